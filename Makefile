@@ -1,0 +1,36 @@
+# The two commands of the README: `make run` and `make test`. Both install what
+# they need first (scripts/setup.sh is idempotent), so they work on a fresh machine.
+SHELL := /bin/bash
+ROOT := $(CURDIR)
+BUILD_TYPE ?= RelWithDebInfo
+
+.PHONY: run test setup build check test-python test-cpp test-frontend bench clean
+
+setup:
+	@scripts/setup.sh
+
+# C++ runtime: binaries land in build/bin/.
+build: setup
+	@if [ -f runtime/cpp/CMakeLists.txt ]; then \
+	  cmake -S runtime/cpp -B build/cpp -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) \
+	        -DMODD_BIN_DIR=$(ROOT)/build/bin >/dev/null && \
+	  cmake --build build/cpp ; \
+	fi
+
+run: build
+	@scripts/run.sh
+
+test: build
+	@scripts/check.sh
+
+test-python: setup
+	@.venv/bin/pytest -q
+
+test-cpp: build
+	@if [ -x runtime/cpp/scripts/test.sh ]; then runtime/cpp/scripts/test.sh; fi
+
+bench: build
+	@scripts/bench.sh
+
+clean:
+	rm -rf build .venv frontend/node_modules frontend/dist

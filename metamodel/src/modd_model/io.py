@@ -1,0 +1,109 @@
+"""Reading and writing models in both notations, .modd text and JSON.
+
+``load_*`` parse, then validate, and attach text positions to every diagnostic
+whose JSON pointer came from text. ``load_model`` raises on errors; the
+``LoadResult`` form returns warnings and errors together for editors."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Literal
+
+from .diagnostics import Diagnostic, Location, ModelError, pointer_parent
+from .parser import SourceMap, parse_lenient
+from .printer import print_model
+from .validate import validate
+
+Format = Literal["modd", "json"]
+
+
+@dataclass
+class LoadResult:
+    """A parsed model (None when it could not be parsed) and all its diagnostics."""
+
+    model: dict[str, Any] | None
+    diagnostics: list[Diagnostic]
+    source_map: SourceMap
+
+    @property
+    def errors(self) -> list[Diagnostic]:
+        return [d for d in self.diagnostics if d.severity == "error"]
+
+    @property
+    def ok(self) -> bool:
+        return self.model is not None and not self.errors
+
+
+def format_of(path: str | Path) -> Format:
+    return "json" if str(path).endswith(".json") else "modd"
+
+
+def _locate(diags: list[Diagnostic], smap: SourceMap, lines: list[str]) -> list[Diagnostic]:
+    out = []
+    for d in diags:
+        ptr = d.pointer
+        while ptr not in smap and ptr:
+            ptr = pointer_parent(ptr)
+        loc = smap.get(ptr)
+        if loc is None and d.location is None:
+            out.append(d)
+            continue
+        loc = d.location or loc
+        assert loc is not None
+        src = lines[loc.line - 1] if 0 < loc.line <= len(lines) else None
+        out.append(replace(d, location=loc, source_line=src))
+    return out
+
+
+def load_text(text: str, filename: str = "<text>", fmt: Format = "modd") -> LoadResult:
+    """Parse and validate a model given as text; never raises for bad input."""
+    lines = text.splitlines()
+    smap: SourceMap = {}
+    if fmt == "json":
+        try:
+            doc: Any = json.loads(text)
+        except json.JSONDecodeError as exc:
+            loc = Location(filename, exc.lineno, exc.colno)
+            src = lines[exc.lineno - 1] if 0 < exc.lineno <= len(lines) else None
+            return LoadResult(None, [Diagnostic(f"invalid JSON: {exc.msg}", "", "error", loc,
+                                                src)], {})
+        # JSON has no line:col per pointer here: the file and the pointer locate it.
+        whole_file = Location(filename, 0, 0)
+        return LoadResult(doc, [replace(d, location=whole_file) for d in validate(doc)], {})
+    doc, smap, word_errors = parse_lenient(text, filename)
+    if doc is None:
+        return LoadResult(None, word_errors, {})
+    # A wrong word is reported once, by the builder, not again by the schema.
+    flagged = {d.pointer for d in word_errors}
+    checks = [d for d in validate(doc) if d.pointer not in flagged]
+    return LoadResult(doc, word_errors + _locate(checks, smap, lines), smap)
+
+
+def load_file(path: str | Path) -> LoadResult:
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        return LoadResult(None, [Diagnostic(f"cannot read {p}: {exc}")], {})
+    return load_text(text, str(path), format_of(p))
+
+
+def load_model(path: str | Path) -> dict[str, Any]:
+    """A valid model from a .modd or .json file; raises ModelError listing every error.
+
+    >>> model = load_model("../shared/scenarios/scenario1.modd")  # doctest: +SKIP
+    """
+    result = load_file(path)
+    if not result.ok:
+        raise ModelError(result.diagnostics)
+    assert result.model is not None
+    return result.model
+
+
+def dumps(doc: dict[str, Any], fmt: Format) -> str:
+    """A model as canonical text in either notation."""
+    if fmt == "json":
+        return json.dumps(doc, indent=2, ensure_ascii=False) + "\n"
+    return print_model(doc)

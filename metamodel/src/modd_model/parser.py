@@ -1,0 +1,393 @@
+"""The .modd text → a model document (the JSON the schema describes) and a
+source map from JSON pointers to text positions.
+
+Three steps, kept apart: the grammar (``modd.lark``) says what is well-formed;
+``_Builder`` turns the parse tree into the document, checking the words the
+grammar leaves open (units, value types, aggregations, setting names); the
+validator (``validate.py``) checks meaning. Every error carries file:line:col."""
+
+from __future__ import annotations
+
+from functools import cache
+from importlib.resources import files
+from typing import Any
+
+from lark import Lark, Token, Tree
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
+from .diagnostics import Diagnostic, Location, ModelError, pointer_join
+from .numbers import canonical_decimal
+from .vocabulary import AGGREGATIONS, KNOWN_UNITS, SCHEMA_VERSION, VALUE_TYPES
+
+SourceMap = dict[str, Location]
+
+# Settings blocks: DSL word -> (JSON property, kind).
+LINK_SETTINGS = {
+    "transport": ("transport", "word"),
+    "key": ("keyRef", "string"),
+    "rtt": ("expectedRttS", "decimal"),
+    "maxBuffer": ("maxBuffer", "int"),
+    "ping": ("pingS", "decimal"),
+    "alpha": ("alpha", "decimal"),
+    "beta": ("beta", "decimal"),
+}
+INGRESS_SETTINGS = {"socket": ("unixSocket", "string"), "port": ("tcpPort", "int")}
+
+_TERMINAL_NAMES = {
+    "NAME": "a name",
+    "NUMBER": "a number",
+    "STRING": "a string in double quotes",
+    "$END": "end of file",
+}
+
+
+@cache
+def _parser() -> Lark:
+    grammar = files("modd_model").joinpath("modd.lark").read_text(encoding="utf-8")
+    return Lark(grammar, parser="lalr", propagate_positions=True, maybe_placeholders=False)
+
+
+def parse_text(text: str, filename: str = "<text>") -> tuple[dict[str, Any], SourceMap]:
+    """Parse .modd text into a model document and its source map.
+
+    Raises ModelError with located diagnostics on a syntax error or an unknown word.
+
+    >>> doc, _ = parse_text('Drone d { Sensors { Sensor s measures { v(METER); } } }'
+    ...     ' PubBroker("127.0.0.1":1, "/l"); SubBroker("127.0.0.1":2, "/c");')
+    >>> doc["drone"]["sensors"][0]["variables"][0]
+    {'name': 'v', 'unit': 'METER'}
+    """
+    doc, smap, diagnostics = parse_lenient(text, filename)
+    if doc is None or diagnostics:
+        raise ModelError(diagnostics)
+    return doc, smap
+
+
+def parse_lenient(text: str, filename: str = "<text>"
+                  ) -> tuple[dict[str, Any] | None, SourceMap, list[Diagnostic]]:
+    """Like parse_text, but returns the document even when some words in it are
+    wrong (unknown unit, aggregation, ...), with those errors, so that the
+    validator can report the model's other problems in the same run. The
+    document is None only on a syntax error."""
+    lines = text.splitlines()
+    try:
+        tree = _parser().parse(text)
+    except UnexpectedInput as exc:
+        return None, {}, [_syntax_diagnostic(exc, filename, lines)]
+    builder = _Builder(filename, lines)
+    doc = builder.build(tree)
+    return doc, builder.source_map, builder.diagnostics
+
+
+def _describe_expected(expected: set[str]) -> str:
+    names: list[str] = []
+    terminals = {t.name: t for t in _parser().terminals}
+    for name in sorted(expected):
+        if name in _TERMINAL_NAMES:
+            names.append(_TERMINAL_NAMES[name])
+        elif name in terminals and terminals[name].pattern.type == "str":
+            names.append(f"'{terminals[name].pattern.value}'")
+        else:
+            names.append(name)
+    names = sorted(set(names))
+    if len(names) == 1:
+        return names[0]
+    return ", ".join(names[:-1]) + " or " + names[-1]
+
+
+def _syntax_diagnostic(exc: UnexpectedInput, filename: str, lines: list[str]) -> Diagnostic:
+    line = getattr(exc, "line", 1) or 1
+    col = getattr(exc, "column", 1) or 1
+    if isinstance(exc, UnexpectedToken) and exc.token.type == "$END":
+        line, col = max(len(lines), 1), len(lines[-1]) + 1 if lines else 1
+        message = f"unexpected end of file, expected {_describe_expected(exc.expected)}"
+    elif isinstance(exc, UnexpectedToken):
+        message = f"unexpected {exc.token.value!r}, expected {_describe_expected(exc.expected)}"
+    elif isinstance(exc, UnexpectedCharacters):
+        message = f"unexpected character {exc.char!r}"
+        if exc.allowed:
+            message += f", expected {_describe_expected(set(exc.allowed))}"
+    elif isinstance(exc, UnexpectedEOF):
+        message = f"unexpected end of file, expected {_describe_expected(set(exc.expected))}"
+    else:  # pragma: no cover - lark raises one of the above
+        message = str(exc)
+    src = lines[line - 1] if 0 < line <= len(lines) else None
+    return Diagnostic(message, "", "error", Location(filename, line, col), src)
+
+
+def _unquote(token: Token) -> str:
+    body = str(token)[1:-1]
+    out: list[str] = []
+    i = 0
+    while i < len(body):
+        c = body[i]
+        if c == "\\" and i + 1 < len(body):
+            nxt = body[i + 1]
+            out.append({"n": "\n", "t": "\t"}.get(nxt, nxt))
+            i += 2
+        else:
+            out.append(c)
+            i += 1
+    return "".join(out)
+
+
+class _Builder:
+    """Walks the parse tree and assembles the model document, recording where
+    each JSON pointer came from."""
+
+    def __init__(self, filename: str, lines: list[str]) -> None:
+        self.filename = filename
+        self.lines = lines
+        self.diagnostics: list[Diagnostic] = []
+        self.source_map: SourceMap = {}
+
+    # -- helpers -------------------------------------------------------
+    def _loc(self, node: Tree[Token] | Token) -> Location:
+        if isinstance(node, Token):
+            return Location(self.filename, node.line or 1, node.column or 1,
+                            node.end_line, node.end_column)
+        meta = node.meta
+        if getattr(meta, "empty", True):
+            return Location(self.filename, 1, 1)
+        return Location(self.filename, meta.line, meta.column, meta.end_line, meta.end_column)
+
+    def _mark(self, pointer: str, node: Tree[Token] | Token) -> None:
+        self.source_map.setdefault(pointer, self._loc(node))
+
+    def _error(self, node: Tree[Token] | Token, message: str, pointer: str = "") -> None:
+        loc = self._loc(node)
+        src = self.lines[loc.line - 1] if 0 < loc.line <= len(self.lines) else None
+        self.diagnostics.append(Diagnostic(message, pointer, "error", loc, src))
+
+    def _decimal(self, token: Token) -> str:
+        return canonical_decimal(str(token))
+
+    def _int(self, token: Token, pointer: str) -> int:
+        text = str(token)
+        if not text.isdigit():
+            self._error(token, f"expected a whole number, found {text!r}", pointer)
+            return 0
+        return int(text)
+
+    # -- the document ----------------------------------------------------
+    def build(self, tree: Tree[Token]) -> dict[str, Any]:
+        doc: dict[str, Any] = {"schemaVersion": SCHEMA_VERSION}
+        publishers: list[dict[str, Any]] = []
+        subscribers: list[dict[str, Any]] = []
+        seen: dict[str, Tree[Token]] = {}
+        for block in tree.children:
+            assert isinstance(block, Tree)
+            kind = str(block.data)
+            if kind in ("drone", "pubbroker", "subbroker", "link"):
+                if kind in seen:
+                    first = self._loc(seen[kind])
+                    self._error(block, f"a second {_BLOCK_WORD[kind]} block; the first is at "
+                                       f"line {first.line}")
+                    continue
+                seen[kind] = block
+            if kind == "drone":
+                doc["drone"] = self._drone(block)
+            elif kind == "pubbroker":
+                doc["pubBroker"] = self._broker(block, "/pubBroker", "logPath")
+            elif kind == "subbroker":
+                doc["subBroker"] = self._broker(block, "/subBroker", "configPath")
+            elif kind == "link":
+                doc["link"] = self._settings(block.children[0], "/link", LINK_SETTINGS)
+                self._mark("/link", block)
+            elif kind == "publishers":
+                for p in block.children:
+                    assert isinstance(p, Tree)
+                    publishers.append(self._publisher(p, len(publishers)))
+            elif kind == "subscriptions":
+                for s in block.children:
+                    assert isinstance(s, Tree)
+                    subscribers.append(self._subscriber(s, len(subscribers)))
+        for kind in ("drone", "pubbroker", "subbroker"):
+            if kind not in seen:
+                self._error(tree, f"the model has no {_BLOCK_WORD[kind]} block")
+        doc["publishers"] = publishers
+        doc["subscribers"] = subscribers
+        return _ordered(doc)
+
+    def _drone(self, node: Tree[Token]) -> dict[str, Any]:
+        name, rest = node.children[0], node.children[1:]
+        drone: dict[str, Any] = {"name": str(name)}
+        self._mark("/drone", node)
+        self._mark("/drone/name", name)
+        sensors: list[dict[str, Any]] = []
+        for child in rest:
+            assert isinstance(child, Tree)
+            if child.data == "description":
+                drone["description"] = _unquote(child.children[0])  # type: ignore[arg-type]
+                continue
+            for s in child.children:
+                assert isinstance(s, Tree)
+                sensors.append(self._sensor(s, f"/drone/sensors/{len(sensors)}"))
+        drone["sensors"] = sensors
+        return drone
+
+    def _sensor(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
+        name = node.children[0]
+        assert isinstance(name, Token)
+        sensor: dict[str, Any] = {"name": str(name)}
+        self._mark(ptr, node)
+        self._mark(ptr + "/name", name)
+        variables: list[dict[str, Any]] = []
+        for child in node.children[1:]:
+            assert isinstance(child, Tree)
+            if child.data == "description":
+                sensor["description"] = _unquote(child.children[0])  # type: ignore[arg-type]
+            else:
+                variables.append(self._variable(child, f"{ptr}/variables/{len(variables)}"))
+        sensor["variables"] = variables
+        return sensor
+
+    def _variable(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
+        name, unit_node, *rest = node.children
+        assert isinstance(name, Token) and isinstance(unit_node, Tree)
+        self._mark(ptr, node)
+        self._mark(ptr + "/name", name)
+        unit_tok = unit_node.children[0]
+        assert isinstance(unit_tok, Token)
+        self._mark(ptr + "/unit", unit_tok)
+        if unit_tok.type == "STRING":
+            unit = _unquote(unit_tok)
+        else:
+            unit = str(unit_tok)
+            if unit not in KNOWN_UNITS:
+                self._error(unit_tok, f"unknown unit {unit!r}; known units are "
+                            f"{', '.join(KNOWN_UNITS)}; write other units in quotes, "
+                            f"e.g. \"mS/cm\"", ptr + "/unit")
+        var: dict[str, Any] = {"name": str(name), "unit": unit}
+        for child in rest:
+            if isinstance(child, Token):
+                self._mark(ptr + "/type", child)
+                if str(child) not in VALUE_TYPES:
+                    self._error(child, f"unknown value type {str(child)!r}; expected one of "
+                                f"{', '.join(VALUE_TYPES)}", ptr + "/type")
+                var["type"] = str(child)
+            else:
+                var["description"] = _unquote(child.children[0])  # type: ignore[arg-type]
+        return var
+
+    def _endpoint(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
+        host, port = node.children
+        assert isinstance(host, Token) and isinstance(port, Token)
+        self._mark(ptr, node)
+        self._mark(ptr + "/host", host)
+        self._mark(ptr + "/port", port)
+        return {"host": _unquote(host), "port": self._int(port, ptr + "/port")}
+
+    def _broker(self, node: Tree[Token], ptr: str, path_key: str) -> dict[str, Any]:
+        broker: dict[str, Any] = {}
+        self._mark(ptr, node)
+        for child in node.children:
+            if isinstance(child, Token) and child.type == "NAME":
+                broker["name"] = str(child)
+                self._mark(ptr + "/name", child)
+            elif isinstance(child, Token):
+                broker[path_key] = _unquote(child)
+                self._mark(f"{ptr}/{path_key}", child)
+            elif child.data == "endpoint":
+                broker["endpoint"] = self._endpoint(child, ptr + "/endpoint")
+            elif ptr == "/pubBroker":
+                broker["ingress"] = self._settings(child, ptr + "/ingress", INGRESS_SETTINGS)
+                self._mark(ptr + "/ingress", child)
+            else:
+                self._error(child, "the SubBroker takes no settings block", ptr)
+        order = ["name", "endpoint", path_key, "ingress"]
+        return {k: broker[k] for k in order if k in broker}
+
+    def _settings(self, node: Tree[Token] | Token, ptr: str,
+                  known: dict[str, tuple[str, str]]) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        assert isinstance(node, Tree)
+        for setting in node.children:
+            assert isinstance(setting, Tree)
+            key_tok, value = setting.children
+            assert isinstance(key_tok, Token) and isinstance(value, Tree)
+            key = str(key_tok)
+            if key not in known:
+                self._error(key_tok, f"unknown setting {key!r}; expected one of "
+                            f"{', '.join(known)}", ptr)
+                continue
+            prop, kind = known[key]
+            self._mark(f"{ptr}/{prop}", setting)
+            if prop in out:
+                self._error(key_tok, f"setting {key!r} given twice", f"{ptr}/{prop}")
+            out[prop] = self._setting_value(value, kind, key, f"{ptr}/{prop}")
+        return {k: out[k] for _, (k, _) in known.items() if k in out}
+
+    def _setting_value(self, value: Tree[Token], kind: str, key: str, ptr: str) -> Any:
+        tok = value.children[0]
+        assert isinstance(tok, Token)
+        found = {"number": "decimal", "string": "string", "word": "word"}[str(value.data)]
+        if kind == "int" and found == "decimal":
+            return self._int(tok, ptr)
+        if kind != found:
+            wanted = {"decimal": "a number", "int": "a whole number", "string": "a string",
+                      "word": "a name"}[kind]
+            self._error(tok, f"setting {key!r} takes {wanted}", ptr)
+            return None
+        if kind == "string":
+            return _unquote(tok)
+        if kind == "decimal":
+            return self._decimal(tok)
+        return str(tok)
+
+    def _publisher(self, node: Tree[Token], index: int) -> dict[str, Any]:
+        ptr = f"/publishers/{index}"
+        name = node.children[0]
+        assert isinstance(name, Token)
+        self._mark(ptr, node)
+        self._mark(ptr + "/name", name)
+        pub: dict[str, Any] = {"name": str(name)}
+        topics: list[str] = []
+        for child in node.children[1:]:
+            if isinstance(child, Tree):
+                pub["endpoint"] = self._endpoint(child, ptr + "/endpoint")
+            elif child.type == "NUMBER":
+                pub["periodS"] = self._decimal(child)
+                self._mark(ptr + "/periodS", child)
+            else:
+                self._mark(f"{ptr}/topics/{len(topics)}", child)
+                topics.append(_unquote(child))
+        pub["topics"] = topics
+        return pub
+
+    def _subscriber(self, node: Tree[Token], index: int) -> dict[str, Any]:
+        ptr = f"/subscribers/{index}"
+        name = node.children[0]
+        assert isinstance(name, Token)
+        self._mark(ptr, node)
+        self._mark(ptr + "/name", name)
+        sub: dict[str, Any] = {"name": str(name)}
+        for child in node.children[1:]:
+            if isinstance(child, Tree):
+                sub["endpoint"] = self._endpoint(child, ptr + "/endpoint")
+            elif child.type == "STRING":
+                sub["topic"] = _unquote(child)
+                self._mark(ptr + "/topic", child)
+            elif child.type == "NUMBER":
+                sub["periodS"] = self._decimal(child)
+                self._mark(ptr + "/periodS", child)
+            else:
+                self._mark(ptr + "/aggregation", child)
+                if str(child) not in AGGREGATIONS:
+                    self._error(child, f"unknown aggregation {str(child)!r}; expected one of "
+                                f"{', '.join(AGGREGATIONS)}", ptr + "/aggregation")
+                sub["aggregation"] = str(child)
+        return sub
+
+
+_BLOCK_WORD = {"drone": "Drone", "pubbroker": "PubBroker", "subbroker": "SubBroker",
+               "link": "Link"}
+_TOP_ORDER = ["schemaVersion", "drone", "pubBroker", "subBroker", "link", "publishers",
+              "subscribers", "layout"]
+
+
+def _ordered(doc: dict[str, Any]) -> dict[str, Any]:
+    return {k: doc[k] for k in _TOP_ORDER if k in doc}
+
+
+__all__ = ["parse_text", "SourceMap", "pointer_join"]

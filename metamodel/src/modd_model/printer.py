@@ -1,0 +1,86 @@
+"""A model document → canonical .modd text.
+
+The canonical form is the paper's Listing 1 (top-level blocks, no
+``DataCollector`` wrapper), four-space indents, every statement ended by ``;``.
+Comments and the diagram layout are not part of the text: they do not survive
+a JSON → .modd → JSON trip (the layout stays in the JSON form)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .parser import INGRESS_SETTINGS, LINK_SETTINGS
+from .vocabulary import KNOWN_UNITS
+
+INDENT = "    "
+
+
+def quote(text: str) -> str:
+    escaped = text.replace("\\", "\\\\").replace('"', '\\"')
+    return '"' + escaped.replace("\n", "\\n").replace("\t", "\\t") + '"'
+
+
+def _endpoint(ep: dict[str, Any]) -> str:
+    return f'{quote(ep["host"])}:{ep["port"]}'
+
+
+def _description(obj: dict[str, Any]) -> str:
+    return f" {quote(obj['description'])}" if "description" in obj else ""
+
+
+def _settings(values: dict[str, Any], known: dict[str, tuple[str, str]], depth: int) -> list[str]:
+    pad = INDENT * depth
+    lines: list[str] = []
+    for word, (prop, kind) in known.items():
+        if prop not in values:
+            continue
+        v = values[prop]
+        text = quote(v) if kind == "string" else str(v)
+        lines.append(f"{pad}{INDENT}{word} = {text};")
+    return lines
+
+
+def _drone(drone: dict[str, Any]) -> list[str]:
+    out = [f"Drone {drone['name']}{_description(drone)} {{", f"{INDENT}Sensors {{"]
+    for s in drone["sensors"]:
+        out.append(f"{INDENT * 2}Sensor {s['name']}{_description(s)} measures {{")
+        for v in s["variables"]:
+            unit = v["unit"] if v["unit"] in KNOWN_UNITS else quote(v["unit"])
+            vtype = f", {v['type']}" if "type" in v else ""
+            out.append(f"{INDENT * 3}{v['name']}({unit}{vtype}){_description(v)};")
+        out.append(f"{INDENT * 2}}}")
+    out += [f"{INDENT}}}", "}"]
+    return out
+
+
+def _broker(word: str, broker: dict[str, Any], path_key: str) -> list[str]:
+    name = f" {broker['name']}" if "name" in broker else ""
+    head = f"{word}{name}({_endpoint(broker['endpoint'])}, {quote(broker[path_key])})"
+    ingress = broker.get("ingress")
+    if not ingress:
+        return [head + ";"]
+    return [head + " {", *_settings(ingress, INGRESS_SETTINGS, 0), "};"]
+
+
+def print_model(doc: dict[str, Any]) -> str:
+    """The canonical .modd text of a model document (ends with a newline)."""
+    out: list[str] = []
+    out += _drone(doc["drone"])
+    out += _broker("PubBroker", doc["pubBroker"], "logPath")
+    out += _broker("SubBroker", doc["subBroker"], "configPath")
+    if doc.get("link"):
+        out += ["Link {", *_settings(doc["link"], LINK_SETTINGS, 0), "}"]
+    out.append("Publishers {")
+    for p in doc["publishers"]:
+        args = [_endpoint(p["endpoint"])] if "endpoint" in p else []
+        args.append(p["periodS"])
+        args += [quote(t) for t in p["topics"]]
+        out.append(f"{INDENT}Publisher {p['name']}({', '.join(args)});")
+    out.append("}")
+    out.append("Subscriptions {")
+    for s in doc["subscribers"]:
+        args = [_endpoint(s["endpoint"])] if "endpoint" in s else []
+        args += [quote(s["topic"]), s["periodS"], s["aggregation"]]
+        out.append(f"{INDENT}Subscriber {s['name']}({', '.join(args)});")
+    out.append("}")
+    return "\n".join(out) + "\n"

@@ -1,0 +1,224 @@
+"""Validation of a model document: the JSON Schema first, then the semantic
+checks a user needs. All problems are reported at once, each with its JSON
+pointer. Semantic checks are small registered functions (one concern each)
+that run only on documents the schema accepts."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from fractions import Fraction
+from typing import Any
+
+from jsonschema import Draft202012Validator
+from jsonschema.exceptions import ValidationError
+
+from .diagnostics import Diagnostic, pointer_join
+from .numbers import to_fraction, to_micros
+from .query import topic_name
+from .schema import load_schema
+
+Check = Callable[[dict[str, Any]], Iterator[Diagnostic]]
+CHECKS: list[Check] = []
+
+# Aggregations that make no sense on booleans (their mean or sum is not a bool).
+_NUMERIC_ONLY = {"AVERAGE", "SUM"}
+
+
+def check(fn: Check) -> Check:
+    """Register a semantic check."""
+    CHECKS.append(fn)
+    return fn
+
+
+def validate(doc: Any) -> list[Diagnostic]:
+    """Every problem of ``doc``: schema errors, then semantic errors and warnings.
+
+    The semantic checks also run on a document the schema rejects, so that a
+    user sees all problems at once; a check that cannot make sense of a
+    malformed part is skipped (the schema error already names that part)."""
+    out = sorted((_schema_diagnostic(e) for e in _schema_validator().iter_errors(doc)),
+                 key=lambda d: d.pointer)
+    if not isinstance(doc, dict):
+        return out
+    for fn in CHECKS:
+        try:
+            out.extend(list(fn(doc)))
+        except (KeyError, TypeError, ValueError, AttributeError, IndexError):
+            if not out:
+                raise  # on a schema-valid document a failing check is a bug
+    return out
+
+
+_VALIDATOR: Draft202012Validator | None = None
+
+
+def _schema_validator() -> Draft202012Validator:
+    global _VALIDATOR
+    if _VALIDATOR is None:
+        _VALIDATOR = Draft202012Validator(load_schema())
+    return _VALIDATOR
+
+
+def _schema_diagnostic(err: ValidationError) -> Diagnostic:
+    pointer = pointer_join(*err.absolute_path)
+    if err.validator == "additionalProperties":
+        message = err.message.replace("Additional properties are not allowed", "unknown property")
+    elif err.validator == "pattern":
+        message = f"{err.instance!r} is not well-formed ({_pattern_hint(err)})"
+    elif err.validator == "anyOf" and isinstance(err.instance, str):
+        message = f"{err.instance!r} is not a valid unit"
+    else:
+        message = err.message
+    return Diagnostic(message, pointer)
+
+
+def _pattern_hint(err: ValidationError) -> str:
+    desc = err.schema.get("description") if isinstance(err.schema, dict) else None
+    return str(desc) if desc else f"expected pattern {err.validator_value}"
+
+
+# -- semantic checks ---------------------------------------------------------
+
+
+def _duplicates(items: list[tuple[str, str]], what: str) -> Iterator[Diagnostic]:
+    first: dict[str, str] = {}
+    for name, ptr in items:
+        if name in first:
+            yield Diagnostic(f"{what} {name!r} is already defined at {first[name]}", ptr)
+        else:
+            first[name] = ptr
+
+
+@check
+def unique_names(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    sensors = doc["drone"]["sensors"]
+    yield from _duplicates(
+        [(s["name"], f"/drone/sensors/{i}/name") for i, s in enumerate(sensors)], "sensor")
+    for i, s in enumerate(sensors):
+        yield from _duplicates(
+            [(v["name"], f"/drone/sensors/{i}/variables/{j}/name")
+             for j, v in enumerate(s["variables"])], f"variable of sensor {s['name']!r}")
+    clients = [(p["name"], f"/publishers/{i}/name") for i, p in enumerate(doc["publishers"])]
+    clients += [(s["name"], f"/subscribers/{i}/name") for i, s in enumerate(doc["subscribers"])]
+    yield from _duplicates(clients, "publisher or subscriber")
+
+
+def _declared_topics(doc: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    drone = doc["drone"]["name"]
+    return {topic_name(drone, s["name"], v["name"]): v
+            for s in doc["drone"]["sensors"] for v in s["variables"]}
+
+
+def _unknown_topic(topic: str, doc: dict[str, Any], ptr: str) -> Diagnostic:
+    drone = doc["drone"]["name"]
+    hint = ""
+    if not topic.startswith(drone + "."):
+        hint = f"; topics of this drone start with {drone + '.'!r}"
+    return Diagnostic(f"unknown topic {topic!r}{hint}", ptr)
+
+
+@check
+def references_resolve(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    declared = _declared_topics(doc)
+    publisher_of: dict[str, str] = {}
+    for i, pub in enumerate(doc["publishers"]):
+        for j, t in enumerate(pub["topics"]):
+            ptr = f"/publishers/{i}/topics/{j}"
+            if t not in declared:
+                yield _unknown_topic(t, doc, ptr)
+            elif t in publisher_of:
+                yield Diagnostic(f"topic {t!r} is already published by {publisher_of[t]!r}; "
+                                 "a topic has one publisher", ptr)
+            else:
+                publisher_of[t] = pub["name"]
+    for i, sub in enumerate(doc["subscribers"]):
+        t = sub["topic"]
+        ptr = f"/subscribers/{i}/topic"
+        if t not in declared:
+            yield _unknown_topic(t, doc, ptr)
+        elif t not in publisher_of:
+            yield Diagnostic(f"no publisher publishes {t!r}, so subscriber "
+                             f"{sub['name']!r} would never receive a value", ptr)
+
+
+def _period_problem(text: str) -> str | None:
+    if to_fraction(text) <= 0:
+        return "a period must be greater than zero"
+    try:
+        to_micros(text)
+    except ValueError:
+        return f"period {text} s is finer than a microsecond, the resolution of the link"
+    return None
+
+
+@check
+def periods_valid(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    for kind in ("publishers", "subscribers"):
+        for i, item in enumerate(doc[kind]):
+            problem = _period_problem(item["periodS"])
+            if problem:
+                yield Diagnostic(problem, f"/{kind}/{i}/periodS")
+    ping = doc.get("link", {}).get("pingS")
+    if ping is not None and to_fraction(ping) <= 0:
+        yield Diagnostic("PING time must be greater than zero", "/link/pingS")
+
+
+@check
+def subscription_periods(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    pub_period: dict[str, Fraction] = {}
+    for pub in doc["publishers"]:
+        for t in pub["topics"]:
+            pub_period.setdefault(t, to_fraction(pub["periodS"]))
+    for i, sub in enumerate(doc["subscribers"]):
+        pm = pub_period.get(sub["topic"])
+        ps = to_fraction(sub["periodS"])
+        if pm is not None and 0 < ps < pm:
+            yield Diagnostic(f"subscription period {sub['periodS']} s is shorter than the "
+                             f"publication period {float(pm):g} s of {sub['topic']!r}",
+                             f"/subscribers/{i}/periodS")
+
+
+@check
+def aggregation_fits_type(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    declared = _declared_topics(doc)
+    for i, sub in enumerate(doc["subscribers"]):
+        var = declared.get(sub["topic"])
+        if var and var.get("type") == "bool" and sub["aggregation"] in _NUMERIC_ONLY:
+            yield Diagnostic(f"{sub['aggregation']} is not defined for the bool topic "
+                             f"{sub['topic']!r}", f"/subscribers/{i}/aggregation")
+
+
+def _endpoints(doc: dict[str, Any]) -> Iterator[tuple[str, int, str]]:
+    for key in ("pubBroker", "subBroker"):
+        ep = doc[key]["endpoint"]
+        yield ep["host"], ep["port"], f"/{key}/endpoint"
+    ingress = doc["pubBroker"].get("ingress", {})
+    if "tcpPort" in ingress:
+        host = doc["pubBroker"]["endpoint"]["host"]
+        yield host, ingress["tcpPort"], "/pubBroker/ingress/tcpPort"
+    for kind in ("publishers", "subscribers"):
+        for i, item in enumerate(doc[kind]):
+            if "endpoint" in item:
+                yield item["endpoint"]["host"], item["endpoint"]["port"], f"/{kind}/{i}/endpoint"
+
+
+@check
+def endpoints_distinct(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    first: dict[tuple[str, int], str] = {}
+    for host, port, ptr in _endpoints(doc):
+        key = (host.lower(), port)
+        if key in first:
+            yield Diagnostic(f"endpoint {host}:{port} is already used by {first[key]}", ptr)
+        else:
+            first[key] = ptr
+
+
+@check
+def unused_topics(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    published = {t for p in doc["publishers"] for t in p["topics"]}
+    drone = doc["drone"]["name"]
+    for i, s in enumerate(doc["drone"]["sensors"]):
+        for j, v in enumerate(s["variables"]):
+            if topic_name(drone, s["name"], v["name"]) not in published:
+                yield Diagnostic(f"no publisher publishes {s['name']}.{v['name']}; it will not "
+                                 "be archived", f"/drone/sensors/{i}/variables/{j}", "warning")

@@ -1,0 +1,10 @@
+"""Closed word lists of the metamodel, read from the schema."""
+
+from __future__ import annotations
+
+from .schema import definition, load_schema
+
+SCHEMA_VERSION: str = load_schema()["properties"]["schemaVersion"]["const"]
+KNOWN_UNITS: tuple[str, ...] = tuple(definition("KnownUnit")["enum"])
+VALUE_TYPES: tuple[str, ...] = tuple(definition("ValueType")["enum"])
+AGGREGATIONS: tuple[str, ...] = tuple(definition("Aggregation")["enum"])

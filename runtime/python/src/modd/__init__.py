@@ -1,0 +1,1 @@
+"""MoDD runtime for Python: the link codec, publisher and subscriber clients and the SubBroker."""
