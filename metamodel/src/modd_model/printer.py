@@ -57,7 +57,7 @@ def _broker(word: str, broker: dict[str, Any], path_key: str) -> list[str]:
     name = f" {broker['name']}" if "name" in broker else ""
     head = f"{word}{name}({_endpoint(broker['endpoint'])}, {quote(broker[path_key])})"
     ingress = broker.get("ingress")
-    if not ingress:
+    if ingress is None:
         return [head + ";"]
     return [head + " {", *_settings(ingress, INGRESS_SETTINGS, 0), "};"]
 
@@ -68,7 +68,7 @@ def print_model(doc: dict[str, Any]) -> str:
     out += _drone(doc["drone"])
     out += _broker("PubBroker", doc["pubBroker"], "logPath")
     out += _broker("SubBroker", doc["subBroker"], "configPath")
-    if doc.get("link"):
+    if "link" in doc:
         out += ["Link {", *_settings(doc["link"], LINK_SETTINGS, 0), "}"]
     out.append("Publishers {")
     for p in doc["publishers"]:

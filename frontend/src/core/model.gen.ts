@@ -1,0 +1,176 @@
+// Generated from metamodel/modd.schema.json by `python -m modd_model.typegen`. Do not edit.
+
+/** A MoDD mission: the drone with its sensors and measured variables (the topics), the on-board PubBroker and the base-station SubBroker, the link between them, the publishers that feed the PubBroker and the subscribers that receive aggregated values. The one source of truth for what a model is: the Python and TypeScript types are generated from this file. */
+export interface ModdModel {
+  /** Version of this schema the model was written for. Tools refuse models of a later major version. */
+  schemaVersion: "1.0";
+  /** The drone and its sensors. */
+  drone: Drone;
+  /** The on-board broker. */
+  pubBroker: PubBroker;
+  /** The base-station broker. */
+  subBroker: SubBroker;
+  /** Link settings and planner constants; the paper's defaults when absent. */
+  link?: Link;
+  /** Processes on board that publish measured variables to the PubBroker. */
+  publishers: Publisher[];
+  /** Base-station consumers, each asking for one topic every period, aggregated. */
+  subscribers: Subscriber[];
+  /** Diagram layout of the workbench (not part of the .modd text). */
+  layout?: Layout;
+}
+
+/** An identifier: a letter or underscore, then letters, digits or underscores. */
+export type Name = string;
+
+/** Fully qualified name of a measured variable: drone.sensor.variable. */
+export type TopicName = string;
+
+/** An exact decimal number written as a string (e.g. "0.25"), so that periods keep exact rational arithmetic end to end. */
+export type Decimal = string;
+
+/** A period in seconds, as an exact decimal string, resolved to the microsecond. */
+export type Period = Decimal;
+
+/** A network endpoint: host (an IP address or host name) and TCP port. */
+export interface Endpoint {
+  /** IP address or host name. */
+  host: string;
+  /** TCP port. */
+  port: number;
+}
+
+/** Physical unit of a measured variable: one of the paper's units, or a free-form unit string (e.g. "mS/cm"). */
+export type Unit = KnownUnit | string;
+
+/** The units of the paper's reference implementation. */
+export type KnownUnit = "METER" | "METER_PER_SECOND" | "METER_PER_SECOND_SQUARED" | "DEGREE_CELSIUS" | "RADIAN" | "RADIAN_PER_SECOND" | "BAR" | "LITER" | "GRAM" | "NONE";
+export const KnownUnitValues = ["METER", "METER_PER_SECOND", "METER_PER_SECOND_SQUARED", "DEGREE_CELSIUS", "RADIAN", "RADIAN_PER_SECOND", "BAR", "LITER", "GRAM", "NONE"] as const;
+
+/** Type of the samples of a measured variable, as published and archived. */
+export type ValueType = "float32" | "float64" | "int" | "bool";
+export const ValueTypeValues = ["float32", "float64", "int", "bool"] as const;
+
+/** How the samples of one period are reduced to what the subscriber receives. ALL sends every raw sample of the period. */
+export type Aggregation = "MIN" | "MAX" | "AVERAGE" | "FIRST" | "LAST" | "ALL" | "COUNT" | "SUM";
+export const AggregationValues = ["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM"] as const;
+
+/** The platform (surface, aerial or underwater drone) and the sensors it carries. */
+export interface Drone {
+  /** Name of the drone; the first part of every topic name and of the zenoh keys. */
+  name: Name;
+  /** Free text shown in the workbench. */
+  description?: string;
+  /** Sensors on board. */
+  sensors: Sensor[];
+}
+
+/** A sensor on board; each of its measured variables is a topic. */
+export interface Sensor {
+  /** Name of the sensor, unique on the drone. */
+  name: Name;
+  /** Free text shown in the workbench. */
+  description?: string;
+  /** What the sensor measures. */
+  variables: MeasuredVariable[];
+}
+
+/** A measured variable, i.e. a topic named drone.sensor.variable. */
+export interface MeasuredVariable {
+  /** Name of the variable, unique within its sensor. */
+  name: Name;
+  /** Physical unit of the samples. */
+  unit: Unit;
+  /** Type of the samples; float32 when absent. */
+  type?: ValueType;
+  /** Free text shown in the workbench. */
+  description?: string;
+}
+
+/** The on-board broker: archives every sample and sends scheduled aggregates over the link. */
+export interface PubBroker {
+  /** Optional name (the reference implementation writes one). */
+  name?: Name;
+  /** Link endpoint: where the PubBroker listens for the SubBroker. */
+  endpoint: Endpoint;
+  /** Directory of the on-board archive (MCAP files). */
+  logPath: string;
+  /** Where publishers connect; generated defaults when absent. */
+  ingress?: Ingress;
+}
+
+/** Where publishers on board connect to the PubBroker, kept apart from the link endpoint. */
+export interface Ingress {
+  /** Path of the Unix socket publishers connect to. */
+  unixSocket?: string;
+  /** TCP port on the PubBroker's host publishers connect to. */
+  tcpPort?: number;
+}
+
+/** The base-station broker: receives scheduled frames and fans values out to subscribers. */
+export interface SubBroker {
+  /** Optional name (the reference implementation writes one). */
+  name?: Name;
+  /** Endpoint of the SubBroker on the base station. */
+  endpoint: Endpoint;
+  /** Directory where the SubBroker keeps its configuration. */
+  configPath: string;
+}
+
+/** The drone link between the PubBroker and the SubBroker, and the constants of the buffer-size planner. */
+export interface Link {
+  /** Transport of the link. */
+  transport?: "tcp";
+  /** Where the pre-shared key is read from: env:NAME or file:PATH. Never the key itself. */
+  keyRef?: string;
+  /** Expected round-trip time of the link in seconds, until measured. */
+  expectedRttS?: Decimal;
+  /** MAX_BUFFER: the largest buffer size n the planner may choose. */
+  maxBuffer?: number;
+  /** PING_TIME in seconds: a subscriber's delay may not exceed 3 x PING. */
+  pingS?: Decimal;
+  /** Weight of the sum of deviations in the planner's objective. */
+  alpha?: Decimal;
+  /** Weight of the largest deviation in the planner's objective. */
+  beta?: Decimal;
+}
+
+/** A process on board (a sensor driver) that publishes some measured variables every period. */
+export interface Publisher {
+  /** Name of the publisher, unique among publishers and subscribers. */
+  name: Name;
+  /** Endpoint of the publisher (the paper's model gives one; publishers connect to the PubBroker's ingress). */
+  endpoint?: Endpoint;
+  /** Publication period in seconds. */
+  periodS: Period;
+  /** Topics it publishes. */
+  topics: TopicName[];
+}
+
+/** A consumer on the base station: one topic, every period, aggregated. */
+export interface Subscriber {
+  /** Name of the subscriber, unique among publishers and subscribers. */
+  name: Name;
+  /** Where the SubBroker delivers over TCP; without it, values are delivered on zenoh only. */
+  endpoint?: Endpoint;
+  /** The monitored variable. */
+  topic: TopicName;
+  /** Subscription period in seconds: one value (or one batch, for ALL) per period. */
+  periodS: Period;
+  /** How the samples of each period are reduced. */
+  aggregation: Aggregation;
+}
+
+/** Diagram layout, kept apart from the semantic model: node positions by node id. */
+export interface Layout {
+  /** Position of each diagram node, by node id. */
+  nodes?: Record<string, Position>;
+}
+
+/** Top-left corner of a node on the canvas. */
+export interface Position {
+  /** Horizontal position. */
+  x: number;
+  /** Vertical position. */
+  y: number;
+}

@@ -1,0 +1,131 @@
+"""Generated from metamodel/modd.schema.json by `python -m modd_model.typegen`. Do not edit."""
+
+from __future__ import annotations
+
+from typing import Literal, NotRequired, TypedDict
+
+
+Name = str
+TopicName = str
+Decimal = str
+Period = Decimal
+KnownUnit = Literal["METER", "METER_PER_SECOND", "METER_PER_SECOND_SQUARED", "DEGREE_CELSIUS", "RADIAN", "RADIAN_PER_SECOND", "BAR", "LITER", "GRAM", "NONE"]
+ValueType = Literal["float32", "float64", "int", "bool"]
+Aggregation = Literal["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM"]
+Unit = KnownUnit | str
+
+
+class ModdModel(TypedDict):
+    """A MoDD mission: the drone with its sensors and measured variables (the topics), the on-board PubBroker and the base-station SubBroker, the link between them, the publishers that feed the PubBroker and the subscribers that receive aggregated values. The one source of truth for what a model is: the Python and TypeScript types are generated from this file."""
+
+    schemaVersion: Literal["1.0"]
+    drone: Drone
+    pubBroker: PubBroker
+    subBroker: SubBroker
+    link: NotRequired[Link]
+    publishers: list[Publisher]
+    subscribers: list[Subscriber]
+    layout: NotRequired[Layout]
+
+
+class Endpoint(TypedDict):
+    """A network endpoint: host (an IP address or host name) and TCP port."""
+
+    host: str
+    port: int
+
+
+class Drone(TypedDict):
+    """The platform (surface, aerial or underwater drone) and the sensors it carries."""
+
+    name: Name
+    description: NotRequired[str]
+    sensors: list[Sensor]
+
+
+class Sensor(TypedDict):
+    """A sensor on board; each of its measured variables is a topic."""
+
+    name: Name
+    description: NotRequired[str]
+    variables: list[MeasuredVariable]
+
+
+class MeasuredVariable(TypedDict):
+    """A measured variable, i.e. a topic named drone.sensor.variable."""
+
+    name: Name
+    unit: Unit
+    type: NotRequired[ValueType]
+    description: NotRequired[str]
+
+
+class PubBroker(TypedDict):
+    """The on-board broker: archives every sample and sends scheduled aggregates over the link."""
+
+    name: NotRequired[Name]
+    endpoint: Endpoint
+    logPath: str
+    ingress: NotRequired[Ingress]
+
+
+class Ingress(TypedDict):
+    """Where publishers on board connect to the PubBroker, kept apart from the link endpoint."""
+
+    unixSocket: NotRequired[str]
+    tcpPort: NotRequired[int]
+
+
+class SubBroker(TypedDict):
+    """The base-station broker: receives scheduled frames and fans values out to subscribers."""
+
+    name: NotRequired[Name]
+    endpoint: Endpoint
+    configPath: str
+
+
+class Link(TypedDict):
+    """The drone link between the PubBroker and the SubBroker, and the constants of the buffer-size planner."""
+
+    transport: NotRequired[Literal["tcp"]]
+    keyRef: NotRequired[str]
+    expectedRttS: NotRequired[Decimal]
+    maxBuffer: NotRequired[int]
+    pingS: NotRequired[Decimal]
+    alpha: NotRequired[Decimal]
+    beta: NotRequired[Decimal]
+
+
+class Publisher(TypedDict):
+    """A process on board (a sensor driver) that publishes some measured variables every period."""
+
+    name: Name
+    endpoint: NotRequired[Endpoint]
+    periodS: Period
+    topics: list[TopicName]
+
+
+class Subscriber(TypedDict):
+    """A consumer on the base station: one topic, every period, aggregated."""
+
+    name: Name
+    endpoint: NotRequired[Endpoint]
+    topic: TopicName
+    periodS: Period
+    aggregation: Aggregation
+
+
+class Layout(TypedDict):
+    """Diagram layout, kept apart from the semantic model: node positions by node id."""
+
+    nodes: NotRequired[dict[str, Position]]
+
+
+class Position(TypedDict):
+    """Top-left corner of a node on the canvas."""
+
+    x: float
+    y: float
+
+
+__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "PubBroker", "Ingress", "SubBroker", "Link", "Publisher", "Subscriber", "Layout", "Position"]

@@ -1,0 +1,56 @@
+"""The `modd` command line, run as users run it (a subprocess of .venv/bin/modd)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+MODD = [sys.executable, "-m", "modd_model.cli"]
+
+
+def run(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*MODD, *args], capture_output=True, text=True, timeout=60)
+
+
+def test_validate_ok_and_failures(scenarios_dir: Path, tmp_path: Path) -> None:
+    ok = run("validate", str(scenarios_dir / "scenario1.modd"),
+             str(scenarios_dir / "scenario2.modd"))
+    assert ok.returncode == 0, ok.stderr
+    bad = tmp_path / "bad.modd"
+    bad.write_text((scenarios_dir / "scenario1.modd").read_text().replace("MIN", "MEAN"))
+    res = run("validate", str(bad))
+    assert res.returncode == 1
+    assert f"{bad}:23:" in res.stderr and "unknown aggregation 'MEAN'" in res.stderr
+
+
+def test_convert_both_ways(scenarios_dir: Path, tmp_path: Path) -> None:
+    out = tmp_path / "s1.json"
+    res = run("convert", str(scenarios_dir / "scenario1.modd"), "--to", "json", "-o", str(out))
+    assert res.returncode == 0, res.stderr
+    assert json.loads(out.read_text())["drone"]["name"] == "usv"
+    back = run("convert", str(out), "--to", "modd")
+    assert back.returncode == 0
+    assert back.stdout.startswith("Drone usv {")
+    assert 'Subscriber sub_7("127.0.0.1":7407, "usv.accelerometer.accel_z", 0.25, MAX);' \
+        in back.stdout
+
+
+def test_fmt_check_and_rewrite(scenarios_dir: Path, tmp_path: Path) -> None:
+    src = tmp_path / "wrapped.modd"
+    shutil.copy(Path(__file__).parent / "data" / "scenario1_datacollector.modd", src)
+    check = run("fmt", "--check", str(src))
+    assert check.returncode == 1 and "not in canonical form" in check.stderr
+    assert run("fmt", str(src)).returncode == 0
+    assert run("fmt", "--check", str(src)).returncode == 0
+    printed = run("convert", str(scenarios_dir / "scenario1.modd"), "--to", "modd").stdout
+    assert src.read_text() == printed
+
+
+def test_console_script_is_installed() -> None:
+    modd = Path(sys.executable).parent / "modd"
+    assert modd.exists()
+    res = subprocess.run([str(modd), "--help"], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 0 and "validate" in res.stdout
