@@ -1,0 +1,130 @@
+"""``modd plan FILE [--json]``: the plan of a model, for people or programs.
+
+Registered through the ``modd.commands`` entry point ``plan``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from fractions import Fraction
+from typing import Any, TextIO
+
+from modd_model import ModelError, load_model
+from modd_model.numbers import fraction_to_decimal, to_fraction
+
+from .plan import METHODS, Plan, make_plan
+
+#: Slots printed in the human-readable schedule.
+TEXT_SLOT_LIMIT = 40
+
+
+def _decimal(text: str) -> Fraction:
+    try:
+        return to_fraction(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from exc
+
+
+def _positive_int(text: str) -> int:
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
+    return int(text)
+
+
+def register(subparsers: Any) -> None:
+    """Add ``plan`` to the ``modd`` command line."""
+    p = subparsers.add_parser(
+        "plan", help="schedule, buffer sizes, delays and link cost of a model"
+    )
+    p.add_argument("file", metavar="FILE", help=".modd or .json model")
+    p.add_argument("--json", action="store_true", help="print the plan as one JSON object")
+    p.add_argument("--ping", type=_decimal, metavar="S", help="PING_TIME in seconds")
+    p.add_argument("--alpha", type=_decimal, help="weight of the sum of deviations")
+    p.add_argument("--beta", type=_decimal, help="weight of the largest deviation")
+    p.add_argument("--max-buffer", type=_positive_int, metavar="N", help="MAX_BUFFER")
+    p.add_argument("--method", choices=METHODS, default="exact", help="buffer-size solver")
+    p.set_defaults(func=run_plan)
+
+
+def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
+    """Load, plan, print. Exit 0 when feasible, 1 on a bad model, 3 when the
+    plan violates the 3 x PING cap (the plan is still printed)."""
+    out = out or sys.stdout
+    try:
+        model = load_model(args.file)
+    except ModelError as exc:
+        for d in exc.diagnostics:
+            print(d, file=sys.stderr)
+        return 1
+    except OSError as exc:
+        print(f"{args.file}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
+    plan = make_plan(
+        model, ping_s=args.ping, alpha=args.alpha, beta=args.beta,
+        max_buffer=args.max_buffer, method=args.method,
+    )
+    if args.json:
+        json.dump(plan.to_json(), out, indent=2)
+        out.write("\n")
+    else:
+        out.write(render_text(plan))
+    return 3 if plan.buffers.infeasible else 0
+
+
+def _sec(value: Fraction) -> str:
+    return fraction_to_decimal(value) + " s"
+
+
+def render_text(plan: Plan) -> str:
+    """The plan for a person: schedule, buffers, delays, link cost."""
+    j = plan.to_json()
+    sched = plan.schedule
+    lines = [
+        f"hyperperiod {j['hyperperiod_s']} s, {j['messages_per_hyperperiod']} messages per "
+        "hyperperiod",
+        "",
+        "sent streams:",
+    ]
+    lines += [f"  [{s.id}] {s.stream.key}" for s in plan.sent_streams]
+    derived = [s for s in plan.streams if not s.sent]
+    if derived:
+        lines.append("derived at the SubBroker:")
+        lines += [
+            f"  {s.stream.key} <- "
+            + " + ".join(f"{x.factor} x {x.stream.key}" for x in s.sources)
+            for s in derived
+        ]
+    lines += ["", "schedule (date -> streams):"]
+    keys = {s.id: s.stream.key for s in plan.sent_streams}
+    for _, date, ids in sched.first_slots(TEXT_SLOT_LIMIT):
+        lines.append(f"  {_sec(date):>12} -> " + ", ".join(keys[i] for i in ids))
+    if sched.messages_per_hyperperiod > TEXT_SLOT_LIMIT:
+        lines.append(f"  ... ({sched.messages_per_hyperperiod - TEXT_SLOT_LIMIT} more)")
+    lines += ["", "buffer sizes:"]
+    lines += [f"  {t}: {n}" for t, n in plan.buffer_sizes.items()]
+    lines += ["", "delays (|ps - n x pm|):"]
+    lines += [f"  {name}: {_sec(d)}" for name, d in plan.delays.items()]
+    link = j["predicted_link_bytes_per_s"]
+    lines += [
+        "",
+        f"link: {link['drone_to_base']} B/s drone->base, {link['base_to_drone']} B/s "
+        "base->drone (IP+TCP included)",
+        f"plain pub/sub: {link['plain_pubsub']} B/s (+ {link['plain_pubsub_acks']} B/s ACKs); "
+        f"saving {100 * link['saving_ratio']:.1f} %",
+    ]
+    lines += _infeasible_lines(plan)
+    return "\n".join(lines) + "\n"
+
+
+def _infeasible_lines(plan: Plan) -> list[str]:
+    if not plan.infeasible:
+        return []
+    cap = _sec(Fraction(plan.constants.cap_us, 1_000_000))
+    lines = ["", f"INFEASIBLE: the delay cap 3 x PING = {cap} cannot be met; "
+             "the plan above is the best one without the cap:"]
+    lines += [
+        f"  {x.topic} ({', '.join(x.subscribers)}): {x.reason}" for x in plan.infeasible
+    ]
+    return lines

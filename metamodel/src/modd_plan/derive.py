@@ -1,0 +1,187 @@
+"""Derived streams: which aggregation can be computed from which, and the pure
+merge functions that compute it.
+
+A *window* is the value one stream carries for one of its periods. Its Python
+form depends on the aggregation (``None`` means the window had no sample, the
+link's presence bitmap marks it absent):
+
+===========  ==================================================
+MIN MAX      the extreme sample, or ``None``
+FIRST LAST   the first / last sample, or ``None``
+SUM          the sum of the samples (``0`` for an empty window)
+COUNT        the number of samples (``int``)
+AVERAGE      ``(mean, count)``, or ``None`` when ``count == 0``
+ALL          the list of raw samples, in publication order
+===========  ==================================================
+
+A stream of period ``k·P`` is derived from ``k`` consecutive windows of a sent
+stream of period ``P``. Every window starts at the configuration epoch, so the
+``k`` source windows tile the derived window exactly. The SubBroker calls
+:func:`derive_value` with the windows in time order.
+
+>>> merge("MIN", [3.0, None, 1.5])
+1.5
+>>> merge("AVERAGE", [(2.0, 2), (5.0, 1)])
+(3.0, 3)
+>>> derive_value("COUNT", [("AVERAGE", [(2.0, 2), None])])
+2
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+Sample = float | int | bool
+Window = Any
+
+#: For each aggregation, the aggregations of ONE sent stream it can be derived
+#: from, most preferred first (same aggregation, then cheaper, ALL last).
+SINGLE_SOURCE_RULES: dict[str, tuple[str, ...]] = {
+    "MIN": ("MIN", "ALL"),
+    "MAX": ("MAX", "ALL"),
+    "AVERAGE": ("AVERAGE", "ALL"),
+    "FIRST": ("FIRST", "ALL"),
+    "LAST": ("LAST", "ALL"),
+    "ALL": ("ALL",),
+    "COUNT": ("COUNT", "AVERAGE", "ALL"),
+    "SUM": ("SUM", "ALL"),
+}
+
+#: Aggregations derivable from TWO sent streams together: AVERAGE = SUM / COUNT.
+PAIR_SOURCE_RULES: dict[str, tuple[str, str]] = {"AVERAGE": ("SUM", "COUNT")}
+
+
+def _present(windows: Sequence[Window]) -> list[Window]:
+    return [w for w in windows if w is not None]
+
+
+def merge_min(windows: Sequence[Sample | None]) -> Sample | None:
+    """Smallest of the present windows; ``None`` when all are absent."""
+    present = _present(windows)
+    return min(present) if present else None
+
+
+def merge_max(windows: Sequence[Sample | None]) -> Sample | None:
+    """Largest of the present windows; ``None`` when all are absent."""
+    present = _present(windows)
+    return max(present) if present else None
+
+
+def merge_first(windows: Sequence[Sample | None]) -> Sample | None:
+    """First present window (windows are in time order)."""
+    present = _present(windows)
+    return present[0] if present else None
+
+
+def merge_last(windows: Sequence[Sample | None]) -> Sample | None:
+    """Last present window (windows are in time order)."""
+    present = _present(windows)
+    return present[-1] if present else None
+
+
+def merge_sum(windows: Sequence[Sample | None]) -> Sample:
+    """Sum of the window sums (absent windows count as 0)."""
+    return sum((w for w in windows if w is not None), 0)
+
+
+def merge_count(windows: Sequence[int | None]) -> int:
+    """Total number of samples."""
+    return sum(w for w in windows if w is not None)
+
+
+def merge_average(windows: Sequence[tuple[float, int] | None]) -> tuple[float, int] | None:
+    """Count-weighted mean of the window means: exact up to float rounding,
+    as the window counts travel with the means."""
+    present = [w for w in windows if w is not None and w[1] > 0]
+    count = sum(c for _, c in present)
+    if count == 0:
+        return None
+    return (sum(m * c for m, c in present) / count, count)
+
+
+def merge_all(windows: Sequence[Sequence[Sample] | None]) -> list[Sample]:
+    """Concatenation of the raw samples."""
+    out: list[Sample] = []
+    for w in windows:
+        if w is not None:
+            out.extend(w)
+    return out
+
+
+MERGES: dict[str, Callable[[Sequence[Any]], Any]] = {
+    "MIN": merge_min,
+    "MAX": merge_max,
+    "FIRST": merge_first,
+    "LAST": merge_last,
+    "SUM": merge_sum,
+    "COUNT": merge_count,
+    "AVERAGE": merge_average,
+    "ALL": merge_all,
+}
+
+
+def merge(aggregation: str, windows: Sequence[Window]) -> Window:
+    """Combine consecutive windows of one aggregation into one window."""
+    return MERGES[aggregation](windows)
+
+
+def aggregate(aggregation: str, samples: Sequence[Sample]) -> Window:
+    """The window value of ``aggregation`` over raw ``samples`` (what the
+    PubBroker computes; also how anything is derived from ALL).
+
+    >>> aggregate("AVERAGE", [1.0, 2.0, 6.0])
+    (3.0, 3)
+    """
+    if aggregation == "ALL":
+        return list(samples)
+    if aggregation == "COUNT":
+        return len(samples)
+    if aggregation == "SUM":
+        return sum(samples, 0)
+    if aggregation == "AVERAGE":
+        return (sum(samples, 0) / len(samples), len(samples)) if samples else None
+    if not samples:
+        return None
+    if aggregation == "MIN":
+        return min(samples)
+    if aggregation == "MAX":
+        return max(samples)
+    if aggregation == "FIRST":
+        return samples[0]
+    if aggregation == "LAST":
+        return samples[-1]
+    raise ValueError(f"unknown aggregation {aggregation!r}")
+
+
+def _convert(target: str, source: str, window: Window) -> Window:
+    """One source window seen as a window of ``target`` (same time span)."""
+    if source == target:
+        return window
+    if source == "ALL":
+        return aggregate(target, window or [])
+    if target == "COUNT" and source == "AVERAGE":
+        return 0 if window is None else window[1]
+    raise ValueError(f"{target} cannot be derived from {source}")
+
+
+def derive_value(target: str, sources: Sequence[tuple[str, Sequence[Window]]]) -> Window:
+    """The value of a derived stream from the windows of its sources.
+
+    ``sources`` lists ``(source aggregation, windows in time order)``; one
+    source for the single-source rules, ``SUM`` then ``COUNT`` for the pair
+    rule. Raises ValueError when no rule applies.
+    """
+    if len(sources) == 1:
+        agg, windows = sources[0]
+        return merge(target, [_convert(target, agg, w) for w in windows])
+    if len(sources) == 2 and PAIR_SOURCE_RULES.get(target) == (sources[0][0], sources[1][0]):
+        total = merge_sum(sources[0][1])
+        count = merge_count(sources[1][1])
+        return (float(total) / count, count) if count else None
+    raise ValueError(f"{target} cannot be derived from {[s for s, _ in sources]}")
+
+
+def single_source_allowed(target: str, source: str) -> bool:
+    """True when ``target`` windows can be computed from ``source`` windows."""
+    return source in SINGLE_SOURCE_RULES[target]

@@ -1,0 +1,152 @@
+"""Predicted bytes on the drone link, from the frame layout of the MoDD link
+protocol (docs/protocol.md, section DATA) — keep :func:`data_frame_bytes` and
+:func:`window_value_bytes` in step with that spec; the link codec's tests
+cross-check them against real encoded frames.
+
+DATA frame, as assumed here::
+
+    varint length | type (1 B) | config id (1 B) | slot sequence (1 B, mod 256)
+    | presence bitmap (ceil(k/8) B, only when some stream is absent) | values
+
+Values in stream-id order: float32 4 B, float64 8 B, int a zigzag varint
+(estimated at :data:`INT_VALUE_BYTES`), bool 1 B; AVERAGE adds a varint sample
+count; COUNT is a varint; ALL is a varint count then the raw samples.
+One TCP segment per slot: 52 B of IPv4 + TCP (timestamps option) headers,
+and one pure ACK (52 B) per segment in the other direction.
+
+The prediction assumes every stream present (a sample in every window).
+
+The plain pub/sub comparison sends every raw sample to every subscriber as
+its own MQTT 3.1.1 QoS 0 PUBLISH (2 B fixed header, 2 B topic length, the
+full topic name, the raw value) in its own TCP segment, ACKed likewise.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from math import ceil
+
+from .schedule import Schedule
+
+TCP_IP_HEADER_BYTES = 52
+UDP_IP_HEADER_BYTES = 28
+DATA_HEADER_BYTES = 3  # type, config id, slot sequence
+INT_VALUE_BYTES = 4  # zigzag varint of a value below 2**27 in magnitude
+SAMPLE_BYTES: dict[str, int] = {"float32": 4, "float64": 8, "int": INT_VALUE_BYTES, "bool": 1}
+MQTT_PUBLISH_OVERHEAD_BYTES = 4  # fixed header + topic length
+#: Above this many slots per hyperperiod the frame-length varints are
+#: estimated from the mean frame instead of walked slot by slot.
+EXACT_WALK_LIMIT = 20_000
+
+
+def varint_size(n: int) -> int:
+    """Bytes of an unsigned LEB128 varint.
+
+    >>> varint_size(127), varint_size(128)
+    (1, 2)
+    """
+    size = 1
+    while n >= 0x80:
+        n >>= 7
+        size += 1
+    return size
+
+
+def aggregate_value_type(aggregation: str, topic_type: str) -> str:
+    """Wire type of one aggregated value of a topic of ``topic_type``."""
+    if aggregation in ("MIN", "MAX", "FIRST", "LAST", "ALL"):
+        return topic_type
+    if aggregation == "AVERAGE":
+        return "float32" if topic_type == "float32" else "float64"
+    if aggregation == "SUM":
+        return topic_type if topic_type.startswith("float") else "int"
+    return "int"  # COUNT
+
+
+def window_value_bytes(aggregation: str, topic_type: str, samples: Fraction) -> Fraction:
+    """Expected bytes of one window's value when ``samples`` samples (on
+    average) fall in a window."""
+    count_bytes = varint_size(ceil(samples))
+    if aggregation == "COUNT":
+        return Fraction(count_bytes)
+    value = SAMPLE_BYTES[aggregate_value_type(aggregation, topic_type)]
+    if aggregation == "AVERAGE":
+        return Fraction(value + count_bytes)
+    if aggregation == "ALL":
+        return count_bytes + samples * value
+    return Fraction(value)
+
+
+def data_frame_bytes(values_bytes: int, stream_count: int, some_absent: bool = False) -> int:
+    """Bytes of one DATA frame (length prefix included, no IP/TCP headers)."""
+    body = DATA_HEADER_BYTES + values_bytes + ((stream_count + 7) // 8 if some_absent else 0)
+    return varint_size(body) + body
+
+
+@dataclass(frozen=True)
+class LinkCost:
+    """Predicted bytes per second, IP and TCP headers included."""
+
+    drone_to_base: float
+    base_to_drone: float
+    plain_pubsub: float
+    plain_pubsub_acks: float
+    frames_per_s: float
+
+    def to_json(self) -> dict[str, float]:
+        total = self.drone_to_base + self.base_to_drone
+        plain = self.plain_pubsub + self.plain_pubsub_acks
+        return {
+            "drone_to_base": round(self.drone_to_base, 3),
+            "base_to_drone": round(self.base_to_drone, 3),
+            "plain_pubsub": round(self.plain_pubsub, 3),
+            "plain_pubsub_acks": round(self.plain_pubsub_acks, 3),
+            "frames_per_s": round(self.frames_per_s, 6),
+            "saving_ratio": round(1 - total / plain, 6) if plain else 0.0,
+        }
+
+
+def _frame_bytes_per_hyperperiod(schedule: Schedule, window_bytes: Sequence[Fraction]) -> float:
+    """Sum of the DATA frames' sizes over one hyperperiod."""
+    m = schedule.messages_per_hyperperiod
+    if m == 0:
+        return 0.0
+    if m <= EXACT_WALK_LIMIT:
+        total = 0
+        for _, _, ids in schedule.first_slots(m):
+            total += data_frame_bytes(ceil(sum(window_bytes[i] for i in ids)), len(ids))
+        return float(total)
+    values = sum(
+        schedule.value_count_per_hyperperiod(i) * b for i, b in enumerate(window_bytes)
+    )
+    mean_body = DATA_HEADER_BYTES + values / m
+    return float(values + m * (DATA_HEADER_BYTES + varint_size(ceil(mean_body))))
+
+
+def predict(
+    schedule: Schedule,
+    window_bytes: Sequence[Fraction],
+    plain_streams: Mapping[str, tuple[Fraction, int]],
+) -> LinkCost:
+    """Link cost of a schedule whose stream ``i`` carries ``window_bytes[i]``
+    per window; ``plain_streams`` maps each subscriber to (publication period
+    of its topic, bytes of one plain pub/sub message payload)."""
+    h = float(schedule.hyperperiod) if schedule.messages_per_hyperperiod else 0.0
+    frames = schedule.messages_per_hyperperiod / h if h else 0.0
+    data = _frame_bytes_per_hyperperiod(schedule, window_bytes) / h if h else 0.0
+    plain_rate = sum(1 / float(pm) for pm, _ in plain_streams.values())
+    plain = sum((TCP_IP_HEADER_BYTES + size) / float(pm) for pm, size in plain_streams.values())
+    return LinkCost(
+        drone_to_base=data + frames * TCP_IP_HEADER_BYTES,
+        base_to_drone=frames * TCP_IP_HEADER_BYTES,
+        plain_pubsub=plain,
+        plain_pubsub_acks=plain_rate * TCP_IP_HEADER_BYTES,
+        frames_per_s=frames,
+    )
+
+
+def plain_message_bytes(topic: str, topic_type: str) -> int:
+    """Payload of one plain pub/sub message carrying one raw sample."""
+    return MQTT_PUBLISH_OVERHEAD_BYTES + len(topic.encode()) + SAMPLE_BYTES[topic_type]

@@ -1,0 +1,225 @@
+"""The plan of a model: streams, schedule, buffer sizes, delays, link cost.
+
+One function, :func:`make_plan`, used by the backend (live), the generators
+and the SubBroker (at run time, with the measured PING):
+
+>>> plan = make_plan(model)                                # doctest: +SKIP
+>>> plan.buffer_sizes["usv.accelerometer.accel_x"]         # doctest: +SKIP
+28
+>>> plan.to_json()["messages_per_hyperperiod"]             # doctest: +SKIP
+8
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from fractions import Fraction
+from math import lcm
+from typing import Any
+
+from modd_model.numbers import MICROS_PER_SECOND, fraction_to_decimal, to_fraction, to_micros
+from modd_model.query import Topic, link_settings, topics
+
+from .buffers import BufferProblem, BufferSolution, Infeasibility, Subscription, solve_exact
+from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
+from .planjson import plan_to_json
+from .schedule import Schedule
+from .streams import PlannedStream, StreamKey, plan_streams, requested_streams
+
+METHODS = ("exact", "cvxpy")
+
+
+def _us(period: Fraction) -> int:
+    return to_micros(fraction_to_decimal(period))
+
+
+def _seconds(us: int) -> str:
+    return fraction_to_decimal(Fraction(us, MICROS_PER_SECOND))
+
+
+@dataclass(frozen=True)
+class PlannerConstants:
+    """MAX_BUFFER, PING (s), alpha, beta: from the model's link, or overridden."""
+
+    max_buffer: int
+    ping_s: Fraction
+    alpha: Fraction
+    beta: Fraction
+
+    @property
+    def cap_us(self) -> int:
+        """3 x PING in whole microseconds (deviations are whole µs)."""
+        return int(3 * self.ping_s * MICROS_PER_SECOND)
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "max_buffer": self.max_buffer,
+            "ping_s": fraction_to_decimal(self.ping_s),
+            "alpha": fraction_to_decimal(self.alpha),
+            "beta": fraction_to_decimal(self.beta),
+            "delay_cap_s": _seconds(self.cap_us),
+        }
+
+
+def constants_for(
+    model: Mapping[str, Any],
+    *,
+    ping_s: Fraction | None = None,
+    alpha: Fraction | None = None,
+    beta: Fraction | None = None,
+    max_buffer: int | None = None,
+) -> PlannerConstants:
+    """The model's planner constants (paper defaults), with overrides."""
+    link = link_settings(dict(model))
+    return PlannerConstants(
+        max_buffer=link.max_buffer if max_buffer is None else max_buffer,
+        ping_s=link.ping_s if ping_s is None else ping_s,
+        alpha=link.alpha if alpha is None else alpha,
+        beta=link.beta if beta is None else beta,
+    )
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Everything the brokers and the UI need, computed once."""
+
+    topics: tuple[Topic, ...]
+    streams: tuple[PlannedStream, ...]
+    subscriptions: dict[str, StreamKey]
+    schedule: Schedule
+    buffers: BufferSolution
+    unpublished: tuple[Infeasibility, ...]
+    constants: PlannerConstants
+    link: LinkCost
+
+    @property
+    def sent_streams(self) -> list[PlannedStream]:
+        """Sent streams in id order."""
+        return sorted((s for s in self.streams if s.id is not None), key=lambda s: s.id or 0)
+
+    @property
+    def buffer_sizes(self) -> dict[str, int]:
+        return dict(self.buffers.sizes)
+
+    @property
+    def delays(self) -> dict[str, Fraction]:
+        """Per subscriber |ps - n * pm| in seconds."""
+        return {k: Fraction(v, MICROS_PER_SECOND) for k, v in self.buffers.deviations_us.items()}
+
+    @property
+    def infeasible(self) -> tuple[Infeasibility, ...]:
+        return self.unpublished + self.buffers.infeasible
+
+    def stream(self, key: str) -> PlannedStream:
+        """The planned stream with this key (KeyError if none)."""
+        for s in self.streams:
+            if s.stream.key == key:
+                return s
+        raise KeyError(key)
+
+    def to_json(self) -> dict[str, Any]:
+        """The plan as one JSON object (see docs/planning.md)."""
+        return plan_to_json(self)
+
+
+def _buffer_problem(
+    model: Mapping[str, Any], tops: Mapping[str, Topic], constants: PlannerConstants
+) -> tuple[BufferProblem, tuple[Infeasibility, ...]]:
+    published = [t for t in tops.values() if t.period is not None]
+    subs: list[Subscription] = []
+    orphans: dict[str, list[str]] = {}
+    for sub in model.get("subscribers", []):
+        topic = tops.get(sub["topic"])
+        if topic is None or topic.period is None:
+            orphans.setdefault(sub["topic"], []).append(sub["name"])
+        else:
+            subs.append(Subscription(sub["name"], sub["topic"], to_micros(sub["periodS"])))
+    problem = BufferProblem(
+        topics=tuple(t.name for t in published),
+        publication_us=tuple(_us(t.period) for t in published if t.period is not None),
+        subscriptions=tuple(subs),
+        max_buffer=constants.max_buffer,
+        cap_us=constants.cap_us,
+        alpha=constants.alpha,
+        beta=constants.beta,
+    )
+    unpublished = tuple(
+        Infeasibility(t, tuple(names), "no publisher publishes this topic")
+        for t, names in orphans.items()
+    )
+    return problem, unpublished
+
+
+def _window_bytes(stream: StreamKey, tops: Mapping[str, Topic]) -> Fraction:
+    topic = tops.get(stream.topic)
+    if topic is None:
+        return window_value_bytes(stream.aggregation, "float32", Fraction(0))
+    samples = stream.period / topic.period if topic.period else Fraction(0)
+    return window_value_bytes(stream.aggregation, topic.type, samples)
+
+
+def _link_cost(
+    model: Mapping[str, Any], sched: Schedule, sent: list[PlannedStream], tops: Mapping[str, Topic]
+) -> LinkCost:
+    window_bytes = [_window_bytes(s.stream, tops) for s in sent]
+    plain: dict[str, tuple[Fraction, int]] = {}
+    for sub in model.get("subscribers", []):
+        topic = tops.get(sub["topic"])
+        if topic is not None and topic.period is not None:
+            plain[sub["name"]] = (topic.period, plain_message_bytes(topic.name, topic.type))
+    return predict(sched, window_bytes, plain)
+
+
+def make_plan(
+    model: Mapping[str, Any],
+    *,
+    ping_s: Fraction | None = None,
+    alpha: Fraction | None = None,
+    beta: Fraction | None = None,
+    max_buffer: int | None = None,
+    method: str = "exact",
+) -> Plan:
+    """Plan a validated model. ``method`` picks the buffer-size solver:
+    ``"exact"`` (fast, default) or ``"cvxpy"`` (the MILP with HiGHS); both
+    give the same sizes. Overrides replace the model's planner constants."""
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
+    constants = constants_for(
+        model, ping_s=ping_s, alpha=alpha, beta=beta, max_buffer=max_buffer
+    )
+    tops = topics(dict(model))
+    index = {name: i for i, name in enumerate(tops)}
+    requested = requested_streams(model)
+    for key in requested:
+        if key.topic not in index:
+            index[key.topic] = len(index)
+
+    def cost(s: StreamKey) -> float:
+        return float(_window_bytes(s, tops) / s.period)
+
+    streams = plan_streams(requested, index, cost)
+    sent = sorted((s for s in streams if s.id is not None), key=lambda s: s.id or 0)
+    hyper = lcm(*(_us(k.period) for k in requested)) if requested else 0
+    sched = Schedule.from_periods_us([_us(s.stream.period) for s in sent], hyper)
+    problem, unpublished = _buffer_problem(model, tops, constants)
+    if method == "cvxpy":
+        from .milp import solve_milp
+
+        buffers = solve_milp(problem)
+    else:
+        buffers = solve_exact(problem)
+    subscriptions = {
+        sub["name"]: StreamKey(sub["topic"], sub["aggregation"], to_fraction(sub["periodS"]))
+        for sub in model.get("subscribers", [])
+    }
+    return Plan(
+        topics=tuple(tops.values()),
+        streams=streams,
+        subscriptions=subscriptions,
+        schedule=sched,
+        buffers=buffers,
+        unpublished=unpublished,
+        constants=constants,
+        link=_link_cost(model, sched, sent, tops),
+    )

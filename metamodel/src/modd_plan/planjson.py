@@ -1,0 +1,97 @@
+"""The plan as one JSON object: the shape the backend, the UI, the CLI
+(``modd plan FILE --json``) and the SubBroker's CONFIG builder read.
+
+Periods and delays are decimal strings (exact); wire periods are integer
+microseconds. See docs/planning.md for every field.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any
+
+from modd_model.numbers import MICROS_PER_SECOND, fraction_to_decimal
+
+from .streams import PlannedStream
+
+if TYPE_CHECKING:
+    from .plan import Plan
+
+#: Slots listed in the JSON schedule (the first hyperperiod when it is shorter).
+SLOT_LIST_LIMIT = 1000
+
+
+def _dec(value: Fraction) -> str:
+    return fraction_to_decimal(value)
+
+
+def _us(value: Fraction) -> int:
+    return int(value * MICROS_PER_SECOND)
+
+
+def _stream_json(s: PlannedStream) -> dict[str, Any]:
+    first = s.sources[0] if s.sources else None
+    return {
+        "id": s.id,
+        "key": s.stream.key,
+        "topic": s.stream.topic,
+        "aggregation": s.stream.aggregation,
+        "period_s": _dec(s.stream.period),
+        "period_us": _us(s.stream.period),
+        "sent": s.sent,
+        "derived_from": first.stream.key if first else None,
+        "factor": first.factor if first else 1,
+        "sources": [{"key": x.stream.key, "factor": x.factor} for x in s.sources],
+        "subscribers": list(s.subscribers),
+    }
+
+
+def _schedule_json(plan: Plan) -> dict[str, Any]:
+    sched = plan.schedule
+    slots = sched.first_slots(SLOT_LIST_LIMIT)
+    return {
+        "epoch_phase_s": "0.0",
+        "streams": [
+            {"id": s.id, "key": s.stream.key, "period_us": _us(s.stream.period)}
+            for s in plan.sent_streams
+        ],
+        "slots": [
+            {"slot": k, "date_s": _dec(date), "streams": ids} for k, date, ids in slots
+        ],
+        "slots_listed": len(slots),
+        "slots_truncated": sched.messages_per_hyperperiod > len(slots),
+    }
+
+
+def plan_to_json(plan: Plan) -> dict[str, Any]:
+    """Every field of the shared contract (docs/planning.md, "Plan JSON")."""
+    sizes = plan.buffer_sizes
+    return {
+        "hyperperiod_s": _dec(plan.schedule.hyperperiod),
+        "messages_per_hyperperiod": plan.schedule.messages_per_hyperperiod,
+        "topics": [
+            {
+                "id": i,
+                "name": t.name,
+                "type": t.type,
+                "unit": t.unit,
+                "publication_period_s": _dec(t.period) if t.period is not None else None,
+                "period_us": _us(t.period) if t.period is not None else None,
+                "buffer_size": sizes.get(t.name),
+            }
+            for i, t in enumerate(plan.topics)
+        ],
+        "streams": [_stream_json(s) for s in plan.streams],
+        "subscriptions": {name: key.key for name, key in plan.subscriptions.items()},
+        "buffer_sizes": sizes,
+        "schedule": _schedule_json(plan),
+        "delays": {name: _dec(d) for name, d in plan.delays.items()},
+        "max_delay_s": _dec(Fraction(plan.buffers.max_deviation_us, MICROS_PER_SECOND)),
+        "predicted_link_bytes_per_s": plan.link.to_json(),
+        "infeasible": [
+            {"topic": x.topic, "subscribers": list(x.subscribers), "reason": x.reason}
+            for x in plan.infeasible
+        ],
+        "violates_delay_cap": bool(plan.buffers.infeasible),
+        "constants": plan.constants.to_json(),
+    }

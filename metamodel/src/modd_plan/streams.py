@@ -1,0 +1,185 @@
+"""Streams: what the subscribers ask for, which of it crosses the link, and
+what the SubBroker derives from what.
+
+A *stream* is (topic, aggregation, window period). Identical streams asked by
+several subscribers are one stream. *Sent* streams get ids ``0..k-1`` ordered
+by topic declaration order, then aggregation in the schema's enum order, then
+period ascending (the shared contract with the link, docs/protocol.md).
+
+Choice of the sent set, per topic: start from every requested stream sent,
+then walk the streams from the most expensive on the link (value bytes per
+second) and drop each one that stays derivable (:mod:`modd_plan.derive`) from
+the streams still sent. Derivability only grows with the sent set, so one pass
+is enough: a stream that cannot be dropped now never can be later.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any
+
+from modd_model.numbers import fraction_to_decimal, to_fraction
+
+from .derive import PAIR_SOURCE_RULES, SINGLE_SOURCE_RULES
+
+#: The schema's Aggregation enum, in order (the tie-break of stream ids).
+AGGREGATIONS: tuple[str, ...] = ("MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM")
+
+
+@dataclass(frozen=True)
+class StreamKey:
+    """(topic, aggregation, window period in seconds).
+
+    >>> StreamKey("usv.a.x", "AVERAGE", Fraction(1, 4)).key
+    'usv.a.x/AVERAGE/0.25'
+    """
+
+    topic: str
+    aggregation: str
+    period: Fraction
+
+    @property
+    def key(self) -> str:
+        return f"{self.topic}/{self.aggregation}/{fraction_to_decimal(self.period)}"
+
+    @classmethod
+    def parse(cls, key: str) -> StreamKey:
+        """Inverse of :attr:`key`."""
+        topic, aggregation, period = key.rsplit("/", 2)
+        return cls(topic, aggregation, to_fraction(period))
+
+
+@dataclass(frozen=True)
+class Source:
+    """A sent stream a derived stream is computed from, ``factor`` windows at a time."""
+
+    stream: StreamKey
+    factor: int
+
+
+@dataclass(frozen=True)
+class PlannedStream:
+    """A requested (or helper) stream with its fate: sent with an id, or derived."""
+
+    stream: StreamKey
+    id: int | None
+    sources: tuple[Source, ...]
+    subscribers: tuple[str, ...]
+
+    @property
+    def sent(self) -> bool:
+        return self.id is not None
+
+
+def requested_streams(model: Mapping[str, Any]) -> dict[StreamKey, list[str]]:
+    """Each distinct stream the subscribers ask for, with its subscribers in
+    model order."""
+    out: dict[StreamKey, list[str]] = {}
+    for sub in model.get("subscribers", []):
+        key = StreamKey(sub["topic"], sub["aggregation"], to_fraction(sub["periodS"]))
+        out.setdefault(key, []).append(sub["name"])
+    return out
+
+
+def _factor(target: StreamKey, source: StreamKey) -> int | None:
+    ratio = target.period / source.period
+    return int(ratio) if ratio.denominator == 1 else None
+
+
+def find_sources(target: StreamKey, sent: Iterable[StreamKey]) -> tuple[Source, ...] | None:
+    """How ``target`` is obtained from ``sent`` streams: ``(Source(target, 1),)``
+    if it is sent itself, the preferred derivation otherwise, ``None`` if it
+    cannot be computed. Preference: the rule order of
+    :data:`~modd_plan.derive.SINGLE_SOURCE_RULES`, then the fewest windows to
+    merge (the longest source period), then the pair rule SUM + COUNT."""
+    candidates = [s for s in sent if s.topic == target.topic]
+    if target in candidates:
+        return (Source(target, 1),)
+    best: tuple[int, int, StreamKey] | None = None
+    for s in candidates:
+        if s.aggregation not in SINGLE_SOURCE_RULES[target.aggregation]:
+            continue
+        factor = _factor(target, s)
+        if factor is None:
+            continue
+        rank = (SINGLE_SOURCE_RULES[target.aggregation].index(s.aggregation), factor, s)
+        if best is None or rank[:2] < best[:2]:
+            best = rank
+    if best is not None:
+        return (Source(best[2], best[1]),)
+    return _pair_sources(target, candidates)
+
+
+def _pair_sources(target: StreamKey, candidates: Sequence[StreamKey]) -> tuple[Source, ...] | None:
+    pair = PAIR_SOURCE_RULES.get(target.aggregation)
+    if pair is None:
+        return None
+    chosen: list[Source] = []
+    for aggregation in pair:
+        options = [
+            (f, s)
+            for s in candidates
+            if s.aggregation == aggregation and (f := _factor(target, s)) is not None
+        ]
+        if not options:
+            return None
+        factor, stream = min(options, key=lambda o: o[0])
+        chosen.append(Source(stream, factor))
+    return tuple(chosen)
+
+
+def stream_order(
+    topic_index: Mapping[str, int],
+) -> Callable[[StreamKey], tuple[int, int, Fraction]]:
+    """Sort key of the contract: topic declaration order, aggregation enum
+    order, period ascending."""
+
+    def order(s: StreamKey) -> tuple[int, int, Fraction]:
+        return (topic_index[s.topic], AGGREGATIONS.index(s.aggregation), s.period)
+
+    return order
+
+
+def choose_sent(
+    requested: Iterable[StreamKey], cost_per_s: Callable[[StreamKey], float]
+) -> set[StreamKey]:
+    """The sent set: requested streams minus those derivable from the rest,
+    dropping the most expensive first (ties: longest period, then key)."""
+    sent = set(requested)
+    by_topic: dict[str, list[StreamKey]] = {}
+    for s in sent:
+        by_topic.setdefault(s.topic, []).append(s)
+    for streams in by_topic.values():
+        if len(streams) < 2:
+            continue
+        kept = set(streams)
+        for s in sorted(streams, key=lambda s: (-cost_per_s(s), -s.period, s.key)):
+            rest = kept - {s}
+            if all(find_sources(r, rest) is not None for r in streams if r not in rest):
+                kept = rest
+        sent -= set(streams) - kept
+    return sent
+
+
+def plan_streams(
+    requested: Mapping[StreamKey, Sequence[str]],
+    topic_index: Mapping[str, int],
+    cost_per_s: Callable[[StreamKey], float],
+) -> tuple[PlannedStream, ...]:
+    """Every requested stream, in contract order, with its id if sent or its
+    sources if derived."""
+    sent = choose_sent(requested, cost_per_s)
+    order = stream_order(topic_index)
+    ids = {s: i for i, s in enumerate(sorted(sent, key=order))}
+    out: list[PlannedStream] = []
+    for s in sorted(set(requested) | sent, key=order):
+        subscribers = tuple(requested.get(s, ()))
+        if s in ids:
+            out.append(PlannedStream(s, ids[s], (), subscribers))
+        else:
+            sources = find_sources(s, sent)
+            assert sources is not None  # choose_sent keeps every stream derivable
+            out.append(PlannedStream(s, None, sources, subscribers))
+    return tuple(out)
