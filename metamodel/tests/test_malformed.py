@@ -43,7 +43,7 @@ CASES = [
     ("endpoint-without-port", '"127.0.0.1":7171,', '"127.0.0.1",', "unexpected", 10),
     ("publisher-missing-comma", '0.04, "usv.imu.ax"', '0.04 "usv.imu.ax"', "expected ','", 13),
     ("subscriber-missing-aggregation", '2.0, AVERAGE);', "2.0);", "expected ','", 16),
-    ("negative-period", "0.25, MIN", "-0.25, MIN", "unexpected character '-'", 17),
+    ("negative-period", "0.25, MIN", "-0.25, MIN", "unsigned decimal number", 17),
     ("eof-inside-block",
      "    Subscriber sub_2(\"127.0.0.1\":7402, \"usv.imu.ay\", 0.25, MIN);\n}\n",
      "", "unexpected end of file", 16),
@@ -89,6 +89,19 @@ CASES = [
     ("empty-sensor", "Sensor imu measures {", "Sensor empty measures { }\n        Sensor imu "
      "measures {", "should be non-empty", 3),
     ("fractional-port", "7402", "7402.5", "whole number", 17),
+    ("unknown-sensor-kind", "Sensor imu measures", "Sensor imu kind can measures",
+     "unknown sensor kind 'can'", 3),
+    ("mavlink-without-source", "Sensor imu measures", "Sensor imu kind mavlink measures",
+     "needs a source", 4),
+    ("source-on-generic-sensor", "ax(METER_PER_SECOND_SQUARED);",
+     "ax(METER_PER_SECOND_SQUARED) from RAW_IMU.xacc;", "is not of kind mavlink", 4),
+    ("mavlink-zero-scale", "Sensor imu measures {\n            ax(METER_PER_SECOND_SQUARED);\n"
+     "            ay(METER_PER_SECOND_SQUARED);\n            flag(NONE, bool);",
+     "Sensor imu kind mavlink measures {\n            ax(METER_PER_SECOND_SQUARED) from "
+     "RAW_IMU.xacc scale 0;\n            ay(METER_PER_SECOND_SQUARED) from RAW_IMU.yacc;\n"
+     "            flag(NONE, bool) from HEARTBEAT.base_mode;", "scale must be", 4),
+    ("mavlink-lowercase-message", "ax(METER_PER_SECOND_SQUARED);",
+     "ax(METER_PER_SECOND_SQUARED) from raw_imu.xacc;", "not well-formed", 4),
 ]
 
 

@@ -28,10 +28,13 @@ def _optional(d: dict[str, Any], **opts: Any) -> st.SearchStrategy[dict[str, Any
 
 
 units = st.one_of(st.sampled_from(KNOWN_UNITS), free_text.filter(bool))
+finite = st.floats(allow_nan=False, allow_infinity=False)
+sources = _optional({"message": st.from_regex(r"[A-Z][A-Z0-9_]{0,20}", fullmatch=True),
+                     "field": names}, scale=finite, offset=finite)
 variables = _optional({"name": names, "unit": units},
-                      type=st.sampled_from(VALUE_TYPES), description=free_text)
+                      type=st.sampled_from(VALUE_TYPES), description=free_text, source=sources)
 sensors = _optional({"name": names, "variables": st.lists(variables, min_size=1, max_size=3)},
-                    description=free_text)
+                    description=free_text, kind=st.sampled_from(["generic", "mavlink"]))
 topic_names = st.builds(lambda a, b, c: f"{a}.{b}.{c}", names, names, names)
 
 

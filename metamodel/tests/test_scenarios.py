@@ -86,4 +86,9 @@ def test_product_extensions_round_trip() -> None:
     assert water[1] == {"name": "conductivity", "unit": "mS/cm", "type": "float64",
                         "description": "Water conductivity \"EC25\""}
     assert "endpoint" not in model["subscribers"][1]
+    autopilot = model["drone"]["sensors"][2]
+    assert autopilot["kind"] == "mavlink"
+    assert autopilot["variables"][0]["source"] == {"message": "GLOBAL_POSITION_INT",
+                                                   "field": "lat", "scale": 1e-7}
+    assert autopilot["variables"][1]["source"]["offset"] == -0.5
     assert load_text(dumps(model, "modd"), "again.modd").model == model

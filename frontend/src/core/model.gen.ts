@@ -71,6 +71,8 @@ export interface Sensor {
   name: Name;
   /** Free text shown in the workbench. */
   description?: string;
+  /** How the sensor is read: generic (a driver publishes through a publisher client) or mavlink (the MAVLink bridge publishes fields of an autopilot's messages, mapped per variable). generic when absent. */
+  kind?: "generic" | "mavlink";
   /** What the sensor measures. */
   variables: MeasuredVariable[];
 }
@@ -85,6 +87,20 @@ export interface MeasuredVariable {
   type?: ValueType;
   /** Free text shown in the workbench. */
   description?: string;
+  /** For a variable of a mavlink sensor: the MAVLink message field it is read from. */
+  source?: MavlinkField;
+}
+
+/** A field of a MAVLink message, converted to the variable's unit as value = raw * scale + offset. */
+export interface MavlinkField {
+  /** MAVLink message name, e.g. GLOBAL_POSITION_INT. */
+  message: string;
+  /** Field of the message, e.g. lat. */
+  field: Name;
+  /** Factor applied to the raw field (e.g. 1e-7 for degE7 to degrees). */
+  scale?: number;
+  /** Added after scaling. */
+  offset?: number;
 }
 
 /** The on-board broker: archives every sample and sends scheduled aggregates over the link. */

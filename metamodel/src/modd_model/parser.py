@@ -17,7 +17,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from .diagnostics import Diagnostic, Location, ModelError, pointer_join
 from .numbers import canonical_decimal
-from .vocabulary import AGGREGATIONS, KNOWN_UNITS, SCHEMA_VERSION, VALUE_TYPES
+from .vocabulary import AGGREGATIONS, KNOWN_UNITS, SCHEMA_VERSION, SENSOR_KINDS, VALUE_TYPES
 
 SourceMap = dict[str, Location]
 
@@ -37,6 +37,7 @@ _TERMINAL_NAMES = {
     "NAME": "a name",
     "NUMBER": "a number",
     "STRING": "a string in double quotes",
+    "SCALAR": "a number",
     "$END": "end of file",
 }
 
@@ -101,6 +102,9 @@ def _syntax_diagnostic(exc: UnexpectedInput, filename: str, lines: list[str]) ->
     if isinstance(exc, UnexpectedToken) and exc.token.type == "$END":
         line, col = max(len(lines), 1), len(lines[-1]) + 1 if lines else 1
         message = f"unexpected end of file, expected {_describe_expected(exc.expected)}"
+    elif isinstance(exc, UnexpectedToken) and exc.token.type == "SCALAR" \
+            and "NUMBER" in exc.expected:
+        message = f"expected an unsigned decimal number, found {exc.token.value!r}"
     elif isinstance(exc, UnexpectedToken):
         message = f"unexpected {exc.token.value!r}, expected {_describe_expected(exc.expected)}"
     elif isinstance(exc, UnexpectedCharacters):
@@ -237,6 +241,14 @@ class _Builder:
             assert isinstance(child, Tree)
             if child.data == "description":
                 sensor["description"] = _unquote(child.children[0])  # type: ignore[arg-type]
+            elif child.data == "sensor_kind":
+                kind = child.children[0]
+                assert isinstance(kind, Token)
+                self._mark(ptr + "/kind", kind)
+                if str(kind) not in SENSOR_KINDS:
+                    self._error(kind, f"unknown sensor kind {str(kind)!r}; expected one of "
+                                f"{', '.join(SENSOR_KINDS)}", ptr + "/kind")
+                sensor["kind"] = str(kind)
             else:
                 variables.append(self._variable(child, f"{ptr}/variables/{len(variables)}"))
         sensor["variables"] = variables
@@ -266,9 +278,22 @@ class _Builder:
                     self._error(child, f"unknown value type {str(child)!r}; expected one of "
                                 f"{', '.join(VALUE_TYPES)}", ptr + "/type")
                 var["type"] = str(child)
+            elif child.data == "source":
+                var["source"] = self._source(child, ptr + "/source")
             else:
                 var["description"] = _unquote(child.children[0])  # type: ignore[arg-type]
         return var
+
+    def _source(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
+        message, field, *factors = node.children
+        self._mark(ptr, node)
+        source: dict[str, Any] = {"message": str(message), "field": str(field)}
+        for factor in factors:
+            assert isinstance(factor, Tree)
+            tok = factor.children[0]
+            assert isinstance(tok, Token)
+            source[str(factor.data)] = float(tok)
+        return source
 
     def _endpoint(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
         host, port = node.children

@@ -28,6 +28,14 @@ def _description(obj: dict[str, Any]) -> str:
     return f" {quote(obj['description'])}" if "description" in obj else ""
 
 
+def _source(src: dict[str, Any]) -> str:
+    text = f" from {src['message']}.{src['field']}"
+    for key in ("scale", "offset"):
+        if key in src:
+            text += f" {key} {float(src[key])!r}"
+    return text
+
+
 def _settings(values: dict[str, Any], known: dict[str, tuple[str, str]], depth: int) -> list[str]:
     pad = INDENT * depth
     lines: list[str] = []
@@ -43,11 +51,13 @@ def _settings(values: dict[str, Any], known: dict[str, tuple[str, str]], depth: 
 def _drone(drone: dict[str, Any]) -> list[str]:
     out = [f"Drone {drone['name']}{_description(drone)} {{", f"{INDENT}Sensors {{"]
     for s in drone["sensors"]:
-        out.append(f"{INDENT * 2}Sensor {s['name']}{_description(s)} measures {{")
+        kind = f" kind {s['kind']}" if "kind" in s else ""
+        out.append(f"{INDENT * 2}Sensor {s['name']}{_description(s)}{kind} measures {{")
         for v in s["variables"]:
             unit = v["unit"] if v["unit"] in KNOWN_UNITS else quote(v["unit"])
             vtype = f", {v['type']}" if "type" in v else ""
-            out.append(f"{INDENT * 3}{v['name']}({unit}{vtype}){_description(v)};")
+            source = _source(v["source"]) if "source" in v else ""
+            out.append(f"{INDENT * 3}{v['name']}({unit}{vtype}){_description(v)}{source};")
         out.append(f"{INDENT * 2}}}")
     out += [f"{INDENT}}}", "}"]
     return out

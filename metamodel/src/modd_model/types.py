@@ -48,6 +48,7 @@ class Sensor(TypedDict):
 
     name: Name
     description: NotRequired[str]
+    kind: NotRequired[Literal["generic", "mavlink"]]
     variables: list[MeasuredVariable]
 
 
@@ -58,6 +59,16 @@ class MeasuredVariable(TypedDict):
     unit: Unit
     type: NotRequired[ValueType]
     description: NotRequired[str]
+    source: NotRequired[MavlinkField]
+
+
+class MavlinkField(TypedDict):
+    """A field of a MAVLink message, converted to the variable's unit as value = raw * scale + offset."""
+
+    message: str
+    field: Name
+    scale: NotRequired[float]
+    offset: NotRequired[float]
 
 
 class PubBroker(TypedDict):
@@ -128,4 +139,4 @@ class Position(TypedDict):
     y: float
 
 
-__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "PubBroker", "Ingress", "SubBroker", "Link", "Publisher", "Subscriber", "Layout", "Position"]
+__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "MavlinkField", "PubBroker", "Ingress", "SubBroker", "Link", "Publisher", "Subscriber", "Layout", "Position"]

@@ -188,6 +188,25 @@ def aggregation_fits_type(doc: dict[str, Any]) -> Iterator[Diagnostic]:
                              f"{sub['topic']!r}", f"/subscribers/{i}/aggregation")
 
 
+@check
+def mavlink_sources(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    """A mavlink sensor maps every variable to a message field; a generic one maps none."""
+    for i, s in enumerate(doc["drone"]["sensors"]):
+        mavlink = s.get("kind") == "mavlink"
+        for j, v in enumerate(s["variables"]):
+            ptr = f"/drone/sensors/{i}/variables/{j}"
+            if mavlink and "source" not in v:
+                yield Diagnostic(f"variable {v['name']!r} of the mavlink sensor {s['name']!r} "
+                                 "needs a source: from MESSAGE.field", ptr)
+            elif not mavlink and "source" in v:
+                yield Diagnostic(f"variable {v['name']!r} has a MAVLink source but sensor "
+                                 f"{s['name']!r} is not of kind mavlink", ptr + "/source")
+            scale = v.get("source", {}).get("scale", 1)
+            if scale != scale or scale in (float("inf"), float("-inf")) or scale == 0:
+                yield Diagnostic("scale must be a finite number other than zero",
+                                 ptr + "/source/scale")
+
+
 def _endpoints(doc: dict[str, Any]) -> Iterator[tuple[str, int, str]]:
     for key in ("pubBroker", "subBroker"):
         ep = doc[key]["endpoint"]

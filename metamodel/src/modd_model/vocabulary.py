@@ -8,3 +8,4 @@ SCHEMA_VERSION: str = load_schema()["properties"]["schemaVersion"]["const"]
 KNOWN_UNITS: tuple[str, ...] = tuple(definition("KnownUnit")["enum"])
 VALUE_TYPES: tuple[str, ...] = tuple(definition("ValueType")["enum"])
 AGGREGATIONS: tuple[str, ...] = tuple(definition("Aggregation")["enum"])
+SENSOR_KINDS: tuple[str, ...] = tuple(definition("Sensor")["properties"]["kind"]["enum"])
