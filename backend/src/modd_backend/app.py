@@ -1,0 +1,69 @@
+"""The application: ``create_app(settings)`` composes the routers; the store,
+the first admin and the zenoh session are opened at start-up (lifespan).
+
+>>> app = create_app(Settings(data_dir=Path("/tmp/modd")))   # doctest: +SKIP
+>>> uvicorn.run(app, host="127.0.0.1", port=8000)            # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from typing import TextIO
+
+from fastapi import APIRouter, FastAPI
+
+from . import errors
+from .accounts import ensure_first_admin
+from .db import Store
+from .deps import AppState
+from .planning import preload_milp
+from .routers import auth, models, plan, projects, users
+from .settings import Settings
+from .spa import mount_frontend
+from .zbridge import ZenohBridge
+
+ROUTERS: tuple[APIRouter, ...] = (
+    auth.router,
+    users.router,
+    projects.router,
+    models.router,
+    plan.router,
+)
+
+
+def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
+    """The service for ``settings``; ``out`` receives the first admin's password."""
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        settings.data_dir.mkdir(parents=True, exist_ok=True)
+        store = Store.open(settings.effective_database_url)
+        with store.session() as db:
+            ensure_first_admin(db, settings.initial_admin_password, out)
+        bridge = None
+        if settings.zenoh_enabled:
+            bridge = ZenohBridge.open(settings.zenoh_connect, settings.zenoh_listen)
+        if settings.preload_milp:
+            preload_milp()
+        app.state.modd = AppState(settings, store, bridge)
+        try:
+            yield
+        finally:
+            if bridge is not None:
+                bridge.close()
+            store.close()
+
+    app = FastAPI(
+        title="MoDD workbench",
+        version="0.1.0",
+        description="Model store, live plan, deploy, live streams and archives of MoDD.",
+        lifespan=lifespan,
+    )
+    errors.install(app)
+    for router in ROUTERS:
+        app.include_router(router)
+    if settings.frontend_dist is not None:
+        mount_frontend(app, settings.frontend_dist)
+    return app

@@ -1,0 +1,71 @@
+"""``modd-backend``: run the service (loopback unless told otherwise).
+
+    modd-backend --host 127.0.0.1 --port 8000 --data ./data
+"""
+
+from __future__ import annotations
+
+import argparse
+import ipaddress
+import sys
+from pathlib import Path
+
+from .settings import DEFAULT_ZENOH_CONNECT, Settings
+
+
+def parse_args(argv: list[str] | None = None) -> Settings:
+    p = argparse.ArgumentParser(prog="modd-backend", description=__doc__.splitlines()[0])
+    p.add_argument("--host", default="127.0.0.1", help="address to bind (default loopback)")
+    p.add_argument("--port", type=int, default=8000)
+    p.add_argument("--data", type=Path, default=Path("data"), help="data directory")
+    p.add_argument("--database-url", help="SQLAlchemy URL (default: SQLite file in --data)")
+    p.add_argument("--zenoh-connect", action="append", metavar="ENDPOINT",
+                   help=f"zenoh endpoint to connect to (default {DEFAULT_ZENOH_CONNECT[0]})")
+    p.add_argument("--zenoh-listen", action="append", metavar="ENDPOINT", default=[])
+    p.add_argument("--no-zenoh", action="store_true", help="no zenoh session (no deploy/streams)")
+    p.add_argument("--frontend", type=Path, default=Path("frontend/dist"),
+                   help="built frontend to serve at / when it exists")
+    p.add_argument("--archives", type=Path, help="archive directory (default DATA/archives)")
+    p.add_argument("--deploy-timeout", type=float, default=10.0, help="seconds")
+    p.add_argument("--admin-password", help="first admin's password (default: drawn, printed)")
+    a = p.parse_args(argv)
+    return Settings(
+        data_dir=a.data,
+        database_url=a.database_url,
+        host=a.host,
+        port=a.port,
+        zenoh_connect=tuple(a.zenoh_connect) if a.zenoh_connect else DEFAULT_ZENOH_CONNECT,
+        zenoh_listen=tuple(a.zenoh_listen),
+        zenoh_enabled=not a.no_zenoh,
+        frontend_dist=a.frontend,
+        archive_dir=a.archives,
+        deploy_timeout_s=a.deploy_timeout,
+        initial_admin_password=a.admin_password,
+        preload_milp=True,
+    )
+
+
+def _is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def main(argv: list[str] | None = None) -> int:
+    import uvicorn
+
+    from .app import create_app
+
+    settings = parse_args(argv)
+    if not _is_loopback(settings.host):
+        print(f"modd-backend: warning: listening on {settings.host}, not loopback",
+              file=sys.stderr)
+    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="info")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,54 @@
+"""Reading models from API input: JSON documents or .modd/JSON text, always
+with every diagnostic as structured data (never raising for bad input)."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from modd_model import LoadResult, load_text, validate
+from modd_model.diagnostics import Diagnostic
+
+from .errors import ApiError
+from .schemas import Format, ModelInput
+
+
+def diagnostics_json(diags: list[Diagnostic]) -> list[dict[str, object]]:
+    return [d.to_json() for d in diags]
+
+
+def read_input(body: ModelInput, filename: str = "<editor>") -> LoadResult:
+    if body.model is not None:
+        return LoadResult(body.model, validate(body.model), {})
+    assert body.text is not None
+    return read_text(body.text, body.format, filename)
+
+
+def read_text(text: str, fmt: Format, filename: str = "<editor>") -> LoadResult:
+    result = load_text(text, filename, fmt)
+    if result.model is not None and not isinstance(result.model, dict):
+        return LoadResult(None, [Diagnostic("a model is a JSON object", "", "error")], {})
+    return result
+
+
+def require_document(result: LoadResult) -> dict[str, Any]:
+    """The parsed document, or 422 with the diagnostics when there is none."""
+    if result.model is None:
+        raise ApiError(
+            422, "the model cannot be read", diagnostics=diagnostics_json(result.diagnostics)
+        )
+    doc: dict[str, Any] = result.model
+    return doc
+
+
+def decode_body(raw: bytes, fmt: Format, filename: str) -> LoadResult:
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        diag = Diagnostic(f"not UTF-8 text: {exc.reason} at byte {exc.start}", "", "error")
+        return LoadResult(None, [diag], {})
+    return read_text(text, fmt, filename)
+
+
+def canonical_json(model: dict[str, Any]) -> str:
+    return json.dumps(model, ensure_ascii=False, sort_keys=False)

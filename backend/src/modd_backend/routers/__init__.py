@@ -1,0 +1,1 @@
+"""One router per resource; :func:`modd_backend.app.create_app` lists them."""

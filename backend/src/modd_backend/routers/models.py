@@ -1,0 +1,118 @@
+"""A project's model: read any revision, save a new one on top of the head
+(409 when stale, 403 when a changed part is another role's), list versions,
+export as .modd or JSON, validate without saving."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends, Query
+from fastapi.responses import Response
+from modd_model import dumps
+from pydantic import BaseModel, Field
+from sqlalchemy import select
+
+from ..deps import DbDep, UserDep, require
+from ..errors import ApiError
+from ..modelio import diagnostics_json, read_input, require_document
+from ..roles import EDITORS
+from ..schemas import (
+    ConflictOut,
+    DiagnosticOut,
+    Format,
+    InvalidModelOut,
+    ModelInput,
+    ModelOut,
+    Responses,
+    VersionOut,
+)
+from ..tables import ModelVersion
+from ..versions import get_project, get_version, head_revision, model_of, save_version, version_json
+from .projects import DENIED, check_edit
+
+router = APIRouter(prefix="/api", tags=["models"])
+NOT_FOUND: Responses = {404: {"description": "no such project or revision"}}
+Revision = Annotated[int | None, Query(ge=1, le=2**31 - 1)]
+
+
+class SaveIn(ModelInput):
+    """A new revision: the model (JSON or text) and the revision it was edited from."""
+
+    base_revision: int = Field(ge=0, le=2**31 - 1)
+    message: str = Field(default="", max_length=10_000)
+
+
+class ValidateOut(BaseModel):
+    ok: bool
+    model: dict[str, Any] | None
+    diagnostics: list[DiagnosticOut]
+
+
+@router.get("/projects/{project_id}/model", responses=NOT_FOUND)
+def read_model(project_id: int, db: DbDep, _user: UserDep, revision: Revision = None) -> ModelOut:
+    return ModelOut.model_validate(version_json(get_version(db, project_id, revision)))
+
+
+@router.put(
+    "/projects/{project_id}/model",
+    dependencies=[Depends(require(*EDITORS))],
+    responses={**NOT_FOUND, **DENIED, 409: {"model": ConflictOut},
+               422: {"model": InvalidModelOut}},
+)
+def save_model(project_id: int, body: SaveIn, db: DbDep, user: UserDep) -> ModelOut:
+    """Save a new revision. Text input keeps the current diagram layout (the
+    .modd text has none)."""
+    model = require_document(read_input(body, f"project-{project_id}.{body.format}"))
+    current = head_revision(db, project_id)
+    before = model_of(get_version(db, project_id)) if current else {}
+    if body.text is not None and "layout" in before and "layout" not in model:
+        model = {**model, "layout": before["layout"]}
+    if body.base_revision == current:
+        check_edit(user, before, model)
+    version = save_version(db, project_id, body.base_revision, model, user.username, body.message)
+    return ModelOut.model_validate(version_json(version))
+
+
+@router.get("/projects/{project_id}/versions", responses=NOT_FOUND)
+def list_versions(project_id: int, db: DbDep, _user: UserDep) -> list[VersionOut]:
+    get_project(db, project_id)
+    rows = db.scalars(
+        select(ModelVersion)
+        .where(ModelVersion.project_id == project_id)
+        .order_by(ModelVersion.revision.desc())
+    )
+    return [VersionOut.model_validate(version_json(v, False)) for v in rows]
+
+
+@router.get(
+    "/projects/{project_id}/export",
+    responses={**NOT_FOUND, 200: {"content": {"text/plain": {}, "application/json": {}}},
+               422: {"description": "an invalid revision cannot be printed as .modd"}},
+)
+def export_model(
+    project_id: int, db: DbDep, _user: UserDep, format: Format = "modd", revision: Revision = None
+) -> Response:
+    """The model as a file: canonical .modd text or JSON (layout kept in JSON only)."""
+    version = get_version(db, project_id, revision)
+    try:
+        text = dumps(model_of(version), format)
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise ApiError(
+            422, f"revision {version.revision} is not valid enough to print as .modd: {exc!r}"
+        ) from None
+    media = "application/json" if format == "json" else "text/plain; charset=utf-8"
+    name = f"project-{project_id}-r{version.revision}.{format}"
+    return Response(
+        text, media_type=media, headers={"Content-Disposition": f'attachment; filename="{name}"'}
+    )
+
+
+@router.post("/validate", responses={422: {"model": InvalidModelOut}})
+def validate_model(body: ModelInput, _user: UserDep) -> ValidateOut:
+    """Parse and validate without saving; ``model`` is the parsed JSON document."""
+    result = read_input(body)
+    return ValidateOut(
+        ok=result.ok,
+        model=result.model,
+        diagnostics=[DiagnosticOut.model_validate(d) for d in diagnostics_json(result.diagnostics)],
+    )

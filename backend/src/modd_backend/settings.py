@@ -1,0 +1,53 @@
+"""Typed settings, passed to :func:`create_app`; nothing is read at import time.
+
+>>> s = Settings(data_dir=Path("/tmp/modd"))
+>>> s.effective_database_url
+'sqlite:////tmp/modd/modd.sqlite3'
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+#: zenoh endpoint of the SubBroker in the embedded default (docs/backend.md).
+DEFAULT_ZENOH_CONNECT = ("tcp/127.0.0.1:7447",)
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Everything the service is configured with.
+
+    ``database_url`` overrides the SQLite file under ``data_dir`` (e.g.
+    ``postgresql+psycopg://user:pw@127.0.0.1/modd``). ``archive_dir`` holds one
+    folder of MCAP files per drone (``<archive_dir>/<drone>/*.mcap``).
+    ``initial_admin_password`` is for scripted set-ups and tests; when None the
+    first start draws one and prints it once.
+    """
+
+    data_dir: Path
+    database_url: str | None = None
+    host: str = "127.0.0.1"
+    port: int = 8000
+    zenoh_connect: tuple[str, ...] = DEFAULT_ZENOH_CONNECT
+    zenoh_listen: tuple[str, ...] = ()
+    zenoh_enabled: bool = True
+    frontend_dist: Path | None = None
+    archive_dir: Path | None = None
+    deploy_timeout_s: float = 10.0
+    subscribe_timeout_s: float = 3.0
+    stream_queue_size: int = 256
+    token_ttl_s: int = 12 * 3600
+    initial_admin_password: str | None = None
+    preload_milp: bool = False
+    cors_origins: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def effective_database_url(self) -> str:
+        if self.database_url:
+            return self.database_url
+        return f"sqlite:///{(self.data_dir / 'modd.sqlite3').as_posix()}"
+
+    @property
+    def effective_archive_dir(self) -> Path:
+        return self.archive_dir if self.archive_dir is not None else self.data_dir / "archives"

@@ -1,0 +1,107 @@
+"""Projects and their model versions: every save is a new revision, saved
+only on top of the current one (optimistic concurrency)."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from modd_model import validate
+from sqlalchemy import func, select
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session as Db
+
+from .errors import ApiError
+from .modelio import canonical_json, diagnostics_json
+from .tables import ModelVersion, Project
+
+
+def get_project(db: Db, project_id: int) -> Project:
+    project = db.get(Project, project_id)
+    if project is None:
+        raise ApiError(404, f"no project {project_id}")
+    return project
+
+
+def head_revision(db: Db, project_id: int) -> int:
+    rev = db.scalar(
+        select(func.max(ModelVersion.revision)).where(ModelVersion.project_id == project_id)
+    )
+    return int(rev or 0)
+
+
+def get_version(db: Db, project_id: int, revision: int | None = None) -> ModelVersion:
+    """The given revision, or the head; 404 when there is none."""
+    get_project(db, project_id)
+    rev = head_revision(db, project_id) if revision is None else revision
+    version = db.scalar(
+        select(ModelVersion).where(
+            ModelVersion.project_id == project_id, ModelVersion.revision == rev
+        )
+    )
+    if version is None:
+        what = f"revision {rev}" if revision is not None else "model yet"
+        raise ApiError(404, f"project {project_id} has no {what}")
+    return version
+
+
+def model_of(version: ModelVersion | None) -> dict[str, Any]:
+    if version is None:
+        return {}
+    doc: dict[str, Any] = json.loads(version.model_json)
+    return doc
+
+
+def save_version(
+    db: Db,
+    project_id: int,
+    base_revision: int,
+    model: dict[str, Any],
+    author: str,
+    message: str,
+) -> ModelVersion:
+    """Store ``model`` as revision base+1; 409 with the current revision when
+    ``base_revision`` is not the head (also when a concurrent save won)."""
+    current = head_revision(db, project_id)
+    if base_revision != current:
+        raise _stale(base_revision, current)
+    version = ModelVersion(
+        project_id=project_id,
+        revision=current + 1,
+        model_json=canonical_json(model),
+        valid=not any(d.severity == "error" for d in validate(model)),
+        author=author,
+        message=message,
+    )
+    db.add(version)
+    try:
+        db.commit()
+    except IntegrityError:
+        db.rollback()
+        raise _stale(base_revision, head_revision(db, project_id)) from None
+    return version
+
+
+def _stale(base: int, current: int) -> ApiError:
+    return ApiError(
+        409,
+        f"the model was saved meanwhile: you edited revision {base}, the current one is "
+        f"{current}; reload and merge",
+        current_revision=current,
+    )
+
+
+def version_json(version: ModelVersion, with_model: bool = True) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "project_id": version.project_id,
+        "revision": version.revision,
+        "valid": version.valid,
+        "author": version.author,
+        "message": version.message,
+        "created_at": version.created_at,
+    }
+    if with_model:
+        model = model_of(version)
+        out["model"] = model
+        out["diagnostics"] = diagnostics_json(validate(model))
+    return out

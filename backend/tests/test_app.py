@@ -1,0 +1,98 @@
+"""The application shell: OpenAPI, first admin, settings, the CLI's loopback
+default, migrations."""
+
+from __future__ import annotations
+
+import io
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import httpx2 as httpx
+import pytest
+from fastapi.testclient import TestClient
+from modd_backend import Settings, create_app
+from modd_backend.cli import parse_args
+from modd_backend.tables import Base
+from sqlalchemy import create_engine, inspect
+
+
+def test_openapi_lists_every_router(client: TestClient) -> None:
+    spec = client.get("/openapi.json").json()
+    paths = set(spec["paths"])
+    for p in ("/api/auth/login", "/api/users", "/api/projects", "/api/projects/{project_id}/model",
+              "/api/plan", "/api/validate"):
+        assert p in paths
+    assert "HTTPBearer" in spec["components"]["securitySchemes"]
+
+
+def test_first_admin_password_is_drawn_and_printed_once(tmp_path: Path) -> None:
+    settings = Settings(data_dir=tmp_path, zenoh_enabled=False)
+    out = io.StringIO()
+    with TestClient(create_app(settings, out=out)) as c:
+        printed = re.search(r"password (\S+) \(shown once", out.getvalue())
+        assert printed, out.getvalue()
+        r = c.post("/api/auth/login", json={"username": "admin", "password": printed.group(1)})
+        assert r.status_code == 200
+        assert r.json()["user"]["roles"] == ["admin"]
+    again = io.StringIO()
+    with TestClient(create_app(settings, out=again)):
+        pass
+    assert again.getvalue() == ""  # second start: the admin exists, nothing printed
+
+
+def test_migrations_match_the_tables(settings: Settings, client: TestClient) -> None:
+    engine = create_engine(settings.effective_database_url)
+    insp = inspect(engine)
+    for table in Base.metadata.sorted_tables:
+        migrated = {c["name"] for c in insp.get_columns(table.name)}
+        assert migrated == {c.name for c in table.columns}, table.name
+    assert "alembic_version" in insp.get_table_names()
+    engine.dispose()
+
+
+def test_cli_defaults_to_loopback(tmp_path: Path) -> None:
+    s = parse_args(["--data", str(tmp_path)])
+    assert s.host == "127.0.0.1"
+    assert s.data_dir == tmp_path
+    assert s.zenoh_connect == ("tcp/127.0.0.1:7447",)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@pytest.mark.slow
+def test_console_script_serves_the_api(tmp_path: Path) -> None:
+    port = _free_port()
+    exe = Path(sys.executable).with_name("modd-backend")
+    log = tmp_path / "backend.log"
+    with log.open("w") as out:
+        proc = subprocess.Popen(
+            [str(exe), "--host", "127.0.0.1", "--port", str(port), "--data", str(tmp_path),
+             "--no-zenoh", "--admin-password", "cli-admin-pw"],
+            stdout=out, stderr=subprocess.STDOUT,
+        )
+    try:
+        deadline = time.monotonic() + 20
+        while True:
+            try:
+                r = httpx.post(f"http://127.0.0.1:{port}/api/auth/login",
+                               json={"username": "admin", "password": "cli-admin-pw"})
+                break
+            except httpx.TransportError:
+                assert proc.poll() is None, log.read_text()
+                assert time.monotonic() < deadline, "the backend did not start"
+                time.sleep(0.1)
+        assert r.status_code == 200
+        assert (tmp_path / "modd.sqlite3").is_file()
+    finally:
+        os.kill(proc.pid, signal.SIGTERM)
+        proc.wait(timeout=10)
