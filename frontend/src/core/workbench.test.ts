@@ -1,0 +1,68 @@
+import { describe, expect, it } from "vitest";
+import { currentModel, initialState, reduce, type Action, type WorkbenchState } from "./workbench";
+import { emptyModel } from "./templates";
+import { scenario1 } from "./testing/scenario1";
+
+const run = (s: WorkbenchState, ...actions: Action[]) => actions.reduce(reduce, s);
+
+describe("workbench reducer", () => {
+  it("applies edits allowed to the role and selects what was created", () => {
+    const s = run(initialState(emptyModel(), "integrator"), { type: "addSensor" });
+    expect(currentModel(s).drone.sensors).toHaveLength(1);
+    expect(s.selection).toEqual(["sensor:sensor_1"]);
+  });
+
+  it("refuses edits outside the role, leaving the model", () => {
+    const s0 = initialState(emptyModel(), "scientist");
+    const s = run(s0, { type: "addSensor" });
+    expect(currentModel(s)).toBe(currentModel(s0));
+    expect(s.notice).toMatch(/scientist view cannot edit sensors/);
+    const t = run(initialState(scenario1(), "scientist"), { type: "setField", id: "pub:pub_1", path: ["periodS"], value: "1" });
+    expect(t.notice).toMatch(/cannot edit/);
+  });
+
+  it("lets a scientist connect subscriptions but not publications", () => {
+    let s = run(initialState(scenario1(), "scientist"), { type: "connect", source: "topic:accelerometer.accel_z", target: "sub:sub_1" });
+    expect(currentModel(s).subscribers[0].topic).toBe("usv.accelerometer.accel_z");
+    s = run(s, { type: "disconnect", source: "pub:pub_1", target: "topic:accelerometer.accel_x" });
+    expect(s.notice).toMatch(/cannot edit/);
+  });
+
+  it("turns model refusals into notices", () => {
+    const s = run(initialState(scenario1(), "admin"), { type: "remove", ids: ["drone"] });
+    expect(s.notice).toMatch(/cannot be removed/);
+    const t = run(initialState(scenario1(), "admin"), { type: "setField", id: "sub:sub_1", path: ["name"], value: "sub_2" });
+    expect(t.notice).toMatch(/already/);
+  });
+
+  it("undoes and redoes; typing in one field is one step", () => {
+    let s = initialState(scenario1(), "scientist");
+    for (const v of ["1", "1.", "1.5"]) s = reduce(s, { type: "setField", id: "sub:sub_1", path: ["periodS"], value: v });
+    expect(s.history.past).toHaveLength(1);
+    s = reduce(s, { type: "undo" });
+    expect(currentModel(s).subscribers[0].periodS).toBe("2.0");
+    s = reduce(s, { type: "redo" });
+    expect(currentModel(s).subscribers[0].periodS).toBe("1.5");
+  });
+
+  it("keeps the selection on a renamed element", () => {
+    let s = run(initialState(scenario1(), "admin"), { type: "select", ids: ["sub:sub_1"] });
+    s = reduce(s, { type: "setField", id: "sub:sub_1", path: ["name"], value: "mean" });
+    expect(s.selection).toEqual(["sub:mean"]);
+  });
+
+  it("copies and pastes within the role's rights", () => {
+    let s = run(initialState(scenario1(), "scientist"), { type: "copy", ids: ["sub:sub_7"] }, { type: "paste" });
+    expect(currentModel(s).subscribers.map((x) => x.name)).toContain("sub_7_copy");
+    expect(s.selection).toEqual(["sub:sub_7_copy"]);
+    s = run(s, { type: "copy", ids: ["pub:pub_1"] }, { type: "paste" });
+    expect(s.notice).toMatch(/cannot edit publishers/);
+  });
+
+  it("lets any role arrange the diagram; load resets history", () => {
+    let s = run(initialState(scenario1(), "operator"), { type: "move", positions: { drone: { x: 10.4, y: 20.6 } } });
+    expect(currentModel(s).layout?.nodes?.drone).toEqual({ x: 10, y: 21 });
+    s = reduce(s, { type: "load", model: emptyModel() });
+    expect(s.history.past).toHaveLength(0);
+  });
+});
