@@ -1,0 +1,60 @@
+import { describe, expect, it, vi } from "vitest";
+import { ApiError, Http } from "./http";
+import { createApi } from "./client";
+
+function fakeFetch(status: number, body: unknown, contentType = "application/json") {
+  return vi.fn(async (_url: string, _init?: RequestInit) =>
+    new Response(typeof body === "string" ? body : JSON.stringify(body), { status, headers: { "Content-Type": contentType } }),
+  );
+}
+
+describe("Http", () => {
+  it("sends the bearer token and JSON, builds queries", async () => {
+    const f = fakeFetch(200, { ok: true });
+    const http = new Http({ baseUrl: "http://127.0.0.1:1", fetch: f as unknown as typeof fetch, token: () => "tok" });
+    await http.request("/api/x", { method: "POST", json: { a: 1 }, query: { q: "a b", none: undefined } });
+    const [url, init] = f.mock.calls[0];
+    expect(url).toBe("http://127.0.0.1:1/api/x?q=a%20b");
+    expect((init!.headers as Record<string, string>).Authorization).toBe("Bearer tok");
+    expect(init!.body).toBe('{"a":1}');
+  });
+
+  it("turns error bodies into ApiError with the structured body", async () => {
+    const f = fakeFetch(409, { detail: "the model was saved meanwhile", current_revision: 4 });
+    const http = new Http({ baseUrl: "", fetch: f as unknown as typeof fetch, token: () => null });
+    const err = await http.request("/api/x").catch((e: ApiError) => e) as ApiError;
+    expect(err).toBeInstanceOf(ApiError);
+    expect(err.isConflict).toBe(true);
+    expect(err.message).toMatch(/saved meanwhile/);
+    expect(err.body.current_revision).toBe(4);
+  });
+
+  it("reads FastAPI validation errors and reports 401", async () => {
+    const onUnauthorized = vi.fn();
+    const f = fakeFetch(401, { detail: [{ loc: ["body", "name"], msg: "too short" }] });
+    const http = new Http({ baseUrl: "", fetch: f as unknown as typeof fetch, token: () => null, onUnauthorized });
+    const err = await http.request("/api/x").catch((e: ApiError) => e) as ApiError;
+    expect(err.message).toBe("body.name: too short");
+    expect(onUnauthorized).toHaveBeenCalledOnce();
+  });
+
+  it("says when the backend cannot be reached", async () => {
+    const f = vi.fn(async () => { throw new TypeError("Failed to fetch"); });
+    const http = new Http({ baseUrl: "", fetch: f as unknown as typeof fetch, token: () => null });
+    const err = await http.request("/api/x").catch((e: ApiError) => e) as ApiError;
+    expect(err.status).toBe(0);
+    expect(err.message).toMatch(/cannot be reached/);
+  });
+});
+
+describe("createApi", () => {
+  it("saves with the base revision", async () => {
+    const f = fakeFetch(200, { revision: 2 });
+    const api = createApi({ baseUrl: "", fetch: f as unknown as typeof fetch, token: () => "t" });
+    await api.saveModel(3, { schemaVersion: "1.0" } as never, 1, "msg");
+    const [url, init] = f.mock.calls[0];
+    expect(url).toBe("/api/projects/3/model");
+    expect(init!.method).toBe("PUT");
+    expect(JSON.parse(init!.body as string)).toEqual({ model: { schemaVersion: "1.0" }, base_revision: 1, message: "msg" });
+  });
+});

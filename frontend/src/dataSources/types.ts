@@ -1,0 +1,52 @@
+/**
+ * Live data behind one interface. Panels never open sockets: they get a
+ * `DataSource` from the services context and subscribe to channels.
+ *
+ * Contract:
+ * - `subscribe(channel, listener)` starts the channel on the source's first
+ *   listener and stops it after the last one leaves (the returned function).
+ * - Listeners are called with batches, in arrival order, on the main thread.
+ * - Backpressure: a source never queues without bound. Values are kept in a
+ *   ring buffer per channel (`history`, at most `capacity` points); when the
+ *   page falls behind the oldest points are dropped, and `dropped` counts them.
+ *   The backend does the same on its side (a slow browser loses its oldest values).
+ */
+
+/** One delivered value of a subscription. */
+export interface Sample {
+  /** Time of the value, seconds since the Unix epoch. */
+  t: number;
+  value: number;
+  /** Aggregation window it covers, seconds (optional). */
+  windowS?: number;
+  /** Number of raw samples aggregated (optional). */
+  count?: number;
+}
+
+/** Link status of a drone: measured against planned. */
+export interface LinkStatus {
+  rttMs: number | null;
+  measuredBytesPerS: number | null;
+  plannedBytesPerS: number | null;
+  /** Seconds since the last frame from the drone. */
+  lastFrameAgeS: number | null;
+  connected: boolean;
+}
+
+export type ConnectionState = "connecting" | "open" | "closed" | "error";
+
+export interface ChannelListener {
+  (batch: readonly Sample[]): void;
+}
+
+export interface DataSource {
+  readonly state: ConnectionState;
+  subscribe(channel: string, listener: ChannelListener): () => void;
+  /** Everything kept for a channel, oldest first. */
+  history(channel: string): readonly Sample[];
+  /** Points dropped for a channel because the buffer was full. */
+  dropped(channel: string): number;
+  onLinkStatus(listener: (s: LinkStatus) => void): () => void;
+  onStateChange(listener: (s: ConnectionState) => void): () => void;
+  close(): void;
+}
