@@ -1,0 +1,1 @@
+"""One module per generated target; each exposes ``artifacts(ctx) -> list[Artifact]``."""

@@ -1,0 +1,53 @@
+"""Per publisher, a C++ driver project that builds with only a compiler and
+CMake: the MoDD publisher client is carried inside.
+
+Generated (rewritten on every run): CMakeLists.txt, README.md, the client,
+``generated/<publisher>_topics.hpp`` and the cross-compile toolchain file.
+User-owned (written once): ``src/driver.cpp`` (a read function per topic, where
+the integrator's code goes, and the main loop with one publish call per topic)
+and ``user.cmake`` (additions to the build)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..artifact import Artifact, Ownership
+from ..context import Context, PublisherView
+from ..render import render
+
+REPO = Path(__file__).resolve().parents[4]
+CLIENT_HEADER = REPO / "runtime" / "cpp" / "include" / "modd" / "client" / "publisher.hpp"
+CLIENT_SOURCE = REPO / "runtime" / "cpp" / "src" / "client" / "publisher.cpp"
+
+
+def client_sources() -> tuple[str, str]:
+    """The C++ publisher client, carried into every driver project."""
+    for p in (CLIENT_HEADER, CLIENT_SOURCE):
+        if not p.is_file():
+            raise FileNotFoundError(f"the C++ publisher client is missing: {p}")
+    return CLIENT_HEADER.read_text(encoding="utf-8"), CLIENT_SOURCE.read_text(encoding="utf-8")
+
+
+def _project(ctx: Context, pub: PublisherView) -> list[Artifact]:
+    root = f"integrator/{pub.name}-driver"
+    header, source = client_sources()
+    args = {"pub": pub, "drone": ctx.drone, "ingress": ctx.ingress,
+            "archive_dir": ctx.model["pubBroker"]["logPath"]}
+    gen = [
+        ("CMakeLists.txt", "cpp_driver/CMakeLists.txt.j2"),
+        ("README.md", "cpp_driver/README.md.j2"),
+        (f"generated/{pub.name}_topics.hpp", "cpp_driver/topics.hpp.j2"),
+        ("cmake/aarch64-linux-gnu.cmake", "cpp_driver/aarch64-linux-gnu.cmake.j2"),
+    ]
+    out = [Artifact(f"{root}/{path}", render(tpl, **args), "integrator") for path, tpl in gen]
+    out += [Artifact(f"{root}/modd/include/modd/client/publisher.hpp", header, "integrator"),
+            Artifact(f"{root}/modd/src/publisher.cpp", source, "integrator")]
+    user = [("src/driver.cpp", "cpp_driver/driver.cpp.j2"),
+            ("user.cmake", "cpp_driver/user.cmake.j2")]
+    out += [Artifact(f"{root}/{path}", render(tpl, **args), "integrator", Ownership.USER)
+            for path, tpl in user]
+    return out
+
+
+def artifacts(ctx: Context) -> list[Artifact]:
+    return [a for pub in ctx.publishers for a in _project(ctx, pub)]

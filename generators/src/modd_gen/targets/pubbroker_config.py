@@ -1,0 +1,42 @@
+"""The PubBroker's configuration file (format: docs/pubbroker.md), for the operator."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from ..artifact import Artifact
+from ..context import Context
+
+# Archive rotation and reporting defaults for a mission: hourly files of at most
+# 256 MiB, fsync at every chunk so that a power cut loses at most one chunk.
+ROTATE_BYTES = 256 * 1024 * 1024
+ROTATE_S = 3600
+STATUS_PERIOD_S = 30
+LOG_PERIOD_S = 10
+
+
+def config(ctx: Context) -> dict[str, Any]:
+    broker = ctx.model["pubBroker"]
+    sizes = ctx.plan.buffer_sizes
+    ingress: dict[str, Any] = {"unix_path": ctx.ingress.unix_socket}
+    if ctx.ingress.tcp_port:
+        ingress.update(host=ctx.ingress.tcp_host, port=ctx.ingress.tcp_port)
+    return {
+        "name": ctx.drone,
+        "link": {"host": broker["endpoint"]["host"], "port": broker["endpoint"]["port"],
+                 "key": ctx.key_ref},
+        "ingress": ingress,
+        "archive": {"dir": broker["logPath"], "prefix": ctx.drone, "rotate_bytes": ROTATE_BYTES,
+                    "rotate_s": ROTATE_S, "fsync": "chunk", "compression": "zstd"},
+        "topics": [{"name": t.name, "type": t.type, "buffer_size": sizes.get(t.name, 25)}
+                   for t in ctx.topics.values() if t.publisher is not None],
+        "default_buffer_size": 25,
+        "status_period_s": STATUS_PERIOD_S,
+        "log_period_s": LOG_PERIOD_S,
+    }
+
+
+def artifacts(ctx: Context) -> list[Artifact]:
+    text = json.dumps(config(ctx), indent=2) + "\n"
+    return [Artifact("operator/pubbroker.json", text, "operator")]
