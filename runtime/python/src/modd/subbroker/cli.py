@@ -1,0 +1,102 @@
+"""``modd-subbroker``: run the base-station SubBroker.
+
+    modd-subbroker --config subbroker.toml
+    modd-subbroker --model mission.modd [--link 127.0.0.1:7171] [--key env:MODD_LINK_KEY]
+                   [--zenoh-listen tcp/127.0.0.1:7447] [--no-tcp-delivery]
+
+SIGTERM or SIGINT stops it cleanly. Exit codes: 0 stopped, 2 bad usage or config.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import signal
+import sys
+import threading
+from dataclasses import replace
+from types import FrameType
+
+from ..zenoh_session import ZenohSettings
+from .config import ConfigError, SubBrokerConfig, config_from_model, load_config, parse_endpoint
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="modd-subbroker",
+        description="MoDD base-station SubBroker: link to the PubBroker, delivery over zenoh "
+        "and TCP, dynamic subscriptions and deploy (docs/subbroker.md).",
+    )
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--config", help="SubBroker TOML configuration file")
+    src.add_argument("--model", help="model (.modd or .json) to run with the defaults")
+    p.add_argument("--link", help="PubBroker link endpoint host:port (default: the model's)")
+    p.add_argument("--key", help="pre-shared key reference env:NAME or file:PATH")
+    p.add_argument("--zenoh-listen", action="append", default=None, metavar="ENDPOINT",
+                   help="zenoh listen endpoint (repeatable; default tcp/127.0.0.1:7447)")
+    p.add_argument("--zenoh-connect", action="append", default=None, metavar="ENDPOINT",
+                   help="zenoh endpoint to connect to (repeatable)")
+    p.add_argument("--zenoh-mode", choices=("peer", "client", "router"), default=None)
+    p.add_argument("--no-tcp-delivery", action="store_true",
+                   help="do not deliver to the subscribers' TCP endpoints")
+    p.add_argument("--status-period", type=float, default=None, metavar="S",
+                   help="seconds between status puts (default 1)")
+    p.add_argument("--log-level", default="INFO")
+    return p
+
+
+def build_config(args: argparse.Namespace) -> SubBrokerConfig:
+    """The configuration the command line asks for."""
+    cfg = load_config(args.config) if args.config else config_from_model(args.model)
+    link = cfg.link
+    if args.link:
+        link = replace(link, endpoint=parse_endpoint(args.link, "--link"))
+    if args.key:
+        link = replace(link, key=args.key)
+    z = cfg.zenoh
+    if args.zenoh_listen or args.zenoh_connect or args.zenoh_mode:
+        z = ZenohSettings(
+            mode=args.zenoh_mode or z.mode,
+            listen=tuple(args.zenoh_listen) if args.zenoh_listen else z.listen,
+            connect=tuple(args.zenoh_connect) if args.zenoh_connect else z.connect,
+            config_file=z.config_file,
+            extra=z.extra,
+        )
+    delivery = cfg.delivery
+    if args.no_tcp_delivery:
+        delivery = replace(delivery, tcp=False)
+    if args.status_period is not None:
+        delivery = replace(delivery, status_period_s=args.status_period)
+    return replace(cfg, link=link, zenoh=z, delivery=delivery)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    logging.basicConfig(
+        level=args.log_level.upper(),
+        format="%(asctime)s modd-subbroker %(levelname)s %(name)s: %(message)s",
+    )
+    try:
+        config = build_config(args)
+        from .broker import SubBroker
+
+        broker = SubBroker(config)
+        broker.start()
+    except (ConfigError, ValueError) as exc:
+        print(f"modd-subbroker: {exc}", file=sys.stderr)
+        return 2
+    done = threading.Event()
+
+    def on_signal(signum: int, frame: FrameType | None) -> None:
+        done.set()
+
+    signal.signal(signal.SIGTERM, on_signal)
+    signal.signal(signal.SIGINT, on_signal)
+    done.wait()
+    logging.getLogger("modd.subbroker").info("stopping")
+    broker.stop()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,197 @@
+"""SubBroker configuration: a TOML file (docs/subbroker.md, "Configuration
+file") or just a model, with the embedded defaults. Nothing is read at import
+time; every error names the file and the key.
+
+>>> cfg = config_from_model("scenario1.modd")              # doctest: +SKIP
+>>> cfg.drone, cfg.link.endpoint                          # doctest: +SKIP
+('usv', ('127.0.0.1', 7171))
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from modd_model import ModelError, load_model
+
+from ..zenoh_session import DEFAULT_ENDPOINT, ZenohSettings
+
+#: Where the pre-shared key is read from when neither the config nor the model says.
+DEFAULT_KEY_REF = "env:MODD_LINK_KEY"
+
+
+class ConfigError(ValueError):
+    """A bad configuration; the message names the file and the key."""
+
+
+@dataclass(frozen=True)
+class LinkOptions:
+    """The link to the PubBroker (``[link]``)."""
+
+    endpoint: tuple[str, int] | None = None  # None: the model's PubBroker endpoint
+    key: str | None = None  # env:NAME or file:PATH; None: the model's keyRef
+    connect_timeout_s: float = 2.0
+    backoff_initial_s: float = 0.1
+    backoff_max_s: float = 1.0
+    liveness_timeout_s: float = 0.0  # 0: 2 x the longest slot gap + 1 s
+    ping_count: int = 3
+    ping_period_s: float = 0.0  # 0: PING only on connect (keeps the link quiet)
+    pubbroker_status_period_s: int = 60  # STATUS rate asked in CONFIG (0: none)
+    ack_timeout_s: float = 5.0
+
+
+@dataclass(frozen=True)
+class DeliveryOptions:
+    """Where values go (``[delivery]``)."""
+
+    zenoh: bool = True
+    tcp: bool = True  # to each subscriber's endpoint, when the model gives one
+    tcp_queue: int = 1000  # values kept per TCP subscriber while it is away
+    status_period_s: float = 1.0  # modd/<drone>/status
+
+
+@dataclass(frozen=True)
+class SubBrokerConfig:
+    """Everything a SubBroker needs, resolved."""
+
+    model: dict[str, Any]
+    drone: str
+    link: LinkOptions = field(default_factory=LinkOptions)
+    zenoh: ZenohSettings = field(default_factory=lambda: ZenohSettings(listen=(DEFAULT_ENDPOINT,)))
+    delivery: DeliveryOptions = field(default_factory=DeliveryOptions)
+    state_dir: Path | None = None  # where a deployed model is kept across restarts
+    source: str = "<defaults>"
+
+    @property
+    def endpoint(self) -> tuple[str, int]:
+        """The PubBroker's link endpoint."""
+        if self.link.endpoint is not None:
+            return self.link.endpoint
+        return endpoint_of(self.model)
+
+    @property
+    def key_ref(self) -> str:
+        return self.link.key or self.model.get("link", {}).get("keyRef") or DEFAULT_KEY_REF
+
+
+def endpoint_of(model: Mapping[str, Any]) -> tuple[str, int]:
+    ep = model.get("pubBroker", {}).get("endpoint")
+    if not ep:
+        raise ConfigError("the model gives no PubBroker endpoint and [link] endpoint is not set")
+    return str(ep["host"]), int(ep["port"])
+
+
+def parse_endpoint(text: str, where: str) -> tuple[str, int]:
+    """``"host:port"`` -> ``(host, port)``."""
+    host, sep, port = text.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ConfigError(f"{where}: expected host:port, got {text!r}")
+    return host, int(port)
+
+
+def resolve_key(ref: str) -> bytes:
+    """The pre-shared key from ``env:NAME`` or ``file:PATH`` (one trailing
+    newline stripped); ConfigError naming the reference otherwise."""
+    kind, _, name = ref.partition(":")
+    if kind == "env":
+        value = os.environ.get(name)
+        if not value:
+            raise ConfigError(f"link key {ref}: environment variable {name} is not set")
+        return value.encode()
+    if kind == "file":
+        try:
+            data = Path(name).read_bytes()
+        except OSError as exc:
+            raise ConfigError(f"link key {ref}: {exc.strerror}") from exc
+        data = data[:-1] if data.endswith(b"\n") else data
+        if not data:
+            raise ConfigError(f"link key {ref}: the file is empty")
+        return data
+    raise ConfigError(f"link key {ref!r}: expected env:NAME or file:PATH")
+
+
+def _drone(model: Mapping[str, Any]) -> str:
+    return str(model["drone"]["name"])
+
+
+def _load(path: Path) -> dict[str, Any]:
+    try:
+        return load_model(path)
+    except ModelError as exc:
+        raise ConfigError(str(exc)) from exc
+    except OSError as exc:
+        raise ConfigError(f"{path}: {exc.strerror}") from exc
+
+
+def config_from_model(model_path: str | Path, **overrides: Any) -> SubBrokerConfig:
+    """A configuration with every default, for ``modd-subbroker --model FILE``."""
+    model = _load(Path(model_path))
+    return replace(
+        SubBrokerConfig(model=model, drone=model["drone"]["name"], source=str(model_path)),
+        **overrides,
+    )
+
+
+def _table(data: Mapping[str, Any], name: str, source: str) -> dict[str, Any]:
+    value = data.get(name, {})
+    if not isinstance(value, dict):
+        raise ConfigError(f"{source}: [{name}] must be a table")
+    return value
+
+
+def _options(cls: type[Any], data: Mapping[str, Any], where: str) -> Any:
+    defaults = cls()
+    known = set(defaults.__dataclass_fields__)
+    values: dict[str, Any] = {}
+    for key, value in data.items():
+        if key not in known:
+            raise ConfigError(f"{where}: unknown key {key!r}; known: {', '.join(sorted(known))}")
+        expected = type(getattr(defaults, key))
+        if key == "endpoint":
+            value = parse_endpoint(str(value), f"{where}.endpoint")
+        elif expected is float and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        elif getattr(defaults, key) is not None and not isinstance(value, expected):
+            raise ConfigError(f"{where}.{key}: expected {expected.__name__}, got {value!r}")
+        values[key] = value
+    return replace(defaults, **values)
+
+
+def load_config(path: str | Path) -> SubBrokerConfig:
+    """Read a SubBroker TOML file; relative paths in it are relative to it."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except OSError as exc:
+        raise ConfigError(f"{path}: {exc.strerror}") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: {exc}") from exc
+    known = {"model", "drone", "state_dir", "link", "zenoh", "delivery"}
+    for key in data:
+        if key not in known:
+            raise ConfigError(f"{path}: unknown key {key!r}; known: {', '.join(sorted(known))}")
+    if "model" not in data:
+        raise ConfigError(f"{path}: missing key 'model' (path of the .modd or .json model)")
+    model = _load(path.parent / str(data["model"]))
+    drone = str(data.get("drone", model["drone"]["name"]))
+    if drone != model["drone"]["name"]:
+        raise ConfigError(f"{path}: drone {drone!r} but the model is for {_drone(model)!r}")
+    try:
+        zenoh = ZenohSettings.from_mapping(_table(data, "zenoh", str(path)), f"{path}: zenoh")
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from exc
+    state = data.get("state_dir")
+    src = str(path)
+    return SubBrokerConfig(
+        model=model,
+        drone=drone,
+        link=_options(LinkOptions, _table(data, "link", src), f"{path}: link"),
+        zenoh=zenoh,
+        delivery=_options(DeliveryOptions, _table(data, "delivery", src), f"{path}: delivery"),
+        state_dir=path.parent / str(state) if state else None,
+        source=str(path),
+    )

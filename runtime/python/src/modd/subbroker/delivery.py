@@ -1,0 +1,198 @@
+"""Delivery of values to subscribers: on zenoh (``modd/<drone>/sub/<name>``)
+and over TCP to the subscriber's endpoint (the paper's delivery, one JSON
+object per line). Neither ever blocks the link thread: zenoh puts are
+non-blocking (congestion control DROP), and each TCP subscriber has its own
+sender thread with a bounded queue that drops its oldest value when full.
+
+>>> tcp = TcpDelivery({"sub_1": ("127.0.0.1", 7401)}, queue_size=10)   # doctest: +SKIP
+>>> tcp.deliver(value)                                                # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import logging
+import socket
+import threading
+from collections import deque
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+from .keys import sub_key
+from .payload import DeliveredValue
+
+if TYPE_CHECKING:
+    import zenoh
+
+log = logging.getLogger("modd.subbroker.delivery")
+
+
+class ZenohDelivery:
+    """Puts each value on the subscriber's key, through one declared
+    publisher per subscriber (declared on first use)."""
+
+    def __init__(self, session: zenoh.Session, drone: str) -> None:
+        self._session = session
+        self._drone = drone
+        self._publishers: dict[str, zenoh.Publisher] = {}
+        self._lock = threading.Lock()
+        self.delivered = 0
+
+    def _publisher(self, subscriber: str) -> zenoh.Publisher:
+        import zenoh
+
+        with self._lock:
+            pub = self._publishers.get(subscriber)
+            if pub is None:
+                pub = self._session.declare_publisher(
+                    sub_key(self._drone, subscriber),
+                    encoding=zenoh.Encoding.APPLICATION_JSON,
+                    congestion_control=zenoh.CongestionControl.DROP,
+                )
+                self._publishers[subscriber] = pub
+            return pub
+
+    def deliver(self, value: DeliveredValue) -> None:
+        self._publisher(value.subscriber).put(value.to_json())
+        self.delivered += 1
+
+    def forget(self, subscriber: str) -> None:
+        """Undeclare a subscriber's publisher (cancelled or undeployed)."""
+        with self._lock:
+            pub = self._publishers.pop(subscriber, None)
+        if pub is not None:
+            pub.undeclare()
+
+    def close(self) -> None:
+        for name in list(self._publishers):
+            self.forget(name)
+
+
+class _TcpSender(threading.Thread):
+    """Sends one subscriber's values to its endpoint, reconnecting with backoff."""
+
+    def __init__(self, name: str, endpoint: tuple[str, int], queue_size: int) -> None:
+        super().__init__(name=f"tcp-delivery-{name}", daemon=True)
+        self.endpoint = endpoint
+        self.queue: deque[bytes] = deque()
+        self.queue_size = queue_size
+        self.cond = threading.Condition()
+        self.stopping = False
+        self.sent = 0
+        self.dropped = 0
+        self.connected = False
+
+    def push(self, line: bytes) -> None:
+        with self.cond:
+            if len(self.queue) >= self.queue_size:
+                self.queue.popleft()
+                self.dropped += 1
+            self.queue.append(line)
+            self.cond.notify()
+
+    def stop(self) -> None:
+        with self.cond:
+            self.stopping = True
+            self.cond.notify()
+
+    def _wait(self, seconds: float) -> bool:
+        """Sleep unless stopped; True when stopping."""
+        with self.cond:
+            self.cond.wait_for(lambda: self.stopping, timeout=seconds)
+            return self.stopping
+
+    def run(self) -> None:
+        backoff = 0.1
+        while not self.stopping:
+            try:
+                sock = socket.create_connection(self.endpoint, timeout=1.0)
+            except OSError:
+                if self._wait(backoff):
+                    return
+                backoff = min(backoff * 2, 2.0)
+                continue
+            backoff = 0.1
+            self.connected = True
+            log.info("TCP delivery connected to %s:%d", *self.endpoint)
+            try:
+                self._pump(sock)
+            except OSError as exc:
+                log.info("TCP delivery to %s:%d lost: %s", *self.endpoint, exc)
+            finally:
+                self.connected = False
+                sock.close()
+
+    def _pump(self, sock: socket.socket) -> None:
+        sock.settimeout(5.0)
+        while True:
+            with self.cond:
+                self.cond.wait_for(lambda: self.queue or self.stopping)
+                if self.stopping:
+                    return
+                batch = list(self.queue)
+                self.queue.clear()
+            try:
+                sock.sendall(b"".join(batch))
+            except OSError:
+                with self.cond:  # put them back, oldest first, within the bound
+                    self.queue.extendleft(reversed(batch))
+                    while len(self.queue) > self.queue_size:
+                        self.queue.popleft()
+                        self.dropped += 1
+                raise
+            self.sent += len(batch)
+
+
+class TcpDelivery:
+    """TCP delivery to the subscribers whose model entry has an endpoint."""
+
+    def __init__(self, endpoints: Mapping[str, tuple[str, int]], queue_size: int = 1000) -> None:
+        self._queue_size = queue_size
+        self._senders: dict[str, _TcpSender] = {}
+        self._lock = threading.Lock()
+        self.set_endpoints(endpoints)
+
+    def set_endpoints(self, endpoints: Mapping[str, tuple[str, int]]) -> None:
+        """Replace the subscriber -> endpoint map (after a deploy); senders of
+        unchanged entries keep their connection and their queue."""
+        with self._lock:
+            for name, sender in list(self._senders.items()):
+                if endpoints.get(name) != sender.endpoint:
+                    sender.stop()
+                    del self._senders[name]
+            for name, endpoint in endpoints.items():
+                if name not in self._senders:
+                    sender = _TcpSender(name, endpoint, self._queue_size)
+                    sender.start()
+                    self._senders[name] = sender
+
+    def deliver(self, value: DeliveredValue) -> None:
+        sender = self._senders.get(value.subscriber)
+        if sender is not None:
+            sender.push(value.to_json() + b"\n")
+
+    def stats(self) -> dict[str, dict[str, int | bool]]:
+        return {
+            name: {"connected": s.connected, "sent": s.sent, "dropped": s.dropped}
+            for name, s in self._senders.items()
+        }
+
+    def close(self) -> None:
+        with self._lock:
+            senders = list(self._senders.values())
+            self._senders.clear()
+        for s in senders:
+            s.stop()
+        for s in senders:
+            s.join(timeout=2.0)
+
+
+def tcp_endpoints(model: Mapping[str, object]) -> dict[str, tuple[str, int]]:
+    """Subscriber name -> endpoint, for the subscribers that have one."""
+    out: dict[str, tuple[str, int]] = {}
+    subs = model.get("subscribers", [])
+    assert isinstance(subs, list)
+    for sub in subs:
+        ep = sub.get("endpoint")
+        if ep:
+            out[sub["name"]] = (str(ep["host"]), int(ep["port"]))
+    return out

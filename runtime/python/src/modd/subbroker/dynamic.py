@@ -1,0 +1,134 @@
+"""Dynamic subscriptions (paper §III-B2) behind ``modd/<drone>/subscribe``.
+
+A request (JSON) asks for a topic, a period and an aggregation while the
+mission runs. The schedule does not change: the request is accepted when the
+stream is sent or derivable from what is sent (:func:`modd_plan.check_dynamic`),
+and its values start with the next complete window. Replies are JSON objects
+with a ``status``; docs/subbroker.md lists them.
+
+>>> reg = DynamicSubscriptions("usv")
+>>> reg.handle({"action": "cancel", "subscriber": "dyn_x"}, None)["status"]
+'ERROR'
+"""
+
+from __future__ import annotations
+
+import secrets
+import threading
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from modd_plan import Accepted, Plan, check_dynamic
+from modd_plan.streams import Source, StreamKey
+
+from .keys import check_name, sub_key
+
+
+class Router(Protocol):
+    """What the running state offers: the plan, and routes in the fan-out."""
+
+    plan: Plan
+
+    def route(self, stream: StreamKey, sources: tuple[Source, ...], subscriber: str) -> None: ...
+
+    def unroute(self, subscriber: str) -> bool: ...
+
+
+@dataclass(frozen=True)
+class Dynamic:
+    """One accepted dynamic subscription."""
+
+    name: str
+    topic: str
+    period_s: str
+    aggregation: str
+
+
+def _period_text(value: Any) -> str | None:
+    if isinstance(value, str):
+        return value
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        return repr(value)
+    return None
+
+
+class DynamicSubscriptions:
+    """The registry of dynamic subscriptions of one drone."""
+
+    def __init__(self, drone: str, reserved: Callable[[], set[str]] = set) -> None:
+        self._drone = drone
+        self._reserved = reserved  # the model's subscriber names
+        self._subs: dict[str, Dynamic] = {}
+        self._lock = threading.Lock()
+
+    def names(self) -> list[str]:
+        with self._lock:
+            return sorted(self._subs)
+
+    def handle(self, request: Mapping[str, Any], running: Router | None) -> dict[str, Any]:
+        """Serve one request; never raises for bad input."""
+        action = request.get("action", "subscribe")
+        if action == "subscribe":
+            return self.subscribe(request, running)
+        if action == "cancel":
+            return self.cancel(str(request.get("subscriber", "")), running)
+        if action == "list":
+            with self._lock:
+                return {"status": "OK", "subscriptions": [vars(d) for d in self._subs.values()]}
+        return {"status": "ERROR", "reason": f"unknown action {action!r}"}
+
+    def subscribe(self, request: Mapping[str, Any], running: Router | None) -> dict[str, Any]:
+        topic, agg = request.get("topic"), request.get("aggregation")
+        period = _period_text(request.get("period_s"))
+        if not isinstance(topic, str) or not isinstance(agg, str) or period is None:
+            return {"status": "ERROR", "reason": "expected topic, period_s and aggregation"}
+        if running is None:
+            return {"status": "NOT_AVAILABLE", "reason": "no plan is running on the link yet"}
+        verdict = check_dynamic(running.plan, topic, period, agg)
+        if not isinstance(verdict, Accepted):
+            return {"status": "NOT_AVAILABLE", "reason": verdict.reason}
+        name = request.get("subscriber") or f"dyn_{secrets.token_hex(4)}"
+        try:
+            check_name("subscriber", str(name))
+        except ValueError as exc:
+            return {"status": "ERROR", "reason": str(exc)}
+        with self._lock:
+            if name in self._subs or name in self._reserved():
+                return {"status": "ERROR", "reason": f"subscriber {name!r} already exists"}
+            self._subs[name] = Dynamic(name, topic, period, agg)
+        target = StreamKey.parse(verdict.stream)
+        running.route(target, verdict.sources, name)
+        return {
+            "status": "ACCEPTED",
+            "subscriber": name,
+            "key": sub_key(self._drone, name),
+            "stream": verdict.stream,
+            "derived_from": verdict.derived_from,
+            "factor": verdict.factor,
+        }
+
+    def cancel(self, name: str, running: Router | None) -> dict[str, Any]:
+        with self._lock:
+            found = self._subs.pop(name, None)
+        if found is None:
+            return {"status": "ERROR", "reason": f"no dynamic subscription named {name!r}"}
+        if running is not None:
+            running.unroute(name)
+        return {"status": "CANCELLED", "subscriber": name}
+
+    def reroute(self, running: Router) -> list[tuple[str, str]]:
+        """Route every dynamic subscription in a new plan (after a deploy);
+        drop and return ``(name, reason)`` for those it cannot serve."""
+        dropped: list[tuple[str, str]] = []
+        with self._lock:
+            subs = list(self._subs.values())
+        for d in subs:
+            verdict = check_dynamic(running.plan, d.topic, d.period_s, d.aggregation)
+            if isinstance(verdict, Accepted):
+                running.route(StreamKey.parse(verdict.stream), verdict.sources, d.name)
+            else:
+                with self._lock:
+                    self._subs.pop(d.name, None)
+                dropped.append((d.name, verdict.reason))
+        return dropped

@@ -1,0 +1,111 @@
+"""A publisher load for the end-to-end tests and the benchmark: every
+publisher of a model publishes all its topics at its period, through the
+PubBroker's ingress protocol (docs/ingress.md), with seeded random values.
+
+    python tests/subbroker/loadgen.py --model M --ingress 127.0.0.1:PORT --seconds 30
+
+It is a separate process, as a sensor driver would be; it stops on SIGTERM
+or after ``--seconds``. It uses the project's Python publisher client when
+that is importable, else writes the ingress frames itself.
+"""
+
+from __future__ import annotations
+
+import argparse
+import random
+import signal
+import socket
+import struct
+import sys
+import time
+from fractions import Fraction
+from types import FrameType
+
+from modd_model import load_model
+
+TYPES = {"float32": (0, "<f"), "float64": (1, "<d"), "int": (2, "<q"), "bool": (3, "<B")}
+
+
+def varint(v: int) -> bytes:
+    out = bytearray()
+    while True:
+        b = v & 0x7F
+        v >>= 7
+        if v:
+            out.append(b | 0x80)
+        else:
+            out.append(b)
+            return bytes(out)
+
+
+def string(s: str) -> bytes:
+    data = s.encode()
+    return varint(len(data)) + data
+
+
+def frame(mtype: int, body: bytes) -> bytes:
+    return varint(len(body) + 1) + bytes([mtype]) + body
+
+
+def value_for(rng: random.Random, vtype: str) -> float | int:
+    if vtype == "bool":
+        return rng.randint(0, 1)
+    if vtype == "int":
+        return rng.randint(-1000, 1000)
+    return rng.uniform(-10.0, 10.0)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser()
+    p.add_argument("--model", required=True)
+    p.add_argument("--ingress", required=True, help="host:port of the PubBroker's TCP ingress")
+    p.add_argument("--seconds", type=float, default=30.0)
+    p.add_argument("--seed", type=int, default=1)
+    args = p.parse_args(argv)
+    model = load_model(args.model)
+    types = {
+        f"{model['drone']['name']}.{s['name']}.{v['name']}": v.get("type", "float32")
+        for s in model["drone"]["sensors"]
+        for v in s["variables"]
+    }
+    host, port = args.ingress.rsplit(":", 1)
+    stop = False
+
+    def on_term(signum: int, frame_: FrameType | None) -> None:
+        nonlocal stop
+        stop = True
+
+    signal.signal(signal.SIGTERM, on_term)
+    rng = random.Random(args.seed)
+    sock = socket.create_connection((host, int(port)))
+    sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    sock.sendall(frame(0x01, bytes([1]) + string("loadgen")))
+    ids: dict[str, int] = {}
+    for pub in model.get("publishers", []):
+        for topic in pub["topics"]:
+            if topic not in ids:
+                ids[topic] = len(ids)
+                sock.sendall(frame(0x02, varint(ids[topic]) + bytes([TYPES[types[topic]][0]])
+                                   + string(topic)))
+    pubs = [(Fraction(pub["periodS"]), pub["topics"]) for pub in model.get("publishers", [])]
+    start = time.monotonic()
+    due = [start + float(period) for period, _ in pubs]
+    while not stop and time.monotonic() - start < args.seconds:
+        i = min(range(len(pubs)), key=lambda k: due[k])
+        delay = due[i] - time.monotonic()
+        if delay > 0:
+            time.sleep(delay)
+        now = time.time_ns()
+        records = b""
+        for topic in pubs[i][1]:
+            code, fmt = TYPES[types[topic]]
+            records += varint(ids[topic]) + struct.pack("<q", now)
+            records += struct.pack(fmt, value_for(rng, types[topic]))
+        sock.sendall(frame(0x03, varint(len(pubs[i][1])) + records))
+        due[i] += float(pubs[i][0])
+    sock.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
