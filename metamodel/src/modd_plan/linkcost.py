@@ -114,12 +114,20 @@ def _frame_bytes_per_hyperperiod(schedule: Schedule, window_bytes: Sequence[Frac
     if m == 0:
         return 0.0
     if m <= EXACT_WALK_LIMIT:
+        per_period: dict[int, tuple[Fraction, int]] = {}
+        for p, b in zip(schedule.periods_us, window_bytes, strict=True):
+            total_b, count = per_period.get(p, (Fraction(0), 0))
+            per_period[p] = (total_b + b, count + 1)
         total = 0
-        for _, _, ids in schedule.first_slots(m):
-            total += data_frame_bytes(ceil(sum(window_bytes[i] for i in ids)), len(ids))
+        for index, _, due in schedule.iter_due_periods():
+            if index == m:
+                break
+            values = sum((per_period[p][0] for p in due), Fraction(0))
+            total += data_frame_bytes(ceil(values), sum(per_period[p][1] for p in due))
         return float(total)
     values = sum(
-        schedule.value_count_per_hyperperiod(i) * b for i, b in enumerate(window_bytes)
+        (schedule.value_count_per_hyperperiod(i) * b for i, b in enumerate(window_bytes)),
+        Fraction(0),
     )
     mean_body = DATA_HEADER_BYTES + values / m
     return float(values + m * (DATA_HEADER_BYTES + varint_size(ceil(mean_body))))

@@ -31,7 +31,10 @@ METHODS = ("exact", "cvxpy")
 
 
 def _us(period: Fraction) -> int:
-    return to_micros(fraction_to_decimal(period))
+    us = period * MICROS_PER_SECOND
+    if us.denominator != 1:
+        raise ValueError(f"{period} s is not a whole number of microseconds")
+    return int(us)
 
 
 def _seconds(us: int) -> str:

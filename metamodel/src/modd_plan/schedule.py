@@ -109,27 +109,33 @@ class Schedule:
                 lo = mid + 1
         return lo * g
 
-    def iter_slots(self, start_slot: int = 0) -> Iterator[Slot]:
-        """Slots from ``start_slot`` on, forever: ``(index, date in s, stream ids)``."""
+    def iter_due_periods(self, start_slot: int = 0) -> Iterator[tuple[int, int, list[int]]]:
+        """Slots from ``start_slot`` on, forever, as ``(index, date in µs,
+        distinct periods due)``: the next-due heap over distinct periods."""
         if not self.periods_us:
             return
-        by_period: dict[int, list[int]] = {}
-        for sid, p in enumerate(self.periods_us):
-            by_period.setdefault(p, []).append(sid)
         start = self.slot_date_us(start_slot)
-        heap = [(-(-start // p) * p, p) for p in by_period]
+        heap = [(-(-start // p) * p, p) for p in sorted(set(self.periods_us))]
         heapq.heapify(heap)
         index = start_slot
         while True:
             date = heap[0][0]
-            ids: list[int] = []
+            due: list[int] = []
             while heap[0][0] == date:
                 _, p = heapq.heappop(heap)
-                ids.extend(by_period[p])
+                due.append(p)
                 heapq.heappush(heap, (date + p, p))
-            ids.sort()
-            yield index, Fraction(date, MICROS_PER_SECOND), ids
+            yield index, date, due
             index += 1
+
+    def iter_slots(self, start_slot: int = 0) -> Iterator[Slot]:
+        """Slots from ``start_slot`` on, forever: ``(index, date in s, stream ids)``."""
+        by_period: dict[int, list[int]] = {}
+        for sid, p in enumerate(self.periods_us):
+            by_period.setdefault(p, []).append(sid)
+        for index, date, due in self.iter_due_periods(start_slot):
+            ids = sorted(i for p in due for i in by_period[p])
+            yield index, Fraction(date, MICROS_PER_SECOND), ids
 
     def first_slots(self, limit: int) -> list[Slot]:
         """The first ``limit`` slots (or fewer if the hyperperiod has fewer)."""

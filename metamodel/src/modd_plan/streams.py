@@ -171,6 +171,9 @@ def plan_streams(
     """Every requested stream, in contract order, with its id if sent or its
     sources if derived."""
     sent = choose_sent(requested, cost_per_s)
+    sent_by_topic: dict[str, list[StreamKey]] = {}
+    for s in sent:
+        sent_by_topic.setdefault(s.topic, []).append(s)
     order = stream_order(topic_index)
     ids = {s: i for i, s in enumerate(sorted(sent, key=order))}
     out: list[PlannedStream] = []
@@ -179,7 +182,7 @@ def plan_streams(
         if s in ids:
             out.append(PlannedStream(s, ids[s], (), subscribers))
         else:
-            sources = find_sources(s, sent)
+            sources = find_sources(s, sent_by_topic[s.topic])
             assert sources is not None  # choose_sent keeps every stream derivable
             out.append(PlannedStream(s, None, sources, subscribers))
     return tuple(out)

@@ -1,0 +1,56 @@
+"""Frame sizes and predicted link bytes."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+from modd_plan.linkcost import (
+    EXACT_WALK_LIMIT,
+    data_frame_bytes,
+    plain_message_bytes,
+    predict,
+    varint_size,
+    window_value_bytes,
+)
+from modd_plan.schedule import Schedule
+
+
+def test_varint_and_frame_sizes() -> None:
+    assert [varint_size(n) for n in (0, 127, 128, 16383, 16384)] == [1, 1, 2, 2, 3]
+    assert data_frame_bytes(18, 4) == 1 + 3 + 18
+    assert data_frame_bytes(18, 9, some_absent=True) == 1 + 3 + 2 + 18
+    assert data_frame_bytes(125, 1) == 2 + 3 + 125  # body 128 B needs a 2-byte length
+
+
+def test_window_value_bytes_per_aggregation() -> None:
+    six = Fraction(6)
+    assert window_value_bytes("MIN", "float32", six) == 4
+    assert window_value_bytes("MAX", "float64", six) == 8
+    assert window_value_bytes("AVERAGE", "float32", six) == 5
+    assert window_value_bytes("AVERAGE", "int", six) == 9
+    assert window_value_bytes("COUNT", "bool", Fraction(300)) == 2
+    assert window_value_bytes("SUM", "bool", six) == 4
+    assert window_value_bytes("ALL", "float32", Fraction(25, 2)) == 1 + 50
+    assert window_value_bytes("FIRST", "bool", six) == 1
+
+
+def test_predict_walks_small_schedules_and_estimates_large_ones() -> None:
+    sched = Schedule.from_periods_us([500_000, 1_000_000])
+    cost = predict(sched, [Fraction(4), Fraction(4)], {"a": (Fraction(1, 10), 10)})
+    # per second: frame at 0.5 (1 value) and at 1.0 (2 values)
+    assert cost.frames_per_s == 2
+    assert cost.drone_to_base == (1 + 3 + 4) + (1 + 3 + 8) + 2 * 52
+    assert cost.base_to_drone == 2 * 52
+    assert cost.plain_pubsub == 10 * (52 + 10)
+    assert cost.plain_pubsub_acks == 10 * 52
+    coprime = [p * 1000 for p in (3, 7, 11, 13, 17, 19, 23)]
+    big = Schedule.from_periods_us(coprime)
+    assert big.messages_per_hyperperiod > EXACT_WALK_LIMIT
+    estimate = predict(big, [Fraction(4)] * 7, {})
+    values_per_s = sum(4 / (p / 1e6) for p in coprime)
+    expected = values_per_s + estimate.frames_per_s * (1 + 3 + 52)
+    assert abs(estimate.drone_to_base - expected) < 1e-6 * expected
+
+
+def test_plain_message_carries_the_topic_name() -> None:
+    assert plain_message_bytes("usv.a.x", "float32") == 4 + 7 + 4

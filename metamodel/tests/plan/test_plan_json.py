@@ -1,0 +1,83 @@
+"""The plan JSON (shared contract) and the infeasible case."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from modd_plan.plan import make_plan
+
+CONTRACT_KEYS = {
+    "hyperperiod_s", "messages_per_hyperperiod", "topics", "streams", "subscriptions",
+    "buffer_sizes", "schedule", "delays", "predicted_link_bytes_per_s", "infeasible",
+    "constants",
+}
+
+
+def test_contract_fields(scenario1_dict: Any) -> None:
+    j = make_plan(scenario1_dict).to_json()
+    assert set(j) >= CONTRACT_KEYS
+    json.dumps(j)  # serialisable as it is
+    assert isinstance(j["hyperperiod_s"], str) and isinstance(j["messages_per_hyperperiod"], int)
+    assert j["topics"][2] == {
+        "id": 2, "name": "d.accelerometer.accel_z", "type": "float32", "unit": "NONE",
+        "publication_period_s": "0.04", "period_us": 40000, "buffer_size": 6,
+    }
+    stream = j["streams"][0]
+    assert set(stream) >= {"id", "key", "topic", "aggregation", "period_s", "period_us", "sent",
+                           "derived_from", "factor", "subscribers"}
+    assert j["schedule"]["streams"][3] == {
+        "id": 3, "key": "d.accelerometer.accel_z/MAX/0.25", "period_us": 250000}
+    assert {"drone_to_base", "base_to_drone", "plain_pubsub"} <= set(
+        j["predicted_link_bytes_per_s"])
+    assert j["constants"] == {"max_buffer": 1000, "ping_s": "0.83", "alpha": "1.0",
+                              "beta": "1.0", "delay_cap_s": "2.49"}
+
+
+def test_infeasible_names_topics_and_subscribers_and_keeps_the_uncapped_plan(
+    make_model: Any,
+) -> None:
+    subs = [("fast", "a", "0.25", "MIN"), ("slow", "a", "8.0", "MIN"), ("ok", "b", "1.0", "MAX")]
+    model = make_model(["a", "b"], [("p", "0.05", ["a", "b"])], subs)
+    j = make_plan(model).to_json()
+    assert j["violates_delay_cap"] is True
+    (bad,) = j["infeasible"]
+    assert bad["topic"] == "d.s.a" and bad["subscribers"] == ["fast", "slow"]
+    assert "0.25 s (fast) to 8.0 s (slow)" in bad["reason"]
+    assert "3 x PING = 2.49 s" in bad["reason"]
+    # the uncapped optimum: n x 0.05 at the middle, 4.125 s -> n = 82 (4.1 s)
+    assert j["buffer_sizes"] == {"d.s.a": 82, "d.s.b": 20}
+    assert j["delays"]["slow"] == "3.9"
+    relaxed = make_plan(model, ping_s=make_plan(model).constants.ping_s * 2).to_json()
+    assert relaxed["infeasible"] == [] and relaxed["buffer_sizes"] == j["buffer_sizes"]
+
+
+def test_publication_period_too_long_for_the_cap(make_model: Any) -> None:
+    model = make_model(["a"], [("p", "10.0", ["a"])], [("s", "a", "1.0", "MIN")])
+    (bad,) = make_plan(model).to_json()["infeasible"]
+    assert "publication period of 10.0 s" in bad["reason"] and "n = 1" in bad["reason"]
+
+
+def test_unpublished_and_unsubscribed_topics(make_model: Any) -> None:
+    model = make_model(["a", "b", "c"], [("p", "0.1", ["a", "b"])],
+                       [("s", "a", "1.0", "MIN"), ("t", "c", "1.0", "MIN")])
+    j = make_plan(model).to_json()
+    assert j["buffer_sizes"] == {"d.s.a": 10, "d.s.b": 1}  # b: nobody asks, smallest n
+    assert j["topics"][2]["buffer_size"] is None
+    assert j["infeasible"] == [
+        {"topic": "d.s.c", "subscribers": ["t"], "reason": "no publisher publishes this topic"}]
+
+
+def test_overrides_change_the_constants(scenario1_dict: Any) -> None:
+    from fractions import Fraction
+
+    plan = make_plan(scenario1_dict, max_buffer=20, alpha=Fraction(0), beta=Fraction(2))
+    assert plan.constants.max_buffer == 20
+    assert plan.buffer_sizes["d.accelerometer.accel_x"] == 20
+    assert plan.buffer_sizes["d.accelerometer.accel_z"] == 6
+
+
+def test_no_subscribers(make_model: Any) -> None:
+    j = make_plan(make_model(["a"], [("p", "0.1", ["a"])], [])).to_json()
+    assert (j["hyperperiod_s"], j["messages_per_hyperperiod"]) == ("0.0", 0)
+    assert j["schedule"]["slots"] == [] and j["buffer_sizes"] == {"d.s.a": 1}
