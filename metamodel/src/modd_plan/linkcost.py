@@ -1,16 +1,20 @@
 """Predicted bytes on the drone link, from the frame layout of the MoDD link
-protocol (docs/protocol.md, section DATA) — keep :func:`data_frame_bytes` and
-:func:`window_value_bytes` in step with that spec; the link codec's tests
-cross-check them against real encoded frames.
+protocol (docs/protocol.md, section DATA; codec in runtime/python/src/modd/link/
+codec.py and runtime/cpp) — keep :func:`data_frame_bytes` and
+:func:`window_value_bytes` in step with that spec; they are cross-checked
+against frames the real codec encodes.
 
-DATA frame, as assumed here::
+DATA frame (the ordinary, non-sync form)::
 
-    varint length | type (1 B) | config id (1 B) | slot sequence (1 B, mod 256)
+    varint length | type (1 B) | slot sequence (1 B, slot mod 256)
     | presence bitmap (ceil(k/8) B, only when some stream is absent) | values
 
-Values in stream-id order: float32 4 B, float64 8 B, int a zigzag varint
-(estimated at :data:`INT_VALUE_BYTES`), bool 1 B; AVERAGE adds a varint sample
-count; COUNT is a varint; ALL is a varint count then the raw samples.
+(the sync form, sent after a gap, carries config id + varint slot instead of
+the sequence byte: rare, not counted.) Values in stream-id order, with the
+wire type of :func:`aggregate_value_type`: float32 4 B, float64 8 B, int a
+zigzag varint (estimated at :data:`INT_VALUE_BYTES`), bool 1 B; AVERAGE adds a
+varint sample count; COUNT is a varint; ALL is a varint count then the raw
+samples.
 One TCP segment per slot: 52 B of IPv4 + TCP (timestamps option) headers,
 and one pure ACK (52 B) per segment in the other direction.
 
@@ -32,7 +36,7 @@ from .schedule import Schedule
 
 TCP_IP_HEADER_BYTES = 52
 UDP_IP_HEADER_BYTES = 28
-DATA_HEADER_BYTES = 3  # type, config id, slot sequence
+DATA_HEADER_BYTES = 2  # type, slot sequence
 INT_VALUE_BYTES = 4  # zigzag varint of a value below 2**27 in magnitude
 SAMPLE_BYTES: dict[str, int] = {"float32": 4, "float64": 8, "int": INT_VALUE_BYTES, "bool": 1}
 MQTT_PUBLISH_OVERHEAD_BYTES = 4  # fixed header + topic length
@@ -59,7 +63,7 @@ def aggregate_value_type(aggregation: str, topic_type: str) -> str:
     if aggregation in ("MIN", "MAX", "FIRST", "LAST", "ALL"):
         return topic_type
     if aggregation == "AVERAGE":
-        return "float32" if topic_type == "float32" else "float64"
+        return "float32" if topic_type in ("float32", "bool") else "float64"
     if aggregation == "SUM":
         return topic_type if topic_type.startswith("float") else "int"
     return "int"  # COUNT
@@ -76,6 +80,8 @@ def window_value_bytes(aggregation: str, topic_type: str, samples: Fraction) -> 
         return Fraction(value + count_bytes)
     if aggregation == "ALL":
         return count_bytes + samples * value
+    if aggregation == "SUM" and topic_type == "bool":  # zigzag varint of at most `samples`
+        return Fraction(varint_size(2 * ceil(samples)))
     return Fraction(value)
 
 

@@ -43,8 +43,8 @@ def test_scenario2(scenarios_dir: Path, expected: dict[str, Any], method: str) -
 def test_scenario1_link_cost(scenarios_dir: Path) -> None:
     link = make_plan(load_model(scenarios_dir / "scenario1.modd")).to_json()[
         "predicted_link_bytes_per_s"]
-    # 4 frames/s of 4 B header + 2 x (4 B average + 1 B count) + 2 x 4 B, + 52 B IP/TCP
+    # 4 frames/s of 3 B header + 2 x (4 B average + 1 B count) + 2 x 4 B, + 52 B IP/TCP
     assert link["frames_per_s"] == 4.0
-    assert link["drone_to_base"] == 4 * (4 + 10 + 8 + 52)
+    assert link["drone_to_base"] == 4 * (3 + 10 + 8 + 52)
     assert link["base_to_drone"] == 4 * 52
     assert link["plain_pubsub"] > 10 * link["drone_to_base"]
