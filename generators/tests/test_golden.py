@@ -12,11 +12,13 @@ from pathlib import Path
 import pytest
 from modd_gen import generate
 from modd_gen.targets.cpp_driver import client_sources
+from modd_gen.targets.subscribers import subscriber_client_sources
 from modd_model import load_model
 
 GOLDEN = Path(__file__).parent / "golden"
 DATA = Path(__file__).resolve().parents[2] / "metamodel" / "tests" / "data"
-CARRIED = ("modd/include/modd/client/publisher.hpp", "modd/src/publisher.cpp")
+CARRIED = ("modd/include/modd/client/publisher.hpp", "modd/src/publisher.cpp",
+           "modd/include/modd/client/subscriber.hpp", "modd/src/subscriber.cpp")
 
 
 def _models(scenarios_dir: Path) -> dict[str, Path]:
@@ -52,6 +54,9 @@ def test_carried_client_is_the_runtime_client(scenarios_dir: Path) -> None:
     artifacts = {a.path: a.content for a in generate(load_model(scenarios_dir / "scenario1.modd"))}
     assert artifacts["integrator/pub_1-driver/" + CARRIED[0]] == header
     assert artifacts["integrator/pub_1-driver/" + CARRIED[1]] == source
+    sub_header, sub_source = subscriber_client_sources()
+    assert artifacts["scientist/cpp/sub_5/" + CARRIED[2]] == sub_header
+    assert artifacts["scientist/cpp/sub_5/" + CARRIED[3]] == sub_source
 
 
 def test_roles_partition_the_output(scenarios_dir: Path) -> None:

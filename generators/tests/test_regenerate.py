@@ -32,7 +32,10 @@ def test_user_files_survive_regeneration(scenarios_dir: Path, tmp_path: Path) ->
     assert "src/driver.cpp (yours: kept)" in second.stdout
     index = json.loads((out / "INDEX.json").read_text())
     kept = {f["path"] for f in index["files"] if f["action"] == "kept"}
-    assert kept == {"integrator/pub_1-driver/src/driver.cpp", "integrator/pub_1-driver/user.cmake"}
+    users = {f["path"] for f in index["files"] if f["ownership"] == "user"}
+    assert kept == users
+    assert {"integrator/pub_1-driver/src/driver.cpp", "integrator/pub_1-driver/user.cmake",
+            "scientist/cpp/sub_5/src/main.cpp"} <= kept
 
 
 def test_invalid_model_generates_nothing(tmp_path: Path) -> None:

@@ -7,15 +7,15 @@ from typing import Any
 
 from .artifact import Artifact
 from .context import Context, build_context
-from .targets import cpp_driver, pubbroker_config
+from .targets import cpp_driver, pubbroker_config, subbroker_config, subscribers
 
 Target = Callable[[Context], list[Artifact]]
 
 #: role -> its targets, in the order they are written
 ROLES: dict[str, list[Target]] = {
     "integrator": [cpp_driver.artifacts],
-    "operator": [pubbroker_config.artifacts],
-    "scientist": [],
+    "operator": [pubbroker_config.artifacts, subbroker_config.artifacts],
+    "scientist": [subscribers.artifacts],
 }
 
 

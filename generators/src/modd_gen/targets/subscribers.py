@@ -1,0 +1,57 @@
+"""Per subscriber, the scientist's stubs: a Python script on the subscriber API
+(prints values, or collects them into a pandas DataFrame), and, for a
+subscriber with a TCP endpoint, a C++ project on the C++ subscriber client
+(a callback per delivered value)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from ..artifact import Artifact, Ownership
+from ..context import Context
+from ..render import render
+
+REPO = Path(__file__).resolve().parents[4]
+SUB_HEADER = REPO / "runtime" / "cpp" / "include" / "modd" / "client" / "subscriber.hpp"
+SUB_SOURCE = REPO / "runtime" / "cpp" / "src" / "client" / "subscriber.cpp"
+
+
+def subscriber_client_sources() -> tuple[str, str]:
+    for p in (SUB_HEADER, SUB_SOURCE):
+        if not p.is_file():
+            raise FileNotFoundError(f"the C++ subscriber client is missing: {p}")
+    return SUB_HEADER.read_text(encoding="utf-8"), SUB_SOURCE.read_text(encoding="utf-8")
+
+
+def _python(ctx: Context, sub: dict[str, Any]) -> Artifact:
+    topic = ctx.topics[sub["topic"]]
+    text = render("py_subscriber/subscriber.py.j2", sub=sub, topic=topic, drone=ctx.drone)
+    return Artifact(f"scientist/python/{sub['name']}.py", text, "scientist", executable=True)
+
+
+def _cpp(ctx: Context, sub: dict[str, Any]) -> list[Artifact]:
+    root = f"scientist/cpp/{sub['name']}"
+    header, source = subscriber_client_sources()
+    args = {"sub": sub, "topic": ctx.topics[sub["topic"]], "drone": ctx.drone}
+    return [
+        Artifact(f"{root}/CMakeLists.txt", render("cpp_subscriber/CMakeLists.txt.j2", **args),
+                 "scientist"),
+        Artifact(f"{root}/modd/include/modd/client/subscriber.hpp", header, "scientist"),
+        Artifact(f"{root}/modd/src/subscriber.cpp", source, "scientist"),
+        Artifact(f"{root}/src/main.cpp", render("cpp_subscriber/main.cpp.j2", **args),
+                 "scientist", Ownership.USER),
+    ]
+
+
+def artifacts(ctx: Context) -> list[Artifact]:
+    out: list[Artifact] = []
+    for sub in ctx.model["subscribers"]:
+        out.append(_python(ctx, sub))
+        if "endpoint" in sub:
+            out += _cpp(ctx, sub)
+    if ctx.model["subscribers"]:
+        out.append(Artifact("scientist/README.md", render(
+            "py_subscriber/README.md.j2", subs=ctx.model["subscribers"], drone=ctx.drone),
+            "scientist"))
+    return out

@@ -1,0 +1,42 @@
+// Subscriber sub_14 (drone usv): MIN of usv.ins.longitude
+// (RADIAN) every 1.0 s, delivered by the SubBroker over TCP to
+// 127.0.0.1:7414.
+//
+// This file is yours: `modd generate` wrote it once and will never overwrite it.
+// Put your processing in on_value().
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+
+#include "modd/client/subscriber.hpp"
+
+namespace {
+
+modd::Subscriber* running = nullptr;
+
+void on_value(const modd::Delivered& d) {
+  if (!d.present) {
+    std::printf("%lld %s: no sample in the window\n", static_cast<long long>(d.end_ns), d.topic.c_str());
+  } else if (!d.values.empty()) {
+    std::printf("%lld %s: %zu samples\n", static_cast<long long>(d.end_ns), d.topic.c_str(), d.values.size());
+  } else {
+    std::printf("%lld %s %s = %.9g\n", static_cast<long long>(d.end_ns), d.topic.c_str(),
+                d.aggregation.c_str(), d.value);
+  }
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main() {
+  const char* port_env = std::getenv("MODD_SUBSCRIBER_PORT");  // override for tests
+  const auto port = static_cast<uint16_t>(port_env ? std::atoi(port_env) : 7414);
+  modd::Subscriber sub("127.0.0.1", port, on_value);
+  running = &sub;
+  std::signal(SIGINT, [](int) { running->stop(); });
+  std::signal(SIGTERM, [](int) { running->stop(); });
+  std::printf("sub_14: listening on 127.0.0.1:%u\n", sub.port());
+  std::fflush(stdout);
+  sub.run();
+  return 0;
+}

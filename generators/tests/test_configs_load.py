@@ -1,0 +1,34 @@
+"""The generated broker configs are the files the runtime really reads: the
+SubBroker's own loader accepts the generated TOML (the PubBroker binary reads
+its JSON in test_cpp_driver_e2e.py)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from modd.subbroker.config import load_config
+from modd_gen import generate, write_artifacts
+from modd_model import load_model
+
+
+def test_generated_subbroker_config_loads(scenarios_dir: Path, tmp_path: Path) -> None:
+    model = load_model(scenarios_dir / "scenario1.modd")
+    write_artifacts(tmp_path, generate(model, "operator"))
+    cfg = load_config(tmp_path / "operator" / "subbroker.toml")
+    assert cfg.drone == "usv"
+    assert cfg.model == model
+    assert cfg.endpoint == ("127.0.0.1", 7171)
+    assert cfg.key_ref == "env:MODD_LINK_KEY"
+    assert cfg.zenoh.listen == ("tcp/127.0.0.1:7447",)
+
+
+def test_pubbroker_config_has_planned_buffer_sizes(scenarios_dir: Path, tmp_path: Path) -> None:
+    model = load_model(scenarios_dir / "scenario1.modd")
+    write_artifacts(tmp_path, generate(model, "operator"))
+    config = json.loads((tmp_path / "operator" / "pubbroker.json").read_text())
+    assert {t["name"]: t["buffer_size"] for t in config["topics"]} == {
+        "usv.accelerometer.accel_x": 28, "usv.accelerometer.accel_y": 28,
+        "usv.accelerometer.accel_z": 6}
+    assert config["link"] == {"host": "127.0.0.1", "port": 7171, "key": "env:MODD_LINK_KEY"}
+    assert config["archive"]["dir"] == "/tmp/modd/logs"
