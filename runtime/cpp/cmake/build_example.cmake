@@ -1,0 +1,13 @@
+# Configures, builds and runs the example integrator project (ctest helper).
+execute_process(COMMAND ${CMAKE_COMMAND} -S ${SRC} -B ${BIN} -G Ninja RESULT_VARIABLE r)
+if(r)
+  message(FATAL_ERROR "configuring the example project failed")
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} --build ${BIN} RESULT_VARIABLE r)
+if(r)
+  message(FATAL_ERROR "building the example project failed")
+endif()
+execute_process(COMMAND ${BIN}/publisher_example --self-test RESULT_VARIABLE r)
+if(r)
+  message(FATAL_ERROR "the example program failed: ${r}")
+endif()

@@ -1,0 +1,100 @@
+// The archive writer thread: takes full (back) buffers from ingest through a
+// bounded queue and writes them to rotating MCAP files, one channel per topic,
+// JSON messages with a JSON schema. Ingest never waits on the disk: submit()
+// only moves a vector under a mutex.
+#pragma once
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+#include "modd/archive/mcap_writer.hpp"
+#include "modd/link/messages.hpp"
+
+namespace modd::archive {
+
+struct Sample {
+  int64_t stamp_ns;   // broker CLOCK_REALTIME on ingest: the MCAP log_time and the window key
+  int64_t publish_ns; // the publisher's own timestamp: the MCAP publish_time
+  double number;      // float topics
+  int64_t integer;    // int and bool topics
+};
+
+struct TopicInfo {
+  std::string name;
+  link::ValueType type;
+};
+
+struct ArchiverOptions {
+  std::string dir;
+  std::string prefix = "modd";
+  uint64_t rotate_bytes = 256ull << 20;
+  uint64_t rotate_s = 3600;
+  WriterOptions writer;
+};
+
+struct ArchiveCounters {
+  std::atomic<uint64_t> archived{0};      // samples in a written chunk
+  std::atomic<uint64_t> failed{0};        // samples lost to a write error (counted, logged)
+  std::atomic<uint64_t> files{0};
+  std::atomic<uint64_t> bytes{0};         // bytes of closed files + current file
+  std::atomic<uint64_t> queued{0};        // samples waiting for the writer
+};
+
+class Archiver {
+ public:
+  explicit Archiver(ArchiverOptions options);
+  ~Archiver();  // stop()
+  Archiver(const Archiver&) = delete;
+  Archiver& operator=(const Archiver&) = delete;
+
+  void submit(std::shared_ptr<const TopicInfo> topic, std::vector<Sample>&& samples);
+  void flush();        // the writer closes its open chunk once the queue before it is written
+  void stop();         // writes everything queued, closes the file, joins
+  // Recycled vectors for the next front buffers (may return an empty one).
+  std::vector<Sample> take_spare();
+  const ArchiveCounters& counters() const { return counters_; }
+  std::string current_file() const;
+  std::string last_error() const;
+
+ private:
+  struct Item {
+    std::shared_ptr<const TopicInfo> topic;
+    std::vector<Sample> samples;
+    bool flush = false;
+  };
+  void run();
+  void write_item(Item& item);
+  void open_file();
+  void close_file();
+
+  ArchiverOptions opt_;
+  ArchiveCounters counters_;
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<Item> queue_;
+  std::vector<std::vector<Sample>> spares_;
+  bool stopping_ = false;
+  std::thread thread_;
+  // writer-thread state
+  std::unique_ptr<McapWriter> writer_;
+  int64_t file_opened_s_ = 0;
+  uint64_t closed_bytes_ = 0;
+  std::unordered_map<const TopicInfo*, uint16_t> channels_;
+  std::unordered_map<const TopicInfo*, uint32_t> sequences_;
+  std::vector<std::shared_ptr<const TopicInfo>> keep_;  // keeps channel keys alive
+  std::string current_file_, last_error_;
+  uint64_t file_counter_ = 0;
+};
+
+// The JSON message for one sample: {"value":V,"publish_time_ns":T}.
+void format_sample_json(std::string& out, link::ValueType type, const Sample& s);
+std::string sample_json_schema(link::ValueType type);
+
+}  // namespace modd::archive

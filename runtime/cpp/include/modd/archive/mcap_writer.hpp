@@ -1,0 +1,81 @@
+// A small MCAP writer following the published specification
+// (https://mcap.dev/spec): magic, header, schemas and channels, compressed
+// chunks with CRCs, message indexes, data end with the data-section CRC, a
+// summary (schemas, channels, statistics, chunk indexes), summary offsets and
+// the footer with the summary CRC. Not thread-safe: one writer thread owns it.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace modd::archive {
+
+enum class Compression { None, Zstd, Lz4 };
+enum class FsyncPolicy { Never, Chunk, Close };
+
+bool parse_compression(const std::string& s, Compression& out);
+bool parse_fsync(const std::string& s, FsyncPolicy& out);
+
+struct WriterOptions {
+  Compression compression = Compression::Zstd;
+  size_t chunk_bytes = 256 * 1024;  // uncompressed chunk size that closes a chunk
+  FsyncPolicy fsync = FsyncPolicy::Chunk;
+  std::string library = "modd-pubbroker";
+};
+
+class McapWriter {
+ public:
+  // Creates (truncates) path and writes magic + header. Throws Error(Io).
+  McapWriter(const std::string& path, WriterOptions options);
+  ~McapWriter();
+  McapWriter(const McapWriter&) = delete;
+  McapWriter& operator=(const McapWriter&) = delete;
+
+  uint16_t add_schema(const std::string& name, const std::string& encoding, const std::string& data);
+  uint16_t add_channel(uint16_t schema_id, const std::string& topic, const std::string& message_encoding,
+                       const std::map<std::string, std::string>& metadata = {});
+  void add_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time, uint64_t publish_time,
+                   std::span<const uint8_t> data);
+  void flush_chunk();  // writes the open chunk (if any) and its message indexes
+  void close();        // flush, summary, footer, magic; idempotent
+  uint64_t file_bytes() const { return offset_ + pending_.size(); }
+  uint64_t message_count() const { return message_count_; }
+  uint64_t flushed_messages() const { return flushed_messages_; }  // in written chunks
+  size_t open_chunk_bytes() const { return chunk_.size(); }
+  const std::string& path() const { return path_; }
+
+ private:
+  struct SchemaRec { uint16_t id; std::string name, encoding, data; };
+  struct ChannelRec { uint16_t id, schema_id; std::string topic, encoding; std::map<std::string, std::string> metadata; };
+  struct ChunkIndexRec {
+    uint64_t start, end, offset, length;
+    std::map<uint16_t, uint64_t> index_offsets;
+    uint64_t index_length, compressed_size, uncompressed_size;
+  };
+  void emit(std::span<const uint8_t> b);  // appends to the file, updating offset and CRC
+  void write_out();                        // pending_ -> fd
+  std::vector<uint8_t> schema_record(const SchemaRec& s) const;
+  std::vector<uint8_t> channel_record(const ChannelRec& c) const;
+
+  std::string path_;
+  WriterOptions opt_;
+  int fd_ = -1;
+  bool closed_ = false;
+  uint64_t offset_ = 0;          // bytes already written to fd
+  std::vector<uint8_t> pending_;  // emitted but not yet written
+  uint32_t data_crc_ = 0;
+  std::vector<SchemaRec> schemas_;
+  std::vector<ChannelRec> channels_;
+  std::vector<ChunkIndexRec> chunk_indexes_;
+  std::map<uint16_t, uint64_t> channel_counts_;
+  uint64_t flushed_messages_ = 0;
+  uint64_t message_count_ = 0, first_time_ = UINT64_MAX, last_time_ = 0;
+  // open chunk
+  std::vector<uint8_t> chunk_;
+  uint64_t chunk_start_ = UINT64_MAX, chunk_end_ = 0;
+  std::map<uint16_t, std::vector<std::pair<uint64_t, uint64_t>>> chunk_index_;
+};
+
+}  // namespace modd::archive

@@ -1,0 +1,53 @@
+// The PubBroker's configuration file (docs/pubbroker.md): one struct, loaded
+// once by main() and passed down. Errors name the file and the JSON pointer.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "modd/archive/mcap_writer.hpp"
+#include "modd/link/messages.hpp"
+
+namespace modd::broker {
+
+struct TopicDefault {
+  std::string name;
+  link::ValueType type = link::ValueType::Float32;
+  uint32_t buffer_size = 0;  // 0: default_buffer_size
+};
+
+struct BrokerConfig {
+  std::string name = "drone";
+  // link: where the SubBroker connects
+  std::string link_host = "127.0.0.1";
+  uint16_t link_port = 7171;
+  std::string key_ref;  // env:NAME or file:PATH
+  uint32_t handshake_timeout_ms = 5000;
+  // ingress: where publishers connect
+  std::string ingress_unix;  // empty: no Unix socket
+  std::string ingress_host = "127.0.0.1";
+  uint16_t ingress_port = 0;  // 0: no TCP ingress
+  // archive
+  std::string archive_dir;
+  std::string archive_prefix = "modd";
+  uint64_t rotate_bytes = 256ull << 20;
+  uint64_t rotate_s = 3600;
+  archive::FsyncPolicy fsync = archive::FsyncPolicy::Chunk;
+  archive::Compression compression = archive::Compression::Zstd;
+  size_t chunk_bytes = 256 * 1024;
+  uint32_t flush_interval_ms = 1000;
+  uint64_t queue_limit_samples = 1'000'000;
+  // topics
+  std::vector<TopicDefault> topics;
+  uint32_t default_buffer_size = 25;
+  bool accept_unknown_topics = false;
+  // reporting
+  uint32_t status_period_s = 30;  // until a CONFIG sets it
+  uint32_t log_period_s = 10;
+};
+
+// Throws modd::Error(BadConfig) "FILE: /json/pointer: what".
+BrokerConfig load_config(const std::string& path);
+BrokerConfig parse_config(const std::string& json_text, const std::string& origin);
+
+}  // namespace modd::broker

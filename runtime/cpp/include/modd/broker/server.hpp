@@ -1,0 +1,60 @@
+// The PubBroker's event loop: one thread, epoll over the link listener, the
+// ingress listeners (Unix and TCP), their connections, and a signalfd. Bytes
+// go to the sessions (Broker, LinkSession, IngressSession); DATA comes back
+// through LinkOutput. The archive writer runs on its own thread.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "modd/broker/broker.hpp"
+
+namespace modd::broker {
+
+class Server final : public LinkOutput {
+ public:
+  Server(const BrokerConfig& cfg, std::string key, Clock& clock);
+  ~Server() override;
+  // Runs until SIGTERM/SIGINT, then flushes and closes the archive.
+  void run();
+  uint16_t link_port() const { return link_port_; }
+  uint16_t ingress_port() const { return ingress_port_; }
+
+  bool link_ready() const override;
+  bool link_write(std::vector<uint8_t>&& bytes) override;
+
+ private:
+  enum class Kind { LinkListen, IngressUnixListen, IngressTcpListen, Link, Ingress, Signal };
+  struct Conn {
+    int fd = -1;
+    Kind kind{};
+    std::unique_ptr<LinkSession> link;
+    std::unique_ptr<IngressSession> ingress;
+    std::vector<uint8_t> out;
+    int64_t deadline_ns = 0;  // handshake deadline (link, before READY)
+  };
+  void add_fd(int fd, Kind kind, uint32_t events = 0x001 /*EPOLLIN*/);
+  void accept_on(Conn& listener);
+  void on_readable(Conn& c);
+  void flush_out(Conn& c);
+  void close_conn(int fd);
+  void timers(int64_t now);
+  int timeout_ms(int64_t now) const;
+
+  BrokerConfig cfg_;
+  std::string key_;
+  Clock& clock_;
+  std::unique_ptr<Broker> broker_;
+  int epfd_ = -1;
+  int sigfd_ = -1;
+  std::unordered_map<int, Conn> conns_;
+  int active_link_ = -1;
+  uint16_t link_port_ = 0, ingress_port_ = 0;
+  bool stop_ = false;
+  int64_t next_flush_ = 0, next_log_ = 0, next_status_ = 0;
+  std::vector<int> to_close_;
+};
+
+}  // namespace modd::broker

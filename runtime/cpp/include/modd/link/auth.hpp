@@ -1,0 +1,23 @@
+// The pre-shared-key challenge: HMAC-SHA256 proofs over both nonces, with a
+// label per direction so that a proof cannot be reflected.
+#pragma once
+#include <span>
+#include <string>
+
+#include "modd/link/messages.hpp"
+
+namespace modd::link {
+
+Mac hmac_sha256(std::span<const uint8_t> key, std::span<const uint8_t> data);
+// The client's proof: HMAC(key, "MODD1C" || server_nonce || client_nonce).
+Mac client_proof(std::span<const uint8_t> key, const Nonce& client, const Nonce& server);
+// The server's proof: HMAC(key, "MODD1S" || client_nonce || server_nonce).
+Mac server_proof(std::span<const uint8_t> key, const Nonce& client, const Nonce& server);
+bool macs_equal(const Mac& a, const Mac& b);  // constant time
+Nonce random_nonce();
+
+// Resolves a key reference: "env:NAME" or "file:PATH" (file content, trailing
+// newline stripped). Throws Error(BadConfig) naming the reference.
+std::string resolve_key(const std::string& reference);
+
+}  // namespace modd::link

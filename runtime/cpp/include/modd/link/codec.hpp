@@ -1,0 +1,45 @@
+// Encoder and decoder of link frames: varint length, type byte, body.
+// Every encode has its decode; decoders throw modd::Error(BadFrame) with the
+// byte offset within the frame.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "modd/link/messages.hpp"
+#include "modd/util/error.hpp"
+
+namespace modd::link {
+
+// Appends one whole frame (length prefix included) to out.
+void encode(std::vector<uint8_t>& out, const Message& m);
+void encode_data(std::vector<uint8_t>& out, const Data& d, std::span<const ValueKind> kinds);
+
+// A frame split from a byte stream: its type and body (after the type byte).
+struct RawFrame {
+  uint8_t type = 0;
+  std::span<const uint8_t> body;
+  size_t size = 0;  // whole frame size, length prefix included
+};
+
+// Splits the next frame from the front of buf. Returns nullopt if more bytes
+// are needed; throws on a length of 0 or above kMaxFrame.
+std::optional<RawFrame> split_frame(std::span<const uint8_t> buf, size_t max_frame = kMaxFrame);
+
+bool is_data_type(uint8_t type);
+Message decode(const RawFrame& f);  // any non-DATA frame
+
+// DATA in two steps: the header tells which slot, the slot tells the kinds.
+struct DataHeader {
+  bool sync = false;
+  bool bitmap = false;
+  uint8_t config_id = 0;
+  uint64_t slot = 0;
+  uint8_t seq8 = 0;
+  size_t values_offset = 0;  // offset in body where the bitmap/values start
+};
+DataHeader decode_data_header(const RawFrame& f);
+Data decode_data(const RawFrame& f, std::span<const ValueKind> kinds);
+
+}  // namespace modd::link

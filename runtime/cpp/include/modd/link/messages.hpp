@@ -1,0 +1,107 @@
+// Messages of the MoDD link protocol (docs/protocol.md), apart from the codec.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace modd::link {
+
+inline constexpr uint8_t kVersion = 1;
+inline constexpr size_t kMaxFrame = 1 << 20;  // bytes after the length prefix
+
+enum class MsgType : uint8_t {
+  Hello = 0x01,
+  Challenge = 0x02,
+  Auth = 0x03,
+  AuthOk = 0x04,
+  Ping = 0x05,
+  Pong = 0x06,
+  Config = 0x07,
+  ConfigAck = 0x08,
+  Data = 0x10,            // seq8, values (all streams present)
+  DataBitmap = 0x11,      // seq8, presence bitmap, values
+  DataSync = 0x12,        // config id, full slot number, values
+  DataSyncBitmap = 0x13,  // config id, full slot number, presence bitmap, values
+  Status = 0x20,
+  Error = 0x7F,
+};
+
+enum class ValueType : uint8_t { Float32 = 0, Float64 = 1, Int = 2, Bool = 3 };
+enum class Aggregation : uint8_t { Min = 0, Max, Average, First, Last, All, Count, Sum };
+
+const char* value_type_name(ValueType t);
+const char* aggregation_name(Aggregation a);
+bool parse_value_type(const std::string& s, ValueType& out);
+bool parse_aggregation(const std::string& s, Aggregation& out);
+
+using Nonce = std::array<uint8_t, 16>;
+using Mac = std::array<uint8_t, 32>;
+
+struct Hello { uint8_t version = kVersion; Nonce nonce{}; };
+struct Challenge { uint8_t version = kVersion; Nonce nonce{}; };
+struct Auth { Mac mac{}; };
+struct AuthOk { Mac mac{}; uint8_t config_id = 0; uint64_t epoch_ns = 0; };
+struct Ping { std::vector<uint8_t> payload; };
+struct Pong { std::vector<uint8_t> payload; };
+
+struct TopicSpec {
+  std::string name;
+  ValueType type = ValueType::Float32;
+  uint32_t buffer_size = 1;
+  uint64_t period_us = 0;  // publication period, informative (0 = unknown)
+};
+struct StreamSpec {
+  uint32_t topic = 0;  // index into Config::topics
+  Aggregation aggregation = Aggregation::Min;
+  uint64_t period_us = 0;  // window period, > 0
+};
+struct Config {
+  uint8_t config_id = 1;
+  uint32_t status_period_s = 0;  // 0: no STATUS
+  std::vector<TopicSpec> topics;
+  std::vector<StreamSpec> streams;  // the sent streams, in stream-id order
+  bool operator==(const Config&) const = default;
+};
+inline bool operator==(const TopicSpec& a, const TopicSpec& b) {
+  return a.name == b.name && a.type == b.type && a.buffer_size == b.buffer_size && a.period_us == b.period_us;
+}
+inline bool operator==(const StreamSpec& a, const StreamSpec& b) {
+  return a.topic == b.topic && a.aggregation == b.aggregation && a.period_us == b.period_us;
+}
+
+struct ConfigAck { uint8_t config_id = 0; uint8_t status = 0; uint64_t epoch_ns = 0; };
+struct Status { std::vector<uint64_t> counters; };
+struct ErrorMsg { uint8_t code = 0; std::string message; };
+
+// One stream's value in a DATA frame. Which fields are used depends on the
+// stream's ValueKind (see value_kind()).
+struct Value {
+  bool present = false;
+  double number = 0;            // F32, F64, and the mean of AVERAGE
+  int64_t integer = 0;          // ZigZag and Bool kinds
+  uint64_t count = 0;           // AVERAGE sample count, COUNT
+  std::vector<double> numbers;  // ALL of float topics
+  std::vector<int64_t> integers;  // ALL of int/bool topics
+};
+
+struct Data {
+  bool sync = false;       // types 0x12/0x13: config id and full slot number
+  uint8_t config_id = 0;   // only on the wire when sync
+  uint64_t slot = 0;       // full slot number (only on the wire when sync)
+  uint8_t seq8 = 0;        // slot mod 256 (on the wire when !sync)
+  std::vector<Value> values;  // one per stream due in the slot, stream-id order
+};
+
+using Message = std::variant<Hello, Challenge, Auth, AuthOk, Ping, Pong, Config, ConfigAck, Status, ErrorMsg>;
+
+// How a (topic type, aggregation) pair is written in DATA.
+enum class ScalarKind : uint8_t { F32, F64, ZigZag, Bool, UVarint };
+struct ValueKind {
+  Aggregation aggregation;
+  ScalarKind scalar;  // the value, or each element of ALL; UVarint for COUNT
+};
+ValueKind value_kind(ValueType type, Aggregation aggregation);
+
+}  // namespace modd::link

@@ -1,0 +1,304 @@
+#include "modd/broker/broker.hpp"
+
+#include <sys/statvfs.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "modd/link/auth.hpp"
+#include "modd/link/codec.hpp"
+#include "modd/util/log.hpp"
+
+namespace modd::broker {
+
+// ---- ingress ---------------------------------------------------------------
+
+void IngressSession::on_register(const ingress::Register& r) {
+  if (locals_.size() <= r.local_id) locals_.resize(r.local_id + 1);
+  Local& l = locals_[r.local_id];
+  l.used = true;
+  l.type = r.type;
+  l.reject = Reject::kCount;
+  l.topic = r.topic;
+  l.global = broker_.find_topic(r.topic, r.type, l.reject);
+  l.generation = broker_.topics_generation();
+}
+
+bool IngressSession::type_of(uint32_t id, link::ValueType& out) const {
+  if (id >= locals_.size() || !locals_[id].used) return false;
+  out = locals_[id].type;
+  return true;
+}
+
+void IngressSession::on_record(const ingress::Record& r) {
+  Local& l = locals_[r.local_id];
+  if (l.generation != broker_.topics_generation()) {
+    // Topics were added or retyped (a CONFIG) since the registration: resolve again.
+    l.reject = Reject::kCount;
+    l.global = broker_.find_topic(l.topic, l.type, l.reject);
+    l.generation = broker_.topics_generation();
+  }
+  broker_.ingest(l.global, l.reject, l.type, stamp_, r);
+}
+
+bool IngressSession::on_bytes(std::span<const uint8_t> in) {
+  stamp_ = broker_.stamp_now();
+  inbuf_.insert(inbuf_.end(), in.begin(), in.end());
+  size_t used = 0;
+  uint64_t left = 0;
+  try {
+    while (auto f = ingress::split_frame(std::span(inbuf_).subspan(used), ingress::kMaxFrame)) {
+      used += f->size;
+      ingress::decode(*f, *this, &left);
+    }
+  } catch (const Error& e) {
+    Counters& c = broker_.counters();
+    ++c.ingress_malformed_frames;
+    c.samples_in += left;
+    c.rej(Reject::Malformed) += left;
+    last_error = e.what();
+    inbuf_.clear();
+    return false;
+  }
+  inbuf_.erase(inbuf_.begin(), inbuf_.begin() + static_cast<std::ptrdiff_t>(used));
+  return true;
+}
+
+// ---- broker ----------------------------------------------------------------
+
+Broker::Broker(const BrokerConfig& cfg, std::string key, Clock& clock, LinkOutput& out)
+    : cfg_(cfg), key_(std::move(key)), clock_(clock), out_(out), status_period_s_(cfg.status_period_s) {
+  archive::ArchiverOptions ao;
+  ao.dir = cfg.archive_dir;
+  ao.prefix = cfg.archive_prefix;
+  ao.rotate_bytes = cfg.rotate_bytes;
+  ao.rotate_s = cfg.rotate_s;
+  ao.writer.compression = cfg.compression;
+  ao.writer.chunk_bytes = cfg.chunk_bytes;
+  ao.writer.fsync = cfg.fsync;
+  archiver_ = std::make_unique<archive::Archiver>(ao);
+  for (const auto& t : cfg.topics)
+    add_topic(t.name, t.type, t.buffer_size ? t.buffer_size : cfg.default_buffer_size, true);
+  started_ns_ = last_stamp_ = clock_.now_ns();
+}
+
+Broker::~Broker() { shutdown(); }
+
+uint32_t Broker::add_topic(const std::string& name, link::ValueType type, uint32_t capacity, bool known) {
+  auto it = by_name_.find(name);
+  if (it != by_name_.end()) {
+    Topic& t = topics_[it->second];
+    t.known = t.known || known;
+    t.capacity = capacity;
+    if (t.info->type != type) {
+      // The type changes: the archive gets a new channel object (new schema).
+      swap_out(t);
+      t.info = std::make_shared<archive::TopicInfo>(archive::TopicInfo{name, type});
+      t.last_publish_ns = INT64_MIN;
+      ++generation_;
+    }
+    return it->second;
+  }
+  Topic t;
+  t.info = std::make_shared<archive::TopicInfo>(archive::TopicInfo{name, type});
+  t.known = known;
+  t.capacity = capacity;
+  topics_.push_back(std::move(t));
+  by_name_[name] = static_cast<uint32_t>(topics_.size() - 1);
+  ++generation_;
+  return static_cast<uint32_t>(topics_.size() - 1);
+}
+
+int64_t Broker::find_topic(const std::string& name, link::ValueType declared, Reject& why) {
+  auto it = by_name_.find(name);
+  if (it == by_name_.end()) {
+    if (!cfg_.accept_unknown_topics) {
+      why = Reject::UnknownTopic;
+      return -1;
+    }
+    return add_topic(name, declared, cfg_.default_buffer_size, false);
+  }
+  if (topics_[it->second].info->type != declared) {
+    why = Reject::WrongType;
+    return -1;
+  }
+  return it->second;
+}
+
+int64_t Broker::stamp_now() {
+  int64_t t = clock_.now_ns();
+  if (t < last_stamp_) t = last_stamp_;  // stamps never go backwards, even if the wall clock does
+  last_stamp_ = t;
+  executor_.advance(t, *this);
+  return t;
+}
+
+void Broker::ingest(int64_t global, Reject why, link::ValueType declared, int64_t stamp, const ingress::Record& r) {
+  ++counters_.samples_in;
+  if (global < 0) {
+    ++counters_.rej(why);
+    return;
+  }
+  Topic& t = topics_[static_cast<size_t>(global)];
+  if (t.info->type != declared) {
+    ++counters_.rej(Reject::WrongType);
+    return;
+  }
+  bool is_float = declared == link::ValueType::Float32 || declared == link::ValueType::Float64;
+  if (is_float && !std::isfinite(r.number)) {
+    ++counters_.rej(Reject::NotFinite);
+    return;
+  }
+  if (r.timestamp_ns < t.last_publish_ns) {
+    ++counters_.rej(Reject::Backwards);
+    return;
+  }
+  if (archiver_->counters().queued + front_samples_ >= cfg_.queue_limit_samples) {
+    ++counters_.rej(Reject::Overflow);
+    return;
+  }
+  t.last_publish_ns = r.timestamp_ns;
+  ++counters_.accepted;
+  executor_.on_sample(static_cast<uint32_t>(global), r.number, r.integer);
+  if (t.front.capacity() == 0) {
+    t.front = archiver_->take_spare();
+    t.front.reserve(t.capacity);
+  }
+  t.front.push_back({stamp, r.timestamp_ns, r.number, r.integer});
+  ++front_samples_;
+  if (t.front.size() >= t.capacity) swap_out(t);
+}
+
+void Broker::swap_out(Topic& t) {
+  if (t.front.empty()) return;
+  front_samples_ -= t.front.size();
+  archiver_->submit(t.info, std::move(t.front));
+  t.front = archiver_->take_spare();
+  t.front.reserve(t.capacity);
+}
+
+void Broker::tick(int64_t now) {
+  if (now < last_stamp_) now = last_stamp_;
+  last_stamp_ = now;
+  executor_.advance(now, *this);
+}
+
+void Broker::flush_buffers() {
+  for (Topic& t : topics_) swap_out(t);
+  archiver_->flush();
+}
+
+void Broker::shutdown() {
+  if (!archiver_) return;
+  flush_buffers();
+  archiver_->stop();
+}
+
+link::ConfigAck Broker::on_config(const link::Config& cfg) {
+  link::ConfigAck ack;
+  ack.config_id = cfg.config_id;
+  // Validate before touching anything: types of existing topics must agree.
+  std::vector<uint32_t> globals;
+  for (const auto& t : cfg.topics) {
+    auto it = by_name_.find(t.name);
+    if (it != by_name_.end() && topics_[it->second].info->type != t.type) {
+      ack.status = static_cast<uint8_t>(ErrorCode::BadConfig);
+      log_line("config %u rejected: topic %s is %s here, %s in CONFIG", cfg.config_id, t.name.c_str(),
+               link::value_type_name(topics_[it->second].info->type), link::value_type_name(t.type));
+      return ack;
+    }
+  }
+  if (executor_.pending()) {
+    ack.status = static_cast<uint8_t>(ErrorCode::Busy);
+    return ack;
+  }
+  for (const auto& t : cfg.topics) globals.push_back(add_topic(t.name, t.type, t.buffer_size, true));
+  int64_t now = stamp_now();
+  auto epoch = executor_.apply(cfg, globals, now);
+  if (!epoch) {
+    ack.status = static_cast<uint8_t>(ErrorCode::Busy);
+    return ack;
+  }
+  ack.epoch_ns = static_cast<uint64_t>(*epoch);
+  status_period_s_ = cfg.status_period_s;
+  log_line("config %u accepted: %zu topics, %zu streams, epoch %lld", cfg.config_id, cfg.topics.size(),
+           cfg.streams.size(), static_cast<long long>(*epoch));
+  return ack;
+}
+
+link::AuthOk Broker::current_config() {
+  link::AuthOk ok;
+  ok.config_id = executor_.config_id();
+  ok.epoch_ns = static_cast<uint64_t>(executor_.epoch_ns());
+  return ok;
+}
+
+void Broker::on_authenticated() {
+  ++counters_.link_sessions;
+  executor_.request_sync();
+  log_line("link: base station authenticated");
+}
+
+void Broker::on_rejected(const std::string& why) {
+  ++counters_.auth_failures;
+  log_line("link: peer rejected: %s", why.c_str());
+}
+
+bool Broker::send_data(std::vector<uint8_t>&& frame) {
+  if (!out_.link_ready()) return false;
+  if (status_pending_) {
+    // STATUS rides in the same write as the DATA frame: no segment of its own.
+    link::encode(frame, link::Status{status_counters()});
+    status_pending_ = false;
+  }
+  size_t n = frame.size();
+  if (!out_.link_write(std::move(frame))) return false;
+  counters_.link_bytes_sent += n;
+  return true;
+}
+
+std::vector<uint64_t> Broker::status_counters() {
+  std::vector<uint64_t> v(kStatusFieldCount, 0);
+  const auto& ac = archiver_->counters();
+  const auto& ec = executor_.counters();
+  v[kUptimeS] = static_cast<uint64_t>((clock_.now_ns() - started_ns_) / 1'000'000'000);
+  v[kSamplesIn] = counters_.samples_in;
+  v[kSamplesArchived] = ac.archived;
+  v[kRejUnknownTopic] = counters_.rejected[0];
+  v[kRejWrongType] = counters_.rejected[1];
+  v[kRejNotFinite] = counters_.rejected[2];
+  v[kRejBackwards] = counters_.rejected[3];
+  v[kRejOverflow] = counters_.rejected[4];
+  v[kRejMalformed] = counters_.rejected[5];
+  v[kArchiveFailed] = ac.failed;
+  v[kIngressMalformedFrames] = counters_.ingress_malformed_frames;
+  v[kPublishersConnected] = counters_.publishers_connected;
+  v[kFramesSent] = ec.frames_sent;
+  v[kFramesDropped] = ec.frames_dropped;
+  v[kLinkBytesSent] = counters_.link_bytes_sent;
+  struct statvfs sv{};
+  if (statvfs(cfg_.archive_dir.c_str(), &sv) == 0)
+    v[kDiskFreeMb] = static_cast<uint64_t>(sv.f_bavail) * sv.f_frsize / (1024 * 1024);
+  uint64_t fill = 0;
+  for (const Topic& t : topics_)
+    if (t.capacity) fill = std::max<uint64_t>(fill, t.front.size() * 100 / t.capacity);
+  v[kBufferFillPct] = fill;
+  v[kArchiveFiles] = ac.files;
+  v[kAuthFailures] = counters_.auth_failures;
+  v[kConfigId] = executor_.config_id();
+  return v;
+}
+
+std::string Broker::log_summary() {
+  auto v = status_counters();
+  std::string s;
+  for (int i = 0; i < kStatusFieldCount; ++i) {
+    if (i) s += ' ';
+    s += kStatusFieldNames[i];
+    s += '=';
+    s += std::to_string(v[i]);
+  }
+  return s;
+}
+
+}  // namespace modd::broker

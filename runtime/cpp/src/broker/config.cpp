@@ -1,0 +1,132 @@
+#include "modd/broker/config.hpp"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "modd/util/error.hpp"
+
+namespace modd::broker {
+
+using nlohmann::json;
+
+namespace {
+
+struct Ctx {
+  const std::string& origin;
+  [[noreturn]] void fail(const std::string& ptr, const std::string& what) const {
+    throw Error(ErrorCode::BadConfig, origin + ": " + ptr + ": " + what);
+  }
+};
+
+template <typename T>
+void get(const Ctx& c, const json& obj, const std::string& ptr, const char* key, T& out) {
+  if (!obj.contains(key)) return;
+  const json& v = obj.at(key);
+  std::string p = ptr + "/" + key;
+  if constexpr (std::is_same_v<T, std::string>) {
+    if (!v.is_string()) c.fail(p, "expected a string");
+    out = v.get<std::string>();
+  } else if constexpr (std::is_same_v<T, bool>) {
+    if (!v.is_boolean()) c.fail(p, "expected true or false");
+    out = v.get<bool>();
+  } else {
+    if (!v.is_number_integer() || v.get<int64_t>() < 0) c.fail(p, "expected a non-negative integer");
+    uint64_t x = v.get<uint64_t>();
+    if (x > static_cast<uint64_t>(std::numeric_limits<T>::max())) c.fail(p, "value too large");
+    out = static_cast<T>(x);
+  }
+}
+
+void check_keys(const Ctx& c, const json& obj, const std::string& ptr, std::initializer_list<const char*> keys) {
+  if (!obj.is_object()) c.fail(ptr.empty() ? "/" : ptr, "expected an object");
+  for (const auto& [k, _] : obj.items()) {
+    bool known = false;
+    for (const char* kk : keys) known = known || k == kk;
+    if (!known) c.fail(ptr + "/" + k, "unknown key");
+  }
+}
+
+}  // namespace
+
+BrokerConfig parse_config(const std::string& text, const std::string& origin) {
+  Ctx c{origin};
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw Error(ErrorCode::BadConfig, origin + ": byte " + std::to_string(e.byte) + ": " + e.what());
+  }
+  BrokerConfig cfg;
+  check_keys(c, j, "", {"name", "link", "ingress", "archive", "topics", "default_buffer_size",
+                        "accept_unknown_topics", "status_period_s", "log_period_s"});
+  get(c, j, "", "name", cfg.name);
+  get(c, j, "", "default_buffer_size", cfg.default_buffer_size);
+  get(c, j, "", "accept_unknown_topics", cfg.accept_unknown_topics);
+  get(c, j, "", "status_period_s", cfg.status_period_s);
+  get(c, j, "", "log_period_s", cfg.log_period_s);
+  if (cfg.default_buffer_size < 1) c.fail("/default_buffer_size", "must be at least 1");
+  if (!j.contains("link")) c.fail("/link", "missing (the link endpoint and key are required)");
+  const json& l = j["link"];
+  check_keys(c, l, "/link", {"host", "port", "key", "handshake_timeout_ms"});
+  get(c, l, "/link", "host", cfg.link_host);
+  get(c, l, "/link", "port", cfg.link_port);
+  get(c, l, "/link", "key", cfg.key_ref);
+  get(c, l, "/link", "handshake_timeout_ms", cfg.handshake_timeout_ms);
+  if (cfg.key_ref.empty()) c.fail("/link/key", "missing: a key reference env:NAME or file:PATH");
+  if (j.contains("ingress")) {
+    const json& i = j["ingress"];
+    check_keys(c, i, "/ingress", {"unix_path", "host", "port"});
+    get(c, i, "/ingress", "unix_path", cfg.ingress_unix);
+    get(c, i, "/ingress", "host", cfg.ingress_host);
+    get(c, i, "/ingress", "port", cfg.ingress_port);
+  }
+  if (cfg.ingress_unix.empty() && cfg.ingress_port == 0) c.fail("/ingress", "needs unix_path or port");
+  if (!j.contains("archive")) c.fail("/archive", "missing");
+  const json& a = j["archive"];
+  check_keys(c, a, "/archive", {"dir", "prefix", "rotate_bytes", "rotate_s", "fsync", "compression",
+                                "chunk_bytes", "flush_interval_ms", "queue_limit_samples"});
+  get(c, a, "/archive", "dir", cfg.archive_dir);
+  if (cfg.archive_dir.empty()) c.fail("/archive/dir", "missing");
+  get(c, a, "/archive", "prefix", cfg.archive_prefix);
+  get(c, a, "/archive", "rotate_bytes", cfg.rotate_bytes);
+  get(c, a, "/archive", "rotate_s", cfg.rotate_s);
+  get(c, a, "/archive", "chunk_bytes", cfg.chunk_bytes);
+  get(c, a, "/archive", "flush_interval_ms", cfg.flush_interval_ms);
+  get(c, a, "/archive", "queue_limit_samples", cfg.queue_limit_samples);
+  if (cfg.flush_interval_ms < 10) c.fail("/archive/flush_interval_ms", "must be at least 10");
+  std::string s;
+  get(c, a, "/archive", "fsync", s);
+  if (!s.empty() && !archive::parse_fsync(s, cfg.fsync)) c.fail("/archive/fsync", "expected never, chunk or close");
+  s.clear();
+  get(c, a, "/archive", "compression", s);
+  if (!s.empty() && !archive::parse_compression(s, cfg.compression))
+    c.fail("/archive/compression", "expected zstd, lz4 or none");
+  if (j.contains("topics")) {
+    if (!j["topics"].is_array()) c.fail("/topics", "expected an array");
+    for (size_t n = 0; n < j["topics"].size(); ++n) {
+      std::string p = "/topics/" + std::to_string(n);
+      const json& t = j["topics"][n];
+      check_keys(c, t, p, {"name", "type", "buffer_size"});
+      TopicDefault td;
+      get(c, t, p, "name", td.name);
+      if (td.name.empty()) c.fail(p + "/name", "missing");
+      std::string ty = "float32";
+      get(c, t, p, "type", ty);
+      if (!link::parse_value_type(ty, td.type)) c.fail(p + "/type", "expected float32, float64, int or bool");
+      get(c, t, p, "buffer_size", td.buffer_size);
+      cfg.topics.push_back(td);
+    }
+  }
+  return cfg;
+}
+
+BrokerConfig load_config(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw Error(ErrorCode::BadConfig, path + ": cannot open");
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return parse_config(ss.str(), path);
+}
+
+}  // namespace modd::broker

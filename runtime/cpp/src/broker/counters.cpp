@@ -1,0 +1,24 @@
+#include "modd/broker/counters.hpp"
+
+namespace modd::broker {
+
+const char* reject_name(Reject r) {
+  switch (r) {
+    case Reject::UnknownTopic: return "unknown_topic";
+    case Reject::WrongType: return "wrong_type";
+    case Reject::NotFinite: return "not_finite";
+    case Reject::Backwards: return "backwards";
+    case Reject::Overflow: return "overflow";
+    case Reject::Malformed: return "malformed";
+    case Reject::kCount: break;
+  }
+  return "?";
+}
+
+const char* const kStatusFieldNames[kStatusFieldCount] = {
+    "uptime_s", "samples_in", "samples_archived", "rejected_unknown_topic", "rejected_wrong_type",
+    "rejected_not_finite", "rejected_backwards", "rejected_overflow", "rejected_malformed", "archive_failed",
+    "ingress_malformed_frames", "publishers_connected", "frames_sent", "frames_dropped", "link_bytes_sent",
+    "disk_free_mb", "buffer_fill_pct", "archive_files", "auth_failures", "config_id"};
+
+}  // namespace modd::broker

@@ -1,0 +1,96 @@
+#include "modd/broker/executor.hpp"
+
+#include "modd/link/codec.hpp"
+#include "modd/util/error.hpp"
+
+namespace modd::broker {
+
+std::unique_ptr<Executor::Active> Executor::build(const link::Config& cfg, const std::vector<uint32_t>& globals,
+                                                  int64_t epoch) {
+  auto a = std::make_unique<Active>();
+  a->config_id = cfg.config_id;
+  a->epoch = epoch;
+  std::vector<uint64_t> periods;
+  for (uint32_t id = 0; id < cfg.streams.size(); ++id) {
+    const auto& s = cfg.streams[id];
+    if (s.topic >= cfg.topics.size() || s.topic >= globals.size())
+      throw Error(ErrorCode::BadConfig, "stream " + std::to_string(id) + " names a missing topic");
+    link::ValueType type = cfg.topics[s.topic].type;
+    a->acc.emplace_back(type, s.aggregation);
+    a->kinds.push_back(link::value_kind(type, s.aggregation));
+    uint32_t g = globals[s.topic];
+    if (a->by_topic.size() <= g) a->by_topic.resize(g + 1);
+    a->by_topic[g].push_back(id);
+    periods.push_back(s.period_us);
+  }
+  a->slots = std::make_unique<link::SlotIterator>(periods);
+  a->next_due = a->slots->empty() ? kNever : epoch + static_cast<int64_t>(a->slots->peek_offset_us()) * 1000;
+  return a;
+}
+
+std::optional<int64_t> Executor::apply(const link::Config& cfg, const std::vector<uint32_t>& globals, int64_t now) {
+  if (pending_) return std::nullopt;
+  if (!active_ || active_->next_due == kNever) {
+    active_ = build(cfg, globals, now);
+    need_sync_ = true;
+    return now;
+  }
+  switch_at_ = active_->next_due;
+  pending_ = build(cfg, globals, switch_at_);
+  return switch_at_;
+}
+
+int64_t Executor::next_due_ns() const { return active_ ? active_->next_due : kNever; }
+
+void Executor::on_sample(uint32_t g, double number, int64_t integer) {
+  if (!active_ || g >= active_->by_topic.size()) return;
+  for (uint32_t id : active_->by_topic[g]) active_->acc[id].add(number, integer);
+}
+
+void Executor::advance(int64_t t, FrameSink& sink) {
+  while (active_ && active_->next_due <= t) {
+    int64_t date = active_->next_due;
+    fire(sink);
+    if (pending_ && date >= switch_at_) {
+      active_ = std::move(pending_);
+      switch_at_ = kNever;
+      need_sync_ = true;
+    }
+  }
+}
+
+void Executor::fire(FrameSink& sink) {
+  Active& a = *active_;
+  link::Slot slot = a.slots->next();
+  a.next_due = a.epoch + static_cast<int64_t>(a.slots->peek_offset_us()) * 1000;
+  ++counters_.slots_fired;
+  link::Data d;
+  d.sync = need_sync_;
+  d.config_id = a.config_id;
+  d.slot = slot.index;
+  d.seq8 = static_cast<uint8_t>(slot.index & 0xFF);
+  std::vector<link::ValueKind> kinds;
+  kinds.reserve(slot.streams.size());
+  bool any = false;
+  for (uint32_t id : slot.streams) {
+    d.values.push_back(a.acc[id].take());
+    kinds.push_back(a.kinds[id]);
+    any = any || d.values.back().present;
+  }
+  if (!any) {
+    ++counters_.slots_empty;
+    need_sync_ = true;  // the receiver sees a gap: the next frame says where it is
+    return;
+  }
+  std::vector<uint8_t> frame;
+  link::encode_data(frame, d, kinds);
+  if (sink.send_data(std::move(frame))) {
+    ++counters_.frames_sent;
+    need_sync_ = false;
+  } else {
+    ++counters_.frames_dropped;
+    need_sync_ = true;
+  }
+}
+
+}  // namespace modd::broker

@@ -1,0 +1,329 @@
+#include "modd/link/codec.hpp"
+
+#include <cmath>
+
+#include "modd/util/bytes.hpp"
+
+namespace modd::link {
+
+namespace {
+
+constexpr size_t kMaxPing = 64;
+constexpr size_t kMaxList = 65535;
+
+void put_frame(std::vector<uint8_t>& out, MsgType type, const std::vector<uint8_t>& body) {
+  ByteWriter w(out);
+  w.varint(body.size() + 1);
+  w.u8(static_cast<uint8_t>(type));
+  w.bytes(body);
+}
+
+template <size_t N>
+void get_array(ByteReader& r, std::array<uint8_t, N>& a) {
+  auto b = r.bytes(N);
+  std::copy(b.begin(), b.end(), a.begin());
+}
+
+void put_scalar(ByteWriter& w, ScalarKind k, double number, int64_t integer, uint64_t count) {
+  switch (k) {
+    case ScalarKind::F32: w.fixed<float>(static_cast<float>(number)); break;
+    case ScalarKind::F64: w.fixed<double>(number); break;
+    case ScalarKind::ZigZag: w.svarint(integer); break;
+    case ScalarKind::Bool: w.u8(integer ? 1 : 0); break;
+    case ScalarKind::UVarint: w.varint(count); break;
+  }
+}
+
+void put_value(ByteWriter& w, const ValueKind& k, const Value& v) {
+  if (k.aggregation == Aggregation::All) {
+    bool is_float = k.scalar == ScalarKind::F32 || k.scalar == ScalarKind::F64;
+    size_t n = is_float ? v.numbers.size() : v.integers.size();
+    w.varint(n);
+    for (size_t i = 0; i < n; ++i)
+      put_scalar(w, k.scalar, is_float ? v.numbers[i] : 0, is_float ? 0 : v.integers[i], 0);
+    return;
+  }
+  put_scalar(w, k.scalar, v.number, v.integer, v.count);
+  if (k.aggregation == Aggregation::Average) w.varint(v.count);
+}
+
+void get_scalar(ByteReader& r, ScalarKind k, double& number, int64_t& integer, uint64_t& count) {
+  switch (k) {
+    case ScalarKind::F32: number = r.fixed<float>(); break;
+    case ScalarKind::F64: number = r.fixed<double>(); break;
+    case ScalarKind::ZigZag: integer = r.svarint(); break;
+    case ScalarKind::Bool: {
+      uint8_t b = r.u8();
+      if (b > 1) r.fail("bool value not 0 or 1");
+      integer = b;
+      break;
+    }
+    case ScalarKind::UVarint: count = r.varint(); break;
+  }
+}
+
+Value get_value(ByteReader& r, const ValueKind& k) {
+  Value v;
+  v.present = true;
+  if (k.aggregation == Aggregation::All) {
+    uint64_t n = r.varint();
+    if (n > r.remaining()) r.fail("ALL count exceeds frame");
+    bool is_float = k.scalar == ScalarKind::F32 || k.scalar == ScalarKind::F64;
+    for (uint64_t i = 0; i < n; ++i) {
+      double d = 0; int64_t x = 0; uint64_t c = 0;
+      get_scalar(r, k.scalar, d, x, c);
+      if (is_float) v.numbers.push_back(d); else v.integers.push_back(x);
+    }
+    v.count = n;
+    return v;
+  }
+  get_scalar(r, k.scalar, v.number, v.integer, v.count);
+  if (k.aggregation == Aggregation::Average) v.count = r.varint();
+  return v;
+}
+
+}  // namespace
+
+void encode(std::vector<uint8_t>& out, const Message& m) {
+  std::vector<uint8_t> body;
+  ByteWriter w(body);
+  MsgType type{};
+  std::visit(
+      [&](const auto& msg) {
+        using T = std::decay_t<decltype(msg)>;
+        if constexpr (std::is_same_v<T, Hello> || std::is_same_v<T, Challenge>) {
+          type = std::is_same_v<T, Hello> ? MsgType::Hello : MsgType::Challenge;
+          w.u8(msg.version);
+          w.bytes(msg.nonce);
+        } else if constexpr (std::is_same_v<T, Auth>) {
+          type = MsgType::Auth;
+          w.bytes(msg.mac);
+        } else if constexpr (std::is_same_v<T, AuthOk>) {
+          type = MsgType::AuthOk;
+          w.bytes(msg.mac);
+          w.u8(msg.config_id);
+          w.fixed<uint64_t>(msg.epoch_ns);
+        } else if constexpr (std::is_same_v<T, Ping> || std::is_same_v<T, Pong>) {
+          type = std::is_same_v<T, Ping> ? MsgType::Ping : MsgType::Pong;
+          w.bytes(msg.payload);
+        } else if constexpr (std::is_same_v<T, Config>) {
+          type = MsgType::Config;
+          w.u8(msg.config_id);
+          w.varint(msg.status_period_s);
+          w.varint(msg.topics.size());
+          for (const auto& t : msg.topics) {
+            w.string(t.name);
+            w.u8(static_cast<uint8_t>(t.type));
+            w.varint(t.buffer_size);
+            w.varint(t.period_us);
+          }
+          w.varint(msg.streams.size());
+          for (const auto& s : msg.streams) {
+            w.varint(s.topic);
+            w.u8(static_cast<uint8_t>(s.aggregation));
+            w.varint(s.period_us);
+          }
+        } else if constexpr (std::is_same_v<T, ConfigAck>) {
+          type = MsgType::ConfigAck;
+          w.u8(msg.config_id);
+          w.u8(msg.status);
+          w.fixed<uint64_t>(msg.epoch_ns);
+        } else if constexpr (std::is_same_v<T, Status>) {
+          type = MsgType::Status;
+          w.varint(msg.counters.size());
+          for (uint64_t c : msg.counters) w.varint(c);
+        } else if constexpr (std::is_same_v<T, ErrorMsg>) {
+          type = MsgType::Error;
+          w.u8(msg.code);
+          w.string(msg.message);
+        }
+      },
+      m);
+  put_frame(out, type, body);
+}
+
+void encode_data(std::vector<uint8_t>& out, const Data& d, std::span<const ValueKind> kinds) {
+  if (d.values.size() != kinds.size())
+    throw Error(ErrorCode::Internal, "DATA has " + std::to_string(d.values.size()) + " values for " +
+                                         std::to_string(kinds.size()) + " streams");
+  bool all_present = true;
+  for (const auto& v : d.values) all_present = all_present && v.present;
+  std::vector<uint8_t> body;
+  body.reserve(8 + d.values.size() * 5);
+  ByteWriter w(body);
+  if (d.sync) {
+    w.u8(d.config_id);
+    w.varint(d.slot);
+  } else {
+    w.u8(d.seq8);
+  }
+  if (!all_present) {
+    size_t nbytes = (d.values.size() + 7) / 8;
+    size_t at = body.size();
+    body.resize(at + nbytes, 0);
+    for (size_t i = 0; i < d.values.size(); ++i)
+      if (d.values[i].present) body[at + i / 8] |= static_cast<uint8_t>(1u << (i % 8));
+  }
+  for (size_t i = 0; i < d.values.size(); ++i)
+    if (d.values[i].present) put_value(w, kinds[i], d.values[i]);
+  uint8_t type = static_cast<uint8_t>(MsgType::Data) | (all_present ? 0 : 1) | (d.sync ? 2 : 0);
+  ByteWriter o(out);
+  o.varint(body.size() + 1);
+  o.u8(type);
+  o.bytes(body);
+}
+
+std::optional<RawFrame> split_frame(std::span<const uint8_t> buf, size_t max_frame) {
+  uint64_t len = 0;
+  size_t i = 0;
+  for (int shift = 0;; shift += 7) {
+    if (i >= buf.size()) return std::nullopt;
+    if (i >= 4) throw Error(ErrorCode::BadFrame, "frame length varint longer than 4 bytes", 0);
+    uint8_t b = buf[i++];
+    len |= static_cast<uint64_t>(b & 0x7F) << shift;
+    if (!(b & 0x80)) break;
+  }
+  if (len == 0) throw Error(ErrorCode::BadFrame, "frame length 0", 0);
+  if (len > max_frame)
+    throw Error(ErrorCode::BadFrame, "frame length " + std::to_string(len) + " above limit " + std::to_string(max_frame), 0);
+  if (buf.size() - i < len) return std::nullopt;
+  RawFrame f;
+  f.type = buf[i];
+  f.body = buf.subspan(i + 1, static_cast<size_t>(len) - 1);
+  f.size = i + static_cast<size_t>(len);
+  return f;
+}
+
+bool is_data_type(uint8_t type) { return type >= 0x10 && type <= 0x13; }
+
+Message decode(const RawFrame& f) {
+  ByteReader r(f.body, 0);
+  auto done = [&](Message m) { r.expect_end(); return m; };
+  switch (static_cast<MsgType>(f.type)) {
+    case MsgType::Hello: case MsgType::Challenge: {
+      uint8_t version = r.u8();
+      Nonce n;
+      get_array(r, n);
+      if (f.type == static_cast<uint8_t>(MsgType::Hello)) return done(Hello{version, n});
+      return done(Challenge{version, n});
+    }
+    case MsgType::Auth: {
+      Auth a;
+      get_array(r, a.mac);
+      return done(a);
+    }
+    case MsgType::AuthOk: {
+      AuthOk a;
+      get_array(r, a.mac);
+      a.config_id = r.u8();
+      a.epoch_ns = r.fixed<uint64_t>();
+      return done(a);
+    }
+    case MsgType::Ping: case MsgType::Pong: {
+      if (f.body.size() > kMaxPing) r.fail("PING/PONG payload above 64 bytes");
+      std::vector<uint8_t> p(f.body.begin(), f.body.end());
+      if (f.type == static_cast<uint8_t>(MsgType::Ping)) return Ping{p};
+      return Pong{p};
+    }
+    case MsgType::Config: {
+      Config c;
+      c.config_id = r.u8();
+      uint64_t sp = r.varint();
+      if (sp > 86400) r.fail("status period above one day");
+      c.status_period_s = static_cast<uint32_t>(sp);
+      uint64_t nt = r.varint();
+      if (nt > kMaxList || nt > r.remaining()) r.fail("topic count " + std::to_string(nt) + " too large");
+      for (uint64_t i = 0; i < nt; ++i) {
+        TopicSpec t;
+        t.name = r.string(255);
+        uint8_t ty = r.u8();
+        if (ty > 3) r.fail("unknown value type " + std::to_string(ty));
+        t.type = static_cast<ValueType>(ty);
+        uint64_t bs = r.varint();
+        if (bs < 1 || bs > 1'000'000) r.fail("buffer size " + std::to_string(bs) + " out of 1..1000000");
+        t.buffer_size = static_cast<uint32_t>(bs);
+        t.period_us = r.varint();
+        c.topics.push_back(std::move(t));
+      }
+      uint64_t ns = r.varint();
+      if (ns > kMaxList || ns > r.remaining()) r.fail("stream count " + std::to_string(ns) + " too large");
+      for (uint64_t i = 0; i < ns; ++i) {
+        StreamSpec s;
+        uint64_t topic = r.varint();
+        if (topic >= nt) r.fail("stream " + std::to_string(i) + " names topic " + std::to_string(topic) + " of " + std::to_string(nt));
+        s.topic = static_cast<uint32_t>(topic);
+        uint8_t a = r.u8();
+        if (a > 7) r.fail("unknown aggregation " + std::to_string(a));
+        s.aggregation = static_cast<Aggregation>(a);
+        s.period_us = r.varint();
+        if (s.period_us == 0 || s.period_us > 366ull * 86400 * 1'000'000) r.fail("stream period out of range");
+        c.streams.push_back(s);
+      }
+      return done(c);
+    }
+    case MsgType::ConfigAck: {
+      ConfigAck a;
+      a.config_id = r.u8();
+      a.status = r.u8();
+      a.epoch_ns = r.fixed<uint64_t>();
+      return done(a);
+    }
+    case MsgType::Status: {
+      Status s;
+      uint64_t n = r.varint();
+      if (n > r.remaining()) r.fail("counter count exceeds frame");
+      for (uint64_t i = 0; i < n; ++i) s.counters.push_back(r.varint());
+      return done(s);
+    }
+    case MsgType::Error: {
+      ErrorMsg e;
+      e.code = r.u8();
+      e.message = r.string(1024);
+      return done(e);
+    }
+    default:
+      break;
+  }
+  throw Error(ErrorCode::BadFrame, "unknown message type 0x" + to_hex(std::span<const uint8_t>(&f.type, 1)), 0);
+}
+
+DataHeader decode_data_header(const RawFrame& f) {
+  if (!is_data_type(f.type)) throw Error(ErrorCode::BadFrame, "not a DATA frame", 0);
+  ByteReader r(f.body);
+  DataHeader h;
+  h.bitmap = f.type & 1;
+  h.sync = f.type & 2;
+  if (h.sync) {
+    h.config_id = r.u8();
+    h.slot = r.varint();
+    h.seq8 = static_cast<uint8_t>(h.slot & 0xFF);
+  } else {
+    h.seq8 = r.u8();
+  }
+  h.values_offset = r.pos();
+  return h;
+}
+
+Data decode_data(const RawFrame& f, std::span<const ValueKind> kinds) {
+  DataHeader h = decode_data_header(f);
+  ByteReader r(f.body.subspan(h.values_offset), h.values_offset);
+  Data d;
+  d.sync = h.sync;
+  d.config_id = h.config_id;
+  d.slot = h.slot;
+  d.seq8 = h.seq8;
+  d.values.resize(kinds.size());
+  std::vector<bool> present(kinds.size(), true);
+  if (h.bitmap) {
+    auto bm = r.bytes((kinds.size() + 7) / 8);
+    for (size_t i = 0; i < kinds.size(); ++i) present[i] = (bm[i / 8] >> (i % 8)) & 1;
+    for (size_t i = kinds.size(); i < bm.size() * 8; ++i)
+      if ((bm[i / 8] >> (i % 8)) & 1) r.fail("presence bit set beyond the slot's streams");
+  }
+  for (size_t i = 0; i < kinds.size(); ++i)
+    if (present[i]) d.values[i] = get_value(r, kinds[i]);
+  r.expect_end();
+  return d;
+}
+
+}  // namespace modd::link

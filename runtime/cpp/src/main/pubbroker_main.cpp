@@ -1,0 +1,59 @@
+// modd-pubbroker: the on-board broker. main() is a straight line:
+// arguments -> config -> key -> server (archive, listeners) -> loop -> clean stop.
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "modd/broker/config.hpp"
+#include "modd/broker/server.hpp"
+#include "modd/link/auth.hpp"
+#include "modd/util/clock.hpp"
+#include "modd/util/error.hpp"
+
+namespace {
+
+const char* kUsage =
+    "usage: modd-pubbroker --config FILE\n"
+    "\n"
+    "The MoDD on-board broker: archives every published sample to MCAP files,\n"
+    "computes the scheduled aggregates and sends them to the base station over\n"
+    "the MoDD link (docs/protocol.md). The config file format is in docs/pubbroker.md.\n"
+    "\n"
+    "options:\n"
+    "  --config FILE   the broker's JSON configuration (required)\n"
+    "  --help          this text\n"
+    "\n"
+    "SIGTERM or SIGINT: flush the buffers, close the archive, exit 0.\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string config_path;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (!std::strcmp(argv[i], "--config") && i + 1 < argc) {
+      config_path = argv[++i];
+      continue;
+    }
+    std::fprintf(stderr, "modd-pubbroker: unknown argument '%s'\n%s", argv[i], kUsage);
+    return 2;
+  }
+  if (config_path.empty()) {
+    std::fprintf(stderr, "modd-pubbroker: --config FILE is required\n%s", kUsage);
+    return 2;
+  }
+  try {
+    modd::broker::BrokerConfig cfg = modd::broker::load_config(config_path);
+    std::string key = modd::link::resolve_key(cfg.key_ref);
+    modd::SystemClock clock;
+    modd::broker::Server server(cfg, key, clock);
+    server.run();
+  } catch (const modd::Error& e) {
+    std::fprintf(stderr, "modd-pubbroker: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,163 @@
+// The broker's logic driven without sockets: ingest validation and counting,
+// CONFIG, DATA through the link output, and the archive at shutdown.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "modd/broker/broker.hpp"
+#include "modd/link/codec.hpp"
+
+using namespace modd;
+using namespace modd::broker;
+using namespace modd::link;
+
+namespace {
+
+struct FakeLink : LinkOutput {
+  bool ready = true;
+  std::vector<std::vector<uint8_t>> writes;
+  bool link_ready() const override { return ready; }
+  bool link_write(std::vector<uint8_t>&& b) override {
+    writes.push_back(std::move(b));
+    return true;
+  }
+};
+
+BrokerConfig test_config(const std::string& name) {
+  BrokerConfig c;
+  c.archive_dir = (std::filesystem::temp_directory_path() / ("modd-broker-" + name + std::to_string(getpid()))).string();
+  std::filesystem::remove_all(c.archive_dir);
+  c.topics = {{"usv.x", ValueType::Float32, 4}, {"usv.n", ValueType::Int, 0}};
+  c.default_buffer_size = 3;
+  c.status_period_s = 0;
+  return c;
+}
+
+std::vector<uint8_t> publisher_bytes(const std::vector<ingress::Register>& regs, const std::vector<ingress::Record>& recs) {
+  std::vector<uint8_t> b;
+  ingress::encode_hello(b, {ingress::kVersion, "p"});
+  for (const auto& r : regs) ingress::encode_register(b, r);
+  ingress::encode_samples(b, recs, [&](uint32_t id) {
+    for (const auto& r : regs)
+      if (r.local_id == id) return r.type;
+    return ValueType::Float32;
+  });
+  return b;
+}
+
+constexpr int64_t kMs = 1'000'000;
+
+}  // namespace
+
+TEST(Broker, RejectionsAreCountedByReason) {
+  FakeClock clock;
+  FakeLink link;
+  BrokerConfig cfg = test_config("rej");
+  Broker b(cfg, "key", clock, link);
+  IngressSession s(b);
+  std::vector<ingress::Register> regs = {{0, ValueType::Float32, "usv.x"},
+                                         {1, ValueType::Float32, "usv.unknown"},
+                                         {2, ValueType::Float64, "usv.n"}};
+  std::vector<ingress::Record> recs = {
+      {0, 100, 1.0, 0},  {0, 200, NAN, 0},   {0, 50, 2.0, 0},  // backwards
+      {1, 300, 1.0, 0},  {2, 300, 1.0, 0},   {0, 200, INFINITY, 0}, {0, 200, 3.0, 0}};
+  ASSERT_TRUE(s.on_bytes(publisher_bytes(regs, recs)));
+  Counters& c = b.counters();
+  EXPECT_EQ(c.samples_in, 7u);
+  EXPECT_EQ(c.accepted, 2u);
+  EXPECT_EQ(c.rej(Reject::NotFinite), 2u);
+  EXPECT_EQ(c.rej(Reject::Backwards), 1u);
+  EXPECT_EQ(c.rej(Reject::UnknownTopic), 1u);
+  EXPECT_EQ(c.rej(Reject::WrongType), 1u);
+  // A malformed frame: counted, the session ends, nothing already accepted is lost.
+  std::vector<uint8_t> junk;  // record 2 uses a local id never registered
+  ingress::encode_samples(junk, std::vector<ingress::Record>{{0, 300, 4.0, 0}, {9, 300, 5.0, 0}},
+                          [](uint32_t) { return ValueType::Float32; });
+  EXPECT_FALSE(s.on_bytes(junk));
+  EXPECT_EQ(c.ingress_malformed_frames, 1u);
+  EXPECT_EQ(c.rej(Reject::Malformed), 1u);
+  EXPECT_EQ(c.accepted, 3u);
+  EXPECT_EQ(c.samples_in, c.accepted + c.rejected_total());
+  b.shutdown();
+  EXPECT_EQ(b.archiver().counters().archived.load(), 3u);
+}
+
+TEST(Broker, ConfigThenDataFramesFromStampedSamples) {
+  FakeClock clock;
+  FakeLink link;
+  BrokerConfig cfg = test_config("data");
+  Broker b(cfg, "key", clock, link);
+  Config c;
+  c.config_id = 1;
+  c.topics = {{"usv.x", ValueType::Float32, 2, 40000}};
+  c.streams = {{0, Aggregation::Max, 250000}, {0, Aggregation::Count, 500000}};
+  ConfigAck ack = b.on_config(c);
+  EXPECT_EQ(ack.status, 0);
+  int64_t E = static_cast<int64_t>(ack.epoch_ns);
+  EXPECT_EQ(E, clock.now_ns());
+  IngressSession s(b);
+  std::vector<ingress::Register> regs = {{0, ValueType::Float32, "usv.x"}};
+  clock.set(E + 100 * kMs);
+  ASSERT_TRUE(s.on_bytes(publisher_bytes(regs, {{0, 1, 5.0, 0}, {0, 2, 7.0, 0}})));
+  // Stamped exactly at the boundary: belongs to the next window.
+  clock.set(E + 250 * kMs);
+  std::vector<uint8_t> more;
+  ingress::encode_samples(more, std::vector<ingress::Record>{{0, 3, 100.0, 0}}, [](uint32_t) { return ValueType::Float32; });
+  ASSERT_TRUE(s.on_bytes(more));
+  ASSERT_EQ(link.writes.size(), 1u);
+  std::vector<ValueKind> k1 = {value_kind(ValueType::Float32, Aggregation::Max)};
+  Data d0 = decode_data(*split_frame(link.writes[0]), k1);
+  EXPECT_EQ(d0.values[0].number, 7.0);
+  b.tick(E + 500 * kMs);
+  ASSERT_EQ(link.writes.size(), 2u);
+  std::vector<ValueKind> k2 = {k1[0], value_kind(ValueType::Float32, Aggregation::Count)};
+  Data d1 = decode_data(*split_frame(link.writes[1]), k2);
+  EXPECT_EQ(d1.seq8, 1);
+  EXPECT_EQ(d1.values[0].number, 100.0);
+  EXPECT_EQ(d1.values[1].count, 3u);
+  // STATUS rides in the same write as the next DATA frame.
+  b.status_due();
+  clock.set(E + 600 * kMs);
+  ASSERT_TRUE(s.on_bytes(more));
+  b.tick(E + 750 * kMs);
+  ASSERT_EQ(link.writes.size(), 3u);
+  auto f = split_frame(link.writes[2]);
+  ASSERT_TRUE(f && is_data_type(f->type));
+  auto st = split_frame(std::span(link.writes[2]).subspan(f->size));
+  ASSERT_TRUE(st);
+  auto status = std::get<Status>(decode(*st));
+  EXPECT_EQ(status.counters[kSamplesIn], 4u);
+  EXPECT_EQ(status.counters[kConfigId], 1u);
+  // Front buffers of 2: everything accepted reaches the archive at shutdown.
+  b.shutdown();
+  EXPECT_EQ(b.archiver().counters().archived.load(), 4u);
+}
+
+TEST(Broker, ConfigWithATypeClashIsRefused) {
+  FakeClock clock;
+  FakeLink link;
+  Broker b(test_config("clash"), "key", clock, link);
+  Config c;
+  c.config_id = 5;
+  c.topics = {{"usv.x", ValueType::Int, 2, 0}};
+  EXPECT_EQ(b.on_config(c).status, static_cast<uint8_t>(ErrorCode::BadConfig));
+}
+
+TEST(Broker, TopicsAddedByConfigAreAcceptedFromEarlierRegistrations) {
+  FakeClock clock;
+  FakeLink link;
+  Broker b(test_config("late"), "key", clock, link);
+  IngressSession s(b);
+  std::vector<ingress::Register> regs = {{0, ValueType::Float64, "usv.late"}};
+  ASSERT_TRUE(s.on_bytes(publisher_bytes(regs, {{0, 1, 1.0, 0}})));
+  EXPECT_EQ(b.counters().rej(Reject::UnknownTopic), 1u);
+  Config c;
+  c.config_id = 1;
+  c.topics = {{"usv.late", ValueType::Float64, 2, 0}};
+  b.on_config(c);
+  std::vector<uint8_t> more;
+  ingress::encode_samples(more, std::vector<ingress::Record>{{0, 2, 2.0, 0}}, [](uint32_t) { return ValueType::Float64; });
+  ASSERT_TRUE(s.on_bytes(more));
+  EXPECT_EQ(b.counters().accepted, 1u);
+}

@@ -1,0 +1,169 @@
+// Structural checks of the MCAP writer (the official Python reader reads the
+// files in tests/runtime): magic at both ends, footer -> summary, CRCs.
+#include <gtest/gtest.h>
+#include <lz4frame.h>
+#include <zstd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "modd/archive/archiver.hpp"
+#include "modd/archive/crc32.hpp"
+#include "modd/archive/mcap_writer.hpp"
+
+using namespace modd::archive;
+
+namespace {
+
+std::string tmpdir(const std::string& name) {
+  auto p = std::filesystem::temp_directory_path() / ("modd-test-" + name + "-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(p);
+  std::filesystem::create_directories(p);
+  return p;
+}
+
+std::vector<uint8_t> slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(f), {}};
+}
+
+template <typename T>
+T rd(const std::vector<uint8_t>& b, size_t at) {
+  T v;
+  std::memcpy(&v, b.data() + at, sizeof(T));
+  return v;
+}
+
+const uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', 0x30, '\r', '\n'};
+
+}  // namespace
+
+TEST(Crc32, KnownValue) {
+  const char* s = "123456789";
+  EXPECT_EQ(crc32(0, std::span(reinterpret_cast<const uint8_t*>(s), 9)), 0xCBF43926u);
+  auto a = std::span(reinterpret_cast<const uint8_t*>(s), 4), b = std::span(reinterpret_cast<const uint8_t*>(s + 4), 5);
+  EXPECT_EQ(crc32(crc32(0, a), b), 0xCBF43926u);
+}
+
+class McapWriterTest : public ::testing::TestWithParam<Compression> {};
+
+TEST_P(McapWriterTest, FileStructureAndCrcs) {
+  std::string dir = tmpdir("mcap");
+  std::string path = dir + "/t.mcap";
+  {
+    WriterOptions o;
+    o.compression = GetParam();
+    o.chunk_bytes = 2000;  // several chunks
+    McapWriter w(path, o);
+    uint16_t s = w.add_schema("modd.float32", "jsonschema", sample_json_schema(modd::link::ValueType::Float32));
+    uint16_t c0 = w.add_channel(s, "a", "json");
+    uint16_t c1 = w.add_channel(s, "b", "json");
+    std::string js;
+    for (int i = 0; i < 300; ++i) {
+      format_sample_json(js, modd::link::ValueType::Float32, Sample{i * 1000, i, i * 0.5, 0});
+      w.add_message(i % 2 ? c1 : c0, static_cast<uint32_t>(i), 1000 + i, i,
+                    std::span(reinterpret_cast<const uint8_t*>(js.data()), js.size()));
+    }
+    w.close();
+    EXPECT_EQ(w.message_count(), 300u);
+  }
+  auto b = slurp(path);
+  ASSERT_GT(b.size(), 100u);
+  EXPECT_EQ(std::memcmp(b.data(), kMagic, 8), 0);
+  EXPECT_EQ(std::memcmp(b.data() + b.size() - 8, kMagic, 8), 0);
+  size_t footer = b.size() - 8 - (1 + 8 + 20);
+  ASSERT_EQ(b[footer], 0x02);
+  uint64_t summary_start = rd<uint64_t>(b, footer + 9);
+  uint32_t summary_crc = rd<uint32_t>(b, footer + 9 + 16);
+  ASSERT_LT(summary_start, footer);
+  EXPECT_EQ(crc32(0, std::span(b.data() + summary_start, footer + 9 + 16 - summary_start)), summary_crc);
+  // Walk the data section: every chunk's records decompress to their CRC.
+  size_t at = 8;
+  int chunks = 0;
+  uint64_t messages = 0;
+  while (at < summary_start) {
+    uint8_t op = b[at];
+    uint64_t len = rd<uint64_t>(b, at + 1);
+    size_t body = at + 9;
+    if (op == 0x0F) {  // data end: CRC of everything before it
+      EXPECT_EQ(rd<uint32_t>(b, body), crc32(0, std::span(b.data(), at)));
+    }
+    if (op == 0x06) {
+      ++chunks;
+      uint64_t usize = rd<uint64_t>(b, body + 16);
+      uint32_t ucrc = rd<uint32_t>(b, body + 24);
+      uint32_t clen = rd<uint32_t>(b, body + 28);
+      std::string comp(reinterpret_cast<const char*>(b.data() + body + 32), clen);
+      size_t rec_at = body + 32 + clen;
+      uint64_t rlen = rd<uint64_t>(b, rec_at);
+      const uint8_t* recs = b.data() + rec_at + 8;
+      std::vector<uint8_t> plain(usize);
+      if (comp == "zstd") {
+        ASSERT_EQ(ZSTD_decompress(plain.data(), plain.size(), recs, rlen), usize);
+      } else if (comp == "lz4") {
+        LZ4F_dctx* ctx;
+        LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION);
+        size_t dst = usize, src = rlen;
+        LZ4F_decompress(ctx, plain.data(), &dst, recs, &src, nullptr);
+        LZ4F_freeDecompressionContext(ctx);
+        ASSERT_EQ(dst, usize);
+      } else {
+        ASSERT_EQ(rlen, usize);
+        std::memcpy(plain.data(), recs, usize);
+      }
+      EXPECT_EQ(crc32(0, plain), ucrc);
+      for (size_t p = 0; p < plain.size();) {
+        EXPECT_EQ(plain[p], 0x05);
+        ++messages;
+        p += 9 + rd<uint64_t>(plain, p + 1);
+      }
+    }
+    at = body + len;
+  }
+  EXPECT_EQ(at, summary_start);
+  EXPECT_GT(chunks, 2);
+  EXPECT_EQ(messages, 300u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Compressions, McapWriterTest,
+                         ::testing::Values(Compression::Zstd, Compression::Lz4, Compression::None));
+
+TEST(Archiver, WritesEverythingSubmittedAndRotates) {
+  std::string dir = tmpdir("archiver");
+  ArchiverOptions o;
+  o.dir = dir;
+  o.rotate_bytes = 4000;
+  o.writer.chunk_bytes = 1000;
+  auto topic = std::make_shared<TopicInfo>(TopicInfo{"usv.x", modd::link::ValueType::Float64});
+  {
+    Archiver a(o);
+    for (int b = 0; b < 50; ++b) {
+      std::vector<Sample> v;
+      for (int i = 0; i < 20; ++i) v.push_back({b * 100 + i, b * 100 + i, i * 0.25, 0});
+      a.submit(topic, std::move(v));
+    }
+    a.flush();
+    a.stop();
+    EXPECT_EQ(a.counters().archived.load(), 1000u);
+    EXPECT_EQ(a.counters().queued.load(), 0u);
+    EXPECT_GT(a.counters().files.load(), 1u);
+  }
+  int files = 0;
+  for (auto& e : std::filesystem::directory_iterator(dir)) {
+    auto b = slurp(e.path());
+    EXPECT_EQ(std::memcmp(b.data() + b.size() - 8, kMagic, 8), 0) << e.path();
+    ++files;
+  }
+  EXPECT_GT(files, 1);
+}
+
+TEST(Archiver, JsonOfEachType) {
+  std::string s;
+  format_sample_json(s, modd::link::ValueType::Float32, Sample{0, 0, 0.1f, 0});
+  EXPECT_EQ(s, "{\"value\":0.1}");
+  format_sample_json(s, modd::link::ValueType::Int, Sample{0, 0, 0, -42});
+  EXPECT_EQ(s, "{\"value\":-42}");
+  format_sample_json(s, modd::link::ValueType::Bool, Sample{0, 0, 0, 1});
+  EXPECT_EQ(s, "{\"value\":true}");
+}

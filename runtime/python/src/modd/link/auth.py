@@ -1,0 +1,91 @@
+"""The pre-shared-key handshake (docs/protocol.md, "Handshake").
+
+The base station (client) sends HELLO with its nonce, the PubBroker answers CHALLENGE with
+its own, the client proves the key with AUTH, the broker proves it back in AUTH_OK.
+
+Example::
+
+    sock = socket.create_connection(("127.0.0.1", 7171))
+    ok, splitter = client_handshake(sock, b"secret")
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import os
+import socket
+from pathlib import Path
+
+from modd.link import codec
+from modd.link.frames import (
+    VERSION,
+    Auth,
+    AuthOk,
+    Challenge,
+    ErrorCode,
+    ErrorMsg,
+    Hello,
+    ProtocolError,
+)
+
+CLIENT_LABEL = b"MODD1C"
+SERVER_LABEL = b"MODD1S"
+
+
+def client_proof(key: bytes, client_nonce: bytes, server_nonce: bytes) -> bytes:
+    return hmac.new(key, CLIENT_LABEL + server_nonce + client_nonce, hashlib.sha256).digest()
+
+
+def server_proof(key: bytes, client_nonce: bytes, server_nonce: bytes) -> bytes:
+    return hmac.new(key, SERVER_LABEL + client_nonce + server_nonce, hashlib.sha256).digest()
+
+
+def resolve_key(reference: str) -> bytes:
+    """`env:NAME` or `file:PATH` (trailing newline stripped), as the PubBroker reads it."""
+    if reference.startswith("env:"):
+        value = os.environ.get(reference[4:])
+        if value is None:
+            raise ValueError(f"key reference {reference}: environment variable not set")
+        key = value.encode()
+    elif reference.startswith("file:"):
+        key = Path(reference[5:]).read_bytes().rstrip(b"\r\n")
+    else:
+        raise ValueError(f"key reference {reference!r} is neither env:NAME nor file:PATH")
+    if not key:
+        raise ValueError(f"key reference {reference} gives an empty key")
+    return key
+
+
+def read_frame(sock: socket.socket, splitter: codec.FrameSplitter) -> codec.RawFrame:
+    """Blocks until the next whole frame; raises ConnectionError if the peer closes."""
+    while (f := splitter.pop()) is None:
+        data = sock.recv(4096)
+        if not data:
+            raise ConnectionError("link closed")
+        splitter.buf += data
+    return f
+
+
+def client_handshake(
+    sock: socket.socket, key: bytes, nonce: bytes | None = None
+) -> tuple[AuthOk, codec.FrameSplitter]:
+    """Runs the handshake on a connected socket. Returns AUTH_OK and the splitter holding any
+    bytes received after it. Raises ProtocolError if the broker refuses or cannot prove the key."""
+    splitter = codec.FrameSplitter()
+    client_nonce = nonce if nonce is not None else os.urandom(16)
+    sock.sendall(codec.encode(Hello(VERSION, client_nonce)))
+    msg = codec.decode(read_frame(sock, splitter))
+    if isinstance(msg, ErrorMsg):
+        raise ProtocolError(ErrorCode(msg.code), f"broker refused HELLO: {msg.message}")
+    if not isinstance(msg, Challenge):
+        raise ProtocolError(ErrorCode.BAD_FRAME, f"expected CHALLENGE, got {type(msg).__name__}")
+    sock.sendall(codec.encode(Auth(client_proof(key, client_nonce, msg.nonce))))
+    ok = codec.decode(read_frame(sock, splitter))
+    if isinstance(ok, ErrorMsg):
+        raise ProtocolError(ErrorCode(ok.code), f"broker refused AUTH: {ok.message}")
+    if not isinstance(ok, AuthOk):
+        raise ProtocolError(ErrorCode.BAD_FRAME, f"expected AUTH_OK, got {type(ok).__name__}")
+    if not hmac.compare_digest(ok.mac, server_proof(key, client_nonce, msg.nonce)):
+        raise ProtocolError(ErrorCode.AUTH_FAILED, "the broker does not know the key")
+    return ok, splitter

@@ -1,0 +1,420 @@
+"""Encoder and decoder of link frames: varint length, type byte, body (docs/protocol.md).
+
+Every encode has its decode. Decoders raise ProtocolError(BAD_FRAME) with the byte offset
+within the frame body.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from modd.link.frames import (
+    MAX_FRAME,
+    Aggregation,
+    Auth,
+    AuthOk,
+    Challenge,
+    Config,
+    ConfigAck,
+    Data,
+    ErrorCode,
+    ErrorMsg,
+    Hello,
+    Message,
+    MsgType,
+    Ping,
+    Pong,
+    ProtocolError,
+    Scalar,
+    Status,
+    StreamSpec,
+    TopicSpec,
+    Value,
+    ValueKind,
+    ValueType,
+)
+
+MAX_PING = 64
+MAX_LIST = 65535
+
+
+def varint(v: int) -> bytes:
+    if v < 0:
+        raise ValueError("varint of a negative number")
+    out = bytearray()
+    while v >= 0x80:
+        out.append((v & 0x7F) | 0x80)
+        v >>= 7
+    out.append(v)
+    return bytes(out)
+
+
+def zigzag(v: int) -> int:
+    return (v << 1) ^ (v >> 63) if v < 0 else v << 1
+
+
+def unzigzag(v: int) -> int:
+    return (v >> 1) ^ -(v & 1)
+
+
+def string(s: str) -> bytes:
+    b = s.encode()
+    return varint(len(b)) + b
+
+
+class Reader:
+    """Reads a frame body; errors carry the offset (base + position)."""
+
+    def __init__(self, data: bytes, base: int = 0) -> None:
+        self.data = data
+        self.pos = 0
+        self.base = base
+
+    def fail(self, what: str) -> ProtocolError:
+        return ProtocolError(ErrorCode.BAD_FRAME, what, self.base + self.pos)
+
+    def need(self, n: int) -> None:
+        if len(self.data) - self.pos < n:
+            raise self.fail(f"truncated: need {n} more bytes")
+
+    def remaining(self) -> int:
+        return len(self.data) - self.pos
+
+    def u8(self) -> int:
+        self.need(1)
+        b = self.data[self.pos]
+        self.pos += 1
+        return b
+
+    def varint(self) -> int:
+        v = 0
+        for shift in range(0, 70, 7):
+            b = self.u8()
+            if shift == 63 and b > 1:
+                self.pos -= 1
+                raise self.fail("varint overflows 64 bits")
+            v |= (b & 0x7F) << shift
+            if not b & 0x80:
+                return v
+        raise self.fail("varint longer than 10 bytes")
+
+    def fixed(self, fmt: str) -> float | int:
+        n = struct.calcsize(fmt)
+        self.need(n)
+        (v,) = struct.unpack_from(fmt, self.data, self.pos)
+        self.pos += n
+        return v  # type: ignore[no-any-return]
+
+    def take(self, n: int) -> bytes:
+        self.need(n)
+        b = self.data[self.pos : self.pos + n]
+        self.pos += n
+        return b
+
+    def string(self, max_len: int) -> str:
+        n = self.varint()
+        if n > max_len:
+            raise self.fail(f"string longer than {max_len}")
+        raw = self.take(n)
+        try:
+            return raw.decode()
+        except UnicodeDecodeError as e:
+            raise self.fail("string is not UTF-8") from e
+
+    def end(self) -> None:
+        if self.pos != len(self.data):
+            raise self.fail(f"{len(self.data) - self.pos} trailing bytes")
+
+
+def _frame(mtype: int, body: bytes) -> bytes:
+    return varint(len(body) + 1) + bytes([mtype]) + body
+
+
+def encode(m: Message) -> bytes:
+    """One whole frame, length prefix included."""
+    if isinstance(m, Hello | Challenge):
+        if len(m.nonce) != 16:
+            raise ValueError("nonce must be 16 bytes")
+        t = MsgType.HELLO if isinstance(m, Hello) else MsgType.CHALLENGE
+        return _frame(t, bytes([m.version]) + m.nonce)
+    if isinstance(m, Auth):
+        return _frame(MsgType.AUTH, m.mac)
+    if isinstance(m, AuthOk):
+        return _frame(MsgType.AUTH_OK, m.mac + bytes([m.config_id]) + struct.pack("<Q", m.epoch_ns))
+    if isinstance(m, Ping):
+        return _frame(MsgType.PING, m.payload)
+    if isinstance(m, Pong):
+        return _frame(MsgType.PONG, m.payload)
+    if isinstance(m, Config):
+        b = bytearray([m.config_id])
+        b += varint(m.status_period_s) + varint(len(m.topics))
+        for t in m.topics:
+            b += string(t.name) + bytes([t.type]) + varint(t.buffer_size) + varint(t.period_us)
+        b += varint(len(m.streams))
+        for s in m.streams:
+            b += varint(s.topic) + bytes([s.aggregation]) + varint(s.period_us)
+        return _frame(MsgType.CONFIG, bytes(b))
+    if isinstance(m, ConfigAck):
+        body = bytes([m.config_id, m.status]) + struct.pack("<Q", m.epoch_ns)
+        return _frame(MsgType.CONFIG_ACK, body)
+    if isinstance(m, Status):
+        body = varint(len(m.counters)) + b"".join(varint(c) for c in m.counters)
+        return _frame(MsgType.STATUS, body)
+    if isinstance(m, ErrorMsg):
+        return _frame(MsgType.ERROR, bytes([m.code]) + string(m.message))
+    raise TypeError(f"not a link message: {m!r}")
+
+
+def _put_scalar(b: bytearray, k: Scalar, number: float, integer: int, count: int) -> None:
+    if k == Scalar.F32:
+        b += struct.pack("<f", number)
+    elif k == Scalar.F64:
+        b += struct.pack("<d", number)
+    elif k == Scalar.ZIGZAG:
+        b += varint(zigzag(integer))
+    elif k == Scalar.BOOL:
+        b.append(1 if integer else 0)
+    else:
+        b += varint(count)
+
+
+def _put_value(b: bytearray, k: ValueKind, v: Value) -> None:
+    if k.aggregation == Aggregation.ALL:
+        b += varint(len(v.samples))
+        for s in v.samples:
+            _put_scalar(b, k.scalar, float(s), int(s), 0)
+        return
+    _put_scalar(b, k.scalar, v.number, v.integer, v.count)
+    if k.aggregation == Aggregation.AVERAGE:
+        b += varint(v.count)
+
+
+def encode_data(d: Data, kinds: Sequence[ValueKind]) -> bytes:
+    if len(d.values) != len(kinds):
+        raise ValueError(f"DATA has {len(d.values)} values for {len(kinds)} streams")
+    all_present = all(v.present for v in d.values)
+    b = bytearray()
+    if d.sync:
+        b.append(d.config_id)
+        b += varint(d.slot)
+    else:
+        b.append(d.seq8 & 0xFF)
+    if not all_present:
+        bm = bytearray((len(d.values) + 7) // 8)
+        for i, v in enumerate(d.values):
+            if v.present:
+                bm[i // 8] |= 1 << (i % 8)
+        b += bm
+    for v, k in zip(d.values, kinds, strict=True):
+        if v.present:
+            _put_value(b, k, v)
+    t = MsgType.DATA | (0 if all_present else 1) | (2 if d.sync else 0)
+    return _frame(t, bytes(b))
+
+
+@dataclass(frozen=True)
+class RawFrame:
+    type: int
+    body: bytes
+    size: int  # whole frame, length prefix included
+
+
+def split_frame(buf: bytes | bytearray, max_frame: int = MAX_FRAME) -> RawFrame | None:
+    """The next frame at the front of buf, or None if more bytes are needed."""
+    length = 0
+    i = 0
+    shift = 0
+    while True:
+        if i >= len(buf):
+            return None
+        if i >= 4:
+            raise ProtocolError(ErrorCode.BAD_FRAME, "frame length varint longer than 4 bytes", 0)
+        b = buf[i]
+        i += 1
+        length |= (b & 0x7F) << shift
+        shift += 7
+        if not b & 0x80:
+            break
+    if length == 0:
+        raise ProtocolError(ErrorCode.BAD_FRAME, "frame length 0", 0)
+    if length > max_frame:
+        raise ProtocolError(
+            ErrorCode.BAD_FRAME, f"frame length {length} above limit {max_frame}", 0
+        )
+    if len(buf) - i < length:
+        return None
+    return RawFrame(buf[i], bytes(buf[i + 1 : i + length]), i + length)
+
+
+class FrameSplitter:
+    """Accumulates stream bytes and yields whole frames."""
+
+    def __init__(self, max_frame: int = MAX_FRAME) -> None:
+        self.buf = bytearray()
+        self.max_frame = max_frame
+
+    def feed(self, data: bytes) -> list[RawFrame]:
+        self.buf += data
+        out: list[RawFrame] = []
+        while (f := self.pop()) is not None:
+            out.append(f)
+        return out
+
+    def pop(self) -> RawFrame | None:
+        """The next whole frame already received, if any."""
+        f = split_frame(self.buf, self.max_frame)
+        if f is not None:
+            del self.buf[: f.size]
+        return f
+
+
+def is_data_type(t: int) -> bool:
+    return 0x10 <= t <= 0x13
+
+
+def decode(f: RawFrame) -> Message:
+    """Any frame but DATA."""
+    r = Reader(f.body)
+    m: Message
+    t = f.type
+    if t in (MsgType.HELLO, MsgType.CHALLENGE):
+        version = r.u8()
+        nonce = r.take(16)
+        m = Hello(version, nonce) if t == MsgType.HELLO else Challenge(version, nonce)
+    elif t == MsgType.AUTH:
+        m = Auth(r.take(32))
+    elif t == MsgType.AUTH_OK:
+        m = AuthOk(r.take(32), r.u8(), int(r.fixed("<Q")))
+    elif t in (MsgType.PING, MsgType.PONG):
+        if len(f.body) > MAX_PING:
+            raise r.fail("PING/PONG payload above 64 bytes")
+        r.pos = len(f.body)
+        m = Ping(f.body) if t == MsgType.PING else Pong(f.body)
+    elif t == MsgType.CONFIG:
+        m = _decode_config(r)
+    elif t == MsgType.CONFIG_ACK:
+        m = ConfigAck(r.u8(), r.u8(), int(r.fixed("<Q")))
+    elif t == MsgType.STATUS:
+        n = r.varint()
+        if n > r.remaining():
+            raise r.fail("counter count exceeds frame")
+        m = Status(tuple(r.varint() for _ in range(n)))
+    elif t == MsgType.ERROR:
+        m = ErrorMsg(r.u8(), r.string(1024))
+    else:
+        raise ProtocolError(ErrorCode.BAD_FRAME, f"unknown message type 0x{t:02x}", 0)
+    r.end()
+    return m
+
+
+def _decode_config(r: Reader) -> Config:
+    config_id = r.u8()
+    sp = r.varint()
+    if sp > 86400:
+        raise r.fail("status period above one day")
+    nt = r.varint()
+    if nt > MAX_LIST or nt > r.remaining():
+        raise r.fail(f"topic count {nt} too large")
+    topics = []
+    for _ in range(nt):
+        name = r.string(255)
+        ty = r.u8()
+        if ty > 3:
+            raise r.fail(f"unknown value type {ty}")
+        bs = r.varint()
+        if not 1 <= bs <= 1_000_000:
+            raise r.fail(f"buffer size {bs} out of 1..1000000")
+        topics.append(TopicSpec(name, ValueType(ty), bs, r.varint()))
+    ns = r.varint()
+    if ns > MAX_LIST or ns > r.remaining():
+        raise r.fail(f"stream count {ns} too large")
+    streams = []
+    for i in range(ns):
+        topic = r.varint()
+        if topic >= nt:
+            raise r.fail(f"stream {i} names topic {topic} of {nt}")
+        a = r.u8()
+        if a > 7:
+            raise r.fail(f"unknown aggregation {a}")
+        p = r.varint()
+        if p == 0 or p > 366 * 86400 * 1_000_000:
+            raise r.fail("stream period out of range")
+        streams.append(StreamSpec(topic, Aggregation(a), p))
+    return Config(config_id, sp, tuple(topics), tuple(streams))
+
+
+@dataclass(frozen=True)
+class DataHeader:
+    sync: bool
+    bitmap: bool
+    config_id: int
+    slot: int
+    seq8: int
+    values_offset: int
+
+
+def decode_data_header(f: RawFrame) -> DataHeader:
+    if not is_data_type(f.type):
+        raise ProtocolError(ErrorCode.BAD_FRAME, "not a DATA frame", 0)
+    r = Reader(f.body)
+    sync = bool(f.type & 2)
+    if sync:
+        cid = r.u8()
+        slot = r.varint()
+        return DataHeader(True, bool(f.type & 1), cid, slot, slot & 0xFF, r.pos)
+    seq8 = r.u8()
+    return DataHeader(False, bool(f.type & 1), 0, 0, seq8, r.pos)
+
+
+def _get_scalar(r: Reader, k: Scalar) -> float | int:
+    if k == Scalar.F32:
+        return r.fixed("<f")
+    if k == Scalar.F64:
+        return r.fixed("<d")
+    if k == Scalar.ZIGZAG:
+        return unzigzag(r.varint())
+    if k == Scalar.BOOL:
+        b = r.u8()
+        if b > 1:
+            raise r.fail("bool value not 0 or 1")
+        return b
+    return r.varint()
+
+
+def _get_value(r: Reader, k: ValueKind) -> Value:
+    v = Value(present=True)
+    is_float = k.scalar in (Scalar.F32, Scalar.F64)
+    if k.aggregation == Aggregation.ALL:
+        n = r.varint()
+        if n > r.remaining():
+            raise r.fail("ALL count exceeds frame")
+        v.samples = [_get_scalar(r, k.scalar) for _ in range(n)]
+        v.count = n
+        return v
+    x = _get_scalar(r, k.scalar)
+    if k.scalar == Scalar.UVARINT:
+        v.count = int(x)
+    elif is_float:
+        v.number = float(x)
+    else:
+        v.integer = int(x)
+    if k.aggregation == Aggregation.AVERAGE:
+        v.count = r.varint()
+    return v
+
+
+def decode_data(f: RawFrame, kinds: Sequence[ValueKind]) -> Data:
+    h = decode_data_header(f)
+    r = Reader(f.body[h.values_offset :], h.values_offset)
+    present = [True] * len(kinds)
+    if h.bitmap:
+        bm = r.take((len(kinds) + 7) // 8)
+        present = [bool(bm[i // 8] >> (i % 8) & 1) for i in range(len(kinds))]
+        for i in range(len(kinds), len(bm) * 8):
+            if bm[i // 8] >> (i % 8) & 1:
+                raise r.fail("presence bit set beyond the slot's streams")
+    values = [_get_value(r, k) if p else Value() for k, p in zip(kinds, present, strict=True)]
+    r.end()
+    return Data(h.sync, h.config_id, h.slot, h.seq8, values)

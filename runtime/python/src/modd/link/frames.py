@@ -1,0 +1,229 @@
+"""Messages of the MoDD link protocol, apart from the codec (docs/protocol.md)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import IntEnum
+
+VERSION = 1
+MAX_FRAME = 1 << 20
+
+
+class MsgType(IntEnum):
+    HELLO = 0x01
+    CHALLENGE = 0x02
+    AUTH = 0x03
+    AUTH_OK = 0x04
+    PING = 0x05
+    PONG = 0x06
+    CONFIG = 0x07
+    CONFIG_ACK = 0x08
+    DATA = 0x10
+    DATA_BITMAP = 0x11
+    DATA_SYNC = 0x12
+    DATA_SYNC_BITMAP = 0x13
+    STATUS = 0x20
+    ERROR = 0x7F
+
+
+class ValueType(IntEnum):
+    FLOAT32 = 0
+    FLOAT64 = 1
+    INT = 2
+    BOOL = 3
+
+    @classmethod
+    def parse(cls, name: str) -> ValueType:
+        names = {"float32": cls.FLOAT32, "float64": cls.FLOAT64, "int": cls.INT, "bool": cls.BOOL}
+        return names[name]
+
+    @property
+    def label(self) -> str:
+        return ("float32", "float64", "int", "bool")[self]
+
+
+class Aggregation(IntEnum):
+    """Enum order is the wire code and the stream-id order of the plan contract."""
+
+    MIN = 0
+    MAX = 1
+    AVERAGE = 2
+    FIRST = 3
+    LAST = 4
+    ALL = 5
+    COUNT = 6
+    SUM = 7
+
+
+class ErrorCode(IntEnum):
+    BAD_FRAME = 1
+    VERSION = 2
+    AUTH_FAILED = 3
+    NOT_AUTHENTICATED = 4
+    BAD_CONFIG = 5
+    BUSY = 6
+    TIMEOUT = 8
+    INTERNAL = 9
+    IO = 10
+
+
+class Scalar(IntEnum):
+    F32 = 0
+    F64 = 1
+    ZIGZAG = 2
+    BOOL = 3
+    UVARINT = 4
+
+
+@dataclass(frozen=True)
+class ValueKind:
+    """How a (topic type, aggregation) pair is written in DATA."""
+
+    aggregation: Aggregation
+    scalar: Scalar
+
+
+def value_kind(vtype: ValueType, agg: Aggregation) -> ValueKind:
+    natural = {
+        ValueType.FLOAT32: Scalar.F32,
+        ValueType.FLOAT64: Scalar.F64,
+        ValueType.INT: Scalar.ZIGZAG,
+        ValueType.BOOL: Scalar.BOOL,
+    }[vtype]
+    if agg == Aggregation.AVERAGE:
+        f32 = vtype in (ValueType.FLOAT32, ValueType.BOOL)
+        return ValueKind(agg, Scalar.F32 if f32 else Scalar.F64)
+    if agg == Aggregation.SUM:
+        s = {ValueType.FLOAT32: Scalar.F32, ValueType.FLOAT64: Scalar.F64}.get(vtype, Scalar.ZIGZAG)
+        return ValueKind(agg, s)
+    if agg == Aggregation.COUNT:
+        return ValueKind(agg, Scalar.UVARINT)
+    return ValueKind(agg, natural)
+
+
+class ProtocolError(Exception):
+    """A malformed frame or a protocol violation; `offset` is the byte offset in the frame body."""
+
+    def __init__(self, code: ErrorCode, message: str, offset: int | None = None) -> None:
+        where = f" (at byte {offset})" if offset is not None else ""
+        super().__init__(f"{code.name}: {message}{where}")
+        self.code = code
+        self.offset = offset
+
+
+@dataclass(frozen=True)
+class Hello:
+    version: int
+    nonce: bytes  # 16 bytes
+
+
+@dataclass(frozen=True)
+class Challenge:
+    version: int
+    nonce: bytes  # 16 bytes
+
+
+@dataclass(frozen=True)
+class Auth:
+    mac: bytes  # 32 bytes
+
+
+@dataclass(frozen=True)
+class AuthOk:
+    mac: bytes
+    config_id: int
+    epoch_ns: int
+
+
+@dataclass(frozen=True)
+class Ping:
+    payload: bytes
+
+
+@dataclass(frozen=True)
+class Pong:
+    payload: bytes
+
+
+@dataclass(frozen=True)
+class TopicSpec:
+    name: str
+    type: ValueType
+    buffer_size: int
+    period_us: int = 0
+
+
+@dataclass(frozen=True)
+class StreamSpec:
+    topic: int
+    aggregation: Aggregation
+    period_us: int
+
+
+@dataclass(frozen=True)
+class Config:
+    config_id: int
+    status_period_s: int
+    topics: tuple[TopicSpec, ...]
+    streams: tuple[StreamSpec, ...]
+
+    def kinds(self) -> list[ValueKind]:
+        return [value_kind(self.topics[s.topic].type, s.aggregation) for s in self.streams]
+
+
+@dataclass(frozen=True)
+class ConfigAck:
+    config_id: int
+    status: int
+    epoch_ns: int
+
+
+STATUS_FIELDS: tuple[str, ...] = (
+    "uptime_s", "samples_in", "samples_archived", "rejected_unknown_topic", "rejected_wrong_type",
+    "rejected_not_finite", "rejected_backwards", "rejected_overflow", "rejected_malformed",
+    "archive_failed", "ingress_malformed_frames", "publishers_connected", "frames_sent",
+    "frames_dropped", "link_bytes_sent", "disk_free_mb", "buffer_fill_pct", "archive_files",
+    "auth_failures", "config_id",
+)
+
+
+@dataclass(frozen=True)
+class Status:
+    counters: tuple[int, ...]
+
+    def as_dict(self) -> dict[str, int]:
+        """Known fields by name; fields a newer broker appends are kept as field_<i>."""
+        return {
+            (STATUS_FIELDS[i] if i < len(STATUS_FIELDS) else f"field_{i}"): v
+            for i, v in enumerate(self.counters)
+        }
+
+
+@dataclass(frozen=True)
+class ErrorMsg:
+    code: int
+    message: str
+
+
+@dataclass
+class Value:
+    """One stream's value in a DATA frame. `number` holds floats and the AVERAGE mean,
+    `integer` ints and bools, `count` the AVERAGE sample count and COUNT, `samples` ALL."""
+
+    present: bool = False
+    number: float = 0.0
+    integer: int = 0
+    count: int = 0
+    samples: list[float | int] = field(default_factory=list)
+
+
+@dataclass
+class Data:
+    sync: bool
+    config_id: int  # meaningful when sync
+    slot: int  # full slot number when sync
+    seq8: int  # slot mod 256
+    values: list[Value]
+
+
+Message = Hello | Challenge | Auth | AuthOk | Ping | Pong | Config | ConfigAck | Status | ErrorMsg

@@ -1,0 +1,204 @@
+# ruff: noqa: E501  (the vector table reads best one vector per line)
+"""Writes the shared link-protocol test vectors (one JSON file each) with the Python codec.
+
+Run: .venv/bin/python runtime/vectors/generate.py
+The C++ codec (runtime/cpp/tests/test_vectors.cpp) and the Python codec
+(runtime/python/tests/test_vectors.py) both decode every vector's hex to the listed message
+and encode the message back to the same hex. Values are exactly representable in float32.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from modd.link import codec
+from modd.link.auth import client_proof, server_proof
+from modd.link.frames import (
+    Aggregation,
+    Auth,
+    AuthOk,
+    Challenge,
+    Config,
+    ConfigAck,
+    Data,
+    ErrorMsg,
+    Hello,
+    Message,
+    Ping,
+    Pong,
+    Status,
+    StreamSpec,
+    TopicSpec,
+    Value,
+    ValueType,
+)
+
+HERE = Path(__file__).parent
+KEY = b"modd-test-key"
+CN = bytes(range(16))
+SN = bytes(range(0xA0, 0xB0))
+
+S1_TOPICS = (
+    TopicSpec("usv.accelerometer.accel_x", ValueType.FLOAT32, 28, 40000),
+    TopicSpec("usv.accelerometer.accel_y", ValueType.FLOAT32, 28, 40000),
+    TopicSpec("usv.accelerometer.accel_z", ValueType.FLOAT32, 6, 40000),
+)
+S1_STREAMS = (
+    StreamSpec(0, Aggregation.AVERAGE, 250000),
+    StreamSpec(1, Aggregation.AVERAGE, 250000),
+    StreamSpec(2, Aggregation.MIN, 250000),
+    StreamSpec(2, Aggregation.MAX, 250000),
+)
+S1 = Config(1, 30, S1_TOPICS, S1_STREAMS)
+
+
+def msg_json(m: Message) -> dict[str, Any]:
+    if isinstance(m, Hello | Challenge):
+        return {"type": "HELLO" if isinstance(m, Hello) else "CHALLENGE",
+                "version": m.version, "nonce": m.nonce.hex()}
+    if isinstance(m, Auth):
+        return {"type": "AUTH", "mac": m.mac.hex()}
+    if isinstance(m, AuthOk):
+        return {"type": "AUTH_OK", "mac": m.mac.hex(), "config_id": m.config_id,
+                "epoch_ns": m.epoch_ns}
+    if isinstance(m, Ping | Pong):
+        return {"type": "PING" if isinstance(m, Ping) else "PONG", "payload": m.payload.hex()}
+    if isinstance(m, Config):
+        return {
+            "type": "CONFIG", "config_id": m.config_id, "status_period_s": m.status_period_s,
+            "topics": [{"name": t.name, "type": t.type.label, "buffer_size": t.buffer_size,
+                        "period_us": t.period_us} for t in m.topics],
+            "streams": [{"topic": s.topic, "aggregation": s.aggregation.name,
+                         "period_us": s.period_us} for s in m.streams],
+        }
+    if isinstance(m, ConfigAck):
+        return {"type": "CONFIG_ACK", "config_id": m.config_id, "status": m.status,
+                "epoch_ns": m.epoch_ns}
+    if isinstance(m, Status):
+        return {"type": "STATUS", "counters": list(m.counters)}
+    if isinstance(m, ErrorMsg):
+        return {"type": "ERROR", "code": m.code, "message": m.message}
+    raise TypeError(m)
+
+
+def data_json(d: Data) -> dict[str, Any]:
+    return {
+        "type": "DATA", "sync": d.sync, "config_id": d.config_id, "slot": d.slot,
+        "seq8": d.seq8,
+        "values": [{"present": v.present, "number": v.number, "integer": v.integer,
+                    "count": v.count, "samples": v.samples} for v in d.values],
+    }
+
+
+def write(name: str, meaning: str, wire: bytes, message: dict[str, Any],
+          kinds: list[tuple[ValueType, Aggregation]] | None = None) -> None:
+    doc: dict[str, Any] = {"name": name, "meaning": meaning, "hex": wire.hex(), "message": message}
+    if kinds is not None:
+        doc["kinds"] = [{"type": t.label, "aggregation": a.name} for t, a in kinds]
+    (HERE / f"{name}.json").write_text(json.dumps(doc, indent=1) + "\n")
+
+
+def simple(name: str, meaning: str, m: Message) -> None:
+    write(name, meaning, codec.encode(m), msg_json(m))
+
+
+def data(name: str, meaning: str, d: Data, kinds: list[tuple[ValueType, Aggregation]]) -> None:
+    from modd.link.frames import value_kind
+    wire = codec.encode_data(d, [value_kind(t, a) for t, a in kinds])
+    write(name, meaning, wire, data_json(d), kinds)
+
+
+def main() -> None:
+    simple("hello", "base station opens: version 1, client nonce 00..0f", Hello(1, CN))
+    simple("challenge", "broker answers: version 1, server nonce a0..af", Challenge(1, SN))
+    simple("auth", "client proof HMAC-SHA256(key 'modd-test-key', 'MODD1C'||sn||cn)",
+           Auth(client_proof(KEY, CN, SN)))
+    simple("auth_ok", "server proof HMAC-SHA256(key, 'MODD1S'||cn||sn), running config 1, epoch",
+           AuthOk(server_proof(KEY, CN, SN), 1, 1_763_700_000_123_456_789))
+    simple("ping", "PING with a 2-byte payload (the sender's sequence)", Ping(b"\x07\x01"))
+    simple("pong", "PONG echoing the PING payload", Pong(b"\x07\x01"))
+    simple("config_scenario1", "scenario 1: 3 float32 topics (28, 28, 6), 4 streams at 0.25 s", S1)
+    simple("config_mixed", "every type and aggregation, one topic of each type", Config(
+        200, 0,
+        (TopicSpec("d.s.f64", ValueType.FLOAT64, 1, 0), TopicSpec("d.s.i", ValueType.INT, 1000, 10000),
+         TopicSpec("d.s.b", ValueType.BOOL, 3, 1_000_000)),
+        tuple(StreamSpec(t, a, p) for t, a, p in [
+            (0, Aggregation.FIRST, 1_000_000), (0, Aggregation.LAST, 1_000_000),
+            (1, Aggregation.ALL, 500_000), (1, Aggregation.COUNT, 2_000_000),
+            (1, Aggregation.SUM, 2_000_000), (2, Aggregation.AVERAGE, 26 * 86400 * 1_000_000)])))
+    simple("config_ack", "CONFIG 1 accepted, takes effect at the epoch", ConfigAck(1, 0, 1_763_700_000_250_000_000))
+    simple("config_ack_busy", "CONFIG 2 refused: BUSY (another waits for its switch date)", ConfigAck(2, 6, 0))
+    simple("status", "STATUS with 20 counters (docs/protocol.md order)", Status(
+        (3600, 270000, 269990, 1, 2, 3, 4, 0, 0, 0, 1, 1, 14400, 0, 317000, 51200, 42, 2, 1, 1)))
+    simple("error_auth", "ERROR AUTH_FAILED with a message", ErrorMsg(3, "HMAC proof does not verify"))
+
+    s1_kinds = [(ValueType.FLOAT32, Aggregation.AVERAGE)] * 2 + [
+        (ValueType.FLOAT32, Aggregation.MIN), (ValueType.FLOAT32, Aggregation.MAX)]
+    data("data_scenario1", "scenario 1 slot 5 (seq8 5): 2 AVERAGE (value, count) + MIN + MAX, all present",
+         Data(False, 0, 0, 5, [Value(True, 0.5, 0, 6), Value(True, -1.25, 0, 7),
+                               Value(True, 9.75), Value(True, 10.5)]), s1_kinds)
+    data("data_scenario1_absent", "scenario 1 slot 300 (seq8 44): accel_y absent -> bitmap 0b1101",
+         Data(False, 0, 0, 44, [Value(True, 0.5, 0, 6), Value(),
+                                Value(True, 9.75), Value(True, 10.5)]), s1_kinds)
+    data("data_sync", "first frame after a gap: config 1, full slot number 1000, all present",
+         Data(True, 1, 1000, 1000 & 0xFF, [Value(True, 0.5, 0, 6), Value(True, -1.25, 0, 7),
+                                          Value(True, 9.75), Value(True, 10.5)]), s1_kinds)
+    data("data_sync_absent", "sync frame with a bitmap: config 7, slot 3, only stream 2 present",
+         Data(True, 7, 3, 3, [Value(), Value(), Value(True, -2.0), Value()]), s1_kinds)
+    mixed = [(ValueType.FLOAT64, Aggregation.FIRST), (ValueType.INT, Aggregation.ALL),
+             (ValueType.INT, Aggregation.COUNT), (ValueType.INT, Aggregation.SUM),
+             (ValueType.BOOL, Aggregation.AVERAGE), (ValueType.BOOL, Aggregation.MAX),
+             (ValueType.FLOAT64, Aggregation.AVERAGE), (ValueType.INT, Aggregation.MIN),
+             (ValueType.FLOAT32, Aggregation.LAST)]
+    data("data_mixed", "9 streams: f64 FIRST, int ALL [3,-1,300], int COUNT, int SUM, bool AVERAGE,"
+         " bool MAX, f64 AVERAGE, int MIN (absent), f32 LAST -> 2-byte bitmap", Data(
+             False, 0, 0, 255,
+             [Value(True, 3.141592653589793), Value(True, 0, 0, 3, [3, -1, 300]),
+              Value(True, 0, 0, 12), Value(True, 0, -70000), Value(True, 0.75, 0, 4),
+              Value(True, 0, 1), Value(True, 2.5e-10, 0, 200), Value(), Value(True, -0.0)]),
+         mixed)
+
+    handshake = {
+        "name": "handshake", "meaning": "HMAC-SHA256 proofs for key 'modd-test-key'",
+        "key": KEY.hex(), "client_nonce": CN.hex(), "server_nonce": SN.hex(),
+        "client_proof": client_proof(KEY, CN, SN).hex(),
+        "server_proof": server_proof(KEY, CN, SN).hex(),
+    }
+    (HERE / "handshake.json").write_text(json.dumps(handshake, indent=1) + "\n")
+
+    from modd.link.schedule import SlotIterator
+    it = SlotIterator([250000, 250000, 2_000_000, 750000])
+    slots = [next(it) for _ in range(12)]
+    (HERE / "slots.json").write_text(json.dumps({
+        "name": "slots", "meaning": "first 12 slots of streams with periods 0.25, 0.25, 2, 0.75 s",
+        "periods_us": [250000, 250000, 2_000_000, 750000],
+        "slots": [{"index": s.index, "offset_us": s.offset_us, "streams": list(s.streams)}
+                  for s in slots]}, indent=1) + "\n")
+
+    def fr(type_and_body: str) -> str:
+        b = bytes.fromhex(type_and_body)
+        return (codec.varint(len(b)) + b).hex()
+
+    invalid = [
+        ("zero_length", "00", "frame length 0"),
+        ("long_length", "ffffffff01", "length varint longer than 4 bytes"),
+        ("unknown_type", fr("55"), "unknown message type 0x55"),
+        ("truncated_hello", fr("0101020304"), "HELLO nonce truncated"),
+        ("config_bad_topic_ref", fr("07 01 00 01 0161 00 01 00 01 05 00 01"),
+         "stream names topic 5 of 1"),
+        ("config_bad_buffer", fr("07 01 00 01 0161 00 00 00 00"), "buffer size 0"),
+        ("config_bad_aggregation", fr("07 01 00 01 0161 00 01 00 01 00 09 01"),
+         "aggregation 9"),
+        ("config_zero_period", fr("07 01 00 01 0161 00 01 00 01 00 00 00"), "stream period 0"),
+        ("trailing_byte", fr("08 01 00 0000000000000000 ff"), "CONFIG_ACK with a trailing byte"),
+        ("status_overlong_varint", fr("20 01 ffffffffffffffffffff7f"), "varint longer than 64 bits"),
+    ]
+    (HERE / "invalid.json").write_text(json.dumps({
+        "name": "invalid", "meaning": "frames both decoders must reject with BAD_FRAME",
+        "frames": [{"name": n, "hex": h, "why": w} for n, h, w in invalid]}, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
