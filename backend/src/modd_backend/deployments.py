@@ -1,0 +1,94 @@
+"""Deploying a model version to a drone: the zenoh query to the SubBroker's
+``modd/<drone>/deploy`` (docs/subbroker.md), and the record of how it ended.
+
+The SubBroker replies ``{"status": "ACKED", ...}`` only after the PubBroker's
+CONFIG_ACK; any other status, an error reply, a timeout or no reply at all is
+a failure, recorded with its reason."""
+
+from __future__ import annotations
+
+import json
+import re
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session as Db
+
+from .tables import Deployment, ModelVersion, utcnow
+from .zbridge import ZenohBridge
+
+NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+#: Extra seconds the backend waits beyond the SubBroker's own deploy timeout.
+QUERY_MARGIN_S = 2.0
+
+
+def deploy_key(drone: str) -> str:
+    if not NAME.match(drone):
+        raise ValueError(f"drone {drone!r} is not an identifier")
+    return f"modd/{drone}/deploy"
+
+
+def deploy(
+    db: Db,
+    bridge: ZenohBridge,
+    version: ModelVersion,
+    model: dict[str, Any],
+    user: str,
+    timeout_s: float,
+) -> Deployment:
+    """Send ``model`` to its drone's SubBroker and record the outcome."""
+    drone = str(model["drone"]["name"])
+    record = Deployment(
+        project_id=version.project_id, revision=version.revision, drone=drone,
+        requested_by=user, status="pending",
+    )
+    db.add(record)
+    db.commit()
+    request = json.dumps({"model": model, "timeout_s": timeout_s}).encode()
+    result = bridge.query(deploy_key(drone), request, timeout_s + QUERY_MARGIN_S)
+    reply = result.json() if result.ok else None
+    if isinstance(reply, dict) and reply.get("status") == "ACKED":
+        record.status = "acked"
+        record.ack_json = json.dumps(reply)
+    else:
+        record.status = "failed"
+        record.error = _reason(result.error, reply)
+        if isinstance(reply, dict):
+            record.ack_json = json.dumps(reply)
+    record.finished_at = utcnow()
+    db.commit()
+    return record
+
+
+def _reason(error: str | None, reply: Any) -> str:
+    if error is not None:
+        return error
+    if isinstance(reply, dict):
+        status = reply.get("status", "no status")
+        return f"{status}: {reply.get('reason', 'no reason given')}"
+    return "the SubBroker's reply is not a JSON object"
+
+
+def record_json(d: Deployment) -> dict[str, Any]:
+    return {
+        "id": d.id,
+        "project_id": d.project_id,
+        "revision": d.revision,
+        "drone": d.drone,
+        "requested_by": d.requested_by,
+        "requested_at": d.requested_at,
+        "finished_at": d.finished_at,
+        "status": d.status,
+        "reply": json.loads(d.ack_json) if d.ack_json else None,
+        "error": d.error,
+    }
+
+
+def last_acked(db: Db, drone: str) -> Deployment | None:
+    """What runs on ``drone``: its latest acknowledged deployment, any project."""
+    return db.scalar(
+        select(Deployment)
+        .where(Deployment.drone == drone, Deployment.status == "acked")
+        .order_by(Deployment.id.desc())
+        .limit(1)
+    )

@@ -1,0 +1,112 @@
+"""Deployments: an operator deploys a model version to its drone; everyone
+can list them and see what is deployed against what is edited (a diff)."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends, Query
+from modd_model import validate
+from pydantic import BaseModel, Field
+from sqlalchemy import select
+
+from ..deployments import deploy, last_acked, record_json
+from ..deps import DbDep, StateDep, UserDep, bridge_of, require
+from ..errors import ApiError
+from ..modeldiff import diff
+from ..modelio import diagnostics_json
+from ..roles import Role
+from ..schemas import InvalidModelOut
+from ..tables import Deployment
+from ..versions import get_project, get_version, model_of
+
+router = APIRouter(prefix="/api", tags=["deploy"])
+
+
+class DeployIn(BaseModel):
+    revision: int | None = Field(default=None, ge=1, le=2**31 - 1,
+                                 description="the head when absent")
+
+
+class DeploymentOut(BaseModel):
+    """``status``: acked (the PubBroker took the config) or failed (``error``
+    says why). ``reply`` is the SubBroker's answer as it came."""
+
+    id: int
+    project_id: int
+    revision: int
+    drone: str
+    requested_by: str
+    requested_at: datetime
+    finished_at: datetime | None
+    status: str
+    reply: dict[str, Any] | None
+    error: str | None
+
+
+class DeployedDiffOut(BaseModel):
+    drone: str
+    head_revision: int
+    deployed: DeploymentOut | None
+    same_project: bool
+    changes: list[dict[str, Any]]
+
+
+@router.post(
+    "/projects/{project_id}/deployments",
+    status_code=201,
+    dependencies=[Depends(require(Role.operator))],
+    responses={404: {"description": "no such project or revision"},
+               422: {"model": InvalidModelOut, "description": "the version is not valid"}},
+)
+def deploy_version(
+    project_id: int, body: DeployIn, db: DbDep, user: UserDep, state: StateDep
+) -> DeploymentOut:
+    """Deploy and wait for the drone's answer (up to the deploy timeout); the
+    record is created either way and says acked or failed."""
+    version = get_version(db, project_id, body.revision)
+    if not version.valid:
+        diags = diagnostics_json(validate(model_of(version)))
+        raise ApiError(422, f"revision {version.revision} has errors: fix them before deploying",
+                       diagnostics=diags)
+    record = deploy(db, bridge_of(state), version, model_of(version), user.username,
+                    state.settings.deploy_timeout_s)
+    return DeploymentOut.model_validate(record_json(record))
+
+
+@router.get("/projects/{project_id}/deployments", responses={404: {"description": "no project"}})
+def list_deployments(project_id: int, db: DbDep, _user: UserDep) -> list[DeploymentOut]:
+    get_project(db, project_id)
+    rows = db.scalars(
+        select(Deployment).where(Deployment.project_id == project_id)
+        .order_by(Deployment.id.desc())
+    )
+    return [DeploymentOut.model_validate(record_json(d)) for d in rows]
+
+
+@router.get("/projects/{project_id}/deployed-diff",
+            responses={404: {"description": "no project or no model"}})
+def deployed_diff(
+    project_id: int,
+    db: DbDep,
+    _user: UserDep,
+    drone: Annotated[str | None, Query(max_length=64)] = None,
+) -> DeployedDiffOut:
+    """Changes from what runs on the drone (its last acked deployment, from any
+    project) to this project's head; everything is an addition when nothing
+    is deployed."""
+    head = get_version(db, project_id)
+    edited = model_of(head)
+    name = drone or str((edited.get("drone") or {}).get("name", ""))
+    running = last_acked(db, name) if name else None
+    deployed: dict[str, Any] = {}
+    if running is not None:
+        deployed = model_of(get_version(db, running.project_id, running.revision))
+    return DeployedDiffOut(
+        drone=name,
+        head_revision=head.revision,
+        deployed=DeploymentOut.model_validate(record_json(running)) if running else None,
+        same_project=running is not None and running.project_id == project_id,
+        changes=diff(deployed, edited),
+    )

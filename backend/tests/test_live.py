@@ -1,0 +1,172 @@
+"""Deploy and live streams against the real base station: the C++ PubBroker
+(build/bin/modd-pubbroker), the SubBroker (modd-subbroker) and a publisher,
+all on loopback, started and stopped by PID (station.py). The backend joins
+the SubBroker's zenoh endpoint as a peer, as in the embedded default."""
+
+from __future__ import annotations
+
+import io
+import json
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from fastapi.testclient import TestClient
+from modd_backend import Settings, create_app
+from modd_model import load_model
+from starlette.testclient import WebSocketTestSession
+
+from .conftest import ADMIN_PASSWORD, Headers, login
+from .station import Station
+
+
+@pytest.fixture(scope="module")
+def station(tmp_path_factory: pytest.TempPathFactory, scenarios_dir: Path
+            ) -> Iterator[Station]:
+    """PubBroker + SubBroker + publisher for scenario 1."""
+    model = load_model(scenarios_dir / "scenario1.modd")
+    st = Station(tmp_path_factory.mktemp("station"), model)
+    try:
+        st.start()
+        yield st
+    finally:
+        st.stop()
+
+
+@pytest.fixture(scope="module")
+def live(station: Station, tmp_path_factory: pytest.TempPathFactory
+         ) -> Iterator[TestClient]:
+    settings = Settings(
+        data_dir=tmp_path_factory.mktemp("backend"),
+        zenoh_connect=(station.zenoh,),
+        initial_admin_password=ADMIN_PASSWORD,
+        deploy_timeout_s=5.0,
+        archive_dir=station.archive.parent,
+    )
+    with TestClient(create_app(settings, out=io.StringIO())) as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def people(live: TestClient) -> dict[str, Headers]:
+    admin = login(live, "admin", ADMIN_PASSWORD)
+    out = {"admin": admin}
+    for role in ("operator", "scientist", "designer"):
+        live.post("/api/users", headers=admin,
+                  json={"username": role, "password": f"{role}-password", "roles": [role]})
+        out[role] = login(live, role, f"{role}-password")
+    return out
+
+
+def _receive_until(ws: WebSocketTestSession, pred: Callable[[dict[str, Any]], bool],
+                   limit: int = 500) -> dict[str, Any]:
+    for _ in range(limit):
+        msg: dict[str, Any] = ws.receive_json()
+        if pred(msg):
+            return msg
+    raise AssertionError("the expected message never came")
+
+
+def test_deploy_is_acked_recorded_and_diffed(
+    live: TestClient, people: dict[str, Headers], station: Station
+) -> None:
+    admin, operator = people["admin"], people["operator"]
+    pid = live.post("/api/projects", headers=admin,
+                    json={"name": "mission", "model": {"model": station.model}}).json()["id"]
+    before = live.get(f"/api/projects/{pid}/deployed-diff", headers=operator).json()
+    assert before["deployed"] is None and before["changes"]
+    r = live.post(f"/api/projects/{pid}/deployments", headers=operator, json={})
+    assert r.status_code == 201, r.text
+    record = r.json()
+    assert record["status"] == "acked", record
+    assert record["reply"]["status"] == "ACKED"
+    assert record["reply"]["buffer_sizes"]["usv.accelerometer.accel_z"] == 6
+    listed = live.get(f"/api/projects/{pid}/deployments", headers=people["scientist"]).json()
+    assert [d["id"] for d in listed] == [record["id"]]
+    same = live.get(f"/api/projects/{pid}/deployed-diff", headers=operator).json()
+    assert same["changes"] == [] and same["same_project"]
+    model = live.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
+    model["subscribers"][0]["periodS"] = "4"
+    live.put(f"/api/projects/{pid}/model", headers=admin,
+             json={"base_revision": 1, "model": model})
+    changed = live.get(f"/api/projects/{pid}/deployed-diff", headers=operator).json()
+    assert changed["changes"] == [{"op": "replace", "pointer": "/subscribers/0/periodS",
+                                   "before": "2.0", "after": "4"}]
+    denied = live.post(f"/api/projects/{pid}/deployments", headers=people["designer"], json={})
+    assert denied.status_code == 403
+
+
+def test_stream_relays_values_and_status(live: TestClient, people: dict[str, Headers]) -> None:
+    token = people["scientist"]["Authorization"].split()[1]
+    with live.websocket_connect(f"/api/drones/usv/stream?token={token}") as ws:
+        ws.send_json({"op": "subscribe", "subscriber": "sub_5", "id": 1})
+        ack = _receive_until(ws, lambda m: m["type"] == "subscribed")
+        assert ack == {"type": "subscribed", "subscriber": "sub_5", "key": "modd/usv/sub/sub_5",
+                       "id": 1}
+        value = _receive_until(ws, lambda m: m["type"] == "value")
+        data = value["data"]
+        assert value["subscriber"] == "sub_5"
+        assert data["aggregation"] == "MIN" and data["topic"] == "usv.accelerometer.accel_z"
+        assert data["end_ns"] - data["start_ns"] == 250_000_000
+        status = _receive_until(ws, lambda m: m["type"] == "status")
+        assert status["data"]["drone"] == "usv" and "rtt_s" in status["data"]
+        ws.send_json({"op": "unsubscribe", "subscriber": "sub_5"})
+        _receive_until(ws, lambda m: m["type"] == "unsubscribed")
+        ws.send_json({"op": "subscribe", "subscriber": "no such/key"})
+        err = _receive_until(ws, lambda m: m["type"] == "error")
+        assert "identifier" in err["message"]
+
+
+def test_dynamic_subscriptions(live: TestClient, people: dict[str, Headers]) -> None:
+    sci = people["scientist"]
+    token = sci["Authorization"].split()[1]
+    with live.websocket_connect(f"/api/drones/usv/stream?token={token}") as ws:
+        ws.send_json({"op": "dynamic", "topic": "usv.accelerometer.accel_x", "period_s": "4",
+                      "aggregation": "AVERAGE", "subscriber": "dyn_avg4"})
+        reply = _receive_until(ws, lambda m: m["type"] == "dynamic")["reply"]
+        assert reply["status"] == "ACCEPTED", reply
+        assert reply["key"] == "modd/usv/sub/dyn_avg4"
+        ws.send_json({"op": "ping"})
+        pong = _receive_until(ws, lambda m: m["type"] == "pong")
+        assert "dyn_avg4" in pong["subscribers"]
+        ws.send_json({"op": "cancel", "subscriber": "dyn_avg4"})
+        cancelled = _receive_until(ws, lambda m: m["type"] == "dynamic")["reply"]
+        assert cancelled["status"] == "CANCELLED"
+    r = live.post("/api/drones/usv/subscriptions", headers=sci,
+                  json={"topic": "usv.accelerometer.accel_x", "period_s": "1",
+                        "aggregation": "MIN"})
+    assert r.status_code == 200
+    assert r.json()["status"] == "NOT_AVAILABLE" and r.json()["reason"]
+    op = live.post("/api/drones/usv/subscriptions", headers=people["operator"],
+                   json={"topic": "usv.accelerometer.accel_x", "period_s": "4",
+                         "aggregation": "AVERAGE"})
+    assert op.status_code == 403
+
+
+def test_deploy_to_a_silent_drone_fails_and_is_recorded(
+    live: TestClient, people: dict[str, Headers], station: Station
+) -> None:
+    model = json.loads(json.dumps(station.model))
+    model["drone"]["name"] = "ghost"
+    text = json.dumps(model).replace('"usv.', '"ghost.')
+    pid = live.post("/api/projects", headers=people["admin"],
+                    json={"name": "ghost", "model": {"text": text, "format": "json"}}).json()["id"]
+    start = time.monotonic()
+    record = live.post(f"/api/projects/{pid}/deployments", headers=people["operator"],
+                       json={}).json()
+    assert record["status"] == "failed"
+    assert "nobody answers on modd/ghost/deploy" in record["error"]
+    assert time.monotonic() - start < 5
+    listed = live.get(f"/api/projects/{pid}/deployments", headers=people["operator"]).json()
+    assert listed[0]["status"] == "failed"
+
+
+def test_websocket_needs_a_token(live: TestClient) -> None:
+    from starlette.websockets import WebSocketDisconnect
+
+    with pytest.raises(WebSocketDisconnect) as exc, \
+            live.websocket_connect("/api/drones/usv/stream?token=bad") as ws:
+        ws.receive_json()
+    assert exc.value.code == 4401
