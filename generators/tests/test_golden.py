@@ -69,3 +69,15 @@ def test_roles_partition_the_output(scenarios_dir: Path) -> None:
     assert all(p.startswith("integrator/") for p in by_role[0])
     with pytest.raises(ValueError, match="unknown role"):
         generate(model, "pilot")
+
+
+def test_table2_doc_is_up_to_date() -> None:
+    from modd_gen import table2
+
+    assert table2.main(["--check"]) == 0, "run .venv/bin/python -m modd_gen.table2"
+
+
+def test_code_lines_rule() -> None:
+    from modd_gen.table2 import code_lines
+
+    assert code_lines("a\n\n  // c\n# d\nb // e\n") == 2
