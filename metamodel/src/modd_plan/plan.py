@@ -174,6 +174,14 @@ def _link_cost(
     return predict(sched, window_bytes, plain)
 
 
+def _solve_buffers(problem: BufferProblem, method: str) -> BufferSolution:
+    if method == "cvxpy":
+        from .milp import solve_milp  # imports cvxpy (0.6 s) on first use only
+
+        return solve_milp(problem)
+    return solve_exact(problem)
+
+
 def make_plan(
     model: Mapping[str, Any],
     *,
@@ -206,22 +214,15 @@ def make_plan(
     hyper = lcm(*(_us(k.period) for k in requested)) if requested else 0
     sched = Schedule.from_periods_us([_us(s.stream.period) for s in sent], hyper)
     problem, unpublished = _buffer_problem(model, tops, constants)
-    if method == "cvxpy":
-        from .milp import solve_milp
-
-        buffers = solve_milp(problem)
-    else:
-        buffers = solve_exact(problem)
-    subscriptions = {
-        sub["name"]: StreamKey(sub["topic"], sub["aggregation"], to_fraction(sub["periodS"]))
-        for sub in model.get("subscribers", [])
-    }
     return Plan(
         topics=tuple(tops.values()),
         streams=streams,
-        subscriptions=subscriptions,
+        subscriptions={
+            sub["name"]: StreamKey(sub["topic"], sub["aggregation"], to_fraction(sub["periodS"]))
+            for sub in model.get("subscribers", [])
+        },
         schedule=sched,
-        buffers=buffers,
+        buffers=_solve_buffers(problem, method),
         unpublished=unpublished,
         constants=constants,
         link=_link_cost(model, sched, sent, tops),
