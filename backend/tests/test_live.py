@@ -53,7 +53,7 @@ def live(station: Station, tmp_path_factory: pytest.TempPathFactory
 def people(live: TestClient) -> dict[str, Headers]:
     admin = login(live, "admin", ADMIN_PASSWORD)
     out = {"admin": admin}
-    for role in ("operator", "scientist", "designer"):
+    for role in ("operator", "scientist", "designer", "integrator"):
         live.post("/api/users", headers=admin,
                   json={"username": role, "password": f"{role}-password", "roles": [role]})
         out[role] = login(live, role, f"{role}-password")
@@ -161,6 +161,11 @@ def test_deploy_to_a_silent_drone_fails_and_is_recorded(
     assert time.monotonic() - start < 5
     listed = live.get(f"/api/projects/{pid}/deployments", headers=people["operator"]).json()
     assert listed[0]["status"] == "failed"
+    # The deploy matrix: operator and admin deploy; the other roles may not.
+    for role, status in (("admin", 201), ("scientist", 403), ("designer", 403),
+                         ("integrator", 403)):
+        r = live.post(f"/api/projects/{pid}/deployments", headers=people[role], json={})
+        assert r.status_code == status, role
 
 
 def test_websocket_needs_a_token(live: TestClient) -> None:
