@@ -1,0 +1,181 @@
+"""``modd up MODEL [--simulate]``: run a model on this machine — the on-board
+PubBroker, the base-station SubBroker and, with ``--simulate``, simulated
+sensors — from configs generated from the model. Stops everything (by PID, in
+reverse order) on Ctrl-C or SIGTERM, or when one of the processes dies.
+
+The run directory (``--workdir``, default ``/tmp/modd-up/<drone>``) holds the
+generated configs, the archive, the ingress socket and each process's log, so
+that a run never writes to the paths of a real drone's model."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import secrets
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+REPO = Path(__file__).resolve().parents[4]
+STOP_TIMEOUT_S = 10.0
+
+
+def pubbroker_binary() -> Path:
+    """``$MODD_PUBBROKER``, else the repository's build, else ``modd-pubbroker`` on PATH."""
+    if env := os.environ.get("MODD_PUBBROKER"):
+        return Path(env)
+    built = REPO / "build" / "bin" / "modd-pubbroker"
+    if built.is_file():
+        return built
+    found = shutil.which("modd-pubbroker")
+    if found:
+        return Path(found)
+    raise FileNotFoundError("modd-pubbroker not found: run `make build`, or set MODD_PUBBROKER")
+
+
+@dataclass
+class Process:
+    name: str
+    argv: list[str]
+    log: Path
+    popen: subprocess.Popen[bytes] | None = None
+
+    def start(self, env: dict[str, str]) -> None:
+        self.log.parent.mkdir(parents=True, exist_ok=True)
+        with self.log.open("ab") as out:
+            self.popen = subprocess.Popen(self.argv, stdout=out, stderr=subprocess.STDOUT,
+                                          env=env, start_new_session=True)
+
+    def stop(self) -> int | None:
+        """SIGTERM, then SIGKILL after STOP_TIMEOUT_S; the exit code."""
+        p = self.popen
+        if p is None:
+            return None
+        if p.poll() is None:
+            p.send_signal(signal.SIGTERM)
+            try:
+                p.wait(STOP_TIMEOUT_S)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+        return p.returncode
+
+
+@dataclass
+class Stack:
+    """The processes of one local run, started in order and stopped in reverse."""
+
+    processes: list[Process] = field(default_factory=list)
+
+    def start(self, env: dict[str, str]) -> None:
+        for p in self.processes:
+            p.start(env)
+            assert p.popen is not None
+            print(f"modd up: started {p.name} (pid {p.popen.pid}), log {p.log}", flush=True)
+
+    def dead(self) -> Process | None:
+        return next((p for p in self.processes if p.popen and p.popen.poll() is not None), None)
+
+    def stop(self) -> None:
+        for p in reversed(self.processes):
+            code = p.stop()
+            print(f"modd up: stopped {p.name} (exit {code})", flush=True)
+
+
+def prepare(model: dict[str, Any], workdir: Path) -> tuple[dict[str, Any], Path]:
+    """The model as run locally (archive and config dirs under workdir) and the
+    directory of the generated operator configs."""
+    from modd_gen import generate, write_artifacts
+
+    local = json.loads(json.dumps(model))
+    local["pubBroker"]["logPath"] = str(workdir / "archive")
+    local["pubBroker"].setdefault("ingress", {})["unixSocket"] = str(workdir / "ingress.sock")
+    local["subBroker"]["configPath"] = str(workdir / "state")
+    write_artifacts(workdir / "generated", generate(local, "operator"))
+    return local, workdir / "generated" / "operator"
+
+
+def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
+                configs: Path) -> Stack:
+    logs = workdir / "logs"
+    bin_dir = Path(sys.executable).parent
+    sub = [str(bin_dir / "modd-subbroker"), "--config", str(configs / "subbroker.toml")]
+    if args.zenoh_listen:
+        sub += ["--zenoh-listen", args.zenoh_listen]
+    stack = Stack([
+        Process("pubbroker", [str(pubbroker_binary()), "--config",
+                              str(configs / "pubbroker.json")], logs / "pubbroker.log"),
+        Process("subbroker", sub, logs / "subbroker.log"),
+    ])
+    if args.simulate:
+        sim = bin_dir / "modd-sim"
+        if not sim.exists():
+            raise FileNotFoundError(f"{sim} not found: the drone simulator is not installed")
+        stack.processes.append(Process("simulator", [str(sim), "--model", str(configs /
+                                                                               "model.json")],
+                                       logs / "simulator.log"))
+    return stack
+
+
+def run(args: argparse.Namespace) -> int:
+    from modd_model import load_file
+
+    result = load_file(args.model)
+    for d in result.diagnostics:
+        print(d, file=sys.stderr)
+    if not result.ok or result.model is None:
+        return 1
+    model = result.model
+    workdir = Path(args.workdir or f"/tmp/modd-up/{model['drone']['name']}").resolve()
+    workdir.mkdir(parents=True, exist_ok=True)
+    local, configs = prepare(model, workdir)
+    env = dict(os.environ)
+    key_ref = (local.get("link", {}).get("keyRef") or "env:MODD_LINK_KEY")
+    kind, _, name = key_ref.partition(":")
+    if kind == "env" and not env.get(name):
+        env[name] = secrets.token_hex(16)  # a key for this local run only
+    try:
+        stack = build_stack(args, local, workdir, configs)
+    except FileNotFoundError as exc:
+        print(f"modd up: {exc}", file=sys.stderr)
+        return 1
+    stopping = False
+
+    def on_signal(_sig: int, _frame: object) -> None:
+        nonlocal stopping
+        stopping = True
+
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
+    stack.start(env)
+    print(f"modd up: drone {local['drone']['name']} running; archive in {workdir / 'archive'};"
+          " Ctrl-C to stop", flush=True)
+    code = 0
+    try:
+        while not stopping:
+            dead = stack.dead()
+            if dead is not None:
+                print(f"modd up: {dead.name} exited ({dead.popen.returncode if dead.popen else '?'}"
+                      f"); see {dead.log}", file=sys.stderr, flush=True)
+                code = 1
+                break
+            time.sleep(0.2)
+    finally:
+        stack.stop()
+    return code
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser("up", help="run a model locally: PubBroker, SubBroker, simulated sensors")
+    p.add_argument("model", metavar="MODEL", help=".modd or .json model")
+    p.add_argument("--simulate", action="store_true", help="also run simulated sensors")
+    p.add_argument("--workdir", metavar="DIR", help="run directory (default /tmp/modd-up/<drone>)")
+    p.add_argument("--zenoh-listen", metavar="ENDPOINT",
+                   help="the SubBroker's zenoh endpoint (default tcp/127.0.0.1:7447)")
+    p.set_defaults(func=run)

@@ -1,0 +1,69 @@
+"""`modd up` runs a model locally from generated configs and stops every
+process it started when it is told to stop."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+MODD = str(Path(sys.executable).parent / "modd")
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+def _wait_for(path: Path, text: str, timeout: float) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if path.exists() and text in path.read_text(errors="replace"):
+            return
+        time.sleep(0.1)
+    raise AssertionError(f"{text!r} never appeared in {path}:\n"
+                         f"{path.read_text(errors='replace') if path.exists() else '(no log)'}")
+
+
+def test_up_runs_the_brokers_and_stops_them(scenarios_dir: Path, tmp_path: Path) -> None:
+    model = tmp_path / "model.modd"
+    port = _free_port()
+    model.write_text((scenarios_dir / "scenario1.modd").read_text()
+                     .replace('"127.0.0.1":7171', f'"127.0.0.1":{port}'))
+    up = subprocess.Popen([MODD, "up", str(model), "--workdir", str(tmp_path / "run"),
+                           "--zenoh-listen", f"tcp/127.0.0.1:{_free_port()}"],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        # the SubBroker planned the model and the PubBroker acknowledged its CONFIG
+        _wait_for(tmp_path / "run" / "logs" / "subbroker.log", "config 1 running", 30)
+        assert (tmp_path / "run" / "generated" / "operator" / "pubbroker.json").is_file()
+    finally:
+        up.send_signal(signal.SIGTERM)
+        out, _ = up.communicate(timeout=60)
+    assert up.returncode == 0, out
+    pids = [int(p) for p in re.findall(r"\(pid (\d+)\)", out)]
+    assert len(pids) == 2, out
+    assert not any(_alive(pid) for pid in pids)
+    assert "stopped pubbroker" in out and "stopped subbroker" in out
+
+
+def test_up_refuses_an_invalid_model(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.modd"
+    bad.write_text("Drone d { }")
+    res = subprocess.run([MODD, "up", str(bad), "--workdir", str(tmp_path / "run")],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 1 and "no PubBroker block" in res.stderr
