@@ -12,6 +12,7 @@ that is importable, else writes the ingress frames itself.
 from __future__ import annotations
 
 import argparse
+import json
 import random
 import signal
 import socket
@@ -88,6 +89,7 @@ def main(argv: list[str] | None = None) -> int:
                 sock.sendall(frame(0x02, varint(ids[topic]) + bytes([TYPES[types[topic]][0]])
                                    + string(topic)))
     pubs = [(Fraction(pub["periodS"]), pub["topics"]) for pub in model.get("publishers", [])]
+    sent = dict.fromkeys(ids, 0)
     start = time.monotonic()
     due = [start + float(period) for period, _ in pubs]
     while not stop and time.monotonic() - start < args.seconds:
@@ -102,8 +104,11 @@ def main(argv: list[str] | None = None) -> int:
             records += varint(ids[topic]) + struct.pack("<q", now)
             records += struct.pack(fmt, value_for(rng, types[topic]))
         sock.sendall(frame(0x03, varint(len(pubs[i][1])) + records))
+        for topic in pubs[i][1]:
+            sent[topic] += 1
         due[i] += float(pubs[i][0])
     sock.close()
+    print(json.dumps({"sent": sent}), flush=True)
     return 0
 
 

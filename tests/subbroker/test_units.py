@@ -17,10 +17,7 @@ from modd.subbroker.planning import config_for, plan_for
 from modd.zenoh_session import ZenohSettings
 from modd_model import load_model
 
-SCEN = Path("/work/shared/scenarios")
-if not SCEN.exists():
-    SCEN = Path(__file__).resolve().parents[3] / "shared" / "scenarios"
-S1 = SCEN / "scenario1.modd"
+S1 = Path(__file__).resolve().parents[3] / "shared" / "scenarios" / "scenario1.modd"
 
 
 def test_keys() -> None:
