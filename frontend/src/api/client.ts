@@ -9,6 +9,7 @@
 import type { ModdModel } from "../core/model.gen";
 import { Http, type HttpOptions } from "./http";
 import type {
+  ArchiveFile, ArchiveSeries, DeployedDiff, Deployment, DynamicReply, DynamicRequest,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, User, ValidateResult, Version,
 } from "./types";
 
@@ -49,6 +50,37 @@ export function createApi(opts: HttpOptions) {
     // --- plan
     plan: (input: ModelInput, signal?: AbortSignal) =>
       http.request<PlanResult>("/api/plan", { method: "POST", json: input, signal }),
+
+    // --- deploy (operator)
+    deploy: (projectId: number, revision?: number) =>
+      http.request<Deployment>(`/api/projects/${projectId}/deployments`, { method: "POST", json: { revision: revision ?? null } }),
+    listDeployments: (projectId: number) => http.request<Deployment[]>(`/api/projects/${projectId}/deployments`),
+    deployedDiff: (projectId: number) => http.request<DeployedDiff>(`/api/projects/${projectId}/deployed-diff`),
+
+    // --- downloads: generated artefacts per role, as a zip
+    downloadUrl: (projectId: number, target: string) => http.url(`/api/projects/${projectId}/downloads/${target}`),
+    download: (projectId: number, target: string) =>
+      http.request<Blob>(`/api/projects/${projectId}/downloads/${target}`, { as: "blob" }),
+
+    // --- live (scientist): dynamic subscriptions; values come over the stream WebSocket
+    addDynamic: (drone: string, body: DynamicRequest) =>
+      http.request<DynamicReply>(`/api/drones/${drone}/subscriptions`, { method: "POST", json: body }),
+    cancelDynamic: (drone: string, subscriber: string) =>
+      http.request<DynamicReply>(`/api/drones/${drone}/subscriptions/${subscriber}`, { method: "DELETE" }),
+    /** ws(s):// URL of a drone's stream; the token goes in the query (browsers cannot set WebSocket headers). */
+    streamUrl: (drone: string, origin: string) => {
+      const base = (opts.baseUrl || origin).replace(/^http/, "ws");
+      return `${base}/api/drones/${drone}/stream?token=${encodeURIComponent(opts.token() ?? "")}`;
+    },
+
+    // --- archives
+    listArchives: (drone: string) => http.request<ArchiveFile[]>(`/api/drones/${drone}/archives`),
+    readArchive: (drone: string, file: string, topic: string, from?: number, to?: number) =>
+      http.request<ArchiveSeries>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}/series`, { query: { topic, from, to } }),
+    archiveUrl: (drone: string, file: string) => http.url(`/api/drones/${drone}/archives/${encodeURIComponent(file)}`),
+
+    // --- 3D scene (viser), served by the backend
+    scene: () => http.request<{ url: string }>("/api/scene"),
   };
 }
 

@@ -55,3 +55,57 @@ export interface PlanResult {
 }
 
 export type ModelInput = { model: ModdModel } | { text: string; format?: "modd" | "json" };
+
+export interface Deployment {
+  id: number;
+  project_id: number;
+  revision: number;
+  drone: string;
+  requested_by: string;
+  requested_at: string;
+  finished_at: string | null;
+  /** acked (the PubBroker took the config) or failed (`error` says why). */
+  status: string;
+  reply: Record<string, unknown> | null;
+  error: string | null;
+}
+
+export interface DeployedDiff {
+  drone: string;
+  head_revision: number;
+  deployed: Deployment | null;
+  same_project: boolean;
+  changes: Array<{ op: string; pointer: string; before?: unknown; after?: unknown }>;
+}
+
+export interface DynamicRequest {
+  topic: string;
+  period_s: string;
+  aggregation: string;
+  subscriber?: string;
+}
+
+/** The SubBroker's answer: ACCEPTED (with key), NOT_AVAILABLE (with reason), CANCELLED, ERROR, NO_REPLY. */
+export interface DynamicReply {
+  status: string;
+  reason?: string | null;
+  subscriber?: string | null;
+  key?: string | null;
+  stream?: string | null;
+  derived_from?: string | null;
+  factor?: number | null;
+}
+
+export interface ArchiveFile {
+  name: string;
+  size?: number;
+  modified?: string;
+  [key: string]: unknown;
+}
+
+export interface ArchiveSeries {
+  topic: string;
+  t: number[];
+  value: number[];
+  [key: string]: unknown;
+}

@@ -48,3 +48,13 @@ describe("modelToGraph", () => {
     expect(g.edges.map((e) => e.id)).toEqual(["link"]);
   });
 });
+
+describe("nextPosition", () => {
+  it("puts a new element below the lowest of its kind", async () => {
+    const { nextPosition, ROW_HEIGHT } = await import("./graph");
+    const m = scenario1();
+    m.layout = { nodes: { "sub:sub_4": { x: 900, y: 1000 } } };
+    expect(nextPosition(m, "subscriber")).toEqual({ x: 900, y: 1000 + ROW_HEIGHT });
+    expect(nextPosition(emptyModel(), "sensor")).toEqual(defaultPosition("sensor", 0));
+  });
+});

@@ -114,3 +114,14 @@ export const CONNECTABLE: Partial<Record<EdgeKind, [ElementKind, ElementKind]>> 
   publishes: ["publisher", "topic"],
   subscribes: ["topic", "subscriber"],
 };
+
+/**
+ * Where to put a new element of `kind`: in its column, one row below the
+ * lowest element of that kind already placed (saved or default position).
+ */
+export function nextPosition(model: ModdModel, kind: ElementKind): Position {
+  const same = modelToGraph(model).nodes.filter((n) => n.kind === kind);
+  if (same.length === 0) return defaultPosition(kind, 0);
+  const lowest = same.reduce((a, b) => (b.position.y > a.position.y ? b : a));
+  return { x: lowest.position.x, y: lowest.position.y + ROW_HEIGHT };
+}

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { canDeploy, canEdit, canEditEdge, viewsFor, type Role } from "./roles";
+import { canDeploy, canEdit, canEditEdge, deniedParts, viewsFor, type Role } from "./roles";
 import type { ElementKind } from "./ids";
 
 const KINDS: ElementKind[] = ["drone", "sensor", "topic", "pubBroker", "subBroker", "link", "publisher", "subscriber"];
@@ -35,5 +35,22 @@ describe("role permissions", () => {
   it("lists views for a user's roles", () => {
     expect(viewsFor(["admin"])).toEqual(["designer", "integrator", "scientist", "operator"]);
     expect(viewsFor(["scientist", "operator"])).toEqual(["scientist", "operator"]);
+  });
+});
+
+describe("deniedParts (the backend's save rule)", () => {
+  it("names the parts a role does not own", async () => {
+    const { scenario1 } = await import("./testing/scenario1");
+    const { rename, moveNodes } = await import("./ops");
+    const before = scenario1();
+    // Renaming a sensor changes the integrator's part and, by reference, the designer's and the scientist's.
+    const after = rename(before, "sensor:accelerometer", "imu");
+    expect(deniedParts("integrator", before, after)).toEqual(["/publishers", "/subscribers"]);
+    expect(deniedParts("admin", before, after)).toEqual([]);
+    const moved = moveNodes(before, { drone: { x: 1, y: 2 } });
+    expect(deniedParts("scientist", before, moved)).toEqual([]);
+    expect(deniedParts("operator", before, moved)).toEqual(["/layout"]);
+    const renamedDrone = rename(before, "drone", "auv");
+    expect(deniedParts("designer", before, renamedDrone)).toEqual(["/subscribers"]);
   });
 });

@@ -56,3 +56,49 @@ export const VIEW_TITLES: Record<ViewRole, string> = {
   scientist: "Scientist",
   operator: "Operator",
 };
+
+/**
+ * Top-level parts of a model and the role owning each, as the backend checks
+ * them on save (backend/src/modd_backend/roles.py): the drone without its
+ * sensors is the platform (designer), `/drone/sensors` the integrator's, the
+ * layout any editor's (null).
+ */
+export const PART_OWNERS: Record<string, Role | null> = {
+  "/schemaVersion": "designer",
+  "/drone": "designer",
+  "/drone/sensors": "integrator",
+  "/pubBroker": "designer",
+  "/subBroker": "designer",
+  "/link": "designer",
+  "/publishers": "designer",
+  "/subscribers": "scientist",
+  "/layout": null,
+};
+
+function parts(model: object): Map<string, string> {
+  const out = new Map<string, string>();
+  for (const [k, v] of Object.entries(model)) {
+    if (k === "drone" && v && typeof v === "object") {
+      const { sensors, ...platform } = v as Record<string, unknown>;
+      out.set("/drone", JSON.stringify(platform));
+      out.set("/drone/sensors", JSON.stringify(sensors));
+    } else {
+      out.set(`/${k}`, JSON.stringify(v));
+    }
+  }
+  return out;
+}
+
+/** The parts an edit changes that `role` may not change (empty: allowed). */
+export function deniedParts(role: Role, before: object, after: object): string[] {
+  if (role === "admin") return [];
+  const a = parts(before);
+  const b = parts(after);
+  const denied: string[] = [];
+  for (const part of new Set([...a.keys(), ...b.keys()])) {
+    if (a.get(part) === b.get(part)) continue;
+    const owner = part in PART_OWNERS ? PART_OWNERS[part] : "designer";
+    if (owner === null ? role === "operator" : owner !== role) denied.push(part);
+  }
+  return denied.sort();
+}

@@ -66,3 +66,18 @@ describe("workbench reducer", () => {
     expect(s.history.past).toHaveLength(0);
   });
 });
+
+describe("replaceModel", () => {
+  it("applies a model whose changes the role owns, refuses others", () => {
+    const s0 = initialState(scenario1(), "scientist");
+    const next = scenario1();
+    next.subscribers[0].periodS = "4.0";
+    const s1 = reduce(s0, { type: "replaceModel", model: next });
+    expect(currentModel(s1).subscribers[0].periodS).toBe("4.0");
+    const bad = scenario1();
+    bad.publishers[0].periodS = "0.1";
+    const s2 = reduce(s1, { type: "replaceModel", model: bad });
+    expect(s2.notice).toBe("the scientist view cannot change /publishers");
+    expect(currentModel(s2)).toBe(currentModel(s1));
+  });
+});

@@ -16,7 +16,7 @@ import {
 } from "./ops";
 import { copyElements, isEmptyFragment, pasteFragment, type Fragment } from "./clipboard";
 import { parseId, type ElementKind } from "./ids";
-import { canEdit, type Role } from "./roles";
+import { canEdit, deniedParts, type Role } from "./roles";
 
 export interface WorkbenchState {
   history: History<ModdModel>;
@@ -29,6 +29,8 @@ export interface WorkbenchState {
 
 export type Action =
   | { type: "load"; model: ModdModel }
+  /** Replace the whole model (text applied to the diagram): one undo step, only parts the role owns may change. */
+  | { type: "replaceModel"; model: ModdModel }
   | { type: "setRole"; role: Role }
   | { type: "select"; ids: string[] }
   | { type: "addSensor"; pos?: Position }
@@ -120,6 +122,11 @@ function edit(s: WorkbenchState, a: Action): WorkbenchState {
       const newId = renamed ? renamedId(a.id, a.value as string) : a.id;
       const select = s.selection.map((x) => (x === a.id ? newId : x));
       return commit(s, model, { select, coalesce: `field:${newId}:${a.path.join(".")}` });
+    }
+    case "replaceModel": {
+      const denied = deniedParts(s.role, m, a.model);
+      if (denied.length) return refuse(s, `the ${s.role} view cannot change ${denied.join(", ")}`);
+      return commit(s, a.model, { select: [] });
     }
     case "move":
       // Anyone may arrange the diagram: the layout is presentation, not model.

@@ -1,5 +1,5 @@
 import { describe, expect, it, vi } from "vitest";
-import { WebSocketSource, type SocketLike } from "./WebSocketSource";
+import { WebSocketSource, toSamples, type SocketLike } from "./WebSocketSource";
 import { RingBuffer } from "./RingBuffer";
 
 class FakeSocket implements SocketLike {
@@ -46,20 +46,33 @@ describe("WebSocketSource", () => {
     expect(src.state).toBe("open");
   });
 
-  it("delivers batches and keeps a bounded history", () => {
+  it("delivers values and keeps a bounded history", () => {
     const { sock, src } = setup(3);
     const got = vi.fn();
     src.subscribe("sub_1", got);
     sock.open();
-    sock.deliver({ type: "values", subscriber: "sub_1", values: [1, 2, 3, 4].map((i) => ({ t: i, value: i * 10, count: 8 })) });
-    sock.deliver({ type: "value", subscriber: "sub_1", t: 5, value: 50 });
-    sock.deliver({ type: "values", subscriber: "other", values: [{ t: 1, value: 1 }] });
+    for (let i = 1; i <= 4; i += 1) {
+      sock.deliver({ type: "value", subscriber: "sub_1", data: { value: i * 10, count: 8, start_ns: (i - 1) * 2e9, end_ns: i * 2e9 } });
+    }
+    sock.deliver({ type: "value", subscriber: "sub_1", data: { value: null, end_ns: 1e10 } });
+    sock.deliver({ type: "value", subscriber: "other", data: { value: 1, end_ns: 1 } });
     sock.deliver({ type: "bogus" });
     sock.onmessage?.({ data: "not json" });
-    expect(got).toHaveBeenCalledTimes(2);
-    expect(got.mock.calls[0][0][0]).toEqual({ t: 1, value: 10, count: 8 });
-    expect(src.history("sub_1").map((s) => s.t)).toEqual([3, 4, 5]);
-    expect(src.dropped("sub_1")).toBe(2);
+    expect(got).toHaveBeenCalledTimes(4);
+    expect(got.mock.calls[0][0][0]).toEqual({ t: 2, value: 10, count: 8, windowS: 2 });
+    expect(src.history("sub_1").map((s) => s.t)).toEqual([4, 6, 8]);
+    expect(src.dropped("sub_1")).toBe(1);
+  });
+
+  it("spreads ALL windows over the window and counts backend drops", () => {
+    expect(toSamples({ value: [1, 2, 3, 4], start_ns: 0, end_ns: 4e9 }).map((s) => s.t)).toEqual([1, 2, 3, 4]);
+    expect(toSamples({ value: true, end_ns: 1e9 })[0].value).toBe(1);
+    const { sock, src } = setup();
+    sock.open();
+    sock.deliver({ type: "dropped", count: 5 });
+    sock.deliver({ type: "error", message: "subscriber 'x y' is not an identifier" });
+    expect(src.droppedByBackend).toBe(5);
+    expect(src.lastError).toMatch(/identifier/);
   });
 
   it("reports link status and connection state", () => {
@@ -69,8 +82,11 @@ describe("WebSocketSource", () => {
     src.onLinkStatus(link);
     src.onStateChange((s) => states.push(s));
     sock.open();
-    sock.deliver({ type: "link", rtt_ms: 12.5, measured_bytes_per_s: 300, planned_bytes_per_s: 296, connected: true });
-    expect(link).toHaveBeenCalledWith({ rttMs: 12.5, measuredBytesPerS: 300, plannedBytesPerS: 296, lastFrameAgeS: null, connected: true });
+    sock.deliver({ type: "status", data: {
+      link: "connected", rtt_s: 0.0125, ip_bytes_in_per_s: 300, predicted_link_bytes_per_s: { drone_to_base: 296 },
+      time_ns: 5e9, last_data_ns: 4.5e9,
+    } });
+    expect(link).toHaveBeenCalledWith({ rttMs: 12.5, measuredBytesPerS: 300, plannedBytesPerS: 296, lastFrameAgeS: 0.5, connected: true, state: "connected" });
     src.close();
     expect(states).toEqual(["open", "closed"]);
   });

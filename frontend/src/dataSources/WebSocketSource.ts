@@ -1,13 +1,17 @@
 /**
- * DataSource over the backend's stream WebSocket (one socket per browser tab
- * and drone, multiplexing subscriptions).
+ * DataSource over the backend's stream WebSocket, /api/drones/<drone>/stream
+ * (backend/src/modd_backend/routers/streams.py): one socket per browser tab
+ * and drone, multiplexing subscriptions.
  *
  * Wire messages (JSON text frames):
- *   → {"op": "subscribe", "subscriber": NAME}   → {"op": "unsubscribe", "subscriber": NAME}
- *   ← {"type": "values", "subscriber": NAME, "values": [{"t": s, "value": x, "window_s"?, "count"?}]}
- *   ← {"type": "value", "subscriber": NAME, "t": s, "value": x}           (single value)
- *   ← {"type": "link", "rtt_ms", "measured_bytes_per_s", "planned_bytes_per_s", "last_frame_age_s", "connected"}
- * Unknown message types are ignored, so the backend can add some.
+ *   → {"op": "subscribe"|"unsubscribe", "subscriber": NAME}
+ *   ← {"type": "value", "subscriber": NAME, "data": DeliveredValue}
+ *        DeliveredValue (runtime/python/src/modd/subbroker/payload.py): value (number,
+ *        list for ALL, or null for an empty window), count, start_ns, end_ns, period_s…
+ *   ← {"type": "status", "data": SubBroker status}  (link, rtt_s, ip_bytes_in_per_s,
+ *        predicted_link_bytes_per_s.drone_to_base, last_data_ns, time_ns)
+ *   ← {"type": "dropped", "count": n}   the backend dropped n messages for a slow page
+ *   ← {"type": "error", "message": …}; subscribed, unsubscribed, pong: ignored
  * The socket factory is injected (tests pass a fake).
  */
 import { RingBuffer } from "./RingBuffer";
@@ -34,14 +38,49 @@ const OPEN = 1;
 
 type Raw = Record<string, unknown>;
 
-function toSample(v: Raw): Sample | null {
-  const t = Number(v.t);
-  const value = Number(v.value);
-  if (!Number.isFinite(t) || !Number.isFinite(value)) return null;
-  const s: Sample = { t, value };
-  if (v.window_s !== undefined) s.windowS = Number(v.window_s);
-  if (v.count !== undefined) s.count = Number(v.count);
-  return s;
+/** Samples of one delivered window; a list (ALL) gives one sample per raw value. Empty windows give none. */
+export function toSamples(d: Raw): Sample[] {
+  const endNs = Number(d.end_ns ?? d.t_ns ?? NaN);
+  const startNs = Number(d.start_ns ?? NaN);
+  const t = Number.isFinite(endNs) ? endNs / 1e9 : Number(d.t);
+  if (!Number.isFinite(t)) return [];
+  const windowS = Number.isFinite(startNs) && Number.isFinite(endNs) ? (endNs - startNs) / 1e9 : undefined;
+  const count = typeof d.count === "number" ? d.count : undefined;
+  const one = (value: unknown, at: number): Sample | null => {
+    const v = typeof value === "boolean" ? Number(value) : Number(value);
+    if (value === null || value === undefined || !Number.isFinite(v)) return null;
+    const s: Sample = { t: at, value: v };
+    if (windowS !== undefined) s.windowS = windowS;
+    if (count !== undefined) s.count = count;
+    return s;
+  };
+  if (Array.isArray(d.value)) {
+    const n = d.value.length;
+    const w = windowS ?? 0;
+    return d.value.map((v, i) => one(v, t - w + (w * (i + 1)) / n)).filter((s): s is Sample => s !== null);
+  }
+  const s = one(d.value, t);
+  return s ? [s] : [];
+}
+
+function num(x: unknown): number | null {
+  return x === null || x === undefined || !Number.isFinite(Number(x)) ? null : Number(x);
+}
+
+/** LinkStatus from the SubBroker's status document. */
+export function toLinkStatus(d: Raw): LinkStatus {
+  const predicted = d.predicted_link_bytes_per_s as Raw | null | undefined;
+  const rtt = num(d.rtt_s);
+  const last = num(d.last_data_ns);
+  const now = num(d.time_ns);
+  return {
+    rttMs: rtt === null ? null : rtt * 1000,
+    measuredBytesPerS: num(d.ip_bytes_in_per_s ?? d.bytes_in_per_s),
+    plannedBytesPerS: predicted ? num(predicted.drone_to_base) : null,
+    lastFrameAgeS: last !== null && now !== null ? (now - last) / 1e9 : null,
+    connected: d.link === "connected" || d.link === "running" || d.link === "up",
+    state: typeof d.link === "string" ? d.link : undefined,
+  };
 }
 
 export class WebSocketSource implements DataSource {
@@ -90,26 +129,26 @@ export class WebSocketSource implements DataSource {
     } catch {
       return;
     }
-    if (msg.type === "values" || msg.type === "value") {
+    if (msg.type === "value") {
       const channel = String(msg.subscriber ?? "");
-      const raw = msg.type === "values" ? (msg.values as Raw[] | undefined) ?? [] : [msg];
-      const batch = raw.map(toSample).filter((s): s is Sample => s !== null);
+      const batch = toSamples((msg.data ?? {}) as Raw);
       if (!channel || batch.length === 0) return;
       const b = this.buffer(channel);
       batch.forEach((s) => b.push(s));
       this.listeners.get(channel)?.forEach((l) => l(batch));
-    } else if (msg.type === "link") {
-      const num = (x: unknown) => (x === null || x === undefined ? null : Number(x));
-      const status: LinkStatus = {
-        rttMs: num(msg.rtt_ms),
-        measuredBytesPerS: num(msg.measured_bytes_per_s),
-        plannedBytesPerS: num(msg.planned_bytes_per_s),
-        lastFrameAgeS: num(msg.last_frame_age_s),
-        connected: Boolean(msg.connected),
-      };
+    } else if (msg.type === "status") {
+      const status = toLinkStatus((msg.data ?? {}) as Raw);
       this.linkListeners.forEach((l) => l(status));
+    } else if (msg.type === "dropped") {
+      this.droppedByBackend += Number(msg.count) || 0;
+    } else if (msg.type === "error") {
+      this.lastError = String(msg.message ?? "error");
     }
   }
+
+  /** Messages the backend dropped because this page was slow. */
+  droppedByBackend = 0;
+  lastError: string | null = null;
 
   subscribe(channel: string, listener: ChannelListener): () => void {
     let set = this.listeners.get(channel);

@@ -31,6 +31,8 @@ export interface LinkStatus {
   /** Seconds since the last frame from the drone. */
   lastFrameAgeS: number | null;
   connected: boolean;
+  /** The SubBroker's word for the link state, as sent. */
+  state?: string;
 }
 
 export type ConnectionState = "connecting" | "open" | "closed" | "error";

@@ -1,0 +1,65 @@
+/** Choose a project, create an empty one, or import a .modd file. */
+import { useEffect, useState } from "react";
+import type { Project } from "../api/types";
+import { emptyModel } from "../core/templates";
+import { useServices } from "./services";
+
+export function ProjectsPage({ onOpen, user, onLogout }: { onOpen: (p: Project) => void; user: string; onLogout: () => void }) {
+  const { api } = useServices();
+  const [projects, setProjects] = useState<Project[] | null>(null);
+  const [error, setError] = useState<string | null>(null);
+  const [name, setName] = useState("");
+  const [drone, setDrone] = useState("usv");
+
+  useEffect(() => {
+    api.listProjects().then(setProjects, (e: Error) => setError(e.message));
+  }, [api]);
+
+  const create = async (e: React.FormEvent) => {
+    e.preventDefault();
+    setError(null);
+    try {
+      onOpen(await api.createProject(name, emptyModel(drone), "empty project"));
+    } catch (err) {
+      setError((err as Error).message);
+    }
+  };
+
+  const importFile = async (file: File) => {
+    setError(null);
+    try {
+      const base = file.name.replace(/\.(modd|json)$/, "").replace(/[^A-Za-z0-9_. -]/g, "_");
+      onOpen(await api.importProject(base, await file.text(), file.name.endsWith(".json") ? "json" : "modd"));
+    } catch (err) {
+      setError((err as Error).message);
+    }
+  };
+
+  return (
+    <main className="projects">
+      <header className="projects-head"><h1>MoDD projects</h1><span>{user}</span><button onClick={onLogout}>Log out</button></header>
+      {error && <p className="error" role="alert">{error}</p>}
+      {projects === null && !error && <p role="status">Loading projects…</p>}
+      {projects && (
+        <ul className="project-list" aria-label="Projects">
+          {projects.length === 0 && <li className="muted">No project yet.</li>}
+          {projects.map((p) => (
+            <li key={p.id}>
+              <button className="link" onClick={() => onOpen(p)}>{p.name}</button>
+              <span className="muted"> revision {p.head_revision} · by {p.created_by}</span>
+            </li>
+          ))}
+        </ul>
+      )}
+      <form className="new-project" onSubmit={create} aria-label="New project">
+        <h2>New empty project</h2>
+        <label>Project name<input value={name} onChange={(e) => setName(e.target.value)} required pattern="[A-Za-z0-9_][A-Za-z0-9_. \-]*" /></label>
+        <label>Drone name<input value={drone} onChange={(e) => setDrone(e.target.value)} required pattern="[A-Za-z_][A-Za-z0-9_]*" /></label>
+        <button type="submit">Create</button>
+      </form>
+      <label className="import">Import a .modd or JSON file
+        <input type="file" accept=".modd,.json" onChange={(e) => { const f = e.target.files?.[0]; if (f) void importFile(f); }} />
+      </label>
+    </main>
+  );
+}

@@ -1,0 +1,41 @@
+/**
+ * Keeps the live plan in step with the edited model: after `delayMs` without
+ * edits, posts the model to the backend's planner (aborting a request still
+ * running) and stores the plan and its diagnostics. Layout-only edits do not
+ * re-plan.
+ */
+import { useEffect, useRef } from "react";
+import type { ModdModel } from "../core/model.gen";
+import { useEditorStore, useModel } from "../editor/useEditor";
+import { useServices } from "./services";
+
+function semantic(m: ModdModel): string {
+  const { layout: _layout, ...rest } = m;
+  void _layout;
+  return JSON.stringify(rest);
+}
+
+export function useLivePlan(delayMs = 400): void {
+  const { api } = useServices();
+  const store = useEditorStore();
+  const model = useModel();
+  const key = semantic(model);
+  const last = useRef<string | null>(null);
+
+  useEffect(() => {
+    if (key === last.current) return;
+    const ctl = new AbortController();
+    const timer = window.setTimeout(async () => {
+      store.patch((s) => ({ plan: { ...s.plan, busy: true } }));
+      try {
+        const result = await api.plan({ model: JSON.parse(key) as ModdModel }, ctl.signal);
+        last.current = key;
+        store.patch({ plan: { busy: false, result, error: null } });
+      } catch (e) {
+        if ((e as Error).name === "AbortError") return;
+        store.patch((s) => ({ plan: { busy: false, result: s.plan.result, error: (e as Error).message } }));
+      }
+    }, delayMs);
+    return () => { window.clearTimeout(timer); ctl.abort(); };
+  }, [key, api, store, delayMs]);
+}

@@ -1,0 +1,86 @@
+/**
+ * The diagram: xyflow canvas over the model. Positions move locally while
+ * dragging and are written to the model's layout on drop (one undo step);
+ * connections and selection go through the store; deletion and clipboard go
+ * through the keyboard shortcuts (xyflow's own delete key is off, so the
+ * model decides what can be removed).
+ */
+import { useCallback, useEffect, useState } from "react";
+import {
+  Background, Controls, MiniMap, ReactFlow, applyNodeChanges,
+  type Connection, type Edge, type NodeChange, type OnSelectionChangeParams,
+} from "@xyflow/react";
+import { nodeTypes } from "./nodes/nodeTypes";
+import type { ElementNode } from "./nodes/types";
+import { useFlowElements } from "./useFlowElements";
+import { useEditorStore, useModel, useRole } from "./useEditor";
+import { useKeyboardShortcuts } from "./useKeyboardShortcuts";
+import { canConnect } from "../core/ops";
+import { canEditEdge } from "../core/roles";
+
+const MINIMAP_COLORS: Record<string, string> = {
+  drone: "#0f766e", sensor: "#7c3aed", topic: "#2563eb", publisher: "#b45309", subscriber: "#be185d",
+  pubBroker: "#475569", subBroker: "#475569",
+};
+
+export function Canvas() {
+  const store = useEditorStore();
+  const model = useModel();
+  const role = useRole();
+  const derived = useFlowElements();
+  const [nodes, setNodes] = useState<ElementNode[]>(derived.nodes);
+  useKeyboardShortcuts();
+
+  useEffect(() => {
+    // Keep xyflow's measurements across re-derivations of the nodes.
+    setNodes((prev) => {
+      const byId = new Map(prev.map((n) => [n.id, n]));
+      return derived.nodes.map((n) => ({ ...n, measured: byId.get(n.id)?.measured }));
+    });
+  }, [derived.nodes]);
+
+  const onNodesChange = useCallback((changes: NodeChange<ElementNode>[]) => {
+    setNodes((ns) => applyNodeChanges(changes.filter((c) => c.type !== "remove"), ns));
+  }, []);
+
+  const onNodeDragStop = useCallback((_e: unknown, _n: ElementNode, dragged: ElementNode[]) => {
+    store.dispatch({ type: "move", positions: Object.fromEntries(dragged.map((n) => [n.id, n.position])) });
+  }, [store]);
+
+  const onSelectionChange = useCallback(({ nodes: ns, edges: es }: OnSelectionChangeParams) => {
+    store.dispatch({ type: "select", ids: [...ns.map((n) => n.id), ...es.map((e) => e.id)] });
+  }, [store]);
+
+  const onConnect = useCallback((c: Connection) => {
+    if (c.source && c.target) store.dispatch({ type: "connect", source: c.source, target: c.target });
+  }, [store]);
+
+  const isValidConnection = useCallback((c: Connection | Edge) => {
+    if (!c.source || !c.target) return false;
+    const kind = c.source.startsWith("pub:") ? "publishes" : "subscribes";
+    return canEditEdge(role, kind) && canConnect(model, c.source, c.target);
+  }, [model, role]);
+
+  return (
+    <div className="canvas" aria-label="Model diagram">
+      <ReactFlow<ElementNode>
+        nodes={nodes}
+        edges={derived.edges}
+        nodeTypes={nodeTypes}
+        onNodesChange={onNodesChange}
+        onNodeDragStop={onNodeDragStop}
+        onSelectionChange={onSelectionChange}
+        onConnect={onConnect}
+        isValidConnection={isValidConnection}
+        deleteKeyCode={null}
+        fitView
+        minZoom={0.2}
+        proOptions={{ hideAttribution: true }}
+      >
+        <Background gap={20} size={1} />
+        <Controls showInteractive={false} />
+        <MiniMap pannable zoomable nodeColor={(n) => MINIMAP_COLORS[n.type ?? ""] ?? "#64748b"} ariaLabel="Minimap" />
+      </ReactFlow>
+    </div>
+  );
+}

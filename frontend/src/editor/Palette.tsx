@@ -1,0 +1,62 @@
+/**
+ * The palette: create elements (what the view's role may create) and the
+ * diagram commands (undo, redo, delete, copy, paste, auto-layout, zoom to fit).
+ */
+import { useReactFlow } from "@xyflow/react";
+import { canEdit } from "../core/roles";
+import { canRedo, canUndo } from "../core/history";
+import { nextPosition } from "../core/graph";
+import { parseId } from "../core/ids";
+import { currentModel } from "../core/workbench";
+import { useEditor, useEditorStore, useRole, useSelection } from "./useEditor";
+import { useAutoLayout } from "./useAutoLayout";
+import { removeSelection } from "./selectionActions";
+import { QuickSubscribe } from "./QuickSubscribe";
+
+/** The sensor a new variable goes to: the selected sensor, or the sensor of the selected topic, or the first. */
+function targetSensor(selection: string[], sensors: string[]): string | undefined {
+  for (const id of selection) {
+    const p = parseId(id);
+    if (p?.kind === "sensor" || p?.kind === "topic") return p.sensor;
+  }
+  return sensors[0];
+}
+
+export function Palette() {
+  const store = useEditorStore();
+  const role = useRole();
+  const selection = useSelection();
+  const history = useEditor((s) => s.wb.history);
+  const hasClipboard = useEditor((s) => s.wb.clipboard !== null);
+  const sensors = useEditor((s) => currentModel(s.wb).drone.sensors.map((x) => x.name).join("\n"));
+  const flow = useReactFlow();
+  const layout = useAutoLayout();
+  const model = () => currentModel(store.getState().wb);
+  const sensor = targetSensor(selection, sensors ? sensors.split("\n") : []);
+
+  return (
+    <nav className="palette" aria-label="Palette">
+      <h2>Create</h2>
+      <button disabled={!canEdit(role, "sensor")} onClick={() => store.dispatch({ type: "addSensor", pos: nextPosition(model(), "sensor") })}>+ Sensor</button>
+      <button
+        disabled={!canEdit(role, "topic") || !sensor}
+        title={sensor ? `adds a measured variable to ${sensor}` : "add a sensor first"}
+        onClick={() => sensor && store.dispatch({ type: "addVariable", sensor, pos: nextPosition(model(), "topic") })}
+      >+ Variable</button>
+      <button disabled={!canEdit(role, "publisher")} onClick={() => store.dispatch({ type: "addPublisher", pos: nextPosition(model(), "publisher") })}>+ Publisher</button>
+      <button disabled={!canEdit(role, "subscriber")} onClick={() => store.dispatch({ type: "addSubscriber", pos: nextPosition(model(), "subscriber") })}>+ Subscriber</button>
+      {canEdit(role, "subscriber") && <QuickSubscribe />}
+      <h2>Edit</h2>
+      <div className="palette-grid">
+        <button aria-label="Undo" title="Undo (Ctrl+Z)" disabled={!canUndo(history)} onClick={() => store.dispatch({ type: "undo" })}>↶ Undo</button>
+        <button aria-label="Redo" title="Redo (Ctrl+Shift+Z)" disabled={!canRedo(history)} onClick={() => store.dispatch({ type: "redo" })}>↷ Redo</button>
+        <button aria-label="Copy" title="Copy (Ctrl+C)" disabled={!selection.length} onClick={() => store.dispatch({ type: "copy", ids: selection })}>Copy</button>
+        <button aria-label="Paste" title="Paste (Ctrl+V)" disabled={!hasClipboard} onClick={() => store.dispatch({ type: "paste" })}>Paste</button>
+        <button aria-label="Delete" title="Delete (Del)" disabled={!selection.length} onClick={() => removeSelection(store)}>Delete</button>
+      </div>
+      <h2>View</h2>
+      <button onClick={() => void layout.run()} disabled={layout.busy}>{layout.busy ? "Laying out…" : "Auto-layout"}</button>
+      <button onClick={() => void flow.fitView({ padding: 0.1, duration: 200 })}>Zoom to fit</button>
+    </nav>
+  );
+}

@@ -1,0 +1,73 @@
+/**
+ * The editor's one store: the core workbench state (model history,
+ * selection, role) plus what the server said (project, saved revision, live
+ * plan and its diagnostics). Components read it through narrow selector hooks
+ * (useEditor) and change it through `dispatch` (model edits, via the core
+ * reducer) or `patch` (server results).
+ */
+import type { ModdModel } from "../core/model.gen";
+import { currentModel, initialState, reduce, type Action, type WorkbenchState } from "../core/workbench";
+import type { Role } from "../core/roles";
+import type { PlanResult } from "../api/types";
+
+export type PanelId = "plan" | "text" | "deploy" | "monitor" | "scene3d" | "archives" | "downloads";
+
+export interface EditorState {
+  wb: WorkbenchState;
+  project: { id: number; name: string } | null;
+  savedRevision: number;
+  /** The model as last loaded or saved (same object as a history entry, so `dirty` is a reference test). */
+  savedModel: ModdModel | null;
+  save: { busy: boolean; error: string | null; conflictRevision: number | null };
+  plan: { busy: boolean; result: PlanResult | null; error: string | null };
+  panel: PanelId;
+}
+
+export interface EditorStore {
+  getState(): EditorState;
+  dispatch(action: Action): void;
+  patch(partial: Partial<EditorState> | ((s: EditorState) => Partial<EditorState>)): void;
+  subscribe(listener: () => void): () => void;
+}
+
+export function createEditorStore(model: ModdModel, role: Role): EditorStore {
+  let state: EditorState = {
+    wb: initialState(model, role),
+    project: null,
+    savedRevision: 0,
+    savedModel: model,
+    save: { busy: false, error: null, conflictRevision: null },
+    plan: { busy: false, result: null, error: null },
+    panel: "plan",
+  };
+  const listeners = new Set<() => void>();
+  const emit = () => listeners.forEach((l) => l());
+  return {
+    getState: () => state,
+    dispatch(action) {
+      const wb = reduce(state.wb, action);
+      if (wb !== state.wb) {
+        state = { ...state, wb };
+        emit();
+      }
+    },
+    patch(partial) {
+      const p = typeof partial === "function" ? partial(state) : partial;
+      state = { ...state, ...p };
+      emit();
+    },
+    subscribe(l) {
+      listeners.add(l);
+      return () => listeners.delete(l);
+    },
+  };
+}
+
+/** Loads a saved revision: resets the history and marks it saved. */
+export function loadRevision(store: EditorStore, project: { id: number; name: string }, revision: number, model: ModdModel): void {
+  store.dispatch({ type: "load", model });
+  const s = store.getState();
+  store.patch({ project, savedRevision: revision, savedModel: currentModel(s.wb), save: { busy: false, error: null, conflictRevision: null } });
+}
+
+export const isDirty = (s: EditorState): boolean => currentModel(s.wb) !== s.savedModel;

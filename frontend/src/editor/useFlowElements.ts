@@ -1,0 +1,55 @@
+/**
+ * The xyflow nodes and edges of the current model: core's graph mapping plus
+ * markers (diagnostics, plan), selection and read-only state for the role.
+ */
+import { useMemo } from "react";
+import { MarkerType, type Edge } from "@xyflow/react";
+import { modelToGraph } from "../core/graph";
+import { nodeMarkers } from "../core/markers";
+import { canEdit, canEditEdge } from "../core/roles";
+import { localDiagnostics } from "../core/diagnostics";
+import { MODD_SCHEMA } from "../core/schema";
+import { useEditor, useModel, useRole, useSelection } from "./useEditor";
+import type { ElementNode } from "./nodes/types";
+
+export function useDiagnostics() {
+  const model = useModel();
+  const backend = useEditor((s) => s.plan.result?.diagnostics);
+  const local = useMemo(() => localDiagnostics(model, MODD_SCHEMA), [model]);
+  return useMemo(() => [...local, ...(backend ?? []).map((d) => ({ ...d, source: "backend" }))], [local, backend]);
+}
+
+export function useFlowElements(): { nodes: ElementNode[]; edges: Edge[] } {
+  const model = useModel();
+  const role = useRole();
+  const selection = useSelection();
+  const plan = useEditor((s) => s.plan.result?.plan ?? null);
+  const diagnostics = useDiagnostics();
+  const graph = useMemo(() => modelToGraph(model), [model]);
+  const markers = useMemo(() => nodeMarkers(model, diagnostics, plan), [model, diagnostics, plan]);
+  return useMemo(() => {
+    const selected = new Set(selection);
+    const nodes: ElementNode[] = graph.nodes.map((n) => ({
+      id: n.id,
+      type: n.kind,
+      position: n.position,
+      selected: selected.has(n.id),
+      deletable: false,
+      data: { kind: n.kind, label: n.label, detail: n.detail, markers: markers.get(n.id), readOnly: !canEdit(role, n.kind) },
+    }));
+    const edges: Edge[] = graph.edges.map((e) => ({
+      id: e.id,
+      source: e.source,
+      target: e.target,
+      className: `edge-${e.kind}`,
+      selected: selected.has(e.id),
+      selectable: e.kind === "link" || canEditEdge(role, e.kind),
+      deletable: false,
+      animated: e.kind === "link",
+      label: e.kind === "link" ? "link" : undefined,
+      markerEnd: e.kind === "publishes" || e.kind === "subscribes" ? { type: MarkerType.ArrowClosed } : undefined,
+      data: { kind: e.kind },
+    }));
+    return { nodes, edges };
+  }, [graph, markers, selection, role]);
+}

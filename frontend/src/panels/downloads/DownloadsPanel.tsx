@@ -1,0 +1,67 @@
+/**
+ * Generated artefacts per role, as zips from the backend's generators:
+ * driver stubs (integrator), broker configs (operator), subscriber stubs
+ * (scientist). Also the model itself as .modd or JSON.
+ */
+import { useState } from "react";
+import { useEditor } from "../../editor/useEditor";
+import { useServices } from "../../app/services";
+
+const TARGETS = [
+  { target: "integrator", title: "Driver stubs (C++)", who: "Sensor integrator" },
+  { target: "scientist", title: "Subscriber stubs (Python, C++)", who: "Scientist" },
+  { target: "operator", title: "Broker configurations", who: "Operator" },
+];
+
+function saveBlob(blob: Blob, name: string) {
+  const url = URL.createObjectURL(blob);
+  const a = document.createElement("a");
+  a.href = url;
+  a.download = name;
+  a.click();
+  setTimeout(() => URL.revokeObjectURL(url), 1000);
+}
+
+export default function DownloadsPanel() {
+  const { api } = useServices();
+  const project = useEditor((s) => s.project);
+  const revision = useEditor((s) => s.savedRevision);
+  const [status, setStatus] = useState<Record<string, string>>({});
+  if (!project) return <div className="panel-body">No project.</div>;
+
+  const get = async (target: string, name: string, fetcher: () => Promise<Blob | string>) => {
+    setStatus((s) => ({ ...s, [target]: "downloading…" }));
+    try {
+      const body = await fetcher();
+      saveBlob(typeof body === "string" ? new Blob([body], { type: "text/plain" }) : body, name);
+      setStatus((s) => ({ ...s, [target]: "done" }));
+    } catch (e) {
+      setStatus((s) => ({ ...s, [target]: (e as Error).message }));
+    }
+  };
+
+  return (
+    <div className="panel-body downloads-panel">
+      <p className="muted">Generated from the saved revision {revision}; save first to include unsaved edits.</p>
+      <ul className="download-list">
+        {TARGETS.map((t) => (
+          <li key={t.target}>
+            <button onClick={() => void get(t.target, `${project.name}-r${revision}-${t.target}.zip`, () => api.download(project.id, t.target))}>
+              Download {t.title}
+            </button>
+            <span className="muted"> for the {t.who}</span>
+            {status[t.target] && <span role="status"> — {status[t.target]}</span>}
+          </li>
+        ))}
+        <li>
+          <button onClick={() => void get("modd", `${project.name}-r${revision}.modd`, () => api.exportModel(project.id, "modd"))}>Download the model (.modd)</button>
+          {status.modd && <span role="status"> — {status.modd}</span>}
+        </li>
+        <li>
+          <button onClick={() => void get("json", `${project.name}-r${revision}.json`, () => api.exportModel(project.id, "json"))}>Download the model (JSON, with layout)</button>
+          {status.json && <span role="status"> — {status.json}</span>}
+        </li>
+      </ul>
+    </div>
+  );
+}

@@ -1,0 +1,24 @@
+/**
+ * The dock's panels, loaded lazily: each is its own chunk, fetched when first
+ * shown, and rendered inside a PanelBoundary.
+ */
+import { lazy, type ComponentType, type LazyExoticComponent } from "react";
+import type { PanelId } from "../editor/store";
+
+export interface PanelInfo {
+  id: PanelId;
+  title: string;
+  component: LazyExoticComponent<ComponentType>;
+}
+
+export const PANELS: PanelInfo[] = [
+  { id: "plan", title: "Plan", component: lazy(() => import("./plan/PlanPanel")) },
+  { id: "text", title: "Text", component: lazy(() => import("./text/TextPanel")) },
+  { id: "downloads", title: "Downloads", component: lazy(() => import("./downloads/DownloadsPanel")) },
+  { id: "deploy", title: "Deploy", component: lazy(() => import("./deploy/DeployPanel")) },
+  { id: "monitor", title: "Monitor", component: lazy(() => import("./monitor/MonitorPanel")) },
+  { id: "scene3d", title: "3D", component: lazy(() => import("./scene3d/ScenePanel")) },
+  { id: "archives", title: "Archives", component: lazy(() => import("./archives/ArchivesPanel")) },
+];
+
+export const InspectorPanel = lazy(() => import("./inspector/InspectorPanel"));
