@@ -136,11 +136,14 @@ def start_pubbroker(tmp: Path, model_path: Path, link_port: int, ingress_port: i
 
 
 def subbroker_config(tmp: Path, model_path: Path, link_port: int, zenoh_port: int,
-                     tcp: bool = False, tag: str = "sb", **link: Any) -> Path:
+                     tcp: bool = False, tag: str = "sb", state_dir: Path | None = None,
+                     **link: Any) -> Path:
     link_lines = "\n".join(f"{k} = {json.dumps(v)}" for k, v in link.items())
+    state = f"state_dir = {json.dumps(str(state_dir))}" if state_dir else ""
     path = tmp / f"{tag}.toml"
     path.write_text(f"""
 model = {json.dumps(str(model_path))}
+{state}
 [link]
 endpoint = "127.0.0.1:{link_port}"
 key = "env:MODD_LINK_KEY"

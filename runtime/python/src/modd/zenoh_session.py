@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 #: Where a SubBroker listens by default, and where clients connect by default.
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 MODES = ("peer", "client", "router")
+RECONNECT = "{period_init_ms: 100, period_max_ms: 1000, period_increase_factor: 2}"
 
 
 @dataclass(frozen=True)
@@ -54,6 +55,8 @@ class ZenohSettings:
             out["listen/endpoints"] = json.dumps(list(self.listen))
         if self.connect:
             out["connect/endpoints"] = json.dumps(list(self.connect))
+            # come back within a second when the other side restarts
+            out["connect/retry"] = RECONNECT
         out.update(self.extra)
         return out
 
