@@ -175,3 +175,21 @@ def test_websocket_needs_a_token(live: TestClient) -> None:
             live.websocket_connect("/api/drones/usv/stream?token=bad") as ws:
         ws.receive_json()
     assert exc.value.code == 4401
+
+
+def test_archive_of_the_running_pubbroker(live: TestClient, people: dict[str, Headers]) -> None:
+    """The PubBroker's own MCAP file, read while it is being written."""
+    h = people["scientist"]
+    deadline = time.monotonic() + 10
+    while True:
+        files = live.get("/api/drones/usv/archives", headers=h).json()
+        counts = {t["topic"]: t["messages"] for f in files for t in f["topics"]}
+        if counts.get("usv.accelerometer.accel_z", 0) > 5:
+            break
+        assert time.monotonic() < deadline, files
+        time.sleep(0.2)
+    name = files[0]["name"]
+    series = live.get(f"/api/drones/usv/archives/{name}/series", headers=h,
+                      params={"topic": "usv.accelerometer.accel_z"}).json()
+    assert series["total"] > 5
+    assert all(-9 <= v <= 9 for _t, v in series["points"])  # the publisher's range

@@ -19,7 +19,7 @@ from .accounts import ensure_first_admin
 from .db import Store
 from .deps import AppState
 from .planning import preload_milp
-from .routers import auth, deploy, models, plan, projects, streams, users
+from .routers import archives, auth, deploy, models, plan, projects, streams, users
 from .settings import Settings
 from .spa import mount_frontend
 from .zbridge import ZenohBridge
@@ -32,6 +32,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     plan.router,
     deploy.router,
     streams.router,
+    archives.router,
 )
 
 

@@ -1,0 +1,93 @@
+"""A drone's on-board archives: list the MCAP files, read a time range of a
+topic (reduced for plotting), export it as CSV, download a file. Any signed-in
+user may read; paths are confined to ``<archive_dir>/<drone>/``."""
+
+from __future__ import annotations
+
+import csv
+import io
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Path, Query
+from fastapi.responses import FileResponse, Response
+from pydantic import BaseModel
+
+from ..archives import archive_path, file_info, list_files, read_topic, reduce_minmax
+from ..deps import StateDep, UserDep
+from ..schemas import Responses
+
+router = APIRouter(prefix="/api/drones/{drone}/archives", tags=["archives"])
+Drone = Annotated[str, Path(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64)]
+Name = Annotated[str, Path(max_length=255)]
+Topic = Annotated[str, Query(max_length=200)]
+Nanos = Annotated[int | None, Query(ge=0, le=2**63 - 1)]
+NOT_FOUND: Responses = {404: {"description": "no such archive file"}}
+
+
+class TopicCount(BaseModel):
+    topic: str
+    messages: int
+
+
+class ArchiveOut(BaseModel):
+    """``complete`` is false for a file still being written or cut short."""
+
+    name: str
+    size: int
+    complete: bool
+    start_ns: int | None
+    end_ns: int | None
+    topics: list[TopicCount]
+
+
+class SeriesOut(BaseModel):
+    """``points`` are [log time ns, value]; ``total`` counts the samples in
+    the range before the min/max reduction to ``max_points``."""
+
+    topic: str
+    total: int
+    reduced: bool
+    points: list[tuple[int, Any]]
+
+
+@router.get("")
+def list_archives(drone: Drone, state: StateDep, _user: UserDep) -> list[ArchiveOut]:
+    root = state.settings.effective_archive_dir
+    return [ArchiveOut.model_validate(file_info(p).to_json()) for p in list_files(root, drone)]
+
+
+@router.get("/{name}/series", responses=NOT_FOUND)
+def read_series(
+    drone: Drone, name: Name, topic: Topic, state: StateDep, _user: UserDep,
+    start_ns: Nanos = None, end_ns: Nanos = None,
+    max_points: Annotated[int, Query(ge=2, le=100_000)] = 2000,
+) -> SeriesOut:
+    path = archive_path(state.settings.effective_archive_dir, drone, name)
+    samples = read_topic(path, topic, start_ns, end_ns)
+    points = reduce_minmax(samples, max_points)
+    return SeriesOut(topic=topic, total=len(samples), reduced=len(points) < len(samples),
+                     points=points)
+
+
+@router.get("/{name}/csv", responses={**NOT_FOUND, 200: {"content": {"text/csv": {}}}})
+def export_csv(
+    drone: Drone, name: Name, topic: Topic, state: StateDep, _user: UserDep,
+    start_ns: Nanos = None, end_ns: Nanos = None,
+) -> Response:
+    """Every sample of the range, unreduced: ``log_time_ns,topic,value``."""
+    path = archive_path(state.settings.effective_archive_dir, drone, name)
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["log_time_ns", "topic", "value"])
+    for t, v in read_topic(path, topic, start_ns, end_ns):
+        writer.writerow([t, topic, v])
+    stem = f"{name.removesuffix('.mcap')}-{topic}.csv"
+    return Response(out.getvalue(), media_type="text/csv",
+                    headers={"Content-Disposition": f'attachment; filename="{stem}"'})
+
+
+@router.get("/{name}", response_class=FileResponse,
+            responses={**NOT_FOUND, 200: {"content": {"application/octet-stream": {}}}})
+def download(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> FileResponse:
+    path = archive_path(state.settings.effective_archive_dir, drone, name)
+    return FileResponse(path, media_type="application/octet-stream", filename=path.name)
