@@ -1,0 +1,96 @@
+"""Round trips, sizes and malformed input of the Python link codec."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from modd.link import codec
+from modd.link.frames import (
+    Aggregation,
+    Config,
+    ConfigAck,
+    Data,
+    Ping,
+    ProtocolError,
+    Status,
+    StreamSpec,
+    TopicSpec,
+    Value,
+    ValueType,
+    value_kind,
+)
+from modd.link.plan import config_from_plan
+
+S1_KINDS = [value_kind(ValueType.FLOAT32, a) for a in
+            (Aggregation.AVERAGE, Aggregation.AVERAGE, Aggregation.MIN, Aggregation.MAX)]
+
+
+def test_scenario_frame_sizes() -> None:
+    d = Data(False, 0, 0, 1, [Value(True, 1.0, 0, 6), Value(True, 1.0, 0, 7),
+                              Value(True, 1.0), Value(True, 1.0)])
+    assert len(codec.encode_data(d, S1_KINDS)) == 21
+    k2 = [value_kind(ValueType.FLOAT32, Aggregation.MIN)] * 19
+    d2 = Data(False, 0, 0, 1, [Value(True, 1.0)] * 19)
+    assert len(codec.encode_data(d2, k2)) == 79
+
+
+@given(st.lists(st.integers(0, 2**64 - 1), max_size=30), st.integers(1, 255))
+def test_status_and_ack_round_trip(counters: list[int], cid: int) -> None:
+    for m in (Status(tuple(counters)), ConfigAck(cid, 0, 2**63)):
+        (raw,) = codec.FrameSplitter().feed(codec.encode(m))
+        assert codec.decode(raw) == m
+
+
+@given(st.lists(st.tuples(st.booleans(), st.floats(width=32, allow_nan=False),
+                          st.integers(1, 10000)), min_size=4, max_size=4),
+       st.integers(0, 10**9), st.booleans())
+def test_data_round_trip(vals: list[tuple[bool, float, int]], slot: int, sync: bool) -> None:
+    values = [Value(p, x, 0, n if i < 2 else 0) if p else Value()
+              for i, (p, x, n) in enumerate(vals)]
+    d = Data(sync, 3, slot, slot & 0xFF, values)
+    wire = codec.encode_data(d, S1_KINDS)
+    (raw,) = codec.FrameSplitter().feed(wire)
+    back = codec.decode_data(raw, S1_KINDS)
+    assert [v.present for v in back.values] == [v.present for v in values]
+    for a, b in zip(back.values, values, strict=True):
+        if b.present:
+            assert a.number == b.number and a.count == b.count
+
+
+def test_splitter_handles_byte_by_byte() -> None:
+    wire = codec.encode(Ping(b"ab")) + codec.encode(Ping(b"c"))
+    s = codec.FrameSplitter()
+    got = []
+    for b in wire:
+        got += s.feed(bytes([b]))
+    assert [codec.decode(f) for f in got] == [Ping(b"ab"), Ping(b"c")]
+
+
+def test_truncated_and_trailing_data_rejected() -> None:
+    d = Data(False, 0, 0, 1, [Value(True, 1.0, 0, 6)] * 2 + [Value(True, 1.0)] * 2)
+    wire = codec.encode_data(d, S1_KINDS)
+    (raw,) = codec.FrameSplitter().feed(wire)
+    with pytest.raises(ProtocolError, match="truncated"):
+        codec.decode_data(codec.RawFrame(raw.type, raw.body[:-1], 0), S1_KINDS)
+    with pytest.raises(ProtocolError, match="trailing"):
+        codec.decode_data(codec.RawFrame(raw.type, raw.body + b"\0", 0), S1_KINDS)
+
+
+def test_config_from_plan() -> None:
+    plan = {
+        "topics": [
+            {"id": 1, "name": "d.s.y", "type": "float32", "buffer_size": 28, "period_us": 40000},
+            {"id": 0, "name": "d.s.x", "type": "float64", "buffer_size": 6, "period_us": 40000},
+        ],
+        "streams": [
+            {"id": 1, "topic": 1, "aggregation": "MAX", "period_us": 250000, "sent": True},
+            {"id": None, "topic": 1, "aggregation": "AVERAGE", "period_us": 2000000, "sent": False},
+            {"id": 0, "topic": 0, "aggregation": "AVERAGE", "period_us": 250000, "sent": True},
+        ],
+    }
+    c = config_from_plan(plan, 4)
+    assert c == Config(4, 30, (TopicSpec("d.s.x", ValueType.FLOAT64, 6, 40000),
+                               TopicSpec("d.s.y", ValueType.FLOAT32, 28, 40000)),
+                       (StreamSpec(0, Aggregation.AVERAGE, 250000),
+                        StreamSpec(1, Aggregation.MAX, 250000)))

@@ -1,0 +1,142 @@
+"""The Python codec against the shared vectors in runtime/vectors/ (C++ passes them too)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+from modd.link import codec
+from modd.link.auth import client_proof, server_proof
+from modd.link.frames import (
+    Aggregation,
+    Auth,
+    AuthOk,
+    Challenge,
+    Config,
+    ConfigAck,
+    Data,
+    ErrorMsg,
+    Hello,
+    Message,
+    Ping,
+    Pong,
+    ProtocolError,
+    Status,
+    StreamSpec,
+    TopicSpec,
+    Value,
+    ValueType,
+    value_kind,
+)
+from modd.link.schedule import SlotIterator
+
+VECTORS = Path(__file__).resolve().parents[2] / "vectors"
+ALL = sorted(p for p in VECTORS.glob("*.json"))
+MESSAGES = [p for p in ALL if "message" in json.loads(p.read_text())]
+
+
+def from_json(m: dict[str, Any]) -> Message:
+    t = m["type"]
+    if t == "HELLO":
+        return Hello(m["version"], bytes.fromhex(m["nonce"]))
+    if t == "CHALLENGE":
+        return Challenge(m["version"], bytes.fromhex(m["nonce"]))
+    if t == "AUTH":
+        return Auth(bytes.fromhex(m["mac"]))
+    if t == "AUTH_OK":
+        return AuthOk(bytes.fromhex(m["mac"]), m["config_id"], m["epoch_ns"])
+    if t == "PING":
+        return Ping(bytes.fromhex(m["payload"]))
+    if t == "PONG":
+        return Pong(bytes.fromhex(m["payload"]))
+    if t == "CONFIG_ACK":
+        return ConfigAck(m["config_id"], m["status"], m["epoch_ns"])
+    if t == "STATUS":
+        return Status(tuple(m["counters"]))
+    if t == "ERROR":
+        return ErrorMsg(m["code"], m["message"])
+    if t == "CONFIG":
+        return Config(
+            m["config_id"], m["status_period_s"],
+            tuple(TopicSpec(x["name"], ValueType.parse(x["type"]), x["buffer_size"], x["period_us"])
+                  for x in m["topics"]),
+            tuple(StreamSpec(x["topic"], Aggregation[x["aggregation"]], x["period_us"])
+                  for x in m["streams"]),
+        )
+    raise AssertionError(t)
+
+
+def test_vectors_exist() -> None:
+    assert len(MESSAGES) >= 17
+
+
+@pytest.mark.parametrize("path", MESSAGES, ids=lambda p: p.stem)
+def test_vector_byte_for_byte(path: Path) -> None:
+    v = json.loads(path.read_text())
+    wire = bytes.fromhex(v["hex"])
+    (raw,) = codec.FrameSplitter().feed(wire)
+    m = v["message"]
+    if m["type"] != "DATA":
+        expected = from_json(m)
+        assert codec.decode(raw) == expected
+        assert codec.encode(expected) == wire
+        return
+    kinds = [value_kind(ValueType.parse(k["type"]), Aggregation[k["aggregation"]])
+             for k in v["kinds"]]
+    values = [Value(x["present"], x["number"], x["integer"], x["count"], x["samples"])
+              for x in m["values"]]
+    data = Data(m["sync"], m["config_id"], m["slot"], m["seq8"], values)
+    assert codec.encode_data(data, kinds) == wire
+    back = codec.decode_data(raw, kinds)
+    assert back.sync == data.sync and back.seq8 == data.seq8
+    if data.sync:
+        assert (back.config_id, back.slot) == (data.config_id, data.slot)
+    for got, want in zip(back.values, values, strict=True):
+        assert got.present == want.present
+        if want.present:
+            assert (got.number, got.integer, got.count) == (want.number, want.integer, want.count)
+            assert got.samples == want.samples
+
+
+def test_invalid_frames_rejected() -> None:
+    v = json.loads((VECTORS / "invalid.json").read_text())
+    for f in v["frames"]:
+        with pytest.raises(ProtocolError):
+            raw = codec.split_frame(bytes.fromhex(f["hex"]))
+            if raw is None:
+                raise ProtocolError(1, "incomplete")  # type: ignore[arg-type]
+            codec.decode(raw)
+
+
+def test_handshake_proofs() -> None:
+    v = json.loads((VECTORS / "handshake.json").read_text())
+    key, cn, sn = (bytes.fromhex(v[k]) for k in ("key", "client_nonce", "server_nonce"))
+    assert client_proof(key, cn, sn).hex() == v["client_proof"]
+    assert server_proof(key, cn, sn).hex() == v["server_proof"]
+
+
+def test_slot_table() -> None:
+    v = json.loads((VECTORS / "slots.json").read_text())
+    it = SlotIterator(v["periods_us"])
+    for s in v["slots"]:
+        got = next(it)
+        assert (got.index, got.offset_us, list(got.streams)) == (
+            s["index"], s["offset_us"], s["streams"])
+
+
+def test_vectors_are_current() -> None:
+    """generate.py reproduces the committed files (the vectors are not edited by hand)."""
+    import importlib.util
+    import tempfile
+
+    spec = importlib.util.spec_from_file_location("gen", VECTORS / "generate.py")
+    assert spec and spec.loader
+    gen = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gen)
+    with tempfile.TemporaryDirectory() as d:
+        gen.HERE = Path(d)
+        gen.main()
+        for p in Path(d).glob("*.json"):
+            assert p.read_text() == (VECTORS / p.name).read_text(), p.name
