@@ -62,6 +62,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--ingress", required=True, help="host:port of the PubBroker's TCP ingress")
     p.add_argument("--seconds", type=float, default=30.0)
     p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--record", help="append every sample sent to this file (JSON lines)")
     args = p.parse_args(argv)
     model = load_model(args.model)
     types = {
@@ -78,6 +79,7 @@ def main(argv: list[str] | None = None) -> int:
 
     signal.signal(signal.SIGTERM, on_term)
     rng = random.Random(args.seed)
+    record = open(args.record, "a") if args.record else None  # noqa: SIM115
     sock = socket.create_connection((host, int(port)))
     sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
     sock.sendall(frame(0x01, bytes([1]) + string("loadgen")))
@@ -99,15 +101,23 @@ def main(argv: list[str] | None = None) -> int:
             time.sleep(delay)
         now = time.time_ns()
         records = b""
-        for topic in pubs[i][1]:
+        values = [value_for(rng, types[topic]) for topic in pubs[i][1]]
+        for topic, value in zip(pubs[i][1], values, strict=True):
             code, fmt = TYPES[types[topic]]
-            records += varint(ids[topic]) + struct.pack("<q", now)
-            records += struct.pack(fmt, value_for(rng, types[topic]))
-        sock.sendall(frame(0x03, varint(len(pubs[i][1])) + records))
+            records += varint(ids[topic]) + struct.pack("<q", now) + struct.pack(fmt, value)
+        try:
+            sock.sendall(frame(0x03, varint(len(pubs[i][1])) + records))
+        except OSError:  # the PubBroker is gone: report what it accepted to take
+            break
         for topic in pubs[i][1]:
             sent[topic] += 1
+        if record is not None:
+            record.write(json.dumps([now, dict(zip(pubs[i][1], values, strict=True))]) + "\n")
+            record.flush()
         due[i] += float(pubs[i][0])
     sock.close()
+    if record is not None:
+        record.close()
     print(json.dumps({"sent": sent}), flush=True)
     return 0
 

@@ -162,10 +162,11 @@ def start_subbroker(tmp: Path, config: Path, tag: str = "sb") -> Proc:
 
 
 def start_load(tmp: Path, model_path: Path, ingress_port: int, seconds: float,
-               tag: str = "load", seed: int = 1) -> Proc:
+               tag: str = "load", seed: int = 1, record: Path | None = None) -> Proc:
+    extra = ["--record", str(record)] if record else []
     return Proc(tag, [*LOADGEN, "--model", str(model_path), "--ingress",
                       f"127.0.0.1:{ingress_port}", "--seconds", str(seconds),
-                      "--seed", str(seed)], tmp / f"{tag}.log")
+                      "--seed", str(seed), *extra], tmp / f"{tag}.log")
 
 
 def load_counts(proc: Proc) -> dict[str, int]:
@@ -177,19 +178,21 @@ def load_counts(proc: Proc) -> dict[str, int]:
 # -- the oracle ------------------------------------------------------------------
 
 
-def _f32(x: float) -> float:
+def f32(x: float) -> float:
     return float(struct.unpack("<f", struct.pack("<f", x))[0])
 
 
 Archive = dict[str, list[tuple[int, Any]]]
 
 
-def read_archive(directory: Path, model_path: Path | None = None) -> Archive:
+def read_archive(directory: Path, model_path: Path | None = None,
+                 published: bool = False) -> Archive:
     """Every sample of every MCAP file, per topic: (log_time ns, value), in
     time order. Read with the official reader's stream API, which stops at a
     truncated tail (a PubBroker killed with -9) instead of failing. With the
     model, float32 values are read back as float32 (the archive writes their
-    shortest decimal form)."""
+    shortest decimal form). ``published``: the publisher's timestamps instead
+    of the PubBroker's log times."""
     f32_topics = set()
     if model_path is not None:
         f32_topics = {t.name for t in topics(load_model(model_path)).values()
@@ -209,8 +212,9 @@ def read_archive(directory: Path, model_path: Path | None = None) -> Archive:
                         topic = channels[rec.channel_id]
                         value = json.loads(rec.data)["value"]
                         if topic in f32_topics:
-                            value = _f32(value)
-                        out.setdefault(topic, []).append((rec.log_time, value))
+                            value = f32(value)
+                        t = rec.publish_time if published else rec.log_time
+                        out.setdefault(topic, []).append((t, value))
             except Exception:  # a truncated tail: everything before it counts
                 pass
     for samples in out.values():
@@ -243,6 +247,29 @@ def close_enough(aggregation: str, got: Any, want: Any) -> bool:
     if aggregation in ("AVERAGE", "SUM"):
         return abs(got - want) <= 1e-5 * max(1.0, abs(want))
     return bool(got == want)
+
+
+def check_against_archive(values: dict[str, list[Any]],
+                          archive: Archive) -> int:
+    """Every delivered window equals the archive's; returns how many were checked."""
+    checked = 0
+    for name, vals in values.items():
+        for v in vals:
+            samples = window_samples(archive.get(v.topic, []), v.start_ns, v.end_ns)
+            want, want_count = oracle_value(v.aggregation, samples)
+            assert close_enough(v.aggregation, v.value, want), (name, v, want, len(samples))
+            if v.aggregation in ("AVERAGE", "COUNT", "ALL"):
+                assert v.count == want_count, (name, v, want_count)
+            checked += 1
+    return checked
+
+
+def assert_contiguous(vals: list[Any], period_ns: int) -> None:
+    ends = [v.end_ns for v in vals]
+    assert ends == sorted(ends)
+    gaps = [b - a for a, b in zip(ends, ends[1:], strict=False) if b - a != period_ns]
+    assert not gaps, f"missing windows: gaps {gaps[:5]} (period {period_ns})"
+
 
 
 # -- a proxy that can drop the traffic -------------------------------------------------

@@ -19,10 +19,10 @@ from modd.subbroker.client import NoReply, request
 from modd.subbroker.payload import DeliveredValue
 from modd.zenoh_session import wait_connected
 from subbroker_harness import (
-    close_enough,
+    assert_contiguous,
+    check_against_archive,
     free_port,
     model_copy,
-    oracle_value,
     processes,
     read_archive,
     start_load,
@@ -30,7 +30,6 @@ from subbroker_harness import (
     start_subbroker,
     subbroker_config,
     wait_port,
-    window_samples,
 )
 
 from conftest import Collector
@@ -38,28 +37,6 @@ from conftest import Collector
 pytestmark = pytest.mark.usefixtures("needs_pubbroker")
 
 RUN_S = 9.0
-
-
-def check_against_archive(values: dict[str, list[DeliveredValue]],
-                          archive: dict[str, list[tuple[int, Any]]]) -> int:
-    """Every delivered window equals the archive's; returns how many were checked."""
-    checked = 0
-    for name, vals in values.items():
-        for v in vals:
-            samples = window_samples(archive.get(v.topic, []), v.start_ns, v.end_ns)
-            want, want_count = oracle_value(v.aggregation, samples)
-            assert close_enough(v.aggregation, v.value, want), (name, v, want, len(samples))
-            if v.aggregation in ("AVERAGE", "COUNT", "ALL"):
-                assert v.count == want_count, (name, v, want_count)
-            checked += 1
-    return checked
-
-
-def assert_contiguous(vals: list[DeliveredValue], period_ns: int) -> None:
-    ends = [v.end_ns for v in vals]
-    assert ends == sorted(ends)
-    gaps = [b - a for a, b in zip(ends, ends[1:], strict=False) if b - a != period_ns]
-    assert not gaps, f"missing windows: gaps {gaps[:5]} (period {period_ns})"
 
 
 class TcpSink(threading.Thread):
