@@ -30,6 +30,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import cache
 from math import ceil
 
 from .schedule import Schedule
@@ -69,6 +70,7 @@ def aggregate_value_type(aggregation: str, topic_type: str) -> str:
     return "int"  # COUNT
 
 
+@cache
 def window_value_bytes(aggregation: str, topic_type: str, samples: Fraction) -> Fraction:
     """Expected bytes of one window's value when ``samples`` samples (on
     average) fall in a window."""

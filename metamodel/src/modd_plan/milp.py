@@ -61,14 +61,15 @@ def _incidence(problem: BufferProblem) -> tuple[sp.csr_matrix, np.ndarray]:
     return a, ps
 
 
-def solve_milp(problem: BufferProblem) -> BufferSolution:
+def solve_milp(problem: BufferProblem, *, tie_break: bool = True) -> BufferSolution:
     """The MILP optimum with the documented tie-break, via cvxpy + HiGHS.
+    ``tie_break=False`` stops after stage 1: some optimum, as HiGHS finds it.
 
     Infeasibility under the cap is detected and explained like
     :func:`modd_plan.buffers.solve_exact` does, then solved without the cap."""
     _, infeasible = _fronts(problem)
     if infeasible:
-        relaxed = solve_milp(problem.without_cap())
+        relaxed = solve_milp(problem.without_cap(), tie_break=tie_break)
         return BufferSolution(relaxed.sizes, relaxed.deviations_us, tuple(infeasible))
     if not problem.subscriptions:
         return solution_from_sizes(problem, [1] * len(problem.topics))
@@ -81,20 +82,24 @@ def solve_milp(problem: BufferProblem) -> BufferSolution:
     if problem.cap_us is not None:
         base.append(z <= problem.cap_us / US_PER_UNIT)
     alpha, beta = float(problem.alpha), float(problem.beta)
-    scale = min((x for x in (alpha, beta) if x > 0), default=1.0)
     stage1 = alpha * cp.sum(z) + beta * w
     v = _solve(cp, stage1, base)
-    base.append(stage1 <= v + TOLERANCE * scale)
-    w_opt = _solve(cp, w, base)
-    base.append(w <= w_opt + TOLERANCE)
-    m = cp.Variable(len(problem.topics))
-    incidence = (a_mat != 0).astype(float)
-    base += [z <= incidence @ m, m >= 0]
-    if alpha > 0:  # keep each topic's sum of deviations at its optimum
-        base.append(cp.sum(z) <= (v - beta * w_opt) / alpha + TOLERANCE)
-    _solve(cp, cp.sum(m), base)
-    m_opt = np.asarray(m.value, dtype=float)
-    base.append(m <= m_opt + TOLERANCE)
-    _solve(cp, cp.sum(n), base)
+    if tie_break:
+        scale = min((x for x in (alpha, beta) if x > 0), default=1.0)
+        base.append(stage1 <= v + TOLERANCE * scale)
+        w_opt = _solve(cp, w, base)
+        base.append(w <= w_opt + TOLERANCE)
+        if alpha > 0:  # keep each topic's sum of deviations at its optimum
+            base.append(cp.sum(z) <= (v - beta * w_opt) / alpha + TOLERANCE)
+        _per_topic_stages(cp, base, n, z, (a_mat != 0).astype(float))
     sizes = [int(round(x)) for x in np.asarray(n.value, dtype=float)]
     return solution_from_sizes(problem, sizes)
+
+
+def _per_topic_stages(cp: ModuleType, base: list[Any], n: Any, z: Any, incidence: Any) -> None:
+    """Stages 3 and 4: the smallest per-topic maximum, then the smallest n."""
+    m = cp.Variable(n.shape[0])
+    base += [z <= incidence @ m, m >= 0]
+    _solve(cp, cp.sum(m), base)
+    base.append(m <= np.asarray(m.value, dtype=float) + TOLERANCE)
+    _solve(cp, cp.sum(n), base)

@@ -15,21 +15,23 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import cache
 from math import lcm
 from typing import Any
 
-from modd_model.numbers import MICROS_PER_SECOND, fraction_to_decimal, to_fraction, to_micros
+from modd_model.numbers import MICROS_PER_SECOND, fraction_to_decimal
 from modd_model.query import Topic, link_settings, topics
 
 from .buffers import BufferProblem, BufferSolution, Infeasibility, Subscription, solve_exact
 from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
 from .planjson import plan_to_json
 from .schedule import Schedule
-from .streams import PlannedStream, StreamKey, plan_streams, requested_streams
+from .streams import PlannedStream, StreamKey, period_of, plan_streams, requested_streams
 
 METHODS = ("exact", "cvxpy")
 
 
+@cache
 def _us(period: Fraction) -> int:
     us = period * MICROS_PER_SECOND
     if us.denominator != 1:
@@ -126,9 +128,11 @@ class Plan:
         return plan_to_json(self)
 
 
-def _buffer_problem(
+def buffer_problem(
     model: Mapping[str, Any], tops: Mapping[str, Topic], constants: PlannerConstants
 ) -> tuple[BufferProblem, tuple[Infeasibility, ...]]:
+    """The buffer-size MILP's data for a model (published topics only), and
+    the subscriptions to unpublished topics, which no buffer can serve."""
     published = [t for t in tops.values() if t.period is not None]
     subs: list[Subscription] = []
     orphans: dict[str, list[str]] = {}
@@ -137,7 +141,7 @@ def _buffer_problem(
         if topic is None or topic.period is None:
             orphans.setdefault(sub["topic"], []).append(sub["name"])
         else:
-            subs.append(Subscription(sub["name"], sub["topic"], to_micros(sub["periodS"])))
+            subs.append(Subscription(sub["name"], sub["topic"], _us(period_of(sub["periodS"]))))
     problem = BufferProblem(
         topics=tuple(t.name for t in published),
         publication_us=tuple(_us(t.period) for t in published if t.period is not None),
@@ -213,12 +217,12 @@ def make_plan(
     sent = sorted((s for s in streams if s.id is not None), key=lambda s: s.id or 0)
     hyper = lcm(*(_us(k.period) for k in requested)) if requested else 0
     sched = Schedule.from_periods_us([_us(s.stream.period) for s in sent], hyper)
-    problem, unpublished = _buffer_problem(model, tops, constants)
+    problem, unpublished = buffer_problem(model, tops, constants)
     return Plan(
         topics=tuple(tops.values()),
         streams=streams,
         subscriptions={
-            sub["name"]: StreamKey(sub["topic"], sub["aggregation"], to_fraction(sub["periodS"]))
+            sub["name"]: StreamKey(sub["topic"], sub["aggregation"], period_of(sub["periodS"]))
             for sub in model.get("subscribers", [])
         },
         schedule=sched,

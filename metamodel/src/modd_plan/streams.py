@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import cache
 from typing import Any
 
 from modd_model.numbers import fraction_to_decimal, to_fraction
@@ -78,14 +79,22 @@ def requested_streams(model: Mapping[str, Any]) -> dict[StreamKey, list[str]]:
     model order."""
     out: dict[StreamKey, list[str]] = {}
     for sub in model.get("subscribers", []):
-        key = StreamKey(sub["topic"], sub["aggregation"], to_fraction(sub["periodS"]))
+        key = StreamKey(sub["topic"], sub["aggregation"], period_of(sub["periodS"]))
         out.setdefault(key, []).append(sub["name"])
     return out
 
 
+@cache
+def period_of(text: str) -> Fraction:
+    """``to_fraction``, memoised: a model repeats few distinct periods."""
+    return to_fraction(text)
+
+
 def _factor(target: StreamKey, source: StreamKey) -> int | None:
-    ratio = target.period / source.period
-    return int(ratio) if ratio.denominator == 1 else None
+    """target.period / source.period if whole (integer arithmetic only)."""
+    a, b = target.period, source.period
+    num, den = a.numerator * b.denominator, a.denominator * b.numerator
+    return num // den if num % den == 0 else None
 
 
 def find_sources(target: StreamKey, sent: Iterable[StreamKey]) -> tuple[Source, ...] | None:
@@ -154,12 +163,15 @@ def choose_sent(
     for streams in by_topic.values():
         if len(streams) < 2:
             continue
-        kept = set(streams)
-        for s in sorted(streams, key=lambda s: (-cost_per_s(s), -s.period, s.key)):
-            rest = kept - {s}
-            if all(find_sources(r, rest) is not None for r in streams if r not in rest):
-                kept = rest
-        sent -= set(streams) - kept
+        streams.sort(key=lambda s: (-cost_per_s(s), -s.period, AGGREGATIONS.index(s.aggregation)))
+        kept = [True] * len(streams)
+        for i in range(len(streams)):
+            kept[i] = False
+            rest = [s for s, k in zip(streams, kept, strict=True) if k]
+            dropped = [s for s, k in zip(streams, kept, strict=True) if not k]
+            if any(find_sources(r, rest) is None for r in dropped):
+                kept[i] = True
+        sent -= {s for s, k in zip(streams, kept, strict=True) if not k}
     return sent
 
 

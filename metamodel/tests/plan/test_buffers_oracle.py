@@ -123,3 +123,5 @@ def test_exact_and_milp_agree_on_a_larger_random_problem() -> None:
     exact, milp = solve_exact(p), solve_milp(p)
     assert exact.sizes == milp.sizes
     assert exact.objective(p.alpha, p.beta) == milp.objective(p.alpha, p.beta)
+    some_optimum = solve_milp(p, tie_break=False)  # the paper's MILP alone
+    assert some_optimum.objective(p.alpha, p.beta) == exact.objective(p.alpha, p.beta)
