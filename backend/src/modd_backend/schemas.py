@@ -6,8 +6,9 @@ not a second copy, defines it."""
 from __future__ import annotations
 
 from datetime import datetime
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
+from fastapi import Path
 from pydantic import BaseModel, Field, model_validator
 
 Format = Literal["json", "modd"]
@@ -73,3 +74,6 @@ class ConflictOut(BaseModel):
 
 #: The ``responses=`` argument of a route (extra documented statuses).
 Responses = dict[int | str, dict[str, Any]]
+
+#: A row id in a path: bounded so that no database integer overflows.
+Id = Annotated[int, Path(ge=1, le=2**31 - 1)]

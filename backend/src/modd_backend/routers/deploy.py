@@ -17,7 +17,7 @@ from ..errors import ApiError
 from ..modeldiff import diff
 from ..modelio import diagnostics_json
 from ..roles import Role
-from ..schemas import InvalidModelOut
+from ..schemas import Id, InvalidModelOut
 from ..tables import Deployment
 from ..versions import get_project, get_version, model_of
 
@@ -61,7 +61,7 @@ class DeployedDiffOut(BaseModel):
                422: {"model": InvalidModelOut, "description": "the version is not valid"}},
 )
 def deploy_version(
-    project_id: int, body: DeployIn, db: DbDep, user: UserDep, state: StateDep
+    project_id: Id, body: DeployIn, db: DbDep, user: UserDep, state: StateDep
 ) -> DeploymentOut:
     """Deploy and wait for the drone's answer (up to the deploy timeout); the
     record is created either way and says acked or failed."""
@@ -76,7 +76,7 @@ def deploy_version(
 
 
 @router.get("/projects/{project_id}/deployments", responses={404: {"description": "no project"}})
-def list_deployments(project_id: int, db: DbDep, _user: UserDep) -> list[DeploymentOut]:
+def list_deployments(project_id: Id, db: DbDep, _user: UserDep) -> list[DeploymentOut]:
     get_project(db, project_id)
     rows = db.scalars(
         select(Deployment).where(Deployment.project_id == project_id)
@@ -88,7 +88,7 @@ def list_deployments(project_id: int, db: DbDep, _user: UserDep) -> list[Deploym
 @router.get("/projects/{project_id}/deployed-diff",
             responses={404: {"description": "no project or no model"}})
 def deployed_diff(
-    project_id: int,
+    project_id: Id,
     db: DbDep,
     _user: UserDep,
     drone: Annotated[str | None, Query(max_length=64)] = None,

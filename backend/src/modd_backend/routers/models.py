@@ -20,6 +20,7 @@ from ..schemas import (
     ConflictOut,
     DiagnosticOut,
     Format,
+    Id,
     InvalidModelOut,
     ModelInput,
     ModelOut,
@@ -49,7 +50,7 @@ class ValidateOut(BaseModel):
 
 
 @router.get("/projects/{project_id}/model", responses=NOT_FOUND)
-def read_model(project_id: int, db: DbDep, _user: UserDep, revision: Revision = None) -> ModelOut:
+def read_model(project_id: Id, db: DbDep, _user: UserDep, revision: Revision = None) -> ModelOut:
     return ModelOut.model_validate(version_json(get_version(db, project_id, revision)))
 
 
@@ -59,7 +60,7 @@ def read_model(project_id: int, db: DbDep, _user: UserDep, revision: Revision = 
     responses={**NOT_FOUND, **DENIED, 409: {"model": ConflictOut},
                422: {"model": InvalidModelOut}},
 )
-def save_model(project_id: int, body: SaveIn, db: DbDep, user: UserDep) -> ModelOut:
+def save_model(project_id: Id, body: SaveIn, db: DbDep, user: UserDep) -> ModelOut:
     """Save a new revision. Text input keeps the current diagram layout (the
     .modd text has none)."""
     model = require_document(read_input(body, f"project-{project_id}.{body.format}"))
@@ -74,7 +75,7 @@ def save_model(project_id: int, body: SaveIn, db: DbDep, user: UserDep) -> Model
 
 
 @router.get("/projects/{project_id}/versions", responses=NOT_FOUND)
-def list_versions(project_id: int, db: DbDep, _user: UserDep) -> list[VersionOut]:
+def list_versions(project_id: Id, db: DbDep, _user: UserDep) -> list[VersionOut]:
     get_project(db, project_id)
     rows = db.scalars(
         select(ModelVersion)
@@ -90,7 +91,7 @@ def list_versions(project_id: int, db: DbDep, _user: UserDep) -> list[VersionOut
                422: {"description": "an invalid revision cannot be printed as .modd"}},
 )
 def export_model(
-    project_id: int, db: DbDep, _user: UserDep, format: Format = "modd", revision: Revision = None
+    project_id: Id, db: DbDep, _user: UserDep, format: Format = "modd", revision: Revision = None
 ) -> Response:
     """The model as a file: canonical .modd text or JSON (layout kept in JSON only)."""
     version = get_version(db, project_id, revision)

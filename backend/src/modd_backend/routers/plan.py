@@ -13,7 +13,7 @@ from pydantic import BaseModel
 from ..deps import DbDep, UserDep
 from ..modelio import read_input
 from ..planning import Method, live_plan
-from ..schemas import DiagnosticOut, ModelInput
+from ..schemas import DiagnosticOut, Id, ModelInput
 from ..versions import get_version, model_of
 
 router = APIRouter(prefix="/api", tags=["plan"])
@@ -36,7 +36,7 @@ def plan_model(body: ModelInput, _user: UserDep, method: Method = "exact") -> Pl
 
 @router.get("/projects/{project_id}/plan", responses={404: {"description": "no such revision"}})
 def plan_version(
-    project_id: int,
+    project_id: Id,
     db: DbDep,
     _user: UserDep,
     revision: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,

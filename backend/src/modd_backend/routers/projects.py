@@ -16,7 +16,7 @@ from ..deps import DbDep, RawBody, UserDep, require, roles_of
 from ..errors import ApiError
 from ..modelio import decode_body, read_input, require_document
 from ..roles import EDITORS, Role, may_edit, owners_of_changes
-from ..schemas import Format, ModelInput, Responses
+from ..schemas import Format, Id, ModelInput, Responses
 from ..tables import Project, User
 from ..versions import get_project, head_revision, save_version
 
@@ -116,12 +116,12 @@ def import_project(
 
 
 @router.get("/{project_id}", responses={404: {"description": "no such project"}})
-def read_project(project_id: int, db: DbDep, _user: UserDep) -> ProjectOut:
+def read_project(project_id: Id, db: DbDep, _user: UserDep) -> ProjectOut:
     return project_out(db, get_project(db, project_id))
 
 
 @router.delete("/{project_id}", status_code=204, dependencies=[Depends(require(Role.admin))],
                responses={404: {"description": "no such project"}})
-def delete_project(project_id: int, db: DbDep) -> None:
+def delete_project(project_id: Id, db: DbDep) -> None:
     db.delete(get_project(db, project_id))
     db.commit()

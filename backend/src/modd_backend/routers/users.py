@@ -13,6 +13,7 @@ from ..accounts import create_user
 from ..deps import DbDep, UserDep, require
 from ..errors import ApiError
 from ..roles import Role, format_roles
+from ..schemas import Id
 from ..security import hash_password
 from ..tables import User
 from .auth import UserOut, user_out
@@ -57,7 +58,7 @@ def add_user(body: UserIn, db: DbDep) -> UserOut:
 
 
 @router.patch("/{user_id}", responses={404: {"description": "no such user"}})
-def change_user(user_id: int, body: UserPatch, db: DbDep) -> UserOut:
+def change_user(user_id: Id, body: UserPatch, db: DbDep) -> UserOut:
     user = _user(db, user_id)
     if body.roles is not None:
         user.roles = format_roles({r.value for r in body.roles})
@@ -68,7 +69,7 @@ def change_user(user_id: int, body: UserPatch, db: DbDep) -> UserOut:
 
 
 @router.delete("/{user_id}", status_code=204, responses={404: {"description": "no such user"}})
-def delete_user(user_id: int, db: DbDep, me: UserDep) -> None:
+def delete_user(user_id: Id, db: DbDep, me: UserDep) -> None:
     user = _user(db, user_id)
     if user.id == me.id:
         raise ApiError(409, "you cannot delete yourself")
