@@ -84,7 +84,7 @@ def test_config_from_plan() -> None:
             {"id": 0, "name": "d.s.x", "type": "float64", "buffer_size": 6, "period_us": 40000},
         ],
         "streams": [
-            {"id": 1, "topic": 1, "aggregation": "MAX", "period_us": 250000, "sent": True},
+            {"id": 1, "topic": "d.s.y", "aggregation": "MAX", "period_us": 250000, "sent": True},
             {"id": None, "topic": 1, "aggregation": "AVERAGE", "period_us": 2000000, "sent": False},
             {"id": 0, "topic": 0, "aggregation": "AVERAGE", "period_us": 250000, "sent": True},
         ],

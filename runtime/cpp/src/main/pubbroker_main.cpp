@@ -1,5 +1,7 @@
 // modd-pubbroker: the on-board broker. main() is a straight line:
 // arguments -> config -> key -> server (archive, listeners) -> loop -> clean stop.
+#include <signal.h>
+
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -45,6 +47,13 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "modd-pubbroker: --config FILE is required\n%s", kUsage);
     return 2;
   }
+  // SIGTERM/SIGINT are read from a signalfd by the event loop: block them before any thread
+  // (the archive writer) starts, so that every thread inherits the mask.
+  sigset_t mask;
+  sigemptyset(&mask);
+  sigaddset(&mask, SIGTERM);
+  sigaddset(&mask, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &mask, nullptr);
   try {
     modd::broker::BrokerConfig cfg = modd::broker::load_config(config_path);
     std::string key = modd::link::resolve_key(cfg.key_ref);

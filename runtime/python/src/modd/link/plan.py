@@ -1,7 +1,8 @@
 """Builds a CONFIG from the planner's plan JSON (the shared plan/link contract).
 
-`plan["topics"]` gives ids, names, types and buffer sizes; `plan["streams"]` the streams,
-those with `sent` true and an integer `id` going on the wire in id order.
+`plan["topics"]` gives ids, names, types and buffer sizes; `plan["streams"]` the streams
+(topic by name or id), those with `sent` true and an integer `id` going on the wire in id
+order.
 
 Example::
 
@@ -32,10 +33,13 @@ def config_from_plan(plan: Mapping[str, Any], config_id: int, status_period_s: i
     )
     sent = sorted((s for s in plan["streams"] if s.get("sent") and s.get("id") is not None),
                   key=lambda s: s["id"])
+    topic_ids = {t.name: i for i, t in enumerate(topics)}
     streams = []
     for i, s in enumerate(sent):
         if s["id"] != i:
             raise ValueError(f"stream ids must be 0..k-1, found {s['id']} at position {i}")
         agg = Aggregation[s["aggregation"]]
-        streams.append(StreamSpec(int(s["topic"]), agg, int(s["period_us"])))
+        topic = s["topic"]  # the topic's name (plan JSON) or its id
+        tid = topic_ids[topic] if isinstance(topic, str) else int(topic)
+        streams.append(StreamSpec(tid, agg, int(s["period_us"])))
     return Config(config_id, status_period_s, topics, tuple(streams))
