@@ -31,7 +31,7 @@ from .subbroker.keys import sub_key, subscribe_key
 from .subbroker.payload import DeliveredValue
 
 if TYPE_CHECKING:
-    import pandas
+    import pandas  # type: ignore[import-untyped]
     import zenoh
 
 Sample = DeliveredValue
@@ -127,12 +127,12 @@ class Subscription:
         if self._closed:
             return
         self._closed = True
-        self._sub.undeclare()
+        self._sub.undeclare()  # type: ignore[no-untyped-call]
         if self._on_close is not None:
             self._on_close()
         self._queue.put(None)
         if self._own_session:
-            self._session.close()
+            self._session.close()  # type: ignore[no-untyped-call]
 
     def __enter__(self) -> Subscription:
         return self
@@ -214,7 +214,7 @@ def subscribe_dynamic(
             raise NotAvailable(str(reply.get("reason", reply)))
     except BaseException:
         if own:
-            s.close()
+            s.close()  # type: ignore[no-untyped-call]
         raise
 
     def cancel() -> None:

@@ -132,7 +132,7 @@ class SubBroker:
         if self._zenoh is not None:
             self._zenoh.close()
         if self._own_session and self._session is not None:
-            self._session.close()
+            self._session.close()  # type: ignore[no-untyped-call]
 
     # -- planning ----------------------------------------------------------------
 
@@ -243,7 +243,7 @@ class SubBroker:
         try:
             query.reply(query.key_expr, json.dumps(reply, separators=(",", ":")))
         finally:
-            query.drop()
+            query.drop()  # type: ignore[no-untyped-call]
 
     def _subscribe(self, payload: bytes) -> dict[str, Any]:
         try:

@@ -60,7 +60,7 @@ class ZenohDelivery:
         with self._lock:
             pub = self._publishers.pop(subscriber, None)
         if pub is not None:
-            pub.undeclare()
+            pub.undeclare()  # type: ignore[no-untyped-call]
 
     def close(self) -> None:
         for name in list(self._publishers):

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 from modd_model import load_text
 
@@ -46,12 +46,15 @@ def parse_request(payload: bytes, drone: str) -> DeployRequest:
     if not isinstance(timeout, int | float) or isinstance(timeout, bool) or timeout <= 0:
         return _error("ERROR", "timeout_s must be a positive number of seconds")
     filename = str(request.get("filename", "<deploy>"))
+    fmt: Literal["modd", "json"]
     if "model" in request:
         text, fmt = json.dumps(request["model"]), "json"
     elif isinstance(request.get("text"), str):
-        text, fmt = request["text"], request.get("format", "modd")
-        if fmt not in ("modd", "json"):
-            return _error("ERROR", f"format {fmt!r}: expected modd or json")
+        text = request["text"]
+        asked = request.get("format", "modd")
+        if asked not in ("modd", "json"):
+            return _error("ERROR", f"format {asked!r}: expected modd or json")
+        fmt = "json" if asked == "json" else "modd"
     else:
         return _error("ERROR", "the request carries neither 'model' nor 'text'")
     result = load_text(text, filename, fmt)

@@ -78,7 +78,7 @@ class StatusPublisher:
     def stop(self) -> None:
         self._stop.set()
         self._thread.join(timeout=2.0)
-        self._pub.undeclare()
+        self._pub.undeclare()  # type: ignore[no-untyped-call]
 
     def publish_now(self) -> dict[str, Any]:
         status = self._snapshot()
