@@ -28,6 +28,9 @@ export default function DeployPanel() {
   const [diff, reloadDiff] = usePanelData(project ? () => api.deployedDiff(pid) : null, [pid, revision]);
   const [history, reloadHistory] = usePanelData(project ? () => api.listDeployments(pid) : null, [pid, revision]);
 
+  // The layout is presentation: it changes nothing on the drone.
+  const changes = diff.state === "ready" ? diff.data.changes.filter((c) => !c.pointer.startsWith("/layout")) : [];
+
   const deploy = async () => {
     setProgress({ busy: true, result: null, error: null });
     try {
@@ -61,9 +64,9 @@ export default function DeployPanel() {
               <p>Drone <strong>{diff.data.drone}</strong>: {diff.data.deployed
                 ? <>runs revision {diff.data.deployed.revision}{diff.data.same_project ? "" : ` of project ${diff.data.deployed.project_id}`}, deployed by {diff.data.deployed.requested_by}</>
                 : "nothing deployed yet"}.</p>
-              {diff.data.changes.length === 0 ? <p className="muted">No difference.</p> : (
+              {changes.length === 0 ? <p className="muted">No difference.</p> : (
                 <table className="diff-table"><tbody>
-                  {diff.data.changes.slice(0, 60).map((c, i) => (
+                  {changes.slice(0, 60).map((c, i) => (
                     <tr key={i} className={`diff-${c.op}`}><td>{c.op}</td><td><code>{c.pointer}</code></td><td>{describe(c.before)}</td><td>{describe(c.after)}</td></tr>
                   ))}
                 </tbody></table>

@@ -1,0 +1,250 @@
+/**
+ * The workbench journey, as a person would click it (docs/user-guide/):
+ * log in, create an empty project, build scenario 1 of the paper in the four
+ * role views, see the live plan's buffer sizes 28, 28, 6, exercise undo/redo,
+ * copy/paste, delete, the text view, save, deploy and watch live values.
+ * Every view is photographed into docs/images/ for the user guide.
+ *
+ * `steps` runs the named steps in order; after a failure the rest are
+ * reported as not run.
+ */
+import { mkdirSync } from "node:fs";
+import { join } from "node:path";
+
+export function journey({ page, baseUrl, password, imagesDir, live }) {
+  mkdirSync(imagesDir, { recursive: true });
+  // Photographs once the live plan has caught up with the last edit.
+  const shot = async (name) => {
+    const rev = page.locator(".topbar .revision");
+    if (await rev.count()) await waitUntil(async () => !/planning/.test((await rev.textContent()) ?? ""), 10000).catch(() => undefined);
+    await page.waitForTimeout(150);
+    await page.screenshot({ path: join(imagesDir, `${name}.png`) });
+  };
+  const node = (id) => page.locator(`.react-flow__node[data-id="${id}"]`);
+  const inspector = page.getByRole("region", { name: "Inspector" });
+  const field = (path) => inspector.locator(`[data-field="${path}"]`).locator("input, select").first();
+  const setText = async (path, value) => {
+    const f = field(path);
+    await f.fill(value);
+    await f.press("Enter");
+  };
+  const setSelect = async (path, value) => field(path).selectOption(value);
+  const view = (name) => page.getByRole("tab", { name, exact: true }).click();
+  const panel = (name) => page.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
+  const select = async (id) => {
+    await node(id).click();
+    await expectVisible(inspector.locator("h2").first());
+  };
+  const layout = async () => {
+    await page.getByRole("button", { name: "Auto-layout" }).click();
+    await page.waitForTimeout(600);
+  };
+  const connect = async (source, target) => {
+    const a = await node(source).locator(".react-flow__handle.source").boundingBox();
+    const b = await node(target).locator(".react-flow__handle.target").boundingBox();
+    if (!a || !b) throw new Error(`handles of ${source} → ${target} are not visible`);
+    await page.mouse.move(a.x + a.width / 2, a.y + a.height / 2);
+    await page.mouse.down();
+    await page.mouse.move((a.x + b.x) / 2, (a.y + b.y) / 2, { steps: 5 });
+    await page.mouse.move(b.x + b.width / 2, b.y + b.height / 2, { steps: 5 });
+    await page.mouse.up();
+  };
+  const clickPane = () => page.locator(".react-flow__pane").click({ position: { x: 8, y: 8 } });
+
+  return [
+    ["log in", async () => {
+      await page.goto(baseUrl);
+      await page.getByLabel("User name").fill("admin");
+      await page.getByLabel("Password").fill("wrong-password");
+      await page.getByRole("button", { name: "Log in" }).click();
+      await expectText(page.getByRole("alert"), /wrong user name or password/);
+      await page.getByLabel("Password").fill(password);
+      await shot("login");
+      await page.getByRole("button", { name: "Log in" }).click();
+      await expectVisible(page.getByRole("heading", { name: "MoDD projects" }));
+    }],
+
+    ["create an empty project", async () => {
+      await page.getByLabel("Project name").fill("scenario1");
+      await page.getByLabel("Drone name").fill("usv");
+      await shot("projects");
+      await page.getByRole("button", { name: "Create" }).click();
+      await expectVisible(node("drone"));
+      await expectCount(page.locator(".react-flow__node"), 3);
+    }],
+
+    ["integrator: sensor and measured variables", async () => {
+      await view("Sensor integrator");
+      await expectDisabled(page.getByRole("button", { name: "+ Publisher" }));
+      await page.getByRole("button", { name: "+ Sensor" }).click();
+      await setText("name", "accelerometer");
+      await expectVisible(node("sensor:accelerometer"));
+      await select("topic:accelerometer.value");
+      await setText("name", "accel_x");
+      await setText("unit", "METER_PER_SECOND_SQUARED");
+      for (const v of ["accel_y", "accel_z"]) {
+        await page.getByRole("button", { name: "+ Variable" }).click();
+        await setText("name", v);
+        await setText("unit", "METER_PER_SECOND_SQUARED");
+      }
+      await expectCount(page.locator(".react-flow__node.react-flow__node-topic"), 3);
+      await layout();
+      await select("topic:accelerometer.accel_z");
+      await shot("integrator");
+    }],
+
+    ["designer: publisher connected by dragging", async () => {
+      await view("System designer");
+      await expectDisabled(page.getByRole("button", { name: "+ Sensor" }));
+      await page.getByRole("button", { name: "+ Publisher" }).click();
+      await setText("periodS", "0.04");
+      await layout();
+      for (const v of ["accel_x", "accel_y", "accel_z"]) await connect("pub:pub_1", `topic:accelerometer.${v}`);
+      await expectCount(page.locator(".react-flow__edge.edge-publishes"), 3);
+      await select("pub:pub_1");
+      await expectText(node("pub:pub_1"), /every 0\.04 s/);
+      await shot("designer");
+    }],
+
+    ["scientist: seven subscriptions", async () => {
+      await view("Scientist");
+      await expectDisabled(page.getByRole("button", { name: "+ Sensor" }));
+      const quick = page.getByRole("form", { name: "Quick subscription" });
+      const subs = [
+        ["accel_x", "2.0", "AVERAGE"], ["accel_y", "2.0", "AVERAGE"], ["accel_x", "0.25", "AVERAGE"],
+        ["accel_y", "0.25", "AVERAGE"], ["accel_z", "0.25", "MIN"], ["accel_z", "0.25", "MAX"],
+      ];
+      for (const [v, period, agg] of subs) {
+        await quick.getByLabel("Topic").selectOption(`usv.accelerometer.${v}`);
+        await quick.getByLabel("Every (s)").fill(period);
+        await quick.getByLabel("Aggregation").selectOption(agg);
+        await quick.getByRole("button", { name: "Subscribe" }).click();
+      }
+      // The seventh by hand: a bare subscriber is flagged until it has a topic.
+      await page.getByRole("button", { name: "+ Subscriber" }).click();
+      await layout();
+      await expectVisible(node("sub:sub_7").locator(".marker-error"));
+      await expectText(inspector, /topic: required/);
+      await shot("validation");
+      await connect("topic:accelerometer.accel_z", "sub:sub_7");
+      await select("sub:sub_7");
+      await setText("periodS", "0.25");
+      await setSelect("aggregation", "MAX");
+      await expectText(node("sub:sub_7"), /MAX every 0\.25 s/);
+      await expectCount(page.locator(".react-flow__node .marker-error"), 0);
+    }],
+
+    ["live plan: buffer sizes 28, 28, 6", async () => {
+      await panel("Plan");
+      await waitUntil(async () => (await page.getByTestId("buffer-size").allTextContents()).join(",") === "28,28,6", 20000,
+        async () => `buffer sizes ${(await page.getByTestId("buffer-size").allTextContents()).join(",")}`);
+      await expectText(page.getByTestId("hyperperiod"), /2\.0 s/);
+      await expectText(node("topic:accelerometer.accel_z"), /n = 6/);
+      await clickPane();
+      await shot("scientist");
+      await page.getByRole("button", { name: "Zoom in", exact: true }).click();
+      await shot("plan");
+    }],
+
+    ["undo, redo, copy, paste, delete", async () => {
+      await clickPane();
+      await page.keyboard.press("Control+z");
+      await expectText(node("sub:sub_7"), /AVERAGE every 0\.25 s/);
+      await page.keyboard.press("Control+Shift+z");
+      await expectText(node("sub:sub_7"), /MAX every 0\.25 s/);
+      await node("sub:sub_7").click();
+      await page.keyboard.press("Control+c");
+      await page.keyboard.press("Control+v");
+      await expectVisible(node("sub:sub_7_copy"));
+      await page.keyboard.press("Delete");
+      await expectCount(node("sub:sub_7_copy"), 0);
+      await expectCount(page.locator(".react-flow__node.react-flow__node-subscriber"), 7);
+    }],
+
+    ["save", async () => {
+      await page.getByRole("button", { name: "Save", exact: true }).click();
+      await expectText(page.locator(".topbar .revision"), /^r2$/);
+    }],
+
+    ["text view: saved text and a syntax error at line:col", async () => {
+      await panel("Text");
+      await expectText(page.locator(".cm-content"), /Subscriber sub_7/);
+      await shot("text");
+      await page.locator(".cm-content").click();
+      await page.keyboard.press("Control+End");
+      await page.keyboard.type(" oops {");
+      await page.getByRole("button", { name: "Apply text to diagram" }).click();
+      await expectText(page.locator(".text-toolbar [role=status]"), /error\(s\): not applied\. \d+:\d+/);
+      await expectVisible(page.locator(".cm-lintRange-error, .cm-lint-marker-error").first());
+      await shot("text-error");
+      await page.getByRole("button", { name: "Reload saved text" }).click();
+      await expectText(page.locator(".text-toolbar [role=status]"), /revision 2/);
+    }],
+
+    ["integrator downloads", async () => {
+      await view("Sensor integrator");
+      await expectVisible(page.getByRole("button", { name: /Download Driver stubs/ }));
+      await shot("downloads");
+    }],
+
+    ["operator: deploy", async () => {
+      await view("Operator");
+      await expectVisible(page.getByRole("region", { name: "Deployment history" }));
+      await page.getByRole("button", { name: "Deploy revision 2" }).click();
+      const result = page.getByTestId("deploy-result");
+      await expectVisible(result, 30000);
+      const text = await result.textContent();
+      if (live) {
+        if (!/Acked/.test(text ?? "")) throw new Error(`deploy not acked: ${text}`);
+      } else if (!/Deploy failed/.test(text ?? "")) {
+        throw new Error(`without a drone the deploy must fail visibly, got: ${text}`);
+      }
+      await shot("operator");
+    }],
+
+    ["monitor", async () => {
+      await view("Scientist");
+      await panel("Monitor");
+      await expectVisible(page.getByRole("status", { name: "Link status" }));
+      if (live) {
+        await expectText(page.getByTestId("last-sub_5"), /last -?\d/, 30000);
+      }
+      await shot("monitor");
+    }],
+
+    ["3D and archives panels", async () => {
+      await panel("3D");
+      await page.waitForTimeout(500);
+      await shot("scene3d");
+      await panel("Archives");
+      await page.waitForTimeout(500);
+      await shot("archives");
+    }],
+  ];
+}
+
+export async function waitUntil(check, timeoutMs, describe) {
+  const t0 = Date.now();
+  while (Date.now() - t0 < timeoutMs) {
+    if (await check()) return;
+    await new Promise((r) => setTimeout(r, 200));
+  }
+  throw new Error(`timed out: ${describe ? await describe() : "condition"}`);
+}
+
+async function expectVisible(locator, timeout = 10000) {
+  await locator.waitFor({ state: "visible", timeout });
+}
+
+async function expectText(locator, re, timeout = 10000) {
+  await waitUntil(async () => re.test((await locator.first().textContent().catch(() => "")) ?? ""), timeout,
+    async () => `${re} not in "${(await locator.first().textContent().catch(() => "")) ?? ""}"`);
+}
+
+async function expectCount(locator, n, timeout = 10000) {
+  await waitUntil(async () => (await locator.count()) === n, timeout, async () => `expected ${n} elements, found ${await locator.count()}`);
+}
+
+async function expectDisabled(locator) {
+  if (!(await locator.isDisabled())) throw new Error("expected a disabled control");
+}
