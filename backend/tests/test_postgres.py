@@ -1,0 +1,90 @@
+"""The store on a real PostgreSQL server (Debian's postgresql package),
+started by this test on a loopback port in a temporary directory and stopped
+with pg_ctl: migrations, versions with optimistic concurrency, deployments.
+Skipped, saying so, when the server binaries are not installed."""
+
+from __future__ import annotations
+
+import io
+import os
+import shutil
+import socket
+import subprocess
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from fastapi.testclient import TestClient
+from modd_backend import Settings, create_app
+
+from .conftest import ADMIN_PASSWORD, login
+
+PG_BINS = sorted(Path("/usr/lib/postgresql").glob("*/bin"))
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _as_postgres(cmd: list[str]) -> list[str]:
+    """initdb refuses to run as root: run as the package's ``postgres`` user."""
+    if os.geteuid() == 0:
+        return ["runuser", "-u", "postgres", "--", *cmd]
+    return cmd
+
+
+@pytest.fixture(scope="module")
+def postgres_url() -> Iterator[str]:
+    if not PG_BINS or not (PG_BINS[-1] / "initdb").exists():
+        pytest.skip("PostgreSQL server binaries are not installed (apt-get install postgresql)")
+    bins = PG_BINS[-1]
+    # Not under pytest's tmp tree: that is private to root, and the server runs
+    # as postgres.
+    root = Path(tempfile.mkdtemp(prefix="modd-pg-"))
+    data = root / "data"
+    if os.geteuid() == 0:
+        shutil.chown(root, "postgres")
+    port = _free_port()
+    subprocess.run(_as_postgres([str(bins / "initdb"), "-D", str(data), "-U", "modd",
+                                 "--auth=trust", "-E", "UTF8"]),
+                   check=True, capture_output=True)
+    opts = f"-h 127.0.0.1 -p {port} -k {root}"
+    subprocess.run(_as_postgres([str(bins / "pg_ctl"), "-D", str(data), "-o", opts, "-w",
+                                 "-l", str(root / "pg.log"), "start"]),
+                   check=True, capture_output=True)
+    try:
+        yield f"postgresql+psycopg://modd@127.0.0.1:{port}/postgres"
+    finally:
+        subprocess.run(_as_postgres([str(bins / "pg_ctl"), "-D", str(data), "-m", "fast",
+                                     "-w", "stop"]), capture_output=True)
+        shutil.rmtree(root, ignore_errors=True)
+
+
+def test_store_on_postgresql(postgres_url: str, tmp_path: Path, scenario1: str) -> None:
+    settings = Settings(data_dir=tmp_path, database_url=postgres_url, zenoh_enabled=False,
+                        initial_admin_password=ADMIN_PASSWORD)
+    with TestClient(create_app(settings, out=io.StringIO())) as c:
+        h = login(c, "admin", ADMIN_PASSWORD)
+        pid = c.post("/api/projects", headers=h,
+                     json={"name": "pg", "model": {"text": scenario1}}).json()["id"]
+        model = c.get(f"/api/projects/{pid}/model", headers=h).json()["model"]
+        model["link"] = {"maxBuffer": 500}
+        ok = c.put(f"/api/projects/{pid}/model", headers=h,
+                   json={"base_revision": 1, "model": model, "message": "on pg"})
+        assert ok.status_code == 200 and ok.json()["revision"] == 2
+        stale = c.put(f"/api/projects/{pid}/model", headers=h,
+                      json={"base_revision": 1, "model": model})
+        assert stale.status_code == 409 and stale.json()["current_revision"] == 2
+        versions = c.get(f"/api/projects/{pid}/versions", headers=h).json()
+        assert [v["message"] for v in versions] == ["on pg", "created"]
+        assert c.get(f"/api/projects/{pid}/deployed-diff", headers=h).json()["deployed"] is None
+    assert not (tmp_path / "modd.sqlite3").exists()  # the URL was used, not the default file
+    # A second start on the same database: migrations are idempotent, no second admin.
+    out = io.StringIO()
+    with TestClient(create_app(settings, out=out)) as c:
+        h = login(c, "admin", ADMIN_PASSWORD)
+        assert len(c.get("/api/projects", headers=h).json()) == 1
+    assert out.getvalue() == ""
