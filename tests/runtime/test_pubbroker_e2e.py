@@ -249,3 +249,15 @@ def test_archive_rotates_and_every_file_reads_back(broker_factory: Any) -> None:
     archive = read_archive(b.archive_dir)
     assert sum(len(v) for v in archive.values()) == load.published
     assert archive[names[0]][0].value == f32(signal_value(0, 0))
+
+
+def test_kill9_loses_at_most_the_flush_interval(broker_factory: Any) -> None:
+    from pubbroker_harness import read_archive_records
+
+    b = broker_factory(archive={"flush_interval_ms": 200})
+    names = [f"usv.accelerometer.accel_{a}" for a in "xyz"]
+    load = run_load(f"unix:{b.unix_path}", names, 100.0, 1.5)
+    time.sleep(0.6)  # > flush interval: everything handed over has been written
+    b.stop(signal.SIGKILL)
+    archive = read_archive_records(b.archive_dir)
+    assert sum(len(v) for v in archive.values()) == load.published
