@@ -75,9 +75,15 @@ export function createApi(opts: HttpOptions) {
 
     // --- archives
     listArchives: (drone: string) => http.request<ArchiveFile[]>(`/api/drones/${drone}/archives`),
-    readArchive: (drone: string, file: string, topic: string, from?: number, to?: number) =>
-      http.request<ArchiveSeries>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}/series`, { query: { topic, from, to } }),
-    archiveUrl: (drone: string, file: string) => http.url(`/api/drones/${drone}/archives/${encodeURIComponent(file)}`),
+    readArchive: (drone: string, file: string, topic: string, startNs?: number, endNs?: number, maxPoints = 2000) =>
+      http.request<ArchiveSeries>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}/series`, {
+        query: { topic, start_ns: startNs, end_ns: endNs, max_points: maxPoints },
+      }),
+    /** The MCAP file itself (a blob: downloads need the bearer token, so no plain link). */
+    downloadArchive: (drone: string, file: string) =>
+      http.request<Blob>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}`, { as: "blob" }),
+    archiveCsv: (drone: string, file: string, topic: string, startNs?: number, endNs?: number) =>
+      http.request<Blob>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}/csv`, { query: { topic, start_ns: startNs, end_ns: endNs }, as: "blob" }),
 
     // --- 3D scene (viser), served by the backend
     scene: () => http.request<{ url: string }>("/api/scene"),

@@ -96,16 +96,21 @@ export interface DynamicReply {
   factor?: number | null;
 }
 
+/** An MCAP archive of a drone (backend routers/archives.py). */
 export interface ArchiveFile {
   name: string;
-  size?: number;
-  modified?: string;
-  [key: string]: unknown;
+  size: number;
+  /** False while the PubBroker still writes it. */
+  complete: boolean;
+  start_ns: number | null;
+  end_ns: number | null;
+  topics: Array<{ topic: string; messages: number }>;
 }
 
+/** A topic over a time range; `points` are [log time ns, value], min/max-reduced to at most max_points. */
 export interface ArchiveSeries {
   topic: string;
-  t: number[];
-  value: number[];
-  [key: string]: unknown;
+  total: number;
+  reduced: boolean;
+  points: Array<[number, unknown]>;
 }

@@ -11,7 +11,7 @@
 import { mkdirSync } from "node:fs";
 import { join } from "node:path";
 
-export function journey({ page, baseUrl, password, imagesDir, live }) {
+export function journey({ page, baseUrl, password, imagesDir, ports, drone, liveValues }) {
   mkdirSync(imagesDir, { recursive: true });
   // Photographs once the live plan has caught up with the last edit.
   const shot = async (name) => {
@@ -101,6 +101,12 @@ export function journey({ page, baseUrl, password, imagesDir, live }) {
       await layout();
       for (const v of ["accel_x", "accel_y", "accel_z"]) await connect("pub:pub_1", `topic:accelerometer.${v}`);
       await expectCount(page.locator(".react-flow__edge.edge-publishes"), 3);
+      // The brokers on free loopback ports (the simulated drone runs this model).
+      await select("pubBroker");
+      await setText("endpoint.port", String(ports.pub));
+      await select("subBroker");
+      await setText("endpoint.port", String(ports.sub));
+      await expectText(node("subBroker"), new RegExp(`127\\.0\\.0\\.1:${ports.sub}`));
       await select("pub:pub_1");
       await expectText(node("pub:pub_1"), /every 0\.04 s/);
       await shot("designer");
@@ -194,8 +200,9 @@ export function journey({ page, baseUrl, password, imagesDir, live }) {
       const result = page.getByTestId("deploy-result");
       await expectVisible(result, 30000);
       const text = await result.textContent();
-      if (live) {
+      if (drone) {
         if (!/Acked/.test(text ?? "")) throw new Error(`deploy not acked: ${text}`);
+        await expectText(page.getByRole("region", { name: "Deployment history" }), /acked/);
       } else if (!/Deploy failed/.test(text ?? "")) {
         throw new Error(`without a drone the deploy must fail visibly, got: ${text}`);
       }
@@ -206,9 +213,19 @@ export function journey({ page, baseUrl, password, imagesDir, live }) {
       await view("Scientist");
       await panel("Monitor");
       await expectVisible(page.getByRole("status", { name: "Link status" }));
-      if (live) {
-        await expectText(page.getByTestId("last-sub_5"), /last -?\d/, 30000);
+      await page.getByRole("checkbox", { name: /sub_5/ }).check();
+      await expectVisible(page.getByTestId("chart-sub_5"));
+      if (drone) {
+        // A dynamic subscription: the SubBroker answers ACCEPTED or NOT_AVAILABLE with its reason.
+        const form = page.getByRole("form", { name: "Dynamic subscription" });
+        await form.getByLabel("Topic").selectOption("usv.accelerometer.accel_x");
+        await form.getByLabel("Period (s)").fill("1.0");
+        await form.getByLabel("Aggregation").selectOption("AVERAGE");
+        await form.getByRole("button", { name: "Ask the drone" }).click();
+        await expectText(form.locator(".dynamic-replies li"), /ACCEPTED|NOT_AVAILABLE/, 15000);
       }
+      if (drone) await expectText(page.getByRole("status", { name: "Link status" }), /link up/, 20000);
+      if (liveValues) await expectText(page.getByTestId("last-sub_5"), /last -?\d/, 30000);
       await shot("monitor");
     }],
 

@@ -6,7 +6,7 @@
  * Chromium at 1280×800; stops what it started, by PID; prints one line
  * "N passed, N failed[, N skipped]" and exits non-zero on any failure.
  */
-import { existsSync, mkdtempSync, rmSync, readFileSync } from "node:fs";
+import { existsSync, mkdirSync, mkdtempSync, rmSync, readFileSync, symlinkSync, writeFileSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { dirname, join, resolve } from "node:path";
 import { fileURLToPath } from "node:url";
@@ -19,7 +19,10 @@ const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
 const repo = resolve(frontend, "..");
 const imagesDir = join(repo, "docs", "images");
-const backendBin = join(repo, ".venv", "bin", "modd-backend");
+const bin = join(repo, ".venv", "bin");
+const backendBin = join(bin, "modd-backend");
+const pubbrokerBin = process.env.MODD_PUBBROKER ?? join(repo, "build", "bin", "modd-pubbroker");
+const simulatorBin = join(bin, "modd-sim");
 const PASSWORD = "e2e-admin-password";
 
 function fail(message) {
@@ -45,22 +48,38 @@ for (const sig of ["SIGINT", "SIGTERM"]) process.on(sig, () => { void cleanup().
 
 try {
   execFileSync("npx", ["vite", "build", "--logLevel", "error"], { cwd: frontend, stdio: "inherit" });
-  const port = await freePort();
+  const [port, zport, pubPort, subPort] = [await freePort(), await freePort(), await freePort(), await freePort()];
   const baseUrl = `http://127.0.0.1:${port}`;
+  const zenoh = `tcp/127.0.0.1:${zport}`;
+  // The simulated drone: PubBroker + SubBroker (+ simulated sensors) of scenario 1,
+  // as the journey builds it, on free loopback ports. Needs the C++ build.
+  const drone = existsSync(pubbrokerBin);
+  const liveValues = drone && existsSync(simulatorBin);
+  if (drone) {
+    const model = scenario1(pubPort, subPort);
+    writeFileSync(join(tmp, "scenario1.json"), JSON.stringify(model));
+    const up = start("modd up", [join(bin, "modd"), "up", join(tmp, "scenario1.json"), "--workdir", join(tmp, "drone"),
+      "--zenoh-listen", zenoh, ...(liveValues ? ["--simulate"] : [])], { cwd: repo, logFile: join(tmp, "drone.log"),
+      env: { MODD_PUBBROKER: pubbrokerBin } });
+    procs.push(up);
+    // The backend lists <archives>/<drone>/*.mcap; `modd up` writes the PubBroker's archive to <workdir>/archive.
+    mkdirSync(join(tmp, "archives"), { recursive: true });
+    symlinkSync(join(tmp, "drone", "archive"), join(tmp, "archives", "usv"));
+  }
   const backend = start("backend", [
     backendBin, "--host", "127.0.0.1", "--port", String(port), "--data", join(tmp, "data"),
-    "--admin-password", PASSWORD, "--frontend", join(frontend, "dist"), "--no-zenoh",
+    "--admin-password", PASSWORD, "--frontend", join(frontend, "dist"),
+    "--archives", join(tmp, "archives"),
+    ...(drone ? ["--zenoh-connect", zenoh] : ["--no-zenoh"]),
   ], { cwd: repo, logFile: join(tmp, "backend.log") });
   procs.push(backend);
   await waitForHttp(`${baseUrl}/openapi.json`, backend);
-
-  const live = false;
-  console.log(`e2e: backend pid ${backend.pid} on ${baseUrl}; live drone: ${live ? "yes" : "no (runtime not wired yet)"}`);
+  console.log(`e2e: backend pid ${backend.pid} on ${baseUrl}; drone: ${drone ? `modd up pid ${procs[0].pid}` : `no (${pubbrokerBin} not built)`}; simulated values: ${liveValues ? "yes" : "no (no modd-sim)"}`);
   browser = await launch();
   const page = browser.context.pages()[0] ?? await browser.context.newPage();
   const errors = [];
   page.on("pageerror", (e) => errors.push(e.message));
-  const steps = journey({ page, baseUrl, password: PASSWORD, imagesDir, live });
+  const steps = journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues });
   let broken = null;
   for (const [name, fn] of steps) {
     if (broken) { console.log(`  - ${name}: not run (after "${broken}" failed)`); failed += 1; continue; }
@@ -75,10 +94,15 @@ try {
       broken = name;
       console.log(`  ✗ ${name}: ${e.message}`);
       await page.screenshot({ path: join(tmpdir(), "modd-e2e-failure.png") }).catch(() => undefined);
-      try { console.log(readFileSync(join(tmp, "backend.log"), "utf8").split("\n").slice(-15).join("\n")); } catch { /* none */ }
     }
   }
-  if (!live) { skipped += 1; console.log("  - live values from a simulated drone: skipped (runtime not wired yet)"); }
+  if (!drone) { skipped += 1; console.log(`  - deploy acked by a drone: skipped (${pubbrokerBin} not built: make build)`); }
+  if (!liveValues) { skipped += 1; console.log("  - live values in a chart: skipped (no simulated sensors: modd-sim is not installed)"); }
+  if (failed) {
+    for (const log of ["backend.log", "drone.log"]) {
+      try { console.log(`--- ${log}\n${readFileSync(join(tmp, log), "utf8").split("\n").slice(-20).join("\n")}`); } catch { /* none */ }
+    }
+  }
 } catch (e) {
   failed += 1;
   console.error(`e2e: ${e.stack ?? e}`);
@@ -87,3 +111,18 @@ try {
 }
 console.log(`${passed} passed, ${failed} failed${skipped ? `, ${skipped} skipped` : ""}`);
 process.exit(failed ? 1 : 0);
+
+/** Scenario 1 as the journey builds it (no subscriber endpoints: zenoh delivery). */
+function scenario1(pubPort, subPort) {
+  const t = (v) => `usv.accelerometer.${v}`;
+  const subs = [["accel_x", "2.0", "AVERAGE"], ["accel_y", "2.0", "AVERAGE"], ["accel_x", "0.25", "AVERAGE"],
+    ["accel_y", "0.25", "AVERAGE"], ["accel_z", "0.25", "MIN"], ["accel_z", "0.25", "MAX"], ["accel_z", "0.25", "MAX"]];
+  return {
+    schemaVersion: "1.0",
+    drone: { name: "usv", sensors: [{ name: "accelerometer", variables: ["accel_x", "accel_y", "accel_z"].map((name) => ({ name, unit: "METER_PER_SECOND_SQUARED" })) }] },
+    pubBroker: { endpoint: { host: "127.0.0.1", port: pubPort }, logPath: "/tmp/modd/logs" },
+    subBroker: { endpoint: { host: "127.0.0.1", port: subPort }, configPath: "/tmp/modd/conf" },
+    publishers: [{ name: "pub_1", periodS: "0.04", topics: [t("accel_x"), t("accel_y"), t("accel_z")] }],
+    subscribers: subs.map(([v, periodS, aggregation], i) => ({ name: `sub_${i + 1}`, topic: t(v), periodS, aggregation })),
+  };
+}

@@ -1,80 +1,102 @@
 /**
- * Archives: the drone's MCAP files; plot a topic over a time range (reduced by
- * the backend for plotting); download the file.
+ * Archives: the drone's MCAP files (from the backend, which reads them with
+ * the official mcap reader); plot a topic over a time range (min/max-reduced
+ * by the backend for plotting); download the file or the range as CSV.
  */
 import { useEffect, useRef, useState } from "react";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
-import { listTopics } from "../../core/query";
 import { useModel } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
 import { usePanelData, LoadState } from "../usePanelData";
-import type { ArchiveSeries } from "../../api/types";
+import { saveBlob } from "../saveBlob";
+import type { ArchiveFile, ArchiveSeries } from "../../api/types";
 
 function SeriesChart({ series }: { series: ArchiveSeries }) {
   const host = useRef<HTMLDivElement>(null);
   useEffect(() => {
     const el = host.current;
     if (!el) return;
+    const pts = series.points.filter(([, v]) => typeof v === "number" || typeof v === "boolean");
     const plot = new uPlot({
       width: Math.max(el.clientWidth, 200), height: 180, scales: { x: { time: true } }, legend: { show: false },
       series: [{}, { label: series.topic, stroke: "#0f766e", width: 1 }],
-    }, [series.t, series.value], el);
+    }, [pts.map(([t]) => t / 1e9), pts.map(([, v]) => Number(v))], el);
     return () => plot.destroy();
   }, [series]);
-  return <div ref={host} className="chart-host" aria-label={`Archived ${series.topic}`} />;
+  return (
+    <figure className="live-chart">
+      <figcaption>{series.topic}: {series.total} samples{series.reduced ? `, reduced to ${series.points.length} points` : ""}</figcaption>
+      <div ref={host} className="chart-host" aria-label={`Archived ${series.topic}`} />
+    </figure>
+  );
 }
+
+const seconds = (ns: number | null) => (ns === null ? "—" : new Date(ns / 1e6).toLocaleString());
 
 export default function ArchivesPanel() {
   const { api } = useServices();
-  const model = useModel();
-  const drone = model.drone.name;
+  const drone = useModel().drone.name;
   const [files, reload] = usePanelData(() => api.listArchives(drone), [drone]);
-  const topics = listTopics(model);
-  const [file, setFile] = useState("");
+  const [file, setFile] = useState<ArchiveFile | null>(null);
   const [topic, setTopic] = useState("");
   const [range, setRange] = useState({ from: "", to: "" });
   const [series, setSeries] = useState<{ data?: ArchiveSeries; error?: string; busy?: boolean }>({});
+  const chosenTopic = topic || file?.topics[0]?.topic || "";
+  // The range is typed in seconds after the file's first message.
+  const bound = (s: string) => (s && file?.start_ns != null ? file.start_ns + Math.round(Number(s) * 1e9) : undefined);
 
   const plot = async (e: React.FormEvent) => {
     e.preventDefault();
+    if (!file) return;
     setSeries({ busy: true });
     try {
-      const from = range.from ? Number(range.from) : undefined;
-      const to = range.to ? Number(range.to) : undefined;
-      setSeries({ data: await api.readArchive(drone, file, topic || topics[0]?.name || "", from, to) });
+      setSeries({ data: await api.readArchive(drone, file.name, chosenTopic, bound(range.from), bound(range.to)) });
     } catch (err) {
       setSeries({ error: (err as Error).message });
     }
+  };
+  const download = async (blob: Promise<Blob>, name: string) => {
+    try { saveBlob(await blob, name); } catch (err) { setSeries({ error: (err as Error).message }); }
   };
 
   return (
     <div className="panel-body archives-panel">
       <LoadState value={files} what="archives" />
-      {files.state !== "ready" && <button onClick={reload}>Retry</button>}
+      {files.state !== "ready" && files.state !== "loading" && <button onClick={reload}>Retry</button>}
       {files.state === "ready" && (
         <div className="archives-grid">
-          <ul className="archive-list" aria-label="Archive files">
-            {files.data.length === 0 && <li className="muted">No archive yet.</li>}
-            {files.data.map((f) => (
-              <li key={f.name} className={file === f.name ? "picked" : ""}>
-                <button className="link" onClick={() => setFile(f.name)}>{f.name}</button>
-                {f.size !== undefined && <span className="muted"> {(f.size / 1024).toFixed(1)} KiB</span>}
-                {" "}<a href={api.archiveUrl(drone, f.name)} download>download</a>
-              </li>
-            ))}
-          </ul>
-          <form onSubmit={plot} className="archive-form" aria-label="Plot an archived topic">
-            <select aria-label="Topic" value={topic || topics[0]?.name || ""} onChange={(e) => setTopic(e.target.value)}>
-              {topics.map((t) => <option key={t.id}>{t.name}</option>)}
-            </select>
-            <input aria-label="From (s since epoch)" placeholder="from" value={range.from} onChange={(e) => setRange({ ...range, from: e.target.value })} size={10} />
-            <input aria-label="To (s since epoch)" placeholder="to" value={range.to} onChange={(e) => setRange({ ...range, to: e.target.value })} size={10} />
-            <button type="submit" disabled={!file}>Plot</button>
-            {series.busy && <span role="status">Reading…</span>}
-            {series.error && <span className="error" role="alert">{series.error}</span>}
-          </form>
-          {series.data && <SeriesChart series={series.data} />}
+          <div>
+            <button onClick={reload}>Refresh</button>
+            <table className="history-table" aria-label="Archive files">
+              <thead><tr><th>File</th><th>Size</th><th>From</th><th>To</th><th /></tr></thead>
+              <tbody>
+                {files.data.length === 0 && <tr><td colSpan={5} className="muted">No archive yet for {drone}.</td></tr>}
+                {files.data.map((f) => (
+                  <tr key={f.name} className={file?.name === f.name ? "picked" : ""}>
+                    <td><button className="link" onClick={() => { setFile(f); setTopic(""); }}>{f.name}</button>{f.complete ? "" : " (being written)"}</td>
+                    <td>{(f.size / 1024).toFixed(1)} KiB</td><td>{seconds(f.start_ns)}</td><td>{seconds(f.end_ns)}</td>
+                    <td><button className="link" onClick={() => void download(api.downloadArchive(drone, f.name), f.name)}>download</button></td>
+                  </tr>
+                ))}
+              </tbody>
+            </table>
+          </div>
+          <div>
+            <form onSubmit={plot} className="archive-form" aria-label="Plot an archived topic">
+              <select aria-label="Topic" value={chosenTopic} onChange={(e) => setTopic(e.target.value)} disabled={!file}>
+                {file?.topics.map((t) => <option key={t.topic} value={t.topic}>{t.topic} ({t.messages})</option>)}
+              </select>
+              <input aria-label="From (s after the start)" placeholder="from s" value={range.from} onChange={(e) => setRange({ ...range, from: e.target.value })} size={6} />
+              <input aria-label="To (s after the start)" placeholder="to s" value={range.to} onChange={(e) => setRange({ ...range, to: e.target.value })} size={6} />
+              <button type="submit" disabled={!file}>Plot</button>
+              <button type="button" disabled={!file} onClick={() => file && void download(api.archiveCsv(drone, file.name, chosenTopic, bound(range.from), bound(range.to)), `${file.name}-${chosenTopic}.csv`)}>CSV</button>
+              {series.busy && <span role="status">Reading…</span>}
+              {series.error && <span className="error" role="alert">{series.error}</span>}
+            </form>
+            {!file && <p className="muted">Pick a file to plot one of its topics.</p>}
+            {series.data && <SeriesChart series={series.data} />}
+          </div>
         </div>
       )}
     </div>

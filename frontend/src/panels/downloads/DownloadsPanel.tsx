@@ -6,6 +6,7 @@
 import { useState } from "react";
 import { useEditor } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
+import { saveBlob } from "../saveBlob";
 
 const TARGETS = [
   { target: "integrator", title: "Driver stubs (C++)", who: "Sensor integrator" },
@@ -13,14 +14,6 @@ const TARGETS = [
   { target: "operator", title: "Broker configurations", who: "Operator" },
 ];
 
-function saveBlob(blob: Blob, name: string) {
-  const url = URL.createObjectURL(blob);
-  const a = document.createElement("a");
-  a.href = url;
-  a.download = name;
-  a.click();
-  setTimeout(() => URL.revokeObjectURL(url), 1000);
-}
 
 export default function DownloadsPanel() {
   const { api } = useServices();
