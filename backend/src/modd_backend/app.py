@@ -19,7 +19,7 @@ from .accounts import ensure_first_admin
 from .db import Store
 from .deps import AppState
 from .planning import preload_milp
-from .routers import archives, auth, deploy, models, plan, projects, streams, users
+from .routers import archives, auth, deploy, downloads, models, plan, projects, streams, users
 from .settings import Settings
 from .spa import mount_frontend
 from .zbridge import ZenohBridge
@@ -31,6 +31,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     models.router,
     plan.router,
     deploy.router,
+    downloads.router,
     streams.router,
     archives.router,
 )

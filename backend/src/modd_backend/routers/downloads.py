@@ -1,0 +1,55 @@
+"""Downloads: a model revision's generated artefacts for one role, as a zip.
+Each role downloads its own target (admin any)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from fastapi import APIRouter, Query
+from fastapi.responses import Response
+from modd_model import validate
+
+from ..deps import DbDep, UserDep, has_role
+from ..downloads import role_zip
+from ..errors import ApiError
+from ..modelio import diagnostics_json
+from ..roles import Role
+from ..schemas import Id, Responses
+from ..versions import get_project, get_version, model_of
+
+router = APIRouter(prefix="/api/projects", tags=["downloads"])
+Target = Literal["integrator", "operator", "scientist"]
+RESPONSES: Responses = {
+    200: {"content": {"application/zip": {}}},
+    403: {"description": "the target is another role's"},
+    404: {"description": "no such project or revision"},
+    422: {"description": "the revision has errors"},
+}
+
+
+@router.get("/{project_id}/downloads/{target}", response_class=Response, responses=RESPONSES)
+def download(
+    project_id: Id,
+    target: Target,
+    db: DbDep,
+    user: UserDep,
+    revision: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
+) -> Response:
+    """integrator: C++ driver projects; operator: PubBroker and SubBroker
+    configs; scientist: Python and C++ subscriber stubs."""
+    if not has_role(user, Role(target)):
+        raise ApiError(403, f"the {target} downloads need the role {target}")
+    project = get_project(db, project_id)
+    version = get_version(db, project_id, revision)
+    model = model_of(version)
+    errors = [d for d in validate(model) if d.severity == "error"]
+    if errors:
+        raise ApiError(422, f"revision {version.revision} has errors: fix them first",
+                       diagnostics=diagnostics_json(errors))
+    folder = f"{project.name}-r{version.revision}-{target}".replace(" ", "_")
+    try:
+        data = role_zip(model, target, folder)
+    except ValueError as exc:
+        raise ApiError(422, f"the generators cannot handle this model: {exc}") from None
+    return Response(data, media_type="application/zip",
+                    headers={"Content-Disposition": f'attachment; filename="{folder}.zip"'})
