@@ -24,8 +24,8 @@ All deviations are integer microseconds (periods are whole microseconds).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from math import lcm
 
@@ -47,7 +47,8 @@ class Subscription:
 
 @dataclass(frozen=True)
 class BufferProblem:
-    """The MILP's data. ``cap_us`` is 3 x PING in whole µs (None: no cap)."""
+    """The MILP's data. ``cap_us`` is 3 x PING in whole µs (None: no cap);
+    it does not bind the subscriptions of the ``uncapped`` topics."""
 
     topics: tuple[str, ...]
     publication_us: tuple[int, ...]
@@ -56,12 +57,15 @@ class BufferProblem:
     cap_us: int | None
     alpha: Fraction
     beta: Fraction
+    uncapped: frozenset[str] = frozenset()
 
-    def without_cap(self) -> BufferProblem:
-        return BufferProblem(
-            self.topics, self.publication_us, self.subscriptions,
-            self.max_buffer, None, self.alpha, self.beta,
-        )
+    def relaxed(self, topics: Iterable[str]) -> BufferProblem:
+        """The same problem with the cap lifted for these topics."""
+        return replace(self, uncapped=self.uncapped | frozenset(topics))
+
+    def cap_for(self, topic: str) -> int | None:
+        """The cap binding the subscriptions of ``topic`` (None: none)."""
+        return None if topic in self.uncapped else self.cap_us
 
     def periods_by_topic(self) -> list[list[Subscription]]:
         index = {t: i for i, t in enumerate(self.topics)}
@@ -84,7 +88,7 @@ class Infeasibility:
 class BufferSolution:
     """Buffer size per topic and the resulting deviation per subscriber (µs).
     ``infeasible`` non-empty means the cap could not be met: the sizes are
-    then the optimum without the cap and violate it."""
+    then the optimum with the cap lifted for those topics, which violate it."""
 
     sizes: dict[str, int]
     deviations_us: dict[str, int]
@@ -185,10 +189,11 @@ def _fronts(problem: BufferProblem) -> tuple[list[_Front | None], list[Infeasibi
         s, m = topic_table([x.period_us for x in subs], pm_us, problem.max_buffer)
         if problem.alpha == 0:
             s = np.zeros_like(s)
-        allowed = np.ones(len(m), dtype=bool) if problem.cap_us is None else m <= problem.cap_us
+        cap = problem.cap_for(topic)
+        allowed = np.ones(len(m), dtype=bool) if cap is None else m <= cap
         if not allowed.any():
-            assert problem.cap_us is not None
-            reason = _explain(topic, subs, pm_us, m, problem.cap_us)
+            assert cap is not None
+            reason = _explain(topic, subs, pm_us, m, cap)
             infeasible.append(Infeasibility(topic, tuple(x.name for x in subs), reason))
             fronts.append(None)
             continue
@@ -218,11 +223,11 @@ def _best_w(fronts: Sequence[_Front], a: int, b: int) -> int:
 def solve_exact(problem: BufferProblem) -> BufferSolution:
     """The MILP's optimum with the documented tie-break, exactly.
 
-    When the cap makes it infeasible, returns the optimum without the cap
-    with ``infeasible`` naming the offending topics."""
+    When the cap makes it infeasible, returns the optimum with the cap lifted
+    for the offending topics only, ``infeasible`` naming them."""
     fronts, infeasible = _fronts(problem)
     if infeasible:
-        relaxed = solve_exact(problem.without_cap())
+        relaxed = solve_exact(problem.relaxed(x.topic for x in infeasible))
         return BufferSolution(relaxed.sizes, relaxed.deviations_us, tuple(infeasible))
     d = lcm(problem.alpha.denominator, problem.beta.denominator)
     a, b = int(problem.alpha * d), int(problem.beta * d)

@@ -123,7 +123,7 @@ def _infeasible_lines(plan: Plan) -> list[str]:
         return []
     cap = _sec(Fraction(plan.constants.cap_us, 1_000_000))
     lines = ["", f"INFEASIBLE: the delay cap 3 x PING = {cap} cannot be met; "
-             "the plan above is the best one without the cap:"]
+             "the plan above lifts it for these topics only:"]
     lines += [
         f"  {x.topic} ({', '.join(x.subscribers)}): {x.reason}" for x in plan.infeasible
     ]

@@ -18,6 +18,7 @@ are rounded and re-evaluated exactly.
 
 from __future__ import annotations
 
+from fractions import Fraction
 from functools import cache
 from types import ModuleType
 from typing import Any
@@ -42,12 +43,13 @@ def _cvxpy() -> ModuleType:
     return cvxpy
 
 
-def _solve(cp: ModuleType, objective: Any, constraints: list[Any]) -> float:
+def _solve(cp: ModuleType, objective: Any, constraints: list[Any], n: Any) -> list[int]:
+    """Solve, and return the buffer sizes rounded to the nearest integers."""
     problem = cp.Problem(cp.Minimize(objective), constraints)
-    problem.solve(solver=cp.HIGHS, mip_rel_gap=0.0)
+    problem.solve(solver=cp.HIGHS, mip_rel_gap=0.0, mip_feasibility_tolerance=1e-9)
     if problem.status not in ("optimal", "optimal_inaccurate"):
         raise ValueError(f"HiGHS: {problem.status}")
-    return float(problem.value)
+    return [int(round(x)) for x in np.asarray(n.value, dtype=float)]
 
 
 def _incidence(problem: BufferProblem) -> tuple[sp.csr_matrix, np.ndarray]:
@@ -65,11 +67,14 @@ def solve_milp(problem: BufferProblem, *, tie_break: bool = True) -> BufferSolut
     """The MILP optimum with the documented tie-break, via cvxpy + HiGHS.
     ``tie_break=False`` stops after stage 1: some optimum, as HiGHS finds it.
 
+    Each stage's optimum is re-evaluated exactly from the rounded sizes
+    before it bounds the next stage, so solver tolerances cannot accumulate.
     Infeasibility under the cap is detected and explained like
-    :func:`modd_plan.buffers.solve_exact` does, then solved without the cap."""
+    :func:`modd_plan.buffers.solve_exact` does, then solved with the cap
+    lifted for the offending topics only."""
     _, infeasible = _fronts(problem)
     if infeasible:
-        relaxed = solve_milp(problem.without_cap(), tie_break=tie_break)
+        relaxed = solve_milp(problem.relaxed(x.topic for x in infeasible), tie_break=tie_break)
         return BufferSolution(relaxed.sizes, relaxed.deviations_us, tuple(infeasible))
     if not problem.subscriptions:
         return solution_from_sizes(problem, [1] * len(problem.topics))
@@ -79,27 +84,43 @@ def solve_milp(problem: BufferProblem, *, tie_break: bool = True) -> BufferSolut
     z = cp.Variable(len(problem.subscriptions))
     w = cp.Variable()
     base = [z >= ps - a_mat @ n, z >= a_mat @ n - ps, z <= w, n >= 1, n <= problem.max_buffer]
-    if problem.cap_us is not None:
-        base.append(z <= problem.cap_us / US_PER_UNIT)
+    subs = problem.subscriptions
+    capped = [j for j, s in enumerate(subs) if problem.cap_for(s.topic) is not None]
+    if problem.cap_us is not None and capped:
+        base.append(z[np.array(capped)] <= problem.cap_us / US_PER_UNIT)
     alpha, beta = float(problem.alpha), float(problem.beta)
     stage1 = alpha * cp.sum(z) + beta * w
-    v = _solve(cp, stage1, base)
+    sizes = _solve(cp, stage1, base, n)
     if tie_break:
-        scale = min((x for x in (alpha, beta) if x > 0), default=1.0)
-        base.append(stage1 <= v + TOLERANCE * scale)
-        w_opt = _solve(cp, w, base)
-        base.append(w <= w_opt + TOLERANCE)
-        if alpha > 0:  # keep each topic's sum of deviations at its optimum
-            base.append(cp.sum(z) <= (v - beta * w_opt) / alpha + TOLERANCE)
-        _per_topic_stages(cp, base, n, z, (a_mat != 0).astype(float))
-    sizes = [int(round(x)) for x in np.asarray(n.value, dtype=float)]
+        sizes = _tie_break(cp, problem, base, (n, z, w), stage1, sizes)
     return solution_from_sizes(problem, sizes)
 
 
-def _per_topic_stages(cp: ModuleType, base: list[Any], n: Any, z: Any, incidence: Any) -> None:
-    """Stages 3 and 4: the smallest per-topic maximum, then the smallest n."""
-    m = cp.Variable(n.shape[0])
+def _ms(us: float) -> float:
+    return us / US_PER_UNIT
+
+
+def _tie_break(
+    cp: ModuleType, problem: BufferProblem, base: list[Any], nzw: tuple[Any, Any, Any],
+    stage1: Any, sizes: list[int],
+) -> list[int]:
+    """Stages 2-4, each bounded by the exact value of the previous stage's sizes."""
+    n, z, w = nzw
+    best = solution_from_sizes(problem, sizes)
+    scale = min((x for x in (problem.alpha, problem.beta) if x > 0), default=Fraction(1))
+    v = float(best.objective(problem.alpha, problem.beta)) * US_PER_UNIT
+    base.append(stage1 <= v + TOLERANCE * float(scale))
+    best = solution_from_sizes(problem, _solve(cp, w, base, n))  # stage 2
+    base.append(w <= _ms(best.max_deviation_us) + TOLERANCE)
+    if problem.alpha > 0:  # keep each topic's sum of deviations at its optimum
+        base.append(cp.sum(z) <= _ms(sum(best.deviations_us.values())) + TOLERANCE)
+    m = cp.Variable(len(problem.topics))
+    incidence = (_incidence(problem)[0] != 0).astype(float)
     base += [z <= incidence @ m, m >= 0]
-    _solve(cp, cp.sum(m), base)
-    base.append(m <= np.asarray(m.value, dtype=float) + TOLERANCE)
-    _solve(cp, cp.sum(n), base)
+    best = solution_from_sizes(problem, _solve(cp, cp.sum(m), base, n))  # stage 3
+    own_max = [
+        max((best.deviations_us[s.name] for s in subs), default=0)
+        for subs in problem.periods_by_topic()
+    ]
+    base.append(m <= np.array([_ms(x) for x in own_max]) + TOLERANCE)
+    return _solve(cp, cp.sum(n), base, n)  # stage 4

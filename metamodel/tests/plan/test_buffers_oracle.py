@@ -69,8 +69,9 @@ def oracle(p: BufferProblem) -> tuple[dict[str, int], list[str]]:
             for pm in [p.publication_us[p.topics.index(t)]]
         )
     ]
-    if cap is not None and not infeasible:
-        grid = [g for g in grid if max(_devs(p, g).values(), default=0) <= cap]
+    if cap is not None:  # the cap binds every topic but the infeasible ones
+        bound = [s.name for s in p.subscriptions if s.topic not in infeasible]
+        grid = [g for g in grid if all(_devs(p, g)[name] <= cap for name in bound)]
     best = min(grid, key=lambda g: _key(p, g))
     return dict(zip(p.topics, best, strict=True)), infeasible
 
@@ -90,6 +91,11 @@ def _problems(seed: int, count: int) -> list[BufferProblem]:
 def test_random_problems_cover_the_interesting_cases() -> None:
     problems = _problems(1, 300)
     assert sum(bool(oracle(p)[1]) for p in problems) >= 20  # infeasible ones
+    mixed = [  # an infeasible topic beside a subscribed one that must keep the cap
+        p for p in problems
+        if oracle(p)[1] and {s.topic for s in p.subscriptions} - set(oracle(p)[1])
+    ]
+    assert len(mixed) >= 10
     assert sum(p.alpha == 0 or p.beta == 0 for p in problems) >= 50
     assert sum(len(p.topics) == 3 and len(p.subscriptions) >= 4 for p in problems) >= 30
 
@@ -125,3 +131,25 @@ def test_exact_and_milp_agree_on_a_larger_random_problem() -> None:
     assert exact.objective(p.alpha, p.beta) == milp.objective(p.alpha, p.beta)
     some_optimum = solve_milp(p, tie_break=False)  # the paper's MILP alone
     assert some_optimum.objective(p.alpha, p.beta) == exact.objective(p.alpha, p.beta)
+
+
+def test_exact_and_milp_agree_on_medium_random_problems() -> None:
+    """Beyond brute force: up to 12 topics x 60 subscriptions, MAX_BUFFER up to
+    1000, caps, zero weights; sizes and infeasibility must be identical."""
+    rng = random.Random(5)
+    for _ in range(15):
+        topics = tuple(f"t{i}" for i in range(rng.randint(2, 12)))
+        p = BufferProblem(
+            topics=topics,
+            publication_us=tuple(rng.choice([*PUB_US, 10_000, 33_000]) for _ in topics),
+            subscriptions=tuple(
+                Subscription(f"s{j}", rng.choice(topics), rng.choice([*SUB_US, 2_300_000]))
+                for j in range(rng.randint(1, 60))
+            ),
+            max_buffer=rng.choice([10, 100, 1000]),
+            cap_us=rng.choice([None, 1_000_000, 2_490_000]),
+            alpha=rng.choice(WEIGHTS),
+            beta=rng.choice(WEIGHTS),
+        )
+        exact, milp = solve_exact(p), solve_milp(p)
+        assert (exact.sizes, exact.infeasible) == (milp.sizes, milp.infeasible), p

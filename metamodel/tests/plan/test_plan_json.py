@@ -52,6 +52,17 @@ def test_infeasible_names_topics_and_subscribers_and_keeps_the_uncapped_plan(
     assert relaxed["infeasible"] == [] and relaxed["buffer_sizes"] == j["buffer_sizes"]
 
 
+def test_the_cap_is_lifted_only_for_the_offending_topic(make_model: Any) -> None:
+    subs = [("fast", "a", "0.25", "MIN"), ("slow", "a", "8.0", "MIN"),
+            ("c1", "c", "0.25", "MIN"), ("c2", "c", "0.25", "MAX"), ("c3", "c", "5.0", "MIN")]
+    j = make_plan(make_model(["a", "c"], [("p", "0.05", ["a", "c"])], subs)).to_json()
+    assert [x["topic"] for x in j["infeasible"]] == ["d.s.a"]
+    # uncapped, c would follow its median (n = 22, c3 waits 3.9 s); capped at
+    # 2.49 s its best is n = 51 (2.55 s): delays 2.3, 2.3, 2.45
+    assert j["buffer_sizes"]["d.s.c"] == 51
+    assert [j["delays"][s] for s in ("c1", "c2", "c3")] == ["2.3", "2.3", "2.45"]
+
+
 def test_publication_period_too_long_for_the_cap(make_model: Any) -> None:
     model = make_model(["a"], [("p", "10.0", ["a"])], [("s", "a", "1.0", "MIN")])
     (bad,) = make_plan(model).to_json()["infeasible"]
