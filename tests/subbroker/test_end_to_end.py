@@ -14,9 +14,11 @@ import time
 from pathlib import Path
 from typing import Any
 
+import modd
 import pytest
 from modd.subbroker.client import NoReply, request
 from modd.subbroker.payload import DeliveredValue
+from modd.subscriber import subscribe_dynamic
 from modd.zenoh_session import wait_connected
 from subbroker_harness import (
     assert_contiguous,
@@ -86,8 +88,14 @@ def test_scenario1_delivery_matches_archive(tmp_path: Path, zenoh_client: Any) -
         assert dyn["derived_from"] == "usv.accelerometer.accel_z/MAX/0.25" and dyn["factor"] == 4
         no = request(session, "modd/usv/subscribe", {**ask, "aggregation": "FIRST"})
         assert no["status"] == "NOT_AVAILABLE" and "FIRST" in no["reason"]
+        avg = subscribe_dynamic("usv", "usv.accelerometer.accel_y", "0.5", "AVERAGE",
+                                session=session)
+        sub4 = modd.subscribe("usv", "sub_4", session=session)
         load.p.wait(RUN_S + 10)
         time.sleep(0.6)
+        avg_vals, sub4_vals = avg.collect(duration_s=0.1), sub4.collect(duration_s=0.1)
+        avg.close()  # cancels it at the SubBroker
+        sub4.close()
         cancel = request(session, "modd/usv/subscribe",
                          {"action": "cancel", "subscriber": dyn["subscriber"]})
         assert cancel["status"] == "CANCELLED"
@@ -101,14 +109,18 @@ def test_scenario1_delivery_matches_archive(tmp_path: Path, zenoh_client: Any) -
     sent = json.loads(load.log().strip().splitlines()[-1])["sent"]
     assert {t: len(s) for t, s in archive.items()} == sent  # lossless archive
     # every subscriber of the model got values, and the dynamic one
-    assert set(values) == {f"sub_{i}" for i in range(1, 8)} | {dyn["subscriber"]}
+    avg_name = avg.accepted["subscriber"]
+    assert set(values) == {f"sub_{i}" for i in range(1, 8)} | {dyn["subscriber"], avg_name}
+    assert status["dynamic"] == []  # both cancelled
+    assert len(avg_vals) >= 2 * RUN_S - 4 and avg_vals == values[avg_name][: len(avg_vals)]
+    assert sub4_vals == values["sub_4"][-len(sub4_vals):] and len(sub4_vals) >= 4 * RUN_S - 8
     n = check_against_archive(values, archive)
     for name, vals in values.items():
         period = int(float(vals[0].period_s) * 1e9)
         # windows with samples, while the load ran: contiguous
         busy = [v for v in vals if v.count != 0 and v.value is not None]
         assert_contiguous(busy, period)
-        if name not in (dyn["subscriber"], "sub_1", "sub_2"):
+        if name not in (dyn["subscriber"], avg_name, "sub_1", "sub_2"):
             assert len(busy) >= int(RUN_S / 0.25) - 3, (name, len(busy))
     assert len(values["sub_1"]) >= 3 and values["sub_1"][1].count in (49, 50, 51)
     # the dynamic subscription stopped after its cancel

@@ -1,0 +1,77 @@
+"""The Python subscriber API over a real zenoh session: values put on a
+subscriber key in the documented payload come out of the iterator, the
+callback and the DataFrame; malformed ones are skipped; dynamic requests
+treat silence as failure."""
+
+from __future__ import annotations
+
+import threading
+import time
+from typing import Any
+
+import modd
+import pytest
+from modd.subbroker.client import NoReply
+from modd.subbroker.payload import DeliveredValue
+from modd.subscriber import subscribe_dynamic
+from modd.zenoh_session import ZenohSettings, client_settings, open_session, wait_connected
+from subbroker_harness import free_port
+
+
+def value(i: int, sub: str = "sub_1") -> DeliveredValue:
+    return DeliveredValue(sub, "usv.a.x", "AVERAGE", "0.25", "METER", 1, i,
+                          i * 250_000_000, (i + 1) * 250_000_000, 0.5 * i, 6, 10**18 + i)
+
+
+@pytest.fixture
+def pair() -> Any:
+    port = free_port()
+    server = open_session(ZenohSettings(listen=(f"tcp/127.0.0.1:{port}",)))
+    yield server, port
+    server.close()
+
+
+def test_iterate_collect_dataframe_and_callback(pair: Any) -> None:
+    server, port = pair
+    sub = modd.subscribe("usv", "sub_1", connect=f"tcp/127.0.0.1:{port}")
+    seen: list[DeliveredValue] = []
+    cb = modd.subscribe("usv", "sub_1", seen.append, connect=f"tcp/127.0.0.1:{port}")
+    time.sleep(0.3)
+    for i in range(5):
+        server.put("modd/usv/sub/sub_1", value(i).to_json())
+    server.put("modd/usv/sub/sub_1", b"{not json")
+    server.put("modd/usv/sub/sub_2", value(9, "sub_2").to_json())  # another key: not seen
+    first = sub.get(timeout_s=2)
+    assert first == value(0)
+    it = iter(sub)
+    assert next(it) == value(1)
+    df = sub.dataframe(count=3, duration_s=2)
+    assert list(df["slot"]) == [2, 3, 4] and list(df["value"]) == [1.0, 1.5, 2.0]
+    assert str(df["end"].dt.tz) == "UTC" and df["end"].iloc[0].value == 750_000_000
+    assert sub.get(timeout_s=0.2) is None and sub.malformed == 1
+    deadline = time.monotonic() + 2
+    while len(seen) < 5 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert seen == [value(i) for i in range(5)]
+    done = threading.Event()
+
+    def drain() -> None:
+        list(sub)  # ends when the subscription closes
+        done.set()
+
+    threading.Thread(target=drain, daemon=True).start()
+    sub.close()
+    cb.close()
+    assert done.wait(2)
+    with pytest.raises(ValueError):
+        sub.collect()
+
+
+def test_dynamic_without_subbroker_is_no_reply() -> None:
+    session = open_session(client_settings(f"tcp/127.0.0.1:{free_port()}"))
+    try:
+        assert not wait_connected(session, 0.2)
+        with pytest.raises(NoReply):
+            subscribe_dynamic("usv", "usv.a.x", "1.0", "MIN", session=session, timeout_s=1)
+    finally:
+        session.close()
