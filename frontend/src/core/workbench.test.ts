@@ -81,3 +81,19 @@ describe("replaceModel", () => {
     expect(currentModel(s2)).toBe(currentModel(s1));
   });
 });
+
+describe("the save rule applied at edit time", () => {
+  it("refuses an integrator rename that would rewrite others' references", () => {
+    const s = reduce(initialState(scenario1(), "integrator"), { type: "setField", id: "sensor:accelerometer", path: ["name"], value: "imu" });
+    expect(s.notice).toBe("this edit changes /publishers, /subscribers, which the integrator view may not change");
+    expect(currentModel(s).drone.sensors[0].name).toBe("accelerometer");
+  });
+
+  it("lets an integrator rename an unreferenced sensor", () => {
+    let s = initialState(scenario1(), "integrator");
+    s = reduce(s, { type: "addSensor" });
+    s = reduce(s, { type: "setField", id: "sensor:sensor_1", path: ["name"], value: "ctd" });
+    expect(s.notice).toBeNull();
+    expect(currentModel(s).drone.sensors.map((x) => x.name)).toEqual(["accelerometer", "ctd"]);
+  });
+});

@@ -157,7 +157,16 @@ export function reduce(s: WorkbenchState, a: Action): WorkbenchState {
     case "dismissNotice": return { ...s, notice: null };
     default:
       try {
-        return edit(s, a);
+        const next = edit(s, a);
+        // The backend's save rule, applied at once: an edit that would change a part
+        // another role owns (e.g. a sensor rename reaching subscriptions) is refused here.
+        const before = currentModel(s);
+        const after = currentModel(next);
+        if (a.type !== "move" && after !== before) {
+          const denied = deniedParts(s.role, before, after);
+          if (denied.length) return refuse(s, `this edit changes ${denied.join(", ")}, which the ${s.role} view may not change`);
+        }
+        return next;
       } catch (e) {
         if (e instanceof EditError) return refuse(s, e.message);
         throw e;

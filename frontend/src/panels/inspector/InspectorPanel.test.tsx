@@ -1,0 +1,61 @@
+// @vitest-environment jsdom
+import { afterEach, describe, expect, it } from "vitest";
+import { act, cleanup, fireEvent, render, screen } from "@testing-library/react";
+import InspectorPanel from "./InspectorPanel";
+import { EditorContext } from "../../editor/useEditor";
+import { createEditorStore, type EditorStore } from "../../editor/store";
+import { scenario1 } from "../../core/testing/scenario1";
+import { currentModel } from "../../core/workbench";
+import type { Role } from "../../core/roles";
+
+function mount(role: Role, selection: string[]): EditorStore {
+  const store = createEditorStore(scenario1(), role);
+  store.dispatch({ type: "select", ids: selection });
+  render(<EditorContext.Provider value={store}><InspectorPanel /></EditorContext.Provider>);
+  return store;
+}
+
+afterEach(cleanup);
+
+describe("InspectorPanel", () => {
+  it("renders the schema's fields and help for a subscriber", () => {
+    mount("scientist", ["sub:sub_1"]);
+    expect(screen.getByRole("heading", { name: "Subscriber sub_1" })).toBeTruthy();
+    expect(screen.getByText(/A consumer on the base station/)).toBeTruthy();
+    expect((screen.getByLabelText(/^aggregation/) as HTMLSelectElement).value).toBe("AVERAGE");
+    expect((screen.getByLabelText(/^topic/) as HTMLSelectElement).value).toBe("usv.accelerometer.accel_x");
+    expect(screen.getByText("How the samples of each period are reduced.")).toBeTruthy();
+  });
+
+  it("commits text fields on Enter, as one undoable edit", () => {
+    const store = mount("scientist", ["sub:sub_1"]);
+    const period = screen.getByLabelText(/^period/) as HTMLInputElement;
+    fireEvent.change(period, { target: { value: "4.0" } });
+    expect(currentModel(store.getState().wb).subscribers[0].periodS).toBe("2.0");
+    act(() => { fireEvent.keyDown(period, { key: "Enter" }); });
+    expect(currentModel(store.getState().wb).subscribers[0].periodS).toBe("4.0");
+    act(() => store.dispatch({ type: "undo" }));
+    expect(currentModel(store.getState().wb).subscribers[0].periodS).toBe("2.0");
+  });
+
+  it("shows a field's error under it", () => {
+    const store = mount("scientist", ["sub:sub_1"]);
+    act(() => store.dispatch({ type: "setField", id: "sub:sub_1", path: ["periodS"], value: "two" }));
+    expect(screen.getByRole("alert").textContent).toMatch(/period \(s\): a decimal number/);
+    expect(screen.getByLabelText(/^period/).getAttribute("aria-invalid")).toBe("true");
+  });
+
+  it("is read-only outside the role", () => {
+    mount("scientist", ["pub:pub_1"]);
+    expect(screen.getByRole("note").textContent).toMatch(/Read-only in the scientist view/);
+    expect((screen.getByLabelText(/^period/) as HTMLInputElement).readOnly).toBe(true);
+  });
+
+  it("lists problems when nothing is selected", () => {
+    const store = mount("scientist", []);
+    act(() => store.dispatch({ type: "addSubscriber" }));
+    act(() => store.dispatch({ type: "select", ids: [] }));
+    expect(screen.getByText(/1 problem/)).toBeTruthy();
+    expect(screen.getByRole("button", { name: "sub:sub_8" })).toBeTruthy();
+  });
+});
