@@ -41,7 +41,8 @@ let browser = null;
 
 async function cleanup() {
   if (browser) await browser.close();
-  for (const p of procs.reverse()) await stop(p);
+  // `modd up` stops its own children (their own sessions) on SIGTERM, within 10 s.
+  for (const p of procs.reverse()) await stop(p, p.name === "modd up" ? 15000 : 8000);
   rmSync(tmp, { recursive: true, force: true });
 }
 for (const sig of ["SIGINT", "SIGTERM"]) process.on(sig, () => { void cleanup().then(() => process.exit(130)); });
