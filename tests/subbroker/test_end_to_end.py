@@ -24,6 +24,7 @@ from subbroker_harness import (
     assert_contiguous,
     check_against_archive,
     free_port,
+    load_counts,
     model_copy,
     processes,
     read_archive,
@@ -142,3 +143,31 @@ def test_no_subbroker_means_no_reply(zenoh_client: Any) -> None:
     with pytest.raises(NoReply):
         request(session, "modd/usv/deploy", {"text": ""}, timeout_s=2)
     assert time.monotonic() - t0 < 2.5
+
+
+def test_scenario2_delivery_matches_archive(tmp_path: Path, zenoh_client: Any) -> None:
+    link, ingress, zport = free_port(), free_port(), free_port()
+    model = model_copy(tmp_path, "scenario2.modd")
+    pb = start_pubbroker(tmp_path, model, link, ingress)
+    sb = start_subbroker(tmp_path, subbroker_config(tmp_path, model, link, zport))
+    load = None
+    try:
+        wait_port(zport)
+        session = zenoh_client(zport)
+        assert wait_connected(session)
+        got = Collector()
+        session.declare_subscriber("modd/usv/sub/*", got.on_sample)
+        assert sb.wait_log("running", 10), sb.log()
+        load = start_load(tmp_path, model, ingress, 5.5)
+        load.p.wait(20)
+        time.sleep(1.2)
+    finally:
+        with processes(pb, sb, *([load] if load else [])):
+            pass
+    values = got.snapshot()
+    archive = read_archive(tmp_path / "archive", model)
+    assert {t: len(s) for t, s in archive.items()} == load_counts(load)
+    assert set(values) == {f"sub_{i}" for i in range(1, 20)}
+    assert check_against_archive(values, archive) >= 19 * 4
+    for vals in values.values():
+        assert_contiguous([v for v in vals if v.value is not None], 1_000_000_000)
