@@ -65,7 +65,25 @@ def test_list_complete_and_cut_files(archive_client: tuple[TestClient, Headers, 
     cut = files["cut-0001.mcap"]
     assert not cut["complete"]
     assert 0 < cut["topics"][0]["messages"] < 1000  # what was flushed before the cut
-    assert c.get("/api/drones/nobody/archives", headers=h).json() == []
+
+
+
+def test_single_drone_layout(tmp_path: Path) -> None:
+    """``modd up`` writes the MCAP files straight into the archive directory."""
+    root = tmp_path / "archive"
+    root.mkdir()
+    write_archive(root / "modd-0000.mcap", 10)
+    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
+                        initial_admin_password=ADMIN_PASSWORD, archive_dir=root)
+    with TestClient(create_app(settings, out=io.StringIO())) as c:
+        h = login(c, "admin", ADMIN_PASSWORD)
+        files = c.get("/api/drones/usv/archives", headers=h).json()
+        assert [f["name"] for f in files] == ["modd-0000.mcap"]
+        s = c.get("/api/drones/usv/archives/modd-0000.mcap/series", headers=h,
+                  params={"topic": TOPICS[0]}).json()
+        assert s["total"] == 10
+        assert c.get("/api/drones/usv/archives/../archive/modd-0000.mcap",
+                     headers=h).status_code == 404
 
 
 def test_series_range_and_reduction(archive_client: tuple[TestClient, Headers, Path]) -> None:

@@ -4,8 +4,9 @@ one channel per topic, JSON messages ``{"value": ...}``) with the official
 written (or cut short by a crash) is read as a stream up to its last complete
 record, so whatever was flushed is readable.
 
-Paths: only ``<archive_dir>/<drone>/<name>.mcap`` with identifier-like names;
-nothing outside the archive directory can be reached."""
+Paths: only ``<archive_dir>/<drone>/<name>.mcap`` (or ``<archive_dir>/<name>.mcap``
+when there is no folder per drone) with plain file names; nothing outside the
+archive directory can be reached."""
 
 from __future__ import annotations
 
@@ -32,9 +33,12 @@ _BROKEN = (McapError, EOFError, ValueError, OSError, struct.error)
 
 
 def drone_dir(root: Path, drone: str) -> Path:
+    """``<root>/<drone>`` when that folder exists (several drones), else the
+    archive directory itself (one drone, as ``modd up`` lays it out)."""
     if not DRONE.match(drone):
         raise ApiError(422, f"drone {drone!r} is not an identifier")
-    return root / drone
+    own = root / drone
+    return own if own.is_dir() else root
 
 
 def archive_path(root: Path, drone: str, name: str) -> Path:
