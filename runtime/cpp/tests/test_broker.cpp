@@ -117,7 +117,7 @@ TEST(Broker, ConfigThenDataFramesFromStampedSamples) {
   EXPECT_EQ(d1.values[0].number, 100.0);
   EXPECT_EQ(d1.values[1].count, 3u);
   // STATUS rides in the same write as the next DATA frame.
-  b.status_due();
+  b.status_due(clock.now_ns());
   clock.set(E + 600 * kMs);
   ASSERT_TRUE(s.on_bytes(more));
   b.tick(E + 750 * kMs);
@@ -129,6 +129,10 @@ TEST(Broker, ConfigThenDataFramesFromStampedSamples) {
   auto status = std::get<Status>(decode(*st));
   EXPECT_EQ(status.counters[kSamplesIn], 4u);
   EXPECT_EQ(status.counters[kConfigId], 1u);
+  // With no DATA for a whole status period, STATUS goes out on its own.
+  b.status_due(E + 800 * kMs);
+  b.send_overdue_status(E + 900 * kMs);
+  EXPECT_EQ(link.writes.size(), 3u);  // period is 0 here: never alone
   // Front buffers of 2: everything accepted reaches the archive at shutdown.
   b.shutdown();
   EXPECT_EQ(b.archiver().counters().archived.load(), 4u);
@@ -160,4 +164,27 @@ TEST(Broker, TopicsAddedByConfigAreAcceptedFromEarlierRegistrations) {
   ingress::encode_samples(more, std::vector<ingress::Record>{{0, 2, 2.0, 0}}, [](uint32_t) { return ValueType::Float64; });
   ASSERT_TRUE(s.on_bytes(more));
   EXPECT_EQ(b.counters().accepted, 1u);
+}
+
+TEST(Broker, StatusGoesAloneOnlyWhenNoDataCarriesIt) {
+  FakeClock clock;
+  FakeLink link;
+  Broker b(test_config("status"), "key", clock, link);
+  Config c;
+  c.config_id = 3;
+  c.status_period_s = 1;
+  c.topics = {{"usv.x", ValueType::Float32, 2, 0}};
+  c.streams = {{0, Aggregation::Last, 250000}};
+  b.on_config(c);
+  int64_t t0 = clock.now_ns();
+  b.status_due(t0);
+  b.send_overdue_status(t0 + 500 * kMs);
+  EXPECT_TRUE(link.writes.empty());
+  b.send_overdue_status(t0 + 1000 * kMs);
+  ASSERT_EQ(link.writes.size(), 1u);
+  auto f = split_frame(link.writes[0]);
+  ASSERT_TRUE(f);
+  EXPECT_EQ(std::get<Status>(decode(*f)).counters[kConfigId], 3u);
+  b.send_overdue_status(t0 + 3000 * kMs);
+  EXPECT_EQ(link.writes.size(), 1u);  // sent once per period
 }

@@ -257,6 +257,23 @@ bool Broker::send_data(std::vector<uint8_t>&& frame) {
   return true;
 }
 
+void Broker::status_due(int64_t now) {
+  if (!status_pending_) status_due_since_ = now;
+  status_pending_ = true;
+}
+
+void Broker::send_overdue_status(int64_t now) {
+  int64_t period = int64_t{status_period_s_} * 1'000'000'000;
+  if (!status_pending_ || period == 0 || now - status_due_since_ < period || !out_.link_ready()) return;
+  std::vector<uint8_t> frame;
+  link::encode(frame, link::Status{status_counters()});
+  size_t n = frame.size();
+  if (out_.link_write(std::move(frame))) {
+    counters_.link_bytes_sent += n;
+    status_pending_ = false;
+  }
+}
+
 std::vector<uint64_t> Broker::status_counters() {
   std::vector<uint64_t> v(kStatusFieldCount, 0);
   const auto& ac = archiver_->counters();

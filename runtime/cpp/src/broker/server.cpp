@@ -204,9 +204,10 @@ void Server::timers(int64_t now) {
   }
   if (now >= next_status_) {
     uint32_t p = broker_->status_period_s();
-    if (p) broker_->status_due();
+    if (p) broker_->status_due(now);
     next_status_ = now + int64_t{std::max<uint32_t>(p, 1)} * 1'000'000'000;
   }
+  broker_->send_overdue_status(now);
   if (now >= next_log_) {
     log_line("counters: %s", broker_->log_summary().c_str());
     next_log_ = now + int64_t{cfg_.log_period_s} * 1'000'000'000;

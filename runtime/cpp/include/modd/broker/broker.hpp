@@ -73,7 +73,10 @@ class Broker final : public LinkHooks, public FrameSink {
   void flush_buffers();        // every flush interval: partial front buffers to the archive
   void shutdown();             // SIGTERM: everything to the archive, files closed
   int64_t next_due_ns() const { return executor_.next_due_ns(); }
-  void status_due() { status_pending_ = true; }
+  void status_due(int64_t now);
+  // STATUS normally rides with the next DATA frame; when no DATA has gone out for a whole
+  // status period after it fell due (idle publishers), it is sent on its own.
+  void send_overdue_status(int64_t now);
   std::vector<uint64_t> status_counters();
   std::string log_summary();
 
@@ -117,6 +120,7 @@ class Broker final : public LinkHooks, public FrameSink {
   uint64_t front_samples_ = 0;
   uint64_t generation_ = 1;
   bool status_pending_ = false;
+  int64_t status_due_since_ = 0;
   uint32_t status_period_s_ = 0;
   std::vector<uint8_t> status_frame_;
 };
