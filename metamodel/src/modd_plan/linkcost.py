@@ -30,7 +30,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from functools import cache
+from functools import lru_cache
 from math import ceil
 
 from .schedule import Schedule
@@ -70,7 +70,7 @@ def aggregate_value_type(aggregation: str, topic_type: str) -> str:
     return "int"  # COUNT
 
 
-@cache
+@lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
 def window_value_bytes(aggregation: str, topic_type: str, samples: Fraction) -> Fraction:
     """Expected bytes of one window's value when ``samples`` samples (on
     average) fall in a window."""

@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from fractions import Fraction
-from functools import cache
+from functools import lru_cache
 from math import lcm
 from typing import Any
 
@@ -31,7 +31,7 @@ from .streams import PlannedStream, StreamKey, period_of, plan_streams, requeste
 METHODS = ("exact", "cvxpy")
 
 
-@cache
+@lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
 def _us(period: Fraction) -> int:
     us = period * MICROS_PER_SECOND
     if us.denominator != 1:

@@ -7,22 +7,27 @@ microseconds. See docs/planning.md for every field.
 
 from __future__ import annotations
 
+import itertools
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
-from modd_model.numbers import MICROS_PER_SECOND, fraction_to_decimal
+from modd_model.numbers import MICROS_PER_SECOND
 
-from .streams import PlannedStream
+from .schedule import Slot
+from .streams import PlannedStream, decimal_of
 
 if TYPE_CHECKING:
     from .plan import Plan
 
-#: Slots listed in the JSON schedule (the first hyperperiod when it is shorter).
+#: Slots listed in the JSON schedule (the first hyperperiod when it is
+#: shorter), and at most this many stream ids over the listed slots, so that
+#: a plan of 10,000 subscriptions stays a small document.
 SLOT_LIST_LIMIT = 1000
+SLOT_ENTRY_LIMIT = 20_000
 
 
 def _dec(value: Fraction) -> str:
-    return fraction_to_decimal(value)
+    return decimal_of(value)
 
 
 def _us(value: Fraction) -> int:
@@ -48,7 +53,14 @@ def _stream_json(s: PlannedStream) -> dict[str, Any]:
 
 def _schedule_json(plan: Plan) -> dict[str, Any]:
     sched = plan.schedule
-    slots = sched.first_slots(SLOT_LIST_LIMIT)
+    slots: list[Slot] = []
+    entries = 0
+    limit = min(SLOT_LIST_LIMIT, sched.messages_per_hyperperiod)
+    for slot in itertools.islice(sched.iter_slots(), limit):
+        entries += len(slot[2])
+        if entries > SLOT_ENTRY_LIMIT and slots:
+            break
+        slots.append(slot)
     return {
         "epoch_phase_s": "0.0",
         "streams": [

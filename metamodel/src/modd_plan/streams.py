@@ -18,7 +18,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from functools import cache
+from functools import lru_cache
 from typing import Any
 
 from modd_model.numbers import fraction_to_decimal, to_fraction
@@ -43,7 +43,7 @@ class StreamKey:
 
     @property
     def key(self) -> str:
-        return f"{self.topic}/{self.aggregation}/{fraction_to_decimal(self.period)}"
+        return f"{self.topic}/{self.aggregation}/{decimal_of(self.period)}"
 
     @classmethod
     def parse(cls, key: str) -> StreamKey:
@@ -84,7 +84,13 @@ def requested_streams(model: Mapping[str, Any]) -> dict[StreamKey, list[str]]:
     return out
 
 
-@cache
+@lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
+def decimal_of(value: Fraction) -> str:
+    """``fraction_to_decimal``, memoised: a plan repeats few distinct periods."""
+    return fraction_to_decimal(value)
+
+
+@lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
 def period_of(text: str) -> Fraction:
     """``to_fraction``, memoised: a model repeats few distinct periods."""
     return to_fraction(text)
