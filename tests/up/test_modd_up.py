@@ -67,3 +67,37 @@ def test_up_refuses_an_invalid_model(tmp_path: Path) -> None:
     res = subprocess.run([MODD, "up", str(bad), "--workdir", str(tmp_path / "run")],
                          capture_output=True, text=True, timeout=60)
     assert res.returncode == 1 and "no PubBroker block" in res.stderr
+
+
+def test_up_with_simulator_delivers_live_values(tmp_path: Path) -> None:
+    """The demo of `make run`: modd up --simulate; values arrive on zenoh."""
+    import modd
+
+    demo = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.modd"
+    model = tmp_path / "demo.modd"
+    port = _free_port()
+    model.write_text(demo.read_text().replace('"127.0.0.1":7171', f'"127.0.0.1":{port}'))
+    zenoh_port = _free_port()
+    up = subprocess.Popen([MODD, "up", str(model), "--simulate", "--workdir",
+                           str(tmp_path / "run"), "--zenoh-listen",
+                           f"tcp/127.0.0.1:{zenoh_port}"],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        _wait_for(tmp_path / "run" / "logs" / "subbroker.log", "config 1 running", 30)
+        sub = modd.subscribe("usv", "water_temp", connect=f"tcp/127.0.0.1:{zenoh_port}")
+        values = []
+        deadline = time.monotonic() + 30
+        while len(values) < 3 and time.monotonic() < deadline:
+            sample = sub.get(timeout_s=5)
+            if sample is not None and sample.value is not None:
+                values.append(sample)
+        sub.close()
+        assert len(values) == 3, "no live values within 30 s"
+    finally:
+        up.send_signal(signal.SIGTERM)
+        out, _ = up.communicate(timeout=60)
+    assert up.returncode == 0, out
+    assert all(8.0 < v.value < 20.0 for v in values)  # the simulated water temperature
+    assert all(v.topic == "usv.ctd.water_temperature" and v.aggregation == "AVERAGE"
+               for v in values)
+    assert len(re.findall(r"\(pid (\d+)\)", out)) == 3
