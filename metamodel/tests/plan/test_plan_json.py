@@ -88,6 +88,16 @@ def test_overrides_change_the_constants(scenario1_dict: Any) -> None:
     assert plan.buffer_sizes["d.accelerometer.accel_z"] == 6
 
 
+def test_slot_listing_is_capped(make_model: Any) -> None:
+    names = [f"v{i}" for i in range(30)]
+    subs = [(f"s{i}", v, "0.25", "MIN") for i, v in enumerate(names)]
+    subs.append(("slow", "v0", "1000.0", "MAX"))  # 4000 slots per hyperperiod
+    sched = make_plan(make_model(names, [("p", "0.05", names)], subs)).to_json()["schedule"]
+    assert sched["slots_truncated"] is True
+    assert sched["slots_listed"] == 666  # 666 x 30 ids <= 20,000 < 667 x 30
+    assert len(sched["streams"]) == 31
+
+
 def test_no_subscribers(make_model: Any) -> None:
     j = make_plan(make_model(["a"], [("p", "0.1", ["a"])], [])).to_json()
     assert (j["hyperperiod_s"], j["messages_per_hyperperiod"]) == ("0.0", 0)
