@@ -1,0 +1,47 @@
+// @vitest-environment jsdom
+import { afterEach, describe, expect, it } from "vitest";
+import { act, cleanup, fireEvent, render, screen } from "@testing-library/react";
+import PlanPanel from "./PlanPanel";
+import { EditorContext } from "../../editor/useEditor";
+import { createEditorStore } from "../../editor/store";
+import { scenario1 } from "../../core/testing/scenario1";
+import planJson from "../../core/testing/scenario1.plan.json";
+import type { PlanJson } from "../../core/plan";
+
+afterEach(cleanup);
+
+function mount(plan: PlanJson | null, diagnostics = [] as Array<{ severity: "error"; message: string; pointer: string }>) {
+  const store = createEditorStore(scenario1(), "designer");
+  store.patch({ plan: { busy: false, error: null, result: { ok: plan !== null, plan, diagnostics, elapsed_ms: 12 } } });
+  render(<EditorContext.Provider value={store}><PlanPanel /></EditorContext.Provider>);
+  return store;
+}
+
+describe("PlanPanel", () => {
+  it("shows the planner's figures: hyperperiod, buffer sizes, delays, link cost", () => {
+    mount(planJson as unknown as PlanJson);
+    expect(screen.getByTestId("hyperperiod").textContent).toBe("2.0 s");
+    expect(screen.getAllByTestId("buffer-size").map((c) => c.textContent)).toEqual(["28", "28", "6"]);
+    expect(screen.getByRole("button", { name: "sub_1 (0.88 s)" })).toBeTruthy();
+    expect(screen.getByText("14.88 kB/s")).toBeTruthy();
+    expect(screen.getByRole("img", { name: /8 messages/ })).toBeTruthy();
+  });
+
+  it("selects a subscriber from its chip", () => {
+    const store = mount(planJson as unknown as PlanJson);
+    act(() => { fireEvent.click(screen.getByRole("button", { name: "sub_5 (0.01 s)" })); });
+    expect(store.getState().wb.selection).toEqual(["sub:sub_5"]);
+  });
+
+  it("explains infeasibility", () => {
+    const p = { ...(planJson as unknown as PlanJson), infeasible: [{ topic: "usv.accelerometer.accel_z", subscribers: ["sub_5"], reason: "period 0.1 is not a multiple of 0.04" }] };
+    mount(p);
+    expect(screen.getByRole("alert").textContent).toMatch(/sub_5\): period 0.1 is not a multiple/);
+  });
+
+  it("lists the errors when the model cannot be planned", () => {
+    mount(null, [{ severity: "error", message: "should be non-empty", pointer: "/publishers/0/topics" }]);
+    expect(screen.getByRole("status").textContent).toMatch(/1 error/);
+    expect(screen.getByText("should be non-empty")).toBeTruthy();
+  });
+});
