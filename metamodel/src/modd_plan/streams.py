@@ -161,7 +161,8 @@ def choose_sent(
     requested: Iterable[StreamKey], cost_per_s: Callable[[StreamKey], float]
 ) -> set[StreamKey]:
     """The sent set: requested streams minus those derivable from the rest,
-    dropping the most expensive first (ties: longest period, then key)."""
+    dropping the most expensive first (ties: longest period, then
+    aggregation order)."""
     sent = set(requested)
     by_topic: dict[str, list[StreamKey]] = {}
     for s in sent:

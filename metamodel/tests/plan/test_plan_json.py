@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
+from fractions import Fraction
 from typing import Any
 
 from modd_plan.plan import make_plan
@@ -80,8 +84,6 @@ def test_unpublished_and_unsubscribed_topics(make_model: Any) -> None:
 
 
 def test_overrides_change_the_constants(scenario1_dict: Any) -> None:
-    from fractions import Fraction
-
     plan = make_plan(scenario1_dict, max_buffer=20, alpha=Fraction(0), beta=Fraction(2))
     assert plan.constants.max_buffer == 20
     assert plan.buffer_sizes["d.accelerometer.accel_x"] == 20
@@ -102,3 +104,34 @@ def test_no_subscribers(make_model: Any) -> None:
     j = make_plan(make_model(["a"], [("p", "0.1", ["a"])], [])).to_json()
     assert (j["hyperperiod_s"], j["messages_per_hyperperiod"]) == ("0.0", 0)
     assert j["schedule"]["slots"] == [] and j["buffer_sizes"] == {"d.s.a": 1}
+
+
+_HASH_SCRIPT = """
+import json, random, sys
+from modd_plan.plan import make_plan
+rng = random.Random(4)
+names = [f"v{i}" for i in range(8)]
+aggs = ["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM"]
+subs = [{"name": f"s{k}", "topic": "d.s." + rng.choice(names),
+         "periodS": rng.choice(["0.25", "0.5", "1.0", "1.5", "3.0"]),
+         "aggregation": rng.choice(aggs)} for k in range(40)]
+model = {"schemaVersion": "1.0",
+         "drone": {"name": "d", "sensors": [{"name": "s", "variables": [
+             {"name": n, "unit": "NONE"} for n in names]}]},
+         "pubBroker": {"endpoint": {"host": "127.0.0.1", "port": 1}, "logPath": "/l"},
+         "subBroker": {"endpoint": {"host": "127.0.0.1", "port": 2}, "configPath": "/c"},
+         "publishers": [{"name": "p", "periodS": "0.05", "topics": ["d.s." + n for n in names]}],
+         "subscribers": subs}
+json.dump(make_plan(model).to_json(), sys.stdout, sort_keys=True)
+"""
+
+
+def test_plan_does_not_depend_on_the_hash_seed() -> None:
+    outputs = {
+        subprocess.run(
+            [sys.executable, "-c", _HASH_SCRIPT], capture_output=True, text=True, check=True,
+            env={**os.environ, "PYTHONHASHSEED": seed},
+        ).stdout
+        for seed in ("1", "2")
+    }
+    assert len(outputs) == 1 and json.loads(outputs.pop())["streams"]
