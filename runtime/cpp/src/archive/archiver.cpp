@@ -144,6 +144,7 @@ void Archiver::write_item(Item& item) {
       if (writer_) {
         uint64_t before = writer_->flushed_messages();
         writer_->flush_chunk();
+        if (opt_.writer.fsync == FsyncPolicy::Chunk) writer_->sync();
         counters_.archived += writer_->flushed_messages() - before;
       }
       return;

@@ -219,7 +219,10 @@ void McapWriter::flush_chunk() {
   chunk_start_ = UINT64_MAX;
   chunk_end_ = 0;
   write_out();
-  if (opt_.fsync == FsyncPolicy::Chunk) ::fsync(fd_);
+}
+
+void McapWriter::sync() {
+  if (fd_ >= 0) ::fsync(fd_);
 }
 
 void McapWriter::close() {

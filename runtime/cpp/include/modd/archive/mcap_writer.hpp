@@ -13,6 +13,8 @@
 namespace modd::archive {
 
 enum class Compression { None, Zstd, Lz4 };
+// Chunk: the archiver fsyncs the written chunks at every flush tick (so at most once per
+// flush interval, not once per chunk at high rates) and at close; Close: at close only.
 enum class FsyncPolicy { Never, Chunk, Close };
 
 bool parse_compression(const std::string& s, Compression& out);
@@ -39,6 +41,7 @@ class McapWriter {
   void add_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time, uint64_t publish_time,
                    std::span<const uint8_t> data);
   void flush_chunk();  // writes the open chunk (if any) and its message indexes
+  void sync();         // fsync of what was written
   void close();        // flush, summary, footer, magic; idempotent
   uint64_t file_bytes() const { return offset_ + pending_.size(); }
   uint64_t message_count() const { return message_count_; }
