@@ -87,36 +87,62 @@ def _frame(mtype: int, body: bytes) -> bytes:
     return _varint(len(body) + 1) + bytes([mtype]) + body
 
 
+TYPES = {"float32": (0, "<f"), "float64": (1, "<d"), "int": (2, "<q"), "bool": (3, "<B")}
+
+
+def _sample(topic: str, i: int, rng: random.Random) -> float:
+    """A survey track for position variables (moving north-east from 43N 5E),
+    small angles for attitude, noise in [-9, 9] for everything else."""
+    variable = topic.rsplit(".", 1)[-1]
+    if variable == "latitude":
+        return 43.0 + 2e-5 * i
+    if variable == "longitude":
+        return 5.0 + 3e-5 * i
+    if variable in ("roll", "pitch", "yaw"):
+        return rng.uniform(-0.2, 0.2)
+    return rng.uniform(-9, 9)
+
+
 class Publisher(threading.Thread):
-    """Publishes every float32 topic of the model's publishers at their period
-    (HELLO, topic declarations, then batches of records)."""
+    """Publishes every topic of every publisher of the model at its period
+    (HELLO, topic declarations, then one batch of records per period)."""
 
     def __init__(self, model: dict[str, Any], port: int) -> None:
         super().__init__(daemon=True)
         self.model, self.port = model, port
         self.stop_event = threading.Event()
+        drone = model["drone"]["name"]
+        self.types = {f"{drone}.{s['name']}.{v['name']}": v.get("type", "float32")
+                      for s in model["drone"]["sensors"] for v in s["variables"]}
 
     def run(self) -> None:
         rng = random.Random(7)
+        pubs = self.model["publishers"]
         with socket.create_connection(("127.0.0.1", self.port)) as sock:
             sock.sendall(_frame(0x01, bytes([1]) + _string("backend-test")))
             ids: dict[str, int] = {}
-            for pub in self.model["publishers"]:
+            for pub in pubs:
                 for topic in pub["topics"]:
-                    ids.setdefault(topic, len(ids))
-                    sock.sendall(_frame(0x02, _varint(ids[topic]) + bytes([0]) + _string(topic)))
-            pub = self.model["publishers"][0]
-            period = float(pub["periodS"])
-            due = time.monotonic()
+                    if topic not in ids:
+                        ids[topic] = len(ids)
+                        code = TYPES[self.types[topic]][0]
+                        sock.sendall(_frame(0x02, _varint(ids[topic]) + bytes([code])
+                                            + _string(topic)))
+            start = time.monotonic()
+            due = [start + float(p["periodS"]) for p in pubs]
+            count = [0] * len(pubs)
             while not self.stop_event.is_set():
-                due += period
-                self.stop_event.wait(max(0.0, due - time.monotonic()))
+                k = min(range(len(pubs)), key=lambda j: due[j])
+                self.stop_event.wait(max(0.0, due[k] - time.monotonic()))
                 now = time.time_ns()
                 records = b"".join(
-                    _varint(ids[t]) + struct.pack("<q", now) + struct.pack("<f", rng.uniform(-9, 9))
-                    for t in pub["topics"]
+                    _varint(ids[t]) + struct.pack("<q", now)
+                    + struct.pack(TYPES[self.types[t]][1], _sample(t, count[k], rng))
+                    for t in pubs[k]["topics"]
                 )
-                sock.sendall(_frame(0x03, _varint(len(pub["topics"])) + records))
+                sock.sendall(_frame(0x03, _varint(len(pubs[k]["topics"])) + records))
+                count[k] += 1
+                due[k] += float(pubs[k]["periodS"])
 
 
 class Station:

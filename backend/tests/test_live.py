@@ -12,6 +12,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+import httpx2 as httpx
 import pytest
 from fastapi.testclient import TestClient
 from modd_backend import Settings, create_app
@@ -21,12 +22,14 @@ from starlette.testclient import WebSocketTestSession
 from .conftest import ADMIN_PASSWORD, Headers, login
 from .station import Station
 
+DEMO = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.modd"
+
 
 @pytest.fixture(scope="module")
-def station(tmp_path_factory: pytest.TempPathFactory, scenarios_dir: Path
-            ) -> Iterator[Station]:
-    """PubBroker + SubBroker + publisher for scenario 1."""
-    model = load_model(scenarios_dir / "scenario1.modd")
+def station(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Station]:
+    """PubBroker + SubBroker + publishers for the demo mission: scenario 1
+    plus position, attitude and water probes."""
+    model = load_model(DEMO)
     st = Station(tmp_path_factory.mktemp("station"), model)
     try:
         st.start()
@@ -44,6 +47,7 @@ def live(station: Station, tmp_path_factory: pytest.TempPathFactory
         initial_admin_password=ADMIN_PASSWORD,
         deploy_timeout_s=5.0,
         archive_dir=station.archive.parent,
+        scene_port=0,
     )
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         yield c
@@ -193,3 +197,25 @@ def test_archive_of_the_running_pubbroker(live: TestClient, people: dict[str, He
                       params={"topic": "usv.accelerometer.accel_z"}).json()
     assert series["total"] > 5
     assert all(-9 <= v <= 9 for _t, v in series["points"])  # the publisher's range
+
+
+def test_scene_draws_the_track_of_the_deployed_model(
+    live: TestClient, people: dict[str, Headers]
+) -> None:
+    """After the deploy (first test), the scene reads the deployed model's
+    position subscribers (track_lat, track_lon) and draws their values."""
+    h = people["scientist"]
+    assert live.put("/api/scene/usv/colour", headers=h,
+                    json={"subscriber": "water_temp"}).status_code == 204
+    deadline = time.monotonic() + 15
+    while True:
+        scene = live.get("/api/scene", headers=h).json()
+        usv = next((d for d in scene["drones"] if d["drone"] == "usv"), None)
+        if usv and usv["points"] >= 2:
+            break
+        assert time.monotonic() < deadline, scene
+        time.sleep(0.25)
+    assert usv["roles"]["track_lat"] == "lat" and usv["roles"]["track_lon"] == "lon"
+    assert usv["colour_by"] == "water_temp"
+    page = httpx.get(scene["url"], timeout=5)
+    assert page.status_code == 200 and "<html" in page.text.lower()  # viser's own client

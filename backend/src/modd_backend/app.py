@@ -10,18 +10,32 @@ from __future__ import annotations
 import sys
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
-from typing import TextIO
+from typing import Any, TextIO
 
 from fastapi import APIRouter, FastAPI
 
 from . import errors
 from .accounts import ensure_first_admin
 from .db import Store
+from .deployments import last_acked
 from .deps import AppState
 from .planning import preload_milp
-from .routers import archives, auth, deploy, downloads, models, plan, projects, streams, users
+from .routers import (
+    archives,
+    auth,
+    deploy,
+    downloads,
+    models,
+    plan,
+    projects,
+    scene,
+    streams,
+    users,
+)
+from .scene import SceneServer, SceneService
 from .settings import Settings
 from .spa import mount_frontend
+from .versions import get_version, model_of
 from .zbridge import ZenohBridge
 
 ROUTERS: tuple[APIRouter, ...] = (
@@ -34,7 +48,22 @@ ROUTERS: tuple[APIRouter, ...] = (
     downloads.router,
     streams.router,
     archives.router,
+    scene.router,
 )
+
+
+def start_scene(settings: Settings, store: Store) -> SceneService:
+    """The viser server, fed with the model last deployed to each drone."""
+
+    def deployed_model(drone: str) -> dict[str, Any] | None:
+        with store.session() as db:
+            running = last_acked(db, drone)
+            if running is None:
+                return None
+            return model_of(get_version(db, running.project_id, running.revision))
+
+    port = settings.scene_port or 0
+    return SceneService(SceneServer(settings.host, port), deployed_model)
 
 
 def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
@@ -52,9 +81,17 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         if settings.preload_milp:
             preload_milp()
         app.state.modd = AppState(settings, store, bridge)
+        scene_sub = None
+        if bridge is not None and settings.scene_port is not None:
+            app.state.modd.scene = start_scene(settings, store)
+            scene_sub = bridge.subscribe("modd/*/sub/*", app.state.modd.scene.on_value)
         try:
             yield
         finally:
+            if scene_sub is not None:
+                scene_sub.undeclare()
+            if app.state.modd.scene is not None:
+                app.state.modd.scene.server.stop()
             if bridge is not None:
                 bridge.close()
             store.close()

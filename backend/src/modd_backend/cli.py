@@ -27,6 +27,8 @@ def parse_args(argv: list[str] | None = None) -> Settings:
                    help="built frontend to serve at / when it exists")
     p.add_argument("--archives", type=Path, help="archive directory (default DATA/archives)")
     p.add_argument("--deploy-timeout", type=float, default=10.0, help="seconds")
+    p.add_argument("--scene-port", type=int, default=0,
+                   help="port of the 3D scene (viser); 0: any free port; -1: no scene")
     p.add_argument("--admin-password", help="first admin's password (default: drawn, printed)")
     a = p.parse_args(argv)
     return Settings(
@@ -42,6 +44,7 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         deploy_timeout_s=a.deploy_timeout,
         initial_admin_password=a.admin_password,
         preload_milp=True,
+        scene_port=None if a.scene_port < 0 else a.scene_port,
     )
 
 

@@ -17,6 +17,7 @@ from sqlalchemy.orm import Session as Db
 from .accounts import user_for_token
 from .db import Store
 from .roles import Role, parse_roles
+from .scene import SceneService
 from .settings import Settings
 from .tables import User
 from .zbridge import ZenohBridge
@@ -27,6 +28,7 @@ class AppState:
     settings: Settings
     store: Store
     bridge: ZenohBridge | None
+    scene: SceneService | None = None
 
 
 def get_state(request: Request) -> AppState:

@@ -40,6 +40,8 @@ class Settings:
     token_ttl_s: int = 12 * 3600
     initial_admin_password: str | None = None
     preload_milp: bool = False
+    #: Port of the viser 3D scene on ``host``; None: no scene, 0: any free port.
+    scene_port: int | None = None
     cors_origins: tuple[str, ...] = field(default_factory=tuple)
 
     @property

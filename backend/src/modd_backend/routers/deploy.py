@@ -72,6 +72,8 @@ def deploy_version(
                        diagnostics=diags)
     record = deploy(db, bridge_of(state), version, model_of(version), user.username,
                     state.settings.deploy_timeout_s)
+    if record.status == "acked" and state.scene is not None:
+        state.scene.forget(record.drone)  # the 3D scene re-reads the drone's model
     return DeploymentOut.model_validate(record_json(record))
 
 
