@@ -159,7 +159,11 @@ class SubBroker:
             if cid == avoid:
                 cid = cid % 255 + 1
             self._last_id = cid
+            # kept until acked: an ack that comes after the deploy timed out
+            # still means the PubBroker runs it, so the SubBroker follows
             self._planned[cid] = (model, plan)
+            for stale in list(self._planned)[:-8]:
+                del self._planned[stale]
         return config_for(plan, cid, self.config.link.pubbroker_status_period_s)
 
     # -- LinkHandler -------------------------------------------------------------
@@ -173,7 +177,8 @@ class SubBroker:
         return self._prepare(model, avoid=ok.config_id)
 
     def on_config_acked(self, config: Config, ack: ConfigAck) -> None:
-        model, plan = self._planned.pop(config.config_id)
+        with self._lock:
+            model, plan = self._planned.pop(config.config_id)
         sent = [s.stream for s in plan.sent_streams]
         running = Running(model, plan, config, ack.epoch_ns, FanOut(sent))
         running.topic_info = {t.name: (t.unit, t.type) for t in topics(model).values()}
@@ -279,8 +284,6 @@ class SubBroker:
             return {"status": "TIMEOUT", "reason": f"{exc} within {request.timeout_s} s"}
         except ConfigRejected as exc:
             return {"status": "NACK", "reason": str(exc), "code": exc.status}
-        finally:
-            self._planned.pop(config.config_id, None)
         self._save(request.model)
         plan = self._running.plan if self._running else None
         summary = plan.to_json() if plan else {}

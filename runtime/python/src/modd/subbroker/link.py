@@ -148,11 +148,12 @@ class LinkClient:
     def send_config(self, config: Config, timeout_s: float) -> ConfigAck:
         """Send CONFIG and wait for its CONFIG_ACK (any thread). Raises LinkDown,
         ConfigRejected or TimeoutError."""
+        deadline = time.monotonic() + timeout_s
         if not self._up.wait(timeout_s):
             raise LinkDown(f"the link to {self._where()} is down")
         future = self._submit(config)
         try:
-            return future.result(timeout=timeout_s)
+            return future.result(timeout=max(0.0, deadline - time.monotonic()))
         except FutureTimeout as exc:
             raise TimeoutError(f"no CONFIG_ACK for config {config.config_id}") from exc
 
