@@ -31,6 +31,10 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
   const setSelect = async (path, value) => field(path).selectOption(value);
   const view = (name) => page.getByRole("tab", { name, exact: true }).click();
   const panel = (name) => page.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
+  const expand = async (on) => {
+    const b = page.locator(".dock-toggle");
+    if ((await b.getAttribute("aria-pressed")) !== String(on)) await b.click();
+  };
   const select = async (id) => {
     await node(id).click();
     await expectVisible(inspector.locator("h2").first());
@@ -149,7 +153,9 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       await clickPane();
       await shot("scientist");
       await page.getByRole("button", { name: "Zoom in", exact: true }).click();
+      await expand(true);
       await shot("plan");
+      await expand(false);
     }],
 
     ["undo, redo, copy, paste, delete", async () => {
@@ -226,7 +232,12 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       }
       if (drone) await expectText(page.getByRole("status", { name: "Link status" }), /link up/, 20000);
       if (liveValues) await expectText(page.getByTestId("last-sub_5"), /last -?\d/, 30000);
+      await page.getByRole("checkbox", { name: /sub_1 / }).uncheck();
+      await page.getByRole("checkbox", { name: /sub_2 / }).uncheck();
+      await expand(true);
+      if (liveValues) await page.waitForTimeout(3000); // a few points on the charts
       await shot("monitor");
+      await expand(false);
     }],
 
     ["3D and archives panels", async () => {
