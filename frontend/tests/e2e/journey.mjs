@@ -245,8 +245,18 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       await page.waitForTimeout(500);
       await shot("scene3d");
       await panel("Archives");
+      if (liveValues) {
+        // The PubBroker's lossless MCAP archive of what the simulated sensors published.
+        const files = page.getByRole("table", { name: "Archive files" });
+        await expectText(files, /\.mcap/, 15000);
+        await files.locator("button.link").first().click();
+        await page.getByRole("form", { name: "Plot an archived topic" }).getByRole("button", { name: "Plot" }).click();
+        await expectText(page.locator(".archives-panel figcaption"), /usv\.accelerometer\.\w+: \d+ samples/, 15000);
+        await expand(true);
+      }
       await page.waitForTimeout(500);
       await shot("archives");
+      await expand(false);
     }],
   ];
 }
