@@ -49,5 +49,12 @@ def _project(ctx: Context, pub: PublisherView) -> list[Artifact]:
     return out
 
 
+def _python(ctx: Context, pub: PublisherView) -> Artifact:
+    """The same driver in Python, on the Python publisher client (user-owned)."""
+    text = render("py_publisher/publisher.py.j2", pub=pub, drone=ctx.drone, ingress=ctx.ingress)
+    return Artifact(f"integrator/python/{pub.name}.py", text, "integrator", Ownership.USER,
+                    executable=True)
+
+
 def artifacts(ctx: Context) -> list[Artifact]:
-    return [a for pub in ctx.publishers for a in _project(ctx, pub)]
+    return [a for pub in ctx.publishers for a in [*_project(ctx, pub), _python(ctx, pub)]]

@@ -30,11 +30,15 @@ def main() -> int:
         frame = modd.subscribe(DRONE, SUBSCRIBER).dataframe(duration_s=args.dataframe)
         frame.to_csv(sys.stdout, index=False)
         return 0
-    for n, sample in enumerate(modd.subscribe(DRONE, SUBSCRIBER), start=1):
-        shown = "no sample in window" if sample.value is None else sample.value
-        print(f"{sample.end_ns} {sample.topic} {sample.aggregation} = {shown}", flush=True)
-        if args.count is not None and n >= args.count:
-            break
+    sub = modd.subscribe(DRONE, SUBSCRIBER)
+    try:
+        for n, sample in enumerate(sub, start=1):
+            shown = "no sample in window" if sample.value is None else sample.value
+            print(f"{sample.end_ns} {sample.topic} {sample.aggregation} = {shown}", flush=True)
+            if args.count is not None and n >= args.count:
+                break
+    finally:
+        sub.close()  # closes the zenoh session, so that the process can exit
     return 0
 
 
