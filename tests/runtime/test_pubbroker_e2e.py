@@ -261,3 +261,48 @@ def test_kill9_loses_at_most_the_flush_interval(broker_factory: Any) -> None:
     b.stop(signal.SIGKILL)
     archive = read_archive_records(b.archive_dir)
     assert sum(len(v) for v in archive.values()) == load.published
+
+
+def test_a_flooding_publisher_does_not_stall_the_others(broker_factory: Any) -> None:
+    import numpy as np
+    from modd.link.codec import varint
+    from modd.link.frames import ValueType
+    from modd.publisher import connect, encode_hello, encode_register
+    from pubbroker_harness import check_windows
+
+    b = broker_factory()
+    config = hand_config_scenario1()
+    names = [t.name for t in config.topics]
+    base = BaseStation(b.link_port)
+    base.configure(config)
+    base.start()
+    stop = threading.Event()
+    flooded = [0]
+
+    def flood() -> None:
+        s = connect(f"unix:{b.unix_path}")
+        s.sendall(encode_hello("flood") + encode_register(0, ValueType.FLOAT32, "usv.flood"))
+        rec = np.zeros(4096, dtype=[("id", "u1"), ("ts", "<i8"), ("v", "<f4")])
+        body = bytes([0x03]) + varint(4096) + rec.tobytes()
+        frame = varint(len(body)) + body
+        while not stop.is_set():
+            s.sendall(frame)
+            flooded[0] += 4096
+        s.close()
+
+    th = threading.Thread(target=flood)
+    th.start()
+    try:
+        load = run_load(f"unix:{b.unix_path}", names, 25.0, 3.0)
+    finally:
+        stop.set()
+        th.join()
+    time.sleep(0.6)
+    got = base.snapshot()
+    base.close()
+    assert b.stop() == 0
+    archive = read_archive(b.archive_dir)
+    assert {t: len(v) for t, v in archive.items()} == load.per_topic
+    assert check_windows(got.windows, {1: config}, archive) >= 4 * 10
+    assert got.statuses and got.statuses[-1]["rejected_unknown_topic"] > 0
+    assert flooded[0] > 100_000

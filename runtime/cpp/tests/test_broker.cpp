@@ -188,3 +188,29 @@ TEST(Broker, StatusGoesAloneOnlyWhenNoDataCarriesIt) {
   b.send_overdue_status(t0 + 3000 * kMs);
   EXPECT_EQ(link.writes.size(), 1u);  // sent once per period
 }
+
+TEST(Broker, VanishingPublisherAndFullQueueAreCounted) {
+  FakeClock clock;
+  FakeLink link;
+  BrokerConfig cfg = test_config("vanish");
+  cfg.queue_limit_samples = 5;
+  cfg.topics.push_back({"usv.big", ValueType::Float32, 100});  // no swap: the writer sees nothing
+  Broker b(cfg, "key", clock, link);
+  IngressSession s(b);
+  std::vector<ingress::Register> regs = {{0, ValueType::Float32, "usv.big"}};
+  std::vector<ingress::Record> recs;
+  for (int i = 0; i < 8; ++i) recs.push_back({0, i, 1.0 * i, 0});
+  ASSERT_TRUE(s.on_bytes(publisher_bytes(regs, recs)));
+  EXPECT_EQ(b.counters().accepted, 5u);  // the queue limit: the rest is rejected, not lost
+  EXPECT_EQ(b.counters().rej(Reject::Overflow), 3u);
+  // Half a SAMPLES frame of 4 records, then the publisher is gone.
+  std::vector<uint8_t> more;
+  ingress::encode_samples(more, std::span(recs).first(4), [](uint32_t) { return ValueType::Float32; });
+  more.resize(more.size() / 2);
+  ASSERT_TRUE(s.on_bytes(more));
+  EXPECT_TRUE(s.on_close());
+  EXPECT_EQ(b.counters().ingress_malformed_frames, 1u);
+  EXPECT_EQ(b.counters().rej(Reject::Malformed), 4u);
+  EXPECT_EQ(b.counters().samples_in, b.counters().accepted + b.counters().rejected_total());
+  EXPECT_FALSE(s.on_close());
+}

@@ -7,6 +7,7 @@
 
 #include "modd/link/auth.hpp"
 #include "modd/link/codec.hpp"
+#include "modd/util/bytes.hpp"
 #include "modd/util/log.hpp"
 
 namespace modd::broker {
@@ -61,6 +62,28 @@ bool IngressSession::on_bytes(std::span<const uint8_t> in) {
     return false;
   }
   inbuf_.erase(inbuf_.begin(), inbuf_.begin() + static_cast<std::ptrdiff_t>(used));
+  return true;
+}
+
+bool IngressSession::on_close() {
+  if (inbuf_.empty()) return false;
+  Counters& c = broker_.counters();
+  ++c.ingress_malformed_frames;
+  // Length varint, type, then for SAMPLES the record count: count what was announced.
+  size_t i = 0;
+  while (i < inbuf_.size() && i < 4 && (inbuf_[i] & 0x80)) ++i;
+  ++i;
+  if (i + 1 < inbuf_.size() && inbuf_[i] == static_cast<uint8_t>(ingress::MsgType::Samples)) {
+    try {
+      ByteReader r(std::span<const uint8_t>(inbuf_).subspan(i + 1));
+      uint64_t n = r.varint();
+      n = std::min<uint64_t>(n, ingress::kMaxFrame / 10);
+      c.samples_in += n;
+      c.rej(Reject::Malformed) += n;
+    } catch (const Error&) {
+    }
+  }
+  inbuf_.clear();
   return true;
 }
 

@@ -169,7 +169,9 @@ void Server::on_readable(Conn& c) {
   uint8_t buf[kReadChunk];
   ssize_t n = ::recv(c.fd, buf, sizeof buf, 0);
   if (n == 0 || (n < 0 && errno != EAGAIN && errno != EINTR)) {
-    if (c.kind == Kind::Ingress && c.ingress) c.ingress->on_bytes({});  // a partial frame left is lost with its sender
+    if (c.kind == Kind::Ingress && c.ingress && c.ingress->on_close())
+      log_line("ingress: publisher '%s' vanished in the middle of a frame (counted as malformed)",
+               c.ingress->publisher().c_str());
     to_close_.push_back(c.fd);
     return;
   }

@@ -39,6 +39,9 @@ class IngressSession final : public ingress::Handler {
   void on_record(const ingress::Record& r) override;
   // Feeds received bytes, stamped `stamp`. Returns false (after counting) on a malformed frame.
   bool on_bytes(std::span<const uint8_t> in);
+  // The publisher went away. A frame it left half-sent is counted as malformed (with the
+  // records it announced, when its header arrived). Returns true if one was left.
+  bool on_close();
   const std::string& publisher() const { return publisher_; }
   std::string last_error;
 
