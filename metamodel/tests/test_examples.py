@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-
 from modd_model import load_file
 
 EXAMPLES = sorted((Path(__file__).resolve().parents[1] / "examples").glob("*.modd"))
