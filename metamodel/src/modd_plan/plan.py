@@ -160,10 +160,16 @@ def buffer_problem(
 
 def _window_bytes(stream: StreamKey, tops: Mapping[str, Topic]) -> Fraction:
     topic = tops.get(stream.topic)
-    if topic is None:
+    if topic is None or topic.period is None:
         return window_value_bytes(stream.aggregation, "float32", Fraction(0))
-    samples = stream.period / topic.period if topic.period else Fraction(0)
-    return window_value_bytes(stream.aggregation, topic.type, samples)
+    p, pm = stream.period, topic.period
+    return _bytes(stream.aggregation, topic.type, p.numerator * pm.denominator,
+                  p.denominator * pm.numerator)
+
+
+@lru_cache(maxsize=65_536)  # keyed by integers: Fraction hashing is slow
+def _bytes(aggregation: str, topic_type: str, samples_num: int, samples_den: int) -> Fraction:
+    return window_value_bytes(aggregation, topic_type, Fraction(samples_num, samples_den))
 
 
 def _link_cost(
@@ -210,8 +216,12 @@ def make_plan(
         if key.topic not in index:
             index[key.topic] = len(index)
 
-    def cost(s: StreamKey) -> float:
-        return float(_window_bytes(s, tops) / s.period)
+    costs: dict[StreamKey, float] = {}
+
+    def cost(s: StreamKey) -> float:  # value bytes per second, memoised
+        if s not in costs:
+            costs[s] = float(_window_bytes(s, tops) / s.period)
+        return costs[s]
 
     streams = plan_streams(requested, index, cost)
     sent = sorted((s for s in streams if s.id is not None), key=lambda s: s.id or 0)

@@ -11,6 +11,11 @@ then walk the streams from the most expensive on the link (value bytes per
 second) and drop each one that stays derivable (:mod:`modd_plan.derive`) from
 the streams still sent. Derivability only grows with the sent set, so one pass
 is enough: a stream that cannot be dropped now never can be later.
+Then try, one at a time, adding a helper ALL stream (nobody asked for it) at
+each requested period of the topic where it could pay (it costs less than
+the sent streams at multiples of its period): when few samples fall in a
+window, the raw samples can cost less than the several aggregates they
+replace. The cheapest of these sets wins (ties: no helper).
 """
 
 from __future__ import annotations
@@ -40,6 +45,11 @@ class StreamKey:
     topic: str
     aggregation: str
     period: Fraction
+
+    def __hash__(self) -> int:
+        # Fraction.__hash__ computes a modular inverse; numerator and
+        # denominator (always normalised) identify the period as well.
+        return hash((self.topic, self.aggregation, self.period.numerator, self.period.denominator))
 
     @property
     def key(self) -> str:
@@ -157,28 +167,57 @@ def stream_order(
     return order
 
 
+def _drop_derivable(
+    required: Sequence[StreamKey],
+    cost_per_s: Callable[[StreamKey], float],
+    helper: StreamKey | None = None,
+) -> list[StreamKey]:
+    """The one-pass drop over ``required`` (+ ``helper``, always kept): the
+    most expensive first (ties: longest period, then aggregation order)."""
+    streams = sorted(
+        required, key=lambda s: (-cost_per_s(s), -s.period, AGGREGATIONS.index(s.aggregation))
+    )
+    kept = [True] * len(streams)
+    extra = [helper] if helper is not None else []
+    for i in range(len(streams)):
+        kept[i] = False
+        rest = [s for s, k in zip(streams, kept, strict=True) if k] + extra
+        dropped = [s for s, k in zip(streams, kept, strict=True) if not k]
+        if any(find_sources(r, rest) is None for r in dropped):
+            kept[i] = True
+    return [s for s, k in zip(streams, kept, strict=True) if k] + extra
+
+
+def _choose_for_topic(
+    streams: Sequence[StreamKey], cost_per_s: Callable[[StreamKey], float]
+) -> list[StreamKey]:
+    best = _drop_derivable(streams, cost_per_s)
+    best_cost = sum(cost_per_s(s) for s in best)
+    for period in sorted({s.period for s in streams}):
+        helper = StreamKey(streams[0].topic, "ALL", period)
+        if helper in streams:
+            continue
+        replaceable = sum(cost_per_s(s) for s in best if _factor(s, helper) is not None)
+        if cost_per_s(helper) >= replaceable:
+            continue  # it cannot pay for itself
+        trial = _drop_derivable(streams, cost_per_s, helper)
+        trial_cost = sum(cost_per_s(s) for s in trial)
+        if trial_cost < best_cost:
+            best, best_cost = trial, trial_cost
+    return best
+
+
 def choose_sent(
     requested: Iterable[StreamKey], cost_per_s: Callable[[StreamKey], float]
 ) -> set[StreamKey]:
-    """The sent set: requested streams minus those derivable from the rest,
-    dropping the most expensive first (ties: longest period, then
-    aggregation order)."""
-    sent = set(requested)
+    """The sent set: per topic, the cheapest of the requested streams minus
+    those derivable from the rest, with or without one helper ALL stream."""
     by_topic: dict[str, list[StreamKey]] = {}
-    for s in sent:
+    for s in requested:
         by_topic.setdefault(s.topic, []).append(s)
+    sent: set[StreamKey] = set()
     for streams in by_topic.values():
-        if len(streams) < 2:
-            continue
-        streams.sort(key=lambda s: (-cost_per_s(s), -s.period, AGGREGATIONS.index(s.aggregation)))
-        kept = [True] * len(streams)
-        for i in range(len(streams)):
-            kept[i] = False
-            rest = [s for s, k in zip(streams, kept, strict=True) if k]
-            dropped = [s for s, k in zip(streams, kept, strict=True) if not k]
-            if any(find_sources(r, rest) is None for r in dropped):
-                kept[i] = True
-        sent -= {s for s, k in zip(streams, kept, strict=True) if not k}
+        sent.update(_choose_for_topic(streams, cost_per_s) if len(streams) > 1 else streams)
     return sent
 
 

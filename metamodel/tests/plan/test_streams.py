@@ -45,13 +45,28 @@ def test_min_is_not_derived_from_max_nor_from_a_non_multiple(make_model: Any) ->
 
 def test_all_feeds_every_aggregation_at_multiples(make_model: Any) -> None:
     subs = [("a", "t", "0.5", "ALL"), ("b", "t", "1.0", "MIN"), ("c", "t", "0.5", "SUM"),
-            ("d", "t", "1.5", "AVERAGE"), ("e", "t", "0.25", "LAST")]
-    j = make_plan(make_model(["t"], [("p", "0.1", ["t"])], subs)).to_json()
+            ("d", "t", "1.5", "AVERAGE"), ("e", "t", "0.2", "LAST")]
+    j = make_plan(make_model(["t"], [("p", "0.05", ["t"])], subs)).to_json()
     streams = _by_key(j)
-    assert [k for k, s in streams.items() if s["sent"]] == ["d.s.t/LAST/0.25", "d.s.t/ALL/0.5"]
+    assert [k for k, s in streams.items() if s["sent"]] == ["d.s.t/LAST/0.2", "d.s.t/ALL/0.5"]
     assert streams["d.s.t/MIN/1.0"]["derived_from"] == "d.s.t/ALL/0.5"
     assert streams["d.s.t/MIN/1.0"]["factor"] == 2
     assert streams["d.s.t/AVERAGE/1.5"]["factor"] == 3
+
+
+def test_a_helper_all_stream_when_raw_samples_are_cheaper(make_model: Any) -> None:
+    # 2 samples per 1 s window: ALL = 1 + 2 x 4 B < MIN 4 + MAX 4 + AVERAGE 5 B
+    subs = [("a", "t", "1.0", "MIN"), ("b", "t", "1.0", "MAX"), ("c", "t", "2.0", "AVERAGE")]
+    j = make_plan(make_model(["t"], [("p", "0.5", ["t"])], subs)).to_json()
+    streams = _by_key(j)
+    helper = streams["d.s.t/ALL/1.0"]
+    assert (helper["sent"], helper["id"], helper["subscribers"]) == (True, 0, [])
+    assert [k for k, s in streams.items() if s["sent"]] == ["d.s.t/ALL/1.0"]
+    assert streams["d.s.t/AVERAGE/2.0"]["derived_from"] == "d.s.t/ALL/1.0"
+    assert j["subscriptions"]["a"] == "d.s.t/MIN/1.0"
+    # 10 samples per window: the aggregates are cheaper, no helper
+    j = make_plan(make_model(["t"], [("p", "0.1", ["t"])], subs)).to_json()
+    assert "d.s.t/ALL/1.0" not in _by_key(j)
 
 
 def test_cheapest_cover_average_from_sum_and_count(make_model: Any) -> None:
