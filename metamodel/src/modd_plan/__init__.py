@@ -12,7 +12,7 @@ dynamic subscriptions the current plan can serve.
 from .buffers import BufferProblem, BufferSolution, Infeasibility, Subscription, solve_exact
 from .derive import aggregate, derive_value, merge
 from .dynamic import Accepted, NotAvailable, check_dynamic
-from .plan import Plan, PlannerConstants, make_plan
+from .plan import Plan, PlannerConstants, buffer_problem, constants_for, make_plan
 from .schedule import Schedule
 from .streams import AGGREGATIONS, PlannedStream, Source, StreamKey
 
@@ -31,7 +31,9 @@ __all__ = [
     "StreamKey",
     "Subscription",
     "aggregate",
+    "buffer_problem",
     "check_dynamic",
+    "constants_for",
     "derive_value",
     "make_plan",
     "merge",
