@@ -219,7 +219,7 @@ def main() -> None:
         (tmp / "ingest").mkdir()
         r = ingest(tmp / "ingest", args.ingest_samples)
         results["ingest"] = r
-        print("\n== PubBroker ingest (archive on: zstd chunks, fsync per chunk; 19 float32 topics,"
+        print("\n== PubBroker ingest (archive on: zstd chunks, fsync every flush tick; 19 float32 topics,"
               " batches of 4096 over the Unix socket)")
         print(f"  {r['samples']:,} samples in {r['seconds_to_ingest']} s: "
               f"{r['samples_per_s_wall']:,} samples/s wall; ingest thread CPU "
