@@ -219,8 +219,8 @@ def main() -> None:
         (tmp / "ingest").mkdir()
         r = ingest(tmp / "ingest", args.ingest_samples)
         results["ingest"] = r
-        print("\n== PubBroker ingest (archive on: zstd chunks, fsync every flush tick; 19 float32 topics,"
-              " batches of 4096 over the Unix socket)")
+        print("\n== PubBroker ingest (archive on: zstd chunks, fsync every flush tick;"
+              " 19 float32 topics, batches of 4096 over the Unix socket)")
         print(f"  {r['samples']:,} samples in {r['seconds_to_ingest']} s: "
               f"{r['samples_per_s_wall']:,} samples/s wall; ingest thread CPU "
               f"{r['ingest_thread_cpu_s']} s -> {r['samples_per_s_ingest_core']:,} samples/s "
