@@ -87,7 +87,8 @@ def solve_milp(problem: BufferProblem, *, tie_break: bool = True) -> BufferSolut
     subs = problem.subscriptions
     capped = [j for j, s in enumerate(subs) if problem.cap_for(s.topic) is not None]
     if problem.cap_us is not None and capped:
-        base.append(z[np.array(capped)] <= problem.cap_us / US_PER_UNIT)
+        bound = z if len(capped) == len(subs) else z[np.array(capped)]
+        base.append(bound <= problem.cap_us / US_PER_UNIT)
     alpha, beta = float(problem.alpha), float(problem.beta)
     stage1 = alpha * cp.sum(z) + beta * w
     sizes = _solve(cp, stage1, base, n)
