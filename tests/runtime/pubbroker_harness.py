@@ -161,6 +161,7 @@ class BaseStation:
             self.sock.close()
             raise
         self.rx = Receiver()
+        self._sent: dict[int, Config] = {}
         self.got = Received()
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -169,6 +170,9 @@ class BaseStation:
     def configure(self, config: Config, timeout: float = 5.0) -> ConfigAck:
         with self._lock:
             n = len(self.got.acks)
+            # Registered by the reader when the ACK arrives, before any later DATA frame:
+            # the new config's first (sync) frame may follow the ACK by a millisecond.
+            self._sent[config.config_id] = config
         self.sock.sendall(codec.encode(config))
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
@@ -176,10 +180,7 @@ class BaseStation:
                 self._handle(read_frame(self.sock, self.splitter))
             with self._lock:
                 if len(self.got.acks) > n:
-                    ack = self.got.acks[n]
-                    if ack.status == 0:
-                        self.rx.add_config(config, ack.epoch_ns)
-                    return ack
+                    return self.got.acks[n]
             if self._thread is not None:
                 time.sleep(0.005)
         raise TimeoutError("no CONFIG_ACK")
@@ -201,6 +202,8 @@ class BaseStation:
                 self.got.statuses.append(m.as_dict())
             elif isinstance(m, ConfigAck):
                 self.got.acks.append(m)
+                if m.status == 0 and m.config_id in self._sent:
+                    self.rx.add_config(self._sent[m.config_id], m.epoch_ns)
             elif isinstance(m, Pong):
                 self.got.pongs.append(m.payload)
             elif isinstance(m, ErrorMsg):

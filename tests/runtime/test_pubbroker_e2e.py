@@ -206,6 +206,9 @@ def test_config_switch_at_a_slot_boundary_and_reconnect(broker_factory: Any) -> 
     n = check_windows(first.windows, configs, archive)
     n += check_windows(second.windows, configs, archive)
     assert {w.config_id for w in first.windows} == {1, 2}
+    # While no base station was connected, slots were dropped and counted, not queued.
+    assert second.statuses and second.statuses[-1]["frames_dropped"] >= 1
+    assert "counters: uptime_s=" in b.log()
     # No sample counted twice or lost at the switch: COUNT windows of config 2 plus the last
     # config-1 AVERAGE window of accel_x cover the samples around the switch exactly.
     switch = ack2.epoch_ns
