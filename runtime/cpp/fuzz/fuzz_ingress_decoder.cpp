@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <unistd.h>
 
 #include "modd/broker/broker.hpp"
 
@@ -16,12 +17,20 @@ struct NoLink : LinkOutput {
   bool link_write(std::vector<uint8_t>&&) override { return false; }
 };
 
+// The archive of the fuzzed broker lives in a per-process directory removed at exit (this
+// object is built before the broker, so it is destroyed after it).
+struct ArchiveDir {
+  std::string path = (std::filesystem::temp_directory_path() / ("modd-fuzz-ingress-" + std::to_string(getpid()))).string();
+  ~ArchiveDir() { std::filesystem::remove_all(path); }
+};
+
 Broker& the_broker() {
+  static ArchiveDir dir;
   static FakeClock clock;
   static NoLink link;
   static std::unique_ptr<Broker> b = [] {
     BrokerConfig cfg;
-    cfg.archive_dir = (std::filesystem::temp_directory_path() / "modd-fuzz-ingress").string();
+    cfg.archive_dir = dir.path;
     cfg.topics = {{"a", link::ValueType::Float32, 4}, {"b", link::ValueType::Int, 2}, {"c", link::ValueType::Bool, 1}};
     cfg.accept_unknown_topics = true;
     cfg.rotate_bytes = 1 << 20;

@@ -24,10 +24,19 @@ struct FakeLink : LinkOutput {
   }
 };
 
+// Archive directories of the tests, removed when the test binary exits.
+struct TempDirs {
+  std::vector<std::string> dirs;
+  ~TempDirs() {
+    for (const auto& d : dirs) std::filesystem::remove_all(d);
+  }
+} temp_dirs;
+
 BrokerConfig test_config(const std::string& name) {
   BrokerConfig c;
   c.archive_dir = (std::filesystem::temp_directory_path() / ("modd-broker-" + name + std::to_string(getpid()))).string();
   std::filesystem::remove_all(c.archive_dir);
+  temp_dirs.dirs.push_back(c.archive_dir);
   c.topics = {{"usv.x", ValueType::Float32, 4}, {"usv.n", ValueType::Int, 0}};
   c.default_buffer_size = 3;
   c.status_period_s = 0;

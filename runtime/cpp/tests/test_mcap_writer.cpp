@@ -16,10 +16,18 @@ using namespace modd::archive;
 
 namespace {
 
+struct TempDirs {
+  std::vector<std::string> dirs;
+  ~TempDirs() {
+    for (const auto& d : dirs) std::filesystem::remove_all(d);
+  }
+} temp_dirs;
+
 std::string tmpdir(const std::string& name) {
   auto p = std::filesystem::temp_directory_path() / ("modd-test-" + name + "-" + std::to_string(::getpid()));
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
+  temp_dirs.dirs.push_back(p);
   return p;
 }
 
