@@ -79,7 +79,7 @@ TEST(Publisher, SendsRegistrationsAndBatchesAndReconnects) {
   modd::Publisher pub("pub_1", "unix:" + path);
   pub.declare("usv.a.x", modd::ValueType::Float32);
   for (int i = 0; i < 100; ++i) EXPECT_TRUE(pub.publish("usv.a.x", int64_t{i}, static_cast<float>(i) * 0.5f));
-  EXPECT_TRUE(pub.publish("usv.a.n", int64_t{7}, int64_t{-3}));
+  EXPECT_TRUE(pub.publish("usv.a.n", int64_t{7}, -3));  // a plain int: an int topic
   int c = ::accept(l.fd, nullptr, nullptr);
   ASSERT_GE(c, 0);
   Sink s;

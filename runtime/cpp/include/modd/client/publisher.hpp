@@ -19,6 +19,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <unordered_map>
 #include <vector>
 
@@ -55,6 +56,12 @@ class Publisher {
   bool publish(const std::string& topic, int64_t timestamp_ns, double value) noexcept;
   bool publish(const std::string& topic, int64_t timestamp_ns, int64_t value) noexcept;
   bool publish(const std::string& topic, int64_t timestamp_ns, bool value) noexcept;
+  // Any other integer type (int, long long, uint8_t, ...) publishes as an int topic.
+  template <typename T>
+    requires(std::is_integral_v<T> && !std::is_same_v<T, bool> && !std::is_same_v<T, int64_t>)
+  bool publish(const std::string& topic, int64_t timestamp_ns, T value) noexcept {
+    return publish(topic, timestamp_ns, static_cast<int64_t>(value));
+  }
   // Waits until the queue is empty and written (true) or the timeout passes.
   bool flush(std::chrono::milliseconds timeout) noexcept;
   bool connected() const noexcept;
