@@ -150,6 +150,13 @@ int64_t Broker::find_topic(const std::string& name, link::ValueType declared, Re
 
 int64_t Broker::stamp_now() {
   int64_t t = clock_.now_ns();
+  if (t < last_stamp_ - 100'000'000 && !clock_warned_) {
+    log_line("clock: CLOCK_REALTIME went back %lld ms; stamps hold at the last one until it catches up",
+             static_cast<long long>((last_stamp_ - t) / 1'000'000));
+    clock_warned_ = true;
+  } else if (t >= last_stamp_) {
+    clock_warned_ = false;
+  }
   if (t < last_stamp_) t = last_stamp_;  // stamps never go backwards, even if the wall clock does
   last_stamp_ = t;
   executor_.advance(t, *this);
