@@ -137,8 +137,8 @@ def encode(m: Message) -> bytes:
     if isinstance(m, Hello | Challenge):
         if len(m.nonce) != 16:
             raise ValueError("nonce must be 16 bytes")
-        t = MsgType.HELLO if isinstance(m, Hello) else MsgType.CHALLENGE
-        return _frame(t, bytes([m.version]) + m.nonce)
+        mt = MsgType.HELLO if isinstance(m, Hello) else MsgType.CHALLENGE
+        return _frame(mt, bytes([m.version]) + m.nonce)
     if isinstance(m, Auth):
         return _frame(MsgType.AUTH, m.mac)
     if isinstance(m, AuthOk):
