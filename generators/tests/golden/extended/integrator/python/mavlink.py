@@ -1,0 +1,78 @@
+#!/usr/bin/env python3
+"""Driver of publisher mavlink (drone usv), in Python: reads the sensors
+every 0.2 s and hands the readings to the on-board PubBroker through the
+MoDD Python publisher client (``import modd``).
+
+This file is yours: `modd generate` wrote it once and will never overwrite it.
+Replace the bodies of the read_*() functions with the reads of your sensors
+(they return a test signal until then).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import signal
+import sys
+import time
+
+from modd.publisher import Publisher
+
+PUBLISHER = 'mavlink'
+DEFAULT_INGRESS = 'unix:/tmp/modd/ingress.sock'
+PERIOD_S = 0.2
+TOPICS = {
+    'usv.autopilot.latitude': 'float64',  # deg
+    'usv.autopilot.altitude': 'float32',  # METER
+    'usv.autopilot.roll': 'float32',  # RADIAN
+}
+
+
+# ---- Sensor reads: replace each body with the read of your sensor. ----------
+def read_latitude(t: float) -> float:
+    return math.sin(t + 0)
+
+
+def read_altitude(t: float) -> float:
+    return math.sin(t + 1)
+
+
+def read_roll(t: float) -> float:
+    return math.sin(t + 2)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
+    parser.add_argument("--ingress", default=os.environ.get("MODD_INGRESS", DEFAULT_INGRESS),
+                        help="unix:/path or tcp:host:port")
+    parser.add_argument("--count", type=int, help="stop after this many readings")
+    args = parser.parse_args()
+    stopping = False
+
+    def stop(*_: object) -> None:
+        nonlocal stopping
+        stopping = True
+
+    signal.signal(signal.SIGINT, stop)
+    signal.signal(signal.SIGTERM, stop)
+    with Publisher(PUBLISHER, args.ingress) as pub:
+        for topic, vtype in TOPICS.items():
+            pub.declare(topic, vtype)
+        start = time.monotonic()
+        n = 0
+        while not stopping and (args.count is None or n < args.count):
+            ts, t = time.time_ns(), time.monotonic() - start
+            # ---- One publish call per topic of mavlink. ----
+            pub.publish('usv.autopilot.latitude', ts, read_latitude(t))
+            pub.publish('usv.autopilot.altitude', ts, read_altitude(t))
+            pub.publish('usv.autopilot.roll', ts, read_roll(t))
+            n += 1
+            time.sleep(max(0.0, start + n * PERIOD_S - time.monotonic()))
+        delivered = pub.flush(5.0)
+    print(f"{PUBLISHER}: {n} readings published", file=sys.stderr)
+    return 0 if delivered else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
