@@ -170,7 +170,8 @@ def test_config_switch_at_a_slot_boundary_and_reconnect(broker_factory: Any) -> 
     c2 = Config(2, 1, c1.topics, (StreamSpec(0, Aggregation.COUNT, 100000),
                                   StreamSpec(1, Aggregation.SUM, 300000),
                                   StreamSpec(2, Aggregation.LAST, 500000),
-                                  StreamSpec(2, Aggregation.FIRST, 500000)))
+                                  StreamSpec(2, Aggregation.FIRST, 500000),
+                                  StreamSpec(1, Aggregation.ALL, 200000)))
     base = BaseStation(b.link_port)
     ack1 = base.configure(c1)
     base.start()
