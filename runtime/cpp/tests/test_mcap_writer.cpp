@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "modd/archive/archiver.hpp"
 #include "modd/archive/crc32.hpp"
@@ -174,4 +175,21 @@ TEST(Archiver, JsonOfEachType) {
   EXPECT_EQ(s, "{\"value\":-42}");
   format_sample_json(s, modd::link::ValueType::Bool, Sample{0, 0, 0, 1});
   EXPECT_EQ(s, "{\"value\":true}");
+}
+
+TEST(Archiver, RotatesByTime) {
+  std::string dir = tmpdir("rotate-time");
+  ArchiverOptions o;
+  o.dir = dir;
+  o.rotate_s = 1;
+  auto topic = std::make_shared<TopicInfo>(TopicInfo{"usv.t", modd::link::ValueType::Int});
+  Archiver a(o);
+  a.submit(topic, std::vector<Sample>{{1, 1, 0, 7}});
+  a.flush();
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  a.submit(topic, std::vector<Sample>{{2, 2, 0, 8}});  // older than 1 s: this file closes after it
+  a.submit(topic, std::vector<Sample>{{3, 3, 0, 9}});  // a new file
+  a.stop();
+  EXPECT_EQ(a.counters().archived.load(), 3u);
+  EXPECT_EQ(a.counters().files.load(), 2u);
 }
