@@ -39,7 +39,9 @@ def _as_postgres(cmd: list[str]) -> list[str]:
 @pytest.fixture(scope="module")
 def postgres_url() -> Iterator[str]:
     if not PG_BINS or not (PG_BINS[-1] / "initdb").exists():
-        pytest.skip("PostgreSQL server binaries are not installed (apt-get install postgresql)")
+        # scripts/setup.sh installs postgresql; without it this is a setup bug, not a skip.
+        pytest.fail("PostgreSQL server binaries are missing: run make setup "
+                    "(apt-get install postgresql)")
     bins = PG_BINS[-1]
     # Not under pytest's tmp tree: that is private to root, and the server runs
     # as postgres.

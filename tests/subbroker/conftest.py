@@ -23,7 +23,7 @@ from subbroker_harness import PUBBROKER  # noqa: E402
 @pytest.fixture
 def needs_pubbroker() -> None:
     if not PUBBROKER.exists():
-        pytest.skip(f"{PUBBROKER} is not built (make build)")
+        pytest.fail(f"{PUBBROKER} is not built: run make build (make test does)")
 
 
 class Collector:

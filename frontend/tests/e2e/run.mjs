@@ -4,7 +4,7 @@
  * data dir, a known admin password) and — when the runtime is built — a
  * simulated drone with `modd up --simulate`; runs the journey in headless
  * Chromium at 1280×800; stops what it started, by PID; prints one line
- * "N passed, N failed[, N skipped]" and exits non-zero on any failure.
+ * "N passed, N failed" and exits non-zero on any failure.
  */
 import { existsSync, mkdirSync, mkdtempSync, rmSync, readFileSync, symlinkSync, writeFileSync } from "node:fs";
 import { tmpdir } from "node:os";
@@ -36,7 +36,7 @@ if (!existsSync("/usr/bin/chromium") && !process.env.MODD_CHROMIUM) fail("no /us
 
 const tmp = mkdtempSync(join(tmpdir(), "modd-e2e-"));
 const procs = [];
-let passed = 0, failed = 0, skipped = 0;
+let passed = 0, failed = 0;
 let browser = null;
 
 async function cleanup() {
@@ -97,8 +97,10 @@ try {
       await page.screenshot({ path: join(tmpdir(), "modd-e2e-failure.png") }).catch(() => undefined);
     }
   }
-  if (!drone) { skipped += 1; console.log(`  - deploy acked by a drone: skipped (${pubbrokerBin} not built: make build)`); }
-  if (!liveValues) { skipped += 1; console.log("  - live values in a chart: skipped (no simulated sensors: modd-sim is not installed)"); }
+  // `make test` builds the PubBroker and installs modd-sim: their absence is a
+  // broken set-up, so these phases fail rather than pass unnoticed.
+  if (!drone) { failed += 1; console.log(`  ✗ deploy acked by a drone: ${pubbrokerBin} is not built (make build)`); }
+  if (!liveValues) { failed += 1; console.log("  ✗ live values in a chart: no simulated sensors (modd-sim is not installed)"); }
   if (failed) {
     for (const log of ["backend.log", "drone.log"]) {
       try { console.log(`--- ${log}\n${readFileSync(join(tmp, log), "utf8").split("\n").slice(-20).join("\n")}`); } catch { /* none */ }
@@ -110,7 +112,7 @@ try {
 } finally {
   await cleanup();
 }
-console.log(`${passed} passed, ${failed} failed${skipped ? `, ${skipped} skipped` : ""}`);
+console.log(`${passed} passed, ${failed} failed`);
 process.exit(failed ? 1 : 0);
 
 /** Scenario 1 as the journey builds it (no subscriber endpoints: zenoh delivery). */

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-import pytest
 from modd_plan.linkcost import (
     EXACT_WALK_LIMIT,
     data_frame_bytes,
@@ -68,8 +67,8 @@ def test_frame_size_matches_the_python_link_codec() -> None:
     """Cross-check against the real encoder (runtime/python, docs/protocol.md):
     one frame per (type, aggregation), 6 samples per window, ints whose
     zigzag varint takes INT_VALUE_BYTES."""
-    codec = pytest.importorskip("modd.link.codec")
-    frames = pytest.importorskip("modd.link.frames")
+    import modd.link.codec as codec
+    import modd.link.frames as frames
     big_int = 2**21  # zigzag 2**22: a 4-byte varint
     for vtype in TYPES:
         for agg in AGGS:
