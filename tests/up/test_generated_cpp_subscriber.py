@@ -5,22 +5,14 @@ fed by the integrator's generated Python publisher."""
 from __future__ import annotations
 
 import signal
-import socket
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from modd_gen import generate, write_artifacts
 from modd_model import load_model
-
-MODD = str(Path(sys.executable).parent / "modd")
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def _build(project: Path) -> Path:
@@ -31,10 +23,12 @@ def _build(project: Path) -> Path:
     return project / "build" / "sub_5_subscriber"
 
 
-def test_cpp_subscriber_gets_values_over_tcp(scenarios_dir: Path, tmp_path: Path) -> None:
+def test_cpp_subscriber_gets_values_over_tcp(scenarios_dir: Path, tmp_path: Path, modd_cmd: str,
+                                             free_port: Callable[[], int],
+                                             wait_for: Callable[..., None]) -> None:
     text = (scenarios_dir / "scenario1.modd").read_text()
-    text = text.replace('"127.0.0.1":7171', f'"127.0.0.1":{_free_port()}')
-    sub_port = _free_port()
+    text = text.replace('"127.0.0.1":7171', f'"127.0.0.1":{free_port()}')
+    sub_port = free_port()
     text = text.replace('"127.0.0.1":7405', f'"127.0.0.1":{sub_port}')
     model_path = tmp_path / "model.modd"
     model_path.write_text(text)
@@ -44,16 +38,12 @@ def test_cpp_subscriber_gets_values_over_tcp(scenarios_dir: Path, tmp_path: Path
     run = tmp_path / "run"
     subscriber = subprocess.Popen([str(exe)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                   text=True)
-    up = subprocess.Popen([MODD, "up", str(model_path), "--workdir", str(run), "--zenoh-listen",
-                           f"tcp/127.0.0.1:{_free_port()}"], stdout=subprocess.PIPE,
+    up = subprocess.Popen([modd_cmd, "up", str(model_path), "--workdir", str(run), "--zenoh-listen",
+                           f"tcp/127.0.0.1:{free_port()}"], stdout=subprocess.PIPE,
                           stderr=subprocess.STDOUT, text=True)
     publisher = None
     try:
-        log = run / "logs" / "subbroker.log"
-        deadline = time.monotonic() + 30
-        while not (log.exists() and "config 1 running" in log.read_text()):
-            assert time.monotonic() < deadline, "the brokers did not come up"
-            time.sleep(0.1)
+        wait_for(run / "logs" / "subbroker.log", "config 1 running", 30)
         publisher = subprocess.Popen(
             [sys.executable, str(tmp_path / "gen/integrator/python/pub_1.py"), "--ingress",
              f"unix:{run / 'ingress.sock'}"], stdout=subprocess.DEVNULL,

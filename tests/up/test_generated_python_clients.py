@@ -6,41 +6,30 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import subprocess
 import sys
-import time
+from collections.abc import Callable
 from pathlib import Path
 
 from modd_gen import generate, write_artifacts
 from modd_model import load_model
 
-MODD = str(Path(sys.executable).parent / "modd")
 
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-def test_generated_publisher_and_subscriber(scenarios_dir: Path, tmp_path: Path) -> None:
+def test_generated_publisher_and_subscriber(scenarios_dir: Path, tmp_path: Path, modd_cmd: str,
+                                            free_port: Callable[[], int],
+                                            wait_for: Callable[..., None]) -> None:
     model_path = tmp_path / "model.modd"
     model_path.write_text((scenarios_dir / "scenario1.modd").read_text()
-                          .replace('"127.0.0.1":7171', f'"127.0.0.1":{_free_port()}'))
+                          .replace('"127.0.0.1":7171', f'"127.0.0.1":{free_port()}'))
     write_artifacts(tmp_path / "gen", generate(load_model(model_path)))
-    zenoh = f"tcp/127.0.0.1:{_free_port()}"
+    zenoh = f"tcp/127.0.0.1:{free_port()}"
     run = tmp_path / "run"
-    up = subprocess.Popen([MODD, "up", str(model_path), "--workdir", str(run),
+    up = subprocess.Popen([modd_cmd, "up", str(model_path), "--workdir", str(run),
                            "--zenoh-listen", zenoh], stdout=subprocess.PIPE,
                           stderr=subprocess.STDOUT, text=True)
     publisher = None
     try:
-        log = run / "logs" / "subbroker.log"
-        deadline = time.monotonic() + 30
-        while not (log.exists() and "config 1 running" in log.read_text()):
-            assert time.monotonic() < deadline, "the brokers did not come up"
-            time.sleep(0.1)
+        wait_for(run / "logs" / "subbroker.log", "config 1 running", 30)
         publisher = subprocess.Popen(
             [sys.executable, str(tmp_path / "gen/integrator/python/pub_1.py"),
              "--ingress", f"unix:{run / 'ingress.sock'}"],

@@ -6,19 +6,10 @@ from __future__ import annotations
 import os
 import re
 import signal
-import socket
 import subprocess
-import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
-
-MODD = str(Path(sys.executable).parent / "modd")
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def _alive(pid: int) -> bool:
@@ -29,27 +20,19 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def _wait_for(path: Path, text: str, timeout: float) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if path.exists() and text in path.read_text(errors="replace"):
-            return
-        time.sleep(0.1)
-    raise AssertionError(f"{text!r} never appeared in {path}:\n"
-                         f"{path.read_text(errors='replace') if path.exists() else '(no log)'}")
-
-
-def test_up_runs_the_brokers_and_stops_them(scenarios_dir: Path, tmp_path: Path) -> None:
+def test_up_runs_the_brokers_and_stops_them(scenarios_dir: Path, tmp_path: Path, modd_cmd: str,
+                                            free_port: Callable[[], int],
+                                            wait_for: Callable[..., None]) -> None:
     model = tmp_path / "model.modd"
-    port = _free_port()
+    port = free_port()
     model.write_text((scenarios_dir / "scenario1.modd").read_text()
                      .replace('"127.0.0.1":7171', f'"127.0.0.1":{port}'))
-    up = subprocess.Popen([MODD, "up", str(model), "--workdir", str(tmp_path / "run"),
-                           "--zenoh-listen", f"tcp/127.0.0.1:{_free_port()}"],
+    up = subprocess.Popen([modd_cmd, "up", str(model), "--workdir", str(tmp_path / "run"),
+                           "--zenoh-listen", f"tcp/127.0.0.1:{free_port()}"],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         # the SubBroker planned the model and the PubBroker acknowledged its CONFIG
-        _wait_for(tmp_path / "run" / "logs" / "subbroker.log", "config 1 running", 30)
+        wait_for(tmp_path / "run" / "logs" / "subbroker.log", "config 1 running", 30)
         assert (tmp_path / "run" / "generated" / "operator" / "pubbroker.json").is_file()
     finally:
         up.send_signal(signal.SIGTERM)
@@ -61,29 +44,31 @@ def test_up_runs_the_brokers_and_stops_them(scenarios_dir: Path, tmp_path: Path)
     assert "stopped pubbroker" in out and "stopped subbroker" in out
 
 
-def test_up_refuses_an_invalid_model(tmp_path: Path) -> None:
+def test_up_refuses_an_invalid_model(tmp_path: Path, modd_cmd: str) -> None:
     bad = tmp_path / "bad.modd"
     bad.write_text("Drone d { }")
-    res = subprocess.run([MODD, "up", str(bad), "--workdir", str(tmp_path / "run")],
+    res = subprocess.run([modd_cmd, "up", str(bad), "--workdir", str(tmp_path / "run")],
                          capture_output=True, text=True, timeout=60)
     assert res.returncode == 1 and "no PubBroker block" in res.stderr
 
 
-def test_up_with_simulator_delivers_live_values(tmp_path: Path) -> None:
+def test_up_with_simulator_delivers_live_values(tmp_path: Path, modd_cmd: str,
+                                                free_port: Callable[[], int],
+                                                wait_for: Callable[..., None]) -> None:
     """The demo of `make run`: modd up --simulate; values arrive on zenoh."""
     import modd
 
     demo = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.modd"
     model = tmp_path / "demo.modd"
-    port = _free_port()
+    port = free_port()
     model.write_text(demo.read_text().replace('"127.0.0.1":7171', f'"127.0.0.1":{port}'))
-    zenoh_port = _free_port()
-    up = subprocess.Popen([MODD, "up", str(model), "--simulate", "--workdir",
+    zenoh_port = free_port()
+    up = subprocess.Popen([modd_cmd, "up", str(model), "--simulate", "--workdir",
                            str(tmp_path / "run"), "--zenoh-listen",
                            f"tcp/127.0.0.1:{zenoh_port}"],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
-        _wait_for(tmp_path / "run" / "logs" / "subbroker.log", "config 1 running", 30)
+        wait_for(tmp_path / "run" / "logs" / "subbroker.log", "config 1 running", 30)
         sub = modd.subscribe("usv", "water_temp", connect=f"tcp/127.0.0.1:{zenoh_port}")
         values = []
         deadline = time.monotonic() + 30
