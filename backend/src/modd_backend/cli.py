@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import ipaddress
+import os
 import sys
 from pathlib import Path
 
@@ -29,7 +30,9 @@ def parse_args(argv: list[str] | None = None) -> Settings:
     p.add_argument("--deploy-timeout", type=float, default=10.0, help="seconds")
     p.add_argument("--scene-port", type=int, default=0,
                    help="port of the 3D scene (viser); 0: any free port; -1: no scene")
-    p.add_argument("--admin-password", help="first admin's password (default: drawn, printed)")
+    p.add_argument("--admin-password", default=os.environ.get("MODD_ADMIN_PASSWORD"),
+                   help="first admin's password (default: $MODD_ADMIN_PASSWORD, else drawn "
+                   "and printed)")
     a = p.parse_args(argv)
     return Settings(
         data_dir=a.data,
