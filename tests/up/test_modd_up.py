@@ -86,3 +86,39 @@ def test_up_with_simulator_delivers_live_values(tmp_path: Path, modd_cmd: str,
     assert all(v.topic == "usv.ctd.water_temperature" and v.aggregation == "AVERAGE"
                for v in values)
     assert len(re.findall(r"\(pid (\d+)\)", out)) == 3
+
+
+def test_up_in_two_parts_drone_and_station(scenarios_dir: Path, tmp_path: Path, modd_cmd: str,
+                                           free_port: Callable[[], int],
+                                           wait_for: Callable[..., None]) -> None:
+    """`--part drone` runs the PubBroker only, `--part station` the SubBroker only (joining a
+    zenoh endpoint with --zenoh-connect); together they reach the running config."""
+    model = tmp_path / "model.modd"
+    port = free_port()
+    model.write_text((scenarios_dir / "scenario1.modd").read_text()
+                     .replace('"127.0.0.1":7171', f'"127.0.0.1":{port}'))
+    env = {k: v for k, v in os.environ.items() if k != "MODD_LINK_KEY"}
+    refused = subprocess.run([modd_cmd, "up", str(model), "--part", "drone", "--workdir",
+                              str(tmp_path / "nokey")], env=env, capture_output=True, text=True,
+                             timeout=60)
+    assert refused.returncode == 1 and "MODD_LINK_KEY" in refused.stderr
+    env["MODD_LINK_KEY"] = "a key both parts share"
+    procs = {part: subprocess.Popen(
+        [modd_cmd, "up", str(model), "--part", part, "--workdir", str(tmp_path / part),
+         "--zenoh-listen", f"tcp/127.0.0.1:{free_port()}",
+         "--zenoh-connect", f"tcp/127.0.0.1:{free_port()}"],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+        for part in ("drone", "station")}
+    outs = {}
+    try:
+        wait_for(tmp_path / "station" / "logs" / "subbroker.log", "config 1 running", 30)
+    finally:
+        for part, proc in procs.items():
+            proc.send_signal(signal.SIGTERM)
+            outs[part] = proc.communicate(timeout=60)[0]
+    assert all(p.returncode == 0 for p in procs.values()), outs
+    assert "started pubbroker" in outs["drone"] and "subbroker" not in outs["drone"]
+    assert "started subbroker" in outs["station"] and "pubbroker" not in outs["station"]
+    assert not (tmp_path / "station" / "logs" / "pubbroker.log").exists()
+    assert not any(_alive(int(pid)) for out in outs.values()
+                   for pid in re.findall(r"\(pid (\d+)\)", out))

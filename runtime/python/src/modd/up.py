@@ -1,7 +1,28 @@
-"""``modd up MODEL [--simulate]``: run a model on this machine — the on-board
-PubBroker, the base-station SubBroker and, with ``--simulate``, simulated
-sensors — from configs generated from the model. Stops everything (by PID, in
-reverse order) on Ctrl-C or SIGTERM, or when one of the processes dies.
+"""``modd up MODEL [--simulate] [--part drone|station|all]``: run a model on this
+machine — the on-board PubBroker, the base-station SubBroker and, with
+``--simulate``, simulated sensors — from configs generated from the model.
+Stops everything (by PID, in reverse order) on Ctrl-C or SIGTERM, or when one
+of the processes dies.
+
+Options:
+
+- ``--simulate``: also run ``modd-sim`` (the simulated sensors) against the
+  PubBroker's ingress.
+- ``--part drone|station|all`` (default ``all``): which side of the link runs
+  here. ``drone`` runs the PubBroker (and, with ``--simulate``, the
+  simulator); ``station`` runs the SubBroker only, which connects to the
+  PubBroker at the link endpoint the model declares; ``all`` runs both.
+- ``--zenoh-listen ENDPOINT`` / ``--zenoh-connect ENDPOINT`` (repeatable):
+  the SubBroker's zenoh endpoints (e.g. ``--zenoh-connect tcp/127.0.0.1:7447``
+  to join a zenoh router); ignored by ``--part drone``.
+
+With ``--part all`` and no key in the environment, a random link key is made
+for the run; with ``--part drone`` or ``station`` both sides must share the
+key the model's ``keyRef`` names (by default ``$MODD_LINK_KEY``), else
+``modd up`` refuses to start.
+- ``--workdir DIR``: the run directory.
+
+Link endpoints are always the model's.
 
 The run directory (``--workdir``, default ``/tmp/modd-up/<drone>``) holds the
 generated configs, the archive, the ingress socket and each process's log, so
@@ -105,15 +126,20 @@ def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
                 configs: Path) -> Stack:
     logs = workdir / "logs"
     bin_dir = Path(sys.executable).parent
-    sub = [str(bin_dir / "modd-subbroker"), "--config", str(configs / "subbroker.toml")]
-    if args.zenoh_listen:
-        sub += ["--zenoh-listen", args.zenoh_listen]
-    stack = Stack([
-        Process("pubbroker", [str(pubbroker_binary()), "--config",
-                              str(configs / "pubbroker.json")], logs / "pubbroker.log"),
-        Process("subbroker", sub, logs / "subbroker.log"),
-    ])
-    if args.simulate:
+    drone, station = args.part in ("drone", "all"), args.part in ("station", "all")
+    stack = Stack()
+    if drone:
+        stack.processes.append(Process("pubbroker", [str(pubbroker_binary()), "--config",
+                                                     str(configs / "pubbroker.json")],
+                                       logs / "pubbroker.log"))
+    if station:
+        sub = [str(bin_dir / "modd-subbroker"), "--config", str(configs / "subbroker.toml")]
+        for endpoint in args.zenoh_listen or ():
+            sub += ["--zenoh-listen", endpoint]
+        for endpoint in args.zenoh_connect or ():
+            sub += ["--zenoh-connect", endpoint]
+        stack.processes.append(Process("subbroker", sub, logs / "subbroker.log"))
+    if args.simulate and drone:
         sim = bin_dir / "modd-sim"
         if not sim.exists():
             raise FileNotFoundError(f"{sim} not found: the drone simulator is not installed")
@@ -139,6 +165,11 @@ def run(args: argparse.Namespace) -> int:
     key_ref = (local.get("link", {}).get("keyRef") or "env:MODD_LINK_KEY")
     kind, _, name = key_ref.partition(":")
     if kind == "env" and not env.get(name):
+        if args.part != "all":
+            # the other part runs elsewhere: a key made up here could never match its key
+            print(f"modd up: --part {args.part} needs the link key in ${name} (the model's "
+                  f"keyRef {key_ref}), the same on the drone and the station", file=sys.stderr)
+            return 1
         env[name] = secrets.token_hex(16)  # a key for this local run only
     try:
         stack = build_stack(args, local, workdir, configs)
@@ -154,7 +185,8 @@ def run(args: argparse.Namespace) -> int:
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
     stack.start(env)
-    print(f"modd up: drone {local['drone']['name']} running; archive in {workdir / 'archive'};"
+    where = f"archive in {workdir / 'archive'}" if args.part != "station" else f"logs in {workdir}"
+    print(f"modd up: drone {local['drone']['name']} ({args.part}) running; {where};"
           " Ctrl-C to stop", flush=True)
     code = 0
     try:
@@ -176,6 +208,11 @@ def register(sub: Any) -> None:
     p.add_argument("model", metavar="MODEL", help=".modd or .json model")
     p.add_argument("--simulate", action="store_true", help="also run simulated sensors")
     p.add_argument("--workdir", metavar="DIR", help="run directory (default /tmp/modd-up/<drone>)")
-    p.add_argument("--zenoh-listen", metavar="ENDPOINT",
-                   help="the SubBroker's zenoh endpoint (default tcp/127.0.0.1:7447)")
+    p.add_argument("--part", choices=("drone", "station", "all"), default="all",
+                   help="drone: PubBroker (+ simulator); station: SubBroker; all: both (default)")
+    p.add_argument("--zenoh-listen", action="append", default=None, metavar="ENDPOINT",
+                   help="the SubBroker's zenoh listen endpoint (repeatable; "
+                        "default tcp/127.0.0.1:7447)")
+    p.add_argument("--zenoh-connect", action="append", default=None, metavar="ENDPOINT",
+                   help="a zenoh endpoint the SubBroker connects to (repeatable)")
     p.set_defaults(func=run)
