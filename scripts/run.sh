@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # `make run`: the main job on embedded defaults — the demo drone run locally
-# (`modd up`: PubBroker, SubBroker, and simulated sensors once the simulator is
-# installed) and the workbench (backend serving the built frontend) on
-# http://127.0.0.1:${MODD_PORT:-8080}/. Ctrl-C stops everything it started.
+# (`modd up --simulate`: PubBroker, SubBroker, simulated autopilot and sensors,
+# MAVLink bridge) and the workbench (backend serving the built frontend) on
+# http://127.0.0.1:${MODD_PORT:-8080}/, with the demo project loaded and
+# deployed. Ctrl-C (or SIGTERM) stops everything it started, by PID.
+# Environment: MODEL, MODD_PORT, MODD_ZENOH_PORT, MODD_DATA, MODD_PROJECT.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$PWD/.venv/bin:$PATH"
@@ -17,6 +19,19 @@ if [ -f frontend/package.json ]; then
   (cd frontend && npm run build --silent >/dev/null) || echo "modd: the frontend did not build; serving the API only" >&2
 fi
 
+# The first admin's password: drawn once per data directory and kept beside it
+# (0600), so the login stays the same from one `make run` to the next.
+PWFILE="$DATA/admin-password"
+if [ ! -s "$PWFILE" ]; then
+  if [ -f "$DATA/backend/modd.sqlite3" ]; then
+    echo "modd: $DATA/backend was made by an older run without $PWFILE;" \
+         "its admin password is in $DATA/backend.log (or remove $DATA to start afresh)" >&2
+  else
+    (umask 077; python3 -c 'import secrets; print(secrets.token_urlsafe(12))' >"$PWFILE")
+  fi
+fi
+export MODD_ADMIN_PASSWORD="$(cat "$PWFILE" 2>/dev/null || true)"
+
 pids=()
 stop() {
   trap - INT TERM EXIT
@@ -26,21 +41,37 @@ stop() {
 }
 trap stop INT TERM EXIT
 
-simulate=()
-if [ -x .venv/bin/modd-sim ]; then simulate=(--simulate); fi
-modd up "$MODEL" --workdir "$DATA/run" "${simulate[@]}" &
+ZENOH="tcp/127.0.0.1:${MODD_ZENOH_PORT:-7447}"
+modd up "$MODEL" --workdir "$DATA/run" --simulate --zenoh-listen "$ZENOH" &
 pids+=($!)
 
-modd-backend --host 127.0.0.1 --port "$PORT" --data "$DATA/backend" \
-  --frontend "$PWD/frontend/dist" --archives "$DATA/run/archive" >"$DATA/backend.log" 2>&1 &
+modd-backend --host 127.0.0.1 --port "$PORT" --data "$DATA/backend" --zenoh-connect "$ZENOH" \
+  --frontend "$PWD/frontend/dist" --archives "$DATA/run/archive" >>"$DATA/backend.log" 2>&1 &
 pids+=($!)
 
-for _ in $(seq 50); do grep -q "Uvicorn running" "$DATA/backend.log" 2>/dev/null && break; sleep 0.2; done
-grep "first user" "$DATA/backend.log" || true
+URL="http://127.0.0.1:$PORT"
+for _ in $(seq 150); do
+  python3 -c "import urllib.request as u; u.urlopen('$URL/openapi.json', timeout=2)" 2>/dev/null && break
+  kill -0 "${pids[1]}" 2>/dev/null || { echo "modd: the backend stopped; see $DATA/backend.log" >&2; exit 1; }
+  sleep 0.2
+done
+
+# The demo project, loaded and deployed through the workbench's own API.
+PROJECT="${MODD_PROJECT:-demo}"
+if [ -n "$MODD_ADMIN_PASSWORD" ]; then
+  MODD_PASSWORD="$MODD_ADMIN_PASSWORD" modd push "$MODEL" --server "$URL" --project "$PROJECT" \
+    --message "loaded by make run" --deploy --wait 60 \
+    || echo "modd: the demo project was not deployed (see above); the workbench still runs" >&2
+fi
+
+DRONE="$(modd convert "$MODEL" --to json | python3 -c 'import json,sys; print(json.load(sys.stdin)["drone"]["name"])')"
 echo
-echo "modd: workbench at http://127.0.0.1:$PORT/  (API docs: http://127.0.0.1:$PORT/docs)"
-echo "modd: login 'admin'; its password was printed at the first start (see $DATA/backend.log)"
-echo "modd: drone $(modd convert "$MODEL" --to json | python3 -c 'import json,sys; print(json.load(sys.stdin)["drone"]["name"])') running locally: archive in $DATA/run/archive, logs in $DATA/run/logs"
-[ ${#simulate[@]} -gt 0 ] || echo "modd: no simulated sensors yet (modd-sim is not installed): the brokers run, no values flow"
+echo "modd: workbench at $URL/  (API docs: $URL/docs)"
+if [ -n "$MODD_ADMIN_PASSWORD" ]; then
+  echo "modd: login 'admin', password '$MODD_ADMIN_PASSWORD' (kept in $PWFILE)"
+else
+  echo "modd: login 'admin'; its password is in $DATA/backend.log"
+fi
+echo "modd: project '$PROJECT' runs on the simulated drone '$DRONE': archive in $DATA/run/archive, logs in $DATA/run/logs and $DATA/backend.log"
 echo "modd: Ctrl-C to stop"
 wait -n "${pids[@]}" || true
