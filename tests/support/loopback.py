@@ -1,0 +1,134 @@
+"""The project's services on loopback, as separate processes, for tests that
+wire several of them together: a zenoh router (a Python session in router
+mode, so no zenohd is needed), a watch on the SubBrokers' status keys, and the
+workbench backend (``modd-backend``) with a small REST and WebSocket client.
+
+Processes are ``Proc`` of tests/subbroker/subbroker_harness.py: each logs to a
+file and is stopped by its PID (SIGTERM, then SIGKILL after a bound).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import httpx2 as httpx
+from modd.zenoh_session import ZenohSettings, open_session
+from websockets.sync.client import ClientConnection, connect
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
+
+from subbroker_harness import Proc, free_port, wait_port  # noqa: E402
+
+__all__ = ["REPO", "VENV_BIN", "Backend", "Proc", "StatusWatch", "free_port", "receive_until",
+           "wait_port", "zenoh_router"]
+
+REPO = Path(__file__).resolve().parents[2]
+VENV_BIN = Path(sys.executable).parent
+
+
+@contextlib.contextmanager
+def zenoh_router(port: int) -> Iterator[Any]:
+    """A zenoh router listening on tcp/127.0.0.1:port, in this process."""
+    session = open_session(ZenohSettings(mode="router", listen=(f"tcp/127.0.0.1:{port}",)))
+    try:
+        yield session
+    finally:
+        session.close()
+
+
+class StatusWatch:
+    """The last ``modd/<drone>/status`` document of every drone, seen from a session."""
+
+    def __init__(self, session: Any) -> None:
+        self.last: dict[str, dict[str, Any]] = {}
+        self._lock = threading.Lock()
+        self._sub = session.declare_subscriber("modd/*/status", self._on_sample)
+
+    def _on_sample(self, sample: Any) -> None:
+        status = json.loads(sample.payload.to_bytes())
+        with self._lock:
+            self.last[str(status["drone"])] = status
+
+    def get(self, drone: str) -> dict[str, Any] | None:
+        with self._lock:
+            return self.last.get(drone)
+
+    def wait(self, drone: str, pred: Callable[[dict[str, Any]], bool],
+             timeout_s: float) -> dict[str, Any]:
+        """The first status of ``drone`` for which ``pred`` holds; fails with the last one."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            status = self.get(drone)
+            if status is not None and pred(status):
+                return status
+            time.sleep(0.1)
+        raise AssertionError(f"no status of {drone} as expected within {timeout_s} s; "
+                             f"last: {self.get(drone)}")
+
+    def close(self) -> None:
+        self._sub.undeclare()
+
+
+class Backend:
+    """A running ``modd-backend`` process and a signed-in client of it."""
+
+    def __init__(self, proc: Proc, port: int) -> None:
+        self.proc, self.port = proc, port
+        self.base = f"http://127.0.0.1:{port}"
+        self.token = ""
+
+    @classmethod
+    def start(cls, tmp: Path, zenoh_connect: str, admin_password: str,
+              extra: list[str] | None = None) -> Backend:
+        port = free_port()
+        argv = [str(VENV_BIN / "modd-backend"), "--host", "127.0.0.1", "--port", str(port),
+                "--data", str(tmp / "backend"), "--zenoh-connect", zenoh_connect,
+                "--admin-password", admin_password, "--frontend", str(tmp / "no-frontend"),
+                "--scene-port", "-1", *(extra or [])]
+        return cls(Proc("backend", argv, tmp / "backend.log"), port)
+
+    def sign_in(self, password: str, timeout_s: float = 30.0) -> None:
+        """Waits until the backend answers, then signs in as ``admin``."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline and self.proc.alive():
+            with contextlib.suppress(httpx.TransportError):
+                r = httpx.post(f"{self.base}/api/auth/login", timeout=5,
+                               json={"username": "admin", "password": password})
+                assert r.status_code == 200, r.text
+                self.token = r.json()["token"]
+                return
+            time.sleep(0.2)
+        raise AssertionError(f"the backend never answered on {self.base}:\n{self.proc.log()}")
+
+    def request(self, method: str, path: str, **kwargs: Any) -> httpx.Response:
+        headers = {"Authorization": f"Bearer {self.token}"}
+        return httpx.request(method, f"{self.base}/api{path}", headers=headers,
+                             timeout=30, **kwargs)
+
+    def stream(self, drone: str) -> ClientConnection:
+        """The live stream WebSocket of ``drone``."""
+        return connect(f"ws://127.0.0.1:{self.port}/api/drones/{drone}/stream?token={self.token}",
+                       open_timeout=10)
+
+
+def receive_until(ws: ClientConnection, pred: Callable[[dict[str, Any]], bool],
+                  timeout_s: float = 20.0) -> list[dict[str, Any]]:
+    """Messages received until one satisfies ``pred`` (included, last)."""
+    got: list[dict[str, Any]] = []
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        try:
+            msg = json.loads(ws.recv(timeout=max(0.01, deadline - time.monotonic())))
+        except TimeoutError:
+            break
+        got.append(msg)
+        if pred(msg):
+            return got
+    raise AssertionError(f"the expected message never came within {timeout_s} s; got {got[-5:]}")
