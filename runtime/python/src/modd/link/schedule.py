@@ -1,4 +1,6 @@
-"""The slot table, computed lazily from the streams' periods with a next-due heap.
+"""The link's slot table, as the receiver walks it: the planner's own slot walk
+(:meth:`modd_plan.schedule.Schedule.iter_due_periods`), so that the SubBroker
+and the plan can never disagree on which streams a DATA frame carries.
 
 Slot k is the k-th distinct due date > 0 after the epoch; its streams are those whose
 period divides the date, in stream-id order. The hyperperiod is never materialised.
@@ -11,9 +13,10 @@ Example::
 
 from __future__ import annotations
 
-import heapq
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+
+from modd_plan.schedule import Schedule
 
 
 @dataclass(frozen=True)
@@ -25,40 +28,25 @@ class Slot:
 
 class SlotIterator(Iterator[Slot]):
     def __init__(self, periods_us: Sequence[int]) -> None:
-        self._periods: list[int] = []
-        self._groups: list[list[int]] = []
         for sid, p in enumerate(periods_us):
             if p <= 0:
                 raise ValueError(f"stream {sid} has period {p}")
-            if p in self._periods:
-                self._groups[self._periods.index(p)].append(sid)
-            else:
-                self._periods.append(p)
-                self._groups.append([sid])
-        self._heap = [(p, g) for g, p in enumerate(self._periods)]
-        heapq.heapify(self._heap)
+        self._by_period: dict[int, list[int]] = {}
+        for sid, p in enumerate(periods_us):
+            self._by_period.setdefault(p, []).append(sid)
+        # The LCM hyperperiod is only a number here: the walk never enumerates it.
+        self._schedule = Schedule.from_periods_us(list(periods_us))
+        self._walk = self._schedule.iter_due_periods(0)
         self._next = 0
 
-    def empty(self) -> bool:
-        return not self._heap
-
-    def peek_offset_us(self) -> int:
-        return self._heap[0][0] if self._heap else 0
-
     def __next__(self) -> Slot:
-        if not self._heap:
-            raise StopIteration
-        due = self._heap[0][0]
-        streams: list[int] = []
-        while self._heap and self._heap[0][0] == due:
-            _, g = heapq.heappop(self._heap)
-            streams.extend(self._groups[g])
-            heapq.heappush(self._heap, (due + self._periods[g], g))
-        s = Slot(self._next, due, tuple(sorted(streams)))
-        self._next += 1
-        return s
+        index, date_us, due = next(self._walk)  # StopIteration when there are no streams
+        self._next = index + 1
+        return Slot(index, date_us, tuple(sorted(s for p in due for s in self._by_period[p])))
 
     def skip_to(self, index: int) -> None:
-        """Advances so that the next slot returned has this index."""
-        while self._next < index:
-            next(self)
+        """Advances so that the next slot returned has this index (a bisection
+        on the slot count, not a walk: a late resume costs no more than an early one)."""
+        if index > self._next:
+            self._walk = self._schedule.iter_due_periods(index)
+            self._next = index
