@@ -11,7 +11,7 @@ step() { printf '\n== %s\n' "$*"; }
 step "ruff"
 ruff check --quiet .
 step "mypy (strict)"
-mypy --no-error-summary metamodel/src backend/src generators/src
+mypy --no-error-summary metamodel/src backend/src generators/src runtime/python/src
 step "pytest"
 pytest -q
 if [ -x runtime/cpp/scripts/test.sh ]; then
