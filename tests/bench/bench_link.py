@@ -1,131 +1,107 @@
-"""The MoDD link on the wire: the paper's scenarios 1 and 2 run for real
-(C++ PubBroker, publisher load at 25 Hz, SubBroker) and tshark captures the
-link on loopback. Bytes are IP bytes (IP and TCP headers included), per
-direction, printed beside the planner's prediction and the paper's figures.
-Asserts nothing about time or size; the issue's targets are printed.
+"""Link bytes on the wire, side by side in one run: the paper's scenarios 1 and 2, each
+system in turn at the same load (publishers at the sensors' rates), tshark on ``lo`` with a
+port filter summing the IP length per direction (IP and TCP headers included), data
+segments and pure ACKs apart:
 
-    .venv/bin/python tests/bench/bench_link.py [--seconds 30] [--scenario 1|2]
+- MoDD link: this project's PubBroker -> SubBroker TCP link (real binaries, configs from
+  the scenario; 4 B values aggregated per window, one frame per schedule slot);
+- Mosquitto (Debian's) on the drone: every sample as a QoS 0 PUBLISH (16-byte payload), one
+  MQTT connection per subscriber from the base; the link is broker <-> subscribers;
+- zenoh: a drone-side router with egress downsampling per subscriber key at the
+  subscription's rate, base-side subscribers. It DROPS samples to reach the rate; it does
+  not aggregate (a subscriber asking MIN over 1 s gets one raw sample, not the minimum);
 
-Needs tshark (scripts/setup.sh installs it) and the right to capture on lo
-(root here). The figures go in docs/benchmarks.md.
+beside the planner's prediction (modd_plan.make_plan) and the information floor (values
+the subscribers need per second x 4 B + one 52-byte TCP segment per slot). Asserts
+nothing; prints the targets (scenario 1 <= 300 B/s, scenario 2 <= 140 B/s drone -> base).
+
+    .venv/bin/python tests/bench/bench_link.py [--seconds 60] [--scenario 1|2 ...]
+                                               [--system modd|mosquitto|zenoh ...] [--json F]
+
+Needs tshark and mosquitto (scripts/setup.sh installs both) and root to capture on lo.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
-import shutil
-import signal
-import subprocess
 import sys
-import tempfile
-import time
 from pathlib import Path
+from typing import Any
 
-REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "tests" / "subbroker"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from modd_model import load_model  # noqa: E402
-from modd_plan import make_plan  # noqa: E402
-from subbroker_harness import (  # noqa: E402
-    SCENARIOS,
-    free_port,
-    model_copy,
-    processes,
-    start_load,
-    start_pubbroker,
-    start_subbroker,
-    subbroker_config,
-    wait_port,
-)
+from benchkit.report import fmt, ratio, table  # noqa: E402
+from benchkit.run import Run, measure  # noqa: E402
+from benchkit.scenario import Scenario, load  # noqa: E402
 
-TARGETS = {1: 300.0, 2: 140.0}  # drone -> base, B/s (issue 5)
+TARGETS = {1: 300.0, 2: 140.0}  # drone -> base, B/s (issues 5 and 10)
+SYSTEM_ORDER = ("modd", "mosquitto", "zenoh")
 
 
-def capture(port: int, pcap: Path) -> subprocess.Popen[bytes]:
-    proc = subprocess.Popen(
-        ["tshark", "-q", "-i", "lo", "-f", f"tcp port {port}", "-w", str(pcap)],
-        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-    )
-    assert proc.stderr is not None
-    deadline = time.monotonic() + 10
-    while time.monotonic() < deadline:  # tshark says "Capturing on 'Loopback'" when ready
-        line = proc.stderr.readline().decode(errors="replace")
-        if "Capturing" in line:
-            return proc
-    raise RuntimeError("tshark did not start capturing")
+def rows(sc: Scenario, runs: list[Run]) -> list[list[object]]:
+    out: list[list[object]] = []
+    for r in runs:
+        assert r.wire is not None
+        d, u = r.wire.rates()["drone_to_base"], r.wire.rates()["base_to_drone"]
+        out.append([r.system, d["bytes_per_s"], d["packets_per_s"],
+                    f"{fmt(d['data_bytes_per_s'])} / {fmt(d['ack_bytes_per_s'])}",
+                    u["bytes_per_s"], u["packets_per_s"],
+                    f"{fmt(u['data_bytes_per_s'])} / {fmt(u['ack_bytes_per_s'])}",
+                    r.delivery.values_per_s, ratio(d["bytes_per_s"], sc.paper_modd_down),
+                    ratio(d["bytes_per_s"], sc.floor_down)])
+    out.append(["planner prediction", sc.planned_down, sc.slots_per_s, "", sc.planned_up,
+                sc.slots_per_s, "", "", ratio(sc.planned_down, sc.paper_modd_down),
+                ratio(sc.planned_down, sc.floor_down)])
+    out.append(["information floor", sc.floor_down, sc.slots_per_s, "", "", "", "",
+                sc.sent_values_per_s, ratio(sc.floor_down, sc.paper_modd_down), "1.00×"])
+    out.append(["paper, MoDD", sc.paper_modd_down, "", "", "", "", "", "", "1.00×",
+                ratio(sc.paper_modd_down, sc.floor_down)])
+    mqtt = float(sc.paper["paper_bytes_per_s"]["drone_to_subscribers_mqtt"])
+    out.append(["paper, MQTT (to subscribers)", mqtt, "", "", "", "", "", "",
+                ratio(mqtt, sc.paper_modd_down), ratio(mqtt, sc.floor_down)])
+    return out
 
 
-def ip_bytes(pcap: Path, link_port: int) -> tuple[int, int, int, int, float]:
-    """(bytes drone->base, bytes base->drone, packets each way, duration)."""
-    out = subprocess.run(
-        ["tshark", "-r", str(pcap), "-T", "fields", "-e", "frame.time_relative",
-         "-e", "tcp.srcport", "-e", "ip.len"],
-        check=True, capture_output=True, text=True,
-    ).stdout
-    down = up = n_down = n_up = 0
-    last = 0.0
-    for line in out.splitlines():
-        t, src, length = line.split("\t")
-        last = float(t)
-        if int(src) == link_port:
-            down, n_down = down + int(length), n_down + 1
-        else:
-            up, n_up = up + int(length), n_up + 1
-    return down, up, n_down, n_up, last
+HEADER = ["system", "drone→base B/s", "pkt/s", "data / ACK B/s", "base→drone B/s", "pkt/s",
+          "data / ACK B/s", "values/s delivered", "× paper MoDD", "× floor"]
 
 
-def run(scenario: int, seconds: float, tmp: Path) -> dict[str, float]:
-    link, ingress, zport = free_port(), free_port(), free_port()
-    model = model_copy(tmp, f"scenario{scenario}.modd")
-    pb = start_pubbroker(tmp, model, link, ingress)
-    sb = start_subbroker(tmp, subbroker_config(tmp, model, link, zport))
-    load = start_load(tmp, model, ingress, seconds + 4)
-    pcap = tmp / f"link{scenario}.pcap"
-    with processes(pb, sb, load):
-        wait_port(zport)
-        if not sb.wait_log("running", 15):
-            raise RuntimeError(sb.log())
-        time.sleep(1.0)  # steady state: handshake, PING and CONFIG are not counted
-        tshark = capture(link, pcap)
-        time.sleep(seconds)
-        os.kill(tshark.pid, signal.SIGINT)
-        tshark.wait(10)
-    down, up, n_down, n_up, _ = ip_bytes(pcap, link)
-    plan = make_plan(load_model(model))
-    paper = json.loads((SCENARIOS / "expected.json").read_text())[f"scenario{scenario}"]
-    return {
-        "seconds": seconds,
-        "drone_to_base": down / seconds,
-        "base_to_drone": up / seconds,
-        "packets_down_per_s": n_down / seconds,
-        "packets_up_per_s": n_up / seconds,
-        "planned_drone_to_base": float(plan.link.drone_to_base),
-        "planned_base_to_drone": float(plan.link.base_to_drone),
-        "paper_drone_to_base": float(paper["paper_bytes_per_s"]["drone_to_base_modd"]),
-        "target_drone_to_base": TARGETS[scenario],
-    }
+def summary(run: Run) -> dict[str, Any]:
+    return {"system": run.system, "seconds": run.seconds,
+            "wire": run.wire.rates() if run.wire else None,
+            "delivered_per_subscriber": run.delivery.per_subscriber}
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--seconds", type=float, default=30.0)
-    p.add_argument("--scenario", type=int, choices=(1, 2), action="append")
-    args = p.parse_args(argv)
-    if shutil.which("tshark") is None:
-        print("tshark is not installed (scripts/setup.sh installs it)", file=sys.stderr)
-        return 2
-    print(f"MoDD link on the wire, loopback, {args.seconds:g} s per scenario, IP bytes/s")
-    print(f"{'':10} {'drone->base':>12} {'planned':>8} {'paper':>8} {'target':>7} "
-          f"{'base->drone':>12} {'planned':>8} {'pkts/s down/up':>15}")
-    for scenario in args.scenario or [1, 2]:
-        with tempfile.TemporaryDirectory(prefix="modd-bench-link-") as tmp:
-            r = run(scenario, args.seconds, Path(tmp))
-        print(f"scenario {scenario} {r['drone_to_base']:12.1f} {r['planned_drone_to_base']:8.1f} "
-              f"{r['paper_drone_to_base']:8.1f} {r['target_drone_to_base']:7.0f} "
-              f"{r['base_to_drone']:12.1f} {r['planned_base_to_drone']:8.1f} "
-              f"{r['packets_down_per_s']:7.2f}/{r['packets_up_per_s']:.2f}")
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--scenario", type=int, choices=(1, 2), action="append")
+    ap.add_argument("--system", choices=SYSTEM_ORDER, action="append")
+    ap.add_argument("--json", type=Path)
+    args = ap.parse_args(argv)
+    systems = [s for s in SYSTEM_ORDER if s in (args.system or SYSTEM_ORDER)]
+    results: dict[str, Any] = {}
+    print(f"Link bytes on the wire: loopback, tshark, IP bytes (headers included), "
+          f"{args.seconds:g} s of steady state per system")
+    for n in args.scenario or [1, 2]:
+        sc = load(n)
+        runs = [measure(s, sc, args.seconds, footprint=False) for s in systems]
+        print(f"\n## Scenario {n}: {len(sc.subscriptions)} subscriptions, "
+              f"{sc.samples_per_s:g} samples/s published; target drone→base "
+              f"≤ {TARGETS[n]:g} B/s for the MoDD link\n")
+        print(table(HEADER, rows(sc, runs)))
+        results[f"scenario{n}"] = [summary(r) for r in runs]
+        for r in runs:
+            if r.system.startswith("zenoh"):
+                print(f"\nzenoh: {r.delivery.values_per_s:.2f} values/s delivered for the "
+                      f"{sum(1 / float(s.period_s) for s in sc.subscriptions):.2f} windows/s "
+                      "asked: the interceptor drops samples (the first one at least 1/freq "
+                      "after the last forwarded) and does not aggregate: a MIN/MAX/AVERAGE "
+                      "subscriber gets one raw sample per window, not its aggregate.")
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(results, indent=1))
     return 0
 
 
