@@ -159,6 +159,23 @@ def modd_commands() -> set[str]:
             for name in p["project"].get("entry-points", {}).get("modd.commands", {})}
 
 
+def toml_text(data: dict[str, Any], prefix: str = "") -> str:
+    """TOML for a document of tables, strings, numbers, booleans and lists of them."""
+
+    def value(v: Any) -> str:
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        return json.dumps(v)
+
+    lines = [f"{k} = {value(v)}" for k, v in data.items() if not isinstance(v, dict)]
+    for k, v in data.items():
+        if isinstance(v, dict):
+            lines += ["", f"[{prefix}{k}]", toml_text(v, f"{prefix}{k}.")]
+    return "\n".join(lines)
+
+
 # -- a service on loopback -------------------------------------------------------------------
 
 
@@ -204,6 +221,22 @@ class Loopback:
             self.models[path] = copy
         return self.models[path]
 
+    def config(self, path: Path, image: Image) -> Path:
+        """A copy of a SubBroker TOML file (docs/subbroker.md): its model becomes the
+        model's loopback copy, paths and endpoints are translated."""
+        data = tomllib.loads(path.read_text())
+        model = data.get("model")
+        if model is not None:
+            data["model"] = str(self.model(path.parent / model))
+        if "state_dir" in data:
+            state = str(data["state_dir"])
+            data["state_dir"] = str(self.path(state, image.workdir) if state.startswith("/")
+                                    else path.parent / state)
+        copy = self.tmp / "configs" / path.name
+        copy.parent.mkdir(parents=True, exist_ok=True)
+        copy.write_text(self.endpoints(toml_text(data)))
+        return copy
+
     def argv(self, words: list[str], image: Image) -> list[str]:
         out: list[str] = []
         for i, word in enumerate(words):
@@ -216,6 +249,8 @@ class Loopback:
                 out.append(str(self.path(word, image.workdir)))
             elif word.endswith(".modd"):
                 out.append(str(self.model(self.path(word, image.workdir))))
+            elif word.endswith(".toml"):
+                out.append(str(self.config(self.path(word, image.workdir), image)))
             elif "/" in word and ":" not in word and not word.startswith("-"):
                 out.append(str(self.path(word, image.workdir)))  # relative to WORKDIR
             else:

@@ -14,11 +14,13 @@ import signal
 import subprocess
 import sys
 import time
+import tomllib
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
+from modd_model import load_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -170,6 +172,9 @@ def test_every_referenced_file_exists(compose: dict[str, Any]) -> None:
             if word.startswith("-") or ":" in word or "/" not in word or word.startswith("/"):
                 continue
             assert (REPO / word).exists() or word in built, f"{name}: {word} does not exist"
+            if word.endswith(".toml"):  # a SubBroker config: its model too
+                model = tomllib.loads((REPO / word).read_text())["model"]
+                assert ((REPO / word).parent / model).is_file(), f"{name}: {word}: {model}"
 
 
 def test_ports_are_published_on_loopback_only(compose: dict[str, Any]) -> None:
@@ -319,6 +324,15 @@ def test_the_services_start_on_loopback_and_become_ready(compose: dict[str, Any]
             backend.sign_in(run.env["MODD_ADMIN_PASSWORD"])
             files = backend.request("GET", "/drones/usv/archives")
             assert files.status_code == 200 and files.json(), files.text
+            # a deploy goes backend -> router -> SubBroker -> drone and is kept in its volume
+            demo = load_model(REPO / "metamodel" / "examples" / "demo.modd")
+            project = backend.request("POST", "/projects",
+                                      json={"name": "demo", "model": {"model": demo}})
+            assert project.status_code == 201, project.text
+            record = backend.request("POST", f"/projects/{project.json()['id']}/deployments",
+                                     json={}).json()
+            assert record["status"] == "acked", record
+            assert (run.lb.tmp / "volumes" / "subbroker-state" / "deployed.json").is_file()
             with backend.stream("usv") as ws:
                 ws.send('{"op": "subscribe", "subscriber": "sub_5"}')
                 msgs = receive_until(ws, lambda m: m["type"] == "value", 20)

@@ -24,10 +24,10 @@ from websockets.sync.client import ClientConnection, connect
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
 
-from subbroker_harness import Proc, free_port, wait_port  # noqa: E402
+from subbroker_harness import PUBBROKER, Proc, free_port, start_pubbroker, wait_port  # noqa: E402
 
-__all__ = ["REPO", "VENV_BIN", "Backend", "Proc", "StatusWatch", "free_port", "receive_until",
-           "wait_port", "zenoh_router"]
+__all__ = ["PUBBROKER", "REPO", "VENV_BIN", "Backend", "Proc", "StatusWatch", "free_port",
+           "receive_until", "start_pubbroker", "wait_port", "zenoh_router"]
 
 REPO = Path(__file__).resolve().parents[2]
 VENV_BIN = Path(sys.executable).parent
