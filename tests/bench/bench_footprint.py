@@ -18,11 +18,37 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from benchkit.footprint import Footprint  # noqa: E402
 from benchkit.report import ratio, table  # noqa: E402
-from benchkit.run import measure  # noqa: E402
-from benchkit.scenario import load  # noqa: E402
+from benchkit.run import Run, measure  # noqa: E402
+from benchkit.scenario import Scenario, load  # noqa: E402
 
 NAMES = {"modd": "PubBroker", "mosquitto": "Mosquitto"}
+
+
+def run(scenarios: list[int], seconds: float) -> list[tuple[Scenario, Run]]:
+    return [(sc, measure(kind, sc, seconds, capture=False, footprint=True))
+            for sc in map(load, scenarios) for kind in NAMES]
+
+
+def render(results: list[tuple[Scenario, Run]], seconds: float) -> str:
+    rows: list[list[object]] = []
+    by_scenario: dict[int, dict[str, Footprint]] = {}
+    for sc, r in results:
+        assert r.footprint is not None
+        fp = by_scenario.setdefault(sc.number, {})[r.kind] = r.footprint
+        rows.append([f"scenario {sc.number} ({sc.samples_per_s:g} samples/s)", NAMES[r.kind],
+                     fp.cpu_percent, fp.cpu_seconds, fp.rss_median_kb / 1024,
+                     fp.rss_peak_kb / 1024, r.delivery.values_per_s])
+        fps = by_scenario[sc.number]
+        if len(fps) == len(NAMES):
+            rows.append([f"scenario {sc.number}", "ratio PubBroker / Mosquitto",
+                         ratio(fps["modd"].cpu_percent, fps["mosquitto"].cpu_percent), "",
+                         ratio(fps["modd"].rss_median_kb, fps["mosquitto"].rss_median_kb), "",
+                         ""])
+    return (f"Broker footprint at the scenario loads, {seconds:g} s per broker\n\n"
+            + table(["load", "broker", "CPU % of a core", "CPU-s", "RSS MB (median)",
+                     "RSS MB (peak)", "values/s delivered"], rows))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -30,23 +56,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seconds", type=float, default=30.0)
     ap.add_argument("--scenario", type=int, choices=(1, 2), action="append")
     args = ap.parse_args(argv)
-    rows: list[list[object]] = []
-    for n in args.scenario or [1, 2]:
-        sc = load(n)
-        fps = {}
-        for kind in ("modd", "mosquitto"):
-            r = measure(kind, sc, args.seconds, capture=False, footprint=True)
-            assert r.footprint is not None
-            fps[kind] = fp = r.footprint
-            rows.append([f"scenario {n} ({sc.samples_per_s:g} samples/s)", NAMES[kind],
-                         fp.cpu_percent, fp.cpu_seconds, fp.rss_median_kb / 1024,
-                         fp.rss_peak_kb / 1024, r.delivery.values_per_s])
-        rows.append([f"scenario {n}", "ratio PubBroker / Mosquitto",
-                     ratio(fps["modd"].cpu_percent, fps["mosquitto"].cpu_percent), "",
-                     ratio(fps["modd"].rss_median_kb, fps["mosquitto"].rss_median_kb), "", ""])
-    print(f"Broker footprint at the scenario loads, {args.seconds:g} s per broker\n")
-    print(table(["load", "broker", "CPU % of a core", "CPU-s", "RSS MB (median)",
-                 "RSS MB (peak)", "values/s delivered"], rows))
+    print(render(run(args.scenario or [1, 2], args.seconds), args.seconds))
     return 0
 
 

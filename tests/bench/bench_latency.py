@@ -22,12 +22,31 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from benchkit.report import table  # noqa: E402
-from benchkit.run import measure  # noqa: E402
-from benchkit.scenario import load  # noqa: E402
+from benchkit.run import Run, measure  # noqa: E402
+from benchkit.scenario import Scenario, load  # noqa: E402
 
 DEFINITION = {"modd": "window end → delivery", "mosquitto": "publish → delivery",
               "zenoh": "publish → delivery"}
 PAPER = {"modd": "modd", "mosquitto": "mqtt"}
+SYSTEMS = ("modd", "mosquitto", "zenoh")
+
+
+def run(scenarios: list[int], seconds: float) -> list[tuple[Scenario, Run]]:
+    return [(sc, measure(kind, sc, seconds, capture=False, footprint=False))
+            for sc in map(load, scenarios) for kind in SYSTEMS]
+
+
+def render(results: list[tuple[Scenario, Run]], seconds: float) -> str:
+    rows: list[list[object]] = []
+    for sc, r in results:
+        d = r.delivery
+        paper = sc.paper["paper_latency_s"].get(PAPER.get(r.kind, ""))
+        rows.append([f"scenario {sc.number}", r.system, DEFINITION[r.kind], len(d.latencies_ns),
+                     d.latency_ms(0.5), d.latency_ms(0.99), d.latency_ms(1.0),
+                     f"{paper * 1000:,.0f}" if paper is not None else "—"])
+    return (f"Delivery latency on loopback, {seconds:g} s per system\n\n"
+            + table(["load", "system", "from → to", "values", "p50 ms", "p99 ms", "max ms",
+                     "paper Table V ms"], rows))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -35,19 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seconds", type=float, default=30.0)
     ap.add_argument("--scenario", type=int, choices=(1, 2), action="append")
     args = ap.parse_args(argv)
-    rows: list[list[object]] = []
-    for n in args.scenario or [1, 2]:
-        sc = load(n)
-        for kind in ("modd", "mosquitto", "zenoh"):
-            r = measure(kind, sc, args.seconds, capture=False, footprint=False)
-            d = r.delivery
-            paper = sc.paper["paper_latency_s"].get(PAPER.get(kind, ""), None)
-            rows.append([f"scenario {n}", r.system, DEFINITION[kind], len(d.latencies_ns),
-                         d.latency_ms(0.5), d.latency_ms(0.99), d.latency_ms(1.0),
-                         f"{paper * 1000:,.0f}" if paper is not None else "—"])
-    print(f"Delivery latency on loopback, {args.seconds:g} s per system, ms\n")
-    print(table(["load", "system", "from → to", "values", "p50 ms", "p99 ms", "max ms",
-                 "paper Table V ms"], rows))
+    print(render(run(args.scenario or [1, 2], args.seconds), args.seconds))
     return 0
 
 

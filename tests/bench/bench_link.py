@@ -73,6 +73,32 @@ def summary(run: Run) -> dict[str, Any]:
             "delivered_per_subscriber": run.delivery.per_subscriber}
 
 
+def run(scenarios: list[int], systems: list[str],
+        seconds: float) -> list[tuple[Scenario, list[Run]]]:
+    """Each scenario, each system in turn, ``seconds`` of capture each."""
+    return [(sc, [measure(k, sc, seconds, footprint=False) for k in systems])
+            for sc in map(load, scenarios)]
+
+
+def render(results: list[tuple[Scenario, list[Run]]], seconds: float) -> str:
+    out = [f"Link bytes on the wire: loopback, tshark, IP bytes (headers included), "
+           f"{seconds:g} s of steady state per system"]
+    for sc, runs in results:
+        out.append(f"\n## Scenario {sc.number}: {len(sc.subscriptions)} subscriptions, "
+                   f"{sc.samples_per_s:g} samples/s published; target drone→base "
+                   f"≤ {TARGETS[sc.number]:g} B/s for the MoDD link\n")
+        out.append(table(HEADER, rows(sc, runs)))
+        for r in runs:
+            if r.system.startswith("zenoh"):
+                asked = sum(1 / float(s.period_s) for s in sc.subscriptions)
+                out.append(f"\nzenoh: {r.delivery.values_per_s:.2f} values/s delivered for "
+                           f"the {asked:.2f} windows/s asked: the interceptor drops samples "
+                           "(it forwards the first one at least 1/freq after the last one "
+                           "forwarded) and does not aggregate: a MIN/MAX/AVERAGE subscriber "
+                           "gets one raw sample per window, not its aggregate.")
+    return "\n".join(out)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=60.0)
@@ -81,27 +107,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", type=Path)
     args = ap.parse_args(argv)
     systems = [s for s in SYSTEM_ORDER if s in (args.system or SYSTEM_ORDER)]
-    results: dict[str, Any] = {}
-    print(f"Link bytes on the wire: loopback, tshark, IP bytes (headers included), "
-          f"{args.seconds:g} s of steady state per system")
-    for n in args.scenario or [1, 2]:
-        sc = load(n)
-        runs = [measure(s, sc, args.seconds, footprint=False) for s in systems]
-        print(f"\n## Scenario {n}: {len(sc.subscriptions)} subscriptions, "
-              f"{sc.samples_per_s:g} samples/s published; target drone→base "
-              f"≤ {TARGETS[n]:g} B/s for the MoDD link\n")
-        print(table(HEADER, rows(sc, runs)))
-        results[f"scenario{n}"] = [summary(r) for r in runs]
-        for r in runs:
-            if r.system.startswith("zenoh"):
-                print(f"\nzenoh: {r.delivery.values_per_s:.2f} values/s delivered for the "
-                      f"{sum(1 / float(s.period_s) for s in sc.subscriptions):.2f} windows/s "
-                      "asked: the interceptor drops samples (the first one at least 1/freq "
-                      "after the last forwarded) and does not aggregate: a MIN/MAX/AVERAGE "
-                      "subscriber gets one raw sample per window, not its aggregate.")
+    results = run(args.scenario or [1, 2], systems, args.seconds)
+    print(render(results, args.seconds))
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(results, indent=1))
+        args.json.write_text(json.dumps({f"scenario{sc.number}": [summary(r) for r in runs]
+                                         for sc, runs in results}, indent=1))
     return 0
 
 

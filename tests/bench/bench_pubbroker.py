@@ -18,7 +18,6 @@ import json
 import os
 import shutil
 import socket
-import subprocess
 import sys
 import tempfile
 import threading
@@ -27,9 +26,12 @@ from pathlib import Path
 from typing import Any
 
 REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "tests" / "runtime"))
+sys.path[:0] = [str(REPO / "tests" / "runtime"), str(REPO / "tests" / "subbroker"),
+                str(REPO / "tests" / "bench")]
 
 import numpy as np  # noqa: E402
+from benchkit.capture import Capture, Wire  # noqa: E402
+from benchkit.footprint import cpu_seconds  # noqa: E402
 from modd.link.codec import varint  # noqa: E402
 from modd.link.frames import ValueType  # noqa: E402
 from modd.publisher import encode_hello, encode_register  # noqa: E402
@@ -40,15 +42,6 @@ from pubbroker_harness import (  # noqa: E402
     run_load,
     scenario_config,
 )
-
-CLK_TCK = os.sysconf("SC_CLK_TCK")
-PAGE = os.sysconf("SC_PAGE_SIZE")
-
-
-def cpu_seconds(pid: int, tid: int | None = None) -> float:
-    path = f"/proc/{pid}/task/{tid}/stat" if tid else f"/proc/{pid}/stat"
-    fields = Path(path).read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / CLK_TCK
 
 
 def rss_kb(pid: int) -> tuple[int, int]:
@@ -124,45 +117,13 @@ def ingest(tmp: Path, total: int, topics: int = 19, batch: int = 4096) -> dict[s
 
 # ---- a scenario on the wire ----------------------------------------------------------------
 
-def capture(port: int, seconds: float, out: Path) -> subprocess.Popen[bytes]:
-    p = subprocess.Popen(["tshark", "-i", "lo", "-f", f"tcp port {port}", "-a",
-                          f"duration:{seconds}", "-w", str(out), "-q"],
-                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    assert p.stderr is not None
-    deadline = time.monotonic() + 10
-    buf = b""
-    while time.monotonic() < deadline and b"Capturing on" not in buf:
-        buf += p.stderr.read1(4096)  # type: ignore[attr-defined]
-    return p
-
-
-def wire_figures(pcap: Path, port: int) -> dict[str, Any]:
-    """IP bytes per direction. A periodic flow's rate is measured between its first and last
-    packet (the packets in [first, last) over last - first), so the capture's start and end
-    do not add a fencepost error."""
-    out = subprocess.run(["tshark", "-r", str(pcap), "-T", "fields", "-e", "frame.time_relative",
-                          "-e", "tcp.srcport", "-e", "ip.len", "-e", "tcp.len"],
-                         capture_output=True, text=True, check=True).stdout
-    pkts: dict[str, list[tuple[float, int, int]]] = {"drone_to_base": [], "base_to_drone": []}
-    for line in out.splitlines():
-        t, src, iplen, tcplen = line.split("\t")
-        d = "drone_to_base" if int(src) == port else "base_to_drone"
-        pkts[d].append((float(t), int(iplen), int(tcplen)))
-    result: dict[str, Any] = {}
-    for d, ps in pkts.items():
-        if len(ps) < 2:
-            result[d] = {"bytes_per_s": 0.0, "packets_per_s": 0.0}
-            continue
-        span = ps[-1][0] - ps[0][0]
-        body = ps[:-1]
-        result[d] = {
-            "bytes_per_s": round(sum(p[1] for p in body) / span, 1),
-            "packets_per_s": round(len(body) / span, 2),
-            "data_packets_per_s": round(sum(p[2] > 0 for p in body) / span, 2),
-            "pure_ack_bytes_per_s": round(sum(p[1] for p in body if p[2] == 0) / span, 1),
-            "seconds": round(span, 2),
-        }
-    return result
+def wire_figures(wire: Wire) -> dict[str, Any]:
+    rates = wire.rates()
+    return {d: {"bytes_per_s": round(r["bytes_per_s"], 1),
+                "packets_per_s": round(r["packets_per_s"], 2),
+                "data_packets_per_s": round(r["data_packets_per_s"], 2),
+                "pure_ack_bytes_per_s": round(r["ack_bytes_per_s"], 1),
+                "seconds": wire.seconds} for d, r in rates.items()}
 
 
 def scenario(tmp: Path, n: int, seconds: float, status_period_s: int) -> dict[str, Any]:
@@ -188,15 +149,13 @@ def scenario(tmp: Path, n: int, seconds: float, status_period_s: int) -> dict[st
                               "planner_drone_to_base_bytes_per_s":
                                   plan["predicted_link_bytes_per_s"]["drone_to_base"]}
     have_tshark = shutil.which("tshark") is not None and os.geteuid() == 0
-    pcap = tmp / "link.pcap"
-    cap = capture(b.link_port, seconds, pcap) if have_tshark else None
+    cap = Capture(tmp, b.link_port, seconds) if have_tshark else None
     cpu0, t0 = cpu_seconds(pid), time.monotonic()
     time.sleep(seconds)
     cpu1, t1 = cpu_seconds(pid), time.monotonic()
     rss, hwm = rss_kb(pid)
     if cap is not None:
-        cap.wait(seconds + 20)
-        result["wire"] = wire_figures(pcap, b.link_port)
+        result["wire"] = wire_figures(cap.wait())
     else:
         result["wire"] = "skipped: tshark missing or no capture rights"
     stop.set()

@@ -5,7 +5,8 @@ the caller): pre-encoded batches written over one loopback TCP connection.
     python blaster.py mqtt --port P --topics a/b,... --count N
 
 ``modd``: SAMPLES frames of 4096 float32 records (13 B each: id, timestamp, value; the
-project's ingress protocol, docs/ingress.md), timestamps rising. ``mqtt``: QoS 0 PUBLISH
+project's ingress protocol, docs/ingress.md), timestamps rising, then a half-close and a
+wait for the broker to close its side (it has read every byte). ``mqtt``: QoS 0 PUBLISH
 packets with a 16-byte payload, 4096 per write, then a QoS 1 PUBLISH whose PUBACK proves
 that the broker has read every packet before it. Connects, prints ``ready``, waits for a
 line on stdin, sends, prints ``{"sent": N}`` and exits (for mqtt, once the end marker is
@@ -59,6 +60,10 @@ def blast_modd(port: int, topics: list[str], count: int) -> int:
         arr["v"] = np.sin((sent + k) * 0.01)
         s.sendall(frame_len + head + arr.tobytes())
         sent += BATCH
+    s.shutdown(socket.SHUT_WR)  # the broker closes its side once it has read everything
+    s.settimeout(300)
+    while s.recv(4096):
+        pass
     s.close()
     return sent
 

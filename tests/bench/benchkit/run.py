@@ -24,6 +24,7 @@ from .systems import SYSTEMS, Delivery  # noqa: E402
 
 @dataclass
 class Run:
+    kind: str  # modd | mosquitto | zenoh
     system: str
     scenario: Scenario
     seconds: float
@@ -54,4 +55,4 @@ def measure(kind: str, sc: Scenario, seconds: float, *, capture: bool = True,
             fp = sampler.stop() if sampler is not None else None
         finally:
             extra = system.stop()
-    return Run(system.name, sc, seconds, wire, fp, delivery, extra)
+    return Run(kind, system.name, sc, seconds, wire, fp, delivery, extra)

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Every benchmark of tests/bench, one after the other, each printing its tables
+# (`make bench`, after `make build`, which runs scripts/setup.sh). Asserts no time.
+# Figures go in docs/benchmarks.md with the command that printed them.
+# Takes about 14 minutes on a 2-core machine. LINK_SECONDS etc. shorten it.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PY=.venv/bin/python
+
+missing=()
+command -v mosquitto >/dev/null 2>&1 || [ -x /usr/sbin/mosquitto ] || missing+=(mosquitto)
+command -v tshark >/dev/null 2>&1 || missing+=(tshark)
+command -v taskset >/dev/null 2>&1 || missing+=(util-linux)
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "bench: missing ${missing[*]}: install with" >&2
+  echo "  sudo apt-get install -y ${missing[*]}   (or run scripts/setup.sh, which does)" >&2
+  exit 2
+fi
+if [ "$(id -u)" -ne 0 ]; then
+  echo "bench: tshark must capture on lo: run as root (or give dumpcap CAP_NET_RAW)" >&2
+  exit 2
+fi
+if [ ! -x build/bin/modd-pubbroker ] || [ ! -x "$PY" ]; then
+  echo "bench: build/bin/modd-pubbroker or .venv missing: run make build" >&2
+  exit 2
+fi
+
+run() { printf '\n===== %s\n\n' "$*"; "$PY" "$@"; }
+start=$(date +%s)
+echo "bench: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%Y-%m-%dT%H:%MZ)"
+run tests/bench/bench_link.py --seconds "${LINK_SECONDS:-60}"
+run tests/bench/bench_ingest.py
+run tests/bench/bench_latency.py --seconds "${LATENCY_SECONDS:-20}"
+run tests/bench/bench_footprint.py --seconds "${FOOTPRINT_SECONDS:-30}"
+run tests/bench/bench_pubbroker.py --seconds "${PUBBROKER_SECONDS:-10}" --ingest-samples 10000000
+run tests/bench/bench_planner.py --quick
+run tests/bench/bench_backend_plan.py --runs 30
+echo
+echo "bench: all done in $(( $(date +%s) - start )) s"
