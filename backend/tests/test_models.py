@@ -136,3 +136,17 @@ def test_validate_endpoint(client: TestClient, admin: Headers, scenario1: str) -
     assert "MEAN" in d["message"] and d["line"] and d["pointer"].startswith("/subscribers/")
     both = client.post("/api/validate", headers=admin, json={"text": "x", "model": {}})
     assert both.status_code == 422
+
+
+def test_print_follows_an_unsaved_model(client: TestClient, admin: Headers, scenario1: str) -> None:
+    """The text view of unsaved diagram edits: print what the editor holds."""
+    model = client.post("/api/validate", json={"text": scenario1}, headers=admin).json()["model"]
+    model["subscribers"][0]["name"] = "renamed_in_diagram"
+    r = client.post("/api/print", json={"model": model}, headers=admin)
+    assert r.status_code == 200, r.text
+    assert r.headers["content-type"].startswith("text/plain")
+    again = client.post("/api/validate", json={"text": r.text}, headers=admin).json()
+    assert again["ok"] and again["model"] == model  # printed text reads back to the same model
+    broken = client.post("/api/print", json={"model": {"drone": 3}}, headers=admin)
+    assert broken.status_code == 422 and "not valid enough" in broken.json()["detail"]
+    assert client.post("/api/print", json={"model": model}).status_code == 401

@@ -43,6 +43,9 @@ export function createApi(opts: HttpOptions) {
       http.request<string>(`/api/projects/${projectId}/export`, { query: { format, revision }, as: "text" }),
     exportUrl: (projectId: number, format: "modd" | "json" = "modd") =>
       http.url(`/api/projects/${projectId}/export`, { format }),
+    /** The .modd text of a model document, saved or not (the text view of unsaved edits). */
+    printModel: (model: ModdModel, signal?: AbortSignal) =>
+      http.request<string>("/api/print", { method: "POST", json: { model }, as: "text", signal }),
     /** Parse and validate without saving; for text, `model` is the parsed document. */
     validate: (input: ModelInput, signal?: AbortSignal) =>
       http.request<ValidateResult>("/api/validate", { method: "POST", json: input, signal }),

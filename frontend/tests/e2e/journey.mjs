@@ -178,10 +178,18 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       await expectText(page.locator(".topbar .revision"), /^r2$/);
     }],
 
-    ["text view: saved text and a syntax error at line:col", async () => {
+    ["text view: saved text, unsaved diagram edits, a syntax error at line:col", async () => {
       await panel("Text");
       await expectText(page.locator(".cm-content"), /Subscriber sub_7/);
       await shot("text");
+      // The text follows a diagram edit before any save, and its undo.
+      await select("sub:sub_7");
+      await setText("periodS", "0.5");
+      await expectText(page.locator(".cm-content"), /sub_7\([^)]*0\.5, MAX\)/);
+      await expectText(page.locator(".text-toolbar [role=status]"), /unsaved edits/);
+      await clickPane();
+      await page.keyboard.press("Control+z");
+      await expectText(page.locator(".cm-content"), /sub_7\([^)]*0\.25, MAX\)/);
       await page.locator(".cm-content").click();
       await page.keyboard.press("Control+End");
       await page.keyboard.type(" oops {");

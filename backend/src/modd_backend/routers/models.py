@@ -117,3 +117,22 @@ def validate_model(body: ModelInput, _user: UserDep) -> ValidateOut:
         model=result.model,
         diagnostics=[DiagnosticOut.model_validate(d) for d in diagnostics_json(result.diagnostics)],
     )
+
+
+class PrintIn(BaseModel):
+    """A model document (possibly unsaved) to print as canonical .modd text."""
+
+    model: dict[str, Any]
+
+
+@router.post("/print", responses={200: {"content": {"text/plain": {}}},
+                                  422: {"description": "not valid enough to print as .modd"}})
+def print_modd(body: PrintIn, _user: UserDep) -> Response:
+    """The .modd text of a model as the diagram holds it, saved or not, so the
+    text view can follow diagram edits before a save."""
+    try:
+        text = dumps(body.model, "modd")
+    except Exception as exc:  # any shape may arrive from an editor mid-edit: never a 500
+        raise ApiError(422, f"the model is not valid enough to print as .modd: {exc!r}") from None
+    return Response(text, media_type="text/plain; charset=utf-8")
+
