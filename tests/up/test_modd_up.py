@@ -55,8 +55,11 @@ def test_up_refuses_an_invalid_model(tmp_path: Path, modd_cmd: str) -> None:
 def test_up_with_simulator_delivers_live_values(tmp_path: Path, modd_cmd: str,
                                                 free_port: Callable[[], int],
                                                 wait_for: Callable[..., None]) -> None:
-    """The demo of `make run`: modd up --simulate; values arrive on zenoh."""
+    """The demo of `make run`: modd up --simulate; values arrive on zenoh, the water
+    temperature from the simulator, the latitude from its autopilot through the bridge."""
     import modd
+    from modd.sim import ORIGIN_LAT
+    from modd.sim.track import LEG_M, METERS_PER_DEG_LAT
 
     demo = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.modd"
     model = tmp_path / "demo.modd"
@@ -67,25 +70,34 @@ def test_up_with_simulator_delivers_live_values(tmp_path: Path, modd_cmd: str,
                            str(tmp_path / "run"), "--zenoh-listen",
                            f"tcp/127.0.0.1:{zenoh_port}"],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    values: dict[str, list[float]] = {"water_temp": [], "track_lat": []}
     try:
         wait_for(tmp_path / "run" / "logs" / "subbroker.log", "config 1 running", 30)
-        sub = modd.subscribe("usv", "water_temp", connect=f"tcp/127.0.0.1:{zenoh_port}")
-        values = []
+        subs = {name: modd.subscribe("usv", name, connect=f"tcp/127.0.0.1:{zenoh_port}")
+                for name in values}
         deadline = time.monotonic() + 30
-        while len(values) < 3 and time.monotonic() < deadline:
-            sample = sub.get(timeout_s=5)
-            if sample is not None and sample.value is not None:
-                values.append(sample)
-        sub.close()
-        assert len(values) == 3, "no live values within 30 s"
+        while any(len(v) < 3 for v in values.values()) and time.monotonic() < deadline:
+            for name, sub in subs.items():
+                sample = sub.get(timeout_s=0.5)
+                if sample is not None and sample.value is not None:
+                    assert sample.topic == {"water_temp": "usv.ctd.water_temperature",
+                                            "track_lat": "usv.autopilot.latitude"}[name]
+                    values[name].append(sample.value)
+        for sub in subs.values():
+            sub.close()
+        assert all(len(v) >= 3 for v in values.values()), f"live values within 30 s: {values}"
     finally:
         up.send_signal(signal.SIGTERM)
         out, _ = up.communicate(timeout=60)
     assert up.returncode == 0, out
-    assert all(8.0 < v.value < 20.0 for v in values)  # the simulated water temperature
-    assert all(v.topic == "usv.ctd.water_temperature" and v.aggregation == "AVERAGE"
-               for v in values)
-    assert len(re.findall(r"\(pid (\d+)\)", out)) == 3
+    assert all(8.0 < v < 20.0 for v in values["water_temp"])  # the simulated water temperature
+    # the survey's latitudes, scaled from degE7 by the bridge
+    assert all(ORIGIN_LAT - 1e-6 <= v <= ORIGIN_LAT + LEG_M / METERS_PER_DEG_LAT + 1e-6
+               for v in values["track_lat"]), values
+    bridge_log = (tmp_path / "run" / "logs" / "bridge.log").read_text()
+    assert "autopilot accepted GLOBAL_POSITION_INT every 0.2 s" in bridge_log, bridge_log
+    assert len(re.findall(r"\(pid (\d+)\)", out)) == 4, out
+    assert "stopped bridge (exit 0)" in out and "stopped simulator (exit 0)" in out
 
 
 def test_up_in_two_parts_drone_and_station(scenarios_dir: Path, tmp_path: Path, modd_cmd: str,

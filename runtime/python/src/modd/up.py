@@ -1,28 +1,29 @@
 """``modd up MODEL [--simulate] [--part drone|station|all]``: run a model on this
 machine — the on-board PubBroker, the base-station SubBroker and, with
-``--simulate``, simulated sensors — from configs generated from the model.
-Stops everything (by PID, in reverse order) on Ctrl-C or SIGTERM, or when one
-of the processes dies.
+``--simulate``, a simulated drone (simulated sensors and autopilot, and the
+MAVLink bridge) — from configs generated from the model. Stops everything (by
+PID, in reverse order) on Ctrl-C or SIGTERM, or when one of the processes dies.
 
 Options:
 
-- ``--simulate``: also run ``modd-sim`` (the simulated sensors) against the
-  PubBroker's ingress.
+- ``--simulate``: also run ``modd-sim`` (the simulated drone) against the
+  PubBroker's ingress and, when the model has ``kind mavlink`` sensors, the
+  MAVLink bridge ``modd-mavlink`` reading the simulator's autopilot over UDP
+  on a loopback port picked free for this run, so that two runs at once do
+  not collide (docs/mavlink.md).
 - ``--part drone|station|all`` (default ``all``): which side of the link runs
-  here. ``drone`` runs the PubBroker (and, with ``--simulate``, the
-  simulator); ``station`` runs the SubBroker only, which connects to the
+  here. ``drone`` runs the PubBroker (and, with ``--simulate``, the simulator
+  and the bridge); ``station`` runs the SubBroker only, which connects to the
   PubBroker at the link endpoint the model declares; ``all`` runs both.
 - ``--zenoh-listen ENDPOINT`` / ``--zenoh-connect ENDPOINT`` (repeatable):
   the SubBroker's zenoh endpoints (e.g. ``--zenoh-connect tcp/127.0.0.1:7447``
   to join a zenoh router); ignored by ``--part drone``.
-
-With ``--part all`` and no key in the environment, a random link key is made
-for the run; with ``--part drone`` or ``station`` both sides must share the
-key the model's ``keyRef`` names (by default ``$MODD_LINK_KEY``), else
-``modd up`` refuses to start.
 - ``--workdir DIR``: the run directory.
 
-Link endpoints are always the model's.
+Link endpoints are always the model's. With ``--part all`` and no key in the
+environment, a random link key is made for the run; with ``--part drone`` or
+``station`` both sides must share the key the model's ``keyRef`` names (by
+default ``$MODD_LINK_KEY``), else ``modd up`` refuses to start.
 
 The run directory (``--workdir``, default ``/tmp/modd-up/<drone>``) holds the
 generated configs, the archive, the ingress socket and each process's log, so
@@ -36,6 +37,7 @@ import os
 import secrets
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -122,6 +124,39 @@ def prepare(model: dict[str, Any], workdir: Path) -> tuple[dict[str, Any], Path]
     return local, workdir / "generated" / "operator"
 
 
+def free_udp_port() -> int:
+    """A UDP port free on loopback now, so that two runs at once do not collide."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def has_mavlink_sensors(model: dict[str, Any]) -> bool:
+    return any(s.get("kind") == "mavlink" for s in model["drone"]["sensors"])
+
+
+def simulation(model: dict[str, Any], model_json: Path, bin_dir: Path,
+               logs: Path) -> list[Process]:
+    """The simulator and, when the model has mavlink sensors, the MAVLink bridge reading
+    the simulator's autopilot on a loopback UDP port of this run (bridge first: it listens)."""
+    sim = bin_dir / "modd-sim"
+    if not sim.exists():
+        raise FileNotFoundError(f"{sim} not found: the drone simulator is not installed")
+    sim_argv = [str(sim), "--model", str(model_json)]
+    out = []
+    if has_mavlink_sensors(model):
+        bridge = bin_dir / "modd-mavlink"
+        if not bridge.exists():
+            raise FileNotFoundError(f"{bridge} not found: the MAVLink bridge is not installed")
+        port = free_udp_port()
+        out.append(Process("bridge", [str(bridge), "--model", str(model_json),
+                                              "--connect", f"udpin:127.0.0.1:{port}"],
+                           logs / "bridge.log"))
+        sim_argv += ["--mavlink", f"udpout:127.0.0.1:{port}"]
+    out.append(Process("simulator", sim_argv, logs / "simulator.log"))
+    return out
+
+
 def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
                 configs: Path) -> Stack:
     logs = workdir / "logs"
@@ -140,12 +175,7 @@ def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
             sub += ["--zenoh-connect", endpoint]
         stack.processes.append(Process("subbroker", sub, logs / "subbroker.log"))
     if args.simulate and drone:
-        sim = bin_dir / "modd-sim"
-        if not sim.exists():
-            raise FileNotFoundError(f"{sim} not found: the drone simulator is not installed")
-        stack.processes.append(Process("simulator", [str(sim), "--model", str(configs /
-                                                                               "model.json")],
-                                       logs / "simulator.log"))
+        stack.processes += simulation(model, configs / "model.json", bin_dir, logs)
     return stack
 
 
@@ -206,10 +236,12 @@ def run(args: argparse.Namespace) -> int:
 def register(sub: Any) -> None:
     p = sub.add_parser("up", help="run a model locally: PubBroker, SubBroker, simulated sensors")
     p.add_argument("model", metavar="MODEL", help=".modd or .json model")
-    p.add_argument("--simulate", action="store_true", help="also run simulated sensors")
+    p.add_argument("--simulate", action="store_true", help="also run the simulated drone "
+                   "(sensors, autopilot) and the MAVLink bridge")
     p.add_argument("--workdir", metavar="DIR", help="run directory (default /tmp/modd-up/<drone>)")
     p.add_argument("--part", choices=("drone", "station", "all"), default="all",
-                   help="drone: PubBroker (+ simulator); station: SubBroker; all: both (default)")
+                   help="drone: PubBroker (+ simulator and bridge); station: SubBroker; "
+                        "all: both (default)")
     p.add_argument("--zenoh-listen", action="append", default=None, metavar="ENDPOINT",
                    help="the SubBroker's zenoh listen endpoint (repeatable; "
                         "default tcp/127.0.0.1:7447)")

@@ -1,0 +1,103 @@
+"""``modd-mavlink --model FILE [--connect URL]``: the MAVLink bridge (docs/mavlink.md).
+
+Reads the autopilot over UDP or a serial port, asks it for the message rates the
+model needs and publishes the fields the model's ``kind mavlink`` sensors map,
+one publisher client per model publisher, to the PubBroker's ingress. Stops
+cleanly (publishers flushed) on SIGTERM or Ctrl-C.
+
+Example::
+
+    modd-mavlink --model demo.modd --connect /dev/ttyUSB0,57600
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+import time
+
+from modd_model import load_file
+
+from ..publisher import Publisher
+from .bridge import Bridge, BridgeSettings
+from .mapping import MappingError, plan_bridge
+from .transport import open_transport
+
+DEFAULT_CONNECT = "udpin:127.0.0.1:14550"
+
+
+def log(line: str) -> None:
+    stamp = time.strftime("%H:%M:%S")
+    print(f"{stamp} modd-mavlink: {line}", flush=True)
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(prog="modd-mavlink", description="MAVLink bridge: autopilot "
+                                "messages → the model's topics → the PubBroker's ingress")
+    p.add_argument("--model", required=True, help=".modd or .json model")
+    p.add_argument("--connect", default=DEFAULT_CONNECT, metavar="URL",
+                   help="udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT or DEVICE[,BAUD] "
+                        f"(default {DEFAULT_CONNECT})")
+    p.add_argument("--ingress", help="unix:/path or tcp:host:port (default: the model's)")
+    p.add_argument("--source-system", type=int, default=255, metavar="ID",
+                   help="the bridge's own MAVLink system id (default 255)")
+    p.add_argument("--target-system", type=int, default=None, metavar="ID",
+                   help="the autopilot's system id (default: the first autopilot heard)")
+    p.add_argument("--heartbeat-timeout", type=float, default=3.0, metavar="S",
+                   help="report the autopilot lost after this long without HEARTBEAT (3)")
+    p.add_argument("--status-period", type=float, default=10.0, metavar="S",
+                   help="seconds between status lines (default 10)")
+    return p.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    result = load_file(args.model)
+    for d in result.diagnostics:
+        print(d, file=sys.stderr)
+    if not result.ok or result.model is None:
+        return 1
+    model = result.model
+    try:
+        plan = plan_bridge(model)
+    except MappingError as exc:
+        for problem in exc.problems:
+            print(f"{args.model}: {problem}", file=sys.stderr)
+        return 1
+    for warning in plan.warnings:
+        log(warning)
+    if not plan.publishers:
+        print(f"modd-mavlink: {args.model}: no published topic of a kind mavlink sensor",
+              file=sys.stderr)
+        return 1
+    if args.ingress:
+        ingress = args.ingress
+    else:
+        from modd_gen.ingress import ingress_of
+
+        ingress = ingress_of(model).address
+    try:
+        transport = open_transport(args.connect, args.source_system)
+    except (OSError, RuntimeError, ValueError) as exc:
+        print(f"modd-mavlink: cannot open {args.connect}: {exc}", file=sys.stderr)
+        return 1
+    sinks = {p.name: Publisher(p.name, ingress) for p in plan.publishers}
+    settings = BridgeSettings(source_system=args.source_system, target_system=args.target_system,
+                              heartbeat_timeout_s=args.heartbeat_timeout,
+                              status_period_s=args.status_period)
+    bridge = Bridge(plan, transport, sinks, settings, log)
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    topics = sum(len(p.mappings) for p in plan.publishers)
+    log(f"drone {model['drone']['name']}: {topics} topics from {args.connect} -> {ingress}, "
+        "waiting for the autopilot's HEARTBEAT")
+    bridge.run(stop)
+    log("stopped")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

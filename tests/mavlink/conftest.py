@@ -1,0 +1,8 @@
+"""The MAVLink tests import their harness (mavlink_harness.py) from this folder."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
