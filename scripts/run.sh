@@ -51,7 +51,7 @@ pids+=($!)
 
 URL="http://127.0.0.1:$PORT"
 for _ in $(seq 150); do
-  python3 -c "import urllib.request as u; u.urlopen('$URL/openapi.json', timeout=2)" 2>/dev/null && break
+  python3 -c "import urllib.request as u; u.urlopen('$URL/api/health', timeout=2)" 2>/dev/null && break
   kill -0 "${pids[1]}" 2>/dev/null || { echo "modd: the backend stopped; see $DATA/backend.log" >&2; exit 1; }
   sleep 0.2
 done

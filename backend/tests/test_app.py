@@ -96,3 +96,9 @@ def test_console_script_serves_the_api(tmp_path: Path) -> None:
     finally:
         os.kill(proc.pid, signal.SIGTERM)
         proc.wait(timeout=10)
+
+
+def test_health_needs_no_login_and_checks_the_database(client: TestClient) -> None:
+    r = client.get("/api/health")
+    assert r.status_code == 200, r.text
+    assert r.json() == {"status": "ok", "database": "ok", "zenoh": "disabled", "scene": False}

@@ -52,3 +52,17 @@ def test_model_mode_runs_and_stops_on_sigterm(tmp_path: Path) -> None:
             p.wait(5)
     assert p.returncode == 0, out
     assert "Connection refused" in out and "stopping" in out
+
+
+def test_client_mode_listens_nowhere_unless_told() -> None:
+    from modd.subbroker.cli import _parser, build_config
+
+    model = str(SCENARIOS / "scenario1.modd")
+    client = build_config(_parser().parse_args(
+        ["--model", model, "--zenoh-mode", "client", "--zenoh-connect", "tcp/127.0.0.1:7999"]))
+    assert client.zenoh.listen == () and client.zenoh.connect == ("tcp/127.0.0.1:7999",)
+    told = build_config(_parser().parse_args(
+        ["--model", model, "--zenoh-mode", "client", "--zenoh-listen", "tcp/127.0.0.1:7998"]))
+    assert told.zenoh.listen == ("tcp/127.0.0.1:7998",)
+    peer = build_config(_parser().parse_args(["--model", model]))
+    assert peer.zenoh.listen == ("tcp/127.0.0.1:7447",)  # the embedded default

@@ -25,6 +25,7 @@ from .routers import (
     auth,
     deploy,
     downloads,
+    health,
     models,
     plan,
     projects,
@@ -39,6 +40,7 @@ from .versions import get_version, model_of
 from .zbridge import ZenohBridge
 
 ROUTERS: tuple[APIRouter, ...] = (
+    health.router,
     auth.router,
     users.router,
     projects.router,

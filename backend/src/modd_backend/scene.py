@@ -113,6 +113,24 @@ class Track:
                 cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy)
 
 
+def scene_url(bound_host: str, port: int, request_host: str | None) -> str:
+    """The address a browser reaches the scene at: the host the server is bound
+    to or, when it listens on every interface (0.0.0.0, ::, e.g. in a
+    container), the host the browser already used for the workbench.
+
+    >>> scene_url("127.0.0.1", 8081, "localhost")
+    'http://127.0.0.1:8081'
+    >>> scene_url("0.0.0.0", 8081, "base.local")
+    'http://base.local:8081'
+    >>> scene_url("::", 8081, "::1")
+    'http://[::1]:8081'
+    """
+    host = bound_host
+    if bound_host in ("0.0.0.0", "::", "") and request_host:
+        host = request_host
+    return f"http://[{host}]:{port}" if ":" in host else f"http://{host}:{port}"
+
+
 class SceneServer:
     """A viser server on loopback drawing the tracks; thread-safe ``update``."""
 
@@ -120,8 +138,13 @@ class SceneServer:
         import viser  # imported here: only a backend with a scene pays for it
 
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
-        self.url = f"http://{host}:{self.server.get_port()}"
+        self.host = host
+        self.port = self.server.get_port()
+        self.url = scene_url(host, self.port, None)
         self._lock = threading.Lock()
+
+    def url_for(self, request_host: str | None) -> str:
+        return scene_url(self.host, self.port, request_host)
 
     def draw(self, drone: str, track: Track) -> None:
         import numpy as np

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Path
+from fastapi import APIRouter, Path, Request
 from pydantic import BaseModel, Field
 
 from ..deps import StateDep, UserDep
@@ -42,13 +42,13 @@ def _scene(state: StateDep) -> SceneService:
 
 
 @router.get("", responses={404: {"description": "no scene configured"}})
-def read_scene(state: StateDep, _user: UserDep) -> SceneOut:
+def read_scene(request: Request, state: StateDep, _user: UserDep) -> SceneOut:
     scene = _scene(state)
     drones = [
         DroneScene(drone=d, points=len(t.points), colour_by=t.colour_by, roles=t.roles)
         for d, t in sorted(scene.tracks.items())
     ]
-    return SceneOut(url=scene.server.url, drones=drones)
+    return SceneOut(url=scene.server.url_for(request.url.hostname), drones=drones)
 
 
 @router.put("/{drone}/colour", status_code=204,

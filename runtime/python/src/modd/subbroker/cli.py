@@ -55,9 +55,14 @@ def build_config(args: argparse.Namespace) -> SubBrokerConfig:
         link = replace(link, key=args.key)
     z = cfg.zenoh
     if args.zenoh_listen or args.zenoh_connect or args.zenoh_mode:
+        listen = z.listen
+        if args.zenoh_listen:
+            listen = tuple(args.zenoh_listen)
+        elif args.zenoh_mode == "client":
+            listen = ()  # a client of a router listens nowhere: two on one host must not collide
         z = ZenohSettings(
             mode=args.zenoh_mode or z.mode,
-            listen=tuple(args.zenoh_listen) if args.zenoh_listen else z.listen,
+            listen=listen,
             connect=tuple(args.zenoh_connect) if args.zenoh_connect else z.connect,
             config_file=z.config_file,
             extra=z.extra,
