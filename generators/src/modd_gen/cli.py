@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 from typing import Any
 
-from modd_model import load_file
+from modd_model import load_or_report
 
 from .artifact import write_artifacts
 from .generate import ROLES, generate
@@ -17,13 +16,11 @@ INDEX = "INDEX.json"
 
 
 def run(args: argparse.Namespace) -> int:
-    result = load_file(args.file)
-    for d in result.diagnostics:
-        print(d, file=sys.stderr)
-    if not result.ok or result.model is None:
+    model = load_or_report(args.file)
+    if model is None:
         return 1
     out = Path(args.out)
-    written = write_artifacts(out, generate(result.model, args.role))
+    written = write_artifacts(out, generate(model, args.role))
     index = [{"path": w.artifact.path, "role": w.artifact.role,
               "ownership": w.artifact.ownership.value, "action": w.action} for w in written]
     (out / INDEX).write_text(json.dumps({"model": str(args.file), "files": index}, indent=2)

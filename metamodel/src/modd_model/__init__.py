@@ -6,7 +6,7 @@
 """
 
 from .diagnostics import Diagnostic, Location, ModelError
-from .io import LoadResult, dumps, format_of, load_file, load_model, load_text
+from .io import LoadResult, dumps, format_of, load_file, load_model, load_or_report, load_text
 from .parser import parse_text
 from .printer import print_model
 from .validate import validate
@@ -19,6 +19,7 @@ __all__ = [
     "dumps",
     "format_of",
     "load_file",
+    "load_or_report",
     "load_model",
     "load_text",
     "parse_text",

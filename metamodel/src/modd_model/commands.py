@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from .io import LoadResult, dumps, format_of, load_file
+from .io import LoadResult, dumps, format_of, load_file, load_or_report
 
 
 def _report(result: LoadResult, quiet_warnings: bool = False) -> None:
@@ -15,12 +15,6 @@ def _report(result: LoadResult, quiet_warnings: bool = False) -> None:
         if d.severity == "warning" and quiet_warnings:
             continue
         print(d, file=sys.stderr)
-
-
-def _load_or_report(path: str) -> dict[str, Any] | None:
-    result = load_file(path)
-    _report(result, quiet_warnings=True)
-    return result.model if result.ok else None
 
 
 def run_validate(args: argparse.Namespace) -> int:
@@ -36,7 +30,7 @@ def run_validate(args: argparse.Namespace) -> int:
 
 
 def run_convert(args: argparse.Namespace) -> int:
-    model = _load_or_report(args.file)
+    model = load_or_report(args.file, quiet_warnings=True)
     if model is None:
         return 1
     text = dumps(model, args.to)
@@ -50,7 +44,7 @@ def run_convert(args: argparse.Namespace) -> int:
 def run_fmt(args: argparse.Namespace) -> int:
     status = 0
     for path in args.files:
-        model = _load_or_report(path)
+        model = load_or_report(path, quiet_warnings=True)
         if model is None:
             status = 1
             continue

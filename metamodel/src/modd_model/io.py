@@ -7,9 +7,10 @@ whose JSON pointer came from text. ``load_model`` raises on errors; the
 from __future__ import annotations
 
 import json
+import sys
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, TextIO
 
 from .diagnostics import Diagnostic, Location, ModelError, pointer_parent
 from .parser import SourceMap, parse_lenient
@@ -88,6 +89,17 @@ def load_file(path: str | Path) -> LoadResult:
     except (OSError, UnicodeDecodeError) as exc:
         return LoadResult(None, [Diagnostic(f"cannot read {p}: {exc}")], {})
     return load_text(text, str(path), format_of(p))
+
+
+def load_or_report(path: str | Path, *, quiet_warnings: bool = False,
+                   out: TextIO | None = None) -> dict[str, Any] | None:
+    """The valid model of a file, or None; every diagnostic goes to ``out``
+    (stderr), as each command-line tool reports a model it was given."""
+    result = load_file(path)
+    for d in result.diagnostics:
+        if not (quiet_warnings and d.severity == "warning"):
+            print(d, file=out or sys.stderr)
+    return result.model if result.ok else None
 
 
 def load_model(path: str | Path) -> dict[str, Any]:
