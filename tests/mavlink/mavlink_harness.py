@@ -123,3 +123,74 @@ def read_archive(directory: Path) -> dict[str, list[tuple[int, Any]]]:
     for samples in out.values():
         samples.sort(key=lambda s: s[0])
     return dict(out)
+
+
+class Recorder:
+    """A publisher stand-in: records what the bridge publishes."""
+
+    def __init__(self) -> None:
+        self.declared: dict[str, str] = {}
+        self.samples: list[tuple[str, int, Any]] = []
+        self.flushed = self.closed = False
+
+    def declare(self, topic: str, vtype: str) -> None:
+        self.declared[topic] = vtype
+
+    def publish(self, topic: str, timestamp_ns: int, value: Any) -> bool:
+        self.samples.append((topic, timestamp_ns, value))
+        return True
+
+    def flush(self, timeout: float = 5.0) -> bool:
+        self.flushed = True
+        return True
+
+    def close(self, timeout: float = 2.0) -> None:
+        self.closed = True
+
+
+class Autopilot:
+    """Hand-built MAVLink 2 frames from an autopilot (system 1, component 1 by default)."""
+
+    def __init__(self, system: int = 1, component: int = 1) -> None:
+        from modd.mavlink.dialect import parser
+
+        self.mav = parser(system, component)
+
+    def frame(self, msg: Any) -> bytes:
+        data = bytes(msg.pack(self.mav))
+        self.mav.seq = (self.mav.seq + 1) % 256
+        return data
+
+    def heartbeat(self) -> bytes:
+        from modd.mavlink.dialect import MAV
+
+        return self.frame(MAV.MAVLink_heartbeat_message(
+            MAV.MAV_TYPE_SURFACE_BOAT, MAV.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0,
+            MAV.MAV_STATE_ACTIVE, 3))
+
+    def attitude(self, yaw: float, boot_ms: int = 1000) -> bytes:
+        from modd.mavlink.dialect import MAV
+
+        return self.frame(MAV.MAVLink_attitude_message(boot_ms, 0.0, 0.0, yaw, 0.0, 0.0, 0.0))
+
+    def position(self, lat_e7: int, lon_e7: int, alt_mm: int, boot_ms: int = 1000) -> bytes:
+        from modd.mavlink.dialect import MAV
+
+        return self.frame(MAV.MAVLink_global_position_int_message(
+            boot_ms, lat_e7, lon_e7, alt_mm, alt_mm, 0, 0, 0, 0))
+
+    def ack(self, command: int, result: int) -> bytes:
+        from modd.mavlink.dialect import MAV
+
+        return self.frame(MAV.MAVLink_command_ack_message(command, result, 0, 0, 255, 191))
+
+
+def unknown_frame(msgid: int = 0x00F0F0, payload: bytes = b"\x01\x02\x03") -> bytes:
+    """A well-formed MAVLink 2 frame of a message id no dialect defines (its CRC cannot
+    be checked without the id's CRC_EXTRA: any two bytes do)."""
+    header = bytes([0xFD, len(payload), 0, 0, 7, 1, 1]) + msgid.to_bytes(3, "little")
+    return header + payload + b"\x00\x00"
+
+
+def corrupt_crc(frame: bytes) -> bytes:
+    return frame[:-1] + bytes([frame[-1] ^ 0xFF])

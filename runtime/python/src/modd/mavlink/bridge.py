@@ -34,6 +34,7 @@ from .status import Counters, status_line
 from .transport import Transport
 
 HEARTBEAT_PERIOD_S = 1.0
+BAD_LOGS_PER_STATUS = 5  # bad frames are logged one by one up to this many per status period
 
 
 class Sink(Protocol):
@@ -74,7 +75,7 @@ class Bridge:
         self._unknown_ids: set[str] = set()
         self._next_heartbeat = 0.0
         self._next_status: float | None = None
-        self._bad_reported = 0
+        self._bad_logged = 0  # bad frames logged since the last status line
         for pub in plan.publishers:
             for m in pub.mappings:
                 self.sinks[pub.name].declare(m.topic, m.type)
@@ -93,6 +94,11 @@ class Bridge:
         if frame.kind is Kind.BAD:
             c.bad += 1
             c.last_bad = frame.reason[:120]
+            self._bad_logged += 1
+            if self._bad_logged <= BAD_LOGS_PER_STATUS:
+                more = " (no more until the next status line)" \
+                    if self._bad_logged == BAD_LOGS_PER_STATUS else ""
+                self.log(f"bad MAVLink data: {c.last_bad} ({c.bad} bad in all){more}")
             return
         if frame.kind is Kind.UNKNOWN:
             c.unknown += 1
@@ -132,16 +138,12 @@ class Bridge:
                 MAV.MAV_STATE_ACTIVE, 3))
         for msg in self.autopilot.poll(now):
             self._send(msg)
-        if self.counters.bad > self._bad_reported:
-            # reported as they come, at most once per tick
-            self.log(f"bad MAVLink data ({self.counters.bad - self._bad_reported} frames, "
-                     f"{self.counters.bad} in all): {self.counters.last_bad}")
-            self._bad_reported = self.counters.bad
         if self._next_status is None:
             self._next_status = now + self.settings.status_period_s
         elif now >= self._next_status:
             self._next_status = now + self.settings.status_period_s
             self.log(self.status())
+            self._bad_logged = 0
 
     def status(self, now: float | None = None) -> str:
         ap = self.autopilot

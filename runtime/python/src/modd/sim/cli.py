@@ -74,6 +74,7 @@ def main(argv: list[str] | None = None) -> int:
             threads.append(threading.Thread(
                 target=run_publisher, name=p["name"], daemon=True,
                 args=(p["name"], float(to_fraction(p["periodS"])), mine, ingress, stop, i, start)))
+    publishers = len(threads)
     if autopilot_topics:
         from .autopilot import SimAutopilot
 
@@ -86,7 +87,7 @@ def main(argv: list[str] | None = None) -> int:
                                         daemon=True))
     for th in threads:
         th.start()
-    log(f"drone {model['drone']['name']}: {len(threads)} publishers -> {ingress}"
+    log(f"drone {model['drone']['name']}: {publishers} publishers -> {ingress}"
         + (f"; autopilot -> {args.mavlink}" if autopilot_topics else "")
         + f"; track started at {start:.3f}")
     stop.wait(args.duration)
