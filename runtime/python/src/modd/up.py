@@ -180,14 +180,11 @@ def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
 
 
 def run(args: argparse.Namespace) -> int:
-    from modd_model import load_file
+    from modd_model import load_or_report
 
-    result = load_file(args.model)
-    for d in result.diagnostics:
-        print(d, file=sys.stderr)
-    if not result.ok or result.model is None:
+    model = load_or_report(args.model)
+    if model is None:
         return 1
-    model = result.model
     workdir = Path(args.workdir or f"/tmp/modd-up/{model['drone']['name']}").resolve()
     workdir.mkdir(parents=True, exist_ok=True)
     local, configs = prepare(model, workdir)

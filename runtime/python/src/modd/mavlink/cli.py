@@ -18,7 +18,7 @@ import sys
 import threading
 import time
 
-from modd_model import load_file
+from modd_model import load_or_report
 
 from ..publisher import Publisher
 from .bridge import Bridge, BridgeSettings
@@ -54,12 +54,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    result = load_file(args.model)
-    for d in result.diagnostics:
-        print(d, file=sys.stderr)
-    if not result.ok or result.model is None:
+    model = load_or_report(args.model)
+    if model is None:
         return 1
-    model = result.model
     try:
         plan = plan_bridge(model)
     except MappingError as exc:

@@ -9,7 +9,7 @@ import threading
 import time
 from typing import Any
 
-from modd_model import load_file
+from modd_model import load_or_report
 from modd_model.numbers import to_fraction
 from modd_model.query import topics
 
@@ -54,12 +54,9 @@ def log(line: str) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    result = load_file(args.model)
-    for d in result.diagnostics:
-        print(d, file=sys.stderr)
-    if not result.ok or result.model is None:
+    model = load_or_report(args.model)
+    if model is None:
         return 1
-    model = result.model
     start = time.time() if args.start_time is None else args.start_time
     ingress = args.ingress or default_ingress(model)
     autopilot_topics = set() if args.no_mavlink else mavlink_topics(model)
