@@ -3,7 +3,7 @@ transport only — the bridge decodes frames itself (see ``decode.py``).
 
 URLs are pymavlink's: ``udpin:HOST:PORT`` (listen; replies go to whoever sent),
 ``udpout:HOST:PORT``, ``tcp:HOST:PORT``, or a serial device with an optional
-baud rate, ``/dev/ttyUSB0,57600`` (needs the ``pyserial`` package).
+baud rate, ``/dev/ttyUSB0,57600`` (through ``pyserial``).
 
 Example::
 
