@@ -123,7 +123,8 @@ def wire_figures(wire: Wire) -> dict[str, Any]:
                 "packets_per_s": round(r["packets_per_s"], 2),
                 "data_packets_per_s": round(r["data_packets_per_s"], 2),
                 "pure_ack_bytes_per_s": round(r["ack_bytes_per_s"], 1),
-                "seconds": wire.seconds} for d, r in rates.items()}
+                "seconds": round(span, 2)}
+            for (d, r), span in zip(rates.items(), (wire.down_span, wire.up_span), strict=True)}
 
 
 def scenario(tmp: Path, n: int, seconds: float, status_period_s: int) -> dict[str, Any]:

@@ -1,5 +1,5 @@
 """Bytes on the wire: tshark on loopback (``lo``) with a port filter for a fixed duration,
-then the IP length of every packet summed per direction, IP and TCP headers included
+then the IP length of the packets summed per direction, IP and TCP headers included
 (52 B per segment here: IPv4 20 + TCP 20 + timestamps option 12), data segments
 (TCP payload > 0) and pure ACKs (no payload) apart. The server port is on the drone, so
 packets from it travel drone -> base."""
@@ -42,13 +42,15 @@ class Direction:
 
 @dataclass(frozen=True)
 class Wire:
-    seconds: float
+    seconds: float  # the capture's duration
     down: Direction  # drone -> base (from the server port)
     up: Direction  # base -> drone
+    down_span: float  # seconds the counted packets of each direction cover
+    up_span: float
 
     def rates(self) -> dict[str, dict[str, float]]:
-        return {"drone_to_base": self.down.per_s(self.seconds),
-                "base_to_drone": self.up.per_s(self.seconds)}
+        return {"drone_to_base": self.down.per_s(self.down_span),
+                "base_to_drone": self.up.per_s(self.up_span)}
 
 
 class Capture:
@@ -74,17 +76,25 @@ class Capture:
 
 
 def read_pcap(pcap: Path, server_port: int, seconds: float) -> Wire:
+    """Per direction, the packets from the first one up to (not including) the last one over
+    the time between them: a periodic flow's exact rate, whatever the capture's edges cut.
+    ``seconds`` (the capture's duration) is kept for a direction with fewer than 2 packets."""
     out = subprocess.run(
-        ["tshark", "-r", str(pcap), "-T", "fields", "-e", "tcp.srcport", "-e", "ip.len",
-         "-e", "tcp.len"], check=True, capture_output=True, text=True).stdout
-    acc = {True: [0] * 6, False: [0] * 6}
+        ["tshark", "-r", str(pcap), "-T", "fields", "-e", "frame.time_relative",
+         "-e", "tcp.srcport", "-e", "ip.len", "-e", "tcp.len"],
+        check=True, capture_output=True, text=True).stdout
+    pkts: dict[bool, list[tuple[float, int, int]]] = {True: [], False: []}
     for line in out.splitlines():
-        src, iplen, tcplen = line.split("\t")
-        a = acc[int(src) == server_port]
-        n = int(iplen)
-        a[0] += n
-        a[1] += 1
-        k = 2 if int(tcplen) > 0 else 4
-        a[k] += n
-        a[k + 1] += 1
-    return Wire(seconds, Direction(*acc[True]), Direction(*acc[False]))
+        t, src, iplen, tcplen = line.split("\t")
+        pkts[int(src) == server_port].append((float(t), int(iplen), int(tcplen)))
+    dirs, spans = [], []
+    for down in (True, False):
+        ps = pkts[down]
+        span = ps[-1][0] - ps[0][0] if len(ps) >= 2 else 0.0
+        body = ps[:-1] if span > 0 else ps
+        data = [p[1] for p in body if p[2] > 0]
+        acks = [p[1] for p in body if p[2] == 0]
+        dirs.append(Direction(sum(data) + sum(acks), len(body), sum(data), len(data),
+                              sum(acks), len(acks)))
+        spans.append(span if span > 0 else seconds)
+    return Wire(seconds, dirs[0], dirs[1], spans[0], spans[1])
