@@ -22,14 +22,11 @@ from pathlib import Path
 
 def listening_copy(model_path: str, host: str, workdir: Path) -> Path:
     """The model with its PubBroker endpoint host set to ``host``, as JSON in workdir."""
-    from modd_model import load_file
+    from modd_model import load_or_report
 
-    result = load_file(model_path)
-    if not result.ok or result.model is None:
-        for d in result.diagnostics:
-            print(d, file=sys.stderr)
+    model = load_or_report(model_path)
+    if model is None:
         raise SystemExit(f"drone: {model_path} is not a valid model")
-    model = result.model
     model["pubBroker"]["endpoint"]["host"] = host
     workdir.mkdir(parents=True, exist_ok=True)
     out = workdir / "model.json"
