@@ -55,6 +55,29 @@ TEST(Crc32, KnownValue) {
   EXPECT_EQ(crc32(crc32(0, a), b), 0xCBF43926u);
 }
 
+// The table-driven CRC against the bit-by-bit definition, over every length and
+// offset around the 16-byte stride, split at every point.
+TEST(Crc32, MatchesBitwiseDefinition) {
+  auto bitwise = [](std::span<const uint8_t> d) {
+    uint32_t c = 0xFFFFFFFFu;
+    for (uint8_t byte : d) {
+      c ^= byte;
+      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    }
+    return ~c;
+  };
+  std::vector<uint8_t> buf(200);
+  uint32_t x = 12345;
+  for (auto& b : buf) b = static_cast<uint8_t>((x = x * 1103515245u + 12345u) >> 16);
+  for (size_t off = 0; off < 17; ++off)
+    for (size_t len = 0; off + len <= 90; ++len) {
+      auto d = std::span<const uint8_t>(buf.data() + off, len);
+      ASSERT_EQ(crc32(0, d), bitwise(d)) << "offset " << off << " length " << len;
+      for (size_t cut = 0; cut <= len; cut += 7)
+        ASSERT_EQ(crc32(crc32(0, d.first(cut)), d.subspan(cut)), bitwise(d)) << "cut " << cut;
+    }
+}
+
 class McapWriterTest : public ::testing::TestWithParam<Compression> {};
 
 TEST_P(McapWriterTest, FileStructureAndCrcs) {
@@ -64,6 +87,7 @@ TEST_P(McapWriterTest, FileStructureAndCrcs) {
     WriterOptions o;
     o.compression = GetParam();
     o.chunk_bytes = 2000;  // several chunks
+    o.message_index = GetParam() != Compression::None;  // both layouts, across the parameters
     McapWriter w(path, o);
     uint16_t s = w.add_schema("modd.float32", "jsonschema", sample_json_schema(modd::link::ValueType::Float32));
     uint16_t c0 = w.add_channel(s, "a", "json");
@@ -90,11 +114,12 @@ TEST_P(McapWriterTest, FileStructureAndCrcs) {
   // Walk the data section: every chunk's records decompress to their CRC.
   size_t at = 8;
   int chunks = 0;
-  uint64_t messages = 0;
+  uint64_t messages = 0, indexed = 0;
   while (at < summary_start) {
     uint8_t op = b[at];
     uint64_t len = rd<uint64_t>(b, at + 1);
     size_t body = at + 9;
+    if (op == 0x07) indexed += rd<uint32_t>(b, body + 2) / 16;  // message index entries
     if (op == 0x0F) {  // data end: CRC of everything before it
       EXPECT_EQ(rd<uint32_t>(b, body), crc32(0, std::span(b.data(), at)));
     }
@@ -133,6 +158,7 @@ TEST_P(McapWriterTest, FileStructureAndCrcs) {
   EXPECT_EQ(at, summary_start);
   EXPECT_GT(chunks, 2);
   EXPECT_EQ(messages, 300u);
+  EXPECT_EQ(indexed, GetParam() != Compression::None ? 300u : 0u);
 }
 
 INSTANTIATE_TEST_SUITE_P(Compressions, McapWriterTest,

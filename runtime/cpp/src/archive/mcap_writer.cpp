@@ -7,6 +7,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <memory>
 
 #include "modd/archive/crc32.hpp"
 #include "modd/util/error.hpp"
@@ -46,8 +47,11 @@ const char* compression_name(Compression c) {
 std::vector<uint8_t> compress(Compression c, const std::vector<uint8_t>& in) {
   std::vector<uint8_t> out;
   if (c == Compression::Zstd) {
+    // One context per thread, reused: a fresh one per chunk costs its allocation and setup.
+    thread_local std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> cctx{ZSTD_createCCtx(), ZSTD_freeCCtx};
+    if (!cctx) throw Error(ErrorCode::Internal, "zstd: cannot create a compression context");
     out.resize(ZSTD_compressBound(in.size()));
-    size_t n = ZSTD_compress(out.data(), out.size(), in.data(), in.size(), 1);
+    size_t n = ZSTD_compressCCtx(cctx.get(), out.data(), out.size(), in.data(), in.size(), 1);
     if (ZSTD_isError(n)) throw Error(ErrorCode::Internal, std::string("zstd: ") + ZSTD_getErrorName(n));
     out.resize(n);
   } else if (c == Compression::Lz4) {
@@ -169,7 +173,7 @@ void McapWriter::add_message(uint16_t channel_id, uint32_t sequence, uint64_t lo
   std::memcpy(head + 23, &publish_time, 8);
   chunk_.insert(chunk_.end(), head, head + sizeof(head));
   chunk_.insert(chunk_.end(), data.begin(), data.end());
-  chunk_index_[channel_id].emplace_back(log_time, at);
+  if (opt_.message_index) chunk_index_[channel_id].emplace_back(log_time, at);
   chunk_start_ = std::min(chunk_start_, log_time);
   chunk_end_ = std::max(chunk_end_, log_time);
   ++message_count_;

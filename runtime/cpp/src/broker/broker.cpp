@@ -98,6 +98,7 @@ Broker::Broker(const BrokerConfig& cfg, std::string key, Clock& clock, LinkOutpu
   ao.rotate_s = cfg.rotate_s;
   ao.writer.compression = cfg.compression;
   ao.writer.chunk_bytes = cfg.chunk_bytes;
+  ao.writer.message_index = cfg.message_index;
   ao.writer.fsync = cfg.fsync;
   archiver_ = std::make_unique<archive::Archiver>(ao);
   for (const auto& t : cfg.topics)

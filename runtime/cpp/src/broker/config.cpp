@@ -85,13 +85,14 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   if (!j.contains("archive")) c.fail("/archive", "missing");
   const json& a = j["archive"];
   check_keys(c, a, "/archive", {"dir", "prefix", "rotate_bytes", "rotate_s", "fsync", "compression",
-                                "chunk_bytes", "flush_interval_ms", "queue_limit_samples"});
+                                "chunk_bytes", "flush_interval_ms", "queue_limit_samples", "message_index"});
   get(c, a, "/archive", "dir", cfg.archive_dir);
   if (cfg.archive_dir.empty()) c.fail("/archive/dir", "missing");
   get(c, a, "/archive", "prefix", cfg.archive_prefix);
   get(c, a, "/archive", "rotate_bytes", cfg.rotate_bytes);
   get(c, a, "/archive", "rotate_s", cfg.rotate_s);
   get(c, a, "/archive", "chunk_bytes", cfg.chunk_bytes);
+  get(c, a, "/archive", "message_index", cfg.message_index);
   get(c, a, "/archive", "flush_interval_ms", cfg.flush_interval_ms);
   get(c, a, "/archive", "queue_limit_samples", cfg.queue_limit_samples);
   if (cfg.flush_interval_ms < 10) c.fail("/archive/flush_interval_ms", "must be at least 10");

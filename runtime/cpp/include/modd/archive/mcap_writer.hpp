@@ -24,6 +24,10 @@ struct WriterOptions {
   Compression compression = Compression::Zstd;
   size_t chunk_bytes = 256 * 1024;  // uncompressed chunk size that closes a chunk
   FsyncPolicy fsync = FsyncPolicy::Chunk;
+  // MCAP Message Index records (16 B per message, never compressed): they let a reader
+  // skip chunks without a topic, which the archive's chunks (every topic, interleaved)
+  // never are; off, the bytes written per sample are halved.
+  bool message_index = false;
   std::string library = "modd-pubbroker";
 };
 

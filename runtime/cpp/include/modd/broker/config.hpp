@@ -35,6 +35,7 @@ struct BrokerConfig {
   archive::FsyncPolicy fsync = archive::FsyncPolicy::Chunk;
   archive::Compression compression = archive::Compression::Zstd;
   size_t chunk_bytes = 256 * 1024;
+  bool message_index = false;
   uint32_t flush_interval_ms = 1000;
   uint64_t queue_limit_samples = 1'000'000;
   // topics
