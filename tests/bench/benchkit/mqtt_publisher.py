@@ -15,7 +15,6 @@ import json
 import math
 import signal
 import sys
-import time
 from pathlib import Path
 from types import FrameType
 
@@ -23,6 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "subbroker"))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchkit.mqtt import PAYLOAD, open_client, publish_packet  # noqa: E402
+from benchkit.ticks import publisher_ticks  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -41,20 +41,11 @@ def main(argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGTERM, on_term)
     sock = open_client(args.port, "drone-publisher")
     sent = {t: 0 for _, ts in publishers for t in ts}
-    seq = 0
-    start = time.monotonic()
-    due = [start + p for p, _ in publishers]
-    while not stop and time.monotonic() - start < args.seconds:
-        i = min(range(len(publishers)), key=lambda k: due[k])
-        delay = due[i] - time.monotonic()
-        if delay > 0:
-            time.sleep(delay)
-        now = time.time_ns()
+    ticks = publisher_ticks([p for p, _ in publishers], args.seconds, lambda: stop)
+    for seq, (i, now) in enumerate(ticks):
         for j, topic in enumerate(publishers[i][1]):
             sock.sendall(publish_packet(topic, PAYLOAD.pack(now, math.sin(0.37 * seq + j), seq)))
             sent[topic] += 1
-        seq += 1
-        due[i] += publishers[i][0]
     sock.close()
     print(json.dumps({"sent": sent}), flush=True)
     return 0

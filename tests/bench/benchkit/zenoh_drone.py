@@ -19,10 +19,14 @@ import math
 import signal
 import struct
 import sys
-import time
+from pathlib import Path
 from types import FrameType
 
 import zenoh
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from benchkit.ticks import publisher_ticks  # noqa: E402
 
 PAYLOAD = struct.Struct("<qfI")  # 16 bytes: publish time ns, value, sequence
 
@@ -61,22 +65,14 @@ def main(argv: list[str] | None = None) -> int:
         by_topic.setdefault(topic, []).append(key)
     publishers = [(float(p), list(ts)) for p, ts in plan["publishers"]]
     print("ready", flush=True)
-    sent, seq = 0, 0
-    start = time.monotonic()
-    due = [start + p for p, _ in publishers]
-    while not stop and time.monotonic() - start < args.seconds:
-        i = min(range(len(publishers)), key=lambda k: due[k])
-        delay = due[i] - time.monotonic()
-        if delay > 0:
-            time.sleep(delay)
-        now = time.time_ns()
+    sent = 0
+    ticks = publisher_ticks([p for p, _ in publishers], args.seconds, lambda: stop)
+    for seq, (i, now) in enumerate(ticks):
         for j, topic in enumerate(publishers[i][1]):
             payload = PAYLOAD.pack(now, math.sin(0.37 * seq + j), seq)
             for key in by_topic.get(topic, []):
                 pubs[key].put(payload)
                 sent += 1
-        seq += 1
-        due[i] += publishers[i][0]
     session.close()
     print(json.dumps({"sent": sent}), flush=True)
     return 0
