@@ -19,15 +19,13 @@ import time
 from pathlib import Path
 from typing import Any
 
+from modd.ports import free_port
+
 REPO = Path(__file__).resolve().parents[2]
 PUBBROKER = REPO / "build" / "bin" / "modd-pubbroker"
 KEY = "modd-backend-test-key"
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def wait_port(port: int, timeout_s: float = 10.0) -> None:

@@ -7,7 +7,6 @@ import io
 import os
 import re
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -16,6 +15,7 @@ from pathlib import Path
 import httpx2 as httpx
 import pytest
 from fastapi.testclient import TestClient
+from modd.ports import free_port
 from modd_backend import Settings, create_app
 from modd_backend.cli import parse_args
 from modd_backend.tables import Base
@@ -63,15 +63,11 @@ def test_cli_defaults_to_loopback(tmp_path: Path) -> None:
     assert s.zenoh_connect == ("tcp/127.0.0.1:7447",)
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 @pytest.mark.slow
 def test_console_script_serves_the_api(tmp_path: Path) -> None:
-    port = _free_port()
+    port = free_port()
     exe = Path(sys.executable).with_name("modd-backend")
     log = tmp_path / "backend.log"
     with log.open("w") as out:

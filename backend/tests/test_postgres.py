@@ -8,7 +8,6 @@ from __future__ import annotations
 import io
 import os
 import shutil
-import socket
 import subprocess
 import tempfile
 from collections.abc import Iterator
@@ -16,6 +15,7 @@ from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
+from modd.ports import free_port
 from modd_backend import Settings, create_app
 
 from .conftest import ADMIN_PASSWORD, login
@@ -23,10 +23,6 @@ from .conftest import ADMIN_PASSWORD, login
 PG_BINS = sorted(Path("/usr/lib/postgresql").glob("*/bin"))
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def _as_postgres(cmd: list[str]) -> list[str]:
@@ -49,7 +45,7 @@ def postgres_url() -> Iterator[str]:
     data = root / "data"
     if os.geteuid() == 0:
         shutil.chown(root, "postgres")
-    port = _free_port()
+    port = free_port()
     subprocess.run(_as_postgres([str(bins / "initdb"), "-D", str(data), "-U", "modd",
                                  "--auth=trust", "-E", "UTF8"]),
                    check=True, capture_output=True)

@@ -4,7 +4,6 @@ zenoh: deploy answers 503 here; tests/run covers an acked deploy)."""
 from __future__ import annotations
 
 import io
-import socket
 import threading
 import time
 from collections.abc import Iterator
@@ -12,6 +11,7 @@ from pathlib import Path
 
 import pytest
 import uvicorn
+from modd.ports import free_port
 from modd_backend import Settings, create_app
 from modd_model.cli import main as modd
 
@@ -24,9 +24,7 @@ DEMO = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.mo
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     settings = Settings(data_dir=tmp_path_factory.mktemp("push"), zenoh_enabled=False,
                         initial_admin_password=ADMIN_PASSWORD)
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
+    port = free_port()
     config = uvicorn.Config(create_app(settings, out=io.StringIO()), host="127.0.0.1",
                             port=port, log_level="warning")
     srv = uvicorn.Server(config)
@@ -84,9 +82,7 @@ def test_push_reports_refusals_with_where(
 
 def test_push_to_nothing_says_so(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                  capsys: pytest.CaptureFixture[str]) -> None:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]  # closed again: nothing listens there
+    port = free_port()  # closed again: nothing listens there
     monkeypatch.setenv("MODD_PASSWORD", "x")
     assert push(f"http://127.0.0.1:{port}", str(DEMO)) == 1
     assert "cannot reach" in capsys.readouterr().err

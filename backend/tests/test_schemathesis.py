@@ -6,7 +6,6 @@ as admin (every role), with zenoh on and no drone answering."""
 from __future__ import annotations
 
 import io
-import socket
 import threading
 import time
 from collections.abc import Iterator
@@ -18,25 +17,20 @@ import pytest
 import schemathesis
 import uvicorn
 from hypothesis import HealthCheck, given, settings
+from modd.ports import free_port
 from modd_backend import Settings, create_app
 
 from .conftest import ADMIN_PASSWORD
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory: pytest.TempPathFactory, scenarios_dir: Path
            ) -> Iterator[dict[str, Any]]:
     data = tmp_path_factory.mktemp("schemathesis")
-    port = _free_port()
+    port = free_port()
     app = create_app(Settings(
         data_dir=data, initial_admin_password=ADMIN_PASSWORD, deploy_timeout_s=0.5,
-        subscribe_timeout_s=0.5, zenoh_connect=(f"tcp/127.0.0.1:{_free_port()}",),
+        subscribe_timeout_s=0.5, zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
     ), out=io.StringIO())
     srv = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning",
                                         lifespan="on"))

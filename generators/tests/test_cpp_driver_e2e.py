@@ -7,13 +7,13 @@ from __future__ import annotations
 import json
 import os
 import signal
-import socket
 import subprocess
 import time
 from pathlib import Path
 
 import pytest
 from mcap.reader import make_reader
+from modd.ports import free_port
 from modd_gen import generate, write_artifacts
 from modd_model import load_model
 
@@ -22,10 +22,6 @@ PUBBROKER = REPO / "build" / "bin" / "modd-pubbroker"
 READINGS = 40
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def _build(project: Path) -> Path:
@@ -60,7 +56,7 @@ def test_generated_driver_builds_runs_and_is_archived(scenarios_dir: Path, tmp_p
     config = json.loads((tmp_path / "gen" / "operator" / "pubbroker.json").read_text())
     config["archive"]["dir"] = str(tmp_path / "archive")
     config["ingress"]["unix_path"] = str(tmp_path / "ingress.sock")
-    config["link"]["port"] = _free_port()
+    config["link"]["port"] = free_port()
     (tmp_path / "pubbroker.json").write_text(json.dumps(config))
     env = {**os.environ, "MODD_LINK_KEY": "test-key"}
     broker = subprocess.Popen([str(PUBBROKER), "--config", str(tmp_path / "pubbroker.json")],

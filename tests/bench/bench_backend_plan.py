@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import os
 import signal
-import socket
 import statistics
 import subprocess
 import sys
@@ -22,6 +21,7 @@ import time
 from pathlib import Path
 
 import httpx2 as httpx
+from modd.ports import free_port
 from modd_model import load_model
 
 REPO = Path(__file__).resolve().parents[2]
@@ -29,10 +29,6 @@ SCENARIOS = REPO.parent / "shared" / "scenarios"
 PASSWORD = "bench-admin-password"
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def start_backend(data: Path, port: int) -> subprocess.Popen[bytes]:

@@ -17,12 +17,11 @@ from mavlink_harness import (
     BIN,
     HERE,
     Proc,
-    free_tcp_port,
-    free_udp_port,
     load_model,
     read_archive,
     start_pubbroker,
 )
+from modd.ports import free_port
 from modd.sim.track import METERS_PER_DEG_LAT, SPEED_MS, altitude, battery, survey_pose
 
 LAG_S = 0.5  # bound on send → receive → timestamp on a loaded 2-core machine
@@ -43,9 +42,9 @@ class Run:
 @pytest.fixture(scope="module")
 def run(tmp_path_factory: pytest.TempPathFactory) -> Run:
     tmp = tmp_path_factory.mktemp("bridge")
-    model = load_model(HERE / "boat.modd", free_tcp_port())
+    model = load_model(HERE / "boat.modd", free_port())
     broker, _local, model_json = start_pubbroker(model, tmp / "run")
-    port = free_udp_port()
+    port = free_port("udp")
     start = time.time() - 195.0  # the first turn comes 5 s into the run
     procs: dict[str, Proc] = {"pubbroker": broker}
     try:

@@ -18,8 +18,6 @@ from mavlink_harness import (
     Autopilot,
     Recorder,
     corrupt_crc,
-    free_tcp_port,
-    free_udp_port,
     load_model,
     unknown_frame,
 )
@@ -28,6 +26,7 @@ from modd.mavlink.decode import Decoder, Kind
 from modd.mavlink.dialect import MAV
 from modd.mavlink.mapping import plan_bridge
 from modd.mavlink.transport import open_transport
+from modd.ports import free_port
 
 TIMEOUT_S = 0.6  # the bridge's heartbeat timeout here
 
@@ -76,9 +75,9 @@ class Rig:
 
 @pytest.fixture
 def rig() -> Iterator[Rig]:
-    model = load_model(HERE / "boat.modd", free_tcp_port())
+    model = load_model(HERE / "boat.modd", free_port())
     plan = plan_bridge(model)
-    port = free_udp_port()
+    port = free_port("udp")
     sinks = {p.name: Recorder() for p in plan.publishers}
     logs: list[str] = []
     bridge = Bridge(plan, open_transport(f"udpin:127.0.0.1:{port}"), sinks,

@@ -12,12 +12,13 @@ import tty
 from collections.abc import Iterator
 
 import pytest
-from mavlink_harness import HERE, Autopilot, Recorder, free_tcp_port, load_model
+from mavlink_harness import HERE, Autopilot, Recorder, load_model
 from modd.mavlink.bridge import Bridge, BridgeSettings
 from modd.mavlink.decode import Decoder, Kind
 from modd.mavlink.dialect import MAV
 from modd.mavlink.mapping import plan_bridge
 from modd.mavlink.transport import open_transport
+from modd.ports import free_port
 
 
 @pytest.fixture
@@ -35,7 +36,7 @@ def uart() -> Iterator[tuple[int, str]]:
 
 def test_bridge_reads_and_writes_a_serial_port(uart: tuple[int, str]) -> None:
     master, path = uart
-    plan = plan_bridge(load_model(HERE / "boat.modd", free_tcp_port()))
+    plan = plan_bridge(load_model(HERE / "boat.modd", free_port()))
     sinks = {p.name: Recorder() for p in plan.publishers}
     logs: list[str] = []
     bridge = Bridge(plan, open_transport(f"{path},921600"), sinks,

@@ -10,8 +10,9 @@ import time
 from pathlib import Path
 
 import pytest
-from mavlink_harness import BIN, HERE, Proc, free_udp_port
+from mavlink_harness import BIN, HERE, Proc
 from modd.mavlink.decode import Decoder, Kind
+from modd.ports import free_port
 
 
 def _ingress_bytes(server: socket.socket, seconds: float) -> bytes:
@@ -48,7 +49,7 @@ def _ingress_bytes(server: socket.socket, seconds: float) -> bytes:
 @pytest.mark.parametrize("no_mavlink", [False, True])
 def test_who_publishes_the_autopilot_topics(tmp_path: Path, no_mavlink: bool) -> None:
     udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    udp_port = free_udp_port()
+    udp_port = free_port("udp")
     udp.bind(("127.0.0.1", udp_port))
     server = socket.create_server(("127.0.0.1", 0))
     argv = [str(BIN / "modd-sim"), "--model", str(HERE / "boat.modd"), "--ingress",

@@ -40,6 +40,7 @@ from modd.link.frames import (
     ValueType,
 )
 from modd.link.receiver import Receiver, Window
+from modd.ports import free_port
 from modd.publisher import Publisher
 
 REPO = Path(__file__).resolve().parents[2]
@@ -48,10 +49,6 @@ SCENARIOS = REPO.parent / "shared" / "scenarios"
 KEY = b"pubbroker-test-key"
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def f32(x: float) -> float:

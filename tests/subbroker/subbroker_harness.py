@@ -22,6 +22,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from modd.ports import free_port
 from modd_model import load_model
 from modd_model.query import topics
 from modd_plan.derive import aggregate
@@ -35,10 +36,6 @@ LOADGEN = [str(PYTHON), str(Path(__file__).with_name("loadgen.py"))]
 KEY = "modd-test-key"
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 class Proc:

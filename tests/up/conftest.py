@@ -3,13 +3,13 @@ and waiting for a line in a process's log."""
 
 from __future__ import annotations
 
-import socket
 import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from modd.ports import free_port as _free_port
 
 FreePort = Callable[[], int]
 WaitFor = Callable[[Path, str, float], None]
@@ -22,12 +22,7 @@ def modd_cmd() -> str:
 
 @pytest.fixture(scope="session")
 def free_port() -> FreePort:
-    def pick() -> int:
-        with socket.socket() as s:
-            s.bind(("127.0.0.1", 0))
-            return int(s.getsockname()[1])
-
-    return pick
+    return _free_port
 
 
 @pytest.fixture(scope="session")

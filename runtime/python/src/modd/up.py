@@ -37,13 +37,14 @@ import os
 import secrets
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from .ports import free_port
 
 REPO = Path(__file__).resolve().parents[4]
 STOP_TIMEOUT_S = 10.0
@@ -124,11 +125,6 @@ def prepare(model: dict[str, Any], workdir: Path) -> tuple[dict[str, Any], Path]
     return local, workdir / "generated" / "operator"
 
 
-def free_udp_port() -> int:
-    """A UDP port free on loopback now, so that two runs at once do not collide."""
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def has_mavlink_sensors(model: dict[str, Any]) -> bool:
@@ -148,7 +144,7 @@ def simulation(model: dict[str, Any], model_json: Path, bin_dir: Path,
         bridge = bin_dir / "modd-mavlink"
         if not bridge.exists():
             raise FileNotFoundError(f"{bridge} not found: the MAVLink bridge is not installed")
-        port = free_udp_port()
+        port = free_port("udp")
         out.append(Process("bridge", [str(bridge), "--model", str(model_json),
                                               "--connect", f"udpin:127.0.0.1:{port}"],
                            logs / "bridge.log"))
