@@ -8,7 +8,7 @@ from collections.abc import Callable
 from typing import Any
 
 from fastapi.testclient import TestClient
-from modd_model import load_text
+from modd_model import dumps, load_text
 
 from .conftest import Headers
 
@@ -150,3 +150,27 @@ def test_print_follows_an_unsaved_model(client: TestClient, admin: Headers, scen
     broken = client.post("/api/print", json={"model": {"drone": 3}}, headers=admin)
     assert broken.status_code == 422 and "not valid enough" in broken.json()["detail"]
     assert client.post("/api/print", json={"model": model}).status_code == 401
+
+
+def test_import_collector_in_windows_1252_and_export_back(
+    client: TestClient, admin: Headers, scenario1: str
+) -> None:
+    """A file of the original tool, saved by Eclipse in windows-1252, imports;
+    the export for the original tool loads back to the same model."""
+    text = ("// Mission de température – 25 °C\n"
+            + dumps(load_text(scenario1, "s.modd").model or {}, "modd"))
+    text = "DataCollector {\n" + text.replace('PubBroker(', 'PubBroker broker(').replace(
+        'SubBroker(', 'SubBroker base(') + "}\n"
+    r = client.post("/api/projects/import", params={"name": "original", "format": "modd"},
+                    headers={**admin, "Content-Type": "text/plain"},
+                    content=text.encode("cp1252"))
+    assert r.status_code == 201, r.text
+    pid = r.json()["id"]
+    out = client.get(f"/api/projects/{pid}/export", params={"format": "collector"},
+                     headers=admin)
+    assert out.status_code == 200
+    assert out.text.startswith("DataCollector {")
+    back = load_text(out.text, "back.collector").model
+    model = client.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
+    assert back == model
+    assert model["pubBroker"]["name"] == "broker"

@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 MODD = [sys.executable, "-m", "modd_model.cli"]
 
 
@@ -43,7 +45,12 @@ def test_fmt_check_and_rewrite(scenarios_dir: Path, tmp_path: Path) -> None:
     shutil.copy(Path(__file__).parent / "data" / "scenario1_datacollector.modd", src)
     check = run("fmt", "--check", str(src))
     assert check.returncode == 1 and "not in canonical form" in check.stderr
-    assert run("fmt", str(src)).returncode == 0
+    # the file has comments, which the canonical form does not keep
+    before = src.read_bytes()
+    refused = run("fmt", str(src))
+    assert refused.returncode == 1 and "has comments" in refused.stderr
+    assert src.read_bytes() == before
+    assert run("fmt", "--drop-comments", str(src)).returncode == 0
     assert run("fmt", "--check", str(src)).returncode == 0
     printed = run("convert", str(scenarios_dir / "scenario1.modd"), "--to", "modd").stdout
     assert src.read_text() == printed
@@ -54,3 +61,28 @@ def test_console_script_is_installed() -> None:
     assert modd.exists()
     res = subprocess.run([str(modd), "--help"], capture_output=True, text=True, timeout=60)
     assert res.returncode == 0 and "validate" in res.stdout
+
+
+def test_write_atomic_leaves_the_original_on_a_failed_write(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A full disk during `modd fmt` or `convert -o`: the user's file is untouched,
+    no temporary file is left behind."""
+    import errno
+    import os
+
+    from modd_model.io import write_atomic
+
+    target = tmp_path / "mission.modd"
+    target.write_text("original\n")
+
+    def full(_fd: int) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "fsync", full)
+    with pytest.raises(OSError):
+        write_atomic(target, "x" * 100_000)
+    assert target.read_text() == "original\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["mission.modd"]
+    monkeypatch.undo()
+    write_atomic(target, "new\n")
+    assert target.read_text() == "new\n"

@@ -8,6 +8,7 @@ from typing import Any
 
 from modd_model import LoadResult, load_text, validate
 from modd_model.diagnostics import Diagnostic
+from modd_model.io import decode
 
 from .errors import ApiError
 from .schemas import Format, ModelInput
@@ -42,12 +43,15 @@ def require_document(result: LoadResult) -> dict[str, Any]:
 
 
 def decode_body(raw: bytes, fmt: Format, filename: str) -> LoadResult:
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        diag = Diagnostic(f"not UTF-8 text: {exc.reason} at byte {exc.start}", "", "error")
-        return LoadResult(None, [diag], {})
-    return read_text(text, fmt, filename)
+    """A raw model file: UTF-8 (or another encoding with a byte-order mark), or
+    windows-1252 for files of the original tool that are not UTF-8, with a
+    warning (modd_model.io.decode)."""
+    text, notes = decode(raw, filename)
+    if text is None:
+        return LoadResult(None, notes, {})
+    result = read_text(text, fmt, filename)
+    result.diagnostics[:0] = notes
+    return result
 
 
 def canonical_json(model: dict[str, Any]) -> str:

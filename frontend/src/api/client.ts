@@ -39,7 +39,7 @@ export function createApi(opts: HttpOptions) {
         method: "PUT", json: { model, base_revision: baseRevision, message },
       }),
     listVersions: (projectId: number) => http.request<Version[]>(`/api/projects/${projectId}/versions`),
-    exportModel: (projectId: number, format: "modd" | "json" = "modd", revision?: number) =>
+    exportModel: (projectId: number, format: "modd" | "json" | "collector" = "modd", revision?: number) =>
       http.request<string>(`/api/projects/${projectId}/export`, { query: { format, revision }, as: "text" }),
     exportUrl: (projectId: number, format: "modd" | "json" = "modd") =>
       http.url(`/api/projects/${projectId}/export`, { format }),

@@ -1,6 +1,9 @@
-/** Choose a project, create an empty one, or import a .modd file. */
+/** Choose a project, create an empty one, or import a model file (.modd, the original tool's .collector, JSON). */
 import { useEffect, useState } from "react";
+import { ApiError } from "../api/http";
 import type { Project } from "../api/types";
+import type { Diagnostic } from "../core/diagnostics";
+import { MODEL_FILE_TYPES, modelFile } from "../core/modelFile";
 import { emptyModel } from "../core/templates";
 import { useServices } from "./services";
 
@@ -10,6 +13,8 @@ export function ProjectsPage({ onOpen, user, onLogout }: { onOpen: (p: Project) 
   const [error, setError] = useState<string | null>(null);
   const [name, setName] = useState("");
   const [drone, setDrone] = useState("usv");
+  const [importNote, setImportNote] = useState<string | null>(null);
+  const [importErrors, setImportErrors] = useState<Diagnostic[]>([]);
 
   useEffect(() => {
     api.listProjects().then(setProjects, (e: Error) => setError(e.message));
@@ -27,11 +32,14 @@ export function ProjectsPage({ onOpen, user, onLogout }: { onOpen: (p: Project) 
 
   const importFile = async (file: File) => {
     setError(null);
+    setImportErrors([]);
+    const f = modelFile(file.name, new Uint8Array(await file.arrayBuffer()));
+    setImportNote(f.encoding === "utf-8" ? null : `${file.name} is not UTF-8: read as ${f.encoding}.`);
     try {
-      const base = file.name.replace(/\.(modd|json)$/, "").replace(/[^A-Za-z0-9_. -]/g, "_");
-      onOpen(await api.importProject(base, await file.text(), file.name.endsWith(".json") ? "json" : "modd"));
+      onOpen(await api.importProject(f.name, f.text, f.format));
     } catch (err) {
       setError((err as Error).message);
+      if (err instanceof ApiError) setImportErrors(err.body.diagnostics ?? []);
     }
   };
 
@@ -57,9 +65,19 @@ export function ProjectsPage({ onOpen, user, onLogout }: { onOpen: (p: Project) 
         <label>Drone name<input value={drone} onChange={(e) => setDrone(e.target.value)} required pattern="[A-Za-z_][A-Za-z0-9_]*" /></label>
         <button type="submit">Create</button>
       </form>
-      <label className="import">Import a .modd or JSON file
-        <input type="file" accept=".modd,.json" onChange={(e) => { const f = e.target.files?.[0]; if (f) void importFile(f); }} />
+      <label className="import">Import a .modd, .collector (original MoDD tool) or JSON file
+        <input type="file" accept={MODEL_FILE_TYPES} onChange={(e) => { const f = e.target.files?.[0]; if (f) void importFile(f); }} />
       </label>
+      {importNote && <p className="muted" role="status">{importNote}</p>}
+      {importErrors.length > 0 && (
+        <ul className="import-diagnostics" aria-label="Import problems">
+          {importErrors.map((d, i) => (
+            <li key={i} className={d.severity}>
+              {d.line ? `line ${d.line}:${d.col ?? 1}: ` : ""}{d.severity}: {d.message}{d.pointer ? ` [${d.pointer}]` : ""}
+            </li>
+          ))}
+        </ul>
+      )}
     </main>
   );
 }

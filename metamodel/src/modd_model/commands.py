@@ -7,7 +7,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from .io import LoadResult, dumps, format_of, load_file, load_or_report
+from .collector import print_collector
+from .io import LoadResult, dumps, format_of, load_file, load_or_report, write_atomic
+from .parser import has_comments
 
 
 def _report(result: LoadResult, quiet_warnings: bool = False) -> None:
@@ -20,7 +22,7 @@ def _report(result: LoadResult, quiet_warnings: bool = False) -> None:
 def run_validate(args: argparse.Namespace) -> int:
     status = 0
     for path in args.files:
-        result = load_file(path)
+        result = load_file(path, args.encoding)
         _report(result)
         if not result.ok:
             status = 1
@@ -30,51 +32,75 @@ def run_validate(args: argparse.Namespace) -> int:
 
 
 def run_convert(args: argparse.Namespace) -> int:
-    model = load_or_report(args.file, quiet_warnings=True)
+    model = load_or_report(args.file, quiet_warnings=True, encoding=args.encoding)
     if model is None:
         return 1
-    text = dumps(model, args.to)
-    if args.output and args.output != "-":
-        Path(args.output).write_text(text, encoding="utf-8")
+    if args.to == "collector":
+        text, omitted = print_collector(model)
+        for d in omitted:
+            print(d, file=sys.stderr)
     else:
-        sys.stdout.write(text)
+        text = dumps(model, args.to)
+    try:
+        if args.output and args.output != "-":
+            write_atomic(args.output, text)
+        else:
+            sys.stdout.write(text)
+    except OSError as exc:
+        print(f"{args.output}: cannot write: {exc.strerror or exc}", file=sys.stderr)
+        return 1
     return 0
 
 
 def run_fmt(args: argparse.Namespace) -> int:
     status = 0
     for path in args.files:
-        model = load_or_report(path, quiet_warnings=True)
-        if model is None:
+        result = load_file(path, args.encoding)
+        _report(result, quiet_warnings=True)
+        if not result.ok or result.model is None:
             status = 1
             continue
-        text = dumps(model, format_of(path))
-        current = Path(path).read_text(encoding="utf-8")
-        if current == text:
+        text = dumps(result.model, format_of(path))
+        current = Path(path).read_bytes()
+        if current == text.encode("utf-8"):
             continue
         if args.check:
             print(f"{path}: not in canonical form", file=sys.stderr)
             status = 1
-        else:
-            Path(path).write_text(text, encoding="utf-8")
-            print(f"{path}: reformatted")
+            continue
+        # Comments are not part of the model: refuse to lose them silently.
+        if format_of(path) == "modd" and not args.drop_comments \
+                and has_comments(current.decode("utf-8", errors="replace")):
+            print(f"{path}: has comments, which the canonical form does not keep; not "
+                  "rewritten (--drop-comments to rewrite it anyway)", file=sys.stderr)
+            status = 1
+            continue
+        try:
+            write_atomic(path, text)
+        except OSError as exc:
+            print(f"{path}: cannot write ({exc.strerror or exc}); the file is unchanged",
+                  file=sys.stderr)
+            status = 1
+            continue
+        print(f"{path}: reformatted")
     return status
-
-
 
 
 def register_validate(sub: Any) -> None:
     p = sub.add_parser("validate", help="check models; errors with file:line:col on stderr")
     p.add_argument("files", nargs="+", metavar="FILE", help=".modd or .json model")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing for valid files")
+    _encoding_option(p)
     p.set_defaults(func=run_validate)
 
 
 def register_convert(sub: Any) -> None:
     p = sub.add_parser("convert", help="convert a model between .modd and JSON")
     p.add_argument("file", metavar="FILE")
-    p.add_argument("--to", choices=["json", "modd"], required=True)
+    p.add_argument("--to", choices=["json", "modd", "collector"], required=True,
+                   help="collector: the original tool's form (says what it leaves out)")
     p.add_argument("-o", "--output", metavar="OUT", help="output file (default: stdout)")
+    _encoding_option(p)
     p.set_defaults(func=run_convert)
 
 
@@ -83,4 +109,12 @@ def register_fmt(sub: Any) -> None:
     p.add_argument("files", nargs="+", metavar="FILE")
     p.add_argument("--check", action="store_true", help="only report files not in canonical "
                    "form (exit 1)")
+    p.add_argument("--drop-comments", action="store_true",
+                   help="rewrite files that have comments too (the comments are lost)")
+    _encoding_option(p)
     p.set_defaults(func=run_fmt)
+
+
+def _encoding_option(p: Any) -> None:
+    p.add_argument("--encoding", metavar="NAME", help="the file's text encoding (default: "
+                   "UTF-8, or windows-1252 for a file that is not UTF-8)")

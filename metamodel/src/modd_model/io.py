@@ -6,8 +6,11 @@ whose JSON pointer came from text. ``load_model`` raises on errors; the
 
 from __future__ import annotations
 
+import codecs
 import json
+import os
 import sys
+import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal, TextIO
@@ -82,20 +85,99 @@ def load_text(text: str, filename: str = "<text>", fmt: Format = "modd") -> Load
     return LoadResult(doc, word_errors + _locate(checks, smap, lines), smap)
 
 
-def load_file(path: str | Path) -> LoadResult:
+#: Largest model file read (a legal model is far smaller; see docs/dsl.md).
+MAX_FILE_BYTES = 16 * 1024 * 1024
+_BOMS = ((codecs.BOM_UTF8, "utf-8-sig"), (codecs.BOM_UTF16_LE, "utf-16"),
+         (codecs.BOM_UTF16_BE, "utf-16"))
+
+
+def decode(data: bytes, filename: str, encoding: str | None = None
+           ) -> tuple[str | None, list[Diagnostic]]:
+    """The text of a model file, and a note on how it was decoded.
+
+    With ``encoding`` given, exactly that (an undecodable byte is an error with
+    its line and column). Otherwise a byte-order mark decides, then UTF-8; a
+    file that is not UTF-8 is read as windows-1252, the default of Eclipse on
+    many installations, where the original tool's files were written (a
+    warning says so)."""
+    if encoding is None:
+        for bom, enc in _BOMS:
+            if data.startswith(bom):
+                return decode(data, filename, enc)
+        try:
+            return data.decode("utf-8"), []
+        except UnicodeDecodeError:
+            text = data.decode("cp1252", errors=_LATIN1_FALLBACK)
+            note = Diagnostic("not UTF-8: read as windows-1252 (choose another encoding "
+                              "with --encoding)", "", "warning", Location(filename, 1, 1))
+            return text, [note]
+    try:
+        return data.decode(encoding), []
+    except LookupError:
+        return None, [Diagnostic(f"unknown encoding {encoding!r}", "", "error",
+                                 Location(filename, 0, 0))]
+    except UnicodeDecodeError as exc:
+        head = data[:exc.start]
+        line = head.count(b"\n") + 1
+        col = exc.start - (head.rfind(b"\n") + 1) + 1
+        return None, [Diagnostic(f"byte 0x{data[exc.start]:02x} is not valid {encoding}",
+                                 "", "error", Location(filename, line, col))]
+
+
+def _latin1(exc: UnicodeError) -> tuple[str, int]:
+    # cp1252 leaves five bytes undefined; Latin-1 gives them a meaning.
+    assert isinstance(exc, UnicodeDecodeError)
+    return exc.object[exc.start:exc.end].decode("latin-1"), exc.end
+
+
+_LATIN1_FALLBACK = "modd-latin1"
+codecs.register_error(_LATIN1_FALLBACK, _latin1)
+
+
+def load_file(path: str | Path, encoding: str | None = None) -> LoadResult:
+    """Load a model file (.modd, .collector or .json) in any encoding ``decode`` reads."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        return LoadResult(None, [Diagnostic(f"cannot read {p}: {exc}")], {})
-    return load_text(text, str(path), format_of(p))
+        with p.open("rb") as f:
+            data = f.read(MAX_FILE_BYTES + 1)
+    except OSError as exc:
+        return LoadResult(None, [Diagnostic(f"cannot read {p}: {exc.strerror or exc}")], {})
+    if len(data) > MAX_FILE_BYTES:
+        return LoadResult(None, [Diagnostic(f"{p} is larger than {MAX_FILE_BYTES} bytes",
+                                            "", "error", Location(str(path), 0, 0))], {})
+    text, notes = decode(data, str(path), encoding)
+    if text is None:
+        return LoadResult(None, notes, {})
+    result = load_text(text, str(path), format_of(p))
+    result.diagnostics[:0] = notes
+    return result
+
+
+def write_atomic(path: str | Path, text: str) -> None:
+    """Replace ``path`` with ``text`` or leave it untouched: write a temporary
+    file beside it, fsync, rename over it. On any error (a full disk) the
+    temporary file is removed and the original is as it was."""
+    p = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent or ".")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        if p.exists():
+            os.chmod(tmp, p.stat().st_mode & 0o7777)
+        os.replace(tmp, p)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 def load_or_report(path: str | Path, *, quiet_warnings: bool = False,
-                   out: TextIO | None = None) -> dict[str, Any] | None:
+                   out: TextIO | None = None, encoding: str | None = None
+                   ) -> dict[str, Any] | None:
     """The valid model of a file, or None; every diagnostic goes to ``out``
     (stderr), as each command-line tool reports a model it was given."""
-    result = load_file(path)
+    result = load_file(path, encoding)
     for d in result.diagnostics:
         if not (quiet_warnings and d.severity == "warning"):
             print(d, file=out or sys.stderr)

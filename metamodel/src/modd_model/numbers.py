@@ -8,6 +8,11 @@ from decimal import Decimal, InvalidOperation
 from fractions import Fraction
 
 _DECIMAL = re.compile(r"^(?:\d+(?:\.\d*)?|\.\d+)$")
+# What the text form accepts: a decimal literal, optionally with an exponent
+# (4.0E-2, as Xtext's EDouble writes it). \Z, not $: no trailing newline.
+_LITERAL = re.compile(r"(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\Z")
+#: Longest canonical decimal accepted: bounds what an exponent can blow up to.
+MAX_DECIMAL_CHARS = 40
 
 #: Periods are resolved to the microsecond on the link (docs/protocol.md).
 MICROS_PER_SECOND = 1_000_000
@@ -24,14 +29,21 @@ def canonical_decimal(text: str) -> str:
 
     >>> canonical_decimal(".5"), canonical_decimal("2"), canonical_decimal("0.250")
     ('0.5', '2.0', '0.25')
+    >>> canonical_decimal("4.0E-2")
+    '0.04'
     """
-    if not is_decimal(text):
+    if not _LITERAL.match(text):
         raise ValueError(f"not a decimal number: {text!r}")
     try:
         d = Decimal(text)
     except InvalidOperation as exc:  # pragma: no cover - the regex already vetted it
         raise ValueError(f"not a decimal number: {text!r}") from exc
+    # Decide on the exponent before formatting: 1e999999999 must not be expanded.
+    if d != 0 and not -MAX_DECIMAL_CHARS < d.adjusted() < MAX_DECIMAL_CHARS:
+        raise ValueError(f"number {text} is out of range")
     s = format(d.normalize(), "f") if d != 0 else "0"
+    if len(s) > MAX_DECIMAL_CHARS:
+        raise ValueError(f"number {text} has more than {MAX_DECIMAL_CHARS} digits")
     if "." not in s:
         s += ".0"
     return s

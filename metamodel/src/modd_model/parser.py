@@ -74,10 +74,20 @@ def parse_lenient(text: str, filename: str = "<text>"
     try:
         tree = _parser().parse(text)
     except UnexpectedInput as exc:
-        return None, {}, [_syntax_diagnostic(exc, filename, lines)]
+        diagnostic = _syntax_diagnostic(exc, filename, lines)
+        return None, {}, [_runaway_string(text, diagnostic, lines) or diagnostic]
     builder = _Builder(filename, lines)
     doc = builder.build(tree)
     return doc, builder.source_map, builder.diagnostics
+
+
+def has_comments(text: str) -> bool:
+    """True when ``text`` holds a // or /* */ comment (outside strings)."""
+    try:
+        return any(tok.type in ("LINE_COMMENT", "BLOCK_COMMENT")
+                   for tok in _parser().lex(text, dont_ignore=True))
+    except UnexpectedInput:
+        return "//" in text or "/*" in text
 
 
 def _describe_expected(expected: set[str]) -> str:
@@ -94,6 +104,29 @@ def _describe_expected(expected: set[str]) -> str:
     if len(names) == 1:
         return names[0]
     return ", ".join(names[:-1]) + " or " + names[-1]
+
+
+def _runaway_string(text: str, error: Diagnostic, lines: list[str]) -> Diagnostic | None:
+    """Strings may span lines (as in Xtext), so a missing closing quote shows up
+    lines later; point at the string that ran over a line end instead."""
+    assert error.location is not None
+    err_line, suspect = error.location.line, None
+    try:
+        for tok in _parser().lex(text):
+            if (tok.line or 0) >= err_line:
+                break
+            if tok.type == "STRING" and "\n" in str(tok):
+                suspect = tok
+    except UnexpectedInput:
+        pass
+    if suspect is None or suspect.end_line != err_line:
+        return None
+    line, col = suspect.line or 1, suspect.column or 1
+    src = lines[line - 1] if 0 < line <= len(lines) else None
+    return Diagnostic(f"the string that starts here runs over the end of its line and on to "
+                      f"line {suspect.end_line}, where the syntax error is ({error.message}); "
+                      f"is a closing quote missing?", "", "error",
+                      Location(error.location.file, line, col), src)
 
 
 def _syntax_diagnostic(exc: UnexpectedInput, filename: str, lines: list[str]) -> Diagnostic:
@@ -119,7 +152,14 @@ def _syntax_diagnostic(exc: UnexpectedInput, filename: str, lines: list[str]) ->
     return Diagnostic(message, "", "error", Location(filename, line, col), src)
 
 
+_ESCAPES = {"n": "\n", "t": "\t", "r": "\r", "b": "\b", "f": "\f"}
+_HEX = frozenset("0123456789abcdefABCDEF")
+
+
 def _unquote(token: Token) -> str:
+    """The value of a string literal in either quote style, with the escapes of
+    Xtext's STRING (\\n \\t \\r \\b \\f \\uXXXX, and any other escaped character
+    standing for itself)."""
     body = str(token)[1:-1]
     out: list[str] = []
     i = 0
@@ -127,12 +167,30 @@ def _unquote(token: Token) -> str:
         c = body[i]
         if c == "\\" and i + 1 < len(body):
             nxt = body[i + 1]
-            out.append({"n": "\n", "t": "\t"}.get(nxt, nxt))
+            if nxt == "u" and len(body) >= i + 6 and set(body[i + 2:i + 6]) <= _HEX:
+                out.append(chr(int(body[i + 2:i + 6], 16)))
+                i += 6
+                continue
+            out.append(_ESCAPES.get(nxt, nxt))
             i += 2
         else:
             out.append(c)
             i += 1
     return "".join(out)
+
+
+def _word(token: Token) -> str:
+    """A name written as an identifier (``^`` escape removed) or as a string."""
+    if token.type == "STRING":
+        return _unquote(token)
+    return str(token).removeprefix("^")
+
+
+def _topic(node: Token | Tree[Token]) -> str:
+    """A topic written as a string or as a bare qualified name."""
+    if isinstance(node, Token):
+        return _unquote(node)
+    return ".".join(_word(t) for t in node.children if isinstance(t, Token))
 
 
 class _Builder:
@@ -163,8 +221,12 @@ class _Builder:
         src = self.lines[loc.line - 1] if 0 < loc.line <= len(self.lines) else None
         self.diagnostics.append(Diagnostic(message, pointer, "error", loc, src))
 
-    def _decimal(self, token: Token) -> str:
-        return canonical_decimal(str(token))
+    def _decimal(self, token: Token, pointer: str = "") -> str:
+        try:
+            return canonical_decimal(str(token))
+        except ValueError as exc:
+            self._error(token, str(exc), pointer)
+            return "0.0"
 
     def _int(self, token: Token, pointer: str) -> int:
         text = str(token)
@@ -215,7 +277,8 @@ class _Builder:
 
     def _drone(self, node: Tree[Token]) -> dict[str, Any]:
         name, rest = node.children[0], node.children[1:]
-        drone: dict[str, Any] = {"name": str(name)}
+        assert isinstance(name, Token)
+        drone: dict[str, Any] = {"name": _word(name)}
         self._mark("/drone", node)
         self._mark("/drone/name", name)
         sensors: list[dict[str, Any]] = []
@@ -233,7 +296,7 @@ class _Builder:
     def _sensor(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
         name = node.children[0]
         assert isinstance(name, Token)
-        sensor: dict[str, Any] = {"name": str(name)}
+        sensor: dict[str, Any] = {"name": _word(name)}
         self._mark(ptr, node)
         self._mark(ptr + "/name", name)
         variables: list[dict[str, Any]] = []
@@ -270,7 +333,7 @@ class _Builder:
                 self._error(unit_tok, f"unknown unit {unit!r}; known units are "
                             f"{', '.join(KNOWN_UNITS)}; write other units in quotes, "
                             f"e.g. \"mS/cm\"", ptr + "/unit")
-        var: dict[str, Any] = {"name": str(name), "unit": unit}
+        var: dict[str, Any] = {"name": _word(name), "unit": unit}
         for child in rest:
             if isinstance(child, Token):
                 self._mark(ptr + "/type", child)
@@ -301,18 +364,23 @@ class _Builder:
         self._mark(ptr, node)
         self._mark(ptr + "/host", host)
         self._mark(ptr + "/port", port)
-        return {"host": _unquote(host), "port": self._int(port, ptr + "/port")}
+        return {"host": _word(host), "port": self._int(port, ptr + "/port")}
 
     def _broker(self, node: Tree[Token], ptr: str, path_key: str) -> dict[str, Any]:
         broker: dict[str, Any] = {}
         self._mark(ptr, node)
         for child in node.children:
-            if isinstance(child, Token) and child.type == "NAME":
-                broker["name"] = str(child)
-                self._mark(ptr + "/name", child)
-            elif isinstance(child, Token):
-                broker[path_key] = _unquote(child)
-                self._mark(f"{ptr}/{path_key}", child)
+            assert isinstance(child, Tree)
+            if child.data == "broker_name":
+                tok = child.children[0]
+                assert isinstance(tok, Token)
+                broker["name"] = _word(tok)
+                self._mark(ptr + "/name", tok)
+            elif child.data == "path":
+                tok = child.children[0]
+                assert isinstance(tok, Token)
+                broker[path_key] = _word(tok)
+                self._mark(f"{ptr}/{path_key}", tok)
             elif child.data == "endpoint":
                 broker["endpoint"] = self._endpoint(child, ptr + "/endpoint")
             elif ptr == "/pubBroker":
@@ -366,17 +434,17 @@ class _Builder:
         assert isinstance(name, Token)
         self._mark(ptr, node)
         self._mark(ptr + "/name", name)
-        pub: dict[str, Any] = {"name": str(name)}
+        pub: dict[str, Any] = {"name": _word(name)}
         topics: list[str] = []
         for child in node.children[1:]:
-            if isinstance(child, Tree):
+            if isinstance(child, Tree) and child.data == "endpoint":
                 pub["endpoint"] = self._endpoint(child, ptr + "/endpoint")
-            elif child.type == "NUMBER":
-                pub["periodS"] = self._decimal(child)
+            elif isinstance(child, Token) and child.type == "NUMBER":
+                pub["periodS"] = self._decimal(child, ptr + "/periodS")
                 self._mark(ptr + "/periodS", child)
             else:
                 self._mark(f"{ptr}/topics/{len(topics)}", child)
-                topics.append(_unquote(child))
+                topics.append(_topic(child))
         pub["topics"] = topics
         return pub
 
@@ -386,15 +454,15 @@ class _Builder:
         assert isinstance(name, Token)
         self._mark(ptr, node)
         self._mark(ptr + "/name", name)
-        sub: dict[str, Any] = {"name": str(name)}
+        sub: dict[str, Any] = {"name": _word(name)}
         for child in node.children[1:]:
-            if isinstance(child, Tree):
+            if isinstance(child, Tree) and child.data == "endpoint":
                 sub["endpoint"] = self._endpoint(child, ptr + "/endpoint")
-            elif child.type == "STRING":
-                sub["topic"] = _unquote(child)
+            elif isinstance(child, Tree) or child.type == "STRING":
+                sub["topic"] = _topic(child)
                 self._mark(ptr + "/topic", child)
             elif child.type == "NUMBER":
-                sub["periodS"] = self._decimal(child)
+                sub["periodS"] = self._decimal(child, ptr + "/periodS")
                 self._mark(ptr + "/periodS", child)
             else:
                 self._mark(ptr + "/aggregation", child)

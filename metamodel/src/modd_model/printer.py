@@ -13,14 +13,27 @@ from .parser import INGRESS_SETTINGS, LINK_SETTINGS
 from .vocabulary import KNOWN_UNITS
 
 INDENT = "    "
+#: Words of the grammar: a name spelled like one is written ^-escaped (^Sensor).
+KEYWORDS = frozenset({"DataCollector", "Drone", "Sensors", "Sensor", "measures", "kind", "from",
+                      "scale", "offset", "PubBroker", "SubBroker", "Link", "Publishers",
+                      "Publisher", "Subscriptions", "Subscriber"})
+
+
+def name(text: str) -> str:
+    """A name as the grammar reads it back: bare, ^-escaped if it is a keyword."""
+    return "^" + text if text in KEYWORDS else text
+
+
+_QUOTE_ESCAPES = str.maketrans({"\\": "\\\\", '"': '\\"', "\n": "\\n", "\t": "\\t",
+                                "\r": "\\r", "\b": "\\b", "\f": "\\f"})
 
 
 def quote(text: str) -> str:
-    escaped = text.replace("\\", "\\\\").replace('"', '\\"')
-    return '"' + escaped.replace("\n", "\\n").replace("\t", "\\t") + '"'
+    """A string literal the parser reads back as ``text``."""
+    return '"' + text.translate(_QUOTE_ESCAPES) + '"'
 
 
-def _endpoint(ep: dict[str, Any]) -> str:
+def endpoint(ep: dict[str, Any]) -> str:
     return f'{quote(ep["host"])}:{ep["port"]}'
 
 
@@ -49,23 +62,23 @@ def _settings(values: dict[str, Any], known: dict[str, tuple[str, str]], depth: 
 
 
 def _drone(drone: dict[str, Any]) -> list[str]:
-    out = [f"Drone {drone['name']}{_description(drone)} {{", f"{INDENT}Sensors {{"]
+    out = [f"Drone {name(drone['name'])}{_description(drone)} {{", f"{INDENT}Sensors {{"]
     for s in drone["sensors"]:
         kind = f" kind {s['kind']}" if "kind" in s else ""
-        out.append(f"{INDENT * 2}Sensor {s['name']}{_description(s)}{kind} measures {{")
+        out.append(f"{INDENT * 2}Sensor {name(s['name'])}{_description(s)}{kind} measures {{")
         for v in s["variables"]:
             unit = v["unit"] if v["unit"] in KNOWN_UNITS else quote(v["unit"])
             vtype = f", {v['type']}" if "type" in v else ""
             source = _source(v["source"]) if "source" in v else ""
-            out.append(f"{INDENT * 3}{v['name']}({unit}{vtype}){_description(v)}{source};")
+            out.append(f"{INDENT * 3}{name(v['name'])}({unit}{vtype}){_description(v)}{source};")
         out.append(f"{INDENT * 2}}}")
     out += [f"{INDENT}}}", "}"]
     return out
 
 
 def _broker(word: str, broker: dict[str, Any], path_key: str) -> list[str]:
-    name = f" {broker['name']}" if "name" in broker else ""
-    head = f"{word}{name}({_endpoint(broker['endpoint'])}, {quote(broker[path_key])})"
+    label = f" {name(broker['name'])}" if "name" in broker else ""
+    head = f"{word}{label}({endpoint(broker['endpoint'])}, {quote(broker[path_key])})"
     ingress = broker.get("ingress")
     if ingress is None:
         return [head + ";"]
@@ -82,15 +95,15 @@ def print_model(doc: dict[str, Any]) -> str:
         out += ["Link {", *_settings(doc["link"], LINK_SETTINGS, 0), "}"]
     out.append("Publishers {")
     for p in doc["publishers"]:
-        args = [_endpoint(p["endpoint"])] if "endpoint" in p else []
+        args = [endpoint(p["endpoint"])] if "endpoint" in p else []
         args.append(p["periodS"])
         args += [quote(t) for t in p["topics"]]
-        out.append(f"{INDENT}Publisher {p['name']}({', '.join(args)});")
+        out.append(f"{INDENT}Publisher {name(p['name'])}({', '.join(args)});")
     out.append("}")
     out.append("Subscriptions {")
     for s in doc["subscribers"]:
-        args = [_endpoint(s["endpoint"])] if "endpoint" in s else []
+        args = [endpoint(s["endpoint"])] if "endpoint" in s else []
         args += [quote(s["topic"]), s["periodS"], s["aggregation"]]
-        out.append(f"{INDENT}Subscriber {s['name']}({', '.join(args)});")
+        out.append(f"{INDENT}Subscriber {name(s['name'])}({', '.join(args)});")
     out.append("}")
     return "\n".join(out) + "\n"

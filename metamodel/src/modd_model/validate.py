@@ -98,9 +98,12 @@ def unique_names(doc: dict[str, Any]) -> Iterator[Diagnostic]:
         yield from _duplicates(
             [(v["name"], f"/drone/sensors/{i}/variables/{j}/name")
              for j, v in enumerate(s["variables"])], f"variable of sensor {s['name']!r}")
-    clients = [(p["name"], f"/publishers/{i}/name") for i, p in enumerate(doc["publishers"])]
-    clients += [(s["name"], f"/subscribers/{i}/name") for i, s in enumerate(doc["subscribers"])]
-    yield from _duplicates(clients, "publisher or subscriber")
+    # Publishers and subscribers are two name spaces (as in the original tool):
+    # their generated files, diagram nodes and zenoh keys never meet.
+    yield from _duplicates([(p["name"], f"/publishers/{i}/name")
+                            for i, p in enumerate(doc["publishers"])], "publisher")
+    yield from _duplicates([(s["name"], f"/subscribers/{i}/name")
+                            for i, s in enumerate(doc["subscribers"])], "subscriber")
 
 
 def _declared_topics(doc: dict[str, Any]) -> dict[str, dict[str, Any]]:
@@ -127,8 +130,11 @@ def references_resolve(doc: dict[str, Any]) -> Iterator[Diagnostic]:
             if t not in declared:
                 yield _unknown_topic(t, doc, ptr)
             elif t in publisher_of:
-                yield Diagnostic(f"topic {t!r} is already published by {publisher_of[t]!r}; "
-                                 "a topic has one publisher", ptr)
+                # Runnable (the broker archives both), but the planner sizes the
+                # buffer for the first publisher's period: say so.
+                yield Diagnostic(f"topic {t!r} is also published by {publisher_of[t]!r}; "
+                                 "buffer sizes are planned for the first publisher's "
+                                 "period only", ptr, "warning")
             else:
                 publisher_of[t] = pub["name"]
     for i, sub in enumerate(doc["subscribers"]):
@@ -207,29 +213,44 @@ def mavlink_sources(doc: dict[str, Any]) -> Iterator[Diagnostic]:
                                  ptr + "/source/scale")
 
 
-def _endpoints(doc: dict[str, Any]) -> Iterator[tuple[str, int, str]]:
+def _endpoints(doc: dict[str, Any]) -> Iterator[tuple[str, int, str, str]]:
+    """(host, port, pointer, kind) of every endpoint; kind is ``listener`` for
+    the sockets a broker binds, else ``publishers`` or ``subscribers``."""
     for key in ("pubBroker", "subBroker"):
         ep = doc[key]["endpoint"]
-        yield ep["host"], ep["port"], f"/{key}/endpoint"
+        yield ep["host"], ep["port"], f"/{key}/endpoint", "listener"
     ingress = doc["pubBroker"].get("ingress", {})
     if "tcpPort" in ingress:
         host = doc["pubBroker"]["endpoint"]["host"]
-        yield host, ingress["tcpPort"], "/pubBroker/ingress/tcpPort"
+        yield host, ingress["tcpPort"], "/pubBroker/ingress/tcpPort", "listener"
     for kind in ("publishers", "subscribers"):
         for i, item in enumerate(doc[kind]):
             if "endpoint" in item:
-                yield item["endpoint"]["host"], item["endpoint"]["port"], f"/{kind}/{i}/endpoint"
+                ep = item["endpoint"]
+                yield ep["host"], ep["port"], f"/{kind}/{i}/endpoint", kind
 
 
 @check
 def endpoints_distinct(doc: dict[str, Any]) -> Iterator[Diagnostic]:
-    first: dict[tuple[str, int], str] = {}
-    for host, port, ptr in _endpoints(doc):
+    """Two brokers' sockets on one endpoint cannot both be bound: an error.
+    The original tool allows the rest and so do we, with a warning: a
+    publisher's endpoint names the machine it runs on (it connects to the
+    ingress, it binds nothing), and subscribers sharing an endpoint share
+    one receiving program (each delivered value names its subscriber)."""
+    first: dict[tuple[str, int], tuple[str, str]] = {}
+    for host, port, ptr, kind in _endpoints(doc):
         key = (host.lower(), port)
-        if key in first:
-            yield Diagnostic(f"endpoint {host}:{port} is already used by {first[key]}", ptr)
+        if key not in first:
+            first[key] = (ptr, kind)
+            continue
+        other, other_kind = first[key]
+        if kind == "listener" or (other_kind == "listener" and kind == "subscribers"):
+            yield Diagnostic(f"endpoint {host}:{port} is already used by {other}", ptr)
+        elif kind == "subscribers" and other_kind == "subscribers":
+            yield Diagnostic(f"endpoint {host}:{port} is shared with {other}: one program "
+                             "must receive both subscriptions there", ptr, "warning")
         else:
-            first[key] = ptr
+            yield Diagnostic(f"endpoint {host}:{port} is also used by {other}", ptr, "warning")
 
 
 @check

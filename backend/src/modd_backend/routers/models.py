@@ -1,14 +1,15 @@
 """A project's model: read any revision, save a new one on top of the head
 (409 when stale, 403 when a changed part is another role's), list versions,
-export as .modd or JSON, validate without saving."""
+export as .modd, JSON or the original tool's .collector form, validate without saving."""
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Depends, Query
 from fastapi.responses import Response
 from modd_model import dumps
+from modd_model.collector import print_collector
 from pydantic import BaseModel, Field
 from sqlalchemy import select
 
@@ -91,12 +92,18 @@ def list_versions(project_id: Id, db: DbDep, _user: UserDep) -> list[VersionOut]
                422: {"description": "an invalid revision cannot be printed as .modd"}},
 )
 def export_model(
-    project_id: Id, db: DbDep, _user: UserDep, format: Format = "modd", revision: Revision = None
+    project_id: Id, db: DbDep, _user: UserDep,
+    format: Format | Literal["collector"] = "modd", revision: Revision = None
 ) -> Response:
-    """The model as a file: canonical .modd text or JSON (layout kept in JSON only)."""
+    """The model as a file: canonical .modd text, JSON (layout kept in JSON only)
+    or the original MoDD tool's .collector form, which opens with a comment per
+    thing that form cannot hold."""
     version = get_version(db, project_id, revision)
     try:
-        text = dumps(model_of(version), format)
+        if format == "collector":
+            text = print_collector(model_of(version), note_omissions=True)[0]
+        else:
+            text = dumps(model_of(version), format)
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise ApiError(
             422, f"revision {version.revision} is not valid enough to print as .modd: {exc!r}"

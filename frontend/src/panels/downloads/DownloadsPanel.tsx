@@ -54,6 +54,11 @@ export default function DownloadsPanel() {
           <button onClick={() => void get("json", `${project.name}-r${revision}.json`, () => api.exportModel(project.id, "json"))}>Download the model (JSON, with layout)</button>
           {status.json && <span role="status"> — {status.json}</span>}
         </li>
+        <li>
+          <button onClick={() => void get("collector", `${project.name}-r${revision}.collector`, () => api.exportModel(project.id, "collector"))}>Download for the original MoDD tool (.collector)</button>
+          <span className="muted"> opens with a comment per thing that form cannot hold</span>
+          {status.collector && <span role="status"> — {status.collector}</span>}
+        </li>
       </ul>
     </div>
   );
