@@ -82,6 +82,21 @@ def test_lexical_forms_of_the_original_grammar() -> None:
     assert m["subscribers"][0]["endpoint"]["host"] == "127.0.0.1"
 
 
+def test_short_topic_references_resolve_when_unambiguous() -> None:
+    text = (DATA / "original_example.collector").read_text().replace(
+        '"usv.thermometer.temperature", 4.0E0', "temperature, 4.0E0").replace(
+        '"usv.accelerometer.accel_z", .25', "'accelerometer.accel_z', .25")
+    m = load_text(text, "short.collector").model
+    assert m is not None
+    assert m["subscribers"][2]["topic"] == "usv.thermometer.temperature"
+    assert m["subscribers"][1]["topic"] == "usv.accelerometer.accel_z"
+    # a short name two sensors share stays as written: an unknown topic, located
+    both = text.replace("temperature(DEGREE_CELSIUS);",
+                        "temperature(DEGREE_CELSIUS); accel_x(NONE);")
+    twice = load_text(both.replace('"usv.accelerometer.accel_x", 2.0', "accel_x, 2.0"), "x")
+    assert any("unknown topic 'accel_x'" in d.message for d in twice.errors)
+
+
 def test_string_escapes_and_newlines() -> None:
     text = (DATA / "lexical_forms.collector").read_text().replace(
         "'logs'", "'lo\\tgs\\u00e9\\'\nnext'")
@@ -225,12 +240,12 @@ def test_convert_to_collector_cli(tmp_path: Path) -> None:
     demo = Path(__file__).parents[1] / "examples" / "demo.modd"
     out = tmp_path / "demo.collector"
     res = subprocess.run([*MODD, "convert", str(demo), "--to", "collector", "-o", str(out)],
-                         capture_output=True, text=True, timeout=60)
+                         capture_output=True, text=True, timeout=180)
     assert res.returncode == 0, res.stderr
     assert "left out of the .collector form" in res.stderr
     assert load_file(out).ok
     back = subprocess.run([*MODD, "convert", str(out), "--to", "modd"],
-                          capture_output=True, text=True, timeout=60)
+                          capture_output=True, text=True, timeout=180)
     assert back.returncode == 0 and back.stdout.startswith("Drone ")
 
 
@@ -239,8 +254,8 @@ def test_validate_with_encoding_option(tmp_path: Path) -> None:
     f.write_bytes(("// é\n" + (DATA / "original_example.collector").read_text())
                   .encode("latin-1"))
     res = subprocess.run([*MODD, "validate", "--encoding", "utf-8", str(f)],
-                         capture_output=True, text=True, timeout=60)
+                         capture_output=True, text=True, timeout=180)
     assert res.returncode == 1 and f"{f}:1:4: error: byte 0xe9" in res.stderr
     ok = subprocess.run([*MODD, "validate", "--encoding", "latin-1", str(f)],
-                        capture_output=True, text=True, timeout=60)
+                        capture_output=True, text=True, timeout=180)
     assert ok.returncode == 0, ok.stderr

@@ -55,7 +55,7 @@ CASES = [
     ("unknown-topic-pub", '"usv.imu.ay", "usv.imu.flag"', '"usv.imu.ay", "usv.imu.gz"',
      "unknown topic 'usv.imu.gz'", 13),
     ("wrong-drone-prefix", '"usv.imu.ax", 2.0', '"auv.imu.ax", 2.0', "start with 'usv.'", 16),
-    ("malformed-topic-name", '"usv.imu.ax", 2.0', '"imu.ax", 2.0', "not well-formed", 16),
+    ("malformed-topic-name", '"usv.imu.ax", 2.0', '"usv.imu", 2.0', "not well-formed", 16),
     ("duplicate-sensor", "    }\n}\nPubBroker",
      "        Sensor imu measures { gx(RADIAN); }\n    }\n}\nPubBroker", "sensor 'imu'", 8),
     ("duplicate-variable", "ay(METER_PER_SECOND_SQUARED);", "ax(METER_PER_SECOND_SQUARED);",

@@ -68,6 +68,35 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       await expectVisible(page.getByRole("heading", { name: "MoDD projects" }));
     }],
 
+    ["import a model of the original tool (.collector, windows-1252)", async () => {
+      const original = [
+        "// Mission de température – essai à 25 °C (saved by Eclipse in windows-1252)",
+        "DataCollector {",
+        "    Drone 'boat' { Sensors { Sensor \"imu\" measures { ax(METER_PER_SECOND_SQUARED); } } }",
+        "    PubBroker broker(localhost:7171, '/logs');",
+        "    SubBroker base(\"127.0.0.1\":7272, \"/conf\");",
+        "    Publishers { Publisher imu(\"127.0.0.1\":7171, 4.0E-2, \"boat.imu.ax\") }",
+        "    Subscriptions {",
+        "        Subscriber a(\"127.0.0.1\":7401, \"boat.imu.ax\", 2.0, AVERAGE)",
+        "        Subscriber b(\"127.0.0.1\":7401, \"boat.imu.ax\", .25, MAX)",
+        "    }",
+        "}",
+      ].join("\n");
+      // windows-1252 bytes: é=0xe9, –=0x96, à=0xe0, °=0xb0
+      const cp1252 = (text) => Buffer.from([...text].map((c) => ({ "–": 0x96 })[c] ?? c.charCodeAt(0)));
+      const input = page.locator('input[type="file"]');
+      // a syntax error: listed under the import with its line
+      await input.setInputFiles({ name: "original.collector", mimeType: "text/plain", buffer: cp1252(original.replace(".25, MAX)", ".25 MAX)")) });
+      await expectText(page.getByRole("list", { name: "Import problems" }), /line 9:\d+: error: unexpected 'MAX'/);
+      await expectText(page.getByRole("status").filter({ hasText: "windows-1252" }), /not UTF-8/);
+      // the file as the original tool wrote it: opens; the shared endpoint is a warning on its node
+      await input.setInputFiles({ name: "original.collector", mimeType: "text/plain", buffer: cp1252(original) });
+      await expectVisible(node("drone"));
+      await expectVisible(node("sub:b").locator(".marker-warning"));
+      await page.getByRole("button", { name: "MoDD", exact: true }).click();
+      await expectVisible(page.getByRole("heading", { name: "MoDD projects" }));
+    }],
+
     ["create an empty project", async () => {
       await page.getByLabel("Project name").fill("scenario1");
       await page.getByLabel("Drone name").fill("usv");

@@ -273,6 +273,7 @@ class _Builder:
                 self._error(tree, f"the model has no {_BLOCK_WORD[kind]} block")
         doc["publishers"] = publishers
         doc["subscribers"] = subscribers
+        _qualify_topics(doc)
         return _ordered(doc)
 
     def _drone(self, node: Tree[Token]) -> dict[str, Any]:
@@ -471,6 +472,32 @@ class _Builder:
                                 f"{', '.join(AGGREGATIONS)}", ptr + "/aggregation")
                 sub["aggregation"] = str(child)
         return sub
+
+
+def _qualify_topics(doc: dict[str, Any]) -> None:
+    """Topics written short (``accel_x`` or ``accelerometer.accel_x``, as a
+    reference in the original tool may be) get their full name when exactly
+    one variable of the drone has that name; anything else is left for the
+    validator to report (unknown topic)."""
+    drone = doc.get("drone")
+    if not drone:
+        return
+    by_short: dict[str, list[str]] = {}
+    for sensor in drone.get("sensors", []):
+        for var in sensor.get("variables", []):
+            name = f"{drone['name']}.{sensor['name']}.{var['name']}"
+            by_short.setdefault(var["name"], []).append(name)
+            by_short.setdefault(f"{sensor['name']}.{var['name']}", []).append(name)
+
+    def full(topic: str) -> str:
+        found = by_short.get(topic, []) if topic.count(".") < 2 else []
+        return found[0] if len(found) == 1 else topic
+
+    for pub in doc["publishers"]:
+        pub["topics"] = [full(t) for t in pub.get("topics", [])]
+    for sub in doc["subscribers"]:
+        if "topic" in sub:
+            sub["topic"] = full(sub["topic"])
 
 
 _BLOCK_WORD = {"drone": "Drone", "pubbroker": "PubBroker", "subbroker": "SubBroker",
