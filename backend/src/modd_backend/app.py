@@ -74,9 +74,11 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         settings.data_dir.mkdir(parents=True, exist_ok=True)
-        store = Store.open(settings.effective_database_url)
-        with store.session() as db:
-            ensure_first_admin(db, settings.initial_admin_password, out)
+        def first_start(store: Store) -> None:
+            with store.session() as db:
+                ensure_first_admin(db, settings.initial_admin_password, out)
+
+        store = Store.open(settings.effective_database_url, init=first_start)
         bridge = None
         if settings.zenoh_enabled:
             bridge = ZenohBridge.open(settings.zenoh_connect, settings.zenoh_listen)

@@ -1,6 +1,7 @@
 """``modd-backend``: run the service (loopback unless told otherwise).
 
     modd-backend --host 127.0.0.1 --port 8000 --data ./data
+    modd-backend backup --data ./data FILE     # and restore: see backup.py
 """
 
 from __future__ import annotations
@@ -61,6 +62,11 @@ def _is_loopback(host: str) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
+    args = sys.argv[1:] if argv is None else argv
+    if args and args[0] in ("backup", "restore"):
+        from .backup import main as backup_main
+
+        return backup_main(args)
     import uvicorn
 
     from .app import create_app
