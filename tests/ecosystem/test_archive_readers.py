@@ -192,7 +192,7 @@ def test_info_reports_gaps(tmp_path: Path) -> None:
         cid = w.register_channel("t", "json", sid)
         for t in [0, 10, 20, 30, 1000, 1010]:
             w.add_message(cid, t * 1_000_000, b'{"value":1}', t * 1_000_000)
-        w.finish()
+        w.finish()  # type: ignore[no-untyped-call]
     info = archive_info(path)
     assert info.complete and info.topics["t"].count == 6
     assert info.topics["t"].gaps == [(30_000_000, 1_000_000_000)]

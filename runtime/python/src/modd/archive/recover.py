@@ -62,7 +62,7 @@ def recover(source: str | Path, output: str | Path | None = None,
                 w.add_message(channel_ids[m.channel_id], m.log_time, m.data, m.publish_time,
                               m.sequence)
                 kept += 1
-            w.finish()
+            w.finish()  # type: ignore[no-untyped-call]
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, dst)

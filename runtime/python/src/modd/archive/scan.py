@@ -21,6 +21,10 @@ from mcap.records import Channel, Footer, Message, Schema
 from mcap.stream_reader import StreamReader
 
 
+class TooLarge(ValueError):
+    """More messages than a scan may hold in memory."""
+
+
 @dataclass
 class Scan:
     """What a file holds up to its last complete record.
@@ -54,12 +58,13 @@ def scan_file(path: str | Path, max_messages: int = 50_000_000) -> Scan:
                     out.channels[rec.id] = rec
                 elif isinstance(rec, Message):
                     if len(out.messages) >= max_messages:
-                        raise ValueError(f"{p}: more than {max_messages} messages")
+                        raise TooLarge(f"{p}: more than {max_messages} messages")
                     out.messages.append(rec)
                 elif isinstance(rec, Footer):
                     out.complete = True
+        except TooLarge:
+            raise
         except (McapError, EOFError, struct.error, ValueError) as exc:
-            if isinstance(exc, ValueError) and "more than" in str(exc):
-                raise
-            out.error = f"{p}: readable up to the last complete record; then {exc or type(exc).__name__}"
+            why = str(exc) or type(exc).__name__
+            out.error = f"{p}: readable up to the last complete record; then {why}"
     return out
