@@ -20,6 +20,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from modd_gen.targets.ros2_msgs import window_msg
+
 from .typehash import Field, MessageType, type_hash
 
 TIME = MessageType("builtin_interfaces/msg/Time", (Field("sec", "int32"),
@@ -32,19 +34,8 @@ WINDOW = MessageType("modd_msgs/msg/Window", (
     Field("count", "uint32"),
     Field("aggregation", "string"),
 ))
-#: The .msg text of modd_msgs/msg/Window (the generators emit it).
-WINDOW_MSG = """\
-# One window of a MoDD subscription, as the SubBroker delivers it.
-# Times are the drone's clock; the window is [window_start, window_end).
-builtin_interfaces/Time window_start
-builtin_interfaces/Time window_end
-# The aggregate (MIN, MAX, AVERAGE, ...); NaN when the window had no sample
-# or is not a number (ALL).
-float64 value
-# Samples behind the value (AVERAGE, COUNT, ALL); 0 when not carried.
-uint32 count
-string aggregation
-"""
+#: The .msg text of modd_msgs/msg/Window: the generators' (one source).
+WINDOW_MSG = window_msg()
 
 FLOAT64_HASH = type_hash(FLOAT64)
 WINDOW_HASH = type_hash(WINDOW, [TIME])
