@@ -109,13 +109,21 @@ def test_every_subscriber_live_in_foxglove(backend: tuple[TestClient, int],
     assert not report["errors"], report["errors"]
     received = report["messages"]
     expected = {s["name"] for s in station.model["subscribers"]}
-    got = {t.split("/")[2] for t in received if t.startswith("/usv/") and t != "/usv/link"}
+    got = {t.split("/")[2] for t in received if t.startswith("/usv/")}
+    assert {"link", "position"} <= got
     assert expected <= got, f"no Foxglove values for {sorted(expected - got)}"
     # each Foxglove message is a value delivered on zenoh, field for field
     for topic, msgs in received.items():
         name = topic.split("/")[2]
         if name == "link":
             assert msgs[-1]["msg"]["link"] == "up"
+            continue
+        if name == "position":  # LocationFix from track_lat and track_lon
+            lats = {v["end_ns"]: v["value"] for v in oracle.values["track_lat"]}
+            lons = {v["end_ns"]: v["value"] for v in oracle.values["track_lon"]}
+            for m in msgs:
+                fix, end = m["msg"], int(m["logTime"])
+                assert fix["latitude"] == lats[end] and fix["longitude"] == lons[end], fix
             continue
         delivered = {v["end_ns"]: v for v in oracle.values[name]}
         for m in msgs:

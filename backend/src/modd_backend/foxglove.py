@@ -4,11 +4,13 @@ value of every drone, live.
 
 Channels: ``/<drone>/<subscriber>`` (one per subscriber, JSON, schema
 :data:`WINDOW_SCHEMA`: value, window start/end, sample count, aggregation,
-backfilled mark) and ``/<drone>/link`` (the SubBroker's status: link state,
-RTT, byte rates). A channel is advertised on the first value of its
-subscriber, so deploys and dynamic subscriptions appear by themselves, and
-is withdrawn when the drone's status no longer routes that subscriber (a new
-deploy, a cancelled dynamic subscription).
+backfilled mark), ``/<drone>/link`` (the SubBroker's status: link state,
+RTT, byte rates) and ``/<drone>/position`` (a ``foxglove.LocationFix`` for
+the Map panel, from the latitude/longitude subscriptions). A channel is
+advertised on the first value of its subscriber, so deploys and dynamic
+subscriptions appear by themselves, and is withdrawn when the drone's status
+no longer routes that subscriber (a new deploy, a cancelled dynamic
+subscription).
 
 Contract: :meth:`FoxgloveLive.on_value` and :meth:`FoxgloveLive.on_status`
 are zenoh callbacks: they never block (``channel.log`` queues per client in
@@ -28,6 +30,8 @@ import json
 import logging
 import threading
 from typing import Any
+
+from .scene import position_roles
 
 log = logging.getLogger("modd.foxglove")
 
@@ -56,6 +60,20 @@ WINDOW_SCHEMA: dict[str, Any] = {
         "period_s": {"type": "string"},
         "unit": {"type": "string"},
         "delivered": _TIME,
+    },
+}
+#: foxglove.LocationFix (the Map panel's message), JSON-encoded.
+LOCATION_SCHEMA: dict[str, Any] = {
+    "title": "foxglove.LocationFix",
+    "type": "object",
+    "properties": {
+        "timestamp": _TIME,
+        "frame_id": {"type": "string"},
+        "latitude": {"type": "number"},
+        "longitude": {"type": "number"},
+        "altitude": {"type": "number"},
+        "position_covariance": {"type": "array", "items": {"type": "number"}},
+        "position_covariance_type": {"type": "integer"},
     },
 }
 LINK_SCHEMA: dict[str, Any] = {
@@ -135,6 +153,7 @@ class FoxgloveLive:
         self.host = host
         self.port = self.server.port
         self._channels: dict[str, Any] = {}
+        self._fix: dict[str, dict[str, float]] = {}  # drone -> lat/lon/alt seen last
         self._lock = threading.Lock()
         self.logged = 0
 
@@ -169,6 +188,28 @@ class FoxgloveLive:
         end_ns = int(delivered.get("end_ns") or 0)
         ch.log(msg, log_time=end_ns or None)
         self.logged += 1
+        self._position(parts[1], parts[3], delivered, end_ns)
+
+    def _position(self, drone: str, subscriber: str, delivered: dict[str, Any],
+                  end_ns: int) -> None:
+        """``/<drone>/position`` (LocationFix) from the subscriptions whose
+        topic is a latitude, longitude or altitude (the 3D scene's rule)."""
+        role = position_roles({"subscribers": [
+            {"name": subscriber, "topic": delivered.get("topic", "")}]}).get(subscriber)
+        value = delivered.get("value")
+        if role not in ("lat", "lon", "alt") or isinstance(value, bool) \
+                or not isinstance(value, int | float):
+            return
+        with self._lock:
+            fix = self._fix.setdefault(drone, {})
+            fix[role] = float(value)
+            if role == "alt" or "lat" not in fix or "lon" not in fix:
+                return
+            lat, lon, alt = fix.pop("lat"), fix.pop("lon"), fix.get("alt", 0.0)
+        ch = self._channel(f"/{drone}/position", LOCATION_SCHEMA, "foxglove.LocationFix")
+        ch.log({"timestamp": _time(end_ns), "frame_id": drone, "latitude": lat,
+                "longitude": lon, "altitude": alt, "position_covariance": [0.0] * 9,
+                "position_covariance_type": 0}, log_time=end_ns or None)
 
     def on_status(self, key: str, payload: bytes) -> None:
         """zenoh callback for ``modd/<drone>/status``: the link channel, and
@@ -187,7 +228,7 @@ class FoxgloveLive:
         prefix = f"/{drone}/"
         with self._lock:
             gone = [t for t in self._channels if t.startswith(prefix)
-                    and t != f"/{drone}/link" and t[len(prefix):] not in routed]
+                    and t[len(prefix):] not in routed | {"link", "position"}]
             closing = [self._channels.pop(t) for t in gone]
         for ch in closing:
             ch.close()
