@@ -143,3 +143,19 @@ def test_every_subscriber_live_in_foxglove(backend: tuple[TestClient, int],
     # the dynamic subscription came and went
     assert f"/usv/{dyn}" in received and received[f"/usv/{dyn}"]
     assert f"/usv/{dyn}" in report["unadvertised"]
+
+
+def test_a_taken_port_leaves_the_backend_running(tmp_path: Path) -> None:
+    import socket
+
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        out = io.StringIO()
+        settings = Settings(data_dir=tmp_path, zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
+                            initial_admin_password="pw-12345678", foxglove_port=port)
+        with TestClient(create_app(settings, out=out)) as c:
+            assert c.get("/api/health").status_code == 200
+            assert c.app.state.modd.foxglove is None  # type: ignore[attr-defined]
+        assert f"no Foxglove server on 127.0.0.1:{port}" in out.getvalue()

@@ -69,6 +69,19 @@ def start_scene(settings: Settings, store: Store) -> SceneService:
     return SceneService(SceneServer(settings.host, port), deployed_model)
 
 
+def start_foxglove(settings: Settings, out: TextIO) -> FoxgloveLive | None:
+    """The Foxglove server, or None (said on ``out``) when its port is taken:
+    the workbench runs without it rather than not at all."""
+    try:
+        server = FoxgloveLive(settings.host, settings.foxglove_port)
+    except RuntimeError as exc:  # the SDK's FoxgloveError
+        print(f"modd-backend: no Foxglove server on {settings.host}:{settings.foxglove_port}: "
+              f"{exc}", file=out, flush=True)
+        return None
+    print(f"modd-backend: Foxglove server at {server.url}", file=out, flush=True)
+    return server
+
+
 def subscribe_values(bridge: ZenohBridge, state: AppState) -> list[Undeclarable]:
     """The one place delivered values and statuses of every drone arrive in
     the backend, handed to each consumer (3D scene, Foxglove server)."""
@@ -105,7 +118,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
             if settings.scene_port is not None:
                 app.state.modd.scene = start_scene(settings, store)
             if settings.foxglove_port:
-                app.state.modd.foxglove = FoxgloveLive(settings.host, settings.foxglove_port)
+                app.state.modd.foxglove = start_foxglove(settings, out)
             subs = subscribe_values(bridge, app.state.modd)
         try:
             yield
