@@ -49,7 +49,7 @@ def test_scientist_downloads_the_layout(
         plots = [config[p] for p in _leaves(tab["layout"])]
         names = {s["name"] for s in subs if s["topic"] == tab["title"]}
         assert {p["paths"][0]["value"] for p in plots} == {f"/{drone}/{n}.value" for n in names}
-    assert config[f"Map!{drone}-position"]["followTopic"] == f"/{drone}/position"
+    assert config[f"map!{drone}-position"]["followTopic"] == f"/{drone}/position"
     assert config[f"Table!{drone}-link"]["topicPath"] == f"/{drone}/link"
     assert client.get("/api/projects/999/foxglove-layout", headers=sci).status_code == 404
 

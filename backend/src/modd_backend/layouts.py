@@ -11,7 +11,7 @@ Panel ids and configs follow the layout files Foxglove and Lichtblick export
 >>> lay = foxglove_layout({"drone": {"name": "usv"}, "subscribers": [
 ...     {"name": "s1", "topic": "usv.ctd.temp", "aggregation": "AVERAGE", "periodS": "1"}]})
 >>> sorted(lay["configById"])
-['Map!usv-position', 'Plot!s1', 'Tab!topics', 'Table!usv-link']
+['Plot!s1', 'Tab!topics', 'Table!usv-link', 'map!usv-position']
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ def foxglove_layout(model: dict[str, Any]) -> dict[str, Any]:
             ids.append(pid)
         tabs.append({"title": topic, "layout": _tree(ids)})
     config["Tab!topics"] = {"activeTabIdx": 0, "tabs": tabs}
-    map_id, table_id = f"Map!{drone}-position", f"Table!{drone}-link"
+    map_id, table_id = f"map!{drone}-position", f"Table!{drone}-link"
     config[map_id] = {"center": None, "disabledTopics": [], "followTopic": f"/{drone}/position",
                       "layer": "map", "topicColors": {}, "zoomLevel": 14}
     config[table_id] = {"topicPath": f"/{drone}/link"}
