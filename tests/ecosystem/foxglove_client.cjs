@@ -93,7 +93,7 @@ function main() {
   client.on("message", ({ subscriptionId, timestamp, data }) => {
     const topic = subscriptions.get(subscriptionId);
     const msg = JSON.parse(decoder.decode(data));
-    (report.messages[topic] ||= []).push({ logTime: timestamp.toString(), msg });
+    (report.messages[topic] ||= []).push({ logTime: timestamp.toString(), msg, recvMs: Date.now() });
     report.received += 1;
   });
   if (seek !== null) {

@@ -112,6 +112,13 @@ def test_every_subscriber_live_in_foxglove(backend: tuple[TestClient, int],
     got = {t.split("/")[2] for t in received if t.startswith("/usv/")}
     assert {"link", "position"} <= got
     assert expected <= got, f"no Foxglove values for {sorted(expected - got)}"
+    # latency: SubBroker's put (delivered) to the client's receipt, same machine and clock
+    lat_ms = sorted(m["recvMs"] - (m["msg"]["delivered"]["sec"] * 1e3
+                                   + m["msg"]["delivered"]["nsec"] / 1e6)
+                    for t, msgs in received.items() if t.split("/")[2] not in ("link", "position")
+                    for m in msgs)
+    print(f"foxglove live: {len(lat_ms)} values, SubBroker put -> client: median "
+          f"{lat_ms[len(lat_ms) // 2]:.1f} ms, p95 {lat_ms[int(len(lat_ms) * 0.95)]:.1f} ms")
     # each Foxglove message is a value delivered on zenoh, field for field
     for topic, msgs in received.items():
         name = topic.split("/")[2]
