@@ -166,3 +166,28 @@ def test_a_taken_port_leaves_the_backend_running(tmp_path: Path) -> None:
             assert c.get("/api/health").status_code == 200
             assert c.app.state.modd.foxglove is None  # type: ignore[attr-defined]
         assert f"no Foxglove server on 127.0.0.1:{port}" in out.getvalue()
+
+
+def test_channels_follow_a_new_deploy() -> None:
+    """A deploy that drops a subscriber (its status routes no longer name it)
+    withdraws its channel; a new subscriber's first value advertises one."""
+    from modd_backend.foxglove import FoxgloveLive
+
+    live = FoxgloveLive("127.0.0.1", free_port())
+    try:
+        v = {"v": 1, "value": 1.0, "count": None, "aggregation": "MIN", "start_ns": 0,
+             "end_ns": 250_000_000, "topic": "usv.a.z", "delivered_ns": 1}
+        for name in ("sub_1", "sub_2"):
+            live.on_value(f"modd/usv/sub/{name}", json.dumps(v).encode())
+        live.on_value("modd/usv/sub/bad key", b"not json")
+        assert live.topics() == ["/usv/sub_1", "/usv/sub_2"]
+        status = {"drone": "usv", "link": "up", "time_ns": 5, "routes": {"usv.a.z/MIN/0.25":
+                                                                          ["sub_2"]},
+                  "dynamic": []}
+        live.on_status("modd/usv/status", json.dumps(status).encode())
+        assert live.topics() == ["/usv/link", "/usv/sub_2"]
+        live.on_value("modd/usv/sub/sub_9", json.dumps(v).encode())
+        live.on_status("modd/usv/status", json.dumps({"link": "down"}).encode())  # no routes
+        assert live.topics() == ["/usv/link", "/usv/sub_2", "/usv/sub_9"]
+    finally:
+        live.stop()
