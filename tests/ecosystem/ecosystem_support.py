@@ -25,7 +25,10 @@ def node_json(script: str, *args: str, timeout: float = 60.0) -> Any:
     if node is None or not (NODE_MODULES / "@mcap" / "core").is_dir():
         pytest.skip("node or the frontend's npm packages are missing (run scripts/setup.sh)")
     env = dict(os.environ, NODE_PATH=str(NODE_MODULES))
-    proc = subprocess.run([node, "--experimental-websocket", str(HERE / script), *args],
+    version = subprocess.run([node, "--version"], capture_output=True, text=True, check=True)
+    major = int(version.stdout.strip().lstrip("v").split(".")[0])
+    flags = ["--experimental-websocket"] if major < 22 else []  # global WebSocket from 22 on
+    proc = subprocess.run([node, *flags, str(HERE / script), *args],
                           capture_output=True, text=True, timeout=timeout, env=env, check=False)
     if proc.returncode != 0:
         raise AssertionError(f"{script} failed ({proc.returncode}): {proc.stderr[-2000:]}")
