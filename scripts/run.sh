@@ -4,12 +4,14 @@
 # MAVLink bridge) and the workbench (backend serving the built frontend) on
 # http://127.0.0.1:${MODD_PORT:-8080}/, with the demo project loaded and
 # deployed. Ctrl-C (or SIGTERM) stops everything it started, by PID.
-# Environment: MODEL, MODD_PORT, MODD_ZENOH_PORT, MODD_DATA, MODD_PROJECT.
+# Environment: MODEL, MODD_PORT, MODD_ZENOH_PORT, MODD_DATA, MODD_PROJECT,
+# MODD_FOXGLOVE_PORT (Foxglove/Lichtblick live server, 0: none; docs/ecosystem.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$PWD/.venv/bin:$PATH"
 MODEL="${MODEL:-metamodel/examples/demo.modd}"
 PORT="${MODD_PORT:-8080}"
+FOXGLOVE_PORT="${MODD_FOXGLOVE_PORT:-8765}"
 DATA="${MODD_DATA:-$PWD/data}"
 mkdir -p "$DATA"
 
@@ -46,7 +48,8 @@ modd up "$MODEL" --workdir "$DATA/run" --simulate --zenoh-listen "$ZENOH" &
 pids+=($!)
 
 modd-backend --host 127.0.0.1 --port "$PORT" --data "$DATA/backend" --zenoh-connect "$ZENOH" \
-  --frontend "$PWD/frontend/dist" --archives "$DATA/run/archive" >>"$DATA/backend.log" 2>&1 &
+  --frontend "$PWD/frontend/dist" --archives "$DATA/run/archive" \
+  --foxglove-port "$FOXGLOVE_PORT" >>"$DATA/backend.log" 2>&1 &
 pids+=($!)
 
 URL="http://127.0.0.1:$PORT"
@@ -73,5 +76,8 @@ else
   echo "modd: login 'admin'; its password is in $DATA/backend.log"
 fi
 echo "modd: project '$PROJECT' runs on the simulated drone '$DRONE': archive in $DATA/run/archive, logs in $DATA/run/logs and $DATA/backend.log"
+if [ "$FOXGLOVE_PORT" != 0 ]; then
+  echo "modd: Foxglove/Lichtblick live at ws://127.0.0.1:$FOXGLOVE_PORT (Open connection > Foxglove WebSocket; docs/ecosystem.md)"
+fi
 echo "modd: Ctrl-C to stop"
 wait -n "${pids[@]}" || true

@@ -19,6 +19,7 @@ from .accounts import ensure_first_admin
 from .db import Store
 from .deployments import last_acked
 from .deps import AppState
+from .foxglove import FoxgloveLive
 from .planning import preload_milp
 from .routers import (
     archives,
@@ -37,7 +38,7 @@ from .scene import SceneServer, SceneService
 from .settings import Settings
 from .spa import mount_frontend
 from .versions import get_version, model_of
-from .zbridge import ZenohBridge
+from .zbridge import Undeclarable, ZenohBridge
 
 ROUTERS: tuple[APIRouter, ...] = (
     health.router,
@@ -68,6 +69,35 @@ def start_scene(settings: Settings, store: Store) -> SceneService:
     return SceneService(SceneServer(settings.host, port), deployed_model)
 
 
+def start_foxglove(settings: Settings, out: TextIO) -> FoxgloveLive | None:
+    """The Foxglove server, or None (said on ``out``) when its port is taken:
+    the workbench runs without it rather than not at all."""
+    try:
+        server = FoxgloveLive(settings.host, settings.foxglove_port)
+    except RuntimeError as exc:  # the SDK's FoxgloveError
+        print(f"modd-backend: no Foxglove server on {settings.host}:{settings.foxglove_port}: "
+              f"{exc}", file=out, flush=True)
+        return None
+    print(f"modd-backend: Foxglove server at {server.url}", file=out, flush=True)
+    return server
+
+
+def subscribe_values(bridge: ZenohBridge, state: AppState) -> list[Undeclarable]:
+    """The one place delivered values and statuses of every drone arrive in
+    the backend, handed to each consumer (3D scene, Foxglove server)."""
+    on_value = [c.on_value for c in (state.scene, state.foxglove) if c is not None]
+    subs: list[Undeclarable] = []
+    if on_value:
+        def values(key: str, payload: bytes) -> None:
+            for consumer in on_value:
+                consumer(key, payload)
+
+        subs.append(bridge.subscribe("modd/*/sub/*", values))
+    if state.foxglove is not None:
+        subs.append(bridge.subscribe("modd/*/status", state.foxglove.on_status))
+    return subs
+
+
 def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
     """The service for ``settings``; ``out`` receives the first admin's password."""
 
@@ -85,17 +115,22 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         if settings.preload_milp:
             preload_milp()
         app.state.modd = AppState(settings, store, bridge)
-        scene_sub = None
-        if bridge is not None and settings.scene_port is not None:
-            app.state.modd.scene = start_scene(settings, store)
-            scene_sub = bridge.subscribe("modd/*/sub/*", app.state.modd.scene.on_value)
+        subs = []
+        if bridge is not None:
+            if settings.scene_port is not None:
+                app.state.modd.scene = start_scene(settings, store)
+            if settings.foxglove_port:
+                app.state.modd.foxglove = start_foxglove(settings, out)
+            subs = subscribe_values(bridge, app.state.modd)
         try:
             yield
         finally:
-            if scene_sub is not None:
-                scene_sub.undeclare()
+            for sub in subs:
+                sub.undeclare()
             if app.state.modd.scene is not None:
                 app.state.modd.scene.server.stop()
+            if app.state.modd.foxglove is not None:
+                app.state.modd.foxglove.stop()
             if bridge is not None:
                 bridge.close()
             store.close()

@@ -31,6 +31,9 @@ def parse_args(argv: list[str] | None = None) -> Settings:
     p.add_argument("--deploy-timeout", type=float, default=10.0, help="seconds")
     p.add_argument("--scene-port", type=int, default=0,
                    help="port of the 3D scene (viser); 0: any free port; -1: no scene")
+    p.add_argument("--foxglove-port", type=int, default=8765,
+                   help="port of the Foxglove WebSocket server (live values for Foxglove and "
+                   "Lichtblick, on --host, no authentication: docs/ecosystem.md); 0: none")
     p.add_argument("--admin-password", default=os.environ.get("MODD_ADMIN_PASSWORD"),
                    help="first admin's password (default: $MODD_ADMIN_PASSWORD, else drawn "
                    "and printed)")
@@ -49,6 +52,7 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         initial_admin_password=a.admin_password,
         preload_milp=True,
         scene_port=None if a.scene_port < 0 else a.scene_port,
+        foxglove_port=a.foxglove_port,
     )
 
 
@@ -75,6 +79,9 @@ def main(argv: list[str] | None = None) -> int:
     if not _is_loopback(settings.host):
         print(f"modd-backend: warning: listening on {settings.host}, not loopback",
               file=sys.stderr)
+        if settings.foxglove_port:
+            print("modd-backend: warning: the Foxglove server has no authentication; "
+                  "see docs/ecosystem.md", file=sys.stderr)
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="info")
     return 0
 

@@ -16,6 +16,7 @@ from sqlalchemy.orm import Session as Db
 
 from .accounts import user_for_token
 from .db import Store
+from .foxglove import FoxgloveLive
 from .roles import Role, parse_roles
 from .scene import SceneService
 from .settings import Settings
@@ -29,6 +30,7 @@ class AppState:
     store: Store
     bridge: ZenohBridge | None
     scene: SceneService | None = None
+    foxglove: FoxgloveLive | None = None
 
 
 def get_state(request: Request) -> AppState:

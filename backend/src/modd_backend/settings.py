@@ -42,6 +42,8 @@ class Settings:
     preload_milp: bool = False
     #: Port of the viser 3D scene on ``host``; None: no scene, 0: any free port.
     scene_port: int | None = None
+    #: Port of the Foxglove WebSocket server on ``host`` (docs/ecosystem.md); 0: none.
+    foxglove_port: int = 0
     cors_origins: tuple[str, ...] = field(default_factory=tuple)
 
     @property

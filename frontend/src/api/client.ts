@@ -64,6 +64,9 @@ export function createApi(opts: HttpOptions) {
     downloadUrl: (projectId: number, target: string) => http.url(`/api/projects/${projectId}/downloads/${target}`),
     download: (projectId: number, target: string) =>
       http.request<Blob>(`/api/projects/${projectId}/downloads/${target}`, { as: "blob" }),
+    /** Foxglove/Lichtblick layout for the live mission (scientist): docs/ecosystem.md. */
+    foxgloveLayout: (projectId: number) =>
+      http.request<Blob>(`/api/projects/${projectId}/foxglove-layout`, { as: "blob" }),
 
     // --- live (scientist): dynamic subscriptions; values come over the stream WebSocket
     addDynamic: (drone: string, body: DynamicRequest) =>

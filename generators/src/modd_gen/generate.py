@@ -7,13 +7,13 @@ from typing import Any
 
 from .artifact import Artifact
 from .context import Context, build_context
-from .targets import cpp_driver, pubbroker_config, subbroker_config, subscribers
+from .targets import cpp_driver, pubbroker_config, ros2_msgs, subbroker_config, subscribers
 
 Target = Callable[[Context], list[Artifact]]
 
 #: role -> its targets, in the order they are written
 ROLES: dict[str, list[Target]] = {
-    "integrator": [cpp_driver.artifacts],
+    "integrator": [cpp_driver.artifacts, ros2_msgs.artifacts],
     "operator": [pubbroker_config.artifacts, subbroker_config.artifacts],
     "scientist": [subscribers.artifacts],
 }

@@ -3,6 +3,8 @@ Each role downloads its own target (admin any)."""
 
 from __future__ import annotations
 
+import json
+import re
 from typing import Annotated, Literal
 
 from fastapi import APIRouter, Query
@@ -12,6 +14,7 @@ from modd_model import validate
 from ..deps import DbDep, UserDep, has_role
 from ..downloads import role_zip
 from ..errors import ApiError
+from ..layouts import foxglove_layout
 from ..modelio import diagnostics_json
 from ..roles import Role
 from ..schemas import Id, Responses
@@ -53,3 +56,26 @@ def download(
         raise ApiError(422, f"the generators cannot handle this model: {exc}") from None
     return Response(data, media_type="application/zip",
                     headers={"Content-Disposition": f'attachment; filename="{folder}.zip"'})
+
+
+@router.get("/{project_id}/foxglove-layout", responses={
+    200: {"content": {"application/json": {}}},
+    403: {"description": "not a scientist"}, 404: {"description": "no such project or revision"}})
+def foxglove_layout_download(
+    project_id: Id,
+    db: DbDep,
+    user: UserDep,
+    revision: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
+) -> Response:
+    """A Foxglove/Lichtblick layout for the project's live mission (a plot per
+    subscriber grouped by topic, a map of the position, the link status);
+    docs/ecosystem.md."""
+    if not has_role(user, Role.scientist):
+        raise ApiError(403, "the Foxglove layout is a scientist's download")
+    project = get_project(db, project_id)
+    version = get_version(db, project_id, revision)
+    safe = re.sub(r"[^A-Za-z0-9_.-]", "_", project.name)
+    name = f"{safe}-r{version.revision}-foxglove-layout"
+    body = json.dumps(foxglove_layout(model_of(version)), indent=1).encode()
+    return Response(body, media_type="application/json",
+                    headers={"Content-Disposition": f'attachment; filename="{name}.json"'})

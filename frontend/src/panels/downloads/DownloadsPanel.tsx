@@ -47,6 +47,13 @@ export default function DownloadsPanel() {
           </li>
         ))}
         <li>
+          <button onClick={() => void get("foxglove", `${project.name}-r${revision}-foxglove-layout.json`, () => api.foxgloveLayout(project.id))}>
+            Download the Foxglove layout
+          </button>
+          <span className="muted"> for the Scientist: open it in Foxglove or Lichtblick against the base station's Foxglove server</span>
+          {status.foxglove && <span role="status"> — {status.foxglove}</span>}
+        </li>
+        <li>
           <button onClick={() => void get("modd", `${project.name}-r${revision}.modd`, () => api.exportModel(project.id, "modd"))}>Download the model (.modd)</button>
           {status.modd && <span role="status"> — {status.modd}</span>}
         </li>

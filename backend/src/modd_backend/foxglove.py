@@ -1,0 +1,250 @@
+"""The Foxglove WebSocket server of the base station (``foxglove-sdk``):
+Foxglove and Lichtblick open ``ws://<host>:<port>`` and see every delivered
+value of every drone, live.
+
+Channels: ``/<drone>/<subscriber>`` (one per subscriber, JSON, schema
+:data:`WINDOW_SCHEMA`: value, window start/end, sample count, aggregation,
+backfilled mark), ``/<drone>/link`` (the SubBroker's status: link state,
+RTT, byte rates) and ``/<drone>/position`` (a ``foxglove.LocationFix`` for
+the Map panel, from the latitude/longitude subscriptions). A channel is
+advertised on the first value of its subscriber, so deploys and dynamic
+subscriptions appear by themselves, and is withdrawn when the drone's status
+no longer routes that subscriber (a new deploy, a cancelled dynamic
+subscription).
+
+Contract: :meth:`FoxgloveLive.on_value` and :meth:`FoxgloveLive.on_status`
+are zenoh callbacks: they never block (``channel.log`` queues per client in
+the SDK, which drops a slow client's oldest data messages first).
+
+The SDK's server has no authentication: it binds to the backend's host
+(loopback by default); docs/ecosystem.md says what to do on a shared network.
+
+>>> window_message({"value": 1.5, "count": 3, "aggregation": "AVERAGE", "start_ns": 0,
+...                 "end_ns": 2_500_000_000})["window_end"]
+{'sec': 2, 'nsec': 500000000}
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+from typing import Any
+
+from .scene import position_roles
+
+log = logging.getLogger("modd.foxglove")
+
+#: The subprotocol the SDK's server speaks (clients must ask for it).
+SUBPROTOCOL = "foxglove.sdk.v1"
+#: Default port, as Foxglove's own servers.
+DEFAULT_PORT = 8765
+
+_TIME = {"type": "object", "properties": {"sec": {"type": "integer"},
+                                          "nsec": {"type": "integer"}}}
+WINDOW_SCHEMA: dict[str, Any] = {
+    "title": "modd.Window",
+    "description": "One window of a MoDD subscription (docs/subbroker.md, delivered value)",
+    "type": "object",
+    "properties": {
+        "value": {"description": "the aggregate; an array for ALL; null for an empty window",
+                  "type": ["number", "boolean", "array", "null"]},
+        "count": {"description": "samples behind the value (AVERAGE, COUNT, ALL)",
+                  "type": ["integer", "null"]},
+        "aggregation": {"type": "string"},
+        "window_start": _TIME,
+        "window_end": _TIME,
+        "backfilled": {"description": "delivered late, after a link outage",
+                       "type": "boolean"},
+        "topic": {"type": "string"},
+        "period_s": {"type": "string"},
+        "unit": {"type": "string"},
+        "delivered": _TIME,
+    },
+}
+#: foxglove.LocationFix (the Map panel's message), JSON-encoded.
+LOCATION_SCHEMA: dict[str, Any] = {
+    "title": "foxglove.LocationFix",
+    "type": "object",
+    "properties": {
+        "timestamp": _TIME,
+        "frame_id": {"type": "string"},
+        "latitude": {"type": "number"},
+        "longitude": {"type": "number"},
+        "altitude": {"type": "number"},
+        "position_covariance": {"type": "array", "items": {"type": "number"}},
+        "position_covariance_type": {"type": "integer"},
+    },
+}
+LINK_SCHEMA: dict[str, Any] = {
+    "title": "modd.LinkStatus",
+    "description": "The SubBroker's status of one drone (docs/subbroker.md, status)",
+    "type": "object",
+    "properties": {
+        "link": {"type": "string"},
+        "rtt_s": {"type": ["number", "null"]},
+        "config_id": {"type": ["integer", "null"]},
+        "delivered": {"type": "integer"},
+        "bytes_in_per_s": {"type": "number"},
+        "ip_bytes_in_per_s": {"type": "number"},
+        "last_error": {"type": ["string", "null"]},
+    },
+}
+
+
+def _time(ns: int) -> dict[str, int]:
+    """Times travel as ``{sec, nsec}`` (Foxglove's time type): a nanosecond
+    count since 1970 does not fit a JavaScript number exactly."""
+    return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
+
+
+def window_message(delivered: dict[str, Any]) -> dict[str, Any]:
+    """The Foxglove message of one delivered value (docs/subbroker.md)."""
+    start = int(delivered.get("start_ns") or 0)
+    end = int(delivered.get("end_ns") or 0)
+    return {
+        "value": delivered.get("value"),
+        "count": delivered.get("count"),
+        "aggregation": delivered.get("aggregation", ""),
+        "window_start": _time(start),
+        "window_end": _time(end),
+        "backfilled": bool(delivered.get("backfilled", False)),
+        "topic": delivered.get("topic", ""),
+        "period_s": str(delivered.get("period_s", "")),
+        "unit": delivered.get("unit", ""),
+        "delivered": _time(int(delivered.get("delivered_ns") or 0)),
+    }
+
+
+def routed_subscribers(status: dict[str, Any]) -> set[str] | None:
+    """Subscribers a status says are delivered (routes and dynamic ones);
+    None when the status does not say (then nothing is withdrawn)."""
+    routes = status.get("routes")
+    if not isinstance(routes, dict):
+        return None
+    out = {str(s) for names in routes.values() if isinstance(names, list) for s in names}
+    dynamic = status.get("dynamic")
+    if isinstance(dynamic, list):
+        out.update(str(d) for d in dynamic)
+    return out
+
+
+def _split(key: str, kind: str) -> list[str] | None:
+    parts = key.split("/")
+    if kind == "sub" and len(parts) == 4 and parts[0] == "modd" and parts[2] == "sub":
+        return parts
+    if kind == "status" and len(parts) == 3 and parts[0] == "modd" and parts[2] == "status":
+        return parts
+    return None
+
+
+class FoxgloveLive:
+    """A Foxglove server on ``host:port`` fed with delivered values and
+    statuses (``modd/*/sub/*``, ``modd/*/status``) by the backend's zenoh
+    session. ``port`` 0 picks a free port (:attr:`port` says which)."""
+
+    def __init__(self, host: str, port: int, name: str = "MoDD base station") -> None:
+        import foxglove
+
+        self._foxglove = foxglove
+        self.context = foxglove.Context()
+        self.server = foxglove.start_server(name=name, host=host, port=port,
+                                            context=self.context)
+        self.host = host
+        self.port = self.server.port
+        self._channels: dict[str, Any] = {}
+        self._fix: dict[str, dict[str, float]] = {}  # drone -> lat/lon/alt seen last
+        self._lock = threading.Lock()
+        self.logged = 0
+
+    @property
+    def url(self) -> str:
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"ws://{host}:{self.port}"
+
+    def topics(self) -> list[str]:
+        with self._lock:
+            return sorted(self._channels)
+
+    def _channel(self, topic: str, schema: dict[str, Any], title: str) -> Any:
+        with self._lock:
+            ch = self._channels.get(topic)
+            if ch is None:
+                fg = self._foxglove
+                ch = fg.Channel(topic, message_encoding="json", context=self.context,
+                                schema=fg.Schema(name=title, encoding="jsonschema",
+                                                 data=json.dumps(schema).encode()))
+                self._channels[topic] = ch
+            return ch
+
+    def on_value(self, key: str, payload: bytes) -> None:
+        """zenoh callback for ``modd/<drone>/sub/<subscriber>``."""
+        parts = _split(key, "sub")
+        delivered = _load(payload)
+        if parts is None or delivered is None:
+            return
+        msg = window_message(delivered)
+        ch = self._channel(f"/{parts[1]}/{parts[3]}", WINDOW_SCHEMA, "modd.Window")
+        end_ns = int(delivered.get("end_ns") or 0)
+        ch.log(msg, log_time=end_ns or None)
+        self.logged += 1
+        self._position(parts[1], parts[3], delivered, end_ns)
+
+    def _position(self, drone: str, subscriber: str, delivered: dict[str, Any],
+                  end_ns: int) -> None:
+        """``/<drone>/position`` (LocationFix) from the subscriptions whose
+        topic is a latitude, longitude or altitude (the 3D scene's rule)."""
+        role = position_roles({"subscribers": [
+            {"name": subscriber, "topic": delivered.get("topic", "")}]}).get(subscriber)
+        value = delivered.get("value")
+        if role not in ("lat", "lon", "alt") or isinstance(value, bool) \
+                or not isinstance(value, int | float):
+            return
+        with self._lock:
+            fix = self._fix.setdefault(drone, {})
+            fix[role] = float(value)
+            if role == "alt" or "lat" not in fix or "lon" not in fix:
+                return
+            lat, lon, alt = fix.pop("lat"), fix.pop("lon"), fix.get("alt", 0.0)
+        ch = self._channel(f"/{drone}/position", LOCATION_SCHEMA, "foxglove.LocationFix")
+        ch.log({"timestamp": _time(end_ns), "frame_id": drone, "latitude": lat,
+                "longitude": lon, "altitude": alt, "position_covariance": [0.0] * 9,
+                "position_covariance_type": 0}, log_time=end_ns or None)
+
+    def on_status(self, key: str, payload: bytes) -> None:
+        """zenoh callback for ``modd/<drone>/status``: the link channel, and
+        withdraws the channels of subscribers no longer routed."""
+        parts = _split(key, "status")
+        status = _load(payload)
+        if parts is None or status is None:
+            return
+        drone = parts[1]
+        time_ns = status.get("time_ns")
+        link = self._channel(f"/{drone}/link", LINK_SCHEMA, "modd.LinkStatus")
+        link.log(status, log_time=time_ns if isinstance(time_ns, int) else None)
+        routed = routed_subscribers(status)
+        if routed is None:
+            return
+        prefix = f"/{drone}/"
+        with self._lock:
+            gone = [t for t in self._channels if t.startswith(prefix)
+                    and t[len(prefix):] not in routed | {"link", "position"}]
+            closing = [self._channels.pop(t) for t in gone]
+        for ch in closing:
+            ch.close()
+
+    def stop(self) -> None:
+        with self._lock:
+            channels = list(self._channels.values())
+            self._channels.clear()
+        for ch in channels:
+            ch.close()
+        self.server.stop()
+
+
+def _load(payload: bytes) -> dict[str, Any] | None:
+    try:
+        data = json.loads(payload)
+    except (ValueError, UnicodeDecodeError):
+        return None
+    return data if isinstance(data, dict) else None

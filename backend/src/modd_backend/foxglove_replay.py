@@ -1,0 +1,225 @@
+"""Ranged playback of a recorded mission in Foxglove or Lichtblick (seek,
+play, pause, speed) through a ``foxglove-sdk`` server with the
+``PlaybackControl`` capability.
+
+What it plays: MCAP files — the PubBroker's archive of a mission (one JSON
+channel per topic, every raw sample), a file recovered with ``modd archive
+recover``, or any MCAP file with JSON channels. Channels keep their topic
+names, schemas and ``log_time``.
+
+    modd-foxglove-replay data/run/archive/usv/*.mcap --port 8766
+
+Contract: one player thread emits the messages whose log time the playback
+clock has passed, at the requested speed; a seek moves the clock and the
+cursor (binary search), a pause stops the clock; every request is answered
+with a ``PlaybackState`` carrying its request id.
+"""
+
+from __future__ import annotations
+
+import argparse
+import bisect
+import threading
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+#: Messages kept in memory at most (a mission day at 100 Hz on 50 topics).
+MAX_MESSAGES = 5_000_000
+
+
+@dataclass(frozen=True)
+class Recorded:
+    log_time: int
+    topic: str
+    data: bytes
+
+
+@dataclass(frozen=True)
+class RecordedChannel:
+    topic: str
+    encoding: str
+    schema_name: str
+    schema_encoding: str
+    schema: bytes
+
+
+def load_recording(paths: Sequence[Path], max_messages: int = MAX_MESSAGES
+                   ) -> tuple[dict[str, RecordedChannel], list[Recorded]]:
+    """Channels and messages (sorted by log time) of closed MCAP files."""
+    from mcap.reader import make_reader
+
+    channels: dict[str, RecordedChannel] = {}
+    messages: list[Recorded] = []
+    for path in paths:
+        with open(path, "rb") as f:
+            try:
+                for schema, ch, m in make_reader(f).iter_messages():
+                    if ch.topic not in channels:
+                        channels[ch.topic] = RecordedChannel(
+                            ch.topic, ch.message_encoding, schema.name if schema else "",
+                            schema.encoding if schema else "", schema.data if schema else b"")
+                    messages.append(Recorded(m.log_time, ch.topic, m.data))
+                    if len(messages) > max_messages:
+                        raise ValueError(f"{path}: more than {max_messages} messages to play")
+            except ValueError:
+                raise
+            except Exception as exc:  # the reader's errors have no common base
+                raise ValueError(f"{path}: cannot be read ({exc}); if a crash cut it, run "
+                                 "`modd archive recover` first") from None
+    if not messages:
+        raise ValueError("nothing to play: the files hold no message")
+    messages.sort(key=lambda r: r.log_time)
+    return channels, messages
+
+
+class Player:
+    """The playback clock and cursor over ``messages``; thread-safe."""
+
+    def __init__(self, messages: list[Recorded]) -> None:
+        self.messages = messages
+        self._times = [m.log_time for m in messages]
+        self.start, self.end = self._times[0], self._times[-1]
+        self.current = self.start
+        self.speed = 1.0
+        self.playing = False
+        self._cursor = 0
+        self._lock = threading.Lock()
+
+    def seek(self, t: int) -> None:
+        with self._lock:
+            self.current = min(max(t, self.start), self.end)
+            self._cursor = bisect.bisect_left(self._times, self.current)
+
+    def control(self, play: bool, speed: float, seek_time: int | None) -> None:
+        if seek_time is not None:
+            self.seek(seek_time)
+        with self._lock:
+            self.playing = play
+            if speed > 0:
+                self.speed = speed
+
+    def advance(self, elapsed_s: float) -> list[Recorded]:
+        """Moves the clock by ``elapsed_s`` (when playing); the messages passed."""
+        with self._lock:
+            if not self.playing:
+                return []
+            self.current = min(self.end, self.current + int(elapsed_s * self.speed * 1e9))
+            stop = bisect.bisect_right(self._times, self.current)
+            out = self.messages[self._cursor:stop]
+            self._cursor = stop
+            if self.current >= self.end:
+                self.playing = False
+            return out
+
+    @property
+    def ended(self) -> bool:
+        return self.current >= self.end
+
+
+class ReplayServer:
+    """A ranged-playback Foxglove server over a recording, on ``host:port``."""
+
+    def __init__(self, paths: Sequence[Path], host: str = "127.0.0.1", port: int = 8766,
+                 tick_s: float = 0.02) -> None:
+        import foxglove
+        from foxglove.websocket import Capability, ServerListener
+
+        self._fg = foxglove
+        channels, messages = load_recording(paths)
+        self.player = Player(messages)
+        self.context = foxglove.Context()
+        self.channels = {
+            t: foxglove.Channel(t, message_encoding=c.encoding or "json", context=self.context,
+                                schema=foxglove.Schema(name=c.schema_name or t,
+                                                       encoding=c.schema_encoding or "jsonschema",
+                                                       data=c.schema))
+            for t, c in channels.items()
+        }
+        replay = self
+
+        class Listener(ServerListener):
+            def on_playback_control_request(self, request: Any) -> Any:
+                return replay.on_request(request)
+
+        self.server = foxglove.start_server(
+            name="MoDD replay", host=host, port=port, context=self.context,
+            capabilities=[Capability.PlaybackControl, Capability.Time],
+            server_listener=Listener(),
+            playback_time_range=(self.player.start, self.player.end))
+        self.port = self.server.port
+        self.host = host
+        self._tick = tick_s
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="modd-replay", daemon=True)
+        self._thread.start()
+
+    @property
+    def url(self) -> str:
+        return f"ws://{self.host}:{self.port}"
+
+    def state(self, request_id: str | None, did_seek: bool) -> Any:
+        from foxglove.websocket import PlaybackState, PlaybackStatus
+
+        p = self.player
+        status = (PlaybackStatus.Ended if p.ended else
+                  PlaybackStatus.Playing if p.playing else PlaybackStatus.Paused)
+        return PlaybackState(status=status, current_time=p.current, playback_speed=p.speed,
+                             did_seek=did_seek, request_id=request_id)
+
+    def on_request(self, request: Any) -> Any:
+        from foxglove.websocket import PlaybackCommand
+
+        self.player.control(request.playback_command == PlaybackCommand.Play,
+                            float(request.playback_speed), request.seek_time)
+        return self.state(request.request_id, request.seek_time is not None)
+
+    def _run(self) -> None:
+        last = time.monotonic()
+        was_playing = False
+        while not self._stop.wait(self._tick):
+            now = time.monotonic()
+            for m in self.player.advance(now - last):
+                self.channels[m.topic].log(m.data, log_time=m.log_time)
+            last = now
+            if self.player.playing or was_playing:
+                self.server.broadcast_time(self.player.current)
+            if was_playing and not self.player.playing:
+                self.server.broadcast_playback_state(self.state(None, False))
+            was_playing = self.player.playing
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join(2)
+        for ch in self.channels.values():
+            ch.close()
+        self.server.stop()
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="modd-foxglove-replay",
+                                description="Ranged playback of MCAP files for Foxglove/Lichtblick")
+    p.add_argument("files", nargs="+", type=Path, metavar="FILE")
+    p.add_argument("--host", default="127.0.0.1", help="address to bind (default loopback)")
+    p.add_argument("--port", type=int, default=8766)
+    a = p.parse_args(argv)
+    try:
+        server = ReplayServer(a.files, a.host, a.port)
+    except (ValueError, OSError) as exc:
+        print(f"modd-foxglove-replay: {exc}")
+        return 1
+    print(f"modd-foxglove-replay: {server.url} plays {len(server.player.messages)} messages "
+          f"on {len(server.channels)} channels (Ctrl-C to stop)", flush=True)
+    try:
+        threading.Event().wait()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.stop()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,132 @@
+"""``modd-plotjuggler``: MoDD's delivered values to PlotJuggler's "UDP Server"
+(JSON protocol), one datagram per delivered window; a separate process, off
+unless started (one per base station, configured by its options).
+
+Each datagram is a JSON object PlotJuggler flattens into series
+``/<drone>/<subscriber>/value`` (and ``/count``, ``/backfilled``), stamped
+with the window's end in seconds (tick "use field as timestamp if
+available" with field ``timestamp`` in PlotJuggler):
+
+    {"timestamp": 1795000000.25, "usv": {"sub_3": {"value": -0.0966, "count": 6}}}
+
+Empty windows (no sample) send no value; ``ALL`` windows send the list, which
+PlotJuggler shows as ``value[0]``, ``value[1]``, ...
+
+    modd-plotjuggler --udp 127.0.0.1:9870 --drone usv
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import os
+import signal
+import socket
+import sys
+import threading
+from typing import Any
+
+from .zenoh_session import DEFAULT_ENDPOINT, ZenohSettings, open_session
+
+log = logging.getLogger("modd.plotjuggler")
+#: PlotJuggler's default UDP server port.
+DEFAULT_UDP = "127.0.0.1:9870"
+#: Above this a datagram is not sent (an ALL window of thousands of samples).
+MAX_DATAGRAM = 65_000
+
+
+def datagram(drone: str, subscriber: str, delivered: dict[str, Any]) -> bytes | None:
+    """The datagram of one delivered value; None when it has nothing to plot.
+
+    >>> datagram("usv", "sub_3", {"end_ns": 2_500_000_000, "value": 1.5, "count": 6})
+    b'{"timestamp":2.5,"usv":{"sub_3":{"value":1.5,"count":6}}}'
+    """
+    value = delivered.get("value")
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return None
+    fields: dict[str, Any] = {"value": value}
+    if isinstance(delivered.get("count"), int):
+        fields["count"] = delivered["count"]
+    if delivered.get("backfilled"):
+        fields["backfilled"] = 1
+    end = delivered.get("end_ns")
+    if not isinstance(end, int):
+        return None
+    doc = {"timestamp": end / 1e9, drone: {subscriber: fields}}
+    out = json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()
+    return out if len(out) <= MAX_DATAGRAM else None
+
+
+def parse_udp(text: str) -> tuple[str, int]:
+    host, sep, port = text.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ValueError(f"--udp {text!r}: expected HOST:PORT, e.g. {DEFAULT_UDP}")
+    return host.strip("[]"), int(port)
+
+
+class PlotJugglerOut:
+    """Subscribes to ``modd/<drone>/sub/*`` and sends a datagram per value."""
+
+    def __init__(self, session: Any, target: tuple[str, int], drone: str = "*") -> None:
+        self.target = target
+        family = socket.AF_INET6 if ":" in target[0] else socket.AF_INET
+        self.sock = socket.socket(family, socket.SOCK_DGRAM)
+        self.sent = 0
+        self.sub = session.declare_subscriber(f"modd/{drone}/sub/*", self._on)
+
+    def _on(self, sample: Any) -> None:
+        parts = str(sample.key_expr).split("/")
+        try:
+            delivered = json.loads(sample.payload.to_bytes())
+        except (ValueError, UnicodeDecodeError):
+            return
+        if len(parts) != 4 or not isinstance(delivered, dict):
+            return
+        data = datagram(parts[1], parts[3], delivered)
+        if data is None:
+            return
+        try:
+            self.sock.sendto(data, self.target)
+            self.sent += 1
+        except OSError as exc:  # nobody listening is fine for UDP; say other errors once
+            log.debug("datagram not sent: %s", exc)
+
+    def close(self) -> None:
+        self.sub.undeclare()
+        self.sock.close()
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="modd-plotjuggler", description=__doc__.splitlines()[0])
+    p.add_argument("--udp", default=DEFAULT_UDP, metavar="HOST:PORT",
+                   help=f"PlotJuggler's UDP server (default {DEFAULT_UDP})")
+    p.add_argument("--drone", default="*", help="drone name (default: every drone)")
+    p.add_argument("--modd-connect", default=os.environ.get("MODD_ZENOH_CONNECT",
+                                                            DEFAULT_ENDPOINT),
+                   metavar="ENDPOINT", help="the SubBroker's zenoh endpoint")
+    a = p.parse_args(argv)
+    try:
+        target = parse_udp(a.udp)
+        session = open_session(ZenohSettings(mode="peer", connect=(a.modd_connect,)))
+    except ValueError as exc:
+        print(f"modd-plotjuggler: {exc}", file=sys.stderr)
+        return 2
+    out = PlotJugglerOut(session, target, a.drone)
+    print(f"modd-plotjuggler: modd/{a.drone}/sub/* -> udp {target[0]}:{target[1]} "
+          "(PlotJuggler: UDP Server, JSON, timestamp field 'timestamp')", flush=True)
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    try:
+        stop.wait()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        out.close()
+        session.close()  # type: ignore[no-untyped-call]
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

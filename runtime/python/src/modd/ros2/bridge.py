@@ -1,0 +1,127 @@
+"""The bridge: every value the SubBroker delivers (``modd/<drone>/sub/<name>``)
+republished as ROS 2 messages on the ROS zenoh network, as ``rmw_zenoh``
+publishers of one node (default ``modd_bridge``):
+
+- ``/<drone>/<subscriber>``: ``modd_msgs/msg/Window``;
+- ``/<drone>/<subscriber>/value``: ``std_msgs/msg/Float64``.
+
+Publishers (and their liveliness tokens, which make them visible to
+``ros2 topic list``) are declared on a subscriber's first value, so deploys
+and dynamic subscriptions appear by themselves.
+
+>>> b = Ros2Bridge(modd_session, ros_session, drones="usv")   # doctest: +SKIP
+>>> b.start()                                                  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+import time
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from . import rmw
+from .messages import FLOAT64, FLOAT64_HASH, WINDOW, WINDOW_HASH, float64_cdr, window_cdr
+
+if TYPE_CHECKING:
+    import zenoh
+
+log = logging.getLogger("modd.ros2")
+
+
+@dataclass
+class RosPublisher:
+    topic: str
+    ros_type: str
+    key: str
+    token_key: str
+    gid: bytes
+    publisher: Any
+    token: Any
+    sequence: int = 0
+
+    def publish(self, payload: bytes) -> None:
+        self.sequence += 1
+        self.publisher.put(payload, attachment=rmw.attachment(self.sequence, time.time_ns(),
+                                                              self.gid))
+
+    def close(self) -> None:
+        self.token.undeclare()
+        self.publisher.undeclare()
+
+
+class Ros2Bridge:
+    def __init__(self, modd: zenoh.Session, ros: zenoh.Session, drones: str = "*",
+                 domain_id: int = 0, node: str = "modd_bridge") -> None:
+        self.modd, self.ros = modd, ros
+        self.drones, self.domain_id, self.node = drones, domain_id, node
+        self.zid = str(ros.zid())
+        self.node_id = 0
+        self._next_id = 1
+        self._pubs: dict[str, RosPublisher] = {}
+        self._lock = threading.Lock()
+        self._node_token: Any = None
+        self._sub: Any = None
+        self.published = 0
+
+    def start(self) -> Ros2Bridge:
+        self._node_token = self.ros.liveliness().declare_token(
+            rmw.node_token(self.domain_id, self.zid, self.node_id, self.node))
+        self._sub = self.modd.declare_subscriber(f"modd/{self.drones}/sub/*", self._on_sample)
+        return self
+
+    def _publisher(self, topic: str, ros_type: str, type_hash: str) -> RosPublisher:
+        with self._lock:
+            pub = self._pubs.get(topic)
+            if pub is None:
+                entity_id, self._next_id = self._next_id, self._next_id + 1
+                key = rmw.topic_key(self.domain_id, topic, ros_type, type_hash)
+                token_key = rmw.publisher_token(self.domain_id, self.zid, self.node_id,
+                                                entity_id, self.node, topic, ros_type, type_hash)
+                pub = RosPublisher(topic, ros_type, key, token_key, rmw.gid(token_key),
+                                   self.ros.declare_publisher(key),
+                                   self.ros.liveliness().declare_token(token_key))
+                self._pubs[topic] = pub
+                log.info("publishing %s (%s) on %s", topic, ros_type, key)
+            return pub
+
+    def _on_sample(self, sample: zenoh.Sample) -> None:
+        parts = str(sample.key_expr).split("/")
+        try:
+            delivered = json.loads(sample.payload.to_bytes())
+        except (ValueError, UnicodeDecodeError):
+            return
+        if len(parts) != 4 or not isinstance(delivered, dict):
+            return
+        self.on_value(parts[1], parts[3], delivered)
+
+    def on_value(self, drone: str, subscriber: str, delivered: dict[str, Any]) -> None:
+        base = f"/{drone}/{subscriber}"
+        try:
+            window = window_cdr(int(delivered["start_ns"]), int(delivered["end_ns"]),
+                                delivered.get("value"), delivered.get("count"),
+                                str(delivered.get("aggregation", "")))
+        except (KeyError, TypeError, ValueError) as exc:
+            log.warning("%s: value skipped (%s)", base, exc)
+            return
+        self._publisher(base, WINDOW.name, WINDOW_HASH).publish(window)
+        self._publisher(f"{base}/value", FLOAT64.name, FLOAT64_HASH).publish(
+            float64_cdr(delivered.get("value")))
+        self.published += 1
+
+    def topics(self) -> dict[str, RosPublisher]:
+        with self._lock:
+            return dict(self._pubs)
+
+    def close(self) -> None:
+        if self._sub is not None:
+            self._sub.undeclare()
+        with self._lock:
+            pubs = list(self._pubs.values())
+            self._pubs.clear()
+        for p in pubs:
+            p.close()
+        if self._node_token is not None:
+            self._node_token.undeclare()

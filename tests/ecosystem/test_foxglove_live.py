@@ -1,0 +1,193 @@
+"""A Foxglove client (@foxglove/ws-protocol, subprotocol foxglove.sdk.v1)
+connected to the backend's Foxglove server, itself fed by a real base station
+(PubBroker + SubBroker + publisher, backend/tests/station.py): it receives
+every subscriber's values live, each equal to the value delivered on zenoh
+(the oracle: an independent zenoh subscriber), plus the link status; a
+dynamic subscription appears as a channel and goes when cancelled."""
+
+from __future__ import annotations
+
+import io
+import json
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+import zenoh
+from ecosystem_support import node_json
+from fastapi.testclient import TestClient
+from modd.ports import free_port
+from modd_backend import Settings, create_app
+from modd_model import load_model
+from station import PUBBROKER, Station
+
+DEMO = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.modd"
+
+pytestmark = pytest.mark.skipif(not PUBBROKER.exists(), reason="build/bin/modd-pubbroker missing")
+
+
+@pytest.fixture(scope="module")
+def station(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Station]:
+    st = Station(tmp_path_factory.mktemp("station"), load_model(DEMO))
+    try:
+        st.start()
+        yield st
+    finally:
+        st.stop()
+
+
+@pytest.fixture(scope="module")
+def backend(station: Station, tmp_path_factory: pytest.TempPathFactory
+            ) -> Iterator[tuple[TestClient, int]]:
+    port = free_port()
+    settings = Settings(data_dir=tmp_path_factory.mktemp("backend"),
+                        zenoh_connect=(station.zenoh,), initial_admin_password="pw-12345678",
+                        foxglove_port=port)
+    with TestClient(create_app(settings, out=io.StringIO())) as c:
+        yield c, port
+
+
+class ZenohOracle:
+    """Every delivered value on ``modd/usv/sub/*``, by subscriber."""
+
+    def __init__(self, endpoint: str) -> None:
+        c = zenoh.Config()
+        c.insert_json5("mode", '"peer"')
+        c.insert_json5("scouting/multicast/enabled", "false")
+        c.insert_json5("connect/endpoints", json.dumps([endpoint]))
+        self.session = zenoh.open(c)
+        self.values: dict[str, list[dict[str, Any]]] = {}
+        self._lock = threading.Lock()
+        self.sub = self.session.declare_subscriber("modd/usv/sub/*", self._on)
+
+    def _on(self, sample: zenoh.Sample) -> None:
+        name = str(sample.key_expr).rsplit("/", 1)[-1]
+        with self._lock:
+            self.values.setdefault(name, []).append(json.loads(sample.payload.to_bytes()))
+
+    def query(self, key: str, request: dict[str, Any]) -> dict[str, Any]:
+        for reply in self.session.get(key, payload=json.dumps(request).encode(), timeout=5):
+            if reply.ok is not None:
+                out: dict[str, Any] = json.loads(reply.ok.payload.to_bytes())
+                return out
+        raise AssertionError(f"no reply on {key}")
+
+    def close(self) -> None:
+        self.sub.undeclare()
+        self.session.close()  # type: ignore[no-untyped-call]
+
+
+def test_every_subscriber_live_in_foxglove(backend: tuple[TestClient, int],
+                                           station: Station) -> None:
+    _client, port = backend
+    oracle = ZenohOracle(station.zenoh)
+    try:
+        time.sleep(1.0)  # the zenoh oracle is connected before the Foxglove client
+        dyn = "dyn_min05"
+
+        def dynamic() -> None:
+            time.sleep(3.0)
+            reply = oracle.query("modd/usv/subscribe",
+                                 {"topic": "usv.accelerometer.accel_z", "period_s": "0.5",
+                                  "aggregation": "MIN", "subscriber": dyn})
+            assert reply["status"] == "ACCEPTED", reply
+            time.sleep(3.0)
+            cancel = oracle.query("modd/usv/subscribe", {"action": "cancel", "subscriber": dyn})
+            assert cancel["status"] == "CANCELLED", cancel
+
+        t = threading.Thread(target=dynamic)
+        t.start()
+        report = node_json("foxglove_client.cjs", f"ws://127.0.0.1:{port}", "9", timeout=60)
+        t.join()
+        time.sleep(0.5)
+    finally:
+        oracle.close()
+    assert report["protocol"] == "foxglove.sdk.v1"
+    assert not report["errors"], report["errors"]
+    received = report["messages"]
+    expected = {s["name"] for s in station.model["subscribers"]}
+    got = {t.split("/")[2] for t in received if t.startswith("/usv/")}
+    assert {"link", "position"} <= got
+    assert expected <= got, f"no Foxglove values for {sorted(expected - got)}"
+    # latency: SubBroker's put (delivered) to the client's receipt, same machine and clock
+    lat_ms = sorted(m["recvMs"] - (m["msg"]["delivered"]["sec"] * 1e3
+                                   + m["msg"]["delivered"]["nsec"] / 1e6)
+                    for t, msgs in received.items() if t.split("/")[2] not in ("link", "position")
+                    for m in msgs)
+    print(f"foxglove live: {len(lat_ms)} values, SubBroker put -> client: median "
+          f"{lat_ms[len(lat_ms) // 2]:.1f} ms, p95 {lat_ms[int(len(lat_ms) * 0.95)]:.1f} ms")
+    # each Foxglove message is a value delivered on zenoh, field for field
+    for topic, msgs in received.items():
+        name = topic.split("/")[2]
+        if name == "link":
+            assert msgs[-1]["msg"]["link"] == "up"
+            continue
+        if name == "position":  # LocationFix from track_lat and track_lon
+            lats = {v["end_ns"]: v["value"] for v in oracle.values["track_lat"]}
+            lons = {v["end_ns"]: v["value"] for v in oracle.values["track_lon"]}
+            for m in msgs:
+                fix, end = m["msg"], int(m["logTime"])
+                assert fix["latitude"] == lats[end] and fix["longitude"] == lons[end], fix
+            continue
+        delivered = {v["end_ns"]: v for v in oracle.values[name]}
+        for m in msgs:
+            w = m["msg"]
+            v = delivered.get(int(m["logTime"]))  # log time = window end, exact (BigInt)
+            assert v is not None, f"{topic}: {w} was never delivered on zenoh"
+            assert w["value"] == v["value"], (topic, w, v)
+            assert w["count"] == v["count"] and w["aggregation"] == v["aggregation"]
+            assert w["backfilled"] is False
+            assert w["window_end"] == {"sec": v["end_ns"] // 10**9, "nsec": v["end_ns"] % 10**9}
+            assert w["window_start"] == {"sec": v["start_ns"] // 10**9,
+                                         "nsec": v["start_ns"] % 10**9}
+    schema = next(a for a in report["advertised"] if a["topic"] == "/usv/sub_5")
+    assert schema["encoding"] == "json" and schema["schemaName"] == "modd.Window"
+    assert set(json.loads(schema["schema"])["properties"]) >= {
+        "value", "count", "aggregation", "window_start", "window_end", "backfilled"}
+    # the dynamic subscription came and went
+    assert f"/usv/{dyn}" in received and received[f"/usv/{dyn}"]
+    assert f"/usv/{dyn}" in report["unadvertised"]
+
+
+def test_a_taken_port_leaves_the_backend_running(tmp_path: Path) -> None:
+    import socket
+
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        out = io.StringIO()
+        settings = Settings(data_dir=tmp_path, zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
+                            initial_admin_password="pw-12345678", foxglove_port=port)
+        with TestClient(create_app(settings, out=out)) as c:
+            assert c.get("/api/health").status_code == 200
+            assert c.app.state.modd.foxglove is None  # type: ignore[attr-defined]
+        assert f"no Foxglove server on 127.0.0.1:{port}" in out.getvalue()
+
+
+def test_channels_follow_a_new_deploy() -> None:
+    """A deploy that drops a subscriber (its status routes no longer name it)
+    withdraws its channel; a new subscriber's first value advertises one."""
+    from modd_backend.foxglove import FoxgloveLive
+
+    live = FoxgloveLive("127.0.0.1", free_port())
+    try:
+        v = {"v": 1, "value": 1.0, "count": None, "aggregation": "MIN", "start_ns": 0,
+             "end_ns": 250_000_000, "topic": "usv.a.z", "delivered_ns": 1}
+        for name in ("sub_1", "sub_2"):
+            live.on_value(f"modd/usv/sub/{name}", json.dumps(v).encode())
+        live.on_value("modd/usv/sub/bad key", b"not json")
+        assert live.topics() == ["/usv/sub_1", "/usv/sub_2"]
+        status = {"drone": "usv", "link": "up", "time_ns": 5, "routes": {"usv.a.z/MIN/0.25":
+                                                                          ["sub_2"]},
+                  "dynamic": []}
+        live.on_status("modd/usv/status", json.dumps(status).encode())
+        assert live.topics() == ["/usv/link", "/usv/sub_2"]
+        live.on_value("modd/usv/sub/sub_9", json.dumps(v).encode())
+        live.on_status("modd/usv/status", json.dumps({"link": "down"}).encode())  # no routes
+        assert live.topics() == ["/usv/link", "/usv/sub_2", "/usv/sub_9"]
+    finally:
+        live.stop()

@@ -1,0 +1,107 @@
+"""Ranged playback in Foxglove: a recorded minute (the PubBroker archive's
+shape: one JSON channel per topic) served by the replay server and read by
+the @foxglove/ws-protocol client, which seeks to the middle and plays; the
+messages that follow start at the seek time, in order, equal to the file's.
+The player's pure part (seek, pause, speed) is tested directly."""
+
+from __future__ import annotations
+
+import json
+import signal
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from ecosystem_support import node_json
+from mcap.writer import Writer
+from modd.ports import free_port
+from modd_backend.foxglove_replay import Player, Recorded, ReplayServer, load_recording
+from pubbroker_harness import BIN, PubBroker, run_load
+
+T0 = 1_795_000_000_000_000_000
+TOPICS = ("usv.ctd.temperature", "usv.ctd.conductivity")
+SCHEMA = b'{"type":"object","properties":{"value":{"type":"number"}}}'
+
+
+def value(topic: int, k: int) -> float:
+    return round(10.0 * topic + k / 10.0, 3)
+
+
+@pytest.fixture
+def minute(tmp_path: Path) -> Path:
+    """A minute at 10 Hz on two topics, written like the PubBroker's archive."""
+    path = tmp_path / "usv-minute.mcap"
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start()
+        sid = w.register_schema("modd.Sample", "jsonschema", SCHEMA)
+        cids = [w.register_channel(t, "json", sid, {"type": "float32"}) for t in TOPICS]
+        for k in range(600):
+            for i, cid in enumerate(cids):
+                t = T0 + k * 100_000_000
+                w.add_message(cid, t, json.dumps({"value": value(i, k)}).encode(), t)
+        w.finish()  # type: ignore[no-untyped-call]
+    return path
+
+
+@pytest.fixture
+def server(minute: Path) -> Iterator[ReplayServer]:
+    s = ReplayServer([minute], "127.0.0.1", free_port())
+    try:
+        yield s
+    finally:
+        s.stop()
+
+
+def test_seek_then_play_in_foxglove(server: ReplayServer) -> None:
+    seek = T0 + 30_000_000_000
+    report = node_json("foxglove_client.cjs", server.url, "4", "--seek", str(seek),
+                       "--after", "1", timeout=30)
+    assert report["protocol"] == "foxglove.sdk.v1" and not report["errors"]
+    assert "playbackControl" in report["serverInfo"]["capabilities"] or \
+        "rangedPlayback" in json.dumps(report["serverInfo"])
+    assert {a["topic"] for a in report["advertised"]} == set(TOPICS)
+    states = report["playbackStates"]
+    assert states and int(states[0]["currentTime"]) == seek
+    for i, topic in enumerate(TOPICS):
+        msgs = report["messages"][topic]
+        times = [int(m["logTime"]) for m in msgs]
+        assert times[0] == seek, "playback starts at the seek time"
+        assert times == sorted(times)
+        ks = [(t - T0) // 100_000_000 for t in times]
+        assert ks == list(range(ks[0], ks[0] + len(ks))), "no message skipped"
+        assert 10 <= len(ks) <= 45, len(ks)  # about 3 s played at speed 1
+        assert [m["msg"]["value"] for m in msgs] == [value(i, k) for k in ks]
+
+
+def test_player_seek_pause_speed() -> None:
+    msgs = [Recorded(t, "a", b"{}") for t in range(0, 10_000_000_000, 1_000_000_000)]
+    p = Player(msgs)
+    assert p.advance(5.0) == []  # paused at start
+    p.control(True, 1.0, 3_000_000_000)
+    assert [m.log_time for m in p.advance(1.0)] == [3_000_000_000, 4_000_000_000]
+    p.control(False, 1.0, None)
+    assert p.advance(3.0) == []
+    p.control(True, 2.0, None)
+    assert [m.log_time for m in p.advance(1.0)] == [5_000_000_000, 6_000_000_000]
+    p.control(True, 1.0, -5)  # clamped to the start
+    assert p.advance(0.0)[0].log_time == 0
+    p.control(True, 100.0, None)
+    assert len(p.advance(1.0)) == 9 and p.ended and not p.playing
+
+
+@pytest.mark.skipif(not BIN.exists(), reason="build/bin/modd-pubbroker is missing")
+def test_a_pubbroker_archive_loads_for_replay(tmp_path: Path) -> None:
+    b = PubBroker(tmp_path, [(t, "float32") for t in TOPICS])
+    b.start()
+    try:
+        load = run_load(f"unix:{b.unix_path}", list(TOPICS), 100.0, 0.5)
+    finally:
+        assert b.stop(signal.SIGTERM) == 0
+    channels, messages = load_recording(sorted(b.archive_dir.glob("*.mcap")))
+    assert set(channels) == set(TOPICS) and len(messages) == load.published
+    assert channels[TOPICS[0]].encoding == "json"
+    broken = tmp_path / "cut.mcap"
+    broken.write_bytes(next(b.archive_dir.glob("*.mcap")).read_bytes()[:-200])
+    with pytest.raises(ValueError, match="modd archive recover"):
+        load_recording([broken])

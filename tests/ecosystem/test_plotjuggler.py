@@ -1,0 +1,87 @@
+"""``modd-plotjuggler``: one UDP datagram per delivered window, in the JSON
+PlotJuggler's UDP server flattens (``/<drone>/<subscriber>/value``, timestamp
+field in seconds); empty windows send nothing. The SubBroker's side is a
+zenoh session putting real delivered values."""
+
+from __future__ import annotations
+
+import json
+import socket
+import subprocess
+import sys
+import time
+
+import pytest
+import zenoh
+from modd.plotjuggler import datagram, parse_udp
+from modd.ports import free_port
+from modd.subbroker.payload import DeliveredValue
+
+
+def flatten(doc: dict[str, object], prefix: str = "") -> dict[str, object]:
+    """PlotJuggler's JSON parser: nested keys joined by '/', arrays indexed."""
+    out: dict[str, object] = {}
+    for k, v in doc.items():
+        if isinstance(v, dict):
+            out.update(flatten(v, f"{prefix}/{k}"))
+        elif isinstance(v, list):
+            out.update({f"{prefix}/{k}[{i}]": x for i, x in enumerate(v)})
+        else:
+            out[f"{prefix}/{k}"] = v
+    return out
+
+
+def test_datagrams_from_delivered_values() -> None:
+    udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    udp.bind(("127.0.0.1", 0))
+    udp.settimeout(10)
+    zep = f"tcp/127.0.0.1:{free_port()}"
+    c = zenoh.Config()
+    c.insert_json5("mode", '"peer"')
+    c.insert_json5("scouting/multicast/enabled", "false")
+    c.insert_json5("listen/endpoints", json.dumps([zep]))
+    station = zenoh.open(c)
+    proc = subprocess.Popen([sys.executable, "-m", "modd.plotjuggler", "--modd-connect", zep,
+                             "--udp", f"127.0.0.1:{udp.getsockname()[1]}", "--drone", "usv"],
+                            stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None and "modd-plotjuggler" in proc.stdout.readline()
+        time.sleep(1.0)
+        values = [DeliveredValue("sub_3", "usv.a.x", "AVERAGE", "0.25", "M", 1, k,
+                                 k * 250_000_000, (k + 1) * 250_000_000, 0.5 * k, 4, 0)
+                  for k in range(1, 4)]
+        values.insert(1, DeliveredValue("sub_5", "usv.a.z", "MIN", "0.25", "M", 1, 0, 0,
+                                        250_000_000, None, None, 0))  # empty: nothing sent
+        values.append(DeliveredValue("all_1", "usv.a.z", "ALL", "1", "M", 1, 0, 0,
+                                     1_000_000_000, [1.0, 2.0], 2, 0))
+        for v in values:
+            station.put(f"modd/usv/sub/{v.subscriber}", v.to_json())
+        got = [json.loads(udp.recv(65536)) for _ in range(4)]
+        udp.settimeout(0.5)
+        with pytest.raises(TimeoutError):
+            udp.recv(65536)
+    finally:
+        proc.terminate()
+        proc.wait(10)
+        if proc.stdout is not None:
+            proc.stdout.close()
+        station.close()  # type: ignore[no-untyped-call]
+        udp.close()
+    series = [flatten(g) for g in got]
+    assert series[:3] == [{"/timestamp": (k + 1) * 0.25, "/usv/sub_3/value": 0.5 * k,
+                           "/usv/sub_3/count": 4} for k in range(1, 4)]
+    assert series[3] == {"/timestamp": 1.0, "/usv/all_1/value[0]": 1.0,
+                         "/usv/all_1/value[1]": 2.0, "/usv/all_1/count": 2}
+
+
+def test_bad_values_and_options() -> None:
+    assert datagram("usv", "s", {"end_ns": 1, "value": float("nan")}) is None
+    assert datagram("usv", "s", {"value": 1.0}) is None
+    assert datagram("usv", "s", {"end_ns": 10**9, "value": [0.0] * 20_000}) is None
+    assert json.loads(datagram("usv", "s", {"end_ns": 10**9, "value": 1, "backfilled": True})
+                      or b"{}")["usv"]["s"]["backfilled"] == 1
+    assert parse_udp("127.0.0.1:9870") == ("127.0.0.1", 9870)
+    assert parse_udp("[::1]:9870") == ("::1", 9870)
+    for bad in ("9870", "host:", "host:0", "host:x"):
+        with pytest.raises(ValueError, match="HOST:PORT"):
+            parse_udp(bad)
