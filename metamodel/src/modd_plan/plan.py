@@ -23,7 +23,14 @@ from modd_model.diagnostics import Diagnostic, ModelError
 from modd_model.numbers import MICROS_PER_SECOND, fraction_to_decimal
 from modd_model.query import Topic, link_settings, topics
 
-from .buffers import BufferProblem, BufferSolution, Infeasibility, Subscription, solve_exact
+from .buffers import (
+    BufferProblem,
+    BufferSolution,
+    BufferTooLarge,
+    Infeasibility,
+    Subscription,
+    solve_exact,
+)
 from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
 from .planjson import plan_to_json
 from .schedule import Schedule, ScheduleTooLarge
@@ -242,6 +249,15 @@ def make_plan(
     except ScheduleTooLarge as exc:
         raise PlanningError(_schedule_diagnostics(model, streams, exc)) from exc
     problem, unpublished = buffer_problem(model, tops, constants)
+    try:
+        buffers = _solve_buffers(problem, method)
+    except BufferTooLarge as exc:
+        position = {sub["name"]: i for i, sub in enumerate(model.get("subscribers", []))}
+        raise PlanningError([
+            Diagnostic(f"subscriber {name!r}: the planner cannot size the buffer of {exc}",
+                       f"/subscribers/{position[name]}/periodS")
+            for name in exc.subscribers[:_MAX_NAMED]
+        ]) from exc
     return Plan(
         topics=tuple(tops.values()),
         streams=streams,
@@ -250,7 +266,7 @@ def make_plan(
             for sub in model.get("subscribers", [])
         },
         schedule=sched,
-        buffers=_solve_buffers(problem, method),
+        buffers=buffers,
         unpublished=unpublished,
         constants=constants,
         link=_link_cost(model, sched, sent, tops),

@@ -52,6 +52,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from functools import cached_property, reduce
 from math import gcd, lcm, prod
+from typing import Any
 
 import numpy as np
 from modd_model.numbers import MICROS_PER_SECOND
@@ -220,7 +221,7 @@ def _unhit_lattice(base: Sequence[int], numbers: Sequence[int]) -> int:
         view = np.moveaxis(marked, axis, 0)
         for k in range(1, view.shape[0]):
             np.logical_or(view[k], view[k - 1], out=view[k])
-    counts: np.ndarray = np.logical_not(marked).astype(np.int64)  # type: ignore[type-arg]
+    counts: np.ndarray[Any, Any] = np.logical_not(marked).astype(np.int64)
     del marked
     bound = 1
     for b in axes:
