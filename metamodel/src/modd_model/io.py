@@ -91,6 +91,18 @@ def load_file(path: str | Path) -> LoadResult:
     return load_text(text, str(path), format_of(p))
 
 
+def locate(diags: list[Diagnostic], result: LoadResult, path: str | Path) -> list[Diagnostic]:
+    """Diagnostics found after loading (the planner's, on the model's JSON
+    pointers) located in the file as :func:`load_file` locates its own."""
+    if format_of(path) == "json" or not result.source_map:
+        return [replace(d, location=d.location or Location(str(path), 0, 0)) for d in diags]
+    try:
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError):
+        lines = []
+    return _locate(diags, result.source_map, lines)
+
+
 def load_or_report(path: str | Path, *, quiet_warnings: bool = False,
                    out: TextIO | None = None) -> dict[str, Any] | None:
     """The valid model of a file, or None; every diagnostic goes to ``out``

@@ -182,3 +182,24 @@ def test_prime_periods_on_a_grid_plan_fast(make_model: Any) -> None:
         unhit *= u - 1
     assert j["messages_per_hyperperiod"] == h - unhit  # pairwise coprime: a product
     assert j["schedule"]["slots_truncated"]
+
+
+def test_cli_prints_the_located_error(make_model: Any, tmp_path: Any, capsys: Any) -> None:
+    import argparse
+
+    from modd_model import dumps
+    from modd_plan.cli import run_plan
+
+    cycle = [f"{PRIMES[i] * PRIMES[(i + 1) % 24] / 1000:.3f}" for i in range(24)]
+    names = [f"v{i}" for i in range(24)]
+    subs = [(f"sub{i}", names[i], p, "MAX") for i, p in enumerate(cycle)]
+    path = tmp_path / "worst.modd"
+    path.write_text(dumps(make_model(names, [("p", "0.001", names)], subs), "modd"))
+    args = argparse.Namespace(file=str(path), json=False, ping=None, alpha=None, beta=None,
+                              max_buffer=None, method="exact")
+    assert run_plan(args) == 1
+    err = capsys.readouterr().err
+    lines = [x for x in err.splitlines() if ": error: subscriber 'sub" in x]
+    assert len(lines) == 24 and all(x.startswith(f"{path}:") for x in lines)
+    line = int(lines[0].split(":")[1])
+    assert "sub0" in path.read_text().splitlines()[line - 1]
