@@ -6,7 +6,7 @@
 
 The names below are imported on first use (PEP 562), so that ``modd --help``
 and light submodules (``modd_model.numbers``, ``modd_model.cli``) do not pay
-for the parser (lark) and the validator (jsonschema).
+for the parser (lark); the validator imports jsonschema on first use.
 """
 
 from __future__ import annotations
@@ -14,17 +14,18 @@ from __future__ import annotations
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
+# ``validate`` is both a submodule and a function: imported here, so that the
+# function, not the module, is the package's attribute (the module is light;
+# it imports jsonschema on first use).
+from .diagnostics import Diagnostic, Location, ModelError
+from .validate import validate
+
 if TYPE_CHECKING:
-    from .diagnostics import Diagnostic, Location, ModelError
     from .io import LoadResult, dumps, format_of, load_file, load_model, load_or_report, load_text
     from .parser import parse_text
     from .printer import print_model
-    from .validate import validate
 
 _WHERE = {
-    "Diagnostic": "diagnostics",
-    "Location": "diagnostics",
-    "ModelError": "diagnostics",
     "LoadResult": "io",
     "dumps": "io",
     "format_of": "io",
@@ -34,7 +35,6 @@ _WHERE = {
     "load_text": "io",
     "parse_text": "parser",
     "print_model": "printer",
-    "validate": "validate",
 }
 
 __all__ = [

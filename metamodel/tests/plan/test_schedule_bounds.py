@@ -203,3 +203,47 @@ def test_cli_prints_the_located_error(make_model: Any, tmp_path: Any, capsys: An
     assert len(lines) == 24 and all(x.startswith(f"{path}:") for x in lines)
     line = int(lines[0].split(":")[1])
     assert "sub0" in path.read_text().splitlines()[line - 1]
+
+
+def test_max_buffer_is_bounded_and_costs_nothing(scenario1_dict: Any) -> None:
+    """maxBuffer has a schema maximum; the planner's memory does not depend on
+    it (the old one: 840 MiB at 1e7, 4.8 GiB at 1e8)."""
+    import resource
+
+    from modd_model import validate
+
+    model = dict(scenario1_dict, link={"maxBuffer": 10**8})
+    diags = [d for d in validate(model) if d.severity == "error"]
+    assert [d.pointer for d in diags] == ["/link/maxBuffer"]
+    assert "1000000" in diags[0].message
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    start = time.process_time()
+    plan = make_plan(scenario1_dict, max_buffer=10**8)
+    assert time.process_time() - start < 1.0
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50_000  # KiB
+    assert plan.buffer_sizes == make_plan(scenario1_dict).buffer_sizes
+
+
+def test_buffer_candidates_beyond_the_bound_are_a_located_error(make_model: Any) -> None:
+    model = make_model(["a", "b"], [("p", "0.000001", ["a", "b"])],
+                       [("fast", "a", "0.001", "MAX"), ("slow", "a", "100000", "MAX"),
+                        ("fine", "b", "1.0", "MAX")], link={"maxBuffer": 10**6})
+    start = time.process_time()
+    with pytest.raises(PlanningError) as info:
+        make_plan(model)
+    assert time.process_time() - start < 1.0
+    diags = info.value.diagnostics
+    assert [d.pointer for d in diags] == ["/subscribers/0/periodS", "/subscribers/1/periodS"]
+    assert "candidate buffer sizes" in diags[0].message
+
+
+def test_periods_and_decimals_are_bounded(scenario1_dict: Any) -> None:
+    from modd_model import validate
+
+    model = dict(scenario1_dict)
+    model["subscribers"] = [dict(s) for s in model["subscribers"]]
+    model["subscribers"][0]["periodS"] = "2000000"
+    model["subscribers"][1]["periodS"] = "0." + "5" * 30
+    errors = {d.pointer: d.message for d in validate(model) if d.severity == "error"}
+    assert "at most 1,000,000 s" in errors["/subscribers/0/periodS"]
+    assert "/subscribers/1/periodS" in errors
