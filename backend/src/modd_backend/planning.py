@@ -74,8 +74,9 @@ def preload_milp() -> None:
 
 #: Worker processes planning at once, seconds a request may plan, bytes of
 #: address space a worker may use, requests waiting for a worker at most.
-PLAN_WORKERS = 2
-PLAN_TIMEOUT_S = 10.0
+#: One core is left to the event loop and the other routes.
+PLAN_WORKERS = max(1, min(4, (os.cpu_count() or 2) - 1))
+PLAN_TIMEOUT_S = 30.0
 PLAN_MEMORY_BYTES = 2 << 30
 PLAN_QUEUE = 8
 #: Extra seconds a worker may take to start (spawn, imports) before the
