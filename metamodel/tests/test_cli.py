@@ -86,3 +86,36 @@ def test_write_atomic_leaves_the_original_on_a_failed_write(
     monkeypatch.undo()
     write_atomic(target, "new\n")
     assert target.read_text() == "new\n"
+
+
+def _modules_after(*argv: str) -> set[str]:
+    """Modules imported by ``modd ARGV`` (run in a fresh interpreter)."""
+    code = (
+        "import sys, json, contextlib, io\n"
+        "from modd_model.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    try:\n"
+        f"        main({list(argv)!r})\n"
+        "    except SystemExit:\n"
+        "        pass\n"
+        "print(json.dumps(sorted(sys.modules)))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=60, check=True).stdout
+    return {m.split(".")[0] for m in json.loads(out.strip().splitlines()[-1])}
+
+
+HEAVY = {"fastapi", "sqlalchemy", "starlette", "pydantic", "cvxpy", "zenoh", "modd_backend",
+         "modd_gen", "modd"}
+
+
+def test_help_imports_no_plugin() -> None:
+    """``modd --help`` lists the commands without importing any of them."""
+    loaded = _modules_after("--help")
+    assert not loaded & (HEAVY | {"lark", "jsonschema", "numpy", "modd_plan"})
+
+
+def test_plan_imports_only_the_planner(scenarios_dir: Path) -> None:
+    loaded = _modules_after("plan", str(scenarios_dir / "scenario1.modd"))
+    assert "modd_plan" in loaded
+    assert not loaded & HEAVY

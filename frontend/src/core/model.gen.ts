@@ -26,7 +26,7 @@ export type Name = string;
 /** Fully qualified name of a measured variable: drone.sensor.variable. */
 export type TopicName = string;
 
-/** An exact decimal number written as a string (e.g. "0.25"), so that periods keep exact rational arithmetic end to end. */
+/** An exact decimal number written as a string (e.g. "0.25"), so that periods keep exact rational arithmetic end to end; at most 24 characters. */
 export type Decimal = string;
 
 /** A period in seconds, as an exact decimal string, resolved to the microsecond. */
@@ -141,7 +141,7 @@ export interface Link {
   keyRef?: string;
   /** Expected round-trip time of the link in seconds, until measured. */
   expectedRttS?: Decimal;
-  /** MAX_BUFFER: the largest buffer size n the planner may choose. */
+  /** MAX_BUFFER: the largest buffer size n the planner may choose (at most one million samples per topic). */
   maxBuffer?: number;
   /** PING_TIME in seconds: a subscriber's delay may not exceed 3 x PING. */
   pingS?: Decimal;

@@ -1,29 +1,77 @@
 """The ``modd`` command line. Subcommands are plugins found through the
 ``modd.commands`` entry points, so each package (planner, generators, runtime)
-registers its own: ``register(subparsers)`` adds a subparser and sets ``func``."""
+registers its own: ``register(subparsers)`` adds a subparser and sets ``func``.
+
+Plugins load lazily: ``modd --help`` lists the entry points' names without
+importing any of them, and ``modd COMMAND ...`` imports only that command's
+plugin (``push`` pulls in the backend application; ``plan`` only the planner).
+This module imports nothing of ``modd_model`` itself.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
 from collections.abc import Sequence
-from importlib.metadata import entry_points
+from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
+#: One-line help of the known commands, shown by ``modd --help`` without
+#: loading their plugins (a plugin not listed here shows its entry point).
+COMMAND_HELP = {
+    "convert": "convert a model between .modd and JSON",
+    "fmt": "rewrite models in canonical form",
+    "generate": "generate configs, driver projects and stubs",
+    "plan": "schedule, buffer sizes, delays and link cost of a model",
+    "push": "put a model into a running workbench (and deploy it)",
+    "up": "run a model locally: PubBroker, SubBroker, simulated sensors",
+    "validate": "check models; errors with file:line:col on stderr",
+}
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="modd", description="MoDD: model-driven data "
-                                     "collection for drones.")
+_DESCRIPTION = "MoDD: model-driven data collection for drones."
+
+
+def _entry_points() -> dict[str, EntryPoint]:
+    return {ep.name: ep for ep in entry_points(group="modd.commands")}
+
+
+def _new_parser() -> tuple[argparse.ArgumentParser, Any]:
+    parser = argparse.ArgumentParser(prog="modd", description=_DESCRIPTION)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for ep in sorted(entry_points(group="modd.commands"), key=lambda e: e.name):
-        try:
-            register = ep.load()
-        except ImportError as exc:
-            # A broken plugin must not take the other commands down with it.
-            _register_broken(sub, ep.name, exc)
-            continue
-        register(sub)
+    return parser, sub
+
+
+def _load(sub: Any, ep: EntryPoint) -> None:
+    try:
+        register = ep.load()
+    except ImportError as exc:
+        # A broken plugin must not take the other commands down with it.
+        _register_broken(sub, ep.name, exc)
+        return
+    register(sub)
+
+
+def build_parser(command: str | None = None, *, load_all: bool = True) -> argparse.ArgumentParser:
+    """The parser with ``command``'s plugin loaded (every plugin when
+    ``command`` is None and ``load_all``); the other commands are listed by
+    name only."""
+    parser, sub = _new_parser()
+    for name, ep in sorted(_entry_points().items()):
+        if name == command or (command is None and load_all):
+            _load(sub, ep)
+        else:  # listed for --help and for argparse's "invalid choice" message
+            sub.add_parser(name, help=COMMAND_HELP.get(name, f"(plugin {ep.value})"))
     return parser
+
+
+def _command_of(argv: Sequence[str], names: set[str]) -> str | None:
+    """The subcommand named on the command line (the first non-option word)."""
+    for word in argv:
+        if word == "--":
+            return None
+        if not word.startswith("-"):
+            return word if word in names else None
+    return None
 
 
 def _register_broken(sub: Any, name: str, exc: ImportError) -> None:
@@ -36,7 +84,9 @@ def _register_broken(sub: Any, name: str, exc: ImportError) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    args_in = list(sys.argv[1:] if argv is None else argv)
+    command = _command_of(args_in, set(_entry_points()))
+    args = build_parser(command, load_all=False).parse_args(args_in)
     try:
         code: int = args.func(args)
     except KeyboardInterrupt:

@@ -172,6 +172,18 @@ def write_atomic(path: str | Path, text: str) -> None:
         raise
 
 
+def locate(diags: list[Diagnostic], result: LoadResult, path: str | Path) -> list[Diagnostic]:
+    """Diagnostics found after loading (the planner's, on the model's JSON
+    pointers) located in the file as :func:`load_file` locates its own."""
+    if format_of(path) == "json" or not result.source_map:
+        return [replace(d, location=d.location or Location(str(path), 0, 0)) for d in diags]
+    try:
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError):
+        lines = []
+    return _locate(diags, result.source_map, lines)
+
+
 def load_or_report(path: str | Path, *, quiet_warnings: bool = False,
                    out: TextIO | None = None, encoding: str | None = None
                    ) -> dict[str, Any] | None:

@@ -7,15 +7,16 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from fractions import Fraction
-from typing import Any
-
-from jsonschema import Draft202012Validator
-from jsonschema.exceptions import ValidationError
+from typing import TYPE_CHECKING, Any
 
 from .diagnostics import Diagnostic, pointer_join
 from .numbers import to_fraction, to_micros
 from .query import topic_name
 from .schema import load_schema
+
+if TYPE_CHECKING:  # jsonschema is imported on first validation (it is slow to import)
+    from jsonschema import Draft202012Validator
+    from jsonschema.exceptions import ValidationError
 
 Check = Callable[[dict[str, Any]], Iterator[Diagnostic]]
 CHECKS: list[Check] = []
@@ -55,6 +56,8 @@ _VALIDATOR: Draft202012Validator | None = None
 def _schema_validator() -> Draft202012Validator:
     global _VALIDATOR
     if _VALIDATOR is None:
+        from jsonschema import Draft202012Validator
+
         _VALIDATOR = Draft202012Validator(load_schema())
     return _VALIDATOR
 
@@ -147,9 +150,16 @@ def references_resolve(doc: dict[str, Any]) -> Iterator[Diagnostic]:
                              f"{sub['name']!r} would never receive a value", ptr)
 
 
+#: Longest period (s) a model may use: about 11.6 days. It bounds the
+#: planner's integers (hyperperiods, buffer-size candidates).
+MAX_PERIOD_S = 1_000_000
+
+
 def _period_problem(text: str) -> str | None:
     if to_fraction(text) <= 0:
         return "a period must be greater than zero"
+    if to_fraction(text) > MAX_PERIOD_S:
+        return f"a period must be at most {MAX_PERIOD_S:,} s"
     try:
         to_micros(text)
     except ValueError:

@@ -115,14 +115,45 @@ def solution_from_sizes(problem: BufferProblem, sizes: Sequence[int]) -> BufferS
     return BufferSolution({t: int(n) for t, n in by_name.items()}, devs)
 
 
-def topic_table(
-    periods_us: Sequence[int], pm_us: int, max_buffer: int
-) -> tuple[IntArray, IntArray]:
-    """S(n) and M(n) for n = 1..max_buffer (index n - 1): the sum and the
-    largest of |ps_j - n * pm| over the topic's subscriptions."""
-    x = np.arange(1, max_buffer + 1, dtype=np.int64) * pm_us
+#: Candidate buffer sizes examined per topic at most (an int64 of each of a
+#: few tables each): the work and memory of a plan never depend on MAX_BUFFER.
+CANDIDATE_LIMIT = 1 << 19
+
+
+class BufferTooLarge(ValueError):
+    """A topic whose useful buffer sizes are too many to examine."""
+
+    def __init__(self, topic: str, subscribers: Sequence[str], count: int) -> None:
+        self.topic = topic
+        self.subscribers = tuple(subscribers)
+        super().__init__(
+            f"{topic}: {count:,} candidate buffer sizes between its shortest and longest "
+            f"subscription period, over the planner's bound {CANDIDATE_LIMIT:,}; bring the "
+            "subscription periods of this topic closer together or publish it less often"
+        )
+
+
+def candidate_range(periods_us: Sequence[int], pm_us: int, max_buffer: int) -> tuple[int, int]:
+    """The buffer sizes ``lo..hi`` that can be optimal. Below ``ps_min / pm``
+    every deviation shrinks as ``n`` grows, above ``ps_max / pm`` every one
+    grows, so a size outside is worse on both the sum and the maximum than
+    the nearest end (and no nearer the cap)."""
     if not periods_us:
-        zero = np.zeros(max_buffer, dtype=np.int64)
+        return 1, 1
+    hi = min(max_buffer, -(-max(periods_us) // pm_us))
+    lo = min(max(1, min(periods_us) // pm_us), hi)
+    return lo, hi
+
+
+def topic_table(
+    periods_us: Sequence[int], pm_us: int, max_buffer: int, lo: int = 1, hi: int | None = None
+) -> tuple[IntArray, IntArray]:
+    """S(n) and M(n) for n = lo..hi (default 1..max_buffer; index n - lo): the
+    sum and the largest of |ps_j - n * pm| over the topic's subscriptions."""
+    hi = max_buffer if hi is None else hi
+    x = np.arange(lo, hi + 1, dtype=np.int64) * pm_us
+    if not periods_us:
+        zero = np.zeros(len(x), dtype=np.int64)
         return zero, zero.copy()
     ps = np.sort(np.asarray(periods_us, dtype=np.int64))
     prefix = np.concatenate(([0], np.cumsum(ps)))
@@ -143,8 +174,8 @@ class _Front:
     n: IntArray
 
 
-def _front(s: IntArray, m: IntArray, allowed: npt.NDArray[np.bool_]) -> _Front:
-    n = np.flatnonzero(allowed).astype(np.int64) + 1
+def _front(s: IntArray, m: IntArray, allowed: npt.NDArray[np.bool_], lo: int) -> _Front:
+    n = np.flatnonzero(allowed).astype(np.int64) + lo
     s, m = s[allowed], m[allowed]
     order = np.lexsort((n, s, m))
     s, m, n = s[order], m[order], n[order]
@@ -153,7 +184,9 @@ def _front(s: IntArray, m: IntArray, allowed: npt.NDArray[np.bool_]) -> _Front:
     return _Front(m[keep], s[keep], n[keep])
 
 
-def _explain(topic: str, subs: Sequence[Subscription], pm_us: int, m: IntArray, cap_us: int) -> str:
+def _explain(
+    topic: str, subs: Sequence[Subscription], pm_us: int, m: IntArray, cap_us: int, first_n: int
+) -> str:
     def sec(us: int | Fraction) -> str:
         return fraction_to_decimal(Fraction(us) / MICROS_PER_SECOND) + " s"
 
@@ -167,10 +200,11 @@ def _explain(topic: str, subs: Sequence[Subscription], pm_us: int, m: IntArray, 
             f"least {sec(Fraction(hi.period_us - lo.period_us, 2))} more or less than its period, "
             f"over the limit 3 x PING = {cap}"
         )
-    best = int(np.argmin(m))
+    i = int(np.argmin(m))
+    best = i + first_n - 1
     return (
         f"with a publication period of {sec(pm_us)} the best buffer size n = {best + 1} "
-        f"(n x pm = {sec((best + 1) * pm_us)}) still leaves a deviation of {sec(int(m[best]))}, "
+        f"(n x pm = {sec((best + 1) * pm_us)}) still leaves a deviation of {sec(int(m[i]))}, "
         f"over the limit 3 x PING = {cap}"
     )
 
@@ -186,18 +220,22 @@ def _fronts(problem: BufferProblem) -> tuple[list[_Front | None], list[Infeasibi
         if not subs:
             fronts.append(None)
             continue
-        s, m = topic_table([x.period_us for x in subs], pm_us, problem.max_buffer)
+        periods = [x.period_us for x in subs]
+        lo, hi = candidate_range(periods, pm_us, problem.max_buffer)
+        if hi - lo + 1 > CANDIDATE_LIMIT:
+            raise BufferTooLarge(topic, [x.name for x in subs], hi - lo + 1)
+        s, m = topic_table(periods, pm_us, problem.max_buffer, lo, hi)
         if problem.alpha == 0:
             s = np.zeros_like(s)
         cap = problem.cap_for(topic)
         allowed = np.ones(len(m), dtype=bool) if cap is None else m <= cap
         if not allowed.any():
             assert cap is not None
-            reason = _explain(topic, subs, pm_us, m, cap)
+            reason = _explain(topic, subs, pm_us, m, cap, lo)
             infeasible.append(Infeasibility(topic, tuple(x.name for x in subs), reason))
             fronts.append(None)
             continue
-        fronts.append(_front(s, m, allowed))
+        fronts.append(_front(s, m, allowed, lo))
     return fronts, infeasible
 
 

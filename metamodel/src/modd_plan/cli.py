@@ -11,10 +11,10 @@ import sys
 from fractions import Fraction
 from typing import Any, TextIO
 
-from modd_model import ModelError, load_model
+from modd_model.io import load_file, locate
 from modd_model.numbers import fraction_to_decimal, to_fraction
 
-from .plan import METHODS, Plan, make_plan
+from .plan import METHODS, Plan, PlanningError, make_plan
 
 #: Slots printed in the human-readable schedule.
 TEXT_SLOT_LIMIT = 40
@@ -52,19 +52,20 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Load, plan, print. Exit 0 when feasible, 1 on a bad model, 3 when the
     plan violates the 3 x PING cap (the plan is still printed)."""
     out = out or sys.stdout
-    try:
-        model = load_model(args.file)
-    except ModelError as exc:
-        for d in exc.diagnostics:
+    result = load_file(args.file)
+    if not result.ok or result.model is None:
+        for d in result.diagnostics:
             print(d, file=sys.stderr)
         return 1
-    except OSError as exc:
-        print(f"{args.file}: {exc.strerror or exc}", file=sys.stderr)
+    try:
+        plan = make_plan(
+            result.model, ping_s=args.ping, alpha=args.alpha, beta=args.beta,
+            max_buffer=args.max_buffer, method=args.method,
+        )
+    except PlanningError as exc:
+        for d in locate(exc.diagnostics, result, args.file):
+            print(d, file=sys.stderr)
         return 1
-    plan = make_plan(
-        model, ping_s=args.ping, alpha=args.alpha, beta=args.beta,
-        max_buffer=args.max_buffer, method=args.method,
-    )
     if args.json:
         json.dump(plan.to_json(), out, indent=2)
         out.write("\n")

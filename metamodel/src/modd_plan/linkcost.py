@@ -116,11 +116,13 @@ class LinkCost:
         }
 
 
-def _frame_bytes_per_hyperperiod(schedule: Schedule, window_bytes: Sequence[Fraction]) -> float:
+def _frame_bytes_per_hyperperiod(
+    schedule: Schedule, window_bytes: Sequence[Fraction]
+) -> Fraction:
     """Sum of the DATA frames' sizes over one hyperperiod."""
     m = schedule.messages_per_hyperperiod
     if m == 0:
-        return 0.0
+        return Fraction(0)
     if m <= EXACT_WALK_LIMIT:
         per_period: dict[int, tuple[Fraction, int]] = {}
         for p, b in zip(schedule.periods_us, window_bytes, strict=True):
@@ -132,13 +134,13 @@ def _frame_bytes_per_hyperperiod(schedule: Schedule, window_bytes: Sequence[Frac
                 break
             values = sum((per_period[p][0] for p in due), Fraction(0))
             total += data_frame_bytes(ceil(values), sum(per_period[p][1] for p in due))
-        return float(total)
+        return Fraction(total)
     values = sum(
         (schedule.value_count_per_hyperperiod(i) * b for i, b in enumerate(window_bytes)),
         Fraction(0),
     )
     mean_body = DATA_HEADER_BYTES + values / m
-    return float(values + m * (DATA_HEADER_BYTES + varint_size(ceil(mean_body))))
+    return values + m * (DATA_HEADER_BYTES + varint_size(ceil(mean_body)))
 
 
 def predict(
@@ -149,9 +151,10 @@ def predict(
     """Link cost of a schedule whose stream ``i`` carries ``window_bytes[i]``
     per window; ``plain_streams`` maps each subscriber to (publication period
     of its topic, bytes of one plain pub/sub message payload)."""
-    h = float(schedule.hyperperiod) if schedule.messages_per_hyperperiod else 0.0
-    frames = schedule.messages_per_hyperperiod / h if h else 0.0
-    data = _frame_bytes_per_hyperperiod(schedule, window_bytes) / h if h else 0.0
+    m, h = schedule.messages_per_hyperperiod, schedule.hyperperiod
+    # rates as exact ratios first: a hyperperiod may be far beyond a float
+    frames = float(m / h) if m else 0.0
+    data = float(_frame_bytes_per_hyperperiod(schedule, window_bytes) / h) if m else 0.0
     plain_rate = sum(1 / float(pm) for pm, _ in plain_streams.values())
     plain = sum((TCP_IP_HEADER_BYTES + size) / float(pm) for pm, size in plain_streams.values())
     return LinkCost(

@@ -12,23 +12,40 @@ and the SubBroker (at run time, with the measured PING):
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
 from math import lcm
 from typing import Any
 
+from modd_model.diagnostics import Diagnostic, ModelError
 from modd_model.numbers import MICROS_PER_SECOND, fraction_to_decimal
 from modd_model.query import Topic, link_settings, topics
 
-from .buffers import BufferProblem, BufferSolution, Infeasibility, Subscription, solve_exact
+from .buffers import (
+    BufferProblem,
+    BufferSolution,
+    BufferTooLarge,
+    Infeasibility,
+    Subscription,
+    solve_exact,
+)
 from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
 from .planjson import plan_to_json
-from .schedule import Schedule
+from .schedule import Schedule, ScheduleTooLarge
 from .streams import PlannedStream, StreamKey, period_of, plan_streams, requested_streams
 
 METHODS = ("exact", "cvxpy")
+
+#: Cap on the hyperperiod's size (bits of its microseconds): far beyond any
+#: mission (2^1024 µs), it only bounds the cost of the big-integer arithmetic.
+HYPERPERIOD_BITS_LIMIT = 1024
+
+
+class PlanningError(ModelError, ValueError):
+    """A valid model the planner cannot plan within its bounds on work and
+    memory; the diagnostics point at the subscriptions that cause it."""
 
 
 @lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
@@ -225,9 +242,22 @@ def make_plan(
 
     streams = plan_streams(requested, index, cost)
     sent = sorted((s for s in streams if s.id is not None), key=lambda s: s.id or 0)
-    hyper = lcm(*(_us(k.period) for k in requested)) if requested else 0
+    hyper = _hyperperiod_us(model, requested)
     sched = Schedule.from_periods_us([_us(s.stream.period) for s in sent], hyper)
+    try:
+        sched.check_bounds()
+    except ScheduleTooLarge as exc:
+        raise PlanningError(_schedule_diagnostics(model, streams, exc)) from exc
     problem, unpublished = buffer_problem(model, tops, constants)
+    try:
+        buffers = _solve_buffers(problem, method)
+    except BufferTooLarge as exc:
+        position = {sub["name"]: i for i, sub in enumerate(model.get("subscribers", []))}
+        raise PlanningError([
+            Diagnostic(f"subscriber {name!r}: the planner cannot size the buffer of {exc}",
+                       f"/subscribers/{position[name]}/periodS")
+            for name in exc.subscribers[:_MAX_NAMED]
+        ]) from exc
     return Plan(
         topics=tuple(tops.values()),
         streams=streams,
@@ -236,8 +266,63 @@ def make_plan(
             for sub in model.get("subscribers", [])
         },
         schedule=sched,
-        buffers=_solve_buffers(problem, method),
+        buffers=buffers,
         unpublished=unpublished,
         constants=constants,
         link=_link_cost(model, sched, sent, tops),
     )
+
+
+def _hyperperiod_us(model: Mapping[str, Any], requested: Mapping[StreamKey, Any]) -> int:
+    """LCM of every requested period (µs), within :data:`HYPERPERIOD_BITS_LIMIT`."""
+    hyper = 1 if requested else 0
+    for key in requested:
+        hyper = lcm(hyper, _us(key.period))
+        if hyper.bit_length() > HYPERPERIOD_BITS_LIMIT:
+            culprits = {_us(k.period) for k in requested if hyper % _us(k.period) == 0}
+            subs = [(i, sub) for i, sub in enumerate(model.get("subscribers", []))
+                    if _us(period_of(sub["periodS"])) in culprits][:20]
+            raise PlanningError([
+                Diagnostic(
+                    f"subscriber {sub['name']!r}: the hyperperiod (the least common multiple "
+                    f"of the subscription periods) exceeds 2^{HYPERPERIOD_BITS_LIMIT} µs; "
+                    "choose periods that are multiples of one another",
+                    f"/subscribers/{i}/periodS",
+                )
+                for i, sub in subs
+            ])
+    return hyper
+
+
+#: Diagnostics of a schedule the planner cannot count: one per period at most.
+_MAX_NAMED = 5
+
+
+def _schedule_diagnostics(
+    model: Mapping[str, Any], streams: Sequence[PlannedStream], exc: ScheduleTooLarge
+) -> list[Diagnostic]:
+    """One located error per offending sent period: at its first subscriber,
+    naming the others (a derived stream's subscribers count for its source)."""
+    culprits = set(exc.periods_us)
+    by_period: dict[int, list[str]] = {}
+    for s in streams:
+        periods = [_us(s.stream.period)] if s.sent else [_us(x.stream.period) for x in s.sources]
+        for p in periods:
+            if p in culprits:
+                by_period.setdefault(p, []).extend(s.subscribers)
+    position = {sub["name"]: i for i, sub in enumerate(model.get("subscribers", []))}
+    out: list[Diagnostic] = []
+    for p in sorted(by_period):
+        names = sorted(set(by_period[p]), key=lambda n: position.get(n, 0))
+        if not names:
+            continue  # a helper stream nobody asked for: named with its topic's others
+        others = names[1:_MAX_NAMED]
+        more = len(names) - 1 - len(others)
+        also = (f" (also {', '.join(others)}" + (f" and {more} more" if more else "") + ")"
+                if others else "")
+        out.append(Diagnostic(
+            f"subscriber {names[0]!r}{also}: sent every {_seconds(p)} s; the planner cannot "
+            f"schedule {exc}",
+            f"/subscribers/{position.get(names[0], 0)}/periodS",
+        ))
+    return out or [Diagnostic(f"the planner cannot schedule {exc}", "/subscribers")]

@@ -7,12 +7,11 @@ from __future__ import annotations
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Query
-from modd_model import LoadResult, validate
+from fastapi.concurrency import run_in_threadpool
 from pydantic import BaseModel
 
 from ..deps import DbDep, UserDep
-from ..modelio import read_input
-from ..planning import Method, live_plan
+from ..planning import Method, guarded_plan
 from ..schemas import DiagnosticOut, Id, ModelInput
 from ..versions import get_version, model_of
 
@@ -29,19 +28,21 @@ class PlanOut(BaseModel):
     elapsed_ms: float
 
 
-@router.post("/plan")
-def plan_model(body: ModelInput, _user: UserDep, method: Method = "exact") -> PlanOut:
-    return PlanOut.model_validate(live_plan(read_input(body), method).to_json())
+@router.post("/plan", responses={503: {"description": "the planner is busy; retry"}})
+async def plan_model(body: ModelInput, _user: UserDep, method: Method = "exact") -> PlanOut:
+    """Parsing, validation and planning run in a worker process within a time
+    and memory budget (modd_backend.planning), never on the event loop."""
+    return PlanOut.model_validate(await guarded_plan(body.model, body.text, body.format, method))
 
 
-@router.get("/projects/{project_id}/plan", responses={404: {"description": "no such revision"}})
-def plan_version(
+@router.get("/projects/{project_id}/plan", responses={
+    404: {"description": "no such revision"}, 503: {"description": "the planner is busy; retry"}})
+async def plan_version(
     project_id: Id,
     db: DbDep,
     _user: UserDep,
     revision: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
     method: Method = "exact",
 ) -> PlanOut:
-    model = model_of(get_version(db, project_id, revision))
-    result = LoadResult(model, validate(model), {})
-    return PlanOut.model_validate(live_plan(result, method).to_json())
+    model = await run_in_threadpool(lambda: model_of(get_version(db, project_id, revision)))
+    return PlanOut.model_validate(await guarded_plan(model, None, "json", method))
