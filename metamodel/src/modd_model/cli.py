@@ -19,7 +19,8 @@ from typing import Any
 #: One-line help of the known commands, shown by ``modd --help`` without
 #: loading their plugins (a plugin not listed here shows its entry point).
 COMMAND_HELP = {
-    "convert": "convert a model between .modd and JSON",
+    "archive": "inspect or recover a PubBroker MCAP archive",
+    "convert": "convert a model between .modd, JSON and the original tool's .collector",
     "fmt": "rewrite models in canonical form",
     "generate": "generate configs, driver projects and stubs",
     "plan": "schedule, buffer sizes, delays and link cost of a model",
