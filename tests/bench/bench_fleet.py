@@ -214,6 +214,23 @@ def start_backend(tmp: Path, router: int) -> tuple[Proc, int]:
     return proc, port
 
 
+def start_drone(tmp: Path, drone: Drone, model_path: Path) -> Proc:
+    """The drone's PubBroker on free ports (taken again if another process took them
+    between the choice and the bind: the machine is shared)."""
+    for attempt in range(3):
+        drone.link, drone.ingress = free_port(), free_port()
+        try:
+            proc = start_pubbroker(tmp, model_path, drone.link, drone.ingress,
+                                   tag=f"pb{attempt}")
+        except TimeoutError:  # it died before listening
+            continue
+        time.sleep(0.1)
+        if proc.alive():
+            return proc
+        proc.stop()
+    raise RuntimeError(f"{drone.name}: the PubBroker did not start (see {tmp})")
+
+
 def wait_all_seen(browser: Browser, drones: list[Drone], procs: list[Proc],
                   timeout_s: float) -> None:
     deadline = time.monotonic() + timeout_s
@@ -240,15 +257,14 @@ async def _run(tmp: Path, n: int, seconds: float, extra: int) -> Result:
             raise RuntimeError(f"router: {procs[0].log()}")
         backend, port = start_backend(tmp, router)
         procs.append(backend)
-        drones = [Drone(f"d{i}", drone_model(i, extra), free_port(), free_port())
-                  for i in range(n)]
+        drones = [Drone(f"d{i}", drone_model(i, extra), 0, 0) for i in range(n)]
         targets = []
         for d in drones:
             dtmp = tmp / d.name
             dtmp.mkdir()
             path = dtmp / "model.json"
             path.write_text(json.dumps(d.model))
-            d.pubbroker = start_pubbroker(dtmp, path, d.link, d.ingress, tag="pb")
+            d.pubbroker = start_drone(dtmp, d, path)
             d.subbroker = Proc(f"sb-{d.name}", [*SUBBROKER, "--config",
                                                 str(subbroker_toml(dtmp, d, path, router))],
                                dtmp / "sb.log")
