@@ -17,6 +17,12 @@ congestion control under the flat-out burst are counted apart).
 
     .venv/bin/python tests/bench/bench_subbroker.py                   # 4,000 subscriptions
     .venv/bin/python tests/bench/bench_subbroker.py --profile         # + the top of cProfile
+    .venv/bin/python tests/bench/bench_subbroker.py --e2e --seconds 20  # the real processes
+
+``--e2e`` runs the same model through the real processes instead: the C++ PubBroker fed by
+the publisher load, the SubBroker CLI over the MoDD link, values counted by a zenoh
+subscriber in this process; the SubBroker's CPU from /proc, its status (delivered,
+``behind``, ``lag_s``) from ``modd/d/status``.
 
 Target (issue 18): <= 10 us of CPU per delivered value (>= 50,000 values/s on one core).
 """
@@ -175,6 +181,84 @@ def _no_link() -> Any:
     return LinkOptions(endpoint=("127.0.0.1", free_port()), backoff_initial_s=60.0)
 
 
+def end_to_end(m: dict[str, Any], seconds: float) -> None:
+    import json
+    import tempfile
+    import threading
+    from pathlib import Path
+
+    here = Path(__file__).resolve().parent
+    for path in (here, here.parent / "subbroker"):
+        if str(path) not in sys.path:
+            sys.path.insert(0, str(path))
+    from benchkit.footprint import Sampler
+    from modd.zenoh_session import client_settings
+    from subbroker_harness import (
+        start_load,
+        start_pubbroker,
+        start_subbroker,
+        subbroker_config,
+        wait_port,
+    )
+
+    asked = float(sum(1 / Fraction(s["periodS"]) for s in m["subscribers"]))
+    with tempfile.TemporaryDirectory(prefix="modd-sbbench-") as tmp_name:
+        tmp = Path(tmp_name)
+        model_path = tmp / "model.json"
+        model_path.write_text(json.dumps(m))
+        link, ingress, zport = free_port(), free_port(), free_port()
+        pb = start_pubbroker(tmp, model_path, link, ingress)
+        sb = start_subbroker(tmp, subbroker_config(tmp, model_path, link, zport))
+        procs = [pb, sb]
+        try:
+            wait_port(zport, 120)
+            session = open_session(client_settings(f"tcp/127.0.0.1:{zport}"))
+            received = [0]
+            status: list[dict[str, Any]] = []
+            lock = threading.Lock()
+
+            def on_value(sample: Any) -> None:
+                received[0] += 1
+
+            def on_status(sample: Any) -> None:
+                with lock:
+                    status.append(json.loads(sample.payload.to_bytes()))
+
+            subs = [session.declare_subscriber("modd/d/sub/**", on_value),
+                    session.declare_subscriber("modd/d/status", on_status)]
+            procs.append(start_load(tmp, model_path, ingress, seconds + 120))
+            deadline = time.monotonic() + 120
+            while time.monotonic() < deadline and not (status and status[-1]["delivered"]):
+                time.sleep(0.2)
+            time.sleep(3)  # past the first derived windows
+            with lock:
+                first = status[-1]
+            got0, sampler = received[0], Sampler(sb.pid).start()
+            time.sleep(seconds)
+            fp = sampler.stop()
+            with lock:
+                last = status[-1]
+            got = received[0] - got0
+            delivered = last["delivered"] - first["delivered"]
+            dt = (last["time_ns"] - first["time_ns"]) / 1e9
+            print(f"End to end: PubBroker -> MoDD link -> SubBroker process -> zenoh, "
+                  f"{len(m['subscribers']):,} subscriptions, {asked:,.0f} values/s asked, "
+                  f"{fp.seconds:.0f} s\n")
+            print("| delivered /s (status) | received /s | SubBroker CPU | CPU us per value "
+                  "| RSS MB | behind | lag_s (last, max) | receive backlog |")
+            print("| ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: |")
+            print(f"| {delivered / dt:,.0f} | {got / fp.seconds:,.0f} | {fp.cpu_percent:.0f} % | "
+                  f"**{1e6 * fp.cpu_seconds / max(1.0, delivered / dt * fp.seconds):.1f}** | {fp.rss_median_kb / 1024:.0f} "
+                  f"| {last.get('behind')} | {last.get('lag_s')}, {last.get('max_lag_s')} | "
+                  f"{last.get('recv_backlog_bytes')} B |")
+            for sub in subs:
+                sub.undeclare()
+            session.close()  # type: ignore[no-untyped-call]
+        finally:
+            for proc in reversed(procs):
+                proc.stop()
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--subs", type=int, default=4000)
@@ -183,8 +267,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--speed", type=float, default=1.0, help="paced phase: x real time")
     ap.add_argument("--flat-slots", type=int, default=64, help="flat-out phase: slots")
     ap.add_argument("--profile", action="store_true", help="print the top of cProfile")
+    ap.add_argument("--e2e", action="store_true", help="through the real processes")
     args = ap.parse_args(argv)
     m = model(args.topics, args.subs)
+    if args.e2e:
+        end_to_end(m, args.seconds)
+        return 0
     bench = Bench(m)
     try:
         config = bench.config
