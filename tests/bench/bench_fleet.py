@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
+import os
 import random
 import statistics
 import sys
@@ -288,6 +289,8 @@ async def _run(tmp: Path, n: int, seconds: float, extra: int) -> Result:
         shared = {"zenoh router (Python, router mode)": procs[0], "backend": backend,
                   "publisher load (all drones, Python)": load}
         shared_samplers = {k: Sampler(p.pid).start() for k, p in shared.items()}
+        shared_samplers["WebSocket clients (this process, all drones)"] = \
+            Sampler(os.getpid()).start()
         browser.marked = True
         t0 = time.monotonic()
         await asyncio.sleep(seconds)
