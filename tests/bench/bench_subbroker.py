@@ -244,11 +244,13 @@ def end_to_end(m: dict[str, Any], seconds: float) -> None:
             print(f"End to end: PubBroker -> MoDD link -> SubBroker process -> zenoh, "
                   f"{len(m['subscribers']):,} subscriptions, {asked:,.0f} values/s asked, "
                   f"{fp.seconds:.0f} s\n")
-            print("| delivered /s (status) | received /s | SubBroker CPU | CPU us per value "
-                  "| RSS MB | behind | lag_s (last, max) | receive backlog |")
-            print("| ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: |")
+            frames = (last["data_frames"] - first["data_frames"]) / dt
+            print("| DATA frames /s | delivered /s (status) | received /s | SubBroker CPU "
+                  "| CPU us per value | RSS MB | behind | lag_s (last, max) | receive backlog |")
+            print("| ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: |")
             per_value = 1e6 * fp.cpu_seconds / max(1.0, delivered / dt * fp.seconds)
-            print(f"| {delivered / dt:,.0f} | {got / fp.seconds:,.0f} | {fp.cpu_percent:.0f} % | "
+            print(f"| {frames:.1f} | {delivered / dt:,.0f} | {got / fp.seconds:,.0f} | "
+                  f"{fp.cpu_percent:.0f} % | "
                   f"**{per_value:.1f}** | {fp.rss_median_kb / 1024:.0f} "
                   f"| {last.get('behind')} | {last.get('lag_s')}, {last.get('max_lag_s')} | "
                   f"{last.get('recv_backlog_bytes')} B |")
