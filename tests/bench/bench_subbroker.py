@@ -230,7 +230,15 @@ def end_to_end(m: dict[str, Any], seconds: float) -> None:
             deadline = time.monotonic() + 120
             while time.monotonic() < deadline and not (status and status[-1]["delivered"]):
                 time.sleep(0.2)
-            time.sleep(3)  # past the first derived windows
+            # Steady state: the first slots declare one zenoh publisher per subscriber
+            # (~0.6 ms each), so the SubBroker starts a few seconds behind and catches up.
+            while time.monotonic() < deadline:
+                time.sleep(2)
+                with lock:
+                    a, b = status[-5], status[-1]
+                rate = (b["delivered"] - a["delivered"]) / ((b["time_ns"] - a["time_ns"]) / 1e9)
+                if abs(rate - asked) < 0.1 * asked and not b.get("recv_backlog_bytes"):
+                    break
             with lock:
                 first = status[-1]
             got0, sampler = received[0], Sampler(sb.pid).start()
