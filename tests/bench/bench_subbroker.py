@@ -290,16 +290,20 @@ def main(argv: list[str] | None = None) -> int:
         per_s = sum(1 / Fraction(s["periodS"]) for s in m["subscribers"])
         hyper = 2.0  # the periods' least common multiple
         n_paced = int(args.seconds * 4)  # 0.25 s slots
-        batch = slots(config, bench.epoch_ns, 16 + n_paced + args.flat_slots)
-        warmup, paced, flat = batch[:16], batch[16:16 + n_paced], batch[16 + n_paced:]
+        n_flat = args.flat_slots
+        batch = slots(config, bench.epoch_ns, 16 + n_paced + 2 * n_flat)
+        warmup, paced = batch[:16], batch[16:16 + n_paced]
+        flat, profiled = batch[16 + n_paced:16 + n_paced + n_flat], batch[16 + n_paced + n_flat:]
         bench.run("warm-up", warmup, None)  # publishers declared, caches filled
         dates = [(w[0].end_ns - paced[0][0].end_ns) / 1e9 / args.speed for w in paced]
         profile = cProfile.Profile() if args.profile else None
         results = [
             bench.run(f"paced, model rate x{args.speed:g} ({float(per_s) * args.speed:,.0f} "
                       "values/s asked)", paced, dates),
-            bench.run("flat out (slots back to back)", flat, None, profile),
+            bench.run("flat out (slots back to back)", flat, None),
         ]
+        if profile is not None:
+            results.append(bench.run("flat out, under cProfile", profiled, None, profile))
         print(f"SubBroker data path: {args.subs:,} subscriptions on {args.topics} topics, "
               f"{len(config.streams)} streams sent, {len(bench.broker._running.fanout.routes())}"
               f" routed (hyperperiod {hyper:g} s), {float(per_s):,.0f} values/s asked\n")
