@@ -2,7 +2,7 @@
 # Every benchmark of tests/bench, one after the other, each printing its tables
 # (`make bench`, after `make build`, which runs scripts/setup.sh). Asserts no time.
 # Figures go in docs/benchmarks.md with the command that printed them.
-# Takes about 14 minutes on a 2-core machine. LINK_SECONDS etc. shorten it.
+# Takes about 17 minutes on a 2-core machine. LINK_SECONDS etc. shorten it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=.venv/bin/python
@@ -35,5 +35,7 @@ run tests/bench/bench_footprint.py --seconds "${FOOTPRINT_SECONDS:-30}"
 run tests/bench/bench_pubbroker.py --seconds "${PUBBROKER_SECONDS:-10}" --ingest-samples 10000000
 run tests/bench/bench_planner.py --quick
 run tests/bench/bench_backend_plan.py --runs 30
+run tests/bench/bench_subbroker.py --seconds "${SUBBROKER_SECONDS:-10}" --profile
+run tests/bench/bench_fleet.py --drones "${FLEET_DRONES:-20}" --seconds "${FLEET_SECONDS:-60}"
 echo
 echo "bench: all done in $(( $(date +%s) - start )) s"

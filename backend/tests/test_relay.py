@@ -88,3 +88,34 @@ def test_role_ownership_rules() -> None:
     assert may_edit({"operator"}, {"/layout": None}) == ["/layout"]
     assert may_edit({"admin"}, changes) == []
     assert owners_of_changes({}, {"extra": 1}) == {"/extra": "designer"}
+
+
+def test_one_wakeup_per_batch_and_nothing_lost() -> None:
+    """Producers wake the consumer only when the queue stops being empty; a
+    consumer that drains and sleeps never misses an item put meanwhile (an
+    item left in the queue with the consumer asleep would hang this test)."""
+
+    async def scenario() -> tuple[list[int], int]:
+        q: DropOldestQueue[int] = DropOldestQueue(100_000)
+        q.bind(asyncio.get_running_loop())
+        n, threads = 20_000, 4
+
+        def produce(k: int) -> None:
+            for i in range(k, n, threads):
+                q.put(i)
+                if i % 997 == 0:
+                    time.sleep(0.001)  # let the consumer drain and go to sleep
+
+        workers = [threading.Thread(target=produce, args=(k,)) for k in range(threads)]
+        for w in workers:
+            w.start()
+        got: list[int] = []
+        while len(got) < n:
+            got += await asyncio.wait_for(q.get_batch(), 5.0)
+        for w in workers:
+            w.join()
+        return got, q.wakeups_saved
+
+    got, saved = asyncio.run(scenario())
+    assert sorted(got) == list(range(20_000))
+    assert saved > 0

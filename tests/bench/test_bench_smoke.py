@@ -88,3 +88,19 @@ def test_ingest() -> None:
     assert mq.confirmed == mq.count, mq
     assert pb.rate > 0 and mq.rate > 0
     assert "goal ≥ 10×" in bench_ingest.render(pb, mq)
+
+
+def test_fleet() -> None:
+    """Two drones on one router, backend and WebSocket clients: every subscriber of both
+    drones reached its client (checked before measuring), values arrive at about the rate
+    the models ask, never before their window ends, and no SubBroker reports it is behind."""
+    import bench_fleet
+
+    result = bench_fleet.run(drones=2, seconds=4.0, extra=10)
+    b = result.browser
+    assert b.latencies_ns and min(b.latencies_ns) > 0
+    assert 0.5 * result.asked_per_s < b.values / result.seconds < 1.5 * result.asked_per_s
+    assert b.dropped == 0 and not b.behind
+    assert len(result.subbrokers) == len(result.pubbrokers) == 2
+    assert all(1024 < f.rss_median_kb < 1024 * 1024 for f in result.subbrokers)
+    assert "p99 ms" in result.render()

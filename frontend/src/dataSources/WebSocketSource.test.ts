@@ -90,4 +90,16 @@ describe("WebSocketSource", () => {
     src.close();
     expect(states).toEqual(["open", "closed"]);
   });
+
+  it("reports a SubBroker that falls behind the link", () => {
+    const { sock, src } = setup();
+    const link = vi.fn();
+    src.onLinkStatus(link);
+    sock.open();
+    sock.deliver({ type: "status", data: { link: "up", behind: true, lag_s: 2.5 } });
+    expect(link).toHaveBeenLastCalledWith(expect.objectContaining({ behind: true, lagS: 2.5 }));
+    sock.deliver({ type: "status", data: { link: "up", behind: false, lag_s: 0.01 } });
+    expect(link).toHaveBeenLastCalledWith(expect.objectContaining({ behind: false, lagS: 0.01 }));
+    src.close();
+  });
 });

@@ -80,6 +80,7 @@ export function toLinkStatus(d: Raw): LinkStatus {
     lastFrameAgeS: last !== null && now !== null ? (now - last) / 1e9 : null,
     connected: d.link === "connected" || d.link === "running" || d.link === "up",
     state: typeof d.link === "string" ? d.link : undefined,
+    ...(typeof d.behind === "boolean" ? { behind: d.behind, lagS: num(d.lag_s) } : {}),
   };
 }
 

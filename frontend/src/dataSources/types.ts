@@ -33,6 +33,10 @@ export interface LinkStatus {
   connected: boolean;
   /** The SubBroker's word for the link state, as sent. */
   state?: string;
+  /** The SubBroker falls behind the link (its status' `behind`), when it says. */
+  behind?: boolean;
+  /** How much later than its best the SubBroker delivers (status' `lag_s`). */
+  lagS?: number | null;
 }
 
 export type ConnectionState = "connecting" | "open" | "closed" | "error";

@@ -66,6 +66,9 @@ export default function MonitorPanel() {
           · measured {link.measuredBytesPerS === null ? "—" : formatRate(link.measuredBytesPerS)}
           {" "}vs planned {link.plannedBytesPerS === null ? "—" : formatRate(link.plannedBytesPerS)}
           {link.lastFrameAgeS !== null && <> · last frame {link.lastFrameAgeS.toFixed(1)} s ago</>}
+          {link.behind && <strong className="behind" role="alert">
+            {" "}· base station behind the link{link.lagS != null && ` by ${link.lagS.toFixed(1)} s`}
+          </strong>}
         </>}
         {!link && state === "open" && " · waiting for the drone's status…"}
       </div>

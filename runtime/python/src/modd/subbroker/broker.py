@@ -26,13 +26,12 @@ from modd.link.receiver import Window
 
 from ..zenoh_session import open_session
 from .config import SubBrokerConfig, resolve_key
-from .delivery import TcpDelivery, ZenohDelivery, tcp_endpoints
+from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoints
 from .deploy import DeployRequest, parse_request
 from .dynamic import DynamicSubscriptions
-from .fanout import FanOut, period_us, window_of
+from .fanout import FanOut
 from .keys import deploy_key, subscribe_key
 from .link import ConfigRejected, LinkClient, LinkDown
-from .payload import DeliveredValue, split_window
 from .planning import config_for, plan_for
 from .status import StatusPublisher
 
@@ -52,6 +51,7 @@ class Running:
     epoch_ns: int
     fanout: FanOut
     topic_info: dict[str, tuple[str, str]] = field(default_factory=dict)  # unit, type
+    slots: SlotDelivery | None = None
 
     def route(self, stream: StreamKey, sources: tuple[Source, ...], subscriber: str) -> None:
         self.fanout.route(stream, sources, subscriber)
@@ -182,6 +182,8 @@ class SubBroker:
         sent = [s.stream for s in plan.sent_streams]
         running = Running(model, plan, config, ack.epoch_ns, FanOut(sent))
         running.topic_info = {t.name: (t.unit, t.type) for t in topics(model).values()}
+        running.slots = SlotDelivery(running.fanout, config.config_id, ack.epoch_ns,
+                                     running.topic_info)
         for ps in plan.streams:
             for sub in ps.subscribers:
                 running.route(ps.stream, ps.sources, sub)
@@ -200,32 +202,10 @@ class SubBroker:
 
     def on_windows(self, windows: list[Window]) -> None:
         running = self._by_id.get(windows[0].config_id)
-        if running is None:
+        if running is None or running.slots is None:
             return
-        slot, end_ns = windows[0].slot, windows[0].end_ns
-        date_us = (end_ns - running.epoch_ns) // 1000
-        sent = running.fanout.sent
-        by_id = {}
-        for w in windows:
-            key = sent[w.stream]
-            by_id[w.stream] = window_of(w.value, key.aggregation, running.topic_info[key.topic][1])
-        now = time.time_ns()
-        for out in running.fanout.on_slot(slot, date_us, by_id):
-            unit = running.topic_info[out.stream.topic][0]
-            value, count = split_window(out.stream.aggregation, out.value)
-            start_ns = running.epoch_ns + (date_us - period_us(out.stream)) * 1000
-            for sub in out.subscribers:
-                self._deliver(DeliveredValue(
-                    sub, out.stream.topic, out.stream.aggregation, _period(out.stream), unit,
-                    running.config.config_id, slot, start_ns, end_ns, value, count, now,
-                ))
-
-    def _deliver(self, value: DeliveredValue) -> None:
-        self.delivered += 1
-        if self._zenoh is not None:
-            self._zenoh.deliver(value)
-        if self._tcp is not None:
-            self._tcp.deliver(value)
+        sinks: list[Sink] = [s for s in (self._zenoh, self._tcp) if s is not None]
+        self.delivered += running.slots.deliver(windows, sinks)
 
     def on_status(self, status: Status) -> None:
         log.debug("PubBroker status %s", status.as_dict())
@@ -337,6 +317,3 @@ class SubBroker:
             "pubbroker": dict(stats.pubbroker),
         }
 
-
-def _period(stream: StreamKey) -> str:
-    return stream.key.rsplit("/", 1)[1]

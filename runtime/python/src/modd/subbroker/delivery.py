@@ -4,6 +4,10 @@ object per line). Neither ever blocks the link thread: zenoh puts are
 non-blocking (congestion control DROP), and each TCP subscriber has its own
 sender thread with a bounded queue that drops its oldest value when full.
 
+:class:`SlotDelivery` is the hot path from one DATA slot's windows to those
+sinks: fan-out (:mod:`.fanout`), each window encoded once for all its
+subscribers (:class:`~.payload.StreamPayload`), one put per subscriber.
+
 >>> tcp = TcpDelivery({"sub_1": ("127.0.0.1", 7401)}, queue_size=10)   # doctest: +SKIP
 >>> tcp.deliver(value)                                                # doctest: +SKIP
 """
@@ -13,12 +17,18 @@ from __future__ import annotations
 import logging
 import socket
 import threading
+import time
 from collections import deque
-from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Protocol
 
+from modd_plan.streams import StreamKey
+
+from modd.link.receiver import Window
+
+from .fanout import FanOut, period_us, window_of
 from .keys import sub_key
-from .payload import DeliveredValue
+from .payload import DeliveredValue, StreamPayload, split_window, subscriber_prefix
 
 if TYPE_CHECKING:
     import zenoh
@@ -52,7 +62,14 @@ class ZenohDelivery:
             return pub
 
     def deliver(self, value: DeliveredValue) -> None:
-        self._publisher(value.subscriber).put(value.to_json())
+        self.put(value.subscriber, value.to_json())
+
+    def put(self, subscriber: str, payload: bytes) -> None:
+        """Put an encoded value (:mod:`.payload`) on the subscriber's key."""
+        pub = self._publishers.get(subscriber)  # no lock: a dict read is atomic
+        if pub is None:
+            pub = self._publisher(subscriber)
+        pub.put(payload)
         self.delivered += 1
 
     def forget(self, subscriber: str) -> None:
@@ -166,9 +183,13 @@ class TcpDelivery:
                     self._senders[name] = sender
 
     def deliver(self, value: DeliveredValue) -> None:
-        sender = self._senders.get(value.subscriber)
+        self.put(value.subscriber, value.to_json())
+
+    def put(self, subscriber: str, payload: bytes) -> None:
+        """Queue an encoded value for the subscriber, when it has an endpoint."""
+        sender = self._senders.get(subscriber)
         if sender is not None:
-            sender.push(value.to_json() + b"\n")
+            sender.push(payload + b"\n")
 
     def stats(self) -> dict[str, dict[str, int | bool]]:
         return {
@@ -196,3 +217,65 @@ def tcp_endpoints(model: Mapping[str, object]) -> dict[str, tuple[str, int]]:
         if ep:
             out[sub["name"]] = (str(ep["host"]), int(ep["port"]))
     return out
+
+
+class Sink(Protocol):
+    """Where encoded values go (:class:`ZenohDelivery`, :class:`TcpDelivery`)."""
+
+    def put(self, subscriber: str, payload: bytes) -> None: ...
+
+
+class SlotDelivery:
+    """One running config's way from the windows of a DATA slot to the sinks.
+
+    Everything that does not change between slots is prepared once: the
+    sent streams' value kinds, each routed stream's constant payload part
+    (on first use) and each subscriber's payload prefix. Per slot it costs
+    the fan-out, one encoding per window due and, per subscriber, one bytes
+    concatenation and one put.
+    """
+
+    def __init__(self, fanout: FanOut, config_id: int, epoch_ns: int,
+                 topic_info: Mapping[str, tuple[str, str]]) -> None:
+        self.fanout = fanout
+        self._config_id = config_id
+        self._epoch_ns = epoch_ns
+        self._topic_info = topic_info
+        self._kinds = [(s.aggregation, topic_info[s.topic][1]) for s in fanout.sent]
+        self._payloads: dict[StreamKey, tuple[StreamPayload, int]] = {}
+        self._prefixes: dict[str, bytes] = {}
+
+    def _payload(self, stream: StreamKey) -> tuple[StreamPayload, int]:
+        unit = self._topic_info[stream.topic][0]
+        period_text = stream.key.rsplit("/", 1)[1]
+        entry = (StreamPayload(stream.topic, stream.aggregation, period_text, unit,
+                               self._config_id), period_us(stream))
+        self._payloads[stream] = entry
+        return entry
+
+    def _prefix(self, subscriber: str) -> bytes:
+        prefix = self._prefixes[subscriber] = subscriber_prefix(subscriber)
+        return prefix
+
+    def deliver(self, windows: Sequence[Window], sinks: Sequence[Sink]) -> int:
+        """Deliver what the slot of ``windows`` completes; the number of values
+        (one per subscriber and window, whatever the number of sinks)."""
+        first = windows[0]
+        slot, end_ns, epoch = first.slot, first.end_ns, self._epoch_ns
+        date_us = (end_ns - epoch) // 1000
+        kinds = self._kinds
+        by_id = {w.stream: window_of(w.value, *kinds[w.stream]) for w in windows}
+        now = time.time_ns()
+        payloads, prefixes = self._payloads, self._prefixes
+        count = 0
+        for out in self.fanout.on_slot(slot, date_us, by_id):
+            payload, period = payloads.get(out.stream) or self._payload(out.stream)
+            value, samples = split_window(out.stream.aggregation, out.value)
+            start_ns = epoch + (date_us - period) * 1000
+            tail = payload.tail(slot, start_ns, end_ns, value, samples, now)
+            for sub in out.subscribers:
+                data = (prefixes.get(sub) or self._prefix(sub)) + tail
+                for sink in sinks:
+                    sink.put(sub, data)
+            count += len(out.subscribers)
+        return count

@@ -20,6 +20,7 @@ a MIN over half a window would be a wrong MIN.
 
 from __future__ import annotations
 
+import itertools
 import threading
 from collections import deque
 from collections.abc import Iterable, Mapping, Sequence
@@ -60,11 +61,24 @@ class _Route:
     subscribers: list[str]
 
 
+@dataclass(frozen=True)
+class _Due:
+    """A route as :meth:`FanOut.on_slot` walks it: everything it needs resolved
+    once, when the routes change, not at every slot."""
+
+    stream: StreamKey
+    sid: int  # the sent stream's id; -1 when derived
+    sources: tuple[tuple[int, int, str], ...]  # (stream id, factor, aggregation)
+    subscribers: tuple[str, ...]
+
+
 class FanOut:
     """Windows of the routed streams from the windows of the sent ones.
 
     ``sent`` lists the sent streams in stream-id order. Thread-safe: the link
     thread calls :meth:`on_slot` while zenoh threads add and remove routes.
+    The routes are grouped by period once per change (:meth:`_rebuild`), so a
+    slot costs one modulo per distinct routed period plus the streams due.
     """
 
     def __init__(self, sent: Sequence[StreamKey]) -> None:
@@ -73,6 +87,7 @@ class FanOut:
         self._history: list[deque[tuple[int, Any]]] = [deque() for _ in sent]
         self._keep = [0] * len(sent)
         self._routes: dict[StreamKey, _Route] = {}
+        self._by_period: list[tuple[int, list[_Due]]] = []
         self._lock = threading.Lock()
 
     @property
@@ -88,6 +103,7 @@ class FanOut:
         for src in srcs or (Source(stream, 1),):
             if src.stream not in self._ids:
                 raise ValueError(f"{src.stream.key} is not sent in the running plan")
+        period_us(stream)  # a period the wire cannot express fails here, not per slot
         with self._lock:
             route = self._routes.setdefault(stream, _Route(srcs, []))
             if subscriber not in route.subscribers:
@@ -122,40 +138,70 @@ class FanOut:
         for sid, hist in enumerate(self._history):
             while len(hist) > keep[sid]:
                 hist.popleft()
+        self._rebuild()
+
+    def _rebuild(self) -> None:
+        """Group the routes by period (in route order within a period)."""
+        groups: dict[int, list[_Due]] = {}
+        for stream, route in self._routes.items():
+            due = _Due(
+                stream,
+                -1 if route.sources else self._ids[stream],
+                tuple((self._ids[s.stream], s.factor, s.stream.aggregation)
+                      for s in route.sources),
+                tuple(route.subscribers),
+            )
+            groups.setdefault(period_us(stream), []).append(due)
+        self._by_period = list(groups.items())
 
     def on_slot(self, slot: int, date_us: int, windows: Mapping[int, Any]) -> list[Output]:
         """Take the windows of one DATA slot (stream id -> window, for the
         streams due at ``date_us``) and return the windows due for delivery."""
         with self._lock:
+            keep, history, periods = self._keep, self._history, self._periods
             for sid, window in windows.items():
-                if self._keep[sid]:
-                    hist = self._history[sid]
-                    hist.append((date_us // self._periods[sid], window))
-                    if len(hist) > self._keep[sid]:
+                if keep[sid]:
+                    hist = history[sid]
+                    hist.append((date_us // periods[sid], window))
+                    if len(hist) > keep[sid]:
                         hist.popleft()
             out: list[Output] = []
-            for stream, route in self._routes.items():
-                if date_us % period_us(stream):
+            for period, dues in self._by_period:
+                if date_us % period:
                     continue
-                if route.sources:
-                    value = self._derive(stream, route.sources, date_us)
-                else:
-                    value = windows.get(self._ids[stream], _INCOMPLETE)
-                if value is not _INCOMPLETE:
-                    out.append(Output(stream, slot, date_us, value, tuple(route.subscribers)))
+                for due in dues:
+                    if due.sid >= 0:
+                        value = windows.get(due.sid, _INCOMPLETE)
+                    else:
+                        value = self._derive(due, date_us)
+                    if value is not _INCOMPLETE:
+                        out.append(Output(due.stream, slot, date_us, value, due.subscribers))
             return out
 
-    def _derive(self, stream: StreamKey, sources: tuple[Source, ...], date_us: int) -> Any:
+    def _derive(self, due: _Due, date_us: int) -> Any:
         parts: list[tuple[str, list[Any]]] = []
-        for src in sources:
-            sid = self._ids[src.stream]
-            last = date_us // self._periods[sid]
-            wanted = range(last - src.factor + 1, last + 1)
-            have = {i: w for i, w in self._history[sid] if i in wanted}
-            if len(have) != src.factor:
+        for sid, factor, aggregation in due.sources:
+            windows = self._tail(sid, factor, date_us // self._periods[sid])
+            if windows is None:
                 return _INCOMPLETE
-            parts.append((src.stream.aggregation, [have[i] for i in wanted]))
-        return derive_value(stream.aggregation, parts)
+            parts.append((aggregation, windows))
+        return derive_value(due.stream.aggregation, parts)
+
+    def _tail(self, sid: int, factor: int, last: int) -> list[Any] | None:
+        """The windows ``last - factor + 1 .. last`` of a sent stream, or None
+        when one is missing. The history is kept in slot order, so they are
+        its last ``factor`` entries when those are numbered right."""
+        hist = self._history[sid]
+        if len(hist) < factor:
+            return None
+        tail = list(itertools.islice(hist, len(hist) - factor, None))
+        if tail[0][0] == last - factor + 1 and tail[-1][0] == last and all(
+            b[0] - a[0] == 1 for a, b in itertools.pairwise(tail)
+        ):
+            return [w for _, w in tail]
+        wanted = range(last - factor + 1, last + 1)  # out of order (never seen): look up
+        have = {i: w for i, w in hist if i in wanted}
+        return [have[i] for i in wanted] if len(have) == factor else None
 
 
 _INCOMPLETE = object()

@@ -46,6 +46,7 @@ from modd.link.frames import (
 )
 from modd.link.receiver import Receiver, Window
 
+from .backpressure import Backpressure, socket_backlog
 from .config import LinkOptions
 
 log = logging.getLogger("modd.subbroker.link")
@@ -92,6 +93,7 @@ class LinkStats:
     last_data_ns: int | None = None
     last_error: str | None = None
     pubbroker: dict[str, int] = field(default_factory=dict)
+    backpressure: Backpressure = field(default_factory=Backpressure)
 
 
 @dataclass
@@ -121,6 +123,7 @@ class LinkClient:
         self.stats = LinkStats()
         self.receiver = Receiver()
         self._sock: socket.socket | None = None
+        self._splitter: codec.FrameSplitter | None = None
         self._send_lock = threading.Lock()
         self._pending: dict[int, _Pending] = {}
         self._pings: dict[bytes, int] = {}
@@ -189,7 +192,9 @@ class LinkClient:
         self._sock = sock
         self.stats.state = "handshake"
         ok, splitter = client_handshake(sock, self._key)
+        self._splitter = splitter
         self.stats.connects += 1
+        self.stats.backpressure.reset(time.time_ns())
         log.info("link to %s authenticated (PubBroker config %d)", self._where(), ok.config_id)
         rtt = self._measure_rtt(sock, splitter)
         self.stats.state = "configuring"
@@ -274,6 +279,10 @@ class LinkClient:
         self.stats.last_data_ns = time.time_ns()
         if windows:
             self._handler.on_windows(windows)
+            splitter = self._splitter
+            waiting = len(splitter.buf) if splitter is not None else 0
+            self.stats.backpressure.observe(windows[0].end_ns,
+                                            waiting + socket_backlog(self._sock), time.time_ns())
 
     def _handle(self, msg: object) -> None:
         if isinstance(msg, ConfigAck):

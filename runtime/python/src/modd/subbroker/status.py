@@ -1,7 +1,9 @@
 """The SubBroker's status on ``modd/<drone>/status``: link state, RTT,
 running config, bytes/s in and out, last DATA time, the PubBroker's own
-counters (from its STATUS frames) and the planner's prediction, as one JSON
-object every ``status_period_s`` (docs/subbroker.md, "Status").
+counters (from its STATUS frames), the planner's prediction and whether the
+SubBroker keeps up with the link (:mod:`.backpressure`: ``behind``,
+``lag_s``, ...), as one JSON object every ``status_period_s``
+(docs/subbroker.md, "Status").
 
 Byte rates here are link frame bytes as the SubBroker reads and writes them;
 ``ip_bytes_in_per_s`` adds 52 bytes of IPv4+TCP headers per frame received,
@@ -82,7 +84,9 @@ class StatusPublisher:
 
     def publish_now(self) -> dict[str, Any]:
         status = self._snapshot()
-        status.update(self._rates.update(self._stats()))
+        stats = self._stats()
+        status.update(self._rates.update(stats))
+        status.update(stats.backpressure.as_dict())
         self.last = status
         self._pub.put(json.dumps(status, separators=(",", ":")))
         return status
