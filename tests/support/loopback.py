@@ -19,15 +19,23 @@ from pathlib import Path
 from typing import Any
 
 import httpx2 as httpx
+from modd.zenoh_auth import acl
 from modd.zenoh_session import ZenohSettings, open_session
 from websockets.sync.client import ClientConnection, connect
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
 
-from subbroker_harness import PUBBROKER, Proc, free_port, start_pubbroker, wait_port  # noqa: E402
+from subbroker_harness import (  # noqa: E402
+    PUBBROKER,
+    Proc,
+    free_port,
+    start_pubbroker,
+    test_credentials,
+    wait_port,
+)
 
 __all__ = ["PUBBROKER", "REPO", "VENV_BIN", "Backend", "Proc", "StatusWatch", "free_port",
-           "receive_until", "start_pubbroker", "wait_port", "zenoh_router"]
+           "receive_until", "start_pubbroker", "test_credentials", "wait_port", "zenoh_router"]
 
 REPO = Path(__file__).resolve().parents[2]
 VENV_BIN = Path(sys.executable).parent
@@ -35,8 +43,12 @@ VENV_BIN = Path(sys.executable).parent
 
 @contextlib.contextmanager
 def zenoh_router(port: int) -> Iterator[Any]:
-    """A zenoh router listening on tcp/127.0.0.1:port, in this process."""
-    session = open_session(ZenohSettings(mode="router", listen=(f"tcp/127.0.0.1:{port}",)))
+    """A zenoh router listening on tcp/127.0.0.1:port, in this process, with
+    the authentication and access control of a SubBroker's (every drone)."""
+    session = open_session(ZenohSettings(
+        mode="router", listen=(f"tcp/127.0.0.1:{port}",),
+        dictionary_file=str(test_credentials().dictionary), access_control=acl(None),
+        extra={"scouting/gossip/enabled": "false"}))
     try:
         yield session
     finally:
@@ -91,7 +103,9 @@ class Backend:
         argv = [str(VENV_BIN / "modd-backend"), "--host", "127.0.0.1", "--port", str(port),
                 "--data", str(tmp / "backend"), "--zenoh-connect", zenoh_connect,
                 "--admin-password", admin_password, "--frontend", str(tmp / "no-frontend"),
-                "--scene-port", "-1", *(extra or [])]
+                "--scene-port", "-1",
+                "--zenoh-credentials", str(test_credentials().cred_file("backend")),
+                "--deploy-key", str(test_credentials().deploy_key_file), *(extra or [])]
         return cls(Proc("backend", argv, tmp / "backend.log"), port)
 
     def sign_in(self, password: str, timeout_s: float = 30.0) -> None:

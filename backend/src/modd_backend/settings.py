@@ -43,6 +43,10 @@ class Settings:
     #: Port of the viser 3D scene on ``host``; None: no scene, 0: any free port.
     scene_port: int | None = None
     cors_origins: tuple[str, ...] = field(default_factory=tuple)
+    #: The ``backend`` identity's zenoh user:password file (docs/security.md).
+    zenoh_credentials: Path | None = None
+    #: The key that signs deploys, shared with the SubBroker (its deploy.key).
+    deploy_key_file: Path | None = None
 
     @property
     def effective_database_url(self) -> str:

@@ -61,7 +61,8 @@ class SubBrokerConfig:
     model: dict[str, Any]
     drone: str
     link: LinkOptions = field(default_factory=LinkOptions)
-    zenoh: ZenohSettings = field(default_factory=lambda: ZenohSettings(listen=(DEFAULT_ENDPOINT,)))
+    zenoh: ZenohSettings = field(
+        default_factory=lambda: ZenohSettings(mode="router", listen=(DEFAULT_ENDPOINT,)))
     delivery: DeliveryOptions = field(default_factory=DeliveryOptions)
     state_dir: Path | None = None  # where a deployed model is kept across restarts
     source: str = "<defaults>"
@@ -72,6 +73,21 @@ class SubBrokerConfig:
         if self.link.endpoint is not None:
             return self.link.endpoint
         return endpoint_of(self.model)
+
+    @property
+    def credentials_dir(self) -> Path:
+        """Where the zenoh credentials and the deploy key are kept (made at
+        first start): ``[zenoh] credentials_dir``, else ``<state_dir>/credentials``,
+        else ``credentials`` beside the config file, else the user's state
+        directory (``$XDG_STATE_HOME/modd/<drone>/credentials``)."""
+        if self.zenoh.credentials_dir:
+            return Path(self.zenoh.credentials_dir)
+        if self.state_dir is not None:
+            return self.state_dir / "credentials"
+        if self.source.endswith(".toml"):
+            return Path(self.source).parent / "credentials"
+        state = os.environ.get("XDG_STATE_HOME") or str(Path.home() / ".local" / "state")
+        return Path(state) / "modd" / self.drone / "credentials"
 
     @property
     def key_ref(self) -> str:
@@ -184,6 +200,8 @@ def load_config(path: str | Path) -> SubBrokerConfig:
         zenoh = ZenohSettings.from_mapping(_table(data, "zenoh", str(path)), f"{path}: zenoh")
     except ValueError as exc:
         raise ConfigError(str(exc)) from exc
+    if zenoh.credentials_dir:
+        zenoh = replace(zenoh, credentials_dir=str(path.parent / zenoh.credentials_dir))
     state = data.get("state_dir")
     src = str(path)
     return SubBrokerConfig(
