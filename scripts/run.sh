@@ -4,6 +4,9 @@
 # MAVLink bridge) and the workbench (backend serving the built frontend) on
 # http://127.0.0.1:${MODD_PORT:-8080}/, with the demo project loaded and
 # deployed. Ctrl-C (or SIGTERM) stops everything it started, by PID.
+# The SubBroker's zenoh router authenticates every client and applies access
+# control (docs/security.md): the credentials (subbroker/backend/viewer .cred)
+# and the deploy key are made once in $DATA/credentials (0600) and kept.
 # Environment: MODEL, MODD_PORT, MODD_ZENOH_PORT, MODD_DATA, MODD_PROJECT.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -42,10 +45,13 @@ stop() {
 trap stop INT TERM EXIT
 
 ZENOH="tcp/127.0.0.1:${MODD_ZENOH_PORT:-7447}"
-modd up "$MODEL" --workdir "$DATA/run" --simulate --zenoh-listen "$ZENOH" &
+CREDS="$DATA/credentials"
+python3 -c 'import sys; from modd.zenoh_auth import CredentialStore; CredentialStore(sys.argv[1]).ensure()' "$CREDS"
+modd up "$MODEL" --workdir "$DATA/run" --credentials "$CREDS" --simulate --zenoh-listen "$ZENOH" &
 pids+=($!)
 
 modd-backend --host 127.0.0.1 --port "$PORT" --data "$DATA/backend" --zenoh-connect "$ZENOH" \
+  --zenoh-credentials "$CREDS/backend.cred" --deploy-key "$CREDS/deploy.key" \
   --frontend "$PWD/frontend/dist" --archives "$DATA/run/archive" >>"$DATA/backend.log" 2>&1 &
 pids+=($!)
 
@@ -73,5 +79,7 @@ else
   echo "modd: login 'admin'; its password is in $DATA/backend.log"
 fi
 echo "modd: project '$PROJECT' runs on the simulated drone '$DRONE': archive in $DATA/run/archive, logs in $DATA/run/logs and $DATA/backend.log"
+echo "modd: zenoh $ZENOH requires credentials; a viewer connects with"
+echo "      modd.subscribe('$DRONE', SUBSCRIBER, connect='$ZENOH', credentials='$CREDS/viewer.cred')"
 echo "modd: Ctrl-C to stop"
 wait -n "${pids[@]}" || true

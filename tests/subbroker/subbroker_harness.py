@@ -40,7 +40,7 @@ KEY = "modd-test-key"
 
 
 @functools.cache
-def test_credentials() -> CredentialStore:
+def shared_credentials() -> CredentialStore:
     """The zenoh credentials (and deploy key) every SubBroker and client of
     this test process uses: made once, in a private temporary directory."""
     return CredentialStore(Path(tempfile.mkdtemp(prefix="modd-zcred-")) / "credentials").ensure()
@@ -50,7 +50,7 @@ def signed(request_body: dict[str, Any]) -> dict[str, Any]:
     """A deploy request signed as the workbench signs it."""
     from modd_model.signing import sign_request
 
-    return sign_request(test_credentials().deploy_key(), request_body)
+    return sign_request(shared_credentials().deploy_key(), request_body)
 
 
 
@@ -164,7 +164,7 @@ key = "env:MODD_LINK_KEY"
 {link_lines}
 [zenoh]
 listen = ["tcp/127.0.0.1:{zenoh_port}"]
-credentials_dir = {json.dumps(str(test_credentials().dir))}
+credentials_dir = {json.dumps(str(shared_credentials().dir))}
 [delivery]
 tcp = {"true" if tcp else "false"}
 status_period_s = 0.5

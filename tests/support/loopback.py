@@ -29,13 +29,13 @@ from subbroker_harness import (  # noqa: E402
     PUBBROKER,
     Proc,
     free_port,
+    shared_credentials,
     start_pubbroker,
-    test_credentials,
     wait_port,
 )
 
 __all__ = ["PUBBROKER", "REPO", "VENV_BIN", "Backend", "Proc", "StatusWatch", "free_port",
-           "receive_until", "start_pubbroker", "test_credentials", "wait_port", "zenoh_router"]
+           "receive_until", "start_pubbroker", "shared_credentials", "wait_port", "zenoh_router"]
 
 REPO = Path(__file__).resolve().parents[2]
 VENV_BIN = Path(sys.executable).parent
@@ -47,7 +47,7 @@ def zenoh_router(port: int) -> Iterator[Any]:
     the authentication and access control of a SubBroker's (every drone)."""
     session = open_session(ZenohSettings(
         mode="router", listen=(f"tcp/127.0.0.1:{port}",),
-        dictionary_file=str(test_credentials().dictionary), access_control=acl(None),
+        dictionary_file=str(shared_credentials().dictionary), access_control=acl(None),
         extra={"scouting/gossip/enabled": "false"}))
     try:
         yield session
@@ -104,8 +104,8 @@ class Backend:
                 "--data", str(tmp / "backend"), "--zenoh-connect", zenoh_connect,
                 "--admin-password", admin_password, "--frontend", str(tmp / "no-frontend"),
                 "--scene-port", "-1",
-                "--zenoh-credentials", str(test_credentials().cred_file("backend")),
-                "--deploy-key", str(test_credentials().deploy_key_file), *(extra or [])]
+                "--zenoh-credentials", str(shared_credentials().cred_file("backend")),
+                "--deploy-key", str(shared_credentials().deploy_key_file), *(extra or [])]
         return cls(Proc("backend", argv, tmp / "backend.log"), port)
 
     def sign_in(self, password: str, timeout_s: float = 30.0) -> None:

@@ -29,8 +29,8 @@ from support.loopback import (  # noqa: E402
     StatusWatch,
     free_port,
     receive_until,
+    shared_credentials,
     start_pubbroker,
-    test_credentials,
     zenoh_router,
 )
 
@@ -99,7 +99,7 @@ def start_drone(tmp: Path, name: str, router: str, extra_subscriber: str | None 
                             d / f"{name}-sim.log", env=env))
     config = d / f"{name}-subbroker.toml"
     config.write_text(SUBBROKER_TOML.format(model=path, link=link, key=key_file, router=router,
-                                              credentials=test_credentials().dir))
+                                              credentials=shared_credentials().dir))
     drone.procs.append(Proc(f"{name}-subbroker", [str(VENV_BIN / "modd-subbroker"), "--config",
                                                    str(config)], d / f"{name}-subbroker.log",
                             env=env))
