@@ -42,12 +42,19 @@ VENV_BIN = Path(sys.executable).parent
 
 
 @contextlib.contextmanager
-def zenoh_router(port: int) -> Iterator[Any]:
+def zenoh_router(port: int, config: dict[str, Any] | None = None) -> Iterator[Any]:
     """A zenoh router listening on tcp/127.0.0.1:port, in this process, with
-    the authentication and access control of a SubBroker's (every drone)."""
+    the authentication and access control of a SubBroker's (every drone), or
+    those of ``config`` (a zenohd configuration: its dictionary_file and
+    access_control)."""
+    dictionary = str(shared_credentials().dictionary)
+    rules = acl(None)
+    if config is not None:
+        dictionary = config["transport"]["auth"]["usrpwd"]["dictionary_file"]
+        rules = config["access_control"]
     session = open_session(ZenohSettings(
         mode="router", listen=(f"tcp/127.0.0.1:{port}",),
-        dictionary_file=str(shared_credentials().dictionary), access_control=acl(None),
+        dictionary_file=dictionary, access_control=rules,
         extra={"scouting/gossip/enabled": "false"}))
     try:
         yield session
