@@ -3,12 +3,13 @@ a rate bound per message and, when a signing key is given, MAVLink 2 signing.
 
 Any local process can send UDP datagrams to the bridge's port; the bridge
 maps only messages from the autopilot's system and component (Autopilot),
-at most ``RATE_FACTOR`` times the rate it asked for each message (plus a small
-burst), and, with a key, only frames signed with it.
+at most ``RATE_FACTOR`` times the rate it asked for each message (after a
+burst of BURST_S seconds' worth, what a radio or UART buffer releases at
+once), and, with a key, only frames signed with it.
 
->>> bound = RateBound({"ATTITUDE": 100_000})       # asked every 0.1 s
->>> sum(bound.allow("ATTITUDE", t / 1000) for t in range(1000))  # 1 kHz for 1 s: 10 + 20
-29
+>>> bound = RateBound({"ATTITUDE": 100_000})       # asked every 0.1 s: 20/s allowed
+>>> sum(bound.allow("ATTITUDE", t / 1000) for t in range(1000))  # 1 kHz for 1 s: 40 + 20
+59
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from typing import Any
 
 #: Messages beyond this multiple of the asked rate (after a burst) are dropped.
 RATE_FACTOR = 2.0
-BURST = 10
+BURST_S = 2.0
 #: Messages the model does not map (HEARTBEAT, COMMAND_ACK...) get this rate.
 OTHER_RATE_HZ = 20.0
 
@@ -32,12 +33,17 @@ class RateBound:
         self._tokens: dict[str, float] = {}
         self._at: dict[str, float] = {}
 
+    def burst(self, message: str) -> float:
+        """Messages let through at once (at least 10)."""
+        return max(10.0, BURST_S * self._rate.get(message, OTHER_RATE_HZ))
+
     def allow(self, message: str, now: float) -> bool:
         rate = self._rate.get(message, OTHER_RATE_HZ)
+        burst = self.burst(message)
         last = self._at.get(message)
-        tokens = self._tokens.get(message, float(BURST))
+        tokens = self._tokens.get(message, burst)
         if last is not None:
-            tokens = min(float(BURST), tokens + (now - last) * rate)
+            tokens = min(burst, tokens + (now - last) * rate)
         self._at[message] = now
         if tokens < 1.0:
             self._tokens[message] = tokens
