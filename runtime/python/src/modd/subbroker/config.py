@@ -18,6 +18,7 @@ from typing import Any
 
 from modd_model import ModelError, load_model
 
+from ..zenoh_auth import read_secret
 from ..zenoh_session import DEFAULT_ENDPOINT, ZenohSettings
 
 #: Where the pre-shared key is read from when neither the config nor the model says.
@@ -119,14 +120,11 @@ def resolve_key(ref: str) -> bytes:
             raise ConfigError(f"link key {ref}: environment variable {name} is not set")
         return value.encode()
     if kind == "file":
+        # a regular file of at most 64 KiB, no final symlink (docs/security.md)
         try:
-            data = Path(name).read_bytes()
-        except OSError as exc:
-            raise ConfigError(f"link key {ref}: {exc.strerror}") from exc
-        data = data[:-1] if data.endswith(b"\n") else data
-        if not data:
-            raise ConfigError(f"link key {ref}: the file is empty")
-        return data
+            return read_secret(name, "link key")
+        except ValueError as exc:
+            raise ConfigError(f"link key {ref}: {exc}") from exc
     raise ConfigError(f"link key {ref!r}: expected env:NAME or file:PATH")
 
 
