@@ -108,8 +108,8 @@ class _Pending:
 
 
 class ZenohBridge:
-    def __init__(self, session: zenoh.Session | None, config: zenoh.Config | None = None,
-                 where: str = "") -> None:
+    def __init__(self, session: zenoh.Session | None,
+                 config: Callable[[], zenoh.Config] | None = None, where: str = "") -> None:
         self._session = session
         self._config = config
         self._where = where
@@ -121,9 +121,10 @@ class ZenohBridge:
     @classmethod
     def open(cls, connect: tuple[str, ...] = (), listen: tuple[str, ...] = (),
              credentials: Path | None = None) -> ZenohBridge:
-        """Opens at once when the router is up, else keeps trying in the background."""
-        config = zenoh_config(connect, listen, credentials)
-        bridge = cls(None, config, ", ".join(connect + listen))
+        """Opens at once when the router is up, else keeps trying in the background
+        (the credentials file is read at each try: it may not be made yet)."""
+        bridge = cls(None, lambda: zenoh_config(connect, listen, credentials),
+                     ", ".join(connect + listen))
         if not bridge._try_open():
             bridge._opener = threading.Thread(target=bridge._keep_trying, daemon=True,
                                               name="modd-zenoh-open")
@@ -133,8 +134,11 @@ class ZenohBridge:
     def _try_open(self) -> bool:
         assert self._config is not None
         try:
-            session = zenoh.open(self._config)
+            session = zenoh.open(self._config())
         except zenoh.ZError:
+            return False
+        except (OSError, ValueError) as exc:  # no credentials file yet, or a bad one
+            log.warning("zenoh credentials: %s", exc)
             return False
         with self._lock:
             self._session = session
