@@ -44,6 +44,7 @@ class Router(Protocol):
 PER_OWNER = 32
 TOTAL = 256
 MAX_FIELD = 256  # characters of a topic, period or aggregation
+MAX_NAME = 64  # characters of a dynamic subscriber's name (the status lists them all)
 
 
 @dataclass(frozen=True)
@@ -121,6 +122,9 @@ class DynamicSubscriptions:
         name = request.get("subscriber") or f"dyn_{secrets.token_hex(4)}"
         if not isinstance(name, str):
             return {"status": "ERROR", "reason": "subscriber: expected a name"}
+        if len(name) > MAX_NAME:
+            return {"status": "ERROR", "reason": f"subscriber name of {len(name)} characters: "
+                    f"at most {MAX_NAME}"}
         try:
             check_name("subscriber", name)
         except ValueError as exc:

@@ -9,16 +9,11 @@ from __future__ import annotations
 import re
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-#: The longest name a key carries (a status lists every dynamic subscriber).
-MAX_NAME = 64
 
 
 def check_name(kind: str, name: str) -> str:
-    """``name`` if it is a model identifier of at most MAX_NAME characters
-    (safe inside a key; the whole string must match, a trailing newline too),
-    else ValueError."""
-    if len(name) > MAX_NAME:
-        raise ValueError(f"{kind} name of {len(name)} characters: at most {MAX_NAME}")
+    """``name`` if it is a model identifier (safe inside a key; the whole
+    string must match, a trailing newline too), else ValueError."""
     if not _NAME.fullmatch(name):
         raise ValueError(f"{kind} {name!r} is not an identifier (letters, digits, underscores)")
     return name
