@@ -317,7 +317,7 @@ def archive_grows(directory: Path, timeout_s: float) -> None:
     raise AssertionError(f"the drone's archive in {directory} does not grow (size {size()})")
 
 
-@pytest.mark.timeout(120)
+@pytest.mark.timeout(180)
 def test_the_services_start_on_loopback_and_become_ready(compose: dict[str, Any],
                                                          run: Run) -> None:
     order = [n for n in start_order(compose) if n not in (ROUTER, "credentials")]
@@ -332,7 +332,7 @@ def test_the_services_start_on_loopback_and_become_ready(compose: dict[str, Any]
             for name in order:
                 run.start(name)
             # the drone archives what its simulated sensors publish
-            archive_grows(run.lb.tmp / "volumes" / "drone-archive", 30)
+            archive_grows(run.lb.tmp / "volumes" / "drone-archive", 60)  # slow start under load
             # the SubBroker linked to the drone and speaks on the router
             status = watch.wait("usv", lambda s: s["link"] == "up" and s["config_id"], 30)
             assert status["delivered"] >= 0

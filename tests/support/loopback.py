@@ -115,7 +115,7 @@ class Backend:
                 "--deploy-key", str(shared_credentials().deploy_key_file), *(extra or [])]
         return cls(Proc("backend", argv, tmp / "backend.log"), port)
 
-    def sign_in(self, password: str, timeout_s: float = 30.0) -> None:
+    def sign_in(self, password: str, timeout_s: float = 90.0) -> None:
         """Waits until the backend answers, then signs in as ``admin``."""
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline and self.proc.alive():
