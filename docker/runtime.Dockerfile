@@ -52,7 +52,7 @@ RUN uv sync --frozen --no-dev --package modd-runtime
 
 # `modd up` finds the PubBroker at build/bin/ of the repository, as in a checkout.
 COPY --from=pubbroker /src/build/bin/modd-pubbroker build/bin/modd-pubbroker
-COPY docker/drone.py docker/subbroker.toml docker/
+COPY docker/drone.py docker/subbroker.toml docker/credentials.py docker/
 
 # No ENTRYPOINT: docker-compose.yml gives each service its command.
 CMD ["modd", "--help"]

@@ -4,6 +4,9 @@
 # MAVLink bridge) and the workbench (backend serving the built frontend) on
 # http://127.0.0.1:${MODD_PORT:-8080}/, with the demo project loaded and
 # deployed. Ctrl-C (or SIGTERM) stops everything it started, by PID.
+# The SubBroker's zenoh router authenticates every client and applies access
+# control (docs/security.md): the credentials (subbroker/backend/viewer .cred)
+# and the deploy key are made once in $DATA/credentials (0600) and kept.
 # Environment: MODEL, MODD_PORT, MODD_ZENOH_PORT, MODD_DATA, MODD_PROJECT,
 # MODD_FOXGLOVE_PORT (Foxglove/Lichtblick live server, 0: none; docs/ecosystem.md).
 set -euo pipefail
@@ -44,10 +47,13 @@ stop() {
 trap stop INT TERM EXIT
 
 ZENOH="tcp/127.0.0.1:${MODD_ZENOH_PORT:-7447}"
-modd up "$MODEL" --workdir "$DATA/run" --simulate --zenoh-listen "$ZENOH" &
+CREDS="$DATA/credentials"
+python3 -c 'import sys; from modd.zenoh_auth import CredentialStore; CredentialStore(sys.argv[1]).ensure()' "$CREDS"
+modd up "$MODEL" --workdir "$DATA/run" --credentials "$CREDS" --simulate --zenoh-listen "$ZENOH" &
 pids+=($!)
 
 modd-backend --host 127.0.0.1 --port "$PORT" --data "$DATA/backend" --zenoh-connect "$ZENOH" \
+  --zenoh-credentials "$CREDS/backend.cred" --deploy-key "$CREDS/deploy.key" \
   --frontend "$PWD/frontend/dist" --archives "$DATA/run/archive" \
   --foxglove-port "$FOXGLOVE_PORT" >>"$DATA/backend.log" 2>&1 &
 pids+=($!)
@@ -79,5 +85,7 @@ echo "modd: project '$PROJECT' runs on the simulated drone '$DRONE': archive in 
 if [ "$FOXGLOVE_PORT" != 0 ]; then
   echo "modd: Foxglove/Lichtblick live at ws://127.0.0.1:$FOXGLOVE_PORT (Open connection > Foxglove WebSocket; docs/ecosystem.md)"
 fi
+echo "modd: zenoh $ZENOH requires credentials; a viewer connects with"
+echo "      modd.subscribe('$DRONE', SUBSCRIBER, connect='$ZENOH', credentials='$CREDS/viewer.cred')"
 echo "modd: Ctrl-C to stop"
 wait -n "${pids[@]}" || true

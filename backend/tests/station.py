@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from modd.ports import free_port
+from modd.zenoh_auth import CredentialStore
 
 REPO = Path(__file__).resolve().parents[2]
 PUBBROKER = REPO / "build" / "bin" / "modd-pubbroker"
@@ -157,6 +158,8 @@ class Station:
         self.archive = tmp / "archive" / model["drone"]["name"]
         self.procs: list[Proc] = []
         self.publisher: Publisher | None = None
+        #: the SubBroker's zenoh credentials and deploy key (docs/security.md)
+        self.credentials = CredentialStore(tmp / "credentials").ensure()
 
     def start(self) -> None:
         if not PUBBROKER.exists():
@@ -178,7 +181,8 @@ class Station:
         (self.tmp / "sb.toml").write_text(
             f'model = {json.dumps(str(self.model_path))}\n[link]\n'
             f'endpoint = "127.0.0.1:{self.link}"\nkey = "env:MODD_LINK_KEY"\n'
-            f'[zenoh]\nlisten = ["{self.zenoh}"]\n[delivery]\ntcp = false\n'
+            f'[zenoh]\nlisten = ["{self.zenoh}"]\n'
+            f'credentials_dir = {json.dumps(str(self.credentials.dir))}\n[delivery]\ntcp = false\n'
             f"status_period_s = 0.5\n"
         )
         sb = Proc([sys.executable, "-m", "modd.subbroker.cli", "--config",

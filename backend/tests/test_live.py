@@ -44,6 +44,8 @@ def live(station: Station, tmp_path_factory: pytest.TempPathFactory
     settings = Settings(
         data_dir=tmp_path_factory.mktemp("backend"),
         zenoh_connect=(station.zenoh,),
+        zenoh_credentials=station.credentials.cred_file("backend"),
+        deploy_key_file=station.credentials.deploy_key_file,
         initial_admin_password=ADMIN_PASSWORD,
         deploy_timeout_s=5.0,
         archive_dir=station.archive.parent,

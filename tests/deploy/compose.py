@@ -232,6 +232,9 @@ class Loopback:
             state = str(data["state_dir"])
             data["state_dir"] = str(self.path(state, image.workdir) if state.startswith("/")
                                     else path.parent / state)
+        creds = data.get("zenoh", {}).get("credentials_dir")
+        if isinstance(creds, str) and creds.startswith("/"):
+            data["zenoh"]["credentials_dir"] = str(self.path(creds, image.workdir))
         copy = self.tmp / "configs" / path.name
         copy.parent.mkdir(parents=True, exist_ok=True)
         copy.write_text(self.endpoints(toml_text(data)))

@@ -7,6 +7,7 @@ view is mapped onto this machine)."""
 from __future__ import annotations
 
 import fnmatch
+import json
 import os
 import re
 import secrets
@@ -48,7 +49,7 @@ from support.loopback import (  # noqa: E402
     zenoh_router,
 )
 
-SERVICES = {"zenoh-router", "backend", "subbroker", "drone"}
+SERVICES = {"credentials", "zenoh-router", "backend", "subbroker", "drone"}
 ROUTER = "zenoh-router"
 
 
@@ -237,6 +238,18 @@ class Run:
         listen = self.lb.endpoints(argv[argv.index("--listen") + 1])
         return int(listen.rsplit(":", 1)[1])
 
+    def router_config(self) -> dict[str, Any]:
+        """The zenohd configuration the credentials service wrote."""
+        svc = services(self.compose)[ROUTER]
+        argv = svc["command"]
+        for vol in svc.get("volumes", []):
+            source, target = str(vol).split(":")[:2]
+            self.lb.mount(source, target, Image())
+        path = self.lb.path(argv[argv.index("--config") + 1], "/nonexistent")
+        # the credentials service was given the mapped path: the dictionary's is too
+        config: dict[str, Any] = json.loads(path.read_text())
+        return config
+
     def environment(self, svc: dict[str, Any], image: Image) -> dict[str, str]:
         env = {k: v for k, v in os.environ.items() if not k.startswith("MODD_")}
         for k, v in image.env.items():
@@ -304,17 +317,22 @@ def archive_grows(directory: Path, timeout_s: float) -> None:
     raise AssertionError(f"the drone's archive in {directory} does not grow (size {size()})")
 
 
-@pytest.mark.timeout(120)
+@pytest.mark.timeout(180)
 def test_the_services_start_on_loopback_and_become_ready(compose: dict[str, Any],
                                                          run: Run) -> None:
-    order = [n for n in start_order(compose) if n != ROUTER]
-    with zenoh_router(run.router_port()) as router:
+    order = [n for n in start_order(compose) if n not in (ROUTER, "credentials")]
+    made = run.start("credentials")
+    assert made.p.wait(60) == 0, made.log()
+    config = run.router_config()
+    assert config["access_control"]["default_permission"] == "deny"
+    assert not run.procs["credentials"].log().count(":") > 2  # names files, no password
+    with zenoh_router(run.router_port(), config) as router:
         watch = StatusWatch(router)
         try:
             for name in order:
                 run.start(name)
             # the drone archives what its simulated sensors publish
-            archive_grows(run.lb.tmp / "volumes" / "drone-archive", 30)
+            archive_grows(run.lb.tmp / "volumes" / "drone-archive", 60)  # slow start under load
             # the SubBroker linked to the drone and speaks on the router
             status = watch.wait("usv", lambda s: s["link"] == "up" and s["config_id"], 30)
             assert status["delivered"] >= 0

@@ -17,7 +17,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 
 from modd.subbroker.payload import DeliveredValue  # noqa: E402
 from modd.zenoh_session import client_settings, open_session  # noqa: E402
-from subbroker_harness import PUBBROKER  # noqa: E402
+from subbroker_harness import PUBBROKER, shared_credentials  # noqa: E402
 
 
 @pytest.fixture
@@ -51,11 +51,13 @@ class Collector:
 
 @pytest.fixture
 def zenoh_client() -> Iterator[Any]:
-    """A factory: zenoh_client(port) -> a session connected to that SubBroker."""
+    """A factory: zenoh_client(port, identity="backend") -> a client session of
+    that SubBroker, with that identity's credentials (shared_credentials)."""
     sessions: list[Any] = []
 
-    def make(port: int) -> Any:
-        s = open_session(client_settings(f"tcp/127.0.0.1:{port}"))
+    def make(port: int, identity: str = "backend") -> Any:
+        cred = shared_credentials().cred_file(identity)
+        s = open_session(client_settings(f"tcp/127.0.0.1:{port}", cred))
         sessions.append(s)
         return s
 

@@ -8,6 +8,7 @@ Every process is stopped by its PID (SIGTERM, then SIGKILL after a bound).
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import os
 import select
@@ -16,6 +17,7 @@ import socket
 import struct
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Iterator
@@ -23,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from modd.ports import free_port
+from modd.zenoh_auth import CredentialStore
 from modd_model import load_model
 from modd_model.query import topics
 from modd_plan.derive import aggregate
@@ -34,6 +37,20 @@ PYTHON = Path(sys.executable)
 SUBBROKER = [str(PYTHON), "-m", "modd.subbroker.cli"]
 LOADGEN = [str(PYTHON), str(Path(__file__).with_name("loadgen.py"))]
 KEY = "modd-test-key"
+
+
+@functools.cache
+def shared_credentials() -> CredentialStore:
+    """The zenoh credentials (and deploy key) every SubBroker and client of
+    this test process uses: made once, in a private temporary directory."""
+    return CredentialStore(Path(tempfile.mkdtemp(prefix="modd-zcred-")) / "credentials").ensure()
+
+
+def signed(request_body: dict[str, Any]) -> dict[str, Any]:
+    """A deploy request signed as the workbench signs it."""
+    from modd_model.signing import sign_request
+
+    return sign_request(shared_credentials().deploy_key(), request_body)
 
 
 
@@ -147,6 +164,7 @@ key = "env:MODD_LINK_KEY"
 {link_lines}
 [zenoh]
 listen = ["tcp/127.0.0.1:{zenoh_port}"]
+credentials_dir = {json.dumps(str(shared_credentials().dir))}
 [delivery]
 tcp = {"true" if tcp else "false"}
 status_period_s = 0.5

@@ -64,7 +64,7 @@ def test_defaults_from_model() -> None:
     assert cfg.endpoint == ("127.0.0.1", 7171)
     assert cfg.key_ref == "env:MODD_LINK_KEY"
     assert cfg.zenoh.inserts()["listen/endpoints"] == '["tcp/127.0.0.1:7447"]'
-    assert cfg.zenoh.inserts()["mode"] == '"peer"'
+    assert cfg.zenoh.inserts()["mode"] == '"router"'  # authenticating its clients
 
 
 @pytest.mark.parametrize("body,message", [
@@ -92,6 +92,13 @@ def test_resolve_key(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     assert resolve_key(f"file:{tmp_path / 'k'}") == b"k2"
     for ref in ("env:SB_NOPE", f"file:{tmp_path / 'none'}", "k3"):
         with pytest.raises(ConfigError, match="link key"):
+            resolve_key(ref)
+    # key files: regular, bounded, no final symlink (docs/security.md, "Local surfaces")
+    (tmp_path / "big").write_bytes(b"x" * (1 << 20))
+    (tmp_path / "link").symlink_to(tmp_path / "k")
+    for ref, why in (("file:/dev/zero", "not a regular file"), (f"file:{tmp_path}/big", "bytes"),
+                     (f"file:{tmp_path}/link", "link")):
+        with pytest.raises(ConfigError, match=why):
             resolve_key(ref)
 
 

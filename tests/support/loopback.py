@@ -19,24 +19,43 @@ from pathlib import Path
 from typing import Any
 
 import httpx2 as httpx
+from modd.zenoh_auth import acl
 from modd.zenoh_session import ZenohSettings, open_session
 from websockets.sync.client import ClientConnection, connect
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
 
-from subbroker_harness import PUBBROKER, Proc, free_port, start_pubbroker, wait_port  # noqa: E402
+from subbroker_harness import (  # noqa: E402
+    PUBBROKER,
+    Proc,
+    free_port,
+    shared_credentials,
+    start_pubbroker,
+    wait_port,
+)
 
 __all__ = ["PUBBROKER", "REPO", "VENV_BIN", "Backend", "Proc", "StatusWatch", "free_port",
-           "receive_until", "start_pubbroker", "wait_port", "zenoh_router"]
+           "receive_until", "start_pubbroker", "shared_credentials", "wait_port", "zenoh_router"]
 
 REPO = Path(__file__).resolve().parents[2]
 VENV_BIN = Path(sys.executable).parent
 
 
 @contextlib.contextmanager
-def zenoh_router(port: int) -> Iterator[Any]:
-    """A zenoh router listening on tcp/127.0.0.1:port, in this process."""
-    session = open_session(ZenohSettings(mode="router", listen=(f"tcp/127.0.0.1:{port}",)))
+def zenoh_router(port: int, config: dict[str, Any] | None = None) -> Iterator[Any]:
+    """A zenoh router listening on tcp/127.0.0.1:port, in this process, with
+    the authentication and access control of a SubBroker's (every drone), or
+    those of ``config`` (a zenohd configuration: its dictionary_file and
+    access_control)."""
+    dictionary = str(shared_credentials().dictionary)
+    rules = acl(None)
+    if config is not None:
+        dictionary = config["transport"]["auth"]["usrpwd"]["dictionary_file"]
+        rules = config["access_control"]
+    session = open_session(ZenohSettings(
+        mode="router", listen=(f"tcp/127.0.0.1:{port}",),
+        dictionary_file=dictionary, access_control=rules,
+        extra={"scouting/gossip/enabled": "false"}))
     try:
         yield session
     finally:
@@ -91,10 +110,12 @@ class Backend:
         argv = [str(VENV_BIN / "modd-backend"), "--host", "127.0.0.1", "--port", str(port),
                 "--data", str(tmp / "backend"), "--zenoh-connect", zenoh_connect,
                 "--admin-password", admin_password, "--frontend", str(tmp / "no-frontend"),
-                "--scene-port", "-1", *(extra or [])]
+                "--scene-port", "-1",
+                "--zenoh-credentials", str(shared_credentials().cred_file("backend")),
+                "--deploy-key", str(shared_credentials().deploy_key_file), *(extra or [])]
         return cls(Proc("backend", argv, tmp / "backend.log"), port)
 
-    def sign_in(self, password: str, timeout_s: float = 30.0) -> None:
+    def sign_in(self, password: str, timeout_s: float = 90.0) -> None:
         """Waits until the backend answers, then signs in as ``admin``."""
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline and self.proc.alive():

@@ -29,6 +29,7 @@ from support.loopback import (  # noqa: E402
     StatusWatch,
     free_port,
     receive_until,
+    shared_credentials,
     start_pubbroker,
     zenoh_router,
 )
@@ -44,6 +45,7 @@ key = "file:{key}"
 mode = "client"
 listen = []
 connect = ["{router}"]
+credentials_dir = "{credentials}"
 [delivery]
 tcp = false
 status_period_s = 0.5
@@ -96,7 +98,8 @@ def start_drone(tmp: Path, name: str, router: str, extra_subscriber: str | None 
                                             "--ingress", f"tcp:127.0.0.1:{ingress}"],
                             d / f"{name}-sim.log", env=env))
     config = d / f"{name}-subbroker.toml"
-    config.write_text(SUBBROKER_TOML.format(model=path, link=link, key=key_file, router=router))
+    config.write_text(SUBBROKER_TOML.format(model=path, link=link, key=key_file, router=router,
+                                              credentials=shared_credentials().dir))
     drone.procs.append(Proc(f"{name}-subbroker", [str(VENV_BIN / "modd-subbroker"), "--config",
                                                    str(config)], d / f"{name}-subbroker.log",
                             env=env))

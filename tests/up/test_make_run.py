@@ -69,6 +69,33 @@ def alive(pid: int) -> bool:
     return stat.rsplit(")", 1)[1].split()[0] != "Z"
 
 
+def check_zenoh_is_closed(data: Path, zport: int, log: Path) -> None:
+    """The SubBroker's zenoh endpoint refuses anonymous and wrong-password
+    clients, the viewer reads values but cannot deploy; credentials are 0600
+    files, named in the output and never printed."""
+    from modd.subbroker.client import NoReply, request
+    from modd.zenoh_auth import Credentials, read_credentials
+    from modd.zenoh_session import client_settings, open_session
+
+    endpoint = f"tcp/127.0.0.1:{zport}"
+    creds = data / "credentials"
+    out = log.read_text()
+    assert f"credentials='{creds / 'viewer.cred'}'" in out
+    for name in ("viewer.cred", "backend.cred", "subbroker.cred", "deploy.key", "users"):
+        assert (creds / name).stat().st_mode & 0o777 == 0o600, name
+        if name.endswith(".cred"):
+            assert read_credentials(creds / name).password not in out
+    for who in (None, Credentials("viewer", "wrong")):
+        with pytest.raises(ValueError, match="cannot open"):
+            open_session(client_settings(endpoint, who))
+    viewer = open_session(client_settings(endpoint, creds / "viewer.cred"))
+    try:
+        with pytest.raises(NoReply):
+            request(viewer, "modd/usv/deploy", {"text": ""}, timeout_s=1)
+    finally:
+        viewer.close()
+
+
 def test_make_run_serves_the_demo_live_and_stops(
         tmp_path: Path, free_port: FreePort, wait_for: WaitFor) -> None:
     data = tmp_path / "data"
@@ -115,6 +142,8 @@ def test_make_run_serves_the_demo_live_and_stops(
         assert scene["url"].startswith("http://127.0.0.1:")
         track = {d["drone"]: d for d in scene["drones"]}
         assert track["usv"]["points"] > 0, scene
+
+        check_zenoh_is_closed(data, zport, log)
     finally:
         stop(proc, log)
     out = log.read_text()

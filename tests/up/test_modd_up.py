@@ -73,7 +73,9 @@ def test_up_with_simulator_delivers_live_values(tmp_path: Path, modd_cmd: str,
     values: dict[str, list[float]] = {"water_temp": [], "track_lat": []}
     try:
         wait_for(tmp_path / "run" / "logs" / "subbroker.log", "config 1 running", 30)
-        subs = {name: modd.subscribe("usv", name, connect=f"tcp/127.0.0.1:{zenoh_port}")
+        viewer = tmp_path / "run" / "credentials" / "viewer.cred"  # what modd up printed
+        subs = {name: modd.subscribe("usv", name, connect=f"tcp/127.0.0.1:{zenoh_port}",
+                                     credentials=viewer)
                 for name in values}
         deadline = time.monotonic() + 30
         while any(len(v) < 3 for v in values.values()) and time.monotonic() < deadline:
@@ -98,6 +100,7 @@ def test_up_with_simulator_delivers_live_values(tmp_path: Path, modd_cmd: str,
     assert "autopilot accepted GLOBAL_POSITION_INT every 0.2 s" in bridge_log, bridge_log
     assert len(re.findall(r"\(pid (\d+)\)", out)) == 4, out
     assert "stopped bridge (exit 0)" in out and "stopped simulator (exit 0)" in out
+    assert f"credentials='{viewer}'" in out
 
 
 def test_up_in_two_parts_drone_and_station(scenarios_dir: Path, tmp_path: Path, modd_cmd: str,

@@ -111,7 +111,8 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         store = Store.open(settings.effective_database_url, init=first_start)
         bridge = None
         if settings.zenoh_enabled:
-            bridge = ZenohBridge.open(settings.zenoh_connect, settings.zenoh_listen)
+            bridge = ZenohBridge.open(settings.zenoh_connect, settings.zenoh_listen,
+                                      settings.zenoh_credentials)
         if settings.preload_milp:
             preload_milp()
         app.state.modd = AppState(settings, store, bridge)

@@ -24,6 +24,13 @@ def parse_args(argv: list[str] | None = None) -> Settings:
     p.add_argument("--zenoh-connect", action="append", metavar="ENDPOINT",
                    help=f"zenoh endpoint to connect to (default {DEFAULT_ZENOH_CONNECT[0]})")
     p.add_argument("--zenoh-listen", action="append", metavar="ENDPOINT", default=[])
+    p.add_argument("--zenoh-credentials", type=Path,
+                   default=os.environ.get("MODD_ZENOH_CREDENTIALS") or None, metavar="FILE",
+                   help="the backend's zenoh user:password file (default "
+                   "$MODD_ZENOH_CREDENTIALS; docs/security.md)")
+    p.add_argument("--deploy-key", type=Path, default=os.environ.get("MODD_DEPLOY_KEY") or None,
+                   metavar="FILE", help="key file that signs deploys, the SubBroker's deploy.key "
+                   "(default $MODD_DEPLOY_KEY)")
     p.add_argument("--no-zenoh", action="store_true", help="no zenoh session (no deploy/streams)")
     p.add_argument("--frontend", type=Path, default=Path("frontend/dist"),
                    help="built frontend to serve at / when it exists")
@@ -53,6 +60,8 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         preload_milp=True,
         scene_port=None if a.scene_port < 0 else a.scene_port,
         foxglove_port=a.foxglove_port,
+        zenoh_credentials=Path(a.zenoh_credentials) if a.zenoh_credentials else None,
+        deploy_key_file=Path(a.deploy_key) if a.deploy_key else None,
     )
 
 

@@ -3,23 +3,35 @@
 
 The SubBroker replies ``{"status": "ACKED", ...}`` only after the PubBroker's
 CONFIG_ACK; any other status, an error reply, a timeout or no reply at all is
-a failure, recorded with its reason."""
+a failure, recorded with its reason.
+
+Every request is signed (modd_model.signing) with the deploy key shared with
+the SubBroker, over the model, the revision, who deployed and a fresh nonce:
+the SubBroker applies nothing else (docs/security.md, "Signed deploys")."""
 
 from __future__ import annotations
 
 import json
 import re
+from pathlib import Path
 from typing import Any
 
+from modd_model.signing import sign_request
 from sqlalchemy import select
 from sqlalchemy.orm import Session as Db
 
 from .tables import Deployment, ModelVersion, utcnow
-from .zbridge import ZenohBridge
+from .zbridge import ZenohBridge, read_secret
 
 NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 #: Extra seconds the backend waits beyond the SubBroker's own deploy timeout.
 QUERY_MARGIN_S = 2.0
+
+
+def signing_key(path: Path | None) -> bytes | None:
+    """The deploy key (the SubBroker's ``deploy.key``), or None when not
+    configured: the SubBroker then refuses the deploy, UNAUTHORISED."""
+    return read_secret(path, "deploy key").encode() if path is not None else None
 
 
 def deploy_key(drone: str) -> str:
@@ -35,6 +47,7 @@ def deploy(
     model: dict[str, Any],
     user: str,
     timeout_s: float,
+    key: bytes | None = None,
 ) -> Deployment:
     """Send ``model`` to its drone's SubBroker and record the outcome."""
     drone = str(model["drone"]["name"])
@@ -44,7 +57,11 @@ def deploy(
     )
     db.add(record)
     db.commit()
-    request = json.dumps({"model": model, "timeout_s": timeout_s}).encode()
+    body: dict[str, Any] = {"model": model, "timeout_s": timeout_s, "revision": version.revision,
+                            "project_id": version.project_id, "deployed_by": user}
+    if key is not None:
+        body = sign_request(key, body)
+    request = json.dumps(body).encode()
     result = bridge.query(deploy_key(drone), request, timeout_s + QUERY_MARGIN_S)
     reply = result.json() if result.ok else None
     if isinstance(reply, dict) and reply.get("status") == "ACKED":

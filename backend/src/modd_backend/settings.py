@@ -45,6 +45,10 @@ class Settings:
     #: Port of the Foxglove WebSocket server on ``host`` (docs/ecosystem.md); 0: none.
     foxglove_port: int = 0
     cors_origins: tuple[str, ...] = field(default_factory=tuple)
+    #: The ``backend`` identity's zenoh user:password file (docs/security.md).
+    zenoh_credentials: Path | None = None
+    #: The key that signs deploys, shared with the SubBroker (its deploy.key).
+    deploy_key_file: Path | None = None
 
     @property
     def effective_database_url(self) -> str:

@@ -1,6 +1,13 @@
-"""The backend's one zenoh session (peer mode, multicast scouting off,
-explicit endpoints) and the two things done with it: queries with a timeout,
-where silence is a failure, and subscriptions delivering to a callback.
+"""The backend's one zenoh session and the two things done with it: queries
+with a timeout, where silence is a failure, and subscriptions delivering to a
+callback.
+
+The session is a *client* of the SubBroker's router (multicast scouting off,
+explicit endpoints) that gives the ``backend`` identity's user name and
+password (a ``.cred`` file, docs/security.md), so every message goes through
+the router's access control. A client cannot open while no router listens:
+the bridge keeps trying in the background, and subscriptions asked meanwhile
+are declared once it is open. (Listening, ``zenoh_listen``, makes it a peer.)
 
 >>> bridge = ZenohBridge.open(connect=("tcp/127.0.0.1:7447",))   # doctest: +SKIP
 >>> bridge.query("modd/usv/deploy", b"{...}", timeout_s=10)      # doctest: +SKIP
@@ -10,8 +17,13 @@ QueryResult(ok=True, payload=b'{"status": "acked", ...}', error=None)
 from __future__ import annotations
 
 import json
+import logging
+import os
+import stat
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Protocol
 
 import zenoh
@@ -37,28 +49,119 @@ class QueryResult:
             return {"raw": self.payload.decode("utf-8", "replace")}
 
 
-def zenoh_config(connect: tuple[str, ...], listen: tuple[str, ...]) -> zenoh.Config:
+log = logging.getLogger("modd_backend.zenoh")
+MAX_SECRET_BYTES = 64 * 1024
+RETRY_S = 0.5
+
+
+def read_secret(path: Path, what: str) -> str:
+    """A small regular file's text (one trailing newline stripped), read
+    without following a final symlink: the mirror of modd.zenoh_auth.read_secret."""
+    fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_SECRET_BYTES:
+            raise ValueError(f"{what} {path}: not a regular file of at most "
+                             f"{MAX_SECRET_BYTES} bytes")
+        if st.st_mode & 0o077:
+            log.warning("%s %s can be read by group or others: chmod 600 it", what, path)
+        data = os.read(fd, MAX_SECRET_BYTES)
+    finally:
+        os.close(fd)
+    text = data.decode("utf-8").removesuffix("\n")
+    if not text:
+        raise ValueError(f"{what} {path}: the file is empty")
+    return text
+
+
+def zenoh_config(connect: tuple[str, ...], listen: tuple[str, ...],
+                 credentials: Path | None = None) -> zenoh.Config:
     c = zenoh.Config()
-    c.insert_json5("mode", '"peer"')
+    c.insert_json5("mode", '"peer"' if listen or not connect else '"client"')
     c.insert_json5("scouting/multicast/enabled", "false")
+    c.insert_json5("scouting/gossip/enabled", "false")
     c.insert_json5("scouting/delay", "0")
     c.insert_json5("connect/endpoints", json.dumps(list(connect)))
     c.insert_json5("listen/endpoints", json.dumps(list(listen)))
+    if credentials is not None:
+        user, sep, password = read_secret(credentials, "zenoh credentials").partition(":")
+        if not sep or not user or not password:
+            raise ValueError(f"zenoh credentials {credentials}: expected user:password")
+        c.insert_json5("transport/auth/usrpwd/user", json.dumps(user))
+        c.insert_json5("transport/auth/usrpwd/password", json.dumps(password))
     return c
 
 
+class _Pending:
+    """A subscription asked before the session opened; declared when it does."""
+
+    def __init__(self, bridge: ZenohBridge, key: str, on_sample: Any) -> None:
+        self.bridge, self.key, self.on_sample = bridge, key, on_sample
+        self.real: Undeclarable | None = None
+
+    def undeclare(self) -> None:
+        with self.bridge._lock:
+            self.bridge._pending.discard(self)
+            real, self.real = self.real, None
+        if real is not None:
+            real.undeclare()
+
+
 class ZenohBridge:
-    def __init__(self, session: zenoh.Session) -> None:
+    def __init__(self, session: zenoh.Session | None,
+                 config: Callable[[], zenoh.Config] | None = None, where: str = "") -> None:
         self._session = session
+        self._config = config
+        self._where = where
+        self._lock = threading.Lock()
+        self._pending: set[_Pending] = set()
+        self._closed = threading.Event()
+        self._opener: threading.Thread | None = None
 
     @classmethod
-    def open(cls, connect: tuple[str, ...] = (), listen: tuple[str, ...] = ()) -> ZenohBridge:
-        """Opens at once; peers are connected in the background when they appear."""
-        return cls(zenoh.open(zenoh_config(connect, listen)))
+    def open(cls, connect: tuple[str, ...] = (), listen: tuple[str, ...] = (),
+             credentials: Path | None = None) -> ZenohBridge:
+        """Opens at once when the router is up, else keeps trying in the background
+        (the credentials file is read at each try: it may not be made yet)."""
+        bridge = cls(None, lambda: zenoh_config(connect, listen, credentials),
+                     ", ".join(connect + listen))
+        if not bridge._try_open():
+            bridge._opener = threading.Thread(target=bridge._keep_trying, daemon=True,
+                                              name="modd-zenoh-open")
+            bridge._opener.start()
+        return bridge
+
+    def _try_open(self) -> bool:
+        assert self._config is not None
+        try:
+            session = zenoh.open(self._config())
+        except zenoh.ZError:
+            return False
+        except (OSError, ValueError) as exc:  # no credentials file yet, or a bad one
+            log.warning("zenoh credentials: %s", exc)
+            return False
+        with self._lock:
+            self._session = session
+            pending = list(self._pending)
+        for p in pending:
+            p.real = session.declare_subscriber(p.key, p.on_sample)
+        log.info("zenoh session open (%s)", self._where)
+        return True
+
+    def _keep_trying(self) -> None:
+        log.warning("zenoh router %s not reachable (or credentials refused); retrying",
+                    self._where)
+        while not self._closed.wait(RETRY_S):
+            if self._try_open():
+                return
 
     def query(self, key: str, payload: bytes, timeout_s: float) -> QueryResult:
         """Blocking ``get``; call it from a worker thread."""
-        replies = self._session.get(key, payload=payload, timeout=timeout_s)
+        session = self._session
+        if session is None:
+            return QueryResult(False, b"", f"the zenoh router {self._where} is not reachable "
+                               "(or refused the backend's credentials)")
+        replies = session.get(key, payload=payload, timeout=timeout_s)
         for reply in replies:
             if reply.ok is not None:
                 return QueryResult(True, reply.ok.payload.to_bytes())
@@ -75,8 +178,18 @@ class ZenohBridge:
         def on_sample(sample: zenoh.Sample) -> None:
             callback(str(sample.key_expr), sample.payload.to_bytes())
 
-        sub: Undeclarable = self._session.declare_subscriber(key, on_sample)
+        with self._lock:
+            session = self._session
+            if session is None:
+                pending = _Pending(self, key, on_sample)
+                self._pending.add(pending)
+                return pending
+        sub: Undeclarable = session.declare_subscriber(key, on_sample)
         return sub
 
     def close(self) -> None:
-        self._session.close()  # type: ignore[no-untyped-call]
+        self._closed.set()
+        if self._opener is not None:
+            self._opener.join(timeout=5)
+        if self._session is not None:
+            self._session.close()  # type: ignore[no-untyped-call]

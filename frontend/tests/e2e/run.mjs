@@ -52,6 +52,7 @@ try {
   const [port, zport, pubPort, subPort] = [await freePort(), await freePort(), await freePort(), await freePort()];
   const baseUrl = `http://127.0.0.1:${port}`;
   const zenoh = `tcp/127.0.0.1:${zport}`;
+  const creds = join(tmp, "credentials");
   // The simulated drone: PubBroker + SubBroker (+ simulated sensors) of scenario 1,
   // as the journey builds it, on free loopback ports. Needs the C++ build.
   const drone = existsSync(pubbrokerBin);
@@ -59,8 +60,12 @@ try {
   if (drone) {
     const model = scenario1(pubPort, subPort);
     writeFileSync(join(tmp, "scenario1.json"), JSON.stringify(model));
+    // The SubBroker's zenoh router authenticates its clients (docs/security.md): the
+    // credentials and the deploy key, made here so that the backend has them at once.
+    execFileSync(join(bin, "python"), ["-c", "import sys; from modd.zenoh_auth import CredentialStore; "
+      + "CredentialStore(sys.argv[1]).ensure()", creds], { cwd: repo, stdio: "inherit" });
     const up = start("modd up", [join(bin, "modd"), "up", join(tmp, "scenario1.json"), "--workdir", join(tmp, "drone"),
-      "--zenoh-listen", zenoh, ...(liveValues ? ["--simulate"] : [])], { cwd: repo, logFile: join(tmp, "drone.log"),
+      "--credentials", creds, "--zenoh-listen", zenoh, ...(liveValues ? ["--simulate"] : [])], { cwd: repo, logFile: join(tmp, "drone.log"),
       env: { MODD_PUBBROKER: pubbrokerBin } });
     procs.push(up);
     // The backend lists <archives>/<drone>/*.mcap; `modd up` writes the PubBroker's archive to <workdir>/archive.
@@ -71,7 +76,8 @@ try {
     backendBin, "--host", "127.0.0.1", "--port", String(port), "--data", join(tmp, "data"),
     "--admin-password", PASSWORD, "--frontend", join(frontend, "dist"),
     "--archives", join(tmp, "archives"),
-    ...(drone ? ["--zenoh-connect", zenoh] : ["--no-zenoh"]),
+    ...(drone ? ["--zenoh-connect", zenoh, "--zenoh-credentials", join(creds, "backend.cred"),
+      "--deploy-key", join(creds, "deploy.key")] : ["--no-zenoh"]),
   ], { cwd: repo, logFile: join(tmp, "backend.log") });
   procs.push(backend);
   await waitForHttp(`${baseUrl}/openapi.json`, backend);

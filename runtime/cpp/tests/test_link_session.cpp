@@ -1,4 +1,8 @@
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
 
 #include "modd/broker/link_session.hpp"
 #include "modd/link/auth.hpp"
@@ -112,4 +116,18 @@ TEST(LinkSession, NothingBeforeTheHandshake) {
   std::vector<uint8_t> garbage = {0xFF, 0xFF, 0x7F};  // a 2 MiB frame announced before auth
   EXPECT_FALSE(s3.on_bytes(garbage, out));
   EXPECT_EQ(std::get<ErrorMsg>(frames_of(out)[0]).code, static_cast<uint8_t>(ErrorCode::BadFrame));
+}
+
+// Key files (docs/security.md, "Local surfaces"): regular files of at most 64 KiB,
+// never through a final symlink; file:/dev/zero used to exhaust memory.
+TEST(KeyFile, RegularBoundedAndNoSymlink) {
+  const std::string dir = ::testing::TempDir();
+  const std::string key = dir + "/modd_key_ok", big = dir + "/modd_key_big", lnk = dir + "/modd_key_lnk";
+  { std::ofstream(key) << "secret\n"; }
+  { std::ofstream(big) << std::string(100000, 'x'); }
+  std::remove(lnk.c_str());
+  ASSERT_EQ(::symlink(key.c_str(), lnk.c_str()), 0);
+  EXPECT_EQ(modd::link::resolve_key("file:" + key), "secret");
+  for (const std::string& ref : {std::string("file:/dev/zero"), "file:" + big, "file:" + lnk})
+    EXPECT_THROW(modd::link::resolve_key(ref), modd::Error) << ref;
 }

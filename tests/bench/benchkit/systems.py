@@ -29,6 +29,7 @@ from subbroker_harness import (
     Proc,
     free_port,
     model_copy,
+    shared_credentials,
     start_load,
     start_pubbroker,
     start_subbroker,
@@ -139,7 +140,8 @@ class ModdLink:
         self.procs = [self.pb, self.sb]
         try:
             wait_port(zport, 15)
-            self.session = open_session(client_settings(f"tcp/127.0.0.1:{zport}"))
+            viewer = shared_credentials().cred_file("viewer")  # the SubBroker authenticates
+            self.session = open_session(client_settings(f"tcp/127.0.0.1:{zport}", viewer))
             self.subs = [modd.subscribe(sc.drone, s.name, self._receiver(s.name),
                                         session=self.session) for s in sc.subscriptions]
             self.load = start_load(tmp, model, ingress, seconds + 30)
@@ -223,7 +225,7 @@ class ZenohLink:
     name = "zenoh downsampling"
 
     def __init__(self, tmp: Path, sc: Scenario, seconds: float) -> None:
-        from modd.zenoh_session import client_settings, open_session
+        from modd.zenoh_session import ZenohSettings, open_session
 
         self.link_port = free_port()
         self.tally = Tally([s.name for s in sc.subscriptions])
@@ -238,7 +240,9 @@ class ZenohLink:
         try:
             if not self.drone.wait_log("ready", 15):
                 raise RuntimeError(f"zenoh drone did not start: {self.drone.log()}")
-            self.session = open_session(client_settings(f"tcp/127.0.0.1:{self.link_port}"))
+            # a peer of the drone-side router, as measured before (docs/benchmarks.md)
+            self.session = open_session(ZenohSettings(
+                mode="peer", connect=(f"tcp/127.0.0.1:{self.link_port}",)))
             self.subs = [self.session.declare_subscriber(k, self._receiver(s.name))
                          for (k, _, _), s in zip(keys, sc.subscriptions, strict=True)]
             slowest = max(float(s.period_s) for s in sc.subscriptions)

@@ -11,7 +11,7 @@ from modd_model import validate
 from pydantic import BaseModel, Field
 from sqlalchemy import select
 
-from ..deployments import deploy, last_acked, record_json
+from ..deployments import deploy, last_acked, record_json, signing_key
 from ..deps import DbDep, StateDep, UserDep, bridge_of, require
 from ..errors import ApiError
 from ..modeldiff import diff
@@ -71,7 +71,7 @@ def deploy_version(
         raise ApiError(422, f"revision {version.revision} has errors: fix them before deploying",
                        diagnostics=diags)
     record = deploy(db, bridge_of(state), version, model_of(version), user.username,
-                    state.settings.deploy_timeout_s)
+                    state.settings.deploy_timeout_s, signing_key(state.settings.deploy_key_file))
     if record.status == "acked" and state.scene is not None:
         state.scene.forget(record.drone)  # the 3D scene re-reads the drone's model
     return DeploymentOut.model_validate(record_json(record))

@@ -5,13 +5,18 @@
 #include <openssl/hmac.h>
 #include <openssl/rand.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdio>
 #include <cstdlib>
-#include <fstream>
-#include <sstream>
 
 #include "modd/util/error.hpp"
 
 namespace modd::link {
+
+constexpr off_t kMaxKeyFile = 64 * 1024;
 
 Mac hmac_sha256(std::span<const uint8_t> key, std::span<const uint8_t> data) {
   Mac out{};
@@ -43,6 +48,37 @@ Nonce random_nonce() {
   return n;
 }
 
+// A key file: a regular file (no final symlink, never a FIFO or device) of at most
+// kMaxKeyFile bytes; a warning when group or others may read it (docs/security.md).
+static std::string read_key_file(const std::string& ref) {
+  const std::string path = ref.substr(5);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) throw Error(ErrorCode::BadConfig, "key reference " + ref + ": cannot open the file");
+  struct stat st{};
+  std::string key;
+  std::string problem;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    problem = "not a regular file";
+  } else if (st.st_size > kMaxKeyFile) {
+    problem = "larger than " + std::to_string(kMaxKeyFile) + " bytes";
+  } else {
+    if ((st.st_mode & 077) != 0)
+      std::fprintf(stderr, "warning: key file %s can be read by group or others: chmod 600 it\n",
+                   path.c_str());
+    key.resize(static_cast<size_t>(st.st_size));
+    size_t got = 0;
+    while (got < key.size()) {
+      const ssize_t n = ::read(fd, key.data() + got, key.size() - got);
+      if (n <= 0) break;
+      got += static_cast<size_t>(n);
+    }
+    key.resize(got);
+  }
+  ::close(fd);
+  if (!problem.empty()) throw Error(ErrorCode::BadConfig, "key reference " + ref + ": " + problem);
+  return key;
+}
+
 std::string resolve_key(const std::string& ref) {
   std::string key;
   if (ref.rfind("env:", 0) == 0) {
@@ -50,11 +86,7 @@ std::string resolve_key(const std::string& ref) {
     if (!v) throw Error(ErrorCode::BadConfig, "key reference " + ref + ": environment variable not set");
     key = v;
   } else if (ref.rfind("file:", 0) == 0) {
-    std::ifstream f(ref.substr(5), std::ios::binary);
-    if (!f) throw Error(ErrorCode::BadConfig, "key reference " + ref + ": cannot read file");
-    std::ostringstream ss;
-    ss << f.rdbuf();
-    key = ss.str();
+    key = read_key_file(ref);
     while (!key.empty() && (key.back() == '\n' || key.back() == '\r')) key.pop_back();
   } else {
     throw Error(ErrorCode::BadConfig, "key reference '" + ref + "' is neither env:NAME nor file:PATH");

@@ -21,6 +21,7 @@ By default the session connects to the SubBroker at ``tcp/127.0.0.1:7447``
 from __future__ import annotations
 
 import logging
+import os
 import queue
 import time
 from collections.abc import Callable, Iterator
@@ -160,12 +161,13 @@ def to_dataframe(values: list[DeliveredValue]) -> pandas.DataFrame:
     return df
 
 
-def _session(session: zenoh.Session | None, connect: str | None) -> tuple[zenoh.Session, bool]:
+def _session(session: zenoh.Session | None, connect: str | None,
+             credentials: str | os.PathLike[str] | None = None) -> tuple[zenoh.Session, bool]:
     if session is not None:
         return session, False
     from .zenoh_session import client_settings, open_session, wait_connected
 
-    opened = open_session(client_settings(connect))
+    opened = open_session(client_settings(connect, credentials))
     wait_connected(opened, timeout_s=2.0)
     return opened, True
 
@@ -177,13 +179,16 @@ def subscribe(
     *,
     connect: str | None = None,
     session: zenoh.Session | None = None,
+    credentials: str | os.PathLike[str] | None = None,
 ) -> Subscription:
     """Subscribe to the values a SubBroker delivers to ``subscriber`` of ``drone``.
 
     With ``callback``, each value is passed to it on zenoh's thread (keep it
     short); without, iterate the returned :class:`Subscription`.
+    ``credentials``: the ``user:password`` file to connect with (a viewer's,
+    ``viewer.cred``), else ``$MODD_ZENOH_CREDENTIALS`` (docs/security.md).
     """
-    s, own = _session(session, connect)
+    s, own = _session(session, connect, credentials)
     return Subscription(s, sub_key(drone, subscriber), callback, own_session=own)
 
 
@@ -197,14 +202,16 @@ def subscribe_dynamic(
     connect: str | None = None,
     session: zenoh.Session | None = None,
     timeout_s: float = 5.0,
+    credentials: str | os.PathLike[str] | None = None,
 ) -> Subscription:
     """Ask the SubBroker for a new (topic, period, aggregation) while the
     mission runs; raises :class:`NotAvailable` with the SubBroker's reason
     when the running plan cannot serve it, NoReply when no SubBroker answers.
-    Closing the subscription cancels it."""
+    Closing the subscription cancels it. Only the ``backend`` identity may
+    ask (``credentials``, docs/security.md)."""
     from .subbroker.client import request
 
-    s, own = _session(session, connect)
+    s, own = _session(session, connect, credentials)
     period = period_s if isinstance(period_s, str) else str(float(period_s))
     try:
         reply = request(s, subscribe_key(drone),

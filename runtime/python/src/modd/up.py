@@ -19,15 +19,22 @@ Options:
   the SubBroker's zenoh endpoints (e.g. ``--zenoh-connect tcp/127.0.0.1:7447``
   to join a zenoh router); ignored by ``--part drone``.
 - ``--workdir DIR``: the run directory.
+- ``--credentials DIR``: the SubBroker's zenoh credentials and deploy key
+  (default ``<workdir>/credentials``), made 0600 at first start; ``modd up``
+  prints which file a viewer connects with, never a password
+  (docs/security.md).
 
 Link endpoints are always the model's. With ``--part all`` and no key in the
 environment, a random link key is made for the run; with ``--part drone`` or
 ``station`` both sides must share the key the model's ``keyRef`` names (by
 default ``$MODD_LINK_KEY``), else ``modd up`` refuses to start.
 
-The run directory (``--workdir``, default ``/tmp/modd-up/<drone>``) holds the
-generated configs, the archive, the ingress socket and each process's log, so
-that a run never writes to the paths of a real drone's model."""
+The run directory (``--workdir``, default ``<runtime dir>/<drone>`` where the
+runtime dir is ``$XDG_RUNTIME_DIR/modd-up`` or ``/tmp/modd-up-<uid>``) holds
+the generated configs, the archive, the ingress socket and each process's log,
+so that a run never writes to the paths of a real drone's model. It is private
+(0700): one owned by another user, or reached through a symbolic link, is
+refused."""
 
 from __future__ import annotations
 
@@ -45,6 +52,8 @@ from pathlib import Path
 from typing import Any
 
 from .ports import free_port
+from .zenoh_auth import CredentialStore, private_dir
+from .zenoh_session import DEFAULT_ENDPOINT
 
 REPO = Path(__file__).resolve().parents[4]
 STOP_TIMEOUT_S = 10.0
@@ -164,7 +173,8 @@ def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
                                                      str(configs / "pubbroker.json")],
                                        logs / "pubbroker.log"))
     if station:
-        sub = [str(bin_dir / "modd-subbroker"), "--config", str(configs / "subbroker.toml")]
+        sub = [str(bin_dir / "modd-subbroker"), "--config", str(configs / "subbroker.toml"),
+               "--credentials", str(args.credentials_dir)]
         for endpoint in args.zenoh_listen or ():
             sub += ["--zenoh-listen", endpoint]
         for endpoint in args.zenoh_connect or ():
@@ -181,8 +191,15 @@ def run(args: argparse.Namespace) -> int:
     model = load_or_report(args.model)
     if model is None:
         return 1
-    workdir = Path(args.workdir or f"/tmp/modd-up/{model['drone']['name']}").resolve()
-    workdir.mkdir(parents=True, exist_ok=True)
+    try:
+        workdir = run_dir(args.workdir, model["drone"]["name"])
+        args.credentials_dir = Path(args.credentials or workdir / "credentials").absolute()
+        store = CredentialStore(args.credentials_dir)
+        if args.part != "drone":
+            store.ensure()
+    except ValueError as exc:
+        print(f"modd up: {exc}", file=sys.stderr)
+        return 1
     local, configs = prepare(model, workdir)
     env = dict(os.environ)
     key_ref = (local.get("link", {}).get("keyRef") or "env:MODD_LINK_KEY")
@@ -211,6 +228,8 @@ def run(args: argparse.Namespace) -> int:
     where = f"archive in {workdir / 'archive'}" if args.part != "station" else f"logs in {workdir}"
     print(f"modd up: drone {local['drone']['name']} ({args.part}) running; {where};"
           " Ctrl-C to stop", flush=True)
+    if args.part != "drone":
+        print(viewer_hint(args, store), flush=True)
     code = 0
     try:
         while not stopping:
@@ -226,12 +245,36 @@ def run(args: argparse.Namespace) -> int:
     return code
 
 
+def run_dir(workdir: str | None, drone: str) -> Path:
+    """The run directory, private to this user (0700; ValueError when another
+    user owns it or a symbolic link leads there)."""
+    if workdir:
+        return private_dir(Path(workdir).absolute())
+    runtime = os.environ.get("XDG_RUNTIME_DIR")
+    base = Path(runtime) / "modd-up" if runtime else Path(f"/tmp/modd-up-{os.getuid()}")
+    private_dir(base)
+    return private_dir(base / drone)
+
+
+def viewer_hint(args: argparse.Namespace, store: CredentialStore) -> str:
+    """How a viewer connects (which file holds its credentials), never a password."""
+    endpoint = (args.zenoh_listen or [DEFAULT_ENDPOINT])[0]
+    return (f"modd up: zenoh {endpoint} requires credentials; a viewer connects with "
+            f"modd.subscribe(DRONE, SUBSCRIBER, connect={endpoint!r}, "
+            f"credentials={str(store.cred_file('viewer'))!r}) (the workbench: "
+            f"modd-backend --zenoh-credentials {store.cred_file('backend')} "
+            f"--deploy-key {store.deploy_key_file})")
+
+
 def register(sub: Any) -> None:
     p = sub.add_parser("up", help="run a model locally: PubBroker, SubBroker, simulated sensors")
     p.add_argument("model", metavar="MODEL", help=".modd or .json model")
     p.add_argument("--simulate", action="store_true", help="also run the simulated drone "
                    "(sensors, autopilot) and the MAVLink bridge")
-    p.add_argument("--workdir", metavar="DIR", help="run directory (default /tmp/modd-up/<drone>)")
+    p.add_argument("--workdir", metavar="DIR", help="run directory, private "
+                   "(default $XDG_RUNTIME_DIR/modd-up/<drone> or /tmp/modd-up-<uid>/<drone>)")
+    p.add_argument("--credentials", metavar="DIR", help="zenoh credentials and deploy key, "
+                   "made at first start (default <workdir>/credentials)")
     p.add_argument("--part", choices=("drone", "station", "all"), default="all",
                    help="drone: PubBroker (+ simulator and bridge); station: SubBroker; "
                         "all: both (default)")

@@ -1,7 +1,10 @@
 """Zenoh sessions for MoDD processes, with the embedded defaults of
-docs/subbroker.md: peer mode, multicast scouting off, ``scouting/delay`` 0,
-loopback endpoints. Client/router mode, user-password authentication and TLS
-pass through as raw zenoh settings for multi-host deployments.
+docs/subbroker.md: multicast scouting off, ``scouting/delay`` 0, loopback
+endpoints, and the credentials plumbing of docs/security.md: a listening
+session authenticates its clients (``dictionary_file``) and applies
+``access_control``; a connecting session gives its user name and password
+(``credentials``, a :class:`~modd.zenoh_auth.Credentials`). TLS passes through
+as raw zenoh settings (``extra``).
 
 >>> s = ZenohSettings(listen=("tcp/127.0.0.1:7447",))
 >>> s.inserts()["scouting/multicast/enabled"]
@@ -11,10 +14,14 @@ pass through as raw zenoh settings for multi-host deployments.
 from __future__ import annotations
 
 import json
+import os
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+from .zenoh_auth import Credentials, CredentialStore, acl, read_credentials
 
 if TYPE_CHECKING:
     import zenoh
@@ -30,8 +37,12 @@ class ZenohSettings:
     """How to open a zenoh session.
 
     ``extra`` maps zenoh configuration paths to JSON5 values inserted last
-    (e.g. ``{"transport/auth/usrpwd/user": '"base"'}``); ``config_file`` is a
-    full zenoh JSON5 configuration to start from.
+    (e.g. ``{"transport/link/tls/root_ca_certificate": '"ca.pem"'}``);
+    ``config_file`` is a full zenoh JSON5 configuration to start from.
+    ``credentials``: what this session gives when it connects;
+    ``dictionary_file``: the ``user:password`` lines it accepts from those that
+    connect to it; ``access_control``: their rules (:func:`modd.zenoh_auth.acl`).
+    ``credentials_dir`` (SubBroker config) is where a SubBroker keeps them.
     """
 
     mode: str = "peer"
@@ -39,6 +50,10 @@ class ZenohSettings:
     connect: tuple[str, ...] = ()
     config_file: str | None = None
     extra: Mapping[str, str] = field(default_factory=dict)
+    credentials: Credentials | None = None
+    dictionary_file: str | None = None
+    access_control: Mapping[str, Any] | None = None
+    credentials_dir: str | None = None
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
@@ -57,13 +72,24 @@ class ZenohSettings:
             out["connect/endpoints"] = json.dumps(list(self.connect))
             # come back within a second when the other side restarts
             out["connect/retry"] = RECONNECT
+            if self.mode == "client":
+                # open even when the router is not up yet, and connect when it is
+                out["connect/exit_on_failure"] = "{client: false}"
+                out["connect/timeout_ms"] = "{client: 0}"
+        if self.credentials is not None:
+            out["transport/auth/usrpwd/user"] = json.dumps(self.credentials.user)
+            out["transport/auth/usrpwd/password"] = json.dumps(self.credentials.password)
+        if self.dictionary_file is not None:
+            out["transport/auth/usrpwd/dictionary_file"] = json.dumps(self.dictionary_file)
+        if self.access_control is not None:
+            out["access_control"] = json.dumps(self.access_control)
         out.update(self.extra)
         return out
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any], where: str = "zenoh") -> ZenohSettings:
         """From a config-file table (docs/subbroker.md, ``[zenoh]``)."""
-        known = {"mode", "listen", "connect", "config_file", "settings"}
+        known = {"mode", "listen", "connect", "config_file", "settings", "credentials_dir"}
         unknown = sorted(set(data) - known)
         if unknown:
             listing = ", ".join(sorted(known))
@@ -72,11 +98,12 @@ class ZenohSettings:
         if not isinstance(extra, Mapping):
             raise ValueError(f"{where}.settings: expected a table of path = value")
         return cls(
-            mode=str(data.get("mode", "peer")),
+            mode=str(data.get("mode", "router")),
             listen=tuple(_str_list(data.get("listen", [DEFAULT_ENDPOINT]), f"{where}.listen")),
             connect=tuple(_str_list(data.get("connect", []), f"{where}.connect")),
             config_file=data.get("config_file"),
             extra={k: json.dumps(v) for k, v in extra.items()},  # TOML values -> JSON
+            credentials_dir=str(data["credentials_dir"]) if "credentials_dir" in data else None,
         )
 
 
@@ -86,14 +113,39 @@ def _str_list(value: Any, where: str) -> list[str]:
     return list(value)
 
 
-def client_settings(connect: str | None = None) -> ZenohSettings:
-    """Settings for a consumer on the base station: a peer that listens
-    nowhere and connects to the SubBroker (``MODD_ZENOH_CONNECT`` or
-    :data:`DEFAULT_ENDPOINT` when ``connect`` is not given)."""
-    import os
-
+def client_settings(connect: str | None = None,
+                    credentials: Credentials | str | os.PathLike[str] | None = None,
+                    ) -> ZenohSettings:
+    """Settings for a consumer on the base station: a client that listens
+    nowhere and connects to the SubBroker or a router (``MODD_ZENOH_CONNECT``
+    or :data:`DEFAULT_ENDPOINT` when ``connect`` is not given), with the user
+    name and password of ``credentials`` (a ``.cred`` file, else
+    ``$MODD_ZENOH_CREDENTIALS``; without any, the router refuses it)."""
     endpoint = connect or os.environ.get("MODD_ZENOH_CONNECT") or DEFAULT_ENDPOINT
-    return ZenohSettings(mode="peer", connect=(endpoint,))
+    if credentials is None and os.environ.get("MODD_ZENOH_CREDENTIALS"):
+        credentials = os.environ["MODD_ZENOH_CREDENTIALS"]
+    if credentials is not None and not isinstance(credentials, Credentials):
+        credentials = read_credentials(Path(credentials))
+    return ZenohSettings(mode="client", connect=(endpoint,), credentials=credentials)
+
+
+def secured(settings: ZenohSettings, store: CredentialStore, identity: str,
+            drone: str | None) -> ZenohSettings:
+    """``settings`` with the credentials plumbing of ``store``: when it
+    listens, it authenticates whoever connects (the store's dictionary) and
+    applies :func:`~modd.zenoh_auth.acl` for ``drone``, gossip off (no peer
+    learns another's address through it); when it connects, it gives
+    ``identity``'s user name and password. Makes missing files (first start)."""
+    store.ensure()
+    extra = dict(settings.extra)
+    changes: dict[str, Any] = {}
+    if settings.listen:
+        changes["dictionary_file"] = str(store.dictionary)
+        changes["access_control"] = acl(drone)
+        extra.setdefault("scouting/gossip/enabled", "false")
+    if settings.connect:
+        changes["credentials"] = store.credentials(identity)
+    return replace(settings, extra=extra, **changes)
 
 
 def zenoh_config(settings: ZenohSettings) -> zenoh.Config:
@@ -106,7 +158,8 @@ def zenoh_config(settings: ZenohSettings) -> zenoh.Config:
         try:
             config.insert_json5(key, value)
         except Exception as exc:  # zenoh raises ZError with the bare path
-            raise ValueError(f"zenoh setting {key} = {value}: {exc}") from exc
+            shown = "<hidden>" if key.endswith("password") else value
+            raise ValueError(f"zenoh setting {key} = {shown}: {exc}") from exc
     return config
 
 

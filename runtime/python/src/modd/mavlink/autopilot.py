@@ -43,7 +43,8 @@ class Request:
 class Autopilot:
     def __init__(self, intervals_us: dict[str, int], log: Callable[[str], None],
                  heartbeat_timeout_s: float = 3.0, target_system: int | None = None,
-                 ack_timeout_s: float = 1.0, attempts: int = 3) -> None:
+                 ack_timeout_s: float = 1.0, attempts: int = 3,
+                 target_component: int | None = None) -> None:
         self.intervals_us = dict(intervals_us)
         self.log = log
         self.heartbeat_timeout_s = heartbeat_timeout_s
@@ -51,7 +52,8 @@ class Autopilot:
         self.max_attempts = attempts
         self.system: int | None = target_system
         self._fixed = target_system is not None
-        self.component: int | None = None
+        self.component: int | None = target_component
+        self._fixed_component = target_component
         self.last_heartbeat: float | None = None
         self.lost = False
         self.accepted: dict[str, int] = {}  # message → interval the autopilot accepted
@@ -69,7 +71,8 @@ class Autopilot:
 
     def is_mine(self, msg: Any) -> bool:
         """Whether a decoded message comes from the autopilot (after its first HEARTBEAT)."""
-        return self.known and msg.get_srcSystem() == self.system
+        return (self.known and msg.get_srcSystem() == self.system
+                and msg.get_srcComponent() == self.component)
 
     def on_message(self, msg: Any, now: float) -> None:
         kind = msg.get_type()
@@ -94,6 +97,10 @@ class Autopilot:
         src, comp = msg.get_srcSystem(), msg.get_srcComponent()
         if self._fixed and src != self.system:
             return  # --target-system: only that one
+        if self._fixed_component is not None and comp != self._fixed_component:
+            return  # --target-component: only that one
+        if self.known and src == self.system and comp != self.component and not self.lost:
+            return  # another component claiming our system id
         if self.known and src != self.system:
             if not self.lost:
                 return  # another vehicle on the same link while ours is alive

@@ -8,8 +8,11 @@ used: ``time_boot_ms`` is not wall-clock time, and ``SYSTEM_TIME`` needs a GPS
 fix and is itself sent late; the receive time is what the bridge actually knows,
 late by the link's latency (milliseconds on loopback or a serial radio).
 
-Only messages from the autopilot (the system of the first HEARTBEAT, or
-``target_system``) are mapped, and only after that HEARTBEAT.
+Only messages from the autopilot (the system and component of the first
+HEARTBEAT, or ``target_system``/``target_component``) are mapped, and only after
+that HEARTBEAT; at most twice the rate asked of each message (guard.RateBound,
+the excess counted as ``limited``); with ``signing_key``, only signed MAVLink 2
+(docs/security.md).
 
 Example::
 
@@ -29,6 +32,7 @@ from typing import Any, Protocol
 from .autopilot import Autopilot
 from .decode import Decoder, Frame, Kind
 from .dialect import MAV, parser
+from .guard import RateBound
 from .mapping import BridgePlan, Number
 from .status import Counters, status_line
 from .transport import Transport
@@ -54,6 +58,8 @@ class BridgeSettings:
     source_system: int = 255
     source_component: int = MAV.MAV_COMP_ID_ONBOARD_COMPUTER
     target_system: int | None = None  # None: the first autopilot heard
+    target_component: int | None = None  # None: the first autopilot's
+    signing_key: bytes | None = None  # 32 bytes: accept only signed MAVLink 2
     heartbeat_timeout_s: float = 3.0
     status_period_s: float = 10.0
 
@@ -68,9 +74,11 @@ class Bridge:
         self.settings = settings or BridgeSettings()
         self.log = log
         self.counters = Counters()
-        self.decoder = Decoder()
+        self.decoder = Decoder(self.settings.signing_key)
         self.autopilot = Autopilot(plan.intervals_us, log, self.settings.heartbeat_timeout_s,
-                                   self.settings.target_system)
+                                   self.settings.target_system,
+                                   target_component=self.settings.target_component)
+        self.rate = RateBound(plan.intervals_us)
         self._packer = parser(self.settings.source_system, self.settings.source_component)
         self._unknown_ids: set[str] = set()
         self._next_heartbeat = 0.0
@@ -112,6 +120,9 @@ class Bridge:
         targets = self.plan.by_message.get(msg.get_type())
         if not targets or not self.autopilot.is_mine(msg):
             c.ignored += 1
+            return
+        if not self.rate.allow(msg.get_type(), now):
+            c.limited += 1
             return
         c.mapped += 1
         for publisher, m in targets:

@@ -22,6 +22,7 @@ from modd_model import load_or_report
 
 from ..publisher import Publisher
 from .bridge import Bridge, BridgeSettings
+from .guard import signing_key
 from .mapping import MappingError, plan_bridge
 from .transport import open_transport
 
@@ -45,6 +46,11 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                    help="the bridge's own MAVLink system id (default 255)")
     p.add_argument("--target-system", type=int, default=None, metavar="ID",
                    help="the autopilot's system id (default: the first autopilot heard)")
+    p.add_argument("--target-component", type=int, default=None, metavar="ID",
+                   help="the autopilot's component id (default: the first autopilot's)")
+    p.add_argument("--signing-key", default=None, metavar="file:PATH",
+                   help="accept only MAVLink 2 signed with this key (SHA-256 of the file's "
+                        "text, as MAVProxy's signing setup; docs/security.md)")
     p.add_argument("--heartbeat-timeout", type=float, default=3.0, metavar="S",
                    help="report the autopilot lost after this long without HEARTBEAT (3)")
     p.add_argument("--status-period", type=float, default=10.0, metavar="S",
@@ -80,8 +86,14 @@ def main(argv: list[str] | None = None) -> int:
     except (OSError, RuntimeError, ValueError) as exc:
         print(f"modd-mavlink: cannot open {args.connect}: {exc}", file=sys.stderr)
         return 1
+    try:
+        key = signing_key(args.signing_key) if args.signing_key else None
+    except ValueError as exc:
+        print(f"modd-mavlink: {exc}", file=sys.stderr)
+        return 1
     sinks = {p.name: Publisher(p.name, ingress) for p in plan.publishers}
     settings = BridgeSettings(source_system=args.source_system, target_system=args.target_system,
+                              target_component=args.target_component, signing_key=key,
                               heartbeat_timeout_s=args.heartbeat_timeout,
                               status_period_s=args.status_period)
     bridge = Bridge(plan, transport, sinks, settings, log)

@@ -38,8 +38,12 @@ class Frame:
 
 
 class Decoder:
-    def __init__(self) -> None:
+    def __init__(self, signing_key: bytes | None = None) -> None:
         self._mav = parser()
+        if signing_key is not None:  # only signed MAVLink 2 (guard.require_signing)
+            from .guard import require_signing
+
+            require_signing(self._mav, signing_key)
 
     def _reset(self) -> None:
         self._mav.buf = bytearray()

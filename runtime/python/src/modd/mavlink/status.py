@@ -21,6 +21,7 @@ class Counters:
     ignored: int = 0  # decoded messages the model does not use, or from other systems
     unconvertible: int = 0  # field values that do not fit their topic's type
     dropped: int = 0  # samples a publisher refused (queue full)
+    limited: int = 0  # messages beyond twice the rate asked (guard.RateBound)
     last_bad: str = ""  # the reason of the last bad frame
 
 
@@ -35,6 +36,8 @@ def status_line(c: Counters, heartbeat_age: float | None, lost: bool,
         extra += f", unconvertible {c.unconvertible}"
     if c.dropped:
         extra += f", dropped {c.dropped}"
+    if c.limited:
+        extra += f", rate-limited {c.limited}"
     last = f" (last: {c.last_bad})" if c.bad and c.last_bad else ""
     return (f"status: mapped {c.mapped} (samples {c.samples}), unknown {c.unknown}, "
             f"bad {c.bad}{last}, ignored {c.ignored}{extra}, {beat}")

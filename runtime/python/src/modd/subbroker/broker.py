@@ -18,13 +18,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from modd_model.query import topics
+from modd_model.signing import NonceGuard
 from modd_plan import Plan
 from modd_plan.streams import Source, StreamKey
 
 from modd.link.frames import AuthOk, Config, ConfigAck, Status
 from modd.link.receiver import Window
 
-from ..zenoh_session import open_session
+from ..zenoh_auth import CredentialStore
+from ..zenoh_session import open_session, secured
 from .config import SubBrokerConfig, resolve_key
 from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoints
 from .deploy import DeployRequest, parse_request
@@ -70,6 +72,9 @@ class SubBroker:
         self._key = resolve_key(config.key_ref)
         self._session = session
         self._own_session = session is None
+        self._store = CredentialStore(config.credentials_dir)
+        self._deploy_key = b""
+        self._nonces = NonceGuard()
         self._model = self._initial_model()
         self._running: Running | None = None
         self._by_id: dict[int, Running] = {}
@@ -101,8 +106,11 @@ class SubBroker:
         return d / "deployed.json" if d is not None else None
 
     def start(self) -> None:
+        self._store.ensure()
+        self._deploy_key = self._store.deploy_key()
         if self._session is None:
-            self._session = open_session(self.config.zenoh)
+            settings = secured(self.config.zenoh, self._store, "subbroker", self.drone)
+            self._session = open_session(settings)
         session = self._session
         if self.config.delivery.zenoh:
             self._zenoh = ZenohDelivery(session, self.drone)
@@ -243,11 +251,20 @@ class SubBroker:
         return reply
 
     def _deploy(self, payload: bytes) -> dict[str, Any]:
-        request = parse_request(payload, self.drone)
+        request = parse_request(payload, self.drone, self._verify)
         if request.model is None:
+            if request.reply.get("status") == "UNAUTHORISED":
+                log.warning("deploy refused: %s", request.reply["reason"])
             return request.reply
         with self._deploy_lock:
             return self.deploy(request)
+
+    def _verify(self, request: dict[str, Any]) -> str | None:
+        refused = self._nonces.verify(self._deploy_key, request)
+        if refused is None:
+            log.info("deploy of revision %s signed for %s", request.get("revision"),
+                     str(request.get("deployed_by"))[:64])
+        return refused
 
     def deploy(self, request: DeployRequest) -> dict[str, Any]:
         """Plan ``request.model``, send CONFIG, wait for the ack; the reply."""

@@ -37,6 +37,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--zenoh-connect", action="append", default=None, metavar="ENDPOINT",
                    help="zenoh endpoint to connect to (repeatable)")
     p.add_argument("--zenoh-mode", choices=("peer", "client", "router"), default=None)
+    p.add_argument("--credentials", metavar="DIR", default=None,
+                   help="zenoh credentials and deploy key directory, made at first start "
+                   "(default: <state_dir>/credentials; docs/security.md)")
     p.add_argument("--no-tcp-delivery", action="store_true",
                    help="do not deliver to the subscribers' TCP endpoints")
     p.add_argument("--status-period", type=float, default=None, metavar="S",
@@ -66,7 +69,10 @@ def build_config(args: argparse.Namespace) -> SubBrokerConfig:
             connect=tuple(args.zenoh_connect) if args.zenoh_connect else z.connect,
             config_file=z.config_file,
             extra=z.extra,
+            credentials_dir=z.credentials_dir,
         )
+    if args.credentials:
+        z = replace(z, credentials_dir=args.credentials)
     delivery = cfg.delivery
     if args.no_tcp_delivery:
         delivery = replace(delivery, tcp=False)

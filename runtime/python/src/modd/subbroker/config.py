@@ -18,6 +18,7 @@ from typing import Any
 
 from modd_model import ModelError, load_model
 
+from ..zenoh_auth import read_secret
 from ..zenoh_session import DEFAULT_ENDPOINT, ZenohSettings
 
 #: Where the pre-shared key is read from when neither the config nor the model says.
@@ -61,7 +62,8 @@ class SubBrokerConfig:
     model: dict[str, Any]
     drone: str
     link: LinkOptions = field(default_factory=LinkOptions)
-    zenoh: ZenohSettings = field(default_factory=lambda: ZenohSettings(listen=(DEFAULT_ENDPOINT,)))
+    zenoh: ZenohSettings = field(
+        default_factory=lambda: ZenohSettings(mode="router", listen=(DEFAULT_ENDPOINT,)))
     delivery: DeliveryOptions = field(default_factory=DeliveryOptions)
     state_dir: Path | None = None  # where a deployed model is kept across restarts
     source: str = "<defaults>"
@@ -72,6 +74,21 @@ class SubBrokerConfig:
         if self.link.endpoint is not None:
             return self.link.endpoint
         return endpoint_of(self.model)
+
+    @property
+    def credentials_dir(self) -> Path:
+        """Where the zenoh credentials and the deploy key are kept (made at
+        first start): ``[zenoh] credentials_dir``, else ``<state_dir>/credentials``,
+        else ``credentials`` beside the config file, else the user's state
+        directory (``$XDG_STATE_HOME/modd/<drone>/credentials``)."""
+        if self.zenoh.credentials_dir:
+            return Path(self.zenoh.credentials_dir)
+        if self.state_dir is not None:
+            return self.state_dir / "credentials"
+        if self.source.endswith(".toml"):
+            return Path(self.source).parent / "credentials"
+        state = os.environ.get("XDG_STATE_HOME") or str(Path.home() / ".local" / "state")
+        return Path(state) / "modd" / self.drone / "credentials"
 
     @property
     def key_ref(self) -> str:
@@ -103,14 +120,11 @@ def resolve_key(ref: str) -> bytes:
             raise ConfigError(f"link key {ref}: environment variable {name} is not set")
         return value.encode()
     if kind == "file":
+        # a regular file of at most 64 KiB, no final symlink (docs/security.md)
         try:
-            data = Path(name).read_bytes()
-        except OSError as exc:
-            raise ConfigError(f"link key {ref}: {exc.strerror}") from exc
-        data = data[:-1] if data.endswith(b"\n") else data
-        if not data:
-            raise ConfigError(f"link key {ref}: the file is empty")
-        return data
+            return read_secret(name, "link key")
+        except ValueError as exc:
+            raise ConfigError(f"link key {ref}: {exc}") from exc
     raise ConfigError(f"link key {ref!r}: expected env:NAME or file:PATH")
 
 
@@ -184,6 +198,8 @@ def load_config(path: str | Path) -> SubBrokerConfig:
         zenoh = ZenohSettings.from_mapping(_table(data, "zenoh", str(path)), f"{path}: zenoh")
     except ValueError as exc:
         raise ConfigError(str(exc)) from exc
+    if zenoh.credentials_dir:
+        zenoh = replace(zenoh, credentials_dir=str(path.parent / zenoh.credentials_dir))
     state = data.get("state_dir")
     src = str(path)
     return SubBrokerConfig(

@@ -10,6 +10,7 @@ error or the timeout). docs/subbroker.md gives the request and reply shapes.
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -32,16 +33,21 @@ def _error(status: str, reason: str, **more: Any) -> DeployRequest:
     return DeployRequest(None, reply={"status": status, "reason": reason, **more})
 
 
-def parse_request(payload: bytes, drone: str) -> DeployRequest:
+def parse_request(payload: bytes, drone: str,
+                  verify: Callable[[dict[str, Any]], str | None] | None = None) -> DeployRequest:
     """Read a deploy payload: ``{"model": {...}}`` (the JSON document) or
     ``{"text": "...", "format": "modd"|"json", "filename": "..."}``, with an
-    optional ``"timeout_s"``. Never raises for bad input."""
+    optional ``"timeout_s"``. ``verify`` (the SubBroker's signature and nonce
+    check, modd_model.signing) gives the reason to refuse it, UNAUTHORISED,
+    before anything else is read. Never raises for bad input."""
     try:
         request = json.loads(payload)
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         return _error("ERROR", f"the request is not JSON: {exc}")
     if not isinstance(request, dict):
         return _error("ERROR", "the request must be a JSON object")
+    if verify is not None and (refused := verify(request)) is not None:
+        return _error("UNAUTHORISED", refused)
     timeout = request.get("timeout_s", DEFAULT_TIMEOUT_S)
     if not isinstance(timeout, int | float) or isinstance(timeout, bool) or timeout <= 0:
         return _error("ERROR", "timeout_s must be a positive number of seconds")

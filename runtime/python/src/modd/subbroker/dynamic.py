@@ -6,6 +6,11 @@ stream is sent or derivable from what is sent (:func:`modd_plan.check_dynamic`),
 and its values start with the next complete window. Replies are JSON objects
 with a ``status``; docs/subbroker.md lists them.
 
+Only the backend may ask (zenoh access control, docs/security.md); it names
+the user it asks for in ``owner``. Each owner may hold at most
+``per_owner`` subscriptions (``total`` in all), and lists and cancels only
+its own.
+
 >>> reg = DynamicSubscriptions("usv")
 >>> reg.handle({"action": "cancel", "subscriber": "dyn_x"}, None)["status"]
 'ERROR'
@@ -35,6 +40,13 @@ class Router(Protocol):
     def unroute(self, subscriber: str) -> bool: ...
 
 
+#: Dynamic subscriptions one owner may hold, and all owners together.
+PER_OWNER = 32
+TOTAL = 256
+MAX_FIELD = 256  # characters of a topic, period or aggregation
+MAX_NAME = 64  # characters of a dynamic subscriber's name (the status lists them all)
+
+
 @dataclass(frozen=True)
 class Dynamic:
     """One accepted dynamic subscription."""
@@ -43,6 +55,14 @@ class Dynamic:
     topic: str
     period_s: str
     aggregation: str
+    owner: str = ""
+
+
+def _owner(request: Mapping[str, Any]) -> str | None:
+    owner = request.get("owner", "")
+    if not isinstance(owner, str) or len(owner) > MAX_FIELD:
+        return None
+    return owner
 
 
 def _period_text(value: Any) -> str | None:
@@ -56,8 +76,11 @@ def _period_text(value: Any) -> str | None:
 class DynamicSubscriptions:
     """The registry of dynamic subscriptions of one drone."""
 
-    def __init__(self, drone: str, reserved: Callable[[], set[str]] = set) -> None:
+    def __init__(self, drone: str, reserved: Callable[[], set[str]] = set,
+                 per_owner: int = PER_OWNER, total: int = TOTAL) -> None:
         self._drone = drone
+        self._per_owner = per_owner
+        self._total = total
         self._reserved = reserved  # the model's subscriber names
         self._subs: dict[str, Dynamic] = {}
         self._lock = threading.Lock()
@@ -69,34 +92,53 @@ class DynamicSubscriptions:
     def handle(self, request: Mapping[str, Any], running: Router | None) -> dict[str, Any]:
         """Serve one request; never raises for bad input."""
         action = request.get("action", "subscribe")
+        owner = _owner(request)
+        if owner is None:
+            return {"status": "ERROR", "reason": f"owner: a string of at most {MAX_FIELD}"}
         if action == "subscribe":
             return self.subscribe(request, running)
         if action == "cancel":
-            return self.cancel(str(request.get("subscriber", "")), running)
+            return self.cancel(str(request.get("subscriber", ""))[:MAX_FIELD], running, owner)
         if action == "list":
             with self._lock:
-                return {"status": "OK", "subscriptions": [vars(d) for d in self._subs.values()]}
-        return {"status": "ERROR", "reason": f"unknown action {action!r}"}
+                mine = [vars(d) for d in self._subs.values() if d.owner == owner]
+            return {"status": "OK", "subscriptions": mine}
+        return {"status": "ERROR", "reason": f"unknown action {str(action)[:MAX_FIELD]!r}"}
 
     def subscribe(self, request: Mapping[str, Any], running: Router | None) -> dict[str, Any]:
         topic, agg = request.get("topic"), request.get("aggregation")
         period = _period_text(request.get("period_s"))
         if not isinstance(topic, str) or not isinstance(agg, str) or period is None:
             return {"status": "ERROR", "reason": "expected topic, period_s and aggregation"}
+        if max(len(topic), len(agg), len(period)) > MAX_FIELD:
+            return {"status": "ERROR", "reason": f"topic, period_s and aggregation: at most "
+                    f"{MAX_FIELD} characters"}
+        owner = _owner(request) or ""
         if running is None:
             return {"status": "NOT_AVAILABLE", "reason": "no plan is running on the link yet"}
         verdict = check_dynamic(running.plan, topic, period, agg)
         if not isinstance(verdict, Accepted):
             return {"status": "NOT_AVAILABLE", "reason": verdict.reason}
         name = request.get("subscriber") or f"dyn_{secrets.token_hex(4)}"
+        if not isinstance(name, str):
+            return {"status": "ERROR", "reason": "subscriber: expected a name"}
+        if len(name) > MAX_NAME:
+            return {"status": "ERROR", "reason": f"subscriber name of {len(name)} characters: "
+                    f"at most {MAX_NAME}"}
         try:
-            check_name("subscriber", str(name))
+            check_name("subscriber", name)
         except ValueError as exc:
             return {"status": "ERROR", "reason": str(exc)}
         with self._lock:
             if name in self._subs or name in self._reserved():
                 return {"status": "ERROR", "reason": f"subscriber {name!r} already exists"}
-            self._subs[name] = Dynamic(name, topic, period, agg)
+            held = sum(1 for d in self._subs.values() if d.owner == owner)
+            if held >= self._per_owner or len(self._subs) >= self._total:
+                limit = (f"{self._per_owner} per owner" if held >= self._per_owner
+                         else f"{self._total} in all")
+                return {"status": "QUOTA", "reason": f"too many dynamic subscriptions ({limit}); "
+                        "cancel one first"}
+            self._subs[name] = Dynamic(name, topic, period, agg, owner)
         target = StreamKey.parse(verdict.stream)
         running.route(target, verdict.sources, name)
         return {
@@ -108,9 +150,13 @@ class DynamicSubscriptions:
             "factor": verdict.factor,
         }
 
-    def cancel(self, name: str, running: Router | None) -> dict[str, Any]:
+    def cancel(self, name: str, running: Router | None, owner: str = "") -> dict[str, Any]:
         with self._lock:
-            found = self._subs.pop(name, None)
+            found = self._subs.get(name)
+            if found is not None and found.owner == owner:
+                del self._subs[name]
+            else:
+                found = None  # another owner's is answered as absent: no probing of names
         if found is None:
             return {"status": "ERROR", "reason": f"no dynamic subscription named {name!r}"}
         if running is not None:

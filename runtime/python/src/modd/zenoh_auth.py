@@ -1,0 +1,208 @@
+"""Who may do what on a SubBroker's zenoh keys (docs/security.md, "Zenoh"):
+the identities, their credentials files and the ``access_control`` rules.
+
+Three identities, least privilege, per drone:
+
+- ``subbroker``: puts values (``modd/<drone>/sub/**``) and status, serves the
+  ``deploy`` and ``subscribe`` queryables;
+- ``backend``: queries ``deploy`` and ``subscribe`` and reads values and status;
+- ``viewer``: reads values and status, nothing else.
+
+A credentials directory (0700) holds ``users`` (the router's dictionary,
+``user:password`` lines), one ``<identity>.cred`` per identity (one
+``user:password`` line, what a client gives) and ``deploy.key`` (the HMAC key
+that signs deploys). Every file is 0600 and made at first start;
+nothing here prints a password.
+
+>>> sorted(acl("usv")["policies"][0]["subjects"])
+['subbroker']
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import secrets
+import stat
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+log = logging.getLogger("modd.zenoh")
+
+IDENTITIES = ("subbroker", "backend", "viewer")
+DICTIONARY = "users"
+DEPLOY_KEY = "deploy.key"
+#: Key and credentials files are small; anything bigger is a mistake or an attack.
+MAX_SECRET_BYTES = 64 * 1024
+
+
+@dataclass(frozen=True)
+class Credentials:
+    """A zenoh user name and password (``repr`` hides the password)."""
+
+    user: str
+    password: str
+
+    def __repr__(self) -> str:
+        return f"Credentials(user={self.user!r}, password=<hidden>)"
+
+
+def read_secret(path: str | Path, what: str = "secret") -> bytes:
+    """The bytes of a key or credentials file: a regular file of at most
+    MAX_SECRET_BYTES, read without following a final symlink; one trailing
+    newline stripped. ValueError naming the file otherwise; a warning when
+    group or others may read it."""
+    path = Path(path)
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | getattr(os, "O_NONBLOCK", 0))
+    except OSError as exc:
+        raise ValueError(f"{what} file {path}: {exc.strerror}") from exc
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise ValueError(f"{what} file {path}: not a regular file")
+        if st.st_size > MAX_SECRET_BYTES:
+            raise ValueError(f"{what} file {path}: {st.st_size} bytes, more than "
+                             f"{MAX_SECRET_BYTES}")
+        if st.st_mode & 0o077:
+            log.warning("%s file %s can be read by group or others (mode %o): chmod 600 it",
+                        what, path, stat.S_IMODE(st.st_mode))
+        data = os.read(fd, MAX_SECRET_BYTES + 1)
+    finally:
+        os.close(fd)
+    if len(data) > MAX_SECRET_BYTES:
+        raise ValueError(f"{what} file {path}: more than {MAX_SECRET_BYTES} bytes")
+    data = data[:-1] if data.endswith(b"\n") else data
+    if not data:
+        raise ValueError(f"{what} file {path}: the file is empty")
+    return data
+
+
+def read_credentials(path: str | Path) -> Credentials:
+    """A ``.cred`` file: one ``user:password`` line."""
+    text = read_secret(path, "zenoh credentials").decode("utf-8", "replace").strip()
+    user, sep, password = text.partition(":")
+    if not sep or not user or not password or "\n" in text:
+        raise ValueError(f"zenoh credentials file {path}: expected one line user:password")
+    return Credentials(user, password)
+
+
+def _write_private(path: Path, data: bytes) -> None:
+    """Create ``path`` 0600 (never through a symlink, never over a file)."""
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW
+    fd = os.open(path, flags, 0o600)
+    try:
+        os.write(fd, data)
+    finally:
+        os.close(fd)
+
+
+def private_dir(path: Path) -> Path:
+    """``path`` made (0700) or checked: a real directory, owned by this user,
+    not reached through a symlink; ValueError otherwise."""
+    try:
+        path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ValueError(f"{path}: {exc.strerror}") from exc
+    st = path.lstat()
+    if stat.S_ISLNK(st.st_mode) or not stat.S_ISDIR(st.st_mode):
+        raise ValueError(f"{path}: a symbolic link or not a directory; refusing to use it")
+    if st.st_uid != os.getuid():
+        raise ValueError(f"{path}: owned by uid {st.st_uid}, not by this user; refusing to use it")
+    if st.st_mode & 0o077:
+        os.chmod(path, 0o700)
+    return path
+
+
+class CredentialStore:
+    """The credentials directory of one deployment (a SubBroker's, `modd up`'s)."""
+
+    def __init__(self, directory: str | Path) -> None:
+        self.dir = Path(directory)
+
+    def ensure(self) -> CredentialStore:
+        """Make the directory and every missing file (first start); idempotent."""
+        private_dir(self.dir)
+        made = []
+        for ident in IDENTITIES:
+            cred = self.dir / f"{ident}.cred"
+            if not cred.exists():
+                _write_private(cred, f"{ident}:{secrets.token_urlsafe(24)}\n".encode())
+                made.append(cred.name)
+        key = self.dir / DEPLOY_KEY
+        if not key.exists():
+            _write_private(key, (secrets.token_hex(32) + "\n").encode())
+            made.append(key.name)
+        self._write_dictionary()
+        if made:
+            log.info("zenoh credentials made in %s: %s", self.dir, ", ".join(made))
+        return self
+
+    def _write_dictionary(self) -> None:
+        lines = [f"{c.user}:{c.password}\n" for c in map(self.credentials, IDENTITIES)]
+        data = "".join(lines).encode()
+        path = self.dictionary
+        if path.exists() and read_secret(path, "zenoh dictionary") + b"\n" == data:
+            return
+        tmp = path.with_name(f".{DICTIONARY}.{secrets.token_hex(4)}")
+        _write_private(tmp, data)
+        tmp.replace(path)
+
+    @property
+    def dictionary(self) -> Path:
+        return self.dir / DICTIONARY
+
+    def cred_file(self, identity: str) -> Path:
+        return self.dir / f"{identity}.cred"
+
+    def credentials(self, identity: str) -> Credentials:
+        return read_credentials(self.cred_file(identity))
+
+    @property
+    def deploy_key_file(self) -> Path:
+        return self.dir / DEPLOY_KEY
+
+    def deploy_key(self) -> bytes:
+        return read_secret(self.deploy_key_file, "deploy key")
+
+
+def _rule(rid: str, messages: list[str], flows: list[str], keys: list[str]) -> dict[str, Any]:
+    return {"id": rid, "messages": messages, "flows": flows, "permission": "allow",
+            "key_exprs": keys}
+
+
+def acl(drone: str | None = None) -> dict[str, Any]:
+    """The ``access_control`` object of the router every client of ``drone``
+    goes through (``None``: every drone, ``modd/*``). Default deny; rules per
+    key expression, message type and flow (ingress: from that client into the
+    router; egress: from the router to it). A subscriber also needs
+    ``declare_subscriber`` on egress, else its publisher never learns of it."""
+    d = f"modd/{drone}" if drone else "modd/*"
+    own = [f"{d}/sub/**", f"{d}/status"]
+    queries = [f"{d}/deploy", f"{d}/subscribe"]
+    # readers may subscribe across drones (modd/*/sub/*): reading is not writing
+    read = ["modd/*/sub/**", "modd/*/status"]
+    rules = [
+        # the SubBroker: its values and status, its queryables (when it is a client)
+        _rule("subbroker_out", ["put", "delete", "declare_queryable", "reply"], ["ingress"],
+              [*own, *queries]),
+        _rule("subbroker_in", ["declare_subscriber", "query", "declare_queryable"], ["egress"],
+              [*read, *queries]),
+        # readers (backend and viewers): subscribe to values and status; a
+        # subscription may be as wide as modd/**, only these keys' puts reach it
+        _rule("read_in", ["declare_subscriber"], ["ingress", "egress"], ["modd/**"]),
+        _rule("read_out", ["put", "delete"], ["egress"], read),
+        # the backend alone asks the queryables
+        _rule("ask", ["query"], ["ingress"], queries),
+        _rule("answer", ["reply", "declare_queryable"], ["egress"], queries),
+    ]
+    subjects = [{"id": ident, "usernames": [ident]} for ident in IDENTITIES]
+    policies = [
+        {"id": "subbroker", "rules": ["subbroker_out", "subbroker_in"], "subjects": ["subbroker"]},
+        {"id": "backend", "rules": ["read_in", "read_out", "ask", "answer"],
+         "subjects": ["backend"]},
+        {"id": "viewer", "rules": ["read_in", "read_out"], "subjects": ["viewer"]},
+    ]
+    return {"enabled": True, "default_permission": "deny", "rules": rules,
+            "subjects": subjects, "policies": policies}

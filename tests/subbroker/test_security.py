@@ -1,0 +1,148 @@
+"""The SubBroker's zenoh control plane as an attacker on the same machine
+meets it (docs/security.md, "Zenoh"): against the real PubBroker and the
+SubBroker CLI on loopback, with the credentials the SubBroker uses.
+
+- anonymous and wrong-password clients are refused;
+- a viewer cannot deploy, subscribe dynamically, or put values or status, and
+  its forged value never reaches a subscriber;
+- a deploy not signed by the workbench, or replayed, is refused;
+- dynamic subscriptions: quota per owner, owner-scoped list and cancel,
+  bounded names."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+from modd.subbroker.client import NoReply, request
+from modd.subbroker.dynamic import PER_OWNER
+from modd.zenoh_auth import Credentials
+from modd.zenoh_session import client_settings, open_session, wait_connected
+from modd_model.signing import sign_request
+from subbroker_harness import (
+    free_port,
+    model_copy,
+    processes,
+    shared_credentials,
+    signed,
+    start_load,
+    start_pubbroker,
+    start_subbroker,
+    subbroker_config,
+    wait_port,
+)
+
+pytestmark = pytest.mark.usefixtures("needs_pubbroker")
+
+DYN = {"topic": "usv.accelerometer.accel_x", "period_s": "4.0", "aggregation": "AVERAGE"}
+
+
+@pytest.fixture(scope="module")
+def station(tmp_path_factory: pytest.TempPathFactory) -> Any:
+    tmp = tmp_path_factory.mktemp("security")
+    link, ingress, zport = free_port(), free_port(), free_port()
+    model = model_copy(tmp, "scenario1.modd")
+    pb = start_pubbroker(tmp, model, link, ingress)
+    sb = start_subbroker(tmp, subbroker_config(tmp, model, link, zport))
+    load = start_load(tmp, model, ingress, 60)
+    try:
+        wait_port(zport)
+        assert sb.wait_log("config 1 running", 15), sb.log()
+        yield {"port": zport, "model": model, "sb": sb}
+    finally:
+        with processes(pb, sb, load):
+            pass
+
+
+def _anonymous(port: int, who: Credentials | None) -> None:
+    open_session(client_settings(f"tcp/127.0.0.1:{port}", who))
+
+
+def test_anonymous_and_wrong_password_refused(station: dict[str, Any]) -> None:
+    port = station["port"]
+    with pytest.raises(ValueError, match="cannot open"):
+        _anonymous(port, None)
+    for who in (Credentials("viewer", "not-the-password"), Credentials("admin", "admin"),
+                Credentials("backend", shared_credentials().credentials("viewer").password)):
+        with pytest.raises(ValueError, match="cannot open"):
+            _anonymous(port, who)
+
+
+def test_viewer_reads_but_cannot_deploy_subscribe_or_forge(
+        station: dict[str, Any], zenoh_client: Any) -> None:
+    port = station["port"]
+    reader = zenoh_client(port, "backend")
+    viewer = zenoh_client(port, "viewer")
+    assert wait_connected(reader) and wait_connected(viewer)
+    seen: list[tuple[str, bytes]] = []
+    mine: list[str] = []
+    reader.declare_subscriber("modd/usv/**",
+                              lambda s: seen.append((str(s.key_expr), s.payload.to_bytes())))
+    viewer.declare_subscriber("modd/usv/**", lambda s: mine.append(str(s.key_expr)))
+    forged = {"subscriber": "sub_3", "topic": "usv.ins.accel_x", "value": 1e9, "slot": 999999}
+    deadline = time.monotonic() + 3
+    while time.monotonic() < deadline:
+        viewer.put("modd/usv/sub/sub_3", json.dumps(forged))
+        viewer.put("modd/usv/status", json.dumps({"drone": "usv", "forged": True}))
+        time.sleep(0.1)
+    assert any("/sub/" in k for k, _ in seen) and any(k.endswith("/status") for k, _ in seen)
+    assert not [p for _, p in seen if b"999999" in p or b"forged" in p]
+    assert any("/sub/" in k for k in mine), "the viewer reads values"
+    s1 = Path(station["model"]).read_text()
+    with pytest.raises(NoReply):
+        request(viewer, "modd/usv/deploy", signed({"text": s1, "format": "json"}), timeout_s=1)
+    with pytest.raises(NoReply):
+        request(viewer, "modd/usv/subscribe", DYN, timeout_s=1)
+    assert "deploy" not in station["sb"].log().split("config 1 running", 1)[1]
+
+
+def test_unsigned_forged_or_replayed_deploy_refused(station: dict[str, Any],
+                                                    zenoh_client: Any) -> None:
+    backend = zenoh_client(station["port"], "backend")
+    assert wait_connected(backend)
+    body = {"text": Path(station["model"]).read_text(), "format": "json", "timeout_s": 5}
+    unsigned = request(backend, "modd/usv/deploy", body)
+    assert unsigned["status"] == "UNAUTHORISED", unsigned
+    forged = sign_request(b"a key the attacker made up", body)
+    assert request(backend, "modd/usv/deploy", forged)["status"] == "UNAUTHORISED"
+    good = signed(body)
+    tampered = {**good, "timeout_s": 6}
+    assert request(backend, "modd/usv/deploy", tampered)["status"] == "UNAUTHORISED"
+    acked = request(backend, "modd/usv/deploy", good)
+    assert acked["status"] == "ACKED", acked
+    replay = request(backend, "modd/usv/deploy", good)
+    assert replay["status"] == "UNAUTHORISED" and "replayed" in replay["reason"]
+
+
+def test_dynamic_quota_owner_scope_and_names(station: dict[str, Any], zenoh_client: Any) -> None:
+    backend = zenoh_client(station["port"], "backend")
+    assert wait_connected(backend)
+
+    def ask(**more: Any) -> dict[str, Any]:
+        return request(backend, "modd/usv/subscribe", {**DYN, **more})
+
+    names = []
+    for _ in range(PER_OWNER):
+        reply = ask(owner="alice")
+        assert reply["status"] == "ACCEPTED", reply
+        names.append(reply["subscriber"])
+    over = ask(owner="alice")
+    assert over["status"] == "QUOTA", over
+    assert ask(owner="bob")["status"] == "ACCEPTED"  # the quota is per owner
+    listed = request(backend, "modd/usv/subscribe", {"action": "list", "owner": "bob"})
+    assert len(listed["subscriptions"]) == 1 and listed["subscriptions"][0]["owner"] == "bob"
+    theft = request(backend, "modd/usv/subscribe",
+                    {"action": "cancel", "subscriber": names[0], "owner": "bob"})
+    assert theft["status"] == "ERROR"
+    mine = request(backend, "modd/usv/subscribe",
+                   {"action": "cancel", "subscriber": names[0], "owner": "alice"})
+    assert mine["status"] == "CANCELLED"
+    for bad in ("x" * 10_000, "sub_ok\n", "a/b", "*"):
+        reply = ask(owner="carol", subscriber=bad)
+        assert reply["status"] == "ERROR", (bad[:20], reply)
+    for name in names[1:]:
+        request(backend, "modd/usv/subscribe",
+                {"action": "cancel", "subscriber": name, "owner": "alice"})
