@@ -10,12 +10,15 @@ import socket
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
-import zenoh
 from modd.plotjuggler import datagram, parse_udp
 from modd.ports import free_port
 from modd.subbroker.payload import DeliveredValue
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from support.loopback import shared_credentials, zenoh_router  # noqa: E402
 
 
 def flatten(doc: dict[str, object], prefix: str = "") -> dict[str, object]:
@@ -35,13 +38,14 @@ def test_datagrams_from_delivered_values() -> None:
     udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     udp.bind(("127.0.0.1", 0))
     udp.settimeout(10)
-    zep = f"tcp/127.0.0.1:{free_port()}"
-    c = zenoh.Config()
-    c.insert_json5("mode", '"peer"')
-    c.insert_json5("scouting/multicast/enabled", "false")
-    c.insert_json5("listen/endpoints", json.dumps([zep]))
-    station = zenoh.open(c)
+    port = free_port()
+    zep = f"tcp/127.0.0.1:{port}"
+    # the SubBroker's router, authentication and access control on; the bridge is a viewer
+    router = zenoh_router(port)
+    station = router.__enter__()
+    viewer = str(shared_credentials().cred_file("viewer"))
     proc = subprocess.Popen([sys.executable, "-m", "modd.plotjuggler", "--modd-connect", zep,
+                             "--credentials", viewer,
                              "--udp", f"127.0.0.1:{udp.getsockname()[1]}", "--drone", "usv"],
                             stdout=subprocess.PIPE, text=True)
     try:
@@ -65,7 +69,7 @@ def test_datagrams_from_delivered_values() -> None:
         proc.wait(10)
         if proc.stdout is not None:
             proc.stdout.close()
-        station.close()  # type: ignore[no-untyped-call]
+        router.__exit__(None, None, None)
         udp.close()
     series = [flatten(g) for g in got]
     assert series[:3] == [{"/timestamp": (k + 1) * 0.25, "/usv/sub_3/value": 0.5 * k,

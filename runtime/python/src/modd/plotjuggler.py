@@ -28,7 +28,7 @@ import sys
 import threading
 from typing import Any
 
-from .zenoh_session import DEFAULT_ENDPOINT, ZenohSettings, open_session
+from .zenoh_session import DEFAULT_ENDPOINT, client_settings, open_session
 
 log = logging.getLogger("modd.plotjuggler")
 #: PlotJuggler's default UDP server port.
@@ -106,10 +106,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--modd-connect", default=os.environ.get("MODD_ZENOH_CONNECT",
                                                             DEFAULT_ENDPOINT),
                    metavar="ENDPOINT", help="the SubBroker's zenoh endpoint")
+    p.add_argument("--credentials", metavar="FILE",
+                   help="a viewer's .cred file (default $MODD_ZENOH_CREDENTIALS; "
+                        "docs/security.md)")
     a = p.parse_args(argv)
     try:
         target = parse_udp(a.udp)
-        session = open_session(ZenohSettings(mode="peer", connect=(a.modd_connect,)))
+        session = open_session(client_settings(a.modd_connect, a.credentials))
     except ValueError as exc:
         print(f"modd-plotjuggler: {exc}", file=sys.stderr)
         return 2

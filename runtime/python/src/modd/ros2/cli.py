@@ -17,7 +17,7 @@ import signal
 import sys
 import threading
 
-from ..zenoh_session import DEFAULT_ENDPOINT, ZenohSettings, open_session
+from ..zenoh_session import DEFAULT_ENDPOINT, ZenohSettings, client_settings, open_session
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -25,9 +25,13 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     p.add_argument("--modd-connect", default=os.environ.get("MODD_ZENOH_CONNECT",
                                                             DEFAULT_ENDPOINT),
                    metavar="ENDPOINT", help="the SubBroker's zenoh endpoint")
+    p.add_argument("--credentials", metavar="FILE",
+                   help="a viewer's .cred file for the SubBroker's zenoh (default "
+                        "$MODD_ZENOH_CREDENTIALS; docs/security.md)")
     p.add_argument("--ros-connect", metavar="ENDPOINT",
                    help="the ROS 2 zenoh router (rmw_zenohd); default: the same session as "
-                        "--modd-connect")
+                        "--modd-connect (then its access control must let this identity "
+                        "put ROS 2 keys and liveliness tokens)")
     p.add_argument("--ros-mode", choices=("peer", "client"), default="peer",
                    help="zenoh mode of the ROS side's session (rmw_zenoh's nodes are peers)")
     p.add_argument("--drone", default="*", help="drone name (default: every drone)")
@@ -44,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
     a = parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="modd-ros2: %(message)s")
     try:
-        modd = open_session(ZenohSettings(mode="peer", connect=(a.modd_connect,)))
+        modd = open_session(client_settings(a.modd_connect, a.credentials))
         ros = modd if not a.ros_connect or a.ros_connect == a.modd_connect else open_session(
             ZenohSettings(mode=a.ros_mode, connect=(a.ros_connect,)))
     except ValueError as exc:
