@@ -7,6 +7,7 @@
 #include <ctime>
 #include <filesystem>
 
+#include "modd/archive/recover.hpp"
 #include "modd/util/error.hpp"
 #include "modd/util/log.hpp"
 
@@ -35,6 +36,8 @@ Archiver::Archiver(ArchiverOptions options) : opt_(std::move(options)) {
   std::error_code ec;
   std::filesystem::create_directories(opt_.dir, ec);
   if (ec) throw Error(ErrorCode::Io, "cannot create archive directory " + opt_.dir + ": " + ec.message());
+  // Files a crash left open (no summary, torn tail) get finalised before anything new is written.
+  recover_dir(opt_.dir, opt_.prefix, opt_.writer);
   thread_ = std::thread([this] { run(); });
 }
 
