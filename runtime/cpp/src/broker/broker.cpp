@@ -480,14 +480,16 @@ std::vector<uint64_t> Broker::status_counters() {
   const auto& ec = executor_.counters();
   v[kUptimeS] = static_cast<uint64_t>((clock_.now_ns() - started_ns_) / 1'000'000'000);
   v[kSamplesIn] = counters_.samples_in;
-  v[kSamplesArchived] = ac.archived;
+  // One read of each writer counter, so that the STATUS reconciles exactly.
+  const uint64_t archived = ac.archived, failed = ac.failed;
+  v[kSamplesArchived] = archived;
   v[kRejUnknownTopic] = counters_.rejected[0];
   v[kRejWrongType] = counters_.rejected[1];
   v[kRejNotFinite] = counters_.rejected[2];
   v[kRejTimestamp] = counters_.rej(Reject::Timestamp);
   v[kRejOverflow] = counters_.rejected[4];
   v[kRejMalformed] = counters_.rejected[5];
-  v[kArchiveFailed] = ac.failed;
+  v[kArchiveFailed] = failed;
   v[kIngressMalformedFrames] = counters_.ingress_malformed_frames;
   v[kPublishersConnected] = counters_.publishers_connected;
   v[kFramesSent] = ec.frames_sent;
@@ -506,7 +508,7 @@ std::vector<uint64_t> Broker::status_counters() {
   v[kRejQuota] = counters_.rej(Reject::Quota);
   v[kArchiveState] = archive_state_;
   v[kArchiveRateBps] = rate_bps_;
-  uint64_t settled = ac.archived + ac.failed;
+  uint64_t settled = archived + failed;
   v[kSamplesPending] = counters_.accepted > settled ? counters_.accepted - settled : 0;
   return v;
 }

@@ -38,7 +38,7 @@ struct ArchiverOptions {
   uint64_t rotate_s = 3600;
   WriterOptions writer;
   uint32_t retry_first_ms = 250;   // after a write error: retry after this, doubling,
-  uint32_t retry_max_ms = 8000;    // up to this
+  uint32_t retry_max_ms = 2000;    // up to this
 };
 
 struct ArchiveCounters {

@@ -49,7 +49,7 @@ struct BrokerConfig {
   uint32_t flush_interval_ms = 1000;
   uint64_t queue_limit_samples = 1'000'000;
   uint64_t low_space_mb = 256;       // free space under which the operator is warned (STATUS + log)
-  uint32_t retry_max_ms = 8000;      // write retry backoff (from 250 ms, doubling) while the disk is full
+  uint32_t retry_max_ms = 2000;      // write retry backoff (from 250 ms, doubling) while the disk is full
   // topics
   std::vector<TopicDefault> topics;
   uint32_t default_buffer_size = 25;
