@@ -39,15 +39,43 @@ Broker& the_broker() {
   }();
   return *b;
 }
+
+// The client's side: broker replies (CATALOGUE, ACK, REJECT) decoded from the same bytes.
+struct Replies : ingress::ReplyHandler {
+  size_t n = 0;
+  void on_catalogue(const ingress::Catalogue&) override { ++n; }
+  void on_ack(const ingress::Ack&) override { ++n; }
+  void on_reject(const ingress::RejectMsg&) override { ++n; }
+};
+
+void decode_replies(std::span<const uint8_t> in, Replies& r, bool must_parse) {
+  size_t used = 0;
+  try {
+    while (auto f = ingress::split_frame(in.subspan(used), ingress::kMaxFrame)) {
+      used += f->size;
+      ingress::decode_reply(*f, r);
+    }
+  } catch (const Error&) {
+    if (must_parse) __builtin_trap();  // what the broker writes always decodes
+  }
+}
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   Broker& b = the_broker();
+  Replies replies;
+  decode_replies(std::span(data, size), replies, false);
   IngressSession s(b);
   // Feed in two pieces so that frames split across reads are exercised.
   size_t half = size / 2;
   if (s.on_bytes(std::span(data, half))) s.on_bytes(std::span(data + half, size - half));
   const Counters& c = b.counters();
   if (c.samples_in != c.accepted + c.rejected_total()) __builtin_trap();  // nothing uncounted
+  // What the broker answers this publisher (catalogue, rejections, acknowledgement) decodes.
+  s.checkpoint(1);
+  s.report(1);
+  auto out = s.take_output();
+  decode_replies(out, replies, true);
+  if (s.rejected() + s.accepted() > c.samples_in) __builtin_trap();
   return 0;
 }

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <chrono>
 #include <filesystem>
+#include <thread>
 
 #include "modd/broker/broker.hpp"
 #include "modd/link/codec.hpp"
@@ -40,6 +42,8 @@ BrokerConfig test_config(const std::string& name) {
   c.topics = {{"usv.x", ValueType::Float32, 4}, {"usv.n", ValueType::Int, 0}};
   c.default_buffer_size = 3;
   c.status_period_s = 0;
+  c.max_future_ms = 0;  // these tests stamp samples with small numbers: no timestamp bounds
+  c.max_past_ms = 0;
   return c;
 }
 
@@ -69,14 +73,14 @@ TEST(Broker, RejectionsAreCountedByReason) {
                                          {1, ValueType::Float32, "usv.unknown"},
                                          {2, ValueType::Float64, "usv.n"}};
   std::vector<ingress::Record> recs = {
-      {0, 100, 1.0, 0},  {0, 200, NAN, 0},   {0, 50, 2.0, 0},  // backwards
+      {0, 100, 1.0, 0},  {0, 200, NAN, 0},   {0, 50, 2.0, 0},  // out of order: accepted
       {1, 300, 1.0, 0},  {2, 300, 1.0, 0},   {0, 200, INFINITY, 0}, {0, 200, 3.0, 0}};
   ASSERT_TRUE(s.on_bytes(publisher_bytes(regs, recs)));
   Counters& c = b.counters();
   EXPECT_EQ(c.samples_in, 7u);
-  EXPECT_EQ(c.accepted, 2u);
+  EXPECT_EQ(c.accepted, 3u);
   EXPECT_EQ(c.rej(Reject::NotFinite), 2u);
-  EXPECT_EQ(c.rej(Reject::Backwards), 1u);
+  EXPECT_EQ(c.rej(Reject::Timestamp), 0u);
   EXPECT_EQ(c.rej(Reject::UnknownTopic), 1u);
   EXPECT_EQ(c.rej(Reject::WrongType), 1u);
   // A malformed frame: counted, the session ends, nothing already accepted is lost.
@@ -86,10 +90,10 @@ TEST(Broker, RejectionsAreCountedByReason) {
   EXPECT_FALSE(s.on_bytes(junk));
   EXPECT_EQ(c.ingress_malformed_frames, 1u);
   EXPECT_EQ(c.rej(Reject::Malformed), 1u);
-  EXPECT_EQ(c.accepted, 3u);
+  EXPECT_EQ(c.accepted, 4u);
   EXPECT_EQ(c.samples_in, c.accepted + c.rejected_total());
   b.shutdown();
-  EXPECT_EQ(b.archiver().counters().archived.load(), 3u);
+  EXPECT_EQ(b.archiver().counters().archived.load(), 4u);
 }
 
 TEST(Broker, ConfigThenDataFramesFromStampedSamples) {
@@ -203,6 +207,8 @@ TEST(Broker, VanishingPublisherAndFullQueueAreCounted) {
   FakeLink link;
   BrokerConfig cfg = test_config("vanish");
   cfg.queue_limit_samples = 5;
+  cfg.publisher_quota_samples = 100;  // the hard limit alone
+  cfg.topic_quota_samples = 100;
   cfg.topics.push_back({"usv.big", ValueType::Float32, 100});  // no swap: the writer sees nothing
   Broker b(cfg, "key", clock, link);
   IngressSession s(b);
@@ -222,4 +228,88 @@ TEST(Broker, VanishingPublisherAndFullQueueAreCounted) {
   EXPECT_EQ(b.counters().rej(Reject::Malformed), 4u);
   EXPECT_EQ(b.counters().samples_in, b.counters().accepted + b.counters().rejected_total());
   EXPECT_FALSE(s.on_close());
+}
+
+namespace {
+// What the broker told a version-2 publisher.
+struct Replies : ingress::ReplyHandler {
+  std::vector<ingress::Catalogue> catalogues;
+  std::vector<ingress::Ack> acks;
+  std::vector<ingress::RejectMsg> rejects;
+  void on_catalogue(const ingress::Catalogue& c) override { catalogues.push_back(c); }
+  void on_ack(const ingress::Ack& a) override { acks.push_back(a); }
+  void on_reject(const ingress::RejectMsg& r) override { rejects.push_back(r); }
+  void feed(const std::vector<uint8_t>& b) {
+    size_t used = 0;
+    while (auto f = ingress::split_frame(std::span(b).subspan(used), ingress::kMaxFrame)) {
+      used += f->size;
+      ingress::decode_reply(*f, *this);
+    }
+    EXPECT_EQ(used, b.size());
+  }
+};
+
+void wait_durable(Broker& b, uint64_t id) {
+  for (int i = 0; i < 400 && b.archiver().counters().durable_flush.load() < id; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ASSERT_GE(b.archiver().counters().durable_flush.load(), id);
+}
+}  // namespace
+
+TEST(Broker, AFarFutureSampleIsRefusedAloneAndThePublisherToldWhy) {
+  FakeClock clock;
+  FakeLink link;
+  BrokerConfig cfg = test_config("future");
+  cfg.max_future_ms = 10'000;
+  cfg.max_past_ms = 3'600'000;
+  Broker b(cfg, "key", clock, link);
+  IngressSession s(b);
+  int64_t now = clock.now_ns();
+  std::vector<ingress::Record> recs = {{0, 4'354'000'000'000'000'000, 1.0, 0}};  // 2107: a driver's unit error
+  for (int i = 0; i < 20; ++i) recs.push_back({0, now - (20 - i) * kMs, 1.0 * i, 0});
+  recs.push_back({0, now - 2 * 3'600'000 * kMs, 9.0, 0});  // two hours old
+  ASSERT_TRUE(s.on_bytes(publisher_bytes({{0, ValueType::Float32, "usv.x"}}, recs)));
+  EXPECT_EQ(b.counters().accepted, 20u);
+  EXPECT_EQ(b.counters().rej(Reject::Timestamp), 2u);
+  b.flush_buffers();
+  wait_durable(b, 1);
+  b.check_archive(now);
+  Replies r;
+  r.feed(s.take_output());
+  ASSERT_EQ(r.catalogues.size(), 1u);
+  EXPECT_EQ(r.catalogues[0].drone, "drone");
+  EXPECT_EQ(r.catalogues[0].max_future_ms, 10'000u);
+  ASSERT_EQ(r.catalogues[0].topics.size(), 2u);
+  EXPECT_EQ(r.catalogues[0].topics[0].name, "usv.x");
+  ASSERT_EQ(r.rejects.size(), 1u);
+  EXPECT_EQ(r.rejects[0].reason, static_cast<uint8_t>(Reject::Timestamp));
+  EXPECT_EQ(r.rejects[0].count, 2u);
+  EXPECT_NE(r.rejects[0].detail.find("ahead of the broker clock"), std::string::npos) << r.rejects[0].detail;
+  ASSERT_EQ(r.acks.size(), 1u);
+  EXPECT_EQ(r.acks[0].received, 22u);
+  EXPECT_EQ(r.acks[0].settled, 22u);
+  EXPECT_EQ(r.acks[0].archived, 20u);
+  b.shutdown();
+  EXPECT_EQ(b.archiver().counters().archived.load(), 20u);
+}
+
+TEST(Broker, AFloodingPublisherLosesOnlyItsOwnSamples) {
+  FakeClock clock;
+  FakeLink link;
+  BrokerConfig cfg = test_config("flood");
+  cfg.queue_limit_samples = 100;
+  cfg.topics = {{"usv.a", ValueType::Float32, 1000}, {"usv.b", ValueType::Float32, 1000}};  // never swapped
+  Broker b(cfg, "key", clock, link);
+  IngressSession flooder(b), calm(b);
+  b.counters().publishers_connected = 2;
+  std::vector<ingress::Record> flood, normal;
+  for (int i = 0; i < 200; ++i) flood.push_back({0, i, 1.0, 0});
+  for (int i = 0; i < 20; ++i) normal.push_back({0, i, 2.0, 0});
+  ASSERT_TRUE(flooder.on_bytes(publisher_bytes({{0, ValueType::Float32, "usv.a"}}, flood)));
+  ASSERT_TRUE(calm.on_bytes(publisher_bytes({{0, ValueType::Float32, "usv.b"}}, normal)));
+  EXPECT_EQ(calm.accepted(), 20u);
+  EXPECT_EQ(calm.rejected(), 0u);
+  EXPECT_EQ(flooder.accepted(), 50u);  // up to half the queue, then over its share (25)
+  EXPECT_EQ(b.counters().rej(Reject::Quota), 150u);
+  EXPECT_EQ(b.counters().samples_in, b.counters().accepted + b.counters().rejected_total());
 }

@@ -12,6 +12,8 @@
 #include "modd/archive/archiver.hpp"
 #include "modd/archive/crc32.hpp"
 #include "modd/archive/mcap_writer.hpp"
+#include "modd/archive/recover.hpp"
+#include "modd/util/error.hpp"
 
 using namespace modd::archive;
 
@@ -218,4 +220,56 @@ TEST(Archiver, RotatesByTime) {
   a.stop();
   EXPECT_EQ(a.counters().archived.load(), 3u);
   EXPECT_EQ(a.counters().files.load(), 2u);
+}
+
+TEST(McapRecover, AFileCutByACrashKeepsItsCompleteChunksAndGetsASummary) {
+  std::string dir = tmpdir("recover");
+  std::string path = dir + "/usv-crash.mcap";
+  WriterOptions o;
+  o.chunk_bytes = 512;
+  o.fsync = FsyncPolicy::Never;
+  uint64_t flushed = 0;
+  {
+    McapWriter w(path, o);
+    uint16_t s = w.add_schema("modd.float32", "jsonschema", "{}");
+    uint16_t ch = w.add_channel(s, "usv.x", "json", {{"type", "float32"}});
+    std::string m = "{\"value\":1.5}";
+    for (uint32_t i = 0; i < 200; ++i)
+      w.add_message(ch, i, 1000 + i, 900 + i, std::span(reinterpret_cast<const uint8_t*>(m.data()), m.size()));
+    flushed = w.flushed_messages();
+    ASSERT_GT(flushed, 0u);
+    ASSERT_LT(flushed, 200u);  // the last chunk is still open, as at a kill -9
+    w.abandon();
+  }
+  auto bytes = slurp(path);
+  std::filesystem::resize_file(path, bytes.size() - 5);  // a torn tail too
+  EXPECT_FALSE(mcap_complete(path));
+  auto rs = recover_dir(dir, "usv", o);
+  ASSERT_EQ(rs.size(), 1u);
+  EXPECT_TRUE(mcap_complete(path));
+  EXPECT_LE(rs[0].messages, flushed);
+  EXPECT_GE(rs[0].messages + 40, flushed);  // at most the torn chunk lost
+  EXPECT_GT(rs[0].dropped_bytes, 0u);
+  auto out = slurp(path);
+  EXPECT_EQ(std::memcmp(out.data(), kMagic, 8), 0);
+  EXPECT_EQ(std::memcmp(out.data() + out.size() - 8, kMagic, 8), 0);
+  EXPECT_TRUE(recover_dir(dir, "usv", o).empty());  // complete now: left alone
+}
+
+TEST(McapWriter, AWriteErrorLosesNothingAndResumes) {
+  // /dev/full fails every write with ENOSPC: what was not written stays pending.
+  WriterOptions o;
+  o.chunk_bytes = 64;
+  McapWriter w("/dev/full", o);
+  uint16_t ch = w.add_channel(0, "usv.x", "json");
+  std::string m = "{\"value\":1}";
+  EXPECT_THROW(
+      for (uint32_t i = 0; i < 10; ++i) w.add_message(ch, i, i, i, std::span(reinterpret_cast<const uint8_t*>(m.data()), m.size())),
+      modd::Error);
+  EXPECT_EQ(w.flushed_messages(), 0u);
+  EXPECT_GT(w.pending_bytes(), 0u);
+  uint64_t pending = w.pending_bytes();
+  EXPECT_THROW(w.flush_chunk(), modd::Error);
+  EXPECT_GE(w.pending_bytes(), pending);  // still held, to be written when space returns
+  w.abandon();
 }

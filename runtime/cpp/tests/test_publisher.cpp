@@ -5,7 +5,9 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstring>
+#include <thread>
 #include <filesystem>
 #include <map>
 
@@ -76,7 +78,7 @@ void read_records(int fd, Sink& s, size_t want, int64_t until_ts = -1) {
 TEST(Publisher, SendsRegistrationsAndBatchesAndReconnects) {
   std::string path = (std::filesystem::temp_directory_path() / ("modd-pub-" + std::to_string(getpid()) + ".sock")).string();
   Listener l(path);
-  modd::Publisher pub("pub_1", "unix:" + path);
+  modd::Publisher pub("pub_1", "unix:" + path, {.connect_wait_ms = 100});
   pub.declare("usv.a.x", modd::ValueType::Float32);
   for (int i = 0; i < 100; ++i) EXPECT_TRUE(pub.publish("usv.a.x", int64_t{i}, static_cast<float>(i) * 0.5f));
   EXPECT_TRUE(pub.publish("usv.a.n", int64_t{7}, -3));  // a plain int: an int topic
@@ -112,7 +114,7 @@ TEST(Publisher, SendsRegistrationsAndBatchesAndReconnects) {
 }
 
 TEST(Publisher, QueueIsBoundedAndNeverBlocks) {
-  modd::Publisher pub("p", "unix:/nonexistent/dir/x.sock", {.queue_capacity = 10, .batch_max = 4, .reconnect_ms = 50});
+  modd::Publisher pub("p", "unix:/nonexistent/dir/x.sock", {.queue_capacity = 10, .batch_max = 4, .reconnect_ms = 50, .connect_wait_ms = 0});
   auto t0 = std::chrono::steady_clock::now();
   int ok = 0;
   for (int i = 0; i < 1000; ++i) ok += pub.publish("t", int64_t{i}, 1.0);
@@ -120,6 +122,68 @@ TEST(Publisher, QueueIsBoundedAndNeverBlocks) {
   auto st = pub.stats();
   EXPECT_EQ(st.published + st.dropped_queue_full, 1000u);
   EXPECT_LE(st.published, 14u);
-  EXPECT_FALSE(pub.publish("t", int64_t{5}, int64_t{1}));  // int on a float topic
+  EXPECT_FALSE(pub.publish("t", int64_t{5}, std::nan("")));  // refused at the call, before the queue
   EXPECT_EQ(pub.stats().dropped_bad_topic, 1u);
+  EXPECT_EQ(pub.stats().refused_out_of_range, 1u);
+}
+
+TEST(Publisher, TheCatalogueRefusesAtTheCallAndResolvesShortNames) {
+  std::string path = (std::filesystem::temp_directory_path() / ("modd-pubc-" + std::to_string(getpid()) + ".sock")).string();
+  Listener l(path);
+  int c = -1;
+  std::thread broker([&] {
+    c = ::accept(l.fd, nullptr, nullptr);
+    modd::ingress::Catalogue cat;
+    cat.drone = "usv";
+    cat.max_future_ms = 10'000;
+    cat.max_past_ms = 60'000;
+    cat.topics = {{"usv.accelerometer.accel_z", modd::link::ValueType::Float32},
+                  {"usv.gps.fix", modd::link::ValueType::Bool},
+                  {"usv.ctd.count", modd::link::ValueType::Int},
+                  {"usv.a.temp", modd::link::ValueType::Float64},
+                  {"usv.b.temp", modd::link::ValueType::Float64}};
+    std::vector<uint8_t> out;
+    modd::ingress::encode_catalogue(out, cat);
+    ASSERT_EQ(::write(c, out.data(), out.size()), static_cast<ssize_t>(out.size()));
+  });
+  std::vector<std::string> errors;
+  modd::Publisher pub("pub_1", "unix:" + path,
+                      {.on_error = [&](const std::string&, const std::string& why) { errors.push_back(why); }});
+  broker.join();
+  ASSERT_GE(c, 0);
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  int64_t now = int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+  // The paper's Listing 2: short name, a double on a float32 topic.
+  double value = 9.81;
+  EXPECT_TRUE(pub.publish("accel_z", now, value));
+  EXPECT_TRUE(pub.publish("accelerometer.accel_z", now, 1));    // an int on a float topic: converted
+  EXPECT_TRUE(pub.publish("count", now, 2.6));                    // rounded to 3
+  EXPECT_TRUE(pub.publish("fix", now, 1));
+  EXPECT_FALSE(pub.publish("fix", now, 2));                       // a bool takes 0 or 1
+  EXPECT_FALSE(pub.publish("accel_zz", now, 1.0));                // unknown
+  EXPECT_NE(pub.last_error().find("unknown topic 'accel_zz'"), std::string::npos) << pub.last_error();
+  EXPECT_NE(pub.last_error().find("usv.accelerometer.accel_z"), std::string::npos);  // says what exists
+  EXPECT_FALSE(pub.publish("temp", now, 1.0));                    // ambiguous
+  EXPECT_NE(pub.last_error().find("ambiguous"), std::string::npos);
+  EXPECT_FALSE(pub.publish("accel_z", now, 1e39));                // beyond float32
+  EXPECT_FALSE(pub.publish("count", now, uint64_t{1} << 63));     // beyond int64
+  EXPECT_FALSE(pub.publish("accel_z", now + 3'600'000'000'000'000, 1.0));  // an hour ahead
+  auto st = pub.stats();
+  EXPECT_EQ(st.published, 4u);
+  EXPECT_EQ(st.refused_unknown_topic, 2u);
+  EXPECT_EQ(st.refused_out_of_range, 3u);
+  EXPECT_EQ(st.refused_timestamp, 1u);
+  EXPECT_EQ(st.dropped_bad_topic, 6u);
+  EXPECT_EQ(errors.size(), 6u);  // once per topic and reason
+  Sink s;
+  read_records(c, s, 4);
+  ASSERT_EQ(s.recs.size(), 4u);
+  EXPECT_EQ(s.regs.at(0).topic, "usv.accelerometer.accel_z");
+  EXPECT_EQ(s.regs.at(0).type, modd::link::ValueType::Float32);
+  EXPECT_FLOAT_EQ(static_cast<float>(s.recs[0].number), 9.81f);
+  EXPECT_EQ(s.recs[1].number, 1.0);
+  EXPECT_EQ(s.recs[2].integer, 3);
+  EXPECT_EQ(s.recs[3].integer, 1);
+  ::close(c);
 }

@@ -14,12 +14,18 @@ ROTATE_BYTES = 256 * 1024 * 1024
 ROTATE_S = 3600
 STATUS_PERIOD_S = 30
 LOG_PERIOD_S = 10
+# Ingress rules (docs/ingress.md): a sample's timestamp is judged against the drone's clock;
+# refused only beyond 10 s ahead or 1 h behind. The operator is warned under 256 MiB free.
+MAX_FUTURE_MS = 10_000
+MAX_PAST_MS = 3_600_000
+LOW_SPACE_MB = 256
 
 
 def config(ctx: Context) -> dict[str, Any]:
     broker = ctx.model["pubBroker"]
     sizes = ctx.plan.buffer_sizes
-    ingress: dict[str, Any] = {"unix_path": ctx.ingress.unix_socket}
+    ingress: dict[str, Any] = {"unix_path": ctx.ingress.unix_socket,
+                               "max_future_ms": MAX_FUTURE_MS, "max_past_ms": MAX_PAST_MS}
     if ctx.ingress.tcp_port:
         ingress.update(host=ctx.ingress.tcp_host, port=ctx.ingress.tcp_port)
     return {
@@ -28,7 +34,8 @@ def config(ctx: Context) -> dict[str, Any]:
                  "key": ctx.key_ref},
         "ingress": ingress,
         "archive": {"dir": broker["logPath"], "prefix": ctx.drone, "rotate_bytes": ROTATE_BYTES,
-                    "rotate_s": ROTATE_S, "fsync": "chunk", "compression": "zstd"},
+                    "rotate_s": ROTATE_S, "fsync": "chunk", "compression": "zstd",
+                    "low_space_mb": LOW_SPACE_MB},
         "topics": [{"name": t.name, "type": t.type, "buffer_size": sizes.get(t.name, 25)}
                    for t in ctx.topics.values() if t.publisher is not None],
         "default_buffer_size": 25,

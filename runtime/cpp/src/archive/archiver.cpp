@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <charconv>
+#include <chrono>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
 
+#include "modd/archive/recover.hpp"
 #include "modd/util/error.hpp"
 #include "modd/util/log.hpp"
 
@@ -34,6 +36,8 @@ Archiver::Archiver(ArchiverOptions options) : opt_(std::move(options)) {
   std::error_code ec;
   std::filesystem::create_directories(opt_.dir, ec);
   if (ec) throw Error(ErrorCode::Io, "cannot create archive directory " + opt_.dir + ": " + ec.message());
+  // Files a crash left open (no summary, torn tail) get finalised before anything new is written.
+  recover_dir(opt_.dir, opt_.prefix, opt_.writer);
   thread_ = std::thread([this] { run(); });
 }
 
@@ -44,15 +48,15 @@ void Archiver::submit(std::shared_ptr<const TopicInfo> topic, std::vector<Sample
   counters_.queued += samples.size();
   {
     std::lock_guard lk(mu_);
-    queue_.push_back(Item{std::move(topic), std::move(samples), false});
+    queue_.push_back(Item{std::move(topic), std::move(samples), false, 0, 0});
   }
   cv_.notify_one();
 }
 
-void Archiver::flush() {
+void Archiver::flush(uint64_t id) {
   {
     std::lock_guard lk(mu_);
-    queue_.push_back(Item{nullptr, {}, true});
+    queue_.push_back(Item{nullptr, {}, true, id, 0});
   }
   cv_.notify_one();
 }
@@ -86,25 +90,52 @@ std::string Archiver::last_error() const {
 
 void Archiver::run() {
   for (;;) {
-    Item item;
+    Item* item = nullptr;
     {
       std::unique_lock lk(mu_);
+      if (counters_.disk_full) {
+        // Hold everything queued (ingest refuses, counted, once the queue limit is reached)
+        // and retry with backoff; no new file is opened meanwhile.
+        cv_.wait_for(lk, std::chrono::milliseconds(backoff_ms_), [&] { return stopping_; });
+        bool stopping = stopping_;
+        lk.unlock();
+        if (retry()) continue;
+        if (stopping) {
+          give_up();
+          return;
+        }
+        backoff_ms_ = std::min(backoff_ms_ * 2, opt_.retry_max_ms);
+        continue;
+      }
       cv_.wait(lk, [&] { return stopping_ || !queue_.empty(); });
       if (queue_.empty()) break;  // stopping and drained
-      item = std::move(queue_.front());
-      queue_.pop_front();
+      item = &queue_.front();     // stays in the queue until written (only this thread pops)
     }
-    write_item(item);
-    if (!item.flush) {
-      item.samples.clear();
-      std::lock_guard lk(mu_);
-      if (spares_.size() < 64) spares_.push_back(std::move(item.samples));
+    if (!write_item(*item)) continue;
+    std::lock_guard lk(mu_);
+    Item done = std::move(queue_.front());
+    queue_.pop_front();
+    if (!done.flush) {
+      done.samples.clear();
+      if (spares_.size() < 64) spares_.push_back(std::move(done.samples));
     }
   }
   try {
     close_file();
   } catch (const Error& e) {
-    log_line("archive: close failed: %s", e.what());
+    set_disk_full(true, e.what());
+    for (;;) {
+      bool stopping;
+      {
+        std::unique_lock lk(mu_);
+        stopping = stopping_;
+      }
+      if (retry()) return;
+      if (stopping) {
+        give_up();
+        return;
+      }
+    }
   }
 }
 
@@ -122,32 +153,95 @@ void Archiver::open_file() {
   channels_.clear();
   sequences_.clear();
   keep_.clear();
+  seen_flushed_ = 0;
   ++counters_.files;
   std::lock_guard lk(mu_);
   current_file_ = path;
 }
 
+void Archiver::count_flushed() {
+  uint64_t f = writer_->flushed_messages();
+  counters_.archived += f - seen_flushed_;
+  seen_flushed_ = f;
+  counters_.bytes = closed_bytes_ + writer_->file_bytes() - writer_->pending_bytes();
+}
+
 void Archiver::close_file() {
   if (!writer_) return;
-  uint64_t before = writer_->flushed_messages();
-  uint64_t total = writer_->message_count();
-  writer_->close();
-  counters_.archived += total - before;
+  writer_->close();  // throws on a write error; close() resumes on the next call
+  count_flushed();
   closed_bytes_ += writer_->file_bytes();
   counters_.bytes = closed_bytes_;
   writer_.reset();
 }
 
-void Archiver::write_item(Item& item) {
+void Archiver::set_disk_full(bool full, const std::string& why) {
+  if (counters_.disk_full == full) return;
+  counters_.disk_full = full;
+  ++counters_.state_changes;
+  if (full) {
+    backoff_ms_ = opt_.retry_first_ms;
+    {
+      std::lock_guard lk(mu_);
+      last_error_ = why;
+    }
+    log_line("archive: write failed (%s): holding %llu queued samples in memory, no new file, retrying every "
+             "%u..%u ms", why.c_str(), static_cast<unsigned long long>(counters_.queued.load()), opt_.retry_first_ms,
+             opt_.retry_max_ms);
+  } else {
+    log_line("archive: writing again (%s resumed where it stopped)", current_file().c_str());
+  }
+}
+
+bool Archiver::retry() {
+  try {
+    if (writer_) {
+      if (writer_->closing()) {
+        close_file();
+      } else {
+        writer_->flush_chunk();
+        count_flushed();
+      }
+    }
+    set_disk_full(false, "");
+    return true;
+  } catch (const Error&) {
+    return false;
+  }
+}
+
+void Archiver::give_up() {
+  uint64_t lost = 0;
+  if (writer_) {
+    lost += writer_->message_count() - writer_->flushed_messages();
+    log_line("archive: stopping with the disk still full: %s left unfinished (recovered at next start)",
+             writer_->path().c_str());
+    writer_->abandon();
+    writer_.reset();
+  }
+  std::lock_guard lk(mu_);
+  for (Item& it : queue_) {
+    if (it.flush) continue;
+    lost += it.samples.size() - it.done;
+    counters_.queued -= it.samples.size();
+  }
+  queue_.clear();
+  counters_.failed += lost;
+  log_line("archive: %llu samples lost to the full disk (counted in archive_failed)",
+           static_cast<unsigned long long>(lost));
+}
+
+bool Archiver::write_item(Item& item) {
+  bool handed_over = false;  // every sample of the item is in the writer (counted out of queued)
   try {
     if (item.flush) {
       if (writer_) {
-        uint64_t before = writer_->flushed_messages();
         writer_->flush_chunk();
         if (opt_.writer.fsync == FsyncPolicy::Chunk) writer_->sync();
-        counters_.archived += writer_->flushed_messages() - before;
+        count_flushed();
       }
-      return;
+      if (item.flush_id) counters_.durable_flush = item.flush_id;
+      return true;
     }
     if (!writer_) open_file();
     const TopicInfo* key = item.topic.get();
@@ -162,34 +256,36 @@ void Archiver::write_item(Item& item) {
     }
     uint32_t& seq = sequences_[key];
     std::string json;
-    uint64_t before = writer_->flushed_messages();
-    for (const Sample& s : item.samples) {
+    while (item.done < item.samples.size()) {
+      const Sample& s = item.samples[item.done];
       format_sample_json(json, item.topic->type, s);
-      writer_->add_message(it->second, seq++, static_cast<uint64_t>(s.stamp_ns), static_cast<uint64_t>(s.publish_ns),
-                           std::span(reinterpret_cast<const uint8_t*>(json.data()), json.size()));
+      writer_->append_message(it->second, seq++, static_cast<uint64_t>(s.stamp_ns), static_cast<uint64_t>(s.publish_ns),
+                              std::span(reinterpret_cast<const uint8_t*>(json.data()), json.size()));
+      ++item.done;
+      if (writer_->chunk_full()) {
+        writer_->flush_chunk();
+        count_flushed();
+      }
     }
-    counters_.archived += writer_->flushed_messages() - before;
     counters_.queued -= item.samples.size();
-    counters_.bytes = closed_bytes_ + writer_->file_bytes();
+    handed_over = true;
+    count_flushed();
     int64_t age = std::time(nullptr) - file_opened_s_;
     if (writer_->file_bytes() >= opt_.rotate_bytes || (opt_.rotate_s > 0 && age >= static_cast<int64_t>(opt_.rotate_s)))
       close_file();
+    return true;
   } catch (const Error& e) {
-    // Disk full or the like: count what is lost, say so, and start a fresh file next time.
-    if (!item.flush) {
-      counters_.queued -= item.samples.size();
-      counters_.failed += item.samples.size();
+    // Disk full or the like: nothing is dropped. What the writer took stays pending in it,
+    // the rest of the item stays queued; the writer thread retries with backoff.
+    if (!item.flush && item.done == item.samples.size()) {
+      // Every sample is in the writer (pending there): the item is done; the loop now
+      // retries the writer before taking the next one.
+      if (!handed_over) counters_.queued -= item.samples.size();
+      set_disk_full(true, e.what());
+      return true;
     }
-    if (writer_) {
-      uint64_t unflushed = writer_->message_count() - writer_->flushed_messages();
-      counters_.failed += unflushed;
-    }
-    {
-      std::lock_guard lk(mu_);
-      last_error_ = e.what();
-    }
-    log_line("archive: %s", e.what());
-    writer_.reset();
+    set_disk_full(true, e.what());
+    return false;
   }
 }
 

@@ -93,7 +93,8 @@ McapWriter::McapWriter(const std::string& path, WriterOptions options) : path_(p
   h.str("");  // profile: none (JSON messages need no ROS profile)
   h.str(opt_.library);
   emit(h.done());
-  write_out();
+  // Written with the first chunk: opening a file writes nothing, so a full disk never
+  // leaves a trail of empty files.
 }
 
 McapWriter::~McapWriter() {
@@ -102,22 +103,31 @@ McapWriter::~McapWriter() {
 }
 
 void McapWriter::emit(std::span<const uint8_t> b) {
+  if (!closed_) data_crc_ = crc32(data_crc_, b);  // the data section ends at Data End
   pending_.insert(pending_.end(), b.begin(), b.end());
 }
 
 void McapWriter::write_out() {
-  if (!closed_) data_crc_ = crc32(data_crc_, pending_);  // the data section ends at Data End
+  // On a write error (disk full) the bytes written so far stay counted in offset_ and the
+  // rest stays pending: calling again resumes exactly where the file ends.
   size_t done = 0;
+  auto keep_rest = [&] {
+    offset_ += done;
+    pending_.erase(pending_.begin(), pending_.begin() + static_cast<std::ptrdiff_t>(done));
+  };
   while (done < pending_.size()) {
     ssize_t n = ::write(fd_, pending_.data() + done, pending_.size() - done);
     if (n < 0) {
       if (errno == EINTR) continue;
-      throw Error(ErrorCode::Io, "write " + path_ + ": " + std::strerror(errno));
+      int err = errno;
+      keep_rest();
+      throw Error(ErrorCode::Io, "write " + path_ + ": " + std::strerror(err));
     }
     done += static_cast<size_t>(n);
   }
   offset_ += pending_.size();
   pending_.clear();
+  flushed_messages_ = staged_messages_;
 }
 
 std::vector<uint8_t> McapWriter::schema_record(const SchemaRec& s) const {
@@ -162,6 +172,12 @@ uint16_t McapWriter::add_channel(uint16_t schema_id, const std::string& topic, c
 
 void McapWriter::add_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time, uint64_t publish_time,
                              std::span<const uint8_t> data) {
+  append_message(channel_id, sequence, log_time, publish_time, data);
+  if (chunk_full()) flush_chunk();
+}
+
+void McapWriter::append_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time, uint64_t publish_time,
+                                std::span<const uint8_t> data) {
   uint64_t at = chunk_.size();
   uint8_t head[1 + 8 + 2 + 4 + 8 + 8];
   uint64_t len = 2 + 4 + 8 + 8 + data.size();
@@ -180,7 +196,6 @@ void McapWriter::add_message(uint16_t channel_id, uint32_t sequence, uint64_t lo
   ++channel_counts_[channel_id];
   first_time_ = std::min(first_time_, log_time);
   last_time_ = std::max(last_time_, log_time);
-  if (chunk_.size() >= opt_.chunk_bytes) flush_chunk();
 }
 
 void McapWriter::flush_chunk() {
@@ -217,7 +232,7 @@ void McapWriter::flush_chunk() {
   }
   ci.index_length = file_bytes() - idx_start;
   chunk_indexes_.push_back(std::move(ci));
-  flushed_messages_ = message_count_;
+  staged_messages_ = message_count_;
   chunk_.clear();
   chunk_index_.clear();
   chunk_start_ = UINT64_MAX;
@@ -230,7 +245,12 @@ void McapWriter::sync() {
 }
 
 void McapWriter::close() {
-  if (closed_ || fd_ < 0) return;
+  if (fd_ < 0) return;
+  if (closed_) {
+    // A close that failed (disk full) resumes: the summary is pending already.
+    finish_close();
+    return;
+  }
   flush_chunk();
   closed_ = true;
   // The data-section CRC covers every byte from the magic to the Data End record.
@@ -310,9 +330,18 @@ void McapWriter::close() {
   fb.insert(fb.end(), crcb, crcb + 4);
   emit(fb);
   emit(kMagic);
+  finish_close();
+}
+
+void McapWriter::finish_close() {
   write_out();
   if (opt_.fsync != FsyncPolicy::Never) ::fsync(fd_);
   ::close(fd_);
+  fd_ = -1;
+}
+
+void McapWriter::abandon() {
+  if (fd_ >= 0) ::close(fd_);
   fd_ = -1;
 }
 

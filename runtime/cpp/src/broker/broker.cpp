@@ -2,6 +2,7 @@
 
 #include <sys/statvfs.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -13,6 +14,21 @@
 namespace modd::broker {
 
 // ---- ingress ---------------------------------------------------------------
+
+IngressSession::IngressSession(Broker& b) : broker_(b) { broker_.attach(this); }
+IngressSession::~IngressSession() { broker_.detach(this); }
+
+void IngressSession::on_hello(const ingress::Hello& h) {
+  publisher_ = h.publisher;
+  version_ = h.version;
+  send_catalogue_if_changed();
+}
+
+void IngressSession::send_catalogue_if_changed() {
+  if (version_ < 2 || catalogue_generation_ == broker_.topics_generation()) return;
+  catalogue_generation_ = broker_.topics_generation();
+  ingress::encode_catalogue(out_, broker_.catalogue());
+}
 
 void IngressSession::on_register(const ingress::Register& r) {
   if (locals_.size() <= r.local_id) locals_.resize(r.local_id + 1);
@@ -39,7 +55,43 @@ void IngressSession::on_record(const ingress::Record& r) {
     l.global = broker_.find_topic(l.topic, l.type, l.reject);
     l.generation = broker_.topics_generation();
   }
-  broker_.ingest(l.global, l.reject, l.type, stamp_, r);
+  Reject why = broker_.ingest(l.global, l.reject, l.type, stamp_, r, this);
+  ++received_;
+  if (why == Reject::kCount) {
+    ++accepted_;
+    return;
+  }
+  if (version_ < 2) return;
+  Refused& f = refused_[{r.local_id, static_cast<uint8_t>(why)}];
+  if (f.count++ == 0) f.detail = broker_.describe(why, l.topic, stamp_, r);
+}
+
+void IngressSession::checkpoint(uint64_t flush_id) {
+  // Bounded while the archive stalls (disk full): the newest checkpoint replaces the last one,
+  // which only delays the acknowledgement of the records in between.
+  if (checkpoints_.size() >= 1024) checkpoints_.pop_back();
+  checkpoints_.push_back({flush_id, received_, accepted_});
+}
+
+void IngressSession::report(uint64_t durable) {
+  while (!checkpoints_.empty() && checkpoints_.front().flush_id <= durable) {
+    settled_ = checkpoints_.front().received;
+    archived_ = checkpoints_.front().accepted;
+    checkpoints_.pop_front();
+  }
+  if (version_ < 2) return;
+  if (out_.size() > 64 * 1024) out_.clear();  // a publisher that does not read: ACKs are cumulative
+  for (auto& [key, f] : refused_) {
+    if (!f.count) continue;
+    ingress::encode_reject(out_, ingress::RejectMsg{key.first, key.second, f.count, f.detail});
+    f.count = 0;
+  }
+  refused_.clear();
+  if (acked_received_ != received_ || acked_settled_ != settled_) {
+    ingress::encode_ack(out_, ingress::Ack{received_, settled_, archived_});
+    acked_received_ = received_;
+    acked_settled_ = settled_;
+  }
 }
 
 bool IngressSession::on_bytes(std::span<const uint8_t> in) {
@@ -100,6 +152,7 @@ Broker::Broker(const BrokerConfig& cfg, std::string key, Clock& clock, LinkOutpu
   ao.writer.chunk_bytes = cfg.chunk_bytes;
   ao.writer.message_index = cfg.message_index;
   ao.writer.fsync = cfg.fsync;
+  ao.retry_max_ms = cfg.retry_max_ms;
   archiver_ = std::make_unique<archive::Archiver>(ao);
   for (const auto& t : cfg.topics)
     add_topic(t.name, t.type, t.buffer_size ? t.buffer_size : cfg.default_buffer_size, true);
@@ -118,7 +171,6 @@ uint32_t Broker::add_topic(const std::string& name, link::ValueType type, uint32
       // The type changes: the archive gets a new channel object (new schema).
       swap_out(t);
       t.info = std::make_shared<archive::TopicInfo>(archive::TopicInfo{name, type});
-      t.last_publish_ns = INT64_MIN;
       ++generation_;
     }
     return it->second;
@@ -164,32 +216,38 @@ int64_t Broker::stamp_now() {
   return t;
 }
 
-void Broker::ingest(int64_t global, Reject why, link::ValueType declared, int64_t stamp, const ingress::Record& r) {
+Reject Broker::ingest(int64_t global, Reject why, link::ValueType declared, int64_t stamp,
+                      const ingress::Record& r, const IngressSession* who) {
   ++counters_.samples_in;
-  if (global < 0) {
-    ++counters_.rej(why);
-    return;
-  }
+  auto refuse = [&](Reject w) {
+    ++counters_.rej(w);
+    return w;
+  };
+  if (global < 0) return refuse(why);
   Topic& t = topics_[static_cast<size_t>(global)];
-  if (t.info->type != declared) {
-    ++counters_.rej(Reject::WrongType);
-    return;
-  }
+  if (t.info->type != declared) return refuse(Reject::WrongType);
   bool is_float = declared == link::ValueType::Float32 || declared == link::ValueType::Float64;
-  if (is_float && !std::isfinite(r.number)) {
-    ++counters_.rej(Reject::NotFinite);
-    return;
+  if (is_float && !std::isfinite(r.number)) return refuse(Reject::NotFinite);
+  // Judged against the broker's clock, never against what came before: one sample stamped in
+  // 2116 cannot block the samples after it.
+  __int128 ahead = static_cast<__int128>(r.timestamp_ns) - stamp;
+  if (cfg_.max_future_ms && ahead > static_cast<__int128>(cfg_.max_future_ms) * 1'000'000)
+    return refuse(Reject::Timestamp);
+  if (cfg_.max_past_ms && -ahead > static_cast<__int128>(cfg_.max_past_ms) * 1'000'000)
+    return refuse(Reject::Timestamp);
+  uint64_t pending = archiver_->counters().queued + front_samples_;
+  if (pending >= cfg_.queue_limit_samples) return refuse(Reject::Overflow);
+  if (pending >= cfg_.queue_limit_samples / 2) {
+    // Fair share: with the queue half full, a publisher (or topic) holding more than its share
+    // of the samples not yet on disk loses its own samples, not the others'.
+    uint64_t n = std::max<uint64_t>(counters_.publishers_connected, 1);
+    uint64_t share = cfg_.publisher_quota_samples ? cfg_.publisher_quota_samples : cfg_.queue_limit_samples / 2 / n;
+    if (who && who->outstanding() >= share) return refuse(Reject::Quota);
+    uint64_t tshare = cfg_.topic_quota_samples ? cfg_.topic_quota_samples : cfg_.queue_limit_samples / 4;
+    if (t.accepted - t.durable_accepted >= tshare) return refuse(Reject::Quota);
   }
-  if (r.timestamp_ns < t.last_publish_ns) {
-    ++counters_.rej(Reject::Backwards);
-    return;
-  }
-  if (archiver_->counters().queued + front_samples_ >= cfg_.queue_limit_samples) {
-    ++counters_.rej(Reject::Overflow);
-    return;
-  }
-  t.last_publish_ns = r.timestamp_ns;
   ++counters_.accepted;
+  ++t.accepted;
   executor_.on_sample(static_cast<uint32_t>(global), r.number, r.integer);
   if (t.front.capacity() == 0) {
     t.front = archiver_->take_spare();
@@ -198,6 +256,55 @@ void Broker::ingest(int64_t global, Reject why, link::ValueType declared, int64_
   t.front.push_back({stamp, r.timestamp_ns, r.number, r.integer});
   ++front_samples_;
   if (t.front.size() >= t.capacity) swap_out(t);
+  return Reject::kCount;
+}
+
+std::string Broker::describe(Reject why, const std::string& topic, int64_t stamp, const ingress::Record& r) const {
+  char buf[320];
+  switch (why) {
+    case Reject::UnknownTopic:
+      std::snprintf(buf, sizeof buf, "topic '%s' is not published on drone '%s'", topic.c_str(), cfg_.name.c_str());
+      break;
+    case Reject::WrongType: {
+      auto it = by_name_.find(topic);
+      std::snprintf(buf, sizeof buf, "topic '%s' is %s on this drone", topic.c_str(),
+                    it == by_name_.end() ? "?" : link::value_type_name(topics_[it->second].info->type));
+      break;
+    }
+    case Reject::NotFinite:
+      std::snprintf(buf, sizeof buf, "topic '%s': value is NaN or infinite", topic.c_str());
+      break;
+    case Reject::Timestamp: {
+      double ahead_s = (static_cast<double>(r.timestamp_ns) - static_cast<double>(stamp)) / 1e9;
+      std::snprintf(buf, sizeof buf,
+                    "topic '%s': timestamp %lld ns is %.3g s %s the broker clock (bounds: %llu ms ahead, %llu ms behind)",
+                    topic.c_str(), static_cast<long long>(r.timestamp_ns), std::fabs(ahead_s),
+                    ahead_s > 0 ? "ahead of" : "behind", static_cast<unsigned long long>(cfg_.max_future_ms),
+                    static_cast<unsigned long long>(cfg_.max_past_ms));
+      break;
+    }
+    case Reject::Overflow:
+      std::snprintf(buf, sizeof buf, "topic '%s': archive queue full (%llu samples)", topic.c_str(),
+                    static_cast<unsigned long long>(cfg_.queue_limit_samples));
+      break;
+    case Reject::Quota:
+      std::snprintf(buf, sizeof buf, "topic '%s': over this publisher's (or topic's) fair share of the archive queue",
+                    topic.c_str());
+      break;
+    default:
+      std::snprintf(buf, sizeof buf, "topic '%s': %s", topic.c_str(), reject_name(why));
+  }
+  return buf;
+}
+
+ingress::Catalogue Broker::catalogue() const {
+  ingress::Catalogue c;
+  c.drone = cfg_.name;
+  c.max_future_ms = cfg_.max_future_ms;
+  c.max_past_ms = cfg_.max_past_ms;
+  c.accept_unknown = cfg_.accept_unknown_topics;
+  for (const Topic& t : topics_) c.topics.push_back({t.info->name, t.info->type});
+  return c;
 }
 
 void Broker::swap_out(Topic& t) {
@@ -215,8 +322,70 @@ void Broker::tick(int64_t now) {
 }
 
 void Broker::flush_buffers() {
-  for (Topic& t : topics_) swap_out(t);
-  archiver_->flush();
+  ++flush_id_;
+  for (Topic& t : topics_) {
+    swap_out(t);
+    if (t.checkpoints.size() >= 1024) t.checkpoints.pop_back();
+    t.checkpoints.emplace_back(flush_id_, t.accepted);
+  }
+  for (IngressSession* s : sessions_) s->checkpoint(flush_id_);
+  archiver_->flush(flush_id_);
+}
+
+void Broker::check_archive(int64_t now) {
+  const auto& ac = archiver_->counters();
+  uint64_t durable = ac.durable_flush;
+  if (durable != durable_seen_) {
+    durable_seen_ = durable;
+    for (Topic& t : topics_)
+      while (!t.checkpoints.empty() && t.checkpoints.front().first <= durable) {
+        t.durable_accepted = t.checkpoints.front().second;
+        t.checkpoints.pop_front();
+      }
+    for (IngressSession* s : sessions_) s->report(durable);
+  }
+  for (IngressSession* s : sessions_) s->send_catalogue_if_changed();
+  bool changed = false;
+  if (ac.state_changes != archive_state_changes_) {
+    archive_state_changes_ = ac.state_changes;
+    changed = true;
+  }
+  if (now >= next_space_check_) {
+    next_space_check_ = now + 1'000'000'000;
+    struct statvfs sv{};
+    if (statvfs(cfg_.archive_dir.c_str(), &sv) == 0) {
+      uint64_t free_mb = static_cast<uint64_t>(sv.f_bavail) * sv.f_frsize / (1024 * 1024);
+      bool low = free_mb < cfg_.low_space_mb;
+      if (low != low_space_) {
+        low_space_ = low;
+        changed = true;
+        if (low)
+          log_line("archive: low space: %llu MiB free under %s (threshold %llu MiB, writing %llu B/s)",
+                   static_cast<unsigned long long>(free_mb), cfg_.archive_dir.c_str(),
+                   static_cast<unsigned long long>(cfg_.low_space_mb), static_cast<unsigned long long>(rate_bps_));
+        else
+          log_line("archive: space back above the threshold: %llu MiB free", static_cast<unsigned long long>(free_mb));
+      }
+    }
+    if (now - rate_since_ >= 10'000'000'000) {
+      uint64_t b = ac.bytes;
+      if (rate_since_) rate_bps_ = (b - std::min(b, rate_bytes_)) * 1'000'000'000 / static_cast<uint64_t>(now - rate_since_);
+      rate_bytes_ = b;
+      rate_since_ = now;
+    }
+  }
+  uint8_t state = ac.disk_full ? kArchiveDiskFull : low_space_ ? kArchiveLowSpace : kArchiveOk;
+  if (state != archive_state_) {
+    archive_state_ = state;
+    changed = true;
+  }
+  if (changed) send_status_now();  // the operator hears of it now, not at the next period
+}
+
+void Broker::send_status_now() {
+  status_pending_ = true;
+  status_due_since_ = INT64_MIN / 2;  // overdue: sent on its own at once if the link is up
+  send_overdue_status(clock_.now_ns());
 }
 
 void Broker::shutdown() {
@@ -311,14 +480,16 @@ std::vector<uint64_t> Broker::status_counters() {
   const auto& ec = executor_.counters();
   v[kUptimeS] = static_cast<uint64_t>((clock_.now_ns() - started_ns_) / 1'000'000'000);
   v[kSamplesIn] = counters_.samples_in;
-  v[kSamplesArchived] = ac.archived;
+  // One read of each writer counter, so that the STATUS reconciles exactly.
+  const uint64_t archived = ac.archived, failed = ac.failed;
+  v[kSamplesArchived] = archived;
   v[kRejUnknownTopic] = counters_.rejected[0];
   v[kRejWrongType] = counters_.rejected[1];
   v[kRejNotFinite] = counters_.rejected[2];
-  v[kRejBackwards] = counters_.rejected[3];
+  v[kRejTimestamp] = counters_.rej(Reject::Timestamp);
   v[kRejOverflow] = counters_.rejected[4];
   v[kRejMalformed] = counters_.rejected[5];
-  v[kArchiveFailed] = ac.failed;
+  v[kArchiveFailed] = failed;
   v[kIngressMalformedFrames] = counters_.ingress_malformed_frames;
   v[kPublishersConnected] = counters_.publishers_connected;
   v[kFramesSent] = ec.frames_sent;
@@ -334,6 +505,11 @@ std::vector<uint64_t> Broker::status_counters() {
   v[kArchiveFiles] = ac.files;
   v[kAuthFailures] = counters_.auth_failures;
   v[kConfigId] = executor_.config_id();
+  v[kRejQuota] = counters_.rej(Reject::Quota);
+  v[kArchiveState] = archive_state_;
+  v[kArchiveRateBps] = rate_bps_;
+  uint64_t settled = archived + failed;
+  v[kSamplesPending] = counters_.accepted > settled ? counters_.accepted - settled : 0;
   return v;
 }
 

@@ -59,12 +59,20 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   }
   BrokerConfig cfg;
   check_keys(c, j, "", {"name", "link", "ingress", "archive", "topics", "default_buffer_size",
-                        "accept_unknown_topics", "status_period_s", "log_period_s"});
+                        "accept_unknown_topics", "status_period_s", "log_period_s", "log"});
   get(c, j, "", "name", cfg.name);
   get(c, j, "", "default_buffer_size", cfg.default_buffer_size);
   get(c, j, "", "accept_unknown_topics", cfg.accept_unknown_topics);
   get(c, j, "", "status_period_s", cfg.status_period_s);
   get(c, j, "", "log_period_s", cfg.log_period_s);
+  if (j.contains("log")) {
+    const json& lg = j["log"];
+    check_keys(c, lg, "/log", {"file", "max_bytes", "keep"});
+    get(c, lg, "/log", "file", cfg.log_file);
+    get(c, lg, "/log", "max_bytes", cfg.log_max_bytes);
+    get(c, lg, "/log", "keep", cfg.log_keep);
+    if (cfg.log_max_bytes < 4096) c.fail("/log/max_bytes", "must be at least 4096");
+  }
   if (cfg.default_buffer_size < 1) c.fail("/default_buffer_size", "must be at least 1");
   if (!j.contains("link")) c.fail("/link", "missing (the link endpoint and key are required)");
   const json& l = j["link"];
@@ -76,7 +84,14 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   if (cfg.key_ref.empty()) c.fail("/link/key", "missing: a key reference env:NAME or file:PATH");
   if (j.contains("ingress")) {
     const json& i = j["ingress"];
-    check_keys(c, i, "/ingress", {"unix_path", "host", "port"});
+    check_keys(c, i, "/ingress", {"unix_path", "host", "port", "max_future_ms", "max_past_ms",
+                                  "publisher_quota_samples", "topic_quota_samples"});
+    get(c, i, "/ingress", "max_future_ms", cfg.max_future_ms);
+    get(c, i, "/ingress", "max_past_ms", cfg.max_past_ms);
+    get(c, i, "/ingress", "publisher_quota_samples", cfg.publisher_quota_samples);
+    get(c, i, "/ingress", "topic_quota_samples", cfg.topic_quota_samples);
+    if (cfg.max_future_ms > 100ull * 365 * 86400 * 1000) c.fail("/ingress/max_future_ms", "above 100 years");
+    if (cfg.max_past_ms > 100ull * 365 * 86400 * 1000) c.fail("/ingress/max_past_ms", "above 100 years");
     get(c, i, "/ingress", "unix_path", cfg.ingress_unix);
     get(c, i, "/ingress", "host", cfg.ingress_host);
     get(c, i, "/ingress", "port", cfg.ingress_port);
@@ -85,7 +100,11 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   if (!j.contains("archive")) c.fail("/archive", "missing");
   const json& a = j["archive"];
   check_keys(c, a, "/archive", {"dir", "prefix", "rotate_bytes", "rotate_s", "fsync", "compression",
-                                "chunk_bytes", "flush_interval_ms", "queue_limit_samples", "message_index"});
+                                "chunk_bytes", "flush_interval_ms", "queue_limit_samples", "message_index",
+                                "low_space_mb", "retry_max_ms"});
+  get(c, a, "/archive", "low_space_mb", cfg.low_space_mb);
+  get(c, a, "/archive", "retry_max_ms", cfg.retry_max_ms);
+  if (cfg.retry_max_ms < 250) c.fail("/archive/retry_max_ms", "must be at least 250");
   get(c, a, "/archive", "dir", cfg.archive_dir);
   if (cfg.archive_dir.empty()) c.fail("/archive/dir", "missing");
   get(c, a, "/archive", "prefix", cfg.archive_prefix);

@@ -7,9 +7,10 @@ const char* reject_name(Reject r) {
     case Reject::UnknownTopic: return "unknown_topic";
     case Reject::WrongType: return "wrong_type";
     case Reject::NotFinite: return "not_finite";
-    case Reject::Backwards: return "backwards";
+    case Reject::Timestamp: return "timestamp";
     case Reject::Overflow: return "overflow";
     case Reject::Malformed: return "malformed";
+    case Reject::Quota: return "quota";
     case Reject::kCount: break;
   }
   return "?";
@@ -17,8 +18,9 @@ const char* reject_name(Reject r) {
 
 const char* const kStatusFieldNames[kStatusFieldCount] = {
     "uptime_s", "samples_in", "samples_archived", "rejected_unknown_topic", "rejected_wrong_type",
-    "rejected_not_finite", "rejected_backwards", "rejected_overflow", "rejected_malformed", "archive_failed",
+    "rejected_not_finite", "rejected_timestamp", "rejected_overflow", "rejected_malformed", "archive_failed",
     "ingress_malformed_frames", "publishers_connected", "frames_sent", "frames_dropped", "link_bytes_sent",
-    "disk_free_mb", "buffer_fill_pct", "archive_files", "auth_failures", "config_id"};
+    "disk_free_mb", "buffer_fill_pct", "archive_files", "auth_failures", "config_id",
+    "rejected_quota", "archive_state", "archive_rate_bps", "samples_pending"};
 
 }  // namespace modd::broker

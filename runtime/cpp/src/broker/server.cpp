@@ -23,6 +23,7 @@ namespace {
 
 constexpr size_t kReadChunk = 64 * 1024;     // per connection per wake-up: no publisher starves the others
 constexpr size_t kLinkBacklog = 64 * 1024;   // unsent link bytes above which DATA is dropped (and counted)
+constexpr size_t kIngressBacklog = 64 * 1024;  // unsent bytes to a publisher above which replies wait
 
 [[noreturn]] void sys_fail(const std::string& what) {
   throw Error(ErrorCode::Io, what + ": " + std::strerror(errno));
@@ -182,7 +183,9 @@ void Server::on_readable(Conn& c) {
       log_line("ingress: publisher '%s' sent a malformed frame, disconnected: %s", c.ingress->publisher().c_str(),
                c.ingress->last_error.c_str());
       to_close_.push_back(c.fd);
+      return;
     }
+    send_ingress_output(c);
     return;
   }
   bool was_ready = c.link->ready();
@@ -198,12 +201,23 @@ void Server::on_readable(Conn& c) {
   if (!keep) to_close_.push_back(c.fd);
 }
 
+void Server::send_ingress_output(Conn& c) {
+  auto bytes = c.ingress->take_output();
+  if (bytes.empty()) return;
+  if (c.out.size() > kIngressBacklog) return;  // a publisher that does not read: ACKs are cumulative
+  c.out.insert(c.out.end(), bytes.begin(), bytes.end());
+  flush_out(c);
+}
+
 void Server::timers(int64_t now) {
   broker_->tick(now);
   if (now >= next_flush_) {
     broker_->flush_buffers();
     next_flush_ = now + int64_t{cfg_.flush_interval_ms} * 1'000'000;
   }
+  broker_->check_archive(now);
+  for (auto& [fd, c] : conns_)
+    if (c.kind == Kind::Ingress) send_ingress_output(c);
   if (now >= next_status_) {
     uint32_t p = broker_->status_period_s();
     if (p) broker_->status_due(now);

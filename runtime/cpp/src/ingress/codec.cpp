@@ -49,6 +49,93 @@ void encode_samples(std::vector<uint8_t>& out, std::span<const Record> records,
   frame(out, MsgType::Samples, b);
 }
 
+void encode_catalogue(std::vector<uint8_t>& out, const Catalogue& c) {
+  std::vector<uint8_t> b;
+  ByteWriter w(b);
+  w.string(c.drone);
+  w.varint(c.max_future_ms);
+  w.varint(c.max_past_ms);
+  w.u8(c.accept_unknown ? 1 : 0);
+  w.varint(c.topics.size());
+  for (const auto& t : c.topics) {
+    w.u8(static_cast<uint8_t>(t.type));
+    w.string(t.name);
+  }
+  frame(out, MsgType::Catalogue, b);
+}
+
+void encode_ack(std::vector<uint8_t>& out, const Ack& a) {
+  std::vector<uint8_t> b;
+  ByteWriter w(b);
+  w.varint(a.received);
+  w.varint(a.settled);
+  w.varint(a.archived);
+  frame(out, MsgType::Ack, b);
+}
+
+void encode_reject(std::vector<uint8_t>& out, const RejectMsg& r) {
+  std::vector<uint8_t> b;
+  ByteWriter w(b);
+  w.varint(r.local_id);
+  w.u8(r.reason);
+  w.varint(r.count);
+  w.string(r.detail.size() > 255 ? r.detail.substr(0, 255) : r.detail);
+  frame(out, MsgType::Reject, b);
+}
+
+void decode_reply(const RawFrame& f, ReplyHandler& h) {
+  ByteReader r(f.body);
+  switch (static_cast<MsgType>(f.type)) {
+    case MsgType::Catalogue: {
+      Catalogue c;
+      c.drone = r.string(255);
+      c.max_future_ms = r.varint();
+      c.max_past_ms = r.varint();
+      uint8_t u = r.u8();
+      if (u > 1) r.fail("accept_unknown not 0 or 1");
+      c.accept_unknown = u == 1;
+      uint64_t n = r.varint();
+      if (n > r.remaining() / 2) r.fail("topic count " + std::to_string(n) + " exceeds frame");
+      for (uint64_t i = 0; i < n; ++i) {
+        CatalogueTopic t;
+        uint8_t ty = r.u8();
+        if (ty > 3) r.fail("unknown value type " + std::to_string(ty));
+        t.type = static_cast<ValueType>(ty);
+        t.name = r.string(255);
+        if (t.name.empty()) r.fail("empty topic name");
+        c.topics.push_back(std::move(t));
+      }
+      r.expect_end();
+      h.on_catalogue(c);
+      return;
+    }
+    case MsgType::Ack: {
+      Ack a;
+      a.received = r.varint();
+      a.settled = r.varint();
+      a.archived = r.varint();
+      if (a.settled > a.received || a.archived > a.settled) r.fail("ACK counts out of order");
+      r.expect_end();
+      h.on_ack(a);
+      return;
+    }
+    case MsgType::Reject: {
+      RejectMsg m;
+      uint64_t id = r.varint();
+      if (id > 65535) r.fail("local topic id above 65535");
+      m.local_id = static_cast<uint32_t>(id);
+      m.reason = r.u8();
+      m.count = r.varint();
+      m.detail = r.string(255);
+      r.expect_end();
+      h.on_reject(m);
+      return;
+    }
+    default: break;
+  }
+  throw Error(ErrorCode::BadFrame, "unknown ingress reply type " + std::to_string(f.type), 0);
+}
+
 void decode(const RawFrame& f, Handler& h, uint64_t* records_left) {
   ByteReader r(f.body);
   if (records_left) *records_left = 0;
@@ -56,7 +143,8 @@ void decode(const RawFrame& f, Handler& h, uint64_t* records_left) {
     case MsgType::Hello: {
       Hello m;
       m.version = r.u8();
-      if (m.version != kVersion) r.fail("unsupported ingress version " + std::to_string(m.version));
+      if (m.version < kMinVersion || m.version > kVersion)
+        r.fail("unsupported ingress version " + std::to_string(m.version));
       m.publisher = r.string(255);
       r.expect_end();
       h.on_hello(m);
@@ -105,6 +193,7 @@ void decode(const RawFrame& f, Handler& h, uint64_t* records_left) {
       r.expect_end();
       return;
     }
+    case MsgType::Catalogue: case MsgType::Ack: case MsgType::Reject: break;  // broker -> publisher only
   }
   throw Error(ErrorCode::BadFrame, "unknown ingress message type " + std::to_string(f.type), 0);
 }

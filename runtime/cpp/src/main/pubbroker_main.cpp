@@ -11,6 +11,7 @@
 #include "modd/link/auth.hpp"
 #include "modd/util/clock.hpp"
 #include "modd/util/error.hpp"
+#include "modd/util/log.hpp"
 
 namespace {
 
@@ -56,6 +57,7 @@ int main(int argc, char** argv) {
   pthread_sigmask(SIG_BLOCK, &mask, nullptr);
   try {
     modd::broker::BrokerConfig cfg = modd::broker::load_config(config_path);
+    if (!cfg.log_file.empty()) modd::log_to_file(cfg.log_file, cfg.log_max_bytes, cfg.log_keep);
     std::string key = modd::link::resolve_key(cfg.key_ref);
     modd::SystemClock clock;
     modd::broker::Server server(cfg, key, clock);

@@ -37,6 +37,8 @@ struct ArchiverOptions {
   uint64_t rotate_bytes = 256ull << 20;
   uint64_t rotate_s = 3600;
   WriterOptions writer;
+  uint32_t retry_first_ms = 250;   // after a write error: retry after this, doubling,
+  uint32_t retry_max_ms = 2000;    // up to this
 };
 
 struct ArchiveCounters {
@@ -45,6 +47,9 @@ struct ArchiveCounters {
   std::atomic<uint64_t> files{0};
   std::atomic<uint64_t> bytes{0};         // bytes of closed files + current file
   std::atomic<uint64_t> queued{0};        // samples waiting for the writer
+  std::atomic<uint64_t> durable_flush{0}; // id of the last flush() whose samples are all in the file
+  std::atomic<bool> disk_full{false};     // a write failed; the writer holds the queue and retries
+  std::atomic<uint64_t> state_changes{0}; // +1 at each disk_full change (the broker sends STATUS at once)
 };
 
 class Archiver {
@@ -55,8 +60,12 @@ class Archiver {
   Archiver& operator=(const Archiver&) = delete;
 
   void submit(std::shared_ptr<const TopicInfo> topic, std::vector<Sample>&& samples);
-  void flush();        // the writer closes its open chunk once the queue before it is written
-  void stop();         // writes everything queued, closes the file, joins
+  // The writer closes its open chunk (fsync with FsyncPolicy::Chunk) once the queue before
+  // it is written, then sets counters().durable_flush to `id` (ids must increase).
+  void flush(uint64_t id = 0);
+  // Writes everything queued, closes the file, joins. With the disk still full it tries once
+  // more, then counts what it holds as failed and leaves the file for recovery at next start.
+  void stop();
   // Recycled vectors for the next front buffers (may return an empty one).
   std::vector<Sample> take_spare();
   const ArchiveCounters& counters() const { return counters_; }
@@ -68,11 +77,17 @@ class Archiver {
     std::shared_ptr<const TopicInfo> topic;
     std::vector<Sample> samples;
     bool flush = false;
+    uint64_t flush_id = 0;
+    size_t done = 0;  // samples already handed to the writer (an item resumes after a write error)
   };
   void run();
-  void write_item(Item& item);
+  bool write_item(Item& item);  // false: a write failed (disk full), the item stays at the front
   void open_file();
   void close_file();
+  void count_flushed();
+  void set_disk_full(bool full, const std::string& why);
+  bool retry();                 // resumes the interrupted write; true when it went through
+  void give_up();               // at stop with the disk still full
 
   ArchiverOptions opt_;
   ArchiveCounters counters_;
@@ -91,6 +106,8 @@ class Archiver {
   std::vector<std::shared_ptr<const TopicInfo>> keep_;  // keeps channel keys alive
   std::string current_file_, last_error_;
   uint64_t file_counter_ = 0;
+  uint64_t seen_flushed_ = 0;  // writer_->flushed_messages() already counted in archived
+  uint32_t backoff_ms_ = 0;
 };
 
 // The JSON message for one sample: {"value":V,"publish_time_ns":T}.

@@ -44,12 +44,22 @@ class McapWriter {
                        const std::map<std::string, std::string>& metadata = {});
   void add_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time, uint64_t publish_time,
                    std::span<const uint8_t> data);
-  void flush_chunk();  // writes the open chunk (if any) and its message indexes
+  // The same without closing a full chunk: the caller calls flush_chunk() when chunk_full().
+  void append_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time, uint64_t publish_time,
+                      std::span<const uint8_t> data);
+  bool chunk_full() const { return chunk_.size() >= opt_.chunk_bytes; }
+  // Writes the open chunk (if any) and its message indexes. On a write error (Error(Io),
+  // e.g. disk full) nothing is lost: what was not written stays pending, and a later
+  // flush_chunk() or close() writes it from where the file ends.
+  void flush_chunk();
   void sync();         // fsync of what was written
-  void close();        // flush, summary, footer, magic; idempotent
+  void close();        // flush, summary, footer, magic; idempotent; resumable after a write error
+  void abandon();      // closes the descriptor as the file is (left for recovery at next start)
   uint64_t file_bytes() const { return offset_ + pending_.size(); }
   uint64_t message_count() const { return message_count_; }
-  uint64_t flushed_messages() const { return flushed_messages_; }  // in written chunks
+  uint64_t flushed_messages() const { return flushed_messages_; }  // in chunks written to the file
+  uint64_t pending_bytes() const { return pending_.size(); }
+  bool closing() const { return closed_ && fd_ >= 0; }  // a close() to resume
   size_t open_chunk_bytes() const { return chunk_.size(); }
   const std::string& path() const { return path_; }
 
@@ -63,6 +73,7 @@ class McapWriter {
   };
   void emit(std::span<const uint8_t> b);  // appends to the file, updating offset and CRC
   void write_out();                        // pending_ -> fd
+  void finish_close();
   std::vector<uint8_t> schema_record(const SchemaRec& s) const;
   std::vector<uint8_t> channel_record(const ChannelRec& c) const;
 
@@ -77,7 +88,7 @@ class McapWriter {
   std::vector<ChannelRec> channels_;
   std::vector<ChunkIndexRec> chunk_indexes_;
   std::map<uint16_t, uint64_t> channel_counts_;
-  uint64_t flushed_messages_ = 0;
+  uint64_t flushed_messages_ = 0, staged_messages_ = 0;
   uint64_t message_count_ = 0, first_time_ = UINT64_MAX, last_time_ = 0;
   // open chunk
   std::vector<uint8_t> chunk_;

@@ -3,6 +3,8 @@
 // link hooks. The server (server.hpp) moves bytes between sockets and this.
 #pragma once
 #include <cstdint>
+#include <deque>
+#include <map>
 #include <memory>
 #include <string>
 #include <unordered_map>
@@ -29,11 +31,16 @@ class LinkOutput {
 
 class Broker;
 
-// One publisher connection's registrations, and the decoder's handler.
+// One publisher connection's registrations, the decoder's handler, and (ingress version 2)
+// what the broker tells the publisher: the topic catalogue, acknowledgements per archive
+// flush and rejections (docs/ingress.md).
 class IngressSession final : public ingress::Handler {
  public:
-  explicit IngressSession(Broker& b) : broker_(b) {}
-  void on_hello(const ingress::Hello& h) override { publisher_ = h.publisher; }
+  explicit IngressSession(Broker& b);
+  ~IngressSession() override;
+  IngressSession(const IngressSession&) = delete;
+  IngressSession& operator=(const IngressSession&) = delete;
+  void on_hello(const ingress::Hello& h) override;
   void on_register(const ingress::Register& r) override;
   bool type_of(uint32_t local_id, link::ValueType& out) const override;
   void on_record(const ingress::Record& r) override;
@@ -45,6 +52,17 @@ class IngressSession final : public ingress::Handler {
   const std::string& publisher() const { return publisher_; }
   std::string last_error;
 
+  // Bytes for the publisher (empty for a version-1 publisher); the server sends them.
+  std::vector<uint8_t> take_output() { return std::move(out_); }
+  // An archive flush was queued (id): records received so far become settled when it is done.
+  void checkpoint(uint64_t flush_id);
+  // Flushes up to `durable` are on disk: ACK what became settled, REJECT what was refused.
+  void report(uint64_t durable);
+  void send_catalogue_if_changed();
+  uint64_t outstanding() const { return accepted_ - archived_; }  // accepted, not yet known on disk
+  uint64_t accepted() const { return accepted_; }
+  uint64_t rejected() const { return received_ - accepted_; }
+
  private:
   struct Local {
     bool used = false;
@@ -54,11 +72,19 @@ class IngressSession final : public ingress::Handler {
     std::string topic;
     uint64_t generation = 0;
   };
+  struct Checkpoint { uint64_t flush_id, received, accepted; };
+  struct Refused { uint64_t count = 0; std::string detail; };
   Broker& broker_;
   std::string publisher_;
+  uint8_t version_ = 0;
   std::vector<Local> locals_;
-  std::vector<uint8_t> inbuf_;
+  std::vector<uint8_t> inbuf_, out_;
   int64_t stamp_ = 0;
+  uint64_t received_ = 0, accepted_ = 0, settled_ = 0, archived_ = 0;
+  uint64_t acked_received_ = UINT64_MAX, acked_settled_ = 0;
+  std::deque<Checkpoint> checkpoints_;
+  std::map<std::pair<uint32_t, uint8_t>, Refused> refused_;
+  uint64_t catalogue_generation_ = 0;
 };
 
 class Broker final : public LinkHooks, public FrameSink {
@@ -68,8 +94,17 @@ class Broker final : public LinkHooks, public FrameSink {
 
   // Stamps a batch: advances the schedule to the stamp first (window rule).
   int64_t stamp_now();
-  // One validated record. Rejections are counted by reason.
-  void ingest(int64_t global, Reject why, link::ValueType declared, int64_t stamp, const ingress::Record& r);
+  // One record, validated and counted: Reject::kCount when accepted, else the reason.
+  // `who` (may be null) is charged for the fair share of the archive queue.
+  Reject ingest(int64_t global, Reject why, link::ValueType declared, int64_t stamp, const ingress::Record& r,
+                const IngressSession* who = nullptr);
+  // Words for a refusal, sent to the publisher (REJECT detail).
+  std::string describe(Reject why, const std::string& topic, int64_t stamp, const ingress::Record& r) const;
+  ingress::Catalogue catalogue() const;
+  void attach(IngressSession* s) { sessions_.push_back(s); }
+  void detach(IngressSession* s) { std::erase(sessions_, s); }
+  // Timers: archive state (disk full, low space) and acknowledgements to publishers.
+  void check_archive(int64_t now);
   int64_t find_topic(const std::string& name, link::ValueType declared, Reject& why);
   // Timers.
   void tick(int64_t now);      // fires due slots (no sample arrived)
@@ -104,10 +139,12 @@ class Broker final : public LinkHooks, public FrameSink {
     bool known = false;
     uint32_t capacity = 1;
     std::vector<archive::Sample> front;
-    int64_t last_publish_ns = INT64_MIN;
+    uint64_t accepted = 0, durable_accepted = 0;  // fair share per topic
+    std::deque<std::pair<uint64_t, uint64_t>> checkpoints;  // (flush id, accepted)
   };
   uint32_t add_topic(const std::string& name, link::ValueType type, uint32_t capacity, bool known);
   void swap_out(Topic& t);
+  void send_status_now();
 
   BrokerConfig cfg_;
   std::string key_;
@@ -127,6 +164,12 @@ class Broker final : public LinkHooks, public FrameSink {
   int64_t status_due_since_ = 0;
   uint32_t status_period_s_ = 0;
   std::vector<uint8_t> status_frame_;
+  std::vector<IngressSession*> sessions_;
+  uint64_t flush_id_ = 0, durable_seen_ = 0, archive_state_changes_ = 0;
+  uint8_t archive_state_ = 0;   // ArchiveStateCode
+  bool low_space_ = false;
+  int64_t next_space_check_ = 0, rate_since_ = 0;
+  uint64_t rate_bytes_ = 0, rate_bps_ = 0;
 };
 
 }  // namespace modd::broker

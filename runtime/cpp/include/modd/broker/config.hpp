@@ -27,6 +27,16 @@ struct BrokerConfig {
   std::string ingress_unix;  // empty: no Unix socket
   std::string ingress_host = "127.0.0.1";
   uint16_t ingress_port = 0;  // 0: no TCP ingress
+  // A sample's timestamp is judged against the broker's clock: refused (rejected_timestamp,
+  // and the publisher told why) only beyond these bounds. 0: no bound on that side.
+  uint64_t max_future_ms = 10'000;
+  uint64_t max_past_ms = 3'600'000;
+  // Fair share of the archive queue, applied once the queue holds half its limit: a
+  // publisher (or topic) with more samples not yet on disk than its share is refused
+  // (rejected_quota). 0: queue_limit_samples / 2 shared by the connected publishers
+  // (topics: queue_limit_samples / 4).
+  uint64_t publisher_quota_samples = 0;
+  uint64_t topic_quota_samples = 0;
   // archive
   std::string archive_dir;
   std::string archive_prefix = "modd";
@@ -38,6 +48,8 @@ struct BrokerConfig {
   bool message_index = false;
   uint32_t flush_interval_ms = 1000;
   uint64_t queue_limit_samples = 1'000'000;
+  uint64_t low_space_mb = 256;       // free space under which the operator is warned (STATUS + log)
+  uint32_t retry_max_ms = 2000;      // write retry backoff (from 250 ms, doubling) while the disk is full
   // topics
   std::vector<TopicDefault> topics;
   uint32_t default_buffer_size = 25;
@@ -45,6 +57,10 @@ struct BrokerConfig {
   // reporting
   uint32_t status_period_s = 30;  // until a CONFIG sets it
   uint32_t log_period_s = 10;
+  // The broker's own log: stderr when empty, else this file rotated by size.
+  std::string log_file;
+  uint64_t log_max_bytes = 4ull << 20;
+  uint32_t log_keep = 3;
 };
 
 // Throws modd::Error(BadConfig) "FILE: /json/pointer: what".

@@ -6,7 +6,9 @@
 
 namespace modd::broker {
 
-enum class Reject : uint8_t { UnknownTopic, WrongType, NotFinite, Backwards, Overflow, Malformed, kCount };
+// Why a record was refused. The numbers are also the REJECT reason codes of the ingress
+// protocol (docs/ingress.md); keep them stable.
+enum class Reject : uint8_t { UnknownTopic, WrongType, NotFinite, Timestamp, Overflow, Malformed, Quota, kCount };
 const char* reject_name(Reject r);
 
 struct Counters {
@@ -27,13 +29,17 @@ struct Counters {
   }
 };
 
-// The STATUS counter list, version 1 (index = position on the wire).
+// The STATUS counter list (index = position on the wire; fields are only ever appended).
 enum StatusField : uint8_t {
-  kUptimeS, kSamplesIn, kSamplesArchived, kRejUnknownTopic, kRejWrongType, kRejNotFinite, kRejBackwards,
+  kUptimeS, kSamplesIn, kSamplesArchived, kRejUnknownTopic, kRejWrongType, kRejNotFinite, kRejTimestamp,
   kRejOverflow, kRejMalformed, kArchiveFailed, kIngressMalformedFrames, kPublishersConnected, kFramesSent,
   kFramesDropped, kLinkBytesSent, kDiskFreeMb, kBufferFillPct, kArchiveFiles, kAuthFailures, kConfigId,
+  kRejQuota, kArchiveState, kArchiveRateBps, kSamplesPending,
   kStatusFieldCount
 };
+
+// STATUS archive_state values.
+enum ArchiveStateCode : uint8_t { kArchiveOk = 0, kArchiveLowSpace = 1, kArchiveDiskFull = 2 };
 extern const char* const kStatusFieldNames[kStatusFieldCount];
 
 }  // namespace modd::broker

@@ -39,6 +39,7 @@ class Server final : public LinkOutput {
   void accept_on(Conn& listener);
   void on_readable(Conn& c);
   void flush_out(Conn& c);
+  void send_ingress_output(Conn& c);
   void close_conn(int fd);
   void timers(int64_t now);
   int timeout_ms(int64_t now) const;

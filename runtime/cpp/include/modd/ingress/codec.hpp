@@ -10,11 +10,29 @@
 
 namespace modd::ingress {
 
+using link::RawFrame;
+using link::split_frame;
+
 void encode_hello(std::vector<uint8_t>& out, const Hello& h);
 void encode_register(std::vector<uint8_t>& out, const Register& r);
 // Records must use local ids whose types are given by type_of.
 void encode_samples(std::vector<uint8_t>& out, std::span<const Record> records,
                     const std::function<ValueType(uint32_t)>& type_of);
+
+void encode_catalogue(std::vector<uint8_t>& out, const Catalogue& c);
+void encode_ack(std::vector<uint8_t>& out, const Ack& a);
+void encode_reject(std::vector<uint8_t>& out, const RejectMsg& r);
+
+// The broker's answers, as a client decodes them.
+class ReplyHandler {
+ public:
+  virtual ~ReplyHandler() = default;
+  virtual void on_catalogue(const Catalogue& c) = 0;
+  virtual void on_ack(const Ack& a) = 0;
+  virtual void on_reject(const RejectMsg& r) = 0;
+};
+// Throws Error(BadFrame) with the offset.
+void decode_reply(const RawFrame& f, ReplyHandler& h);
 
 // Receives what a decoded frame carries.
 class Handler {
@@ -27,8 +45,6 @@ class Handler {
   virtual void on_record(const Record& r) = 0;
 };
 
-using link::RawFrame;
-using link::split_frame;
 
 // Decodes one frame and calls the handler. Throws Error(BadFrame) with the
 // offset; records decoded before the error have been delivered already, and

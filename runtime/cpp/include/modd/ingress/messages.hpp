@@ -11,12 +11,37 @@
 namespace modd::ingress {
 
 using link::ValueType;
-inline constexpr uint8_t kVersion = 1;
+// Version 2 adds the broker's answers (CATALOGUE, ACK, REJECT); a version-1 publisher
+// gets none of them (the broker never writes to it).
+inline constexpr uint8_t kVersion = 2;
+inline constexpr uint8_t kMinVersion = 1;
 inline constexpr size_t kMaxFrame = 1 << 20;
 
-enum class MsgType : uint8_t { Hello = 0x01, Register = 0x02, Samples = 0x03 };
+enum class MsgType : uint8_t {
+  Hello = 0x01, Register = 0x02, Samples = 0x03,                // publisher -> broker
+  Catalogue = 0x81, Ack = 0x82, Reject = 0x83,                  // broker -> publisher (version 2)
+};
 
 struct Hello { uint8_t version = kVersion; std::string publisher; };
+
+// The drone's topics and the timestamp bounds, so that a client refuses at the call what
+// the broker would refuse. Sent after HELLO and again whenever the topics change.
+struct CatalogueTopic { std::string name; ValueType type = ValueType::Float32; };
+struct Catalogue {
+  std::string drone;
+  uint64_t max_future_ms = 0, max_past_ms = 0;  // 0: no bound
+  bool accept_unknown = false;
+  std::vector<CatalogueTopic> topics;
+};
+
+// Cumulative counts of this connection's records, sent after each archive flush:
+// `received` records decoded; every record before `settled` is either refused (and told in a
+// REJECT) or in the archive file (fsynced with fsync "chunk"); `archived` of them are on disk.
+struct Ack { uint64_t received = 0, settled = 0, archived = 0; };
+
+// `count` records of `local_id` refused for `reason` (the broker's Reject code) since the
+// previous REJECT for them; `detail` says why in words (the first case of the batch).
+struct RejectMsg { uint32_t local_id = 0; uint8_t reason = 0; uint64_t count = 0; std::string detail; };
 struct Register { uint32_t local_id = 0; ValueType type = ValueType::Float32; std::string topic; };
 
 // One record of a SAMPLES batch. Ints and bools travel in `integer`.

@@ -180,10 +180,11 @@ class ConfigAck:
 
 STATUS_FIELDS: tuple[str, ...] = (
     "uptime_s", "samples_in", "samples_archived", "rejected_unknown_topic", "rejected_wrong_type",
-    "rejected_not_finite", "rejected_backwards", "rejected_overflow", "rejected_malformed",
+    "rejected_not_finite", "rejected_timestamp", "rejected_overflow", "rejected_malformed",
     "archive_failed", "ingress_malformed_frames", "publishers_connected", "frames_sent",
     "frames_dropped", "link_bytes_sent", "disk_free_mb", "buffer_fill_pct", "archive_files",
-    "auth_failures", "config_id",
+    "auth_failures", "config_id", "rejected_quota", "archive_state", "archive_rate_bps",
+    "samples_pending",
 )
 
 

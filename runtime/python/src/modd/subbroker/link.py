@@ -6,9 +6,9 @@ proves the pre-shared key, measures the RTT with PING, has the SubBroker
 plan (:meth:`LinkHandler.on_connect`) and sends CONFIG, then reads frames:
 DATA goes through the codec's :class:`~modd.link.receiver.Receiver` to the
 handler as windows; CONFIG_ACK, PONG, STATUS and ERROR are handled here.
-When the link drops or falls silent it reconnects with exponential backoff
-and re-establishes the running config (resumes it when the PubBroker's
-AUTH_OK still reports it, else sends it again).
+When the link drops or falls silent it reconnects: at once the first time
+after a link that was up, then with exponential backoff; it re-establishes
+the running config (resumes it when the PubBroker's AUTH_OK still reports it, else sends it again).
 
 Silence: after half the liveness timeout without a frame it sends one PING;
 after the whole timeout it drops the connection. Nothing else is sent while
@@ -168,9 +168,9 @@ class LinkClient:
     def _run(self) -> None:
         backoff = self._opt.backoff_initial_s
         while not self._stop.is_set():
+            connects, began = self.stats.connects, time.monotonic()
             try:
                 self._session()
-                backoff = self._opt.backoff_initial_s
             except (OSError, ProtocolError, LinkDown) as exc:
                 self.stats.last_error = str(exc)
                 if not self._stop.is_set():
@@ -180,9 +180,14 @@ class LinkClient:
                 log.exception("link to %s: internal error", self._where())
             finally:
                 self._drop("link down")
+            lasted = time.monotonic() - began
+            if self.stats.connects != connects and lasted >= self._opt.backoff_max_s:
+                # The link was up for a while (a flapping radio, not a peer that fails at once):
+                # the first retry goes at once, the next ones back off.
+                backoff = 0.0
             if self._stop.wait(backoff):
                 break
-            backoff = min(backoff * 2, self._opt.backoff_max_s)
+            backoff = min(max(backoff * 2, self._opt.backoff_initial_s), self._opt.backoff_max_s)
         self.stats.state = "stopped"
 
     def _session(self) -> None:

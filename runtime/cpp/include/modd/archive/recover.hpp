@@ -1,0 +1,31 @@
+// Recovery of MCAP files left unfinished by a crash (kill -9, power cut, a stop with the disk
+// full): every complete chunk whose CRC holds is kept, the torn tail is dropped, and the file
+// is rewritten with its Data End, summary and footer so that every reader opens it. The new
+// file is written beside the old one, fsynced, then renamed over it: a crash during recovery
+// leaves the original in place.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "modd/archive/mcap_writer.hpp"
+
+namespace modd::archive {
+
+struct Recovered {
+  std::string path;
+  uint64_t messages = 0;       // kept
+  uint64_t chunks = 0;         // kept
+  uint64_t dropped_bytes = 0;  // torn tail (a chunk cut short or with a bad CRC, and what follows)
+  bool removed = false;        // empty file (nothing but a partial magic/header): removed
+};
+
+// True if the file ends with the MCAP magic (it was closed).
+bool mcap_complete(const std::string& path);
+// Recovers one file in place. Throws Error(Io) if it cannot be read or rewritten.
+Recovered recover_mcap(const std::string& path, const WriterOptions& options);
+// Recovers every `<prefix>*.mcap` file of `dir` that is not complete (and removes stale
+// `.recovering` files of an interrupted recovery). Errors are logged, not thrown.
+std::vector<Recovered> recover_dir(const std::string& dir, const std::string& prefix, const WriterOptions& options);
+
+}  // namespace modd::archive

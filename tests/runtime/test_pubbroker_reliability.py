@@ -1,0 +1,282 @@
+"""The PubBroker under bad clocks, floods, a full disk and a crash (issue 23, docs/reliability.md),
+with the real binary and the archive read back by the official `mcap` reader as the oracle."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+from modd.ingress import Ack, Reject, decode_reply
+from modd.link import codec
+from modd.link.frames import ValueType
+from modd.publisher import connect, encode_hello, encode_register, encode_samples
+from pubbroker_harness import (
+    BIN,
+    BaseStation,
+    PubBroker,
+    f32,
+    hand_config_scenario1,
+    read_archive,
+    run_load,
+)
+
+X, Y, Z = (f"usv.accelerometer.accel_{a}" for a in "xyz")
+
+
+def final_counters(log: str) -> dict[str, int]:
+    """The counters of the broker's last line ("stopped: name=value ...")."""
+    line = [ln for ln in log.splitlines() if "stopped:" in ln][-1]
+    return {k: int(v) for k, v in re.findall(r"(\w+)=(\d+)", line)}
+
+
+def assert_reconciled(c: dict[str, int]) -> None:
+    rejected = sum(v for k, v in c.items() if k.startswith("rejected_"))
+    assert c["samples_in"] == c["samples_archived"] + c["archive_failed"] + rejected, c
+    assert c["samples_pending"] == 0
+
+
+def count_messages(directory: Path, topic: str) -> int:
+    """Messages of one topic, by the official reader through the message indexes (the flood's
+    million messages are not parsed)."""
+    from mcap.reader import make_reader
+
+    n = 0
+    for path in sorted(directory.glob("*.mcap")):
+        with open(path, "rb") as f:
+            n += sum(1 for _ in make_reader(f).iter_messages(topics=[topic]))
+    return n
+
+
+def replies(s: socket.socket, until: float, done: Any) -> list[Any]:
+    """Broker -> publisher frames until done(list) or the deadline."""
+    sp = codec.FrameSplitter()
+    out: list[Any] = []
+    s.settimeout(0.1)
+    deadline = time.monotonic() + until
+    while time.monotonic() < deadline and not done(out):
+        try:
+            data = s.recv(65536)
+        except TimeoutError:
+            continue
+        if not data:
+            break
+        out += [decode_reply(f.type, f.body) for f in sp.feed(data)]
+    return out
+
+
+def test_a_far_future_sample_blocks_nothing_and_its_publisher_is_told(broker_factory: Any) -> None:
+    b = broker_factory()
+    s = connect(f"unix:{b.unix_path}")
+    now = time.time_ns()
+    bad = 4_354_000_000_000_000_000  # year 2107: microseconds taken for nanoseconds and the like
+    records = [(0, bad, 1.0)] + [(0, now + i * 1_000_000, f32(0.5 * i)) for i in range(20)]
+    s.sendall(encode_hello("liar") + encode_register(0, ValueType.FLOAT32, X)
+              + encode_samples(records, [ValueType.FLOAT32]))
+    got = replies(s, 5.0, lambda r: any(isinstance(x, Ack) and x.settled == 21 for x in r))
+    s.close()
+    rejects = [r for r in got if isinstance(r, Reject)]
+    assert len(rejects) == 1 and rejects[0].count == 1
+    assert rejects[0].reason_text == "timestamp out of bounds"
+    assert "ahead of the broker clock" in rejects[0].detail
+    ack = [r for r in got if isinstance(r, Ack)][-1]
+    assert (ack.received, ack.settled, ack.archived) == (21, 21, 20)
+    # The same topic from another publisher right after: nothing blocked.
+    later = run_load(f"unix:{b.unix_path}", [X], 50.0, 0.5)
+    assert b.stop() == 0
+    archived = [a.value for a in read_archive(b.archive_dir)[X]]
+    assert archived[:20] == [f32(0.5 * i) for i in range(20)]
+    assert len(archived) == 20 + later.published
+    c = final_counters(b.log())
+    assert c["rejected_timestamp"] == 1
+    assert_reconciled(c)
+
+
+def test_a_flooding_publisher_loses_only_its_own_samples(broker_factory: Any) -> None:
+    flood_topic = "usv.flood.value"
+    b = broker_factory(topics=[(X, "float32"), (Y, "float32"), (Z, "float32"),
+                               (flood_topic, "float32")],
+                       archive={"queue_limit_samples": 40_000, "message_index": True})
+    stop = threading.Event()
+    sent = [0]
+
+    def flood() -> None:
+        s = connect(f"unix:{b.unix_path}")
+        now = time.time_ns()
+        batch = encode_samples([(0, now, 1.0)] * 20_000, [ValueType.FLOAT32])
+        s.sendall(encode_hello("flooder") + encode_register(0, ValueType.FLOAT32, flood_topic))
+        while not stop.is_set():
+            s.sendall(batch)
+            sent[0] += 20_000
+        s.close()
+
+    flooder = threading.Thread(target=flood)
+    flooder.start()
+    time.sleep(0.3)
+    results: list[Any] = [None, None]
+
+    def calm(i: int, topics: list[str]) -> None:
+        results[i] = run_load(f"unix:{b.unix_path}", topics, 200.0, 2.0)
+
+    calms = [threading.Thread(target=calm, args=(0, [X, Y])),
+             threading.Thread(target=calm, args=(1, [Z]))]
+    for t in calms:
+        t.start()
+    for t in calms:
+        t.join()
+    stop.set()
+    flooder.join()
+    assert b.stop() == 0
+    c = final_counters(b.log())
+    assert_reconciled(c)
+    assert c["rejected_quota"] > 0, c  # the flood was refused ...
+    for r in results:  # ... and nothing of the others was
+        for topic, n in r.per_topic.items():
+            got = count_messages(b.archive_dir, topic)
+            assert got == n, (topic, n, got)
+    assert c["rejected_overflow"] == 0
+
+
+def test_a_file_left_open_by_a_crash_is_recovered_at_start(broker_factory: Any) -> None:
+    from mcap.reader import make_reader
+
+    b = broker_factory()
+    run_load(f"unix:{b.unix_path}", [X, Y], 100.0, 1.0)
+    time.sleep(0.5)  # flushed (every 200 ms) and acknowledged
+    b.stop(signal.SIGKILL)
+    files = sorted(b.archive_dir.glob("*.mcap"))
+    assert len(files) == 1
+    assert not files[0].read_bytes().endswith(b"\x89MCAP0\r\n")  # no footer: a crashed file
+    b2 = broker_factory(archive={"dir": str(b.archive_dir)})
+    assert "left open by a crash" in b2.log()
+    with open(files[0], "rb") as f:  # the official reader opens it with its summary
+        summary = make_reader(f).get_summary()
+        assert summary is not None and summary.statistics is not None
+        assert summary.statistics.message_count >= 150
+    assert b2.stop() == 0
+    assert len(read_archive(b.archive_dir)[X]) >= 75
+
+
+class NamespacedBroker(PubBroker):
+    """The broker in a private mount namespace whose archive directory is a small tmpfs
+    (`unshare -rm`: no privileges needed, nothing mounted outside the test); the files are
+    copied out when it stops, and the test fills the tmpfs through /proc/PID/root."""
+
+    def __init__(self, tmp: Path, size_kib: int, **overrides: Any) -> None:
+        super().__init__(tmp, [(X, "float32"), (Y, "float32"), (Z, "float32")], **overrides)
+        self.size_kib = size_kib
+        self.copied = tmp / "copied"
+        self.pid = 0
+
+    def start(self) -> NamespacedBroker:
+        self.archive_dir.mkdir(parents=True, exist_ok=True)
+        self.copied.mkdir()
+        pidfile = self.tmp / "pid"
+        script = (f"mount -t tmpfs -o size={self.size_kib}k tmpfs '{self.archive_dir}' || exit 97\n"
+                  f"'{BIN}' --config '{self.config_path}' & echo $! > '{pidfile}'\n"
+                  f"wait $!; rc=$?; cp -a '{self.archive_dir}/.' '{self.copied}/'; exit $rc\n")
+        self._log = open(self.log_path, "wb")  # noqa: SIM115 (closed in stop)
+        self.proc = subprocess.Popen(["unshare", "-rm", "sh", "-c", script],
+                                     stdout=self._log, stderr=subprocess.STDOUT)
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            if self.proc.poll() is not None:
+                raise RuntimeError(f"namespaced broker exited: {self.log()}")
+            if pidfile.exists() and pidfile.read_text().strip() and os.path.exists(self.unix_path):
+                self.pid = int(pidfile.read_text())
+                return self
+            time.sleep(0.02)
+        raise RuntimeError("namespaced broker did not start")
+
+    def inside(self, name: str) -> Path:
+        return Path(f"/proc/{self.pid}/root") / str(self.archive_dir).lstrip("/") / name
+
+    def stop(self, sig: int = signal.SIGTERM, timeout: float = 20.0) -> int:
+        if self.proc is None:
+            return 0
+        try:
+            if self.proc.poll() is None:
+                os.kill(self.pid, sig)
+                self.proc.wait(timeout)
+            return int(self.proc.returncode)
+        finally:
+            self._log.close()
+
+
+def unshare_works() -> bool:
+    if shutil.which("unshare") is None:
+        return False
+    return subprocess.run(["unshare", "-rm", "sh", "-c", "mount -t tmpfs -o size=64k tmpfs /mnt"],
+                          capture_output=True).returncode == 0
+
+
+@pytest.mark.skipif(not unshare_works(), reason="no unprivileged mount namespace (unshare -rm)")
+def test_disk_full_then_space_back(tmp_path: Path) -> None:
+    full_s = float(os.environ.get("MODD_DISK_FULL_S", "5"))
+    b = NamespacedBroker(tmp_path, 2048, archive={"low_space_mb": 1, "flush_interval_ms": 200})
+    b.start()
+    try:
+        base = BaseStation(b.link_port)
+        base.configure(hand_config_scenario1(status_period_s=60))  # STATUS once a minute at most
+        base.start()
+        stop = threading.Event()
+        result: list[Any] = []
+        load = threading.Thread(target=lambda: result.append(
+            run_load(f"unix:{b.unix_path}", [X, Y, Z], 100.0, full_s + 8.0, stop=stop)))
+        load.start()
+        time.sleep(1.5)
+        filler = b.inside("filler")
+        with open(filler, "wb") as f:  # fill the tmpfs to the last byte
+            try:
+                while True:
+                    f.write(b"\0" * 65536)
+                    f.flush()
+            except OSError:
+                pass
+        t_full = time.monotonic()
+        told = None
+        while time.monotonic() - t_full < 5:
+            st = base.snapshot().statuses
+            if st and st[-1].get("archive_state") == 2:
+                told = time.monotonic() - t_full
+                break
+            time.sleep(0.02)
+        time.sleep(max(0.0, full_s - (time.monotonic() - t_full)))
+        filler.unlink()
+        t_back = time.monotonic()
+        back = None
+        while time.monotonic() - t_back < 10:
+            st = base.snapshot().statuses
+            if st and st[-1].get("archive_state") == 0:
+                back = time.monotonic() - t_back
+                break
+            time.sleep(0.02)
+        load.join()
+        base.close()
+        assert b.stop() == 0
+    finally:
+        if b.alive():
+            b.stop(signal.SIGKILL)
+    print(f"disk full {full_s:.0f} s: operator told after {told} s, writing again after {back} s")
+    assert told is not None and told <= 2.0, b.log()
+    assert back is not None
+    log = b.log()
+    assert log.count("archive: write failed") == 1  # one line per state change
+    assert log.count("archive: writing again") == 1
+    files = sorted(b.copied.glob("*.mcap"))
+    assert 1 <= len(files) <= 2  # at most one new file
+    archive = read_archive(b.copied)  # every file read completely by the official reader
+    published = result[0].per_topic
+    for t in (X, Y, Z):
+        assert len(archive[t]) == published[t]  # nothing accepted was lost
+    c = final_counters(log)
+    assert_reconciled(c)
+    assert c["archive_failed"] == 0
