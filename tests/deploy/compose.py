@@ -195,11 +195,13 @@ class Loopback:
         return self.ports[container_port]
 
     def path(self, container_path: str, workdir: str) -> Path:
-        """The image's WORKDIR is the repository; other absolute paths live under tmp."""
+        """The image's WORKDIR is the repository; other absolute paths live under tmp
+        (an image without a WORKDIR of its own, such as zenohd's "/", maps nothing
+        into the repository: the test never writes into the work tree)."""
         p = Path(container_path)
         if not p.is_absolute():
             return REPO / p
-        if p == Path(workdir) or Path(workdir) in p.parents:
+        if Path(workdir) != Path("/") and (p == Path(workdir) or Path(workdir) in p.parents):
             return REPO / p.relative_to(workdir)
         return self.tmp / "root" / p.relative_to("/")
 

@@ -88,17 +88,29 @@ def test_closed_files_with_message_indexes_read_the_same_indexed(tmp_path: Path)
     assert dict(total) == published
 
 
-@pytest.mark.xfail(strict=True, reason="@mcap/core's indexed reader (the one Foxglove and "
-                   "Lichtblick use for files) refuses chunk indexes without message indexes, "
-                   "the PubBroker's default (archive.message_index false): docs/ecosystem.md")
 def test_default_files_open_in_the_indexed_typescript_reader(tmp_path: Path) -> None:
-    files, _ = closed_archive(tmp_path)
+    """@mcap/core's indexed reader (the one Foxglove and Lichtblick open files with)
+    refuses chunk indexes without message indexes: the default writes them."""
+    files, published = closed_archive(tmp_path)
+    ts = node_json("mcap_count.cjs", *map(str, files))
+    total: Counter[str] = Counter()
+    for f in files:
+        assert ts[str(f)]["error"] is None, f.name
+        assert ts[str(f)]["counts"] == python_counts(f)
+        total.update(ts[str(f)]["counts"])
+    assert dict(total) == published
+
+
+def test_files_without_message_indexes_are_refused_by_the_indexed_reader(
+        tmp_path: Path) -> None:
+    """Why the default is on: the same files without message indexes."""
+    files, _ = closed_archive(tmp_path, message_index=False)
     ts = node_json("mcap_count.cjs", str(files[0]))
-    assert ts[str(files[0])]["error"] is None
+    assert "chunk index without message indexes" in str(ts[str(files[0])]["error"])
 
 
-def test_recover_makes_default_files_open_in_the_indexed_reader(tmp_path: Path) -> None:
-    files, _ = closed_archive(tmp_path)
+def test_recover_makes_unindexed_files_open_in_the_indexed_reader(tmp_path: Path) -> None:
+    files, _ = closed_archive(tmp_path, message_index=False)
     out = tmp_path / "indexed.mcap"
     recover(files[0], out)
     ts = node_json("mcap_count.cjs", str(out))

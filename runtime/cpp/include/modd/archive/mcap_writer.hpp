@@ -24,10 +24,11 @@ struct WriterOptions {
   Compression compression = Compression::Zstd;
   size_t chunk_bytes = 256 * 1024;  // uncompressed chunk size that closes a chunk
   FsyncPolicy fsync = FsyncPolicy::Chunk;
-  // MCAP Message Index records (16 B per message, never compressed): they let a reader
-  // skip chunks without a topic, which the archive's chunks (every topic, interleaved)
-  // never are; off, the bytes written per sample are halved.
-  bool message_index = false;
+  // MCAP Message Index records (16 B per message, never compressed). On by default:
+  // the indexed readers Foxglove and Lichtblick open files with (@mcap/core's
+  // McapIndexedReader) refuse chunk indexes without them. Off halves the bytes
+  // written per sample, for archives read only front to back.
+  bool message_index = true;
   std::string library = "modd-pubbroker";
 };
 

@@ -45,7 +45,7 @@ struct BrokerConfig {
   archive::FsyncPolicy fsync = archive::FsyncPolicy::Chunk;
   archive::Compression compression = archive::Compression::Zstd;
   size_t chunk_bytes = 256 * 1024;
-  bool message_index = false;
+  bool message_index = true;
   uint32_t flush_interval_ms = 1000;
   uint64_t queue_limit_samples = 1'000'000;
   uint64_t low_space_mb = 256;       // free space under which the operator is warned (STATUS + log)
