@@ -4,7 +4,7 @@ SHELL := /bin/bash
 ROOT := $(CURDIR)
 BUILD_TYPE ?= RelWithDebInfo
 
-.PHONY: run test setup build check test-python test-cpp test-frontend bench clean
+.PHONY: run test setup build check test-python test-cpp test-frontend bench screenshots clean
 
 setup:
 	@scripts/setup.sh
@@ -31,6 +31,11 @@ test-cpp: build
 
 bench: build
 	@scripts/bench.sh
+
+# The user guide's pictures (docs/images), taken by the browser journey; tests
+# themselves write their screenshots to a temporary folder.
+screenshots: build
+	@cd frontend && MODD_SCREENSHOTS=docs/images npm run test:e2e
 
 clean:
 	rm -rf build .venv frontend/node_modules frontend/dist

@@ -18,7 +18,11 @@ import { journey } from "./journey.mjs";
 const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
 const repo = resolve(frontend, "..");
-const imagesDir = join(repo, "docs", "images");
+// Screenshots go to a temporary folder: a test never writes into the work tree.
+// `make screenshots` (MODD_SCREENSHOTS=docs/images) refreshes the user guide's pictures.
+const imagesDir = process.env.MODD_SCREENSHOTS
+  ? resolve(repo, process.env.MODD_SCREENSHOTS)
+  : mkdtempSync(join(tmpdir(), "modd-e2e-shots-"));
 const bin = join(repo, ".venv", "bin");
 const backendBin = join(bin, "modd-backend");
 const pubbrokerBin = process.env.MODD_PUBBROKER ?? join(repo, "build", "bin", "modd-pubbroker");
