@@ -7,7 +7,7 @@ import re
 from decimal import Decimal, InvalidOperation
 from fractions import Fraction
 
-_DECIMAL = re.compile(r"^(?:\d+(?:\.\d*)?|\.\d+)$")
+_DECIMAL = re.compile(r"(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)")
 
 #: Periods are resolved to the microsecond on the link (docs/protocol.md).
 MICROS_PER_SECOND = 1_000_000
@@ -15,7 +15,7 @@ MICROS_PER_SECOND = 1_000_000
 
 def is_decimal(text: str) -> bool:
     """True for an unsigned decimal literal such as ``2``, ``2.0``, ``.5``."""
-    return bool(_DECIMAL.match(text))
+    return _DECIMAL.fullmatch(text) is not None
 
 
 def canonical_decimal(text: str) -> str:

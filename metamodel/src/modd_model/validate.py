@@ -5,11 +5,14 @@ that run only on documents the schema accepts."""
 
 from __future__ import annotations
 
+import ipaddress
+import re
 from collections.abc import Callable, Iterator
 from fractions import Fraction
+from functools import cache
 from typing import Any
 
-from jsonschema import Draft202012Validator
+from jsonschema import Draft202012Validator, validators
 from jsonschema.exceptions import ValidationError
 
 from .diagnostics import Diagnostic, pointer_join
@@ -52,10 +55,45 @@ def validate(doc: Any) -> list[Diagnostic]:
 _VALIDATOR: Draft202012Validator | None = None
 
 
+@cache
+def ecma_regex(pattern: str) -> re.Pattern[str]:
+    """A schema ``pattern`` compiled with the meaning JSON Schema gives it (ECMA-262,
+    as the workbench's browser reads it), not Python's: an unescaped ``$`` outside
+    a character class is the end of the text (``\\Z``), where Python's ``$`` also
+    accepts a trailing newline (``re.search("^a$", "a\\n")`` matches); ``\\d``
+    and ``\\w`` are ASCII.
+
+    >>> bool(ecma_regex("^[a-z]+$").search("abc\\n"))
+    False
+    """
+    out, in_class, i = [], False, 0
+    while i < len(pattern):
+        c = pattern[i]
+        if c == "\\":
+            out.append(pattern[i:i + 2])
+            i += 2
+            continue
+        if c == "[":
+            in_class = True
+        elif c == "]":
+            in_class = False
+        out.append(r"\Z" if c == "$" and not in_class else c)
+        i += 1
+    return re.compile("".join(out), re.ASCII)
+
+
+def _pattern(validator: Any, pattern: str, instance: Any, schema: Any) -> Iterator[ValidationError]:
+    if validator.is_type(instance, "string") and not ecma_regex(pattern).search(instance):
+        yield ValidationError(f"{instance!r} does not match {pattern!r}")
+
+
+_Validator = validators.extend(Draft202012Validator, {"pattern": _pattern})
+
+
 def _schema_validator() -> Draft202012Validator:
     global _VALIDATOR
     if _VALIDATOR is None:
-        _VALIDATOR = Draft202012Validator(load_schema())
+        _VALIDATOR = _Validator(load_schema())
     return _VALIDATOR
 
 
@@ -205,6 +243,18 @@ def mavlink_sources(doc: dict[str, Any]) -> Iterator[Diagnostic]:
             if scale != scale or scale in (float("inf"), float("-inf")) or scale == 0:
                 yield Diagnostic("scale must be a finite number other than zero",
                                  ptr + "/source/scale")
+
+
+@check
+def hosts_are_addresses(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    """A host the schema reads as an address (a colon, or only digits and dots)
+    must be one: ``999.1.1.1`` and ``1:2:3`` are neither names nor addresses."""
+    for host, _port, ptr in _endpoints(doc):
+        if ":" in host or re.fullmatch(r"[0-9.]+", host):
+            try:
+                ipaddress.ip_address(host)
+            except ValueError:
+                yield Diagnostic(f"{host!r} is not an IP address", ptr + "/host")
 
 
 def _endpoints(doc: dict[str, Any]) -> Iterator[tuple[str, int, str]]:

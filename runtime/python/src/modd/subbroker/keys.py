@@ -8,12 +8,12 @@ from __future__ import annotations
 
 import re
 
-_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
 def check_name(kind: str, name: str) -> str:
     """``name`` if it is a model identifier (safe inside a key), else ValueError."""
-    if not _NAME.match(name):
+    if not _NAME.fullmatch(name):
         raise ValueError(f"{kind} {name!r} is not an identifier (letters, digits, underscores)")
     return name
 
