@@ -35,7 +35,7 @@ int main() {
   running = &sub;
   std::signal(SIGINT, [](int) { running->stop(); });
   std::signal(SIGTERM, [](int) { running->stop(); });
-  std::printf("sub_3: listening on 127.0.0.1:%u\n", sub.port());
+  std::printf("%s: listening on %s:%u\n", "sub_3", "127.0.0.1", sub.port());
   std::fflush(stdout);
   sub.run();
   return 0;
