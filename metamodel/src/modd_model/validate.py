@@ -18,7 +18,7 @@ from jsonschema.exceptions import ValidationError
 from .diagnostics import Diagnostic, pointer_join
 from .numbers import to_fraction, to_micros
 from .query import topic_name
-from .schema import load_schema
+from .schema import definition, load_schema
 
 Check = Callable[[dict[str, Any]], Iterator[Diagnostic]]
 CHECKS: list[Check] = []
@@ -105,7 +105,8 @@ def _schema_diagnostic(err: ValidationError) -> Diagnostic:
     elif err.validator == "pattern":
         message = f"{err.instance!r} is not well-formed ({_pattern_hint(err)})"
     elif err.validator == "anyOf" and isinstance(err.instance, str):
-        message = f"{err.instance!r} is not a valid unit"
+        message = (f"{err.instance!r} is not a valid unit (one of the known units, or 1 to 64 "
+                   "printable characters without control or invisible formatting characters)")
     else:
         message = err.message
     return Diagnostic(message, pointer)
@@ -250,7 +251,10 @@ def mavlink_sources(doc: dict[str, Any]) -> Iterator[Diagnostic]:
 def hosts_are_addresses(doc: dict[str, Any]) -> Iterator[Diagnostic]:
     """A host the schema reads as an address (a colon, or only digits and dots)
     must be one: ``999.1.1.1`` and ``1:2:3`` are neither names nor addresses."""
+    well_formed = ecma_regex(definition("Host")["pattern"])
     for host, _port, ptr in _endpoints(doc):
+        if not well_formed.search(host):
+            continue  # the schema error names it
         if ":" in host or re.fullmatch(r"[0-9.]+", host):
             try:
                 ipaddress.ip_address(host)
