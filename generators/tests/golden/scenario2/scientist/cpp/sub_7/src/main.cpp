@@ -31,7 +31,12 @@ void on_value(const modd::Delivered& d) {
 
 int main() {
   const char* port_env = std::getenv("MODD_SUBSCRIBER_PORT");  // override for tests
-  const auto port = static_cast<uint16_t>(port_env ? std::atoi(port_env) : 7407);
+  const long wanted = port_env ? std::strtol(port_env, nullptr, 10) : 7407;
+  if (wanted < 0 || wanted > 65535) {
+    std::fprintf(stderr, "MODD_SUBSCRIBER_PORT: not a port: %s\n", port_env);
+    return 2;
+  }
+  const auto port = static_cast<uint16_t>(wanted);
   try {
     // Values are accepted only from the SubBroker, which proves it holds the
     // delivery key ($MODD_DELIVERY_KEY, or ~/.config/modd/delivery.key).
