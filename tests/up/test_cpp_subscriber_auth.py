@@ -162,6 +162,10 @@ def test_a_proof_from_the_key_is_accepted(subscriber: tuple[int, Output]) -> Non
         peer.sendall(b"AUTH " + delivery_auth.proof(KEY.encode(), nonce).encode() + b"\n"
                      + _line(_value(4_000_000_004, -0.75)))
         out.wait("4000000004 usv.accelerometer.accel_z MIN = -0.75", 5)
+        # Proven, the connection outlives the 5 s handshake timeout (the idle one is 300 s).
+        time.sleep(5.5)
+        peer.sendall(_line(_value(4_000_000_005, 0.125)))
+        out.wait("4000000005 usv.accelerometer.accel_z MIN = 0.125", 5)
 
 
 def test_out_of_range_integers_are_malformed_not_undefined(subscriber: tuple[int, Output]

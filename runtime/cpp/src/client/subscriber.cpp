@@ -279,7 +279,9 @@ void create_key_file(const std::string& path) {
   if (fd < 0) return;  // another process is writing it; reading decides
   bool ok = ::write(fd, key.data(), key.size()) == ssize_t(key.size());
   ::close(fd);
-  if (ok) [[maybe_unused]] int r = ::link(tmp.c_str(), path.c_str());  // fails if it exists: fine
+  if (ok && ::link(tmp.c_str(), path.c_str()) != 0) {
+    // EEXIST: another process put its key there first; that one is used.
+  }
   ::unlink(tmp.c_str());
 }
 
@@ -521,13 +523,14 @@ bool Subscriber::serve(Connection& c) {
   if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
   if (n == 0) return false;  // the SubBroker went away; it reconnects by itself
   c.buf.append(chunk, size_t(n));
-  if (c.proven) c.deadline = Clock::now() + std::chrono::milliseconds(options_.idle_timeout_ms);
   size_t start = 0, nl;
   while ((nl = c.buf.find('\n', start)) != std::string::npos) {
     std::string_view line(c.buf.data() + start, nl - start);
     start = nl + 1;
     if (!handle_line(c, line)) return false;
   }
+  // Once proven (possibly by this very read), the idle timeout runs from the last byte.
+  if (c.proven) c.deadline = Clock::now() + std::chrono::milliseconds(options_.idle_timeout_ms);
   c.buf.erase(0, start);
   if (c.buf.size() > (c.proven ? kMaxLine : 256)) {
     ++(c.proven ? malformed_ : refused_);
