@@ -32,3 +32,14 @@ def test_pubbroker_config_has_planned_buffer_sizes(scenarios_dir: Path, tmp_path
         "usv.accelerometer.accel_z": 6}
     assert config["link"] == {"host": "127.0.0.1", "port": 7171, "key": "env:MODD_LINK_KEY"}
     assert config["archive"]["dir"] == "/tmp/modd/logs"
+
+
+def test_toml_writer_round_trips_hostile_strings() -> None:
+    import tomllib
+
+    from modd_gen.tomlwriter import dumps
+
+    doc = {"a": 'x"\n[zenoh]\nlisten = ["tcp/0.0.0.0:1"]\n#\\', "b": "\x00\x1f\x7f\t\r µ 米 🚁",
+           "n": 3, "t": True, "f": 0.5, "l": ["p\nq", "r"],
+           "zenoh": {"mode": "peer", "weird key\n": "v", "sub": {"k": "\u2028"}}}
+    assert tomllib.loads(dumps(doc)) == doc

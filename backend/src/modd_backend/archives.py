@@ -25,8 +25,8 @@ from mcap.stream_reader import StreamReader
 
 from .errors import ApiError
 
-DRONE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-FILE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*\.mcap$")
+DRONE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+FILE = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*\.mcap")
 Sample = tuple[int, Any]
 #: What the reader raises on a file cut short or not yet closed.
 _BROKEN = (McapError, EOFError, ValueError, OSError, struct.error)
@@ -35,7 +35,7 @@ _BROKEN = (McapError, EOFError, ValueError, OSError, struct.error)
 def drone_dir(root: Path, drone: str) -> Path:
     """``<root>/<drone>`` when that folder exists (several drones), else the
     archive directory itself (one drone, as ``modd up`` lays it out)."""
-    if not DRONE.match(drone):
+    if not DRONE.fullmatch(drone):
         raise ApiError(422, f"drone {drone!r} is not an identifier")
     own = root / drone
     return own if own.is_dir() else root
@@ -43,7 +43,7 @@ def drone_dir(root: Path, drone: str) -> Path:
 
 def archive_path(root: Path, drone: str, name: str) -> Path:
     """The file, checked to be a direct child of the drone's folder; 404 otherwise."""
-    if not FILE.match(name) or ".." in name:
+    if not FILE.fullmatch(name) or ".." in name:
         raise ApiError(404, f"no archive named {name!r}")
     folder = drone_dir(root, drone).resolve()
     path = (folder / name).resolve()
@@ -56,7 +56,7 @@ def list_files(root: Path, drone: str) -> list[Path]:
     folder = drone_dir(root, drone)
     if not folder.is_dir():
         return []
-    return sorted(p for p in folder.iterdir() if p.is_file() and FILE.match(p.name))
+    return sorted(p for p in folder.iterdir() if p.is_file() and FILE.fullmatch(p.name))
 
 
 def _value(data: bytes) -> Any:

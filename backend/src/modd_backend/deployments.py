@@ -23,7 +23,7 @@ from sqlalchemy.orm import Session as Db
 from .tables import Deployment, ModelVersion, utcnow
 from .zbridge import ZenohBridge, read_secret
 
-NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 #: Extra seconds the backend waits beyond the SubBroker's own deploy timeout.
 QUERY_MARGIN_S = 2.0
 
@@ -35,7 +35,7 @@ def signing_key(path: Path | None) -> bytes | None:
 
 
 def deploy_key(drone: str) -> str:
-    if not NAME.match(drone):
+    if not NAME.fullmatch(drone):
         raise ValueError(f"drone {drone!r} is not an identifier")
     return f"modd/{drone}/deploy"
 

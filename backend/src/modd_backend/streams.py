@@ -15,11 +15,11 @@ from typing import Any
 from .relay import DropOldestQueue
 from .zbridge import Undeclarable, ZenohBridge
 
-NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
 def check_name(kind: str, name: object) -> str:
-    if not isinstance(name, str) or not NAME.match(name):
+    if not isinstance(name, str) or not NAME.fullmatch(name):
         raise ValueError(f"{kind} {name!r} is not an identifier (letters, digits, underscores)")
     return name
 

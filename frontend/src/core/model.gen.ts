@@ -35,10 +35,19 @@ export type Period = Decimal;
 /** A network endpoint: host (an IP address or host name) and TCP port. */
 export interface Endpoint {
   /** IP address or host name. */
-  host: string;
+  host: Host;
   /** TCP port. */
   port: number;
 }
+
+/** A host name (letters, digits and hyphens in dot-separated labels of at most 63 characters), an IPv4 address, or an IPv6 address (hex digits, colons and dots; checked as an address). */
+export type Host = string;
+
+/** Free text: printable characters, line breaks and tabs; no other control characters and no invisible or bidirectional formatting characters. */
+export type Text = string;
+
+/** A file or directory path: printable characters only (no control characters, no invisible or bidirectional formatting characters). */
+export type Path = string;
 
 /** Physical unit of a measured variable: one of the paper's units, or a free-form unit string (e.g. "mS/cm"). */
 export type Unit = KnownUnit | string;
@@ -60,7 +69,7 @@ export interface Drone {
   /** Name of the drone; the first part of every topic name and of the zenoh keys. */
   name: Name;
   /** Free text shown in the workbench. */
-  description?: string;
+  description?: Text;
   /** Sensors on board. */
   sensors: Sensor[];
 }
@@ -70,7 +79,7 @@ export interface Sensor {
   /** Name of the sensor, unique on the drone. */
   name: Name;
   /** Free text shown in the workbench. */
-  description?: string;
+  description?: Text;
   /** How the sensor is read: generic (a driver publishes through a publisher client) or mavlink (the MAVLink bridge publishes fields of an autopilot's messages, mapped per variable). generic when absent. */
   kind?: "generic" | "mavlink";
   /** What the sensor measures. */
@@ -86,7 +95,7 @@ export interface MeasuredVariable {
   /** Type of the samples; float32 when absent. */
   type?: ValueType;
   /** Free text shown in the workbench. */
-  description?: string;
+  description?: Text;
   /** For a variable of a mavlink sensor: the MAVLink message field it is read from. */
   source?: MavlinkField;
 }
@@ -110,7 +119,7 @@ export interface PubBroker {
   /** Link endpoint: where the PubBroker listens for the SubBroker. */
   endpoint: Endpoint;
   /** Directory of the on-board archive (MCAP files). */
-  logPath: string;
+  logPath: Path;
   /** Where publishers connect; generated defaults when absent. */
   ingress?: Ingress;
 }
@@ -118,7 +127,7 @@ export interface PubBroker {
 /** Where publishers on board connect to the PubBroker, kept apart from the link endpoint. */
 export interface Ingress {
   /** Path of the Unix socket publishers connect to. */
-  unixSocket?: string;
+  unixSocket?: Path;
   /** TCP port on the PubBroker's host publishers connect to. */
   tcpPort?: number;
 }
@@ -130,14 +139,14 @@ export interface SubBroker {
   /** Endpoint of the SubBroker on the base station. */
   endpoint: Endpoint;
   /** Directory where the SubBroker keeps its configuration. */
-  configPath: string;
+  configPath: Path;
 }
 
 /** The drone link between the PubBroker and the SubBroker, and the constants of the buffer-size planner. */
 export interface Link {
   /** Transport of the link. */
   transport?: "tcp";
-  /** Where the pre-shared key is read from: env:NAME or file:PATH. Never the key itself. */
+  /** Where the pre-shared key is read from: env:NAME (an environment variable name) or file:PATH (a path without control characters). Never the key itself. */
   keyRef?: string;
   /** Expected round-trip time of the link in seconds, until measured. */
   expectedRttS?: Decimal;

@@ -7,6 +7,7 @@ a model change keeps the integrator's work."""
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
@@ -17,6 +18,21 @@ class Ownership(StrEnum):
     USER = "user"  # written once, then the user's
 
 
+# A generated file's path: relative, parts of ASCII letters, digits, _ . and -
+# (model names are identifiers; this holds even if a name were not one).
+_PART = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
+
+
+def check_path(path: str) -> str:
+    """``path`` when it is a safe relative path for a generated file: no control
+    character, no separator other than /, no empty, ``.`` or ``..`` part, no
+    absolute path. Raises ValueError naming the path otherwise."""
+    parts = path.split("/")
+    if not all(_PART.fullmatch(p) and p not in (".", "..") for p in parts):
+        raise ValueError(f"unsafe generated file name {path!r}")
+    return path
+
+
 @dataclass(frozen=True)
 class Artifact:
     path: str  # relative, with forward slashes
@@ -24,6 +40,9 @@ class Artifact:
     role: str  # integrator | operator | scientist
     ownership: Ownership = Ownership.GENERATED
     executable: bool = False
+
+    def __post_init__(self) -> None:
+        check_path(self.path)
 
 
 @dataclass(frozen=True)

@@ -35,24 +35,148 @@ def py_type(value_type: str) -> str:
     return _PY_TYPES[value_type]
 
 
+def _ident(name: str) -> str:
+    ident = re.sub(r"[^A-Za-z0-9_]", "_", name)
+    return "_" + ident if not ident or ident[0].isdigit() else ident
+
+
 def cpp_ident(name: str) -> str:
-    """A C++ identifier for a model name (names are already identifiers; keywords get a _)."""
-    ident = re.sub(r"\W", "_", name)
+    """A C++ (and CMake target) identifier for a model name: ASCII letters, digits
+    and _ only, whatever the name holds; keywords get a _: ``cpp_ident("new") == "new_"``."""
+    ident = _ident(name)
     return ident + "_" if ident in _CPP_KEYWORDS else ident
 
 
 def py_ident(name: str) -> str:
-    ident = re.sub(r"\W", "_", name)
+    """A Python identifier for a model name: ``py_ident("class") == "class_"``."""
+    ident = _ident(name)
     return ident + "_" if ident in _PY_KEYWORDS else ident
 
 
+# Model strings reach generated text in four kinds of place: string literals
+# (C++, Python), comments (C++ //, Python #, CMake #, TOML #), docstrings and
+# Markdown. Each gets its own filter; a template prints no model string raw.
+
+
 def cpp_string(text: str) -> str:
-    """A C++ string literal (JSON escaping is valid C++ for these characters)."""
-    return json.dumps(text, ensure_ascii=True)
+    """A C++ string literal holding exactly ``text`` (as UTF-8), in plain ASCII: quote,
+    backslash and ? (trigraphs) escaped, every other byte outside printable ASCII
+    as a three-digit octal escape (never \\x, which would swallow a following hex
+    digit; never \\u, which may not name a control character).
+
+    >>> cpp_string('a"b\\n')
+    '"a\\\\"b\\\\012"'
+    """
+    out = []
+    for byte in text.encode("utf-8"):
+        ch = chr(byte)
+        if ch in '"\\?':
+            out.append("\\" + ch)
+        elif 0x20 <= byte < 0x7F:
+            out.append(ch)
+        else:
+            out.append(f"\\{byte:03o}")
+    return '"' + "".join(out) + '"'
 
 
 def py_string(text: str) -> str:
+    """A Python string literal holding exactly ``text`` (``repr`` escapes every
+    non-printable character, so the literal is one line)."""
     return repr(text)
+
+
+_SHORT_ESCAPES = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
+
+
+def _escaped(text: str, quote: str) -> str:
+    """``text`` with backslash, ``quote`` and every non-printable character escaped
+    the Python/C way (printable non-ASCII text is kept, readable)."""
+    out = []
+    for ch in text:
+        if ch == "\\" or ch == quote:
+            out.append("\\" + ch)
+        elif ch.isprintable():
+            out.append(ch)
+        elif ch in _SHORT_ESCAPES:
+            out.append(_SHORT_ESCAPES[ch])
+        elif ord(ch) < 0x100:
+            out.append(f"\\x{ord(ch):02x}")
+        elif ord(ch) < 0x10000:
+            out.append(f"\\u{ord(ch):04x}")
+        else:
+            out.append(f"\\U{ord(ch):08x}")
+    return "".join(out)
+
+
+def _plain(text: str) -> bool:
+    return text.isprintable() and not any(c in text for c in '\\"`') and "??" not in text
+
+
+def comment(value: object) -> str:
+    """Text for a one-line comment (C++ //, Python/CMake/TOML #): printed as is when
+    it is plain (printable, no backslash, quote, backquote or ``??``), otherwise
+    quoted with escapes, so that it can neither end the line, nor splice the next
+    one (a C++ comment ending in a backslash), nor hold a control character.
+
+    >>> comment("m/s"), comment("m\\n#x")
+    ('m/s', '"m\\\\n#x"')
+    """
+    text = str(value)
+    if _plain(text):
+        return text
+    return '"' + _escaped(text, '"').replace("??", "?\\?") + '"'
+
+
+def py_docstring(text: str) -> str:
+    """Text inside a triple-quoted Python docstring: the string value of the
+    docstring holds exactly ``text`` (quotes and backslashes escaped, so that
+    neither ``\"\"\"`` nor a trailing backslash can close it)."""
+    return _escaped(text, '"')
+
+
+_MD_SPECIAL = re.compile(r"([\\`*_{}\[\]#!|~])")
+
+
+def md_text(text: str) -> str:
+    """Text for Markdown (a paragraph or a table cell): Markdown punctuation
+    backslash-escaped, ``<``, ``>`` and ``&`` as entities (no HTML), every
+    non-printable character escaped, so that the text stays on its line and in
+    its cell.
+
+    >>> print(md_text("a|b <i>\\n"))
+    a\\|b &lt;i&gt;\\\\n
+    """
+    text = _escaped(text, "") if not text.isprintable() else text
+    text = text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    return _MD_SPECIAL.sub(r"\\\1", text)
+
+
+def md_code(text: str) -> str:
+    """An inline code span holding ``text``: fenced with one backquote more than
+    the longest run inside it, ``|`` escaped (tables), non-printables escaped."""
+    if not text.isprintable():
+        text = _escaped(text, "")
+    run = max((len(m) for m in re.findall(r"`+", text)), default=0)
+    fence = "`" * (run + 1)
+    pad = " " if text.startswith("`") or text.endswith("`") or run else ""
+    return fence + pad + text.replace("|", "\\|") + pad + fence
+
+
+def decimal(text: str) -> str:
+    """A decimal number from the model (a period), checked: it is printed as a
+    number literal, so it must be one."""
+    from modd_model.numbers import is_decimal
+
+    if not is_decimal(text):
+        raise ValueError(f"not a decimal number: {text!r}")
+    return text
+
+
+def port(value: object) -> int:
+    """A TCP port from the model, checked to be one."""
+    if not isinstance(value, int) or isinstance(value, bool) or not 0 < value < 65536:
+        raise ValueError(f"not a TCP port: {value!r}")
+    return value
 
 
 def cpp_sample_literal(value_type: str) -> str:
@@ -86,6 +210,12 @@ FILTERS = {
     "py_ident": py_ident,
     "cpp_string": cpp_string,
     "py_string": py_string,
+    "comment": comment,
+    "py_docstring": py_docstring,
+    "md_text": md_text,
+    "md_code": md_code,
+    "decimal": decimal,
+    "port": port,
     "cpp_sample_literal": cpp_sample_literal,
     "period_ms": period_ms,
     "period_us": period_us,

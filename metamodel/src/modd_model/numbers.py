@@ -7,10 +7,10 @@ import re
 from decimal import Decimal, InvalidOperation
 from fractions import Fraction
 
-_DECIMAL = re.compile(r"^(?:\d+(?:\.\d*)?|\.\d+)$")
+_DECIMAL = re.compile(r"(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)")
 # What the text form accepts: a decimal literal, optionally with an exponent
-# (4.0E-2, as Xtext's EDouble writes it). \Z, not $: no trailing newline.
-_LITERAL = re.compile(r"(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\Z")
+# (4.0E-2, as Xtext's EDouble writes it); used with fullmatch (no trailing newline).
+_LITERAL = re.compile(r"(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 #: Longest canonical decimal accepted: bounds what an exponent can blow up to.
 MAX_DECIMAL_CHARS = 40
 
@@ -20,7 +20,7 @@ MICROS_PER_SECOND = 1_000_000
 
 def is_decimal(text: str) -> bool:
     """True for an unsigned decimal literal such as ``2``, ``2.0``, ``.5``."""
-    return bool(_DECIMAL.match(text))
+    return _DECIMAL.fullmatch(text) is not None
 
 
 def canonical_decimal(text: str) -> str:

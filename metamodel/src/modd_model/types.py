@@ -9,6 +9,9 @@ Name = str
 TopicName = str
 Decimal = str
 Period = Decimal
+Host = str
+Text = str
+Path = str
 KnownUnit = Literal["METER", "METER_PER_SECOND", "METER_PER_SECOND_SQUARED", "DEGREE_CELSIUS", "RADIAN", "RADIAN_PER_SECOND", "BAR", "LITER", "GRAM", "NONE"]
 ValueType = Literal["float32", "float64", "int", "bool"]
 Aggregation = Literal["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM"]
@@ -31,7 +34,7 @@ class ModdModel(TypedDict):
 class Endpoint(TypedDict):
     """A network endpoint: host (an IP address or host name) and TCP port."""
 
-    host: str
+    host: Host
     port: int
 
 
@@ -39,7 +42,7 @@ class Drone(TypedDict):
     """The platform (surface, aerial or underwater drone) and the sensors it carries."""
 
     name: Name
-    description: NotRequired[str]
+    description: NotRequired[Text]
     sensors: list[Sensor]
 
 
@@ -47,7 +50,7 @@ class Sensor(TypedDict):
     """A sensor on board; each of its measured variables is a topic."""
 
     name: Name
-    description: NotRequired[str]
+    description: NotRequired[Text]
     kind: NotRequired[Literal["generic", "mavlink"]]
     variables: list[MeasuredVariable]
 
@@ -58,7 +61,7 @@ class MeasuredVariable(TypedDict):
     name: Name
     unit: Unit
     type: NotRequired[ValueType]
-    description: NotRequired[str]
+    description: NotRequired[Text]
     source: NotRequired[MavlinkField]
 
 
@@ -76,14 +79,14 @@ class PubBroker(TypedDict):
 
     name: NotRequired[Name]
     endpoint: Endpoint
-    logPath: str
+    logPath: Path
     ingress: NotRequired[Ingress]
 
 
 class Ingress(TypedDict):
     """Where publishers on board connect to the PubBroker, kept apart from the link endpoint."""
 
-    unixSocket: NotRequired[str]
+    unixSocket: NotRequired[Path]
     tcpPort: NotRequired[int]
 
 
@@ -92,7 +95,7 @@ class SubBroker(TypedDict):
 
     name: NotRequired[Name]
     endpoint: Endpoint
-    configPath: str
+    configPath: Path
 
 
 class Link(TypedDict):
@@ -139,4 +142,4 @@ class Position(TypedDict):
     y: float
 
 
-__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "MavlinkField", "PubBroker", "Ingress", "SubBroker", "Link", "Publisher", "Subscriber", "Layout", "Position"]
+__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "MavlinkField", "PubBroker", "Ingress", "SubBroker", "Link", "Publisher", "Subscriber", "Layout", "Position"]

@@ -5,14 +5,17 @@ that run only on documents the schema accepts."""
 
 from __future__ import annotations
 
+import ipaddress
+import re
 from collections.abc import Callable, Iterator
 from fractions import Fraction
+from functools import cache
 from typing import TYPE_CHECKING, Any
 
 from .diagnostics import Diagnostic, pointer_join
 from .numbers import to_fraction, to_micros
 from .query import topic_name
-from .schema import load_schema
+from .schema import definition, load_schema
 
 if TYPE_CHECKING:  # jsonschema is imported on first validation (it is slow to import)
     from jsonschema import Draft202012Validator
@@ -53,12 +56,54 @@ def validate(doc: Any) -> list[Diagnostic]:
 _VALIDATOR: Draft202012Validator | None = None
 
 
+@cache
+def ecma_regex(pattern: str) -> re.Pattern[str]:
+    """A schema ``pattern`` compiled with the meaning JSON Schema gives it (ECMA-262,
+    as the workbench's browser reads it), not Python's: an unescaped ``$`` outside
+    a character class is the end of the text (``\\Z``), where Python's ``$`` also
+    accepts a trailing newline (``re.search("^a$", "a\\n")`` matches); ``\\d``
+    and ``\\w`` are ASCII.
+
+    >>> bool(ecma_regex("^[a-z]+$").search("abc\\n"))
+    False
+    """
+    out, in_class, i = [], False, 0
+    while i < len(pattern):
+        c = pattern[i]
+        if c == "\\":
+            out.append(pattern[i:i + 2])
+            i += 2
+            continue
+        if c == "[":
+            in_class = True
+        elif c == "]":
+            in_class = False
+        out.append(r"\Z" if c == "$" and not in_class else c)
+        i += 1
+    return re.compile("".join(out), re.ASCII)
+
+
+def _pattern(validator: Any, pattern: str, instance: Any, schema: Any) -> Iterator[ValidationError]:
+    from jsonschema.exceptions import ValidationError
+
+    if validator.is_type(instance, "string") and not ecma_regex(pattern).search(instance):
+        yield ValidationError(f"{instance!r} does not match {pattern!r}")
+
+
+@cache
+def _validator_class() -> Any:
+    """Draft 2020-12 with ECMA-262 ``pattern``; jsonschema is imported here, on
+    first validation (it is slow to import)."""
+    from jsonschema import Draft202012Validator, validators
+
+    return validators.extend(  # type: ignore[no-untyped-call]
+        Draft202012Validator, {"pattern": _pattern})
+
+
 def _schema_validator() -> Draft202012Validator:
     global _VALIDATOR
     if _VALIDATOR is None:
-        from jsonschema import Draft202012Validator
-
-        _VALIDATOR = Draft202012Validator(load_schema())
+        _VALIDATOR = _validator_class()(load_schema())
     return _VALIDATOR
 
 
@@ -69,7 +114,8 @@ def _schema_diagnostic(err: ValidationError) -> Diagnostic:
     elif err.validator == "pattern":
         message = f"{err.instance!r} is not well-formed ({_pattern_hint(err)})"
     elif err.validator == "anyOf" and isinstance(err.instance, str):
-        message = f"{err.instance!r} is not a valid unit"
+        message = (f"{err.instance!r} is not a valid unit (one of the known units, or 1 to 64 "
+                   "printable characters without control or invisible formatting characters)")
     else:
         message = err.message
     return Diagnostic(message, pointer)
@@ -221,6 +267,21 @@ def mavlink_sources(doc: dict[str, Any]) -> Iterator[Diagnostic]:
             if scale != scale or scale in (float("inf"), float("-inf")) or scale == 0:
                 yield Diagnostic("scale must be a finite number other than zero",
                                  ptr + "/source/scale")
+
+
+@check
+def hosts_are_addresses(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    """A host the schema reads as an address (a colon, or only digits and dots)
+    must be one: ``999.1.1.1`` and ``1:2:3`` are neither names nor addresses."""
+    well_formed = ecma_regex(definition("Host")["pattern"])
+    for host, _port, ptr, _kind in _endpoints(doc):
+        if not well_formed.search(host):
+            continue  # the schema error names it
+        if ":" in host or re.fullmatch(r"[0-9.]+", host):
+            try:
+                ipaddress.ip_address(host)
+            except ValueError:
+                yield Diagnostic(f"{host!r} is not an IP address", ptr + "/host")
 
 
 def _endpoints(doc: dict[str, Any]) -> Iterator[tuple[str, int, str, str]]:

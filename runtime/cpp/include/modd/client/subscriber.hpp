@@ -12,7 +12,16 @@
 // Callbacks run on the thread that runs run(); a slow callback delays only
 // this subscriber (the SubBroker keeps a bounded queue per subscriber and drops
 // its oldest values, never blocking the link).
+//
+// Only the SubBroker may deliver (docs/subbroker.md, "TCP delivery"): on each
+// connection the subscriber sends a challenge, "MODD-DELIVERY/1 <nonce>\n", and
+// accepts value lines only after the answer "AUTH <HMAC-SHA256(key, ...)>\n"
+// proves that the peer holds the delivery key. Several connections are served
+// at once (poll); one that does not prove itself within the handshake timeout,
+// or stays idle past the idle timeout, is dropped, so an idle or hostile socket
+// never holds back the SubBroker's values.
 #pragma once
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -39,6 +48,21 @@ struct Delivered {
 // Parses one delivered line. On malformed input returns false and says why.
 bool parse_delivered(std::string_view line, Delivered& out, std::string* error = nullptr);
 
+// The delivery key shared by the SubBroker and its TCP subscribers. Resolved as
+// the SubBroker does: $MODD_DELIVERY_KEY when set (a reference: "env:NAME" or
+// "file:PATH"), else the file $XDG_CONFIG_HOME/modd/delivery.key (default
+// ~/.config/modd/delivery.key), created with a random key (mode 0600) when
+// absent. A key file must be a regular file of at most 4 KiB. Throws
+// std::runtime_error naming the reference.
+std::string load_delivery_key();
+
+using Digest = std::array<uint8_t, 32>;
+Digest sha256(std::string_view data);
+Digest hmac_sha256(std::string_view key, std::string_view data);
+// The SubBroker's answer to a challenge: lowercase hex of
+// HMAC-SHA256(key, "modd-delivery/1\n" + nonce_hex).
+std::string delivery_proof(std::string_view key, std::string_view nonce_hex);
+
 class Subscriber {
  public:
   using Callback = std::function<void(const Delivered&)>;
@@ -46,11 +70,19 @@ class Subscriber {
     uint64_t received = 0;   // values passed to the callback
     uint64_t malformed = 0;  // lines that did not parse (skipped)
     uint64_t connections = 0;
+    uint64_t refused = 0;    // connections dropped: no or wrong proof, idle, over the limit
+  };
+  struct Options {
+    std::string key;                  // the delivery key; empty: load_delivery_key()
+    int handshake_timeout_ms = 5000;  // to prove itself, from accept
+    int idle_timeout_ms = 300000;     // without a byte, once proven
+    size_t max_connections = 8;       // at once; past it the oldest unproven one is dropped
   };
 
   // Listens on host:port, the subscriber's endpoint in the model (port 0: any).
-  // Throws std::runtime_error when the endpoint cannot be bound.
+  // Throws std::runtime_error when the endpoint cannot be bound or the key loaded.
   Subscriber(const std::string& host, uint16_t port, Callback callback);
+  Subscriber(const std::string& host, uint16_t port, Callback callback, Options options);
   ~Subscriber();
   Subscriber(const Subscriber&) = delete;
   Subscriber& operator=(const Subscriber&) = delete;
@@ -62,14 +94,18 @@ class Subscriber {
   Stats stats() const noexcept;
 
  private:
-  void serve_connection(int fd);
+  struct Connection;
+  void accept_one(std::vector<Connection>& conns);
+  bool serve(Connection& c);  // false: drop the connection
+  bool handle_line(Connection& c, std::string_view line);
 
   Callback callback_;
+  Options options_;
   int listen_fd_ = -1;
   int wake_[2] = {-1, -1};
   uint16_t port_ = 0;
   std::atomic<bool> stopping_{false};
-  std::atomic<uint64_t> received_{0}, malformed_{0}, connections_{0};
+  std::atomic<uint64_t> received_{0}, malformed_{0}, connections_{0}, refused_{0};
   std::thread thread_;
 };
 

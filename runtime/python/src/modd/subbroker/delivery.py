@@ -26,6 +26,7 @@ from modd_plan.streams import StreamKey
 
 from modd.link.receiver import Window
 
+from . import delivery_auth
 from .fanout import FanOut, period_us, window_of
 from .keys import sub_key
 from .payload import DeliveredValue, StreamPayload, split_window, subscriber_prefix
@@ -34,6 +35,10 @@ if TYPE_CHECKING:
     import zenoh
 
 log = logging.getLogger("modd.subbroker.delivery")
+
+#: How long a new TCP delivery connection waits for a subscriber's challenge
+#: (delivery_auth); a plain JSON-lines sink that sends none gets values after it.
+CHALLENGE_WAIT_S = 0.5
 
 
 class ZenohDelivery:
@@ -97,6 +102,7 @@ class _TcpSender(threading.Thread):
         self.sent = 0
         self.dropped = 0
         self.connected = False
+        self.key: bytes | None = None  # the delivery key, loaded when first asked
 
     def push(self, line: bytes) -> None:
         with self.cond:
@@ -127,6 +133,15 @@ class _TcpSender(threading.Thread):
                     return
                 backoff = min(backoff * 2, 2.0)
                 continue
+            try:
+                self._answer_challenge(sock)
+            except (OSError, delivery_auth.DeliveryKeyError) as exc:
+                log.warning("TCP delivery to %s:%d: handshake failed: %s", *self.endpoint, exc)
+                sock.close()
+                if self._wait(backoff):
+                    return
+                backoff = min(backoff * 2, 2.0)
+                continue
             backoff = 0.1
             self.connected = True
             log.info("TCP delivery connected to %s:%d", *self.endpoint)
@@ -137,6 +152,30 @@ class _TcpSender(threading.Thread):
             finally:
                 self.connected = False
                 sock.close()
+
+    def _answer_challenge(self, sock: socket.socket) -> None:
+        """Prove the delivery key when the subscriber asks (its first line is a
+        challenge); a subscriber that sends nothing within CHALLENGE_WAIT_S asked
+        for no proof."""
+        sock.settimeout(CHALLENGE_WAIT_S)
+        data = b""
+        while b"\n" not in data and len(data) < 256:
+            try:
+                chunk = sock.recv(256 - len(data))
+            except TimeoutError:
+                if not data:
+                    return
+                raise
+            if not chunk:
+                raise ConnectionError("closed by the subscriber")
+            data += chunk
+        line = data.split(b"\n", 1)[0]
+        if not line.startswith(delivery_auth.GREETING):
+            raise ConnectionError(f"unexpected first line {line[:40]!r}")
+        nonce = line[len(delivery_auth.GREETING):].decode("ascii", "replace")
+        if self.key is None:
+            self.key = delivery_auth.load_key()
+        sock.sendall(b"AUTH " + delivery_auth.proof(self.key, nonce).encode() + b"\n")
 
     def _pump(self, sock: socket.socket) -> None:
         sock.settimeout(5.0)

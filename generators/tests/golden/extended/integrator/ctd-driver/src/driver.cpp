@@ -79,12 +79,12 @@ int main(int argc, char** argv) {
   const bool delivered = pub.flush(std::chrono::seconds(5));
   const auto s = pub.stats();
   const auto dropped = s.dropped_queue_full + s.dropped_bad_topic;
-  std::printf("ctd: %llu samples published, %llu handed to the PubBroker, %llu dropped\n",
-              static_cast<unsigned long long>(s.published), static_cast<unsigned long long>(s.sent),
+  std::printf("%s: %llu samples published, %llu handed to the PubBroker, %llu dropped\n",
+              gen::kPublisher, static_cast<unsigned long long>(s.published), static_cast<unsigned long long>(s.sent),
               static_cast<unsigned long long>(dropped));
   if (!delivered) {
-    std::fprintf(stderr, "ctd: %llu samples could not be handed to the PubBroker at %s\n",
-                 static_cast<unsigned long long>(s.published - s.sent - dropped), ingress.c_str());
+    std::fprintf(stderr, "%s: %llu samples could not be handed to the PubBroker at %s\n",
+                 gen::kPublisher, static_cast<unsigned long long>(s.published - s.sent - dropped), ingress.c_str());
     return 1;
   }
   return 0;

@@ -7,6 +7,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 
 #include "modd/client/subscriber.hpp"
 
@@ -30,13 +31,29 @@ void on_value(const modd::Delivered& d) {
 
 int main() {
   const char* port_env = std::getenv("MODD_SUBSCRIBER_PORT");  // override for tests
-  const auto port = static_cast<uint16_t>(port_env ? std::atoi(port_env) : 7411);
-  modd::Subscriber sub("127.0.0.1", port, on_value);
-  running = &sub;
-  std::signal(SIGINT, [](int) { running->stop(); });
-  std::signal(SIGTERM, [](int) { running->stop(); });
-  std::printf("sub_11: listening on 127.0.0.1:%u\n", sub.port());
-  std::fflush(stdout);
-  sub.run();
+  const long wanted = port_env ? std::strtol(port_env, nullptr, 10) : 7411;
+  if (wanted < 0 || wanted > 65535) {
+    std::fprintf(stderr, "MODD_SUBSCRIBER_PORT: not a port: %s\n", port_env);
+    return 2;
+  }
+  const auto port = static_cast<uint16_t>(wanted);
+  try {
+    // Values are accepted only from the SubBroker, which proves it holds the
+    // delivery key ($MODD_DELIVERY_KEY, or ~/.config/modd/delivery.key).
+    modd::Subscriber sub("127.0.0.1", port, on_value);
+    running = &sub;
+    std::signal(SIGINT, [](int) { if (running) running->stop(); });
+    std::signal(SIGTERM, [](int) { if (running) running->stop(); });
+    std::printf("%s: listening on %s:%u\n", "sub_11", "127.0.0.1", sub.port());
+    std::fflush(stdout);
+    sub.run();
+    running = nullptr;
+    const auto s = sub.stats();
+    std::fprintf(stderr, "%llu values, %llu connections refused\n",
+                 static_cast<unsigned long long>(s.received), static_cast<unsigned long long>(s.refused));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  }
   return 0;
 }
