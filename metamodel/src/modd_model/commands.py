@@ -95,7 +95,8 @@ def register_validate(sub: Any) -> None:
 
 
 def register_convert(sub: Any) -> None:
-    p = sub.add_parser("convert", help="convert a model between .modd, JSON and the original tool's .collector")
+    p = sub.add_parser("convert", help="convert a model between .modd, JSON and the "
+                       "original tool's .collector")
     p.add_argument("file", metavar="FILE")
     p.add_argument("--to", choices=["json", "modd", "collector"], required=True,
                    help="collector: the original tool's form (says what it leaves out)")
