@@ -17,6 +17,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "runtime"))
 
+import contextlib
+
 from modd.link.frames import AuthOk, Config, ConfigAck, Status  # noqa: E402
 from modd.link.receiver import Window  # noqa: E402
 from modd.ports import free_port  # noqa: E402
@@ -61,17 +63,13 @@ class Proxy(threading.Thread):
         except OSError:
             pass
         for s in (a, b):
-            try:
+            with contextlib.suppress(OSError):
                 s.shutdown(socket.SHUT_RDWR)
-            except OSError:
-                pass
 
     def cut(self) -> None:
         for s in self.pair:
-            try:
+            with contextlib.suppress(OSError):
                 s.shutdown(socket.SHUT_RDWR)
-            except OSError:
-                pass
 
 
 def main() -> None:
