@@ -104,8 +104,9 @@ def test_bad_input_is_counted_never_archived(broker_factory: Any) -> None:
                                 (0, t0 + 3, 2.5)], types))
     # A corrupt frame: the broker counts it, drops this publisher, keeps serving the others.
     s.sendall(bytes([0x05, 0x03, 0x05, 0x00, 0x01, 0x02]))
-    time.sleep(0.3)
-    assert s.recv(10) == b""  # closed by the broker
+    s.settimeout(5)
+    while s.recv(65536):  # the broker's answers (catalogue), then the close
+        pass
     s.close()
     good = run_load(f"unix:{b.unix_path}", [x], 25.0, 1.2)
     time.sleep(1.2)
