@@ -63,7 +63,7 @@ def serial_frame_bytes(payload: int) -> int:
     84
     """
     body = payload + SERIAL_CRC_BYTES
-    return body + max(1, ceil(body / 254)) + 1
+    return body + 1 + body // 254 + 1
 
 
 def wire_bytes(transport: str, payload: int) -> int:
