@@ -154,3 +154,17 @@ def test_cobs_round_trip_and_bounded_deframer() -> None:
     stream = bytes(range(1, 60)) + b"\x00" + good + bytearray(good[:-3]) + b"\x55\x00" + good
     assert df.feed(stream) == [b"ok", b"ok"]
     assert df.oversized == 1 and df.corrupt == 1
+
+
+def test_planner_serial_and_datagram_sizes_match_the_codec() -> None:
+    """linkbudget's size formulas (the plan's bytes/s) against real encodings."""
+    from modd.link.datagram import DataDatagram, encode_data
+    from modd_plan.linkbudget import DGRAM_HEADER_BYTES, TAG_BYTES, serial_frame_bytes
+
+    for n in range(1, 700):
+        worst = bytes([0x55]) * n  # no zero byte: COBS's largest overhead
+        assert len(encode_frame(worst)) == serial_frame_bytes(n), n
+        assert len(encode_frame(bytes(n))) <= serial_frame_bytes(n)
+    for slots in (1, 4, 5):
+        raw = encode_data(DataDatagram(1, 9, [b"\x01" * 18] * slots), KEY, DRONE_TO_BASE)
+        assert len(raw) == DGRAM_HEADER_BYTES + 18 * slots + TAG_BYTES
