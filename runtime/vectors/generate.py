@@ -199,6 +199,11 @@ def main() -> None:
         "name": "invalid", "meaning": "frames both decoders must reject with BAD_FRAME",
         "frames": [{"name": n, "hex": h, "why": w} for n, h, w in invalid]}, indent=1) + "\n")
 
+    import sys
+    sys.path.insert(0, str(Path(__file__).parent))  # gen_datagrams.py, beside this script
+    from gen_datagrams import write as write_datagrams
+    write_datagrams(HERE)
+
 
 if __name__ == "__main__":
     main()

@@ -144,8 +144,20 @@ export interface SubBroker {
 
 /** The drone link between the PubBroker and the SubBroker, and the constants of the buffer-size planner. */
 export interface Link {
-  /** Transport of the link. */
-  transport?: "tcp";
+  /** Transport of the link: tcp (a stream, today's protocol), udp (datagrams to the PubBroker's endpoint, for IP radios: long-range Wi-Fi, mesh, LTE) or serial (framed datagrams on a character device: a SiK/RFD900 telemetry radio, a UART). */
+  transport?: "tcp" | "udp" | "serial";
+  /** For a serial link: the character device of the radio on the base station, e.g. /dev/ttyUSB0. */
+  device?: string;
+  /** For a serial link: the character device of the radio on board (the PubBroker's side); the base station's device when absent. */
+  droneDevice?: string;
+  /** For a serial link: the baud rate of the serial port (not the radio's air rate). */
+  baud?: number;
+  /** Usable bytes per second of the radio, one way, on the wire (headers and framing included); the planner's link budget. No budget when absent. */
+  rateBps?: number;
+  /** Largest packet the radio carries, in bytes: one datagram (UDP, IP+UDP headers excluded) or one frame (serial, framing included). 1472 for udp, 252 for serial (a SiK radio) when absent. */
+  maxPacket?: number;
+  /** Largest delay, in seconds, the scientists accept before a value is sent: consecutive slots are packed into one datagram up to this delay and the packet size (udp, serial). */
+  acceptedDelayS?: Decimal;
   /** Where the pre-shared key is read from: env:NAME (an environment variable name) or file:PATH (a path without control characters). Never the key itself. */
   keyRef?: string;
   /** Expected round-trip time of the link in seconds, until measured. */

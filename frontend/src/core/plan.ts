@@ -45,6 +45,28 @@ export interface LinkCost {
   saving_ratio: number;
 }
 
+/** The declared transport's link budget (metamodel/src/modd_plan/linkbudget.py). */
+export interface LinkBudget {
+  transport: "tcp" | "udp" | "serial";
+  rate_bps: number | null;
+  max_packet: number;
+  accepted_delay_s: number;
+  drone_to_base: number;
+  base_to_drone: number;
+  packets_per_s: number;
+  share: number | null;
+  delays_s: Record<string, number>;
+  over_budget: string[];
+  error: string | null;
+}
+
+/** What a transport's bytes/s include, in words. */
+export const TRANSPORT_HEADERS: Record<LinkBudget["transport"], string> = {
+  tcp: "IP + TCP headers and ACKs",
+  udp: "IP + UDP headers",
+  serial: "COBS + CRC framing",
+};
+
 export interface Infeasibility {
   topic: string;
   subscribers: string[];
@@ -67,6 +89,7 @@ export interface PlanJson {
   delays: Record<string, string>;
   max_delay_s: string;
   predicted_link_bytes_per_s: LinkCost;
+  link_budget?: LinkBudget | null;
   infeasible: Infeasibility[];
   violates_delay_cap: boolean;
   constants?: Record<string, unknown>;

@@ -24,6 +24,12 @@ SourceMap = dict[str, Location]
 # Settings blocks: DSL word -> (JSON property, kind).
 LINK_SETTINGS = {
     "transport": ("transport", "word"),
+    "device": ("device", "string"),
+    "droneDevice": ("droneDevice", "string"),
+    "baud": ("baud", "int"),
+    "rate": ("rateBps", "int"),
+    "packet": ("maxPacket", "int"),
+    "delay": ("acceptedDelayS", "decimal"),
     "key": ("keyRef", "string"),
     "rtt": ("expectedRttS", "decimal"),
     "maxBuffer": ("maxBuffer", "int"),

@@ -101,7 +101,13 @@ class SubBroker(TypedDict):
 class Link(TypedDict):
     """The drone link between the PubBroker and the SubBroker, and the constants of the buffer-size planner."""
 
-    transport: NotRequired[Literal["tcp"]]
+    transport: NotRequired[Literal["tcp", "udp", "serial"]]
+    device: NotRequired[str]
+    droneDevice: NotRequired[str]
+    baud: NotRequired[int]
+    rateBps: NotRequired[int]
+    maxPacket: NotRequired[int]
+    acceptedDelayS: NotRequired[Decimal]
     keyRef: NotRequired[str]
     expectedRttS: NotRequired[Decimal]
     maxBuffer: NotRequired[int]

@@ -269,6 +269,37 @@ def mavlink_sources(doc: dict[str, Any]) -> Iterator[Diagnostic]:
                                  ptr + "/source/scale")
 
 
+_SERIAL_ONLY = ("device", "droneDevice", "baud")
+
+
+@check
+def link_transport(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    """Device and baud belong to a serial link, which needs a device; the accepted
+    delay is positive; a serial frame fits the radio's packet."""
+    link = doc.get("link", {})
+    transport = link.get("transport", "tcp")
+    if transport != "tcp":
+        # The planner budgets udp and serial; the brokers do not carry them yet.
+        yield Diagnostic(f"the brokers of this version run the link over tcp: the {transport} "
+                         "transport is planned (link budget) but not yet carried",
+                         "/link/transport", "warning")
+    if transport == "serial" and "device" not in link:
+        yield Diagnostic("a serial link needs the radio's device, e.g. "
+                         'device = "/dev/ttyUSB0"', "/link")
+    if transport != "serial":
+        for key in _SERIAL_ONLY:
+            if key in link:
+                yield Diagnostic(f"{key} is only for a serial link (this link is "
+                                 f"{transport})", f"/link/{key}")
+    delay = link.get("acceptedDelayS")
+    if delay is not None and to_fraction(delay) <= 0:
+        yield Diagnostic("the accepted delay must be greater than zero", "/link/acceptedDelayS")
+    packet = link.get("maxPacket")
+    if transport == "serial" and packet is not None and packet > 4096:
+        yield Diagnostic(f"a serial frame of {packet} B is larger than any telemetry radio "
+                         "carries (at most 4096)", "/link/maxPacket")
+
+
 @check
 def hosts_are_addresses(doc: dict[str, Any]) -> Iterator[Diagnostic]:
     """A host the schema reads as an address (a colon, or only digits and dots)

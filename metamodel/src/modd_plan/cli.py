@@ -14,6 +14,7 @@ from typing import Any, TextIO
 from modd_model.io import load_file, locate
 from modd_model.numbers import fraction_to_decimal, to_fraction
 
+from .linkbudget import budget_lines
 from .plan import METHODS, Plan, PlanningError, make_plan
 
 #: Slots printed in the human-readable schedule.
@@ -50,7 +51,8 @@ def register(subparsers: Any) -> None:
 
 def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Load, plan, print. Exit 0 when feasible, 1 on a bad model, 3 when the
-    plan violates the 3 x PING cap (the plan is still printed)."""
+    plan violates the 3 x PING cap, 4 when it exceeds the link's byte budget
+    (the plan is still printed)."""
     out = out or sys.stdout
     result = load_file(args.file)
     if not result.ok or result.model is None:
@@ -71,7 +73,9 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
         out.write("\n")
     else:
         out.write(render_text(plan))
-    return 3 if plan.buffers.infeasible else 0
+    if plan.buffers.infeasible:
+        return 3
+    return 4 if plan.budget is not None and plan.budget.error else 0
 
 
 def _sec(value: Fraction) -> str:
@@ -115,6 +119,8 @@ def render_text(plan: Plan) -> str:
         f"plain pub/sub: {link['plain_pubsub']} B/s (+ {link['plain_pubsub_acks']} B/s ACKs); "
         f"saving {100 * link['saving_ratio']:.1f} %",
     ]
+    if plan.budget is not None:
+        lines += budget_lines(plan.budget)
     lines += _infeasible_lines(plan)
     return "\n".join(lines) + "\n"
 

@@ -31,6 +31,7 @@ from .buffers import (
     Subscription,
     solve_exact,
 )
+from .linkbudget import LinkBudget, LinkSettings, link_budget
 from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
 from .planjson import plan_to_json
 from .schedule import Schedule, ScheduleTooLarge
@@ -114,6 +115,7 @@ class Plan:
     unpublished: tuple[Infeasibility, ...]
     constants: PlannerConstants
     link: LinkCost
+    budget: LinkBudget | None = None  # the declared transport's budget (linkbudget.py)
 
     @property
     def sent_streams(self) -> list[PlannedStream]:
@@ -201,6 +203,19 @@ def _link_cost(
     return predict(sched, window_bytes, plain)
 
 
+def _budget(model: Mapping[str, Any], sched: Schedule, sent: list[PlannedStream],
+            streams: Sequence[PlannedStream], tops: Mapping[str, Topic]) -> LinkBudget:
+    served: dict[StreamKey, list[str]] = {s.stream: list(s.subscribers) for s in sent}
+    for s in streams:
+        for src in s.sources:
+            if src.stream in served and s.stream != src.stream:
+                served[src.stream] += [n for n in s.subscribers if n not in served[src.stream]]
+    return link_budget(LinkSettings.of(model), sched,
+                       [_window_bytes(s.stream, tops) for s in sent],
+                       [served[s.stream] for s in sent],
+                       [sub["name"] for sub in model.get("subscribers", [])])
+
+
 def _solve_buffers(problem: BufferProblem, method: str) -> BufferSolution:
     if method == "cvxpy":
         from .milp import solve_milp  # imports cvxpy (0.6 s) on first use only
@@ -270,6 +285,7 @@ def make_plan(
         unpublished=unpublished,
         constants=constants,
         link=_link_cost(model, sched, sent, tops),
+        budget=_budget(model, sched, sent, streams, tops),
     )
 
 

@@ -100,6 +100,7 @@ def plan_to_json(plan: Plan) -> dict[str, Any]:
         "delays": {name: _dec(d) for name, d in plan.delays.items()},
         "max_delay_s": _dec(Fraction(plan.buffers.max_deviation_us, MICROS_PER_SECOND)),
         "predicted_link_bytes_per_s": plan.link.to_json(),
+        "link_budget": plan.budget.to_json() if plan.budget is not None else None,
         "infeasible": [
             {"topic": x.topic, "subscribers": list(x.subscribers), "reason": x.reason}
             for x in plan.infeasible

@@ -39,6 +39,32 @@ describe("PlanPanel", () => {
     expect(screen.getByRole("alert").textContent).toMatch(/sub_5\): period 0.1 is not a multiple/);
   });
 
+  it("shows the link budget and the over-budget error naming the subscriptions", () => {
+    const budget = {
+      transport: "serial" as const, rate_bps: 60, max_packet: 252, accepted_delay_s: 1,
+      drone_to_base: 81.6, base_to_drone: 0.6, packets_per_s: 0.8, share: 1.36,
+      delays_s: { sub_1: 2.7, sub_2: 2.7 }, over_budget: ["sub_4", "sub_2"],
+      error: "the plan needs 81.6 B/s on the serial link, more than its 60 B/s; the subscriptions that exceed the budget: sub_4, sub_2",
+    };
+    const store = mount({ ...(planJson as unknown as PlanJson), link_budget: budget });
+    expect(screen.getByTestId("transport").textContent).toBe("serial");
+    expect(screen.getByTestId("budget-share").textContent).toBe("136.0 %");
+    expect(screen.getByTestId("budget-error").textContent).toMatch(/more than its 60 B\/s.*sub_4, sub_2/);
+    act(() => { fireEvent.click(screen.getByRole("button", { name: "sub_4" })); });
+    expect(store.getState().wb.selection).toEqual(["sub:sub_4"]);
+  });
+
+  it("shows no budget error within the budget", () => {
+    const budget = {
+      transport: "udp" as const, rate_bps: 3600, max_packet: 1472, accepted_delay_s: 1,
+      drone_to_base: 100.8, base_to_drone: 1.4, packets_per_s: 0.8, share: 0.028,
+      delays_s: { sub_1: 1.03 }, over_budget: [], error: null,
+    };
+    mount({ ...(planJson as unknown as PlanJson), link_budget: budget });
+    expect(screen.getByTestId("transport").textContent).toBe("udp");
+    expect(screen.queryByTestId("budget-error")).toBeNull();
+  });
+
   it("lists the errors when the model cannot be planned", () => {
     mount(null, [{ severity: "error", message: "should be non-empty", pointer: "/publishers/0/topics" }]);
     expect(screen.getByRole("status").textContent).toMatch(/1 error/);

@@ -2,12 +2,14 @@
  * The live plan: recomputed by the backend's planning engine as you edit
  * (debounced in useLivePlan). Hyperperiod, the schedule's timeline, buffer
  * sizes per topic with each subscriber's delay, predicted link bytes/s
- * against plain pub/sub, and what is infeasible and why.
+ * against plain pub/sub, the declared transport's link budget, and what is
+ * infeasible and why.
  */
 import { formatRate, topicRows } from "../../core/plan";
 import { subscriberId, topicId } from "../../core/ids";
 import { findTopicByName } from "../../core/query";
 import { useEditor, useEditorStore, useModel } from "../../editor/useEditor";
+import { LinkBudgetView } from "./LinkBudget";
 import { Timeline } from "./Timeline";
 
 export default function PlanPanel() {
@@ -41,6 +43,7 @@ export default function PlanPanel() {
         <div className="figure"><span>Max delay</span><strong>{plan.max_delay_s} s</strong></div>
         <div className="figure muted"><span>Planned in</span><strong>{result.elapsed_ms.toFixed(0)} ms</strong></div>
       </div>
+      {plan.link_budget && <LinkBudgetView budget={plan.link_budget} onSelect={(n) => select(subscriberId(n))} />}
       {(plan.infeasible.length > 0 || plan.violates_delay_cap) && (
         <div className="infeasible" role="alert">
           <strong>Infeasible</strong>

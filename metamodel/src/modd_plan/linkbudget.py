@@ -1,0 +1,317 @@
+"""The link budget per transport: bytes per second on the wire of the declared
+link (tcp, udp or serial) with that transport's headers and framing, its
+share of the radio's usable bytes/s, the delay each subscription sees, and
+the subscriptions that make the plan exceed the budget.
+
+Layouts (docs/protocol.md, "Datagram transports"), kept in step with the
+codec in ``runtime/python/src/modd/link/datagram.py``:
+
+* tcp: one DATA frame per slot (:func:`linkcost.data_frame_bytes`), split into
+  segments of at most :data:`TCP_MSS` bytes, each with 52 B of IPv4 + TCP
+  headers and one 52 B pure ACK back.
+* udp and serial: consecutive slots packed into one datagram while the first
+  slot has waited at most the accepted delay and the datagram fits the
+  packet: ``type, config id, slot (u16le)`` (:data:`DGRAM_HEADER_BYTES`), the
+  slots' values, a truncated HMAC tag (:data:`TAG_BYTES`). A slot larger than
+  one packet goes as fragments, each with its own header, fragment byte and
+  tag. udp adds 28 B of IPv4 + UDP headers per datagram; serial adds a CRC-16,
+  COBS's overhead byte(s) and the 0x00 delimiter (:func:`serial_frame_bytes`).
+* base to drone: nothing while nothing is lost on udp/serial but a keepalive
+  PING every :data:`KEEPALIVE_S` seconds (the PubBroker's proof that the base
+  station still listens).
+
+Every stream is assumed present in every window, as in ``linkcost``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from math import ceil
+from typing import Any
+
+from .linkcost import (
+    TCP_IP_HEADER_BYTES,
+    UDP_IP_HEADER_BYTES,
+    data_frame_bytes,
+)
+from .schedule import Schedule
+
+TRANSPORTS = ("tcp", "udp", "serial")
+TCP_MSS = 1448  # Ethernet MTU 1500 - IPv4 20 - TCP 20 - timestamps 12
+DGRAM_HEADER_BYTES = 4  # type, config id, slot u16le
+FRAGMENT_BYTE = 1  # fragment index (high nibble) and count - 1 (low nibble)
+TAG_BYTES = 4  # truncated HMAC-SHA256 of a DATA datagram
+CONTROL_TAG_BYTES = 8  # truncated HMAC-SHA256 of a control datagram
+SERIAL_CRC_BYTES = 2
+DEFAULT_PACKET = {"tcp": TCP_MSS, "udp": 1472, "serial": 252}
+KEEPALIVE_S = 30
+#: slots walked at most to predict packing and delays (bounded work per plan)
+WALK_LIMIT = 400
+#: a keepalive: control datagram type + counter (varint, ~2 B) + PING frame
+#: (length, type, 2 B payload) + tag
+KEEPALIVE_BYTES = 1 + 2 + 4 + CONTROL_TAG_BYTES
+
+
+def serial_frame_bytes(payload: int) -> int:
+    """Bytes through the serial line for a datagram of ``payload`` bytes:
+    COBS over payload + CRC-16 (one overhead byte per 254 started), then the
+    0x00 delimiter.
+
+    >>> serial_frame_bytes(80)
+    84
+    """
+    body = payload + SERIAL_CRC_BYTES
+    return body + 1 + body // 254 + 1
+
+
+def wire_bytes(transport: str, payload: int) -> int:
+    """One datagram of ``payload`` bytes on the wire of ``transport``."""
+    if transport == "udp":
+        return payload + UDP_IP_HEADER_BYTES
+    if transport == "serial":
+        return serial_frame_bytes(payload)
+    raise ValueError(f"no datagrams on {transport!r}")
+
+
+def datagram_capacity(transport: str, max_packet: int) -> int:
+    """Largest datagram payload (header, values and tag) that fits one packet."""
+    if transport == "udp":
+        return max_packet
+    n = max_packet - SERIAL_CRC_BYTES - 2
+    while serial_frame_bytes(n) > max_packet:
+        n -= 1
+    return n
+
+
+@dataclass(frozen=True)
+class LinkSettings:
+    """The model's link as the budget sees it."""
+
+    transport: str = "tcp"
+    rate_bps: int | None = None
+    max_packet: int = TCP_MSS
+    accepted_delay: Fraction = Fraction(1)
+
+    @staticmethod
+    def of(model: Mapping[str, Any], transport: str | None = None) -> LinkSettings:
+        """From the model's ``link`` block (``transport`` overrides it, as
+        ``modd up --link`` does)."""
+        link = model.get("link", {})
+        t = transport or link.get("transport", "tcp")
+        if t not in TRANSPORTS:
+            raise ValueError(f"unknown transport {t!r}; expected one of {', '.join(TRANSPORTS)}")
+        packet = link.get("maxPacket", DEFAULT_PACKET[t]) if t != "tcp" else TCP_MSS
+        return LinkSettings(t, link.get("rateBps"), packet,
+                            Fraction(link.get("acceptedDelayS", "1")))
+
+
+@dataclass(frozen=True)
+class LinkBudget:
+    """Predicted figures of one transport (bytes/s on the wire, both ways)."""
+
+    settings: LinkSettings
+    drone_to_base: float
+    base_to_drone: float
+    packets_per_s: float
+    delays_s: dict[str, float]
+    over_budget: tuple[str, ...] = field(default=())
+
+    @property
+    def share(self) -> float | None:
+        rate = self.settings.rate_bps
+        return self.drone_to_base / rate if rate else None
+
+    @property
+    def error(self) -> str | None:
+        rate = self.settings.rate_bps
+        if rate is None or self.drone_to_base <= rate:
+            return None
+        names = ", ".join(self.over_budget)
+        return (f"the plan needs {self.drone_to_base:.1f} B/s on the {self.settings.transport} "
+                f"link, more than its {rate} B/s; the subscriptions that exceed the budget: "
+                f"{names}")
+
+    def to_json(self) -> dict[str, Any]:
+        s = self.settings
+        share = self.share
+        return {
+            "transport": s.transport,
+            "rate_bps": s.rate_bps,
+            "max_packet": s.max_packet,
+            "accepted_delay_s": float(s.accepted_delay),
+            "drone_to_base": round(self.drone_to_base, 3),
+            "base_to_drone": round(self.base_to_drone, 3),
+            "packets_per_s": round(self.packets_per_s, 6),
+            "share": round(share, 6) if share is not None else None,
+            "delays_s": {k: round(v, 6) for k, v in self.delays_s.items()},
+            "over_budget": list(self.over_budget),
+            "error": self.error,
+        }
+
+
+def _slot_walk(schedule: Schedule, window_bytes: Sequence[Fraction], delay: Fraction
+               ) -> list[tuple[int, int, list[int]]]:
+    """(date µs, value bytes, stream ids) of the first slots: one hyperperiod,
+    or more until they span 20 accepted delays (so that packing reaches its
+    steady state), at most :data:`WALK_LIMIT` slots (beyond, the walk is
+    a sample of the schedule's start)."""
+    by_period: dict[int, list[int]] = {}
+    for i, p in enumerate(schedule.periods_us):
+        by_period.setdefault(p, []).append(i)
+    period_bytes = {p: sum((window_bytes[i] for i in ids), Fraction(0))
+                    for p, ids in by_period.items()}
+    m = schedule.messages_per_hyperperiod
+    if m == 0:
+        return []
+    per_s = Fraction(m) / schedule.hyperperiod
+    limit = min(max(m, ceil(20 * delay * per_s)), WALK_LIMIT)
+    out: list[tuple[int, int, list[int]]] = []
+    for index, date, due in schedule.iter_due_periods():
+        if index >= limit:
+            break
+        ids = sorted(i for p in due for i in by_period[p])
+        out.append((date, ceil(sum((period_bytes[p] for p in due), Fraction(0))), ids))
+    return out
+
+
+def _tcp(settings: LinkSettings, slots: list[tuple[int, int, list[int]]], span_s: float,
+         n_streams: int) -> tuple[float, float, float, list[float]]:
+    wire = 0
+    segments = 0
+    for _, values, ids in slots:
+        frame = data_frame_bytes(values, len(ids))
+        segs = ceil(frame / TCP_MSS)
+        segments += segs
+        wire += frame + segs * TCP_IP_HEADER_BYTES
+    rate = settings.rate_bps
+    delays = [0.0] * n_streams
+    for _, values, ids in slots:
+        air = (data_frame_bytes(values, len(ids)) + TCP_IP_HEADER_BYTES) / rate if rate else 0.0
+        for i in ids:
+            delays[i] = max(delays[i], air)
+    return wire / span_s, segments * TCP_IP_HEADER_BYTES / span_s, segments / span_s, delays
+
+
+def _datagrams(settings: LinkSettings, slots: list[tuple[int, int, list[int]]], span_s: float,
+               n_streams: int) -> tuple[float, float, float, list[float]]:
+    """Pack slots as the PubBroker does: a datagram holds consecutive slots
+    while its first slot has waited at most the accepted delay and it fits
+    the packet; it is sent at its last slot's date."""
+    t = settings.transport
+    cap = datagram_capacity(t, settings.max_packet)
+    room = cap - DGRAM_HEADER_BYTES - TAG_BYTES
+    delay_us = settings.accepted_delay * 1_000_000
+    rate = settings.rate_bps
+    wire = 0
+    packets = 0
+    delays = [0.0] * n_streams
+    group: list[tuple[int, int, list[int]]] = []
+
+    def flush() -> None:
+        nonlocal wire, packets
+        if not group:
+            return
+        values = sum(v for _, v, _ in group)
+        size = DGRAM_HEADER_BYTES + values + TAG_BYTES
+        bytes_on_wire = wire_bytes(t, size)
+        wire += bytes_on_wire
+        packets += 1
+        sent = group[-1][0]
+        air = bytes_on_wire / rate if rate else 0.0
+        for date, _, ids in group:
+            for i in ids:
+                delays[i] = max(delays[i], (sent - date) / 1e6 + air)
+        group.clear()
+
+    for slot in slots:
+        date, values, ids = slot
+        if values > room:  # one slot larger than a packet: fragments
+            flush()
+            per = room - FRAGMENT_BYTE
+            n = ceil(values / per)
+            size = n * (DGRAM_HEADER_BYTES + FRAGMENT_BYTE + TAG_BYTES) + values
+            wire += sum(wire_bytes(t, DGRAM_HEADER_BYTES + FRAGMENT_BYTE + TAG_BYTES
+                                   + min(per, values - k * per)) for k in range(n))
+            packets += n
+            air = wire_bytes(t, size // n) * n / rate if rate else 0.0
+            for i in ids:
+                delays[i] = max(delays[i], air)
+            continue
+        if group and (date - group[0][0] > delay_us
+                      or sum(v for _, v, _ in group) + values > room):
+            flush()
+        group.append(slot)
+    flush()
+    keepalive = wire_bytes(t, KEEPALIVE_BYTES) / KEEPALIVE_S
+    return wire / span_s, keepalive, packets / span_s, delays
+
+
+def link_budget(
+    settings: LinkSettings,
+    schedule: Schedule,
+    window_bytes: Sequence[Fraction],
+    subscribers_of: Sequence[Sequence[str]],
+    subscriptions: Sequence[str],
+) -> LinkBudget:
+    """The budget of ``settings``'s transport for a schedule whose sent
+    stream ``i`` carries ``window_bytes[i]`` per window and serves the
+    subscribers ``subscribers_of[i]`` (directly or through a derived stream).
+    ``subscriptions`` lists every subscriber, each of which gets a delay."""
+    n = len(window_bytes)
+    slots = _slot_walk(schedule, window_bytes, settings.accepted_delay)
+    if not slots:
+        return LinkBudget(settings, 0.0, 0.0, 0.0, dict.fromkeys(subscriptions, 0.0))
+    span_s = slots[-1][0] / 1e6  # slot dates start after 0: the walk covers (0, last]
+    walk = _tcp if settings.transport == "tcp" else _datagrams
+    down, up, packets, stream_delay = walk(settings, slots, span_s, n)
+    delays = dict.fromkeys(subscriptions, 0.0)
+    for i, subs in enumerate(subscribers_of):
+        for s in subs:
+            delays[s] = max(delays.get(s, 0.0), stream_delay[i])
+    return LinkBudget(settings, down, up, packets, delays,
+                      _over_budget(settings, down, schedule, window_bytes, subscribers_of))
+
+
+def _over_budget(settings: LinkSettings, total: float, schedule: Schedule,
+                 window_bytes: Sequence[Fraction], subscribers_of: Sequence[Sequence[str]]
+                 ) -> tuple[str, ...]:
+    """The subscriptions of the most expensive sent streams (value bytes/s),
+    in that order, until dropping them brings the plan under the budget."""
+    rate = settings.rate_bps
+    if rate is None or total <= rate:
+        return ()
+    cost = sorted(((float(b) / (p / 1e6), i) for i, (b, p)
+                   in enumerate(zip(window_bytes, schedule.periods_us, strict=True))),
+                  reverse=True)
+    # headers scale with the packets; values are what a subscription adds
+    excess = total - rate
+    names: list[str] = []
+    for c, i in cost:
+        for s in subscribers_of[i]:
+            if s not in names:
+                names.append(s)
+        excess -= c
+        if excess <= 0:
+            break
+    return tuple(names)
+
+
+
+def budget_lines(budget: LinkBudget) -> list[str]:
+    """The budget for a person (``modd plan``'s text output)."""
+    s = budget.settings
+    headers = {"tcp": "IP+TCP headers", "udp": "IP+UDP headers",
+               "serial": "COBS+CRC framing"}[s.transport]
+    lines = ["", f"link budget ({s.transport}, packet {s.max_packet} B, accepted delay "
+             f"{float(s.accepted_delay):g} s): {budget.drone_to_base:.1f} B/s drone->base, "
+             f"{budget.base_to_drone:.1f} B/s base->drone ({headers} included), "
+             f"{budget.packets_per_s:.3f} packets/s"]
+    share = budget.share
+    if share is not None:
+        lines.append(f"  {100 * share:.1f} % of the radio's {s.rate_bps} B/s")
+    lines += [f"  delay {name}: {d:.3f} s" for name, d in budget.delays_s.items()]
+    if budget.error:
+        lines += ["", f"OVER BUDGET: {budget.error}"]
+    return lines

@@ -1,0 +1,231 @@
+#include "modd/link/datagram.hpp"
+
+#include <cstring>
+#include <string>
+
+#include "modd/link/auth.hpp"
+#include "modd/util/bytes.hpp"
+
+namespace modd::link::dgram {
+
+namespace {
+
+std::vector<uint8_t> tag(const Mac& key, uint8_t direction, uint64_t seq,
+                         std::span<const uint8_t> body, size_t n) {
+  std::vector<uint8_t> msg;
+  msg.reserve(9 + body.size());
+  msg.push_back(direction);
+  for (int i = 0; i < 8; ++i) msg.push_back(static_cast<uint8_t>(seq >> (8 * i)));
+  msg.insert(msg.end(), body.begin(), body.end());
+  Mac full = hmac_sha256(key, msg);
+  return {full.begin(), full.begin() + static_cast<long>(n)};
+}
+
+bool equal_ct(std::span<const uint8_t> a, std::span<const uint8_t> b) {
+  if (a.size() != b.size()) return false;
+  uint8_t d = 0;
+  for (size_t i = 0; i < a.size(); ++i) d |= a[i] ^ b[i];
+  return d == 0;
+}
+
+}  // namespace
+
+Mac session_key(std::span<const uint8_t> psk, const Nonce& client, const Nonce& server) {
+  std::vector<uint8_t> msg{'M', 'O', 'D', 'D', '1', 'K'};
+  msg.insert(msg.end(), client.begin(), client.end());
+  msg.insert(msg.end(), server.begin(), server.end());
+  return hmac_sha256(psk, msg);
+}
+
+uint64_t extend16(uint16_t low, uint64_t expected) {
+  int64_t base = static_cast<int64_t>(expected - (expected & 0xFFFF) + low);
+  int64_t best = -1;
+  for (int64_t c : {base - 0x10000, base, base + 0x10000}) {
+    if (c < 0) continue;
+    auto dist = [&](int64_t x) { return x > static_cast<int64_t>(expected) ? x - static_cast<int64_t>(expected) : static_cast<int64_t>(expected) - x; };
+    if (best < 0 || dist(c) < dist(best)) best = c;
+  }
+  return static_cast<uint64_t>(best);
+}
+
+std::vector<uint8_t> encode_data(const DataDatagram& d, const Mac& key, uint8_t direction) {
+  if (d.config_id == 0 || d.slots.empty()) throw std::invalid_argument("empty DATA datagram");
+  std::vector<uint8_t> out;
+  ByteWriter w(out);
+  w.u8(d.presence.empty() ? kData : kDataBitmap);
+  w.u8(d.config_id);
+  w.u8(static_cast<uint8_t>(d.slot & 0xFF));
+  w.u8(static_cast<uint8_t>((d.slot >> 8) & 0xFF));
+  if (!d.presence.empty()) {
+    if (d.slots.size() > 255) throw std::invalid_argument("more than 255 slots");
+    w.u8(static_cast<uint8_t>(d.slots.size()));
+    w.varint(d.presence.size());
+    std::vector<uint8_t> bm((d.presence.size() + 7) / 8);
+    for (size_t i = 0; i < d.presence.size(); ++i)
+      if (d.presence[i]) bm[i / 8] |= static_cast<uint8_t>(1u << (i % 8));
+    w.bytes(bm);
+  }
+  for (const auto& s : d.slots) w.bytes(s);
+  auto t = tag(key, direction, d.slot, out, kTag);
+  out.insert(out.end(), t.begin(), t.end());
+  return out;
+}
+
+VerifiedData verify_data(std::span<const uint8_t> raw, const Mac& key, uint8_t direction,
+                         uint64_t expected_slot) {
+  if (raw.size() < 4 + kTag || (raw[0] != kData && raw[0] != kDataBitmap))
+    throw Error(ErrorCode::BadFrame, "not a DATA datagram", 0);
+  auto body = raw.first(raw.size() - kTag);
+  uint16_t low = static_cast<uint16_t>(raw[2] | (raw[3] << 8));
+  uint64_t slot = extend16(low, expected_slot);
+  if (!equal_ct(tag(key, direction, slot, body, kTag), raw.last(kTag)))
+    throw Forged("tag of the datagram of slot " + std::to_string(slot) + " does not verify");
+  ByteReader r(body);
+  r.u8();
+  VerifiedData v;
+  v.config_id = r.u8();
+  r.bytes(2);
+  v.slot = slot;
+  if (raw[0] == kDataBitmap) {
+    uint8_t count = r.u8();
+    uint64_t streams = r.varint();
+    if (count == 0 || streams > 8 * r.remaining()) r.fail("presence bitmap longer than the datagram");
+    auto bm = r.bytes(static_cast<size_t>((streams + 7) / 8));
+    for (size_t i = streams; i < bm.size() * 8; ++i)
+      if (bm[i / 8] >> (i % 8) & 1) r.fail("presence bit set beyond the datagram's streams");
+    v.slot_count = count;
+    v.stream_count = streams;
+    v.presence.assign(bm.begin(), bm.end());
+  }
+  auto rest = r.bytes(r.remaining());
+  v.values.assign(rest.begin(), rest.end());
+  return v;
+}
+
+std::vector<uint8_t> encode_control(uint64_t counter, std::span<const uint8_t> frame,
+                                    const Mac& key, uint8_t direction) {
+  std::vector<uint8_t> out;
+  ByteWriter w(out);
+  w.u8(kControl);
+  w.varint(counter);
+  w.bytes(frame);
+  auto t = tag(key, direction, counter, out, kControlTag);
+  out.insert(out.end(), t.begin(), t.end());
+  return out;
+}
+
+std::pair<uint64_t, std::vector<uint8_t>> verify_control(std::span<const uint8_t> raw,
+                                                         const Mac& key, uint8_t direction) {
+  if (raw.size() < 3 + kControlTag || raw[0] != kControl)
+    throw Error(ErrorCode::BadFrame, "not a control datagram", 0);
+  auto body = raw.first(raw.size() - kControlTag);
+  ByteReader r(body);
+  r.u8();
+  uint64_t counter = r.varint();
+  if (!equal_ct(tag(key, direction, counter, body, kControlTag), raw.last(kControlTag)))
+    throw Forged("tag of control datagram " + std::to_string(counter) + " does not verify");
+  auto rest = r.bytes(r.remaining());
+  return {counter, {rest.begin(), rest.end()}};
+}
+
+bool ReplayWindow::accept(uint64_t seq) {
+  if ((any_ && top_ >= size_ && seq <= top_ - size_) || seen_.count(seq)) return false;
+  seen_.insert(seq);
+  if (!any_ || seq > top_) {
+    top_ = seq;
+    any_ = true;
+    if (seen_.size() > size_ && top_ >= size_) seen_.erase(seen_.begin(), seen_.upper_bound(top_ - size_));
+  }
+  return true;
+}
+
+uint16_t crc16(std::span<const uint8_t> data) {
+  uint16_t crc = 0xFFFF;
+  for (uint8_t b : data) {
+    crc ^= static_cast<uint16_t>(b << 8);
+    for (int i = 0; i < 8; ++i)
+      crc = (crc & 0x8000) ? static_cast<uint16_t>((crc << 1) ^ 0x1021) : static_cast<uint16_t>(crc << 1);
+  }
+  return crc;
+}
+
+std::vector<uint8_t> cobs_encode(std::span<const uint8_t> data) {
+  std::vector<uint8_t> out{0};
+  size_t code_at = 0;
+  for (uint8_t b : data) {
+    if (b == 0) {
+      out[code_at] = static_cast<uint8_t>(out.size() - code_at);
+      code_at = out.size();
+      out.push_back(0);
+      continue;
+    }
+    out.push_back(b);
+    if (out.size() - code_at == 0xFF) {
+      out[code_at] = 0xFF;
+      code_at = out.size();
+      out.push_back(0);
+    }
+  }
+  out[code_at] = static_cast<uint8_t>(out.size() - code_at);
+  return out;
+}
+
+std::optional<std::vector<uint8_t>> cobs_decode(std::span<const uint8_t> data) {
+  std::vector<uint8_t> out;
+  size_t i = 0;
+  while (i < data.size()) {
+    uint8_t code = data[i];
+    if (code == 0 || i + code > data.size()) return std::nullopt;
+    for (size_t k = i + 1; k < i + code; ++k) {
+      if (data[k] == 0) return std::nullopt;
+      out.push_back(data[k]);
+    }
+    i += code;
+    if (code != 0xFF && i < data.size()) out.push_back(0);
+  }
+  return out;
+}
+
+std::vector<uint8_t> encode_frame(std::span<const uint8_t> datagram) {
+  std::vector<uint8_t> body(datagram.begin(), datagram.end());
+  uint16_t crc = crc16(datagram);
+  body.push_back(static_cast<uint8_t>(crc & 0xFF));
+  body.push_back(static_cast<uint8_t>(crc >> 8));
+  auto out = cobs_encode(body);
+  out.push_back(0);
+  return out;
+}
+
+std::vector<std::vector<uint8_t>> Deframer::feed(std::span<const uint8_t> bytes) {
+  std::vector<std::vector<uint8_t>> out;
+  for (uint8_t b : bytes) {
+    if (b != 0) {
+      if (skipping_) continue;
+      buf_.push_back(b);
+      if (buf_.size() > max_) {
+        ++oversized_;
+        buf_.clear();
+        skipping_ = true;
+      }
+      continue;
+    }
+    if (skipping_) {
+      skipping_ = false;
+      continue;
+    }
+    if (buf_.empty()) continue;
+    auto body = cobs_decode(buf_);
+    buf_.clear();
+    if (!body || body->size() < 3 ||
+        crc16(std::span<const uint8_t>(*body).first(body->size() - 2)) !=
+            static_cast<uint16_t>((*body)[body->size() - 2] | ((*body)[body->size() - 1] << 8))) {
+      ++corrupt_;
+      continue;
+    }
+    body->resize(body->size() - 2);
+    out.push_back(std::move(*body));
+  }
+  return out;
+}
+
+}  // namespace modd::link::dgram

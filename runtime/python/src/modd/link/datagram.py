@@ -1,0 +1,218 @@
+"""Datagram form of the MoDD link (udp and serial transports; docs/protocol.md,
+"Datagram transports").
+
+A datagram carries one or more consecutive schedule slots (DATA), a control
+frame (CONFIG, PING, NACK, ... under a counter) or a handshake frame. DATA and
+control datagrams end with a truncated HMAC-SHA256 tag under the session key
+derived from the handshake's nonces; the tag covers the direction, the full
+(64-bit) sequence number and every byte before it, so a forged, corrupt or
+replayed datagram is dropped (and counted) before anything is decoded.
+
+>>> key = session_key(b"k", bytes(16), bytes(16))
+>>> d = DataDatagram(config_id=1, slot=70000, slots=[b"\\x01\\x02", b"\\x03"])
+>>> raw = encode_data(d, key, DRONE_TO_BASE)
+>>> verify_data(raw, key, DRONE_TO_BASE, expected_slot=69990).slot
+70000
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import struct
+from dataclasses import dataclass, field
+
+from .codec import Reader, varint
+from .frames import ErrorCode, ProtocolError
+
+DGRAM_DATA = 0x30
+DGRAM_DATA_BITMAP = 0x31
+DGRAM_FRAGMENT = 0x32
+DGRAM_CONTROL = 0x40
+DGRAM_HANDSHAKE = 0x41
+NACK = 0x09  # control frame type: ranges of slots to resend
+
+TAG_BYTES = 4
+CONTROL_TAG_BYTES = 8
+SESSION_LABEL = b"MODD1K"
+DRONE_TO_BASE = b"D"
+BASE_TO_DRONE = b"B"
+MAX_NACK_RANGES = 32
+
+
+def session_key(psk: bytes, client_nonce: bytes, server_nonce: bytes) -> bytes:
+    """The key of a session's datagram tags, from the handshake's nonces."""
+    return hmac.new(psk, SESSION_LABEL + client_nonce + server_nonce, hashlib.sha256).digest()
+
+
+def tag(key: bytes, direction: bytes, seq: int, body: bytes, length: int) -> bytes:
+    """HMAC-SHA256(key, direction ‖ u64le(seq) ‖ body) truncated to ``length``."""
+    msg = direction + struct.pack("<Q", seq & 0xFFFFFFFFFFFFFFFF) + body
+    return hmac.new(key, msg, hashlib.sha256).digest()[:length]
+
+
+def extend16(low: int, expected: int) -> int:
+    """The full slot number ≡ ``low`` (mod 2^16) nearest to ``expected`` (the
+    receiver's next slot, or the slot its clock says is due).
+
+    >>> extend16(3, 65533), extend16(65533, 65540)
+    (65539, 65533)
+    """
+    base = expected - (expected & 0xFFFF) + low
+    candidates = (base - 0x10000, base, base + 0x10000)
+    return min((c for c in candidates if c >= 0), key=lambda c: abs(c - expected))
+
+
+@dataclass
+class DataDatagram:
+    """Consecutive slots ``slot``, ``slot + 1``, ... each as its encoded values
+    (the body of a DATA frame after seq8 and bitmap: docs/protocol.md, DATA).
+    ``presence`` is None when every stream of every slot is present, else one
+    bool per stream of the slots, in order."""
+
+    config_id: int
+    slot: int
+    slots: list[bytes]
+    presence: list[bool] | None = None
+    streams_per_slot: list[int] = field(default_factory=list)
+
+
+class Forged(Exception):
+    """A datagram whose tag does not verify: dropped and counted, never decoded."""
+
+
+def encode_data(d: DataDatagram, key: bytes, direction: bytes) -> bytes:
+    """One DATA datagram (tag included)."""
+    if not 1 <= d.config_id <= 255 or not d.slots:
+        raise ValueError("a DATA datagram needs a config id 1..255 and at least one slot")
+    head = bytearray()
+    if d.presence is None:
+        head.append(DGRAM_DATA)
+        head.append(d.config_id)
+        head += struct.pack("<H", d.slot & 0xFFFF)
+    else:
+        if len(d.slots) > 255:
+            raise ValueError("at most 255 slots in a datagram with a presence bitmap")
+        head.append(DGRAM_DATA_BITMAP)
+        head.append(d.config_id)
+        head += struct.pack("<H", d.slot & 0xFFFF)
+        head.append(len(d.slots))
+        bm = bytearray((len(d.presence) + 7) // 8)
+        for i, p in enumerate(d.presence):
+            if p:
+                bm[i // 8] |= 1 << (i % 8)
+        head += varint(len(d.presence)) + bm
+    body = bytes(head) + b"".join(d.slots)
+    return body + tag(key, direction, d.slot, body, TAG_BYTES)
+
+
+@dataclass(frozen=True)
+class VerifiedData:
+    """A DATA datagram whose tag verified: the full slot and the undecoded values
+    (decode them with the schedule's value kinds, slot by slot)."""
+
+    config_id: int
+    slot: int
+    slot_count: int | None  # None: every stream present, count the slots while decoding
+    presence: bytes | None
+    stream_count: int
+    values: bytes
+
+
+def verify_data(raw: bytes, key: bytes, direction: bytes, expected_slot: int) -> VerifiedData:
+    """Check a DATA datagram's tag before anything else; raises Forged or
+    ProtocolError (offsets in the datagram)."""
+    if len(raw) < 4 + TAG_BYTES or raw[0] not in (DGRAM_DATA, DGRAM_DATA_BITMAP):
+        raise ProtocolError(ErrorCode.BAD_FRAME, "not a DATA datagram", 0)
+    body, got = raw[:-TAG_BYTES], raw[-TAG_BYTES:]
+    (low,) = struct.unpack_from("<H", raw, 2)
+    slot = extend16(low, expected_slot)
+    if not hmac.compare_digest(tag(key, direction, slot, body, TAG_BYTES), got):
+        raise Forged(f"tag of the datagram of slot {slot} does not verify")
+    r = Reader(body)
+    r.u8()
+    config_id = r.u8()
+    r.take(2)
+    if raw[0] == DGRAM_DATA:
+        return VerifiedData(config_id, slot, None, None, 0, bytes(body[r.pos:]))
+    count = r.u8()
+    streams = r.varint()
+    if count == 0 or streams > 8 * r.remaining():
+        raise r.fail("presence bitmap longer than the datagram")
+    bm = r.take((streams + 7) // 8)
+    for i in range(streams, len(bm) * 8):
+        if bm[i // 8] >> (i % 8) & 1:
+            raise r.fail("presence bit set beyond the datagram's streams")
+    return VerifiedData(config_id, slot, count, bytes(bm), streams, bytes(body[r.pos:]))
+
+
+def encode_control(counter: int, frame: bytes, key: bytes, direction: bytes) -> bytes:
+    """A control datagram: counter, one link frame (docs/protocol.md), 8 B tag."""
+    body = bytes([DGRAM_CONTROL]) + varint(counter) + frame
+    return body + tag(key, direction, counter, body, CONTROL_TAG_BYTES)
+
+
+def verify_control(raw: bytes, key: bytes, direction: bytes) -> tuple[int, bytes]:
+    """(counter, frame) of a control datagram whose tag verifies."""
+    if len(raw) < 3 + CONTROL_TAG_BYTES or raw[0] != DGRAM_CONTROL:
+        raise ProtocolError(ErrorCode.BAD_FRAME, "not a control datagram", 0)
+    body, got = raw[:-CONTROL_TAG_BYTES], raw[-CONTROL_TAG_BYTES:]
+    r = Reader(body)
+    r.u8()
+    counter = r.varint()
+    if not hmac.compare_digest(tag(key, direction, counter, body, CONTROL_TAG_BYTES), got):
+        raise Forged(f"tag of control datagram {counter} does not verify")
+    return counter, bytes(body[r.pos:])
+
+
+def encode_handshake(frame: bytes) -> bytes:
+    """A handshake datagram (HELLO, CHALLENGE, AUTH, AUTH_OK, ERROR): the
+    frames carry their own HMAC proofs, so no tag."""
+    return bytes([DGRAM_HANDSHAKE]) + frame
+
+
+def encode_nack(ranges: list[tuple[int, int]]) -> bytes:
+    """NACK frame body: ranges (first slot, count) the SubBroker is missing."""
+    if not 1 <= len(ranges) <= MAX_NACK_RANGES:
+        raise ValueError(f"a NACK holds 1..{MAX_NACK_RANGES} ranges")
+    body = varint(len(ranges))
+    for first, n in ranges:
+        body += varint(first) + varint(n)
+    return varint(len(body) + 1) + bytes([NACK]) + body
+
+
+def decode_nack(body: bytes) -> list[tuple[int, int]]:
+    r = Reader(body)
+    n = r.varint()
+    if not 1 <= n <= MAX_NACK_RANGES:
+        raise r.fail(f"a NACK holds 1..{MAX_NACK_RANGES} ranges")
+    out = []
+    for _ in range(n):
+        first, count = r.varint(), r.varint()
+        if not 1 <= count <= 65535:
+            raise r.fail("NACK range of 0 or more than 65535 slots")
+        out.append((first, count))
+    r.end()
+    return out
+
+
+class ReplayWindow:
+    """Sequence numbers seen (RFC 4303's sliding window): a number older than
+    the window or already seen is refused. ``size`` bounds the memory."""
+
+    def __init__(self, size: int = 1024) -> None:
+        self.size = size
+        self.top = -1
+        self.seen: set[int] = set()
+
+    def accept(self, seq: int) -> bool:
+        """True, and remember it, if ``seq`` is new and inside the window."""
+        if seq <= self.top - self.size or seq in self.seen:
+            return False
+        self.seen.add(seq)
+        if seq > self.top:
+            self.top = seq
+            floor = self.top - self.size
+            if len(self.seen) > self.size:
+                self.seen = {s for s in self.seen if s > floor}
+        return True

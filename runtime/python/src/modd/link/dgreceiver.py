@@ -1,0 +1,183 @@
+"""The base station's side of a datagram link (udp, serial): verifies each
+datagram's tag before anything else, refuses replays, decodes the slots it
+carries with the schedule, tracks gaps for NACKs and keeps the counters the
+SubBroker's status reports (docs/protocol.md, "Datagram transports").
+
+The sender's side is :class:`DatagramSender` (the PubBroker's packing and
+resend ring, in Python for tests, benchmarks and the reference)."""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from . import codec
+from .datagram import (
+    BASE_TO_DRONE,
+    DRONE_TO_BASE,
+    DataDatagram,
+    Forged,
+    ReplayWindow,
+    decode_nack,
+    encode_control,
+    encode_data,
+    encode_nack,
+    verify_control,
+    verify_data,
+)
+from .frames import ProtocolError, Value, ValueKind
+from .resend import GapTracker, ResendRing
+from .schedule import SlotIterator
+
+
+@dataclass
+class LinkStats:
+    """Counters of one datagram link (the SubBroker's status, per direction)."""
+
+    datagrams: int = 0
+    bytes_in: int = 0
+    bytes_out: int = 0
+    forged: int = 0
+    replayed: int = 0
+    malformed: int = 0
+    slots: int = 0
+    nacks: int = 0
+    _recent: deque[tuple[float, int, int]] = field(default_factory=deque)
+
+    def count(self, now: float, inbound: int = 0, outbound: int = 0) -> None:
+        self.bytes_in += inbound
+        self.bytes_out += outbound
+        self._recent.append((now, inbound, outbound))
+        while self._recent and self._recent[0][0] < now - 10.0:
+            self._recent.popleft()
+
+    def rates(self) -> tuple[float, float]:
+        """Measured bytes/s (in, out) over the last 10 s."""
+        if len(self._recent) < 2:
+            return 0.0, 0.0
+        span = max(self._recent[-1][0] - self._recent[0][0], 1.0)
+        return (sum(i for _, i, _ in self._recent) / span,
+                sum(o for _, _, o in self._recent) / span)
+
+
+class DatagramReceiver:
+    """Decodes DATA datagrams of one config into ``(slot, values)`` where
+    values lists the slot's streams in order (absent ones not present)."""
+
+    def __init__(self, key: bytes, config_id: int, periods_us: Sequence[int],
+                 kinds: Sequence[ValueKind], window: int = 1024) -> None:
+        self.key = key
+        self.config_id = config_id
+        self.periods_us = list(periods_us)
+        self.kinds = list(kinds)
+        self.replay = ReplayWindow(window)
+        self.gaps = GapTracker()
+        self.stats = LinkStats()
+        self.counter = 0
+
+    def on_datagram(self, raw: bytes, now: float) -> list[tuple[int, list[Value]]]:
+        """The slots of a datagram that verifies and is new, decoded; [] otherwise
+        (counted as forged, replayed or malformed)."""
+        self.stats.count(now, inbound=len(raw))
+        self.stats.datagrams += 1
+        try:
+            v = verify_data(raw, self.key, DRONE_TO_BASE, max(self.gaps.next, 0))
+        except Forged:
+            self.stats.forged += 1
+            return []
+        except ProtocolError:
+            self.stats.malformed += 1
+            return []
+        if v.config_id != self.config_id or not self.replay.accept(v.slot):
+            self.stats.replayed += 1
+            return []
+        try:
+            out = self._decode(v.slot, v.slot_count, v.presence, v.values)
+        except ProtocolError:
+            self.stats.malformed += 1
+            return []
+        self.gaps.received(v.slot, len(out), now)
+        self.stats.slots += len(out)
+        return out
+
+    def _decode(self, first: int, count: int | None, presence: bytes | None,
+                values: bytes) -> list[tuple[int, list[Value]]]:
+        r = codec.Reader(values)
+        it = SlotIterator(self.periods_us)
+        it.skip_to(first)
+        out: list[tuple[int, list[Value]]] = []
+        bit = 0
+        slot = first
+        while (count is None and r.remaining()) or (count is not None and len(out) < count):
+            streams = next(it).streams
+            vals: list[Value] = []
+            for s in streams:
+                present = presence is None or bool(presence[bit // 8] >> (bit % 8) & 1)
+                bit += 1
+                vals.append(codec._get_value(r, self.kinds[s]) if present else Value())
+            out.append((slot, vals))
+            slot += 1
+        r.end()
+        return out
+
+    def nack(self, now: float, every: float) -> bytes | None:
+        """A control datagram asking for the missing slots, when one is due."""
+        ranges = self.gaps.due(now, every)
+        if not ranges:
+            return None
+        self.counter += 1
+        self.stats.nacks += 1
+        raw = encode_control(self.counter, encode_nack(ranges), self.key, BASE_TO_DRONE)
+        self.stats.count(now, outbound=len(raw))
+        return raw
+
+
+class DatagramSender:
+    """Packs encoded slots into DATA datagrams (up to ``delay_s`` and
+    ``room`` value bytes), keeps them in a resend ring, answers NACKs."""
+
+    def __init__(self, key: bytes, config_id: int, delay_s: float, room: int) -> None:
+        self.key = key
+        self.config_id = config_id
+        self.delay_s = delay_s
+        self.room = room
+        self.ring = ResendRing()
+        self.group: list[tuple[int, float, bytes]] = []
+        self.window = ReplayWindow(64)
+
+    def add_slot(self, slot: int, date: float, values: bytes) -> list[bytes]:
+        """Queue one all-present slot; returns the datagrams to send now."""
+        out: list[bytes] = []
+        if self.group and (date - self.group[0][1] > self.delay_s
+                           or sum(len(v) for *_, v in self.group) + len(values) > self.room):
+            out.append(self.flush())
+        self.group.append((slot, date, values))
+        return out
+
+    def due(self, now: float) -> list[bytes]:
+        """The pending datagram, once its first slot has waited the accepted delay."""
+        if self.group and now - self.group[0][1] >= self.delay_s:
+            return [self.flush()]
+        return []
+
+    def flush(self) -> bytes:
+        first = self.group[0][0]
+        raw = encode_data(DataDatagram(self.config_id, first, [v for *_, v in self.group]),
+                          self.key, DRONE_TO_BASE)
+        self.ring.add(first, len(self.group), raw)
+        self.group.clear()
+        return raw
+
+    def on_control(self, raw: bytes) -> list[bytes]:
+        """Datagrams to resend for a NACK (nothing for a forged or replayed one)."""
+        try:
+            counter, frame = verify_control(raw, self.key, BASE_TO_DRONE)
+        except (Forged, ProtocolError):
+            return []
+        if not self.window.accept(counter):
+            return []
+        f = codec.split_frame(frame)
+        if f is None or f.type != 0x09:
+            return []
+        return self.ring.lookup(decode_nack(f.body))

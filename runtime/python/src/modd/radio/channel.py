@@ -1,0 +1,109 @@
+"""One direction of an emulated radio: decides, for each packet offered at a
+time, whether it is dropped (and why) or when it arrives. Pure and seeded; the
+clock is passed in, so tests drive it without sleeping.
+
+>>> ch = Channel(RadioSpec(rate=1000, latency_ms=50), seed=1)
+>>> ch.offer(b"x" * 100, now=0.0)  # 100 B at 1000 B/s, then 50 ms
+0.15
+"""
+
+from __future__ import annotations
+
+import random
+from collections import Counter
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class RadioSpec:
+    """What the radio imposes (both directions alike)."""
+
+    rate: float | None = None  # bytes/s, None: unlimited
+    packet: int | None = None  # largest packet in bytes; larger ones are dropped
+    loss: float = 0.0  # probability of losing a packet
+    latency_ms: float = 0.0
+    jitter_ms: float = 0.0  # uniform in [-jitter, +jitter], never before the send
+    outages: tuple[tuple[float, float], ...] = ()  # (start s, duration s) from the start
+    queue_s: float = 2.0  # a packet that would wait longer than this to be sent is dropped
+    seed: int = 0
+
+    @staticmethod
+    def parse(text: str) -> RadioSpec:
+        """``rate=3600,packet=252,loss=0.05,latency_ms=80,jitter_ms=20,outage=10+30,seed=7``
+        (``outage`` may repeat: start+duration in seconds). Raises ValueError naming
+        the bad item."""
+        values: dict[str, float] = {}
+        outages: list[tuple[float, float]] = []
+        for item in filter(None, (p.strip() for p in text.split(","))):
+            key, sep, raw = item.partition("=")
+            if not sep:
+                raise ValueError(f"radio setting {item!r}: expected name=value")
+            try:
+                if key == "outage":
+                    start, _, length = raw.partition("+")
+                    outages.append((float(start), float(length)))
+                    continue
+                value = float(raw)
+            except ValueError:
+                raise ValueError(f"radio setting {key!r}: {raw!r} is not a number") from None
+            if key not in ("rate", "packet", "loss", "latency_ms", "jitter_ms", "queue_s",
+                           "seed"):
+                raise ValueError(f"unknown radio setting {key!r}; expected rate, packet, loss, "
+                                 "latency_ms, jitter_ms, outage, queue_s or seed")
+            if value < 0 or (key == "loss" and value > 1):
+                raise ValueError(f"radio setting {key}={raw} is out of range")
+            values[key] = value
+        return RadioSpec(
+            rate=values.get("rate"), packet=int(values["packet"]) if "packet" in values else None,
+            loss=values.get("loss", 0.0), latency_ms=values.get("latency_ms", 0.0),
+            jitter_ms=values.get("jitter_ms", 0.0), outages=tuple(outages),
+            queue_s=values.get("queue_s", 2.0), seed=int(values.get("seed", 0)))
+
+
+@dataclass
+class Channel:
+    """One direction. ``offer`` returns the arrival time, or None when dropped
+    (``dropped`` counts why: loss, outage, oversize, queue)."""
+
+    spec: RadioSpec
+    seed: int = 0
+    start: float = 0.0
+    passed: int = 0
+    passed_bytes: int = 0
+    dropped: Counter[str] = field(default_factory=Counter)
+    _busy_until: float = 0.0
+    _rng: random.Random = field(init=False)
+
+    def __post_init__(self) -> None:
+        self._rng = random.Random(self.seed)
+
+    def in_outage(self, now: float) -> bool:
+        t = now - self.start
+        return any(s <= t < s + d for s, d in self.spec.outages)
+
+    def offer(self, packet: bytes, now: float) -> float | None:
+        s = self.spec
+        if s.packet is not None and len(packet) > s.packet:
+            self.dropped["oversize"] += 1
+            return None
+        if self.in_outage(now):
+            self.dropped["outage"] += 1
+            return None
+        begin = max(now, self._busy_until)
+        if begin - now > s.queue_s:
+            self.dropped["queue"] += 1
+            return None
+        end = begin + (len(packet) / s.rate if s.rate else 0.0)
+        self._busy_until = end  # a lost packet used the air time too
+        if self._rng.random() < s.loss:
+            self.dropped["loss"] += 1
+            return None
+        jitter = self._rng.uniform(-s.jitter_ms, s.jitter_ms) if s.jitter_ms else 0.0
+        self.passed += 1
+        self.passed_bytes += len(packet)
+        return round(max(end, end + (s.latency_ms + jitter) / 1000), 9)
+
+    def summary(self) -> str:
+        drops = ", ".join(f"{k} {v}" for k, v in sorted(self.dropped.items())) or "none"
+        lost = sum(self.dropped.values())
+        return f"passed {self.passed} ({self.passed_bytes} B), dropped {lost} ({drops})"

@@ -1,0 +1,77 @@
+"""``modd-radio``: put an emulated radio between the two ends of the MoDD link.
+
+UDP: ``modd-radio --udp 127.0.0.1:7181 --to 127.0.0.1:7171 --radio "rate=3600,loss=0.05"``
+(the SubBroker sends to 7181 instead of the PubBroker's 7171).
+Serial: ``modd-radio --serial --radio "rate=3600,packet=252"`` creates two
+pseudo-terminals, prints their paths (``base=/dev/pts/N drone=/dev/pts/M``) and
+relays between them. Prints what it passed and dropped every ``--report`` seconds
+and when it stops (SIGTERM, SIGINT, or ``--duration``)."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import time
+
+from .channel import Channel, RadioSpec
+from .relay import open_pty_pair, run_serial, run_udp
+
+
+def _hostport(text: str) -> tuple[str, int]:
+    host, _, port = text.rpartition(":")
+    if not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected HOST:PORT")
+    return host, int(port)
+
+
+def _spec(text: str) -> RadioSpec:
+    try:
+        return RadioSpec.parse(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _print(up: Channel, down: Channel) -> None:
+    print(f"radio: base->drone {up.summary()}; drone->base {down.summary()}", flush=True)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="modd-radio", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    mode = p.add_mutually_exclusive_group(required=True)
+    mode.add_argument("--udp", type=_hostport, metavar="HOST:PORT",
+                      help="listen here for the base station's datagrams")
+    mode.add_argument("--serial", action="store_true",
+                      help="relay between two new pseudo-terminals")
+    p.add_argument("--to", type=_hostport, metavar="HOST:PORT",
+                   help="the PubBroker's UDP endpoint (with --udp)")
+    p.add_argument("--radio", type=_spec, default=RadioSpec(), metavar="SPEC",
+                   help='e.g. "rate=3600,packet=252,loss=0.05,latency_ms=80,jitter_ms=20,'
+                        'outage=10+30,seed=7"')
+    p.add_argument("--report", type=float, default=10.0, metavar="S")
+    p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
+    args = p.parse_args(argv)
+    if args.udp and not args.to:
+        p.error("--udp needs --to HOST:PORT (the PubBroker's endpoint)")
+    stopping: list[bool] = []
+    signal.signal(signal.SIGTERM, lambda *_: stopping.append(True))
+    signal.signal(signal.SIGINT, lambda *_: stopping.append(True))
+    end = time.monotonic() + args.duration if args.duration else None
+
+    def stop() -> bool:
+        return bool(stopping) or (end is not None and time.monotonic() >= end)
+
+    if args.udp:
+        up, down = run_udp(args.radio, args.udp, args.to, stop, _print, args.report)
+    else:
+        base, base_path = open_pty_pair()
+        drone, drone_path = open_pty_pair()
+        print(f"base={base_path} drone={drone_path}", flush=True)
+        up, down = run_serial(args.radio, base, drone, stop, _print, args.report)
+    _print(up, down)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

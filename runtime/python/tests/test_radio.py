@@ -1,0 +1,154 @@
+"""modd-radio: the channel model (rate, packet size, loss, latency, jitter,
+outages; seeded), the UDP relay and the pseudo-terminal relay, and the CLI's
+passed/dropped report. The oracle is what the far end actually received."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import threading
+import time
+
+import pytest
+from modd.ports import free_port
+from modd.radio.channel import Channel, RadioSpec
+from modd.radio.relay import open_pty_pair, run_serial, run_udp
+
+
+def test_spec_parse_and_errors() -> None:
+    s = RadioSpec.parse("rate=3600,loss=0.05,latency_ms=80,packet=252,outage=10+30,seed=7")
+    assert (s.rate, s.loss, s.latency_ms, s.packet, s.outages, s.seed) == \
+        (3600, 0.05, 80, 252, ((10.0, 30.0),), 7)
+    for bad, msg in (("rate=x", "not a number"), ("loss=2", "out of range"),
+                     ("speed=3", "unknown radio setting 'speed'"), ("rate", "name=value")):
+        with pytest.raises(ValueError, match=msg):
+            RadioSpec.parse(bad)
+
+
+def test_channel_rate_loss_outage_are_seeded() -> None:
+    spec = RadioSpec(rate=1000, loss=0.2, packet=100, outages=((5, 2),), seed=3)
+    a, b = Channel(spec, 9), Channel(spec, 9)
+    times = [i * 0.1 for i in range(100)]
+    ra = [a.offer(b"x" * 50, t) for t in times]
+    assert ra == [b.offer(b"x" * 50, t) for t in times]  # same seed, same fate
+    assert a.dropped["outage"] == 20  # 5.0 <= t < 7.0
+    assert 5 <= a.dropped["loss"] <= 30
+    assert a.offer(b"x" * 101, 20.0) is None and a.dropped["oversize"] == 1
+    # back to back at 1000 B/s: 50 B takes 50 ms, the second waits for the first
+    c = Channel(RadioSpec(rate=1000))
+    assert c.offer(b"x" * 50, 0.0) == 0.05 and c.offer(b"x" * 50, 0.0) == 0.1
+    # more than queue_s of backlog is dropped
+    q = Channel(RadioSpec(rate=100, queue_s=1.0))
+    fates = [q.offer(b"x" * 50, 0.0) for _ in range(5)]
+    assert fates[:3] == [0.5, 1.0, 1.5] and fates[3:] == [None, None]
+    assert q.dropped["queue"] == 2
+
+
+def test_udp_relay_both_ways_with_loss_and_latency() -> None:
+    target = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    target.bind(("127.0.0.1", 0))
+    port = free_port("udp")
+    stop = threading.Event()
+    spec = RadioSpec(loss=0.2, latency_ms=30, seed=5)
+    result: list[tuple[Channel, Channel]] = []
+    t = threading.Thread(target=lambda: result.append(
+        run_udp(spec, ("127.0.0.1", port), target.getsockname(), stop.is_set)))
+    t.start()
+    base = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    base.settimeout(2)
+    try:
+        time.sleep(0.05)
+        sent_at = time.monotonic()
+        for i in range(200):
+            base.sendto(i.to_bytes(2, "little"), ("127.0.0.1", port))
+        target.settimeout(0.5)
+        got: list[int] = []
+        try:
+            while True:
+                data, relay = target.recvfrom(100)
+                got.append(int.from_bytes(data, "little"))
+        except TimeoutError:
+            pass
+        assert time.monotonic() - sent_at >= 0.03
+        for i in got[:20]:  # back to the base station through the radio
+            target.sendto(bytes([i]), relay)
+        back = 0
+        base.settimeout(0.5)
+        try:
+            while True:
+                base.recvfrom(100)
+                back += 1
+        except TimeoutError:
+            pass
+    finally:
+        stop.set()
+        t.join(5)
+        base.close()
+        target.close()
+    up, down = result[0]
+    assert up.passed == len(got) and up.dropped["loss"] == 200 - len(got)
+    assert 120 <= len(got) <= 185
+    assert down.passed == back and back + down.dropped["loss"] == 20
+
+
+def test_serial_relay_between_pseudo_terminals() -> None:
+    base_master, base_path = open_pty_pair()
+    drone_master, drone_path = open_pty_pair()
+    stop = threading.Event()
+    result: list[tuple[Channel, Channel]] = []
+    spec = RadioSpec(rate=20000, packet=64, seed=1)
+    t = threading.Thread(target=lambda: result.append(
+        run_serial(spec, base_master, drone_master, stop.is_set)))
+    t.start()
+    import tty
+    b = os.open(base_path, os.O_RDWR | os.O_NOCTTY)
+    d = os.open(drone_path, os.O_RDWR | os.O_NOCTTY)
+    tty.setraw(b)
+    tty.setraw(d)
+    try:
+        frames = b"".join(bytes([i + 1]) * 30 + b"\x00" for i in range(10))
+        os.write(d, frames)
+        os.set_blocking(b, False)
+        got = b""
+        deadline = time.monotonic() + 3
+        while len(got) < len(frames) and time.monotonic() < deadline:
+            try:
+                got += os.read(b, 4096)
+            except BlockingIOError:
+                time.sleep(0.01)
+        assert got == frames
+    finally:
+        stop.set()
+        t.join(5)
+        for fd in (b, d, base_master, drone_master):
+            os.close(fd)
+    up, down = result[0]
+    assert down.passed == 10 and down.passed_bytes == len(frames)  # one packet per frame
+
+
+def test_cli_prints_passed_and_dropped() -> None:
+    target = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    target.bind(("127.0.0.1", 0))
+    port = free_port("udp")
+    host, tport = target.getsockname()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "modd.radio.cli", "--udp", f"127.0.0.1:{port}", "--to",
+         f"{host}:{tport}", "--radio", "loss=0.5,seed=2", "--duration", "1.5"],
+        stdout=subprocess.PIPE, text=True)
+    try:
+        time.sleep(0.5)
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+            for _ in range(40):
+                s.sendto(b"x", ("127.0.0.1", port))
+        out, _ = proc.communicate(timeout=10)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        target.close()
+    assert proc.returncode == 0
+    last = out.strip().splitlines()[-1]
+    assert "base->drone passed" in last and "loss" in last, out
+    passed = int(last.split("base->drone passed ")[1].split()[0])
+    assert 8 <= passed <= 32

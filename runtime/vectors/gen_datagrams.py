@@ -1,0 +1,94 @@
+"""Datagram-transport vectors (udp, serial: docs/protocol.md, "Datagram
+transports"), written to datagram.json by generate.py with the Python codec
+(modd.link.datagram, modd.link.serialframe)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from modd.link import codec
+from modd.link.datagram import (
+    BASE_TO_DRONE,
+    DRONE_TO_BASE,
+    DataDatagram,
+    encode_control,
+    encode_data,
+    encode_handshake,
+    encode_nack,
+    session_key,
+)
+from modd.link.frames import Aggregation, Data, Hello, Ping, Value, ValueType, value_kind
+from modd.link.serialframe import encode_frame
+
+KEY = b"modd-test-key"
+CN = bytes(range(16))
+SN = bytes(range(0xA0, 0xB0))
+S1_KINDS = [value_kind(ValueType.FLOAT32, a) for a in
+            (Aggregation.AVERAGE, Aggregation.AVERAGE, Aggregation.MIN, Aggregation.MAX)]
+
+
+def slot_values(values: Sequence[Value]) -> bytes:
+    """The value bytes of one slot (a DATA frame's body after seq8 and bitmap)."""
+    present = [v for v in values if v.present]
+    kinds = [k for k, v in zip(S1_KINDS, values, strict=True) if v.present]
+    frame = codec.encode_data(Data(False, 0, 0, 0, list(present)), kinds)
+    return frame[3:]  # length (1 B here), type, seq8
+
+
+def _slot(i: int) -> list[Value]:
+    return [Value(True, 0.5 + i, 0, 6), Value(True, -1.25, 0, 7), Value(True, 9.75 - i),
+            Value(True, 10.5 + i)]
+
+
+def write(here: Path) -> None:
+    skey = session_key(KEY, CN, SN)
+    five = [slot_values(_slot(i)) for i in range(5)]
+    data = encode_data(DataDatagram(1, 70000, five), skey, DRONE_TO_BASE)
+    absent = [_slot(0), [Value(True, 1.0, 0, 6), Value(), Value(True, 2.0), Value()]]
+    presence = [v.present for s in absent for v in s]
+    bitmap = encode_data(DataDatagram(1, 65535, [slot_values(s) for s in absent], presence),
+                         skey, DRONE_TO_BASE)
+    nack = encode_control(3, encode_nack([(69990, 5), (70010, 1)]), skey, BASE_TO_DRONE)
+    ping = encode_control(4, codec.encode(Ping(b"\x07\x01")), skey, BASE_TO_DRONE)
+    hello = encode_handshake(codec.encode(Hello(1, CN)))
+    forged = bytearray(data)
+    forged[5] ^= 0x01
+    cases: list[dict[str, Any]] = [
+        {"name": "data_scenario1_5_slots", "direction": "D", "expected_slot": 69990,
+         "meaning": "config 1, slots 70000..70004 of scenario 1 (slot i: AVERAGE 0.5+i count 6,"
+                    " AVERAGE -1.25 count 7, MIN 9.75-i, MAX 10.5+i), all present, 4-byte tag",
+         "hex": data.hex(), "config_id": 1, "slot": 70000,
+         "slots": [s.hex() for s in five]},
+        {"name": "data_bitmap", "direction": "D", "expected_slot": 65534,
+         "meaning": "config 1, slots 65535 and 65536 (low 16 bits 0xffff), the second with "
+                    "streams 1 and 3 absent: 8-stream presence bitmap 0b01011111 "
+                    "(bit i = stream i mod 4 of slot i div 4)",
+         "hex": bitmap.hex(), "config_id": 1, "slot": 65535,
+         "presence": presence, "slots": [slot_values(s).hex() for s in absent]},
+        {"name": "control_nack", "direction": "B", "counter": 3,
+         "meaning": "base asks for slots 69990..69994 and 70010 (NACK in control datagram 3)",
+         "hex": nack.hex(), "ranges": [[69990, 5], [70010, 1]]},
+        {"name": "control_ping", "direction": "B", "counter": 4,
+         "meaning": "keepalive PING (payload 07 01) in control datagram 4, 8-byte tag",
+         "hex": ping.hex()},
+        {"name": "handshake_hello", "meaning": "HELLO version 1, nonce 00..0f, no tag",
+         "hex": hello.hex()},
+        {"name": "serial_data_scenario1_5_slots",
+         "meaning": "data_scenario1_5_slots framed for serial: COBS(datagram + CRC-16 LE) 00",
+         "hex": encode_frame(data).hex(), "datagram": data.hex()},
+    ]
+    invalid = [
+        {"name": "forged", "direction": "D", "expected_slot": 69990, "hex": forged.hex(),
+         "why": "one value bit flipped: the tag does not verify (dropped, counted as forged)"},
+        {"name": "wrong_direction", "direction": "B", "expected_slot": 69990, "hex": data.hex(),
+         "why": "a drone->base datagram reflected to the drone: the tag covers the direction"},
+        {"name": "replay", "direction": "D", "expected_slot": 69990, "hex": data.hex(),
+         "why": "the valid datagram again after it was accepted: refused by the replay window"},
+    ]
+    doc = {"name": "datagram", "key": KEY.hex(), "client_nonce": CN.hex(),
+           "server_nonce": SN.hex(), "session_key": skey.hex(), "vectors": cases,
+           "invalid": invalid}
+    (here / "datagram.json").write_text(json.dumps(doc, indent=1) + "\n")
