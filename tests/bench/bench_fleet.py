@@ -39,6 +39,7 @@ for p in (HERE, HERE.parent / "subbroker"):
 
 import httpx2 as httpx  # noqa: E402
 from benchkit.footprint import Footprint, Sampler  # noqa: E402
+from modd.zenoh_auth import CredentialStore  # noqa: E402
 from modd_model import load_model  # noqa: E402
 from subbroker_harness import (  # noqa: E402
     PYTHON,
@@ -90,7 +91,8 @@ class Drone:
         return sum(1 / float(s["periodS"]) for s in self.model["subscribers"])
 
 
-def subbroker_toml(tmp: Path, drone: Drone, model_path: Path, router: int) -> Path:
+def subbroker_toml(tmp: Path, drone: Drone, model_path: Path, router: int,
+                   credentials: Path) -> Path:
     path = tmp / f"{drone.name}.toml"
     path.write_text(f"""
 model = {json.dumps(str(model_path))}
@@ -101,6 +103,7 @@ key = "env:MODD_LINK_KEY"
 mode = "client"
 connect = ["tcp/127.0.0.1:{router}"]
 listen = []
+credentials_dir = {json.dumps(str(credentials))}
 [delivery]
 tcp = false
 status_period_s = 1.0
@@ -202,7 +205,7 @@ class Result:
         return "\n".join(lines)
 
 
-def start_backend(tmp: Path, router: int) -> tuple[Proc, int]:
+def start_backend(tmp: Path, router: int, credentials: Path) -> tuple[Proc, int]:
     """Started, not waited for (it imports for seconds): wait_port(port) before use."""
     port = free_port()
     exe = str(Path(PYTHON).with_name("modd-backend"))
@@ -210,8 +213,10 @@ def start_backend(tmp: Path, router: int) -> tuple[Proc, int]:
     data.mkdir()
     proc = Proc("backend", [exe, "--port", str(port), "--data", str(data),
                             "--zenoh-connect", f"tcp/127.0.0.1:{router}",
-                            "--scene-port", "-1", "--admin-password", PASSWORD],
-                tmp / "backend.log")
+                            "--zenoh-credentials", str(credentials / "backend.cred"),
+                            "--deploy-key", str(credentials / "deploy.key"),
+                            "--scene-port", "-1"],
+                tmp / "backend.log", env={"MODD_ADMIN_PASSWORD": PASSWORD})
     return proc, port
 
 
@@ -251,12 +256,16 @@ async def _run(tmp: Path, n: int, seconds: float, extra: int) -> Result:
     procs: list[Proc] = []
     router = free_port()
     kit = str(HERE / "benchkit" / "fleet_procs.py")
+    # as deployed: the router authenticates every client and applies access control
+    credentials = tmp / "credentials"
+    CredentialStore(credentials).ensure()
     procs.append(Proc("router", [str(PYTHON), kit, "router", "--listen",
-                                 f"tcp/127.0.0.1:{router}"], tmp / "router.log"))
+                                 f"tcp/127.0.0.1:{router}", "--credentials", str(credentials)],
+                      tmp / "router.log"))
     try:
         if not procs[0].wait_log("ready", 30):
             raise RuntimeError(f"router: {procs[0].log()}")
-        backend, port = start_backend(tmp, router)
+        backend, port = start_backend(tmp, router, credentials)
         procs.append(backend)
         drones = [Drone(f"d{i}", drone_model(i, extra), 0, 0) for i in range(n)]
         targets = []
@@ -267,7 +276,8 @@ async def _run(tmp: Path, n: int, seconds: float, extra: int) -> Result:
             path.write_text(json.dumps(d.model))
             d.pubbroker = start_drone(dtmp, d, path)
             d.subbroker = Proc(f"sb-{d.name}", [*SUBBROKER, "--config",
-                                                str(subbroker_toml(dtmp, d, path, router))],
+                                                str(subbroker_toml(dtmp, d, path, router,
+                                                                   credentials))],
                                dtmp / "sb.log")
             procs += [d.pubbroker, d.subbroker]
             targets.append([d.name, d.ingress, str(path)])

@@ -20,6 +20,7 @@ import zenoh
 from ecosystem_support import node_json
 from fastapi.testclient import TestClient
 from modd.ports import free_port
+from modd.zenoh_session import client_settings, open_session
 from modd_backend import Settings, create_app
 from modd_model import load_model
 from station import PUBBROKER, Station
@@ -45,6 +46,8 @@ def backend(station: Station, tmp_path_factory: pytest.TempPathFactory
     port = free_port()
     settings = Settings(data_dir=tmp_path_factory.mktemp("backend"),
                         zenoh_connect=(station.zenoh,), initial_admin_password="pw-12345678",
+                        zenoh_credentials=station.credentials.cred_file("backend"),
+                        deploy_key_file=station.credentials.deploy_key_file,
                         foxglove_port=port)
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         yield c, port
@@ -53,12 +56,9 @@ def backend(station: Station, tmp_path_factory: pytest.TempPathFactory
 class ZenohOracle:
     """Every delivered value on ``modd/usv/sub/*``, by subscriber."""
 
-    def __init__(self, endpoint: str) -> None:
-        c = zenoh.Config()
-        c.insert_json5("mode", '"peer"')
-        c.insert_json5("scouting/multicast/enabled", "false")
-        c.insert_json5("connect/endpoints", json.dumps([endpoint]))
-        self.session = zenoh.open(c)
+    def __init__(self, endpoint: str, credentials: Path) -> None:
+        # the backend's identity: it may subscribe to values and ask for subscriptions
+        self.session = open_session(client_settings(endpoint, credentials))
         self.values: dict[str, list[dict[str, Any]]] = {}
         self._lock = threading.Lock()
         self.sub = self.session.declare_subscriber("modd/usv/sub/*", self._on)
@@ -83,7 +83,7 @@ class ZenohOracle:
 def test_every_subscriber_live_in_foxglove(backend: tuple[TestClient, int],
                                            station: Station) -> None:
     _client, port = backend
-    oracle = ZenohOracle(station.zenoh)
+    oracle = ZenohOracle(station.zenoh, station.credentials.cred_file("backend"))
     try:
         time.sleep(1.0)  # the zenoh oracle is connected before the Foxglove client
         dyn = "dyn_min05"

@@ -57,7 +57,8 @@ def test_who_publishes_the_autopilot_topics(tmp_path: Path, no_mavlink: bool) ->
             f"udpout:127.0.0.1:{udp_port}"] + (["--no-mavlink"] if no_mavlink else [])
     sim = Proc(argv, tmp_path / "sim.log")
     try:
-        ingress = _ingress_bytes(server, 2.5)
+        # the publisher waits up to 1 s for a catalogue this plain server never sends
+        ingress = _ingress_bytes(server, 5.0)
         udp.settimeout(0.5)
         try:
             datagrams = [udp.recv(4096) for _ in range(3)]

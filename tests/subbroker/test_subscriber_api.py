@@ -14,8 +14,9 @@ import pytest
 from modd.subbroker.client import NoReply
 from modd.subbroker.payload import DeliveredValue
 from modd.subscriber import subscribe_dynamic
+from modd.zenoh_auth import acl
 from modd.zenoh_session import ZenohSettings, client_settings, open_session, wait_connected
-from subbroker_harness import free_port
+from subbroker_harness import free_port, shared_credentials
 
 
 def value(i: int, sub: str = "sub_1") -> DeliveredValue:
@@ -68,10 +69,24 @@ def test_iterate_collect_dataframe_and_callback(pair: Any) -> None:
 
 
 def test_dynamic_without_subbroker_is_no_reply() -> None:
-    session = open_session(client_settings(f"tcp/127.0.0.1:{free_port()}"))
+    """A router with no SubBroker behind it: no reply, said as such."""
+    port = free_port()
+    router = open_session(ZenohSettings(
+        mode="router", listen=(f"tcp/127.0.0.1:{port}",), access_control=acl(None),
+        dictionary_file=str(shared_credentials().dictionary)))
+    session = open_session(client_settings(f"tcp/127.0.0.1:{port}",
+                                           shared_credentials().cred_file("backend")))
     try:
-        assert not wait_connected(session, 0.2)
+        assert wait_connected(session, 2.0)
         with pytest.raises(NoReply):
             subscribe_dynamic("usv", "usv.a.x", "1.0", "MIN", session=session, timeout_s=1)
     finally:
         session.close()
+        router.close()
+
+
+def test_nothing_listening_is_a_clear_error() -> None:
+    """A client session fails at once, naming where it tried, when nothing listens."""
+    where = f"tcp/127.0.0.1:{free_port()}"
+    with pytest.raises(ValueError, match=f"cannot open a zenoh session \\(client, {where}\\)"):
+        open_session(client_settings(where))

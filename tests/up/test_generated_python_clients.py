@@ -35,7 +35,8 @@ def test_generated_publisher_and_subscriber(scenarios_dir: Path, tmp_path: Path,
              "--ingress", f"unix:{run / 'ingress.sock'}"],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         sub = subprocess.run(
-            [sys.executable, str(tmp_path / "gen/scientist/python/sub_5.py"), "--count", "3"],
+            [sys.executable, str(tmp_path / "gen/scientist/python/sub_5.py"), "--count", "3",
+             "--credentials", str(run / "credentials" / "viewer.cred")],
             env={**os.environ, "MODD_ZENOH_CONNECT": zenoh}, capture_output=True, text=True,
             timeout=60)
     finally:

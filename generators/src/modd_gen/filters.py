@@ -3,6 +3,7 @@ out text only; every decision about types and names is made here, and tested."""
 
 from __future__ import annotations
 
+import html
 import json
 import re
 from typing import Any
@@ -202,6 +203,18 @@ def to_json(value: Any) -> str:
     return json.dumps(value, indent=2, ensure_ascii=False)
 
 
+def xml_text(text: str) -> str:
+    """Text for an XML element's content: ``&``, ``<``, ``>`` and quotes as
+    entities, control characters refused (XML 1.0 cannot hold them).
+
+    >>> xml_text('a<b & "c"')
+    'a&lt;b &amp; &quot;c&quot;'
+    """
+    if any(ord(c) < 0x20 and c not in "\t\n\r" for c in text):
+        raise ValueError(f"{text!r}: control characters cannot appear in XML")
+    return html.escape(text, quote=True).replace("&#x27;", "&apos;")
+
+
 FILTERS = {
     "cpp_type": cpp_type,
     "cpp_value_type": cpp_value_type,
@@ -220,4 +233,5 @@ FILTERS = {
     "period_ms": period_ms,
     "period_us": period_us,
     "to_json": to_json,
+    "xml_text": xml_text,
 }

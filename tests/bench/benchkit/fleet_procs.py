@@ -2,7 +2,7 @@
 router (a Python session in router mode) and one publisher load feeding every drone's
 PubBroker (its TCP ingress, docs/ingress.md) from a single process.
 
-    python fleet_procs.py router --listen tcp/127.0.0.1:PORT
+    python fleet_procs.py router --listen tcp/127.0.0.1:PORT --credentials DIR
     python fleet_procs.py load --targets '[["d0", 7001, MODEL_JSON_PATH], ...]' --seconds S
 """
 
@@ -25,12 +25,17 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "subbroker"))
 from loadgen import TYPES, frame, string, value_for, varint  # noqa: E402
 
 
-def router(listen: str) -> None:
+def router(listen: str, credentials: str) -> None:
+    """A router with a SubBroker's authentication and access control (every drone)."""
+    from modd.zenoh_auth import CredentialStore, acl
     from modd.zenoh_session import ZenohSettings, open_session
 
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda s, f: stop.set())
-    session = open_session(ZenohSettings(mode="router", listen=(listen,)))
+    store = CredentialStore(credentials).ensure()
+    session = open_session(ZenohSettings(
+        mode="router", listen=(listen,), dictionary_file=str(store.dictionary),
+        access_control=acl(None), extra={"scouting/gossip/enabled": "false"}))
     print("ready", flush=True)
     stop.wait()
     session.close()  # type: ignore[no-untyped-call]
@@ -90,11 +95,12 @@ def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("what", choices=["router", "load"])
     ap.add_argument("--listen")
+    ap.add_argument("--credentials", help="credentials directory (made when missing)")
     ap.add_argument("--targets")
     ap.add_argument("--seconds", type=float, default=60.0)
     args = ap.parse_args()
     if args.what == "router":
-        router(args.listen)
+        router(args.listen, args.credentials)
     else:
         load([tuple(t) for t in json.loads(args.targets)], args.seconds)
     return 0

@@ -6,7 +6,9 @@ Prints each value as the base-station SubBroker delivers it on zenoh, or, with
 --dataframe SECONDS, collects the values of that many seconds into a pandas
 DataFrame and writes it as CSV. Needs the MoDD Python runtime (``import modd``)
 and a SubBroker reachable through zenoh (default tcp/127.0.0.1:7447;
-MODD_ZENOH_CONNECT to change it).
+--connect or MODD_ZENOH_CONNECT to change it), which lets in only known users:
+give a viewer's credentials file (--credentials FILE or MODD_ZENOH_CREDENTIALS;
+`modd up` and `make run` print where theirs is).
 """
 
 from __future__ import annotations
@@ -25,12 +27,23 @@ def main() -> int:
     parser.add_argument("--dataframe", type=float, metavar="SECONDS",
                         help="collect this many seconds of values, print them as CSV")
     parser.add_argument("--count", type=int, help="stop after this many values")
+    parser.add_argument("--connect", metavar="ENDPOINT",
+                        help="the SubBroker's zenoh endpoint (default $MODD_ZENOH_CONNECT, "
+                        "else tcp/127.0.0.1:7447)")
+    parser.add_argument("--credentials", metavar="FILE",
+                        help="a viewer's credentials file (default $MODD_ZENOH_CREDENTIALS)")
     args = parser.parse_args()
+    try:
+        sub = modd.subscribe(DRONE, SUBSCRIBER, connect=args.connect,
+                             credentials=args.credentials)
+    except ValueError as exc:  # nothing listens there, or the credentials were refused
+        print(f"{SUBSCRIBER}: {exc}", file=sys.stderr)
+        return 1
     if args.dataframe is not None:
-        frame = modd.subscribe(DRONE, SUBSCRIBER).dataframe(duration_s=args.dataframe)
+        frame = sub.dataframe(duration_s=args.dataframe)
+        sub.close()
         frame.to_csv(sys.stdout, index=False)
         return 0
-    sub = modd.subscribe(DRONE, SUBSCRIBER)
     try:
         for n, sample in enumerate(sub, start=1):
             shown = "no sample in window" if sample.value is None else sample.value
