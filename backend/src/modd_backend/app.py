@@ -7,18 +7,25 @@ the first admin and the zenoh session are opened at start-up (lifespan).
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
+import os
 import sys
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from typing import Any, TextIO
 
 from fastapi import APIRouter, FastAPI
+from sqlalchemy import text
+from starlette.concurrency import run_in_threadpool
 
 from . import errors
 from .accounts import ensure_first_admin
 from .db import Store
 from .deployments import last_acked
 from .deps import AppState
+from .guards import Guard, HeavyLimiter
+from .hub import SubscriptionHub
 from .planning import preload_milp
 from .routers import (
     archives,
@@ -36,6 +43,7 @@ from .routers import (
 from .scene import SceneServer, SceneService
 from .settings import Settings
 from .spa import mount_frontend
+from .throttle import Throttle
 from .versions import get_version, model_of
 from .zbridge import ZenohBridge
 
@@ -68,11 +76,28 @@ def start_scene(settings: Settings, store: Store) -> SceneService:
     return SceneService(SceneServer(settings.host, port), deployed_model)
 
 
+def _ping(state: AppState) -> None:
+    with state.store.session() as db:
+        db.execute(text("SELECT 1"))
+
+
+async def _ping_database(state: AppState, every_s: float = 2.0) -> None:
+    """Keep ``state.database`` current for /api/health (which never waits on it)."""
+    while True:
+        try:
+            await asyncio.wait_for(run_in_threadpool(_ping, state), every_s * 2)
+            state.database = "ok"
+        except Exception:  # any failure of the store is reported, never raised
+            state.database = "error"
+        await asyncio.sleep(every_s)
+
+
 def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
     """The service for ``settings``; ``out`` receives the first admin's password."""
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        os.umask(0o077)  # the store, logs and state this process writes: owner only
         settings.data_dir.mkdir(parents=True, exist_ok=True)
         store = Store.open(settings.effective_database_url)
         with store.session() as db:
@@ -82,18 +107,31 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
             bridge = ZenohBridge.open(settings.zenoh_connect, settings.zenoh_listen)
         if settings.preload_milp:
             preload_milp()
-        app.state.modd = AppState(settings, store, bridge)
-        scene_sub = None
-        if bridge is not None and settings.scene_port is not None:
-            app.state.modd.scene = start_scene(settings, store)
-            scene_sub = bridge.subscribe("modd/*/sub/*", app.state.modd.scene.on_value)
+        state = AppState(
+            settings, store, bridge,
+            heavy=HeavyLimiter(settings.heavy_per_user, settings.heavy_total),
+            login_accounts=Throttle(settings.login_limit_account, settings.login_window_s),
+            login_addresses=Throttle(settings.login_limit_address, settings.login_window_s),
+        )
+        app.state.modd = state
+        state.database = "ok"  # just opened and migrated
+        if bridge is not None:
+            state.hub = SubscriptionHub()
+            state.hub.start(bridge)
+            if settings.scene_port is not None:
+                state.scene = start_scene(settings, store)
+                state.hub.listen_all(state.scene.on_value)
+        pinger = asyncio.create_task(_ping_database(state))
         try:
             yield
         finally:
-            if scene_sub is not None:
-                scene_sub.undeclare()
-            if app.state.modd.scene is not None:
-                app.state.modd.scene.server.stop()
+            pinger.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await pinger
+            if state.hub is not None:
+                state.hub.stop()
+            if state.scene is not None:
+                state.scene.server.stop()
             if bridge is not None:
                 bridge.close()
             store.close()
@@ -105,6 +143,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         lifespan=lifespan,
     )
     errors.install(app)
+    app.add_middleware(Guard, settings=settings)
     for router in ROUTERS:
         app.include_router(router)
     if settings.frontend_dist is not None:
