@@ -342,3 +342,10 @@ def test_heavy_limiter_refuses_at_once() -> None:
             pass
         assert exc.value.status == 503
     assert lim.in_flight == 0
+
+
+def test_scene_colour_needs_a_role(client: TestClient, user_factory: Callable[..., Headers]
+                                   ) -> None:
+    nobody = user_factory("nobody")
+    r = client.put("/api/scene/usv/colour", headers=nobody, json={"subscriber": None})
+    assert r.status_code == 403

@@ -69,10 +69,10 @@ try {
   }
   const backend = start("backend", [
     backendBin, "--host", "127.0.0.1", "--port", String(port), "--data", join(tmp, "data"),
-    "--admin-password", PASSWORD, "--frontend", join(frontend, "dist"),
+    "--frontend", join(frontend, "dist"),
     "--archives", join(tmp, "archives"),
     ...(drone ? ["--zenoh-connect", zenoh] : ["--no-zenoh"]),
-  ], { cwd: repo, logFile: join(tmp, "backend.log") });
+  ], { cwd: repo, logFile: join(tmp, "backend.log"), env: { MODD_ADMIN_PASSWORD: PASSWORD } });
   procs.push(backend);
   await waitForHttp(`${baseUrl}/openapi.json`, backend);
   console.log(`e2e: backend pid ${backend.pid} on ${baseUrl}; drone: ${drone ? `modd up pid ${procs[0].pid}` : `no (${pubbrokerBin} not built)`}; simulated values: ${liveValues ? "yes" : "no (no modd-sim)"}`);
