@@ -35,5 +35,6 @@ run tests/bench/bench_footprint.py --seconds "${FOOTPRINT_SECONDS:-30}"
 run tests/bench/bench_pubbroker.py --seconds "${PUBBROKER_SECONDS:-10}" --ingest-samples 10000000
 run tests/bench/bench_planner.py --quick
 run tests/bench/bench_backend_plan.py --runs 30
+run tests/bench/bench_health_ws.py --ops 20000
 echo
 echo "bench: all done in $(( $(date +%s) - start )) s"
