@@ -226,6 +226,10 @@ async def _receive_loop(websocket: WebSocket, relay: StreamRelay, state: AppStat
                 continue
             reply = await _handle(message, relay, state, user)
             relay.queue.put(reply)
+            # Messages already buffered are received without a suspension:
+            # yield once per op, so a flooding socket cannot starve the others
+            # (or /api/health) of the event loop.
+            await asyncio.sleep(0)
     except (WebSocketDisconnect, RuntimeError, KeyError):
         return
 
@@ -238,6 +242,7 @@ async def _send_loop(websocket: WebSocket, relay: StreamRelay) -> None:
             await websocket.send_json({"type": "dropped", "count": dropped})
         for item in batch:
             await websocket.send_json(item)
+            await asyncio.sleep(0)  # writes do not suspend: let others run
 
 
 async def _handle(
