@@ -104,7 +104,7 @@ def test_deploy_is_acked_recorded_and_diffed(
 
 def test_stream_relays_values_and_status(live: TestClient, people: dict[str, Headers]) -> None:
     token = people["scientist"]["Authorization"].split()[1]
-    with live.websocket_connect("/api/drones/usv/stream") as ws:
+    with live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws:
         ws.send_json({"op": "auth", "token": token})
         assert ws.receive_json()["type"] == "authenticated"
         ws.send_json({"op": "subscribe", "subscriber": "sub_5", "id": 1})
@@ -128,7 +128,7 @@ def test_stream_relays_values_and_status(live: TestClient, people: dict[str, Hea
 def test_dynamic_subscriptions(live: TestClient, people: dict[str, Headers]) -> None:
     sci = people["scientist"]
     token = sci["Authorization"].split()[1]
-    with live.websocket_connect("/api/drones/usv/stream") as ws:
+    with live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws:
         ws.send_json({"op": "auth", "token": token})
         assert ws.receive_json()["type"] == "authenticated"
         ws.send_json({"op": "dynamic", "topic": "usv.accelerometer.accel_x", "period_s": "4",
@@ -180,13 +180,13 @@ def test_websocket_needs_a_token(live: TestClient) -> None:
     from starlette.websockets import WebSocketDisconnect
 
     with pytest.raises(WebSocketDisconnect) as exc, \
-            live.websocket_connect("/api/drones/usv/stream") as ws:
+            live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws:
         ws.send_json({"op": "auth", "token": "bad"})
         ws.receive_json()
     assert exc.value.code == 4401
     # a token in the URL is refused outright (URLs end up in logs)
     with pytest.raises(WebSocketDisconnect) as exc, \
-            live.websocket_connect("/api/drones/usv/stream?token=x") as ws:
+            live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream?token=x") as ws:
         ws.receive_json()
     assert exc.value.code == 4400
 

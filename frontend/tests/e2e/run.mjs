@@ -6,7 +6,7 @@
  * Chromium at 1280×800; stops what it started, by PID; prints one line
  * "N passed, N failed" and exits non-zero on any failure.
  */
-import { existsSync, mkdirSync, mkdtempSync, rmSync, readFileSync, symlinkSync, writeFileSync } from "node:fs";
+import { existsSync, mkdtempSync, rmSync, readFileSync, writeFileSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { dirname, join, resolve } from "node:path";
 import { fileURLToPath } from "node:url";
@@ -63,14 +63,13 @@ try {
       "--zenoh-listen", zenoh, ...(liveValues ? ["--simulate"] : [])], { cwd: repo, logFile: join(tmp, "drone.log"),
       env: { MODD_PUBBROKER: pubbrokerBin } });
     procs.push(up);
-    // The backend lists <archives>/<drone>/*.mcap; `modd up` writes the PubBroker's archive to <workdir>/archive.
-    mkdirSync(join(tmp, "archives"), { recursive: true });
-    symlinkSync(join(tmp, "drone", "archive"), join(tmp, "archives", "usv"));
+    // `modd up` writes the PubBroker's archive to <workdir>/archive: the backend reads it as a
+    // one-drone archive directory (a drone folder symlinked out of the archive directory is refused).
   }
   const backend = start("backend", [
     backendBin, "--host", "127.0.0.1", "--port", String(port), "--data", join(tmp, "data"),
     "--frontend", join(frontend, "dist"),
-    "--archives", join(tmp, "archives"),
+    "--archives", drone ? join(tmp, "drone", "archive") : join(tmp, "archives"),
     ...(drone ? ["--zenoh-connect", zenoh] : ["--no-zenoh"]),
   ], { cwd: repo, logFile: join(tmp, "backend.log"), env: { MODD_ADMIN_PASSWORD: PASSWORD } });
   procs.push(backend);
