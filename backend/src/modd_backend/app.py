@@ -46,7 +46,7 @@ from .settings import Settings
 from .spa import mount_frontend
 from .throttle import Throttle
 from .versions import get_version, model_of
-from .zbridge import Undeclarable, ZenohBridge
+from .zbridge import ZenohBridge
 
 ROUTERS: tuple[APIRouter, ...] = (
     health.router,
