@@ -24,6 +24,7 @@ from ..deps import (
     SESSION_COOKIE,
     AppState,
     StateDep,
+    UserDep,
     bridge_of,
     has_role,
     require,
@@ -65,15 +66,18 @@ Scientist = Depends(require(Role.scientist))
 
 
 @router.post("/{drone}/subscriptions", dependencies=[Scientist])
-def add_dynamic(drone: Drone, body: DynamicIn, state: StateDep) -> DynamicOut:
-    request = {"action": "subscribe", **body.model_dump(exclude_none=True)}
+def add_dynamic(drone: Drone, body: DynamicIn, state: StateDep, user: UserDep) -> DynamicOut:
+    # the SubBroker scopes quotas, listing and cancelling to the owner
+    request = {"action": "subscribe", **body.model_dump(exclude_none=True),
+               "owner": user.username}
     reply = dynamic_request(bridge_of(state), drone, request, state.settings.subscribe_timeout_s)
     return DynamicOut.model_validate(reply)
 
 
 @router.delete("/{drone}/subscriptions/{subscriber}", dependencies=[Scientist])
-def cancel_dynamic(drone: Drone, subscriber: Name, state: StateDep) -> DynamicOut:
-    request = {"action": "cancel", "subscriber": subscriber}
+def cancel_dynamic(drone: Drone, subscriber: Name, state: StateDep,
+                   user: UserDep) -> DynamicOut:
+    request = {"action": "cancel", "subscriber": subscriber, "owner": user.username}
     reply = dynamic_request(bridge_of(state), drone, request, state.settings.subscribe_timeout_s)
     return DynamicOut.model_validate(reply)
 
@@ -288,6 +292,7 @@ async def _dynamic(
         request = {"action": "subscribe", **{k: message[k] for k in fields if k in message}}
     else:
         request = {"action": "cancel", "subscriber": message.get("subscriber")}
+    request["owner"] = user.username  # the SubBroker scopes quotas and cancels to it
     reply = await run_in_threadpool(
         dynamic_request, bridge_of(state), relay.drone, request, state.settings.subscribe_timeout_s
     )
