@@ -12,6 +12,24 @@ from fastapi.testclient import TestClient
 from modd_backend import Settings, create_app
 
 ADMIN_PASSWORD = "admin-password-for-tests"
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _loopback_host() -> Iterator[None]:
+    """The backend answers only Host names on its allow-list (loopback by
+    default): the test client talks as http://127.0.0.1, not "testserver"
+    (session-wide, so module-scoped clients get it too)."""
+    import starlette.testclient
+
+    init = starlette.testclient.TestClient.__init__
+
+    def loopback_init(self: TestClient, *args: object, **kwargs: object) -> None:
+        kwargs.setdefault("base_url", "http://127.0.0.1")
+        init(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    starlette.testclient.TestClient.__init__ = loopback_init  # type: ignore[method-assign]
+    yield
+    starlette.testclient.TestClient.__init__ = init  # type: ignore[method-assign]
 Headers = dict[str, str]
 
 

@@ -97,4 +97,6 @@ def test_console_script_serves_the_api(tmp_path: Path) -> None:
 def test_health_needs_no_login_and_checks_the_database(client: TestClient) -> None:
     r = client.get("/api/health")
     assert r.status_code == 200, r.text
-    assert r.json() == {"status": "ok", "database": "ok", "zenoh": "disabled", "scene": False}
+    assert r.json() == {"status": "ok", "database": "ok", "zenoh": "disabled", "scene": False,
+                        "ready": True, "saturated": False, "heavy_in_flight": 0,
+                        "heavy_limit": 8}

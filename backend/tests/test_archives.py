@@ -58,7 +58,8 @@ def archive_client(tmp_path: Path) -> Iterator[tuple[TestClient, Headers, Path]]
 def test_list_complete_and_cut_files(archive_client: tuple[TestClient, Headers, Path]) -> None:
     c, h, _ = archive_client
     files = {f["name"]: f for f in c.get("/api/drones/usv/archives", headers=h).json()}
-    assert set(files) == {"run-0000.mcap", "cut-0001.mcap", "link.mcap"}
+    # link.mcap leads outside the archive directory: not listed (nor served)
+    assert set(files) == {"run-0000.mcap", "cut-0001.mcap"}
     run = files["run-0000.mcap"]
     assert run["complete"] and run["start_ns"] == T0
     assert run["topics"] == [{"topic": t, "messages": 1000} for t in TOPICS]
@@ -137,3 +138,33 @@ def test_no_path_escapes(archive_client: tuple[TestClient, Headers, Path], path:
 def test_archives_need_a_token(archive_client: tuple[TestClient, Headers, Path]) -> None:
     c, _, _ = archive_client
     assert c.get("/api/drones/usv/archives").status_code == 401
+
+
+def test_drone_folder_symlink_out_is_404(tmp_path: Path) -> None:
+    """A drone folder that is a symlink out of the archive directory is
+    neither listed nor served (it was followed)."""
+    root = tmp_path / "archives"
+    root.mkdir()
+    outside = tmp_path / "elsewhere"
+    outside.mkdir()
+    (outside / "run-0000.mcap").write_bytes(b"\x89MCAP0\r\n")
+    (root / "other").mkdir()
+    (root / "usv").symlink_to(outside, target_is_directory=True)
+    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
+                        initial_admin_password=ADMIN_PASSWORD, archive_dir=root)
+    with TestClient(create_app(settings, out=io.StringIO())) as c:
+        h = login(c, "admin", ADMIN_PASSWORD)
+        assert c.get("/api/drones/usv/archives", headers=h).status_code == 404
+        assert c.get("/api/drones/usv/archives/run-0000.mcap", headers=h).status_code == 404
+
+
+def test_csv_name_is_rfc6266_and_non_latin1_topics_work(
+    archive_client: tuple[TestClient, Headers, Path]
+) -> None:
+    c, h, _ = archive_client
+    r = c.get("/api/drones/usv/archives/run-0000.mcap/csv", headers=h,
+              params={"topic": 'températur"e/水'})
+    assert r.status_code == 200, r.text
+    cd = r.headers["content-disposition"]
+    assert cd.startswith('attachment; filename="run-0000-temp_ratur_e/_.csv"')
+    assert "filename*=UTF-8''run-0000-temp%C3%A9ratur%22e%2F%E6%B0%B4.csv" in cd

@@ -106,7 +106,9 @@ def test_deploy_is_acked_recorded_and_diffed(
 
 def test_stream_relays_values_and_status(live: TestClient, people: dict[str, Headers]) -> None:
     token = people["scientist"]["Authorization"].split()[1]
-    with live.websocket_connect(f"/api/drones/usv/stream?token={token}") as ws:
+    with live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws:
+        ws.send_json({"op": "auth", "token": token})
+        assert ws.receive_json()["type"] == "authenticated"
         ws.send_json({"op": "subscribe", "subscriber": "sub_5", "id": 1})
         ack = _receive_until(ws, lambda m: m["type"] == "subscribed")
         assert ack == {"type": "subscribed", "subscriber": "sub_5", "key": "modd/usv/sub/sub_5",
@@ -128,7 +130,9 @@ def test_stream_relays_values_and_status(live: TestClient, people: dict[str, Hea
 def test_dynamic_subscriptions(live: TestClient, people: dict[str, Headers]) -> None:
     sci = people["scientist"]
     token = sci["Authorization"].split()[1]
-    with live.websocket_connect(f"/api/drones/usv/stream?token={token}") as ws:
+    with live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws:
+        ws.send_json({"op": "auth", "token": token})
+        assert ws.receive_json()["type"] == "authenticated"
         ws.send_json({"op": "dynamic", "topic": "usv.accelerometer.accel_x", "period_s": "4",
                       "aggregation": "AVERAGE", "subscriber": "dyn_avg4"})
         reply = _receive_until(ws, lambda m: m["type"] == "dynamic")["reply"]
@@ -178,9 +182,15 @@ def test_websocket_needs_a_token(live: TestClient) -> None:
     from starlette.websockets import WebSocketDisconnect
 
     with pytest.raises(WebSocketDisconnect) as exc, \
-            live.websocket_connect("/api/drones/usv/stream?token=bad") as ws:
+            live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws:
+        ws.send_json({"op": "auth", "token": "bad"})
         ws.receive_json()
     assert exc.value.code == 4401
+    # a token in the URL is refused outright (URLs end up in logs)
+    with pytest.raises(WebSocketDisconnect) as exc, \
+            live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream?token=x") as ws:
+        ws.receive_json()
+    assert exc.value.code == 4400
 
 
 def test_archive_of_the_running_pubbroker(live: TestClient, people: dict[str, Headers]) -> None:

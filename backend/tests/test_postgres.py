@@ -86,3 +86,22 @@ def test_store_on_postgresql(postgres_url: str, tmp_path: Path, scenario1: str) 
         h = login(c, "admin", ADMIN_PASSWORD)
         assert len(c.get("/api/projects", headers=h).json()) == 1
     assert out.getvalue() == ""
+
+
+def test_concurrent_saves_on_postgresql(postgres_url: str, tmp_path: Path,
+                                        scenario1: str) -> None:
+    """Same race as test_saverace.py on PostgreSQL (read committed)."""
+    from .saverace import race_saves
+
+    settings = Settings(data_dir=tmp_path, database_url=postgres_url, zenoh_enabled=False,
+                        initial_admin_password=ADMIN_PASSWORD)
+    with TestClient(create_app(settings, out=io.StringIO())) as c:
+        h = login(c, "admin", ADMIN_PASSWORD)
+        for name, role in (("des", "designer"), ("sci", "scientist")):
+            c.post("/api/users", headers=h,
+                   json={"username": name, "password": f"pw-{name}-12345", "roles": [role]})
+        designer = login(c, "des", "pw-des-12345")
+        scientist = login(c, "sci", "pw-sci-12345")
+        bad, statuses = race_saves(c, h, designer, scientist, scenario1, rounds=30)
+        assert bad == [], f"unauthorised revisions stored: {bad}"
+        assert set(statuses) <= {"attack 403", "attack 409", "honest 200", "honest 409"}, statuses

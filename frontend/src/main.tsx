@@ -8,16 +8,18 @@ import { createApi } from "./api/client";
 import { WebSocketSource, type SocketLike } from "./dataSources/WebSocketSource";
 import { App } from "./app/App";
 import { ServicesContext, type Services } from "./app/services";
-import { loadSession, saveSession, type Session } from "./app/session";
+import { restoreSession, type Session } from "./app/session";
 import "./app/styles.css";
 
-let session: Session | null = loadSession(window.sessionStorage);
-const onSession = (s: Session | null) => { session = s; saveSession(window.sessionStorage, s); };
+let session: Session | null = null;
+const onSession = (s: Session | null) => { session = s; };
+window.sessionStorage.removeItem("modd.session"); // bearer tokens kept there before the cookie session
 
 const api = createApi({
   baseUrl: "",
   fetch: window.fetch.bind(window),
   token: () => session?.token ?? null,
+  csrf: () => session?.csrf ?? null,
   onUnauthorized: () => {
     if (session) { onSession(null); window.location.reload(); }
   },
@@ -31,10 +33,13 @@ const services: Services = {
   }),
 };
 
-createRoot(document.getElementById("root")!).render(
-  <StrictMode>
-    <ServicesContext.Provider value={services}>
-      <App initial={session} onSession={onSession} />
-    </ServicesContext.Provider>
-  </StrictMode>,
-);
+void restoreSession(api.me).then((restored) => {
+  session = restored;
+  createRoot(document.getElementById("root")!).render(
+    <StrictMode>
+      <ServicesContext.Provider value={services}>
+        <App initial={session} onSession={onSession} />
+      </ServicesContext.Provider>
+    </StrictMode>,
+  );
+});

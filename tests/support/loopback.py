@@ -135,8 +135,9 @@ class Backend:
 
     def stream(self, drone: str) -> ClientConnection:
         """The live stream WebSocket of ``drone``."""
-        return connect(f"ws://127.0.0.1:{self.port}/api/drones/{drone}/stream?token={self.token}",
-                       open_timeout=10)
+        ws = connect(f"ws://127.0.0.1:{self.port}/api/drones/{drone}/stream", open_timeout=10)
+        ws.send(json.dumps({"op": "auth", "token": self.token}))  # never in the URL
+        return ws
 
 
 def receive_until(ws: ClientConnection, pred: Callable[[dict[str, Any]], bool],

@@ -124,8 +124,9 @@ def test_make_run_serves_the_demo_live_and_stops(
         # autopilot over MAVLink (scaled from degE7 by the bridge), water
         # temperature from a scientific sensor.
         seen: dict[str, float] = {}
-        ws_url = f"ws://127.0.0.1:{port}/api/drones/usv/stream?token={token}"
+        ws_url = f"ws://127.0.0.1:{port}/api/drones/usv/stream"
         with connect(ws_url, open_timeout=10) as ws:
+            ws.send(json.dumps({"op": "auth", "token": token}))
             for sub in ("track_lat", "water_temp"):
                 ws.send(json.dumps({"op": "subscribe", "subscriber": sub}))
             deadline = time.monotonic() + LIVE_TIMEOUT_S

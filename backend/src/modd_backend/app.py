@@ -7,12 +7,17 @@ the first admin and the zenoh session are opened at start-up (lifespan).
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
+import os
 import sys
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from typing import Any, TextIO
 
 from fastapi import APIRouter, FastAPI
+from sqlalchemy import text
+from starlette.concurrency import run_in_threadpool
 
 from . import errors
 from .accounts import ensure_first_admin
@@ -20,6 +25,8 @@ from .db import Store
 from .deployments import last_acked
 from .deps import AppState
 from .foxglove import FoxgloveLive
+from .guards import Guard, HeavyLimiter
+from .hub import SubscriptionHub
 from .planning import preload_milp
 from .routers import (
     archives,
@@ -37,8 +44,9 @@ from .routers import (
 from .scene import SceneServer, SceneService
 from .settings import Settings
 from .spa import mount_frontend
+from .throttle import Throttle
 from .versions import get_version, model_of
-from .zbridge import Undeclarable, ZenohBridge
+from .zbridge import ZenohBridge
 
 ROUTERS: tuple[APIRouter, ...] = (
     health.router,
@@ -82,20 +90,20 @@ def start_foxglove(settings: Settings, out: TextIO) -> FoxgloveLive | None:
     return server
 
 
-def subscribe_values(bridge: ZenohBridge, state: AppState) -> list[Undeclarable]:
-    """The one place delivered values and statuses of every drone arrive in
-    the backend, handed to each consumer (3D scene, Foxglove server)."""
-    on_value = [c.on_value for c in (state.scene, state.foxglove) if c is not None]
-    subs: list[Undeclarable] = []
-    if on_value:
-        def values(key: str, payload: bytes) -> None:
-            for consumer in on_value:
-                consumer(key, payload)
+def _ping(state: AppState) -> None:
+    with state.store.session() as db:
+        db.execute(text("SELECT 1"))
 
-        subs.append(bridge.subscribe("modd/*/sub/*", values))
-    if state.foxglove is not None:
-        subs.append(bridge.subscribe("modd/*/status", state.foxglove.on_status))
-    return subs
+
+async def _ping_database(state: AppState, every_s: float = 2.0) -> None:
+    """Keep ``state.database`` current for /api/health (which never waits on it)."""
+    while True:
+        try:
+            await asyncio.wait_for(run_in_threadpool(_ping, state), every_s * 2)
+            state.database = "ok"
+        except Exception:  # any failure of the store is reported, never raised
+            state.database = "error"
+        await asyncio.sleep(every_s)
 
 
 def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
@@ -103,6 +111,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        os.umask(0o077)  # the store, logs and state this process writes: owner only
         settings.data_dir.mkdir(parents=True, exist_ok=True)
         def first_start(store: Store) -> None:
             with store.session() as db:
@@ -115,23 +124,38 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
                                       settings.zenoh_credentials)
         if settings.preload_milp:
             preload_milp()
-        app.state.modd = AppState(settings, store, bridge)
-        subs = []
+        state = AppState(
+            settings, store, bridge,
+            heavy=HeavyLimiter(settings.heavy_per_user, settings.heavy_total),
+            login_accounts=Throttle(settings.login_limit_account, settings.login_window_s),
+            login_addresses=Throttle(settings.login_limit_address, settings.login_window_s),
+        )
+        app.state.modd = state
+        state.database = "ok"  # just opened and migrated
         if bridge is not None:
+            state.hub = SubscriptionHub()
+            state.hub.start(bridge)
             if settings.scene_port is not None:
-                app.state.modd.scene = start_scene(settings, store)
+                state.scene = start_scene(settings, store)
+                state.hub.listen_all(state.scene.on_value)
             if settings.foxglove_port:
-                app.state.modd.foxglove = start_foxglove(settings, out)
-            subs = subscribe_values(bridge, app.state.modd)
+                state.foxglove = start_foxglove(settings, out)
+                if state.foxglove is not None:
+                    state.hub.listen_all(state.foxglove.on_value)
+                    state.hub.listen_all_status(state.foxglove.on_status)
+        pinger = asyncio.create_task(_ping_database(state))
         try:
             yield
         finally:
-            for sub in subs:
-                sub.undeclare()
-            if app.state.modd.scene is not None:
-                app.state.modd.scene.server.stop()
-            if app.state.modd.foxglove is not None:
-                app.state.modd.foxglove.stop()
+            pinger.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await pinger
+            if state.hub is not None:
+                state.hub.stop()
+            if state.scene is not None:
+                state.scene.server.stop()
+            if state.foxglove is not None:
+                state.foxglove.stop()
             if bridge is not None:
                 bridge.close()
             store.close()
@@ -143,6 +167,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         lifespan=lifespan,
     )
     errors.install(app)
+    app.add_middleware(Guard, settings=settings)
     for router in ROUTERS:
         app.include_router(router)
     if settings.frontend_dist is not None:

@@ -34,29 +34,45 @@ _BROKEN = (McapError, EOFError, ValueError, OSError, struct.error)
 
 def drone_dir(root: Path, drone: str) -> Path:
     """``<root>/<drone>`` when that folder exists (several drones), else the
-    archive directory itself (one drone, as ``modd up`` lays it out)."""
+    archive directory itself (one drone, as ``modd up`` lays it out). Resolved;
+    a drone folder that resolves outside the archive directory (a symlink
+    out) is a 404."""
     if not DRONE.fullmatch(drone):
         raise ApiError(422, f"drone {drone!r} is not an identifier")
+    base = root.resolve()
     own = root / drone
-    return own if own.is_dir() else root
+    if own.is_symlink() or own.is_dir():
+        real = own.resolve()
+        if not real.is_relative_to(base) or real == base:
+            raise ApiError(404, f"no archives for drone {drone!r}")
+        return real
+    return base
+
+
+def _confined(path: Path, folder: Path) -> bool:
+    """A regular file directly in ``folder`` once every link is resolved."""
+    real = path.resolve()
+    return real.parent == folder and real.is_file()
 
 
 def archive_path(root: Path, drone: str, name: str) -> Path:
     """The file, checked to be a direct child of the drone's folder; 404 otherwise."""
     if not FILE.fullmatch(name) or ".." in name:
         raise ApiError(404, f"no archive named {name!r}")
-    folder = drone_dir(root, drone).resolve()
-    path = (folder / name).resolve()
-    if path.parent != folder or not path.is_file():
+    folder = drone_dir(root, drone)
+    path = folder / name
+    if not _confined(path, folder):
         raise ApiError(404, f"no archive {name!r} for drone {drone!r}")
-    return path
+    return path.resolve()
 
 
 def list_files(root: Path, drone: str) -> list[Path]:
+    if not root.is_dir():
+        return []
     folder = drone_dir(root, drone)
     if not folder.is_dir():
         return []
-    return sorted(p for p in folder.iterdir() if p.is_file() and FILE.fullmatch(p.name))
+    return sorted(p for p in folder.iterdir() if FILE.fullmatch(p.name) and _confined(p, folder))
 
 
 def _value(data: bytes) -> Any:

@@ -7,10 +7,13 @@
 from __future__ import annotations
 
 import argparse
+import copy
 import ipaddress
+import logging
 import os
 import sys
 from pathlib import Path
+from typing import Any
 
 from .settings import DEFAULT_ZENOH_CONNECT, Settings
 
@@ -20,7 +23,9 @@ def parse_args(argv: list[str] | None = None) -> Settings:
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default loopback)")
     p.add_argument("--port", type=int, default=8000)
     p.add_argument("--data", type=Path, default=Path("data"), help="data directory")
-    p.add_argument("--database-url", help="SQLAlchemy URL (default: SQLite file in --data)")
+    p.add_argument("--database-url", default=os.environ.get("MODD_DATABASE_URL"),
+                   help="SQLAlchemy URL (default: $MODD_DATABASE_URL, else a SQLite file in "
+                   "--data); a URL with a password belongs in the environment, not here")
     p.add_argument("--zenoh-connect", action="append", metavar="ENDPOINT",
                    help=f"zenoh endpoint to connect to (default {DEFAULT_ZENOH_CONNECT[0]})")
     p.add_argument("--zenoh-listen", action="append", metavar="ENDPOINT", default=[])
@@ -41,10 +46,26 @@ def parse_args(argv: list[str] | None = None) -> Settings:
     p.add_argument("--foxglove-port", type=int, default=8765,
                    help="port of the Foxglove WebSocket server (live values for Foxglove and "
                    "Lichtblick, on --host, no authentication: docs/ecosystem.md); 0: none")
-    p.add_argument("--admin-password", default=os.environ.get("MODD_ADMIN_PASSWORD"),
-                   help="first admin's password (default: $MODD_ADMIN_PASSWORD, else drawn "
-                   "and printed)")
+    p.add_argument("--admin-password-file", type=Path, metavar="FILE",
+                   help="file holding the first admin's password (first line)")
+    p.add_argument("--admin-password",
+                   help="deprecated: visible to every local user in the process list; use "
+                   "--admin-password-file or $MODD_ADMIN_PASSWORD")
+    p.add_argument("--allowed-host", action="append", default=[], metavar="NAME",
+                   help="a Host name clients may use besides the loopback names (repeat)")
     a = p.parse_args(argv)
+    password = os.environ.get("MODD_ADMIN_PASSWORD")
+    if a.admin_password_file is not None:
+        try:
+            password = a.admin_password_file.read_text().splitlines()[0]
+        except (OSError, IndexError) as exc:
+            p.error(f"--admin-password-file {a.admin_password_file}: cannot read a password "
+                    f"({exc or 'empty file'})")
+    if a.admin_password is not None:
+        print("modd-backend: warning: --admin-password shows the password to every local "
+              "user (process list); use --admin-password-file or $MODD_ADMIN_PASSWORD",
+              file=sys.stderr)
+        password = a.admin_password
     return Settings(
         data_dir=a.data,
         database_url=a.database_url,
@@ -56,7 +77,8 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         frontend_dist=a.frontend,
         archive_dir=a.archives,
         deploy_timeout_s=a.deploy_timeout,
-        initial_admin_password=a.admin_password,
+        initial_admin_password=password,
+        allowed_hosts=tuple(a.allowed_host),
         preload_milp=True,
         scene_port=None if a.scene_port < 0 else a.scene_port,
         foxglove_port=a.foxglove_port,
@@ -72,6 +94,28 @@ def _is_loopback(host: str) -> bool:
         return ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False
+
+
+class RedactQuery(logging.Filter):
+    """Cuts the query string from every logged request path (access and
+    WebSocket lines), so no secret sent in a URL ends up in a log."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if isinstance(record.args, tuple):
+            record.args = tuple(
+                a.split("?", 1)[0] + "?…" if isinstance(a, str) and "?" in a and
+                a.startswith("/") else a for a in record.args)
+        return True
+
+
+def log_config() -> dict[str, Any]:
+    from uvicorn.config import LOGGING_CONFIG
+
+    cfg = copy.deepcopy(LOGGING_CONFIG)
+    cfg["filters"] = {"redact": {"()": RedactQuery}}
+    for handler in cfg["handlers"].values():
+        handler["filters"] = ["redact"]
+    return cfg
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -91,7 +135,8 @@ def main(argv: list[str] | None = None) -> int:
         if settings.foxglove_port:
             print("modd-backend: warning: the Foxglove server has no authentication; "
                   "see docs/ecosystem.md", file=sys.stderr)
-    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="info")
+    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="info",
+                log_config=log_config(), ws_max_size=1024 * 1024)
     return 0
 
 

@@ -6,9 +6,11 @@ authenticated user and role checks.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
-from typing import Annotated
+import hmac
+from collections import Counter
+from collections.abc import AsyncIterator, Callable, Iterator
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Annotated, Literal
 
 from fastapi import Depends, HTTPException, Request, WebSocket
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
@@ -19,9 +21,21 @@ from .db import Store
 from .foxglove import FoxgloveLive
 from .roles import Role, parse_roles
 from .scene import SceneService
+from .security import csrf_for
 from .settings import Settings
 from .tables import User
+from .throttle import Throttle
 from .zbridge import ZenohBridge
+
+if TYPE_CHECKING:
+    from .guards import HeavyLimiter
+    from .hub import SubscriptionHub
+
+#: The workbench's session cookie (HttpOnly, SameSite=Strict) and the header
+#: a cookie session must add to every unsafe request (CSRF).
+SESSION_COOKIE = "modd_session"
+CSRF_HEADER = "X-CSRF-Token"
+SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
 
 
 @dataclass
@@ -31,9 +45,18 @@ class AppState:
     bridge: ZenohBridge | None
     scene: SceneService | None = None
     foxglove: FoxgloveLive | None = None
+    hub: SubscriptionHub | None = None
+    heavy: HeavyLimiter | None = None
+    login_accounts: Throttle = field(default_factory=lambda: Throttle(10, 300))
+    login_addresses: Throttle = field(default_factory=lambda: Throttle(50, 300))
+    #: Live WebSocket subscriptions per user id (event loop only).
+    ws_counts: Counter[int] = field(default_factory=Counter)
+    #: Result of the last background database ping (health).
+    database: Literal["ok", "error", "unknown"] = "unknown"
 
 
-def get_state(request: Request) -> AppState:
+async def get_state(request: Request) -> AppState:
+    """(async: read on the event loop, never waiting for a worker thread)"""
     state: AppState = request.app.state.modd
     return state
 
@@ -55,12 +78,40 @@ DbDep = Annotated[Db, Depends(get_db)]
 _bearer = HTTPBearer(auto_error=False, description="Token from POST /api/auth/login")
 
 
-def bearer_token(
+@dataclass(frozen=True)
+class Credentials:
+    """The session token of a request, and whether it came as the cookie."""
+
+    token: str
+    via_cookie: bool
+
+
+def credentials(
+    request: Request,
     creds: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
-) -> str:
-    if creds is None or creds.scheme.lower() != "bearer":
-        raise HTTPException(401, "missing bearer token", headers={"WWW-Authenticate": "Bearer"})
-    return creds.credentials
+) -> Credentials:
+    """A bearer token (API clients) or the session cookie (the workbench).
+    With the cookie, unsafe methods need ``X-CSRF-Token`` (403 without)."""
+    if creds is not None and creds.scheme.lower() == "bearer":
+        return Credentials(creds.credentials, False)
+    cookie = request.cookies.get(SESSION_COOKIE)
+    if cookie:
+        if request.method not in SAFE_METHODS:
+            sent = request.headers.get(CSRF_HEADER, "")
+            if not hmac.compare_digest(sent.encode(), csrf_for(cookie).encode()):
+                raise HTTPException(
+                    403, f"a cookie session needs the {CSRF_HEADER} header on "
+                    f"{request.method} (given by login and /api/auth/me)")
+        return Credentials(cookie, True)
+    raise HTTPException(401, "missing bearer token or session cookie",
+                        headers={"WWW-Authenticate": "Bearer"})
+
+
+CredsDep = Annotated[Credentials, Depends(credentials)]
+
+
+def bearer_token(creds: CredsDep) -> str:
+    return creds.token
 
 
 TokenDep = Annotated[str, Depends(bearer_token)]
@@ -97,6 +148,19 @@ def require(*roles: Role) -> Callable[[User], User]:
         return user
 
     return check
+
+
+async def _heavy(state: StateDep, user: UserDep) -> AsyncIterator[None]:
+    if state.heavy is None:
+        yield
+        return
+    with state.heavy.slot(user.id):
+        yield
+
+
+#: Route dependency of heavy routes (CSV, series, deploy): a slot of the
+#: HeavyLimiter or 429/503 with Retry-After at once.
+Heavy = Depends(_heavy)
 
 
 def bridge_of(state: AppState) -> ZenohBridge:

@@ -46,6 +46,23 @@ def verify_password(password: str, stored: str) -> bool:
     return hmac.compare_digest(got, expected)
 
 
+_DUMMY: list[str] = []
+
+
+def burn_password_check(password: str) -> None:
+    """Spend what verifying a real hash costs, for an unknown user name, so
+    that the answer time does not tell which names exist."""
+    if not _DUMMY:
+        _DUMMY.append(hash_password(secrets.token_urlsafe(16)))
+    verify_password(password, _DUMMY[0])
+
+
+def csrf_for(token: str) -> str:
+    """The CSRF token of a cookie session: derived from the session token,
+    which page scripts cannot read (HttpOnly), so another origin cannot forge it."""
+    return hashlib.sha256(b"modd-csrf:" + token.encode()).hexdigest()[:32]
+
+
 def new_token() -> str:
     return secrets.token_urlsafe(32)
 

@@ -49,6 +49,37 @@ class Settings:
     zenoh_credentials: Path | None = None
     #: The key that signs deploys, shared with the SubBroker (its deploy.key).
     deploy_key_file: Path | None = None
+    #: Host names (or host:port) requests may name besides the loopback names
+    #: (localhost, 127.0.0.1, ::1) and ``host``; "*" allows any (not advised).
+    allowed_hosts: tuple[str, ...] = field(default_factory=tuple)
+    #: Failed logins allowed per account / per client address within the window.
+    login_limit_account: int = 10
+    login_limit_address: int = 50
+    login_window_s: float = 300.0
+    #: Largest request body any route accepts (413 beyond), and JSON nesting depth (422).
+    max_body_bytes: int = 4 * 1024 * 1024
+    max_json_depth: int = 64
+    #: Heavy routes (CSV export, series, deploy): at once per user and in all.
+    heavy_per_user: int = 2
+    heavy_total: int = 8
+    #: Live subscriptions per WebSocket and per user (over all their sockets).
+    ws_subscriptions_per_socket: int = 256
+    ws_subscriptions_per_user: int = 1024
+    #: How often an open WebSocket re-checks its session and roles (seconds).
+    ws_recheck_s: float = 0.4
+
+    def host_allowed(self, host_header: str) -> bool:
+        """Whether a request's ``Host`` names this service (DNS rebinding guard)."""
+        if "*" in self.allowed_hosts:
+            return True
+        host = host_header.strip().lower()
+        if host.startswith("["):  # [::1]:8000
+            name = host[1:].split("]", 1)[0]
+        else:
+            name = host.rsplit(":", 1)[0] if host.count(":") == 1 else host
+        names = {"localhost", "127.0.0.1", "::1", self.host.lower()}
+        names |= {h.lower() for h in self.allowed_hosts}
+        return name in names or host in names or name.endswith(".localhost")
 
     @property
     def effective_database_url(self) -> str:

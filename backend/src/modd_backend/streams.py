@@ -1,82 +1,114 @@
-"""One browser's live view of one drone: the zenoh subscriptions it asked
-for, all feeding one bounded queue that its WebSocket drains.
+"""One browser's live view of one drone: the subscriptions it asked for,
+all feeding one bounded queue that its WebSocket drains.
 
 Contract: zenoh threads only ever ``put`` into the queue, which never blocks;
 a slow browser loses its oldest messages and is told how many with a
 ``{"type": "dropped", "count": n}`` message. The drone's status
-(``modd/<drone>/status``) is relayed on the same socket."""
+(``modd/<drone>/status``) is relayed on the same socket. Subscriptions are
+entries in the shared :class:`~modd_backend.hub.SubscriptionHub` (no zenoh
+declaration, no thread), capped per socket and per user."""
 
 from __future__ import annotations
 
 import json
 import re
+from collections import Counter
 from typing import Any
 
+from .hub import SubscriptionHub
 from .relay import DropOldestQueue
-from .zbridge import Undeclarable, ZenohBridge
+from .zbridge import ZenohBridge
 
-NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")
 
 
 def check_name(kind: str, name: object) -> str:
     if not isinstance(name, str) or not NAME.fullmatch(name):
-        raise ValueError(f"{kind} {name!r} is not an identifier (letters, digits, underscores)")
+        raise ValueError(f"{kind} {str(name)[:80]!r} is not an identifier (letters, digits, "
+                         "underscores, at most 64)")
     return name
 
 
 def _decode(payload: bytes) -> Any:
     try:
         return json.loads(payload)
-    except (ValueError, UnicodeDecodeError):
-        return {"raw": payload.hex()}
+    except (ValueError, UnicodeDecodeError, RecursionError):
+        return {"raw": payload[:4096].hex()}
+
+
+class CapReached(ValueError):
+    """A subscription past the per-socket or per-user cap."""
 
 
 class StreamRelay:
-    """The subscriptions of one WebSocket; ``close`` undeclares them all."""
+    """The subscriptions of one WebSocket; ``close`` removes them all.
 
-    def __init__(self, bridge: ZenohBridge, drone: str, queue_size: int) -> None:
+    ``per_user`` is shared by all sockets of the app (user id -> live
+    subscriptions); it is only touched from the event loop."""
+
+    def __init__(self, hub: SubscriptionHub, drone: str, queue_size: int, *,
+                 user_id: int = 0, per_socket: int = 256, per_user: int = 1024,
+                 per_user_counts: Counter[int] | None = None) -> None:
         self.drone = check_name("drone", drone)
-        self.bridge = bridge
+        self.hub = hub
         self.queue: DropOldestQueue[dict[str, Any]] = DropOldestQueue(queue_size)
-        self._subs: dict[str, Undeclarable] = {}
-        self._status: Undeclarable | None = None
+        self.user_id = user_id
+        self.per_socket = per_socket
+        self.per_user = per_user
+        self.counts: Counter[int] = per_user_counts if per_user_counts is not None else Counter()
+        self._subs: set[str] = set()
+        self._started = False
+
+    def _on_value(self, name: str, payload: bytes) -> None:
+        self.queue.put({"type": "value", "subscriber": name, "data": _decode(payload)})
+
+    def _on_status(self, payload: bytes) -> None:
+        self.queue.put({"type": "status", "data": _decode(payload)})
 
     def start(self) -> None:
-        self._status = self.bridge.subscribe(
-            f"modd/{self.drone}/status",
-            lambda _k, p: self.queue.put({"type": "status", "data": _decode(p)}),
-        )
+        self.hub.add_status(self.drone, self._on_status)
+        self._started = True
 
     def subscribe(self, subscriber: object) -> dict[str, Any]:
         name = check_name("subscriber", subscriber)
         key = f"modd/{self.drone}/sub/{name}"
         if name not in self._subs:
-            self._subs[name] = self.bridge.subscribe(
-                key,
-                lambda _k, p: self.queue.put(
-                    {"type": "value", "subscriber": name, "data": _decode(p)}
-                ),
-            )
+            if len(self._subs) >= self.per_socket:
+                raise CapReached(f"at most {self.per_socket} subscriptions per connection")
+            if self.counts[self.user_id] >= self.per_user:
+                raise CapReached(f"at most {self.per_user} live subscriptions per user")
+            self._subs.add(name)
+            self.counts[self.user_id] += 1
+            self.hub.add(self.drone, name, self._on_value)
         return {"type": "subscribed", "subscriber": name, "key": key}
 
     def unsubscribe(self, subscriber: object) -> dict[str, Any]:
         name = check_name("subscriber", subscriber)
-        sub = self._subs.pop(name, None)
-        if sub is not None:
-            sub.undeclare()
+        if name in self._subs:
+            self._subs.discard(name)
+            self._release(1)
+            self.hub.remove(self.drone, name, self._on_value)
         return {"type": "unsubscribed", "subscriber": name}
+
+    def _release(self, n: int) -> None:
+        left = self.counts[self.user_id] - n
+        if left > 0:
+            self.counts[self.user_id] = left
+        else:
+            self.counts.pop(self.user_id, None)
 
     @property
     def subscribers(self) -> list[str]:
         return sorted(self._subs)
 
     def close(self) -> None:
-        for sub in self._subs.values():
-            sub.undeclare()
+        for name in self._subs:
+            self.hub.remove(self.drone, name, self._on_value)
+        self._release(len(self._subs))
         self._subs.clear()
-        if self._status is not None:
-            self._status.undeclare()
-            self._status = None
+        if self._started:
+            self.hub.remove_status(self.drone, self._on_status)
+            self._started = False
 
 
 def dynamic_request(bridge: ZenohBridge, drone: str, request: dict[str, Any],

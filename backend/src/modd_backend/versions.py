@@ -4,6 +4,7 @@ only on top of the current one (optimistic concurrency)."""
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from typing import Any
 
 from modd_model import validate
@@ -52,6 +53,21 @@ def model_of(version: ModelVersion | None) -> dict[str, Any]:
     return doc
 
 
+def head_version(db: Db, project_id: int) -> ModelVersion | None:
+    """The head row itself, read in one statement (revision and model agree)."""
+    return db.scalar(
+        select(ModelVersion)
+        .where(ModelVersion.project_id == project_id)
+        .order_by(ModelVersion.revision.desc())
+        .limit(1)
+    )
+
+
+#: Checks a save against the model it replaces; may return the model to store
+#: (e.g. with the replaced layout kept) or raise ApiError (403 ...).
+SaveCheck = Callable[[dict[str, Any], dict[str, Any]], dict[str, Any]]
+
+
 def save_version(
     db: Db,
     project_id: int,
@@ -59,12 +75,22 @@ def save_version(
     model: dict[str, Any],
     author: str,
     message: str,
+    check: SaveCheck | None = None,
 ) -> ModelVersion:
     """Store ``model`` as revision base+1; 409 with the current revision when
-    ``base_revision`` is not the head (also when a concurrent save won)."""
-    current = head_revision(db, project_id)
+    ``base_revision`` is not the head (also when a concurrent save won).
+
+    ``check(before, after)`` runs against the revision this save actually
+    replaces, read in the same transaction as the insert: revision numbers are
+    unique per project, so the insert of head+1 fails (409) unless the head
+    checked is still the head. A stale base is a 409 before any role check."""
+    head = head_version(db, project_id)
+    current = head.revision if head is not None else 0
     if base_revision != current:
+        db.rollback()
         raise _stale(base_revision, current)
+    if check is not None:
+        model = check(model_of(head), model)
     version = ModelVersion(
         project_id=project_id,
         revision=current + 1,

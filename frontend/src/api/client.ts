@@ -19,10 +19,11 @@ export function createApi(opts: HttpOptions) {
     http,
 
     // --- auth
+    /** A cookie session (HttpOnly, SameSite=Strict; spans tabs): the answer carries the CSRF token, no bearer token. */
     login: (username: string, password: string) =>
-      http.request<LoginResult>("/api/auth/login", { method: "POST", json: { username, password } }),
+      http.request<LoginResult>("/api/auth/login", { method: "POST", json: { username, password, session: "cookie" } }),
     logout: () => http.request<void>("/api/auth/logout", { method: "POST", as: "none" }),
-    me: () => http.request<User>("/api/auth/me"),
+    me: () => http.request<User & { csrf?: string | null }>("/api/auth/me"),
 
     // --- projects
     listProjects: () => http.request<Project[]>("/api/projects"),
@@ -73,10 +74,10 @@ export function createApi(opts: HttpOptions) {
       http.request<DynamicReply>(`/api/drones/${drone}/subscriptions`, { method: "POST", json: body }),
     cancelDynamic: (drone: string, subscriber: string) =>
       http.request<DynamicReply>(`/api/drones/${drone}/subscriptions/${subscriber}`, { method: "DELETE" }),
-    /** ws(s):// URL of a drone's stream; the token goes in the query (browsers cannot set WebSocket headers). */
+    /** ws(s):// URL of a drone's stream; the session cookie authenticates it (never a token in the URL). */
     streamUrl: (drone: string, origin: string) => {
       const base = (opts.baseUrl || origin).replace(/^http/, "ws");
-      return `${base}/api/drones/${drone}/stream?token=${encodeURIComponent(opts.token() ?? "")}`;
+      return `${base}/api/drones/${drone}/stream`;
     },
 
     // --- archives

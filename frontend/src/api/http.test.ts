@@ -58,3 +58,19 @@ describe("createApi", () => {
     expect(JSON.parse(init!.body as string)).toEqual({ model: { schemaVersion: "1.0" }, base_revision: 1, message: "msg" });
   });
 });
+
+describe("cookie session", () => {
+  it("asks for a cookie, sends the CSRF header on unsafe methods only, never a token in the stream URL", async () => {
+    const f = fakeFetch(200, { token: null, csrf: "c", user: { id: 1, username: "a", roles: [] } });
+    const api = createApi({ baseUrl: "", fetch: f as unknown as typeof fetch, token: () => null, csrf: () => "c" });
+    await api.login("a", "pw");
+    const [, login] = f.mock.calls[0];
+    expect(JSON.parse(login!.body as string)).toEqual({ username: "a", password: "pw", session: "cookie" });
+    expect(login!.credentials).toBe("same-origin");
+    expect((login!.headers as Record<string, string>)["X-CSRF-Token"]).toBe("c");
+    expect((login!.headers as Record<string, string>).Authorization).toBeUndefined();
+    await api.listProjects();
+    expect((f.mock.calls[1][1]!.headers as Record<string, string>)["X-CSRF-Token"]).toBeUndefined();
+    expect(api.streamUrl("usv", "http://h:1")).toBe("ws://h:1/api/drones/usv/stream");
+  });
+});

@@ -1,5 +1,6 @@
 /**
- * The one place that talks HTTP to the backend. Adds the bearer token, turns
+ * The one place that talks HTTP to the backend. Adds the bearer token (API
+ * clients) or the CSRF header of the cookie session (the workbench), turns
  * error responses into `ApiError` carrying the structured body the backend
  * sends ({detail, diagnostics?, current_revision?, denied?}).
  *
@@ -34,8 +35,10 @@ export interface HttpOptions {
   /** Prefix of every path, e.g. "" (same origin) or "http://127.0.0.1:8000". */
   baseUrl: string;
   fetch: typeof fetch;
-  /** Current bearer token, or null when logged out. */
+  /** Current bearer token (API clients), or null: the workbench's session is an HttpOnly cookie. */
   token: () => string | null;
+  /** The cookie session's CSRF token, sent as X-CSRF-Token on every unsafe method. */
+  csrf?: () => string | null;
   /** Called on a 401 so the app can return to the login page. */
   onUnauthorized?: () => void;
 }
@@ -78,6 +81,8 @@ export class Http {
     const headers: Record<string, string> = {};
     const token = this.opts.token();
     if (token) headers.Authorization = `Bearer ${token}`;
+    const csrf = this.opts.csrf?.();
+    if (csrf && (o.method ?? "GET") !== "GET") headers["X-CSRF-Token"] = csrf;
     let body: string | undefined;
     if (o.json !== undefined) {
       headers["Content-Type"] = "application/json";
@@ -88,7 +93,9 @@ export class Http {
     }
     let res: Response;
     try {
-      res = await this.opts.fetch(this.url(path, o.query), { method: o.method ?? "GET", headers, body, signal: o.signal });
+      res = await this.opts.fetch(this.url(path, o.query), {
+        method: o.method ?? "GET", headers, body, signal: o.signal, credentials: "same-origin",
+      });
     } catch (e) {
       if ((e as { name?: string }).name === "AbortError") throw e;
       throw new ApiError(0, `the backend cannot be reached (${(e as Error).message})`);

@@ -15,7 +15,10 @@ export interface User {
 }
 
 export interface LoginResult {
-  token: string;
+  /** null for a cookie session (the workbench): the token stays in an HttpOnly cookie. */
+  token: string | null;
+  /** The cookie session's CSRF token (X-CSRF-Token on unsafe methods). */
+  csrf?: string | null;
   user: User;
 }
 

@@ -1,26 +1,24 @@
 /**
- * The login session: token and user, kept in sessionStorage so a reload stays
- * logged in (the storage is passed in; nothing is read at import time).
+ * The login session. The workbench's session is an HttpOnly, SameSite=Strict
+ * cookie set by the backend, so it spans tabs and survives a reload, and page
+ * scripts never see the token; what the page keeps is the user and the CSRF
+ * token, both read back from /api/auth/me at start.
  */
 import type { User } from "../api/types";
 
 export interface Session {
-  token: string;
+  /** Bearer token (API clients only); null with the cookie session. */
+  token: string | null;
+  csrf?: string | null;
   user: User;
 }
 
-const KEY = "modd.session";
-
-export function loadSession(storage: Storage): Session | null {
+/** The session of the cookie this browser holds, or null (not logged in). */
+export async function restoreSession(me: () => Promise<User & { csrf?: string | null }>): Promise<Session | null> {
   try {
-    const raw = storage.getItem(KEY);
-    return raw ? (JSON.parse(raw) as Session) : null;
+    const { csrf, ...user } = await me();
+    return { token: null, csrf: csrf ?? null, user };
   } catch {
     return null;
   }
-}
-
-export function saveSession(storage: Storage, s: Session | null): void {
-  if (s) storage.setItem(KEY, JSON.stringify(s));
-  else storage.removeItem(KEY);
 }

@@ -6,7 +6,7 @@
  * Chromium at 1280×800; stops what it started, by PID; prints one line
  * "N passed, N failed" and exits non-zero on any failure.
  */
-import { existsSync, mkdirSync, mkdtempSync, rmSync, readFileSync, symlinkSync, writeFileSync } from "node:fs";
+import { existsSync, mkdtempSync, rmSync, readFileSync, writeFileSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { dirname, join, resolve } from "node:path";
 import { fileURLToPath } from "node:url";
@@ -72,17 +72,16 @@ try {
       "--credentials", creds, "--zenoh-listen", zenoh, ...(liveValues ? ["--simulate"] : [])], { cwd: repo, logFile: join(tmp, "drone.log"),
       env: { MODD_PUBBROKER: pubbrokerBin } });
     procs.push(up);
-    // The backend lists <archives>/<drone>/*.mcap; `modd up` writes the PubBroker's archive to <workdir>/archive.
-    mkdirSync(join(tmp, "archives"), { recursive: true });
-    symlinkSync(join(tmp, "drone", "archive"), join(tmp, "archives", "usv"));
+    // `modd up` writes the PubBroker's archive to <workdir>/archive: the backend reads it as a
+    // one-drone archive directory (a drone folder symlinked out of the archive directory is refused).
   }
   const backend = start("backend", [
     backendBin, "--host", "127.0.0.1", "--port", String(port), "--data", join(tmp, "data"),
-    "--admin-password", PASSWORD, "--frontend", join(frontend, "dist"),
-    "--archives", join(tmp, "archives"),
+    "--frontend", join(frontend, "dist"),
+    "--archives", drone ? join(tmp, "drone", "archive") : join(tmp, "archives"),
     ...(drone ? ["--zenoh-connect", zenoh, "--zenoh-credentials", join(creds, "backend.cred"),
       "--deploy-key", join(creds, "deploy.key")] : ["--no-zenoh"]),
-  ], { cwd: repo, logFile: join(tmp, "backend.log") });
+  ], { cwd: repo, logFile: join(tmp, "backend.log"), env: { MODD_ADMIN_PASSWORD: PASSWORD } });
   procs.push(backend);
   await waitForHttp(`${baseUrl}/openapi.json`, backend);
   console.log(`e2e: backend pid ${backend.pid} on ${baseUrl}; drone: ${drone ? `modd up pid ${procs[0].pid}` : `no (${pubbrokerBin} not built)`}; simulated values: ${liveValues ? "yes" : "no (no modd-sim)"}`);

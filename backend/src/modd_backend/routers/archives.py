@@ -13,7 +13,8 @@ from fastapi.responses import FileResponse, Response
 from pydantic import BaseModel
 
 from ..archives import archive_path, file_info, list_files, read_topic, reduce_minmax
-from ..deps import StateDep, UserDep
+from ..deps import Heavy, StateDep, UserDep
+from ..downloads import content_disposition
 from ..schemas import Responses
 
 router = APIRouter(prefix="/api/drones/{drone}/archives", tags=["archives"])
@@ -22,6 +23,8 @@ Name = Annotated[str, Path(max_length=255)]
 Topic = Annotated[str, Query(max_length=200)]
 Nanos = Annotated[int | None, Query(ge=0, le=2**63 - 1)]
 NOT_FOUND: Responses = {404: {"description": "no such archive file"}}
+BUSY: Responses = {429: {"description": "this user's heavy requests are running; Retry-After"},
+                   503: {"description": "all heavy slots are taken; Retry-After"}}
 
 
 class TopicCount(BaseModel):
@@ -56,7 +59,7 @@ def list_archives(drone: Drone, state: StateDep, _user: UserDep) -> list[Archive
     return [ArchiveOut.model_validate(file_info(p).to_json()) for p in list_files(root, drone)]
 
 
-@router.get("/{name}/series", responses=NOT_FOUND)
+@router.get("/{name}/series", responses={**NOT_FOUND, **BUSY}, dependencies=[Heavy])
 def read_series(
     drone: Drone, name: Name, topic: Topic, state: StateDep, _user: UserDep,
     start_ns: Nanos = None, end_ns: Nanos = None,
@@ -69,7 +72,8 @@ def read_series(
                      points=points)
 
 
-@router.get("/{name}/csv", responses={**NOT_FOUND, 200: {"content": {"text/csv": {}}}})
+@router.get("/{name}/csv", responses={**NOT_FOUND, **BUSY, 200: {"content": {"text/csv": {}}}},
+            dependencies=[Heavy])
 def export_csv(
     drone: Drone, name: Name, topic: Topic, state: StateDep, _user: UserDep,
     start_ns: Nanos = None, end_ns: Nanos = None,
@@ -82,8 +86,8 @@ def export_csv(
     for t, v in read_topic(path, topic, start_ns, end_ns):
         writer.writerow([t, topic, v])
     stem = f"{name.removesuffix('.mcap')}-{topic}.csv"
-    return Response(out.getvalue(), media_type="text/csv",
-                    headers={"Content-Disposition": f'attachment; filename="{stem}"'})
+    return Response(out.getvalue(), media_type="text/csv; charset=utf-8",
+                    headers={"Content-Disposition": content_disposition(stem)})
 
 
 @router.get("/{name}", response_class=FileResponse,

@@ -1,14 +1,20 @@
-"""Sessions: log in for a bearer token, log out, who am I, change my password."""
+"""Sessions: log in (a bearer token for API clients, or an HttpOnly cookie
+for the workbench), log out, who am I, change my password.
+
+Failed logins are throttled per account and per client address (429 with
+``Retry-After``); an unknown user name costs the same time as a wrong password."""
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from typing import Literal
+
+from fastapi import APIRouter, Request, Response
 from pydantic import BaseModel, Field
 
 from .. import accounts
-from ..deps import DbDep, StateDep, TokenDep, UserDep, roles_of
-from ..errors import ApiError
-from ..security import hash_password, verify_password
+from ..deps import SESSION_COOKIE, CredsDep, DbDep, StateDep, TokenDep, UserDep, roles_of
+from ..errors import ApiError, retry_later
+from ..security import csrf_for, hash_password, verify_password
 from ..tables import User
 
 router = APIRouter(prefix="/api/auth", tags=["auth"])
@@ -17,6 +23,9 @@ router = APIRouter(prefix="/api/auth", tags=["auth"])
 class LoginIn(BaseModel):
     username: str = Field(min_length=1, max_length=64)
     password: str = Field(min_length=1, max_length=1024)
+    #: "token": the token in the answer (API clients send it as a bearer);
+    #: "cookie": an HttpOnly SameSite=Strict cookie, no token in the answer.
+    session: Literal["token", "cookie"] = "token"
 
 
 class UserOut(BaseModel):
@@ -25,8 +34,16 @@ class UserOut(BaseModel):
     roles: list[str]
 
 
+class MeOut(UserOut):
+    """``csrf``: with a cookie session, the value of ``X-CSRF-Token`` that
+    every unsafe request must carry."""
+
+    csrf: str | None = None
+
+
 class LoginOut(BaseModel):
-    token: str
+    token: str | None
+    csrf: str | None = None
     user: UserOut
 
 
@@ -39,28 +56,54 @@ def user_out(user: User) -> UserOut:
     return UserOut(id=user.id, username=user.username, roles=sorted(roles_of(user)))
 
 
-@router.post("/login", responses={401: {"description": "wrong user name or password"}})
-def login(body: LoginIn, db: DbDep, state: StateDep) -> LoginOut:
+def client_address(request: Request) -> str:
+    return request.client.host if request.client is not None else "unknown"
+
+
+@router.post("/login", responses={401: {"description": "wrong user name or password"},
+                                  429: {"description": "too many failed logins; Retry-After"}})
+def login(body: LoginIn, db: DbDep, state: StateDep, request: Request,
+          response: Response) -> LoginOut:
+    account = body.username.lower()
+    address = client_address(request)
+    wait = max(state.login_accounts.retry_after(account),
+               state.login_addresses.retry_after(address))
+    if wait > 0:
+        raise retry_later(429, "too many failed logins; try again later", wait)
     found = accounts.login(db, body.username, body.password, state.settings.token_ttl_s)
     if found is None:
+        state.login_accounts.fail(account)
+        state.login_addresses.fail(address)
         raise ApiError(401, "wrong user name or password")
+    state.login_accounts.clear(account)
     token, user = found
+    if body.session == "cookie":
+        response.set_cookie(
+            SESSION_COOKIE, token, max_age=state.settings.token_ttl_s, path="/",
+            httponly=True, samesite="strict", secure=request.url.scheme == "https",
+        )
+        return LoginOut(token=None, csrf=csrf_for(token), user=user_out(user))
     return LoginOut(token=token, user=user_out(user))
 
 
 @router.post("/logout", status_code=204)
-def logout(db: DbDep, token: TokenDep) -> None:
-    accounts.logout(db, token)
+def logout(db: DbDep, creds: CredsDep, response: Response) -> None:
+    accounts.logout(db, creds.token)
+    if creds.via_cookie:
+        response.delete_cookie(SESSION_COOKIE, path="/", httponly=True, samesite="strict")
 
 
 @router.get("/me")
-def me(user: UserDep) -> UserOut:
-    return user_out(user)
+def me(user: UserDep, creds: CredsDep) -> MeOut:
+    return MeOut(**user_out(user).model_dump(),
+                 csrf=csrf_for(creds.token) if creds.via_cookie else None)
 
 
 @router.put("/password", status_code=204, responses={403: {"description": "wrong password"}})
-def change_password(body: PasswordIn, user: UserDep, db: DbDep) -> None:
+def change_password(body: PasswordIn, user: UserDep, db: DbDep, token: TokenDep) -> None:
+    """Also ends every other session of the user (their open sockets close)."""
     if not verify_password(body.old_password, user.password_hash):
         raise ApiError(403, "the old password is wrong")
     user.password_hash = hash_password(body.new_password)
+    accounts.revoke_sessions(db, user.id, keep_token=token)
     db.commit()

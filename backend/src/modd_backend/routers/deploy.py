@@ -12,7 +12,7 @@ from pydantic import BaseModel, Field
 from sqlalchemy import select
 
 from ..deployments import deploy, last_acked, record_json, signing_key
-from ..deps import DbDep, StateDep, UserDep, bridge_of, require
+from ..deps import DbDep, Heavy, StateDep, UserDep, bridge_of, require
 from ..errors import ApiError
 from ..modeldiff import diff
 from ..modelio import diagnostics_json
@@ -56,7 +56,7 @@ class DeployedDiffOut(BaseModel):
 @router.post(
     "/projects/{project_id}/deployments",
     status_code=201,
-    dependencies=[Depends(require(Role.operator))],
+    dependencies=[Depends(require(Role.operator)), Heavy],
     responses={404: {"description": "no such project or revision"},
                422: {"model": InvalidModelOut, "description": "the version is not valid"}},
 )

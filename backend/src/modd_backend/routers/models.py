@@ -29,7 +29,7 @@ from ..schemas import (
     VersionOut,
 )
 from ..tables import ModelVersion
-from ..versions import get_project, get_version, head_revision, model_of, save_version, version_json
+from ..versions import get_project, get_version, model_of, save_version, version_json
 from .projects import DENIED, check_edit
 
 router = APIRouter(prefix="/api", tags=["models"])
@@ -65,13 +65,17 @@ def save_model(project_id: Id, body: SaveIn, db: DbDep, user: UserDep) -> ModelO
     """Save a new revision. Text input keeps the current diagram layout (the
     .modd text has none)."""
     model = require_document(read_input(body, f"project-{project_id}.{body.format}"))
-    current = head_revision(db, project_id)
-    before = model_of(get_version(db, project_id)) if current else {}
-    if body.text is not None and "layout" in before and "layout" not in model:
-        model = {**model, "layout": before["layout"]}
-    if body.base_revision == current:
-        check_edit(user, before, model)
-    version = save_version(db, project_id, body.base_revision, model, user.username, body.message)
+    get_project(db, project_id)
+    from_text = body.text is not None
+
+    def check(before: dict[str, Any], after: dict[str, Any]) -> dict[str, Any]:
+        if from_text and "layout" in before and "layout" not in after:
+            after = {**after, "layout": before["layout"]}
+        check_edit(user, before, after)
+        return after
+
+    version = save_version(db, project_id, body.base_revision, model, user.username,
+                           body.message, check)
     return ModelOut.model_validate(version_json(version))
 
 

@@ -8,7 +8,7 @@ from typing import Annotated
 from fastapi import APIRouter, Path, Request
 from pydantic import BaseModel, Field
 
-from ..deps import StateDep, UserDep
+from ..deps import StateDep, UserDep, roles_of
 from ..errors import ApiError
 from ..scene import SceneService
 
@@ -52,7 +52,11 @@ def read_scene(request: Request, state: StateDep, _user: UserDep) -> SceneOut:
 
 
 @router.put("/{drone}/colour", status_code=204,
-            responses={404: {"description": "no scene configured"}})
-def set_colour(drone: Drone, body: ColourIn, state: StateDep, _user: UserDep) -> None:
-    """Colour the drone's track by this subscriber's values (null: plain)."""
+            responses={403: {"description": "a user without any role"},
+                       404: {"description": "no scene configured"}})
+def set_colour(drone: Drone, body: ColourIn, state: StateDep, user: UserDep) -> None:
+    """Colour the drone's track by this subscriber's values (null: plain);
+    the scene is shared, so a user holding no role may not change it."""
+    if not roles_of(user):
+        raise ApiError(403, "colouring the shared 3D scene needs a role")
     _scene(state).colour_by(drone, body.subscriber)

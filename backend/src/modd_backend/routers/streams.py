@@ -2,7 +2,8 @@
 subscriptions the page asks for (docs/backend.md, "Streams"), and dynamic
 subscriptions over REST.
 
-Client messages: ``{"op": "subscribe"|"unsubscribe", "subscriber": NAME}``,
+Client messages: ``{"op": "auth", "token": T}`` first (API clients
+without the session cookie), ``{"op": "subscribe"|"unsubscribe", "subscriber": NAME}``,
 ``{"op": "dynamic", "topic", "period_s", "aggregation", ["subscriber"]}``,
 ``{"op": "cancel", "subscriber": NAME}``, ``{"op": "ping"}``; an optional
 ``"id"`` is echoed. Server messages carry a ``type``: value, status, dropped,
@@ -18,10 +19,22 @@ from fastapi import APIRouter, Depends, Path, WebSocket, WebSocketDisconnect
 from pydantic import BaseModel, Field
 from starlette.concurrency import run_in_threadpool
 
-from ..accounts import user_for_token
-from ..deps import AppState, StateDep, bridge_of, has_role, require, ws_state
+from ..accounts import session_state, user_for_token
+from ..deps import (
+    SESSION_COOKIE,
+    AppState,
+    StateDep,
+    UserDep,
+    bridge_of,
+    has_role,
+    require,
+    roles_of,
+    ws_state,
+)
+from ..guards import loads_bounded
 from ..roles import Role
-from ..streams import StreamRelay, dynamic_request
+from ..settings import Settings
+from ..streams import CapReached, StreamRelay, check_name, dynamic_request
 from ..tables import User
 
 router = APIRouter(prefix="/api/drones", tags=["streams"])
@@ -53,60 +66,176 @@ Scientist = Depends(require(Role.scientist))
 
 
 @router.post("/{drone}/subscriptions", dependencies=[Scientist])
-def add_dynamic(drone: Drone, body: DynamicIn, state: StateDep) -> DynamicOut:
-    request = {"action": "subscribe", **body.model_dump(exclude_none=True)}
+def add_dynamic(drone: Drone, body: DynamicIn, state: StateDep, user: UserDep) -> DynamicOut:
+    # the SubBroker scopes quotas, listing and cancelling to the owner
+    request = {"action": "subscribe", **body.model_dump(exclude_none=True),
+               "owner": user.username}
     reply = dynamic_request(bridge_of(state), drone, request, state.settings.subscribe_timeout_s)
     return DynamicOut.model_validate(reply)
 
 
 @router.delete("/{drone}/subscriptions/{subscriber}", dependencies=[Scientist])
-def cancel_dynamic(drone: Drone, subscriber: Name, state: StateDep) -> DynamicOut:
-    request = {"action": "cancel", "subscriber": subscriber}
+def cancel_dynamic(drone: Drone, subscriber: Name, state: StateDep,
+                   user: UserDep) -> DynamicOut:
+    request = {"action": "cancel", "subscriber": subscriber, "owner": user.username}
     reply = dynamic_request(bridge_of(state), drone, request, state.settings.subscribe_timeout_s)
     return DynamicOut.model_validate(reply)
 
 
-def _authenticate(state: AppState, token: str | None) -> User | None:
-    if not token:
-        return None
+#: Largest WebSocket message a client may send (a subscribe op is ~60 bytes).
+MAX_MESSAGE = 64 * 1024
+#: Seconds a client without the session cookie has to send ``{"op": "auth"}``.
+AUTH_TIMEOUT_S = 5.0
+
+
+def _session(state: AppState, token: str) -> tuple[User, str] | None:
     with state.store.session() as db:
-        return user_for_token(db, token)
+        user = user_for_token(db, token)
+        return None if user is None else (user, user.roles)
+
+
+def _recheck(state: AppState, token: str) -> tuple[int, str] | None:
+    with state.store.session() as db:
+        return session_state(db, token)
+
+
+def origin_allowed(websocket: WebSocket, settings: Settings) -> bool:
+    """A browser's WebSocket names its page's origin: it must be this
+    service's own (or a configured CORS origin). Clients without an Origin
+    (API clients, not browsers) pass; they cannot use the cookie (below)."""
+    origin = websocket.headers.get("origin")
+    if origin is None:
+        return True
+    if origin in settings.cors_origins:
+        return True
+    host = websocket.headers.get("host", "")
+    return origin.split("://", 1)[-1].rstrip("/").lower() == host.lower()
+
+
+def _parse(text: str) -> Any:
+    if len(text) > MAX_MESSAGE:
+        raise ValueError(f"a message is at most {MAX_MESSAGE} bytes")
+    return loads_bounded(text, 16)
 
 
 @router.websocket("/{drone}/stream")
-async def stream(websocket: WebSocket, drone: str, token: str | None = None) -> None:
-    """Browsers cannot set headers on a WebSocket: the token is a query parameter."""
+async def stream(websocket: WebSocket, drone: str) -> None:
+    """Authenticated by the session cookie (the workbench; same origin
+    only) or, for API clients, by ``{"op": "auth", "token": ...}`` as the
+    first message. Never by a token in the URL (URLs end up in logs)."""
     state = ws_state(websocket)
-    user = await run_in_threadpool(_authenticate, state, token)
-    if user is None:
-        await websocket.close(code=4401, reason="missing or invalid token")
+    if "token" in websocket.query_params:
+        await websocket.close(code=4400, reason="no token in a URL: send "
+                              '{"op": "auth", "token": ...} first, or use the session cookie')
         return
-    if state.bridge is None:
+    if not origin_allowed(websocket, state.settings):
+        await websocket.close(code=4403, reason="Origin not allowed")
+        return
+    cookie = websocket.cookies.get(SESSION_COOKIE)
+    if cookie is not None and websocket.headers.get("origin") is None:
+        cookie = None  # a cookie is honoured only with a checked Origin
+    if state.bridge is None or state.hub is None:
         await websocket.close(code=4503, reason="zenoh is disabled")
         return
     try:
-        relay = StreamRelay(state.bridge, drone, state.settings.stream_queue_size)
+        check_name("drone", drone)
     except ValueError as exc:
-        await websocket.close(code=4400, reason=str(exc))
+        await websocket.close(code=4400, reason=str(exc)[:120])
         return
+    session = None
+    if cookie is not None:
+        session = await run_in_threadpool(_session, state, cookie)
+        if session is None:
+            await websocket.close(code=4401, reason="missing or invalid token")
+            return
     await websocket.accept()
+    token = cookie
+    if session is None:
+        token, session = await _first_message_auth(websocket, state)
+        if session is None or token is None:
+            await websocket.close(code=4401, reason="missing or invalid token")
+            return
+    user, roles = session
+    assert token is not None
+    settings = state.settings
+    relay = StreamRelay(state.hub, drone, settings.stream_queue_size, user_id=user.id,
+                        per_socket=settings.ws_subscriptions_per_socket,
+                        per_user=settings.ws_subscriptions_per_user,
+                        per_user_counts=state.ws_counts)
     relay.queue.bind(asyncio.get_running_loop())
     relay.start()
-    sender = asyncio.create_task(_send_loop(websocket, relay))
+    tasks: set[asyncio.Task[Any]] = {
+        asyncio.create_task(_send_loop(websocket, relay)),
+        asyncio.create_task(_receive_loop(websocket, relay, state, user)),
+    }
+    watcher = asyncio.create_task(_watch(state, token, (user.id, roles)))
+    tasks.add(watcher)
+    try:
+        done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+        for task in tasks - done:
+            task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await task
+        ended = watcher.result() if watcher in done and not watcher.cancelled() else None
+        if ended is not None:
+            with contextlib.suppress(Exception):
+                await websocket.close(code=ended[0], reason=ended[1])
+    finally:
+        relay.close()
+
+
+async def _first_message_auth(
+    websocket: WebSocket, state: AppState
+) -> tuple[str | None, tuple[User, str] | None]:
+    try:
+        text = await asyncio.wait_for(websocket.receive_text(), AUTH_TIMEOUT_S)
+        message = _parse(text)
+    except (TimeoutError, ValueError, KeyError, WebSocketDisconnect, RuntimeError):
+        return None, None
+    if not isinstance(message, dict) or message.get("op") != "auth":
+        return None, None
+    token = message.get("token")
+    if not isinstance(token, str) or not token or len(token) > 256:
+        return None, None
+    session = await run_in_threadpool(_session, state, token)
+    if session is not None:
+        reply: dict[str, Any] = {"type": "authenticated", "user": session[0].username}
+        if message.get("id") is not None:
+            reply["id"] = message.get("id")
+        await websocket.send_json(reply)
+    return token, session
+
+
+async def _watch(state: AppState, token: str, seen: tuple[int, str]) -> tuple[int, str] | None:
+    """Re-check the session every ``ws_recheck_s``: logout, expiry, a password
+    change, deletion (4401) or a role change (4403) ends the socket."""
+    while True:
+        await asyncio.sleep(state.settings.ws_recheck_s)
+        now = await run_in_threadpool(_recheck, state, token)
+        if now is None:
+            return 4401, "the session ended"
+        if now != seen:
+            return 4403, "your roles changed; reconnect"
+
+
+async def _receive_loop(websocket: WebSocket, relay: StreamRelay, state: AppState,
+                        user: User) -> None:
     try:
         while True:
-            message = await websocket.receive_json()
+            text = await websocket.receive_text()
+            try:
+                message = _parse(text)
+            except ValueError as exc:
+                relay.queue.put({"type": "error", "message": f"not a JSON message: {exc}"})
+                continue
             reply = await _handle(message, relay, state, user)
             relay.queue.put(reply)
-    except (WebSocketDisconnect, RuntimeError):
-        pass
-    except ValueError:  # not JSON: say so and close
-        await websocket.close(code=4400, reason="messages are JSON objects")
-    finally:
-        sender.cancel()
-        with contextlib.suppress(asyncio.CancelledError, Exception):
-            await sender
-        relay.close()
+            # Messages already buffered are received without a suspension:
+            # yield once per op, so a flooding socket cannot starve the others
+            # (or /api/health) of the event loop.
+            await asyncio.sleep(0)
+    except (WebSocketDisconnect, RuntimeError, KeyError):
+        return
 
 
 async def _send_loop(websocket: WebSocket, relay: StreamRelay) -> None:
@@ -117,16 +246,24 @@ async def _send_loop(websocket: WebSocket, relay: StreamRelay) -> None:
             await websocket.send_json({"type": "dropped", "count": dropped})
         for item in batch:
             await websocket.send_json(item)
+            await asyncio.sleep(0)  # writes do not suspend: let others run
 
 
 async def _handle(
     message: Any, relay: StreamRelay, state: AppState, user: User
 ) -> dict[str, Any]:
+    """One op, with the role it needs: values and status need any role;
+    dynamic subscriptions need the role scientist."""
     if not isinstance(message, dict):
         return {"type": "error", "message": "a message is a JSON object with an 'op'"}
     op, ident = message.get("op"), message.get("id")
+    if not isinstance(ident, str | int | None) or (isinstance(ident, str) and len(ident) > 64):
+        ident = None
+    out: dict[str, Any]
     try:
-        if op == "subscribe":
+        if not roles_of(user) and op != "ping":
+            out = {"type": "error", "message": "live values need a role"}
+        elif op == "subscribe":
             out = relay.subscribe(message.get("subscriber"))
         elif op == "unsubscribe":
             out = relay.unsubscribe(message.get("subscriber"))
@@ -134,15 +271,17 @@ async def _handle(
             out = {"type": "pong", "subscribers": relay.subscribers}
         elif op in ("dynamic", "cancel"):
             out = await _dynamic(op, message, relay, state, user)
+        elif op == "auth":
+            out = {"type": "error", "message": "already authenticated"}
         else:
-            out = {"type": "error", "message": f"unknown op {op!r}"}
+            out = {"type": "error", "message": f"unknown op {str(op)[:40]!r}"}
+    except CapReached as exc:
+        out = {"type": "error", "code": "cap", "message": str(exc)}
     except ValueError as exc:
         out = {"type": "error", "message": str(exc)}
     if ident is not None:
         out["id"] = ident
     return out
-
-
 async def _dynamic(
     op: str, message: dict[str, Any], relay: StreamRelay, state: AppState, user: User
 ) -> dict[str, Any]:
@@ -153,8 +292,9 @@ async def _dynamic(
         request = {"action": "subscribe", **{k: message[k] for k in fields if k in message}}
     else:
         request = {"action": "cancel", "subscriber": message.get("subscriber")}
+    request["owner"] = user.username  # the SubBroker scopes quotas and cancels to it
     reply = await run_in_threadpool(
-        dynamic_request, relay.bridge, relay.drone, request, state.settings.subscribe_timeout_s
+        dynamic_request, bridge_of(state), relay.drone, request, state.settings.subscribe_timeout_s
     )
     if reply.get("status") == "ACCEPTED" and isinstance(reply.get("subscriber"), str):
         relay.subscribe(reply["subscriber"])  # values start at the next slot

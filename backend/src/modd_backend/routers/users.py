@@ -9,7 +9,7 @@ from pydantic import BaseModel, Field
 from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
 
-from ..accounts import create_user
+from ..accounts import admins_left, create_user, revoke_sessions
 from ..deps import DbDep, UserDep, require
 from ..errors import ApiError
 from ..roles import Role, format_roles
@@ -57,13 +57,21 @@ def add_user(body: UserIn, db: DbDep) -> UserOut:
     return user_out(user)
 
 
-@router.patch("/{user_id}", responses={404: {"description": "no such user"}})
+@router.patch("/{user_id}", responses={404: {"description": "no such user"},
+                                         409: {"description": "the last admin"}})
 def change_user(user_id: Id, body: UserPatch, db: DbDep) -> UserOut:
+    """A new password ends every session of the user; the last admin keeps
+    the role admin (409)."""
     user = _user(db, user_id)
     if body.roles is not None:
         user.roles = format_roles({r.value for r in body.roles})
+        db.flush()
+        if admins_left(db) == 0:
+            db.rollback()
+            raise ApiError(409, "the last admin cannot lose the role admin")
     if body.password is not None:
         user.password_hash = hash_password(body.password)
+        revoke_sessions(db, user.id)
     db.commit()
     return user_out(user)
 
@@ -74,4 +82,8 @@ def delete_user(user_id: Id, db: DbDep, me: UserDep) -> None:
     if user.id == me.id:
         raise ApiError(409, "you cannot delete yourself")
     db.delete(user)
+    db.flush()
+    if admins_left(db) == 0:
+        db.rollback()
+        raise ApiError(409, "the last admin cannot be deleted")
     db.commit()

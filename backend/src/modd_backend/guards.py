@@ -1,0 +1,250 @@
+"""Guards every request passes before any route (one ASGI middleware), and
+the bound on heavy routes.
+
+- ``Host`` must name this service (loopback names, the bound host, and
+  ``Settings.allowed_hosts``): 400 otherwise (DNS rebinding).
+- A request body is read here, at most ``max_body_bytes`` (413 beyond, with
+  or without a Content-Length), and a JSON body nested deeper than
+  ``max_json_depth`` is refused with 422 before any route sees it: a request
+  answered with an error stores nothing.
+- Every answer carries the security headers (a CSP without inline scripts,
+  ``frame-ancestors 'none'`` except for the same-origin 3D scene, nosniff,
+  Referrer-Policy).
+
+Heavy routes (CSV export, series, deploy) take a slot of :class:`HeavyLimiter`
+or are refused at once with 429 (this user's share is taken) or 503 (all are),
+both with ``Retry-After``; nothing queues behind them, ``/api/health`` least.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from .errors import retry_later
+from .settings import Settings
+
+#: Mount point of the reverse-proxied 3D scene (routers/scene.py).
+SCENE_PREFIX = "/scene/"
+_BODY_METHODS = frozenset({"POST", "PUT", "PATCH", "DELETE"})
+_STRINGS = re.compile(rb'"(?:[^"\\]|\\.)*"', re.DOTALL)
+_BRACKETS = re.compile(rb"[\[\]{}]")
+
+
+def json_depth(data: bytes) -> int:
+    """Deepest nesting of arrays/objects in a JSON text (strings skipped);
+    linear, no recursion, so a hostile body cannot exhaust the stack.
+
+    >>> json_depth(b'{"a": [1, {"b": "]]]"}]}'), json_depth(b'3')
+    (3, 0)
+    """
+    depth = deepest = 0
+    for m in _BRACKETS.finditer(_STRINGS.sub(b'""', data)):
+        if m.group() in (b"[", b"{"):
+            depth += 1
+            deepest = max(deepest, depth)
+        else:
+            depth -= 1
+    return deepest
+
+
+def loads_bounded(text: str | bytes, max_depth: int) -> Any:
+    """``json.loads`` refusing (ValueError) a document nested deeper than ``max_depth``."""
+    raw = text.encode() if isinstance(text, str) else text
+    if json_depth(raw) > max_depth:
+        raise ValueError(f"JSON nested deeper than {max_depth} levels")
+    return json.loads(raw)
+
+
+def csp(path: str, host: str, frames: str = "") -> str:
+    """The Content-Security-Policy of an answer: no inline or foreign
+    scripts; only the 3D scene (same origin) may be framed, by the workbench."""
+    scene = path.startswith(SCENE_PREFIX)
+    if path in ("/docs", "/redoc"):  # FastAPI's API pages: inline bootstrap, CDN assets
+        cdn = "https://cdn.jsdelivr.net"
+        return (f"default-src 'self'; script-src 'self' 'unsafe-inline' {cdn}; "
+                f"style-src 'self' 'unsafe-inline' {cdn}; img-src 'self' data: "
+                "https://fastapi.tiangolo.com; frame-ancestors 'none'; object-src 'none'")
+    scripts = "'self' 'wasm-unsafe-eval'" if scene else "'self'"
+    ancestors = "'self'" if scene else "'none'"
+    return (
+        "default-src 'self'; "
+        f"script-src {scripts}; "
+        "style-src 'self' 'unsafe-inline'; "
+        "img-src 'self' data: blob:; font-src 'self' data:; "
+        f"connect-src 'self' ws://{host} wss://{host}; "
+        f"worker-src 'self' blob:; frame-src 'self'{frames}; object-src 'none'; base-uri 'none'; "
+        f"form-action 'self'; frame-ancestors {ancestors}"
+    )
+
+
+def security_headers(path: str, host: str, frames: str = "") -> list[tuple[bytes, bytes]]:
+    framing = b"SAMEORIGIN" if path.startswith(SCENE_PREFIX) else b"DENY"
+    return [
+        (b"content-security-policy", csp(path, host, frames).encode()),
+        (b"x-content-type-options", b"nosniff"),
+        (b"referrer-policy", b"no-referrer"),
+        (b"x-frame-options", framing),
+        (b"cross-origin-opener-policy", b"same-origin"),
+    ]
+
+
+class _TooLarge(Exception):
+    pass
+
+
+class Guard:
+    """The ASGI middleware described in the module docstring."""
+
+    def __init__(self, app: ASGIApp, settings: Settings) -> None:
+        self.app = app
+        self.settings = settings
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] not in ("http", "websocket"):
+            await self.app(scope, receive, send)
+            return
+        headers = {k.decode("latin-1").lower(): v.decode("latin-1")
+                   for k, v in scope.get("headers", [])}
+        host = headers.get("host", "")
+        if not self.settings.host_allowed(host):
+            if scope["type"] == "websocket":
+                await send({"type": "websocket.close", "code": 4400,
+                            "reason": "Host not allowed"})
+                return
+            await _plain(send, 400, f"Host {host!r} is not allowed here "
+                         "(settings: allowed_hosts)", scope["path"], "localhost")
+            return
+        if scope["type"] == "websocket":
+            await self.app(scope, receive, send)
+            return
+        path: str = scope["path"]
+        extra = security_headers(path, host, _scene_frame(scope, host))
+
+        async def send_with_headers(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                names = {k.lower() for k, _ in message.get("headers", [])}
+                message["headers"] = list(message.get("headers", [])) + [
+                    h for h in extra if h[0] not in names]
+            await send(message)
+
+        if scope["method"] not in _BODY_METHODS:
+            await self.app(scope, receive, send_with_headers)
+            return
+        limit = self.settings.max_body_bytes
+        declared = headers.get("content-length")
+        if declared is not None and declared.isdigit() and int(declared) > limit:
+            await _too_large(send, limit, path, host)
+            return
+        try:
+            body = await _read_body(receive, limit)
+        except _TooLarge:
+            await _too_large(send, limit, path, host)
+            return
+        ctype = headers.get("content-type", "")
+        if body[:1] in (b"{", b"[") or "json" in ctype:
+            depth = json_depth(body)
+            if depth > self.settings.max_json_depth:
+                await _json_error(send, 422, {
+                    "detail": f"the JSON body is nested {depth} levels deep; at most "
+                              f"{self.settings.max_json_depth} are accepted"}, path, host)
+                return
+        replayed = False
+
+        async def replay() -> Message:
+            nonlocal replayed
+            if not replayed:
+                replayed = True
+                return {"type": "http.request", "body": body, "more_body": False}
+            return await receive()
+
+        await self.app(scope, replay, send_with_headers)
+
+
+def _scene_frame(scope: Scope, host: str) -> str:
+    """The viser scene's own origin, which the workbench frames (" origin" or "")."""
+    state = getattr(getattr(scope.get("app"), "state", None), "modd", None)
+    scene = getattr(state, "scene", None)
+    if scene is None:
+        return ""
+    name = host[1:].split("]", 1)[0] if host.startswith("[") else host.rsplit(":", 1)[0]
+    return " " + str(scene.server.url_for(name)).rstrip("/")
+
+
+async def _read_body(receive: Receive, limit: int) -> bytes:
+    chunks: list[bytes] = []
+    size = 0
+    while True:
+        message = await receive()
+        if message["type"] == "http.disconnect":
+            break
+        chunk = message.get("body", b"")
+        size += len(chunk)
+        if size > limit:
+            raise _TooLarge
+        chunks.append(chunk)
+        if not message.get("more_body", False):
+            break
+    return b"".join(chunks)
+
+
+async def _json_error(send: Send, status: int, body: dict[str, Any], path: str,
+                      host: str) -> None:
+    data = json.dumps(body).encode()
+    await send({"type": "http.response.start", "status": status, "headers": [
+        (b"content-type", b"application/json"), (b"content-length", str(len(data)).encode()),
+        (b"connection", b"close"), *security_headers(path, host)]})
+    await send({"type": "http.response.body", "body": data})
+
+
+async def _too_large(send: Send, limit: int, path: str, host: str) -> None:
+    await _json_error(send, 413, {"detail": f"the request body exceeds {limit} bytes",
+                                  "limit_bytes": limit}, path, host)
+
+
+async def _plain(send: Send, status: int, text: str, path: str, host: str) -> None:
+    await _json_error(send, status, {"detail": text}, path, host)
+
+
+class HeavyLimiter:
+    """Slots for heavy requests: ``per_user`` each and ``total`` in all.
+    Never waits: a request finding no slot is refused at once."""
+
+    def __init__(self, per_user: int, total: int) -> None:
+        self.per_user = per_user
+        self.total = total
+        self.in_flight = 0
+        self._by_user: dict[int, int] = {}
+        self._lock = threading.Lock()
+
+    @property
+    def saturated(self) -> bool:
+        return self.in_flight >= self.total
+
+    @contextmanager
+    def slot(self, user_id: int) -> Iterator[None]:
+        with self._lock:
+            if self._by_user.get(user_id, 0) >= self.per_user:
+                raise retry_later(429, f"at most {self.per_user} heavy requests at once "
+                                  "per user (CSV, series, deploy); retry shortly", 1)
+            if self.in_flight >= self.total:
+                raise retry_later(503, "the service is busy with heavy requests; retry "
+                                  "shortly", 1)
+            self.in_flight += 1
+            self._by_user[user_id] = self._by_user.get(user_id, 0) + 1
+        try:
+            yield
+        finally:
+            with self._lock:
+                self.in_flight -= 1
+                left = self._by_user[user_id] - 1
+                if left:
+                    self._by_user[user_id] = left
+                else:
+                    del self._by_user[user_id]

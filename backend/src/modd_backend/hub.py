@@ -1,0 +1,110 @@
+"""One zenoh subscription for every live value and one for every status,
+shared by all WebSockets (and the 3D scene), fanned out in process.
+
+A WebSocket's ``subscribe`` only adds a callback to a dict: nothing is
+declared on zenoh, no thread is started and the event loop never waits, so
+neither the number of sockets nor of subscriptions costs OS threads (the
+two wildcard subscribers are declared once, at start-up).
+
+>>> hub = SubscriptionHub()
+>>> got = []
+>>> hub.add("usv", "sub_1", lambda name, p: got.append((name, p)))
+>>> hub.on_value("modd/usv/sub/sub_1", b"1"); hub.on_value("modd/usv/sub/sub_2", b"2")
+>>> got
+[('sub_1', b'1')]
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+
+from .zbridge import Undeclarable, ZenohBridge
+
+ValueCallback = Callable[[str, bytes], None]
+StatusCallback = Callable[[bytes], None]
+#: Wildcards the hub subscribes to.
+VALUES = "modd/*/sub/*"
+STATUS = "modd/*/status"
+
+
+class SubscriptionHub:
+    """Callbacks per (drone, subscriber) and per drone status; callbacks run on
+    a zenoh thread and must not block (they put into a DropOldestQueue)."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._values: dict[tuple[str, str], set[ValueCallback]] = {}
+        self._status: dict[str, set[StatusCallback]] = {}
+        self._every_value: list[Callable[[str, bytes], None]] = []
+        self._every_status: list[Callable[[str, bytes], None]] = []
+        self._declared: list[Undeclarable] = []
+
+    def start(self, bridge: ZenohBridge) -> None:
+        """Declare the two wildcard subscribers (blocking; call at start-up)."""
+        self._declared = [bridge.subscribe(VALUES, self.on_value),
+                          bridge.subscribe(STATUS, self.on_status)]
+
+    def stop(self) -> None:
+        for sub in self._declared:
+            sub.undeclare()
+        self._declared = []
+
+    def listen_all(self, callback: Callable[[str, bytes], None]) -> None:
+        """``callback(key, payload)`` for every value (the 3D scene)."""
+        self._every_value.append(callback)
+
+    def listen_all_status(self, callback: Callable[[str, bytes], None]) -> None:
+        """``callback(key, payload)`` for every drone's status (the Foxglove server)."""
+        self._every_status.append(callback)
+
+    def on_value(self, key: str, payload: bytes) -> None:
+        parts = key.split("/")
+        for cb in self._every_value:
+            cb(key, payload)
+        if len(parts) != 4:
+            return
+        with self._lock:
+            targets = list(self._values.get((parts[1], parts[3]), ()))
+        for cb in targets:
+            cb(parts[3], payload)
+
+    def on_status(self, key: str, payload: bytes) -> None:
+        parts = key.split("/")
+        for cb in self._every_status:
+            cb(key, payload)
+        if len(parts) != 3:
+            return
+        with self._lock:
+            targets = list(self._status.get(parts[1], ()))
+        for cb in targets:
+            cb(payload)
+
+    def add(self, drone: str, name: str, callback: ValueCallback) -> None:
+        with self._lock:
+            self._values.setdefault((drone, name), set()).add(callback)
+
+    def remove(self, drone: str, name: str, callback: ValueCallback) -> None:
+        with self._lock:
+            cbs = self._values.get((drone, name))
+            if cbs is not None:
+                cbs.discard(callback)
+                if not cbs:
+                    del self._values[(drone, name)]
+
+    def add_status(self, drone: str, callback: StatusCallback) -> None:
+        with self._lock:
+            self._status.setdefault(drone, set()).add(callback)
+
+    def remove_status(self, drone: str, callback: StatusCallback) -> None:
+        with self._lock:
+            cbs = self._status.get(drone)
+            if cbs is not None:
+                cbs.discard(callback)
+                if not cbs:
+                    del self._status[drone]
+
+    @property
+    def keys(self) -> int:
+        with self._lock:
+            return len(self._values)
