@@ -71,8 +71,8 @@ class SubscriptionHub:
 
     def on_status(self, key: str, payload: bytes) -> None:
         parts = key.split("/")
-        for cb in self._every_status:
-            cb(key, payload)
+        for every in self._every_status:
+            every(key, payload)
         if len(parts) != 3:
             return
         with self._lock:
