@@ -30,8 +30,9 @@ from fastapi.testclient import TestClient
 from modd_backend import Settings, create_app
 s = Settings(data_dir=Path(sys.argv[1]), database_url=sys.argv[2] or None,
              zenoh_enabled=False, initial_admin_password="pw-" + "x" * 12)
-with TestClient(create_app(s, out=io.StringIO())) as c:
-    assert c.get("/api/health").status_code == 200
+with TestClient(create_app(s, out=io.StringIO()), base_url="http://127.0.0.1") as c:
+    r = c.get("/api/health")
+    assert r.status_code == 200, r.text
 """
 
 

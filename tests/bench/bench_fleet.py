@@ -139,10 +139,12 @@ class Browser:
             self.max_lag_s = max(self.max_lag_s, float(data.get("lag_s") or 0.0))
 
 
-async def browse(url: str, drone: Drone, browser: Browser, stop: asyncio.Event) -> None:
+async def browse(url: str, token: str, drone: Drone, browser: Browser,
+                 stop: asyncio.Event) -> None:
     import websockets
 
     async with websockets.connect(url, max_queue=None) as ws:
+        await ws.send(json.dumps({"op": "auth", "token": token}))  # never in the URL
         for name in drone.subscribers:
             await ws.send(json.dumps({"op": "subscribe", "subscriber": name}))
         while not stop.is_set():
@@ -285,14 +287,26 @@ async def _run(tmp: Path, n: int, seconds: float, extra: int) -> Result:
                              "--seconds", str(seconds + 300)], tmp / "load.log")
         procs.append(load)
         await asyncio.to_thread(wait_port, port, 180)
+        tokens = {}
         async with httpx.AsyncClient(base_url=f"http://127.0.0.1:{port}", timeout=30) as c:
             r = await c.post("/api/auth/login", json={"username": "admin", "password": PASSWORD})
             r.raise_for_status()
-            token = r.json()["token"]
+            admin = {"Authorization": f"Bearer {r.json()['token']}"}
+            # one scientist per drone, as on a real base station: the backend caps
+            # live subscriptions per user (1,024) and a fleet asks for more
+            for d in drones:
+                user = f"scientist_{d.name}"
+                r = await c.post("/api/users", headers=admin, json={
+                    "username": user, "password": PASSWORD, "roles": ["scientist"]})
+                r.raise_for_status()
+                r = await c.post("/api/auth/login", json={"username": user,
+                                                          "password": PASSWORD})
+                r.raise_for_status()
+                tokens[d.name] = r.json()["token"]
         browser, stop = Browser(), asyncio.Event()
         tasks = [asyncio.create_task(browse(
-            f"ws://127.0.0.1:{port}/api/drones/{d.name}/stream?token={token}", d, browser, stop))
-            for d in drones]
+            f"ws://127.0.0.1:{port}/api/drones/{d.name}/stream", tokens[d.name], d, browser,
+            stop)) for d in drones]
         await asyncio.to_thread(wait_all_seen, browser, drones, procs, 60 + 3 * n)
         samplers = [Sampler(p.pid).start() for d in drones
                     for p in (d.pubbroker, d.subbroker) if p is not None]

@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import re
 import shlex
+import shutil
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -262,11 +263,23 @@ class Loopback:
                 out.append(self.endpoints(word))
         return out
 
-    def mount(self, volume: str, target: str, image: Image) -> None:
-        """A named volume: one directory, a symlink to it at each mount point."""
+    def mount(self, volume: str, target: str, image: Image, read_only: bool = False) -> None:
+        """A named volume: one directory, a symlink to it at each mount point. The
+        first read-only mount holds the directory itself (the volume's store
+        becomes a link to it): a reader that refuses folders reached through a
+        link out of its tree (the backend's archive listing) sees, as under
+        Docker, a plain directory there."""
         store = self.tmp / "volumes" / volume
-        store.mkdir(parents=True, exist_ok=True)
         link = self.path(target, image.workdir)
         link.parent.mkdir(parents=True, exist_ok=True)
-        if not link.is_symlink():
+        if read_only and not store.is_symlink() and not link.exists() \
+                and not link.is_symlink():
+            store.mkdir(parents=True, exist_ok=True)
+            shutil.move(str(store), str(link))
+            store.symlink_to(link, target_is_directory=True)
+            return
+        store.parent.mkdir(parents=True, exist_ok=True)
+        if not store.exists():
+            store.mkdir()
+        if not link.is_symlink() and not link.exists():
             link.symlink_to(store, target_is_directory=True)

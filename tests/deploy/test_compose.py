@@ -270,8 +270,8 @@ class Run:
         svc = services(self.compose)[name]
         image = image_of(svc)
         for vol in svc.get("volumes", []):
-            source, target = str(vol).split(":")[:2]
-            self.lb.mount(source, target, image)
+            source, target, *mode = str(vol).split(":")
+            self.lb.mount(source, target, image, read_only=mode == ["ro"])
         argv = self.lb.argv(argv_of(svc), image)
         argv[0] = self.executable(argv[0])
         proc = Proc(name, argv, self.tmp / f"{name}.log", env=self.environment(svc, image))
