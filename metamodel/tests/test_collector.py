@@ -55,6 +55,16 @@ def test_original_example_loads_with_warnings_not_errors() -> None:
         assert d.location is not None and d.location.line > 0, str(d)
 
 
+def test_every_unit_and_aggregation_of_the_original() -> None:
+    m = _load(DATA / "all_words.collector")
+    units = [v["unit"] for s in m["drone"]["sensors"] for v in s["variables"]]
+    assert sorted(units) == sorted(KNOWN_UNITS)
+    assert [s["aggregation"] for s in m["subscribers"]] == list(ORIGINAL_AGGREGATIONS)
+    assert [p["periodS"] for p in m["publishers"]] == ["0.1", "1.0"]
+    assert m["pubBroker"]["endpoint"] == {"host": "127.0.0.2", "port": 7171}
+    assert all("endpoint" in s for s in m["subscribers"])
+
+
 def test_topic_published_twice_is_a_warning() -> None:
     text = (DATA / "original_example.collector").read_text().replace(
         'Publisher thermometer("127.0.0.1":7373, 1.0, "usv.thermometer.temperature")',
@@ -164,7 +174,8 @@ def test_utf8_with_bom_loads(tmp_path: Path) -> None:
 # -- export back -------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", ["original_example.collector", "lexical_forms.collector"])
+@pytest.mark.parametrize("name", ["original_example.collector", "lexical_forms.collector",
+                                  "all_words.collector"])
 def test_collector_round_trip(name: str) -> None:
     model = _load(DATA / name)
     text, omitted = print_collector(model)
