@@ -27,7 +27,13 @@ from station import PUBBROKER, Station
 
 DEMO = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.modd"
 
-pytestmark = pytest.mark.skipif(not PUBBROKER.exists(), reason="build/bin/modd-pubbroker missing")
+
+
+@pytest.fixture(autouse=True)
+def _pubbroker_built() -> None:
+    """make test builds it: missing is a setup bug, not a skip."""
+    if not PUBBROKER.exists():
+        pytest.fail(f"{PUBBROKER} is missing: run make build")
 
 
 @pytest.fixture(scope="module")
@@ -49,7 +55,7 @@ def backend(station: Station, tmp_path_factory: pytest.TempPathFactory
                         zenoh_credentials=station.credentials.cred_file("backend"),
                         deploy_key_file=station.credentials.deploy_key_file,
                         foxglove_port=port)
-    with TestClient(create_app(settings, out=io.StringIO())) as c:
+    with TestClient(create_app(settings, out=io.StringIO()), base_url="http://127.0.0.1") as c:
         yield c, port
 
 
@@ -162,7 +168,7 @@ def test_a_taken_port_leaves_the_backend_running(tmp_path: Path) -> None:
         out = io.StringIO()
         settings = Settings(data_dir=tmp_path, zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
                             initial_admin_password="pw-12345678", foxglove_port=port)
-        with TestClient(create_app(settings, out=out)) as c:
+        with TestClient(create_app(settings, out=out), base_url="http://127.0.0.1") as c:
             assert c.get("/api/health").status_code == 200
             assert c.app.state.modd.foxglove is None  # type: ignore[attr-defined]
         assert f"no Foxglove server on 127.0.0.1:{port}" in out.getvalue()

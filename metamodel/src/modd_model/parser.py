@@ -164,7 +164,7 @@ _HEX = frozenset("0123456789abcdefABCDEF")
 
 def _unquote(token: Token) -> str:
     """The value of a string literal in either quote style, with the escapes of
-    Xtext's STRING (\\n \\t \\r \\b \\f \\uXXXX, and any other escaped character
+    Xtext's STRING (\\n \\t \\r \\b \\f, \\u and four hex digits, and any other escaped character
     standing for itself)."""
     body = str(token)[1:-1]
     out: list[str] = []
