@@ -23,6 +23,10 @@ run: build
 test: build
 	@scripts/check.sh
 
+# The fast tier (formatters, linters, types, unit tests): under 2 minutes.
+check: setup
+	@scripts/check-fast.sh
+
 test-python: setup
 	@.venv/bin/pytest -q
 

@@ -25,3 +25,40 @@ def scenarios_dir() -> Path:
 def expected(scenarios_dir: Path) -> dict[str, Any]:
     data: dict[str, Any] = json.loads((scenarios_dir / "expected.json").read_text())
     return data
+
+
+# -- Tiers ---------------------------------------------------------------------
+# ``make check`` runs the unit tests of every component: ``-m "not e2e and not
+# slow"``. A test is ``e2e`` when it starts other processes (the CLI, servers,
+# the PubBroker, a compiler) or a network server: everything under tests/ and
+# the component tests named here (a module, or module::test). ``make test``
+# runs them all. Marking here rather than in each file keeps one list to read.
+CROSS_PROCESS = (
+    "tests/",
+    "metamodel/tests/test_cli.py",
+    "metamodel/tests/test_collector.py::test_convert_to_collector_cli",
+    "metamodel/tests/test_collector.py::test_validate_with_encoding_option",
+    "metamodel/tests/plan/test_plan_json.py::test_plan_does_not_depend_on_the_hash_seed",
+    "generators/tests/test_cpp_driver_e2e.py",
+    "generators/tests/test_hostile_strings.py",
+    "generators/tests/test_regenerate.py",
+    "runtime/python/tests/test_radio.py",
+    "backend/tests/test_app.py",
+    "backend/tests/test_archives.py",
+    "backend/tests/test_frontend.py",
+    "backend/tests/test_hardening.py",
+    "backend/tests/test_live.py",
+    "backend/tests/test_postgres.py",
+    "backend/tests/test_push.py",
+    "backend/tests/test_relay.py",
+    "backend/tests/test_schemathesis.py",
+    "backend/tests/test_store.py",
+)
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    for item in items:
+        node = item.nodeid.split("[", 1)[0]
+        if any(node == c or (c.endswith((".py", "/")) and node.startswith(c))
+               for c in CROSS_PROCESS):
+            item.add_marker(pytest.mark.e2e)

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Every check of the project, used by developers and CI alike (via `make test`):
-# lint and types, the Python suites, the C++ suites, the frontend suites.
+# the fast tier first (scripts/check-fast.sh: formatters, lint, types, unit
+# tests), then the cross-process Python suites, the C++ suites, the frontend suites.
 # Exits non-zero on the first failing suite, after saying which.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -8,12 +9,9 @@ export PATH="$PWD/.venv/bin:$PATH"
 
 step() { printf '\n== %s\n' "$*"; }
 
-step "ruff"
-ruff check --quiet .
-step "mypy (strict)"
-mypy --no-error-summary metamodel/src backend/src generators/src runtime/python/src
-step "pytest"
-pytest -q
+scripts/check-fast.sh
+step "pytest (cross-process and slow: what make check left out)"
+pytest -q -m "e2e or slow"
 if [ -x runtime/cpp/scripts/test.sh ]; then
   step "C++ runtime"
   runtime/cpp/scripts/test.sh

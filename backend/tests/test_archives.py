@@ -37,7 +37,7 @@ def write_archive(path: Path, samples: int) -> None:
                 value = float(i % 50) if k == 0 else -float(i)
                 w.add_message(chans[t], log_time=T0 + i * STEP, publish_time=T0 + i * STEP,
                               data=json.dumps({"value": value}).encode())
-        w.finish()
+        w.finish()  # type: ignore[no-untyped-call]
 
 
 @pytest.fixture
@@ -90,7 +90,8 @@ def test_single_drone_layout(tmp_path: Path) -> None:
 def test_series_range_and_reduction(archive_client: tuple[TestClient, Headers, Path]) -> None:
     c, h, _ = archive_client
     url = "/api/drones/usv/archives/run-0000.mcap/series"
-    params = {"topic": TOPICS[0], "start_ns": T0 + 10 * STEP, "end_ns": T0 + 20 * STEP}
+    params: dict[str, str | int] = {"topic": TOPICS[0], "start_ns": T0 + 10 * STEP,
+                                    "end_ns": T0 + 20 * STEP}
     s = c.get(url, headers=h, params=params).json()
     assert s["total"] == 10 and not s["reduced"]
     assert [p[0] for p in s["points"]] == [T0 + i * STEP for i in range(10, 20)]

@@ -21,6 +21,7 @@ from modd_backend.errors import ApiError
 from modd_backend.guards import HeavyLimiter
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
+from websockets.typing import Origin
 
 from .conftest import ADMIN_PASSWORD, Headers, login
 from .served import serve
@@ -128,7 +129,7 @@ def test_subscription_cap_and_health_under_20000_ops(live_base: str) -> None:
 
     sender = threading.Thread(target=flood)
     sender.start()
-    latencies = []
+    latencies: list[float] = []
     with httpx.Client(timeout=10) as c:
         while not done.is_set() or len(latencies) < 50:
             t = time.perf_counter()
@@ -145,7 +146,7 @@ def test_subscription_cap_and_health_under_20000_ops(live_base: str) -> None:
             pong = msg
     assert pong is not None and len(pong["subscribers"]) == 100
     second = _stream(base, tok)
-    replies = []
+    replies: list[dict[str, Any]] = []
     for i in range(80):
         second.send(json.dumps({"op": "subscribe", "subscriber": f"t_{i}", "id": i}))
     while len(replies) < 80:
@@ -164,21 +165,21 @@ def test_websocket_refuses_token_in_url_and_foreign_origin(live_base: str) -> No
     base = live_base
     tok = _token(base, "admin", ADMIN_PASSWORD)
     url = base.replace("http", "ws") + "/api/drones/usv/stream"
-    for extra, kw in ((f"?token={tok}", {}), ("", {"origin": "http://evil.example"})):
+    for extra, origin in ((f"?token={tok}", None), ("", Origin("http://evil.example"))):
         with pytest.raises(Exception, match="403|440"), \
-                connect(url + extra, open_timeout=10, **kw) as ws:
+                connect(url + extra, open_timeout=10, origin=origin) as ws:
             ws.recv(timeout=5)
     # a cookie session from the workbench's own origin works
     r = httpx.post(base + "/api/auth/login", timeout=30,
                    json={"username": "admin", "password": ADMIN_PASSWORD, "session": "cookie"})
     cookie = r.cookies["modd_session"]
-    with connect(url, open_timeout=10, origin=base,
+    with connect(url, open_timeout=10, origin=Origin(base),
                  additional_headers={"Cookie": f"modd_session={cookie}"}) as ws:
         ws.send(json.dumps({"op": "ping", "id": 1}))
         assert json.loads(ws.recv(timeout=10))["type"] == "pong"
     # ... but not from another origin (refused at the handshake)
     with pytest.raises(Exception, match="403|4403"), connect(
-            url, open_timeout=10, origin="http://evil.example",
+            url, open_timeout=10, origin=Origin("http://evil.example"),
             additional_headers={"Cookie": f"modd_session={cookie}"}) as ws:
         ws.recv(timeout=5)
 

@@ -86,7 +86,7 @@ def test_health_answers_while_a_long_plan_runs(
     worker = threading.Thread(target=plan)
     worker.start()
     time.sleep(0.3)
-    latencies = []
+    latencies: list[float] = []
     while worker.is_alive() and len(latencies) < 200:
         start = time.perf_counter()
         assert client.get("/api/health").status_code == 200

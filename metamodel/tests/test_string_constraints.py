@@ -96,7 +96,8 @@ def test_dsl_escape_cannot_smuggle_a_newline_into_a_unit() -> None:
         'PubBroker("127.0.0.1":7171, "/logs");\nSubBroker("127.0.0.1":7272, "/conf");\n'
         'Publishers { Publisher pub_1(0.04, "usv.imu.ax"); }\nSubscriptions { }\n')
     result = load_text(text, "m.modd")
-    if result.ok:  # the grammar keeps the backslash: then the unit holds no newline
+    # the grammar keeps the backslash: then the unit holds no newline
+    if result.ok and result.model is not None:
         unit = result.model["drone"]["sensors"][0]["variables"][0]["unit"]
         assert "\n" not in unit
     else:

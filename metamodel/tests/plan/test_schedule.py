@@ -96,7 +96,7 @@ def test_same_slots_as_the_link_runtime() -> None:
             slot = next(theirs)
             index, date, ids = next(ours)
             assert (slot.index, slot.offset_us, list(slot.streams)) == (
-                index, date * 1_000_000, ids)
+                index, int(date * 1_000_000), ids)
 
 
 def test_twenty_six_day_model_plans_in_milliseconds(make_model: Any) -> None:

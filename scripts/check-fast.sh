@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# The fast tier (`make check`, under 2 minutes): formatters, linters, types
+# (tests included) and the unit tests of every component. `make test`
+# (scripts/check.sh) runs this first, then the cross-process suites.
+# Exits non-zero on the first failing step, after saying which.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export PATH="$PWD/.venv/bin:$PATH"
+
+step() { printf '\n== %s\n' "$*"; }
+formatted() { grep -v '^\s*#' scripts/formatted.txt | grep -v '^\s*$'; }
+
+step "ruff check"
+ruff check --quiet .
+step "ruff format --check (scripts/formatted.txt)"
+mapfile -t py < <(formatted | while read -r p; do
+  if [ -d "$p" ] || [[ "$p" == *.py ]]; then echo "$p"; fi; done)
+ruff format --check --quiet --force-exclude "${py[@]}"
+if command -v clang-format >/dev/null 2>&1; then
+  step "clang-format (scripts/formatted.txt)"
+  mapfile -t cxx < <(formatted | grep -E '\.(hpp|cpp|h)$' || true)
+  [ ${#cxx[@]} -eq 0 ] || clang-format --dry-run --Werror --style=file "${cxx[@]}"
+fi
+step "contracts and model types up to date"
+python -m modd_model.typegen --check
+python -m modd_contracts.typegen --check
+step "mypy (strict, sources and component tests)"
+mypy --no-error-summary metamodel/src backend/src generators/src runtime/python/src
+mypy --no-error-summary --explicit-package-bases \
+  metamodel/tests generators/tests runtime/python/tests backend/tests
+if [ -f frontend/package.json ]; then
+  step "eslint, tsc"
+  (cd frontend && npx --no-install eslint --max-warnings=0 src && npx --no-install tsc --noEmit -p tsconfig.json)
+fi
+step "unit tests (pytest -m 'not e2e and not slow')"
+pytest -q -m "not e2e and not slow" metamodel/tests generators/tests runtime/python/tests backend/tests
+if [ -f build/cpp/build.ninja ]; then
+  step "C++ unit tests (build/cpp, after make build)"
+  cmake --build build/cpp --target modd_unit_tests >/dev/null
+  build/cpp/modd_unit_tests --gtest_brief=1
+fi
+if [ -f frontend/package.json ]; then
+  step "frontend unit tests (vitest)"
+  (cd frontend && npx --no-install vitest run --silent)
+fi
