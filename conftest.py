@@ -1,5 +1,6 @@
-"""Fixtures shared by every test tree: where the paper's scenarios live
-(../shared/scenarios beside the repository, as in CI)."""
+"""Fixtures shared by every test tree: where the paper's reference scenarios
+live (metamodel/examples/scenarios, a copy of the project's shared/scenarios
+kept inside the repository so that no test reads outside it), and the test tiers."""
 
 from __future__ import annotations
 
@@ -10,14 +11,13 @@ from typing import Any
 import pytest
 
 REPO = Path(__file__).resolve().parent
-SCENARIOS = REPO.parent / "shared" / "scenarios"
+SCENARIOS = REPO / "metamodel" / "examples" / "scenarios"
 
 
 @pytest.fixture(scope="session")
 def scenarios_dir() -> Path:
     if not SCENARIOS.is_dir():
-        pytest.fail(f"the reference scenarios are missing: {SCENARIOS} (CI puts ../shared "
-                    "beside the repository)")
+        pytest.fail(f"the reference scenarios are missing: {SCENARIOS}")
     return SCENARIOS
 
 
@@ -42,6 +42,7 @@ CROSS_PROCESS = (
     "generators/tests/test_cpp_driver_e2e.py",
     "generators/tests/test_hostile_strings.py",
     "generators/tests/test_regenerate.py",
+    "generators/tests/test_packaged.py",
     "runtime/python/tests/test_radio.py",
     "backend/tests/test_app.py",
     "backend/tests/test_archives.py",

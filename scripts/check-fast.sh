@@ -24,6 +24,7 @@ fi
 step "contracts and model types up to date"
 python -m modd_model.typegen --check
 python -m modd_contracts.typegen --check
+python -m modd_gen.cpp_client --check
 step "mypy (strict, sources and component tests)"
 mypy --no-error-summary metamodel/src backend/src generators/src runtime/python/src
 mypy --no-error-summary --explicit-package-bases \

@@ -31,7 +31,7 @@ from modd.ports import free_port
 from modd_model import load_model
 
 REPO = Path(__file__).resolve().parents[2]
-SCENARIOS = REPO.parent / "shared" / "scenarios"
+SCENARIOS = REPO / "metamodel" / "examples" / "scenarios"
 PASSWORD = "bench-admin-password"
 
 

@@ -34,7 +34,7 @@ from modd_plan.milp import solve_milp
 from modd_plan.plan import buffer_problem, constants_for, make_plan
 
 REPO = Path(__file__).resolve().parents[2]
-SCENARIOS = REPO.parent / "shared" / "scenarios"
+SCENARIOS = REPO / "metamodel" / "examples" / "scenarios"
 PUB_PERIODS = ["0.01", "0.02", "0.04", "0.05", "0.1", "0.2", "0.5", "1.0"]
 SUB_PERIODS = ["0.25", "0.5", "1.0", "2.0", "2.5", "5.0", "10.0", "0.3", "0.7", "1.5"]
 AGGS = ["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "COUNT", "SUM"]

@@ -45,7 +45,7 @@ from modd.publisher import Publisher
 
 REPO = Path(__file__).resolve().parents[2]
 BIN = REPO / "build" / "bin" / "modd-pubbroker"
-SCENARIOS = REPO.parent / "shared" / "scenarios"
+SCENARIOS = REPO / "metamodel" / "examples" / "scenarios"
 KEY = b"pubbroker-test-key"
 
 

@@ -31,7 +31,7 @@ from modd_model.query import topics
 from modd_plan.derive import aggregate
 
 REPO = Path(__file__).resolve().parents[2]
-SCENARIOS = REPO.parent / "shared" / "scenarios"  # shared/ lies beside the clone
+SCENARIOS = REPO / "metamodel" / "examples" / "scenarios"  # the paper's reference scenarios
 PUBBROKER = REPO / "build" / "bin" / "modd-pubbroker"
 PYTHON = Path(sys.executable)
 SUBBROKER = [str(PYTHON), "-m", "modd.subbroker.cli"]

@@ -20,6 +20,7 @@ from modd.subbroker.client import NoReply, request
 from modd.subbroker.payload import DeliveredValue
 from modd.subscriber import subscribe_dynamic
 from modd.zenoh_session import ZenohSettings, open_session, wait_connected
+from modd_contracts.schema import validate
 from subbroker_harness import (
     assert_contiguous,
     check_against_archive,
@@ -134,6 +135,9 @@ def test_scenario1_delivery_matches_archive(tmp_path: Path, zenoh_client: Any) -
     assert status["link"] == "up" and status["config_id"] == 1
     assert 0 < status["predicted_link_bytes_per_s"]["drone_to_base"] <= 300
     assert n > 150
+    # what the processes really sent keeps to the contracts (modd_contracts)
+    assert validate("status", status) == []
+    assert [e for x in tcp.lines for e in validate("delivered_value", x)] == []
 
 
 def test_no_subbroker_means_no_reply() -> None:

@@ -8,9 +8,10 @@ from fractions import Fraction
 
 import pytest
 from modd.link.frames import Value
-from modd.subbroker.fanout import FanOut, period_us, window_of
+from modd.subbroker.fanout import FanOut, period_us
 from modd_plan.derive import aggregate
 from modd_plan.streams import Source, StreamKey
+from modd_plan.windows import window_of
 
 Q = Fraction(1, 4)
 

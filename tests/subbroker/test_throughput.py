@@ -26,13 +26,14 @@ from modd.link.receiver import Window
 from modd.link.schedule import SlotIterator
 from modd.subbroker.backpressure import Backpressure, socket_backlog
 from modd.subbroker.delivery import SlotDelivery
-from modd.subbroker.fanout import FanOut, period_us, window_of
+from modd.subbroker.fanout import FanOut, period_us
 from modd.subbroker.link import LinkStats
-from modd.subbroker.payload import DeliveredValue, StreamPayload, split_window, subscriber_prefix
+from modd.subbroker.payload import DeliveredValue, StreamPayload, subscriber_prefix
 from modd.subbroker.planning import config_for, plan_for
 from modd.subbroker.status import StatusPublisher
 from modd.zenoh_session import ZenohSettings, open_session
 from modd_model.query import topics
+from modd_plan.windows import split_window, window_of
 
 VALUES: list[Any] = [0.0, -0.0, 1.5, -123.456e-7, 1e300, 3, -7, 0, True, False, None,
                      [], [1.0, 2.5], [1, 2, 3], [True, False], float("nan"), float("inf"),

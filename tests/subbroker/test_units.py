@@ -12,12 +12,13 @@ from modd.subbroker.deploy import parse_request
 from modd.subbroker.dynamic import DynamicSubscriptions
 from modd.subbroker.fanout import FanOut
 from modd.subbroker.keys import deploy_key, status_key, sub_key, subscribe_key
-from modd.subbroker.payload import DeliveredValue, split_window
+from modd.subbroker.payload import DeliveredValue
 from modd.subbroker.planning import config_for, plan_for
 from modd.zenoh_session import ZenohSettings
 from modd_model import load_model
+from modd_plan.windows import split_window
 
-S1 = Path(__file__).resolve().parents[3] / "shared" / "scenarios" / "scenario1.modd"
+S1 = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "scenarios" / "scenario1.modd"
 
 
 def test_keys() -> None:

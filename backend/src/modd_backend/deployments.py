@@ -12,10 +12,10 @@ the SubBroker applies nothing else (docs/security.md, "Signed deploys")."""
 from __future__ import annotations
 
 import json
-import re
 from pathlib import Path
 from typing import Any
 
+from modd_contracts.keys import deploy_key
 from modd_model.signing import sign_request
 from sqlalchemy import select
 from sqlalchemy.orm import Session as Db
@@ -23,7 +23,6 @@ from sqlalchemy.orm import Session as Db
 from .tables import Deployment, ModelVersion, utcnow
 from .zbridge import ZenohBridge, read_secret
 
-NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 #: Extra seconds the backend waits beyond the SubBroker's own deploy timeout.
 QUERY_MARGIN_S = 2.0
 
@@ -32,12 +31,6 @@ def signing_key(path: Path | None) -> bytes | None:
     """The deploy key (the SubBroker's ``deploy.key``), or None when not
     configured: the SubBroker then refuses the deploy, UNAUTHORISED."""
     return read_secret(path, "deploy key").encode() if path is not None else None
-
-
-def deploy_key(drone: str) -> str:
-    if not NAME.fullmatch(drone):
-        raise ValueError(f"drone {drone!r} is not an identifier")
-    return f"modd/{drone}/deploy"
 
 
 def deploy(

@@ -19,13 +19,15 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 
+from modd_contracts import keys
+
 from .zbridge import Undeclarable, ZenohBridge
 
 ValueCallback = Callable[[str, bytes], None]
 StatusCallback = Callable[[bytes], None]
 #: Wildcards the hub subscribes to.
-VALUES = "modd/*/sub/*"
-STATUS = "modd/*/status"
+VALUES = keys.ALL_VALUES
+STATUS = keys.ALL_STATUS
 
 
 class SubscriptionHub:

@@ -11,22 +11,14 @@ declaration, no thread), capped per socket and per user."""
 from __future__ import annotations
 
 import json
-import re
 from collections import Counter
 from typing import Any
+
+from modd_contracts.keys import check_name, sub_key, subscribe_key
 
 from .hub import SubscriptionHub
 from .relay import DropOldestQueue
 from .zbridge import ZenohBridge
-
-NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")
-
-
-def check_name(kind: str, name: object) -> str:
-    if not isinstance(name, str) or not NAME.fullmatch(name):
-        raise ValueError(f"{kind} {str(name)[:80]!r} is not an identifier (letters, digits, "
-                         "underscores, at most 64)")
-    return name
 
 
 def _decode(payload: bytes) -> Any:
@@ -71,7 +63,7 @@ class StreamRelay:
 
     def subscribe(self, subscriber: object) -> dict[str, Any]:
         name = check_name("subscriber", subscriber)
-        key = f"modd/{self.drone}/sub/{name}"
+        key = sub_key(self.drone, name)
         if name not in self._subs:
             if len(self._subs) >= self.per_socket:
                 raise CapReached(f"at most {self.per_socket} subscriptions per connection")
@@ -116,7 +108,7 @@ def dynamic_request(bridge: ZenohBridge, drone: str, request: dict[str, Any],
     """Ask the SubBroker's ``modd/<drone>/subscribe`` queryable; its reply
     (``ACCEPTED`` with the key, ``NOT_AVAILABLE`` with the reason, ...) or a
     ``NO_REPLY`` status when nobody answers. Blocking."""
-    key = f"modd/{check_name('drone', drone)}/subscribe"
+    key = subscribe_key(check_name("drone", drone))
     result = bridge.query(key, json.dumps(request).encode(), timeout_s)
     if not result.ok:
         return {"status": "NO_REPLY", "reason": result.error}

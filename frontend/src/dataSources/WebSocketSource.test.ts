@@ -1,5 +1,8 @@
 import { describe, expect, it, vi } from "vitest";
-import { WebSocketSource, toSamples, type SocketLike } from "./WebSocketSource";
+import { WebSocketSource, toLinkStatus, toSamples, type SocketLike } from "./WebSocketSource";
+import deliveredVectors from "../../../contracts/vectors/delivered_value.json";
+import statusVectors from "../../../contracts/vectors/status.json";
+import type { DeliveredValue, SubBrokerStatus } from "../core/contracts.gen";
 import { RingBuffer } from "./RingBuffer";
 
 class FakeSocket implements SocketLike {
@@ -83,10 +86,10 @@ describe("WebSocketSource", () => {
     src.onStateChange((s) => states.push(s));
     sock.open();
     sock.deliver({ type: "status", data: {
-      link: "connected", rtt_s: 0.0125, ip_bytes_in_per_s: 300, predicted_link_bytes_per_s: { drone_to_base: 296 },
+      link: "up", rtt_s: 0.0125, ip_bytes_in_per_s: 300, predicted_link_bytes_per_s: { drone_to_base: 296 },
       time_ns: 5e9, last_data_ns: 4.5e9,
     } });
-    expect(link).toHaveBeenCalledWith({ rttMs: 12.5, measuredBytesPerS: 300, plannedBytesPerS: 296, lastFrameAgeS: 0.5, connected: true, state: "connected" });
+    expect(link).toHaveBeenCalledWith({ rttMs: 12.5, measuredBytesPerS: 300, plannedBytesPerS: 296, lastFrameAgeS: 0.5, connected: true, state: "up" });
     src.close();
     expect(states).toEqual(["open", "closed"]);
   });
@@ -101,5 +104,36 @@ describe("WebSocketSource", () => {
     sock.deliver({ type: "status", data: { link: "up", behind: false, lag_s: 0.01 } });
     expect(link).toHaveBeenLastCalledWith(expect.objectContaining({ behind: false, lagS: 0.01 }));
     src.close();
+  });
+});
+
+describe("the contracts' vectors (contracts/vectors)", () => {
+  it("turns every delivered value the SubBroker writes into the samples a chart plots", () => {
+    for (const c of deliveredVectors.vectors) {
+      const d = JSON.parse(c.line) as DeliveredValue;
+      const got = toSamples(d).map((s) => [s.t, s.value]);
+      expect(got.length, c.name).toBe(c.samples.length);
+      got.forEach(([t, v], i) => {
+        expect(t, c.name).toBeCloseTo(c.samples[i][0], 6);
+        expect(v, c.name).toBe(c.samples[i][1]);
+      });
+    }
+  });
+
+  it("reads the status document's fields as the SubBroker sends them", () => {
+    for (const c of statusVectors.vectors) {
+      const got = toLinkStatus(c.document as SubBrokerStatus);
+      const want = c.link_status;
+      expect(got.connected, c.name).toBe(want.connected);
+      expect(got.state, c.name).toBe(want.state);
+      expect(got.measuredBytesPerS, c.name).toBe(want.measuredBytesPerS);
+      expect(got.plannedBytesPerS, c.name).toBe(want.plannedBytesPerS);
+      expect(got.behind, c.name).toBe(want.behind);
+      expect(got.lagS, c.name).toBe(want.lagS);
+      if (want.rttMs === null) expect(got.rttMs).toBeNull();
+      else expect(got.rttMs, c.name).toBeCloseTo(want.rttMs, 9);
+      if (want.lastFrameAgeS === null) expect(got.lastFrameAgeS).toBeNull();
+      else expect(got.lastFrameAgeS, c.name).toBeCloseTo(want.lastFrameAgeS, 3);
+    }
   });
 });

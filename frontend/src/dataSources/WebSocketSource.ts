@@ -6,14 +6,15 @@
  * Wire messages (JSON text frames):
  *   → {"op": "subscribe"|"unsubscribe", "subscriber": NAME}
  *   ← {"type": "value", "subscriber": NAME, "data": DeliveredValue}
- *        DeliveredValue (runtime/python/src/modd/subbroker/payload.py): value (number,
- *        list for ALL, or null for an empty window), count, start_ns, end_ns, period_s…
- *   ← {"type": "status", "data": SubBroker status}  (link, rtt_s, ip_bytes_in_per_s,
- *        predicted_link_bytes_per_s.drone_to_base, last_data_ns, time_ns)
+ *   ← {"type": "status", "data": SubBrokerStatus}
+ *        Both are contracts (metamodel/src/modd_contracts/schemas, types generated in
+ *        core/contracts.gen.ts): the functions below read their fields by those types,
+ *        each as possibly absent, since the socket is not trusted.
  *   ← {"type": "dropped", "count": n}   the backend dropped n messages for a slow page
  *   ← {"type": "error", "message": …}; subscribed, unsubscribed, pong: ignored
  * The socket factory is injected (tests pass a fake).
  */
+import type { DeliveredValue, SubBrokerStatus } from "../core/contracts.gen";
 import { RingBuffer } from "./RingBuffer";
 import type { ChannelListener, ConnectionState, DataSource, LinkStatus, Sample } from "./types";
 
@@ -39,15 +40,15 @@ const OPEN = 1;
 type Raw = Record<string, unknown>;
 
 /** Samples of one delivered window; a list (ALL) gives one sample per raw value. Empty windows give none. */
-export function toSamples(d: Raw): Sample[] {
-  const endNs = Number(d.end_ns ?? d.t_ns ?? NaN);
-  const startNs = Number(d.start_ns ?? NaN);
-  const t = Number.isFinite(endNs) ? endNs / 1e9 : Number(d.t);
-  if (!Number.isFinite(t)) return [];
-  const windowS = Number.isFinite(startNs) && Number.isFinite(endNs) ? (endNs - startNs) / 1e9 : undefined;
+export function toSamples(d: Partial<DeliveredValue>): Sample[] {
+  const endNs = num(d.end_ns);
+  const startNs = num(d.start_ns);
+  if (endNs === null) return [];
+  const t = endNs / 1e9;
+  const windowS = startNs !== null ? (endNs - startNs) / 1e9 : undefined;
   const count = typeof d.count === "number" ? d.count : undefined;
   const one = (value: unknown, at: number): Sample | null => {
-    const v = typeof value === "boolean" ? Number(value) : Number(value);
+    const v = Number(value);
     if (value === null || value === undefined || !Number.isFinite(v)) return null;
     const s: Sample = { t: at, value: v };
     if (windowS !== undefined) s.windowS = windowS;
@@ -67,18 +68,17 @@ function num(x: unknown): number | null {
   return x === null || x === undefined || !Number.isFinite(Number(x)) ? null : Number(x);
 }
 
-/** LinkStatus from the SubBroker's status document. */
-export function toLinkStatus(d: Raw): LinkStatus {
-  const predicted = d.predicted_link_bytes_per_s as Raw | null | undefined;
+/** LinkStatus from the SubBroker's status document; the link is connected when its state is "up". */
+export function toLinkStatus(d: Partial<SubBrokerStatus>): LinkStatus {
   const rtt = num(d.rtt_s);
   const last = num(d.last_data_ns);
   const now = num(d.time_ns);
   return {
     rttMs: rtt === null ? null : rtt * 1000,
-    measuredBytesPerS: num(d.ip_bytes_in_per_s ?? d.bytes_in_per_s),
-    plannedBytesPerS: predicted ? num(predicted.drone_to_base) : null,
+    measuredBytesPerS: num(d.ip_bytes_in_per_s),
+    plannedBytesPerS: num(d.predicted_link_bytes_per_s?.drone_to_base),
     lastFrameAgeS: last !== null && now !== null ? (now - last) / 1e9 : null,
-    connected: d.link === "connected" || d.link === "running" || d.link === "up",
+    connected: d.link === "up",
     state: typeof d.link === "string" ? d.link : undefined,
     ...(typeof d.behind === "boolean" ? { behind: d.behind, lagS: num(d.lag_s) } : {}),
   };
@@ -132,13 +132,13 @@ export class WebSocketSource implements DataSource {
     }
     if (msg.type === "value") {
       const channel = String(msg.subscriber ?? "");
-      const batch = toSamples((msg.data ?? {}) as Raw);
+      const batch = toSamples((msg.data ?? {}) as Partial<DeliveredValue>);
       if (!channel || batch.length === 0) return;
       const b = this.buffer(channel);
       batch.forEach((s) => b.push(s));
       this.listeners.get(channel)?.forEach((l) => l(batch));
     } else if (msg.type === "status") {
-      const status = toLinkStatus((msg.data ?? {}) as Raw);
+      const status = toLinkStatus((msg.data ?? {}) as Partial<SubBrokerStatus>);
       this.linkListeners.forEach((l) => l(status));
     } else if (msg.type === "dropped") {
       this.droppedByBackend += Number(msg.count) || 0;

@@ -21,7 +21,7 @@ from .artifact import Artifact, Ownership
 from .generate import generate
 
 REPO = Path(__file__).resolve().parents[3]
-SCENARIOS = REPO.parent / "shared" / "scenarios"
+SCENARIOS = REPO / "metamodel" / "examples" / "scenarios"
 OUTPUT = REPO / "docs" / "generated-code.md"
 CARRIED = ("/modd/src/", "/modd/include/", "/ros2/modd_msgs/")
 

@@ -199,7 +199,7 @@ def load_or_report(path: str | Path, *, quiet_warnings: bool = False,
 def load_model(path: str | Path) -> dict[str, Any]:
     """A valid model from a .modd or .json file; raises ModelError listing every error.
 
-    >>> model = load_model("../shared/scenarios/scenario1.modd")  # doctest: +SKIP
+    >>> model = load_model("metamodel/examples/scenarios/scenario1.modd")  # doctest: +SKIP
     """
     result = load_file(path)
     if not result.ok:

@@ -57,7 +57,7 @@ def _ts_type(s: dict[str, Any]) -> str:
         extra = s.get("additionalProperties")
         return f"Record<string, {_ts_type(extra)}>" if isinstance(extra, dict) else "object"
     return {"string": "string", "integer": "number", "number": "number",
-            "boolean": "boolean"}.get(str(t), "unknown")
+            "boolean": "boolean", "null": "null"}.get(str(t), "unknown")
 
 
 def _ts_doc(text: str | None, indent: str = "") -> list[str]:
@@ -102,8 +102,8 @@ def _py_type(s: dict[str, Any]) -> str:
     if t == "object" and "properties" not in s:
         extra = s.get("additionalProperties")
         return f"dict[str, {_py_type(extra)}]" if isinstance(extra, dict) else "dict[str, Any]"
-    return {"string": "str", "integer": "int", "number": "float", "boolean": "bool"}.get(
-        str(t), "Any")
+    return {"string": "str", "integer": "int", "number": "float", "boolean": "bool",
+            "null": "None"}.get(str(t), "Any")
 
 
 def _refs(s: Any) -> set[str]:

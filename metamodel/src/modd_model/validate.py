@@ -12,6 +12,8 @@ from fractions import Fraction
 from functools import cache
 from typing import TYPE_CHECKING, Any
 
+from modd_contracts.aggregations import AGGREGATIONS
+
 from .diagnostics import Diagnostic, pointer_join
 from .numbers import to_fraction, to_micros
 from .query import topic_name
@@ -24,8 +26,9 @@ if TYPE_CHECKING:  # jsonschema is imported on first validation (it is slow to i
 Check = Callable[[dict[str, Any]], Iterator[Diagnostic]]
 CHECKS: list[Check] = []
 
-# Aggregations that make no sense on booleans (their mean or sum is not a bool).
-_NUMERIC_ONLY = {"AVERAGE", "SUM"}
+# Aggregations that make no sense on booleans (their mean or sum is not a bool):
+# the aggregation table's numericOnly.
+_NUMERIC_ONLY = {a.name for a in AGGREGATIONS if a.numeric_only}
 
 
 def check(fn: Check) -> Check:

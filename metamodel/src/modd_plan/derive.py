@@ -32,24 +32,21 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from modd_contracts.aggregations import AGGREGATIONS
+
 Sample = float | int | bool
 Window = Any
 
 #: For each aggregation, the aggregations of ONE sent stream it can be derived
-#: from, most preferred first (same aggregation, then cheaper, ALL last).
-SINGLE_SOURCE_RULES: dict[str, tuple[str, ...]] = {
-    "MIN": ("MIN", "ALL"),
-    "MAX": ("MAX", "ALL"),
-    "AVERAGE": ("AVERAGE", "ALL"),
-    "FIRST": ("FIRST", "ALL"),
-    "LAST": ("LAST", "ALL"),
-    "ALL": ("ALL",),
-    "COUNT": ("COUNT", "AVERAGE", "ALL"),
-    "SUM": ("SUM", "ALL"),
-}
+#: from, most preferred first (same aggregation, then cheaper, ALL last): the
+#: aggregation table's ``derivableFrom`` (metamodel/modd.schema.json).
+SINGLE_SOURCE_RULES: dict[str, tuple[str, ...]] = {a.name: a.derivable_from for a in AGGREGATIONS}
 
-#: Aggregations derivable from TWO sent streams together: AVERAGE = SUM / COUNT.
-PAIR_SOURCE_RULES: dict[str, tuple[str, str]] = {"AVERAGE": ("SUM", "COUNT")}
+#: Aggregations derivable from TWO sent streams together (AVERAGE = SUM / COUNT):
+#: the table's ``derivableFromPair``.
+PAIR_SOURCE_RULES: dict[str, tuple[str, str]] = {
+    a.name: a.derivable_from_pair for a in AGGREGATIONS if a.derivable_from_pair
+}
 
 
 def _present(windows: Sequence[Window]) -> list[Window]:

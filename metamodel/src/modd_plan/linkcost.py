@@ -33,6 +33,8 @@ from fractions import Fraction
 from functools import lru_cache
 from math import ceil
 
+from modd_contracts.aggregations import BY_NAME
+
 from .schedule import Schedule
 
 TCP_IP_HEADER_BYTES = 52
@@ -60,14 +62,9 @@ def varint_size(n: int) -> int:
 
 
 def aggregate_value_type(aggregation: str, topic_type: str) -> str:
-    """Wire type of one aggregated value of a topic of ``topic_type``."""
-    if aggregation in ("MIN", "MAX", "FIRST", "LAST", "ALL"):
-        return topic_type
-    if aggregation == "AVERAGE":
-        return "float32" if topic_type in ("float32", "bool") else "float64"
-    if aggregation == "SUM":
-        return topic_type if topic_type.startswith("float") else "int"
-    return "int"  # COUNT
+    """Wire type of one aggregated value of a topic of ``topic_type``: the
+    aggregation table's ``result``."""
+    return BY_NAME[aggregation].result[topic_type]
 
 
 @lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models

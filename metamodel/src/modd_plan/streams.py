@@ -26,12 +26,13 @@ from fractions import Fraction
 from functools import lru_cache
 from typing import Any
 
+from modd_contracts.aggregations import NAMES
 from modd_model.numbers import fraction_to_decimal, to_fraction
 
 from .derive import PAIR_SOURCE_RULES, SINGLE_SOURCE_RULES
 
-#: The schema's Aggregation enum, in order (the tie-break of stream ids).
-AGGREGATIONS: tuple[str, ...] = ("MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM")
+#: The aggregation table's names in wire-code order (the tie-break of stream ids).
+AGGREGATIONS: tuple[str, ...] = NAMES
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""The paper's scenarios, loaded from ../shared/scenarios, against expected.json."""
+"""The paper's scenarios, loaded from metamodel/examples/scenarios, against expected.json."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The paper's scenarios as loads: publishers (period, topics), subscriptions (name, topic,
 period, aggregation), the planner's prediction, the information floor and the paper's
-figures (../shared/scenarios/expected.json)."""
+figures (metamodel/examples/scenarios/expected.json)."""
 
 from __future__ import annotations
 

@@ -16,6 +16,7 @@ import contextlib
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Path, WebSocket, WebSocketDisconnect
+from modd_contracts.keys import check_name
 from pydantic import BaseModel, Field
 from starlette.concurrency import run_in_threadpool
 
@@ -34,7 +35,7 @@ from ..deps import (
 from ..guards import loads_bounded
 from ..roles import Role
 from ..settings import Settings
-from ..streams import CapReached, StreamRelay, check_name, dynamic_request
+from ..streams import CapReached, StreamRelay, dynamic_request
 from ..tables import User
 
 router = APIRouter(prefix="/api/drones", tags=["streams"])

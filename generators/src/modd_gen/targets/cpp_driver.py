@@ -9,23 +9,15 @@ and ``user.cmake`` (additions to the build)."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from ..artifact import Artifact, Ownership
 from ..context import Context, PublisherView
+from ..cpp_client import client
 from ..render import render
-
-REPO = Path(__file__).resolve().parents[4]
-CLIENT_HEADER = REPO / "runtime" / "cpp" / "include" / "modd" / "client" / "publisher.hpp"
-CLIENT_SOURCE = REPO / "runtime" / "cpp" / "src" / "client" / "publisher.cpp"
 
 
 def client_sources() -> tuple[str, str]:
-    """The C++ publisher client, carried into every driver project."""
-    for p in (CLIENT_HEADER, CLIENT_SOURCE):
-        if not p.is_file():
-            raise FileNotFoundError(f"the C++ publisher client is missing: {p}")
-    return CLIENT_HEADER.read_text(encoding="utf-8"), CLIENT_SOURCE.read_text(encoding="utf-8")
+    """The C++ publisher client, carried into every driver project (package data)."""
+    return client("publisher")
 
 
 def _project(ctx: Context, pub: PublisherView) -> list[Artifact]:

@@ -5,23 +5,17 @@ subscriber with a TCP endpoint, a C++ project on the C++ subscriber client
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 from ..artifact import Artifact, Ownership
 from ..context import Context
+from ..cpp_client import client
 from ..render import render
-
-REPO = Path(__file__).resolve().parents[4]
-SUB_HEADER = REPO / "runtime" / "cpp" / "include" / "modd" / "client" / "subscriber.hpp"
-SUB_SOURCE = REPO / "runtime" / "cpp" / "src" / "client" / "subscriber.cpp"
 
 
 def subscriber_client_sources() -> tuple[str, str]:
-    for p in (SUB_HEADER, SUB_SOURCE):
-        if not p.is_file():
-            raise FileNotFoundError(f"the C++ subscriber client is missing: {p}")
-    return SUB_HEADER.read_text(encoding="utf-8"), SUB_SOURCE.read_text(encoding="utf-8")
+    """The C++ subscriber client, carried into subscriber projects (package data)."""
+    return client("subscriber")
 
 
 def _python(ctx: Context, sub: dict[str, Any]) -> Artifact:

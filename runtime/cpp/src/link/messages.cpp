@@ -1,14 +1,22 @@
 #include "modd/link/messages.hpp"
 
+#include "modd/link/aggregation_table.gen.hpp"
+
 namespace modd::link {
 
 namespace {
 constexpr const char* kTypeNames[] = {"float32", "float64", "int", "bool"};
-constexpr const char* kAggNames[] = {"MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM"};
+// The aggregation table is generated from the metamodel (python -m modd_contracts.typegen);
+// the enum in messages.hpp must list it in wire-code order.
+static_assert(table::kAggregationCount == static_cast<int>(Aggregation::Sum) + 1,
+              "Aggregation enum and the generated aggregation table differ");
 }  // namespace
 
 const char* value_type_name(ValueType t) { return kTypeNames[static_cast<int>(t) & 3]; }
-const char* aggregation_name(Aggregation a) { return kAggNames[static_cast<int>(a) & 7]; }
+const char* aggregation_name(Aggregation a) {
+  int i = static_cast<int>(a);
+  return i < table::kAggregationCount ? table::kAggregations[i].name : "?";
+}
 
 bool parse_value_type(const std::string& s, ValueType& out) {
   for (int i = 0; i < 4; ++i)
@@ -16,30 +24,20 @@ bool parse_value_type(const std::string& s, ValueType& out) {
   return false;
 }
 bool parse_aggregation(const std::string& s, Aggregation& out) {
-  for (int i = 0; i < 8; ++i)
-    if (s == kAggNames[i]) { out = static_cast<Aggregation>(i); return true; }
+  for (int i = 0; i < table::kAggregationCount; ++i)
+    if (s == table::kAggregations[i].name) { out = static_cast<Aggregation>(i); return true; }
   return false;
 }
 
 ValueKind value_kind(ValueType type, Aggregation a) {
-  ScalarKind natural = type == ValueType::Float32   ? ScalarKind::F32
-                       : type == ValueType::Float64 ? ScalarKind::F64
-                       : type == ValueType::Int     ? ScalarKind::ZigZag
-                                                    : ScalarKind::Bool;
-  switch (a) {
-    case Aggregation::Min: case Aggregation::Max: case Aggregation::First:
-    case Aggregation::Last: case Aggregation::All:
-      return {a, natural};
-    case Aggregation::Average:
-      return {a, (type == ValueType::Float32 || type == ValueType::Bool) ? ScalarKind::F32 : ScalarKind::F64};
-    case Aggregation::Sum:
-      return {a, type == ValueType::Float32   ? ScalarKind::F32
-                 : type == ValueType::Float64 ? ScalarKind::F64
-                                              : ScalarKind::ZigZag};
-    case Aggregation::Count:
-      return {a, ScalarKind::UVarint};
-  }
-  return {a, natural};
+  // The wire type of the value per topic type is the table's `result`; a COUNT,
+  // never negative, is written as an unsigned varint rather than zigzag.
+  if (a == Aggregation::Count) return {a, ScalarKind::UVarint};
+  static constexpr ScalarKind kScalar[] = {ScalarKind::F32, ScalarKind::F64, ScalarKind::ZigZag,
+                                           ScalarKind::Bool};
+  int i = static_cast<int>(a);
+  if (i >= table::kAggregationCount) return {a, kScalar[static_cast<int>(type) & 3]};
+  return {a, kScalar[table::kAggregations[i].result[static_cast<int>(type) & 3]]};
 }
 
 }  // namespace modd::link

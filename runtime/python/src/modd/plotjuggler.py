@@ -28,6 +28,8 @@ import sys
 import threading
 from typing import Any
 
+from modd_contracts import keys
+
 from .zenoh_session import DEFAULT_ENDPOINT, client_settings, open_session
 
 log = logging.getLogger("modd.plotjuggler")
@@ -74,7 +76,8 @@ class PlotJugglerOut:
         family = socket.AF_INET6 if ":" in target[0] else socket.AF_INET
         self.sock = socket.socket(family, socket.SOCK_DGRAM)
         self.sent = 0
-        self.sub = session.declare_subscriber(f"modd/{drone}/sub/*", self._on)
+        self.sub = session.declare_subscriber(
+            keys.values_of(None if drone == "*" else drone), self._on)
 
     def _on(self, sample: Any) -> None:
         parts = str(sample.key_expr).split("/")

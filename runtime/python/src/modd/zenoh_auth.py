@@ -28,6 +28,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from modd_contracts import keys
+
 log = logging.getLogger("modd.zenoh")
 
 IDENTITIES = ("subbroker", "backend", "viewer")
@@ -178,11 +180,11 @@ def acl(drone: str | None = None) -> dict[str, Any]:
     key expression, message type and flow (ingress: from that client into the
     router; egress: from the router to it). A subscriber also needs
     ``declare_subscriber`` on egress, else its publisher never learns of it."""
-    d = f"modd/{drone}" if drone else "modd/*"
-    own = [f"{d}/sub/**", f"{d}/status"]
+    d = keys.drone_prefix(drone or None)
+    own = [keys.values_tree(drone or None), keys.status_key(drone or None)]
     queries = [f"{d}/deploy", f"{d}/subscribe"]
     # readers may subscribe across drones (modd/*/sub/*): reading is not writing
-    read = ["modd/*/sub/**", "modd/*/status"]
+    read = [keys.values_tree(None), keys.ALL_STATUS]
     rules = [
         # the SubBroker: its values and status, its queryables (when it is a client)
         _rule("subbroker_out", ["put", "delete", "declare_queryable", "reply"], ["ingress"],
@@ -191,7 +193,7 @@ def acl(drone: str | None = None) -> dict[str, Any]:
               [*read, *queries]),
         # readers (backend and viewers): subscribe to values and status; a
         # subscription may be as wide as modd/**, only these keys' puts reach it
-        _rule("read_in", ["declare_subscriber"], ["ingress", "egress"], ["modd/**"]),
+        _rule("read_in", ["declare_subscriber"], ["ingress", "egress"], [keys.EVERYTHING]),
         _rule("read_out", ["put", "delete"], ["egress"], read),
         # the backend alone asks the queryables
         _rule("ask", ["query"], ["ingress"], queries),

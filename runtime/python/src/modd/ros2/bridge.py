@@ -22,6 +22,8 @@ import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from modd_contracts import keys
+
 from . import rmw
 from .messages import FLOAT64, FLOAT64_HASH, WINDOW, WINDOW_HASH, float64_cdr, window_cdr
 
@@ -69,7 +71,8 @@ class Ros2Bridge:
     def start(self) -> Ros2Bridge:
         self._node_token = self.ros.liveliness().declare_token(
             rmw.node_token(self.domain_id, self.zid, self.node_id, self.node))
-        self._sub = self.modd.declare_subscriber(f"modd/{self.drones}/sub/*", self._on_sample)
+        self._sub = self.modd.declare_subscriber(
+            keys.values_of(None if self.drones == "*" else self.drones), self._on_sample)
         return self
 
     def _publisher(self, topic: str, ros_type: str, type_hash: str) -> RosPublisher:

@@ -23,13 +23,14 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Protocol
 
 from modd_plan.streams import StreamKey
+from modd_plan.windows import split_window, window_of
 
 from modd.link.receiver import Window
 
 from . import delivery_auth
-from .fanout import FanOut, period_us, window_of
+from .fanout import FanOut, period_us
 from .keys import sub_key
-from .payload import DeliveredValue, StreamPayload, split_window, subscriber_prefix
+from .payload import DeliveredValue, StreamPayload, subscriber_prefix
 
 if TYPE_CHECKING:
     import zenoh

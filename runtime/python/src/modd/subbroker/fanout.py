@@ -205,22 +205,3 @@ class FanOut:
 
 
 _INCOMPLETE = object()
-
-
-def window_of(value: Any, aggregation: str, value_type: str) -> Any:
-    """A decoded DATA value (:class:`modd.link.frames.Value`) as a window in
-    the form of :mod:`modd_plan.derive` (``None`` when marked absent)."""
-    floats = value_type in ("float32", "float64")
-    if not value.present:
-        return None
-    if aggregation == "AVERAGE":
-        return (value.number, value.count) if value.count else None
-    if aggregation == "COUNT":
-        return value.count
-    if aggregation == "ALL":
-        return [bool(x) for x in value.samples] if value_type == "bool" else list(value.samples)
-    if aggregation == "SUM":
-        return value.number if floats else value.integer
-    if floats:
-        return value.number
-    return bool(value.integer) if value_type == "bool" else value.integer

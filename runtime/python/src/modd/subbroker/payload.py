@@ -24,8 +24,7 @@ import math
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-Scalar = float | int | bool
-Value = Scalar | list[Scalar] | None
+from modd_plan.windows import Value
 
 #: Version of the payload; a reader rejects a higher major version.
 PAYLOAD_VERSION = 1
@@ -80,23 +79,6 @@ class DeliveredValue:
         if not isinstance(data, dict):
             raise ValueError("a delivered value is a JSON object")
         return cls.from_dict(data)
-
-
-def split_window(aggregation: str, window: Any) -> tuple[Value, int | None]:
-    """``(value, count)`` of a window in the form of :mod:`modd_plan.derive`.
-
-    >>> split_window("AVERAGE", (2.5, 4)), split_window("MIN", None)
-    ((2.5, 4), (None, None))
-    """
-    if aggregation == "AVERAGE":
-        return (None, 0) if window is None else (float(window[0]), int(window[1]))
-    if aggregation == "COUNT":
-        count = int(window or 0)
-        return count, count
-    if aggregation == "ALL":
-        samples = list(window or [])
-        return samples, len(samples)
-    return window, None
 
 
 def subscriber_prefix(subscriber: str) -> bytes:

@@ -1,0 +1,296 @@
+// Generated from the contracts by `python -m modd_contracts.typegen`. Do not edit.
+
+export const DELIVERED_VALUE_VERSION = 1;
+export const STATUS_VERSION = 1;
+export const PLAN_VERSION = 1;
+export const PUBBROKER_VERSION = 1;
+
+/** One window of one subscription, as the SubBroker puts it on modd/<drone>/sub/<subscriber> and writes it on a TCP delivery connection (one compact JSON object a line). Producer: runtime/python/src/modd/subbroker/payload.py. Consumers: the backend (stream relay, 3D scene, Foxglove), the generated C++ and Python subscriber clients, the browser's WebSocketSource. docs/subbroker.md, "Delivered values". */
+export interface DeliveredValue {
+  /** The subscription's name (also the last chunk of the key). */
+  subscriber: string;
+  /** The topic, drone.sensor.variable. */
+  topic: string;
+  /** How the window's samples were reduced (the metamodel's Aggregation). */
+  aggregation: string;
+  /** The subscription's period, an exact decimal string. */
+  period_s: string;
+  /** The variable's unit (the metamodel's Unit). */
+  unit: string;
+  /** The running configuration the window belongs to. */
+  config_id: number;
+  /** The schedule slot of the DATA frame that closed the window. */
+  slot: number;
+  /** Start of the window [start_ns, end_ns), ns since the Unix epoch on the drone's clock. */
+  start_ns: number;
+  /** End of the window (exclusive), ns since the Unix epoch on the drone's clock. */
+  end_ns: number;
+  /** The window's value: a number or boolean, the list of raw samples for ALL, or null when the window had no sample. */
+  value: number | boolean | (number | boolean)[] | null;
+  /** Samples behind the value when the aggregation carries it (AVERAGE, COUNT, ALL), else null. */
+  count: number | null;
+  /** When the SubBroker delivered it, ns since the Unix epoch on the base station's clock. */
+  delivered_ns: number;
+  /** Payload version; a reader rejects a higher one. */
+  v: number;
+}
+
+/** The SubBroker's status document, put on modd/<drone>/status every status_period_s. Producer: runtime/python/src/modd/subbroker/broker.py (status), status.py (rates), backpressure.py. Consumers: the backend (stream relay, health, Foxglove), `modd up`, the browser's WebSocketSource. docs/subbroker.md, "Status". A new field is added here first. */
+export interface SubBrokerStatus {
+  /** The drone's name. */
+  drone: string;
+  /** When the document was made, ns since the Unix epoch (base station clock). */
+  time_ns: number;
+  /** The link's state. */
+  link: LinkState;
+  /** The PubBroker endpoint, host:port. */
+  endpoint: string;
+  /** Last PING round trip, seconds. */
+  rtt_s: number | null;
+  /** The running configuration, or null before the first CONFIG_ACK. */
+  config_id: number | null;
+  /** The running configuration's epoch. */
+  epoch_ns: number | null;
+  /** Link frame bytes read since start. */
+  bytes_in: number;
+  /** Link frame bytes written since start. */
+  bytes_out: number;
+  /** DATA frames decoded. */
+  data_frames: number;
+  /** Frames skipped as bad. */
+  skipped_frames: number;
+  /** Link sessions opened. */
+  connects: number;
+  /** When the last DATA frame arrived. */
+  last_data_ns: number | null;
+  /** The last link error, if any. */
+  last_error: string | null;
+  /** Values delivered since start. */
+  delivered: number;
+  /** The planner's prediction for the running plan (modd_plan.linkcost), or null. */
+  predicted_link_bytes_per_s: PredictedLink | null;
+  /** Subscriber names per routed stream key. */
+  routes: Record<string, string[]>;
+  /** Names of the dynamic subscriptions. */
+  dynamic: string[];
+  /** TCP delivery senders per subscriber. */
+  tcp: Record<string, TcpSender>;
+  /** The PubBroker's counters from its last STATUS frame (docs/protocol.md, STATUS). */
+  pubbroker: Record<string, number>;
+  /** Link bytes read per second since the previous status. */
+  bytes_in_per_s?: number | null;
+  /** Link bytes written per second. */
+  bytes_out_per_s?: number | null;
+  /** bytes_in_per_s plus 52 B of IPv4+TCP headers per frame: the figure to hold against predicted drone_to_base. */
+  ip_bytes_in_per_s?: number | null;
+  /** Whether the SubBroker falls behind the link. */
+  behind?: boolean;
+  /** How far behind, seconds. */
+  lag_s?: number | null;
+  /** Largest lag seen. */
+  max_lag_s?: number;
+  /** Bytes waiting in the receive buffer. */
+  recv_backlog_bytes?: number;
+  /** Since when it is behind. */
+  behind_since_ns?: number | null;
+  /** How many times it fell behind. */
+  behind_episodes?: number;
+}
+
+/** State of the SubBroker's link to the PubBroker. */
+export type LinkState = "connecting" | "handshake" | "configuring" | "up" | "down" | "stopped";
+export const LinkStateValues = ["connecting", "handshake", "configuring", "up", "down", "stopped"] as const;
+
+/** The planner's link-cost estimate, bytes per second (modd_plan.linkcost.LinkCost.to_json). */
+export interface PredictedLink {
+  drone_to_base: number;
+  base_to_drone: number;
+  plain_pubsub: number;
+  plain_pubsub_acks: number;
+  frames_per_s: number;
+  saving_ratio: number;
+}
+
+/** One TCP delivery connection. */
+export interface TcpSender {
+  connected: boolean;
+  sent: number;
+  dropped: number;
+}
+
+/** The plan as one JSON object (docs/planning.md, "Plan JSON"). Producer: metamodel/src/modd_plan/planjson.py (`modd plan --json`, the backend's live plan). Consumers: the backend, the workbench's plan panel (frontend/src/core/plan.ts), the SubBroker's CONFIG builder. Periods and delays are exact decimal strings, wire periods integer microseconds. */
+export interface PlanDocument {
+  /** Length of the schedule's hyperperiod. */
+  hyperperiod_s: DecimalString;
+  /** DATA frames per hyperperiod. */
+  messages_per_hyperperiod: number;
+  /** Topics in id order. */
+  topics: PlanTopic[];
+  /** Planned streams in id order (sent and derived). */
+  streams: PlanStream[];
+  /** Each subscription's stream key. */
+  subscriptions: Record<string, string>;
+  /** Buffer size per topic. */
+  buffer_sizes: Record<string, number>;
+  schedule: PlanSchedule;
+  /** Worst delivery delay per subscription, seconds. */
+  delays: Record<string, DecimalString>;
+  /** The largest deviation of the buffers. */
+  max_delay_s: DecimalString;
+  /** The link-cost estimate (status.schema.json PredictedLink). */
+  predicted_link_bytes_per_s: Record<string, number>;
+  /** The radio budget (modd_plan.linkbudget) when the model names a radio, else null. */
+  link_budget: object | null;
+  /** Subscriptions the planner could not serve. */
+  infeasible: PlanInfeasible[];
+  /** True when no buffer sizes meet the delay cap. */
+  violates_delay_cap: boolean;
+  /** The planner constants in force (decimal strings). */
+  constants: object;
+}
+
+/** An exact decimal number written as a string. */
+export type DecimalString = string;
+
+export interface PlanTopic {
+  id: number;
+  name: string;
+  type: string;
+  unit: string;
+  publication_period_s: DecimalString | null;
+  period_us: number | null;
+  buffer_size: number | null;
+}
+
+export interface PlanSource {
+  key: string;
+  factor: number;
+}
+
+export interface PlanStream {
+  /** The wire id of a sent stream; null for a derived one. */
+  id: number | null;
+  /** topic/AGGREGATION/period_s */
+  key: string;
+  topic: string;
+  aggregation: string;
+  period_s: DecimalString;
+  period_us: number;
+  /** Sent over the link (else derived at the SubBroker). */
+  sent: boolean;
+  derived_from: string | null;
+  factor: number;
+  sources: PlanSource[];
+  subscribers: string[];
+}
+
+export interface PlanSlot {
+  slot: number;
+  date_s: DecimalString;
+  streams: number[];
+}
+
+export interface PlanSentStream {
+  id: number;
+  key: string;
+  period_us: number;
+}
+
+/** The slot table (the first slots of the hyperperiod, bounded). */
+export interface PlanSchedule {
+  epoch_phase_s: DecimalString;
+  streams: PlanSentStream[];
+  slots: PlanSlot[];
+  slots_listed: number;
+  slots_truncated: boolean;
+}
+
+export interface PlanInfeasible {
+  topic: string;
+  subscribers: string[];
+  reason: string;
+}
+
+/** The PubBroker's configuration file, pubbroker.json (docs/pubbroker.md). Producer: generators/src/modd_gen/targets/pubbroker_config.py (operator/pubbroker.json), `modd up`. Consumer: runtime/cpp/src/broker/config.cpp, which refuses unknown keys. Each `default` is what the PubBroker uses when the key is absent (config.hpp; a test holds the two together) and what the generator writes. */
+export interface PubBrokerConfig {
+  /** The drone's name. */
+  name?: string;
+  link: PubBrokerLink;
+  ingress?: PubBrokerIngress;
+  archive: PubBrokerArchive;
+  /** Topics known before the first CONFIG. */
+  topics?: PubBrokerTopic[];
+  /** Buffer size of a topic the plan does not size. */
+  default_buffer_size?: number;
+  /** Archive topics no configuration names. */
+  accept_unknown_topics?: boolean;
+  /** STATUS frame period until a CONFIG sets it. */
+  status_period_s?: number;
+  /** Period of the counters line in the log. */
+  log_period_s?: number;
+  log?: PubBrokerLog;
+}
+
+/** Where the PubBroker listens for the SubBroker, and the link key. */
+export interface PubBrokerLink {
+  host?: string;
+  port?: number;
+  /** The link key's reference, env:NAME or file:PATH. */
+  key: string;
+  handshake_timeout_ms?: number;
+}
+
+/** Local ingress (docs/ingress.md): a Unix socket and/or TCP. */
+export interface PubBrokerIngress {
+  unix_path?: string;
+  host?: string;
+  /** 0: no TCP ingress. */
+  port?: number;
+  max_future_ms?: number;
+  max_past_ms?: number;
+  /** 0: no quota. */
+  publisher_quota_samples?: number;
+  /** 0: no quota. */
+  topic_quota_samples?: number;
+}
+
+/** The MCAP archive (docs/pubbroker.md, "Archive"). */
+export interface PubBrokerArchive {
+  dir: string;
+  prefix?: string;
+  rotate_bytes?: number;
+  rotate_s?: number;
+  fsync?: "never" | "chunk" | "close";
+  compression?: "zstd" | "lz4" | "none";
+  chunk_bytes?: number;
+  flush_interval_ms?: number;
+  queue_limit_samples?: number;
+  message_index?: boolean;
+  low_space_mb?: number;
+  retry_max_ms?: number;
+}
+
+export interface PubBrokerTopic {
+  name: string;
+  type?: "float32" | "float64" | "int" | "bool";
+  /** 0: default_buffer_size. */
+  buffer_size?: number;
+}
+
+export interface PubBrokerLog {
+  file?: string;
+  max_bytes?: number;
+  keep?: number;
+}
+
+/** The aggregation table (modd.schema.json Aggregation x-table). */
+export const AGGREGATION_TABLE = [
+  { name: "MIN", code: 0, numericOnly: false },
+  { name: "MAX", code: 1, numericOnly: false },
+  { name: "AVERAGE", code: 2, numericOnly: true },
+  { name: "FIRST", code: 3, numericOnly: false },
+  { name: "LAST", code: 4, numericOnly: false },
+  { name: "ALL", code: 5, numericOnly: false },
+  { name: "COUNT", code: 6, numericOnly: false },
+  { name: "SUM", code: 7, numericOnly: true },
+] as const;

@@ -1,0 +1,112 @@
+// MoDD subscriber client (C++): receives a subscriber's values over the
+// SubBroker's TCP delivery (docs/subbroker.md: the SubBroker connects to the
+// subscriber's endpoint and writes one JSON object per line) and calls back
+// once per delivered value. Self-contained (this header and subscriber.cpp,
+// standard library and POSIX only), like the publisher client.
+//
+//   modd::Subscriber sub("127.0.0.1", 7405, [](const modd::Delivered& d) {
+//     if (d.present) std::printf("%s %s = %g\n", d.topic.c_str(), d.aggregation.c_str(), d.value);
+//   });
+//   sub.run();  // until sub.stop() from another thread or a signal handler
+//
+// Callbacks run on the thread that runs run(); a slow callback delays only
+// this subscriber (the SubBroker keeps a bounded queue per subscriber and drops
+// its oldest values, never blocking the link).
+//
+// Only the SubBroker may deliver (docs/subbroker.md, "TCP delivery"): on each
+// connection the subscriber sends a challenge, "MODD-DELIVERY/1 <nonce>\n", and
+// accepts value lines only after the answer "AUTH <HMAC-SHA256(key, ...)>\n"
+// proves that the peer holds the delivery key. Several connections are served
+// at once (poll); one that does not prove itself within the handshake timeout,
+// or stays idle past the idle timeout, is dropped, so an idle or hostile socket
+// never holds back the SubBroker's values.
+#pragma once
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+namespace modd {
+
+// One window of one subscription.
+struct Delivered {
+  std::string subscriber, topic, aggregation, period_s, unit;
+  uint64_t config_id = 0;
+  uint64_t slot = 0;
+  int64_t start_ns = 0, end_ns = 0;  // the window [start, end), ns since the Unix epoch
+  int64_t delivered_ns = 0;
+  bool present = false;              // false: no sample in the window
+  double value = 0;                  // the aggregate (bools as 0/1); unset for ALL
+  std::vector<double> values;        // ALL: every raw sample of the window
+  int64_t count = -1;                // samples behind the value, when known; else -1
+};
+
+// Parses one delivered line. On malformed input returns false and says why.
+bool parse_delivered(std::string_view line, Delivered& out, std::string* error = nullptr);
+
+// The delivery key shared by the SubBroker and its TCP subscribers. Resolved as
+// the SubBroker does: $MODD_DELIVERY_KEY when set (a reference: "env:NAME" or
+// "file:PATH"), else the file $XDG_CONFIG_HOME/modd/delivery.key (default
+// ~/.config/modd/delivery.key), created with a random key (mode 0600) when
+// absent. A key file must be a regular file of at most 4 KiB. Throws
+// std::runtime_error naming the reference.
+std::string load_delivery_key();
+
+using Digest = std::array<uint8_t, 32>;
+Digest sha256(std::string_view data);
+Digest hmac_sha256(std::string_view key, std::string_view data);
+// The SubBroker's answer to a challenge: lowercase hex of
+// HMAC-SHA256(key, "modd-delivery/1\n" + nonce_hex).
+std::string delivery_proof(std::string_view key, std::string_view nonce_hex);
+
+class Subscriber {
+ public:
+  using Callback = std::function<void(const Delivered&)>;
+  struct Stats {
+    uint64_t received = 0;   // values passed to the callback
+    uint64_t malformed = 0;  // lines that did not parse (skipped)
+    uint64_t connections = 0;
+    uint64_t refused = 0;    // connections dropped: no or wrong proof, idle, over the limit
+  };
+  struct Options {
+    std::string key;                  // the delivery key; empty: load_delivery_key()
+    int handshake_timeout_ms = 5000;  // to prove itself, from accept
+    int idle_timeout_ms = 300000;     // without a byte, once proven
+    size_t max_connections = 8;       // at once; past it the oldest unproven one is dropped
+  };
+
+  // Listens on host:port, the subscriber's endpoint in the model (port 0: any).
+  // Throws std::runtime_error when the endpoint cannot be bound or the key loaded.
+  Subscriber(const std::string& host, uint16_t port, Callback callback);
+  Subscriber(const std::string& host, uint16_t port, Callback callback, Options options);
+  ~Subscriber();
+  Subscriber(const Subscriber&) = delete;
+  Subscriber& operator=(const Subscriber&) = delete;
+
+  void run();                 // serves until stop()
+  void start();               // run() on a background thread
+  void stop() noexcept;       // safe from any thread and from a signal handler
+  uint16_t port() const noexcept { return port_; }
+  Stats stats() const noexcept;
+
+ private:
+  struct Connection;
+  void accept_one(std::vector<Connection>& conns);
+  bool serve(Connection& c);  // false: drop the connection
+  bool handle_line(Connection& c, std::string_view line);
+
+  Callback callback_;
+  Options options_;
+  int listen_fd_ = -1;
+  int wake_[2] = {-1, -1};
+  uint16_t port_ = 0;
+  std::atomic<bool> stopping_{false};
+  std::atomic<uint64_t> received_{0}, malformed_{0}, connections_{0}, refused_{0};
+  std::thread thread_;
+};
+
+}  // namespace modd

@@ -1,0 +1,105 @@
+"""Generated from the contracts by `python -m modd_contracts.typegen`. Do not edit.
+
+The aggregation table (metamodel/modd.schema.json, ``Aggregation`` x-table):
+one row per aggregation, in wire-code order.
+
+>>> BY_NAME["AVERAGE"].result["int"]
+'float64'
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class AggregationSpec:
+    """One aggregation: see the schema's ``x-table-doc`` for each field."""
+
+    name: str
+    code: int
+    numeric_only: bool
+    wire_count: bool
+    result: dict[str, str]
+    derivable_from: tuple[str, ...]
+    derivable_from_pair: tuple[str, str] | None
+
+
+AGGREGATIONS: tuple[AggregationSpec, ...] = (
+    AggregationSpec(
+        name='MIN',
+        code=0,
+        numeric_only=False,
+        wire_count=False,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'bool'},
+        derivable_from=('MIN', 'ALL'),
+        derivable_from_pair=None,
+    ),
+    AggregationSpec(
+        name='MAX',
+        code=1,
+        numeric_only=False,
+        wire_count=False,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'bool'},
+        derivable_from=('MAX', 'ALL'),
+        derivable_from_pair=None,
+    ),
+    AggregationSpec(
+        name='AVERAGE',
+        code=2,
+        numeric_only=True,
+        wire_count=True,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'float64', 'bool': 'float32'},
+        derivable_from=('AVERAGE', 'ALL'),
+        derivable_from_pair=('SUM', 'COUNT'),
+    ),
+    AggregationSpec(
+        name='FIRST',
+        code=3,
+        numeric_only=False,
+        wire_count=False,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'bool'},
+        derivable_from=('FIRST', 'ALL'),
+        derivable_from_pair=None,
+    ),
+    AggregationSpec(
+        name='LAST',
+        code=4,
+        numeric_only=False,
+        wire_count=False,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'bool'},
+        derivable_from=('LAST', 'ALL'),
+        derivable_from_pair=None,
+    ),
+    AggregationSpec(
+        name='ALL',
+        code=5,
+        numeric_only=False,
+        wire_count=False,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'bool'},
+        derivable_from=('ALL',),
+        derivable_from_pair=None,
+    ),
+    AggregationSpec(
+        name='COUNT',
+        code=6,
+        numeric_only=False,
+        wire_count=False,
+        result={'float32': 'int', 'float64': 'int', 'int': 'int', 'bool': 'int'},
+        derivable_from=('COUNT', 'AVERAGE', 'ALL'),
+        derivable_from_pair=None,
+    ),
+    AggregationSpec(
+        name='SUM',
+        code=7,
+        numeric_only=True,
+        wire_count=False,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'int'},
+        derivable_from=('SUM', 'ALL'),
+        derivable_from_pair=None,
+    ),
+)
+#: The rows by name.
+BY_NAME: dict[str, AggregationSpec] = {a.name: a for a in AGGREGATIONS}
+#: The names in wire-code order.
+NAMES: tuple[str, ...] = tuple(a.name for a in AGGREGATIONS)

@@ -1,0 +1,90 @@
+"""The zenoh key expressions between the SubBroker, the backend and the other
+base-station processes (docs/subbroker.md, "Zenoh keys"): the one place
+where they are spelled. Builders check every name they put in a key, so a
+model string can never widen a key expression (``*``, ``/``, ``**``).
+
+>>> sub_key("usv", "sub_1")
+'modd/usv/sub/sub_1'
+>>> values_of("usv"), values_of(None)
+('modd/usv/sub/*', 'modd/*/sub/*')
+>>> parse_sub_key("modd/usv/sub/sub_1")
+('usv', 'sub_1')
+"""
+
+from __future__ import annotations
+
+import re
+
+#: The first chunk of every MoDD key.
+ROOT = "modd"
+#: The metamodel's ``Name`` (pattern and maxLength; a test holds them to the schema).
+NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")
+
+
+def check_name(kind: str, name: object) -> str:
+    """``name`` if it is a model identifier (safe inside a key; the whole
+    string must match, a trailing newline too), else ValueError."""
+    if not isinstance(name, str) or not NAME.fullmatch(name):
+        raise ValueError(
+            f"{kind} {str(name)[:80]!r} is not an identifier (letters, digits, "
+            "underscores, at most 64)"
+        )
+    return name
+
+
+def drone_prefix(drone: str | None) -> str:
+    """``modd/<drone>``, or ``modd/*`` (every drone) for ``None``."""
+    return f"{ROOT}/{'*' if drone is None else check_name('drone', drone)}"
+
+
+def sub_key(drone: str, subscriber: str) -> str:
+    """Where the SubBroker puts the delivered values of one subscriber."""
+    return f"{drone_prefix(drone)}/sub/{check_name('subscriber', subscriber)}"
+
+
+def status_key(drone: str | None) -> str:
+    """Where the SubBroker puts its status document (``None``: every drone's)."""
+    return f"{drone_prefix(drone)}/status"
+
+
+def deploy_key(drone: str) -> str:
+    """The SubBroker's deploy queryable."""
+    return f"{drone_prefix(drone)}/deploy"
+
+
+def subscribe_key(drone: str) -> str:
+    """The SubBroker's dynamic-subscription queryable."""
+    return f"{drone_prefix(drone)}/subscribe"
+
+
+def values_of(drone: str | None) -> str:
+    """Every subscriber's values of one drone (``None``: of every drone)."""
+    return f"{drone_prefix(drone)}/sub/*"
+
+
+def values_tree(drone: str | None) -> str:
+    """``values_of`` and anything deeper (``modd/<drone>/sub/**``), for ACL rules."""
+    return f"{drone_prefix(drone)}/sub/**"
+
+
+#: Everything under the MoDD root, for ACL rules.
+EVERYTHING = f"{ROOT}/**"
+#: Every drone's values and every drone's status: what readers subscribe to.
+ALL_VALUES = values_of(None)
+ALL_STATUS = status_key(None)
+
+
+def parse_sub_key(key: str) -> tuple[str, str]:
+    """``(drone, subscriber)`` of a :func:`sub_key`, else ValueError."""
+    parts = key.split("/")
+    if len(parts) != 4 or parts[0] != ROOT or parts[2] != "sub":
+        raise ValueError(f"{key!r} is not a {ROOT}/<drone>/sub/<subscriber> key")
+    return check_name("drone", parts[1]), check_name("subscriber", parts[3])
+
+
+def parse_status_key(key: str) -> str:
+    """The drone of a :func:`status_key`, else ValueError."""
+    parts = key.split("/")
+    if len(parts) != 3 or parts[0] != ROOT or parts[2] != "status":
+        raise ValueError(f"{key!r} is not a {ROOT}/<drone>/status key")
+    return check_name("drone", parts[1])

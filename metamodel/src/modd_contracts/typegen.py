@@ -1,0 +1,274 @@
+"""Types and tables generated from the contracts, so that no language
+re-types them by hand:
+
+- ``metamodel/src/modd_contracts/types.py``: Python TypedDicts of the contract
+  schemas (``schemas/*.schema.json``) and their versions;
+- ``frontend/src/core/contracts.gen.ts``: the same as TypeScript types;
+- ``metamodel/src/modd_contracts/aggregations.py``: the aggregation table
+  (the metamodel's ``Aggregation`` ``x-table``) for Python;
+- ``runtime/cpp/include/modd/link/aggregation_table.gen.hpp``: the same for C++.
+
+Run ``python -m modd_contracts.typegen`` to rewrite them; ``--check`` exits 1
+when one is stale (``make check`` does that, and a test).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from modd_model.schema import definition
+from modd_model.typegen import _dependency_order, _py_type, _ts_doc, _ts_type
+
+from .schema import NAMES, load
+
+HEADER = "Generated from the contracts by `python -m modd_contracts.typegen`. Do not edit."
+REPO = Path(__file__).resolve().parents[3]
+OUTPUTS = {
+    "py": REPO / "metamodel" / "src" / "modd_contracts" / "types.py",
+    "ts": REPO / "frontend" / "src" / "core" / "contracts.gen.ts",
+    "aggpy": REPO / "metamodel" / "src" / "modd_contracts" / "aggregations.py",
+    "aggcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "link" / "aggregation_table.gen.hpp",
+}
+
+
+def _definitions() -> list[tuple[str, dict[str, Any]]]:
+    """Every contract's root (named by its title) and ``$defs``, in order."""
+    out: list[tuple[str, dict[str, Any]]] = []
+    for name in NAMES:
+        schema = load(name)
+        out.append((schema["title"], {k: v for k, v in schema.items() if k != "$defs"}))
+        out += list(schema.get("$defs", {}).items())
+    return out
+
+
+def _versions() -> list[tuple[str, int]]:
+    return [(f"{name.upper()}_VERSION", int(load(name)["x-version"])) for name in NAMES]
+
+
+def generate_py() -> str:
+    defs = _definitions()
+    out = [
+        f'"""{HEADER}"""',
+        "",
+        "from __future__ import annotations",
+        "",
+        "from typing import Any, Literal, NotRequired, TypedDict",
+        "",
+    ]
+    for const, v in _versions():
+        out.append(f"{const} = {v}")
+    out += ["", ""]
+    for name, s in _dependency_order([(n, s) for n, s in defs if "properties" not in s]):
+        out.append(f"{name} = {_py_type(s)}")
+    out += ["", ""]
+    for name, s in defs:
+        if "properties" not in s:
+            continue
+        required = set(s.get("required", []))
+        doc = s.get("description", name).split(". ")[0].rstrip(".")
+        out += [f"class {name}(TypedDict):", f'    """{doc}."""', ""]
+        for prop, ps in s["properties"].items():
+            t = _py_type(ps)
+            out.append(f"    {prop}: {t if prop in required else f'NotRequired[{t}]'}")
+        out += ["", ""]
+    names = [c for c, _ in _versions()] + [n for n, _ in defs]
+    out.append("__all__ = [" + ", ".join(f'"{n}"' for n in names) + "]")
+    text = "\n".join(out) + "\n"
+    if "Any]" not in text:
+        text = text.replace("import Any, Literal", "import Literal")
+    if "Literal[" not in text:
+        text = text.replace("Literal, ", "")
+    return text
+
+
+def generate_ts() -> str:
+    out = [f"// {HEADER}", ""]
+    for const, v in _versions():
+        out.append(f"export const {const} = {v};")
+    out.append("")
+    for name, s in _definitions():
+        out += _ts_doc(s.get("description"))
+        if "properties" in s:
+            required = set(s.get("required", []))
+            out.append(f"export interface {name} {{")
+            for prop, ps in s["properties"].items():
+                out += _ts_doc(ps.get("description"), "  ")
+                out.append(f"  {prop}{'' if prop in required else '?'}: {_ts_type(ps)};")
+            out.append("}")
+        else:
+            out.append(f"export type {name} = {_ts_type(s)};")
+        if "enum" in s:
+            out.append(
+                f"export const {name}Values = [{', '.join(json.dumps(v) for v in s['enum'])}]"
+                " as const;"
+            )
+        out.append("")
+    out += _ts_aggregations()
+    return "\n".join(out)
+
+
+# -- the aggregation table ---------------------------------------------------------
+
+
+def _table() -> list[dict[str, Any]]:
+    agg = definition("Aggregation")
+    rows: list[dict[str, Any]] = agg["x-table"]
+    names = [r["name"] for r in rows]
+    if names != agg["enum"] or [r["code"] for r in rows] != list(range(len(rows))):
+        raise ValueError("Aggregation x-table must list the enum in wire-code order 0, 1, ...")
+    return rows
+
+
+def _ts_aggregations() -> list[str]:
+    out = [
+        "/** The aggregation table (modd.schema.json Aggregation x-table). */",
+        "export const AGGREGATION_TABLE = [",
+    ]
+    for r in _table():
+        out.append(
+            f"  {{ name: {json.dumps(r['name'])}, code: {r['code']}, "
+            f"numericOnly: {json.dumps(r['numericOnly'])} }},"
+        )
+    out += ["] as const;", ""]
+    return out
+
+
+def generate_agg_py() -> str:
+    out = [
+        f'"""{HEADER}',
+        "",
+        "The aggregation table (metamodel/modd.schema.json, ``Aggregation`` x-table):",
+        "one row per aggregation, in wire-code order.",
+        "",
+        '>>> BY_NAME["AVERAGE"].result["int"]',
+        "'float64'",
+        '"""',
+        "",
+        "from __future__ import annotations",
+        "",
+        "from dataclasses import dataclass",
+        "",
+        "",
+        "@dataclass(frozen=True)",
+        "class AggregationSpec:",
+        '    """One aggregation: see the schema\'s ``x-table-doc`` for each field."""',
+        "",
+        "    name: str",
+        "    code: int",
+        "    numeric_only: bool",
+        "    wire_count: bool",
+        "    result: dict[str, str]",
+        "    derivable_from: tuple[str, ...]",
+        "    derivable_from_pair: tuple[str, str] | None",
+        "",
+        "",
+        "AGGREGATIONS: tuple[AggregationSpec, ...] = (",
+    ]
+    for r in _table():
+        pair = r.get("derivableFromPair")
+        out += [
+            "    AggregationSpec(",
+            f"        name={r['name']!r},",
+            f"        code={r['code']},",
+            f"        numeric_only={r['numericOnly']},",
+            f"        wire_count={r['wireCount']},",
+            f"        result={r['result']!r},",
+            f"        derivable_from={tuple(r['derivableFrom'])!r},",
+            f"        derivable_from_pair={tuple(pair) if pair else None!r},",
+            "    ),",
+        ]
+    out += [
+        ")",
+        "#: The rows by name.",
+        "BY_NAME: dict[str, AggregationSpec] = {a.name: a for a in AGGREGATIONS}",
+        "#: The names in wire-code order.",
+        "NAMES: tuple[str, ...] = tuple(a.name for a in AGGREGATIONS)",
+        "",
+    ]
+    return "\n".join(out)
+
+
+def generate_agg_cpp() -> str:
+    types = ["float32", "float64", "int", "bool"]
+    enum = {"float32": "Float32", "float64": "Float64", "int": "Int", "bool": "Bool"}
+    out = [
+        f"// {HEADER}",
+        "// The aggregation table (metamodel/modd.schema.json, Aggregation x-table).",
+        "#pragma once",
+        "",
+        "#include <cstdint>",
+        "",
+        "namespace modd::link::table {",
+        "",
+        "struct AggregationRow {",
+        "  const char* name;",
+        "  uint8_t code;",
+        "  bool numeric_only;",
+        "  bool wire_count;",
+        "  // Wire value type per topic type, indexed by ValueType",
+        "  // (float32, float64, int, bool): 0 float32, 1 float64, 2 int, 3 bool.",
+        "  uint8_t result[4];",
+        "};",
+        "",
+        "inline constexpr AggregationRow kAggregations[] = {",
+    ]
+    for r in _table():
+        res = ", ".join(str(types.index(r["result"][t])) for t in types)
+        out.append(
+            f'    {{"{r["name"]}", {r["code"]}, {str(r["numericOnly"]).lower()}, '
+            f"{str(r['wireCount']).lower()}, {{{res}}}}},"
+        )
+    out += [
+        "};",
+        f"inline constexpr int kAggregationCount = {len(_table())};",
+        "",
+        f"// Value types in the order of result[]: {', '.join(enum[t] for t in types)}.",
+        "",
+        "}  // namespace modd::link::table",
+        "",
+    ]
+    return "\n".join(out)
+
+
+GENERATORS: dict[str, Callable[[], str]] = {
+    "py": generate_py,
+    "ts": generate_ts,
+    "aggpy": generate_agg_py,
+    "aggcpp": generate_agg_cpp,
+}
+
+
+def stale_outputs() -> list[Path]:
+    return [
+        path
+        for key, path in OUTPUTS.items()
+        if not path.is_file() or path.read_text(encoding="utf-8") != GENERATORS[key]()
+    ]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
+    parser.add_argument("--check", action="store_true", help="exit 1 if an output is stale")
+    args = parser.parse_args(argv)
+    if args.check:
+        stale = stale_outputs()
+        for p in stale:
+            print(
+                f"stale: {p.relative_to(REPO)} (run python -m modd_contracts.typegen)",
+                file=sys.stderr,
+            )
+        return 1 if stale else 0
+    for key, path in OUTPUTS.items():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(GENERATORS[key](), encoding="utf-8")
+        print(f"wrote {path.relative_to(REPO)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

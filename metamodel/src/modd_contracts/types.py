@@ -1,0 +1,245 @@
+"""Generated from the contracts by `python -m modd_contracts.typegen`. Do not edit."""
+
+from __future__ import annotations
+
+from typing import Any, Literal, NotRequired, TypedDict
+
+DELIVERED_VALUE_VERSION = 1
+STATUS_VERSION = 1
+PLAN_VERSION = 1
+PUBBROKER_VERSION = 1
+
+
+LinkState = Literal["connecting", "handshake", "configuring", "up", "down", "stopped"]
+DecimalString = str
+
+
+class DeliveredValue(TypedDict):
+    """One window of one subscription, as the SubBroker puts it on modd/<drone>/sub/<subscriber> and writes it on a TCP delivery connection (one compact JSON object a line)."""
+
+    subscriber: str
+    topic: str
+    aggregation: str
+    period_s: str
+    unit: str
+    config_id: int
+    slot: int
+    start_ns: int
+    end_ns: int
+    value: float | bool | list[float | bool] | None
+    count: int | None
+    delivered_ns: int
+    v: int
+
+
+class SubBrokerStatus(TypedDict):
+    """The SubBroker's status document, put on modd/<drone>/status every status_period_s."""
+
+    drone: str
+    time_ns: int
+    link: LinkState
+    endpoint: str
+    rtt_s: float | None
+    config_id: int | None
+    epoch_ns: int | None
+    bytes_in: int
+    bytes_out: int
+    data_frames: int
+    skipped_frames: int
+    connects: int
+    last_data_ns: int | None
+    last_error: str | None
+    delivered: int
+    predicted_link_bytes_per_s: PredictedLink | None
+    routes: dict[str, list[str]]
+    dynamic: list[str]
+    tcp: dict[str, TcpSender]
+    pubbroker: dict[str, int]
+    bytes_in_per_s: NotRequired[float | None]
+    bytes_out_per_s: NotRequired[float | None]
+    ip_bytes_in_per_s: NotRequired[float | None]
+    behind: NotRequired[bool]
+    lag_s: NotRequired[float | None]
+    max_lag_s: NotRequired[float]
+    recv_backlog_bytes: NotRequired[int]
+    behind_since_ns: NotRequired[int | None]
+    behind_episodes: NotRequired[int]
+
+
+class PredictedLink(TypedDict):
+    """The planner's link-cost estimate, bytes per second (modd_plan.linkcost.LinkCost.to_json)."""
+
+    drone_to_base: float
+    base_to_drone: float
+    plain_pubsub: float
+    plain_pubsub_acks: float
+    frames_per_s: float
+    saving_ratio: float
+
+
+class TcpSender(TypedDict):
+    """One TCP delivery connection."""
+
+    connected: bool
+    sent: int
+    dropped: int
+
+
+class PlanDocument(TypedDict):
+    """The plan as one JSON object (docs/planning.md, "Plan JSON")."""
+
+    hyperperiod_s: DecimalString
+    messages_per_hyperperiod: int
+    topics: list[PlanTopic]
+    streams: list[PlanStream]
+    subscriptions: dict[str, str]
+    buffer_sizes: dict[str, int]
+    schedule: PlanSchedule
+    delays: dict[str, DecimalString]
+    max_delay_s: DecimalString
+    predicted_link_bytes_per_s: dict[str, float]
+    link_budget: dict[str, Any] | None
+    infeasible: list[PlanInfeasible]
+    violates_delay_cap: bool
+    constants: dict[str, Any]
+
+
+class PlanTopic(TypedDict):
+    """PlanTopic."""
+
+    id: int
+    name: str
+    type: str
+    unit: str
+    publication_period_s: DecimalString | None
+    period_us: int | None
+    buffer_size: int | None
+
+
+class PlanSource(TypedDict):
+    """PlanSource."""
+
+    key: str
+    factor: int
+
+
+class PlanStream(TypedDict):
+    """PlanStream."""
+
+    id: int | None
+    key: str
+    topic: str
+    aggregation: str
+    period_s: DecimalString
+    period_us: int
+    sent: bool
+    derived_from: str | None
+    factor: int
+    sources: list[PlanSource]
+    subscribers: list[str]
+
+
+class PlanSlot(TypedDict):
+    """PlanSlot."""
+
+    slot: int
+    date_s: DecimalString
+    streams: list[int]
+
+
+class PlanSentStream(TypedDict):
+    """PlanSentStream."""
+
+    id: int
+    key: str
+    period_us: int
+
+
+class PlanSchedule(TypedDict):
+    """The slot table (the first slots of the hyperperiod, bounded)."""
+
+    epoch_phase_s: DecimalString
+    streams: list[PlanSentStream]
+    slots: list[PlanSlot]
+    slots_listed: int
+    slots_truncated: bool
+
+
+class PlanInfeasible(TypedDict):
+    """PlanInfeasible."""
+
+    topic: str
+    subscribers: list[str]
+    reason: str
+
+
+class PubBrokerConfig(TypedDict):
+    """The PubBroker's configuration file, pubbroker.json (docs/pubbroker.md)."""
+
+    name: NotRequired[str]
+    link: PubBrokerLink
+    ingress: NotRequired[PubBrokerIngress]
+    archive: PubBrokerArchive
+    topics: NotRequired[list[PubBrokerTopic]]
+    default_buffer_size: NotRequired[int]
+    accept_unknown_topics: NotRequired[bool]
+    status_period_s: NotRequired[int]
+    log_period_s: NotRequired[int]
+    log: NotRequired[PubBrokerLog]
+
+
+class PubBrokerLink(TypedDict):
+    """Where the PubBroker listens for the SubBroker, and the link key."""
+
+    host: NotRequired[str]
+    port: NotRequired[int]
+    key: str
+    handshake_timeout_ms: NotRequired[int]
+
+
+class PubBrokerIngress(TypedDict):
+    """Local ingress (docs/ingress.md): a Unix socket and/or TCP."""
+
+    unix_path: NotRequired[str]
+    host: NotRequired[str]
+    port: NotRequired[int]
+    max_future_ms: NotRequired[int]
+    max_past_ms: NotRequired[int]
+    publisher_quota_samples: NotRequired[int]
+    topic_quota_samples: NotRequired[int]
+
+
+class PubBrokerArchive(TypedDict):
+    """The MCAP archive (docs/pubbroker.md, "Archive")."""
+
+    dir: str
+    prefix: NotRequired[str]
+    rotate_bytes: NotRequired[int]
+    rotate_s: NotRequired[int]
+    fsync: NotRequired[Literal["never", "chunk", "close"]]
+    compression: NotRequired[Literal["zstd", "lz4", "none"]]
+    chunk_bytes: NotRequired[int]
+    flush_interval_ms: NotRequired[int]
+    queue_limit_samples: NotRequired[int]
+    message_index: NotRequired[bool]
+    low_space_mb: NotRequired[int]
+    retry_max_ms: NotRequired[int]
+
+
+class PubBrokerTopic(TypedDict):
+    """PubBrokerTopic."""
+
+    name: str
+    type: NotRequired[Literal["float32", "float64", "int", "bool"]]
+    buffer_size: NotRequired[int]
+
+
+class PubBrokerLog(TypedDict):
+    """PubBrokerLog."""
+
+    file: NotRequired[str]
+    max_bytes: NotRequired[int]
+    keep: NotRequired[int]
+
+
+__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "DeliveredValue", "SubBrokerStatus", "LinkState", "PredictedLink", "TcpSender", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog"]

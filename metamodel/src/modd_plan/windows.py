@@ -1,0 +1,59 @@
+"""Windows in and out of the SubBroker: the one place that turns a decoded
+link value into a window of :mod:`modd_plan.derive` (:func:`window_of`) and a
+window into the delivered value's ``(value, count)`` (:func:`split_window`,
+docs/subbroker.md, "Delivered values"). Beside :mod:`.derive`, whose window
+forms both follow.
+
+>>> split_window("AVERAGE", (2.5, 4)), split_window("MIN", None)
+((2.5, 4), (None, None))
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol
+
+Scalar = float | int | bool
+Value = Scalar | list[Scalar] | None
+
+
+class LinkValue(Protocol):
+    """One stream's value in a DATA frame (:class:`modd.link.frames.Value`)."""
+
+    present: bool
+    number: float
+    integer: int
+    count: int
+    samples: Any
+
+
+def window_of(value: LinkValue, aggregation: str, value_type: str) -> Any:
+    """A decoded DATA value as a window in the form of :mod:`modd_plan.derive`
+    (``None`` when marked absent)."""
+    floats = value_type in ("float32", "float64")
+    if not value.present:
+        return None
+    if aggregation == "AVERAGE":
+        return (value.number, value.count) if value.count else None
+    if aggregation == "COUNT":
+        return value.count
+    if aggregation == "ALL":
+        return [bool(x) for x in value.samples] if value_type == "bool" else list(value.samples)
+    if aggregation == "SUM":
+        return value.number if floats else value.integer
+    if floats:
+        return value.number
+    return bool(value.integer) if value_type == "bool" else value.integer
+
+
+def split_window(aggregation: str, window: Any) -> tuple[Value, int | None]:
+    """``(value, count)`` of a window, as the delivered value carries them:
+    ``count`` for the aggregations that have one (AVERAGE, COUNT, ALL)."""
+    if aggregation == "AVERAGE":
+        return (None, 0) if window is None else (float(window[0]), int(window[1]))
+    if aggregation == "COUNT":
+        count = int(window or 0)
+        return count, count
+    if aggregation == "ALL":
+        samples = list(window or [])
+        return samples, len(samples)
+    return window, None

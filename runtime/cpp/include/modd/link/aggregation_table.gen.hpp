@@ -1,0 +1,33 @@
+// Generated from the contracts by `python -m modd_contracts.typegen`. Do not edit.
+// The aggregation table (metamodel/modd.schema.json, Aggregation x-table).
+#pragma once
+
+#include <cstdint>
+
+namespace modd::link::table {
+
+struct AggregationRow {
+  const char* name;
+  uint8_t code;
+  bool numeric_only;
+  bool wire_count;
+  // Wire value type per topic type, indexed by ValueType
+  // (float32, float64, int, bool): 0 float32, 1 float64, 2 int, 3 bool.
+  uint8_t result[4];
+};
+
+inline constexpr AggregationRow kAggregations[] = {
+    {"MIN", 0, false, false, {0, 1, 2, 3}},
+    {"MAX", 1, false, false, {0, 1, 2, 3}},
+    {"AVERAGE", 2, true, true, {0, 1, 1, 0}},
+    {"FIRST", 3, false, false, {0, 1, 2, 3}},
+    {"LAST", 4, false, false, {0, 1, 2, 3}},
+    {"ALL", 5, false, false, {0, 1, 2, 3}},
+    {"COUNT", 6, false, false, {2, 2, 2, 2}},
+    {"SUM", 7, true, false, {0, 1, 2, 2}},
+};
+inline constexpr int kAggregationCount = 8;
+
+// Value types in the order of result[]: Float32, Float64, Int, Bool.
+
+}  // namespace modd::link::table
