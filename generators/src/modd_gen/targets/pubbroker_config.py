@@ -5,20 +5,31 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from modd_contracts.schema import load
+
 from ..artifact import Artifact
 from ..context import Context
 
+
+def _default(obj: str, key: str) -> Any:
+    """A default of the pubbroker.json contract (the PubBroker's own, config.hpp)."""
+    schema = load("pubbroker")
+    props = schema["properties"] if not obj else schema["$defs"][obj]["properties"]
+    return props[key]["default"]
+
+
 # Archive rotation and reporting defaults for a mission: hourly files of at most
 # 256 MiB, fsync at every chunk so that a power cut loses at most one chunk.
-ROTATE_BYTES = 256 * 1024 * 1024
-ROTATE_S = 3600
-STATUS_PERIOD_S = 30
-LOG_PERIOD_S = 10
+ROTATE_BYTES = _default("PubBrokerArchive", "rotate_bytes")
+ROTATE_S = _default("PubBrokerArchive", "rotate_s")
+STATUS_PERIOD_S = _default("", "status_period_s")
+LOG_PERIOD_S = _default("", "log_period_s")
+DEFAULT_BUFFER_SIZE = _default("", "default_buffer_size")
 # Ingress rules (docs/ingress.md): a sample's timestamp is judged against the drone's clock;
 # refused only beyond 10 s ahead or 1 h behind. The operator is warned under 256 MiB free.
-MAX_FUTURE_MS = 10_000
-MAX_PAST_MS = 3_600_000
-LOW_SPACE_MB = 256
+MAX_FUTURE_MS = _default("PubBrokerIngress", "max_future_ms")
+MAX_PAST_MS = _default("PubBrokerIngress", "max_past_ms")
+LOW_SPACE_MB = _default("PubBrokerArchive", "low_space_mb")
 
 
 def config(ctx: Context) -> dict[str, Any]:
@@ -36,9 +47,10 @@ def config(ctx: Context) -> dict[str, Any]:
         "archive": {"dir": broker["logPath"], "prefix": ctx.drone, "rotate_bytes": ROTATE_BYTES,
                     "rotate_s": ROTATE_S, "fsync": "chunk", "compression": "zstd",
                     "low_space_mb": LOW_SPACE_MB},
-        "topics": [{"name": t.name, "type": t.type, "buffer_size": sizes.get(t.name, 25)}
+        "topics": [{"name": t.name, "type": t.type,
+                    "buffer_size": sizes.get(t.name, DEFAULT_BUFFER_SIZE)}
                    for t in ctx.topics.values() if t.publisher is not None],
-        "default_buffer_size": 25,
+        "default_buffer_size": DEFAULT_BUFFER_SIZE,
         "status_period_s": STATUS_PERIOD_S,
         "log_period_s": LOG_PERIOD_S,
     }
