@@ -12,6 +12,7 @@ import os
 import re
 import signal
 import subprocess
+import sys
 import time
 import urllib.request
 from pathlib import Path
@@ -27,11 +28,11 @@ REPO = Path(__file__).resolve().parents[2]
 LIVE_TIMEOUT_S = 90.0
 
 
-def start(data: Path, port: int, zenoh_port: int,
-          run: int) -> tuple[subprocess.Popen[bytes], Path]:
+def start(data: Path, port: int, zenoh_port: int, run: int,
+          foxglove_port: int = 0) -> tuple[subprocess.Popen[bytes], Path]:
     log = data.parent / f"run-{run}.log"
     env = {**os.environ, "MODD_PORT": str(port), "MODD_ZENOH_PORT": str(zenoh_port),
-           "MODD_DATA": str(data)}
+           "MODD_DATA": str(data), "MODD_FOXGLOVE_PORT": str(foxglove_port)}
     with log.open("ab") as out:
         proc = subprocess.Popen(["bash", str(REPO / "scripts" / "run.sh")], cwd=REPO, env=env,
                                 stdout=out, stderr=subprocess.STDOUT, start_new_session=True)
@@ -96,13 +97,34 @@ def check_zenoh_is_closed(data: Path, zport: int, log: Path) -> None:
         viewer.close()
 
 
+def check_foxglove_live(fport: int, log: Path) -> None:
+    """A Foxglove client (@foxglove/ws-protocol, as Foxglove and Lichtblick
+    speak it) on `make run`'s live server gets values of every subscriber of
+    the demo model, its link status and its position (docs/ecosystem.md)."""
+    sys.path.insert(0, str(REPO / "tests" / "ecosystem"))
+    from ecosystem_support import node_json
+    from modd_model.io import load_model
+
+    assert f"Foxglove/Lichtblick live at ws://127.0.0.1:{fport}" in log.read_text()
+    model = load_model(REPO / "metamodel" / "examples" / "demo.modd")
+    # 6 s: every demo subscriber's period is at most 2 s
+    report = node_json("foxglove_client.cjs", f"ws://127.0.0.1:{fport}", "6", timeout=60)
+    assert report["protocol"] == "foxglove.sdk.v1" and not report["errors"], report["errors"]
+    got = {t.split("/")[2] for t, msgs in report["messages"].items()
+           if t.startswith("/usv/") and msgs}
+    expected = {s["name"] for s in model["subscribers"]} | {"link", "position"}
+    assert expected <= got, f"no Foxglove values for {sorted(expected - got)}"
+    lat = report["messages"]["/usv/track_lat"][-1]["msg"]
+    assert lat["aggregation"] == "LAST" and lat["value"] >= ORIGIN_LAT - 1e-6, lat
+
+
 def test_make_run_serves_the_demo_live_and_stops(
         tmp_path: Path, free_port: FreePort, wait_for: WaitFor) -> None:
     data = tmp_path / "data"
-    port, zport = free_port(), free_port()
+    port, zport, fport = free_port(), free_port(), free_port()
     base = f"http://127.0.0.1:{port}"
     t0 = time.monotonic()
-    proc, log = start(data, port, zport, 1)
+    proc, log = start(data, port, zport, 1, fport)
     try:
         wait_for(log, "modd: Ctrl-C to stop", 240)
         out = log.read_text()
@@ -145,6 +167,7 @@ def test_make_run_serves_the_demo_live_and_stops(
         assert track["usv"]["points"] > 0, scene
 
         check_zenoh_is_closed(data, zport, log)
+        check_foxglove_live(fport, log)
     finally:
         stop(proc, log)
     out = log.read_text()
