@@ -8,13 +8,15 @@
 # control (docs/security.md): the credentials (subbroker/backend/viewer .cred)
 # and the deploy key are made once in $DATA/credentials (0600) and kept.
 # Environment: MODEL, MODD_PORT, MODD_ZENOH_PORT, MODD_DATA, MODD_PROJECT,
-# MODD_FOXGLOVE_PORT (Foxglove/Lichtblick live server, 0: none; docs/ecosystem.md).
+# MODD_FOXGLOVE_PORT (Foxglove/Lichtblick live server, 0: none; docs/ecosystem.md),
+# MODD_FOXGLOVE_REPLAY_PORT (its replay of an archive chosen in the workbench, 0: none).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$PWD/.venv/bin:$PATH"
 MODEL="${MODEL:-metamodel/examples/demo.modd}"
 PORT="${MODD_PORT:-8080}"
 FOXGLOVE_PORT="${MODD_FOXGLOVE_PORT:-8765}"
+REPLAY_PORT="${MODD_FOXGLOVE_REPLAY_PORT:-8766}"
 DATA="${MODD_DATA:-$PWD/data}"
 mkdir -p "$DATA"
 
@@ -55,7 +57,7 @@ pids+=($!)
 modd-backend --host 127.0.0.1 --port "$PORT" --data "$DATA/backend" --zenoh-connect "$ZENOH" \
   --zenoh-credentials "$CREDS/backend.cred" --deploy-key "$CREDS/deploy.key" \
   --frontend "$PWD/frontend/dist" --archives "$DATA/run/archive" \
-  --foxglove-port "$FOXGLOVE_PORT" >>"$DATA/backend.log" 2>&1 &
+  --foxglove-port "$FOXGLOVE_PORT" --foxglove-replay-port "$REPLAY_PORT" >>"$DATA/backend.log" 2>&1 &
 pids+=($!)
 
 URL="http://127.0.0.1:$PORT"
@@ -84,6 +86,9 @@ fi
 echo "modd: project '$PROJECT' runs on the simulated drone '$DRONE': archive in $DATA/run/archive, logs in $DATA/run/logs and $DATA/backend.log"
 if [ "$FOXGLOVE_PORT" != 0 ]; then
   echo "modd: Foxglove/Lichtblick live at ws://127.0.0.1:$FOXGLOVE_PORT (Open connection > Foxglove WebSocket; docs/ecosystem.md)"
+fi
+if [ "$REPLAY_PORT" != 0 ]; then
+  echo "modd: Foxglove/Lichtblick replay of an archive (Archives panel > Replay in Foxglove) at ws://127.0.0.1:$REPLAY_PORT"
 fi
 echo "modd: zenoh $ZENOH requires credentials; a viewer connects with"
 echo "      modd.subscribe('$DRONE', SUBSCRIBER, connect='$ZENOH', credentials='$CREDS/viewer.cred')"

@@ -106,3 +106,65 @@ def test_a_pubbroker_archive_loads_for_replay(tmp_path: Path) -> None:
     broken.write_bytes(next(b.archive_dir.glob("*.mcap")).read_bytes()[:-200])
     with pytest.raises(ValueError, match="modd archive recover"):
         load_recording([broken])
+
+
+def test_the_workbench_replays_an_archive_in_foxglove(tmp_path: Path, minute: Path) -> None:
+    """Archives panel > Replay in Foxglove: the backend serves the chosen
+    range of a drone's archive — here a file still being written (no summary,
+    cut mid-record) — on its replay port; Foxglove seeks and plays it."""
+    import io
+
+    from fastapi.testclient import TestClient
+    from modd_backend.app import create_app
+    from modd_backend.settings import Settings
+
+    folder = tmp_path / "archives" / "usv"
+    folder.mkdir(parents=True)
+    data = minute.read_bytes()
+    (folder / "writing.mcap").write_bytes(data[: len(data) * 2 // 3])  # no summary, cut
+    port = free_port()
+    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
+                        initial_admin_password="pw-12345678", archive_dir=tmp_path / "archives",
+                        foxglove_replay_port=port)
+    with TestClient(create_app(settings, out=io.StringIO()),
+                    base_url="http://127.0.0.1") as c:
+        url = "/api/drones/usv/archives/writing.mcap/replay"
+        assert c.post(url, json={}).status_code == 401
+        token = c.post("/api/auth/login", json={"username": "admin",
+                                                "password": "pw-12345678"}).json()["token"]
+        auth = {"Authorization": f"Bearer {token}"}
+        assert c.post("/api/drones/usv/archives/../x.mcap/replay", json={},
+                      headers=auth).status_code == 404
+        r = c.post(url, json={"start_ns": T0 + 70_000_000_000}, headers=auth)
+        assert r.status_code == 422 and "no message in that range" in r.json()["detail"], r.text
+        assert str(folder) not in r.text
+        r = c.post(url, json={"start_ns": T0 + 10_000_000_000}, headers=auth)
+        assert r.status_code == 200, r.text
+        info = r.json()
+        assert info["url"] == f"ws://127.0.0.1:{port}" and info["topics"] == sorted(TOPICS)
+        assert info["start_ns"] == T0 + 10_000_000_000
+        assert c.get("/api/replay", headers=auth).json()["file"] == "writing.mcap"
+
+        seek = T0 + 20_000_000_000
+        report = node_json("foxglove_client.cjs", info["url"], "3", "--seek", str(seek),
+                           "--after", "1", timeout=30)
+        assert not report["errors"] and int(report["playbackStates"][0]["currentTime"]) == seek
+        for i, topic in enumerate(TOPICS):
+            msgs = report["messages"][topic]
+            ks = [(int(m["logTime"]) - T0) // 100_000_000 for m in msgs]
+            assert ks[0] == 200 and ks == list(range(200, 200 + len(ks))), ks[:5]
+            assert [m["msg"]["value"] for m in msgs] == [value(i, k) for k in ks]
+        # the cut: nothing past the file's last complete record is played
+        assert info["end_ns"] < T0 + 60_000_000_000
+
+        assert c.delete("/api/replay", headers=auth).status_code == 204
+        assert c.get("/api/replay", headers=auth).json() is None
+
+    off = Settings(data_dir=tmp_path / "data2", zenoh_enabled=False,
+                   initial_admin_password="pw-12345678", archive_dir=tmp_path / "archives")
+    with TestClient(create_app(off, out=io.StringIO()), base_url="http://127.0.0.1") as c:
+        token = c.post("/api/auth/login", json={"username": "admin",
+                                                "password": "pw-12345678"}).json()["token"]
+        r = c.post("/api/drones/usv/archives/writing.mcap/replay", json={},
+                   headers={"Authorization": f"Bearer {token}"})
+        assert r.status_code == 409 and "--foxglove-replay-port" in r.json()["detail"]

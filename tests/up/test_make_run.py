@@ -12,6 +12,7 @@ import os
 import re
 import signal
 import subprocess
+import sys
 import time
 import urllib.request
 from pathlib import Path
@@ -27,11 +28,12 @@ REPO = Path(__file__).resolve().parents[2]
 LIVE_TIMEOUT_S = 90.0
 
 
-def start(data: Path, port: int, zenoh_port: int,
-          run: int) -> tuple[subprocess.Popen[bytes], Path]:
+def start(data: Path, port: int, zenoh_port: int, run: int, foxglove_port: int = 0,
+          replay_port: int = 0) -> tuple[subprocess.Popen[bytes], Path]:
     log = data.parent / f"run-{run}.log"
     env = {**os.environ, "MODD_PORT": str(port), "MODD_ZENOH_PORT": str(zenoh_port),
-           "MODD_DATA": str(data)}
+           "MODD_DATA": str(data), "MODD_FOXGLOVE_PORT": str(foxglove_port),
+           "MODD_FOXGLOVE_REPLAY_PORT": str(replay_port)}
     with log.open("ab") as out:
         proc = subprocess.Popen(["bash", str(REPO / "scripts" / "run.sh")], cwd=REPO, env=env,
                                 stdout=out, stderr=subprocess.STDOUT, start_new_session=True)
@@ -96,13 +98,63 @@ def check_zenoh_is_closed(data: Path, zport: int, log: Path) -> None:
         viewer.close()
 
 
+def check_foxglove_live(fport: int, log: Path) -> None:
+    """A Foxglove client (@foxglove/ws-protocol, as Foxglove and Lichtblick
+    speak it) on `make run`'s live server gets values of every subscriber of
+    the demo model, its link status and its position (docs/ecosystem.md)."""
+    sys.path.insert(0, str(REPO / "tests" / "ecosystem"))
+    from ecosystem_support import node_json
+    from modd_model.io import load_model
+
+    assert f"Foxglove/Lichtblick live at ws://127.0.0.1:{fport}" in log.read_text()
+    model = load_model(REPO / "metamodel" / "examples" / "demo.modd")
+    # 6 s: every demo subscriber's period is at most 2 s
+    report = node_json("foxglove_client.cjs", f"ws://127.0.0.1:{fport}", "6", timeout=60)
+    assert report["protocol"] == "foxglove.sdk.v1" and not report["errors"], report["errors"]
+    got = {t.split("/")[2] for t, msgs in report["messages"].items()
+           if t.startswith("/usv/") and msgs}
+    expected = {s["name"] for s in model["subscribers"]} | {"link", "position"}
+    assert expected <= got, f"no Foxglove values for {sorted(expected - got)}"
+    lat = report["messages"]["/usv/track_lat"][-1]["msg"]
+    assert lat["aggregation"] == "LAST" and lat["value"] >= ORIGIN_LAT - 1e-6, lat
+
+
+def check_foxglove_replay(base: str, token: str, rport: int) -> None:
+    """Archives panel > Replay in Foxglove on the archive the drone is
+    writing: a Foxglove client seeks into it and plays from there, in order,
+    every value equal to the archive's (read by the Python MCAP reader)."""
+    from ecosystem_support import node_json
+
+    files = api(f"{base}/api/drones/usv/archives", token)
+    name = files[-1]["name"]
+    req = urllib.request.Request(f"{base}/api/drones/usv/archives/{name}/replay",
+                                 data=b"{}", method="POST",
+                                 headers={"Content-Type": "application/json",
+                                          "Authorization": f"Bearer {token}"})
+    with urllib.request.urlopen(req, timeout=30) as resp:
+        info = json.loads(resp.read())
+    assert info["url"] == f"ws://127.0.0.1:{rport}" and "usv.ctd.water_temperature" in info[
+        "topics"], info
+    seek = (info["start_ns"] + info["end_ns"]) // 2
+    report = node_json("foxglove_client.cjs", info["url"], "3", "--seek", str(seek),
+                       "--after", "1", timeout=30)
+    assert not report["errors"] and int(report["playbackStates"][0]["currentTime"]) == seek
+    temps = report["messages"]["usv.ctd.water_temperature"]
+    times = [int(m["logTime"]) for m in temps]
+    assert times and times[0] >= seek and times == sorted(times), times[:5]
+    series = api(f"{base}/api/drones/usv/archives/{name}/series?topic=usv.ctd.water_temperature"
+                 f"&start_ns={seek}&max_points=100000", token)
+    archived = {t: v for t, v in series["points"]}
+    assert all(archived[int(m["logTime"])] == m["msg"]["value"] for m in temps)
+
+
 def test_make_run_serves_the_demo_live_and_stops(
         tmp_path: Path, free_port: FreePort, wait_for: WaitFor) -> None:
     data = tmp_path / "data"
-    port, zport = free_port(), free_port()
+    port, zport, fport, rport = free_port(), free_port(), free_port(), free_port()
     base = f"http://127.0.0.1:{port}"
     t0 = time.monotonic()
-    proc, log = start(data, port, zport, 1)
+    proc, log = start(data, port, zport, 1, fport, rport)
     try:
         wait_for(log, "modd: Ctrl-C to stop", 240)
         out = log.read_text()
@@ -145,6 +197,8 @@ def test_make_run_serves_the_demo_live_and_stops(
         assert track["usv"]["points"] > 0, scene
 
         check_zenoh_is_closed(data, zport, log)
+        check_foxglove_live(fport, log)
+        check_foxglove_replay(base, token, rport)
     finally:
         stop(proc, log)
     out = log.read_text()

@@ -59,6 +59,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     downloads.router,
     streams.router,
     archives.router,
+    archives.replay_router,
     scene.router,
 )
 
@@ -143,6 +144,10 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
                 if state.foxglove is not None:
                     state.hub.listen_all(state.foxglove.on_value)
                     state.hub.listen_all_status(state.foxglove.on_status)
+        if settings.foxglove_replay_port:
+            from .replay import ReplaySlot
+
+            state.replay = ReplaySlot(settings.host, settings.foxglove_replay_port)
         pinger = asyncio.create_task(_ping_database(state))
         try:
             yield
@@ -156,6 +161,8 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
                 state.scene.server.stop()
             if state.foxglove is not None:
                 state.foxglove.stop()
+            if state.replay is not None:
+                state.replay.stop()
             if bridge is not None:
                 bridge.close()
             store.close()

@@ -46,6 +46,9 @@ def parse_args(argv: list[str] | None = None) -> Settings:
     p.add_argument("--foxglove-port", type=int, default=8765,
                    help="port of the Foxglove WebSocket server (live values for Foxglove and "
                    "Lichtblick, on --host, no authentication: docs/ecosystem.md); 0: none")
+    p.add_argument("--foxglove-replay-port", type=int, default=8766,
+                   help="port of the Foxglove replay of an archive chosen in the workbench "
+                   "(on --host, no authentication); 0: none")
     p.add_argument("--admin-password-file", type=Path, metavar="FILE",
                    help="file holding the first admin's password (first line)")
     p.add_argument("--admin-password",
@@ -82,6 +85,7 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         preload_milp=True,
         scene_port=None if a.scene_port < 0 else a.scene_port,
         foxglove_port=a.foxglove_port,
+        foxglove_replay_port=a.foxglove_replay_port,
         zenoh_credentials=Path(a.zenoh_credentials) if a.zenoh_credentials else None,
         deploy_key_file=Path(a.deploy_key) if a.deploy_key else None,
     )

@@ -30,6 +30,7 @@ from .zbridge import ZenohBridge
 if TYPE_CHECKING:
     from .guards import HeavyLimiter
     from .hub import SubscriptionHub
+    from .replay import ReplaySlot
 
 #: The workbench's session cookie (HttpOnly, SameSite=Strict) and the header
 #: a cookie session must add to every unsafe request (CSRF).
@@ -45,6 +46,7 @@ class AppState:
     bridge: ZenohBridge | None
     scene: SceneService | None = None
     foxglove: FoxgloveLive | None = None
+    replay: ReplaySlot | None = None
     hub: SubscriptionHub | None = None
     heavy: HeavyLimiter | None = None
     login_accounts: Throttle = field(default_factory=lambda: Throttle(10, 300))

@@ -46,33 +46,90 @@ class RecordedChannel:
     schema: bytes
 
 
-def load_recording(paths: Sequence[Path], max_messages: int = MAX_MESSAGES
+def load_recording(paths: Sequence[Path], max_messages: int = MAX_MESSAGES, *,
+                   partial: bool = False, start_ns: int | None = None,
+                   end_ns: int | None = None
                    ) -> tuple[dict[str, RecordedChannel], list[Recorded]]:
-    """Channels and messages (sorted by log time) of closed MCAP files."""
+    """Channels and messages (sorted by log time) of MCAP files, those whose
+    log time is in [start_ns, end_ns). A file without a summary (still being
+    written, or cut by a crash) is refused unless ``partial``: then its
+    complete records are played, up to the cut."""
     from mcap.reader import make_reader
 
     channels: dict[str, RecordedChannel] = {}
     messages: list[Recorded] = []
+
+    def keep(topic: str, schema: Any, encoding: str, log_time: int, data: bytes) -> None:
+        if (start_ns is not None and log_time < start_ns) or (
+                end_ns is not None and log_time >= end_ns):
+            return
+        if topic not in channels:
+            channels[topic] = RecordedChannel(
+                topic, encoding, schema.name if schema else "",
+                schema.encoding if schema else "", schema.data if schema else b"")
+        messages.append(Recorded(log_time, topic, data))
+        if len(messages) > max_messages:
+            raise ValueError(f"more than {max_messages} messages to play: choose a shorter "
+                             "time range")
+
     for path in paths:
+        first = len(messages)  # a fallback to the partial reader starts this file again
         with open(path, "rb") as f:
             try:
-                for schema, ch, m in make_reader(f).iter_messages():
-                    if ch.topic not in channels:
-                        channels[ch.topic] = RecordedChannel(
-                            ch.topic, ch.message_encoding, schema.name if schema else "",
-                            schema.encoding if schema else "", schema.data if schema else b"")
-                    messages.append(Recorded(m.log_time, ch.topic, m.data))
-                    if len(messages) > max_messages:
-                        raise ValueError(f"{path}: more than {max_messages} messages to play")
-            except ValueError:
-                raise
+                reader = make_reader(f)
+                if partial and reader.get_summary() is None:
+                    raise EOFError("no summary")
+                for schema, ch, m in reader.iter_messages(starting_at=start_ns,
+                                                          ending_before=end_ns):
+                    keep(ch.topic, schema, ch.message_encoding, m.log_time, m.data)
+            except ValueError as exc:
+                if "messages to play" in str(exc):
+                    raise ValueError(f"{path}: {exc}") from None
+                if not partial:
+                    raise ValueError(f"{path}: cannot be read ({exc}); if a crash cut it, run "
+                                     "`modd archive recover` first") from None
+                del messages[first:]
+                _load_partial(path, keep)
             except Exception as exc:  # the reader's errors have no common base
-                raise ValueError(f"{path}: cannot be read ({exc}); if a crash cut it, run "
-                                 "`modd archive recover` first") from None
+                if not partial:
+                    raise ValueError(f"{path}: cannot be read ({exc}); if a crash cut it, run "
+                                     "`modd archive recover` first") from None
+                del messages[first:]
+                _load_partial(path, keep)
     if not messages:
-        raise ValueError("nothing to play: the files hold no message")
+        raise ValueError("nothing to play: the files hold no message in that range")
     messages.sort(key=lambda r: r.log_time)
     return channels, messages
+
+
+def _load_partial(path: Path, keep: Any) -> None:
+    """The complete records of a file without a summary, in file order,
+    stopping quietly where it is cut (the file being written ends there)."""
+    import struct
+
+    from mcap.exceptions import McapError
+    from mcap.records import Channel, Message, Schema
+    from mcap.stream_reader import StreamReader
+
+    schemas: dict[int, Schema] = {}
+    channels: dict[int, Channel] = {}
+    with open(path, "rb") as f:
+        try:
+            for rec in StreamReader(f, skip_magic=False, emit_chunks=False).records:
+                if isinstance(rec, Schema):
+                    schemas[rec.id] = rec
+                elif isinstance(rec, Channel):
+                    channels[rec.id] = rec
+                elif isinstance(rec, Message) and rec.channel_id in channels:
+                    ch = channels[rec.channel_id]
+                    keep(ch.topic, schemas.get(ch.schema_id), ch.message_encoding,
+                         rec.log_time, rec.data)
+        except (McapError, EOFError, OSError, struct.error):
+            return
+        except ValueError as exc:
+            if "messages to play" in str(exc):
+                raise
+            return
 
 
 class Player:
@@ -123,12 +180,14 @@ class ReplayServer:
     """A ranged-playback Foxglove server over a recording, on ``host:port``."""
 
     def __init__(self, paths: Sequence[Path], host: str = "127.0.0.1", port: int = 8766,
-                 tick_s: float = 0.02) -> None:
+                 tick_s: float = 0.02, *,
+                 recording: tuple[dict[str, RecordedChannel], list[Recorded]] | None = None
+                 ) -> None:
         import foxglove
         from foxglove.websocket import Capability, ServerListener
 
         self._fg = foxglove
-        channels, messages = load_recording(paths)
+        channels, messages = recording if recording is not None else load_recording(paths)
         self.player = Player(messages)
         self.context = foxglove.Context()
         self.channels = {

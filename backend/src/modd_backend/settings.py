@@ -44,6 +44,8 @@ class Settings:
     scene_port: int | None = None
     #: Port of the Foxglove WebSocket server on ``host`` (docs/ecosystem.md); 0: none.
     foxglove_port: int = 0
+    #: Port of the Foxglove replay of an archive the user picks (docs/ecosystem.md); 0: none.
+    foxglove_replay_port: int = 0
     cors_origins: tuple[str, ...] = field(default_factory=tuple)
     #: The ``backend`` identity's zenoh user:password file (docs/security.md).
     zenoh_credentials: Path | None = None

@@ -9,7 +9,8 @@
 import type { ModdModel } from "../core/model.gen";
 import { Http, type HttpOptions } from "./http";
 import type {
-  ArchiveFile, ArchiveSeries, DeployedDiff, Deployment, DynamicReply, DynamicRequest,
+  ArchiveFile, ArchiveReplay, ArchiveSeries,
+  DeployedDiff, Deployment, DynamicReply, DynamicRequest,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, User, ValidateResult, Version,
 } from "./types";
 
@@ -91,6 +92,12 @@ export function createApi(opts: HttpOptions) {
       http.request<Blob>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}`, { as: "blob" }),
     archiveCsv: (drone: string, file: string, topic: string, startNs?: number, endNs?: number) =>
       http.request<Blob>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}/csv`, { query: { topic, start_ns: startNs, end_ns: endNs }, as: "blob" }),
+
+    /** Serves the range to Foxglove/Lichtblick (seek, play, pause) on the backend's replay port. */
+    replayArchive: (drone: string, file: string, startNs?: number, endNs?: number) =>
+      http.request<ArchiveReplay>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}/replay`, {
+        method: "POST", json: { start_ns: startNs ?? null, end_ns: endNs ?? null },
+      }),
 
     // --- 3D scene (viser), served by the backend
     scene: () => http.request<{ url: string }>("/api/scene"),

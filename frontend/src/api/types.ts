@@ -110,6 +110,18 @@ export interface ArchiveFile {
   topics: Array<{ topic: string; messages: number }>;
 }
 
+/** A replay served to Foxglove/Lichtblick (backend routers/archives.py). */
+export interface ArchiveReplay {
+  url: string;
+  drone: string;
+  file: string;
+  start_ns: number;
+  end_ns: number;
+  messages: number;
+  topics: string[];
+  started_by: string;
+}
+
 /** A topic over a time range; `points` are [log time ns, value], min/max-reduced to at most max_points. */
 export interface ArchiveSeries {
   topic: string;

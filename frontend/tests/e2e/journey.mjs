@@ -289,6 +289,9 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
         await files.locator("button.link").first().click();
         await page.getByRole("form", { name: "Plot an archived topic" }).getByRole("button", { name: "Plot" }).click();
         await expectText(page.locator(".archives-panel figcaption"), /usv\.accelerometer\.\w+: \d+ samples/, 15000);
+        // The same file served to Foxglove/Lichtblick (seek, play, pause) on the replay port.
+        await page.getByRole("button", { name: "Replay in Foxglove" }).click();
+        await expectText(page.getByRole("status", { name: "Foxglove replay" }), /\d+ messages.*ws:\/\/127\.0\.0\.1:\d+/, 15000);
         await expand(true);
       }
       await page.waitForTimeout(500);

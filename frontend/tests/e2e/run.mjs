@@ -54,6 +54,7 @@ for (const sig of ["SIGINT", "SIGTERM"]) process.on(sig, () => { void cleanup().
 try {
   execFileSync("npx", ["vite", "build", "--logLevel", "error"], { cwd: frontend, stdio: "inherit" });
   const [port, zport, pubPort, subPort] = [await freePort(), await freePort(), await freePort(), await freePort()];
+  const [foxglovePort, replayPort] = [await freePort(), await freePort()];
   const baseUrl = `http://127.0.0.1:${port}`;
   const zenoh = `tcp/127.0.0.1:${zport}`;
   const creds = join(tmp, "credentials");
@@ -78,6 +79,7 @@ try {
   const backend = start("backend", [
     backendBin, "--host", "127.0.0.1", "--port", String(port), "--data", join(tmp, "data"),
     "--frontend", join(frontend, "dist"),
+    "--foxglove-port", String(foxglovePort), "--foxglove-replay-port", String(replayPort),
     "--archives", drone ? join(tmp, "drone", "archive") : join(tmp, "archives"),
     ...(drone ? ["--zenoh-connect", zenoh, "--zenoh-credentials", join(creds, "backend.cred"),
       "--deploy-key", join(creds, "deploy.key")] : ["--no-zenoh"]),

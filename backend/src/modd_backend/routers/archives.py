@@ -8,7 +8,7 @@ import csv
 import io
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Path, Query
+from fastapi import APIRouter, HTTPException, Path, Query
 from fastapi.responses import FileResponse, Response
 from pydantic import BaseModel
 
@@ -41,6 +41,27 @@ class ArchiveOut(BaseModel):
     start_ns: int | None
     end_ns: int | None
     topics: list[TopicCount]
+
+
+class ReplayIn(BaseModel):
+    """The range to play (log time, ns); the whole file when left out."""
+
+    start_ns: int | None = None
+    end_ns: int | None = None
+
+
+class ReplayOut(BaseModel):
+    """Where Foxglove or Lichtblick connects (Open connection > Foxglove
+    WebSocket) to seek, play and pause the range."""
+
+    url: str
+    drone: str
+    file: str
+    start_ns: int
+    end_ns: int
+    messages: int
+    topics: list[str]
+    started_by: str
 
 
 class SeriesOut(BaseModel):
@@ -90,8 +111,46 @@ def export_csv(
                     headers={"Content-Disposition": content_disposition(stem)})
 
 
+@router.post("/{name}/replay", responses={
+    **NOT_FOUND, **BUSY, 409: {"description": "replay is off (--foxglove-replay-port 0)"},
+    422: {"description": "nothing in the range, or more than a replay holds"}},
+    dependencies=[Heavy])
+def start_replay(drone: Drone, name: Name, body: ReplayIn, state: StateDep,
+                 user: UserDep) -> ReplayOut:
+    """Serves the range to Foxglove/Lichtblick with seek, play and pause
+    (replacing the replay running now). A file still being written plays up
+    to its last complete record."""
+    if state.replay is None:
+        raise HTTPException(409, "replay is off on this backend (--foxglove-replay-port 0)")
+    path = archive_path(state.settings.effective_archive_dir, drone, name)
+    try:
+        info = state.replay.start(drone, path, body.start_ns, body.end_ns, user.username)
+    except ValueError as exc:
+        raise HTTPException(422, f"{name}: {exc}".replace(str(path), name)) from None
+    except OSError as exc:
+        raise HTTPException(409, f"the replay server cannot start: {exc.strerror or exc}"
+                            ) from None
+    return ReplayOut.model_validate(info.__dict__)
+
+
 @router.get("/{name}", response_class=FileResponse,
             responses={**NOT_FOUND, 200: {"content": {"application/octet-stream": {}}}})
 def download(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> FileResponse:
     path = archive_path(state.settings.effective_archive_dir, drone, name)
     return FileResponse(path, media_type="application/octet-stream", filename=path.name)
+
+
+replay_router = APIRouter(prefix="/api/replay", tags=["archives"])
+
+
+@replay_router.get("")
+def current_replay(state: StateDep, _user: UserDep) -> ReplayOut | None:
+    """The replay being served now, or null."""
+    info = state.replay.info if state.replay is not None else None
+    return None if info is None else ReplayOut.model_validate(info.__dict__)
+
+
+@replay_router.delete("", status_code=204)
+def stop_replay(state: StateDep, _user: UserDep) -> None:
+    if state.replay is not None:
+        state.replay.stop()

@@ -10,7 +10,7 @@ import { useModel } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
 import { usePanelData, LoadState } from "../usePanelData";
 import { saveBlob } from "../saveBlob";
-import type { ArchiveFile, ArchiveSeries } from "../../api/types";
+import type { ArchiveFile, ArchiveReplay, ArchiveSeries } from "../../api/types";
 
 function SeriesChart({ series }: { series: ArchiveSeries }) {
   const host = useRef<HTMLDivElement>(null);
@@ -56,6 +56,17 @@ export default function ArchivesPanel() {
       setSeries({ error: (err as Error).message });
     }
   };
+  const [replay, setReplay] = useState<ArchiveReplay | null>(null);
+  const startReplay = async () => {
+    if (!file) return;
+    setSeries({ busy: true });
+    try {
+      setReplay(await api.replayArchive(drone, file.name, bound(range.from), bound(range.to)));
+      setSeries({});
+    } catch (err) {
+      setSeries({ error: (err as Error).message });
+    }
+  };
   const download = async (blob: Promise<Blob>, name: string) => {
     try { saveBlob(await blob, name); } catch (err) { setSeries({ error: (err as Error).message }); }
   };
@@ -91,9 +102,16 @@ export default function ArchivesPanel() {
               <input aria-label="To (s after the start)" placeholder="to s" value={range.to} onChange={(e) => setRange({ ...range, to: e.target.value })} size={6} />
               <button type="submit" disabled={!file}>Plot</button>
               <button type="button" disabled={!file} onClick={() => file && void download(api.archiveCsv(drone, file.name, chosenTopic, bound(range.from), bound(range.to)), `${file.name}-${chosenTopic}.csv`)}>CSV</button>
+              <button type="button" disabled={!file} onClick={() => void startReplay()} title="Serve this range to Foxglove or Lichtblick: seek, play, pause">Replay in Foxglove</button>
               {series.busy && <span role="status">Reading…</span>}
               {series.error && <span className="error" role="alert">{series.error}</span>}
             </form>
+            {replay && (
+              <p role="status" aria-label="Foxglove replay">
+                Replay of {replay.file} ({replay.messages} messages, {replay.topics.length} topics): in Foxglove or Lichtblick,
+                Open connection → Foxglove WebSocket → <code>{replay.url}</code>
+              </p>
+            )}
             {!file && <p className="muted">Pick a file to plot one of its topics.</p>}
             {series.data && <SeriesChart series={series.data} />}
           </div>

@@ -1,0 +1,62 @@
+"""The workbench's replay slot: one ranged-playback Foxglove server
+(modd_backend.foxglove_replay) at a time, on the backend's host and
+``--foxglove-replay-port``, over an archive file the user picked in the
+Archives panel — a closed file, or the one the drone is still writing (its
+complete part). Starting another replay replaces the current one."""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+
+from .foxglove_replay import ReplayServer, load_recording
+
+#: Messages one replay holds in memory at most (≈ 200 B each).
+MAX_REPLAY_MESSAGES = 1_000_000
+
+
+@dataclass(frozen=True)
+class ReplayInfo:
+    url: str
+    drone: str
+    file: str
+    start_ns: int
+    end_ns: int
+    messages: int
+    topics: list[str]
+    started_by: str
+
+
+class ReplaySlot:
+    def __init__(self, host: str, port: int,
+                 max_messages: int = MAX_REPLAY_MESSAGES) -> None:
+        self.host, self.port, self.max_messages = host, port, max_messages
+        self._lock = threading.Lock()
+        self._server: ReplayServer | None = None
+        self.info: ReplayInfo | None = None
+
+    def start(self, drone: str, path: Path, start_ns: int | None, end_ns: int | None,
+              user: str) -> ReplayInfo:
+        """Loads the range (ValueError: nothing in it, or too much), then
+        swaps the server; the old one stops first so the port is free."""
+        recording = load_recording([path], self.max_messages, partial=True,
+                                   start_ns=start_ns, end_ns=end_ns)
+        with self._lock:
+            self._stop_locked()
+            server = ReplayServer([path], self.host, self.port, recording=recording)
+            self._server = server
+            p = server.player
+            self.info = ReplayInfo(server.url, drone, path.name, p.start, p.end,
+                                   len(p.messages), sorted(server.channels), user)
+            return self.info
+
+    def stop(self) -> None:
+        with self._lock:
+            self._stop_locked()
+
+    def _stop_locked(self) -> None:
+        if self._server is not None:
+            self._server.stop()
+            self._server = None
+            self.info = None
