@@ -60,11 +60,13 @@ ROUTERS: tuple[APIRouter, ...] = (
     streams.router,
     archives.router,
     scene.router,
+    scene.proxy,
 )
 
 
 def start_scene(settings: Settings, store: Store) -> SceneService:
-    """The viser server, fed with the model last deployed to each drone."""
+    """The viser server (on loopback: browsers reach it only through the
+    backend's ``/scene/`` proxy), fed with the model last deployed to each drone."""
 
     def deployed_model(drone: str) -> dict[str, Any] | None:
         with store.session() as db:
@@ -74,7 +76,7 @@ def start_scene(settings: Settings, store: Store) -> SceneService:
             return model_of(get_version(db, running.project_id, running.revision))
 
     port = settings.scene_port or 0
-    return SceneService(SceneServer(settings.host, port), deployed_model)
+    return SceneService(SceneServer("127.0.0.1", port), deployed_model)
 
 
 def start_foxglove(settings: Settings, out: TextIO) -> FoxgloveLive | None:
