@@ -101,6 +101,13 @@ class SubBroker:
             return model
         return self.config.model
 
+    def nonce_file(self) -> Path:
+        """The deploy nonces accepted within the signing window (replay
+        guard across restarts): beside the deployed model, else beside
+        the deploy key."""
+        d = self.config.state_dir
+        return (d if d is not None else self.config.credentials_dir) / f"deploy-nonces-{self.drone}"
+
     def _state_file(self) -> Path | None:
         d = self.config.state_dir
         return d / "deployed.json" if d is not None else None
@@ -108,6 +115,9 @@ class SubBroker:
     def start(self) -> None:
         self._store.ensure()
         self._deploy_key = self._store.deploy_key()
+        nonces = self.nonce_file()
+        nonces.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+        self._nonces = NonceGuard(path=nonces)
         if self._session is None:
             settings = secured(self.config.zenoh, self._store, "subbroker", self.drone)
             self._session = open_session(settings)
