@@ -27,7 +27,8 @@ from modd.link.receiver import Window
 
 from ..zenoh_auth import CredentialStore
 from ..zenoh_session import open_session, secured
-from .config import SubBrokerConfig, resolve_key
+from . import delivery_auth
+from .config import ConfigError, SubBrokerConfig, resolve_key
 from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoints
 from .deploy import DeployRequest, parse_request
 from .dynamic import DynamicSubscriptions
@@ -125,7 +126,13 @@ class SubBroker:
         if self.config.delivery.zenoh:
             self._zenoh = ZenohDelivery(session, self.drone)
         if self.config.delivery.tcp:
-            self._tcp = TcpDelivery({}, self.config.delivery.tcp_queue)
+            key = self.config.delivery.key
+            if key:  # a configured key must be readable now, not at the first subscriber
+                try:
+                    delivery_auth.load_key(key)
+                except delivery_auth.DeliveryKeyError as exc:
+                    raise ConfigError(str(exc)) from exc
+            self._tcp = TcpDelivery({}, self.config.delivery.tcp_queue, key)
         self._queryables = [
             session.declare_queryable(subscribe_key(self.drone), self._on_query(self._subscribe)),
             session.declare_queryable(deploy_key(self.drone), self._on_query(self._deploy)),
