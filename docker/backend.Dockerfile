@@ -43,5 +43,5 @@ COPY backend backend
 RUN uv sync --frozen --no-dev --package modd-backend
 COPY --from=frontend /src/frontend/dist frontend/dist
 
-EXPOSE 8080 8081
+EXPOSE 8080
 CMD ["modd-backend", "--host", "0.0.0.0", "--port", "8080", "--data", "/var/lib/modd/backend"]

@@ -20,6 +20,7 @@ export default defineConfig({
     fs: { allow: [".", metamodelDir] },
     proxy: {
       "/api": { target: backend, changeOrigin: true, ws: true },
+      "/scene": { target: backend, changeOrigin: true, ws: true },
     },
   },
   build: { outDir: "dist", chunkSizeWarningLimit: 2000 },

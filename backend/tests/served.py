@@ -14,6 +14,7 @@ import uvicorn
 from modd.ports import free_port
 from modd_backend import Settings, create_app
 from modd_backend.cli import log_config
+from modd_backend.wspacing import PacedWebSocketProtocol
 
 
 @contextmanager
@@ -22,7 +23,7 @@ def serve(settings: Settings, **config: Any) -> Iterator[str]:
     port = free_port()
     server = uvicorn.Server(uvicorn.Config(
         create_app(settings, out=io.StringIO()), host="127.0.0.1", port=port,
-        log_config=log_config(), **config))
+        log_config=log_config(), **{"ws": PacedWebSocketProtocol, **config}))
     thread = threading.Thread(target=server.run, daemon=True)
     thread.start()
     deadline = time.monotonic() + 60

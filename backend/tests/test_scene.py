@@ -49,13 +49,3 @@ def test_attitude_quaternion() -> None:
     w, x, y, z = t.quaternion()
     assert [w, z] == pytest.approx([math.sqrt(0.5), math.sqrt(0.5)])
     assert [x, y] == pytest.approx([0.0, 0.0])
-
-
-def test_scene_url_is_reachable_from_the_browser() -> None:
-    from modd_backend.scene import scene_url
-
-    assert scene_url("127.0.0.1", 8081, "localhost") == "http://127.0.0.1:8081"
-    # Listening everywhere (a container): the host the browser used, not 0.0.0.0.
-    assert scene_url("0.0.0.0", 8081, "base.local") == "http://base.local:8081"
-    assert scene_url("0.0.0.0", 8081, None) == "http://0.0.0.0:8081"
-    assert scene_url("::", 8081, "::1") == "http://[::1]:8081"

@@ -5,7 +5,8 @@ SubBroker CLI on loopback, with the credentials the SubBroker uses.
 - anonymous and wrong-password clients are refused;
 - a viewer cannot deploy, subscribe dynamically, or put values or status, and
   its forged value never reaches a subscriber;
-- a deploy not signed by the workbench, or replayed, is refused;
+- a deploy not signed by the workbench, or replayed (also after a restart
+  of the SubBroker), is refused;
 - dynamic subscriptions: quota per owner, owner-scoped list and cancel,
   bounded names."""
 
@@ -46,14 +47,16 @@ def station(tmp_path_factory: pytest.TempPathFactory) -> Any:
     link, ingress, zport = free_port(), free_port(), free_port()
     model = model_copy(tmp, "scenario1.modd")
     pb = start_pubbroker(tmp, model, link, ingress)
-    sb = start_subbroker(tmp, subbroker_config(tmp, model, link, zport))
+    config = subbroker_config(tmp, model, link, zport)
+    sb = start_subbroker(tmp, config)
     load = start_load(tmp, model, ingress, 60)
+    info = {"port": zport, "model": model, "sb": sb, "config": config}
     try:
         wait_port(zport)
         assert sb.wait_log("config 1 running", 15), sb.log()
-        yield {"port": zport, "model": model, "sb": sb}
+        yield info
     finally:
-        with processes(pb, sb, load):
+        with processes(pb, info["sb"], load):
             pass
 
 
@@ -146,3 +149,29 @@ def test_dynamic_quota_owner_scope_and_names(station: dict[str, Any], zenoh_clie
     for name in names[1:]:
         request(backend, "modd/usv/subscribe",
                 {"action": "cancel", "subscriber": name, "owner": "alice"})
+
+
+def test_replayed_deploy_refused_after_a_subbroker_restart(
+        station: dict[str, Any], zenoh_client: Any, tmp_path: Path) -> None:
+    backend = zenoh_client(station["port"], "backend")
+    assert wait_connected(backend)
+    body = {"text": Path(station["model"]).read_text(), "format": "json", "timeout_s": 5}
+    good = signed(body)
+    applied = request(backend, "modd/usv/deploy", good)  # the signature and nonce passed
+    assert applied["status"] != "UNAUTHORISED", applied
+    old = station["sb"]
+    old.stop()
+    station["sb"] = sb = start_subbroker(tmp_path, station["config"], "sb-restarted")
+    wait_port(station["port"])
+    assert sb.wait_log("running", 15), sb.log()
+    deadline = time.monotonic() + 10
+    while True:  # the client reconnects to the restarted router by itself
+        try:
+            replay = request(backend, "modd/usv/deploy", good, timeout_s=2)
+            break
+        except NoReply:
+            assert time.monotonic() < deadline, sb.log()
+            time.sleep(0.2)
+    assert replay["status"] == "UNAUTHORISED" and "replayed" in replay["reason"], replay
+    fresh = request(backend, "modd/usv/deploy", signed(body))  # a new signature still works
+    assert fresh["status"] != "UNAUTHORISED", fresh

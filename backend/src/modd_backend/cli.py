@@ -131,6 +131,7 @@ def main(argv: list[str] | None = None) -> int:
     import uvicorn
 
     from .app import create_app
+    from .wspacing import PacedWebSocketProtocol
 
     settings = parse_args(argv)
     if not _is_loopback(settings.host):
@@ -140,7 +141,7 @@ def main(argv: list[str] | None = None) -> int:
             print("modd-backend: warning: the Foxglove server has no authentication; "
                   "see docs/ecosystem.md", file=sys.stderr)
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="info",
-                log_config=log_config(), ws_max_size=1024 * 1024)
+                log_config=log_config(), ws_max_size=1024 * 1024, ws=PacedWebSocketProtocol)
     return 0
 
 

@@ -62,32 +62,32 @@ def loads_bounded(text: str | bytes, max_depth: int) -> Any:
     return json.loads(raw)
 
 
-def csp(path: str, host: str, frames: str = "") -> str:
+def csp(path: str, host: str) -> str:
     """The Content-Security-Policy of an answer: no inline or foreign
-    scripts; only the 3D scene (same origin) may be framed, by the workbench."""
+    scripts; only the 3D scene (same origin) may be framed, by the workbench.
+    (The scene's page sets its own, stricter policy: sceneproxy.py.)"""
     scene = path.startswith(SCENE_PREFIX)
     if path in ("/docs", "/redoc"):  # FastAPI's API pages: inline bootstrap, CDN assets
         cdn = "https://cdn.jsdelivr.net"
         return (f"default-src 'self'; script-src 'self' 'unsafe-inline' {cdn}; "
                 f"style-src 'self' 'unsafe-inline' {cdn}; img-src 'self' data: "
                 "https://fastapi.tiangolo.com; frame-ancestors 'none'; object-src 'none'")
-    scripts = "'self' 'wasm-unsafe-eval'" if scene else "'self'"
     ancestors = "'self'" if scene else "'none'"
     return (
         "default-src 'self'; "
-        f"script-src {scripts}; "
+        "script-src 'self'; "
         "style-src 'self' 'unsafe-inline'; "
         "img-src 'self' data: blob:; font-src 'self' data:; "
         f"connect-src 'self' ws://{host} wss://{host}; "
-        f"worker-src 'self' blob:; frame-src 'self'{frames}; object-src 'none'; base-uri 'none'; "
+        "worker-src 'self' blob:; frame-src 'self'; object-src 'none'; base-uri 'none'; "
         f"form-action 'self'; frame-ancestors {ancestors}"
     )
 
 
-def security_headers(path: str, host: str, frames: str = "") -> list[tuple[bytes, bytes]]:
+def security_headers(path: str, host: str) -> list[tuple[bytes, bytes]]:
     framing = b"SAMEORIGIN" if path.startswith(SCENE_PREFIX) else b"DENY"
     return [
-        (b"content-security-policy", csp(path, host, frames).encode()),
+        (b"content-security-policy", csp(path, host).encode()),
         (b"x-content-type-options", b"nosniff"),
         (b"referrer-policy", b"no-referrer"),
         (b"x-frame-options", framing),
@@ -125,7 +125,7 @@ class Guard:
             await self.app(scope, receive, send)
             return
         path: str = scope["path"]
-        extra = security_headers(path, host, _scene_frame(scope, host))
+        extra = security_headers(path, host)
 
         async def send_with_headers(message: Message) -> None:
             if message["type"] == "http.response.start":
@@ -165,16 +165,6 @@ class Guard:
             return await receive()
 
         await self.app(scope, replay, send_with_headers)
-
-
-def _scene_frame(scope: Scope, host: str) -> str:
-    """The viser scene's own origin, which the workbench frames (" origin" or "")."""
-    state = getattr(getattr(scope.get("app"), "state", None), "modd", None)
-    scene = getattr(state, "scene", None)
-    if scene is None:
-        return ""
-    name = host[1:].split("]", 1)[0] if host.startswith("[") else host.rsplit(":", 1)[0]
-    return " " + str(scene.server.url_for(name)).rstrip("/")
 
 
 async def _read_body(receive: Receive, limit: int) -> bytes:

@@ -4,7 +4,8 @@ chosen subscribed value, with its attitude (roll/pitch/yaw) as a frame.
 
 :class:`Track` is the pure part (what to draw from delivered values);
 :class:`SceneServer` draws it with viser, which serves its own web client on
-its own port (the frontend embeds it in an iframe).
+its own loopback port; browsers reach it only through the backend's
+``/scene/`` proxy, behind the session (sceneproxy.py).
 
 >>> roles = position_roles({"subscribers": [
 ...     {"name": "la", "topic": "d.gps.latitude"}, {"name": "lo", "topic": "d.gps.lon"}]})
@@ -113,38 +114,22 @@ class Track:
                 cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy)
 
 
-def scene_url(bound_host: str, port: int, request_host: str | None) -> str:
-    """The address a browser reaches the scene at: the host the server is bound
-    to or, when it listens on every interface (0.0.0.0, ::, e.g. in a
-    container), the host the browser already used for the workbench.
-
-    >>> scene_url("127.0.0.1", 8081, "localhost")
-    'http://127.0.0.1:8081'
-    >>> scene_url("0.0.0.0", 8081, "base.local")
-    'http://base.local:8081'
-    >>> scene_url("::", 8081, "::1")
-    'http://[::1]:8081'
-    """
-    host = bound_host
-    if bound_host in ("0.0.0.0", "::", "") and request_host:
-        host = request_host
-    return f"http://[{host}]:{port}" if ":" in host else f"http://{host}:{port}"
-
-
 class SceneServer:
-    """A viser server on loopback drawing the tracks; thread-safe ``update``."""
+    """A viser server drawing the tracks; thread-safe ``draw``. It listens
+    on a loopback address only (``host`` anything else is refused): the
+    backend's proxy is the way in."""
 
     def __init__(self, host: str, port: int) -> None:
+        import ipaddress
+
         import viser  # imported here: only a backend with a scene pays for it
 
+        if not ipaddress.ip_address(host).is_loopback:
+            raise ValueError(f"the 3D scene listens on loopback only, not {host!r}")
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.host = host
         self.port = self.server.get_port()
-        self.url = scene_url(host, self.port, None)
         self._lock = threading.Lock()
-
-    def url_for(self, request_host: str | None) -> str:
-        return scene_url(self.host, self.port, request_host)
 
     def draw(self, drone: str, track: Track) -> None:
         import numpy as np

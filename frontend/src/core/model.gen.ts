@@ -12,9 +12,9 @@ export interface ModdModel {
   subBroker: SubBroker;
   /** Link settings and planner constants; the paper's defaults when absent. */
   link?: Link;
-  /** Processes on board that publish measured variables to the PubBroker. */
+  /** Processes on board that publish measured variables to the PubBroker (at most 1,000). */
   publishers: Publisher[];
-  /** Base-station consumers, each asking for one topic every period, aggregated. */
+  /** Base-station consumers, each asking for one topic every period, aggregated (at most 50,000). */
   subscribers: Subscriber[];
   /** Diagram layout of the workbench (not part of the .modd text). */
   layout?: Layout;
@@ -70,7 +70,7 @@ export interface Drone {
   name: Name;
   /** Free text shown in the workbench. */
   description?: Text;
-  /** Sensors on board. */
+  /** Sensors on board (at most 1,000). */
   sensors: Sensor[];
 }
 
@@ -82,7 +82,7 @@ export interface Sensor {
   description?: Text;
   /** How the sensor is read: generic (a driver publishes through a publisher client) or mavlink (the MAVLink bridge publishes fields of an autopilot's messages, mapped per variable). generic when absent. */
   kind?: "generic" | "mavlink";
-  /** What the sensor measures. */
+  /** What the sensor measures (1 to 256 variables). */
   variables: MeasuredVariable[];
 }
 
@@ -180,7 +180,7 @@ export interface Publisher {
   endpoint?: Endpoint;
   /** Publication period in seconds. */
   periodS: Period;
-  /** Topics it publishes. */
+  /** Topics it publishes (1 to 256). */
   topics: TopicName[];
 }
 
@@ -200,7 +200,7 @@ export interface Subscriber {
 
 /** Diagram layout, kept apart from the semantic model: node positions by node id. */
 export interface Layout {
-  /** Position of each diagram node, by node id. */
+  /** Position of each diagram node, by node id (at most 60,000 nodes). */
   nodes?: Record<string, Position>;
 }
 

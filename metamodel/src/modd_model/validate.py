@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from modd_contracts.aggregations import AGGREGATIONS
 
+from .bounds import size_errors
 from .diagnostics import Diagnostic, pointer_join
 from .numbers import to_fraction, to_micros
 from .query import topic_name
@@ -42,7 +43,12 @@ def validate(doc: Any) -> list[Diagnostic]:
 
     The semantic checks also run on a document the schema rejects, so that a
     user sees all problems at once; a check that cannot make sense of a
-    malformed part is skipped (the schema error already names that part)."""
+    malformed part is skipped (the schema error already names that part).
+    A document past the schema's size bounds is reported for those alone
+    (bounds.py): the work stays bounded whatever its size."""
+    oversized = size_errors(doc)
+    if oversized:
+        return oversized
     out = sorted((_schema_diagnostic(e) for e in _schema_validator().iter_errors(doc)),
                  key=lambda d: d.pointer)
     if not isinstance(doc, dict):

@@ -27,7 +27,8 @@ from modd.link.receiver import Window
 
 from ..zenoh_auth import CredentialStore
 from ..zenoh_session import open_session, secured
-from .config import SubBrokerConfig, resolve_key
+from . import delivery_auth
+from .config import ConfigError, SubBrokerConfig, resolve_key
 from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoints
 from .deploy import DeployRequest, parse_request
 from .dynamic import DynamicSubscriptions
@@ -101,6 +102,13 @@ class SubBroker:
             return model
         return self.config.model
 
+    def nonce_file(self) -> Path:
+        """The deploy nonces accepted within the signing window (replay
+        guard across restarts): beside the deployed model, else beside
+        the deploy key."""
+        d = self.config.state_dir
+        return (d if d is not None else self.config.credentials_dir) / f"deploy-nonces-{self.drone}"
+
     def _state_file(self) -> Path | None:
         d = self.config.state_dir
         return d / "deployed.json" if d is not None else None
@@ -108,6 +116,9 @@ class SubBroker:
     def start(self) -> None:
         self._store.ensure()
         self._deploy_key = self._store.deploy_key()
+        nonces = self.nonce_file()
+        nonces.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+        self._nonces = NonceGuard(path=nonces)
         if self._session is None:
             settings = secured(self.config.zenoh, self._store, "subbroker", self.drone)
             self._session = open_session(settings)
@@ -115,7 +126,13 @@ class SubBroker:
         if self.config.delivery.zenoh:
             self._zenoh = ZenohDelivery(session, self.drone)
         if self.config.delivery.tcp:
-            self._tcp = TcpDelivery({}, self.config.delivery.tcp_queue)
+            key = self.config.delivery.key
+            if key:  # a configured key must be readable now, not at the first subscriber
+                try:
+                    delivery_auth.load_key(key)
+                except delivery_auth.DeliveryKeyError as exc:
+                    raise ConfigError(str(exc)) from exc
+            self._tcp = TcpDelivery({}, self.config.delivery.tcp_queue, key)
         self._queryables = [
             session.declare_queryable(subscribe_key(self.drone), self._on_query(self._subscribe)),
             session.declare_queryable(deploy_key(self.drone), self._on_query(self._deploy)),

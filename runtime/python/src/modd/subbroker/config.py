@@ -20,6 +20,7 @@ from modd_model import ModelError, load_model
 
 from ..zenoh_auth import read_secret
 from ..zenoh_session import DEFAULT_ENDPOINT, ZenohSettings
+from .delivery_auth import DeliveryKeyError, check_ref
 
 #: Where the pre-shared key is read from when neither the config nor the model says.
 DEFAULT_KEY_REF = "env:MODD_LINK_KEY"
@@ -53,6 +54,9 @@ class DeliveryOptions:
     tcp: bool = True  # to each subscriber's endpoint, when the model gives one
     tcp_queue: int = 1000  # values kept per TCP subscriber while it is away
     status_period_s: float = 1.0  # modd/<drone>/status
+    #: The TCP delivery key: env:NAME or file:PATH (relative to the config
+    #: file); empty: $MODD_DELIVERY_KEY, else ~/.config/modd/delivery.key.
+    key: str = ""
 
 
 @dataclass(frozen=True)
@@ -202,12 +206,20 @@ def load_config(path: str | Path) -> SubBrokerConfig:
         zenoh = replace(zenoh, credentials_dir=str(path.parent / zenoh.credentials_dir))
     state = data.get("state_dir")
     src = str(path)
+    delivery = _options(DeliveryOptions, _table(data, "delivery", src), f"{path}: delivery")
+    if delivery.key:
+        try:
+            check_ref(delivery.key, f"{path}: delivery.key")
+        except DeliveryKeyError as exc:
+            raise ConfigError(str(exc)) from exc
+        if delivery.key.startswith("file:"):
+            delivery = replace(delivery, key="file:" + str(path.parent / delivery.key[5:]))
     return SubBrokerConfig(
         model=model,
         drone=drone,
         link=_options(LinkOptions, _table(data, "link", src), f"{path}: link"),
         zenoh=zenoh,
-        delivery=_options(DeliveryOptions, _table(data, "delivery", src), f"{path}: delivery"),
+        delivery=delivery,
         state_dir=path.parent / str(state) if state else None,
         source=str(path),
     )

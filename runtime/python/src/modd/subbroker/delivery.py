@@ -93,9 +93,11 @@ class ZenohDelivery:
 class _TcpSender(threading.Thread):
     """Sends one subscriber's values to its endpoint, reconnecting with backoff."""
 
-    def __init__(self, name: str, endpoint: tuple[str, int], queue_size: int) -> None:
+    def __init__(self, name: str, endpoint: tuple[str, int], queue_size: int,
+                 key_ref: str = "") -> None:
         super().__init__(name=f"tcp-delivery-{name}", daemon=True)
         self.endpoint = endpoint
+        self.key_ref = key_ref
         self.queue: deque[bytes] = deque()
         self.queue_size = queue_size
         self.cond = threading.Condition()
@@ -175,7 +177,7 @@ class _TcpSender(threading.Thread):
             raise ConnectionError(f"unexpected first line {line[:40]!r}")
         nonce = line[len(delivery_auth.GREETING):].decode("ascii", "replace")
         if self.key is None:
-            self.key = delivery_auth.load_key()
+            self.key = delivery_auth.load_key(self.key_ref)
         sock.sendall(b"AUTH " + delivery_auth.proof(self.key, nonce).encode() + b"\n")
 
     def _pump(self, sock: socket.socket) -> None:
@@ -202,8 +204,12 @@ class _TcpSender(threading.Thread):
 class TcpDelivery:
     """TCP delivery to the subscribers whose model entry has an endpoint."""
 
-    def __init__(self, endpoints: Mapping[str, tuple[str, int]], queue_size: int = 1000) -> None:
+    def __init__(self, endpoints: Mapping[str, tuple[str, int]], queue_size: int = 1000,
+                 key_ref: str = "") -> None:
+        """``key_ref``: where the delivery key comes from (``[delivery] key``;
+        empty: ``$MODD_DELIVERY_KEY``, else the user's delivery.key)."""
         self._queue_size = queue_size
+        self._key_ref = key_ref
         self._senders: dict[str, _TcpSender] = {}
         self._lock = threading.Lock()
         self.set_endpoints(endpoints)
@@ -218,7 +224,7 @@ class TcpDelivery:
                     del self._senders[name]
             for name, endpoint in endpoints.items():
                 if name not in self._senders:
-                    sender = _TcpSender(name, endpoint, self._queue_size)
+                    sender = _TcpSender(name, endpoint, self._queue_size, self._key_ref)
                     sender.start()
                     self._senders[name] = sender
 

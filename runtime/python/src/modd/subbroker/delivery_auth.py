@@ -5,7 +5,8 @@ SubBroker answers ``AUTH <hex HMAC-SHA256(key, "modd-delivery/1\\n" + nonce)>\\n
 before any value, so that a subscriber accepts values only from a holder of the
 delivery key.
 
-The key: ``$MODD_DELIVERY_KEY`` when set (``env:NAME`` or ``file:PATH``), else
+The key: the SubBroker's ``[delivery] key`` setting when given (``env:NAME`` or
+``file:PATH``), else ``$MODD_DELIVERY_KEY`` when set (same forms), else
 ``$XDG_CONFIG_HOME/modd/delivery.key`` (default ``~/.config/modd/delivery.key``),
 created with a random key, mode 0600, when absent. Both sides resolve it the
 same way, so a SubBroker and the subscribers of the same user agree without
@@ -78,19 +79,26 @@ def _create_key_file(path: Path) -> None:
         tmp.unlink()
 
 
-def load_key() -> bytes:
-    """The delivery key, resolved as described above."""
-    ref = os.environ.get("MODD_DELIVERY_KEY")
+def check_ref(ref: str, where: str = "MODD_DELIVERY_KEY") -> str:
+    """``ref`` when it is ``env:NAME`` or ``file:PATH`` (DeliveryKeyError otherwise)."""
+    kind, _, name = ref.partition(":")
+    if kind not in ("env", "file") or not name or any(c in name for c in "\n\r\0"):
+        raise DeliveryKeyError(f"{where}: expected env:NAME or file:PATH, got {ref[:80]!r}")
+    return ref
+
+
+def load_key(ref: str = "") -> bytes:
+    """The delivery key, resolved as described above (``ref``: the setting)."""
+    where = "[delivery] key" if ref else "MODD_DELIVERY_KEY"
+    ref = ref or os.environ.get("MODD_DELIVERY_KEY", "")
     if ref:
-        kind, _, name = ref.partition(":")
+        kind, _, name = check_ref(ref, where).partition(":")
         if kind == "env":
             value = os.environ.get(name)
             if not value:
                 raise DeliveryKeyError(f"delivery key {ref}: the variable is not set")
             return value.encode()
-        if kind == "file":
-            return _read_key_file(Path(name))
-        raise DeliveryKeyError("MODD_DELIVERY_KEY: expected env:NAME or file:PATH")
+        return _read_key_file(Path(name))
     path = default_key_path()
     if not path.exists():
         _create_key_file(path)

@@ -1,0 +1,294 @@
+"""The 3D scene through the backend's own origin: a reverse proxy (HTTP and
+WebSocket) at ``/scene/`` to the viser server, which listens on loopback only.
+
+Contract (docs/security.md, "3D scene"):
+
+- every request needs a session (cookie or bearer header) of a user holding
+  a role (401 / 403 otherwise), like live values on the stream WebSocket;
+- the WebSocket upgrade is refused unless its ``Origin`` is this service's own
+  (or a configured CORS origin), and a cookie counts only with an Origin;
+  the session is re-checked every ``ws_recheck_s`` and the socket closed when
+  it ends or the roles change;
+- viser's page is one HTML file whose inline bootstrap unpacks and inserts an
+  inline module script. The page gets its own Content-Security-Policy that
+  allows exactly those two scripts by their SHA-256 (computed here from the
+  page the upstream serves), never ``'unsafe-inline'``; the workbench's own
+  CSP is not widened.
+
+>>> csp_hash("alert(1)")
+"'sha256-bhHHL3z2vDgxUt0W3dWQOrprscmda2Y5pLsLg4GF+pI='"
+"""
+
+from __future__ import annotations
+
+import asyncio
+import base64
+import contextlib
+import hashlib
+import html
+import re
+from dataclasses import dataclass
+from typing import Any
+
+import zstandard
+from starlette.concurrency import run_in_threadpool
+from starlette.websockets import WebSocket, WebSocketDisconnect
+from websockets.asyncio.client import ClientConnection
+from websockets.asyncio.client import connect as ws_connect
+from websockets.exceptions import ConnectionClosed
+from websockets.typing import Subprotocol
+
+from .accounts import session_state, user_for_token
+from .deps import SESSION_COOKIE, AppState
+from .roles import parse_roles
+
+#: Largest upstream answer relayed (viser's page is ~0.8 MB).
+MAX_UPSTREAM_BYTES = 32 * 1024 * 1024
+_SCRIPT = re.compile(r"<script([^>]*)>(.*?)</script>", re.DOTALL | re.IGNORECASE)
+_ATTR = re.compile(r'data-(p|ss|cs)="([^"]*)"')
+_ALPHABET = ("!#$%()*+,-./0123456789:;=?@ABCDEFGHIJKLMNOPQRSTUVWXYZ[\\]^_"
+             "abcdefghijklmnopqrstuvwxyz{|}~")
+_DIGIT = {c: i for i, c in enumerate(_ALPHABET)}
+
+
+def csp_hash(text: str) -> str:
+    """The CSP source expression allowing an inline script of this text."""
+    digest = hashlib.sha256(text.encode("utf-8")).digest()
+    return f"'sha256-{base64.b64encode(digest).decode()}'"
+
+
+def base88_decode(text: str) -> bytes:
+    """viser's packing of binary data into an HTML attribute (its ``de``):
+    5 characters per 4 bytes, big-endian; a tail of r characters is r-1 bytes.
+
+    >>> base88_decode(base88_encode(b"viser!"))
+    b'viser!'
+    """
+    out = bytearray()
+    whole = len(text) - len(text) % 5
+    for i in range(0, whole, 5):
+        v = 0
+        for ch in text[i:i + 5]:
+            v = v * 88 + _DIGIT[ch]
+        out += (v & 0xFFFFFFFF).to_bytes(4, "big")
+    tail = text[whole:]
+    if tail:
+        v = 0
+        for ch in tail:
+            v = v * 88 + _DIGIT[ch]
+        out += (v % (1 << (8 * (len(tail) - 1)))).to_bytes(len(tail) - 1, "big")
+    return bytes(out)
+
+
+def base88_encode(data: bytes) -> str:
+    """The inverse of :func:`base88_decode` (for tests)."""
+    out = []
+    whole = len(data) - len(data) % 4
+    for i in range(0, whole, 4):
+        v = int.from_bytes(data[i:i + 4], "big")
+        out.append("".join(_ALPHABET[v // 88**k % 88] for k in range(4, -1, -1)))
+    tail = data[whole:]
+    if tail:
+        v = int.from_bytes(tail, "big")
+        out.append("".join(_ALPHABET[v // 88**k % 88] for k in range(len(tail), -1, -1)))
+    return "".join(out)
+
+
+def _unpacked_module(attrs: str) -> str | None:
+    """The module script viser's bootstrap inserts: ``data-p`` is zstd of the
+    page's CSS (``data-ss`` bytes) followed by its JavaScript (``data-cs``)."""
+    found = dict(_ATTR.findall(attrs))
+    if not {"p", "ss", "cs"} <= found.keys():
+        return None
+    ss, cs = int(found["ss"]), int(found["cs"])
+    if ss + cs > MAX_UPSTREAM_BYTES * 8:
+        return None
+    packed = base88_decode(html.unescape(found["p"]))
+    raw = zstandard.ZstdDecompressor().decompress(packed, max_output_size=ss + cs)
+    return raw[ss:ss + cs].decode("utf-8", errors="replace")
+
+
+def script_hashes(page: str) -> list[str]:
+    """CSP hashes of every inline script of the page, and of the module
+    script its bootstrap unpacks (what the page runs, nothing else)."""
+    hashes: list[str] = []
+    for attrs, body in _SCRIPT.findall(page):
+        if "src=" in attrs.lower():
+            continue
+        hashes.append(csp_hash(body))
+        module = _unpacked_module(attrs)
+        if module is not None:
+            hashes.append(csp_hash(module))
+    return hashes
+
+
+def scene_csp(hashes: list[str], host: str) -> str:
+    """The policy of the proxied page: its own scripts by hash, WebAssembly
+    (viser's zstd decoder), its WebSocket at ``/scene`` and framing by the
+    workbench only."""
+    scripts = " ".join(hashes) or "'none'"
+    return (
+        "default-src 'none'; "
+        f"script-src {scripts} 'wasm-unsafe-eval'; "
+        "style-src 'unsafe-inline'; img-src data: blob:; font-src data:; "
+        f"connect-src ws://{host}/scene wss://{host}/scene data: blob:; "
+        "worker-src blob:; base-uri 'none'; form-action 'none'; object-src 'none'; "
+        "frame-ancestors 'self'"
+    )
+
+
+@dataclass(frozen=True)
+class Upstream:
+    status: int
+    headers: dict[str, str]
+    body: bytes
+
+
+async def fetch(port: int, path: str, timeout_s: float = 10.0) -> Upstream:
+    """GET ``path`` from the viser server on 127.0.0.1:``port`` (HTTP/1.1,
+    identity encoding, bounded size)."""
+
+    async def run() -> Upstream:
+        reader, writer = await asyncio.open_connection("127.0.0.1", port)
+        try:
+            writer.write(f"GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
+                         "Accept-Encoding: identity\r\nConnection: close\r\n\r\n".encode())
+            await writer.drain()
+            head = await reader.readuntil(b"\r\n\r\n")
+            lines = head.decode("latin-1").split("\r\n")
+            status = int(lines[0].split(" ", 2)[1])
+            headers = {k.strip().lower(): v.strip() for k, _, v in
+                       (line.partition(":") for line in lines[1:] if line)}
+            length = int(headers.get("content-length", "-1"))
+            if length > MAX_UPSTREAM_BYTES:
+                raise ValueError("the scene's answer is too large")
+            if length >= 0:
+                body = await reader.readexactly(length)
+            else:
+                body = await reader.read(MAX_UPSTREAM_BYTES + 1)
+                if len(body) > MAX_UPSTREAM_BYTES:
+                    raise ValueError("the scene's answer is too large")
+            return Upstream(status, headers, body)
+        finally:
+            writer.close()
+            with contextlib.suppress(Exception):
+                await writer.wait_closed()
+
+    return await asyncio.wait_for(run(), timeout_s)
+
+
+class PagePolicies:
+    """CSP per page body (viser's page is static: computed once)."""
+
+    def __init__(self) -> None:
+        self._hashes: dict[bytes, list[str]] = {}
+
+    def hashes(self, body: bytes) -> list[str]:
+        key = hashlib.sha256(body).digest()
+        found = self._hashes.get(key)
+        if found is None:
+            found = script_hashes(body.decode("utf-8", errors="replace"))
+            if len(self._hashes) > 8:
+                self._hashes.clear()
+            self._hashes[key] = found
+        return found
+
+
+# --- the WebSocket ---------------------------------------------------------
+
+def _session(state: AppState, token: str) -> tuple[int, str] | None:
+    with state.store.session() as db:
+        user = user_for_token(db, token)
+        return None if user is None else (user.id, user.roles)
+
+
+def _recheck(state: AppState, token: str) -> tuple[int, str] | None:
+    with state.store.session() as db:
+        return session_state(db, token)
+
+
+def socket_token(websocket: WebSocket) -> str | None:
+    """The session of a WebSocket upgrade: an ``Authorization: Bearer``
+    header, or the cookie when the browser named an Origin (checked before)."""
+    auth = websocket.headers.get("authorization", "")
+    if auth.lower().startswith("bearer ") and len(auth) < 300:
+        return auth[7:].strip()
+    if websocket.headers.get("origin") is not None:
+        return websocket.cookies.get(SESSION_COOKIE)
+    return None
+
+
+async def relay_socket(websocket: WebSocket, state: AppState, port: int) -> None:
+    """Authenticate the upgrade, then relay frames both ways with the viser
+    server until either side closes or the session ends."""
+    from .routers.streams import origin_allowed
+
+    if not origin_allowed(websocket, state.settings):
+        await websocket.close(code=4403, reason="Origin not allowed")
+        return
+    token = socket_token(websocket)
+    seen = None if token is None else await run_in_threadpool(_session, state, token)
+    if token is None or seen is None:
+        await websocket.close(code=4401, reason="the 3D scene needs a session")
+        return
+    if not parse_roles(seen[1]):
+        await websocket.close(code=4403, reason="the 3D scene needs a role")
+        return
+    offered = [Subprotocol(p) for p in websocket.scope.get("subprotocols", [])][:4]
+    try:
+        upstream = await ws_connect(f"ws://127.0.0.1:{port}", subprotocols=offered or None,
+                                    compression=None, max_size=64 * 1024 * 1024,
+                                    open_timeout=5)
+    except (OSError, TimeoutError, ConnectionClosed) as exc:
+        await websocket.close(code=1011, reason=f"the 3D scene is not running: {exc}"[:120])
+        return
+    await websocket.accept(subprotocol=upstream.subprotocol)
+    tasks = {asyncio.create_task(_down(upstream, websocket)),
+             asyncio.create_task(_up(websocket, upstream)),
+             asyncio.create_task(_watch(state, token, seen))}
+    try:
+        done, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+        for task in pending:
+            task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await task
+        ended: Any = None
+        for task in done:
+            if not task.cancelled() and task.exception() is None:
+                ended = task.result() or ended
+        code, reason = ended if isinstance(ended, tuple) else (1000, "")
+        with contextlib.suppress(Exception):
+            await websocket.close(code=code, reason=reason)
+    finally:
+        await upstream.close()
+
+
+async def _down(upstream: ClientConnection, websocket: WebSocket) -> None:
+    with contextlib.suppress(ConnectionClosed, RuntimeError, WebSocketDisconnect):
+        async for message in upstream:
+            if isinstance(message, bytes):
+                await websocket.send_bytes(message)
+            else:
+                await websocket.send_text(message)
+
+
+async def _up(websocket: WebSocket, upstream: ClientConnection) -> None:
+    with contextlib.suppress(ConnectionClosed, RuntimeError, WebSocketDisconnect):
+        while True:
+            message = await websocket.receive()
+            if message["type"] == "websocket.disconnect":
+                return
+            if message.get("bytes") is not None:
+                await upstream.send(message["bytes"])
+            elif message.get("text") is not None:
+                await upstream.send(message["text"])
+
+
+async def _watch(state: AppState, token: str, seen: tuple[int, str]) -> tuple[int, str]:
+    while True:
+        await asyncio.sleep(state.settings.ws_recheck_s)
+        now = await run_in_threadpool(_recheck, state, token)
+        if now is None:
+            return 4401, "the session ended"
+        if now != seen:
+            return 4403, "your roles changed; reconnect"
