@@ -8,8 +8,8 @@ microseconds. See docs/planning.md for every field.
 from __future__ import annotations
 
 import itertools
-from functools import lru_cache
 from fractions import Fraction
+from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
 from modd_model.numbers import MICROS_PER_SECOND
