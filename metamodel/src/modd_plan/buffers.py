@@ -27,6 +27,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
+from functools import lru_cache
 from math import lcm
 
 import numpy as np
@@ -184,10 +185,17 @@ def _front(s: IntArray, m: IntArray, allowed: npt.NDArray[np.bool_], lo: int) ->
     return _Front(m[keep], s[keep], n[keep])
 
 
+@lru_cache(maxsize=65_536)  # bounded: many infeasible topics repeat few figures
+def _seconds(us: int) -> str:
+    return fraction_to_decimal(Fraction(us, MICROS_PER_SECOND)) + " s"
+
+
 def _explain(
     topic: str, subs: Sequence[Subscription], pm_us: int, m: IntArray, cap_us: int, first_n: int
 ) -> str:
     def sec(us: int | Fraction) -> str:
+        if isinstance(us, int):
+            return _seconds(us)
         return fraction_to_decimal(Fraction(us) / MICROS_PER_SECOND) + " s"
 
     lo = min(subs, key=lambda s: s.period_us)
@@ -211,32 +219,146 @@ def _explain(
 
 def _fronts(problem: BufferProblem) -> tuple[list[_Front | None], list[Infeasibility]]:
     """Per topic its front (None for a topic nobody subscribes to) and the
-    topics the cap makes infeasible."""
-    fronts: list[_Front | None] = []
-    infeasible: list[Infeasibility] = []
-    for topic, pm_us, subs in zip(
-        problem.topics, problem.publication_us, problem.periods_by_topic(), strict=True
+    topics the cap makes infeasible; then, when some are, the fronts of the
+    problem with the cap lifted for those topics (:func:`solve_exact`)."""
+    fronts, infeasible, _ = _fronts_both(problem)
+    return fronts, infeasible
+
+
+def _fronts_both(
+    problem: BufferProblem,
+) -> tuple[list[_Front | None], list[Infeasibility], list[_Front | None]]:
+    """The fronts, the infeasible topics and the fronts with the cap lifted
+    for them, from one table per topic. All topics' tables are computed
+    together in a few numpy operations over their concatenated candidate
+    ranges (each topic alone costs more in numpy's per-call overhead than
+    in arithmetic); the results are those of :func:`topic_table` and
+    :func:`_front` topic by topic."""
+    rows: list[tuple[int, str, int, list[Subscription], int, int]] = []
+    for i, (topic, pm_us, subs) in enumerate(
+        zip(problem.topics, problem.publication_us, problem.periods_by_topic(), strict=True)
     ):
         if not subs:
-            fronts.append(None)
             continue
-        periods = [x.period_us for x in subs]
-        lo, hi = candidate_range(periods, pm_us, problem.max_buffer)
+        lo, hi = candidate_range([x.period_us for x in subs], pm_us, problem.max_buffer)
         if hi - lo + 1 > CANDIDATE_LIMIT:
             raise BufferTooLarge(topic, [x.name for x in subs], hi - lo + 1)
-        s, m = topic_table(periods, pm_us, problem.max_buffer, lo, hi)
-        if problem.alpha == 0:
-            s = np.zeros_like(s)
-        cap = problem.cap_for(topic)
-        allowed = np.ones(len(m), dtype=bool) if cap is None else m <= cap
-        if not allowed.any():
-            assert cap is not None
-            reason = _explain(topic, subs, pm_us, m, cap, lo)
-            infeasible.append(Infeasibility(topic, tuple(x.name for x in subs), reason))
-            fronts.append(None)
+        rows.append((i, topic, pm_us, subs, lo, hi))
+    fronts: list[_Front | None] = [None] * len(problem.topics)
+    relaxed: list[_Front | None] = [None] * len(problem.topics)
+    infeasible: list[Infeasibility] = []
+    if not rows:
+        return fronts, infeasible, relaxed
+    tables = _tables(problem, rows)
+    caps = [problem.cap_for(topic) for _, topic, *_ in rows]
+    m_all = tables[1]
+    starts = tables[3]
+    cap_arr = np.repeat(np.array([-1 if c is None else c for c in caps], dtype=np.int64),
+                        np.diff(starts))
+    uncapped = np.repeat(np.array([c is None for c in caps]), np.diff(starts))
+    allowed = uncapped | (m_all <= cap_arr)
+    any_allowed = np.logical_or.reduceat(allowed, starts[:-1])
+    capped = _segment_fronts(tables, allowed)
+    bad = [r for r, ok in enumerate(any_allowed) if not ok]
+    if bad:
+        everything = _segment_fronts(tables, np.repeat(~any_allowed, np.diff(starts)))
+    for r, (i, topic, pm_us, subs, lo, _) in enumerate(rows):
+        if any_allowed[r]:
+            fronts[i] = relaxed[i] = capped[r]
             continue
-        fronts.append(_front(s, m, allowed, lo))
-    return fronts, infeasible
+        cap = caps[r]
+        assert cap is not None
+        m = m_all[starts[r]:starts[r + 1]]
+        infeasible.append(
+            Infeasibility(topic, tuple(x.name for x in subs), _explain(topic, subs, pm_us, m, cap,
+                                                                       lo)))
+        relaxed[i] = everything[r]
+    return fronts, infeasible, relaxed
+
+
+#: Largest candidate value (µs) and table count the batched computation's
+#: encodings keep inside int64; beyond, topics are computed one by one.
+_BATCH_VALUE_BITS = 42
+_BATCH_ROWS_BITS = 20
+
+
+def _tables(
+    problem: BufferProblem, rows: Sequence[tuple[int, str, int, list[Subscription], int, int]]
+) -> tuple[IntArray, IntArray, IntArray, IntArray]:
+    """S, M and n over every row's candidates, concatenated, with each row's
+    start offset (and the total at the end)."""
+    lengths = np.array([hi - lo + 1 for *_, lo, hi in rows], dtype=np.int64)
+    starts = np.concatenate(([0], np.cumsum(lengths)))
+    big_ps = max(max(x.period_us for x in r[3]) for r in rows)
+    big_x = max(hi * pm for _, _, pm, _, _, hi in rows)
+    if (max(big_ps, big_x).bit_length() >= _BATCH_VALUE_BITS
+            or len(rows).bit_length() >= _BATCH_ROWS_BITS):
+        parts = [topic_table([x.period_us for x in subs], pm, problem.max_buffer, lo, hi)
+                 for _, _, pm, subs, lo, hi in rows]
+        n = np.concatenate([np.arange(lo, hi + 1, dtype=np.int64) for *_, lo, hi in rows])
+        s_all = np.concatenate([p[0] for p in parts])
+        m_all = np.concatenate([p[1] for p in parts])
+        if problem.alpha == 0:
+            s_all = np.zeros_like(s_all)
+        return s_all, m_all, n, starts
+    seg = np.repeat(np.arange(len(rows), dtype=np.int64), lengths)
+    offset = np.arange(starts[-1], dtype=np.int64) - starts[:-1][seg]
+    n = np.array([lo for *_, lo, _ in rows], dtype=np.int64)[seg] + offset
+    x = n * np.array([pm for _, _, pm, *_ in rows], dtype=np.int64)[seg]
+    # every row's periods, sorted within the row, rows in order
+    per_row = [sorted(x.period_us for x in r[3]) for r in rows]
+    counts = np.array([len(p) for p in per_row], dtype=np.int64)
+    ps = np.array([v for p in per_row for v in p], dtype=np.int64)
+    ps_start = np.concatenate(([0], np.cumsum(counts)))
+    ps_seg = np.repeat(np.arange(len(rows), dtype=np.int64), counts)
+    prefix = np.concatenate(([0], np.cumsum(ps)))
+    key_ps = (ps_seg << _BATCH_VALUE_BITS) + ps
+    k_global = np.searchsorted(key_ps, (seg << _BATCH_VALUE_BITS) + x, side="right")
+    first = ps_start[:-1][seg]
+    k = k_global - first
+    below = x * k - (prefix[k_global] - prefix[first])
+    above = (prefix[ps_start[1:]][seg] - prefix[k_global]) - x * (counts[seg] - k)
+    lo_ps = ps[ps_start[:-1]][seg]
+    hi_ps = ps[ps_start[1:] - 1][seg]
+    m_all = np.maximum(hi_ps - x, x - lo_ps)
+    s_all = below + above
+    if problem.alpha == 0:
+        s_all = np.zeros_like(s_all)
+    return s_all, m_all, n, starts
+
+
+def _segment_fronts(
+    tables: tuple[IntArray, IntArray, IntArray, IntArray], allowed: npt.NDArray[np.bool_]
+) -> list[_Front | None]:
+    """:func:`_front` of every row (None for a row with nothing allowed)."""
+    s_all, m_all, n_all, starts = tables
+    rows = len(starts) - 1
+    seg_all = np.repeat(np.arange(rows, dtype=np.int64), np.diff(starts))
+    s, m, n, seg = s_all[allowed], m_all[allowed], n_all[allowed], seg_all[allowed]
+    # (row, M, S, n): rows and n are already in order, and lexsort is stable
+    if len(m) and int(m.max()).bit_length() < _BATCH_VALUE_BITS and rows.bit_length() < 20:
+        order = np.lexsort((s, (seg << _BATCH_VALUE_BITS) + m))
+    else:
+        order = np.lexsort((n, s, m, seg))
+    s, m, n, seg = s[order], m[order], n[order], seg[order]
+    # a point is kept when its S is below every S before it in its row: a
+    # running minimum over S (or its dense ranks when S is too large) shifted
+    # so that each row starts below all the rows before it
+    top = int(s.max()) + 1 if len(s) else 1
+    if top * (rows + 1) < 1 << 62:
+        shifted = s + (rows - seg) * top
+    else:
+        _, rank = np.unique(s, return_inverse=True)
+        shifted = rank.astype(np.int64).ravel() + (rows - seg) * (len(s) + 1)
+    running = np.minimum.accumulate(shifted)
+    keep = np.concatenate(([True], shifted[1:] < running[:-1]))[:len(s)]
+    m, s, n, seg = m[keep], s[keep], n[keep], seg[keep]
+    bounds = np.searchsorted(seg, np.arange(rows + 1, dtype=np.int64))
+    out: list[_Front | None] = []
+    for r in range(rows):
+        a, b = int(bounds[r]), int(bounds[r + 1])
+        out.append(_Front(m[a:b], s[a:b], n[a:b]) if b > a else None)
+    return out
 
 
 def _best_w(fronts: Sequence[_Front], a: int, b: int) -> int:
@@ -263,10 +385,9 @@ def solve_exact(problem: BufferProblem) -> BufferSolution:
 
     When the cap makes it infeasible, returns the optimum with the cap lifted
     for the offending topics only, ``infeasible`` naming them."""
-    fronts, infeasible = _fronts(problem)
-    if infeasible:
-        relaxed = solve_exact(problem.relaxed(x.topic for x in infeasible))
-        return BufferSolution(relaxed.sizes, relaxed.deviations_us, tuple(infeasible))
+    fronts, infeasible, relaxed = _fronts_both(problem)
+    if infeasible:  # the optimum with the cap lifted for those topics
+        fronts = relaxed
     d = lcm(problem.alpha.denominator, problem.beta.denominator)
     a, b = int(problem.alpha * d), int(problem.beta * d)
     used = [f for f in fronts if f is not None]
@@ -274,4 +395,7 @@ def solve_exact(problem: BufferProblem) -> BufferSolution:
     sizes = [
         1 if f is None else int(f.n[np.searchsorted(f.m, w, side="right") - 1]) for f in fronts
     ]
-    return solution_from_sizes(problem, sizes)
+    solution = solution_from_sizes(problem, sizes)
+    if infeasible:
+        return BufferSolution(solution.sizes, solution.deviations_us, tuple(infeasible))
+    return solution

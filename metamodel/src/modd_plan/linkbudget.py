@@ -151,12 +151,17 @@ class LinkBudget:
         }
 
 
+#: One walked slot: (date µs, value bytes, stream count, distinct periods due).
+WalkedSlot = tuple[int, int, int, list[int]]
+
+
 def _slot_walk(schedule: Schedule, window_bytes: Sequence[Fraction], delay: Fraction
-               ) -> list[tuple[int, int, list[int]]]:
-    """(date µs, value bytes, stream ids) of the first slots: one hyperperiod,
-    or more until they span 20 accepted delays (so that packing reaches its
-    steady state), at most :data:`WALK_LIMIT` slots (beyond, the walk is
-    a sample of the schedule's start)."""
+               ) -> list[WalkedSlot]:
+    """The first slots: one hyperperiod, or more until they span 20 accepted
+    delays (so that packing reaches its steady state), at most
+    :data:`WALK_LIMIT` slots (beyond, the walk is a sample of the schedule's
+    start). Streams of one period are due together: each slot carries its
+    periods, not its stream ids."""
     by_period: dict[int, list[int]] = {}
     for i, p in enumerate(schedule.periods_us):
         by_period.setdefault(p, []).append(i)
@@ -167,35 +172,35 @@ def _slot_walk(schedule: Schedule, window_bytes: Sequence[Fraction], delay: Frac
         return []
     per_s = Fraction(m) / schedule.hyperperiod
     limit = min(max(m, ceil(20 * delay * per_s)), WALK_LIMIT)
-    out: list[tuple[int, int, list[int]]] = []
+    out: list[WalkedSlot] = []
     for index, date, due in schedule.iter_due_periods():
         if index >= limit:
             break
-        ids = sorted(i for p in due for i in by_period[p])
-        out.append((date, ceil(sum((period_bytes[p] for p in due), Fraction(0))), ids))
+        count = sum(len(by_period[p]) for p in due)
+        out.append((date, ceil(sum((period_bytes[p] for p in due), Fraction(0))), count, due))
     return out
 
 
-def _tcp(settings: LinkSettings, slots: list[tuple[int, int, list[int]]], span_s: float,
-         n_streams: int) -> tuple[float, float, float, list[float]]:
+def _tcp(settings: LinkSettings, slots: list[WalkedSlot], span_s: float
+         ) -> tuple[float, float, float, dict[int, float]]:
     wire = 0
     segments = 0
-    for _, values, ids in slots:
-        frame = data_frame_bytes(values, len(ids))
+    for _, values, count, _ in slots:
+        frame = data_frame_bytes(values, count)
         segs = ceil(frame / TCP_MSS)
         segments += segs
         wire += frame + segs * TCP_IP_HEADER_BYTES
     rate = settings.rate_bps
-    delays = [0.0] * n_streams
-    for _, values, ids in slots:
-        air = (data_frame_bytes(values, len(ids)) + TCP_IP_HEADER_BYTES) / rate if rate else 0.0
-        for i in ids:
-            delays[i] = max(delays[i], air)
+    delays: dict[int, float] = {}  # per period
+    for _, values, count, due in slots:
+        air = (data_frame_bytes(values, count) + TCP_IP_HEADER_BYTES) / rate if rate else 0.0
+        for p in due:
+            delays[p] = max(delays.get(p, 0.0), air)
     return wire / span_s, segments * TCP_IP_HEADER_BYTES / span_s, segments / span_s, delays
 
 
-def _datagrams(settings: LinkSettings, slots: list[tuple[int, int, list[int]]], span_s: float,
-               n_streams: int) -> tuple[float, float, float, list[float]]:
+def _datagrams(settings: LinkSettings, slots: list[WalkedSlot], span_s: float
+               ) -> tuple[float, float, float, dict[int, float]]:
     """Pack slots as the PubBroker does: a datagram holds consecutive slots
     while its first slot has waited at most the accepted delay and it fits
     the packet; it is sent at its last slot's date."""
@@ -206,27 +211,27 @@ def _datagrams(settings: LinkSettings, slots: list[tuple[int, int, list[int]]], 
     rate = settings.rate_bps
     wire = 0
     packets = 0
-    delays = [0.0] * n_streams
-    group: list[tuple[int, int, list[int]]] = []
+    delays: dict[int, float] = {}  # per period
+    group: list[WalkedSlot] = []
 
     def flush() -> None:
         nonlocal wire, packets
         if not group:
             return
-        values = sum(v for _, v, _ in group)
+        values = sum(v for _, v, _, _ in group)
         size = DGRAM_HEADER_BYTES + values + TAG_BYTES
         bytes_on_wire = wire_bytes(t, size)
         wire += bytes_on_wire
         packets += 1
         sent = group[-1][0]
         air = bytes_on_wire / rate if rate else 0.0
-        for date, _, ids in group:
-            for i in ids:
-                delays[i] = max(delays[i], (sent - date) / 1e6 + air)
+        for date, _, _, due in group:
+            for p in due:
+                delays[p] = max(delays.get(p, 0.0), (sent - date) / 1e6 + air)
         group.clear()
 
     for slot in slots:
-        date, values, ids = slot
+        date, values, _, due = slot
         if values > room:  # one slot larger than a packet: fragments
             flush()
             per = room - FRAGMENT_BYTE
@@ -236,11 +241,11 @@ def _datagrams(settings: LinkSettings, slots: list[tuple[int, int, list[int]]], 
                                    + min(per, values - k * per)) for k in range(n))
             packets += n
             air = wire_bytes(t, size // n) * n / rate if rate else 0.0
-            for i in ids:
-                delays[i] = max(delays[i], air)
+            for p in due:
+                delays[p] = max(delays.get(p, 0.0), air)
             continue
         if group and (date - group[0][0] > delay_us
-                      or sum(v for _, v, _ in group) + values > room):
+                      or sum(v for _, v, _, _ in group) + values > room):
             flush()
         group.append(slot)
     flush()
@@ -259,17 +264,17 @@ def link_budget(
     stream ``i`` carries ``window_bytes[i]`` per window and serves the
     subscribers ``subscribers_of[i]`` (directly or through a derived stream).
     ``subscriptions`` lists every subscriber, each of which gets a delay."""
-    n = len(window_bytes)
     slots = _slot_walk(schedule, window_bytes, settings.accepted_delay)
     if not slots:
         return LinkBudget(settings, 0.0, 0.0, 0.0, dict.fromkeys(subscriptions, 0.0))
     span_s = slots[-1][0] / 1e6  # slot dates start after 0: the walk covers (0, last]
     walk = _tcp if settings.transport == "tcp" else _datagrams
-    down, up, packets, stream_delay = walk(settings, slots, span_s, n)
+    down, up, packets, period_delay = walk(settings, slots, span_s)
     delays = dict.fromkeys(subscriptions, 0.0)
     for i, subs in enumerate(subscribers_of):
+        d = period_delay.get(schedule.periods_us[i], 0.0)
         for s in subs:
-            delays[s] = max(delays.get(s, 0.0), stream_delay[i])
+            delays[s] = max(delays.get(s, 0.0), d)
     return LinkBudget(settings, down, up, packets, delays,
                       _over_budget(settings, down, schedule, window_bytes, subscribers_of))
 

@@ -121,10 +121,16 @@ def _frame_bytes_per_hyperperiod(
     if m == 0:
         return Fraction(0)
     if m <= EXACT_WALK_LIMIT:
-        per_period: dict[int, tuple[Fraction, int]] = {}
+        # equal window sizes are mostly the same object: count them, then
+        # add each distinct one once per period (exact either way)
+        same: dict[tuple[int, int], tuple[Fraction, int]] = {}
         for p, b in zip(schedule.periods_us, window_bytes, strict=True):
+            b0, k = same.get((p, id(b)), (b, 0))
+            same[(p, id(b))] = (b0, k + 1)
+        per_period: dict[int, tuple[Fraction, int]] = {}
+        for (p, _), (b, k) in same.items():
             total_b, count = per_period.get(p, (Fraction(0), 0))
-            per_period[p] = (total_b + b, count + 1)
+            per_period[p] = (total_b + b * k, count + k)
         total = 0
         for index, _, due in schedule.iter_due_periods():
             if index == m:
@@ -152,8 +158,13 @@ def predict(
     # rates as exact ratios first: a hyperperiod may be far beyond a float
     frames = float(m / h) if m else 0.0
     data = float(_frame_bytes_per_hyperperiod(schedule, window_bytes) / h) if m else 0.0
-    plain_rate = sum(1 / float(pm) for pm, _ in plain_streams.values())
-    plain = sum((TCP_IP_HEADER_BYTES + size) / float(pm) for pm, size in plain_streams.values())
+    floats: dict[int, float] = {}  # float(pm) per period object (one per topic)
+    for pm, _ in plain_streams.values():
+        if id(pm) not in floats:
+            floats[id(pm)] = float(pm)
+    plain_rate = sum(1 / floats[id(pm)] for pm, _ in plain_streams.values())
+    plain = sum((TCP_IP_HEADER_BYTES + size) / floats[id(pm)]
+                for pm, size in plain_streams.values())
     return LinkCost(
         drone_to_base=data + frames * TCP_IP_HEADER_BYTES,
         base_to_drone=frames * TCP_IP_HEADER_BYTES,

@@ -12,7 +12,9 @@ and the SubBroker (at run time, with the measured PING):
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import gc
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
@@ -35,7 +37,7 @@ from .linkbudget import LinkBudget, LinkSettings, link_budget
 from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
 from .planjson import plan_to_json
 from .schedule import Schedule, ScheduleTooLarge
-from .streams import PlannedStream, StreamKey, period_of, plan_streams, requested_streams
+from .streams import PlannedStream, StreamKey, period_of, plan_streams, subscription_keys
 
 METHODS = ("exact", "cvxpy")
 
@@ -49,12 +51,27 @@ class PlanningError(ModelError, ValueError):
     memory; the diagnostics point at the subscriptions that cause it."""
 
 
-@lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
 def _us(period: Fraction) -> int:
-    us = period * MICROS_PER_SECOND
-    if us.denominator != 1:
-        raise ValueError(f"{period} s is not a whole number of microseconds")
-    return int(us)
+    return _us_of(period.numerator, period.denominator)
+
+
+def _key_us(key: StreamKey) -> int:
+    """A stream's period in µs (its numerator and denominator are cached)."""
+    return _us_of(*key._nd)  # type: ignore[attr-defined]
+
+
+@lru_cache(maxsize=65_536)  # bounded, keyed by integers: Fraction hashing is slow
+def _us_of(numerator: int, denominator: int) -> int:
+    us, rest = divmod(numerator * MICROS_PER_SECOND, denominator)
+    if rest:
+        raise ValueError(f"{Fraction(numerator, denominator)} s is not a whole number of "
+                         "microseconds")
+    return us
+
+
+@lru_cache(maxsize=65_536)  # bounded: a model repeats few period texts
+def _text_us(text: str) -> int:
+    return _us(period_of(text))
 
 
 def _seconds(us: int) -> str:
@@ -144,7 +161,8 @@ class Plan:
 
     def to_json(self) -> dict[str, Any]:
         """The plan as one JSON object (see docs/planning.md)."""
-        return plan_to_json(self)
+        with gc_paused():
+            return plan_to_json(self)
 
 
 def buffer_problem(
@@ -160,7 +178,7 @@ def buffer_problem(
         if topic is None or topic.period is None:
             orphans.setdefault(sub["topic"], []).append(sub["name"])
         else:
-            subs.append(Subscription(sub["name"], sub["topic"], _us(period_of(sub["periodS"]))))
+            subs.append(Subscription(sub["name"], sub["topic"], _text_us(sub["periodS"])))
     problem = BufferProblem(
         topics=tuple(t.name for t in published),
         publication_us=tuple(_us(t.period) for t in published if t.period is not None),
@@ -181,9 +199,8 @@ def _window_bytes(stream: StreamKey, tops: Mapping[str, Topic]) -> Fraction:
     topic = tops.get(stream.topic)
     if topic is None or topic.period is None:
         return window_value_bytes(stream.aggregation, "float32", Fraction(0))
-    p, pm = stream.period, topic.period
-    return _bytes(stream.aggregation, topic.type, p.numerator * pm.denominator,
-                  p.denominator * pm.numerator)
+    (pn, pd), pm = stream._nd, topic.period  # type: ignore[attr-defined]
+    return _bytes(stream.aggregation, topic.type, pn * pm.denominator, pd * pm.numerator)
 
 
 @lru_cache(maxsize=65_536)  # keyed by integers: Fraction hashing is slow
@@ -191,10 +208,18 @@ def _bytes(aggregation: str, topic_type: str, samples_num: int, samples_den: int
     return window_value_bytes(aggregation, topic_type, Fraction(samples_num, samples_den))
 
 
+@lru_cache(maxsize=65_536)  # keyed by integers: a plan repeats few (period, topic) kinds
+def _cost(aggregation: str, topic_type: str, p_num: int, p_den: int, pm_num: int,
+          pm_den: int) -> float:
+    """Value bytes per second of a stream of period p on a topic of period pm."""
+    window = _bytes(aggregation, topic_type, p_num * pm_den, p_den * pm_num)
+    return float(window / Fraction(p_num, p_den))
+
+
 def _link_cost(
-    model: Mapping[str, Any], sched: Schedule, sent: list[PlannedStream], tops: Mapping[str, Topic]
+    model: Mapping[str, Any], sched: Schedule, window_bytes: list[Fraction],
+    tops: Mapping[str, Topic]
 ) -> LinkCost:
-    window_bytes = [_window_bytes(s.stream, tops) for s in sent]
     plain: dict[str, tuple[Fraction, int]] = {}
     for sub in model.get("subscribers", []):
         topic = tops.get(sub["topic"])
@@ -204,14 +229,14 @@ def _link_cost(
 
 
 def _budget(model: Mapping[str, Any], sched: Schedule, sent: list[PlannedStream],
-            streams: Sequence[PlannedStream], tops: Mapping[str, Topic]) -> LinkBudget:
+            streams: Sequence[PlannedStream], window_bytes: list[Fraction]) -> LinkBudget:
     served: dict[StreamKey, list[str]] = {s.stream: list(s.subscribers) for s in sent}
     for s in streams:
         for src in s.sources:
             if src.stream in served and s.stream != src.stream:
                 served[src.stream] += [n for n in s.subscribers if n not in served[src.stream]]
     return link_budget(LinkSettings.of(model), sched,
-                       [_window_bytes(s.stream, tops) for s in sent],
+                       window_bytes,
                        [served[s.stream] for s in sent],
                        [sub["name"] for sub in model.get("subscribers", [])])
 
@@ -238,27 +263,62 @@ def make_plan(
     give the same sizes. Overrides replace the model's planner constants."""
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
+    with gc_paused():
+        return _make_plan(model, ping_s=ping_s, alpha=alpha, beta=beta,
+                          max_buffer=max_buffer, method=method)
+
+
+@contextmanager
+def gc_paused() -> Iterator[None]:
+    """The cyclic garbage collector off for a block that allocates many small
+    objects without cycles (a plan of 25,000 subscriptions: its passes over
+    the model's dictionaries cost more than the planning). Reference
+    counting still frees everything; the collector's previous state is
+    restored."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def _make_plan(
+    model: Mapping[str, Any],
+    *,
+    ping_s: Fraction | None,
+    alpha: Fraction | None,
+    beta: Fraction | None,
+    max_buffer: int | None,
+    method: str,
+) -> Plan:
     constants = constants_for(
         model, ping_s=ping_s, alpha=alpha, beta=beta, max_buffer=max_buffer
     )
     tops = topics(dict(model))
     index = {name: i for i, name in enumerate(tops)}
-    requested = requested_streams(model)
+    keys = subscription_keys(model)
+    requested: dict[StreamKey, list[str]] = {}
+    for sub, key in zip(model.get("subscribers", []), keys, strict=True):
+        requested.setdefault(key, []).append(sub["name"])
     for key in requested:
         if key.topic not in index:
             index[key.topic] = len(index)
 
-    costs: dict[StreamKey, float] = {}
+    published = {t.name: (t.type, t.period.numerator, t.period.denominator)
+                 for t in tops.values() if t.period is not None}
 
-    def cost(s: StreamKey) -> float:  # value bytes per second, memoised
-        if s not in costs:
-            costs[s] = float(_window_bytes(s, tops) / s.period)
-        return costs[s]
+    def cost(s: StreamKey) -> float:  # value bytes per second
+        topic = published.get(s.topic)
+        if topic is None:
+            return float(_window_bytes(s, tops) / s.period)
+        return _cost(s.aggregation, topic[0], *s._nd, topic[1], topic[2])  # type: ignore
 
     streams = plan_streams(requested, index, cost)
     sent = sorted((s for s in streams if s.id is not None), key=lambda s: s.id or 0)
     hyper = _hyperperiod_us(model, requested)
-    sched = Schedule.from_periods_us([_us(s.stream.period) for s in sent], hyper)
+    sched = Schedule.from_periods_us([_key_us(s.stream) for s in sent], hyper)
     try:
         sched.check_bounds()
     except ScheduleTooLarge as exc:
@@ -273,27 +333,27 @@ def make_plan(
                        f"/subscribers/{position[name]}/periodS")
             for name in exc.subscribers[:_MAX_NAMED]
         ]) from exc
+    window_bytes = [_window_bytes(s.stream, tops) for s in sent]
     return Plan(
         topics=tuple(tops.values()),
         streams=streams,
         subscriptions={
-            sub["name"]: StreamKey(sub["topic"], sub["aggregation"], period_of(sub["periodS"]))
-            for sub in model.get("subscribers", [])
+            sub["name"]: key for sub, key in zip(model.get("subscribers", []), keys, strict=True)
         },
         schedule=sched,
         buffers=buffers,
         unpublished=unpublished,
         constants=constants,
-        link=_link_cost(model, sched, sent, tops),
-        budget=_budget(model, sched, sent, streams, tops),
+        link=_link_cost(model, sched, window_bytes, tops),
+        budget=_budget(model, sched, sent, streams, window_bytes),
     )
 
 
 def _hyperperiod_us(model: Mapping[str, Any], requested: Mapping[StreamKey, Any]) -> int:
     """LCM of every requested period (µs), within :data:`HYPERPERIOD_BITS_LIMIT`."""
     hyper = 1 if requested else 0
-    for key in requested:
-        hyper = lcm(hyper, _us(key.period))
+    for us in dict.fromkeys(_key_us(key) for key in requested):  # distinct, in order
+        hyper = lcm(hyper, us)
         if hyper.bit_length() > HYPERPERIOD_BITS_LIMIT:
             culprits = {_us(k.period) for k in requested if hyper % _us(k.period) == 0}
             subs = [(i, sub) for i, sub in enumerate(model.get("subscribers", []))

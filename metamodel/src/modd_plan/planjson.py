@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import itertools
 from fractions import Fraction
+from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
 from modd_model.numbers import MICROS_PER_SECOND
 
 from .schedule import Slot
-from .streams import PlannedStream, decimal_of
+from .streams import PlannedStream, StreamKey, _decimal_of, decimal_of
 
 if TYPE_CHECKING:
     from .plan import Plan
@@ -34,15 +35,26 @@ def _us(value: Fraction) -> int:
     return int(value * MICROS_PER_SECOND)
 
 
+def _key_us(key: StreamKey) -> int:
+    num, den = key._nd  # type: ignore[attr-defined]
+    return int(num * MICROS_PER_SECOND // den)
+
+
+@lru_cache(maxsize=65_536)  # bounded: a plan repeats few delays
+def _dec_us(us: int) -> str:
+    return decimal_of(Fraction(us, MICROS_PER_SECOND))
+
+
 def _stream_json(s: PlannedStream) -> dict[str, Any]:
     first = s.sources[0] if s.sources else None
+    key = s.stream
     return {
         "id": s.id,
-        "key": s.stream.key,
-        "topic": s.stream.topic,
-        "aggregation": s.stream.aggregation,
-        "period_s": _dec(s.stream.period),
-        "period_us": _us(s.stream.period),
+        "key": key.key,
+        "topic": key.topic,
+        "aggregation": key.aggregation,
+        "period_s": _decimal_of(*key._nd),  # type: ignore[attr-defined]
+        "period_us": _key_us(key),
         "sent": s.sent,
         "derived_from": first.stream.key if first else None,
         "factor": first.factor if first else 1,
@@ -64,7 +76,7 @@ def _schedule_json(plan: Plan) -> dict[str, Any]:
     return {
         "epoch_phase_s": "0.0",
         "streams": [
-            {"id": s.id, "key": s.stream.key, "period_us": _us(s.stream.period)}
+            {"id": s.id, "key": s.stream.key, "period_us": _key_us(s.stream)}
             for s in plan.sent_streams
         ],
         "slots": [
@@ -97,7 +109,7 @@ def plan_to_json(plan: Plan) -> dict[str, Any]:
         "subscriptions": {name: key.key for name, key in plan.subscriptions.items()},
         "buffer_sizes": sizes,
         "schedule": _schedule_json(plan),
-        "delays": {name: _dec(d) for name, d in plan.delays.items()},
+        "delays": {name: _dec_us(us) for name, us in plan.buffers.deviations_us.items()},
         "max_delay_s": _dec(Fraction(plan.buffers.max_deviation_us, MICROS_PER_SECOND)),
         "predicted_link_bytes_per_s": plan.link.to_json(),
         "link_budget": plan.budget.to_json() if plan.budget is not None else None,

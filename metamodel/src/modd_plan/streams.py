@@ -33,6 +33,7 @@ from .derive import PAIR_SOURCE_RULES, SINGLE_SOURCE_RULES
 
 #: The aggregation table's names in wire-code order (the tie-break of stream ids).
 AGGREGATIONS: tuple[str, ...] = NAMES
+_AGG_INDEX = {a: i for i, a in enumerate(AGGREGATIONS)}
 
 
 @dataclass(frozen=True)
@@ -47,14 +48,31 @@ class StreamKey:
     aggregation: str
     period: Fraction
 
+    def __post_init__(self) -> None:
+        # Fraction.__hash__ computes a modular inverse and its numerator and
+        # denominator are properties: both are read once here. Not fields:
+        # equality, repr and order stay those of (topic, aggregation, period).
+        nd = (self.period.numerator, self.period.denominator)
+        object.__setattr__(self, "_nd", nd)
+        # sort keys: (float, Fraction) orders as the Fraction, the float first
+        object.__setattr__(self, "_sort_period", (nd[0] / nd[1], self.period))
+        object.__setattr__(self, "_hash", hash((self.topic, self.aggregation, *nd)))
+
     def __hash__(self) -> int:
-        # Fraction.__hash__ computes a modular inverse; numerator and
-        # denominator (always normalised) identify the period as well.
-        return hash((self.topic, self.aggregation, self.period.numerator, self.period.denominator))
+        return self._hash  # type: ignore[attr-defined, no-any-return]
+
+    def __reduce__(self) -> tuple[type[StreamKey], tuple[str, str, Fraction]]:
+        # rebuilt, not copied: a string's hash differs between processes
+        return (StreamKey, (self.topic, self.aggregation, self.period))
 
     @property
     def key(self) -> str:
-        return f"{self.topic}/{self.aggregation}/{decimal_of(self.period)}"
+        # cached in the instance's __dict__ (frozen: computed once per key)
+        key: str | None = self.__dict__.get("_key")
+        if key is None:
+            key = f"{self.topic}/{self.aggregation}/{_decimal_of(*self._nd)}"  # type: ignore
+            object.__setattr__(self, "_key", key)
+        return key
 
     @classmethod
     def parse(cls, key: str) -> StreamKey:
@@ -89,16 +107,34 @@ def requested_streams(model: Mapping[str, Any]) -> dict[StreamKey, list[str]]:
     """Each distinct stream the subscribers ask for, with its subscribers in
     model order."""
     out: dict[StreamKey, list[str]] = {}
-    for sub in model.get("subscribers", []):
-        key = StreamKey(sub["topic"], sub["aggregation"], period_of(sub["periodS"]))
+    for sub, key in zip(model.get("subscribers", []), subscription_keys(model), strict=True):
         out.setdefault(key, []).append(sub["name"])
     return out
 
 
-@lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
+def subscription_keys(model: Mapping[str, Any]) -> list[StreamKey]:
+    """The stream of each subscriber, in model order (one object per
+    distinct stream)."""
+    seen: dict[tuple[str, str, str], StreamKey] = {}
+    out: list[StreamKey] = []
+    for sub in model.get("subscribers", []):
+        text = (sub["topic"], sub["aggregation"], sub["periodS"])
+        key = seen.get(text)
+        if key is None:
+            key = seen[text] = StreamKey(text[0], text[1], period_of(text[2]))
+        out.append(key)
+    return out
+
+
 def decimal_of(value: Fraction) -> str:
-    """``fraction_to_decimal``, memoised: a plan repeats few distinct periods."""
-    return fraction_to_decimal(value)
+    """``fraction_to_decimal``, memoised: a plan repeats few distinct periods
+    (keyed by numerator and denominator: hashing a Fraction is slow)."""
+    return _decimal_of(value.numerator, value.denominator)
+
+
+@lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
+def _decimal_of(numerator: int, denominator: int) -> str:
+    return fraction_to_decimal(Fraction(numerator, denominator))
 
 
 @lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
@@ -109,8 +145,8 @@ def period_of(text: str) -> Fraction:
 
 def _factor(target: StreamKey, source: StreamKey) -> int | None:
     """target.period / source.period if whole (integer arithmetic only)."""
-    a, b = target.period, source.period
-    num, den = a.numerator * b.denominator, a.denominator * b.numerator
+    (an, ad), (bn, bd) = target._nd, source._nd  # type: ignore[attr-defined]
+    num, den = an * bd, ad * bn
     return num // den if num % den == 0 else None
 
 
@@ -158,12 +194,13 @@ def _pair_sources(target: StreamKey, candidates: Sequence[StreamKey]) -> tuple[S
 
 def stream_order(
     topic_index: Mapping[str, int],
-) -> Callable[[StreamKey], tuple[int, int, Fraction]]:
+) -> Callable[[StreamKey], tuple[int, int, tuple[float, Fraction]]]:
     """Sort key of the contract: topic declaration order, aggregation enum
     order, period ascending."""
 
-    def order(s: StreamKey) -> tuple[int, int, Fraction]:
-        return (topic_index[s.topic], AGGREGATIONS.index(s.aggregation), s.period)
+    def order(s: StreamKey) -> tuple[int, int, tuple[float, Fraction]]:
+        return (topic_index[s.topic], _AGG_INDEX[s.aggregation],
+                s._sort_period)  # type: ignore[attr-defined]
 
     return order
 
@@ -174,35 +211,68 @@ def _drop_derivable(
     helper: StreamKey | None = None,
 ) -> list[StreamKey]:
     """The one-pass drop over ``required`` (+ ``helper``, always kept): the
-    most expensive first (ties: longest period, then aggregation order)."""
-    streams = sorted(
-        required, key=lambda s: (-cost_per_s(s), -s.period, AGGREGATIONS.index(s.aggregation))
-    )
-    kept = [True] * len(streams)
-    extra = [helper] if helper is not None else []
-    for i in range(len(streams)):
+    most expensive first (ties: longest period, then aggregation order).
+
+    The streams are of one topic. Which stream can serve which is computed
+    once (the rules of :func:`find_sources`), so that each drop costs a
+    scan of those relations, not a search over the sent set."""
+    # stable sorts, last key first: (-cost, -period, aggregation order)
+    streams = sorted(required, key=lambda s: _AGG_INDEX[s.aggregation])
+    streams.sort(key=lambda s: s._sort_period, reverse=True)  # type: ignore[attr-defined]
+    streams.sort(key=cost_per_s, reverse=True)
+    n = len(streams)
+    every = streams + ([helper] if helper is not None else [])
+    kept = [True] * len(every)  # the helper (index n) stays kept
+    singles: list[list[int]] = []
+    pairs: list[list[list[int]] | None] = []
+    for target in streams:
+        rules = SINGLE_SOURCE_RULES[target.aggregation]
+        singles.append([
+            j for j, s in enumerate(every)
+            if s is not target and s.aggregation in rules and _factor(target, s) is not None
+        ])
+        pair = PAIR_SOURCE_RULES.get(target.aggregation)
+        pairs.append(None if pair is None else [
+            [j for j, s in enumerate(every)
+             if s.aggregation == aggregation and _factor(target, s) is not None]
+            for aggregation in pair
+        ])
+
+    def derivable(r: int) -> bool:
+        if any(kept[j] for j in singles[r]):
+            return True
+        groups = pairs[r]
+        return groups is not None and all(any(kept[j] for j in g) for g in groups)
+
+    dropped: list[int] = []
+    for i in range(n):
         kept[i] = False
-        rest = [s for s, k in zip(streams, kept, strict=True) if k] + extra
-        dropped = [s for s, k in zip(streams, kept, strict=True) if not k]
-        if any(find_sources(r, rest) is None for r in dropped):
+        dropped.append(i)
+        if not all(derivable(r) for r in dropped):
             kept[i] = True
-    return [s for s, k in zip(streams, kept, strict=True) if k] + extra
+            dropped.pop()
+    return [s for s, k in zip(every, kept, strict=True) if k]
 
 
 def _choose_for_topic(
     streams: Sequence[StreamKey], cost_per_s: Callable[[StreamKey], float]
 ) -> list[StreamKey]:
-    best = _drop_derivable(streams, cost_per_s)
-    best_cost = sum(cost_per_s(s) for s in best)
-    for period in sorted({s.period for s in streams}):
-        helper = StreamKey(streams[0].topic, "ALL", period)
-        if helper in streams:
+    costs = {s: cost_per_s(s) for s in streams}  # one call per stream
+    cost = costs.__getitem__
+    best = _drop_derivable(streams, cost)
+    best_cost = sum(cost(s) for s in best)
+    topic = streams[0].topic
+    periods = {s._nd: s._sort_period for s in streams}  # type: ignore[attr-defined]
+    for _, period in sorted(periods.values()):
+        helper = StreamKey(topic, "ALL", period)
+        if helper in costs:
             continue
-        replaceable = sum(cost_per_s(s) for s in best if _factor(s, helper) is not None)
-        if cost_per_s(helper) >= replaceable:
+        replaceable = sum(cost(s) for s in best if _factor(s, helper) is not None)
+        costs[helper] = helper_cost = cost_per_s(helper)
+        if helper_cost >= replaceable:
             continue  # it cannot pay for itself
-        trial = _drop_derivable(streams, cost_per_s, helper)
-        trial_cost = sum(cost_per_s(s) for s in trial)
+        trial = _drop_derivable(streams, cost, helper)
+        trial_cost = sum(cost(s) for s in trial)
         if trial_cost < best_cost:
             best, best_cost = trial, trial_cost
     return best
@@ -233,10 +303,10 @@ def plan_streams(
     sent_by_topic: dict[str, list[StreamKey]] = {}
     for s in sent:
         sent_by_topic.setdefault(s.topic, []).append(s)
-    order = stream_order(topic_index)
-    ids = {s: i for i, s in enumerate(sorted(sent, key=order))}
+    every = sorted(set(requested) | sent, key=stream_order(topic_index))
+    ids = {s: i for i, s in enumerate(s for s in every if s in sent)}
     out: list[PlannedStream] = []
-    for s in sorted(set(requested) | sent, key=order):
+    for s in every:
         subscribers = tuple(requested.get(s, ()))
         if s in ids:
             out.append(PlannedStream(s, ids[s], (), subscribers))
