@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import logging
 import os
 import sys
 from collections.abc import AsyncIterator
@@ -28,6 +29,7 @@ from .foxglove import FoxgloveLive
 from .guards import Guard, HeavyLimiter
 from .hub import SubscriptionHub
 from .planning import preload_milp
+from .reconcile import DroneStatuses, reconcile
 from .routers import (
     archives,
     auth,
@@ -47,6 +49,8 @@ from .spa import mount_frontend
 from .throttle import Throttle
 from .versions import get_version, model_of
 from .zbridge import ZenohBridge
+
+log = logging.getLogger("modd_backend")
 
 ROUTERS: tuple[APIRouter, ...] = (
     health.router,
@@ -95,6 +99,22 @@ def _ping(state: AppState) -> None:
         db.execute(text("SELECT 1"))
 
 
+def _reconcile(state: AppState) -> None:
+    assert state.statuses is not None
+    with state.store.session() as db:
+        reconcile(db, state.statuses, state.settings.deploy_timeout_s)
+
+
+async def _reconcile_deployments(state: AppState, every_s: float = 1.0) -> None:
+    """Settle deploy records with what the drones report (reconcile.py)."""
+    while True:
+        await asyncio.sleep(every_s)
+        try:
+            await run_in_threadpool(_reconcile, state)
+        except Exception:  # reported; the next round tries again
+            log.exception("reconciling deploy records failed")
+
+
 async def _ping_database(state: AppState, every_s: float = 2.0) -> None:
     """Keep ``state.database`` current for /api/health (which never waits on it)."""
     while True:
@@ -134,6 +154,8 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         state.database = "ok"  # just opened and migrated
         if bridge is not None:
             state.hub = SubscriptionHub()
+            state.statuses = DroneStatuses()
+            state.hub.listen_all_status(state.statuses.on_status)
             state.hub.start(bridge)
             if settings.scene_port is not None:
                 state.scene = start_scene(settings, store)
@@ -143,13 +165,16 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
                 if state.foxglove is not None:
                     state.hub.listen_all(state.foxglove.on_value)
                     state.hub.listen_all_status(state.foxglove.on_status)
-        pinger = asyncio.create_task(_ping_database(state))
+        tasks = [asyncio.create_task(_ping_database(state))]
+        if state.statuses is not None:
+            tasks.append(asyncio.create_task(_reconcile_deployments(state)))
         try:
             yield
         finally:
-            pinger.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await pinger
+            for task in tasks:
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
             if state.hub is not None:
                 state.hub.stop()
             if state.scene is not None:
