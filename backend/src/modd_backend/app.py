@@ -20,7 +20,7 @@ from fastapi import APIRouter, FastAPI
 from sqlalchemy import text
 from starlette.concurrency import run_in_threadpool
 
-from . import errors
+from . import archive_work, errors
 from .accounts import ensure_first_admin
 from .db import Store
 from .deployments import last_acked
@@ -183,6 +183,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
                 state.foxglove.stop()
             if bridge is not None:
                 bridge.close()
+            await run_in_threadpool(archive_work.shutdown_pool)
             store.close()
 
     app = FastAPI(
