@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import gc
+import logging
 import os
 import sys
 from collections.abc import AsyncIterator
@@ -20,7 +21,7 @@ from fastapi import APIRouter, FastAPI
 from sqlalchemy import text
 from starlette.concurrency import run_in_threadpool
 
-from . import errors
+from . import archive_work, errors
 from .accounts import ensure_first_admin
 from .db import Store
 from .deployments import last_acked
@@ -29,6 +30,7 @@ from .foxglove import FoxgloveLive
 from .guards import Guard, HeavyLimiter
 from .hub import SubscriptionHub
 from .planning import preload_milp
+from .reconcile import DroneStatuses, reconcile
 from .routers import (
     archives,
     auth,
@@ -48,6 +50,8 @@ from .spa import mount_frontend
 from .throttle import Throttle
 from .versions import get_version, model_of
 from .zbridge import ZenohBridge
+
+log = logging.getLogger("modd_backend")
 
 ROUTERS: tuple[APIRouter, ...] = (
     health.router,
@@ -99,6 +103,22 @@ def _ping(state: AppState) -> None:
         db.execute(text("SELECT 1"))
 
 
+def _reconcile(state: AppState) -> None:
+    assert state.statuses is not None
+    with state.store.session() as db:
+        reconcile(db, state.statuses, state.settings.deploy_timeout_s)
+
+
+async def _reconcile_deployments(state: AppState, every_s: float = 1.0) -> None:
+    """Settle deploy records with what the drones report (reconcile.py)."""
+    while True:
+        await asyncio.sleep(every_s)
+        try:
+            await run_in_threadpool(_reconcile, state)
+        except Exception:  # reported; the next round tries again
+            log.exception("reconciling deploy records failed")
+
+
 async def _ping_database(state: AppState, every_s: float = 2.0) -> None:
     """Keep ``state.database`` current for /api/health (which never waits on it)."""
     while True:
@@ -138,6 +158,8 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         state.database = "ok"  # just opened and migrated
         if bridge is not None:
             state.hub = SubscriptionHub()
+            state.statuses = DroneStatuses()
+            state.hub.listen_all_status(state.statuses.on_status)
             state.hub.start(bridge)
             if settings.scene_port is not None:
                 state.scene = start_scene(settings, store)
@@ -151,7 +173,9 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
             from .replay import ReplaySlot
 
             state.replay = ReplaySlot(settings.host, settings.foxglove_replay_port)
-        pinger = asyncio.create_task(_ping_database(state))
+        tasks = [asyncio.create_task(_ping_database(state))]
+        if state.statuses is not None:
+            tasks.append(asyncio.create_task(_reconcile_deployments(state)))
         # Everything loaded so far (FastAPI, cvxpy, viser, zenoh: ~150,000
         # objects) lives as long as the process: out of the collector's
         # sight, a full collection no longer stalls the event loop (it took
@@ -161,9 +185,10 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         try:
             yield
         finally:
-            pinger.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await pinger
+            for task in tasks:
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
             if state.hub is not None:
                 state.hub.stop()
             if state.scene is not None:
@@ -174,6 +199,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
                 state.replay.stop()
             if bridge is not None:
                 bridge.close()
+            await run_in_threadpool(archive_work.shutdown_pool)
             store.close()
 
     app = FastAPI(

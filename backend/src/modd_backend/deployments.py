@@ -7,11 +7,17 @@ a failure, recorded with its reason.
 
 Every request is signed (modd_model.signing) with the deploy key shared with
 the SubBroker, over the model, the revision, who deployed and a fresh nonce:
-the SubBroker applies nothing else (docs/security.md, "Signed deploys")."""
+the SubBroker applies nothing else (docs/security.md, "Signed deploys").
+
+The record is written ``pending`` with the request's nonce before the query
+goes out; the drone's status names the nonce of what it runs, so a record
+left pending by a backend that stopped mid-deploy is settled against what the
+drone runs (:mod:`.reconcile`)."""
 
 from __future__ import annotations
 
 import json
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +31,15 @@ from .zbridge import ZenohBridge, read_secret
 
 #: Extra seconds the backend waits beyond the SubBroker's own deploy timeout.
 QUERY_MARGIN_S = 2.0
+
+#: Deployment ids whose query this process is waiting for (reconcile skips them).
+_in_flight: set[int] = set()
+_in_flight_lock = threading.Lock()
+
+
+def in_flight() -> set[int]:
+    with _in_flight_lock:
+        return set(_in_flight)
 
 
 def signing_key(path: Path | None) -> bytes | None:
@@ -44,18 +59,24 @@ def deploy(
 ) -> Deployment:
     """Send ``model`` to its drone's SubBroker and record the outcome."""
     drone = str(model["drone"]["name"])
-    record = Deployment(
-        project_id=version.project_id, revision=version.revision, drone=drone,
-        requested_by=user, status="pending",
-    )
-    db.add(record)
-    db.commit()
     body: dict[str, Any] = {"model": model, "timeout_s": timeout_s, "revision": version.revision,
                             "project_id": version.project_id, "deployed_by": user}
     if key is not None:
         body = sign_request(key, body)
+    record = Deployment(
+        project_id=version.project_id, revision=version.revision, drone=drone,
+        requested_by=user, status="pending", nonce=body.get("nonce"),
+    )
+    db.add(record)
+    db.commit()
     request = json.dumps(body).encode()
-    result = bridge.query(deploy_key(drone), request, timeout_s + QUERY_MARGIN_S)
+    with _in_flight_lock:
+        _in_flight.add(record.id)
+    try:
+        result = bridge.query(deploy_key(drone), request, timeout_s + QUERY_MARGIN_S)
+    finally:
+        with _in_flight_lock:
+            _in_flight.discard(record.id)
     reply = result.json() if result.ok else None
     if isinstance(reply, dict) and reply.get("status") == "ACKED":
         record.status = "acked"

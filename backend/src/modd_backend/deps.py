@@ -30,6 +30,7 @@ from .zbridge import ZenohBridge
 if TYPE_CHECKING:
     from .guards import HeavyLimiter
     from .hub import SubscriptionHub
+    from .reconcile import DroneStatuses
     from .replay import ReplaySlot
 
 #: The workbench's session cookie (HttpOnly, SameSite=Strict) and the header
@@ -48,6 +49,8 @@ class AppState:
     foxglove: FoxgloveLive | None = None
     replay: ReplaySlot | None = None
     hub: SubscriptionHub | None = None
+    #: The last status of each drone (what it runs), fed by the hub.
+    statuses: DroneStatuses | None = None
     heavy: HeavyLimiter | None = None
     login_accounts: Throttle = field(default_factory=lambda: Throttle(10, 300))
     login_addresses: Throttle = field(default_factory=lambda: Throttle(50, 300))

@@ -78,6 +78,8 @@ class Deployment(Base):
     requested_at: Mapped[datetime] = mapped_column(default=utcnow)
     finished_at: Mapped[datetime | None]
     #: pending, acked or failed
-    status: Mapped[str] = mapped_column(String(16))
+    status: Mapped[str] = mapped_column(String(16), index=True)
+    #: the signed request's nonce: the drone's status names it while it runs this
+    nonce: Mapped[str | None] = mapped_column(String(128), index=True)
     ack_json: Mapped[str | None] = mapped_column(Text)
     error: Mapped[str | None] = mapped_column(Text)

@@ -4,15 +4,14 @@ user may read; paths are confined to ``<archive_dir>/<drone>/``."""
 
 from __future__ import annotations
 
-import csv
-import io
 from typing import Annotated, Any
 
 from fastapi import APIRouter, HTTPException, Path, Query
 from fastapi.responses import FileResponse, Response
 from pydantic import BaseModel
 
-from ..archives import archive_path, file_info, list_files, read_topic, reduce_minmax
+from ..archive_work import csv_text, in_worker, series
+from ..archives import archive_path, file_info, list_files
 from ..deps import Heavy, StateDep, UserDep
 from ..downloads import content_disposition
 from ..schemas import Responses
@@ -81,33 +80,28 @@ def list_archives(drone: Drone, state: StateDep, _user: UserDep) -> list[Archive
 
 
 @router.get("/{name}/series", responses={**NOT_FOUND, **BUSY}, dependencies=[Heavy])
-def read_series(
+async def read_series(
     drone: Drone, name: Name, topic: Topic, state: StateDep, _user: UserDep,
     start_ns: Nanos = None, end_ns: Nanos = None,
     max_points: Annotated[int, Query(ge=2, le=100_000)] = 2000,
 ) -> SeriesOut:
     path = archive_path(state.settings.effective_archive_dir, drone, name)
-    samples = read_topic(path, topic, start_ns, end_ns)
-    points = reduce_minmax(samples, max_points)
-    return SeriesOut(topic=topic, total=len(samples), reduced=len(points) < len(samples),
-                     points=points)
+    total, points = await in_worker(series, path, topic, start_ns, end_ns, max_points)
+    return SeriesOut(topic=topic, total=total, reduced=len(points) < total, points=points)
 
 
 @router.get("/{name}/csv", responses={**NOT_FOUND, **BUSY, 200: {"content": {"text/csv": {}}}},
             dependencies=[Heavy])
-def export_csv(
+async def export_csv(
     drone: Drone, name: Name, topic: Topic, state: StateDep, _user: UserDep,
     start_ns: Nanos = None, end_ns: Nanos = None,
 ) -> Response:
-    """Every sample of the range, unreduced: ``log_time_ns,topic,value``."""
+    """Every sample of the range, unreduced: ``log_time_ns,topic,value``
+    (read in a worker process: archive_work.py)."""
     path = archive_path(state.settings.effective_archive_dir, drone, name)
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["log_time_ns", "topic", "value"])
-    for t, v in read_topic(path, topic, start_ns, end_ns):
-        writer.writerow([t, topic, v])
+    text = await in_worker(csv_text, path, topic, start_ns, end_ns)
     stem = f"{name.removesuffix('.mcap')}-{topic}.csv"
-    return Response(out.getvalue(), media_type="text/csv; charset=utf-8",
+    return Response(text, media_type="text/csv; charset=utf-8",
                     headers={"Content-Disposition": content_disposition(stem)})
 
 

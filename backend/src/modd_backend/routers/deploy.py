@@ -46,11 +46,18 @@ class DeploymentOut(BaseModel):
 
 
 class DeployedDiffOut(BaseModel):
+    """``source``: ``drone`` when the drone's status said what it runs (its
+    ``drone_reports``; ``deployed`` is then that deployment's record, None for
+    its configured model or a deploy this store does not hold), ``record``
+    when the drone does not report and the last acked record stands in."""
+
     drone: str
     head_revision: int
     deployed: DeploymentOut | None
     same_project: bool
     changes: list[dict[str, Any]]
+    source: str = "record"
+    drone_reports: dict[str, Any] | None = None
 
 
 @router.post(
@@ -93,15 +100,24 @@ def deployed_diff(
     project_id: Id,
     db: DbDep,
     _user: UserDep,
+    state: StateDep,
     drone: Annotated[str | None, Query(max_length=64)] = None,
 ) -> DeployedDiffOut:
-    """Changes from what runs on the drone (its last acked deployment, from any
-    project) to this project's head; everything is an addition when nothing
-    is deployed."""
+    """Changes from what runs on the drone (what its status reports; its last
+    acked deployment when it does not report) to this project's head;
+    everything is an addition when nothing known is deployed."""
     head = get_version(db, project_id)
     edited = model_of(head)
     name = drone or str((edited.get("drone") or {}).get("name", ""))
-    running = last_acked(db, name) if name else None
+    reports = state.statuses.deployment(name) if state.statuses and name else None
+    running: Deployment | None = None
+    if reports is not None:
+        nonce = reports.get("nonce")
+        if isinstance(nonce, str):
+            running = db.scalar(select(Deployment).where(Deployment.drone == name,
+                                                         Deployment.nonce == nonce).limit(1))
+    elif name:
+        running = last_acked(db, name)
     deployed: dict[str, Any] = {}
     if running is not None:
         deployed = model_of(get_version(db, running.project_id, running.revision))
@@ -111,4 +127,6 @@ def deployed_diff(
         deployed=DeploymentOut.model_validate(record_json(running)) if running else None,
         same_project=running is not None and running.project_id == project_id,
         changes=diff(deployed, edited),
+        source="drone" if reports is not None else "record",
+        drone_reports=reports,
     )

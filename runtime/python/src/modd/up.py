@@ -179,6 +179,8 @@ def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
             sub += ["--zenoh-listen", endpoint]
         for endpoint in args.zenoh_connect or ():
             sub += ["--zenoh-connect", endpoint]
+        if not args.resume:
+            sub.append("--no-resume")  # what runs is MODEL, not an earlier run's deployment
         stack.processes.append(Process("subbroker", sub, logs / "subbroker.log"))
     if args.simulate and drone:
         stack.processes += simulation(model, configs / "model.json", bin_dir, logs)
@@ -201,6 +203,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"modd up: {exc}", file=sys.stderr)
         return 1
     local, configs = prepare(model, workdir)
+    if args.part != "drone":
+        print(kept_note(workdir / "state", args.resume), end="", flush=True)
     env = dict(os.environ)
     key_ref = (local.get("link", {}).get("keyRef") or "env:MODD_LINK_KEY")
     kind, _, name = key_ref.partition(":")
@@ -245,6 +249,21 @@ def run(args: argparse.Namespace) -> int:
     return code
 
 
+def kept_note(state: Path, resume: bool) -> str:
+    """What happens to a deployment an earlier run kept in ``state``."""
+    from .subbroker.kept import StateDir
+
+    kept = StateDir(state).load_deployment()
+    if kept is None:
+        return ""
+    where = state / "deployed.json"
+    if resume:
+        return (f"modd up: --resume: the SubBroker resumes the deployment kept in {where} "
+                f"({kept[1].describe()}), not MODEL\n")
+    return (f"modd up: running MODEL; the deployment kept in {where} ({kept[1].describe()}) "
+            "is not resumed (--resume resumes it)\n")
+
+
 def run_dir(workdir: str | None, drone: str) -> Path:
     """The run directory, private to this user (0700; ValueError when another
     user owns it or a symbolic link leads there)."""
@@ -283,4 +302,7 @@ def register(sub: Any) -> None:
                         "default tcp/127.0.0.1:7447)")
     p.add_argument("--zenoh-connect", action="append", default=None, metavar="ENDPOINT",
                    help="a zenoh endpoint the SubBroker connects to (repeatable)")
+    p.add_argument("--resume", action="store_true",
+                   help="resume the deployment (and dynamic subscriptions) a workbench made "
+                   "in an earlier run of this drone, instead of running MODEL")
     p.set_defaults(func=run)

@@ -8,6 +8,7 @@ composed (docs/subbroker.md).
 
 from __future__ import annotations
 
+import hmac
 import json
 import logging
 import threading
@@ -17,12 +18,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from modd_model.diagnostics import Diagnostic, ModelError
 from modd_model.query import topics
-from modd_model.signing import NonceGuard
+from modd_model.signing import NonceGuard, signature
 from modd_plan import Plan
 from modd_plan.streams import Source, StreamKey
 
-from modd.link.frames import AuthOk, Config, ConfigAck, Status
+from modd.link.frames import AuthOk, Config, ConfigAck, ErrorCode, Status
 from modd.link.receiver import Window
 
 from ..zenoh_auth import CredentialStore
@@ -33,9 +35,10 @@ from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoi
 from .deploy import DeployRequest, parse_request
 from .dynamic import DynamicSubscriptions
 from .fanout import FanOut
+from .kept import Deployment, StateDir, same_model
 from .keys import deploy_key, subscribe_key
 from .link import ConfigRejected, LinkClient, LinkDown
-from .planning import config_for, plan_for
+from .planning import config_for, plan_within
 from .status import StatusPublisher
 
 if TYPE_CHECKING:
@@ -53,6 +56,7 @@ class Running:
     config: Config
     epoch_ns: int
     fanout: FanOut
+    meta: Deployment = field(default_factory=Deployment.configured)
     topic_info: dict[str, tuple[str, str]] = field(default_factory=dict)  # unit, type
     slots: SlotDelivery | None = None
 
@@ -76,14 +80,18 @@ class SubBroker:
         self._store = CredentialStore(config.credentials_dir)
         self._deploy_key = b""
         self._nonces = NonceGuard()
-        self._model = self._initial_model()
+        self._state = StateDir(config.state_dir)
+        self._model, self._meta = self._initial_model()
         self._running: Running | None = None
         self._by_id: dict[int, Running] = {}
-        self._planned: dict[int, tuple[dict[str, Any], Plan]] = {}
+        self._planned: dict[int, tuple[dict[str, Any], Plan, Deployment]] = {}
         self._last_id = 0
         self._lock = threading.RLock()
         self._deploy_lock = threading.Lock()
         self.dynamic = DynamicSubscriptions(self.drone, self._static_names)
+        if config.resume:
+            self.dynamic.restore(self._state.load_dynamic())
+        self.dynamic.persist = self._state.save_dynamic
         self.link = LinkClient(config.endpoint, self._key, config.link, self, self._liveness)
         self._zenoh: ZenohDelivery | None = None
         self._tcp: TcpDelivery | None = None
@@ -94,13 +102,23 @@ class SubBroker:
 
     # -- lifecycle -------------------------------------------------------------
 
-    def _initial_model(self) -> dict[str, Any]:
-        saved = self._state_file()
-        if saved is not None and saved.exists():
-            log.info("running the deployed model kept in %s", saved)
-            model: dict[str, Any] = json.loads(saved.read_text())
-            return model
-        return self.config.model
+    def _initial_model(self) -> tuple[dict[str, Any], Deployment]:
+        """The kept deployment, said loudly (it is not the configured model),
+        unless ``resume`` is off; else the configured model."""
+        kept = self._state.load_deployment()
+        where = self._state.deployment_file()
+        if kept is None:
+            return self.config.model, Deployment.configured()
+        model, meta = kept
+        if not self.config.resume:
+            log.warning("NOT resuming the deployment kept in %s (%s): running the configured "
+                        "model", where, meta.describe())
+            return self.config.model, Deployment.configured()
+        self._differs = not same_model(model, self.config.model)
+        log.warning("RESUMING the deployment kept in %s: %s%s", where, meta.describe(),
+                    "; it DIFFERS from the configured model" if self._differs
+                    else " (the same as the configured model)")
+        return model, meta
 
     def nonce_file(self) -> Path:
         """The deploy nonces accepted within the signing window (replay
@@ -109,9 +127,7 @@ class SubBroker:
         d = self.config.state_dir
         return (d if d is not None else self.config.credentials_dir) / f"deploy-nonces-{self.drone}"
 
-    def _state_file(self) -> Path | None:
-        d = self.config.state_dir
-        return d / "deployed.json" if d is not None else None
+    _differs = False
 
     def start(self) -> None:
         self._store.ensure()
@@ -175,8 +191,8 @@ class SubBroker:
         shortest = min(s.period_us for s in running.config.streams) / 1e6
         return max(3.0, 2 * shortest + 1.0)
 
-    def _prepare(self, model: dict[str, Any], avoid: int) -> Config:
-        plan = plan_for(model, self.link.stats.rtt_s)
+    def _prepare(self, model: dict[str, Any], avoid: int, meta: Deployment) -> Config:
+        plan = plan_within(model, self.link.stats.rtt_s, self.config.link.plan_budget_s)
         if not plan.sent_streams:
             raise ValueError("the plan sends nothing over the link (no published subscription)")
         with self._lock:
@@ -186,7 +202,7 @@ class SubBroker:
             self._last_id = cid
             # kept until acked: an ack that comes after the deploy timed out
             # still means the PubBroker runs it, so the SubBroker follows
-            self._planned[cid] = (model, plan)
+            self._planned[cid] = (model, plan, meta)
             for stale in list(self._planned)[:-8]:
                 del self._planned[stale]
         return config_for(plan, cid, self.config.link.pubbroker_status_period_s)
@@ -198,14 +214,32 @@ class SubBroker:
         if running and ok.config_id == running.config.config_id and ok.epoch_ns == running.epoch_ns:
             log.info("resuming config %d", ok.config_id)
             return None
-        model = running.model if running else self._model
-        return self._prepare(model, avoid=ok.config_id)
+        if running:
+            return self._prepare(running.model, ok.config_id, running.meta)
+        try:
+            return self._prepare(self._model, ok.config_id, self._meta)
+        except ValueError as exc:
+            if self._meta.source != "kept":
+                raise
+            log.error("the kept deployment (%s) cannot be planned: %s; running the configured "
+                      "model", self._meta.describe(), exc)
+            self._model, self._meta = self.config.model, Deployment.configured()
+            self._differs = False
+            return self._prepare(self._model, ok.config_id, self._meta)
 
     def on_config_acked(self, config: Config, ack: ConfigAck) -> None:
         with self._lock:
-            model, plan = self._planned.pop(config.config_id)
+            model, plan, meta = self._planned.pop(config.config_id)
+        if meta.source == "deploy" and meta.deployed_at_ns is None:
+            # acked, even after its deploy timed out: this is what the drone runs now
+            meta = meta.acked()
+            self._differs = not same_model(model, self.config.model)
+            try:
+                self._state.save_deployment(model, meta)
+            except OSError as exc:
+                log.error("cannot keep the deployment in the state directory: %s", exc)
         sent = [s.stream for s in plan.sent_streams]
-        running = Running(model, plan, config, ack.epoch_ns, FanOut(sent))
+        running = Running(model, plan, config, ack.epoch_ns, FanOut(sent), meta)
         running.topic_info = {t.name: (t.unit, t.type) for t in topics(model).values()}
         running.slots = SlotDelivery(running.fanout, config.config_id, ack.epoch_ns,
                                      running.topic_info)
@@ -219,11 +253,17 @@ class SubBroker:
         with self._lock:
             self._by_id = {config.config_id: running}
             self._running = running
-            self._model = model
+            self._model, self._meta = model, meta
         if self._tcp is not None:
             self._tcp.set_endpoints(tcp_endpoints(model))
-        log.info("config %d running (epoch %d ns, %d streams sent)", config.config_id,
-                 ack.epoch_ns, len(config.streams))
+        log.info("config %d running (epoch %d ns, %d streams sent): %s", config.config_id,
+                 ack.epoch_ns, len(config.streams),
+                 meta.describe() if meta.source != "configured" else "the configured model")
+        if self._status is not None:  # what runs is known at once, not a period later
+            try:
+                self._status.publish_now()
+            except Exception:  # a status must never stop the link
+                log.exception("status publication failed")
 
     def on_windows(self, windows: list[Window]) -> None:
         running = self._by_id.get(windows[0].config_id)
@@ -268,13 +308,34 @@ class SubBroker:
         return reply
 
     def _deploy(self, payload: bytes) -> dict[str, Any]:
-        request = parse_request(payload, self.drone, self._verify)
-        if request.model is None:
-            if request.reply.get("status") == "UNAUTHORISED":
-                log.warning("deploy refused: %s", request.reply["reason"])
-            return request.reply
-        with self._deploy_lock:
+        with self._deploy_lock:  # one at a time, and a repeated request sees the first's end
+            already = self._already_running(payload)
+            if already is not None:
+                return already
+            request = parse_request(payload, self.drone, self._verify)
+            if request.model is None:
+                if request.reply.get("status") == "UNAUTHORISED":
+                    log.warning("deploy refused: %s", request.reply["reason"])
+                return request.reply
             return self.deploy(request)
+
+    def _already_running(self, payload: bytes) -> dict[str, Any] | None:
+        """The reply to a deploy request that is the one running (same signed
+        nonce, sent again by a workbench resuming it): ACKED, nothing re-applied."""
+        running = self._running
+        if running is None or not running.meta.nonce:
+            return None
+        try:
+            request = json.loads(payload)
+        except (ValueError, UnicodeDecodeError):
+            return None
+        if not isinstance(request, dict) or request.get("nonce") != running.meta.nonce:
+            return None
+        sig = request.get("signature")
+        if not isinstance(sig, str) or not hmac.compare_digest(
+                sig, signature(self._deploy_key, request)):
+            return None
+        return {**self._acked_reply(running, running.config, []), "already_running": True}
 
     def _verify(self, request: dict[str, Any]) -> str | None:
         refused = self._nonces.verify(self._deploy_key, request)
@@ -286,42 +347,59 @@ class SubBroker:
     def deploy(self, request: DeployRequest) -> dict[str, Any]:
         """Plan ``request.model``, send CONFIG, wait for the ack; the reply."""
         assert request.model is not None
+        meta = Deployment.from_request(request.fields)
         try:
-            config = self._prepare(request.model, avoid=0)
+            config = self._prepare(request.model, 0, meta)
         except ValueError as exc:
-            return {"status": "REJECTED", "reason": str(exc)}
-        try:
-            ack = self.link.send_config(config, request.timeout_s)
-        except LinkDown as exc:
-            return {"status": "LINK_DOWN", "reason": str(exc)}
-        except TimeoutError as exc:
-            return {"status": "TIMEOUT", "reason": f"{exc} within {request.timeout_s} s"}
-        except ConfigRejected as exc:
-            return {"status": "NACK", "reason": str(exc), "code": exc.status}
-        self._save(request.model)
-        plan = self._running.plan if self._running else None
-        summary = plan.to_json() if plan else {}
+            log.warning("deploy of %s refused: %s", meta.describe(), exc)
+            return {"status": "REJECTED", "reason": str(exc),
+                    "diagnostics": _located(exc, request.model)}
+        deadline = time.monotonic() + request.timeout_s
+        delay, busy = 0.05, 0
+        while True:
+            try:
+                self.link.send_config(config, max(0.01, deadline - time.monotonic()))
+                break
+            except LinkDown as exc:
+                return {"status": "LINK_DOWN", "reason": str(exc)}
+            except TimeoutError as exc:
+                return {"status": "TIMEOUT", "reason": f"{exc} within {request.timeout_s} s"}
+            except ConfigRejected as exc:
+                if exc.status != ErrorCode.BUSY or time.monotonic() + delay >= deadline:
+                    return {"status": "NACK", "reason": str(exc), "code": exc.status,
+                            "busy_retries": busy}
+                # a CONFIG still waits for its switch date: send again after a backoff
+                busy += 1
+                time.sleep(delay)
+                delay = min(delay * 2, 1.0)
+        running = self._running
+        assert running is not None
+        return {**self._acked_reply(running, config, request.warnings), "busy_retries": busy}
+
+    def _acked_reply(self, running: Running, config: Config,
+                     warnings: list[dict[str, Any]]) -> dict[str, Any]:
+        summary = running.plan.to_json()
         return {
             "status": "ACKED",
-            "config_id": ack.config_id,
-            "epoch_ns": ack.epoch_ns,
+            "config_id": config.config_id,
+            "epoch_ns": running.epoch_ns,
             "streams_sent": len(config.streams),
             "hyperperiod_s": summary.get("hyperperiod_s"),
             "messages_per_hyperperiod": summary.get("messages_per_hyperperiod"),
             "buffer_sizes": summary.get("buffer_sizes"),
             "predicted_link_bytes_per_s": summary.get("predicted_link_bytes_per_s"),
-            "warnings": request.warnings,
+            "warnings": warnings,
+            "deployment": running.meta.as_json(),
         }
 
-    def _save(self, model: dict[str, Any]) -> None:
-        path = self._state_file()
-        if path is not None:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(".tmp")
-            tmp.write_text(json.dumps(model))
-            tmp.replace(path)
-
     # -- status ------------------------------------------------------------------
+
+    def _deployment_status(self, running: Running | None) -> dict[str, Any]:
+        """Which revision runs, deployed when and by whom, and whether it is
+        the configured model (docs/subbroker.md, "Status")."""
+        meta = running.meta if running else self._meta
+        return {**meta.as_json(), "running": running is not None,
+                "differs_from_configured": meta.source != "configured" and self._differs}
 
     def status(self) -> dict[str, Any]:
         """The status document (docs/subbroker.md, "Status")."""
@@ -336,6 +414,7 @@ class SubBroker:
             "rtt_s": stats.rtt_s,
             "config_id": running.config.config_id if running else None,
             "epoch_ns": running.epoch_ns if running else None,
+            "deployment": self._deployment_status(running),
             "bytes_in": stats.bytes_in,
             "bytes_out": stats.bytes_out,
             "data_frames": stats.data_frames,
@@ -351,3 +430,17 @@ class SubBroker:
             "pubbroker": dict(stats.pubbroker),
         }
 
+
+def _located(exc: ValueError, model: dict[str, Any]) -> list[dict[str, object]]:
+    """A planning refusal as diagnostics pinned where the model can be
+    changed: the planner's own, the subscription of an over-large topic, else
+    the whole model."""
+    if isinstance(exc, ModelError) and exc.diagnostics:
+        return [d.to_json() for d in exc.diagnostics]
+    pointer = ""
+    subscribers = getattr(exc, "subscribers", ())
+    for i, sub in enumerate(model.get("subscribers", [])):
+        if isinstance(sub, dict) and sub.get("name") in subscribers:
+            pointer = f"/subscribers/{i}"
+            break
+    return [Diagnostic(str(exc), pointer).to_json()]

@@ -44,6 +44,9 @@ def _parser() -> argparse.ArgumentParser:
                    help="do not deliver to the subscribers' TCP endpoints")
     p.add_argument("--status-period", type=float, default=None, metavar="S",
                    help="seconds between status puts (default 1)")
+    p.add_argument("--no-resume", action="store_true",
+                   help="run the configured model, not the deployment (and dynamic "
+                   "subscriptions) kept in the state directory")
     p.add_argument("--log-level", default="INFO")
     return p
 
@@ -78,7 +81,8 @@ def build_config(args: argparse.Namespace) -> SubBrokerConfig:
         delivery = replace(delivery, tcp=False)
     if args.status_period is not None:
         delivery = replace(delivery, status_period_s=args.status_period)
-    return replace(cfg, link=link, zenoh=z, delivery=delivery)
+    return replace(cfg, link=link, zenoh=z, delivery=delivery,
+                   resume=cfg.resume and not args.no_resume)
 
 
 def main(argv: list[str] | None = None) -> int:

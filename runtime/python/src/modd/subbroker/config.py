@@ -44,6 +44,7 @@ class LinkOptions:
     ping_period_s: float = 0.0  # 0: PING only on connect (keeps the link quiet)
     pubbroker_status_period_s: int = 60  # STATUS rate asked in CONFIG (0: none)
     ack_timeout_s: float = 5.0
+    plan_budget_s: float = 5.0  # a deploy not planned within it is refused (REJECTED)
 
 
 @dataclass(frozen=True)
@@ -71,6 +72,9 @@ class SubBrokerConfig:
     delivery: DeliveryOptions = field(default_factory=DeliveryOptions)
     state_dir: Path | None = None  # where a deployed model is kept across restarts
     source: str = "<defaults>"
+    #: Resume the deployment and dynamic subscriptions kept in state_dir (else
+    #: run the configured model; ``modd-subbroker --no-resume``).
+    resume: bool = True
 
     @property
     def endpoint(self) -> tuple[str, int]:

@@ -27,6 +27,8 @@ class DeployRequest:
     timeout_s: float = DEFAULT_TIMEOUT_S
     reply: dict[str, Any] = field(default_factory=dict)
     warnings: list[dict[str, Any]] = field(default_factory=list)
+    #: who asked for what: project_id, revision, nonce, deployed_by (as sent)
+    fields: dict[str, Any] = field(default_factory=dict)
 
 
 def _error(status: str, reason: str, **more: Any) -> DeployRequest:
@@ -74,4 +76,6 @@ def parse_request(payload: bytes, drone: str,
         return _error("REJECTED", reason)
     if not result.model.get("subscribers"):
         return _error("REJECTED", "the model has no subscriptions: nothing to send over the link")
-    return DeployRequest(result.model, float(timeout), warnings=diagnostics)
+    meta = {k: request[k] for k in ("project_id", "revision", "nonce", "deployed_by")
+            if k in request}
+    return DeployRequest(result.model, float(timeout), warnings=diagnostics, fields=meta)

@@ -18,6 +18,7 @@ its own.
 
 from __future__ import annotations
 
+import logging
 import secrets
 import threading
 from collections.abc import Callable, Mapping
@@ -28,6 +29,8 @@ from modd_plan import Accepted, Plan, check_dynamic
 from modd_plan.streams import Source, StreamKey
 
 from .keys import check_name, sub_key
+
+log = logging.getLogger("modd.subbroker")
 
 
 class Router(Protocol):
@@ -84,6 +87,32 @@ class DynamicSubscriptions:
         self._reserved = reserved  # the model's subscriber names
         self._subs: dict[str, Dynamic] = {}
         self._lock = threading.Lock()
+        #: called with every subscription after each change (the state directory)
+        self.persist: Callable[[list[dict[str, str]]], None] | None = None
+
+    def restore(self, saved: list[dict[str, str]]) -> None:
+        """Take back subscriptions kept by an earlier run (their owner and
+        the quotas as when they were made); routed by the next :meth:`reroute`."""
+        with self._lock:
+            for d in saved[: self._total]:
+                name = d["name"]
+                try:
+                    check_name("subscriber", name)
+                except ValueError:
+                    continue
+                if len(name) <= MAX_NAME:
+                    self._subs[name] = Dynamic(name, d["topic"], d["period_s"],
+                                               d["aggregation"], d["owner"])
+
+    def _changed(self) -> None:
+        if self.persist is None:
+            return
+        with self._lock:
+            subs = [vars(d).copy() for d in self._subs.values()]
+        try:
+            self.persist(subs)
+        except OSError as exc:  # the subscription still works in this run
+            log.error("cannot keep the dynamic subscriptions: %s", exc)
 
     def names(self) -> list[str]:
         with self._lock:
@@ -141,6 +170,7 @@ class DynamicSubscriptions:
             self._subs[name] = Dynamic(name, topic, period, agg, owner)
         target = StreamKey.parse(verdict.stream)
         running.route(target, verdict.sources, name)
+        self._changed()
         return {
             "status": "ACCEPTED",
             "subscriber": name,
@@ -161,6 +191,7 @@ class DynamicSubscriptions:
             return {"status": "ERROR", "reason": f"no dynamic subscription named {name!r}"}
         if running is not None:
             running.unroute(name)
+        self._changed()
         return {"status": "CANCELLED", "subscriber": name}
 
     def reroute(self, running: Router) -> list[tuple[str, str]]:
@@ -177,4 +208,6 @@ class DynamicSubscriptions:
                 with self._lock:
                     self._subs.pop(d.name, None)
                 dropped.append((d.name, verdict.reason))
+        if dropped:
+            self._changed()
         return dropped

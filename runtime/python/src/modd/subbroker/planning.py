@@ -8,6 +8,8 @@ stream-id order, periods in whole microseconds).
 
 from __future__ import annotations
 
+import threading
+from concurrent.futures import Future
 from fractions import Fraction
 from typing import Any
 
@@ -28,6 +30,44 @@ def plan_for(model: dict[str, Any], rtt_s: float | None) -> Plan:
     if rtt_s is not None:
         ping = max(ping, Fraction(str(round(rtt_s, 6))))
     return make_plan(model, ping_s=ping)
+
+
+class OverBudget(ValueError):
+    """A model the SubBroker cannot plan within its budget."""
+
+
+_running_over: list[threading.Thread] = []
+
+
+def plan_within(model: dict[str, Any], rtt_s: float | None, budget_s: float) -> Plan:
+    """:func:`plan_for` on a worker thread, given up after ``budget_s``
+    (OverBudget; ValueError for a model that cannot be planned at all). The
+    planner's memory is bounded (modd_plan.buffers.CANDIDATE_LIMIT) but not its
+    time on a pathological model: a plan given up goes on computing on its
+    thread, so while one still runs every other request is refused at once."""
+    _running_over[:] = [t for t in _running_over if t.is_alive()]
+    if _running_over:
+        raise OverBudget("a model given up for its planning budget is still being planned; "
+                         "retry in a moment")
+    future: Future[Plan] = Future()
+
+    def work() -> None:
+        try:
+            future.set_result(plan_for(model, rtt_s))
+        except BaseException as exc:  # handed to the caller
+            future.set_exception(exc)
+
+    thread = threading.Thread(target=work, name="modd-plan", daemon=True)
+    thread.start()
+    thread.join(budget_s)
+    if thread.is_alive():
+        _running_over.append(thread)
+        raise OverBudget(f"planning this model takes longer than the SubBroker's budget of "
+                         f"{budget_s:g} s ([link] plan_budget_s)")
+    try:
+        return future.result()
+    except MemoryError as exc:
+        raise OverBudget("planning this model ran out of memory") from exc
 
 
 def config_for(plan: Plan, config_id: int, status_period_s: int = 60) -> Config:

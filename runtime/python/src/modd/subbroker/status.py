@@ -71,6 +71,7 @@ class StatusPublisher:
         self._stats = stats
         self._rates = Rates()
         self._stop = threading.Event()
+        self._publishing = threading.Lock()  # the period's thread and an event's (a deploy)
         self._thread = threading.Thread(target=self._run, name="modd-status", daemon=True)
         self.last: dict[str, Any] = {}
 
@@ -83,13 +84,14 @@ class StatusPublisher:
         self._pub.undeclare()  # type: ignore[no-untyped-call]
 
     def publish_now(self) -> dict[str, Any]:
-        status = self._snapshot()
-        stats = self._stats()
-        status.update(self._rates.update(stats))
-        status.update(stats.backpressure.as_dict())
-        self.last = status
-        self._pub.put(json.dumps(status, separators=(",", ":")))
-        return status
+        with self._publishing:
+            status = self._snapshot()
+            stats = self._stats()
+            status.update(self._rates.update(stats))
+            status.update(stats.backpressure.as_dict())
+            self.last = status
+            self._pub.put(json.dumps(status, separators=(",", ":")))
+            return status
 
     def _run(self) -> None:
         while not self._stop.wait(self._period):
