@@ -27,14 +27,17 @@ from modd.link.receiver import Window
 
 from ..zenoh_auth import CredentialStore
 from ..zenoh_session import open_session, secured
+from . import backfill_query
+from .backfill import BackfillManager
 from .config import SubBrokerConfig, resolve_key
 from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoints
 from .deploy import DeployRequest, parse_request
 from .dynamic import DynamicSubscriptions
 from .fanout import FanOut
-from .keys import deploy_key, subscribe_key
+from .keys import backfill_key, deploy_key, subscribe_key
 from .link import ConfigRejected, LinkClient, LinkDown
 from .planning import config_for, plan_for
+from .record import BaseRecord
 from .status import StatusPublisher
 
 if TYPE_CHECKING:
@@ -90,6 +93,12 @@ class SubBroker:
         self._queryables: list[Any] = []
         self._workers = ThreadPoolExecutor(max_workers=4, thread_name_prefix="modd-query")
         self.delivered = 0
+        # Backfill (docs/subbroker.md, "Backfill") and the base-station record of every delivery.
+        self.record = (BaseRecord(config.state_dir / "records", self.drone)
+                       if config.state_dir is not None else None)
+        self.backfill = BackfillManager(self.link.send_frame, self._sinks)
+        self.link.backfill_sink = self.backfill.on_frame
+        self.link.on_up = self.backfill.on_up
 
     # -- lifecycle -------------------------------------------------------------
 
@@ -119,6 +128,8 @@ class SubBroker:
         self._queryables = [
             session.declare_queryable(subscribe_key(self.drone), self._on_query(self._subscribe)),
             session.declare_queryable(deploy_key(self.drone), self._on_query(self._deploy)),
+            session.declare_queryable(backfill_key(self.drone),
+                                      self._on_query(self._backfill)),
         ]
         self._status = StatusPublisher(
             session, self.drone, self.config.delivery.status_period_s, self.status,
@@ -139,6 +150,8 @@ class SubBroker:
             self._tcp.close()
         if self._zenoh is not None:
             self._zenoh.close()
+        if self.record is not None:
+            self.record.close()
         if self._own_session and self._session is not None:
             self._session.close()  # type: ignore[no-untyped-call]
 
@@ -205,6 +218,8 @@ class SubBroker:
             self._model = model
         if self._tcp is not None:
             self._tcp.set_endpoints(tcp_endpoints(model))
+        if self.record is not None:
+            self.record.begin(str(model.get("name") or self.drone), ack.epoch_ns)
         log.info("config %d running (epoch %d ns, %d streams sent)", config.config_id,
                  ack.epoch_ns, len(config.streams))
 
@@ -212,8 +227,11 @@ class SubBroker:
         running = self._by_id.get(windows[0].config_id)
         if running is None or running.slots is None:
             return
-        sinks: list[Sink] = [s for s in (self._zenoh, self._tcp) if s is not None]
-        self.delivered += running.slots.deliver(windows, sinks)
+        self.backfill.on_windows(running, windows)
+        self.delivered += running.slots.deliver(windows, self._sinks())
+
+    def _sinks(self) -> list[Sink]:
+        return [s for s in (self._zenoh, self._tcp, self.record) if s is not None]
 
     def on_status(self, status: Status) -> None:
         log.debug("PubBroker status %s", status.as_dict())
@@ -249,6 +267,13 @@ class SubBroker:
         if reply["status"] == "CANCELLED" and self._zenoh is not None:
             self._zenoh.forget(reply["subscriber"])
         return reply
+
+    def _backfill(self, payload: bytes) -> dict[str, Any]:
+        def until(running: Running) -> int:
+            got = self.backfill.received_until()
+            return got if got is not None else time.time_ns()
+
+        return backfill_query.handle(payload, self.backfill, lambda: self._running, until)
 
     def _deploy(self, payload: bytes) -> dict[str, Any]:
         request = parse_request(payload, self.drone, self._verify)

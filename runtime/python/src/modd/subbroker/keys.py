@@ -37,3 +37,8 @@ def deploy_key(drone: str) -> str:
 def subscribe_key(drone: str) -> str:
     """The dynamic-subscription queryable."""
     return f"modd/{check_name('drone', drone)}/subscribe"
+
+
+def backfill_key(drone: str) -> str:
+    """The backfill queryable (start, progress, cancel)."""
+    return f"modd/{check_name('drone', drone)}/backfill"
