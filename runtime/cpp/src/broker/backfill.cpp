@@ -13,6 +13,7 @@ namespace bf = link::backfill;
 namespace {
 constexpr int64_t kPollNs = 20'000'000;  // archive not complete yet, live guard: look again
 constexpr int64_t kProgressNs = 1'000'000'000;
+constexpr int64_t kGuardNs = 100'000'000;
 }  // namespace
 
 BackfillSender::Job::Job(const bf::Request& r, const std::string& dir, const std::string& prefix)
@@ -137,8 +138,11 @@ void BackfillSender::pump(const Env& env, std::vector<std::vector<uint8_t>>& fra
       std::vector<uint8_t> f;
       bf::encode_data(f, bf::DataFrame{j.req.request_id, j.next, j.batch}, j.kind);
       double cost = static_cast<double>(f.size() + kSegmentOverhead);
-      // Live first: the frame goes only if it is through (at the pace) before the next slot.
-      if (env.next_live_due - env.now < static_cast<int64_t>(cost * 1e9 / r)) return;
+      // Live first: the frame goes only if it is through before the next slot: its time at
+      // the pace (an upper bound of its air time, the pace being at most the radio's rate),
+      // capped at kGuardNs so that a slow pace still finds room between 4 Hz slots.
+      int64_t guard = std::min(static_cast<int64_t>(cost * 1e9 / r), kGuardNs);
+      if (env.next_live_due - env.now < guard) return;
       j.next += j.batch.size();
       j.batch.clear();
       j.batch_bytes = 0;
@@ -146,7 +150,9 @@ void BackfillSender::pump(const Env& env, std::vector<std::vector<uint8_t>>& fra
       bytes_sent_ += f.size();
       credit_ -= cost;
       if (env.now - j.last_progress >= kProgressNs) {
+        size_t before = f.size();
         bf::encode(f, bf::Progress{j.req.request_id, j.next, j.req.windows, j.bytes_sent, rate()});
+        credit_ -= static_cast<double>(f.size() - before);  // the pace covers PROGRESS too
         j.last_progress = env.now;
       }
       frames.push_back(std::move(f));
