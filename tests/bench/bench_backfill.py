@@ -80,7 +80,8 @@ def main() -> int:
         pcap = tmp / "bf.pcap"
         tshark = Proc("tshark", ["tshark", "-q", "-i", "lo", "-f", f"tcp port {link}",
                                  "-w", str(pcap)], tmp / "tshark.log")
-        assert tshark.wait_log("Capturing on", 15), tshark.log()
+        assert tshark.wait_log("Capture started", 15), tshark.log()
+        time.sleep(0.5)
         sock = socket.create_connection(("127.0.0.1", link))
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         _, splitter = client_handshake(sock, KEY.encode())

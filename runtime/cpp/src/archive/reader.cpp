@@ -25,11 +25,15 @@ T get(const uint8_t* p) {
 }
 
 bool parse_value(std::string_view json, link::ValueType type, ArchivedSample& s) {
-  constexpr std::string_view key = "\"value\":";
+  constexpr std::string_view key = "\"value\"";
   size_t at = json.find(key);
   if (at == std::string_view::npos) return false;
   const char* b = json.data() + at + key.size();
   const char* e = json.data() + json.size();
+  auto space = [&] { while (b < e && (*b == ' ' || *b == '\t' || *b == '\n' || *b == '\r')) ++b; };
+  space();
+  if (b == e || *b++ != ':') return false;
+  space();
   switch (type) {
     case link::ValueType::Float32: {
       float f = 0;
