@@ -31,6 +31,7 @@ from .planning import preload_milp
 from .routers import (
     archives,
     auth,
+    backfill,
     deploy,
     downloads,
     health,
@@ -60,6 +61,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     streams.router,
     archives.router,
     scene.router,
+    backfill.router,
 )
 
 

@@ -216,6 +216,18 @@ class BackfillManager:
             self._finish(job, "CANCELLED")
             return job
 
+    def cap(self, job_id: int, rate_bps: int) -> Job | None:
+        """Lower (or set) the pace of a job; a running request is asked again at the new
+        pace from its resume point (the PubBroker replaces a request with the same id)."""
+        with self._lock:
+            job = self._jobs.get(job_id)
+            if job is None or job.finished.is_set():
+                return job
+            job.rate_bps = rate_bps
+            if job is self._active and job.request is not None:
+                self.on_up()
+            return job
+
     def on_up(self) -> None:
         """The link is up again: ask for the running request from its resume point."""
         with self._lock:
@@ -224,7 +236,7 @@ class BackfillManager:
                 q = job.request
                 job.request = bf.BackfillRequest(q.request_id, q.topic, q.type, q.aggregation,
                                                  q.period_us, q.from_ns, q.windows, job.next,
-                                                 q.rate_bps)
+                                                 job.rate_bps)
                 log.info("backfill %d: resuming at window %d of %d", job.job_id, job.next,
                          q.windows)
                 self._try_send(bf.encode(job.request))

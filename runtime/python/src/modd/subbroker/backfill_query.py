@@ -6,8 +6,11 @@ subscriptions the link missed since the running config began;
 ``{"op": "start", "subscriber": S, "from_ns": T0, "to_ns": T1}`` the windows
 of ``[T0, T1)`` not delivered yet. ``"rate_bps"`` caps the pace (default: the
 spare budget of the link, its ``rateBps`` minus the plan's live bytes/s).
-``{"op": "progress", "id": N}`` and ``{"op": "cancel", "id": N}`` answer the
-job's progress document (``status`` RUNNING, DONE, CANCELLED or FAILED).
+``{"op": "progress", "id": N}``, ``{"op": "cancel", "id": N}`` and
+``{"op": "cap", "id": N, "rate_bps": R}`` answer the job's progress document
+(``status`` RUNNING, DONE, CANCELLED or FAILED). ``"owner"`` (set by the
+backend to the asking user) must own a dynamic subscription to start its
+backfill.
 """
 
 from __future__ import annotations
@@ -42,7 +45,8 @@ def _int(request: dict[str, Any], name: str) -> int | None:
 
 
 def handle(payload: bytes, manager: BackfillManager, running: Callable[[], Running | None],
-           covered_until: Callable[[Running], int]) -> dict[str, Any]:
+           covered_until: Callable[[Running], int],
+           owner_of: Callable[[str], str | None] = lambda _name: None) -> dict[str, Any]:
     try:
         request = json.loads(payload or b"{}")
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
@@ -51,14 +55,25 @@ def handle(payload: bytes, manager: BackfillManager, running: Callable[[], Runni
         return {"status": "ERROR", "reason": "the request must be a JSON object"}
     op = request.get("op", "start")
     try:
-        if op in ("progress", "cancel"):
-            job_id = _int(request, "id")
-            job = manager.job(job_id or 0) if op == "progress" else manager.cancel(job_id or 0)
+        if op in ("progress", "cancel", "cap"):
+            job_id = _int(request, "id") or 0
+            if op == "cap":
+                rate = _int(request, "rate_bps")
+                if rate is None or not 1 <= rate <= MAX_RATE_BPS:
+                    raise ValueError(f"rate_bps must be in 1..{MAX_RATE_BPS}")
+                job = manager.cap(job_id, rate)
+            else:
+                job = manager.job(job_id) if op == "progress" else manager.cancel(job_id)
             if job is None:
                 return {"status": "UNKNOWN", "reason": f"no backfill {job_id}"}
             return job.progress()
         if op != "start":
-            return {"status": "ERROR", "reason": f"unknown op {op!r} (start, progress, cancel)"}
+            return {"status": "ERROR",
+                    "reason": f"unknown op {str(op)[:32]!r} (start, progress, cancel, cap)"}
+        owner = owner_of(str(request.get("subscriber")))
+        if owner is not None and request.get("owner") not in (None, owner):
+            return {"status": "UNAUTHORISED",
+                    "reason": "a dynamic subscription is backfilled for its owner only"}
         return _start(request, manager, running(), covered_until)
     except ValueError as exc:
         return {"status": "ERROR", "reason": str(exc)}

@@ -273,7 +273,8 @@ class SubBroker:
             got = self.backfill.received_until()
             return got if got is not None else time.time_ns()
 
-        return backfill_query.handle(payload, self.backfill, lambda: self._running, until)
+        return backfill_query.handle(payload, self.backfill, lambda: self._running, until,
+                                     self.dynamic.owner_of)
 
     def _deploy(self, payload: bytes) -> dict[str, Any]:
         request = parse_request(payload, self.drone, self._verify)
