@@ -17,7 +17,14 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from .diagnostics import Diagnostic, Location, ModelError, pointer_join
 from .numbers import canonical_decimal
-from .vocabulary import AGGREGATIONS, BACKFILL_POLICIES, KNOWN_UNITS, SCHEMA_VERSION, SENSOR_KINDS, VALUE_TYPES
+from .vocabulary import (
+    AGGREGATIONS,
+    BACKFILL_POLICIES,
+    KNOWN_UNITS,
+    SCHEMA_VERSION,
+    SENSOR_KINDS,
+    VALUE_TYPES,
+)
 
 SourceMap = dict[str, Location]
 
