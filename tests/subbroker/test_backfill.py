@@ -194,3 +194,41 @@ def test_backfill_survives_a_cut_and_a_pubbroker_restart(tmp_path: Path,
     assert len(back) == p["windows"]
     check_complete(values["sub_5"], 250_000_000, asked)  # no hole, none twice, in order
     assert check_against_archive({"sub_5": back}, read_archive(tmp_path / "archive", model))
+
+
+def test_policy_gaps_fills_by_itself(tmp_path: Path, zenoh_client: Any) -> None:
+    """A subscription with ``backfill = gaps`` in the model gets the outage's windows
+    without anyone asking; the others (policy off) do not."""
+    link, ingress, zport = free_port(), free_port(), free_port()
+    model = model_copy(tmp_path, "scenario1.modd")
+    doc = json.loads(model.read_text())
+    for sub in doc["subscribers"]:
+        if sub["name"] == "sub_5":
+            sub["backfill"] = "gaps"
+    model.write_text(json.dumps(doc))
+    pb = start_pubbroker(tmp_path, model, link, ingress)
+    proxy = Blackhole(link)
+    sb = start_subbroker(tmp_path, subbroker_config(tmp_path, model, proxy.port, zport))
+    load = None
+    try:
+        wait_port(zport, 60)
+        got = listen(zenoh_client, zport)
+        assert sb.wait_log("running", 60)
+        load = start_load(tmp_path, model, ingress, CUT_S + 120)
+        wait_live(got, "sub_5", 0)
+        proxy.drop()
+        cut_ns = time.time_ns()
+        time.sleep(CUT_S)
+        proxy.restore()
+        assert sb.wait_log("resuming config 1", 30), sb.log()
+        assert sb.wait_log("backfill 1 for sub_5: DONE", 30), sb.log()
+        asked = time.time_ns() - 3_000_000_000
+    finally:
+        with processes(*(x for x in (pb, sb, load) if x is not None)):
+            proxy.close()
+    values = got.snapshot()
+    back = [v for v in values["sub_5"] if v.backfilled]
+    assert back and all(v.end_ns > cut_ns - 1_000_000_000 for v in back)
+    check_complete([v for v in values["sub_5"] if v.end_ns > cut_ns - 1_000_000_000],
+                   250_000_000, asked)
+    assert not any(v.backfilled for v in values["sub_6"])  # policy off

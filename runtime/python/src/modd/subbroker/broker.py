@@ -45,6 +45,9 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("modd.subbroker")
 
+#: After a reconnection, live values flow again before the automatic backfill looks for gaps.
+AUTO_BACKFILL_DELAY_S = 2.0
+
 
 @dataclass
 class Running:
@@ -98,7 +101,7 @@ class SubBroker:
                        if config.state_dir is not None else None)
         self.backfill = BackfillManager(self.link.send_frame, self._sinks)
         self.link.backfill_sink = self.backfill.on_frame
-        self.link.on_up = self.backfill.on_up
+        self.link.on_up = self._link_up
 
     # -- lifecycle -------------------------------------------------------------
 
@@ -229,6 +232,34 @@ class SubBroker:
             return
         self.backfill.on_windows(running, windows)
         self.delivered += running.slots.deliver(windows, self._sinks())
+
+    def _link_up(self) -> None:
+        """After a reconnection: the running backfill resumes, and the subscriptions whose
+        model asks for it (``backfill = gaps | mission``) get their gaps filled once live
+        values flow again."""
+        self.backfill.on_up()
+        since = self.backfill.received_until()
+        if since is None:  # the first connection: nothing was missed
+            return
+        timer = threading.Timer(AUTO_BACKFILL_DELAY_S, self._auto_backfill, (since,))
+        timer.daemon = True
+        timer.start()
+
+    def _auto_backfill(self, since_ns: int) -> None:
+        running = self._running
+        until = self.backfill.received_until()
+        if running is None or until is None:
+            return
+        for sub in running.model.get("subscribers", []):
+            policy = sub.get("backfill", "off")
+            if policy == "off":
+                continue
+            start = running.epoch_ns if policy == "mission" else since_ns
+            runs = self.backfill.gaps(running, sub["name"], start, until)
+            if runs:
+                log.info("backfill of %s (%s): %d runs after the outage", sub["name"], policy,
+                         len(runs))
+                self.backfill.start(sub["name"], runs, backfill_query.spare_budget(running))
 
     def _sinks(self) -> list[Sink]:
         return [s for s in (self._zenoh, self._tcp, self.record) if s is not None]
