@@ -39,5 +39,6 @@ run tests/bench/bench_subbroker.py --seconds "${SUBBROKER_SECONDS:-10}" --profil
 run tests/bench/bench_fleet.py --drones "${FLEET_DRONES:-20}" --seconds "${FLEET_SECONDS:-60}"
 run tests/bench/bench_health_ws.py --ops 20000
 run tests/bench/bench_health_csv.py --clients 70 --seconds "${HEALTH_CSV_SECONDS:-20}"
+run tests/bench/bench_backfill.py --minutes "${BACKFILL_MINUTES:-10}" --rate 3600
 echo
 echo "bench: all done in $(( $(date +%s) - start )) s"

@@ -231,3 +231,30 @@ def test_scene_draws_the_track_of_the_deployed_model(
     assert usv["colour_by"] == "water_temp"
     page = httpx.get(scene["url"], timeout=5)
     assert page.status_code == 200 and "<html" in page.text.lower()  # viser's own client
+
+
+def test_backfill_routes_and_roles(live: TestClient, people: dict[str, Headers]) -> None:
+    """A scientist starts a backfill of a subscriber's gaps and follows it; the
+    operator caps and cancels; the other roles may not."""
+    sci, op = people["scientist"], people["operator"]
+    body = {"subscriber": "sub_5", "gaps": True}
+    assert live.post("/api/drones/usv/backfill", headers=people["designer"],
+                     json=body).status_code == 403
+    assert live.post("/api/drones/usv/backfill", headers=sci,
+                     json={"subscriber": "sub_5"}).status_code == 422
+    started = live.post("/api/drones/usv/backfill", headers=sci, json=body).json()
+    assert started["status"] in ("RUNNING", "DONE"), started
+    job = started["id"]
+    p = live.get(f"/api/drones/usv/backfill/{job}", headers=sci).json()
+    assert p["id"] == job and p["windows_total"] >= p["windows_done"] >= 0
+    assert live.post(f"/api/drones/usv/backfill/{job}/cap", headers=sci,
+                     json={"rate_bps": 100}).status_code == 403
+    capped = live.post(f"/api/drones/usv/backfill/{job}/cap", headers=op,
+                       json={"rate_bps": 100}).json()
+    assert capped["id"] == job
+    assert live.delete(f"/api/drones/usv/backfill/{job}",
+                       headers=people["integrator"]).status_code == 403
+    gone = live.delete(f"/api/drones/usv/backfill/{job}", headers=op).json()
+    assert gone["status"] in ("CANCELLED", "DONE"), gone
+    unknown = live.get("/api/drones/usv/backfill/999999", headers=sci).json()
+    assert unknown["status"] == "UNKNOWN"

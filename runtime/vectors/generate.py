@@ -203,6 +203,8 @@ def main() -> None:
     sys.path.insert(0, str(Path(__file__).parent))  # gen_datagrams.py, beside this script
     from gen_datagrams import write as write_datagrams
     write_datagrams(HERE)
+    from gen_backfill import write as write_backfill
+    write_backfill(HERE)
 
 
 if __name__ == "__main__":

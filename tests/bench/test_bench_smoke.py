@@ -104,3 +104,13 @@ def test_fleet() -> None:
     assert len(result.subbrokers) == len(result.pubbrokers) == 2
     assert all(1024 < f.rss_median_kb < 1024 * 1024 for f in result.subbrokers)
     assert "p99 ms" in result.render()
+
+
+def test_backfill() -> None:
+    """30 s of archive backfilled raw at 3,600 B/s: every sample back, the pace kept."""
+    import subprocess
+
+    out = subprocess.run([sys.executable, str(HERE / "bench_backfill.py"), "--minutes", "0.5"],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "750 / 750" in out.stdout, out.stdout

@@ -34,6 +34,7 @@ from .reconcile import DroneStatuses, reconcile
 from .routers import (
     archives,
     auth,
+    backfill,
     deploy,
     downloads,
     health,
@@ -67,6 +68,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     archives.replay_router,
     scene.router,
     scene.proxy,
+    backfill.router,
 )
 
 

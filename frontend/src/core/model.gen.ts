@@ -196,6 +196,8 @@ export interface Subscriber {
   periodS: Period;
   /** How the samples of each period are reduced. */
   aggregation: Aggregation;
+  /** What the SubBroker fills by itself from the drone's archive after a link outage: off (nothing; a backfill can still be asked for), gaps (the windows missed since the last connection) or mission (every window missed since the running config began). */
+  backfill?: "off" | "gaps" | "mission";
 }
 
 /** Diagram layout, kept apart from the semantic model: node positions by node id. */

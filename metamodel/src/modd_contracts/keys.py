@@ -57,6 +57,11 @@ def subscribe_key(drone: str) -> str:
     return f"{drone_prefix(drone)}/subscribe"
 
 
+def backfill_key(drone: str) -> str:
+    """The SubBroker's backfill queryable (start, progress, cancel)."""
+    return f"{drone_prefix(drone)}/backfill"
+
+
 def values_of(drone: str | None) -> str:
     """Every subscriber's values of one drone (``None``: of every drone)."""
     return f"{drone_prefix(drone)}/sub/*"

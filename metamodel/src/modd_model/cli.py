@@ -20,6 +20,7 @@ from typing import Any
 #: loading their plugins (a plugin not listed here shows its entry point).
 COMMAND_HELP = {
     "archive": "inspect or recover a PubBroker MCAP archive",
+    "backfill": "fill what the link missed from the drone's archive",
     "convert": "convert a model between .modd, JSON and the original tool's .collector",
     "fmt": "rewrite models in canonical form",
     "generate": "generate configs, driver projects and stubs",

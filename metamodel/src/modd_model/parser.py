@@ -17,7 +17,14 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from .diagnostics import Diagnostic, Location, ModelError, pointer_join
 from .numbers import canonical_decimal
-from .vocabulary import AGGREGATIONS, KNOWN_UNITS, SCHEMA_VERSION, SENSOR_KINDS, VALUE_TYPES
+from .vocabulary import (
+    AGGREGATIONS,
+    BACKFILL_POLICIES,
+    KNOWN_UNITS,
+    SCHEMA_VERSION,
+    SENSOR_KINDS,
+    VALUE_TYPES,
+)
 
 SourceMap = dict[str, Location]
 
@@ -465,6 +472,14 @@ class _Builder:
         for child in node.children[1:]:
             if isinstance(child, Tree) and child.data == "endpoint":
                 sub["endpoint"] = self._endpoint(child, ptr + "/endpoint")
+            elif isinstance(child, Tree) and child.data == "backfill":
+                word = child.children[0]
+                assert isinstance(word, Token)
+                self._mark(ptr + "/backfill", word)
+                if str(word) not in BACKFILL_POLICIES:
+                    self._error(word, f"unknown backfill policy {str(word)!r}; expected one of "
+                                f"{', '.join(BACKFILL_POLICIES)}", ptr + "/backfill")
+                sub["backfill"] = str(word)
             elif isinstance(child, Tree) or child.type == "STRING":
                 sub["topic"] = _topic(child)
                 self._mark(ptr + "/topic", child)

@@ -133,6 +133,7 @@ class Subscriber(TypedDict):
     topic: TopicName
     periodS: Period
     aggregation: Aggregation
+    backfill: NotRequired[Literal["off", "gaps", "mission"]]
 
 
 class Layout(TypedDict):

@@ -9,3 +9,5 @@ KNOWN_UNITS: tuple[str, ...] = tuple(definition("KnownUnit")["enum"])
 VALUE_TYPES: tuple[str, ...] = tuple(definition("ValueType")["enum"])
 AGGREGATIONS: tuple[str, ...] = tuple(definition("Aggregation")["enum"])
 SENSOR_KINDS: tuple[str, ...] = tuple(definition("Sensor")["properties"]["kind"]["enum"])
+BACKFILL_POLICIES: tuple[str, ...] = tuple(
+    definition("Subscriber")["properties"]["backfill"]["enum"])

@@ -141,6 +141,11 @@ struct Rebuild {
 
 }  // namespace
 
+bool decompress_chunk(const std::string& compression, std::span<const uint8_t> in, uint64_t size,
+                      std::vector<uint8_t>& out) {
+  return decompress(compression, in, size, out);
+}
+
 bool mcap_complete(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) return false;

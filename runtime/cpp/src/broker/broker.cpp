@@ -142,7 +142,8 @@ bool IngressSession::on_close() {
 // ---- broker ----------------------------------------------------------------
 
 Broker::Broker(const BrokerConfig& cfg, std::string key, Clock& clock, LinkOutput& out)
-    : cfg_(cfg), key_(std::move(key)), clock_(clock), out_(out), status_period_s_(cfg.status_period_s) {
+    : cfg_(cfg), key_(std::move(key)), clock_(clock), out_(out), status_period_s_(cfg.status_period_s),
+      backfill_(cfg.archive_dir, cfg.archive_prefix, cfg.backfill_default_rate_bps) {
   archive::ArchiverOptions ao;
   ao.dir = cfg.archive_dir;
   ao.prefix = cfg.archive_prefix;
@@ -330,6 +331,9 @@ void Broker::flush_buffers() {
   }
   for (IngressSession* s : sessions_) s->checkpoint(flush_id_);
   archiver_->flush(flush_id_);
+  // Every sample stamped before last_stamp_ is in this flush (stamps never go backwards).
+  if (flush_stamps_.size() >= 1024) flush_stamps_.pop_front();
+  flush_stamps_.emplace_back(flush_id_, last_stamp_);
 }
 
 void Broker::check_archive(int64_t now) {
@@ -337,6 +341,10 @@ void Broker::check_archive(int64_t now) {
   uint64_t durable = ac.durable_flush;
   if (durable != durable_seen_) {
     durable_seen_ = durable;
+    while (!flush_stamps_.empty() && flush_stamps_.front().first <= durable) {
+      archived_until_ = flush_stamps_.front().second;
+      flush_stamps_.pop_front();
+    }
     for (Topic& t : topics_)
       while (!t.checkpoints.empty() && t.checkpoints.front().first <= durable) {
         t.durable_accepted = t.checkpoints.front().second;
@@ -436,7 +444,33 @@ link::AuthOk Broker::current_config() {
 void Broker::on_authenticated() {
   ++counters_.link_sessions;
   executor_.request_sync();
+  backfill_.clear();  // the base station asks again, with its resume points
   log_line("link: base station authenticated");
+}
+
+void Broker::on_backfill(const link::RawFrame& f, std::vector<uint8_t>& out) {
+  namespace bf = link::backfill;
+  if (f.type == static_cast<uint8_t>(bf::Type::Data) || f.type == static_cast<uint8_t>(bf::Type::Progress) ||
+      f.type == static_cast<uint8_t>(bf::Type::End))
+    throw Error(ErrorCode::BadFrame, "backfill answers are sent by the PubBroker only", 0);
+  bf::Message m = bf::decode(f);
+  if (auto* c = std::get_if<bf::Cancel>(&m)) return backfill_.on_cancel(c->request_id, out);
+  const auto& r = std::get<bf::Request>(m);
+  std::optional<link::ValueType> known;
+  auto it = by_name_.find(r.topic);
+  if (it != by_name_.end()) known = topics_[it->second].info->type;
+  backfill_.on_request(r, known, out);
+}
+
+void Broker::pump_backfill(int64_t now) {
+  if (!backfill_.active()) return;
+  BackfillSender::Env env{now, archived_until_, executor_.next_due_ns(), out_.link_ready() && out_.link_backlog() == 0};
+  std::vector<std::vector<uint8_t>> frames;
+  backfill_.pump(env, frames);
+  for (auto& f : frames) {
+    size_t n = f.size();
+    if (out_.link_write(std::move(f))) counters_.link_bytes_sent += n;
+  }
 }
 
 void Broker::on_rejected(const std::string& why) {

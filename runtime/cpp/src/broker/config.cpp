@@ -59,11 +59,16 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   }
   BrokerConfig cfg;
   check_keys(c, j, "", {"name", "link", "ingress", "archive", "topics", "default_buffer_size",
-                        "accept_unknown_topics", "status_period_s", "log_period_s", "log"});
+                        "accept_unknown_topics", "status_period_s", "log_period_s", "log", "backfill"});
   get(c, j, "", "name", cfg.name);
   get(c, j, "", "default_buffer_size", cfg.default_buffer_size);
   get(c, j, "", "accept_unknown_topics", cfg.accept_unknown_topics);
   get(c, j, "", "status_period_s", cfg.status_period_s);
+  if (j.contains("backfill")) {
+    check_keys(c, j["backfill"], "/backfill", {"default_rate_bps"});
+    get(c, j["backfill"], "/backfill", "default_rate_bps", cfg.backfill_default_rate_bps);
+    if (cfg.backfill_default_rate_bps < 1) c.fail("/backfill/default_rate_bps", "must be at least 1");
+  }
   get(c, j, "", "log_period_s", cfg.log_period_s);
   if (j.contains("log")) {
     const json& lg = j["log"];

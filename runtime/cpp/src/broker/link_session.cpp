@@ -1,5 +1,7 @@
 #include "modd/broker/link_session.hpp"
 
+#include "modd/link/backfill.hpp"
+
 #include "modd/link/auth.hpp"
 #include "modd/link/codec.hpp"
 
@@ -43,6 +45,10 @@ bool LinkSession::on_bytes(std::span<const uint8_t> in, std::vector<uint8_t>& ou
 bool LinkSession::handle(uint8_t type, std::span<const uint8_t> body, std::vector<uint8_t>& out) {
   RawFrame f{type, body, 0};
   if (is_data_type(type)) throw Error(ErrorCode::BadFrame, "DATA is sent by the PubBroker only", 0);
+  if (state_ == State::Ready && link::backfill::is_backfill_type(type)) {
+    hooks_.on_backfill(f, out);  // request or cancel (docs/protocol.md, "Backfill")
+    return true;
+  }
   Message m = decode(f);
   switch (state_) {
     case State::AwaitHello: {

@@ -107,6 +107,11 @@ bool Server::link_ready() const {
   return it != conns_.end() && it->second.out.size() < kLinkBacklog;
 }
 
+size_t Server::link_backlog() const {
+  auto it = conns_.find(active_link_);
+  return it == conns_.end() ? 0 : it->second.out.size();
+}
+
 bool Server::link_write(std::vector<uint8_t>&& bytes) {
   if (!link_ready()) return false;
   Conn& c = conns_[active_link_];
@@ -211,6 +216,7 @@ void Server::send_ingress_output(Conn& c) {
 
 void Server::timers(int64_t now) {
   broker_->tick(now);
+  broker_->pump_backfill(now);
   if (now >= next_flush_) {
     broker_->flush_buffers();
     next_flush_ = now + int64_t{cfg_.flush_interval_ms} * 1'000'000;
@@ -238,7 +244,7 @@ void Server::timers(int64_t now) {
 }
 
 int Server::timeout_ms(int64_t now) const {
-  int64_t next = std::min({broker_->next_due_ns(), next_flush_, next_log_, next_status_});
+  int64_t next = std::min({broker_->next_due_ns(), next_flush_, next_log_, next_status_, broker_->backfill_wake_ns(now)});
   for (const auto& [fd, c] : conns_)
     if (c.kind == Kind::Link && !c.link->ready()) next = std::min(next, c.deadline_ns);
   if (next <= now) return 0;

@@ -84,6 +84,12 @@ Value get_value(ByteReader& r, const ValueKind& k) {
 
 }  // namespace
 
+void encode_value(std::vector<uint8_t>& out, const ValueKind& k, const Value& v) {
+  ByteWriter w(out);
+  put_value(w, k, v);
+}
+Value decode_value(ByteReader& r, const ValueKind& k) { return get_value(r, k); }
+
 void encode(std::vector<uint8_t>& out, const Message& m) {
   std::vector<uint8_t> body;
   ByteWriter w(body);

@@ -144,14 +144,16 @@ class Subscription:
 
 def to_dataframe(values: list[DeliveredValue]) -> pandas.DataFrame:
     """Rows of delivered values; ``start``, ``end`` and ``delivered`` as UTC
-    timestamps, the other fields as they are."""
+    timestamps, ``backfilled`` True for values filled from the drone's archive,
+    the other fields as they are."""
     import pandas as pd
 
     columns = ["subscriber", "topic", "aggregation", "period_s", "unit", "config_id", "slot",
-               "start", "end", "value", "count", "delivered"]
+               "start", "end", "value", "count", "delivered", "backfilled"]
     rows: list[dict[str, Any]] = []
     for v in values:
         row = v.to_dict()
+        row["backfilled"] = v.backfilled
         row["start"], row["end"] = row.pop("start_ns"), row.pop("end_ns")
         row["delivered"] = row.pop("delivered_ns")
         rows.append(row)

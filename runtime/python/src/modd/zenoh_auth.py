@@ -5,7 +5,7 @@ Three identities, least privilege, per drone:
 
 - ``subbroker``: puts values (``modd/<drone>/sub/**``) and status, serves the
   ``deploy`` and ``subscribe`` queryables;
-- ``backend``: queries ``deploy`` and ``subscribe`` and reads values and status;
+- ``backend``: queries ``deploy``, ``subscribe`` and ``backfill`` and reads values and status;
 - ``viewer``: reads values and status, nothing else.
 
 A credentials directory (0700) holds ``users`` (the router's dictionary,
@@ -182,7 +182,7 @@ def acl(drone: str | None = None) -> dict[str, Any]:
     ``declare_subscriber`` on egress, else its publisher never learns of it."""
     d = keys.drone_prefix(drone or None)
     own = [keys.values_tree(drone or None), keys.status_key(drone or None)]
-    queries = [f"{d}/deploy", f"{d}/subscribe"]
+    queries = [f"{d}/deploy", f"{d}/subscribe", f"{d}/backfill"]
     # readers may subscribe across drones (modd/*/sub/*): reading is not writing
     read = [keys.values_tree(None), keys.ALL_STATUS]
     rules = [

@@ -5,6 +5,7 @@
 // leaves the original in place.
 #pragma once
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,9 @@ struct Recovered {
   bool removed = false;        // empty file (nothing but a partial magic/header): removed
 };
 
+// Decompresses one chunk's records ("", "zstd" or "lz4") into out (exactly `size` bytes).
+bool decompress_chunk(const std::string& compression, std::span<const uint8_t> in, uint64_t size,
+                      std::vector<uint8_t>& out);
 // True if the file ends with the MCAP magic (it was closed).
 bool mcap_complete(const std::string& path);
 // Recovers one file in place. Throws Error(Io) if it cannot be read or rewritten.

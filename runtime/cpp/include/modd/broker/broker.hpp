@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "modd/archive/archiver.hpp"
+#include "modd/broker/backfill.hpp"
 #include "modd/broker/config.hpp"
 #include "modd/broker/counters.hpp"
 #include "modd/broker/executor.hpp"
@@ -27,6 +28,8 @@ class LinkOutput {
   virtual bool link_ready() const = 0;
   // One write: the bytes must leave in one send (one TCP segment when small).
   virtual bool link_write(std::vector<uint8_t>&& bytes) = 0;
+  // Bytes written but not yet sent (backfill waits until the live bytes are out).
+  virtual size_t link_backlog() const { return 0; }
 };
 
 class Broker;
@@ -123,6 +126,11 @@ class Broker final : public LinkHooks, public FrameSink {
   link::AuthOk current_config() override;
   void on_authenticated() override;
   void on_rejected(const std::string& why) override;
+  void on_backfill(const link::RawFrame& f, std::vector<uint8_t>& out) override;
+  // Backfill frames the pace allows now, between live slots (docs/protocol.md, "Backfill").
+  void pump_backfill(int64_t now);
+  int64_t backfill_wake_ns(int64_t now) const { return backfill_.next_wake_ns(now); }
+  const BackfillSender& backfill() const { return backfill_; }
   // FrameSink
   bool send_data(std::vector<uint8_t>&& frame) override;
 
@@ -170,6 +178,9 @@ class Broker final : public LinkHooks, public FrameSink {
   bool low_space_ = false;
   int64_t next_space_check_ = 0, rate_since_ = 0;
   uint64_t rate_bytes_ = 0, rate_bps_ = 0;
+  BackfillSender backfill_;
+  std::deque<std::pair<uint64_t, int64_t>> flush_stamps_;  // (flush id, stamp horizon at that flush)
+  int64_t archived_until_ = 0;  // samples stamped before this are in written chunks
 };
 
 }  // namespace modd::broker

@@ -50,6 +50,8 @@ struct BrokerConfig {
   uint64_t queue_limit_samples = 1'000'000;
   uint64_t low_space_mb = 256;       // free space under which the operator is warned (STATUS + log)
   uint32_t retry_max_ms = 2000;      // write retry backoff (from 250 ms, doubling) while the disk is full
+  // backfill (docs/protocol.md, "Backfill"): the pace of a request that sets no rate
+  uint64_t backfill_default_rate_bps = 1000;
   // topics
   std::vector<TopicDefault> topics;
   uint32_t default_buffer_size = 25;

@@ -24,6 +24,7 @@ class Server final : public LinkOutput {
 
   bool link_ready() const override;
   bool link_write(std::vector<uint8_t>&& bytes) override;
+  size_t link_backlog() const override;
 
  private:
   enum class Kind { LinkListen, IngressUnixListen, IngressTcpListen, Link, Ingress, Signal };

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "modd/link/messages.hpp"
+#include "modd/util/bytes.hpp"
 #include "modd/util/error.hpp"
 
 namespace modd::link {
@@ -41,5 +42,9 @@ struct DataHeader {
 };
 DataHeader decode_data_header(const RawFrame& f);
 Data decode_data(const RawFrame& f, std::span<const ValueKind> kinds);
+
+// One value as DATA lays it out (table "Values"); shared with the backfill frames.
+void encode_value(std::vector<uint8_t>& out, const ValueKind& k, const Value& v);
+Value decode_value(ByteReader& r, const ValueKind& k);
 
 }  // namespace modd::link

@@ -29,22 +29,27 @@ from modd.link.receiver import Window
 
 from ..zenoh_auth import CredentialStore
 from ..zenoh_session import open_session, secured
-from . import delivery_auth
+from . import backfill_query, delivery_auth
+from .backfill import BackfillManager
 from .config import ConfigError, SubBrokerConfig, resolve_key
 from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoints
 from .deploy import DeployRequest, parse_request
 from .dynamic import DynamicSubscriptions
 from .fanout import FanOut
 from .kept import Deployment, StateDir, same_model
-from .keys import deploy_key, subscribe_key
+from .keys import backfill_key, deploy_key, subscribe_key
 from .link import ConfigRejected, LinkClient, LinkDown
 from .planning import config_for, plan_within
+from .record import BaseRecord
 from .status import StatusPublisher
 
 if TYPE_CHECKING:
     import zenoh
 
 log = logging.getLogger("modd.subbroker")
+
+#: After a reconnection, live values flow again before the automatic backfill looks for gaps.
+AUTO_BACKFILL_DELAY_S = 2.0
 
 
 @dataclass
@@ -99,6 +104,12 @@ class SubBroker:
         self._queryables: list[Any] = []
         self._workers = ThreadPoolExecutor(max_workers=4, thread_name_prefix="modd-query")
         self.delivered = 0
+        # Backfill (docs/subbroker.md, "Backfill") and the base-station record of every delivery.
+        self.record = (BaseRecord(config.state_dir / "records", self.drone)
+                       if config.state_dir is not None else None)
+        self.backfill = BackfillManager(self.link.send_frame, self._sinks)
+        self.link.backfill_sink = self.backfill.on_frame
+        self.link.on_up = self._link_up
 
     # -- lifecycle -------------------------------------------------------------
 
@@ -152,6 +163,8 @@ class SubBroker:
         self._queryables = [
             session.declare_queryable(subscribe_key(self.drone), self._on_query(self._subscribe)),
             session.declare_queryable(deploy_key(self.drone), self._on_query(self._deploy)),
+            session.declare_queryable(backfill_key(self.drone),
+                                      self._on_query(self._backfill)),
         ]
         self._status = StatusPublisher(
             session, self.drone, self.config.delivery.status_period_s, self.status,
@@ -172,6 +185,8 @@ class SubBroker:
             self._tcp.close()
         if self._zenoh is not None:
             self._zenoh.close()
+        if self.record is not None:
+            self.record.close()
         if self._own_session and self._session is not None:
             self._session.close()  # type: ignore[no-untyped-call]
 
@@ -256,6 +271,8 @@ class SubBroker:
             self._model, self._meta = model, meta
         if self._tcp is not None:
             self._tcp.set_endpoints(tcp_endpoints(model))
+        if self.record is not None:
+            self.record.begin(str(model.get("name") or self.drone), ack.epoch_ns)
         log.info("config %d running (epoch %d ns, %d streams sent): %s", config.config_id,
                  ack.epoch_ns, len(config.streams),
                  meta.describe() if meta.source != "configured" else "the configured model")
@@ -269,8 +286,39 @@ class SubBroker:
         running = self._by_id.get(windows[0].config_id)
         if running is None or running.slots is None:
             return
-        sinks: list[Sink] = [s for s in (self._zenoh, self._tcp) if s is not None]
-        self.delivered += running.slots.deliver(windows, sinks)
+        self.backfill.on_windows(running, windows)
+        self.delivered += running.slots.deliver(windows, self._sinks())
+
+    def _link_up(self) -> None:
+        """After a reconnection: the running backfill resumes, and the subscriptions whose
+        model asks for it (``backfill = gaps | mission``) get their gaps filled once live
+        values flow again."""
+        self.backfill.on_up()
+        since = self.backfill.received_until()
+        if since is None:  # the first connection: nothing was missed
+            return
+        timer = threading.Timer(AUTO_BACKFILL_DELAY_S, self._auto_backfill, (since,))
+        timer.daemon = True
+        timer.start()
+
+    def _auto_backfill(self, since_ns: int) -> None:
+        running = self._running
+        until = self.backfill.received_until()
+        if running is None or until is None:
+            return
+        for sub in running.model.get("subscribers", []):
+            policy = sub.get("backfill", "off")
+            if policy == "off":
+                continue
+            start = running.epoch_ns if policy == "mission" else since_ns
+            runs = self.backfill.gaps(running, sub["name"], start, until)
+            if runs:
+                log.info("backfill of %s (%s): %d runs after the outage", sub["name"], policy,
+                         len(runs))
+                self.backfill.start(sub["name"], runs, backfill_query.spare_budget(running))
+
+    def _sinks(self) -> list[Sink]:
+        return [s for s in (self._zenoh, self._tcp, self.record) if s is not None]
 
     def on_status(self, status: Status) -> None:
         log.debug("PubBroker status %s", status.as_dict())
@@ -306,6 +354,14 @@ class SubBroker:
         if reply["status"] == "CANCELLED" and self._zenoh is not None:
             self._zenoh.forget(reply["subscriber"])
         return reply
+
+    def _backfill(self, payload: bytes) -> dict[str, Any]:
+        def until(running: Running) -> int:
+            got = self.backfill.received_until()
+            return got if got is not None else time.time_ns()
+
+        return backfill_query.handle(payload, self.backfill, lambda: self._running, until,
+                                     self.dynamic.owner_of)
 
     def _deploy(self, payload: bytes) -> dict[str, Any]:
         with self._deploy_lock:  # one at a time, and a repeated request sees the first's end

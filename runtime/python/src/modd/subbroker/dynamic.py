@@ -118,6 +118,12 @@ class DynamicSubscriptions:
         with self._lock:
             return sorted(self._subs)
 
+    def owner_of(self, name: str) -> str | None:
+        """The owner of a dynamic subscription (None: not a dynamic one)."""
+        with self._lock:
+            d = self._subs.get(name)
+            return d.owner if d is not None else None
+
     def handle(self, request: Mapping[str, Any], running: Router | None) -> dict[str, Any]:
         """Serve one request; never raises for bad input."""
         action = request.get("action", "subscribe")

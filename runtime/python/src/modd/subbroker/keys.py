@@ -8,6 +8,13 @@ modules. A new key goes there, not here.
 
 from __future__ import annotations
 
-from modd_contracts.keys import check_name, deploy_key, status_key, sub_key, subscribe_key
+from modd_contracts.keys import (
+    backfill_key,
+    check_name,
+    deploy_key,
+    status_key,
+    sub_key,
+    subscribe_key,
+)
 
-__all__ = ["check_name", "deploy_key", "status_key", "sub_key", "subscribe_key"]
+__all__ = ["check_name", "deploy_key", "status_key", "sub_key", "subscribe_key", "backfill_key"]

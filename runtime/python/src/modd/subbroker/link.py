@@ -31,6 +31,7 @@ from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass, field
 from typing import Protocol
 
+from modd.link import backfill as bf
 from modd.link import codec
 from modd.link.auth import client_handshake
 from modd.link.frames import (
@@ -130,6 +131,10 @@ class LinkClient:
         self._up = threading.Event()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="modd-link", daemon=True)
+        #: Backfill frames from the PubBroker go here (link thread); ``on_up`` runs after each
+        #: (re)connection, so that running backfills are asked for again with their resume point.
+        self.backfill_sink: Callable[[codec.RawFrame], None] | None = None
+        self.on_up: Callable[[], None] | None = None
 
     # -- public --------------------------------------------------------------
 
@@ -147,6 +152,12 @@ class LinkClient:
 
     def wait_up(self, timeout_s: float) -> bool:
         return self._up.wait(timeout_s)
+
+    def send_frame(self, frame: bytes) -> None:
+        """Send one encoded frame (a backfill request or cancel); raises LinkDown."""
+        if not self._up.is_set():
+            raise LinkDown(f"the link to {self._where()} is down")
+        self._send(frame)
 
     def send_config(self, config: Config, timeout_s: float) -> ConfigAck:
         """Send CONFIG and wait for its CONFIG_ACK (any thread). Raises LinkDown,
@@ -209,6 +220,8 @@ class LinkClient:
         else:
             self.stats.state = "up"
         self._up.set()
+        if self.on_up is not None:
+            self.on_up()
         self._read_loop(sock, splitter)
 
     def _measure_rtt(self, sock: socket.socket, splitter: codec.FrameSplitter) -> float | None:
@@ -222,6 +235,9 @@ class LinkClient:
                 frame = self._next_frame(sock, splitter)
                 if codec.is_data_type(frame.type):
                     self._on_data(frame)  # the running config, when resuming
+                    continue
+                if bf.is_backfill_type(frame.type):
+                    self._on_backfill(frame)
                     continue
                 msg = codec.decode(frame)
                 if isinstance(msg, Pong) and msg.payload == payload:
@@ -264,6 +280,8 @@ class LinkClient:
             last, pinged = time.monotonic(), False
             if codec.is_data_type(frame.type):
                 self._on_data(frame)
+            elif bf.is_backfill_type(frame.type):
+                self._on_backfill(frame)
             else:
                 self._handle(codec.decode(frame))
             if self._pending:
@@ -288,6 +306,11 @@ class LinkClient:
             waiting = len(splitter.buf) if splitter is not None else 0
             self.stats.backpressure.observe(windows[0].end_ns,
                                             waiting + socket_backlog(self._sock), time.time_ns())
+
+    def _on_backfill(self, frame: codec.RawFrame) -> None:
+        sink = self.backfill_sink
+        if sink is not None:
+            sink(frame)
 
     def _handle(self, msg: object) -> None:
         if isinstance(msg, ConfigAck):

@@ -53,9 +53,15 @@ class DeliveredValue:
     value: Value
     count: int | None
     delivered_ns: int
+    #: True for a window recomputed from the drone's archive after the link missed it
+    #: (docs/protocol.md, "Backfill"); on the wire only when true, so live payloads keep
+    #: their bytes.
+    backfilled: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
+        if not self.backfilled:
+            del out["backfilled"]
         out["v"] = PAYLOAD_VERSION
         return out
 
@@ -68,10 +74,13 @@ class DeliveredValue:
         version = data.get("v", PAYLOAD_VERSION)
         if not isinstance(version, int) or version > PAYLOAD_VERSION:
             raise ValueError(f"unsupported delivered-value version {version!r}")
-        missing = [f.name for f in fields(cls) if f.name not in data]
+        missing = [f.name for f in fields(cls) if f.name not in data and f.name != "backfilled"]
         if missing:
             raise ValueError(f"delivered value lacks {', '.join(missing)}")
-        return cls(**{f.name: data[f.name] for f in fields(cls)})
+        out = cls(**{f.name: data[f.name] for f in fields(cls) if f.name in data})
+        if not isinstance(out.backfilled, bool):
+            raise ValueError("delivered value: backfilled must be true or false")
+        return out
 
     @classmethod
     def from_json(cls, raw: bytes | str) -> DeliveredValue:

@@ -1,0 +1,77 @@
+// The PubBroker's side of backfill (docs/protocol.md, "Backfill"): requests
+// from the base station, their windows recomputed from the broker's own MCAP
+// archive with the live path's Accumulator, and BACKFILL_DATA frames paced by
+// a token bucket between live slots. Without sockets: the broker tells it the
+// time, the archive horizon and when the next live slot is due, and sends what
+// pump() returns. Memory is bounded: at most kMaxJobs requests, each holding
+// one decompressed chunk, one open window and one frame's worth of windows.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "modd/archive/reader.hpp"
+#include "modd/broker/accumulator.hpp"
+#include "modd/link/backfill.hpp"
+
+namespace modd::broker {
+
+class BackfillSender {
+ public:
+  static constexpr size_t kMaxJobs = 8;
+  // Bytes a TCP segment adds on the wire (IPv4 + TCP with timestamps): counted by the pace.
+  static constexpr size_t kSegmentOverhead = 52;
+
+  struct Env {
+    int64_t now = 0;
+    int64_t archived_until = 0;  // every sample stamped before this is in a written chunk
+    int64_t next_live_due = 0;   // date of the next live slot (INT64_MAX: none)
+    bool link_idle = false;      // the link is up and nothing waits in its send queue
+  };
+
+  BackfillSender(std::string dir, std::string prefix, uint64_t default_rate_bps);
+  // A request (replacing a running one with the same id) or a cancel. `known_type` is the
+  // topic's type when the broker knows the topic. Replies (an END for a refusal) go to out.
+  void on_request(const link::backfill::Request& r, std::optional<link::ValueType> known_type,
+                  std::vector<uint8_t>& out);
+  void on_cancel(uint64_t request_id, std::vector<uint8_t>& out);
+  void clear() { jobs_.clear(); }  // a new link session: the base station asks again with resume points
+  // Appends the frames the pace allows now (each to be sent as its own write) to `frames`.
+  void pump(const Env& env, std::vector<std::vector<uint8_t>>& frames);
+  // When pump() next has something to do (INT64_MAX: nothing runs).
+  int64_t next_wake_ns(int64_t now) const;
+  size_t active() const { return jobs_.size(); }
+  uint64_t bytes_sent() const { return bytes_sent_; }
+
+ private:
+  struct Job {
+    link::backfill::Request req;
+    link::ValueKind kind;
+    Accumulator acc;
+    archive::TopicReader reader;
+    uint64_t next = 0;  // first window not sent
+    std::vector<link::Value> batch;
+    size_t batch_bytes = 0;
+    bool waiting = false;  // the next window is not complete in the archive yet
+    uint64_t bytes_sent = 0;
+    int64_t last_progress = 0;
+    uint64_t progress_next = 0;
+    Job(const link::backfill::Request& r, const std::string& dir, const std::string& prefix);
+  };
+  uint64_t rate() const;
+  size_t frame_budget() const;
+  void fill(Job& j, const Env& env);
+  void end(Job& j, link::backfill::EndStatus st, const std::string& why, std::vector<std::vector<uint8_t>>& frames);
+
+  std::string dir_, prefix_;
+  uint64_t default_rate_;
+  std::vector<std::unique_ptr<Job>> jobs_;
+  size_t turn_ = 0;  // round robin between jobs
+  double credit_ = 0;  // token bucket, bytes; a frame goes when credit >= 0
+  int64_t refilled_at_ = 0;
+  uint64_t bytes_sent_ = 0;
+};
+
+}  // namespace modd::broker

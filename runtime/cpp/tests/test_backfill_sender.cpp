@@ -1,0 +1,217 @@
+// The PubBroker's backfill: windows recomputed from an archive the Archiver wrote,
+// compared with an Accumulator fed the same samples directly; resume points;
+// the pace (token bucket) and the live guard.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <map>
+#include <random>
+
+#include "modd/archive/archiver.hpp"
+#include "modd/archive/reader.hpp"
+#include "modd/broker/backfill.hpp"
+
+using namespace modd;
+using namespace modd::broker;
+namespace bf = modd::link::backfill;
+
+namespace {
+
+constexpr int64_t kT0 = 1'763'700'000'000'000'000;
+
+struct Fixture {
+  std::string dir;
+  std::vector<archive::Sample> samples;  // 25 Hz with jitter, 60 s, float32 values
+  explicit Fixture(const std::string& name, size_t rotate_bytes = 256u << 20) {
+    dir = (std::filesystem::temp_directory_path() / ("modd-bf-" + name + std::to_string(::getpid()))).string();
+    std::filesystem::remove_all(dir);
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<int64_t> jitter(0, 9'000'000);
+    std::uniform_real_distribution<float> val(-20, 20);
+    for (int64_t i = 0; i < 25 * 60; ++i)
+      samples.push_back({kT0 + i * 40'000'000 + jitter(rng), 0, static_cast<double>(val(rng)), 0});
+    archive::ArchiverOptions o;
+    o.dir = dir;
+    o.writer.chunk_bytes = 4096;  // many chunks: the reader crosses chunk borders
+    o.rotate_bytes = rotate_bytes;
+    archive::Archiver a(o);
+    auto topic = std::make_shared<const archive::TopicInfo>(archive::TopicInfo{"usv.imu.x", link::ValueType::Float32});
+    auto other = std::make_shared<const archive::TopicInfo>(archive::TopicInfo{"usv.imu.y", link::ValueType::Float32});
+    for (size_t at = 0; at < samples.size(); at += 25) {
+      std::vector<archive::Sample> part(samples.begin() + static_cast<long>(at),
+                                        samples.begin() + static_cast<long>(std::min(at + 25, samples.size())));
+      a.submit(other, std::vector<archive::Sample>(part));  // interleaved channel, to be skipped
+      a.submit(topic, std::move(part));
+    }
+    a.stop();
+  }
+  ~Fixture() { std::filesystem::remove_all(dir); }
+  link::Value expected(link::Aggregation agg, int64_t s, int64_t e) const {
+    Accumulator acc(link::ValueType::Float32, agg);
+    for (const auto& x : samples)
+      if (x.stamp_ns >= s && x.stamp_ns < e) acc.add(x.number, 0);
+    return acc.take();
+  }
+};
+
+bf::Request request(link::Aggregation agg, uint64_t windows, uint64_t resume, uint64_t rate) {
+  bf::Request r;
+  r.request_id = 5;
+  r.topic = "usv.imu.x";
+  r.type = link::ValueType::Float32;
+  r.aggregation = agg;
+  r.period_us = 250'000;
+  r.from_ns = kT0 - 100'000'000;
+  r.windows = windows;
+  r.resume = resume;
+  r.rate_bps = rate;
+  return r;
+}
+
+// Runs the sender in simulated time until END; returns the windows by index and the frames' times.
+struct Outcome {
+  std::map<uint64_t, link::Value> windows;
+  std::vector<std::pair<int64_t, size_t>> sent;  // (time, bytes of the write)
+  std::vector<size_t> data_bytes;                 // of its BACKFILL_DATA frame
+  bf::EndStatus status = bf::EndStatus::Io;
+  int duplicates = 0;
+};
+
+Outcome run(BackfillSender& s, const bf::Request& r, int64_t live_period_ns = 0) {
+  Outcome out;
+  std::vector<uint8_t> reply;
+  s.on_request(r, link::ValueType::Float32, reply);
+  EXPECT_TRUE(reply.empty());
+  link::ValueKind kind = link::value_kind(r.type, r.aggregation);
+  int64_t now = kT0 + 3600'000'000'000;
+  for (int step = 0; step < 2'000'000 && s.active(); ++step) {
+    BackfillSender::Env env{now, now, live_period_ns ? (now / live_period_ns + 1) * live_period_ns : INT64_MAX, true};
+    std::vector<std::vector<uint8_t>> frames;
+    s.pump(env, frames);
+    for (const auto& f : frames) {
+      out.sent.emplace_back(now, f.size());
+      out.data_bytes.push_back(0);
+      size_t at = 0;
+      while (auto raw = link::split_frame(std::span(f).subspan(at))) {
+        at += raw->size;
+        if (raw->type == static_cast<uint8_t>(bf::Type::Data)) {
+          out.data_bytes.back() += raw->size;
+          auto d = bf::decode_data(*raw, kind);
+          for (size_t i = 0; i < d.values.size(); ++i)
+            if (!out.windows.emplace(d.first + i, d.values[i]).second) ++out.duplicates;
+        } else {
+          bf::Message m = bf::decode(*raw);
+          if (auto* e = std::get_if<bf::End>(&m)) out.status = e->status;
+        }
+      }
+    }
+    now = std::max(now + 1'000'000, s.next_wake_ns(now));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(BackfillSender, WindowsEqualTheLiveAccumulatorOverTheArchive) {
+  Fixture fx("eq", 64 * 1024);  // several files too
+  for (auto agg : {link::Aggregation::Min, link::Aggregation::Average, link::Aggregation::All, link::Aggregation::Count}) {
+    BackfillSender s(fx.dir, "modd", 100000);
+    auto r = request(agg, 250, 0, 0);
+    Outcome out = run(s, r);
+    EXPECT_EQ(out.status, bf::EndStatus::Done);
+    EXPECT_EQ(out.duplicates, 0);
+    ASSERT_EQ(out.windows.size(), 250u);
+    for (uint64_t k = 0; k < 250; ++k) {
+      int64_t st = r.window_start_ns(k);
+      link::Value want = fx.expected(agg, st, st + 250'000'000);
+      const link::Value& got = out.windows[k];
+      ASSERT_EQ(got.present, want.present) << k;
+      if (!want.present) continue;
+      EXPECT_FLOAT_EQ(static_cast<float>(got.number), static_cast<float>(want.number)) << k;
+      EXPECT_EQ(got.count, want.count) << k;
+      if (agg == link::Aggregation::All) {
+        ASSERT_EQ(got.numbers.size(), want.numbers.size());
+        for (size_t i = 0; i < want.numbers.size(); ++i) EXPECT_EQ(got.numbers[i], want.numbers[i]);
+      }
+    }
+  }
+}
+
+TEST(BackfillSender, ResumeSendsOnlyTheRest) {
+  Fixture fx("resume");
+  BackfillSender s(fx.dir, "modd", 100000);
+  Outcome out = run(s, request(link::Aggregation::Max, 200, 137, 0));
+  EXPECT_EQ(out.status, bf::EndStatus::Done);
+  EXPECT_EQ(out.windows.size(), 63u);
+  EXPECT_EQ(out.windows.begin()->first, 137u);
+  EXPECT_EQ(out.duplicates, 0);
+}
+
+TEST(BackfillSender, PaceNeverExceedsTheRateByMoreThanOneFrame) {
+  Fixture fx("pace");
+  const uint64_t rate = 1200;
+  BackfillSender s(fx.dir, "modd", 100000);
+  Outcome out = run(s, request(link::Aggregation::All, 240, 0, rate), 250'000'000);
+  EXPECT_EQ(out.status, bf::EndStatus::Done);
+  size_t biggest = 0;
+  for (auto& [t, n] : out.sent) biggest = std::max(biggest, n + BackfillSender::kSegmentOverhead);
+  // Every 1 s interval starting at a frame: bytes (with the segment overhead) <= rate + one frame.
+  for (size_t i = 0; i < out.sent.size(); ++i) {
+    size_t bytes = 0;
+    for (size_t j = i; j < out.sent.size() && out.sent[j].first < out.sent[i].first + 1'000'000'000; ++j)
+      bytes += out.sent[j].second + BackfillSender::kSegmentOverhead;
+    EXPECT_LE(bytes, rate + biggest) << "interval starting at frame " << i;
+  }
+  // And the whole run takes about what the rate allows.
+  size_t total = 0;
+  for (auto& [t, n] : out.sent) total += n + BackfillSender::kSegmentOverhead;
+  double secs = static_cast<double>(out.sent.back().first - out.sent.front().first) / 1e9;
+  EXPECT_NEAR(secs, static_cast<double>(total) / rate, 0.2 * static_cast<double>(total) / rate + 1);
+  // Live guard: no frame goes in the last moments before a live slot (period 250 ms).
+  for (size_t i = 0; i < out.sent.size(); ++i) {
+    if (!out.data_bytes[i]) continue;
+    int64_t to_slot = 250'000'000 - out.sent[i].first % 250'000'000;
+    EXPECT_GE(static_cast<double>(to_slot),
+              std::min((out.data_bytes[i] + BackfillSender::kSegmentOverhead) * 1e9 / rate, 1e8) * 0.99);
+  }
+}
+
+TEST(BackfillSender, WaitsForWindowsNotYetArchived) {
+  Fixture fx("wait");
+  BackfillSender s(fx.dir, "modd", 100000);
+  std::vector<uint8_t> reply;
+  auto r = request(link::Aggregation::Min, 100, 0, 0);
+  s.on_request(r, std::nullopt, reply);
+  BackfillSender::Env env{kT0 + 3600'000'000'000, r.window_start_ns(10), INT64_MAX, true};
+  std::vector<std::vector<uint8_t>> frames;
+  for (int i = 0; i < 100; ++i) {
+    s.pump(env, frames);
+    env.now += 100'000'000;
+  }
+  uint64_t last = 0;
+  for (const auto& f : frames) {
+    auto raw = link::split_frame(f);
+    if (raw->type != static_cast<uint8_t>(bf::Type::Data)) continue;
+    auto d = bf::decode_data(*raw, link::value_kind(r.type, r.aggregation));
+    last = d.first + d.values.size();
+  }
+  EXPECT_EQ(last, 10u);  // windows 0..9 end at or before the horizon (window 10 ends after it)
+  EXPECT_EQ(s.active(), 1u);
+}
+
+TEST(BackfillSender, RefusesAWrongTypeAndCancels) {
+  Fixture fx("refuse");
+  BackfillSender s(fx.dir, "modd", 1000);
+  std::vector<uint8_t> reply;
+  s.on_request(request(link::Aggregation::Min, 10, 0, 0), link::ValueType::Int, reply);
+  auto m = bf::decode(*link::split_frame(reply));
+  EXPECT_EQ(std::get<bf::End>(m).status, bf::EndStatus::BadRequest);
+  reply.clear();
+  s.on_request(request(link::Aggregation::Min, 10, 0, 0), std::nullopt, reply);
+  EXPECT_EQ(s.active(), 1u);
+  s.on_cancel(5, reply);
+  EXPECT_EQ(s.active(), 0u);
+  EXPECT_EQ(std::get<bf::End>(bf::decode(*link::split_frame(reply))).status, bf::EndStatus::Cancelled);
+}
