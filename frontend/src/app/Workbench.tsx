@@ -20,9 +20,12 @@ import { useLivePlan } from "./useLivePlan";
 import { TopBar } from "./TopBar";
 import { Dock } from "./Dock";
 import { Notice } from "./Notice";
+import { ConflictBanner, RemoteSaveNotice } from "./ConflictBanner";
+import { useProjectEvents } from "./useProjectEvents";
 
 function LivePlan() {
   useLivePlan();
+  useProjectEvents();
   return null;
 }
 
@@ -53,6 +56,8 @@ export function Workbench({ project, user, onLogout, onProjects }: Props) {
         <div className="workbench">
           <TopBar user={user} onLogout={onLogout} onProjects={onProjects} />
           <Notice />
+          <ConflictBanner />
+          <RemoteSaveNotice />
           <div className="main">
             <Palette />
             <div className="center">

@@ -1,0 +1,126 @@
+/**
+ * The workbench as people use it (issue "never lose an edit, work
+ * together safely"): two people on one project, the revision history, a
+ * reload with unsaved edits, deep links, the text view round trip, typing in
+ * the inspector, the operator view. Runs after the journey (or alone with
+ * MODD_E2E_ONLY=collab); each step fails on the workbench before the change
+ * it checks.
+ *
+ * The second person works in a second browser (own profile, own cookie).
+ */
+import { join } from "node:path";
+import { launch } from "./browser.mjs";
+import { waitUntil } from "./journey.mjs";
+
+export function collaboration({ page, baseUrl, password, imagesDir, onCleanup }) {
+  let api; // bearer-token client of the admin (set up by the first step)
+  let other; // the second person's page
+  let pid; // the shared project
+  const shot = (p, name) => p.screenshot({ path: join(imagesDir, `${name}.png`) });
+  const node = (p, id) => p.locator(`.react-flow__node[data-id="${id}"]`);
+  const inspector = (p) => p.getByRole("region", { name: "Inspector" });
+  const field = (p, path) => inspector(p).locator(`[data-field="${path}"]`).locator("input, select").first();
+  const select = async (p, id) => { await node(p, id).click(); await inspector(p).locator("h2").first().waitFor(); };
+  const setText = async (p, path, value) => { const f = field(p, path); await f.fill(value); await f.press("Enter"); };
+  const save = (p) => p.getByRole("button", { name: "Save", exact: true }).click();
+  const openProject = async (p, name) => {
+    await p.goto(baseUrl);
+    await p.getByRole("button", { name, exact: true }).click();
+    await node(p, "drone").waitFor();
+  };
+  const login = async (p, user, pw) => {
+    await p.goto(baseUrl);
+    await p.getByLabel("User name").fill(user);
+    await p.getByLabel("Password").fill(pw);
+    await p.getByRole("button", { name: "Log in" }).click();
+    await p.getByRole("heading", { name: "MoDD projects" }).waitFor();
+  };
+
+  return [
+    ["collab: two people, one project — live notice, conflict banner, three-way merge", async () => {
+      api = await tokenClient(baseUrl, "admin", password);
+      await api("POST", "/api/users", { username: "alice", password: "alice-password-1", roles: ["scientist"] });
+      pid = (await api("POST", "/api/projects", { name: "shared", model: { model: scenario1() }, message: "created" })).id;
+      if (!(await page.getByRole("heading", { name: "MoDD projects" }).count())) {
+        await page.goto(baseUrl);
+        if (await page.getByLabel("User name").count()) await login(page, "admin", password);
+      }
+      const second = await launch();
+      onCleanup(() => second.close());
+      other = second.context.pages()[0] ?? await second.context.newPage();
+      await login(other, "alice", "alice-password-1");
+      await openProject(page, "shared");
+      await openProject(other, "shared");
+      await page.getByRole("tab", { name: "Scientist", exact: true }).click();
+      // I change sub_1 and sub_2; alice changes sub_1 differently and sub_3, and saves first.
+      await select(page, "sub:sub_1");
+      await setText(page, "periodS", "8.0");
+      await select(page, "sub:sub_2");
+      await field(page, "aggregation").selectOption("MAX");
+      await select(other, "sub:sub_1");
+      await setText(other, "periodS", "4.0");
+      await select(other, "sub:sub_3");
+      await field(other, "aggregation").selectOption("MIN");
+      await save(other);
+      await expectText(other.locator(".topbar .revision"), /^r2(?!.*unsaved)/);
+      // announced live to me, over the stream socket
+      await expectText(page.getByRole("status").filter({ hasText: "Saved by alice" }), /revision 2/);
+      await save(page);
+      const banner = page.getByRole("alertdialog", { name: "Edit conflict" });
+      await expectText(banner, /Revision 2 was saved by alice/);
+      const row = banner.locator('tr[data-pointer="/subscribers/sub_1/periodS"]');
+      await expectText(row, /8\.0/);
+      await expectText(row, /4\.0/);
+      const merge = banner.getByRole("button", { name: /Merge into revision 2/ });
+      if (!(await merge.isDisabled())) throw new Error("merging before the conflicting field is chosen");
+      await shot(page, "conflict-banner");
+      await row.getByRole("radio").first().check(); // keep mine: 8.0
+      await merge.click();
+      await expectText(page.locator(".topbar .revision"), /r2 · unsaved/);
+      await save(page);
+      await expectText(page.locator(".topbar .revision"), /^r3(?!.*unsaved)/);
+      const r3 = (await api("GET", `/api/projects/${pid}/model`)).model;
+      const sub = (n) => r3.subscribers.find((s) => s.name === n);
+      if (sub("sub_1").periodS !== "8.0" || sub("sub_2").aggregation !== "MAX" || sub("sub_3").aggregation !== "MIN") {
+        throw new Error(`merge lost an edit: ${JSON.stringify(r3.subscribers.slice(0, 3))}`);
+      }
+    }],
+  ];
+}
+
+/** A bearer-token API client (the admin's set-up calls). */
+export async function tokenClient(baseUrl, username, password) {
+  const res = await fetch(`${baseUrl}/api/auth/login`, {
+    method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify({ username, password }),
+  });
+  if (!res.ok) throw new Error(`login ${username}: HTTP ${res.status}`);
+  const { token } = await res.json();
+  return async (method, path, json) => {
+    const r = await fetch(`${baseUrl}${path}`, {
+      method, headers: { Authorization: `Bearer ${token}`, ...(json ? { "Content-Type": "application/json" } : {}) },
+      body: json ? JSON.stringify(json) : undefined,
+    });
+    if (!r.ok) throw new Error(`${method} ${path}: HTTP ${r.status} ${await r.text()}`);
+    return r.status === 204 ? null : r.json();
+  };
+}
+
+async function expectText(locator, re, timeout = 10000) {
+  await waitUntil(async () => re.test((await locator.first().textContent().catch(() => "")) ?? ""), timeout,
+    async () => `${re} not in "${(await locator.first().textContent().catch(() => "")) ?? ""}"`);
+}
+
+/** Scenario 1 on the drone "usv" (the simulated drone's name), zenoh delivery. */
+function scenario1() {
+  const t = (v) => `usv.accelerometer.${v}`;
+  const subs = [["accel_x", "2.0", "AVERAGE"], ["accel_y", "2.0", "AVERAGE"], ["accel_x", "0.25", "AVERAGE"],
+    ["accel_y", "0.25", "AVERAGE"], ["accel_z", "0.25", "MIN"], ["accel_z", "0.25", "MAX"], ["accel_z", "0.25", "MAX"]];
+  return {
+    schemaVersion: "1.0",
+    drone: { name: "usv", sensors: [{ name: "accelerometer", variables: ["accel_x", "accel_y", "accel_z"].map((name) => ({ name, unit: "METER_PER_SECOND_SQUARED" })) }] },
+    pubBroker: { endpoint: { host: "127.0.0.1", port: 7171 }, logPath: "/tmp/modd/logs" },
+    subBroker: { endpoint: { host: "127.0.0.1", port: 7272 }, configPath: "/tmp/modd/conf" },
+    publishers: [{ name: "pub_1", periodS: "0.04", topics: [t("accel_x"), t("accel_y"), t("accel_z")] }],
+    subscribers: subs.map(([v, periodS, aggregation], i) => ({ name: `sub_${i + 1}`, topic: t(v), periodS, aggregation })),
+  };
+}
