@@ -2,8 +2,8 @@
 # `make run`: the main job on embedded defaults — the demo drone run locally
 # (`modd up --simulate`: PubBroker, SubBroker, simulated autopilot and sensors,
 # MAVLink bridge) and the workbench (backend serving the built frontend) on
-# http://127.0.0.1:${MODD_PORT:-8080}/, with the demo project loaded and
-# deployed. Ctrl-C (or SIGTERM) stops everything it started, by PID.
+# http://127.0.0.1:${MODD_PORT:-8080}/, with the demo project loaded (only
+# when it does not exist: a restart keeps the user's revisions) and deployed. Ctrl-C (or SIGTERM) stops everything it started, by PID.
 # The SubBroker's zenoh router authenticates every client and applies access
 # control (docs/security.md): the credentials (subbroker/backend/viewer .cred)
 # and the deploy key are made once in $DATA/credentials (0600) and kept.
@@ -69,7 +69,7 @@ done
 PROJECT="${MODD_PROJECT:-demo}"
 if [ -n "$MODD_ADMIN_PASSWORD" ]; then
   MODD_PASSWORD="$MODD_ADMIN_PASSWORD" modd push "$MODEL" --server "$URL" --project "$PROJECT" \
-    --message "loaded by make run" --deploy --wait 60 \
+    --message "loaded by make run" --if-new --deploy --wait 60 \
     || echo "modd: the demo project was not deployed (see above); the workbench still runs" >&2
 fi
 

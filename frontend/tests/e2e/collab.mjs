@@ -12,7 +12,7 @@ import { join } from "node:path";
 import { launch } from "./browser.mjs";
 import { waitUntil } from "./journey.mjs";
 
-export function collaboration({ page, baseUrl, password, imagesDir, onCleanup }) {
+export function collaboration({ page, baseUrl, password, imagesDir, ports, drone, onCleanup }) {
   let api; // bearer-token client of the admin (set up by the first step)
   let other; // the second person's page
   let pid; // the shared project
@@ -40,7 +40,7 @@ export function collaboration({ page, baseUrl, password, imagesDir, onCleanup })
     ["collab: two people, one project — live notice, conflict banner, three-way merge", async () => {
       api = await tokenClient(baseUrl, "admin", password);
       await api("POST", "/api/users", { username: "alice", password: "alice-password-1", roles: ["scientist"] });
-      pid = (await api("POST", "/api/projects", { name: "shared", model: { model: scenario1() }, message: "created" })).id;
+      pid = (await api("POST", "/api/projects", { name: "shared", model: { model: scenario1(ports) }, message: "created" })).id;
       if (!(await page.getByRole("heading", { name: "MoDD projects" }).count())) {
         await page.goto(baseUrl);
         if (await page.getByLabel("User name").count()) await login(page, "admin", password);
@@ -85,6 +85,35 @@ export function collaboration({ page, baseUrl, password, imagesDir, onCleanup })
         throw new Error(`merge lost an edit: ${JSON.stringify(r3.subscribers.slice(0, 3))}`);
       }
     }],
+
+    ["collab: revision history — compare two, restore as a new revision, redeploy a past one", async () => {
+      const panel = (name) => page.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
+      await panel("History");
+      const table = page.getByRole("table", { name: "Revisions" });
+      await expectText(table, /r3 \(open\)/);
+      await table.getByLabel("Pick revision 1").check();
+      await table.getByLabel("Pick revision 3").check();
+      await page.getByRole("button", { name: "Compare r1 → r3" }).click();
+      const diff = page.getByLabel("Changes from revision 1 to 3");
+      await expectText(diff, /~ \/subscribers\/sub_1\/periodS: 2\.0 → 8\.0/);
+      await expectText(diff, /~ \/subscribers\/sub_3\/aggregation: AVERAGE → MIN/);
+      await shot(page, "history");
+      page.once("dialog", (d) => void d.accept());
+      await table.locator('tr[data-revision="1"]').getByRole("button", { name: "Restore" }).click();
+      await expectText(page.getByRole("status").filter({ hasText: "restored" }), /Revision 1 restored as revision 4/);
+      await expectText(page.locator(".topbar .revision"), /^r4(?!.*unsaved)/);
+      const r4 = (await api("GET", `/api/projects/${pid}/model`)).model;
+      if (r4.subscribers[0].periodS !== "2.0" || r4.subscribers[2].aggregation !== "AVERAGE") throw new Error("r4 is not r1's model");
+      if (drone) {
+        await page.getByRole("tab", { name: "Operator", exact: true }).click();
+        await panel("History");
+        page.once("dialog", (d) => void d.accept());
+        await page.getByRole("table", { name: "Revisions" }).locator('tr[data-revision="2"]').getByRole("button", { name: "Redeploy" }).click();
+        await expectText(page.getByRole("status").filter({ hasText: "Revision 2" }), /Revision 2 deployed to usv \(acked\)/, 30000);
+        const last = (await api("GET", `/api/projects/${pid}/deployments`))[0];
+        if (last.revision !== 2 || last.status !== "acked") throw new Error(`last deployment: ${JSON.stringify(last)}`);
+      }
+    }],
   ];
 }
 
@@ -111,15 +140,15 @@ async function expectText(locator, re, timeout = 10000) {
 }
 
 /** Scenario 1 on the drone "usv" (the simulated drone's name), zenoh delivery. */
-function scenario1() {
+function scenario1(ports) {
   const t = (v) => `usv.accelerometer.${v}`;
   const subs = [["accel_x", "2.0", "AVERAGE"], ["accel_y", "2.0", "AVERAGE"], ["accel_x", "0.25", "AVERAGE"],
     ["accel_y", "0.25", "AVERAGE"], ["accel_z", "0.25", "MIN"], ["accel_z", "0.25", "MAX"], ["accel_z", "0.25", "MAX"]];
   return {
     schemaVersion: "1.0",
     drone: { name: "usv", sensors: [{ name: "accelerometer", variables: ["accel_x", "accel_y", "accel_z"].map((name) => ({ name, unit: "METER_PER_SECOND_SQUARED" })) }] },
-    pubBroker: { endpoint: { host: "127.0.0.1", port: 7171 }, logPath: "/tmp/modd/logs" },
-    subBroker: { endpoint: { host: "127.0.0.1", port: 7272 }, configPath: "/tmp/modd/conf" },
+    pubBroker: { endpoint: { host: "127.0.0.1", port: ports.pub }, logPath: "/tmp/modd/logs" },
+    subBroker: { endpoint: { host: "127.0.0.1", port: ports.sub }, configPath: "/tmp/modd/conf" },
     publishers: [{ name: "pub_1", periodS: "0.04", topics: [t("accel_x"), t("accel_y"), t("accel_z")] }],
     subscribers: subs.map(([v, periodS, aggregation], i) => ({ name: `sub_${i + 1}`, topic: t(v), periodS, aggregation })),
   };

@@ -96,7 +96,7 @@ try {
   const only = process.env.MODD_E2E_ONLY;
   const steps = [
     ...(only === "collab" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
-    ...collaboration({ page, baseUrl, password: PASSWORD, imagesDir, onCleanup: (fn) => cleanups.push(fn) }),
+    ...collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) }),
   ];
   let broken = null;
   for (const [name, fn] of steps) {
