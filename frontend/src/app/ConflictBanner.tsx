@@ -77,3 +77,16 @@ export function RemoteSaveNotice() {
     </div>
   );
 }
+
+/** Unsaved edits put back from this browser's storage at start. */
+export function DraftNotice() {
+  const store = useEditorStore();
+  const note = useEditor((s) => s.draftRestored);
+  if (!note) return null;
+  return (
+    <div className="draft-restored" role="status">
+      {note}
+      <button aria-label="Dismiss" onClick={() => store.patch({ draftRestored: null })}>×</button>
+    </div>
+  );
+}

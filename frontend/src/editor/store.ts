@@ -26,6 +26,8 @@ export interface EditorState {
   conflict: MergeState | null;
   /** The newest revision someone saved, as announced over the stream socket. */
   remoteSave: { revision: number; author: string; message: string } | null;
+  /** Unsaved edits found in this browser at start and put back (when they were kept). */
+  draftRestored: string | null;
 }
 
 export interface MergeState {
@@ -56,6 +58,7 @@ export function createEditorStore(model: ModdModel, role: Role): EditorStore {
     panel: "plan",
     conflict: null,
     remoteSave: null,
+    draftRestored: null,
   };
   const listeners = new Set<() => void>();
   const emit = () => listeners.forEach((l) => l());

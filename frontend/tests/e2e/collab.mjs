@@ -114,6 +114,47 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
         if (last.revision !== 2 || last.status !== "acked") throw new Error(`last deployment: ${JSON.stringify(last)}`);
       }
     }],
+
+    ["collab: deep links, unsaved edits survive a reload, leaving warns", async () => {
+      await page.goto(`${baseUrl}/projects/${pid}/scientist/history`);
+      await page.getByRole("table", { name: "Revisions" }).waitFor();
+      if ((await page.getByRole("tab", { name: "Scientist", exact: true }).getAttribute("aria-selected")) !== "true") throw new Error("the deep link's view is not open");
+      await select(page, "sub:sub_1");
+      await setText(page, "periodS", "0.5");
+      await expectText(page.locator(".topbar .revision"), /unsaved/);
+      await page.waitForTimeout(500); // the draft is written 0.3 s after the last edit
+      let warned = null;
+      page.once("dialog", (d) => { warned = d.type(); void d.accept(); });
+      await page.reload();
+      if (warned !== "beforeunload") throw new Error(`leaving with unsaved edits did not warn (${warned})`);
+      await expectText(page.getByRole("status").filter({ hasText: "restored from this browser" }), /Unsaved edits of revision 4 restored/);
+      await expectText(page.locator(".topbar .revision"), /^r4 · unsaved/);
+      if (new URL(page.url()).pathname !== `/projects/${pid}/scientist/history`) throw new Error(`the address is ${page.url()}`);
+      await select(page, "sub:sub_1");
+      if ((await field(page, "periodS").inputValue()) !== "0.5") throw new Error("the unsaved edit was lost");
+      await shot(page, "draft-restored");
+      await save(page);
+      await expectText(page.locator(".topbar .revision"), /^r5(?!.*unsaved)/);
+      await page.waitForTimeout(500);
+      const left = await page.evaluate(() => Object.keys(window.localStorage).filter((k) => k.startsWith("modd.draft.")));
+      if (left.length) throw new Error(`a saved draft is still kept: ${left}`);
+      // A link opened in a browser not logged in: the login, then that project, view and panel.
+      const third = await launch();
+      onCleanup(() => third.close());
+      const p3 = third.context.pages()[0] ?? await third.context.newPage();
+      await p3.goto(`${baseUrl}/projects/${pid}/operator/deploy`);
+      await p3.getByLabel("User name").fill("admin");
+      await p3.getByLabel("Password").fill(password);
+      await p3.getByRole("button", { name: "Log in" }).click();
+      await node(p3, "drone").waitFor();
+      if ((await p3.getByRole("tab", { name: "Operator", exact: true }).getAttribute("aria-selected")) !== "true") throw new Error("the link's view is not open after login");
+      if ((await p3.getByRole("tab", { name: "Deploy", exact: true }).getAttribute("aria-selected")) !== "true") throw new Error("the link's panel is not open after login");
+      // and a second tab of the same browser shares the session (cookie), no new login
+      const tab = await third.context.newPage();
+      await tab.goto(`${baseUrl}/projects/${pid}`);
+      await node(tab, "drone").waitFor();
+      await third.close();
+    }],
   ];
 }
 
