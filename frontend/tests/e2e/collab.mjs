@@ -155,6 +155,28 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await node(tab, "drone").waitFor();
       await third.close();
     }],
+
+    ["collab: text view — unchanged text applies in every view after inspector edits (\"5\" is 5.0)", async () => {
+      const panel = (name) => page.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
+      await page.getByRole("tab", { name: "Scientist", exact: true }).click();
+      await select(page, "sub:sub_2");
+      await setText(page, "periodS", "5");
+      if ((await field(page, "periodS").inputValue()) !== "5.0") throw new Error("a typed period is not stored in its one spelling");
+      for (const view of ["System designer", "Sensor integrator", "Scientist"]) {
+        await page.getByRole("tab", { name: view, exact: true }).click();
+        await panel("Text");
+        const apply = page.getByRole("button", { name: "Apply text to diagram" });
+        await apply.waitFor();
+        await page.waitForTimeout(400); // the text follows the diagram's unsaved edits
+        await apply.click();
+        await page.waitForTimeout(400);
+        const notice = page.locator(".notice");
+        if (await notice.count()) throw new Error(`Apply of the unchanged text in the ${view} view: ${await notice.textContent()}`);
+      }
+      await expectText(page.locator(".topbar .revision"), /unsaved/);
+      await save(page);
+      await expectText(page.locator(".topbar .revision"), /^r6(?!.*unsaved)/);
+    }],
   ];
 }
 

@@ -6,6 +6,7 @@
 import { useEffect, useId, useState } from "react";
 import type { FieldSpec } from "../../core/schemaForm";
 import type { TopicRef } from "../../core/query";
+import { canonicalDecimal } from "../../core/canonical";
 
 interface Props {
   spec: FieldSpec;
@@ -20,12 +21,15 @@ function toText(v: unknown): string {
   return v === undefined || v === null ? "" : String(v);
 }
 
-function parse(spec: FieldSpec, text: string): unknown {
+/** What a field stores for the text typed in it (the inspector's one conversion). */
+export function parseField(spec: FieldSpec, text: string): unknown {
   if (text === "") return spec.required ? "" : undefined;
   if (spec.input === "integer" || spec.input === "number") {
     const n = Number(text);
     return Number.isFinite(n) ? n : text;
   }
+  // One spelling of a decimal (the .modd parser's): "5" is stored as "5.0".
+  if (spec.input === "decimal") return canonicalDecimal(text) ?? text;
   return text;
 }
 
@@ -33,7 +37,7 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
   const id = useId();
   const [text, setText] = useState(toText(value));
   useEffect(() => setText(toText(value)), [value]);
-  const commit = () => { if (text !== toText(value)) onCommit(parse(spec, text)); };
+  const commit = () => { if (text !== toText(value)) onCommit(parseField(spec, text)); };
   const describedBy = `${id}-help`;
   const invalid = errors.length > 0;
   let control;
