@@ -177,6 +177,35 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await save(page);
       await expectText(page.locator(".topbar .revision"), /^r6(?!.*unsaved)/);
     }],
+
+    ["collab: inspector — applies as you type, and the first click after a rename is kept", async () => {
+      await page.getByRole("tab", { name: "Scientist", exact: true }).click();
+      await select(page, "sub:sub_4");
+      const period = field(page, "periodS");
+      await period.click();
+      await period.press("Control+A");
+      await period.pressSequentially("1.5", { delay: 60 });
+      // no Enter, no blur: the diagram and the plan follow once typing pauses
+      await expectText(node(page, "sub:sub_4"), /1\.5 s/, 5000);
+      if (!(await period.evaluate((el) => el === document.activeElement))) throw new Error("the field lost the focus");
+      await select(page, "sub:sub_3");
+      const name = field(page, "name");
+      await name.fill("renamed_3");
+      await node(page, "sub:sub_2").click(); // at once, while the rename is still being typed
+      await expectText(inspector(page).locator("h2").first(), /sub_2$/);
+      await node(page, "sub:renamed_3").waitFor();
+      // typing a name keeps the focus while the element is renamed under it
+      await select(page, "sub:renamed_3");
+      await field(page, "name").click();
+      await field(page, "name").press("End");
+      await field(page, "name").pressSequentially("_x", { delay: 60 });
+      await node(page, "sub:renamed_3_x").waitFor({ timeout: 5000 });
+      await page.waitForTimeout(300);
+      await field(page, "name").pressSequentially("y", { delay: 60 });
+      await node(page, "sub:renamed_3_xy").waitFor({ timeout: 5000 });
+      await save(page);
+      await expectText(page.locator(".topbar .revision"), /^r7(?!.*unsaved)/);
+    }],
   ];
 }
 
