@@ -32,6 +32,11 @@ export function canEdit(role: Role, kind: ElementKind): boolean {
   return EDITS[role].includes(kind);
 }
 
+/** Whether `role` may edit anything in the model (the operator may not). */
+export function editsAnything(role: Role): boolean {
+  return EDITS[role].length > 0;
+}
+
 /** Whether `role` may add or remove an edge of `kind` (the edge belongs to its source or target owner). */
 export function canEditEdge(role: Role, kind: EdgeKind): boolean {
   if (kind === "publishes") return canEdit(role, "publisher");

@@ -206,6 +206,30 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await save(page);
       await expectText(page.locator(".topbar .revision"), /^r7(?!.*unsaved)/);
     }],
+
+    ["collab: operator view — no undo, copy or delete; the palette follows the view", async () => {
+      await page.getByRole("tab", { name: "Scientist", exact: true }).click();
+      await select(page, "sub:sub_2");
+      await setText(page, "periodS", "3");
+      await save(page); // an edit saved, then undone from the Operator view would vanish locally
+      await expectText(page.locator(".topbar .revision"), /^r8(?!.*unsaved)/);
+      await page.getByRole("tab", { name: "Operator", exact: true }).click();
+      const palette = page.getByRole("navigation", { name: "Palette" });
+      await node(page, "sub:sub_2").click();
+      for (const name of ["Undo", "Copy", "Delete", "Paste", "+ Subscriber"]) {
+        if (!(await palette.getByRole("button", { name, exact: true }).isDisabled())) throw new Error(`${name} is enabled in the Operator view`);
+      }
+      if (await page.getByRole("form", { name: "Quick subscription" }).count()) throw new Error("the quick subscription is offered in the Operator view");
+      await page.keyboard.press("Control+z");
+      await page.keyboard.press("Delete");
+      await node(page, "sub:sub_2").waitFor();
+      await expectText(node(page, "sub:sub_2"), /every 3\.0 s/);
+      if (/unsaved/.test((await page.locator(".topbar .revision").textContent()) ?? "")) throw new Error("the Operator view changed the model");
+      // back in the Scientist view the palette offers its commands again
+      await page.getByRole("tab", { name: "Scientist", exact: true }).click();
+      if (await palette.getByRole("button", { name: "Undo", exact: true }).isDisabled()) throw new Error("Undo is off in the Scientist view");
+      await page.getByRole("form", { name: "Quick subscription" }).waitFor();
+    }],
   ];
 }
 
