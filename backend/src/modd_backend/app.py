@@ -43,6 +43,7 @@ from .routers import (
 )
 from .scene import SceneServer, SceneService
 from .settings import Settings
+from .apidocs import install_docs
 from .spa import mount_frontend
 from .throttle import Throttle
 from .versions import get_version, model_of
@@ -165,11 +166,13 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         version="0.1.0",
         description="Model store, live plan, deploy, live streams and archives of MoDD.",
         lifespan=lifespan,
+        docs_url=None,  # apidocs.py: Swagger UI from the backend's own files
     )
     errors.install(app)
     app.add_middleware(Guard, settings=settings)
     for router in ROUTERS:
         app.include_router(router)
+    install_docs(app)
     if settings.frontend_dist is not None:
         mount_frontend(app, settings.frontend_dist)
     return app

@@ -230,6 +230,17 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       if (await palette.getByRole("button", { name: "Undo", exact: true }).isDisabled()) throw new Error("Undo is off in the Scientist view");
       await page.getByRole("form", { name: "Quick subscription" }).waitFor();
     }],
+
+    ["/docs works offline (Swagger UI served by the backend)", async () => {
+      const foreign = [];
+      const p = await page.context().newPage();
+      await p.route((url) => !url.href.startsWith(baseUrl), (r) => { foreign.push(r.request().url()); return r.abort(); });
+      await p.goto(`${baseUrl}/docs`);
+      await expectText(p.locator(".swagger-ui .info .title"), /MoDD workbench/, 15000);
+      await p.locator(".swagger-ui .opblock").first().waitFor();
+      await p.close();
+      if (foreign.length) throw new Error(`/docs asked the network for ${foreign.join(", ")}`);
+    }],
   ];
 }
 
