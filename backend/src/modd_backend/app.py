@@ -21,6 +21,7 @@ from starlette.concurrency import run_in_threadpool
 
 from . import errors
 from .accounts import ensure_first_admin
+from .apidocs import install_docs
 from .db import Store
 from .deployments import last_acked
 from .deps import AppState
@@ -43,7 +44,6 @@ from .routers import (
 )
 from .scene import SceneServer, SceneService
 from .settings import Settings
-from .apidocs import install_docs
 from .spa import mount_frontend
 from .throttle import Throttle
 from .versions import get_version, model_of
