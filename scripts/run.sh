@@ -2,12 +2,13 @@
 # `make run`: the main job on embedded defaults — the demo drone run locally
 # (`modd up --simulate`: PubBroker, SubBroker, simulated autopilot and sensors,
 # MAVLink bridge) and the workbench (backend serving the built frontend) on
-# http://127.0.0.1:${MODD_PORT:-8080}/, with the demo project loaded and
-# deployed. Ctrl-C (or SIGTERM) stops everything it started, by PID.
+# http://127.0.0.1:${MODD_PORT:-8080}/, with the demo project loaded (only
+# when it does not exist: a restart keeps the user's revisions) and deployed. Ctrl-C (or SIGTERM) stops everything it started, by PID.
 # The SubBroker's zenoh router authenticates every client and applies access
 # control (docs/security.md): the credentials (subbroker/backend/viewer .cred)
 # and the deploy key are made once in $DATA/credentials (0600) and kept.
 # Environment: MODEL, MODD_PORT, MODD_ZENOH_PORT, MODD_DATA, MODD_PROJECT,
+# MODD_PUB_PORT and MODD_SUB_PORT (the drone's link ends),
 # MODD_FOXGLOVE_PORT (Foxglove/Lichtblick live server, 0: none; docs/ecosystem.md),
 # MODD_FOXGLOVE_REPLAY_PORT (its replay of an archive chosen in the workbench, 0: none).
 set -euo pipefail
@@ -15,15 +16,38 @@ cd "$(dirname "$0")/.."
 export PATH="$PWD/.venv/bin:$PATH"
 MODEL="${MODEL:-metamodel/examples/demo.modd}"
 PORT="${MODD_PORT:-8080}"
-FOXGLOVE_PORT="${MODD_FOXGLOVE_PORT:-8765}"
-REPLAY_PORT="${MODD_FOXGLOVE_REPLAY_PORT:-8766}"
-DATA="${MODD_DATA:-$PWD/data}"
+# Two instances side by side: MODD_PORT=8081 alone moves every other default
+# port by the same offset (zenoh 7448, Foxglove 8766 and 8866, the drone's link ends
+# 7172/7273) and the data directory (data-8081, which holds the run's ingress
+# socket and archive); each can still be set on its own.
+OFFSET=$((PORT - 8080))
+FOXGLOVE_PORT="${MODD_FOXGLOVE_PORT:-$((8765 + OFFSET))}"
+REPLAY_PORT="${MODD_FOXGLOVE_REPLAY_PORT:-$((8865 + OFFSET))}"
+ZENOH_PORT="${MODD_ZENOH_PORT:-$((7447 + OFFSET))}"
+if [ "$OFFSET" = 0 ]; then DATA="${MODD_DATA:-$PWD/data}"; else DATA="${MODD_DATA:-$PWD/data-$PORT}"; fi
 mkdir -p "$DATA"
 
 modd validate -q "$MODEL"
+# The drone's link ends (PubBroker and SubBroker ports): the model's, unless moved.
+if [ -n "${MODD_PUB_PORT:-}" ] || [ -n "${MODD_SUB_PORT:-}" ] || [ "$OFFSET" != 0 ]; then
+  modd convert "$MODEL" --to json | python3 -c '
+import json, sys
+m = json.load(sys.stdin)
+for part, var in (("pubBroker", sys.argv[1]), ("subBroker", sys.argv[2])):
+    m[part]["endpoint"]["port"] = int(var) if var else m[part]["endpoint"]["port"] + int(sys.argv[3])
+json.dump(m, open(sys.argv[4], "w"), indent=1)' "${MODD_PUB_PORT:-}" "${MODD_SUB_PORT:-}" "$OFFSET" "$DATA/model.json"
+  MODEL="$DATA/model.json"
+fi
+
+# The frontend is rebuilt only when a source is newer than the last build.
 if [ -f frontend/package.json ]; then
-  echo "modd: building the frontend"
-  (cd frontend && npm run build --silent >/dev/null) || echo "modd: the frontend did not build; serving the API only" >&2
+  if [ -f frontend/dist/index.html ] && [ -z "$(find frontend/src frontend/index.html frontend/package.json \
+       frontend/vite.config.ts metamodel/modd.schema.json -newer frontend/dist/index.html -print -quit 2>/dev/null)" ]; then
+    echo "modd: the frontend is up to date (frontend/dist)"
+  else
+    echo "modd: building the frontend"
+    (cd frontend && npm run build --silent >/dev/null) || echo "modd: the frontend did not build; serving the API only" >&2
+  fi
 fi
 
 # The first admin's password: drawn once per data directory and kept beside it
@@ -48,7 +72,7 @@ stop() {
 }
 trap stop INT TERM EXIT
 
-ZENOH="tcp/127.0.0.1:${MODD_ZENOH_PORT:-7447}"
+ZENOH="tcp/127.0.0.1:$ZENOH_PORT"
 CREDS="$DATA/credentials"
 python3 -c 'import sys; from modd.zenoh_auth import CredentialStore; CredentialStore(sys.argv[1]).ensure()' "$CREDS"
 modd up "$MODEL" --workdir "$DATA/run" --credentials "$CREDS" --simulate --zenoh-listen "$ZENOH" &
@@ -61,17 +85,23 @@ modd-backend --host 127.0.0.1 --port "$PORT" --data "$DATA/backend" --zenoh-conn
 pids+=($!)
 
 URL="http://127.0.0.1:$PORT"
+answers() { python3 -c "import urllib.request as u; u.urlopen('$URL/api/health', timeout=2)" 2>/dev/null; }
+up=0
 for _ in $(seq 150); do
-  python3 -c "import urllib.request as u; u.urlopen('$URL/api/health', timeout=2)" 2>/dev/null && break
+  answers && { up=1; break; }
   kill -0 "${pids[1]}" 2>/dev/null || { echo "modd: the backend stopped; see $DATA/backend.log" >&2; exit 1; }
   sleep 0.2
 done
+if [ "$up" != 1 ]; then
+  echo "modd: the workbench does not answer at $URL/api/health after 30 s; see $DATA/backend.log" >&2
+  exit 1
+fi
 
 # The demo project, loaded and deployed through the workbench's own API.
 PROJECT="${MODD_PROJECT:-demo}"
 if [ -n "$MODD_ADMIN_PASSWORD" ]; then
   MODD_PASSWORD="$MODD_ADMIN_PASSWORD" modd push "$MODEL" --server "$URL" --project "$PROJECT" \
-    --message "loaded by make run" --deploy --wait 60 \
+    --message "loaded by make run" --if-new --deploy --wait 60 \
     || echo "modd: the demo project was not deployed (see above); the workbench still runs" >&2
 fi
 
@@ -83,7 +113,7 @@ if [ -n "$MODD_ADMIN_PASSWORD" ]; then
 else
   echo "modd: login 'admin'; its password is in $DATA/backend.log"
 fi
-echo "modd: project '$PROJECT' runs on the simulated drone '$DRONE': archive in $DATA/run/archive, logs in $DATA/run/logs and $DATA/backend.log"
+echo "modd: project '$PROJECT' runs on the simulated drone '$DRONE': ingress socket $DATA/run/ingress.sock, archive in $DATA/run/archive, logs in $DATA/run/logs and $DATA/backend.log"
 if [ "$FOXGLOVE_PORT" != 0 ]; then
   echo "modd: Foxglove/Lichtblick live at ws://127.0.0.1:$FOXGLOVE_PORT (Open connection > Foxglove WebSocket; docs/ecosystem.md)"
 fi
@@ -92,5 +122,11 @@ if [ "$REPLAY_PORT" != 0 ]; then
 fi
 echo "modd: zenoh $ZENOH requires credentials; a viewer connects with"
 echo "      modd.subscribe('$DRONE', SUBSCRIBER, connect='$ZENOH', credentials='$CREDS/viewer.cred')"
-echo "modd: Ctrl-C to stop"
+# Only a workbench that answers is announced as running.
+if answers; then
+  echo "modd: Ctrl-C to stop"
+else
+  echo "modd: the workbench stopped answering at $URL; see $DATA/backend.log" >&2
+  exit 1
+fi
 wait -n "${pids[@]}" || true

@@ -7,10 +7,12 @@ import io
 import json
 import zipfile
 from collections.abc import Callable
+from pathlib import Path
 
 from fastapi.testclient import TestClient
+from modd_backend import Settings, create_app
 
-from .conftest import Headers
+from .conftest import ADMIN_PASSWORD, Headers, login
 
 
 def _project(client: TestClient, admin: Headers, text: str) -> int:
@@ -56,3 +58,22 @@ def test_invalid_revision_and_unknown_target(
     ok = client.get(f"/api/projects/{pid}/downloads/scientist?revision=1", headers=admin)
     assert ok.status_code == 200
     assert client.get(f"/api/projects/{pid}/downloads/pilot", headers=admin).status_code == 422
+
+
+def test_driver_readme_names_the_run_s_ingress_and_archive(tmp_path: Path, scenario1: str) -> None:
+    """Behind `make run` (a `modd up` work dir: <run>/archive, <run>/ingress.sock)
+    the integrator's drivers name that run's paths, not the model's defaults."""
+    run = tmp_path / "run"
+    (run / "archive").mkdir(parents=True)
+    (run / "ingress.sock").touch()  # modd up's PubBroker socket (a plain file stands in)
+    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
+                        initial_admin_password=ADMIN_PASSWORD, archive_dir=run / "archive")
+    with TestClient(create_app(settings, out=io.StringIO())) as c:
+        admin = login(c, "admin", ADMIN_PASSWORD)
+        pid = _project(c, admin, scenario1)
+        z = zipfile.ZipFile(io.BytesIO(c.get(f"/api/projects/{pid}/downloads/integrator",
+                                             headers=admin).content))
+        readme = z.read(next(n for n in z.namelist() if n.endswith("README.md"))).decode()
+        assert f"unix:{run / 'ingress.sock'}" in readme
+        assert str(run / "archive") in readme
+        assert "/tmp/modd/logs" not in readme

@@ -350,3 +350,16 @@ def test_scene_colour_needs_a_role(client: TestClient, user_factory: Callable[..
     nobody = user_factory("nobody")
     r = client.put("/api/scene/usv/colour", headers=nobody, json={"subscriber": None})
     assert r.status_code == 403
+
+
+def test_api_docs_work_offline(client: TestClient) -> None:
+    """/docs names no foreign origin: Swagger UI's files come from the backend."""
+    page = client.get("/docs")
+    assert page.status_code == 200
+    assert "http" not in page.text.replace("http-equiv", "")  # no CDN, no absolute URL
+    assert "/docs-assets/swagger-ui-bundle.js" in page.text
+    csp = page.headers["content-security-policy"]
+    assert "cdn" not in csp and "https:" not in csp
+    for asset in ("swagger-ui-bundle.js", "swagger-ui.css"):
+        r = client.get(f"/docs-assets/{asset}")
+        assert r.status_code == 200 and len(r.content) > 10_000, asset

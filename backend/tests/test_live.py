@@ -258,3 +258,32 @@ def test_backfill_routes_and_roles(live: TestClient, people: dict[str, Headers])
     assert gone["status"] in ("CANCELLED", "DONE"), gone
     unknown = live.get("/api/drones/usv/backfill/999999", headers=sci).json()
     assert unknown["status"] == "UNKNOWN"
+
+
+def test_saves_are_announced_to_the_project_watchers(
+    live: TestClient, people: dict[str, Headers]
+) -> None:
+    """Everyone with a project open hears of a save over the stream socket."""
+    admin = people["admin"]
+    pid = live.post("/api/projects", headers=admin,
+                    json={"name": "watched", "model": {"text": DEMO.read_text()}}).json()["id"]
+    model = live.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
+    token = people["scientist"]["Authorization"].split()[1]
+    with live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws:
+        ws.send_json({"op": "auth", "token": token})
+        assert ws.receive_json()["type"] == "authenticated"
+        ws.send_json({"op": "watch", "project": "x"})
+        assert "project id" in _receive_until(ws, lambda m: m["type"] == "error")["message"]
+        ws.send_json({"op": "watch", "project": pid, "id": 7})
+        assert _receive_until(ws, lambda m: m["type"] == "watching") == {
+            "type": "watching", "project": pid, "id": 7}
+        model["subscribers"][0]["periodS"] = "4.0"
+        saved = live.put(f"/api/projects/{pid}/model", headers=people["scientist"],
+                         json={"model": model, "base_revision": 1, "message": "slower"})
+        assert saved.status_code == 200, saved.text
+        event = _receive_until(ws, lambda m: m["type"] == "saved")
+        assert event == {"type": "saved", "project": pid, "revision": 2,
+                         "author": "scientist", "message": "slower"}
+        ws.send_json({"op": "unwatch", "project": pid})
+        _receive_until(ws, lambda m: m["type"] == "unwatched")
+    assert live.app.state.modd.project_events.watchers(pid) == 0  # type: ignore[attr-defined]

@@ -86,3 +86,22 @@ def test_push_to_nothing_says_so(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
     monkeypatch.setenv("MODD_PASSWORD", "x")
     assert push(f"http://127.0.0.1:{port}", str(DEMO)) == 1
     assert "cannot reach" in capsys.readouterr().err
+
+
+def test_push_if_new_keeps_an_existing_project(
+        server: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """`make run` restarted: the user's revisions stay the head."""
+    monkeypatch.setenv("MODD_PASSWORD", ADMIN_PASSWORD)
+    model = tmp_path / "restart.modd"
+    model.write_text(DEMO.read_text())
+    assert push(server, str(model), "--if-new") == 0
+    out = capsys.readouterr().out
+    assert "project 'restart'" in out and "at revision 1" in out
+    model.write_text(DEMO.read_text().replace("1.0, AVERAGE);", "2.0, AVERAGE);"))
+    assert push(server, str(model)) == 0  # the user's own revision 2
+    model.write_text(DEMO.read_text())  # the stock model again
+    assert push(server, str(model), "--if-new") == 0
+    assert "exists: kept as it is, running revision 2" in capsys.readouterr().out
+    assert push(server, str(model)) == 0  # without --if-new: the stock model is revision 3
+    assert "at revision 3" in capsys.readouterr().out

@@ -23,6 +23,7 @@ from starlette.concurrency import run_in_threadpool
 
 from . import archive_work, errors
 from .accounts import ensure_first_admin
+from .apidocs import install_docs
 from .db import Store
 from .deployments import last_acked
 from .deps import AppState
@@ -209,11 +210,13 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         version="0.1.0",
         description="Model store, live plan, deploy, live streams and archives of MoDD.",
         lifespan=lifespan,
+        docs_url=None,  # apidocs.py: Swagger UI from the backend's own files
     )
     errors.install(app)
     app.add_middleware(Guard, settings=settings)
     for router in ROUTERS:
         app.include_router(router)
+    install_docs(app)
     if settings.frontend_dist is not None:
         mount_frontend(app, settings.frontend_dist)
     return app

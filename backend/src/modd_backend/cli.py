@@ -46,7 +46,7 @@ def parse_args(argv: list[str] | None = None) -> Settings:
     p.add_argument("--foxglove-port", type=int, default=8765,
                    help="port of the Foxglove WebSocket server (live values for Foxglove and "
                    "Lichtblick, on --host, no authentication: docs/ecosystem.md); 0: none")
-    p.add_argument("--foxglove-replay-port", type=int, default=8766,
+    p.add_argument("--foxglove-replay-port", type=int, default=8865,
                    help="port of the Foxglove replay of an archive chosen in the workbench "
                    "(on --host, no authentication); 0: none")
     p.add_argument("--admin-password-file", type=Path, metavar="FILE",

@@ -19,6 +19,7 @@ from sqlalchemy.orm import Session as Db
 from .accounts import user_for_token
 from .db import Store
 from .foxglove import FoxgloveLive
+from .project_events import ProjectEvents
 from .roles import Role, parse_roles
 from .scene import SceneService
 from .security import csrf_for
@@ -51,6 +52,8 @@ class AppState:
     hub: SubscriptionHub | None = None
     #: The last status of each drone (what it runs), fed by the hub.
     statuses: DroneStatuses | None = None
+    #: Saves announced to the stream WebSockets watching a project.
+    project_events: ProjectEvents = field(default_factory=ProjectEvents)
     heavy: HeavyLimiter | None = None
     login_accounts: Throttle = field(default_factory=lambda: Throttle(10, 300))
     login_addresses: Throttle = field(default_factory=lambda: Throttle(50, 300))

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 import zipfile
+from pathlib import Path
 from typing import Any
 
 from modd_gen.generate import ROLES, generate
@@ -16,6 +17,26 @@ from modd_gen.generate import ROLES, generate
 TARGETS: tuple[str, ...] = tuple(ROLES)
 #: A fixed timestamp inside the zip, so that the bytes depend on the model only.
 _EPOCH = (2024, 1, 1, 0, 0, 0)
+
+
+def as_run(model: dict[str, Any], archive_dir: Path | None) -> dict[str, Any]:
+    """The model with the ingress socket and archive directory of the run the
+    backend watches, when it watches a ``modd up`` run (``make run``: the
+    archive directory is ``<workdir>/archive`` and the PubBroker's ingress
+    ``<workdir>/ingress.sock``), so generated drivers and their READMEs name
+    the paths that run actually uses. Otherwise the model as it is.
+
+    >>> as_run({"pubBroker": {"logPath": "/logs"}}, None)
+    {'pubBroker': {'logPath': '/logs'}}
+    """
+    if archive_dir is None:
+        return model
+    socket = archive_dir.parent / "ingress.sock"
+    if not socket.exists() or not isinstance(model.get("pubBroker"), dict):
+        return model
+    broker = {**model["pubBroker"], "logPath": str(archive_dir),
+              "ingress": {**model["pubBroker"].get("ingress", {}), "unixSocket": str(socket)}}
+    return {**model, "pubBroker": broker}
 
 
 def role_zip(model: dict[str, Any], role: str, folder: str) -> bytes:

@@ -67,7 +67,11 @@ def csp(path: str, host: str) -> str:
     scripts; only the 3D scene (same origin) may be framed, by the workbench.
     (The scene's page sets its own, stricter policy: sceneproxy.py.)"""
     scene = path.startswith(SCENE_PREFIX)
-    if path in ("/docs", "/redoc"):  # FastAPI's API pages: inline bootstrap, CDN assets
+    if path == "/docs":  # Swagger UI: an inline bootstrap, its files served here (apidocs.py)
+        return ("default-src 'self'; script-src 'self' 'unsafe-inline'; "
+                "style-src 'self' 'unsafe-inline'; img-src 'self' data:; "
+                "frame-ancestors 'none'; object-src 'none'")
+    if path == "/redoc":  # FastAPI's ReDoc page: inline bootstrap, CDN assets
         cdn = "https://cdn.jsdelivr.net"
         return (f"default-src 'self'; script-src 'self' 'unsafe-inline' {cdn}; "
                 f"style-src 'self' 'unsafe-inline' {cdn}; img-src 'self' data: "

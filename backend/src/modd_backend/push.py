@@ -98,6 +98,20 @@ def push_model(client: Client, text: str, fmt: str, name: str, message: str) -> 
     return pid, int(saved["revision"])
 
 
+def keep_project(client: Client, name: str) -> tuple[int, int] | None:
+    """``--if-new``: (project id, revision to run) when the project exists: the
+    revision last deployed with an ack, else the head. None: no such project."""
+    project = find_project(client, name)
+    if project is None or not project["head_revision"]:
+        return None
+    pid = int(project["id"])
+    records: list[dict[str, Any]] = client.call("GET", f"/api/projects/{pid}/deployments")
+    acked = [r for r in records if r.get("status") == "acked"]
+    if acked:
+        return pid, int(max(acked, key=lambda r: int(r["id"]))["revision"])
+    return pid, int(project["head_revision"])
+
+
 def _content(model: Any) -> Any:
     """The model without its diagram layout, which a .modd file does not carry."""
     if isinstance(model, dict):
@@ -132,8 +146,15 @@ def run(args: argparse.Namespace) -> int:
         text = path.read_text()
         client = Client(args.server)
         client.login(args.user, _password(args))
-        pid, revision = push_model(client, text, fmt, name, args.message or f"pushed {path.name}")
-        print(f"modd push: project {name!r} (id {pid}) at revision {revision}")
+        kept = keep_project(client, name) if args.if_new else None
+        if kept is not None:
+            pid, revision = kept
+            print(f"modd push: project {name!r} (id {pid}) exists: kept as it is, "
+                  f"running revision {revision}")
+        else:
+            pid, revision = push_model(client, text, fmt, name,
+                                       args.message or f"pushed {path.name}")
+            print(f"modd push: project {name!r} (id {pid}) at revision {revision}")
         if not args.deploy:
             return 0
         record = deploy(client, pid, revision, args.wait)
@@ -156,6 +177,9 @@ def register(sub: Any) -> None:
     p.add_argument("--password-file", metavar="FILE", help="default: $MODD_PASSWORD")
     p.add_argument("--project", metavar="NAME", help="project name (default: the file's stem)")
     p.add_argument("--message", help="revision message")
+    p.add_argument("--if-new", action="store_true",
+                   help="load the model only into a new project; an existing one is kept "
+                        "(--deploy then deploys its last deployed revision, else its head)")
     p.add_argument("--deploy", action="store_true", help="deploy the pushed revision")
     p.add_argument("--wait", type=float, default=0.0, metavar="S",
                    help="retry a failed deploy for up to S seconds")

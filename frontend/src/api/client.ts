@@ -28,6 +28,7 @@ export function createApi(opts: HttpOptions) {
 
     // --- projects
     listProjects: () => http.request<Project[]>("/api/projects"),
+    getProject: (projectId: number) => http.request<Project>(`/api/projects/${projectId}`),
     createProject: (name: string, model: ModdModel | null, message = "created") =>
       http.request<Project>("/api/projects", { method: "POST", json: { name, model: model ? { model } : null, message } }),
     importProject: (name: string, text: string, format: "modd" | "json" = "modd") =>

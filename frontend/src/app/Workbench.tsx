@@ -4,6 +4,8 @@
  * running.
  */
 import { useEffect, useMemo, useState } from "react";
+import type { Api } from "../api/client";
+import type { ModelVersion } from "../api/types";
 import { ReactFlowProvider } from "@xyflow/react";
 import "@xyflow/react/dist/style.css";
 import type { Project, User } from "../api/types";
@@ -20,28 +22,73 @@ import { useLivePlan } from "./useLivePlan";
 import { TopBar } from "./TopBar";
 import { Dock } from "./Dock";
 import { Notice } from "./Notice";
+import { ConflictBanner, DraftNotice, RemoteSaveNotice } from "./ConflictBanner";
+import { useProjectEvents } from "./useProjectEvents";
+import { useDrafts } from "./useDrafts";
+import { readDraft, writeDraft } from "./drafts";
+import { goTo, type Route } from "./routes";
+import { sameValue } from "../core/merge";
+import { push } from "../core/history";
 
 function LivePlan() {
   useLivePlan();
+  useProjectEvents();
   return null;
 }
 
-interface Props { project: Project; user: User; onLogout: () => void; onProjects: () => void }
+interface Props { project: Project; user: User; onLogout: () => void; onProjects: () => void; route?: Route }
 
-export function Workbench({ project, user, onLogout, onProjects }: Props) {
+/** Puts back unsaved edits this browser kept for the project: on the head, or offered as a merge when the head moved on. */
+async function restoreDraft(api: Api, store: EditorStore, user: string, head: ModelVersion): Promise<void> {
+  const project = store.getState().project;
+  if (!project) return;
+  const draft = readDraft(window.localStorage, user, project.id);
+  if (!draft) return;
+  if (sameValue(draft.model, head.model)) { writeDraft(window.localStorage, user, project.id, null); return; }
+  const when = new Date(draft.savedAt).toLocaleString();
+  if (draft.baseRevision === head.revision) {
+    store.patch((s) => ({ wb: { ...s.wb, history: push(s.wb.history, draft.model) }, draftRestored: `Unsaved edits of revision ${head.revision} restored from this browser (${when}).` }));
+    return;
+  }
+  const base = await api.readModel(project.id, draft.baseRevision).catch(() => null);
+  store.patch({
+    draftRestored: `Unsaved edits of revision ${draft.baseRevision} found in this browser (${when}); revision ${head.revision} was saved since.`,
+    conflict: { base: base?.model ?? head.model, mine: draft.model, theirs: head.model, revision: head.revision, author: head.author, choices: {} },
+  });
+}
+
+export function Workbench({ project, user, onLogout, onProjects, route }: Props) {
   const { api } = useServices();
-  const firstView = viewsFor(user.roles as Role[])[0] ?? "operator";
-  const store: EditorStore = useMemo(() => createEditorStore(emptyModel(), firstView), [project.id]); // eslint-disable-line react-hooks/exhaustive-deps
+  const views = viewsFor(user.roles as Role[]);
+  const firstView = route?.view && views.includes(route.view) ? route.view : views[0] ?? "operator";
+  const store: EditorStore = useMemo(() => {
+    const s = createEditorStore(emptyModel(), firstView);
+    if (route?.panel) s.patch({ panel: route.panel });
+    return s;
+  }, [project.id]); // eslint-disable-line react-hooks/exhaustive-deps
   const [state, setState] = useState<"loading" | "ready" | string>("loading");
 
   useEffect(() => {
     let live = true;
     api.readModel(project.id).then(
-      (v) => { if (live) { loadRevision(store, { id: project.id, name: project.name }, v.revision, v.model); setState("ready"); } },
+      async (v) => {
+        if (!live) return;
+        loadRevision(store, { id: project.id, name: project.name }, v.revision, v.model);
+        await restoreDraft(api, store, user.username, v).catch(() => undefined);
+        if (live) setState("ready");
+      },
       (e: Error) => { if (live) setState(e.message); },
     );
     return () => { live = false; };
-  }, [api, project, store]);
+  }, [api, project, store, user.username]);
+
+  useDrafts(store, user.username, state === "ready");
+  // The address follows the view and the panel (deep links: app/routes.ts).
+  useEffect(() => {
+    const sync = () => { const s = store.getState(); goTo({ project: project.id, view: s.wb.role as Route["view"], panel: s.panel }); };
+    sync();
+    return store.subscribe(sync);
+  }, [store, project.id]);
 
   if (state === "loading") return <main className="loading" role="status">Loading {project.name}…</main>;
   if (state !== "ready") return <main className="error" role="alert">Cannot open {project.name}: {state} <button onClick={onProjects}>Back</button></main>;
@@ -53,6 +100,9 @@ export function Workbench({ project, user, onLogout, onProjects }: Props) {
         <div className="workbench">
           <TopBar user={user} onLogout={onLogout} onProjects={onProjects} />
           <Notice />
+          <ConflictBanner />
+          <RemoteSaveNotice />
+          <DraftNotice />
           <div className="main">
             <Palette />
             <div className="center">

@@ -12,6 +12,7 @@
  */
 import type { ElementKind } from "./ids";
 import type { EdgeKind } from "./graph";
+import { canonicalJson } from "./canonical";
 
 export type Role = "designer" | "integrator" | "scientist" | "operator" | "admin";
 /** The four views of the workbench, one per working role. */
@@ -29,6 +30,11 @@ const EDITS: Record<Role, readonly ElementKind[]> = {
 /** Whether `role` may create, change or delete elements of `kind`. */
 export function canEdit(role: Role, kind: ElementKind): boolean {
   return EDITS[role].includes(kind);
+}
+
+/** Whether `role` may edit anything in the model (the operator may not). */
+export function editsAnything(role: Role): boolean {
+  return EDITS[role].length > 0;
 }
 
 /** Whether `role` may add or remove an edge of `kind` (the edge belongs to its source or target owner). */
@@ -78,18 +84,20 @@ export const PART_OWNERS: Record<string, Role | null> = {
 function parts(model: object): Map<string, string> {
   const out = new Map<string, string>();
   for (const [k, v] of Object.entries(model)) {
+    if (v === undefined) continue; // an absent part, however it is written
     if (k === "drone" && v && typeof v === "object") {
       const { sensors, ...platform } = v as Record<string, unknown>;
-      out.set("/drone", JSON.stringify(platform));
-      out.set("/drone/sensors", JSON.stringify(sensors));
+      out.set("/drone", canonicalJson(platform));
+      out.set("/drone/sensors", canonicalJson(sensors));
     } else {
-      out.set(`/${k}`, JSON.stringify(v));
+      out.set(`/${k}`, canonicalJson(v));
     }
   }
   return out;
 }
 
-/** The parts an edit changes that `role` may not change (empty: allowed). */
+/** The parts an edit changes that `role` may not change (empty: allowed). Parts are compared
+ * by meaning (core/canonical.ts): "5" and "5.0", or keys in another order, are no change. */
 export function deniedParts(role: Role, before: object, after: object): string[] {
   if (role === "admin") return [];
   const a = parts(before);

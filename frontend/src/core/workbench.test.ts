@@ -21,6 +21,16 @@ describe("workbench reducer", () => {
     expect(t.notice).toMatch(/cannot edit/);
   });
 
+  it("the operator view changes nothing: no undo, redo, copy or delete of saved edits", () => {
+    const edited = run(initialState(scenario1(), "scientist"), { type: "remove", ids: ["sub:sub_7"] });
+    const op = run(edited, { type: "setRole", role: "operator" });
+    const s = run(op, { type: "undo" }, { type: "copy", ids: ["sub:sub_1"] }, { type: "remove", ids: ["sub:sub_1"] });
+    expect(currentModel(s)).toBe(currentModel(edited));
+    expect(s.clipboard).toBeNull();
+    expect(s.notice).toMatch(/operator view cannot edit/);
+    expect(currentModel(run(edited, { type: "undo" })).subscribers).toHaveLength(7); // the scientist may undo
+  });
+
   it("lets a scientist connect subscriptions but not publications", () => {
     let s = run(initialState(scenario1(), "scientist"), { type: "connect", source: "topic:accelerometer.accel_z", target: "sub:sub_1" });
     expect(currentModel(s).subscribers[0].topic).toBe("usv.accelerometer.accel_z");

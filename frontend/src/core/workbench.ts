@@ -16,7 +16,7 @@ import {
 } from "./ops";
 import { copyElements, isEmptyFragment, pasteFragment, type Fragment } from "./clipboard";
 import { parseId, type ElementKind } from "./ids";
-import { canEdit, deniedParts, type Role } from "./roles";
+import { canEdit, deniedParts, editsAnything, type Role } from "./roles";
 
 export interface WorkbenchState {
   history: History<ModdModel>;
@@ -151,9 +151,10 @@ export function reduce(s: WorkbenchState, a: Action): WorkbenchState {
     case "load": return { ...s, history: reset(s.history, a.model), selection: [], notice: null };
     case "setRole": return { ...s, role: a.role, notice: null };
     case "select": return sameIds(s.selection, a.ids) ? s : { ...s, selection: a.ids };
-    case "undo": return { ...s, history: undo(s.history), notice: null };
-    case "redo": return { ...s, history: redo(s.history), notice: null };
-    case "copy": return { ...s, clipboard: copyElements(currentModel(s), a.ids) };
+    // A view that edits nothing (the operator's) changes nothing: no undo, redo or copy either.
+    case "undo": return readOnlyView(s) ? refuse(s, denied(s.role, "the model (no undo)")) : { ...s, history: undo(s.history), notice: null };
+    case "redo": return readOnlyView(s) ? refuse(s, denied(s.role, "the model (no redo)")) : { ...s, history: redo(s.history), notice: null };
+    case "copy": return readOnlyView(s) ? s : { ...s, clipboard: copyElements(currentModel(s), a.ids) };
     case "dismissNotice": return { ...s, notice: null };
     default:
       try {
@@ -172,6 +173,11 @@ export function reduce(s: WorkbenchState, a: Action): WorkbenchState {
         throw e;
       }
   }
+}
+
+/** Whether the view's role may edit nothing at all (the operator view). */
+export function readOnlyView(s: WorkbenchState): boolean {
+  return !editsAnything(s.role);
 }
 
 function sameIds(a: readonly string[], b: readonly string[]): boolean {

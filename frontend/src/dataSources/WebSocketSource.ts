@@ -10,13 +10,14 @@
  *        Both are contracts (metamodel/src/modd_contracts/schemas, types generated in
  *        core/contracts.gen.ts): the functions below read their fields by those types,
  *        each as possibly absent, since the socket is not trusted.
+ *   → {"op": "watch", "project": ID}   ← {"type": "saved", "project", "revision", "author", "message"}
  *   ← {"type": "dropped", "count": n}   the backend dropped n messages for a slow page
  *   ← {"type": "error", "message": …}; subscribed, unsubscribed, pong: ignored
  * The socket factory is injected (tests pass a fake).
  */
 import type { DeliveredValue, SubBrokerStatus } from "../core/contracts.gen";
 import { RingBuffer } from "./RingBuffer";
-import type { ChannelListener, ConnectionState, DataSource, LinkStatus, Sample } from "./types";
+import type { ChannelListener, ConnectionState, DataSource, LinkStatus, Sample, SavedEvent } from "./types";
 
 export interface SocketLike {
   readyState: number;
@@ -92,6 +93,7 @@ export class WebSocketSource implements DataSource {
   private readonly linkListeners = new Set<(s: LinkStatus) => void>();
   private readonly stateListeners = new Set<(s: ConnectionState) => void>();
   private readonly capacity: number;
+  private readonly savedListeners = new Map<number, Set<(e: SavedEvent) => void>>();
 
   constructor(opts: WebSocketSourceOptions) {
     this.capacity = opts.capacity ?? 2000;
@@ -99,6 +101,7 @@ export class WebSocketSource implements DataSource {
     this.socket.onopen = () => {
       this.setState("open");
       for (const channel of this.listeners.keys()) this.send({ op: "subscribe", subscriber: channel });
+      for (const project of this.savedListeners.keys()) this.send({ op: "watch", project });
     };
     this.socket.onclose = () => this.setState("closed");
     this.socket.onerror = () => this.setState("error");
@@ -140,6 +143,9 @@ export class WebSocketSource implements DataSource {
     } else if (msg.type === "status") {
       const status = toLinkStatus((msg.data ?? {}) as Partial<SubBrokerStatus>);
       this.linkListeners.forEach((l) => l(status));
+    } else if (msg.type === "saved") {
+      const e: SavedEvent = { project: Number(msg.project), revision: Number(msg.revision), author: String(msg.author ?? ""), message: String(msg.message ?? "") };
+      this.savedListeners.get(e.project)?.forEach((l) => l(e));
     } else if (msg.type === "dropped") {
       this.droppedByBackend += Number(msg.count) || 0;
     } else if (msg.type === "error") {
@@ -181,6 +187,25 @@ export class WebSocketSource implements DataSource {
   onLinkStatus(listener: (s: LinkStatus) => void): () => void {
     this.linkListeners.add(listener);
     return () => this.linkListeners.delete(listener);
+  }
+
+  watchProject(project: number, listener: (e: SavedEvent) => void): () => void {
+    let set = this.savedListeners.get(project);
+    if (!set) {
+      set = new Set();
+      this.savedListeners.set(project, set);
+      this.send({ op: "watch", project });
+    }
+    set.add(listener);
+    return () => {
+      const s = this.savedListeners.get(project);
+      if (!s) return;
+      s.delete(listener);
+      if (s.size === 0) {
+        this.savedListeners.delete(project);
+        this.send({ op: "unwatch", project });
+      }
+    };
   }
 
   onStateChange(listener: (s: ConnectionState) => void): () => void {

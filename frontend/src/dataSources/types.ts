@@ -54,5 +54,15 @@ export interface DataSource {
   dropped(channel: string): number;
   onLinkStatus(listener: (s: LinkStatus) => void): () => void;
   onStateChange(listener: (s: ConnectionState) => void): () => void;
+  /** Saves of a project, as the backend announces them (optional: sources without a backend have none). */
+  watchProject?(project: number, listener: (e: SavedEvent) => void): () => void;
   close(): void;
+}
+
+/** A revision someone saved (stream message `{"type": "saved"}`). */
+export interface SavedEvent {
+  project: number;
+  revision: number;
+  author: string;
+  message: string;
 }

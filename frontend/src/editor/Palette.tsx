@@ -3,7 +3,7 @@
  * diagram commands (undo, redo, delete, copy, paste, auto-layout, zoom to fit).
  */
 import { useReactFlow } from "@xyflow/react";
-import { canEdit } from "../core/roles";
+import { canEdit, editsAnything } from "../core/roles";
 import { canRedo, canUndo } from "../core/history";
 import { nextPosition } from "../core/graph";
 import { parseId } from "../core/ids";
@@ -33,6 +33,10 @@ export function Palette() {
   const layout = useAutoLayout();
   const model = () => currentModel(store.getState().wb);
   const sensor = targetSensor(selection, sensors ? sensors.split("\n") : []);
+  // The palette follows the view: in a view that edits nothing (Operator) the edit commands are off.
+  const edits = editsAnything(role);
+  const removable = selection.some((id) => { const k = parseId(id)?.kind; return k ? canEdit(role, k) : canEdit(role, "subscriber") || canEdit(role, "publisher"); });
+  const offTitle = `The ${role} view does not edit the model`;
 
   return (
     <nav className="palette" aria-label="Palette">
@@ -48,11 +52,11 @@ export function Palette() {
       {canEdit(role, "subscriber") && <QuickSubscribe />}
       <h2>Edit</h2>
       <div className="palette-grid">
-        <button aria-label="Undo" title="Undo (Ctrl+Z)" disabled={!canUndo(history)} onClick={() => store.dispatch({ type: "undo" })}>↶ Undo</button>
-        <button aria-label="Redo" title="Redo (Ctrl+Shift+Z)" disabled={!canRedo(history)} onClick={() => store.dispatch({ type: "redo" })}>↷ Redo</button>
-        <button aria-label="Copy" title="Copy (Ctrl+C)" disabled={!selection.length} onClick={() => store.dispatch({ type: "copy", ids: selection })}>Copy</button>
-        <button aria-label="Paste" title="Paste (Ctrl+V)" disabled={!hasClipboard} onClick={() => store.dispatch({ type: "paste" })}>Paste</button>
-        <button aria-label="Delete" title="Delete (Del)" disabled={!selection.length} onClick={() => removeSelection(store)}>Delete</button>
+        <button aria-label="Undo" title={edits ? "Undo (Ctrl+Z)" : offTitle} disabled={!edits || !canUndo(history)} onClick={() => store.dispatch({ type: "undo" })}>↶ Undo</button>
+        <button aria-label="Redo" title={edits ? "Redo (Ctrl+Shift+Z)" : offTitle} disabled={!edits || !canRedo(history)} onClick={() => store.dispatch({ type: "redo" })}>↷ Redo</button>
+        <button aria-label="Copy" title={edits ? "Copy (Ctrl+C)" : offTitle} disabled={!edits || !selection.length} onClick={() => store.dispatch({ type: "copy", ids: selection })}>Copy</button>
+        <button aria-label="Paste" title={edits ? "Paste (Ctrl+V)" : offTitle} disabled={!edits || !hasClipboard} onClick={() => store.dispatch({ type: "paste" })}>Paste</button>
+        <button aria-label="Delete" title={edits ? "Delete (Del)" : offTitle} disabled={!edits || !removable} onClick={() => removeSelection(store)}>Delete</button>
       </div>
       <h2>View</h2>
       <button onClick={() => void layout.run()} disabled={layout.busy}>{layout.busy ? "Laying out…" : "Auto-layout"}</button>

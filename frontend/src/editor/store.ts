@@ -9,8 +9,9 @@ import type { ModdModel } from "../core/model.gen";
 import { currentModel, initialState, reduce, type Action, type WorkbenchState } from "../core/workbench";
 import type { Role } from "../core/roles";
 import type { PlanResult } from "../api/types";
+import type { Side } from "../core/merge";
 
-export type PanelId = "plan" | "text" | "deploy" | "monitor" | "scene3d" | "archives" | "downloads";
+export type PanelId = "plan" | "text" | "deploy" | "monitor" | "scene3d" | "archives" | "downloads" | "history";
 
 export interface EditorState {
   wb: WorkbenchState;
@@ -21,6 +22,22 @@ export interface EditorState {
   save: { busy: boolean; error: string | null; conflictRevision: number | null };
   plan: { busy: boolean; result: PlanResult | null; error: string | null };
   panel: PanelId;
+  /** A save refused because revision `revision` was saved meanwhile: the three models to merge. */
+  conflict: MergeState | null;
+  /** The newest revision someone saved, as announced over the stream socket. */
+  remoteSave: { revision: number; author: string; message: string } | null;
+  /** Unsaved edits found in this browser at start and put back (when they were kept). */
+  draftRestored: string | null;
+}
+
+export interface MergeState {
+  base: ModdModel;
+  mine: ModdModel;
+  theirs: ModdModel;
+  revision: number;
+  author: string;
+  /** How each conflicting field is resolved so far, by pointer. */
+  choices: Record<string, Side>;
 }
 
 export interface EditorStore {
@@ -39,6 +56,9 @@ export function createEditorStore(model: ModdModel, role: Role): EditorStore {
     save: { busy: false, error: null, conflictRevision: null },
     plan: { busy: false, result: null, error: null },
     panel: "plan",
+    conflict: null,
+    remoteSave: null,
+    draftRestored: null,
   };
   const listeners = new Set<() => void>();
   const emit = () => listeners.forEach((l) => l());
@@ -67,7 +87,7 @@ export function createEditorStore(model: ModdModel, role: Role): EditorStore {
 export function loadRevision(store: EditorStore, project: { id: number; name: string }, revision: number, model: ModdModel): void {
   store.dispatch({ type: "load", model });
   const s = store.getState();
-  store.patch({ project, savedRevision: revision, savedModel: currentModel(s.wb), save: { busy: false, error: null, conflictRevision: null } });
+  store.patch({ project, savedRevision: revision, savedModel: currentModel(s.wb), save: { busy: false, error: null, conflictRevision: null }, conflict: null });
 }
 
 export const isDirty = (s: EditorState): boolean => currentModel(s.wb) !== s.savedModel;

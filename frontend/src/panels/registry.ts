@@ -19,6 +19,7 @@ export const PANELS: PanelInfo[] = [
   { id: "monitor", title: "Monitor", component: lazy(() => import("./monitor/MonitorPanel")) },
   { id: "scene3d", title: "3D", component: lazy(() => import("./scene3d/ScenePanel")) },
   { id: "archives", title: "Archives", component: lazy(() => import("./archives/ArchivesPanel")) },
+  { id: "history", title: "History", component: lazy(() => import("./history/HistoryPanel")) },
 ];
 
 export const InspectorPanel = lazy(() => import("./inspector/InspectorPanel"));

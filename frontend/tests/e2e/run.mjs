@@ -14,6 +14,7 @@ import { execFileSync } from "node:child_process";
 import { launch } from "./browser.mjs";
 import { freePort, start, stop, waitForHttp } from "./processes.mjs";
 import { journey } from "./journey.mjs";
+import { collaboration } from "./collab.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
@@ -42,8 +43,10 @@ const tmp = mkdtempSync(join(tmpdir(), "modd-e2e-"));
 const procs = [];
 let passed = 0, failed = 0;
 let browser = null;
+const cleanups = []; // extra browsers the steps open
 
 async function cleanup() {
+  for (const c of cleanups) await c();
   if (browser) await browser.close();
   // `modd up` stops its own children (their own sessions) on SIGTERM, within 10 s.
   for (const p of procs.reverse()) await stop(p, p.name === "modd up" ? 15000 : 8000);
@@ -91,7 +94,12 @@ try {
   const page = browser.context.pages()[0] ?? await browser.context.newPage();
   const errors = [];
   page.on("pageerror", (e) => errors.push(e.message));
-  const steps = journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues });
+  // MODD_E2E_ONLY=collab: only the collaboration steps (frontend/tests/e2e/collab.mjs).
+  const only = process.env.MODD_E2E_ONLY;
+  const steps = [
+    ...(only === "collab" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
+    ...collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) }),
+  ];
   let broken = null;
   for (const [name, fn] of steps) {
     if (broken) { console.log(`  - ${name}: not run (after "${broken}" failed)`); failed += 1; continue; }

@@ -11,8 +11,8 @@ from fastapi import APIRouter, Query
 from fastapi.responses import Response
 from modd_model import validate
 
-from ..deps import DbDep, UserDep, has_role
-from ..downloads import role_zip
+from ..deps import DbDep, StateDep, UserDep, has_role
+from ..downloads import as_run, role_zip
 from ..errors import ApiError
 from ..layouts import foxglove_layout
 from ..modelio import diagnostics_json
@@ -36,10 +36,13 @@ def download(
     target: Target,
     db: DbDep,
     user: UserDep,
+    state: StateDep,
     revision: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
 ) -> Response:
-    """integrator: C++ driver projects; operator: PubBroker and SubBroker
-    configs; scientist: Python and C++ subscriber stubs."""
+    """integrator: C++ driver projects (naming the ingress socket and archive
+    directory of the run this backend watches, e.g. ``make run``'s, when there
+    is one); operator: PubBroker and SubBroker configs; scientist: Python and
+    C++ subscriber stubs."""
     if not has_role(user, Role(target)):
         raise ApiError(403, f"the {target} downloads need the role {target}")
     project = get_project(db, project_id)
@@ -51,6 +54,8 @@ def download(
                        diagnostics=diagnostics_json(errors))
     folder = f"{project.name}-r{version.revision}-{target}".replace(" ", "_")
     try:
+        if target == "integrator":
+            model = as_run(model, state.settings.archive_dir)
         data = role_zip(model, target, folder)
     except ValueError as exc:
         raise ApiError(422, f"the generators cannot handle this model: {exc}") from None

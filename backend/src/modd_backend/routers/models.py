@@ -13,7 +13,7 @@ from modd_model.collector import print_collector
 from pydantic import BaseModel, Field
 from sqlalchemy import select
 
-from ..deps import DbDep, UserDep, require
+from ..deps import AppState, DbDep, StateDep, UserDep, require
 from ..errors import ApiError
 from ..modelio import diagnostics_json, read_input, require_document
 from ..roles import EDITORS
@@ -61,9 +61,11 @@ def read_model(project_id: Id, db: DbDep, _user: UserDep, revision: Revision = N
     responses={**NOT_FOUND, **DENIED, 409: {"model": ConflictOut},
                422: {"model": InvalidModelOut}},
 )
-def save_model(project_id: Id, body: SaveIn, db: DbDep, user: UserDep) -> ModelOut:
+def save_model(project_id: Id, body: SaveIn, db: DbDep, user: UserDep,
+               state: StateDep) -> ModelOut:
     """Save a new revision. Text input keeps the current diagram layout (the
-    .modd text has none)."""
+    .modd text has none). Everyone watching the project over a stream
+    WebSocket hears of it (``{"type": "saved", ...}``)."""
     model = require_document(read_input(body, f"project-{project_id}.{body.format}"))
     get_project(db, project_id)
     from_text = body.text is not None
@@ -76,7 +78,16 @@ def save_model(project_id: Id, body: SaveIn, db: DbDep, user: UserDep) -> ModelO
 
     version = save_version(db, project_id, body.base_revision, model, user.username,
                            body.message, check)
+    announce_save(state, version)
     return ModelOut.model_validate(version_json(version))
+
+
+def announce_save(state: AppState, version: ModelVersion) -> None:
+    """Tell the project's watchers that a revision was saved."""
+    state.project_events.publish(version.project_id, {
+        "type": "saved", "project": version.project_id, "revision": version.revision,
+        "author": version.author, "message": version.message[:200],
+    })
 
 
 @router.get("/projects/{project_id}/versions", responses=NOT_FOUND)

@@ -5,9 +5,10 @@ subscriptions over REST.
 Client messages: ``{"op": "auth", "token": T}`` first (API clients
 without the session cookie), ``{"op": "subscribe"|"unsubscribe", "subscriber": NAME}``,
 ``{"op": "dynamic", "topic", "period_s", "aggregation", ["subscriber"]}``,
-``{"op": "cancel", "subscriber": NAME}``, ``{"op": "ping"}``; an optional
+``{"op": "cancel", "subscriber": NAME}``, ``{"op": "ping"}``,
+``{"op": "watch"|"unwatch", "project": ID}`` (saves of a project); an optional
 ``"id"`` is echoed. Server messages carry a ``type``: value, status, dropped,
-subscribed, unsubscribed, dynamic, pong, error."""
+subscribed, unsubscribed, dynamic, pong, watching, unwatched, saved, error."""
 
 from __future__ import annotations
 
@@ -33,6 +34,7 @@ from ..deps import (
     ws_state,
 )
 from ..guards import loads_bounded
+from ..project_events import ProjectWatches
 from ..roles import Role
 from ..settings import Settings
 from ..streams import CapReached, StreamRelay, dynamic_request
@@ -165,9 +167,10 @@ async def stream(websocket: WebSocket, drone: str) -> None:
                         per_user_counts=state.ws_counts)
     relay.queue.bind(asyncio.get_running_loop())
     relay.start()
+    watches = ProjectWatches(state.project_events, relay.queue.put)
     tasks: set[asyncio.Task[Any]] = {
         asyncio.create_task(_send_loop(websocket, relay)),
-        asyncio.create_task(_receive_loop(websocket, relay, state, user)),
+        asyncio.create_task(_receive_loop(websocket, relay, state, user, watches)),
     }
     watcher = asyncio.create_task(_watch(state, token, (user.id, roles)))
     tasks.add(watcher)
@@ -182,6 +185,7 @@ async def stream(websocket: WebSocket, drone: str) -> None:
             with contextlib.suppress(Exception):
                 await websocket.close(code=ended[0], reason=ended[1])
     finally:
+        watches.close()
         relay.close()
 
 
@@ -220,7 +224,7 @@ async def _watch(state: AppState, token: str, seen: tuple[int, str]) -> tuple[in
 
 
 async def _receive_loop(websocket: WebSocket, relay: StreamRelay, state: AppState,
-                        user: User) -> None:
+                        user: User, watches: ProjectWatches) -> None:
     try:
         while True:
             text = await websocket.receive_text()
@@ -229,7 +233,7 @@ async def _receive_loop(websocket: WebSocket, relay: StreamRelay, state: AppStat
             except ValueError as exc:
                 relay.queue.put({"type": "error", "message": f"not a JSON message: {exc}"})
                 continue
-            reply = await _handle(message, relay, state, user)
+            reply = await _handle(message, relay, state, user, watches)
             relay.queue.put(reply)
             # Messages already buffered are received without a suspension:
             # yield once per op, so a flooding socket cannot starve the others
@@ -251,7 +255,7 @@ async def _send_loop(websocket: WebSocket, relay: StreamRelay) -> None:
 
 
 async def _handle(
-    message: Any, relay: StreamRelay, state: AppState, user: User
+    message: Any, relay: StreamRelay, state: AppState, user: User, watches: ProjectWatches
 ) -> dict[str, Any]:
     """One op, with the role it needs: values and status need any role;
     dynamic subscriptions need the role scientist."""
@@ -270,6 +274,8 @@ async def _handle(
             out = relay.unsubscribe(message.get("subscriber"))
         elif op == "ping":
             out = {"type": "pong", "subscribers": relay.subscribers}
+        elif op in ("watch", "unwatch"):
+            out = watches.handle(op, message.get("project"))
         elif op in ("dynamic", "cancel"):
             out = await _dynamic(op, message, relay, state, user)
         elif op == "auth":

@@ -1,11 +1,18 @@
 /**
  * One inspector field, chosen by the schema's input kind. Text-like inputs
- * commit on Enter or blur (a half-typed name is not applied); selects and
- * checkboxes commit at once. An emptied optional field is removed.
+ * apply as you type, once typing pauses (TYPING_DELAY_MS) and only a value
+ * the field accepts (a half-typed "0." waits), and at once on Enter or blur;
+ * selects and checkboxes commit at once. An emptied optional field is removed.
+ * What you type stays as typed while the field has the focus, even when the
+ * model spells it its own way ("5" is stored as "5.0") or renames the element.
  */
-import { useEffect, useId, useState } from "react";
-import type { FieldSpec } from "../../core/schemaForm";
+import { useEffect, useId, useRef, useState } from "react";
+import { checkField, type FieldSpec } from "../../core/schemaForm";
 import type { TopicRef } from "../../core/query";
+import { canonicalDecimal, sameMeaning } from "../../core/canonical";
+
+/** Pause in typing after which the field is applied (the plan follows). */
+export const TYPING_DELAY_MS = 400;
 
 interface Props {
   spec: FieldSpec;
@@ -20,20 +27,51 @@ function toText(v: unknown): string {
   return v === undefined || v === null ? "" : String(v);
 }
 
-function parse(spec: FieldSpec, text: string): unknown {
+/** What a field stores for the text typed in it (the inspector's one conversion). */
+export function parseField(spec: FieldSpec, text: string): unknown {
   if (text === "") return spec.required ? "" : undefined;
   if (spec.input === "integer" || spec.input === "number") {
     const n = Number(text);
     return Number.isFinite(n) ? n : text;
   }
+  // One spelling of a decimal (the .modd parser's): "5" is stored as "5.0".
+  if (spec.input === "decimal") return canonicalDecimal(text) ?? text;
   return text;
 }
 
 export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: Props) {
   const id = useId();
   const [text, setText] = useState(toText(value));
-  useEffect(() => setText(toText(value)), [value]);
-  const commit = () => { if (text !== toText(value)) onCommit(parse(spec, text)); };
+  const focused = useRef(false);
+  const timer = useRef<ReturnType<typeof setTimeout> | null>(null);
+  const latest = useRef({ text, value, onCommit });
+  latest.current = { text, value, onCommit };
+  const shown = useRef(value);
+  useEffect(() => {
+    if (sameMeaning({ v: shown.current }, { v: value })) return; // a re-render, not a new value
+    shown.current = value;
+    // Keep the typed text while focused when it means the value (no jump from "5" to "5.0" mid-typing).
+    setText((prev) => (focused.current && sameMeaning({ v: parseField(spec, prev) }, { v: value }) ? prev : toText(value)));
+  }, [value, spec]);
+  useEffect(() => () => { if (timer.current) clearTimeout(timer.current); }, []);
+  const commitText = (t: string) => {
+    if (timer.current) { clearTimeout(timer.current); timer.current = null; }
+    const { value: v, onCommit: apply } = latest.current;
+    const parsed = parseField(spec, t);
+    if (t !== toText(v) && !sameMeaning({ v: parsed }, { v })) apply(parsed);
+  };
+  /** Enter or blur: applies now, and shows the value as stored ("5" → "5.0"). */
+  const commit = () => {
+    const t = latest.current.text;
+    commitText(t);
+    setText(toText(parseField(spec, t)));
+  };
+  const typed = (t: string) => {
+    setText(t);
+    if (timer.current) clearTimeout(timer.current);
+    // As you type: only a value the field accepts (the whole form is checked again on blur/Enter).
+    if (checkField(spec, parseField(spec, t)) === null) timer.current = setTimeout(() => commitText(t), TYPING_DELAY_MS);
+  };
   const describedBy = `${id}-help`;
   const invalid = errors.length > 0;
   let control;
@@ -79,9 +117,10 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
             list={spec.input === "enumOrText" ? `${id}-options` : undefined}
             inputMode={spec.input === "integer" || spec.input === "decimal" || spec.input === "number" ? "decimal" : undefined}
             placeholder={spec.default !== undefined ? String(spec.default) : undefined}
-            onChange={(e) => setText(e.target.value)}
-            onBlur={commit}
-            onKeyDown={(e) => { if (e.key === "Enter") commit(); if (e.key === "Escape") setText(toText(value)); }} />
+            onChange={(e) => typed(e.target.value)}
+            onFocus={() => { focused.current = true; }}
+            onBlur={() => { focused.current = false; commit(); }}
+            onKeyDown={(e) => { if (e.key === "Enter") commit(); if (e.key === "Escape") { if (timer.current) clearTimeout(timer.current); setText(toText(value)); } }} />
           {spec.input === "enumOrText" && (
             <datalist id={`${id}-options`}>{spec.options?.map((o) => <option key={o} value={o} />)}</datalist>
           )}

@@ -3,7 +3,7 @@
  * element, with the schema's descriptions as help and the diagnostics of each
  * field under it. Read-only when the view's role may not edit the element.
  */
-import { useMemo } from "react";
+import { useMemo, useRef } from "react";
 import { parseId, type ElementKind } from "../../core/ids";
 import { elementValue } from "../../core/ops";
 import { formFor, getPath, kindDescription } from "../../core/schemaForm";
@@ -25,6 +25,9 @@ export default function InspectorPanel() {
   const diagnostics = useDiagnostics();
   const placed = useMemo(() => placeDiagnostics(model, diagnostics), [model, diagnostics]);
   const topics = useMemo(() => listTopics(model), [model]);
+  // The form stays mounted across a rename of its element (typing a name keeps the focus);
+  // choosing another element gives fresh fields.
+  const slot = useRef({ id: "", n: 0 });
 
   const nodeIds = selection.filter((id) => parseId(id));
   if (nodeIds.length === 0) {
@@ -55,6 +58,10 @@ export default function InspectorPanel() {
     );
   }
   const id = nodeIds[0];
+  if (slot.current.id !== id) {
+    const renamed = slot.current.id !== "" && elementValue(model, slot.current.id) === undefined;
+    slot.current = { id, n: renamed ? slot.current.n : slot.current.n + 1 };
+  }
   const kind = parseId(id)!.kind as ElementKind;
   const value = elementValue(model, id);
   if (!value) return <section className="inspector"><p>This element no longer exists.</p></section>;
@@ -71,7 +78,7 @@ export default function InspectorPanel() {
       {general.map((m) => <div key={m} className="field-error" role="alert">{m}</div>)}
       <form onSubmit={(e) => e.preventDefault()}>
         {formFor(MODD_SCHEMA, kind).map((spec) => (
-          <FieldInput key={`${id}/${spec.path.join(".")}`} spec={spec} value={getPath(value, spec.path)} topics={topics}
+          <FieldInput key={`${slot.current.n}/${kind}/${spec.path.join(".")}`} spec={spec} value={getPath(value, spec.path)} topics={topics}
             readOnly={readOnly} errors={fieldErrors(spec.path)}
             onCommit={(v) => store.dispatch({ type: "setField", id, path: spec.path, value: v })} />
         ))}
