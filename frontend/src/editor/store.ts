@@ -9,6 +9,7 @@ import type { ModdModel } from "../core/model.gen";
 import { currentModel, initialState, reduce, type Action, type WorkbenchState } from "../core/workbench";
 import type { Role } from "../core/roles";
 import type { PlanResult } from "../api/types";
+import type { PlanJson } from "../core/plan";
 
 export type PanelId = "plan" | "text" | "deploy" | "monitor" | "scene3d" | "archives" | "downloads";
 
@@ -19,8 +20,21 @@ export interface EditorState {
   /** The model as last loaded or saved (same object as a history entry, so `dirty` is a reference test). */
   savedModel: ModdModel | null;
   save: { busy: boolean; error: string | null; conflictRevision: number | null };
-  plan: { busy: boolean; result: PlanResult | null; error: string | null };
+  plan: PlanState;
   panel: PanelId;
+}
+
+/**
+ * The live plan: the last answer, plus the last valid plan (shown greyed
+ * while the model has errors) and the valid plan before it (what the last
+ * edit changed, core/planDiff).
+ */
+export interface PlanState {
+  busy: boolean;
+  result: PlanResult | null;
+  error: string | null;
+  lastValid?: PlanJson | null;
+  previous?: PlanJson | null;
 }
 
 export interface EditorStore {

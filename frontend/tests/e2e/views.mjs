@@ -72,6 +72,27 @@ export function views({ page, imagesDir, drone, liveValues, dronePid }) {
       await page.keyboard.press("Delete");
       await save(5);
     }],
+
+    ["plan changes highlighted; one error keeps the last valid plan greyed, errors in words, once each", async () => {
+      await view("Scientist");
+      await panel("Plan");
+      await select("sub:sub_1");
+      await setText("periodS", "10.0");
+      const changes = page.getByRole("status", { name: "Plan changes" });
+      await expectText(changes, /hyperperiod: 2\.0 s → 10\.0 s/, 15000);
+      await expectVisible(page.locator('[data-testid="hyperperiod"].changed'));
+      await expandShot("plan-changes");
+      await setText("periodS", "-1");
+      const errors = page.getByRole("alert", { name: "Plan errors" });
+      await expectText(errors, /subscriber sub_1: /, 15000);
+      await expectVisible(page.getByTestId("plan-stale"));
+      const items = await errors.locator("li").allTextContents();
+      if (new Set(items).size !== items.length) throw new Error(`duplicate messages: ${items.join(" | ")}`);
+      if (items.some((t) => /^\s*\//.test(t))) throw new Error(`a bare JSON pointer: ${items.join(" | ")}`);
+      await expandShot("plan-errors");
+      await setText("periodS", "2.0");
+      await expectVisible(page.getByTestId("plan-current"), 15000);
+    }],
   ];
 
   async function expandShot(name) {
@@ -90,4 +111,8 @@ export function childPids(parent, name) {
 async function expectText(locator, re, timeout = 10000) {
   await waitUntil(async () => re.test((await locator.first().textContent().catch(() => "")) ?? ""), timeout,
     async () => `${re} not in "${(await locator.first().textContent().catch(() => "")) ?? ""}"`);
+}
+
+async function expectVisible(locator, timeout = 10000) {
+  await locator.first().waitFor({ state: "visible", timeout });
 }
