@@ -20,6 +20,7 @@ import { useLivePlan } from "./useLivePlan";
 import { TopBar } from "./TopBar";
 import { Dock } from "./Dock";
 import { Notice } from "./Notice";
+import { LinkBanner } from "./LinkBanner";
 
 function LivePlan() {
   useLivePlan();
@@ -53,6 +54,7 @@ export function Workbench({ project, user, onLogout, onProjects }: Props) {
         <div className="workbench">
           <TopBar user={user} onLogout={onLogout} onProjects={onProjects} />
           <Notice />
+          <LinkBanner />
           <div className="main">
             <Palette />
             <div className="center">

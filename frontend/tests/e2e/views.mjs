@@ -93,6 +93,36 @@ export function views({ page, imagesDir, drone, liveValues, dronePid }) {
       await setText("periodS", "2.0");
       await expectVisible(page.getByTestId("plan-current"), 15000);
     }],
+
+    // Last: it stops the drone's PubBroker for a while.
+    ["link loss: a banner in every view, the link drawn broken, the stream dot red, time since the last frame", async () => {
+      if (!drone) throw new Error("needs the simulated drone (make build)");
+      await view("Scientist");
+      await panel("Monitor");
+      await expectText(page.getByRole("status", { name: "Link status" }), /link up/, 20000);
+      if (await page.getByTestId("link-banner").count()) throw new Error("a link-lost banner while the link is up");
+      const [pubbroker] = childPids(dronePid, "modd-pubbroker");
+      if (!pubbroker) throw new Error(`no modd-pubbroker under modd up (pid ${dronePid})`);
+      process.kill(pubbroker, "SIGSTOP");
+      try {
+        const banner = page.getByTestId("link-banner");
+        await expectVisible(banner, 20000);
+        await expectText(page.getByTestId("since-last-frame"), /last frame \d+ s ago/);
+        if (!/dot-down/.test((await page.getByTestId("stream-dot").getAttribute("class")) ?? "")) throw new Error("the stream dot is not red");
+        const dash = await page.locator(".react-flow__edge.edge-link path.react-flow__edge-path").first()
+          .evaluate((el) => getComputedStyle(el).strokeDasharray);
+        if (!dash || dash === "none") throw new Error(`the link edge is not drawn broken (stroke-dasharray ${dash})`);
+        await shot("link-lost");
+        for (const v of ["Operator", "System designer", "Sensor integrator"]) {
+          await view(v);
+          await expectVisible(banner);
+        }
+        await view("Scientist");
+      } finally {
+        process.kill(pubbroker, "SIGCONT");
+      }
+      await waitUntil(async () => (await page.getByTestId("link-banner").count()) === 0, 60000, async () => "the banner stays after the link is back");
+    }],
   ];
 
   async function expandShot(name) {

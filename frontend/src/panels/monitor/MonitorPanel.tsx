@@ -3,37 +3,25 @@
  * stream WebSocket), link status (RTT, measured against planned bytes/s), and
  * dynamic subscriptions (scientist) answered ACCEPTED or NOT_AVAILABLE.
  */
-import { useEffect, useMemo, useState } from "react";
+import { useState } from "react";
 import { AggregationValues } from "../../core/model.gen";
 import { listTopics } from "../../core/query";
 import { formatRate } from "../../core/plan";
 import { canEdit } from "../../core/roles";
 import { useEditor, useModel } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
-import type { ConnectionState, DataSource, LinkStatus } from "../../dataSources/types";
+import { formatAge } from "../../core/linkHealth";
+import { useLinkHealth } from "../../app/useLinkHealth";
 import type { DynamicReply } from "../../api/types";
 import { LiveChart } from "./LiveChart";
-
-function useStream(drone: string): { source: DataSource; state: ConnectionState; link: LinkStatus | null } {
-  const { openStream } = useServices();
-  const source = useMemo(() => openStream(drone), [openStream, drone]);
-  const [state, setState] = useState<ConnectionState>(source.state);
-  const [link, setLink] = useState<LinkStatus | null>(null);
-  useEffect(() => {
-    const a = source.onStateChange(setState);
-    const b = source.onLinkStatus(setLink);
-    setState(source.state);
-    return () => { a(); b(); source.close(); };
-  }, [source]);
-  return { source, state, link };
-}
 
 export default function MonitorPanel() {
   const model = useModel();
   const role = useEditor((s) => s.wb.role);
   const { api } = useServices();
   const drone = model.drone.name;
-  const { source, state, link } = useStream(drone);
+  const health = useLinkHealth();
+  const { source, state, link } = health.stream;
   const subscribers = model.subscribers.filter((s) => s.topic);
   const [watched, setWatched] = useState<string[]>(() => subscribers.slice(0, 4).map((s) => s.name));
   const [dynamic, setDynamic] = useState<Array<{ label: string; reply: DynamicReply }>>([]);
@@ -59,13 +47,14 @@ export default function MonitorPanel() {
   return (
     <div className="panel-body monitor-panel">
       <div className="link-status" role="status" aria-label="Link status">
-        <span className={`dot dot-${state}`} aria-hidden /> stream {state}
+        <span className={`dot dot-${health.down ? "down" : state}`} data-testid="stream-dot" aria-hidden /> stream {state}
+        {health.down && <strong className="error"> · link lost: {health.reason}</strong>}
         {link && <>
           · link <strong>{link.state ?? (link.connected ? "up" : "down")}</strong>
           · RTT {link.rttMs === null ? "—" : `${link.rttMs.toFixed(1)} ms`}
           · measured {link.measuredBytesPerS === null ? "—" : formatRate(link.measuredBytesPerS)}
           {" "}vs planned {link.plannedBytesPerS === null ? "—" : formatRate(link.plannedBytesPerS)}
-          {link.lastFrameAgeS !== null && <> · last frame {link.lastFrameAgeS.toFixed(1)} s ago</>}
+          {health.sinceLastFrameS !== null && <> · last frame {formatAge(health.sinceLastFrameS)} ago</>}
           {link.behind && <strong className="behind" role="alert">
             {" "}· base station behind the link{link.lagS != null && ` by ${link.lagS.toFixed(1)} s`}
           </strong>}
