@@ -86,6 +86,7 @@ try {
   procs.push(backend);
   await waitForHttp(`${baseUrl}/openapi.json`, backend);
   console.log(`e2e: backend pid ${backend.pid} on ${baseUrl}; drone: ${drone ? `modd up pid ${procs[0].pid}` : `no (${pubbrokerBin} not built)`}; simulated values: ${liveValues ? "yes" : "no (no modd-sim)"}`);
+  await warmPlanner(baseUrl);
   browser = await launch();
   const page = browser.context.pages()[0] ?? await browser.context.newPage();
   const errors = [];
@@ -126,6 +127,21 @@ try {
 }
 console.log(`${passed} passed, ${failed} failed`);
 process.exit(failed ? 1 : 0);
+
+/**
+ * The backend plans in worker processes started on the first request (each
+ * imports the solver: seconds on a busy machine). One plan before the
+ * journey, so that its steps are not timed against that start-up.
+ */
+async function warmPlanner(baseUrl) {
+  const login = await fetch(`${baseUrl}/api/auth/login`, { method: "POST", headers: { "content-type": "application/json" },
+    body: JSON.stringify({ username: "admin", password: PASSWORD }) });
+  const { token } = await login.json();
+  const model = scenario1(1, 2);
+  const r = await fetch(`${baseUrl}/api/plan`, { method: "POST", headers: { "content-type": "application/json", authorization: `Bearer ${token}` },
+    body: JSON.stringify({ model }), signal: AbortSignal.timeout(120000) });
+  if (!r.ok) throw new Error(`warming the planner: HTTP ${r.status}`);
+}
 
 /** Scenario 1 as the journey builds it (no subscriber endpoints: zenoh delivery). */
 function scenario1(pubPort, subPort) {

@@ -94,6 +94,73 @@ export function views({ page, imagesDir, drone, liveValues, dronePid }) {
       await expectVisible(page.getByTestId("plan-current"), 15000);
     }],
 
+    ["schedule strip readable at more than 120 messages per hyperperiod", async () => {
+      await panel("Plan");
+      await select("sub:sub_5");
+      await setText("periodS", "0.04");
+      await select("sub:sub_1");
+      await setText("periodS", "2.4");
+      await expectText(page.getByTestId("hyperperiod"), /^12(\.0)? s$/, 15000);
+      await page.locator(".timeline-controls").getByRole("button", { name: "All" }).click();
+      const ticks = await page.getByTestId("schedule-tick").evaluateAll((els) => els.map((e) => e.getBoundingClientRect()).map((r) => [r.left, r.right]));
+      if (ticks.length < 120) throw new Error(`only ${ticks.length} ticks drawn`);
+      const sorted = ticks.sort((a, b) => a[0] - b[0]);
+      const overlaps = sorted.filter((t, i) => i > 0 && t[0] < sorted[i - 1][1] - 0.01).length;
+      if (overlaps) throw new Error(`${overlaps} of ${ticks.length} schedule ticks overlap`);
+      await expectText(page.getByLabel("Time within the hyperperiod"), /0 s.*s/);
+      await expandShot("schedule-strip");
+      await page.locator(".react-flow__pane").click({ position: { x: 8, y: 8 } });
+      await page.keyboard.press("Control+z");
+      await page.keyboard.press("Control+z");
+      await expectText(page.getByTestId("hyperperiod"), /^2\.0 s$/, 15000);
+    }],
+
+    ["monitor: time axis, units, several subscriptions per chart, zoom/pan with a shared cursor, dynamic label, history across a redeploy", async () => {
+      await panel("Monitor");
+      const chart3 = page.getByTestId("chart-sub_3");
+      await expectVisible(chart3);
+      // Units on the y axis; the x axis spans seconds from the first point, never years.
+      await expectText(chart3.getByTestId("chart-axes"), /values in m\/s²/);
+      if (liveValues) await expectText(page.getByTestId("last-sub_3"), /last -?\d/, 30000);
+      await expectText(chart3.getByTestId("chart-axes"), /time .+ – .+ \((60\.0|[1-5]?\d\.\d) s\)/);
+      // Two subscriptions on one chart.
+      await page.getByLabel("Add to the chart of sub_3").selectOption("sub_4");
+      const both = page.getByTestId("chart-sub_3+sub_4");
+      await expectVisible(both);
+      await expectText(both.locator(".u-legend"), /sub_3[\s\S]*sub_4/);
+      // Zoom and pan: one window for every chart.
+      await page.getByRole("button", { name: "Zoom in on time" }).click();
+      await expectText(page.getByTestId("time-window"), /\(30\.0 s\)/);
+      await page.getByRole("button", { name: "← Earlier" }).click();
+      await expectText(page.getByTestId("time-window"), /\(30\.0 s\)/);
+      // The cursor follows the mouse on every chart.
+      const over = await both.locator(".u-over").boundingBox();
+      await page.mouse.move(over.x + over.width / 2, over.y + over.height / 2);
+      const cursors = page.locator(".live-chart .u-cursor-x");
+      const off = await cursors.evaluateAll((els) => els.filter((e) => e.classList.contains("u-off")).length);
+      if ((await cursors.count()) < 2 || off > 0) throw new Error(`the cursor is not shared: ${off} of ${await cursors.count()} charts hide it`);
+      await page.getByRole("button", { name: "Follow live" }).click();
+      await expectText(page.getByTestId("time-window"), /following/);
+      // A dynamic subscription is labelled with its topic and aggregation.
+      const accepted = await page.locator(".dynamic-replies li.status-ok").count();
+      if (accepted) await expectText(page.getByRole("complementary", { name: "Subscriptions to watch" }), /accel_x AVERAGE 1\.0 s \(dynamic\)/);
+      await expandShot("monitor-charts");
+      // History across a redeploy (and leaving the panel).
+      if (liveValues) {
+        const kept = async () => Number(/(\d+) kept/.exec((await page.getByTestId("chart-sub_5").textContent()) ?? "")?.[1] ?? 0);
+        await waitUntil(async () => (await kept()) >= 5, 30000, async () => `sub_5 kept ${await kept()}`);
+        const before = await kept();
+        await view("Operator");
+        await panel("Deploy");
+        await page.getByRole("button", { name: "Deploy revision 5" }).click();
+        await expectText(page.getByTestId("deploy-result"), /Acked/, 30000);
+        await view("Scientist");
+        await panel("Monitor");
+        const after = await kept();
+        if (after < before) throw new Error(`the chart lost its history: ${before} points before the redeploy, ${after} after`);
+      }
+    }],
+
     // Last: it stops the drone's PubBroker for a while.
     ["link loss: a banner in every view, the link drawn broken, the stream dot red, time since the last frame", async () => {
       if (!drone) throw new Error("needs the simulated drone (make build)");

@@ -5,6 +5,7 @@
  */
 import { useMemo, useState } from "react";
 import { timeline, zoomWindow, type PlanJson } from "../../core/plan";
+import { axisTicks, tickWidth } from "../../core/timelineScale";
 
 export function Timeline({ plan }: { plan: PlanJson }) {
   const hyper = Number(plan.hyperperiod_s);
@@ -14,6 +15,8 @@ export function Timeline({ plan }: { plan: PlanJson }) {
   const marks = useMemo(() => timeline(plan, from, to), [plan, from, to]);
   const [picked, setPicked] = useState<number | null>(null);
   const pickedMark = marks.find((m) => m.slot === picked) ?? marks[0];
+  // Ticks never overlap: at 120 messages in view each is narrower than the gap to the next.
+  const width = tickWidth(marks.map((m) => m.x));
 
   return (
     <div className="timeline">
@@ -32,10 +35,13 @@ export function Timeline({ plan }: { plan: PlanJson }) {
         {marks.map((m) => (
           <g key={m.slot} onClick={() => setPicked(m.slot)} className={m.slot === pickedMark?.slot ? "tick picked" : "tick"}>
             <title>{`slot ${m.slot} at ${m.t} s: ${m.streams.join(", ")}`}</title>
-            <rect x={m.x * 990} y={40 - Math.min(8 + 6 * m.streams.length, 38)} width={10} height={Math.min(8 + 6 * m.streams.length, 38)} />
+            <rect x={m.x * (1000 - width)} y={40 - Math.min(8 + 6 * m.streams.length, 38)} width={width} height={Math.min(8 + 6 * m.streams.length, 38)} data-testid="schedule-tick" />
           </g>
         ))}
       </svg>
+      <div className="timeline-scale" aria-label="Time within the hyperperiod">
+        {axisTicks(from, to).map((t) => <span key={t.label} style={{ left: `${t.x * 100}%` }}>{t.label}</span>)}
+      </div>
       {pickedMark && (
         <p className="timeline-detail">
           Message {pickedMark.slot} at {pickedMark.t} s carries {pickedMark.streams.length} stream(s): {pickedMark.streams.join(", ")}
