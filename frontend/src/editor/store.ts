@@ -11,7 +11,7 @@ import type { Role } from "../core/roles";
 import type { PlanResult } from "../api/types";
 import type { PlanJson } from "../core/plan";
 
-export type PanelId = "plan" | "text" | "deploy" | "monitor" | "scene3d" | "archives" | "downloads";
+export type PanelId = "plan" | "text" | "deploy" | "monitor" | "map" | "scene3d" | "archives" | "downloads";
 
 export interface EditorState {
   wb: WorkbenchState;

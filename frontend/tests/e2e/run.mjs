@@ -93,7 +93,8 @@ try {
   page.on("pageerror", (e) => errors.push(e.message));
   const steps = journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues });
   // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
-  steps.push(...views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null }));
+  steps.push(...views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null,
+    survey: surveyModel(pubPort, subPort) }));
   let broken = null;
   for (const [name, fn] of steps) {
     if (broken) { console.log(`  - ${name}: not run (after "${broken}" failed)`); failed += 1; continue; }
@@ -148,12 +149,41 @@ function scenario1(pubPort, subPort) {
   const t = (v) => `usv.accelerometer.${v}`;
   const subs = [["accel_x", "2.0", "AVERAGE"], ["accel_y", "2.0", "AVERAGE"], ["accel_x", "0.25", "AVERAGE"],
     ["accel_y", "0.25", "AVERAGE"], ["accel_z", "0.25", "MIN"], ["accel_z", "0.25", "MAX"], ["accel_z", "0.25", "MAX"]];
-  return {
+  const model = {
     schemaVersion: "1.0",
     drone: { name: "usv", sensors: [{ name: "accelerometer", variables: ["accel_x", "accel_y", "accel_z"].map((name) => ({ name, unit: "METER_PER_SECOND_SQUARED" })) }] },
     pubBroker: { endpoint: { host: "127.0.0.1", port: pubPort }, logPath: "/tmp/modd/logs" },
     subBroker: { endpoint: { host: "127.0.0.1", port: subPort }, configPath: "/tmp/modd/conf" },
     publishers: [{ name: "pub_1", periodS: "0.04", topics: [t("accel_x"), t("accel_y"), t("accel_z")] }],
     subscribers: subs.map(([v, periodS, aggregation], i) => ({ name: `sub_${i + 1}`, topic: t(v), periodS, aggregation })),
+  };
+  // The survey's position and water sensors (views.mjs deploys a model that subscribes to them):
+  // simulated from the start, so that they flow once that model is deployed.
+  const survey = surveyParts();
+  model.drone.sensors.push(...survey.sensors);
+  model.publishers.push(survey.publisher);
+  return model;
+}
+
+/** Scenario 1 plus the survey's sensors and subscriptions: the model views.mjs imports as a second project. */
+function surveyModel(pubPort, subPort) {
+  const m = scenario1(pubPort, subPort);
+  m.subscribers.push(...surveyParts().subscribers);
+  return m;
+}
+
+/** GPS and CTD sensors, their publisher (simulated: a lawnmower survey through a warm plume). */
+export function surveyParts() {
+  return {
+    sensors: [
+      { name: "gps", variables: [{ name: "latitude", unit: "NONE", type: "float64" }, { name: "longitude", unit: "NONE", type: "float64" }] },
+      { name: "ctd", variables: [{ name: "water_temperature", unit: "DEGREE_CELSIUS" }] },
+    ],
+    publisher: { name: "pub_2", periodS: "0.2", topics: ["usv.gps.latitude", "usv.gps.longitude", "usv.ctd.water_temperature"] },
+    subscribers: [
+      { name: "sub_lat", topic: "usv.gps.latitude", periodS: "1.0", aggregation: "LAST" },
+      { name: "sub_lon", topic: "usv.gps.longitude", periodS: "1.0", aggregation: "LAST" },
+      { name: "sub_temp", topic: "usv.ctd.water_temperature", periodS: "1.0", aggregation: "AVERAGE" },
+    ],
   };
 }

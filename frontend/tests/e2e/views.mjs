@@ -10,7 +10,7 @@ import { execFileSync } from "node:child_process";
 import { join } from "node:path";
 import { waitUntil } from "./journey.mjs";
 
-export function views({ page, imagesDir, drone, liveValues, dronePid }) {
+export function views({ page, imagesDir, drone, liveValues, dronePid, survey }) {
   const shot = async (name) => {
     await page.waitForTimeout(200);
     await page.screenshot({ path: join(imagesDir, `${name}.png`) });
@@ -64,7 +64,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid }) {
       await save(4);
       await view("Operator");
       await panel("Deploy");
-      await expectText(page.getByTestId("deploy-blocked"), /revision 4 has 1 error\(s\)/);
+      await expectText(page.getByTestId("deploy-blocked"), /revision 4 has \d+ error\(s\)/);
       await expectText(page.getByRole("list", { name: "Why deploy is disabled" }), /subscriber sub_8/);
       if (!(await page.getByRole("button", { name: "Deploy revision 4" }).isDisabled())) throw new Error("deploy of an invalid revision is enabled");
       await view("Scientist");
@@ -159,6 +159,51 @@ export function views({ page, imagesDir, drone, liveValues, dronePid }) {
         const after = await kept();
         if (after < before) throw new Error(`the chart lost its history: ${before} points before the redeploy, ${after} after`);
       }
+    }],
+
+    ["map: the survey deployed from another project, its track drawn in 2D and coloured by the water temperature", async () => {
+      if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
+      await page.getByRole("button", { name: "MoDD", exact: true }).click();
+      await page.locator('input[type="file"]').setInputFiles({ name: "survey.json", mimeType: "application/json", buffer: Buffer.from(JSON.stringify(survey)) });
+      await expectVisible(node("sub:sub_temp"));
+      await view("Operator");
+      await panel("Deploy");
+      await expectText(page.getByTestId("other-project"), /The drone runs project scenario1/, 15000);
+      await expectText(page.getByRole("list", { name: "Model changes" }), /subscriber sub_temp added: usv\.ctd\.water_temperature AVERAGE every 1\.0 s/);
+      await expandShot("deploy-other-project");
+      await page.getByRole("button", { name: "Deploy revision 1" }).click();
+      await expectText(page.getByTestId("deploy-result"), /Acked/, 30000);
+      await view("Scientist");
+      await panel("Map");
+      await page.getByLabel("Colour by").selectOption("sub_temp");
+      await expectText(page.getByTestId("map-legend"), /sub_temp.*°C/);
+      const canvas = page.getByTestId("map-canvas");
+      await waitUntil(async () => Number(await canvas.getAttribute("data-points")) >= 8, 60000,
+        async () => `${await canvas.getAttribute("data-points")} fixes on the map`);
+      await expand(true);
+      await page.waitForTimeout(1500);
+      const px = JSON.parse((await canvas.getAttribute("data-track-px")) ?? "[]");
+      const png = await canvas.screenshot();
+      const found = await page.evaluate(async ({ b64, px }) => {
+        const img = new Image();
+        img.src = `data:image/png;base64,${b64}`;
+        await img.decode();
+        const c = document.createElement("canvas");
+        c.width = img.width; c.height = img.height;
+        const ctx = c.getContext("2d");
+        ctx.drawImage(img, 0, 0);
+        const coloured = ([r, g, b]) => Math.max(r, g, b) - Math.min(r, g, b) > 60;
+        const along = px.filter(([x, y]) => coloured(ctx.getImageData(x, y, 1, 1).data)).length;
+        const all = ctx.getImageData(0, 0, c.width, c.height).data;
+        let total = 0;
+        for (let i = 0; i < all.length; i += 4) if (coloured([all[i], all[i + 1], all[i + 2]])) total += 1;
+        return { along, of: px.length, total };
+      }, { b64: png.toString("base64"), px });
+      if (found.of < 8 || found.along < 0.8 * found.of || found.total < 100) {
+        throw new Error(`the track is not drawn: ${found.along} of ${found.of} fixes coloured in the screenshot, ${found.total} coloured pixels`);
+      }
+      await shot("map");
+      await expand(false);
     }],
 
     // Last: it stops the drone's PubBroker for a while.
