@@ -16,6 +16,26 @@ export function tickWidth(xs: readonly number[], strip = 1000): number {
   return Math.min(10, Math.max(1, 0.7 * gap * strip));
 }
 
+/**
+ * Ticks at positions `xs` (0..1, in order) laid out so that none overlaps
+ * another: a width from the typical gap (70 % of the median, 2 to 10 units of
+ * a 1000-unit strip), and ticks closer than that stacked in lanes.
+ */
+export function layoutTicks(xs: readonly number[], strip = 1000): { width: number; lanes: number; lane: number[] } {
+  const gaps = xs.slice(1).map((x, i) => x - xs[i]).filter((g) => g > 1e-12).sort((a, b) => a - b);
+  const median = gaps.length ? gaps[gaps.length >> 1] : 1;
+  const width = Math.min(10, Math.max(2, 0.7 * median * (strip - 10)));
+  const ends: number[] = [];
+  const lane = xs.map((x) => {
+    const left = x * (strip - width);
+    let i = ends.findIndex((end) => end <= left);
+    if (i < 0) { i = ends.length; ends.push(0); }
+    ends[i] = left + width + 0.5;
+    return i;
+  });
+  return { width, lanes: Math.max(ends.length, 1), lane };
+}
+
 /** A round step (1, 2 or 5 × 10^n) giving about `count` labels over `span`. */
 export function niceStep(span: number, count = 5): number {
   const raw = span / Math.max(count, 1);
