@@ -102,11 +102,16 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey }) 
       await setText("periodS", "2.4");
       await expectText(page.getByTestId("hyperperiod"), /^12(\.0)? s$/, 15000);
       await page.locator(".timeline-controls").getByRole("button", { name: "All" }).click();
-      const ticks = await page.getByTestId("schedule-tick").evaluateAll((els) => els.map((e) => e.getBoundingClientRect()).map((r) => [r.left, r.right]));
+      const ticks = await page.getByTestId("schedule-tick").evaluateAll((els) => els.map((e) => e.getBoundingClientRect()).map((r) => [r.left, r.right, r.top, r.bottom]));
       if (ticks.length < 120) throw new Error(`only ${ticks.length} ticks drawn`);
       const sorted = ticks.sort((a, b) => a[0] - b[0]);
-      const overlaps = sorted.filter((t, i) => i > 0 && t[0] < sorted[i - 1][1] - 0.01).length;
-      if (overlaps) throw new Error(`${overlaps} of ${ticks.length} schedule ticks overlap`);
+      let overlaps = 0;
+      for (let i = 0; i < sorted.length; i += 1) {
+        for (let j = i + 1; j < sorted.length && sorted[j][0] < sorted[i][1] - 0.01; j += 1) {
+          if (sorted[j][2] < sorted[i][3] - 0.01 && sorted[i][2] < sorted[j][3] - 0.01) overlaps += 1;
+        }
+      }
+      if (overlaps) throw new Error(`${overlaps} pairs of the ${ticks.length} schedule ticks overlap`);
       await expectText(page.getByLabel("Time within the hyperperiod"), /0 s.*s/);
       await expandShot("schedule-strip");
       await page.locator(".react-flow__pane").click({ position: { x: 8, y: 8 } });
@@ -204,6 +209,43 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey }) 
       }
       await shot("map");
       await expand(false);
+    }],
+
+    ["archives: a time range played back through the charts (seek, play, pause)", async () => {
+      if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
+      await panel("Archives");
+      const files = page.getByRole("table", { name: "Archive files" });
+      await page.getByRole("button", { name: "Refresh" }).click();
+      await expectText(files, /\.mcap/, 15000);
+      await files.locator("button.link").first().click();
+      const form = page.getByRole("form", { name: "Play back an archive range" });
+      await form.getByRole("button", { name: "Load for playback" }).click();
+      const controls = page.getByRole("group", { name: "Playback controls" });
+      await expectVisible(controls, 20000);
+      const time = page.getByTestId("playback-time");
+      await expectText(time, /^0\.0 s of \d+\.\d s/);
+      const total = Number(/of ([\d.]+) s/.exec((await time.textContent()) ?? "")?.[1]);
+      if (!(total > 2)) throw new Error(`the archive range is only ${total} s`);
+      const chart = page.locator(".playback-section .live-chart").first();
+      const kept = async () => Number(/(\d+) kept/.exec((await chart.textContent()) ?? "")?.[1] ?? 0);
+      // Seek to the middle: the chart holds what was recorded until then.
+      const seek = controls.getByLabel("Seek");
+      const [min, max] = [Number(await seek.getAttribute("min")), Number(await seek.getAttribute("max"))];
+      await seek.fill(String((min + max) / 2));
+      await expectText(time, new RegExp(`^${(total / 2).toFixed(0)}\\.|^${Math.floor(total / 2)}\\.`));
+      const half = await kept();
+      if (half < 1) throw new Error("nothing charted at the middle of the range");
+      await expandShot("playback");
+      // Play: the cursor and the chart move on; pause: they stop.
+      await controls.getByRole("button", { name: "Play" }).click();
+      await waitUntil(async () => (await kept()) > half, 10000, async () => `still ${await kept()} points after play`);
+      await controls.getByRole("button", { name: "Pause" }).click();
+      const paused = await time.textContent();
+      await page.waitForTimeout(800);
+      if ((await time.textContent()) !== paused) throw new Error("the cursor moves while paused");
+      if (!/paused/.test(paused ?? "")) throw new Error(`not paused: ${paused}`);
+      await seek.fill(String(min));
+      await waitUntil(async () => (await kept()) <= 1, 5000, async () => `${await kept()} points kept after seeking to the start`);
     }],
 
     // Last: it stops the drone's PubBroker for a while.

@@ -29,7 +29,12 @@ function useLast(source: DataSource, channel: string): [Sample | null, number] {
   useEffect(() => {
     setLast(source.history(channel).at(-1) ?? null);
     setCount(source.history(channel).length);
-    return source.subscribe(channel, (batch) => { setLast(batch[batch.length - 1]); setCount((c) => c + batch.length); });
+    // Read back from the source: a playback seek delivers an empty batch and a shorter history.
+    return source.subscribe(channel, () => {
+      const h = source.history(channel);
+      setLast(h.at(-1) ?? null);
+      setCount(h.length);
+    });
   }, [source, channel]);
   return [last, count];
 }
