@@ -56,7 +56,7 @@ export function TimeChart({ source, series, window: view, onZoom, syncKey, heigh
       series: [
         { label: "time" },
         ...series.map((s, i) => ({
-          label: s.unit ? `${s.label} (${s.unit})` : s.label, stroke: COLOURS[i % COLOURS.length], width: 1.5,
+          label: s.unit ? `${s.channel} (${s.unit})` : s.channel, stroke: COLOURS[i % COLOURS.length], width: 1.5,
           spanGaps: true, points: { show: true, size: 4 },
         })),
       ],
