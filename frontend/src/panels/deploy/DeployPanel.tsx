@@ -111,7 +111,7 @@ export default function DeployPanel() {
               <tbody>{history.data.map((d) => (
                 <tr key={d.id} className={d.revision === revision ? "picked" : ""}>
                   <td>{d.id}</td><td>{d.revision}</td><td>{d.drone}</td><td>{d.requested_by}</td>
-                  <td>{new Date(d.requested_at).toLocaleString()}</td>
+                  <td>{new Date(d.requested_at).toLocaleString(undefined, { dateStyle: "short", timeStyle: "short" })}</td>
                   <td className={d.status === "acked" ? "status-ok" : "error"}>{d.status}{d.error ? `: ${d.error}` : ""}</td>
                   <td>
                     <button className="link" onClick={() => setPicked(d.revision)} aria-label={`Review revision ${d.revision} (deployment ${d.id})`}>diff</button>
