@@ -21,7 +21,7 @@ import { useServices } from "../../app/services";
 import { useLinkHealth } from "../../app/useLinkHealth";
 import type { DynamicReply } from "../../api/types";
 import { LiveChart } from "./LiveChart";
-import { useChartLayout } from "./useChartLayout";
+import { keepSubscribed, useChartLayout } from "./useChartLayout";
 
 export default function MonitorPanel() {
   const model = useModel();
@@ -37,6 +37,8 @@ export default function MonitorPanel() {
   const topics = listTopics(model);
   const [dyn, setDyn] = useState({ topic: "", period_s: "1.0", aggregation: "AVERAGE" });
   const watched = charts.flat();
+  const watchedKey = watched.join(",");
+  useEffect(() => { keepSubscribed(source, watchedKey ? watchedKey.split(",") : []); }, [source, watchedKey]);
 
   const describe = (name: string) => {
     const s = model.subscribers.find((x) => x.name === name);
