@@ -10,6 +10,7 @@ import { App } from "./app/App";
 import { ServicesContext, type Services } from "./app/services";
 import { restoreSession, type Session } from "./app/session";
 import "./app/styles.css";
+import "./app/views.css";
 
 let session: Session | null = null;
 const onSession = (s: Session | null) => { session = s; };

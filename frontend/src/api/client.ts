@@ -14,6 +14,13 @@ import type {
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, User, ValidateResult, Version,
 } from "./types";
 
+/**
+ * Where the backend serves the viser 3D client, on its own origin (behind the
+ * session; the backend proxies viser's HTTP and WebSocket there). The one
+ * place the frontend names that path.
+ */
+export const SCENE_PATH = "/scene/";
+
 export function createApi(opts: HttpOptions) {
   const http = new Http(opts);
   return {
@@ -102,6 +109,9 @@ export function createApi(opts: HttpOptions) {
 
     // --- 3D scene (viser), served by the backend
     scene: () => http.request<{ url: string }>("/api/scene"),
+    /** Colours the drone's track in the shared 3D scene by a subscriber's values (null: plain). */
+    setSceneColour: (drone: string, subscriber: string | null) =>
+      http.request<void>(`/api/scene/${drone}/colour`, { method: "PUT", json: { subscriber }, as: "none" }),
   };
 }
 

@@ -29,6 +29,7 @@ import { readDraft, writeDraft } from "./drafts";
 import { goTo, type Route } from "./routes";
 import { sameValue } from "../core/merge";
 import { push } from "../core/history";
+import { LinkBanner } from "./LinkBanner";
 
 function LivePlan() {
   useLivePlan();
@@ -103,6 +104,7 @@ export function Workbench({ project, user, onLogout, onProjects, route }: Props)
           <ConflictBanner />
           <RemoteSaveNotice />
           <DraftNotice />
+          <LinkBanner />
           <div className="main">
             <Palette />
             <div className="center">

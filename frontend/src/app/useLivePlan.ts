@@ -2,17 +2,25 @@
  * Keeps the live plan in step with the edited model: after `delayMs` without
  * edits, posts the model to the backend's planner (aborting a request still
  * running) and stores the plan and its diagnostics. Layout-only edits do not
- * re-plan.
+ * re-plan. Keeps the last valid plan and the one before it (nextPlanState).
  */
 import { useEffect, useRef } from "react";
 import type { ModdModel } from "../core/model.gen";
 import { useEditorStore, useModel } from "../editor/useEditor";
+import type { PlanState } from "../editor/store";
+import type { PlanResult } from "../api/types";
 import { useServices } from "./services";
 
 function semantic(m: ModdModel): string {
   const { layout: _layout, ...rest } = m;
   void _layout;
   return JSON.stringify(rest);
+}
+
+/** The plan state after an answer: a valid plan becomes the last valid one, the one before it `previous`. */
+export function nextPlanState(prev: PlanState, result: PlanResult): PlanState {
+  if (!result.plan) return { ...prev, busy: false, result, error: null };
+  return { busy: false, result, error: null, lastValid: result.plan, previous: prev.lastValid ?? null };
 }
 
 export function useLivePlan(delayMs = 400): void {
@@ -30,10 +38,10 @@ export function useLivePlan(delayMs = 400): void {
       try {
         const result = await api.plan({ model: JSON.parse(key) as ModdModel }, ctl.signal);
         last.current = key;
-        store.patch({ plan: { busy: false, result, error: null } });
+        store.patch((s) => ({ plan: nextPlanState(s.plan, result) }));
       } catch (e) {
         if ((e as Error).name === "AbortError") return;
-        store.patch((s) => ({ plan: { busy: false, result: s.plan.result, error: (e as Error).message } }));
+        store.patch((s) => ({ plan: { ...s.plan, busy: false, error: (e as Error).message } }));
       }
     }, delayMs);
     return () => { window.clearTimeout(timer); ctl.abort(); };

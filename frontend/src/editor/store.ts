@@ -10,8 +10,9 @@ import { currentModel, initialState, reduce, type Action, type WorkbenchState } 
 import type { Role } from "../core/roles";
 import type { PlanResult } from "../api/types";
 import type { Side } from "../core/merge";
+import type { PlanJson } from "../core/plan";
 
-export type PanelId = "plan" | "text" | "deploy" | "monitor" | "scene3d" | "archives" | "downloads" | "history";
+export type PanelId = "plan" | "text" | "deploy" | "monitor" | "map" | "scene3d" | "archives" | "downloads" | "history";
 
 export interface EditorState {
   wb: WorkbenchState;
@@ -20,7 +21,7 @@ export interface EditorState {
   /** The model as last loaded or saved (same object as a history entry, so `dirty` is a reference test). */
   savedModel: ModdModel | null;
   save: { busy: boolean; error: string | null; conflictRevision: number | null };
-  plan: { busy: boolean; result: PlanResult | null; error: string | null };
+  plan: PlanState;
   panel: PanelId;
   /** A save refused because revision `revision` was saved meanwhile: the three models to merge. */
   conflict: MergeState | null;
@@ -38,6 +39,19 @@ export interface MergeState {
   author: string;
   /** How each conflicting field is resolved so far, by pointer. */
   choices: Record<string, Side>;
+}
+
+/**
+ * The live plan: the last answer, plus the last valid plan (shown greyed
+ * while the model has errors) and the valid plan before it (what the last
+ * edit changed, core/planDiff).
+ */
+export interface PlanState {
+  busy: boolean;
+  result: PlanResult | null;
+  error: string | null;
+  lastValid?: PlanJson | null;
+  previous?: PlanJson | null;
 }
 
 export interface EditorStore {

@@ -17,6 +17,7 @@ export const PANELS: PanelInfo[] = [
   { id: "downloads", title: "Downloads", component: lazy(() => import("./downloads/DownloadsPanel")) },
   { id: "deploy", title: "Deploy", component: lazy(() => import("./deploy/DeployPanel")) },
   { id: "monitor", title: "Monitor", component: lazy(() => import("./monitor/MonitorPanel")) },
+  { id: "map", title: "Map", component: lazy(() => import("./map/MapPanel")) },
   { id: "scene3d", title: "3D", component: lazy(() => import("./scene3d/ScenePanel")) },
   { id: "archives", title: "Archives", component: lazy(() => import("./archives/ArchivesPanel")) },
   { id: "history", title: "History", component: lazy(() => import("./history/HistoryPanel")) },

@@ -15,6 +15,7 @@ import { launch } from "./browser.mjs";
 import { freePort, start, stop, waitForHttp } from "./processes.mjs";
 import { journey } from "./journey.mjs";
 import { collaboration } from "./collab.mjs";
+import { views } from "./views.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
@@ -90,6 +91,7 @@ try {
   procs.push(backend);
   await waitForHttp(`${baseUrl}/openapi.json`, backend);
   console.log(`e2e: backend pid ${backend.pid} on ${baseUrl}; drone: ${drone ? `modd up pid ${procs[0].pid}` : `no (${pubbrokerBin} not built)`}; simulated values: ${liveValues ? "yes" : "no (no modd-sim)"}`);
+  await warmPlanner(baseUrl);
   browser = await launch();
   const page = browser.context.pages()[0] ?? await browser.context.newPage();
   const errors = [];
@@ -98,6 +100,9 @@ try {
   const only = process.env.MODD_E2E_ONLY;
   const steps = [
     ...(only === "collab" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
+    // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
+    ...(only === "collab" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null,
+      survey: surveyModel(pubPort, subPort) })),
     ...collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) }),
   ];
   let broken = null;
@@ -134,17 +139,61 @@ try {
 console.log(`${passed} passed, ${failed} failed`);
 process.exit(failed ? 1 : 0);
 
+/**
+ * The backend plans in worker processes started on the first request (each
+ * imports the solver: seconds on a busy machine). One plan before the
+ * journey, so that its steps are not timed against that start-up.
+ */
+async function warmPlanner(baseUrl) {
+  const login = await fetch(`${baseUrl}/api/auth/login`, { method: "POST", headers: { "content-type": "application/json" },
+    body: JSON.stringify({ username: "admin", password: PASSWORD }) });
+  const { token } = await login.json();
+  const model = scenario1(1, 2);
+  const r = await fetch(`${baseUrl}/api/plan`, { method: "POST", headers: { "content-type": "application/json", authorization: `Bearer ${token}` },
+    body: JSON.stringify({ model }), signal: AbortSignal.timeout(120000) });
+  if (!r.ok) throw new Error(`warming the planner: HTTP ${r.status}`);
+}
+
 /** Scenario 1 as the journey builds it (no subscriber endpoints: zenoh delivery). */
 function scenario1(pubPort, subPort) {
   const t = (v) => `usv.accelerometer.${v}`;
   const subs = [["accel_x", "2.0", "AVERAGE"], ["accel_y", "2.0", "AVERAGE"], ["accel_x", "0.25", "AVERAGE"],
     ["accel_y", "0.25", "AVERAGE"], ["accel_z", "0.25", "MIN"], ["accel_z", "0.25", "MAX"], ["accel_z", "0.25", "MAX"]];
-  return {
+  const model = {
     schemaVersion: "1.0",
     drone: { name: "usv", sensors: [{ name: "accelerometer", variables: ["accel_x", "accel_y", "accel_z"].map((name) => ({ name, unit: "METER_PER_SECOND_SQUARED" })) }] },
     pubBroker: { endpoint: { host: "127.0.0.1", port: pubPort }, logPath: "/tmp/modd/logs" },
     subBroker: { endpoint: { host: "127.0.0.1", port: subPort }, configPath: "/tmp/modd/conf" },
     publishers: [{ name: "pub_1", periodS: "0.04", topics: [t("accel_x"), t("accel_y"), t("accel_z")] }],
     subscribers: subs.map(([v, periodS, aggregation], i) => ({ name: `sub_${i + 1}`, topic: t(v), periodS, aggregation })),
+  };
+  // The survey's position and water sensors (views.mjs deploys a model that subscribes to them):
+  // simulated from the start, so that they flow once that model is deployed.
+  const survey = surveyParts();
+  model.drone.sensors.push(...survey.sensors);
+  model.publishers.push(survey.publisher);
+  return model;
+}
+
+/** Scenario 1 plus the survey's sensors and subscriptions: the model views.mjs imports as a second project. */
+function surveyModel(pubPort, subPort) {
+  const m = scenario1(pubPort, subPort);
+  m.subscribers.push(...surveyParts().subscribers);
+  return m;
+}
+
+/** GPS and CTD sensors, their publisher (simulated: a lawnmower survey through a warm plume). */
+export function surveyParts() {
+  return {
+    sensors: [
+      { name: "gps", variables: [{ name: "latitude", unit: "NONE", type: "float64" }, { name: "longitude", unit: "NONE", type: "float64" }] },
+      { name: "ctd", variables: [{ name: "water_temperature", unit: "DEGREE_CELSIUS" }] },
+    ],
+    publisher: { name: "pub_2", periodS: "0.2", topics: ["usv.gps.latitude", "usv.gps.longitude", "usv.ctd.water_temperature"] },
+    subscribers: [
+      { name: "sub_lat", topic: "usv.gps.latitude", periodS: "1.0", aggregation: "LAST" },
+      { name: "sub_lon", topic: "usv.gps.longitude", periodS: "1.0", aggregation: "LAST" },
+      { name: "sub_temp", topic: "usv.ctd.water_temperature", periodS: "1.0", aggregation: "AVERAGE" },
+    ],
   };
 }

@@ -1,7 +1,8 @@
 /**
  * Archives: the drone's MCAP files (from the backend, which reads them with
  * the official mcap reader); plot a topic over a time range (min/max-reduced
- * by the backend for plotting); download the file or the range as CSV.
+ * by the backend for plotting); download the file or the range as CSV; play
+ * a range back through the monitor's charts (Playback: seek, play, pause).
  */
 import { useEffect, useRef, useState } from "react";
 import uPlot from "uplot";
@@ -11,6 +12,7 @@ import { useServices } from "../../app/services";
 import { usePanelData, LoadState } from "../usePanelData";
 import { saveBlob } from "../saveBlob";
 import type { ArchiveFile, ArchiveReplay, ArchiveSeries } from "../../api/types";
+import { Playback } from "./Playback";
 
 function SeriesChart({ series }: { series: ArchiveSeries }) {
   const host = useRef<HTMLDivElement>(null);
@@ -114,6 +116,7 @@ export default function ArchivesPanel() {
             )}
             {!file && <p className="muted">Pick a file to plot one of its topics.</p>}
             {series.data && <SeriesChart series={series.data} />}
+            {file && <Playback key={file.name} file={file} bound={bound} />}
           </div>
         </div>
       )}

@@ -1,69 +1,85 @@
 /**
- * A live uPlot chart of one subscription: fed by the data source, redrawn at
- * most once per animation frame; shows the last value, its window and how
- * stale it is.
+ * One chart card of the monitor: one or more subscriptions on a TimeChart,
+ * each with its last value, window and how stale it is; a subscription can
+ * be taken off the chart, another watched one added to it.
  */
-import { useEffect, useRef, useState } from "react";
-import uPlot from "uplot";
-import "uplot/dist/uPlot.min.css";
+import { useEffect, useState } from "react";
 import type { DataSource, Sample } from "../../dataSources/types";
+import type { ViewWindow } from "../../core/chartData";
+import { TimeChart, type ChartSeries } from "./TimeChart";
 
 interface Props {
   source: DataSource;
-  subscriber: string;
-  label: string;
+  series: ChartSeries[];
+  window: ViewWindow;
+  onZoom: (from: number, to: number) => void;
+  /** Watched subscriptions not on this chart, offered to add. */
+  addable: string[];
+  onAdd: (channel: string) => void;
+  onRemove: (channel: string) => void;
+  syncKey?: string;
+  marker?: number | null;
+  /** The clock "how old" is measured against (the playback cursor in a replay). */
+  now?: number;
 }
 
-export function LiveChart({ source, subscriber, label }: Props) {
-  const host = useRef<HTMLDivElement>(null);
-  const [last, setLast] = useState<Sample | null>(null);
-  const [count, setCount] = useState(0);
-  const [now, setNow] = useState(() => Date.now() / 1000);
-
+function useLast(source: DataSource, channel: string): [Sample | null, number] {
+  const [last, setLast] = useState<Sample | null>(() => source.history(channel).at(-1) ?? null);
+  const [count, setCount] = useState(() => source.history(channel).length);
   useEffect(() => {
-    const el = host.current;
-    if (!el) return;
-    const data = (): uPlot.AlignedData => {
-      const h = source.history(subscriber);
-      return [h.map((s) => s.t), h.map((s) => s.value)];
-    };
-    const plot = new uPlot({
-      width: Math.max(el.clientWidth, 200), height: 140,
-      scales: { x: { time: true } },
-      legend: { show: false },
-      series: [{}, { label, stroke: "#2563eb", width: 1.5, points: { show: true, size: 4 } }],
-      axes: [{ stroke: "#475569" }, { stroke: "#475569", size: 56 }],
-    }, data(), el);
-    let frame = 0;
-    const off = source.subscribe(subscriber, (batch) => {
-      setLast(batch[batch.length - 1]);
-      setCount((c) => c + batch.length);
-      if (!frame) frame = requestAnimationFrame(() => { frame = 0; plot.setData(data()); });
+    setLast(source.history(channel).at(-1) ?? null);
+    setCount(source.history(channel).length);
+    // Read back from the source: a playback seek delivers an empty batch and a shorter history.
+    return source.subscribe(channel, () => {
+      const h = source.history(channel);
+      setLast(h.at(-1) ?? null);
+      setCount(h.length);
     });
-    const ro = new ResizeObserver(() => plot.setSize({ width: Math.max(el.clientWidth, 200), height: 140 }));
-    ro.observe(el);
-    const h = source.history(subscriber);
-    if (h.length) setLast(h[h.length - 1]);
-    return () => { off(); ro.disconnect(); cancelAnimationFrame(frame); plot.destroy(); };
-  }, [source, subscriber, label]);
+  }, [source, channel]);
+  return [last, count];
+}
 
-  useEffect(() => {
-    const t = setInterval(() => setNow(Date.now() / 1000), 1000);
-    return () => clearInterval(t);
-  }, []);
-
+function LastValue({ source, s, now }: { source: DataSource; s: ChartSeries; now: number }) {
+  const [last, count] = useLast(source, s.channel);
   const age = last ? Math.max(now - last.t, 0) : null;
   return (
-    <figure className="live-chart" data-testid={`chart-${subscriber}`}>
+    <span className="chart-last-line">
+      <strong>{s.channel}</strong> <span className="muted">{s.label}</span>
+      <span className="chart-last" data-testid={`last-${s.channel}`}>
+        {last ? <>last {last.value.toPrecision(5)}{s.unit ? ` ${s.unit}` : ""}{last.windowS ? ` over ${last.windowS.toFixed(2)} s` : ""}{last.count !== undefined ? ` (${last.count} samples)` : ""}</> : "waiting for values…"}
+      </span>
+      {age !== null && <span className={age > 5 ? "stale" : "fresh"}> · {age < 1 ? "fresh" : `${age.toFixed(0)} s old`}</span>}
+      <span className="muted"> · {count} kept</span>
+    </span>
+  );
+}
+
+export function LiveChart({ source, series, window, onZoom, addable, onAdd, onRemove, syncKey = "monitor", marker = null, now }: Props) {
+  const [clock, setClock] = useState(() => Date.now() / 1000);
+  useEffect(() => {
+    if (now !== undefined) return;
+    const t = setInterval(() => setClock(Date.now() / 1000), 1000);
+    return () => clearInterval(t);
+  }, [now]);
+  const id = series.map((s) => s.channel).join("+");
+  return (
+    <figure className="live-chart" data-testid={`chart-${id}`} aria-label={`Chart of ${series.map((s) => s.channel).join(", ")}`}>
       <figcaption>
-        <strong>{subscriber}</strong> <span className="muted">{label}</span>
-        <span className="chart-last" data-testid={`last-${subscriber}`}>
-          {last ? <>last {last.value.toPrecision(5)}{last.windowS ? ` over ${last.windowS.toFixed(2)} s` : ""}{last.count !== undefined ? ` (${last.count} samples)` : ""}</> : "waiting for values…"}
-        </span>
-        {age !== null && <span className={age > 5 ? "stale" : "fresh"}> · {age < 1 ? "fresh" : `${age.toFixed(0)} s old`}</span>}
-        <span className="muted"> · {count} received</span>
+        {series.map((s) => (
+          <div key={s.channel}>
+            <LastValue source={source} s={s} now={now ?? clock} />
+            {series.length > 1 && <button className="link" aria-label={`Take ${s.channel} off this chart`} onClick={() => onRemove(s.channel)}>×</button>}
+          </div>
+        ))}
+        {addable.length > 0 && (
+          <select className="chart-pick" aria-label={`Add to the chart of ${series[0]?.channel ?? ""}`} value=""
+            onChange={(e) => { if (e.target.value) onAdd(e.target.value); }}>
+            <option value="">+ add to this chart…</option>
+            {addable.map((c) => <option key={c} value={c}>{c}</option>)}
+          </select>
+        )}
       </figcaption>
-      <div ref={host} className="chart-host" />
+      <TimeChart source={source} series={series} window={window} onZoom={onZoom} syncKey={syncKey} marker={marker} />
     </figure>
   );
 }

@@ -1,46 +1,54 @@
 /**
  * Monitor: live charts of the chosen subscriptions (values over the drone's
- * stream WebSocket), link status (RTT, measured against planned bytes/s), and
- * dynamic subscriptions (scientist) answered ACCEPTED or NOT_AVAILABLE.
+ * shared stream, app/useDroneStream), link status (RTT, measured against
+ * planned bytes/s, time since the last frame), and dynamic subscriptions
+ * (scientist) answered ACCEPTED or NOT_AVAILABLE.
+ *
+ * Charts: several subscriptions per chart, units on the axes, one time
+ * window for all (follow live, or zoom by dragging / the buttons and pan),
+ * a cursor shared across charts. What is charted, and each chart's history,
+ * survive leaving the panel and redeploys (the stream is the workbench's).
  */
-import { useEffect, useMemo, useState } from "react";
+import { useEffect, useState } from "react";
 import { AggregationValues } from "../../core/model.gen";
-import { listTopics } from "../../core/query";
+import { findTopicByName, listTopics } from "../../core/query";
 import { formatRate } from "../../core/plan";
 import { canEdit } from "../../core/roles";
+import { formatAge } from "../../core/linkHealth";
+import { DEFAULT_WINDOW, panRange, unitLabel, visibleRange, zoomRange, type ViewWindow } from "../../core/chartData";
 import { useEditor, useModel } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
-import type { ConnectionState, DataSource, LinkStatus } from "../../dataSources/types";
+import { useLinkHealth } from "../../app/useLinkHealth";
 import type { DynamicReply } from "../../api/types";
 import { LiveChart } from "./LiveChart";
-
-function useStream(drone: string): { source: DataSource; state: ConnectionState; link: LinkStatus | null } {
-  const { openStream } = useServices();
-  const source = useMemo(() => openStream(drone), [openStream, drone]);
-  const [state, setState] = useState<ConnectionState>(source.state);
-  const [link, setLink] = useState<LinkStatus | null>(null);
-  useEffect(() => {
-    const a = source.onStateChange(setState);
-    const b = source.onLinkStatus(setLink);
-    setState(source.state);
-    return () => { a(); b(); source.close(); };
-  }, [source]);
-  return { source, state, link };
-}
+import { keepSubscribed, useChartLayout } from "./useChartLayout";
 
 export default function MonitorPanel() {
   const model = useModel();
   const role = useEditor((s) => s.wb.role);
   const { api } = useServices();
   const drone = model.drone.name;
-  const { source, state, link } = useStream(drone);
+  const health = useLinkHealth();
+  const { source, state, link } = health.stream;
   const subscribers = model.subscribers.filter((s) => s.topic);
-  const [watched, setWatched] = useState<string[]>(() => subscribers.slice(0, 4).map((s) => s.name));
-  const [dynamic, setDynamic] = useState<Array<{ label: string; reply: DynamicReply }>>([]);
+  const layout = useChartLayout(drone, subscribers.slice(0, 4).map((s) => s.name));
+  const { charts, win, dynamic } = layout.state;
+  const [replies, setReplies] = useState<Array<{ label: string; reply: DynamicReply }>>([]);
   const topics = listTopics(model);
   const [dyn, setDyn] = useState({ topic: "", period_s: "1.0", aggregation: "AVERAGE" });
+  const watched = charts.flat();
+  const watchedKey = watched.join(",");
+  useEffect(() => { keepSubscribed(source, watchedKey ? watchedKey.split(",") : []); }, [source, watchedKey]);
 
-  const toggle = (name: string) => setWatched((w) => (w.includes(name) ? w.filter((x) => x !== name) : [...w, name]));
+  const describe = (name: string) => {
+    const s = model.subscribers.find((x) => x.name === name);
+    const d = dynamic[name];
+    const topic = s?.topic ?? d?.topic ?? "";
+    const aggregation = s?.aggregation ?? d?.aggregation;
+    const unit = unitLabel(findTopicByName(model, topic)?.variable.unit, aggregation);
+    const label = s ? `${s.topic} ${s.aggregation} every ${s.periodS} s` : d ? `${d.topic} ${d.aggregation} every ${d.period_s} s (dynamic)` : "(not in the model)";
+    return { channel: name, label, unit };
+  };
 
   const addDynamic = async (e: React.FormEvent) => {
     e.preventDefault();
@@ -49,23 +57,34 @@ export default function MonitorPanel() {
     const label = `${topic} ${dyn.aggregation} every ${dyn.period_s} s`;
     try {
       const reply = await api.addDynamic(drone, { ...dyn, topic });
-      setDynamic((d) => [{ label, reply }, ...d]);
-      if (reply.status === "ACCEPTED" && reply.subscriber) setWatched((w) => [...w, reply.subscriber!]);
+      setReplies((d) => [{ label, reply }, ...d]);
+      if (reply.status === "ACCEPTED" && reply.subscriber) layout.addDynamic(reply.subscriber, { ...dyn, topic });
     } catch (err) {
-      setDynamic((d) => [{ label, reply: { status: "ERROR", reason: (err as Error).message } }, ...d]);
+      setReplies((d) => [{ label, reply: { status: "ERROR", reason: (err as Error).message } }, ...d]);
     }
   };
+
+  // The range every chart shows now (for zoom and pan from the buttons).
+  const [clock, setClock] = useState(() => Date.now() / 1000);
+  useEffect(() => {
+    const t = setInterval(() => setClock(Date.now() / 1000), 1000);
+    return () => clearInterval(t);
+  }, []);
+  const newest = Math.max(...watched.map((c) => source.history(c).at(-1)?.t ?? -Infinity));
+  const range = visibleRange(win, Number.isFinite(newest) ? newest : clock);
+  const setWin = (w: ViewWindow) => layout.setWindow(w);
 
   return (
     <div className="panel-body monitor-panel">
       <div className="link-status" role="status" aria-label="Link status">
-        <span className={`dot dot-${state}`} aria-hidden /> stream {state}
+        <span className={`dot dot-${health.down ? "down" : state}`} data-testid="stream-dot" aria-hidden /> stream {state}
+        {health.down && <strong className="error"> · link lost: {health.reason}</strong>}
         {link && <>
           · link <strong>{link.state ?? (link.connected ? "up" : "down")}</strong>
           · RTT {link.rttMs === null ? "—" : `${link.rttMs.toFixed(1)} ms`}
           · measured {link.measuredBytesPerS === null ? "—" : formatRate(link.measuredBytesPerS)}
           {" "}vs planned {link.plannedBytesPerS === null ? "—" : formatRate(link.plannedBytesPerS)}
-          {link.lastFrameAgeS !== null && <> · last frame {link.lastFrameAgeS.toFixed(1)} s ago</>}
+          {health.sinceLastFrameS !== null && <> · last frame {formatAge(health.sinceLastFrameS)} ago</>}
           {link.behind && <strong className="behind" role="alert">
             {" "}· base station behind the link{link.lagS != null && ` by ${link.lagS.toFixed(1)} s`}
           </strong>}
@@ -77,8 +96,12 @@ export default function MonitorPanel() {
           <h3>Watch</h3>
           {subscribers.length === 0 && <p className="muted">No subscription in the model.</p>}
           {subscribers.map((s) => (
-            <label key={s.name}><input type="checkbox" checked={watched.includes(s.name)} onChange={() => toggle(s.name)} />
+            <label key={s.name}><input type="checkbox" checked={watched.includes(s.name)} onChange={() => layout.toggle(s.name)} />
               {s.name} <span className="muted">{s.aggregation} {s.periodS} s</span></label>
+          ))}
+          {Object.entries(dynamic).map(([name, d]) => (
+            <label key={name}><input type="checkbox" checked={watched.includes(name)} onChange={() => layout.toggle(name)} />
+              {name} <span className="muted">{d.topic} {d.aggregation} {d.period_s} s (dynamic)</span></label>
           ))}
           {canEdit(role, "subscriber") && (
             <form onSubmit={addDynamic} className="dynamic-form" aria-label="Dynamic subscription">
@@ -92,7 +115,7 @@ export default function MonitorPanel() {
               </select>
               <button type="submit">Ask the drone</button>
               <ul className="dynamic-replies">
-                {dynamic.map((d, i) => (
+                {replies.map((d, i) => (
                   <li key={i} className={d.reply.status === "ACCEPTED" ? "status-ok" : "error"}>
                     {d.label}: <strong>{d.reply.status}</strong>{d.reply.reason ? ` — ${d.reply.reason}` : ""}{d.reply.subscriber ? ` (${d.reply.subscriber})` : ""}
                   </li>
@@ -101,12 +124,27 @@ export default function MonitorPanel() {
             </form>
           )}
         </aside>
-        <div className="charts">
-          {watched.length === 0 && <p className="muted">Tick subscriptions to chart them.</p>}
-          {watched.map((name) => {
-            const s = model.subscribers.find((x) => x.name === name);
-            return <LiveChart key={name} source={source} subscriber={name} label={s ? `${s.topic} ${s.aggregation} ${s.periodS} s` : "dynamic"} />;
-          })}
+        <div>
+          <div className="chart-tools" role="toolbar" aria-label="Time window">
+            <button onClick={() => setWin(zoomRange(range, 0.5))}>Zoom in on time</button>
+            <button onClick={() => setWin(zoomRange(range, 2))}>Zoom out in time</button>
+            <button onClick={() => setWin(panRange(range, -0.5))}>← Earlier</button>
+            <button onClick={() => setWin(panRange(range, 0.5))}>Later →</button>
+            <button aria-pressed={win.follow} onClick={() => setWin(DEFAULT_WINDOW)}>Follow live</button>
+            <span className="muted" data-testid="time-window">
+              {win.follow ? `following, last ${win.spanS.toFixed(0)} s` : `${new Date(range[0] * 1000).toLocaleTimeString()} – ${new Date(range[1] * 1000).toLocaleTimeString()} (${(range[1] - range[0]).toFixed(1)} s)`}
+              {" "}· drag across a chart to zoom
+            </span>
+          </div>
+          <div className="charts">
+            {charts.length === 0 && <p className="muted">Tick subscriptions to chart them.</p>}
+            {charts.map((chart, i) => (
+              <LiveChart key={chart.join("+")} source={source} series={chart.map(describe)} window={win}
+                onZoom={(from, to) => setWin({ follow: false, from, to })}
+                addable={watched.filter((c) => !chart.includes(c))}
+                onAdd={(c) => layout.moveTo(c, i)} onRemove={(c) => layout.split(c)} />
+            ))}
+          </div>
         </div>
       </div>
     </div>

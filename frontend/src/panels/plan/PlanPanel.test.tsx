@@ -65,9 +65,34 @@ describe("PlanPanel", () => {
     expect(screen.queryByTestId("budget-error")).toBeNull();
   });
 
-  it("lists the errors when the model cannot be planned", () => {
-    mount(null, [{ severity: "error", message: "should be non-empty", pointer: "/publishers/0/topics" }]);
+  it("lists the errors in words, once each, when the model cannot be planned", () => {
+    const e = { severity: "error" as const, message: "should be non-empty", pointer: "/publishers/0/topics" };
+    mount(null, [e, { ...e }]);
     expect(screen.getByRole("status").textContent).toMatch(/1 error/);
-    expect(screen.getByText("should be non-empty")).toBeTruthy();
+    expect(screen.getByRole("alert", { name: "Plan errors" }).textContent).toContain("publisher pub_1: topics: should be non-empty");
+  });
+
+  it("keeps the last valid plan greyed under the errors", () => {
+    const store = createEditorStore(scenario1(), "designer");
+    const plan = planJson as unknown as PlanJson;
+    store.patch({ plan: { busy: false, error: null, lastValid: plan, result: { ok: false, plan: null, elapsed_ms: 3,
+      diagnostics: [{ severity: "error", message: "required", pointer: "/subscribers/6/topic" }] } } });
+    render(<EditorContext.Provider value={store}><PlanPanel /></EditorContext.Provider>);
+    expect(screen.getByTestId("plan-stale")).toBeTruthy();
+    expect(screen.getAllByTestId("buffer-size").map((c) => c.textContent)).toEqual(["28", "28", "6"]);
+    expect(screen.getByRole("alert", { name: "Plan errors" }).textContent).toContain("subscriber sub_7: topic: required");
+  });
+
+  it("highlights what the last edit changed in the plan", () => {
+    const store = createEditorStore(scenario1(), "designer");
+    const before = planJson as unknown as PlanJson;
+    const after = { ...before, hyperperiod_s: "10.0", delays: { ...before.delays, sub_3: "2.0" } };
+    store.patch({ plan: { busy: false, error: null, lastValid: after, previous: before, result: { ok: true, plan: after, elapsed_ms: 3, diagnostics: [] } } });
+    render(<EditorContext.Provider value={store}><PlanPanel /></EditorContext.Provider>);
+    const changes = screen.getByRole("status", { name: "Plan changes" }).textContent;
+    expect(changes).toContain("hyperperiod: 2.0 s → 10.0 s");
+    expect(changes).toMatch(/sub_3 delay: [\d.]+ s → 2\.0 s/);
+    expect(screen.getByTestId("hyperperiod").className).toBe("changed");
+    expect(screen.getByRole("button", { name: "sub_3 (2.0 s)" }).className).toMatch(/changed/);
   });
 });

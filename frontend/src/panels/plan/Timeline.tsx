@@ -5,6 +5,7 @@
  */
 import { useMemo, useState } from "react";
 import { timeline, zoomWindow, type PlanJson } from "../../core/plan";
+import { axisTicks, layoutTicks } from "../../core/timelineScale";
 
 export function Timeline({ plan }: { plan: PlanJson }) {
   const hyper = Number(plan.hyperperiod_s);
@@ -14,6 +15,9 @@ export function Timeline({ plan }: { plan: PlanJson }) {
   const marks = useMemo(() => timeline(plan, from, to), [plan, from, to]);
   const [picked, setPicked] = useState<number | null>(null);
   const pickedMark = marks.find((m) => m.slot === picked) ?? marks[0];
+  // Ticks never overlap: narrower than the typical gap, and messages closer than that stacked in lanes.
+  const { width, lanes, lane } = useMemo(() => layoutTicks(marks.map((m) => m.x)), [marks]);
+  const laneH = 36 / lanes;
 
   return (
     <div className="timeline">
@@ -29,13 +33,18 @@ export function Timeline({ plan }: { plan: PlanJson }) {
         aria-label={`Schedule of one hyperperiod: ${plan.messages_per_hyperperiod} messages`}
         onWheel={(e) => setZoom((z) => Math.min(Math.max(e.deltaY < 0 ? z * 1.25 : z / 1.25, 1), 1e6))}>
         <line x1={0} y1={40} x2={1000} y2={40} className="timeline-axis" />
-        {marks.map((m) => (
+        {marks.map((m, i) => (
           <g key={m.slot} onClick={() => setPicked(m.slot)} className={m.slot === pickedMark?.slot ? "tick picked" : "tick"}>
             <title>{`slot ${m.slot} at ${m.t} s: ${m.streams.join(", ")}`}</title>
-            <rect x={m.x * 990} y={40 - Math.min(8 + 6 * m.streams.length, 38)} width={10} height={Math.min(8 + 6 * m.streams.length, 38)} />
+            {lanes === 1
+              ? <rect x={m.x * (1000 - width)} y={40 - Math.min(8 + 6 * m.streams.length, 38)} width={width} height={Math.min(8 + 6 * m.streams.length, 38)} data-testid="schedule-tick" />
+              : <rect x={m.x * (1000 - width)} y={40 - (lane[i] + 1) * laneH} width={width} height={Math.max(laneH - 1, 1)} data-testid="schedule-tick" />}
           </g>
         ))}
       </svg>
+      <div className="timeline-scale" aria-label="Time within the hyperperiod">
+        {axisTicks(from, to).map((t) => <span key={t.label} style={{ left: `${t.x * 100}%` }}>{t.label}</span>)}
+      </div>
       {pickedMark && (
         <p className="timeline-detail">
           Message {pickedMark.slot} at {pickedMark.t} s carries {pickedMark.streams.length} stream(s): {pickedMark.streams.join(", ")}

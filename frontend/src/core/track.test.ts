@@ -1,0 +1,32 @@
+import { describe, expect, it } from "vitest";
+import { colourOf, gridStep, positionSubscribers, trackPoints, valueAt, valueRange } from "./track";
+import { scenario1 } from "./testing/scenario1";
+
+const s = (t: number, value: number) => ({ t, value });
+
+describe("track", () => {
+  it("finds the position subscriptions by variable name", () => {
+    const m = scenario1();
+    m.subscribers.push({ name: "la", topic: "usv.gps.latitude", periodS: "1", aggregation: "LAST" },
+      { name: "lo", topic: "usv.gps.lon", periodS: "1", aggregation: "LAST" });
+    expect(positionSubscribers(m)).toEqual({ lat: "la", lon: "lo" });
+    expect(positionSubscribers(scenario1())).toEqual({ lat: null, lon: null });
+  });
+
+  it("pairs fixes and puts them in metres from the first (an independent figure: 1e-3° of latitude ≈ 111.2 m)", () => {
+    const pts = trackPoints([s(1, 47.7), s(2, 47.701), s(3, 47.702)], [s(1, -3.35), s(2.1, -3.35), s(9, -3.349)], [s(0.5, 10), s(2.5, 14)]);
+    expect(pts).toHaveLength(2);
+    expect(pts[1].north).toBeCloseTo(111.19, 1);
+    expect(pts[1].east).toBeCloseTo(0, 6);
+    expect(pts.map((p) => p.value)).toEqual([10, 10]);
+    expect(valueRange(pts)).toEqual([10, 10]);
+  });
+
+  it("reads a step value, colours and rounds the grid", () => {
+    expect(valueAt([s(1, 5), s(3, 7)], 2)).toBe(5);
+    expect(valueAt([s(1, 5)], 0)).toBeNull();
+    expect(colourOf(0)).toEqual([0, 0, 255]);
+    expect(colourOf(1)).toEqual([255, 0, 0]);
+    expect(gridStep(400)).toBe(100);
+  });
+});

@@ -1,0 +1,85 @@
+/**
+ * The drone's track for the 2D map, from delivered values: which
+ * subscriptions carry its position (by variable name, as the backend's 3D
+ * scene reads them: backend/src/modd_backend/scene.py), the fixes in local
+ * metres east/north of the first one, each coloured by the chosen
+ * subscription's value at that time, a colour scale with its legend, and a
+ * round grid step.
+ *
+ * @example
+ *   positionSubscribers(model)          // { lat: "sub_lat", lon: "sub_lon" }
+ *   trackPoints(lat, lon, temperature)  // [{ t, east: 0, north: 0, value: 12.1 }, ...]
+ */
+import type { ModdModel } from "./model.gen";
+import type { Sample } from "../dataSources/types";
+
+const ROLE_NAMES = { lat: ["latitude", "lat"], lon: ["longitude", "lon", "lng"] } as const;
+export const EARTH_RADIUS_M = 6_371_000;
+
+/** The first subscriptions whose topics are a latitude and a longitude. */
+export function positionSubscribers(model: ModdModel): { lat: string | null; lon: string | null } {
+  const find = (names: readonly string[]) =>
+    model.subscribers.find((s) => names.includes((s.topic.split(".").pop() ?? "").toLowerCase()))?.name ?? null;
+  return { lat: find(ROLE_NAMES.lat), lon: find(ROLE_NAMES.lon) };
+}
+
+export interface TrackPoint { t: number; east: number; north: number; lat: number; lon: number; value: number | null }
+
+/** The sample of a sorted series at or before `t` (binary search), or null. */
+export function valueAt(series: readonly Sample[], t: number): number | null {
+  let lo = 0, hi = series.length - 1, found = -1;
+  while (lo <= hi) {
+    const mid = (lo + hi) >> 1;
+    if (series[mid].t <= t + 1e-6) { found = mid; lo = mid + 1; } else hi = mid - 1;
+  }
+  return found < 0 ? null : series[found].value;
+}
+
+/**
+ * Fixes where a latitude and a longitude arrived together (within `pairS`),
+ * in metres from the first fix (equirectangular: fine over a survey area).
+ */
+export function trackPoints(lat: readonly Sample[], lon: readonly Sample[], colour: readonly Sample[] = [], pairS = 0.5): TrackPoint[] {
+  const out: TrackPoint[] = [];
+  let j = 0;
+  for (const a of lat) {
+    while (j < lon.length - 1 && lon[j + 1].t <= a.t + 1e-6) j += 1;
+    const candidates = [lon[j], lon[j + 1]].filter((b): b is Sample => b !== undefined);
+    const b = candidates.sort((x, y) => Math.abs(x.t - a.t) - Math.abs(y.t - a.t))[0];
+    if (!b || Math.abs(b.t - a.t) > pairS) continue;
+    out.push({ t: a.t, lat: a.value, lon: b.value, east: 0, north: 0, value: colour.length ? valueAt(colour, a.t) : null });
+  }
+  if (out.length === 0) return out;
+  const lat0 = out[0].lat, lon0 = out[0].lon;
+  const k = (Math.PI / 180) * EARTH_RADIUS_M;
+  for (const p of out) {
+    p.east = (p.lon - lon0) * k * Math.cos((lat0 * Math.PI) / 180);
+    p.north = (p.lat - lat0) * k;
+  }
+  return out;
+}
+
+/** Blue (low) through green to red (high), as the 3D scene colours its track. */
+export function colourOf(x: number): [number, number, number] {
+  const t = Math.min(1, Math.max(0, Number.isFinite(x) ? x : 0));
+  return t < 0.5 ? [0, Math.round(510 * t), Math.round(255 * (1 - 2 * t))] : [Math.round(510 * (t - 0.5)), Math.round(255 * (2 - 2 * t)), 0];
+}
+
+/** The values' range for the legend (null without values). */
+export function valueRange(points: readonly TrackPoint[]): [number, number] | null {
+  const v = points.map((p) => p.value).filter((x): x is number => x !== null);
+  if (!v.length) return null;
+  return [Math.min(...v), Math.max(...v)];
+}
+
+/** A round grid step in metres (1, 2 or 5 × 10^n) giving about `lines` lines over `span` metres. */
+export function gridStep(span: number, lines = 6): number {
+  const raw = Math.max(span, 1) / lines;
+  const p = 10 ** Math.floor(Math.log10(raw));
+  return [1, 2, 5, 10].map((m) => m * p).find((s) => s >= raw) ?? 10 * p;
+}
+
+/** "40 m", "1.2 km". */
+export function formatDistance(m: number): string {
+  return m >= 1000 ? `${Number((m / 1000).toFixed(2))} km` : `${Number(m.toFixed(1))} m`;
+}

@@ -1,0 +1,98 @@
+/**
+ * Plays back a time range of an archive file through the monitor's charts:
+ * pick topics, load the range (the backend reads it with the official mcap
+ * reader, at most `MAX_POINTS` points per topic), then seek, play and pause;
+ * the charts show what was recorded up to the cursor, and zoom like live ones.
+ */
+import { useEffect, useMemo, useState } from "react";
+import { PlaybackSource, archiveSamples } from "../../dataSources/PlaybackSource";
+import { DEFAULT_WINDOW, unitLabel, type ViewWindow } from "../../core/chartData";
+import { findTopicByName } from "../../core/query";
+import { useModel } from "../../editor/useEditor";
+import { useServices } from "../../app/services";
+import type { ArchiveFile } from "../../api/types";
+import { LiveChart } from "../monitor/LiveChart";
+
+const MAX_POINTS = 5000;
+const RATES = [1, 10, 60];
+
+function usePlayback(source: PlaybackSource | null): { t: number; playing: boolean } {
+  const [state, setState] = useState({ t: source?.cursor ?? 0, playing: false });
+  useEffect(() => {
+    if (!source) return;
+    setState({ t: source.cursor, playing: source.playing });
+    const off = source.onCursor((t, playing) => setState({ t, playing }));
+    return () => { off(); source.pause(); };
+  }, [source]);
+  return state;
+}
+
+export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string) => number | undefined }) {
+  const { api } = useServices();
+  const model = useModel();
+  const drone = model.drone.name;
+  const [picked, setPicked] = useState<string[]>(() => file.topics.slice(0, 2).map((t) => t.topic));
+  const [range, setRange] = useState({ from: "", to: "" });
+  const [loaded, setLoaded] = useState<{ source?: PlaybackSource; error?: string; busy?: boolean }>({});
+  const source = loaded.source ?? null;
+  const { t, playing } = usePlayback(source);
+  const [rate, setRate] = useState(10);
+  const [charts, setCharts] = useState<string[][]>([]);
+  const [win, setWin] = useState<ViewWindow>(DEFAULT_WINDOW);
+  const whole: ViewWindow = useMemo(() => (source ? { follow: false, from: source.start, to: Math.max(source.end, source.start + 1) } : DEFAULT_WINDOW), [source]);
+
+  const load = async (e: React.FormEvent) => {
+    e.preventDefault();
+    setLoaded({ busy: true });
+    try {
+      const all = await Promise.all(picked.map((topic) => api.readArchive(drone, file.name, topic, bound(range.from), bound(range.to), MAX_POINTS)));
+      const src = new PlaybackSource(Object.fromEntries(all.map((s) => [s.topic, archiveSamples(s.points)])));
+      setCharts(picked.map((p) => [p]));
+      setWin({ follow: false, from: src.start, to: Math.max(src.end, src.start + 1) });
+      setLoaded({ source: src });
+    } catch (err) {
+      setLoaded({ error: (err as Error).message });
+    }
+  };
+  const describe = (topic: string) => ({ channel: topic, label: "archived", unit: unitLabel(findTopicByName(model, topic)?.variable.unit) });
+  const toggle = (topic: string) => setPicked((p) => (p.includes(topic) ? p.filter((x) => x !== topic) : [...p, topic]));
+
+  return (
+    <section className="playback-section" aria-label="Archive playback">
+      <form onSubmit={load} className="archive-form" aria-label="Play back an archive range">
+        <strong>Play back</strong>
+        {file.topics.map((tp) => (
+          <label key={tp.topic}><input type="checkbox" checked={picked.includes(tp.topic)} onChange={() => toggle(tp.topic)} />{tp.topic}</label>
+        ))}
+        <input aria-label="Playback from (s after the start)" placeholder="from s" value={range.from} onChange={(e) => setRange({ ...range, from: e.target.value })} size={6} />
+        <input aria-label="Playback to (s after the start)" placeholder="to s" value={range.to} onChange={(e) => setRange({ ...range, to: e.target.value })} size={6} />
+        <button type="submit" disabled={picked.length === 0 || loaded.busy}>Load for playback</button>
+        {loaded.busy && <span role="status">Reading…</span>}
+        {loaded.error && <span className="error" role="alert">{loaded.error}</span>}
+      </form>
+      {source && (
+        <>
+          <div className="playback" role="group" aria-label="Playback controls">
+            <button onClick={() => (playing ? source.pause() : source.play(rate))}>{playing ? "Pause" : "Play"}</button>
+            <input type="range" aria-label="Seek" min={source.start} max={source.end} step={(source.end - source.start) / 1000 || 1}
+              value={t} onChange={(e) => source.seek(Number(e.target.value))} />
+            <select aria-label="Speed" value={rate} onChange={(e) => { setRate(Number(e.target.value)); source.rate = Number(e.target.value); }}>
+              {RATES.map((r) => <option key={r} value={r}>{r}×</option>)}
+            </select>
+            <span data-testid="playback-time">{(t - source.start).toFixed(1)} s of {(source.end - source.start).toFixed(1)} s · {new Date(t * 1000).toLocaleTimeString()}{playing ? " · playing" : " · paused"}</span>
+            <button onClick={() => setWin(whole)}>Whole range</button>
+          </div>
+          <div className="charts">
+            {charts.map((chart, i) => (
+              <LiveChart key={chart.join("+")} source={source} series={chart.map(describe)} window={win} syncKey="playback" marker={t} now={t}
+                onZoom={(from, to) => setWin({ follow: false, from, to })}
+                addable={charts.flat().filter((c) => !chart.includes(c))}
+                onAdd={(c) => setCharts((cs) => cs.map((x, j) => (j === i ? [...x, c] : x.filter((y) => y !== c))).filter((x) => x.length))}
+                onRemove={(c) => setCharts((cs) => [...cs.map((x) => x.filter((y) => y !== c)).filter((x) => x.length), [c]])} />
+            ))}
+          </div>
+        </>
+      )}
+    </section>
+  );
+}

@@ -1,0 +1,126 @@
+/**
+ * A uPlot chart of one or more channels of a DataSource (live subscriptions,
+ * or an archive played back): time on x in local time, the values' units on
+ * y, redrawn at most once per animation frame. The visible window comes from
+ * outside (shared by every chart of a panel); dragging across a chart zooms
+ * every chart to that range; the cursor is shared by all charts with the
+ * same `syncKey`.
+ */
+import { useEffect, useRef } from "react";
+import uPlot from "uplot";
+import "uplot/dist/uPlot.min.css";
+import type { DataSource } from "../../dataSources/types";
+import { alignSeries, axisLabel, visibleRange, type ViewWindow } from "../../core/chartData";
+
+export interface ChartSeries { channel: string; label: string; unit: string }
+
+const COLOURS = ["#2563eb", "#dc2626", "#15803d", "#9333ea", "#d97706", "#0891b2"];
+
+interface Props {
+  source: DataSource;
+  series: ChartSeries[];
+  window: ViewWindow;
+  onZoom: (from: number, to: number) => void;
+  syncKey: string;
+  height?: number;
+  /** A playback cursor to draw as a vertical line (seconds), if any. */
+  marker?: number | null;
+}
+
+export function TimeChart({ source, series, window: view, onZoom, syncKey, height = 150, marker = null }: Props) {
+  const host = useRef<HTMLDivElement>(null);
+  const info = useRef<HTMLSpanElement>(null);
+  const plotRef = useRef<uPlot | null>(null);
+  const viewRef = useRef(view);
+  viewRef.current = view;
+  const markerRef = useRef(marker);
+  markerRef.current = marker;
+  const zoomRef = useRef(onZoom);
+  zoomRef.current = onZoom;
+  const key = series.map((s) => `${s.channel}|${s.label}|${s.unit}`).join(";");
+
+  useEffect(() => {
+    const el = host.current;
+    if (!el) return;
+    const data = (): uPlot.AlignedData => alignSeries(series.map((s) => source.history(s.channel))) as uPlot.AlignedData;
+    const lastT = () => Math.max(...series.map((s) => source.history(s.channel).at(-1)?.t ?? -Infinity));
+    const range = (): [number, number] => {
+      const last = lastT();
+      return visibleRange(viewRef.current, Number.isFinite(last) ? last : null);
+    };
+    const plot = new uPlot({
+      width: Math.max(el.clientWidth, 200), height,
+      scales: { x: { time: true, range: () => range() } },
+      legend: { show: true, live: true },
+      cursor: { sync: { key: syncKey, setSeries: false }, drag: { x: true, y: false, setScale: false } },
+      series: [
+        { label: "time" },
+        ...series.map((s, i) => ({
+          label: s.unit ? `${s.channel} (${s.unit})` : s.channel, stroke: COLOURS[i % COLOURS.length], width: 1.5,
+          spanGaps: true, points: { show: true, size: 4 },
+        })),
+      ],
+      axes: [
+        { stroke: "#475569", label: "local time", labelSize: 16 },
+        { stroke: "#475569", size: 56, label: axisLabel(series.map((s) => s.unit)), labelSize: 16 },
+      ],
+      hooks: {
+        // The axis as drawn, in words (the canvas holds no text a reader or a test can get at).
+        setScale: [(u, scale) => {
+          const min = u.scales.x.min;
+          const max = u.scales.x.max;
+          if (scale !== "x" || !info.current || min == null || max == null) return;
+          const t = (s: number) => new Date(s * 1000).toLocaleTimeString();
+          info.current.textContent = `time ${t(min)} – ${t(max)} (${(max - min).toFixed(1)} s)`;
+        }],
+        setSelect: [(u) => {
+          if (u.select.width < 3) return;
+          const from = u.posToVal(u.select.left, "x");
+          const to = u.posToVal(u.select.left + u.select.width, "x");
+          u.setSelect({ left: 0, top: 0, width: 0, height: 0 }, false);
+          zoomRef.current(from, to);
+        }],
+        draw: [(u) => {
+          const m = markerRef.current;
+          if (m === null) return;
+          const x = u.valToPos(m, "x", true);
+          const ctx = u.ctx;
+          ctx.save();
+          ctx.strokeStyle = "#be185d";
+          ctx.lineWidth = 2;
+          ctx.beginPath();
+          ctx.moveTo(x, u.bbox.top);
+          ctx.lineTo(x, u.bbox.top + u.bbox.height);
+          ctx.stroke();
+          ctx.restore();
+        }],
+      },
+    }, data(), el);
+    plotRef.current = plot;
+    let frame = 0;
+    const redraw = () => {
+      if (!frame) frame = requestAnimationFrame(() => { frame = 0; plot.setData(data()); });
+    };
+    const offs = series.map((s) => source.subscribe(s.channel, redraw));
+    const ro = new ResizeObserver(() => plot.setSize({ width: Math.max(el.clientWidth, 200), height }));
+    ro.observe(el);
+    return () => { offs.forEach((off) => off()); ro.disconnect(); cancelAnimationFrame(frame); plot.destroy(); plotRef.current = null; };
+    // eslint-disable-next-line react-hooks/exhaustive-deps
+  }, [source, key, syncKey, height]);
+
+  // A new window (zoom, pan, follow) or playback cursor: redraw with the same data.
+  useEffect(() => {
+    const plot = plotRef.current;
+    if (plot) plot.setData(plot.data);
+  }, [view, marker]);
+
+  const units = axisLabel(series.map((s) => s.unit));
+  return (
+    <>
+      <div ref={host} className="chart-host" />
+      <div className="chart-axes muted" data-testid="chart-axes">
+        <span ref={info} /> · values{units ? ` in ${units}` : " (no unit)"}
+      </div>
+    </>
+  );
+}

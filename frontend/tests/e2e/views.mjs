@@ -1,0 +1,302 @@
+/**
+ * "Seeing what changed" and "plots and the map" (issue 20, items 7–12), as a
+ * person clicks them, after the journey (journey.mjs) has built, saved and
+ * deployed scenario 1: the deploy review in the model's words, plan changes,
+ * link loss, the monitor's charts, the 2D map and archive playback.
+ * Each step fails on a workbench without the feature (its controls and words
+ * do not exist there). Pictures go to `imagesDir` like the journey's.
+ */
+import { execFileSync } from "node:child_process";
+import { join } from "node:path";
+import { waitUntil } from "./journey.mjs";
+
+export function views({ page, imagesDir, drone, liveValues, dronePid, survey }) {
+  const shot = async (name) => {
+    await page.waitForTimeout(200);
+    await page.screenshot({ path: join(imagesDir, `${name}.png`) });
+  };
+  const node = (id) => page.locator(`.react-flow__node[data-id="${id}"]`);
+  const inspector = page.getByRole("region", { name: "Inspector" });
+  const setText = async (path, value) => {
+    const f = inspector.locator(`[data-field="${path}"]`).locator("input, select").first();
+    await f.fill(value);
+    await f.press("Enter");
+  };
+  const view = (name) => page.getByRole("tab", { name, exact: true }).click();
+  const panel = (name) => page.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
+  const expand = async (on) => {
+    const b = page.locator(".dock-toggle");
+    if ((await b.getAttribute("aria-pressed")) !== String(on)) await b.click();
+  };
+  const save = async (revision) => {
+    await page.getByRole("button", { name: "Save", exact: true }).click();
+    await expectText(page.locator(".topbar .revision"), new RegExp(`^r${revision}$`));
+  };
+  const select = async (id) => {
+    await node(id).click();
+    await inspector.locator("h2").first().waitFor({ state: "visible", timeout: 10000 });
+  };
+
+  return [
+    ["deploy review: changes in words, plan consequences, invalid head disabled, history diff and redeploy", async () => {
+      await view("Scientist");
+      await select("sub:sub_7");
+      await setText("periodS", "0.5");
+      await save(3);
+      await view("Operator");
+      await panel("Deploy");
+      const changes = page.getByRole("list", { name: "Model changes" });
+      await expectText(changes, /subscriber sub_7: period 0\.25 s → 0\.5 s/);
+      const consequences = page.getByRole("table", { name: "Plan consequences" });
+      await expectText(consequences, /sub_7 delay.*→/);
+      await expandShot("deploy-diff");
+      // A history row: review it (no difference with what runs) and redeploy it (a rollback).
+      await page.getByRole("button", { name: /^Review revision 2 / }).first().click();
+      await expectText(page.getByRole("region", { name: "Deployed against edited" }), /Deployed vs revision 2[\s\S]*No difference/);
+      if (drone) {
+        await page.getByRole("button", { name: /^Redeploy revision 2 / }).first().click();
+        await expectText(page.getByTestId("deploy-result"), /Acked by the drone \(usv, revision 2\)/, 30000);
+      }
+      await page.getByRole("button", { name: /Back to the head/ }).click();
+      // An invalid head: saved, but deploy is disabled and says why, naming the element.
+      await view("Scientist");
+      await page.getByRole("button", { name: "+ Subscriber" }).click();
+      await save(4);
+      await view("Operator");
+      await panel("Deploy");
+      await expectText(page.getByTestId("deploy-blocked"), /revision 4 has \d+ error\(s\)/);
+      await expectText(page.getByRole("list", { name: "Why deploy is disabled" }), /subscriber sub_8/);
+      if (!(await page.getByRole("button", { name: "Deploy revision 4" }).isDisabled())) throw new Error("deploy of an invalid revision is enabled");
+      await view("Scientist");
+      await select("sub:sub_8");
+      await page.keyboard.press("Delete");
+      await save(5);
+    }],
+
+    ["plan changes highlighted; one error keeps the last valid plan greyed, errors in words, once each", async () => {
+      await view("Scientist");
+      await panel("Plan");
+      await select("sub:sub_1");
+      await setText("periodS", "10.0");
+      const changes = page.getByRole("status", { name: "Plan changes" });
+      await expectText(changes, /hyperperiod: 2\.0 s → 10\.0 s/, 15000);
+      await expectVisible(page.locator('[data-testid="hyperperiod"].changed'));
+      await expandShot("plan-changes");
+      await setText("periodS", "-1");
+      const errors = page.getByRole("alert", { name: "Plan errors" });
+      await expectText(errors, /subscriber sub_1: /, 15000);
+      await expectVisible(page.getByTestId("plan-stale"));
+      const items = await errors.locator("li").allTextContents();
+      if (new Set(items).size !== items.length) throw new Error(`duplicate messages: ${items.join(" | ")}`);
+      if (items.some((t) => /^\s*\//.test(t))) throw new Error(`a bare JSON pointer: ${items.join(" | ")}`);
+      await expandShot("plan-errors");
+      await setText("periodS", "2.0");
+      await expectVisible(page.getByTestId("plan-current"), 15000);
+    }],
+
+    ["schedule strip readable at more than 120 messages per hyperperiod", async () => {
+      await panel("Plan");
+      await select("sub:sub_5");
+      await setText("periodS", "0.04");
+      await select("sub:sub_1");
+      await setText("periodS", "2.4");
+      await expectText(page.getByTestId("hyperperiod"), /^12(\.0)? s$/, 15000);
+      await page.locator(".timeline-controls").getByRole("button", { name: "All" }).click();
+      const ticks = await page.getByTestId("schedule-tick").evaluateAll((els) => els.map((e) => e.getBoundingClientRect()).map((r) => [r.left, r.right, r.top, r.bottom]));
+      if (ticks.length < 120) throw new Error(`only ${ticks.length} ticks drawn`);
+      const sorted = ticks.sort((a, b) => a[0] - b[0]);
+      let overlaps = 0;
+      for (let i = 0; i < sorted.length; i += 1) {
+        for (let j = i + 1; j < sorted.length && sorted[j][0] < sorted[i][1] - 0.01; j += 1) {
+          if (sorted[j][2] < sorted[i][3] - 0.01 && sorted[i][2] < sorted[j][3] - 0.01) overlaps += 1;
+        }
+      }
+      if (overlaps) throw new Error(`${overlaps} pairs of the ${ticks.length} schedule ticks overlap`);
+      await expectText(page.getByLabel("Time within the hyperperiod"), /0 s.*s/);
+      await expandShot("schedule-strip");
+      await page.locator(".react-flow__pane").click({ position: { x: 8, y: 8 } });
+      await page.keyboard.press("Control+z");
+      await page.keyboard.press("Control+z");
+      await expectText(page.getByTestId("hyperperiod"), /^2\.0 s$/, 15000);
+    }],
+
+    ["monitor: time axis, units, several subscriptions per chart, zoom/pan with a shared cursor, dynamic label, history across a redeploy", async () => {
+      await panel("Monitor");
+      const chart3 = page.getByTestId("chart-sub_3");
+      await expectVisible(chart3);
+      // Units on the y axis; the x axis spans seconds from the first point, never years.
+      await expectText(chart3.getByTestId("chart-axes"), /values in m\/s²/);
+      if (liveValues) await expectText(page.getByTestId("last-sub_3"), /last -?\d/, 30000);
+      await expectText(chart3.getByTestId("chart-axes"), /time .+ – .+ \((60\.0|[1-5]?\d\.\d) s\)/);
+      // Two subscriptions on one chart.
+      await page.getByLabel("Add to the chart of sub_3").selectOption("sub_4");
+      const both = page.getByTestId("chart-sub_3+sub_4");
+      await expectVisible(both);
+      await expectText(both.locator(".u-legend"), /sub_3[\s\S]*sub_4/);
+      // Zoom and pan: one window for every chart.
+      await page.getByRole("button", { name: "Zoom in on time" }).click();
+      await expectText(page.getByTestId("time-window"), /\(30\.0 s\)/);
+      await page.getByRole("button", { name: "← Earlier" }).click();
+      await expectText(page.getByTestId("time-window"), /\(30\.0 s\)/);
+      // The cursor follows the mouse on every chart.
+      const over = await both.locator(".u-over").boundingBox();
+      await page.mouse.move(over.x + over.width / 2, over.y + over.height / 2);
+      const cursors = page.locator(".live-chart .u-cursor-x");
+      const off = await cursors.evaluateAll((els) => els.filter((e) => e.classList.contains("u-off")).length);
+      if ((await cursors.count()) < 2 || off > 0) throw new Error(`the cursor is not shared: ${off} of ${await cursors.count()} charts hide it`);
+      await page.getByRole("button", { name: "Follow live" }).click();
+      await expectText(page.getByTestId("time-window"), /following/);
+      // A dynamic subscription is labelled with its topic and aggregation.
+      const accepted = await page.locator(".dynamic-replies li.status-ok").count();
+      if (accepted) await expectText(page.getByRole("complementary", { name: "Subscriptions to watch" }), /accel_x AVERAGE 1\.0 s \(dynamic\)/);
+      await expandShot("monitor-charts");
+      // History across a redeploy (and leaving the panel).
+      if (liveValues) {
+        const kept = async () => Number(/(\d+) kept/.exec((await page.getByTestId("chart-sub_5").textContent()) ?? "")?.[1] ?? 0);
+        await waitUntil(async () => (await kept()) >= 5, 30000, async () => `sub_5 kept ${await kept()}`);
+        const before = await kept();
+        await view("Operator");
+        await panel("Deploy");
+        await page.getByRole("button", { name: "Deploy revision 5" }).click();
+        await expectText(page.getByTestId("deploy-result"), /Acked/, 30000);
+        await view("Scientist");
+        await panel("Monitor");
+        const after = await kept();
+        if (after < before) throw new Error(`the chart lost its history: ${before} points before the redeploy, ${after} after`);
+      }
+    }],
+
+    ["map: the survey deployed from another project, its track drawn in 2D and coloured by the water temperature", async () => {
+      if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
+      await page.getByRole("button", { name: "MoDD", exact: true }).click();
+      await page.locator('input[type="file"]').setInputFiles({ name: "survey.json", mimeType: "application/json", buffer: Buffer.from(JSON.stringify(survey)) });
+      await expectVisible(node("sub:sub_temp"));
+      await view("Operator");
+      await panel("Deploy");
+      await expectText(page.getByTestId("other-project"), /The drone runs project scenario1/, 15000);
+      await expectText(page.getByRole("list", { name: "Model changes" }), /subscriber sub_temp added: usv\.ctd\.water_temperature AVERAGE every 1\.0 s/);
+      await expandShot("deploy-other-project");
+      await page.getByRole("button", { name: "Deploy revision 1" }).click();
+      await expectText(page.getByTestId("deploy-result"), /Acked/, 30000);
+      await view("Scientist");
+      await panel("Map");
+      await page.getByLabel("Colour by").selectOption("sub_temp");
+      await expectText(page.getByTestId("map-legend"), /sub_temp.*°C/);
+      const canvas = page.getByTestId("map-canvas");
+      await waitUntil(async () => Number(await canvas.getAttribute("data-points")) >= 8, 60000,
+        async () => `${await canvas.getAttribute("data-points")} fixes on the map`);
+      await expand(true);
+      await page.waitForTimeout(1500);
+      const px = JSON.parse((await canvas.getAttribute("data-track-px")) ?? "[]");
+      const png = await canvas.screenshot();
+      const found = await page.evaluate(async ({ b64, px }) => {
+        const img = new Image();
+        img.src = `data:image/png;base64,${b64}`;
+        await img.decode();
+        const c = document.createElement("canvas");
+        c.width = img.width; c.height = img.height;
+        const ctx = c.getContext("2d");
+        ctx.drawImage(img, 0, 0);
+        const coloured = ([r, g, b]) => Math.max(r, g, b) - Math.min(r, g, b) > 60;
+        const along = px.filter(([x, y]) => coloured(ctx.getImageData(x, y, 1, 1).data)).length;
+        const all = ctx.getImageData(0, 0, c.width, c.height).data;
+        let total = 0;
+        for (let i = 0; i < all.length; i += 4) if (coloured([all[i], all[i + 1], all[i + 2]])) total += 1;
+        return { along, of: px.length, total };
+      }, { b64: png.toString("base64"), px });
+      if (found.of < 8 || found.along < 0.8 * found.of || found.total < 100) {
+        throw new Error(`the track is not drawn: ${found.along} of ${found.of} fixes coloured in the screenshot, ${found.total} coloured pixels`);
+      }
+      await shot("map");
+      await expand(false);
+    }],
+
+    ["archives: a time range played back through the charts (seek, play, pause)", async () => {
+      if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
+      await panel("Archives");
+      const files = page.getByRole("table", { name: "Archive files" });
+      await page.getByRole("button", { name: "Refresh" }).click();
+      await expectText(files, /\.mcap/, 15000);
+      await files.locator("button.link").first().click();
+      const form = page.getByRole("form", { name: "Play back an archive range" });
+      await form.getByRole("button", { name: "Load for playback" }).click();
+      const controls = page.getByRole("group", { name: "Playback controls" });
+      await expectVisible(controls, 20000);
+      const time = page.getByTestId("playback-time");
+      await expectText(time, /^0\.0 s of \d+\.\d s/);
+      const total = Number(/of ([\d.]+) s/.exec((await time.textContent()) ?? "")?.[1]);
+      if (!(total > 2)) throw new Error(`the archive range is only ${total} s`);
+      const chart = page.locator(".playback-section .live-chart").first();
+      const kept = async () => Number(/(\d+) kept/.exec((await chart.textContent()) ?? "")?.[1] ?? 0);
+      // Seek to the middle: the chart holds what was recorded until then.
+      const seek = controls.getByLabel("Seek");
+      const [min, max] = [Number(await seek.getAttribute("min")), Number(await seek.getAttribute("max"))];
+      await seek.fill(String((min + max) / 2));
+      await expectText(time, new RegExp(`^${(total / 2).toFixed(0)}\\.|^${Math.floor(total / 2)}\\.`));
+      const half = await kept();
+      if (half < 1) throw new Error("nothing charted at the middle of the range");
+      await expandShot("playback");
+      // Play: the cursor and the chart move on; pause: they stop.
+      await controls.getByRole("button", { name: "Play" }).click();
+      await waitUntil(async () => (await kept()) > half, 10000, async () => `still ${await kept()} points after play`);
+      await controls.getByRole("button", { name: "Pause" }).click();
+      const paused = await time.textContent();
+      await page.waitForTimeout(800);
+      if ((await time.textContent()) !== paused) throw new Error("the cursor moves while paused");
+      if (!/paused/.test(paused ?? "")) throw new Error(`not paused: ${paused}`);
+      await seek.fill(String(min));
+      await waitUntil(async () => (await kept()) <= 1, 5000, async () => `${await kept()} points kept after seeking to the start`);
+    }],
+
+    // Last: it stops the drone's PubBroker for a while.
+    ["link loss: a banner in every view, the link drawn broken, the stream dot red, time since the last frame", async () => {
+      if (!drone) throw new Error("needs the simulated drone (make build)");
+      await view("Scientist");
+      await panel("Monitor");
+      await expectText(page.getByRole("status", { name: "Link status" }), /link up/, 20000);
+      if (await page.getByTestId("link-banner").count()) throw new Error("a link-lost banner while the link is up");
+      const [pubbroker] = childPids(dronePid, "modd-pubbroker");
+      if (!pubbroker) throw new Error(`no modd-pubbroker under modd up (pid ${dronePid})`);
+      process.kill(pubbroker, "SIGSTOP");
+      try {
+        const banner = page.getByTestId("link-banner");
+        await expectVisible(banner, 20000);
+        await expectText(page.getByTestId("since-last-frame"), /last frame \d+ s ago/);
+        if (!/dot-down/.test((await page.getByTestId("stream-dot").getAttribute("class")) ?? "")) throw new Error("the stream dot is not red");
+        const dash = await page.locator(".react-flow__edge.edge-link path.react-flow__edge-path").first()
+          .evaluate((el) => getComputedStyle(el).strokeDasharray);
+        if (!dash || dash === "none") throw new Error(`the link edge is not drawn broken (stroke-dasharray ${dash})`);
+        await shot("link-lost");
+        for (const v of ["Operator", "System designer", "Sensor integrator"]) {
+          await view(v);
+          await expectVisible(banner);
+        }
+        await view("Scientist");
+      } finally {
+        process.kill(pubbroker, "SIGCONT");
+      }
+      await waitUntil(async () => (await page.getByTestId("link-banner").count()) === 0, 60000, async () => "the banner stays after the link is back");
+    }],
+  ];
+
+  async function expandShot(name) {
+    await expand(true);
+    await shot(name);
+    await expand(false);
+  }
+}
+
+/** The PIDs of `parent`'s children whose command is `name`. */
+export function childPids(parent, name) {
+  const out = execFileSync("ps", ["-o", "pid=,comm=", "--ppid", String(parent)], { encoding: "utf8" });
+  return out.split("\n").map((l) => l.trim().split(/\s+/)).filter(([, c]) => c === name).map(([p]) => Number(p));
+}
+
+async function expectText(locator, re, timeout = 10000) {
+  await waitUntil(async () => re.test((await locator.first().textContent().catch(() => "")) ?? ""), timeout,
+    async () => `${re} not in "${(await locator.first().textContent().catch(() => "")) ?? ""}"`);
+}
+
+async function expectVisible(locator, timeout = 10000) {
+  await locator.first().waitFor({ state: "visible", timeout });
+}
