@@ -8,6 +8,7 @@ import json
 import threading
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import httpx2 as httpx
 import pytest
@@ -22,12 +23,12 @@ from .served import serve
 @pytest.fixture
 def base(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[str]:
     slices: list[int] = []
-    parent = PacedWebSocketProtocol.__mro__[1]
+    parent: Any = PacedWebSocketProtocol.__mro__[1]
     original = parent.data_received
 
     def spy(self: object, data: bytes) -> None:
         slices.append(len(data))
-        original(self, data)  # type: ignore[arg-type]
+        original(self, data)
 
     monkeypatch.setattr(parent, "data_received", spy)
     settings = Settings(data_dir=tmp_path / "data", initial_admin_password=ADMIN_PASSWORD,

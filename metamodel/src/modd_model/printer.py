@@ -104,7 +104,7 @@ def print_model(doc: dict[str, Any]) -> str:
     for s in doc["subscribers"]:
         args = [endpoint(s["endpoint"])] if "endpoint" in s else []
         args += [quote(s["topic"]), s["periodS"], s["aggregation"]]
-        if s.get("backfill", "off") != "off":
+        if "backfill" in s:  # "off" too when set: the text keeps what the model says
             args.append(f"backfill = {s['backfill']}")
         out.append(f"{INDENT}Subscriber {name(s['name'])}({', '.join(args)});")
     out.append("}")

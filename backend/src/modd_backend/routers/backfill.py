@@ -18,12 +18,12 @@ import threading
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, HTTPException, Path
+from modd_contracts.keys import check_name
 from pydantic import BaseModel, Field
 from starlette.concurrency import run_in_threadpool
 
 from ..deps import StateDep, UserDep, bridge_of, has_role, require
 from ..roles import Role
-from ..streams import check_name
 from ..zbridge import ZenohBridge
 
 router = APIRouter(prefix="/api/drones", tags=["backfill"])

@@ -387,6 +387,9 @@ bool parse_delivered(std::string_view line, Delivered& out, std::string* error) 
       } else if (!scalar(v, out.value)) {
         return bad(key);
       }
+    } else if (key == "backfilled") {
+      if (v.kind != Json::Bool) return bad(key);
+      out.backfilled = v.boolean;
     } else if (key == "v") {
       if (!integer(v, n) || n > 1) return bad("v (unsupported payload version)");
     }

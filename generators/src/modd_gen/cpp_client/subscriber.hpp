@@ -43,6 +43,7 @@ struct Delivered {
   double value = 0;                  // the aggregate (bools as 0/1); unset for ALL
   std::vector<double> values;        // ALL: every raw sample of the window
   int64_t count = -1;                // samples behind the value, when known; else -1
+  bool backfilled = false;           // recomputed from the drone's archive after the link missed it
 };
 
 // Parses one delivered line. On malformed input returns false and says why.

@@ -24,14 +24,15 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from modd_plan.streams import StreamKey
+from modd_plan.windows import split_window, window_of
 
 from modd.link import backfill as bf
 from modd.link.codec import RawFrame
 from modd.link.frames import Aggregation, ProtocolError, ValueType
 from modd.link.receiver import Window
 
-from .fanout import period_us, window_of
-from .payload import DeliveredValue, split_window
+from .fanout import period_us
+from .payload import DeliveredValue
 
 if TYPE_CHECKING:
     from .broker import Running
