@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import itertools
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, cast
 
+from modd_contracts.types import PlanDocument, PlanSchedule, PlanStream
 from modd_model.numbers import MICROS_PER_SECOND
 
 from .schedule import Slot
@@ -34,7 +35,7 @@ def _us(value: Fraction) -> int:
     return int(value * MICROS_PER_SECOND)
 
 
-def _stream_json(s: PlannedStream) -> dict[str, Any]:
+def _stream_json(s: PlannedStream) -> PlanStream:
     first = s.sources[0] if s.sources else None
     return {
         "id": s.id,
@@ -51,7 +52,7 @@ def _stream_json(s: PlannedStream) -> dict[str, Any]:
     }
 
 
-def _schedule_json(plan: Plan) -> dict[str, Any]:
+def _schedule_json(plan: Plan) -> PlanSchedule:
     sched = plan.schedule
     slots: list[Slot] = []
     entries = 0
@@ -64,7 +65,7 @@ def _schedule_json(plan: Plan) -> dict[str, Any]:
     return {
         "epoch_phase_s": "0.0",
         "streams": [
-            {"id": s.id, "key": s.stream.key, "period_us": _us(s.stream.period)}
+            {"id": cast(int, s.id), "key": s.stream.key, "period_us": _us(s.stream.period)}
             for s in plan.sent_streams
         ],
         "slots": [
@@ -75,7 +76,7 @@ def _schedule_json(plan: Plan) -> dict[str, Any]:
     }
 
 
-def plan_to_json(plan: Plan) -> dict[str, Any]:
+def plan_to_json(plan: Plan) -> PlanDocument:
     """Every field of the shared contract (docs/planning.md, "Plan JSON")."""
     sizes = plan.buffer_sizes
     return {

@@ -283,16 +283,16 @@ class SubBroker:
             return {"status": "NACK", "reason": str(exc), "code": exc.status}
         self._save(request.model)
         plan = self._running.plan if self._running else None
-        summary = plan.to_json() if plan else {}
+        summary = plan.to_json() if plan else None
         return {
             "status": "ACKED",
             "config_id": ack.config_id,
             "epoch_ns": ack.epoch_ns,
             "streams_sent": len(config.streams),
-            "hyperperiod_s": summary.get("hyperperiod_s"),
-            "messages_per_hyperperiod": summary.get("messages_per_hyperperiod"),
-            "buffer_sizes": summary.get("buffer_sizes"),
-            "predicted_link_bytes_per_s": summary.get("predicted_link_bytes_per_s"),
+            "hyperperiod_s": summary["hyperperiod_s"] if summary else None,
+            "messages_per_hyperperiod": summary["messages_per_hyperperiod"] if summary else None,
+            "buffer_sizes": summary["buffer_sizes"] if summary else None,
+            "predicted_link_bytes_per_s": plan.link.to_json() if plan else None,
             "warnings": request.warnings,
         }
 
