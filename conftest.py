@@ -49,6 +49,7 @@ CROSS_PROCESS = (
     "backend/tests/test_frontend.py",
     "backend/tests/test_hardening.py",
     "backend/tests/test_live.py",
+    "backend/tests/test_plan_guard.py",  # the planner's process pool
     "backend/tests/test_postgres.py",
     "backend/tests/test_push.py",
     "backend/tests/test_relay.py",
@@ -57,9 +58,27 @@ CROSS_PROCESS = (
 )
 
 
+# Unit tests that take several seconds (property tests, solver oracles, races):
+# ``slow``, so run by ``make test`` but not by ``make check``.
+SLOW = (
+    "metamodel/tests/test_roundtrip_property.py",
+    "metamodel/tests/plan/test_buffers_oracle.py",
+    "metamodel/tests/test_collector.py::test_any_document_exports_to_what_the_original_form_keeps",
+    "metamodel/tests/plan/test_schedule_bounds.py::test_count_matches_the_previous_algorithm",
+    "backend/tests/test_saverace.py",
+    "backend/tests/test_plan.py::test_scenario1_plan_is_the_planners",
+    "backend/tests/test_plan.py::test_scenario2_with_the_milp",
+)
+
+
+def _listed(node: str, listed: tuple[str, ...]) -> bool:
+    return any(node == c or (c.endswith((".py", "/")) and node.startswith(c)) for c in listed)
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     for item in items:
         node = item.nodeid.split("[", 1)[0]
-        if any(node == c or (c.endswith((".py", "/")) and node.startswith(c))
-               for c in CROSS_PROCESS):
+        if _listed(node, CROSS_PROCESS):
             item.add_marker(pytest.mark.e2e)
+        elif _listed(node, SLOW):
+            item.add_marker(pytest.mark.slow)

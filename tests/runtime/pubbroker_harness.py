@@ -242,13 +242,13 @@ class BaseStation:
 
 
 def scenario_config(n: int, config_id: int = 1, status_period_s: int = 1) -> Config:
-    """CONFIG from the planner on the scenario file."""
-    from modd.link.plan import config_from_plan
+    """CONFIG from the planner on the scenario file, as the SubBroker builds it."""
+    from modd.subbroker.planning import config_for
     from modd_model import load_model
     from modd_plan import make_plan
 
-    plan = make_plan(load_model(SCENARIOS / f"scenario{n}.modd")).to_json()
-    return config_from_plan(plan, config_id, status_period_s)
+    plan = make_plan(load_model(SCENARIOS / f"scenario{n}.modd"))
+    return config_for(plan, config_id, status_period_s)
 
 
 def hand_config_scenario1(config_id: int = 1, status_period_s: int = 1) -> Config:

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from fastapi import HTTPException
+from modd_contracts.types import PlanDocument
 from modd_model import LoadResult, validate
 from modd_model.diagnostics import Diagnostic, ModelError
 from modd_plan import make_plan
@@ -39,7 +40,7 @@ Method = Literal["exact", "cvxpy"]
 
 @dataclass(frozen=True)
 class LivePlan:
-    plan: dict[str, Any] | None
+    plan: PlanDocument | None
     diagnostics: list[dict[str, object]]
     elapsed_ms: float
 

@@ -137,10 +137,10 @@ export interface PlanDocument {
   delays: Record<string, DecimalString>;
   /** The largest deviation of the buffers. */
   max_delay_s: DecimalString;
-  /** The link-cost estimate (status.schema.json PredictedLink). */
-  predicted_link_bytes_per_s: Record<string, number>;
-  /** The radio budget (modd_plan.linkbudget) when the model names a radio, else null. */
-  link_budget: object | null;
+  /** The link-cost estimate, as the status carries it. */
+  predicted_link_bytes_per_s: PredictedLink;
+  /** The declared transport's link budget (modd_plan.linkbudget), else null. */
+  link_budget: PlanLinkBudget | null;
   /** Subscriptions the planner could not serve. */
   infeasible: PlanInfeasible[];
   /** True when no buffer sizes meet the delay cap. */
@@ -203,6 +203,21 @@ export interface PlanSchedule {
   slots: PlanSlot[];
   slots_listed: number;
   slots_truncated: boolean;
+}
+
+/** The declared transport's link budget (metamodel/src/modd_plan/linkbudget.py). */
+export interface PlanLinkBudget {
+  transport: "tcp" | "udp" | "serial";
+  rate_bps: number | null;
+  max_packet: number;
+  accepted_delay_s: number;
+  drone_to_base: number;
+  base_to_drone: number;
+  packets_per_s: number;
+  share: number | null;
+  delays_s: Record<string, number>;
+  over_budget: string[];
+  error: string | null;
 }
 
 export interface PlanInfeasible {

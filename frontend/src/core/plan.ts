@@ -7,58 +7,24 @@ import type { ModdModel } from "./model.gen";
 import { findTopicByName } from "./query";
 import { subscriberId } from "./ids";
 
-export interface PlanTopic {
-  id: number;
-  name: string;
-  type: string;
-  unit: string;
-  publication_period_s: string | null;
-  period_us: number | null;
-  buffer_size: number | null;
-}
+import type {
+  PlanDocument,
+  PlanInfeasible,
+  PlanLinkBudget,
+  PlanSlot,
+  PlanStream,
+  PlanTopic,
+  PredictedLink,
+} from "./contracts.gen";
 
-export interface PlanStream {
-  id: number | null;
-  key: string;
-  topic: string;
-  aggregation: string;
-  period_s: string;
-  period_us: number;
-  sent: boolean;
-  derived_from: string | null;
-  factor: number;
-  subscribers: string[];
-}
-
-export interface PlanSlot {
-  slot: number;
-  date_s: string;
-  streams: number[];
-}
-
-export interface LinkCost {
-  drone_to_base: number;
-  base_to_drone: number;
-  plain_pubsub: number;
-  plain_pubsub_acks?: number;
-  frames_per_s: number;
-  saving_ratio: number;
-}
-
+// The plan JSON's types are generated from its contract
+// (metamodel/src/modd_contracts/schemas/plan.schema.json, core/contracts.gen.ts).
+export type { PlanSlot, PlanStream, PlanTopic };
+export type PlanJson = PlanDocument;
+export type LinkCost = PredictedLink;
 /** The declared transport's link budget (metamodel/src/modd_plan/linkbudget.py). */
-export interface LinkBudget {
-  transport: "tcp" | "udp" | "serial";
-  rate_bps: number | null;
-  max_packet: number;
-  accepted_delay_s: number;
-  drone_to_base: number;
-  base_to_drone: number;
-  packets_per_s: number;
-  share: number | null;
-  delays_s: Record<string, number>;
-  over_budget: string[];
-  error: string | null;
-}
+export type LinkBudget = PlanLinkBudget;
+export type Infeasibility = PlanInfeasible;
 
 /** What a transport's bytes/s include, in words. */
 export const TRANSPORT_HEADERS: Record<LinkBudget["transport"], string> = {
@@ -66,34 +32,6 @@ export const TRANSPORT_HEADERS: Record<LinkBudget["transport"], string> = {
   udp: "IP + UDP headers",
   serial: "COBS + CRC framing",
 };
-
-export interface Infeasibility {
-  topic: string;
-  subscribers: string[];
-  reason: string;
-}
-
-export interface PlanJson {
-  hyperperiod_s: string;
-  messages_per_hyperperiod: number;
-  topics: PlanTopic[];
-  streams: PlanStream[];
-  subscriptions: Record<string, string>;
-  buffer_sizes: Record<string, number>;
-  schedule: {
-    streams: Array<{ id: number; key: string; period_us: number }>;
-    slots: PlanSlot[];
-    slots_listed: number;
-    slots_truncated: boolean;
-  };
-  delays: Record<string, string>;
-  max_delay_s: string;
-  predicted_link_bytes_per_s: LinkCost;
-  link_budget?: LinkBudget | null;
-  infeasible: Infeasibility[];
-  violates_delay_cap: boolean;
-  constants?: Record<string, unknown>;
-}
 
 export interface TopicRow {
   topic: string;

@@ -42,7 +42,12 @@ def validate(name: str, document: Any) -> list[str]:
     ``/json/pointer: message`` (empty when it conforms). Needs ``jsonschema``,
     which the metamodel package depends on; imported here only."""
     from jsonschema import Draft202012Validator
+    from referencing import Registry, Resource
 
-    validator = Draft202012Validator(load(name))
+    # the schemas refer to each other by file name (status.schema.json#/$defs/...)
+    registry: Registry = Registry().with_resources(
+        (load(n)["$id"], Resource.from_contents(load(n))) for n in NAMES
+    )
+    validator = Draft202012Validator(load(name), registry=registry)
     errors = sorted(validator.iter_errors(document), key=lambda e: list(e.absolute_path))
     return ["/" + "/".join(str(p) for p in e.absolute_path) + f": {e.message}" for e in errors]

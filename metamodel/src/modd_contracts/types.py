@@ -97,8 +97,8 @@ class PlanDocument(TypedDict):
     schedule: PlanSchedule
     delays: dict[str, DecimalString]
     max_delay_s: DecimalString
-    predicted_link_bytes_per_s: dict[str, float]
-    link_budget: dict[str, Any] | None
+    predicted_link_bytes_per_s: PredictedLink
+    link_budget: PlanLinkBudget | None
     infeasible: list[PlanInfeasible]
     violates_delay_cap: bool
     constants: dict[str, Any]
@@ -163,6 +163,22 @@ class PlanSchedule(TypedDict):
     slots: list[PlanSlot]
     slots_listed: int
     slots_truncated: bool
+
+
+class PlanLinkBudget(TypedDict):
+    """The declared transport's link budget (metamodel/src/modd_plan/linkbudget.py)."""
+
+    transport: Literal["tcp", "udp", "serial"]
+    rate_bps: float | None
+    max_packet: int
+    accepted_delay_s: float
+    drone_to_base: float
+    base_to_drone: float
+    packets_per_s: float
+    share: float | None
+    delays_s: dict[str, float]
+    over_budget: list[str]
+    error: str | None
 
 
 class PlanInfeasible(TypedDict):
@@ -242,4 +258,4 @@ class PubBrokerLog(TypedDict):
     keep: NotRequired[int]
 
 
-__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "DeliveredValue", "SubBrokerStatus", "LinkState", "PredictedLink", "TcpSender", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog"]
+__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "DeliveredValue", "SubBrokerStatus", "LinkState", "PredictedLink", "TcpSender", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog"]

@@ -31,6 +31,8 @@ from fractions import Fraction
 from math import ceil
 from typing import Any
 
+from modd_contracts.types import PlanLinkBudget
+
 from .linkcost import (
     TCP_IP_HEADER_BYTES,
     UDP_IP_HEADER_BYTES,
@@ -133,11 +135,11 @@ class LinkBudget:
                 f"link, more than its {rate} B/s; the subscriptions that exceed the budget: "
                 f"{names}")
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> PlanLinkBudget:
         s = self.settings
         share = self.share
         return {
-            "transport": s.transport,
+            "transport": s.transport,  # type: ignore[typeddict-item]  # a word the settings checked
             "rate_bps": s.rate_bps,
             "max_packet": s.max_packet,
             "accepted_delay_s": float(s.accepted_delay),

@@ -34,6 +34,7 @@ from functools import lru_cache
 from math import ceil
 
 from modd_contracts.aggregations import BY_NAME
+from modd_contracts.types import PredictedLink
 
 from .schedule import Schedule
 
@@ -100,7 +101,7 @@ class LinkCost:
     plain_pubsub_acks: float
     frames_per_s: float
 
-    def to_json(self) -> dict[str, float]:
+    def to_json(self) -> PredictedLink:
         total = self.drone_to_base + self.base_to_drone
         plain = self.plain_pubsub + self.plain_pubsub_acks
         return {

@@ -21,6 +21,7 @@ from functools import lru_cache
 from math import lcm
 from typing import Any
 
+from modd_contracts.types import PlanDocument
 from modd_model.diagnostics import Diagnostic, ModelError
 from modd_model.numbers import MICROS_PER_SECOND, fraction_to_decimal
 from modd_model.query import Topic, link_settings, topics
@@ -159,8 +160,8 @@ class Plan:
                 return s
         raise KeyError(key)
 
-    def to_json(self) -> dict[str, Any]:
-        """The plan as one JSON object (see docs/planning.md)."""
+    def to_json(self) -> PlanDocument:
+        """The plan as one JSON object (see docs/planning.md), typed by its contract."""
         with gc_paused():
             return plan_to_json(self)
 

@@ -10,8 +10,9 @@ from __future__ import annotations
 import itertools
 from fractions import Fraction
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, cast
 
+from modd_contracts.types import PlanDocument, PlanSchedule, PlanStream
 from modd_model.numbers import MICROS_PER_SECOND
 
 from .schedule import Slot
@@ -45,7 +46,7 @@ def _dec_us(us: int) -> str:
     return decimal_of(Fraction(us, MICROS_PER_SECOND))
 
 
-def _stream_json(s: PlannedStream) -> dict[str, Any]:
+def _stream_json(s: PlannedStream) -> PlanStream:
     first = s.sources[0] if s.sources else None
     key = s.stream
     return {
@@ -63,7 +64,7 @@ def _stream_json(s: PlannedStream) -> dict[str, Any]:
     }
 
 
-def _schedule_json(plan: Plan) -> dict[str, Any]:
+def _schedule_json(plan: Plan) -> PlanSchedule:
     sched = plan.schedule
     slots: list[Slot] = []
     entries = 0
@@ -76,7 +77,7 @@ def _schedule_json(plan: Plan) -> dict[str, Any]:
     return {
         "epoch_phase_s": "0.0",
         "streams": [
-            {"id": s.id, "key": s.stream.key, "period_us": _key_us(s.stream)}
+            {"id": cast(int, s.id), "key": s.stream.key, "period_us": _key_us(s.stream)}
             for s in plan.sent_streams
         ],
         "slots": [
@@ -87,7 +88,7 @@ def _schedule_json(plan: Plan) -> dict[str, Any]:
     }
 
 
-def plan_to_json(plan: Plan) -> dict[str, Any]:
+def plan_to_json(plan: Plan) -> PlanDocument:
     """Every field of the shared contract (docs/planning.md, "Plan JSON")."""
     sizes = plan.buffer_sizes
     return {

@@ -5,6 +5,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any
 
+from modd_contracts.types import PlanDocument, PlanStream
 from modd_plan.plan import make_plan
 from modd_plan.streams import StreamKey, find_sources
 
@@ -12,7 +13,7 @@ X = "d.accelerometer.accel_x"
 Z = "d.accelerometer.accel_z"
 
 
-def _by_key(plan_json: dict[str, Any]) -> dict[str, dict[str, Any]]:
+def _by_key(plan_json: PlanDocument) -> dict[str, PlanStream]:
     return {s["key"]: s for s in plan_json["streams"]}
 
 
@@ -28,7 +29,7 @@ def test_scenario1_derives_the_2s_average_and_shares_the_max(scenario1_dict: Any
     assert mx["subscribers"] == ["sub_6", "sub_7"] and mx["sent"]
     assert j["subscriptions"]["sub_6"] == j["subscriptions"]["sub_7"] == mx["key"]
     # ids: topic order, then aggregation enum order (MIN before MAX), then period
-    sent = sorted((s for s in j["streams"] if s["sent"]), key=lambda s: s["id"])
+    sent = sorted((s for s in j["streams"] if s["sent"]), key=lambda s: s["id"] or 0)
     assert [s["key"] for s in sent] == [
         f"{X}/AVERAGE/0.25", "d.accelerometer.accel_y/AVERAGE/0.25",
         f"{Z}/MIN/0.25", f"{Z}/MAX/0.25",

@@ -8,19 +8,15 @@ from hypothesis import strategies as st
 from modd.link import codec
 from modd.link.frames import (
     Aggregation,
-    Config,
     ConfigAck,
     Data,
     Ping,
     ProtocolError,
     Status,
-    StreamSpec,
-    TopicSpec,
     Value,
     ValueType,
     value_kind,
 )
-from modd.link.plan import config_from_plan
 
 S1_KINDS = [value_kind(ValueType.FLOAT32, a) for a in
             (Aggregation.AVERAGE, Aggregation.AVERAGE, Aggregation.MIN, Aggregation.MAX)]
@@ -75,22 +71,3 @@ def test_truncated_and_trailing_data_rejected() -> None:
         codec.decode_data(codec.RawFrame(raw.type, raw.body[:-1], 0), S1_KINDS)
     with pytest.raises(ProtocolError, match="trailing"):
         codec.decode_data(codec.RawFrame(raw.type, raw.body + b"\0", 0), S1_KINDS)
-
-
-def test_config_from_plan() -> None:
-    plan = {
-        "topics": [
-            {"id": 1, "name": "d.s.y", "type": "float32", "buffer_size": 28, "period_us": 40000},
-            {"id": 0, "name": "d.s.x", "type": "float64", "buffer_size": 6, "period_us": 40000},
-        ],
-        "streams": [
-            {"id": 1, "topic": "d.s.y", "aggregation": "MAX", "period_us": 250000, "sent": True},
-            {"id": None, "topic": 1, "aggregation": "AVERAGE", "period_us": 2000000, "sent": False},
-            {"id": 0, "topic": 0, "aggregation": "AVERAGE", "period_us": 250000, "sent": True},
-        ],
-    }
-    c = config_from_plan(plan, 4)
-    assert c == Config(4, 30, (TopicSpec("d.s.x", ValueType.FLOAT64, 6, 40000),
-                               TopicSpec("d.s.y", ValueType.FLOAT32, 28, 40000)),
-                       (StreamSpec(0, Aggregation.AVERAGE, 250000),
-                        StreamSpec(1, Aggregation.MAX, 250000)))

@@ -162,7 +162,10 @@ class Reader {
       return true;
     }
     v.kind = Json::Number;
-    return number(v.number);
+    size_t start = pos_;
+    if (!number(v.number)) return false;
+    v.text.assign(s_.substr(start, pos_ - start));  // the literal: integers are read exactly
+    return true;
   }
 
   std::string_view s_;
@@ -178,6 +181,15 @@ bool scalar(const Json& j, double& out) {
 
 bool integer(const Json& j, int64_t& out) {
   if (j.kind != Json::Number || j.number != std::floor(j.number)) return false;
+  // Nanosecond times exceed a double's 53 bits: read an integer literal exactly.
+  if (!j.text.empty() && j.text.find_first_of(".eE") == std::string::npos) {
+    errno = 0;
+    char* end = nullptr;
+    long long n = std::strtoll(j.text.c_str(), &end, 10);
+    if (errno == ERANGE || end != j.text.c_str() + j.text.size()) return false;
+    out = static_cast<int64_t>(n);
+    return true;
+  }
   // Range first: casting a double outside int64_t's range is undefined behaviour.
   if (!(j.number >= -9223372036854775808.0 && j.number < 9223372036854775808.0)) return false;
   out = static_cast<int64_t>(j.number);

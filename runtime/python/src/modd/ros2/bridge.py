@@ -59,6 +59,8 @@ class Ros2Bridge:
                  domain_id: int = 0, node: str = "modd_bridge") -> None:
         self.modd, self.ros = modd, ros
         self.drones, self.domain_id, self.node = drones, domain_id, node
+        #: The values this bridge reads (modd_contracts.keys).
+        self.key = keys.values_of(None if drones == "*" else drones)
         self.zid = str(ros.zid())
         self.node_id = 0
         self._next_id = 1
@@ -71,8 +73,7 @@ class Ros2Bridge:
     def start(self) -> Ros2Bridge:
         self._node_token = self.ros.liveliness().declare_token(
             rmw.node_token(self.domain_id, self.zid, self.node_id, self.node))
-        self._sub = self.modd.declare_subscriber(
-            keys.values_of(None if self.drones == "*" else self.drones), self._on_sample)
+        self._sub = self.modd.declare_subscriber(self.key, self._on_sample)
         return self
 
     def _publisher(self, topic: str, ros_type: str, type_hash: str) -> RosPublisher:

@@ -56,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     bridge = Ros2Bridge(modd, ros, a.drone, a.domain_id, a.node).start()
     print(f"modd-ros2: node /{a.node} on ROS domain {a.domain_id}: values of "
-          f"modd/{a.drone}/sub/* as /<drone>/<subscriber> (modd_msgs/msg/Window) and "
+          f"{bridge.key} as /<drone>/<subscriber> (modd_msgs/msg/Window) and "
           f"/<drone>/<subscriber>/value (std_msgs/msg/Float64)", flush=True)
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
