@@ -100,3 +100,23 @@ def test_health_needs_no_login_and_checks_the_database(client: TestClient) -> No
     assert r.json() == {"status": "ok", "database": "ok", "zenoh": "disabled", "scene": False,
                         "ready": True, "saturated": False, "heavy_in_flight": 0,
                         "heavy_limit": 8}
+
+
+def test_admin_password_from_file_or_environment_not_argv(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The first admin's password need not be in argv (/proc/PID/cmdline is
+    readable by every local user): a file or $MODD_ADMIN_PASSWORD; the
+    argv option still works but warns."""
+    secret = tmp_path / "admin.pw"
+    secret.write_text("from-a-file-123\n")
+    monkeypatch.delenv("MODD_ADMIN_PASSWORD", raising=False)
+    s = parse_args(["--data", str(tmp_path), "--admin-password-file", str(secret)])
+    assert s.initial_admin_password == "from-a-file-123"
+    monkeypatch.setenv("MODD_ADMIN_PASSWORD", "from-the-env-123")
+    assert parse_args(["--data", str(tmp_path)]).initial_admin_password == "from-the-env-123"
+    monkeypatch.setenv("MODD_DATABASE_URL", "postgresql+psycopg://u:pw@127.0.0.1/modd")
+    assert "pw@" in str(parse_args(["--data", str(tmp_path)]).database_url)  # not in argv
+    assert "warning" not in capsys.readouterr().err
+    parse_args(["--data", str(tmp_path), "--admin-password", "in-argv-123"])
+    assert "process list" in capsys.readouterr().err

@@ -124,6 +124,8 @@ def test_csv_and_download(archive_client: tuple[TestClient, Headers, Path]) -> N
     "/api/drones/usv/archives/..%2Fsecret.mcap",
     "/api/drones/usv/archives/%2E%2E%2F%2E%2E%2Fsecret.mcap/series?topic=x",
     "/api/drones/usv/archives/link.mcap",  # a symlink leading outside
+    "/api/drones/usv/archives/link.mcap/csv?topic=x",  # the same through the other routes
+    "/api/drones/usv/archives/link.mcap/series?topic=x",
     "/api/drones/usv/archives/../../secret.mcap",
     "/api/drones/usv/archives/notes.txt",
     "/api/drones/..%2Fusv/archives",

@@ -12,7 +12,6 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-import httpx2 as httpx
 import pytest
 from fastapi.testclient import TestClient
 from modd_backend import Settings, create_app
@@ -229,8 +228,10 @@ def test_scene_draws_the_track_of_the_deployed_model(
         time.sleep(0.25)
     assert usv["roles"]["track_lat"] == "lat" and usv["roles"]["track_lon"] == "lon"
     assert usv["colour_by"] == "water_temp"
-    page = httpx.get(scene["url"], timeout=5)
-    assert page.status_code == 200 and "<html" in page.text.lower()  # viser's own client
+    assert scene["url"] == "/scene/"  # viser's own client, through the backend's proxy
+    page = live.get(scene["url"], headers=h)
+    assert page.status_code == 200 and "<html" in page.text.lower()
+    assert live.get(scene["url"]).status_code == 401
 
 
 def test_backfill_routes_and_roles(live: TestClient, people: dict[str, Headers]) -> None:

@@ -175,3 +175,48 @@ def test_replayed_deploy_refused_after_a_subbroker_restart(
     assert replay["status"] == "UNAUTHORISED" and "replayed" in replay["reason"], replay
     fresh = request(backend, "modd/usv/deploy", signed(body))  # a new signature still works
     assert fresh["status"] != "UNAUTHORISED", fresh
+
+
+def _replies(session: Any, key: str, body: dict[str, Any]) -> list[dict[str, Any]]:
+    """Every reply to one query (a forged queryable would add one)."""
+    out = []
+    for reply in session.get(key, payload=json.dumps(body).encode(), timeout=3):
+        if reply.ok is not None:
+            out.append(json.loads(reply.ok.payload.to_bytes()))
+    return out
+
+
+def test_no_identity_but_the_subbroker_answers_or_forges(
+        station: dict[str, Any], zenoh_client: Any) -> None:
+    """Held-out: a viewer, or a stolen backend credential, declares queryables
+    on the control keys to answer in the SubBroker's place, and the backend
+    puts forged values and status: none of it reaches anyone."""
+    port = station["port"]
+    backend = zenoh_client(port, "backend")
+    viewer = zenoh_client(port, "viewer")
+    other = zenoh_client(port, "backend")
+    assert wait_connected(backend) and wait_connected(viewer) and wait_connected(other)
+    forged_reply = json.dumps({"status": "ACKED", "forged": True, "subscriptions": []})
+
+    def answer(query: Any) -> None:
+        query.reply(query.key_expr, forged_reply.encode())
+
+    fakes = [s.declare_queryable(k, answer) for s in (viewer, other)
+             for k in ("modd/usv/deploy", "modd/usv/subscribe", "modd/**")]
+    seen: list[bytes] = []
+    viewer.declare_subscriber("modd/**", lambda s: seen.append(s.payload.to_bytes()))
+    time.sleep(0.5)
+    listed = _replies(backend, "modd/usv/subscribe", {"action": "list", "owner": "x"})
+    assert listed and not [r for r in listed if r.get("forged")], listed
+    deploys = _replies(backend, "modd/usv/deploy", {"text": "{}", "format": "json"})
+    assert deploys and all(r["status"] == "UNAUTHORISED" for r in deploys), deploys
+    deadline = time.monotonic() + 2
+    while time.monotonic() < deadline:
+        other.put("modd/usv/sub/sub_1", json.dumps({"value": 1e9, "slot": 999999}))
+        other.put("modd/usv/status", json.dumps({"forged": True}))
+        other.put("modd/usv/sub/new_name", json.dumps({"value": 1e9, "slot": 999999}))
+        time.sleep(0.1)
+    assert seen, "the viewer reads the SubBroker's values"
+    assert not [p for p in seen if b"999999" in p or b"forged" in p]
+    for q in fakes:
+        q.undeclare()

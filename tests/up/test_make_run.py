@@ -14,6 +14,7 @@ import signal
 import subprocess
 import sys
 import time
+import urllib.error
 import urllib.request
 from pathlib import Path
 from typing import Any
@@ -192,7 +193,13 @@ def test_make_run_serves_the_demo_live_and_stops(
         assert 5.0 < seen["water_temp"] < 20.0
 
         scene = api(base + "/api/scene", token)
-        assert scene["url"].startswith("http://127.0.0.1:")
+        assert scene["url"] == "/scene/"  # proxied on the workbench's origin, behind the session
+        page = urllib.request.Request(base + "/scene/",
+                                      headers={"Authorization": f"Bearer {token}"})
+        with urllib.request.urlopen(page, timeout=30) as resp:
+            assert "'sha256-" in resp.headers["Content-Security-Policy"]
+        with pytest.raises(urllib.error.HTTPError):  # no session, no scene
+            urllib.request.urlopen(base + "/scene/", timeout=30)
         track = {d["drone"]: d for d in scene["drones"]}
         assert track["usv"]["points"] > 0, scene
 
