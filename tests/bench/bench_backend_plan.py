@@ -68,11 +68,28 @@ def measure(client: httpx.Client, body: dict[str, object], method: str, runs: in
     return times
 
 
+def valid_synthetic(n_topics: int, n_subs: int) -> dict[str, Any]:
+    """bench_planner's synthetic model with every subscription period at
+    least its topic's publication period (the validator refuses shorter
+    ones: the model would not be planned at all)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from bench_planner import SUB_PERIODS, synthetic
+    from modd_model.numbers import to_fraction
+
+    model = synthetic(n_topics, n_subs)
+    pm = {t: to_fraction(p["periodS"]) for p in model["publishers"] for t in p["topics"]}
+    for k, sub in enumerate(model["subscribers"]):
+        if to_fraction(sub["periodS"]) < pm[sub["topic"]]:
+            fits = [x for x in SUB_PERIODS if to_fraction(x) >= pm[sub["topic"]]]
+            sub["periodS"] = fits[k % len(fits)]
+    return model
+
+
 def health_during_big_plans(c: httpx.Client, port: int, plans: int) -> None:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from bench_planner import synthetic
 
-    body = {"model": synthetic(5000, 25000)}
+    body = {"model": valid_synthetic(5000, 25000)}
     trips: list[float] = []
     oks: list[bool] = []
 
