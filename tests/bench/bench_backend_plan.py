@@ -25,6 +25,7 @@ import tempfile
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import httpx2 as httpx
 from modd.ports import free_port
@@ -86,9 +87,6 @@ def valid_synthetic(n_topics: int, n_subs: int) -> dict[str, Any]:
 
 
 def health_during_big_plans(c: httpx.Client, port: int, plans: int) -> None:
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from bench_planner import synthetic
-
     body = {"model": valid_synthetic(5000, 25000)}
     trips: list[float] = []
     oks: list[bool] = []
