@@ -6,12 +6,8 @@ and it must parse as lark itself does."""
 from __future__ import annotations
 
 import hashlib
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
-
-import pytest
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "modd_model"
 SCENARIOS = Path(__file__).resolve().parents[3] / "shared" / "scenarios"
@@ -52,13 +48,3 @@ def test_standalone_parses_as_lark() -> None:
         assert [(t.type, str(t)) for t in _parser().lex(text, dont_ignore=True)] == [
             (t.type, str(t)) for t in reference.lex(text, dont_ignore=True)]
 
-
-def test_modd_plan_imports_neither_lark_nor_numpy_nor_jsonschema() -> None:
-    scenario = SCENARIOS / "scenario1.modd"
-    if not scenario.exists():
-        pytest.skip("no scenario")
-    code = ("import sys; from modd_model.cli import main; main(['plan', sys.argv[1]]); "
-            "print(sorted(m for m in ('lark', 'numpy', 'jsonschema') if m in sys.modules))")
-    out = subprocess.run([sys.executable, "-c", code, str(scenario)], check=True,
-                         capture_output=True, text=True).stdout
-    assert out.strip().splitlines()[-1] == "[]"
