@@ -156,6 +156,8 @@ def worst_case(name: str) -> dict[str, Any]:
             "messages_per_hyperperiod"] > 10**6 else f"{plan['messages_per_hyperperiod']} messages"
     except ModelError as exc:
         outcome = f"located error ({len(exc.diagnostics)} subscriptions)"
+    except ValueError as exc:  # e.g. a hyperperiod past the decimal strings' range
+        outcome = f"ValueError: {str(exc)[:48]}"
     cpu = time.process_time() - start
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return {"cpu_s": cpu, "peak_mb": rss, "outcome": outcome}
