@@ -34,6 +34,7 @@ run tests/bench/bench_latency.py --seconds "${LATENCY_SECONDS:-20}"
 run tests/bench/bench_footprint.py --seconds "${FOOTPRINT_SECONDS:-30}"
 run tests/bench/bench_pubbroker.py --seconds "${PUBBROKER_SECONDS:-10}" --ingest-samples 10000000
 run tests/bench/bench_planner.py --quick
+run tests/bench/bench_plan_cpu.py
 run tests/bench/bench_backend_plan.py --runs 30
 run tests/bench/bench_subbroker.py --seconds "${SUBBROKER_SECONDS:-10}" --profile
 run tests/bench/bench_fleet.py --drones "${FLEET_DRONES:-20}" --seconds "${FLEET_SECONDS:-60}"

@@ -288,3 +288,33 @@ def test_saves_are_announced_to_the_project_watchers(
         ws.send_json({"op": "unwatch", "project": pid})
         _receive_until(ws, lambda m: m["type"] == "unwatched")
     assert live.app.state.modd.project_events.watchers(pid) == 0  # type: ignore[attr-defined]
+
+
+def test_batched_stream_keeps_each_subscribers_order(
+    live: TestClient, people: dict[str, Headers]
+) -> None:
+    """``?batch=1``: the values of two subscriptions come in batch frames (and
+    lone messages), every message as the unbatched socket sends it, each
+    subscriber's windows in time order."""
+    token = people["scientist"]["Authorization"].split()[1]
+    with live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream?batch=1") as ws:
+        ws.send_json({"op": "auth", "token": token})
+        assert ws.receive_json()["type"] == "authenticated"
+        for name in ("sub_5", "sub_1"):
+            ws.send_json({"op": "subscribe", "subscriber": name})
+        ends: dict[str, list[int]] = {}
+        frames = 0
+        while sum(len(v) for v in ends.values()) < 12:
+            frame: dict[str, Any] = ws.receive_json()
+            frames += 1
+            assert frames < 500, ends
+            messages = frame["messages"] if frame["type"] == "batch" else [frame]
+            if frame["type"] == "batch":
+                assert len(messages) > 1
+            for m in messages:
+                if m["type"] == "value":
+                    assert set(m) == {"type", "subscriber", "data"}
+                    ends.setdefault(m["subscriber"], []).append(m["data"]["end_ns"])
+        assert set(ends) == {"sub_5", "sub_1"}
+        for seq in ends.values():
+            assert seq == sorted(seq) and len(set(seq)) == len(seq)

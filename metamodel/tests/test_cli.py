@@ -119,3 +119,29 @@ def test_plan_imports_only_the_planner(scenarios_dir: Path) -> None:
     loaded = _modules_after("plan", str(scenarios_dir / "scenario1.modd"))
     assert "modd_plan" in loaded
     assert not loaded & HEAVY
+
+
+def test_builtin_commands_are_the_declared_entry_points() -> None:
+    """``modd`` loads its own commands without the entry-point scan: the table
+    must say what the metamodel's pyproject.toml declares."""
+    from importlib.metadata import entry_points
+
+    from modd_model.cli import BUILTIN
+
+    declared = {ep.name: ep.value for ep in entry_points(group="modd.commands")
+                if ep.name in BUILTIN}
+    assert declared == BUILTIN
+
+
+def test_plan_reads_no_entry_points(scenarios_dir: Path) -> None:
+    """``modd plan`` of a small model: no entry-point scan, no lark (the
+    parser is generated), no jsonschema (the compiled validator), no numpy."""
+    code = ("import sys, contextlib, io\n"
+            "from modd_model.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            f"    main(['plan', {str(scenarios_dir / 'scenario1.modd')!r}])\n"
+            "print(sorted(m for m in ('importlib.metadata', 'lark', 'jsonschema', 'numpy')\n"
+            "             if m in sys.modules))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=60, check=True).stdout
+    assert out.strip().splitlines()[-1] == "[]"

@@ -25,6 +25,7 @@ import tempfile
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import httpx2 as httpx
 from modd.ports import free_port
@@ -68,11 +69,25 @@ def measure(client: httpx.Client, body: dict[str, object], method: str, runs: in
     return times
 
 
-def health_during_big_plans(c: httpx.Client, port: int, plans: int) -> None:
+def valid_synthetic(n_topics: int, n_subs: int) -> dict[str, Any]:
+    """bench_planner's synthetic model with every subscription period at
+    least its topic's publication period (the validator refuses shorter
+    ones: the model would not be planned at all)."""
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from bench_planner import synthetic
+    from bench_planner import SUB_PERIODS, synthetic
+    from modd_model.numbers import to_fraction
 
-    body = {"model": synthetic(5000, 25000)}
+    model = synthetic(n_topics, n_subs)
+    pm = {t: to_fraction(p["periodS"]) for p in model["publishers"] for t in p["topics"]}
+    for k, sub in enumerate(model["subscribers"]):
+        if to_fraction(sub["periodS"]) < pm[sub["topic"]]:
+            fits = [x for x in SUB_PERIODS if to_fraction(x) >= pm[sub["topic"]]]
+            sub["periodS"] = fits[k % len(fits)]
+    return model
+
+
+def health_during_big_plans(c: httpx.Client, port: int, plans: int) -> None:
+    body = {"model": valid_synthetic(5000, 25000)}
     trips: list[float] = []
     oks: list[bool] = []
 

@@ -125,7 +125,10 @@ class Browser:
 
     def on_message(self, drone: str, msg: dict[str, Any]) -> None:
         kind = msg.get("type")
-        if kind == "value":
+        if kind == "batch":  # ?batch=1, as the workbench's Monitor asks
+            for m in msg["messages"]:
+                self.on_message(drone, m)
+        elif kind == "value":
             self.seen.setdefault(drone, set()).add(msg["subscriber"])
             if self.marked:
                 self.values += 1
@@ -254,7 +257,7 @@ def wait_all_seen(browser: Browser, drones: list[Drone], procs: list[Proc],
     raise RuntimeError(f"no value within {timeout_s} s for {missing}")
 
 
-async def _run(tmp: Path, n: int, seconds: float, extra: int) -> Result:
+async def _run(tmp: Path, n: int, seconds: float, extra: int, batched: bool = True) -> Result:
     procs: list[Proc] = []
     router = free_port()
     kit = str(HERE / "benchkit" / "fleet_procs.py")
@@ -305,8 +308,9 @@ async def _run(tmp: Path, n: int, seconds: float, extra: int) -> Result:
                 tokens[d.name] = r.json()["token"]
         browser, stop = Browser(), asyncio.Event()
         tasks = [asyncio.create_task(browse(
-            f"ws://127.0.0.1:{port}/api/drones/{d.name}/stream", tokens[d.name], d, browser,
-            stop)) for d in drones]
+            f"ws://127.0.0.1:{port}/api/drones/{d.name}/stream"
+            + ("?batch=1" if batched else ""), tokens[d.name], d, browser, stop))
+            for d in drones]
         await asyncio.to_thread(wait_all_seen, browser, drones, procs, 60 + 3 * n)
         samplers = [Sampler(p.pid).start() for d in drones
                     for p in (d.pubbroker, d.subbroker) if p is not None]
@@ -333,9 +337,9 @@ async def _run(tmp: Path, n: int, seconds: float, extra: int) -> Result:
             p.stop()
 
 
-def run(drones: int, seconds: float, extra: int = 50) -> Result:
+def run(drones: int, seconds: float, extra: int = 50, batched: bool = True) -> Result:
     with tempfile.TemporaryDirectory(prefix="modd-fleet-") as tmp:
-        return asyncio.run(_run(Path(tmp), drones, seconds, extra))
+        return asyncio.run(_run(Path(tmp), drones, seconds, extra, batched))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -343,9 +347,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--drones", type=int, default=20)
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--extra-subscribers", type=int, default=50)
+    ap.add_argument("--unbatched", action="store_true",
+                    help="one WebSocket frame per value (the stream's default without ?batch=1)")
     args = ap.parse_args(argv)
     start = time.monotonic()
-    result = run(args.drones, args.seconds, args.extra_subscribers)
+    result = run(args.drones, args.seconds, args.extra_subscribers, not args.unbatched)
+    print(f"WebSocket frames: {'one per value' if args.unbatched else 'batched (?batch=1)'}")
     print(result.render())
     print(f"\n(whole run {time.monotonic() - start:.0f} s, start-up included)")
     return 0

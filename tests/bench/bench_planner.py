@@ -134,6 +134,19 @@ def worst_case(name: str) -> dict[str, Any]:
     elif name.startswith("synthetic:"):
         _, t, n = name.split(":")
         model = synthetic(int(t), int(n))
+    elif name.startswith("validate:"):  # the validator alone, on a valid model
+        import importlib
+
+        from bench_backend_plan import valid_synthetic
+
+        _, t, n = name.split(":")
+        model = valid_synthetic(int(t), int(n))
+        validate = importlib.import_module("modd_model.validate").validate
+        start = time.process_time()
+        errors = [d for d in validate(model) if d.severity == "error"]
+        cpu = time.process_time() - start
+        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        return {"cpu_s": cpu, "peak_mb": rss, "outcome": f"{len(errors)} errors (validation)"}
     else:  # maxbuffer
         model = load_model(SCENARIOS / "scenario1.modd")
     start = time.process_time()
@@ -143,6 +156,8 @@ def worst_case(name: str) -> dict[str, Any]:
             "messages_per_hyperperiod"] > 10**6 else f"{plan['messages_per_hyperperiod']} messages"
     except ModelError as exc:
         outcome = f"located error ({len(exc.diagnostics)} subscriptions)"
+    except ValueError as exc:  # e.g. a hyperperiod past the decimal strings' range
+        outcome = f"ValueError: {str(exc)[:48]}"
     cpu = time.process_time() - start
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return {"cpu_s": cpu, "peak_mb": rss, "outcome": outcome}
@@ -163,7 +178,8 @@ def cli_cpu(*argv: str) -> float:
 def worst_cases(quick: bool) -> None:
     names = [f"e:{kind}:{e}" for kind in ("primes", "grid", "consecutive", "cycle")
              for e in ((16, 24, 40) if quick else (16, 20, 24, 32, 40))]
-    names += ["grid:10:25", "grid:100:500", "synthetic:5000:25000", "maxbuffer"]
+    names += ["grid:10:25", "grid:100:500", "synthetic:5000:25000", "validate:5000:25000",
+              "maxbuffer"]
     print("\nworst cases (issue 18), each in a fresh process; e = non-dividing sent periods")
     print(f"{'case':34} {'CPU':>9} {'peak RSS':>9}  outcome")
     for name in names:

@@ -22,10 +22,11 @@ import multiprocessing
 import os
 import threading
 import time
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 from fastapi import HTTPException
 from modd_contracts.types import PlanDocument
@@ -36,6 +37,7 @@ from modd_plan import make_plan
 from .modelio import diagnostics_json, read_text
 
 Method = Literal["exact", "cvxpy"]
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -177,6 +179,17 @@ async def guarded_plan(
 ) -> dict[str, Any]:
     """:func:`plan_request` in a worker process, within the time and memory
     budget; 503 (Retry-After) when too many requests already wait."""
+    return await guarded_call(plan_request, model, text, fmt, method)
+
+
+async def guarded_call(
+    fn: Callable[[dict[str, Any] | None, str | None, str, Method, float], T],
+    model: dict[str, Any] | None, text: str | None, fmt: str, method: Method,
+) -> T | dict[str, Any]:
+    """``fn`` (:func:`plan_request` or a function around it that also
+    serialises its answer, so that the event loop does not walk a plan of
+    10 MB) in a worker process, within the time and memory budget; the
+    failure's LivePlan JSON when the worker is over it."""
     global _waiting
     if _waiting >= PLAN_QUEUE:
         raise HTTPException(503, "the planner is busy; retry shortly",
@@ -185,7 +198,7 @@ async def guarded_plan(
     start = time.perf_counter()
     pool = _get_pool()
     try:
-        future = pool.submit(plan_request, model, text, fmt, method, PLAN_TIMEOUT_S)
+        future = pool.submit(fn, model, text, fmt, method, PLAN_TIMEOUT_S)
         return await asyncio.wait_for(asyncio.wrap_future(future), PLAN_TIMEOUT_S + PLAN_START_S)
     except TimeoutError:  # the worker's own timer did not stop it: kill it
         _discard_pool(pool)

@@ -1,5 +1,5 @@
 import { describe, expect, it, vi } from "vitest";
-import { WebSocketSource, toLinkStatus, toSamples, type SocketLike } from "./WebSocketSource";
+import { WebSocketSource, toLinkStatus, toSamples, withBatch, type SocketLike } from "./WebSocketSource";
 import deliveredVectors from "../../../contracts/vectors/delivered_value.json";
 import statusVectors from "../../../contracts/vectors/status.json";
 import type { DeliveredValue, SubBrokerStatus } from "../core/contracts.gen";
@@ -65,6 +65,43 @@ describe("WebSocketSource", () => {
     expect(got.mock.calls[0][0][0]).toEqual({ t: 2, value: 10, count: 8, windowS: 2 });
     expect(src.history("sub_1").map((s) => s.t)).toEqual([4, 6, 8]);
     expect(src.dropped("sub_1")).toBe(1);
+  });
+
+  it("asks for batches and reads them in order, one listener call per channel and batch", () => {
+    expect(withBatch("ws://h/api/drones/d/stream")).toBe("ws://h/api/drones/d/stream?batch=1");
+    expect(withBatch("ws://h/s?x=1")).toBe("ws://h/s?x=1&batch=1");
+    expect(withBatch("ws://h/s?batch=0")).toBe("ws://h/s?batch=0");
+    const urls: string[] = [];
+    const sock = new FakeSocket();
+    const src = new WebSocketSource({ url: "ws://127.0.0.1/x", connect: (u) => { urls.push(u); return sock; }, capacity: 10 });
+    expect(urls).toEqual(["ws://127.0.0.1/x?batch=1"]);
+    const a = vi.fn();
+    const b = vi.fn();
+    const link = vi.fn();
+    src.subscribe("a", a);
+    src.subscribe("b", b);
+    src.onLinkStatus(link);
+    sock.open();
+    const v = (sub: string, value: number, endS: number) =>
+      ({ type: "value", subscriber: sub, data: { value, start_ns: (endS - 1) * 1e9, end_ns: endS * 1e9 } });
+    sock.deliver({ type: "batch", messages: [
+      v("a", 1, 1), v("b", 10, 1), v("a", 2, 2), { type: "dropped", count: 3 },
+      { type: "status", data: { link: "connected" } }, v("a", 3, 3), null, 7,
+    ] });
+    expect(a).toHaveBeenCalledTimes(1);
+    expect(a.mock.calls[0][0].map((s: { value: number }) => s.value)).toEqual([1, 2, 3]);
+    expect(b).toHaveBeenCalledTimes(1);
+    expect(b.mock.calls[0][0].map((s: { value: number }) => s.value)).toEqual([10]);
+    expect(src.history("a").map((s) => s.t)).toEqual([1, 2, 3]);
+    expect(src.droppedByBackend).toBe(3);
+    expect(link).toHaveBeenCalledTimes(1);
+    // single messages still work, after the batch in each channel's history
+    sock.deliver(v("a", 4, 4));
+    expect(a).toHaveBeenCalledTimes(2);
+    expect(src.history("a").map((s) => s.value)).toEqual([1, 2, 3, 4]);
+    // a malformed batch is ignored
+    sock.deliver({ type: "batch", messages: "nope" });
+    expect(a).toHaveBeenCalledTimes(2);
   });
 
   it("spreads ALL windows over the window and counts backend drops", () => {

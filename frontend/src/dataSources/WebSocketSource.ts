@@ -12,6 +12,9 @@
  *        each as possibly absent, since the socket is not trusted.
  *   → {"op": "watch", "project": ID}   ← {"type": "saved", "project", "revision", "author", "message"}
  *   ← {"type": "dropped", "count": n}   the backend dropped n messages for a slow page
+ *   ← {"type": "batch", "messages": [m, …]}  several of the above in one frame, in order
+ *        (the socket asks for them with ?batch=1: one frame per wake-up of the backend's
+ *        sender instead of one per value; each channel's listeners get one call per batch)
  *   ← {"type": "error", "message": …}; subscribed, unsubscribed, pong: ignored
  * The socket factory is injected (tests pass a fake).
  */
@@ -65,6 +68,12 @@ export function toSamples(d: Partial<DeliveredValue>): Sample[] {
   return s ? [s] : [];
 }
 
+/** The stream URL asking the backend for batched frames (``batch=1``). */
+export function withBatch(url: string): string {
+  if (/[?&]batch=/.test(url)) return url;
+  return url + (url.includes("?") ? "&" : "?") + "batch=1";
+}
+
 function num(x: unknown): number | null {
   return x === null || x === undefined || !Number.isFinite(Number(x)) ? null : Number(x);
 }
@@ -97,7 +106,7 @@ export class WebSocketSource implements DataSource {
 
   constructor(opts: WebSocketSourceOptions) {
     this.capacity = opts.capacity ?? 2000;
-    this.socket = opts.connect(opts.url);
+    this.socket = opts.connect(withBatch(opts.url));
     this.socket.onopen = () => {
       this.setState("open");
       for (const channel of this.listeners.keys()) this.send({ op: "subscribe", subscriber: channel });
@@ -133,13 +142,29 @@ export class WebSocketSource implements DataSource {
     } catch {
       return;
     }
+    const samples = new Map<string, Sample[]>(); // per channel, in arrival order
+    if (msg.type === "batch" && Array.isArray(msg.messages)) {
+      for (const m of msg.messages) {
+        if (m && typeof m === "object") this.handle(m as Raw, samples);
+      }
+    } else {
+      this.handle(msg, samples);
+    }
+    samples.forEach((batch, channel) => {
+      const b = this.buffer(channel);
+      batch.forEach((s) => b.push(s));
+      this.listeners.get(channel)?.forEach((l) => l(batch));
+    });
+  }
+
+  private handle(msg: Raw, samples: Map<string, Sample[]>): void {
     if (msg.type === "value") {
       const channel = String(msg.subscriber ?? "");
       const batch = toSamples((msg.data ?? {}) as Partial<DeliveredValue>);
       if (!channel || batch.length === 0) return;
-      const b = this.buffer(channel);
-      batch.forEach((s) => b.push(s));
-      this.listeners.get(channel)?.forEach((l) => l(batch));
+      const list = samples.get(channel);
+      if (list) list.push(...batch);
+      else samples.set(channel, batch);
     } else if (msg.type === "status") {
       const status = toLinkStatus((msg.data ?? {}) as Partial<SubBrokerStatus>);
       this.linkListeners.forEach((l) => l(status));

@@ -24,17 +24,21 @@ All deviations are integer microseconds (periods are whole microseconds).
 
 from __future__ import annotations
 
+from bisect import bisect_right
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
 from functools import lru_cache
 from math import lcm
+from typing import TYPE_CHECKING
 
-import numpy as np
-import numpy.typing as npt
 from modd_model.numbers import MICROS_PER_SECOND, fraction_to_decimal
 
-IntArray = npt.NDArray[np.int64]
+if TYPE_CHECKING:  # numpy is imported only for models past SMALL_CANDIDATES
+    import numpy as np
+    import numpy.typing as npt
+
+    IntArray = npt.NDArray[np.int64]
 
 
 @dataclass(frozen=True)
@@ -151,6 +155,8 @@ def topic_table(
 ) -> tuple[IntArray, IntArray]:
     """S(n) and M(n) for n = lo..hi (default 1..max_buffer; index n - lo): the
     sum and the largest of |ps_j - n * pm| over the topic's subscriptions."""
+    import numpy as np
+
     hi = max_buffer if hi is None else hi
     x = np.arange(lo, hi + 1, dtype=np.int64) * pm_us
     if not periods_us:
@@ -176,6 +182,8 @@ class _Front:
 
 
 def _front(s: IntArray, m: IntArray, allowed: npt.NDArray[np.bool_], lo: int) -> _Front:
+    import numpy as np
+
     n = np.flatnonzero(allowed).astype(np.int64) + lo
     s, m = s[allowed], m[allowed]
     order = np.lexsort((n, s, m))
@@ -191,7 +199,8 @@ def _seconds(us: int) -> str:
 
 
 def _explain(
-    topic: str, subs: Sequence[Subscription], pm_us: int, m: IntArray, cap_us: int, first_n: int
+    topic: str, subs: Sequence[Subscription], pm_us: int, m: IntArray | Sequence[int],
+    cap_us: int, first_n: int
 ) -> str:
     def sec(us: int | Fraction) -> str:
         if isinstance(us, int):
@@ -208,7 +217,7 @@ def _explain(
             f"least {sec(Fraction(hi.period_us - lo.period_us, 2))} more or less than its period, "
             f"over the limit 3 x PING = {cap}"
         )
-    i = int(np.argmin(m))
+    i = int(m.argmin()) if hasattr(m, "argmin") else min(range(len(m)), key=m.__getitem__)
     best = i + first_n - 1
     return (
         f"with a publication period of {sec(pm_us)} the best buffer size n = {best + 1} "
@@ -234,16 +243,9 @@ def _fronts_both(
     ranges (each topic alone costs more in numpy's per-call overhead than
     in arithmetic); the results are those of :func:`topic_table` and
     :func:`_front` topic by topic."""
-    rows: list[tuple[int, str, int, list[Subscription], int, int]] = []
-    for i, (topic, pm_us, subs) in enumerate(
-        zip(problem.topics, problem.publication_us, problem.periods_by_topic(), strict=True)
-    ):
-        if not subs:
-            continue
-        lo, hi = candidate_range([x.period_us for x in subs], pm_us, problem.max_buffer)
-        if hi - lo + 1 > CANDIDATE_LIMIT:
-            raise BufferTooLarge(topic, [x.name for x in subs], hi - lo + 1)
-        rows.append((i, topic, pm_us, subs, lo, hi))
+    import numpy as np
+
+    rows = _rows(problem)
     fronts: list[_Front | None] = [None] * len(problem.topics)
     relaxed: list[_Front | None] = [None] * len(problem.topics)
     infeasible: list[Infeasibility] = []
@@ -276,6 +278,31 @@ def _fronts_both(
     return fronts, infeasible, relaxed
 
 
+Row = tuple[int, str, int, list[Subscription], int, int]
+
+
+def _rows(problem: BufferProblem) -> list[Row]:
+    """(topic index, topic, pm µs, its subscriptions, lo, hi) of every
+    subscribed topic; BufferTooLarge past :data:`CANDIDATE_LIMIT`."""
+    rows: list[Row] = []
+    for i, (topic, pm_us, subs) in enumerate(
+        zip(problem.topics, problem.publication_us, problem.periods_by_topic(), strict=True)
+    ):
+        if not subs:
+            continue
+        lo, hi = candidate_range([x.period_us for x in subs], pm_us, problem.max_buffer)
+        if hi - lo + 1 > CANDIDATE_LIMIT:
+            raise BufferTooLarge(topic, [x.name for x in subs], hi - lo + 1)
+        rows.append((i, topic, pm_us, subs, lo, hi))
+    return rows
+
+
+#: Candidate sizes (all topics together) up to which the sizes are computed
+#: in plain Python: numpy's import (~0.3 s of CPU) is not worth it for a
+#: small model (``modd plan`` of the paper's scenarios starts faster). Both
+#: ways give the same sizes (tests/plan/test_buffers_oracle.py runs both).
+SMALL_CANDIDATES = 4096
+
 #: Largest candidate value (µs) and table count the batched computation's
 #: encodings keep inside int64; beyond, topics are computed one by one.
 _BATCH_VALUE_BITS = 42
@@ -283,10 +310,12 @@ _BATCH_ROWS_BITS = 20
 
 
 def _tables(
-    problem: BufferProblem, rows: Sequence[tuple[int, str, int, list[Subscription], int, int]]
+    problem: BufferProblem, rows: Sequence[Row]
 ) -> tuple[IntArray, IntArray, IntArray, IntArray]:
     """S, M and n over every row's candidates, concatenated, with each row's
     start offset (and the total at the end)."""
+    import numpy as np
+
     lengths = np.array([hi - lo + 1 for *_, lo, hi in rows], dtype=np.int64)
     starts = np.concatenate(([0], np.cumsum(lengths)))
     big_ps = max(max(x.period_us for x in r[3]) for r in rows)
@@ -331,6 +360,8 @@ def _segment_fronts(
     tables: tuple[IntArray, IntArray, IntArray, IntArray], allowed: npt.NDArray[np.bool_]
 ) -> list[_Front | None]:
     """:func:`_front` of every row (None for a row with nothing allowed)."""
+    import numpy as np
+
     s_all, m_all, n_all, starts = tables
     rows = len(starts) - 1
     seg_all = np.repeat(np.arange(rows, dtype=np.int64), np.diff(starts))
@@ -363,6 +394,8 @@ def _segment_fronts(
 
 def _best_w(fronts: Sequence[_Front], a: int, b: int) -> int:
     """The smallest w minimising a * sum_i min{S_i : M_i <= w} + b * w."""
+    import numpy as np
+
     w0 = max(int(f.m[0]) for f in fronts)
     f0 = sum(int(f.s[np.searchsorted(f.m, w0, side="right") - 1]) for f in fronts)
     ms = [f.m[1:][f.m[1:] > w0] for f in fronts]
@@ -385,6 +418,10 @@ def solve_exact(problem: BufferProblem) -> BufferSolution:
 
     When the cap makes it infeasible, returns the optimum with the cap lifted
     for the offending topics only, ``infeasible`` naming them."""
+    if sum(hi - lo + 1 for *_, lo, hi in _rows(problem)) <= SMALL_CANDIDATES:
+        return _solve_small(problem)
+    import numpy as np
+
     fronts, infeasible, relaxed = _fronts_both(problem)
     if infeasible:  # the optimum with the cap lifted for those topics
         fronts = relaxed
@@ -399,3 +436,65 @@ def solve_exact(problem: BufferProblem) -> BufferSolution:
     if infeasible:
         return BufferSolution(solution.sizes, solution.deviations_us, tuple(infeasible))
     return solution
+
+
+def _solve_small(problem: BufferProblem) -> BufferSolution:
+    """:func:`solve_exact` in plain Python, for small models (the same steps
+    on lists: tables, fronts, the sweep over w, the sizes)."""
+    fronts: list[tuple[list[int], list[int], list[int]] | None] = [None] * len(problem.topics)
+    infeasible: list[Infeasibility] = []
+    for i, topic, pm_us, subs, lo, hi in _rows(problem):
+        ps = [x.period_us for x in subs]
+        first, last = min(ps), max(ps)
+        xs = [n * pm_us for n in range(lo, hi + 1)]
+        m = [max(last - x, x - first) for x in xs]
+        s = ([0] * len(xs) if problem.alpha == 0
+             else [sum(abs(p - x) for p in ps) for x in xs])
+        cap = problem.cap_for(topic)
+        allowed = [k for k, mk in enumerate(m) if cap is None or mk <= cap]
+        if not allowed:
+            assert cap is not None
+            reason = _explain(topic, subs, pm_us, m, cap, lo)
+            infeasible.append(Infeasibility(topic, tuple(x.name for x in subs), reason))
+            allowed = list(range(len(m)))  # the cap lifted for this topic
+        fm: list[int] = []
+        fs: list[int] = []
+        fn: list[int] = []
+        for mk, sk, nk in sorted((m[k], s[k], lo + k) for k in allowed):
+            if not fs or sk < fs[-1]:
+                fm.append(mk)
+                fs.append(sk)
+                fn.append(nk)
+        fronts[i] = (fm, fs, fn)
+    d = lcm(problem.alpha.denominator, problem.beta.denominator)
+    a, b = int(problem.alpha * d), int(problem.beta * d)
+    used = [f for f in fronts if f is not None]
+    w = _best_w_small(used, a, b) if used else 0
+    sizes = [1 if f is None else f[2][bisect_right(f[0], w) - 1] for f in fronts]
+    solution = solution_from_sizes(problem, sizes)
+    if infeasible:
+        return BufferSolution(solution.sizes, solution.deviations_us, tuple(infeasible))
+    return solution
+
+
+def _best_w_small(fronts: Sequence[tuple[list[int], list[int], list[int]]], a: int, b: int
+                  ) -> int:
+    """:func:`_best_w` on lists."""
+    w0 = max(f[0][0] for f in fronts)
+    f0 = sum(f[1][bisect_right(f[0], w0) - 1] for f in fronts)
+    events: list[tuple[int, int]] = [
+        (fm[j], fs[j] - fs[j - 1]) for fm, fs, _ in fronts for j in range(1, len(fm))
+        if fm[j] > w0
+    ]
+    if not events:
+        return w0
+    events.sort(key=lambda e: e[0])  # stable, as the numpy sweep
+    total = f0
+    cands: list[tuple[int, int]] = []
+    for k, (mk, dk) in enumerate(events):
+        total += dk
+        if k + 1 == len(events) or events[k + 1][0] != mk:  # the last event at each w
+            cands.append((mk, total))
+    objective = [a * f + b * w for w, f in cands]
+    i = objective.index(min(objective))
+    return cands[i][0] if objective[i] < a * f0 + b * w0 else w0

@@ -54,7 +54,6 @@ from functools import cached_property, reduce
 from math import gcd, lcm, prod
 from typing import Any
 
-import numpy as np
 from modd_model.numbers import MICROS_PER_SECOND
 
 Slot = tuple[int, Fraction, list[int]]
@@ -98,7 +97,9 @@ def essential_periods(periods: Sequence[int]) -> list[int]:
     :class:`ScheduleTooLarge` past :data:`ESSENTIAL_LIMIT` of them."""
     distinct = sorted(set(periods))
     out: list[int] = []
-    if distinct and distinct[-1] < _INT64_SAFE:
+    if len(distinct) > 64 and distinct[-1] < _INT64_SAFE:  # numpy: only for many periods
+        import numpy as np
+
         rest = np.asarray(distinct, dtype=np.int64)
         while rest.size:
             p = int(rest[0])
@@ -210,6 +211,8 @@ def _unhit_inclusion_exclusion(numbers: Sequence[int], period: int) -> int:
 
 def _unhit_lattice(base: Sequence[int], numbers: Sequence[int]) -> int:
     """Dates in [1, prod b^a_b] divisible by none of ``numbers`` (the sieve)."""
+    import numpy as np
+
     top = {b: max(_valuation(r, b) for r in numbers) for b in base}
     # axes by modulus b^a ascending: the counts are contracted in that order,
     # in int64 while every partial sum stays below 2^62, then in Python ints

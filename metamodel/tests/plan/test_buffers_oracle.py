@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from fractions import Fraction
 
 import pytest
+from modd_plan import buffers
 from modd_plan.buffers import BufferProblem, BufferSolution, Subscription, solve_exact
 from modd_plan.milp import solve_milp
 
@@ -100,10 +101,40 @@ def test_random_problems_cover_the_interesting_cases() -> None:
     assert sum(len(p.topics) == 3 and len(p.subscriptions) >= 4 for p in problems) >= 30
 
 
+@pytest.mark.parametrize("way", ["python", "numpy"])
 @pytest.mark.parametrize("chunk", range(6))
-def test_exact_method_matches_brute_force(chunk: int) -> None:
+def test_exact_method_matches_brute_force(
+    chunk: int, way: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Both ways of the exact method: plain Python (small models) and the
+    batched numpy tables (forced here with a threshold of 0)."""
+    if way == "numpy":
+        monkeypatch.setattr(buffers, "SMALL_CANDIDATES", 0)
     for p in _problems(1, 300)[chunk * 50 : (chunk + 1) * 50]:
         _check(p, solve_exact(p))
+
+
+def test_both_ways_agree_on_larger_random_problems(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Beyond brute force: the plain-Python and numpy ways give the same
+    solution on problems of a few thousand candidates, caps and zero weights
+    included."""
+    rng = random.Random(11)
+    for _ in range(40):
+        topics = tuple(f"d.s.t{i}" for i in range(rng.randint(1, 12)))
+        p = BufferProblem(
+            topics=topics,
+            publication_us=tuple(rng.choice(PUB_US) for _ in topics),
+            subscriptions=tuple(Subscription(f"s{j}", rng.choice(topics), rng.choice(SUB_US))
+                                for j in range(rng.randint(0, 60))),
+            max_buffer=rng.choice([5, 50, 1000]),
+            cap_us=rng.choice(CAPS_US),
+            alpha=rng.choice(WEIGHTS),
+            beta=rng.choice(WEIGHTS),
+        )
+        monkeypatch.setattr(buffers, "SMALL_CANDIDATES", 10**9)
+        small = solve_exact(p)
+        monkeypatch.setattr(buffers, "SMALL_CANDIDATES", 0)
+        assert solve_exact(p) == small, p
 
 
 @pytest.mark.parametrize("chunk", range(4))

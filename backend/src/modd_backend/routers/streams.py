@@ -8,12 +8,16 @@ without the session cookie), ``{"op": "subscribe"|"unsubscribe", "subscriber": N
 ``{"op": "cancel", "subscriber": NAME}``, ``{"op": "ping"}``,
 ``{"op": "watch"|"unwatch", "project": ID}`` (saves of a project); an optional
 ``"id"`` is echoed. Server messages carry a ``type``: value, status, dropped,
-subscribed, unsubscribed, dynamic, pong, watching, unwatched, saved, error."""
+subscribed, unsubscribed, dynamic, pong, watching, unwatched, saved, error. A
+socket opened with ``?batch=1`` gets what is queued at each wake-up of its
+sender as one ``{"type": "batch", "messages": [...]}`` frame (in order; a lone
+message as itself)."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Path, WebSocket, WebSocketDisconnect
@@ -169,7 +173,8 @@ async def stream(websocket: WebSocket, drone: str) -> None:
     relay.start()
     watches = ProjectWatches(state.project_events, relay.queue.put)
     tasks: set[asyncio.Task[Any]] = {
-        asyncio.create_task(_send_loop(websocket, relay)),
+        asyncio.create_task(_send_loop(websocket, relay,
+                                       websocket.query_params.get("batch") == "1")),
         asyncio.create_task(_receive_loop(websocket, relay, state, user, watches)),
     }
     watcher = asyncio.create_task(_watch(state, token, (user.id, roles)))
@@ -243,14 +248,33 @@ async def _receive_loop(websocket: WebSocket, relay: StreamRelay, state: AppStat
         return
 
 
-async def _send_loop(websocket: WebSocket, relay: StreamRelay) -> None:
+#: Messages in one batched frame at most (the queue holds stream_queue_size).
+BATCH_LIMIT = 512
+
+
+def _dumps(message: Any) -> str:
+    return json.dumps(message, separators=(",", ":"), ensure_ascii=False)
+
+
+async def _send_loop(websocket: WebSocket, relay: StreamRelay, batched: bool = False) -> None:
+    """Everything queued since the last wake-up goes out in order: one frame
+    per message, or with ``?batch=1`` one ``{"type": "batch", "messages":
+    [...]}`` frame per wake-up (one JSON encoding, one compression and one
+    write for all the values of a slot instead of one each: the 20-drone
+    fleet's stream proxy spent its time there)."""
     while True:
         batch = await relay.queue.get_batch()
         dropped = relay.queue.take_dropped()
         if dropped:
-            await websocket.send_json({"type": "dropped", "count": dropped})
+            batch.insert(0, {"type": "dropped", "count": dropped})
+        if batched and len(batch) > 1:
+            for k in range(0, len(batch), BATCH_LIMIT):
+                await websocket.send_text(
+                    _dumps({"type": "batch", "messages": batch[k:k + BATCH_LIMIT]}))
+                await asyncio.sleep(0)
+            continue
         for item in batch:
-            await websocket.send_json(item)
+            await websocket.send_text(_dumps(item))
             await asyncio.sleep(0)  # writes do not suspend: let others run
 
 
