@@ -15,6 +15,7 @@
  * The socket factory is injected (tests pass a fake).
  */
 import { RingBuffer } from "./RingBuffer";
+import { archiveSpace } from "../core/archiveSpace";
 import type { ChannelListener, ConnectionState, DataSource, LinkStatus, Sample } from "./types";
 
 export interface SocketLike {
@@ -73,6 +74,7 @@ export function toLinkStatus(d: Raw): LinkStatus {
   const rtt = num(d.rtt_s);
   const last = num(d.last_data_ns);
   const now = num(d.time_ns);
+  const archive = archiveSpace(d.pubbroker as Record<string, unknown> | undefined);
   return {
     rttMs: rtt === null ? null : rtt * 1000,
     measuredBytesPerS: num(d.ip_bytes_in_per_s ?? d.bytes_in_per_s),
@@ -81,6 +83,7 @@ export function toLinkStatus(d: Raw): LinkStatus {
     connected: d.link === "connected" || d.link === "running" || d.link === "up",
     state: typeof d.link === "string" ? d.link : undefined,
     ...(typeof d.behind === "boolean" ? { behind: d.behind, lagS: num(d.lag_s) } : {}),
+    ...(archive ? { archive } : {}),
   };
 }
 

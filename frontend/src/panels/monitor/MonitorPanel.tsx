@@ -13,6 +13,7 @@ import { useServices } from "../../app/services";
 import type { ConnectionState, DataSource, LinkStatus } from "../../dataSources/types";
 import type { DynamicReply } from "../../api/types";
 import { LiveChart } from "./LiveChart";
+import { ArchiveSpaceNote } from "./ArchiveSpaceNote";
 
 function useStream(drone: string): { source: DataSource; state: ConnectionState; link: LinkStatus | null } {
   const { openStream } = useServices();
@@ -66,6 +67,7 @@ export default function MonitorPanel() {
           · measured {link.measuredBytesPerS === null ? "—" : formatRate(link.measuredBytesPerS)}
           {" "}vs planned {link.plannedBytesPerS === null ? "—" : formatRate(link.plannedBytesPerS)}
           {link.lastFrameAgeS !== null && <> · last frame {link.lastFrameAgeS.toFixed(1)} s ago</>}
+          {link.archive && <ArchiveSpaceNote space={link.archive} />}
           {link.behind && <strong className="behind" role="alert">
             {" "}· base station behind the link{link.lagS != null && ` by ${link.lagS.toFixed(1)} s`}
           </strong>}
