@@ -159,6 +159,15 @@ class Backend:
                 self.kill9()
 
 
+def mount_tmpfs(directory: Path, size_mb: int = 128) -> bool:
+    """Mount a small tmpfs on ``directory`` (root only; False when not possible)."""
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        return False
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size_mb}m,mode=0700", "tmpfs",
+                        str(directory)], capture_output=True, check=False)
+    return r.returncode == 0
+
+
 def rss_kib(pid: int) -> int | None:
     try:
         for line in Path(f"/proc/{pid}/status").read_text().splitlines():
@@ -174,6 +183,9 @@ class Soak:
         self.tmp, self.seconds = tmp, seconds
         self.link, self.ingress, self.zport = free_port(), free_port(), free_port()
         self.model = model_copy(tmp, "scenario1.modd")
+        self.archive = tmp / "archive"
+        self.archive.mkdir()
+        self.tmpfs = mount_tmpfs(self.archive)
         self.pb_count = 0
         self.pb = self.start_pb()
         self.proxy = Blackhole(self.link)
@@ -185,7 +197,8 @@ class Soak:
             raise RuntimeError("SubBroker did not start: " + self.sb.log())
         self.backend = Backend(tmp, f"tcp/127.0.0.1:{self.zport}")
         self.backend.start()
-        self.load = start_load(tmp, self.model, self.ingress, seconds + 5)
+        # publishers run until stopped (the schedule drifts when restarts are slow)
+        self.load = start_load(tmp, self.model, self.ingress, seconds * 4 + 600)
         self.events: list[str] = []
         self.rss: dict[str, list[tuple[float, int]]] = {"pubbroker": [], "subbroker": []}
         self.started = {"pubbroker": time.monotonic(), "subbroker": time.monotonic()}
@@ -229,6 +242,30 @@ class Soak:
         self.rss["subbroker"] = []
         self.started["subbroker"] = time.monotonic()
 
+    def disk_full(self) -> None:
+        """The archive's file system filled (a small tmpfs, as root) for 5 s."""
+        if not self.tmpfs:
+            self.note("disk full: skipped (needs root to mount a tmpfs)")
+            return
+        filler = self.archive / "filler.bin"
+        chunk = b"\0" * (1 << 20)
+        with filler.open("wb") as f:
+            try:
+                while True:
+                    f.write(chunk)
+                    f.flush()
+            except OSError:
+                pass
+        full_at = time.monotonic()
+        told = self.pb.wait_log("archive: write failed", 5)
+        self.note(f"disk full for 5 s (the PubBroker said so: {told}, after "
+                  f"{time.monotonic() - full_at:.2f} s)")
+        time.sleep(max(0.0, 5 - (time.monotonic() - full_at)))
+        with contextlib.suppress(OSError):
+            filler.unlink()
+        back = self.pb.wait_log("archive: writing again", 5)
+        self.note(f"space back; the PubBroker writes again: {back}")
+
     def kill_pubbroker(self) -> None:
         self.note("kill -9 PubBroker, restart (its open file is recovered)")
         self.pb.kill9()
@@ -236,8 +273,7 @@ class Soak:
         self.rss["pubbroker"] = []
         self.started["pubbroker"] = time.monotonic()
         self.load.stop()  # its connection died with the broker: a new publisher run
-        left = self.seconds - (time.monotonic() - self.t0) + 5
-        self.load = start_load(self.tmp, self.model, self.ingress, left,
+        self.load = start_load(self.tmp, self.model, self.ingress, self.seconds * 4 + 600,
                                tag=f"load{self.pb_count}", seed=self.pb_count)
 
     def kill_backend(self) -> None:
@@ -297,7 +333,8 @@ class Soak:
         schedule: list[tuple[float, Callable[[], None]]] = [
             (0.10, self.link_cut), (0.20, self.kill_subbroker),
             (0.30, self.deploy_and_kill_backend), (0.42, self.lying_publisher),
-            (0.50, self.flooding_publisher), (0.60, self.kill_pubbroker),
+            (0.50, self.flooding_publisher), (0.55, self.disk_full),
+            (0.60, self.kill_pubbroker),
             (0.72, self.link_stall), (0.80, self.kill_backend),
         ]
         for at, fault in schedule:
@@ -433,6 +470,8 @@ def main() -> int:
         failed += check_memory(soak)
         if a.keep:
             shutil.copytree(tmp, a.keep, dirs_exist_ok=True)
+        if soak.tmpfs:
+            subprocess.run(["umount", str(soak.archive)], check=False)
         for f in failed:
             print(f"soak: FAILED: {f}")
         print(f"soak: {len(soak.events)} faults in {a.seconds:g} s; "
