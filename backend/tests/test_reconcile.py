@@ -9,6 +9,7 @@ the backend waits for the answers; the oracle is the SubBroker's status."""
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import os
 import signal
@@ -100,10 +101,9 @@ def station(tmp_path: Path) -> Iterator[Station]:
 
 def _post_in_background(backend: Backend, path: str, body: dict[str, Any]) -> threading.Thread:
     def post() -> None:
-        try:
+        # the backend is killed while it waits: no answer is expected
+        with contextlib.suppress(httpx.TransportError):
             backend.call("POST", path, json=body)
-        except httpx.TransportError:
-            pass  # the backend is killed while it waits: no answer is expected
 
     t = threading.Thread(target=post, daemon=True)
     t.start()
