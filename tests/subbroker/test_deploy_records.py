@@ -3,8 +3,8 @@ items 5, 6 and 8), against the real PubBroker:
 
 - the status names the deployment that runs (project, revision, nonce, who,
   when) and is put at once when a CONFIG is acknowledged;
-- a deploy request sent again (same signed nonce) is answered ACKED and
-  applies nothing;
+- a deploy request sent again (same signed nonce) applies nothing, and the
+  refusal of the replay says it is the deployment running;
 - a deploy sent right after another (the PubBroker answers BUSY while the
   first waits for its switch date) is retried, not refused;
 - a model the SubBroker cannot plan within its budget is refused with a
@@ -98,13 +98,14 @@ def test_the_status_names_what_runs_and_a_restart_resumes_it_loudly(
         assert abs(meta["deployed_at_ns"] - time.time_ns()) < 60e9
         assert running["config_id"] == replies[0]["config_id"]
 
-        # the same signed request again: ACKED, nothing re-applied
+        # the same signed request again: a replay, refused, but told it is what runs
         accepted = pb.log().count("accepted")
         again = signed({"text": s2.read_text(), "format": "json", "project_id": 7,
                         "revision": 4, "deployed_by": "operator"})
         assert request(session, "modd/usv/deploy", again, timeout_s=15)["status"] == "ACKED"
         dup = request(session, "modd/usv/deploy", again, timeout_s=15)
-        assert dup["status"] == "ACKED" and dup.get("already_running") is True, dup
+        assert dup["status"] == "UNAUTHORISED" and dup.get("already_running") is True, dup
+        assert dup["deployment"]["revision"] == 4 and "replayed" in dup["reason"]
         time.sleep(0.3)
         assert pb.log().count("accepted") == accepted + 1
 

@@ -5,6 +5,7 @@ treat silence as failure."""
 
 from __future__ import annotations
 
+import json
 import threading
 import time
 from typing import Any
@@ -90,3 +91,44 @@ def test_nothing_listening_is_a_clear_error() -> None:
     where = f"tcp/127.0.0.1:{free_port()}"
     with pytest.raises(ValueError, match=f"cannot open a zenoh session \\(client, {where}\\)"):
         open_session(client_settings(where))
+
+
+def test_a_malformed_value_is_dropped_alone_and_the_rest_is_kept(pair: Any) -> None:
+    """Wrong types, over-deep JSON and a raising callback cost only themselves
+    (issue 23: one wrong value made dataframe() raise and lose everything)."""
+    server, port = pair
+    sub = modd.subscribe("usv", "sub_1", connect=f"tcp/127.0.0.1:{port}")
+    calls: list[int] = []
+
+    def fragile(v: DeliveredValue) -> None:
+        calls.append(v.slot)
+        if v.slot == 1:
+            raise RuntimeError("a bug in the user's callback")
+
+    cb = modd.subscribe("usv", "sub_1", fragile, connect=f"tcp/127.0.0.1:{port}")
+    time.sleep(0.3)
+    good = value(0).to_dict()
+    bad = [
+        {**good, "value": "3.5"},  # a string where a number goes
+        {**good, "value": {"x": 1}},
+        {**good, "start_ns": "soon"},
+        {**good, "count": 2.5},
+        {**good, "slot": True},
+    ]
+    server.put("modd/usv/sub/sub_1", value(0).to_json())
+    for b in bad:
+        server.put("modd/usv/sub/sub_1", json.dumps(b))
+    server.put("modd/usv/sub/sub_1", b'{"value":' + b"[" * 100_000 + b"]" * 100_000 + b"}")
+    for i in (1, 2):
+        server.put("modd/usv/sub/sub_1", value(i).to_json())
+    df = sub.dataframe(count=3, duration_s=3)
+    assert list(df["slot"]) == [0, 1, 2] and list(df["value"]) == [0.0, 0.5, 1.0]
+    assert sub.malformed == len(bad) + 1
+    deadline = time.monotonic() + 2
+    while len(calls) < 3 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert calls == [0, 1, 2]  # the callback's exception stopped nothing
+    sub.close()
+    cb.close()
+    with pytest.raises(ValueError, match="nested deeper than 8 levels at byte 16"):
+        DeliveredValue.from_json(b'{"value":' + b"[" * 9 + b"]" * 9 + b"}")

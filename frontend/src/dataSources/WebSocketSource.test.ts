@@ -174,3 +174,13 @@ describe("the contracts' vectors (contracts/vectors)", () => {
     }
   });
 });
+
+describe("toLinkStatus", () => {
+  it("carries the archive space the PubBroker reports", async () => {
+    const { toLinkStatus } = await import("./WebSocketSource");
+    const s = toLinkStatus({ link: "up", pubbroker: { disk_free_mb: 100, archive_rate_bps: 1e5, archive_state: 1 } });
+    expect(s.archive?.state).toBe("low");
+    expect(s.archive?.warn).toBe(true);
+    expect(s.archive?.hoursLeft).toBeCloseTo((100 * 1048576) / 1e5 / 3600, 6);
+  });
+});

@@ -20,6 +20,7 @@
  */
 import type { DeliveredValue, SubBrokerStatus } from "../core/contracts.gen";
 import { RingBuffer } from "./RingBuffer";
+import { archiveSpace } from "../core/archiveSpace";
 import type { ChannelListener, ConnectionState, DataSource, LinkStatus, Sample, SavedEvent } from "./types";
 
 export interface SocketLike {
@@ -83,6 +84,7 @@ export function toLinkStatus(d: Partial<SubBrokerStatus>): LinkStatus {
   const rtt = num(d.rtt_s);
   const last = num(d.last_data_ns);
   const now = num(d.time_ns);
+  const archive = archiveSpace(d.pubbroker as Record<string, unknown> | undefined);
   return {
     rttMs: rtt === null ? null : rtt * 1000,
     measuredBytesPerS: num(d.ip_bytes_in_per_s),
@@ -91,6 +93,7 @@ export function toLinkStatus(d: Partial<SubBrokerStatus>): LinkStatus {
     connected: d.link === "up",
     state: typeof d.link === "string" ? d.link : undefined,
     ...(typeof d.behind === "boolean" ? { behind: d.behind, lagS: num(d.lag_s) } : {}),
+    ...(archive ? { archive } : {}),
   };
 }
 

@@ -1,3 +1,4 @@
+import type { ArchiveSpace } from "../core/archiveSpace";
 /**
  * Live data behind one interface. Panels never open sockets: they get a
  * `DataSource` from the services context and subscribe to channels.
@@ -37,6 +38,8 @@ export interface LinkStatus {
   behind?: boolean;
   /** How much later than its best the SubBroker delivers (status' `lag_s`). */
   lagS?: number | null;
+  /** The on-board archive's space (core/archiveSpace.ts), once the PubBroker reported it. */
+  archive?: ArchiveSpace | null;
 }
 
 export type ConnectionState = "connecting" | "open" | "closed" | "error";

@@ -22,6 +22,7 @@ import { useLinkHealth } from "../../app/useLinkHealth";
 import type { DynamicReply } from "../../api/types";
 import { LiveChart } from "./LiveChart";
 import { keepSubscribed, useChartLayout } from "./useChartLayout";
+import { ArchiveSpaceNote } from "./ArchiveSpaceNote";
 
 export default function MonitorPanel() {
   const model = useModel();
@@ -85,6 +86,7 @@ export default function MonitorPanel() {
           · measured {link.measuredBytesPerS === null ? "—" : formatRate(link.measuredBytesPerS)}
           {" "}vs planned {link.plannedBytesPerS === null ? "—" : formatRate(link.plannedBytesPerS)}
           {health.sinceLastFrameS !== null && <> · last frame {formatAge(health.sinceLastFrameS)} ago</>}
+          {link.archive && <ArchiveSpaceNote space={link.archive} />}
           {link.behind && <strong className="behind" role="alert">
             {" "}· base station behind the link{link.lagS != null && ` by ${link.lagS.toFixed(1)} s`}
           </strong>}

@@ -66,14 +66,21 @@ class Subscription:
         self._sub = session.declare_subscriber(key, self._receive)
 
     def _receive(self, sample: zenoh.Sample) -> None:
+        """One payload: a malformed one is dropped alone and counted
+        (``malformed``), never raised into zenoh's thread nor kept."""
         try:
             value = DeliveredValue.from_json(sample.payload.to_bytes())
-        except ValueError as exc:
+        except ValueError as exc:  # json's errors and over-deep input are ValueErrors
             self.malformed += 1
-            log.warning("%s: malformed value skipped: %s", self.key, exc)
+            if self.malformed <= 10 or self.malformed % 1000 == 0:
+                log.warning("%s: malformed value dropped (%d so far): %s", self.key,
+                            self.malformed, exc)
             return
         if self._callback is not None:
-            self._callback(value)
+            try:
+                self._callback(value)
+            except Exception:  # the user's callback: reported, the subscription goes on
+                log.exception("%s: the callback raised", self.key)
             return
         while True:
             try:

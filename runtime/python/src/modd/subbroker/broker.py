@@ -377,7 +377,10 @@ class SubBroker:
 
     def _already_running(self, payload: bytes) -> dict[str, Any] | None:
         """The reply to a deploy request that is the one running (same signed
-        nonce, sent again by a workbench resuming it): ACKED, nothing re-applied."""
+        nonce, sent again by a workbench resuming it): nothing re-applied. A
+        replayed nonce stays refused (UNAUTHORISED), but the reply says it is
+        what runs (``already_running`` and the ACKED fields), so a resumed
+        deploy learns its outcome."""
         running = self._running
         if running is None or not running.meta.nonce:
             return None
@@ -391,7 +394,9 @@ class SubBroker:
         if not isinstance(sig, str) or not hmac.compare_digest(
                 sig, signature(self._deploy_key, request)):
             return None
-        return {**self._acked_reply(running, running.config, []), "already_running": True}
+        return {**self._acked_reply(running, running.config, []), "status": "UNAUTHORISED",
+                "reason": "the deploy request was already applied (replayed nonce): it is the "
+                "deployment running now", "already_running": True}
 
     def _verify(self, request: dict[str, Any]) -> str | None:
         refused = self._nonces.verify(self._deploy_key, request)

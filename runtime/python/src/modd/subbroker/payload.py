@@ -28,6 +28,46 @@ from modd_plan.windows import Value
 
 #: Version of the payload; a reader rejects a higher major version.
 PAYLOAD_VERSION = 1
+#: Nesting a delivered value may have (an ALL window is a list: depth 2).
+MAX_DEPTH = 8
+_TEXT = ("subscriber", "topic", "aggregation", "period_s", "unit")
+_INTS = ("config_id", "slot", "start_ns", "end_ns", "delivered_ns")
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _is_scalar(v: Any) -> bool:
+    return isinstance(v, int | float | bool)
+
+
+def json_depth_error(raw: bytes | str, limit: int = MAX_DEPTH) -> str | None:
+    """Where ``raw`` nests deeper than ``limit`` (byte offset), or None; the
+    check runs before parsing, so no input reaches the parser's recursion.
+
+    >>> json_depth_error(b'{"a":[[[1]]]}', 3)
+    'JSON nested deeper than 3 levels at byte 7'
+    """
+    data = raw.encode() if isinstance(raw, str) else raw
+    depth, in_string, escaped = 0, False, False
+    for i, c in enumerate(data):
+        if in_string:
+            if escaped:
+                escaped = False
+            elif c == 0x5C:  # backslash
+                escaped = True
+            elif c == 0x22:
+                in_string = False
+        elif c == 0x22:
+            in_string = True
+        elif c in (0x5B, 0x7B):
+            depth += 1
+            if depth > limit:
+                return f"JSON nested deeper than {limit} levels at byte {i}"
+        elif c in (0x5D, 0x7D):
+            depth -= 1
+    return None
 
 
 @dataclass(frozen=True)
@@ -77,6 +117,19 @@ class DeliveredValue:
         missing = [f.name for f in fields(cls) if f.name not in data and f.name != "backfilled"]
         if missing:
             raise ValueError(f"delivered value lacks {', '.join(missing)}")
+        for name in _TEXT:
+            if not isinstance(data[name], str):
+                raise ValueError(f"delivered value: {name} is {data[name]!r}, not a string")
+        for name in _INTS:
+            if not _is_int(data[name]):
+                raise ValueError(f"delivered value: {name} is {data[name]!r}, not an integer")
+        value, count = data["value"], data["count"]
+        if not (value is None or _is_scalar(value)
+                or (isinstance(value, list) and all(_is_scalar(x) for x in value))):
+            raise ValueError(f"delivered value: value is {str(value)[:80]}, not a number, a "
+                             "boolean, a list of them or null")
+        if count is not None and not _is_int(count):
+            raise ValueError(f"delivered value: count is {count!r}, not an integer or null")
         out = cls(**{f.name: data[f.name] for f in fields(cls) if f.name in data})
         if not isinstance(out.backfilled, bool):
             raise ValueError("delivered value: backfilled must be true or false")
@@ -84,6 +137,10 @@ class DeliveredValue:
 
     @classmethod
     def from_json(cls, raw: bytes | str) -> DeliveredValue:
+        """Parse one payload; ValueError (with where) for anything malformed,
+        over-deep JSON included (never a RecursionError)."""
+        if (deep := json_depth_error(raw)) is not None:
+            raise ValueError(deep)
         data = json.loads(raw)
         if not isinstance(data, dict):
             raise ValueError("a delivered value is a JSON object")
