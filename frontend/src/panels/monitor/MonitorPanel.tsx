@@ -13,6 +13,7 @@ import { useServices } from "../../app/services";
 import type { ConnectionState, DataSource, LinkStatus } from "../../dataSources/types";
 import type { DynamicReply } from "../../api/types";
 import { LiveChart } from "./LiveChart";
+import { FillGaps } from "./FillGaps";
 
 function useStream(drone: string): { source: DataSource; state: ConnectionState; link: LinkStatus | null } {
   const { openStream } = useServices();
@@ -80,6 +81,7 @@ export default function MonitorPanel() {
             <label key={s.name}><input type="checkbox" checked={watched.includes(s.name)} onChange={() => toggle(s.name)} />
               {s.name} <span className="muted">{s.aggregation} {s.periodS} s</span></label>
           ))}
+          {canEdit(role, "subscriber") && <FillGaps drone={drone} source={source} subscribers={watched} />}
           {canEdit(role, "subscriber") && (
             <form onSubmit={addDynamic} className="dynamic-form" aria-label="Dynamic subscription">
               <h3>Dynamic subscription</h3>
