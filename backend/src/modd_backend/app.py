@@ -38,6 +38,7 @@ from .routers import (
     models,
     plan,
     projects,
+    records,
     scene,
     streams,
     users,
@@ -62,6 +63,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     archives.router,
     scene.router,
     backfill.router,
+    records.router,
 )
 
 

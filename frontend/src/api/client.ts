@@ -96,6 +96,10 @@ export function createApi(opts: HttpOptions) {
     /** The MCAP file itself (a blob: downloads need the bearer token, so no plain link). */
     downloadArchive: (drone: string, file: string) =>
       http.request<Blob>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}`, { as: "blob" }),
+    /** The SubBroker's base-station records: every delivered value, live and backfilled. */
+    listRecords: (drone: string) => http.request<ArchiveFile[]>(`/api/drones/${drone}/records`),
+    downloadRecord: (drone: string, file: string) =>
+      http.request<Blob>(`/api/drones/${drone}/records/${encodeURIComponent(file)}`, { as: "blob" }),
     archiveCsv: (drone: string, file: string, topic: string, startNs?: number, endNs?: number) =>
       http.request<Blob>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}/csv`, { query: { topic, start_ns: startNs, end_ns: endNs }, as: "blob" }),
 

@@ -297,6 +297,8 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
         await files.locator("button.link").first().click();
         await page.getByRole("form", { name: "Plot an archived topic" }).getByRole("button", { name: "Plot" }).click();
         await expectText(page.locator(".archives-panel figcaption"), /usv\.accelerometer\.\w+: \d+ samples/, 15000);
+        // The base-station record of what was delivered, live and backfilled.
+        await expectText(page.getByRole("table", { name: "Base-station record files" }), /\.mcap/, 15000);
         await expand(true);
       }
       await page.waitForTimeout(500);

@@ -79,6 +79,7 @@ try {
     backendBin, "--host", "127.0.0.1", "--port", String(port), "--data", join(tmp, "data"),
     "--frontend", join(frontend, "dist"),
     "--archives", drone ? join(tmp, "drone", "archive") : join(tmp, "archives"),
+    "--records", drone ? join(tmp, "drone", "records") : join(tmp, "records"),
     ...(drone ? ["--zenoh-connect", zenoh, "--zenoh-credentials", join(creds, "backend.cred"),
       "--deploy-key", join(creds, "deploy.key")] : ["--no-zenoh"]),
   ], { cwd: repo, logFile: join(tmp, "backend.log"), env: { MODD_ADMIN_PASSWORD: PASSWORD } });

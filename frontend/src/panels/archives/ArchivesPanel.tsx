@@ -9,6 +9,7 @@ import "uplot/dist/uPlot.min.css";
 import { useModel } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
 import { usePanelData, LoadState } from "../usePanelData";
+import { BaseRecords } from "./BaseRecords";
 import { saveBlob } from "../saveBlob";
 import type { ArchiveFile, ArchiveSeries } from "../../api/types";
 
@@ -81,6 +82,7 @@ export default function ArchivesPanel() {
                 ))}
               </tbody>
             </table>
+            <BaseRecords drone={drone} />
           </div>
           <div>
             <form onSubmit={plot} className="archive-form" aria-label="Plot an archived topic">
