@@ -80,7 +80,7 @@ pids+=($!)
 
 modd-backend --host 127.0.0.1 --port "$PORT" --data "$DATA/backend" --zenoh-connect "$ZENOH" \
   --zenoh-credentials "$CREDS/backend.cred" --deploy-key "$CREDS/deploy.key" \
-  --frontend "$PWD/frontend/dist" --archives "$DATA/run/archive" \
+  --frontend "$PWD/frontend/dist" --archives "$DATA/run/archive" --records "$DATA/run/records" \
   --foxglove-port "$FOXGLOVE_PORT" --foxglove-replay-port "$REPLAY_PORT" >>"$DATA/backend.log" 2>&1 &
 pids+=($!)
 

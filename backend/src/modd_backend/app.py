@@ -42,6 +42,7 @@ from .routers import (
     models,
     plan,
     projects,
+    records,
     scene,
     streams,
     users,
@@ -70,6 +71,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     scene.router,
     scene.proxy,
     backfill.router,
+    records.router,
 )
 
 

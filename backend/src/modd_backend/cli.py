@@ -40,6 +40,8 @@ def parse_args(argv: list[str] | None = None) -> Settings:
     p.add_argument("--frontend", type=Path, default=Path("frontend/dist"),
                    help="built frontend to serve at / when it exists")
     p.add_argument("--archives", type=Path, help="archive directory (default DATA/archives)")
+    p.add_argument("--records", type=Path,
+                   help="base-station records directory (default DATA/records)")
     p.add_argument("--deploy-timeout", type=float, default=10.0, help="seconds")
     p.add_argument("--scene-port", type=int, default=0,
                    help="port of the 3D scene (viser); 0: any free port; -1: no scene")
@@ -79,6 +81,7 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         zenoh_enabled=not a.no_zenoh,
         frontend_dist=a.frontend,
         archive_dir=a.archives,
+        record_dir=a.records,
         deploy_timeout_s=a.deploy_timeout,
         initial_admin_password=password,
         allowed_hosts=tuple(a.allowed_host),

@@ -34,6 +34,7 @@ class Settings:
     zenoh_enabled: bool = True
     frontend_dist: Path | None = None
     archive_dir: Path | None = None
+    record_dir: Path | None = None  # the SubBrokers' base-station records, <record_dir>/<drone>/
     deploy_timeout_s: float = 10.0
     subscribe_timeout_s: float = 3.0
     stream_queue_size: int = 256
@@ -88,6 +89,10 @@ class Settings:
         if self.database_url:
             return self.database_url
         return f"sqlite:///{(self.data_dir / 'modd.sqlite3').as_posix()}"
+
+    @property
+    def effective_record_dir(self) -> Path:
+        return self.record_dir if self.record_dir is not None else self.data_dir / "records"
 
     @property
     def effective_archive_dir(self) -> Path:

@@ -9,7 +9,7 @@
 import type { ModdModel } from "../core/model.gen";
 import { Http, type HttpOptions } from "./http";
 import type {
-  ArchiveFile, ArchiveReplay, ArchiveSeries,
+  ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress,
   DeployedDiff, Deployment, DynamicReply, DynamicRequest,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, User, ValidateResult, Version,
 } from "./types";
@@ -83,6 +83,12 @@ export function createApi(opts: HttpOptions) {
       http.request<DynamicReply>(`/api/drones/${drone}/subscriptions`, { method: "POST", json: body }),
     cancelDynamic: (drone: string, subscriber: string) =>
       http.request<DynamicReply>(`/api/drones/${drone}/subscriptions/${subscriber}`, { method: "DELETE" }),
+    // --- backfill: fill what the link missed from the drone's archive
+    startBackfill: (drone: string, body: { subscriber: string; gaps?: boolean; from_ns?: number; to_ns?: number; rate_bps?: number }) =>
+      http.request<BackfillProgress>(`/api/drones/${drone}/backfill`, { method: "POST", json: body }),
+    backfillProgress: (drone: string, id: number) => http.request<BackfillProgress>(`/api/drones/${drone}/backfill/${id}`),
+    cancelBackfill: (drone: string, id: number) =>
+      http.request<BackfillProgress>(`/api/drones/${drone}/backfill/${id}`, { method: "DELETE" }),
     /** ws(s):// URL of a drone's stream; the session cookie authenticates it (never a token in the URL). */
     streamUrl: (drone: string, origin: string) => {
       const base = (opts.baseUrl || origin).replace(/^http/, "ws");
@@ -98,6 +104,10 @@ export function createApi(opts: HttpOptions) {
     /** The MCAP file itself (a blob: downloads need the bearer token, so no plain link). */
     downloadArchive: (drone: string, file: string) =>
       http.request<Blob>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}`, { as: "blob" }),
+    /** The SubBroker's base-station records: every delivered value, live and backfilled. */
+    listRecords: (drone: string) => http.request<ArchiveFile[]>(`/api/drones/${drone}/records`),
+    downloadRecord: (drone: string, file: string) =>
+      http.request<Blob>(`/api/drones/${drone}/records/${encodeURIComponent(file)}`, { as: "blob" }),
     archiveCsv: (drone: string, file: string, topic: string, startNs?: number, endNs?: number) =>
       http.request<Blob>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}/csv`, { query: { topic, start_ns: startNs, end_ns: endNs }, as: "blob" }),
 

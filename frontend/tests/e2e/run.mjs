@@ -85,6 +85,7 @@ try {
     "--frontend", join(frontend, "dist"),
     "--foxglove-port", String(foxglovePort), "--foxglove-replay-port", String(replayPort),
     "--archives", drone ? join(tmp, "drone", "archive") : join(tmp, "archives"),
+    "--records", drone ? join(tmp, "drone", "records") : join(tmp, "records"),
     ...(drone ? ["--zenoh-connect", zenoh, "--zenoh-credentials", join(creds, "backend.cred"),
       "--deploy-key", join(creds, "deploy.key")] : ["--no-zenoh"]),
   ], { cwd: repo, logFile: join(tmp, "backend.log"), env: { MODD_ADMIN_PASSWORD: PASSWORD } });

@@ -10,6 +10,7 @@ import "uplot/dist/uPlot.min.css";
 import { useModel } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
 import { usePanelData, LoadState } from "../usePanelData";
+import { BaseRecords } from "./BaseRecords";
 import { saveBlob } from "../saveBlob";
 import type { ArchiveFile, ArchiveReplay, ArchiveSeries } from "../../api/types";
 import { Playback } from "./Playback";
@@ -94,6 +95,7 @@ export default function ArchivesPanel() {
                 ))}
               </tbody>
             </table>
+            <BaseRecords drone={drone} />
           </div>
           <div>
             <form onSubmit={plot} className="archive-form" aria-label="Plot an archived topic">

@@ -174,7 +174,8 @@ def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
                                        logs / "pubbroker.log"))
     if station:
         sub = [str(bin_dir / "modd-subbroker"), "--config", str(configs / "subbroker.toml"),
-               "--credentials", str(args.credentials_dir)]
+               "--credentials", str(args.credentials_dir),
+               "--record-dir", str(workdir / "records")]  # the base-station record
         for endpoint in args.zenoh_listen or ():
             sub += ["--zenoh-listen", endpoint]
         for endpoint in args.zenoh_connect or ():

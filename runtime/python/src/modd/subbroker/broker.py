@@ -105,8 +105,9 @@ class SubBroker:
         self._workers = ThreadPoolExecutor(max_workers=4, thread_name_prefix="modd-query")
         self.delivered = 0
         # Backfill (docs/subbroker.md, "Backfill") and the base-station record of every delivery.
-        self.record = (BaseRecord(config.state_dir / "records", self.drone)
-                       if config.state_dir is not None else None)
+        records = config.record_dir or (config.state_dir / "records" if config.state_dir
+                                        else None)
+        self.record = BaseRecord(records, self.drone) if records is not None else None
         self.backfill = BackfillManager(self.link.send_frame, self._sinks)
         self.link.backfill_sink = self.backfill.on_frame
         self.link.on_up = self._link_up

@@ -15,6 +15,7 @@ import signal
 import sys
 import threading
 from dataclasses import replace
+from pathlib import Path
 from types import FrameType
 
 from ..zenoh_session import ZenohSettings
@@ -40,6 +41,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--credentials", metavar="DIR", default=None,
                    help="zenoh credentials and deploy key directory, made at first start "
                    "(default: <state_dir>/credentials; docs/security.md)")
+    p.add_argument("--record-dir", metavar="DIR", default=None,
+                   help="base-station MCAP record of every delivered value "
+                   "(default: <state_dir>/records; none without a state_dir)")
     p.add_argument("--no-tcp-delivery", action="store_true",
                    help="do not deliver to the subscribers' TCP endpoints")
     p.add_argument("--status-period", type=float, default=None, metavar="S",
@@ -81,6 +85,8 @@ def build_config(args: argparse.Namespace) -> SubBrokerConfig:
         delivery = replace(delivery, tcp=False)
     if args.status_period is not None:
         delivery = replace(delivery, status_period_s=args.status_period)
+    if args.record_dir:
+        cfg = replace(cfg, record_dir=Path(args.record_dir))
     return replace(cfg, link=link, zenoh=z, delivery=delivery,
                    resume=cfg.resume and not args.no_resume)
 

@@ -71,6 +71,7 @@ class SubBrokerConfig:
         default_factory=lambda: ZenohSettings(mode="router", listen=(DEFAULT_ENDPOINT,)))
     delivery: DeliveryOptions = field(default_factory=DeliveryOptions)
     state_dir: Path | None = None  # where a deployed model is kept across restarts
+    record_dir: Path | None = None  # base-station record (default <state_dir>/records)
     source: str = "<defaults>"
     #: Resume the deployment and dynamic subscriptions kept in state_dir (else
     #: run the configured model; ``modd-subbroker --no-resume``).
@@ -192,7 +193,7 @@ def load_config(path: str | Path) -> SubBrokerConfig:
         raise ConfigError(f"{path}: {exc.strerror}") from exc
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: {exc}") from exc
-    known = {"model", "drone", "state_dir", "link", "zenoh", "delivery"}
+    known = {"model", "drone", "state_dir", "record_dir", "link", "zenoh", "delivery"}
     for key in data:
         if key not in known:
             raise ConfigError(f"{path}: unknown key {key!r}; known: {', '.join(sorted(known))}")
@@ -225,5 +226,6 @@ def load_config(path: str | Path) -> SubBrokerConfig:
         zenoh=zenoh,
         delivery=delivery,
         state_dir=path.parent / str(state) if state else None,
+        record_dir=path.parent / str(data["record_dir"]) if data.get("record_dir") else None,
         source=str(path),
     )

@@ -20,11 +20,12 @@ import re
 import threading
 import time
 from pathlib import Path
-from typing import IO, Any
-
-from mcap.writer import CompressionType, Writer
+from typing import IO, TYPE_CHECKING, Any
 
 from .keys import sub_key
+
+if TYPE_CHECKING:
+    from mcap.writer import Writer
 
 log = logging.getLogger("modd.subbroker.record")
 
@@ -63,6 +64,8 @@ class BaseRecord:
             while self.path.exists():
                 self.path = directory / f"{_SAFE.sub('_', mission)}-{stamp}-{n}.mcap"
                 n += 1
+            from mcap.writer import CompressionType, Writer  # on first use: a light start-up
+
             self._file = self.path.open("wb")
             self._writer = Writer(self._file, compression=CompressionType.ZSTD)
             self._writer.start(profile="", library="modd-subbroker")
