@@ -7,7 +7,7 @@ import { MODEL_FILE_TYPES, modelFile } from "../core/modelFile";
 import { emptyModel } from "../core/templates";
 import { useServices } from "./services";
 
-export function ProjectsPage({ onOpen, user, onLogout }: { onOpen: (p: Project) => void; user: string; onLogout: () => void }) {
+export function ProjectsPage({ onOpen, user, onLogout, onUsers }: { onOpen: (p: Project) => void; user: string; onLogout: () => void; onUsers?: () => void }) {
   const { api } = useServices();
   const [projects, setProjects] = useState<Project[] | null>(null);
   const [error, setError] = useState<string | null>(null);
@@ -45,7 +45,7 @@ export function ProjectsPage({ onOpen, user, onLogout }: { onOpen: (p: Project) 
 
   return (
     <main className="projects">
-      <header className="projects-head"><h1>MoDD projects</h1><span>{user}</span><button onClick={onLogout}>Log out</button></header>
+      <header className="projects-head"><h1>MoDD projects</h1><span>{user}</span>{onUsers && <button onClick={onUsers}>Users and roles</button>}<button onClick={onLogout}>Log out</button></header>
       {error && <p className="error" role="alert">{error}</p>}
       {projects === null && !error && <p role="status">Loading projects…</p>}
       {projects && (

@@ -168,8 +168,10 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
         const apply = page.getByRole("button", { name: "Apply text to diagram" });
         await apply.waitFor();
         await page.waitForTimeout(400); // the text follows the diagram's unsaved edits
+        const validated = page.waitForResponse((r) => r.url().endsWith("/api/validate"));
         await apply.click();
-        await page.waitForTimeout(400);
+        await validated;
+        await page.waitForTimeout(200);
         const notice = page.locator(".notice");
         if (await notice.count()) throw new Error(`Apply of the unchanged text in the ${view} view: ${await notice.textContent()}`);
       }
@@ -240,6 +242,34 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await p.locator(".swagger-ui .opblock").first().waitFor();
       await p.close();
       if (foreign.length) throw new Error(`/docs asked the network for ${foreign.join(", ")}`);
+    }],
+
+    ["admin: users and roles in the browser — create, set roles, reset a password, delete", async () => {
+      await page.goto(baseUrl);
+      await page.getByRole("button", { name: "Users and roles" }).click();
+      const form = page.getByRole("form", { name: "New user" });
+      await form.getByLabel("User name").fill("bob");
+      await form.getByLabel("Password").fill("bob-password-1");
+      await form.getByLabel("scientist").uncheck();
+      await form.getByLabel("integrator").check();
+      await form.getByRole("button", { name: "Create user" }).click();
+      await expectText(page.getByRole("status"), /bob created/);
+      const users = page.getByRole("table", { name: "Users" });
+      await users.getByLabel("bob operator").check();
+      await expectText(page.getByRole("status"), /bob: roles saved/);
+      const bob = (await api("GET", "/api/users")).find((u) => u.username === "bob");
+      if (bob.roles.slice().sort().join(",") !== "integrator,operator") throw new Error(`bob's roles: ${bob.roles}`);
+      await shot(page, "users");
+      page.once("dialog", (d) => void d.accept("bob-password-2"));
+      await users.locator('tr[data-user="bob"]').getByRole("button", { name: "Reset password" }).click();
+      await expectText(page.getByRole("status"), /bob: password reset/);
+      await tokenClient(baseUrl, "bob", "bob-password-2"); // the new password works
+      page.once("dialog", (d) => void d.accept());
+      await users.locator('tr[data-user="bob"]').getByRole("button", { name: "Delete" }).click();
+      await expectText(page.getByRole("status"), /bob deleted/);
+      if ((await api("GET", "/api/users")).some((u) => u.username === "bob")) throw new Error("bob was not deleted");
+      await page.getByRole("button", { name: "Projects" }).click();
+      await page.getByRole("heading", { name: "MoDD projects" }).waitFor();
     }],
   ];
 }
