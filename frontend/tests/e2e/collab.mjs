@@ -271,6 +271,47 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await page.getByRole("button", { name: "Projects" }).click();
       await page.getByRole("heading", { name: "MoDD projects" }).waitFor();
     }],
+
+    ["diagram: auto-layout fits clear of the minimap, new nodes appear in view, names legible zoomed out", async () => {
+      await page.goto(`${baseUrl}/projects/${pid}/scientist/plan`);
+      await node(page, "drone").waitFor();
+      const overlap = (a, b) => a.x < b.x + b.width && b.x < a.x + a.width && a.y < b.y + b.height && b.y < a.y + a.height;
+      const underMinimap = async () => {
+        const mini = await page.locator(".react-flow__minimap").boundingBox();
+        const hit = [];
+        for (const n of await page.locator(".react-flow__node").all()) {
+          const b = await n.boundingBox();
+          if (b && overlap(b, mini)) hit.push(await n.getAttribute("data-id"));
+        }
+        return hit;
+      };
+      await page.getByRole("button", { name: "Auto-layout" }).click();
+      await page.waitForTimeout(900);
+      const hidden = await underMinimap();
+      if (hidden.length) throw new Error(`after auto-layout, under the minimap: ${hidden.join(", ")}`);
+      // zoomed in on a corner, a new subscriber still shows up where it can be seen
+      for (let i = 0; i < 4; i++) await page.locator(".react-flow__controls-zoomin").click();
+      await page.waitForTimeout(300);
+      const before = await page.locator(".react-flow__node").count();
+      await page.getByRole("navigation", { name: "Palette" }).getByRole("button", { name: "+ Subscriber" }).click();
+      await waitUntil(async () => (await page.locator(".react-flow__node").count()) === before + 1, 5000);
+      await page.waitForTimeout(500);
+      const fresh = page.locator(".react-flow__node.selected");
+      const canvas = await page.locator(".canvas").boundingBox();
+      const b = await fresh.boundingBox();
+      if (!b || b.x < canvas.x || b.y < canvas.y || b.x + b.width > canvas.x + canvas.width || b.y + b.height > canvas.y + canvas.height) {
+        throw new Error(`the new node is out of view: ${JSON.stringify(b)} in ${JSON.stringify(canvas)}`);
+      }
+      await page.keyboard.press("Control+z");
+      // zoomed far out: names only, larger
+      for (let i = 0; i < 8; i++) await page.locator(".react-flow__controls-zoomout").click();
+      await page.locator(".canvas.canvas-far").waitFor();
+      if (await page.locator(".react-flow__node .node-detail").first().isVisible()) throw new Error("details still shown zoomed out");
+      await page.getByRole("button", { name: "Zoom to fit" }).click();
+      await page.waitForTimeout(500);
+      const again = await underMinimap();
+      if (again.length) throw new Error(`after zoom to fit, under the minimap: ${again.join(", ")}`);
+    }],
   ];
 }
 
