@@ -7,4 +7,4 @@
 import type { FitViewOptions } from "@xyflow/react";
 
 export const FIT: FitViewOptions = { padding: { top: "24px", left: "24px", bottom: "24px", right: "240px" }, duration: 200 };
-export const FAR_ZOOM = 0.6;
+export const FAR_ZOOM = 0.45;

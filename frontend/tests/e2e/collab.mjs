@@ -312,6 +312,21 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       const again = await underMinimap();
       if (again.length) throw new Error(`after zoom to fit, under the minimap: ${again.join(", ")}`);
     }],
+
+    ["new project from a template, with a first step per role view", async () => {
+      await page.goto(baseUrl);
+      await page.getByLabel("Project name").fill("from template");
+      await page.getByLabel("Start from").selectOption("scenario1");
+      await page.getByRole("button", { name: "Create" }).click();
+      await node(page, "sub:sub_7").waitFor();
+      for (const [view, re] of [["System designer", /PubBroker/], ["Scientist", /Quick subscription/], ["Operator", /Deploy panel/]]) {
+        await page.getByRole("tab", { name: view, exact: true }).click();
+        const note = page.getByRole("note", { name: "First step" });
+        await expectText(note, re);
+        await note.getByRole("button", { name: "Got it" }).click();
+        if (await note.count()) throw new Error(`the ${view} first step stays after "Got it"`);
+      }
+    }],
   ];
 }
 
