@@ -7,6 +7,7 @@
  *   const { token, user } = await api.login("admin", "secret");
  */
 import type { ModdModel } from "../core/model.gen";
+import type { Role } from "../core/roles";
 import { Http, type HttpOptions } from "./http";
 import type {
   ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress,
@@ -32,6 +33,15 @@ export function createApi(opts: HttpOptions) {
       http.request<LoginResult>("/api/auth/login", { method: "POST", json: { username, password, session: "cookie" } }),
     logout: () => http.request<void>("/api/auth/logout", { method: "POST", as: "none" }),
     me: () => http.request<User & { csrf?: string | null }>("/api/auth/me"),
+
+    // --- users (admin)
+    listUsers: () => http.request<User[]>("/api/users"),
+    createUser: (username: string, password: string, roles: Role[]) =>
+      http.request<User>("/api/users", { method: "POST", json: { username, password, roles } }),
+    /** New roles and/or a new password (which ends the user's sessions). */
+    changeUser: (userId: number, change: { roles?: Role[]; password?: string }) =>
+      http.request<User>(`/api/users/${userId}`, { method: "PATCH", json: change }),
+    deleteUser: (userId: number) => http.request<void>(`/api/users/${userId}`, { method: "DELETE", as: "none" }),
 
     // --- projects
     listProjects: () => http.request<Project[]>("/api/projects"),

@@ -44,7 +44,7 @@ export interface HttpOptions {
 }
 
 export interface RequestOptions {
-  method?: "GET" | "POST" | "PUT" | "DELETE";
+  method?: "GET" | "POST" | "PUT" | "PATCH" | "DELETE";
   json?: unknown;
   text?: string;
   query?: Record<string, string | number | undefined>;

@@ -4,6 +4,7 @@ import type { Project } from "../api/types";
 import { LoginPage } from "./LoginPage";
 import { ProjectsPage } from "./ProjectsPage";
 import { Workbench } from "./Workbench";
+import { UsersPage } from "./UsersPage";
 import { useServices } from "./services";
 import type { Session } from "./session";
 import { goTo, parseRoute } from "./routes";
@@ -20,9 +21,14 @@ export function App({ initial, onSession }: Props) {
   // The address as the page was opened (a deep link): kept through the login.
   const [route, setRoute] = useState(() => parseRoute(window.location.pathname));
   const [routeError, setRouteError] = useState<string | null>(null);
+  const [usersPage, setUsersPage] = useState(() => window.location.pathname === "/users");
+  const showUsers = useCallback((on: boolean) => {
+    window.history.pushState(null, "", on ? "/users" : "/");
+    setUsersPage(on);
+  }, []);
 
   useEffect(() => {
-    const onPop = () => { setRoute(parseRoute(window.location.pathname)); };
+    const onPop = () => { setRoute(parseRoute(window.location.pathname)); setUsersPage(window.location.pathname === "/users"); };
     window.addEventListener("popstate", onPop);
     return () => window.removeEventListener("popstate", onPop);
   }, []);
@@ -58,7 +64,9 @@ export function App({ initial, onSession }: Props) {
   }, [api, onSession]);
 
   if (!session) return <LoginPage onLogin={login} />;
+  if (usersPage && session.user.roles.includes("admin")) return <UsersPage me={session.user} onBack={() => showUsers(false)} />;
   if (route.project !== null && project?.id !== route.project) return <main className="loading" role="status">Opening project {route.project}…</main>;
-  if (!project) return <>{routeError && <p className="error" role="alert">{routeError}</p>}<ProjectsPage user={session.user.username} onOpen={open} onLogout={logout} /></>;
+  if (!project) return <>{routeError && <p className="error" role="alert">{routeError}</p>}<ProjectsPage user={session.user.username} onOpen={open} onLogout={logout}
+    onUsers={session.user.roles.includes("admin") ? () => showUsers(true) : undefined} /></>;
   return <Workbench key={project.id} project={project} user={session.user} route={route} onLogout={logout} onProjects={toProjects} />;
 }

@@ -5,14 +5,16 @@ import type { Project } from "../api/types";
 import type { Diagnostic } from "../core/diagnostics";
 import { MODEL_FILE_TYPES, modelFile } from "../core/modelFile";
 import { emptyModel } from "../core/templates";
+import { PROJECT_TEMPLATES } from "./projectTemplates";
 import { useServices } from "./services";
 
-export function ProjectsPage({ onOpen, user, onLogout }: { onOpen: (p: Project) => void; user: string; onLogout: () => void }) {
+export function ProjectsPage({ onOpen, user, onLogout, onUsers }: { onOpen: (p: Project) => void; user: string; onLogout: () => void; onUsers?: () => void }) {
   const { api } = useServices();
   const [projects, setProjects] = useState<Project[] | null>(null);
   const [error, setError] = useState<string | null>(null);
   const [name, setName] = useState("");
   const [drone, setDrone] = useState("usv");
+  const [template, setTemplate] = useState<string>("empty");
   const [importNote, setImportNote] = useState<string | null>(null);
   const [importErrors, setImportErrors] = useState<Diagnostic[]>([]);
 
@@ -24,7 +26,8 @@ export function ProjectsPage({ onOpen, user, onLogout }: { onOpen: (p: Project) 
     e.preventDefault();
     setError(null);
     try {
-      onOpen(await api.createProject(name, emptyModel(drone), "empty project"));
+      const t = PROJECT_TEMPLATES.find((x) => x.id === template);
+      onOpen(t?.text ? await api.importProject(name, t.text, "modd") : await api.createProject(name, emptyModel(drone), "empty project"));
     } catch (err) {
       setError((err as Error).message);
     }
@@ -45,7 +48,7 @@ export function ProjectsPage({ onOpen, user, onLogout }: { onOpen: (p: Project) 
 
   return (
     <main className="projects">
-      <header className="projects-head"><h1>MoDD projects</h1><span>{user}</span><button onClick={onLogout}>Log out</button></header>
+      <header className="projects-head"><h1>MoDD projects</h1><span>{user}</span>{onUsers && <button onClick={onUsers}>Users and roles</button>}<button onClick={onLogout}>Log out</button></header>
       {error && <p className="error" role="alert">{error}</p>}
       {projects === null && !error && <p role="status">Loading projects…</p>}
       {projects && (
@@ -60,9 +63,12 @@ export function ProjectsPage({ onOpen, user, onLogout }: { onOpen: (p: Project) 
         </ul>
       )}
       <form className="new-project" onSubmit={create} aria-label="New project">
-        <h2>New empty project</h2>
+        <h2>New project</h2>
         <label>Project name<input value={name} onChange={(e) => setName(e.target.value)} required pattern="[A-Za-z0-9_][A-Za-z0-9_. \-]*" /></label>
-        <label>Drone name<input value={drone} onChange={(e) => setDrone(e.target.value)} required pattern="[A-Za-z_][A-Za-z0-9_]*" /></label>
+        <label>Start from<select value={template} onChange={(e) => setTemplate(e.target.value)}>
+          {PROJECT_TEMPLATES.map((t) => <option key={t.id} value={t.id}>{t.title}</option>)}
+        </select></label>
+        {template === "empty" && <label>Drone name<input value={drone} onChange={(e) => setDrone(e.target.value)} required pattern="[A-Za-z_][A-Za-z0-9_]*" /></label>}
         <button type="submit">Create</button>
       </form>
       <label className="import">Import a .modd, .collector (original MoDD tool) or JSON file

@@ -25,6 +25,7 @@ import { Notice } from "./Notice";
 import { ConflictBanner, DraftNotice, RemoteSaveNotice } from "./ConflictBanner";
 import { useProjectEvents } from "./useProjectEvents";
 import { useDrafts } from "./useDrafts";
+import { FirstStep } from "./FirstStep";
 import { readDraft, writeDraft } from "./drafts";
 import { goTo, type Route } from "./routes";
 import { sameValue } from "../core/merge";
@@ -105,6 +106,7 @@ export function Workbench({ project, user, onLogout, onProjects, route }: Props)
           <RemoteSaveNotice />
           <DraftNotice />
           <LinkBanner />
+          <FirstStep />
           <div className="main">
             <Palette />
             <div className="center">

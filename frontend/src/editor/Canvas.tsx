@@ -5,9 +5,9 @@
  * through the keyboard shortcuts (xyflow's own delete key is off, so the
  * model decides what can be removed).
  */
-import { useCallback, useEffect, useState } from "react";
+import { useCallback, useEffect, useRef, useState } from "react";
 import {
-  Background, Controls, MiniMap, ReactFlow, applyNodeChanges,
+  Background, Controls, MiniMap, ReactFlow, applyNodeChanges, useStore,
   type Connection, type Edge, type NodeChange, type OnSelectionChangeParams,
 } from "@xyflow/react";
 import { nodeTypes } from "./nodes/nodeTypes";
@@ -17,6 +17,8 @@ import { useEditorStore, useModel, useRole } from "./useEditor";
 import { useKeyboardShortcuts } from "./useKeyboardShortcuts";
 import { canConnect } from "../core/ops";
 import { canEditEdge } from "../core/roles";
+import { FAR_ZOOM, FIT } from "./fit";
+import { useRevealNew } from "./useRevealNew";
 
 const MINIMAP_COLORS: Record<string, string> = {
   drone: "#0f766e", sensor: "#7c3aed", topic: "#2563eb", publisher: "#b45309", subscriber: "#be185d",
@@ -30,6 +32,9 @@ export function Canvas() {
   const derived = useFlowElements();
   const [nodes, setNodes] = useState<ElementNode[]>(derived.nodes);
   useKeyboardShortcuts();
+  const box = useRef<HTMLDivElement>(null);
+  useRevealNew(box);
+  const far = useStore((s) => s.transform[2] < FAR_ZOOM);
 
   useEffect(() => {
     // Keep xyflow's measurements across re-derivations of the nodes.
@@ -62,7 +67,7 @@ export function Canvas() {
   }, [model, role]);
 
   return (
-    <div className="canvas" aria-label="Model diagram">
+    <div className={`canvas${far ? " canvas-far" : ""}`} aria-label="Model diagram" ref={box}>
       <ReactFlow<ElementNode>
         nodes={nodes}
         edges={derived.edges}
@@ -74,6 +79,7 @@ export function Canvas() {
         isValidConnection={isValidConnection}
         deleteKeyCode={null}
         fitView
+        fitViewOptions={FIT}
         minZoom={0.2}
         proOptions={{ hideAttribution: true }}
       >

@@ -10,6 +10,7 @@ import { parseId } from "../core/ids";
 import { currentModel } from "../core/workbench";
 import { useEditor, useEditorStore, useRole, useSelection } from "./useEditor";
 import { useAutoLayout } from "./useAutoLayout";
+import { FIT } from "./fit";
 import { removeSelection } from "./selectionActions";
 import { QuickSubscribe } from "./QuickSubscribe";
 
@@ -60,7 +61,7 @@ export function Palette() {
       </div>
       <h2>View</h2>
       <button onClick={() => void layout.run()} disabled={layout.busy}>{layout.busy ? "Laying out…" : "Auto-layout"}</button>
-      <button onClick={() => void flow.fitView({ padding: 0.1, duration: 200 })}>Zoom to fit</button>
+      <button onClick={() => void flow.fitView(FIT)}>Zoom to fit</button>
     </nav>
   );
 }

@@ -5,6 +5,7 @@ import { modelToGraph } from "../core/graph";
 import { currentModel } from "../core/workbench";
 import { autoLayout } from "./autoLayout";
 import { useEditorStore } from "./useEditor";
+import { FIT } from "./fit";
 
 export function useAutoLayout(): { run: () => Promise<void>; busy: boolean } {
   const store = useEditorStore();
@@ -15,7 +16,7 @@ export function useAutoLayout(): { run: () => Promise<void>; busy: boolean } {
     try {
       const positions = await autoLayout(modelToGraph(currentModel(store.getState().wb)));
       store.dispatch({ type: "move", positions });
-      requestAnimationFrame(() => void flow.fitView({ padding: 0.1, duration: 200 }));
+      requestAnimationFrame(() => void flow.fitView(FIT));
     } finally {
       setBusy(false);
     }

@@ -168,8 +168,10 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
         const apply = page.getByRole("button", { name: "Apply text to diagram" });
         await apply.waitFor();
         await page.waitForTimeout(400); // the text follows the diagram's unsaved edits
+        const validated = page.waitForResponse((r) => r.url().endsWith("/api/validate"));
         await apply.click();
-        await page.waitForTimeout(400);
+        await validated;
+        await page.waitForTimeout(200);
         const notice = page.locator(".notice");
         if (await notice.count()) throw new Error(`Apply of the unchanged text in the ${view} view: ${await notice.textContent()}`);
       }
@@ -240,6 +242,90 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await p.locator(".swagger-ui .opblock").first().waitFor();
       await p.close();
       if (foreign.length) throw new Error(`/docs asked the network for ${foreign.join(", ")}`);
+    }],
+
+    ["admin: users and roles in the browser — create, set roles, reset a password, delete", async () => {
+      await page.goto(baseUrl);
+      await page.getByRole("button", { name: "Users and roles" }).click();
+      const form = page.getByRole("form", { name: "New user" });
+      await form.getByLabel("User name").fill("bob");
+      await form.getByLabel("Password").fill("bob-password-1");
+      await form.getByLabel("scientist").uncheck();
+      await form.getByLabel("integrator").check();
+      await form.getByRole("button", { name: "Create user" }).click();
+      await expectText(page.getByRole("status"), /bob created/);
+      const users = page.getByRole("table", { name: "Users" });
+      await users.getByLabel("bob operator").check();
+      await expectText(page.getByRole("status"), /bob: roles saved/);
+      const bob = (await api("GET", "/api/users")).find((u) => u.username === "bob");
+      if (bob.roles.slice().sort().join(",") !== "integrator,operator") throw new Error(`bob's roles: ${bob.roles}`);
+      await shot(page, "users");
+      page.once("dialog", (d) => void d.accept("bob-password-2"));
+      await users.locator('tr[data-user="bob"]').getByRole("button", { name: "Reset password" }).click();
+      await expectText(page.getByRole("status"), /bob: password reset/);
+      await tokenClient(baseUrl, "bob", "bob-password-2"); // the new password works
+      page.once("dialog", (d) => void d.accept());
+      await users.locator('tr[data-user="bob"]').getByRole("button", { name: "Delete" }).click();
+      await expectText(page.getByRole("status"), /bob deleted/);
+      if ((await api("GET", "/api/users")).some((u) => u.username === "bob")) throw new Error("bob was not deleted");
+      await page.getByRole("button", { name: "Projects" }).click();
+      await page.getByRole("heading", { name: "MoDD projects" }).waitFor();
+    }],
+
+    ["diagram: auto-layout fits clear of the minimap, new nodes appear in view, names legible zoomed out", async () => {
+      await page.goto(`${baseUrl}/projects/${pid}/scientist/plan`);
+      await node(page, "drone").waitFor();
+      const overlap = (a, b) => a.x < b.x + b.width && b.x < a.x + a.width && a.y < b.y + b.height && b.y < a.y + a.height;
+      const underMinimap = async () => {
+        const mini = await page.locator(".react-flow__minimap").boundingBox();
+        const hit = [];
+        for (const n of await page.locator(".react-flow__node").all()) {
+          const b = await n.boundingBox();
+          if (b && overlap(b, mini)) hit.push(await n.getAttribute("data-id"));
+        }
+        return hit;
+      };
+      await page.getByRole("button", { name: "Auto-layout" }).click();
+      await page.waitForTimeout(900);
+      const hidden = await underMinimap();
+      if (hidden.length) throw new Error(`after auto-layout, under the minimap: ${hidden.join(", ")}`);
+      // zoomed in on a corner, a new subscriber still shows up where it can be seen
+      for (let i = 0; i < 4; i++) await page.locator(".react-flow__controls-zoomin").click();
+      await page.waitForTimeout(300);
+      const before = await page.locator(".react-flow__node").count();
+      await page.getByRole("navigation", { name: "Palette" }).getByRole("button", { name: "+ Subscriber" }).click();
+      await waitUntil(async () => (await page.locator(".react-flow__node").count()) === before + 1, 5000);
+      await page.waitForTimeout(500);
+      const fresh = page.locator(".react-flow__node.selected");
+      const canvas = await page.locator(".canvas").boundingBox();
+      const b = await fresh.boundingBox();
+      if (!b || b.x < canvas.x || b.y < canvas.y || b.x + b.width > canvas.x + canvas.width || b.y + b.height > canvas.y + canvas.height) {
+        throw new Error(`the new node is out of view: ${JSON.stringify(b)} in ${JSON.stringify(canvas)}`);
+      }
+      await page.keyboard.press("Control+z");
+      // zoomed far out: names only, larger
+      for (let i = 0; i < 8; i++) await page.locator(".react-flow__controls-zoomout").click();
+      await page.locator(".canvas.canvas-far").waitFor();
+      if (await page.locator(".react-flow__node .node-detail").first().isVisible()) throw new Error("details still shown zoomed out");
+      await page.getByRole("button", { name: "Zoom to fit" }).click();
+      await page.waitForTimeout(500);
+      const again = await underMinimap();
+      if (again.length) throw new Error(`after zoom to fit, under the minimap: ${again.join(", ")}`);
+    }],
+
+    ["new project from a template, with a first step per role view", async () => {
+      await page.goto(baseUrl);
+      await page.getByLabel("Project name").fill("from template");
+      await page.getByLabel("Start from").selectOption("scenario1");
+      await page.getByRole("button", { name: "Create" }).click();
+      await node(page, "sub:sub_7").waitFor();
+      for (const [view, re] of [["System designer", /PubBroker/], ["Scientist", /Quick subscription/], ["Operator", /Deploy panel/]]) {
+        await page.getByRole("tab", { name: view, exact: true }).click();
+        const note = page.getByRole("note", { name: "First step" });
+        await expectText(note, re);
+        await note.getByRole("button", { name: "Got it" }).click();
+        if (await note.count()) throw new Error(`the ${view} first step stays after "Got it"`);
+      }
     }],
   ];
 }
