@@ -50,7 +50,8 @@ def world(tmp_path_factory: pytest.TempPathFactory, scenarios_dir: Path
 
 def _operations(spec: dict[str, Any], pid: int, uid: int) -> list[tuple[str, str, bool]]:
     values = {"project_id": str(pid), "user_id": str(uid), "drone": "usv",
-              "subscriber": "sub_1", "name": "x.mcap", "target": "cpp-driver"}
+              "subscriber": "sub_1", "name": "x.mcap", "target": "cpp-driver",
+              "job_id": "1", "revision": "1"}
     out = []
     for path, ops in spec["paths"].items():
         for method, op in ops.items():

@@ -26,8 +26,9 @@ def test_generated_parser_is_fresh() -> None:
 def _shape(node: Any) -> Any:
     """A tree as plain data: rule names, tokens with their positions."""
     if isinstance(node, str) and hasattr(node, "type"):  # a Token
-        return ("token", node.type, str(node), node.line, node.column, node.end_line,
-                node.end_column, node.start_pos, node.end_pos)
+        tok: Any = node
+        return ("token", tok.type, str(tok), tok.line, tok.column, tok.end_line,
+                tok.end_column, tok.start_pos, tok.end_pos)
     meta = node.meta
     return (str(node.data), [_shape(c) for c in node.children],
             (meta.line, meta.column, meta.end_line, meta.end_column) if not meta.empty else None)

@@ -6,15 +6,17 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, HTTPException, Path, Query
+from fastapi import APIRouter, Depends, HTTPException, Path, Query
 from fastapi.responses import FileResponse, Response
 from pydantic import BaseModel
 
 from ..archive_work import csv_text, in_worker, series
 from ..archives import archive_path, file_info, list_files
-from ..deps import Heavy, StateDep, UserDep
+from ..deps import Heavy, StateDep, UserDep, require
 from ..downloads import content_disposition
+from ..roles import Role
 from ..schemas import Responses
+from ..tables import User
 
 router = APIRouter(prefix="/api/drones/{drone}/archives", tags=["archives"])
 Drone = Annotated[str, Path(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64)]
@@ -40,6 +42,11 @@ class ArchiveOut(BaseModel):
     start_ns: int | None
     end_ns: int | None
     topics: list[TopicCount]
+
+
+#: Who may start or stop the replay server (it changes what a port serves):
+#: a user holding a role that works with the data.
+REPLAYERS = require(Role.scientist, Role.operator, Role.designer, Role.integrator)
 
 
 class ReplayIn(BaseModel):
@@ -110,7 +117,7 @@ async def export_csv(
     422: {"description": "nothing in the range, or more than a replay holds"}},
     dependencies=[Heavy])
 def start_replay(drone: Drone, name: Name, body: ReplayIn, state: StateDep,
-                 user: UserDep) -> ReplayOut:
+                 user: Annotated[User, Depends(REPLAYERS)]) -> ReplayOut:
     """Serves the range to Foxglove/Lichtblick with seek, play and pause
     (replacing the replay running now). A file still being written plays up
     to its last complete record."""
@@ -145,6 +152,6 @@ def current_replay(state: StateDep, _user: UserDep) -> ReplayOut | None:
 
 
 @replay_router.delete("", status_code=204)
-def stop_replay(state: StateDep, _user: UserDep) -> None:
+def stop_replay(state: StateDep, _user: Annotated[User, Depends(REPLAYERS)]) -> None:
     if state.replay is not None:
         state.replay.stop()
