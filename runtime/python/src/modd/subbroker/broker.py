@@ -30,12 +30,14 @@ from ..zenoh_session import open_session, secured
 from .config import SubBrokerConfig, resolve_key
 from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoints
 from .deploy import DeployRequest, parse_request
+from .dglink import DatagramLinkClient
 from .dynamic import DynamicSubscriptions
 from .fanout import FanOut
 from .keys import deploy_key, subscribe_key
-from .link import ConfigRejected, LinkClient, LinkDown
+from .link import ConfigRejected, LinkDown
 from .planning import config_for, plan_for
 from .status import StatusPublisher
+from .transport import link_client
 
 if TYPE_CHECKING:
     import zenoh
@@ -83,7 +85,7 @@ class SubBroker:
         self._lock = threading.RLock()
         self._deploy_lock = threading.Lock()
         self.dynamic = DynamicSubscriptions(self.drone, self._static_names)
-        self.link = LinkClient(config.endpoint, self._key, config.link, self, self._liveness)
+        self.link = link_client(config, self._key, self, self._liveness)
         self._zenoh: ZenohDelivery | None = None
         self._tcp: TcpDelivery | None = None
         self._status: StatusPublisher | None = None
@@ -126,7 +128,8 @@ class SubBroker:
         )
         self._status.start()
         self.link.start()
-        log.info("SubBroker for %s: link %s:%d", self.drone, *self.config.endpoint)
+        log.info("SubBroker for %s: link %s %s:%d", self.drone, self.config.transport,
+                 *self.config.endpoint)
 
     def stop(self) -> None:
         self.link.stop()
@@ -332,5 +335,10 @@ class SubBroker:
             "dynamic": self.dynamic.names(),
             "tcp": self._tcp.stats() if self._tcp else {},
             "pubbroker": dict(stats.pubbroker),
+            "transport": self.config.transport,
+            "link_budget": (running.plan.budget.to_json()
+                            if running is not None and running.plan.budget is not None else None),
+            "radio": (self.link.radio_status()
+                      if isinstance(self.link, DatagramLinkClient) else None),
         }
 
