@@ -37,6 +37,22 @@ export interface LinkStatus {
   behind?: boolean;
   /** How much later than its best the SubBroker delivers (status' `lag_s`). */
   lagS?: number | null;
+  /** Over udp or serial (status' `radio`): what the datagram link measures. */
+  radio?: RadioFigures;
+}
+
+/** A datagram link's figures (docs/subbroker.md, "Status": `radio`). */
+export interface RadioFigures {
+  transport: string;
+  /** Share of the slots that did not arrive the first time (0..1). */
+  loss: number | null;
+  retransmissions: number;
+  forged: number;
+  replayed: number;
+  malformed: number;
+  /** Measured bytes/s on the wire, base to drone, and the plan's. */
+  outBytesPerS: number | null;
+  plannedOutBytesPerS: number | null;
 }
 
 export type ConnectionState = "connecting" | "open" | "closed" | "error";

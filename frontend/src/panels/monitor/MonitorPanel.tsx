@@ -13,6 +13,7 @@ import { useServices } from "../../app/services";
 import type { ConnectionState, DataSource, LinkStatus } from "../../dataSources/types";
 import type { DynamicReply } from "../../api/types";
 import { LiveChart } from "./LiveChart";
+import { RadioLine } from "./RadioLine";
 
 function useStream(drone: string): { source: DataSource; state: ConnectionState; link: LinkStatus | null } {
   const { openStream } = useServices();
@@ -65,6 +66,7 @@ export default function MonitorPanel() {
           · RTT {link.rttMs === null ? "—" : `${link.rttMs.toFixed(1)} ms`}
           · measured {link.measuredBytesPerS === null ? "—" : formatRate(link.measuredBytesPerS)}
           {" "}vs planned {link.plannedBytesPerS === null ? "—" : formatRate(link.plannedBytesPerS)}
+          {link.radio && <RadioLine radio={link.radio} />}
           {link.lastFrameAgeS !== null && <> · last frame {link.lastFrameAgeS.toFixed(1)} s ago</>}
           {link.behind && <strong className="behind" role="alert">
             {" "}· base station behind the link{link.lagS != null && ` by ${link.lagS.toFixed(1)} s`}
