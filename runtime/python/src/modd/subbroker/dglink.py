@@ -30,6 +30,8 @@ from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass, field
 from typing import Any
 
+from modd_plan.schedule import Schedule
+
 from modd.link import codec
 from modd.link.auth import client_proof, server_proof
 from modd.link.datagram import (
@@ -43,6 +45,7 @@ from modd.link.datagram import (
     ReplayWindow,
     encode_control,
     encode_handshake,
+    encode_nack,
     session_key,
     verify_control,
 )
@@ -75,6 +78,7 @@ RETRY_S = 1.0  # handshake and CONFIG resent this often ...
 RETRIES = 10  # ... at most this many times
 KEEPALIVE_S = 30.0
 MAX_NACK_ASKS = 5
+OVERDUE_GRACE_S = 0.25  # beyond the learnt lateness, before an overdue datagram is asked for
 
 
 @dataclass
@@ -96,6 +100,14 @@ class _Run:
     config: Config
     epoch_ns: int
     receiver: DatagramReceiver
+    schedule: Schedule
+    # Smallest (arrival - date of a datagram's last slot), s: the link's latency plus the
+    # clocks' offset, learnt from the traffic, so that a lost datagram is asked for when
+    # it is overdue rather than when the next one arrives (docs/protocol.md, "NACK").
+    lateness: float | None = None
+    asked_slot: int = -1
+    asked_at: float = float("-inf")
+    asks: int = 0
 
 
 @dataclass
@@ -314,6 +326,7 @@ class DatagramLinkClient:
                 if nack is not None:
                     self.radio.nacks += 1
                     self._send(nack)
+                self._ask_overdue(run, now)
             self._resend_pending(now)
             silence = self._silence_s()
             silent = now - last
@@ -322,6 +335,27 @@ class DatagramLinkClient:
             if (silent > silence and now - pinged > silence) or now - self._last_sent > KEEPALIVE_S:
                 self._control(codec.encode(Ping(b"alive")))
                 pinged = now
+
+    def _ask_overdue(self, run: _Run, now: float) -> None:
+        """NACK the next expected slot once the datagram holding it is overdue
+        (sent at the latest its date + the accepted delay, arriving the learnt
+        lateness after): a lost datagram is asked for at once, not when the next
+        one shows the gap. Every accepted delay, at most MAX_NACK_ASKS times."""
+        nxt = run.receiver.gaps.next
+        if run.lateness is None or nxt < 0:
+            return
+        if nxt != run.asked_slot:
+            run.asked_slot, run.asks, run.asked_at = nxt, 0, float("-inf")
+        if run.asks >= MAX_NACK_ASKS or now - run.asked_at < self.delay_s:
+            return
+        due = (run.epoch_ns / 1e9 + run.schedule.slot_date_us(nxt) / 1e6 + self.delay_s
+               + run.lateness + OVERDUE_GRACE_S)
+        if time.time() < due:
+            return
+        run.asks += 1
+        run.asked_at = now
+        self.radio.nacks += 1
+        self._control(encode_nack([(nxt, 1)]))
 
     def _silence_s(self) -> float:
         return max(self._liveness_s(), 2 * self.delay_s + 1.0)
@@ -394,6 +428,9 @@ class DatagramLinkClient:
         self.radio.malformed += after[2] - before[2]
         if not slots:
             return False
+        last = run.epoch_ns / 1e9 + run.schedule.slot_date_us(slots[-1][0]) / 1e6
+        late = time.time() - last
+        run.lateness = late if run.lateness is None else min(run.lateness, late)
         self.stats.data_frames += 1
         self.stats.frames_in += 1
         self.stats.last_data_ns = time.time_ns()
@@ -450,7 +487,8 @@ class DatagramLinkClient:
         periods = [s.period_us for s in config.streams]
         receiver = DatagramReceiver(self._key, config.config_id, periods, config.kinds())
         receiver.gaps.max_asks = MAX_NACK_ASKS
-        self._runs = {config.config_id: _Run(config, ack.epoch_ns, receiver)}
+        self._runs = {config.config_id: _Run(config, ack.epoch_ns, receiver,
+                                             Schedule.from_periods_us(periods))}
         self._handler.on_config_acked(config, ack)
         self.stats.state = "up"
         pending.future.set_result(ack)
