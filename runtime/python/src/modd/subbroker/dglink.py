@@ -322,10 +322,12 @@ class DatagramLinkClient:
                     last = now
             self._sample_rates(now)
             for run in self._runs.values():
-                nack = run.receiver.nack(now, every=self.delay_s)
-                if nack is not None:
+                # the gaps' ranges go under this session's one control counter (the
+                # receiver's own NACK datagrams would reuse its numbers: dropped as replays)
+                ranges = run.receiver.gaps.due(now, self._ask_every())
+                if ranges:
                     self.radio.nacks += 1
-                    self._send(nack)
+                    self._control(encode_nack(ranges))
                 self._ask_overdue(run, now)
             self._resend_pending(now)
             silence = self._silence_s()
@@ -335,6 +337,13 @@ class DatagramLinkClient:
             if (silent > silence and now - pinged > silence) or now - self._last_sent > KEEPALIVE_S:
                 self._control(codec.encode(Ping(b"alive")))
                 pinged = now
+
+    def _ask_every(self) -> float:
+        """How long an ask waits for its answer before it is repeated: twice the
+        RTT and a margin, at most the accepted delay (a lost NACK or resend costs
+        a round trip, not a whole accepted delay)."""
+        rtt = self.stats.rtt_s if self.stats.rtt_s is not None else 0.2
+        return min(self.delay_s, max(0.3, 2 * rtt + 0.15))
 
     def _ask_overdue(self, run: _Run, now: float) -> None:
         """NACK the next expected slot once the datagram holding it is overdue
@@ -346,7 +355,7 @@ class DatagramLinkClient:
             return
         if nxt != run.asked_slot:
             run.asked_slot, run.asks, run.asked_at = nxt, 0, float("-inf")
-        if run.asks >= MAX_NACK_ASKS or now - run.asked_at < self.delay_s:
+        if run.asks >= MAX_NACK_ASKS or now - run.asked_at < self._ask_every():
             return
         due = (run.epoch_ns / 1e9 + run.schedule.slot_date_us(nxt) / 1e6 + self.delay_s
                + run.lateness + OVERDUE_GRACE_S)
