@@ -108,6 +108,7 @@ class _Run:
     asked_slot: int = -1
     asked_at: float = float("-inf")
     asks: int = 0
+    recovered: int = 0  # slots that came after an overdue NACK (no gap opened)
 
 
 @dataclass
@@ -184,7 +185,8 @@ class DatagramLinkClient:
         r = self.radio
         rx = [run.receiver for run in self._runs.values()]
         received = sum(x.stats.slots for x in rx)
-        recovered = sum(x.gaps.recovered for x in rx)
+        recovered = (sum(x.gaps.recovered for x in rx)
+                     + sum(run.recovered for run in self._runs.values()))
         lost = sum(x.gaps.lost for x in rx)
         missing = sum(x.gaps.missing for x in rx)
         seen = received + lost + missing
@@ -437,6 +439,8 @@ class DatagramLinkClient:
         self.radio.malformed += after[2] - before[2]
         if not slots:
             return False
+        if run.asks and slots[0][0] <= run.asked_slot < slots[0][0] + len(slots):
+            run.recovered += len(slots)  # the answer to an overdue NACK
         last = run.epoch_ns / 1e9 + run.schedule.slot_date_us(slots[-1][0]) / 1e6
         late = time.time() - last
         run.lateness = late if run.lateness is None else min(run.lateness, late)
