@@ -97,6 +97,14 @@ export interface SubBrokerStatus {
   behind_since_ns?: number | null;
   /** How many times it fell behind. */
   behind_episodes?: number;
+  /** What runs (docs/subbroker.md, "Status"): source (configured, deploy or kept), project_id, revision, nonce, deployed_by, deployed_at_ns, resumed_at_ns, running, differs_from_configured. */
+  deployment?: unknown;
+  /** The link's transport this SubBroker was started with ("": the model's; tcp, udp or serial). */
+  transport?: string;
+  /** Over udp and serial: the planner's figures for the declared transport (modd_plan.linkbudget: drone_to_base, base_to_drone, share, delays_s, ...), else null. */
+  link_budget?: object | null;
+  /** Over udp and serial: what the datagram link measures (wire bytes/s per direction, loss, retransmissions, forged, replayed, malformed, ...); null over tcp. */
+  radio?: unknown | null;
 }
 
 /** State of the SubBroker's link to the PubBroker. */

@@ -187,3 +187,20 @@ describe("toLinkStatus", () => {
     expect(s.archive?.hoursLeft).toBeCloseTo((100 * 1048576) / 1e5 / 3600, 6);
   });
 });
+
+describe("toLinkStatus over a datagram link", () => {
+  it("takes the measured and planned bytes/s of the declared transport and the radio's figures", () => {
+    const s = toLinkStatus({
+      link: "up", rtt_s: 0.08, ip_bytes_in_per_s: 300, time_ns: 2e9, last_data_ns: 1e9,
+      predicted_link_bytes_per_s: { drone_to_base: 292.5 } as SubBrokerStatus["predicted_link_bytes_per_s"],
+      link_budget: { drone_to_base: 100.8, base_to_drone: 1.4 },
+      radio: { transport: "udp", wire_bytes_in_per_s: 98.2, wire_bytes_out_per_s: 2.1, loss: 0.05,
+               retransmissions: 7, forged: 2, replayed: 1, malformed: 0 },
+    });
+    expect(s.measuredBytesPerS).toBe(98.2);
+    expect(s.plannedBytesPerS).toBe(100.8);
+    expect(s.radio).toEqual({ transport: "udp", loss: 0.05, retransmissions: 7, forged: 2, replayed: 1,
+                              malformed: 0, outBytesPerS: 2.1, plannedOutBytesPerS: 1.4 });
+    expect(toLinkStatus({ link: "up", ip_bytes_in_per_s: 300 }).radio).toBeUndefined();
+  });
+});

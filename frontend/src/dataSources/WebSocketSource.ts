@@ -82,19 +82,34 @@ function num(x: unknown): number | null {
 
 /** LinkStatus from the SubBroker's status document; the link is connected when its state is "up". */
 export function toLinkStatus(d: Partial<SubBrokerStatus>): LinkStatus {
+  // over udp/serial the plan of the declared transport, else the TCP prediction
+  const predicted = (d.link_budget ?? d.predicted_link_bytes_per_s) as Record<string, unknown> | null | undefined;
+  const radio = d.radio as Record<string, unknown> | null | undefined;
   const rtt = num(d.rtt_s);
   const last = num(d.last_data_ns);
   const now = num(d.time_ns);
   const archive = archiveSpace(d.pubbroker as Record<string, unknown> | undefined);
   return {
     rttMs: rtt === null ? null : rtt * 1000,
-    measuredBytesPerS: num(d.ip_bytes_in_per_s),
-    plannedBytesPerS: num(d.predicted_link_bytes_per_s?.drone_to_base),
+    measuredBytesPerS: num(radio ? radio.wire_bytes_in_per_s : d.ip_bytes_in_per_s),
+    plannedBytesPerS: predicted ? num(predicted.drone_to_base) : null,
     lastFrameAgeS: last !== null && now !== null ? (now - last) / 1e9 : null,
     connected: d.link === "up",
     state: typeof d.link === "string" ? d.link : undefined,
     ...(typeof d.behind === "boolean" ? { behind: d.behind, lagS: num(d.lag_s) } : {}),
     ...(archive ? { archive } : {}),
+    ...(radio ? {
+      radio: {
+        transport: String(radio.transport ?? ""),
+        loss: num(radio.loss),
+        retransmissions: num(radio.retransmissions) ?? 0,
+        forged: num(radio.forged) ?? 0,
+        replayed: num(radio.replayed) ?? 0,
+        malformed: num(radio.malformed) ?? 0,
+        outBytesPerS: num(radio.wire_bytes_out_per_s),
+        plannedOutBytesPerS: predicted ? num(predicted.base_to_drone) : null,
+      },
+    } : {}),
   };
 }
 

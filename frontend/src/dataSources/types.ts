@@ -42,6 +42,22 @@ export interface LinkStatus {
   lagS?: number | null;
   /** The on-board archive's space (core/archiveSpace.ts), once the PubBroker reported it. */
   archive?: ArchiveSpace | null;
+  /** Over udp or serial (status' `radio`): what the datagram link measures. */
+  radio?: RadioFigures;
+}
+
+/** A datagram link's figures (docs/subbroker.md, "Status": `radio`). */
+export interface RadioFigures {
+  transport: string;
+  /** Share of the slots that did not arrive the first time (0..1). */
+  loss: number | null;
+  retransmissions: number;
+  forged: number;
+  replayed: number;
+  malformed: number;
+  /** Measured bytes/s on the wire, base to drone, and the plan's. */
+  outBytesPerS: number | null;
+  plannedOutBytesPerS: number | null;
 }
 
 export type ConnectionState = "connecting" | "open" | "closed" | "error";

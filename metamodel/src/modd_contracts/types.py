@@ -65,6 +65,10 @@ class SubBrokerStatus(TypedDict):
     recv_backlog_bytes: NotRequired[int]
     behind_since_ns: NotRequired[int | None]
     behind_episodes: NotRequired[int]
+    deployment: NotRequired[Any]
+    transport: NotRequired[str]
+    link_budget: NotRequired[dict[str, Any] | None]
+    radio: NotRequired[Any | None]
 
 
 class PredictedLink(TypedDict):

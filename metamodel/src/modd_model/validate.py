@@ -319,11 +319,6 @@ def link_transport(doc: dict[str, Any]) -> Iterator[Diagnostic]:
     delay is positive; a serial frame fits the radio's packet."""
     link = doc.get("link", {})
     transport = link.get("transport", "tcp")
-    if transport != "tcp":
-        # The planner budgets udp and serial; the brokers do not carry them yet.
-        yield Diagnostic(f"the brokers of this version run the link over tcp: the {transport} "
-                         "transport is planned (link budget) but not yet carried",
-                         "/link/transport", "warning")
     if transport == "serial" and "device" not in link:
         yield Diagnostic("a serial link needs the radio's device, e.g. "
                          'device = "/dev/ttyUSB0"', "/link")

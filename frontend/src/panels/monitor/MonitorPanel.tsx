@@ -24,6 +24,7 @@ import { LiveChart } from "./LiveChart";
 import { keepSubscribed, useChartLayout } from "./useChartLayout";
 import { ArchiveSpaceNote } from "./ArchiveSpaceNote";
 import { FillGaps } from "./FillGaps";
+import { RadioLine } from "./RadioLine";
 
 export default function MonitorPanel() {
   const model = useModel();
@@ -86,6 +87,7 @@ export default function MonitorPanel() {
           · RTT {link.rttMs === null ? "—" : `${link.rttMs.toFixed(1)} ms`}
           · measured {link.measuredBytesPerS === null ? "—" : formatRate(link.measuredBytesPerS)}
           {" "}vs planned {link.plannedBytesPerS === null ? "—" : formatRate(link.plannedBytesPerS)}
+          {link.radio && <RadioLine radio={link.radio} />}
           {health.sinceLastFrameS !== null && <> · last frame {formatAge(health.sinceLastFrameS)} ago</>}
           {link.archive && <ArchiveSpaceNote space={link.archive} />}
           {link.behind && <strong className="behind" role="alert">

@@ -6,6 +6,7 @@ import json
 from typing import Any
 
 from modd_contracts.schema import load
+from modd_plan.linkbudget import LinkSettings
 
 from ..artifact import Artifact
 from ..context import Context
@@ -32,6 +33,23 @@ MAX_PAST_MS = _default("PubBrokerIngress", "max_past_ms")
 LOW_SPACE_MB = _default("PubBrokerArchive", "low_space_mb")
 
 
+def link_transport(model: dict[str, Any]) -> dict[str, Any]:
+    """The link's transport keys for the PubBroker (docs/pubbroker.md, "link"):
+    nothing for tcp (the default), else transport, packet, accepted delay and,
+    for serial, the on-board device and its baud rate."""
+    link = model.get("link", {})
+    transport = link.get("transport", "tcp")
+    if transport == "tcp":
+        return {}
+    settings = LinkSettings.of(model)
+    out: dict[str, Any] = {"transport": transport, "max_packet": settings.max_packet,
+                           "delay_ms": int(settings.accepted_delay * 1000)}
+    if transport == "serial":
+        out["device"] = link.get("droneDevice") or link["device"]
+        out["baud"] = link.get("baud", 57600)
+    return out
+
+
 def config(ctx: Context) -> dict[str, Any]:
     broker = ctx.model["pubBroker"]
     sizes = ctx.plan.buffer_sizes
@@ -42,7 +60,7 @@ def config(ctx: Context) -> dict[str, Any]:
     return {
         "name": ctx.drone,
         "link": {"host": broker["endpoint"]["host"], "port": broker["endpoint"]["port"],
-                 "key": ctx.key_ref},
+                 "key": ctx.key_ref, **link_transport(ctx.model)},
         "ingress": ingress,
         "archive": {"dir": broker["logPath"], "prefix": ctx.drone, "rotate_bytes": ROTATE_BYTES,
                     "rotate_s": ROTATE_S, "fsync": "chunk", "compression": "zstd",

@@ -20,11 +20,19 @@ ZENOH_LISTEN = "tcp/127.0.0.1:7447"
 def config(ctx: Context) -> dict[str, Any]:
     """The settings of subbroker.toml (docs/subbroker.md)."""
     endpoint = ctx.model["pubBroker"]["endpoint"]
+    link: dict[str, Any] = {"endpoint": f"{endpoint['host']}:{endpoint['port']}",
+                            "key": ctx.key_ref}
+    model_link = ctx.model.get("link", {})
+    if model_link.get("transport", "tcp") != "tcp":
+        link["transport"] = model_link["transport"]
+        if model_link["transport"] == "serial":
+            link["device"] = model_link["device"]
+            link["baud"] = model_link.get("baud", 57600)
     return {
         "model": "model.json",
         "drone": ctx.drone,
         "state_dir": ctx.model["subBroker"]["configPath"],
-        "link": {"endpoint": f"{endpoint['host']}:{endpoint['port']}", "key": ctx.key_ref},
+        "link": link,
         "zenoh": {"mode": "peer", "listen": [ZENOH_LISTEN]},
         "delivery": {"zenoh": True, "tcp": True},
     }

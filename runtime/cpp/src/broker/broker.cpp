@@ -491,6 +491,21 @@ bool Broker::send_data(std::vector<uint8_t>&& frame) {
   return true;
 }
 
+bool Broker::send_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
+                       std::vector<bool>&& presence) {
+  if (!out_.link_ready()) return false;
+  if (status_pending_) {
+    // STATUS goes in a CONTROL datagram of its own: DATA datagrams carry slots only.
+    std::vector<uint8_t> frame;
+    link::encode(frame, link::Status{status_counters()});
+    if (out_.link_write(std::move(frame))) status_pending_ = false;
+  }
+  size_t n = values.size();
+  if (!out_.link_slot(config_id, slot, date_ns, std::move(values), std::move(presence))) return false;
+  counters_.link_bytes_sent += n;
+  return true;
+}
+
 void Broker::status_due(int64_t now) {
   if (!status_pending_) status_due_since_ = now;
   status_pending_ = true;

@@ -81,7 +81,21 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   if (cfg.default_buffer_size < 1) c.fail("/default_buffer_size", "must be at least 1");
   if (!j.contains("link")) c.fail("/link", "missing (the link endpoint and key are required)");
   const json& l = j["link"];
-  check_keys(c, l, "/link", {"host", "port", "key", "handshake_timeout_ms"});
+  check_keys(c, l, "/link", {"host", "port", "key", "handshake_timeout_ms", "transport", "device", "baud",
+                              "max_packet", "delay_ms", "keepalive_timeout_s"});
+  get(c, l, "/link", "transport", cfg.link_transport);
+  if (cfg.link_transport != "tcp" && cfg.link_transport != "udp" && cfg.link_transport != "serial")
+    c.fail("/link/transport", "expected tcp, udp or serial");
+  get(c, l, "/link", "device", cfg.link_device);
+  if (cfg.link_transport == "serial" && cfg.link_device.empty())
+    c.fail("/link/device", "missing: a serial link needs the radio's device, e.g. /dev/ttyUSB0");
+  get(c, l, "/link", "baud", cfg.link_baud);
+  get(c, l, "/link", "max_packet", cfg.link_max_packet);
+  if (cfg.link_max_packet == 0) cfg.link_max_packet = cfg.link_transport == "serial" ? 252 : 1472;
+  if (cfg.link_max_packet < 32 || cfg.link_max_packet > 65507) c.fail("/link/max_packet", "expected 32..65507");
+  get(c, l, "/link", "delay_ms", cfg.link_delay_ms);
+  if (cfg.link_delay_ms > 3'600'000) c.fail("/link/delay_ms", "above one hour");
+  get(c, l, "/link", "keepalive_timeout_s", cfg.link_keepalive_timeout_s);
   get(c, l, "/link", "host", cfg.link_host);
   get(c, l, "/link", "port", cfg.link_port);
   get(c, l, "/link", "key", cfg.key_ref);

@@ -59,8 +59,35 @@ void Executor::advance(int64_t t, FrameSink& sink) {
   }
 }
 
+void Executor::fire_slot(FrameSink& sink, const link::Data& d, const std::vector<link::ValueKind>& kinds,
+                         int64_t date) {
+  // The values as a DATA frame lays them out, without the frame's header (length, type,
+  // seq8) and bitmap: the datagram carries its own header and one bitmap for all its slots.
+  link::Data body = d;
+  body.sync = false;
+  std::vector<uint8_t> frame;
+  link::encode_data(frame, body, kinds);
+  std::vector<bool> presence;
+  bool all = true;
+  for (const auto& v : d.values) {
+    presence.push_back(v.present);
+    all = all && v.present;
+  }
+  size_t len_bytes = 1;
+  while (frame[len_bytes - 1] & 0x80) ++len_bytes;
+  size_t skip = len_bytes + 2 + (all ? 0 : (d.values.size() + 7) / 8);
+  std::vector<uint8_t> values(frame.begin() + static_cast<std::ptrdiff_t>(skip), frame.end());
+  if (sink.send_slot(d.config_id, d.slot, date, std::move(values), std::move(presence))) {
+    ++counters_.frames_sent;
+    need_sync_ = false;
+  } else {
+    ++counters_.frames_dropped;
+  }
+}
+
 void Executor::fire(FrameSink& sink) {
   Active& a = *active_;
+  int64_t date = a.next_due;
   link::Slot slot = a.slots->next();
   a.next_due = a.epoch + static_cast<int64_t>(a.slots->peek_offset_us()) * 1000;
   ++counters_.slots_fired;
@@ -76,6 +103,11 @@ void Executor::fire(FrameSink& sink) {
     d.values.push_back(a.acc[id].take());
     kinds.push_back(a.kinds[id]);
     any = any || d.values.back().present;
+  }
+  if (sink.wants_slots()) {
+    if (!any) ++counters_.slots_empty;
+    fire_slot(sink, d, kinds, date);
+    return;
   }
   if (!any) {
     ++counters_.slots_empty;

@@ -75,7 +75,17 @@ Server::Server(const BrokerConfig& cfg, std::string key, Clock& clock)
   sigfd_ = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);
   if (sigfd_ < 0) sys_fail("signalfd");
   add_fd(sigfd_, Kind::Signal);
-  add_fd(tcp_listen(cfg_.link_host, cfg_.link_port, link_port_), Kind::LinkListen);
+  if (cfg_.link_transport == "tcp") {
+    add_fd(tcp_listen(cfg_.link_host, cfg_.link_port, link_port_), Kind::LinkListen);
+  } else {
+    DgramOptions o;
+    o.max_datagram = cfg_.link_transport == "serial" ? serial_capacity(cfg_.link_max_packet) : cfg_.link_max_packet;
+    o.delay_ns = int64_t{cfg_.link_delay_ms} * 1'000'000;
+    o.keepalive_timeout_ns = int64_t{cfg_.link_keepalive_timeout_s} * 1'000'000'000;
+    dlink_ = std::make_unique<DatagramLink>(key_, *broker_, *this, o, [] { return link::random_nonce(); });
+    open_dgram_port();
+    if (!port_) throw Error(ErrorCode::Io, "cannot open the link device " + cfg_.link_device);
+  }
   if (!cfg_.ingress_unix.empty()) add_fd(unix_listen(cfg_.ingress_unix), Kind::IngressUnixListen);
   if (cfg_.ingress_port) add_fd(tcp_listen(cfg_.ingress_host, cfg_.ingress_port, ingress_port_), Kind::IngressTcpListen);
   int64_t now = clock_.now_ns();
@@ -85,7 +95,8 @@ Server::Server(const BrokerConfig& cfg, std::string key, Clock& clock)
 }
 
 Server::~Server() {
-  for (auto& [fd, c] : conns_) ::close(fd);
+  for (auto& [fd, c] : conns_)
+    if (c.kind != Kind::Dgram) ::close(fd);  // the port closes its own
   if (!cfg_.ingress_unix.empty()) ::unlink(cfg_.ingress_unix.c_str());
   if (epfd_ >= 0) ::close(epfd_);
 }
@@ -101,7 +112,49 @@ void Server::add_fd(int fd, Kind kind, uint32_t events) {
   conns_[fd] = std::move(c);
 }
 
+void Server::open_dgram_port() {
+  try {
+    if (cfg_.link_transport == "udp")
+      port_ = open_udp(cfg_.link_host, cfg_.link_port, link_port_);
+    else
+      port_ = open_serial(cfg_.link_device, cfg_.link_baud, cfg_.link_max_packet);
+  } catch (const Error& e) {
+    if (cfg_.link_transport == "udp") throw;
+    log_line("link: %s (trying again in 1 s)", e.what());
+    port_.reset();
+    return;
+  }
+  add_fd(port_->fd(), Kind::Dgram);
+}
+
+void Server::on_dgram_readable() {
+  int64_t now = clock_.now_ns();
+  port_->read([&](std::span<const uint8_t> d) { dlink_->on_datagram(d, now); });
+  if (port_->broken()) {
+    log_line("link: %s went away; opening it again every second", port_->describe().c_str());
+    int fd = port_->fd();
+    epoll_ctl(epfd_, EPOLL_CTL_DEL, fd, nullptr);
+    conns_.erase(fd);
+    port_.reset();
+    port_retry_ns_ = now + 1'000'000'000;
+  }
+}
+
+void Server::send(std::vector<uint8_t>&& datagram, bool reply) {
+  if (port_) port_->send(std::move(datagram), reply);
+}
+
+void Server::adopt_source() {
+  if (port_) port_->adopt_source();
+}
+
+bool Server::link_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
+                       std::vector<bool>&& presence) {
+  return dlink_ && dlink_->add_slot(config_id, slot, date_ns, std::move(values), std::move(presence));
+}
+
 bool Server::link_ready() const {
+  if (dlink_) return dlink_->ready();
   if (active_link_ < 0) return false;
   auto it = conns_.find(active_link_);
   return it != conns_.end() && it->second.out.size() < kLinkBacklog;
@@ -113,6 +166,7 @@ size_t Server::link_backlog() const {
 }
 
 bool Server::link_write(std::vector<uint8_t>&& bytes) {
+  if (dlink_) return dlink_->send_frame(bytes);
   if (!link_ready()) return false;
   Conn& c = conns_[active_link_];
   c.out.insert(c.out.end(), bytes.begin(), bytes.end());
@@ -217,6 +271,14 @@ void Server::send_ingress_output(Conn& c) {
 void Server::timers(int64_t now) {
   broker_->tick(now);
   broker_->pump_backfill(now);
+  if (dlink_) {
+    dlink_->tick(now);  // after the slots due now were added: a full group leaves at its last slot's date
+    if (port_) port_->flush_pending();
+    if (!port_ && now >= port_retry_ns_) {
+      open_dgram_port();
+      port_retry_ns_ = now + 1'000'000'000;
+    }
+  }
   if (now >= next_flush_) {
     broker_->flush_buffers();
     next_flush_ = now + int64_t{cfg_.flush_interval_ms} * 1'000'000;
@@ -232,6 +294,7 @@ void Server::timers(int64_t now) {
   broker_->send_overdue_status(now);
   if (now >= next_log_) {
     log_line("counters: %s", broker_->log_summary().c_str());
+    if (dlink_) log_line("link: %s", dlink_->summary().c_str());
     next_log_ = now + int64_t{cfg_.log_period_s} * 1'000'000'000;
   }
   for (auto& [fd, c] : conns_)
@@ -245,6 +308,7 @@ void Server::timers(int64_t now) {
 
 int Server::timeout_ms(int64_t now) const {
   int64_t next = std::min({broker_->next_due_ns(), next_flush_, next_log_, next_status_, broker_->backfill_wake_ns(now)});
+  if (dlink_) next = std::min(next, dlink_->next_due_ns());
   for (const auto& [fd, c] : conns_)
     if (c.kind == Kind::Link && !c.link->ready()) next = std::min(next, c.deadline_ns);
   if (next <= now) return 0;
@@ -253,7 +317,8 @@ int Server::timeout_ms(int64_t now) const {
 }
 
 void Server::run() {
-  log_line("started: link %s:%u, ingress %s%s%s, archive %s", cfg_.link_host.c_str(), link_port_,
+  log_line("started: link %s %s:%u, ingress %s%s%s, archive %s",
+           port_ ? port_->describe().c_str() : "tcp", cfg_.link_host.c_str(), link_port_,
            cfg_.ingress_unix.c_str(), cfg_.ingress_port ? " tcp:" : "",
            cfg_.ingress_port ? std::to_string(ingress_port_).c_str() : "", cfg_.archive_dir.c_str());
   epoll_event events[64];
@@ -272,6 +337,9 @@ void Server::run() {
         }
         case Kind::LinkListen: case Kind::IngressUnixListen: case Kind::IngressTcpListen:
           accept_on(c);
+          break;
+        case Kind::Dgram:
+          on_dgram_readable();
           break;
         default:
           if (events[i].events & EPOLLOUT) flush_out(c);

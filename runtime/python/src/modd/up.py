@@ -51,6 +51,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from . import uplink
 from .ports import free_port
 from .zenoh_auth import CredentialStore, private_dir
 from .zenoh_session import DEFAULT_ENDPOINT
@@ -108,6 +109,8 @@ class Stack:
 
     def start(self, env: dict[str, str]) -> None:
         for p in self.processes:
+            if p.popen is not None:
+                continue  # started before the others (the radio emulator)
             p.start(env)
             assert p.popen is not None
             print(f"modd up: started {p.name} (pid {p.popen.pid}), log {p.log}", flush=True)
@@ -121,12 +124,15 @@ class Stack:
             print(f"modd up: stopped {p.name} (exit {code})", flush=True)
 
 
-def prepare(model: dict[str, Any], workdir: Path) -> tuple[dict[str, Any], Path]:
-    """The model as run locally (archive and config dirs under workdir) and the
-    directory of the generated operator configs."""
+def prepare(model: dict[str, Any], workdir: Path, transport: str | None = None,
+            devices: tuple[str, str] | None = None) -> tuple[dict[str, Any], Path]:
+    """The model as run locally (archive and config dirs under workdir, the
+    run's transport) and the directory of the generated operator configs."""
     from modd_gen import generate, write_artifacts
 
     local = json.loads(json.dumps(model))
+    if transport is not None:
+        uplink.apply(local, transport, devices)
     local["pubBroker"]["logPath"] = str(workdir / "archive")
     local["pubBroker"].setdefault("ingress", {})["unixSocket"] = str(workdir / "ingress.sock")
     local["subBroker"]["configPath"] = str(workdir / "state")
@@ -182,6 +188,8 @@ def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
             sub += ["--zenoh-connect", endpoint]
         if not args.resume:
             sub.append("--no-resume")  # what runs is MODEL, not an earlier run's deployment
+        if getattr(args, "relay", None):
+            sub += ["--link", "{}:{}".format(*args.relay)]
         stack.processes.append(Process("subbroker", sub, logs / "subbroker.log"))
     if args.simulate and drone:
         stack.processes += simulation(model, configs / "model.json", bin_dir, logs)
@@ -203,7 +211,12 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(f"modd up: {exc}", file=sys.stderr)
         return 1
-    local, configs = prepare(model, workdir)
+    try:
+        radio, devices = start_radio(args, model, workdir)
+    except (uplink.LinkSetupError, FileNotFoundError) as exc:
+        print(f"modd up: {exc}", file=sys.stderr)
+        return 1
+    local, configs = prepare(model, workdir, args.transport, devices)
     if args.part != "drone":
         print(kept_note(workdir / "state", args.resume), end="", flush=True)
     env = dict(os.environ)
@@ -220,7 +233,11 @@ def run(args: argparse.Namespace) -> int:
         stack = build_stack(args, local, workdir, configs)
     except FileNotFoundError as exc:
         print(f"modd up: {exc}", file=sys.stderr)
+        if radio is not None:
+            radio.stop()
         return 1
+    if radio is not None:
+        stack.processes.insert(0, radio)  # stopped last
     stopping = False
 
     def on_signal(_sig: int, _frame: object) -> None:
@@ -263,6 +280,36 @@ def kept_note(state: Path, resume: bool) -> str:
                 f"({kept[1].describe()}), not MODEL\n")
     return (f"modd up: running MODEL; the deployment kept in {where} ({kept[1].describe()}) "
             "is not resumed (--resume resumes it)\n")
+def start_radio(args: argparse.Namespace, model: dict[str, Any], workdir: Path
+                ) -> tuple[Process | None, tuple[str, str] | None]:
+    """Check --link/--radio; start the emulator when the run needs one (serial
+    with both parts here: always, it makes the pseudo-terminals; udp: with
+    --radio). Returns it (started) and, over serial, the (base, drone) devices."""
+    args.relay = None
+    transport = uplink.check(args.link, args.radio, model)
+    args.transport = transport if args.link or args.radio else None  # None: the model's own
+    needs = (transport == "serial" and args.part == "all") or (
+        transport == "udp" and args.radio is not None)
+    if args.radio is not None and args.part != "all":
+        raise uplink.LinkSetupError("--radio needs both ends of the link here (--part all)")
+    if not needs:
+        return None, None
+    ep = model["pubBroker"]["endpoint"]
+    argv, args.relay = uplink.radio_argv(Path(sys.executable).parent, transport, args.radio,
+                                         (str(ep["host"]), int(ep["port"])))
+    radio = Process("radio", argv, workdir / "logs" / "radio.log")
+    if radio.log.exists():
+        radio.log.unlink()  # the devices line of an earlier run must not be read
+    radio.start(dict(os.environ))
+    assert radio.popen is not None
+    print(f"modd up: started radio (pid {radio.popen.pid}), log {radio.log}", flush=True)
+    if transport != "serial":
+        return radio, None
+    try:
+        return radio, uplink.wait_devices(radio.log)
+    except uplink.LinkSetupError:
+        radio.stop()
+        raise
 
 
 def run_dir(workdir: str | None, drone: str) -> Path:
@@ -306,4 +353,10 @@ def register(sub: Any) -> None:
     p.add_argument("--resume", action="store_true",
                    help="resume the deployment (and dynamic subscriptions) a workbench made "
                    "in an earlier run of this drone, instead of running MODEL")
+    p.add_argument("--link", choices=("tcp", "udp", "serial"), default=None,
+                   help="the link's transport for this run (default: the model's); serial "
+                        "runs the radio emulator between two pseudo-terminals")
+    p.add_argument("--radio", metavar="SPEC", default=None,
+                   help='an emulated radio in the path (udp or serial), e.g. '
+                        '"rate=3600,loss=0.05,latency_ms=80" (modd-radio --help)')
     p.set_defaults(func=run)

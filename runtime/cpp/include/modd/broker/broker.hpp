@@ -30,6 +30,13 @@ class LinkOutput {
   virtual bool link_write(std::vector<uint8_t>&& bytes) = 0;
   // Bytes written but not yet sent (backfill waits until the live bytes are out).
   virtual size_t link_backlog() const { return 0; }
+  // Datagram transports: every slot goes here (FrameSink::send_slot), frames (STATUS)
+  // through link_write as CONTROL datagrams.
+  virtual bool datagrams() const { return false; }
+  virtual bool link_slot(uint8_t /*config_id*/, uint64_t /*slot*/, int64_t /*date_ns*/,
+                         std::vector<uint8_t>&& /*values*/, std::vector<bool>&& /*presence*/) {
+    return false;
+  }
 };
 
 class Broker;
@@ -133,6 +140,9 @@ class Broker final : public LinkHooks, public FrameSink {
   const BackfillSender& backfill() const { return backfill_; }
   // FrameSink
   bool send_data(std::vector<uint8_t>&& frame) override;
+  bool wants_slots() const override { return out_.datagrams(); }
+  bool send_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
+                 std::vector<bool>&& presence) override;
 
   Counters& counters() { return counters_; }
   uint64_t topics_generation() const { return generation_; }

@@ -23,6 +23,14 @@ struct BrokerConfig {
   uint16_t link_port = 7171;
   std::string key_ref;  // env:NAME or file:PATH
   uint32_t handshake_timeout_ms = 5000;
+  // transport (docs/pubbroker.md, "link"): tcp (listen on host:port), udp (datagrams on
+  // host:port) or serial (framed datagrams on a character device)
+  std::string link_transport = "tcp";
+  std::string link_device;        // serial: the radio's device on board
+  uint32_t link_baud = 57600;     // serial
+  uint32_t link_max_packet = 0;   // udp: datagram payload; serial: frame; 0: 1472 / 252
+  uint32_t link_delay_ms = 1000;  // accepted delay: slots packed into one datagram up to it
+  uint32_t link_keepalive_timeout_s = 90;  // silence after which DATA stops (0: never)
   // ingress: where publishers connect
   std::string ingress_unix;  // empty: no Unix socket
   std::string ingress_host = "127.0.0.1";

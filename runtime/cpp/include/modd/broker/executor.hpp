@@ -26,6 +26,13 @@ class FrameSink {
   virtual ~FrameSink() = default;
   // One whole DATA frame; returns false if it could not be sent (no link, backlog).
   virtual bool send_data(std::vector<uint8_t>&& frame) = 0;
+  // Datagram transports (udp, serial) take every slot, empty ones included, as its
+  // encoded values and presence flags (send_slot), instead of DATA frames.
+  virtual bool wants_slots() const { return false; }
+  virtual bool send_slot(uint8_t /*config_id*/, uint64_t /*slot*/, int64_t /*date_ns*/,
+                         std::vector<uint8_t>&& /*values*/, std::vector<bool>&& /*presence*/) {
+    return false;
+  }
 };
 
 struct ExecutorCounters {
@@ -64,6 +71,7 @@ class Executor {
   };
   std::unique_ptr<Active> build(const link::Config& cfg, const std::vector<uint32_t>& topic_globals, int64_t epoch);
   void fire(FrameSink& sink);
+  void fire_slot(FrameSink& sink, const link::Data& d, const std::vector<link::ValueKind>& kinds, int64_t date);
 
   std::unique_ptr<Active> active_, pending_;
   int64_t switch_at_ = kNever;

@@ -10,10 +10,12 @@
 #include <vector>
 
 #include "modd/broker/broker.hpp"
+#include "modd/broker/dgram_link.hpp"
+#include "modd/broker/dgram_port.hpp"
 
 namespace modd::broker {
 
-class Server final : public LinkOutput {
+class Server final : public LinkOutput, public DatagramOut {
  public:
   Server(const BrokerConfig& cfg, std::string key, Clock& clock);
   ~Server() override;
@@ -25,9 +27,15 @@ class Server final : public LinkOutput {
   bool link_ready() const override;
   bool link_write(std::vector<uint8_t>&& bytes) override;
   size_t link_backlog() const override;
+  bool datagrams() const override { return dlink_ != nullptr; }
+  bool link_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
+                 std::vector<bool>&& presence) override;
+  // DatagramOut: to the current port (a serial device is opened again after it went away)
+  void send(std::vector<uint8_t>&& datagram, bool reply) override;
+  void adopt_source() override;
 
  private:
-  enum class Kind { LinkListen, IngressUnixListen, IngressTcpListen, Link, Ingress, Signal };
+  enum class Kind { LinkListen, IngressUnixListen, IngressTcpListen, Link, Ingress, Signal, Dgram };
   struct Conn {
     int fd = -1;
     Kind kind{};
@@ -44,6 +52,8 @@ class Server final : public LinkOutput {
   void close_conn(int fd);
   void timers(int64_t now);
   int timeout_ms(int64_t now) const;
+  void open_dgram_port();
+  void on_dgram_readable();
 
   BrokerConfig cfg_;
   std::string key_;
@@ -57,6 +67,10 @@ class Server final : public LinkOutput {
   bool stop_ = false;
   int64_t next_flush_ = 0, next_log_ = 0, next_status_ = 0;
   std::vector<int> to_close_;
+  // udp and serial transports (docs/protocol.md, "Datagram transports")
+  std::unique_ptr<DgramPort> port_;
+  std::unique_ptr<DatagramLink> dlink_;
+  int64_t port_retry_ns_ = 0;
 };
 
 }  // namespace modd::broker

@@ -26,10 +26,12 @@ class RadioSpec:
     outages: tuple[tuple[float, float], ...] = ()  # (start s, duration s) from the start
     queue_s: float = 2.0  # a packet that would wait longer than this to be sent is dropped
     seed: int = 0
+    duplicate: float = 0.0  # probability that a packet that passed arrives twice
 
     @staticmethod
     def parse(text: str) -> RadioSpec:
         """``rate=3600,packet=252,loss=0.05,latency_ms=80,jitter_ms=20,outage=10+30,seed=7``
+        (``duplicate=0.01``: a share of the packets arrives twice)
         (``outage`` may repeat: start+duration in seconds). Raises ValueError naming
         the bad item."""
         values: dict[str, float] = {}
@@ -47,17 +49,18 @@ class RadioSpec:
             except ValueError:
                 raise ValueError(f"radio setting {key!r}: {raw!r} is not a number") from None
             if key not in ("rate", "packet", "loss", "latency_ms", "jitter_ms", "queue_s",
-                           "seed"):
+                           "seed", "duplicate"):
                 raise ValueError(f"unknown radio setting {key!r}; expected rate, packet, loss, "
-                                 "latency_ms, jitter_ms, outage, queue_s or seed")
-            if value < 0 or (key == "loss" and value > 1):
+                                 "latency_ms, jitter_ms, outage, queue_s, seed or duplicate")
+            if value < 0 or (key in ("loss", "duplicate") and value > 1):
                 raise ValueError(f"radio setting {key}={raw} is out of range")
             values[key] = value
         return RadioSpec(
             rate=values.get("rate"), packet=int(values["packet"]) if "packet" in values else None,
             loss=values.get("loss", 0.0), latency_ms=values.get("latency_ms", 0.0),
             jitter_ms=values.get("jitter_ms", 0.0), outages=tuple(outages),
-            queue_s=values.get("queue_s", 2.0), seed=int(values.get("seed", 0)))
+            queue_s=values.get("queue_s", 2.0), seed=int(values.get("seed", 0)),
+            duplicate=values.get("duplicate", 0.0))
 
 
 @dataclass
@@ -71,6 +74,7 @@ class Channel:
     passed: int = 0
     passed_bytes: int = 0
     dropped: Counter[str] = field(default_factory=Counter)
+    duplicated: int = 0
     _busy_until: float = 0.0
     _rng: random.Random = field(init=False)
 
@@ -103,7 +107,15 @@ class Channel:
         self.passed_bytes += len(packet)
         return round(max(end, end + (s.latency_ms + jitter) / 1000), 9)
 
+    def duplicates(self) -> bool:
+        """Whether the packet that just passed arrives a second time."""
+        if self.spec.duplicate and self._rng.random() < self.spec.duplicate:
+            self.duplicated += 1
+            return True
+        return False
+
     def summary(self) -> str:
         drops = ", ".join(f"{k} {v}" for k, v in sorted(self.dropped.items())) or "none"
         lost = sum(self.dropped.values())
-        return f"passed {self.passed} ({self.passed_bytes} B), dropped {lost} ({drops})"
+        dup = f", duplicated {self.duplicated}" if self.duplicated else ""
+        return f"passed {self.passed} ({self.passed_bytes} B), dropped {lost} ({drops}){dup}"

@@ -18,6 +18,7 @@ from .channel import Channel, RadioSpec
 
 MAX_DATAGRAM = 65535
 SERIAL_IDLE_S = 0.02  # bytes waiting this long go as a (short) radio packet
+DUPLICATE_AFTER_S = 0.005  # a duplicated packet arrives again this much later
 
 
 class _Pending:
@@ -70,11 +71,16 @@ def run_udp(spec: RadioSpec, listen: tuple[str, int], target: tuple[str, int],
                     at = up.offer(data, now)
                     if at is not None:
                         pending.add(at, partial(_send, back.send, data))
+                        if up.duplicates():
+                            pending.add(at + DUPLICATE_AFTER_S, partial(_send, back.send, data))
                 else:
                     data = back.recv(MAX_DATAGRAM)
                     at = down.offer(data, now)
                     if at is not None and peer:
-                        pending.add(at, partial(_send, partial(_sendto, front, peer[0]), data))
+                        send = partial(_send, partial(_sendto, front, peer[0]), data)
+                        pending.add(at, send)
+                        if down.duplicates():
+                            pending.add(at + DUPLICATE_AFTER_S, send)
             if report and time.monotonic() >= next_report:
                 report(up, down)
                 next_report += report_every
@@ -128,7 +134,10 @@ def run_serial(spec: RadioSpec, base_master: int, drone_master: int,
         ch, out = route[fd]
         at = ch.offer(packet, now)
         if at is not None:
-            pending.add(at, lambda: _send(lambda x: os.write(out, x), packet))
+            send = partial(_send, partial(os.write, out), packet)
+            pending.add(at, send)
+            if ch.duplicates():
+                pending.add(at + DUPLICATE_AFTER_S, send)
 
     try:
         while not stop():

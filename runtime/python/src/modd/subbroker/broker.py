@@ -34,14 +34,16 @@ from .backfill import BackfillManager
 from .config import ConfigError, SubBrokerConfig, resolve_key
 from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoints
 from .deploy import DeployRequest, parse_request
+from .dglink import DatagramLinkClient
 from .dynamic import DynamicSubscriptions
 from .fanout import FanOut
 from .kept import Deployment, StateDir, same_model
 from .keys import backfill_key, deploy_key, subscribe_key
-from .link import ConfigRejected, LinkClient, LinkDown
+from .link import ConfigRejected, LinkDown
 from .planning import config_for, plan_within
 from .record import BaseRecord
 from .status import StatusPublisher
+from .transport import link_client
 
 if TYPE_CHECKING:
     import zenoh
@@ -97,7 +99,7 @@ class SubBroker:
         if config.resume:
             self.dynamic.restore(self._state.load_dynamic())
         self.dynamic.persist = self._state.save_dynamic
-        self.link = LinkClient(config.endpoint, self._key, config.link, self, self._liveness)
+        self.link = link_client(config, self._key, self, self._liveness)
         self._zenoh: ZenohDelivery | None = None
         self._tcp: TcpDelivery | None = None
         self._status: StatusPublisher | None = None
@@ -173,7 +175,8 @@ class SubBroker:
         )
         self._status.start()
         self.link.start()
-        log.info("SubBroker for %s: link %s:%d", self.drone, *self.config.endpoint)
+        log.info("SubBroker for %s: link %s %s:%d", self.drone, self.config.transport,
+                 *self.config.endpoint)
 
     def stop(self) -> None:
         self.link.stop()
@@ -490,6 +493,11 @@ class SubBroker:
             "dynamic": self.dynamic.names(),
             "tcp": self._tcp.stats() if self._tcp else {},
             "pubbroker": dict(stats.pubbroker),
+            "transport": self.config.transport,
+            "link_budget": (running.plan.budget.to_json()
+                            if running is not None and running.plan.budget is not None else None),
+            "radio": (self.link.radio_status()
+                      if isinstance(self.link, DatagramLinkClient) else None),
         }
 
 

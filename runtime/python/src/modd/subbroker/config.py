@@ -45,6 +45,11 @@ class LinkOptions:
     pubbroker_status_period_s: int = 60  # STATUS rate asked in CONFIG (0: none)
     ack_timeout_s: float = 5.0
     plan_budget_s: float = 5.0  # a deploy not planned within it is refused (REJECTED)
+    # transport (docs/subbroker.md): "" is the model's (tcp, udp or serial); for serial the
+    # base station's device (the model's `device` when "") and its baud rate
+    transport: str = ""
+    device: str = ""
+    baud: int = 0  # 0: the model's (57600)
 
 
 @dataclass(frozen=True)
@@ -98,6 +103,24 @@ class SubBrokerConfig:
             return Path(self.source).parent / "credentials"
         state = os.environ.get("XDG_STATE_HOME") or str(Path.home() / ".local" / "state")
         return Path(state) / "modd" / self.drone / "credentials"
+
+    @property
+    def transport(self) -> str:
+        """tcp, udp or serial: ``[link] transport``, else the model's."""
+        t = self.link.transport or self.model.get("link", {}).get("transport", "tcp")
+        if t not in ("tcp", "udp", "serial"):
+            raise ConfigError(f"{self.source}: link.transport: expected tcp, udp or serial, "
+                              f"got {t!r}")
+        return str(t)
+
+    @property
+    def device(self) -> str:
+        """The serial device of the base station's radio."""
+        dev = self.link.device or self.model.get("link", {}).get("device", "")
+        if not dev:
+            raise ConfigError(f"{self.source}: a serial link needs [link] device (or the "
+                              "model's link device)")
+        return str(dev)
 
     @property
     def key_ref(self) -> str:

@@ -1,0 +1,118 @@
+// The PubBroker's side of a datagram link (udp, serial; docs/protocol.md,
+// "Datagram transports"), without the socket: the handshake in 0x41
+// datagrams, the session key, CONTROL datagrams (PING, CONFIG, NACK, STATUS)
+// under their tags and replay window, slot packing up to the accepted delay
+// and the packet, the resend ring, and the keepalive timeout.
+//
+// Contract: everything received goes through on_datagram(); every slot the
+// executor fires goes through add_slot() (empty ones too: the sequence has no
+// holes); tick(now) sends a group whose first slot has waited the accepted
+// delay. What leaves goes to a DatagramOut: `reply` datagrams to the sender
+// of the datagram being handled, the others to the authenticated peer.
+#pragma once
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "modd/broker/link_session.hpp"
+#include "modd/link/datagram.hpp"
+#include "modd/link/messages.hpp"
+
+namespace modd::broker {
+
+class DatagramOut {
+ public:
+  virtual ~DatagramOut() = default;
+  virtual void send(std::vector<uint8_t>&& datagram, bool reply) = 0;
+  // The sender of the datagram being handled becomes the peer (udp: its address).
+  virtual void adopt_source() = 0;
+};
+
+struct DgramOptions {
+  size_t max_datagram = 1472;       // largest datagram (udp payload; serial: frame minus framing)
+  int64_t delay_ns = 1'000'000'000;  // accepted delay: a group is sent when its first slot waited this
+  int64_t keepalive_timeout_ns = 90'000'000'000;  // silence after which DATA stops (3 x 30 s PING)
+  size_t ring_datagrams = 256;
+  size_t ring_bytes = 64 * 1024;
+};
+
+struct DgramCounters {
+  uint64_t datagrams_in = 0, datagrams_out = 0, bytes_out = 0;
+  uint64_t forged = 0, replayed = 0, malformed = 0;
+  uint64_t nacks = 0, resent = 0, too_old = 0;
+  uint64_t handshakes = 0, timeouts = 0;
+};
+
+class DatagramLink {
+ public:
+  DatagramLink(std::string psk, LinkHooks& hooks, DatagramOut& out, DgramOptions opt,
+               std::function<link::Nonce()> nonce_source);
+
+  void on_datagram(std::span<const uint8_t> raw, int64_t now);
+  // One fired slot: its values encoded as in DATA (no seq8, no bitmap) and one
+  // presence flag per stream of the slot. False when no session is up.
+  bool add_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
+                std::vector<bool>&& presence);
+  // A link frame (STATUS) in a CONTROL datagram; false when no session is up.
+  bool send_frame(std::span<const uint8_t> frame);
+  void tick(int64_t now);
+  int64_t next_due_ns() const;
+  bool ready() const { return ready_; }
+  const DgramCounters& counters() const { return c_; }
+  std::string summary() const;
+
+ private:
+  struct SlotEntry {
+    std::vector<uint8_t> values;
+    std::vector<bool> presence;
+  };
+  struct Sent {
+    uint64_t first = 0, count = 0, key_epoch = 0;
+    link::dgram::DataDatagram d;
+    std::vector<uint8_t> raw;
+  };
+  void on_handshake(std::span<const uint8_t> frame, int64_t now);
+  void on_control(std::span<const uint8_t> raw, int64_t now);
+  void on_nack(std::span<const uint8_t> body);
+  void send_control(std::span<const uint8_t> frame, bool reply = false);
+  void send_handshake(const link::Message& m, bool reply);
+  size_t group_size(const SlotEntry* extra) const;
+  void flush();
+  void emit(std::vector<uint8_t>&& d, bool reply = false);
+
+  std::string psk_;
+  LinkHooks& hooks_;
+  DatagramOut& out_;
+  DgramOptions opt_;
+  std::function<link::Nonce()> nonce_source_;
+  DgramCounters c_;
+  // handshake in progress (kept until a newer HELLO) and the session
+  bool pending_ = false;
+  link::Nonce hello_nonce_{}, challenge_nonce_{};
+  bool ready_ = false;
+  link::Mac key_{};
+  uint64_t key_epoch_ = 0;
+  link::Nonce session_client_{}, session_server_{};
+  int64_t last_heard_ = 0;
+  uint64_t counter_ = 0;
+  link::dgram::ReplayWindow control_window_{64};
+  std::vector<uint8_t> last_config_, last_ack_;
+  // packing
+  uint8_t group_config_ = 0;
+  uint64_t group_first_ = 0;
+  int64_t group_date_ = 0;
+  std::vector<SlotEntry> group_;
+  // resend ring
+  std::deque<Sent> ring_;
+  size_t ring_bytes_ = 0;
+};
+
+// Largest datagram whose serial frame (COBS over datagram + CRC-16, then 0x00)
+// fits a radio packet of `packet` bytes.
+size_t serial_capacity(size_t packet);
+
+}  // namespace modd::broker

@@ -1,0 +1,307 @@
+#include "modd/broker/dgram_link.hpp"
+
+#include <cstdio>
+
+#include "modd/link/auth.hpp"
+#include "modd/link/backfill.hpp"
+#include "modd/link/codec.hpp"
+#include "modd/util/bytes.hpp"
+#include "modd/util/log.hpp"
+
+namespace modd::broker {
+
+using namespace modd::link;
+namespace dg = modd::link::dgram;
+
+namespace {
+
+constexpr uint8_t kNack = 0x09;  // control frame: ranges of slots to resend
+constexpr size_t kMaxNackRanges = 32;
+
+size_t varint_size(uint64_t v) {
+  size_t n = 1;
+  while (v >= 0x80) {
+    v >>= 7;
+    ++n;
+  }
+  return n;
+}
+
+size_t serial_frame_bytes(size_t payload) {
+  size_t body = payload + 2;
+  return body + 1 + body / 254 + 1;
+}
+
+}  // namespace
+
+size_t serial_capacity(size_t packet) {
+  size_t n = packet > 4 ? packet - 4 : 0;
+  while (n > 0 && serial_frame_bytes(n) > packet) --n;
+  return n;
+}
+
+DatagramLink::DatagramLink(std::string psk, LinkHooks& hooks, DatagramOut& out, DgramOptions opt,
+                           std::function<Nonce()> nonce_source)
+    : psk_(std::move(psk)), hooks_(hooks), out_(out), opt_(opt), nonce_source_(std::move(nonce_source)) {}
+
+void DatagramLink::emit(std::vector<uint8_t>&& d, bool reply) {
+  ++c_.datagrams_out;
+  c_.bytes_out += d.size();
+  out_.send(std::move(d), reply);
+}
+
+void DatagramLink::on_datagram(std::span<const uint8_t> raw, int64_t now) {
+  ++c_.datagrams_in;
+  if (raw.empty()) {
+    ++c_.malformed;
+    return;
+  }
+  try {
+    if (raw[0] == dg::kHandshake) {
+      on_handshake(raw.subspan(1), now);
+    } else if (raw[0] == dg::kControl) {
+      on_control(raw, now);
+    } else {
+      ++c_.malformed;  // DATA goes drone -> base only
+    }
+  } catch (const dg::Forged&) {
+    ++c_.forged;
+  } catch (const Error&) {
+    ++c_.malformed;
+  }
+}
+
+void DatagramLink::send_handshake(const Message& m, bool reply) {
+  std::vector<uint8_t> d{dg::kHandshake};
+  encode(d, m);
+  emit(std::move(d), reply);
+}
+
+void DatagramLink::on_handshake(std::span<const uint8_t> frame, int64_t now) {
+  auto f = split_frame(frame, 64);
+  if (!f || f->size != frame.size()) throw Error(ErrorCode::BadFrame, "not one handshake frame", 0);
+  Message m = decode(*f);
+  std::span<const uint8_t> key(reinterpret_cast<const uint8_t*>(psk_.data()), psk_.size());
+  if (auto* h = std::get_if<Hello>(&m)) {
+    if (h->version != kVersion) {
+      send_handshake(ErrorMsg{static_cast<uint8_t>(ErrorCode::Version),
+                              "unsupported version " + std::to_string(h->version) + ", this broker speaks 1"},
+                     true);
+      return;
+    }
+    // A repeated HELLO (its answer was lost) gets the same CHALLENGE; a new one a fresh nonce.
+    if (!pending_ || h->nonce != hello_nonce_) {
+      hello_nonce_ = h->nonce;
+      challenge_nonce_ = nonce_source_();
+      pending_ = true;
+    }
+    send_handshake(Challenge{kVersion, challenge_nonce_}, true);
+    return;
+  }
+  auto* a = std::get_if<Auth>(&m);
+  if (!a) throw Error(ErrorCode::BadFrame, "unexpected handshake frame", 0);
+  if (ready_ && macs_equal(a->mac, client_proof(key, session_client_, session_server_))) {
+    // AUTH repeated because AUTH_OK was lost: answer again, to the peer only.
+    AuthOk ok = hooks_.current_config();
+    ok.mac = server_proof(key, session_client_, session_server_);
+    send_handshake(ok, false);
+    return;
+  }
+  if (!pending_ || !macs_equal(a->mac, client_proof(key, hello_nonce_, challenge_nonce_))) {
+    hooks_.on_rejected("datagram AUTH does not verify (wrong key, or a stale challenge)");
+    send_handshake(ErrorMsg{static_cast<uint8_t>(ErrorCode::AuthFailed), "HMAC proof does not verify"}, true);
+    return;
+  }
+  pending_ = false;
+  session_client_ = hello_nonce_;
+  session_server_ = challenge_nonce_;
+  key_ = dg::session_key(key, session_client_, session_server_);
+  ++key_epoch_;
+  ready_ = true;
+  last_heard_ = now;
+  control_window_ = dg::ReplayWindow(64);
+  ++c_.handshakes;
+  out_.adopt_source();
+  AuthOk ok = hooks_.current_config();
+  ok.mac = server_proof(key, session_client_, session_server_);
+  send_handshake(ok, true);
+  hooks_.on_authenticated();
+}
+
+void DatagramLink::on_control(std::span<const uint8_t> raw, int64_t now) {
+  if (!ready_) {
+    ++c_.forged;  // no session: nothing can verify
+    return;
+  }
+  auto [counter, frame] = dg::verify_control(raw, key_, dg::kBaseToDrone);
+  if (!control_window_.accept(counter)) {
+    ++c_.replayed;
+    return;
+  }
+  last_heard_ = now;
+  out_.adopt_source();
+  auto f = split_frame(frame);
+  if (!f || f->size != frame.size()) throw Error(ErrorCode::BadFrame, "not one control frame", 0);
+  if (f->type == kNack) {
+    on_nack(f->body);
+    return;
+  }
+  if (link::backfill::is_backfill_type(f->type)) {  // request or cancel (docs/protocol.md, "Backfill")
+    std::vector<uint8_t> out;
+    hooks_.on_backfill(*f, out);
+    if (!out.empty()) send_control(out);
+    return;
+  }
+  if (is_data_type(f->type)) throw Error(ErrorCode::BadFrame, "DATA in a control datagram", 0);
+  Message m = decode(*f);
+  if (auto* p = std::get_if<Ping>(&m)) {
+    std::vector<uint8_t> out;
+    encode(out, Pong{p->payload});
+    send_control(out);
+  } else if (auto* cfg = std::get_if<Config>(&m)) {
+    if (frame == last_config_) {
+      send_control(last_ack_);  // a retry: its ack was lost
+      return;
+    }
+    ConfigAck ack = hooks_.on_config(*cfg);
+    std::vector<uint8_t> out;
+    encode(out, ack);
+    if (ack.status == 0) {
+      last_config_ = frame;
+      last_ack_ = out;
+    }
+    send_control(out);
+  } else if (auto* e = std::get_if<ErrorMsg>(&m)) {
+    hooks_.on_rejected("peer sent ERROR " + std::to_string(e->code) + ": " + e->message);
+    ready_ = false;
+  }
+}
+
+void DatagramLink::on_nack(std::span<const uint8_t> body) {
+  ByteReader r(body);
+  uint64_t n = r.varint();
+  if (n < 1 || n > kMaxNackRanges) r.fail("a NACK holds 1..32 ranges");
+  ++c_.nacks;
+  std::vector<std::pair<uint64_t, uint64_t>> ranges;
+  for (uint64_t i = 0; i < n; ++i) {
+    uint64_t first = r.varint(), count = r.varint();
+    if (count < 1 || count > 65535) r.fail("NACK range of 0 or more than 65535 slots");
+    ranges.emplace_back(first, count);
+  }
+  for (auto [first, count] : ranges) {
+    if (ring_.empty() || first < ring_.front().first) ++c_.too_old;
+    for (Sent& s : ring_) {
+      if (s.first >= first + count || first >= s.first + s.count) continue;
+      if (s.key_epoch != key_epoch_) {  // sent under an older session: tagged again under this one
+        s.raw = dg::encode_data(s.d, key_, dg::kDroneToBase);
+        s.key_epoch = key_epoch_;
+      }
+      ++c_.resent;
+      emit(std::vector<uint8_t>(s.raw));
+    }
+  }
+}
+
+void DatagramLink::send_control(std::span<const uint8_t> frame, bool reply) {
+  emit(dg::encode_control(++counter_, frame, key_, dg::kDroneToBase), reply);
+}
+
+bool DatagramLink::send_frame(std::span<const uint8_t> frame) {
+  if (!ready_) return false;
+  send_control(frame);
+  return true;
+}
+
+size_t DatagramLink::group_size(const SlotEntry* extra) const {
+  size_t values = 0, streams = 0;
+  bool all = true;
+  auto add = [&](const SlotEntry& e) {
+    values += e.values.size();
+    streams += e.presence.size();
+    for (bool p : e.presence) all = all && p;
+  };
+  for (const auto& e : group_) add(e);
+  if (extra) add(*extra);
+  size_t head = 4 + (all ? 0 : 1 + varint_size(streams) + (streams + 7) / 8);
+  return head + values + dg::kTag;
+}
+
+bool DatagramLink::add_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
+                            std::vector<bool>&& presence) {
+  if (!ready_) {
+    if (!group_.empty()) flush();
+    return false;
+  }
+  SlotEntry e{std::move(values), std::move(presence)};
+  if (!group_.empty() &&
+      (config_id != group_config_ || slot != group_first_ + group_.size() || date_ns - group_date_ > opt_.delay_ns ||
+       group_.size() >= 255 || group_size(&e) > opt_.max_datagram))
+    flush();
+  if (group_.empty()) {
+    group_config_ = config_id;
+    group_first_ = slot;
+    group_date_ = date_ns;
+  }
+  group_.push_back(std::move(e));
+  return true;
+}
+
+void DatagramLink::flush() {
+  if (group_.empty()) return;
+  Sent s;
+  s.first = group_first_;
+  s.count = group_.size();
+  s.key_epoch = key_epoch_;
+  s.d.config_id = group_config_;
+  s.d.slot = group_first_;
+  bool all = true;
+  for (const auto& e : group_)
+    for (bool p : e.presence) all = all && p;
+  for (auto& e : group_) {
+    s.d.slots.push_back(std::move(e.values));
+    if (!all) s.d.presence.insert(s.d.presence.end(), e.presence.begin(), e.presence.end());
+  }
+  group_.clear();
+  if (!ready_) return;
+  s.raw = dg::encode_data(s.d, key_, dg::kDroneToBase);
+  emit(std::vector<uint8_t>(s.raw));
+  ring_bytes_ += s.raw.size();
+  ring_.push_back(std::move(s));
+  while (!ring_.empty() && (ring_.size() > opt_.ring_datagrams || ring_bytes_ > opt_.ring_bytes)) {
+    ring_bytes_ -= ring_.front().raw.size();
+    ring_.pop_front();
+  }
+}
+
+void DatagramLink::tick(int64_t now) {
+  if (!group_.empty() && now - group_date_ >= opt_.delay_ns) flush();
+  if (ready_ && opt_.keepalive_timeout_ns > 0 && now - last_heard_ > opt_.keepalive_timeout_ns) {
+    ready_ = false;
+    ++c_.timeouts;
+    log_line("link: nothing authenticated from the base station for %lld s: DATA paused until a new handshake",
+             static_cast<long long>((now - last_heard_) / 1'000'000'000));
+  }
+}
+
+int64_t DatagramLink::next_due_ns() const {
+  int64_t next = INT64_MAX;
+  if (!group_.empty()) next = group_date_ + opt_.delay_ns;
+  if (ready_ && opt_.keepalive_timeout_ns > 0) next = std::min(next, last_heard_ + opt_.keepalive_timeout_ns + 1);
+  return next;
+}
+
+std::string DatagramLink::summary() const {
+  char buf[320];
+  std::snprintf(buf, sizeof buf,
+                "datagrams_in=%llu datagrams_out=%llu bytes_out=%llu forged=%llu replayed=%llu malformed=%llu "
+                "nacks=%llu resent=%llu too_old=%llu handshakes=%llu timeouts=%llu",
+                static_cast<unsigned long long>(c_.datagrams_in), static_cast<unsigned long long>(c_.datagrams_out),
+                static_cast<unsigned long long>(c_.bytes_out), static_cast<unsigned long long>(c_.forged),
+                static_cast<unsigned long long>(c_.replayed), static_cast<unsigned long long>(c_.malformed),
+                static_cast<unsigned long long>(c_.nacks), static_cast<unsigned long long>(c_.resent),
+                static_cast<unsigned long long>(c_.too_old), static_cast<unsigned long long>(c_.handshakes),
+                static_cast<unsigned long long>(c_.timeouts));
+  return buf;
+}
+
+}  // namespace modd::broker

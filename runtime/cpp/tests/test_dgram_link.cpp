@@ -1,0 +1,178 @@
+// The PubBroker's datagram session without sockets: handshake in datagrams
+// (a repeated HELLO gets the same CHALLENGE), CONFIG applied once however
+// often it is resent, slots packed up to the accepted delay, a NACK answered
+// from the ring (tagged again under a new session), forged and replayed
+// control datagrams dropped and counted, the keepalive timeout.
+#include <gtest/gtest.h>
+
+#include "modd/broker/dgram_link.hpp"
+#include "modd/link/auth.hpp"
+#include "modd/link/codec.hpp"
+#include "modd/link/datagram.hpp"
+
+using namespace modd;
+using namespace modd::broker;
+using namespace modd::link;
+namespace dg = modd::link::dgram;
+
+namespace {
+
+struct Hooks : LinkHooks {
+  int configs = 0, auths = 0, rejects = 0;
+  ConfigAck on_config(const Config& c) override {
+    ++configs;
+    return {c.config_id, 0, 77};
+  }
+  AuthOk current_config() override { return AuthOk{{}, 0, 0}; }
+  void on_authenticated() override { ++auths; }
+  void on_rejected(const std::string&) override { ++rejects; }
+};
+
+struct Out : DatagramOut {
+  std::vector<std::vector<uint8_t>> sent;
+  int adopted = 0;
+  void send(std::vector<uint8_t>&& d, bool) override { sent.push_back(std::move(d)); }
+  void adopt_source() override { ++adopted; }
+};
+
+const std::string kPsk = "psk";
+std::span<const uint8_t> psk() { return {reinterpret_cast<const uint8_t*>(kPsk.data()), kPsk.size()}; }
+
+template <typename T>
+std::vector<uint8_t> hs(const T& m) {
+  std::vector<uint8_t> d{dg::kHandshake};
+  encode(d, m);
+  return d;
+}
+
+Message answer(const std::vector<uint8_t>& d) {
+  auto f = split_frame(std::span(d).subspan(1));
+  return decode(*f);
+}
+
+struct Session {
+  Hooks hooks;
+  Out out;
+  uint8_t next_nonce = 1;
+  DatagramLink link{kPsk, hooks, out, DgramOptions{200, 1'000'000'000, 5'000'000'000, 256, 65536},
+                    [this] { Nonce n{}; n.fill(next_nonce++); return n; }};
+  Mac key{};
+  uint64_t counter = 0;
+
+  void handshake(uint8_t client_byte, int64_t now) {
+    Nonce c{};
+    c.fill(client_byte);
+    link.on_datagram(hs(Hello{kVersion, c}), now);
+    auto ch = std::get<Challenge>(answer(out.sent.back()));
+    link.on_datagram(hs(Auth{client_proof(psk(), c, ch.nonce)}), now);
+    auto ok = std::get<AuthOk>(answer(out.sent.back()));
+    ASSERT_TRUE(macs_equal(ok.mac, server_proof(psk(), c, ch.nonce)));
+    key = dg::session_key(psk(), c, ch.nonce);
+  }
+  std::vector<uint8_t> control(const std::vector<uint8_t>& frame) {
+    return dg::encode_control(++counter, frame, key, dg::kBaseToDrone);
+  }
+};
+
+std::vector<uint8_t> nack(uint64_t first, uint64_t n) {
+  std::vector<uint8_t> body{1};
+  for (uint64_t v : {first, n}) {
+    while (v >= 0x80) {
+      body.push_back(static_cast<uint8_t>(v | 0x80));
+      v >>= 7;
+    }
+    body.push_back(static_cast<uint8_t>(v));
+  }
+  std::vector<uint8_t> f{static_cast<uint8_t>(body.size() + 1), 0x09};
+  f.insert(f.end(), body.begin(), body.end());
+  return f;
+}
+
+}  // namespace
+
+TEST(DgramLink, RepeatedHelloGetsTheSameChallengeAndAuthOpensTheSession) {
+  Session s;
+  Nonce c{};
+  c.fill(9);
+  s.link.on_datagram(hs(Hello{kVersion, c}), 0);
+  s.link.on_datagram(hs(Hello{kVersion, c}), 1);
+  EXPECT_EQ(std::get<Challenge>(answer(s.out.sent[0])).nonce, std::get<Challenge>(answer(s.out.sent[1])).nonce);
+  EXPECT_FALSE(s.link.ready());
+  s.link.on_datagram(hs(Auth{Mac{}}), 2);  // a wrong proof
+  EXPECT_FALSE(s.link.ready());
+  EXPECT_EQ(s.hooks.rejects, 1);
+  s.handshake(9, 3);
+  EXPECT_TRUE(s.link.ready());
+  EXPECT_EQ(s.hooks.auths, 1);
+}
+
+TEST(DgramLink, ConfigAppliedOnceThoughResent) {
+  Session s;
+  s.handshake(1, 0);
+  Config cfg;
+  cfg.config_id = 3;
+  std::vector<uint8_t> frame;
+  encode(frame, Message{cfg});
+  s.link.on_datagram(s.control(frame), 1);
+  s.link.on_datagram(s.control(frame), 2);  // its ack was lost
+  EXPECT_EQ(s.hooks.configs, 1);
+  for (size_t i : {s.out.sent.size() - 2, s.out.sent.size() - 1}) {
+    auto [counter, f] = dg::verify_control(s.out.sent[i], s.key, dg::kDroneToBase);
+    EXPECT_EQ(std::get<ConfigAck>(decode(*split_frame(f))).epoch_ns, 77u);
+  }
+}
+
+TEST(DgramLink, PacksSlotsUpToTheDelayAndResendsOnNack) {
+  Session s;
+  s.handshake(1, 0);
+  size_t before = s.out.sent.size();
+  const int64_t q = 250'000'000;
+  for (uint64_t k = 0; k < 8; ++k) {
+    s.link.add_slot(1, k, static_cast<int64_t>(k + 1) * q, {1, 2, 3, 4}, {true});
+    s.link.tick(static_cast<int64_t>(k + 1) * q);
+  }
+  // slots 0..4 (0.25 .. 1.25 s) in one datagram, sent at 1.25 s; 5..7 wait
+  ASSERT_EQ(s.out.sent.size(), before + 1);
+  auto v = dg::verify_data(s.out.sent.back(), s.key, dg::kDroneToBase, 0);
+  EXPECT_EQ(v.slot, 0u);
+  EXPECT_EQ(v.values.size(), 5u * 4);
+  s.link.tick(9 * q);  // nothing due yet
+  ASSERT_EQ(s.out.sent.size(), before + 1);
+  s.link.tick(10 * q);  // slot 5 (1.5 s) waited 1 s
+  ASSERT_EQ(s.out.sent.size(), before + 2);
+  auto first = s.out.sent[before];
+  // a new session, then a NACK of slot 2: the datagram of slots 0..4, tagged under the new key
+  s.handshake(2, 11 * q);
+  s.link.on_datagram(s.control(nack(2, 1)), 11 * q);
+  auto resent = s.out.sent.back();
+  EXPECT_NE(resent, first);
+  EXPECT_EQ(dg::verify_data(resent, s.key, dg::kDroneToBase, 0).values, v.values);
+  EXPECT_EQ(s.link.counters().resent, 1u);
+}
+
+TEST(DgramLink, ForgedAndReplayedControlDatagramsAreDroppedAndCounted) {
+  Session s;
+  s.handshake(1, 0);
+  std::vector<uint8_t> ping;
+  encode(ping, Message{Ping{{1, 2}}});
+  auto good = s.control(ping);
+  auto bad = good;
+  bad[3] ^= 0x20;
+  size_t before = s.out.sent.size();
+  s.link.on_datagram(bad, 1);
+  s.link.on_datagram(good, 2);
+  s.link.on_datagram(good, 3);  // replayed
+  EXPECT_EQ(s.link.counters().forged, 1u);
+  EXPECT_EQ(s.link.counters().replayed, 1u);
+  EXPECT_EQ(s.out.sent.size(), before + 1);  // one PONG
+}
+
+TEST(DgramLink, SilenceStopsDataUntilANewHandshake) {
+  Session s;
+  s.handshake(1, 0);
+  s.link.tick(5'000'000'001);
+  EXPECT_FALSE(s.link.ready());
+  EXPECT_FALSE(s.link.add_slot(1, 0, 6'000'000'000, {1}, {true}));
+  s.handshake(3, 7'000'000'000);
+  EXPECT_TRUE(s.link.ready());
+}

@@ -1,0 +1,129 @@
+"""Where the base station's datagrams come and go (docs/protocol.md,
+"Datagram transports"): a UDP socket connected to the PubBroker's endpoint,
+or a character device (a telemetry radio, a UART, a pseudo-terminal) in raw
+mode, each datagram one serial frame (COBS + CRC-16, 0x00).
+
+>>> port = UdpPort(("127.0.0.1", 7171))          # doctest: +SKIP
+>>> port.send(raw); port.recv(0.1)               # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import select
+import socket
+import termios
+import tty
+from typing import Protocol
+
+from modd.link.serialframe import Deframer, encode_frame
+
+#: IPv4 (20) + UDP (8): what a datagram costs on the wire beyond its payload.
+UDP_IP_HEADER_BYTES = 28
+
+_BAUD = {9600: termios.B9600, 19200: termios.B19200, 38400: termios.B38400,
+         57600: termios.B57600, 115200: termios.B115200, 230400: termios.B230400}
+
+
+class DatagramPort(Protocol):
+    """One end of a datagram link. ``wire_in``/``wire_out`` count the bytes on
+    the wire (headers or framing included)."""
+
+    wire_in: int
+    wire_out: int
+
+    @property
+    def corrupt(self) -> int: ...
+
+    def send(self, datagram: bytes) -> None: ...
+
+    def recv(self, timeout_s: float) -> list[bytes]: ...
+
+    def close(self) -> None: ...
+
+
+class UdpPort:
+    """A UDP socket connected to the PubBroker's endpoint (loopback in tests)."""
+
+    def __init__(self, endpoint: tuple[str, int]) -> None:
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.connect(endpoint)
+        self.wire_in = self.wire_out = 0
+
+    @property
+    def corrupt(self) -> int:
+        return 0  # the UDP checksum drops a damaged datagram before us
+
+    def send(self, datagram: bytes) -> None:
+        with contextlib.suppress(OSError):  # nobody there (yet): lost, as on a radio
+            self.sock.send(datagram)
+            self.wire_out += len(datagram) + UDP_IP_HEADER_BYTES
+
+    def recv(self, timeout_s: float) -> list[bytes]:
+        out: list[bytes] = []
+        ready, _, _ = select.select([self.sock], [], [], timeout_s)
+        while ready and len(out) < 64:
+            try:
+                data = self.sock.recv(65535)
+            except (BlockingIOError, ConnectionRefusedError):
+                break  # an ICMP error of an earlier send: the far end is not up
+            self.wire_in += len(data) + UDP_IP_HEADER_BYTES
+            out.append(data)
+            ready, _, _ = select.select([self.sock], [], [], 0)
+        return out
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+class SerialPort:
+    """A character device in raw mode at ``baud``; frames of at most
+    ``max_frame`` bytes (the radio's packet)."""
+
+    def __init__(self, device: str, baud: int, max_frame: int) -> None:
+        self.fd = os.open(device, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+        try:
+            tty.setraw(self.fd)
+            attrs = termios.tcgetattr(self.fd)
+            speed = _BAUD.get(baud)
+            if speed is not None:
+                attrs[4] = attrs[5] = speed
+                termios.tcsetattr(self.fd, termios.TCSANOW, attrs)
+        except termios.error:
+            pass  # not a terminal (a FIFO in a test): raw bytes anyway
+        self.deframer = Deframer(max_frame)
+        self.wire_in = self.wire_out = 0
+
+    @property
+    def corrupt(self) -> int:
+        return self.deframer.corrupt + self.deframer.oversized
+
+    def send(self, datagram: bytes) -> None:
+        frame = encode_frame(datagram)
+        view = memoryview(frame)
+        while view:
+            try:
+                n = os.write(self.fd, view)
+            except BlockingIOError:
+                select.select([], [self.fd], [], 0.5)
+                continue
+            self.wire_out += n
+            view = view[n:]
+
+    def recv(self, timeout_s: float) -> list[bytes]:
+        ready, _, _ = select.select([self.fd], [], [], timeout_s)
+        if not ready:
+            return []
+        try:
+            data = os.read(self.fd, 65536)
+        except BlockingIOError:
+            return []
+        except OSError as exc:  # EIO: the other end of a pseudo-terminal went away
+            raise ConnectionError(f"serial device: {exc.strerror}") from exc
+        self.wire_in += len(data)
+        return self.deframer.feed(data)
+
+    def close(self) -> None:
+        with contextlib.suppress(OSError):
+            os.close(self.fd)

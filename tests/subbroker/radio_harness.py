@@ -1,0 +1,138 @@
+"""Real processes for the datagram transports (udp, serial): the PubBroker
+with a udp or serial link, the SubBroker with the same, the radio emulator
+(modd-radio: a UDP relay, or two pseudo-terminals), and an injecting relay
+that forges and replays datagrams. Every process is stopped by its PID."""
+
+from __future__ import annotations
+
+import json
+import random
+import select
+import socket
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+from modd.ports import free_port
+from modd_model import load_model
+from modd_model.query import topics
+from subbroker_harness import PUBBROKER, Proc, shared_credentials
+
+RADIO = [str(Path(sys.executable)), "-m", "modd.radio.cli"]
+
+
+def start_pubbroker_dgram(tmp: Path, model_path: Path, link: dict[str, Any], ingress_port: int,
+                          tag: str = "pb", archive: str = "archive") -> Proc:
+    """A PubBroker whose link is ``link`` (transport, port or device, ...)."""
+    model = load_model(model_path)
+    cfg = {
+        "name": model["drone"]["name"],
+        "link": {"host": "127.0.0.1", "key": "env:MODD_LINK_KEY", **link},
+        "ingress": {"host": "127.0.0.1", "port": ingress_port},
+        "archive": {"dir": str(tmp / archive), "flush_interval_ms": 200},
+        "topics": [{"name": t.name, "type": t.type} for t in topics(model).values()],
+        "status_period_s": 60,
+        "log_period_s": 1,
+    }
+    path = tmp / f"{tag}.json"
+    path.write_text(json.dumps(cfg))
+    proc = Proc(tag, [str(PUBBROKER), "--config", str(path)], tmp / f"{tag}.log")
+    assert proc.wait_log("started:", 10), proc.log()
+    return proc
+
+
+def subbroker_dgram_config(tmp: Path, model_path: Path, endpoint: str, zenoh_port: int,
+                           transport: str, device: str = "", tag: str = "sb") -> Path:
+    dev = f"device = {json.dumps(device)}" if device else ""
+    path = tmp / f"{tag}.toml"
+    path.write_text(f"""
+model = {json.dumps(str(model_path))}
+[link]
+endpoint = "{endpoint}"
+key = "env:MODD_LINK_KEY"
+transport = "{transport}"
+{dev}
+[zenoh]
+listen = ["tcp/127.0.0.1:{zenoh_port}"]
+credentials_dir = {json.dumps(str(shared_credentials().dir))}
+[delivery]
+tcp = false
+status_period_s = 0.5
+""")
+    return path
+
+
+def start_radio_udp(tmp: Path, target: int, spec: str, tag: str = "radio") -> tuple[Proc, int]:
+    """modd-radio as a UDP relay to 127.0.0.1:target; (process, its port)."""
+    port = free_port("udp")
+    proc = Proc(tag, [*RADIO, "--udp", f"127.0.0.1:{port}", "--to", f"127.0.0.1:{target}",
+                      "--radio", spec, "--report", "1"], tmp / f"{tag}.log")
+    time.sleep(0.3)
+    return proc, port
+
+
+def start_radio_serial(tmp: Path, spec: str, tag: str = "radio") -> tuple[Proc, str, str]:
+    """modd-radio between two new pseudo-terminals; (process, base, drone)."""
+    proc = Proc(tag, [*RADIO, "--serial", "--radio", spec, "--report", "1"], tmp / f"{tag}.log")
+    assert proc.wait_log("drone=", 10), proc.log()
+    line = next(ln for ln in proc.log().splitlines() if ln.startswith("base="))
+    base, drone = (part.partition("=")[2] for part in line.split())
+    return proc, base, drone
+
+
+def radio_counts(proc: Proc) -> str:
+    lines = [ln for ln in proc.log().splitlines() if ln.startswith("radio:")]
+    return lines[-1] if lines else ""
+
+
+class Injector:
+    """A UDP relay base station <-> PubBroker that, besides forwarding, sends
+    the SubBroker copies of drone->base datagrams with one bit flipped
+    (forged) and again as they were (replayed), and the PubBroker forged
+    control datagrams."""
+
+    def __init__(self, target: int, seed: int = 3) -> None:
+        self.port = free_port("udp")
+        self.front = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.front.bind(("127.0.0.1", self.port))
+        self.back = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.back.connect(("127.0.0.1", target))
+        self.rng = random.Random(seed)
+        self.forged_down = self.replayed_down = self.forged_up = 0
+        self.peer: tuple[str, int] | None = None
+        self._stop = False
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def close(self) -> None:
+        self._stop = True
+        self._thread.join(2)
+        self.front.close()
+        self.back.close()
+
+    def _run(self) -> None:
+        while not self._stop:
+            ready, _, _ = select.select([self.front, self.back], [], [], 0.05)
+            for s in ready:
+                if s is self.front:
+                    data, self.peer = self.front.recvfrom(65535)
+                    self.back.send(data)
+                    if data[0] == 0x40:  # a forged control datagram to the PubBroker
+                        bad = bytearray(data)
+                        bad[-1] ^= 0x01
+                        self.back.send(bytes(bad))
+                        self.forged_up += 1
+                    continue
+                data = self.back.recv(65535)
+                if self.peer is None:
+                    continue
+                self.front.sendto(data, self.peer)
+                if data[0] in (0x30, 0x31):
+                    bad = bytearray(data)
+                    bad[self.rng.randrange(4, len(bad))] ^= 1 << self.rng.randrange(8)
+                    self.front.sendto(bytes(bad), self.peer)
+                    self.front.sendto(data, self.peer)
+                    self.forged_down += 1
+                    self.replayed_down += 1

@@ -1,0 +1,262 @@
+"""The link over udp and over serial, end to end on loopback and
+pseudo-terminals, real processes: the C++ PubBroker, the publisher load, the
+SubBroker, the radio emulator (modd-radio) in the path. The oracle is the
+on-board archive (MCAP, official reader): every delivered window equals the
+one recomputed from the archived samples, and the windows that must arrive
+are all there (loss, reordering, duplication, an outage, reboots are
+repaired, or only cost the live view what the protocol says)."""
+
+from __future__ import annotations
+
+import re
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+from modd.zenoh_session import wait_connected
+from radio_harness import (
+    RADIO,
+    Injector,
+    radio_counts,
+    start_pubbroker_dgram,
+    start_radio_serial,
+    start_radio_udp,
+    subbroker_dgram_config,
+)
+from subbroker_harness import (
+    Proc,
+    check_against_archive,
+    free_port,
+    load_counts,
+    model_copy,
+    processes,
+    read_archive,
+    start_load,
+    start_subbroker,
+    wait_port,
+)
+
+from conftest import Collector
+
+pytestmark = pytest.mark.usefixtures("needs_pubbroker")
+
+PERIOD_NS = 250_000_000  # scenario 1's subscriptions that are sent every 0.25 s
+
+
+def _watch(zenoh_client: Any, zport: int) -> Collector:
+    wait_port(zport, 40)  # the SubBroker's start (imports, zenoh) on a loaded machine
+    session = zenoh_client(zport)
+    assert wait_connected(session)
+    got = Collector()
+    session.declare_subscriber("modd/usv/**", got.on_sample)
+    return got
+
+
+def _windows(values: dict[str, list[Any]], name: str) -> set[int]:
+    return {v.end_ns for v in values.get(name, []) if v.value is not None}
+
+
+def _expected(archive: dict[str, list[tuple[int, Any]]], topic: str, period_ns: int,
+              first_end: int, last_end: int) -> set[int]:
+    """Window ends in [first_end, last_end] whose window holds archived samples."""
+    stamps = [t for t, _ in archive[topic]]
+    out = set()
+    for end in range(first_end, last_end + 1, period_ns):
+        if any(end - period_ns <= t < end for t in stamps):
+            out.add(end)
+    return out
+
+
+def _delivered_share(values: dict[str, list[Any]], archive: dict[str, Any],
+                     name: str = "sub_5") -> tuple[float, set[int]]:
+    """Share of sub_5's windows (accel_z MAX every 0.25 s) delivered, between its
+    first and last delivered window, and the missing window ends."""
+    got = _windows(values, name)
+    topic = values[name][0].topic
+    want = _expected(archive, topic, PERIOD_NS, min(got), max(got))
+    return len(got & want) / len(want), want - got
+
+
+def _run(tmp: Path, model: Path, pb: Proc, sb: Proc, got: Collector, seconds: float,
+         settle: float = 2.0) -> tuple[dict[str, list[Any]], dict[str, Any], Proc]:
+    assert sb.wait_log("running", 20), sb.log()[-3000:]
+    load = start_load(tmp, model, _ingress(pb), seconds)
+    load.p.wait(seconds + 20)
+    time.sleep(settle)
+    with processes(load):
+        pass
+    return got.snapshot(), read_archive(tmp / "archive", model), load
+
+
+def _ingress(pb: Proc) -> int:
+    return int(re.search(r'"port": (\d+)', (pb.log_path.with_suffix(".json")).read_text()
+                         .split('"ingress"')[1]).group(1))  # type: ignore[union-attr]
+
+
+def _start(tmp: Path, transport: str, spec: str | None
+           ) -> tuple[Path, Proc, Proc, Proc | None, int]:
+    model = model_copy(tmp, "scenario1.modd")
+    zport, ingress = free_port(), free_port()
+    radio: Proc | None = None
+    if transport == "udp":
+        port = free_port("udp")
+        pb = start_pubbroker_dgram(tmp, model, {"transport": "udp", "port": port}, ingress)
+        endpoint = port
+        if spec is not None:
+            radio, endpoint = start_radio_udp(tmp, port, spec)
+        cfg = subbroker_dgram_config(tmp, model, f"127.0.0.1:{endpoint}", zport, "udp")
+    else:
+        radio, base, drone = start_radio_serial(tmp, spec or "")
+        pb = start_pubbroker_dgram(tmp, model, {"transport": "serial", "device": drone,
+                                                "port": 1}, ingress)
+        cfg = subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport, "serial", device=base)
+    sb = start_subbroker(tmp, cfg)
+    return model, pb, sb, radio, zport
+
+
+@pytest.mark.parametrize("transport", ["udp", "serial"])
+def test_transport_delivers_what_the_archive_holds(transport: str, tmp_path: Path,
+                                                   zenoh_client: Any) -> None:
+    model, pb, sb, radio, zport = _start(tmp_path, transport, None)
+    with processes(*([radio] if radio else []), pb, sb):
+        got = _watch(zenoh_client, zport)
+        values, archive, load = _run(tmp_path, model, pb, sb, got, 6.0)
+        status = got.status[-1]
+    assert {t: len(s) for t, s in archive.items()} == load_counts(load)  # lossless archive
+    assert set(values) >= {f"sub_{i}" for i in range(3, 8)}  # sub_1, sub_2: 10 s windows
+    assert check_against_archive(values, archive) > 100
+    share, missing = _delivered_share(values, archive)
+    assert share == 1.0, sorted(missing)
+    radio_st = status["radio"]
+    assert status["transport"] == transport and status["link"] == "up"
+    assert radio_st["forged"] == 0 and radio_st["replayed"] == 0 and radio_st["nacks"] == 0
+    # nothing flows back while nothing is lost (the PINGs of the RTT, at most)
+    assert radio_st["wire_bytes_out_per_s"] is not None and radio_st["wire_bytes_out_per_s"] < 20
+    assert 0 < radio_st["wire_bytes_in_per_s"] < 300
+
+
+@pytest.mark.parametrize("transport", ["udp", "serial"])
+def test_loss_reordering_duplication_are_repaired(transport: str, tmp_path: Path,
+                                                  zenoh_client: Any) -> None:
+    spec = "loss=0.15,latency_ms=40,jitter_ms=30,duplicate=0.1,seed=5"
+    model, pb, sb, radio, zport = _start(tmp_path, transport, spec)
+    assert radio is not None
+    with processes(radio, pb, sb):
+        got = _watch(zenoh_client, zport)
+        values, archive, _ = _run(tmp_path, model, pb, sb, got, 8.0, settle=4.0)
+        status = got.status[-1]
+        counts = radio_counts(radio)
+    assert check_against_archive(values, archive) > 100  # no wrong value, ever
+    share, missing = _delivered_share(values, archive)
+    assert share >= 0.97, (share, sorted(missing), status["radio"], counts)
+    r = status["radio"]
+    assert "loss" in counts and r["nacks"] > 0 and r["retransmissions"] > 0, (r, counts)
+    assert r["replayed"] > 0, r  # the duplicates, dropped and counted
+    assert r["forged"] == 0 and r["loss"] > 0
+
+
+def test_outage_and_reboots_through_the_emulator(tmp_path: Path, zenoh_client: Any) -> None:
+    """A radio outage (11 s here, shortened from 30 s: longer than the
+    SubBroker's 9 s of silence, so the same code path) is repaired from the
+    PubBroker's resend ring after a new handshake; a SubBroker killed with -9
+    and started again, then a PubBroker restarted, each get the link back
+    through the emulator without anyone's help."""
+    model = model_copy(tmp_path, "scenario1.modd")
+    zport, ingress, port = free_port(), free_port(), free_port("udp")
+    pb = start_pubbroker_dgram(tmp_path, model, {"transport": "udp", "port": port}, ingress)
+    relay = free_port("udp")
+    sb = start_subbroker(tmp_path, subbroker_dgram_config(
+        tmp_path, model, f"127.0.0.1:{relay}", zport, "udp"))
+    radio: Proc | None = None
+    try:
+        got = _watch(zenoh_client, zport)
+        # the emulator starts once the SubBroker is up, so that its outage (4 s after
+        # its start, for 11 s) falls while the load runs; the handshake waits for it
+        radio = Proc("radio", [*RADIO, "--udp", f"127.0.0.1:{relay}", "--to",
+                               f"127.0.0.1:{port}", "--radio", "latency_ms=30,outage=4+11,seed=2",
+                               "--report", "1"], tmp_path / "radio.log")
+        assert sb.wait_log("running", 20), sb.log()[-3000:]
+        load = start_load(tmp_path, model, ingress, 16.0)
+        load.p.wait(40)
+        time.sleep(4.0)  # the NACKs of the outage's slots, after the new handshake
+        values = got.snapshot()
+        archive = read_archive(tmp_path / "archive", model)
+        assert check_against_archive(values, archive) > 100
+        share, missing = _delivered_share(values, archive)
+        assert share == 1.0, (sorted(missing), got.status[-1]["radio"], radio_counts(radio))
+        assert "outage" in radio_counts(radio)
+        r = got.status[-1]["radio"]
+        assert r["handshakes"] >= 2 and r["retransmissions"] > 30, r  # a new session, resent
+
+        # the SubBroker dies (-9) and comes back: a new session, a new CONFIG
+        sb.kill9()
+        sb = start_subbroker(tmp_path, tmp_path / "sb.toml", tag="sb2")
+        assert sb.wait_log("running", 30), sb.log()[-3000:]
+        before = len(got.snapshot().get("sub_5", []))
+        load2 = start_load(tmp_path, model, ingress, 3.0, tag="load2")
+        load2.p.wait(20)
+        time.sleep(1.5)
+        assert len(got.snapshot().get("sub_5", [])) > before + 8
+
+        # the PubBroker restarts: the SubBroker finds the silence, handshakes again
+        pb.stop()
+        with processes(load, load2):
+            pass
+        archive = read_archive(tmp_path / "archive", model)  # what the first PubBroker kept
+        pb = start_pubbroker_dgram(tmp_path, model, {"transport": "udp", "port": _pb_port(pb)},
+                                   ingress, tag="pb2", archive="archive2")
+        assert sb.wait_log("config 2 running", 30) or "running" in sb.log()
+        deadline = time.monotonic() + 30
+        while "PubBroker config 0" not in sb.log() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert "PubBroker config 0" in sb.log(), sb.log()[-3000:]  # it met the new PubBroker
+        time.sleep(2.0)
+        before = len(got.snapshot().get("sub_5", []))
+        load3 = start_load(tmp_path, model, ingress, 3.0, tag="load3")
+        load3.p.wait(20)
+        time.sleep(1.5)
+        with processes(load3):
+            pass
+        after = got.snapshot()
+        assert len(after.get("sub_5", [])) > before + 8, sb.log()[-2000:]
+        archive2 = read_archive(tmp_path / "archive2", model)
+        late = {k: [v for v in vs if v.start_ns > max(t for t, _ in archive[v.topic])]
+                for k, vs in after.items()}
+        assert check_against_archive(late, archive2) > 20
+    finally:
+        with processes(radio, pb, sb):
+            pass
+
+
+def _pb_port(pb: Proc) -> int:
+    import json
+
+    return int(json.loads(pb.log_path.with_suffix(".json").read_text())["link"]["port"])
+
+
+def test_forged_and_replayed_datagrams_are_dropped_and_counted(tmp_path: Path,
+                                                               zenoh_client: Any) -> None:
+    model = model_copy(tmp_path, "scenario1.modd")
+    zport, ingress, port = free_port(), free_port(), free_port("udp")
+    pb = start_pubbroker_dgram(tmp_path, model, {"transport": "udp", "port": port}, ingress)
+    tap = Injector(port)
+    sb = start_subbroker(tmp_path, subbroker_dgram_config(
+        tmp_path, model, f"127.0.0.1:{tap.port}", zport, "udp"))
+    try:
+        with processes(pb, sb):
+            got = _watch(zenoh_client, zport)
+            values, archive, _ = _run(tmp_path, model, pb, sb, got, 5.0)
+            status = got.status[-1]
+            time.sleep(1.2)  # the PubBroker logs its link counters every second
+            pb_log = pb.log()
+    finally:
+        tap.close()
+    r = status["radio"]
+    assert tap.forged_down > 5 and r["forged"] >= tap.forged_down - 2, (r, tap.forged_down)
+    assert r["replayed"] >= tap.replayed_down - 2, (r, tap.replayed_down)
+    assert check_against_archive(values, archive) > 100  # only genuine values came out
+    share, missing = _delivered_share(values, archive)
+    assert share == 1.0, sorted(missing)
+    forged_up = [int(x) for x in re.findall(r"link: datagrams_in=\d+ .*?forged=(\d+)", pb_log)]
+    assert forged_up and forged_up[-1] >= tap.forged_up > 0, pb_log[-2000:]
