@@ -41,9 +41,15 @@ def _start_together(data: Path, url: str) -> list[subprocess.CompletedProcess[st
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
              for _ in range(STARTERS)]
     out = []
-    for p in procs:
-        stdout, stderr = p.communicate(timeout=180)
-        out.append(subprocess.CompletedProcess(p.args, p.returncode, stdout, stderr))
+    try:
+        for p in procs:  # each imports the whole backend: minutes on a loaded machine
+            stdout, stderr = p.communicate(timeout=300)
+            out.append(subprocess.CompletedProcess(p.args, p.returncode, stdout, stderr))
+    finally:
+        for p in procs:  # a test that fails stops what it started
+            if p.poll() is None:
+                p.kill()
+                p.communicate()
     return out
 
 
