@@ -9,6 +9,7 @@
 import type { ModdModel } from "../core/model.gen";
 import { Http, type HttpOptions } from "./http";
 import type {
+  BackfillProgress,
   ArchiveFile, ArchiveReplay, ArchiveSeries,
   DeployedDiff, Deployment, DynamicReply, DynamicRequest,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, User, ValidateResult, Version,
@@ -83,6 +84,12 @@ export function createApi(opts: HttpOptions) {
       http.request<DynamicReply>(`/api/drones/${drone}/subscriptions`, { method: "POST", json: body }),
     cancelDynamic: (drone: string, subscriber: string) =>
       http.request<DynamicReply>(`/api/drones/${drone}/subscriptions/${subscriber}`, { method: "DELETE" }),
+    // --- backfill: fill what the link missed from the drone's archive
+    startBackfill: (drone: string, body: { subscriber: string; gaps?: boolean; from_ns?: number; to_ns?: number; rate_bps?: number }) =>
+      http.request<BackfillProgress>(`/api/drones/${drone}/backfill`, { method: "POST", json: body }),
+    backfillProgress: (drone: string, id: number) => http.request<BackfillProgress>(`/api/drones/${drone}/backfill/${id}`),
+    cancelBackfill: (drone: string, id: number) =>
+      http.request<BackfillProgress>(`/api/drones/${drone}/backfill/${id}`, { method: "DELETE" }),
     /** ws(s):// URL of a drone's stream; the session cookie authenticates it (never a token in the URL). */
     streamUrl: (drone: string, origin: string) => {
       const base = (opts.baseUrl || origin).replace(/^http/, "ws");

@@ -99,6 +99,23 @@ export interface DynamicReply {
   factor?: number | null;
 }
 
+/** A backfill's progress (backend routers/backfill.py; docs/subbroker.md, "Backfill"). */
+export interface BackfillProgress {
+  status: string;
+  reason?: string | null;
+  id?: number | null;
+  subscriber?: string | null;
+  windows: number;
+  windows_done: number;
+  windows_total: number;
+  duplicates: number;
+  bytes: number;
+  rate_bps: number;
+  seconds: number;
+  bytes_per_s: number;
+  seconds_left?: number | null;
+}
+
 /** An MCAP archive of a drone (backend routers/archives.py). */
 export interface ArchiveFile {
   name: string;

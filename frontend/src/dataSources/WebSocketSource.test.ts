@@ -70,6 +70,9 @@ describe("WebSocketSource", () => {
   it("spreads ALL windows over the window and counts backend drops", () => {
     expect(toSamples({ value: [1, 2, 3, 4], start_ns: 0, end_ns: 4e9 }).map((s) => s.t)).toEqual([1, 2, 3, 4]);
     expect(toSamples({ value: true, end_ns: 1e9 })[0].value).toBe(1);
+    // a value filled from the drone's archive keeps its mark; live ones carry none
+    expect(toSamples({ value: 2, start_ns: 0, end_ns: 1e9, backfilled: true })[0].backfilled).toBe(true);
+    expect(toSamples({ value: 2, start_ns: 0, end_ns: 1e9 })[0].backfilled).toBeUndefined();
     const { sock, src } = setup();
     sock.open();
     sock.deliver({ type: "dropped", count: 5 });

@@ -54,6 +54,7 @@ export function toSamples(d: Partial<DeliveredValue>): Sample[] {
     const s: Sample = { t: at, value: v };
     if (windowS !== undefined) s.windowS = windowS;
     if (count !== undefined) s.count = count;
+    if (d.backfilled === true) s.backfilled = true;
     return s;
   };
   if (Array.isArray(d.value)) {

@@ -21,6 +21,8 @@ export interface Sample {
   windowS?: number;
   /** Number of raw samples aggregated (optional). */
   count?: number;
+  /** Recomputed from the drone's archive after the link missed it (backfill). */
+  backfilled?: boolean;
 }
 
 /** Link status of a drone: measured against planned. */

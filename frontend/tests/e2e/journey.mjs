@@ -269,6 +269,14 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       }
       if (drone) await expectText(page.getByRole("status", { name: "Link status" }), /link up/, 20000);
       if (liveValues) await expectText(page.getByTestId("last-sub_5"), /last -?\d/, 30000);
+      if (drone && liveValues) {
+        // Fill gaps: the drone recomputes what the link missed from its archive; the progress
+        // bar runs to done, with no window delivered twice.
+        const fill = page.getByRole("region", { name: "Fill gaps" });
+        await fill.getByLabel("Subscription to fill").selectOption("sub_5");
+        await fill.getByRole("button", { name: "Fill gaps" }).click();
+        await expectText(page.getByTestId("backfill-progress"), /done: \d+ filled, 0 duplicates/, 60000);
+      }
       await page.getByRole("checkbox", { name: /sub_1 / }).uncheck();
       await page.getByRole("checkbox", { name: /sub_2 / }).uncheck();
       await expand(true);

@@ -22,6 +22,7 @@ import { useLinkHealth } from "../../app/useLinkHealth";
 import type { DynamicReply } from "../../api/types";
 import { LiveChart } from "./LiveChart";
 import { keepSubscribed, useChartLayout } from "./useChartLayout";
+import { FillGaps } from "./FillGaps";
 
 export default function MonitorPanel() {
   const model = useModel();
@@ -103,6 +104,7 @@ export default function MonitorPanel() {
             <label key={name}><input type="checkbox" checked={watched.includes(name)} onChange={() => layout.toggle(name)} />
               {name} <span className="muted">{d.topic} {d.aggregation} {d.period_s} s (dynamic)</span></label>
           ))}
+          {canEdit(role, "subscriber") && <FillGaps drone={drone} source={source} subscribers={watched} />}
           {canEdit(role, "subscriber") && (
             <form onSubmit={addDynamic} className="dynamic-form" aria-label="Dynamic subscription">
               <h3>Dynamic subscription</h3>
