@@ -33,6 +33,8 @@ export interface DeliveredValue {
   delivered_ns: number;
   /** Payload version; a reader rejects a higher one. */
   v: number;
+  /** Present and true when the window was recomputed from the drone's archive after the link missed it (backfill); absent on live values. */
+  backfilled?: boolean;
 }
 
 /** The SubBroker's status document, put on modd/<drone>/status every status_period_s. Producer: runtime/python/src/modd/subbroker/broker.py (status), status.py (rates), backpressure.py. Consumers: the backend (stream relay, health, Foxglove), `modd up`, the browser's WebSocketSource. docs/subbroker.md, "Status". A new field is added here first. */

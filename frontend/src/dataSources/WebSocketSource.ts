@@ -66,6 +66,11 @@ export function toSamples(d: Partial<DeliveredValue>): Sample[] {
   return s ? [s] : [];
 }
 
+/** Two samples of the same window (same time and window length): a backfill repeating a live value. */
+function sameWindow(a: Sample, b: Sample): boolean {
+  return a.t === b.t && a.windowS === b.windowS;
+}
+
 function num(x: unknown): number | null {
   return x === null || x === undefined || !Number.isFinite(Number(x)) ? null : Number(x);
 }
@@ -139,7 +144,9 @@ export class WebSocketSource implements DataSource {
       const batch = toSamples((msg.data ?? {}) as Partial<DeliveredValue>);
       if (!channel || batch.length === 0) return;
       const b = this.buffer(channel);
-      batch.forEach((s) => b.push(s));
+      // Live values come in time order; a backfilled one goes in place among them (a
+      // window already held, live or backfilled before, is replaced, never doubled).
+      batch.forEach((s) => b.insertOrdered(s, (x) => x.t, sameWindow));
       this.listeners.get(channel)?.forEach((l) => l(batch));
     } else if (msg.type === "status") {
       const status = toLinkStatus((msg.data ?? {}) as Partial<SubBrokerStatus>);

@@ -30,6 +30,7 @@ class DeliveredValue(TypedDict):
     count: int | None
     delivered_ns: int
     v: int
+    backfilled: NotRequired[bool]
 
 
 class SubBrokerStatus(TypedDict):
