@@ -4,7 +4,9 @@
  * the progress: windows done / total, bytes/s used against the pace, time left.
  * The Monitor puts one on each chart (the chart's subscriptions) and one for
  * the drone (every subscription of the model and the dynamic ones).
- * One backfill per subscription, started together; the bar sums them.
+ * One backfill per subscription, started together; the bar sums them (a
+ * subscription the drone refuses is named beside it). Only subscriptions of
+ * the running plan can be filled (dynamic ones are not in the drone's plan).
  * Backfilled values arrive on the usual stream, marked `backfilled`: counted
  * here as they come (the chart draws them in place, marked). Contract: talks
  * only through the services' api and the panel's data source; polls each
@@ -33,7 +35,9 @@ export function sumProgress(all: readonly BackfillProgress[]): BackfillProgress 
   if (all.length === 0) return null;
   const sum = (f: (p: BackfillProgress) => number) => all.reduce((n, p) => n + f(p), 0);
   const running = all.some((p) => p.status === "RUNNING");
-  const failed = all.find((p) => p.status !== "RUNNING" && p.status !== "DONE");
+  const done = all.some((p) => p.status === "DONE");
+  // A failure decides only when nothing ran to the end (each failure is said beside the bar).
+  const failed = done ? undefined : all.find((p) => p.status !== "RUNNING" && p.status !== "DONE");
   const left = all.map((p) => p.seconds_left).filter((s): s is number => s != null);
   return {
     status: running ? "RUNNING" : failed ? failed.status : "DONE",

@@ -109,7 +109,7 @@ export default function MonitorPanel() {
               {name} <span className="muted">{d.topic} {d.aggregation} {d.period_s} s (dynamic)</span></label>
           ))}
           {canEdit(role, "subscriber") && <FillGaps drone={drone} source={source} scope={`drone ${drone}`}
-            subscribers={[...subscribers.map((s) => s.name), ...Object.keys(dynamic)]} />}
+            subscribers={subscribers.map((s) => s.name)} />}
           {canEdit(role, "subscriber") && (
             <form onSubmit={addDynamic} className="dynamic-form" aria-label="Dynamic subscription">
               <h3>Dynamic subscription</h3>
@@ -150,7 +150,7 @@ export default function MonitorPanel() {
                 onZoom={(from, to) => setWin({ follow: false, from, to })}
                 addable={watched.filter((c) => !chart.includes(c))}
                 onAdd={(c) => layout.moveTo(c, i)} onRemove={(c) => layout.split(c)}
-                tools={canEdit(role, "subscriber") && <FillGaps drone={drone} source={source} subscribers={chart} scope={chart.join(", ")} compact />} />
+                tools={canEdit(role, "subscriber") && <FillGaps drone={drone} source={source} subscribers={chart.filter((c) => !(c in dynamic))} scope={chart.join(", ")} compact />} />
             ))}
           </div>
         </div>

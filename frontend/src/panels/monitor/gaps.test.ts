@@ -109,7 +109,10 @@ describe("Fill gaps of several subscriptions", () => {
     });
     expect(sumProgress([p("DONE", 4, 4, null), p("RUNNING", 1, 6, 3)])).toMatchObject({ status: "RUNNING", windows_done: 5, windows_total: 10, bytes_per_s: 200, seconds_left: 3 });
     expect(sumProgress([p("DONE", 4, 4, null), p("DONE", 6, 6, null)])).toMatchObject({ status: "DONE", windows: 10 });
-    expect(sumProgress([p("DONE", 4, 4, null), { ...p("ERROR", 0, 0, null), reason: "no link" }])).toMatchObject({ status: "ERROR", reason: "no link" });
+    expect(sumProgress([p("ERROR", 0, 0, null), { ...p("ERROR", 0, 0, null), reason: "no link" }])).toMatchObject({ status: "ERROR" });
+    expect(sumProgress([{ ...p("ERROR", 0, 0, null), reason: "no link" }])).toMatchObject({ status: "ERROR", reason: "no link" });
+    // one refused, the others done: done (the refusal is said beside the bar)
+    expect(sumProgress([p("DONE", 4, 4, null), { ...p("ERROR", 0, 0, null), reason: "no link" }])).toMatchObject({ status: "DONE", windows: 4 });
     expect(sumProgress([])).toBeNull();
   });
 });
