@@ -106,8 +106,11 @@ try {
     ...collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) }),
   ];
   let broken = null;
+  // MODD_E2E_KEEP_GOING=1: the later steps still run after a failure (to see them locally; they
+  // may fail for the failed step's sake). By default they are not run.
+  const keepGoing = process.env.MODD_E2E_KEEP_GOING === "1";
   for (const [name, fn] of steps) {
-    if (broken) { console.log(`  - ${name}: not run (after "${broken}" failed)`); failed += 1; continue; }
+    if (broken && !keepGoing) { console.log(`  - ${name}: not run (after "${broken}" failed)`); failed += 1; continue; }
     const t0 = Date.now();
     try {
       await fn();
@@ -117,6 +120,7 @@ try {
     } catch (e) {
       failed += 1;
       broken = name;
+      errors.length = 0;
       console.log(`  ✗ ${name}: ${e.message}`);
       await page.screenshot({ path: join(tmpdir(), "modd-e2e-failure.png") }).catch(() => undefined);
     }
