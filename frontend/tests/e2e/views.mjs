@@ -13,7 +13,7 @@ import { waitUntil } from "./journey.mjs";
 /** How long the gap step stops the drone's PubBroker (ms). */
 const OUTAGE_MS = 8000;
 
-export function views({ page, imagesDir, drone, liveValues, dronePid, survey }) {
+export function views({ page, imagesDir, drone, liveValues, dronePid, survey, ports }) {
   const shot = async (name) => {
     await page.waitForTimeout(200);
     await page.screenshot({ path: join(imagesDir, `${name}.png`) });
@@ -282,7 +282,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey }) 
     }],
 
     // After the link loss: an outage of its own, then the chart's gap filled from the drone's archive.
-    ["a gap after an outage: the line breaks, Fill gaps on the chart, progress bar, the gap filled with backfilled points marked", async () => {
+    ["a gap after a link outage: the line breaks, Fill gaps on the chart, progress bar, the gap filled with backfilled points marked", async () => {
       if (!drone || !liveValues) throw new Error("needs the simulated drone (make build)");
       await view("Scientist");
       await panel("Monitor");
@@ -298,14 +298,9 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey }) 
       };
       await waitUntil(async () => Number.isFinite(await missing()), 10000, async () => `caption "${await caption.textContent()}"`);
       const before = await missing();
-      const [pubbroker] = childPids(dronePid, "modd-pubbroker");
-      if (!pubbroker) throw new Error(`no modd-pubbroker under modd up (pid ${dronePid})`);
-      process.kill(pubbroker, "SIGSTOP");
-      try {
-        await page.waitForTimeout(OUTAGE_MS);
-      } finally {
-        process.kill(pubbroker, "SIGCONT");
-      }
+      // A link outage, the drone running on: its archive keeps what the link misses (stopping the
+      // PubBroker, as the link-loss step does, stops its archive too: nothing to fill then).
+      await cutLink(ports, OUTAGE_MS);
       // Values again after the outage, and the hole between them drawn as a gap.
       await waitUntil(async () => (await missing()) > before, 90000,
         async () => `no new gap after a ${OUTAGE_MS / 1000} s outage (before: ${before}; now "${await caption.textContent()}")`);
@@ -329,6 +324,24 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey }) 
     await shot(name);
     await expand(false);
   }
+}
+
+/**
+ * Cuts the drone's link for `ms`: every established TCP connection on the
+ * PubBroker's and SubBroker's ports is reset (ss -K, loopback only) every
+ * 200 ms, so each reconnection dies at once; the drone keeps running.
+ */
+async function cutLink(ports, ms) {
+  const filter = ["(", "sport", "=", `:${ports.pub}`, "or", "dport", "=", `:${ports.pub}`,
+    "or", "sport", "=", `:${ports.sub}`, "or", "dport", "=", `:${ports.sub}`, ")"];
+  const end = Date.now() + ms;
+  let killed = 0;
+  while (Date.now() < end) {
+    const out = execFileSync("ss", ["-K", "-H", "-t", "state", "established", "dst", "127.0.0.1", ...filter], { encoding: "utf8" });
+    killed += out.split("\n").filter(Boolean).length;
+    await new Promise((r) => setTimeout(r, 200));
+  }
+  if (killed === 0) throw new Error(`no link connection on ports ${ports.pub}/${ports.sub} to cut (ss -K needs CAP_NET_ADMIN and INET_DIAG_DESTROY)`);
 }
 
 /** The PIDs of `parent`'s children whose command is `name`. */
