@@ -27,6 +27,65 @@ export function alignSeries(series: ReadonlyArray<readonly Sample[]>): [number[]
   return [xs, ...ys];
 }
 
+/** A chart's channel as the chart reads it: its samples (time order) and the subscription's period, if known. */
+export interface ChannelData {
+  samples: readonly Sample[];
+  /** Seconds between two windows of the subscription; without it no gap is seen. */
+  periodS?: number;
+}
+
+/** A hole longer than this many periods is a gap (ALL spreads a window's samples inside it). */
+const GAP_PERIODS = 1.5;
+
+/** Where windows are missing: [time of the last value before, time of the next value, windows missing]. */
+export function findGaps(samples: readonly Sample[], periodS?: number): Array<[number, number, number]> {
+  const gaps: Array<[number, number, number]> = [];
+  if (!periodS || periodS <= 0) return gaps;
+  for (let i = 1; i < samples.length; i++) {
+    const dt = samples[i].t - samples[i - 1].t;
+    if (dt > GAP_PERIODS * periodS) gaps.push([samples[i - 1].t, samples[i].t, Math.max(1, Math.round(dt / periodS) - 1)]);
+  }
+  return gaps;
+}
+
+/**
+ * uPlot data for channels that may have gaps and backfilled values: x is the
+ * union of the times plus one point inside each gap (the first missing
+ * window's time); per channel two y arrays, its values (null at its own gaps,
+ * so the line breaks there, and undefined where another channel has a point,
+ * which uPlot joins across) and its backfilled values alone (to mark them).
+ *
+ * @example
+ *   alignWithGaps([{ samples: [{ t: 1, value: 5 }, { t: 4, value: 7, backfilled: true }], periodS: 1 }])
+ *   // [[1, 2, 4], [5, null, 7], [undefined, undefined, 7]]
+ */
+export function alignWithGaps(channels: readonly ChannelData[]): [number[], ...Array<Array<number | null | undefined>>] {
+  const holes = channels.map((c) => findGaps(c.samples, c.periodS).map(([from]) => from + c.periodS!));
+  const xs = [...new Set([...channels.flatMap((c) => c.samples.map((p) => p.t)), ...holes.flat()])].sort((a, b) => a - b);
+  const index = new Map(xs.map((t, i) => [t, i]));
+  const ys: Array<Array<number | null | undefined>> = [];
+  channels.forEach((c, k) => {
+    const y = new Array<number | null | undefined>(xs.length).fill(undefined);
+    const marked = new Array<number | null | undefined>(xs.length).fill(undefined);
+    for (const t of holes[k]) y[index.get(t)!] = null;
+    for (const p of c.samples) {
+      y[index.get(p.t)!] = p.value;
+      if (p.backfilled) marked[index.get(p.t)!] = p.value;
+    }
+    ys.push(y, marked);
+  });
+  return [xs, ...ys];
+}
+
+/** In words, for a chart's caption: "2 windows missing in 1 gap · 5 backfilled". */
+export function gapSummary(channels: readonly ChannelData[]): string {
+  const gaps = channels.flatMap((c) => findGaps(c.samples, c.periodS));
+  const missing = gaps.reduce((n, g) => n + g[2], 0);
+  const filled = channels.reduce((n, c) => n + c.samples.filter((s) => s.backfilled).length, 0);
+  const words = gaps.length === 0 ? "no gap" : `${missing} window${missing === 1 ? "" : "s"} missing in ${gaps.length} gap${gaps.length === 1 ? "" : "s"}`;
+  return `${words} · ${filled} backfilled`;
+}
+
 /**
  * The x range to draw: a fixed window as is; a following window ends at the
  * newest value and spans `spanS` (never the years uPlot picks for one point).

@@ -33,7 +33,7 @@ export interface DeliveredValue {
   delivered_ns: number;
   /** Payload version; a reader rejects a higher one. */
   v: number;
-  /** True for a window recomputed on board from the archive after the link missed it (a backfill, docs/protocol.md), delivered late in window order; absent on live values (false). */
+  /** Present and true when the window was recomputed from the drone's archive after the link missed it (backfill); absent on live values. */
   backfilled?: boolean;
 }
 

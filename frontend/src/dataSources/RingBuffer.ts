@@ -29,6 +29,46 @@ export class RingBuffer<T> {
     this.dropped += 1;
   }
 
+  /**
+   * Puts an item where `key` orders it (the items are kept ascending by key):
+   * pushed when it is not older than the last, else inserted in place, or put
+   * in place of an item with the same key when `same` says it is the same one.
+   * A full buffer drops its oldest item (which may be the new one) and counts it.
+   */
+  insertOrdered(item: T, key: (x: T) => number, same: (a: T, b: T) => boolean = () => false): void {
+    const last = this.last();
+    const k = key(item);
+    if (last === undefined || key(last) < k) {
+      this.push(item);
+      return;
+    }
+    const all = this.toArray();
+    let lo = 0;
+    let hi = all.length;
+    while (lo < hi) {
+      const mid = (lo + hi) >> 1;
+      if (key(all[mid]) < k) lo = mid + 1;
+      else hi = mid;
+    }
+    for (let i = lo; i < all.length && key(all[i]) === k; i++) {
+      if (same(all[i], item)) {
+        all[i] = item;
+        this.items = all;
+        this.start = 0;
+        return;
+      }
+    }
+    // Among equal keys, after the ones already there.
+    while (lo < all.length && key(all[lo]) === k) lo++;
+    all.splice(lo, 0, item);
+    if (all.length > this.capacity) {
+      all.shift();
+      this.dropped += 1;
+    }
+    this.items = all;
+    this.start = 0;
+  }
+
   toArray(): T[] {
     return [...this.items.slice(this.start), ...this.items.slice(0, this.start)];
   }

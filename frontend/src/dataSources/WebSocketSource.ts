@@ -76,6 +76,11 @@ export function withBatch(url: string): string {
   return url + (url.includes("?") ? "&" : "?") + "batch=1";
 }
 
+/** Two samples of the same window (same time and window length): a backfill repeating a live value. */
+function sameWindow(a: Sample, b: Sample): boolean {
+  return a.t === b.t && a.windowS === b.windowS;
+}
+
 function num(x: unknown): number | null {
   return x === null || x === undefined || !Number.isFinite(Number(x)) ? null : Number(x);
 }
@@ -171,7 +176,9 @@ export class WebSocketSource implements DataSource {
     }
     samples.forEach((batch, channel) => {
       const b = this.buffer(channel);
-      batch.forEach((s) => b.push(s));
+      // Live values come in time order; a backfilled one goes in place among them (a
+      // window already held, live or backfilled before, is replaced, never doubled).
+      batch.forEach((s) => b.insertOrdered(s, (x) => x.t, sameWindow));
       this.listeners.get(channel)?.forEach((l) => l(batch));
     });
   }

@@ -102,13 +102,16 @@ try {
   const steps = [
     ...(only === "collab" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
-    ...(only === "collab" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null,
+    ...(only === "collab" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
       survey: surveyModel(pubPort, subPort) })),
     ...collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) }),
   ];
   let broken = null;
+  // MODD_E2E_KEEP_GOING=1: the later steps still run after a failure (to see them locally; they
+  // may fail for the failed step's sake). By default they are not run.
+  const keepGoing = process.env.MODD_E2E_KEEP_GOING === "1";
   for (const [name, fn] of steps) {
-    if (broken) { console.log(`  - ${name}: not run (after "${broken}" failed)`); failed += 1; continue; }
+    if (broken && !keepGoing) { console.log(`  - ${name}: not run (after "${broken}" failed)`); failed += 1; continue; }
     const t0 = Date.now();
     try {
       await fn();
@@ -118,6 +121,7 @@ try {
     } catch (e) {
       failed += 1;
       broken = name;
+      errors.length = 0;
       console.log(`  ✗ ${name}: ${e.message}`);
       await page.screenshot({ path: join(tmpdir(), "modd-e2e-failure.png") }).catch(() => undefined);
     }

@@ -10,7 +10,10 @@ import { execFileSync } from "node:child_process";
 import { join } from "node:path";
 import { waitUntil } from "./journey.mjs";
 
-export function views({ page, imagesDir, drone, liveValues, dronePid, survey }) {
+/** How long the gap step stops the drone's PubBroker (ms). */
+const OUTAGE_MS = 8000;
+
+export function views({ page, imagesDir, drone, liveValues, dronePid, survey, ports }) {
   const shot = async (name) => {
     await page.waitForTimeout(200);
     await page.screenshot({ path: join(imagesDir, `${name}.png`) });
@@ -277,6 +280,43 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey }) 
       }
       await waitUntil(async () => (await page.getByTestId("link-banner").count()) === 0, 60000, async () => "the banner stays after the link is back");
     }],
+
+    // After the link loss: an outage of its own, then the chart's gap filled from the drone's archive.
+    ["a gap after a link outage: the line breaks, Fill gaps on the chart, progress bar, the gap filled with backfilled points marked", async () => {
+      if (!drone || !liveValues) throw new Error("needs the simulated drone (make build)");
+      await view("Scientist");
+      await panel("Monitor");
+      const box = page.getByRole("checkbox", { name: /sub_5 / });
+      if (!(await box.isChecked())) await box.check();
+      await expectText(page.getByRole("status", { name: "Link status" }), /link up/, 60000);
+      await expectText(page.getByTestId("last-sub_5"), /last -?\d/, 60000);
+      const chart = page.locator("figure.live-chart", { has: page.getByTestId("last-sub_5") });
+      const caption = chart.getByTestId("chart-gaps");
+      const missing = async () => {
+        const t = (await caption.textContent()) ?? "";
+        return /no gap/.test(t) ? 0 : Number(/(\d+) windows? missing/.exec(t)?.[1] ?? NaN);
+      };
+      await waitUntil(async () => Number.isFinite(await missing()), 10000, async () => `caption "${await caption.textContent()}"`);
+      const before = await missing();
+      // A link outage, the drone running on: its archive keeps what the link misses (stopping the
+      // PubBroker, as the link-loss step does, stops its archive too: nothing to fill then).
+      await cutLink(ports, OUTAGE_MS);
+      // Values again after the outage, and the hole between them drawn as a gap.
+      await waitUntil(async () => (await missing()) > before, 90000,
+        async () => `no new gap after a ${OUTAGE_MS / 1000} s outage (before: ${before}; now "${await caption.textContent()}")`);
+      const gap = await missing();
+      await expandShot("monitor-gap");
+      await chart.getByRole("button", { name: "Fill gaps" }).click();
+      const progress = chart.getByTestId("backfill-progress");
+      await expectVisible(progress, 30000);
+      await expectText(progress, /\d+\/\d+ windows · \d+ of \S+ B\/s/);
+      await expectText(progress, /done: [1-9]\d* filled, 0 duplicates/, 180000);
+      // The missed windows are back in place, marked: the gap is gone, the points counted as backfilled.
+      await waitUntil(async () => (await missing()) <= before && /[1-9]\d* backfilled/.test((await caption.textContent()) ?? ""), 60000,
+        async () => `after Fill gaps: "${await caption.textContent()}" (${gap} windows were missing, ${before} before the outage)`);
+      await expectText(progress, /[1-9]\d* backfilled values received/);
+      await expandShot("monitor-backfilled");
+    }],
   ];
 
   async function expandShot(name) {
@@ -284,6 +324,24 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey }) 
     await shot(name);
     await expand(false);
   }
+}
+
+/**
+ * Cuts the drone's link for `ms`: every established TCP connection on the
+ * PubBroker's and SubBroker's ports is reset (ss -K, loopback only) every
+ * 200 ms, so each reconnection dies at once; the drone keeps running.
+ */
+async function cutLink(ports, ms) {
+  const filter = ["(", "sport", "=", `:${ports.pub}`, "or", "dport", "=", `:${ports.pub}`,
+    "or", "sport", "=", `:${ports.sub}`, "or", "dport", "=", `:${ports.sub}`, ")"];
+  const end = Date.now() + ms;
+  let killed = 0;
+  while (Date.now() < end) {
+    const out = execFileSync("ss", ["-K", "-H", "-t", "state", "established", "dst", "127.0.0.1", ...filter], { encoding: "utf8" });
+    killed += out.split("\n").filter(Boolean).length;
+    await new Promise((r) => setTimeout(r, 200));
+  }
+  if (killed === 0) throw new Error(`no link connection on ports ${ports.pub}/${ports.sub} to cut (ss -K needs CAP_NET_ADMIN and INET_DIAG_DESTROY)`);
 }
 
 /** The PIDs of `parent`'s children whose command is `name`. */

@@ -21,7 +21,7 @@ describe("FillGaps", () => {
     const startBackfill = vi.fn(async () => progress({ windows_done: 10, bytes_per_s: 420, seconds_left: 3 }));
     const backfillProgress = vi.fn(async () => progress({ status: "DONE", windows: 40, windows_done: 40 }));
     const services = { api: { startBackfill, backfillProgress }, openStream: () => source } as unknown as Services;
-    render(<ServicesContext.Provider value={services}><FillGaps drone="usv" source={source} subscribers={["sub_5"]} /></ServicesContext.Provider>);
+    render(<ServicesContext.Provider value={services}><FillGaps drone="usv" source={source} subscribers={["sub_5"]} scope="sub_5" /></ServicesContext.Provider>);
     await act(async () => { fireEvent.click(screen.getByRole("button", { name: "Fill gaps" })); });
     expect(startBackfill).toHaveBeenCalledWith("usv", { subscriber: "sub_5", gaps: true });
     expect(screen.getByTestId("backfill-progress").textContent).toMatch(/10\/40 windows · 420 of 600 B\/s · 3 s left/);

@@ -1,10 +1,16 @@
 /**
- * "Fill gaps": asks the drone for what the link missed of one subscription
+ * "Fill gaps": asks the drone for what the link missed of some subscriptions
  * (backfill from its archive, paced within the link's spare budget) and shows
  * the progress: windows done / total, bytes/s used against the pace, time left.
+ * The Monitor puts one on each chart (the chart's subscriptions) and one for
+ * the drone (every subscription of the model and the dynamic ones).
+ * One backfill per subscription, started together; the bar sums them (a
+ * subscription the drone refuses is named beside it). Only subscriptions of
+ * the running plan can be filled (dynamic ones are not in the drone's plan).
  * Backfilled values arrive on the usual stream, marked `backfilled`: counted
- * here as they come. Contract: talks only through the services' api and the
- * panel's data source; polls the progress every POLL_MS while it runs.
+ * here as they come (the chart draws them in place, marked). Contract: talks
+ * only through the services' api and the panel's data source; polls each
+ * running backfill every POLL_MS.
  */
 import { useEffect, useRef, useState } from "react";
 import { useServices } from "../../app/services";
@@ -16,61 +22,89 @@ const POLL_MS = 500;
 interface Props {
   drone: string;
   source: DataSource;
+  /** The subscriptions a click fills. */
   subscribers: string[];
+  /** What is filled, in words ("sub_5", "drone usv"): names the region. */
+  scope: string;
+  /** Short form (on a chart): the bar and the counts on one line. */
+  compact?: boolean;
 }
 
-export function FillGaps({ drone, source, subscribers }: Props) {
+/** The progress of several backfills as one: windows and bytes/s summed, the longest time left. */
+export function sumProgress(all: readonly BackfillProgress[]): BackfillProgress | null {
+  if (all.length === 0) return null;
+  const sum = (f: (p: BackfillProgress) => number) => all.reduce((n, p) => n + f(p), 0);
+  const running = all.some((p) => p.status === "RUNNING");
+  const done = all.some((p) => p.status === "DONE");
+  // A failure decides only when nothing ran to the end (each failure is said beside the bar).
+  const failed = done ? undefined : all.find((p) => p.status !== "RUNNING" && p.status !== "DONE");
+  const left = all.map((p) => p.seconds_left).filter((s): s is number => s != null);
+  return {
+    status: running ? "RUNNING" : failed ? failed.status : "DONE",
+    reason: failed?.reason ?? null,
+    windows: sum((p) => p.windows), windows_done: sum((p) => p.windows_done), windows_total: sum((p) => p.windows_total),
+    duplicates: sum((p) => p.duplicates), bytes: sum((p) => p.bytes), seconds: Math.max(...all.map((p) => p.seconds)),
+    bytes_per_s: sum((p) => p.bytes_per_s), rate_bps: Math.max(...all.map((p) => p.rate_bps)),
+    seconds_left: left.length ? Math.max(...left) : null,
+  };
+}
+
+export function FillGaps({ drone, source, subscribers, scope, compact = false }: Props) {
   const { api } = useServices();
-  const [chosen, setChosen] = useState("");
-  const [progress, setProgress] = useState<BackfillProgress | null>(null);
+  const [jobs, setJobs] = useState<Record<string, BackfillProgress>>({});
   const [error, setError] = useState<string | null>(null);
   const [marked, setMarked] = useState(0);
-  const timer = useRef<number | undefined>(undefined);
-  const subscriber = chosen || subscribers[0] || "";
+  const timers = useRef(new Set<number>());
+  const key = subscribers.join(",");
 
-  useEffect(() => () => window.clearTimeout(timer.current), []);
+  useEffect(() => () => { timers.current.forEach((t) => window.clearTimeout(t)); }, []);
   useEffect(() => {
-    if (!subscriber) return;
-    return source.subscribe(subscriber, (batch) => {
+    const offs = (key ? key.split(",") : []).map((sub) => source.subscribe(sub, (batch) => {
       const n = batch.filter((s) => s.backfilled).length;
       if (n) setMarked((m) => m + n);
-    });
-  }, [source, subscriber]);
+    }));
+    return () => offs.forEach((off) => off());
+  }, [source, key]);
 
-  const poll = (id: number) => {
-    timer.current = window.setTimeout(async () => {
+  const poll = (sub: string, id: number) => {
+    const t = window.setTimeout(async () => {
+      timers.current.delete(t);
       try {
         const p = await api.backfillProgress(drone, id);
-        setProgress(p);
-        if (p.status === "RUNNING") poll(id);
+        setJobs((j) => ({ ...j, [sub]: p }));
+        if (p.status === "RUNNING") poll(sub, id);
       } catch (err) {
         setError((err as Error).message);
       }
     }, POLL_MS);
+    timers.current.add(t);
   };
 
   const start = async () => {
     setError(null);
     setMarked(0);
-    try {
-      const p = await api.startBackfill(drone, { subscriber, gaps: true });
-      setProgress(p);
-      if (p.status === "RUNNING" && p.id) poll(p.id);
-      else if (p.status !== "DONE") setError(`${p.status}: ${p.reason ?? ""}`);
-    } catch (err) {
-      setError((err as Error).message);
-    }
+    setJobs({});
+    await Promise.all(subscribers.map(async (sub) => {
+      try {
+        const p = await api.startBackfill(drone, { subscriber: sub, gaps: true });
+        setJobs((j) => ({ ...j, [sub]: p }));
+        if (p.status === "RUNNING" && p.id) poll(sub, p.id);
+        else if (p.status !== "DONE") setError(`${sub}: ${p.status}${p.reason ? `: ${p.reason}` : ""}`);
+      } catch (err) {
+        setError(`${sub}: ${(err as Error).message}`);
+      }
+    }));
   };
 
+  const progress = sumProgress(Object.values(jobs));
   const running = progress?.status === "RUNNING";
   const total = progress?.windows_total ?? 0;
   return (
-    <section className="fill-gaps" aria-label="Fill gaps">
-      <h3>Fill gaps</h3>
-      <select aria-label="Subscription to fill" value={subscriber} onChange={(e) => setChosen(e.target.value)}>
-        {subscribers.map((s) => <option key={s}>{s}</option>)}
-      </select>
-      <button type="button" onClick={start} disabled={!subscriber || running}>Fill gaps</button>
+    <section className={compact ? "fill-gaps compact" : "fill-gaps"} aria-label={`Fill gaps: ${scope}`}>
+      {!compact && <h3>Fill gaps</h3>}
+      <button type="button" onClick={start} disabled={subscribers.length === 0 || running}
+        title={`Ask the drone for what the link missed of ${subscribers.join(", ")}`}>Fill gaps</button>
+      {!compact && <span className="muted"> {subscribers.length} subscription{subscribers.length === 1 ? "" : "s"}</span>}
       {progress && (
         <div role="status" aria-label="Backfill progress" data-testid="backfill-progress">
           <progress max={Math.max(total, 1)} value={total ? progress.windows_done : 1} />

@@ -3,7 +3,7 @@
  * each with its last value, window and how stale it is; a subscription can
  * be taken off the chart, another watched one added to it.
  */
-import { useEffect, useState } from "react";
+import { useEffect, useState, type ReactNode } from "react";
 import type { DataSource, Sample } from "../../dataSources/types";
 import type { ViewWindow } from "../../core/chartData";
 import { TimeChart, type ChartSeries } from "./TimeChart";
@@ -21,6 +21,8 @@ interface Props {
   marker?: number | null;
   /** The clock "how old" is measured against (the playback cursor in a replay). */
   now?: number;
+  /** Actions on this chart's subscriptions (the Monitor's "Fill gaps"). */
+  tools?: ReactNode;
 }
 
 function useLast(source: DataSource, channel: string): [Sample | null, number] {
@@ -54,7 +56,7 @@ function LastValue({ source, s, now }: { source: DataSource; s: ChartSeries; now
   );
 }
 
-export function LiveChart({ source, series, window, onZoom, addable, onAdd, onRemove, syncKey = "monitor", marker = null, now }: Props) {
+export function LiveChart({ source, series, window, onZoom, addable, onAdd, onRemove, syncKey = "monitor", marker = null, now, tools }: Props) {
   const [clock, setClock] = useState(() => Date.now() / 1000);
   useEffect(() => {
     if (now !== undefined) return;
@@ -78,6 +80,7 @@ export function LiveChart({ source, series, window, onZoom, addable, onAdd, onRe
             {addable.map((c) => <option key={c} value={c}>{c}</option>)}
           </select>
         )}
+        {tools}
       </figcaption>
       <TimeChart source={source} series={series} window={window} onZoom={onZoom} syncKey={syncKey} marker={marker} />
     </figure>

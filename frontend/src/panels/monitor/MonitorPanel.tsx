@@ -8,6 +8,9 @@
  * window for all (follow live, or zoom by dragging / the buttons and pan),
  * a cursor shared across charts. What is charted, and each chart's history,
  * survive leaving the panel and redeploys (the stream is the workbench's).
+ * Missing windows break a chart's line; "Fill gaps" on a chart (its
+ * subscriptions) or for the drone (all of them) backfills them from the
+ * drone's archive, and the backfilled values appear in place, marked.
  */
 import { useEffect, useState } from "react";
 import { AggregationValues } from "../../core/model.gen";
@@ -50,7 +53,8 @@ export default function MonitorPanel() {
     const aggregation = s?.aggregation ?? d?.aggregation;
     const unit = unitLabel(findTopicByName(model, topic)?.variable.unit, aggregation);
     const label = s ? `${s.topic} ${s.aggregation} every ${s.periodS} s` : d ? `${d.topic} ${d.aggregation} every ${d.period_s} s (dynamic)` : "(not in the model)";
-    return { channel: name, label, unit };
+    const period = Number(s ? s.periodS : d ? d.period_s : NaN);
+    return { channel: name, label, unit, ...(Number.isFinite(period) && period > 0 ? { periodS: period } : {}) };
   };
 
   const addDynamic = async (e: React.FormEvent) => {
@@ -108,7 +112,8 @@ export default function MonitorPanel() {
             <label key={name}><input type="checkbox" checked={watched.includes(name)} onChange={() => layout.toggle(name)} />
               {name} <span className="muted">{d.topic} {d.aggregation} {d.period_s} s (dynamic)</span></label>
           ))}
-          {canEdit(role, "subscriber") && <FillGaps drone={drone} source={source} subscribers={watched} />}
+          {canEdit(role, "subscriber") && <FillGaps drone={drone} source={source} scope={`drone ${drone}`}
+            subscribers={subscribers.map((s) => s.name)} />}
           {canEdit(role, "subscriber") && (
             <form onSubmit={addDynamic} className="dynamic-form" aria-label="Dynamic subscription">
               <h3>Dynamic subscription</h3>
@@ -148,7 +153,8 @@ export default function MonitorPanel() {
               <LiveChart key={chart.join("+")} source={source} series={chart.map(describe)} window={win}
                 onZoom={(from, to) => setWin({ follow: false, from, to })}
                 addable={watched.filter((c) => !chart.includes(c))}
-                onAdd={(c) => layout.moveTo(c, i)} onRemove={(c) => layout.split(c)} />
+                onAdd={(c) => layout.moveTo(c, i)} onRemove={(c) => layout.split(c)}
+                tools={canEdit(role, "subscriber") && <FillGaps drone={drone} source={source} subscribers={chart.filter((c) => !(c in dynamic))} scope={chart.join(", ")} compact />} />
             ))}
           </div>
         </div>

@@ -5,16 +5,32 @@
  * outside (shared by every chart of a panel); dragging across a chart zooms
  * every chart to that range; the cursor is shared by all charts with the
  * same `syncKey`.
+ *
+ * Gaps: where windows of a subscription are missing (an outage), its line
+ * breaks (a null point at the first missing window's time; the period comes
+ * from the subscription). Backfilled values sit in place among the live ones
+ * (the source keeps them in time order) and are marked: a second series per
+ * channel draws them as large hollow amber points, legend "backfilled". The
+ * caption says it in words (missing windows, backfilled values), since the
+ * canvas holds no text.
  */
 import { useEffect, useRef } from "react";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import type { DataSource } from "../../dataSources/types";
-import { alignSeries, axisLabel, visibleRange, type ViewWindow } from "../../core/chartData";
+import { alignWithGaps, axisLabel, gapSummary, visibleRange, type ViewWindow } from "../../core/chartData";
 
-export interface ChartSeries { channel: string; label: string; unit: string }
+export interface ChartSeries {
+  channel: string;
+  label: string;
+  unit: string;
+  /** Seconds between windows (the subscription's period): where values are missing, the line breaks. */
+  periodS?: number;
+}
 
-const COLOURS = ["#2563eb", "#dc2626", "#15803d", "#9333ea", "#d97706", "#0891b2"];
+const BACKFILLED = "#d97706";
+
+const COLOURS = ["#2563eb", "#dc2626", "#15803d", "#9333ea", "#0891b2", "#4d7c0f"];
 
 interface Props {
   source: DataSource;
@@ -30,6 +46,7 @@ interface Props {
 export function TimeChart({ source, series, window: view, onZoom, syncKey, height = 150, marker = null }: Props) {
   const host = useRef<HTMLDivElement>(null);
   const info = useRef<HTMLSpanElement>(null);
+  const gaps = useRef<HTMLSpanElement>(null);
   const plotRef = useRef<uPlot | null>(null);
   const viewRef = useRef(view);
   viewRef.current = view;
@@ -37,12 +54,16 @@ export function TimeChart({ source, series, window: view, onZoom, syncKey, heigh
   markerRef.current = marker;
   const zoomRef = useRef(onZoom);
   zoomRef.current = onZoom;
-  const key = series.map((s) => `${s.channel}|${s.label}|${s.unit}`).join(";");
+  const key = series.map((s) => `${s.channel}|${s.label}|${s.unit}|${s.periodS ?? ""}`).join(";");
 
   useEffect(() => {
     const el = host.current;
     if (!el) return;
-    const data = (): uPlot.AlignedData => alignSeries(series.map((s) => source.history(s.channel))) as uPlot.AlignedData;
+    const data = (): uPlot.AlignedData => {
+      const channels = series.map((s) => ({ samples: source.history(s.channel), periodS: s.periodS }));
+      if (gaps.current) gaps.current.textContent = gapSummary(channels);
+      return alignWithGaps(channels) as uPlot.AlignedData;
+    };
     const lastT = () => Math.max(...series.map((s) => source.history(s.channel).at(-1)?.t ?? -Infinity));
     const range = (): [number, number] => {
       const last = lastT();
@@ -55,10 +76,16 @@ export function TimeChart({ source, series, window: view, onZoom, syncKey, heigh
       cursor: { sync: { key: syncKey, setSeries: false }, drag: { x: true, y: false, setScale: false } },
       series: [
         { label: "time" },
-        ...series.map((s, i) => ({
-          label: s.unit ? `${s.channel} (${s.unit})` : s.channel, stroke: COLOURS[i % COLOURS.length], width: 1.5,
-          spanGaps: true, points: { show: true, size: 4 },
-        })),
+        ...series.flatMap((s, i): uPlot.Series[] => [
+          {
+            label: s.unit ? `${s.channel} (${s.unit})` : s.channel, stroke: COLOURS[i % COLOURS.length], width: 1.5,
+            spanGaps: false, points: { show: true, size: 4 },
+          },
+          {
+            label: series.length > 1 ? `backfilled (${s.channel})` : "backfilled", stroke: BACKFILLED, width: 0,
+            paths: () => null, points: { show: true, size: 9, width: 2, stroke: BACKFILLED, fill: "#fff7ed" },
+          },
+        ]),
       ],
       axes: [
         { stroke: "#475569", label: "local time", labelSize: 16 },
@@ -120,6 +147,7 @@ export function TimeChart({ source, series, window: view, onZoom, syncKey, heigh
       <div ref={host} className="chart-host" />
       <div className="chart-axes muted" data-testid="chart-axes">
         <span ref={info} /> · values{units ? ` in ${units}` : " (no unit)"}
+        {" · "}<span ref={gaps} data-testid="chart-gaps" />
       </div>
     </>
   );
