@@ -216,13 +216,14 @@ def test_make_run_serves_the_demo_live_and_stops(
     with pytest.raises(OSError):  # nothing serves the workbench any more
         urllib.request.urlopen(base + "/", timeout=2)
 
-    # Again on the same data: the same login, and the same revision (no duplicate).
+    # Again on the same data: the same login, and the project kept as the user left it
+    # (no new revision, the stock model not loaded over it).
     proc, log = start(data, port, zport, 2)
     try:
         wait_for(log, "modd: Ctrl-C to stop", 240)
         again = log.read_text()
         assert f"password '{password}'" in again
-        assert "project 'demo' (id 1) at revision 1" in again
+        assert "project 'demo' (id 1) exists: kept as it is, running revision 1" in again
     finally:
         stop(proc, log)
 
