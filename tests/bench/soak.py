@@ -377,10 +377,13 @@ def check(soak: Soak) -> list[str]:
     py: dict[str, int] = {}
     for f in files:
         with f.open("rb") as fh:
-            reader = make_reader(fh)
-            if reader.get_summary() is None:
-                failed.append(f"{f.name}: no summary (not finalised)")
-            py[f.name] = sum(1 for _ in reader.iter_messages())
+            try:
+                reader = make_reader(fh)
+                if reader.get_summary() is None:
+                    failed.append(f"{f.name}: no summary (not finalised)")
+                py[f.name] = sum(1 for _ in reader.iter_messages())
+            except Exception as exc:  # the reader's errors have no common base
+                failed.append(f"{f.name}: the Python reader cannot read it: {exc}")
     node = shutil.which("node")
     ts: dict[str, int] = {}
     if node is None or not (NODE_MODULES / "@mcap" / "core").is_dir():
@@ -462,16 +465,18 @@ def main() -> int:
         soak = Soak(tmp, a.seconds)
         failed: list[str] = []
         try:
-            soak.run()
-            failed += check_records(soak)
-        finally:
-            soak.stop()
-        failed += check(soak)
-        failed += check_memory(soak)
-        if a.keep:
-            shutil.copytree(tmp, a.keep, dirs_exist_ok=True)
-        if soak.tmpfs:
-            subprocess.run(["umount", str(soak.archive)], check=False)
+            try:
+                soak.run()
+                failed += check_records(soak)
+            finally:
+                soak.stop()
+            failed += check(soak)
+            failed += check_memory(soak)
+            if a.keep:
+                shutil.copytree(tmp, a.keep, dirs_exist_ok=True)
+        finally:  # the tmpfs never outlives the run, whatever failed
+            if soak.tmpfs:
+                subprocess.run(["umount", str(soak.archive)], check=False)
         for f in failed:
             print(f"soak: FAILED: {f}")
         print(f"soak: {len(soak.events)} faults in {a.seconds:g} s; "
