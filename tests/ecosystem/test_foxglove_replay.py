@@ -168,3 +168,42 @@ def test_the_workbench_replays_an_archive_in_foxglove(tmp_path: Path, minute: Pa
         r = c.post("/api/drones/usv/archives/writing.mcap/replay", json={},
                    headers={"Authorization": f"Bearer {token}"})
         assert r.status_code == 409 and "--foxglove-replay-port" in r.json()["detail"]
+
+
+def test_the_base_station_record_replays_through_the_same_server(tmp_path: Path,
+                                                                  minute: Path) -> None:
+    """Archives panel, base-station records: the record of what was delivered
+    plays on the same replay server as the drone's archives (seek and play)."""
+    import io
+
+    from fastapi.testclient import TestClient
+    from modd_backend.app import create_app
+    from modd_backend.settings import Settings
+
+    folder = tmp_path / "records" / "usv"
+    folder.mkdir(parents=True)
+    (folder / "usv-mission.mcap").write_bytes(minute.read_bytes())
+    port = free_port()
+    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
+                        initial_admin_password="pw-12345678", record_dir=tmp_path / "records",
+                        foxglove_replay_port=port)
+    with TestClient(create_app(settings, out=io.StringIO()),
+                    base_url="http://127.0.0.1") as c:
+        url = "/api/drones/usv/records/usv-mission.mcap/replay"
+        token = c.post("/api/auth/login", json={"username": "admin",
+                                                "password": "pw-12345678"}).json()["token"]
+        auth = {"Authorization": f"Bearer {token}"}
+        assert c.post(url, json={}).status_code == 401
+        assert c.post("/api/drones/usv/records/nothing.mcap/replay", json={},
+                      headers=auth).status_code == 404
+        r = c.post(url, json={}, headers=auth)
+        assert r.status_code == 200, r.text
+        info = r.json()
+        assert info["file"] == "usv-mission.mcap" and info["topics"] == sorted(TOPICS)
+        assert info["messages"] == 1200 and info["start_ns"] == T0
+        seek = T0 + 45_000_000_000
+        report = node_json("foxglove_client.cjs", info["url"], "2", "--seek", str(seek),
+                           "--after", "1", timeout=30)
+        assert not report["errors"] and int(report["playbackStates"][0]["currentTime"]) == seek
+        times = [int(m["logTime"]) for m in report["messages"][TOPICS[0]]]
+        assert times and times[0] == seek and times == sorted(times)

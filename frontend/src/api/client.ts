@@ -116,6 +116,11 @@ export function createApi(opts: HttpOptions) {
       http.request<Blob>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}`, { as: "blob" }),
     /** The SubBroker's base-station records: every delivered value, live and backfilled. */
     listRecords: (drone: string) => http.request<ArchiveFile[]>(`/api/drones/${drone}/records`),
+    /** A base-station record served to Foxglove/Lichtblick (seek, play, pause) on the replay port. */
+    replayRecord: (drone: string, file: string) =>
+      http.request<ArchiveReplay>(`/api/drones/${drone}/records/${encodeURIComponent(file)}/replay`, {
+        method: "POST", json: { start_ns: null, end_ns: null },
+      }),
     downloadRecord: (drone: string, file: string) =>
       http.request<Blob>(`/api/drones/${drone}/records/${encodeURIComponent(file)}`, { as: "blob" }),
     archiveCsv: (drone: string, file: string, topic: string, startNs?: number, endNs?: number) =>

@@ -4,6 +4,7 @@ user may read; paths are confined to ``<archive_dir>/<drone>/``."""
 
 from __future__ import annotations
 
+from pathlib import Path as FsPath
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, HTTPException, Path, Query
@@ -12,7 +13,7 @@ from pydantic import BaseModel
 
 from ..archive_work import csv_text, in_worker, series
 from ..archives import archive_path, file_info, list_files
-from ..deps import Heavy, StateDep, UserDep, require
+from ..deps import AppState, Heavy, StateDep, UserDep, require
 from ..downloads import content_disposition
 from ..roles import Role
 from ..schemas import Responses
@@ -121,9 +122,15 @@ def start_replay(drone: Drone, name: Name, body: ReplayIn, state: StateDep,
     """Serves the range to Foxglove/Lichtblick with seek, play and pause
     (replacing the replay running now). A file still being written plays up
     to its last complete record."""
+    return serve_replay(state, state.settings.effective_archive_dir, drone, name, body, user)
+
+
+def serve_replay(state: AppState, root: FsPath, drone: str, name: str, body: ReplayIn,
+                 user: User) -> ReplayOut:
+    """The replay of ``<root>/<drone>/<name>`` (an archive or a base-station record)."""
     if state.replay is None:
         raise HTTPException(409, "replay is off on this backend (--foxglove-replay-port 0)")
-    path = archive_path(state.settings.effective_archive_dir, drone, name)
+    path = archive_path(root, drone, name)
     try:
         info = state.replay.start(drone, path, body.start_ns, body.end_ns, user.username)
     except ValueError as exc:

@@ -5,12 +5,25 @@ paths are confined to ``<record_dir>/<drone>/``."""
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from typing import Annotated
+
+from fastapi import APIRouter, Depends
 from fastapi.responses import FileResponse
 
 from ..archives import archive_path, file_info, list_files
-from ..deps import StateDep, UserDep
-from .archives import NOT_FOUND, ArchiveOut, Drone, Name
+from ..deps import Heavy, StateDep, UserDep
+from ..tables import User
+from .archives import (
+    BUSY,
+    NOT_FOUND,
+    REPLAYERS,
+    ArchiveOut,
+    Drone,
+    Name,
+    ReplayIn,
+    ReplayOut,
+    serve_replay,
+)
 
 router = APIRouter(prefix="/api/drones/{drone}/records", tags=["archives"])
 
@@ -26,3 +39,15 @@ def list_records(drone: Drone, state: StateDep, _user: UserDep) -> list[ArchiveO
 def download_record(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> FileResponse:
     path = archive_path(state.settings.effective_record_dir, drone, name)
     return FileResponse(path, media_type="application/octet-stream", filename=path.name)
+
+
+@router.post("/{name}/replay", responses={
+    **NOT_FOUND, **BUSY, 409: {"description": "replay is off (--foxglove-replay-port 0)"},
+    422: {"description": "nothing in the range, or more than a replay holds"}},
+    dependencies=[Heavy])
+def replay_record(drone: Drone, name: Name, body: ReplayIn, state: StateDep,
+                  user: Annotated[User, Depends(REPLAYERS)]) -> ReplayOut:
+    """The base-station record of a mission (what was delivered, live and
+    backfilled) in Foxglove/Lichtblick: seek, play, pause; the same replay
+    server as the drone's archives."""
+    return serve_replay(state, state.settings.effective_record_dir, drone, name, body, user)

@@ -3,7 +3,9 @@
  * the SubBroker delivered, live and backfilled (docs/subbroker.md), listed
  * and downloadable beside the drone's own archive.
  */
+import { useState } from "react";
 import { useServices } from "../../app/services";
+import type { ArchiveReplay } from "../../api/types";
 import { saveBlob } from "../saveBlob";
 import { usePanelData } from "../usePanelData";
 
@@ -11,6 +13,10 @@ export function BaseRecords({ drone }: { drone: string }) {
   const { api } = useServices();
   const [files, reload] = usePanelData(() => api.listRecords(drone), [drone]);
   const download = async (name: string) => saveBlob(await api.downloadRecord(drone, name), name);
+  const [replay, setReplay] = useState<{ data?: ArchiveReplay; error?: string }>({});
+  const startReplay = async (name: string) => {
+    try { setReplay({ data: await api.replayRecord(drone, name) }); } catch (err) { setReplay({ error: (err as Error).message }); }
+  };
   return (
     <section aria-label="Base-station records">
       <h3>Base-station records <button className="link" onClick={reload}>refresh</button></h3>
@@ -24,12 +30,20 @@ export function BaseRecords({ drone }: { drone: string }) {
                 <td>{f.name}{f.complete ? "" : " (being written)"}</td>
                 <td>{(f.size / 1024).toFixed(1)} KiB</td>
                 <td>{f.topics.reduce((n, t) => n + t.messages, 0)}</td>
-                <td><button className="link" onClick={() => void download(f.name)}>download</button></td>
+                <td><button className="link" onClick={() => void download(f.name)}>download</button>{" "}
+                  <button className="link" onClick={() => void startReplay(f.name)}>replay in Foxglove</button></td>
               </tr>
             ))}
           </tbody>
         </table>
       ) : <p className="muted">{files.state === "loading" ? "loading…" : "records unavailable"}</p>}
+      {replay.data && (
+        <p role="status" aria-label="Foxglove replay of a record">
+          Replay of {replay.data.file} ({replay.data.messages} values): in Foxglove or Lichtblick,
+          Open connection → Foxglove WebSocket → <code>{replay.data.url}</code>
+        </p>
+      )}
+      {replay.error && <p className="error" role="alert">{replay.error}</p>}
     </section>
   );
 }
