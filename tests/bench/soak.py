@@ -159,8 +159,10 @@ class Backend:
                 self.kill9()
 
 
-def mount_tmpfs(directory: Path, size_mb: int = 128) -> bool:
-    """Mount a small tmpfs on ``directory`` (root only; False when not possible)."""
+def mount_tmpfs(directory: Path, size_mb: int = 512) -> bool:
+    """Mount a tmpfs on ``directory`` (root only; False when not possible). Room for the
+    flood's file twice over: recovering a file left open by a crash writes a rebuilt copy
+    beside it before the rename (docs/reliability.md)."""
     if os.geteuid() != 0 or shutil.which("mount") is None:
         return False
     r = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size_mb}m,mode=0700", "tmpfs",

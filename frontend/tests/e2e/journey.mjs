@@ -298,7 +298,7 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
         await page.getByRole("form", { name: "Plot an archived topic" }).getByRole("button", { name: "Plot" }).click();
         await expectText(page.locator(".archives-panel figcaption"), /usv\.accelerometer\.\w+: \d+ samples/, 15000);
         // The same file served to Foxglove/Lichtblick (seek, play, pause) on the replay port.
-        await page.getByRole("button", { name: "Replay in Foxglove" }).click();
+        await page.getByRole("button", { name: "Replay in Foxglove", exact: true }).click();
         await expectText(page.getByRole("status", { name: "Foxglove replay" }), /\d+ messages.*ws:\/\/127\.0\.0\.1:\d+/, 15000);
         // The base-station record of what was delivered, live and backfilled.
         await expectText(page.getByRole("table", { name: "Base-station record files" }), /\.mcap/, 15000);

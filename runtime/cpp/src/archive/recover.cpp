@@ -172,7 +172,7 @@ Recovered recover_mcap(const std::string& path, const WriterOptions& options) {
   }
   std::string tmp = path + ".recovering";
   uint64_t good = 8;
-  {
+  try {
     McapWriter w(tmp, options);
     Rebuild rb{w};
     size_t at = 8;
@@ -215,6 +215,12 @@ Recovered recover_mcap(const std::string& path, const WriterOptions& options) {
     }
     res.messages = rb.messages;
     w.close();
+  } catch (...) {
+    // No room (or no write) for the rebuilt copy: the original stays as it was, and the
+    // partial copy must not keep the space the archive needs for new samples.
+    std::error_code rm;
+    std::filesystem::remove(tmp, rm);
+    throw;
   }
   res.dropped_bytes = all.size() - good;
   std::error_code ec;
