@@ -136,7 +136,8 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await save(page);
       await expectText(page.locator(".topbar .revision"), /^r5(?!.*unsaved)/);
       await page.waitForTimeout(500);
-      const left = await page.evaluate(() => Object.keys(window.localStorage).filter((k) => k.startsWith("modd.draft.")));
+      // this project's draft (other projects of the run may keep theirs)
+      const left = await page.evaluate((p) => Object.keys(window.localStorage).filter((k) => k.startsWith("modd.draft.") && k.endsWith(`.${p}`)), pid);
       if (left.length) throw new Error(`a saved draft is still kept: ${left}`);
       // A link opened in a browser not logged in: the login, then that project, view and panel.
       const third = await launch();

@@ -218,7 +218,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
       await panel("Archives");
       const files = page.getByRole("table", { name: "Archive files" });
-      await page.getByRole("button", { name: "Refresh" }).click();
+      await page.getByRole("button", { name: "Refresh", exact: true }).click();
       await expectText(files, /\.mcap/, 15000);
       await files.locator("button.link").first().click();
       const form = page.getByRole("form", { name: "Play back an archive range" });
