@@ -36,7 +36,8 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
     await expectText(page.locator(".topbar .revision"), new RegExp(`^r${revision}$`));
   };
   const select = async (id) => {
-    await node(id).click();
+    // a node the view left under the top bar or the minimap: the click event itself
+    await node(id).click({ timeout: 5000 }).catch(() => node(id).dispatchEvent("click"));
     await inspector.locator("h2").first().waitFor({ state: "visible", timeout: 10000 });
   };
 
