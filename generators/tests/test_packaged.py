@@ -59,11 +59,12 @@ def reproduce(pairs: list[tuple[str, str]], root: Path) -> None:
             shutil.copy2(origin, target)
 
 
-@pytest.mark.skipif(UV is None, reason="uv is installed by scripts/setup.sh")
 @pytest.mark.parametrize(("dockerfile", "stage"), [("backend.Dockerfile", "backend"),
                                                    ("runtime.Dockerfile", "runtime")])
 def test_integrator_download_from_installed_wheels(tmp_path: Path, dockerfile: str,
                                                    stage: str) -> None:
+    if UV is None:  # make test installs it (scripts/setup.sh): missing is a setup bug
+        pytest.fail("uv is missing: run scripts/setup.sh")
     image = tmp_path / "image"
     pairs = copy_set(REPO / "docker" / dockerfile, stage)
     assert ("generators", "generators") in pairs and ("metamodel", "metamodel") in pairs
