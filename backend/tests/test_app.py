@@ -3,6 +3,7 @@ default, migrations."""
 
 from __future__ import annotations
 
+import asyncio
 import io
 import os
 import re
@@ -54,6 +55,32 @@ def test_migrations_match_the_tables(settings: Settings, client: TestClient) -> 
         assert migrated == {c.name for c in table.columns}, table.name
     assert "alembic_version" in insp.get_table_names()
     engine.dispose()
+
+
+def test_background_loops_end_on_the_stop_flag_without_a_cancellation() -> None:
+    # Python 3.11's wait_for can swallow a cancellation; the flag alone must end
+    # the loops, or the app's shutdown waits on them (a CI run hung 600 s).
+    from types import SimpleNamespace
+
+    from modd_backend.app import _ping_database
+
+    pings: list[int] = []
+
+    class Store:
+        def session(self) -> object:
+            pings.append(1)
+            raise RuntimeError("no store here")
+
+    async def run() -> None:
+        stop = asyncio.Event()
+        state = SimpleNamespace(store=Store(), database="?")
+        task = asyncio.create_task(_ping_database(state, stop, every_s=0.01))  # type: ignore[arg-type]
+        await asyncio.sleep(0.05)
+        stop.set()
+        await asyncio.wait_for(task, 2)  # never cancelled: ends by the flag
+        assert state.database == "error" and pings
+
+    asyncio.run(run())
 
 
 def test_cli_defaults_to_loopback(tmp_path: Path) -> None:

@@ -8,7 +8,6 @@ the first admin and the zenoh session are opened at start-up (lifespan).
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import gc
 import logging
 import os
@@ -114,9 +113,10 @@ def _reconcile(state: AppState) -> None:
         reconcile(db, state.statuses, state.settings.deploy_timeout_s)
 
 
-async def _reconcile_deployments(state: AppState, every_s: float = 1.0) -> None:
+async def _reconcile_deployments(state: AppState, stop: asyncio.Event,
+                                 every_s: float = 1.0) -> None:
     """Settle deploy records with what the drones report (reconcile.py)."""
-    while True:
+    while not stop.is_set():
         await asyncio.sleep(every_s)
         try:
             await run_in_threadpool(_reconcile, state)
@@ -124,11 +124,15 @@ async def _reconcile_deployments(state: AppState, every_s: float = 1.0) -> None:
             log.exception("reconciling deploy records failed")
 
 
-async def _ping_database(state: AppState, every_s: float = 2.0) -> None:
+async def _ping_database(state: AppState, stop: asyncio.Event, every_s: float = 2.0) -> None:
     """Keep ``state.database`` current for /api/health (which never waits on it)."""
-    while True:
+    while not stop.is_set():
         try:
-            await asyncio.wait_for(run_in_threadpool(_ping, state), every_s * 2)
+            # asyncio.timeout, not wait_for: Python 3.11's wait_for swallows a
+            # cancellation that arrives as the ping completes, and the loop
+            # then outlived the app's shutdown (a CI run hung 600 s on it).
+            async with asyncio.timeout(every_s * 2):
+                await run_in_threadpool(_ping, state)
             state.database = "ok"
         except Exception:  # any failure of the store is reported, never raised
             state.database = "error"
@@ -178,9 +182,10 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
             from .replay import ReplaySlot
 
             state.replay = ReplaySlot(settings.host, settings.foxglove_replay_port)
-        tasks = [asyncio.create_task(_ping_database(state))]
+        stop = asyncio.Event()
+        tasks = [asyncio.create_task(_ping_database(state, stop))]
         if state.statuses is not None:
-            tasks.append(asyncio.create_task(_reconcile_deployments(state)))
+            tasks.append(asyncio.create_task(_reconcile_deployments(state, stop)))
         # Everything loaded so far (FastAPI, cvxpy, viser, zenoh: ~150,000
         # objects) lives as long as the process: out of the collector's
         # sight, a full collection no longer stalls the event loop (it took
@@ -190,10 +195,12 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         try:
             yield
         finally:
+            # The flag ends each loop even if a cancellation is lost; the
+            # bounded wait keeps a stuck store call from holding the shutdown.
+            stop.set()
             for task in tasks:
                 task.cancel()
-                with contextlib.suppress(asyncio.CancelledError):
-                    await task
+            await asyncio.wait(tasks, timeout=10)
             if state.hub is not None:
                 state.hub.stop()
             if state.scene is not None:
