@@ -109,11 +109,15 @@ def test_derivability_rules_hold_on_samples() -> None:
 
 
 def test_cpp_enum_follows_the_table() -> None:
-    """messages.hpp's enum lists the table in wire-code order."""
-    text = (REPO / "runtime/cpp/include/modd/link/messages.hpp").read_text()
+    """The C++ enum is the generated header's, in wire-code order; messages.hpp
+    has no copy of its own."""
+    messages = (REPO / "runtime/cpp/include/modd/link/messages.hpp").read_text()
+    assert "enum class Aggregation" not in messages
+    assert '#include "modd/link/aggregation_table.gen.hpp"' in messages
+    text = (REPO / "runtime/cpp/include/modd/link/aggregation_table.gen.hpp").read_text()
     enum = re.search(r"enum class Aggregation : uint8_t \{([^}]*)\}", text)
     assert enum is not None
-    names = [n.split("=")[0].strip().upper() for n in enum.group(1).split(",")]
+    names = [n.split("=")[0].strip().upper() for n in enum.group(1).split(",") if n.strip()]
     assert names == [a.name for a in AGGREGATIONS]
 
 

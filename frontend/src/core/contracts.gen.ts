@@ -319,3 +319,15 @@ export const AGGREGATION_TABLE = [
   { name: "COUNT", code: 6, numericOnly: false },
   { name: "SUM", code: 7, numericOnly: true },
 ] as const;
+
+/** Each aggregation's name, for code that compares or builds one. */
+export const AGGREGATION = {
+  MIN: "MIN",
+  MAX: "MAX",
+  AVERAGE: "AVERAGE",
+  FIRST: "FIRST",
+  LAST: "LAST",
+  ALL: "ALL",
+  COUNT: "COUNT",
+  SUM: "SUM",
+} as const;

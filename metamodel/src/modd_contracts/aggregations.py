@@ -10,6 +10,33 @@ one row per aggregation, in wire-code order.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import IntEnum
+from typing import Final
+
+#: Each aggregation's name, for code that compares or builds one
+#: (``aggregation == AVERAGE``); typed as its ``Literal``.
+MIN: Final = "MIN"
+MAX: Final = "MAX"
+AVERAGE: Final = "AVERAGE"
+FIRST: Final = "FIRST"
+LAST: Final = "LAST"
+ALL: Final = "ALL"
+COUNT: Final = "COUNT"
+SUM: Final = "SUM"
+
+
+class Aggregation(IntEnum):
+    """The wire code of each aggregation (docs/protocol.md); the enum order is
+    the stream-id order of the plan contract."""
+
+    MIN = 0
+    MAX = 1
+    AVERAGE = 2
+    FIRST = 3
+    LAST = 4
+    ALL = 5
+    COUNT = 6
+    SUM = 7
 
 
 @dataclass(frozen=True)

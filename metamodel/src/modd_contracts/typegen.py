@@ -134,7 +134,14 @@ def _ts_aggregations() -> list[str]:
             f"  {{ name: {json.dumps(r['name'])}, code: {r['code']}, "
             f"numericOnly: {json.dumps(r['numericOnly'])} }},"
         )
-    out += ["] as const;", ""]
+    out += [
+        "] as const;",
+        "",
+        "/** Each aggregation's name, for code that compares or builds one. */",
+        "export const AGGREGATION = {",
+    ]
+    out += [f"  {r['name']}: {json.dumps(r['name'])}," for r in _table()]
+    out += ["} as const;", ""]
     return out
 
 
@@ -152,6 +159,23 @@ def generate_agg_py() -> str:
         "from __future__ import annotations",
         "",
         "from dataclasses import dataclass",
+        "from enum import IntEnum",
+        "from typing import Final",
+        "",
+        "#: Each aggregation's name, for code that compares or builds one",
+        "#: (``aggregation == AVERAGE``); typed as its ``Literal``.",
+    ]
+    out += [f"{r['name']}: Final = {json.dumps(r['name'])}" for r in _table()]
+    out += [
+        "",
+        "",
+        "class Aggregation(IntEnum):",
+        '    """The wire code of each aggregation (docs/protocol.md); the enum order is',
+        '    the stream-id order of the plan contract."""',
+        "",
+    ]
+    out += [f"    {r['name']} = {r['code']}" for r in _table()]
+    out += [
         "",
         "",
         "@dataclass(frozen=True)",
@@ -202,6 +226,17 @@ def generate_agg_cpp() -> str:
         "#pragma once",
         "",
         "#include <cstdint>",
+        "",
+        "namespace modd::link {",
+        "",
+        "// The wire code of each aggregation (docs/protocol.md).",
+        "enum class Aggregation : uint8_t {",
+    ]
+    out += [f"  {r['name'].capitalize()} = {r['code']}," for r in _table()]
+    out += [
+        "};",
+        "",
+        "}  // namespace modd::link",
         "",
         "namespace modd::link::table {",
         "",

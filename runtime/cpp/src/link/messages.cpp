@@ -6,8 +6,8 @@ namespace modd::link {
 
 namespace {
 constexpr const char* kTypeNames[] = {"float32", "float64", "int", "bool"};
-// The aggregation table is generated from the metamodel (python -m modd_contracts.typegen);
-// the enum in messages.hpp must list it in wire-code order.
+// The aggregation table and enum are generated from the metamodel
+// (python -m modd_contracts.typegen), the enum in wire-code order.
 static_assert(table::kAggregationCount == static_cast<int>(Aggregation::Sum) + 1,
               "Aggregation enum and the generated aggregation table differ");
 }  // namespace

@@ -4,6 +4,22 @@
 
 #include <cstdint>
 
+namespace modd::link {
+
+// The wire code of each aggregation (docs/protocol.md).
+enum class Aggregation : uint8_t {
+  Min = 0,
+  Max = 1,
+  Average = 2,
+  First = 3,
+  Last = 4,
+  All = 5,
+  Count = 6,
+  Sum = 7,
+};
+
+}  // namespace modd::link
+
 namespace modd::link::table {
 
 struct AggregationRow {

@@ -6,6 +6,8 @@
 #include <variant>
 #include <vector>
 
+#include "modd/link/aggregation_table.gen.hpp"  // the Aggregation enum, generated
+
 namespace modd::link {
 
 inline constexpr uint8_t kVersion = 1;
@@ -29,7 +31,6 @@ enum class MsgType : uint8_t {
 };
 
 enum class ValueType : uint8_t { Float32 = 0, Float64 = 1, Int = 2, Bool = 3 };
-enum class Aggregation : uint8_t { Min = 0, Max, Average, First, Last, All, Count, Sum };
 
 const char* value_type_name(ValueType t);
 const char* aggregation_name(Aggregation a);

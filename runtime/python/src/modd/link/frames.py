@@ -5,6 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from enum import IntEnum
 
+from modd_contracts.aggregations import AGGREGATIONS
+from modd_contracts.aggregations import Aggregation as Aggregation  # the wire codes, generated
+
 VERSION = 1
 MAX_FRAME = 1 << 20
 
@@ -42,19 +45,6 @@ class ValueType(IntEnum):
         return ("float32", "float64", "int", "bool")[self]
 
 
-class Aggregation(IntEnum):
-    """Enum order is the wire code and the stream-id order of the plan contract."""
-
-    MIN = 0
-    MAX = 1
-    AVERAGE = 2
-    FIRST = 3
-    LAST = 4
-    ALL = 5
-    COUNT = 6
-    SUM = 7
-
-
 class ErrorCode(IntEnum):
     BAD_FRAME = 1
     VERSION = 2
@@ -84,21 +74,15 @@ class ValueKind:
 
 
 def value_kind(vtype: ValueType, agg: Aggregation) -> ValueKind:
-    natural = {
-        ValueType.FLOAT32: Scalar.F32,
-        ValueType.FLOAT64: Scalar.F64,
-        ValueType.INT: Scalar.ZIGZAG,
-        ValueType.BOOL: Scalar.BOOL,
-    }[vtype]
-    if agg == Aggregation.AVERAGE:
-        f32 = vtype in (ValueType.FLOAT32, ValueType.BOOL)
-        return ValueKind(agg, Scalar.F32 if f32 else Scalar.F64)
-    if agg == Aggregation.SUM:
-        s = {ValueType.FLOAT32: Scalar.F32, ValueType.FLOAT64: Scalar.F64}.get(vtype, Scalar.ZIGZAG)
-        return ValueKind(agg, s)
+    """The wire type of the value is the aggregation table's result type for
+    the topic type; a COUNT, never negative, is an unsigned varint rather than
+    zigzag (the C++ ``value_kind`` reads the same table)."""
     if agg == Aggregation.COUNT:
         return ValueKind(agg, Scalar.UVARINT)
-    return ValueKind(agg, natural)
+    return ValueKind(agg, _SCALAR[AGGREGATIONS[agg].result[vtype.label]])
+
+
+_SCALAR = {"float32": Scalar.F32, "float64": Scalar.F64, "int": Scalar.ZIGZAG, "bool": Scalar.BOOL}
 
 
 class ProtocolError(Exception):
