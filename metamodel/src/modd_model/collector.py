@@ -17,13 +17,15 @@ from __future__ import annotations
 
 from typing import Any
 
+from modd_contracts import aggregations as agg
+
 from .diagnostics import Diagnostic
 from .printer import INDENT, endpoint, name, quote
 from .query import DEFAULT_VALUE_TYPE
 from .vocabulary import KNOWN_UNITS
 
 #: Aggregations the original metamodel knows.
-ORIGINAL_AGGREGATIONS = ("MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL")
+ORIGINAL_AGGREGATIONS = (agg.MIN, agg.MAX, agg.AVERAGE, agg.FIRST, agg.LAST, agg.ALL)
 #: Broker names written when the model gives none (the original requires one).
 DEFAULT_BROKER_NAMES = {"pubBroker": "broker", "subBroker": "base"}
 

@@ -32,6 +32,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from modd_contracts import aggregations as agg
 from modd_contracts.aggregations import AGGREGATIONS
 
 Sample = float | int | bool
@@ -107,14 +108,14 @@ def merge_all(windows: Sequence[Sequence[Sample] | None]) -> list[Sample]:
 
 
 MERGES: dict[str, Callable[[Sequence[Any]], Any]] = {
-    "MIN": merge_min,
-    "MAX": merge_max,
-    "FIRST": merge_first,
-    "LAST": merge_last,
-    "SUM": merge_sum,
-    "COUNT": merge_count,
-    "AVERAGE": merge_average,
-    "ALL": merge_all,
+    agg.MIN: merge_min,
+    agg.MAX: merge_max,
+    agg.FIRST: merge_first,
+    agg.LAST: merge_last,
+    agg.SUM: merge_sum,
+    agg.COUNT: merge_count,
+    agg.AVERAGE: merge_average,
+    agg.ALL: merge_all,
 }
 
 
@@ -130,23 +131,23 @@ def aggregate(aggregation: str, samples: Sequence[Sample]) -> Window:
     >>> aggregate("AVERAGE", [1.0, 2.0, 6.0])
     (3.0, 3)
     """
-    if aggregation == "ALL":
+    if aggregation == agg.ALL:
         return list(samples)
-    if aggregation == "COUNT":
+    if aggregation == agg.COUNT:
         return len(samples)
-    if aggregation == "SUM":
+    if aggregation == agg.SUM:
         return sum(samples, 0)
-    if aggregation == "AVERAGE":
+    if aggregation == agg.AVERAGE:
         return (sum(samples, 0) / len(samples), len(samples)) if samples else None
     if not samples:
         return None
-    if aggregation == "MIN":
+    if aggregation == agg.MIN:
         return min(samples)
-    if aggregation == "MAX":
+    if aggregation == agg.MAX:
         return max(samples)
-    if aggregation == "FIRST":
+    if aggregation == agg.FIRST:
         return samples[0]
-    if aggregation == "LAST":
+    if aggregation == agg.LAST:
         return samples[-1]
     raise ValueError(f"unknown aggregation {aggregation!r}")
 
@@ -155,9 +156,9 @@ def _convert(target: str, source: str, window: Window) -> Window:
     """One source window seen as a window of ``target`` (same time span)."""
     if source == target:
         return window
-    if source == "ALL":
+    if source == agg.ALL:
         return aggregate(target, window or [])
-    if target == "COUNT" and source == "AVERAGE":
+    if target == agg.COUNT and source == agg.AVERAGE:
         return 0 if window is None else window[1]
     raise ValueError(f"{target} cannot be derived from {source}")
 
@@ -170,8 +171,8 @@ def derive_value(target: str, sources: Sequence[tuple[str, Sequence[Window]]]) -
     rule. Raises ValueError when no rule applies.
     """
     if len(sources) == 1:
-        agg, windows = sources[0]
-        return merge(target, [_convert(target, agg, w) for w in windows])
+        source, windows = sources[0]
+        return merge(target, [_convert(target, source, w) for w in windows])
     if len(sources) == 2 and PAIR_SOURCE_RULES.get(target) == (sources[0][0], sources[1][0]):
         total = merge_sum(sources[0][1])
         count = merge_count(sources[1][1])

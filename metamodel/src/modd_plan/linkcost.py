@@ -33,6 +33,7 @@ from fractions import Fraction
 from functools import lru_cache
 from math import ceil
 
+from modd_contracts import aggregations as agg
 from modd_contracts.aggregations import BY_NAME
 from modd_contracts.types import PredictedLink
 
@@ -73,14 +74,14 @@ def window_value_bytes(aggregation: str, topic_type: str, samples: Fraction) -> 
     """Expected bytes of one window's value when ``samples`` samples (on
     average) fall in a window."""
     count_bytes = varint_size(ceil(samples))
-    if aggregation == "COUNT":
+    if aggregation == agg.COUNT:
         return Fraction(count_bytes)
     value = SAMPLE_BYTES[aggregate_value_type(aggregation, topic_type)]
-    if aggregation == "AVERAGE":
+    if aggregation == agg.AVERAGE:
         return Fraction(value + count_bytes)
-    if aggregation == "ALL":
+    if aggregation == agg.ALL:
         return count_bytes + samples * value
-    if aggregation == "SUM" and topic_type == "bool":  # zigzag varint of at most `samples`
+    if aggregation == agg.SUM and topic_type == "bool":  # zigzag varint of at most `samples`
         return Fraction(varint_size(2 * ceil(samples)))
     return Fraction(value)
 

@@ -26,6 +26,7 @@ from fractions import Fraction
 from functools import lru_cache
 from typing import Any
 
+from modd_contracts import aggregations as agg
 from modd_contracts.aggregations import NAMES
 from modd_model.numbers import fraction_to_decimal, to_fraction
 
@@ -264,7 +265,7 @@ def _choose_for_topic(
     topic = streams[0].topic
     periods = {s._nd: s._sort_period for s in streams}  # type: ignore[attr-defined]
     for _, period in sorted(periods.values()):
-        helper = StreamKey(topic, "ALL", period)
+        helper = StreamKey(topic, agg.ALL, period)
         if helper in costs:
             continue
         replaceable = sum(cost(s) for s in best if _factor(s, helper) is not None)

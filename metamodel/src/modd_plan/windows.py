@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from typing import Any, Protocol
 
+from modd_contracts import aggregations as agg
+
 Scalar = float | int | bool
 Value = Scalar | list[Scalar] | None
 
@@ -32,13 +34,13 @@ def window_of(value: LinkValue, aggregation: str, value_type: str) -> Any:
     floats = value_type in ("float32", "float64")
     if not value.present:
         return None
-    if aggregation == "AVERAGE":
+    if aggregation == agg.AVERAGE:
         return (value.number, value.count) if value.count else None
-    if aggregation == "COUNT":
+    if aggregation == agg.COUNT:
         return value.count
-    if aggregation == "ALL":
+    if aggregation == agg.ALL:
         return [bool(x) for x in value.samples] if value_type == "bool" else list(value.samples)
-    if aggregation == "SUM":
+    if aggregation == agg.SUM:
         return value.number if floats else value.integer
     if floats:
         return value.number
@@ -48,12 +50,12 @@ def window_of(value: LinkValue, aggregation: str, value_type: str) -> Any:
 def split_window(aggregation: str, window: Any) -> tuple[Value, int | None]:
     """``(value, count)`` of a window, as the delivered value carries them:
     ``count`` for the aggregations that have one (AVERAGE, COUNT, ALL)."""
-    if aggregation == "AVERAGE":
+    if aggregation == agg.AVERAGE:
         return (None, 0) if window is None else (float(window[0]), int(window[1]))
-    if aggregation == "COUNT":
+    if aggregation == agg.COUNT:
         count = int(window or 0)
         return count, count
-    if aggregation == "ALL":
+    if aggregation == agg.ALL:
         samples = list(window or [])
         return samples, len(samples)
     return window, None
