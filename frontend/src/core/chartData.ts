@@ -9,6 +9,7 @@
  *   visibleRange({ follow: true, spanS: 60 }, 100) // [40, 100]: one point still gets a 60 s axis
  */
 import type { Sample } from "../dataSources/types";
+import { AGGREGATION } from "./contracts.gen";
 
 /** Follow the newest value over the last `spanS` seconds, or show [from, to] (after a zoom or pan). */
 export type ViewWindow = { follow: true; spanS: number } | { follow: false; from: number; to: number };
@@ -111,7 +112,7 @@ export function panRange([from, to]: [number, number], share: number): ViewWindo
 
 /** The unit of a topic's values as an axis reads it; COUNT counts samples whatever the unit. */
 export function unitLabel(unit: string | undefined, aggregation?: string): string {
-  if (aggregation === "COUNT") return "samples";
+  if (aggregation === AGGREGATION.COUNT) return "samples";
   if (!unit || unit === "NONE") return "";
   const words: Record<string, string> = {
     METER: "m", METER_PER_SECOND: "m/s", METER_PER_SECOND_SQUARED: "m/s²", DEGREE_CELSIUS: "°C",

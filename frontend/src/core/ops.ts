@@ -14,6 +14,7 @@ import {
   DRONE_ID, PUB_BROKER_ID, SUB_BROKER_ID, LINK_ID,
   parseId, publisherId, sensorId, subscriberId, topicId, topicName,
 } from "./ids";
+import { AGGREGATION } from "./contracts.gen";
 import { listTopics } from "./query";
 import { freshName } from "./templates";
 
@@ -96,7 +97,7 @@ export function addSubscriber(
   if (clientNames(m).includes(n)) throw new EditError(`"${n}" names a publisher or subscriber already`);
   // An unconnected subscriber has an empty topic: validation flags it until it is connected.
   m.subscribers.push({
-    name: n, topic: opts.topic ?? "", periodS: opts.periodS ?? "1.0", aggregation: opts.aggregation ?? "AVERAGE",
+    name: n, topic: opts.topic ?? "", periodS: opts.periodS ?? "1.0", aggregation: opts.aggregation ?? AGGREGATION.AVERAGE,
   });
   setPosition(m, subscriberId(n), pos);
   return { model: m, id: subscriberId(n) };

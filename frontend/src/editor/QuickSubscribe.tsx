@@ -4,6 +4,7 @@
  */
 import { useState } from "react";
 import { AggregationValues, type Aggregation } from "../core/model.gen";
+import { AGGREGATION } from "../core/contracts.gen";
 import { listTopics } from "../core/query";
 import { nextPosition } from "../core/graph";
 import { currentModel } from "../core/workbench";
@@ -15,7 +16,7 @@ export function QuickSubscribe() {
   const topics = listTopics(model);
   const [topic, setTopic] = useState("");
   const [periodS, setPeriod] = useState("1.0");
-  const [aggregation, setAggregation] = useState<Aggregation>("AVERAGE");
+  const [aggregation, setAggregation] = useState<Aggregation>(AGGREGATION.AVERAGE);
   const chosen = topic || topics[0]?.name || "";
   return (
     <form

@@ -14,6 +14,7 @@
  */
 import { useEffect, useState } from "react";
 import { AggregationValues } from "../../core/model.gen";
+import { AGGREGATION } from "../../core/contracts.gen";
 import { findTopicByName, listTopics } from "../../core/query";
 import { formatRate } from "../../core/plan";
 import { canEdit } from "../../core/roles";
@@ -41,7 +42,7 @@ export default function MonitorPanel() {
   const { charts, win, dynamic } = layout.state;
   const [replies, setReplies] = useState<Array<{ label: string; reply: DynamicReply }>>([]);
   const topics = listTopics(model);
-  const [dyn, setDyn] = useState({ topic: "", period_s: "1.0", aggregation: "AVERAGE" });
+  const [dyn, setDyn] = useState<{ topic: string; period_s: string; aggregation: string }>({ topic: "", period_s: "1.0", aggregation: AGGREGATION.AVERAGE });
   const watched = charts.flat();
   const watchedKey = watched.join(",");
   useEffect(() => { keepSubscribed(source, watchedKey ? watchedKey.split(",") : []); }, [source, watchedKey]);

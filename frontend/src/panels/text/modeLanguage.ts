@@ -4,8 +4,9 @@
  * errors come from the backend's parser, the one grammar.
  */
 import { StreamLanguage } from "@codemirror/language";
+import { AggregationValues } from "../../core/model.gen";
 
-const KEYWORDS = /^(DataCollector|Drone|Sensors|Sensor|measures|PubBroker|SubBroker|Publishers|Publisher|Subscriptions|Subscriber|Link|MIN|MAX|AVERAGE|FIRST|LAST|ALL|COUNT|SUM)\b/;
+const KEYWORDS = new RegExp(`^(DataCollector|Drone|Sensors|Sensor|measures|PubBroker|SubBroker|Publishers|Publisher|Subscriptions|Subscriber|Link|${AggregationValues.join("|")})\\b`);
 
 export const moddLanguage = StreamLanguage.define<{ inComment: boolean }>({
   startState: () => ({ inComment: false }),
