@@ -49,6 +49,21 @@ def test_keys_parse_back() -> None:
     for bad in ("modd/usv/status", "modd/*/sub/x", "other/usv/sub/x", "modd/usv/sub/x/y"):
         with pytest.raises(ValueError):
             keys.parse_sub_key(bad)
+        assert keys.match_sub_key(bad) is None
+    for bad in ("modd/*/status", "modd/usv/status/x", "modd/usv/sub/x", "x/usv/status"):
+        assert keys.match_status_key(bad) is None
+        with pytest.raises(ValueError):
+            keys.parse_status_key(bad)
+    assert keys.match_status_key("modd/usv/status") == "usv"
+
+
+def test_queryables_are_the_builders() -> None:
+    assert keys.queryables_of("usv") == [
+        keys.deploy_key("usv"),
+        keys.subscribe_key("usv"),
+        keys.backfill_key("usv"),
+    ]
+    assert keys.queryables_of(None) == ["modd/*/deploy", "modd/*/subscribe", "modd/*/backfill"]
 
 
 def test_key_names_are_the_metamodels() -> None:

@@ -9,6 +9,8 @@ model string can never widen a key expression (``*``, ``/``, ``**``).
 ('modd/usv/sub/*', 'modd/*/sub/*')
 >>> parse_sub_key("modd/usv/sub/sub_1")
 ('usv', 'sub_1')
+>>> match_status_key("modd/usv/status"), match_sub_key("modd/usv/status")
+('usv', None)
 """
 
 from __future__ import annotations
@@ -47,19 +49,29 @@ def status_key(drone: str | None) -> str:
     return f"{drone_prefix(drone)}/status"
 
 
+#: The last chunk of each of the SubBroker's queryables.
+QUERYABLES = ("deploy", "subscribe", "backfill")
+
+
 def deploy_key(drone: str) -> str:
     """The SubBroker's deploy queryable."""
-    return f"{drone_prefix(drone)}/deploy"
+    return f"{drone_prefix(drone)}/{QUERYABLES[0]}"
 
 
 def subscribe_key(drone: str) -> str:
     """The SubBroker's dynamic-subscription queryable."""
-    return f"{drone_prefix(drone)}/subscribe"
+    return f"{drone_prefix(drone)}/{QUERYABLES[1]}"
 
 
 def backfill_key(drone: str) -> str:
     """The SubBroker's backfill queryable (start, progress, cancel)."""
-    return f"{drone_prefix(drone)}/backfill"
+    return f"{drone_prefix(drone)}/{QUERYABLES[2]}"
+
+
+def queryables_of(drone: str | None) -> list[str]:
+    """Every queryable of one drone's SubBroker (``None``: of every drone),
+    for ACL rules."""
+    return [f"{drone_prefix(drone)}/{q}" for q in QUERYABLES]
 
 
 def values_of(drone: str | None) -> str:
@@ -79,17 +91,35 @@ ALL_VALUES = values_of(None)
 ALL_STATUS = status_key(None)
 
 
-def parse_sub_key(key: str) -> tuple[str, str]:
-    """``(drone, subscriber)`` of a :func:`sub_key`, else ValueError."""
+def match_sub_key(key: str) -> tuple[str, str] | None:
+    """``(drone, subscriber)`` of a :func:`sub_key`, or ``None`` for any other
+    key (what a subscription callback does with a key it did not expect)."""
     parts = key.split("/")
     if len(parts) != 4 or parts[0] != ROOT or parts[2] != "sub":
-        raise ValueError(f"{key!r} is not a {ROOT}/<drone>/sub/<subscriber> key")
-    return check_name("drone", parts[1]), check_name("subscriber", parts[3])
+        return None
+    drone, subscriber = parts[1], parts[3]
+    return (drone, subscriber) if NAME.fullmatch(drone) and NAME.fullmatch(subscriber) else None
+
+
+def match_status_key(key: str) -> str | None:
+    """The drone of a :func:`status_key`, or ``None`` for any other key."""
+    parts = key.split("/")
+    if len(parts) != 3 or parts[0] != ROOT or parts[2] != "status":
+        return None
+    return parts[1] if NAME.fullmatch(parts[1]) else None
+
+
+def parse_sub_key(key: str) -> tuple[str, str]:
+    """``(drone, subscriber)`` of a :func:`sub_key`, else ValueError."""
+    found = match_sub_key(key)
+    if found is None:
+        raise ValueError(f"{key[:200]!r} is not a {ROOT}/<drone>/sub/<subscriber> key")
+    return found
 
 
 def parse_status_key(key: str) -> str:
     """The drone of a :func:`status_key`, else ValueError."""
-    parts = key.split("/")
-    if len(parts) != 3 or parts[0] != ROOT or parts[2] != "status":
-        raise ValueError(f"{key!r} is not a {ROOT}/<drone>/status key")
-    return check_name("drone", parts[1])
+    found = match_status_key(key)
+    if found is None:
+        raise ValueError(f"{key[:200]!r} is not a {ROOT}/<drone>/status key")
+    return found
