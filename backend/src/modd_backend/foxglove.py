@@ -31,6 +31,8 @@ import logging
 import threading
 from typing import Any
 
+from modd_contracts.keys import match_status_key, match_sub_key
+
 from .scene import position_roles
 
 log = logging.getLogger("modd.foxglove")
@@ -129,15 +131,6 @@ def routed_subscribers(status: dict[str, Any]) -> set[str] | None:
     return out
 
 
-def _split(key: str, kind: str) -> list[str] | None:
-    parts = key.split("/")
-    if kind == "sub" and len(parts) == 4 and parts[0] == "modd" and parts[2] == "sub":
-        return parts
-    if kind == "status" and len(parts) == 3 and parts[0] == "modd" and parts[2] == "status":
-        return parts
-    return None
-
-
 class FoxgloveLive:
     """A Foxglove server on ``host:port`` fed with delivered values and
     statuses (``modd/*/sub/*``, ``modd/*/status``) by the backend's zenoh
@@ -179,16 +172,17 @@ class FoxgloveLive:
 
     def on_value(self, key: str, payload: bytes) -> None:
         """zenoh callback for ``modd/<drone>/sub/<subscriber>``."""
-        parts = _split(key, "sub")
+        found = match_sub_key(key)
         delivered = _load(payload)
-        if parts is None or delivered is None:
+        if found is None or delivered is None:
             return
+        drone, subscriber = found
         msg = window_message(delivered)
-        ch = self._channel(f"/{parts[1]}/{parts[3]}", WINDOW_SCHEMA, "modd.Window")
+        ch = self._channel(f"/{drone}/{subscriber}", WINDOW_SCHEMA, "modd.Window")
         end_ns = int(delivered.get("end_ns") or 0)
         ch.log(msg, log_time=end_ns or None)
         self.logged += 1
-        self._position(parts[1], parts[3], delivered, end_ns)
+        self._position(drone, subscriber, delivered, end_ns)
 
     def _position(self, drone: str, subscriber: str, delivered: dict[str, Any],
                   end_ns: int) -> None:
@@ -214,11 +208,10 @@ class FoxgloveLive:
     def on_status(self, key: str, payload: bytes) -> None:
         """zenoh callback for ``modd/<drone>/status``: the link channel, and
         withdraws the channels of subscribers no longer routed."""
-        parts = _split(key, "status")
+        drone = match_status_key(key)
         status = _load(payload)
-        if parts is None or status is None:
+        if drone is None or status is None:
             return
-        drone = parts[1]
         time_ns = status.get("time_ns")
         link = self._channel(f"/{drone}/link", LINK_SCHEMA, "modd.LinkStatus")
         link.log(status, log_time=time_ns if isinstance(time_ns, int) else None)

@@ -61,24 +61,24 @@ class SubscriptionHub:
         self._every_status.append(callback)
 
     def on_value(self, key: str, payload: bytes) -> None:
-        parts = key.split("/")
+        found = keys.match_sub_key(key)
         for cb in self._every_value:
             cb(key, payload)
-        if len(parts) != 4:
+        if found is None:
             return
         with self._lock:
-            targets = list(self._values.get((parts[1], parts[3]), ()))
+            targets = list(self._values.get(found, ()))
         for cb in targets:
-            cb(parts[3], payload)
+            cb(found[1], payload)
 
     def on_status(self, key: str, payload: bytes) -> None:
-        parts = key.split("/")
+        drone = keys.match_status_key(key)
         for every in self._every_status:
             every(key, payload)
-        if len(parts) != 3:
+        if drone is None:
             return
         with self._lock:
-            targets = list(self._status.get(parts[1], ()))
+            targets = list(self._status.get(drone, ()))
         for cb in targets:
             cb(payload)
 

@@ -31,6 +31,7 @@ import time
 from datetime import datetime, timedelta
 from typing import Any
 
+from modd_contracts.keys import match_status_key
 from sqlalchemy import select
 from sqlalchemy.orm import Session as Db
 
@@ -56,8 +57,8 @@ class DroneStatuses:
 
     def on_status(self, key: str, payload: bytes) -> None:
         """The hub's callback (a zenoh thread): parse, keep, never raise."""
-        parts = key.split("/")
-        if len(parts) != 3 or len(payload) > 1 << 20:
+        drone = match_status_key(key)
+        if drone is None or len(payload) > 1 << 20:
             return
         try:
             doc = json.loads(payload)
@@ -66,9 +67,9 @@ class DroneStatuses:
         if not isinstance(doc, dict):
             return
         with self._lock:
-            if parts[1] not in self._last and len(self._last) >= MAX_DRONES:
+            if drone not in self._last and len(self._last) >= MAX_DRONES:
                 return
-            self._last[parts[1]] = (time.monotonic(), utcnow(), doc)
+            self._last[drone] = (time.monotonic(), utcnow(), doc)
 
     def drones(self) -> list[str]:
         with self._lock:

@@ -20,6 +20,8 @@ import threading
 from dataclasses import dataclass, field
 from typing import Any
 
+from modd_contracts.keys import match_sub_key
+
 #: Variable names (last part of a topic) read as a position or an attitude.
 ROLE_NAMES: dict[str, tuple[str, ...]] = {
     "lat": ("latitude", "lat"),
@@ -175,19 +177,19 @@ class SceneService:
         """zenoh callback for ``modd/<drone>/sub/<subscriber>``."""
         import json
 
-        parts = key.split("/")
-        if len(parts) != 4:
+        found = match_sub_key(key)
+        if found is None:
             return
         try:
             delivered = json.loads(payload)
         except (ValueError, UnicodeDecodeError):
             return
         if isinstance(delivered, dict):
-            track = self.track(parts[1])
+            track = self.track(found[0])
             with self._lock:
-                changed = track.ingest(parts[3], delivered)
+                changed = track.ingest(found[1], delivered)
             if changed:
-                self.server.draw(parts[1], track)
+                self.server.draw(found[0], track)
 
     def colour_by(self, drone: str, subscriber: str | None) -> None:
         with self._lock:

@@ -18,7 +18,7 @@ import threading
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, HTTPException, Path
-from modd_contracts.keys import check_name
+from modd_contracts.keys import backfill_key
 from pydantic import BaseModel, Field
 from starlette.concurrency import run_in_threadpool
 
@@ -69,7 +69,7 @@ class Progress(BaseModel):
 
 
 def _ask(bridge: ZenohBridge, drone: str, request: dict[str, Any]) -> Progress:
-    key = f"modd/{check_name('drone', drone)}/backfill"
+    key = backfill_key(drone)
     result = bridge.query(key, json.dumps(request).encode(), TIMEOUT_S)
     if not result.ok:
         return Progress(status="NO_REPLY", reason=result.error)
