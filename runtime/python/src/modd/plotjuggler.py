@@ -80,14 +80,14 @@ class PlotJugglerOut:
             keys.values_of(None if drone == "*" else drone), self._on)
 
     def _on(self, sample: Any) -> None:
-        parts = str(sample.key_expr).split("/")
+        found = keys.match_sub_key(str(sample.key_expr))
         try:
             delivered = json.loads(sample.payload.to_bytes())
         except (ValueError, UnicodeDecodeError):
             return
-        if len(parts) != 4 or not isinstance(delivered, dict):
+        if found is None or not isinstance(delivered, dict):
             return
-        data = datagram(parts[1], parts[3], delivered)
+        data = datagram(*found, delivered)
         if data is None:
             return
         try:
@@ -120,7 +120,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"modd-plotjuggler: {exc}", file=sys.stderr)
         return 2
     out = PlotJugglerOut(session, target, a.drone)
-    print(f"modd-plotjuggler: modd/{a.drone}/sub/* -> udp {target[0]}:{target[1]} "
+    values = keys.values_of(None if a.drone == "*" else a.drone)
+    print(f"modd-plotjuggler: {values} -> udp {target[0]}:{target[1]} "
           "(PlotJuggler: UDP Server, JSON, timestamp field 'timestamp')", flush=True)
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())

@@ -180,9 +180,8 @@ def acl(drone: str | None = None) -> dict[str, Any]:
     key expression, message type and flow (ingress: from that client into the
     router; egress: from the router to it). A subscriber also needs
     ``declare_subscriber`` on egress, else its publisher never learns of it."""
-    d = keys.drone_prefix(drone or None)
     own = [keys.values_tree(drone or None), keys.status_key(drone or None)]
-    queries = [f"{d}/deploy", f"{d}/subscribe", f"{d}/backfill"]
+    queries = keys.queryables_of(drone or None)
     # readers may subscribe across drones (modd/*/sub/*): reading is not writing
     read = [keys.values_tree(None), keys.ALL_STATUS]
     rules = [

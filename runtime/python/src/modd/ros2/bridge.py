@@ -92,14 +92,14 @@ class Ros2Bridge:
             return pub
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
-        parts = str(sample.key_expr).split("/")
+        found = keys.match_sub_key(str(sample.key_expr))
         try:
             delivered = json.loads(sample.payload.to_bytes())
         except (ValueError, UnicodeDecodeError):
             return
-        if len(parts) != 4 or not isinstance(delivered, dict):
+        if found is None or not isinstance(delivered, dict):
             return
-        self.on_value(parts[1], parts[3], delivered)
+        self.on_value(*found, delivered)
 
     def on_value(self, drone: str, subscriber: str, delivered: dict[str, Any]) -> None:
         base = f"/{drone}/{subscriber}"
