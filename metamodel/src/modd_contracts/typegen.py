@@ -57,6 +57,7 @@ def generate_py() -> str:
         "",
         "from __future__ import annotations",
         "",
+        "from dataclasses import dataclass",
         "from typing import Any, Literal, NotRequired, TypedDict",
         "",
     ]
@@ -76,7 +77,10 @@ def generate_py() -> str:
             t = _py_type(ps)
             out.append(f"    {prop}: {t if prop in required else f'NotRequired[{t}]'}")
         out += ["", ""]
-    names = [c for c, _ in _versions()] + [n for n, _ in defs]
+    records = dict(defs)
+    for name, (record, omit) in RECORDS.items():
+        out += _py_record(name, record, omit, records[name])
+    names = [c for c, _ in _versions()] + [n for n, _ in defs] + [r for r, _ in RECORDS.values()]
     out.append("__all__ = [" + ", ".join(f'"{n}"' for n in names) + "]")
     text = "\n".join(out) + "\n"
     if "Any]" not in text:
@@ -84,6 +88,36 @@ def generate_py() -> str:
     if "Literal[" not in text:
         text = text.replace("Literal, ", "")
     return text
+
+
+#: Contracts that Python code holds as objects: a frozen dataclass of the
+#: contract's fields but the ones named (its version, a constant of the writer),
+#: which the owner subclasses with its methods (``modd.subbroker.payload``).
+RECORDS: dict[str, tuple[str, tuple[str, ...]]] = {
+    "DeliveredValue": ("DeliveredValueFields", ("v",))
+}
+
+
+def _py_record(name: str, record: str, omit: tuple[str, ...], s: dict[str, Any]) -> list[str]:
+    """A frozen dataclass of ``s``'s properties in their order; an optional
+    boolean defaults to False (and must come last), other optionals are refused."""
+    required = set(s.get("required", []))
+    out = [
+        "@dataclass(frozen=True)",
+        f"class {record}:",
+        f'    """The fields of :class:`{name}` but {", ".join(omit)}, as a record."""',
+        "",
+    ]
+    for prop, ps in s["properties"].items():
+        if prop in omit:
+            continue
+        if prop in required:
+            out.append(f"    {prop}: {_py_type(ps)}")
+        elif ps.get("type") == "boolean":
+            out.append(f"    {prop}: bool = False")
+        else:
+            raise ValueError(f"{name}.{prop}: a record's optional field must be a boolean")
+    return [*out, "", ""]
 
 
 def generate_ts() -> str:

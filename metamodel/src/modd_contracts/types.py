@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Literal, NotRequired, TypedDict
 
 DELIVERED_VALUE_VERSION = 1
@@ -263,4 +264,23 @@ class PubBrokerLog(TypedDict):
     keep: NotRequired[int]
 
 
-__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "DeliveredValue", "SubBrokerStatus", "LinkState", "PredictedLink", "TcpSender", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog"]
+@dataclass(frozen=True)
+class DeliveredValueFields:
+    """The fields of :class:`DeliveredValue` but v, as a record."""
+
+    subscriber: str
+    topic: str
+    aggregation: str
+    period_s: str
+    unit: str
+    config_id: int
+    slot: int
+    start_ns: int
+    end_ns: int
+    value: float | bool | list[float | bool] | None
+    count: int | None
+    delivered_ns: int
+    backfilled: bool = False
+
+
+__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "DeliveredValue", "SubBrokerStatus", "LinkState", "PredictedLink", "TcpSender", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "DeliveredValueFields"]

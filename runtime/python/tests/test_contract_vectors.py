@@ -5,13 +5,15 @@ codes are the table's."""
 from __future__ import annotations
 
 import json
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
 from modd.link.frames import Aggregation
 from modd.subbroker.payload import DeliveredValue, StreamPayload, subscriber_prefix
 from modd_contracts.aggregations import AGGREGATIONS
-from modd_contracts.schema import validate, version
+from modd_contracts.schema import load, validate, version
+from modd_contracts.types import DeliveredValueFields
 
 VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors"
 
@@ -41,3 +43,11 @@ def test_payload_version_is_the_schemas() -> None:
 
 def test_link_codes_are_the_tables() -> None:
     assert {a.name: a.value for a in Aggregation} == {a.name: a.code for a in AGGREGATIONS}
+
+
+def test_the_payload_object_declares_no_field_of_its_own() -> None:
+    """DeliveredValue's fields are the generated record's, which are the
+    schema's properties but the version ``v``: one definition."""
+    assert fields(DeliveredValue) == fields(DeliveredValueFields)
+    props = list(load("delivered_value")["properties"])
+    assert [f.name for f in fields(DeliveredValue)] == [p for p in props if p != "v"]
