@@ -24,14 +24,16 @@ import math
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
+from modd_contracts.types import DELIVERED_VALUE_VERSION, DeliveredValueFields
 from modd_plan.windows import Value
 
-#: Version of the payload; a reader rejects a higher major version.
-PAYLOAD_VERSION = 1
+#: Version of the payload (the contract's ``x-version``); a reader rejects a higher one.
+PAYLOAD_VERSION = DELIVERED_VALUE_VERSION
 #: Nesting a delivered value may have (an ALL window is a list: depth 2).
 MAX_DEPTH = 8
-_TEXT = ("subscriber", "topic", "aggregation", "period_s", "unit")
-_INTS = ("config_id", "slot", "start_ns", "end_ns", "delivered_ns")
+#: The text and the integer fields, by the contract's types.
+_TEXT = tuple(f.name for f in fields(DeliveredValueFields) if f.type == "str")
+_INTS = tuple(f.name for f in fields(DeliveredValueFields) if f.type == "int")
 
 
 def _is_int(v: Any) -> bool:
@@ -71,32 +73,21 @@ def json_depth_error(raw: bytes | str, limit: int = MAX_DEPTH) -> str | None:
 
 
 @dataclass(frozen=True)
-class DeliveredValue:
-    """One window of a subscription.
+class DeliveredValue(DeliveredValueFields):
+    """One window of a subscription: the fields are the contract's
+    (``schemas/delivered_value.schema.json``, generated into
+    :class:`modd_contracts.types.DeliveredValueFields`), the methods read and
+    write the payload.
 
     ``value`` is ``None`` when the window had no sample (the link's presence
     bitmap marked it absent). ``count`` is the number of samples behind the
     value when the aggregation carries it (AVERAGE, COUNT, ALL), else ``None``.
     Times are nanoseconds since the Unix epoch on the drone's clock: the
-    window is ``[start_ns, end_ns)``.
+    window is ``[start_ns, end_ns)``. ``backfilled`` is true for a window
+    recomputed from the drone's archive after the link missed it
+    (docs/protocol.md, "Backfill"); on the wire only when true, so live
+    payloads keep their bytes.
     """
-
-    subscriber: str
-    topic: str
-    aggregation: str
-    period_s: str
-    unit: str
-    config_id: int
-    slot: int
-    start_ns: int
-    end_ns: int
-    value: Value
-    count: int | None
-    delivered_ns: int
-    #: True for a window recomputed from the drone's archive after the link missed it
-    #: (docs/protocol.md, "Backfill"); on the wire only when true, so live payloads keep
-    #: their bytes.
-    backfilled: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
