@@ -16,6 +16,7 @@ import { freePort, start, stop, waitForHttp } from "./processes.mjs";
 import { journey } from "./journey.mjs";
 import { collaboration } from "./collab.mjs";
 import { views } from "./views.mjs";
+import { startTileServer } from "./tiles.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
