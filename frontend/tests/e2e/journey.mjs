@@ -123,6 +123,8 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       await expectCount(page.locator(".react-flow__node.react-flow__node-topic"), 3);
       await layout();
       await select("topic:accelerometer.accel_z");
+      // A generic sensor's variable: no MAVLink field mapping in the inspector.
+      if (await page.locator('.inspector [data-field^="source"]').count()) throw new Error("MAVLink fields shown for a generic sensor's variable");
       await shot("integrator");
     }],
 

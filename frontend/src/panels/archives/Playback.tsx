@@ -51,7 +51,12 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
     setLoaded({ busy: true });
     try {
       const wanted = [...new Set([...picked, ...[position.lat, position.lon].filter((x): x is string => !!x)])];
-      const all = await Promise.all(wanted.map((topic) => api.readArchive(drone, file.name, topic, bound(range.from), bound(range.to), MAX_POINTS)));
+      // Two reads at a time: series reads are heavy routes, limited per user (backend settings: heavy_per_user).
+      const all: Awaited<ReturnType<typeof api.readArchive>>[] = [];
+      for (let i = 0; i < wanted.length; i += 2) {
+        all.push(...await Promise.all(wanted.slice(i, i + 2).map((topic) =>
+          api.readArchive(drone, file.name, topic, bound(range.from), bound(range.to), MAX_POINTS))));
+      }
       const src = new PlaybackSource(Object.fromEntries(all.map((s) => [s.topic, archiveSamples(s.points)])));
       setCharts(picked.map((p) => [p]));
       setWin({ follow: false, from: src.start, to: Math.max(src.end, src.start + 1) });
