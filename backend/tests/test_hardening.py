@@ -288,6 +288,26 @@ def test_security_headers_on_every_answer(client: TestClient, admin: Headers) ->
         assert r.headers["x-frame-options"] == "DENY"
 
 
+def test_map_tiles_only_from_configured_origins(tmp_path: Path) -> None:
+    """No foreign image by default; a configured tile origin is allowed for images
+    only (not scripts, frames or connections); a malformed one is refused."""
+    def img_src(settings: Settings) -> tuple[str, str]:
+        with TestClient(create_app(settings, out=io.StringIO())) as c:
+            csp = c.get("/api/health").headers["content-security-policy"]
+        return next(d for d in csp.split(";") if d.strip().startswith("img-src")), csp
+
+    default, _ = img_src(_settings(tmp_path / "a"))
+    assert default.split() == ["img-src", "'self'", "data:", "blob:"]
+    tiles = "http://127.0.0.1:8123"
+    images, csp = img_src(_settings(tmp_path / "b", tile_origins=(tiles,)))
+    assert images.split() == ["img-src", "'self'", "data:", "blob:", tiles]
+    assert csp.count(tiles) == 1
+    for bad in ("http://127.0.0.1:8123/{z}/{x}/{y}.png", "javascript:alert(1)", "https://a b",
+                "http://x; script-src *"):
+        with pytest.raises(ValueError, match="tile origin"):
+            _settings(tmp_path / "c", tile_origins=(bad,))
+
+
 def test_host_allow_list(tmp_path: Path) -> None:
     app = create_app(_settings(tmp_path, allowed_hosts=("modd.ship.lan",)), out=io.StringIO())
     with TestClient(app) as c:

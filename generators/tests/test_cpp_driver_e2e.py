@@ -8,6 +8,7 @@ import json
 import os
 import signal
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -71,6 +72,7 @@ def test_generated_driver_builds_runs_and_is_archived(scenarios_dir: Path, tmp_p
                               f"unix:{tmp_path / 'ingress.sock'}"], capture_output=True,
                              text=True, timeout=60)
         assert run.returncode == 0, run.stderr
+        assert "cannot reach" not in run.stderr, run.stderr
     finally:
         broker.send_signal(signal.SIGTERM)
         out, _ = broker.communicate(timeout=30)
@@ -82,3 +84,37 @@ def test_generated_driver_builds_runs_and_is_archived(scenarios_dir: Path, tmp_p
     for topic in topics:
         assert len(archived[topic]) == READINGS, topic
         assert all(-1.0 <= v <= 1.0 for v in archived[topic])  # the skeleton's test signal
+
+    # No broker at the ingress: the driver says so at once (not after its 5 s flush).
+    gone = f"unix:{tmp_path / 'gone.sock'}"
+    _says_unreachable_at_once([str(exe), "--count", "1", "--ingress", gone], gone)
+
+
+def _says_unreachable_at_once(cmd: list[str], ingress: str) -> None:
+    """Runs a driver with nothing listening at `ingress`: its first line on stderr, within
+    3 s, names the PubBroker it cannot reach; it still ends (failing) once its flush gives up."""
+    start = time.monotonic()
+    with subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                          text=True) as proc:
+        try:
+            assert proc.stderr is not None
+            first = proc.stderr.readline()
+            elapsed = time.monotonic() - start
+            assert f"cannot reach the PubBroker at {ingress}" in first, first
+            assert elapsed < 3.0, f"said after {elapsed:.1f} s"
+            proc.stderr.read()
+            assert proc.wait(timeout=30) != 0
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+
+
+def test_generated_python_driver_says_at_once_it_cannot_reach_the_broker(
+        scenarios_dir: Path, tmp_path: Path) -> None:
+    model = load_model(scenarios_dir / "scenario1.modd")
+    write_artifacts(tmp_path / "gen", generate(model))
+    script = tmp_path / "gen" / "integrator" / "python" / "pub_1.py"
+    ingress = f"unix:{tmp_path / 'gone.sock'}"
+    _says_unreachable_at_once([sys.executable, str(script), "--count", "1", "--ingress", ingress],
+                              ingress)

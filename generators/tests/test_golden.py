@@ -81,3 +81,15 @@ def test_code_lines_rule() -> None:
     from modd_gen.table2 import code_lines
 
     assert code_lines("a\n\n  // c\n# d\nb // e\n") == 2
+
+
+def test_mavlink_topics_get_no_driver_stub() -> None:
+    """The MAVLink bridge publishes a MAVLink sensor's topics (docs/mavlink.md):
+    no C++ or Python read function is generated for them."""
+    paths = [a.path for a in generate(load_model(DATA / "extended.modd"))]
+    bridged = ("integrator/mavlink-driver/", "integrator/python/mavlink")
+    assert not [p for p in paths if p.startswith(bridged)]
+    assert "integrator/imu-driver/src/driver.cpp" in paths
+    driven = "\n".join(a.content for a in generate(load_model(DATA / "extended.modd"))
+                       if a.path.startswith("integrator/"))
+    assert "usv.autopilot." not in driven

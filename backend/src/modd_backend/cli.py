@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from .settings import DEFAULT_ZENOH_CONNECT, Settings
+from .settings import DEFAULT_ZENOH_CONNECT, Settings, check_origin
 
 
 def parse_args(argv: list[str] | None = None) -> Settings:
@@ -58,7 +58,16 @@ def parse_args(argv: list[str] | None = None) -> Settings:
                    "--admin-password-file or $MODD_ADMIN_PASSWORD")
     p.add_argument("--allowed-host", action="append", default=[], metavar="NAME",
                    help="a Host name clients may use besides the loopback names (repeat)")
+    p.add_argument("--tile-origin", action="append", metavar="ORIGIN",
+                   default=[o for o in os.environ.get("MODD_TILE_ORIGINS", "").split() if o],
+                   help="an origin (https://host[:port]) the map may load tiles from (repeat; "
+                   "default $MODD_TILE_ORIGINS, space-separated; none: no foreign images)")
     a = p.parse_args(argv)
+    for origin in a.tile_origin:
+        try:
+            check_origin(origin)
+        except ValueError as exc:
+            p.error(f"--tile-origin: {exc}")
     password = os.environ.get("MODD_ADMIN_PASSWORD")
     if a.admin_password_file is not None:
         try:
@@ -85,6 +94,7 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         deploy_timeout_s=a.deploy_timeout,
         initial_admin_password=password,
         allowed_hosts=tuple(a.allowed_host),
+        tile_origins=tuple(a.tile_origin),
         preload_milp=True,
         scene_port=None if a.scene_port < 0 else a.scene_port,
         foxglove_port=a.foxglove_port,

@@ -62,10 +62,12 @@ def loads_bounded(text: str | bytes, max_depth: int) -> Any:
     return json.loads(raw)
 
 
-def csp(path: str, host: str) -> str:
+def csp(path: str, host: str, tile_origins: tuple[str, ...] = ()) -> str:
     """The Content-Security-Policy of an answer: no inline or foreign
     scripts; only the 3D scene (same origin) may be framed, by the workbench.
-    (The scene's page sets its own, stricter policy: sceneproxy.py.)"""
+    (The scene's page sets its own, stricter policy: sceneproxy.py.)
+    Images come from this origin only, and from the map tile servers the
+    service was configured with (``Settings.tile_origins``)."""
     scene = path.startswith(SCENE_PREFIX)
     if path == "/docs":  # Swagger UI: an inline bootstrap, its files served here (apidocs.py)
         return ("default-src 'self'; script-src 'self' 'unsafe-inline'; "
@@ -77,21 +79,23 @@ def csp(path: str, host: str) -> str:
                 f"style-src 'self' 'unsafe-inline' {cdn}; img-src 'self' data: "
                 "https://fastapi.tiangolo.com; frame-ancestors 'none'; object-src 'none'")
     ancestors = "'self'" if scene else "'none'"
+    images = " ".join(("'self' data: blob:", *tile_origins))
     return (
         "default-src 'self'; "
         "script-src 'self'; "
         "style-src 'self' 'unsafe-inline'; "
-        "img-src 'self' data: blob:; font-src 'self' data:; "
+        f"img-src {images}; font-src 'self' data:; "
         f"connect-src 'self' ws://{host} wss://{host}; "
         "worker-src 'self' blob:; frame-src 'self'; object-src 'none'; base-uri 'none'; "
         f"form-action 'self'; frame-ancestors {ancestors}"
     )
 
 
-def security_headers(path: str, host: str) -> list[tuple[bytes, bytes]]:
+def security_headers(path: str, host: str,
+                     tile_origins: tuple[str, ...] = ()) -> list[tuple[bytes, bytes]]:
     framing = b"SAMEORIGIN" if path.startswith(SCENE_PREFIX) else b"DENY"
     return [
-        (b"content-security-policy", csp(path, host).encode()),
+        (b"content-security-policy", csp(path, host, tile_origins).encode()),
         (b"x-content-type-options", b"nosniff"),
         (b"referrer-policy", b"no-referrer"),
         (b"x-frame-options", framing),
@@ -129,7 +133,7 @@ class Guard:
             await self.app(scope, receive, send)
             return
         path: str = scope["path"]
-        extra = security_headers(path, host)
+        extra = security_headers(path, host, self.settings.tile_origins)
 
         async def send_with_headers(message: Message) -> None:
             if message["type"] == "http.response.start":

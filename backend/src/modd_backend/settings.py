@@ -7,11 +7,27 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 #: zenoh endpoint of the SubBroker in the embedded default (docs/backend.md).
 DEFAULT_ZENOH_CONNECT = ("tcp/127.0.0.1:7447",)
+
+
+_ORIGIN = re.compile(r"https?://[A-Za-z0-9.-]+(:[0-9]{1,5})?|https?://\[[0-9A-Fa-f:.]+\](:[0-9]{1,5})?")
+
+
+def check_origin(origin: str) -> str:
+    """``origin`` if it is an http(s) origin with no path, else ValueError naming it.
+
+    >>> check_origin("https://tile.openstreetmap.org")
+    'https://tile.openstreetmap.org'
+    """
+    if not _ORIGIN.fullmatch(origin):
+        raise ValueError(f"tile origin {origin!r}: expected scheme://host[:port] "
+                         "(http or https, no path), e.g. https://tile.openstreetmap.org")
+    return origin
 
 
 @dataclass(frozen=True)
@@ -48,6 +64,9 @@ class Settings:
     #: Port of the Foxglove replay of an archive the user picks (docs/ecosystem.md); 0: none.
     foxglove_replay_port: int = 0
     cors_origins: tuple[str, ...] = field(default_factory=tuple)
+    #: Origins (scheme://host[:port]) the map may load tiles from; none by default,
+    #: so the workbench loads no image from elsewhere (docs/security.md).
+    tile_origins: tuple[str, ...] = field(default_factory=tuple)
     #: The ``backend`` identity's zenoh user:password file (docs/security.md).
     zenoh_credentials: Path | None = None
     #: The key that signs deploys, shared with the SubBroker (its deploy.key).
@@ -70,6 +89,10 @@ class Settings:
     ws_subscriptions_per_user: int = 1024
     #: How often an open WebSocket re-checks its session and roles (seconds).
     ws_recheck_s: float = 0.4
+
+    def __post_init__(self) -> None:
+        for origin in self.tile_origins:
+            check_origin(origin)
 
     def host_allowed(self, host_header: str) -> bool:
         """Whether a request's ``Host`` names this service (DNS rebinding guard)."""

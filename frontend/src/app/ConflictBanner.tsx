@@ -2,9 +2,10 @@
  * Two people edited one project: the save was refused because another
  * revision was saved meanwhile. Shows who saved what, merges both edits
  * (core/merge.ts) and, for fields both changed, the two values side by side
- * with a choice per field. Dropping the local edits asks first.
+ * with a choice per field, named in the model's words (core/changeWords.ts). Dropping the local edits asks first.
  */
-import { mergeModels, showValue, type Side } from "../core/merge";
+import { mergeModels, type Side } from "../core/merge";
+import { fieldInWords, valueInWords } from "../core/changeWords";
 import "./collab.css";
 import { useEditor, useEditorStore } from "../editor/useEditor";
 import { useSaveModel } from "./useSaveModel";
@@ -33,12 +34,12 @@ export function ConflictBanner() {
           <tbody>
             {result.conflicts.map((c) => (
               <tr key={c.pointer} data-pointer={c.pointer}>
-                <td><code>{c.pointer}</code></td>
-                <td className="muted">{showValue(c.base)}</td>
+                <td title={c.pointer}>{fieldInWords(c.pointer)}</td>
+                <td className="muted">{valueInWords(c.pointer, c.base)}</td>
                 <td><label><input type="radio" name={c.pointer} checked={conflict.choices[c.pointer] === "mine"}
-                  onChange={() => choose(c.pointer, "mine")} /> {showValue(c.mine)}</label></td>
+                  onChange={() => choose(c.pointer, "mine")} /> {valueInWords(c.pointer, c.mine)}</label></td>
                 <td><label><input type="radio" name={c.pointer} checked={conflict.choices[c.pointer] === "theirs"}
-                  onChange={() => choose(c.pointer, "theirs")} /> {showValue(c.theirs)}</label></td>
+                  onChange={() => choose(c.pointer, "theirs")} /> {valueInWords(c.pointer, c.theirs)}</label></td>
               </tr>
             ))}
           </tbody>

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { describeChanges } from "./changeWords";
+import { describeChanges, fieldInWords, valueInWords } from "./changeWords";
 import { planChanges } from "./planDiff";
 import { diagnosticsInWords } from "./diagnosticWords";
 import { scenario1 } from "./testing/scenario1";
@@ -54,5 +54,19 @@ describe("diagnosticsInWords", () => {
       { severity: "warning", message: "odd", pointer: "/drone/sensors/0/variables/1/unit" },
     ]);
     expect(d.map((x) => `${x.element}: ${x.text}`)).toEqual(["subscriber sub_7: topic: required", "variable accelerometer.accel_y: unit: odd"]);
+  });
+});
+
+describe("fieldInWords", () => {
+  it("names a field by its element and the model's word, and shows its value with its unit", () => {
+    expect(fieldInWords("/subscribers/sub_7/periodS")).toBe("subscriber sub_7: period");
+    expect(valueInWords("/subscribers/sub_7/periodS", "5")).toBe("5 s");
+    expect(fieldInWords("/drone/sensors/ctd/variables/water_temperature/unit")).toBe("variable ctd.water_temperature: unit");
+    expect(fieldInWords("/publishers/pub_1/topics")).toBe("publisher pub_1: topics");
+    expect(valueInWords("/publishers/pub_1/topics", ["a", "b"])).toBe("a, b");
+    expect(fieldInWords("/subscribers/sub_2")).toBe("subscriber sub_2");
+    expect(valueInWords("/subscribers/sub_2", { name: "sub_2", topic: "usv.gps.lat", periodS: "1.0", aggregation: "LAST" }))
+      .toBe("usv.gps.lat LAST every 1.0 s");
+    expect(valueInWords("/subscribers/sub_2", undefined)).toBe("(removed)");
   });
 });

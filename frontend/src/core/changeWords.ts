@@ -77,6 +77,26 @@ function locate(pointer: string): { kind: string; element: string; field: string
   return { kind: "model", element: p[0] ?? "model", field: p.slice(1) };
 }
 
+/**
+ * Names the field a pointer designates in the model's words, and shows a
+ * value of it, for views that list fields one by one (the merge view).
+ *
+ * @example
+ *   fieldInWords("/subscribers/sub_7/periodS")   // "subscriber sub_7: period"
+ *   valueInWords("/subscribers/sub_7/periodS", "5") // "5 s"
+ */
+export function fieldInWords(pointer: string): string {
+  const { element, field } = locate(pointer);
+  return field.length ? `${element}: ${field.map((f) => FIELD_WORDS[f] ?? f).join(" ")}` : element;
+}
+
+export function valueInWords(pointer: string, v: unknown): string {
+  if (v === undefined) return "(removed)";
+  const { kind, field } = locate(pointer);
+  if (field.length === 0 && v !== null && typeof v === "object") return whole(kind, v) || fieldValue("", v);
+  return fieldValue(field[field.length - 1] ?? "", v);
+}
+
 /** One sentence for one change. */
 export function sentence(c: Change): ChangeSentence {
   const { kind, element, field } = locate(c.pointer);

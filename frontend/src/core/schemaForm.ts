@@ -136,6 +136,18 @@ export function formFor(root: JsonSchema, kind: ElementKind): FieldSpec[] {
   return fieldsOf(root, def, [], true);
 }
 
+/**
+ * The fields the inspector shows for an element: `formFor`, less the MAVLink
+ * field mapping (`source.*`) of a variable whose sensor is not a MAVLink one.
+ *
+ * @example
+ *   shownFields(schema, "topic", "generic").some((f) => f.path[0] === "source") // false
+ */
+export function shownFields(root: JsonSchema, kind: ElementKind, sensorKind?: string): FieldSpec[] {
+  const all = formFor(root, kind);
+  return kind === "topic" && sensorKind !== "mavlink" ? all.filter((f) => f.path[0] !== "source") : all;
+}
+
 /** Description of an element kind, from the schema. */
 export function kindDescription(root: JsonSchema, kind: ElementKind): string {
   return root.$defs?.[DEF_OF_KIND[kind]]?.description ?? "";

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { colourOf, gridStep, positionSubscribers, trackPoints, valueAt, valueRange } from "./track";
+import { colourOf, gridStep, positionSubscribers, positionTopics, trackPoints, valueAt, valueRange } from "./track";
 import { scenario1 } from "./testing/scenario1";
 
 const s = (t: number, value: number) => ({ t, value });
@@ -11,6 +11,12 @@ describe("track", () => {
       { name: "lo", topic: "usv.gps.lon", periodS: "1", aggregation: "LAST" });
     expect(positionSubscribers(m)).toEqual({ lat: "la", lon: "lo" });
     expect(positionSubscribers(scenario1())).toEqual({ lat: null, lon: null });
+  });
+
+  it("finds the position topics of an archive by variable name", () => {
+    expect(positionTopics(["usv.ctd.water_temperature", "usv.gps.longitude", "usv.gps.latitude"]))
+      .toEqual({ lat: "usv.gps.latitude", lon: "usv.gps.longitude" });
+    expect(positionTopics(["usv.gps.platitude"])).toEqual({ lat: null, lon: null });
   });
 
   it("pairs fixes and puts them in metres from the first (an independent figure: 1e-3° of latitude ≈ 111.2 m)", () => {

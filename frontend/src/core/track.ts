@@ -23,6 +23,12 @@ export function positionSubscribers(model: ModdModel): { lat: string | null; lon
   return { lat: find(ROLE_NAMES.lat), lon: find(ROLE_NAMES.lon) };
 }
 
+/** The first topics (full names, e.g. of an archive file) that are a latitude and a longitude. */
+export function positionTopics(topics: readonly string[]): { lat: string | null; lon: string | null } {
+  const find = (names: readonly string[]) => topics.find((t) => names.includes((t.split(".").pop() ?? "").toLowerCase())) ?? null;
+  return { lat: find(ROLE_NAMES.lat), lon: find(ROLE_NAMES.lon) };
+}
+
 export interface TrackPoint { t: number; east: number; north: number; lat: number; lon: number; value: number | null }
 
 /** The sample of a sorted series at or before `t` (binary search), or null. */

@@ -1,6 +1,8 @@
 /**
  * The scientist's shortcut: topic, period and aggregation, then Add — one
- * subscriber connected to its topic in a few clicks.
+ * subscriber connected to its topic in a few clicks. The topics are grouped
+ * by sensor, each under its full name (as everywhere in the workbench) with
+ * its unit.
  */
 import { useState } from "react";
 import { AggregationValues, type Aggregation } from "../core/model.gen";
@@ -8,6 +10,7 @@ import { AGGREGATION } from "../core/contracts.gen";
 import { listTopics } from "../core/query";
 import { nextPosition } from "../core/graph";
 import { currentModel } from "../core/workbench";
+import { unitLabel } from "../core/chartData";
 import { useEditorStore, useModel } from "./useEditor";
 
 export function QuickSubscribe() {
@@ -29,8 +32,15 @@ export function QuickSubscribe() {
       }}
     >
       <label>Topic
-        <select value={chosen} onChange={(e) => setTopic(e.target.value)} disabled={!topics.length}>
-          {topics.map((t) => <option key={t.id} value={t.name}>{t.name}</option>)}
+        <select value={chosen} title={chosen} onChange={(e) => setTopic(e.target.value)} disabled={!topics.length}>
+          {model.drone.sensors.map((sensor) => (
+            <optgroup key={sensor.name} label={`${sensor.name}${sensor.description ? ` — ${sensor.description}` : ""}`}>
+              {topics.filter((t) => t.sensor === sensor).map((t) => {
+                const unit = unitLabel(t.variable.unit);
+                return <option key={t.id} value={t.name}>{t.name}{unit ? ` (${unit})` : ""}</option>;
+              })}
+            </optgroup>
+          ))}
         </select>
       </label>
       <label>Every (s)

@@ -123,6 +123,8 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       await expectCount(page.locator(".react-flow__node.react-flow__node-topic"), 3);
       await layout();
       await select("topic:accelerometer.accel_z");
+      // A generic sensor's variable: no MAVLink field mapping in the inspector.
+      if (await page.locator('.inspector [data-field^="source"]').count()) throw new Error("MAVLink fields shown for a generic sensor's variable");
       await shot("integrator");
     }],
 
@@ -149,6 +151,10 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       await view("Scientist");
       await expectDisabled(page.getByRole("button", { name: "+ Sensor" }));
       const quick = page.getByRole("form", { name: "Quick subscription" });
+      // Readable: the topics grouped by sensor, each by its full name with its unit.
+      const groups = await quick.getByLabel("Topic").locator("optgroup").evaluateAll((gs) => gs.map((g) => g.label));
+      if (!groups.some((g) => g.startsWith("accelerometer"))) throw new Error(`quick subscription topics not grouped by sensor: ${JSON.stringify(groups)}`);
+      await expectText(quick.getByLabel("Topic").locator("option").first(), /^usv\.accelerometer\.accel_x \(m\/s²\)$/);
       const subs = [
         ["accel_x", "2.0", "AVERAGE"], ["accel_y", "2.0", "AVERAGE"], ["accel_x", "0.25", "AVERAGE"],
         ["accel_y", "0.25", "AVERAGE"], ["accel_z", "0.25", "MIN"], ["accel_z", "0.25", "MAX"],

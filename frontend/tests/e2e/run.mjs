@@ -16,6 +16,7 @@ import { freePort, start, stop, waitForHttp } from "./processes.mjs";
 import { journey } from "./journey.mjs";
 import { collaboration } from "./collab.mjs";
 import { views } from "./views.mjs";
+import { startTileServer } from "./tiles.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
@@ -80,10 +81,14 @@ try {
     // `modd up` writes the PubBroker's archive to <workdir>/archive: the backend reads it as a
     // one-drone archive directory (a drone folder symlinked out of the archive directory is refused).
   }
+  // A map tile server on loopback; the backend allows its origin for images (--tile-origin).
+  const tiles = await startTileServer();
+  cleanups.push(tiles.close);
   const backend = start("backend", [
     backendBin, "--host", "127.0.0.1", "--port", String(port), "--data", join(tmp, "data"),
     "--frontend", join(frontend, "dist"),
     "--foxglove-port", String(foxglovePort), "--foxglove-replay-port", String(replayPort),
+    "--tile-origin", tiles.origin,
     "--archives", drone ? join(tmp, "drone", "archive") : join(tmp, "archives"),
     "--records", drone ? join(tmp, "drone", "records") : join(tmp, "records"),
     ...(drone ? ["--zenoh-connect", zenoh, "--zenoh-credentials", join(creds, "backend.cred"),
@@ -106,7 +111,7 @@ try {
     ...(only === "collab" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
     ...(only === "collab" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
-      survey: surveyModel(pubPort, subPort) })),
+      survey: surveyModel(pubPort, subPort), tiles })),
     ...collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) }),
   ];
   let broken = null;

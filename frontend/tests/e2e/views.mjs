@@ -9,11 +9,12 @@
 import { execFileSync } from "node:child_process";
 import { join } from "node:path";
 import { waitUntil } from "./journey.mjs";
+import { TILE_FILL, tileOf } from "./tiles.mjs";
 
 /** How long the gap step stops the drone's PubBroker (ms). */
 const OUTAGE_MS = 8000;
 
-export function views({ page, imagesDir, drone, liveValues, dronePid, survey, ports }) {
+export function views({ page, imagesDir, drone, liveValues, dronePid, survey, ports, tiles }) {
   const shot = async (name) => {
     await page.waitForTimeout(200);
     await page.screenshot({ path: join(imagesDir, `${name}.png`) });
@@ -215,6 +216,39 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await expand(false);
     }],
 
+    ["map tiles: from the loopback tile server the service allows, under the track; an origin it does not allow is refused and said", async () => {
+      if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
+      await expand(true);
+      const canvas = page.getByTestId("map-canvas");
+      const tilePixels = async () => pixels(page, await canvas.screenshot(), TILE_FILL);
+      const before = await tilePixels();
+      if (before.share > 0.01) throw new Error(`tile-coloured pixels before any tile URL: ${before.share}`);
+      const status = page.getByTestId("tile-status");
+      await page.getByLabel("Tile URL").fill(`${tiles.origin}/{z}/{x}/{y}.png`);
+      await expectText(status, /Tiles: ([1-9]\d*) of \1 drawn from http:\/\/127\.0\.0\.1/, 20000);
+      // The tiles asked for are where the track is: the tile of its first fix (the OSM formula) at the zoom used.
+      const [lat, lon] = ((await canvas.getAttribute("data-origin")) ?? "").split(",").map(Number);
+      const asked = tiles.requests.filter((r) => r.host === new URL(tiles.origin).host);
+      const z = Math.max(...asked.map((r) => r.z));
+      const [tx, ty] = tileOf(lat, lon, z);
+      if (!(z >= 10) || !asked.some((r) => r.z === z && r.x === tx && r.y === ty)) {
+        throw new Error(`no tile ${z}/${tx}/${ty} for the fix ${lat}, ${lon} among ${JSON.stringify(asked.slice(-8))}`);
+      }
+      await waitUntil(async () => (await tilePixels()).share > 0.3, 10000, async () => `tiles cover ${(await tilePixels()).share} of the map`);
+      if ((await pixels(page, await canvas.screenshot(), null, JSON.parse((await canvas.getAttribute("data-track-px")) ?? "[]"))).along < 5) {
+        throw new Error("the track is no longer drawn over the tiles");
+      }
+      await shot("map-tiles");
+      // The same server under a name the service does not allow: the page's policy refuses it, nothing is fetched.
+      const port = new URL(tiles.origin).port;
+      const n = tiles.requests.length;
+      await page.getByLabel("Tile URL").fill(`http://localhost:${port}/{z}/{x}/{y}.png`);
+      await expectText(status, /[1-9]\d* did not load: is http:\/\/localhost:\d+ reachable, and allowed/, 20000);
+      if (tiles.requests.slice(n).some((r) => r.host.startsWith("localhost"))) throw new Error("a tile from an origin the service does not allow was fetched");
+      await page.getByLabel("Tile URL").fill("");
+      await expand(false);
+    }],
+
     ["archives: a time range played back through the charts (seek, play, pause)", async () => {
       if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
       await panel("Archives");
@@ -250,6 +284,50 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       if (!/paused/.test(paused ?? "")) throw new Error(`not paused: ${paused}`);
       await seek.fill(String(min));
       await waitUntil(async () => (await kept()) <= 1, 5000, async () => `${await kept()} points kept after seeking to the start`);
+    }],
+
+    ["archive playback on the map: the survey's track up to the playback time", async () => {
+      if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
+      await panel("Archives");
+      const files = page.getByRole("table", { name: "Archive files" });
+      await page.getByRole("button", { name: "Refresh", exact: true }).click();
+      const form = page.getByRole("form", { name: "Play back an archive range" });
+      // The survey's file: the one whose topics hold its positions.
+      const names = files.locator("tbody button.link", { hasText: ".mcap" });
+      let found = false;
+      for (let i = (await names.count()) - 1; i >= 0 && !found; i -= 1) {
+        await names.nth(i).click();
+        found = /usv\.gps\.latitude/.test((await form.textContent().catch(() => "")) ?? "");
+      }
+      if (!found) throw new Error("no archive file holds usv.gps.latitude");
+      await form.getByRole("button", { name: "Load for playback" }).click();
+      const controls = page.getByRole("group", { name: "Playback controls" });
+      await expectVisible(controls, 20000);
+      const map = page.getByTestId("playback-map-canvas");
+      await expectVisible(map);
+      const fixes = async () => Number(await map.getAttribute("data-points"));
+      const seek = controls.getByLabel("Seek");
+      const [min, max] = [Number(await seek.getAttribute("min")), Number(await seek.getAttribute("max"))];
+      await seek.fill(String(max));
+      await waitUntil(async () => (await fixes()) >= 8, 10000, async () => `${await fixes()} fixes at the end of the range`);
+      const all = await fixes();
+      await seek.fill(String((min + max) / 2));
+      // Positions are published at a steady rate: half the range holds about half the fixes.
+      await waitUntil(async () => (await fixes()) < all, 5000, async () => `still ${await fixes()} of ${all} fixes at the middle`);
+      const half = await fixes();
+      if (half < 0.3 * all || half > 0.7 * all) throw new Error(`${half} of ${all} fixes drawn at the middle of the range`);
+      await expand(true);
+      await page.waitForTimeout(800);
+      const px = JSON.parse((await map.getAttribute("data-track-px")) ?? "[]");
+      const drawn = await pixels(page, await map.screenshot(), null, px);
+      if (drawn.along < 0.8 * px.length) throw new Error(`${drawn.along} of ${px.length} fixes drawn`);
+      await shot("playback-map");
+      await expand(false);
+      await controls.getByRole("button", { name: "Play" }).click();
+      await waitUntil(async () => (await fixes()) > half, 10000, async () => `still ${await fixes()} fixes after play`);
+      await controls.getByRole("button", { name: "Pause" }).click();
+      await seek.fill(String(min));
+      await waitUntil(async () => (await fixes()) <= 1, 5000, async () => `${await fixes()} fixes at the start`);
     }],
 
     // Last: it stops the drone's PubBroker for a while.
@@ -349,6 +427,28 @@ async function cutLink(ports, ms) {
 export function childPids(parent, name) {
   const out = execFileSync("ps", ["-o", "pid=,comm=", "--ppid", String(parent)], { encoding: "utf8" });
   return out.split("\n").map((l) => l.trim().split(/\s+/)).filter(([, c]) => c === name).map(([p]) => Number(p));
+}
+
+/**
+ * Reads a PNG screenshot in the page: the share of its pixels within 8 of
+ * `rgb` (when given), and how many of the points `px` are strongly coloured.
+ */
+async function pixels(page, png, rgb, px = []) {
+  return page.evaluate(async ({ b64, rgb, px }) => {
+    const img = new Image();
+    img.src = `data:image/png;base64,${b64}`;
+    await img.decode();
+    const c = document.createElement("canvas");
+    c.width = img.width; c.height = img.height;
+    const ctx = c.getContext("2d");
+    ctx.drawImage(img, 0, 0);
+    const all = ctx.getImageData(0, 0, c.width, c.height).data;
+    let near = 0;
+    if (rgb) for (let i = 0; i < all.length; i += 4) if (Math.abs(all[i] - rgb[0]) + Math.abs(all[i + 1] - rgb[1]) + Math.abs(all[i + 2] - rgb[2]) <= 8) near += 1;
+    const coloured = ([r, g, b]) => Math.max(r, g, b) - Math.min(r, g, b) > 60;
+    const along = px.filter(([x, y]) => coloured(ctx.getImageData(x, y, 1, 1).data)).length;
+    return { share: near / (all.length / 4), along };
+  }, { b64: png.toString("base64"), rgb, px });
 }
 
 async function expectText(locator, re, timeout = 10000) {

@@ -3,6 +3,8 @@
  * pick topics, load the range (the backend reads it with the official mcap
  * reader, at most `MAX_POINTS` points per topic), then seek, play and pause;
  * the charts show what was recorded up to the cursor, and zoom like live ones.
+ * When the file holds a latitude and a longitude, they are read too and the
+ * map shows the track up to the cursor (coloured by a picked topic).
  */
 import { useEffect, useMemo, useState } from "react";
 import { PlaybackSource, archiveSamples } from "../../dataSources/PlaybackSource";
@@ -12,6 +14,8 @@ import { useModel } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
 import type { ArchiveFile } from "../../api/types";
 import { LiveChart } from "../monitor/LiveChart";
+import { positionTopics } from "../../core/track";
+import { TrackMap } from "../map/MapPanel";
 
 const MAX_POINTS = 5000;
 const RATES = [1, 10, 60];
@@ -39,13 +43,20 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
   const [rate, setRate] = useState(10);
   const [charts, setCharts] = useState<string[][]>([]);
   const [win, setWin] = useState<ViewWindow>(DEFAULT_WINDOW);
+  const position = positionTopics(file.topics.map((tp) => tp.topic));
   const whole: ViewWindow = useMemo(() => (source ? { follow: false, from: source.start, to: Math.max(source.end, source.start + 1) } : DEFAULT_WINDOW), [source]);
 
   const load = async (e: React.FormEvent) => {
     e.preventDefault();
     setLoaded({ busy: true });
     try {
-      const all = await Promise.all(picked.map((topic) => api.readArchive(drone, file.name, topic, bound(range.from), bound(range.to), MAX_POINTS)));
+      const wanted = [...new Set([...picked, ...[position.lat, position.lon].filter((x): x is string => !!x)])];
+      // Two reads at a time: series reads are heavy routes, limited per user (backend settings: heavy_per_user).
+      const all: Awaited<ReturnType<typeof api.readArchive>>[] = [];
+      for (let i = 0; i < wanted.length; i += 2) {
+        all.push(...await Promise.all(wanted.slice(i, i + 2).map((topic) =>
+          api.readArchive(drone, file.name, topic, bound(range.from), bound(range.to), MAX_POINTS))));
+      }
       const src = new PlaybackSource(Object.fromEntries(all.map((s) => [s.topic, archiveSamples(s.points)])));
       setCharts(picked.map((p) => [p]));
       setWin({ follow: false, from: src.start, to: Math.max(src.end, src.start + 1) });
@@ -82,6 +93,13 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
             <span data-testid="playback-time">{(t - source.start).toFixed(1)} s of {(source.end - source.start).toFixed(1)} s · {new Date(t * 1000).toLocaleTimeString()}{playing ? " · playing" : " · paused"}</span>
             <button onClick={() => setWin(whole)}>Whole range</button>
           </div>
+          {position.lat && position.lon && (
+            <div className="playback-map" aria-label="Track up to the playback time">
+              <TrackMap key={`${file.name}:${charts.flat().join(",")}`} source={source} lat={position.lat} lon={position.lon} id="playback-map"
+                choices={charts.flat().filter((c) => c !== position.lat && c !== position.lon).map((c) => ({ ...describe(c), detail: "archived", label: c }))}
+                missing="" />
+            </div>
+          )}
           <div className="charts">
             {charts.map((chart, i) => (
               <LiveChart key={chart.join("+")} source={source} series={chart.map(describe)} window={win} syncKey="playback" marker={t} now={t}

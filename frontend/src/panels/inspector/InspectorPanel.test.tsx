@@ -27,6 +27,14 @@ describe("InspectorPanel", () => {
     expect(screen.getByText("How the samples of each period are reduced.")).toBeTruthy();
   });
 
+  it("shows the MAVLink field mapping only for a variable of a MAVLink sensor", () => {
+    const store = mount("integrator", ["topic:accelerometer.accel_x"]);
+    expect(screen.queryByLabelText(/^message/)).toBeNull();
+    expect(document.querySelector('[data-field^="source"]')).toBeNull();
+    act(() => store.dispatch({ type: "setField", id: "sensor:accelerometer", path: ["kind"], value: "mavlink" }));
+    expect(document.querySelector('[data-field^="source"]')).not.toBeNull();
+  });
+
   it("commits text fields on Enter, as one undoable edit", () => {
     const store = mount("scientist", ["sub:sub_1"]);
     const period = screen.getByLabelText(/^period/) as HTMLInputElement;

@@ -6,7 +6,7 @@
 import { useMemo, useRef } from "react";
 import { parseId, type ElementKind } from "../../core/ids";
 import { elementValue } from "../../core/ops";
-import { formFor, getPath, kindDescription } from "../../core/schemaForm";
+import { getPath, kindDescription, shownFields } from "../../core/schemaForm";
 import { MODD_SCHEMA } from "../../core/schema";
 import { listTopics } from "../../core/query";
 import { placeDiagnostics } from "../../core/diagnostics";
@@ -66,6 +66,8 @@ export default function InspectorPanel() {
   const value = elementValue(model, id);
   if (!value) return <section className="inspector"><p>This element no longer exists.</p></section>;
   const readOnly = !canEdit(role, kind);
+  const parsed = parseId(id)!;
+  const sensorKind = kind === "topic" ? model.drone.sensors.find((x) => x.name === parsed.sensor)?.kind : undefined;
   const mine = placed.filter((d) => d.elementId === id);
   const fieldErrors = (path: string[]) => mine.filter((d) => d.field.slice(0, path.length).join("/") === path.join("/") && d.field.length >= path.length).map((d) => d.message);
   const general = mine.filter((d) => d.field.length === 0).map((d) => d.message);
@@ -77,7 +79,7 @@ export default function InspectorPanel() {
       {readOnly && <p className="readonly-note" role="note">Read-only in the {role} view.</p>}
       {general.map((m) => <div key={m} className="field-error" role="alert">{m}</div>)}
       <form onSubmit={(e) => e.preventDefault()}>
-        {formFor(MODD_SCHEMA, kind).map((spec) => (
+        {shownFields(MODD_SCHEMA, kind, sensorKind).map((spec) => (
           <FieldInput key={`${slot.current.n}/${kind}/${spec.path.join(".")}`} spec={spec} value={getPath(value, spec.path)} topics={topics}
             readOnly={readOnly} errors={fieldErrors(spec.path)}
             onCommit={(v) => store.dispatch({ type: "setField", id, path: spec.path, value: v })} />

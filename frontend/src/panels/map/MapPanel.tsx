@@ -3,11 +3,13 @@
  * metres from its first fix with a grid, a scale bar and north up; each fix
  * coloured by a chosen subscription, with its legend. Tiles are optional (a
  * tile URL such as https://tile.openstreetmap.org/{z}/{x}/{y}.png, kept in
- * this browser): offline, the plain local plot is the map.
+ * this browser; the service must allow its origin, `--tile-origin`):
+ * offline, the plain local plot is the map.
  *
  * The positions come from the subscriptions whose topics are a latitude and
- * a longitude (core/track), over the workbench's shared stream, or from a
- * source handed in (archive playback). The colour choice also colours the
+ * a longitude (core/track), over the workbench's shared stream; archive
+ * playback hands in its own source and topics (TrackMap), and the map shows
+ * the track up to the playback cursor. The colour choice also colours the
  * backend's 3D scene, when it runs one.
  */
 import { useEffect, useRef, useState } from "react";
@@ -18,9 +20,12 @@ import { useModel } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
 import { useDroneStream } from "../../app/useDroneStream";
 import type { DataSource } from "../../dataSources/types";
-import { drawMap } from "./drawMap";
+import { drawMap, tileOrigin, tileUrlProblem, type TileCount } from "./drawMap";
 
 const TILE_KEY = "modd.map.tileUrl";
+
+/** A channel of the source the track can be coloured by. */
+export interface ColourChoice { channel: string; label: string; detail: string; unit: string }
 
 function useTrack(source: DataSource, lat: string | null, lon: string | null, colour: string): TrackPoint[] {
   const [points, setPoints] = useState<TrackPoint[]>([]);
@@ -36,18 +41,40 @@ function useTrack(source: DataSource, lat: string | null, lon: string | null, co
   return points;
 }
 
-export function TrackMap({ source }: { source: DataSource }) {
-  const model = useModel();
-  const { api } = useServices();
-  const { lat, lon } = positionSubscribers(model);
-  const others = model.subscribers.filter((s) => s.topic && s.name !== lat && s.name !== lon);
-  const [colour, setColour] = useState(() => others[0]?.name ?? "");
+function TileStatus({ url, count }: { url: string; count: TileCount }) {
+  const problem = tileUrlProblem(url);
+  if (!url) return null;
+  if (problem) return <p className="error" role="alert" data-testid="tile-status">Tiles off: {problem}.</p>;
+  const origin = tileOrigin(url);
+  return (
+    <p className={count.failed ? "error" : "muted"} data-testid="tile-status">
+      Tiles: {count.drawn} of {count.asked} drawn from {origin}
+      {count.failed > 0 && <>; {count.failed} did not load: is {origin} reachable, and allowed by the workbench (modd-backend --tile-origin {origin})?</>}
+    </p>
+  );
+}
+
+interface TrackMapProps {
+  source: DataSource;
+  lat: string | null;
+  lon: string | null;
+  choices: readonly ColourChoice[];
+  /** Called when the user picks a colour channel ("" for plain). */
+  onColour?: (channel: string) => void;
+  /** Prefix of the test ids (map, playback-map). */
+  id?: string;
+  missing: string;
+}
+
+export function TrackMap({ source, lat, lon, choices, onColour, id = "map", missing }: TrackMapProps) {
+  const drone = useModel().drone.name;
+  const [colour, setColour] = useState(() => choices[0]?.channel ?? "");
   const [tileUrl, setTileUrl] = useState(() => window.localStorage.getItem(TILE_KEY) ?? "");
+  const [tiles, setTiles] = useState<TileCount>({ asked: 0, drawn: 0, failed: 0 });
   const points = useTrack(source, lat, lon, colour);
   const canvas = useRef<HTMLCanvasElement>(null);
   const range = valueRange(points);
-  const sub = model.subscribers.find((s) => s.name === colour);
-  const unit = sub ? unitLabel(findTopicByName(model, sub.topic)?.variable.unit, sub.aggregation) : "";
+  const chosen = choices.find((c) => c.channel === colour);
   const [redraw, setRedraw] = useState(0);
 
   useEffect(() => {
@@ -59,31 +86,31 @@ export function TrackMap({ source }: { source: DataSource }) {
   }, []);
   useEffect(() => {
     const el = canvas.current;
-    if (el) el.dataset.trackPx = JSON.stringify(drawMap(el, points, range, { tileUrl, onTile: () => setRedraw((n) => n + 1) }));
+    if (!el) return;
+    const drawn = drawMap(el, points, range, { tileUrl, onTile: () => setRedraw((n) => n + 1) });
+    el.dataset.trackPx = JSON.stringify(drawn.px);
+    el.dataset.origin = points.length ? `${points[0].lat},${points[0].lon}` : "";
+    setTiles((t) => (t.asked === drawn.tiles.asked && t.drawn === drawn.tiles.drawn && t.failed === drawn.tiles.failed ? t : drawn.tiles));
   }, [points, range?.[0], range?.[1], tileUrl, redraw]); // eslint-disable-line react-hooks/exhaustive-deps
 
-  const chooseColour = (name: string) => {
-    setColour(name);
-    // The 3D scene is shared: it follows the choice when the backend runs one (404 otherwise).
-    api.setSceneColour(model.drone.name, name || null).catch(() => undefined);
-  };
+  const choose = (channel: string) => { setColour(channel); onColour?.(channel); };
 
   return (
     <div className="map-panel">
-      <canvas ref={canvas} className="map-canvas" role="img" data-testid="map-canvas" data-points={points.length}
-        aria-label={`Track of ${model.drone.name}: ${points.length} fixes${sub ? `, coloured by ${sub.name}` : ""}`} />
+      <canvas ref={canvas} className="map-canvas" role="img" data-testid={`${id}-canvas`} data-points={points.length}
+        aria-label={`Track of ${drone}: ${points.length} fixes${chosen ? `, coloured by ${chosen.label}` : ""}`} />
       <aside className="map-legend" aria-label="Map legend">
         <label>Colour by{" "}
-          <select aria-label="Colour by" value={colour} onChange={(e) => chooseColour(e.target.value)}>
+          <select aria-label="Colour by" value={colour} onChange={(e) => choose(e.target.value)}>
             <option value="">(plain)</option>
-            {others.map((s) => <option key={s.name} value={s.name}>{s.name}: {s.topic} {s.aggregation}</option>)}
+            {choices.map((c) => <option key={c.channel} value={c.channel}>{c.label}: {c.detail}</option>)}
           </select>
         </label>
-        {!lat || !lon ? <p className="muted" role="status">No subscription delivers a latitude and a longitude: subscribe to them to draw the track.</p>
+        {!lat || !lon ? <p className="muted" role="status">{missing}</p>
           : <p className="muted" role="status">{points.length} fixes from {lat} and {lon}.</p>}
-        {sub && (
-          <div data-testid="map-legend">
-            <strong>{sub.name}</strong> <span className="muted">{sub.topic} {sub.aggregation}{unit ? ` (${unit})` : ""}</span>
+        {chosen && (
+          <div data-testid={`${id}-legend`}>
+            <strong>{chosen.label}</strong> <span className="muted">{chosen.detail}{chosen.unit ? ` (${chosen.unit})` : ""}</span>
             <div className="legend-bar" />
             <div className="legend-scale"><span>{range ? range[0].toPrecision(4) : "—"}</span><span>{range ? range[1].toPrecision(4) : "—"}</span></div>
           </div>
@@ -92,6 +119,7 @@ export function TrackMap({ source }: { source: DataSource }) {
           <input aria-label="Tile URL" placeholder="https://tile.example/{z}/{x}/{y}.png" value={tileUrl}
             onChange={(e) => { setTileUrl(e.target.value); window.localStorage.setItem(TILE_KEY, e.target.value); }} />
         </label>
+        <TileStatus url={tileUrl} count={tiles} />
         <p className="muted">North is up; grid and scale in metres from the first fix.</p>
       </aside>
     </div>
@@ -99,7 +127,20 @@ export function TrackMap({ source }: { source: DataSource }) {
 }
 
 export default function MapPanel() {
-  const drone = useModel().drone.name;
-  const { source } = useDroneStream(drone);
-  return <div className="panel-body"><TrackMap source={source} /></div>;
+  const model = useModel();
+  const { api } = useServices();
+  const { source } = useDroneStream(model.drone.name);
+  const { lat, lon } = positionSubscribers(model);
+  const choices = model.subscribers.filter((s) => s.topic && s.name !== lat && s.name !== lon).map((s) => ({
+    channel: s.name, label: s.name, detail: `${s.topic} ${s.aggregation}`,
+    unit: unitLabel(findTopicByName(model, s.topic)?.variable.unit, s.aggregation),
+  }));
+  // The 3D scene is shared: it follows the choice when the backend runs one (404 otherwise).
+  const onColour = (name: string) => { api.setSceneColour(model.drone.name, name || null).catch(() => undefined); };
+  return (
+    <div className="panel-body">
+      <TrackMap source={source} lat={lat} lon={lon} choices={choices} onColour={onColour}
+        missing="No subscription delivers a latitude and a longitude: subscribe to them to draw the track." />
+    </div>
+  );
 }

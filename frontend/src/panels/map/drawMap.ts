@@ -8,28 +8,55 @@ import { colourOf, EARTH_RADIUS_M, formatDistance, gridStep, type TrackPoint } f
 
 interface Options { tileUrl: string; onTile: () => void }
 
-const tiles = new Map<string, HTMLImageElement>();
+/** The tiles a drawing asked for: drawn, failed (unreachable, refused by the page's policy, not an image), waiting. */
+export interface TileCount { asked: number; drawn: number; failed: number }
 
-function tile(url: string, onLoad: () => void): HTMLImageElement | null {
+/** What a drawing did: where (CSS pixels in the canvas) up to 40 of the fixes were drawn, and its tiles. */
+export interface Drawn { px: Array<[number, number]>; tiles: TileCount }
+
+const tiles = new Map<string, HTMLImageElement>();
+const failedTiles = new Set<string>();
+const MAX_TILES_KEPT = 512;
+
+function tile(url: string, onChange: () => void): HTMLImageElement | "failed" | null {
+  if (failedTiles.has(url)) return "failed";
   let img = tiles.get(url);
   if (!img) {
+    if (tiles.size >= MAX_TILES_KEPT) tiles.delete(tiles.keys().next().value as string);
     img = new Image();
-    img.crossOrigin = "anonymous";
-    img.onload = onLoad;
+    img.crossOrigin = "anonymous"; // keeps the canvas readable; tile servers answer CORS (OSM does)
+    img.onload = onChange;
+    img.onerror = () => { failedTiles.add(url); tiles.delete(url); onChange(); };
     img.src = url;
     tiles.set(url, img);
   }
   return img.complete && img.naturalWidth > 0 ? img : null;
 }
 
-/** Draws; returns where (CSS pixels in the canvas) up to 40 of the fixes were drawn, for checks. */
-export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], range: [number, number] | null, opts: Options): Array<[number, number]> {
+/** A tile URL template the map can use: http(s), with {z}, {x} and {y}; else why not. */
+export function tileUrlProblem(url: string): string | null {
+  if (!url) return null;
+  if (!/^https?:\/\/[^/]+\//.test(url)) return "a tile URL starts with http:// or https:// and a host";
+  const missing = ["{z}", "{x}", "{y}"].filter((p) => !url.includes(p));
+  if (missing.length) return `a tile URL needs ${missing.join(", ")}`;
+  try { new URL(tileOrigin(url)); } catch { return "not a URL"; }
+  return null;
+}
+
+/** The origin (scheme://host:port) a tile URL template loads from. */
+export function tileOrigin(url: string): string {
+  return new URL(url.replace(/\{[xyz]\}/g, "0")).origin;
+}
+
+/** Draws the map; see `Drawn`. */
+export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], range: [number, number] | null, opts: Options): Drawn {
+  const tileCount: TileCount = { asked: 0, drawn: 0, failed: 0 };
   const dpr = window.devicePixelRatio || 1;
   const w = Math.max(el.clientWidth, 100), h = Math.max(el.clientHeight, 100);
   el.width = Math.round(w * dpr);
   el.height = Math.round(h * dpr);
   const ctx = el.getContext("2d");
-  if (!ctx) return [];
+  if (!ctx) return { px: [], tiles: tileCount };
   ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
   ctx.fillStyle = "#f8fafc";
   ctx.fillRect(0, 0, w, h);
@@ -37,7 +64,7 @@ export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], ra
   if (points.length === 0) {
     ctx.fillStyle = "#64748b";
     ctx.fillText("waiting for positions…", 12, 20);
-    return [];
+    return { px: [], tiles: tileCount };
   }
   const xs = points.map((p) => p.east), ys = points.map((p) => p.north);
   const minX = Math.min(...xs), maxX = Math.max(...xs), minY = Math.min(...ys), maxY = Math.max(...ys);
@@ -48,7 +75,7 @@ export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], ra
   const X = (e: number) => w / 2 + (e - cx) * s;
   const Y = (n: number) => h / 2 - (n - cy) * s;
 
-  if (opts.tileUrl) drawTiles(ctx, points[0], s, X, Y, w, h, opts);
+  if (opts.tileUrl && !tileUrlProblem(opts.tileUrl)) drawTiles(ctx, points[0], s, X, Y, w, h, opts, tileCount);
 
   // Grid at a round step, labelled on the left and bottom.
   const step = gridStep(span);
@@ -88,11 +115,11 @@ export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], ra
   ctx.fillText(formatDistance(step), w - 16 - step * s, h - 26);
   ctx.fillText("N ↑", w - 28, 16);
   const every = Math.max(1, Math.ceil(points.length / 40));
-  return points.filter((_, i) => i % every === 0).map((p) => [Math.round(X(p.east)), Math.round(Y(p.north))]);
+  return { px: points.filter((_, i) => i % every === 0).map((p) => [Math.round(X(p.east)), Math.round(Y(p.north))]), tiles: tileCount };
 }
 
 function drawTiles(ctx: CanvasRenderingContext2D, origin: TrackPoint, s: number, X: (e: number) => number, Y: (n: number) => number,
-  w: number, h: number, opts: Options): void {
+  w: number, h: number, opts: Options, count: TileCount): void {
   const lat0 = origin.lat, lon0 = origin.lon;
   const cos0 = Math.cos((lat0 * Math.PI) / 180);
   const z = Math.max(0, Math.min(19, Math.round(Math.log2((156543.03 * cos0 * s)))));
@@ -114,7 +141,10 @@ function drawTiles(ctx: CanvasRenderingContext2D, origin: TrackPoint, s: number,
     for (let ty = Math.floor(y0); ty <= Math.floor(y1) && ty - Math.floor(y0) < 16; ty += 1) {
       const url = opts.tileUrl.replace("{z}", String(z)).replace("{x}", String(tx)).replace("{y}", String(ty));
       const img = tile(url, opts.onTile);
-      if (!img) continue;
+      count.asked += 1;
+      if (img === "failed") count.failed += 1;
+      if (!img || img === "failed") continue;
+      count.drawn += 1;
       const [ax, ay] = fromTile(tx, ty), [bx, by] = fromTile(tx + 1, ty + 1);
       ctx.drawImage(img, ax, ay, bx - ax, by - ay);
     }

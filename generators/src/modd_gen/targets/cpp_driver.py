@@ -5,7 +5,12 @@ Generated (rewritten on every run): CMakeLists.txt, README.md, the client,
 ``generated/<publisher>_topics.hpp`` and the cross-compile toolchain file.
 User-owned (written once): ``src/driver.cpp`` (a read function per topic, where
 the integrator's code goes, and the main loop with one publish call per topic)
-and ``user.cmake`` (additions to the build)."""
+and ``user.cmake`` (additions to the build).
+
+Topics of MAVLink sensors get no read function: the MAVLink bridge
+(``modd-mavlink``, docs/mavlink.md) publishes them from the autopilot's
+messages, as the model maps them. A publisher of MAVLink topics only gets no
+driver at all."""
 
 from __future__ import annotations
 
@@ -48,5 +53,13 @@ def _python(ctx: Context, pub: PublisherView) -> Artifact:
                     executable=True)
 
 
+def _driven(ctx: Context) -> list[PublisherView]:
+    """The publishers with their topics that a driver reads (not the MAVLink bridge)."""
+    bridged = {s["name"] for s in ctx.model["drone"]["sensors"] if s.get("kind") == "mavlink"}
+    views = [PublisherView(p.name, p.period_s, [t for t in p.topics if t.sensor not in bridged])
+             for p in ctx.publishers]
+    return [v for v in views if v.topics]
+
+
 def artifacts(ctx: Context) -> list[Artifact]:
-    return [a for pub in ctx.publishers for a in [*_project(ctx, pub), _python(ctx, pub)]]
+    return [a for pub in _driven(ctx) for a in [*_project(ctx, pub), _python(ctx, pub)]]

@@ -136,7 +136,12 @@ def main() -> int:
 
     signal.signal(signal.SIGINT, stop)
     signal.signal(signal.SIGTERM, stop)
-    with Publisher(PUBLISHER, args.ingress) as pub:
+    with Publisher(PUBLISHER, args.ingress) as pub:  # waits up to 1 s for the broker's catalogue
+        if not pub.connected:
+            # Said at once: the client keeps queueing (bounded) and reconnects by itself.
+            print(f"{PUBLISHER}: cannot reach the PubBroker at {args.ingress}: is it running"
+                  " (modd up starts one)? Readings are queued and sent when it answers.",
+                  file=sys.stderr, flush=True)
         for topic, vtype in TOPICS.items():
             pub.declare(topic, vtype)
         start = time.monotonic()

@@ -56,7 +56,15 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, [](int) { running = false; });
   std::signal(SIGTERM, [](int) { running = false; });
 
-  modd::Publisher pub(gen::kPublisher, ingress);
+  modd::Publisher pub(gen::kPublisher, ingress);  // waits up to 1 s for the broker's catalogue
+  if (!pub.connected()) {
+    // Said at once, not after the first flush: the driver keeps queueing (bounded) and
+    // reconnects by itself, but whoever starts it should know nothing is received yet.
+    std::fprintf(stderr,
+                 "%s: cannot reach the PubBroker at %s: is it running (modd up starts one)? "
+                 "Readings are queued and sent when it answers.\n",
+                 gen::kPublisher, ingress.c_str());
+  }
   gen::declare_topics(pub);
   const auto start = std::chrono::steady_clock::now();
   auto next = start;
