@@ -3,6 +3,7 @@ with the real binary and the archive read back by the official `mcap` reader as 
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
@@ -163,6 +164,28 @@ def test_a_file_left_open_by_a_crash_is_recovered_at_start(broker_factory: Any) 
         assert summary.statistics.message_count >= 150
     assert b2.stop() == 0
     assert len(read_archive(b.archive_dir)[X]) >= 75
+    # Each run kept its counters beside its files; the killed one's last record too.
+    records = {r["run"].rsplit("-", 1)[1]: r for r in (
+        json.loads(p.read_text()) for p in b.archive_dir.glob("usv-run-*.counters.json"))}
+    killed, clean = records[str(b.proc.pid)], records[str(b2.proc.pid)]
+    for r in (killed, clean):
+        assert_reconciled_record(r["counters"])
+    assert not killed["final"] and clean["final"]
+    assert killed["counters"]["samples_archived"] > 0
+    # the killed run's file holds at least what it counted archived (the oracle: the archive)
+    [(name, counted)] = killed["files"].items()
+    with open(b.archive_dir / name, "rb") as f:
+        held = sum(1 for _ in make_reader(f).iter_messages())
+    assert held >= counted == killed["counters"]["samples_archived"], (held, counted)
+    final = final_counters(b2.log())  # the clean run's record says what its last line says
+    keys = [k for k in final if k.startswith(("samples_", "rejected_", "archive_failed"))]
+    assert {k: clean["counters"][k] for k in keys} == {k: final[k] for k in keys}
+
+
+def assert_reconciled_record(c: dict[str, int]) -> None:
+    rejected = sum(v for k, v in c.items() if k.startswith("rejected_"))
+    assert c["samples_in"] == (c["samples_archived"] + c["archive_failed"] + rejected
+                               + c["samples_pending"]), c
 
 
 class NamespacedBroker(PubBroker):
