@@ -12,6 +12,8 @@ proxy forwards nothing for 2 s), kill -9 of the backend.
 Checks at the end (exit 1 when one fails):
 - the last PubBroker run's counters reconcile: samples_in = archived +
   archive_failed + every rejected_* counter, nothing pending;
+- so do EVERY run's, those ended by kill -9 included, from the counters each run keeps
+  beside its files, against what its files hold (check_runs);
 - every archive file is read completely by two MCAP readers: the Python
   ``mcap`` package and the TypeScript ``@mcap/core`` (node), with the same counts;
 - no deploy record is pending, and the drone runs what the last acked record says;
@@ -160,9 +162,8 @@ class Backend:
 
 
 def mount_tmpfs(directory: Path, size_mb: int = 512) -> bool:
-    """Mount a tmpfs on ``directory`` (root only; False when not possible). Room for the
-    flood's file twice over: recovering a file left open by a crash writes a rebuilt copy
-    beside it before the rename (docs/reliability.md)."""
+    """Mount a tmpfs on ``directory`` (root only; False when not possible). Recovering a
+    file left open by a crash finishes it in place (a few KiB, docs/reliability.md)."""
     if os.geteuid() != 0 or shutil.which("mount") is None:
         return False
     r = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size_mb}m,mode=0700", "tmpfs",
@@ -408,6 +409,68 @@ def check(soak: Soak) -> list[str]:
     bad = [f for f in failed if "mcap" in f]
     print(f"archive: {len(files)} files, {sum(py.values()):,} messages, read completely by "
           f"python mcap and @mcap/core: {'yes' if not bad else 'NO'}")
+    failed += check_runs(tmp / "archive", py)
+    return failed
+
+
+def check_runs(archive: Path, read: dict[str, int]) -> list[str]:
+    """The counters of EVERY PubBroker run against the archive, the runs ended by kill -9
+    included: each run keeps its counters beside its files (``*.counters.json``, replaced at
+    every acknowledgement; docs/reliability.md, "Counters that reconcile"). Per run, at its
+    last record: samples_in = archived + archive_failed + refused + pending, exactly; its files
+    hold exactly `archived` (a clean stop, pending 0) or at least `archived` (kill -9: what it
+    wrote after its last record, at most its pending then plus 2 s of its input)."""
+    failed: list[str] = []
+    runs = [json.loads(p.read_text()) for p in sorted(archive.glob("*.counters.json"))]
+    owned: set[str] = set()
+    tot = {"in": 0, "archived": 0, "failed": 0, "refused": 0, "pending": 0, "late": 0}
+    for r in runs:
+        c, files, name = r["counters"], r["files"], r["run"]
+        refused = sum(v for k, v in c.items() if k.startswith("rejected_"))
+        if c["samples_in"] != (c["samples_archived"] + c["archive_failed"] + refused
+                               + c["samples_pending"]):
+            failed.append(f"run {name}: its counters do not reconcile: {c}")
+        owned |= set(files)
+        missing = [f for f in files if f not in read]
+        if missing:
+            failed.append(f"run {name}: files it wrote are not in the archive: {missing}")
+        held = sum(read.get(f, 0) for f in files)
+        short = [f for f, n in files.items() if read.get(f, 0) < n]
+        if short:
+            failed.append(f"run {name}: files hold fewer messages than it counted: {short}")
+        late = held - c["samples_archived"]
+        if r["final"]:
+            if late != 0 or c["samples_pending"] != 0:
+                failed.append(f"run {name} (stopped): its files hold {held}, it counted "
+                              f"{c['samples_archived']} archived, pending {c['samples_pending']}")
+        else:
+            seconds = max(1e-9, (r["updated_ns"] - r["started_ns"]) / 1e9)
+            bound = c["samples_pending"] + int(c["samples_in"] / seconds * 2.0) + 1
+            print(f"run {name} ended by kill -9: its last record {seconds:.1f} s into it; "
+                  f"{late:,} written after it (bound {bound:,}: pending {c['samples_pending']:,} "
+                  f"+ 2 s of input)")
+            if late < 0 or late > bound:
+                failed.append(f"run {name}: {late} messages written after its last record "
+                              f"(bound {bound})")
+        tot["in"] += c["samples_in"]
+        tot["archived"] += c["samples_archived"]
+        tot["failed"] += c["archive_failed"]
+        tot["refused"] += refused
+        tot["pending"] += c["samples_pending"]
+        tot["late"] += max(0, late)
+    orphans = sorted(set(read) - owned)
+    if orphans:
+        failed.append(f"archive files no run counts: {orphans}")
+    killed = sum(1 for r in runs if not r["final"])
+    print(f"every PubBroker run ({len(runs)}, {killed} ended by kill -9): samples_in "
+          f"{tot['in']:,} = archived {tot['archived']:,} + archive_failed {tot['failed']} + "
+          f"refused {tot['refused']:,} + pending at a kill {tot['pending']:,}; the archive holds "
+          f"{sum(read.values()):,} = {tot['archived']:,} counted + {tot['late']:,} written after "
+          f"a killed run's last record")
+    if not runs:
+        failed.append("no run kept its counters")
+    elif sum(read.values()) != tot["archived"] + tot["late"]:
+        failed.append("the archive holds messages no run counted")
     return failed
 
 

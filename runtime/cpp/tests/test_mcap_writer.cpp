@@ -273,3 +273,40 @@ TEST(McapWriter, AWriteErrorLosesNothingAndResumes) {
   EXPECT_GE(w.pending_bytes(), pending);  // still held, to be written when space returns
   w.abandon();
 }
+
+TEST(McapRecover, AFileIsFinishedInPlaceAndAChunkWithoutAllItsIndexesIsDropped) {
+  std::string dir = tmpdir("recover-in-place");
+  std::string path = dir + "/usv-cut.mcap";
+  WriterOptions o;
+  o.chunk_bytes = 512;
+  o.fsync = FsyncPolicy::Never;
+  uint64_t flushed = 0;
+  {
+    McapWriter w(path, o);
+    uint16_t s = w.add_schema("modd.float32", "jsonschema", "{}");
+    uint16_t a = w.add_channel(s, "usv.a", "json");
+    uint16_t b = w.add_channel(s, "usv.b", "json");
+    std::string m = "{\"value\":1.5}";
+    for (uint32_t i = 0; i < 200; ++i)  // both channels in every chunk: two Message Index records each
+      w.add_message(i % 2 ? a : b, i, 1000 + i, 900 + i, std::span(reinterpret_cast<const uint8_t*>(m.data()), m.size()));
+    w.flush_chunk();
+    flushed = w.flushed_messages();
+    w.abandon();
+  }
+  auto before = slurp(path);
+  // Cut inside the last chunk's second Message Index record: that chunk is not whole.
+  std::filesystem::resize_file(path, before.size() - 10);
+  auto rs = recover_dir(dir, "usv", o);
+  ASSERT_EQ(rs.size(), 1u);
+  EXPECT_FALSE(rs[0].failed);
+  EXPECT_LT(rs[0].messages, flushed);
+  EXPECT_GE(rs[0].messages + 40, flushed);
+  auto after = slurp(path);
+  uint64_t kept = before.size() - 10 - rs[0].dropped_bytes;
+  // In place: the kept bytes are the original ones, the summary follows them.
+  EXPECT_EQ(std::memcmp(after.data(), before.data(), kept), 0);
+  EXPECT_EQ(after[kept], 0x0F);  // Data End right after the last whole chunk and its indexes
+  EXPECT_TRUE(mcap_complete(path));
+  EXPECT_TRUE(std::filesystem::is_empty(dir) == false);
+  EXPECT_TRUE(recover_dir(dir, "usv", o).empty());
+}

@@ -37,7 +37,8 @@ Archiver::Archiver(ArchiverOptions options) : opt_(std::move(options)) {
   std::filesystem::create_directories(opt_.dir, ec);
   if (ec) throw Error(ErrorCode::Io, "cannot create archive directory " + opt_.dir + ": " + ec.message());
   // Files a crash left open (no summary, torn tail) get finalised before anything new is written.
-  recover_dir(opt_.dir, opt_.prefix, opt_.writer);
+  for (Recovered& r : recover_dir(opt_.dir, opt_.prefix, opt_.writer))
+    if (r.failed) unrecovered_.push_back(std::move(r.path));
   thread_ = std::thread([this] { run(); });
 }
 
@@ -83,6 +84,10 @@ std::string Archiver::current_file() const {
   std::lock_guard lk(mu_);
   return current_file_;
 }
+std::vector<std::pair<std::string, uint64_t>> Archiver::files() const {
+  std::lock_guard lk(mu_);
+  return files_;
+}
 std::string Archiver::last_error() const {
   std::lock_guard lk(mu_);
   return last_error_;
@@ -107,7 +112,19 @@ void Archiver::run() {
         backoff_ms_ = std::min(backoff_ms_ * 2, opt_.retry_max_ms);
         continue;
       }
-      cv_.wait(lk, [&] { return stopping_ || !queue_.empty(); });
+      if (!unrecovered_.empty()) {
+        // A file left by a crash that could not be finished for want of space: tried again
+        // every 2 s and as soon as a write goes through again, not only at the next start.
+        if (std::chrono::steady_clock::now() >= next_recovery_) {
+          lk.unlock();
+          retry_recovery();
+          continue;
+        }
+        cv_.wait_until(lk, next_recovery_, [&] { return stopping_ || !queue_.empty(); });
+        if (!stopping_ && queue_.empty()) continue;
+      } else {
+        cv_.wait(lk, [&] { return stopping_ || !queue_.empty(); });
+      }
       if (queue_.empty()) break;  // stopping and drained
       item = &queue_.front();     // stays in the queue until written (only this thread pops)
     }
@@ -148,6 +165,11 @@ void Archiver::open_file() {
   char name[64];
   std::snprintf(name, sizeof name, "-%s-%04llu.mcap", stamp, static_cast<unsigned long long>(file_counter_++));
   std::string path = opt_.dir + "/" + opt_.prefix + name;
+  std::error_code ec;
+  while (std::filesystem::exists(path, ec)) {  // a restart within the same second: never overwrite
+    std::snprintf(name, sizeof name, "-%s-%04llu.mcap", stamp, static_cast<unsigned long long>(file_counter_++));
+    path = opt_.dir + "/" + opt_.prefix + name;
+  }
   writer_ = std::make_unique<McapWriter>(path, opt_.writer);
   file_opened_s_ = now;
   channels_.clear();
@@ -157,10 +179,16 @@ void Archiver::open_file() {
   ++counters_.files;
   std::lock_guard lk(mu_);
   current_file_ = path;
+  if (files_.size() >= 4096) files_.erase(files_.begin());
+  files_.emplace_back(opt_.prefix + name, 0);
 }
 
 void Archiver::count_flushed() {
   uint64_t f = writer_->flushed_messages();
+  if (f != seen_flushed_) {
+    std::lock_guard lk(mu_);
+    if (!files_.empty()) files_.back().second = f;  // before `archived`: the record never says less
+  }
   counters_.archived += f - seen_flushed_;
   seen_flushed_ = f;
   counters_.bytes = closed_bytes_ + writer_->file_bytes() - writer_->pending_bytes();
@@ -190,6 +218,7 @@ void Archiver::set_disk_full(bool full, const std::string& why) {
              opt_.retry_max_ms);
   } else {
     log_line("archive: writing again (%s resumed where it stopped)", current_file().c_str());
+    next_recovery_ = {};  // room again: a file left by a crash is finished now too
   }
 }
 
@@ -208,6 +237,22 @@ bool Archiver::retry() {
   } catch (const Error&) {
     return false;
   }
+}
+
+void Archiver::retry_recovery() {
+  std::vector<std::string> still;
+  for (std::string& path : unrecovered_) {
+    try {
+      Recovered r = recover_mcap(path, opt_.writer);
+      log_line("archive: recovered %s now that there is room: %llu messages in %llu chunks kept, %llu torn bytes "
+               "dropped", path.c_str(), static_cast<unsigned long long>(r.messages),
+               static_cast<unsigned long long>(r.chunks), static_cast<unsigned long long>(r.dropped_bytes));
+    } catch (const Error&) {
+      still.push_back(std::move(path));
+    }
+  }
+  unrecovered_ = std::move(still);
+  next_recovery_ = std::chrono::steady_clock::now() + std::chrono::seconds(2);
 }
 
 void Archiver::give_up() {

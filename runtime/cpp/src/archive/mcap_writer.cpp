@@ -6,6 +6,7 @@
 #include <zstd.h>
 
 #include <cerrno>
+#include <algorithm>
 #include <cstring>
 #include <memory>
 
@@ -95,6 +96,45 @@ McapWriter::McapWriter(const std::string& path, WriterOptions options) : path_(p
   emit(h.done());
   // Written with the first chunk: opening a file writes nothing, so a full disk never
   // leaves a trail of empty files.
+}
+
+McapWriter::McapWriter(const std::string& path, WriterOptions options, Resume at)
+    : path_(path), opt_(std::move(options)) {
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+  if (fd_ < 0) throw Error(ErrorCode::Io, "cannot open " + path + ": " + std::strerror(errno));
+  if (::ftruncate(fd_, static_cast<off_t>(at.offset)) != 0 || ::lseek(fd_, static_cast<off_t>(at.offset), SEEK_SET) < 0) {
+    int err = errno;
+    ::close(fd_);
+    fd_ = -1;
+    throw Error(ErrorCode::Io, "cannot cut " + path + ": " + std::strerror(err));
+  }
+  offset_ = at.offset;
+  data_crc_ = at.data_crc;
+}
+
+void McapWriter::adopt_schema(uint16_t id, const std::string& name, const std::string& encoding,
+                              const std::string& data) {
+  schemas_.push_back({id, name, encoding, data});
+}
+
+void McapWriter::adopt_channel(uint16_t id, uint16_t schema_id, const std::string& topic, const std::string& encoding,
+                               const std::map<std::string, std::string>& metadata) {
+  channels_.push_back({id, schema_id, topic, encoding, metadata});
+}
+
+void McapWriter::adopt_chunk(const ChunkIndex& chunk, const std::map<uint16_t, uint64_t>& channel_counts) {
+  uint64_t n = 0;
+  for (const auto& [ch, k] : channel_counts) {
+    channel_counts_[ch] += k;
+    n += k;
+  }
+  if (n) {
+    first_time_ = std::min(first_time_, chunk.start);
+    last_time_ = std::max(last_time_, chunk.end);
+  }
+  message_count_ += n;
+  staged_messages_ = flushed_messages_ = message_count_;
+  chunk_indexes_.push_back(chunk);
 }
 
 McapWriter::~McapWriter() {
@@ -220,6 +260,7 @@ void McapWriter::flush_chunk() {
   ci.length = crec.size();
   ci.compressed_size = compressed.size();
   ci.uncompressed_size = chunk_.size();
+  ci.compression = compression_name(opt_.compression);
   emit(crec);
   uint64_t idx_start = file_bytes();
   for (const auto& [ch, entries] : chunk_index_) {
@@ -300,7 +341,7 @@ void McapWriter::close() {
     r.put<uint32_t>(static_cast<uint32_t>(ci.index_offsets.size() * 10));
     for (const auto& [ch, off] : ci.index_offsets) { r.put<uint16_t>(ch); r.put<uint64_t>(off); }
     r.put<uint64_t>(ci.index_length);
-    r.str(compression_name(opt_.compression));
+    r.str(ci.compression);
     r.put<uint64_t>(ci.compressed_size);
     r.put<uint64_t>(ci.uncompressed_size);
     recs.push_back(r.done());

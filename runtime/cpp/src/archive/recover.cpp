@@ -1,13 +1,19 @@
 #include "modd/archive/recover.hpp"
 
+#include <fcntl.h>
 #include <lz4frame.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <zstd.h>
 
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
+#include <tuple>
 
 #include "modd/archive/crc32.hpp"
 #include "modd/util/error.hpp"
@@ -70,10 +76,18 @@ bool decompress(const std::string& comp, std::span<const uint8_t> in, uint64_t s
   return false;
 }
 
-struct Rebuild {
-  McapWriter& w;
+// What a file cut by a crash holds up to its last complete record: a chunk counts once it
+// and the Message Index records written with it (one per channel it holds, in the same
+// write) are whole, so that an indexed reader finds every message the summary announces.
+struct Scan {
   std::map<uint16_t, std::tuple<std::string, std::string, std::string>> schemas;  // id -> name, encoding, data
-  std::map<uint16_t, uint16_t> schema_map, channel_map;                            // old id -> new id
+  struct Channel {
+    uint16_t schema;
+    std::string topic, encoding;
+    std::map<std::string, std::string> meta;
+  };
+  std::map<uint16_t, Channel> channels;
+  std::vector<std::pair<ChunkIndex, std::map<uint16_t, uint64_t>>> chunks;  // with messages per channel
   uint64_t messages = 0;
 
   void schema(Cursor c) {
@@ -81,7 +95,7 @@ struct Rebuild {
     std::string name = c.str(), enc = c.str();
     uint32_t len = c.get<uint32_t>();
     auto data = c.bytes(len);
-    schemas[id] = {name, enc, std::string(data.begin(), data.end())};
+    schemas.emplace(id, std::tuple{name, enc, std::string(data.begin(), data.end())});
   }
   void channel(Cursor c) {
     uint16_t id = c.get<uint16_t>(), sid = c.get<uint16_t>();
@@ -94,28 +108,11 @@ struct Rebuild {
       std::string k = m.str();
       meta[k] = m.str();
     }
-    if (channel_map.count(id)) return;
-    uint16_t new_sid = 0;
-    if (sid) {
-      auto s = schema_map.find(sid);
-      if (s == schema_map.end()) {
-        auto& [name, senc, data] = schemas.at(sid);
-        s = schema_map.emplace(sid, w.add_schema(name, senc, data)).first;
-      }
-      new_sid = s->second;
-    }
-    channel_map[id] = w.add_channel(new_sid, topic, enc, meta);
+    if (sid && !schemas.count(sid)) throw std::out_of_range("schema");
+    channels.emplace(id, Channel{sid, topic, enc, meta});
   }
-  void message(Cursor c) {
-    uint16_t ch = c.get<uint16_t>();
-    uint32_t seq = c.get<uint32_t>();
-    uint64_t log_time = c.get<uint64_t>(), pub_time = c.get<uint64_t>();
-    auto data = c.bytes(c.n - c.at);
-    w.add_message(channel_map.at(ch), seq, log_time, pub_time, data);
-    ++messages;
-  }
-  // The records of a chunk, checked completely before any is used.
-  bool chunk(const std::vector<uint8_t>& recs) {
+  // The records of a chunk, checked completely before any is used; its messages per channel.
+  bool chunk(const std::vector<uint8_t>& recs, std::map<uint16_t, uint64_t>& counts) {
     size_t at = 0;
     while (at < recs.size()) {
       if (recs.size() - at < 9) return false;
@@ -132,12 +129,43 @@ struct Rebuild {
       Cursor c{recs.data() + at + 9, len};
       if (op == kSchema) schema(c);
       else if (op == kChannel) channel(c);
-      else if (op == kMessage) message(c);
+      else if (op == kMessage) {
+        uint16_t ch = c.get<uint16_t>();
+        if (!channels.count(ch)) return false;  // a channel never defined
+        ++counts[ch];
+      }
       at += 9 + len;
     }
     return true;
   }
 };
+
+// A read-only view of a whole file (mapped: a 256 MiB file costs no heap).
+struct Mapped {
+  const uint8_t* p = nullptr;
+  size_t n = 0;
+  explicit Mapped(const std::string& path) {
+    int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw Error(ErrorCode::Io, "cannot read " + path + ": " + std::strerror(errno));
+    struct stat st{};
+    if (::fstat(fd, &st) == 0 && st.st_size > 0) {
+      void* m = ::mmap(nullptr, static_cast<size_t>(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
+      if (m != MAP_FAILED) {
+        p = static_cast<const uint8_t*>(m);
+        n = static_cast<size_t>(st.st_size);
+      }
+    }
+    ::close(fd);
+    if (st.st_size > 0 && !p) throw Error(ErrorCode::Io, "cannot map " + path);
+  }
+  ~Mapped() {
+    if (p) ::munmap(const_cast<uint8_t*>(p), n);
+  }
+  Mapped(const Mapped&) = delete;
+  Mapped& operator=(const Mapped&) = delete;
+};
+
+constexpr uint8_t kMessageIndex = 0x07;
 
 }  // namespace
 
@@ -161,48 +189,91 @@ bool mcap_complete(const std::string& path) {
 Recovered recover_mcap(const std::string& path, const WriterOptions& options) {
   Recovered res;
   res.path = path;
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw Error(ErrorCode::Io, "cannot read " + path);
-  std::vector<uint8_t> all((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  if (all.size() < 8 + 9 || std::memcmp(all.data(), kMagic, 8) != 0) {
-    std::filesystem::remove(path);
-    res.removed = true;
-    res.dropped_bytes = all.size();
-    return res;
-  }
-  std::string tmp = path + ".recovering";
   uint64_t good = 8;
-  try {
-    McapWriter w(tmp, options);
-    Rebuild rb{w};
+  uint32_t crc = 0;
+  Scan scan;
+  {
+    Mapped file(path);
+    const uint8_t* all = file.p;
+    const size_t size = file.n;
+    if (size < 8 + 9 || std::memcmp(all, kMagic, 8) != 0) {
+      std::filesystem::remove(path);
+      res.removed = true;
+      res.dropped_bytes = size;
+      return res;
+    }
+    // A chunk read whole, waiting for its Message Index records.
+    struct Pending {
+      ChunkIndex ci;
+      std::map<uint16_t, uint64_t> counts;
+    };
+    std::optional<Pending> pend;
+    auto commit = [&](uint64_t end) {
+      res.messages += [&] {
+        uint64_t n = 0;
+        for (const auto& [ch, k] : pend->counts) n += k;
+        return n;
+      }();
+      ++res.chunks;
+      scan.chunks.emplace_back(std::move(pend->ci), std::move(pend->counts));
+      pend.reset();
+      good = end;
+    };
     size_t at = 8;
     std::vector<uint8_t> plain;
-    while (all.size() - at >= 9) {
+    while (size - at >= 9) {
       uint8_t op = all[at];
       uint64_t len;
-      std::memcpy(&len, all.data() + at + 1, 8);
-      if (all.size() - at - 9 < len) break;  // cut short
-      Cursor c{all.data() + at + 9, len};
+      std::memcpy(&len, all + at + 1, 8);
+      if (size - at - 9 < len) break;  // cut short
+      Cursor c{all + at + 9, len};
+      const uint64_t next = at + 9 + len;
+      if (pend) {
+        if (op == kMessageIndex && len >= 2) {
+          uint16_t ch = c.get<uint16_t>();
+          pend->ci.index_offsets[ch] = at;
+          pend->ci.index_length += 9 + len;
+          at = next;
+          bool all_indexed = true;
+          for (const auto& [k, n] : pend->counts) all_indexed &= pend->ci.index_offsets.count(k) > 0;
+          if (all_indexed) commit(at);
+          continue;
+        }
+        if (!pend->ci.index_offsets.empty()) break;  // some of its indexes, then something else
+        commit(at);                                  // a file written without message indexes
+      }
       bool ok = true;
       try {
         if (op == kChunk) {
-          c.get<uint64_t>();
-          c.get<uint64_t>();
+          ChunkIndex ci;
+          ci.start = c.get<uint64_t>();
+          ci.end = c.get<uint64_t>();
           uint64_t usize = c.get<uint64_t>();
-          uint32_t crc = c.get<uint32_t>();
-          std::string comp = c.str();
+          uint32_t chunk_crc = c.get<uint32_t>();
+          ci.compression = c.str();
           uint64_t clen = c.get<uint64_t>();
           auto data = c.bytes(clen);
-          ok = decompress(comp, data, usize, plain) && (crc == 0 || crc32(0, plain) == crc) && rb.chunk(plain);
-          if (ok) ++res.chunks;
+          ci.offset = at;
+          ci.length = 9 + len;
+          ci.compressed_size = clen;
+          ci.uncompressed_size = usize;
+          std::map<uint16_t, uint64_t> counts;
+          ok = decompress(ci.compression, data, usize, plain) && (chunk_crc == 0 || crc32(0, plain) == chunk_crc) &&
+               scan.chunk(plain, counts);
+          if (ok) {
+            pend = Pending{std::move(ci), std::move(counts)};
+            at = next;
+            if (pend->counts.empty()) commit(at);
+            continue;
+          }
         } else if (op == kSchema) {
-          rb.schema(c);
+          scan.schema(c);
         } else if (op == kChannel) {
-          rb.channel(c);
+          scan.channel(c);
         } else if (op == kMessage) {
-          rb.message(c);
+          ok = false;  // messages outside chunks: not written by the PubBroker; the tail is dropped
         } else if (op == kDataEnd || op == kFooter) {
-          break;
+          break;  // an interrupted finish: written again
         }
       } catch (const Cursor::Short&) {
         ok = false;
@@ -210,22 +281,23 @@ Recovered recover_mcap(const std::string& path, const WriterOptions& options) {
         ok = false;  // a channel or schema id never defined
       }
       if (!ok) break;
-      at += 9 + len;
+      at = next;
       good = at;
     }
-    res.messages = rb.messages;
-    w.close();
-  } catch (...) {
-    // No room (or no write) for the rebuilt copy: the original stays as it was, and the
-    // partial copy must not keep the space the archive needs for new samples.
-    std::error_code rm;
-    std::filesystem::remove(tmp, rm);
-    throw;
+    // A last chunk whose indexes never made it: dropped (its samples were never counted
+    // archived: the writer counts a chunk once the chunk and its indexes are written).
+    if (pend && pend->ci.index_offsets.empty() && !options.message_index) commit(pend->ci.offset + pend->ci.length);
+    res.dropped_bytes = size - good;
+    crc = crc32(0, std::span(all, good));
   }
-  res.dropped_bytes = all.size() - good;
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error(ErrorCode::Io, "cannot replace " + path + ": " + ec.message());
+  // Finished in place: cut to the last complete record, then Data End, summary and footer
+  // appended (a few KiB, so recovery works on a nearly full disk). A crash or a full disk
+  // meanwhile leaves a file the next attempt scans to the same point.
+  McapWriter w(path, options, McapWriter::Resume{good, crc});
+  for (const auto& [id, sch] : scan.schemas) w.adopt_schema(id, std::get<0>(sch), std::get<1>(sch), std::get<2>(sch));
+  for (const auto& [id, ch] : scan.channels) w.adopt_channel(id, ch.schema, ch.topic, ch.encoding, ch.meta);
+  for (const auto& [ci, counts] : scan.chunks) w.adopt_chunk(ci, counts);
+  w.close();
   return res;
 }
 
@@ -251,7 +323,11 @@ std::vector<Recovered> recover_dir(const std::string& dir, const std::string& pr
                  static_cast<unsigned long long>(r.chunks), static_cast<unsigned long long>(r.dropped_bytes));
       out.push_back(std::move(r));
     } catch (const Error& err) {
-      log_line("archive: cannot recover %s: %s", name.c_str(), err.what());
+      log_line("archive: cannot recover %s yet: %s (tried again while the broker runs)", name.c_str(), err.what());
+      Recovered r;
+      r.path = e.path().string();
+      r.failed = true;
+      out.push_back(std::move(r));
     }
   }
   return out;

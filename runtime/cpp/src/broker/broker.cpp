@@ -158,6 +158,8 @@ Broker::Broker(const BrokerConfig& cfg, std::string key, Clock& clock, LinkOutpu
   for (const auto& t : cfg.topics)
     add_topic(t.name, t.type, t.buffer_size ? t.buffer_size : cfg.default_buffer_size, true);
   started_ns_ = last_stamp_ = clock_.now_ns();
+  run_record_ = std::make_unique<RunRecord>(cfg.archive_dir, cfg.archive_prefix, started_ns_);
+  write_run_record(started_ns_, false);
 }
 
 Broker::~Broker() { shutdown(); }
@@ -350,7 +352,12 @@ void Broker::check_archive(int64_t now) {
         t.durable_accepted = t.checkpoints.front().second;
         t.checkpoints.pop_front();
       }
+    // The record first: an acknowledgement a publisher holds is always backed by a record
+    // that counts it archived.
+    write_run_record(now, false);
     for (IngressSession* s : sessions_) s->report(durable);
+  } else if (ac.files != record_files_ || (now >= next_record_ns_ && counters_.samples_in != record_samples_in_)) {
+    write_run_record(now, false);
   }
   for (IngressSession* s : sessions_) s->send_catalogue_if_changed();
   bool changed = false;
@@ -397,9 +404,22 @@ void Broker::send_status_now() {
 }
 
 void Broker::shutdown() {
-  if (!archiver_) return;
+  if (!archiver_ || shut_down_) return;
+  shut_down_ = true;
   flush_buffers();
   archiver_->stop();
+  write_run_record(clock_.now_ns(), true);
+}
+
+void Broker::write_run_record(int64_t now, bool final) {
+  std::vector<uint64_t> v = status_counters();  // `archived` read before the files: never more
+  std::vector<std::pair<std::string, uint64_t>> counters;
+  counters.reserve(v.size());
+  for (int i = 0; i < kStatusFieldCount; ++i) counters.emplace_back(kStatusFieldNames[i], v[static_cast<size_t>(i)]);
+  run_record_->write(counters, archiver_->files(), final, now);
+  record_files_ = v[kArchiveFiles];
+  record_samples_in_ = counters_.samples_in;
+  next_record_ns_ = now + 1'000'000'000;
 }
 
 link::ConfigAck Broker::on_config(const link::Config& cfg) {

@@ -4,6 +4,7 @@
 // only moves a vector under a mutex.
 #pragma once
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -12,6 +13,7 @@
 #include <string>
 #include <thread>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "modd/archive/mcap_writer.hpp"
@@ -71,6 +73,9 @@ class Archiver {
   const ArchiveCounters& counters() const { return counters_; }
   std::string current_file() const;
   std::string last_error() const;
+  // The files this run opened (names, newest last; at most the last 4096) with the messages
+  // of each in chunks written to it: never more than the file holds, even after a crash.
+  std::vector<std::pair<std::string, uint64_t>> files() const;
 
  private:
   struct Item {
@@ -88,6 +93,7 @@ class Archiver {
   void set_disk_full(bool full, const std::string& why);
   bool retry();                 // resumes the interrupted write; true when it went through
   void give_up();               // at stop with the disk still full
+  void retry_recovery();        // files a crash left that could not be finished at start
 
   ArchiverOptions opt_;
   ArchiveCounters counters_;
@@ -105,9 +111,12 @@ class Archiver {
   std::unordered_map<const TopicInfo*, uint32_t> sequences_;
   std::vector<std::shared_ptr<const TopicInfo>> keep_;  // keeps channel keys alive
   std::string current_file_, last_error_;
+  std::vector<std::pair<std::string, uint64_t>> files_;  // under mu_
   uint64_t file_counter_ = 0;
   uint64_t seen_flushed_ = 0;  // writer_->flushed_messages() already counted in archived
   uint32_t backoff_ms_ = 0;
+  std::vector<std::string> unrecovered_;  // writer thread (after the constructor)
+  std::chrono::steady_clock::time_point next_recovery_{};
 };
 
 // The JSON message for one sample: {"value":V,"publish_time_ns":T}.

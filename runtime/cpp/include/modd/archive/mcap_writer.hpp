@@ -32,10 +32,32 @@ struct WriterOptions {
   std::string library = "modd-pubbroker";
 };
 
+// A chunk as the summary's Chunk Index describes it.
+struct ChunkIndex {
+  uint64_t start = 0, end = 0, offset = 0, length = 0;  // log times; the Chunk record's place
+  std::map<uint16_t, uint64_t> index_offsets;            // channel -> its Message Index record
+  uint64_t index_length = 0, compressed_size = 0, uncompressed_size = 0;
+  std::string compression;
+};
+
 class McapWriter {
  public:
   // Creates (truncates) path and writes magic + header. Throws Error(Io).
   McapWriter(const std::string& path, WriterOptions options);
+  // Reopens a file a crash left unfinished, to finish it in place (archive recovery, which
+  // then needs no room for a copy): the file is cut to `offset`, the end of its last complete
+  // record, whose data-section CRC so far is `data_crc`; the caller adopts the schemas,
+  // channels and chunks before it, and close() appends Data End, summary and footer.
+  struct Resume {
+    uint64_t offset;
+    uint32_t data_crc;
+  };
+  McapWriter(const std::string& path, WriterOptions options, Resume at);
+  void adopt_schema(uint16_t id, const std::string& name, const std::string& encoding, const std::string& data);
+  void adopt_channel(uint16_t id, uint16_t schema_id, const std::string& topic, const std::string& encoding,
+                     const std::map<std::string, std::string>& metadata);
+  // A chunk already in the file, with its messages per channel.
+  void adopt_chunk(const ChunkIndex& chunk, const std::map<uint16_t, uint64_t>& channel_counts);
   ~McapWriter();
   McapWriter(const McapWriter&) = delete;
   McapWriter& operator=(const McapWriter&) = delete;
@@ -67,11 +89,7 @@ class McapWriter {
  private:
   struct SchemaRec { uint16_t id; std::string name, encoding, data; };
   struct ChannelRec { uint16_t id, schema_id; std::string topic, encoding; std::map<std::string, std::string> metadata; };
-  struct ChunkIndexRec {
-    uint64_t start, end, offset, length;
-    std::map<uint16_t, uint64_t> index_offsets;
-    uint64_t index_length, compressed_size, uncompressed_size;
-  };
+  using ChunkIndexRec = ChunkIndex;
   void emit(std::span<const uint8_t> b);  // appends to the file, updating offset and CRC
   void write_out();                        // pending_ -> fd
   void finish_close();

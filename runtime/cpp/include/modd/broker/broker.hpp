@@ -16,6 +16,7 @@
 #include "modd/broker/counters.hpp"
 #include "modd/broker/executor.hpp"
 #include "modd/broker/link_session.hpp"
+#include "modd/broker/run_record.hpp"
 #include "modd/ingress/codec.hpp"
 #include "modd/util/clock.hpp"
 
@@ -163,6 +164,7 @@ class Broker final : public LinkHooks, public FrameSink {
   uint32_t add_topic(const std::string& name, link::ValueType type, uint32_t capacity, bool known);
   void swap_out(Topic& t);
   void send_status_now();
+  void write_run_record(int64_t now, bool final);
 
   BrokerConfig cfg_;
   std::string key_;
@@ -191,6 +193,10 @@ class Broker final : public LinkHooks, public FrameSink {
   BackfillSender backfill_;
   std::deque<std::pair<uint64_t, int64_t>> flush_stamps_;  // (flush id, stamp horizon at that flush)
   int64_t archived_until_ = 0;  // samples stamped before this are in written chunks
+  std::unique_ptr<RunRecord> run_record_;  // this run's counters beside its archive files
+  int64_t next_record_ns_ = 0;
+  uint64_t record_files_ = 0, record_samples_in_ = 0;
+  bool shut_down_ = false;
 };
 
 }  // namespace modd::broker
