@@ -61,21 +61,31 @@ def to_fraction(text: str) -> Fraction:
 
 
 def fraction_to_decimal(value: Fraction) -> str:
-    """A canonical decimal string for a fraction whose decimal expansion ends
-    (denominator of the form 2^a 5^b); raises ValueError otherwise."""
-    den = value.denominator
-    for p in (2, 5):
-        while den % p == 0:
-            den //= p
+    """The canonical decimal string of a fraction whose decimal expansion ends
+    (denominator of the form 2^a 5^b); raises ValueError otherwise.
+
+    Exact whatever its length: this writes computed values (a plan's
+    hyperperiod can have hundreds of digits, bounded by the planner), unlike
+    :func:`canonical_decimal`, which bounds what a text may ask for.
+
+    >>> fraction_to_decimal(Fraction(3, 8)), fraction_to_decimal(Fraction(-5))
+    ('0.375', '-5.0')
+    """
+    num, den = value.numerator, value.denominator
+    twos = fives = 0
+    while den % 2 == 0:
+        den //= 2
+        twos += 1
+    while den % 5 == 0:
+        den //= 5
+        fives += 1
     if den != 1:
         raise ValueError(f"{value} has no finite decimal expansion")
-    digits = 0
-    while (value * 10**digits).denominator != 1:
-        digits += 1
-    scaled = value.numerator * 10**digits // value.denominator
-    s = str(scaled).rjust(digits + 1, "0")
-    text = s[: len(s) - digits] + "." + s[len(s) - digits :] if digits else s
-    return canonical_decimal(text)
+    digits = max(twos, fives)  # value * 10^digits is a whole number
+    scaled = abs(num) * 10**digits // value.denominator
+    whole, frac = divmod(scaled, 10**digits)
+    fraction = str(frac).rjust(digits, "0").rstrip("0") if digits else ""
+    return f"{'-' if num < 0 else ''}{whole}.{fraction or '0'}"
 
 
 def to_micros(text: str) -> int:

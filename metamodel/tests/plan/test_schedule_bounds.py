@@ -7,7 +7,8 @@ fast, with the subscriptions named."""
 from __future__ import annotations
 
 import time
-from math import lcm
+from fractions import Fraction
+from math import lcm, prod
 from typing import Any
 
 import pytest
@@ -247,3 +248,59 @@ def test_periods_and_decimals_are_bounded(scenario1_dict: Any) -> None:
     errors = {d.pointer: d.message for d in validate(model) if d.severity == "error"}
     assert "at most 1,000,000 s" in errors["/subscribers/0/periodS"]
     assert "/subscribers/1/periodS" in errors
+
+
+def _grid_model(make_model: Any, n_topics: int, n_subs: int) -> Any:
+    """The bench's ``grid:T:N``: periods drawn from primes x 0.1 s (0.3 ...
+    11.3 s, 29 of them), published every 0.1 s; hyperperiod about 10^45 s."""
+    grid = [f"{p / 10:.1f}" for p in PRIMES[1:30]]
+    names = [f"v{i}" for i in range(n_topics)]
+    subs = [(f"sub{k}", names[k % n_topics], grid[k % len(grid)], ("MIN", "MAX", "AVERAGE")[k % 3])
+            for k in range(n_subs)]
+    return make_model(names, [("p", "0.1", names)], subs)
+
+
+@pytest.mark.parametrize("case", ["e:primes:40", "e:grid:40", "grid:100:500"])
+def test_hyperperiods_past_forty_digits_make_valid_plans(make_model: Any, case: str) -> None:
+    """The bench's cases whose hyperperiod has 45-70 digits (10^39-10^64 s):
+    the runtime never materialises the hyperperiod, so the plan is written
+    whole, its hyperperiod exact (it ended in "number out of range")."""
+    from modd_contracts.schema import validate as check_contract
+
+    if case == "grid:100:500":
+        model, units, scale = _grid_model(make_model, 100, 500), PRIMES[1:30], 100_000
+    else:
+        units = PRIMES[1:41]
+        scale = 10_000 if case == "e:primes:40" else 100_000
+        names = [f"v{i}" for i in range(40)]
+        subs = [(f"sub{i}", names[i], f"{p * scale / 10**6:.2f}", "MAX")
+                for i, p in enumerate(units)]
+        model = make_model(names, [("p", "0.01", names)], subs)
+    start = time.process_time()
+    j = make_plan(model).to_json()
+    assert time.process_time() - start < 2.0  # ~25 ms idle
+    assert check_contract("plan", j) == []
+    assert len(j["hyperperiod_s"]) > 40
+    assert Fraction(j["hyperperiod_s"]) == Fraction(scale * prod(units), 10**6)
+    unhit = prod(u - 1 for u in units)
+    assert j["messages_per_hyperperiod"] == prod(units) - unhit  # pairwise coprime
+    assert Fraction(j["schedule"]["slots"][0]["date_s"]) == Fraction(3 * scale, 10**6)
+
+
+def test_hyperperiod_past_the_bound_is_a_located_error(make_model: Any) -> None:
+    """Past 2^HYPERPERIOD_BITS_LIMIT µs: refused while the LCM is built."""
+    from modd_plan.plan import HYPERPERIOD_BITS_LIMIT
+
+    units = [p for p in range(7, 1500) if all(p % q for q in range(2, int(p**0.5) + 1))][:150]
+    # coprime to 10 and to one another: no period divides another
+    assert prod(units).bit_length() > HYPERPERIOD_BITS_LIMIT
+    names = [f"v{i}" for i in range(len(units))]
+    subs = [(f"sub{i}", names[i], f"{p / 1000:.3f}", "MAX") for i, p in enumerate(units)]
+    model = make_model(names, [("p", "0.001", names)], subs)
+    start = time.process_time()
+    with pytest.raises(PlanningError) as info:
+        make_plan(model)
+    assert time.process_time() - start < 1.0
+    diags = info.value.diagnostics
+    assert diags and all(d.pointer.startswith("/subscribers/") for d in diags)
+    assert diags[0].pointer == "/subscribers/0/periodS" and "hyperperiod" in diags[0].message
