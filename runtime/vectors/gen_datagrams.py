@@ -16,9 +16,12 @@ from modd.link.datagram import (
     DataDatagram,
     encode_control,
     encode_data,
+    encode_fragments,
     encode_handshake,
     encode_nack,
     session_key,
+    slot_bitmap_body,
+    tag,
 )
 from modd.link.frames import Aggregation, Data, Hello, Ping, Value, ValueType, value_kind
 from modd.link.serialframe import encode_frame
@@ -54,6 +57,15 @@ def write(here: Path) -> None:
     nack = encode_control(3, encode_nack([(69990, 5), (70010, 1)]), skey, BASE_TO_DRONE)
     ping = encode_control(4, codec.encode(Ping(b"\x07\x01")), skey, BASE_TO_DRONE)
     hello = encode_handshake(codec.encode(Hello(1, CN)))
+    big_presence = [True, False, True, True]
+    big_values = slot_values([Value(True, 0.5, 0, 6), Value(), Value(True, 9.75),
+                              Value(True, 10.5)])
+    big_body = slot_bitmap_body(big_presence, big_values)
+    frags = encode_fragments(1, 65537, big_body, 15, skey, DRONE_TO_BASE)
+    bad_index = bytes([0x32, 1, 1, 0, 0x21, 0xAA])  # piece 2 of 2
+    bad_index += tag(skey, DRONE_TO_BASE, 65537, bad_index, 4)
+    forged_frag = bytearray(frags[1])
+    forged_frag[5] ^= 0x80
     forged = bytearray(data)
     forged[5] ^= 0x01
     cases: list[dict[str, Any]] = [
@@ -76,6 +88,13 @@ def write(here: Path) -> None:
          "hex": ping.hex()},
         {"name": "handshake_hello", "meaning": "HELLO version 1, nonce 00..0f, no tag",
          "hex": hello.hex()},
+        {"name": "fragments_of_one_slot", "direction": "D", "expected_slot": 65530,
+         "meaning": "slot 65537 (low 16 bits 0x0001) of config 1 (streams 0, 2, 3 of scenario 1"
+                    " present) cut for a 15-byte datagram: its one-slot 0x31 body (k=1, n=4,"
+                    " bitmap 0b1101, values) in pieces of 6 B, frag = index << 4 | count - 1",
+         "config_id": 1, "slot": 65537, "max_datagram": 15, "body": big_body.hex(),
+         "presence": big_presence, "values": big_values.hex(),
+         "fragments": [f.hex() for f in frags]},
         {"name": "serial_data_scenario1_5_slots",
          "meaning": "data_scenario1_5_slots framed for serial: COBS(datagram + CRC-16 LE) 00",
          "hex": encode_frame(data).hex(), "datagram": data.hex()},
@@ -85,6 +104,12 @@ def write(here: Path) -> None:
          "why": "one value bit flipped: the tag does not verify (dropped, counted as forged)"},
         {"name": "wrong_direction", "direction": "B", "expected_slot": 69990, "hex": data.hex(),
          "why": "a drone->base datagram reflected to the drone: the tag covers the direction"},
+        {"name": "fragment_forged", "direction": "D", "expected_slot": 65530,
+         "hex": forged_frag.hex(), "kind": "fragment",
+         "why": "a fragment with one piece bit flipped: the tag does not verify"},
+        {"name": "fragment_index_beyond_count", "direction": "D", "expected_slot": 65530,
+         "hex": bad_index.hex(), "kind": "fragment",
+         "why": "a fragment whose tag verifies but says piece 2 of 2: refused (BAD_FRAME at 4)"},
         {"name": "replay", "direction": "D", "expected_slot": 69990, "hex": data.hex(),
          "why": "the valid datagram again after it was accepted: refused by the replay window"},
     ]

@@ -1,5 +1,5 @@
-// libFuzzer target: the datagram transports' receive path (tag check of DATA
-// and control datagrams, the serial deframer, COBS) fed arbitrary bytes. Must
+// libFuzzer target: the datagram transports' receive path (tag check of DATA,
+// fragment and control datagrams, fragment cutting, the serial deframer, COBS) fed arbitrary bytes. Must
 // never crash, leak or hit UB; nothing unauthenticated is ever returned.
 #include <cstddef>
 #include <cstdint>
@@ -27,6 +27,27 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::abort();
   } catch (const Forged&) {
   } catch (const Error&) {
+  }
+  try {
+    verify_fragment(in, key, kDroneToBase, 70000);
+    std::abort();
+  } catch (const Forged&) {
+  } catch (const Error&) {
+  }
+  // the sender's cutting: pieces put back together give the body, each within the packet
+  if (size > 0) {
+    size_t max = 10 + data[0] % 240;
+    try {
+      auto frags = encode_fragments(1, 70000, in, max, key, kDroneToBase);
+      std::vector<uint8_t> whole;
+      for (const auto& f : frags) {
+        if (f.size() > max) std::abort();
+        auto got = verify_fragment(f, key, kDroneToBase, 70001);
+        whole.insert(whole.end(), got.piece.begin(), got.piece.end());
+      }
+      if (whole != std::vector<uint8_t>(in.begin(), in.end())) std::abort();
+    } catch (const std::invalid_argument&) {
+    }
   }
   Deframer df(252);
   for (const auto& d : df.feed(in)) {

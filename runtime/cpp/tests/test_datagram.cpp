@@ -105,6 +105,7 @@ TEST(Datagram, InvalidVectorsAreRefused) {
   auto v = vectors();
   Mac key = key_of(v);
   for (const auto& c : v["invalid"]) {
+    if (c.contains("kind")) continue;  // fragments: InvalidFragmentsAreRefused
     auto raw = from_hex(c["hex"].get<std::string>());
     uint64_t expected = c["expected_slot"].get<uint64_t>();
     if (c["name"] == "replay") {
@@ -145,4 +146,50 @@ TEST(Datagram, Extend16AndReplayWindow) {
   EXPECT_TRUE(w.accept(30));
   EXPECT_FALSE(w.accept(22));
   EXPECT_TRUE(w.accept(23));
+}
+
+TEST(Datagram, FragmentVectorsVerifyAndEncodeBack) {
+  auto v = vectors();
+  Mac key = key_of(v);
+  const auto& c = by_name(v, "fragments_of_one_slot");
+  std::vector<bool> presence;
+  for (bool p : c["presence"]) presence.push_back(p);
+  auto body = slot_bitmap_body(presence, from_hex(c["values"].get<std::string>()));
+  EXPECT_EQ(to_hex(body), c["body"].get<std::string>());
+  auto frags = encode_fragments(1, c["slot"].get<uint64_t>(), body, c["max_datagram"].get<size_t>(), key, kDroneToBase);
+  ASSERT_EQ(frags.size(), c["fragments"].size());
+  std::vector<uint8_t> whole;
+  for (size_t i = 0; i < frags.size(); ++i) {
+    EXPECT_EQ(to_hex(frags[i]), c["fragments"][i].get<std::string>()) << i;
+    auto f = verify_fragment(frags[i], key, kDroneToBase, c["expected_slot"].get<uint64_t>());
+    EXPECT_EQ(f.slot, c["slot"].get<uint64_t>());
+    EXPECT_EQ(f.index, i);
+    EXPECT_EQ(f.count, frags.size());
+    whole.insert(whole.end(), f.piece.begin(), f.piece.end());
+  }
+  EXPECT_EQ(whole, body);
+  EXPECT_THROW(encode_fragments(1, 5, std::vector<uint8_t>(17 * 11), 20, key, kDroneToBase), std::invalid_argument);
+}
+
+TEST(Datagram, InvalidFragmentsAreRefused) {
+  auto v = vectors();
+  Mac key = key_of(v);
+  int seen = 0;
+  for (const auto& c : v["invalid"]) {
+    if (!c.contains("kind") || c["kind"] != "fragment") continue;
+    ++seen;
+    auto raw = from_hex(c["hex"].get<std::string>());
+    uint64_t expected = c["expected_slot"].get<uint64_t>();
+    if (c["name"] == "fragment_forged") {
+      EXPECT_THROW(verify_fragment(raw, key, dir(c), expected), Forged);
+    } else {
+      try {
+        verify_fragment(raw, key, dir(c), expected);
+        ADD_FAILURE() << c["name"];
+      } catch (const Error& e) {
+        EXPECT_EQ(e.code(), ErrorCode::BadFrame);
+      }
+    }
+  }
+  EXPECT_EQ(seen, 2);
 }

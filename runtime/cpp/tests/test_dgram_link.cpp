@@ -176,3 +176,38 @@ TEST(DgramLink, SilenceStopsDataUntilANewHandshake) {
   s.handshake(3, 7'000'000'000);
   EXPECT_TRUE(s.link.ready());
 }
+
+TEST(DgramLink, ASlotLargerThanThePacketGoesAsFragmentsAndIsResentWhole) {
+  Session s;  // max_datagram 200
+  s.handshake(1, 0);
+  const int64_t q = 250'000'000;
+  s.link.add_slot(1, 0, q, {1, 2, 3}, {true});
+  size_t before = s.out.sent.size();
+  std::vector<uint8_t> big(450);
+  for (size_t i = 0; i < big.size(); ++i) big[i] = static_cast<uint8_t>(i * 7);
+  s.link.add_slot(1, 1, 2 * q, std::vector<uint8_t>(big), {true, false, true});
+  // slot 0's group goes first, then the 3 fragments of slot 1, each within the packet
+  ASSERT_EQ(s.out.sent.size(), before + 4);
+  EXPECT_EQ(dg::verify_data(s.out.sent[before], s.key, dg::kDroneToBase, 0).slot, 0u);
+  std::vector<uint8_t> whole;
+  for (size_t i = before + 1; i < s.out.sent.size(); ++i) {
+    EXPECT_LE(s.out.sent[i].size(), 200u);
+    auto f = dg::verify_fragment(s.out.sent[i], s.key, dg::kDroneToBase, 0);
+    EXPECT_EQ(f.slot, 1u);
+    EXPECT_EQ(f.count, 3);
+    whole.insert(whole.end(), f.piece.begin(), f.piece.end());
+  }
+  EXPECT_EQ(whole, dg::slot_bitmap_body({true, false, true}, big));
+  EXPECT_EQ(s.link.counters().fragments, 3u);
+  // a NACK of slot 1 resends its three fragments; after a new session, tagged under its key
+  s.handshake(2, 3 * q);
+  size_t mark = s.out.sent.size();
+  s.link.on_datagram(s.control(nack(1, 1)), 4 * q);
+  ASSERT_EQ(s.out.sent.size(), mark + 3);
+  for (size_t i = mark; i < s.out.sent.size(); ++i)
+    EXPECT_EQ(dg::verify_fragment(s.out.sent[i], s.key, dg::kDroneToBase, 0).slot, 1u);
+  // a slot 16 fragments cannot hold is dropped and counted, and does not stop the next
+  s.link.add_slot(1, 2, 3 * q, std::vector<uint8_t>(17 * 200), {true});
+  EXPECT_EQ(s.link.counters().dropped, 1u);
+  EXPECT_TRUE(s.link.add_slot(1, 3, 4 * q, {9}, {true}));
+}

@@ -1,5 +1,6 @@
 #include "modd/link/datagram.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <string>
 
@@ -100,6 +101,61 @@ VerifiedData verify_data(std::span<const uint8_t> raw, const Mac& key, uint8_t d
   auto rest = r.bytes(r.remaining());
   v.values.assign(rest.begin(), rest.end());
   return v;
+}
+
+std::vector<uint8_t> slot_bitmap_body(const std::vector<bool>& presence, std::span<const uint8_t> values) {
+  std::vector<uint8_t> out;
+  ByteWriter w(out);
+  w.u8(1);
+  w.varint(presence.size());
+  std::vector<uint8_t> bm((presence.size() + 7) / 8);
+  for (size_t i = 0; i < presence.size(); ++i)
+    if (presence[i]) bm[i / 8] |= static_cast<uint8_t>(1u << (i % 8));
+  w.bytes(bm);
+  w.bytes(values);
+  return out;
+}
+
+std::vector<std::vector<uint8_t>> encode_fragments(uint8_t config_id, uint64_t slot,
+                                                   std::span<const uint8_t> body, size_t max_datagram,
+                                                   const Mac& key, uint8_t direction) {
+  if (config_id == 0 || max_datagram <= kFragmentHead + kTag || body.empty())
+    throw std::invalid_argument("a fragment needs a config id, a body and room for a piece");
+  size_t room = max_datagram - kFragmentHead - kTag;
+  size_t count = (body.size() + room - 1) / room;
+  if (count > kMaxFragments)
+    throw std::invalid_argument("a slot of " + std::to_string(body.size()) + " B needs " + std::to_string(count) +
+                                " fragments of " + std::to_string(room) + " B (at most 16)");
+  std::vector<std::vector<uint8_t>> out;
+  for (size_t i = 0; i < count; ++i) {
+    std::vector<uint8_t> d{kFragment, config_id, static_cast<uint8_t>(slot & 0xFF),
+                           static_cast<uint8_t>((slot >> 8) & 0xFF), static_cast<uint8_t>(i << 4 | (count - 1))};
+    auto piece = body.subspan(i * room, std::min(room, body.size() - i * room));
+    d.insert(d.end(), piece.begin(), piece.end());
+    auto t = tag(key, direction, slot, d, kTag);
+    d.insert(d.end(), t.begin(), t.end());
+    out.push_back(std::move(d));
+  }
+  return out;
+}
+
+Fragment verify_fragment(std::span<const uint8_t> raw, const Mac& key, uint8_t direction,
+                         uint64_t expected_slot) {
+  if (raw.size() < kFragmentHead + 1 + kTag || raw[0] != kFragment)
+    throw Error(ErrorCode::BadFrame, "not a fragment datagram", 0);
+  auto body = raw.first(raw.size() - kTag);
+  uint64_t slot = extend16(static_cast<uint16_t>(raw[2] | (raw[3] << 8)), expected_slot);
+  if (!equal_ct(tag(key, direction, slot, body, kTag), raw.last(kTag)))
+    throw Forged("tag of the fragment of slot " + std::to_string(slot) + " does not verify");
+  Fragment f;
+  f.config_id = raw[1];
+  f.slot = slot;
+  f.index = static_cast<uint8_t>(raw[4] >> 4);
+  f.count = static_cast<uint8_t>((raw[4] & 0x0F) + 1);
+  if (f.index >= f.count) throw Error(ErrorCode::BadFrame, "fragment index beyond its count", 4);
+  auto piece = body.subspan(kFragmentHead);
+  f.piece.assign(piece.begin(), piece.end());
+  return f;
 }
 
 std::vector<uint8_t> encode_control(uint64_t counter, std::span<const uint8_t> frame,

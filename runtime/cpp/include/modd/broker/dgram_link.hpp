@@ -45,6 +45,8 @@ struct DgramCounters {
   uint64_t forged = 0, replayed = 0, malformed = 0;
   uint64_t nacks = 0, resent = 0, too_old = 0;
   uint64_t handshakes = 0, timeouts = 0;
+  uint64_t fragments = 0;  // 0x32 datagrams sent for slots larger than a packet
+  uint64_t dropped = 0;    // slots too large even for 16 fragments (the archive keeps them)
 };
 
 class DatagramLink {
@@ -70,10 +72,13 @@ class DatagramLink {
     std::vector<uint8_t> values;
     std::vector<bool> presence;
   };
+  // One ring entry: a DATA datagram, or every fragment of one slot (frag_body set).
   struct Sent {
     uint64_t first = 0, count = 0, key_epoch = 0;
     link::dgram::DataDatagram d;
-    std::vector<uint8_t> raw;
+    std::vector<uint8_t> frag_body;
+    std::vector<std::vector<uint8_t>> raws;
+    size_t bytes() const;
   };
   void on_handshake(std::span<const uint8_t> frame, int64_t now);
   void on_control(std::span<const uint8_t> raw, int64_t now);
@@ -81,7 +86,11 @@ class DatagramLink {
   void send_control(std::span<const uint8_t> frame, bool reply = false);
   void send_handshake(const link::Message& m, bool reply);
   size_t group_size(const SlotEntry* extra) const;
+  static size_t alone_size(const SlotEntry& e);  // the datagram of this slot alone
   void flush();
+  void send_fragments(uint8_t config_id, uint64_t slot, const SlotEntry& e);
+  void keep(Sent&& s);
+  void retag(Sent& s);
   void emit(std::vector<uint8_t>&& d, bool reply = false);
 
   std::string psk_;

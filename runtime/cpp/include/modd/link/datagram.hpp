@@ -18,6 +18,9 @@ namespace modd::link::dgram {
 
 constexpr uint8_t kData = 0x30;
 constexpr uint8_t kDataBitmap = 0x31;
+constexpr uint8_t kFragment = 0x32;
+constexpr size_t kMaxFragments = 16;
+constexpr size_t kFragmentHead = 5;  // type, config id, slot16, frag
 constexpr uint8_t kControl = 0x40;
 constexpr uint8_t kHandshake = 0x41;
 constexpr size_t kTag = 4;
@@ -56,6 +59,24 @@ struct VerifiedData {
 };
 // Throws Forged (tag) or Error(BadFrame) with the offset in the datagram.
 VerifiedData verify_data(std::span<const uint8_t> raw, const Mac& key, uint8_t direction,
+                         uint64_t expected_slot);
+
+// A slot too large for one packet goes as fragments (0x32) of its one-slot
+// 0x31 body (k = 1, stream count, presence bitmap, values): at most 16 pieces,
+// each datagram at most `max_datagram` bytes, each tagged with the full slot.
+// Throws std::invalid_argument when 16 pieces cannot hold it.
+std::vector<uint8_t> slot_bitmap_body(const std::vector<bool>& presence, std::span<const uint8_t> values);
+std::vector<std::vector<uint8_t>> encode_fragments(uint8_t config_id, uint64_t slot,
+                                                   std::span<const uint8_t> body, size_t max_datagram,
+                                                   const Mac& key, uint8_t direction);
+struct Fragment {
+  uint8_t config_id = 0;
+  uint64_t slot = 0;
+  uint8_t index = 0, count = 0;
+  std::vector<uint8_t> piece;
+};
+// Throws Forged (tag) or Error(BadFrame).
+Fragment verify_fragment(std::span<const uint8_t> raw, const Mac& key, uint8_t direction,
                          uint64_t expected_slot);
 
 std::vector<uint8_t> encode_control(uint64_t counter, std::span<const uint8_t> frame,

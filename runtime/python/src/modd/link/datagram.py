@@ -20,6 +20,7 @@ from __future__ import annotations
 import hashlib
 import hmac
 import struct
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from .codec import Reader, varint
@@ -146,6 +147,87 @@ def verify_data(raw: bytes, key: bytes, direction: bytes, expected_slot: int) ->
     return VerifiedData(config_id, slot, count, bytes(bm), streams, bytes(body[r.pos:]))
 
 
+MAX_FRAGMENTS = 16
+FRAGMENT_HEAD = 5  # type, config id, slot16, frag
+
+
+def slot_bitmap_body(streams: Sequence[bool], values: bytes) -> bytes:
+    """The bytes of a one-slot 0x31 datagram between its slot16 and its tag
+    (``k = 1``, the stream count, the presence bitmap, the values): what the
+    fragments of a slot carry, cut in pieces."""
+    bm = bytearray((len(streams) + 7) // 8)
+    for i, p in enumerate(streams):
+        if p:
+            bm[i // 8] |= 1 << (i % 8)
+    return b"\x01" + varint(len(streams)) + bytes(bm) + values
+
+
+def encode_fragments(config_id: int, slot: int, body: bytes, max_datagram: int,
+                     key: bytes, direction: bytes) -> list[bytes]:
+    """The 0x32 datagrams of one slot too large for a packet: ``body`` (see
+    :func:`slot_bitmap_body`) in at most 16 pieces, each datagram at most
+    ``max_datagram`` bytes, each tagged with the full slot as its sequence.
+
+    >>> key = session_key(b"k", bytes(16), bytes(16))
+    >>> [len(d) for d in encode_fragments(1, 9, bytes(25), 19, key, DRONE_TO_BASE)]
+    [19, 19, 14]
+    """
+    room = max_datagram - FRAGMENT_HEAD - TAG_BYTES
+    if not 1 <= config_id <= 255 or room < 1 or not body:
+        raise ValueError("a fragment needs a config id 1..255, a body and room for a piece")
+    count = -(-len(body) // room)
+    if count > MAX_FRAGMENTS:
+        raise ValueError(f"a slot of {len(body)} B needs {count} fragments of {room} B "
+                         f"(at most {MAX_FRAGMENTS})")
+    out = []
+    for i in range(count):
+        head = bytes([DGRAM_FRAGMENT, config_id]) + struct.pack("<H", slot & 0xFFFF)
+        frag = head + bytes([i << 4 | (count - 1)]) + body[i * room:(i + 1) * room]
+        out.append(frag + tag(key, direction, slot, frag, TAG_BYTES))
+    return out
+
+
+@dataclass(frozen=True)
+class Fragment:
+    """A fragment whose tag verified: piece ``index`` of ``count`` of a slot."""
+
+    config_id: int
+    slot: int
+    index: int
+    count: int
+    piece: bytes
+
+
+def verify_fragment(raw: bytes, key: bytes, direction: bytes, expected_slot: int) -> Fragment:
+    """Check a fragment's tag before anything else; raises Forged or ProtocolError."""
+    if len(raw) < FRAGMENT_HEAD + 1 + TAG_BYTES or raw[0] != DGRAM_FRAGMENT:
+        raise ProtocolError(ErrorCode.BAD_FRAME, "not a fragment datagram", 0)
+    body, got = raw[:-TAG_BYTES], raw[-TAG_BYTES:]
+    (low,) = struct.unpack_from("<H", raw, 2)
+    slot = extend16(low, expected_slot)
+    if not hmac.compare_digest(tag(key, direction, slot, body, TAG_BYTES), got):
+        raise Forged(f"tag of the fragment of slot {slot} does not verify")
+    index, count = raw[4] >> 4, (raw[4] & 0x0F) + 1
+    if index >= count:
+        raise ProtocolError(ErrorCode.BAD_FRAME, f"fragment {index} of {count}", 4)
+    return Fragment(raw[1], slot, index, count, bytes(body[FRAGMENT_HEAD:]))
+
+
+def verify_slot_body(config_id: int, slot: int, body: bytes) -> VerifiedData:
+    """A reassembled slot (the pieces of its fragments in order) read as the
+    one-slot 0x31 datagram it is; raises ProtocolError."""
+    r = Reader(body)
+    count = r.u8()
+    streams = r.varint()
+    if count != 1 or streams > 8 * r.remaining():
+        raise r.fail("a reassembled slot holds one slot and its presence bitmap")
+    bm = r.take((streams + 7) // 8)
+    for i in range(streams, len(bm) * 8):
+        if bm[i // 8] >> (i % 8) & 1:
+            raise r.fail("presence bit set beyond the slot's streams")
+    return VerifiedData(config_id, slot, 1, bytes(bm), streams, bytes(body[r.pos:]))
+
+
 def encode_control(counter: int, frame: bytes, key: bytes, direction: bytes) -> bytes:
     """A control datagram: counter, one link frame (docs/protocol.md), 8 B tag."""
     body = bytes([DGRAM_CONTROL]) + varint(counter) + frame
@@ -204,6 +286,10 @@ class ReplayWindow:
         self.size = size
         self.top = -1
         self.seen: set[int] = set()
+
+    def seen_or_old(self, seq: int) -> bool:
+        """True when ``accept(seq)`` would refuse it (nothing remembered)."""
+        return seq <= self.top - self.size or seq in self.seen
 
     def accept(self, seq: int) -> bool:
         """True, and remember it, if ``seq`` is new and inside the window."""

@@ -15,18 +15,23 @@ from dataclasses import dataclass, field
 from . import codec
 from .datagram import (
     BASE_TO_DRONE,
+    DGRAM_FRAGMENT,
     DRONE_TO_BASE,
     DataDatagram,
     Forged,
+    Fragment,
     ReplayWindow,
+    VerifiedData,
     decode_nack,
     encode_control,
     encode_data,
     encode_nack,
     verify_control,
     verify_data,
+    verify_fragment,
+    verify_slot_body,
 )
-from .frames import ProtocolError, Value, ValueKind
+from .frames import ErrorCode, ProtocolError, Value, ValueKind
 from .resend import GapTracker, ResendRing
 from .schedule import SlotIterator
 
@@ -61,6 +66,42 @@ class LinkStats:
                 sum(o for _, _, o in self._recent) / span)
 
 
+class Reassembly:
+    """The fragments (0x32) of the slots being put together; bounded: at most
+    ``max_slots`` slots at once (the oldest partial slot is given up, and its
+    slot is asked for again like any lost one), each at most 16 pieces.
+
+    >>> r = Reassembly()
+    >>> r.add(Fragment(1, 7, 1, 2, b"cd")) is None
+    True
+    >>> r.add(Fragment(1, 7, 0, 2, b"ab"))
+    b'abcd'
+    """
+
+    def __init__(self, max_slots: int = 8) -> None:
+        self.max_slots = max_slots
+        self.partial: dict[int, tuple[int, int, dict[int, bytes]]] = {}
+        self.given_up = 0
+
+    def add(self, f: Fragment) -> bytes | None:
+        """The slot's body once its last missing piece arrives, else None.
+        Raises ProtocolError when the fragment contradicts the others of its slot."""
+        config_id, count, pieces = self.partial.get(f.slot, (f.config_id, f.count, {}))
+        if (config_id, count) != (f.config_id, f.count):
+            del self.partial[f.slot]
+            raise ProtocolError(ErrorCode.BAD_FRAME,
+                                f"fragment of slot {f.slot} disagrees with the others", 4)
+        pieces[f.index] = f.piece  # a duplicate piece replaces its twin
+        if len(pieces) == count:
+            self.partial.pop(f.slot, None)
+            return b"".join(pieces[i] for i in range(count))
+        self.partial[f.slot] = (config_id, count, pieces)
+        while len(self.partial) > self.max_slots:
+            del self.partial[min(self.partial)]
+            self.given_up += 1
+        return None
+
+
 class DatagramReceiver:
     """Decodes DATA datagrams of one config into ``(slot, values)`` where
     values lists the slot's streams in order (absent ones not present)."""
@@ -74,6 +115,7 @@ class DatagramReceiver:
         self.replay = ReplayWindow(window)
         self.gaps = GapTracker()
         self.stats = LinkStats()
+        self.reassembly = Reassembly()
         self.counter = 0
 
     def on_datagram(self, raw: bytes, now: float) -> list[tuple[int, list[Value]]]:
@@ -82,6 +124,8 @@ class DatagramReceiver:
         self.stats.count(now, inbound=len(raw))
         self.stats.datagrams += 1
         try:
+            if raw[:1] == bytes([DGRAM_FRAGMENT]):
+                return self._on_fragment(raw, now)
             v = verify_data(raw, self.key, DRONE_TO_BASE, max(self.gaps.next, 0))
         except Forged:
             self.stats.forged += 1
@@ -89,6 +133,21 @@ class DatagramReceiver:
         except ProtocolError:
             self.stats.malformed += 1
             return []
+        return self._accept(v, now)
+
+    def _on_fragment(self, raw: bytes, now: float) -> list[tuple[int, list[Value]]]:
+        """A fragment: verified, kept until its slot is whole; a piece of a slot
+        already delivered is a replay. Raises Forged, ProtocolError."""
+        f = verify_fragment(raw, self.key, DRONE_TO_BASE, max(self.gaps.next, 0))
+        if f.config_id != self.config_id or self.replay.seen_or_old(f.slot):
+            self.stats.replayed += 1
+            return []
+        body = self.reassembly.add(f)
+        if body is None:
+            return []
+        return self._accept(verify_slot_body(f.config_id, f.slot, body), now)
+
+    def _accept(self, v: VerifiedData, now: float) -> list[tuple[int, list[Value]]]:
         if v.config_id != self.config_id or not self.replay.accept(v.slot):
             self.stats.replayed += 1
             return []

@@ -40,6 +40,7 @@ from modd.link.datagram import (
     DGRAM_CONTROL,
     DGRAM_DATA,
     DGRAM_DATA_BITMAP,
+    DGRAM_FRAGMENT,
     DGRAM_HANDSHAKE,
     DRONE_TO_BASE,
     Forged,
@@ -411,7 +412,7 @@ class DatagramLinkClient:
         if not raw:
             return False
         kind = raw[0]
-        if kind in (DGRAM_DATA, DGRAM_DATA_BITMAP) and len(raw) > 1:
+        if kind in (DGRAM_DATA, DGRAM_DATA_BITMAP, DGRAM_FRAGMENT) and len(raw) > 1:
             return self._on_data(raw)
         if kind == DGRAM_CONTROL and self._key:
             try:
