@@ -67,6 +67,18 @@ def test_syntax_error_is_located(client: TestClient, admin: Headers, scenario1: 
     assert client.get(f"/api/projects/{pid}", headers=admin).json()["head_revision"] == 1
 
 
+def test_text_diagnostics_reach_the_client_with_their_end(
+    client: TestClient, admin: Headers, scenario1: str
+) -> None:
+    bad = scenario1.replace("AVERAGE)", "AVERAGED)", 1)
+    r = client.post("/api/validate", headers=admin, json={"text": bad})
+    diags = [d for d in r.json()["diagnostics"] if d["pointer"].endswith("/aggregation")]
+    assert len(diags) == 1, r.json()
+    d = diags[0]
+    line = bad.splitlines()[d["line"] - 1]
+    assert d["end_line"] == d["line"] and line[d["col"] - 1:d["end_col"] - 1] == "AVERAGED"
+
+
 def test_invalid_model_is_saved_with_pointed_diagnostics(
     client: TestClient, admin: Headers, scenario1: str
 ) -> None:

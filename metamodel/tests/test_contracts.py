@@ -14,10 +14,11 @@ import pytest
 from jsonschema import Draft202012Validator
 from modd_contracts import keys
 from modd_contracts.aggregations import AGGREGATIONS, BY_NAME
+from modd_contracts.owners import MODEL_PART_OWNERS
 from modd_contracts.schema import NAMES, load, validate
-from modd_contracts.typegen import stale_outputs
+from modd_contracts.typegen import part_owners, stale_outputs
 from modd_model import load_model
-from modd_model.schema import definition
+from modd_model.schema import definition, load_schema
 from modd_plan import make_plan
 from modd_plan.derive import PAIR_SOURCE_RULES, SINGLE_SOURCE_RULES, aggregate, derive_value
 
@@ -64,6 +65,15 @@ def test_queryables_are_the_builders() -> None:
         keys.backfill_key("usv"),
     ]
     assert keys.queryables_of(None) == ["modd/*/deploy", "modd/*/subscribe", "modd/*/backfill"]
+
+
+def test_every_model_part_has_an_owner() -> None:
+    """A new top-level part of the schema must name its owning role."""
+    root = load_schema()
+    assert set(root["properties"]) <= {p.split("/")[1] for p in MODEL_PART_OWNERS}
+    assert part_owners() == MODEL_PART_OWNERS
+    assert MODEL_PART_OWNERS["/drone/sensors"] == "integrator"
+    assert set(MODEL_PART_OWNERS.values()) <= {"designer", "integrator", "scientist", None}
 
 
 def test_key_names_are_the_metamodels() -> None:

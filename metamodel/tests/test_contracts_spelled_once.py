@@ -107,8 +107,8 @@ def test_the_scanners_find_what_they_look_for() -> None:
     """Each scanner on a sample that breaks the rule (so the test can fail)."""
     py = 'X = "AVERAGE"\nK = f"modd/{d}/status"\nd = key.split("/")\n"""AVERAGE in a doc"""\n'
     assert [f.split(": ", 1)[1] for f in python_findings("a.py", py)] == [
-        "aggregation name \"AVERAGE\"",
-        "zenoh key literal f\"modd/{d}/status\"",
+        'aggregation name "AVERAGE"',
+        'zenoh key literal f"modd/{d}/status"',
         "zenoh key split by hand",
     ]
     ts = (

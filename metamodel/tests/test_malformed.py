@@ -181,3 +181,20 @@ def test_invalid_json_is_located() -> None:
     result = load_text('{\n  "drone": ,\n}', "bad.json", "json")
     (err,) = result.errors
     assert err.location is not None and (err.location.line, err.location.col) == (2, 12)
+
+
+def test_text_diagnostics_carry_where_the_located_text_ends() -> None:
+    """The editor underlines the whole word: ``[col, end_col)`` of the
+    diagnostic is the bad word in the text (the oracle: where it stands)."""
+    from pathlib import Path
+
+    demo = Path(__file__).resolve().parents[1] / "examples" / "demo.modd"
+    text = demo.read_text().replace("0.25, AVERAGE);", "0.25, AVERAGED);", 1)
+    found = [d.to_json() for d in load_text(text, "demo.modd").diagnostics]
+    bad = [d for d in found if str(d["pointer"]).endswith("/aggregation")]
+    assert len(bad) == 1, found
+    d = bad[0]
+    line = text.splitlines()[int(str(d["line"])) - 1]
+    assert d["end_line"] == d["line"]
+    assert line[int(str(d["col"])) - 1 : int(str(d["end_col"])) - 1] == "AVERAGED"
+    assert line.index("AVERAGED") == int(str(d["col"])) - 1

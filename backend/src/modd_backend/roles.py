@@ -12,6 +12,8 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import Any
 
+from modd_contracts.owners import MODEL_PART_OWNERS
+
 
 class Role(StrEnum):
     designer = "designer"
@@ -25,18 +27,11 @@ ALL_ROLES: tuple[Role, ...] = tuple(Role)
 #: Roles that may edit some part of a model (layout belongs to any of them).
 EDITORS: frozenset[Role] = frozenset({Role.designer, Role.integrator, Role.scientist})
 
-#: Top-level model parts and their owners; "/drone" without its sensors is the
-#: platform (designer); "/drone/sensors" is the integrator's.
+#: Top-level model parts and their owners (the schema's ``x-owner``, generated);
+#: "/drone" without its sensors is the platform (designer); "/drone/sensors" is
+#: the integrator's; None: any editor.
 PART_OWNERS: dict[str, Role | None] = {
-    "/schemaVersion": Role.designer,
-    "/drone": Role.designer,
-    "/drone/sensors": Role.integrator,
-    "/pubBroker": Role.designer,
-    "/subBroker": Role.designer,
-    "/link": Role.designer,
-    "/publishers": Role.designer,
-    "/subscribers": Role.scientist,
-    "/layout": None,  # any editor
+    part: None if role is None else Role(role) for part, role in MODEL_PART_OWNERS.items()
 }
 
 _MISSING = object()

@@ -15,7 +15,8 @@ Format = Literal["json", "modd"]
 
 
 class DiagnosticOut(BaseModel):
-    """One located problem: JSON pointer always, file:line:col for text input."""
+    """One located problem: JSON pointer always, file:line:col for text input,
+    and where the located text ends (end_col exclusive) when the parser knows."""
 
     severity: Literal["error", "warning"]
     message: str
@@ -23,6 +24,8 @@ class DiagnosticOut(BaseModel):
     file: str | None = None
     line: int | None = None
     col: int | None = None
+    end_line: int | None = None
+    end_col: int | None = None
 
 
 class ModelInput(BaseModel):

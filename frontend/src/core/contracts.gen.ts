@@ -331,3 +331,16 @@ export const AGGREGATION = {
   COUNT: "COUNT",
   SUM: "SUM",
 } as const;
+
+/** The role owning each model part (modd.schema.json x-owner; null: any editor). */
+export const MODEL_PART_OWNERS: Readonly<Record<string, "designer" | "integrator" | "scientist" | null>> = {
+  "/schemaVersion": "designer",
+  "/drone": "designer",
+  "/drone/sensors": "integrator",
+  "/pubBroker": "designer",
+  "/subBroker": "designer",
+  "/link": "designer",
+  "/publishers": "designer",
+  "/subscribers": "scientist",
+  "/layout": null,
+};

@@ -21,6 +21,9 @@ export interface Diagnostic {
   /** 1-based line and column in the .modd text, when the diagnostic comes from text. */
   line?: number | null;
   col?: number | null;
+  /** Where the located text ends (1-based, end_col exclusive), when the parser knows. */
+  end_line?: number | null;
+  end_col?: number | null;
   /** Where it comes from: "local" (editor checks), "backend", "plan". */
   source?: string;
 }

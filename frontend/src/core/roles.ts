@@ -13,6 +13,7 @@
 import type { ElementKind } from "./ids";
 import type { EdgeKind } from "./graph";
 import { canonicalJson } from "./canonical";
+import { MODEL_PART_OWNERS } from "./contracts.gen";
 
 export type Role = "designer" | "integrator" | "scientist" | "operator" | "admin";
 /** The four views of the workbench, one per working role. */
@@ -67,19 +68,9 @@ export const VIEW_TITLES: Record<ViewRole, string> = {
  * Top-level parts of a model and the role owning each, as the backend checks
  * them on save (backend/src/modd_backend/roles.py): the drone without its
  * sensors is the platform (designer), `/drone/sensors` the integrator's, the
- * layout any editor's (null).
+ * layout any editor's (null). Generated from the schema's `x-owner` (contracts.gen.ts).
  */
-export const PART_OWNERS: Record<string, Role | null> = {
-  "/schemaVersion": "designer",
-  "/drone": "designer",
-  "/drone/sensors": "integrator",
-  "/pubBroker": "designer",
-  "/subBroker": "designer",
-  "/link": "designer",
-  "/publishers": "designer",
-  "/subscribers": "scientist",
-  "/layout": null,
-};
+export const PART_OWNERS: Readonly<Record<string, Role | null>> = MODEL_PART_OWNERS;
 
 function parts(model: object): Map<string, string> {
   const out = new Map<string, string>();

@@ -21,7 +21,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from modd_model.schema import definition
+from modd_model.schema import definition, load_schema
 from modd_model.typegen import _dependency_order, _py_type, _ts_doc, _ts_type
 
 from .schema import NAMES, load
@@ -33,6 +33,7 @@ OUTPUTS = {
     "ts": REPO / "frontend" / "src" / "core" / "contracts.gen.ts",
     "aggpy": REPO / "metamodel" / "src" / "modd_contracts" / "aggregations.py",
     "aggcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "link" / "aggregation_table.gen.hpp",
+    "owners": REPO / "metamodel" / "src" / "modd_contracts" / "owners.py",
 }
 
 
@@ -143,7 +144,57 @@ def generate_ts() -> str:
             )
         out.append("")
     out += _ts_aggregations()
+    out += _ts_owners()
     return "\n".join(out)
+
+
+# -- who owns which part of a model ------------------------------------------------
+
+
+def part_owners() -> dict[str, str | None]:
+    """JSON pointer of each model part with an ``x-owner`` and its role: the
+    root's properties, and the properties of the definitions they refer to
+    (``/drone/sensors``)."""
+    root = load_schema()
+    out: dict[str, str | None] = {}
+    for prop, s in root["properties"].items():
+        if "x-owner" in s:
+            out[f"/{prop}"] = s["x-owner"]
+        ref = s.get("$ref", "")
+        if ref.startswith("#/$defs/"):
+            for sub, ss in root["$defs"][ref.split("/")[-1]].get("properties", {}).items():
+                if "x-owner" in ss:
+                    out[f"/{prop}/{sub}"] = ss["x-owner"]
+    return out
+
+
+def _ts_owners() -> list[str]:
+    owners = part_owners()
+    roles = sorted({r for r in owners.values() if r is not None})
+    role_type = " | ".join(json.dumps(r) for r in roles)
+    out = [
+        "/** The role owning each model part (modd.schema.json x-owner; null: any editor). */",
+        f"export const MODEL_PART_OWNERS: Readonly<Record<string, {role_type} | null>> = {{",
+    ]
+    out += [f"  {json.dumps(k)}: {json.dumps(v)}," for k, v in owners.items()]
+    return [*out, "};", ""]
+
+
+def generate_owners_py() -> str:
+    out = [
+        f'"""{HEADER}',
+        "",
+        "The role owning each model part (metamodel/modd.schema.json ``x-owner``;",
+        "``None``: any editor), by JSON pointer.",
+        '"""',
+        "",
+        "from __future__ import annotations",
+        "",
+        "MODEL_PART_OWNERS: dict[str, str | None] = {",
+    ]
+    for pointer, role in part_owners().items():
+        out.append(f"    {json.dumps(pointer)}: {json.dumps(role) if role else None},")
+    return "\n".join([*out, "}", ""])
 
 
 # -- the aggregation table ---------------------------------------------------------
@@ -309,6 +360,7 @@ GENERATORS: dict[str, Callable[[], str]] = {
     "ts": generate_ts,
     "aggpy": generate_agg_py,
     "aggcpp": generate_agg_cpp,
+    "owners": generate_owners_py,
 }
 
 

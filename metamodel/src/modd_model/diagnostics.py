@@ -58,6 +58,10 @@ class Diagnostic:
         if self.location and self.location.line > 0:
             out["line"] = self.location.line
             out["col"] = self.location.col
+            if self.location.end_line is not None and self.location.end_col is not None:
+                # the end of the located text, exclusive (the parser's end column)
+                out["end_line"] = self.location.end_line
+                out["end_col"] = self.location.end_col
         return out
 
 

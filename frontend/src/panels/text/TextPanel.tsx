@@ -13,7 +13,7 @@ import { EditorView, basicSetup } from "codemirror";
 import { EditorState } from "@codemirror/state";
 import { linter, setDiagnostics, type Diagnostic as CmDiagnostic } from "@codemirror/lint";
 import { moddLanguage } from "./modeLanguage";
-import { offsetOf } from "./positions";
+import { rangeOf } from "./positions";
 import { useEditor, useEditorStore, useModel } from "../../editor/useEditor";
 import { isDirty } from "../../editor/store";
 import { useServices } from "../../app/services";
@@ -22,8 +22,8 @@ import type { Diagnostic } from "../../core/diagnostics";
 
 function toCm(text: string, diags: Diagnostic[]): CmDiagnostic[] {
   return diags.map((d) => {
-    const from = d.line ? offsetOf(text, d.line, d.col ?? 1) : 0;
-    return { from, to: Math.min(from + 1, text.length), severity: d.severity === "error" ? "error" : "warning", message: d.message };
+    const { from, to } = rangeOf(text, d);
+    return { from, to, severity: d.severity === "error" ? "error" : "warning", message: d.message };
   });
 }
 
