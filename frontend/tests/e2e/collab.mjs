@@ -98,8 +98,8 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await table.getByLabel("Pick revision 3").check();
       await page.getByRole("button", { name: "Compare r1 → r3" }).click();
       const diff = page.getByLabel("Changes from revision 1 to 3");
-      await expectText(diff, /~ \/subscribers\/sub_1\/periodS: 2\.0 → 8\.0/);
-      await expectText(diff, /~ \/subscribers\/sub_3\/aggregation: AVERAGE → MIN/);
+      await expectText(diff, /~ subscriber sub_1: period 2\.0 s → 8\.0 s/);
+      await expectText(diff, /~ subscriber sub_3: aggregation AVERAGE → MIN/);
       await shot(page, "history");
       page.once("dialog", (d) => void d.accept());
       await table.locator('tr[data-revision="1"]').getByRole("button", { name: "Restore" }).click();
