@@ -91,8 +91,8 @@ def test_generated_driver_builds_runs_and_is_archived(scenarios_dir: Path, tmp_p
 
 
 def _says_unreachable_at_once(cmd: list[str], ingress: str) -> None:
-    """Runs a driver with nothing listening at `ingress`: its first line on stderr, within
-    3 s, names the PubBroker it cannot reach; it still ends (failing) once its flush gives up."""
+    """Runs a driver with nothing listening at `ingress`: its first line on stderr, while it
+    still runs, names the PubBroker it cannot reach; it ends (failing) once its flush gives up."""
     start = time.monotonic()
     with subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                           text=True) as proc:
@@ -100,8 +100,11 @@ def _says_unreachable_at_once(cmd: list[str], ingress: str) -> None:
             assert proc.stderr is not None
             first = proc.stderr.readline()
             elapsed = time.monotonic() - start
+            running = proc.poll() is None
             assert f"cannot reach the PubBroker at {ingress}" in first, first
-            assert elapsed < 3.0, f"said after {elapsed:.1f} s"
+            # Said while the driver still runs, before its 5 s flush gives up (startup included;
+            # the machine may be loaded).
+            assert running and elapsed < 4.5, f"said after {elapsed:.1f} s (running: {running})"
             proc.stderr.read()
             assert proc.wait(timeout=30) != 0
         finally:

@@ -11,7 +11,7 @@ import type { ModdModel } from "./model.gen";
 function buildScenario1(): ModdModel {
   let m = emptyModel("usv");
   m = addSensor(m, "accelerometer").model;
-  m = rename(m, "topic:accelerometer.value", "accel_x");
+  m = rename(m, "topic:accelerometer.var_1", "accel_x");
   m = setField(m, "topic:accelerometer.accel_x", ["unit"], "METER_PER_SECOND_SQUARED");
   for (const v of ["accel_y", "accel_z"]) m = addVariable(m, "accelerometer", v, "METER_PER_SECOND_SQUARED").model;
   m = addPublisher(m, "pub_1", "0.04").model;
@@ -62,11 +62,18 @@ describe("add", () => {
     expect(() => addPublisher(m, "sub_2")).toThrow(EditError);
   });
 
+  it("names a new sensor's first variable as + Variable names the next ones", () => {
+    let m = addSensor(emptyModel()).model;
+    m = addVariable(m, "sensor_1").model;
+    m = addVariable(m, "sensor_1").model;
+    expect(m.drone.sensors[0].variables.map((v) => v.name)).toEqual(["var_1", "var_2", "var_3"]);
+  });
+
   it("refuses bad and duplicate names", () => {
     expect(() => addSensor(emptyModel(), "1bad")).toThrow(/not a name/);
     const m = addSensor(emptyModel(), "gps").model;
     expect(() => addSensor(m, "gps")).toThrow(/exists/);
-    expect(() => addVariable(m, "gps", "value")).toThrow(/already/);
+    expect(() => addVariable(m, "gps", "var_1")).toThrow(/already/);
     expect(() => addVariable(m, "nope")).toThrow(/no sensor/);
   });
 });
@@ -111,7 +118,7 @@ describe("remove", () => {
     expect(n.drone.sensors[0].variables.map((v) => v.name)).toEqual(["accel_x", "accel_z"]);
     expect(n.publishers[0].topics).not.toContain("usv.accelerometer.accel_y");
     const one = addSensor(emptyModel(), "s").model;
-    expect(() => removeElement(one, "topic:s.value")).toThrow(/at least one/);
+    expect(() => removeElement(one, "topic:s.var_1")).toThrow(/at least one/);
   });
 
   it("refuses the singletons", () => {

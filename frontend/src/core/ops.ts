@@ -56,8 +56,9 @@ export function addSensor(model: ModdModel, name?: string, pos?: Position): Crea
   const n = name ?? freshName("sensor", m.drone.sensors.map((s) => s.name));
   checkName(n);
   if (m.drone.sensors.some((s) => s.name === n)) throw new EditError(`sensor "${n}" exists already`);
-  // The schema asks for at least one variable: a new sensor comes with one.
-  m.drone.sensors.push({ name: n, variables: [{ name: "value", unit: "NONE" }] });
+  // The schema asks for at least one variable: a new sensor comes with one, named as
+  // + Variable names the next ones (var_1, var_2, …), like sensor_1, pub_1, sub_1.
+  m.drone.sensors.push({ name: n, variables: [{ name: freshName("var", []), unit: "NONE" }] });
   setPosition(m, sensorId(n), pos);
   return { model: m, id: sensorId(n) };
 }

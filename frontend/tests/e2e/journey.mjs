@@ -112,7 +112,7 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       await page.getByRole("button", { name: "+ Sensor" }).click();
       await setText("name", "accelerometer");
       await expectVisible(node("sensor:accelerometer"));
-      await select("topic:accelerometer.value");
+      await select("topic:accelerometer.var_1"); // named like the variables + Variable adds
       await setText("name", "accel_x");
       await setText("unit", "METER_PER_SECOND_SQUARED");
       for (const v of ["accel_y", "accel_z"]) {

@@ -317,6 +317,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       const half = await fixes();
       if (half < 0.3 * all || half > 0.7 * all) throw new Error(`${half} of ${all} fixes drawn at the middle of the range`);
       await expand(true);
+      await map.scrollIntoViewIfNeeded();
       await page.waitForTimeout(800);
       const px = JSON.parse((await map.getAttribute("data-track-px")) ?? "[]");
       const drawn = await pixels(page, await map.screenshot(), null, px);

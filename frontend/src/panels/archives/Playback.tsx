@@ -4,7 +4,7 @@
  * reader, at most `MAX_POINTS` points per topic), then seek, play and pause;
  * the charts show what was recorded up to the cursor, and zoom like live ones.
  * When the file holds a latitude and a longitude, they are read too and the
- * map shows the track up to the cursor (coloured by a picked topic).
+ * map under the charts shows the track up to the cursor (coloured by a picked topic).
  */
 import { useEffect, useMemo, useState } from "react";
 import { PlaybackSource, archiveSamples } from "../../dataSources/PlaybackSource";
@@ -93,13 +93,6 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
             <span data-testid="playback-time">{(t - source.start).toFixed(1)} s of {(source.end - source.start).toFixed(1)} s · {new Date(t * 1000).toLocaleTimeString()}{playing ? " · playing" : " · paused"}</span>
             <button onClick={() => setWin(whole)}>Whole range</button>
           </div>
-          {position.lat && position.lon && (
-            <div className="playback-map" aria-label="Track up to the playback time">
-              <TrackMap key={`${file.name}:${charts.flat().join(",")}`} source={source} lat={position.lat} lon={position.lon} id="playback-map"
-                choices={charts.flat().filter((c) => c !== position.lat && c !== position.lon).map((c) => ({ ...describe(c), detail: "archived", label: c }))}
-                missing="" />
-            </div>
-          )}
           <div className="charts">
             {charts.map((chart, i) => (
               <LiveChart key={chart.join("+")} source={source} series={chart.map(describe)} window={win} syncKey="playback" marker={t} now={t}
@@ -109,6 +102,13 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
                 onRemove={(c) => setCharts((cs) => [...cs.map((x) => x.filter((y) => y !== c)).filter((x) => x.length), [c]])} />
             ))}
           </div>
+          {position.lat && position.lon && (
+            <div className="playback-map" aria-label="Track up to the playback time">
+              <TrackMap key={`${file.name}:${charts.flat().join(",")}`} source={source} lat={position.lat} lon={position.lon} id="playback-map"
+                choices={charts.flat().filter((c) => c !== position.lat && c !== position.lon).map((c) => ({ ...describe(c), detail: "archived", label: c }))}
+                missing="" />
+            </div>
+          )}
         </>
       )}
     </section>

@@ -1,12 +1,15 @@
-/** One model change as a line of the history diff: "~ /subscribers/sub_1/periodS: 2.0 → 4.0". */
+/**
+ * One model change as a line of the history diff, in the model's words
+ * (core/changeWords.ts), marked + added, − removed, ~ changed:
+ * "~ subscriber sub_1: period 2.0 s → 4.0 s".
+ */
 import type { Change } from "../../core/diff";
-import { showValue } from "../../core/merge";
+import { sentence } from "../../core/changeWords";
 
-const MAX = 120;
-const short = (v: unknown) => { const s = showValue(v); return s.length > MAX ? `${s.slice(0, MAX)}…` : s; };
+const MAX = 160;
+const MARK: Record<Change["op"], string> = { add: "+", remove: "−", replace: "~" };
 
 export function changeLine(c: Change): string {
-  if (c.op === "add") return `+ ${c.pointer}: ${short(c.after)}`;
-  if (c.op === "remove") return `− ${c.pointer}`;
-  return `~ ${c.pointer}: ${short(c.before)} → ${short(c.after)}`;
+  const text = sentence(c).text;
+  return `${MARK[c.op]} ${text.length > MAX ? `${text.slice(0, MAX)}…` : text}`;
 }

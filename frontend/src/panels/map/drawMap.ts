@@ -52,7 +52,8 @@ export function tileOrigin(url: string): string {
 export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], range: [number, number] | null, opts: Options): Drawn {
   const tileCount: TileCount = { asked: 0, drawn: 0, failed: 0 };
   const dpr = window.devicePixelRatio || 1;
-  const w = Math.max(el.clientWidth, 100), h = Math.max(el.clientHeight, 100);
+  // The drawing is the size the canvas is shown at (CSS pixels), so fix positions match the screen.
+  const w = Math.max(el.clientWidth, 1), h = Math.max(el.clientHeight, 1);
   el.width = Math.round(w * dpr);
   el.height = Math.round(h * dpr);
   const ctx = el.getContext("2d");
