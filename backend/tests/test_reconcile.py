@@ -27,6 +27,7 @@ from modd.ports import free_port
 from modd_model import load_model
 
 from .station import Station
+from .test_postgres import postgres_url  # noqa: F401  (the fixture)
 
 DEMO = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.modd"
 PASSWORD = "reconcile-admin-pw"
@@ -37,7 +38,7 @@ pytestmark = pytest.mark.slow
 class Backend:
     """``modd-backend`` as its own process, so that it can be killed."""
 
-    def __init__(self, tmp: Path, station: Station) -> None:
+    def __init__(self, tmp: Path, station: Station, database_url: str | None = None) -> None:
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.cmd = [str(Path(sys.executable).with_name("modd-backend")), "--port", str(self.port),
@@ -46,6 +47,8 @@ class Backend:
                     "--deploy-key", str(station.credentials.deploy_key_file),
                     "--deploy-timeout", "3", "--scene-port", "-1", "--foxglove-port", "0",
                     "--frontend", str(tmp / "nofrontend")]
+        if database_url:
+            self.cmd += ["--database-url", database_url]
         self.log = tmp / "backend.log"
         self.proc: subprocess.Popen[bytes] | None = None
         self.headers: dict[str, str] = {}
@@ -117,9 +120,16 @@ def _wait(pred: Any, timeout_s: float, what: str) -> None:
         time.sleep(0.05)
 
 
+@pytest.mark.parametrize("database", ["sqlite", "postgresql"])
 def test_a_backend_killed_mid_deploy_settles_its_records_with_the_drone(
-        tmp_path: Path, station: Station) -> None:
-    backend = Backend(tmp_path, station)
+        tmp_path: Path, station: Station, database: str, request: pytest.FixtureRequest) -> None:
+    url = None
+    if database == "postgresql":  # the store several backends share (issue 23)
+        pg = request.getfixturevalue("postgres_url")
+        url = pg.rsplit("/", 1)[0] + "/reconcile"
+        subprocess.run(["psql", "--dbname", pg.replace("+psycopg", ""), "-c",
+                        "CREATE DATABASE reconcile"], check=True, capture_output=True)
+    backend = Backend(tmp_path, station, url)
     backend.start()
     pubbroker, subbroker = station.procs[0], station.procs[1]
     try:

@@ -426,3 +426,27 @@ def test_kill_9_loses_nothing_acknowledged_on_disk_and_the_publisher_replays_the
     assert st.replayed > 0
     print(f"kill -9: {at_kill.on_disk} on disk of {at_kill.sent} sent at the kill; "
           f"{st.replayed} replayed; {sum(map(len, published.values()))} published, all archived")
+
+
+def test_a_publisher_that_disconnects_mid_frame_is_counted_and_harms_nobody(
+        broker_factory: Any) -> None:
+    """A publisher dying in the middle of a SAMPLES frame: its whole samples before it are
+    archived, the announced records of the cut frame counted as malformed (the equation
+    still holds), and another publisher on the same topic loses nothing."""
+    b = broker_factory()
+    s = connect(f"unix:{b.unix_path}")
+    now = time.time_ns()
+    whole = encode_samples([(0, now + i, f32(i)) for i in range(10)], [ValueType.FLOAT32])
+    cut = encode_samples([(0, now + 100 + i, f32(i)) for i in range(40)], [ValueType.FLOAT32])
+    s.sendall(encode_hello("dying") + encode_register(0, ValueType.FLOAT32, X) + whole
+              + cut[: len(cut) // 2])
+    time.sleep(0.3)
+    s.close()
+    later = run_load(f"unix:{b.unix_path}", [X], 50.0, 0.5)
+    assert b.alive()
+    assert b.stop() == 0
+    archived = read_archive(b.archive_dir)[X]
+    assert len(archived) == 10 + later.published
+    c = final_counters(b.log())
+    assert c["rejected_malformed"] == 40 and c["ingress_malformed_frames"] == 1, c
+    assert_reconciled(c)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import time
 from pathlib import Path
 from typing import Any
@@ -193,3 +194,40 @@ def kill9_bound(buffer_size: int, flush_interval_s: float, period_s: float) -> i
     buffer (n - 1 at most), the samples of one archive flush interval, and
     one publisher batch in flight."""
     return buffer_size - 1 + int(flush_interval_s / period_s + 0.5) + 1
+
+
+def test_subbroker_stopped_then_continued(tmp_path: Path, zenoh_client: Any) -> None:
+    """A SubBroker frozen (SIGSTOP: a swapped-out or stalled base station) while the
+    drone keeps sending: the PubBroker archives everything without waiting on the link,
+    and live values are back within 3 s of the SIGCONT."""
+    link, ingress, zport = free_port(), free_port(), free_port()
+    model = model_copy(tmp_path, "scenario1.modd")
+    pb = start_pubbroker(tmp_path, model, link, ingress)
+    sb = start_subbroker(tmp_path, subbroker_config(tmp_path, model, link, zport))
+    load = start_load(tmp_path, model, ingress, CUT_S + 9)
+    try:
+        wait_port(zport)
+        got = listen(zenoh_client, zport)
+        assert sb.wait_log("running", 10)
+        time.sleep(2)
+        os.kill(sb.pid, signal.SIGSTOP)
+        try:
+            time.sleep(CUT_S)
+        finally:
+            continued_ns = time.time_ns()
+            os.kill(sb.pid, signal.SIGCONT)
+        back = first_value_after(got, continued_ns, 10)
+        print(f"SubBroker stopped {CUT_S:g} s: live values back {back} s after SIGCONT")
+        assert back is not None and back <= BACK_WITHIN_S, (back, sb.log())
+        load.p.wait(CUT_S + 20)
+        time.sleep(0.5)
+    finally:
+        with processes(pb, sb, load):
+            pass
+    archive = read_archive(tmp_path / "archive", model)
+    assert_all_archived(load, archive)
+    values = got.snapshot()
+    assert check_against_archive(values, archive) > 20
+    after = [v for v in values["sub_6"] if v.end_ns > continued_ns + 1_000_000_000
+             and v.value is not None]
+    assert_contiguous(after, 250_000_000)

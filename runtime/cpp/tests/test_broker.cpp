@@ -293,6 +293,36 @@ TEST(Broker, AFarFutureSampleIsRefusedAloneAndThePublisherToldWhy) {
   EXPECT_EQ(b.archiver().counters().archived.load(), 20u);
 }
 
+TEST(Broker, AClockJumpingBackBlocksNothing) {
+  // The on-board clock set back two hours (a GPS or NTP correction): the publishers on the
+  // same clock stamp with it at once. Their samples are judged against the clock as it reads
+  // now (not against the stamps held since), so none is refused; the archive's log times
+  // hold at the last one until the clock catches up.
+  FakeClock clock;
+  FakeLink link;
+  BrokerConfig cfg = test_config("jump");
+  cfg.max_future_ms = 10'000;
+  cfg.max_past_ms = 3'600'000;
+  Broker b(cfg, "key", clock, link);
+  IngressSession s(b);
+  int64_t before = clock.now_ns();
+  std::vector<ingress::Record> recs;
+  for (int i = 0; i < 10; ++i) recs.push_back({0, before - (10 - i) * kMs, 1.0 * i, 0});
+  ASSERT_TRUE(s.on_bytes(publisher_bytes({{0, ValueType::Float32, "usv.x"}}, recs)));
+  int64_t after = before - 2 * 3'600'000 * kMs;  // two hours back: beyond max_past_ms
+  clock.set(after);
+  std::vector<ingress::Record> later;
+  for (int i = 0; i < 10; ++i) later.push_back({0, after + i * kMs, 10.0 + i, 0});
+  later.push_back({0, before + 60'000 * kMs, 99.0, 0});  // a minute ahead of the old time: 2 h ahead now
+  std::vector<uint8_t> bytes;
+  ingress::encode_samples(bytes, later, [](uint32_t) { return ValueType::Float32; });
+  ASSERT_TRUE(s.on_bytes(bytes));
+  EXPECT_EQ(b.counters().accepted, 20u);
+  EXPECT_EQ(b.counters().rej(Reject::Timestamp), 1u);
+  b.shutdown();
+  EXPECT_EQ(b.archiver().counters().archived.load(), 20u);
+}
+
 TEST(Broker, AFloodingPublisherLosesOnlyItsOwnSamples) {
   FakeClock clock;
   FakeLink link;

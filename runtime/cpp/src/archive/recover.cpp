@@ -54,7 +54,7 @@ struct Cursor {
 };
 
 bool decompress(const std::string& comp, std::span<const uint8_t> in, uint64_t size, std::vector<uint8_t>& out) {
-  if (size > (1ull << 31)) return false;
+  if (size > (1ull << 28)) return false;  // a chunk closes at chunk_bytes (256 KiB): a bigger size is a torn header
   out.resize(size);
   if (comp.empty()) {
     if (in.size() != size) return false;

@@ -157,7 +157,7 @@ Broker::Broker(const BrokerConfig& cfg, std::string key, Clock& clock, LinkOutpu
   archiver_ = std::make_unique<archive::Archiver>(ao);
   for (const auto& t : cfg.topics)
     add_topic(t.name, t.type, t.buffer_size ? t.buffer_size : cfg.default_buffer_size, true);
-  started_ns_ = last_stamp_ = clock_.now_ns();
+  started_ns_ = last_stamp_ = clock_now_ = clock_.now_ns();
   run_record_ = std::make_unique<RunRecord>(cfg.archive_dir, cfg.archive_prefix, started_ns_);
   write_run_record(started_ns_, false);
 }
@@ -213,6 +213,7 @@ int64_t Broker::stamp_now() {
   } else if (t >= last_stamp_) {
     clock_warned_ = false;
   }
+  clock_now_ = t;  // what timestamps are judged against: the clock as it reads now
   if (t < last_stamp_) t = last_stamp_;  // stamps never go backwards, even if the wall clock does
   last_stamp_ = t;
   executor_.advance(t, *this);
@@ -231,9 +232,11 @@ Reject Broker::ingest(int64_t global, Reject why, link::ValueType declared, int6
   if (t.info->type != declared) return refuse(Reject::WrongType);
   bool is_float = declared == link::ValueType::Float32 || declared == link::ValueType::Float64;
   if (is_float && !std::isfinite(r.number)) return refuse(Reject::NotFinite);
-  // Judged against the broker's clock, never against what came before: one sample stamped in
-  // 2116 cannot block the samples after it.
-  __int128 ahead = static_cast<__int128>(r.timestamp_ns) - stamp;
+  // Judged against the broker's clock as it reads now, never against what came before: one
+  // sample stamped in 2116 cannot block the samples after it, and after the clock jumps back
+  // (the archive's stamps then hold until it catches up) samples stamped by the same clock
+  // are still in bounds.
+  __int128 ahead = static_cast<__int128>(r.timestamp_ns) - clock_now_;
   if (cfg_.max_future_ms && ahead > static_cast<__int128>(cfg_.max_future_ms) * 1'000'000)
     return refuse(Reject::Timestamp);
   if (cfg_.max_past_ms && -ahead > static_cast<__int128>(cfg_.max_past_ms) * 1'000'000)
@@ -278,7 +281,8 @@ std::string Broker::describe(Reject why, const std::string& topic, int64_t stamp
       std::snprintf(buf, sizeof buf, "topic '%s': value is NaN or infinite", topic.c_str());
       break;
     case Reject::Timestamp: {
-      double ahead_s = (static_cast<double>(r.timestamp_ns) - static_cast<double>(stamp)) / 1e9;
+      (void)stamp;
+      double ahead_s = (static_cast<double>(r.timestamp_ns) - static_cast<double>(clock_now_)) / 1e9;
       std::snprintf(buf, sizeof buf,
                     "topic '%s': timestamp %lld ns is %.3g s %s the broker clock (bounds: %llu ms ahead, %llu ms behind)",
                     topic.c_str(), static_cast<long long>(r.timestamp_ns), std::fabs(ahead_s),

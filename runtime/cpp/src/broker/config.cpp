@@ -134,6 +134,8 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   get(c, a, "/archive", "flush_interval_ms", cfg.flush_interval_ms);
   get(c, a, "/archive", "queue_limit_samples", cfg.queue_limit_samples);
   if (cfg.flush_interval_ms < 10) c.fail("/archive/flush_interval_ms", "must be at least 10");
+  // Readers (recovery, backfill) refuse a chunk over 256 MiB as a torn header: bound it here.
+  if (cfg.chunk_bytes > (64u << 20)) c.fail("/archive/chunk_bytes", "must be at most 67108864");
   std::string s;
   get(c, a, "/archive", "fsync", s);
   if (!s.empty() && !archive::parse_fsync(s, cfg.fsync)) c.fail("/archive/fsync", "expected never, chunk or close");

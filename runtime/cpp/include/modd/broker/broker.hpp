@@ -176,6 +176,7 @@ class Broker final : public LinkHooks, public FrameSink {
   std::vector<Topic> topics_;
   std::unordered_map<std::string, uint32_t> by_name_;
   int64_t last_stamp_ = 0;
+  int64_t clock_now_ = 0;  // the clock's last reading (last_stamp_ holds when it goes back)
   bool clock_warned_ = false;
   int64_t started_ns_ = 0;
   uint64_t front_samples_ = 0;
