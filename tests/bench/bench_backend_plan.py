@@ -10,7 +10,10 @@ Target (issue 7): under 300 ms per request for the paper's scenarios.
 Then (issue 18) the round trip of a 5,000 topics x 25,000 subscribers model
 (target <= 3 s) and the latency of ``GET /api/health`` polled while such
 plans run (target p99 <= 50 ms): planning runs in worker processes, off the
-event loop (modd_backend.planning).
+event loop (modd_backend.planning). The CPU seconds of the backend process
+and of its planning workers per request (from /proc) are the figures that do
+not depend on the machine's load; the workers are started by a small plan
+first, as in a running service.
 """
 
 from __future__ import annotations
@@ -144,11 +147,21 @@ def health_during_big_plans(c: httpx.Client, port: int, plans: int, backend_pid:
     print(f"\nPOST /api/plan, 5,000 topics x 25,000 subscribers: round trip median "
           f"{statistics.median(trips):.2f} s, max {max(trips):.2f} s, {sum(oks)}/{len(oks)} ok")
     print(f"GET /api/health meanwhile ({len(health)} requests): median "
-          f"{statistics.median(health):.1f} ms, p99 {p99:.1f} ms, max {health[-1]:.1f} ms")
+          f"{statistics.median(health):.1f} ms, p99 {p99:.1f} ms, max {health[-1]:.1f} ms; "
+          "target p99 <= 50 ms")
     loop, work = ((a - b) / plans for a, b in zip(after, before, strict=True))
     print(f"CPU per 5,000 x 25,000 plan request: backend process {loop:.2f} s (event loop, "
-          f"health polls included), planning workers {work:.2f} s, total {loop + work:.2f} s; "
-          "target: round trip <= 3 s")
+          f"health polls included), planning workers {work:.2f} s, total {loop + work:.2f} s")
+    before = cpu_seconds(backend_pid)
+    start = time.perf_counter()
+    with httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=120,
+                      headers=dict(c.headers)) as pc:
+        ok = pc.post("/api/plan", json=body).json()["ok"]
+    trip = time.perf_counter() - start
+    loop, work = (a - b for a, b in zip(cpu_seconds(backend_pid), before, strict=True))
+    print(f"one plan alone: round trip {trip:.2f} s ({'ok' if ok else 'NOT planned'}); CPU: "
+          f"backend process {loop:.2f} s, planning worker {work:.2f} s, total "
+          f"{loop + work:.2f} s (the machine-independent figure); target: round trip <= 3 s")
 
 
 def main(argv: list[str] | None = None) -> int:
