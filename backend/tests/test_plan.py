@@ -70,3 +70,32 @@ def test_plan_of_a_stored_revision(client: TestClient, admin: Headers, scenario1
     assert body["plan"]["buffer_sizes"]["usv.accelerometer.accel_z"] == 6
     assert client.get("/api/plan").status_code == 405
     assert client.post("/api/plan", json={"text": scenario1}).status_code == 401
+
+
+def test_bodies_that_are_not_a_model_input_get_fastapis_422(
+    client: TestClient, admin: Headers, scenario1: str
+) -> None:
+    """The body is read in the planning worker, not by FastAPI on the event
+    loop: the answers to bodies that are not a ModelInput keep FastAPI's
+    422 form (``detail`` items with ``loc`` from ``body``)."""
+    def post(**kw: Any) -> Any:
+        return client.post("/api/plan", headers={**admin, **kw.pop("headers", {})}, **kw)
+
+    r = post(content=b'{"text": ', headers={"content-type": "application/json"})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["type"] == "json_invalid"
+    assert r.json()["detail"][0]["loc"][0] == "body"
+    r = post(json={"text": scenario1, "model": {}})
+    assert r.status_code == 422
+    assert "exactly one" in r.json()["detail"][0]["msg"]
+    r = post(json={"text": 3})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["body", "text"]
+    r = post(content=b"", headers={"content-type": "application/json"})
+    assert r.status_code == 422 and r.json()["detail"][0]["type"] == "missing"
+    r = post(content=scenario1.encode(), headers={"content-type": "text/plain"})
+    assert r.status_code == 422
+    r = post(json={"text": scenario1}, headers={"content-type": "application/vnd.x+json"})
+    assert r.status_code == 200 and r.json()["ok"]
+    spec = client.get("/openapi.json").json()
+    body = spec["paths"]["/api/plan"]["post"]["requestBody"]
+    assert body["content"]["application/json"]["schema"]["$ref"].endswith("/ModelInput")

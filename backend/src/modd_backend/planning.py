@@ -182,14 +182,12 @@ async def guarded_plan(
     return await guarded_call(plan_request, model, text, fmt, method)
 
 
-async def guarded_call(
-    fn: Callable[[dict[str, Any] | None, str | None, str, Method, float], T],
-    model: dict[str, Any] | None, text: str | None, fmt: str, method: Method,
-) -> T | dict[str, Any]:
-    """``fn`` (:func:`plan_request` or a function around it that also
-    serialises its answer, so that the event loop does not walk a plan of
-    10 MB) in a worker process, within the time and memory budget; the
-    failure's LivePlan JSON when the worker is over it."""
+async def guarded_call(fn: Callable[..., T], *args: Any) -> T | dict[str, Any]:
+    """``fn(*args, timeout_s)`` (:func:`plan_request` or a function around it
+    that also reads the request body and serialises its answer, so that the
+    event loop neither parses a model of 4 MiB nor walks a plan of 10 MB) in
+    a worker process, within the time and memory budget; the failure's
+    LivePlan JSON when the worker is over it."""
     global _waiting
     if _waiting >= PLAN_QUEUE:
         raise HTTPException(503, "the planner is busy; retry shortly",
@@ -198,7 +196,7 @@ async def guarded_call(
     start = time.perf_counter()
     pool = _get_pool()
     try:
-        future = pool.submit(fn, model, text, fmt, method, PLAN_TIMEOUT_S)
+        future = pool.submit(fn, *args, PLAN_TIMEOUT_S)
         return await asyncio.wait_for(asyncio.wrap_future(future), PLAN_TIMEOUT_S + PLAN_START_S)
     except TimeoutError:  # the worker's own timer did not stop it: kill it
         _discard_pool(pool)

@@ -235,7 +235,7 @@ def _fronts(problem: BufferProblem) -> tuple[list[_Front | None], list[Infeasibi
 
 
 def _fronts_both(
-    problem: BufferProblem,
+    problem: BufferProblem, rows: list[Row] | None = None,
 ) -> tuple[list[_Front | None], list[Infeasibility], list[_Front | None]]:
     """The fronts, the infeasible topics and the fronts with the cap lifted
     for them, from one table per topic. All topics' tables are computed
@@ -245,7 +245,7 @@ def _fronts_both(
     :func:`_front` topic by topic."""
     import numpy as np
 
-    rows = _rows(problem)
+    rows = _rows(problem) if rows is None else rows
     fronts: list[_Front | None] = [None] * len(problem.topics)
     relaxed: list[_Front | None] = [None] * len(problem.topics)
     infeasible: list[Infeasibility] = []
@@ -418,11 +418,12 @@ def solve_exact(problem: BufferProblem) -> BufferSolution:
 
     When the cap makes it infeasible, returns the optimum with the cap lifted
     for the offending topics only, ``infeasible`` naming them."""
-    if sum(hi - lo + 1 for *_, lo, hi in _rows(problem)) <= SMALL_CANDIDATES:
+    rows = _rows(problem)
+    if sum(hi - lo + 1 for *_, lo, hi in rows) <= SMALL_CANDIDATES:
         return _solve_small(problem)
     import numpy as np
 
-    fronts, infeasible, relaxed = _fronts_both(problem)
+    fronts, infeasible, relaxed = _fronts_both(problem, rows)
     if infeasible:  # the optimum with the cap lifted for those topics
         fronts = relaxed
     d = lcm(problem.alpha.denominator, problem.beta.denominator)

@@ -275,13 +275,21 @@ def gc_paused() -> Iterator[None]:
     objects without cycles (a plan of 25,000 subscriptions: its passes over
     the model's dictionaries cost more than the planning). Reference
     counting still frees everything; the collector's previous state is
-    restored."""
+    restored. At the end, the objects allocated meanwhile (and any other
+    young ones) join the oldest generation in O(1) (``freeze`` then
+    ``unfreeze``) instead of being scanned by the next young collection
+    (0.05-0.17 s for a plan's JSON of 25,000 streams; they are acyclic and
+    freed by reference counting); skipped when the process has frozen
+    objects of its own, which ``unfreeze`` would release."""
     enabled = gc.isenabled()
     gc.disable()
     try:
         yield
     finally:
         if enabled:
+            if gc.get_freeze_count() == 0:
+                gc.freeze()
+                gc.unfreeze()
             gc.enable()
 
 

@@ -206,6 +206,81 @@ def stream_order(
     return order
 
 
+class _Relations:
+    """Which of a topic's requested streams can serve which (the rules of
+    :func:`find_sources`), computed once per topic in the drop order: the
+    most expensive first (ties: longest period, then aggregation order).
+    A helper ALL stream adds one column (:meth:`drop`), so trying several
+    helpers costs a scan each, not the pairs again."""
+
+    def __init__(self, required: Sequence[StreamKey],
+                 cost_per_s: Callable[[StreamKey], float]) -> None:
+        # stable sorts, last key first: (-cost, -period, aggregation order)
+        streams = sorted(required, key=lambda s: _AGG_INDEX[s.aggregation])
+        streams.sort(key=lambda s: s._sort_period, reverse=True)  # type: ignore[attr-defined]
+        streams.sort(key=cost_per_s, reverse=True)
+        self.streams = streams
+        nds: list[tuple[int, int]] = [s._nd for s in streams]  # type: ignore[attr-defined]
+        self.nds = nds
+        aggs = [s.aggregation for s in streams]
+        self.singles: list[list[int]] = []
+        self.pairs: list[list[list[int]] | None] = []
+        #: per target: whether an ALL source serves it alone, and which of its
+        #: pair groups (by position) an ALL source joins
+        self.all_single: list[bool] = []
+        self.all_pair: list[list[int]] = []
+        for r, (an, ad) in enumerate(nds):
+            # j divides: target period / period j is whole
+            whole = [(an * bd) % (ad * bn) == 0 for bn, bd in nds]
+            rules = SINGLE_SOURCE_RULES[aggs[r]]
+            self.singles.append([j for j in range(len(nds))
+                                 if j != r and whole[j] and aggs[j] in rules])
+            self.all_single.append("ALL" in rules)
+            pair = PAIR_SOURCE_RULES.get(aggs[r])
+            if pair is None:
+                self.pairs.append(None)
+                self.all_pair.append([])
+            else:
+                self.pairs.append([[j for j in range(len(nds)) if whole[j] and aggs[j] == a]
+                                   for a in pair])
+                self.all_pair.append([g for g, a in enumerate(pair) if a == "ALL"])
+
+    def drop(self, helper: StreamKey | None = None) -> list[StreamKey]:
+        """The one-pass drop over the requested streams (+ ``helper``, always
+        kept, last)."""
+        n = len(self.streams)
+        singles, pairs = self.singles, self.pairs
+        if helper is not None:  # its column: the targets it serves
+            hn, hd = helper._nd  # type: ignore[attr-defined]
+            singles, pairs = list(singles), list(pairs)
+            for r, (an, ad) in enumerate(self.nds):
+                if (an * hd) % (ad * hn):
+                    continue
+                if self.all_single[r]:
+                    singles[r] = [*singles[r], n]
+                groups = pairs[r]
+                if self.all_pair[r] and groups is not None:
+                    pairs[r] = [[*g, n] if k in self.all_pair[r] else g
+                                for k, g in enumerate(groups)]
+        kept = [True] * (n + 1)  # the helper (index n) stays kept
+
+        def derivable(r: int) -> bool:
+            if any(kept[j] for j in singles[r]):
+                return True
+            groups = pairs[r]
+            return groups is not None and all(any(kept[j] for j in g) for g in groups)
+
+        dropped: list[int] = []
+        for i in range(n):
+            kept[i] = False
+            dropped.append(i)
+            if not all(derivable(r) for r in dropped):
+                kept[i] = True
+                dropped.pop()
+        out = [s for s, k in zip(self.streams, kept, strict=False) if k]
+        return out + [helper] if helper is not None else out
+
+
 def _drop_derivable(
     required: Sequence[StreamKey],
     cost_per_s: Callable[[StreamKey], float],
@@ -217,42 +292,7 @@ def _drop_derivable(
     The streams are of one topic. Which stream can serve which is computed
     once (the rules of :func:`find_sources`), so that each drop costs a
     scan of those relations, not a search over the sent set."""
-    # stable sorts, last key first: (-cost, -period, aggregation order)
-    streams = sorted(required, key=lambda s: _AGG_INDEX[s.aggregation])
-    streams.sort(key=lambda s: s._sort_period, reverse=True)  # type: ignore[attr-defined]
-    streams.sort(key=cost_per_s, reverse=True)
-    n = len(streams)
-    every = streams + ([helper] if helper is not None else [])
-    kept = [True] * len(every)  # the helper (index n) stays kept
-    singles: list[list[int]] = []
-    pairs: list[list[list[int]] | None] = []
-    for target in streams:
-        rules = SINGLE_SOURCE_RULES[target.aggregation]
-        singles.append([
-            j for j, s in enumerate(every)
-            if s is not target and s.aggregation in rules and _factor(target, s) is not None
-        ])
-        pair = PAIR_SOURCE_RULES.get(target.aggregation)
-        pairs.append(None if pair is None else [
-            [j for j, s in enumerate(every)
-             if s.aggregation == aggregation and _factor(target, s) is not None]
-            for aggregation in pair
-        ])
-
-    def derivable(r: int) -> bool:
-        if any(kept[j] for j in singles[r]):
-            return True
-        groups = pairs[r]
-        return groups is not None and all(any(kept[j] for j in g) for g in groups)
-
-    dropped: list[int] = []
-    for i in range(n):
-        kept[i] = False
-        dropped.append(i)
-        if not all(derivable(r) for r in dropped):
-            kept[i] = True
-            dropped.pop()
-    return [s for s, k in zip(every, kept, strict=True) if k]
+    return _Relations(required, cost_per_s).drop(helper)
 
 
 def _choose_for_topic(
@@ -260,20 +300,28 @@ def _choose_for_topic(
 ) -> list[StreamKey]:
     costs = {s: cost_per_s(s) for s in streams}  # one call per stream
     cost = costs.__getitem__
-    best = _drop_derivable(streams, cost)
-    best_cost = sum(cost(s) for s in best)
+    relations = _Relations(streams, cost)
+    best = relations.drop()
+    best_cost = sum(map(cost, best))  # the same order of additions as a loop
     topic = streams[0].topic
     periods = {s._nd: s._sort_period for s in streams}  # type: ignore[attr-defined]
-    for _, period in sorted(periods.values()):
+    asked_all = {s._nd for s in streams if s.aggregation == agg.ALL}  # type: ignore[attr-defined]
+    for nd, (_, period) in sorted(periods.items(), key=lambda item: item[1]):
+        if nd in asked_all:
+            continue  # an ALL stream at this period is asked for already
+        hn, hd = nd
+        # the sent streams at multiples of the helper's period, in order
+        replaceable = 0.0
+        for s in best:
+            sn, sd = s._nd  # type: ignore[attr-defined]
+            if (sn * hd) % (sd * hn) == 0:
+                replaceable += cost(s)
         helper = StreamKey(topic, agg.ALL, period)
-        if helper in costs:
-            continue
-        replaceable = sum(cost(s) for s in best if _factor(s, helper) is not None)
         costs[helper] = helper_cost = cost_per_s(helper)
         if helper_cost >= replaceable:
             continue  # it cannot pay for itself
-        trial = _drop_derivable(streams, cost, helper)
-        trial_cost = sum(cost(s) for s in trial)
+        trial = relations.drop(helper)
+        trial_cost = sum(map(cost, trial))
         if trial_cost < best_cost:
             best, best_cost = trial, trial_cost
     return best

@@ -183,6 +183,7 @@ def test_prime_periods_on_a_grid_plan_fast(make_model: Any) -> None:
         unhit *= u - 1
     assert j["messages_per_hyperperiod"] == h - unhit  # pairwise coprime: a product
     assert j["schedule"]["slots_truncated"]
+    assert Fraction(j["hyperperiod_s"]) == Fraction(h, 10)  # 35 digits: once rounded to 28
 
 
 def test_cli_prints_the_located_error(make_model: Any, tmp_path: Any, capsys: Any) -> None:
