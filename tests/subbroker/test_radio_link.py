@@ -260,3 +260,46 @@ def test_forged_and_replayed_datagrams_are_dropped_and_counted(tmp_path: Path,
     assert share == 1.0, sorted(missing)
     forged_up = [int(x) for x in re.findall(r"link: datagrams_in=\d+ .*?forged=(\d+)", pb_log)]
     assert forged_up and forged_up[-1] >= tap.forged_up > 0, pb_log[-2000:]
+
+
+def _attacks(counts: str, direction: str) -> tuple[int, int]:
+    """(forged, replayed) by the emulator's attacker in one direction."""
+    part = counts.split(f"{direction} ")[1].split(";")[0]
+    forged = re.search(r"forged (\d+)", part)
+    replayed = re.search(r"replayed (\d+)", part)
+    return (int(forged.group(1)) if forged else 0, int(replayed.group(1)) if replayed else 0)
+
+
+@pytest.mark.parametrize("transport", ["udp", "serial"])
+def test_forged_and_replayed_on_the_air_are_dropped(transport: str, tmp_path: Path,
+                                                     zenoh_client: Any) -> None:
+    """An attacker on the radio (the emulator) forges a share of the datagrams
+    each way (over serial with a good CRC, so the tag must refuse them) and
+    replays others 1.5 s later: none is decoded, each is counted, and the
+    delivery is still whole and equal to the archive."""
+    spec = "forge=0.5,replay=0.5,latency_ms=20,seed=4"
+    model, pb, sb, radio, zport = _start(tmp_path, transport, spec)
+    assert radio is not None
+    with processes(radio, pb, sb):
+        got = _watch(zenoh_client, zport)
+        values, archive, _ = _run(tmp_path, model, pb, sb, got, 6.0, settle=3.0)
+        status = got.status[-1]
+        counts = radio_counts(radio)
+        pb_log = pb.log()
+    r = status["radio"]
+    down_forged, down_replayed = _attacks(counts, "drone->base")
+    up_forged, up_replayed = _attacks(counts, "base->drone")
+    assert down_forged > 2 and down_replayed > 2, counts
+    # a forgery is refused by its tag, or earlier (a flipped config id names no config)
+    refused = r["forged"] + r["unknown_config"] + r["malformed"]
+    assert r["forged"] > 0 and refused >= down_forged - 1, (r, counts)
+    assert r["replayed"] >= down_replayed - 2, (r, counts)
+    assert check_against_archive(values, archive) > 100  # only genuine values came out
+    share, missing = _delivered_share(values, archive)
+    assert share == 1.0, (sorted(missing), r, counts)
+    pb_counts = re.findall(r"link: datagrams_in=\d+ .*?forged=(\d+) replayed=(\d+)", pb_log)
+    assert pb_counts, pb_log[-2000:]
+    if up_forged:
+        assert int(pb_counts[-1][0]) > 0, (pb_counts[-1], counts)
+    if up_replayed:
+        assert int(pb_counts[-1][1]) > 0, (pb_counts[-1], counts)
