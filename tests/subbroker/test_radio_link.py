@@ -16,6 +16,7 @@ from typing import Any
 
 import pytest
 from modd.zenoh_session import wait_connected
+from modd_contracts.schema import validate
 from radio_harness import (
     RADIO,
     Injector,
@@ -95,7 +96,7 @@ def _ingress(pb: Proc) -> int:
                          .split('"ingress"')[1]).group(1))  # type: ignore[union-attr]
 
 
-def _start(tmp: Path, transport: str, spec: str | None
+def _start(tmp: Path, transport: str, spec: str | None, pb_status_s: int = 60
            ) -> tuple[Path, Proc, Proc, Proc | None, int]:
     model = model_copy(tmp, "scenario1.modd")
     zport, ingress = free_port(), free_port()
@@ -106,12 +107,14 @@ def _start(tmp: Path, transport: str, spec: str | None
         endpoint = port
         if spec is not None:
             radio, endpoint = start_radio_udp(tmp, port, spec)
-        cfg = subbroker_dgram_config(tmp, model, f"127.0.0.1:{endpoint}", zport, "udp")
+        cfg = subbroker_dgram_config(tmp, model, f"127.0.0.1:{endpoint}", zport, "udp",
+                                     pb_status_s=pb_status_s)
     else:
         radio, base, drone = start_radio_serial(tmp, spec or "")
         pb = start_pubbroker_dgram(tmp, model, {"transport": "serial", "device": drone,
                                                 "port": 1}, ingress)
-        cfg = subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport, "serial", device=base)
+        cfg = subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport, "serial", device=base,
+                                     pb_status_s=pb_status_s)
     sb = start_subbroker(tmp, cfg)
     return model, pb, sb, radio, zport
 
@@ -119,7 +122,7 @@ def _start(tmp: Path, transport: str, spec: str | None
 @pytest.mark.parametrize("transport", ["udp", "serial"])
 def test_transport_delivers_what_the_archive_holds(transport: str, tmp_path: Path,
                                                    zenoh_client: Any) -> None:
-    model, pb, sb, radio, zport = _start(tmp_path, transport, None)
+    model, pb, sb, radio, zport = _start(tmp_path, transport, None, pb_status_s=2)
     with processes(*([radio] if radio else []), pb, sb):
         got = _watch(zenoh_client, zport)
         values, archive, load = _run(tmp_path, model, pb, sb, got, 6.0)
@@ -135,6 +138,12 @@ def test_transport_delivers_what_the_archive_holds(transport: str, tmp_path: Pat
     # nothing flows back while nothing is lost (the PINGs of the RTT, at most)
     assert radio_st["wire_bytes_out_per_s"] is not None and radio_st["wire_bytes_out_per_s"] < 20
     assert 0 < radio_st["wire_bytes_in_per_s"] < 300
+    assert validate("status", status) == []  # the contract, radio figures included
+    # the PubBroker's side, from its STATUS (fields 24..29)
+    pb_side = next(s["radio"]["pubbroker"] for s in reversed(got.status)
+                   if s["radio"] and s["radio"]["pubbroker"])
+    assert pb_side["datagrams_sent"] > 10 and pb_side["datagrams_resent"] == 0, pb_side
+    assert pb_side["forged"] == 0 and pb_side["replayed"] == 0 and pb_side["nacks"] == 0
 
 
 @pytest.mark.parametrize("transport", ["udp", "serial"])
@@ -307,7 +316,7 @@ def test_forged_and_replayed_on_the_air_are_dropped(transport: str, tmp_path: Pa
     replays others 1.5 s later: none is decoded, each is counted, and the
     delivery is still whole and equal to the archive."""
     spec = "forge=0.5,replay=0.5,latency_ms=20,seed=4"
-    model, pb, sb, radio, zport = _start(tmp_path, transport, spec)
+    model, pb, sb, radio, zport = _start(tmp_path, transport, spec, pb_status_s=1)
     assert radio is not None
     with processes(radio, pb, sb):
         got = _watch(zenoh_client, zport)
@@ -319,16 +328,19 @@ def test_forged_and_replayed_on_the_air_are_dropped(transport: str, tmp_path: Pa
     down_forged, down_replayed = _attacks(counts, "drone->base")
     up_forged, up_replayed = _attacks(counts, "base->drone")
     assert down_forged > 2 and down_replayed > 2, counts
-    # a forgery is refused by its tag, or earlier (a flipped config id names no config)
-    refused = r["forged"] + r["unknown_config"] + r["malformed"]
-    assert r["forged"] > 0 and refused >= down_forged - 1, (r, counts)
-    assert r["replayed"] >= down_replayed - 2, (r, counts)
+    # a forgery is refused by its tag, or earlier (a flipped config id names no config); a
+    # replay by the replay window, or as a handshake datagram out of a handshake (malformed)
+    refused = r["forged"] + r["unknown_config"] + r["malformed"] + r["replayed"]
+    assert r["forged"] > 0 and r["replayed"] > 0, (r, counts)
+    assert refused >= down_forged + down_replayed - 1, (r, counts)
     assert check_against_archive(values, archive) > 100  # only genuine values came out
     share, missing = _delivered_share(values, archive)
     assert share == 1.0, (sorted(missing), r, counts)
     pb_counts = re.findall(r"link: datagrams_in=\d+ .*?forged=(\d+) replayed=(\d+)", pb_log)
     assert pb_counts, pb_log[-2000:]
+    pb_side = r["pubbroker"]  # the PubBroker's STATUS, in the SubBroker's status
+    assert pb_side is not None and validate("status", status) == [], r
     if up_forged:
-        assert int(pb_counts[-1][0]) > 0, (pb_counts[-1], counts)
+        assert int(pb_counts[-1][0]) > 0 and pb_side["forged"] > 0, (pb_side, counts)
     if up_replayed:
-        assert int(pb_counts[-1][1]) > 0, (pb_counts[-1], counts)
+        assert int(pb_counts[-1][1]) > 0 and pb_side["replayed"] > 0, (pb_side, counts)
