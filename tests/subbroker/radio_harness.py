@@ -44,7 +44,9 @@ def start_pubbroker_dgram(tmp: Path, model_path: Path, link: dict[str, Any], ing
 
 
 def subbroker_dgram_config(tmp: Path, model_path: Path, endpoint: str, zenoh_port: int,
-                           transport: str, device: str = "", tag: str = "sb") -> Path:
+                           transport: str, device: str = "", tag: str = "sb",
+                           pb_status_s: int = 60) -> Path:
+    """``pb_status_s``: the PubBroker's STATUS period asked in CONFIG."""
     dev = f"device = {json.dumps(device)}" if device else ""
     path = tmp / f"{tag}.toml"
     path.write_text(f"""
@@ -53,6 +55,7 @@ model = {json.dumps(str(model_path))}
 endpoint = "{endpoint}"
 key = "env:MODD_LINK_KEY"
 transport = "{transport}"
+pubbroker_status_period_s = {pb_status_s}
 {dev}
 [zenoh]
 listen = ["tcp/127.0.0.1:{zenoh_port}"]

@@ -10,11 +10,13 @@ from __future__ import annotations
 
 import re
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
 import pytest
 from modd.zenoh_session import wait_connected
+from modd_contracts.schema import validate
 from radio_harness import (
     RADIO,
     Injector,
@@ -94,7 +96,7 @@ def _ingress(pb: Proc) -> int:
                          .split('"ingress"')[1]).group(1))  # type: ignore[union-attr]
 
 
-def _start(tmp: Path, transport: str, spec: str | None
+def _start(tmp: Path, transport: str, spec: str | None, pb_status_s: int = 60
            ) -> tuple[Path, Proc, Proc, Proc | None, int]:
     model = model_copy(tmp, "scenario1.modd")
     zport, ingress = free_port(), free_port()
@@ -105,12 +107,14 @@ def _start(tmp: Path, transport: str, spec: str | None
         endpoint = port
         if spec is not None:
             radio, endpoint = start_radio_udp(tmp, port, spec)
-        cfg = subbroker_dgram_config(tmp, model, f"127.0.0.1:{endpoint}", zport, "udp")
+        cfg = subbroker_dgram_config(tmp, model, f"127.0.0.1:{endpoint}", zport, "udp",
+                                     pb_status_s=pb_status_s)
     else:
         radio, base, drone = start_radio_serial(tmp, spec or "")
         pb = start_pubbroker_dgram(tmp, model, {"transport": "serial", "device": drone,
                                                 "port": 1}, ingress)
-        cfg = subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport, "serial", device=base)
+        cfg = subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport, "serial", device=base,
+                                     pb_status_s=pb_status_s)
     sb = start_subbroker(tmp, cfg)
     return model, pb, sb, radio, zport
 
@@ -118,7 +122,7 @@ def _start(tmp: Path, transport: str, spec: str | None
 @pytest.mark.parametrize("transport", ["udp", "serial"])
 def test_transport_delivers_what_the_archive_holds(transport: str, tmp_path: Path,
                                                    zenoh_client: Any) -> None:
-    model, pb, sb, radio, zport = _start(tmp_path, transport, None)
+    model, pb, sb, radio, zport = _start(tmp_path, transport, None, pb_status_s=2)
     with processes(*([radio] if radio else []), pb, sb):
         got = _watch(zenoh_client, zport)
         values, archive, load = _run(tmp_path, model, pb, sb, got, 6.0)
@@ -134,6 +138,12 @@ def test_transport_delivers_what_the_archive_holds(transport: str, tmp_path: Pat
     # nothing flows back while nothing is lost (the PINGs of the RTT, at most)
     assert radio_st["wire_bytes_out_per_s"] is not None and radio_st["wire_bytes_out_per_s"] < 20
     assert 0 < radio_st["wire_bytes_in_per_s"] < 300
+    assert validate("status", status) == []  # the contract, radio figures included
+    # the PubBroker's side, from its STATUS (fields 24..29)
+    pb_side = next(s["radio"]["pubbroker"] for s in reversed(got.status)
+                   if s["radio"] and s["radio"]["pubbroker"])
+    assert pb_side["datagrams_sent"] > 10 and pb_side["datagrams_resent"] == 0, pb_side
+    assert pb_side["forged"] == 0 and pb_side["replayed"] == 0 and pb_side["nacks"] == 0
 
 
 @pytest.mark.parametrize("transport", ["udp", "serial"])
@@ -156,83 +166,111 @@ def test_loss_reordering_duplication_are_repaired(transport: str, tmp_path: Path
     assert r["forged"] == 0 and r["loss"] > 0
 
 
+OUTAGE_S = 30.0
+
+
 def test_outage_and_reboots_through_the_emulator(tmp_path: Path, zenoh_client: Any) -> None:
-    """A radio outage (11 s here, shortened from 30 s: longer than the
-    SubBroker's 9 s of silence, so the same code path) is repaired from the
-    PubBroker's resend ring after a new handshake; a SubBroker killed with -9
-    and started again, then a PubBroker restarted, each get the link back
-    through the emulator without anyone's help."""
-    model = model_copy(tmp_path, "scenario1.modd")
-    zport, ingress, port = free_port(), free_port(), free_port("udp")
-    pb = start_pubbroker_dgram(tmp_path, model, {"transport": "udp", "port": port}, ingress)
-    relay = free_port("udp")
-    sb = start_subbroker(tmp_path, subbroker_dgram_config(
-        tmp_path, model, f"127.0.0.1:{relay}", zport, "udp"))
+    """Over udp and over serial at once (two stacks, in parallel): a radio
+    outage of 30 s is repaired from the PubBroker's resend ring after a new
+    handshake; a SubBroker killed with -9 and started again, then a PubBroker
+    restarted, each get the link back through the emulator without anyone's
+    help."""
+    with ThreadPoolExecutor(2) as pool:
+        runs = {t: pool.submit(_outage_and_reboots, tmp_path / t, t, zenoh_client)
+                for t in ("udp", "serial")}
+        for transport, run in runs.items():
+            try:
+                run.result()
+            except AssertionError as exc:
+                raise AssertionError(f"over {transport}: {exc}") from exc
+
+
+def _outage_and_reboots(tmp: Path, transport: str, zenoh_client: Any) -> None:
+    tmp.mkdir()
+    model = model_copy(tmp, "scenario1.modd")
+    zport, ingress = free_port(), free_port()
     radio: Proc | None = None
+    pb: Proc | None = None
+    sb: Proc | None = None
     try:
-        got = _watch(zenoh_client, zport)
-        # the emulator starts once the SubBroker is up, so that its outage (4 s after
-        # its start, for 11 s) falls while the load runs; the handshake waits for it
-        radio = Proc("radio", [*RADIO, "--udp", f"127.0.0.1:{relay}", "--to",
-                               f"127.0.0.1:{port}", "--radio", "latency_ms=30,outage=4+11,seed=2",
-                               "--report", "1"], tmp_path / "radio.log")
-        assert sb.wait_log("running", 20), sb.log()[-3000:]
-        load = start_load(tmp_path, model, ingress, 16.0)
-        load.p.wait(40)
-        time.sleep(4.0)  # the NACKs of the outage's slots, after the new handshake
+        if transport == "udp":
+            port, relay = free_port("udp"), free_port("udp")
+            link: dict[str, Any] = {"transport": "udp", "port": port}
+            pb = start_pubbroker_dgram(tmp, model, link, ingress)
+            sb = start_subbroker(tmp, subbroker_dgram_config(
+                tmp, model, f"127.0.0.1:{relay}", zport, "udp"))
+            got = _watch(zenoh_client, zport)
+            # the emulator starts once the SubBroker is up, so that its outage falls
+            # while the load runs; the handshake waits for it
+            outage_at = 4.0
+            radio = Proc("radio", [*RADIO, "--udp", f"127.0.0.1:{relay}", "--to",
+                                   f"127.0.0.1:{port}", "--radio",
+                                   f"latency_ms=30,outage={outage_at}+{OUTAGE_S},seed=2",
+                                   "--report", "1"], tmp / "radio.log")
+        else:
+            # the emulator makes the pseudo-terminals: it comes first, its outage later
+            outage_at = 14.0
+            radio, base, drone = start_radio_serial(
+                tmp, f"latency_ms=30,outage={outage_at}+{OUTAGE_S},seed=2")
+            link = {"transport": "serial", "device": drone, "port": 1}
+            pb = start_pubbroker_dgram(tmp, model, link, ingress)
+            sb = start_subbroker(tmp, subbroker_dgram_config(
+                tmp, model, "127.0.0.1:1", zport, "serial", device=base))
+            got = _watch(zenoh_client, zport)
+        started = radio.started
+        assert sb.wait_log("running", 30), sb.log()[-3000:]
+        # the load runs from before the outage to 6 s after it
+        seconds = outage_at + OUTAGE_S + 6.0 - (time.monotonic() - started)
+        assert seconds > OUTAGE_S + 6.0, "the SubBroker started after the outage began"
+        load = start_load(tmp, model, ingress, seconds)
+        load.p.wait(seconds + 30)
+        time.sleep(5.0)  # the NACKs of the outage's slots, after the new handshake
         values = got.snapshot()
-        archive = read_archive(tmp_path / "archive", model)
+        archive = read_archive(tmp / "archive", model)
         assert check_against_archive(values, archive) > 100
         share, missing = _delivered_share(values, archive)
         assert share == 1.0, (sorted(missing), got.status[-1]["radio"], radio_counts(radio))
         assert "outage" in radio_counts(radio)
         r = got.status[-1]["radio"]
-        assert r["handshakes"] >= 2 and r["retransmissions"] > 30, r  # a new session, resent
+        # a new session, and the outage's 120 slots of 0.25 s resent from the ring
+        assert r["handshakes"] >= 2 and r["retransmissions"] >= 100, r
 
         # the SubBroker dies (-9) and comes back: a new session, a new CONFIG
         sb.kill9()
-        sb = start_subbroker(tmp_path, tmp_path / "sb.toml", tag="sb2")
+        sb = start_subbroker(tmp, tmp / "sb.toml", tag="sb2")
         assert sb.wait_log("running", 30), sb.log()[-3000:]
         before = len(got.snapshot().get("sub_5", []))
-        load2 = start_load(tmp_path, model, ingress, 3.0, tag="load2")
+        load2 = start_load(tmp, model, ingress, 3.0, tag="load2")
         load2.p.wait(20)
         time.sleep(1.5)
-        assert len(got.snapshot().get("sub_5", [])) > before + 8
+        assert len(got.snapshot().get("sub_5", [])) > before + 8, sb.log()[-2000:]
 
         # the PubBroker restarts: the SubBroker finds the silence, handshakes again
         pb.stop()
         with processes(load, load2):
             pass
-        archive = read_archive(tmp_path / "archive", model)  # what the first PubBroker kept
-        pb = start_pubbroker_dgram(tmp_path, model, {"transport": "udp", "port": _pb_port(pb)},
-                                   ingress, tag="pb2", archive="archive2")
-        assert sb.wait_log("config 2 running", 30) or "running" in sb.log()
+        archive = read_archive(tmp / "archive", model)  # what the first PubBroker kept
+        pb = start_pubbroker_dgram(tmp, model, link, ingress, tag="pb2", archive="archive2")
         deadline = time.monotonic() + 30
         while "PubBroker config 0" not in sb.log() and time.monotonic() < deadline:
             time.sleep(0.2)
         assert "PubBroker config 0" in sb.log(), sb.log()[-3000:]  # it met the new PubBroker
         time.sleep(2.0)
         before = len(got.snapshot().get("sub_5", []))
-        load3 = start_load(tmp_path, model, ingress, 3.0, tag="load3")
+        load3 = start_load(tmp, model, ingress, 3.0, tag="load3")
         load3.p.wait(20)
         time.sleep(1.5)
         with processes(load3):
             pass
         after = got.snapshot()
         assert len(after.get("sub_5", [])) > before + 8, sb.log()[-2000:]
-        archive2 = read_archive(tmp_path / "archive2", model)
+        archive2 = read_archive(tmp / "archive2", model)
         late = {k: [v for v in vs if v.start_ns > max(t for t, _ in archive[v.topic])]
                 for k, vs in after.items()}
         assert check_against_archive(late, archive2) > 20
     finally:
         with processes(radio, pb, sb):
             pass
-
-
-def _pb_port(pb: Proc) -> int:
-    import json
-
-    return int(json.loads(pb.log_path.with_suffix(".json").read_text())["link"]["port"])
 
 
 def test_forged_and_replayed_datagrams_are_dropped_and_counted(tmp_path: Path,
@@ -260,3 +298,49 @@ def test_forged_and_replayed_datagrams_are_dropped_and_counted(tmp_path: Path,
     assert share == 1.0, sorted(missing)
     forged_up = [int(x) for x in re.findall(r"link: datagrams_in=\d+ .*?forged=(\d+)", pb_log)]
     assert forged_up and forged_up[-1] >= tap.forged_up > 0, pb_log[-2000:]
+
+
+def _attacks(counts: str, direction: str) -> tuple[int, int]:
+    """(forged, replayed) by the emulator's attacker in one direction."""
+    part = counts.split(f"{direction} ")[1].split(";")[0]
+    forged = re.search(r"forged (\d+)", part)
+    replayed = re.search(r"replayed (\d+)", part)
+    return (int(forged.group(1)) if forged else 0, int(replayed.group(1)) if replayed else 0)
+
+
+@pytest.mark.parametrize("transport", ["udp", "serial"])
+def test_forged_and_replayed_on_the_air_are_dropped(transport: str, tmp_path: Path,
+                                                     zenoh_client: Any) -> None:
+    """An attacker on the radio (the emulator) forges a share of the datagrams
+    each way (over serial with a good CRC, so the tag must refuse them) and
+    replays others 1.5 s later: none is decoded, each is counted, and the
+    delivery is still whole and equal to the archive."""
+    spec = "forge=0.5,replay=0.5,latency_ms=20,seed=4"
+    model, pb, sb, radio, zport = _start(tmp_path, transport, spec, pb_status_s=1)
+    assert radio is not None
+    with processes(radio, pb, sb):
+        got = _watch(zenoh_client, zport)
+        values, archive, _ = _run(tmp_path, model, pb, sb, got, 6.0, settle=3.0)
+        status = got.status[-1]
+        counts = radio_counts(radio)
+        pb_log = pb.log()
+    r = status["radio"]
+    down_forged, down_replayed = _attacks(counts, "drone->base")
+    up_forged, up_replayed = _attacks(counts, "base->drone")
+    assert down_forged > 2 and down_replayed > 2, counts
+    # a forgery is refused by its tag, or earlier (a flipped config id names no config); a
+    # replay by the replay window, or as a handshake datagram out of a handshake (malformed)
+    refused = r["forged"] + r["unknown_config"] + r["malformed"] + r["replayed"]
+    assert r["forged"] > 0 and r["replayed"] > 0, (r, counts)
+    assert refused >= down_forged + down_replayed - 1, (r, counts)
+    assert check_against_archive(values, archive) > 100  # only genuine values came out
+    share, missing = _delivered_share(values, archive)
+    assert share == 1.0, (sorted(missing), r, counts)
+    pb_counts = re.findall(r"link: datagrams_in=\d+ .*?forged=(\d+) replayed=(\d+)", pb_log)
+    assert pb_counts, pb_log[-2000:]
+    pb_side = r["pubbroker"]  # the PubBroker's STATUS, in the SubBroker's status
+    assert pb_side is not None and validate("status", status) == [], r
+    if up_forged:
+        assert int(pb_counts[-1][0]) > 0 and pb_side["forged"] > 0, (pb_side, counts)
+    if up_replayed:
+        assert int(pb_counts[-1][1]) > 0 and pb_side["replayed"] > 0, (pb_side, counts)

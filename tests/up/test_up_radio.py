@@ -13,7 +13,10 @@ from pathlib import Path
 
 import pytest
 
-RATE_SUBS = ("sub_3", "sub_4", "sub_5", "sub_6", "sub_7")  # every 0.25 s in scenario 1
+# scenario 1's subscriptions and their periods (ns)
+PERIODS = {"sub_1": 2_000_000_000, "sub_2": 2_000_000_000, **{
+    f"sub_{i}": 250_000_000 for i in range(3, 8)}}
+WATCH_S = 9.0
 
 
 @pytest.mark.parametrize("link", ["udp", "serial"])
@@ -34,28 +37,34 @@ def test_up_over_a_datagram_link_through_the_radio(link: str, scenarios_dir: Pat
                            "--workdir", str(run), "--zenoh-listen",
                            f"tcp/127.0.0.1:{zenoh_port}"],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    counts = dict.fromkeys(RATE_SUBS, 0)
+    ends: dict[str, set[int]] = {name: set() for name in PERIODS}
     try:
         wait_for(run / "logs" / "subbroker.log", "running", 60)
         viewer = run / "credentials" / "viewer.cred"
         subs = {name: modd.subscribe("usv", name, connect=f"tcp/127.0.0.1:{zenoh_port}",
-                                     credentials=viewer) for name in RATE_SUBS}
+                                     credentials=viewer) for name in PERIODS}
         time.sleep(2.0)  # the simulator's first samples, the first datagram
         for sub in subs.values():
             sub.collect(duration_s=0.01)
         start = time.monotonic()
-        while time.monotonic() - start < 6.0:
+        while time.monotonic() - start < WATCH_S:
             for name, sub in subs.items():
-                counts[name] += len([v for v in sub.collect(duration_s=0.05)
-                                     if v.value is not None])
+                ends[name] |= {v.end_ns for v in sub.collect(duration_s=0.05)
+                               if v.value is not None}
         for sub in subs.values():
             sub.close()
     finally:
         up.send_signal(signal.SIGTERM)
         out, _ = up.communicate(timeout=60)
     assert up.returncode == 0, out
-    # 4 values/s each; the radio loses 5 %, the NACKs repair it within ~2 s
-    assert all(n >= 4 * 6.0 * 0.75 for n in counts.values()), (counts, out)
+    # every subscription at its rate: its windows one period apart, no hole between the
+    # first and the last (the radio loses 5 %, the NACKs repair it), as many as the
+    # watch holds (a window at either edge may fall outside it)
+    for name, period in PERIODS.items():
+        got = sorted(ends[name])
+        assert got, (name, out)
+        assert all(b - a == period for a, b in zip(got, got[1:], strict=False)), (name, got)
+        assert len(got) >= WATCH_S * 1e9 // period - 2, (name, len(got), out)
     pb_config = (run / "generated" / "operator" / "pubbroker.json").read_text()
     assert f'"transport": "{link}"' in pb_config
     assert "started radio" in out and "stopped radio" in out

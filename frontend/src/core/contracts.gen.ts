@@ -103,8 +103,56 @@ export interface SubBrokerStatus {
   transport?: string;
   /** Over udp and serial: the planner's figures for the declared transport (modd_plan.linkbudget: drone_to_base, base_to_drone, share, delays_s, ...), else null. */
   link_budget?: object | null;
-  /** Over udp and serial: what the datagram link measures (wire bytes/s per direction, loss, retransmissions, forged, replayed, malformed, ...); null over tcp. */
-  radio?: unknown | null;
+  /** Over udp and serial: what the datagram link measures (docs/subbroker.md, "Status"); null over tcp. */
+  radio?: RadioStatus | null;
+}
+
+/** A datagram link's figures (modd.subbroker.dglink.DatagramLinkClient.radio_status): the wire bytes/s per direction over the last 10 s, the share of slots lost or repaired, the datagrams refused, and the PubBroker's own counters from its last STATUS. */
+export interface RadioStatus {
+  transport: "udp" | "serial";
+  /** The accepted delay the link runs with (the deployed model's). */
+  accepted_delay_s: number;
+  /** Drone to base, headers or framing included; null before two samples. */
+  wire_bytes_in_per_s: unknown;
+  /** Base to drone (NACKs, PINGs, CONFIG), headers or framing included; null before two samples. */
+  wire_bytes_out_per_s: unknown;
+  /** Share of the slots that were missing (later repaired or not). */
+  loss: unknown;
+  slots_received: number;
+  /** Slots that arrived after a NACK. */
+  retransmissions: number;
+  /** Slots given up (asked 5 times, or out of the resend ring). */
+  slots_lost: number;
+  /** Slots missing now and still asked for. */
+  slots_missing: number;
+  nacks: number;
+  datagrams_in: number;
+  /** Datagrams whose tag did not verify: dropped, never decoded. */
+  forged: number;
+  /** Datagrams seen before or older than the replay window: dropped. */
+  replayed: number;
+  /** Datagrams or serial frames that did not decode (CRC, COBS, layout). */
+  malformed: number;
+  unknown_config: number;
+  handshakes: number;
+  /** The PubBroker's datagram counters from its last STATUS (docs/protocol.md, STATUS fields 24..29); null before its first STATUS. */
+  pubbroker: PubBrokerDatagrams | null;
+}
+
+/** What the PubBroker counted on its datagram link. */
+export interface PubBrokerDatagrams {
+  /** Every datagram sent, fragments and resends included. */
+  datagrams_sent: number;
+  /** Datagrams sent again for NACKs. */
+  datagrams_resent: number;
+  /** NACKs received. */
+  nacks: number;
+  /** Slots not sent: no session, or too large for 16 fragments (the archive keeps their samples). */
+  slots_dropped: number;
+  /** Datagrams received whose tag did not verify. */
+  forged: number;
+  /** Datagrams received again or older than the replay window. */
+  replayed: number;
 }
 
 /** State of the SubBroker's link to the PubBroker. */

@@ -69,7 +69,40 @@ class SubBrokerStatus(TypedDict):
     deployment: NotRequired[Any]
     transport: NotRequired[str]
     link_budget: NotRequired[dict[str, Any] | None]
-    radio: NotRequired[Any | None]
+    radio: NotRequired[RadioStatus | None]
+
+
+class RadioStatus(TypedDict):
+    """A datagram link's figures (modd.subbroker.dglink.DatagramLinkClient.radio_status): the wire bytes/s per direction over the last 10 s, the share of slots lost or repaired, the datagrams refused, and the PubBroker's own counters from its last STATUS."""
+
+    transport: Literal["udp", "serial"]
+    accepted_delay_s: float
+    wire_bytes_in_per_s: Any
+    wire_bytes_out_per_s: Any
+    loss: Any
+    slots_received: int
+    retransmissions: int
+    slots_lost: int
+    slots_missing: int
+    nacks: int
+    datagrams_in: int
+    forged: int
+    replayed: int
+    malformed: int
+    unknown_config: int
+    handshakes: int
+    pubbroker: PubBrokerDatagrams | None
+
+
+class PubBrokerDatagrams(TypedDict):
+    """What the PubBroker counted on its datagram link."""
+
+    datagrams_sent: int
+    datagrams_resent: int
+    nacks: int
+    slots_dropped: int
+    forged: int
+    replayed: int
 
 
 class PredictedLink(TypedDict):
@@ -283,4 +316,4 @@ class DeliveredValueFields:
     backfilled: bool = False
 
 
-__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "DeliveredValue", "SubBrokerStatus", "LinkState", "PredictedLink", "TcpSender", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "DeliveredValueFields"]
+__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "DeliveredValueFields"]

@@ -46,6 +46,39 @@ def test_channel_rate_loss_outage_are_seeded() -> None:
     assert q.dropped["queue"] == 2
 
 
+def test_forged_copies_pass_the_framing_and_fail_the_tag() -> None:
+    """An attacker's forgery over serial has a good CRC (the deframer passes it),
+    so it is the datagram's tag that refuses it; handshakes are not forged."""
+    from modd.link.datagram import (
+        DRONE_TO_BASE,
+        DataDatagram,
+        Forged,
+        encode_data,
+        session_key,
+        verify_data,
+    )
+    from modd.link.serialframe import Deframer, encode_frame
+
+    key = session_key(b"k", bytes(16), bytes(16))
+    raw = encode_data(DataDatagram(1, 40, [b"\x01\x02\x03\x04"] * 3), key, DRONE_TO_BASE)
+    ch = Channel(RadioSpec(forge=1.0, replay=0.5, seed=2), 4)
+    for serial in (False, True):
+        for _ in range(20):
+            packet = encode_frame(raw) if serial else raw
+            bad = ch.forgery(packet, serial)
+            assert bad is not None and bad != packet
+            got = Deframer(252).feed(bad) if serial else [bad]
+            assert len(got) == 1 and got[0] != raw  # framing intact, datagram altered
+            with pytest.raises(Forged):
+                verify_data(got[0], key, DRONE_TO_BASE, 40)
+    assert ch.forgery(b"\x41\x05hello", False) is None  # a handshake datagram
+    assert ch.forgery(encode_frame(raw)[:-1], True) is None  # a piece of a frame
+    assert 10 <= sum(ch.replays() for _ in range(40)) <= 30
+    assert "forged 40" in ch.summary() and "replayed" in ch.summary()
+    with pytest.raises(ValueError, match="out of range"):
+        RadioSpec.parse("forge=1.5")
+
+
 def test_udp_relay_both_ways_with_loss_and_latency() -> None:
     target = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     target.bind(("127.0.0.1", 0))

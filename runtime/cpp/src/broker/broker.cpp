@@ -583,6 +583,13 @@ std::vector<uint64_t> Broker::status_counters() {
   v[kArchiveRateBps] = rate_bps_;
   uint64_t settled = archived + failed;
   v[kSamplesPending] = counters_.accepted > settled ? counters_.accepted - settled : 0;
+  const LinkDatagramCounts d = out_.datagram_counts();
+  v[kDgramSent] = d.sent;
+  v[kDgramResent] = d.resent;
+  v[kDgramNacks] = d.nacks;
+  v[kDgramDropped] = d.dropped;
+  v[kDgramForged] = d.forged;
+  v[kDgramReplayed] = d.replayed;
   return v;
 }
 

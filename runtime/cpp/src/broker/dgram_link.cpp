@@ -282,6 +282,7 @@ bool DatagramLink::add_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, s
                             std::vector<bool>&& presence) {
   if (!ready_) {
     if (!group_.empty()) flush();
+    ++c_.dropped;
     return false;
   }
   SlotEntry e{std::move(values), std::move(presence)};

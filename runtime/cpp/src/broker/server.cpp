@@ -148,6 +148,12 @@ void Server::adopt_source() {
   if (port_) port_->adopt_source();
 }
 
+LinkDatagramCounts Server::datagram_counts() const {
+  if (!dlink_) return {};
+  const DgramCounters& c = dlink_->counters();
+  return {c.datagrams_out, c.resent, c.nacks, c.dropped, c.forged, c.replayed};
+}
+
 bool Server::link_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
                        std::vector<bool>&& presence) {
   return dlink_ && dlink_->add_slot(config_id, slot, date_ns, std::move(values), std::move(presence));
@@ -286,10 +292,14 @@ void Server::timers(int64_t now) {
   broker_->check_archive(now);
   for (auto& [fd, c] : conns_)
     if (c.kind == Kind::Ingress) send_ingress_output(c);
-  if (now >= next_status_) {
+  {
     uint32_t p = broker_->status_period_s();
-    if (p) broker_->status_due(now);
-    next_status_ = now + int64_t{std::max<uint32_t>(p, 1)} * 1'000'000'000;
+    int64_t period_ns = int64_t{std::max<uint32_t>(p, 1)} * 1'000'000'000;
+    if (next_status_ > now + period_ns) next_status_ = now + period_ns;  // a CONFIG shortened the period
+    if (now >= next_status_) {
+      if (p) broker_->status_due(now);
+      next_status_ = now + period_ns;
+    }
   }
   broker_->send_overdue_status(now);
   if (now >= next_log_) {

@@ -38,6 +38,8 @@ class LinkOutput {
                          std::vector<uint8_t>&& /*values*/, std::vector<bool>&& /*presence*/) {
     return false;
   }
+  // Datagram transports: the link's counters for STATUS (fields 24..29), zeros over tcp.
+  virtual LinkDatagramCounts datagram_counts() const { return {}; }
 };
 
 class Broker;

@@ -35,7 +35,15 @@ enum StatusField : uint8_t {
   kRejOverflow, kRejMalformed, kArchiveFailed, kIngressMalformedFrames, kPublishersConnected, kFramesSent,
   kFramesDropped, kLinkBytesSent, kDiskFreeMb, kBufferFillPct, kArchiveFiles, kAuthFailures, kConfigId,
   kRejQuota, kArchiveState, kArchiveRateBps, kSamplesPending,
+  kDgramSent, kDgramResent, kDgramNacks, kDgramDropped, kDgramForged, kDgramReplayed,
   kStatusFieldCount
+};
+
+// What a datagram link (udp, serial) reports in STATUS: datagrams sent (fragments and
+// resends included), datagrams resent for NACKs, NACKs received, slots not sent (no session,
+// or too large for 16 fragments), forged and replayed datagrams received (dropped).
+struct LinkDatagramCounts {
+  uint64_t sent = 0, resent = 0, nacks = 0, dropped = 0, forged = 0, replayed = 0;
 };
 
 // STATUS archive_state values.

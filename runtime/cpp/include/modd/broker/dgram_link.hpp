@@ -46,7 +46,7 @@ struct DgramCounters {
   uint64_t nacks = 0, resent = 0, too_old = 0;
   uint64_t handshakes = 0, timeouts = 0;
   uint64_t fragments = 0;  // 0x32 datagrams sent for slots larger than a packet
-  uint64_t dropped = 0;    // slots too large even for 16 fragments (the archive keeps them)
+  uint64_t dropped = 0;    // slots not sent: no session, or too large for 16 fragments (archived all the same)
 };
 
 class DatagramLink {

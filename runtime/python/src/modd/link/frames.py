@@ -168,7 +168,8 @@ STATUS_FIELDS: tuple[str, ...] = (
     "archive_failed", "ingress_malformed_frames", "publishers_connected", "frames_sent",
     "frames_dropped", "link_bytes_sent", "disk_free_mb", "buffer_fill_pct", "archive_files",
     "auth_failures", "config_id", "rejected_quota", "archive_state", "archive_rate_bps",
-    "samples_pending",
+    "samples_pending", "link_datagrams_sent", "link_datagrams_resent", "link_nacks",
+    "link_slots_dropped", "link_forged", "link_replayed",
 )
 
 

@@ -27,11 +27,18 @@ class RadioSpec:
     queue_s: float = 2.0  # a packet that would wait longer than this to be sent is dropped
     seed: int = 0
     duplicate: float = 0.0  # probability that a packet that passed arrives twice
+    # An attacker on the air: a share of the packets that passed is followed by a
+    # forged copy (one bit of the datagram flipped; over serial the frame's CRC is
+    # made good again, so that the forgery reaches the tag check) ...
+    forge: float = 0.0
+    # ... or sent again REPLAY_AFTER_S later, as it was (a replay, not a duplicate).
+    replay: float = 0.0
 
     @staticmethod
     def parse(text: str) -> RadioSpec:
         """``rate=3600,packet=252,loss=0.05,latency_ms=80,jitter_ms=20,outage=10+30,seed=7``
-        (``duplicate=0.01``: a share of the packets arrives twice)
+        (``duplicate=0.01``: a share of the packets arrives twice; ``forge=0.1``,
+        ``replay=0.1``: an attacker forges or replays a share of them)
         (``outage`` may repeat: start+duration in seconds). Raises ValueError naming
         the bad item."""
         values: dict[str, float] = {}
@@ -49,10 +56,11 @@ class RadioSpec:
             except ValueError:
                 raise ValueError(f"radio setting {key!r}: {raw!r} is not a number") from None
             if key not in ("rate", "packet", "loss", "latency_ms", "jitter_ms", "queue_s",
-                           "seed", "duplicate"):
+                           "seed", "duplicate", "forge", "replay"):
                 raise ValueError(f"unknown radio setting {key!r}; expected rate, packet, loss, "
-                                 "latency_ms, jitter_ms, outage, queue_s, seed or duplicate")
-            if value < 0 or (key in ("loss", "duplicate") and value > 1):
+                                 "latency_ms, jitter_ms, outage, queue_s, seed, duplicate, "
+                                 "forge or replay")
+            if value < 0 or (key in ("loss", "duplicate", "forge", "replay") and value > 1):
                 raise ValueError(f"radio setting {key}={raw} is out of range")
             values[key] = value
         return RadioSpec(
@@ -60,7 +68,8 @@ class RadioSpec:
             loss=values.get("loss", 0.0), latency_ms=values.get("latency_ms", 0.0),
             jitter_ms=values.get("jitter_ms", 0.0), outages=tuple(outages),
             queue_s=values.get("queue_s", 2.0), seed=int(values.get("seed", 0)),
-            duplicate=values.get("duplicate", 0.0))
+            duplicate=values.get("duplicate", 0.0), forge=values.get("forge", 0.0),
+            replay=values.get("replay", 0.0))
 
 
 @dataclass
@@ -75,6 +84,8 @@ class Channel:
     passed_bytes: int = 0
     dropped: Counter[str] = field(default_factory=Counter)
     duplicated: int = 0
+    forged: int = 0
+    replayed: int = 0
     _busy_until: float = 0.0
     _rng: random.Random = field(init=False)
 
@@ -114,8 +125,40 @@ class Channel:
             return True
         return False
 
+    def forgery(self, packet: bytes, serial: bool) -> bytes | None:
+        """A forged copy of the packet that just passed (one bit flipped after the
+        datagram's type byte), or None. Only datagrams with a tag (DATA, fragment,
+        control) are forged: a handshake datagram carries its own proofs."""
+        if not self.spec.forge or self._rng.random() >= self.spec.forge:
+            return None
+        from modd.link.serialframe import cobs_decode, encode_frame  # only when forging
+
+        datagram = packet
+        if serial:
+            if not packet.endswith(b"\x00"):
+                return None  # a piece of a frame: nothing an attacker could make verify
+            try:
+                datagram = cobs_decode(packet.rstrip(b"\x00"))[:-2]
+            except ValueError:
+                return None
+        if len(datagram) < 6 or datagram[0] not in (0x30, 0x31, 0x32, 0x40):
+            return None
+        bad = bytearray(datagram)
+        bad[self._rng.randrange(1, len(bad))] ^= 1 << self._rng.randrange(8)
+        self.forged += 1
+        return encode_frame(bytes(bad)) if serial else bytes(bad)
+
+    def replays(self) -> bool:
+        """Whether the packet that just passed is sent again later, as it was."""
+        if self.spec.replay and self._rng.random() < self.spec.replay:
+            self.replayed += 1
+            return True
+        return False
+
     def summary(self) -> str:
         drops = ", ".join(f"{k} {v}" for k, v in sorted(self.dropped.items())) or "none"
         lost = sum(self.dropped.values())
         dup = f", duplicated {self.duplicated}" if self.duplicated else ""
+        dup += f", forged {self.forged}" if self.forged else ""
+        dup += f", replayed {self.replayed}" if self.replayed else ""
         return f"passed {self.passed} ({self.passed_bytes} B), dropped {lost} ({drops}){dup}"

@@ -19,6 +19,8 @@ from .channel import Channel, RadioSpec
 MAX_DATAGRAM = 65535
 SERIAL_IDLE_S = 0.02  # bytes waiting this long go as a (short) radio packet
 DUPLICATE_AFTER_S = 0.005  # a duplicated packet arrives again this much later
+FORGED_AFTER_S = 0.003  # a forged copy follows the genuine packet
+REPLAY_AFTER_S = 1.5  # a replayed packet comes again this much later (outside any reorder)
 
 
 class _Pending:
@@ -70,17 +72,13 @@ def run_udp(spec: RadioSpec, listen: tuple[str, int], target: tuple[str, int],
                     peer[:] = [addr]
                     at = up.offer(data, now)
                     if at is not None:
-                        pending.add(at, partial(_send, back.send, data))
-                        if up.duplicates():
-                            pending.add(at + DUPLICATE_AFTER_S, partial(_send, back.send, data))
+                        _deliver(pending, up, at, back.send, data, serial=False)
                 else:
                     data = back.recv(MAX_DATAGRAM)
                     at = down.offer(data, now)
                     if at is not None and peer:
-                        send = partial(_send, partial(_sendto, front, peer[0]), data)
-                        pending.add(at, send)
-                        if down.duplicates():
-                            pending.add(at + DUPLICATE_AFTER_S, send)
+                        _deliver(pending, down, at, partial(_sendto, front, peer[0]), data,
+                                 serial=False)
             if report and time.monotonic() >= next_report:
                 report(up, down)
                 next_report += report_every
@@ -89,6 +87,19 @@ def run_udp(spec: RadioSpec, listen: tuple[str, int], target: tuple[str, int],
         front.close()
         back.close()
     return up, down
+
+
+def _deliver(pending: _Pending, ch: Channel, at: float, fn: Callable[[bytes], object],
+             data: bytes, serial: bool) -> None:
+    """Schedule a packet that passed, with its duplicate, forgery or replay."""
+    pending.add(at, partial(_send, fn, data))
+    if ch.duplicates():
+        pending.add(at + DUPLICATE_AFTER_S, partial(_send, fn, data))
+    forged = ch.forgery(data, serial)
+    if forged is not None:
+        pending.add(at + FORGED_AFTER_S, partial(_send, fn, forged))
+    if ch.replays():
+        pending.add(at + REPLAY_AFTER_S, partial(_send, fn, data))
 
 
 def _sendto(sock: socket.socket, addr: tuple[str, int], data: bytes) -> int:
@@ -134,10 +145,7 @@ def run_serial(spec: RadioSpec, base_master: int, drone_master: int,
         ch, out = route[fd]
         at = ch.offer(packet, now)
         if at is not None:
-            send = partial(_send, partial(os.write, out), packet)
-            pending.add(at, send)
-            if ch.duplicates():
-                pending.add(at + DUPLICATE_AFTER_S, send)
+            _deliver(pending, ch, at, partial(os.write, out), packet, serial=True)
 
     try:
         while not stop():

@@ -80,6 +80,8 @@ RETRY_S = 1.0  # handshake and CONFIG resent this often ...
 RETRIES = 10  # ... at most this many times
 KEEPALIVE_S = 30.0
 MAX_NACK_ASKS = 5
+PUBBROKER_COUNTS = ("datagrams_sent", "datagrams_resent", "nacks", "slots_dropped", "forged",
+                    "replayed")
 OVERDUE_GRACE_S = 0.25  # beyond the learnt lateness, before an overdue datagram is asked for
 
 
@@ -227,7 +229,17 @@ class DatagramLinkClient:
             "malformed": r.malformed + (port.corrupt if port is not None else 0),
             "unknown_config": r.unknown_config,
             "handshakes": r.handshakes,
+            "pubbroker": self._pubbroker_counts(),
         }
+
+    def _pubbroker_counts(self) -> dict[str, int] | None:
+        """The PubBroker's side from its last STATUS (docs/protocol.md, STATUS 24..29):
+        datagrams sent, resent, NACKs it got, slots it dropped, forged and replayed
+        datagrams it refused; None before its first STATUS (or from an older broker)."""
+        st = self.stats.pubbroker
+        if not st or "link_datagrams_sent" not in st:
+            return None
+        return {name: int(st[f"link_{name}"]) for name in PUBBROKER_COUNTS}
 
     # -- thread --------------------------------------------------------------------
 
