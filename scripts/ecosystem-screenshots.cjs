@@ -70,9 +70,9 @@ function serve() {
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
-async function shot(page, name, locator) {
+async function shot(page, name, clip) {
   const file = path.join(out, name);
-  await (locator ?? page).screenshot({ path: file });
+  await page.screenshot({ path: file, clip });
   console.log(`ecosystem-screenshots: ${file}`);
 }
 
@@ -108,10 +108,28 @@ async function main() {
     await page.goto(live);
     await sleep(Number(process.env.LIVE_WAIT_MS ?? 45_000));
     await shot(page, "ecosystem-lichtblick-live.png");
-    for (const [id, name] of [[/ map!/, "map"], [/ Table!/, "link-table"]]) {
+    // The map and the link status, each full screen (the panel's menu > Fullscreen).
+    // (the map panel without the app bar; the table's one row at the top of the page)
+    const map = { x: 0, y: 44, width: 1600, height: 870 };
+    const top = { x: 0, y: 0, width: 1600, height: 190 };
+    for (const [id, name, zoomIn, clip] of [[/ map!/, "map", 4, map], [/ Table!/, "link-table", 0, top]]) {
       const panel = page.getByTestId(id).first();
-      if (await panel.count()) await shot(page, `ecosystem-lichtblick-${name}.png`, panel);
-      else console.error(`ecosystem-screenshots: no panel ${id}`);
+      if (!(await panel.count())) {
+        console.error(`ecosystem-screenshots: no panel ${id}`);
+        continue;
+      }
+      await panel.hover();
+      await panel.getByTestId("panel-menu").first().click();
+      await page.getByTestId("panel-menu-fullscreen").first().click();
+      await sleep(1_000);
+      for (let i = 0; i < zoomIn; i++) {
+        await page.getByRole("button", { name: "Zoom in" }).first().click();
+        await sleep(300);
+      }
+      await sleep(Number(process.env.PANEL_WAIT_MS ?? 10_000));
+      await shot(page, `ecosystem-lichtblick-${name}.png`, clip);
+      await page.keyboard.press("Escape");
+      await sleep(500);
     }
 
     // 3. The drone's archive, opened as a file (Lichtblick's Remote file, an
@@ -120,7 +138,7 @@ async function main() {
     const replay = `${app}/?ds=remote-file&ds.url=${encodeURIComponent(app + "/modd/archive.mcap")}` +
       `&layoutUrl=${encodeURIComponent(app + "/modd/modd-archive-layout.json")}`;
     await page.goto(replay);
-    await sleep(Number(process.env.REPLAY_WAIT_MS ?? 20_000));
+    await sleep(Number(process.env.REPLAY_WAIT_MS ?? 30_000));
     const scrubber = page.getByTestId("playback-slider").first();
     if (await scrubber.count()) {
       const box = await scrubber.boundingBox();

@@ -29,6 +29,11 @@ BASE="http://127.0.0.1:$MODD_PORT"
 
 RUN_PID=""
 cleanup() {
+  local rc=$?
+  if [ "$rc" != 0 ] && [ -f "$MODD_DATA/backend.log" ]; then
+    echo "ecosystem-screenshots: failed ($rc); the end of the backend's log:" >&2
+    tail -30 "$MODD_DATA/backend.log" >&2
+  fi
   if [ -n "$RUN_PID" ]; then kill -TERM "$RUN_PID" 2>/dev/null || true; wait "$RUN_PID" 2>/dev/null || true; fi
   rm -rf "$WORK"
 }
@@ -46,7 +51,7 @@ echo "ecosystem-screenshots: make run is up at $BASE; recording ${RECORD_S} s of
 sleep "$RECORD_S"
 
 # The scientist's layout download and the replay request, through the workbench's API.
-"$PY" - "$BASE" "$(cat "$MODD_DATA/admin-password")" "$WORK" <<'EOF'
+"$PY" - "$BASE" "$(cat "$MODD_DATA/admin-password")" "$WORK" <<'EOF' || { tail -20 "$WORK/run.log" >&2; exit 1; }
 import json, sys, urllib.request
 base, password, work = sys.argv[1:4]
 
@@ -61,7 +66,10 @@ def call(path, body=None, method=None):
 
 token = None
 token = call("/api/auth/login", {"username": "admin", "password": password})["token"]
-project = call("/api/projects")[0]["id"]
+projects = call("/api/projects")
+if not projects:
+    sys.exit("ecosystem-screenshots: make run loaded no project (see its log above)")
+project = projects[0]["id"]
 with open(f"{work}/modd-layout.json", "w") as f:
     json.dump(call(f"/api/projects/{project}/foxglove-layout"), f)
 archive = call("/api/drones/usv/archives")[0]
