@@ -24,6 +24,7 @@ from modd.zenoh_session import client_settings, open_session
 from modd_backend import Settings, create_app
 from modd_model import load_model
 from station import PUBBROKER, Station
+from viewer_schema import refusals
 
 DEMO = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.modd"
 
@@ -151,6 +152,9 @@ def test_every_subscriber_live_in_foxglove(backend: tuple[TestClient, int],
                                          "nsec": v["start_ns"] % 10**9}
     schema = next(a for a in report["advertised"] if a["topic"] == "/usv/sub_5")
     assert schema["encoding"] == "json" and schema["schemaName"] == "modd.Window"
+    # every channel is one the viewers can read (else Lichtblick drops it)
+    for adv in report["advertised"]:
+        assert not refusals(json.loads(adv["schema"])), (adv["topic"], adv["schema"])
     assert set(json.loads(schema["schema"])["properties"]) >= {
         "value", "count", "aggregation", "window_start", "window_end", "backfilled"}
     # the dynamic subscription came and went
@@ -195,5 +199,27 @@ def test_channels_follow_a_new_deploy() -> None:
         live.on_value("modd/usv/sub/sub_9", json.dumps(v).encode())
         live.on_status("modd/usv/status", json.dumps({"link": "down"}).encode())  # no routes
         assert live.topics() == ["/usv/link", "/usv/sub_2", "/usv/sub_9"]
+    finally:
+        live.stop()
+
+
+def test_an_all_subscriber_changes_its_channel_schema() -> None:
+    """An ``ALL`` subscriber's value is an array of numbers in its schema; a
+    deploy that changes its aggregation advertises the channel again."""
+    from modd_backend.foxglove import FoxgloveLive
+
+    live = FoxgloveLive("127.0.0.1", free_port())
+    try:
+        v = {"value": [1.0, 2.0], "count": 2, "aggregation": "ALL", "start_ns": 0,
+             "end_ns": 250_000_000, "topic": "usv.a.z", "delivered_ns": 1}
+        live.on_value("modd/usv/sub/s", json.dumps(v).encode())
+        first = live._channels["/usv/s"]
+        assert json.loads(live._schemas["/usv/s"])["properties"]["value"]["type"] == "array"
+        live.on_value("modd/usv/sub/s", json.dumps(v).encode())
+        assert live._channels["/usv/s"] is first  # same schema: same channel
+        live.on_value("modd/usv/sub/s", json.dumps(dict(v, value=1.5, aggregation="MAX")).encode())
+        assert live._channels["/usv/s"] is not first
+        assert json.loads(live._schemas["/usv/s"])["properties"]["value"]["type"] == "number"
+        assert live.topics() == ["/usv/s"]
     finally:
         live.stop()

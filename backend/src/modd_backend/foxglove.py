@@ -44,26 +44,42 @@ DEFAULT_PORT = 8765
 
 _TIME = {"type": "object", "properties": {"sec": {"type": "integer"},
                                           "nsec": {"type": "integer"}}}
-WINDOW_SCHEMA: dict[str, Any] = {
-    "title": "modd.Window",
-    "description": "One window of a MoDD subscription (docs/subbroker.md, delivered value)",
-    "type": "object",
-    "properties": {
-        "value": {"description": "the aggregate; an array for ALL; null for an empty window",
-                  "type": ["number", "boolean", "array", "null"]},
-        "count": {"description": "samples behind the value (AVERAGE, COUNT, ALL)",
-                  "type": ["integer", "null"]},
-        "aggregation": {"type": "string"},
-        "window_start": _TIME,
-        "window_end": _TIME,
-        "backfilled": {"description": "delivered late, after a link outage",
-                       "type": "boolean"},
-        "topic": {"type": "string"},
-        "period_s": {"type": "string"},
-        "unit": {"type": "string"},
-        "delivered": _TIME,
-    },
-}
+# One JSON type per field: Foxglove's and Lichtblick's JSON-schema reader
+# (packages/mcap-support parseJsonSchema) refuses a list of types such as
+# ["number", "null"] and then drops the whole channel ("Failed to parse channel
+# schema"). A null still travels where a field says number: the viewers do not
+# validate messages against the schema, they only read its field types.
+
+
+def window_schema(aggregation: str = "") -> dict[str, Any]:
+    """The ``modd.Window`` schema of a subscriber: ``value`` is an array of
+    numbers for ``ALL``, a number otherwise (null for an empty window)."""
+    value: dict[str, Any] = (
+        {"description": "the window's samples", "type": "array", "items": {"type": "number"}}
+        if aggregation == "ALL" else
+        {"description": "the aggregate; null for an empty window", "type": "number"})
+    return {
+        "title": "modd.Window",
+        "description": "One window of a MoDD subscription (docs/subbroker.md, delivered value)",
+        "type": "object",
+        "properties": {
+            "value": value,
+            "count": {"description": "samples behind the value (AVERAGE, COUNT, ALL); "
+                                     "null when not carried", "type": "integer"},
+            "aggregation": {"type": "string"},
+            "window_start": _TIME,
+            "window_end": _TIME,
+            "backfilled": {"description": "delivered late, after a link outage",
+                           "type": "boolean"},
+            "topic": {"type": "string"},
+            "period_s": {"type": "string"},
+            "unit": {"type": "string"},
+            "delivered": _TIME,
+        },
+    }
+
+
+WINDOW_SCHEMA: dict[str, Any] = window_schema()
 #: foxglove.LocationFix (the Map panel's message), JSON-encoded.
 LOCATION_SCHEMA: dict[str, Any] = {
     "title": "foxglove.LocationFix",
@@ -80,16 +96,17 @@ LOCATION_SCHEMA: dict[str, Any] = {
 }
 LINK_SCHEMA: dict[str, Any] = {
     "title": "modd.LinkStatus",
-    "description": "The SubBroker's status of one drone (docs/subbroker.md, status)",
+    "description": "The SubBroker's status of one drone (docs/subbroker.md, status); "
+                   "rtt_s, config_id and last_error are null when unknown",
     "type": "object",
     "properties": {
         "link": {"type": "string"},
-        "rtt_s": {"type": ["number", "null"]},
-        "config_id": {"type": ["integer", "null"]},
+        "rtt_s": {"type": "number"},
+        "config_id": {"type": "integer"},
         "delivered": {"type": "integer"},
         "bytes_in_per_s": {"type": "number"},
         "ip_bytes_in_per_s": {"type": "number"},
-        "last_error": {"type": ["string", "null"]},
+        "last_error": {"type": "string"},
     },
 }
 
@@ -146,6 +163,7 @@ class FoxgloveLive:
         self.host = host
         self.port = self.server.port
         self._channels: dict[str, Any] = {}
+        self._schemas: dict[str, bytes] = {}  # topic -> the schema advertised
         self._fix: dict[str, dict[str, float]] = {}  # drone -> lat/lon/alt seen last
         self._lock = threading.Lock()
         self.logged = 0
@@ -160,14 +178,20 @@ class FoxgloveLive:
             return sorted(self._channels)
 
     def _channel(self, topic: str, schema: dict[str, Any], title: str) -> Any:
+        """The channel of ``topic``; advertised again when its schema changes
+        (a new deploy made a subscriber ``ALL``, or no longer)."""
+        data = json.dumps(schema).encode()
         with self._lock:
             ch = self._channels.get(topic)
+            if ch is not None and self._schemas.get(topic) != data:
+                ch.close()  # withdrawn before its successor is advertised
+                ch = None
             if ch is None:
                 fg = self._foxglove
                 ch = fg.Channel(topic, message_encoding="json", context=self.context,
-                                schema=fg.Schema(name=title, encoding="jsonschema",
-                                                 data=json.dumps(schema).encode()))
+                                schema=fg.Schema(name=title, encoding="jsonschema", data=data))
                 self._channels[topic] = ch
+                self._schemas[topic] = data
             return ch
 
     def on_value(self, key: str, payload: bytes) -> None:
@@ -178,7 +202,8 @@ class FoxgloveLive:
             return
         drone, subscriber = found
         msg = window_message(delivered)
-        ch = self._channel(f"/{drone}/{subscriber}", WINDOW_SCHEMA, "modd.Window")
+        ch = self._channel(f"/{drone}/{subscriber}",
+                           window_schema(str(delivered.get("aggregation", ""))), "modd.Window")
         end_ns = int(delivered.get("end_ns") or 0)
         ch.log(msg, log_time=end_ns or None)
         self.logged += 1
@@ -223,6 +248,8 @@ class FoxgloveLive:
             gone = [t for t in self._channels if t.startswith(prefix)
                     and t[len(prefix):] not in routed | {"link", "position"}]
             closing = [self._channels.pop(t) for t in gone]
+            for t in gone:
+                self._schemas.pop(t, None)
         for ch in closing:
             ch.close()
 
@@ -230,6 +257,7 @@ class FoxgloveLive:
         with self._lock:
             channels = list(self._channels.values())
             self._channels.clear()
+            self._schemas.clear()
         for ch in channels:
             ch.close()
         self.server.stop()

@@ -38,9 +38,12 @@ log = logging.getLogger("modd.subbroker.record")
 
 RETRY_S = 2.0
 _SAFE = re.compile(r"[^A-Za-z0-9_.-]")
+# One JSON type per field, as Foxglove and Lichtblick read schemas (a field
+# without a type makes them drop the channel); a null or an ALL window's list
+# still travels in "value".
 _SCHEMA = json.dumps({"type": "object", "properties": {
-    "value": {}, "start_ns": {"type": "integer"}, "end_ns": {"type": "integer"},
-    "backfilled": {"type": "boolean"}}}).encode()
+    "value": {"type": "number"}, "start_ns": {"type": "integer"},
+    "end_ns": {"type": "integer"}, "backfilled": {"type": "boolean"}}}).encode()
 
 
 class BaseRecord:
