@@ -9,11 +9,12 @@
 import { execFileSync } from "node:child_process";
 import { join } from "node:path";
 import { waitUntil } from "./journey.mjs";
+import { checkRows, readTopic } from "./archiveOracle.mjs";
 
 /** How long the gap step stops the drone's PubBroker (ms). */
 const OUTAGE_MS = 8000;
 
-export function views({ page, imagesDir, drone, liveValues, dronePid, survey, ports }) {
+export function views({ page, imagesDir, drone, liveValues, dronePid, survey, ports, archiveDir }) {
   const shot = async (name) => {
     await page.waitForTimeout(200);
     await page.screenshot({ path: join(imagesDir, `${name}.png`) });
@@ -317,6 +318,39 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
         async () => `after Fill gaps: "${await caption.textContent()}" (${gap} windows were missing, ${before} before the outage)`);
       await expectText(progress, /[1-9]\d* backfilled values received/);
       await expandShot("monitor-backfilled");
+      // The values, as a scientist reads them: the chart's table, backfilled rows only, each
+      // checked against the drone's own archive (read and aggregated by the test: the oracle).
+      const filled = Number(/(\d+) backfilled/.exec((await caption.textContent()) ?? "")?.[1]);
+      await chart.getByRole("button", { name: "Show values" }).click();
+      await chart.getByRole("checkbox", { name: "Backfilled only" }).check();
+      const table = chart.getByRole("table", { name: "Values of sub_5" });
+      const rows = table.locator("tbody tr[data-end]");
+      // the filled gap may lie before the chart's last minute: zoom out until every backfilled row shows
+      for (let i = 0; i < 5 && (await rows.count()) < filled; i += 1) {
+        await page.getByRole("toolbar", { name: "Time window" }).getByRole("button", { name: "Zoom out in time" }).click();
+        await page.waitForTimeout(700);
+      }
+      const shown = await rows.evaluateAll((trs) => trs.map((tr) => ({
+        start: Number(tr.dataset.start), end: Number(tr.dataset.end), value: Number(tr.dataset.value),
+        cells: [...tr.cells].map((c) => c.textContent ?? ""),
+      })));
+      if (shown.length !== filled) throw new Error(`the table shows ${shown.length} backfilled rows, the chart counts ${filled}`);
+      const ends = new Set(shown.map((r) => r.end));
+      if (ends.size !== shown.length) throw new Error("a window shown twice in the table");
+      const [, topic, aggregation] = /sub_5: (\S+) ([A-Z]+) every/.exec((await table.getByTestId("values-caption").textContent()) ?? "") ?? [];
+      if (!topic) throw new Error("the table's caption does not name sub_5's topic and aggregation");
+      const samples = readTopic(archiveDir, topic);
+      const wrong = checkRows(samples, aggregation, shown.map((r) => ({ ...r, count: /^\d+$/.test(r.cells[3]) ? Number(r.cells[3]) : null })));
+      // what the cells say, not only the attributes: 7 significant digits of the same value, marked backfilled
+      for (const r of shown) {
+        const text = Number(r.cells[2]);
+        if (!(Math.abs(text - r.value) <= 5e-7 * Math.abs(r.value) + 1e-12)) wrong.push(`cell "${r.cells[2]}" for the value ${r.value}`);
+        if (r.cells[4] !== "backfilled") wrong.push(`window ending ${r.cells[1]} not marked backfilled`);
+      }
+      if (wrong.length) throw new Error(`${wrong.length} of ${shown.length} backfilled values differ from the archive's ${topic} (${samples.length} samples): ${wrong.slice(0, 3).join("; ")}`);
+      console.log(`    ${shown.length} backfilled values of sub_5 (${topic} ${aggregation}) equal the archive's, read by @mcap/core`);
+      await expandShot("monitor-values");
+      await page.getByRole("button", { name: "Follow live" }).click();
     }],
   ];
 
