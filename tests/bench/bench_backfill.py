@@ -95,7 +95,7 @@ def live(args: argparse.Namespace) -> int:
           f"emulator at {args.live_rate} B/s, after a {args.outage:g} s outage; phases of "
           f"{args.phase:g} s without / with a backfill of the outage's gaps\n")
     print(table(["pair", "values", "p50", "p99", "values (bf)", "p50 (bf)", "p99 (bf)",
-                 "windows filled", "backfill B/s"], rows))
+                 "windows filled", "backfill B/s", "radio B/s down", "radio queue drops"], rows))
     before, after = facts["load_before"], facts.get("load_after", (0, 0, 0))
     print(f"\np99 with / without backfill (medians of {len(pairs)} pairs): {ratio:.3f} "
           f"({ratio - 1:+.1%}; target within +10%)")

@@ -32,7 +32,7 @@ export interface TableRows {
  *   // → { rows: [{ channel: "sub_5", start: 1.75, end: 2, value: 1, count: null, backfilled: false }], total: 1 }
  */
 export function tableRows(channels: ReadonlyArray<{ channel: string; samples: readonly Sample[] }>,
-  [from, to]: readonly [number, number], { backfilledOnly = false, limit = 500 } = {}): TableRows {
+  [from, to]: readonly [number, number], { backfilledOnly = false, limit = 2000 } = {}): TableRows {
   const rows: ValueRow[] = [];
   for (const { channel, samples } of channels) {
     for (const s of samples) {

@@ -4,18 +4,20 @@ target "live windows keep their latency: p99 within 10 % of the run without back
 Scenario 1 over the udp link through the radio emulator (modd-radio) at ``rate`` B/s,
 the model's ``Link.rateBps`` the same (so a backfill is paced at the spare budget: the
 radio's bytes/s minus the plan's live bytes/s), the real PubBroker and SubBroker, the
-publisher load at the sensors' rates. The radio goes dark for ``outage_s`` once (under
-the PubBroker's 90 s keep-alive, so the running config resumes), after the config runs: every subscriber misses those windows, the drone archives them.
-Then, in pairs, a phase with no backfill and a phase with one (one subscriber's gap, via
-the SubBroker's ``modd/<drone>/backfill`` queryable) alternate (the order swaps every
-pair, so drifting machine load weighs on both). Latency of a live value: the end of its
-window (the slot date, on this machine's clock) to its receipt at a zenoh subscriber of
-the SubBroker, as bench_latency.py measures it; backfilled values are left out."""
+publisher load at the sensors' rates. The radio goes dark once for ``outage_s`` (under
+the PubBroker's 90 s keep-alive, so the running config resumes) after the config runs:
+every subscriber misses those windows, the drone archives them. Then, in pairs, a phase
+with no backfill and a phase with one (the subscribers' gaps filled one after the other,
+through the SubBroker's ``modd/<drone>/backfill`` queryable) alternate; the order swaps
+every pair, so drifting machine load weighs on both. Latency of a live value: the end of
+its window (the slot date, on this machine's clock) to its receipt at a zenoh subscriber
+of the SubBroker, as bench_latency.py measures it; backfilled values are left out."""
 
 from __future__ import annotations
 
 import json
 import os
+import re
 import statistics
 import threading
 import time
@@ -34,9 +36,24 @@ from subbroker_harness import (
     shared_credentials,
     start_load,
     start_subbroker,
+    wait_port,
 )
 
 ORDER = ["sub_3", "sub_4", "sub_5", "sub_6", "sub_7", "sub_1", "sub_2"]
+
+
+DOWN = re.compile(r"drone->base passed (\d+) \((\d+) B\), dropped \d+ \(([^)]*)\)")
+
+
+def radio_down(radio: Proc) -> tuple[int, int]:
+    """(bytes passed, datagrams dropped for the queue) drone -> base so far, from the
+    emulator's last report (every second)."""
+    for line in reversed(radio.log().splitlines()):
+        m = DOWN.search(line)
+        if m:
+            queue = re.search(r"queue (\d+)", m.group(3))
+            return int(m.group(2)), int(queue.group(1)) if queue else 0
+    return 0, 0
 
 
 @dataclass
@@ -46,6 +63,13 @@ class Phase:
     seconds: float = 0.0
     windows: int = 0  # backfilled windows delivered in the phase
     bytes: int = 0
+    radio_bytes: int = 0  # drone -> base through the radio (payloads)
+    queue_drops: int = 0  # datagrams the radio dropped: more offered than its rate
+
+    def radio_bps(self) -> float:
+        """Drone -> base bytes/s through the radio (its reports are 1 s apart: the span
+        counted is the phase plus the 1.1 s waited for the report after it)."""
+        return self.radio_bytes / (self.seconds + 1.1) if self.seconds else 0.0
 
     def p(self, q: float) -> float:
         xs = sorted(self.latencies_ns)
@@ -81,12 +105,13 @@ def _ask(session: Any, request: dict[str, Any]) -> dict[str, Any]:
     raise RuntimeError(f"no reply from the backfill queryable to {request}")
 
 
-def _measure(rx: Receiver, phase: Phase, session: Any | None, todo: list[str],
+def _measure(rx: Receiver, radio: Proc, phase: Phase, session: Any | None, todo: list[str],
              seconds: float) -> Phase:
     """One phase of ``seconds``: no backfill, or the gaps of the subscribers in ``todo``
     filled one after the other (each taken off ``todo`` when done; the one still running
     at the end is cancelled and left first in ``todo``)."""
     t0 = time.monotonic()
+    b0, q0 = radio_down(radio)
     with rx.lock:
         rx.phase = phase
     if session is None:
@@ -107,6 +132,9 @@ def _measure(rx: Receiver, phase: Phase, session: Any | None, todo: list[str],
     with rx.lock:
         rx.phase = None
     phase.seconds = time.monotonic() - t0
+    time.sleep(1.1)  # the radio's next report
+    b1, q1 = radio_down(radio)
+    phase.radio_bytes, phase.queue_drops = b1 - b0, q1 - q0
     return phase
 
 
@@ -122,7 +150,7 @@ def run(tmp: Path, rate: int, outage_s: float, seconds: float,
     pb = start_pubbroker_dgram(tmp, model_path, {"transport": "udp", "port": port}, ingress)
     radio = Proc("radio", [*RADIO, "--udp", f"127.0.0.1:{relay}", "--to", f"127.0.0.1:{port}",
                            "--radio", f"rate={rate},outage={settle}+{outage_s},seed=1",
-                           "--report", "5"], tmp / "radio.log")
+                           "--report", "1"], tmp / "radio.log")
     sb = start_subbroker(tmp, subbroker_dgram_config(tmp, model_path, f"127.0.0.1:{relay}",
                                                      zport, "udp"))
     load = start_load(tmp, model_path, ingress, settle + outage_s + pairs * 2 * seconds + 120)
@@ -130,6 +158,7 @@ def run(tmp: Path, rate: int, outage_s: float, seconds: float,
     out: list[tuple[Phase, Phase]] = []
     facts: dict[str, Any] = {"load_before": os.getloadavg()}
     try:
+        wait_port(zport, 60)
         session = open_session(client_settings(f"tcp/127.0.0.1:{zport}",
                                                shared_credentials().cred_file("backend")))
         if not wait_connected(session, 60) or not sb.wait_log("running", 60):
@@ -144,7 +173,7 @@ def run(tmp: Path, rate: int, outage_s: float, seconds: float,
         for i in range(pairs):
             quiet, busy = Phase(False), Phase(True)
             for p in ((quiet, busy) if i % 2 == 0 else (busy, quiet)):
-                _measure(rx, p, session if p.backfill else None, todo, seconds)
+                _measure(rx, radio, p, session if p.backfill else None, todo, seconds)
             if busy.windows == 0:
                 break  # every gap filled: no backfill to compare against
             out.append((quiet, busy))
@@ -166,14 +195,18 @@ def report(pairs: list[tuple[Phase, Phase]], facts: dict[str, Any]
         rows.append([i + 1, len(quiet.latencies_ns), f"{quiet.p(0.5):.0f}",
                      f"{quiet.p(0.99):.0f}", len(busy.latencies_ns), f"{busy.p(0.5):.0f}",
                      f"{busy.p(0.99):.0f}", busy.windows,
-                     f"{busy.bytes / busy.seconds:.0f}" if busy.seconds else "—"])
+                     f"{busy.bytes / busy.seconds:.0f}" if busy.seconds else "—",
+                     f"{quiet.radio_bps():.0f} / {busy.radio_bps():.0f}",
+                     f"{quiet.queue_drops} / {busy.queue_drops}"])
     med_quiet = statistics.median(q.p(0.99) for q, _ in pairs)
     med_busy = statistics.median(b.p(0.99) for _, b in pairs)
     all_quiet = Phase(False, [x for q, _ in pairs for x in q.latencies_ns])
     all_busy = Phase(True, [x for _, b in pairs for x in b.latencies_ns])
-    rows.append(["median", "", "", f"{med_quiet:.0f}", "", "", f"{med_busy:.0f}", "", ""])
+    rows.append(["median", "", "", f"{med_quiet:.0f}", "", "", f"{med_busy:.0f}", "", "", "", ""])
     rows.append(["pooled", len(all_quiet.latencies_ns), f"{all_quiet.p(0.5):.0f}",
                  f"{all_quiet.p(0.99):.0f}", len(all_busy.latencies_ns),
                  f"{all_busy.p(0.5):.0f}", f"{all_busy.p(0.99):.0f}",
-                 sum(b.windows for _, b in pairs), ""])
+                 sum(b.windows for _, b in pairs), "", "",
+                 f"{sum(q.queue_drops for q, _ in pairs)} / "
+                 f"{sum(b.queue_drops for _, b in pairs)}"])
     return rows, med_busy / med_quiet

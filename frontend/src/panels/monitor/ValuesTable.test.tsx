@@ -1,7 +1,7 @@
 // @vitest-environment jsdom
 import { afterEach, describe, expect, it, vi } from "vitest";
 import { act, cleanup, fireEvent, render, screen, within } from "@testing-library/react";
-import { ValuesTable, ROW_LIMIT } from "./ValuesTable";
+import { ValuesTable } from "./ValuesTable";
 import type { ChannelListener, DataSource, Sample } from "../../dataSources/types";
 
 afterEach(cleanup);
@@ -60,14 +60,15 @@ describe("ValuesTable", () => {
 
   it("follows new values (at most every 500 ms) and shows only the newest rows of a long window", async () => {
     vi.useFakeTimers();
-    const many = Array.from({ length: ROW_LIMIT + 20 }, (_, i) => ({ t: 100 + i * 0.1, value: i }));
+    const LIMIT = 50;
+    const many = Array.from({ length: LIMIT + 20 }, (_, i) => ({ t: 100 + i * 0.1, value: i }));
     const { source, push } = fakeSource(many);
-    const { container } = render(<ValuesTable source={source} series={series} window={{ follow: true, spanS: 3600 }} />);
+    const { container } = render(<ValuesTable source={source} series={series} window={{ follow: true, spanS: 3600 }} limit={LIMIT} />);
     fireEvent.click(screen.getByRole("button", { name: "Show values" }));
     // role queries over hundreds of rows are slow in jsdom: plain selectors here
     const last = () => [...container.querySelectorAll<HTMLElement>("tbody tr")].at(-1)?.dataset.value;
-    expect(container.querySelectorAll("tbody tr").length).toBe(ROW_LIMIT);
-    expect(screen.getByTestId("values-caption").textContent).toMatch(new RegExp(`the newest ${ROW_LIMIT} of ${ROW_LIMIT + 20} values`));
+    expect(container.querySelectorAll("tbody tr").length).toBe(LIMIT);
+    expect(screen.getByTestId("values-caption").textContent).toMatch(new RegExp(`the newest ${LIMIT} of ${LIMIT + 20} values`));
     act(() => push([{ t: 1000, value: -1, backfilled: true }]));
     expect(last()).not.toBe("-1");
     await act(async () => { await vi.advanceTimersByTimeAsync(600); });

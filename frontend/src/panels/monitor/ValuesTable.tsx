@@ -17,15 +17,17 @@ import type { ChartSeries } from "./TimeChart";
 
 const REFRESH_MS = 500;
 /** Rows shown at most (the newest): a long window of fast subscriptions holds thousands. */
-export const ROW_LIMIT = 500;
+export const ROW_LIMIT = 2000;
 
 interface Props {
   source: DataSource;
   series: ChartSeries[];
   window: ViewWindow;
+  /** Rows shown at most (the newest). */
+  limit?: number;
 }
 
-export function ValuesTable({ source, series, window: view }: Props) {
+export function ValuesTable({ source, series, window: view, limit = ROW_LIMIT }: Props) {
   const [open, setOpen] = useState(false);
   const [backfilledOnly, setBackfilledOnly] = useState(false);
   const [, setTick] = useState(0);
@@ -54,7 +56,7 @@ export function ValuesTable({ source, series, window: view }: Props) {
   const channels = series.map((s) => ({ channel: s.channel, samples: source.history(s.channel) }));
   const newest = Math.max(...channels.map((c) => c.samples.at(-1)?.t ?? -Infinity));
   const range = visibleRange(view, Number.isFinite(newest) ? newest : null);
-  const { rows, total } = tableRows(channels, range, { backfilledOnly, limit: ROW_LIMIT });
+  const { rows, total } = tableRows(channels, range, { backfilledOnly, limit });
   const multi = series.length > 1;
   const units = [...new Set(series.map((s) => s.unit).filter(Boolean))];
   const shown = total > rows.length ? `the newest ${rows.length} of ${total}` : String(total);
