@@ -73,8 +73,9 @@ def main() -> int:
     ap.add_argument("--live-only", action="store_true", help="only the --live part")
     ap.add_argument("--live-rate", type=int, default=600, help="the radio's bytes/s (--live)")
     ap.add_argument("--outage", type=float, default=80.0, help="outage to fill, s (< 90) (--live)")
-    ap.add_argument("--phase", type=float, default=5.0, help="seconds per phase (--live)")
-    ap.add_argument("--pairs", type=int, default=8, help="at most this many pairs (--live)")
+    ap.add_argument("--phase", type=float, default=6.0,
+                    help="seconds of a phase without backfill (--live)")
+    ap.add_argument("--pairs", type=int, default=5, help="at most 5 pairs (--live)")
     args = ap.parse_args()
     pacing = 0 if args.live_only else pace(args)
     if not (args.live or args.live_only):
@@ -93,8 +94,8 @@ def live(args: argparse.Namespace) -> int:
     rows, ratio = report(pairs, facts)
     print(f"\nlive latency (window end -> delivery, ms), scenario 1 over udp through the radio "
           f"emulator at {args.live_rate} B/s, after a {args.outage:g} s outage; phases of "
-          f"{args.phase:g} s without / with a backfill of the outage's gaps\n")
-    print(table(["pair", "values", "p50", "p99", "values (bf)", "p50 (bf)", "p99 (bf)",
+          f"{args.phase:g} s without a backfill / with one subscriber's gaps filled\n")
+    print(table(["pair (gap of)", "values", "p50", "p99", "values (bf)", "p50 (bf)", "p99 (bf)",
                  "windows filled", "backfill B/s", "radio B/s down", "radio queue drops"], rows))
     before, after = facts["load_before"], facts.get("load_after", (0, 0, 0))
     print(f"\np99 with / without backfill (medians of {len(pairs)} pairs): {ratio:.3f} "
