@@ -11,13 +11,20 @@ windows) at RATE bytes/s (the emulated SiK budget with ECC, 3,600 B/s). Prints:
 * the largest number of wire bytes drone -> base in any 1 s interval (tshark on
   lo) against the cap plus one frame.
 
+With ``--live``, then: scenario 1 over the emulated radio, live latency (window end ->
+delivery) in phases without and with a running backfill, side by side
+(benchkit/backfill_live.py): p50/p99 per pair, the median p99 of each, their ratio and
+the machine's load.
+
     .venv/bin/python tests/bench/bench_backfill.py [--minutes 10] [--rate 3600]
+    .venv/bin/python tests/bench/bench_backfill.py --live [--live-rate 600] [--outage 80]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import socket
 import subprocess
 import sys
@@ -61,7 +68,44 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--minutes", type=float, default=10.0)
     ap.add_argument("--rate", type=int, default=3600, help="pace in bytes/s (SiK with ECC)")
+    ap.add_argument("--live", action="store_true",
+                    help="also live latency with vs without a running backfill")
+    ap.add_argument("--live-only", action="store_true", help="only the --live part")
+    ap.add_argument("--live-rate", type=int, default=600, help="the radio's bytes/s (--live)")
+    ap.add_argument("--outage", type=float, default=80.0, help="outage to fill, s (< 90) (--live)")
+    ap.add_argument("--phase", type=float, default=6.0,
+                    help="seconds of a phase without backfill (--live)")
+    ap.add_argument("--pairs", type=int, default=5, help="at most 5 pairs (--live)")
     args = ap.parse_args()
+    pacing = 0 if args.live_only else pace(args)
+    if not (args.live or args.live_only):
+        return pacing
+    return max(pacing, live(args))
+
+
+def live(args: argparse.Namespace) -> int:
+    from benchkit.backfill_live import report, run
+
+    with tempfile.TemporaryDirectory(prefix="modd-bench-backfill-live-") as d:
+        pairs, facts = run(Path(d), args.live_rate, args.outage, args.phase, args.pairs)
+    if not pairs:
+        print("live latency: no pair measured (nothing to backfill)")
+        return 1
+    rows, ratio = report(pairs, facts)
+    print(f"\nlive latency (window end -> delivery, ms), scenario 1 over udp through the radio "
+          f"emulator at {args.live_rate} B/s, after a {args.outage:g} s outage; phases of "
+          f"{args.phase:g} s without a backfill / with one subscriber's gaps filled\n")
+    print(table(["pair (gap of)", "values", "p50", "p99", "values (bf)", "p50 (bf)", "p99 (bf)",
+                 "windows filled", "backfill B/s", "radio B/s down", "radio queue drops"], rows))
+    before, after = facts["load_before"], facts.get("load_after", (0, 0, 0))
+    print(f"\np99 with / without backfill (medians of {len(pairs)} pairs): {ratio:.3f} "
+          f"({ratio - 1:+.1%}; target within +10%)")
+    print(f"load average (1 min) {before[0]:.1f} before, {after[0]:.1f} after, on "
+          f"{os.cpu_count()} cores; {' '.join(facts.get('radio', []))}")
+    return 0
+
+
+def pace(args: argparse.Namespace) -> int:
     check_capture()
     tmp = Path(tempfile.mkdtemp(prefix="modd-bench-backfill-"))
     seconds = int(args.minutes * 60)

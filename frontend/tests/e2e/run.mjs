@@ -105,14 +105,16 @@ try {
   // sorter asks for it and is refused; MoDD draws no splats, so that refusal is expected.
   const expected = (m) => m.includes("'unsafe-eval' is not an allowed source of script");
   page.on("pageerror", (e) => { if (!expected(e.message)) errors.push(e.message); });
-  // MODD_E2E_ONLY=collab: only the collaboration steps (frontend/tests/e2e/collab.mjs).
+  // MODD_E2E_ONLY=collab: only the collaboration steps (frontend/tests/e2e/collab.mjs);
+  // MODD_E2E_ONLY=views: the journey and views.mjs, without them.
   const only = process.env.MODD_E2E_ONLY;
   const steps = [
     ...(only === "collab" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
     ...(only === "collab" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
+      archiveDir: join(tmp, "drone", "archive"),
       survey: surveyModel(pubPort, subPort), tiles })),
-    ...collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) }),
+    ...(only === "views" ? [] : collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) })),
   ];
   let broken = null;
   // MODD_E2E_KEEP_GOING=1: the later steps still run after a failure (to see them locally; they

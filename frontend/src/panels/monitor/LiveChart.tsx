@@ -1,12 +1,14 @@
 /**
  * One chart card of the monitor: one or more subscriptions on a TimeChart,
  * each with its last value, window and how stale it is; a subscription can
- * be taken off the chart, another watched one added to it.
+ * be taken off the chart, another watched one added to it; "Show values"
+ * opens the chart's values as a table (ValuesTable).
  */
 import { useEffect, useState, type ReactNode } from "react";
 import type { DataSource, Sample } from "../../dataSources/types";
 import type { ViewWindow } from "../../core/chartData";
 import { TimeChart, type ChartSeries } from "./TimeChart";
+import { ValuesTable } from "./ValuesTable";
 
 interface Props {
   source: DataSource;
@@ -83,6 +85,7 @@ export function LiveChart({ source, series, window, onZoom, addable, onAdd, onRe
         {tools}
       </figcaption>
       <TimeChart source={source} series={series} window={window} onZoom={onZoom} syncKey={syncKey} marker={marker} />
+      <ValuesTable source={source} series={series} window={window} />
     </figure>
   );
 }

@@ -125,6 +125,29 @@ class _Pending:
     tries: int = 0
 
 
+def control_frames(payload: bytes) -> list[codec.RawFrame] | None:
+    """The link frames of a control datagram, in order, or None when the payload is not
+    whole frames. Usually one; the PubBroker puts a backfill's PROGRESS in the same
+    datagram as the DATA or END it reports on (docs/protocol.md, "Datagram types"): an END
+    read past would leave its backfill running for ever.
+
+    >>> [f.type for f in control_frames(bytes([1, 0x06, 2, 0x07, 0]))]
+    [6, 7]
+    """
+    out: list[codec.RawFrame] = []
+    rest = payload
+    try:
+        while rest:
+            f = codec.split_frame(rest)
+            if f is None:
+                return None
+            out.append(f)
+            rest = rest[f.size:]
+    except ProtocolError:
+        return None
+    return out or None
+
+
 class DatagramLinkClient:
     """Keeps one authenticated datagram session with the PubBroker."""
 
@@ -438,17 +461,18 @@ class DatagramLinkClient:
             if not self._window.accept(counter):
                 self.radio.replayed += 1
                 return False
-            f = codec.split_frame(frame)
-            if f is None:
+            frames = control_frames(frame)
+            if frames is None:
                 self.radio.malformed += 1
                 return False
-            self.stats.frames_in += 1
-            if bf.is_backfill_type(f.type):
-                sink = self.backfill_sink
-                if sink is not None:
-                    sink(f)
-                return True
-            self._handle(codec.decode(f))
+            self.stats.frames_in += len(frames)
+            for f in frames:
+                if bf.is_backfill_type(f.type):
+                    sink = self.backfill_sink
+                    if sink is not None:
+                        sink(f)
+                else:
+                    self._handle(codec.decode(f))
             return True
         self.radio.malformed += 1
         return False
