@@ -88,6 +88,21 @@ def test_cli_defaults_to_loopback(tmp_path: Path) -> None:
     assert s.host == "127.0.0.1"
     assert s.data_dir == tmp_path
     assert s.zenoh_connect == ("tcp/127.0.0.1:7447",)
+    assert s.tile_origins == ()
+
+
+def test_cli_tile_origins(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                          capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.delenv("MODD_TILE_ORIGINS", raising=False)
+    s = parse_args(["--data", str(tmp_path), "--tile-origin", "https://tile.openstreetmap.org",
+                    "--tile-origin", "http://127.0.0.1:8123"])
+    assert s.tile_origins == ("https://tile.openstreetmap.org", "http://127.0.0.1:8123")
+    monkeypatch.setenv("MODD_TILE_ORIGINS", "https://a.tile.example https://b.tile.example")
+    assert parse_args(["--data", str(tmp_path)]).tile_origins == (
+        "https://a.tile.example", "https://b.tile.example")
+    with pytest.raises(SystemExit):
+        parse_args(["--data", str(tmp_path), "--tile-origin", "https://t.example/{z}/{x}/{y}.png"])
+    assert "--tile-origin" in capsys.readouterr().err
 
 
 
