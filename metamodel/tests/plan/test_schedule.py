@@ -105,9 +105,10 @@ def test_twenty_six_day_model_plans_in_milliseconds(make_model: Any) -> None:
     subs = [(f"sub{i}", names[i], p, "MAX") for i, p in enumerate(periods)]
     model = make_model(names, [("p", "0.1", names)], subs)
     make_plan(model)  # warm-up (imports)
-    start = time.perf_counter()
+    start = time.process_time()  # CPU, not wall: other processes on the machine do not count
     j = make_plan(model).to_json()
-    elapsed = time.perf_counter() - start
+    elapsed = time.process_time() - start
     assert j["hyperperiod_s"] == "2230928.7" and j["messages_per_hyperperiod"] == 13185447
     assert j["schedule"]["slots_truncated"] and j["schedule"]["slots_listed"] == 1000
-    assert elapsed < 0.25  # ~2 ms here; generous for a loaded CI machine
+    # ~2 ms here; the exponential planner took 12.9 s on this model
+    assert elapsed < 1.0
