@@ -74,6 +74,30 @@ def test_seek_then_play_in_foxglove(server: ReplayServer) -> None:
         assert [m["msg"]["value"] for m in msgs] == [value(i, k) for k in ks]
 
 
+@pytest.mark.parametrize("autoplay", [True, False])
+def test_autoplay_serves_a_viewer_without_playback_controls(minute: Path, autoplay: bool) -> None:
+    # Lichtblick's WebSocket player subscribes and never sends a playback
+    # request: with autoplay the range plays from its start; without, nothing.
+    server = ReplayServer([minute], "127.0.0.1", free_port(), autoplay=autoplay)
+    try:
+        report = node_json("foxglove_client.cjs", server.url, "3", timeout=30)
+    finally:
+        server.stop()
+    assert not report["errors"]
+    got = report["messages"]
+    if not autoplay:
+        assert not any(got.get(t) for t in TOPICS)
+        return
+    for i, topic in enumerate(TOPICS):
+        times = [int(m["logTime"]) for m in got[topic]]
+        assert times and times[0] == T0, "played from the start of the range"
+        ks = [(t - T0) // 100_000_000 for t in times]
+        assert ks == list(range(len(ks))), "in order, none skipped"
+        assert [m["msg"]["value"] for m in got[topic]] == [value(i, k) for k in ks]
+    # PlaybackState status 0 = Playing (the SDK's PlaybackStatus)
+    assert report["playbackStates"] and report["playbackStates"][0]["status"] == 0
+
+
 def test_player_seek_pause_speed() -> None:
     msgs = [Recorded(t, "a", b"{}") for t in range(0, 10_000_000_000, 1_000_000_000)]
     p = Player(msgs)
@@ -156,6 +180,13 @@ def test_the_workbench_replays_an_archive_in_foxglove(tmp_path: Path, minute: Pa
             assert [m["msg"]["value"] for m in msgs] == [value(i, k) for k in ks]
         # the cut: nothing past the file's last complete record is played
         assert info["end_ns"] < T0 + 60_000_000_000
+
+        # "play at once": a viewer that only subscribes gets the range from its start
+        r = c.post(url, json={"start_ns": T0 + 10_000_000_000, "autoplay": True}, headers=auth)
+        assert r.status_code == 200 and r.json()["autoplay"] is True, r.text
+        report = node_json("foxglove_client.cjs", r.json()["url"], "2", timeout=30)
+        ks = [(int(m["logTime"]) - T0) // 100_000_000 for m in report["messages"][TOPICS[0]]]
+        assert ks[:1] == [100] and ks == list(range(100, 100 + len(ks))), ks[:5]
 
         assert c.delete("/api/replay", headers=auth).status_code == 204
         assert c.get("/api/replay", headers=auth).json() is None

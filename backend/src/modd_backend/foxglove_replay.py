@@ -181,14 +181,19 @@ class ReplayServer:
 
     def __init__(self, paths: Sequence[Path], host: str = "127.0.0.1", port: int = 8766,
                  tick_s: float = 0.02, *,
-                 recording: tuple[dict[str, RecordedChannel], list[Recorded]] | None = None
-                 ) -> None:
+                 recording: tuple[dict[str, RecordedChannel], list[Recorded]] | None = None,
+                 autoplay: bool = False) -> None:
         import foxglove
         from foxglove.websocket import Capability, ServerListener
 
         self._fg = foxglove
         channels, messages = recording if recording is not None else load_recording(paths)
         self.player = Player(messages)
+        # Lichtblick's WebSocket player (1.28) has no playback controls: it
+        # subscribes and waits. With autoplay the first subscription plays the
+        # range once from its start, unless a client has already taken control.
+        self.autoplay = autoplay
+        self._controlled = False
         self.context = foxglove.Context()
         self.channels = {
             t: foxglove.Channel(t, message_encoding=c.encoding or "json", context=self.context,
@@ -202,6 +207,9 @@ class ReplayServer:
         class Listener(ServerListener):
             def on_playback_control_request(self, request: Any) -> Any:
                 return replay.on_request(request)
+
+            def on_subscribe(self, client: Any, channel: Any) -> None:
+                replay.on_subscribe()
 
         self.server = foxglove.start_server(
             name="MoDD replay", host=host, port=port, context=self.context,
@@ -228,9 +236,15 @@ class ReplayServer:
         return PlaybackState(status=status, current_time=p.current, playback_speed=p.speed,
                              did_seek=did_seek, request_id=request_id)
 
+    def on_subscribe(self) -> None:
+        if self.autoplay and not self._controlled:
+            self._controlled = True  # once: later subscriptions join the running playback
+            self.player.control(True, self.player.speed, None)
+
     def on_request(self, request: Any) -> Any:
         from foxglove.websocket import PlaybackCommand
 
+        self._controlled = True
         self.player.control(request.playback_command == PlaybackCommand.Play,
                             float(request.playback_speed), request.seek_time)
         return self.state(request.request_id, request.seek_time is not None)
@@ -243,6 +257,8 @@ class ReplayServer:
             for m in self.player.advance(now - last):
                 self.channels[m.topic].log(m.data, log_time=m.log_time)
             last = now
+            if self.player.playing and not was_playing:
+                self.server.broadcast_playback_state(self.state(None, False))  # autoplay began
             if self.player.playing or was_playing:
                 self.server.broadcast_time(self.player.current)
             if was_playing and not self.player.playing:
@@ -263,9 +279,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("files", nargs="+", type=Path, metavar="FILE")
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default loopback)")
     p.add_argument("--port", type=int, default=8766)
+    p.add_argument("--autoplay", action="store_true",
+                   help="play once from the start when a viewer subscribes (for viewers "
+                        "without playback controls, such as Lichtblick)")
     a = p.parse_args(argv)
     try:
-        server = ReplayServer(a.files, a.host, a.port)
+        server = ReplayServer(a.files, a.host, a.port, autoplay=a.autoplay)
     except (ValueError, OSError) as exc:
         print(f"modd-foxglove-replay: {exc}")
         return 1

@@ -26,6 +26,7 @@ class ReplayInfo:
     messages: int
     topics: list[str]
     started_by: str
+    autoplay: bool
 
 
 class ReplaySlot:
@@ -37,18 +38,19 @@ class ReplaySlot:
         self.info: ReplayInfo | None = None
 
     def start(self, drone: str, path: Path, start_ns: int | None, end_ns: int | None,
-              user: str) -> ReplayInfo:
+              user: str, *, autoplay: bool = False) -> ReplayInfo:
         """Loads the range (ValueError: nothing in it, or too much), then
         swaps the server; the old one stops first so the port is free."""
         recording = load_recording([path], self.max_messages, partial=True,
                                    start_ns=start_ns, end_ns=end_ns)
         with self._lock:
             self._stop_locked()
-            server = ReplayServer([path], self.host, self.port, recording=recording)
+            server = ReplayServer([path], self.host, self.port, recording=recording,
+                                  autoplay=autoplay)
             self._server = server
             p = server.player
             self.info = ReplayInfo(server.url, drone, path.name, p.start, p.end,
-                                   len(p.messages), sorted(server.channels), user)
+                                   len(p.messages), sorted(server.channels), user, autoplay)
             return self.info
 
     def stop(self) -> None:

@@ -117,19 +117,20 @@ export function createApi(opts: HttpOptions) {
     /** The SubBroker's base-station records: every delivered value, live and backfilled. */
     listRecords: (drone: string) => http.request<ArchiveFile[]>(`/api/drones/${drone}/records`),
     /** A base-station record served to Foxglove/Lichtblick (seek, play, pause) on the replay port. */
-    replayRecord: (drone: string, file: string) =>
+    replayRecord: (drone: string, file: string, autoplay = false) =>
       http.request<ArchiveReplay>(`/api/drones/${drone}/records/${encodeURIComponent(file)}/replay`, {
-        method: "POST", json: { start_ns: null, end_ns: null },
+        method: "POST", json: { start_ns: null, end_ns: null, autoplay },
       }),
     downloadRecord: (drone: string, file: string) =>
       http.request<Blob>(`/api/drones/${drone}/records/${encodeURIComponent(file)}`, { as: "blob" }),
     archiveCsv: (drone: string, file: string, topic: string, startNs?: number, endNs?: number) =>
       http.request<Blob>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}/csv`, { query: { topic, start_ns: startNs, end_ns: endNs }, as: "blob" }),
 
-    /** Serves the range to Foxglove/Lichtblick (seek, play, pause) on the backend's replay port. */
-    replayArchive: (drone: string, file: string, startNs?: number, endNs?: number) =>
+    /** Serves the range to Foxglove/Lichtblick (seek, play, pause) on the backend's replay port;
+     *  `autoplay`: played once from its start when a viewer subscribes (viewers without playback controls). */
+    replayArchive: (drone: string, file: string, startNs?: number, endNs?: number, autoplay = false) =>
       http.request<ArchiveReplay>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}/replay`, {
-        method: "POST", json: { start_ns: startNs ?? null, end_ns: endNs ?? null },
+        method: "POST", json: { start_ns: startNs ?? null, end_ns: endNs ?? null, autoplay },
       }),
 
     // --- 3D scene (viser), served by the backend

@@ -137,6 +137,8 @@ export interface ArchiveReplay {
   messages: number;
   topics: string[];
   started_by: string;
+  /** Plays once from the start when a viewer subscribes (viewers without playback controls). */
+  autoplay: boolean;
 }
 
 /** A topic over a time range; `points` are [log time ns, value], min/max-reduced to at most max_points. */

@@ -55,6 +55,9 @@ class ReplayIn(BaseModel):
 
     start_ns: int | None = None
     end_ns: int | None = None
+    #: Play once from the start when a viewer subscribes: for viewers without
+    #: playback controls (Lichtblick 1.28's WebSocket player).
+    autoplay: bool = False
 
 
 class ReplayOut(BaseModel):
@@ -69,6 +72,7 @@ class ReplayOut(BaseModel):
     messages: int
     topics: list[str]
     started_by: str
+    autoplay: bool
 
 
 class SeriesOut(BaseModel):
@@ -132,7 +136,8 @@ def serve_replay(state: AppState, root: FsPath, drone: str, name: str, body: Rep
         raise HTTPException(409, "replay is off on this backend (--foxglove-replay-port 0)")
     path = archive_path(root, drone, name)
     try:
-        info = state.replay.start(drone, path, body.start_ns, body.end_ns, user.username)
+        info = state.replay.start(drone, path, body.start_ns, body.end_ns, user.username,
+                                  autoplay=body.autoplay)
     except ValueError as exc:
         raise HTTPException(422, f"{name}: {exc}".replace(str(path), name)) from None
     except OSError as exc:

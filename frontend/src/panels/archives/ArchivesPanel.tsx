@@ -60,11 +60,13 @@ export default function ArchivesPanel() {
     }
   };
   const [replay, setReplay] = useState<ArchiveReplay | null>(null);
+  // Lichtblick's WebSocket player has no playback controls: the server then plays by itself.
+  const [autoplay, setAutoplay] = useState(false);
   const startReplay = async () => {
     if (!file) return;
     setSeries({ busy: true });
     try {
-      setReplay(await api.replayArchive(drone, file.name, bound(range.from), bound(range.to)));
+      setReplay(await api.replayArchive(drone, file.name, bound(range.from), bound(range.to), autoplay));
       setSeries({});
     } catch (err) {
       setSeries({ error: (err as Error).message });
@@ -95,7 +97,7 @@ export default function ArchivesPanel() {
                 ))}
               </tbody>
             </table>
-            <BaseRecords drone={drone} />
+            <BaseRecords drone={drone} autoplay={autoplay} />
           </div>
           <div>
             <form onSubmit={plot} className="archive-form" aria-label="Plot an archived topic">
@@ -107,6 +109,9 @@ export default function ArchivesPanel() {
               <button type="submit" disabled={!file}>Plot</button>
               <button type="button" disabled={!file} onClick={() => file && void download(api.archiveCsv(drone, file.name, chosenTopic, bound(range.from), bound(range.to)), `${file.name}-${chosenTopic}.csv`)}>CSV</button>
               <button type="button" disabled={!file} onClick={() => void startReplay()} title="Serve this range to Foxglove or Lichtblick: seek, play, pause">Replay in Foxglove</button>
+              <label title="For viewers without playback controls (Lichtblick): the replay plays once from its start when the viewer subscribes">
+                <input type="checkbox" checked={autoplay} onChange={(e) => setAutoplay(e.target.checked)} /> play at once
+              </label>
               {series.busy && <span role="status">Reading…</span>}
               {series.error && <span className="error" role="alert">{series.error}</span>}
             </form>
@@ -114,6 +119,7 @@ export default function ArchivesPanel() {
               <p role="status" aria-label="Foxglove replay">
                 Replay of {replay.file} ({replay.messages} messages, {replay.topics.length} topics): in Foxglove or Lichtblick,
                 Open connection → Foxglove WebSocket → <code>{replay.url}</code>
+                {replay.autoplay && " (plays from the start when the viewer subscribes)"}
               </p>
             )}
             {!file && <p className="muted">Pick a file to plot one of its topics.</p>}

@@ -9,13 +9,13 @@ import type { ArchiveReplay } from "../../api/types";
 import { saveBlob } from "../saveBlob";
 import { usePanelData } from "../usePanelData";
 
-export function BaseRecords({ drone }: { drone: string }) {
+export function BaseRecords({ drone, autoplay = false }: { drone: string; autoplay?: boolean }) {
   const { api } = useServices();
   const [files, reload] = usePanelData(() => api.listRecords(drone), [drone]);
   const download = async (name: string) => saveBlob(await api.downloadRecord(drone, name), name);
   const [replay, setReplay] = useState<{ data?: ArchiveReplay; error?: string }>({});
   const startReplay = async (name: string) => {
-    try { setReplay({ data: await api.replayRecord(drone, name) }); } catch (err) { setReplay({ error: (err as Error).message }); }
+    try { setReplay({ data: await api.replayRecord(drone, name, autoplay) }); } catch (err) { setReplay({ error: (err as Error).message }); }
   };
   return (
     <section aria-label="Base-station records">
@@ -41,6 +41,7 @@ export function BaseRecords({ drone }: { drone: string }) {
         <p role="status" aria-label="Foxglove replay of a record">
           Replay of {replay.data.file} ({replay.data.messages} values): in Foxglove or Lichtblick,
           Open connection → Foxglove WebSocket → <code>{replay.data.url}</code>
+          {replay.data.autoplay && " (plays from the start when the viewer subscribes)"}
         </p>
       )}
       {replay.error && <p className="error" role="alert">{replay.error}</p>}
