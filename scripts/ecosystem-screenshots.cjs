@@ -150,6 +150,14 @@ async function main() {
     if (await play.count()) await play.click();
     await sleep(5_000);
     await shot(page, "ecosystem-lichtblick-archive.png");
+
+    // 4. The workbench's "Replay in Foxglove" with "play at once": the backend's
+    // replay server plays the archive's range when Lichtblick subscribes.
+    const replayUrl = fs.readFileSync(path.join(work, "replay-url"), "utf8").trim();
+    await page.goto(`${app}/?ds=foxglove-websocket&ds.url=${encodeURIComponent(replayUrl)}` +
+      `&layoutUrl=${encodeURIComponent(app + "/modd/modd-archive-layout.json")}`);
+    await sleep(Number(process.env.REPLAY_WAIT_MS ?? 30_000));
+    await shot(page, "ecosystem-lichtblick-replay.png");
   } finally {
     await context.close().catch(() => undefined);
     fs.rmSync(profile, { recursive: true, force: true });

@@ -98,6 +98,10 @@ def tree(ids):
 with open(f"{work}/modd-archive-layout.json", "w") as f:
     json.dump({"configById": config, "globalVariables": {}, "userNodes": {},
                "playbackConfig": {"speed": 1}, "layout": tree(ids)}, f)
+# Replay in Foxglove with "play at once": Lichtblick has no playback controls.
+replay = call(f"/api/drones/usv/archives/{archive['name']}/replay", {"autoplay": True}, "POST")
+with open(f"{work}/replay-url", "w") as f:
+    f.write(replay["url"])
 EOF
 # The archive the drone is writing, as a closed and indexed copy (what a
 # scientist downloads from the Archives panel, recovered).
