@@ -31,6 +31,7 @@ import logging
 import threading
 from typing import Any
 
+from modd_contracts import aggregations as agg
 from modd_contracts.keys import match_status_key, match_sub_key
 
 from .scene import position_roles
@@ -56,7 +57,7 @@ def window_schema(aggregation: str = "") -> dict[str, Any]:
     numbers for ``ALL``, a number otherwise (null for an empty window)."""
     value: dict[str, Any] = (
         {"description": "the window's samples", "type": "array", "items": {"type": "number"}}
-        if aggregation == "ALL" else
+        if aggregation == agg.ALL else
         {"description": "the aggregate; null for an empty window", "type": "number"})
     return {
         "title": "modd.Window",

@@ -235,7 +235,7 @@ class _Relations:
             rules = SINGLE_SOURCE_RULES[aggs[r]]
             self.singles.append([j for j in range(len(nds))
                                  if j != r and whole[j] and aggs[j] in rules])
-            self.all_single.append("ALL" in rules)
+            self.all_single.append(agg.ALL in rules)
             pair = PAIR_SOURCE_RULES.get(aggs[r])
             if pair is None:
                 self.pairs.append(None)
@@ -243,7 +243,7 @@ class _Relations:
             else:
                 self.pairs.append([[j for j in range(len(nds)) if whole[j] and aggs[j] == a]
                                    for a in pair])
-                self.all_pair.append([g for g, a in enumerate(pair) if a == "ALL"])
+                self.all_pair.append([g for g, a in enumerate(pair) if a == agg.ALL])
 
     def drop(self, helper: StreamKey | None = None) -> list[StreamKey]:
         """The one-pass drop over the requested streams (+ ``helper``, always
