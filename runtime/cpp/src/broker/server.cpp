@@ -83,6 +83,7 @@ Server::Server(const BrokerConfig& cfg, std::string key, Clock& clock)
     o.delay_ns = int64_t{cfg_.link_delay_ms} * 1'000'000;
     o.keepalive_timeout_ns = int64_t{cfg_.link_keepalive_timeout_s} * 1'000'000'000;
     dlink_ = std::make_unique<DatagramLink>(key_, *broker_, *this, o, [] { return link::random_nonce(); });
+    broker_->set_backfill_max_datagram(o.max_datagram);
     open_dgram_port();
     if (!port_) throw Error(ErrorCode::Io, "cannot open the link device " + cfg_.link_device);
   }

@@ -438,18 +438,26 @@ class DatagramLinkClient:
             if not self._window.accept(counter):
                 self.radio.replayed += 1
                 return False
-            f = codec.split_frame(frame)
-            if f is None:
-                self.radio.malformed += 1
-                return False
-            self.stats.frames_in += 1
-            if bf.is_backfill_type(f.type):
-                sink = self.backfill_sink
-                if sink is not None:
-                    sink(f)
-                return True
-            self._handle(codec.decode(f))
-            return True
+            # one or more frames (the PubBroker writes a backfill's last BACKFILL_DATA,
+            # PROGRESS and END in one write)
+            frames: list[codec.RawFrame] = []
+            rest = frame
+            while rest:
+                f = codec.split_frame(rest)
+                if f is None:
+                    self.radio.malformed += 1
+                    return False
+                frames.append(f)
+                rest = rest[f.size:]
+            for f in frames:
+                self.stats.frames_in += 1
+                if bf.is_backfill_type(f.type):
+                    sink = self.backfill_sink
+                    if sink is not None:
+                        sink(f)
+                    continue
+                self._handle(codec.decode(f))
+            return bool(frames)
         self.radio.malformed += 1
         return False
 
