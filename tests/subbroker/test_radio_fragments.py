@@ -98,7 +98,8 @@ def test_slots_larger_than_the_packet_arrive_as_fragments(loss: float, tmp_path:
     # the windows between the load's first and last are full: 25 Hz x 2 s
     assert max(len(v.value) for v in values["sub_8"]) >= 45, values["sub_8"]
     frags = [int(x) for x in re.findall(r"link: .*fragments=(\d+)", pb_log)]
-    assert frags and frags[-1] >= 2 * len(ends), pb_log[-1500:]
+    # two fragments a full window (the edge windows, partly filled, may fit one packet)
+    assert frags and frags[-1] >= 2 * (len(ends) - 2), pb_log[-1500:]
     assert "oversize" not in counts, counts  # nothing larger than the packet was offered
     if loss:
         r = got.status[-1]["radio"]

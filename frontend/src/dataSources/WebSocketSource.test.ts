@@ -195,7 +195,7 @@ describe("toLinkStatus over a datagram link", () => {
       predicted_link_bytes_per_s: { drone_to_base: 292.5 } as SubBrokerStatus["predicted_link_bytes_per_s"],
       link_budget: { drone_to_base: 100.8, base_to_drone: 1.4 },
       radio: { transport: "udp", wire_bytes_in_per_s: 98.2, wire_bytes_out_per_s: 2.1, loss: 0.05,
-               retransmissions: 7, forged: 2, replayed: 1, malformed: 0 },
+               retransmissions: 7, forged: 2, replayed: 1, malformed: 0 } as SubBrokerStatus["radio"],
     });
     expect(s.measuredBytesPerS).toBe(98.2);
     expect(s.plannedBytesPerS).toBe(100.8);

@@ -215,3 +215,22 @@ TEST(BackfillSender, RefusesAWrongTypeAndCancels) {
   EXPECT_EQ(s.active(), 0u);
   EXPECT_EQ(std::get<bf::End>(bf::decode(*link::split_frame(reply))).status, bf::EndStatus::Cancelled);
 }
+
+TEST(BackfillSender, FramesFitTheDatagramLinksPacket) {
+  Fixture fx("cap");
+  for (auto agg : {link::Aggregation::Average, link::Aggregation::Min, link::Aggregation::Count}) {
+    BackfillSender s(fx.dir, "modd", 100000);
+    s.set_max_datagram(100);  // a fast pace (frames of ~6 KB) on a link of 100-byte datagrams
+    Outcome out = run(s, request(agg, 240, 0, 100000));
+    EXPECT_EQ(out.status, bf::EndStatus::Done);
+    EXPECT_EQ(out.windows.size(), 240u);
+    EXPECT_EQ(out.duplicates, 0);
+    size_t frames = 0;
+    for (size_t n : out.data_bytes) {
+      if (!n) continue;
+      ++frames;
+      EXPECT_LE(n + 19, 100u);  // the CONTROL datagram: type, counter varint, frame, tag
+    }
+    EXPECT_GT(frames, 5u);
+  }
+}

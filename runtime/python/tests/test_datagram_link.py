@@ -117,3 +117,26 @@ def test_a_new_session_key_refuses_the_old_sessions_datagrams() -> None:
     old = sender.add_slot(0, 0.25, _encoded(0)) + [sender.flush()]
     rebooted = DatagramReceiver(session_key(b"psk", bytes(16), bytes(16)), 1, PERIODS, KINDS)
     assert rebooted.on_datagram(old[0], 1.0) == [] and rebooted.stats.forged == 1
+
+
+def test_control_datagram_with_several_frames_delivers_each() -> None:
+    """The PubBroker writes a backfill's PROGRESS and END in one write, so one
+    CONTROL datagram may hold several frames: each reaches the backfill sink,
+    and a truncated tail is refused as malformed."""
+    from modd.link import backfill as bf
+    from modd.link.datagram import DRONE_TO_BASE, encode_control
+    from modd.subbroker.config import LinkOptions
+    from modd.subbroker.dglink import DatagramLinkClient
+
+    client = DatagramLinkClient(lambda: None, "test", "udp", b"psk",  # type: ignore[arg-type,return-value]
+                                LinkOptions(), None)  # type: ignore[arg-type]
+    key = session_key(b"psk", bytes(16), bytes(16))
+    client._key = key
+    got: list[codec.RawFrame] = []
+    client.backfill_sink = got.append
+    frames = (bf.encode(bf.BackfillProgress(7, 24, 24, 96, 20000))
+              + bf.encode(bf.BackfillEnd(7, bf.EndStatus.DONE, 24, "")))
+    assert client._on_datagram(encode_control(1, frames, key, DRONE_TO_BASE))
+    assert [f.type for f in got] == [bf.BackfillType.PROGRESS, bf.BackfillType.END]
+    assert not client._on_datagram(encode_control(2, frames[:-1], key, DRONE_TO_BASE))
+    assert client.radio.malformed == 1 and len(got) == 2

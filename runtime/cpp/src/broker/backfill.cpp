@@ -29,8 +29,18 @@ uint64_t BackfillSender::rate() const {
   return jobs_.empty() ? default_rate_ : r;
 }
 
+size_t BackfillSender::window_bytes_cap() const {
+  // CONTROL datagram: type 1 + counter varint <= 10 + tag 8; BACKFILL_DATA frame: length
+  // varint <= 3 + type 1 + request id, first <= 10 each + count <= 3; and the window added
+  // last may overshoot the budget by its value (<= 18 B: AVERAGE of f64 + count) and one
+  // presence byte.
+  constexpr size_t kOverhead = 19 + 27 + 18 + 1;
+  if (max_datagram_ == 0) return SIZE_MAX;
+  return max_datagram_ > kOverhead + 1 ? max_datagram_ - kOverhead : 1;
+}
+
 size_t BackfillSender::frame_budget() const {
-  return static_cast<size_t>(std::clamp<uint64_t>(rate() / 16, 64, 16384));
+  return std::min(static_cast<size_t>(std::clamp<uint64_t>(rate() / 16, 64, 16384)), window_bytes_cap());
 }
 
 void BackfillSender::on_request(const bf::Request& r, std::optional<link::ValueType> known_type,

@@ -82,7 +82,7 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   if (!j.contains("link")) c.fail("/link", "missing (the link endpoint and key are required)");
   const json& l = j["link"];
   check_keys(c, l, "/link", {"host", "port", "key", "handshake_timeout_ms", "transport", "device", "baud",
-                              "max_packet", "delay_ms", "keepalive_timeout_s"});
+                              "max_packet", "delay_ms", "keepalive_timeout_s", "ring_bytes"});
   get(c, l, "/link", "transport", cfg.link_transport);
   if (cfg.link_transport != "tcp" && cfg.link_transport != "udp" && cfg.link_transport != "serial")
     c.fail("/link/transport", "expected tcp, udp or serial");
@@ -96,6 +96,8 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   get(c, l, "/link", "delay_ms", cfg.link_delay_ms);
   if (cfg.link_delay_ms > 3'600'000) c.fail("/link/delay_ms", "above one hour");
   get(c, l, "/link", "keepalive_timeout_s", cfg.link_keepalive_timeout_s);
+  get(c, l, "/link", "ring_bytes", cfg.link_ring_bytes);
+  if (cfg.link_ring_bytes < 256 || cfg.link_ring_bytes > (16u << 20)) c.fail("/link/ring_bytes", "expected 256..16777216");
   get(c, l, "/link", "host", cfg.link_host);
   get(c, l, "/link", "port", cfg.link_port);
   get(c, l, "/link", "key", cfg.key_ref);

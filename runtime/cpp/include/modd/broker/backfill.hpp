@@ -44,6 +44,12 @@ class BackfillSender {
   int64_t next_wake_ns(int64_t now) const;
   size_t active() const { return jobs_.size(); }
   uint64_t bytes_sent() const { return bytes_sent_; }
+  // Datagram links: a BACKFILL_DATA frame must fit one CONTROL datagram of at most
+  // `max_datagram` bytes (0: no cap, tcp). Exact for every aggregation but ALL, whose one
+  // window may be larger than any cap (then it goes alone and the radio may drop it).
+  void set_max_datagram(size_t max_datagram) { max_datagram_ = max_datagram; }
+  // The cap on a frame's window bytes for the link (SIZE_MAX when none).
+  size_t window_bytes_cap() const;
 
  private:
   struct Job {
@@ -61,7 +67,7 @@ class BackfillSender {
     Job(const link::backfill::Request& r, const std::string& dir, const std::string& prefix);
   };
   uint64_t rate() const;
-  size_t frame_budget() const;
+  size_t frame_budget() const;  // the pace's, capped by window_bytes_cap()
   void fill(Job& j, const Env& env);
   void end(Job& j, link::backfill::EndStatus st, const std::string& why, std::vector<std::vector<uint8_t>>& frames);
 
@@ -72,6 +78,7 @@ class BackfillSender {
   double credit_ = 0;  // token bucket, bytes; a frame goes when credit >= 0
   int64_t refilled_at_ = 0;
   uint64_t bytes_sent_ = 0;
+  size_t max_datagram_ = 0;
 };
 
 }  // namespace modd::broker

@@ -141,6 +141,7 @@ class Broker final : public LinkHooks, public FrameSink {
   void pump_backfill(int64_t now);
   int64_t backfill_wake_ns(int64_t now) const { return backfill_.next_wake_ns(now); }
   const BackfillSender& backfill() const { return backfill_; }
+  void set_backfill_max_datagram(size_t n) { backfill_.set_max_datagram(n); }
   // FrameSink
   bool send_data(std::vector<uint8_t>&& frame) override;
   bool wants_slots() const override { return out_.datagrams(); }

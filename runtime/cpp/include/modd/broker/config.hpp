@@ -31,6 +31,7 @@ struct BrokerConfig {
   uint32_t link_max_packet = 0;   // udp: datagram payload; serial: frame; 0: 1472 / 252
   uint32_t link_delay_ms = 1000;  // accepted delay: slots packed into one datagram up to it
   uint32_t link_keepalive_timeout_s = 90;  // silence after which DATA stops (0: never)
+  uint32_t link_ring_bytes = 64 * 1024;    // udp/serial: the resend ring's bound (also 256 datagrams)
   // ingress: where publishers connect
   std::string ingress_unix;  // empty: no Unix socket
   std::string ingress_host = "127.0.0.1";
