@@ -52,11 +52,16 @@ class StreamKey:
         # Fraction.__hash__ computes a modular inverse and its numerator and
         # denominator are properties: both are read once here. Not fields:
         # equality, repr and order stay those of (topic, aggregation, period).
-        nd = (self.period.numerator, self.period.denominator)
-        object.__setattr__(self, "_nd", nd)
-        # sort keys: (float, Fraction) orders as the Fraction, the float first
-        object.__setattr__(self, "_sort_period", (nd[0] / nd[1], self.period))
-        object.__setattr__(self, "_hash", hash((self.topic, self.aggregation, *nd)))
+        # Written into the instance's __dict__ at once (a frozen dataclass's
+        # attributes otherwise go through object.__setattr__ one by one).
+        period = self.period
+        nd = (period.numerator, period.denominator)
+        self.__dict__.update(
+            _nd=nd,
+            # sort keys: (float, Fraction) orders as the Fraction, the float first
+            _sort_period=(nd[0] / nd[1], period),
+            _hash=hash((self.topic, self.aggregation, *nd)),
+        )
 
     def __hash__(self) -> int:
         return self._hash  # type: ignore[attr-defined, no-any-return]
@@ -81,15 +86,19 @@ class StreamKey:
         return cls(topic, aggregation, to_fraction(period))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Source:
     """A sent stream a derived stream is computed from, ``factor`` windows at a time."""
 
     stream: StreamKey
     factor: int
 
+    def __init__(self, stream: StreamKey, factor: int) -> None:
+        # one dictionary update, not a frozen dataclass's setattr per field
+        self.__dict__.update(stream=stream, factor=factor)
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, init=False)
 class PlannedStream:
     """A requested (or helper) stream with its fate: sent with an id, or derived."""
 
@@ -97,6 +106,11 @@ class PlannedStream:
     id: int | None
     sources: tuple[Source, ...]
     subscribers: tuple[str, ...]
+
+    def __init__(self, stream: StreamKey, id: int | None,  # noqa: A002 (the field's name)
+                 sources: tuple[Source, ...], subscribers: tuple[str, ...]) -> None:
+        # one dictionary update, not a frozen dataclass's setattr per field
+        self.__dict__.update(stream=stream, id=id, sources=sources, subscribers=subscribers)
 
     @property
     def sent(self) -> bool:
@@ -214,10 +228,12 @@ class _Relations:
 
     def __init__(self, required: Sequence[StreamKey],
                  cost_per_s: Callable[[StreamKey], float]) -> None:
-        # stable sorts, last key first: (-cost, -period, aggregation order)
+        # stable sorts, last key first: (-cost, -period, aggregation order);
+        # a stable reverse sort on (cost, period) keeps the aggregation order
+        # of its ties
         streams = sorted(required, key=lambda s: _AGG_INDEX[s.aggregation])
-        streams.sort(key=lambda s: s._sort_period, reverse=True)  # type: ignore[attr-defined]
-        streams.sort(key=cost_per_s, reverse=True)
+        streams.sort(key=lambda s: (cost_per_s(s), s._sort_period),  # type: ignore[attr-defined]
+                     reverse=True)
         self.streams = streams
         nds: list[tuple[int, int]] = [s._nd for s in streams]  # type: ignore[attr-defined]
         self.nds = nds
