@@ -244,19 +244,21 @@ class _Relations:
         #: pair groups (by position) an ALL source joins
         self.all_single: list[bool] = []
         self.all_pair: list[list[int]] = []
+        columns = list(zip(range(len(nds)), nds, aggs, strict=True))
         for r, (an, ad) in enumerate(nds):
-            # j divides: target period / period j is whole
-            whole = [(an * bd) % (ad * bn) == 0 for bn, bd in nds]
+            # j serves r: j's aggregation is a rule of r's (tested first, the
+            # cheaper test) and target period / period j is whole
             rules = SINGLE_SOURCE_RULES[aggs[r]]
-            self.singles.append([j for j in range(len(nds))
-                                 if j != r and whole[j] and aggs[j] in rules])
+            self.singles.append([j for j, (bn, bd), a in columns
+                                 if a in rules and j != r and (an * bd) % (ad * bn) == 0])
             self.all_single.append("ALL" in rules)
             pair = PAIR_SOURCE_RULES.get(aggs[r])
             if pair is None:
                 self.pairs.append(None)
                 self.all_pair.append([])
             else:
-                self.pairs.append([[j for j in range(len(nds)) if whole[j] and aggs[j] == a]
+                whole = [(an * bd) % (ad * bn) == 0 for bn, bd in nds]
+                self.pairs.append([[j for j, _, b in columns if b == a and whole[j]]
                                    for a in pair])
                 self.all_pair.append([g for g, a in enumerate(pair) if a == "ALL"])
 
@@ -278,20 +280,23 @@ class _Relations:
                     pairs[r] = [[*g, n] if k in self.all_pair[r] else g
                                 for k, g in enumerate(groups)]
         kept = [True] * (n + 1)  # the helper (index n) stays kept
+        is_kept = kept.__getitem__
 
         def derivable(r: int) -> bool:
-            if any(kept[j] for j in singles[r]):
+            if any(map(is_kept, singles[r])):
                 return True
             groups = pairs[r]
-            return groups is not None and all(any(kept[j] for j in g) for g in groups)
+            return groups is not None and all(any(map(is_kept, g)) for g in groups)
 
         dropped: list[int] = []
         for i in range(n):
             kept[i] = False
             dropped.append(i)
-            if not all(derivable(r) for r in dropped):
-                kept[i] = True
-                dropped.pop()
+            for r in dropped:
+                if not derivable(r):
+                    kept[i] = True
+                    dropped.pop()
+                    break
         out = [s for s, k in zip(self.streams, kept, strict=False) if k]
         return out + [helper] if helper is not None else out
 
