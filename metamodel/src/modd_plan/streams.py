@@ -36,7 +36,7 @@ AGGREGATIONS: tuple[str, ...] = NAMES
 _AGG_INDEX = {a: i for i, a in enumerate(AGGREGATIONS)}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class StreamKey:
     """(topic, aggregation, window period in seconds).
 
@@ -48,19 +48,22 @@ class StreamKey:
     aggregation: str
     period: Fraction
 
-    def __post_init__(self) -> None:
+    def __init__(self, topic: str, aggregation: str, period: Fraction) -> None:
+        # All attributes written into the instance's __dict__ at once (a
+        # frozen dataclass's __init__ sets each through object.__setattr__).
         # Fraction.__hash__ computes a modular inverse and its numerator and
-        # denominator are properties: both are read once here. Not fields:
-        # equality, repr and order stay those of (topic, aggregation, period).
-        # Written into the instance's __dict__ at once (a frozen dataclass's
-        # attributes otherwise go through object.__setattr__ one by one).
-        period = self.period
+        # denominator are properties: both are read once here. The derived
+        # ones are not fields: equality, repr and order stay those of
+        # (topic, aggregation, period).
         nd = (period.numerator, period.denominator)
         self.__dict__.update(
+            topic=topic,
+            aggregation=aggregation,
+            period=period,
             _nd=nd,
             # sort keys: (float, Fraction) orders as the Fraction, the float first
             _sort_period=(nd[0] / nd[1], period),
-            _hash=hash((self.topic, self.aggregation, *nd)),
+            _hash=hash((topic, aggregation, *nd)),
         )
 
     def __hash__(self) -> int:
