@@ -318,8 +318,14 @@ def _drop_derivable(
     return _Relations(required, cost_per_s).drop(helper)
 
 
+#: The cost of a stream given as (topic, aggregation, period numerator,
+#: period denominator): lets the choice price a helper before building its key.
+CostOf = Callable[[str, str, int, int], float]
+
+
 def _choose_for_topic(
-    streams: Sequence[StreamKey], cost_per_s: Callable[[StreamKey], float]
+    streams: Sequence[StreamKey], cost_per_s: Callable[[StreamKey], float],
+    cost_of: CostOf | None = None,
 ) -> list[StreamKey]:
     costs = {s: cost_per_s(s) for s in streams}  # one call per stream
     cost = costs.__getitem__
@@ -339,10 +345,17 @@ def _choose_for_topic(
             sn, sd = s._nd  # type: ignore[attr-defined]
             if (sn * hd) % (sd * hn) == 0:
                 replaceable += cost(s)
-        helper = StreamKey(topic, "ALL", period)
-        costs[helper] = helper_cost = cost_per_s(helper)
-        if helper_cost >= replaceable:
-            continue  # it cannot pay for itself
+        if cost_of is not None:
+            helper_cost = cost_of(topic, "ALL", hn, hd)
+            if helper_cost >= replaceable:
+                continue  # it cannot pay for itself (its key not even built)
+            helper = StreamKey(topic, "ALL", period)
+            costs[helper] = helper_cost
+        else:
+            helper = StreamKey(topic, "ALL", period)
+            costs[helper] = helper_cost = cost_per_s(helper)
+            if helper_cost >= replaceable:
+                continue  # it cannot pay for itself
         trial = relations.drop(helper)
         trial_cost = sum(map(cost, trial))
         if trial_cost < best_cost:
@@ -351,16 +364,19 @@ def _choose_for_topic(
 
 
 def choose_sent(
-    requested: Iterable[StreamKey], cost_per_s: Callable[[StreamKey], float]
+    requested: Iterable[StreamKey], cost_per_s: Callable[[StreamKey], float],
+    cost_of: CostOf | None = None,
 ) -> set[StreamKey]:
     """The sent set: per topic, the cheapest of the requested streams minus
-    those derivable from the rest, with or without one helper ALL stream."""
+    those derivable from the rest, with or without one helper ALL stream.
+    ``cost_of``, when given, must equal ``cost_per_s`` on the key's parts."""
     by_topic: dict[str, list[StreamKey]] = {}
     for s in requested:
         by_topic.setdefault(s.topic, []).append(s)
     sent: set[StreamKey] = set()
     for streams in by_topic.values():
-        sent.update(_choose_for_topic(streams, cost_per_s) if len(streams) > 1 else streams)
+        sent.update(_choose_for_topic(streams, cost_per_s, cost_of)
+                    if len(streams) > 1 else streams)
     return sent
 
 
@@ -368,10 +384,11 @@ def plan_streams(
     requested: Mapping[StreamKey, Sequence[str]],
     topic_index: Mapping[str, int],
     cost_per_s: Callable[[StreamKey], float],
+    cost_of: CostOf | None = None,
 ) -> tuple[PlannedStream, ...]:
     """Every requested stream, in contract order, with its id if sent or its
     sources if derived."""
-    sent = choose_sent(requested, cost_per_s)
+    sent = choose_sent(requested, cost_per_s, cost_of)
     sent_by_topic: dict[str, list[StreamKey]] = {}
     for s in sent:
         sent_by_topic.setdefault(s.topic, []).append(s)
