@@ -25,7 +25,7 @@ Every stream is assumed present in every window, as in ``linkcost``.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from math import ceil
@@ -157,6 +157,17 @@ class LinkBudget:
 WalkedSlot = tuple[int, int, int, list[int]]
 
 
+def exact_sum(values: Iterable[Fraction]) -> Fraction:
+    """``sum(values, Fraction(0))``, exactly, with one Fraction addition per
+    distinct denominator (a plan's window sizes repeat few): the numerators
+    of each denominator are added as integers."""
+    by_den: dict[int, int] = {}
+    for v in values:
+        d = v.denominator
+        by_den[d] = by_den.get(d, 0) + v.numerator
+    return sum((Fraction(n, d) for d, n in by_den.items()), Fraction(0))
+
+
 def _slot_walk(schedule: Schedule, window_bytes: Sequence[Fraction], delay: Fraction
                ) -> list[WalkedSlot]:
     """The first slots: one hyperperiod, or more until they span 20 accepted
@@ -167,8 +178,7 @@ def _slot_walk(schedule: Schedule, window_bytes: Sequence[Fraction], delay: Frac
     by_period: dict[int, list[int]] = {}
     for i, p in enumerate(schedule.periods_us):
         by_period.setdefault(p, []).append(i)
-    period_bytes = {p: sum((window_bytes[i] for i in ids), Fraction(0))
-                    for p, ids in by_period.items()}
+    period_bytes = {p: exact_sum(window_bytes[i] for i in ids) for p, ids in by_period.items()}
     m = schedule.messages_per_hyperperiod
     if m == 0:
         return []

@@ -324,7 +324,13 @@ def _make_plan(
             return float(_window_bytes(s, tops) / s.period)
         return _cost(s.aggregation, topic[0], *s._nd, topic[1], topic[2])  # type: ignore
 
-    streams = plan_streams(requested, index, cost)
+    def cost_of(topic_name: str, aggregation: str, p_num: int, p_den: int) -> float:
+        topic = published.get(topic_name)
+        if topic is None:
+            return cost(StreamKey(topic_name, aggregation, Fraction(p_num, p_den)))
+        return _cost(aggregation, topic[0], p_num, p_den, topic[1], topic[2])
+
+    streams = plan_streams(requested, index, cost, cost_of)
     sent = sorted((s for s in streams if s.id is not None), key=lambda s: s.id or 0)
     hyper = _hyperperiod_us(model, requested)
     sched = Schedule.from_periods_us([_key_us(s.stream) for s in sent], hyper)

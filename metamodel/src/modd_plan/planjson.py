@@ -8,6 +8,7 @@ microseconds. See docs/planning.md for every field.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Sequence
 from fractions import Fraction
 from functools import lru_cache
 from typing import TYPE_CHECKING, cast
@@ -46,22 +47,34 @@ def _dec_us(us: int) -> str:
     return decimal_of(Fraction(us, MICROS_PER_SECOND))
 
 
-def _stream_json(s: PlannedStream) -> PlanStream:
-    first = s.sources[0] if s.sources else None
-    key = s.stream
-    return {
-        "id": s.id,
-        "key": key.key,
-        "topic": key.topic,
-        "aggregation": key.aggregation,
-        "period_s": _decimal_of(*key._nd),  # type: ignore[attr-defined]
-        "period_us": _key_us(key),
-        "sent": s.sent,
-        "derived_from": first.stream.key if first else None,
-        "factor": first.factor if first else 1,
-        "sources": [{"key": x.stream.key, "factor": x.factor} for x in s.sources],
-        "subscribers": list(s.subscribers),
-    }
+def _streams_json(streams: Sequence[PlannedStream]) -> list[PlanStream]:
+    """The streams' JSON objects. A plan repeats few periods: their decimal
+    and microsecond forms are computed once per period, not per stream."""
+    periods: dict[tuple[int, int], tuple[str, int]] = {}
+    out: list[PlanStream] = []
+    append = out.append
+    for s in streams:
+        key = s.stream
+        nd = key._nd  # type: ignore[attr-defined]
+        period = periods.get(nd)
+        if period is None:
+            period = periods[nd] = (_decimal_of(*nd), _key_us(key))
+        sources = s.sources
+        first = sources[0] if sources else None
+        append({
+            "id": s.id,
+            "key": key.key,
+            "topic": key.topic,
+            "aggregation": key.aggregation,
+            "period_s": period[0],
+            "period_us": period[1],
+            "sent": s.id is not None,
+            "derived_from": first.stream.key if first else None,
+            "factor": first.factor if first else 1,
+            "sources": [{"key": x.stream.key, "factor": x.factor} for x in sources],
+            "subscribers": list(s.subscribers),
+        })
+    return out
 
 
 def _schedule_json(plan: Plan) -> PlanSchedule:
@@ -106,7 +119,7 @@ def plan_to_json(plan: Plan) -> PlanDocument:
             }
             for i, t in enumerate(plan.topics)
         ],
-        "streams": [_stream_json(s) for s in plan.streams],
+        "streams": _streams_json(plan.streams),
         "subscriptions": {name: key.key for name, key in plan.subscriptions.items()},
         "buffer_sizes": sizes,
         "schedule": _schedule_json(plan),

@@ -37,7 +37,7 @@ AGGREGATIONS: tuple[str, ...] = NAMES
 _AGG_INDEX = {a: i for i, a in enumerate(AGGREGATIONS)}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class StreamKey:
     """(topic, aggregation, window period in seconds).
 
@@ -49,15 +49,23 @@ class StreamKey:
     aggregation: str
     period: Fraction
 
-    def __post_init__(self) -> None:
+    def __init__(self, topic: str, aggregation: str, period: Fraction) -> None:
+        # All attributes written into the instance's __dict__ at once (a
+        # frozen dataclass's __init__ sets each through object.__setattr__).
         # Fraction.__hash__ computes a modular inverse and its numerator and
-        # denominator are properties: both are read once here. Not fields:
-        # equality, repr and order stay those of (topic, aggregation, period).
-        nd = (self.period.numerator, self.period.denominator)
-        object.__setattr__(self, "_nd", nd)
-        # sort keys: (float, Fraction) orders as the Fraction, the float first
-        object.__setattr__(self, "_sort_period", (nd[0] / nd[1], self.period))
-        object.__setattr__(self, "_hash", hash((self.topic, self.aggregation, *nd)))
+        # denominator are properties: both are read once here. The derived
+        # ones are not fields: equality, repr and order stay those of
+        # (topic, aggregation, period).
+        nd = (period.numerator, period.denominator)
+        self.__dict__.update(
+            topic=topic,
+            aggregation=aggregation,
+            period=period,
+            _nd=nd,
+            # sort keys: (float, Fraction) orders as the Fraction, the float first
+            _sort_period=(nd[0] / nd[1], period),
+            _hash=hash((topic, aggregation, *nd)),
+        )
 
     def __hash__(self) -> int:
         return self._hash  # type: ignore[attr-defined, no-any-return]
@@ -82,15 +90,19 @@ class StreamKey:
         return cls(topic, aggregation, to_fraction(period))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Source:
     """A sent stream a derived stream is computed from, ``factor`` windows at a time."""
 
     stream: StreamKey
     factor: int
 
+    def __init__(self, stream: StreamKey, factor: int) -> None:
+        # one dictionary update, not a frozen dataclass's setattr per field
+        self.__dict__.update(stream=stream, factor=factor)
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, init=False)
 class PlannedStream:
     """A requested (or helper) stream with its fate: sent with an id, or derived."""
 
@@ -98,6 +110,11 @@ class PlannedStream:
     id: int | None
     sources: tuple[Source, ...]
     subscribers: tuple[str, ...]
+
+    def __init__(self, stream: StreamKey, id: int | None,  # noqa: A002 (the field's name)
+                 sources: tuple[Source, ...], subscribers: tuple[str, ...]) -> None:
+        # one dictionary update, not a frozen dataclass's setattr per field
+        self.__dict__.update(stream=stream, id=id, sources=sources, subscribers=subscribers)
 
     @property
     def sent(self) -> bool:
@@ -215,10 +232,12 @@ class _Relations:
 
     def __init__(self, required: Sequence[StreamKey],
                  cost_per_s: Callable[[StreamKey], float]) -> None:
-        # stable sorts, last key first: (-cost, -period, aggregation order)
+        # stable sorts, last key first: (-cost, -period, aggregation order);
+        # a stable reverse sort on (cost, period) keeps the aggregation order
+        # of its ties
         streams = sorted(required, key=lambda s: _AGG_INDEX[s.aggregation])
-        streams.sort(key=lambda s: s._sort_period, reverse=True)  # type: ignore[attr-defined]
-        streams.sort(key=cost_per_s, reverse=True)
+        streams.sort(key=lambda s: (cost_per_s(s), s._sort_period),  # type: ignore[attr-defined]
+                     reverse=True)
         self.streams = streams
         nds: list[tuple[int, int]] = [s._nd for s in streams]  # type: ignore[attr-defined]
         self.nds = nds
@@ -229,19 +248,21 @@ class _Relations:
         #: pair groups (by position) an ALL source joins
         self.all_single: list[bool] = []
         self.all_pair: list[list[int]] = []
+        columns = list(zip(range(len(nds)), nds, aggs, strict=True))
         for r, (an, ad) in enumerate(nds):
-            # j divides: target period / period j is whole
-            whole = [(an * bd) % (ad * bn) == 0 for bn, bd in nds]
+            # j serves r: j's aggregation is a rule of r's (tested first, the
+            # cheaper test) and target period / period j is whole
             rules = SINGLE_SOURCE_RULES[aggs[r]]
-            self.singles.append([j for j in range(len(nds))
-                                 if j != r and whole[j] and aggs[j] in rules])
+            self.singles.append([j for j, (bn, bd), a in columns
+                                 if a in rules and j != r and (an * bd) % (ad * bn) == 0])
             self.all_single.append(agg.ALL in rules)
             pair = PAIR_SOURCE_RULES.get(aggs[r])
             if pair is None:
                 self.pairs.append(None)
                 self.all_pair.append([])
             else:
-                self.pairs.append([[j for j in range(len(nds)) if whole[j] and aggs[j] == a]
+                whole = [(an * bd) % (ad * bn) == 0 for bn, bd in nds]
+                self.pairs.append([[j for j, _, b in columns if b == a and whole[j]]
                                    for a in pair])
                 self.all_pair.append([g for g, a in enumerate(pair) if a == agg.ALL])
 
@@ -263,20 +284,23 @@ class _Relations:
                     pairs[r] = [[*g, n] if k in self.all_pair[r] else g
                                 for k, g in enumerate(groups)]
         kept = [True] * (n + 1)  # the helper (index n) stays kept
+        is_kept = kept.__getitem__
 
         def derivable(r: int) -> bool:
-            if any(kept[j] for j in singles[r]):
+            if any(map(is_kept, singles[r])):
                 return True
             groups = pairs[r]
-            return groups is not None and all(any(kept[j] for j in g) for g in groups)
+            return groups is not None and all(any(map(is_kept, g)) for g in groups)
 
         dropped: list[int] = []
         for i in range(n):
             kept[i] = False
             dropped.append(i)
-            if not all(derivable(r) for r in dropped):
-                kept[i] = True
-                dropped.pop()
+            for r in dropped:
+                if not derivable(r):
+                    kept[i] = True
+                    dropped.pop()
+                    break
         out = [s for s, k in zip(self.streams, kept, strict=False) if k]
         return out + [helper] if helper is not None else out
 
@@ -295,8 +319,14 @@ def _drop_derivable(
     return _Relations(required, cost_per_s).drop(helper)
 
 
+#: The cost of a stream given as (topic, aggregation, period numerator,
+#: period denominator): lets the choice price a helper before building its key.
+CostOf = Callable[[str, str, int, int], float]
+
+
 def _choose_for_topic(
-    streams: Sequence[StreamKey], cost_per_s: Callable[[StreamKey], float]
+    streams: Sequence[StreamKey], cost_per_s: Callable[[StreamKey], float],
+    cost_of: CostOf | None = None,
 ) -> list[StreamKey]:
     costs = {s: cost_per_s(s) for s in streams}  # one call per stream
     cost = costs.__getitem__
@@ -316,10 +346,17 @@ def _choose_for_topic(
             sn, sd = s._nd  # type: ignore[attr-defined]
             if (sn * hd) % (sd * hn) == 0:
                 replaceable += cost(s)
-        helper = StreamKey(topic, agg.ALL, period)
-        costs[helper] = helper_cost = cost_per_s(helper)
-        if helper_cost >= replaceable:
-            continue  # it cannot pay for itself
+        if cost_of is not None:
+            helper_cost = cost_of(topic, agg.ALL, hn, hd)
+            if helper_cost >= replaceable:
+                continue  # it cannot pay for itself (its key not even built)
+            helper = StreamKey(topic, agg.ALL, period)
+            costs[helper] = helper_cost
+        else:
+            helper = StreamKey(topic, agg.ALL, period)
+            costs[helper] = helper_cost = cost_per_s(helper)
+            if helper_cost >= replaceable:
+                continue  # it cannot pay for itself
         trial = relations.drop(helper)
         trial_cost = sum(map(cost, trial))
         if trial_cost < best_cost:
@@ -328,16 +365,19 @@ def _choose_for_topic(
 
 
 def choose_sent(
-    requested: Iterable[StreamKey], cost_per_s: Callable[[StreamKey], float]
+    requested: Iterable[StreamKey], cost_per_s: Callable[[StreamKey], float],
+    cost_of: CostOf | None = None,
 ) -> set[StreamKey]:
     """The sent set: per topic, the cheapest of the requested streams minus
-    those derivable from the rest, with or without one helper ALL stream."""
+    those derivable from the rest, with or without one helper ALL stream.
+    ``cost_of``, when given, must equal ``cost_per_s`` on the key's parts."""
     by_topic: dict[str, list[StreamKey]] = {}
     for s in requested:
         by_topic.setdefault(s.topic, []).append(s)
     sent: set[StreamKey] = set()
     for streams in by_topic.values():
-        sent.update(_choose_for_topic(streams, cost_per_s) if len(streams) > 1 else streams)
+        sent.update(_choose_for_topic(streams, cost_per_s, cost_of)
+                    if len(streams) > 1 else streams)
     return sent
 
 
@@ -345,10 +385,11 @@ def plan_streams(
     requested: Mapping[StreamKey, Sequence[str]],
     topic_index: Mapping[str, int],
     cost_per_s: Callable[[StreamKey], float],
+    cost_of: CostOf | None = None,
 ) -> tuple[PlannedStream, ...]:
     """Every requested stream, in contract order, with its id if sent or its
     sources if derived."""
-    sent = choose_sent(requested, cost_per_s)
+    sent = choose_sent(requested, cost_per_s, cost_of)
     sent_by_topic: dict[str, list[StreamKey]] = {}
     for s in sent:
         sent_by_topic.setdefault(s.topic, []).append(s)

@@ -90,3 +90,18 @@ def test_over_budget_names_the_subscriptions(scenarios_dir: Path) -> None:
     ok = _plan_with(scenarios_dir, "scenario1.modd", 'transport = serial; device = "/dev/x"; '
                     "rate = 3600;").budget
     assert ok is not None and ok.error is None and ok.over_budget == ()
+
+
+def test_exact_sum_equals_the_fraction_sum() -> None:
+    """The per-denominator integer sum against Fraction addition, seeded."""
+    import random
+    from fractions import Fraction
+
+    from modd_plan.linkbudget import exact_sum
+
+    rng = random.Random(7)
+    for _ in range(200):
+        values = [Fraction(rng.randint(-10**6, 10**6), rng.choice([1, 2, 3, 7, 10, 12, 10**6]))
+                  for _ in range(rng.randint(0, 40))]
+        assert exact_sum(values) == sum(values, Fraction(0))
+        assert isinstance(exact_sum(values), Fraction)

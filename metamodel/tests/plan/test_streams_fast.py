@@ -61,7 +61,15 @@ def test_choice_matches_the_reference(seed: int) -> None:
         def cost(s: StreamKey, table: dict[StreamKey, float] = table) -> float:
             return table[s]
 
-        assert streams._choose_for_topic(required, cost) == _reference_choose(required, cost)
+        reference = _reference_choose(required, cost)
+        assert streams._choose_for_topic(required, cost) == reference
+
+        def cost_of(topic: str, aggregation: str, num: int, den: int,
+                    table: dict[StreamKey, float] = table) -> float:
+            return table[StreamKey(topic, aggregation, Fraction(num, den))]
+
+        # pricing a helper from its parts, before its key is built: the same choice
+        assert streams._choose_for_topic(required, cost, cost_of) == reference
         helper = StreamKey("d.s.v", "ALL", rng.choice(PERIODS))
         if helper not in required:
             assert (streams._drop_derivable(required, cost, helper)
