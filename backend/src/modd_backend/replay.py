@@ -7,8 +7,10 @@ complete part). Starting another replay replaces the current one."""
 from __future__ import annotations
 
 import threading
+import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from .foxglove_replay import ReplayServer, load_recording
 
@@ -45,13 +47,25 @@ class ReplaySlot:
                                    start_ns=start_ns, end_ns=end_ns)
         with self._lock:
             self._stop_locked()
-            server = ReplayServer([path], self.host, self.port, recording=recording,
-                                  autoplay=autoplay)
+            server = self._bind(path, recording, autoplay)
             self._server = server
             p = server.player
             self.info = ReplayInfo(server.url, drone, path.name, p.start, p.end,
                                    len(p.messages), sorted(server.channels), user, autoplay)
             return self.info
+
+    def _bind(self, path: Path, recording: Any, autoplay: bool) -> ReplayServer:
+        """The new server on the slot's port: the SDK frees the port of the one
+        just stopped a moment later, so a busy port is retried for up to 3 s."""
+        deadline = time.monotonic() + 3.0
+        while True:
+            try:
+                return ReplayServer([path], self.host, self.port, recording=recording,
+                                    autoplay=autoplay)
+            except RuntimeError as exc:  # the SDK's FoxgloveError
+                if "in use" not in str(exc) or time.monotonic() > deadline:
+                    raise OSError(str(exc)) from None
+                time.sleep(0.1)
 
     def stop(self) -> None:
         with self._lock:
