@@ -98,10 +98,13 @@ def test_a_deploy_changes_the_packing_delay(tmp_path: Path, zenoh_client: Any) -
     assert before >= 3.5, (before, a, b)
     assert after <= 2.2, (after, c, d)
     assert b["nacks"] == d["nacks"] == 0 and d["forged"] == 0, d
-    # the emulator's count (drone -> base datagrams a second): at least twice as many
+    # the emulator's count (drone -> base datagrams a second): 0.8/s -> 2/s; its report
+    # comes every second, so each figure may be a second stale (hence 1.4, not 2.5)
     rate_before = (wb[1] - wa[1]) / (wb[0] - wa[0])
     rate_after = (wd[1] - wc[1]) / (wd[0] - wc[0])
-    assert rate_after >= 1.8 * rate_before, (rate_before, rate_after)
+    print(f"slots a datagram {before:.2f} -> {after:.2f}; "
+          f"emulator drone->base datagrams/s {rate_before:.2f} -> {rate_after:.2f}")
+    assert rate_after >= 1.4 * rate_before, (rate_before, rate_after)
     # delivery complete across the switch: the archive is the oracle
     assert {t: len(s) for t, s in archive.items()} == load_counts(load)
     assert check_against_archive(values, archive) > 100
