@@ -72,6 +72,7 @@ def msg_json(m: Message) -> dict[str, Any]:
                         "period_us": t.period_us} for t in m.topics],
             "streams": [{"topic": s.topic, "aggregation": s.aggregation.name,
                          "period_us": s.period_us} for s in m.streams],
+            **({} if m.accepted_delay_ms is None else {"accepted_delay_ms": m.accepted_delay_ms}),
         }
     if isinstance(m, ConfigAck):
         return {"type": "CONFIG_ACK", "config_id": m.config_id, "status": m.status,
@@ -120,6 +121,9 @@ def main() -> None:
     simple("ping", "PING with a 2-byte payload (the sender's sequence)", Ping(b"\x07\x01"))
     simple("pong", "PONG echoing the PING payload", Pong(b"\x07\x01"))
     simple("config_scenario1", "scenario 1: 3 float32 topics (28, 28, 6), 4 streams at 0.25 s", S1)
+    simple("config_scenario1_delay", "scenario 1 on a datagram link, with the optional "
+           "trailing accepted delay (250 ms): the PubBroker packs slots with it",
+           Config(1, 30, S1_TOPICS, S1_STREAMS, 250))
     simple("config_mixed", "every type and aggregation, one topic of each type", Config(
         200, 0,
         (TopicSpec("d.s.f64", ValueType.FLOAT64, 1, 0), TopicSpec("d.s.i", ValueType.INT, 1000, 10000),
@@ -193,6 +197,10 @@ def main() -> None:
          "aggregation 9"),
         ("config_zero_period", fr("07 01 00 01 0161 00 01 00 01 00 00 00"), "stream period 0"),
         ("trailing_byte", fr("08 01 00 0000000000000000 ff"), "CONFIG_ACK with a trailing byte"),
+        ("config_delay_above_one_hour", fr("07 01 00 01 0161 00 01 00 01 00 00 01 81dddb01"),
+         "accepted delay 3600001 ms (above one hour)"),
+        ("config_two_trailing_fields", fr("07 01 00 01 0161 00 01 00 01 00 00 01 01 01"),
+         "a byte after the accepted delay"),
         ("status_overlong_varint", fr("20 01 ffffffffffffffffffff7f"), "varint longer than 64 bits"),
     ]
     (HERE / "invalid.json").write_text(json.dumps({

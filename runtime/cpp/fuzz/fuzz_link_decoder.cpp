@@ -38,6 +38,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         Message m = decode(*f);
         std::vector<uint8_t> out;
         encode(out, m);  // whatever decodes must encode
+        if (const auto* c = std::get_if<Config>(&m)) {
+          // and a CONFIG (its optional accepted delay included) must read back the same
+          auto g = split_frame(out);
+          if (!g || !(std::get<Config>(decode(*g)) == *c)) std::abort();
+        }
       }
     }
   } catch (const Error&) {

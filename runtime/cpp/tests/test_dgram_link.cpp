@@ -5,6 +5,8 @@
 // control datagrams dropped and counted, the keepalive timeout.
 #include <gtest/gtest.h>
 
+#include <optional>
+
 #include "modd/broker/dgram_link.hpp"
 #include "modd/link/auth.hpp"
 #include "modd/link/codec.hpp"
@@ -148,6 +150,35 @@ TEST(DgramLink, PacksSlotsUpToTheDelayAndResendsOnNack) {
   EXPECT_NE(resent, first);
   EXPECT_EQ(dg::verify_data(resent, s.key, dg::kDroneToBase, 0).values, v.values);
   EXPECT_EQ(s.link.counters().resent, 1u);
+}
+
+TEST(DgramLink, AConfigChangesTheAcceptedDelayAndAnOldOneRestoresIt) {
+  Session s;
+  s.handshake(1, 0);
+  const int64_t q = 250'000'000;
+  auto send_config = [&](uint8_t id, std::optional<uint32_t> delay_ms, int64_t now) {
+    Config cfg;
+    cfg.config_id = id;
+    cfg.accepted_delay_ms = delay_ms;
+    std::vector<uint8_t> frame;
+    encode(frame, Message{cfg});
+    s.link.on_datagram(s.control(frame), now);
+  };
+  send_config(2, 250, 1);
+  EXPECT_EQ(s.link.delay_ns(), q);
+  size_t before = s.out.sent.size();
+  for (uint64_t k = 0; k < 4; ++k) {
+    s.link.add_slot(2, k, static_cast<int64_t>(k + 1) * q, {1, 2, 3, 4}, {true});
+    s.link.tick(static_cast<int64_t>(k + 1) * q);
+  }
+  // up to 0.25 s: slots 0, 1 (0.25, 0.5 s) sent at 0.5 s, slots 2, 3 at 1 s
+  ASSERT_EQ(s.out.sent.size(), before + 2);
+  EXPECT_EQ(dg::verify_data(s.out.sent[before], s.key, dg::kDroneToBase, 0).values.size(), 2u * 4);
+  EXPECT_EQ(dg::verify_data(s.out.sent[before + 1], s.key, dg::kDroneToBase, 2).slot, 2u);
+  send_config(3, std::nullopt, 5 * q);  // no field: the config file's delay again
+  EXPECT_EQ(s.link.delay_ns(), 1'000'000'000);
+  send_config(4, 0, 6 * q);  // 0: one slot a datagram
+  EXPECT_EQ(s.link.delay_ns(), 0);
 }
 
 TEST(DgramLink, ForgedAndReplayedControlDatagramsAreDroppedAndCounted) {

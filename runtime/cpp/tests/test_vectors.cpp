@@ -62,6 +62,7 @@ Message from_json(const json& m) {
       s.period_us = sj["period_us"];
       c.streams.push_back(s);
     }
+    if (m.contains("accepted_delay_ms")) c.accepted_delay_ms = m["accepted_delay_ms"].get<uint32_t>();
     return c;
   }
   ADD_FAILURE() << "unknown vector type " << t;

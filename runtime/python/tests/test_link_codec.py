@@ -7,12 +7,16 @@ from hypothesis import given
 from hypothesis import strategies as st
 from modd.link import codec
 from modd.link.frames import (
+    MAX_ACCEPTED_DELAY_MS,
     Aggregation,
+    Config,
     ConfigAck,
     Data,
     Ping,
     ProtocolError,
     Status,
+    StreamSpec,
+    TopicSpec,
     Value,
     ValueType,
     value_kind,
@@ -36,6 +40,31 @@ def test_status_and_ack_round_trip(counters: list[int], cid: int) -> None:
     for m in (Status(tuple(counters)), ConfigAck(cid, 0, 2**63)):
         (raw,) = codec.FrameSplitter().feed(codec.encode(m))
         assert codec.decode(raw) == m
+
+
+@given(st.one_of(st.none(), st.integers(0, MAX_ACCEPTED_DELAY_MS)), st.integers(1, 255))
+def test_config_accepted_delay_round_trip(delay: int | None, cid: int) -> None:
+    """The optional trailing accepted delay (docs/protocol.md, "CONFIG"): absent, the
+    frame is byte for byte the old one; present, one trailing varint."""
+    topics = (TopicSpec("d.s.t", ValueType.FLOAT32, 4, 250_000),)
+    streams = (StreamSpec(0, Aggregation.AVERAGE, 1_000_000),)
+    m = Config(cid, 30, topics, streams, delay)
+    wire = codec.encode(m)
+    old = codec.encode(Config(cid, 30, topics, streams))
+    if delay is None:
+        assert wire == old
+    else:  # one more varint, and the length prefix counts it
+        assert wire[-len(codec.varint(delay)):] == codec.varint(delay)
+        assert len(wire) - len(old) in (len(codec.varint(delay)), len(codec.varint(delay)) + 1)
+    (raw,) = codec.FrameSplitter().feed(wire)
+    assert codec.decode(raw) == m
+
+
+def test_config_accepted_delay_out_of_range() -> None:
+    c = Config(1, 0, (TopicSpec("a", ValueType.FLOAT32, 1),),
+               (StreamSpec(0, Aggregation.MIN, 1),), MAX_ACCEPTED_DELAY_MS + 1)
+    with pytest.raises(ValueError, match="accepted delay"):
+        codec.encode(c)
 
 
 @given(st.lists(st.tuples(st.booleans(), st.floats(width=32, allow_nan=False),

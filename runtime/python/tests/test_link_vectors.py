@@ -64,6 +64,7 @@ def from_json(m: dict[str, Any]) -> Message:
                   for x in m["topics"]),
             tuple(StreamSpec(x["topic"], Aggregation[x["aggregation"]], x["period_us"])
                   for x in m["streams"]),
+            m.get("accepted_delay_ms"),
         )
     raise AssertionError(t)
 

@@ -42,7 +42,7 @@ size_t serial_capacity(size_t packet) {
 
 DatagramLink::DatagramLink(std::string psk, LinkHooks& hooks, DatagramOut& out, DgramOptions opt,
                            std::function<Nonce()> nonce_source)
-    : psk_(std::move(psk)), hooks_(hooks), out_(out), opt_(opt), nonce_source_(std::move(nonce_source)) {}
+    : psk_(std::move(psk)), hooks_(hooks), out_(out), opt_(opt), delay_ns_(opt.delay_ns), nonce_source_(std::move(nonce_source)) {}
 
 void DatagramLink::emit(std::vector<uint8_t>&& d, bool reply) {
   ++c_.datagrams_out;
@@ -169,6 +169,9 @@ void DatagramLink::on_control(std::span<const uint8_t> raw, int64_t now) {
     if (ack.status == 0) {
       last_config_ = frame;
       last_ack_ = out;
+      // a deploy may change the accepted delay: packing follows it from now on
+      // (absent: the config file's), the group being packed included
+      delay_ns_ = cfg->accepted_delay_ms ? int64_t{*cfg->accepted_delay_ms} * 1'000'000 : opt_.delay_ns;
     }
     send_control(out);
   } else if (auto* e = std::get_if<ErrorMsg>(&m)) {
@@ -292,7 +295,7 @@ bool DatagramLink::add_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, s
     return true;
   }
   if (!group_.empty() &&
-      (config_id != group_config_ || slot != group_first_ + group_.size() || date_ns - group_date_ > opt_.delay_ns ||
+      (config_id != group_config_ || slot != group_first_ + group_.size() || date_ns - group_date_ > delay_ns_ ||
        group_.size() >= 255 || group_size(&e) > opt_.max_datagram))
     flush();
   if (group_.empty()) {
@@ -327,7 +330,7 @@ void DatagramLink::flush() {
 }
 
 void DatagramLink::tick(int64_t now) {
-  if (!group_.empty() && now - group_date_ >= opt_.delay_ns) flush();
+  if (!group_.empty() && now - group_date_ >= delay_ns_) flush();
   if (ready_ && opt_.keepalive_timeout_ns > 0 && now - last_heard_ > opt_.keepalive_timeout_ns) {
     ready_ = false;
     ++c_.timeouts;
@@ -338,7 +341,7 @@ void DatagramLink::tick(int64_t now) {
 
 int64_t DatagramLink::next_due_ns() const {
   int64_t next = INT64_MAX;
-  if (!group_.empty()) next = group_date_ + opt_.delay_ns;
+  if (!group_.empty()) next = group_date_ + delay_ns_;
   if (ready_ && opt_.keepalive_timeout_ns > 0) next = std::min(next, last_heard_ + opt_.keepalive_timeout_ns + 1);
   return next;
 }

@@ -129,6 +129,7 @@ void encode(std::vector<uint8_t>& out, const Message& m) {
             w.u8(static_cast<uint8_t>(s.aggregation));
             w.varint(s.period_us);
           }
+          if (msg.accepted_delay_ms) w.varint(*msg.accepted_delay_ms);
         } else if constexpr (std::is_same_v<T, ConfigAck>) {
           type = MsgType::ConfigAck;
           w.u8(msg.config_id);
@@ -264,6 +265,11 @@ Message decode(const RawFrame& f) {
         s.period_us = r.varint();
         if (s.period_us == 0 || s.period_us > 366ull * 86400 * 1'000'000) r.fail("stream period out of range");
         c.streams.push_back(s);
+      }
+      if (r.remaining() > 0) {
+        uint64_t d = r.varint();
+        if (d > kMaxAcceptedDelayMs) r.fail("accepted delay above one hour");
+        c.accepted_delay_ms = static_cast<uint32_t>(d);
       }
       return done(c);
     }

@@ -64,6 +64,7 @@ class DatagramLink {
   void tick(int64_t now);
   int64_t next_due_ns() const;
   bool ready() const { return ready_; }
+  int64_t delay_ns() const { return delay_ns_; }  // the accepted delay packing runs with
   const DgramCounters& counters() const { return c_; }
   std::string summary() const;
 
@@ -97,6 +98,7 @@ class DatagramLink {
   LinkHooks& hooks_;
   DatagramOut& out_;
   DgramOptions opt_;
+  int64_t delay_ns_;  // the running accepted delay: the CONFIG's, else opt_.delay_ns
   std::function<link::Nonce()> nonce_source_;
   DgramCounters c_;
   // handshake in progress (kept until a newer HELLO) and the session

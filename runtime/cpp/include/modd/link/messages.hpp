@@ -2,6 +2,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -12,6 +13,7 @@ namespace modd::link {
 
 inline constexpr uint8_t kVersion = 1;
 inline constexpr size_t kMaxFrame = 1 << 20;  // bytes after the length prefix
+inline constexpr uint32_t kMaxAcceptedDelayMs = 3'600'000;  // CONFIG's optional accepted delay: one hour
 
 enum class MsgType : uint8_t {
   Hello = 0x01,
@@ -63,6 +65,9 @@ struct Config {
   uint32_t status_period_s = 0;  // 0: no STATUS
   std::vector<TopicSpec> topics;
   std::vector<StreamSpec> streams;  // the sent streams, in stream-id order
+  // Optional trailing field (datagram links): the accepted delay the PubBroker packs
+  // slots with; absent = the delay of its config file (docs/protocol.md, "CONFIG").
+  std::optional<uint32_t> accepted_delay_ms;
   bool operator==(const Config&) const = default;
 };
 inline bool operator==(const TopicSpec& a, const TopicSpec& b) {

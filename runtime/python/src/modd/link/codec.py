@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from modd.link.frames import (
+    MAX_ACCEPTED_DELAY_MS,
     MAX_FRAME,
     Aggregation,
     Auth,
@@ -155,6 +156,11 @@ def encode(m: Message) -> bytes:
         b += varint(len(m.streams))
         for s in m.streams:
             b += varint(s.topic) + bytes([s.aggregation]) + varint(s.period_us)
+        if m.accepted_delay_ms is not None:
+            if not 0 <= m.accepted_delay_ms <= MAX_ACCEPTED_DELAY_MS:
+                raise ValueError(f"accepted delay {m.accepted_delay_ms} ms out of "
+                                 f"0..{MAX_ACCEPTED_DELAY_MS}")
+            b += varint(m.accepted_delay_ms)
         return _frame(MsgType.CONFIG, bytes(b))
     if isinstance(m, ConfigAck):
         body = bytes([m.config_id, m.status]) + struct.pack("<Q", m.epoch_ns)
@@ -342,7 +348,12 @@ def _decode_config(r: Reader) -> Config:
         if p == 0 or p > 366 * 86400 * 1_000_000:
             raise r.fail("stream period out of range")
         streams.append(StreamSpec(topic, Aggregation(a), p))
-    return Config(config_id, sp, tuple(topics), tuple(streams))
+    delay = None
+    if r.remaining():
+        delay = r.varint()
+        if delay > MAX_ACCEPTED_DELAY_MS:
+            raise r.fail("accepted delay above one hour")
+    return Config(config_id, sp, tuple(topics), tuple(streams), delay)
 
 
 @dataclass(frozen=True)

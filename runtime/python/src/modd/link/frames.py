@@ -144,12 +144,19 @@ class StreamSpec:
     period_us: int
 
 
+#: The largest accepted delay a CONFIG may carry (one hour, as the PubBroker's link.delay_ms).
+MAX_ACCEPTED_DELAY_MS = 3_600_000
+
+
 @dataclass(frozen=True)
 class Config:
     config_id: int
     status_period_s: int
     topics: tuple[TopicSpec, ...]
     streams: tuple[StreamSpec, ...]
+    #: Optional trailing field (datagram links): the accepted delay the PubBroker packs
+    #: slots with; None = the delay of its config file (docs/protocol.md, "CONFIG").
+    accepted_delay_ms: int | None = None
 
     def kinds(self) -> list[ValueKind]:
         return [value_kind(self.topics[s.topic].type, s.aggregation) for s in self.streams]

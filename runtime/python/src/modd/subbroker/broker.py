@@ -40,7 +40,7 @@ from .fanout import FanOut
 from .kept import Deployment, StateDir, same_model
 from .keys import backfill_key, deploy_key, subscribe_key
 from .link import ConfigRejected, LinkDown
-from .planning import config_for, plan_within
+from .planning import accepted_delay_ms, config_for, plan_within
 from .record import BaseRecord
 from .status import StatusPublisher
 from .transport import link_client
@@ -214,6 +214,7 @@ class SubBroker:
         plan = plan_within(model, self.link.stats.rtt_s, self.config.link.plan_budget_s)
         if not plan.sent_streams:
             raise ValueError("the plan sends nothing over the link (no published subscription)")
+        delay_ms = accepted_delay_ms(model, self.config.model, self.config.transport)
         with self._lock:
             cid = self._last_id % 255 + 1
             if cid == avoid:
@@ -224,7 +225,7 @@ class SubBroker:
             self._planned[cid] = (model, plan, meta)
             for stale in list(self._planned)[:-8]:
                 del self._planned[stale]
-        return config_for(plan, cid, self.config.link.pubbroker_status_period_s)
+        return config_for(plan, cid, self.config.link.pubbroker_status_period_s, delay_ms)
 
     # -- LinkHandler -------------------------------------------------------------
 
@@ -270,7 +271,13 @@ class SubBroker:
             if self._zenoh is not None:
                 self._zenoh.forget(name)
         with self._lock:
+            # the replaced config's last windows (dated up to the new epoch) may still
+            # come: over a datagram link, the group packed before the switch, up to
+            # the old accepted delay later. They go to the deployment they belong to.
+            previous = self._running
             self._by_id = {config.config_id: running}
+            if previous is not None and previous.config.config_id != config.config_id:
+                self._by_id[previous.config.config_id] = previous
             self._running = running
             self._model, self._meta = model, meta
         if self._tcp is not None:

@@ -113,6 +113,9 @@ class _Run:
     asked_at: float = float("-inf")
     asks: int = 0
     recovered: int = 0  # slots that came after an overdue NACK (no gap opened)
+    # The epoch of the config that replaced this one: its slots dated before it still
+    # come (the PubBroker's group packed before the switch), none after.
+    end_ns: int | None = None
 
 
 @dataclass
@@ -160,7 +163,10 @@ class DatagramLinkClient:
         self._psk = key
         self._opt = options
         self._handler = handler
+        #: the accepted delay the PubBroker packs with: the configured one until a
+        #: CONFIG carrying another is acked (docs/protocol.md, "CONFIG")
         self.delay_s = delay_s
+        self._configured_delay_s = delay_s
         self._liveness_s = liveness_s
         self.stats = LinkStats()
         self.radio = RadioCounters()
@@ -405,6 +411,9 @@ class DatagramLinkClient:
         nxt = run.receiver.gaps.next
         if run.lateness is None or nxt < 0:
             return
+        date_ns = run.epoch_ns + run.schedule.slot_date_us(nxt) * 1000
+        if run.end_ns is not None and date_ns >= run.end_ns:
+            return  # a replaced config: no slot of it after the switch
         if nxt != run.asked_slot:
             run.asked_slot, run.asks, run.asked_at = nxt, 0, float("-inf")
         if run.asks >= MAX_NACK_ASKS or now - run.asked_at < self._ask_every():
@@ -553,11 +562,21 @@ class DatagramLinkClient:
                 ack.status, f"PubBroker refused config {ack.config_id} (status {ack.status})"))
             return
         config = pending.config
+        self.delay_s = (self._configured_delay_s if config.accepted_delay_ms is None
+                        else config.accepted_delay_ms / 1000)
         periods = [s.period_us for s in config.streams]
         receiver = DatagramReceiver(self._key, config.config_id, periods, config.kinds())
         receiver.gaps.max_asks = MAX_NACK_ASKS
-        self._runs = {config.config_id: _Run(config, ack.epoch_ns, receiver,
-                                             Schedule.from_periods_us(periods))}
+        # the running config's last slots (up to the new epoch, packed before the switch,
+        # up to the old accepted delay late) are still decoded: the previous run is kept
+        # until the next config replaces it
+        runs = {cid: run for cid, run in self._runs.items()
+                if run.end_ns is None and cid != config.config_id}
+        for run in runs.values():
+            run.end_ns = ack.epoch_ns
+        runs[config.config_id] = _Run(config, ack.epoch_ns, receiver,
+                                      Schedule.from_periods_us(periods))
+        self._runs = runs
         self._handler.on_config_acked(config, ack)
         self.stats.state = "up"
         pending.future.set_result(ack)

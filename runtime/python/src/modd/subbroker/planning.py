@@ -16,8 +16,16 @@ from typing import Any
 from modd_model.numbers import MICROS_PER_SECOND
 from modd_model.query import link_settings
 from modd_plan import Plan, make_plan
+from modd_plan.linkbudget import LinkSettings
 
-from modd.link.frames import Aggregation, Config, StreamSpec, TopicSpec, ValueType
+from modd.link.frames import (
+    MAX_ACCEPTED_DELAY_MS,
+    Aggregation,
+    Config,
+    StreamSpec,
+    TopicSpec,
+    ValueType,
+)
 
 from .fanout import period_us
 
@@ -70,8 +78,35 @@ def plan_within(model: dict[str, Any], rtt_s: float | None, budget_s: float) -> 
         raise OverBudget("planning this model ran out of memory") from exc
 
 
-def config_for(plan: Plan, config_id: int, status_period_s: int = 60) -> Config:
-    """The CONFIG frame of a plan. Topics nobody publishes get buffer size 1."""
+def accepted_delay_ms(model: dict[str, Any], configured: dict[str, Any],
+                      transport: str) -> int | None:
+    """The CONFIG's optional accepted delay (docs/protocol.md, "CONFIG"): on a
+    datagram link, the ``model``'s ``Link.delay`` in ms when it differs from the
+    ``configured`` model's (the one the PubBroker's config file was generated
+    from, ``link.delay_ms``), else None: a CONFIG that changes nothing stays byte
+    for byte the one an older PubBroker reads. ValueError above one hour.
+
+    >>> accepted_delay_ms({"link": {"acceptedDelayS": "0.25"}}, {}, "udp")
+    250
+    >>> accepted_delay_ms({"link": {"acceptedDelayS": "1"}}, {}, "udp") is None
+    True
+    >>> accepted_delay_ms({"link": {"acceptedDelayS": "0.25"}}, {}, "tcp") is None
+    True
+    """
+    if transport == "tcp":
+        return None
+    ms = int(LinkSettings.of(model, transport).accepted_delay * 1000)
+    if ms == int(LinkSettings.of(configured, transport).accepted_delay * 1000):
+        return None
+    if ms > MAX_ACCEPTED_DELAY_MS:
+        raise ValueError(f"the link's accepted delay ({ms / 1000:g} s) is above one hour")
+    return ms
+
+
+def config_for(plan: Plan, config_id: int, status_period_s: int = 60,
+               accepted_delay_ms: int | None = None) -> Config:
+    """The CONFIG frame of a plan. Topics nobody publishes get buffer size 1;
+    ``accepted_delay_ms`` is the optional trailing field (datagram links)."""
     if not 1 <= config_id <= 255:
         raise ValueError("config_id must be 1..255")
     sizes = plan.buffer_sizes
@@ -89,4 +124,4 @@ def config_for(plan: Plan, config_id: int, status_period_s: int = 60) -> Config:
         StreamSpec(index[s.stream.topic], Aggregation[s.stream.aggregation], period_us(s.stream))
         for s in plan.sent_streams
     )
-    return Config(config_id, status_period_s, topics, streams)
+    return Config(config_id, status_period_s, topics, streams, accepted_delay_ms)
