@@ -11,10 +11,10 @@
 # PLOT_S (seconds of plotting before the screenshot, default 40).
 # PlotJuggler runs with its own settings in a temporary directory
 # (XDG_CONFIG_HOME): UDP Server on a free loopback port, protocol JSON, the
-# field `timestamp` as time, a 30 s streaming buffer. Its layout names the
-# series and starts the streamer; the three dialogs this opens (Start
-# streaming?, the UDP Server's options, placeholders for the series not yet
-# received) are accepted with Return, as a user would. Everything runs on
+# field `timestamp` as time, a 30 s streaming buffer. It starts with its UDP
+# Server (--start_streamer; its dialog accepted with Return); once MoDD's
+# values arrive, the layout naming the series to plot is loaded through the
+# Layout panel's load button, as a user would (xdotool). Everything runs on
 # 127.0.0.1 on free ports; everything started is stopped by PID at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -81,6 +81,7 @@ NlohmannParser.json.timestampEnabled=true
 NlohmannParser.json.timestampFieldName=timestamp
 MainWindow.streamingBufferValue=30
 MainWindow.previousStreamingPlugin=UDP Server
+MainWindow.lastLayoutDirectory=$WORK
 
 [Changelog]
 first=false
@@ -120,21 +121,19 @@ EOF
  <Plugins>
   <plugin ID="UDP Server"/>
  </Plugins>
- <previouslyLoaded_Streamer name="UDP Server"/>
 </root>
 EOF
 } >"$WORK/layout.xml"
 
-"$PLOTJUGGLER_BIN" --nosplash --window_title "PlotJuggler: MoDD demo" --layout "$WORK/layout.xml" >"$WORK/plotjuggler.log" 2>&1 &
+"$PLOTJUGGLER_BIN" --nosplash --window_title "PlotJuggler: MoDD demo" \
+  --start_streamer libDataStreamUDP >"$WORK/plotjuggler.log" 2>&1 &
 PJ_PID=$!
-# Accept the dialogs (Return: Yes / OK / Create empty placeholders) until the
-# UDP server listens and the main window shows (after the layout's dialogs).
+# The UDP Server's dialog (its options as set above): OK, with Return.
 main_window() { xdotool search --onlyvisible --pid "$PJ_PID" --name 'MoDD demo' 2>/dev/null | head -1; }
 listening() { ss -Huln "sport = :$PJ_PORT" | grep -q .; }
 for _ in $(seq 120); do
   kill -0 "$PJ_PID" 2>/dev/null || exit 1
-  for w in $(xdotool search --onlyvisible --pid "$PJ_PID" --name \
-      'Start Streaming|UDP Server|Warning' 2>/dev/null); do
+  for w in $(xdotool search --onlyvisible --pid "$PJ_PID" --name '^UDP Server$' 2>/dev/null); do
     xdotool windowfocus --sync "$w" 2>/dev/null && xdotool key --clearmodifiers Return || true
     sleep 0.5
   done
@@ -151,6 +150,30 @@ xdotool windowmove "$MAIN" 0 0 windowsize "$MAIN" 1600 900
   --modd-connect "tcp/127.0.0.1:$MODD_ZENOH_PORT" \
   --credentials "$MODD_DATA/credentials/viewer.cred" >"$WORK/modd-plotjuggler.log" 2>&1 &
 OUT_PID=$!
+
+# 5. Once the series exist (PlotJuggler 3.9 drops a layout's curves it has not
+# received yet), the layout: the Layout panel's load button, then its path in
+# the file dialog.
+sleep 8
+xdotool mousemove 77 143 click 1
+for _ in $(seq 40); do
+  w="$(xdotool search --onlyvisible --pid "$PJ_PID" --name 'Open Layout' 2>/dev/null | head -1)"
+  [ -n "$w" ] && break
+  sleep 0.25
+done
+[ -n "$w" ] || { echo "PlotJuggler's Open Layout dialog did not open" >&2; exit 1; }
+for _ in 1 2 3; do  # the dialog takes its keys once it has listed the directory
+  sleep 1.5
+  # its File name field (the dialog is centred on the 1600x900 main window)
+  xdotool mousemove 791 559 click 1 sleep 0.3 type --delay 20 "$WORK/layout.xml"
+  xdotool key Return
+  sleep 1.5
+  [ -z "$(xdotool search --onlyvisible --pid "$PJ_PID" --name 'Open Layout' 2>/dev/null)" ] && break
+done
+# Any question the layout asks (curves not received yet): the default answer.
+for w in $(xdotool search --onlyvisible --pid "$PJ_PID" --name 'Warning' 2>/dev/null); do
+  xdotool windowfocus --sync "$w" 2>/dev/null && xdotool key --clearmodifiers Return || true
+done
 sleep "$PLOT_S"
 kill -0 "$OUT_PID" 2>/dev/null || exit 1
 kill -0 "$PJ_PID" 2>/dev/null || exit 1
