@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
 from typing import Any, cast
 
@@ -113,7 +114,7 @@ class DeliveredValue(DeliveredValueFields):
         return json.dumps(self.to_dict(), separators=(",", ":")).encode()
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> DeliveredValue:
+    def from_dict(cls, data: Mapping[str, Any]) -> DeliveredValue:
         doc = cast(DeliveredValueDoc, data)  # its fields are checked below
         version: object = doc.get("v", PAYLOAD_VERSION)
         if not isinstance(version, int) or version > PAYLOAD_VERSION:
