@@ -44,9 +44,11 @@ _INTS = tuple(f.name for f in fields(DeliveredValueFields) if f.type == "int")
 #: the five a stream's windows share, the six of one window, the version.
 _ORDER = DELIVERED_VALUE_REQUIRED
 _FIRST, _CONSTANT, _WINDOW, _VERSION = _ORDER[0], _ORDER[1:6], _ORDER[6:12], _ORDER[12:]
-#: One window's fields and the version, as a ``%`` template of their values.
-_TAIL = ",".join([*(f'"{k}":%s' for k in _WINDOW),
-                  *(f'"{k}":{PAYLOAD_VERSION}' for k in _VERSION)]) + "}"
+#: What goes before each of one window's values (the first is in the stream's
+#: head), and the version that closes the payload: ``,"start_ns":`` and so on.
+_KEYS = tuple(f',"{k}":' for k in _WINDOW)
+_K1, _K2, _K3, _K4, _K5 = _KEYS[1:]
+_END = "".join(f',"{k}":{PAYLOAD_VERSION}' for k in _VERSION) + "}"
 
 
 def _is_int(v: Any) -> bool:
@@ -182,9 +184,9 @@ class StreamPayload:
                  config_id: int) -> None:
         fixed = json.dumps(dict(zip(_CONSTANT, (topic, aggregation, period_s, unit, config_id),
                                     strict=True)), separators=(",", ":"))
-        self._head = fixed[1:-1] + ","
+        self._head = fixed[1:-1] + _KEYS[0]
 
     def tail(self, slot: int, start_ns: int, end_ns: int, value: Value, count: int | None,
              delivered_ns: int) -> bytes:
-        return (self._head + _TAIL % (slot, start_ns, end_ns, _json_scalar(value),
-                                      _json_scalar(count), delivered_ns)).encode()
+        return (f"{self._head}{slot}{_K1}{start_ns}{_K2}{end_ns}{_K3}{_json_scalar(value)}"
+                f"{_K4}{_json_scalar(count)}{_K5}{delivered_ns}{_END}").encode()
