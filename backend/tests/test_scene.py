@@ -7,10 +7,14 @@ import math
 
 import pytest
 from modd_backend.scene import Track, position_roles
+from modd_contracts.types import DeliveredValue
 
 
-def _v(value: object) -> dict[str, object]:
-    return {"value": value, "start_ns": 0, "end_ns": 1}
+def _v(value: float | None) -> DeliveredValue:
+    """A whole delivered value (the contract's type: mypy checks its fields)."""
+    return DeliveredValue(subscriber="s", topic="usv.a.b", aggregation="LAST", period_s="1",
+                          unit="NONE", config_id=1, slot=0, start_ns=0, end_ns=1, value=value,
+                          count=None, delivered_ns=1, v=1)
 
 
 def test_roles_from_the_model() -> None:

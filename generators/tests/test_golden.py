@@ -12,13 +12,14 @@ from pathlib import Path
 import pytest
 from modd_gen import generate
 from modd_gen.targets.cpp_driver import client_sources
-from modd_gen.targets.subscribers import subscriber_client_sources
+from modd_gen.targets.subscribers import delivered_value_header, subscriber_client_sources
 from modd_model import load_model
 
 GOLDEN = Path(__file__).parent / "golden"
 DATA = Path(__file__).resolve().parents[2] / "metamodel" / "tests" / "data"
 CARRIED = ("modd/include/modd/client/publisher.hpp", "modd/src/publisher.cpp",
-           "modd/include/modd/client/subscriber.hpp", "modd/src/subscriber.cpp")
+           "modd/include/modd/client/subscriber.hpp", "modd/src/subscriber.cpp",
+           "modd/include/modd/client/delivered_value.gen.hpp")
 
 
 def _models(scenarios_dir: Path) -> dict[str, Path]:
@@ -57,6 +58,9 @@ def test_carried_client_is_the_runtime_client(scenarios_dir: Path) -> None:
     sub_header, sub_source = subscriber_client_sources()
     assert artifacts["scientist/cpp/sub_5/" + CARRIED[2]] == sub_header
     assert artifacts["scientist/cpp/sub_5/" + CARRIED[3]] == sub_source
+    repo = Path(__file__).resolve().parents[2]
+    assert artifacts["scientist/cpp/sub_5/" + CARRIED[4]] == delivered_value_header() == (
+        repo / "runtime/cpp/include/modd/client/delivered_value.gen.hpp").read_text("utf-8")
 
 
 def test_roles_partition_the_output(scenarios_dir: Path) -> None:

@@ -6,10 +6,20 @@ apart by hand. Tests, benchmarks and model fixtures are data and may.
 What counts as code: Python under each member's ``src/`` (string tokens, so
 docstrings and comments, which document, are not code), the browser's
 TypeScript outside tests (comments removed), and the C++ runtime's sources.
+
+The delivered value's field names (``schemas/delivered_value.schema.json``)
+are also words of other documents (a Foxglove message has a ``value``), so
+they are held where the payload is read: Python takes a delivered value as the
+contract's ``DeliveredValue`` TypedDict (mypy then checks every field it
+reads), never as an untyped ``json.loads`` result; the browser reads it
+through ``contracts.gen.ts``'s ``DeliveredValue`` (tsc checks), never by a
+quoted index; the C++ subscriber client names no field in a string literal
+(``delivered_value.gen.hpp`` does).
 """
 
 from __future__ import annotations
 
+import ast
 import io
 import re
 import tokenize
@@ -18,6 +28,7 @@ from pathlib import Path
 import pytest
 from modd_contracts.aggregations import NAMES
 from modd_contracts.keys import ROOT
+from modd_contracts.schema import load
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -25,6 +36,11 @@ REPO = Path(__file__).resolve().parents[2]
 PY_ROOTS = ("metamodel/src", "backend/src", "generators/src", "runtime/python/src")
 TS_ROOTS = ("frontend/src",)
 CPP_ROOTS = ("runtime/cpp/src", "runtime/cpp/include")
+
+#: Where C++ parses the delivered value: the subscriber client.
+CPP_PAYLOAD_ROOTS = ("runtime/cpp/src/client", "runtime/cpp/include/modd/client")
+#: The delivered value's field names.
+PAYLOAD_FIELDS = frozenset(load("delivered_value")["properties"])
 
 #: The contracts home and the files generated from it (or from the schema).
 ALLOWED = (
@@ -93,6 +109,70 @@ def cpp_findings(rel: str, text: str) -> list[str]:
     return out
 
 
+_FIELD = "|".join(sorted(PAYLOAD_FIELDS))
+#: A payload field read by a quoted index (``d["value"]``) rather than a typed property.
+_TS_FIELD_INDEX = re.compile(rf"(?:[\w)\]]|\?\.)\[\s*[\"'`]({_FIELD})[\"'`]\s*\]")
+_CPP_STRING = re.compile(r'"((?:[^"\\\n]|\\.)*)"')
+#: The name a delivered value goes by in Python code.
+_PY_DELIVERED = "delivered"
+#: An annotation that holds a JSON object untyped (``delivered: int``, a count, is not one).
+_PY_UNTYPED = re.compile(r"\b(dict|Mapping|MutableMapping|Any|object)\b")
+
+
+def _untyped(annotation: ast.expr | None) -> bool:
+    return annotation is None or bool(_PY_UNTYPED.search(ast.unparse(annotation)))
+
+
+def _is_json_loads(node: ast.expr) -> bool:
+    return isinstance(node, ast.Call) and ast.unparse(node.func) in ("json.loads", "loads")
+
+
+def python_payload_findings(rel: str, text: str) -> list[str]:
+    """A delivered value held untyped: a ``delivered`` parameter or variable not
+    annotated with the contract's ``DeliveredValue``, or set from ``json.loads``
+    (``modd_contracts.delivered.load_delivered`` types it)."""
+    out = []
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            a = node.args
+            for arg in [*a.posonlyargs, *a.args, *a.kwonlyargs]:
+                if arg.arg == _PY_DELIVERED and _untyped(arg.annotation):
+                    out.append(f"{rel}:{arg.lineno}: delivered value parameter not typed")
+        elif (
+            isinstance(node, ast.AnnAssign)
+            and ast.unparse(node.target) == _PY_DELIVERED
+            and _untyped(node.annotation)
+        ):
+            out.append(f"{rel}:{node.lineno}: delivered value variable not typed")
+        elif (
+            isinstance(node, ast.Assign)
+            and _is_json_loads(node.value)
+            and any(ast.unparse(t) == _PY_DELIVERED for t in node.targets)
+        ):
+            out.append(f"{rel}:{node.lineno}: delivered value parsed untyped")
+    return out
+
+
+def ts_payload_findings(rel: str, text: str) -> list[str]:
+    code = _TS_COMMENT.sub(lambda m: "\n" * m.group(0).count("\n"), text)
+    return [
+        f"{rel}:{n}: payload field {m.group(1)} by a quoted index"
+        for n, line in enumerate(code.splitlines(), 1)
+        if (m := _TS_FIELD_INDEX.search(line))
+    ]
+
+
+def cpp_payload_findings(rel: str, text: str) -> list[str]:
+    code = _TS_COMMENT.sub(lambda m: "\n" * m.group(0).count("\n"), text)
+    return [
+        f"{rel}:{n}: payload field name {m.group(0)}"
+        for n, line in enumerate(code.splitlines(), 1)
+        if not line.lstrip().startswith("#include")
+        for m in _CPP_STRING.finditer(line)
+        if m.group(1) in PAYLOAD_FIELDS
+    ]
+
+
 def _files(roots: tuple[str, ...], suffixes: tuple[str, ...]) -> list[tuple[str, str]]:
     out = []
     for root in roots:
@@ -123,6 +203,59 @@ def test_the_scanners_find_what_they_look_for() -> None:
     assert cpp_findings("a.cpp", 'if (s == "COUNT") {}  // COUNT\n') == [
         'a.cpp:1: aggregation name "COUNT"'
     ]
+
+
+def test_the_payload_scanners_find_what_they_look_for() -> None:
+    """Each payload-field scanner on a sample that breaks the rule."""
+    py = (
+        "def f(delivered: dict[str, Any]) -> None: ...\n"
+        "def g(delivered: DeliveredValue, data: dict) -> None: ...\n"
+        "delivered = json.loads(raw)\n"
+        "delivered: dict = {}\n"
+        "x = {'value': 1}\n"
+        "def h(delivered) -> None: ...\n"
+        "delivered: int = 0\n"
+    )
+    assert python_payload_findings("a.py", py) == [
+        "a.py:1: delivered value parameter not typed",
+        "a.py:3: delivered value parsed untyped",
+        "a.py:4: delivered value variable not typed",
+        "a.py:6: delivered value parameter not typed",
+    ]
+    ts = (
+        'const v = d["end_ns"]; // d["value"]\nconst t = d.end_ns; m["type"] = "value";\n'
+        'const roles = ["subscriber", "topic"]; const c = msg?.["count"];\n'
+    )
+    assert ts_payload_findings("a.ts", ts) == [
+        "a.ts:1: payload field end_ns by a quoted index",
+        "a.ts:3: payload field count by a quoted index",
+    ]
+    cpp = (
+        '#include "modd/client/subscriber.hpp"\n'
+        'if (key == "start_ns") return bad("bad \\"" + key + "\\"");  // "value"\n'
+        "if (key == f::kValue) {}\n"
+    )
+    assert cpp_payload_findings("a.cpp", cpp) == ['a.cpp:2: payload field name "start_ns"']
+
+
+@pytest.mark.parametrize(
+    ("language", "roots", "suffixes", "scan"),
+    [
+        ("python", PY_ROOTS, (".py",), python_payload_findings),
+        ("typescript", TS_ROOTS, (".ts", ".tsx"), ts_payload_findings),
+        ("c++", CPP_PAYLOAD_ROOTS, (".cpp", ".hpp", ".h"), cpp_payload_findings),
+    ],
+)
+def test_no_payload_field_spelled_outside_its_types(
+    language: str, roots: tuple[str, ...], suffixes: tuple[str, ...], scan: object
+) -> None:
+    assert callable(scan)
+    found = [f for rel, text in _files(roots, suffixes) for f in scan(rel, text)]
+    assert found == [], (
+        f"{language}: delivered-value fields read outside the contract's types "
+        "(modd_contracts.types.DeliveredValue and modd_contracts.delivered.load_delivered, "
+        "contracts.gen.ts, delivered_value.gen.hpp):\n" + "\n".join(found)
+    )
 
 
 @pytest.mark.parametrize(

@@ -32,7 +32,9 @@ import threading
 from typing import Any
 
 from modd_contracts import aggregations as agg
+from modd_contracts.delivered import load_delivered
 from modd_contracts.keys import match_status_key, match_sub_key
+from modd_contracts.types import DeliveredValue
 
 from .scene import position_roles
 
@@ -118,7 +120,7 @@ def _time(ns: int) -> dict[str, int]:
     return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
 
 
-def window_message(delivered: dict[str, Any]) -> dict[str, Any]:
+def window_message(delivered: DeliveredValue) -> dict[str, Any]:
     """The Foxglove message of one delivered value (docs/subbroker.md)."""
     start = int(delivered.get("start_ns") or 0)
     end = int(delivered.get("end_ns") or 0)
@@ -198,7 +200,7 @@ class FoxgloveLive:
     def on_value(self, key: str, payload: bytes) -> None:
         """zenoh callback for ``modd/<drone>/sub/<subscriber>``."""
         found = match_sub_key(key)
-        delivered = _load(payload)
+        delivered = load_delivered(payload)
         if found is None or delivered is None:
             return
         drone, subscriber = found
@@ -210,7 +212,7 @@ class FoxgloveLive:
         self.logged += 1
         self._position(drone, subscriber, delivered, end_ns)
 
-    def _position(self, drone: str, subscriber: str, delivered: dict[str, Any],
+    def _position(self, drone: str, subscriber: str, delivered: DeliveredValue,
                   end_ns: int) -> None:
         """``/<drone>/position`` (LocationFix) from the subscriptions whose
         topic is a latitude, longitude or altitude (the 3D scene's rule)."""

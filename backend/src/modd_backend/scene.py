@@ -20,7 +20,9 @@ import threading
 from dataclasses import dataclass, field
 from typing import Any
 
+from modd_contracts.delivered import load_delivered
 from modd_contracts.keys import match_sub_key
+from modd_contracts.types import DeliveredValue
 
 #: Variable names (last part of a topic) read as a position or an attitude.
 ROLE_NAMES: dict[str, tuple[str, ...]] = {
@@ -68,7 +70,7 @@ class Track:
     _fix: dict[str, float] = field(default_factory=dict)
     _last_value: float | None = None
 
-    def ingest(self, subscriber: str, delivered: dict[str, Any]) -> bool:
+    def ingest(self, subscriber: str, delivered: DeliveredValue) -> bool:
         """Take one delivered value; True when the drawing changed."""
         value = delivered.get("value")
         if isinstance(value, list | tuple):  # AVERAGE travels as (mean, count) elsewhere
@@ -175,16 +177,11 @@ class SceneService:
 
     def on_value(self, key: str, payload: bytes) -> None:
         """zenoh callback for ``modd/<drone>/sub/<subscriber>``."""
-        import json
-
         found = match_sub_key(key)
         if found is None:
             return
-        try:
-            delivered = json.loads(payload)
-        except (ValueError, UnicodeDecodeError):
-            return
-        if isinstance(delivered, dict):
+        delivered = load_delivered(payload)
+        if delivered is not None:
             track = self.track(found[0])
             with self._lock:
                 changed = track.ingest(found[1], delivered)

@@ -6,7 +6,9 @@ re-types them by hand:
 - ``frontend/src/core/contracts.gen.ts``: the same as TypeScript types;
 - ``metamodel/src/modd_contracts/aggregations.py``: the aggregation table
   (the metamodel's ``Aggregation`` ``x-table``) for Python;
-- ``runtime/cpp/include/modd/link/aggregation_table.gen.hpp``: the same for C++.
+- ``runtime/cpp/include/modd/link/aggregation_table.gen.hpp``: the same for C++;
+- ``runtime/cpp/include/modd/client/delivered_value.gen.hpp``: the delivered
+  value's field names and version, for the C++ subscriber client's parser.
 
 Run ``python -m modd_contracts.typegen`` to rewrite them; ``--check`` exits 1
 when one is stale (``make check`` does that, and a test).
@@ -34,6 +36,7 @@ OUTPUTS = {
     "aggpy": REPO / "metamodel" / "src" / "modd_contracts" / "aggregations.py",
     "aggcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "link" / "aggregation_table.gen.hpp",
     "owners": REPO / "metamodel" / "src" / "modd_contracts" / "owners.py",
+    "dvcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "client" / "delivered_value.gen.hpp",
 }
 
 
@@ -79,9 +82,21 @@ def generate_py() -> str:
             out.append(f"    {prop}: {t if prop in required else f'NotRequired[{t}]'}")
         out += ["", ""]
     records = dict(defs)
+    required_consts = []
     for name, (record, omit) in RECORDS.items():
         out += _py_record(name, record, omit, records[name])
+        const = _snake(name).upper() + "_REQUIRED"
+        required = set(records[name].get("required", []))
+        order = [p for p in records[name]["properties"] if p in required]
+        out += [
+            f"#: The fields every :class:`{name}` carries, in the contract's order.",
+            f"{const}: tuple[str, ...] = ({', '.join(json.dumps(p) for p in order)},)",
+            "",
+            "",
+        ]
+        required_consts.append(const)
     names = [c for c, _ in _versions()] + [n for n, _ in defs] + [r for r, _ in RECORDS.values()]
+    names += required_consts
     out.append("__all__ = [" + ", ".join(f'"{n}"' for n in names) + "]")
     text = "\n".join(out) + "\n"
     if "Any]" not in text:
@@ -97,6 +112,11 @@ def generate_py() -> str:
 RECORDS: dict[str, tuple[str, tuple[str, ...]]] = {
     "DeliveredValue": ("DeliveredValueFields", ("v",))
 }
+
+
+def _snake(name: str) -> str:
+    """``DeliveredValue`` -> ``delivered_value``."""
+    return "".join(f"_{c.lower()}" if c.isupper() else c for c in name).lstrip("_")
 
 
 def _py_record(name: str, record: str, omit: tuple[str, ...], s: dict[str, Any]) -> list[str]:
@@ -355,12 +375,49 @@ def generate_agg_cpp() -> str:
     return "\n".join(out)
 
 
+# -- the delivered value's field names for C++ ----------------------------------------
+
+
+def _cpp_ident(field: str) -> str:
+    """``start_ns`` -> ``kStartNs`` (the project's constant style)."""
+    return "k" + "".join(part.capitalize() for part in field.split("_"))
+
+
+def generate_delivered_value_cpp() -> str:
+    schema = load("delivered_value")
+    out = [
+        f"// {HEADER}",
+        "// The delivered value's field names and version",
+        "// (metamodel/src/modd_contracts/schemas/delivered_value.schema.json),",
+        "// read by the C++ subscriber client's parser (docs/subbroker.md).",
+        "#pragma once",
+        "",
+        "#include <cstdint>",
+        "#include <string_view>",
+        "",
+        "namespace modd::delivered_value {",
+        "",
+        "// Payload version; a reader rejects a higher one.",
+        f"inline constexpr int64_t kVersion = {int(schema['x-version'])};",
+        "",
+    ]
+    for prop, ps in schema["properties"].items():
+        doc = str(ps.get("description", prop)).split(". ")[0].rstrip(".")
+        out += [
+            f"// {doc}.",
+            f"inline constexpr std::string_view {_cpp_ident(prop)} = {json.dumps(prop)};",
+        ]
+    out += ["", "}  // namespace modd::delivered_value", ""]
+    return "\n".join(out)
+
+
 GENERATORS: dict[str, Callable[[], str]] = {
     "py": generate_py,
     "ts": generate_ts,
     "aggpy": generate_agg_py,
     "aggcpp": generate_agg_cpp,
     "owners": generate_owners_py,
+    "dvcpp": generate_delivered_value_cpp,
 }
 
 

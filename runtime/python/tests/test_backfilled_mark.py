@@ -24,7 +24,7 @@ def test_live_payload_unchanged_and_backfilled_marked() -> None:
 
 
 def test_backfilled_must_be_a_bool() -> None:
-    raw = DeliveredValue("s", "t", "MIN", "1", "M", 1, 1, 0, 1, 0.0, None, 1).to_dict()
-    raw["backfilled"] = "yes"
+    good = DeliveredValue("s", "t", "MIN", "1", "M", 1, 1, 0, 1, 0.0, None, 1).to_dict()
+    raw: dict[str, object] = {**good, "backfilled": "yes"}
     with pytest.raises(ValueError, match="backfilled"):
         DeliveredValue.from_dict(raw)

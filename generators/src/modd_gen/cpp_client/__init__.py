@@ -25,6 +25,7 @@ ORIGINALS = {
     "publisher.cpp": "runtime/cpp/src/client/publisher.cpp",
     "subscriber.hpp": "runtime/cpp/include/modd/client/subscriber.hpp",
     "subscriber.cpp": "runtime/cpp/src/client/subscriber.cpp",
+    "delivered_value.gen.hpp": "runtime/cpp/include/modd/client/delivered_value.gen.hpp",
 }
 
 

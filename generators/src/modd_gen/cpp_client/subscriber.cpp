@@ -1,5 +1,7 @@
 #include "modd/client/subscriber.hpp"
 
+#include "modd/client/delivered_value.gen.hpp"
+
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -369,25 +371,28 @@ bool parse_delivered(std::string_view line, Delivered& out, std::string* error) 
     if (error) *error = "bad \"" + key + "\"";
     return false;
   };
+  namespace f = delivered_value;
   for (const auto& [key, v] : fields) {
     int64_t n = 0;
-    if (key == "subscriber" || key == "topic" || key == "aggregation" || key == "period_s" ||
-        key == "unit") {
+    if (key == f::kSubscriber || key == f::kTopic || key == f::kAggregation ||
+        key == f::kPeriodS || key == f::kUnit) {
       if (v.kind != Json::String) return bad(key);
-      std::string* dst = key == "subscriber" ? &out.subscriber : key == "topic" ? &out.topic
-                         : key == "aggregation" ? &out.aggregation : key == "period_s" ? &out.period_s
-                         : &out.unit;
+      std::string* dst = key == f::kSubscriber    ? &out.subscriber
+                         : key == f::kTopic       ? &out.topic
+                         : key == f::kAggregation ? &out.aggregation
+                         : key == f::kPeriodS     ? &out.period_s
+                                                  : &out.unit;
       *dst = v.text;
       ++seen;
-    } else if (key == "config_id" || key == "slot") {
+    } else if (key == f::kConfigId || key == f::kSlot) {
       if (!integer(v, n) || n < 0) return bad(key);
-      (key == "slot" ? out.slot : out.config_id) = static_cast<uint64_t>(n);
-    } else if (key == "start_ns" || key == "end_ns" || key == "delivered_ns") {
+      (key == f::kSlot ? out.slot : out.config_id) = static_cast<uint64_t>(n);
+    } else if (key == f::kStartNs || key == f::kEndNs || key == f::kDeliveredNs) {
       if (!integer(v, n)) return bad(key);
-      (key == "start_ns" ? out.start_ns : key == "end_ns" ? out.end_ns : out.delivered_ns) = n;
-    } else if (key == "count") {
+      (key == f::kStartNs ? out.start_ns : key == f::kEndNs ? out.end_ns : out.delivered_ns) = n;
+    } else if (key == f::kCount) {
       if (v.kind != Json::Null && !integer(v, out.count)) return bad(key);
-    } else if (key == "value") {
+    } else if (key == f::kValue) {
       if (v.kind == Json::Null) continue;
       out.present = true;
       if (v.kind == Json::Array) {
@@ -399,11 +404,13 @@ bool parse_delivered(std::string_view line, Delivered& out, std::string* error) 
       } else if (!scalar(v, out.value)) {
         return bad(key);
       }
-    } else if (key == "backfilled") {
+    } else if (key == f::kBackfilled) {
       if (v.kind != Json::Bool) return bad(key);
       out.backfilled = v.boolean;
-    } else if (key == "v") {
-      if (!integer(v, n) || n > 1) return bad("v (unsupported payload version)");
+    } else if (key == f::kV) {
+      if (!integer(v, n) || n > f::kVersion) {
+        return bad(std::string(f::kV) + " (unsupported payload version)");
+      }
     }
   }
   if (seen < 2 || out.topic.empty()) {

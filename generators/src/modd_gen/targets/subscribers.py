@@ -9,13 +9,19 @@ from typing import Any
 
 from ..artifact import Artifact, Ownership
 from ..context import Context
-from ..cpp_client import client
+from ..cpp_client import client, read
 from ..render import render
 
 
 def subscriber_client_sources() -> tuple[str, str]:
     """The C++ subscriber client, carried into subscriber projects (package data)."""
     return client("subscriber")
+
+
+def delivered_value_header() -> str:
+    """The delivered value's field names (generated from the contract), which
+    the subscriber client's parser includes."""
+    return read("delivered_value.gen.hpp")
 
 
 def _python(ctx: Context, sub: dict[str, Any]) -> Artifact:
@@ -32,6 +38,8 @@ def _cpp(ctx: Context, sub: dict[str, Any]) -> list[Artifact]:
         Artifact(f"{root}/CMakeLists.txt", render("cpp_subscriber/CMakeLists.txt.j2", **args),
                  "scientist"),
         Artifact(f"{root}/modd/include/modd/client/subscriber.hpp", header, "scientist"),
+        Artifact(f"{root}/modd/include/modd/client/delivered_value.gen.hpp",
+                 delivered_value_header(), "scientist"),
         Artifact(f"{root}/modd/src/subscriber.cpp", source, "scientist"),
         Artifact(f"{root}/src/main.cpp", render("cpp_subscriber/main.cpp.j2", **args),
                  "scientist", Ownership.USER),

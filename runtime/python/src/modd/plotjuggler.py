@@ -29,6 +29,8 @@ import threading
 from typing import Any
 
 from modd_contracts import keys
+from modd_contracts.delivered import load_delivered
+from modd_contracts.types import DeliveredValue
 
 from .zenoh_session import DEFAULT_ENDPOINT, client_settings, open_session
 
@@ -39,7 +41,7 @@ DEFAULT_UDP = "127.0.0.1:9870"
 MAX_DATAGRAM = 65_000
 
 
-def datagram(drone: str, subscriber: str, delivered: dict[str, Any]) -> bytes | None:
+def datagram(drone: str, subscriber: str, delivered: DeliveredValue) -> bytes | None:
     """The datagram of one delivered value; None when it has nothing to plot.
 
     >>> datagram("usv", "sub_3", {"end_ns": 2_500_000_000, "value": 1.5, "count": 6})
@@ -81,11 +83,8 @@ class PlotJugglerOut:
 
     def _on(self, sample: Any) -> None:
         found = keys.match_sub_key(str(sample.key_expr))
-        try:
-            delivered = json.loads(sample.payload.to_bytes())
-        except (ValueError, UnicodeDecodeError):
-            return
-        if found is None or not isinstance(delivered, dict):
+        delivered = load_delivered(sample.payload.to_bytes())
+        if found is None or delivered is None:
             return
         data = datagram(*found, delivered)
         if data is None:

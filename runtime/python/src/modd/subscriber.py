@@ -25,8 +25,11 @@ import os
 import queue
 import time
 from collections.abc import Callable, Iterator
+from dataclasses import asdict, fields
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
+
+from modd_contracts.types import DeliveredValueFields
 
 from .subbroker.keys import sub_key, subscribe_key
 from .subbroker.payload import DeliveredValue
@@ -155,18 +158,13 @@ def to_dataframe(values: list[DeliveredValue]) -> pandas.DataFrame:
     the other fields as they are."""
     import pandas as pd
 
-    columns = ["subscriber", "topic", "aggregation", "period_s", "unit", "config_id", "slot",
-               "start", "end", "value", "count", "delivered", "backfilled"]
-    rows: list[dict[str, Any]] = []
-    for v in values:
-        row = v.to_dict()
-        row["backfilled"] = v.backfilled
-        row["start"], row["end"] = row.pop("start_ns"), row.pop("end_ns")
-        row["delivered"] = row.pop("delivered_ns")
-        rows.append(row)
-    df = pd.DataFrame(rows, columns=columns)
-    for col in ("start", "end", "delivered"):
-        df[col] = pd.to_datetime(df[col], unit="ns", utc=True)
+    # The contract's fields in its order, the times without their _ns suffix.
+    columns = {f.name: f.name.removesuffix("_ns") for f in fields(DeliveredValueFields)}
+    rows: list[dict[str, Any]] = [{columns[k]: x for k, x in asdict(v).items()} for v in values]
+    df = pd.DataFrame(rows, columns=list(columns.values()))
+    for field, col in columns.items():
+        if field != col:
+            df[col] = pd.to_datetime(df[col], unit="ns", utc=True)
     return df
 
 

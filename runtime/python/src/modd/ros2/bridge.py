@@ -15,7 +15,6 @@ and dynamic subscriptions appear by themselves.
 
 from __future__ import annotations
 
-import json
 import logging
 import threading
 import time
@@ -23,6 +22,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from modd_contracts import keys
+from modd_contracts.delivered import load_delivered
+from modd_contracts.types import DeliveredValue
 
 from . import rmw
 from .messages import FLOAT64, FLOAT64_HASH, WINDOW, WINDOW_HASH, float64_cdr, window_cdr
@@ -93,15 +94,12 @@ class Ros2Bridge:
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         found = keys.match_sub_key(str(sample.key_expr))
-        try:
-            delivered = json.loads(sample.payload.to_bytes())
-        except (ValueError, UnicodeDecodeError):
-            return
-        if found is None or not isinstance(delivered, dict):
+        delivered = load_delivered(sample.payload.to_bytes())
+        if found is None or delivered is None:
             return
         self.on_value(*found, delivered)
 
-    def on_value(self, drone: str, subscriber: str, delivered: dict[str, Any]) -> None:
+    def on_value(self, drone: str, subscriber: str, delivered: DeliveredValue) -> None:
         base = f"/{drone}/{subscriber}"
         try:
             window = window_cdr(int(delivered["start_ns"]), int(delivered["end_ns"]),

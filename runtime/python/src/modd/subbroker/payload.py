@@ -21,10 +21,16 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
-from typing import Any
+from typing import Any, cast
 
-from modd_contracts.types import DELIVERED_VALUE_VERSION, DeliveredValueFields
+from modd_contracts.types import (
+    DELIVERED_VALUE_REQUIRED,
+    DELIVERED_VALUE_VERSION,
+    DeliveredValueFields,
+)
+from modd_contracts.types import DeliveredValue as DeliveredValueDoc
 from modd_plan.windows import Value
 
 #: Version of the payload (the contract's ``x-version``); a reader rejects a higher one.
@@ -34,6 +40,15 @@ MAX_DEPTH = 8
 #: The text and the integer fields, by the contract's types.
 _TEXT = tuple(f.name for f in fields(DeliveredValueFields) if f.type == "str")
 _INTS = tuple(f.name for f in fields(DeliveredValueFields) if f.type == "int")
+#: The fields every payload carries, in the contract's order: the subscriber,
+#: the five a stream's windows share, the six of one window, the version.
+_ORDER = DELIVERED_VALUE_REQUIRED
+_FIRST, _CONSTANT, _WINDOW, _VERSION = _ORDER[0], _ORDER[1:6], _ORDER[6:12], _ORDER[12:]
+#: What goes before each of one window's values (the first is in the stream's
+#: head), and the version that closes the payload: ``,"start_ns":`` and so on.
+_KEYS = tuple(f',"{k}":' for k in _WINDOW)
+_K1, _K2, _K3, _K4, _K5 = _KEYS[1:]
+_END = "".join(f',"{k}":{PAYLOAD_VERSION}' for k in _VERSION) + "}"
 
 
 def _is_int(v: Any) -> bool:
@@ -89,8 +104,8 @@ class DeliveredValue(DeliveredValueFields):
     payloads keep their bytes.
     """
 
-    def to_dict(self) -> dict[str, Any]:
-        out = asdict(self)
+    def to_dict(self) -> DeliveredValueDoc:
+        out = cast(DeliveredValueDoc, asdict(self))
         if not self.backfilled:
             del out["backfilled"]
         out["v"] = PAYLOAD_VERSION
@@ -101,11 +116,12 @@ class DeliveredValue(DeliveredValueFields):
         return json.dumps(self.to_dict(), separators=(",", ":")).encode()
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> DeliveredValue:
-        version = data.get("v", PAYLOAD_VERSION)
+    def from_dict(cls, data: Mapping[str, Any]) -> DeliveredValue:
+        doc = cast(DeliveredValueDoc, data)  # its fields are checked below
+        version: object = doc.get("v", PAYLOAD_VERSION)
         if not isinstance(version, int) or version > PAYLOAD_VERSION:
             raise ValueError(f"unsupported delivered-value version {version!r}")
-        missing = [f.name for f in fields(cls) if f.name not in data and f.name != "backfilled"]
+        missing = [k for k in _ORDER if k not in data and k not in _VERSION]
         if missing:
             raise ValueError(f"delivered value lacks {', '.join(missing)}")
         for name in _TEXT:
@@ -114,7 +130,7 @@ class DeliveredValue(DeliveredValueFields):
         for name in _INTS:
             if not _is_int(data[name]):
                 raise ValueError(f"delivered value: {name} is {data[name]!r}, not an integer")
-        value, count = data["value"], data["count"]
+        value, count = doc["value"], doc["count"]
         if not (value is None or _is_scalar(value)
                 or (isinstance(value, list) and all(_is_scalar(x) for x in value))):
             raise ValueError(f"delivered value: value is {str(value)[:80]}, not a number, a "
@@ -140,7 +156,7 @@ class DeliveredValue(DeliveredValueFields):
 
 def subscriber_prefix(subscriber: str) -> bytes:
     """The start of every payload for ``subscriber``: ``{"subscriber":"NAME",``."""
-    return b'{"subscriber":' + json.dumps(subscriber).encode() + b","
+    return b"{" + json.dumps(_FIRST).encode() + b":" + json.dumps(subscriber).encode() + b","
 
 
 def _json_scalar(value: Value) -> str:
@@ -166,12 +182,11 @@ class StreamPayload:
 
     def __init__(self, topic: str, aggregation: str, period_s: str, unit: str,
                  config_id: int) -> None:
-        fixed = json.dumps({"topic": topic, "aggregation": aggregation, "period_s": period_s,
-                            "unit": unit, "config_id": config_id}, separators=(",", ":"))
-        self._head = fixed[1:-1] + ',"slot":'
+        fixed = json.dumps(dict(zip(_CONSTANT, (topic, aggregation, period_s, unit, config_id),
+                                    strict=True)), separators=(",", ":"))
+        self._head = fixed[1:-1] + _KEYS[0]
 
     def tail(self, slot: int, start_ns: int, end_ns: int, value: Value, count: int | None,
              delivered_ns: int) -> bytes:
-        return (f'{self._head}{slot},"start_ns":{start_ns},"end_ns":{end_ns},'
-                f'"value":{_json_scalar(value)},"count":{_json_scalar(count)},'
-                f'"delivered_ns":{delivered_ns},"v":{PAYLOAD_VERSION}}}').encode()
+        return (f"{self._head}{slot}{_K1}{start_ns}{_K2}{end_ns}{_K3}{_json_scalar(value)}"
+                f"{_K4}{_json_scalar(count)}{_K5}{delivered_ns}{_END}").encode()
