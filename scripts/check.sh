@@ -17,6 +17,7 @@ if [ -x runtime/cpp/scripts/test.sh ]; then
   runtime/cpp/scripts/test.sh
 fi
 if [ -f frontend/package.json ]; then
-  step "frontend"
-  (cd frontend && npm test --silent)
+  # typecheck and the unit tests ran in the fast tier; the browser journeys are left
+  step "frontend: browser journeys"
+  (cd frontend && npm run --silent test:e2e)
 fi
