@@ -124,7 +124,7 @@ def test_a_malformed_value_is_dropped_alone_and_the_rest_is_kept(pair: Any) -> N
     df = sub.dataframe(count=3, duration_s=3)
     assert list(df["slot"]) == [0, 1, 2] and list(df["value"]) == [0.0, 0.5, 1.0]
     assert sub.malformed == len(bad) + 1
-    deadline = time.monotonic() + 2
+    deadline = time.monotonic() + 15  # a loaded machine schedules zenoh's thread late
     while len(calls) < 3 and time.monotonic() < deadline:
         time.sleep(0.01)
     assert calls == [0, 1, 2]  # the callback's exception stopped nothing

@@ -9,6 +9,13 @@ backfilled windows are recorded per subscriber and stream, so no window is
 delivered twice. One link request runs at a time; its resume point is the
 first window not yet received, so after a link drop or a PubBroker restart
 it is asked again from there (nothing sent twice, nothing skipped).
+
+A datagram link (udp, serial) loses frames, and control datagrams are not
+resent: a lost BACKFILL_DATA shows as a frame that starts past the resume
+point, a lost END as a run whose windows all arrived, a lost request or END
+as silence. Each is answered by asking again from the resume point (the
+PubBroker replaces a request of the same id), so a lossy radio slows a
+backfill down but never leaves it running for ever.
 """
 
 from __future__ import annotations
@@ -39,6 +46,13 @@ if TYPE_CHECKING:
     from .delivery import Sink
 
 log = logging.getLogger("modd.subbroker.backfill")
+
+#: A resume answered by frames already in flight is not asked again within this time.
+RESUME_GRACE_S = 2.0
+#: Silence of the running request after which it is asked again (at least; slower paces
+#: wait for four of the largest data frames at their rate).
+STALL_S = 10.0
+LARGEST_FRAME_B = 250
 
 
 class Intervals:
@@ -100,6 +114,13 @@ class Job:
     request: bf.BackfillRequest | None = None
     next: int = 0  # resume point of the running request
     finished: threading.Event = field(default_factory=threading.Event)
+    heard: float = 0.0  # monotonic time of the running request's last frame (or its sending)
+    asked_at: float = 0.0  # monotonic time the running request was last sent
+    asked_next: int = -1  # the resume point it was sent with
+    resumes: int = 0  # requests sent again after a loss or a silence
+
+    def stall_s(self) -> float:
+        return max(STALL_S, 4 * LARGEST_FRAME_B / max(self.rate_bps, 1))
 
     def progress(self) -> dict[str, Any]:
         secs = time.monotonic() - self.started
@@ -234,13 +255,52 @@ class BackfillManager:
         with self._lock:
             job = self._active
             if job is not None and job.request is not None:
-                q = job.request
-                job.request = bf.BackfillRequest(q.request_id, q.topic, q.type, q.aggregation,
-                                                 q.period_us, q.from_ns, q.windows, job.next,
-                                                 job.rate_bps)
-                log.info("backfill %d: resuming at window %d of %d", job.job_id, job.next,
-                         q.windows)
-                self._try_send(bf.encode(job.request))
+                self._resume(job, "the link is up again")
+
+    def _resume(self, job: Job, why: str) -> None:
+        """Ask for the running request again from its resume point (same id: the
+        PubBroker replaces the request it has, if any)."""
+        q = job.request
+        assert q is not None
+        job.request = bf.BackfillRequest(q.request_id, q.topic, q.type, q.aggregation,
+                                         q.period_us, q.from_ns, q.windows, job.next,
+                                         job.rate_bps)
+        job.resumes += 1
+        log.info("backfill %d: %s, resuming at window %d of %d", job.job_id, why, job.next,
+                 q.windows)
+        self._ask(job)
+
+    def _resume_unless_asked(self, job: Job, why: str) -> None:
+        """Resume, unless the same resume point was asked for a moment ago (frames
+        sent before that request reached the PubBroker still arrive)."""
+        if job.asked_next == job.next and time.monotonic() - job.asked_at < RESUME_GRACE_S:
+            return
+        self._resume(job, why)
+
+    def _ask(self, job: Job) -> None:
+        """Send the running request, and watch it: silence past its stall time asks again."""
+        assert job.request is not None
+        now = time.monotonic()
+        job.asked_at = job.heard = now
+        job.asked_next = job.next
+        self._try_send(bf.encode(job.request))
+        self._watch(job, job.request.request_id, job.stall_s())
+
+    def _watch(self, job: Job, request_id: int, after_s: float) -> None:
+        timer = threading.Timer(after_s, self._check_stall, (job, request_id))
+        timer.daemon = True
+        timer.start()
+
+    def _check_stall(self, job: Job, request_id: int) -> None:
+        with self._lock:
+            if (self._active is not job or job.request is None
+                    or job.request.request_id != request_id or job.finished.is_set()):
+                return  # that request ended; its successor has its own watch
+            quiet = time.monotonic() - job.heard
+            if quiet >= job.stall_s() - 0.01:
+                self._resume(job, f"nothing heard for {quiet:.1f} s")
+            else:
+                self._watch(job, request_id, job.stall_s() - quiet)
 
     def _try_send(self, frame: bytes) -> None:
         try:
@@ -277,7 +337,7 @@ class BackfillManager:
                 next(self._request_ids), run.stream.topic, ValueType.parse(run.value_type),
                 Aggregation[run.stream.aggregation], period_us(run.stream), run.from_ns,
                 run.windows, 0, job.rate_bps)
-            self._try_send(bf.encode(job.request))
+            self._ask(job)
 
     # -- frames from the PubBroker (link thread) --------------------------------------
 
@@ -297,10 +357,15 @@ class BackfillManager:
                 return
             if job is None or req is None or getattr(msg, "request_id", None) != req.request_id:
                 return
+            job.heard = time.monotonic()
             if isinstance(msg, bf.BackfillEnd):
                 self._on_end(job, req, msg)
 
     def _on_data(self, job: Job, req: bf.BackfillRequest, d: bf.BackfillData, size: int) -> None:
+        job.heard = time.monotonic()
+        if d.first > job.next:  # a frame before it was lost on the way
+            self._resume_unless_asked(job, f"windows {job.next}..{d.first - 1} lost")
+            return
         if d.first != job.next:  # in flight before a resume: asked for again
             return
         run = job.runs[0]
@@ -326,17 +391,26 @@ class BackfillManager:
             filled = self._filled.setdefault((run.subscriber, run.stream), Intervals())
             filled.add(start, start + q)
             job.delivered += 1
+        if job.next >= req.windows:  # all of the run: its END may be lost, not waited for
+            self._run_done(job)
+
+    def _run_done(self, job: Job) -> None:
+        job.runs.popleft()
+        job.request = None
+        self._active = None
+        if job.runs:
+            self._next_request()  # the job stays first in the queue: its next run
+        else:
+            self._finish(job, "DONE")
 
     def _on_end(self, job: Job, req: bf.BackfillRequest, end: bf.BackfillEnd) -> None:
         if end.status == bf.EndStatus.DONE and job.next >= req.windows:
-            job.runs.popleft()
-            self._active = None
-            if job.runs:
-                self._next_request()  # the job stays first in the queue: its next run
-            else:
-                self._finish(job, "DONE")
+            self._run_done(job)
             return
         if end.status == bf.EndStatus.DONE:
-            return  # an END of a request sent before a resume: the resumed one follows
+            # the PubBroker sent the whole run but windows from job.next did not arrive
+            # (or this END left before a resume reached it: then the resumed one follows)
+            self._resume_unless_asked(job, f"the run ended with windows from {job.next} lost")
+            return
         self._finish(job, "CANCELLED" if end.status == bf.EndStatus.CANCELLED else "FAILED",
                      f"{end.status.name}: {end.message}")
