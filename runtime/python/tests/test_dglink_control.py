@@ -9,7 +9,10 @@ from __future__ import annotations
 from modd.link import backfill as bf
 from modd.link import codec
 from modd.link.datagram import DRONE_TO_BASE, encode_control, session_key
+from modd.link.frames import Aggregation, Config, ErrorCode, StreamSpec, TopicSpec, ValueType
+from modd.subbroker.config import LinkOptions
 from modd.subbroker.dglink import DatagramLinkClient, control_frames
+from modd.subbroker.link import ConfigRejected
 
 KEY = session_key(b"psk", bytes(16), bytes(range(16)))
 
@@ -47,3 +50,38 @@ def test_the_datagram_link_hands_on_the_end_behind_a_progress() -> None:
     # a torn payload is malformed, nothing of it handed on
     assert not client._on_datagram(encode_control(2, _end_with_progress()[:-1], KEY, DRONE_TO_BASE))
     assert client.radio.malformed == 1 and len(got) == 2
+
+
+def _config(topics: int) -> Config:
+    names = tuple(TopicSpec(f"usv.sensor.topic_{i:03d}", ValueType.FLOAT32, 1)
+                  for i in range(topics))
+    streams = tuple(StreamSpec(i, Aggregation.AVERAGE, 250_000) for i in range(topics))
+    return Config(3, 0, names, streams)
+
+
+def test_a_config_larger_than_the_radios_packet_is_refused_with_its_sizes() -> None:
+    """Control datagrams are not cut: a CONFIG that does not fit one packet used to be
+    sent and lost on the radio every time, the deploy ending in "no CONFIG_ACK"."""
+    sent: list[bytes] = []
+
+    class Port:
+        def send(self, datagram: bytes) -> None:
+            sent.append(datagram)
+
+    def client(max_packet: int) -> DatagramLinkClient:
+        c = DatagramLinkClient(lambda: Port(), "serial /dev/radio", "serial", b"psk",  # type: ignore[arg-type,return-value]
+                               LinkOptions(), None, max_packet=max_packet)  # type: ignore[arg-type]
+        c._key, c._port = KEY, Port()  # type: ignore[assignment]
+        return c
+
+    big = _config(20)
+    refused = client(252)._submit(big)
+    exc = refused.exception(timeout=0)
+    assert isinstance(exc, ConfigRejected) and exc.status == ErrorCode.BAD_CONFIG
+    assert "config 3 is" in str(exc) and "link.maxPacket 252 B" in str(exc), exc
+    assert sent == []  # nothing sent that the radio would drop
+    size = int(str(exc).split(" is ")[1].split(" B")[0])
+    assert size == len(encode_control(1 << 32, codec.encode(big), KEY, DRONE_TO_BASE))
+    # the same config on a radio whose packet holds it goes out
+    client(1024)._submit(big)
+    assert len(sent) == 1 and len(sent[0]) <= size

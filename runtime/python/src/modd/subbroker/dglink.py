@@ -30,6 +30,7 @@ from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass, field
 from typing import Any
 
+from modd_plan.linkbudget import datagram_capacity
 from modd_plan.schedule import Schedule
 
 from modd.link import backfill as bf
@@ -156,8 +157,12 @@ class DatagramLinkClient:
 
     def __init__(self, open_port: Callable[[], DatagramPort], where: str, transport: str,
                  key: bytes, options: LinkOptions, handler: LinkHandler,
-                 delay_s: float = 1.0, liveness_s: Callable[[], float] = lambda: 3.0) -> None:
+                 delay_s: float = 1.0, liveness_s: Callable[[], float] = lambda: 3.0,
+                 max_packet: int | None = None) -> None:
         self.transport = transport
+        #: the radio's largest packet (the model's link.maxPacket): control datagrams are
+        #: not cut, so a CONFIG that does not fit one is refused here, with its sizes
+        self._max_packet = max_packet
         self._open_port = open_port
         self._where = where
         self._psk = key
@@ -585,11 +590,29 @@ class DatagramLinkClient:
 
     def _submit(self, config: Config, connecting: bool = False) -> Future[ConfigAck]:
         future: Future[ConfigAck] = Future()
+        too_big = self._config_too_big(config)
+        if too_big:
+            log.error("%s: %s", self._where, too_big)
+            future.set_exception(ConfigRejected(ErrorCode.BAD_CONFIG, too_big))
+            return future
         deadline = time.monotonic() + self._opt.ack_timeout_s
         with self._lock:
             self._pending[config.config_id] = _Pending(config, future, deadline, connecting)
         self._resend_pending(time.monotonic())
         return future
+
+    def _config_too_big(self, config: Config) -> str:
+        """Why ``config`` cannot travel in one control datagram of this radio, or ""."""
+        if self._max_packet is None:
+            return ""
+        size = len(encode_control(1 << 32, codec.encode(config), bytes(32), BASE_TO_DRONE))
+        fits = datagram_capacity(self.transport, self._max_packet)
+        if size <= fits:
+            return ""
+        return (f"config {config.config_id} is {size} B in its control datagram, more than one "
+                f"packet of this {self.transport} link carries ({fits} B of link.maxPacket "
+                f"{self._max_packet} B); control datagrams are not cut: raise link.maxPacket if "
+                f"the radio allows it, or send fewer streams")
 
     def _resend_pending(self, now: float) -> None:
         with self._lock:

@@ -37,4 +37,4 @@ def link_client(config: SubBrokerConfig, key: bytes, handler: LinkHandler,
         opener = partial(SerialPort, config.device, baud, settings.max_packet)
         where = f"serial {config.device}"
     return DatagramLinkClient(opener, where, transport, key, config.link, handler,
-                              float(settings.accepted_delay), liveness)
+                              float(settings.accepted_delay), liveness, settings.max_packet)
