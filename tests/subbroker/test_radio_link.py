@@ -321,16 +321,22 @@ def test_forged_and_replayed_on_the_air_are_dropped(transport: str, tmp_path: Pa
     with processes(radio, pb, sb):
         got = _watch(zenoh_client, zport)
         values, archive, _ = _run(tmp_path, model, pb, sb, got, 6.0, settle=3.0)
-        status = got.status[-1]
-        counts = radio_counts(radio)
+        # the emulator's report and the SubBroker's status are each a second apart:
+        # wait (briefly) until the status has counted what the report says was sent
+        deadline = time.monotonic() + 8.0
+        while True:
+            counts, status = radio_counts(radio), got.status[-1]
+            r = status["radio"]
+            down_forged, down_replayed = _attacks(counts, "drone->base")
+            refused = r["forged"] + r["unknown_config"] + r["malformed"] + r["replayed"]
+            if refused >= down_forged + down_replayed - 1 or time.monotonic() > deadline:
+                break
+            time.sleep(0.3)
         pb_log = pb.log()
-    r = status["radio"]
-    down_forged, down_replayed = _attacks(counts, "drone->base")
     up_forged, up_replayed = _attacks(counts, "base->drone")
     assert down_forged > 2 and down_replayed > 2, counts
     # a forgery is refused by its tag, or earlier (a flipped config id names no config); a
     # replay by the replay window, or as a handshake datagram out of a handshake (malformed)
-    refused = r["forged"] + r["unknown_config"] + r["malformed"] + r["replayed"]
     assert r["forged"] > 0 and r["replayed"] > 0, (r, counts)
     assert refused >= down_forged + down_replayed - 1, (r, counts)
     assert check_against_archive(values, archive) > 100  # only genuine values came out
