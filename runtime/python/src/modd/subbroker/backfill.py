@@ -35,8 +35,8 @@ from .fanout import period_us
 from .payload import DeliveredValue
 
 if TYPE_CHECKING:
-    from .broker import Running
     from .delivery import Sink
+    from .running import Running
 
 log = logging.getLogger("modd.subbroker.backfill")
 
