@@ -124,7 +124,6 @@ class BackfillManager:
         self._lock = threading.RLock()
         self._received: dict[StreamKey, Intervals] = {}
         self._filled: dict[tuple[str, StreamKey], Intervals] = {}
-        self._connected_at: int | None = None
         self._jobs: dict[int, Job] = {}
         self._queue: deque[Job] = deque()
         self._active: Job | None = None
