@@ -31,11 +31,11 @@ from ..deps import (
     AppState,
     StateDep,
     UserDep,
-    bridge_of,
     has_role,
     require,
     roles_of,
     ws_state,
+    zenoh_session_of,
 )
 from ..guards import loads_bounded
 from ..project_events import ProjectWatches
@@ -77,7 +77,8 @@ def add_dynamic(drone: Drone, body: DynamicIn, state: StateDep, user: UserDep) -
     # the SubBroker scopes quotas, listing and cancelling to the owner
     request = {"action": "subscribe", **body.model_dump(exclude_none=True),
                "owner": user.username}
-    reply = dynamic_request(bridge_of(state), drone, request, state.settings.subscribe_timeout_s)
+    reply = dynamic_request(zenoh_session_of(state), drone, request,
+                            state.settings.subscribe_timeout_s)
     return DynamicOut.model_validate(reply)
 
 
@@ -85,7 +86,8 @@ def add_dynamic(drone: Drone, body: DynamicIn, state: StateDep, user: UserDep) -
 def cancel_dynamic(drone: Drone, subscriber: Name, state: StateDep,
                    user: UserDep) -> DynamicOut:
     request = {"action": "cancel", "subscriber": subscriber, "owner": user.username}
-    reply = dynamic_request(bridge_of(state), drone, request, state.settings.subscribe_timeout_s)
+    reply = dynamic_request(zenoh_session_of(state), drone, request,
+                            state.settings.subscribe_timeout_s)
     return DynamicOut.model_validate(reply)
 
 
@@ -141,7 +143,7 @@ async def stream(websocket: WebSocket, drone: str) -> None:
     cookie = websocket.cookies.get(SESSION_COOKIE)
     if cookie is not None and websocket.headers.get("origin") is None:
         cookie = None  # a cookie is honoured only with a checked Origin
-    if state.bridge is None or state.hub is None:
+    if state.zenoh_session is None or state.hub is None:
         await websocket.close(code=4503, reason="zenoh is disabled")
         return
     try:
@@ -325,7 +327,8 @@ async def _dynamic(
         request = {"action": "cancel", "subscriber": message.get("subscriber")}
     request["owner"] = user.username  # the SubBroker scopes quotas and cancels to it
     reply = await run_in_threadpool(
-        dynamic_request, bridge_of(state), relay.drone, request, state.settings.subscribe_timeout_s
+        dynamic_request, zenoh_session_of(state), relay.drone, request,
+        state.settings.subscribe_timeout_s,
     )
     if reply.get("status") == "ACCEPTED" and isinstance(reply.get("subscriber"), str):
         relay.subscribe(reply["subscriber"])  # values start at the next slot
