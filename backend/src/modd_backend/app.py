@@ -38,12 +38,12 @@ from .routers import (
     deploy,
     downloads,
     health,
+    live,
     models,
     plan,
     projects,
     records,
     scene,
-    streams,
     users,
 )
 from .scene import SceneServer, SceneService
@@ -64,7 +64,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     plan.router,
     deploy.router,
     downloads.router,
-    streams.router,
+    live.router,
     archives.router,
     archives.replay_router,
     scene.router,

@@ -1,5 +1,5 @@
 """Live data: one WebSocket per browser and drone multiplexing the
-subscriptions the page asks for (docs/backend.md, "Streams"), and dynamic
+subscriptions the page asks for (docs/backend.md, "Live relay"), and dynamic
 subscriptions over REST.
 
 Client messages: ``{"op": "auth", "token": T}`` first (API clients
@@ -38,10 +38,10 @@ from ..deps import (
     zenoh_session_of,
 )
 from ..guards import loads_bounded
+from ..live import CapReached, LiveRelay, dynamic_request
 from ..project_events import ProjectWatches
 from ..roles import Role
 from ..settings import Settings
-from ..streams import CapReached, StreamRelay, dynamic_request
 from ..tables import User
 
 router = APIRouter(prefix="/api/drones", tags=["streams"])
@@ -167,7 +167,7 @@ async def stream(websocket: WebSocket, drone: str) -> None:
     user, roles = session
     assert token is not None
     settings = state.settings
-    relay = StreamRelay(state.hub, drone, settings.stream_queue_size, user_id=user.id,
+    relay = LiveRelay(state.hub, drone, settings.stream_queue_size, user_id=user.id,
                         per_socket=settings.ws_subscriptions_per_socket,
                         per_user=settings.ws_subscriptions_per_user,
                         per_user_counts=state.ws_counts)
@@ -230,7 +230,7 @@ async def _watch(state: AppState, token: str, seen: tuple[int, str]) -> tuple[in
             return 4403, "your roles changed; reconnect"
 
 
-async def _receive_loop(websocket: WebSocket, relay: StreamRelay, state: AppState,
+async def _receive_loop(websocket: WebSocket, relay: LiveRelay, state: AppState,
                         user: User, watches: ProjectWatches) -> None:
     try:
         while True:
@@ -258,7 +258,7 @@ def _dumps(message: Any) -> str:
     return json.dumps(message, separators=(",", ":"), ensure_ascii=False)
 
 
-async def _send_loop(websocket: WebSocket, relay: StreamRelay, batched: bool = False) -> None:
+async def _send_loop(websocket: WebSocket, relay: LiveRelay, batched: bool = False) -> None:
     """Everything queued since the last wake-up goes out in order: one frame
     per message, or with ``?batch=1`` one ``{"type": "batch", "messages":
     [...]}`` frame per wake-up (one JSON encoding, one compression and one
@@ -281,7 +281,7 @@ async def _send_loop(websocket: WebSocket, relay: StreamRelay, batched: bool = F
 
 
 async def _handle(
-    message: Any, relay: StreamRelay, state: AppState, user: User, watches: ProjectWatches
+    message: Any, relay: LiveRelay, state: AppState, user: User, watches: ProjectWatches
 ) -> dict[str, Any]:
     """One op, with the role it needs: values and status need any role;
     dynamic subscriptions need the role scientist."""
@@ -316,7 +316,7 @@ async def _handle(
         out["id"] = ident
     return out
 async def _dynamic(
-    op: str, message: dict[str, Any], relay: StreamRelay, state: AppState, user: User
+    op: str, message: dict[str, Any], relay: LiveRelay, state: AppState, user: User
 ) -> dict[str, Any]:
     if not has_role(user, Role.scientist):
         return {"type": "error", "message": "dynamic subscriptions need the role scientist"}

@@ -32,7 +32,7 @@ class CapReached(ValueError):
     """A subscription past the per-socket or per-user cap."""
 
 
-class StreamRelay:
+class LiveRelay:
     """The subscriptions of one WebSocket; ``close`` removes them all.
 
     ``per_user`` is shared by all sockets of the app (user id -> live
