@@ -125,11 +125,14 @@ def test_a_cycle_is_found(tmp_path: Path) -> None:
     pkg = tmp_path / "pkg"
     pkg.mkdir()
     (pkg / "__init__.py").write_text("")
-    (pkg / "a.py").write_text("from typing import TYPE_CHECKING\n"
-                              "if TYPE_CHECKING:\n    from .b import B\n")
+    (pkg / "a.py").write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from .b import B\n"
+    )
     (pkg / "b.py").write_text("from . import a\n")
     (pkg / "c.py").write_text("def f():\n    from pkg.d import g\n")
     (pkg / "d.py").write_text("import pkg.c\n")
     (pkg / "e.py").write_text("from .a import x\n")
     assert cycles(import_graph(modules({"t": tmp_path}))) == [
-        ["pkg.a", "pkg.b"], ["pkg.c", "pkg.d"]]
+        ["pkg.a", "pkg.b"],
+        ["pkg.c", "pkg.d"],
+    ]
