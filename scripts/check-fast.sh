@@ -25,10 +25,20 @@ step "contracts and model types up to date"
 python -m modd_model.typegen --check
 python -m modd_contracts.typegen --check
 python -m modd_gen.cpp_client --check
-step "mypy (strict, sources and component tests)"
+step "mypy (strict: sources, component tests, cross-process tests and benchmarks)"
 mypy --no-error-summary metamodel/src backend/src generators/src runtime/python/src
 mypy --no-error-summary --explicit-package-bases \
   metamodel/tests generators/tests runtime/python/tests backend/tests
+# The cross-process tests and benchmarks import their harnesses by bare name
+# (each tree's conftest.py puts its folder on sys.path): the same folders are
+# mypy's bases here. The conftest.py files share one module name, so one run each.
+tests_path=tests/subbroker:tests/runtime:tests/mavlink:tests/ecosystem:tests/bench
+tests_path+=:tests/deploy:tests/twodrones:tests:backend/tests
+MYPYPATH=$tests_path mypy --no-error-summary --explicit-package-bases \
+  --exclude '/conftest\.py$' tests
+for c in tests/*/conftest.py; do
+  MYPYPATH=$tests_path mypy --no-error-summary --explicit-package-bases "$c"
+done
 if [ -f frontend/package.json ]; then
   step "eslint, tsc"
   (cd frontend && npx --no-install eslint --max-warnings=0 src && npx --no-install tsc --noEmit -p tsconfig.json)

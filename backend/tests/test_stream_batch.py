@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 from modd_backend.relay import DropOldestQueue
-from modd_backend.routers import streams
+from modd_backend.routers import live
 
 
 class FakeSocket:
@@ -29,7 +29,7 @@ async def _run(batched: bool, items: list[dict[str, Any]], size: int) -> list[An
         queue.put(item)
     sock = FakeSocket()
     task = asyncio.create_task(
-        streams._send_loop(sock, SimpleNamespace(queue=queue), batched))  # type: ignore[arg-type]
+        live._send_loop(sock, SimpleNamespace(queue=queue), batched))  # type: ignore[arg-type]
     await asyncio.sleep(0.05)
     queue.put({"type": "value", "subscriber": "late", "data": {}})
     await asyncio.sleep(0.05)
@@ -54,6 +54,6 @@ def test_sender_order_and_drops(batched: bool) -> None:
 
 
 def test_batches_are_bounded(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(streams, "BATCH_LIMIT", 2)
+    monkeypatch.setattr(live, "BATCH_LIMIT", 2)
     frames = asyncio.run(_run(True, ITEMS[:5], 10))
     assert [len(f["messages"]) for f in frames[:3]] == [2, 2, 1]

@@ -186,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
                       f"{'median ms':>9} {'p95 ms':>7} {'max ms':>7}")
                 for name in ("scenario1", "scenario2"):
                     path = SCENARIOS / f"{name}.modd"
-                    bodies = {"modd": {"text": path.read_text()},
+                    bodies: dict[str, dict[str, object]] = {"modd": {"text": path.read_text()},
                               "json": {"model": load_model(path)}}
                     for kind, body in bodies.items():
                         for method in ("exact", "cvxpy"):

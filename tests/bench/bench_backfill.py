@@ -160,12 +160,12 @@ def pace(args: argparse.Namespace) -> int:
                          check=True, capture_output=True, text=True).stdout
     down = [(float(t), int(n), int(p)) for t, s, n, p in
             (ln.split("\t") for ln in out.splitlines()) if int(s) == link]
-    data = [(t, n) for t, n, p in down if p > 0]
-    wire = sum(n for _, n in data)
-    biggest = max(n for _, n in data)
+    segments = [(t, n) for t, n, p in down if p > 0]
+    wire = sum(n for _, n in segments)
+    biggest = max(n for _, n in segments)
     worst = 0
-    for i, (t0, _) in enumerate(data):
-        worst = max(worst, sum(n for t, n in data[i:] if t < t0 + 1.0))
+    for i, (t0, _) in enumerate(segments):
+        worst = max(worst, sum(n for t, n in segments[i:] if t < t0 + 1.0))
     budget_s = wire / args.rate
     print(f"backfill: {args.minutes:g} min of one {HZ} Hz float32 topic, ALL in 1 s windows, "
           f"pace {args.rate} B/s\n")

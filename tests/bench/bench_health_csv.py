@@ -46,7 +46,7 @@ def write_archive(path: Path, samples: int) -> None:
             t = T0 + i * 10_000_000
             w.add_message(chan, log_time=t, publish_time=t,
                           data=json.dumps({"value": (i % 97) * 0.5}).encode())
-        w.finish()
+        w.finish()  # type: ignore[no-untyped-call]
 
 
 def start_backend(tmp: Path, port: int) -> subprocess.Popen[bytes]:

@@ -156,9 +156,10 @@ def pubbroker(tmp: Path, total: int) -> Ingest:
 
 def sys_counter(port: int, topic: str, at_least: int, timeout_s: float = 5.0) -> int:
     import paho.mqtt.client as mqtt
+    from paho.mqtt.enums import CallbackAPIVersion
 
     got: list[int] = []
-    c = mqtt.Client(mqtt.CallbackAPIVersion.VERSION2, client_id="bench-sys")
+    c = mqtt.Client(CallbackAPIVersion.VERSION2, client_id="bench-sys")
     c.on_message = lambda cl, ud, msg: got.append(int(msg.payload))
     c.connect("127.0.0.1", port)
     c.loop_start()

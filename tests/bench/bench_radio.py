@@ -57,7 +57,7 @@ def _counts(radio: Proc) -> list[tuple[float, tuple[int, int, int, int]]]:
     for ln in radio.log().splitlines():
         m = LINE.search(ln)
         if m:
-            out.append((0.0, tuple(int(x) for x in m.groups())))  # type: ignore[misc]
+            out.append((0.0, tuple(int(x) for x in m.groups())))
     return out  # type: ignore[return-value]
 
 
@@ -169,7 +169,7 @@ def run_mavlink(tmp: Path, scenario: str, spec: str, seconds: float) -> dict[str
     subscription needs, at its rate, over UDP through the same emulator."""
     import socket
 
-    from pymavlink.dialects.v20 import common as mavlink2
+    from pymavlink.dialects.v20 import common as mavlink2  # type: ignore[import-untyped]
 
     model = load_model(model_copy(tmp, scenario))
     # one message per value a subscription receives, at its rate
@@ -236,8 +236,9 @@ def run_zenoh(tmp: Path, number: int, spec: str, seconds: float) -> dict[str, An
 
     sc = load(number)
     port, relay = free_port("udp"), free_port("udp")
-    keys = [[f"bench/{sc.drone}/sub/{s.name}", s.topic, 1 / float(s.period_s)]
-            for s in sc.subscriptions]
+    keys: list[tuple[str, str, float]] = [
+        (f"bench/{sc.drone}/sub/{s.name}", s.topic, 1 / float(s.period_s))
+        for s in sc.subscriptions]
     plan = {"publishers": [[float(p), ts] for p, ts in sc.publishers], "keys": keys}
     drone = Proc("zenoh-drone", [sys.executable, str(HERE / "benchkit" / "zenoh_drone.py"),
                                  "--listen", f"udp/127.0.0.1:{port}", "--plan", json.dumps(plan),
@@ -262,10 +263,10 @@ def run_zenoh(tmp: Path, number: int, spec: str, seconds: float) -> dict[str, An
         time.sleep(seconds)
         t1, c1, r1 = time.monotonic(), _snapshot(radio), received[0]
         for sub in subs:
-            sub.undeclare()
+            sub.undeclare()  # type: ignore[no-untyped-call]
     finally:
         if session is not None:
-            session.close()
+            session.close()  # type: ignore[no-untyped-call]
         with processes(radio, drone):
             pass
     span = t1 - t0

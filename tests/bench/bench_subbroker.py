@@ -48,6 +48,7 @@ from modd.link.schedule import SlotIterator
 from modd.ports import free_port
 from modd.subbroker.broker import SubBroker
 from modd.subbroker.config import DeliveryOptions, SubBrokerConfig
+from modd.subbroker.kept import Deployment
 from modd.zenoh_session import ZenohSettings, open_session
 
 PERIODS = ["0.25", "0.5", "1.0", "2.0"]
@@ -140,7 +141,7 @@ class Bench:
         self.broker = SubBroker(cfg, self.session)
         self.broker.start()
         self.broker.link.stop()  # the windows come from this bench, not from a PubBroker
-        config = self.broker._prepare(m, avoid=0)
+        config = self.broker._prepare(m, avoid=0, meta=Deployment.configured())
         self.epoch_ns = time.time_ns()
         self.broker.on_config_acked(config, ConfigAck(config.config_id, 0, self.epoch_ns))
         self.config = config
@@ -263,7 +264,7 @@ def end_to_end(m: dict[str, Any], seconds: float) -> None:
                   f"| {last.get('behind')} | {last.get('lag_s')}, {last.get('max_lag_s')} | "
                   f"{last.get('recv_backlog_bytes')} B |")
             for sub in subs:
-                sub.undeclare()
+                sub.undeclare()  # type: ignore[no-untyped-call]
             session.close()  # type: ignore[no-untyped-call]
         finally:
             for proc in reversed(procs):
@@ -304,8 +305,10 @@ def main(argv: list[str] | None = None) -> int:
         ]
         if profile is not None:
             results.append(bench.run("flat out, under cProfile", profiled, None, profile))
+        running = bench.broker._running
+        assert running is not None
         print(f"SubBroker data path: {args.subs:,} subscriptions on {args.topics} topics, "
-              f"{len(config.streams)} streams sent, {len(bench.broker._running.fanout.routes())}"
+              f"{len(config.streams)} streams sent, {len(running.fanout.routes())}"
               f" routed (hyperperiod {hyper:g} s), {float(per_s):,.0f} values/s asked\n")
         print("| phase | values delivered | received | values/s | CPU (of a core) "
               "| CPU us per value | values/s per core |")

@@ -78,7 +78,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp, PubBroker(Path(tmp)) as b:
         proxy = Proxy(b.link_port)
         proxy.start()
-        link = LinkClient(("127.0.0.1", proxy.port), KEY, LinkOptions(), Quiet())  # type: ignore[arg-type]
+        link = LinkClient(("127.0.0.1", proxy.port), KEY, LinkOptions(), Quiet())
         link.start()
         while link.stats.state != "up":
             time.sleep(0.001)

@@ -22,7 +22,7 @@ sys.path.insert(0, str(HERE.parent / "subbroker"))
 from flap_reconnect import Proxy  # noqa: E402
 from modd.subbroker.payload import DeliveredValue  # noqa: E402
 from modd.zenoh_session import client_settings, open_session, wait_connected  # noqa: E402
-from subbroker_harness import (  # type: ignore[import-not-found]  # noqa: E402
+from subbroker_harness import (  # noqa: E402
     free_port,
     model_copy,
     processes,
@@ -77,7 +77,7 @@ def main() -> None:
                 t1 = t0 + int(seconds * 1e9)
                 time.sleep(3)
             finally:
-                session.close()
+                session.close()  # type: ignore[no-untyped-call]
     with lock:
         live = {v.end_ns for v in got if t0 < v.end_ns <= t1 and not v.backfilled
                 and v.value is not None}

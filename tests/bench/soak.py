@@ -50,7 +50,7 @@ from mcap.reader import make_reader
 
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "tests" / "subbroker"))
-from subbroker_harness import (  # type: ignore[import-not-found]  # noqa: E402
+from subbroker_harness import (  # noqa: E402
     Blackhole,
     Proc,
     free_port,

@@ -69,7 +69,7 @@ def dockerfile(service: dict[str, Any]) -> Path | None:
         return None
     if isinstance(build, str):
         return REPO / build / "Dockerfile"
-    return REPO / build.get("context", ".") / build.get("dockerfile", "Dockerfile")
+    return REPO / str(build.get("context", ".")) / str(build.get("dockerfile", "Dockerfile"))
 
 
 def image_of(service: dict[str, Any]) -> Image:

@@ -131,8 +131,8 @@ def test_a_file_cut_by_kill9_reads_the_same_and_recovers(broker: PubBroker,
     broker.stop(signal.SIGKILL)
     files = sorted(broker.archive_dir.glob("*.mcap"))
     last = files[-1]
-    with open(last, "rb") as f, pytest.raises(Exception):  # noqa: B017 - any reader error
-        list(make_reader(f).iter_messages())
+    with open(last, "rb") as cut, pytest.raises(Exception):  # noqa: B017 - any reader error
+        list(make_reader(cut).iter_messages())
     # front to back: both readers see the same messages in the cut file
     ts_stream = node_json("mcap_count.cjs", "--stream", *map(str, files))
     total: Counter[str] = Counter()
@@ -150,8 +150,8 @@ def test_a_file_cut_by_kill9_reads_the_same_and_recovers(broker: PubBroker,
     ts = node_json("mcap_count.cjs", str(out))
     assert ts[str(out)]["error"] is None
     assert ts[str(out)]["counts"] == python_counts(out) == scan_counts(last)
-    with open(out, "rb") as f:
-        summary = make_reader(f).get_summary()
+    with open(out, "rb") as recovered:
+        summary = make_reader(recovered).get_summary()
     assert summary is not None and summary.statistics is not None
     assert summary.statistics.message_count == r.messages
     assert summary.chunk_indexes

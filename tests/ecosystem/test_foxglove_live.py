@@ -83,7 +83,7 @@ class ZenohOracle:
         raise AssertionError(f"no reply on {key}")
 
     def close(self) -> None:
-        self.sub.undeclare()
+        self.sub.undeclare()  # type: ignore[no-untyped-call]
         self.session.close()  # type: ignore[no-untyped-call]
 
 

@@ -133,8 +133,8 @@ def test_bridge_publishes_as_rmw_zenoh(networks: tuple[zenoh.Session, zenoh.Sess
         if proc.stdout is not None:
             proc.stdout.close()
         time.sleep(0.3)
-        data_sub.undeclare()
-        live_sub.undeclare()
+        data_sub.undeclare()  # type: ignore[no-untyped-call]
+        live_sub.undeclare()  # type: ignore[no-untyped-call]
 
     window_key = f"0/usv/sub_3/modd_msgs::msg::dds_::Window_/{WINDOW_HASH}"
     float_key = f"0/usv/sub_3/value/std_msgs::msg::dds_::Float64_/{PUBLISHED_FLOAT64}"

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 import re
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -61,7 +62,7 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> Run:
         ready_ns = time.time_ns()
         time.sleep(RUN_S)
     finally:
-        codes = {name: procs[name].stop() for name in ("sim", "bridge", "pubbroker")
+        codes: dict[str, int] = {name: procs[name].stop() for name in ("sim", "bridge", "pubbroker")
                  if name in procs}
     return Run(read_archive(tmp / "run" / "archive"), start, ready_ns, procs["bridge"].log(),
                procs["sim"].log(), codes)
@@ -91,7 +92,7 @@ def test_the_observed_rate_is_the_rate_asked(run: Run, topic: str, hz: float) ->
 
 
 def _near_track(value: float, ts: int, start: float, quantum: float,
-                f: Any, speed: float) -> bool:
+                f: Callable[[float], float], speed: float) -> bool:
     """Whether value is f(t) for some t in [receive - LAG_S, receive], within quantum."""
     t = ts / 1e9 - start
     samples = [f(t - LAG_S * k / 10) for k in range(11)]
@@ -103,7 +104,7 @@ def test_archived_values_follow_the_simulated_track(run: Run) -> None:
     a = {t.rsplit(".", 1)[1]: v for t, v in run.archive.items() if t.startswith("boat.autopilot")}
     assert set(a) == set(AUTOPILOT), sorted(run.archive)
     deg_per_s = SPEED_MS / METERS_PER_DEG_LAT / math.cos(math.radians(47.7))
-    checks = {
+    checks: dict[str, tuple[Callable[[float], float], float, float]] = {
         "latitude": (lambda t: survey_pose(t).lat, 0.5e-7, deg_per_s),
         "longitude": (lambda t: survey_pose(t).lon, 0.5e-7, deg_per_s),
         # alt in mm, then * 0.001 + 10 (the offset of boat.modd)

@@ -53,7 +53,7 @@ def garbled(draw: Any) -> bytes:
         frame[i] = draw(st.integers(0, 255))
     cut = draw(st.integers(0, len(frame)))
     tail = draw(st.sampled_from([b"", bytes(frame[:cut]), draw(st.binary(max_size=20))]))
-    return bytes(frame[:cut]) + tail
+    return bytes(frame[:cut]) + bytes(tail)
 
 
 chunks = st.lists(st.one_of(st.binary(max_size=300), garbled(),

@@ -24,7 +24,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from modd.ports import free_port
+from modd.ports import free_port as free_port  # re-exported: the tests import it from here
 from modd.zenoh_auth import CredentialStore
 from modd_model import load_model
 from modd_model.query import topics
@@ -260,7 +260,7 @@ def close_enough(aggregation: str, got: Any, want: Any) -> bool:
     if got is None or want is None:
         return got is None and want is None
     if aggregation in ("AVERAGE", "SUM"):
-        return abs(got - want) <= 1e-5 * max(1.0, abs(want))
+        return bool(abs(got - want) <= 1e-5 * max(1.0, abs(want)))
     return bool(got == want)
 
 
@@ -378,9 +378,11 @@ class Blackhole:
 
 
 @contextlib.contextmanager
-def processes(*procs: Proc) -> Iterator[None]:
+def processes(*procs: Proc | None) -> Iterator[None]:
+    """Stop the processes on exit, last first (None: one that never started)."""
     try:
         yield
     finally:
         for p in reversed(procs):
-            p.stop()
+            if p is not None:
+                p.stop()

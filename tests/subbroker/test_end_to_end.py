@@ -111,6 +111,7 @@ def test_scenario1_delivery_matches_archive(tmp_path: Path, zenoh_client: Any) -
     sent = json.loads(load.log().strip().splitlines()[-1])["sent"]
     assert {t: len(s) for t, s in archive.items()} == sent  # lossless archive
     # every subscriber of the model got values, and the dynamic one
+    assert avg.accepted is not None
     avg_name = avg.accepted["subscriber"]
     assert set(values) == {f"sub_{i}" for i in range(1, 8)} | {dyn["subscriber"], avg_name}
     assert status["dynamic"] == []  # both cancelled
@@ -150,7 +151,7 @@ def test_no_subbroker_means_no_reply() -> None:
             request(session, "modd/usv/deploy", {"text": ""}, timeout_s=2)
         assert time.monotonic() - t0 < 2.5
     finally:
-        session.close()
+        session.close()  # type: ignore[no-untyped-call]
 
 
 def test_scenario2_delivery_matches_archive(tmp_path: Path, zenoh_client: Any) -> None:

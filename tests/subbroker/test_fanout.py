@@ -8,7 +8,7 @@ from fractions import Fraction
 
 import pytest
 from modd.link.frames import Value
-from modd.subbroker.fanout import FanOut, period_us
+from modd.subbroker.fanout import FanOut, Output, period_us
 from modd_plan.derive import aggregate
 from modd_plan.streams import Source, StreamKey
 from modd_plan.windows import window_of
@@ -17,7 +17,7 @@ Q = Fraction(1, 4)
 
 
 def _drive(fan: FanOut, sent: list[StreamKey], samples_per_quarter: list[list[float]],
-           start_quarter: int = 1):
+           start_quarter: int = 1) -> list[Output]:
     """Feed quarter-second windows of every sent stream (all of period 0.25 s)."""
     outs = []
     for q, samples in enumerate(samples_per_quarter, start=start_quarter):
@@ -59,7 +59,7 @@ def test_pair_rule_average_from_sum_and_count() -> None:
     samples = [[1.0, 2.0], [3.0], [], [6.0]]
     outs = []
     for q, xs in enumerate(samples, start=1):
-        windows = {0: len(xs)}
+        windows: dict[int, float] = {0: len(xs)}
         if q % 2 == 0:
             windows[1] = sum(samples[q - 2]) + sum(xs)
         outs += fan.on_slot(q - 1, q * 250_000, windows)

@@ -91,7 +91,8 @@ def test_a_deploy_changes_the_packing_delay(tmp_path: Path, zenoh_client: Any) -
     archive = read_archive(tmp_path / "archive", model)
 
     def per_datagram(x: dict[str, Any], y: dict[str, Any]) -> float:
-        return (y["slots_received"] - x["slots_received"]) / (y["datagrams_in"] - x["datagrams_in"])
+        return float((y["slots_received"] - x["slots_received"])
+                     / (y["datagrams_in"] - x["datagrams_in"]))
 
     before, after = per_datagram(a, b), per_datagram(c, d)
     # 4 slots/s (0.25 s windows): up to 1 s, 4 or 5 slots a datagram; up to 0.25 s, 1 or 2

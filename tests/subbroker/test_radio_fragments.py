@@ -96,7 +96,8 @@ def test_slots_larger_than_the_packet_arrive_as_fragments(loss: float, tmp_path:
             if any(e - PERIOD_NS <= t < e for t in stamps)] if ends else []
     assert len(ends) >= 3 and ends == want, (ends, want, counts)
     # the windows between the load's first and last are full: 25 Hz x 2 s
-    assert max(len(v.value) for v in values["sub_8"]) >= 45, values["sub_8"]
+    assert max(len(v.value) for v in values["sub_8"] if isinstance(v.value, list)) >= 45, \
+        values["sub_8"]
     frags = [int(x) for x in re.findall(r"link: .*fragments=(\d+)", pb_log)]
     # two fragments a full window (the edge windows, partly filled, may fit one packet)
     assert frags and frags[-1] >= 2 * (len(ends) - 2), pb_log[-1500:]

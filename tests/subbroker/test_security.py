@@ -50,7 +50,7 @@ def station(tmp_path_factory: pytest.TempPathFactory) -> Any:
     config = subbroker_config(tmp, model, link, zport)
     sb = start_subbroker(tmp, config)
     load = start_load(tmp, model, ingress, 60)
-    info = {"port": zport, "model": model, "sb": sb, "config": config}
+    info: dict[str, Any] = {"port": zport, "model": model, "sb": sb, "config": config}
     try:
         wait_port(zport)
         assert sb.wait_log("config 1 running", 15), sb.log()

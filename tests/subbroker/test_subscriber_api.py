@@ -30,7 +30,7 @@ def pair() -> Any:
     port = free_port()
     server = open_session(ZenohSettings(listen=(f"tcp/127.0.0.1:{port}",)))
     yield server, port
-    server.close()
+    server.close()  # type: ignore[no-untyped-call]
 
 
 def test_iterate_collect_dataframe_and_callback(pair: Any) -> None:
@@ -82,8 +82,8 @@ def test_dynamic_without_subbroker_is_no_reply() -> None:
         with pytest.raises(NoReply):
             subscribe_dynamic("usv", "usv.a.x", "1.0", "MIN", session=session, timeout_s=1)
     finally:
-        session.close()
-        router.close()
+        session.close()  # type: ignore[no-untyped-call]
+        router.close()  # type: ignore[no-untyped-call]
 
 
 def test_nothing_listening_is_a_clear_error() -> None:

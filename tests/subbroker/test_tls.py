@@ -84,4 +84,4 @@ def test_mutual_tls_with_credentials(tmp_path: Path) -> None:
             client("other_ca", "stranger")  # does not trust the router's CA
     finally:
         for s in reversed(sessions):
-            s.close()  # type: ignore[attr-defined]
+            s.close()  # type: ignore[no-untyped-call]

@@ -22,6 +22,7 @@ import httpx2 as httpx
 from modd.zenoh_auth import acl
 from modd.zenoh_session import ZenohSettings, open_session
 from websockets.sync.client import ClientConnection, connect
+from websockets.sync.connection import Connection
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
 
@@ -59,7 +60,7 @@ def zenoh_router(port: int, config: dict[str, Any] | None = None) -> Iterator[An
     try:
         yield session
     finally:
-        session.close()
+        session.close()  # type: ignore[no-untyped-call]
 
 
 class StatusWatch:
@@ -140,7 +141,7 @@ class Backend:
         return ws
 
 
-def receive_until(ws: ClientConnection, pred: Callable[[dict[str, Any]], bool],
+def receive_until(ws: Connection, pred: Callable[[dict[str, Any]], bool],
                   timeout_s: float = 20.0) -> list[dict[str, Any]]:
     """Messages received until one satisfies ``pred`` (included, last)."""
     got: list[dict[str, Any]] = []

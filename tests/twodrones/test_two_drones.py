@@ -165,7 +165,10 @@ def check_deploys(backend: Backend, watch: StatusWatch, usv: Drone, asv: Drone) 
         record = deploy(backend, projects[d.name])
         assert record["drone"] == d.name, record
         config_id = record["reply"]["config_id"]
-        watch.wait(d.name, lambda s, c=config_id: s["config_id"] == c, 10)
+        def running(s: dict[str, Any], c: int = config_id) -> bool:
+            return bool(s["config_id"] == c)
+
+        watch.wait(d.name, running, 10)
         time.sleep(1.0)  # two status periods of the other SubBroker
         after = watch.get(other.name)
         assert after is not None

@@ -96,7 +96,7 @@ def check_zenoh_is_closed(data: Path, zport: int, log: Path) -> None:
         with pytest.raises(NoReply):
             request(viewer, "modd/usv/deploy", {"text": ""}, timeout_s=1)
     finally:
-        viewer.close()
+        viewer.close()  # type: ignore[no-untyped-call]
 
 
 def check_foxglove_live(fport: int, log: Path) -> None:

@@ -38,12 +38,12 @@ from .routers import (
     deploy,
     downloads,
     health,
+    live,
     models,
     plan,
     projects,
     records,
     scene,
-    streams,
     users,
 )
 from .scene import SceneServer, SceneService
@@ -51,7 +51,7 @@ from .settings import Settings
 from .spa import mount_frontend
 from .throttle import Throttle
 from .versions import get_version, model_of
-from .zbridge import ZenohBridge
+from .zenoh_session import ZenohSession
 
 log = logging.getLogger("modd_backend")
 
@@ -64,7 +64,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     plan.router,
     deploy.router,
     downloads.router,
-    streams.router,
+    live.router,
     archives.router,
     archives.replay_router,
     scene.router,
@@ -151,25 +151,25 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
                 ensure_first_admin(db, settings.initial_admin_password, out)
 
         store = Store.open(settings.effective_database_url, init=first_start)
-        bridge = None
+        zenoh_session = None
         if settings.zenoh_enabled:
-            bridge = ZenohBridge.open(settings.zenoh_connect, settings.zenoh_listen,
-                                      settings.zenoh_credentials)
+            zenoh_session = ZenohSession.open(settings.zenoh_connect, settings.zenoh_listen,
+                                              settings.zenoh_credentials)
         if settings.preload_milp:
             preload_milp()
         state = AppState(
-            settings, store, bridge,
+            settings, store, zenoh_session,
             heavy=HeavyLimiter(settings.heavy_per_user, settings.heavy_total),
             login_accounts=Throttle(settings.login_limit_account, settings.login_window_s),
             login_addresses=Throttle(settings.login_limit_address, settings.login_window_s),
         )
         app.state.modd = state
         state.database = "ok"  # just opened and migrated
-        if bridge is not None:
+        if zenoh_session is not None:
             state.hub = SubscriptionHub()
             state.statuses = DroneStatuses()
             state.hub.listen_all_status(state.statuses.on_status)
-            state.hub.start(bridge)
+            state.hub.start(zenoh_session)
             if settings.scene_port is not None:
                 state.scene = start_scene(settings, store)
                 state.hub.listen_all(state.scene.on_value)
@@ -209,8 +209,8 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
                 state.foxglove.stop()
             if state.replay is not None:
                 state.replay.stop()
-            if bridge is not None:
-                bridge.close()
+            if zenoh_session is not None:
+                zenoh_session.close()
             await run_in_threadpool(archive_work.shutdown_pool)
             store.close()
 

@@ -27,7 +27,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session as Db
 
 from .tables import Deployment, ModelVersion, utcnow
-from .zbridge import ZenohBridge, read_secret
+from .zenoh_session import ZenohSession, read_secret
 
 #: Extra seconds the backend waits beyond the SubBroker's own deploy timeout.
 QUERY_MARGIN_S = 2.0
@@ -50,7 +50,7 @@ def signing_key(path: Path | None) -> bytes | None:
 
 def deploy(
     db: Db,
-    bridge: ZenohBridge,
+    zenoh_session: ZenohSession,
     version: ModelVersion,
     model: dict[str, Any],
     user: str,
@@ -73,7 +73,7 @@ def deploy(
     with _in_flight_lock:
         _in_flight.add(record.id)
     try:
-        result = bridge.query(deploy_key(drone), request, timeout_s + QUERY_MARGIN_S)
+        result = zenoh_session.query(deploy_key(drone), request, timeout_s + QUERY_MARGIN_S)
     finally:
         with _in_flight_lock:
             _in_flight.discard(record.id)

@@ -26,7 +26,7 @@ from .security import csrf_for
 from .settings import Settings
 from .tables import User
 from .throttle import Throttle
-from .zbridge import ZenohBridge
+from .zenoh_session import ZenohSession
 
 if TYPE_CHECKING:
     from .guards import HeavyLimiter
@@ -45,7 +45,7 @@ SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
 class AppState:
     settings: Settings
     store: Store
-    bridge: ZenohBridge | None
+    zenoh_session: ZenohSession | None
     scene: SceneService | None = None
     foxglove: FoxgloveLive | None = None
     replay: ReplaySlot | None = None
@@ -171,10 +171,10 @@ async def _heavy(state: StateDep, user: UserDep) -> AsyncIterator[None]:
 Heavy = Depends(_heavy)
 
 
-def bridge_of(state: AppState) -> ZenohBridge:
-    if state.bridge is None:
+def zenoh_session_of(state: AppState) -> ZenohSession:
+    if state.zenoh_session is None:
         raise HTTPException(503, "zenoh is disabled in this backend's settings")
-    return state.bridge
+    return state.zenoh_session
 
 
 async def raw_body(request: Request) -> bytes:

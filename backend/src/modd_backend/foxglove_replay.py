@@ -186,7 +186,6 @@ class ReplayServer:
         import foxglove
         from foxglove.websocket import Capability, ServerListener
 
-        self._fg = foxglove
         channels, messages = recording if recording is not None else load_recording(paths)
         self.player = Player(messages)
         # Lichtblick's WebSocket player (1.28) has no playback controls: it

@@ -21,7 +21,7 @@ from collections.abc import Callable
 
 from modd_contracts import keys
 
-from .zbridge import Undeclarable, ZenohBridge
+from .zenoh_session import Undeclarable, ZenohSession
 
 ValueCallback = Callable[[str, bytes], None]
 StatusCallback = Callable[[bytes], None]
@@ -42,10 +42,10 @@ class SubscriptionHub:
         self._every_status: list[Callable[[str, bytes], None]] = []
         self._declared: list[Undeclarable] = []
 
-    def start(self, bridge: ZenohBridge) -> None:
+    def start(self, zenoh_session: ZenohSession) -> None:
         """Declare the two wildcard subscribers (blocking; call at start-up)."""
-        self._declared = [bridge.subscribe(VALUES, self.on_value),
-                          bridge.subscribe(STATUS, self.on_status)]
+        self._declared = [zenoh_session.subscribe(VALUES, self.on_value),
+                          zenoh_session.subscribe(STATUS, self.on_status)]
 
     def stop(self) -> None:
         for sub in self._declared:

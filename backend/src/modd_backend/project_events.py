@@ -1,7 +1,7 @@
 """Saves announced to everyone with the project open: the save route
 publishes ``{"type": "saved", "project", "revision", "author", "message"}``
 and every stream WebSocket that asked ``{"op": "watch", "project": ID}``
-gets it (docs/backend.md, "Streams").
+gets it (docs/backend.md, "Live relay").
 
 Callbacks run on the saving thread and must not block (the stream sockets
 put into their DropOldestQueue).

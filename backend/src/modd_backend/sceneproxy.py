@@ -221,7 +221,7 @@ def socket_token(websocket: WebSocket) -> str | None:
 async def relay_socket(websocket: WebSocket, state: AppState, port: int) -> None:
     """Authenticate the upgrade, then relay frames both ways with the viser
     server until either side closes or the session ends."""
-    from .routers.streams import origin_allowed
+    from .routers.live import origin_allowed
 
     if not origin_allowed(websocket, state.settings):
         await websocket.close(code=4403, reason="Origin not allowed")

@@ -43,10 +43,6 @@ class ModelInput(BaseModel):
         return self
 
 
-class ErrorOut(BaseModel):
-    detail: str
-
-
 class InvalidModelOut(BaseModel):
     """422 for a model that cannot be read at all (syntax errors)."""
 

@@ -1,6 +1,6 @@
 /**
  * DataSource over the backend's stream WebSocket, /api/drones/<drone>/stream
- * (backend/src/modd_backend/routers/streams.py): one socket per browser tab
+ * (backend/src/modd_backend/routers/live.py): one socket per browser tab
  * and drone, multiplexing subscriptions.
  *
  * Wire messages (JSON text frames):

@@ -18,10 +18,6 @@ class Ingress:
         """The publisher clients' address form: ``unix:PATH`` (preferred on board)."""
         return f"unix:{self.unix_socket}"
 
-    @property
-    def tcp_address(self) -> str | None:
-        return f"tcp:{self.tcp_host}:{self.tcp_port}" if self.tcp_port else None
-
 
 def ingress_of(model: dict[str, Any]) -> Ingress:
     broker = model["pubBroker"]

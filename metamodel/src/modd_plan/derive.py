@@ -178,8 +178,3 @@ def derive_value(target: str, sources: Sequence[tuple[str, Sequence[Window]]]) -
         count = merge_count(sources[1][1])
         return (float(total) / count, count) if count else None
     raise ValueError(f"{target} cannot be derived from {[s for s, _ in sources]}")
-
-
-def single_source_allowed(target: str, source: str) -> bool:
-    """True when ``target`` windows can be computed from ``source`` windows."""
-    return source in SINGLE_SOURCE_RULES[target]

@@ -11,16 +11,50 @@ import itertools
 from collections.abc import Sequence
 from fractions import Fraction
 from functools import lru_cache
-from typing import TYPE_CHECKING, cast
+from typing import Any, Protocol, cast
 
 from modd_contracts.types import PlanDocument, PlanSchedule, PlanStream
 from modd_model.numbers import MICROS_PER_SECOND
+from modd_model.query import Topic
 
-from .schedule import Slot
+from .buffers import BufferSolution, Infeasibility
+from .linkbudget import LinkBudget
+from .linkcost import LinkCost
+from .schedule import Schedule, Slot
 from .streams import PlannedStream, StreamKey, _decimal_of, decimal_of
 
-if TYPE_CHECKING:
-    from .plan import Plan
+
+class _Constants(Protocol):
+    def to_json(self) -> dict[str, Any]: ...
+
+
+class PlanView(Protocol):
+    """What the JSON reads of a plan: ``plan.Plan`` is one. A protocol, not an
+    import of ``Plan``, so that ``plan.py`` (which renders itself through this
+    module) and this module do not import each other."""
+
+    @property
+    def topics(self) -> tuple[Topic, ...]: ...
+    @property
+    def streams(self) -> tuple[PlannedStream, ...]: ...
+    @property
+    def subscriptions(self) -> dict[str, StreamKey]: ...
+    @property
+    def schedule(self) -> Schedule: ...
+    @property
+    def buffers(self) -> BufferSolution: ...
+    @property
+    def constants(self) -> _Constants: ...
+    @property
+    def link(self) -> LinkCost: ...
+    @property
+    def budget(self) -> LinkBudget | None: ...
+    @property
+    def sent_streams(self) -> list[PlannedStream]: ...
+    @property
+    def buffer_sizes(self) -> dict[str, int]: ...
+    @property
+    def infeasible(self) -> tuple[Infeasibility, ...]: ...
 
 #: Slots listed in the JSON schedule (the first hyperperiod when it is
 #: shorter), and at most this many stream ids over the listed slots, so that
@@ -77,7 +111,7 @@ def _streams_json(streams: Sequence[PlannedStream]) -> list[PlanStream]:
     return out
 
 
-def _schedule_json(plan: Plan) -> PlanSchedule:
+def _schedule_json(plan: PlanView) -> PlanSchedule:
     sched = plan.schedule
     slots: list[Slot] = []
     entries = 0
@@ -101,7 +135,7 @@ def _schedule_json(plan: Plan) -> PlanSchedule:
     }
 
 
-def plan_to_json(plan: Plan) -> PlanDocument:
+def plan_to_json(plan: PlanView) -> PlanDocument:
     """Every field of the shared contract (docs/planning.md, "Plan JSON")."""
     sizes = plan.buffer_sizes
     return {

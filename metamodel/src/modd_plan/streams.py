@@ -121,15 +121,6 @@ class PlannedStream:
         return self.id is not None
 
 
-def requested_streams(model: Mapping[str, Any]) -> dict[StreamKey, list[str]]:
-    """Each distinct stream the subscribers ask for, with its subscribers in
-    model order."""
-    out: dict[StreamKey, list[str]] = {}
-    for sub, key in zip(model.get("subscribers", []), subscription_keys(model), strict=True):
-        out.setdefault(key, []).append(sub["name"])
-    return out
-
-
 def subscription_keys(model: Mapping[str, Any]) -> list[StreamKey]:
     """The stream of each subscriber, in model order (one object per
     distinct stream)."""

@@ -177,7 +177,7 @@ def run(tmp: Path, rate: int, outage_s: float, seconds: float,
         facts["radio"] = [ln for ln in radio.log().splitlines() if ln.startswith("radio:")][-1:]
     finally:
         if session is not None:
-            session.close()
+            session.close()  # type: ignore[no-untyped-call]
         with processes(load, radio, pb, sb):
             pass
     return out, facts

@@ -19,6 +19,7 @@ import threading
 import time
 from pathlib import Path
 from types import FrameType
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "subbroker"))
 
@@ -51,7 +52,7 @@ def load(targets: list[tuple[str, int, str]], seconds: float) -> None:
 
     signal.signal(signal.SIGTERM, on_term)
     rng = random.Random(1)
-    jobs = []  # (due, period, sock, records of (id, type) per topic)
+    jobs: list[list[Any]] = []  # (due, period, sock, records of (id, type) per topic)
     start = time.monotonic()
     for _, port, path in targets:
         model = json.loads(Path(path).read_text())

@@ -162,7 +162,7 @@ class ModdLink:
         for sub in getattr(self, "subs", []):
             sub.close()
         if hasattr(self, "session"):
-            self.session.close()
+            self.session.close()  # type: ignore[no-untyped-call]
         for p in reversed(self.procs):
             p.stop()
         return {"pubbroker_log": self.pb.log()[-500:]}
@@ -173,6 +173,7 @@ class MosquittoLink:
 
     def __init__(self, tmp: Path, sc: Scenario, seconds: float) -> None:
         import paho.mqtt.client as mqtt
+        from paho.mqtt.enums import CallbackAPIVersion
 
         self.broker = Mosquitto(tmp)
         self.link_port, self.broker_pid = self.broker.link_port, self.broker.pid
@@ -181,7 +182,7 @@ class MosquittoLink:
         self.procs = [self.broker.proc]
         try:
             for s in sc.subscriptions:
-                c = mqtt.Client(mqtt.CallbackAPIVersion.VERSION2, client_id=f"base-{s.name}")
+                c = mqtt.Client(CallbackAPIVersion.VERSION2, client_id=f"base-{s.name}")
                 c.on_message = self._receiver(s.name)
                 subscribed = threading.Event()
                 c.on_subscribe = lambda *a, ev=subscribed: ev.set()
@@ -229,8 +230,9 @@ class ZenohLink:
 
         self.link_port = free_port()
         self.tally = Tally([s.name for s in sc.subscriptions])
-        keys = [[f"bench/{sc.drone}/sub/{s.name}", s.topic, 1 / float(s.period_s)]
-                for s in sc.subscriptions]
+        keys: list[tuple[str, str, float]] = [
+            (f"bench/{sc.drone}/sub/{s.name}", s.topic, 1 / float(s.period_s))
+            for s in sc.subscriptions]
         plan = {"publishers": [[float(p), ts] for p, ts in sc.publishers], "keys": keys}
         self.drone = Proc("zenoh-drone", [PYTHON, str(HERE / "zenoh_drone.py"), "--listen",
                                           f"tcp/127.0.0.1:{self.link_port}", "--plan",
@@ -261,7 +263,7 @@ class ZenohLink:
         for sub in getattr(self, "subs", []):
             sub.undeclare()
         if hasattr(self, "session"):
-            self.session.close()
+            self.session.close()  # type: ignore[no-untyped-call]
         self.drone.stop()
         return {"sent": _last_json(self.drone).get("sent", 0)}
 

@@ -73,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
             for key in by_topic.get(topic, []):
                 pubs[key].put(payload)
                 sent += 1
-    session.close()
+    session.close()  # type: ignore[no-untyped-call]
     print(json.dumps({"sent": sent}), flush=True)
     return 0
 

@@ -22,9 +22,9 @@ from modd_contracts.keys import backfill_key
 from pydantic import BaseModel, Field
 from starlette.concurrency import run_in_threadpool
 
-from ..deps import StateDep, UserDep, bridge_of, has_role, require
+from ..deps import StateDep, UserDep, has_role, require, zenoh_session_of
 from ..roles import Role
-from ..zbridge import ZenohBridge
+from ..zenoh_session import ZenohSession
 
 router = APIRouter(prefix="/api/drones", tags=["backfill"])
 Drone = Annotated[str, Path(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64)]
@@ -68,9 +68,9 @@ class Progress(BaseModel):
     seconds_left: float | None = None
 
 
-def _ask(bridge: ZenohBridge, drone: str, request: dict[str, Any]) -> Progress:
+def _ask(zenoh_session: ZenohSession, drone: str, request: dict[str, Any]) -> Progress:
     key = backfill_key(drone)
-    result = bridge.query(key, json.dumps(request).encode(), TIMEOUT_S)
+    result = zenoh_session.query(key, json.dumps(request).encode(), TIMEOUT_S)
     if not result.ok:
         return Progress(status="NO_REPLY", reason=result.error)
     reply = result.json()
@@ -89,7 +89,7 @@ async def start(drone: Drone, body: BackfillIn, state: StateDep, user: UserDep) 
         raise HTTPException(422, "give gaps: true, or from_ns and to_ns")
     request: dict[str, Any] = {"op": "start", **body.model_dump(exclude_none=True),
                                "owner": user.username}
-    reply = await run_in_threadpool(_ask, bridge_of(state), drone, request)
+    reply = await run_in_threadpool(_ask, zenoh_session_of(state), drone, request)
     if reply.id is not None:
         with _lock:
             _started[(drone, reply.id)] = user.username
@@ -100,13 +100,13 @@ async def start(drone: Drone, body: BackfillIn, state: StateDep, user: UserDep) 
 
 @router.get("/{drone}/backfill/{job_id}", dependencies=[Either])
 async def progress(drone: Drone, job_id: JobId, state: StateDep) -> Progress:
-    return await run_in_threadpool(_ask, bridge_of(state), drone,
+    return await run_in_threadpool(_ask, zenoh_session_of(state), drone,
                                    {"op": "progress", "id": job_id})
 
 
 @router.post("/{drone}/backfill/{job_id}/cap", dependencies=[Operator])
 async def cap(drone: Drone, job_id: JobId, body: CapIn, state: StateDep) -> Progress:
-    return await run_in_threadpool(_ask, bridge_of(state), drone,
+    return await run_in_threadpool(_ask, zenoh_session_of(state), drone,
                                    {"op": "cap", "id": job_id, "rate_bps": body.rate_bps})
 
 
@@ -116,4 +116,5 @@ async def cancel(drone: Drone, job_id: JobId, state: StateDep, user: UserDep) ->
         starter = _started.get((drone, job_id))
     if not has_role(user, Role.operator) and starter != user.username:
         raise HTTPException(403, "only the operator or who started it may cancel a backfill")
-    return await run_in_threadpool(_ask, bridge_of(state), drone, {"op": "cancel", "id": job_id})
+    return await run_in_threadpool(_ask, zenoh_session_of(state), drone,
+                                   {"op": "cancel", "id": job_id})

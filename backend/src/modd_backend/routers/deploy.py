@@ -12,7 +12,7 @@ from pydantic import BaseModel, Field
 from sqlalchemy import select
 
 from ..deployments import deploy, last_acked, record_json, signing_key
-from ..deps import DbDep, Heavy, StateDep, UserDep, bridge_of, require
+from ..deps import DbDep, Heavy, StateDep, UserDep, require, zenoh_session_of
 from ..errors import ApiError
 from ..modeldiff import diff
 from ..modelio import diagnostics_json
@@ -77,7 +77,7 @@ def deploy_version(
         diags = diagnostics_json(validate(model_of(version)))
         raise ApiError(422, f"revision {version.revision} has errors: fix them before deploying",
                        diagnostics=diags)
-    record = deploy(db, bridge_of(state), version, model_of(version), user.username,
+    record = deploy(db, zenoh_session_of(state), version, model_of(version), user.username,
                     state.settings.deploy_timeout_s, signing_key(state.settings.deploy_key_file))
     if record.status == "acked" and state.scene is not None:
         state.scene.forget(record.drone)  # the 3D scene re-reads the drone's model

@@ -44,7 +44,7 @@ async def health(request: Request, response: Response) -> HealthOut:
     return HealthOut(
         status="ok" if database != "error" else "degraded",
         database=database,
-        zenoh="connected" if state.bridge is not None else "disabled",
+        zenoh="connected" if state.zenoh_session is not None else "disabled",
         scene=state.scene is not None,
         ready=database == "ok" and not saturated,
         saturated=saturated,

@@ -145,7 +145,6 @@ bool TopicReader::read_record(int64_t from) {
     in_.read(reinterpret_cast<char*>(head + 9), 16);
     auto end = static_cast<int64_t>(get<uint64_t>(head + 17));
     if (end < from) {
-      ++chunks_skipped_;
       offset_ += 9 + len;
       return true;
     }
@@ -169,7 +168,6 @@ bool TopicReader::read_record(int64_t from) {
       if (!decompress_chunk(comp, std::span(p + 40 + clen_name, clen), usize, chunk_))
         throw Error(ErrorCode::Io, files_[file_] + ": chunk at byte " + std::to_string(offset_) + " does not decompress");
       chunk_at_ = 0;
-      ++chunks_read_;
     }
   } else if (op == kDataEnd || op == kFooter) {
     file_done_ = true;

@@ -58,6 +58,8 @@ class Subscription:
         on_close: Callable[[], None] | None = None,
     ) -> None:
         self.key = key
+        #: The SubBroker's reply to a dynamic subscription (``subscribe_dynamic``), else None.
+        self.accepted: dict[str, Any] | None = None
         self.dropped = 0
         self.malformed = 0
         self._session = session
@@ -239,7 +241,7 @@ def subscribe_dynamic(
             log.info("cancel of %s: %s", reply["subscriber"], exc)
 
     sub = Subscription(s, str(reply["key"]), callback, own_session=own, on_close=cancel)
-    sub.accepted = reply  # type: ignore[attr-defined]
+    sub.accepted = reply
     return sub
 
 

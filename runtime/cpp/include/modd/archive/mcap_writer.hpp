@@ -83,7 +83,6 @@ class McapWriter {
   uint64_t flushed_messages() const { return flushed_messages_; }  // in chunks written to the file
   uint64_t pending_bytes() const { return pending_.size(); }
   bool closing() const { return closed_ && fd_ >= 0; }  // a close() to resume
-  size_t open_chunk_bytes() const { return chunk_.size(); }
   const std::string& path() const { return path_; }
 
  private:

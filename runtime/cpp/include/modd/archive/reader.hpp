@@ -29,8 +29,6 @@ class TopicReader {
   // Throws Error(Io) on a file that cannot be read or a message that does not parse.
   std::optional<ArchivedSample> peek(int64_t from);
   void pop() { have_ = false; }
-  uint64_t chunks_read() const { return chunks_read_; }
-  uint64_t chunks_skipped() const { return chunks_skipped_; }
 
  private:
   bool next_file();
@@ -51,7 +49,6 @@ class TopicReader {
   size_t chunk_at_ = 0;
   bool have_ = false;
   ArchivedSample sample_;
-  uint64_t chunks_read_ = 0, chunks_skipped_ = 0;
 };
 
 }  // namespace modd::archive

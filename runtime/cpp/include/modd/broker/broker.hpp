@@ -187,7 +187,6 @@ class Broker final : public LinkHooks, public FrameSink {
   bool status_pending_ = false;
   int64_t status_due_since_ = 0;
   uint32_t status_period_s_ = 0;
-  std::vector<uint8_t> status_frame_;
   std::vector<IngressSession*> sessions_;
   uint64_t flush_id_ = 0, durable_seen_ = 0, archive_state_changes_ = 0;
   uint8_t archive_state_ = 0;   // ArchiveStateCode

@@ -52,14 +52,4 @@ struct Record {
   int64_t integer = 0;
 };
 
-inline size_t value_width(ValueType t) {
-  switch (t) {
-    case ValueType::Float32: return 4;
-    case ValueType::Float64: return 8;
-    case ValueType::Int: return 8;
-    case ValueType::Bool: return 1;
-  }
-  return 0;
-}
-
 }  // namespace modd::ingress

@@ -21,7 +21,7 @@ import hashlib
 import hmac
 import struct
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from .codec import Reader, varint
 from .frames import ErrorCode, ProtocolError
@@ -75,7 +75,6 @@ class DataDatagram:
     slot: int
     slots: list[bytes]
     presence: list[bool] | None = None
-    streams_per_slot: list[int] = field(default_factory=list)
 
 
 class Forged(Exception):

@@ -42,8 +42,8 @@ from .fanout import period_us
 from .payload import DeliveredValue
 
 if TYPE_CHECKING:
-    from .broker import Running
     from .delivery import Sink
+    from .running import Running
 
 log = logging.getLogger("modd.subbroker.backfill")
 
@@ -145,7 +145,6 @@ class BackfillManager:
         self._lock = threading.RLock()
         self._received: dict[StreamKey, Intervals] = {}
         self._filled: dict[tuple[str, StreamKey], Intervals] = {}
-        self._connected_at: int | None = None
         self._jobs: dict[int, Job] = {}
         self._queue: deque[Job] = deque()
         self._active: Job | None = None

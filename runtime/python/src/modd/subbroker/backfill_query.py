@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 from .backfill import BackfillManager, Job
 
 if TYPE_CHECKING:
-    from .broker import Running
+    from .running import Running
 
 MAX_RATE_BPS = 1_000_000_000
 

@@ -14,7 +14,6 @@ import logging
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -22,7 +21,6 @@ from modd_model.diagnostics import Diagnostic, ModelError
 from modd_model.query import topics
 from modd_model.signing import NonceGuard, signature
 from modd_plan import Plan
-from modd_plan.streams import Source, StreamKey
 
 from modd.link.frames import AuthOk, Config, ConfigAck, ErrorCode, Status
 from modd.link.receiver import Window
@@ -42,6 +40,7 @@ from .keys import backfill_key, deploy_key, subscribe_key
 from .link import ConfigRejected, LinkDown
 from .planning import accepted_delay_ms, config_for, plan_within
 from .record import BaseRecord
+from .running import Running
 from .status import StatusPublisher
 from .transport import link_client
 
@@ -52,26 +51,6 @@ log = logging.getLogger("modd.subbroker")
 
 #: After a reconnection, live values flow again before the automatic backfill looks for gaps.
 AUTO_BACKFILL_DELAY_S = 2.0
-
-
-@dataclass
-class Running:
-    """A config the PubBroker acknowledged, with everything to fan it out."""
-
-    model: dict[str, Any]
-    plan: Plan
-    config: Config
-    epoch_ns: int
-    fanout: FanOut
-    meta: Deployment = field(default_factory=Deployment.configured)
-    topic_info: dict[str, tuple[str, str]] = field(default_factory=dict)  # unit, type
-    slots: SlotDelivery | None = None
-
-    def route(self, stream: StreamKey, sources: tuple[Source, ...], subscriber: str) -> None:
-        self.fanout.route(stream, sources, subscriber)
-
-    def unroute(self, subscriber: str) -> bool:
-        return self.fanout.unroute(subscriber)
 
 
 class SubBroker:

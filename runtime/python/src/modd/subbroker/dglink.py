@@ -208,9 +208,6 @@ class DatagramLinkClient:
     def up(self) -> bool:
         return self._up.is_set()
 
-    def wait_up(self, timeout_s: float) -> bool:
-        return self._up.wait(timeout_s)
-
     def send_config(self, config: Config, timeout_s: float) -> ConfigAck:
         deadline = time.monotonic() + timeout_s
         if not self._up.wait(timeout_s):

@@ -150,9 +150,6 @@ class LinkClient:
     def up(self) -> bool:
         return self._up.is_set()
 
-    def wait_up(self, timeout_s: float) -> bool:
-        return self._up.wait(timeout_s)
-
     def send_frame(self, frame: bytes) -> None:
         """Send one encoded frame (a backfill request or cancel); raises LinkDown."""
         if not self._up.is_set():

@@ -1,5 +1,5 @@
 """Live data: one WebSocket per browser and drone multiplexing the
-subscriptions the page asks for (docs/backend.md, "Streams"), and dynamic
+subscriptions the page asks for (docs/backend.md, "Live relay"), and dynamic
 subscriptions over REST.
 
 Client messages: ``{"op": "auth", "token": T}`` first (API clients
@@ -31,17 +31,17 @@ from ..deps import (
     AppState,
     StateDep,
     UserDep,
-    bridge_of,
     has_role,
     require,
     roles_of,
     ws_state,
+    zenoh_session_of,
 )
 from ..guards import loads_bounded
+from ..live import CapReached, LiveRelay, dynamic_request
 from ..project_events import ProjectWatches
 from ..roles import Role
 from ..settings import Settings
-from ..streams import CapReached, StreamRelay, dynamic_request
 from ..tables import User
 
 router = APIRouter(prefix="/api/drones", tags=["streams"])
@@ -77,7 +77,8 @@ def add_dynamic(drone: Drone, body: DynamicIn, state: StateDep, user: UserDep) -
     # the SubBroker scopes quotas, listing and cancelling to the owner
     request = {"action": "subscribe", **body.model_dump(exclude_none=True),
                "owner": user.username}
-    reply = dynamic_request(bridge_of(state), drone, request, state.settings.subscribe_timeout_s)
+    reply = dynamic_request(zenoh_session_of(state), drone, request,
+                            state.settings.subscribe_timeout_s)
     return DynamicOut.model_validate(reply)
 
 
@@ -85,7 +86,8 @@ def add_dynamic(drone: Drone, body: DynamicIn, state: StateDep, user: UserDep) -
 def cancel_dynamic(drone: Drone, subscriber: Name, state: StateDep,
                    user: UserDep) -> DynamicOut:
     request = {"action": "cancel", "subscriber": subscriber, "owner": user.username}
-    reply = dynamic_request(bridge_of(state), drone, request, state.settings.subscribe_timeout_s)
+    reply = dynamic_request(zenoh_session_of(state), drone, request,
+                            state.settings.subscribe_timeout_s)
     return DynamicOut.model_validate(reply)
 
 
@@ -141,7 +143,7 @@ async def stream(websocket: WebSocket, drone: str) -> None:
     cookie = websocket.cookies.get(SESSION_COOKIE)
     if cookie is not None and websocket.headers.get("origin") is None:
         cookie = None  # a cookie is honoured only with a checked Origin
-    if state.bridge is None or state.hub is None:
+    if state.zenoh_session is None or state.hub is None:
         await websocket.close(code=4503, reason="zenoh is disabled")
         return
     try:
@@ -165,7 +167,7 @@ async def stream(websocket: WebSocket, drone: str) -> None:
     user, roles = session
     assert token is not None
     settings = state.settings
-    relay = StreamRelay(state.hub, drone, settings.stream_queue_size, user_id=user.id,
+    relay = LiveRelay(state.hub, drone, settings.stream_queue_size, user_id=user.id,
                         per_socket=settings.ws_subscriptions_per_socket,
                         per_user=settings.ws_subscriptions_per_user,
                         per_user_counts=state.ws_counts)
@@ -228,7 +230,7 @@ async def _watch(state: AppState, token: str, seen: tuple[int, str]) -> tuple[in
             return 4403, "your roles changed; reconnect"
 
 
-async def _receive_loop(websocket: WebSocket, relay: StreamRelay, state: AppState,
+async def _receive_loop(websocket: WebSocket, relay: LiveRelay, state: AppState,
                         user: User, watches: ProjectWatches) -> None:
     try:
         while True:
@@ -256,7 +258,7 @@ def _dumps(message: Any) -> str:
     return json.dumps(message, separators=(",", ":"), ensure_ascii=False)
 
 
-async def _send_loop(websocket: WebSocket, relay: StreamRelay, batched: bool = False) -> None:
+async def _send_loop(websocket: WebSocket, relay: LiveRelay, batched: bool = False) -> None:
     """Everything queued since the last wake-up goes out in order: one frame
     per message, or with ``?batch=1`` one ``{"type": "batch", "messages":
     [...]}`` frame per wake-up (one JSON encoding, one compression and one
@@ -279,7 +281,7 @@ async def _send_loop(websocket: WebSocket, relay: StreamRelay, batched: bool = F
 
 
 async def _handle(
-    message: Any, relay: StreamRelay, state: AppState, user: User, watches: ProjectWatches
+    message: Any, relay: LiveRelay, state: AppState, user: User, watches: ProjectWatches
 ) -> dict[str, Any]:
     """One op, with the role it needs: values and status need any role;
     dynamic subscriptions need the role scientist."""
@@ -314,7 +316,7 @@ async def _handle(
         out["id"] = ident
     return out
 async def _dynamic(
-    op: str, message: dict[str, Any], relay: StreamRelay, state: AppState, user: User
+    op: str, message: dict[str, Any], relay: LiveRelay, state: AppState, user: User
 ) -> dict[str, Any]:
     if not has_role(user, Role.scientist):
         return {"type": "error", "message": "dynamic subscriptions need the role scientist"}
@@ -325,7 +327,8 @@ async def _dynamic(
         request = {"action": "cancel", "subscriber": message.get("subscriber")}
     request["owner"] = user.username  # the SubBroker scopes quotas and cancels to it
     reply = await run_in_threadpool(
-        dynamic_request, bridge_of(state), relay.drone, request, state.settings.subscribe_timeout_s
+        dynamic_request, zenoh_session_of(state), relay.drone, request,
+        state.settings.subscribe_timeout_s,
     )
     if reply.get("status") == "ACCEPTED" and isinstance(reply.get("subscriber"), str):
         relay.subscribe(reply["subscriber"])  # values start at the next slot

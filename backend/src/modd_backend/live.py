@@ -18,7 +18,7 @@ from modd_contracts.keys import check_name, sub_key, subscribe_key
 
 from .hub import SubscriptionHub
 from .relay import DropOldestQueue
-from .zbridge import ZenohBridge
+from .zenoh_session import ZenohSession
 
 
 def _decode(payload: bytes) -> Any:
@@ -32,7 +32,7 @@ class CapReached(ValueError):
     """A subscription past the per-socket or per-user cap."""
 
 
-class StreamRelay:
+class LiveRelay:
     """The subscriptions of one WebSocket; ``close`` removes them all.
 
     ``per_user`` is shared by all sockets of the app (user id -> live
@@ -103,13 +103,13 @@ class StreamRelay:
             self._started = False
 
 
-def dynamic_request(bridge: ZenohBridge, drone: str, request: dict[str, Any],
+def dynamic_request(zenoh_session: ZenohSession, drone: str, request: dict[str, Any],
                     timeout_s: float) -> dict[str, Any]:
     """Ask the SubBroker's ``modd/<drone>/subscribe`` queryable; its reply
     (``ACCEPTED`` with the key, ``NOT_AVAILABLE`` with the reason, ...) or a
     ``NO_REPLY`` status when nobody answers. Blocking."""
     key = subscribe_key(check_name("drone", drone))
-    result = bridge.query(key, json.dumps(request).encode(), timeout_s)
+    result = zenoh_session.query(key, json.dumps(request).encode(), timeout_s)
     if not result.ok:
         return {"status": "NO_REPLY", "reason": result.error}
     reply = result.json()

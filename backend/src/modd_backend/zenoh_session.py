@@ -6,11 +6,11 @@ The session is a *client* of the SubBroker's router (multicast scouting off,
 explicit endpoints) that gives the ``backend`` identity's user name and
 password (a ``.cred`` file, docs/security.md), so every message goes through
 the router's access control. A client cannot open while no router listens:
-the bridge keeps trying in the background, and subscriptions asked meanwhile
+the session keeps trying in the background, and subscriptions asked meanwhile
 are declared once it is open. (Listening, ``zenoh_listen``, makes it a peer.)
 
->>> bridge = ZenohBridge.open(connect=("tcp/127.0.0.1:7447",))   # doctest: +SKIP
->>> bridge.query("modd/usv/deploy", b"{...}", timeout_s=10)      # doctest: +SKIP
+>>> zs = ZenohSession.open(connect=("tcp/127.0.0.1:7447",))   # doctest: +SKIP
+>>> zs.query("modd/usv/deploy", b"{...}", timeout_s=10)      # doctest: +SKIP
 QueryResult(ok=True, payload=b'{"status": "acked", ...}', error=None)
 """
 
@@ -95,19 +95,19 @@ def zenoh_config(connect: tuple[str, ...], listen: tuple[str, ...],
 class _Pending:
     """A subscription asked before the session opened; declared when it does."""
 
-    def __init__(self, bridge: ZenohBridge, key: str, on_sample: Any) -> None:
-        self.bridge, self.key, self.on_sample = bridge, key, on_sample
+    def __init__(self, owner: ZenohSession, key: str, on_sample: Any) -> None:
+        self.owner, self.key, self.on_sample = owner, key, on_sample
         self.real: Undeclarable | None = None
 
     def undeclare(self) -> None:
-        with self.bridge._lock:
-            self.bridge._pending.discard(self)
+        with self.owner._lock:
+            self.owner._pending.discard(self)
             real, self.real = self.real, None
         if real is not None:
             real.undeclare()
 
 
-class ZenohBridge:
+class ZenohSession:
     def __init__(self, session: zenoh.Session | None,
                  config: Callable[[], zenoh.Config] | None = None, where: str = "") -> None:
         self._session = session
@@ -120,16 +120,16 @@ class ZenohBridge:
 
     @classmethod
     def open(cls, connect: tuple[str, ...] = (), listen: tuple[str, ...] = (),
-             credentials: Path | None = None) -> ZenohBridge:
+             credentials: Path | None = None) -> ZenohSession:
         """Opens at once when the router is up, else keeps trying in the background
         (the credentials file is read at each try: it may not be made yet)."""
-        bridge = cls(None, lambda: zenoh_config(connect, listen, credentials),
+        opened = cls(None, lambda: zenoh_config(connect, listen, credentials),
                      ", ".join(connect + listen))
-        if not bridge._try_open():
-            bridge._opener = threading.Thread(target=bridge._keep_trying, daemon=True,
+        if not opened._try_open():
+            opened._opener = threading.Thread(target=opened._keep_trying, daemon=True,
                                               name="modd-zenoh-open")
-            bridge._opener.start()
-        return bridge
+            opened._opener.start()
+        return opened
 
     def _try_open(self) -> bool:
         assert self._config is not None
