@@ -22,6 +22,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Path, WebSocket, WebSocketDisconnect
 from modd_contracts.keys import check_name
+from modd_model.jsondepth import loads_bounded
 from pydantic import BaseModel, Field
 from starlette.concurrency import run_in_threadpool
 
@@ -37,7 +38,6 @@ from ..deps import (
     roles_of,
     ws_state,
 )
-from ..guards import loads_bounded
 from ..project_events import ProjectWatches
 from ..roles import Role
 from ..settings import Settings
