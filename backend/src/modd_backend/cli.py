@@ -15,7 +15,18 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from sqlalchemy.engine import make_url
+from sqlalchemy.exc import ArgumentError
+
 from .settings import DEFAULT_ZENOH_CONNECT, Settings, check_origin
+from .zbridge import read_secret
+
+
+def _has_password(url: str) -> bool:
+    try:
+        return bool(make_url(url).password)
+    except ArgumentError:
+        return False
 
 
 def parse_args(argv: list[str] | None = None) -> Settings:
@@ -70,11 +81,15 @@ def parse_args(argv: list[str] | None = None) -> Settings:
             p.error(f"--tile-origin: {exc}")
     password = os.environ.get("MODD_ADMIN_PASSWORD")
     if a.admin_password_file is not None:
-        try:
-            password = a.admin_password_file.read_text().splitlines()[0]
-        except (OSError, IndexError) as exc:
+        try:  # a small regular file (not /dev/zero, not a link), like every secret
+            password = read_secret(a.admin_password_file, "admin password file").splitlines()[0]
+        except (OSError, ValueError, IndexError) as exc:
             p.error(f"--admin-password-file {a.admin_password_file}: cannot read a password "
                     f"({exc or 'empty file'})")
+    if a.database_url and a.database_url != os.environ.get("MODD_DATABASE_URL") \
+            and _has_password(a.database_url):
+        print("modd-backend: warning: --database-url shows the database password to every "
+              "local user (process list); use $MODD_DATABASE_URL", file=sys.stderr)
     if a.admin_password is not None:
         print("modd-backend: warning: --admin-password shows the password to every local "
               "user (process list); use --admin-password-file or $MODD_ADMIN_PASSWORD",
