@@ -74,6 +74,10 @@ class Settings:
     #: Host names (or host:port) requests may name besides the loopback names
     #: (localhost, 127.0.0.1, ::1) and ``host``; "*" allows any (not advised).
     allowed_hosts: tuple[str, ...] = field(default_factory=tuple)
+    #: Addresses of reverse proxies whose X-Forwarded-For/-Proto are believed.
+    #: None by default: any local process could otherwise name any client
+    #: address (and escape the per-address login throttling).
+    trusted_proxies: tuple[str, ...] = field(default_factory=tuple)
     #: Failed logins allowed per account / per client address within the window.
     login_limit_account: int = 10
     login_limit_address: int = 50
