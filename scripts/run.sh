@@ -25,7 +25,10 @@ FOXGLOVE_PORT="${MODD_FOXGLOVE_PORT:-$((8765 + OFFSET))}"
 REPLAY_PORT="${MODD_FOXGLOVE_REPLAY_PORT:-$((8865 + OFFSET))}"
 ZENOH_PORT="${MODD_ZENOH_PORT:-$((7447 + OFFSET))}"
 if [ "$OFFSET" = 0 ]; then DATA="${MODD_DATA:-$PWD/data}"; else DATA="${MODD_DATA:-$PWD/data-$PORT}"; fi
+# The data directory holds the credentials, the run, the store and the logs:
+# the user's alone (docs/security.md), as is everything made from here on.
 mkdir -p "$DATA"
+chmod 700 "$DATA"
 
 modd validate -q "$MODEL"
 # The drone's link ends (PubBroker and SubBroker ports): the model's, unless moved.
@@ -63,6 +66,8 @@ if [ ! -s "$PWFILE" ]; then
 fi
 export MODD_ADMIN_PASSWORD="$(cat "$PWFILE" 2>/dev/null || true)"
 
+umask 077  # the logs and files of every process started below: 0600
+[ ! -f "$DATA/backend.log" ] || chmod 600 "$DATA/backend.log"  # made by an older run
 pids=()
 stop() {
   trap - INT TERM EXIT

@@ -13,8 +13,7 @@ from typing import Any
 import uvicorn
 from modd.ports import free_port
 from modd_backend import Settings, create_app
-from modd_backend.cli import log_config
-from modd_backend.wspacing import PacedWebSocketProtocol
+from modd_backend.cli import server_options
 
 
 @contextmanager
@@ -23,7 +22,7 @@ def serve(settings: Settings, **config: Any) -> Iterator[str]:
     port = free_port()
     server = uvicorn.Server(uvicorn.Config(
         create_app(settings, out=io.StringIO()), host="127.0.0.1", port=port,
-        log_config=log_config(), **{"ws": PacedWebSocketProtocol, **config}))
+        **{**server_options(settings), **config}))
     thread = threading.Thread(target=server.run, daemon=True)
     thread.start()
     deadline = time.monotonic() + 60

@@ -169,5 +169,5 @@ def test_csv_name_is_rfc6266_and_non_latin1_topics_work(
               params={"topic": 'températur"e/水'})
     assert r.status_code == 200, r.text
     cd = r.headers["content-disposition"]
-    assert cd.startswith('attachment; filename="run-0000-temp_ratur_e/_.csv"')
+    assert cd.startswith('attachment; filename="run-0000-temp_ratur_e__.csv"')  # no "/"
     assert "filename*=UTF-8''run-0000-temp%C3%A9ratur%22e%2F%E6%B0%B4.csv" in cd

@@ -198,3 +198,22 @@ def test_text_diagnostics_carry_where_the_located_text_ends() -> None:
     assert d["end_line"] == d["line"]
     assert line[int(str(d["col"])) - 1 : int(str(d["end_col"])) - 1] == "AVERAGED"
     assert line.index("AVERAGED") == int(str(d["col"])) - 1
+
+
+@pytest.mark.parametrize("depth", [65, 1_000, 200_000])
+def test_json_text_nested_too_deep_is_a_located_error(depth: int) -> None:
+    """Before: ``json.loads`` raised RecursionError from about 1,000 levels on
+    (the workbench answered 500); now an error at line 1 of the file."""
+    text = '{"drone": ' + "[" * depth + "]" * depth + "}"
+    result = load_text(text, "deep.json", "json")
+    assert result.model is None
+    [diag] = result.diagnostics
+    assert diag.severity == "error" and f"nested {depth + 1} levels" in diag.message
+    assert diag.location is not None and diag.location.file == "deep.json"
+    assert diag.location.line == 1
+
+
+def test_json_text_at_the_depth_bound_is_parsed() -> None:
+    text = '{"drone": ' + "[" * 63 + "]" * 63 + "}"
+    result = load_text(text, "ok.json", "json")
+    assert result.model is not None and "nested" not in str(result.diagnostics)

@@ -110,3 +110,13 @@ def test_schema_patterns_end_at_the_end_of_the_text() -> None:
     assert not ecma_regex("^[a-z]+$").search("abc\n")
     assert ecma_regex("^[$a]+$").search("$a$")  # a $ inside a class is a character
     assert ecma_regex(r"^\$$").search("$")
+
+
+def test_decimal_literal_is_matched_whole() -> None:
+    """``canonical_decimal`` matched a prefix only: "2.0\\n" and "2.0 " passed."""
+    from modd_model.numbers import canonical_decimal
+
+    assert canonical_decimal("2.0") == "2.0"
+    for text in ("2.0\n", "2.0 ", " 2.0", "2.0x", "2..0"):
+        with pytest.raises(ValueError, match="not a decimal"):
+            canonical_decimal(text)

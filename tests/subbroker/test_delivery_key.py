@@ -18,7 +18,7 @@ import pytest
 from modd.ports import free_port
 from modd.subbroker.config import ConfigError, load_config
 from modd.subbroker.delivery import TcpDelivery
-from modd.subbroker.delivery_auth import GREETING, LABEL
+from modd.subbroker.delivery_auth import GREETING, LABEL, DeliveryKeyError, load_key
 
 
 def _config(tmp: Path, scenarios_dir: Path, delivery: str) -> Path:
@@ -72,3 +72,12 @@ def test_unreadable_configured_key_stops_the_subbroker_at_start(
                           env={**os.environ, "MODD_LINK_KEY": "link-key-for-tests"})
     assert proc.returncode == 2, proc.stderr
     assert "missing.key" in proc.stderr
+
+
+def test_a_fifo_as_the_delivery_key_is_refused_at_once(tmp_path: Path) -> None:
+    """A FIFO planted where the key file is: the open blocked until a writer
+    came (the SubBroker hung at start); now refused as not a regular file."""
+    fifo = tmp_path / "delivery.key"
+    os.mkfifo(fifo)
+    with pytest.raises(DeliveryKeyError, match="not a regular file"):
+        load_key(f"file:{fifo}")

@@ -220,3 +220,28 @@ def test_no_identity_but_the_subbroker_answers_or_forges(
     assert not [p for p in seen if b"999999" in p or b"forged" in p]
     for q in fakes:
         q.undeclare()
+
+
+def test_oversized_or_deep_queries_are_refused_before_parsing(
+        station: dict[str, Any], zenoh_client: Any) -> None:
+    """Held-out: a stolen ``backend`` credential sends 30,000-deep and
+    oversized documents to every queryable. Before, the parser's recursion
+    answered "internal error" (a traceback logged per query) and a 20 MB
+    query was parsed whole; now each is an ERROR naming the bound, and the
+    SubBroker keeps answering."""
+    backend = zenoh_client(station["port"], "backend")
+    assert wait_connected(backend)
+    deep = b"[" * 30_000 + b"]" * 30_000  # within the size bound, far past the recursion limit
+    big = json.dumps({"action": "list", "owner": "x" * 70_000}).encode()
+    for key in ("modd/usv/deploy", "modd/usv/subscribe", "modd/usv/backfill"):
+        for payload, words in ((deep, "nested"), (big, "bytes")):
+            replies = [json.loads(r.ok.payload.to_bytes())
+                       for r in backend.get(key, payload=payload, timeout=5) if r.ok is not None]
+            if key.endswith("deploy") and payload is big:  # within a deploy's bound
+                assert replies and replies[0]["status"] != "ACKED", replies
+                continue
+            assert len(replies) == 1, (key, replies)
+            assert replies[0]["status"] == "ERROR" and words in replies[0]["reason"], replies
+    listed = request(backend, "modd/usv/subscribe", {"action": "list", "owner": "x"})
+    assert listed["status"] == "OK"
+    assert "RecursionError" not in station["sb"].log()

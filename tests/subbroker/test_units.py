@@ -195,3 +195,19 @@ def test_dynamic_registry() -> None:
     assert "mine" not in str(run.fanout.routes())
     assert reg.handle({"action": "cancel", "subscriber": "mine"}, run)["status"] == "ERROR"
     assert reg.names() == [ok["subscriber"]]
+
+
+def test_queries_bounded_before_parsing() -> None:
+    from modd.subbroker.request import MAX_DEPLOY_BYTES, MAX_SMALL_BYTES, read_request
+
+    deep = b"[" * 100_000 + b"]" * 100_000
+    for payload, bound, words in ((deep, MAX_SMALL_BYTES * 10, "nested"),
+                                  (b" " * (MAX_SMALL_BYTES + 1), MAX_SMALL_BYTES, "bytes"),
+                                  (b"[1]", MAX_SMALL_BYTES, "object"),
+                                  (b"{", MAX_SMALL_BYTES, "not JSON")):
+        request, problem = read_request(payload, bound)
+        assert request is None and problem is not None and words in problem, problem
+    assert parse_request(deep, "usv").reply["status"] == "ERROR"
+    assert "nested" in parse_request(deep, "usv").reply["reason"]
+    huge = b" " * (MAX_DEPLOY_BYTES + 1)
+    assert "bytes" in parse_request(huge, "usv").reply["reason"]

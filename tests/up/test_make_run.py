@@ -88,6 +88,10 @@ def check_zenoh_is_closed(data: Path, zport: int, log: Path) -> None:
         assert (creds / name).stat().st_mode & 0o777 == 0o600, name
         if name.endswith(".cred"):
             assert read_credentials(creds / name).password not in out
+    # the data directory and the backend's log are the user's alone (the log
+    # was 0644 in a 0755 directory: requests, user names for every local user)
+    assert data.stat().st_mode & 0o077 == 0, oct(data.stat().st_mode)
+    assert (data / "backend.log").stat().st_mode & 0o077 == 0
     for who in (None, Credentials("viewer", "wrong")):
         with pytest.raises(ValueError, match="cannot open"):
             open_session(client_settings(endpoint, who))

@@ -15,7 +15,18 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from sqlalchemy.engine import make_url
+from sqlalchemy.exc import ArgumentError
+
 from .settings import DEFAULT_ZENOH_CONNECT, Settings, check_origin
+from .zenoh_session import read_secret
+
+
+def _has_password(url: str) -> bool:
+    try:
+        return bool(make_url(url).password)
+    except ArgumentError:
+        return False
 
 
 def parse_args(argv: list[str] | None = None) -> Settings:
@@ -58,6 +69,10 @@ def parse_args(argv: list[str] | None = None) -> Settings:
                    "--admin-password-file or $MODD_ADMIN_PASSWORD")
     p.add_argument("--allowed-host", action="append", default=[], metavar="NAME",
                    help="a Host name clients may use besides the loopback names (repeat)")
+    p.add_argument("--trusted-proxy", action="append", metavar="ADDRESS",
+                   default=[a for a in os.environ.get("MODD_TRUSTED_PROXIES", "").split() if a],
+                   help="address of a reverse proxy whose X-Forwarded-For/-Proto headers are "
+                   "believed (repeat; default $MODD_TRUSTED_PROXIES; none: they are ignored)")
     p.add_argument("--tile-origin", action="append", metavar="ORIGIN",
                    default=[o for o in os.environ.get("MODD_TILE_ORIGINS", "").split() if o],
                    help="an origin (https://host[:port]) the map may load tiles from (repeat; "
@@ -70,11 +85,15 @@ def parse_args(argv: list[str] | None = None) -> Settings:
             p.error(f"--tile-origin: {exc}")
     password = os.environ.get("MODD_ADMIN_PASSWORD")
     if a.admin_password_file is not None:
-        try:
-            password = a.admin_password_file.read_text().splitlines()[0]
-        except (OSError, IndexError) as exc:
+        try:  # a small regular file (not /dev/zero, not a link), like every secret
+            password = read_secret(a.admin_password_file, "admin password file").splitlines()[0]
+        except (OSError, ValueError, IndexError) as exc:
             p.error(f"--admin-password-file {a.admin_password_file}: cannot read a password "
                     f"({exc or 'empty file'})")
+    if a.database_url and a.database_url != os.environ.get("MODD_DATABASE_URL") \
+            and _has_password(a.database_url):
+        print("modd-backend: warning: --database-url shows the database password to every "
+              "local user (process list); use $MODD_DATABASE_URL", file=sys.stderr)
     if a.admin_password is not None:
         print("modd-backend: warning: --admin-password shows the password to every local "
               "user (process list); use --admin-password-file or $MODD_ADMIN_PASSWORD",
@@ -94,6 +113,7 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         deploy_timeout_s=a.deploy_timeout,
         initial_admin_password=password,
         allowed_hosts=tuple(a.allowed_host),
+        trusted_proxies=tuple(a.trusted_proxy),
         tile_origins=tuple(a.tile_origin),
         preload_milp=True,
         scene_port=None if a.scene_port < 0 else a.scene_port,
@@ -144,7 +164,6 @@ def main(argv: list[str] | None = None) -> int:
     import uvicorn
 
     from .app import create_app
-    from .wspacing import PacedWebSocketProtocol
 
     settings = parse_args(argv)
     if not _is_loopback(settings.host):
@@ -154,8 +173,20 @@ def main(argv: list[str] | None = None) -> int:
             print("modd-backend: warning: the Foxglove server has no authentication; "
                   "see docs/ecosystem.md", file=sys.stderr)
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="info",
-                log_config=log_config(), ws_max_size=1024 * 1024, ws=PacedWebSocketProtocol)
+                **server_options(settings))
     return 0
+
+
+def server_options(settings: Settings) -> dict[str, Any]:
+    """uvicorn's options for this service. X-Forwarded-* headers are read only
+    from ``trusted_proxies`` (uvicorn believes them from 127.0.0.1 by default,
+    so any local process could pose as any client address)."""
+    from .wspacing import PacedWebSocketProtocol
+
+    proxies = list(settings.trusted_proxies)
+    return {"log_config": log_config(), "ws_max_size": 1024 * 1024,
+            "ws": PacedWebSocketProtocol, "proxy_headers": bool(proxies),
+            "forwarded_allow_ips": proxies or None}
 
 
 if __name__ == "__main__":

@@ -61,13 +61,14 @@ def _add(z: zipfile.ZipFile, name: str, content: str, executable: bool) -> None:
 
 def content_disposition(filename: str) -> str:
     """``attachment`` with the name per RFC 6266: an ASCII fallback (quotes,
-    backslashes and controls replaced) and the exact name as ``filename*``.
+    slashes, backslashes and controls replaced: a file name, not a path) and
+    the exact name as ``filename*``.
 
     >>> content_disposition('a"b-températur.csv')
     'attachment; filename="a_b-temp_ratur.csv"; filename*=UTF-8\\'\\'a%22b-temp%C3%A9ratur.csv'
     """
     from urllib.parse import quote
 
-    fallback = "".join(c if 0x20 <= ord(c) < 0x7F and c not in '"\\;' else "_"
+    fallback = "".join(c if 0x20 <= ord(c) < 0x7F and c not in '"\\;/' else "_"
                        for c in filename)
     return f"attachment; filename=\"{fallback}\"; filename*=UTF-8''{quote(filename, safe='')}"

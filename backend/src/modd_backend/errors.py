@@ -6,10 +6,16 @@ editor gets diagnostics, the current revision or the denied parts as data.
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
 from fastapi import FastAPI, Request
-from fastapi.responses import JSONResponse
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse, Response
+
+#: Validation errors answered at most (a body of 150,000 unknown keys listed
+#: each, with its input echoed).
+MAX_VALIDATION_ERRORS = 50
 
 
 class ApiError(Exception):
@@ -33,5 +39,22 @@ def retry_later(status: int, detail: str, retry_after_s: float) -> ApiError:
                     retry_after_s=seconds)
 
 
+async def _invalid(_request: Request, exc: Exception) -> Response:
+    """FastAPI's 422 without echoing the input: a value it cannot write back
+    as JSON (``1e400``, a lone surrogate) made the answer itself fail with
+    500, and a large body was echoed whole. ``type``, ``loc``, ``msg`` and
+    ``ctx`` (as text) are kept; the text is ASCII JSON, so any key is safe."""
+    assert isinstance(exc, RequestValidationError)
+    errors = [{"type": str(e.get("type", "")), "loc": [x if isinstance(x, int) else str(x)
+                                                       for x in e.get("loc", ())],
+               "msg": str(e.get("msg", "")),
+               **({"ctx": {str(k): str(v) for k, v in e["ctx"].items()}}
+                  if isinstance(e.get("ctx"), dict) else {})}
+              for e in list(exc.errors())[:MAX_VALIDATION_ERRORS]]
+    body = json.dumps({"detail": errors}, ensure_ascii=True)
+    return Response(body, status_code=422, media_type="application/json")
+
+
 def install(app: FastAPI) -> None:
     app.add_exception_handler(ApiError, _handle)
+    app.add_exception_handler(RequestValidationError, _invalid)

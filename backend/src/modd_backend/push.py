@@ -24,6 +24,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .zenoh_session import read_secret
+
 
 class PushError(Exception):
     """The workbench refused or could not be reached; the message says which step."""
@@ -132,7 +134,10 @@ def deploy(client: Client, project_id: int, revision: int, wait_s: float) -> dic
 
 def _password(args: argparse.Namespace) -> str:
     if args.password_file:
-        return Path(args.password_file).read_text().strip()
+        try:  # a small regular file, not a link (docs/security.md)
+            return read_secret(Path(args.password_file), "password file").strip()
+        except (OSError, ValueError) as exc:
+            raise PushError(f"--password-file {args.password_file}: {exc}") from None
     if pw := os.environ.get("MODD_PASSWORD"):
         return pw
     raise PushError("no password: set MODD_PASSWORD or give --password-file")

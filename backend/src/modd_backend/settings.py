@@ -15,6 +15,8 @@ from pathlib import Path
 DEFAULT_ZENOH_CONNECT = ("tcp/127.0.0.1:7447",)
 
 
+#: A Host header: a name or a bracketed IPv6 address, then at most a port.
+_HOST = re.compile(r"(?:\[(?P<v6>[0-9a-f:.]+)\]|(?P<name>[a-z0-9_.-]+))(?::[0-9]{1,5})?")
 _ORIGIN = re.compile(r"https?://[A-Za-z0-9.-]+(:[0-9]{1,5})?|https?://\[[0-9A-Fa-f:.]+\](:[0-9]{1,5})?")
 
 
@@ -74,6 +76,10 @@ class Settings:
     #: Host names (or host:port) requests may name besides the loopback names
     #: (localhost, 127.0.0.1, ::1) and ``host``; "*" allows any (not advised).
     allowed_hosts: tuple[str, ...] = field(default_factory=tuple)
+    #: Addresses of reverse proxies whose X-Forwarded-For/-Proto are believed.
+    #: None by default: any local process could otherwise name any client
+    #: address (and escape the per-address login throttling).
+    trusted_proxies: tuple[str, ...] = field(default_factory=tuple)
     #: Failed logins allowed per account / per client address within the window.
     login_limit_account: int = 10
     login_limit_address: int = 50
@@ -99,10 +105,10 @@ class Settings:
         if "*" in self.allowed_hosts:
             return True
         host = host_header.strip().lower()
-        if host.startswith("["):  # [::1]:8000
-            name = host[1:].split("]", 1)[0]
-        else:
-            name = host.rsplit(":", 1)[0] if host.count(":") == 1 else host
+        parts = _HOST.fullmatch(host)  # a name or [address], then at most a port
+        if parts is None:
+            return False
+        name = parts["v6"] or parts["name"]
         names = {"localhost", "127.0.0.1", "::1", self.host.lower()}
         names |= {h.lower() for h in self.allowed_hosts}
         return name in names or host in names or name.endswith(".localhost")

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, Literal, TextIO
 
 from .diagnostics import Diagnostic, Location, ModelError, pointer_parent
+from .jsondepth import MAX_DEPTH, json_depth
 from .parser import SourceMap, parse_lenient
 from .printer import print_model
 from .validate import validate
@@ -66,6 +67,11 @@ def load_text(text: str, filename: str = "<text>", fmt: Format = "modd") -> Load
     lines = text.splitlines()
     smap: SourceMap = {}
     if fmt == "json":
+        depth = json_depth(text.encode("utf-8", "surrogatepass"))
+        if depth > MAX_DEPTH:
+            return LoadResult(None, [Diagnostic(
+                f"invalid JSON: nested {depth} levels deep; at most {MAX_DEPTH} are read",
+                "", "error", Location(filename, 1, 1), lines[0][:200] if lines else None)], {})
         try:
             doc: Any = json.loads(text)
         except json.JSONDecodeError as exc:

@@ -32,7 +32,7 @@ def canonical_decimal(text: str) -> str:
     >>> canonical_decimal("4.0E-2")
     '0.04'
     """
-    if not _LITERAL.match(text):
+    if not _LITERAL.fullmatch(text):  # the whole text: no trailing newline or blank
         raise ValueError(f"not a decimal number: {text!r}")
     try:
         d = Decimal(text)

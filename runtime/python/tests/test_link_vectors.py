@@ -8,7 +8,7 @@ from typing import Any
 
 import pytest
 from modd.link import codec
-from modd.link.auth import client_proof, server_proof
+from modd.link.auth import client_proof, resolve_key, server_proof
 from modd.link.frames import (
     Aggregation,
     Auth,
@@ -141,3 +141,19 @@ def test_vectors_are_current() -> None:
         gen.main()
         for p in Path(d).glob("*.json"):
             assert p.read_text() == (VECTORS / p.name).read_text(), p.name
+
+
+def test_link_key_file_is_a_small_regular_file(tmp_path: Path) -> None:
+    """``file:/dev/zero`` was read without a bound (MemoryError); a link to
+    the key, or a key of more than 64 KiB, is refused too."""
+    key = tmp_path / "link.key"
+    key.write_text("secret\n")
+    key.chmod(0o600)
+    assert resolve_key(f"file:{key}") == b"secret"
+    (tmp_path / "via-link").symlink_to(key)
+    big = tmp_path / "big.key"
+    big.write_bytes(b"k" * (64 * 1024 + 1))
+    for ref in ("file:/dev/zero", f"file:{tmp_path / 'via-link'}", f"file:{big}",
+                f"file:{tmp_path}"):
+        with pytest.raises(ValueError, match="link key"):
+            resolve_key(ref)

@@ -65,7 +65,8 @@ def download(
 
 @router.get("/{project_id}/foxglove-layout", responses={
     200: {"content": {"application/json": {}}},
-    403: {"description": "not a scientist"}, 404: {"description": "no such project or revision"}})
+    403: {"description": "not a scientist"}, 404: {"description": "no such project or revision"},
+    422: {"description": "the revision has errors"}})
 def foxglove_layout_download(
     project_id: Id,
     db: DbDep,
@@ -79,8 +80,13 @@ def foxglove_layout_download(
         raise ApiError(403, "the Foxglove layout is a scientist's download")
     project = get_project(db, project_id)
     version = get_version(db, project_id, revision)
+    model = model_of(version)
+    errors = [d for d in validate(model) if d.severity == "error"]
+    if errors:  # an invalid revision may lack any part the layout reads
+        raise ApiError(422, f"revision {version.revision} has errors: fix them first",
+                       diagnostics=diagnostics_json(errors))
     safe = re.sub(r"[^A-Za-z0-9_.-]", "_", project.name)
     name = f"{safe}-r{version.revision}-foxglove-layout"
-    body = json.dumps(foxglove_layout(model_of(version)), indent=1).encode()
+    body = json.dumps(foxglove_layout(model), indent=1).encode()
     return Response(body, media_type="application/json",
                     headers={"Content-Disposition": f'attachment; filename="{name}.json"'})

@@ -22,6 +22,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Path, WebSocket, WebSocketDisconnect
 from modd_contracts.keys import check_name
+from modd_model.jsondepth import loads_bounded
 from pydantic import BaseModel, Field
 from starlette.concurrency import run_in_threadpool
 
@@ -37,7 +38,6 @@ from ..deps import (
     ws_state,
     zenoh_session_of,
 )
-from ..guards import loads_bounded
 from ..live import CapReached, LiveRelay, dynamic_request
 from ..project_events import ProjectWatches
 from ..roles import Role

@@ -15,7 +15,6 @@ import hashlib
 import hmac
 import os
 import socket
-from pathlib import Path
 
 from modd.link import codec
 from modd.link.frames import (
@@ -28,6 +27,7 @@ from modd.link.frames import (
     Hello,
     ProtocolError,
 )
+from modd.zenoh_auth import read_secret
 
 CLIENT_LABEL = b"MODD1C"
 SERVER_LABEL = b"MODD1S"
@@ -49,7 +49,8 @@ def resolve_key(reference: str) -> bytes:
             raise ValueError(f"key reference {reference}: environment variable not set")
         key = value.encode()
     elif reference.startswith("file:"):
-        key = Path(reference[5:]).read_bytes().rstrip(b"\r\n")
+        # a regular file of at most 64 KiB, no final symlink (docs/security.md)
+        key = read_secret(reference[5:], "link key").rstrip(b"\r\n")
     else:
         raise ValueError(f"key reference {reference!r} is neither env:NAME nor file:PATH")
     if not key:

@@ -15,11 +15,11 @@ backfill.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from .backfill import BackfillManager, Job
+from .request import MAX_SMALL_BYTES, read_request
 
 if TYPE_CHECKING:
     from .running import Running
@@ -47,12 +47,9 @@ def _int(request: dict[str, Any], name: str) -> int | None:
 def handle(payload: bytes, manager: BackfillManager, running: Callable[[], Running | None],
            covered_until: Callable[[Running], int],
            owner_of: Callable[[str], str | None] = lambda _name: None) -> dict[str, Any]:
-    try:
-        request = json.loads(payload or b"{}")
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        return {"status": "ERROR", "reason": f"the request is not JSON: {exc}"}
-    if not isinstance(request, dict):
-        return {"status": "ERROR", "reason": "the request must be a JSON object"}
+    request, problem = read_request(payload, MAX_SMALL_BYTES)
+    if request is None:
+        return {"status": "ERROR", "reason": problem}
     op = request.get("op", "start")
     try:
         if op in ("progress", "cancel", "cap"):

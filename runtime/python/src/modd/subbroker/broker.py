@@ -40,6 +40,7 @@ from .keys import backfill_key, deploy_key, subscribe_key
 from .link import ConfigRejected, LinkDown
 from .planning import accepted_delay_ms, config_for, plan_within
 from .record import BaseRecord
+from .request import MAX_DEPLOY_BYTES, MAX_SMALL_BYTES, read_request
 from .running import Running
 from .status import StatusPublisher
 from .transport import link_client
@@ -334,12 +335,9 @@ class SubBroker:
             query.drop()  # type: ignore[no-untyped-call]
 
     def _subscribe(self, payload: bytes) -> dict[str, Any]:
-        try:
-            request = json.loads(payload or b"{}")
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            return {"status": "ERROR", "reason": f"the request is not JSON: {exc}"}
-        if not isinstance(request, dict):
-            return {"status": "ERROR", "reason": "the request must be a JSON object"}
+        request, problem = read_request(payload, MAX_SMALL_BYTES)
+        if request is None:
+            return {"status": "ERROR", "reason": problem}
         reply = self.dynamic.handle(request, self._running)
         if reply["status"] == "CANCELLED" and self._zenoh is not None:
             self._zenoh.forget(reply["subscriber"])
@@ -374,11 +372,8 @@ class SubBroker:
         running = self._running
         if running is None or not running.meta.nonce:
             return None
-        try:
-            request = json.loads(payload)
-        except (ValueError, UnicodeDecodeError):
-            return None
-        if not isinstance(request, dict) or request.get("nonce") != running.meta.nonce:
+        request, _ = read_request(payload, MAX_DEPLOY_BYTES)
+        if request is None or request.get("nonce") != running.meta.nonce:
             return None
         sig = request.get("signature")
         if not isinstance(sig, str) or not hmac.compare_digest(

@@ -46,7 +46,8 @@ def default_key_path() -> Path:
 
 def _read_key_file(path: Path) -> bytes:
     try:
-        fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC | os.O_NOFOLLOW)
+        # no final link; O_NONBLOCK: a FIFO planted as the key must not block the open
+        fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC | os.O_NOFOLLOW | os.O_NONBLOCK)
     except OSError as exc:
         raise DeliveryKeyError(f"delivery key file:{path}: {exc.strerror}") from exc
     with os.fdopen(fd, "rb") as f:

@@ -16,6 +16,8 @@ from typing import Any, Literal
 
 from modd_model import load_text
 
+from .request import MAX_DEPLOY_BYTES, read_request
+
 DEFAULT_TIMEOUT_S = 10.0
 
 
@@ -42,12 +44,9 @@ def parse_request(payload: bytes, drone: str,
     optional ``"timeout_s"``. ``verify`` (the SubBroker's signature and nonce
     check, modd_model.signing) gives the reason to refuse it, UNAUTHORISED,
     before anything else is read. Never raises for bad input."""
-    try:
-        request = json.loads(payload)
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        return _error("ERROR", f"the request is not JSON: {exc}")
-    if not isinstance(request, dict):
-        return _error("ERROR", "the request must be a JSON object")
+    request, problem = read_request(payload or b"null", MAX_DEPLOY_BYTES)
+    if request is None:
+        return _error("ERROR", problem or "unreadable request")
     if verify is not None and (refused := verify(request)) is not None:
         return _error("UNAUTHORISED", refused)
     timeout = request.get("timeout_s", DEFAULT_TIMEOUT_S)
@@ -76,6 +75,6 @@ def parse_request(payload: bytes, drone: str,
         return _error("REJECTED", reason)
     if not result.model.get("subscribers"):
         return _error("REJECTED", "the model has no subscriptions: nothing to send over the link")
-    meta = {k: request[k] for k in ("project_id", "revision", "nonce", "deployed_by")
-            if k in request}
+    kept = ("project_id", "revision", "nonce", "deployed_by")
+    meta: dict[str, Any] = {k: request[k] for k in kept if k in request}
     return DeployRequest(result.model, float(timeout), warnings=diagnostics, fields=meta)
