@@ -180,7 +180,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await view("Operator");
       await panel("Deploy");
       await expectText(page.getByTestId("other-project"), /The drone runs project scenario1/, 15000);
-      await expectText(page.getByRole("list", { name: "Model changes" }), /subscriber sub_temp added: usv\.ctd\.water_temperature AVERAGE every 1\.0 s/);
+      await expectText(page.getByRole("list", { name: "Model changes" }), /subscriber sub_temp added: usv\.ctd\.water_temperature \(°C\) AVERAGE every 1\.0 s/);
       await expandShot("deploy-other-project");
       await page.getByRole("button", { name: "Deploy revision 1" }).click();
       await expectText(page.getByTestId("deploy-result"), /Acked/, 30000);
@@ -405,7 +405,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       // aggregated by the test: the oracle), backfilled ones marked.
       await chart.getByRole("button", { name: "Show values" }).click();
       const table = chart.getByRole("table", { name: "Values of sub_5" });
-      const [, topic, aggregation, periodText] = /sub_5: (\S+) ([A-Z]+) every (\S+) s/.exec((await table.getByTestId("values-caption").textContent()) ?? "") ?? [];
+      const [, topic, aggregation, periodText] = /sub_5: (\S+)(?: \([^)]*\))? ([A-Z]+) every (\S+) s/.exec((await table.getByTestId("values-caption").textContent()) ?? "") ?? [];
       if (!topic) throw new Error("the table's caption does not name sub_5's topic, aggregation and period");
       const period = Number(periodText);
       const readRows = () => table.locator("tbody tr[data-end]").evaluateAll((trs) => trs.map((tr) => ({

@@ -9,6 +9,7 @@
 import { useEffect, useId, useRef, useState } from "react";
 import { checkField, type FieldSpec } from "../../core/schemaForm";
 import type { TopicRef } from "../../core/query";
+import { topicRefLabel } from "../../core/topicLabel";
 import { canonicalDecimal, sameMeaning } from "../../core/canonical";
 
 /** Pause in typing after which the field is applied (the plan follows). */
@@ -90,7 +91,7 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
         <select id={id} value={toText(value)} disabled={readOnly} aria-invalid={invalid} aria-describedby={describedBy}
           onChange={(e) => onCommit(e.target.value)}>
           <option value="">(choose a topic)</option>
-          {topics.map((t) => <option key={t.id} value={t.name}>{t.name}</option>)}
+          {topics.map((t) => <option key={t.id} value={t.name}>{topicRefLabel(t)}</option>)}
         </select>
       );
       break;
@@ -103,7 +104,7 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
             <label key={t.id}>
               <input type="checkbox" checked={chosen.has(t.name)}
                 onChange={(e) => onCommit(e.target.checked ? [...chosen, t.name] : [...chosen].filter((x) => x !== t.name))} />
-              {t.name}
+              {topicRefLabel(t)}
             </label>
           ))}
         </fieldset>
