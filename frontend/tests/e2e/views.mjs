@@ -287,7 +287,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await waitUntil(async () => (await kept()) <= 1, 5000, async () => `${await kept()} points kept after seeking to the start`);
     }],
 
-    ["archive playback on the map: the survey's track up to the playback time", async () => {
+    ["archive playback on the map: the survey's track up to the playback time, the map beside the charts in view at 1280×800 and 1920×1080", async () => {
       if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
       await panel("Archives");
       const files = page.getByRole("table", { name: "Archive files" });
@@ -306,6 +306,32 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await expectVisible(controls, 20000);
       const map = page.getByTestId("playback-map-canvas");
       await expectVisible(map);
+      // Beside (or above) the charts, in view as soon as the range is loaded, without scrolling,
+      // at 1280×800 and at 1920×1080: the whole canvas is on screen, and it is what is there.
+      const inView = async () => {
+        const vp = page.viewportSize();
+        const m = await map.boundingBox();
+        const c = await page.locator(".playback-section .live-chart").first().boundingBox();
+        if (!m || !c) throw new Error("no playback map or chart");
+        const where = `the playback map at y ${m.y.toFixed(0)}–${(m.y + m.height).toFixed(0)} in a ${vp.width}×${vp.height} window`;
+        if (m.y < 0 || m.y + m.height > vp.height + 1) throw new Error(`${where}: not in view without scrolling`);
+        if (m.y > c.y + 1) throw new Error(`${where}: below the first chart (y ${c.y.toFixed(0)})`);
+        const corners = [[m.x + 2, m.y + 2], [m.x + m.width - 2, m.y + m.height - 2]];
+        for (const [x, y] of corners) {
+          if (!(await map.evaluate((el, [px, py]) => document.elementFromPoint(px, py) === el, [x, y]))) throw new Error(`${where}: covered at (${x}, ${y})`);
+        }
+      };
+      await inView();
+      await page.setViewportSize({ width: 1920, height: 1080 });
+      try {
+        await form.getByRole("button", { name: "Load for playback" }).click();
+        await page.waitForTimeout(500);
+        await expectVisible(map, 20000);
+        await inView();
+      } finally {
+        await page.setViewportSize({ width: 1280, height: 800 });
+      }
+      await page.waitForTimeout(300);
       const fixes = async () => Number(await map.getAttribute("data-points"));
       const seek = controls.getByLabel("Seek");
       const [min, max] = [Number(await seek.getAttribute("min")), Number(await seek.getAttribute("max"))];

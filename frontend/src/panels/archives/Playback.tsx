@@ -48,9 +48,9 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
   const [win, setWin] = useState<ViewWindow>(DEFAULT_WINDOW);
   const position = positionTopics(file.topics.map((tp) => tp.topic));
   const track = position.lat && position.lon ? { lat: position.lat, lon: position.lon } : null;
-  const section = useRef<HTMLElement>(null);
+  const controls = useRef<HTMLDivElement>(null);
   // Loaded: the controls, the map and the first charts come into view together.
-  useEffect(() => { if (source) section.current?.scrollIntoView({ block: "start" }); }, [source]);
+  useEffect(() => { if (source) controls.current?.scrollIntoView({ block: "start" }); }, [source]);
   const whole: ViewWindow = useMemo(() => (source ? { follow: false, from: source.start, to: Math.max(source.end, source.start + 1) } : DEFAULT_WINDOW), [source]);
 
   const load = async (e: React.FormEvent) => {
@@ -76,7 +76,7 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
   const toggle = (topic: string) => setPicked((p) => (p.includes(topic) ? p.filter((x) => x !== topic) : [...p, topic]));
 
   return (
-    <section ref={section} className="playback-section" aria-label="Archive playback">
+    <section className="playback-section" aria-label="Archive playback">
       <form onSubmit={load} className="archive-form" aria-label="Play back an archive range">
         <strong>Play back</strong>
         {file.topics.map((tp) => (
@@ -90,7 +90,7 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
       </form>
       {source && (
         <>
-          <div className="playback" role="group" aria-label="Playback controls">
+          <div ref={controls} className="playback" role="group" aria-label="Playback controls">
             <button onClick={() => (playing ? source.pause() : source.play(rate))}>{playing ? "Pause" : "Play"}</button>
             <input type="range" aria-label="Seek" min={source.start} max={source.end} step={(source.end - source.start) / 1000 || 1}
               value={t} onChange={(e) => source.seek(Number(e.target.value))} />
