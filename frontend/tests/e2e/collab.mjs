@@ -325,6 +325,24 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await page.waitForTimeout(500);
       const again = await underMinimap();
       if (again.length) throw new Error(`after zoom to fit, under the minimap: ${again.join(", ")}`);
+      // Names legible (11 px on screen, 10.5 at least) at fit-to-screen and zoomed out to about half.
+      const legible = async (what) => {
+        const r = await page.evaluate(() => {
+          const zoom = new DOMMatrix(getComputedStyle(document.querySelector(".react-flow__viewport")).transform).a;
+          const px = [...document.querySelectorAll(".react-flow__node .node-label")].map((l) => parseFloat(getComputedStyle(l).fontSize) * zoom);
+          return { zoom, min: Math.min(...px) };
+        });
+        if (!(r.min >= 10.5)) throw new Error(`${what}: names drawn at ${r.min.toFixed(1)} px on screen (zoom ${r.zoom.toFixed(2)})`);
+        return r.zoom;
+      };
+      await legible("at fit-to-screen");
+      for (let i = 0; i < 10 && (await legible("zooming out")) > 0.55; i++) {
+        await page.locator(".react-flow__controls-zoomout").click();
+        await page.waitForTimeout(250);
+      }
+      await legible("zoomed out to about half");
+      await page.getByRole("button", { name: "Zoom to fit" }).click();
+      await page.waitForTimeout(500);
     }],
 
     ["new project from a template, with a first step per role view", async () => {

@@ -44,6 +44,8 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
   const id = useId();
   const [text, setText] = useState(toText(value));
   const focused = useRef(false);
+  // Out of focus the field shows the model's value: an edit the view refused (or undone) does not stay on screen.
+  const [editing, setEditing] = useState(false);
   const timer = useRef<ReturnType<typeof setTimeout> | null>(null);
   const latest = useRef({ text, value, onCommit });
   latest.current = { text, value, onCommit };
@@ -114,13 +116,13 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
     default:
       control = (
         <>
-          <input id={id} value={text} readOnly={readOnly} aria-invalid={invalid} aria-describedby={describedBy}
+          <input id={id} value={editing ? text : toText(value)} readOnly={readOnly} aria-invalid={invalid} aria-describedby={describedBy}
             list={spec.input === "enumOrText" ? `${id}-options` : undefined}
             inputMode={spec.input === "integer" || spec.input === "decimal" || spec.input === "number" ? "decimal" : undefined}
             placeholder={spec.default !== undefined ? String(spec.default) : undefined}
             onChange={(e) => typed(e.target.value)}
-            onFocus={() => { focused.current = true; }}
-            onBlur={() => { focused.current = false; commit(); }}
+            onFocus={() => { focused.current = true; setEditing(true); setText(toText(value)); }}
+            onBlur={() => { focused.current = false; setEditing(false); commit(); }}
             onKeyDown={(e) => { if (e.key === "Enter") commit(); if (e.key === "Escape") { if (timer.current) clearTimeout(timer.current); setText(toText(value)); } }} />
           {spec.input === "enumOrText" && (
             <datalist id={`${id}-options`}>{spec.options?.map((o) => <option key={o} value={o} />)}</datalist>
