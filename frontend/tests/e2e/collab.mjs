@@ -184,7 +184,7 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await expectText(page.locator(".topbar .revision"), /^r6(?!.*unsaved)/);
     }],
 
-    ["collab: inspector — applies as you type, and the first click after a rename is kept", async () => {
+    ["collab: inspector — applies as you type, and the first click after a rename (accepted or refused) is kept", async () => {
       await page.getByRole("tab", { name: "Scientist", exact: true }).click();
       await select(page, "sub:sub_4");
       const period = field(page, "periodS");
@@ -219,6 +219,19 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await page.mouse.up();
       await node(page, "sub:renamed_3_xyz").waitFor({ timeout: 5000 });
       await expectText(inspector(page).locator("h2").first(), /sub_2$/);
+      // A rename the view refuses (the integrator's sensor rename would rewrite the subscriptions):
+      // its notice, shown on blur, must not move the diagram under the click that caused the blur.
+      await page.getByRole("tab", { name: "Sensor integrator", exact: true }).click();
+      await select(page, "sensor:accelerometer");
+      await field(page, "name").fill("imu");
+      await node(page, "sub:sub_2").click();
+      await expectText(page.locator(".notice"), /which the integrator view may not change/);
+      await expectText(inspector(page).locator("h2").first(), /sub_2$/);
+      await select(page, "sensor:accelerometer");
+      const shown = await field(page, "name").inputValue();
+      if (shown !== "accelerometer") throw new Error(`the refused name stays in the field: "${shown}"`);
+      await page.locator(".notice").getByRole("button", { name: "Dismiss" }).click();
+      await page.getByRole("tab", { name: "Scientist", exact: true }).click();
       await save(page);
       await expectText(page.locator(".topbar .revision"), /^r7(?!.*unsaved)/);
     }],
