@@ -55,6 +55,8 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await expectText(changes, /subscriber sub_7: period 0\.25 s → 0\.5 s/);
       const consequences = page.getByRole("table", { name: "Plan consequences" });
       await expectText(consequences, /sub_7 delay.*→/);
+      // A buffer named by its topic as everywhere (core/topicLabel): full name and unit.
+      await expectText(consequences, /usv\.accelerometer\.accel_z \(m\/s²\) buffer/);
       await expandShot("deploy-diff");
       // A history row: review it (no difference with what runs) and redeploy it (a rollback).
       await page.getByRole("button", { name: /^Review revision 2 / }).first().click();

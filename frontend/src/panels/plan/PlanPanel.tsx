@@ -102,7 +102,7 @@ export default function PlanPanel() {
   if (!result) return <div className="panel-body" role="status">{busy ? "Planning…" : "No plan yet."}</div>;
   const plan = result.plan;
   const errors = diagnosticsInWords(model, result.diagnostics.filter((d) => d.severity === "error"));
-  const changes = plan ? planChanges(previous ?? null, plan) : [];
+  const changes = plan ? planChanges(previous ?? null, plan, (t) => topicLabel(model, t)) : [];
   const shown = plan ?? lastValid ?? null;
   return (
     <div className="panel-body">
