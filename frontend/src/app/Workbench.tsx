@@ -101,7 +101,6 @@ export function Workbench({ project, user, onLogout, onProjects, route }: Props)
         <LivePlan />
         <div className="workbench">
           <TopBar user={user} onLogout={onLogout} onProjects={onProjects} />
-          <Notice />
           <ConflictBanner />
           <RemoteSaveNotice />
           <DraftNotice />
@@ -110,6 +109,9 @@ export function Workbench({ project, user, onLogout, onProjects, route }: Props)
           <div className="main">
             <Palette />
             <div className="center">
+              {/* Over the canvas, not above it: a refused edit (told on blur) must not move the
+                  diagram under a click already under way, or that click is lost. */}
+              <Notice />
               <Canvas />
               <Dock />
             </div>

@@ -14,7 +14,7 @@ describe("describeChanges", () => {
     after.subscribers[6].periodS = "0.5";
     after.subscribers.splice(0, 1);
     const texts = describeChanges(before, after).map((c) => c.text);
-    expect(texts).toContain("subscriber sub_8 added: usv.accelerometer.accel_x AVERAGE every 5 s");
+    expect(texts).toContain("subscriber sub_8 added: usv.accelerometer.accel_x (m/s²) AVERAGE every 5 s");
     expect(texts).toContain("subscriber sub_7: period 0.25 s → 0.5 s");
     expect(texts.some((t) => /^subscriber sub_1 removed/.test(t))).toBe(true);
     expect(texts.join("\n")).not.toMatch(/\/subscribers/);
@@ -22,7 +22,7 @@ describe("describeChanges", () => {
 
   it("lists each element once when nothing is deployed", () => {
     const texts = describeChanges({}, scenario1()).map((c) => c.text);
-    expect(texts).toContain("sensor accelerometer added: accel_x (METER_PER_SECOND_SQUARED), accel_y (METER_PER_SECOND_SQUARED), accel_z (METER_PER_SECOND_SQUARED)");
+    expect(texts).toContain("sensor accelerometer added: usv.accelerometer.accel_x (m/s²), usv.accelerometer.accel_y (m/s²), usv.accelerometer.accel_z (m/s²)");
     expect(texts.filter((t) => t.startsWith("subscriber "))).toHaveLength(7);
   });
 

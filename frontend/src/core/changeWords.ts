@@ -12,6 +12,9 @@
  */
 import { diffModels, type Change } from "./diff";
 import type { ModdModel, Publisher, Sensor, Subscriber } from "./model.gen";
+import { subscriptionLabel, topicLabel } from "./topicLabel";
+import { unitLabel } from "./chartData";
+import { topicName } from "./ids";
 
 export interface ChangeSentence {
   op: Change["op"];
@@ -41,23 +44,30 @@ function fieldValue(field: string, v: unknown): string {
   return String(v);
 }
 
-export function subscriberWords(s: Subscriber): string {
-  return `${s.topic || "(no topic)"} ${s.aggregation} every ${seconds(s.periodS)}`;
+/** The models a sentence takes units from (core/topicLabel): the newer first. */
+type Models = ReadonlyArray<ModdModel | undefined>;
+
+export function subscriberWords(s: Subscriber, models: Models = []): string {
+  return subscriptionLabel(models, s);
 }
 
-function publisherWords(p: Publisher): string {
-  return `every ${seconds(p.periodS)}, ${p.topics.length} topic(s): ${p.topics.join(", ")}`;
+function publisherWords(p: Publisher, models: Models): string {
+  return `every ${seconds(p.periodS)}, ${p.topics.length} topic(s): ${p.topics.map((t) => topicLabel(models, t)).join(", ")}`;
 }
 
-function sensorWords(s: Sensor): string {
-  return s.variables.map((v) => `${v.name} (${v.unit})`).join(", ");
+function sensorWords(s: Sensor, models: Models): string {
+  const drone = models.find((m) => m)?.drone.name;
+  return s.variables.map((v) => {
+    const unit = unitLabel(v.unit);
+    return drone ? topicLabel(models, topicName(drone, s.name, v.name)) : unit ? `${v.name} (${unit})` : v.name;
+  }).join(", ");
 }
 
-function whole(kind: string, value: unknown): string {
-  if (kind === "subscriber") return subscriberWords(value as Subscriber);
-  if (kind === "publisher") return publisherWords(value as Publisher);
-  if (kind === "sensor") return sensorWords(value as Sensor);
-  if (kind === "variable") return String((value as { unit?: string }).unit ?? "");
+function whole(kind: string, value: unknown, models: Models = []): string {
+  if (kind === "subscriber") return subscriberWords(value as Subscriber, models);
+  if (kind === "publisher") return publisherWords(value as Publisher, models);
+  if (kind === "sensor") return sensorWords(value as Sensor, models);
+  if (kind === "variable") return unitLabel((value as { unit?: string }).unit) || String((value as { unit?: string }).unit ?? "");
   return fieldValue("", value);
 }
 
@@ -97,26 +107,28 @@ export function valueInWords(pointer: string, v: unknown): string {
   return fieldValue(field[field.length - 1] ?? "", v);
 }
 
-/** One sentence for one change. */
-export function sentence(c: Change): ChangeSentence {
+/** One sentence for one change; topics are named with their units from `models` (the newer first). */
+export function sentence(c: Change, models: Models = []): ChangeSentence {
   const { kind, element, field } = locate(c.pointer);
   const name = field.map((f) => FIELD_WORDS[f] ?? f).join(" ");
   let text: string;
-  if (field.length === 0 && c.op === "add") text = `${element} added${whole(kind, c.after) ? `: ${whole(kind, c.after)}` : ""}`;
-  else if (field.length === 0 && c.op === "remove") text = `${element} removed (was ${whole(kind, c.before)})`;
+  if (field.length === 0 && c.op === "add") text = `${element} added${whole(kind, c.after, models) ? `: ${whole(kind, c.after, models)}` : ""}`;
+  else if (field.length === 0 && c.op === "remove") text = `${element} removed (was ${whole(kind, c.before, models)})`;
   else if (field.length === 0) text = `${element}: ${fieldValue("", c.before)} → ${fieldValue("", c.after)}`;
   else if (field[0] === "topics" && Array.isArray(c.before) && Array.isArray(c.after)) {
     const before = new Set(c.before.map(String));
     const after = new Set(c.after.map(String));
     const added = [...after].filter((t) => !before.has(t));
     const removed = [...before].filter((t) => !after.has(t));
-    text = `${element}: ${[added.length ? `publishes ${added.join(", ")}` : "", removed.length ? `no longer ${removed.join(", ")}` : ""]
+    const named = (ts: string[]) => ts.map((t) => topicLabel(models, t)).join(", ");
+    text = `${element}: ${[added.length ? `publishes ${named(added)}` : "", removed.length ? `no longer ${named(removed)}` : ""]
       .filter(Boolean).join("; ") || "topics reordered"}`;
   } else {
     const last = field[field.length - 1];
-    text = c.op === "add" ? `${element}: ${name} set to ${fieldValue(last, c.after)}`
-      : c.op === "remove" ? `${element}: ${name} ${fieldValue(last, c.before)} removed`
-        : `${element}: ${name} ${fieldValue(last, c.before)} → ${fieldValue(last, c.after)}`;
+    const value = (v: unknown) => (last === "topic" && typeof v === "string" && v ? topicLabel(models, v) : fieldValue(last, v));
+    text = c.op === "add" ? `${element}: ${name} set to ${value(c.after)}`
+      : c.op === "remove" ? `${element}: ${name} ${value(c.before)} removed`
+        : `${element}: ${name} ${value(c.before)} → ${value(c.after)}`;
   }
   return { op: c.op, element, text, pointer: c.pointer };
 }
@@ -133,5 +145,6 @@ export function describeChanges(before: ModdModel | Record<string, never>, after
     publishers: [], subscribers: [],
   };
   const changes = diffModels(base, after);
-  return changes.map(sentence).sort((a, b) => rank(a) - rank(b) || a.element.localeCompare(b.element, undefined, { numeric: true }));
+  const models = [after, "drone" in before ? (before as ModdModel) : undefined];
+  return changes.map((c) => sentence(c, models)).sort((a, b) => rank(a) - rank(b) || a.element.localeCompare(b.element, undefined, { numeric: true }));
 }

@@ -18,6 +18,7 @@ import {
   publisherId, sensorId, subscriberId,
 } from "./ids";
 import { listTopics } from "./query";
+import { subscriptionLabel, topicLabel } from "./topicLabel";
 
 export type EdgeKind = "carries" | "measures" | "publishes" | "subscribes" | "link";
 
@@ -87,7 +88,7 @@ export function modelToGraph(model: ModdModel): Graph {
   }
   const byName = new Map<string, string>();
   for (const t of listTopics(model)) {
-    add(t.id, "topic", t.variable.name, `${t.variable.unit} · ${t.variable.type ?? "float32"}`);
+    add(t.id, "topic", t.variable.name, `${topicLabel(model, t.name)} · ${t.variable.type ?? "float32"}`);
     byName.set(t.name, t.id);
     const sid = sensorId(t.sensor.name);
     edges.push({ id: edgeId("measures", sid, t.id), kind: "measures", source: sid, target: t.id });
@@ -102,7 +103,7 @@ export function modelToGraph(model: ModdModel): Graph {
   }
   for (const s of model.subscribers) {
     const sid = subscriberId(s.name);
-    add(sid, "subscriber", s.name, `${s.aggregation} every ${s.periodS} s`);
+    add(sid, "subscriber", s.name, subscriptionLabel(model, s));
     const tid = byName.get(s.topic);
     if (tid) edges.push({ id: edgeId("subscribes", tid, sid), kind: "subscribes", source: tid, target: sid });
   }

@@ -21,23 +21,26 @@ export interface PlanChange {
 
 const secs = (s: string | number | null | undefined) => (s === null || s === undefined ? "—" : `${s} s`);
 
+/** How a figure names a topic (core/topicLabel.ts gives the workbench's one form); the bare name by default. */
+export type TopicNamer = (topic: string) => string;
+
 /** The headline figures of a plan, formatted, by key. */
-export function planFigures(plan: PlanJson): Map<string, [string, string]> {
+export function planFigures(plan: PlanJson, name: TopicNamer = (t) => t): Map<string, [string, string]> {
   const out = new Map<string, [string, string]>();
   out.set("hyperperiod", ["hyperperiod", secs(plan.hyperperiod_s)]);
   out.set("messages", ["messages per hyperperiod", String(plan.messages_per_hyperperiod)]);
   out.set("bytes", ["link, drone → base", formatRate(plan.predicted_link_bytes_per_s.drone_to_base)]);
   out.set("maxDelay", ["max delay", secs(plan.max_delay_s)]);
   for (const [name, d] of Object.entries(plan.delays)) out.set(`delay:${name}`, [`${name} delay`, secs(d)]);
-  for (const [topic, n] of Object.entries(plan.buffer_sizes)) out.set(`buffer:${topic}`, [`${topic} buffer`, String(n)]);
+  for (const [topic, n] of Object.entries(plan.buffer_sizes)) out.set(`buffer:${topic}`, [`${name(topic)} buffer`, String(n)]);
   return out;
 }
 
 /** Figures that differ between two plans (added or removed ones show "—" on the missing side). */
-export function planChanges(before: PlanJson | null, after: PlanJson): PlanChange[] {
+export function planChanges(before: PlanJson | null, after: PlanJson, name?: TopicNamer): PlanChange[] {
   if (!before) return [];
-  const a = planFigures(before);
-  const b = planFigures(after);
+  const a = planFigures(before, name);
+  const b = planFigures(after, name);
   const out: PlanChange[] = [];
   for (const key of new Set([...a.keys(), ...b.keys()])) {
     const x = a.get(key);

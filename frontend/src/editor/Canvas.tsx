@@ -17,7 +17,7 @@ import { useEditorStore, useModel, useRole } from "./useEditor";
 import { useKeyboardShortcuts } from "./useKeyboardShortcuts";
 import { canConnect } from "../core/ops";
 import { canEditEdge } from "../core/roles";
-import { FAR_ZOOM, FIT } from "./fit";
+import { FAR_ZOOM, FIT, farLabelPx } from "./fit";
 import { useRevealNew } from "./useRevealNew";
 
 const MINIMAP_COLORS: Record<string, string> = {
@@ -34,7 +34,9 @@ export function Canvas() {
   useKeyboardShortcuts();
   const box = useRef<HTMLDivElement>(null);
   useRevealNew(box);
-  const far = useStore((s) => s.transform[2] < FAR_ZOOM);
+  // Below FAR_ZOOM: names only, at a legible size (fit.ts); the zoom in steps of 0.02 (rounded down), not each frame.
+  const zoom = useStore((s) => Math.floor(s.transform[2] * 50) / 50);
+  const far = zoom < FAR_ZOOM;
 
   useEffect(() => {
     // Keep xyflow's measurements across re-derivations of the nodes.
@@ -67,7 +69,8 @@ export function Canvas() {
   }, [model, role]);
 
   return (
-    <div className={`canvas${far ? " canvas-far" : ""}`} aria-label="Model diagram" ref={box}>
+    <div className={`canvas${far ? " canvas-far" : ""}`} aria-label="Model diagram" ref={box}
+      style={far ? ({ "--far-label-px": `${farLabelPx(zoom)}px` } as React.CSSProperties) : undefined}>
       <ReactFlow<ElementNode>
         nodes={nodes}
         edges={derived.edges}

@@ -10,7 +10,7 @@ import { AGGREGATION } from "../core/contracts.gen";
 import { listTopics } from "../core/query";
 import { nextPosition } from "../core/graph";
 import { currentModel } from "../core/workbench";
-import { unitLabel } from "../core/chartData";
+import { topicLabel } from "../core/topicLabel";
 import { useEditorStore, useModel } from "./useEditor";
 
 export function QuickSubscribe() {
@@ -35,10 +35,7 @@ export function QuickSubscribe() {
         <select value={chosen} title={chosen} onChange={(e) => setTopic(e.target.value)} disabled={!topics.length}>
           {model.drone.sensors.map((sensor) => (
             <optgroup key={sensor.name} label={`${sensor.name}${sensor.description ? ` — ${sensor.description}` : ""}`}>
-              {topics.filter((t) => t.sensor === sensor).map((t) => {
-                const unit = unitLabel(t.variable.unit);
-                return <option key={t.id} value={t.name}>{t.name}{unit ? ` (${unit})` : ""}</option>;
-              })}
+              {topics.filter((t) => t.sensor === sensor).map((t) => <option key={t.id} value={t.name}>{topicLabel(model, t.name)}</option>)}
             </optgroup>
           ))}
         </select>

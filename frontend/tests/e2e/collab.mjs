@@ -184,7 +184,7 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await expectText(page.locator(".topbar .revision"), /^r6(?!.*unsaved)/);
     }],
 
-    ["collab: inspector — applies as you type, and the first click after a rename is kept", async () => {
+    ["collab: inspector — applies as you type, and the first click after a rename (accepted or refused) is kept", async () => {
       await page.getByRole("tab", { name: "Scientist", exact: true }).click();
       await select(page, "sub:sub_4");
       const period = field(page, "periodS");
@@ -219,6 +219,19 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await page.mouse.up();
       await node(page, "sub:renamed_3_xyz").waitFor({ timeout: 5000 });
       await expectText(inspector(page).locator("h2").first(), /sub_2$/);
+      // A rename the view refuses (the integrator's sensor rename would rewrite the subscriptions):
+      // its notice, shown on blur, must not move the diagram under the click that caused the blur.
+      await page.getByRole("tab", { name: "Sensor integrator", exact: true }).click();
+      await select(page, "sensor:accelerometer");
+      await field(page, "name").fill("imu");
+      await node(page, "sub:sub_2").click();
+      await expectText(page.locator(".notice"), /which the integrator view may not change/);
+      await expectText(inspector(page).locator("h2").first(), /sub_2$/);
+      await select(page, "sensor:accelerometer");
+      const shown = await field(page, "name").inputValue();
+      if (shown !== "accelerometer") throw new Error(`the refused name stays in the field: "${shown}"`);
+      await page.locator(".notice").getByRole("button", { name: "Dismiss" }).click();
+      await page.getByRole("tab", { name: "Scientist", exact: true }).click();
       await save(page);
       await expectText(page.locator(".topbar .revision"), /^r7(?!.*unsaved)/);
     }],
@@ -325,6 +338,24 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await page.waitForTimeout(500);
       const again = await underMinimap();
       if (again.length) throw new Error(`after zoom to fit, under the minimap: ${again.join(", ")}`);
+      // Names legible (11 px on screen, 10.5 at least) at fit-to-screen and zoomed out to about half.
+      const legible = async (what) => {
+        const r = await page.evaluate(() => {
+          const zoom = new DOMMatrix(getComputedStyle(document.querySelector(".react-flow__viewport")).transform).a;
+          const px = [...document.querySelectorAll(".react-flow__node .node-label")].map((l) => parseFloat(getComputedStyle(l).fontSize) * zoom);
+          return { zoom, min: Math.min(...px) };
+        });
+        if (!(r.min >= 10.5)) throw new Error(`${what}: names drawn at ${r.min.toFixed(1)} px on screen (zoom ${r.zoom.toFixed(2)})`);
+        return r.zoom;
+      };
+      await legible("at fit-to-screen");
+      for (let i = 0; i < 10 && (await legible("zooming out")) > 0.55; i++) {
+        await page.locator(".react-flow__controls-zoomout").click();
+        await page.waitForTimeout(250);
+      }
+      await legible("zoomed out to about half");
+      await page.getByRole("button", { name: "Zoom to fit" }).click();
+      await page.waitForTimeout(500);
     }],
 
     ["new project from a template, with a first step per role view", async () => {

@@ -193,6 +193,28 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       await expand(false);
     }],
 
+    ["topic names shown consistently: diagram, plan, inspector, monitor (full name and unit, as quick subscription)", async () => {
+      const x = "usv.accelerometer.accel_x (m/s²)";
+      const literal = (t) => new RegExp(t.replace(/[.*+?^${}()|[\]\\]/g, "\\$&"));
+      // Diagram: the measured variable's node and a subscriber's node.
+      await expectText(node("topic:accelerometer.accel_x").locator(".node-detail"), literal(x));
+      await expectText(node("sub:sub_1").locator(".node-detail"), literal(`${x} AVERAGE every 2.0 s`));
+      // Plan: the buffer table's topic column.
+      await panel("Plan");
+      await expectText(page.getByRole("table", { name: "Buffer sizes" }).locator("tbody tr").first().locator("td").first(), literal(x));
+      // Inspector: the subscriber's topic field.
+      await select("sub:sub_1");
+      const chosen = await field("topic").evaluate((el) => el.selectedOptions[0]?.textContent ?? "");
+      if (chosen !== x) throw new Error(`inspector topic shows "${chosen}", not "${x}"`);
+      // Monitor: the watch list and the dynamic subscription's topics.
+      await panel("Monitor");
+      await expectText(page.getByRole("complementary", { name: "Subscriptions to watch" }).locator("label").first(), literal(`sub_1 ${x} AVERAGE every 2.0 s`));
+      const dyn = await page.getByRole("form", { name: "Dynamic subscription" }).getByLabel("Topic").locator("option").first().textContent();
+      if (dyn !== x) throw new Error(`dynamic subscription offers "${dyn}", not "${x}"`);
+      await panel("Plan");
+      await clickPane();
+    }],
+
     ["undo, redo, copy, paste, delete", async () => {
       await clickPane();
       await page.keyboard.press("Control+z");
@@ -302,7 +324,7 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
         await expectText(files, /\.mcap/, 15000);
         await files.locator("button.link").first().click();
         await page.getByRole("form", { name: "Plot an archived topic" }).getByRole("button", { name: "Plot" }).click();
-        await expectText(page.locator(".archives-panel figcaption"), /usv\.accelerometer\.\w+: \d+ samples/, 15000);
+        await expectText(page.locator(".archives-panel figcaption"), /usv\.accelerometer\.\w+ \(m\/s²\): \d+ samples/, 15000);
         // The same file served to Foxglove/Lichtblick (seek, play, pause) on the replay port.
         await page.getByRole("button", { name: "Replay in Foxglove", exact: true }).click();
         await expectText(page.getByRole("status", { name: "Foxglove replay" }), /\d+ messages.*ws:\/\/127\.0\.0\.1:\d+/, 15000);

@@ -55,6 +55,8 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await expectText(changes, /subscriber sub_7: period 0\.25 s → 0\.5 s/);
       const consequences = page.getByRole("table", { name: "Plan consequences" });
       await expectText(consequences, /sub_7 delay.*→/);
+      // A buffer named by its topic as everywhere (core/topicLabel): full name and unit.
+      await expectText(consequences, /usv\.accelerometer\.accel_z \(m\/s²\) buffer/);
       await expandShot("deploy-diff");
       // A history row: review it (no difference with what runs) and redeploy it (a rollback).
       await page.getByRole("button", { name: /^Review revision 2 / }).first().click();
@@ -180,7 +182,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await view("Operator");
       await panel("Deploy");
       await expectText(page.getByTestId("other-project"), /The drone runs project scenario1/, 15000);
-      await expectText(page.getByRole("list", { name: "Model changes" }), /subscriber sub_temp added: usv\.ctd\.water_temperature AVERAGE every 1\.0 s/);
+      await expectText(page.getByRole("list", { name: "Model changes" }), /subscriber sub_temp added: usv\.ctd\.water_temperature \(°C\) AVERAGE every 1\.0 s/);
       await expandShot("deploy-other-project");
       await page.getByRole("button", { name: "Deploy revision 1" }).click();
       await expectText(page.getByTestId("deploy-result"), /Acked/, 30000);
@@ -287,7 +289,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await waitUntil(async () => (await kept()) <= 1, 5000, async () => `${await kept()} points kept after seeking to the start`);
     }],
 
-    ["archive playback on the map: the survey's track up to the playback time", async () => {
+    ["archive playback on the map: the survey's track up to the playback time, the map beside the charts in view at 1280×800 and 1920×1080", async () => {
       if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
       await panel("Archives");
       const files = page.getByRole("table", { name: "Archive files" });
@@ -306,6 +308,32 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await expectVisible(controls, 20000);
       const map = page.getByTestId("playback-map-canvas");
       await expectVisible(map);
+      // Beside (or above) the charts, in view as soon as the range is loaded, without scrolling,
+      // at 1280×800 and at 1920×1080: the whole canvas is on screen, and it is what is there.
+      const inView = async () => {
+        const vp = page.viewportSize();
+        const m = await map.boundingBox();
+        const c = await page.locator(".playback-section .live-chart").first().boundingBox();
+        if (!m || !c) throw new Error("no playback map or chart");
+        const where = `the playback map at y ${m.y.toFixed(0)}–${(m.y + m.height).toFixed(0)} in a ${vp.width}×${vp.height} window`;
+        if (m.y < 0 || m.y + m.height > vp.height + 1) throw new Error(`${where}: not in view without scrolling`);
+        if (m.y > c.y + 1) throw new Error(`${where}: below the first chart (y ${c.y.toFixed(0)})`);
+        const corners = [[m.x + 2, m.y + 2], [m.x + m.width - 2, m.y + m.height - 2]];
+        for (const [x, y] of corners) {
+          if (!(await map.evaluate((el, [px, py]) => document.elementFromPoint(px, py) === el, [x, y]))) throw new Error(`${where}: covered at (${x}, ${y})`);
+        }
+      };
+      await inView();
+      await page.setViewportSize({ width: 1920, height: 1080 });
+      try {
+        await form.getByRole("button", { name: "Load for playback" }).click();
+        await page.waitForTimeout(500);
+        await expectVisible(map, 20000);
+        await inView();
+      } finally {
+        await page.setViewportSize({ width: 1280, height: 800 });
+      }
+      await page.waitForTimeout(300);
       const fixes = async () => Number(await map.getAttribute("data-points"));
       const seek = controls.getByLabel("Seek");
       const [min, max] = [Number(await seek.getAttribute("min")), Number(await seek.getAttribute("max"))];
@@ -405,7 +433,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       // aggregated by the test: the oracle), backfilled ones marked.
       await chart.getByRole("button", { name: "Show values" }).click();
       const table = chart.getByRole("table", { name: "Values of sub_5" });
-      const [, topic, aggregation, periodText] = /sub_5: (\S+) ([A-Z]+) every (\S+) s/.exec((await table.getByTestId("values-caption").textContent()) ?? "") ?? [];
+      const [, topic, aggregation, periodText] = /sub_5: (\S+)(?: \([^)]*\))? ([A-Z]+) every (\S+) s/.exec((await table.getByTestId("values-caption").textContent()) ?? "") ?? [];
       if (!topic) throw new Error("the table's caption does not name sub_5's topic, aggregation and period");
       const period = Number(periodText);
       const readRows = () => table.locator("tbody tr[data-end]").evaluateAll((trs) => trs.map((tr) => ({

@@ -14,8 +14,9 @@ import { BaseRecords } from "./BaseRecords";
 import { saveBlob } from "../saveBlob";
 import type { ArchiveFile, ArchiveReplay, ArchiveSeries } from "../../api/types";
 import { Playback } from "./Playback";
+import { topicLabel } from "../../core/topicLabel";
 
-function SeriesChart({ series }: { series: ArchiveSeries }) {
+function SeriesChart({ series, name }: { series: ArchiveSeries; name: string }) {
   const host = useRef<HTMLDivElement>(null);
   useEffect(() => {
     const el = host.current;
@@ -23,13 +24,13 @@ function SeriesChart({ series }: { series: ArchiveSeries }) {
     const pts = series.points.filter(([, v]) => typeof v === "number" || typeof v === "boolean");
     const plot = new uPlot({
       width: Math.max(el.clientWidth, 200), height: 180, scales: { x: { time: true } }, legend: { show: false },
-      series: [{}, { label: series.topic, stroke: "#0f766e", width: 1 }],
+      series: [{}, { label: name, stroke: "#0f766e", width: 1 }],
     }, [pts.map(([t]) => t / 1e9), pts.map(([, v]) => Number(v))], el);
     return () => plot.destroy();
-  }, [series]);
+  }, [series, name]);
   return (
     <figure className="live-chart">
-      <figcaption>{series.topic}: {series.total} samples{series.reduced ? `, reduced to ${series.points.length} points` : ""}</figcaption>
+      <figcaption>{name}: {series.total} samples{series.reduced ? `, reduced to ${series.points.length} points` : ""}</figcaption>
       <div ref={host} className="chart-host" aria-label={`Archived ${series.topic}`} />
     </figure>
   );
@@ -39,7 +40,8 @@ const seconds = (ns: number | null) => (ns === null ? "—" : new Date(ns / 1e6)
 
 export default function ArchivesPanel() {
   const { api } = useServices();
-  const drone = useModel().drone.name;
+  const model = useModel();
+  const drone = model.drone.name;
   const [files, reload] = usePanelData(() => api.listArchives(drone), [drone]);
   const [file, setFile] = useState<ArchiveFile | null>(null);
   const [topic, setTopic] = useState("");
@@ -102,7 +104,7 @@ export default function ArchivesPanel() {
           <div>
             <form onSubmit={plot} className="archive-form" aria-label="Plot an archived topic">
               <select aria-label="Topic" value={chosenTopic} onChange={(e) => setTopic(e.target.value)} disabled={!file}>
-                {file?.topics.map((t) => <option key={t.topic} value={t.topic}>{t.topic} ({t.messages})</option>)}
+                {file?.topics.map((t) => <option key={t.topic} value={t.topic}>{topicLabel(model, t.topic)} · {t.messages} messages</option>)}
               </select>
               <input aria-label="From (s after the start)" placeholder="from s" value={range.from} onChange={(e) => setRange({ ...range, from: e.target.value })} size={6} />
               <input aria-label="To (s after the start)" placeholder="to s" value={range.to} onChange={(e) => setRange({ ...range, to: e.target.value })} size={6} />
@@ -123,9 +125,9 @@ export default function ArchivesPanel() {
               </p>
             )}
             {!file && <p className="muted">Pick a file to plot one of its topics.</p>}
-            {series.data && <SeriesChart series={series.data} />}
-            {file && <Playback key={file.name} file={file} bound={bound} />}
+            {series.data && <SeriesChart series={series.data} name={topicLabel(model, series.data.topic)} />}
           </div>
+          {file && <Playback key={file.name} file={file} bound={bound} />}
         </div>
       )}
     </div>

@@ -4,12 +4,15 @@
  * reader, at most `MAX_POINTS` points per topic), then seek, play and pause;
  * the charts show what was recorded up to the cursor, and zoom like live ones.
  * When the file holds a latitude and a longitude, they are read too and the
- * map under the charts shows the track up to the cursor (coloured by a picked topic).
+ * map beside the charts (above them in a narrow panel) shows the track up to
+ * the cursor, coloured by a picked topic; it stays in view while the charts
+ * scroll. Loading brings the playback into view.
  */
-import { useEffect, useMemo, useState } from "react";
+import { useEffect, useMemo, useRef, useState } from "react";
 import { PlaybackSource, archiveSamples } from "../../dataSources/PlaybackSource";
 import { DEFAULT_WINDOW, unitLabel, type ViewWindow } from "../../core/chartData";
 import { findTopicByName } from "../../core/query";
+import { topicLabel } from "../../core/topicLabel";
 import { useModel } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
 import type { ArchiveFile } from "../../api/types";
@@ -44,6 +47,10 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
   const [charts, setCharts] = useState<string[][]>([]);
   const [win, setWin] = useState<ViewWindow>(DEFAULT_WINDOW);
   const position = positionTopics(file.topics.map((tp) => tp.topic));
+  const track = position.lat && position.lon ? { lat: position.lat, lon: position.lon } : null;
+  const controls = useRef<HTMLDivElement>(null);
+  // Loaded: the controls, the map and the first charts come into view together.
+  useEffect(() => { if (source) controls.current?.scrollIntoView({ block: "start" }); }, [source]);
   const whole: ViewWindow = useMemo(() => (source ? { follow: false, from: source.start, to: Math.max(source.end, source.start + 1) } : DEFAULT_WINDOW), [source]);
 
   const load = async (e: React.FormEvent) => {
@@ -65,7 +72,7 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
       setLoaded({ error: (err as Error).message });
     }
   };
-  const describe = (topic: string) => ({ channel: topic, label: "archived", unit: unitLabel(findTopicByName(model, topic)?.variable.unit) });
+  const describe = (topic: string) => ({ channel: topic, title: topicLabel(model, topic), label: "archived", unit: unitLabel(findTopicByName(model, topic)?.variable.unit) });
   const toggle = (topic: string) => setPicked((p) => (p.includes(topic) ? p.filter((x) => x !== topic) : [...p, topic]));
 
   return (
@@ -73,7 +80,7 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
       <form onSubmit={load} className="archive-form" aria-label="Play back an archive range">
         <strong>Play back</strong>
         {file.topics.map((tp) => (
-          <label key={tp.topic}><input type="checkbox" checked={picked.includes(tp.topic)} onChange={() => toggle(tp.topic)} />{tp.topic}</label>
+          <label key={tp.topic}><input type="checkbox" checked={picked.includes(tp.topic)} onChange={() => toggle(tp.topic)} />{topicLabel(model, tp.topic)}</label>
         ))}
         <input aria-label="Playback from (s after the start)" placeholder="from s" value={range.from} onChange={(e) => setRange({ ...range, from: e.target.value })} size={6} />
         <input aria-label="Playback to (s after the start)" placeholder="to s" value={range.to} onChange={(e) => setRange({ ...range, to: e.target.value })} size={6} />
@@ -83,7 +90,7 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
       </form>
       {source && (
         <>
-          <div className="playback" role="group" aria-label="Playback controls">
+          <div ref={controls} className="playback" role="group" aria-label="Playback controls">
             <button onClick={() => (playing ? source.pause() : source.play(rate))}>{playing ? "Pause" : "Play"}</button>
             <input type="range" aria-label="Seek" min={source.start} max={source.end} step={(source.end - source.start) / 1000 || 1}
               value={t} onChange={(e) => source.seek(Number(e.target.value))} />
@@ -93,22 +100,24 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
             <span data-testid="playback-time">{(t - source.start).toFixed(1)} s of {(source.end - source.start).toFixed(1)} s · {new Date(t * 1000).toLocaleTimeString()}{playing ? " · playing" : " · paused"}</span>
             <button onClick={() => setWin(whole)}>Whole range</button>
           </div>
-          <div className="charts">
-            {charts.map((chart, i) => (
-              <LiveChart key={chart.join("+")} source={source} series={chart.map(describe)} window={win} syncKey="playback" marker={t} now={t}
-                onZoom={(from, to) => setWin({ follow: false, from, to })}
-                addable={charts.flat().filter((c) => !chart.includes(c))}
-                onAdd={(c) => setCharts((cs) => cs.map((x, j) => (j === i ? [...x, c] : x.filter((y) => y !== c))).filter((x) => x.length))}
-                onRemove={(c) => setCharts((cs) => [...cs.map((x) => x.filter((y) => y !== c)).filter((x) => x.length), [c]])} />
-            ))}
-          </div>
-          {position.lat && position.lon && (
-            <div className="playback-map" aria-label="Track up to the playback time">
-              <TrackMap key={`${file.name}:${charts.flat().join(",")}`} source={source} lat={position.lat} lon={position.lon} id="playback-map"
-                choices={charts.flat().filter((c) => c !== position.lat && c !== position.lon).map((c) => ({ ...describe(c), detail: "archived", label: c }))}
-                missing="" />
+          <div className={`playback-body${track ? " with-map" : ""}`}>
+            {track && (
+              <div className="playback-map" aria-label="Track up to the playback time">
+                <TrackMap key={`${file.name}:${charts.flat().join(",")}`} source={source} lat={track.lat} lon={track.lon} id="playback-map"
+                  choices={charts.flat().filter((c) => c !== track.lat && c !== track.lon).map((c) => ({ ...describe(c), detail: "archived", label: topicLabel(model, c) }))}
+                  missing="" />
+              </div>
+            )}
+            <div className="charts">
+              {charts.map((chart, i) => (
+                <LiveChart key={chart.join("+")} source={source} series={chart.map(describe)} window={win} syncKey="playback" marker={t} now={t}
+                  onZoom={(from, to) => setWin({ follow: false, from, to })}
+                  addable={charts.flat().filter((c) => !chart.includes(c))}
+                  onAdd={(c) => setCharts((cs) => cs.map((x, j) => (j === i ? [...x, c] : x.filter((y) => y !== c))).filter((x) => x.length))}
+                  onRemove={(c) => setCharts((cs) => [...cs.map((x) => x.filter((y) => y !== c)).filter((x) => x.length), [c]])} />
+              ))}
             </div>
-          )}
+          </div>
         </>
       )}
     </section>

@@ -5,6 +5,7 @@
  * planned by the backend's planning engine, core/planDiff), and whether the
  * candidate may be deployed at all (an invalid revision may not).
  */
+import { topicLabel } from "../../core/topicLabel";
 import { describeChanges, type ChangeSentence } from "../../core/changeWords";
 import { diagnosticsInWords, type WordedDiagnostic } from "../../core/diagnosticWords";
 import { planChanges, type PlanChange } from "../../core/planDiff";
@@ -38,7 +39,8 @@ export async function loadDeployReview(api: Api, projectId: number, revision: nu
     candidate,
     otherProject: otherId === null ? null : projects.find((p) => p.id === otherId)?.name ?? `#${otherId}`,
     changes: describeChanges(running?.model ?? {}, candidate.model),
-    consequences: before?.plan && after?.plan ? planChanges(before.plan, after.plan) : [],
+    consequences: before?.plan && after?.plan
+      ? planChanges(before.plan, after.plan, (t) => topicLabel([candidate.model, running?.model], t)) : [],
     blockers: blockers.length || candidate.valid ? blockers
       : [{ severity: "error", element: "the model", elementId: "drone", text: `revision ${candidate.revision} is not valid`, pointer: null }],
   };

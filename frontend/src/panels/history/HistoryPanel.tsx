@@ -34,7 +34,7 @@ export default function HistoryPanel() {
   const compare = async () => {
     const [a, b] = [...picked].sort((x, y) => x - y);
     const [ma, mb] = await Promise.all([api.readModel(project.id, a), api.readModel(project.id, b)]);
-    setDiff({ a, b, lines: diffModels(ma.model, mb.model).map(changeLine) });
+    setDiff({ a, b, lines: diffModels(ma.model, mb.model).map((c) => changeLine(c, [mb.model, ma.model])) });
   };
   const restore = async (rev: number) => {
     const s = store.getState();

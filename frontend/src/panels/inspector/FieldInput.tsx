@@ -9,6 +9,7 @@
 import { useEffect, useId, useRef, useState } from "react";
 import { checkField, type FieldSpec } from "../../core/schemaForm";
 import type { TopicRef } from "../../core/query";
+import { topicRefLabel } from "../../core/topicLabel";
 import { canonicalDecimal, sameMeaning } from "../../core/canonical";
 
 /** Pause in typing after which the field is applied (the plan follows). */
@@ -43,6 +44,8 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
   const id = useId();
   const [text, setText] = useState(toText(value));
   const focused = useRef(false);
+  // Out of focus the field shows the model's value: an edit the view refused (or undone) does not stay on screen.
+  const [editing, setEditing] = useState(false);
   const timer = useRef<ReturnType<typeof setTimeout> | null>(null);
   const latest = useRef({ text, value, onCommit });
   latest.current = { text, value, onCommit };
@@ -90,7 +93,7 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
         <select id={id} value={toText(value)} disabled={readOnly} aria-invalid={invalid} aria-describedby={describedBy}
           onChange={(e) => onCommit(e.target.value)}>
           <option value="">(choose a topic)</option>
-          {topics.map((t) => <option key={t.id} value={t.name}>{t.name}</option>)}
+          {topics.map((t) => <option key={t.id} value={t.name}>{topicRefLabel(t)}</option>)}
         </select>
       );
       break;
@@ -103,7 +106,7 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
             <label key={t.id}>
               <input type="checkbox" checked={chosen.has(t.name)}
                 onChange={(e) => onCommit(e.target.checked ? [...chosen, t.name] : [...chosen].filter((x) => x !== t.name))} />
-              {t.name}
+              {topicRefLabel(t)}
             </label>
           ))}
         </fieldset>
@@ -113,13 +116,13 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
     default:
       control = (
         <>
-          <input id={id} value={text} readOnly={readOnly} aria-invalid={invalid} aria-describedby={describedBy}
+          <input id={id} value={editing ? text : toText(value)} readOnly={readOnly} aria-invalid={invalid} aria-describedby={describedBy}
             list={spec.input === "enumOrText" ? `${id}-options` : undefined}
             inputMode={spec.input === "integer" || spec.input === "decimal" || spec.input === "number" ? "decimal" : undefined}
             placeholder={spec.default !== undefined ? String(spec.default) : undefined}
             onChange={(e) => typed(e.target.value)}
-            onFocus={() => { focused.current = true; }}
-            onBlur={() => { focused.current = false; commit(); }}
+            onFocus={() => { focused.current = true; setEditing(true); setText(toText(value)); }}
+            onBlur={() => { focused.current = false; setEditing(false); commit(); }}
             onKeyDown={(e) => { if (e.key === "Enter") commit(); if (e.key === "Escape") { if (timer.current) clearTimeout(timer.current); setText(toText(value)); } }} />
           {spec.input === "enumOrText" && (
             <datalist id={`${id}-options`}>{spec.options?.map((o) => <option key={o} value={o} />)}</datalist>

@@ -12,6 +12,7 @@
  * the track up to the playback cursor. The colour choice also colours the
  * backend's 3D scene, when it runs one.
  */
+import { subscriptionLabel } from "../../core/topicLabel";
 import { useEffect, useRef, useState } from "react";
 import { positionSubscribers, trackPoints, valueRange, type TrackPoint } from "../../core/track";
 import { unitLabel } from "../../core/chartData";
@@ -93,6 +94,7 @@ export function TrackMap({ source, lat, lon, choices, onColour, id = "map", miss
     setTiles((t) => (t.asked === drawn.tiles.asked && t.drawn === drawn.tiles.drawn && t.failed === drawn.tiles.failed ? t : drawn.tiles));
   }, [points, range?.[0], range?.[1], tileUrl, redraw]); // eslint-disable-line react-hooks/exhaustive-deps
 
+  const unitSuffix = chosen?.unit ? ` ${chosen.unit}` : "";
   const choose = (channel: string) => { setColour(channel); onColour?.(channel); };
 
   return (
@@ -110,9 +112,9 @@ export function TrackMap({ source, lat, lon, choices, onColour, id = "map", miss
           : <p className="muted" role="status">{points.length} fixes from {lat} and {lon}.</p>}
         {chosen && (
           <div data-testid={`${id}-legend`}>
-            <strong>{chosen.label}</strong> <span className="muted">{chosen.detail}{chosen.unit ? ` (${chosen.unit})` : ""}</span>
+            <strong>{chosen.label}</strong> <span className="muted">{chosen.detail}</span>
             <div className="legend-bar" />
-            <div className="legend-scale"><span>{range ? range[0].toPrecision(4) : "—"}</span><span>{range ? range[1].toPrecision(4) : "—"}</span></div>
+            <div className="legend-scale"><span>{range ? `${range[0].toPrecision(4)}${unitSuffix}` : "—"}</span><span>{range ? `${range[1].toPrecision(4)}${unitSuffix}` : "—"}</span></div>
           </div>
         )}
         <label>Tile URL (optional)
@@ -132,7 +134,7 @@ export default function MapPanel() {
   const { source } = useDroneStream(model.drone.name);
   const { lat, lon } = positionSubscribers(model);
   const choices = model.subscribers.filter((s) => s.topic && s.name !== lat && s.name !== lon).map((s) => ({
-    channel: s.name, label: s.name, detail: `${s.topic} ${s.aggregation}`,
+    channel: s.name, label: s.name, detail: subscriptionLabel(model, s),
     unit: unitLabel(findTopicByName(model, s.topic)?.variable.unit, s.aggregation),
   }));
   // The 3D scene is shared: it follows the choice when the backend runs one (404 otherwise).

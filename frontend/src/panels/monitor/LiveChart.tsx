@@ -48,7 +48,7 @@ function LastValue({ source, s, now }: { source: DataSource; s: ChartSeries; now
   const age = last ? Math.max(now - last.t, 0) : null;
   return (
     <span className="chart-last-line">
-      <strong>{s.channel}</strong> <span className="muted">{s.label}</span>
+      <strong>{s.title ?? s.channel}</strong> <span className="muted">{s.label}</span>
       <span className="chart-last" data-testid={`last-${s.channel}`}>
         {last ? <>last {last.value.toPrecision(5)}{s.unit ? ` ${s.unit}` : ""}{last.windowS ? ` over ${last.windowS.toFixed(2)} s` : ""}{last.count !== undefined ? ` (${last.count} samples)` : ""}</> : "waiting for values…"}
       </span>

@@ -16,6 +16,7 @@ import { useEffect, useState } from "react";
 import { AggregationValues } from "../../core/model.gen";
 import { AGGREGATION } from "../../core/contracts.gen";
 import { findTopicByName, listTopics } from "../../core/query";
+import { subscriptionLabel, topicLabel } from "../../core/topicLabel";
 import { formatRate } from "../../core/plan";
 import { canEdit } from "../../core/roles";
 import { formatAge } from "../../core/linkHealth";
@@ -53,7 +54,7 @@ export default function MonitorPanel() {
     const topic = s?.topic ?? d?.topic ?? "";
     const aggregation = s?.aggregation ?? d?.aggregation;
     const unit = unitLabel(findTopicByName(model, topic)?.variable.unit, aggregation);
-    const label = s ? `${s.topic} ${s.aggregation} every ${s.periodS} s` : d ? `${d.topic} ${d.aggregation} every ${d.period_s} s (dynamic)` : "(not in the model)";
+    const label = s ? subscriptionLabel(model, s) : d ? `${subscriptionLabel(model, { ...d, periodS: d.period_s })} (dynamic)` : "(not in the model)";
     const period = Number(s ? s.periodS : d ? d.period_s : NaN);
     return { channel: name, label, unit, ...(Number.isFinite(period) && period > 0 ? { periodS: period } : {}) };
   };
@@ -62,7 +63,7 @@ export default function MonitorPanel() {
     e.preventDefault();
     const topic = dyn.topic || topics[0]?.name;
     if (!topic) return;
-    const label = `${topic} ${dyn.aggregation} every ${dyn.period_s} s`;
+    const label = subscriptionLabel(model, { topic, aggregation: dyn.aggregation, periodS: dyn.period_s });
     try {
       const reply = await api.addDynamic(drone, { ...dyn, topic });
       setReplies((d) => [{ label, reply }, ...d]);
@@ -107,11 +108,11 @@ export default function MonitorPanel() {
           {subscribers.length === 0 && <p className="muted">No subscription in the model.</p>}
           {subscribers.map((s) => (
             <label key={s.name}><input type="checkbox" checked={watched.includes(s.name)} onChange={() => layout.toggle(s.name)} />
-              {s.name} <span className="muted">{s.aggregation} {s.periodS} s</span></label>
+              {s.name} <span className="muted">{subscriptionLabel(model, s)}</span></label>
           ))}
           {Object.entries(dynamic).map(([name, d]) => (
             <label key={name}><input type="checkbox" checked={watched.includes(name)} onChange={() => layout.toggle(name)} />
-              {name} <span className="muted">{d.topic} {d.aggregation} {d.period_s} s (dynamic)</span></label>
+              {name} <span className="muted">{subscriptionLabel(model, { ...d, periodS: d.period_s })} (dynamic)</span></label>
           ))}
           {canEdit(role, "subscriber") && <FillGaps drone={drone} source={source} scope={`drone ${drone}`}
             subscribers={subscribers.map((s) => s.name)} />}
@@ -119,7 +120,7 @@ export default function MonitorPanel() {
             <form onSubmit={addDynamic} className="dynamic-form" aria-label="Dynamic subscription">
               <h3>Dynamic subscription</h3>
               <select aria-label="Topic" value={dyn.topic || topics[0]?.name || ""} onChange={(e) => setDyn({ ...dyn, topic: e.target.value })}>
-                {topics.map((t) => <option key={t.id}>{t.name}</option>)}
+                {topics.map((t) => <option key={t.id} value={t.name}>{topicLabel(model, t.name)}</option>)}
               </select>
               <input aria-label="Period (s)" value={dyn.period_s} onChange={(e) => setDyn({ ...dyn, period_s: e.target.value })} size={5} />
               <select aria-label="Aggregation" value={dyn.aggregation} onChange={(e) => setDyn({ ...dyn, aggregation: e.target.value })}>

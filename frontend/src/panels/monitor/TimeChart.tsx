@@ -22,6 +22,8 @@ import { alignWithGaps, axisLabel, gapSummary, visibleRange, type ViewWindow } f
 
 export interface ChartSeries {
   channel: string;
+  /** The series' name on the chart (a playback names it by its topic, core/topicLabel); default the channel. */
+  title?: string;
   label: string;
   unit: string;
   /** Seconds between windows (the subscription's period): where values are missing, the line breaks. */
@@ -54,7 +56,7 @@ export function TimeChart({ source, series, window: view, onZoom, syncKey, heigh
   markerRef.current = marker;
   const zoomRef = useRef(onZoom);
   zoomRef.current = onZoom;
-  const key = series.map((s) => `${s.channel}|${s.label}|${s.unit}|${s.periodS ?? ""}`).join(";");
+  const key = series.map((s) => `${s.channel}|${s.title ?? ""}|${s.label}|${s.unit}|${s.periodS ?? ""}`).join(";");
 
   useEffect(() => {
     const el = host.current;
@@ -78,7 +80,7 @@ export function TimeChart({ source, series, window: view, onZoom, syncKey, heigh
         { label: "time" },
         ...series.flatMap((s, i): uPlot.Series[] => [
           {
-            label: s.unit ? `${s.channel} (${s.unit})` : s.channel, stroke: COLOURS[i % COLOURS.length], width: 1.5,
+            label: s.title ?? (s.unit ? `${s.channel} (${s.unit})` : s.channel), stroke: COLOURS[i % COLOURS.length], width: 1.5,
             spanGaps: false, points: { show: true, size: 4 },
           },
           {

@@ -14,6 +14,7 @@ import { planChanges, type PlanChange } from "../../core/planDiff";
 import { diagnosticsInWords } from "../../core/diagnosticWords";
 import { subscriberId, topicId } from "../../core/ids";
 import { findTopicByName } from "../../core/query";
+import { topicLabel } from "../../core/topicLabel";
 import { useEditor, useEditorStore, useModel } from "../../editor/useEditor";
 import { LinkBudgetView } from "./LinkBudget";
 import { Timeline } from "./Timeline";
@@ -57,7 +58,7 @@ function PlanView({ plan, changed, stale, elapsedMs, busy }: ViewProps) {
           <ul>
             {plan.infeasible.map((x, i) => (
               <li key={i}>
-                <button className="link" onClick={() => { const t = findTopicByName(model, x.topic); if (t) select(t.id); }}>{x.topic}</button>
+                <button className="link" onClick={() => { const t = findTopicByName(model, x.topic); if (t) select(t.id); }}>{topicLabel(model, x.topic)}</button>
                 {x.subscribers.length > 0 && <> ({x.subscribers.join(", ")})</>}: {x.reason}
               </li>
             ))}
@@ -73,7 +74,7 @@ function PlanView({ plan, changed, stale, elapsedMs, busy }: ViewProps) {
               const t = findTopicByName(model, r.topic);
               return (
                 <tr key={r.topic}>
-                  <td><button className="link" onClick={() => t && select(topicId(t.sensor.name, t.variable.name))}>{r.topic}</button></td>
+                  <td><button className="link" onClick={() => t && select(topicId(t.sensor.name, t.variable.name))}>{topicLabel(model, r.topic)}</button></td>
                   <td>{r.publicationPeriodS ?? "—"} s</td>
                   <td className="buffer-size" data-testid="buffer-size"><span className={mark(`buffer:${r.topic}`)} title={was(`buffer:${r.topic}`)}>{r.bufferSize ?? "—"}</span></td>
                   <td>{r.subscribers.map((s) => (
@@ -101,7 +102,7 @@ export default function PlanPanel() {
   if (!result) return <div className="panel-body" role="status">{busy ? "Planning…" : "No plan yet."}</div>;
   const plan = result.plan;
   const errors = diagnosticsInWords(model, result.diagnostics.filter((d) => d.severity === "error"));
-  const changes = plan ? planChanges(previous ?? null, plan) : [];
+  const changes = plan ? planChanges(previous ?? null, plan, (t) => topicLabel(model, t)) : [];
   const shown = plan ?? lastValid ?? null;
   return (
     <div className="panel-body">

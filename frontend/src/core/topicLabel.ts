@@ -1,0 +1,42 @@
+/**
+ * The one form in which the workbench names a topic: its full name
+ * (`drone.sensor.variable`) and, when the variable has one, its unit — the
+ * same in the diagram, the plan, the Monitor, the inspector, the archives
+ * and the deploy diff.
+ *
+ * @example
+ *   topicLabel(model, "usv.accelerometer.accel_x")      // "usv.accelerometer.accel_x (m/s²)"
+ *   topicLabel(model, "usv.gps.latitude")               // "usv.gps.latitude" (unit NONE)
+ *   topicLabel(model, "usv.gone.x")                     // "usv.gone.x" (not in the model: the name alone)
+ *   subscriptionLabel(model, sub)                       // "usv.accelerometer.accel_x (m/s²) AVERAGE every 2.0 s"
+ */
+import type { ModdModel } from "./model.gen";
+import { unitLabel } from "./chartData";
+import { findTopicByName, type TopicRef } from "./query";
+
+/** A topic the model lists (query.listTopics), as every panel shows it. */
+export function topicRefLabel(t: TopicRef): string {
+  const unit = unitLabel(t.variable.unit);
+  return unit ? `${t.name} (${unit})` : t.name;
+}
+
+/**
+ * A topic by its full name, as every panel shows it: the first of the models
+ * that has it gives the unit (a deploy diff passes the new and the deployed
+ * model, so that a removed topic keeps its unit); outside them, the name alone.
+ */
+export function topicLabel(model: ModdModel | ReadonlyArray<ModdModel | undefined> | undefined, topic: string): string {
+  for (const m of Array.isArray(model) ? model : [model as ModdModel | undefined]) {
+    const t = m && findTopicByName(m, topic);
+    if (t) return topicRefLabel(t);
+  }
+  return topic;
+}
+
+/** A subscription as every panel tells it: its topic (as topicLabel), aggregation and period. */
+export function subscriptionLabel(
+  model: ModdModel | ReadonlyArray<ModdModel | undefined> | undefined,
+  s: { topic: string; aggregation: string; periodS: string | number },
+): string {
+  return `${s.topic ? topicLabel(model, s.topic) : "(no topic)"} ${s.aggregation} every ${String(s.periodS)} s`;
+}
