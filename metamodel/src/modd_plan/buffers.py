@@ -283,18 +283,42 @@ Row = tuple[int, str, int, list[Subscription], int, int]
 
 def _rows(problem: BufferProblem) -> list[Row]:
     """(topic index, topic, pm µs, its subscriptions, lo, hi) of every
-    subscribed topic; BufferTooLarge past :data:`CANDIDATE_LIMIT`."""
+    subscribed topic, ``lo..hi`` narrowed to :func:`front_range`;
+    BufferTooLarge past :data:`CANDIDATE_LIMIT` (counted over
+    :func:`candidate_range`, the bound a model is told about)."""
     rows: list[Row] = []
     for i, (topic, pm_us, subs) in enumerate(
         zip(problem.topics, problem.publication_us, problem.periods_by_topic(), strict=True)
     ):
         if not subs:
             continue
-        lo, hi = candidate_range([x.period_us for x in subs], pm_us, problem.max_buffer)
+        periods = sorted(x.period_us for x in subs)
+        lo, hi = candidate_range(periods, pm_us, problem.max_buffer)
         if hi - lo + 1 > CANDIDATE_LIMIT:
             raise BufferTooLarge(topic, [x.name for x in subs], hi - lo + 1)
-        rows.append((i, topic, pm_us, subs, lo, hi))
+        rows.append((i, topic, pm_us, subs, *front_range(periods, pm_us, lo, hi)))
     return rows
+
+
+def front_range(periods_us: Sequence[int], pm_us: int, lo: int, hi: int) -> tuple[int, int]:
+    """The part of ``lo..hi`` that holds every point of the topic's front
+    (``periods_us`` sorted). M(n) and S(n) are convex in n: M is smallest
+    where n x pm is nearest the middle of the periods, S where it is at a
+    median. Left of both, a step to n + 1 makes M strictly smaller
+    (n x pm < n' x pm <= middle) and S no larger (at or below the lower
+    median), so n is dominated by n + 1, which sorts before it; right of
+    both, the same with n - 1. Cutting those sizes leaves the front, the
+    smallest M (for the infeasibility message) and the tie-breaks as they
+    were, on far fewer candidates (709,724 -> 293,637 for 5,000 topics x
+    25,000 subscriptions). Tested against the whole range in
+    tests/plan/test_buffers_oracle.py."""
+    k = len(periods_us)
+    if k == 0:
+        return lo, hi
+    ends = periods_us[0] + periods_us[-1]  # twice the middle
+    left = min(ends // (2 * pm_us), periods_us[(k - 1) // 2] // pm_us)
+    right = max(-(-ends // (2 * pm_us)), -(-periods_us[k // 2] // pm_us))
+    return min(max(lo, left), hi), max(min(hi, right), lo)
 
 
 #: Candidate sizes (all topics together) up to which the sizes are computed
