@@ -41,13 +41,18 @@ if TYPE_CHECKING:  # numpy is imported only for models past SMALL_CANDIDATES
     IntArray = npt.NDArray[np.int64]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Subscription:
     """One subscriber's period on one topic (µs)."""
 
     name: str
     topic: str
     period_us: int
+
+    def __init__(self, name: str, topic: str, period_us: int) -> None:
+        # one dictionary update, not a frozen dataclass's setattr per field
+        # (a plan builds one per subscription)
+        self.__dict__.update(name=name, topic=topic, period_us=period_us)
 
 
 @dataclass(frozen=True)

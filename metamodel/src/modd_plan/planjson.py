@@ -71,7 +71,8 @@ def _streams_json(streams: Sequence[PlannedStream]) -> list[PlanStream]:
             "sent": s.id is not None,
             "derived_from": first.stream.key if first else None,
             "factor": first.factor if first else 1,
-            "sources": [{"key": x.stream.key, "factor": x.factor} for x in sources],
+            "sources": ([{"key": x.stream.key, "factor": x.factor} for x in sources]
+                        if sources else []),  # a sent stream's: no comprehension to run
             "subscribers": list(s.subscribers),
         })
     return out
