@@ -175,7 +175,10 @@ def find_sources(target: StreamKey, sent: Iterable[StreamKey]) -> tuple[Source, 
     :data:`~modd_plan.derive.SINGLE_SOURCE_RULES`, then the fewest windows to
     merge (the longest source period), then the pair rule SUM + COUNT."""
     candidates = [s for s in sent if s.topic == target.topic]
-    if target in candidates:
+    # ``target in candidates``, without the dataclass's __eq__ (two tuples
+    # and a Fraction comparison per candidate): the topic is equal already
+    agg_nd = (target.aggregation, target._nd)  # type: ignore[attr-defined]
+    if any((s.aggregation, s._nd) == agg_nd for s in candidates):  # type: ignore[attr-defined]
         return (Source(target, 1),)
     best: tuple[int, int, StreamKey] | None = None
     for s in candidates:
@@ -250,22 +253,27 @@ class _Relations:
         #: pair groups (by position) an ALL source joins
         self.all_single: list[bool] = []
         self.all_pair: list[list[int]] = []
-        columns = list(zip(range(len(nds)), nds, aggs, strict=True))
+        # the streams of each aggregation (position, period): a target scans
+        # only those of its rules' aggregations (the order of a list of
+        # servers does not matter: the drop asks whether any is kept)
+        by_agg: dict[str, list[tuple[int, int, int]]] = {}
+        for j, ((bn, bd), a) in enumerate(zip(nds, aggs, strict=True)):
+            by_agg.setdefault(a, []).append((j, bn, bd))
+        empty: list[tuple[int, int, int]] = []
         for r, (an, ad) in enumerate(nds):
-            # j serves r: j's aggregation is a rule of r's (tested first, the
-            # cheaper test) and target period / period j is whole
+            # j serves r: j's aggregation is a rule of r's and target period /
+            # period j is whole
             rules = SINGLE_SOURCE_RULES[aggs[r]]
-            self.singles.append([j for j, (bn, bd), a in columns
-                                 if a in rules and j != r and (an * bd) % (ad * bn) == 0])
+            self.singles.append([j for a in rules for j, bn, bd in by_agg.get(a, empty)
+                                 if j != r and (an * bd) % (ad * bn) == 0])
             self.all_single.append(agg.ALL in rules)
             pair = PAIR_SOURCE_RULES.get(aggs[r])
             if pair is None:
                 self.pairs.append(None)
                 self.all_pair.append([])
             else:
-                whole = [(an * bd) % (ad * bn) == 0 for bn, bd in nds]
-                self.pairs.append([[j for j, _, b in columns if b == a and whole[j]]
-                                   for a in pair])
+                self.pairs.append([[j for j, bn, bd in by_agg.get(a, empty)
+                                    if (an * bd) % (ad * bn) == 0] for a in pair])
                 self.all_pair.append([g for g, a in enumerate(pair) if a == agg.ALL])
 
     def drop(self, helper: tuple[int, int] | None = None) -> list[int]:
@@ -356,6 +364,8 @@ def _choose_for_topic(
             sn, sd = nds[i] if i < n else best_nd
             if (sn * hd) % (sd * hn) == 0:
                 replaceable += cost(i)
+        if replaceable <= 0.0:
+            continue  # nothing to replace: a helper (cost >= 0) cannot pay
         if cost_of is not None:
             helper_cost = cost_of(topic, agg.ALL, hn, hd)
             if helper_cost >= replaceable:
