@@ -23,7 +23,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import Any
 
 from modd_contracts import aggregations as agg
@@ -74,14 +74,12 @@ class StreamKey:
         # rebuilt, not copied: a string's hash differs between processes
         return (StreamKey, (self.topic, self.aggregation, self.period))
 
-    @property
+    @cached_property
     def key(self) -> str:
-        # cached in the instance's __dict__ (frozen: computed once per key)
-        key: str | None = self.__dict__.get("_key")
-        if key is None:
-            key = f"{self.topic}/{self.aggregation}/{_decimal_of(*self._nd)}"  # type: ignore
-            object.__setattr__(self, "_key", key)
-        return key
+        # computed once, then a plain attribute of the instance (a non-data
+        # descriptor: later reads do not call a function; a plan reads each
+        # key several times)
+        return f"{self.topic}/{self.aggregation}/{_decimal_of(*self._nd)}"  # type: ignore
 
     @classmethod
     def parse(cls, key: str) -> StreamKey:
