@@ -65,6 +65,10 @@ class StreamKey:
             # sort keys: (float, Fraction) orders as the Fraction, the float first
             _sort_period=(nd[0] / nd[1], period),
             _hash=hash((topic, aggregation, *nd)),
+            # the key text now: a plan reads every key, and the instance's
+            # own attribute then hides the cached_property below (3.11's
+            # takes a lock on its first read)
+            key=f"{topic}/{aggregation}/{_decimal_of(*nd)}",
         )
 
     def __hash__(self) -> int:
@@ -76,9 +80,9 @@ class StreamKey:
 
     @cached_property
     def key(self) -> str:
-        # computed once, then a plain attribute of the instance (a non-data
-        # descriptor: later reads do not call a function; a plan reads each
-        # key several times)
+        # set by __init__ (a plain attribute of the instance, which hides
+        # this non-data descriptor); computed here only for an instance made
+        # without __init__
         return f"{self.topic}/{self.aggregation}/{_decimal_of(*self._nd)}"  # type: ignore
 
     @classmethod
