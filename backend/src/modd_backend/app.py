@@ -23,6 +23,7 @@ from starlette.concurrency import run_in_threadpool
 from . import archive_work, errors
 from .accounts import ensure_first_admin
 from .apidocs import install_docs
+from .bodies import install_schemas
 from .db import Store
 from .deployments import last_acked
 from .deps import AppState
@@ -225,6 +226,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
     app.add_middleware(Guard, settings=settings)
     for router in ROUTERS:
         app.include_router(router)
+    install_schemas(app)  # the bodies routes read themselves (bodies.py)
     install_docs(app)
     if settings.frontend_dist is not None:
         mount_frontend(app, settings.frontend_dist)

@@ -41,13 +41,18 @@ if TYPE_CHECKING:  # numpy is imported only for models past SMALL_CANDIDATES
     IntArray = npt.NDArray[np.int64]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Subscription:
     """One subscriber's period on one topic (µs)."""
 
     name: str
     topic: str
     period_us: int
+
+    def __init__(self, name: str, topic: str, period_us: int) -> None:
+        # one dictionary update, not a frozen dataclass's setattr per field
+        # (a plan builds one per subscription)
+        self.__dict__.update(name=name, topic=topic, period_us=period_us)
 
 
 @dataclass(frozen=True)
@@ -278,23 +283,86 @@ def _fronts_both(
     return fronts, infeasible, relaxed
 
 
+def _front_arrays(
+    problem: BufferProblem, rows: list[Row],
+) -> tuple[IntArray, IntArray, IntArray, IntArray, list[Infeasibility]]:
+    """:func:`_fronts_both`'s fronts with the cap lifted for the infeasible
+    topics, end to end as :func:`_concat` gives them (M, S, n, each row's
+    start and the total), without one object per topic; and the infeasible
+    topics. Every row's front has a point: a feasible row has an allowed
+    size, an infeasible one all of its sizes."""
+    import numpy as np
+
+    tables = _tables(problem, rows)
+    caps = [problem.cap_for(topic) for _, topic, *_ in rows]
+    m_all, starts = tables[1], tables[3]
+    lengths = np.diff(starts)
+    cap_arr = np.repeat(np.array([-1 if c is None else c for c in caps], dtype=np.int64),
+                        lengths)
+    uncapped = np.repeat(np.array([c is None for c in caps]), lengths)
+    allowed = uncapped | (m_all <= cap_arr)
+    any_allowed = np.logical_or.reduceat(allowed, starts[:-1])
+    m, s, n, seg = _segment_front_arrays(tables, allowed)
+    infeasible: list[Infeasibility] = []
+    bad = np.flatnonzero(~any_allowed).tolist()
+    if bad:
+        parts = _segment_front_arrays(tables, np.repeat(~any_allowed, lengths))
+        m, s, n, seg = (np.concatenate(pair) for pair in zip((m, s, n, seg), parts,
+                                                                 strict=True))
+        order = np.argsort(seg, kind="stable")  # rows in order, each row's points kept
+        m, s, n, seg = m[order], s[order], n[order], seg[order]
+        for r in bad:
+            _, topic, pm_us, subs, lo, _ = rows[r]
+            cap = caps[r]
+            assert cap is not None
+            infeasible.append(Infeasibility(
+                topic, tuple(x.name for x in subs),
+                _explain(topic, subs, pm_us, m_all[starts[r]:starts[r + 1]], cap, lo)))
+    bounds = np.searchsorted(seg, np.arange(len(rows) + 1, dtype=np.int64))
+    return m, s, n, bounds, infeasible
+
+
 Row = tuple[int, str, int, list[Subscription], int, int]
 
 
 def _rows(problem: BufferProblem) -> list[Row]:
     """(topic index, topic, pm µs, its subscriptions, lo, hi) of every
-    subscribed topic; BufferTooLarge past :data:`CANDIDATE_LIMIT`."""
+    subscribed topic, ``lo..hi`` narrowed to :func:`front_range`;
+    BufferTooLarge past :data:`CANDIDATE_LIMIT` (counted over
+    :func:`candidate_range`, the bound a model is told about)."""
     rows: list[Row] = []
     for i, (topic, pm_us, subs) in enumerate(
         zip(problem.topics, problem.publication_us, problem.periods_by_topic(), strict=True)
     ):
         if not subs:
             continue
-        lo, hi = candidate_range([x.period_us for x in subs], pm_us, problem.max_buffer)
+        periods = sorted(x.period_us for x in subs)
+        lo, hi = candidate_range(periods, pm_us, problem.max_buffer)
         if hi - lo + 1 > CANDIDATE_LIMIT:
             raise BufferTooLarge(topic, [x.name for x in subs], hi - lo + 1)
-        rows.append((i, topic, pm_us, subs, lo, hi))
+        rows.append((i, topic, pm_us, subs, *front_range(periods, pm_us, lo, hi)))
     return rows
+
+
+def front_range(periods_us: Sequence[int], pm_us: int, lo: int, hi: int) -> tuple[int, int]:
+    """The part of ``lo..hi`` that holds every point of the topic's front
+    (``periods_us`` sorted). M(n) and S(n) are convex in n: M is smallest
+    where n x pm is nearest the middle of the periods, S where it is at a
+    median. Left of both, a step to n + 1 makes M strictly smaller
+    (n x pm < n' x pm <= middle) and S no larger (at or below the lower
+    median), so n is dominated by n + 1, which sorts before it; right of
+    both, the same with n - 1. Cutting those sizes leaves the front, the
+    smallest M (for the infeasibility message) and the tie-breaks as they
+    were, on far fewer candidates (709,724 -> 293,637 for 5,000 topics x
+    25,000 subscriptions). Tested against the whole range in
+    tests/plan/test_buffers_oracle.py."""
+    k = len(periods_us)
+    if k == 0:
+        return lo, hi
+    ends = periods_us[0] + periods_us[-1]  # twice the middle
+    left = min(ends // (2 * pm_us), periods_us[(k - 1) // 2] // pm_us)
+    right = max(-(-ends // (2 * pm_us)), -(-periods_us[k // 2] // pm_us))
+    return min(max(lo, left), hi), max(min(hi, right), lo)
 
 
 #: Candidate sizes (all topics together) up to which the sizes are computed
@@ -362,6 +430,23 @@ def _segment_fronts(
     """:func:`_front` of every row (None for a row with nothing allowed)."""
     import numpy as np
 
+    m, s, n, seg = _segment_front_arrays(tables, allowed)
+    rows = len(tables[3]) - 1
+    bounds = np.searchsorted(seg, np.arange(rows + 1, dtype=np.int64))
+    out: list[_Front | None] = []
+    for r in range(rows):
+        a, b = int(bounds[r]), int(bounds[r + 1])
+        out.append(_Front(m[a:b], s[a:b], n[a:b]) if b > a else None)
+    return out
+
+
+def _segment_front_arrays(
+    tables: tuple[IntArray, IntArray, IntArray, IntArray], allowed: npt.NDArray[np.bool_]
+) -> tuple[IntArray, IntArray, IntArray, IntArray]:
+    """Every row's front end to end: M, S, n and the row of each point (rows
+    in order, each row's points as :func:`_front` orders them)."""
+    import numpy as np
+
     s_all, m_all, n_all, starts = tables
     rows = len(starts) - 1
     seg_all = np.repeat(np.arange(rows, dtype=np.int64), np.diff(starts))
@@ -383,13 +468,7 @@ def _segment_fronts(
         shifted = rank.astype(np.int64).ravel() + (rows - seg) * (len(s) + 1)
     running = np.minimum.accumulate(shifted)
     keep = np.concatenate(([True], shifted[1:] < running[:-1]))[:len(s)]
-    m, s, n, seg = m[keep], s[keep], n[keep], seg[keep]
-    bounds = np.searchsorted(seg, np.arange(rows + 1, dtype=np.int64))
-    out: list[_Front | None] = []
-    for r in range(rows):
-        a, b = int(bounds[r]), int(bounds[r + 1])
-        out.append(_Front(m[a:b], s[a:b], n[a:b]) if b > a else None)
-    return out
+    return m[keep], s[keep], n[keep], seg[keep]
 
 
 def _concat(fronts: Sequence[_Front]) -> tuple[IntArray, IntArray, IntArray, IntArray]:
@@ -415,9 +494,15 @@ def _last_at_most(m: IntArray, starts: IntArray, w: int) -> IntArray:
 
 def _best_w(fronts: Sequence[_Front], a: int, b: int) -> int:
     """The smallest w minimising a * sum_i min{S_i : M_i <= w} + b * w."""
+    m, s, _, starts = _concat(fronts)
+    return _best_w_of(m, s, starts, a, b)
+
+
+def _best_w_of(m: IntArray, s: IntArray, starts: IntArray, a: int, b: int) -> int:
+    """:func:`_best_w` of fronts given end to end (each front's start offset
+    in ``starts``, the total at the end)."""
     import numpy as np
 
-    m, s, _, starts = _concat(fronts)
     w0 = int(m[starts[:-1]].max())
     f0 = sum(s[_last_at_most(m, starts, w0)].tolist())
     # the events: every point but a front's first with M > w0, and the
@@ -439,14 +524,6 @@ def _best_w(fronts: Sequence[_Front], a: int, b: int) -> int:
     return int(cand_w[i]) if objective[i] < a * f0 + b * w0 else w0
 
 
-def _sizes_at(fronts: Sequence[_Front], w: int) -> list[int]:
-    """Per front: n of its last point with M <= w."""
-    if not fronts:
-        return []
-    m, _, n, starts = _concat(fronts)
-    return n[_last_at_most(m, starts, w)].tolist()  # type: ignore[no-any-return]
-
-
 def solve_exact(problem: BufferProblem) -> BufferSolution:
     """The MILP's optimum with the documented tie-break, exactly.
 
@@ -456,15 +533,18 @@ def solve_exact(problem: BufferProblem) -> BufferSolution:
     if sum(hi - lo + 1 for *_, lo, hi in rows) <= SMALL_CANDIDATES:
         return _solve_small(problem)
 
-    fronts, infeasible, relaxed = _fronts_both(problem, rows)
-    if infeasible:  # the optimum with the cap lifted for those topics
-        fronts = relaxed
     d = lcm(problem.alpha.denominator, problem.beta.denominator)
     a, b = int(problem.alpha * d), int(problem.beta * d)
-    used = [f for f in fronts if f is not None]
-    w = _best_w(used, a, b) if used else 0
-    chosen = iter(_sizes_at(used, w))
-    sizes = [1 if f is None else next(chosen) for f in fronts]
+    sizes = [1] * len(problem.topics)  # a topic nobody subscribes to
+    infeasible: list[Infeasibility] = []
+    if rows:
+        # every row's front end to end (the cap lifted for the infeasible
+        # topics): one front per subscribed topic, in topic order
+        m, s, n, starts, infeasible = _front_arrays(problem, rows)
+        w = _best_w_of(m, s, starts, a, b)
+        chosen = n[_last_at_most(m, starts, w)].tolist()
+        for (i, *_), size in zip(rows, chosen, strict=True):
+            sizes[i] = size
     solution = solution_from_sizes(problem, sizes)
     if infeasible:
         return BufferSolution(solution.sizes, solution.deviations_us, tuple(infeasible))

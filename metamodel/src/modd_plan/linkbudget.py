@@ -36,6 +36,7 @@ from modd_contracts.types import PlanLinkBudget
 from .linkcost import (
     TCP_IP_HEADER_BYTES,
     UDP_IP_HEADER_BYTES,
+    ceil_of_sums,
     data_frame_bytes,
 )
 from .schedule import Schedule
@@ -185,11 +186,12 @@ def _slot_walk(schedule: Schedule, window_bytes: Sequence[Fraction], delay: Frac
     per_s = Fraction(m) / schedule.hyperperiod
     limit = min(max(m, ceil(20 * delay * per_s)), WALK_LIMIT)
     out: list[WalkedSlot] = []
+    ceil_sum = ceil_of_sums(period_bytes)
+    counts = {p: len(ids) for p, ids in by_period.items()}
     for index, date, due in schedule.iter_due_periods():
         if index >= limit:
             break
-        count = sum(len(by_period[p]) for p in due)
-        out.append((date, ceil(sum((period_bytes[p] for p in due), Fraction(0))), count, due))
+        out.append((date, ceil_sum(due), sum(counts[p] for p in due), due))
     return out
 
 

@@ -27,11 +27,11 @@ full topic name, the raw value) in its own TCP segment, ACKed likewise.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
-from math import ceil
+from math import ceil, lcm
 
 from modd_contracts import aggregations as agg
 from modd_contracts.aggregations import BY_NAME
@@ -133,12 +133,13 @@ def _frame_bytes_per_hyperperiod(
         for (p, _), (b, k) in same.items():
             total_b, count = per_period.get(p, (Fraction(0), 0))
             per_period[p] = (total_b + b * k, count + k)
+        ceil_sum = ceil_of_sums({p: b for p, (b, _) in per_period.items()})
+        counts = {p: k for p, (_, k) in per_period.items()}
         total = 0
         for index, _, due in schedule.iter_due_periods():
             if index == m:
                 break
-            values = sum((per_period[p][0] for p in due), Fraction(0))
-            total += data_frame_bytes(ceil(values), sum(per_period[p][1] for p in due))
+            total += data_frame_bytes(ceil_sum(due), sum(counts[p] for p in due))
         return Fraction(total)
     values = sum(
         (schedule.value_count_per_hyperperiod(i) * b for i, b in enumerate(window_bytes)),
@@ -146,6 +147,22 @@ def _frame_bytes_per_hyperperiod(
     )
     mean_body = DATA_HEADER_BYTES + values / m
     return values + m * (DATA_HEADER_BYTES + varint_size(ceil(mean_body)))
+
+
+#: Bits of a common denominator up to which :func:`ceil_of_sums` adds integers.
+_COMMON_DENOMINATOR_BITS = 512
+
+
+def ceil_of_sums(values: Mapping[int, Fraction]) -> Callable[[Iterable[int]], int]:
+    """``ceil(sum(values[k] for k in keys))`` as a function of ``keys``,
+    exactly: on one common denominator the sum is of integers (a slot adds
+    the bytes of its due periods: one Fraction addition each, with its gcd,
+    was most of a long walk's time); Fractions when that denominator is huge."""
+    den = lcm(*(v.denominator for v in values.values())) if values else 1
+    if den.bit_length() > _COMMON_DENOMINATOR_BITS:
+        return lambda keys: ceil(sum((values[k] for k in keys), Fraction(0)))
+    scaled = {k: v.numerator * (den // v.denominator) for k, v in values.items()}
+    return lambda keys: -(-sum(scaled[k] for k in keys) // den)
 
 
 def predict(

@@ -222,23 +222,36 @@ def _link_cost(
     tops: Mapping[str, Topic]
 ) -> LinkCost:
     plain: dict[str, tuple[Fraction, int]] = {}
+    per_topic: dict[str, tuple[Fraction, int] | None] = {}  # computed once per topic
     for sub in model.get("subscribers", []):
-        topic = tops.get(sub["topic"])
-        if topic is not None and topic.period is not None:
-            plain[sub["name"]] = (topic.period, plain_message_bytes(topic.name, topic.type))
+        name = sub["topic"]
+        if name in per_topic:
+            entry = per_topic[name]
+        else:
+            topic = tops.get(name)
+            entry = per_topic[name] = (
+                (topic.period, plain_message_bytes(topic.name, topic.type))
+                if topic is not None and topic.period is not None else None)
+        if entry is not None:
+            plain[sub["name"]] = entry
     return predict(sched, window_bytes, plain)
 
 
 def _budget(model: Mapping[str, Any], sched: Schedule, sent: list[PlannedStream],
             streams: Sequence[PlannedStream], window_bytes: list[Fraction]) -> LinkBudget:
-    served: dict[StreamKey, list[str]] = {s.stream: list(s.subscribers) for s in sent}
+    # by identity: plan_streams gives each stream one key object, which its
+    # derived streams' sources hold (no StreamKey hashed or compared)
+    served: dict[int, list[str]] = {id(s.stream): list(s.subscribers) for s in sent}
     for s in streams:
+        if s.id is not None or not s.subscribers:
+            continue  # a sent stream has no sources; nobody to add
         for src in s.sources:
-            if src.stream in served and s.stream != src.stream:
-                served[src.stream] += [n for n in s.subscribers if n not in served[src.stream]]
+            names = served.get(id(src.stream))
+            if names is not None:
+                names += [n for n in s.subscribers if n not in names]
     return link_budget(LinkSettings.of(model), sched,
                        window_bytes,
-                       [served[s.stream] for s in sent],
+                       [served[id(s.stream)] for s in sent],
                        [sub["name"] for sub in model.get("subscribers", [])])
 
 

@@ -11,9 +11,10 @@ import itertools
 from collections.abc import Sequence
 from fractions import Fraction
 from functools import lru_cache
-from typing import Any, Protocol, cast
+from operator import itemgetter
+from typing import Any, Protocol
 
-from modd_contracts.types import PlanDocument, PlanSchedule, PlanStream
+from modd_contracts.types import PlanDocument, PlanSchedule, PlanSentStream, PlanStream
 from modd_model.numbers import MICROS_PER_SECOND
 from modd_model.query import Topic
 
@@ -81,12 +82,15 @@ def _dec_us(us: int) -> str:
     return decimal_of(Fraction(us, MICROS_PER_SECOND))
 
 
-def _streams_json(streams: Sequence[PlannedStream]) -> list[PlanStream]:
-    """The streams' JSON objects. A plan repeats few periods: their decimal
-    and microsecond forms are computed once per period, not per stream."""
+def _streams_json(streams: Sequence[PlannedStream]
+                  ) -> tuple[list[PlanStream], list[PlanSentStream]]:
+    """The streams' JSON objects, and the schedule's (the sent streams by
+    id). A plan repeats few periods: their decimal and microsecond forms are
+    computed once per period, not per stream."""
     periods: dict[tuple[int, int], tuple[str, int]] = {}
     out: list[PlanStream] = []
     append = out.append
+    sent: list[PlanSentStream] = []
     for s in streams:
         key = s.stream
         nd = key._nd  # type: ignore[attr-defined]
@@ -95,6 +99,8 @@ def _streams_json(streams: Sequence[PlannedStream]) -> list[PlanStream]:
             period = periods[nd] = (_decimal_of(*nd), _key_us(key))
         sources = s.sources
         first = sources[0] if sources else None
+        if s.id is not None:
+            sent.append({"id": s.id, "key": key.key, "period_us": period[1]})
         append({
             "id": s.id,
             "key": key.key,
@@ -105,13 +111,15 @@ def _streams_json(streams: Sequence[PlannedStream]) -> list[PlanStream]:
             "sent": s.id is not None,
             "derived_from": first.stream.key if first else None,
             "factor": first.factor if first else 1,
-            "sources": [{"key": x.stream.key, "factor": x.factor} for x in sources],
+            "sources": ([{"key": x.stream.key, "factor": x.factor} for x in sources]
+                        if sources else []),  # a sent stream's: no comprehension to run
             "subscribers": list(s.subscribers),
         })
-    return out
+    sent.sort(key=itemgetter("id"))  # in order already from plan_streams: one linear pass
+    return out, sent
 
 
-def _schedule_json(plan: PlanView) -> PlanSchedule:
+def _schedule_json(plan: PlanView, streams: list[PlanSentStream]) -> PlanSchedule:
     sched = plan.schedule
     slots: list[Slot] = []
     entries = 0
@@ -123,10 +131,7 @@ def _schedule_json(plan: PlanView) -> PlanSchedule:
         slots.append(slot)
     return {
         "epoch_phase_s": "0.0",
-        "streams": [
-            {"id": cast(int, s.id), "key": s.stream.key, "period_us": _key_us(s.stream)}
-            for s in plan.sent_streams
-        ],
+        "streams": streams,
         "slots": [
             {"slot": k, "date_s": _dec(date), "streams": ids} for k, date, ids in slots
         ],
@@ -138,6 +143,7 @@ def _schedule_json(plan: PlanView) -> PlanSchedule:
 def plan_to_json(plan: PlanView) -> PlanDocument:
     """Every field of the shared contract (docs/planning.md, "Plan JSON")."""
     sizes = plan.buffer_sizes
+    streams, sent = _streams_json(plan.streams)
     return {
         "hyperperiod_s": _dec(plan.schedule.hyperperiod),
         "messages_per_hyperperiod": plan.schedule.messages_per_hyperperiod,
@@ -153,10 +159,10 @@ def plan_to_json(plan: PlanView) -> PlanDocument:
             }
             for i, t in enumerate(plan.topics)
         ],
-        "streams": _streams_json(plan.streams),
+        "streams": streams,
         "subscriptions": {name: key.key for name, key in plan.subscriptions.items()},
         "buffer_sizes": sizes,
-        "schedule": _schedule_json(plan),
+        "schedule": _schedule_json(plan, sent),
         "delays": {name: _dec_us(us) for name, us in plan.buffers.deviations_us.items()},
         "max_delay_s": _dec(Fraction(plan.buffers.max_deviation_us, MICROS_PER_SECOND)),
         "predicted_link_bytes_per_s": plan.link.to_json(),

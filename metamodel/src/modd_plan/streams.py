@@ -23,7 +23,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import Any
 
 from modd_contracts import aggregations as agg
@@ -65,6 +65,10 @@ class StreamKey:
             # sort keys: (float, Fraction) orders as the Fraction, the float first
             _sort_period=(nd[0] / nd[1], period),
             _hash=hash((topic, aggregation, *nd)),
+            # the key text now: a plan reads every key, and the instance's
+            # own attribute then hides the cached_property below (3.11's
+            # takes a lock on its first read)
+            key=f"{topic}/{aggregation}/{_decimal_of(*nd)}",
         )
 
     def __hash__(self) -> int:
@@ -74,14 +78,12 @@ class StreamKey:
         # rebuilt, not copied: a string's hash differs between processes
         return (StreamKey, (self.topic, self.aggregation, self.period))
 
-    @property
+    @cached_property
     def key(self) -> str:
-        # cached in the instance's __dict__ (frozen: computed once per key)
-        key: str | None = self.__dict__.get("_key")
-        if key is None:
-            key = f"{self.topic}/{self.aggregation}/{_decimal_of(*self._nd)}"  # type: ignore
-            object.__setattr__(self, "_key", key)
-        return key
+        # set by __init__ (a plain attribute of the instance, which hides
+        # this non-data descriptor); computed here only for an instance made
+        # without __init__
+        return f"{self.topic}/{self.aggregation}/{_decimal_of(*self._nd)}"  # type: ignore
 
     @classmethod
     def parse(cls, key: str) -> StreamKey:
@@ -166,7 +168,10 @@ def find_sources(target: StreamKey, sent: Iterable[StreamKey]) -> tuple[Source, 
     :data:`~modd_plan.derive.SINGLE_SOURCE_RULES`, then the fewest windows to
     merge (the longest source period), then the pair rule SUM + COUNT."""
     candidates = [s for s in sent if s.topic == target.topic]
-    if target in candidates:
+    # ``target in candidates``, without the dataclass's __eq__ (two tuples
+    # and a Fraction comparison per candidate): the topic is equal already
+    agg_nd = (target.aggregation, target._nd)  # type: ignore[attr-defined]
+    if any((s.aggregation, s._nd) == agg_nd for s in candidates):  # type: ignore[attr-defined]
         return (Source(target, 1),)
     best: tuple[int, int, StreamKey] | None = None
     for s in candidates:
@@ -219,17 +224,19 @@ class _Relations:
     :func:`find_sources`), computed once per topic in the drop order: the
     most expensive first (ties: longest period, then aggregation order).
     A helper ALL stream adds one column (:meth:`drop`), so trying several
-    helpers costs a scan each, not the pairs again."""
+    helpers costs a scan each, not the pairs again. Streams are handled by
+    position (``costs[i]`` is the cost of ``streams[i]``), never hashed."""
 
-    def __init__(self, required: Sequence[StreamKey],
-                 cost_per_s: Callable[[StreamKey], float]) -> None:
+    def __init__(self, required: Sequence[StreamKey], costs: Sequence[float]) -> None:
         # stable sorts, last key first: (-cost, -period, aggregation order);
         # a stable reverse sort on (cost, period) keeps the aggregation order
         # of its ties
-        streams = sorted(required, key=lambda s: _AGG_INDEX[s.aggregation])
-        streams.sort(key=lambda s: (cost_per_s(s), s._sort_period),  # type: ignore[attr-defined]
-                     reverse=True)
+        order = sorted(range(len(required)), key=lambda i: _AGG_INDEX[required[i].aggregation])
+        order.sort(key=lambda i: (costs[i], required[i]._sort_period),  # type: ignore
+                   reverse=True)
+        streams = [required[i] for i in order]
         self.streams = streams
+        self.costs = [costs[i] for i in order]
         nds: list[tuple[int, int]] = [s._nd for s in streams]  # type: ignore[attr-defined]
         self.nds = nds
         aggs = [s.aggregation for s in streams]
@@ -239,31 +246,37 @@ class _Relations:
         #: pair groups (by position) an ALL source joins
         self.all_single: list[bool] = []
         self.all_pair: list[list[int]] = []
-        columns = list(zip(range(len(nds)), nds, aggs, strict=True))
+        # the streams of each aggregation (position, period): a target scans
+        # only those of its rules' aggregations (the order of a list of
+        # servers does not matter: the drop asks whether any is kept)
+        by_agg: dict[str, list[tuple[int, int, int]]] = {}
+        for j, ((bn, bd), a) in enumerate(zip(nds, aggs, strict=True)):
+            by_agg.setdefault(a, []).append((j, bn, bd))
+        empty: list[tuple[int, int, int]] = []
         for r, (an, ad) in enumerate(nds):
-            # j serves r: j's aggregation is a rule of r's (tested first, the
-            # cheaper test) and target period / period j is whole
+            # j serves r: j's aggregation is a rule of r's and target period /
+            # period j is whole
             rules = SINGLE_SOURCE_RULES[aggs[r]]
-            self.singles.append([j for j, (bn, bd), a in columns
-                                 if a in rules and j != r and (an * bd) % (ad * bn) == 0])
+            self.singles.append([j for a in rules for j, bn, bd in by_agg.get(a, empty)
+                                 if j != r and (an * bd) % (ad * bn) == 0])
             self.all_single.append(agg.ALL in rules)
             pair = PAIR_SOURCE_RULES.get(aggs[r])
             if pair is None:
                 self.pairs.append(None)
                 self.all_pair.append([])
             else:
-                whole = [(an * bd) % (ad * bn) == 0 for bn, bd in nds]
-                self.pairs.append([[j for j, _, b in columns if b == a and whole[j]]
-                                   for a in pair])
+                self.pairs.append([[j for j, bn, bd in by_agg.get(a, empty)
+                                    if (an * bd) % (ad * bn) == 0] for a in pair])
                 self.all_pair.append([g for g, a in enumerate(pair) if a == agg.ALL])
 
-    def drop(self, helper: StreamKey | None = None) -> list[StreamKey]:
-        """The one-pass drop over the requested streams (+ ``helper``, always
-        kept, last)."""
+    def drop(self, helper: tuple[int, int] | None = None) -> list[int]:
+        """The one-pass drop over the requested streams (+ a helper ALL
+        stream of period ``helper`` = (numerator, denominator), always kept,
+        last): the positions kept, the helper's being ``len(streams)``."""
         n = len(self.streams)
         singles, pairs = self.singles, self.pairs
         if helper is not None:  # its column: the targets it serves
-            hn, hd = helper._nd  # type: ignore[attr-defined]
+            hn, hd = helper
             singles, pairs = list(singles), list(pairs)
             for r, (an, ad) in enumerate(self.nds):
                 if (an * hd) % (ad * hn):
@@ -292,8 +305,8 @@ class _Relations:
                     kept[i] = True
                     dropped.pop()
                     break
-        out = [s for s, k in zip(self.streams, kept, strict=False) if k]
-        return out + [helper] if helper is not None else out
+        out = [i for i in range(n) if kept[i]]
+        return out + [n] if helper is not None else out
 
 
 def _drop_derivable(
@@ -307,7 +320,10 @@ def _drop_derivable(
     The streams are of one topic. Which stream can serve which is computed
     once (the rules of :func:`find_sources`), so that each drop costs a
     scan of those relations, not a search over the sent set."""
-    return _Relations(required, cost_per_s).drop(helper)
+    relations = _Relations(required, [cost_per_s(s) for s in required])
+    kept = relations.drop(None if helper is None else helper._nd)  # type: ignore[attr-defined]
+    streams = [*relations.streams, helper]
+    return [streams[i] for i in kept]  # type: ignore[misc]
 
 
 #: The cost of a stream given as (topic, aggregation, period numerator,
@@ -319,40 +335,50 @@ def _choose_for_topic(
     streams: Sequence[StreamKey], cost_per_s: Callable[[StreamKey], float],
     cost_of: CostOf | None = None,
 ) -> list[StreamKey]:
-    costs = {s: cost_per_s(s) for s in streams}  # one call per stream
+    relations = _Relations(streams, [cost_per_s(s) for s in streams])  # one call per stream
+    n = len(streams)
+    costs = [*relations.costs, 0.0]  # position n: the helper on trial
     cost = costs.__getitem__
-    relations = _Relations(streams, cost)
     best = relations.drop()
     best_cost = sum(map(cost, best))  # the same order of additions as a loop
+    best_helper: StreamKey | None = None
+    best_nd = (1, 1)  # the period of best_helper, once there is one (position n)
     topic = streams[0].topic
     periods = {s._nd: s._sort_period for s in streams}  # type: ignore[attr-defined]
     asked_all = {s._nd for s in streams if s.aggregation == agg.ALL}  # type: ignore[attr-defined]
+    nds = relations.nds
     for nd, (_, period) in sorted(periods.items(), key=lambda item: item[1]):
         if nd in asked_all:
             continue  # an ALL stream at this period is asked for already
         hn, hd = nd
         # the sent streams at multiples of the helper's period, in order
         replaceable = 0.0
-        for s in best:
-            sn, sd = s._nd  # type: ignore[attr-defined]
+        for i in best:
+            sn, sd = nds[i] if i < n else best_nd
             if (sn * hd) % (sd * hn) == 0:
-                replaceable += cost(s)
+                replaceable += cost(i)
+        if replaceable <= 0.0:
+            continue  # nothing to replace: a helper (cost >= 0) cannot pay
         if cost_of is not None:
             helper_cost = cost_of(topic, agg.ALL, hn, hd)
             if helper_cost >= replaceable:
                 continue  # it cannot pay for itself (its key not even built)
-            helper = StreamKey(topic, agg.ALL, period)
-            costs[helper] = helper_cost
+            helper = None
         else:
             helper = StreamKey(topic, agg.ALL, period)
-            costs[helper] = helper_cost = cost_per_s(helper)
+            helper_cost = cost_per_s(helper)
             if helper_cost >= replaceable:
                 continue  # it cannot pay for itself
-        trial = relations.drop(helper)
+        trial = relations.drop(nd)
+        previous, costs[n] = costs[n], helper_cost
         trial_cost = sum(map(cost, trial))
         if trial_cost < best_cost:
-            best, best_cost = trial, trial_cost
-    return best
+            best, best_cost, best_nd = trial, trial_cost, nd
+            best_helper = helper or StreamKey(topic, agg.ALL, period)
+        else:
+            costs[n] = previous  # the best set's helper keeps its cost
+    kept = [relations.streams[i] for i in best if i < n]
+    return kept + [best_helper] if best_helper is not None else kept
 
 
 def choose_sent(
@@ -379,20 +405,37 @@ def plan_streams(
     cost_of: CostOf | None = None,
 ) -> tuple[PlannedStream, ...]:
     """Every requested stream, in contract order, with its id if sent or its
-    sources if derived."""
-    sent = choose_sent(requested, cost_per_s, cost_of)
-    sent_by_topic: dict[str, list[StreamKey]] = {}
-    for s in sent:
-        sent_by_topic.setdefault(s.topic, []).append(s)
-    every = sorted(set(requested) | sent, key=stream_order(topic_index))
-    ids = {s: i for i, s in enumerate(s for s in every if s in sent)}
+    sources if derived.
+
+    Topic by topic (the contract's order begins with the topic's), so that
+    the choice, the order and the ids are decided on a few streams at a time
+    with no stream hashed: the choice of :func:`choose_sent`, the order of
+    :func:`stream_order`."""
+    by_topic: dict[str, list[tuple[StreamKey, Sequence[str]]]] = {}
+    for key, names in requested.items():
+        by_topic.setdefault(key.topic, []).append((key, names))
     out: list[PlannedStream] = []
-    for s in every:
-        subscribers = tuple(requested.get(s, ()))
-        if s in ids:
-            out.append(PlannedStream(s, ids[s], (), subscribers))
-        else:
-            sources = find_sources(s, sent_by_topic[s.topic])
-            assert sources is not None  # choose_sent keeps every stream derivable
-            out.append(PlannedStream(s, None, sources, subscribers))
+    append = out.append
+    next_id = 0
+    for topic in sorted(by_topic, key=topic_index.__getitem__):
+        pairs = by_topic[topic]
+        if len(pairs) == 1:
+            key, names = pairs[0]
+            append(PlannedStream(key, next_id, (), tuple(names)))
+            next_id += 1
+            continue
+        sent = _choose_for_topic([k for k, _ in pairs], cost_per_s, cost_of)
+        sent_ids = {id(k) for k in sent}
+        asked = {id(k) for k, _ in pairs}
+        every = pairs + [(k, ()) for k in sent if id(k) not in asked]  # a helper: nobody's
+        every.sort(key=lambda pair: (_AGG_INDEX[pair[0].aggregation],
+                                     pair[0]._sort_period))  # type: ignore[attr-defined]
+        for key, names in every:
+            if id(key) in sent_ids:
+                append(PlannedStream(key, next_id, (), tuple(names)))
+                next_id += 1
+            else:
+                sources = find_sources(key, sent)
+                assert sources is not None  # the choice keeps every stream derivable
+                append(PlannedStream(key, None, sources, tuple(names)))
     return tuple(out)

@@ -184,3 +184,35 @@ def test_exact_and_milp_agree_on_medium_random_problems() -> None:
         )
         exact, milp = solve_exact(p), solve_milp(p)
         assert (exact.sizes, exact.infeasible) == (milp.sizes, milp.infeasible), p
+
+
+def test_front_range_keeps_the_whole_front() -> None:
+    """The narrowed candidate range (front_range) against the whole one: the
+    same Pareto front (M, S, n), the same smallest M and the same first size
+    reaching it, on random topics, caps and zero weights included."""
+    import numpy as np
+
+    rng = random.Random(5)
+    narrower = 0
+    for _ in range(2000):
+        pm = rng.choice(PUB_US + [10_000, 1_000, 37_000])
+        periods = sorted(rng.choice(SUB_US + [rng.randrange(1_000, 9_000_000)])
+                         for _ in range(rng.randint(1, 9)))
+        lo, hi = buffers.candidate_range(periods, pm, rng.choice([3, 50, 10**6]))
+        a, b = buffers.front_range(periods, pm, lo, hi)
+        assert lo <= a <= b <= hi
+        narrower += (b - a) < (hi - lo)
+        cap = rng.choice(CAPS_US)
+        for zero_s in (False, True):
+            fronts = []
+            for first, last in ((lo, hi), (a, b)):
+                s, m = buffers.topic_table(periods, pm, hi, first, last)
+                if zero_s:
+                    s = np.zeros_like(s)
+                allowed = np.ones(len(m), dtype=bool) if cap is None else m <= cap
+                front = buffers._front(s, m, allowed, first) if allowed.any() else None
+                best = (int(m.min()), int(m.argmin()) + first)
+                fronts.append((best, None if front is None else
+                               (front.m.tolist(), front.s.tolist(), front.n.tolist())))
+            assert fronts[0] == fronts[1], (periods, pm, lo, hi, cap)
+    assert narrower > 500

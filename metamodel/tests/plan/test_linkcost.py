@@ -81,3 +81,24 @@ def test_frame_size_matches_the_python_link_codec() -> None:
             encoded = codec.encode_data(data, [kind])
             predicted = data_frame_bytes(int(window_value_bytes(agg, vtype, Fraction(6))), 1)
             assert len(encoded) == predicted, (vtype, agg)
+
+
+def test_ceil_of_sums_is_the_ceiling_of_the_fraction_sum() -> None:
+    """The slot walks' integer sums on a common denominator against the
+    Fraction sum they replace, the fallback for huge denominators included."""
+    import math
+    import random
+    from fractions import Fraction
+
+    from modd_plan.linkcost import ceil_of_sums
+
+    rng = random.Random(3)
+    for case in range(400):
+        dens = [1, 2, 3, 4, 7, 10, 25, 1000] if case % 2 else [rng.randrange(2, 10**40) | 1
+                                                               for _ in range(3)]
+        values = {k: Fraction(rng.randrange(0, 10**6), rng.choice(dens)) for k in range(12)}
+        ceil_sum = ceil_of_sums(values)
+        for _ in range(5):
+            keys = rng.sample(range(12), rng.randint(0, 12))
+            assert ceil_sum(keys) == math.ceil(sum((values[k] for k in keys), Fraction(0)))
+    assert ceil_of_sums({})([]) == 0

@@ -13,6 +13,7 @@ from modd_model.collector import print_collector
 from pydantic import BaseModel, Field
 from sqlalchemy import select
 
+from ..bodies import BodyDep, documented, parse_as
 from ..deps import AppState, DbDep, StateDep, UserDep, require
 from ..errors import ApiError
 from ..modelio import diagnostics_json, read_input, require_document
@@ -60,12 +61,16 @@ def read_model(project_id: Id, db: DbDep, _user: UserDep, revision: Revision = N
     dependencies=[Depends(require(*EDITORS))],
     responses={**NOT_FOUND, **DENIED, 409: {"model": ConflictOut},
                422: {"model": InvalidModelOut}},
+    openapi_extra=documented(SaveIn),
 )
-def save_model(project_id: Id, body: SaveIn, db: DbDep, user: UserDep,
+def save_model(project_id: Id, raw: BodyDep, db: DbDep, user: UserDep,
                state: StateDep) -> ModelOut:
-    """Save a new revision. Text input keeps the current diagram layout (the
-    .modd text has none). Everyone watching the project over a stream
-    WebSocket hears of it (``{"type": "saved", ...}``)."""
+    """Save a new revision (the body is a :class:`SaveIn`, read and
+    validated in the thread pool, not on the event loop: modd_backend.bodies).
+    Text input keeps the current diagram layout (the .modd text has none).
+    Everyone watching the project over a stream WebSocket hears of it
+    (``{"type": "saved", ...}``)."""
+    body = parse_as(raw, SaveIn)
     model = require_document(read_input(body, f"project-{project_id}.{body.format}"))
     get_project(db, project_id)
     from_text = body.text is not None
@@ -130,10 +135,13 @@ def export_model(
     )
 
 
-@router.post("/validate", responses={422: {"model": InvalidModelOut}})
-def validate_model(body: ModelInput, _user: UserDep) -> ValidateOut:
-    """Parse and validate without saving; ``model`` is the parsed JSON document."""
-    result = read_input(body)
+@router.post("/validate", responses={422: {"model": InvalidModelOut}},
+             openapi_extra=documented(ModelInput))
+def validate_model(raw: BodyDep, _user: UserDep) -> ValidateOut:
+    """Parse and validate without saving; ``model`` is the parsed JSON
+    document. The body (a :class:`ModelInput`) is read in the thread pool,
+    not on the event loop (modd_backend.bodies)."""
+    result = read_input(parse_as(raw, ModelInput))
     return ValidateOut(
         ok=result.ok,
         model=result.model,

@@ -4,15 +4,14 @@ infeasibilities) with the model's diagnostics."""
 
 from __future__ import annotations
 
-import email.message
-import json
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Query, Request, Response
+from fastapi import APIRouter, Query, Response
 from fastapi.concurrency import run_in_threadpool
 from fastapi.exceptions import RequestValidationError
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel
 
+from ..bodies import BodyDep, documented, read_as
 from ..deps import DbDep, UserDep
 from ..planning import Method, guarded_call, plan_request
 from ..schemas import DiagnosticOut, Id, ModelInput
@@ -50,39 +49,10 @@ def plan_body_json(
     worker), then :func:`plan_response_json`. A body that is not a
     ModelInput gives FastAPI's validation errors (``loc`` from ``body``),
     which the route answers with 422 as FastAPI does."""
-    try:
-        if not body:
-            return [{"type": "missing", "loc": ("body",), "msg": "Field required",
-                     "input": None}]
-        data: Any = body
-        if is_json:
-            try:
-                data = json.loads(body)
-            except json.JSONDecodeError as exc:
-                return [{"type": "json_invalid", "loc": ("body", exc.pos),
-                         "msg": "JSON decode error", "input": {}, "ctx": {"error": exc.msg}}]
-            except UnicodeDecodeError as exc:
-                return [{"type": "json_invalid", "loc": ("body", exc.start),
-                         "msg": "JSON decode error", "input": {}, "ctx": {"error": str(exc)}}]
-        parsed = ModelInput.model_validate(data)
-    except ValidationError as exc:
-        return [{**e, "loc": ("body", *e["loc"]), **({"ctx": {k: str(v) for k, v in
-                                                              e["ctx"].items()}}
-                                                     if "ctx" in e else {})}
-                for e in exc.errors(include_url=False, include_input=False)]
+    parsed = read_as(body, is_json, ModelInput)
+    if isinstance(parsed, list):
+        return parsed
     return plan_response_json(parsed.model, parsed.text, parsed.format, method, timeout_s)
-
-
-def _is_json(content_type: str | None) -> bool:
-    """FastAPI's rule for parsing a body as JSON: no Content-Type, or
-    application/json or application/*+json."""
-    if not content_type:
-        return True
-    message = email.message.Message()
-    message["content-type"] = content_type
-    subtype = message.get_content_subtype()
-    return message.get_content_maintype() == "application" and (
-        subtype == "json" or subtype.endswith("+json"))
 
 
 async def _plan_response(model: dict[str, Any] | None, text: str | None, fmt: str,
@@ -93,20 +63,14 @@ async def _plan_response(model: dict[str, Any] | None, text: str | None, fmt: st
     return Response(out, media_type="application/json")
 
 
-_MODEL_INPUT_BODY = {"requestBody": {"required": True, "content": {"application/json": {
-    "schema": {"$ref": "#/components/schemas/ModelInput"}}}}}
-
-
-@router.post("/plan", response_model=PlanOut, openapi_extra=_MODEL_INPUT_BODY,
+@router.post("/plan", response_model=PlanOut, openapi_extra=documented(ModelInput),
              responses={503: {"description": "the planner is busy; retry"}})
-async def plan_model(request: Request, _user: UserDep, method: Method = "exact") -> Response:
+async def plan_model(body: BodyDep, _user: UserDep, method: Method = "exact") -> Response:
     """The body is a :class:`ModelInput`. Its parse, its validation, the
     planning and the answer's JSON all run in a worker process within a time
     and memory budget (modd_backend.planning), never on the event loop:
     the route hands the worker the body's bytes."""
-    body = await request.body()
-    out = await guarded_call(plan_body_json, body, _is_json(request.headers.get("content-type")),
-                             method)
+    out = await guarded_call(plan_body_json, body.data, body.is_json, method)
     if isinstance(out, list):
         raise RequestValidationError(out)
     if isinstance(out, dict):  # the worker's failure (over time or memory)

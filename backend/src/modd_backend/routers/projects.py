@@ -12,6 +12,7 @@ from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session as Db
 
+from ..bodies import BodyDep, documented, parse_as
 from ..deps import DbDep, RawBody, UserDep, require, roles_of
 from ..errors import ApiError
 from ..modelio import decode_body, read_input, require_document
@@ -83,9 +84,12 @@ def list_projects(db: DbDep, _user: UserDep) -> list[ProjectOut]:
     return [project_out(db, p) for p in db.scalars(select(Project).order_by(Project.id))]
 
 
-@router.post("", status_code=201, dependencies=[Editor],
+@router.post("", status_code=201, dependencies=[Editor], openapi_extra=documented(ProjectIn),
              responses={**DENIED, 409: {"description": "name taken"}})
-def add_project(body: ProjectIn, db: DbDep, user: UserDep) -> ProjectOut:
+def add_project(raw: BodyDep, db: DbDep, user: UserDep) -> ProjectOut:
+    """Create a project, empty or with a model (the body is a
+    :class:`ProjectIn`, read in the thread pool: modd_backend.bodies)."""
+    body = parse_as(raw, ProjectIn)
     model = require_document(read_input(body.model)) if body.model is not None else None
     return create_project(db, user, body.name, model, body.message)
 
