@@ -95,3 +95,23 @@ def test_health_answers_while_a_long_plan_runs(
     worker.join(120)
     assert done and len(latencies) >= 5
     assert max(latencies) < min(1.0, done[0] / 2)  # the plan took seconds; health did not
+
+
+def test_the_service_stops_its_planning_workers(settings: Any) -> None:
+    """A stopped backend leaves no planning worker behind, not even one that is
+    planning (they used to outlive `modd-backend`, found by bench_backend_plan.py)."""
+    import io
+    import os
+
+    from modd_backend import create_app
+
+    with TestClient(create_app(settings, out=io.StringIO())):
+        pool = planning._get_pool()
+        pool.submit(time.sleep, 30)  # a worker busy with a long plan
+        for _ in range(planning.PLAN_WORKERS):
+            pool.submit(os.getpid)
+        pids = [p.pid for p in getattr(pool, "_processes", {}).values()]
+        assert pids
+    for pid in pids:  # reaped by the pool's shutdown: no such process any more
+        with pytest.raises(ProcessLookupError):
+            os.kill(pid, 0)

@@ -20,7 +20,7 @@ from fastapi import APIRouter, FastAPI
 from sqlalchemy import text
 from starlette.concurrency import run_in_threadpool
 
-from . import archive_work, errors
+from . import archive_work, errors, planning
 from .accounts import ensure_first_admin
 from .apidocs import install_docs
 from .bodies import install_schemas
@@ -213,6 +213,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
             if zenoh_session is not None:
                 zenoh_session.close()
             await run_in_threadpool(archive_work.shutdown_pool)
+            await run_in_threadpool(planning.shutdown_pool)
             store.close()
 
     app = FastAPI(

@@ -123,11 +123,14 @@ def _discard_pool(pool: ProcessPoolExecutor) -> None:
 
 
 def shutdown_pool() -> None:
-    """Stop the workers (the service's shutdown, tests)."""
+    """Stop the workers (the service's shutdown, tests); one still planning is
+    killed, its answer having no one left to read it."""
     global _pool
     with _lock:
         pool, _pool = _pool, None
     if pool is not None:
+        for proc in list(getattr(pool, "_processes", {}).values()):
+            proc.kill()
         pool.shutdown(wait=True, cancel_futures=True)
 
 
