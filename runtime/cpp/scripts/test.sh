@@ -2,7 +2,8 @@
 # The C++ runtime's checks, run by `make test` (scripts/check.sh):
 #   1. ctest on build/cpp (the regular build of `make build`): units + example project;
 #   2. the units again under AddressSanitizer + UndefinedBehaviorSanitizer (build/cpp-asan);
-#   3. the libFuzzer targets built with clang (build/cpp-fuzz), each run for FUZZ_SECONDS.
+#   3. the libFuzzer targets built with clang (build/cpp-fuzz): the link, ingress, datagram
+#      and backfill decoders, each run for FUZZ_SECONDS.
 # Longer fuzzing: FUZZ_SECONDS=600 runtime/cpp/scripts/test.sh  (or run a target by hand:
 #   build/cpp-fuzz/fuzz_link_decoder -max_total_time=600 build/cpp-fuzz/corpus-link)
 # Exits non-zero on the first failure.
@@ -11,7 +12,7 @@ cd "$(dirname "$0")/../../.."
 ROOT=$PWD
 SRC=runtime/cpp
 JOBS=${JOBS:-2}
-FUZZ_SECONDS=${FUZZ_SECONDS:-15}
+FUZZ_SECONDS=${FUZZ_SECONDS:-10}
 step() { printf '\n== C++: %s\n' "$*"; }
 
 step "build + ctest (build/cpp)"
@@ -29,8 +30,9 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
 step "libFuzzer targets, ${FUZZ_SECONDS}s each (build/cpp-fuzz)"
 CXX=clang++ cmake -S $SRC -B build/cpp-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMODD_FUZZ=ON \
       -DMODD_TESTS=OFF -DMODD_BIN_DIR="$ROOT/build/cpp-fuzz/bin" >/dev/null
-cmake --build build/cpp-fuzz -j"$JOBS" --target fuzz_link_decoder fuzz_ingress_decoder
-for t in link_decoder ingress_decoder; do
+TARGETS=(link_decoder ingress_decoder datagram backfill)  # every decoder of the runtime
+cmake --build build/cpp-fuzz -j"$JOBS" --target "${TARGETS[@]/#/fuzz_}"
+for t in "${TARGETS[@]}"; do
   corpus=build/cpp-fuzz/corpus-$t
   mkdir -p "$corpus"
   if [ "$t" = link_decoder ]; then
