@@ -38,9 +38,10 @@ from websockets.asyncio.client import connect as ws_connect
 from websockets.exceptions import ConnectionClosed
 from websockets.typing import Subprotocol
 
-from .accounts import session_state, user_for_token
+from .accounts import user_for_token
 from .deps import SESSION_COOKIE, AppState
 from .roles import parse_roles
+from .sessionwatch import watch_session
 
 #: Largest upstream answer relayed (viser's page is ~0.8 MB).
 MAX_UPSTREAM_BYTES = 32 * 1024 * 1024
@@ -202,11 +203,6 @@ def _session(state: AppState, token: str) -> tuple[int, str] | None:
         return None if user is None else (user.id, user.roles)
 
 
-def _recheck(state: AppState, token: str) -> tuple[int, str] | None:
-    with state.store.session() as db:
-        return session_state(db, token)
-
-
 def socket_token(websocket: WebSocket) -> str | None:
     """The session of a WebSocket upgrade: an ``Authorization: Bearer``
     header, or the cookie when the browser named an Origin (checked before)."""
@@ -245,7 +241,7 @@ async def relay_socket(websocket: WebSocket, state: AppState, port: int) -> None
     await websocket.accept(subprotocol=upstream.subprotocol)
     tasks = {asyncio.create_task(_down(upstream, websocket)),
              asyncio.create_task(_up(websocket, upstream)),
-             asyncio.create_task(_watch(state, token, seen))}
+             asyncio.create_task(watch_session(state, token, seen))}
     try:
         done, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
         for task in pending:
@@ -284,11 +280,3 @@ async def _up(websocket: WebSocket, upstream: ClientConnection) -> None:
                 await upstream.send(message["text"])
 
 
-async def _watch(state: AppState, token: str, seen: tuple[int, str]) -> tuple[int, str]:
-    while True:
-        await asyncio.sleep(state.settings.ws_recheck_s)
-        now = await run_in_threadpool(_recheck, state, token)
-        if now is None:
-            return 4401, "the session ended"
-        if now != seen:
-            return 4403, "your roles changed; reconnect"

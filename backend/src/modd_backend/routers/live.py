@@ -26,7 +26,7 @@ from modd_model.jsondepth import loads_bounded
 from pydantic import BaseModel, Field
 from starlette.concurrency import run_in_threadpool
 
-from ..accounts import session_state, user_for_token
+from ..accounts import user_for_token
 from ..deps import (
     SESSION_COOKIE,
     AppState,
@@ -41,6 +41,7 @@ from ..deps import (
 from ..live import CapReached, LiveRelay, dynamic_request
 from ..project_events import ProjectWatches
 from ..roles import Role
+from ..sessionwatch import watch_session
 from ..settings import Settings
 from ..tables import User
 
@@ -101,11 +102,6 @@ def _session(state: AppState, token: str) -> tuple[User, str] | None:
     with state.store.session() as db:
         user = user_for_token(db, token)
         return None if user is None else (user, user.roles)
-
-
-def _recheck(state: AppState, token: str) -> tuple[int, str] | None:
-    with state.store.session() as db:
-        return session_state(db, token)
 
 
 def origin_allowed(websocket: WebSocket, settings: Settings) -> bool:
@@ -179,7 +175,7 @@ async def stream(websocket: WebSocket, drone: str) -> None:
                                        websocket.query_params.get("batch") == "1")),
         asyncio.create_task(_receive_loop(websocket, relay, state, user, watches)),
     }
-    watcher = asyncio.create_task(_watch(state, token, (user.id, roles)))
+    watcher = asyncio.create_task(watch_session(state, token, (user.id, roles)))
     tasks.add(watcher)
     try:
         done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
@@ -216,18 +212,6 @@ async def _first_message_auth(
             reply["id"] = message.get("id")
         await websocket.send_json(reply)
     return token, session
-
-
-async def _watch(state: AppState, token: str, seen: tuple[int, str]) -> tuple[int, str] | None:
-    """Re-check the session every ``ws_recheck_s``: logout, expiry, a password
-    change, deletion (4401) or a role change (4403) ends the socket."""
-    while True:
-        await asyncio.sleep(state.settings.ws_recheck_s)
-        now = await run_in_threadpool(_recheck, state, token)
-        if now is None:
-            return 4401, "the session ended"
-        if now != seen:
-            return 4403, "your roles changed; reconnect"
 
 
 async def _receive_loop(websocket: WebSocket, relay: LiveRelay, state: AppState,
