@@ -18,7 +18,7 @@ from modd.zenoh_session import ZenohSettings
 from modd_model import load_model
 from modd_plan.windows import split_window
 
-S1 = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "scenarios" / "scenario1.modd"
+S1 = Path(__file__).resolve().parents[3] / "metamodel" / "examples" / "scenarios" / "scenario1.modd"
 
 
 def test_keys() -> None:
