@@ -27,7 +27,7 @@ def _settings(tmp_path: Path, **more: Any) -> Settings:
 def _wrong_logins(base: str, n: int) -> list[int]:
     return [httpx.post(f"{base}/api/auth/login",
                        json={"username": f"spray{i}", "password": "wrong"},
-                       headers={"X-Forwarded-For": f"10.9.{i}.{i}"}, timeout=30).status_code
+                       headers={"X-Forwarded-For": f"127.9.{i}.{i}"}, timeout=30).status_code
             for i in range(n)]
 
 
@@ -37,7 +37,7 @@ def test_forwarded_for_from_an_untrusted_client_is_ignored(tmp_path: Path) -> No
         r = httpx.post(f"{base}/api/auth/login", timeout=30,
                        json={"username": "admin", "password": ADMIN_PASSWORD,
                              "session": "cookie"},
-                       headers={"X-Forwarded-For": "10.1.1.1", "X-Forwarded-Proto": "https"})
+                       headers={"X-Forwarded-For": "127.1.1.1", "X-Forwarded-Proto": "https"})
     assert codes[:LIMIT] == [401] * LIMIT and codes[LIMIT:] == [429] * 3, codes
     assert r.status_code == 429  # the address is the socket's, still throttled
 
@@ -48,6 +48,6 @@ def test_a_trusted_proxy_names_the_client(tmp_path: Path) -> None:
         r = httpx.post(f"{base}/api/auth/login", timeout=30,
                        json={"username": "admin", "password": ADMIN_PASSWORD,
                              "session": "cookie"},
-                       headers={"X-Forwarded-For": "10.1.1.1", "X-Forwarded-Proto": "https"})
+                       headers={"X-Forwarded-For": "127.1.1.1", "X-Forwarded-Proto": "https"})
     assert codes == [401] * (LIMIT + 3), codes  # one address each, as the proxy says
     assert r.status_code == 200 and "secure" in r.headers["set-cookie"].lower()
