@@ -386,7 +386,9 @@ def _tables(
 
     lengths = np.array([hi - lo + 1 for *_, lo, hi in rows], dtype=np.int64)
     starts = np.concatenate(([0], np.cumsum(lengths)))
-    big_ps = max(max(x.period_us for x in r[3]) for r in rows)
+    # every row's periods, sorted within the row, rows in order
+    per_row = [sorted([x.period_us for x in r[3]]) for r in rows]
+    big_ps = max(p[-1] for p in per_row)
     big_x = max(hi * pm for _, _, pm, _, _, hi in rows)
     if (max(big_ps, big_x).bit_length() >= _BATCH_VALUE_BITS
             or len(rows).bit_length() >= _BATCH_ROWS_BITS):
@@ -402,8 +404,6 @@ def _tables(
     offset = np.arange(starts[-1], dtype=np.int64) - starts[:-1][seg]
     n = np.array([lo for *_, lo, _ in rows], dtype=np.int64)[seg] + offset
     x = n * np.array([pm for _, _, pm, *_ in rows], dtype=np.int64)[seg]
-    # every row's periods, sorted within the row, rows in order
-    per_row = [sorted(x.period_us for x in r[3]) for r in rows]
     counts = np.array([len(p) for p in per_row], dtype=np.int64)
     ps = np.array([v for p in per_row for v in p], dtype=np.int64)
     ps_start = np.concatenate(([0], np.cumsum(counts)))

@@ -38,7 +38,14 @@ from .linkbudget import LinkBudget, LinkSettings, link_budget
 from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
 from .planjson import plan_to_json
 from .schedule import Schedule, ScheduleTooLarge
-from .streams import PlannedStream, StreamKey, period_of, plan_streams, subscription_keys
+from .streams import (
+    PlannedStream,
+    Price,
+    StreamKey,
+    period_of,
+    plan_streams,
+    subscription_keys,
+)
 
 METHODS = ("exact", "cvxpy")
 
@@ -331,19 +338,17 @@ def _make_plan(
     published = {t.name: (t.type, t.period.numerator, t.period.denominator)
                  for t in tops.values() if t.period is not None}
 
-    def cost(s: StreamKey) -> float:  # value bytes per second
-        topic = published.get(s.topic)
-        if topic is None:
-            return float(_window_bytes(s, tops) / s.period)
-        return _cost(s.aggregation, topic[0], *s._nd, topic[1], topic[2])  # type: ignore
-
-    def cost_of(topic_name: str, aggregation: str, p_num: int, p_den: int) -> float:
+    def pricing(topic_name: str) -> Price:  # value bytes per second of a stream
         topic = published.get(topic_name)
         if topic is None:
-            return cost(StreamKey(topic_name, aggregation, Fraction(p_num, p_den)))
-        return _cost(aggregation, topic[0], p_num, p_den, topic[1], topic[2])
+            return lambda aggregation, p_num, p_den: float(
+                _window_bytes(StreamKey(topic_name, aggregation, Fraction(p_num, p_den)), tops)
+                / Fraction(p_num, p_den))
+        topic_type, pm_num, pm_den = topic
+        return lambda aggregation, p_num, p_den: _cost(aggregation, topic_type, p_num, p_den,
+                                                       pm_num, pm_den)
 
-    streams = plan_streams(requested, index, cost, cost_of)
+    streams = plan_streams(requested, index, pricing)
     sent = sorted((s for s in streams if s.id is not None), key=lambda s: s.id or 0)
     hyper = _hyperperiod_us(model, requested)
     sched = Schedule.from_periods_us([_key_us(s.stream) for s in sent], hyper)

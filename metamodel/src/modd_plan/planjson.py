@@ -69,7 +69,12 @@ def _dec(value: Fraction) -> str:
 
 
 def _us(value: Fraction) -> int:
-    return int(value * MICROS_PER_SECOND)
+    return _us_of(value.numerator, value.denominator)
+
+
+@lru_cache(maxsize=65_536)  # keyed by integers: a plan repeats few publication periods
+def _us_of(numerator: int, denominator: int) -> int:
+    return int(Fraction(numerator, denominator) * MICROS_PER_SECOND)
 
 
 def _key_us(key: StreamKey) -> int:

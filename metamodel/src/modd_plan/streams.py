@@ -219,33 +219,37 @@ def stream_order(
     return order
 
 
+#: Per aggregation: whether an ALL stream serves it alone, its single-source
+#: rules' rank (find_sources' first preference), and which of its pair
+#: groups an ALL stream joins.
+_ALL_SERVES = {a: agg.ALL in rules for a, rules in SINGLE_SOURCE_RULES.items()}
+_RULE_RANK = {a: {x: k for k, x in enumerate(rules)} for a, rules in SINGLE_SOURCE_RULES.items()}
+_ALL_PAIR = {a: [g for g, x in enumerate(pair) if x == agg.ALL]
+             for a, pair in PAIR_SOURCE_RULES.items()}
+
+
 class _Relations:
     """Which of a topic's requested streams can serve which (the rules of
     :func:`find_sources`), computed once per topic in the drop order: the
     most expensive first (ties: longest period, then aggregation order).
     A helper ALL stream adds one column (:meth:`drop`), so trying several
     helpers costs a scan each, not the pairs again. Streams are handled by
-    position (``costs[i]`` is the cost of ``streams[i]``), never hashed."""
+    position (``costs[i]`` is the cost of ``streams[i]``, ``order[i]`` its
+    position in ``required``), never hashed."""
 
     def __init__(self, required: Sequence[StreamKey], costs: Sequence[float]) -> None:
-        # stable sorts, last key first: (-cost, -period, aggregation order);
-        # a stable reverse sort on (cost, period) keeps the aggregation order
-        # of its ties
-        order = sorted(range(len(required)), key=lambda i: _AGG_INDEX[required[i].aggregation])
-        order.sort(key=lambda i: (costs[i], required[i]._sort_period),  # type: ignore
-                   reverse=True)
-        streams = [required[i] for i in order]
-        self.streams = streams
-        self.costs = [costs[i] for i in order]
+        # one sort of plain tuples: cost and period descending, aggregation
+        # order ascending (its index negated); (aggregation, period) is
+        # unique within a topic, so the position is never compared
+        ranked = sorted(zip(costs, [s._sort_period for s in required],  # type: ignore
+                            [-_AGG_INDEX[s.aggregation] for s in required],
+                            range(len(required))), reverse=True)
+        self.order = order = [t[3] for t in ranked]
+        self.costs = [t[0] for t in ranked]
+        self.streams = streams = [required[i] for i in order]
         nds: list[tuple[int, int]] = [s._nd for s in streams]  # type: ignore[attr-defined]
         self.nds = nds
-        aggs = [s.aggregation for s in streams]
-        self.singles: list[list[int]] = []
-        self.pairs: list[list[list[int]] | None] = []
-        #: per target: whether an ALL source serves it alone, and which of its
-        #: pair groups (by position) an ALL source joins
-        self.all_single: list[bool] = []
-        self.all_pair: list[list[int]] = []
+        self.aggs = aggs = [s.aggregation for s in streams]
         # the streams of each aggregation (position, period): a target scans
         # only those of its rules' aggregations (the order of a list of
         # servers does not matter: the drop asks whether any is kept)
@@ -253,21 +257,19 @@ class _Relations:
         for j, ((bn, bd), a) in enumerate(zip(nds, aggs, strict=True)):
             by_agg.setdefault(a, []).append((j, bn, bd))
         empty: list[tuple[int, int, int]] = []
+        singles: list[list[int]] = []
+        pairs: list[list[list[int]] | None] = []
         for r, (an, ad) in enumerate(nds):
             # j serves r: j's aggregation is a rule of r's and target period /
             # period j is whole
-            rules = SINGLE_SOURCE_RULES[aggs[r]]
-            self.singles.append([j for a in rules for j, bn, bd in by_agg.get(a, empty)
-                                 if j != r and (an * bd) % (ad * bn) == 0])
-            self.all_single.append(agg.ALL in rules)
-            pair = PAIR_SOURCE_RULES.get(aggs[r])
-            if pair is None:
-                self.pairs.append(None)
-                self.all_pair.append([])
-            else:
-                self.pairs.append([[j for j, bn, bd in by_agg.get(a, empty)
-                                    if (an * bd) % (ad * bn) == 0] for a in pair])
-                self.all_pair.append([g for g, a in enumerate(pair) if a == agg.ALL])
+            a = aggs[r]
+            singles.append([j for b in SINGLE_SOURCE_RULES[a] for j, bn, bd in by_agg.get(b, empty)
+                            if j != r and (an * bd) % (ad * bn) == 0])
+            pair = PAIR_SOURCE_RULES.get(a)
+            pairs.append(None if pair is None else
+                         [[j for j, bn, bd in by_agg.get(b, empty) if (an * bd) % (ad * bn) == 0]
+                          for b in pair])
+        self.singles, self.pairs = singles, pairs
 
     def drop(self, helper: tuple[int, int] | None = None) -> list[int]:
         """The one-pass drop over the requested streams (+ a helper ALL
@@ -281,32 +283,67 @@ class _Relations:
             for r, (an, ad) in enumerate(self.nds):
                 if (an * hd) % (ad * hn):
                     continue
-                if self.all_single[r]:
+                a = self.aggs[r]
+                if _ALL_SERVES[a]:
                     singles[r] = [*singles[r], n]
                 groups = pairs[r]
-                if self.all_pair[r] and groups is not None:
-                    pairs[r] = [[*g, n] if k in self.all_pair[r] else g
-                                for k, g in enumerate(groups)]
+                if groups is not None and _ALL_PAIR[a]:
+                    joined = _ALL_PAIR[a]
+                    pairs[r] = [[*g, n] if k in joined else g for k, g in enumerate(groups)]
         kept = [True] * (n + 1)  # the helper (index n) stays kept
         is_kept = kept.__getitem__
-
-        def derivable(r: int) -> bool:
-            if any(map(is_kept, singles[r])):
-                return True
-            groups = pairs[r]
-            return groups is not None and all(any(map(is_kept, g)) for g in groups)
-
         dropped: list[int] = []
         for i in range(n):
             kept[i] = False
             dropped.append(i)
-            for r in dropped:
-                if not derivable(r):
-                    kept[i] = True
-                    dropped.pop()
-                    break
+            for r in dropped:  # every dropped stream still derivable?
+                if any(map(is_kept, singles[r])):
+                    continue
+                groups = pairs[r]
+                if groups is not None and all(any(map(is_kept, g)) for g in groups):
+                    continue
+                kept[i] = True
+                dropped.pop()
+                break
         out = [i for i in range(n) if kept[i]]
         return out + [n] if helper is not None else out
+
+    def sources(self, r: int, kept: Sequence[bool], helper: StreamKey | None
+                ) -> tuple[Source, ...] | None:
+        """:func:`find_sources` of the stream at position ``r`` from the kept
+        positions (``kept[len(streams)]``: the helper, when there is one):
+        the same preference, on the relations already computed."""
+        n = len(self.streams)
+        an, ad = self.nds[r]
+        a = self.aggs[r]
+        serves = helper is not None and _factor(self.streams[r], helper) is not None
+        rank = _RULE_RANK[a]
+        best: tuple[int, int, int] | None = None  # (rule rank, factor, position)
+        for j in (*self.singles[r], n) if serves and _ALL_SERVES[a] else self.singles[r]:
+            if not kept[j]:
+                continue
+            bn, bd = self.nds[j] if j < n else helper._nd  # type: ignore[union-attr]
+            candidate = (rank[self.aggs[j] if j < n else agg.ALL], (an * bd) // (ad * bn), j)
+            if best is None or candidate[:2] < best[:2]:
+                best = candidate
+        if best is not None:
+            j = best[2]
+            return (Source(self.streams[j] if j < n else helper, best[1]),)  # type: ignore[arg-type]
+        groups = self.pairs[r]
+        if groups is None:
+            return None
+        chosen: list[Source] = []
+        joined = _ALL_PAIR[a] if serves else ()
+        for k, group in enumerate(groups):
+            options = [j for j in group if kept[j]] + ([n] if k in joined else [])
+            if not options:
+                return None
+            factors = [(an * bd) // (ad * bn) for bn, bd in
+                       (self.nds[j] if j < n else helper._nd for j in options)]  # type: ignore
+            f = min(factors)
+            j = options[factors.index(f)]
+            chosen.append(Source(self.streams[j] if j < n else helper, f))  # type: ignore[arg-type]
+        return tuple(chosen)
 
 
 def _drop_derivable(
@@ -330,12 +367,35 @@ def _drop_derivable(
 #: period denominator): lets the choice price a helper before building its key.
 CostOf = Callable[[str, str, int, int], float]
 
+#: The cost of a stream of one topic given as (aggregation, period numerator,
+#: period denominator); :func:`plan_streams` asks one per topic.
+Price = Callable[[str, int, int], float]
+
 
 def _choose_for_topic(
     streams: Sequence[StreamKey], cost_per_s: Callable[[StreamKey], float],
     cost_of: CostOf | None = None,
 ) -> list[StreamKey]:
-    relations = _Relations(streams, [cost_per_s(s) for s in streams])  # one call per stream
+    topic = streams[0].topic
+
+    def price(aggregation: str, num: int, den: int) -> float:
+        if cost_of is not None:
+            return cost_of(topic, aggregation, num, den)
+        return cost_per_s(StreamKey(topic, aggregation, Fraction(num, den)))
+
+    relations, best, helper = _choose(streams, [cost_per_s(s) for s in streams], price)
+    n = len(relations.streams)
+    kept = [relations.streams[i] for i in best if i < n]
+    return kept + [helper] if helper is not None else kept
+
+
+def _choose(
+    streams: Sequence[StreamKey], stream_costs: Sequence[float], price: Price,
+) -> tuple[_Relations, list[int], StreamKey | None]:
+    """The choice for one topic's streams (their costs given): the
+    relations, the kept positions (the helper's is ``len(streams)``) and the
+    helper ALL stream, if one pays (priced by ``price``)."""
+    relations = _Relations(streams, stream_costs)
     n = len(streams)
     costs = [*relations.costs, 0.0]  # position n: the helper on trial
     cost = costs.__getitem__
@@ -343,7 +403,6 @@ def _choose_for_topic(
     best_cost = sum(map(cost, best))  # the same order of additions as a loop
     best_helper: StreamKey | None = None
     best_nd = (1, 1)  # the period of best_helper, once there is one (position n)
-    topic = streams[0].topic
     periods = {s._nd: s._sort_period for s in streams}  # type: ignore[attr-defined]
     asked_all = {s._nd for s in streams if s.aggregation == agg.ALL}  # type: ignore[attr-defined]
     nds = relations.nds
@@ -351,34 +410,26 @@ def _choose_for_topic(
         if nd in asked_all:
             continue  # an ALL stream at this period is asked for already
         hn, hd = nd
+        helper_cost = price(agg.ALL, hn, hd)
+        if helper_cost >= best_cost:
+            continue  # more than all the sent streams: it cannot pay for itself
         # the sent streams at multiples of the helper's period, in order
         replaceable = 0.0
         for i in best:
             sn, sd = nds[i] if i < n else best_nd
             if (sn * hd) % (sd * hn) == 0:
                 replaceable += cost(i)
-        if replaceable <= 0.0:
-            continue  # nothing to replace: a helper (cost >= 0) cannot pay
-        if cost_of is not None:
-            helper_cost = cost_of(topic, agg.ALL, hn, hd)
-            if helper_cost >= replaceable:
-                continue  # it cannot pay for itself (its key not even built)
-            helper = None
-        else:
-            helper = StreamKey(topic, agg.ALL, period)
-            helper_cost = cost_per_s(helper)
-            if helper_cost >= replaceable:
-                continue  # it cannot pay for itself
+        if helper_cost >= replaceable:
+            continue  # it cannot pay for itself (its key not even built)
         trial = relations.drop(nd)
         previous, costs[n] = costs[n], helper_cost
         trial_cost = sum(map(cost, trial))
         if trial_cost < best_cost:
             best, best_cost, best_nd = trial, trial_cost, nd
-            best_helper = helper or StreamKey(topic, agg.ALL, period)
+            best_helper = StreamKey(streams[0].topic, agg.ALL, period)
         else:
             costs[n] = previous  # the best set's helper keeps its cost
-    kept = [relations.streams[i] for i in best if i < n]
-    return kept + [best_helper] if best_helper is not None else kept
+    return relations, best, best_helper
 
 
 def choose_sent(
@@ -401,19 +452,19 @@ def choose_sent(
 def plan_streams(
     requested: Mapping[StreamKey, Sequence[str]],
     topic_index: Mapping[str, int],
-    cost_per_s: Callable[[StreamKey], float],
-    cost_of: CostOf | None = None,
+    pricing: Callable[[str], Price],
 ) -> tuple[PlannedStream, ...]:
     """Every requested stream, in contract order, with its id if sent or its
     sources if derived.
 
     Topic by topic (the contract's order begins with the topic's), so that
-    the choice, the order and the ids are decided on a few streams at a time
-    with no stream hashed: the choice of :func:`choose_sent`, the order of
-    :func:`stream_order`."""
+    the choice, the order, the ids and the sources are decided on a few
+    streams at a time, by position, with no stream hashed: the choice of
+    :func:`choose_sent`, the order of :func:`stream_order`, the sources of
+    :func:`find_sources`."""
     by_topic: dict[str, list[tuple[StreamKey, Sequence[str]]]] = {}
-    for key, names in requested.items():
-        by_topic.setdefault(key.topic, []).append((key, names))
+    for pair in requested.items():
+        by_topic.setdefault(pair[0].topic, []).append(pair)
     out: list[PlannedStream] = []
     append = out.append
     next_id = 0
@@ -424,18 +475,31 @@ def plan_streams(
             append(PlannedStream(key, next_id, (), tuple(names)))
             next_id += 1
             continue
-        sent = _choose_for_topic([k for k, _ in pairs], cost_per_s, cost_of)
-        sent_ids = {id(k) for k in sent}
-        asked = {id(k) for k, _ in pairs}
-        every = pairs + [(k, ()) for k in sent if id(k) not in asked]  # a helper: nobody's
-        every.sort(key=lambda pair: (_AGG_INDEX[pair[0].aggregation],
-                                     pair[0]._sort_period))  # type: ignore[attr-defined]
-        for key, names in every:
-            if id(key) in sent_ids:
-                append(PlannedStream(key, next_id, (), tuple(names)))
+        price = pricing(topic)
+        keys = [k for k, _ in pairs]
+        relations, best, helper = _choose(
+            keys, [price(k.aggregation, *k._nd) for k in keys], price)  # type: ignore
+        n = len(pairs)
+        names_at = [pairs[i][1] for i in relations.order]
+        kept = [False] * (n + 1)
+        for i in best:
+            kept[i] = True
+        streams = relations.streams
+        # contract order: aggregation order, then period
+        ranked = sorted(zip([_AGG_INDEX[a] for a in relations.aggs],
+                            [s._sort_period for s in streams], range(n)))  # type: ignore
+        if helper is not None:  # nobody's: its place among the others
+            ranked.append((_AGG_INDEX[agg.ALL], helper._sort_period, n))  # type: ignore
+            ranked.sort()
+        for *_, i in ranked:
+            if i == n:
+                append(PlannedStream(helper, next_id, (), ()))  # type: ignore[arg-type]
+                next_id += 1
+            elif kept[i]:
+                append(PlannedStream(streams[i], next_id, (), tuple(names_at[i])))
                 next_id += 1
             else:
-                sources = find_sources(key, sent)
+                sources = relations.sources(i, kept, helper)
                 assert sources is not None  # the choice keeps every stream derivable
-                append(PlannedStream(key, None, sources, tuple(names)))
+                append(PlannedStream(streams[i], None, sources, tuple(names_at[i])))
     return tuple(out)

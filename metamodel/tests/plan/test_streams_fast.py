@@ -74,3 +74,58 @@ def test_choice_matches_the_reference(seed: int) -> None:
         if helper not in required:
             assert (streams._drop_derivable(required, cost, helper)
                     == _reference_drop(required, cost, helper))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_plan_streams_sources_match_find_sources(seed: int) -> None:
+    """plan_streams takes each derived stream's sources from the relations
+    the choice computed; find_sources over the sent streams is the oracle
+    (the same preference: rule order, fewest windows, then SUM + COUNT)."""
+    rng = random.Random(100 + seed)
+    for _ in range(200):
+        topics = [f"d.s.v{t}" for t in range(rng.randint(1, 4))]
+        requested: dict[StreamKey, list[str]] = {}
+        for t in topics:
+            for s in rng.sample([StreamKey(t, a, p) for a in AGGREGATIONS for p in PERIODS],
+                                rng.randint(1, 10)):
+                requested[s] = [f"sub{len(requested)}"]
+        levels = [rng.choice([1.0, 2.0, 4.0, 0.5]) for _ in range(3)]
+        prices: dict[tuple[str, str, int, int], float] = {}
+
+        def pricing(topic: str) -> streams.Price:
+            def price(aggregation: str, num: int, den: int) -> float:
+                return prices.setdefault((topic, aggregation, num, den),
+                                         rng.choice(levels) * den / num)
+            return price
+
+        planned = streams.plan_streams(requested, {t: i for i, t in enumerate(topics)}, pricing)
+        sent = [p.stream for p in planned if p.sent]
+        assert len({p.stream for p in planned}) == len(planned)
+        assert [p.id for p in planned if p.sent] == list(range(len(sent)))
+        for p in planned:
+            if not p.sent:
+                assert p.sources == find_sources(p.stream, sent), p.stream
+            assert p.subscribers == tuple(requested.get(p.stream, ()))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_relations_sources_match_find_sources(seed: int) -> None:
+    """The relations' sources of one stream from any kept set (with or
+    without a helper ALL stream) against find_sources over those streams:
+    many candidates per rule, so the preference order is exercised."""
+    rng = random.Random(200 + seed)
+    pool = [StreamKey("d.s.v", a, p) for a in AGGREGATIONS for p in PERIODS]
+    for _ in range(300):
+        required = rng.sample(pool, rng.randint(2, 30))
+        relations = streams._Relations(required, [rng.random() for _ in required])
+        n = len(required)
+        helper = rng.choice([None, StreamKey("d.s.v", "ALL", rng.choice(PERIODS))])
+        if helper is not None and helper in required:
+            helper = None
+        kept = [rng.random() < 0.7 for _ in range(n)] + [helper is not None]
+        for r in range(n):
+            was, kept[r] = kept[r], False
+            sent = [s for s, k in zip(relations.streams, kept, strict=False) if k]
+            expected = find_sources(relations.streams[r], sent + ([helper] if helper else []))
+            assert relations.sources(r, kept, helper) == expected
+            kept[r] = was
