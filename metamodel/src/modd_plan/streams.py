@@ -243,7 +243,7 @@ class _Relations:
         # unique within a topic, so the position is never compared
         ranked = sorted(zip(costs, [s._sort_period for s in required],  # type: ignore
                             [-_AGG_INDEX[s.aggregation] for s in required],
-                            range(len(required))), reverse=True)
+                            range(len(required)), strict=True), reverse=True)
         self.order = order = [t[3] for t in ranked]
         self.costs = [t[0] for t in ranked]
         self.streams = streams = [required[i] for i in order]
@@ -487,7 +487,7 @@ def plan_streams(
         streams = relations.streams
         # contract order: aggregation order, then period
         ranked = sorted(zip([_AGG_INDEX[a] for a in relations.aggs],
-                            [s._sort_period for s in streams], range(n)))  # type: ignore
+                            [s._sort_period for s in streams], range(n), strict=True))  # type: ignore
         if helper is not None:  # nobody's: its place among the others
             ranked.append((_AGG_INDEX[agg.ALL], helper._sort_period, n))  # type: ignore
             ranked.sort()

@@ -92,7 +92,8 @@ def test_plan_streams_sources_match_find_sources(seed: int) -> None:
         levels = [rng.choice([1.0, 2.0, 4.0, 0.5]) for _ in range(3)]
         prices: dict[tuple[str, str, int, int], float] = {}
 
-        def pricing(topic: str) -> streams.Price:
+        def pricing(topic: str, prices: dict[tuple[str, str, int, int], float] = prices,
+                    levels: list[float] = levels) -> streams.Price:
             def price(aggregation: str, num: int, den: int) -> float:
                 return prices.setdefault((topic, aggregation, num, den),
                                          rng.choice(levels) * den / num)
