@@ -203,15 +203,16 @@ def _seconds(us: int) -> str:
     return fraction_to_decimal(Fraction(us, MICROS_PER_SECOND)) + " s"
 
 
+@lru_cache(maxsize=65_536)  # bounded: many infeasible topics repeat few figures
+def _half_seconds(us: int) -> str:
+    return fraction_to_decimal(Fraction(us, 2 * MICROS_PER_SECOND)) + " s"
+
+
 def _explain(
     topic: str, subs: Sequence[Subscription], pm_us: int, m: IntArray | Sequence[int],
     cap_us: int, first_n: int
 ) -> str:
-    def sec(us: int | Fraction) -> str:
-        if isinstance(us, int):
-            return _seconds(us)
-        return fraction_to_decimal(Fraction(us) / MICROS_PER_SECOND) + " s"
-
+    sec = _seconds
     lo = min(subs, key=lambda s: s.period_us)
     hi = max(subs, key=lambda s: s.period_us)
     cap = sec(cap_us)
@@ -219,7 +220,7 @@ def _explain(
         return (
             f"subscription periods range from {sec(lo.period_us)} ({lo.name}) to "
             f"{sec(hi.period_us)} ({hi.name}): whatever the buffer size, one of them waits at "
-            f"least {sec(Fraction(hi.period_us - lo.period_us, 2))} more or less than its period, "
+            f"least {_half_seconds(hi.period_us - lo.period_us)} more or less than its period, "
             f"over the limit 3 x PING = {cap}"
         )
     i = int(m.argmin()) if hasattr(m, "argmin") else min(range(len(m)), key=m.__getitem__)
@@ -269,7 +270,7 @@ def _fronts_both(
     bad = [r for r, ok in enumerate(any_allowed) if not ok]
     if bad:
         everything = _segment_fronts(tables, np.repeat(~any_allowed, np.diff(starts)))
-    for r, (i, topic, pm_us, subs, lo, _) in enumerate(rows):
+    for r, (i, topic, pm_us, subs, _, lo, _) in enumerate(rows):
         if any_allowed[r]:
             fronts[i] = relaxed[i] = capped[r]
             continue
@@ -277,7 +278,7 @@ def _fronts_both(
         assert cap is not None
         m = m_all[starts[r]:starts[r + 1]]
         infeasible.append(
-            Infeasibility(topic, tuple(x.name for x in subs), _explain(topic, subs, pm_us, m, cap,
+            Infeasibility(topic, tuple([x.name for x in subs]), _explain(topic, subs, pm_us, m, cap,
                                                                        lo)))
         relaxed[i] = everything[r]
     return fronts, infeasible, relaxed
@@ -312,22 +313,22 @@ def _front_arrays(
         order = np.argsort(seg, kind="stable")  # rows in order, each row's points kept
         m, s, n, seg = m[order], s[order], n[order], seg[order]
         for r in bad:
-            _, topic, pm_us, subs, lo, _ = rows[r]
+            _, topic, pm_us, subs, _, lo, _ = rows[r]
             cap = caps[r]
             assert cap is not None
             infeasible.append(Infeasibility(
-                topic, tuple(x.name for x in subs),
+                topic, tuple([x.name for x in subs]),
                 _explain(topic, subs, pm_us, m_all[starts[r]:starts[r + 1]], cap, lo)))
     bounds = np.searchsorted(seg, np.arange(len(rows) + 1, dtype=np.int64))
     return m, s, n, bounds, infeasible
 
 
-Row = tuple[int, str, int, list[Subscription], int, int]
+Row = tuple[int, str, int, list[Subscription], list[int], int, int]
 
 
 def _rows(problem: BufferProblem) -> list[Row]:
-    """(topic index, topic, pm µs, its subscriptions, lo, hi) of every
-    subscribed topic, ``lo..hi`` narrowed to :func:`front_range`;
+    """(topic index, topic, pm µs, its subscriptions, their periods sorted,
+    lo, hi) of every subscribed topic, ``lo..hi`` narrowed to :func:`front_range`;
     BufferTooLarge past :data:`CANDIDATE_LIMIT` (counted over
     :func:`candidate_range`, the bound a model is told about)."""
     rows: list[Row] = []
@@ -336,11 +337,11 @@ def _rows(problem: BufferProblem) -> list[Row]:
     ):
         if not subs:
             continue
-        periods = sorted(x.period_us for x in subs)
+        periods = sorted([x.period_us for x in subs])
         lo, hi = candidate_range(periods, pm_us, problem.max_buffer)
         if hi - lo + 1 > CANDIDATE_LIMIT:
             raise BufferTooLarge(topic, [x.name for x in subs], hi - lo + 1)
-        rows.append((i, topic, pm_us, subs, *front_range(periods, pm_us, lo, hi)))
+        rows.append((i, topic, pm_us, subs, periods, *front_range(periods, pm_us, lo, hi)))
     return rows
 
 
@@ -387,13 +388,13 @@ def _tables(
     lengths = np.array([hi - lo + 1 for *_, lo, hi in rows], dtype=np.int64)
     starts = np.concatenate(([0], np.cumsum(lengths)))
     # every row's periods, sorted within the row, rows in order
-    per_row = [sorted([x.period_us for x in r[3]]) for r in rows]
+    per_row = [r[4] for r in rows]
     big_ps = max(p[-1] for p in per_row)
-    big_x = max(hi * pm for _, _, pm, _, _, hi in rows)
+    big_x = max(hi * pm for _, _, pm, *_, hi in rows)
     if (max(big_ps, big_x).bit_length() >= _BATCH_VALUE_BITS
             or len(rows).bit_length() >= _BATCH_ROWS_BITS):
         parts = [topic_table([x.period_us for x in subs], pm, problem.max_buffer, lo, hi)
-                 for _, _, pm, subs, lo, hi in rows]
+                 for _, _, pm, subs, _, lo, hi in rows]
         n = np.concatenate([np.arange(lo, hi + 1, dtype=np.int64) for *_, lo, hi in rows])
         s_all = np.concatenate([p[0] for p in parts])
         m_all = np.concatenate([p[1] for p in parts])
@@ -556,7 +557,7 @@ def _solve_small(problem: BufferProblem) -> BufferSolution:
     on lists: tables, fronts, the sweep over w, the sizes)."""
     fronts: list[tuple[list[int], list[int], list[int]] | None] = [None] * len(problem.topics)
     infeasible: list[Infeasibility] = []
-    for i, topic, pm_us, subs, lo, hi in _rows(problem):
+    for i, topic, pm_us, subs, _, lo, hi in _rows(problem):
         ps = [x.period_us for x in subs]
         first, last = min(ps), max(ps)
         xs = [n * pm_us for n in range(lo, hi + 1)]
@@ -568,7 +569,7 @@ def _solve_small(problem: BufferProblem) -> BufferSolution:
         if not allowed:
             assert cap is not None
             reason = _explain(topic, subs, pm_us, m, cap, lo)
-            infeasible.append(Infeasibility(topic, tuple(x.name for x in subs), reason))
+            infeasible.append(Infeasibility(topic, tuple([x.name for x in subs]), reason))
             allowed = list(range(len(m)))  # the cap lifted for this topic
         fm: list[int] = []
         fs: list[int] = []

@@ -161,11 +161,20 @@ WalkedSlot = tuple[int, int, int, list[int]]
 def exact_sum(values: Iterable[Fraction]) -> Fraction:
     """``sum(values, Fraction(0))``, exactly, with one Fraction addition per
     distinct denominator (a plan's window sizes repeat few): the numerators
-    of each denominator are added as integers."""
-    by_den: dict[int, int] = {}
+    of each denominator are added as integers, each distinct object's once
+    times its count (a Fraction's numerator and denominator are properties;
+    each object is held while counted, so its ``id`` is not reused)."""
+    seen: dict[int, list[Any]] = {}
     for v in values:
+        entry = seen.get(id(v))
+        if entry is None:
+            seen[id(v)] = [v, 1]
+        else:
+            entry[1] += 1
+    by_den: dict[int, int] = {}
+    for v, count in seen.values():
         d = v.denominator
-        by_den[d] = by_den.get(d, 0) + v.numerator
+        by_den[d] = by_den.get(d, 0) + v.numerator * count
     return sum((Fraction(n, d) for d, n in by_den.items()), Fraction(0))
 
 

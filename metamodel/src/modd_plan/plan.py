@@ -366,7 +366,15 @@ def _make_plan(
                        f"/subscribers/{position[name]}/periodS")
             for name in exc.subscribers[:_MAX_NAMED]
         ]) from exc
-    window_bytes = [_window_bytes(s.stream, tops) for s in sent]
+
+    def window(stream: StreamKey) -> Fraction:  # _window_bytes, from the topic's integers
+        topic = published.get(stream.topic)
+        if topic is None:
+            return _window_bytes(stream, tops)
+        pn, pd = stream._nd  # type: ignore[attr-defined]
+        return _bytes(stream.aggregation, topic[0], pn * topic[2], pd * topic[1])
+
+    window_bytes = [window(s.stream) for s in sent]
     return Plan(
         topics=tuple(tops.values()),
         streams=streams,

@@ -105,3 +105,9 @@ def test_exact_sum_equals_the_fraction_sum() -> None:
                   for _ in range(rng.randint(0, 40))]
         assert exact_sum(values) == sum(values, Fraction(0))
         assert isinstance(exact_sum(values), Fraction)
+        # the same objects many times (a plan's window sizes), and temporaries
+        # made one by one (an object freed early could lend its id to the next)
+        repeated = [rng.choice(values or [Fraction(1, 3)]) for _ in range(50)]
+        assert exact_sum(repeated) == sum(repeated, Fraction(0))
+        assert exact_sum(Fraction(v.numerator + 1, v.denominator) for v in repeated) == sum(
+            (Fraction(v.numerator + 1, v.denominator) for v in repeated), Fraction(0))
