@@ -42,9 +42,9 @@ from .streams import (
     PlannedStream,
     Price,
     StreamKey,
+    asked_streams,
     period_of,
     plan_streams,
-    subscription_keys,
 )
 
 METHODS = ("exact", "cvxpy")
@@ -327,11 +327,8 @@ def _make_plan(
     )
     tops = topics(dict(model))
     index = {name: i for i, name in enumerate(tops)}
-    keys = subscription_keys(model)
-    requested: dict[StreamKey, list[str]] = {}
-    for sub, key in zip(model.get("subscribers", []), keys, strict=True):
-        requested.setdefault(key, []).append(sub["name"])
-    for key in requested:
+    requested, subscriptions = asked_streams(model)
+    for key, _ in requested:
         if key.topic not in index:
             index[key.topic] = len(index)
 
@@ -350,7 +347,7 @@ def _make_plan(
 
     streams = plan_streams(requested, index, pricing)
     sent = sorted((s for s in streams if s.id is not None), key=lambda s: s.id or 0)
-    hyper = _hyperperiod_us(model, requested)
+    hyper = _hyperperiod_us(model, [key for key, _ in requested])
     sched = Schedule.from_periods_us([_key_us(s.stream) for s in sent], hyper)
     try:
         sched.check_bounds()
@@ -378,9 +375,7 @@ def _make_plan(
     return Plan(
         topics=tuple(tops.values()),
         streams=streams,
-        subscriptions={
-            sub["name"]: key for sub, key in zip(model.get("subscribers", []), keys, strict=True)
-        },
+        subscriptions=subscriptions,
         schedule=sched,
         buffers=buffers,
         unpublished=unpublished,
@@ -390,7 +385,7 @@ def _make_plan(
     )
 
 
-def _hyperperiod_us(model: Mapping[str, Any], requested: Mapping[StreamKey, Any]) -> int:
+def _hyperperiod_us(model: Mapping[str, Any], requested: Sequence[StreamKey]) -> int:
     """LCM of every requested period (µs), within :data:`HYPERPERIOD_BITS_LIMIT`."""
     hyper = 1 if requested else 0
     for us in dict.fromkeys(_key_us(key) for key in requested):  # distinct, in order

@@ -123,18 +123,30 @@ class PlannedStream:
         return self.id is not None
 
 
-def subscription_keys(model: Mapping[str, Any]) -> list[StreamKey]:
-    """The stream of each subscriber, in model order (one object per
-    distinct stream)."""
-    seen: dict[tuple[str, str, str], StreamKey] = {}
-    out: list[StreamKey] = []
+def asked_streams(
+    model: Mapping[str, Any],
+) -> tuple[list[tuple[StreamKey, list[str]]], dict[str, StreamKey]]:
+    """Each distinct stream the subscribers ask for, with its subscribers in
+    model order (streams in the order first asked), and each subscriber's
+    stream. One key object per distinct stream: texts of one period ("1",
+    "1.0") give one stream. Found by (topic, aggregation, numerator,
+    denominator) tuples, whose hash is C's, never by a StreamKey's."""
+    by_text: dict[tuple[str, str, str], tuple[StreamKey, list[str]]] = {}
+    by_stream: dict[tuple[str, str, int, int], tuple[StreamKey, list[str]]] = {}
+    subscriptions: dict[str, StreamKey] = {}
     for sub in model.get("subscribers", []):
         text = (sub["topic"], sub["aggregation"], sub["periodS"])
-        key = seen.get(text)
-        if key is None:
-            key = seen[text] = StreamKey(text[0], text[1], period_of(text[2]))
-        out.append(key)
-    return out
+        entry = by_text.get(text)
+        if entry is None:
+            period = period_of(text[2])
+            ident = (text[0], text[1], period.numerator, period.denominator)
+            entry = by_stream.get(ident)
+            if entry is None:
+                entry = by_stream[ident] = (StreamKey(text[0], text[1], period), [])
+            by_text[text] = entry
+        entry[1].append(sub["name"])
+        subscriptions[sub["name"]] = entry[0]
+    return list(by_stream.values()), subscriptions
 
 
 def decimal_of(value: Fraction) -> str:
@@ -450,12 +462,12 @@ def choose_sent(
 
 
 def plan_streams(
-    requested: Mapping[StreamKey, Sequence[str]],
+    requested: Iterable[tuple[StreamKey, Sequence[str]]],
     topic_index: Mapping[str, int],
     pricing: Callable[[str], Price],
 ) -> tuple[PlannedStream, ...]:
-    """Every requested stream, in contract order, with its id if sent or its
-    sources if derived.
+    """Every requested stream (with its subscribers), in contract order,
+    with its id if sent or its sources if derived.
 
     Topic by topic (the contract's order begins with the topic's), so that
     the choice, the order, the ids and the sources are decided on a few
@@ -463,7 +475,7 @@ def plan_streams(
     :func:`choose_sent`, the order of :func:`stream_order`, the sources of
     :func:`find_sources`."""
     by_topic: dict[str, list[tuple[StreamKey, Sequence[str]]]] = {}
-    for pair in requested.items():
+    for pair in requested:
         by_topic.setdefault(pair[0].topic, []).append(pair)
     out: list[PlannedStream] = []
     append = out.append

@@ -99,7 +99,8 @@ def test_plan_streams_sources_match_find_sources(seed: int) -> None:
                                          rng.choice(levels) * den / num)
             return price
 
-        planned = streams.plan_streams(requested, {t: i for i, t in enumerate(topics)}, pricing)
+        index = {t: i for i, t in enumerate(topics)}
+        planned = streams.plan_streams(requested.items(), index, pricing)
         sent = [p.stream for p in planned if p.sent]
         assert len({p.stream for p in planned}) == len(planned)
         assert [p.id for p in planned if p.sent] == list(range(len(sent)))
@@ -130,3 +131,16 @@ def test_relations_sources_match_find_sources(seed: int) -> None:
             expected = find_sources(relations.streams[r], sent + ([helper] if helper else []))
             assert relations.sources(r, kept, helper) == expected
             kept[r] = was
+
+
+def test_asked_streams_one_stream_per_period_whatever_its_text() -> None:
+    model = {"subscribers": [
+        {"name": f"s{k}", "topic": "d.s.v", "aggregation": "MAX", "periodS": p}
+        for k, p in enumerate(["1", "2.0", "1.0", "2", "1.00", "0.5"])
+    ]}
+    requested, subscriptions = streams.asked_streams(model)
+    assert [(k.key, names) for k, names in requested] == [
+        ("d.s.v/MAX/1.0", ["s0", "s2", "s4"]), ("d.s.v/MAX/2.0", ["s1", "s3"]),
+        ("d.s.v/MAX/0.5", ["s5"])]
+    assert subscriptions["s4"] is requested[0][0] and subscriptions["s3"] is requested[1][0]
+    assert len(subscriptions) == 6
