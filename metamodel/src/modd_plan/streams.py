@@ -49,14 +49,16 @@ class StreamKey:
     aggregation: str
     period: Fraction
 
-    def __init__(self, topic: str, aggregation: str, period: Fraction) -> None:
+    def __init__(self, topic: str, aggregation: str, period: Fraction,
+                 nd: tuple[int, int] | None = None) -> None:
         # All attributes written into the instance's __dict__ at once (a
         # frozen dataclass's __init__ sets each through object.__setattr__).
         # Fraction.__hash__ computes a modular inverse and its numerator and
-        # denominator are properties: both are read once here. The derived
-        # ones are not fields: equality, repr and order stay those of
-        # (topic, aggregation, period).
-        nd = (period.numerator, period.denominator)
+        # denominator are properties: both are read once here (or given as
+        # ``nd``). The derived ones are not fields: equality, repr and order
+        # stay those of (topic, aggregation, period).
+        if nd is None:
+            nd = (period.numerator, period.denominator)
         self.__dict__.update(
             topic=topic,
             aggregation=aggregation,
@@ -138,11 +140,11 @@ def asked_streams(
         text = (sub["topic"], sub["aggregation"], sub["periodS"])
         entry = by_text.get(text)
         if entry is None:
-            period = period_of(text[2])
-            ident = (text[0], text[1], period.numerator, period.denominator)
+            period, nd = _period_parts(text[2])
+            ident = (text[0], text[1], *nd)
             entry = by_stream.get(ident)
             if entry is None:
-                entry = by_stream[ident] = (StreamKey(text[0], text[1], period), [])
+                entry = by_stream[ident] = (StreamKey(text[0], text[1], period, nd), [])
             by_text[text] = entry
         entry[1].append(sub["name"])
         subscriptions[sub["name"]] = entry[0]
@@ -158,6 +160,13 @@ def decimal_of(value: Fraction) -> str:
 @lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
 def _decimal_of(numerator: int, denominator: int) -> str:
     return fraction_to_decimal(Fraction(numerator, denominator))
+
+
+@lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
+def _period_parts(text: str) -> tuple[Fraction, tuple[int, int]]:
+    """A period text's Fraction and its (numerator, denominator)."""
+    period = period_of(text)
+    return period, (period.numerator, period.denominator)
 
 
 @lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
@@ -304,19 +313,21 @@ class _Relations:
                     pairs[r] = [[*g, n] if k in joined else g for k, g in enumerate(groups)]
         kept = [True] * (n + 1)  # the helper (index n) stays kept
         is_kept = kept.__getitem__
+        def derivable(r: int) -> bool:
+            if any(map(is_kept, singles[r])):
+                return True
+            groups = pairs[r]
+            return groups is not None and all(any(map(is_kept, g)) for g in groups)
+
         dropped: list[int] = []
         for i in range(n):
             kept[i] = False
-            dropped.append(i)
-            for r in dropped:  # every dropped stream still derivable?
-                if any(map(is_kept, singles[r])):
-                    continue
-                groups = pairs[r]
-                if groups is not None and all(any(map(is_kept, g)) for g in groups):
-                    continue
+            # i itself first: most streams that stay are those the others
+            # cannot serve; then every stream dropped before it
+            if derivable(i) and all(map(derivable, dropped)):
+                dropped.append(i)
+            else:
                 kept[i] = True
-                dropped.pop()
-                break
         out = [i for i in range(n) if kept[i]]
         return out + [n] if helper is not None else out
 
