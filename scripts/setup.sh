@@ -27,7 +27,16 @@ if ! command -v uv >/dev/null 2>&1; then
   python3 -m pip install --quiet --disable-pip-version-check uv
 fi
 
-uv sync --quiet --all-packages
+# --compile-bytecode: the dependencies' bytecode written once here, as pip
+# does, not compiled again by every process (where PYTHONDONTWRITEBYTECODE is
+# set, Python never writes it: the backend's imports then cost 3.5 s of CPU
+# per start instead of 1.3-2 s, `modd plan` 0.6 s instead of 0.15-0.23 s).
+# uv sync skips what is compiled already.
+uv sync --quiet --all-packages --compile-bytecode
+# the same for the workspace's own sources (editable: not in site-packages);
+# compileall skips the files whose bytecode is current
+.venv/bin/python -m compileall -q -j 0 metamodel/src runtime/python/src backend/src \
+  generators/src >/dev/null
 
 if [ -f frontend/package.json ]; then
   if [ ! -d frontend/node_modules ] || [ frontend/package-lock.json -nt frontend/node_modules/.package-lock.json ]; then
