@@ -5,7 +5,7 @@ diagnostics saying why there is none. Same code as the brokers run.
 {'usv.accelerometer.accel_x': 28, ...}
 
 The HTTP routes never plan (nor parse, nor validate) on the event loop or in
-the shared thread pool: :func:`guarded_plan` sends the request to a small
+the shared thread pool: :func:`guarded_call` sends the request to a small
 pool of worker processes (:data:`PLAN_WORKERS`), each under an address-space
 limit (:data:`PLAN_MEMORY_BYTES`); a request may plan :data:`PLAN_TIMEOUT_S`
 (a timer in the worker stops it and the answer says so); a worker that does
@@ -177,20 +177,13 @@ def _failed(message: str, elapsed_ms: float) -> dict[str, Any]:
     return LivePlan(None, diagnostics_json([Diagnostic(message, "")]), elapsed_ms).to_json()
 
 
-async def guarded_plan(
-    model: dict[str, Any] | None, text: str | None, fmt: str, method: Method
-) -> dict[str, Any]:
-    """:func:`plan_request` in a worker process, within the time and memory
-    budget; 503 (Retry-After) when too many requests already wait."""
-    return await guarded_call(plan_request, model, text, fmt, method)
-
-
 async def guarded_call(fn: Callable[..., T], *args: Any) -> T | dict[str, Any]:
     """``fn(*args, timeout_s)`` (:func:`plan_request` or a function around it
     that also reads the request body and serialises its answer, so that the
     event loop neither parses a model of 4 MiB nor walks a plan of 10 MB) in
     a worker process, within the time and memory budget; the failure's
-    LivePlan JSON when the worker is over it."""
+    LivePlan JSON when the worker is over it; 503 (Retry-After) when too
+    many requests already wait."""
     global _waiting
     if _waiting >= PLAN_QUEUE:
         raise HTTPException(503, "the planner is busy; retry shortly",

@@ -242,3 +242,23 @@ TEST(DgramLink, ASlotLargerThanThePacketGoesAsFragmentsAndIsResentWhole) {
   EXPECT_EQ(s.link.counters().dropped, 1u);
   EXPECT_TRUE(s.link.add_slot(1, 3, 4 * q, {9}, {true}));
 }
+
+// The overhead the backfill pace counts per frame, against what the codec and the serial
+// framing really add to a frame of one packet (counters up to 2^28).
+TEST(DgramLink, ControlFrameOverheadBoundsTheWire) {
+  Mac key{};
+  for (size_t n : {1u, 60u, 200u, 230u}) {
+    std::vector<uint8_t> frame(n, 0x00);  // zeros: COBS's worst case
+    for (uint64_t counter : {1ull, 1000ull, (1ull << 28) - 1}) {
+      auto datagram = dg::encode_control(counter, frame, key, dg::kDroneToBase);
+      size_t udp = datagram.size() - n + 28;
+      EXPECT_LE(udp, control_frame_overhead(false)) << n << " " << counter;
+      size_t serial = dg::encode_frame(datagram).size() - n;
+      EXPECT_LE(serial, control_frame_overhead(true)) << n << " " << counter;
+      if (counter == (1ull << 28) - 1) {  // the bound is reached: not a loose guess
+        EXPECT_EQ(udp, control_frame_overhead(false));
+        EXPECT_EQ(serial, control_frame_overhead(true));
+      }
+    }
+  }
+}

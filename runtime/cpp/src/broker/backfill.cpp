@@ -147,7 +147,7 @@ void BackfillSender::pump(const Env& env, std::vector<std::vector<uint8_t>>& fra
       if (j.batch_bytes < frame_budget() && j.batch.size() < bf::kMaxBatch && !last && !j.waiting) continue;
       std::vector<uint8_t> f;
       bf::encode_data(f, bf::DataFrame{j.req.request_id, j.next, j.batch}, j.kind);
-      double cost = static_cast<double>(f.size() + kSegmentOverhead);
+      double cost = static_cast<double>(f.size() + frame_overhead_);
       // Live first: the frame goes only if it is through before the next slot: its time at
       // the pace (an upper bound of its air time, the pace being at most the radio's rate),
       // capped at kGuardNs so that a slow pace still finds room between 4 Hz slots.

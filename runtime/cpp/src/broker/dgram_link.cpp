@@ -40,6 +40,12 @@ size_t serial_capacity(size_t packet) {
   return n;
 }
 
+size_t control_frame_overhead(bool serial) {
+  constexpr size_t kDatagram = 1 + 4 + dg::kControlTag;
+  constexpr size_t kUdpIp = 28;  // IPv4 20 + UDP 8
+  return kDatagram + (serial ? serial_frame_bytes(0) : kUdpIp);
+}
+
 DatagramLink::DatagramLink(std::string psk, LinkHooks& hooks, DatagramOut& out, DgramOptions opt,
                            std::function<Nonce()> nonce_source)
     : psk_(std::move(psk)), hooks_(hooks), out_(out), opt_(opt), delay_ns_(opt.delay_ns), nonce_source_(std::move(nonce_source)) {}

@@ -84,7 +84,7 @@ Server::Server(const BrokerConfig& cfg, std::string key, Clock& clock)
     o.keepalive_timeout_ns = int64_t{cfg_.link_keepalive_timeout_s} * 1'000'000'000;
     o.ring_bytes = cfg_.link_ring_bytes;
     dlink_ = std::make_unique<DatagramLink>(key_, *broker_, *this, o, [] { return link::random_nonce(); });
-    broker_->set_backfill_max_datagram(o.max_datagram);
+    broker_->set_backfill_link(o.max_datagram, control_frame_overhead(cfg_.link_transport == "serial"));
     open_dgram_port();
     if (!port_) throw Error(ErrorCode::Io, "cannot open the link device " + cfg_.link_device);
   }

@@ -21,7 +21,8 @@ namespace modd::broker {
 class BackfillSender {
  public:
   static constexpr size_t kMaxJobs = 8;
-  // Bytes a TCP segment adds on the wire (IPv4 + TCP with timestamps): counted by the pace.
+  // Bytes a TCP segment adds on the wire (IPv4 + TCP with timestamps): what the pace
+  // counts per frame unless the link says otherwise (set_frame_overhead).
   static constexpr size_t kSegmentOverhead = 52;
 
   struct Env {
@@ -48,6 +49,10 @@ class BackfillSender {
   // `max_datagram` bytes (0: no cap, tcp). Exact for every aggregation but ALL, whose one
   // window may be larger than any cap (then it goes alone and the radio may drop it).
   void set_max_datagram(size_t max_datagram) { max_datagram_ = max_datagram; }
+  // Bytes the link adds to each frame on the wire, counted by the pace with the frame
+  // (kSegmentOverhead on tcp; a datagram link's: control_frame_overhead()).
+  void set_frame_overhead(size_t bytes) { frame_overhead_ = bytes; }
+  size_t frame_overhead() const { return frame_overhead_; }
   // The cap on a frame's window bytes for the link (SIZE_MAX when none).
   size_t window_bytes_cap() const;
 
@@ -79,6 +84,7 @@ class BackfillSender {
   int64_t refilled_at_ = 0;
   uint64_t bytes_sent_ = 0;
   size_t max_datagram_ = 0;
+  size_t frame_overhead_ = kSegmentOverhead;
 };
 
 }  // namespace modd::broker

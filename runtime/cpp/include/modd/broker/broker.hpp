@@ -141,7 +141,12 @@ class Broker final : public LinkHooks, public FrameSink {
   void pump_backfill(int64_t now);
   int64_t backfill_wake_ns(int64_t now) const { return backfill_.next_wake_ns(now); }
   const BackfillSender& backfill() const { return backfill_; }
-  void set_backfill_max_datagram(size_t n) { backfill_.set_max_datagram(n); }
+  // A datagram link: backfill frames fit one control datagram of at most `max_datagram`
+  // bytes, and the pace counts the link's bytes per frame (`frame_overhead`).
+  void set_backfill_link(size_t max_datagram, size_t frame_overhead) {
+    backfill_.set_max_datagram(max_datagram);
+    backfill_.set_frame_overhead(frame_overhead);
+  }
   // FrameSink
   bool send_data(std::vector<uint8_t>&& frame) override;
   bool wants_slots() const override { return out_.datagrams(); }

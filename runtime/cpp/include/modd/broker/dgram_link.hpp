@@ -125,5 +125,10 @@ class DatagramLink {
 // Largest datagram whose serial frame (COBS over datagram + CRC-16, then 0x00)
 // fits a radio packet of `packet` bytes.
 size_t serial_capacity(size_t packet);
+// Bytes a datagram link adds on the wire to one frame sent in a CONTROL datagram of at
+// most one packet: the datagram's type, counter (4 bytes: up to 2^28 datagrams) and tag,
+// then IPv4 + UDP headers, or the serial framing (CRC-16, COBS code byte, delimiter).
+// The backfill pace counts them (tcp: BackfillSender::kSegmentOverhead).
+size_t control_frame_overhead(bool serial);
 
 }  // namespace modd::broker
