@@ -15,6 +15,7 @@ from modd.link.datagram import (
     DRONE_TO_BASE,
     DataDatagram,
     encode_control,
+    encode_control_fragments,
     encode_data,
     encode_fragments,
     encode_handshake,
@@ -68,6 +69,13 @@ def write(here: Path) -> None:
     forged_frag[5] ^= 0x80
     forged = bytearray(data)
     forged[5] ^= 0x01
+    # scenario 1's CONFIG frame (config_scenario1.json) cut for 40-byte datagrams
+    config = bytes.fromhex(json.loads((here / "config_scenario1.json").read_text())["hex"])
+    cfrags = encode_control_fragments(1000, config, 40, skey, BASE_TO_DRONE)
+    forged_cfrag = bytearray(cfrags[2])
+    forged_cfrag[6] ^= 0x01
+    cbad_index = bytes([0x42]) + bytes.fromhex("e807") + bytes([0x21, 0xAA])  # piece 2 of 2
+    cbad_index += tag(skey, BASE_TO_DRONE, 1000, cbad_index, 8)
     cases: list[dict[str, Any]] = [
         {"name": "data_scenario1_5_slots", "direction": "D", "expected_slot": 69990,
          "meaning": "config 1, slots 70000..70004 of scenario 1 (slot i: AVERAGE 0.5+i count 6,"
@@ -95,6 +103,13 @@ def write(here: Path) -> None:
          "config_id": 1, "slot": 65537, "max_datagram": 15, "body": big_body.hex(),
          "presence": big_presence, "values": big_values.hex(),
          "fragments": [f.hex() for f in frags]},
+        {"name": "control_fragments_of_a_config", "direction": "B", "counter": 1000,
+         "meaning": "scenario 1's CONFIG frame (config_scenario1.json) too large for a "
+                    "40-byte datagram, cut into control fragments (0x42) under counters "
+                    "1000, 1001, ...: counter varint, frag = index << 4 | count - 1, the "
+                    "piece (at most 40 - 15 B), the 8-byte CONTROL tag with the counter as seq",
+         "max_datagram": 40, "frames": config.hex(),
+         "fragments": [f.hex() for f in cfrags]},
         {"name": "serial_data_scenario1_5_slots",
          "meaning": "data_scenario1_5_slots framed for serial: COBS(datagram + CRC-16 LE) 00",
          "hex": encode_frame(data).hex(), "datagram": data.hex()},
@@ -110,6 +125,13 @@ def write(here: Path) -> None:
         {"name": "fragment_index_beyond_count", "direction": "D", "expected_slot": 65530,
          "hex": bad_index.hex(), "kind": "fragment",
          "why": "a fragment whose tag verifies but says piece 2 of 2: refused (BAD_FRAME at 4)"},
+        {"name": "control_fragment_forged", "direction": "B", "hex": forged_cfrag.hex(),
+         "kind": "control_fragment",
+         "why": "a control fragment with one piece bit flipped: the tag does not verify"},
+        {"name": "control_fragment_index_beyond_count", "direction": "B",
+         "hex": cbad_index.hex(), "kind": "control_fragment",
+         "why": "a control fragment whose tag verifies but says piece 2 of 2: refused "
+                "(BAD_FRAME at 3)"},
         {"name": "replay", "direction": "D", "expected_slot": 69990, "hex": data.hex(),
          "why": "the valid datagram again after it was accepted: refused by the replay window"},
     ]

@@ -36,8 +36,8 @@ from conftest import Collector
 
 pytestmark = pytest.mark.usefixtures("needs_pubbroker")
 
-# The radio's largest frame: room for scenario 1's CONFIG (a control datagram of
-# ~130 B framed; control frames are not cut), not for 2 s of 25 Hz samples (ALL, ~220 B).
+# The radio's largest frame: room for scenario 1's CONFIG in one control datagram (~130 B
+# framed), not for 2 s of 25 Hz samples (ALL, ~220 B).
 PACKET = 144
 PERIOD_NS = 2_000_000_000
 

@@ -1,9 +1,11 @@
 // libFuzzer target: the datagram transports' receive path (tag check of DATA,
-// fragment and control datagrams, fragment cutting, the serial deframer, COBS) fed arbitrary bytes. Must
+// fragment, control and control fragment datagrams, fragment cutting and putting back
+// together, the serial deframer, COBS) fed arbitrary bytes. Must
 // never crash, leak or hit UB; nothing unauthenticated is ever returned.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <optional>
 #include <span>
 
 #include "modd/link/datagram.hpp"
@@ -33,6 +35,28 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::abort();
   } catch (const Forged&) {
   } catch (const Error&) {
+  }
+  try {
+    verify_control_fragment(in, key, kBaseToDrone);
+    std::abort();
+  } catch (const Forged&) {
+  } catch (const Error&) {
+  }
+  // control messages cut and put back together, in reverse order, bounded: the frames
+  // come back whole, each datagram within the packet
+  if (size > 0) {
+    size_t max = 16 + data[0] % 240;
+    try {
+      auto frags = encode_control_fragments(1000 + size, in, max, key, kBaseToDrone);
+      ControlPieces pieces;
+      std::optional<std::vector<uint8_t>> whole;
+      for (size_t k = frags.size(); k-- > 0;) {
+        if (frags[k].size() > max || whole) std::abort();
+        whole = pieces.add(verify_control_fragment(frags[k], key, kBaseToDrone));
+      }
+      if (!whole || *whole != std::vector<uint8_t>(in.begin(), in.end())) std::abort();
+    } catch (const std::invalid_argument&) {
+    }
   }
   // the sender's cutting: pieces put back together give the body, each within the packet
   if (size > 0) {

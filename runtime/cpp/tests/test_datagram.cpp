@@ -193,3 +193,73 @@ TEST(Datagram, InvalidFragmentsAreRefused) {
   }
   EXPECT_EQ(seen, 2);
 }
+
+TEST(Datagram, ControlFragmentVectorsVerifyAndEncodeBack) {
+  auto v = vectors();
+  Mac key = key_of(v);
+  const auto& c = by_name(v, "control_fragments_of_a_config");
+  auto frames = from_hex(c["frames"].get<std::string>());
+  uint64_t counter = c["counter"].get<uint64_t>();
+  auto frags = encode_control_fragments(counter, frames, c["max_datagram"].get<size_t>(), key, kBaseToDrone);
+  ASSERT_EQ(frags.size(), c["fragments"].size());
+  ASSERT_GT(frags.size(), 1u);
+  ControlPieces pieces;
+  std::optional<std::vector<uint8_t>> whole;
+  for (size_t k = frags.size(); k-- > 0;) {  // in reverse order
+    EXPECT_EQ(to_hex(frags[k]), c["fragments"][k].get<std::string>()) << k;
+    EXPECT_LE(frags[k].size(), c["max_datagram"].get<size_t>());
+    auto f = verify_control_fragment(frags[k], key, kBaseToDrone);
+    EXPECT_EQ(f.counter, counter + k);
+    EXPECT_EQ(f.index, k);
+    EXPECT_EQ(f.first(), counter);
+    EXPECT_EQ(f.count, frags.size());
+    EXPECT_FALSE(whole.has_value());
+    whole = pieces.add(std::move(f));
+  }
+  ASSERT_TRUE(whole.has_value());
+  EXPECT_EQ(*whole, frames);
+  EXPECT_THROW(encode_control_fragments(1, std::vector<uint8_t>(17 * 10), 25, key, kBaseToDrone), std::invalid_argument);
+}
+
+TEST(Datagram, InvalidControlFragmentsAreRefused) {
+  auto v = vectors();
+  Mac key = key_of(v);
+  int seen = 0;
+  for (const auto& c : v["invalid"]) {
+    if (!c.contains("kind") || c["kind"] != "control_fragment") continue;
+    ++seen;
+    auto raw = from_hex(c["hex"].get<std::string>());
+    if (c["name"] == "control_fragment_forged") {
+      EXPECT_THROW(verify_control_fragment(raw, key, dir(c)), Forged);
+    } else {
+      try {
+        verify_control_fragment(raw, key, dir(c));
+        ADD_FAILURE() << c["name"];
+      } catch (const Error& e) {
+        EXPECT_EQ(e.code(), ErrorCode::BadFrame);
+        EXPECT_EQ(e.offset(), 3u);
+      }
+    }
+  }
+  EXPECT_EQ(seen, 2);
+}
+
+TEST(Datagram, ControlPiecesAreBoundedAndRefuseAChangedCount) {
+  Mac key{};
+  std::vector<uint8_t> frames(200);
+  for (size_t i = 0; i < frames.size(); ++i) frames[i] = static_cast<uint8_t>(i);
+  ControlPieces pieces;
+  std::vector<std::vector<std::vector<uint8_t>>> messages;
+  for (uint64_t k = 1; k <= 6; ++k) messages.push_back(encode_control_fragments(100 * k, frames, 60, key, kBaseToDrone));
+  for (auto& m : messages) EXPECT_FALSE(pieces.add(verify_control_fragment(m[0], key, kBaseToDrone)));
+  EXPECT_EQ(pieces.given_up(), 2u);  // the oldest two
+  for (size_t i = 1; i < messages[0].size(); ++i)  // the rest of a message given up: never whole
+    EXPECT_FALSE(pieces.add(verify_control_fragment(messages[0][i], key, kBaseToDrone)));
+  std::optional<std::vector<uint8_t>> done;
+  for (size_t i = 1; i < messages[5].size(); ++i) done = pieces.add(verify_control_fragment(messages[5][i], key, kBaseToDrone));
+  ASSERT_TRUE(done.has_value());
+  EXPECT_EQ(*done, frames);
+  auto other = encode_control_fragments(500, std::vector<uint8_t>(300), 60, key, kBaseToDrone);
+  EXPECT_FALSE(pieces.add(verify_control_fragment(other[1], key, kBaseToDrone)));
+  EXPECT_EQ(pieces.malformed(), 1u);  // message 500 has 5 pieces, this one says 7
+}

@@ -9,6 +9,7 @@
 
 #include "modd/broker/dgram_link.hpp"
 #include "modd/link/auth.hpp"
+#include "modd/link/backfill.hpp"
 #include "modd/link/codec.hpp"
 #include "modd/link/datagram.hpp"
 
@@ -28,6 +29,10 @@ struct Hooks : LinkHooks {
   AuthOk current_config() override { return AuthOk{{}, 0, 0}; }
   void on_authenticated() override { ++auths; }
   void on_rejected(const std::string&) override { ++rejects; }
+  std::vector<uint8_t> backfill_reply;  // what a backfill request is answered with
+  void on_backfill(const RawFrame&, std::vector<uint8_t>& out) override {
+    out.insert(out.end(), backfill_reply.begin(), backfill_reply.end());
+  }
 };
 
 struct Out : DatagramOut {
@@ -261,4 +266,70 @@ TEST(DgramLink, ControlFrameOverheadBoundsTheWire) {
       }
     }
   }
+}
+
+// A CONFIG larger than one packet arrives as control fragments (scenario 2's on a SiK
+// radio): applied once every piece is there, in any order; a forged or replayed piece is
+// counted and dropped; the retry (every piece again, new counters) gets the same ack.
+TEST(DgramLink, AConfigCutIntoControlFragmentsIsAppliedOnce) {
+  Session s;
+  s.handshake(1, 0);
+  Config cfg;
+  cfg.config_id = 4;
+  for (uint32_t i = 0; i < 20; ++i) {
+    cfg.topics.push_back(TopicSpec{"usv.accelerometer.accel_" + std::to_string(i), ValueType::Float32, 28, 10'000});
+    cfg.streams.push_back(StreamSpec{i, Aggregation::Average, 250'000});
+  }
+  std::vector<uint8_t> frame;
+  encode(frame, Message{cfg});
+  ASSERT_GT(frame.size(), 3 * 200u);
+  auto pieces = dg::encode_control_fragments(s.counter + 1, frame, 200, s.key, dg::kBaseToDrone);
+  s.counter += pieces.size();
+  ASSERT_GE(pieces.size(), 4u);
+  auto forged = pieces[1];
+  forged[5] ^= 1;
+  s.link.on_datagram(forged, 1);
+  EXPECT_EQ(s.link.counters().forged, 1u);
+  size_t before = s.out.sent.size();
+  for (size_t k = pieces.size(); k-- > 1;) s.link.on_datagram(pieces[k], 2);
+  EXPECT_EQ(s.hooks.configs, 0);  // piece 0 still missing
+  s.link.on_datagram(pieces[2], 3);  // a replay
+  EXPECT_EQ(s.link.counters().replayed, 1u);
+  s.link.on_datagram(pieces[0], 4);
+  EXPECT_EQ(s.hooks.configs, 1);
+  ASSERT_EQ(s.out.sent.size(), before + 1);
+  auto [c1, ack] = dg::verify_control(s.out.sent.back(), s.key, dg::kDroneToBase);
+  EXPECT_EQ(std::get<ConfigAck>(decode(*split_frame(ack))).config_id, 4);
+  // its ack lost: the SubBroker sends every piece again, under new counters
+  auto again = dg::encode_control_fragments(s.counter + 1, frame, 200, s.key, dg::kBaseToDrone);
+  s.counter += again.size();
+  for (auto& p : again) s.link.on_datagram(p, 5);
+  EXPECT_EQ(s.hooks.configs, 1);  // applied once
+  auto [c2, ack2] = dg::verify_control(s.out.sent.back(), s.key, dg::kDroneToBase);
+  EXPECT_EQ(ack2, ack);
+}
+
+// The PubBroker's own control message larger than one datagram (here a backfill END
+// with a long reason) goes as control fragments, each within the packet.
+TEST(DgramLink, ALargeControlMessageGoesAsControlFragments) {
+  Session s;
+  s.handshake(1, 0);
+  namespace bf = modd::link::backfill;
+  bf::End end{7, bf::EndStatus::Io, 0, std::string(450, 'x')};
+  bf::encode(s.hooks.backfill_reply, bf::Message{end});
+  std::vector<uint8_t> cancel;
+  bf::encode(cancel, bf::Message{bf::Cancel{7}});
+  size_t before = s.out.sent.size();
+  s.link.on_datagram(s.control(cancel), 1);
+  std::vector<std::vector<uint8_t>> frags(s.out.sent.begin() + static_cast<std::ptrdiff_t>(before), s.out.sent.end());
+  ASSERT_GE(frags.size(), 3u);
+  dg::ControlPieces pieces;
+  std::optional<std::vector<uint8_t>> whole;
+  for (auto& d : frags) {
+    EXPECT_EQ(d[0], dg::kControlFragment);
+    EXPECT_LE(d.size(), 200u);
+    whole = pieces.add(dg::verify_control_fragment(d, s.key, dg::kDroneToBase));
+  }
+  ASSERT_TRUE(whole.has_value());
+  EXPECT_EQ(std::get<bf::End>(bf::decode(*split_frame(*whole))), end);
 }

@@ -8,11 +8,20 @@ from __future__ import annotations
 
 from modd.link import backfill as bf
 from modd.link import codec
-from modd.link.datagram import DRONE_TO_BASE, encode_control, session_key
+from modd.link.datagram import (
+    BASE_TO_DRONE,
+    DRONE_TO_BASE,
+    ControlPieces,
+    encode_control,
+    encode_control_fragments,
+    session_key,
+    verify_control_fragment,
+)
 from modd.link.frames import Aggregation, Config, ErrorCode, StreamSpec, TopicSpec, ValueType
 from modd.subbroker.config import LinkOptions
 from modd.subbroker.dglink import DatagramLinkClient, control_frames
 from modd.subbroker.link import ConfigRejected
+from modd_plan.linkbudget import datagram_capacity
 
 KEY = session_key(b"psk", bytes(16), bytes(range(16)))
 
@@ -59,29 +68,72 @@ def _config(topics: int) -> Config:
     return Config(3, 0, names, streams)
 
 
-def test_a_config_larger_than_the_radios_packet_is_refused_with_its_sizes() -> None:
-    """Control datagrams are not cut: a CONFIG that does not fit one packet used to be
-    sent and lost on the radio every time, the deploy ending in "no CONFIG_ACK"."""
-    sent: list[bytes] = []
+class _Port:
+    def __init__(self) -> None:
+        self.sent: list[bytes] = []
 
-    class Port:
-        def send(self, datagram: bytes) -> None:
-            sent.append(datagram)
+    def send(self, datagram: bytes) -> None:
+        self.sent.append(datagram)
 
-    def client(max_packet: int) -> DatagramLinkClient:
-        c = DatagramLinkClient(lambda: Port(), "serial /dev/radio", "serial", b"psk",  # type: ignore[arg-type,return-value]
-                               LinkOptions(), None, max_packet=max_packet)  # type: ignore[arg-type]
-        c._key, c._port = KEY, Port()  # type: ignore[assignment]
-        return c
 
+def _client(max_packet: int, port: _Port) -> DatagramLinkClient:
+    c = DatagramLinkClient(lambda: port, "serial /dev/radio", "serial", b"psk",  # type: ignore[arg-type,return-value]
+                           LinkOptions(), None, max_packet=max_packet)  # type: ignore[arg-type]
+    c._key, c._port = KEY, port  # type: ignore[assignment]
+    c._counter = 41
+    return c
+
+
+def test_a_config_larger_than_the_radios_packet_goes_as_control_fragments() -> None:
+    """A CONFIG that does not fit one packet (scenario 2's is 517 B in its control
+    datagram, a SiK radio carries 248 B) goes as control fragments under
+    consecutive counters, each within the packet; the pieces put back together
+    are the CONFIG frame (the PubBroker's side: test_dgram_link.cpp)."""
+    port = _Port()
     big = _config(20)
-    refused = client(252)._submit(big)
+    frame = codec.encode(big)
+    assert len(encode_control(1, frame, KEY, BASE_TO_DRONE)) > datagram_capacity("serial", 252)
+    _client(252, port)._submit(big)
+    assert len(port.sent) == 3
+    assert all(len(d) <= datagram_capacity("serial", 252) for d in port.sent)
+    pieces = [verify_control_fragment(d, KEY, BASE_TO_DRONE) for d in port.sent]
+    assert [p.counter for p in pieces] == [42, 43, 44]
+    assert [(p.index, p.count, p.first) for p in pieces] == [(0, 3, 42), (1, 3, 42), (2, 3, 42)]
+    whole = ControlPieces()
+    assert [whole.add(p) for p in reversed(pieces)][-1] == frame  # in any order
+    # a CONFIG that fits one packet is one CONTROL datagram, as before
+    port.sent.clear()
+    _client(1024, port)._submit(big)
+    assert len(port.sent) == 1 and port.sent[0][0] == 0x40
+
+
+def test_a_config_beyond_sixteen_fragments_is_refused_with_its_sizes() -> None:
+    """Sixteen fragments at most: a larger CONFIG is refused at the deploy, with
+    its size and the packet's, instead of being lost on the radio at every try."""
+    port = _Port()
+    big = _config(200)
+    refused = _client(252, port)._submit(big)
     exc = refused.exception(timeout=0)
     assert isinstance(exc, ConfigRejected) and exc.status == ErrorCode.BAD_CONFIG
-    assert "config 3 is" in str(exc) and "link.maxPacket 252 B" in str(exc), exc
-    assert sent == []  # nothing sent that the radio would drop
-    size = int(str(exc).split(" is ")[1].split(" B")[0])
-    assert size == len(encode_control(1 << 32, codec.encode(big), KEY, DRONE_TO_BASE))
-    # the same config on a radio whose packet holds it goes out
-    client(1024)._submit(big)
-    assert len(sent) == 1 and len(sent[0]) <= size
+    assert f"config 3 is {len(codec.encode(big))} B" in str(exc), exc
+    assert "link.maxPacket 252 B" in str(exc) and "16 control fragments" in str(exc), exc
+    assert port.sent == []  # nothing sent that the PubBroker could not put back together
+
+
+def test_control_fragments_from_the_pubbroker_are_put_back_together() -> None:
+    """The SubBroker reads control fragments too (drone to base): a forged piece
+    is counted and dropped, a replayed one too, and the message is handled once
+    its pieces are all there, in any order."""
+    port = _Port()
+    client = _client(252, port)
+    message = _end_with_progress() * 30  # ~ 600 B of backfill frames
+    got: list[int] = []
+    client.backfill_sink = lambda f: got.append(f.type)
+    frags = encode_control_fragments(7, message, 100, KEY, DRONE_TO_BASE)
+    assert len(frags) > 3
+    forged = frags[1][:-1] + bytes([frags[1][-1] ^ 1])
+    assert not client._on_datagram(forged) and client.radio.forged == 1
+    for d in reversed(frags):
+        assert client._on_datagram(d)
+    assert not client._on_datagram(frags[0]) and client.radio.replayed == 1
+    assert len(got) == 60  # every frame of the message, once

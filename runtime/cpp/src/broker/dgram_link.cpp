@@ -67,6 +67,8 @@ void DatagramLink::on_datagram(std::span<const uint8_t> raw, int64_t now) {
       on_handshake(raw.subspan(1), now);
     } else if (raw[0] == dg::kControl) {
       on_control(raw, now);
+    } else if (raw[0] == dg::kControlFragment) {
+      on_control_fragment(raw, now);
     } else {
       ++c_.malformed;  // DATA goes drone -> base only
     }
@@ -126,6 +128,7 @@ void DatagramLink::on_handshake(std::span<const uint8_t> frame, int64_t now) {
   ready_ = true;
   last_heard_ = now;
   control_window_ = dg::ReplayWindow(64);
+  pieces_.clear();
   ++c_.handshakes;
   out_.adopt_source();
   AuthOk ok = hooks_.current_config();
@@ -146,6 +149,28 @@ void DatagramLink::on_control(std::span<const uint8_t> raw, int64_t now) {
   }
   last_heard_ = now;
   out_.adopt_source();
+  on_control_frame(frame);
+}
+
+void DatagramLink::on_control_fragment(std::span<const uint8_t> raw, int64_t now) {
+  if (!ready_) {
+    ++c_.forged;  // no session: nothing can verify
+    return;
+  }
+  dg::ControlFragment piece = dg::verify_control_fragment(raw, key_, dg::kBaseToDrone);
+  if (!control_window_.accept(piece.counter)) {
+    ++c_.replayed;
+    return;
+  }
+  last_heard_ = now;
+  out_.adopt_source();
+  uint64_t before = pieces_.malformed();
+  auto whole = pieces_.add(std::move(piece));
+  c_.malformed += pieces_.malformed() - before;
+  if (whole) on_control_frame(*whole);
+}
+
+void DatagramLink::on_control_frame(const std::vector<uint8_t>& frame) {
   auto f = split_frame(frame);
   if (!f || f->size != frame.size()) throw Error(ErrorCode::BadFrame, "not one control frame", 0);
   if (f->type == kNack) {
@@ -211,7 +236,22 @@ void DatagramLink::on_nack(std::span<const uint8_t> body) {
 }
 
 void DatagramLink::send_control(std::span<const uint8_t> frame, bool reply) {
-  emit(dg::encode_control(++counter_, frame, key_, dg::kDroneToBase), reply);
+  auto d = dg::encode_control(counter_ + 1, frame, key_, dg::kDroneToBase);
+  if (d.size() <= opt_.max_datagram) {
+    ++counter_;
+    emit(std::move(d), reply);
+    return;
+  }
+  // larger than one packet (an ERROR's text, a STATUS of a long name): control fragments
+  std::vector<std::vector<uint8_t>> pieces;
+  try {
+    pieces = dg::encode_control_fragments(counter_ + 1, frame, opt_.max_datagram, key_, dg::kDroneToBase);
+  } catch (const std::invalid_argument& e) {
+    log_line("link: a control frame of %zu B not sent: %s", frame.size(), e.what());
+    return;
+  }
+  counter_ += pieces.size();
+  for (auto& p : pieces) emit(std::move(p), reply);
 }
 
 bool DatagramLink::send_frame(std::span<const uint8_t> frame) {

@@ -184,6 +184,75 @@ std::pair<uint64_t, std::vector<uint8_t>> verify_control(std::span<const uint8_t
   return {counter, {rest.begin(), rest.end()}};
 }
 
+std::vector<std::vector<uint8_t>> encode_control_fragments(uint64_t counter, std::span<const uint8_t> frames,
+                                                           size_t max_datagram, const Mac& key, uint8_t direction) {
+  if (max_datagram <= kControlFragmentOverhead || frames.empty() || counter + kMaxFragments >= (uint64_t{1} << 35))
+    throw std::invalid_argument("a control fragment needs frames, room for a piece and a counter below 2^35");
+  size_t room = max_datagram - kControlFragmentOverhead;
+  size_t count = (frames.size() + room - 1) / room;
+  if (count > kMaxFragments)
+    throw std::invalid_argument("a control message of " + std::to_string(frames.size()) + " B needs " +
+                                std::to_string(count) + " fragments of " + std::to_string(room) + " B (at most 16)");
+  std::vector<std::vector<uint8_t>> out;
+  for (size_t i = 0; i < count; ++i) {
+    std::vector<uint8_t> d;
+    ByteWriter w(d);
+    w.u8(kControlFragment);
+    w.varint(counter + i);
+    w.u8(static_cast<uint8_t>(i << 4 | (count - 1)));
+    w.bytes(frames.subspan(i * room, std::min(room, frames.size() - i * room)));
+    auto t = tag(key, direction, counter + i, d, kControlTag);
+    d.insert(d.end(), t.begin(), t.end());
+    out.push_back(std::move(d));
+  }
+  return out;
+}
+
+ControlFragment verify_control_fragment(std::span<const uint8_t> raw, const Mac& key, uint8_t direction) {
+  if (raw.size() < 4 + kControlTag || raw[0] != kControlFragment)
+    throw Error(ErrorCode::BadFrame, "not a control fragment", 0);
+  auto body = raw.first(raw.size() - kControlTag);
+  ByteReader r(body);
+  r.u8();
+  uint64_t counter = r.varint();
+  if (!equal_ct(tag(key, direction, counter, body, kControlTag), raw.last(kControlTag)))
+    throw Forged("tag of control fragment " + std::to_string(counter) + " does not verify");
+  size_t at = r.pos();
+  uint8_t frag = r.u8();
+  ControlFragment f;
+  f.counter = counter;
+  f.index = frag >> 4;
+  f.count = (frag & 0x0F) + 1u;
+  if (f.index >= f.count || counter < f.index)
+    throw Error(ErrorCode::BadFrame, "control fragment " + std::to_string(f.index) + " of " + std::to_string(f.count), at);
+  auto rest = r.bytes(r.remaining());
+  f.piece.assign(rest.begin(), rest.end());
+  return f;
+}
+
+std::optional<std::vector<uint8_t>> ControlPieces::add(ControlFragment f) {
+  auto it = partial_.find(f.first());
+  if (it != partial_.end() && it->second.count != f.count) {
+    ++malformed_;
+    return std::nullopt;
+  }
+  if (it == partial_.end()) {
+    if (f.count == 1) return std::move(f.piece);
+    if (partial_.size() >= kMaxPartial) {  // the oldest message: given up
+      partial_.erase(partial_.begin());
+      ++given_up_;
+    }
+    it = partial_.emplace(f.first(), Partial{f.count, {}}).first;
+  }
+  Partial& p = it->second;
+  p.pieces[f.index] = std::move(f.piece);
+  if (p.pieces.size() < p.count) return std::nullopt;
+  std::vector<uint8_t> whole;
+  for (auto& [i, piece] : p.pieces) whole.insert(whole.end(), piece.begin(), piece.end());
+  partial_.erase(it);
+  return whole;
+}
+
 bool ReplayWindow::accept(uint64_t seq) {
   if ((any_ && top_ >= size_ && seq <= top_ - size_) || seen_.count(seq)) return false;
   seen_.insert(seq);

@@ -83,6 +83,8 @@ class DatagramLink {
   };
   void on_handshake(std::span<const uint8_t> frame, int64_t now);
   void on_control(std::span<const uint8_t> raw, int64_t now);
+  void on_control_fragment(std::span<const uint8_t> raw, int64_t now);
+  void on_control_frame(const std::vector<uint8_t>& frame);  // one control message's frame
   void on_nack(std::span<const uint8_t> body);
   void send_control(std::span<const uint8_t> frame, bool reply = false);
   void send_handshake(const link::Message& m, bool reply);
@@ -111,6 +113,7 @@ class DatagramLink {
   int64_t last_heard_ = 0;
   uint64_t counter_ = 0;
   link::dgram::ReplayWindow control_window_{64};
+  link::dgram::ControlPieces pieces_;  // control messages cut into fragments (0x42)
   std::vector<uint8_t> last_config_, last_ack_;
   // packing
   uint8_t group_config_ = 0;

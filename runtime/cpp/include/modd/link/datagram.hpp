@@ -6,6 +6,7 @@
 // corrupt datagram raises Forged and is counted, never decoded.
 #pragma once
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <set>
 #include <span>
@@ -23,6 +24,7 @@ constexpr size_t kMaxFragments = 16;
 constexpr size_t kFragmentHead = 5;  // type, config id, slot16, frag
 constexpr uint8_t kControl = 0x40;
 constexpr uint8_t kHandshake = 0x41;
+constexpr uint8_t kControlFragment = 0x42;
 constexpr size_t kTag = 4;
 constexpr size_t kControlTag = 8;
 constexpr uint8_t kDroneToBase = 'D';
@@ -86,6 +88,47 @@ std::pair<uint64_t, std::vector<uint8_t>> verify_control(std::span<const uint8_t
                                                          const Mac& key, uint8_t direction);
 
 // RFC 4303-style window of sequence numbers seen (bounded by `size`).
+// A control fragment (0x42) whose tag verified: piece `index` of `count` of the control
+// message whose first fragment has counter `counter - index` (docs/protocol.md).
+struct ControlFragment {
+  uint64_t counter = 0;
+  unsigned index = 0;
+  unsigned count = 0;
+  std::vector<uint8_t> piece;
+  uint64_t first() const { return counter - index; }
+};
+// Bytes of a control fragment around its piece: type, counter (varint of at most 5 bytes:
+// counters below 2^35), frag, tag.
+constexpr size_t kControlFragmentOverhead = 1 + 5 + 1 + kControlTag;
+// The 0x42 datagrams of a control message too large for one datagram: `frames` cut in
+// order into at most 16 pieces, piece i under counter `counter + i`, each datagram at most
+// `max_datagram` bytes. Throws std::invalid_argument beyond 16 pieces.
+std::vector<std::vector<uint8_t>> encode_control_fragments(uint64_t counter, std::span<const uint8_t> frames,
+                                                           size_t max_datagram, const Mac& key, uint8_t direction);
+// Throws Forged (tag) or Error(BadFrame) with the offset in the datagram.
+ControlFragment verify_control_fragment(std::span<const uint8_t> raw, const Mac& key, uint8_t direction);
+
+// Control messages put back together from their fragments, bounded: at most kMaxPartial
+// messages in progress (the oldest given up), kMaxFragments pieces each. add() returns the
+// message's frames once every piece is there; a piece whose count differs from its
+// message's is counted malformed and dropped. Replays are the replay window's business.
+class ControlPieces {
+ public:
+  static constexpr size_t kMaxPartial = 4;
+  std::optional<std::vector<uint8_t>> add(ControlFragment f);
+  uint64_t malformed() const { return malformed_; }
+  uint64_t given_up() const { return given_up_; }
+  void clear() { partial_.clear(); }
+
+ private:
+  struct Partial {
+    unsigned count = 0;
+    std::map<unsigned, std::vector<uint8_t>> pieces;
+  };
+  std::map<uint64_t, Partial> partial_;  // by the message's first counter
+  uint64_t malformed_ = 0, given_up_ = 0;
+};
+
 class ReplayWindow {
  public:
   explicit ReplayWindow(uint64_t size = 1024) : size_(size) {}

@@ -31,6 +31,7 @@ DGRAM_DATA_BITMAP = 0x31
 DGRAM_FRAGMENT = 0x32
 DGRAM_CONTROL = 0x40
 DGRAM_HANDSHAKE = 0x41
+DGRAM_CONTROL_FRAGMENT = 0x42
 NACK = 0x09  # control frame type: ranges of slots to resend
 
 TAG_BYTES = 4
@@ -244,6 +245,103 @@ def verify_control(raw: bytes, key: bytes, direction: bytes) -> tuple[int, bytes
     if not hmac.compare_digest(tag(key, direction, counter, body, CONTROL_TAG_BYTES), got):
         raise Forged(f"tag of control datagram {counter} does not verify")
     return counter, bytes(body[r.pos:])
+
+
+#: Bytes of a control fragment around its piece: type, counter (a varint of
+#: at most 5 bytes: counters below 2^35), frag, tag.
+CONTROL_FRAGMENT_OVERHEAD = 1 + 5 + 1 + CONTROL_TAG_BYTES
+
+
+def encode_control_fragments(counter: int, frames: bytes, max_datagram: int, key: bytes,
+                             direction: bytes) -> list[bytes]:
+    """The 0x42 datagrams of a control message too large for one packet:
+    ``frames`` cut in order into at most 16 pieces, piece ``i`` under counter
+    ``counter + i`` (consecutive: the receiver finds a message's first
+    counter as ``counter - index``), each datagram at most ``max_datagram``
+    bytes, each tagged as CONTROL.
+
+    >>> key = session_key(b"k", bytes(16), bytes(16))
+    >>> [len(d) for d in encode_control_fragments(7, bytes(40), 30, key, BASE_TO_DRONE)]
+    [26, 26, 21]
+    """
+    room = max_datagram - CONTROL_FRAGMENT_OVERHEAD
+    if room < 1 or not frames or counter + MAX_FRAGMENTS >= 1 << 35:
+        raise ValueError("a control fragment needs frames, room for a piece and a counter "
+                         "below 2^35")
+    count = -(-len(frames) // room)
+    if count > MAX_FRAGMENTS:
+        raise ValueError(f"a control message of {len(frames)} B needs {count} fragments of "
+                         f"{room} B (at most {MAX_FRAGMENTS})")
+    out = []
+    for i in range(count):
+        head = bytes([DGRAM_CONTROL_FRAGMENT]) + varint(counter + i)
+        body = head + bytes([i << 4 | (count - 1)]) + frames[i * room:(i + 1) * room]
+        out.append(body + tag(key, direction, counter + i, body, CONTROL_TAG_BYTES))
+    return out
+
+
+@dataclass(frozen=True)
+class ControlFragment:
+    """A control fragment whose tag verified: piece ``index`` of ``count`` of
+    the message whose first fragment has counter ``counter - index``."""
+
+    counter: int
+    index: int
+    count: int
+    piece: bytes
+
+    @property
+    def first(self) -> int:
+        return self.counter - self.index
+
+
+def verify_control_fragment(raw: bytes, key: bytes, direction: bytes) -> ControlFragment:
+    """Check a control fragment's tag before anything else; raises Forged or
+    ProtocolError."""
+    if len(raw) < 4 + CONTROL_TAG_BYTES or raw[0] != DGRAM_CONTROL_FRAGMENT:
+        raise ProtocolError(ErrorCode.BAD_FRAME, "not a control fragment", 0)
+    body, got = raw[:-CONTROL_TAG_BYTES], raw[-CONTROL_TAG_BYTES:]
+    r = Reader(body)
+    r.u8()
+    counter = r.varint()
+    if not hmac.compare_digest(tag(key, direction, counter, body, CONTROL_TAG_BYTES), got):
+        raise Forged(f"tag of control fragment {counter} does not verify")
+    frag = r.u8()
+    index, count = frag >> 4, (frag & 0x0F) + 1
+    if index >= count or counter < index:
+        raise ProtocolError(ErrorCode.BAD_FRAME, f"control fragment {index} of {count}", r.pos - 1)
+    return ControlFragment(counter, index, count, bytes(body[r.pos:]))
+
+
+class ControlPieces:
+    """Control messages put back together from their fragments, bounded: at
+    most :data:`MAX_PARTIAL` messages in progress (the oldest given up), 16
+    pieces each. :meth:`add` returns the message's frames once every piece
+    is there; a piece whose count differs from its message's is counted
+    ``malformed`` and dropped. Replays are the replay window's business (each
+    piece has its own counter)."""
+
+    MAX_PARTIAL = 4
+
+    def __init__(self) -> None:
+        self._partial: dict[int, tuple[int, dict[int, bytes]]] = {}
+        self.malformed = 0
+        self.given_up = 0
+
+    def add(self, f: ControlFragment) -> bytes | None:
+        count, pieces = self._partial.get(f.first, (f.count, {}))
+        if count != f.count:
+            self.malformed += 1
+            return None
+        pieces[f.index] = f.piece
+        if len(pieces) == count:
+            self._partial.pop(f.first, None)
+            return b"".join(pieces[i] for i in range(count))
+        if f.first not in self._partial and len(self._partial) >= self.MAX_PARTIAL:
+            del self._partial[min(self._partial)]  # the oldest message: given up
+            self.given_up += 1
+        self._partial[f.first] = (count, pieces)
+        return None
 
 
 def encode_handshake(frame: bytes) -> bytes:

@@ -39,18 +39,23 @@ from modd.link.auth import client_proof, server_proof
 from modd.link.datagram import (
     BASE_TO_DRONE,
     DGRAM_CONTROL,
+    DGRAM_CONTROL_FRAGMENT,
     DGRAM_DATA,
     DGRAM_DATA_BITMAP,
     DGRAM_FRAGMENT,
     DGRAM_HANDSHAKE,
     DRONE_TO_BASE,
+    MAX_FRAGMENTS,
+    ControlPieces,
     Forged,
     ReplayWindow,
     encode_control,
+    encode_control_fragments,
     encode_handshake,
     encode_nack,
     session_key,
     verify_control,
+    verify_control_fragment,
 )
 from modd.link.dgreceiver import DatagramReceiver
 from modd.link.frames import (
@@ -160,8 +165,9 @@ class DatagramLinkClient:
                  delay_s: float = 1.0, liveness_s: Callable[[], float] = lambda: 3.0,
                  max_packet: int | None = None) -> None:
         self.transport = transport
-        #: the radio's largest packet (the model's link.maxPacket): control datagrams are
-        #: not cut, so a CONFIG that does not fit one is refused here, with its sizes
+        #: the radio's largest packet (the model's link.maxPacket): a control message
+        #: larger than one packet goes as control fragments (at most 16); a CONFIG that
+        #: needs more is refused here, with its sizes
         self._max_packet = max_packet
         self._open_port = open_port
         self._where = where
@@ -180,6 +186,7 @@ class DatagramLinkClient:
         self._old_key = b""
         self._counter = 0
         self._window = ReplayWindow(64)
+        self._pieces = ControlPieces()
         self._runs: dict[int, _Run] = {}
         self._pending: dict[int, _Pending] = {}
         self._pings: dict[bytes, float] = {}
@@ -327,6 +334,7 @@ class DatagramLinkClient:
             raise ProtocolError(ErrorCode.AUTH_FAILED, "the broker does not know the key")
         self._old_key, self._key = self._key, session_key(self._psk, nonce, challenge.nonce)
         self._window = ReplayWindow(64)
+        self._pieces = ControlPieces()
         for run in self._runs.values():
             run.receiver.key = self._key
         return ok
@@ -472,21 +480,42 @@ class DatagramLinkClient:
             if not self._window.accept(counter):
                 self.radio.replayed += 1
                 return False
-            frames = control_frames(frame)
-            if frames is None:
+            return self._on_control_frames(frame)
+        if kind == DGRAM_CONTROL_FRAGMENT and self._key:
+            try:
+                piece = verify_control_fragment(raw, self._key, DRONE_TO_BASE)
+            except Forged:
+                self.radio.forged += 1
+                return False
+            except ProtocolError:
                 self.radio.malformed += 1
                 return False
-            self.stats.frames_in += len(frames)
-            for f in frames:
-                if bf.is_backfill_type(f.type):
-                    sink = self.backfill_sink
-                    if sink is not None:
-                        sink(f)
-                else:
-                    self._handle(codec.decode(f))
-            return True
+            if not self._window.accept(piece.counter):
+                self.radio.replayed += 1
+                return False
+            before = self._pieces.malformed
+            whole = self._pieces.add(piece)
+            self.radio.malformed += self._pieces.malformed - before
+            return self._on_control_frames(whole) if whole is not None else True
         self.radio.malformed += 1
         return False
+
+    def _on_control_frames(self, frame: bytes) -> bool:
+        """The link frames of a control message (one datagram's, or put back
+        together from its fragments), handled in order."""
+        frames = control_frames(frame)
+        if frames is None:
+            self.radio.malformed += 1
+            return False
+        self.stats.frames_in += len(frames)
+        for f in frames:
+            if bf.is_backfill_type(f.type):
+                sink = self.backfill_sink
+                if sink is not None:
+                    sink(f)
+            else:
+                self._handle(codec.decode(f))
+        return True
 
     def _on_data(self, raw: bytes) -> bool:
         run = self._runs.get(raw[1])
@@ -599,17 +628,21 @@ class DatagramLinkClient:
         return future
 
     def _config_too_big(self, config: Config) -> str:
-        """Why ``config`` cannot travel in one control datagram of this radio, or ""."""
+        """Why ``config`` cannot travel in the control fragments of this radio
+        (at most 16 packets), or ""."""
         if self._max_packet is None:
             return ""
-        size = len(encode_control(1 << 32, codec.encode(config), bytes(32), BASE_TO_DRONE))
         fits = datagram_capacity(self.transport, self._max_packet)
-        if size <= fits:
-            return ""
-        return (f"config {config.config_id} is {size} B in its control datagram, more than one "
-                f"packet of this {self.transport} link carries ({fits} B of link.maxPacket "
-                f"{self._max_packet} B); control datagrams are not cut: raise link.maxPacket if "
-                f"the radio allows it, or send fewer streams")
+        try:
+            encode_control_fragments(1 << 32, codec.encode(config), fits, bytes(32),
+                                     BASE_TO_DRONE)
+        except ValueError as exc:
+            size = len(codec.encode(config))
+            return (f"config {config.config_id} is {size} B, more than the {MAX_FRAGMENTS} "
+                    f"control fragments of this {self.transport} link carry ({fits} B datagrams "
+                    f"of link.maxPacket {self._max_packet} B: {exc}); raise link.maxPacket if "
+                    f"the radio allows it, or send fewer streams")
+        return ""
 
     def _resend_pending(self, now: float) -> None:
         with self._lock:
@@ -631,10 +664,21 @@ class DatagramLinkClient:
             pending.future.set_exception(exc)
 
     def _control(self, frame: bytes) -> None:
+        """One control message: a CONTROL datagram, or control fragments under
+        consecutive counters when it is larger than one packet of the radio."""
         with self._lock:
-            self._counter += 1
-            raw = encode_control(self._counter, frame, self._key, BASE_TO_DRONE)
-        self._send(raw)
+            raw = encode_control(self._counter + 1, frame, self._key, BASE_TO_DRONE)
+            fits = (datagram_capacity(self.transport, self._max_packet)
+                    if self._max_packet is not None else None)
+            if fits is None or len(raw) <= fits:
+                self._counter += 1
+                datagrams = [raw]
+            else:
+                datagrams = encode_control_fragments(self._counter + 1, frame, fits, self._key,
+                                                     BASE_TO_DRONE)
+                self._counter += len(datagrams)
+        for d in datagrams:
+            self._send(d)
 
     def _send(self, raw: bytes) -> None:
         port = self._port
