@@ -170,16 +170,25 @@ std::vector<uint8_t> encode_control(uint64_t counter, std::span<const uint8_t> f
   return out;
 }
 
-std::pair<uint64_t, std::vector<uint8_t>> verify_control(std::span<const uint8_t> raw,
-                                                         const Mac& key, uint8_t direction) {
-  if (raw.size() < 3 + kControlTag || raw[0] != kControl)
-    throw Error(ErrorCode::BadFrame, "not a control datagram", 0);
+// A control datagram or control fragment (`kind`) whose tag verified: a reader of its body
+// after the counter, and the counter. The tag is checked before anything after the counter
+// is read.
+static std::pair<ByteReader, uint64_t> verified_control(std::span<const uint8_t> raw, const Mac& key,
+                                                        uint8_t direction, uint8_t kind, size_t min_body,
+                                                        const std::string& what) {
+  if (raw.size() < min_body + kControlTag || raw[0] != kind) throw Error(ErrorCode::BadFrame, "not a " + what, 0);
   auto body = raw.first(raw.size() - kControlTag);
   ByteReader r(body);
   r.u8();
   uint64_t counter = r.varint();
   if (!equal_ct(tag(key, direction, counter, body, kControlTag), raw.last(kControlTag)))
-    throw Forged("tag of control datagram " + std::to_string(counter) + " does not verify");
+    throw Forged("tag of " + what + " " + std::to_string(counter) + " does not verify");
+  return {r, counter};
+}
+
+std::pair<uint64_t, std::vector<uint8_t>> verify_control(std::span<const uint8_t> raw,
+                                                         const Mac& key, uint8_t direction) {
+  auto [r, counter] = verified_control(raw, key, direction, kControl, 3, "control datagram");
   auto rest = r.bytes(r.remaining());
   return {counter, {rest.begin(), rest.end()}};
 }
@@ -209,14 +218,7 @@ std::vector<std::vector<uint8_t>> encode_control_fragments(uint64_t counter, std
 }
 
 ControlFragment verify_control_fragment(std::span<const uint8_t> raw, const Mac& key, uint8_t direction) {
-  if (raw.size() < 4 + kControlTag || raw[0] != kControlFragment)
-    throw Error(ErrorCode::BadFrame, "not a control fragment", 0);
-  auto body = raw.first(raw.size() - kControlTag);
-  ByteReader r(body);
-  r.u8();
-  uint64_t counter = r.varint();
-  if (!equal_ct(tag(key, direction, counter, body, kControlTag), raw.last(kControlTag)))
-    throw Forged("tag of control fragment " + std::to_string(counter) + " does not verify");
+  auto [r, counter] = verified_control(raw, key, direction, kControlFragment, 4, "control fragment");
   size_t at = r.pos();
   uint8_t frag = r.u8();
   ControlFragment f;

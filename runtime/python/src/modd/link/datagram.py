@@ -234,17 +234,26 @@ def encode_control(counter: int, frame: bytes, key: bytes, direction: bytes) -> 
     return body + tag(key, direction, counter, body, CONTROL_TAG_BYTES)
 
 
-def verify_control(raw: bytes, key: bytes, direction: bytes) -> tuple[int, bytes]:
-    """(counter, frame) of a control datagram whose tag verifies."""
-    if len(raw) < 3 + CONTROL_TAG_BYTES or raw[0] != DGRAM_CONTROL:
-        raise ProtocolError(ErrorCode.BAD_FRAME, "not a control datagram", 0)
+def _verified_control(raw: bytes, key: bytes, direction: bytes, kind: int, min_body: int,
+                      what: str) -> tuple[Reader, int]:
+    """A control datagram or control fragment (``kind``) whose tag verified:
+    a reader of its body after the counter, and the counter. The tag is
+    checked before anything after the counter is read."""
+    if len(raw) < min_body + CONTROL_TAG_BYTES or raw[0] != kind:
+        raise ProtocolError(ErrorCode.BAD_FRAME, f"not a {what}", 0)
     body, got = raw[:-CONTROL_TAG_BYTES], raw[-CONTROL_TAG_BYTES:]
     r = Reader(body)
     r.u8()
     counter = r.varint()
     if not hmac.compare_digest(tag(key, direction, counter, body, CONTROL_TAG_BYTES), got):
-        raise Forged(f"tag of control datagram {counter} does not verify")
-    return counter, bytes(body[r.pos:])
+        raise Forged(f"tag of {what} {counter} does not verify")
+    return r, counter
+
+
+def verify_control(raw: bytes, key: bytes, direction: bytes) -> tuple[int, bytes]:
+    """(counter, frame) of a control datagram whose tag verifies."""
+    r, counter = _verified_control(raw, key, direction, DGRAM_CONTROL, 3, "control datagram")
+    return counter, bytes(r.take(r.remaining()))
 
 
 #: Bytes of a control fragment around its piece: type, counter (a varint of
@@ -298,19 +307,13 @@ class ControlFragment:
 def verify_control_fragment(raw: bytes, key: bytes, direction: bytes) -> ControlFragment:
     """Check a control fragment's tag before anything else; raises Forged or
     ProtocolError."""
-    if len(raw) < 4 + CONTROL_TAG_BYTES or raw[0] != DGRAM_CONTROL_FRAGMENT:
-        raise ProtocolError(ErrorCode.BAD_FRAME, "not a control fragment", 0)
-    body, got = raw[:-CONTROL_TAG_BYTES], raw[-CONTROL_TAG_BYTES:]
-    r = Reader(body)
-    r.u8()
-    counter = r.varint()
-    if not hmac.compare_digest(tag(key, direction, counter, body, CONTROL_TAG_BYTES), got):
-        raise Forged(f"tag of control fragment {counter} does not verify")
+    r, counter = _verified_control(raw, key, direction, DGRAM_CONTROL_FRAGMENT, 4,
+                                   "control fragment")
     frag = r.u8()
     index, count = frag >> 4, (frag & 0x0F) + 1
     if index >= count or counter < index:
         raise ProtocolError(ErrorCode.BAD_FRAME, f"control fragment {index} of {count}", r.pos - 1)
-    return ControlFragment(counter, index, count, bytes(body[r.pos:]))
+    return ControlFragment(counter, index, count, bytes(r.take(r.remaining())))
 
 
 class ControlPieces:
