@@ -286,7 +286,7 @@ def main() -> int:
     args = p.parse_args()
     rows: list[dict[str, Any]] = []
     plan = [("scenario1.modd", "udp", ""), ("scenario2.modd", "udp", ""),
-            ("scenario1.modd", "serial", "packet=252"),
+            ("scenario1.modd", "serial", "packet=252"), ("scenario2.modd", "serial", "packet=252"),
             ("scenario1.modd", "udp", "loss=0.05,latency_ms=80,jitter_ms=20,seed=5"),
             ("scenario1.modd", "udp", "loss=0.20,latency_ms=80,jitter_ms=20,seed=6")]
     for scenario, transport, spec in plan:
