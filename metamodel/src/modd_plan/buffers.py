@@ -393,8 +393,8 @@ def _tables(
     big_x = max(hi * pm for _, _, pm, *_, hi in rows)
     if (max(big_ps, big_x).bit_length() >= _BATCH_VALUE_BITS
             or len(rows).bit_length() >= _BATCH_ROWS_BITS):
-        parts = [topic_table([x.period_us for x in subs], pm, problem.max_buffer, lo, hi)
-                 for _, _, pm, subs, _, lo, hi in rows]
+        parts = [topic_table(periods, pm, problem.max_buffer, lo, hi)
+                 for _, _, pm, _, periods, lo, hi in rows]
         n = np.concatenate([np.arange(lo, hi + 1, dtype=np.int64) for *_, lo, hi in rows])
         s_all = np.concatenate([p[0] for p in parts])
         m_all = np.concatenate([p[1] for p in parts])
@@ -557,9 +557,8 @@ def _solve_small(problem: BufferProblem) -> BufferSolution:
     on lists: tables, fronts, the sweep over w, the sizes)."""
     fronts: list[tuple[list[int], list[int], list[int]] | None] = [None] * len(problem.topics)
     infeasible: list[Infeasibility] = []
-    for i, topic, pm_us, subs, _, lo, hi in _rows(problem):
-        ps = [x.period_us for x in subs]
-        first, last = min(ps), max(ps)
+    for i, topic, pm_us, subs, ps, lo, hi in _rows(problem):
+        first, last = ps[0], ps[-1]  # sorted
         xs = [n * pm_us for n in range(lo, hi + 1)]
         m = [max(last - x, x - first) for x in xs]
         s = ([0] * len(xs) if problem.alpha == 0

@@ -242,7 +242,7 @@ void DatagramLink::send_control(std::span<const uint8_t> frame, bool reply) {
     emit(std::move(d), reply);
     return;
   }
-  // larger than one packet (an ERROR's text, a STATUS of a long name): control fragments
+  // larger than one packet (a backfill END with a long reason): control fragments
   std::vector<std::vector<uint8_t>> pieces;
   try {
     pieces = dg::encode_control_fragments(counter_ + 1, frame, opt_.max_datagram, key_, dg::kDroneToBase);
