@@ -58,8 +58,11 @@ def signed(request_body: dict[str, Any]) -> dict[str, Any]:
 class Proc:
     """A child process with its log file; stopped by PID."""
 
-    def __init__(self, name: str, cmd: list[str], log: Path, env: dict[str, str] | None = None):
+    def __init__(self, name: str, cmd: list[str], log: Path, env: dict[str, str] | None = None,
+                 dumps_stacks: bool = False):
         self.name, self.cmd, self.log_path = name, cmd, log
+        # SIGUSR1 prints the threads' stacks into the log (modd-subbroker only)
+        self.dumps_stacks = dumps_stacks
         self._log = open(log, "ab")  # noqa: SIM115 - closed in stop()
         full_env = {**os.environ, "MODD_LINK_KEY": KEY, **(env or {})}
         self.p = subprocess.Popen(cmd, stdout=self._log, stderr=subprocess.STDOUT, env=full_env)
@@ -85,6 +88,9 @@ class Proc:
             if not self.alive():
                 return text in self.log()
             time.sleep(0.02)
+        if self.dumps_stacks and self.alive():  # the failure's message shows what it waited on
+            os.kill(self.pid, signal.SIGUSR1)
+            time.sleep(0.5)
         return False
 
     def stop(self, timeout_s: float = 10.0) -> int | None:
@@ -173,7 +179,8 @@ status_period_s = 0.5
 
 
 def start_subbroker(tmp: Path, config: Path, tag: str = "sb") -> Proc:
-    return Proc(tag, [*SUBBROKER, "--config", str(config)], tmp / f"{tag}.log")
+    return Proc(tag, [*SUBBROKER, "--config", str(config)], tmp / f"{tag}.log",
+                dumps_stacks=True)
 
 
 def start_load(tmp: Path, model_path: Path, ingress_port: int, seconds: float,

@@ -1,5 +1,6 @@
 """The modd-subbroker command: bad configurations exit 2 naming the cause;
-SIGTERM stops it cleanly (exit 0) even while the link is down."""
+SIGTERM stops it cleanly (exit 0) even while the link is down; SIGUSR1
+prints the threads' stacks and leaves it running."""
 
 from __future__ import annotations
 
@@ -44,6 +45,8 @@ def test_model_mode_runs_and_stops_on_sigterm(tmp_path: Path) -> None:
     try:
         wait_port(zport)
         time.sleep(0.5)
+        os.kill(p.pid, signal.SIGUSR1)  # prints the threads' stacks and goes on
+        time.sleep(0.3)
         os.kill(p.pid, signal.SIGTERM)
         out, _ = p.communicate(timeout=10)
     finally:
@@ -52,6 +55,7 @@ def test_model_mode_runs_and_stops_on_sigterm(tmp_path: Path) -> None:
             p.wait(5)
     assert p.returncode == 0, out
     assert "Connection refused" in out and "stopping" in out
+    assert "most recent call first" in out and "_run" in out  # the link thread's stack
 
 
 def test_client_mode_listens_nowhere_unless_told() -> None:

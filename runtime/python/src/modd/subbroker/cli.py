@@ -4,12 +4,14 @@
     modd-subbroker --model mission.modd [--link 127.0.0.1:7171] [--key env:MODD_LINK_KEY]
                    [--zenoh-listen tcp/127.0.0.1:7447] [--no-tcp-delivery]
 
-SIGTERM or SIGINT stops it cleanly. Exit codes: 0 stopped, 2 bad usage or config.
+SIGTERM or SIGINT stops it cleanly; SIGUSR1 prints every thread's stack to stderr.
+Exit codes: 0 stopped, 2 bad usage or config.
 """
 
 from __future__ import annotations
 
 import argparse
+import faulthandler
 import logging
 import signal
 import sys
@@ -97,6 +99,8 @@ def main(argv: list[str] | None = None) -> int:
         level=args.log_level.upper(),
         format="%(asctime)s modd-subbroker %(levelname)s %(name)s: %(message)s",
     )
+    # `kill -USR1 <pid>` prints every thread's stack to stderr: what a stuck SubBroker waits on
+    faulthandler.register(signal.SIGUSR1, all_threads=True)
     try:
         config = build_config(args)
         from .broker import SubBroker

@@ -222,14 +222,27 @@ class LinkClient:
         self._read_loop(sock, splitter)
 
     def _measure_rtt(self, sock: socket.socket, splitter: codec.FrameSplitter) -> float | None:
+        """The median of ``ping_count`` PING round trips. Each PONG is awaited at most
+        ``connect_timeout_s`` in all: DATA that keeps flowing (the PubBroker's running
+        config) must not hold the connection here for ever; a missing PONG is skipped
+        and the plan keeps the model's ping time."""
         rtts: list[float] = []
-        sock.settimeout(self._opt.connect_timeout_s)
         for i in range(self._opt.ping_count):
             payload = struct.pack("<I", i) + os.urandom(4)
             start = time.monotonic()
+            deadline = start + self._opt.connect_timeout_s
             self._send(codec.encode(Ping(payload)))
             while True:
-                frame = self._next_frame(sock, splitter)
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    log.warning("link to %s: no PONG in %g s; planning without this round trip",
+                                self._where(), self._opt.connect_timeout_s)
+                    break
+                sock.settimeout(left)
+                try:
+                    frame = self._next_frame(sock, splitter)
+                except TimeoutError:
+                    continue
                 if codec.is_data_type(frame.type):
                     self._on_data(frame)  # the running config, when resuming
                     continue
