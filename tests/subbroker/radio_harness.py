@@ -45,8 +45,9 @@ def start_pubbroker_dgram(tmp: Path, model_path: Path, link: dict[str, Any], ing
 
 def subbroker_dgram_config(tmp: Path, model_path: Path, endpoint: str, zenoh_port: int,
                            transport: str, device: str = "", tag: str = "sb",
-                           pb_status_s: int = 60) -> Path:
-    """``pb_status_s``: the PubBroker's STATUS period asked in CONFIG."""
+                           pb_status_s: int = 60, ping_period_s: float = 0.0) -> Path:
+    """``pb_status_s``: the PubBroker's STATUS period asked in CONFIG;
+    ``ping_period_s``: the SubBroker's periodic PINGs (0: none)."""
     dev = f"device = {json.dumps(device)}" if device else ""
     path = tmp / f"{tag}.toml"
     path.write_text(f"""
@@ -56,6 +57,7 @@ endpoint = "{endpoint}"
 key = "env:MODD_LINK_KEY"
 transport = "{transport}"
 pubbroker_status_period_s = {pb_status_s}
+ping_period_s = {ping_period_s}
 {dev}
 [zenoh]
 listen = ["tcp/127.0.0.1:{zenoh_port}"]

@@ -96,8 +96,8 @@ def _ingress(pb: Proc) -> int:
                          .split('"ingress"')[1]).group(1))  # type: ignore[union-attr]
 
 
-def _start(tmp: Path, transport: str, spec: str | None, pb_status_s: int = 60
-           ) -> tuple[Path, Proc, Proc, Proc | None, int]:
+def _start(tmp: Path, transport: str, spec: str | None, pb_status_s: int = 60,
+           ping_period_s: float = 0.0) -> tuple[Path, Proc, Proc, Proc | None, int]:
     model = model_copy(tmp, "scenario1.modd")
     zport, ingress = free_port(), free_port()
     radio: Proc | None = None
@@ -108,13 +108,13 @@ def _start(tmp: Path, transport: str, spec: str | None, pb_status_s: int = 60
         if spec is not None:
             radio, endpoint = start_radio_udp(tmp, port, spec)
         cfg = subbroker_dgram_config(tmp, model, f"127.0.0.1:{endpoint}", zport, "udp",
-                                     pb_status_s=pb_status_s)
+                                     pb_status_s=pb_status_s, ping_period_s=ping_period_s)
     else:
         radio, base, drone = start_radio_serial(tmp, spec or "")
         pb = start_pubbroker_dgram(tmp, model, {"transport": "serial", "device": drone,
                                                 "port": 1}, ingress)
         cfg = subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport, "serial", device=base,
-                                     pb_status_s=pb_status_s)
+                                     pb_status_s=pb_status_s, ping_period_s=ping_period_s)
     sb = start_subbroker(tmp, cfg)
     return model, pb, sb, radio, zport
 
@@ -144,6 +144,22 @@ def test_transport_delivers_what_the_archive_holds(transport: str, tmp_path: Pat
                    if s["radio"] and s["radio"]["pubbroker"])
     assert pb_side["datagrams_sent"] > 10 and pb_side["datagrams_resent"] == 0, pb_side
     assert pb_side["forged"] == 0 and pb_side["replayed"] == 0 and pb_side["nacks"] == 0
+
+
+def test_periodic_pings_measure_the_radio_round_trip(tmp_path: Path, zenoh_client: Any) -> None:
+    """``ping_period_s``: PINGs go every 0.1 s besides the data (the quiet link of
+    the test above sends under 20 B/s), and the RTT they measure is the radio's
+    (60 ms of latency each way)."""
+    model, pb, sb, radio, zport = _start(tmp_path, "udp", "latency_ms=60,seed=1",
+                                         ping_period_s=0.1)
+    assert radio is not None
+    with processes(radio, pb, sb):
+        got = _watch(zenoh_client, zport)
+        _run(tmp_path, model, pb, sb, got, 3.0)
+        status = got.status[-1]
+    r = status["radio"]
+    assert r["wire_bytes_out_per_s"] is not None and r["wire_bytes_out_per_s"] > 200, r
+    assert status["rtt_s"] is not None and 0.11 < status["rtt_s"] < 0.5, status
 
 
 @pytest.mark.parametrize("transport", ["udp", "serial"])

@@ -48,7 +48,8 @@ def test_control_frames_refuses_a_torn_or_empty_payload() -> None:
 
 
 def test_the_datagram_link_hands_on_the_end_behind_a_progress() -> None:
-    client = DatagramLinkClient(lambda: None, "test", "udp", b"psk", None, None)  # type: ignore[arg-type,return-value]
+    client = DatagramLinkClient(lambda: None, "test", "udp", b"psk", LinkOptions(),  # type: ignore[arg-type,return-value]
+                                None)  # type: ignore[arg-type]
     client._key = KEY  # an authenticated session (the handshake is not under test here)
     got: list[object] = []
     client.backfill_sink = lambda f: got.append(bf.decode(f))

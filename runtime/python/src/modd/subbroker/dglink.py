@@ -78,7 +78,7 @@ from modd.link.schedule import SlotIterator
 
 from .config import LinkOptions
 from .dgport import DatagramPort
-from .link import ConfigRejected, LinkDown, LinkHandler, LinkStats
+from .link import ConfigRejected, LinkDown, LinkHandler, LinkStats, RoundTrips
 
 log = logging.getLogger("modd.subbroker.dglink")
 
@@ -190,6 +190,7 @@ class DatagramLinkClient:
         self._runs: dict[int, _Run] = {}
         self._pending: dict[int, _Pending] = {}
         self._pings: dict[bytes, float] = {}
+        self._round_trips = RoundTrips(options.ping_period_s)
         self._rtt = 0.0
         self._last_sent = 0.0
         self._lock = threading.Lock()
@@ -382,9 +383,13 @@ class DatagramLinkClient:
     def _loop(self) -> None:
         last = time.monotonic()
         pinged = 0.0
+        self._round_trips.restart(last)
         while not self._stop.is_set():
             got = self._recv(0.05)
             now = time.monotonic()
+            payload = self._round_trips.due(now)
+            if payload is not None:
+                self._control(codec.encode(Ping(payload)))
             for raw in got:
                 if self._on_datagram(raw):
                     last = now
@@ -573,6 +578,9 @@ class DatagramLinkClient:
             start = self._pings.pop(msg.payload, None)
             if start is not None:
                 self._rtt = time.monotonic() - start
+            rtt = self._round_trips.on_pong(msg.payload, time.monotonic())
+            if rtt is not None:
+                self.stats.rtt_s = rtt
         elif isinstance(msg, Status):
             self.stats.pubbroker = msg.as_dict()
             self._handler.on_status(msg)

@@ -12,7 +12,9 @@ the running config (resumes it when the PubBroker's AUTH_OK still reports it, el
 
 Silence: after half the liveness timeout without a frame it sends one PING;
 after the whole timeout it drops the connection. Nothing else is sent while
-DATA flows, so that the link stays as quiet as the plan predicts.
+DATA flows, so that the link stays as quiet as the plan predicts, unless
+``ping_period_s`` asks for periodic PINGs (:class:`RoundTrips`) that keep the
+measured RTT current.
 """
 
 from __future__ import annotations
@@ -79,6 +81,47 @@ class LinkHandler(Protocol):
     def on_status(self, status: Status) -> None: ...
 
 
+class RoundTrips:
+    """The periodic PINGs of an established link (``[link] ping_period_s``) and the
+    round trips their PONGs measure: the link's RTT follows a radio whose latency
+    changes (the NACK timing and the next plan use it). At most ``in_flight``
+    PINGs are awaited; older ones are forgotten (a lost PING costs nothing)."""
+
+    def __init__(self, period_s: float, keep: int = 5, in_flight: int = 4) -> None:
+        self.period_s = period_s
+        self._keep = keep
+        self._in_flight = in_flight
+        self._sent: dict[bytes, float] = {}
+        self._recent: list[float] = []
+        self._next = 0.0
+        self._count = 0
+
+    def restart(self, now: float) -> None:
+        """A new session: the first periodic PING one period from now."""
+        self._sent.clear()
+        self._next = now + self.period_s
+
+    def due(self, now: float) -> bytes | None:
+        """The payload of the PING to send now, or None (periodic PINGs off, or not yet)."""
+        if self.period_s <= 0 or now < self._next:
+            return None
+        self._next = now + self.period_s
+        self._count += 1
+        payload = b"rt" + struct.pack("<I", self._count & 0xFFFFFFFF) + os.urandom(2)
+        self._sent[payload] = now
+        while len(self._sent) > self._in_flight:
+            del self._sent[next(iter(self._sent))]
+        return payload
+
+    def on_pong(self, payload: bytes, now: float) -> float | None:
+        """The median of the recent round trips once this PONG answers one of ours."""
+        start = self._sent.pop(payload, None)
+        if start is None:
+            return None
+        self._recent = [*self._recent[1 - self._keep:], now - start]
+        return statistics.median(self._recent)
+
+
 @dataclass
 class LinkStats:
     """Counters of the link as the SubBroker sees it (frame bytes, not IP)."""
@@ -127,7 +170,7 @@ class LinkClient:
         self._splitter: codec.FrameSplitter | None = None
         self._send_lock = threading.Lock()
         self._pending: dict[int, _Pending] = {}
-        self._pings: dict[bytes, int] = {}
+        self._round_trips = RoundTrips(options.ping_period_s)
         self._up = threading.Event()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="modd-link", daemon=True)
@@ -273,7 +316,11 @@ class LinkClient:
     def _read_loop(self, sock: socket.socket, splitter: codec.FrameSplitter) -> None:
         last = time.monotonic()
         pinged = False
+        self._round_trips.restart(last)
         while not self._stop.is_set():
+            payload = self._round_trips.due(time.monotonic())
+            if payload is not None:
+                self._send(codec.encode(Ping(payload)))
             timeout = self._liveness_s()
             sock.settimeout(max(0.05, min(0.5, timeout / 4)))
             try:
@@ -335,7 +382,11 @@ class LinkClient:
             self.stats.last_error = f"PubBroker error {msg.code}: {msg.message}"
             for cid in list(self._pending):
                 self._fail(cid, ConfigRejected(msg.code, msg.message))
-        elif not isinstance(msg, Pong):
+        elif isinstance(msg, Pong):
+            rtt = self._round_trips.on_pong(msg.payload, time.monotonic())
+            if rtt is not None:
+                self.stats.rtt_s = rtt
+        else:
             what = type(msg).__name__
             raise ProtocolError(ErrorCode.BAD_FRAME, f"unexpected {what} on an established link")
 
