@@ -163,7 +163,7 @@ def test_replayed_deploy_refused_after_a_subbroker_restart(
     old.stop()
     station["sb"] = sb = start_subbroker(tmp_path, station["config"], "sb-restarted")
     wait_port(station["port"])
-    assert sb.wait_log("running", 15), sb.log()
+    assert sb.wait_log("running", 30), sb.log()
     deadline = time.monotonic() + 10
     while True:  # the client reconnects to the restarted router by itself
         try:
