@@ -25,6 +25,7 @@ from typing import Any
 import pytest
 from modd.subbroker.client import request
 from modd.zenoh_session import wait_connected
+from modd_model.query import topics
 from subbroker_harness import (
     SUBBROKER,
     Proc,
@@ -165,6 +166,23 @@ def _slow_model(tmp: Path, base: Path, extra: int) -> Path:
     return path
 
 
+def _large_model(tmp: Path, base: Path, extra: int) -> Path:
+    """``base`` with ``extra`` subscriptions at four dividing periods: a plannable
+    model whose plan takes time in proportion (20,000: about 0.5 s on this machine,
+    ten times the test's budget, where the exponential cases of ``_slow_model`` now
+    plan in milliseconds)."""
+    model = json.loads(base.read_text())
+    names = list(topics(model))
+    for i in range(extra):
+        model["subscribers"].append({
+            "name": f"many_{i}", "topic": names[i % len(names)],
+            "periodS": ("0.5", "1.0", "2.0", "5.0")[(i // len(names)) % 4],
+            "aggregation": ("MIN", "MAX", "AVERAGE")[i % 3]})
+    path = tmp / "large.json"
+    path.write_text(json.dumps(model))
+    return path
+
+
 def test_a_deploy_over_the_planning_budget_is_refused_and_the_config_keeps_running(
         tmp_path: Path, zenoh_client: Any) -> None:
     link, ingress, zport = free_port(), free_port(), free_port()
@@ -181,8 +199,7 @@ def test_a_deploy_over_the_planning_budget_is_refused_and_the_config_keeps_runni
         session.declare_subscriber("modd/usv/**", got.on_sample)
         assert sb.wait_log("config 1 running", 10), sb.log()
         t0 = time.monotonic()
-        # 40 extra periods: a plan of ~0.4 s here (150 is refused at once by the slot bound)
-        reply = _deploy(session, _slow_model(tmp_path, s1, 40), 2)
+        reply = _deploy(session, _large_model(tmp_path, s1, 20_000), 2)
         took = time.monotonic() - t0
         assert reply["status"] == "REJECTED", reply
         assert "budget of 0.05 s" in reply["reason"] and took < 3
