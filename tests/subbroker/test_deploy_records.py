@@ -154,7 +154,8 @@ def test_the_status_names_what_runs_and_a_restart_resumes_it_loudly(
 
 
 def _slow_model(tmp: Path, base: Path, extra: int) -> Path:
-    """``base`` with ``extra`` subscriptions at many periods: a plan of seconds."""
+    """``base`` with ``extra`` subscriptions at as many non-dividing periods: past
+    65 of them the slot bound refuses the model with a located error."""
     model = json.loads(base.read_text())
     for i in range(extra):
         model["subscribers"].append({
