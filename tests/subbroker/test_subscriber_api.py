@@ -12,6 +12,7 @@ from typing import Any
 
 import modd
 import pytest
+import zenoh
 from modd.subbroker.client import NoReply
 from modd.subbroker.payload import DeliveredValue
 from modd.subscriber import subscribe_dynamic
@@ -115,12 +116,19 @@ def test_a_malformed_value_is_dropped_alone_and_the_rest_is_kept(pair: Any) -> N
         {**good, "count": 2.5},
         {**good, "slot": True},
     ]
-    server.put("modd/usv/sub/sub_1", value(0).to_json())
+
+    def put(payload: str | bytes) -> None:
+        # blocking, not zenoh's default of dropping when a queue is full: the
+        # 200 KB value, put in a burst to two sessions, was once dropped for one
+        server.put("modd/usv/sub/sub_1", payload,
+                   congestion_control=zenoh.CongestionControl.BLOCK)
+
+    put(value(0).to_json())
     for b in bad:
-        server.put("modd/usv/sub/sub_1", json.dumps(b))
-    server.put("modd/usv/sub/sub_1", b'{"value":' + b"[" * 100_000 + b"]" * 100_000 + b"}")
+        put(json.dumps(b))
+    put(b'{"value":' + b"[" * 100_000 + b"]" * 100_000 + b"}")
     for i in (1, 2):
-        server.put("modd/usv/sub/sub_1", value(i).to_json())
+        put(value(i).to_json())
     df = sub.dataframe(count=3, duration_s=3)
     assert list(df["slot"]) == [0, 1, 2] and list(df["value"]) == [0.0, 0.5, 1.0]
     assert sub.malformed == len(bad) + 1
