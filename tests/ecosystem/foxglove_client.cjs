@@ -72,6 +72,7 @@ function main() {
   const after = afterAt >= 0 ? Number(rest[afterAt + 1]) : 1;
   const report = {
     protocol: null, serverInfo: null, advertised: [], unadvertised: [], errors: [],
+    statuses: [], resubscribed: [],
     messages: {}, received: 0, playbackStates: [], seekSentAtMessage: null,
   };
   const socket = new FilteringSocket(url, report);
@@ -89,7 +90,27 @@ function main() {
       subscriptions.set(client.subscribe(ch.id), ch.topic);
     }
   });
-  client.on("unadvertise", (ids) => { for (const id of ids) report.unadvertised.push(topics.get(id)); });
+  client.on("unadvertise", (ids) => {
+    for (const id of ids) { report.unadvertised.push(topics.get(id)); topics.delete(id); }
+  });
+  // foxglove-sdk advertises a new channel before it records it as advertised
+  // to the client (connected_client.rs, advertise_channels): a client that
+  // subscribes at once can be told "Unknown channel ID" for a channel it was
+  // just offered. A robust client subscribes again while the channel stands.
+  const retries = new Map(); // channel id -> re-subscriptions
+  client.on("status", (status) => {
+    const m = /Unknown channel ID: (\d+)/.exec(status.message || "");
+    if (!m) { report.statuses.push(status.message); return; }
+    const id = Number(m[1]);
+    const n = retries.get(id) || 0;
+    if (!topics.has(id)) { report.statuses.push(status.message); return; } // withdrawn since
+    if (n >= 5) { report.errors.push(status.message); return; }
+    retries.set(id, n + 1);
+    report.resubscribed.push(topics.get(id));
+    setTimeout(() => {
+      if (topics.has(id)) subscriptions.set(client.subscribe(id), topics.get(id));
+    }, 50 * (n + 1));
+  });
   client.on("message", ({ subscriptionId, timestamp, data }) => {
     const topic = subscriptions.get(subscriptionId);
     const msg = JSON.parse(decoder.decode(data));
