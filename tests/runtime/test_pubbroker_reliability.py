@@ -6,16 +6,15 @@ from __future__ import annotations
 import json
 import os
 import re
-import shutil
 import signal
 import socket
 import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
 from typing import Any
 
-import pytest
 from modd.ingress import Ack, Reject, decode_reply
 from modd.link import codec
 from modd.link.frames import ValueType
@@ -29,6 +28,10 @@ from pubbroker_harness import (
     read_archive,
     run_load,
 )
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from support.namespaces import needs_mount_namespace  # noqa: E402
 
 X, Y, Z = (f"usv.accelerometer.accel_{a}" for a in "xyz")
 
@@ -236,14 +239,7 @@ class NamespacedBroker(PubBroker):
             self._log.close()
 
 
-def unshare_works() -> bool:
-    if shutil.which("unshare") is None:
-        return False
-    return subprocess.run(["unshare", "-rm", "sh", "-c", "mount -t tmpfs -o size=64k tmpfs /mnt"],
-                          capture_output=True).returncode == 0
-
-
-@pytest.mark.skipif(not unshare_works(), reason="no unprivileged mount namespace (unshare -rm)")
+@needs_mount_namespace
 def test_disk_full_then_space_back(tmp_path: Path) -> None:
     full_s = float(os.environ.get("MODD_DISK_FULL_S", "5"))
     b = NamespacedBroker(tmp_path, 2048, archive={"low_space_mb": 1, "flush_interval_ms": 200})
@@ -316,7 +312,7 @@ def wait_log(b: PubBroker, text: str, timeout: float) -> bool:
     return False
 
 
-@pytest.mark.skipif(not unshare_works(), reason="no unprivileged mount namespace (unshare -rm)")
+@needs_mount_namespace
 def test_a_crashed_file_is_recovered_without_room_for_a_copy_and_when_space_returns(
         tmp_path: Path, broker_factory: Any) -> None:
     from mcap.reader import make_reader

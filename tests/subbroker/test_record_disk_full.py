@@ -6,12 +6,13 @@ returns. The disk is a real 4 MiB tmpfs in a private mount namespace (`unshare -
 from __future__ import annotations
 
 import json
-import shutil
 import subprocess
 import sys
 from pathlib import Path
 
-import pytest
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from support.namespaces import needs_mount_namespace  # noqa: E402
 
 CHILD = r'''
 import json, logging, os, sys, time
@@ -55,14 +56,7 @@ print(json.dumps(out))
 '''
 
 
-def unshare_works() -> bool:
-    if shutil.which("unshare") is None:
-        return False
-    return subprocess.run(["unshare", "-rm", "sh", "-c", "mount -t tmpfs -o size=64k tmpfs /mnt"],
-                          capture_output=True).returncode == 0
-
-
-@pytest.mark.skipif(not unshare_works(), reason="no unprivileged mount namespace (unshare -rm)")
+@needs_mount_namespace
 def test_a_full_disk_never_stops_delivery_and_the_record_resumes(tmp_path: Path) -> None:
     from mcap.reader import make_reader
 
