@@ -126,17 +126,16 @@ def test_control_datagram_with_several_frames_delivers_each() -> None:
     from modd.link import backfill as bf
     from modd.link.datagram import DRONE_TO_BASE, encode_control
     from modd.subbroker.config import LinkOptions
-    from modd.subbroker.dglink import DatagramLinkClient
+    from modd.subbroker.dgsession import DatagramSession
 
-    client = DatagramLinkClient(lambda: None, "test", "udp", b"psk",  # type: ignore[arg-type,return-value]
-                                LinkOptions(), None)  # type: ignore[arg-type]
+    client = DatagramSession("udp", b"psk", LinkOptions(), None)  # type: ignore[arg-type]
     key = session_key(b"psk", bytes(16), bytes(16))
     client._key = key
     got: list[codec.RawFrame] = []
     client.backfill_sink = got.append
     frames = (bf.encode(bf.BackfillProgress(7, 24, 24, 96, 20000))
               + bf.encode(bf.BackfillEnd(7, bf.EndStatus.DONE, 24, "")))
-    assert client._on_datagram(encode_control(1, frames, key, DRONE_TO_BASE))
+    assert client.datagram(encode_control(1, frames, key, DRONE_TO_BASE))
     assert [f.type for f in got] == [bf.BackfillType.PROGRESS, bf.BackfillType.END]
-    assert not client._on_datagram(encode_control(2, frames[:-1], key, DRONE_TO_BASE))
+    assert not client.datagram(encode_control(2, frames[:-1], key, DRONE_TO_BASE))
     assert client.radio.malformed == 1 and len(got) == 2

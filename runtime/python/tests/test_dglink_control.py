@@ -6,6 +6,8 @@ its job stayed RUNNING (found by tests/bench/bench_backfill.py --live)."""
 
 from __future__ import annotations
 
+from concurrent.futures import Future
+
 from modd.link import backfill as bf
 from modd.link import codec
 from modd.link.datagram import (
@@ -17,9 +19,18 @@ from modd.link.datagram import (
     session_key,
     verify_control_fragment,
 )
-from modd.link.frames import Aggregation, Config, ErrorCode, StreamSpec, TopicSpec, ValueType
+from modd.link.frames import (
+    Aggregation,
+    Config,
+    ConfigAck,
+    ErrorCode,
+    StreamSpec,
+    TopicSpec,
+    ValueType,
+)
 from modd.subbroker.config import LinkOptions
-from modd.subbroker.dglink import DatagramLinkClient, control_frames
+from modd.subbroker.dglink import control_frames
+from modd.subbroker.dgsession import DatagramSession
 from modd.subbroker.link import ConfigRejected
 from modd_plan.linkbudget import datagram_capacity
 
@@ -48,17 +59,16 @@ def test_control_frames_refuses_a_torn_or_empty_payload() -> None:
 
 
 def test_the_datagram_link_hands_on_the_end_behind_a_progress() -> None:
-    client = DatagramLinkClient(lambda: None, "test", "udp", b"psk", LinkOptions(),  # type: ignore[arg-type,return-value]
-                                None)  # type: ignore[arg-type]
+    client = DatagramSession("udp", b"psk", LinkOptions(), None)  # type: ignore[arg-type]
     client._key = KEY  # an authenticated session (the handshake is not under test here)
     got: list[object] = []
     client.backfill_sink = lambda f: got.append(bf.decode(f))
-    assert client._on_datagram(encode_control(1, _end_with_progress(), KEY, DRONE_TO_BASE))
+    assert client.datagram(encode_control(1, _end_with_progress(), KEY, DRONE_TO_BASE))
     assert got == [bf.BackfillProgress(7, 55, 55, 309, 499),
                    bf.BackfillEnd(7, bf.EndStatus.DONE, 55)]
     assert client.stats.frames_in == 2
     # a torn payload is malformed, nothing of it handed on
-    assert not client._on_datagram(encode_control(2, _end_with_progress()[:-1], KEY, DRONE_TO_BASE))
+    assert not client.datagram(encode_control(2, _end_with_progress()[:-1], KEY, DRONE_TO_BASE))
     assert client.radio.malformed == 1 and len(got) == 2
 
 
@@ -70,19 +80,27 @@ def _config(topics: int) -> Config:
 
 
 class _Port:
+    """What the session emits, as its pump writes it."""
+
     def __init__(self) -> None:
         self.sent: list[bytes] = []
 
-    def send(self, datagram: bytes) -> None:
-        self.sent.append(datagram)
+
+class _Client(DatagramSession):
+    def __init__(self, max_packet: int, port: _Port) -> None:
+        super().__init__("serial", b"psk", LinkOptions(), None,  # type: ignore[arg-type]
+                         max_packet=max_packet, where="serial /dev/radio")
+        self._key, self._port = KEY, port
+        self._counter = 41
+
+    def _submit(self, config: Config) -> Future[ConfigAck]:
+        future = self.submit(config)
+        self._port.sent.extend(self.take())
+        return future
 
 
-def _client(max_packet: int, port: _Port) -> DatagramLinkClient:
-    c = DatagramLinkClient(lambda: port, "serial /dev/radio", "serial", b"psk",  # type: ignore[arg-type,return-value]
-                           LinkOptions(), None, max_packet=max_packet)  # type: ignore[arg-type]
-    c._key, c._port = KEY, port  # type: ignore[assignment]
-    c._counter = 41
-    return c
+def _client(max_packet: int, port: _Port) -> _Client:
+    return _Client(max_packet, port)
 
 
 def test_a_config_larger_than_the_radios_packet_goes_as_control_fragments() -> None:
@@ -133,8 +151,8 @@ def test_control_fragments_from_the_pubbroker_are_put_back_together() -> None:
     frags = encode_control_fragments(7, message, 100, KEY, DRONE_TO_BASE)
     assert len(frags) > 3
     forged = frags[1][:-1] + bytes([frags[1][-1] ^ 1])
-    assert not client._on_datagram(forged) and client.radio.forged == 1
+    assert not client.datagram(forged) and client.radio.forged == 1
     for d in reversed(frags):
-        assert client._on_datagram(d)
-    assert not client._on_datagram(frags[0]) and client.radio.replayed == 1
+        assert client.datagram(d)
+    assert not client.datagram(frags[0]) and client.radio.replayed == 1
     assert len(got) == 60  # every frame of the message, once

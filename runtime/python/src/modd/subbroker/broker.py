@@ -32,7 +32,6 @@ from .backfill import BackfillManager
 from .config import ConfigError, SubBrokerConfig, resolve_key
 from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoints
 from .deploy import DeployRequest, parse_request
-from .dglink import DatagramLinkClient
 from .dynamic import DynamicSubscriptions
 from .fanout import FanOut
 from .kept import Deployment, StateDir, same_model
@@ -477,8 +476,7 @@ class SubBroker:
             "transport": self.config.transport,
             "link_budget": (running.plan.budget.to_json()
                             if running is not None and running.plan.budget is not None else None),
-            "radio": (self.link.radio_status()
-                      if isinstance(self.link, DatagramLinkClient) else None),
+            "radio": self.link.radio_status(),
         }
 
 

@@ -1,10 +1,13 @@
 """Where the base station's datagrams come and go (docs/protocol.md,
 "Datagram transports"): a UDP socket connected to the PubBroker's endpoint,
 or a character device (a telemetry radio, a UART, a pseudo-terminal) in raw
-mode, each datagram one serial frame (COBS + CRC-16, 0x00).
+mode, each datagram one serial frame (COBS + CRC-16, 0x00). Each datagram
+read comes with its source address (None on a serial line): the session
+binds to the PubBroker's (docs/security.md).
 
 >>> port = UdpPort(("127.0.0.1", 7171))          # doctest: +SKIP
 >>> port.send(raw); port.recv(0.1)               # doctest: +SKIP
+[(b'...', ('127.0.0.1', 7171))]
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ import select
 import socket
 import termios
 import tty
+from collections.abc import Hashable
 from typing import Protocol
 
 from modd.link.serialframe import Deframer, encode_frame
@@ -34,22 +38,36 @@ class DatagramPort(Protocol):
     wire_out: int
 
     @property
+    def peer(self) -> Hashable | None:
+        """The address the PubBroker's datagrams come from (None: a point-to-point line)."""
+        ...
+
+    @property
     def corrupt(self) -> int: ...
 
     def send(self, datagram: bytes) -> None: ...
 
-    def recv(self, timeout_s: float) -> list[bytes]: ...
+    def recv(self, timeout_s: float) -> list[tuple[bytes, Hashable | None]]:
+        """The datagrams that came within ``timeout_s``, each with its source."""
+        ...
 
     def close(self) -> None: ...
 
 
 class UdpPort:
-    """A UDP socket connected to the PubBroker's endpoint (loopback in tests)."""
+    """A UDP socket that sends to the PubBroker's endpoint (loopback in tests) and
+    reads from any address, so that a stranger's datagrams are seen and counted."""
 
     def __init__(self, endpoint: tuple[str, int]) -> None:
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.connect(endpoint)
+        addr = socket.getaddrinfo(endpoint[0], endpoint[1], socket.AF_INET,
+                                  socket.SOCK_DGRAM)[0][4]
+        self._peer = (str(addr[0]), int(addr[1]))  # as recvfrom reports it
         self.wire_in = self.wire_out = 0
+
+    @property
+    def peer(self) -> tuple[str, int]:
+        return self._peer
 
     @property
     def corrupt(self) -> int:
@@ -57,19 +75,19 @@ class UdpPort:
 
     def send(self, datagram: bytes) -> None:
         with contextlib.suppress(OSError):  # nobody there (yet): lost, as on a radio
-            self.sock.send(datagram)
+            self.sock.sendto(datagram, self._peer)
             self.wire_out += len(datagram) + UDP_IP_HEADER_BYTES
 
-    def recv(self, timeout_s: float) -> list[bytes]:
-        out: list[bytes] = []
+    def recv(self, timeout_s: float) -> list[tuple[bytes, Hashable | None]]:
+        out: list[tuple[bytes, Hashable | None]] = []
         ready, _, _ = select.select([self.sock], [], [], timeout_s)
         while ready and len(out) < 64:
             try:
-                data = self.sock.recv(65535)
+                data, source = self.sock.recvfrom(65535)
             except (BlockingIOError, ConnectionRefusedError):
                 break  # an ICMP error of an earlier send: the far end is not up
             self.wire_in += len(data) + UDP_IP_HEADER_BYTES
-            out.append(data)
+            out.append((data, source[:2]))
             ready, _, _ = select.select([self.sock], [], [], 0)
         return out
 
@@ -96,6 +114,10 @@ class SerialPort:
         self.wire_in = self.wire_out = 0
 
     @property
+    def peer(self) -> None:
+        return None  # one radio at the other end of the line
+
+    @property
     def corrupt(self) -> int:
         return self.deframer.corrupt + self.deframer.oversized
 
@@ -111,7 +133,7 @@ class SerialPort:
             self.wire_out += n
             view = view[n:]
 
-    def recv(self, timeout_s: float) -> list[bytes]:
+    def recv(self, timeout_s: float) -> list[tuple[bytes, Hashable | None]]:
         ready, _, _ = select.select([self.fd], [], [], timeout_s)
         if not ready:
             return []
@@ -122,7 +144,7 @@ class SerialPort:
         except OSError as exc:  # EIO: the other end of a pseudo-terminal went away
             raise ConnectionError(f"serial device: {exc.strerror}") from exc
         self.wire_in += len(data)
-        return self.deframer.feed(data)
+        return [(d, None) for d in self.deframer.feed(data)]
 
     def close(self) -> None:
         with contextlib.suppress(OSError):

@@ -1,7 +1,8 @@
 """The link client for the configured transport (docs/subbroker.md,
-"Transports"): :class:`~.link.LinkClient` over tcp, or
-:class:`~.dglink.DatagramLinkClient` over udp (a socket connected to the
-PubBroker's endpoint) or serial (the base station radio's device).
+"Transports"), behind one interface (:class:`~.pump.Link`):
+:class:`~.link.LinkClient` over tcp, or :class:`~.dglink.DatagramLinkClient`
+over udp (a socket that sends to the PubBroker's endpoint) or serial (the
+base station radio's device).
 
 >>> link = link_client(config, key, handler, liveness)   # doctest: +SKIP
 """
@@ -17,12 +18,13 @@ from .config import SubBrokerConfig
 from .dglink import DatagramLinkClient
 from .dgport import DatagramPort, SerialPort, UdpPort
 from .link import LinkClient, LinkHandler
+from .pump import Link
 
 DEFAULT_BAUD = 57600
 
 
 def link_client(config: SubBrokerConfig, key: bytes, handler: LinkHandler,
-                liveness: Callable[[], float]) -> LinkClient | DatagramLinkClient:
+                liveness: Callable[[], float]) -> Link:
     """The link client the configuration asks for (not started)."""
     transport = config.transport
     if transport == "tcp":
