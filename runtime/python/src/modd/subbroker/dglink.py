@@ -54,9 +54,10 @@ class DatagramLinkClient(Pump):
         port = self._port
         if port is None:
             raise LinkDown("the link is down")
+        if self.dgram.up:  # once the CONFIG is out: the rates are the running link's
+            self.dgram.sample_wire(port.wire_in, port.wire_out)
         for raw, source in port.recv(0.05):
             self.dgram.datagram(raw, source)
-        self.dgram.sample_wire(port.wire_in, port.wire_out)
 
     def _write(self, data: bytes) -> None:
         port = self._port
