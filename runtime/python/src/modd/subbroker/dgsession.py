@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Hashable
-from typing import Any
+from typing import Any, TypeVar
 
 from modd_plan.linkbudget import datagram_capacity
 
@@ -51,6 +51,7 @@ from .dgruns import PUBBROKER_COUNTS, RadioCounters, Runs, control_frames
 from .session import Clock, LinkDown, LinkHandler, LinkSession
 
 log = logging.getLogger("modd.subbroker.dglink")
+_T = TypeVar("_T")
 
 RETRY_S = 1.0  # handshake and CONFIG resent this often ...
 RETRIES = 10  # ... at most this many times
@@ -224,31 +225,32 @@ class DatagramSession(LinkSession):
         self.radio.malformed += 1
         return False
 
-    def _on_control(self, raw: bytes) -> bool:
+    def _verified(self, verify: Callable[[bytes, bytes, bytes], _T], raw: bytes) -> _T | None:
+        """``verify`` (a control datagram's or a control fragment's) under the session
+        key; None, counted, when it is forged or malformed."""
         try:
-            counter, frame = verify_control(raw, self._key, DRONE_TO_BASE)
+            return verify(raw, self._key, DRONE_TO_BASE)
         except Forged:
             self.radio.forged += 1
-            return False
         except ProtocolError:
             self.radio.malformed += 1
+        return None
+
+    def _fresh(self, counter: int) -> bool:
+        if self._window.accept(counter):
+            return True
+        self.radio.replayed += 1
+        return False
+
+    def _on_control(self, raw: bytes) -> bool:
+        verified = self._verified(verify_control, raw)
+        if verified is None or not self._fresh(verified[0]):
             return False
-        if not self._window.accept(counter):
-            self.radio.replayed += 1
-            return False
-        return self._on_control_frames(frame)
+        return self._on_control_frames(verified[1])
 
     def _on_control_fragment(self, raw: bytes) -> bool:
-        try:
-            piece = verify_control_fragment(raw, self._key, DRONE_TO_BASE)
-        except Forged:
-            self.radio.forged += 1
-            return False
-        except ProtocolError:
-            self.radio.malformed += 1
-            return False
-        if not self._window.accept(piece.counter):
-            self.radio.replayed += 1
+        piece = self._verified(verify_control_fragment, raw)
+        if piece is None or not self._fresh(piece.counter):
             return False
         before = self._pieces.malformed
         whole = self._pieces.add(piece)
