@@ -49,7 +49,7 @@ from modd.link.frames import (
 from modd.link.receiver import Window
 from modd.subbroker.config import LinkOptions
 from modd.subbroker.dgsession import RETRIES, DatagramSession
-from modd.subbroker.session import ConfigRejected, LinkDown
+from modd.subbroker.linkhooks import ConfigRejected, LinkDown
 from modd.subbroker.stream_session import StreamSession
 
 PSK = b"a link key of the test, 32 bytes"

@@ -36,7 +36,7 @@ from .dynamic import DynamicSubscriptions
 from .fanout import FanOut
 from .kept import Deployment, StateDir, same_model
 from .keys import backfill_key, deploy_key, subscribe_key
-from .link import ConfigRejected, LinkDown
+from .linkhooks import ConfigRejected, LinkDown
 from .planning import accepted_delay_ms, config_for, plan_within
 from .record import BaseRecord
 from .request import MAX_DEPLOY_BYTES, MAX_SMALL_BYTES, read_request

@@ -15,8 +15,8 @@ from .config import LinkOptions
 from .dgport import DatagramPort
 from .dgruns import control_frames
 from .dgsession import DatagramSession
+from .linkhooks import LinkDown, LinkHandler
 from .pump import Pump
-from .session import LinkDown, LinkHandler
 
 __all__ = ["DatagramLinkClient", "control_frames"]
 

@@ -21,7 +21,7 @@ from modd.link.frames import Config, ConfigAck, ProtocolError, Value
 from modd.link.receiver import Window
 from modd.link.schedule import SlotIterator
 
-from .session import Clock
+from .linkhooks import Clock
 
 MAX_NACK_ASKS = 5
 PUBBROKER_COUNTS = ("datagrams_sent", "datagrams_resent", "nacks", "slots_dropped", "forged",

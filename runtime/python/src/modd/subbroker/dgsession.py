@@ -48,7 +48,8 @@ from modd.link.frames import Config, ConfigAck, Ping, ProtocolError
 
 from .config import LinkOptions
 from .dgruns import PUBBROKER_COUNTS, RadioCounters, Runs, control_frames
-from .session import Clock, LinkDown, LinkHandler, LinkSession
+from .linkhooks import Clock, LinkDown, LinkHandler
+from .session import LinkSession
 
 log = logging.getLogger("modd.subbroker.dglink")
 _T = TypeVar("_T")

@@ -21,8 +21,9 @@ from collections.abc import Callable
 
 from .backpressure import socket_backlog
 from .config import LinkOptions
+from .linkhooks import ConfigRejected, LinkDown, LinkHandler, LinkStats
 from .pump import Pump
-from .session import ConfigRejected, LinkDown, LinkHandler, LinkStats, RoundTrips
+from .roundtrips import RoundTrips
 from .stream_session import StreamSession
 
 __all__ = ["ConfigRejected", "LinkClient", "LinkDown", "LinkHandler", "LinkStats", "RoundTrips"]

@@ -24,7 +24,8 @@ from modd.link import codec
 from modd.link.frames import Config, ConfigAck, ProtocolError
 
 from .config import LinkOptions
-from .session import LinkDown, LinkSession, LinkStats
+from .linkhooks import LinkDown, LinkStats
+from .session import LinkSession
 
 log = logging.getLogger("modd.subbroker.link")
 

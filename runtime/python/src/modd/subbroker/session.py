@@ -24,11 +24,9 @@ import os
 import statistics
 import struct
 import threading
-import time
 from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
-from typing import Protocol
 
 from modd.link import backfill as bf
 from modd.link import codec
@@ -48,114 +46,12 @@ from modd.link.frames import (
     ProtocolError,
     Status,
 )
-from modd.link.receiver import Window
 
-from .backpressure import Backpressure
 from .config import LinkOptions
+from .linkhooks import Clock, ConfigRejected, LinkDown, LinkHandler, LinkStats, SystemClock
+from .roundtrips import RoundTrips
 
 log = logging.getLogger("modd.subbroker.link")
-
-
-class LinkDown(ConnectionError):
-    """The link is not up (or dropped while waiting)."""
-
-
-class ConfigRejected(RuntimeError):
-    """The PubBroker refused a CONFIG; ``status`` is its CONFIG_ACK status or ERROR code."""
-
-    def __init__(self, status: int, message: str) -> None:
-        super().__init__(message)
-        self.status = status
-
-
-class LinkHandler(Protocol):
-    """What the SubBroker does with link events (called on the link thread)."""
-
-    def on_connect(self, ok: AuthOk, rtt_s: float | None) -> Config | None:
-        """The CONFIG to send now, or None to resume the one ``ok`` reports."""
-        ...
-
-    def on_config_acked(self, config: Config, ack: ConfigAck) -> None: ...
-
-    def on_windows(self, windows: list[Window]) -> None: ...
-
-    def on_status(self, status: Status) -> None: ...
-
-
-class Clock(Protocol):
-    """The two clocks a session reads: monotonic seconds (timers) and wall
-    nanoseconds (a window's lateness, ``last_data_ns``)."""
-
-    def monotonic(self) -> float: ...
-
-    def time_ns(self) -> int: ...
-
-
-class SystemClock:
-    def monotonic(self) -> float:
-        return time.monotonic()
-
-    def time_ns(self) -> int:
-        return time.time_ns()
-
-
-class RoundTrips:
-    """The periodic PINGs of an established link (``[link] ping_period_s``) and the
-    round trips their PONGs measure: the link's RTT follows a radio whose latency
-    changes (the NACK timing and the next plan use it). At most ``in_flight``
-    PINGs are awaited; older ones are forgotten (a lost PING costs nothing)."""
-
-    def __init__(self, period_s: float, keep: int = 5, in_flight: int = 4) -> None:
-        self.period_s = period_s
-        self._keep = keep
-        self._in_flight = in_flight
-        self._sent: dict[bytes, float] = {}
-        self._recent: list[float] = []
-        self._next = 0.0
-        self._count = 0
-
-    def restart(self, now: float) -> None:
-        """A new session: the first periodic PING one period from now."""
-        self._sent.clear()
-        self._next = now + self.period_s
-
-    def due(self, now: float) -> bytes | None:
-        """The payload of the PING to send now, or None (periodic PINGs off, or not yet)."""
-        if self.period_s <= 0 or now < self._next:
-            return None
-        self._next = now + self.period_s
-        self._count += 1
-        payload = b"rt" + struct.pack("<I", self._count & 0xFFFFFFFF) + os.urandom(2)
-        self._sent[payload] = now
-        while len(self._sent) > self._in_flight:
-            del self._sent[next(iter(self._sent))]
-        return payload
-
-    def on_pong(self, payload: bytes, now: float) -> float | None:
-        """The median of the recent round trips once this PONG answers one of ours."""
-        start = self._sent.pop(payload, None)
-        if start is None:
-            return None
-        self._recent = [*self._recent[1 - self._keep:], now - start]
-        return statistics.median(self._recent)
-
-
-@dataclass
-class LinkStats:
-    """Counters of the link as the SubBroker sees it (frame bytes, not IP)."""
-
-    state: str = "connecting"
-    bytes_in: int = 0
-    bytes_out: int = 0
-    frames_in: int = 0
-    data_frames: int = 0
-    bad_frames: int = 0
-    connects: int = 0
-    rtt_s: float | None = None
-    last_data_ns: int | None = None
-    last_error: str | None = None
-    pubbroker: dict[str, int] = field(default_factory=dict)
-    backpressure: Backpressure = field(default_factory=Backpressure)
 
 
 @dataclass

@@ -20,7 +20,8 @@ from modd.link.frames import Config, ConfigAck, Ping, ProtocolError
 from modd.link.receiver import Receiver
 
 from .config import LinkOptions
-from .session import Clock, LinkDown, LinkHandler, LinkSession
+from .linkhooks import Clock, LinkDown, LinkHandler
+from .session import LinkSession
 
 log = logging.getLogger("modd.subbroker.link")
 

@@ -17,7 +17,8 @@ from modd_plan.linkbudget import LinkSettings
 from .config import SubBrokerConfig
 from .dglink import DatagramLinkClient
 from .dgport import DatagramPort, SerialPort, UdpPort
-from .link import LinkClient, LinkHandler
+from .link import LinkClient
+from .linkhooks import LinkHandler
 from .pump import Link
 
 DEFAULT_BAUD = 57600
