@@ -544,3 +544,106 @@ def test_a_config_that_needs_no_more_than_the_packet_goes_whole() -> None:
     assert drone.read(d) == big
     s.datagram(drone.control(codec.encode(ConfigAck(4, 0, 5))), DRONE)
     assert future.result(timeout=0) == ConfigAck(4, 0, 5) and s.delay_s == 2.0
+
+
+def test_an_overdue_datagram_is_asked_for_before_the_next_one_shows_the_gap() -> None:
+    """The last datagram of a burst is lost: no later one opens a gap, so the session
+    asks for the next slot once it is overdue (its date + the accepted delay + the
+    learnt lateness + 0.25 s), at most five times, every ask interval."""
+    handler = Handler()
+    s, clock, drone, sender = _running(handler)
+    (first,) = sender.add_slot(0, 0.0, _slot(0.0)) + sender.add_slot(1, 0.25, _slot(1.0)) \
+        + sender.add_slot(2, 0.5, _slot(2.0))
+    lost = sender.flush()  # slot 2, lost on the radio
+    clock.advance(0.3)  # slot 1's window ended 0.25 s after the epoch: 50 ms of lateness
+    assert s.datagram(first, DRONE) and len(handler.windows) == 2
+    clock.advance(1.0)  # slot 2 is dated 0.75 s; due 0.75 + 1 + 0.05 + 0.25 = 2.05 s
+    s.tick()
+    assert s.take() == [] and s.radio.nacks == 0
+    asked: list[bytes] = []
+    for _ in range(20):
+        clock.advance(0.35)
+        s.tick()
+        asked += [d for n in s.take() for d in sender.on_control(n)]
+    assert asked == [lost] * 5 and s.radio.nacks == 5  # MAX_NACK_ASKS
+    s.datagram(lost, DRONE)
+    assert [w.value.number for ws in handler.windows for w in ws] == [0.0, 1.0, 2.0]
+    assert s.radio_status()["retransmissions"] == 1
+
+
+def test_a_new_config_keeps_the_last_slots_of_the_one_it_replaces() -> None:
+    """The replaced config's slots dated before the new epoch still come (packed
+    before the switch) and are delivered; DATA of a config never acked is counted."""
+    handler = Handler()
+    s, clock, drone, sender = _running(handler)
+    (late,) = sender.add_slot(0, 0.0, _slot(7.0)) + [sender.flush()]
+    nxt = Config(4, 0, CONFIG.topics, CONFIG.streams)
+    s.submit(nxt)
+    s.datagram(drone.control(codec.encode(ConfigAck(4, 0, clock.wall_ns + 10**9))), DRONE)
+    assert s.datagram(late, DRONE) and handler.windows[0][0].config_id == 3
+    stray = DatagramSender(drone.key, 5, delay_s=1.0, room=10)
+    (d,) = stray.add_slot(0, 0.0, _slot(1.0)) + [stray.flush()]
+    assert not s.datagram(d, DRONE) and s.radio.unknown_config == 1
+    assert sorted(s.runs.by_id) == [3, 4] and s.runs.by_id[3].end_ns == clock.wall_ns + 10**9
+
+
+def test_a_link_with_nothing_to_say_pings_every_keepalive_period() -> None:
+    """While DATA flows the base station sends nothing, but once every 30 s."""
+    s, clock, drone, sender = _running(Handler())
+    s.take()
+    pings = 0
+    for k in range(130):  # 65 s of a datagram of two slots every 0.5 s
+        clock.advance(0.5)
+        out = sender.add_slot(2 * k, k * 0.5, _slot(1.0)) \
+            + sender.add_slot(2 * k + 1, k * 0.5 + 0.25, _slot(1.0)) + [sender.flush()]
+        for d in out:
+            s.datagram(d, DRONE)
+        s.tick()
+        sent = [drone.read(d) for d in s.take()]
+        assert all(m == Ping(b"alive") for m in sent), sent  # no NACK: nothing lost
+        pings += len(sent)
+    assert pings == 2
+
+
+def test_the_radio_status_rates_over_the_last_ten_seconds() -> None:
+    s, clock, drone, _ = _running(Handler())
+    for k in range(60):  # 15 s: 100 B/s in, 10 B/s out on the wire
+        s.sample_wire(k * 25, k * 2)
+        clock.advance(0.25)
+    status = s.radio_status(corrupt=3)
+    assert status["wire_bytes_in_per_s"] == 100.0 and status["wire_bytes_out_per_s"] == 8.0
+    assert status["malformed"] == 3 and status["transport"] == "udp"
+    assert status["accepted_delay_s"] == 1.0 and status["pubbroker"] is None
+
+
+def test_bytes_a_few_at_a_time_make_the_same_frames() -> None:
+    """A stream cuts frames anywhere: the session reads the same handshake, DATA and
+    backfill frames whether they come whole or byte by byte."""
+    handler = Handler()
+    s, clock = _session(handler)
+    peer = PeerHandshake()
+    s.begin()
+    for b in peer.challenge(frames(s.take())[0]):
+        s.feed(bytes([b]))
+    for b in peer.auth_ok(frames(s.take())[0]):
+        s.feed(bytes([b]))
+    for _ in range(3):
+        (ping,) = frames(s.take())
+        assert isinstance(ping, Ping)
+        s.feed(codec.encode(Pong(ping.payload)))
+    s.take()
+    wire = codec.encode(ConfigAck(3, 0, 0)) + _data(0, 1.0) + _data(1, 2.0)
+    for i in range(0, len(wire), 3):
+        s.feed(wire[i:i + 3])
+    assert [w.value.number for (w,) in handler.windows] == [1.0, 2.0]
+    assert handler.acked == [(CONFIG, ConfigAck(3, 0, 0))] and s.stats.data_frames == 2
+
+
+def test_the_backlog_of_the_transport_counts_in_the_backpressure() -> None:
+    clock = FakeClock()
+    s = StreamSession(PSK, LinkOptions(), Handler(), lambda: 3.0, clock,
+                      backlog=lambda: 300_000)
+    _authenticate(s, clock, PeerHandshake())
+    s.feed(codec.encode(ConfigAck(3, 0, 0)) + _data(0, 1.0))
+    bp = s.stats.backpressure.as_dict()
+    assert bp["recv_backlog_bytes"] == 300_000 and bp["behind"] is True
