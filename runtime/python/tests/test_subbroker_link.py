@@ -10,9 +10,11 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from mcap.reader import make_reader
 from modd.link import codec
 from modd.link.auth import client_proof, server_proof
 from modd.link.frames import (
@@ -80,11 +82,14 @@ def _connect(s: StreamSession, running: int = 0, epoch: int = 0) -> list[object]
 
 
 @pytest.fixture
-def broker(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> SubBroker:
+def broker(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[SubBroker]:
     monkeypatch.setenv("MODD_TEST_SUBBROKER_LINK_KEY", KEY.decode())
     config = config_from_model(S1, link=LinkOptions(key="env:MODD_TEST_SUBBROKER_LINK_KEY"),
                                state_dir=tmp_path / "state")
-    return SubBroker(config)
+    b = SubBroker(config)
+    yield b
+    if b.record is not None:
+        b.record.close()
 
 
 def _values(config: Config, slot_streams: tuple[int, ...], slot: int) -> list[Value]:
@@ -130,6 +135,14 @@ def test_the_subbroker_configures_runs_and_delivers_each_slot(broker: SubBroker)
         assert isinstance(slot_index, int) and stream_id is not None
         assert got["value"] == sent[(slot_index, stream_id)], got
         assert got["end_ns"] == epoch + (slot_index + 1) * 250_000_000  # 0.25 s slots
+    # the base-station record holds what was delivered, read by the official reader
+    assert broker.record is not None
+    broker.record.close()
+    files = list((broker.config.state_dir or Path()).glob("records/usv/*.mcap"))
+    with files[0].open("rb") as f:
+        recorded = [json.loads(m.data) for _, _, m in make_reader(f).iter_messages()]
+    assert sorted(json.dumps({**r, "delivered_ns": 0}, sort_keys=True) for r in recorded) \
+        == sorted(json.dumps({**d, "delivered_ns": 0}, sort_keys=True) for _, d in sink.got)
 
 
 def test_a_reconnect_resumes_what_runs_or_configures_again(broker: SubBroker) -> None:
