@@ -27,7 +27,8 @@ def _radio_day(bp: Backpressure, minutes: int) -> int:
 
 
 def test_short_episodes_over_a_radio_log_one_line_a_minute(
-        caplog: pytest.LogCaptureFixture) -> None:
+    caplog: pytest.LogCaptureFixture,
+) -> None:
     caplog.set_level(logging.INFO, logger="modd.subbroker.backpressure")
     bp = Backpressure(behind_lag_s=1.0)
     late = _radio_day(bp, minutes=10)
@@ -35,8 +36,14 @@ def test_short_episodes_over_a_radio_log_one_line_a_minute(
     lines = [r.getMessage() for r in caplog.records]
     assert len(lines) <= 2 + 10, lines  # was 2 a late slot: 240 lines
     assert lines[0].startswith("falling behind") and lines[1].startswith("caught up")
-    counted = [re.match(r"over the last (\d+) s: fell behind the link (\d+) times, "
-                        r"caught up (\d+) times", line) for line in lines[2:]]
+    counted = [
+        re.match(
+            r"over the last (\d+) s: fell behind the link (\d+) times, "
+            r"caught up (\d+) times",
+            line,
+        )
+        for line in lines[2:]
+    ]
     assert all(counted), lines
     fell = sum(int(m.group(2)) for m in counted if m)
     caught = sum(int(m.group(3)) for m in counted if m)

@@ -43,8 +43,12 @@ from modd.subbroker.pump import Pump
 from modd.subbroker.stream_session import StreamSession
 
 KEY = b"the pump's link key, 32 bytes ok"
-CONFIG = Config(9, 0, (TopicSpec("usv.depth", ValueType.FLOAT32, 1),),
-                (StreamSpec(0, Aggregation.MAX, 500_000),))
+CONFIG = Config(
+    9,
+    0,
+    (TopicSpec("usv.depth", ValueType.FLOAT32, 1),),
+    (StreamSpec(0, Aggregation.MAX, 500_000),),
+)
 OPTIONS = LinkOptions(backoff_initial_s=0.01, backoff_max_s=0.05, ack_timeout_s=10.0)
 
 
@@ -182,8 +186,10 @@ def test_a_dropped_link_fails_what_waits_and_comes_back(pump: MemoryPump) -> Non
 
     t = threading.Thread(target=deploy)
     t.start()
-    _until(lambda: any(isinstance(m, Config) and m.config_id == 11 for m in pump.broker.got),
-           "the CONFIG is sent")
+    _until(
+        lambda: any(isinstance(m, Config) and m.config_id == 11 for m in pump.broker.got),
+        "the CONFIG is sent",
+    )
     pump.refuse = 2  # the next two connects are refused: backoff, then it comes back
     pump.inbox.put(None)
     t.join(5.0)
@@ -233,8 +239,11 @@ def test_the_udp_port_reports_each_datagrams_source_and_the_session_binds_to_it(
             got: list[tuple[bytes, object]] = []
             _until(lambda: len(got.__iadd__(port.recv(0.05))) >= 2, "both datagrams arrive")
             assert sorted(str(src) for _, src in got) == sorted(
-                [str(("127.0.0.1", drone.getsockname()[1])),
-                 str(("127.0.0.2", stranger.getsockname()[1]))])
+                [
+                    str(("127.0.0.1", drone.getsockname()[1])),
+                    str(("127.0.0.2", stranger.getsockname()[1])),
+                ]
+            )
             for raw, src in got:
                 session.datagram(raw, src)
             assert session.radio.foreign == 1 and len(session.take()) == 1  # one AUTH

@@ -53,8 +53,12 @@ from modd.subbroker.linkhooks import ConfigRejected, LinkDown
 from modd.subbroker.stream_session import StreamSession
 
 PSK = b"a link key of the test, 32 bytes"
-CONFIG = Config(3, 0, (TopicSpec("usv.water.temp", ValueType.FLOAT32, 1),),
-                (StreamSpec(0, Aggregation.AVERAGE, 250_000),))
+CONFIG = Config(
+    3,
+    0,
+    (TopicSpec("usv.water.temp", ValueType.FLOAT32, 1),),
+    (StreamSpec(0, Aggregation.AVERAGE, 250_000),),
+)
 
 
 class FakeClock:
@@ -125,15 +129,18 @@ def frames(data: list[bytes]) -> list[Message]:
 
 # -- over a byte stream (tcp) --------------------------------------------------
 
-def _session(handler: Handler | None = None, liveness_s: float = 3.0,
-             **opts: float) -> tuple[StreamSession, FakeClock]:
+
+def _session(
+    handler: Handler | None = None, liveness_s: float = 3.0, **opts: float
+) -> tuple[StreamSession, FakeClock]:
     clock = FakeClock()
     options = LinkOptions(**opts)  # type: ignore[arg-type]
     return StreamSession(PSK, options, handler or Handler(), lambda: liveness_s, clock), clock
 
 
-def _authenticate(s: StreamSession, clock: FakeClock, peer: PeerHandshake,
-                  config_id: int = 0, rtt_s: float = 0.04) -> None:
+def _authenticate(
+    s: StreamSession, clock: FakeClock, peer: PeerHandshake, config_id: int = 0, rtt_s: float = 0.04
+) -> None:
     """HELLO, CHALLENGE, AUTH, AUTH_OK, then every PING answered ``rtt_s`` later."""
     s.begin()
     (hello,) = frames(s.take())
@@ -148,8 +155,9 @@ def _authenticate(s: StreamSession, clock: FakeClock, peer: PeerHandshake,
 
 
 def _data(slot: int, value: float, config: Config = CONFIG) -> bytes:
-    return codec.encode_data(Data(True, config.config_id, slot, slot & 0xFF,
-                                  [Value(True, value, 0, 4)]), config.kinds())
+    return codec.encode_data(
+        Data(True, config.config_id, slot, slot & 0xFF, [Value(True, value, 0, 4)]), config.kinds()
+    )
 
 
 def test_handshake_rtt_config_and_up() -> None:
@@ -280,7 +288,9 @@ def test_data_frames_become_windows_and_backfill_goes_to_the_sink() -> None:
     end = bf.encode(bf.BackfillEnd(7, bf.EndStatus.DONE, 55))
     s.feed(_data(0, 1.5) + _data(1, 2.5) + end)
     assert [(w.slot, w.value.number, w.end_ns) for (w,) in handler.windows] == [
-        (0, 1.5, 10**18 + 250_000_000), (1, 2.5, 10**18 + 500_000_000)]
+        (0, 1.5, 10**18 + 250_000_000),
+        (1, 2.5, 10**18 + 500_000_000),
+    ]
     assert got == [bf.BackfillEnd(7, bf.EndStatus.DONE, 55)]
     assert s.stats.data_frames == 2 and s.stats.last_data_ns == clock.wall_ns
     s.feed(codec.encode(Status((11, 22, 33))))
@@ -356,12 +366,20 @@ class Drone:
         return codec.decode(f)
 
 
-def _authenticated(handler: Handler | None = None, config_id: int = 0,
-                   options: LinkOptions | None = None
-                   ) -> tuple[DatagramSession, FakeClock, Drone]:
+def _authenticated(
+    handler: Handler | None = None, config_id: int = 0, options: LinkOptions | None = None
+) -> tuple[DatagramSession, FakeClock, Drone]:
     clock = FakeClock()
-    s = DatagramSession("udp", PSK, options or LinkOptions(), handler or Handler(), delay_s=1.0,
-                        liveness_s=lambda: 3.0, clock=clock, peer=DRONE)
+    s = DatagramSession(
+        "udp",
+        PSK,
+        options or LinkOptions(),
+        handler or Handler(),
+        delay_s=1.0,
+        liveness_s=lambda: 3.0,
+        clock=clock,
+        peer=DRONE,
+    )
     drone = Drone()
     s.begin()
     (hello,) = s.take()
@@ -378,8 +396,7 @@ def _authenticated(handler: Handler | None = None, config_id: int = 0,
 
 
 def _slot(value: float) -> bytes:
-    return codec.encode_data(Data(False, 0, 0, 0, [Value(True, value, 0, 2)]),
-                             CONFIG.kinds())[3:]
+    return codec.encode_data(Data(False, 0, 0, 0, [Value(True, value, 0, 2)]), CONFIG.kinds())[3:]
 
 
 def test_hello_is_sent_every_second_ten_times_then_the_session_ends() -> None:
@@ -552,8 +569,11 @@ def test_an_overdue_datagram_is_asked_for_before_the_next_one_shows_the_gap() ->
     learnt lateness + 0.25 s), at most five times, every ask interval."""
     handler = Handler()
     s, clock, drone, sender = _running(handler)
-    (first,) = sender.add_slot(0, 0.0, _slot(0.0)) + sender.add_slot(1, 0.25, _slot(1.0)) \
+    (first,) = (
+        sender.add_slot(0, 0.0, _slot(0.0))
+        + sender.add_slot(1, 0.25, _slot(1.0))
         + sender.add_slot(2, 0.5, _slot(2.0))
+    )
     lost = sender.flush()  # slot 2, lost on the radio
     clock.advance(0.3)  # slot 1's window ended 0.25 s after the epoch: 50 ms of lateness
     assert s.datagram(first, DRONE) and len(handler.windows) == 2
@@ -594,8 +614,11 @@ def test_a_link_with_nothing_to_say_pings_every_keepalive_period() -> None:
     pings = 0
     for k in range(130):  # 65 s of a datagram of two slots every 0.5 s
         clock.advance(0.5)
-        out = sender.add_slot(2 * k, k * 0.5, _slot(1.0)) \
-            + sender.add_slot(2 * k + 1, k * 0.5 + 0.25, _slot(1.0)) + [sender.flush()]
+        out = (
+            sender.add_slot(2 * k, k * 0.5, _slot(1.0))
+            + sender.add_slot(2 * k + 1, k * 0.5 + 0.25, _slot(1.0))
+            + [sender.flush()]
+        )
         for d in out:
             s.datagram(d, DRONE)
         s.tick()
@@ -634,15 +657,14 @@ def test_bytes_a_few_at_a_time_make_the_same_frames() -> None:
     s.take()
     wire = codec.encode(ConfigAck(3, 0, 0)) + _data(0, 1.0) + _data(1, 2.0)
     for i in range(0, len(wire), 3):
-        s.feed(wire[i:i + 3])
+        s.feed(wire[i : i + 3])
     assert [w.value.number for (w,) in handler.windows] == [1.0, 2.0]
     assert handler.acked == [(CONFIG, ConfigAck(3, 0, 0))] and s.stats.data_frames == 2
 
 
 def test_the_backlog_of_the_transport_counts_in_the_backpressure() -> None:
     clock = FakeClock()
-    s = StreamSession(PSK, LinkOptions(), Handler(), lambda: 3.0, clock,
-                      backlog=lambda: 300_000)
+    s = StreamSession(PSK, LinkOptions(), Handler(), lambda: 3.0, clock, backlog=lambda: 300_000)
     _authenticate(s, clock, PeerHandshake())
     s.feed(codec.encode(ConfigAck(3, 0, 0)) + _data(0, 1.0))
     bp = s.stats.backpressure.as_dict()

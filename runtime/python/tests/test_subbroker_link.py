@@ -84,8 +84,9 @@ def _connect(s: StreamSession, running: int = 0, epoch: int = 0) -> list[object]
 @pytest.fixture
 def broker(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[SubBroker]:
     monkeypatch.setenv("MODD_TEST_SUBBROKER_LINK_KEY", KEY.decode())
-    config = config_from_model(S1, link=LinkOptions(key="env:MODD_TEST_SUBBROKER_LINK_KEY"),
-                               state_dir=tmp_path / "state")
+    config = config_from_model(
+        S1, link=LinkOptions(key="env:MODD_TEST_SUBBROKER_LINK_KEY"), state_dir=tmp_path / "state"
+    )
     b = SubBroker(config)
     yield b
     if b.record is not None:
@@ -116,8 +117,10 @@ def test_the_subbroker_configures_runs_and_delivers_each_slot(broker: SubBroker)
     for _ in range(40):
         slot = next(it)
         values = _values(config, slot.streams, slot.index)
-        frame = codec.encode_data(Data(True, config.config_id, slot.index, slot.index & 0xFF,
-                                       values), [kinds[s] for s in slot.streams])
+        frame = codec.encode_data(
+            Data(True, config.config_id, slot.index, slot.index & 0xFF, values),
+            [kinds[s] for s in slot.streams],
+        )
         session.feed(frame)
         for sid, v in zip(slot.streams, values, strict=True):
             sent[(slot.index, sid)] = v.number
@@ -126,8 +129,9 @@ def test_the_subbroker_configures_runs_and_delivers_each_slot(broker: SubBroker)
     assert running is not None
     direct = {ps.stream.key: ps.id for ps in running.plan.sent_streams}
     subscribers = sum(len(ps.subscribers) for ps in running.plan.sent_streams)
-    delivered = [d for _, d in sink.got
-                 if f"{d['topic']}/{d['aggregation']}/{d['period_s']}" in direct]
+    delivered = [
+        d for _, d in sink.got if f"{d['topic']}/{d['aggregation']}/{d['period_s']}" in direct
+    ]
     assert len(delivered) == 40 * subscribers > 0  # every slot, to each subscriber
     for got in delivered:
         stream_id = direct[f"{got['topic']}/{got['aggregation']}/{got['period_s']}"]
@@ -141,8 +145,9 @@ def test_the_subbroker_configures_runs_and_delivers_each_slot(broker: SubBroker)
     files = list((broker.config.state_dir or Path()).glob("records/usv/*.mcap"))
     with files[0].open("rb") as f:
         recorded = [json.loads(m.data) for _, _, m in make_reader(f).iter_messages()]
-    assert sorted(json.dumps({**r, "delivered_ns": 0}, sort_keys=True) for r in recorded) \
-        == sorted(json.dumps({**d, "delivered_ns": 0}, sort_keys=True) for _, d in sink.got)
+    assert sorted(json.dumps({**r, "delivered_ns": 0}, sort_keys=True) for r in recorded) == sorted(
+        json.dumps({**d, "delivered_ns": 0}, sort_keys=True) for _, d in sink.got
+    )
 
 
 def test_a_reconnect_resumes_what_runs_or_configures_again(broker: SubBroker) -> None:

@@ -26,15 +26,24 @@ class DatagramLinkClient(Pump):
 
     retry_at_once = False
 
-    def __init__(self, open_port: Callable[[], DatagramPort], where: str, transport: str,
-                 key: bytes, options: LinkOptions, handler: LinkHandler,
-                 delay_s: float = 1.0, liveness_s: Callable[[], float] = lambda: 3.0,
-                 max_packet: int | None = None) -> None:
+    def __init__(
+        self,
+        open_port: Callable[[], DatagramPort],
+        where: str,
+        transport: str,
+        key: bytes,
+        options: LinkOptions,
+        handler: LinkHandler,
+        delay_s: float = 1.0,
+        liveness_s: Callable[[], float] = lambda: 3.0,
+        max_packet: int | None = None,
+    ) -> None:
         self.transport = transport
         self._open_port = open_port
         self._port: DatagramPort | None = None
-        self.dgram = DatagramSession(transport, key, options, handler, delay_s, liveness_s,
-                                     max_packet, where=where)
+        self.dgram = DatagramSession(
+            transport, key, options, handler, delay_s, liveness_s, max_packet, where=where
+        )
         super().__init__(self.dgram, options, where, "modd-dglink")
 
     @property

@@ -24,8 +24,14 @@ from modd.link.schedule import SlotIterator
 from .linkhooks import Clock
 
 MAX_NACK_ASKS = 5
-PUBBROKER_COUNTS = ("datagrams_sent", "datagrams_resent", "nacks", "slots_dropped", "forged",
-                    "replayed")
+PUBBROKER_COUNTS = (
+    "datagrams_sent",
+    "datagrams_resent",
+    "nacks",
+    "slots_dropped",
+    "forged",
+    "replayed",
+)
 OVERDUE_GRACE_S = 0.25  # beyond the learnt lateness, before an overdue datagram is asked for
 
 
@@ -80,7 +86,7 @@ def control_frames(payload: bytes) -> list[codec.RawFrame] | None:
             if f is None:
                 return None
             out.append(f)
-            rest = rest[f.size:]
+            rest = rest[f.size :]
     except ProtocolError:
         return None
     return out or None
@@ -109,17 +115,24 @@ class Runs:
         accepted delay late) still are: the previous run is kept until the next
         config replaces it."""
         self.key = key
-        self.delay_s = (self._configured_delay_s if config.accepted_delay_ms is None
-                        else config.accepted_delay_ms / 1000)
+        self.delay_s = (
+            self._configured_delay_s
+            if config.accepted_delay_ms is None
+            else config.accepted_delay_ms / 1000
+        )
         periods = [s.period_us for s in config.streams]
         receiver = DatagramReceiver(key, config.config_id, periods, config.kinds())
         receiver.gaps.max_asks = MAX_NACK_ASKS
-        runs = {cid: run for cid, run in self.by_id.items()
-                if run.end_ns is None and cid != config.config_id}
+        runs = {
+            cid: run
+            for cid, run in self.by_id.items()
+            if run.end_ns is None and cid != config.config_id
+        }
         for run in runs.values():
             run.end_ns = ack.epoch_ns
-        runs[config.config_id] = _Run(config, ack.epoch_ns, receiver,
-                                      Schedule.from_periods_us(periods))
+        runs[config.config_id] = _Run(
+            config, ack.epoch_ns, receiver, Schedule.from_periods_us(periods)
+        )
         self.by_id = runs
 
     def on_datagram(self, raw: bytes) -> list[list[Window]] | None:
@@ -177,8 +190,13 @@ class Runs:
             run.asked_slot, run.asks, run.asked_at = nxt, 0, float("-inf")
         if run.asks >= MAX_NACK_ASKS or now - run.asked_at < every:
             return False
-        due = (run.epoch_ns / 1e9 + run.schedule.slot_date_us(nxt) / 1e6 + self.delay_s
-               + run.lateness + OVERDUE_GRACE_S)
+        due = (
+            run.epoch_ns / 1e9
+            + run.schedule.slot_date_us(nxt) / 1e6
+            + self.delay_s
+            + run.lateness
+            + OVERDUE_GRACE_S
+        )
         if self._clock.time_ns() / 1e9 < due:
             return False
         run.asks += 1
@@ -198,8 +216,9 @@ class Runs:
         transport, the accepted delay and the PubBroker's counters."""
         rx = [run.receiver for run in self.by_id.values()]
         received = sum(x.stats.slots for x in rx)
-        recovered = (sum(x.gaps.recovered for x in rx)
-                     + sum(run.recovered for run in self.by_id.values()))
+        recovered = sum(x.gaps.recovered for x in rx) + sum(
+            run.recovered for run in self.by_id.values()
+        )
         lost = sum(x.gaps.lost for x in rx)
         missing = sum(x.gaps.missing for x in rx)
         seen = received + lost + missing
@@ -239,7 +258,17 @@ def _windows(run: _Run, slots: list[tuple[int, list[Value]]]) -> list[list[Windo
         if not any(v.present for v in values):
             continue
         end = run.epoch_ns + slot.offset_us * 1000
-        out.append([Window(run.config.config_id, index, sid,
-                           end - run.config.streams[sid].period_us * 1000, end, v)
-                    for sid, v in zip(slot.streams, values, strict=True)])
+        out.append(
+            [
+                Window(
+                    run.config.config_id,
+                    index,
+                    sid,
+                    end - run.config.streams[sid].period_us * 1000,
+                    end,
+                    v,
+                )
+                for sid, v in zip(slot.streams, values, strict=True)
+            ]
+        )
     return out

@@ -69,10 +69,19 @@ class DatagramSession(LinkSession):
     config_resend_s = RETRY_S
     config_tries = RETRIES
 
-    def __init__(self, transport: str, key: bytes, options: LinkOptions, handler: LinkHandler,
-                 delay_s: float = 1.0, liveness_s: Callable[[], float] = lambda: 3.0,
-                 max_packet: int | None = None, clock: Clock | None = None,
-                 where: str = "the PubBroker", peer: Hashable | None = None) -> None:
+    def __init__(
+        self,
+        transport: str,
+        key: bytes,
+        options: LinkOptions,
+        handler: LinkHandler,
+        delay_s: float = 1.0,
+        liveness_s: Callable[[], float] = lambda: 3.0,
+        max_packet: int | None = None,
+        clock: Clock | None = None,
+        where: str = "the PubBroker",
+        peer: Hashable | None = None,
+    ) -> None:
         super().__init__(key, options, handler, liveness_s, clock, where)
         self.transport = transport
         #: the radio's largest packet (the model's link.maxPacket): a control message
@@ -123,14 +132,18 @@ class DatagramSession(LinkSession):
         if fits is None or len(raw) <= fits:
             self._counter += 1
             return [raw]
-        datagrams = encode_control_fragments(self._counter + 1, frame, fits, self._key,
-                                             BASE_TO_DRONE)
+        datagrams = encode_control_fragments(
+            self._counter + 1, frame, fits, self._key, BASE_TO_DRONE
+        )
         self._counter += len(datagrams)
         return datagrams
 
     def _fits(self) -> int | None:
-        return (datagram_capacity(self.transport, self._max_packet)
-                if self._max_packet is not None else None)
+        return (
+            datagram_capacity(self.transport, self._max_packet)
+            if self._max_packet is not None
+            else None
+        )
 
     def _authenticated(self, nonce: bytes, server_nonce: bytes) -> None:
         self.runs.old_key, self._key = self._key, session_key(self._psk, nonce, server_nonce)
@@ -150,14 +163,15 @@ class DatagramSession(LinkSession):
         if fits is None:
             return ""
         try:
-            encode_control_fragments(1 << 32, codec.encode(config), fits, bytes(32),
-                                     BASE_TO_DRONE)
+            encode_control_fragments(1 << 32, codec.encode(config), fits, bytes(32), BASE_TO_DRONE)
         except ValueError as exc:
             size = len(codec.encode(config))
-            why = (f"config {config.config_id} is {size} B, more than the {MAX_FRAGMENTS} "
-                   f"control fragments of this {self.transport} link carry ({fits} B datagrams "
-                   f"of link.maxPacket {self._max_packet} B: {exc}); raise link.maxPacket if "
-                   f"the radio allows it, or send fewer streams")
+            why = (
+                f"config {config.config_id} is {size} B, more than the {MAX_FRAGMENTS} "
+                f"control fragments of this {self.transport} link carry ({fits} B datagrams "
+                f"of link.maxPacket {self._max_packet} B: {exc}); raise link.maxPacket if "
+                f"the radio allows it, or send fewer streams"
+            )
             log.error("%s: %s", self.where, why)
             return why
         return ""
@@ -183,8 +197,9 @@ class DatagramSession(LinkSession):
         silent = now - self._last_in
         if silent > 3 * silence:
             raise LinkDown(f"nothing from the PubBroker for {silent:.1f} s")
-        if ((silent > silence and now - self._pinged > silence)
-                or now - self._last_sent > KEEPALIVE_S):
+        if (
+            silent > silence and now - self._pinged > silence
+        ) or now - self._last_sent > KEEPALIVE_S:
             self.send(codec.encode(Ping(b"alive")))
             self._pinged = now
 
@@ -199,8 +214,13 @@ class DatagramSession(LinkSession):
         if allowed is not None and source != allowed:
             self.radio.foreign += 1
             if self.radio.foreign % FOREIGN_LOG_EVERY == 1:
-                log.warning("link to %s: datagram from %s dropped, the session is bound to %s "
-                            "(%d so far)", self.where, source, allowed, self.radio.foreign)
+                log.warning(
+                    "link to %s: datagram from %s dropped, the session is bound to %s (%d so far)",
+                    self.where,
+                    source,
+                    allowed,
+                    self.radio.foreign,
+                )
             return False
         self._source = source
         ok = self._on_datagram(raw)
@@ -291,9 +311,12 @@ class DatagramSession(LinkSession):
         """Loss, retransmissions, forged/dropped datagrams, measured bytes/s on the
         wire per direction (headers or framing included), over the last 10 s;
         ``corrupt``: the frames the port's deframer refused."""
-        return {"transport": self.transport, "accepted_delay_s": self.delay_s,
-                **self.runs.status(self.radio, corrupt),
-                "pubbroker": self._pubbroker_counts()}
+        return {
+            "transport": self.transport,
+            "accepted_delay_s": self.delay_s,
+            **self.runs.status(self.radio, corrupt),
+            "pubbroker": self._pubbroker_counts(),
+        }
 
     def _pubbroker_counts(self) -> dict[str, int] | None:
         """The PubBroker's side from its last STATUS (docs/protocol.md, STATUS 24..29):

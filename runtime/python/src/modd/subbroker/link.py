@@ -32,13 +32,25 @@ __all__ = ["ConfigRejected", "LinkClient", "LinkDown", "LinkHandler", "LinkStats
 class LinkClient(Pump):
     """Keeps one authenticated TCP link to the PubBroker up, on a daemon thread."""
 
-    def __init__(self, endpoint: tuple[str, int], key: bytes, options: LinkOptions,
-                 handler: LinkHandler, liveness_s: Callable[[], float] = lambda: 3.0) -> None:
+    def __init__(
+        self,
+        endpoint: tuple[str, int],
+        key: bytes,
+        options: LinkOptions,
+        handler: LinkHandler,
+        liveness_s: Callable[[], float] = lambda: 3.0,
+    ) -> None:
         self.endpoint = endpoint
         self._sock: socket.socket | None = None
         where = f"{endpoint[0]}:{endpoint[1]}"
-        self.tcp = StreamSession(key, options, handler, liveness_s, where=where,
-                                 backlog=lambda: socket_backlog(self._sock))
+        self.tcp = StreamSession(
+            key,
+            options,
+            handler,
+            liveness_s,
+            where=where,
+            backlog=lambda: socket_backlog(self._sock),
+        )
         super().__init__(self.tcp, options, where, "modd-link")
 
     def _open(self) -> None:

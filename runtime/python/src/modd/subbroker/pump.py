@@ -69,8 +69,9 @@ class Pump:
     #: fails at once), the first retry goes at once.
     retry_at_once = True
 
-    def __init__(self, session: LinkSession, options: LinkOptions, where: str,
-                 thread_name: str) -> None:
+    def __init__(
+        self, session: LinkSession, options: LinkOptions, where: str, thread_name: str
+    ) -> None:
         self.session = session
         self._opt = options
         self._where = where
@@ -171,8 +172,11 @@ class Pump:
             finally:
                 self._drop("link down")
             lasted = time.monotonic() - began
-            if self.retry_at_once and self.stats.connects != connects \
-                    and lasted >= self._opt.backoff_max_s:
+            if (
+                self.retry_at_once
+                and self.stats.connects != connects
+                and lasted >= self._opt.backoff_max_s
+            ):
                 backoff = 0.0
             if self._stop.wait(backoff):
                 break

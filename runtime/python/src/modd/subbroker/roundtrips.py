@@ -49,5 +49,5 @@ class RoundTrips:
         start = self._sent.pop(payload, None)
         if start is None:
             return None
-        self._recent = [*self._recent[1 - self._keep:], now - start]
+        self._recent = [*self._recent[1 - self._keep :], now - start]
         return statistics.median(self._recent)

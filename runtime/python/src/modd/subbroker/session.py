@@ -93,9 +93,15 @@ class LinkSession:
     config_resend_s: float | None = None
     config_tries: int | None = None
 
-    def __init__(self, key: bytes, options: LinkOptions, handler: LinkHandler,
-                 liveness_s: Callable[[], float] = lambda: 3.0,
-                 clock: Clock | None = None, where: str = "the PubBroker") -> None:
+    def __init__(
+        self,
+        key: bytes,
+        options: LinkOptions,
+        handler: LinkHandler,
+        liveness_s: Callable[[], float] = lambda: 3.0,
+        clock: Clock | None = None,
+        where: str = "the PubBroker",
+    ) -> None:
         self.where = where
         self._psk = key
         self._opt = options
@@ -222,23 +228,26 @@ class LinkSession:
         assert hs is not None
         hs.sent_at, hs.tries = now, hs.tries + 1
         with self._lock:
-            self._out.extend(self._wrap(hs.frame) if hs.step == "PING"
-                             else self._wrap_handshake(hs.frame))
+            self._out.extend(
+                self._wrap(hs.frame) if hs.step == "PING" else self._wrap_handshake(hs.frame)
+            )
 
     def _handshake_tick(self, now: float) -> None:
         hs = self._hs
         assert hs is not None
         if hs.step == "PING":
             if now - hs.sent_at >= self.ping_wait_s:
-                log.warning("link: no PONG in %g s; planning without this round trip",
-                            self.ping_wait_s)
+                log.warning(
+                    "link: no PONG in %g s; planning without this round trip", self.ping_wait_s
+                )
                 self._next_ping(now)
             return
         if now - hs.sent_at < self.handshake_wait_s:
             return
         if hs.tries >= self.handshake_tries:
-            raise LinkDown(f"no answer to {hs.step} after {hs.tries} "
-                           f"{'try' if hs.tries == 1 else 'tries'}")
+            raise LinkDown(
+                f"no answer to {hs.step} after {hs.tries} {'try' if hs.tries == 1 else 'tries'}"
+            )
         self._send_step(now)
 
     @property
@@ -259,20 +268,19 @@ class LinkSession:
             self._hs = _Handshake("AUTH", codec.encode(Auth(proof)), hs.nonce, msg.nonce)
             self._send_step(self.clock.monotonic())
         elif hs.step == "AUTH" and isinstance(msg, AuthOk):
-            if not hmac.compare_digest(msg.mac, server_proof(self._psk, hs.nonce,
-                                                             hs.server_nonce)):
+            if not hmac.compare_digest(msg.mac, server_proof(self._psk, hs.nonce, hs.server_nonce)):
                 raise ProtocolError(ErrorCode.AUTH_FAILED, "the broker does not know the key")
             self._authenticated(hs.nonce, hs.server_nonce)
             self.stats.connects += 1
             self.stats.backpressure.reset(self.clock.time_ns())
-            log.info("link to %s authenticated (PubBroker config %d)", self.where,
-                     msg.config_id)
+            log.info("link to %s authenticated (PubBroker config %d)", self.where, msg.config_id)
             hs.ok, hs.step, hs.ping = msg, "PING", -1
             self._next_ping(self.clock.monotonic())
         elif strict:
             expected = "CHALLENGE" if hs.step == "HELLO" else "AUTH_OK"
-            raise ProtocolError(ErrorCode.BAD_FRAME,
-                                f"expected {expected}, got {type(msg).__name__}")
+            raise ProtocolError(
+                ErrorCode.BAD_FRAME, f"expected {expected}, got {type(msg).__name__}"
+            )
 
     def _next_ping(self, now: float) -> None:
         """The next of the ``ping_count`` round trips measured on connect, or the CONFIG
@@ -322,8 +330,12 @@ class LinkSession:
             return
         msg = codec.decode(frame)
         hs = self._hs
-        if isinstance(msg, Pong) and hs is not None and hs.step == "PING" \
-                and msg.payload == hs.nonce:
+        if (
+            isinstance(msg, Pong)
+            and hs is not None
+            and hs.step == "PING"
+            and msg.payload == hs.nonce
+        ):
             now = self.clock.monotonic()
             hs.rtts.append(now - hs.sent_at)
             self._next_ping(now)
@@ -359,8 +371,11 @@ class LinkSession:
             log.debug("CONFIG_ACK for config %d that is not awaited", ack.config_id)
             return
         if ack.status != 0:
-            pending.future.set_exception(ConfigRejected(
-                ack.status, f"PubBroker refused config {ack.config_id} (status {ack.status})"))
+            pending.future.set_exception(
+                ConfigRejected(
+                    ack.status, f"PubBroker refused config {ack.config_id} (status {ack.status})"
+                )
+            )
             return
         self._accept_config(pending.config, ack)
         self.handler.on_config_acked(pending.config, ack)

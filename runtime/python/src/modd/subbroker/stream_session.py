@@ -29,9 +29,16 @@ log = logging.getLogger("modd.subbroker.link")
 class StreamSession(LinkSession):
     """A :class:`LinkSession` fed the bytes of a stream (see the module)."""
 
-    def __init__(self, key: bytes, options: LinkOptions, handler: LinkHandler,
-                 liveness_s: Callable[[], float] = lambda: 3.0, clock: Clock | None = None,
-                 where: str = "the PubBroker", backlog: Callable[[], int] = lambda: 0) -> None:
+    def __init__(
+        self,
+        key: bytes,
+        options: LinkOptions,
+        handler: LinkHandler,
+        liveness_s: Callable[[], float] = lambda: 3.0,
+        clock: Clock | None = None,
+        where: str = "the PubBroker",
+        backlog: Callable[[], int] = lambda: 0,
+    ) -> None:
         super().__init__(key, options, handler, liveness_s, clock, where)
         # one try each, as long as a connection may take: a peer that answers nothing
         # is not a lost datagram
