@@ -664,7 +664,8 @@ def test_bytes_a_few_at_a_time_make_the_same_frames() -> None:
 
 def test_the_backlog_of_the_transport_counts_in_the_backpressure() -> None:
     clock = FakeClock()
-    s = StreamSession(PSK, LinkOptions(), Handler(), lambda: 3.0, clock, backlog=lambda: 300_000)
+    s = StreamSession(PSK, LinkOptions(), Handler(), lambda: 3.0, clock)
+    s.backlog = lambda: 300_000
     _authenticate(s, clock, PeerHandshake())
     s.feed(codec.encode(ConfigAck(3, 0, 0)) + _data(0, 1.0))
     bp = s.stats.backpressure.as_dict()

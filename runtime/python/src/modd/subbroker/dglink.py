@@ -2,8 +2,9 @@
 the port (:mod:`.dgport`) and pumps a :class:`~.dgsession.DatagramSession`,
 behind the same interface as the tcp one (:class:`~.pump.Link`).
 
->>> link = DatagramLinkClient(lambda: UdpPort(("127.0.0.1", 7171)), "udp 127.0.0.1:7171",
-...                           "udp", key, LinkOptions(), handler)   # doctest: +SKIP
+>>> session = DatagramSession("udp", key, LinkOptions(), handler)          # doctest: +SKIP
+>>> link = DatagramLinkClient(lambda: UdpPort(("127.0.0.1", 7171)), session,
+...                           LinkOptions())                             # doctest: +SKIP
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from .config import LinkOptions
 from .dgport import DatagramPort
 from .dgruns import control_frames
 from .dgsession import DatagramSession
-from .linkhooks import LinkDown, LinkHandler
+from .linkhooks import LinkDown
 from .pump import Pump
 
 __all__ = ["DatagramLinkClient", "control_frames"]
@@ -27,24 +28,13 @@ class DatagramLinkClient(Pump):
     retry_at_once = False
 
     def __init__(
-        self,
-        open_port: Callable[[], DatagramPort],
-        where: str,
-        transport: str,
-        key: bytes,
-        options: LinkOptions,
-        handler: LinkHandler,
-        delay_s: float = 1.0,
-        liveness_s: Callable[[], float] = lambda: 3.0,
-        max_packet: int | None = None,
+        self, open_port: Callable[[], DatagramPort], session: DatagramSession, options: LinkOptions
     ) -> None:
-        self.transport = transport
+        self.transport = session.transport
         self._open_port = open_port
         self._port: DatagramPort | None = None
-        self.dgram = DatagramSession(
-            transport, key, options, handler, delay_s, liveness_s, max_packet, where=where
-        )
-        super().__init__(self.dgram, options, where, "modd-dglink")
+        self.dgram = session
+        super().__init__(session, options, session.where, "modd-dglink")
 
     @property
     def delay_s(self) -> float:

@@ -43,14 +43,8 @@ class LinkClient(Pump):
         self.endpoint = endpoint
         self._sock: socket.socket | None = None
         where = f"{endpoint[0]}:{endpoint[1]}"
-        self.tcp = StreamSession(
-            key,
-            options,
-            handler,
-            liveness_s,
-            where=where,
-            backlog=lambda: socket_backlog(self._sock),
-        )
+        self.tcp = StreamSession(key, options, handler, liveness_s, where=where)
+        self.tcp.backlog = lambda: socket_backlog(self._sock)
         super().__init__(self.tcp, options, where, "modd-link")
 
     def _open(self) -> None:

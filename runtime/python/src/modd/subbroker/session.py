@@ -120,8 +120,12 @@ class LinkSession:
         #: (re)connection, so that running backfills are asked for again with their resume point.
         self.backfill_sink: Callable[[codec.RawFrame], None] | None = None
         self.on_up: Callable[[], None] | None = None
+        self._setup()
 
     # -- what a transport provides --------------------------------------------------
+
+    def _setup(self) -> None:
+        """The transport's own state (called at the end of ``__init__``)."""
 
     def _wrap(self, frame: bytes) -> list[bytes]:
         """What carries one link frame of an established session."""

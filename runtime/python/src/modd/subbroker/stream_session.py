@@ -19,8 +19,7 @@ from modd.link import codec
 from modd.link.frames import Config, ConfigAck, Ping, ProtocolError
 from modd.link.receiver import Receiver
 
-from .config import LinkOptions
-from .linkhooks import Clock, LinkDown, LinkHandler
+from .linkhooks import LinkDown
 from .session import LinkSession
 
 log = logging.getLogger("modd.subbroker.link")
@@ -29,24 +28,14 @@ log = logging.getLogger("modd.subbroker.link")
 class StreamSession(LinkSession):
     """A :class:`LinkSession` fed the bytes of a stream (see the module)."""
 
-    def __init__(
-        self,
-        key: bytes,
-        options: LinkOptions,
-        handler: LinkHandler,
-        liveness_s: Callable[[], float] = lambda: 3.0,
-        clock: Clock | None = None,
-        where: str = "the PubBroker",
-        backlog: Callable[[], int] = lambda: 0,
-    ) -> None:
-        super().__init__(key, options, handler, liveness_s, clock, where)
+    def _setup(self) -> None:
         # one try each, as long as a connection may take: a peer that answers nothing
         # is not a lost datagram
-        self.handshake_wait_s = self.ping_wait_s = options.connect_timeout_s
+        self.handshake_wait_s = self.ping_wait_s = self._opt.connect_timeout_s
         self.receiver = Receiver()
         self._splitter = codec.FrameSplitter()
         #: bytes the transport holds that are not fed yet (the socket's receive queue)
-        self._backlog = backlog
+        self.backlog: Callable[[], int] = lambda: 0
         self._pinged = False
 
     def begin(self) -> None:
@@ -100,5 +89,5 @@ class StreamSession(LinkSession):
         self.stats.last_data_ns = self.clock.time_ns()
         if windows:
             self.handler.on_windows(windows)
-            waiting = len(self._splitter.buf) + self._backlog()
+            waiting = len(self._splitter.buf) + self.backlog()
             self.stats.backpressure.observe(windows[0].end_ns, waiting, self.clock.time_ns())

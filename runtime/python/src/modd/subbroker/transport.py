@@ -17,6 +17,7 @@ from modd_plan.linkbudget import LinkSettings
 from .config import SubBrokerConfig
 from .dglink import DatagramLinkClient
 from .dgport import DatagramPort, SerialPort, UdpPort
+from .dgsession import DatagramSession
 from .link import LinkClient
 from .linkhooks import LinkHandler
 from .pump import Link
@@ -39,5 +40,6 @@ def link_client(config: SubBrokerConfig, key: bytes, handler: LinkHandler,
         baud = config.link.baud or int(config.model.get("link", {}).get("baud", DEFAULT_BAUD))
         opener = partial(SerialPort, config.device, baud, settings.max_packet)
         where = f"serial {config.device}"
-    return DatagramLinkClient(opener, where, transport, key, config.link, handler,
-                              float(settings.accepted_delay), liveness, settings.max_packet)
+    session = DatagramSession(transport, key, config.link, handler, float(settings.accepted_delay),
+                              liveness, settings.max_packet, where=where)
+    return DatagramLinkClient(opener, session, config.link)
