@@ -33,6 +33,7 @@ from modd.link.frames import (
 from modd.link.schedule import SlotIterator
 from modd.subbroker.broker import SubBroker
 from modd.subbroker.config import LinkOptions, config_from_model
+from modd.subbroker.status import StatusPublisher
 from modd.subbroker.stream_session import StreamSession
 from modd_contracts.schema import validate
 
@@ -165,3 +166,43 @@ def test_a_reconnect_resumes_what_runs_or_configures_again(broker: SubBroker) ->
     (again,) = _connect(session, running=config.config_id, epoch=78)
     assert isinstance(again, Config) and again.config_id not in (0, config.config_id)
     assert again.streams == config.streams and again.topics == config.topics
+
+
+class Publisher:
+    def __init__(self) -> None:
+        self.put_: list[str] = []
+
+    def put(self, payload: str) -> None:
+        self.put_.append(payload)
+
+
+class Session:
+    """The zenoh session's one call the status publisher makes."""
+
+    def __init__(self) -> None:
+        self.publisher = Publisher()
+        self.keys: list[str] = []
+
+    def declare_publisher(self, key: str) -> Publisher:
+        self.keys.append(key)
+        return self.publisher
+
+
+def test_the_published_status_holds_the_links_counters(broker: SubBroker) -> None:
+    """The whole document on modd/<drone>/status (the snapshot, the byte rates, the
+    backpressure) with the session's counters, against its contract."""
+    clock = Clock()
+    session = StreamSession(KEY, broker.config.link, broker, lambda: 3.0, clock)
+    (config,) = _connect(session)
+    assert isinstance(config, Config)
+    session.feed(codec.encode(ConfigAck(config.config_id, 0, 5)))
+    zenoh = Session()
+    publisher = StatusPublisher(zenoh, "usv", 60.0, broker.status, lambda: session.stats)  # type: ignore[arg-type]
+    publisher.publish_now()
+    session.feed(codec.encode(Ping(b"p")))
+    status = publisher.publish_now()
+    assert zenoh.keys == ["modd/usv/status"] and len(zenoh.publisher.put_) == 2
+    published = json.loads(zenoh.publisher.put_[-1])
+    assert published == json.loads(json.dumps(status))
+    assert validate("status", published) == []
+    assert published["bytes_in_per_s"] is not None and published["behind"] is False

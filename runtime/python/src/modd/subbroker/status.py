@@ -21,7 +21,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from .keys import status_key
-from .link import LinkStats
+from .linkhooks import LinkStats
 
 if TYPE_CHECKING:
     import zenoh
