@@ -122,7 +122,15 @@ def flips(data: bytes, layout: list[Record]) -> list[tuple[int, int]]:
     chunks = [at for op, at, _ in layout if op == CHUNK]
     indexes = [at for op, at, _ in layout if op == MESSAGE_INDEX]
     first = chunks[0]
-    out = [(first + 1 + k * (len(data) - first - 2) // 18, 1 << (k % 8)) for k in range(19)]
+
+    def in_data(p: int) -> int:  # a channel record between chunks: the next chunk instead
+        rec = next((r for r in layout if r[1] <= p < r[1] + r[2]), None)
+        if rec is None or rec[0] in (CHUNK, MESSAGE_INDEX):
+            return p
+        return next(at for at in chunks if at > p) + 20
+
+    out = [(in_data(first + 1 + k * (len(data) - first - 2) // 18), 1 << (k % 8))
+           for k in range(19)]
     after = [next(i for i in indexes if i > chunks[c]) for c in (11, 13)]
     out += [(chunks[3], 0xFF), (chunks[5] + 3, 0xFF), (chunks[7] + 9 + 24, 0xFF),
             (chunks[9] + 9 + 19, 0xFF), (after[0] + 2, 0xFF), (after[1] + 9, 0xFF)]
