@@ -38,3 +38,18 @@ def test_settings_and_a_config_file_override_the_limits(tmp_path: Path) -> None:
     got = unicast(zenoh_config(ZenohSettings(mode="router", listen=("tcp/127.0.0.1:7447",),
                                              config_file=str(f))))
     assert got["accept_pending"] == 50 and got["accept_timeout"] == 2000
+
+
+def test_the_docker_routers_config_has_the_same_limits(tmp_path: Path) -> None:
+    import importlib.util
+
+    from modd.zenoh_auth import CredentialStore
+
+    path = Path(__file__).resolve().parents[3] / "docker" / "credentials.py"
+    spec = importlib.util.spec_from_file_location("docker_credentials", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    cfg = module.router_config(CredentialStore(tmp_path / "cred"), "usv")
+    got = unicast(zenoh.Config.from_json5(json.dumps(cfg)))
+    assert got["accept_timeout"] == 2000 and got["accept_pending"] == 2000
