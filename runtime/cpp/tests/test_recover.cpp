@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <optional>
 #include <set>
+#include <tuple>
 
 #include "modd/archive/mcap_writer.hpp"
 #include "modd/archive/recover.hpp"
@@ -176,6 +177,15 @@ std::vector<std::pair<size_t, uint8_t>> flips(const Bytes& b, const std::vector<
   return out;
 }
 
+// A crashed file in a fresh directory, with its undamaged layout.
+struct Fixture {
+  std::string dir;
+  Bytes clean;
+  std::vector<Record> layout;
+  explicit Fixture(const std::string& name) : dir(fresh_dir(name)), clean(crashed_file(dir)), layout(records(clean)) {}
+  ~Fixture() { std::filesystem::remove_all(dir); }
+};
+
 Recovered recover_one(const std::string& dir, const Bytes& b) {
   std::string path = dir + "/usv-crashed.mcap";
   spill(path, b);
@@ -188,9 +198,8 @@ Recovered recover_one(const std::string& dir, const Bytes& b) {
 }  // namespace
 
 TEST(McapRecoverDamage, EachOf25SingleByteFlipsKeepsEveryChunkWhoseDataChecks) {
-  std::string dir = fresh_dir("flips");
-  Bytes clean = crashed_file(dir);
-  auto layout = records(clean);
+  Fixture fx("flips");
+  const auto& [dir, clean, layout] = std::tie(fx.dir, fx.clean, fx.layout);
   ASSERT_GT(std::count_if(layout.begin(), layout.end(), [](const Record& r) { return r.op == 0x06; }), 30);
   const uint64_t all = oracle_count(clean, layout);
   int rewritten = 0;
@@ -208,31 +217,25 @@ TEST(McapRecoverDamage, EachOf25SingleByteFlipsKeepsEveryChunkWhoseDataChecks) {
     if (want < all) EXPECT_FALSE(r.skipped.empty()) << "flip at " << at;
   }
   EXPECT_GT(rewritten, 10);  // most flips land before the last chunk: the copy path ran
-  std::filesystem::remove_all(dir);
 }
 
 TEST(McapRecoverDamage, All25FlipsInOneFileKeepEveryChunkWhoseDataChecks) {
-  std::string dir = fresh_dir("flips-all");
-  Bytes clean = crashed_file(dir);
-  auto layout = records(clean);
-  Bytes d = clean;
-  for (auto [at, mask] : flips(clean, layout)) d[at] ^= mask;
-  uint64_t want = oracle_count(d, layout);
-  Recovered r = recover_one(dir, d);
+  Fixture fx("flips-all");
+  Bytes d = fx.clean;
+  for (auto [at, mask] : flips(fx.clean, fx.layout)) d[at] ^= mask;
+  uint64_t want = oracle_count(d, fx.layout);
+  Recovered r = recover_one(fx.dir, d);
   EXPECT_TRUE(r.rewritten);
   EXPECT_EQ(r.messages, want);
   EXPECT_GE(r.skipped.size(), 10u);
-  EXPECT_EQ(read_back(slurp(dir + "/usv-crashed.mcap")), want);
-  std::filesystem::remove_all(dir);
+  EXPECT_EQ(read_back(slurp(fx.dir + "/usv-crashed.mcap")), want);
 }
 
 TEST(McapRecoverDamage, WithoutRoomForTheCopyTheOriginalStaysAsItIs) {
-  std::string dir = fresh_dir("no-copy");
-  Bytes clean = crashed_file(dir);
-  auto layout = records(clean);
-  Bytes d = clean;
-  d[layout[4].at + 60] ^= 0x10;  // a damaged chunk early on: the copy path
-  std::string path = dir + "/usv-crashed.mcap";
+  Fixture fx("no-copy");
+  Bytes d = fx.clean;
+  d[fx.layout[4].at + 60] ^= 0x10;  // a damaged chunk early on: the copy path
+  std::string path = fx.dir + "/usv-crashed.mcap";
   spill(path, d);
   std::filesystem::create_directory(path + ".recovering");  // the copy cannot be created
   EXPECT_THROW(recover_mcap(path, WriterOptions{}), modd::Error);
@@ -240,24 +243,32 @@ TEST(McapRecoverDamage, WithoutRoomForTheCopyTheOriginalStaysAsItIs) {
   std::filesystem::remove(path + ".recovering");
   Recovered r = recover_mcap(path, WriterOptions{});
   EXPECT_TRUE(r.rewritten);
-  EXPECT_EQ(r.messages, oracle_count(d, layout));
-  std::filesystem::remove_all(dir);
+  EXPECT_EQ(r.messages, oracle_count(d, fx.layout));
 }
 
 TEST(McapRecoverDamage, ACraftedHugeLengthOrSizeIsSkippedNotAllocated) {
-  std::string dir = fresh_dir("huge");
-  Bytes clean = crashed_file(dir);
-  auto layout = records(clean);
+  Fixture fx("huge");
   std::vector<size_t> chunks;
-  for (const Record& r : layout)
+  for (const Record& r : fx.layout)
     if (r.op == 0x06) chunks.push_back(r.at);
-  Bytes d = clean;
+  Bytes d = fx.clean;
   uint64_t huge = ~0ull >> 1;
   std::memcpy(&d[chunks[2] + 1], &huge, 8);        // record length
   std::memcpy(&d[chunks[6] + 9 + 16], &huge, 8);   // uncompressed size
-  uint64_t want = oracle_count(d, layout);
-  Recovered r = recover_one(dir, d);
+  uint64_t want = oracle_count(d, fx.layout);
+  Recovered r = recover_one(fx.dir, d);
   EXPECT_EQ(r.messages, want);
-  EXPECT_EQ(read_back(slurp(dir + "/usv-crashed.mcap")), want);
-  std::filesystem::remove_all(dir);
+  EXPECT_EQ(read_back(slurp(fx.dir + "/usv-crashed.mcap")), want);
+}
+
+TEST(McapRecoverDamage, AFlippedMagicIsWrittenAgainNotTheFileRemoved) {
+  Fixture fx("magic");
+  Bytes d = fx.clean;
+  d[3] ^= 0x20;  // "MCAP" -> "MCaP"
+  uint64_t want = oracle_count(d, fx.layout);
+  Recovered r = recover_one(fx.dir, d);
+  EXPECT_FALSE(r.removed);
+  EXPECT_TRUE(r.rewritten);
+  EXPECT_EQ(r.messages, want);
+  EXPECT_EQ(read_back(slurp(fx.dir + "/usv-crashed.mcap")), want);
 }
