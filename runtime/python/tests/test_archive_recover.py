@@ -19,6 +19,7 @@ import zstandard
 from mcap.reader import make_reader
 from modd.archive import cli
 from modd.archive.recover import recover
+from modd.archive.scan import scan_file
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "tests"))
 from support import mcap_oracle as oracle  # type: ignore[import-not-found]  # noqa: E402
@@ -57,7 +58,10 @@ def test_the_fixture_is_what_the_oracle_expects(crashed: tuple[bytes, list[oracl
     src.write_bytes(data)
     r = recover(src)
     assert r.messages == 3000 and r.chunks == 75
+    assert [s.why for s in r.skipped] == ["a record longer than the rest of the file"]  # torn
     assert official_count(r.output) == 3000
+    again = scan_file(r.output)  # what it wrote reads back closed, nothing skipped
+    assert again.complete and not again.skipped and len(again.messages) == 3000
 
 
 def test_each_of_25_single_byte_flips_keeps_every_chunk_whose_data_checks(

@@ -181,7 +181,9 @@ class _Walk:
         self.scan.messages.extend(messages)
 
     def _data_end_holds(self, at: int) -> bool:
-        return u32(self.buf, at + 9) == zlib.crc32(self.buf[:at])
+        """A Data End whose CRC holds, or is 0 (not computed: the ``mcap`` writer's)."""
+        crc = u32(self.buf, at + 9)
+        return crc == 0 or crc == zlib.crc32(self.buf[:at])
 
     def _resync(self, start: int) -> int:
         """The next offset from ``start`` where a record checks whole, else the end."""
