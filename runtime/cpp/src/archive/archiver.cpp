@@ -244,7 +244,7 @@ void Archiver::retry_recovery() {
   for (std::string& path : unrecovered_) {
     try {
       Recovered r = recover_mcap(path, opt_.writer);
-      log_recovered(std::filesystem::path(path).filename().string() + " now that there is room", r);
+      log_recovered(std::filesystem::path(path).filename().string(), r, " now that there is room");
     } catch (const Error&) {
       still.push_back(std::move(path));
     }

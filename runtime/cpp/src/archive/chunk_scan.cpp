@@ -3,6 +3,7 @@
 #include <lz4frame.h>
 #include <zstd.h>
 
+#include <algorithm>
 #include <cstring>
 #include <optional>
 
@@ -49,8 +50,20 @@ struct Cursor {
   bool done() const { return at == n; }
 };
 
+// Whether `in` could decompress to `size` bytes at all, checked before anything is allocated:
+// a crafted size (up to the bound) with a few bytes of data costs nothing.
+bool plausible(const std::string& comp, std::span<const uint8_t> in, uint64_t size) {
+  if (size > kMaxChunkBytes) return false;  // a torn or crafted header
+  if (comp.empty()) return in.size() == size;
+  if (comp == "zstd") {  // the size in the frame's header (the writer puts it there) must agree
+    unsigned long long declared = ZSTD_getFrameContentSize(in.data(), in.size());
+    return declared != ZSTD_CONTENTSIZE_ERROR && (declared == ZSTD_CONTENTSIZE_UNKNOWN || declared == size);
+  }
+  return comp == "lz4" && size <= in.size() * 256ull + 64;  // LZ4's ratio is below 255:1
+}
+
 bool decompress(const std::string& comp, std::span<const uint8_t> in, uint64_t size, std::vector<uint8_t>& out) {
-  if (size > kMaxChunkBytes) return false;  // a torn or crafted header: never allocated
+  if (!plausible(comp, in, size)) return false;
   out.resize(size);
   if (comp.empty()) {
     if (in.size() != size) return false;
@@ -347,6 +360,7 @@ FileScan scan_mcap(std::span<const uint8_t> file, bool message_index) {
   Walk w{file, message_index, {}, {}};
   // A damaged magic does not stop the scan: the records after it may all be whole.
   w.s.magic = file.size() >= 8 && std::memcmp(file.data(), kMagic, 8) == 0;
+  w.s.clean_end = std::min<uint64_t>(8, file.size());
   w.run();
   return w.s;
 }

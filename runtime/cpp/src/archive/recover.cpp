@@ -219,7 +219,7 @@ Recovered recover_mcap(const std::string& path, const WriterOptions& options) {
   return res;
 }
 
-void log_recovered(const std::string& name, const Recovered& r) {
+void log_recovered(const std::string& name, const Recovered& r, const char* when) {
   auto u = [](uint64_t v) { return static_cast<unsigned long long>(v); };
   if (r.removed) {
     log_line("archive: removed %s: an empty file left by a crash", name.c_str());
@@ -229,9 +229,10 @@ void log_recovered(const std::string& name, const Recovered& r) {
     log_line("archive: %s is not an MCAP file (no magic, no record found): left as it is", name.c_str());
     return;
   }
-  log_line("archive: recovered %s left open by a crash%s: %llu messages in %llu chunks kept, %llu damaged or torn "
-           "bytes dropped in %zu regions", name.c_str(), r.rewritten ? " (rewritten beside it, then replaced)" : "",
-           u(r.messages), u(r.chunks), u(r.dropped_bytes), r.skipped.size());
+  log_line("archive: recovered %s left open by a crash%s%s: %llu messages in %llu chunks kept, %llu damaged or "
+           "torn bytes dropped in %zu regions", name.c_str(), when,
+           r.rewritten ? " (written beside it, read back, then renamed over it)" : "", u(r.messages), u(r.chunks),
+           u(r.dropped_bytes), r.skipped.size());
   for (size_t i = 0; i < r.skipped.size() && i < 20; ++i)
     log_line("archive:   skipped %llu bytes at offset %llu: %s", u(r.skipped[i].length), u(r.skipped[i].offset),
              r.skipped[i].why.c_str());

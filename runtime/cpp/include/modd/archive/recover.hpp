@@ -37,8 +37,9 @@ bool decompress_chunk(const std::string& compression, std::span<const uint8_t> i
 bool mcap_complete(const std::string& path);
 // Recovers one file. Throws Error if it cannot be read or finished (the original then stays).
 Recovered recover_mcap(const std::string& path, const WriterOptions& options);
-// The log lines of one recovery (kept and dropped, then each skipped region).
-void log_recovered(const std::string& name, const Recovered& r);
+// The log lines of one recovery (kept and dropped, then each skipped region); `when` follows
+// the file's name (e.g. " now that there is room").
+void log_recovered(const std::string& name, const Recovered& r, const char* when = "");
 // Recovers every `<prefix>*.mcap` file of `dir` that is not complete (and removes stale
 // `.recovering` files an older version's interrupted recovery left). Errors are logged, not
 // thrown: a file that could not be finished is returned with `failed` set.

@@ -102,9 +102,14 @@ def decompress(compression: str, data: bytes, size: int) -> bytes:
     if compression == "":
         out = data
     elif compression == "zstd":
+        declared = zstandard.frame_content_size(data)  # -1: not in the frame's header
+        if declared not in (-1, size):
+            raise Damaged(f"the zstd frame holds {declared} bytes, the chunk declares {size}")
         with zstandard.ZstdDecompressor().stream_reader(io.BytesIO(data)) as r:
             out = r.read(size + 1)
     elif compression == "lz4":
+        if size > len(data) * 256 + 64:  # LZ4's ratio is below 255:1: nothing allocated
+            raise Damaged(f"{len(data)} lz4 bytes cannot hold {size}")
         out = lz4.frame.LZ4FrameDecompressor().decompress(data, max_length=size + 1)
     else:
         raise Damaged(f"unknown compression {compression!r}")
