@@ -19,13 +19,17 @@ import os
 from pathlib import Path
 
 from modd.zenoh_auth import CredentialStore, acl
+from modd.zenoh_session import LISTENER_LIMITS
 
 
 def router_config(store: CredentialStore, drone: str | None) -> dict[str, object]:
+    # bounds against idle connections, as the SubBroker's (docs/security.md)
+    unicast = {k.rsplit("/", 1)[1]: json.loads(v) for k, v in LISTENER_LIMITS.items()}
     return {
         "mode": "router",
         "scouting": {"multicast": {"enabled": False}, "gossip": {"enabled": False}},
-        "transport": {"auth": {"usrpwd": {"dictionary_file": str(store.dictionary)}}},
+        "transport": {"auth": {"usrpwd": {"dictionary_file": str(store.dictionary)}},
+                      "unicast": unicast},
         "access_control": acl(drone),
     }
 

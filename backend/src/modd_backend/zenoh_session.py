@@ -52,6 +52,11 @@ class QueryResult:
 log = logging.getLogger("modd_backend.zenoh")
 MAX_SECRET_BYTES = 64 * 1024
 RETRY_S = 0.5
+#: When the backend listens: bounds against connections that never authenticate (the mirror of
+#: modd.zenoh_session.LISTENER_LIMITS; docs/security.md, "Idle connections").
+LISTENER_LIMITS = {"transport/unicast/accept_timeout": "2000",
+                   "transport/unicast/accept_pending": "2000",
+                   "transport/unicast/max_sessions": "256"}
 
 
 def read_secret(path: Path, what: str) -> str:
@@ -83,6 +88,8 @@ def zenoh_config(connect: tuple[str, ...], listen: tuple[str, ...],
     c.insert_json5("scouting/delay", "0")
     c.insert_json5("connect/endpoints", json.dumps(list(connect)))
     c.insert_json5("listen/endpoints", json.dumps(list(listen)))
+    for key, value in LISTENER_LIMITS.items() if listen else ():
+        c.insert_json5(key, value)
     if credentials is not None:
         user, sep, password = read_secret(credentials, "zenoh credentials").partition(":")
         if not sep or not user or not password:

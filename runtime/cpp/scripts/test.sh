@@ -3,7 +3,7 @@
 #   1. ctest on build/cpp (the regular build of `make build`): units + example project;
 #   2. the units again under AddressSanitizer + UndefinedBehaviorSanitizer (build/cpp-asan);
 #   3. the libFuzzer targets built with clang (build/cpp-fuzz): the link, ingress, datagram
-#      and backfill decoders, each run for FUZZ_SECONDS.
+#      and backfill decoders and the archive recovery's scan, each run for FUZZ_SECONDS.
 # Longer fuzzing: FUZZ_SECONDS=600 runtime/cpp/scripts/test.sh  (or run a target by hand:
 #   build/cpp-fuzz/fuzz_link_decoder -max_total_time=600 build/cpp-fuzz/corpus-link)
 # Exits non-zero on the first failure.
@@ -30,7 +30,7 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
 step "libFuzzer targets, ${FUZZ_SECONDS}s each (build/cpp-fuzz)"
 CXX=clang++ cmake -S $SRC -B build/cpp-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMODD_FUZZ=ON \
       -DMODD_TESTS=OFF -DMODD_BIN_DIR="$ROOT/build/cpp-fuzz/bin" >/dev/null
-TARGETS=(link_decoder ingress_decoder datagram backfill)  # every decoder of the runtime
+TARGETS=(link_decoder ingress_decoder datagram backfill chunk_scan)  # every decoder of the runtime
 cmake --build build/cpp-fuzz -j"$JOBS" --target "${TARGETS[@]/#/fuzz_}"
 for t in "${TARGETS[@]}"; do
   corpus=build/cpp-fuzz/corpus-$t
@@ -41,6 +41,11 @@ for t in "${TARGETS[@]}"; do
       python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); h=d.get("hex"); h and sys.stdout.buffer.write(bytes.fromhex(h))' \
         "$v" > "$corpus/$(basename "$v" .json)"
     done
+  fi
+  if [ "$t" = chunk_scan ] && [ -x .venv/bin/python ]; then
+    # Seed with small crashed files (the recovery tests' independent writer).
+    .venv/bin/python -c 'import sys; sys.path.insert(0, "tests"); from support.mcap_oracle import crashed_mcap
+for n, k in ((12, 4), (90, 30), (7, 1)): open(f"{sys.argv[1]}/seed-{n}-{k}", "wb").write(crashed_mcap(n, per_chunk=k))' "$corpus"
   fi
   build/cpp-fuzz/fuzz_$t -max_total_time="$FUZZ_SECONDS" -print_final_stats=0 -close_fd_mask=3 "$corpus" \
     > build/cpp-fuzz/$t.log 2>&1 || { tail -50 build/cpp-fuzz/$t.log; echo "fuzz_$t FAILED"; exit 1; }

@@ -244,9 +244,7 @@ void Archiver::retry_recovery() {
   for (std::string& path : unrecovered_) {
     try {
       Recovered r = recover_mcap(path, opt_.writer);
-      log_line("archive: recovered %s now that there is room: %llu messages in %llu chunks kept, %llu torn bytes "
-               "dropped", path.c_str(), static_cast<unsigned long long>(r.messages),
-               static_cast<unsigned long long>(r.chunks), static_cast<unsigned long long>(r.dropped_bytes));
+      log_recovered(std::filesystem::path(path).filename().string(), r, " now that there is room");
     } catch (const Error&) {
       still.push_back(std::move(path));
     }

@@ -1,19 +1,14 @@
 #include "modd/archive/recover.hpp"
 
 #include <fcntl.h>
-#include <lz4frame.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <zstd.h>
 
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <map>
-#include <optional>
-#include <tuple>
 
 #include "modd/archive/crc32.hpp"
 #include "modd/util/error.hpp"
@@ -24,121 +19,6 @@ namespace modd::archive {
 namespace {
 
 constexpr uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', 0x30, '\r', '\n'};
-enum Op : uint8_t { kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06, kDataEnd = 0x0F, kFooter = 0x02 };
-
-// Bounds-checked little-endian reader over one record body; throws on a short read.
-struct Cursor {
-  const uint8_t* p;
-  size_t n, at = 0;
-  struct Short {};
-  template <typename T> T get() {
-    if (n - at < sizeof(T)) throw Short{};
-    T v;
-    std::memcpy(&v, p + at, sizeof(T));
-    at += sizeof(T);
-    return v;
-  }
-  std::string str() {
-    uint32_t len = get<uint32_t>();
-    if (n - at < len) throw Short{};
-    std::string s(reinterpret_cast<const char*>(p + at), len);
-    at += len;
-    return s;
-  }
-  std::span<const uint8_t> bytes(uint64_t len) {
-    if (n - at < len) throw Short{};
-    std::span<const uint8_t> s(p + at, len);
-    at += len;
-    return s;
-  }
-};
-
-bool decompress(const std::string& comp, std::span<const uint8_t> in, uint64_t size, std::vector<uint8_t>& out) {
-  if (size > (1ull << 28)) return false;  // a chunk closes at chunk_bytes (256 KiB): a bigger size is a torn header
-  out.resize(size);
-  if (comp.empty()) {
-    if (in.size() != size) return false;
-    std::memcpy(out.data(), in.data(), size);
-    return true;
-  }
-  if (comp == "zstd") {
-    size_t r = ZSTD_decompress(out.data(), out.size(), in.data(), in.size());
-    return !ZSTD_isError(r) && r == size;
-  }
-  if (comp == "lz4") {
-    LZ4F_dctx* d = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&d, LZ4F_VERSION))) return false;
-    size_t dst = out.size(), src = in.size();
-    size_t r = LZ4F_decompress(d, out.data(), &dst, in.data(), &src, nullptr);
-    LZ4F_freeDecompressionContext(d);
-    return !LZ4F_isError(r) && dst == size;
-  }
-  return false;
-}
-
-// What a file cut by a crash holds up to its last complete record: a chunk counts once it
-// and the Message Index records written with it (one per channel it holds, in the same
-// write) are whole, so that an indexed reader finds every message the summary announces.
-struct Scan {
-  std::map<uint16_t, std::tuple<std::string, std::string, std::string>> schemas;  // id -> name, encoding, data
-  struct Channel {
-    uint16_t schema;
-    std::string topic, encoding;
-    std::map<std::string, std::string> meta;
-  };
-  std::map<uint16_t, Channel> channels;
-  std::vector<std::pair<ChunkIndex, std::map<uint16_t, uint64_t>>> chunks;  // with messages per channel
-  uint64_t messages = 0;
-
-  void schema(Cursor c) {
-    uint16_t id = c.get<uint16_t>();
-    std::string name = c.str(), enc = c.str();
-    uint32_t len = c.get<uint32_t>();
-    auto data = c.bytes(len);
-    schemas.emplace(id, std::tuple{name, enc, std::string(data.begin(), data.end())});
-  }
-  void channel(Cursor c) {
-    uint16_t id = c.get<uint16_t>(), sid = c.get<uint16_t>();
-    std::string topic = c.str(), enc = c.str();
-    uint32_t mlen = c.get<uint32_t>();
-    Cursor m{c.p + c.at, mlen};
-    c.bytes(mlen);
-    std::map<std::string, std::string> meta;
-    while (m.at < m.n) {
-      std::string k = m.str();
-      meta[k] = m.str();
-    }
-    if (sid && !schemas.count(sid)) throw std::out_of_range("schema");
-    channels.emplace(id, Channel{sid, topic, enc, meta});
-  }
-  // The records of a chunk, checked completely before any is used; its messages per channel.
-  bool chunk(const std::vector<uint8_t>& recs, std::map<uint16_t, uint64_t>& counts) {
-    size_t at = 0;
-    while (at < recs.size()) {
-      if (recs.size() - at < 9) return false;
-      uint64_t len;
-      std::memcpy(&len, recs.data() + at + 1, 8);
-      if (recs.size() - at - 9 < len) return false;
-      at += 9 + len;
-    }
-    at = 0;
-    while (at < recs.size()) {
-      uint8_t op = recs[at];
-      uint64_t len;
-      std::memcpy(&len, recs.data() + at + 1, 8);
-      Cursor c{recs.data() + at + 9, len};
-      if (op == kSchema) schema(c);
-      else if (op == kChannel) channel(c);
-      else if (op == kMessage) {
-        uint16_t ch = c.get<uint16_t>();
-        if (!channels.count(ch)) return false;  // a channel never defined
-        ++counts[ch];
-      }
-      at += 9 + len;
-    }
-    return true;
-  }
-};
 
 // A read-only view of a whole file (mapped: a 256 MiB file costs no heap).
 struct Mapped {
@@ -163,16 +43,126 @@ struct Mapped {
   }
   Mapped(const Mapped&) = delete;
   Mapped& operator=(const Mapped&) = delete;
+  std::span<const uint8_t> all() const { return {p, n}; }
 };
 
-constexpr uint8_t kMessageIndex = 0x07;
+// Hands the scan's schemas, channels and chunks to a writer that finishes a file; a chunk's
+// indexes are taken to start right after it at `index_start[i]`.
+void adopt(McapWriter& w, const FileScan& s, const std::vector<uint64_t>& chunk_at) {
+  for (const auto& [id, sc] : s.schemas) w.adopt_schema(id, sc.name, sc.encoding, sc.data);
+  for (const auto& [id, ch] : s.channels) w.adopt_channel(id, ch.schema, ch.topic, ch.encoding, ch.meta);
+  for (size_t i = 0; i < chunk_at.size(); ++i) {
+    const ScannedChunk& c = s.chunks[i];
+    ChunkIndex ci = c.ci;
+    ci.offset = chunk_at[i];
+    ci.index_offsets.clear();
+    for (const auto& [ch, off] : c.index_at) ci.index_offsets[ch] = chunk_at[i] + ci.length + off;
+    ci.index_length = c.index.size();
+    w.adopt_chunk(ci, c.counts);
+  }
+}
+
+// Appends bytes to a descriptor, keeping the data-section CRC; throws Error(Io).
+struct Out {
+  int fd;
+  const std::string& path;
+  uint64_t at = 0;
+  uint32_t crc = 0;
+  void put(std::span<const uint8_t> b) {
+    crc = crc32(crc, b);
+    for (size_t done = 0; done < b.size();) {
+      ssize_t n = ::write(fd, b.data() + done, b.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) throw Error(ErrorCode::Io, "write " + path + ": " + std::strerror(errno));
+      done += static_cast<size_t>(n);
+    }
+    at += b.size();
+  }
+};
+
+void sync_path(const std::string& path) {
+  int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+}
+
+// Finished in place: nothing trusted lies past `clean_end` (what is cut holds no whole chunk),
+// so the file is cut there, the last kept chunk's indexes rewritten if they were torn, then
+// Data End, summary and footer appended: room for a few KiB is enough.
+void finish_in_place(const std::string& path, const FileScan& s, std::span<const uint8_t> file,
+                     const WriterOptions& options) {
+  std::vector<uint8_t> tail;
+  if (s.clean_chunks && !s.chunks[s.clean_chunks - 1].index_intact) tail = s.chunks[s.clean_chunks - 1].index;
+  uint32_t crc = crc32(crc32(0, file.first(s.clean_end)), tail);
+  {
+    int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) throw Error(ErrorCode::Io, "cannot open " + path + ": " + std::strerror(errno));
+    Out out{fd, path, s.clean_end};
+    int err = ::lseek(fd, static_cast<off_t>(s.clean_end), SEEK_SET) < 0 ? errno : 0;
+    try {
+      if (!err) out.put(tail);
+    } catch (...) {
+      ::close(fd);
+      throw;
+    }
+    ::close(fd);
+    if (err) throw Error(ErrorCode::Io, "cannot seek " + path + ": " + std::strerror(err));
+  }
+  McapWriter w(path, options, McapWriter::Resume{s.clean_end + tail.size(), crc});
+  std::vector<uint64_t> at;
+  for (size_t i = 0; i < s.clean_chunks; ++i) at.push_back(s.chunks[i].ci.offset);
+  adopt(w, s, at);
+  w.close();
+}
+
+// Writes the trusted records beside the original (`.recovering`): magic, header, schemas,
+// channels, then each kept chunk as it was with its Message Index records, then the summary.
+void write_copy(const std::string& tmp, const FileScan& s, std::span<const uint8_t> file, const WriterOptions& options) {
+  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw Error(ErrorCode::Io, "cannot create " + tmp + ": " + std::strerror(errno));
+  Out out{fd, tmp};
+  std::vector<uint64_t> at;
+  try {
+    out.put(kMagic);
+    if (s.header.length) {
+      out.put(file.subspan(s.header.offset, s.header.length));
+    } else {  // opcode, length 8, two empty strings (profile, library)
+      const uint8_t h[17] = {0x01, 8};
+      out.put(h);
+    }
+    for (const auto& [id, sc] : s.schemas)
+      if (sc.at.length) out.put(file.subspan(sc.at.offset, sc.at.length));
+    for (const auto& [id, ch] : s.channels)
+      if (ch.at.length) out.put(file.subspan(ch.at.offset, ch.at.length));
+    for (const ScannedChunk& c : s.chunks) {
+      at.push_back(out.at);
+      out.put(file.subspan(c.ci.offset, c.ci.length));
+      out.put(c.index);
+    }
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  ::close(fd);
+  WriterOptions o = options;
+  o.fsync = FsyncPolicy::Close;
+  McapWriter w(tmp, o, McapWriter::Resume{out.at, out.crc});
+  adopt(w, s, at);
+  w.close();
+}
+
+// The copy read back: every chunk whole, the same messages, closed.
+void verify_copy(const std::string& tmp, const FileScan& s, bool message_index) {
+  Mapped m(tmp);
+  FileScan v = scan_mcap(m.all(), message_index);
+  if (!v.magic || !v.skipped.empty() || !v.data_end || v.chunks.size() != s.chunks.size() ||
+      v.messages != s.messages || !mcap_complete(tmp))
+    throw Error(ErrorCode::Internal, "the recovered copy " + tmp + " does not read back whole");
+}
 
 }  // namespace
-
-bool decompress_chunk(const std::string& compression, std::span<const uint8_t> in, uint64_t size,
-                      std::vector<uint8_t>& out) {
-  return decompress(compression, in, size, out);
-}
 
 bool mcap_complete(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
@@ -189,116 +179,63 @@ bool mcap_complete(const std::string& path) {
 Recovered recover_mcap(const std::string& path, const WriterOptions& options) {
   Recovered res;
   res.path = path;
-  uint64_t good = 8;
-  uint32_t crc = 0;
-  Scan scan;
-  {
-    Mapped file(path);
-    const uint8_t* all = file.p;
-    const size_t size = file.n;
-    if (size < 8 + 9 || std::memcmp(all, kMagic, 8) != 0) {
-      std::filesystem::remove(path);
-      res.removed = true;
-      res.dropped_bytes = size;
-      return res;
-    }
-    // A chunk read whole, waiting for its Message Index records.
-    struct Pending {
-      ChunkIndex ci;
-      std::map<uint16_t, uint64_t> counts;
-    };
-    std::optional<Pending> pend;
-    auto commit = [&](uint64_t end) {
-      res.messages += [&] {
-        uint64_t n = 0;
-        for (const auto& [ch, k] : pend->counts) n += k;
-        return n;
-      }();
-      ++res.chunks;
-      scan.chunks.emplace_back(std::move(pend->ci), std::move(pend->counts));
-      pend.reset();
-      good = end;
-    };
-    size_t at = 8;
-    std::vector<uint8_t> plain;
-    while (size - at >= 9) {
-      uint8_t op = all[at];
-      uint64_t len;
-      std::memcpy(&len, all + at + 1, 8);
-      if (size - at - 9 < len) break;  // cut short
-      Cursor c{all + at + 9, len};
-      const uint64_t next = at + 9 + len;
-      if (pend) {
-        if (op == kMessageIndex && len >= 2) {
-          uint16_t ch = c.get<uint16_t>();
-          pend->ci.index_offsets[ch] = at;
-          pend->ci.index_length += 9 + len;
-          at = next;
-          bool all_indexed = true;
-          for (const auto& [k, n] : pend->counts) all_indexed &= pend->ci.index_offsets.count(k) > 0;
-          if (all_indexed) commit(at);
-          continue;
-        }
-        if (!pend->ci.index_offsets.empty()) break;  // some of its indexes, then something else
-        commit(at);                                  // a file written without message indexes
-      }
-      bool ok = true;
-      try {
-        if (op == kChunk) {
-          ChunkIndex ci;
-          ci.start = c.get<uint64_t>();
-          ci.end = c.get<uint64_t>();
-          uint64_t usize = c.get<uint64_t>();
-          uint32_t chunk_crc = c.get<uint32_t>();
-          ci.compression = c.str();
-          uint64_t clen = c.get<uint64_t>();
-          auto data = c.bytes(clen);
-          ci.offset = at;
-          ci.length = 9 + len;
-          ci.compressed_size = clen;
-          ci.uncompressed_size = usize;
-          std::map<uint16_t, uint64_t> counts;
-          ok = decompress(ci.compression, data, usize, plain) && (chunk_crc == 0 || crc32(0, plain) == chunk_crc) &&
-               scan.chunk(plain, counts);
-          if (ok) {
-            pend = Pending{std::move(ci), std::move(counts)};
-            at = next;
-            if (pend->counts.empty()) commit(at);
-            continue;
-          }
-        } else if (op == kSchema) {
-          scan.schema(c);
-        } else if (op == kChannel) {
-          scan.channel(c);
-        } else if (op == kMessage) {
-          ok = false;  // messages outside chunks: not written by the PubBroker; the tail is dropped
-        } else if (op == kDataEnd || op == kFooter) {
-          break;  // an interrupted finish: written again
-        }
-      } catch (const Cursor::Short&) {
-        ok = false;
-      } catch (const std::out_of_range&) {
-        ok = false;  // a channel or schema id never defined
-      }
-      if (!ok) break;
-      at = next;
-      good = at;
-    }
-    // A last chunk whose indexes never made it: dropped (its samples were never counted
-    // archived: the writer counts a chunk once the chunk and its indexes are written).
-    if (pend && pend->ci.index_offsets.empty() && !options.message_index) commit(pend->ci.offset + pend->ci.length);
-    res.dropped_bytes = size - good;
-    crc = crc32(0, std::span(all, good));
+  Mapped file(path);
+  if (file.n < 8 + 9) {  // nothing but a partial magic or header
+    std::filesystem::remove(path);
+    res.removed = true;
+    res.dropped_bytes = file.n;
+    return res;
   }
-  // Finished in place: cut to the last complete record, then Data End, summary and footer
-  // appended (a few KiB, so recovery works on a nearly full disk). A crash or a full disk
-  // meanwhile leaves a file the next attempt scans to the same point.
-  McapWriter w(path, options, McapWriter::Resume{good, crc});
-  for (const auto& [id, sch] : scan.schemas) w.adopt_schema(id, std::get<0>(sch), std::get<1>(sch), std::get<2>(sch));
-  for (const auto& [id, ch] : scan.channels) w.adopt_channel(id, ch.schema, ch.topic, ch.encoding, ch.meta);
-  for (const auto& [ci, counts] : scan.chunks) w.adopt_chunk(ci, counts);
-  w.close();
+  FileScan s = scan_mcap(file.all(), options.message_index);
+  res.skipped = s.skipped;
+  res.messages = s.messages;
+  res.chunks = s.chunks.size();
+  if (!s.magic && s.chunks.empty() && s.channels.empty()) {
+    res.foreign = true;  // not an MCAP file: left as it is
+    return res;
+  }
+  if (s.magic && s.in_place) {
+    res.dropped_bytes = file.n - s.clean_end;
+    finish_in_place(path, s, file.all(), options);
+    return res;
+  }
+  // Something trusted lies past a damaged region: a copy keeps it, and replaces the original
+  // only once it reads back whole. Without room for it, the original stays as it is.
+  const std::string tmp = path + ".recovering";
+  try {
+    write_copy(tmp, s, file.all(), options);
+    verify_copy(tmp, s, options.message_index);
+    sync_path(tmp);
+    if (::rename(tmp.c_str(), path.c_str()) != 0)
+      throw Error(ErrorCode::Io, "cannot replace " + path + ": " + std::strerror(errno));
+    sync_path(std::filesystem::path(path).parent_path().string());
+  } catch (...) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw;
+  }
+  res.rewritten = true;
+  for (const Skipped& k : s.skipped) res.dropped_bytes += k.length;
   return res;
+}
+
+void log_recovered(const std::string& name, const Recovered& r, const char* when) {
+  auto u = [](uint64_t v) { return static_cast<unsigned long long>(v); };
+  if (r.removed) {
+    log_line("archive: removed %s: an empty file left by a crash", name.c_str());
+    return;
+  }
+  if (r.foreign) {
+    log_line("archive: %s is not an MCAP file (no magic, no record found): left as it is", name.c_str());
+    return;
+  }
+  log_line("archive: recovered %s left open by a crash%s%s: %llu messages in %llu chunks kept, %llu damaged or "
+           "torn bytes dropped in %zu regions", name.c_str(), when,
+           r.rewritten ? " (written beside it, read back, then renamed over it)" : "", u(r.messages), u(r.chunks),
+           u(r.dropped_bytes), r.skipped.size());
+  for (size_t i = 0; i < r.skipped.size() && i < 20; ++i)
+    log_line("archive:   skipped %llu bytes at offset %llu: %s", u(r.skipped[i].length), u(r.skipped[i].offset),
+             r.skipped[i].why.c_str());
 }
 
 std::vector<Recovered> recover_dir(const std::string& dir, const std::string& prefix, const WriterOptions& options) {
@@ -315,12 +252,7 @@ std::vector<Recovered> recover_dir(const std::string& dir, const std::string& pr
     if (!name.ends_with(".mcap") || mcap_complete(e.path().string())) continue;
     try {
       Recovered r = recover_mcap(e.path().string(), options);
-      if (r.removed)
-        log_line("archive: removed %s: an empty file left by a crash", name.c_str());
-      else
-        log_line("archive: recovered %s left open by a crash: %llu messages in %llu chunks kept, %llu torn bytes "
-                 "dropped", name.c_str(), static_cast<unsigned long long>(r.messages),
-                 static_cast<unsigned long long>(r.chunks), static_cast<unsigned long long>(r.dropped_bytes));
+      log_recovered(name, r);
       out.push_back(std::move(r));
     } catch (const Error& err) {
       log_line("archive: cannot recover %s yet: %s (tried again while the broker runs)", name.c_str(), err.what());

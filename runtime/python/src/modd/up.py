@@ -1,8 +1,10 @@
 """``modd up MODEL [--simulate] [--part drone|station|all]``: run a model on this
 machine — the on-board PubBroker, the base-station SubBroker and, with
 ``--simulate``, a simulated drone (simulated sensors and autopilot, and the
-MAVLink bridge) — from configs generated from the model. Stops everything (by
-PID, in reverse order) on Ctrl-C or SIGTERM, or when one of the processes dies.
+MAVLink bridge) — from configs generated from the model. A process that dies
+is restarted with a backoff, as systemd does on a drone (:mod:`modd.supervise`:
+1 s doubling to 30 s, at most 5 restarts in 5 minutes, then the run stops).
+Stops everything (by PID, in reverse order) on Ctrl-C or SIGTERM.
 
 Options:
 
@@ -46,13 +48,13 @@ import shutil
 import signal
 import subprocess
 import sys
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from . import uplink
 from .ports import free_port
+from .supervise import watch
 from .zenoh_auth import CredentialStore, private_dir
 from .zenoh_session import DEFAULT_ENDPOINT
 
@@ -79,6 +81,13 @@ class Process:
     argv: list[str]
     log: Path
     popen: subprocess.Popen[bytes] | None = None
+    restartable: bool = True  # the serial radio is not: its pseudo-terminals would change
+
+    def exit_code(self) -> int | None:
+        return self.popen.poll() if self.popen is not None else None
+
+    def pid(self) -> int | None:
+        return self.popen.pid if self.popen is not None else None
 
     def start(self, env: dict[str, str]) -> None:
         self.log.parent.mkdir(parents=True, exist_ok=True)
@@ -114,9 +123,6 @@ class Stack:
             p.start(env)
             assert p.popen is not None
             print(f"modd up: started {p.name} (pid {p.popen.pid}), log {p.log}", flush=True)
-
-    def dead(self) -> Process | None:
-        return next((p for p in self.processes if p.popen and p.popen.poll() is not None), None)
 
     def stop(self) -> None:
         for p in reversed(self.processes):
@@ -252,16 +258,10 @@ def run(args: argparse.Namespace) -> int:
           " Ctrl-C to stop", flush=True)
     if args.part != "drone":
         print(viewer_hint(args, store), flush=True)
-    code = 0
+    code = 1
     try:
-        while not stopping:
-            dead = stack.dead()
-            if dead is not None:
-                print(f"modd up: {dead.name} exited ({dead.popen.returncode if dead.popen else '?'}"
-                      f"); see {dead.log}", file=sys.stderr, flush=True)
-                code = 1
-                break
-            time.sleep(0.2)
+        code = watch(stack.processes, env, lambda: stopping,
+                     say=lambda line: print(line, file=sys.stderr, flush=True))
     finally:
         stack.stop()
     return code
@@ -297,7 +297,8 @@ def start_radio(args: argparse.Namespace, model: dict[str, Any], workdir: Path
     ep = model["pubBroker"]["endpoint"]
     argv, args.relay = uplink.radio_argv(Path(sys.executable).parent, transport, args.radio,
                                          (str(ep["host"]), int(ep["port"])))
-    radio = Process("radio", argv, workdir / "logs" / "radio.log")
+    radio = Process("radio", argv, workdir / "logs" / "radio.log",
+                    restartable=transport != "serial")
     if radio.log.exists():
         radio.log.unlink()  # the devices line of an earlier run must not be read
     radio.start(dict(os.environ))

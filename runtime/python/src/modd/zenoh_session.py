@@ -30,6 +30,20 @@ if TYPE_CHECKING:
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 MODES = ("peer", "client", "router")
 RECONNECT = "{period_init_ms: 100, period_max_ms: 1000, period_increase_factor: 2}"
+#: A listening session's bounds against connections that open and never authenticate
+#: (docs/security.md, "Idle connections"): zenoh's defaults (10 s to authenticate, 100 at
+#: once) let 100 idle sockets lock every new session out for 10 s. Each is overridable in
+#: ``[zenoh.settings]`` (or a ``config_file`` that sets it).
+LISTENER_LIMITS = {
+    # ms a connection may take from accept to an authenticated session (default 10000)
+    "transport/unicast/accept_timeout": "2000",
+    # connections authenticating at once (default 100); more are closed at once
+    "transport/unicast/accept_pending": "2000",
+    # authenticated sessions at once (default 1000): the backend, tools and viewers
+    "transport/unicast/max_sessions": "256",
+    # links per session (zenoh's default, kept explicit)
+    "transport/unicast/max_links": "1",
+}
 
 
 @dataclass(frozen=True)
@@ -68,6 +82,8 @@ class ZenohSettings:
         }
         if self.listen or self.mode != "client":
             out["listen/endpoints"] = json.dumps(list(self.listen))
+        if self.listen:
+            out.update(LISTENER_LIMITS)
         if self.connect:
             out["connect/endpoints"] = json.dumps(list(self.connect))
             # come back within a second when the other side restarts
@@ -154,7 +170,13 @@ def zenoh_config(settings: ZenohSettings) -> zenoh.Config:
 
     path = settings.config_file
     config = zenoh.Config.from_file(path) if path else zenoh.Config()
-    for key, value in settings.inserts().items():
+    inserts = settings.inserts()
+    if path:  # a limit the file sets (not zenoh's default) is the file's
+        default = zenoh.Config()
+        for key in LISTENER_LIMITS:
+            if key not in settings.extra and config.get_json(key) != default.get_json(key):
+                inserts.pop(key, None)
+    for key, value in inserts.items():
         try:
             config.insert_json5(key, value)
         except Exception as exc:  # zenoh raises ZError with the bare path
@@ -167,11 +189,25 @@ def open_session(settings: ZenohSettings) -> zenoh.Session:
     """Open a session; raises ValueError naming the endpoints if it cannot."""
     import zenoh
 
+    if settings.listen:
+        _room_for_pending()
     try:
         return zenoh.open(zenoh_config(settings))
     except zenoh.ZError as exc:
         where = ", ".join(settings.listen + settings.connect) or "no endpoint"
         raise ValueError(f"cannot open a zenoh session ({settings.mode}, {where}): {exc}") from exc
+
+
+def _room_for_pending() -> None:
+    """Raises the soft limit on open files to what ``accept_pending`` may hold
+    (a service's soft limit is often 1024), within the hard limit."""
+    import resource
+
+    want = int(LISTENER_LIMITS["transport/unicast/accept_pending"]) + 1024
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if soft != resource.RLIM_INFINITY and soft < want:
+        new = want if hard == resource.RLIM_INFINITY else min(want, hard)
+        resource.setrlimit(resource.RLIMIT_NOFILE, (new, hard))
 
 
 def wait_connected(session: zenoh.Session, timeout_s: float = 5.0) -> bool:

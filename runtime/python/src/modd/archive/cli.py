@@ -48,7 +48,7 @@ def run_info(args: argparse.Namespace) -> int:
     gap = None if args.gap_s is None else int(args.gap_s * 1e9)
     try:
         info = archive_info(args.file, min_gap_ns=gap)
-    except ValueError as exc:
+    except (ValueError, OSError, MemoryError) as exc:
         print(f"modd archive info: {exc}", file=sys.stderr)
         return 1
     print(json.dumps(info.to_json(), indent=1) if args.json else format_info(info))
@@ -56,7 +56,7 @@ def run_info(args: argparse.Namespace) -> int:
 
 
 def run_recover(args: argparse.Namespace) -> int:
-    from .recover import recover
+    from .recover import format_report, recover
 
     if (err := _check(args.file)) is not None:
         print(err, file=sys.stderr)
@@ -64,12 +64,8 @@ def run_recover(args: argparse.Namespace) -> int:
     output = args.file if args.in_place else args.output
     try:
         r = recover(args.file, output)
-    except (ValueError, OSError) as exc:
+    except (ValueError, OSError, MemoryError) as exc:
         print(f"modd archive recover: {exc}", file=sys.stderr)
         return 1
-    state = "was closed" if r.was_complete else "was not closed"
-    print(f"{r.source} ({state}): {r.messages} messages on {r.channels} channels written "
-          f"to {r.output}")
-    if r.stopped_at:
-        print(f"  {r.stopped_at}")
+    print(format_report(r))
     return 0

@@ -111,7 +111,7 @@ def format_info(info: ArchiveInfo) -> str:
     lines = [f"{info.path}: {info.messages} messages, {len(info.topics)} topics, {state}",
              f"time range: {_iso(info.start_ns)} .. {_iso(info.end_ns)}"]
     if info.stopped_at:
-        lines.append(f"stopped reading: {info.stopped_at}")
+        lines.append(f"skipped: {info.stopped_at}")
     width = max((len(t) for t in info.topics), default=5)
     for t in sorted(info.topics.values(), key=lambda t: t.topic):
         period = f"{t.median_interval_ns / 1e6:.1f} ms" if t.median_interval_ns else "-"

@@ -1,9 +1,10 @@
 """``modd archive recover FILE``: rewrite an MCAP file that a crash left
-without summary and index (like ``mcap recover``), so that every reader
-(indexed readers included) opens it. The messages are those of every complete
-chunk, with their schemas and channels, written in log-time order by the
-official ``mcap`` writer (zstd chunks, message indexes, statistics, summary,
-footer).
+without summary and index (like ``mcap recover``), or that bad bytes damaged,
+so that every reader (indexed readers included) opens it. The messages are
+those of every chunk whose data checks, wherever it lies (:mod:`.scan` skips
+damaged regions and reports them), with their schemas and channels, written in
+log-time order by the official ``mcap`` writer (zstd chunks, message indexes,
+statistics, summary, footer).
 
 >>> report = recover("crashed.mcap", "crashed-recovered.mcap")   # doctest: +SKIP
 >>> report.messages                                              # doctest: +SKIP
@@ -18,7 +19,7 @@ from pathlib import Path
 
 from mcap.writer import CompressionType, Writer
 
-from .scan import scan_file
+from .scan import Skipped, scan_file
 
 
 @dataclass(frozen=True)
@@ -29,6 +30,8 @@ class Recovered:
     channels: int
     was_complete: bool
     stopped_at: str | None
+    chunks: int = 0
+    skipped: tuple[Skipped, ...] = ()
 
 
 def default_output(path: Path) -> Path:
@@ -68,4 +71,22 @@ def recover(source: str | Path, output: str | Path | None = None,
         os.replace(tmp, dst)
     finally:
         tmp.unlink(missing_ok=True)
-    return Recovered(src, dst, kept, len(channel_ids), scan.complete, scan.error)
+    return Recovered(src, dst, kept, len(channel_ids), scan.complete, scan.error, scan.chunks,
+                     tuple(scan.skipped))
+
+
+def format_report(r: Recovered, limit: int = 50) -> str:
+    """What ``modd archive recover`` prints: what was written, then each
+    damaged region skipped (offset and length in bytes, why)."""
+    state = "was closed" if r.was_complete else "was not closed"
+    lines = [f"{r.source} ({state}): {r.messages} messages on {r.channels} channels in "
+             f"{r.chunks} chunks written to {r.output}"]
+    if r.skipped:
+        total = sum(s.length for s in r.skipped)
+        lines.append(f"  skipped {len(r.skipped)} damaged or torn region(s), {total} bytes:")
+        lines += [f"    offset {s.offset}, {s.length} bytes: {s.why}" for s in r.skipped[:limit]]
+        if len(r.skipped) > limit:
+            lines.append(f"    ... {len(r.skipped) - limit} more")
+    else:
+        lines.append("  nothing skipped: every record checked")
+    return "\n".join(lines)

@@ -9,9 +9,18 @@ clock is passed in, so tests drive it without sleeping.
 
 from __future__ import annotations
 
+import math
 import random
 from collections import Counter
 from dataclasses import dataclass, field
+
+#: The largest UDP payload (IPv4): a larger ``packet`` bound means nothing.
+MAX_PACKET = 65507
+#: Settings beyond these are mistakes (a radio that holds a packet for more than
+#: ten minutes, or a queue of an hour, is not a radio any link could use).
+MAX_LATENCY_MS = 600_000.0
+MAX_QUEUE_S = 3600.0
+SHARES = ("loss", "duplicate", "forge", "replay")
 
 
 @dataclass(frozen=True)
@@ -33,6 +42,30 @@ class RadioSpec:
     forge: float = 0.0
     # ... or sent again REPLAY_AFTER_S later, as it was (a replay, not a duplicate).
     replay: float = 0.0
+
+    def __post_init__(self) -> None:
+        """Refuses settings no radio has, naming the setting and its range."""
+        def bad(name: str, value: object, want: str) -> ValueError:
+            return ValueError(f"radio setting {name}={value} is out of range: expected {want}")
+
+        if self.rate is not None and not (math.isfinite(self.rate) and self.rate > 0):
+            raise bad("rate", self.rate, "bytes/s > 0 (leave it out for no limit)")
+        if self.packet is not None and not 1 <= self.packet <= MAX_PACKET:
+            raise bad("packet", self.packet, f"a whole number of bytes in 1..{MAX_PACKET}")
+        for name in SHARES:
+            if not 0 <= getattr(self, name) <= 1:
+                raise bad(name, getattr(self, name), "a share in 0..1")
+        for name in ("latency_ms", "jitter_ms"):
+            if not 0 <= getattr(self, name) <= MAX_LATENCY_MS:
+                raise bad(name, getattr(self, name), f"ms in 0..{MAX_LATENCY_MS:.0f}")
+        if not 0 < self.queue_s <= MAX_QUEUE_S:
+            raise bad("queue_s", self.queue_s, f"seconds in (0, {MAX_QUEUE_S:.0f}]")
+        if self.seed < 0:
+            raise bad("seed", self.seed, "a whole number >= 0")
+        for start, length in self.outages:
+            if not (math.isfinite(start) and start >= 0 and math.isfinite(length) and length > 0):
+                raise bad("outage", f"{start}+{length}", "start+duration in s, start >= 0, "
+                          "duration > 0")
 
     @staticmethod
     def parse(text: str) -> RadioSpec:
@@ -60,8 +93,12 @@ class RadioSpec:
                 raise ValueError(f"unknown radio setting {key!r}; expected rate, packet, loss, "
                                  "latency_ms, jitter_ms, outage, queue_s, seed, duplicate, "
                                  "forge or replay")
-            if value < 0 or (key in ("loss", "duplicate", "forge", "replay") and value > 1):
-                raise ValueError(f"radio setting {key}={raw} is out of range")
+            if key in values:
+                raise ValueError(f"radio setting {key!r} given twice")
+            if key in ("packet", "seed") and not (math.isfinite(value) and value.is_integer()):
+                raise ValueError(f"radio setting {key}={raw}: expected a whole number")
+            if not math.isfinite(value):
+                raise ValueError(f"radio setting {key}={raw}: expected a finite number")
             values[key] = value
         return RadioSpec(
             rate=values.get("rate"), packet=int(values["packet"]) if "packet" in values else None,

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import signal
+import socket
 import sys
 import time
 
@@ -30,6 +31,19 @@ def _spec(text: str) -> RadioSpec:
         return RadioSpec.parse(text)
     except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _same_endpoint(a: tuple[str, int], b: tuple[str, int]) -> bool:
+    """Whether datagrams sent to ``b`` would come back to a socket bound to ``a``
+    (same port, and the same address, or ``a`` bound to every address)."""
+    if a[1] != b[1]:
+        return False
+    if a[0] in ("0.0.0.0", "", "::") or a[0] == b[0]:
+        return True
+    try:
+        return socket.gethostbyname(a[0]) == socket.gethostbyname(b[0])
+    except OSError:
+        return False
 
 
 def _print(up: Channel, down: Channel) -> None:
@@ -54,6 +68,11 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     if args.udp and not args.to:
         p.error("--udp needs --to HOST:PORT (the PubBroker's endpoint)")
+    if args.udp and _same_endpoint(args.udp, args.to):
+        p.error(f"--to {args.to[0]}:{args.to[1]} is where the radio listens (--udp): it would "
+                "relay every datagram to itself; give the PubBroker's endpoint")
+    if args.report <= 0 or (args.duration is not None and args.duration <= 0):
+        p.error("--report and --duration take seconds > 0")
     stopping: list[bool] = []
     signal.signal(signal.SIGTERM, lambda *_: stopping.append(True))
     signal.signal(signal.SIGINT, lambda *_: stopping.append(True))
