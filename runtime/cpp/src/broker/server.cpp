@@ -83,7 +83,7 @@ Server::Server(const BrokerConfig& cfg, std::string key, Clock& clock)
     o.delay_ns = int64_t{cfg_.link_delay_ms} * 1'000'000;
     o.keepalive_timeout_ns = int64_t{cfg_.link_keepalive_timeout_s} * 1'000'000'000;
     o.ring_bytes = cfg_.link_ring_bytes;
-    dlink_ = std::make_unique<DatagramLink>(key_, *broker_, *this, o, [] { return link::random_nonce(); });
+    dlink_ = std::make_unique<DatagramLink>(key_, *broker_, *this, o);
     broker_->set_backfill_link(o.max_datagram, control_frame_overhead(cfg_.link_transport == "serial"));
     open_dgram_port();
     if (!port_) throw Error(ErrorCode::Io, "cannot open the link device " + cfg_.link_device);
@@ -150,10 +150,14 @@ void Server::adopt_source() {
   if (port_) port_->adopt_source();
 }
 
+std::vector<uint8_t> Server::source() const { return port_ ? port_->source() : std::vector<uint8_t>{}; }
+
+bool Server::from_peer() const { return !port_ || port_->from_peer(); }
+
 LinkDatagramCounts Server::datagram_counts() const {
   if (!dlink_) return {};
   const DgramCounters& c = dlink_->counters();
-  return {c.datagrams_out, c.resent, c.nacks, c.dropped, c.forged, c.replayed};
+  return {c.datagrams_out, c.resent, c.nacks, c.dropped, c.forged + c.foreign, c.replayed};  // foreign: forged's row
 }
 
 bool Server::link_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,

@@ -91,7 +91,10 @@ std::string resolve_key(const std::string& ref) {
   } else {
     throw Error(ErrorCode::BadConfig, "key reference '" + ref + "' is neither env:NAME nor file:PATH");
   }
-  if (key.empty()) throw Error(ErrorCode::BadConfig, "key reference " + ref + " gives an empty key");
+  if (key.size() < kMinKeyBytes)
+    throw Error(ErrorCode::BadConfig, "key reference " + ref + " gives a key of " + std::to_string(key.size()) +
+                                          " bytes; a link key needs at least " + std::to_string(kMinKeyBytes) +
+                                          " (e.g. openssl rand -hex 16)");
   return key;
 }
 

@@ -16,8 +16,12 @@ Mac server_proof(std::span<const uint8_t> key, const Nonce& client, const Nonce&
 bool macs_equal(const Mac& a, const Mac& b);  // constant time
 Nonce random_nonce();
 
+// Shorter link keys are refused where they are read (here and in the SubBroker).
+constexpr size_t kMinKeyBytes = 16;
+
 // Resolves a key reference: "env:NAME" or "file:PATH" (file content, trailing
-// newline stripped). Throws Error(BadConfig) naming the reference.
+// newline stripped). Throws Error(BadConfig) naming the reference, and for a key
+// shorter than kMinKeyBytes.
 std::string resolve_key(const std::string& reference);
 
 }  // namespace modd::link
