@@ -55,7 +55,7 @@ DatagramLink::DatagramLink(std::string psk, LinkHooks& hooks, DatagramOut& out, 
       opt_(opt),
       delay_ns_(opt.delay_ns),
       challenges_(opt.challenges, cookie_secret),
-      resend_budget_(0, static_cast<double>(opt.resend_burst_bytes ? opt.resend_burst_bytes : opt.ring_bytes)),
+      resend_budget_(0, static_cast<double>(opt.resend_burst_bytes ? opt.resend_burst_bytes : opt.ring_bytes), 0),
       per_nack_(opt.resend_per_nack_bytes ? opt.resend_per_nack_bytes : opt.ring_bytes / 4) {}
 
 void DatagramLink::emit(std::vector<uint8_t>&& d, bool reply) {

@@ -44,8 +44,8 @@ struct DgramOptions {
   int64_t keepalive_timeout_ns = 90'000'000'000;  // silence after which DATA stops (3 x 30 s PING)
   size_t ring_datagrams = 256;
   size_t ring_bytes = 64 * 1024;
-  // NACK resends: earned one byte per live DATA byte sent (so resends never add more than
-  // the plan's own rate) up to `resend_burst_bytes`, and at most `resend_per_nack_bytes` for
+  // NACK resends: earned one byte per live DATA byte sent, from none (so resends never add
+  // more than the plan's own bytes) up to `resend_burst_bytes`, and at most `resend_per_nack_bytes` for
   // one NACK (docs/protocol.md, "Resends"). 0: ring_bytes, ring_bytes / 4.
   size_t resend_burst_bytes = 0;
   size_t resend_per_nack_bytes = 0;

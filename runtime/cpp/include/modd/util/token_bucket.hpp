@@ -8,7 +8,9 @@ namespace modd {
 
 class TokenBucket {
  public:
-  TokenBucket(double rate_per_s, double burst) : rate_(rate_per_s), burst_(burst), tokens_(burst) {}
+  // Starts full, or with `initial` tokens.
+  TokenBucket(double rate_per_s, double burst, double initial = -1)
+      : rate_(rate_per_s), burst_(burst), tokens_(initial < 0 ? burst : initial) {}
   // Takes `n` tokens if there are that many now; false (nothing taken) otherwise.
   bool take(int64_t now, double n = 1) {
     refill(now);
