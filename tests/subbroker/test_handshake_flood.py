@@ -85,15 +85,18 @@ def _pb_counter(pb: Proc, name: str) -> int:
 
 
 def test_a_stranger_flooding_hellos_on_the_radio_cannot_keep_the_base_station_out(
-        tmp_path: Path) -> None:
+    tmp_path: Path,
+) -> None:
     model = model_copy(tmp_path, "scenario1.modd")
     radio, base, drone = start_radio_serial(tmp_path, RADIO_300MS)
     with processes(radio):
-        pb = start_pubbroker_dgram(tmp_path, model, {"transport": "serial", "device": drone,
-                                                     "port": 1}, free_port())
+        pb = start_pubbroker_dgram(
+            tmp_path, model, {"transport": "serial", "device": drone, "port": 1}, free_port()
+        )
         with processes(pb):
-            cfg = subbroker_dgram_config(tmp_path, model, "127.0.0.1:1", free_port(), "serial",
-                                         device=base)
+            cfg = subbroker_dgram_config(
+                tmp_path, model, "127.0.0.1:1", free_port(), "serial", device=base
+            )
             quiet = _time_to_authenticate(tmp_path, cfg, "sb-quiet")
             flood = HelloFlood(base, 50)
             try:
@@ -102,11 +105,15 @@ def test_a_stranger_flooding_hellos_on_the_radio_cannot_keep_the_base_station_ou
             finally:
                 flood.close()
             time.sleep(1.5)  # a log line with the PubBroker's counters
-    print(f"authenticated {quiet:.2f} s after start without the stranger, "
-          f"{', '.join(f'{t:.2f}' for t in times)} s with 50 HELLO/s ({flood.sent} HELLOs)")
+    print(
+        f"authenticated {quiet:.2f} s after start without the stranger, "
+        f"{', '.join(f'{t:.2f}' for t in times)} s with 50 HELLO/s ({flood.sent} HELLOs)"
+    )
     challenges = _pb_counter(pb, "challenges")
-    print(f"PubBroker: {challenges} CHALLENGEs, {_pb_counter(pb, 'hellos_unanswered')} HELLOs "
-          f"unanswered, {_pb_counter(pb, 'handshakes')} sessions")
+    print(
+        f"PubBroker: {challenges} CHALLENGEs, {_pb_counter(pb, 'hellos_unanswered')} HELLOs "
+        f"unanswered, {_pb_counter(pb, 'handshakes')} sessions"
+    )
     assert max(times) <= quiet + 2.0, (quiet, times)
     # the flood is answered at the CHALLENGE rate (2 a second on a shared medium, after a
     # burst of 4), not HELLO for HELLO
@@ -195,12 +202,16 @@ def test_a_nack_storm_is_resent_within_the_link_budget(tmp_path: Path) -> None:
             client.close()
         elapsed = time.monotonic() - began
         time.sleep(1.2)  # a log line with the PubBroker's counters
-    print(f"PubBroker: resent={_pb_counter(pb, 'resent')} resend_paced="
-          f"{_pb_counter(pb, 'resend_paced')} nacks={_pb_counter(pb, 'nacks')}")
+    print(
+        f"PubBroker: resent={_pb_counter(pb, 'resent')} resend_paced="
+        f"{_pb_counter(pb, 'resend_paced')} nacks={_pb_counter(pb, 'nacks')}"
+    )
     nack_bytes = sum(len(n) for n in storm)
     resent = during - live
-    print(f"live {live / 3:.0f} B/s; 1,000 wide NACKs ({nack_bytes} B) drew {resent} B of "
-          f"resends in 3 s ({resent / nack_bytes:.2f}x the NACKs)")
+    print(
+        f"live {live / 3:.0f} B/s; 1,000 wide NACKs ({nack_bytes} B) drew {resent} B of "
+        f"resends in 3 s ({resent / nack_bytes:.2f}x the NACKs)"
+    )
     assert live > 0
     # resends are earned by live DATA only: the whole storm costs at most what the link sent
     # live since the PubBroker started (twice the rate measured, for the load's variance),
