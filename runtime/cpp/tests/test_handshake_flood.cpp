@@ -257,3 +257,18 @@ TEST(HandshakeFlood, NackResendsAreCappedPerNackAndEarnedByLiveData) {
               resent_bytes, static_cast<double>(resent_bytes) / static_cast<double>(nack_bytes),
               live_during);
 }
+
+TEST(HandshakeFlood, AnAuthFloodIsDroppedOverItsRateAndTheRealAuthStillVerifies) {
+  Drone d;
+  const std::vector<uint8_t> stranger{2}, base{1};
+  Nonce h = nonce(7);
+  d.hear(hs(Hello{kVersion, h}), base, 0);
+  Nonce c = d.challenges().at(0);
+  size_t mark = d.air.sent.size();
+  for (int i = 0; i < 200; ++i) d.hear(hs(Auth{Mac{}}), stranger, i * kMs);  // 200 in 0.2 s
+  // answered (ERROR) up to the verification rate only: 20 a second after a burst of 20
+  EXPECT_LE(d.air.sent.size() - mark, 25u);
+  EXPECT_GE(d.link.handshake_counters().auth_limited, 175u);
+  d.hear(hs(Auth{client_proof(psk(), h, c)}), base, 1'500 * kMs);
+  EXPECT_TRUE(d.link.ready());
+}

@@ -119,14 +119,15 @@ void DatagramLink::on_handshake(std::span<const uint8_t> frame, int64_t now) {
     send_handshake(ok, false);
     return;
   }
-  auto pair = challenges_.on_auth(a->mac, key, now);
-  if (!pair) {
+  auto got = challenges_.on_auth(a->mac, key, now);
+  if (got.status == Challenges::AuthResult::Limited) return;  // an AUTH flood: no air time
+  if (got.status == Challenges::AuthResult::Failed) {
     hooks_.on_rejected("datagram AUTH does not verify (wrong key, or a stale challenge)");
     send_handshake(ErrorMsg{static_cast<uint8_t>(ErrorCode::AuthFailed), "HMAC proof does not verify"}, true);
     return;
   }
-  session_client_ = pair->first;
-  session_server_ = pair->second;
+  session_client_ = got.hello;
+  session_server_ = got.challenge;
   key_ = dg::session_key(key, session_client_, session_server_);
   ++key_epoch_;
   ready_ = true;

@@ -79,27 +79,26 @@ std::optional<Nonce> Challenges::on_hello(const Nonce& hello, std::span<const ui
   return c;
 }
 
-std::optional<std::pair<Nonce, Nonce>> Challenges::on_auth(const Mac& mac,
-                                                           std::span<const uint8_t> key,
-                                                           int64_t now) {
+Challenges::AuthResult Challenges::on_auth(const Mac& mac, std::span<const uint8_t> key,
+                                           int64_t now) {
   expire(now);
   if (!auth_.take(now)) {
     ++c_.auth_limited;
-    return std::nullopt;
+    return {AuthResult::Limited};
   }
   // Newest first: the base station's handshake is most likely among the latest.
   for (auto h = hellos_.rbegin(); h != hellos_.rend(); ++h)
     for (auto c = challenges_.rbegin(); c != challenges_.rend(); ++c)
       if (macs_equal(mac, client_proof(key, h->nonce, c->nonce))) {
-        std::pair<Nonce, Nonce> pair{h->nonce, c->nonce};
+        AuthResult ok{AuthResult::Ok, h->nonce, c->nonce};
         hellos_.erase(std::next(h).base());
         challenges_.erase(std::next(c).base());
-        remember(used_, pair.first, now, 4 * lim_.max_hellos);
+        remember(used_, ok.hello, now, 4 * lim_.max_hellos);
         ++c_.auth_ok;
-        return pair;
+        return ok;
       }
   ++c_.auth_failed;
-  return std::nullopt;
+  return {AuthResult::Failed};
 }
 
 }  // namespace modd::link

@@ -44,9 +44,13 @@ class Challenges {
   // send, or nullopt when a rate limit says not to answer (the HELLO is remembered all the same).
   std::optional<Nonce> on_hello(const Nonce& hello, std::span<const uint8_t> source, int64_t now);
   // An AUTH: the (hello, challenge) pair its proof verifies with under `key`, both forgotten
-  // (one use), or nullopt (wrong key, stale, or over the verification rate).
-  std::optional<std::pair<Nonce, Nonce>> on_auth(const Mac& mac, std::span<const uint8_t> key,
-                                                 int64_t now);
+  // (one use); Failed (wrong key, or stale), or Limited (over the verification rate: not
+  // checked, to be dropped without an answer).
+  struct AuthResult {
+    enum Status { Ok, Failed, Limited } status = Failed;
+    Nonce hello{}, challenge{};
+  };
+  AuthResult on_auth(const Mac& mac, std::span<const uint8_t> key, int64_t now);
   const ChallengeCounters& counters() const { return c_; }
 
  private:
