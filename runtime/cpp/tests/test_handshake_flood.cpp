@@ -75,6 +75,21 @@ struct Drone {
     air.from = from;
     link.on_datagram(d, now);
   }
+  // The base station's handshake from `from` (HELLO, then AUTH with the CHALLENGE it got):
+  // the session key.
+  Mac open_session(const std::vector<uint8_t>& from, int64_t now) {
+    auto [h, c] = hello(from, now);
+    hear(hs(Auth{client_proof(psk(), h, c)}), from, now + kMs);
+    EXPECT_TRUE(link.ready());
+    return dg::session_key(psk(), h, c);
+  }
+  // The base station's HELLO: its nonce and the CHALLENGE it got.
+  std::pair<Nonce, Nonce> hello(const std::vector<uint8_t>& from, int64_t now) {
+    Nonce h = nonce(7);
+    size_t mark = air.sent.size();
+    hear(hs(Hello{kVersion, h}), from, now);
+    return {h, challenges(mark).at(0)};
+  }
   // The CHALLENGEs sent since datagram `since`.
   std::vector<Nonce> challenges(size_t since = 0) const {
     std::vector<Nonce> out;
@@ -90,9 +105,7 @@ struct Drone {
 TEST(HandshakeFlood, AStrangersHelloDuringAHandshakeDoesNotFailTheRealAuth) {
   Drone d;
   const std::vector<uint8_t> base{1}, stranger{2};
-  Nonce h = nonce(7);
-  d.hear(hs(Hello{kVersion, h}), base, 0);
-  Nonce c = d.challenges().at(0);
+  auto [h, c] = d.hello(base, 0);
   d.hear(hs(Hello{kVersion, nonce(9)}), stranger, 100 * kMs);  // was: replaced the only challenge
   d.hear(hs(Auth{client_proof(psk(), h, c)}), base, 600 * kMs);
   EXPECT_TRUE(d.link.ready());
@@ -173,12 +186,7 @@ TEST(HandshakeFlood, AReplayedHandshakeOpensNoSession) {
 TEST(HandshakeFlood, TheSessionIsBoundToItsPeersAddress) {
   Drone d;
   const std::vector<uint8_t> base{1}, other{2};
-  Nonce h = nonce(7);
-  d.hear(hs(Hello{kVersion, h}), base, 0);
-  Nonce c = d.challenges().at(0);
-  d.hear(hs(Auth{client_proof(psk(), h, c)}), base, kMs);
-  ASSERT_TRUE(d.link.ready());
-  Mac key = dg::session_key(psk(), h, c);
+  Mac key = d.open_session(base, 0);
   std::vector<uint8_t> ping;
   encode(ping, Message{Ping{{1}}});
   size_t before = d.air.sent.size();
@@ -223,11 +231,7 @@ TEST(HandshakeFlood, NackResendsAreCappedPerNackAndEarnedByLiveData) {
   o.keepalive_timeout_ns = 0;  // the base station's PINGs are not played here
   Drone d(o);
   const std::vector<uint8_t> base{1};
-  Nonce h = nonce(7);
-  d.hear(hs(Hello{kVersion, h}), base, 0);
-  Nonce c = d.challenges().at(0);
-  d.hear(hs(Auth{client_proof(psk(), h, c)}), base, kMs);
-  Mac key = dg::session_key(psk(), h, c);
+  Mac key = d.open_session(base, 0);
   int64_t t = 0;
   uint64_t slot = 0;
   auto live = [&](int n) {  // n slots of 150 B, one datagram each
@@ -261,9 +265,7 @@ TEST(HandshakeFlood, NackResendsAreCappedPerNackAndEarnedByLiveData) {
 TEST(HandshakeFlood, AnAuthFloodIsDroppedOverItsRateAndTheRealAuthStillVerifies) {
   Drone d;
   const std::vector<uint8_t> stranger{2}, base{1};
-  Nonce h = nonce(7);
-  d.hear(hs(Hello{kVersion, h}), base, 0);
-  Nonce c = d.challenges().at(0);
+  auto [h, c] = d.hello(base, 0);
   size_t mark = d.air.sent.size();
   for (int i = 0; i < 200; ++i) d.hear(hs(Auth{Mac{}}), stranger, i * kMs);  // 200 in 0.2 s
   // answered (ERROR) up to the verification rate only: 20 a second after a burst of 20
