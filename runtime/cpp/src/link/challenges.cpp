@@ -87,9 +87,10 @@ Challenges::AuthResult Challenges::on_auth(const Mac& mac, std::span<const uint8
     return {AuthResult::Limited};
   }
   // Newest first: the base station's handshake is most likely among the latest.
+  ClientProofs proof(key);
   for (auto h = hellos_.rbegin(); h != hellos_.rend(); ++h)
     for (auto c = challenges_.rbegin(); c != challenges_.rend(); ++c)
-      if (macs_equal(mac, client_proof(key, h->nonce, c->nonce))) {
+      if (macs_equal(mac, proof(h->nonce, c->nonce))) {
         AuthResult ok{AuthResult::Ok, h->nonce, c->nonce};
         hellos_.erase(std::next(h).base());
         challenges_.erase(std::next(c).base());

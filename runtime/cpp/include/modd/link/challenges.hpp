@@ -28,7 +28,7 @@ struct ChallengeLimits {
   int64_t lifetime_ns = 5'000'000'000;
   double per_source_per_s = 2, per_source_burst = 4;
   double total_per_s = 8, total_burst = 8;
-  double auth_per_s = 20, auth_burst = 20;
+  double auth_per_s = 10, auth_burst = 10;
   size_t max_sources = 256;  // per-source buckets kept (least recently used replaced)
 };
 
