@@ -18,6 +18,7 @@ import re
 import socket
 import threading
 import time
+from datetime import datetime
 from pathlib import Path
 
 import pytest
@@ -68,13 +69,20 @@ class HelloFlood:
         os.close(self.fd)
 
 
+def _stamp(line: str) -> datetime:
+    return datetime.strptime(line[:23], "%Y-%m-%d %H:%M:%S,%f")
+
+
 def _time_to_authenticate(tmp: Path, cfg: Path, tag: str) -> float:
-    """Seconds from the SubBroker's start to its link's authentication."""
-    start = time.monotonic()
+    """Seconds from the SubBroker's first log line (its link starts) to its link's
+    authentication, by the SubBroker's own log stamps (its interpreter's start-up, slow on
+    a loaded machine, left out)."""
     sb = start_subbroker(tmp, cfg, tag=tag)
     try:
         assert sb.wait_log(AUTHENTICATED, 60), sb.log()[-3000:]
-        return time.monotonic() - start
+        lines = sb.log().splitlines()
+        done = next(ln for ln in lines if AUTHENTICATED in ln)
+        return (_stamp(done) - _stamp(lines[0])).total_seconds()
     finally:
         sb.stop()
 
@@ -106,7 +114,7 @@ def test_a_stranger_flooding_hellos_on_the_radio_cannot_keep_the_base_station_ou
                 flood.close()
             time.sleep(1.5)  # a log line with the PubBroker's counters
     print(
-        f"authenticated {quiet:.2f} s after start without the stranger, "
+        f"authenticated {quiet:.2f} s after the link started without the stranger, "
         f"{', '.join(f'{t:.2f}' for t in times)} s with 50 HELLO/s ({flood.sent} HELLOs)"
     )
     challenges = _pb_counter(pb, "challenges")
@@ -114,7 +122,9 @@ def test_a_stranger_flooding_hellos_on_the_radio_cannot_keep_the_base_station_ou
         f"PubBroker: {challenges} CHALLENGEs, {_pb_counter(pb, 'hellos_unanswered')} HELLOs "
         f"unanswered, {_pb_counter(pb, 'handshakes')} sessions"
     )
-    assert max(times) <= quiet + 2.0, (quiet, times)
+    # within 2 s (the issue's bound: four 300 ms crossings and a CHALLENGE heard), or 1 s
+    # more than without the stranger when the machine is that slow
+    assert max(times) <= max(2.0, quiet + 1.0), (quiet, times)
     # the flood is answered at the CHALLENGE rate (2 a second on a shared medium, after a
     # burst of 4), not HELLO for HELLO
     seconds = flood.sent / 50
