@@ -26,13 +26,14 @@ from modd.link import codec
 from modd.link.auth import client_proof, server_proof
 from modd.link.datagram import (
     BASE_TO_DRONE,
+    DGRAM_CONTROL,
     DGRAM_HANDSHAKE,
     encode_control,
     encode_handshake,
     encode_nack,
     session_key,
 )
-from modd.link.frames import VERSION, Auth, AuthOk, Challenge, Hello
+from modd.link.frames import VERSION, Auth, AuthOk, Challenge, Hello, Ping
 from modd.link.serialframe import encode_frame
 from modd.ports import free_port
 from radio_harness import start_pubbroker_dgram, start_radio_serial, subbroker_dgram_config
@@ -227,3 +228,64 @@ def test_a_nack_storm_is_resent_within_the_link_budget(tmp_path: Path) -> None:
     # live since the PubBroker started (twice the rate measured, for the load's variance),
     # never a ring per NACK
     assert resent <= 2 * live / 3 * elapsed, (during, live, elapsed)
+
+
+def _udp(port: int) -> socket.socket:
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.bind(("127.0.0.1", 0))
+    s.connect(("127.0.0.1", port))
+    s.settimeout(0.05)
+    return s
+
+
+def _drain(sock: socket.socket, seconds: float) -> list[bytes]:
+    got, deadline = [], time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        with contextlib.suppress(TimeoutError):
+            got.append(sock.recv(65535))
+    return got
+
+
+def test_over_udp_a_flooding_address_gets_its_own_rate_and_the_session_its_address(
+    tmp_path: Path,
+) -> None:
+    """udp: a stranger's address flooding HELLOs gets 2 CHALLENGEs a second (after a burst
+    of 4) while a base station from another address authenticates at once; the session's
+    CONTROL datagrams sent from a third address are dropped and counted (`foreign`)."""
+    model = model_copy(tmp_path, "scenario1.modd")
+    port = free_port("udp")
+    pb = start_pubbroker_dgram(tmp_path, model, {"transport": "udp", "port": port}, free_port())
+    with processes(pb):
+        stranger = _udp(port)
+        challenges = 0
+        start = time.monotonic()
+        for i in range(150):  # 3 s at 50 HELLO/s
+            stranger.send(encode_handshake(codec.encode(Hello(VERSION, os.urandom(16)))))
+            for raw in _drain(stranger, max(0.0, start + (i + 1) / 50 - time.monotonic())):
+                challenges += raw[:1] == bytes([DGRAM_HANDSHAKE])
+            if i == 75:  # mid-flood: the base station
+                began = time.monotonic()
+                client = StormClient(port)
+                took = time.monotonic() - began
+        challenges += sum(raw[:1] == bytes([DGRAM_HANDSHAKE]) for raw in _drain(stranger, 0.3))
+        elsewhere = _udp(port)
+        ping = codec.encode(Ping(b"where"))
+        client.counter += 1
+        elsewhere.send(encode_control(client.counter, ping, client.key, BASE_TO_DRONE))
+        from_elsewhere = _drain(elsewhere, 0.5) + _drain(client.sock, 0.5)
+        client.counter += 1
+        client.sock.send(encode_control(client.counter, ping, client.key, BASE_TO_DRONE))
+        from_peer = [d for d in _drain(client.sock, 1.0) if d[:1] == bytes([DGRAM_CONTROL])]
+        time.sleep(1.2)  # a log line with the PubBroker's counters
+        for s in (stranger, elsewhere):
+            s.close()
+        client.close()
+    print(
+        f"udp: {challenges} CHALLENGEs for 150 HELLOs in 3 s; "
+        f"the base station in {took * 1000:.0f} ms"
+    )
+    assert challenges <= 4 + 2 * 4, challenges
+    assert took < 2.0
+    assert not [d for d in from_elsewhere if d[:1] == bytes([DGRAM_CONTROL])]  # no PONG
+    assert _pb_counter(pb, "foreign") == 1, pb.log()[-1500:]
+    assert len(from_peer) >= 1  # the PONG, to the session's address
