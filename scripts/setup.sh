@@ -6,7 +6,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 APT_PACKAGES=(cmake ninja-build g++ make libgtest-dev libssl-dev libzstd-dev liblz4-dev
-              nlohmann-json3-dev clang clang-format libclang-rt-14-dev tshark chromium postgresql mosquitto)
+              nlohmann-json3-dev clang clang-format libclang-rt-14-dev tshark chromium postgresql mosquitto
+              faketime)  # faketime: the PubBroker's clock-step test (tests/runtime/test_pubbroker_clock_step.py)
 
 missing=()
 for p in "${APT_PACKAGES[@]}"; do

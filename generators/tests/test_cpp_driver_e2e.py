@@ -59,7 +59,7 @@ def test_generated_driver_builds_runs_and_is_archived(scenarios_dir: Path, tmp_p
     config["ingress"]["unix_path"] = str(tmp_path / "ingress.sock")
     config["link"]["port"] = free_port()
     (tmp_path / "pubbroker.json").write_text(json.dumps(config))
-    env = {**os.environ, "MODD_LINK_KEY": "test-key"}
+    env = {**os.environ, "MODD_LINK_KEY": "a-test-link-key-of-16+"}
     broker = subprocess.Popen([str(PUBBROKER), "--config", str(tmp_path / "pubbroker.json")],
                               env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     try:

@@ -126,7 +126,7 @@ class Bench:
     """A SubBroker in this process, running ``m``'s plan, and the receiver process."""
 
     def __init__(self, m: dict[str, Any]) -> None:
-        os.environ.setdefault("MODD_LINK_KEY", "bench-key")
+        os.environ.setdefault("MODD_LINK_KEY", "bench-link-key-16b")
         port = free_port()
         self.session = open_session(ZenohSettings(mode="peer",
                                                   listen=(f"tcp/127.0.0.1:{port}",)))

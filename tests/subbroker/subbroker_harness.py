@@ -36,7 +36,7 @@ PUBBROKER = REPO / "build" / "bin" / "modd-pubbroker"
 PYTHON = Path(sys.executable)
 SUBBROKER = [str(PYTHON), "-m", "modd.subbroker.cli"]
 LOADGEN = [str(PYTHON), str(Path(__file__).with_name("loadgen.py"))]
-KEY = "modd-test-key"
+KEY = "modd-test-link-key-16"
 
 
 @functools.cache

@@ -40,7 +40,7 @@ def test_model_mode_runs_and_stops_on_sigterm(tmp_path: Path) -> None:
         [*CLI, "--model", str(SCENARIOS / "scenario1.modd"), "--link", f"127.0.0.1:{free_port()}",
          "--zenoh-listen", f"tcp/127.0.0.1:{zport}", "--no-tcp-delivery"],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        env={**os.environ, "MODD_LINK_KEY": "k"},
+        env={**os.environ, "MODD_LINK_KEY": "a-test-link-key-of-16+"},
     )
     try:
         wait_port(zport)

@@ -1,6 +1,6 @@
 // libFuzzer target: the datagram transports' receive path (tag check of DATA,
 // fragment, control and control fragment datagrams, fragment cutting and putting back
-// together, the serial deframer, COBS) fed arbitrary bytes. Must
+// together, the serial deframer, COBS, the PubBroker's handshake) fed arbitrary bytes. Must
 // never crash, leak or hit UB; nothing unauthenticated is ever returned.
 #include <cstddef>
 #include <cstdint>
@@ -8,11 +8,39 @@
 #include <optional>
 #include <span>
 
+#include "modd/broker/dgram_link.hpp"
 #include "modd/link/datagram.hpp"
 #include "modd/util/error.hpp"
 
 using namespace modd;
 using namespace modd::link::dgram;
+
+namespace {
+
+// The PubBroker's datagram session fed whatever arrives, under no session: handshakes
+// (HELLO floods, AUTHs against the outstanding challenges), and no key. Nothing may open
+// a session without the key.
+struct NoHooks : broker::LinkHooks {
+  link::ConfigAck on_config(const link::Config& c) override { return {c.config_id, 0, 0}; }
+  link::AuthOk current_config() override { return {}; }
+  void on_authenticated() override { std::abort(); }
+  void on_rejected(const std::string&) override {}
+};
+struct Sink : broker::DatagramOut {
+  void send(std::vector<uint8_t>&&, bool) override {}
+  void adopt_source() override {}
+};
+
+void fuzz_session(std::span<const uint8_t> in) {
+  static NoHooks hooks;
+  static Sink out;
+  static broker::DatagramLink session("a-link-key-of-32-bytes-for-fuzzing", hooks, out, {}, link::Mac{});
+  static int64_t now = 0;
+  now += 7'000'000;  // 7 ms a datagram: rate limits and expiry are exercised
+  session.on_datagram(in, now);
+}
+
+}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::span<const uint8_t> in(data, size);
@@ -73,6 +101,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     } catch (const std::invalid_argument&) {
     }
   }
+  fuzz_session(in);
   Deframer df(252);
   for (const auto& d : df.feed(in)) {
     if (d.size() > 252) std::abort();

@@ -297,7 +297,7 @@ TEST(Broker, AClockJumpingBackBlocksNothing) {
   // The on-board clock set back two hours (a GPS or NTP correction): the publishers on the
   // same clock stamp with it at once. Their samples are judged against the clock as it reads
   // now (not against the stamps held since), so none is refused; the archive's log times
-  // hold at the last one until the clock catches up.
+  // keep the broker's monotonic timeline (test_clock_step.cpp).
   FakeClock clock;
   FakeLink link;
   BrokerConfig cfg = test_config("jump");

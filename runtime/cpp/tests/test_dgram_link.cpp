@@ -60,9 +60,7 @@ Message answer(const std::vector<uint8_t>& d) {
 struct Session {
   Hooks hooks;
   Out out;
-  uint8_t next_nonce = 1;
-  DatagramLink link{kPsk, hooks, out, DgramOptions{200, 1'000'000'000, 5'000'000'000, 256, 65536},
-                    [this] { Nonce n{}; n.fill(next_nonce++); return n; }};
+  DatagramLink link{kPsk, hooks, out, DgramOptions{200, 1'000'000'000, 5'000'000'000, 256, 65536}, Mac{}};
   Mac key{};
   uint64_t counter = 0;
 

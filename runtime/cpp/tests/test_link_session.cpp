@@ -123,11 +123,28 @@ TEST(LinkSession, NothingBeforeTheHandshake) {
 TEST(KeyFile, RegularBoundedAndNoSymlink) {
   const std::string dir = ::testing::TempDir();
   const std::string key = dir + "/modd_key_ok", big = dir + "/modd_key_big", lnk = dir + "/modd_key_lnk";
-  { std::ofstream(key) << "secret\n"; }
+  { std::ofstream(key) << "a-secret-of-16-bytes\n"; }
   { std::ofstream(big) << std::string(100000, 'x'); }
   std::remove(lnk.c_str());
   ASSERT_EQ(::symlink(key.c_str(), lnk.c_str()), 0);
-  EXPECT_EQ(modd::link::resolve_key("file:" + key), "secret");
+  EXPECT_EQ(modd::link::resolve_key("file:" + key), "a-secret-of-16-bytes");
   for (const std::string& ref : {std::string("file:/dev/zero"), "file:" + big, "file:" + lnk})
     EXPECT_THROW(modd::link::resolve_key(ref), modd::Error) << ref;
+}
+
+// A 1-byte key was accepted: keys shorter than 16 bytes are refused, saying why.
+TEST(KeyFile, AKeyShorterThan16BytesIsRefused) {
+  const std::string key = ::testing::TempDir() + "/modd_key_short";
+  { std::ofstream(key) << "0123456789abcde\n"; }  // 15 bytes
+  ::setenv("MODD_TEST_SHORT_KEY", "k", 1);
+  ::setenv("MODD_TEST_KEY_16", "0123456789abcdef", 1);
+  for (const std::string& ref : {"file:" + key, std::string("env:MODD_TEST_SHORT_KEY")}) {
+    try {
+      modd::link::resolve_key(ref);
+      ADD_FAILURE() << ref << " accepted";
+    } catch (const modd::Error& e) {
+      EXPECT_NE(std::string(e.what()).find("at least 16"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(modd::link::resolve_key("env:MODD_TEST_KEY_16").size(), 16u);
 }

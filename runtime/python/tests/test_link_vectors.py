@@ -147,9 +147,9 @@ def test_link_key_file_is_a_small_regular_file(tmp_path: Path) -> None:
     """``file:/dev/zero`` was read without a bound (MemoryError); a link to
     the key, or a key of more than 64 KiB, is refused too."""
     key = tmp_path / "link.key"
-    key.write_text("secret\n")
+    key.write_text("a-secret-of-16-bytes\n")
     key.chmod(0o600)
-    assert resolve_key(f"file:{key}") == b"secret"
+    assert resolve_key(f"file:{key}") == b"a-secret-of-16-bytes"
     (tmp_path / "via-link").symlink_to(key)
     big = tmp_path / "big.key"
     big.write_bytes(b"k" * (64 * 1024 + 1))
@@ -157,3 +157,17 @@ def test_link_key_file_is_a_small_regular_file(tmp_path: Path) -> None:
                 f"file:{tmp_path}"):
         with pytest.raises(ValueError, match="link key"):
             resolve_key(ref)
+
+
+def test_a_link_key_shorter_than_16_bytes_is_refused(tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """A 1-byte key was accepted: the PubBroker and the SubBroker refuse keys under 16 bytes."""
+    short = tmp_path / "short.key"
+    short.write_text("0123456789abcde\n")  # 15 bytes
+    short.chmod(0o600)
+    monkeypatch.setenv("MODD_TEST_KEY", "k")
+    for ref in (f"file:{short}", "env:MODD_TEST_KEY"):
+        with pytest.raises(ValueError, match="at least 16"):
+            resolve_key(ref)
+    monkeypatch.setenv("MODD_TEST_KEY", "0123456789abcdef")
+    assert resolve_key("env:MODD_TEST_KEY") == b"0123456789abcdef"

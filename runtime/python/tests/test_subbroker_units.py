@@ -87,10 +87,13 @@ def test_config_errors_name_file_and_key(tmp_path: Path, body: str, message: str
 
 
 def test_resolve_key(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setenv("SB_KEY", "k1")
-    assert resolve_key("env:SB_KEY") == b"k1"
-    (tmp_path / "k").write_bytes(b"k2\n")
-    assert resolve_key(f"file:{tmp_path / 'k'}") == b"k2"
+    monkeypatch.setenv("SB_KEY", "k1-of-16-bytes-at-least")
+    assert resolve_key("env:SB_KEY") == b"k1-of-16-bytes-at-least"
+    (tmp_path / "k").write_bytes(b"k2-of-16-bytes-at-least\n")
+    assert resolve_key(f"file:{tmp_path / 'k'}") == b"k2-of-16-bytes-at-least"
+    monkeypatch.setenv("SB_SHORT", "k")
+    with pytest.raises(ConfigError, match="at least 16"):  # a 1-byte key was accepted
+        resolve_key("env:SB_SHORT")
     for ref in ("env:SB_NOPE", f"file:{tmp_path / 'none'}", "k3"):
         with pytest.raises(ConfigError, match="link key"):
             resolve_key(ref)

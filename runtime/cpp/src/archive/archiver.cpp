@@ -156,6 +156,14 @@ void Archiver::run() {
   }
 }
 
+namespace {
+// Seconds on the monotonic clock: a file's age for rotation, which a wall-clock step must not move.
+int64_t steady_s() {
+  using namespace std::chrono;
+  return duration_cast<seconds>(steady_clock::now().time_since_epoch()).count();
+}
+}  // namespace
+
 void Archiver::open_file() {
   std::time_t now = std::time(nullptr);
   std::tm tm{};
@@ -171,7 +179,7 @@ void Archiver::open_file() {
     path = opt_.dir + "/" + opt_.prefix + name;
   }
   writer_ = std::make_unique<McapWriter>(path, opt_.writer);
-  file_opened_s_ = now;
+  file_opened_s_ = steady_s();
   channels_.clear();
   sequences_.clear();
   keep_.clear();
@@ -313,7 +321,8 @@ bool Archiver::write_item(Item& item) {
     counters_.queued -= item.samples.size();
     handed_over = true;
     count_flushed();
-    int64_t age = std::time(nullptr) - file_opened_s_;
+    // Age on the monotonic clock: a wall-clock step neither rotates nor holds the file.
+    int64_t age = steady_s() - file_opened_s_;
     if (writer_->file_bytes() >= opt_.rotate_bytes || (opt_.rotate_s > 0 && age >= static_cast<int64_t>(opt_.rotate_s)))
       close_file();
     return true;

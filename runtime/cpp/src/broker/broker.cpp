@@ -142,7 +142,7 @@ bool IngressSession::on_close() {
 // ---- broker ----------------------------------------------------------------
 
 Broker::Broker(const BrokerConfig& cfg, std::string key, Clock& clock, LinkOutput& out)
-    : cfg_(cfg), key_(std::move(key)), clock_(clock), out_(out), status_period_s_(cfg.status_period_s),
+    : cfg_(cfg), key_(std::move(key)), time_(clock), out_(out), status_period_s_(cfg.status_period_s),
       backfill_(cfg.archive_dir, cfg.archive_prefix, cfg.backfill_default_rate_bps) {
   archive::ArchiverOptions ao;
   ao.dir = cfg.archive_dir;
@@ -157,7 +157,8 @@ Broker::Broker(const BrokerConfig& cfg, std::string key, Clock& clock, LinkOutpu
   archiver_ = std::make_unique<archive::Archiver>(ao);
   for (const auto& t : cfg.topics)
     add_topic(t.name, t.type, t.buffer_size ? t.buffer_size : cfg.default_buffer_size, true);
-  started_ns_ = last_stamp_ = clock_now_ = clock_.now_ns();
+  started_ns_ = last_stamp_ = time_.now();
+  clock_now_ = time_.wall();
   run_record_ = std::make_unique<RunRecord>(cfg.archive_dir, cfg.archive_prefix, started_ns_);
   write_run_record(started_ns_, false);
 }
@@ -204,17 +205,22 @@ int64_t Broker::find_topic(const std::string& name, link::ValueType declared, Re
   return it->second;
 }
 
-int64_t Broker::stamp_now() {
-  int64_t t = clock_.now_ns();
-  if (t < last_stamp_ - 100'000'000 && !clock_warned_) {
-    log_line("clock: CLOCK_REALTIME went back %lld ms; stamps hold at the last one until it catches up",
-             static_cast<long long>((last_stamp_ - t) / 1'000'000));
-    clock_warned_ = true;
-  } else if (t >= last_stamp_) {
-    clock_warned_ = false;
+int64_t Broker::now() {
+  int64_t t = time_.now();
+  clock_now_ = time_.wall();
+  if (Timeline::Step st = time_.last_step(); st.delta_ns != 0) {
+    log_line("clock: CLOCK_REALTIME stepped %+.3f s; stamps and the schedule keep the monotonic timeline "
+             "(wall - timeline now %+.3f s, %llu step(s) this run)",
+             static_cast<double>(st.delta_ns) / 1e9, static_cast<double>(time_.offset_ns()) / 1e9,
+             static_cast<unsigned long long>(time_.steps()));
+    run_record_->note_clock(time_.steps(), time_.offset_ns(), st);
   }
-  clock_now_ = t;  // what timestamps are judged against: the clock as it reads now
-  if (t < last_stamp_) t = last_stamp_;  // stamps never go backwards, even if the wall clock does
+  return t;
+}
+
+int64_t Broker::stamp_now() {
+  int64_t t = now();
+  if (t < last_stamp_) t = last_stamp_;  // the timeline is monotonic: this only guards a fake clock
   last_stamp_ = t;
   executor_.advance(t, *this);
   return t;
@@ -404,7 +410,7 @@ void Broker::check_archive(int64_t now) {
 void Broker::send_status_now() {
   status_pending_ = true;
   status_due_since_ = INT64_MIN / 2;  // overdue: sent on its own at once if the link is up
-  send_overdue_status(clock_.now_ns());
+  send_overdue_status(now());
 }
 
 void Broker::shutdown() {
@@ -412,7 +418,7 @@ void Broker::shutdown() {
   shut_down_ = true;
   flush_buffers();
   archiver_->stop();
-  write_run_record(clock_.now_ns(), true);
+  write_run_record(now(), true);
 }
 
 void Broker::write_run_record(int64_t now, bool final) {
@@ -551,7 +557,7 @@ std::vector<uint64_t> Broker::status_counters() {
   std::vector<uint64_t> v(kStatusFieldCount, 0);
   const auto& ac = archiver_->counters();
   const auto& ec = executor_.counters();
-  v[kUptimeS] = static_cast<uint64_t>((clock_.now_ns() - started_ns_) / 1'000'000'000);
+  v[kUptimeS] = static_cast<uint64_t>((now() - started_ns_) / 1'000'000'000);
   v[kSamplesIn] = counters_.samples_in;
   // One read of each writer counter, so that the STATUS reconciles exactly.
   const uint64_t archived = ac.archived, failed = ac.failed;

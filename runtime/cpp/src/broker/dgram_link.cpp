@@ -1,5 +1,6 @@
 #include "modd/broker/dgram_link.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "modd/link/auth.hpp"
@@ -47,8 +48,15 @@ size_t control_frame_overhead(bool serial) {
 }
 
 DatagramLink::DatagramLink(std::string psk, LinkHooks& hooks, DatagramOut& out, DgramOptions opt,
-                           std::function<Nonce()> nonce_source)
-    : psk_(std::move(psk)), hooks_(hooks), out_(out), opt_(opt), delay_ns_(opt.delay_ns), nonce_source_(std::move(nonce_source)) {}
+                           std::optional<Mac> cookie_secret)
+    : psk_(std::move(psk)),
+      hooks_(hooks),
+      out_(out),
+      opt_(opt),
+      delay_ns_(opt.delay_ns),
+      challenges_(opt.challenges, cookie_secret),
+      resend_budget_(0, static_cast<double>(opt.resend_burst_bytes ? opt.resend_burst_bytes : opt.ring_bytes), 0),
+      per_nack_(opt.resend_per_nack_bytes ? opt.resend_per_nack_bytes : opt.ring_bytes / 4) {}
 
 void DatagramLink::emit(std::vector<uint8_t>&& d, bool reply) {
   ++c_.datagrams_out;
@@ -97,32 +105,29 @@ void DatagramLink::on_handshake(std::span<const uint8_t> frame, int64_t now) {
                      true);
       return;
     }
-    // A repeated HELLO (its answer was lost) gets the same CHALLENGE; a new one a fresh nonce.
-    if (!pending_ || h->nonce != hello_nonce_) {
-      hello_nonce_ = h->nonce;
-      challenge_nonce_ = nonce_source_();
-      pending_ = true;
-    }
-    send_handshake(Challenge{kVersion, challenge_nonce_}, true);
+    // A cookie: a repeated HELLO (its answer was lost) gets the same CHALLENGE. Over a
+    // rate limit, no answer (bounded air time); the HELLO is remembered all the same.
+    if (auto c = challenges_.on_hello(h->nonce, out_.source(), now)) send_handshake(Challenge{kVersion, *c}, true);
     return;
   }
   auto* a = std::get_if<Auth>(&m);
   if (!a) throw Error(ErrorCode::BadFrame, "unexpected handshake frame", 0);
-  if (ready_ && macs_equal(a->mac, client_proof(key, session_client_, session_server_))) {
+  if (ready_ && out_.from_peer() && macs_equal(a->mac, client_proof(key, session_client_, session_server_))) {
     // AUTH repeated because AUTH_OK was lost: answer again, to the peer only.
     AuthOk ok = hooks_.current_config();
     ok.mac = server_proof(key, session_client_, session_server_);
     send_handshake(ok, false);
     return;
   }
-  if (!pending_ || !macs_equal(a->mac, client_proof(key, hello_nonce_, challenge_nonce_))) {
+  auto got = challenges_.on_auth(a->mac, key, now);
+  if (got.status == Challenges::AuthResult::Limited) return;  // an AUTH flood: no air time
+  if (got.status == Challenges::AuthResult::Failed) {
     hooks_.on_rejected("datagram AUTH does not verify (wrong key, or a stale challenge)");
     send_handshake(ErrorMsg{static_cast<uint8_t>(ErrorCode::AuthFailed), "HMAC proof does not verify"}, true);
     return;
   }
-  pending_ = false;
-  session_client_ = hello_nonce_;
-  session_server_ = challenge_nonce_;
+  session_client_ = got.hello;
+  session_server_ = got.challenge;
   key_ = dg::session_key(key, session_client_, session_server_);
   ++key_epoch_;
   ready_ = true;
@@ -142,13 +147,16 @@ void DatagramLink::on_control(std::span<const uint8_t> raw, int64_t now) {
     ++c_.forged;  // no session: nothing can verify
     return;
   }
+  if (!out_.from_peer()) {
+    ++c_.foreign;  // the session is bound to its peer's address (a new AUTH moves it)
+    return;
+  }
   auto [counter, frame] = dg::verify_control(raw, key_, dg::kBaseToDrone);
   if (!control_window_.accept(counter)) {
     ++c_.replayed;
     return;
   }
   last_heard_ = now;
-  out_.adopt_source();
   on_control_frame(frame);
 }
 
@@ -157,13 +165,16 @@ void DatagramLink::on_control_fragment(std::span<const uint8_t> raw, int64_t now
     ++c_.forged;  // no session: nothing can verify
     return;
   }
+  if (!out_.from_peer()) {
+    ++c_.foreign;  // the session is bound to its peer's address (a new AUTH moves it)
+    return;
+  }
   dg::ControlFragment piece = dg::verify_control_fragment(raw, key_, dg::kBaseToDrone);
   if (!control_window_.accept(piece.counter)) {
     ++c_.replayed;
     return;
   }
   last_heard_ = now;
-  out_.adopt_source();
   uint64_t before = pieces_.malformed();
   auto whole = pieces_.add(std::move(piece));
   c_.malformed += pieces_.malformed() - before;
@@ -222,10 +233,22 @@ void DatagramLink::on_nack(std::span<const uint8_t> body) {
     if (count < 1 || count > 65535) r.fail("NACK range of 0 or more than 65535 slots");
     ranges.emplace_back(first, count);
   }
+  // Paced: at most per_nack_ bytes for this NACK and what live DATA has earned; what does
+  // not fit is asked again by the base station's next NACK (or its backfill).
+  size_t left = per_nack_;
+  std::vector<const Sent*> done;  // a datagram once per NACK, however many ranges name it
   for (auto [first, count] : ranges) {
     if (ring_.empty() || first < ring_.front().first) ++c_.too_old;
     for (Sent& s : ring_) {
       if (s.first >= first + count || first >= s.first + s.count) continue;
+      if (std::find(done.begin(), done.end(), &s) != done.end()) continue;
+      done.push_back(&s);
+      size_t n = s.bytes();
+      if (n > left || !resend_budget_.take(last_heard_, static_cast<double>(n))) {
+        c_.resend_paced += s.raws.size();
+        continue;
+      }
+      left -= n;
       if (s.key_epoch != key_epoch_) retag(s);  // sent under an older session
       for (const auto& raw : s.raws) {
         ++c_.resent;
@@ -322,6 +345,7 @@ void DatagramLink::send_fragments(uint8_t config_id, uint64_t slot, const SlotEn
   }
   for (const auto& raw : s.raws) {
     ++c_.fragments;
+    resend_budget_.earn(static_cast<double>(raw.size()));
     emit(std::vector<uint8_t>(raw));
   }
   keep(std::move(s));
@@ -371,6 +395,7 @@ void DatagramLink::flush() {
   group_.clear();
   if (!ready_) return;
   s.raws = {dg::encode_data(s.d, key_, dg::kDroneToBase)};
+  resend_budget_.earn(static_cast<double>(s.raws[0].size()));
   emit(std::vector<uint8_t>(s.raws[0]));
   keep(std::move(s));
 }
@@ -393,17 +418,21 @@ int64_t DatagramLink::next_due_ns() const {
 }
 
 std::string DatagramLink::summary() const {
-  char buf[400];
+  char buf[600];
   std::snprintf(buf, sizeof buf,
                 "datagrams_in=%llu datagrams_out=%llu bytes_out=%llu forged=%llu replayed=%llu malformed=%llu "
-                "nacks=%llu resent=%llu too_old=%llu handshakes=%llu timeouts=%llu fragments=%llu dropped=%llu",
+                "nacks=%llu resent=%llu too_old=%llu handshakes=%llu timeouts=%llu fragments=%llu dropped=%llu "
+                "foreign=%llu resend_paced=%llu challenges=%llu hellos_unanswered=%llu",
                 static_cast<unsigned long long>(c_.datagrams_in), static_cast<unsigned long long>(c_.datagrams_out),
                 static_cast<unsigned long long>(c_.bytes_out), static_cast<unsigned long long>(c_.forged),
                 static_cast<unsigned long long>(c_.replayed), static_cast<unsigned long long>(c_.malformed),
                 static_cast<unsigned long long>(c_.nacks), static_cast<unsigned long long>(c_.resent),
                 static_cast<unsigned long long>(c_.too_old), static_cast<unsigned long long>(c_.handshakes),
                 static_cast<unsigned long long>(c_.timeouts), static_cast<unsigned long long>(c_.fragments),
-                static_cast<unsigned long long>(c_.dropped));
+                static_cast<unsigned long long>(c_.dropped), static_cast<unsigned long long>(c_.foreign),
+                static_cast<unsigned long long>(c_.resend_paced),
+                static_cast<unsigned long long>(challenges_.counters().challenges),
+                static_cast<unsigned long long>(challenges_.counters().unanswered));
   return buf;
 }
 

@@ -68,6 +68,13 @@ class UdpPort final : public DgramPort {
     peer_ = source_;
     peer_len_ = source_len_;
   }
+  std::vector<uint8_t> source() const override {
+    const auto* p = reinterpret_cast<const uint8_t*>(&source_);
+    return {p, p + source_len_};
+  }
+  bool from_peer() const override {
+    return peer_len_ == source_len_ && std::memcmp(&peer_, &source_, source_len_) == 0;
+  }
 
  private:
   int fd_ = -1;

@@ -24,6 +24,12 @@ RunRecord::RunRecord(std::string dir, const std::string& prefix, int64_t started
   path_ = dir_ + "/" + prefix + "-run-" + run_ + ".counters.json";
 }
 
+void RunRecord::note_clock(uint64_t steps, int64_t wall_minus_timeline_ns, Timeline::Step last) {
+  clock_steps_ = steps;
+  clock_offset_ns_ = wall_minus_timeline_ns;
+  clock_last_ = last;
+}
+
 bool RunRecord::write(const std::vector<std::pair<std::string, uint64_t>>& counters,
                       const std::vector<std::pair<std::string, uint64_t>>& files, bool final, int64_t now_ns) {
   nlohmann::ordered_json doc;
@@ -33,6 +39,11 @@ bool RunRecord::write(const std::vector<std::pair<std::string, uint64_t>>& count
   doc["final"] = final;
   auto& c = doc["counters"] = nlohmann::ordered_json::object();
   for (const auto& [k, v] : counters) c[k] = v;
+  if (clock_steps_)
+    doc["clock"] = {{"steps", clock_steps_},
+                    {"wall_minus_timeline_ns", clock_offset_ns_},
+                    {"last_step_at_ns", clock_last_.at_ns},
+                    {"last_step_ns", clock_last_.delta_ns}};
   auto& f = doc["files"] = nlohmann::ordered_json::object();
   for (const auto& [name, n] : files) f[name] = n;
   std::string text = doc.dump() + "\n";

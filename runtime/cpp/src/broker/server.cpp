@@ -83,14 +83,14 @@ Server::Server(const BrokerConfig& cfg, std::string key, Clock& clock)
     o.delay_ns = int64_t{cfg_.link_delay_ms} * 1'000'000;
     o.keepalive_timeout_ns = int64_t{cfg_.link_keepalive_timeout_s} * 1'000'000'000;
     o.ring_bytes = cfg_.link_ring_bytes;
-    dlink_ = std::make_unique<DatagramLink>(key_, *broker_, *this, o, [] { return link::random_nonce(); });
+    dlink_ = std::make_unique<DatagramLink>(key_, *broker_, *this, o);
     broker_->set_backfill_link(o.max_datagram, control_frame_overhead(cfg_.link_transport == "serial"));
     open_dgram_port();
     if (!port_) throw Error(ErrorCode::Io, "cannot open the link device " + cfg_.link_device);
   }
   if (!cfg_.ingress_unix.empty()) add_fd(unix_listen(cfg_.ingress_unix), Kind::IngressUnixListen);
   if (cfg_.ingress_port) add_fd(tcp_listen(cfg_.ingress_host, cfg_.ingress_port, ingress_port_), Kind::IngressTcpListen);
-  int64_t now = clock_.now_ns();
+  int64_t now = broker_->now();
   next_flush_ = now + int64_t{cfg_.flush_interval_ms} * 1'000'000;
   next_log_ = cfg_.log_period_s ? now + int64_t{cfg_.log_period_s} * 1'000'000'000 : Executor::kNever;
   next_status_ = now + int64_t{std::max<uint32_t>(broker_->status_period_s(), 1)} * 1'000'000'000;
@@ -130,7 +130,7 @@ void Server::open_dgram_port() {
 }
 
 void Server::on_dgram_readable() {
-  int64_t now = clock_.now_ns();
+  int64_t now = broker_->now();
   port_->read([&](std::span<const uint8_t> d) { dlink_->on_datagram(d, now); });
   if (port_->broken()) {
     log_line("link: %s went away; opening it again every second", port_->describe().c_str());
@@ -150,10 +150,14 @@ void Server::adopt_source() {
   if (port_) port_->adopt_source();
 }
 
+std::vector<uint8_t> Server::source() const { return port_ ? port_->source() : std::vector<uint8_t>{}; }
+
+bool Server::from_peer() const { return !port_ || port_->from_peer(); }
+
 LinkDatagramCounts Server::datagram_counts() const {
   if (!dlink_) return {};
   const DgramCounters& c = dlink_->counters();
-  return {c.datagrams_out, c.resent, c.nacks, c.dropped, c.forged, c.replayed};
+  return {c.datagrams_out, c.resent, c.nacks, c.dropped, c.forged + c.foreign, c.replayed};  // foreign: forged's row
 }
 
 bool Server::link_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
@@ -209,7 +213,7 @@ void Server::accept_on(Conn& l) {
       add_fd(fd, Kind::Link);
       Conn& c = conns_[fd];
       c.link = std::make_unique<LinkSession>(key_, *broker_, [] { return link::random_nonce(); });
-      c.deadline_ns = clock_.now_ns() + int64_t{cfg_.handshake_timeout_ms} * 1'000'000;
+      c.deadline_ns = broker_->now() + int64_t{cfg_.handshake_timeout_ms} * 1'000'000;
     } else {
       add_fd(fd, Kind::Ingress);
       conns_[fd].ingress = std::make_unique<IngressSession>(*broker_);
@@ -335,7 +339,7 @@ void Server::run() {
            cfg_.ingress_port ? std::to_string(ingress_port_).c_str() : "", cfg_.archive_dir.c_str());
   epoll_event events[64];
   while (!stop_) {
-    int n = epoll_wait(epfd_, events, 64, timeout_ms(clock_.now_ns()));
+    int n = epoll_wait(epfd_, events, 64, timeout_ms(broker_->now()));
     if (n < 0 && errno != EINTR) sys_fail("epoll_wait");
     for (int i = 0; i < n; ++i) {
       auto it = conns_.find(events[i].data.fd);
@@ -358,7 +362,7 @@ void Server::run() {
           if (events[i].events & (EPOLLIN | EPOLLHUP | EPOLLERR)) on_readable(c);
       }
     }
-    timers(clock_.now_ns());
+    timers(broker_->now());
     for (int fd : to_close_) close_conn(fd);
     to_close_.clear();
   }

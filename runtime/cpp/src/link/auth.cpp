@@ -9,6 +9,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <cstdio>
 #include <cstdlib>
 
@@ -41,6 +43,49 @@ Mac server_proof(std::span<const uint8_t> key, const Nonce& client, const Nonce&
 }
 
 bool macs_equal(const Mac& a, const Mac& b) { return CRYPTO_memcmp(a.data(), b.data(), a.size()) == 0; }
+
+ClientProofs::ClientProofs(std::span<const uint8_t> key)
+    : inner_(EVP_MD_CTX_new()), outer_(EVP_MD_CTX_new()), work_(EVP_MD_CTX_new()) {
+  std::array<uint8_t, 64> k{}, ipad{}, opad{};
+  if (key.size() > k.size()) {
+    unsigned int n = 0;
+    EVP_Digest(key.data(), key.size(), k.data(), &n, EVP_sha256(), nullptr);
+  } else {
+    std::copy(key.begin(), key.end(), k.begin());
+  }
+  for (size_t i = 0; i < k.size(); ++i) {
+    ipad[i] = k[i] ^ 0x36;
+    opad[i] = k[i] ^ 0x5c;
+  }
+  if (!inner_ || !outer_ || !work_ || !EVP_DigestInit_ex(inner_, EVP_sha256(), nullptr) ||
+      !EVP_DigestUpdate(inner_, ipad.data(), ipad.size()) ||
+      !EVP_DigestInit_ex(outer_, EVP_sha256(), nullptr) ||
+      !EVP_DigestUpdate(outer_, opad.data(), opad.size())) {
+    EVP_MD_CTX_free(inner_);  // a constructor that throws runs no destructor
+    EVP_MD_CTX_free(outer_);
+    EVP_MD_CTX_free(work_);
+    throw Error(ErrorCode::Internal, "SHA-256 set-up failed");
+  }
+}
+
+ClientProofs::~ClientProofs() {
+  EVP_MD_CTX_free(inner_);
+  EVP_MD_CTX_free(outer_);
+  EVP_MD_CTX_free(work_);
+}
+
+Mac ClientProofs::operator()(const Nonce& client, const Nonce& server) {
+  Mac in{}, out{};
+  unsigned int n = 0;
+  bool ok = EVP_MD_CTX_copy_ex(work_, inner_) && EVP_DigestUpdate(work_, "MODD1C", 6) &&
+            EVP_DigestUpdate(work_, server.data(), server.size()) &&
+            EVP_DigestUpdate(work_, client.data(), client.size()) &&
+            EVP_DigestFinal_ex(work_, in.data(), &n) && EVP_MD_CTX_copy_ex(work_, outer_) &&
+            EVP_DigestUpdate(work_, in.data(), in.size()) &&
+            EVP_DigestFinal_ex(work_, out.data(), &n);
+  if (!ok) throw Error(ErrorCode::Internal, "SHA-256 failed");
+  return out;
+}
 
 Nonce random_nonce() {
   Nonce n{};
@@ -91,7 +136,10 @@ std::string resolve_key(const std::string& ref) {
   } else {
     throw Error(ErrorCode::BadConfig, "key reference '" + ref + "' is neither env:NAME nor file:PATH");
   }
-  if (key.empty()) throw Error(ErrorCode::BadConfig, "key reference " + ref + " gives an empty key");
+  if (key.size() < kMinKeyBytes)
+    throw Error(ErrorCode::BadConfig, "key reference " + ref + " gives a key of " + std::to_string(key.size()) +
+                                          " bytes; a link key needs at least " + std::to_string(kMinKeyBytes) +
+                                          " (e.g. openssl rand -hex 16)");
   return key;
 }
 

@@ -22,7 +22,7 @@
 namespace modd::archive {
 
 struct Sample {
-  int64_t stamp_ns;   // broker CLOCK_REALTIME on ingest: the MCAP log_time and the window key
+  int64_t stamp_ns;   // broker timeline on ingest (util/clock.hpp): the MCAP log_time and the window key
   int64_t publish_ns; // the publisher's own timestamp: the MCAP publish_time
   double number;      // float topics
   int64_t integer;    // int and bool topics

@@ -107,6 +107,10 @@ class Broker final : public LinkHooks, public FrameSink {
 
   // Stamps a batch: advances the schedule to the stamp first (window rule).
   int64_t stamp_now();
+  // The broker's timeline (util/clock.hpp): what stamps, slot dates and timers read. Logs a
+  // wall-clock step when it sees one.
+  int64_t now();
+  const Timeline& timeline() const { return time_; }
   // One record, validated and counted: Reject::kCount when accepted, else the reason.
   // `who` (may be null) is charged for the fair share of the archive queue.
   Reject ingest(int64_t global, Reject why, link::ValueType declared, int64_t stamp, const ingress::Record& r,
@@ -176,7 +180,7 @@ class Broker final : public LinkHooks, public FrameSink {
 
   BrokerConfig cfg_;
   std::string key_;
-  Clock& clock_;
+  Timeline time_;
   LinkOutput& out_;
   std::unique_ptr<archive::Archiver> archiver_;
   Executor executor_;
@@ -184,8 +188,7 @@ class Broker final : public LinkHooks, public FrameSink {
   std::vector<Topic> topics_;
   std::unordered_map<std::string, uint32_t> by_name_;
   int64_t last_stamp_ = 0;
-  int64_t clock_now_ = 0;  // the clock's last reading (last_stamp_ holds when it goes back)
-  bool clock_warned_ = false;
+  int64_t clock_now_ = 0;  // the wall clock's last reading: publishers' timestamps are judged against it
   int64_t started_ns_ = 0;
   uint64_t front_samples_ = 0;
   uint64_t generation_ = 1;

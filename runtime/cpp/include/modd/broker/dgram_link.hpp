@@ -19,8 +19,10 @@
 #include <vector>
 
 #include "modd/broker/link_session.hpp"
+#include "modd/link/challenges.hpp"
 #include "modd/link/datagram.hpp"
 #include "modd/link/messages.hpp"
+#include "modd/util/token_bucket.hpp"
 
 namespace modd::broker {
 
@@ -30,6 +32,10 @@ class DatagramOut {
   virtual void send(std::vector<uint8_t>&& datagram, bool reply) = 0;
   // The sender of the datagram being handled becomes the peer (udp: its address).
   virtual void adopt_source() = 0;
+  // The sender of the datagram being handled (udp: its address bytes; serial: none), and
+  // whether it is the peer: after AUTH, the session is bound to the peer's address.
+  virtual std::vector<uint8_t> source() const { return {}; }
+  virtual bool from_peer() const { return true; }
 };
 
 struct DgramOptions {
@@ -38,6 +44,12 @@ struct DgramOptions {
   int64_t keepalive_timeout_ns = 90'000'000'000;  // silence after which DATA stops (3 x 30 s PING)
   size_t ring_datagrams = 256;
   size_t ring_bytes = 64 * 1024;
+  // NACK resends: earned one byte per live DATA byte sent, from none (so resends never add
+  // more than the plan's own bytes) up to `resend_burst_bytes`, and at most `resend_per_nack_bytes` for
+  // one NACK (docs/protocol.md, "Resends"). 0: ring_bytes, ring_bytes / 4.
+  size_t resend_burst_bytes = 0;
+  size_t resend_per_nack_bytes = 0;
+  link::ChallengeLimits challenges{};
 };
 
 struct DgramCounters {
@@ -47,12 +59,14 @@ struct DgramCounters {
   uint64_t handshakes = 0, timeouts = 0;
   uint64_t fragments = 0;  // 0x32 datagrams sent for slots larger than a packet
   uint64_t dropped = 0;    // slots not sent: no session, or too large for 16 fragments (archived all the same)
+  uint64_t foreign = 0;    // datagrams of the session from another address than its peer's: dropped
+  uint64_t resend_paced = 0;  // NACKed datagrams not resent: over the resend budget (asked again later)
 };
 
 class DatagramLink {
  public:
   DatagramLink(std::string psk, LinkHooks& hooks, DatagramOut& out, DgramOptions opt,
-               std::function<link::Nonce()> nonce_source);
+               std::optional<link::Mac> cookie_secret = std::nullopt);
 
   void on_datagram(std::span<const uint8_t> raw, int64_t now);
   // One fired slot: its values encoded as in DATA (no seq8, no bitmap) and one
@@ -66,6 +80,7 @@ class DatagramLink {
   bool ready() const { return ready_; }
   int64_t delay_ns() const { return delay_ns_; }  // the accepted delay packing runs with
   const DgramCounters& counters() const { return c_; }
+  const link::ChallengeCounters& handshake_counters() const { return challenges_.counters(); }
   std::string summary() const;
 
  private:
@@ -101,11 +116,9 @@ class DatagramLink {
   DatagramOut& out_;
   DgramOptions opt_;
   int64_t delay_ns_;  // the running accepted delay: the CONFIG's, else opt_.delay_ns
-  std::function<link::Nonce()> nonce_source_;
   DgramCounters c_;
-  // handshake in progress (kept until a newer HELLO) and the session
-  bool pending_ = false;
-  link::Nonce hello_nonce_{}, challenge_nonce_{};
+  // handshakes in progress (several at once, rate-limited) and the session
+  link::Challenges challenges_;
   bool ready_ = false;
   link::Mac key_{};
   uint64_t key_epoch_ = 0;
@@ -123,6 +136,8 @@ class DatagramLink {
   // resend ring
   std::deque<Sent> ring_;
   size_t ring_bytes_ = 0;
+  TokenBucket resend_budget_;
+  size_t per_nack_;
 };
 
 // Largest datagram whose serial frame (COBS over datagram + CRC-16, then 0x00)

@@ -1,6 +1,7 @@
 // The schedule executor: owns the running config's accumulators and slot
 // iterator, and emits one DATA frame per due slot. Time is passed in (broker
-// stamps, CLOCK_REALTIME ns), so a test drives it with a fake clock.
+// stamps on its timeline, util/clock.hpp: monotonic, never stepped), so a test
+// drives it with a fake clock.
 //
 // Contract (docs/protocol.md, "Windows"): slot k of a config with epoch E is
 // due at E + offset_k; a window [E+(j-1)P, E+jP) aggregates exactly the

@@ -9,12 +9,15 @@
 // archive_failed + every rejected_* + samples_pending); "files" names the archive files of
 // this run with the messages of each in written chunks (never more than the file holds, even
 // after kill -9 and recovery). Not fsynced: it survives a crash of the process, and a power
-// cut leaves the last copy the file system kept.
+// cut leaves the last copy the file system kept. "clock" (after a wall-clock step only):
+// {"steps", "wall_minus_timeline_ns", "last_step_at_ns", "last_step_ns"}.
 #pragma once
 #include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "modd/util/clock.hpp"
 
 namespace modd::broker {
 
@@ -26,11 +29,17 @@ class RunRecord {
   bool write(const std::vector<std::pair<std::string, uint64_t>>& counters,
              const std::vector<std::pair<std::string, uint64_t>>& files, bool final, int64_t now_ns);
   const std::string& path() const { return path_; }
+  // Wall-clock steps seen this run (util/clock.hpp, Timeline): written as "clock" with the
+  // next record, so that a reader can map the archive's log times to the wall clock.
+  void note_clock(uint64_t steps, int64_t wall_minus_timeline_ns, Timeline::Step last);
 
  private:
   std::string dir_, path_, run_;
   int64_t started_ns_;
   bool failing_ = false;
+  uint64_t clock_steps_ = 0;
+  int64_t clock_offset_ns_ = 0;
+  Timeline::Step clock_last_{0, 0};
 };
 
 }  // namespace modd::broker

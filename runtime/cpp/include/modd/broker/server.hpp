@@ -34,6 +34,8 @@ class Server final : public LinkOutput, public DatagramOut {
   // DatagramOut: to the current port (a serial device is opened again after it went away)
   void send(std::vector<uint8_t>&& datagram, bool reply) override;
   void adopt_source() override;
+  std::vector<uint8_t> source() const override;
+  bool from_peer() const override;
 
  private:
   enum class Kind { LinkListen, IngressUnixListen, IngressTcpListen, Link, Ingress, Signal, Dgram };

@@ -31,6 +31,16 @@ from modd.zenoh_auth import read_secret
 
 CLIENT_LABEL = b"MODD1C"
 SERVER_LABEL = b"MODD1S"
+MIN_KEY_BYTES = 16  # as the PubBroker (link/auth.hpp, kMinKeyBytes): shorter keys are refused
+
+
+def check_key_length(key: bytes, reference: str) -> bytes:
+    """``key`` if it holds at least :data:`MIN_KEY_BYTES` bytes, else ValueError naming
+    ``reference`` and the length."""
+    if len(key) < MIN_KEY_BYTES:
+        raise ValueError(f"key reference {reference} gives a key of {len(key)} bytes; a link key "
+                         f"needs at least {MIN_KEY_BYTES} (e.g. openssl rand -hex 16)")
+    return key
 
 
 def client_proof(key: bytes, client_nonce: bytes, server_nonce: bytes) -> bytes:
@@ -53,9 +63,7 @@ def resolve_key(reference: str) -> bytes:
         key = read_secret(reference[5:], "link key").rstrip(b"\r\n")
     else:
         raise ValueError(f"key reference {reference!r} is neither env:NAME nor file:PATH")
-    if not key:
-        raise ValueError(f"key reference {reference} gives an empty key")
-    return key
+    return check_key_length(key, reference)
 
 
 def read_frame(sock: socket.socket, splitter: codec.FrameSplitter) -> codec.RawFrame:

@@ -18,6 +18,7 @@ from typing import Any
 
 from modd_model import ModelError, load_model
 
+from ..link.auth import check_key_length
 from ..zenoh_auth import read_secret
 from ..zenoh_session import DEFAULT_ENDPOINT, ZenohSettings
 from .delivery_auth import DeliveryKeyError, check_ref
@@ -144,20 +145,25 @@ def parse_endpoint(text: str, where: str) -> tuple[str, int]:
 
 def resolve_key(ref: str) -> bytes:
     """The pre-shared key from ``env:NAME`` or ``file:PATH`` (one trailing
-    newline stripped); ConfigError naming the reference otherwise."""
+    newline stripped), at least 16 bytes; ConfigError naming the reference otherwise."""
     kind, _, name = ref.partition(":")
     if kind == "env":
         value = os.environ.get(name)
         if not value:
             raise ConfigError(f"link key {ref}: environment variable {name} is not set")
-        return value.encode()
-    if kind == "file":
+        key = value.encode()
+    elif kind == "file":
         # a regular file of at most 64 KiB, no final symlink (docs/security.md)
         try:
-            return read_secret(name, "link key")
+            key = read_secret(name, "link key")
         except ValueError as exc:
             raise ConfigError(f"link key {ref}: {exc}") from exc
-    raise ConfigError(f"link key {ref!r}: expected env:NAME or file:PATH")
+    else:
+        raise ConfigError(f"link key {ref!r}: expected env:NAME or file:PATH")
+    try:
+        return check_key_length(key, ref)
+    except ValueError as exc:
+        raise ConfigError(f"link key: {exc}") from exc
 
 
 def _drone(model: Mapping[str, Any]) -> str:
