@@ -9,7 +9,8 @@ intervals (a few per outage, not one per window). Kept in the state directory
 A window of an earlier config is asked for as that config defined it (its
 stream, on its epoch's grid) and recomputed on board from the archive.
 
->>> >>> rec = WindowRecord()
+>>> from fractions import Fraction
+>>> rec = WindowRecord()
 >>> s = StreamKey("usv.a.x", "MIN", Fraction(1, 4))
 >>> rec.begin(Epoch("m", 1, 0, [Due("sub", s, s, "m", "float32")]))
 >>> rec.add_received(s, 0, 500_000_000); rec.add_received(s, 1_000_000_000, 2_000_000_000)
