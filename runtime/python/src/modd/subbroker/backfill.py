@@ -206,6 +206,9 @@ class BackfillManager:
                 log.info("backfill request waits for the link: %s", exc)
                 self._queue.link_down()
                 break
+        for note in self._queue.notes:
+            log.info("%s", note)
+        self._queue.notes.clear()
         self._wake.notify_all()
 
     def on_frame(self, frame: RawFrame) -> None:

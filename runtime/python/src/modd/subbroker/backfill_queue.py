@@ -101,6 +101,7 @@ class InFlight:
     heard: float = 0.0
     retry_at: float | None = None
     busy: int = 0  # BUSY answers in a row
+    why: str = ""  # why it is asked again (said once it is sent)
 
 
 @dataclass
@@ -122,6 +123,7 @@ class BackfillQueue:
     flight: InFlight | None = None
     _turn: int = 0  # counts the runs put in flight
     _served: dict[str, int] = field(default_factory=dict)  # owner / job id -> its last turn
+    notes: list[str] = field(default_factory=list)  # what to log (the manager drains it)
 
     # -- jobs -------------------------------------------------------------------------
 
@@ -150,7 +152,7 @@ class BackfillQueue:
         if f is None or f.job is not job or f.sent_at is None:
             return []
         f.sent_at, f.sends = None, 0
-        return self._send(f, now)
+        return self._again(f, now, f"a new pace of {rate_bps} B/s")
 
     # -- the link ---------------------------------------------------------------------
 
@@ -162,6 +164,7 @@ class BackfillQueue:
         if f is not None and f.last_sent is not None:
             f.sent_at, f.acked, f.sends, f.retry_at = None, False, 0, None
             f.job.resumes += 1
+            f.why = "the link is up again"
         return self._serve(now)
 
     def link_down(self) -> None:
@@ -216,6 +219,7 @@ class BackfillQueue:
             f.acked, f.sent_at = False, None
             f.retry_at = now + min(self.timing.busy_s * 2 ** (f.busy - 1),
                                    self.timing.busy_max_s)
+            f.why = f"the PubBroker said {end.status.name}"
             return []
         self.flight = None
         self._end(f.job, "FAILED", f"{end.status.name}: {end.message}", now)
@@ -240,14 +244,14 @@ class BackfillQueue:
             return []
         if f.retry_at is not None and now >= f.retry_at:
             f.retry_at = None
-            if f.sent_at is not None:
-                f.sent_at = None  # not acknowledged in time: sent again
-                f.job.resumes += 1
+            if f.sent_at is not None:  # not acknowledged in time: sent again
+                waited, f.sent_at = now - f.sent_at, None
+                return self._again(f, now, f"no answer in {waited:.1f} s")
             return self._send(f, now)
         if f.acked and now - f.heard >= self.timing.stall(f.job.rate_bps) - 1e-6:
+            quiet = now - f.heard
             f.acked, f.sent_at, f.sends = False, None, 0
-            f.job.resumes += 1
-            return self._send(f, now)
+            return self._again(f, now, f"nothing heard for {quiet:.1f} s")
         return []
 
     # -- progress ---------------------------------------------------------------------
@@ -328,6 +332,10 @@ class BackfillQueue:
         if f.last_sent is not None and now - f.last_sent < self.timing.min_resend_s:
             f.retry_at = f.last_sent + self.timing.min_resend_s  # never twice within it
             return []
+        if f.why:
+            self.notes.append(f"backfill {f.job.job_id}: {f.why}, resuming at window {f.next} "
+                              f"of {f.request.windows}")
+            f.why = ""
         q = f.request
         f.request = bf.BackfillRequest(q.request_id, q.topic, q.type, q.aggregation, q.period_us,
                                        q.from_ns, q.windows, f.next, f.job.rate_bps)
@@ -346,7 +354,12 @@ class BackfillQueue:
                 and now - f.sent_at < self.timing.resume_grace_s:
             return []
         f.acked, f.sent_at = False, None
+        return self._again(f, now, f"windows from {f.next} lost")
+
+    def _again(self, f: InFlight, now: float, why: str) -> list[bytes]:
+        """Send the request in flight again from its resume point, saying why."""
         f.job.resumes += 1
+        f.why = why
         return self._send(f, now)
 
     def _run_done(self, f: InFlight, now: float) -> list[bytes]:
