@@ -4,8 +4,9 @@ loopback. Oracle: the PubBroker's archive read by the official `mcap` package.
 - 13 concurrent `modd backfill --gaps` (one per subscriber of scenario 2) after an
   outage the link cannot repair all end DONE, every missed window delivered once with
   the archive's value, within the paced time docs/subbroker.md predicts.
-- After a SubBroker outage (stopped, then started again: a new config epoch) and after
-  a PubBroker restart, `--gaps` fills the windows of the earlier config.
+- After a SubBroker outage (stopped, then started again: a new config epoch), after a
+  PubBroker restart and after a link outage followed by a redeploy, `--gaps` fills the
+  windows of the earlier config.
 
 The outage lasts MODD_BACKFILL_CUT_S seconds (4 in `make test`).
 """
@@ -20,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from modd.subbroker.client import request
 from modd.subbroker.payload import DeliveredValue
 from subbroker_harness import (
     PYTHON,
@@ -31,6 +33,7 @@ from subbroker_harness import (
     processes,
     read_archive,
     shared_credentials,
+    signed,
     start_load,
     start_pubbroker,
     start_subbroker,
@@ -142,12 +145,32 @@ def test_thirteen_concurrent_gaps_all_done(tmp_path: Path, zenoh_client: Any) ->
           f" {total} B in {took:.1f} s")
 
 
+def gaps_cli(zport: int, sb: Proc) -> dict[str, Any]:
+    code, out, err = run_cli(zport, "--subscriber", "sub_5", "--gaps", "--json")
+    assert code == 0, (out, err, sb.log()[-3000:])
+    fig: dict[str, Any] = json.loads(out.strip().splitlines()[-1])
+    assert fig["duplicates"] == 0, fig
+    return fig
+
+
+def redeployed(model: Path) -> dict[str, Any]:
+    """The model with sub_6 changed (MAX to AVERAGE): a new config, sub_5 as it was."""
+    doc = json.loads(model.read_text())
+    for sub in doc["subscribers"]:
+        if sub["name"] == "sub_6":
+            sub["aggregation"] = "AVERAGE"
+    return signed({"text": json.dumps(doc), "format": "json"})
+
+
 def test_gaps_fill_the_earlier_configs_after_restarts(tmp_path: Path,
                                                        zenoh_client: Any) -> None:
+    """Config 1 → SubBroker outage → config 2 → PubBroker restart → config 3 → link
+    outage → redeploy → config 4: each `--gaps` fills the windows of the earlier one."""
     link, ingress, zport = free_port(), free_port(), free_port()
     model = model_copy(tmp_path, "scenario1.modd")
     state = tmp_path / "state"
-    config = subbroker_config(tmp_path, model, link, zport, state_dir=state)
+    proxy = Blackhole(link)
+    config = subbroker_config(tmp_path, model, proxy.port, zport, state_dir=state)
     pb = start_pubbroker(tmp_path, model, link, ingress)
     procs: list[Proc] = [pb]
     first = second = None
@@ -171,10 +194,8 @@ def test_gaps_fill_the_earlier_configs_after_restarts(tmp_path: Path,
         assert sb.wait_log("config 2 running", 60), sb.log()
         wait_live(second, "sub_5", time.time_ns())
         asked = time.time_ns() - SECOND
-        code, out, err = run_cli(zport, "--subscriber", "sub_5", "--gaps", "--json")
-        assert code == 0, (out, err, sb.log()[-3000:])
-        fig = json.loads(out.strip().splitlines()[-1])
-        assert fig["windows"] >= (CUT_S - 1.5) * 4 and fig["duplicates"] == 0, fig
+        fig = gaps_cli(zport, sb)
+        assert fig["windows"] >= (CUT_S - 1.5) * 4, fig
         both = [(first, stopped_ns), (second, 1 << 63)]
         check_epochs([v for v in merged(both)["sub_5"] if v.end_ns > first_ns],
                      250_000_000, asked)
@@ -187,20 +208,31 @@ def test_gaps_fill_the_earlier_configs_after_restarts(tmp_path: Path,
         assert sb.wait_log("config 3 running", 60), sb.log()
         wait_live(second, "sub_5", time.time_ns())
         asked = time.time_ns() - SECOND
-        code, out, err = run_cli(zport, "--subscriber", "sub_5", "--gaps", "--json")
-        assert code == 0, (out, err, sb.log()[-3000:])
-        fig2 = json.loads(out.strip().splitlines()[-1])
-        assert fig2["windows"] >= 2 and fig2["duplicates"] == 0, fig2
+        fig2 = gaps_cli(zport, sb)
+        assert fig2["windows"] >= 2, fig2
+        # 3. a link outage under config 3, then a redeploy (config 4) before anyone fills it
+        proxy.drop()
+        time.sleep(CUT_S)
+        proxy.restore()
+        assert sb.wait_log("resuming config 3", 30), sb.log()
+        session = zenoh_client(zport)
+        reply = request(session, "modd/usv/deploy", redeployed(model))
+        assert reply["status"] == "ACKED" and reply["config_id"] == 4, reply
+        wait_live(second, "sub_5", time.time_ns())
+        asked = time.time_ns() - SECOND
+        fig3 = gaps_cli(zport, sb)
+        assert fig3["windows"] >= (CUT_S - 1.5) * 4, fig3
     finally:
         with processes(*procs):
-            pass
+            proxy.close()
     assert first is not None and second is not None
     values = merged([(first, stopped_ns), (second, 1 << 63)])["sub_5"]
     check_epochs([v for v in values if v.end_ns > first_ns], 250_000_000, asked)
     back = [v for v in values if v.backfilled]  # the mission's first windows may be too
-    assert len(back) == fig["windows"] + fig2["windows"]
-    assert {v.config_id for v in back} == {1, 2}  # the earlier configs' windows
+    assert len(back) == fig["windows"] + fig2["windows"] + fig3["windows"]
+    assert {v.config_id for v in back} == {1, 2, 3}  # the earlier configs' windows
     assert check_against_archive({"sub_5": back}, read_archive(tmp_path / "archive", model))
     print(f"after a {CUT_S:.0f} s SubBroker outage: {fig['windows']} windows filled in"
           f" {fig['seconds']:.1f} s; after a PubBroker restart: {fig2['windows']} in"
-          f" {fig2['seconds']:.1f} s")
+          f" {fig2['seconds']:.1f} s; after a link outage and a redeploy: {fig3['windows']} in"
+          f" {fig3['seconds']:.1f} s")
