@@ -7,7 +7,10 @@ from __future__ import annotations
 
 import json
 import random
+import time
 from fractions import Fraction
+from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 from modd.subbroker.window_record import Due, Epoch, WindowRecord
@@ -100,3 +103,35 @@ def test_the_mission_starts_at_its_first_epoch_and_names_its_subscribers() -> No
     assert rec.subscribers(T0 + 130 * S) == {"sub", "other"}
     rec.begin(Epoch("m2", 4, T0 + 300 * S, []))
     assert rec.mission_start("m") is None and rec.mission_start("m2") == T0 + 300 * S
+
+
+def test_the_manager_keeps_the_record_without_a_clean_stop(tmp_path: Path) -> None:
+    """Written within SAVE_S of a live window (a kill -9 loses at most that), read back by
+    the next SubBroker: the earlier epoch's gaps are still known."""
+    from modd.link.frames import Value
+    from modd.link.receiver import Window
+    from modd.subbroker.backfill import SAVE_S, BackfillManager
+    from modd.subbroker.kept import StateDir
+
+    ps = SimpleNamespace(stream=FAST, sources=(), subscribers=["sub"])
+    running = SimpleNamespace(plan=SimpleNamespace(streams=[ps]), model={"name": "m"},
+                              topic_info={FAST.topic: ("m", "float32")},
+                              config=SimpleNamespace(config_id=1), epoch_ns=T0,
+                              fanout=SimpleNamespace(sent=[FAST]))
+    m = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
+    m.on_config(running)  # type: ignore[arg-type]
+    q = S // 4
+    m.on_windows(running, [Window(1, k, 0, T0 + k * q, T0 + (k + 1) * q, Value(True, 1.0))  # type: ignore[arg-type]
+                           for k in range(40) if not 10 <= k < 20])
+    deadline = time.monotonic() + SAVE_S + 5
+    while True:  # no close(): as after a kill -9
+        doc = StateDir(tmp_path).load_windows()
+        if doc and doc["received"]:
+            break
+        assert time.monotonic() < deadline, "the record was not written"
+        time.sleep(0.05)
+    again = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
+    assert again.received_until() == T0 + 40 * q
+    assert [(r.from_ns, r.windows, r.config_id) for r in again.record.gaps("sub", T0, T0 + 10 * S)
+            ] == [(T0 + 10 * q, 10, 1)]
+    m.close()

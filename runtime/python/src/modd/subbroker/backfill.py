@@ -120,7 +120,9 @@ class BackfillManager:
         with self._lock:
             for w in windows:
                 self.record.add_received(sent[w.stream], w.start_ns, w.end_ns)
-            self._dirty = True
+            if not self._dirty:  # the clock thread saves it within SAVE_S
+                self._dirty = True
+                self._wake.notify_all()
 
     def received_until(self) -> int | None:
         with self._lock:
