@@ -268,7 +268,7 @@ class BackfillQueue:
             if not f.acked:
                 return f"asked the PubBroker {max(f.sends, 1)} time(s), waiting for its answer"
             return f"paced at {job.rate_bps} B/s" if job.rate_bps else "paced by the PubBroker"
-        ahead = self.order().index(job) + (self.flight is not None)
+        ahead = len(self.order(job)) - 1 + (self.flight is not None)
         return f"queued behind {ahead} job{'s' if ahead != 1 else ''}" + (
             "" if self.up else ", waiting for the link")
 
@@ -286,8 +286,8 @@ class BackfillQueue:
                 "requests": job.requests, "resumes": job.resumes,
                 "reason": self.reason(job, now)}
 
-    def order(self) -> list[Job]:
-        """The waiting jobs in the order the queue serves their next runs."""
+    def order(self, until: Job | None = None) -> list[Job]:
+        """The waiting jobs in the order the queue serves their next runs (up to ``until``)."""
         served = dict(self._served)
         busy = self.flight.job if self.flight is not None else None
         waiting = [j for j in self.jobs.values() if j is not busy]
@@ -296,6 +296,8 @@ class BackfillQueue:
             job = _least_served(waiting, served)
             waiting.remove(job)
             out.append(job)
+            if job is until:
+                break
             served[_o(job)] = served[_j(job)] = self._turn + turn
         return out
 
