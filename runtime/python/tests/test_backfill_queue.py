@@ -10,10 +10,12 @@ window it claims to be.
 
 from __future__ import annotations
 
+import random
 from collections import deque
 from collections.abc import Callable
 from fractions import Fraction
 
+import pytest
 from modd.link import backfill as bf
 from modd.link.codec import split_frame
 from modd.link.frames import Value
@@ -105,6 +107,7 @@ class Bench:
         self.got: dict[tuple[str, int], float] = {}
         self.twice = 0
         self.reasons: dict[int, set[str]] = {}
+        self.track_reasons = True
         self.ids = 0
 
     def send(self, frames: list[bytes]) -> None:
@@ -148,7 +151,7 @@ class Bench:
         wake = self.q.wake_at()
         if wake is not None and wake <= self.now:
             self.send(self.q.tick(self.now))
-        for job in self.q.jobs.values():
+        for job in self.q.jobs.values() if self.track_reasons else ():
             self.reasons.setdefault(job.job_id, set()).add(self.q.reason(job, self.now))
 
     def run_until(self, done: Callable[[], bool], limit_s: float) -> float:
@@ -276,3 +279,40 @@ def test_cancel_and_a_refusal_move_the_queue_on() -> None:
                       b.now))
     assert third.status == "FAILED" and "UNKNOWN_TOPIC" in third.reason
     b.run_until(lambda: fourth.status == "DONE", 30)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_many_owners_loss_flaps_and_busy_every_window_once(seed: int) -> None:
+    """Random loss of every kind of frame, BUSY answers, link flaps, 3 owners with 12 jobs:
+    every job DONE, every window once, one request on the link at a time, the same
+    request never twice within min_resend_s."""
+    rng = random.Random(seed)
+    pb = FakePubBroker(rate_bps=2000, busy=3, drop=lambda k, n: rng.random() < 0.15)
+    b = Bench(pb, Timing(stall_s=2.0))
+    b.track_reasons = False
+    want: dict[tuple[str, int], float] = {}
+    jobs = []
+    for i in range(12):
+        name, runs = f"sub_{i}", 1 + i % 3
+        jobs.append(b.submit(name, runs_of(name, runs, 10 + 3 * i, 1000 * i), 2000,
+                             owner=f"user_{i % 3}"))
+        want |= expected(name, runs, 10 + 3 * i, 1000 * i)
+    last_sent: dict[int, float] = {}
+    for _ in range(60_000):
+        if all(j.status != "RUNNING" for j in jobs):
+            break
+        if rng.random() < 0.002:  # the link drops for a moment, the PubBroker forgets
+            b.up = False
+            b.q.link_down()
+        elif not b.up and rng.random() < 0.05:
+            b.up = True
+            pb.forget()
+            b.send(b.q.link_up(b.now))
+        n = len(pb.requests)
+        b.step()
+        for t, r in pb.requests[n:]:
+            assert t - last_sent.get(r.request_id, -9.0) >= b.q.timing.min_resend_s - 1e-9
+            last_sent[r.request_id] = t
+    assert [j.status for j in jobs] == ["DONE"] * 12, [b.q.progress(j, b.now) for j in jobs]
+    assert b.got == want and b.twice == 0
+    assert pb.most_at_once == 1
