@@ -72,8 +72,9 @@ class BackfillManager:
         self._state = state
         self._lock = threading.RLock()
         self._wake = threading.Condition(self._lock)
-        self._queue = BackfillQueue(timing or Timing(),
-                                    next_request_id=time.time_ns() // 1_000_000 % (1 << 21))
+        # request ids from 1 (one byte in every BACKFILL_DATA): the PubBroker forgets its
+        # requests at each authentication, so a restarted SubBroker's ids meet no old one
+        self._queue = BackfillQueue(timing or Timing())
         self.record = self._load()
         self._dirty = False
         self._saved_at = 0.0
