@@ -163,6 +163,12 @@ class BackfillManager:
             self._ended(job)
         return job
 
+    def running(self, subscriber: str, owner: str) -> bool:
+        """Whether ``owner`` has a job for ``subscriber`` that has not ended."""
+        with self._lock:
+            return any(j.subscriber == subscriber and j.owner == owner
+                       for j in self._queue.jobs.values())
+
     def job(self, job_id: int) -> Job | None:
         return self._jobs.get(job_id)
 

@@ -304,11 +304,14 @@ class SubBroker:
             if policy == "off":
                 continue
             start = self.backfill.mission_start(running) if policy == "mission" else since_ns
+            if self.backfill.running(sub["name"], "(policy)"):
+                continue  # a flapping link: the job of an earlier reconnection runs on
             runs = self.backfill.gaps(running, sub["name"], start, until)
             if runs:
                 log.info("backfill of %s (%s): %d runs after the outage", sub["name"], policy,
                          len(runs))
-                self.backfill.start(sub["name"], runs, backfill_query.spare_budget(running))
+                self.backfill.start(sub["name"], runs, backfill_query.spare_budget(running),
+                                    "(policy)")
 
     def _sinks(self) -> list[Sink]:
         return [s for s in (self._zenoh, self._tcp, self.record) if s is not None]
