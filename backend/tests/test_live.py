@@ -261,6 +261,36 @@ def test_backfill_routes_and_roles(live: TestClient, people: dict[str, Headers])
     assert unknown["status"] == "UNKNOWN"
 
 
+def test_drone_wide_fill_gaps_by_the_operator_and_the_scientist_at_once(
+    live: TestClient, people: dict[str, Headers], station: Station
+) -> None:
+    """The workbench's drone-wide Fill gaps, asked by the operator and the scientist at
+    the same time (one backfill per subscription each): every job ends DONE, and a job
+    that is still running always says why (issue 28)."""
+    names = [s["name"] for s in station.model["subscribers"]]
+    jobs = []
+    for who in ("operator", "scientist"):
+        for name in names:
+            p = live.post("/api/drones/usv/backfill", headers=people[who],
+                          json={"subscriber": name, "gaps": True}).json()
+            assert p["status"] in ("RUNNING", "DONE"), (who, name, p)
+            jobs.append((who, p["id"]))
+    deadline = time.monotonic() + 60
+    ended: dict[int, dict[str, Any]] = {}
+    while len(ended) < len(jobs):
+        for who, job in jobs:
+            if job in ended:
+                continue
+            p = live.get(f"/api/drones/usv/backfill/{job}", headers=people[who]).json()
+            if p["status"] == "RUNNING":
+                assert p["reason"], p  # waiting, and saying for what
+            else:
+                ended[job] = p
+        assert time.monotonic() < deadline, [p for p in ended.values()]
+        time.sleep(0.2)
+    assert {p["status"] for p in ended.values()} == {"DONE"}, ended
+
+
 def test_saves_are_announced_to_the_project_watchers(
     live: TestClient, people: dict[str, Headers]
 ) -> None:

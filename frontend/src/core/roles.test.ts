@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { canDeploy, canEdit, canEditEdge, deniedParts, viewsFor, type Role } from "./roles";
+import { canDeploy, canEdit, canEditEdge, canFillGaps, deniedParts, viewsFor, type Role } from "./roles";
 import type { ElementKind } from "./ids";
 
 const KINDS: ElementKind[] = ["drone", "sensor", "topic", "pubBroker", "subBroker", "link", "publisher", "subscriber"];
@@ -19,6 +19,10 @@ describe("role permissions", () => {
   it("gives admin everything", () => {
     for (const k of KINDS) expect(canEdit("admin", k)).toBe(true);
     expect(canDeploy("admin")).toBe(true);
+  });
+
+  it("lets the scientist and the operator fill gaps", () => {
+    expect(["designer", "integrator", "scientist", "operator", "admin"].filter((r) => canFillGaps(r as Role))).toEqual(["scientist", "operator", "admin"]);
   });
 
   it("lets only operators deploy", () => {

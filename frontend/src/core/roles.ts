@@ -46,6 +46,12 @@ export function canEditEdge(role: Role, kind: EdgeKind): boolean {
   return false; // structure (drone → sensor → topic) follows from the elements
 }
 
+/** Whether `role` may ask the drone for what the link missed ("Fill gaps"): the
+ * scientist for the subscriptions, the operator for the drone (backfill edits no model). */
+export function canFillGaps(role: Role): boolean {
+  return role === "scientist" || role === "operator" || role === "admin";
+}
+
 export function canDeploy(role: Role): boolean {
   return role === "operator" || role === "admin";
 }

@@ -304,6 +304,15 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
         const fill = page.getByRole("region", { name: /^Fill gaps: drone / });
         await fill.getByRole("button", { name: "Fill gaps" }).click();
         await expectText(fill.getByTestId("backfill-progress"), /done: \d+ filled, 0 duplicates/, 90000);
+        // The operator fills the drone's gaps as the scientist does (the same region in the
+        // Operator view; backfill edits no model).
+        await view("Operator");
+        await panel("Monitor");
+        const byOperator = page.getByRole("region", { name: /^Fill gaps: drone / });
+        await byOperator.getByRole("button", { name: "Fill gaps" }).click();
+        await expectText(byOperator.getByTestId("backfill-progress"), /done: \d+ filled, 0 duplicates/, 90000);
+        await view("Scientist");
+        await panel("Monitor");
       }
       await page.getByRole("checkbox", { name: /sub_1 / }).uncheck();
       await page.getByRole("checkbox", { name: /sub_2 / }).uncheck();

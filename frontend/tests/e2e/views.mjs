@@ -480,6 +480,30 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await expandShot("monitor-values");
       await page.getByRole("button", { name: "Follow live" }).click();
     }],
+
+    // The operator fills the whole drone after an outage (issue 28): one backfill per
+    // subscription, queued on the SubBroker, each to DONE with something filled.
+    ["operator: drone-wide Fill gaps after an outage, every subscription filled, no duplicate", async () => {
+      if (!drone || !liveValues) throw new Error("needs the simulated drone (make build)");
+      await view("Operator");
+      await panel("Monitor");
+      const link = page.getByRole("status", { name: "Link status" });
+      await expectText(link, /link up/, 60000);
+      await cutLink(ports, OUTAGE_MS);
+      await expectText(link, /link up/, 60000);
+      await page.waitForTimeout(3000); // live values again: the outage's windows lie behind them
+      const fill = page.getByRole("region", { name: /^Fill gaps: drone / });
+      await fill.getByRole("button", { name: "Fill gaps" }).click();
+      const progress = fill.getByTestId("backfill-progress");
+      await expectVisible(progress, 30000);
+      let reason = "";
+      await waitUntil(async () => {
+        reason ||= (await fill.getByTestId("backfill-reason").count()) ? (await fill.getByTestId("backfill-reason").textContent()) ?? "" : "";
+        return /done: [1-9]\d* filled, 0 duplicates/.test((await progress.textContent()) ?? "");
+      }, 180000, async () => `the operator's Fill gaps: "${await progress.textContent()}"`);
+      console.log(`    operator: ${await progress.textContent()}${reason ? ` (seen while running:${reason})` : ""}`);
+      await view("Scientist");
+    }],
   ];
 
   async function expandShot(name) {

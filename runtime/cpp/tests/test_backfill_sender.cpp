@@ -84,7 +84,10 @@ Outcome run(BackfillSender& s, const bf::Request& r, int64_t live_period_ns = 0)
   Outcome out;
   std::vector<uint8_t> reply;
   s.on_request(r, link::ValueType::Float32, reply);
-  EXPECT_TRUE(reply.empty());
+  // accepted: acknowledged at once by a PROGRESS at the resume point
+  auto ack = std::get<bf::Progress>(bf::decode(*link::split_frame(reply)));
+  EXPECT_EQ(ack.request_id, r.request_id);
+  EXPECT_EQ(ack.next, r.resume);
   link::ValueKind kind = link::value_kind(r.type, r.aggregation);
   int64_t now = kT0 + 3600'000'000'000;
   for (int step = 0; step < 2'000'000 && s.active(); ++step) {
@@ -244,6 +247,8 @@ TEST(BackfillSender, RefusesAWrongTypeAndCancels) {
   reply.clear();
   s.on_request(request(link::Aggregation::Min, 10, 0, 0), std::nullopt, reply);
   EXPECT_EQ(s.active(), 1u);
+  EXPECT_EQ(std::get<bf::Progress>(bf::decode(*link::split_frame(reply))).bytes_sent, 0u);
+  reply.clear();
   s.on_cancel(5, reply);
   EXPECT_EQ(s.active(), 0u);
   EXPECT_EQ(std::get<bf::End>(bf::decode(*link::split_frame(reply))).status, bf::EndStatus::Cancelled);

@@ -13,12 +13,10 @@ import time
 from collections.abc import Callable
 from fractions import Fraction
 
-import pytest
 from modd.link import backfill as bf
 from modd.link.codec import split_frame
 from modd.link.frames import Value
-from modd.subbroker import backfill as manager_mod
-from modd.subbroker.backfill import BackfillManager, Run
+from modd.subbroker.backfill import BackfillManager, Run, Timing
 from modd.subbroker.payload import DeliveredValue
 from modd_plan.streams import StreamKey
 
@@ -86,15 +84,18 @@ def run_backfill(drop: Callable[[str, int], bool], windows: int = 20,
                  timeout_s: float = 10.0) -> tuple[dict[str, object], Sink, LossyPubBroker]:
     sink = Sink()
     pb = LossyPubBroker(drop)
-    m = BackfillManager(pb.receive, lambda: [sink])
+    m = BackfillManager(pb.receive, lambda: [sink],
+                        timing=Timing(stall_s=0.3, resume_grace_s=0.2, ack_s=0.3,
+                                      min_resend_s=0.05))
     stream = StreamKey("usv.a.z", "MIN", PERIOD)
     run = Run("sub_5", stream, stream, "float32", "m/s2", 1, FROM_NS, windows)
     job = m.start("sub_5", [run], 100_000)
     deadline = time.monotonic() + timeout_s
-    while not job.finished.is_set() and time.monotonic() < deadline:
+    while job.status == "RUNNING" and time.monotonic() < deadline:
         if not pb.pump(m):
             time.sleep(0.01)
-    return job.progress(), sink, pb
+    m.close()
+    return m.progress(job), sink, pb
 
 
 def check_once_each(sink: Sink, windows: int) -> None:
@@ -102,12 +103,6 @@ def check_once_each(sink: Sink, windows: int) -> None:
     got = sorted((v.start_ns, v.value) for v in sink.values)
     assert got == [(FROM_NS + k * q, float(k)) for k in range(windows)]
     assert all(v.backfilled for v in sink.values)
-
-
-@pytest.fixture(autouse=True)
-def short_stall(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(manager_mod, "STALL_S", 0.3)
-    monkeypatch.setattr(manager_mod, "RESUME_GRACE_S", 0.2)
 
 
 def test_nothing_lost_one_request() -> None:

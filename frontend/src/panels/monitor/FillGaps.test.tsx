@@ -33,4 +33,20 @@ describe("FillGaps", () => {
     expect(text).toMatch(/1 backfilled values received/);
     vi.useRealTimers();
   });
+
+  it("says what a waiting backfill waits for, one job or many", async () => {
+    vi.useFakeTimers();
+    const source = { subscribe: () => () => {} } as unknown as DataSource;
+    const reasons: Record<string, string> = { sub_1: "paced at 600 B/s", sub_2: "queued behind 1 job", sub_3: "queued behind 2 jobs" };
+    const startBackfill = vi.fn(async (_d: string, b: { subscriber: string }) =>
+      progress({ id: Number(b.subscriber.slice(4)), reason: reasons[b.subscriber] }));
+    const backfillProgress = vi.fn(async () => progress({ reason: "waiting for the link" }));
+    const services = { api: { startBackfill, backfillProgress }, openStream: () => source } as unknown as Services;
+    render(<ServicesContext.Provider value={services}><FillGaps drone="usv" source={source} subscribers={["sub_1", "sub_2", "sub_3"]} scope="drone usv" /></ServicesContext.Provider>);
+    await act(async () => { fireEvent.click(screen.getByRole("button", { name: "Fill gaps" })); });
+    expect(screen.getByTestId("backfill-reason").textContent).toBe(" · paced at 600 B/s, 2 queued");
+    await act(async () => { await vi.advanceTimersByTimeAsync(600); });
+    expect(screen.getByTestId("backfill-reason").textContent).toBe(" · waiting for the link");
+    vi.useRealTimers();
+  });
 });

@@ -8,7 +8,10 @@
  * subscription the drone refuses is named beside it). Only subscriptions of
  * the running plan can be filled (dynamic ones are not in the drone's plan).
  * Backfilled values arrive on the usual stream, marked `backfilled`: counted
- * here as they come (the chart draws them in place, marked). Contract: talks
+ * here as they come (the chart draws them in place, marked). A running job
+ * says what it waits for (the SubBroker's queue: "queued behind 3 jobs",
+ * "waiting for the link", "paced at 600 B/s"), shown beside the bar. The
+ * scientist and the operator both see it (roles.canFillGaps). Contract: talks
  * only through the services' api and the panel's data source; polls each
  * running backfill every POLL_MS.
  */
@@ -30,6 +33,16 @@ interface Props {
   compact?: boolean;
 }
 
+/** What running backfills wait for, in a few words: one job's reason, or the reason of the
+ * job on the link and how many are queued behind it. */
+export function runningReason(all: readonly BackfillProgress[]): string | null {
+  const reasons = all.filter((p) => p.status === "RUNNING" && p.reason).map((p) => p.reason as string);
+  if (reasons.length <= 1) return reasons[0] ?? null;
+  const queued = reasons.filter((r) => r.startsWith("queued behind")).length;
+  const active = reasons.find((r) => !r.startsWith("queued behind"));
+  return [active, queued ? `${queued} queued` : null].filter(Boolean).join(", ");
+}
+
 /** The progress of several backfills as one: windows and bytes/s summed, the longest time left. */
 export function sumProgress(all: readonly BackfillProgress[]): BackfillProgress | null {
   if (all.length === 0) return null;
@@ -41,7 +54,7 @@ export function sumProgress(all: readonly BackfillProgress[]): BackfillProgress 
   const left = all.map((p) => p.seconds_left).filter((s): s is number => s != null);
   return {
     status: running ? "RUNNING" : failed ? failed.status : "DONE",
-    reason: failed?.reason ?? null,
+    reason: running ? runningReason(all) : failed?.reason ?? null,
     windows: sum((p) => p.windows), windows_done: sum((p) => p.windows_done), windows_total: sum((p) => p.windows_total),
     duplicates: sum((p) => p.duplicates), bytes: sum((p) => p.bytes), seconds: Math.max(...all.map((p) => p.seconds)),
     bytes_per_s: sum((p) => p.bytes_per_s), rate_bps: Math.max(...all.map((p) => p.rate_bps)),
@@ -111,6 +124,7 @@ export function FillGaps({ drone, source, subscribers, scope, compact = false }:
           <span> {progress.windows_done}/{total} windows</span>
           <span className="muted"> · {progress.bytes_per_s.toFixed(0)} of {progress.rate_bps || "—"} B/s</span>
           {progress.seconds_left != null && running && <span className="muted"> · {progress.seconds_left.toFixed(0)} s left</span>}
+          {running && progress.reason && <span className="muted" data-testid="backfill-reason"> · {progress.reason}</span>}
           <strong> · {progress.status === "DONE" ? `done: ${progress.windows} filled, ${progress.duplicates} duplicates` : progress.status.toLowerCase()}</strong>
           {marked > 0 && <span className="backfilled"> · {marked} backfilled values received</span>}
         </div>

@@ -18,7 +18,7 @@ import { AGGREGATION } from "../../core/contracts.gen";
 import { findTopicByName, listTopics } from "../../core/query";
 import { subscriptionLabel, topicLabel } from "../../core/topicLabel";
 import { formatRate } from "../../core/plan";
-import { canEdit } from "../../core/roles";
+import { canEdit, canFillGaps } from "../../core/roles";
 import { formatAge } from "../../core/linkHealth";
 import { DEFAULT_WINDOW, panRange, unitLabel, visibleRange, zoomRange, type ViewWindow } from "../../core/chartData";
 import { useEditor, useModel } from "../../editor/useEditor";
@@ -114,7 +114,7 @@ export default function MonitorPanel() {
             <label key={name}><input type="checkbox" checked={watched.includes(name)} onChange={() => layout.toggle(name)} />
               {name} <span className="muted">{subscriptionLabel(model, { ...d, periodS: d.period_s })} (dynamic)</span></label>
           ))}
-          {canEdit(role, "subscriber") && <FillGaps drone={drone} source={source} scope={`drone ${drone}`}
+          {canFillGaps(role) && <FillGaps drone={drone} source={source} scope={`drone ${drone}`}
             subscribers={subscribers.map((s) => s.name)} />}
           {canEdit(role, "subscriber") && (
             <form onSubmit={addDynamic} className="dynamic-form" aria-label="Dynamic subscription">
@@ -156,7 +156,7 @@ export default function MonitorPanel() {
                 onZoom={(from, to) => setWin({ follow: false, from, to })}
                 addable={watched.filter((c) => !chart.includes(c))}
                 onAdd={(c) => layout.moveTo(c, i)} onRemove={(c) => layout.split(c)}
-                tools={canEdit(role, "subscriber") && <FillGaps drone={drone} source={source} subscribers={chart.filter((c) => !(c in dynamic))} scope={chart.join(", ")} compact />} />
+                tools={canFillGaps(role) && <FillGaps drone={drone} source={source} subscribers={chart.filter((c) => !(c in dynamic))} scope={chart.join(", ")} compact />} />
             ))}
           </div>
         </div>

@@ -64,6 +64,8 @@ void BackfillSender::on_request(const bf::Request& r, std::optional<link::ValueT
   }
   if (jobs_.size() >= kMaxJobs) return refuse(bf::EndStatus::Busy, "too many backfills at once, ask again later");
   jobs_.push_back(std::make_unique<Job>(r, dir_, prefix_));
+  // The acknowledgement: the base station sends a request again until it hears of it.
+  bf::encode(out, bf::Progress{r.request_id, r.resume, r.windows, 0, r.rate_bps ? r.rate_bps : default_rate_});
   log_line("backfill %llu: %s %s over %llu us, windows %llu..%llu, %llu B/s", static_cast<unsigned long long>(r.request_id),
            r.topic.c_str(), link::aggregation_name(r.aggregation), static_cast<unsigned long long>(r.period_us),
            static_cast<unsigned long long>(r.resume), static_cast<unsigned long long>(r.windows - 1),

@@ -81,8 +81,10 @@ def _bar(p: dict[str, Any]) -> str:
     filled = width if total == 0 else width * done // total
     left = p.get("seconds_left")
     eta = f"  {left:.0f} s left" if isinstance(left, int | float) else ""
+    why = f"  ({str(p.get('reason'))[:60]})" if p.get("status") == "RUNNING" and p.get(
+        "reason") else ""
     return (f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} windows  "
-            f"{p.get('bytes_per_s', 0):.0f}/{p.get('rate_bps') or '-'} B/s{eta}   ")
+            f"{p.get('bytes_per_s', 0):.0f}/{p.get('rate_bps') or '-'} B/s{eta}{why}   ")
 
 
 def run(args: argparse.Namespace) -> int:

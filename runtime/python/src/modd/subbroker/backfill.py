@@ -1,382 +1,263 @@
-"""Backfill on the base station (docs/subbroker.md, "Backfill"): which windows
-each subscriber got, the gaps an outage left, and requests to the PubBroker
-(docs/protocol.md, "Backfill") that fill them from the drone's archive.
+"""Backfill on the base station (docs/subbroker.md, "Backfill"): the record of
+which windows each subscriber got and should have got (window_record.py), the
+queue of jobs and their link requests (backfill_queue.py, without I/O), and
+here what joins them to the link, the clock and the subscribers: a frame sent,
+a frame received, a timer, a window delivered.
 
-The record of what arrived is kept per sent stream as merged time intervals
-(a few per outage, not one per window), so it stays small over a whole
-mission. A subscriber's window is delivered if its source stream covers it;
-backfilled windows are recorded per subscriber and stream, so no window is
-delivered twice. One link request runs at a time; its resume point is the
-first window not yet received, so after a link drop or a PubBroker restart
-it is asked again from there (nothing sent twice, nothing skipped).
-
-A datagram link (udp, serial) loses frames, and control datagrams are not
-resent: a lost BACKFILL_DATA shows as a frame that starts past the resume
-point, a lost END as a run whose windows all arrived, a lost request or END
-as silence. Each is answered by asking again from the resume point (the
-PubBroker replaces a request of the same id), so a lossy radio slows a
-backfill down but never leaves it running for ever.
+One request is on the link at a time; its resume point is the first window not
+yet received, so after a link drop or a PubBroker restart it is asked again
+from there (nothing sent twice, nothing skipped). A datagram link (udp, serial)
+loses frames and does not resend control frames: a lost BACKFILL_DATA shows as a
+frame that starts past the resume point, a lost END as a run whose windows all
+arrived, a lost request or END as silence; each is answered by asking again.
 """
 
 from __future__ import annotations
 
-import bisect
 import itertools
 import logging
 import threading
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from modd_plan.streams import StreamKey
 from modd_plan.windows import split_window, window_of
 
 from modd.link import backfill as bf
 from modd.link.codec import RawFrame
-from modd.link.frames import Aggregation, ProtocolError, ValueType
+from modd.link.frames import ProtocolError
 from modd.link.receiver import Window
 
-from .fanout import period_us
+from .backfill_queue import BackfillQueue, Filled, Job, Run, Timing
 from .payload import DeliveredValue
+from .window_record import Due, Epoch, WindowRecord
 
 if TYPE_CHECKING:
     from .delivery import Sink
+    from .kept import StateDir
     from .running import Running
 
 log = logging.getLogger("modd.subbroker.backfill")
 
-#: A resume answered by frames already in flight is not asked again within this time.
-RESUME_GRACE_S = 2.0
-#: Silence of the running request after which it is asked again (at least; slower paces
-#: wait for four of the largest data frames at their rate).
-STALL_S = 10.0
-LARGEST_FRAME_B = 250
+#: The window record is written to the state directory at most this often (and at stop).
+SAVE_S = 1.0
+#: Ended jobs kept for their progress document.
+KEEP_ENDED = 64
+
+__all__ = ["BackfillManager", "Job", "Run", "Timing"]
 
 
-class Intervals:
-    """Disjoint, merged ``[start, end)`` intervals of nanoseconds.
-
-    >>> iv = Intervals(); iv.add(0, 10); iv.add(10, 20); iv.add(30, 40)
-    >>> iv.spans, iv.covers(5, 20), iv.covers(15, 35)
-    ([(0, 20), (30, 40)], True, False)
-    """
-
-    def __init__(self) -> None:
-        self.spans: list[tuple[int, int]] = []
-
-    def add(self, start: int, end: int) -> None:
-        i = bisect.bisect_left(self.spans, (start, start))
-        if i > 0 and self.spans[i - 1][1] >= start:
-            i -= 1
-        j = i
-        while j < len(self.spans) and self.spans[j][0] <= end:
-            start, end = min(start, self.spans[j][0]), max(end, self.spans[j][1])
-            j += 1
-        self.spans[i:j] = [(start, end)]
-
-    def covers(self, start: int, end: int) -> bool:
-        i = bisect.bisect_right(self.spans, (start, 1 << 63)) - 1
-        return i >= 0 and self.spans[i][0] <= start and self.spans[i][1] >= end
+def epoch_of(running: Running) -> Epoch:
+    """What each subscriber is due while ``running`` runs."""
+    due = []
+    for ps in running.plan.streams:
+        source = ps.sources[0].stream if ps.sources else ps.stream
+        unit, vtype = running.topic_info[ps.stream.topic]
+        due += [Due(sub, ps.stream, source, unit, vtype) for sub in ps.subscribers]
+    return Epoch(mission_of(running), running.config.config_id, running.epoch_ns, due)
 
 
-@dataclass
-class Run:
-    """Consecutive windows of one subscriber's stream, one link request."""
-
-    subscriber: str
-    stream: StreamKey
-    source: StreamKey  # the sent stream the live path derives it from (the record's key)
-    value_type: str
-    unit: str
-    config_id: int
-    from_ns: int
-    windows: int
-
-
-@dataclass
-class Job:
-    """One backfill as the queryable and the CLI see it."""
-
-    job_id: int
-    subscriber: str
-    runs: deque[Run]
-    total: int
-    rate_bps: int
-    started: float = field(default_factory=time.monotonic)
-    status: str = "RUNNING"  # DONE, CANCELLED, FAILED
-    reason: str = ""
-    done_windows: int = 0
-    delivered: int = 0
-    duplicates: int = 0
-    bytes: int = 0
-    request: bf.BackfillRequest | None = None
-    next: int = 0  # resume point of the running request
-    finished: threading.Event = field(default_factory=threading.Event)
-    heard: float = 0.0  # monotonic time of the running request's last frame (or its sending)
-    asked_at: float = 0.0  # monotonic time the running request was last sent
-    asked_next: int = -1  # the resume point it was sent with
-    resumes: int = 0  # requests sent again after a loss or a silence
-
-    def stall_s(self) -> float:
-        return max(STALL_S, 4 * LARGEST_FRAME_B / max(self.rate_bps, 1))
-
-    def progress(self) -> dict[str, Any]:
-        secs = time.monotonic() - self.started
-        left = None
-        if self.done_windows and self.status == "RUNNING":
-            left = secs / self.done_windows * (self.total - self.done_windows)
-        return {"status": self.status, "id": self.job_id, "subscriber": self.subscriber,
-                "windows": self.delivered, "windows_done": self.done_windows,
-                "windows_total": self.total, "duplicates": self.duplicates, "bytes": self.bytes,
-                "rate_bps": self.rate_bps, "seconds": round(secs, 3),
-                "bytes_per_s": round(self.bytes / secs, 1) if secs > 0 else 0.0,
-                "seconds_left": None if left is None else round(left, 1),
-                "reason": self.reason}
+def mission_of(running: Running) -> str:
+    return str(running.model.get("name") or "")
 
 
 class BackfillManager:
-    """Delivered-window record, gap detection and the link requests of one SubBroker."""
+    """The window record, the queue and the link requests of one SubBroker."""
 
-    def __init__(self, send: Callable[[bytes], None], sinks: Callable[[], Sequence[Sink]]) -> None:
+    def __init__(self, send: Callable[[bytes], None], sinks: Callable[[], Sequence[Sink]],
+                 state: StateDir | None = None, timing: Timing | None = None) -> None:
         self._send = send
         self._sinks = sinks
+        self._state = state
         self._lock = threading.RLock()
-        self._received: dict[StreamKey, Intervals] = {}
-        self._filled: dict[tuple[str, StreamKey], Intervals] = {}
+        self._wake = threading.Condition(self._lock)
+        # request ids from 1 (one byte in every BACKFILL_DATA): the PubBroker forgets its
+        # requests at each authentication, so a restarted SubBroker's ids meet no old one
+        self._queue = BackfillQueue(timing or Timing())
+        self.record = self._load()
+        self._dirty = False
+        self._saved_at = 0.0
         self._jobs: dict[int, Job] = {}
-        self._queue: deque[Job] = deque()
-        self._active: Job | None = None
         self._ids = itertools.count(1)
-        self._request_ids = itertools.count(1)
+        self._closed = False
+        self._thread: threading.Thread | None = None
 
-    # -- the record ---------------------------------------------------------------
+    # -- the record -----------------------------------------------------------------
+
+    def _load(self) -> WindowRecord:
+        doc = self._state.load_windows() if self._state is not None else None
+        if doc is None:
+            return WindowRecord()
+        try:
+            return WindowRecord.from_json(doc)
+        except (KeyError, TypeError, ValueError) as exc:
+            log.error("window record in the state directory unreadable (%s): starting afresh",
+                      exc)
+            return WindowRecord()
+
+    def save(self) -> None:
+        """Write the record to the state directory (if any) when it changed."""
+        with self._lock:
+            if self._state is None or not self._dirty:
+                return
+            doc, self._dirty, self._saved_at = self.record.to_json(), False, time.monotonic()
+        try:
+            self._state.save_windows(doc)
+        except OSError as exc:
+            log.error("cannot keep the window record: %s", exc)
+
+    def on_config(self, running: Running) -> None:
+        """A config runs (acknowledged): its windows are due from its epoch."""
+        with self._lock:
+            self.record.begin(epoch_of(running))
+            self._dirty = True
+            self._ensure_thread()
+        self.save()
 
     def on_windows(self, running: Running, windows: Sequence[Window]) -> None:
         """Live windows that arrived (link thread)."""
         sent = running.fanout.sent
         with self._lock:
             for w in windows:
-                iv = self._received.get(sent[w.stream])
-                if iv is None:
-                    iv = self._received[sent[w.stream]] = Intervals()
-                iv.add(w.start_ns, w.end_ns)
+                self.record.add_received(sent[w.stream], w.start_ns, w.end_ns)
+            if not self._dirty:  # the clock thread saves it within SAVE_S
+                self._dirty = True
+                self._wake.notify_all()
 
     def received_until(self) -> int | None:
-        """The end of the latest live window received (the live path covers what follows)."""
         with self._lock:
-            ends = [iv.spans[-1][1] for iv in self._received.values() if iv.spans]
-        return max(ends) if ends else None
+            return self.record.received_until()
 
-    def delivered(self, subscriber: str, stream: StreamKey, source: StreamKey,
-                  start: int, end: int) -> bool:
+    def mission_start(self, running: Running) -> int:
         with self._lock:
-            live = self._received.get(source)
-            if live is not None and live.covers(start, end):
-                return True
-            filled = self._filled.get((subscriber, stream))
-            return filled is not None and filled.covers(start, end)
+            start = self.record.mission_start(mission_of(running))
+        return running.epoch_ns if start is None else min(start, running.epoch_ns)
+
+    def knows(self, running: Running, subscriber: str) -> bool:
+        with self._lock:
+            self.record.begin(epoch_of(running))
+            return subscriber in self.record.subscribers(self.mission_start(running))
 
     def gaps(self, running: Running, subscriber: str, from_ns: int, to_ns: int) -> list[Run]:
-        """The runs of windows of ``subscriber``'s streams in ``[from_ns, to_ns)`` that
-        were not delivered (live or backfilled), on the live window grid."""
-        runs: list[Run] = []
-        epoch = running.epoch_ns
-        for ps in running.plan.streams:
-            if subscriber not in ps.subscribers:
-                continue
-            stream = ps.stream
-            source = ps.sources[0].stream if ps.sources else stream
-            q = period_us(stream) * 1000
-            first = max(0, -(-(from_ns - epoch) // q))
-            last = (to_ns - epoch) // q  # windows [epoch + j q, epoch + (j+1) q) for j < last
-            unit, vtype = running.topic_info[stream.topic]
-            start: int | None = None
-            for j in range(first, last):
-                s = epoch + j * q
-                if self.delivered(subscriber, stream, source, s, s + q):
-                    if start is not None:
-                        runs.append(Run(subscriber, stream, source, vtype, unit,
-                                        running.config.config_id, start, (s - start) // q))
-                        start = None
-                elif start is None:
-                    start = s
-            if start is not None:
-                end = epoch + last * q
-                runs.append(Run(subscriber, stream, source, vtype, unit,
-                                running.config.config_id, start, (end - start) // q))
-        return runs
+        """The runs of ``subscriber``'s windows in ``[from_ns, to_ns)`` not delivered,
+        in every config that ran then (each on its own window grid)."""
+        with self._lock:
+            self.record.begin(epoch_of(running))  # dynamic subscriptions added since
+            return self.record.gaps(subscriber, from_ns, to_ns)
 
-    # -- jobs ---------------------------------------------------------------------
+    # -- jobs -------------------------------------------------------------------------
 
-    def start(self, subscriber: str, runs: list[Run], rate_bps: int) -> Job:
-        job = Job(next(self._ids), subscriber, deque(runs), sum(r.windows for r in runs), rate_bps)
+    def start(self, subscriber: str, runs: list[Run], rate_bps: int, owner: str = "") -> Job:
+        job = Job(next(self._ids), subscriber, owner, deque(runs),
+                  sum(r.windows for r in runs), rate_bps)
         with self._lock:
             self._jobs[job.job_id] = job
-            for old in list(self._jobs)[:-64]:
-                if self._jobs[old].finished.is_set():
-                    del self._jobs[old]
-            self._queue.append(job)
-            if self._active is None:
-                self._next_request()
-        if job.total == 0:
-            self._finish(job, "DONE")
+            ended = [j for j in self._jobs.values() if j.status != "RUNNING"]
+            for old in ended[:-KEEP_ENDED]:
+                del self._jobs[old.job_id]
+            _, frames = self._queue.submit(job, time.monotonic())
+            self._transmit(frames)
+            self._ensure_thread()
+        if job.status != "RUNNING":
+            self._ended(job)
         return job
+
+    def running(self, subscriber: str, owner: str) -> bool:
+        """Whether ``owner`` has a job for ``subscriber`` that has not ended."""
+        with self._lock:
+            return any(j.subscriber == subscriber and j.owner == owner
+                       for j in self._queue.jobs.values())
 
     def job(self, job_id: int) -> Job | None:
         return self._jobs.get(job_id)
 
+    def progress(self, job: Job) -> dict[str, Any]:
+        with self._lock:
+            return self._queue.progress(job, time.monotonic())
+
     def cancel(self, job_id: int) -> Job | None:
         with self._lock:
             job = self._jobs.get(job_id)
-            if job is None or job.finished.is_set():
+            if job is None or job.status != "RUNNING":
                 return job
-            if job is self._active and job.request is not None:
-                self._try_send(bf.encode(bf.BackfillCancel(job.request.request_id)))
-            self._finish(job, "CANCELLED")
-            return job
+            self._transmit(self._queue.cancel(job, time.monotonic()))
+        self._ended(job)
+        return job
 
     def cap(self, job_id: int, rate_bps: int) -> Job | None:
-        """Lower (or set) the pace of a job; a running request is asked again at the new
-        pace from its resume point (the PubBroker replaces a request with the same id)."""
+        """Set the pace of a job; a running request is asked again at it from its resume
+        point (the PubBroker replaces a request with the same id)."""
         with self._lock:
             job = self._jobs.get(job_id)
-            if job is None or job.finished.is_set():
-                return job
-            job.rate_bps = rate_bps
-            if job is self._active and job.request is not None:
-                self.on_up()
+            if job is not None and job.status == "RUNNING":
+                self._transmit(self._queue.cap(job, rate_bps, time.monotonic()))
             return job
 
     def on_up(self) -> None:
-        """The link is up again: ask for the running request from its resume point."""
+        """The link is up (again): the request in flight is asked from its resume point."""
         with self._lock:
-            job = self._active
-            if job is not None and job.request is not None:
-                self._resume(job, "the link is up again")
+            self._transmit(self._queue.link_up(time.monotonic()))
 
-    def _resume(self, job: Job, why: str) -> None:
-        """Ask for the running request again from its resume point (same id: the
-        PubBroker replaces the request it has, if any)."""
-        q = job.request
-        assert q is not None
-        job.request = bf.BackfillRequest(q.request_id, q.topic, q.type, q.aggregation,
-                                         q.period_us, q.from_ns, q.windows, job.next,
-                                         job.rate_bps)
-        job.resumes += 1
-        log.info("backfill %d: %s, resuming at window %d of %d", job.job_id, why, job.next,
-                 q.windows)
-        self._ask(job)
-
-    def _resume_unless_asked(self, job: Job, why: str) -> None:
-        """Resume, unless the same resume point was asked for a moment ago (frames
-        sent before that request reached the PubBroker still arrive)."""
-        if job.asked_next == job.next and time.monotonic() - job.asked_at < RESUME_GRACE_S:
-            return
-        self._resume(job, why)
-
-    def _ask(self, job: Job) -> None:
-        """Send the running request, and watch it: silence past its stall time asks again."""
-        assert job.request is not None
-        now = time.monotonic()
-        job.asked_at = job.heard = now
-        job.asked_next = job.next
-        self._try_send(bf.encode(job.request))
-        self._watch(job, job.request.request_id, job.stall_s())
-
-    def _watch(self, job: Job, request_id: int, after_s: float) -> None:
-        timer = threading.Timer(after_s, self._check_stall, (job, request_id))
-        timer.daemon = True
-        timer.start()
-
-    def _check_stall(self, job: Job, request_id: int) -> None:
+    def close(self) -> None:
         with self._lock:
-            if (self._active is not job or job.request is None
-                    or job.request.request_id != request_id or job.finished.is_set()):
-                return  # that request ended; its successor has its own watch
-            quiet = time.monotonic() - job.heard
-            if quiet >= job.stall_s() - 0.01:
-                self._resume(job, f"nothing heard for {quiet:.1f} s")
-            else:
-                self._watch(job, request_id, job.stall_s() - quiet)
+            self._closed = True
+            self._wake.notify_all()
+        self.save()
 
-    def _try_send(self, frame: bytes) -> None:
-        try:
-            self._send(frame)
-        except (ConnectionError, OSError) as exc:  # sent again from on_up
-            log.info("backfill request waits for the link: %s", exc)
+    # -- frames to and from the PubBroker ----------------------------------------------
 
-    def _finish(self, job: Job, status: str, reason: str = "") -> None:
-        with self._lock:
-            if job.finished.is_set():
-                return
-            job.status, job.reason = status, reason
-            job.finished.set()
-            if job in self._queue:
-                self._queue.remove(job)
-            if self._active is job:
-                self._active = None
-                self._next_request()
-        log.info("backfill %d for %s: %s (%d windows, %d duplicates, %d bytes)%s", job.job_id,
-                 job.subscriber, status, job.delivered, job.duplicates, job.bytes,
-                 f": {reason}" if reason else "")
-
-    def _next_request(self) -> None:
-        while self._queue and self._active is None:
-            job = self._queue[0]
-            if not job.runs:
-                self._queue.popleft()
-                self._finish(job, "DONE")
-                continue
-            run = job.runs[0]
-            self._active = job
-            job.next = 0
-            job.request = bf.BackfillRequest(
-                next(self._request_ids), run.stream.topic, ValueType.parse(run.value_type),
-                Aggregation[run.stream.aggregation], period_us(run.stream), run.from_ns,
-                run.windows, 0, job.rate_bps)
-            self._ask(job)
-
-    # -- frames from the PubBroker (link thread) --------------------------------------
+    def _transmit(self, frames: list[bytes]) -> None:
+        for frame in frames:
+            try:
+                self._send(frame)
+            except (ConnectionError, OSError) as exc:  # sent again when the link is up
+                log.info("backfill request waits for the link: %s", exc)
+                self._queue.link_down()
+                break
+        for note in self._queue.notes:
+            log.info("%s", note)
+        self._queue.notes.clear()
+        self._wake.notify_all()
 
     def on_frame(self, frame: RawFrame) -> None:
+        """A backfill frame from the PubBroker (link thread)."""
         with self._lock:
-            job = self._active
-            req = job.request if job is not None else None
+            ended_before = set(self._queue.jobs)
+            now = time.monotonic()
+            flight = self._queue.flight
             try:
                 if frame.type == bf.BackfillType.DATA:
-                    if job is None or req is None or bf.data_request_id(frame) != req.request_id:
-                        return  # a frame of a request cancelled or replaced
-                    self._on_data(job, req, bf.decode_data(frame, req.kind()), len(frame.body) + 2)
-                    return
-                msg = bf.decode(frame)
+                    if flight is None or bf.data_request_id(frame) != flight.request.request_id:
+                        return  # a frame of a request cancelled, replaced or ended
+                    data = bf.decode_data(frame, flight.request.kind())
+                    filled, frames = self._queue.on_data(data, len(frame.body) + 2, now)
+                    if filled is not None:
+                        self._deliver(filled)
+                else:
+                    msg = bf.decode(frame)
+                    frames = []
+                    if isinstance(msg, bf.BackfillEnd):
+                        frames = self._queue.on_end(msg, now)
+                    elif isinstance(msg, bf.BackfillProgress):
+                        self._queue.heard(msg.request_id, now)
             except ProtocolError as exc:
                 log.warning("backfill frame refused: %s", exc)
                 return
-            if job is None or req is None or getattr(msg, "request_id", None) != req.request_id:
-                return
-            job.heard = time.monotonic()
-            if isinstance(msg, bf.BackfillEnd):
-                self._on_end(job, req, msg)
+            self._transmit(frames)
+            ended = [self._jobs[i] for i in ended_before - set(self._queue.jobs)
+                     if i in self._jobs]
+        for job in ended:
+            self._ended(job)
 
-    def _on_data(self, job: Job, req: bf.BackfillRequest, d: bf.BackfillData, size: int) -> None:
-        job.heard = time.monotonic()
-        if d.first > job.next:  # a frame before it was lost on the way
-            self._resume_unless_asked(job, f"windows {job.next}..{d.first - 1} lost")
-            return
-        if d.first != job.next:  # in flight before a resume: asked for again
-            return
-        run = job.runs[0]
-        job.bytes += size
-        now = time.time_ns()
-        q = req.period_us * 1000
-        source = run.source
-        for i, value in enumerate(d.values):
-            start = req.window_start_ns(d.first + i)
-            job.next += 1
-            job.done_windows += 1
-            if self.delivered(run.subscriber, run.stream, source, start, start + q):
+    def _deliver(self, f: Filled) -> None:
+        """The windows of a BACKFILL_DATA frame to the subscriber (those not delivered)."""
+        run, job, now = f.run, f.job, time.time_ns()
+        q = f.request.period_us * 1000
+        sinks = self._sinks()
+        for i, value in enumerate(f.data.values):
+            start = f.request.window_start_ns(f.data.first + i)
+            if self.record.delivered(run.subscriber, run.stream, run.source, start, start + q):
                 job.duplicates += 1
                 continue
             window = window_of(value, run.stream.aggregation, run.value_type)
@@ -385,31 +266,43 @@ class BackfillManager:
                                  run.stream.key.rsplit("/", 1)[1], run.unit, run.config_id,
                                  (start + q) // q, start, start + q, val, count, now, True)
             payload = out.to_json()
-            for sink in self._sinks():
+            for sink in sinks:
                 sink.put(run.subscriber, payload)
-            filled = self._filled.setdefault((run.subscriber, run.stream), Intervals())
-            filled.add(start, start + q)
+            self.record.add_filled(run.subscriber, run.stream, start, start + q)
             job.delivered += 1
-        if job.next >= req.windows:  # all of the run: its END may be lost, not waited for
-            self._run_done(job)
+        self._dirty = True
 
-    def _run_done(self, job: Job) -> None:
-        job.runs.popleft()
-        job.request = None
-        self._active = None
-        if job.runs:
-            self._next_request()  # the job stays first in the queue: its next run
-        else:
-            self._finish(job, "DONE")
+    def _ended(self, job: Job) -> None:
+        log.info("backfill %d for %s: %s (%d windows, %d duplicates, %d bytes, %d requests)%s",
+                 job.job_id, job.subscriber, job.status, job.delivered, job.duplicates,
+                 job.bytes, job.requests, f": {job.reason}" if job.reason else "")
 
-    def _on_end(self, job: Job, req: bf.BackfillRequest, end: bf.BackfillEnd) -> None:
-        if end.status == bf.EndStatus.DONE and job.next >= req.windows:
-            self._run_done(job)
-            return
-        if end.status == bf.EndStatus.DONE:
-            # the PubBroker sent the whole run but windows from job.next did not arrive
-            # (or this END left before a resume reached it: then the resumed one follows)
-            self._resume_unless_asked(job, f"the run ended with windows from {job.next} lost")
-            return
-        self._finish(job, "CANCELLED" if end.status == bf.EndStatus.CANCELLED else "FAILED",
-                     f"{end.status.name}: {end.message}")
+    # -- the clock --------------------------------------------------------------------
+
+    def _ensure_thread(self) -> None:
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._run, name="modd-backfill", daemon=True)
+            self._thread.start()
+
+    def _run(self) -> None:
+        """Retries, resumes after a silence, and the record's saving, on time."""
+        while True:
+            with self._lock:
+                if self._closed:
+                    return
+                wake = self._queue.wake_at()
+                now = time.monotonic()
+                if self._dirty and self._state is not None:
+                    wake = min(wake or now + SAVE_S, self._saved_at + SAVE_S)
+                timeout = None if wake is None else max(0.0, wake - now)
+                if timeout is None or timeout > 0:
+                    self._wake.wait(timeout)
+                    continue
+                before = set(self._queue.jobs)
+                self._transmit(self._queue.tick(now))
+                ended = [self._jobs[i] for i in before - set(self._queue.jobs) if i in self._jobs]
+                save = self._dirty and now - self._saved_at >= SAVE_S and self._state is not None
+            if save:
+                self.save()
+            for job in ended:
+                self._ended(job)

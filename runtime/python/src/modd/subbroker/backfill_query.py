@@ -2,10 +2,13 @@
 JSON requests to start a backfill, follow its progress, or cancel it.
 
 ``{"op": "start", "subscriber": S, "gaps": true}`` fills every window of S's
-subscriptions the link missed since the running config began;
+subscriptions the link missed since the mission began (every config that ran
+since, across SubBroker and PubBroker restarts and redeploys);
 ``{"op": "start", "subscriber": S, "from_ns": T0, "to_ns": T1}`` the windows
 of ``[T0, T1)`` not delivered yet. ``"rate_bps"`` caps the pace (default: the
 spare budget of the link, its ``rateBps`` minus the plan's live bytes/s).
+The job is queued fairly among every user's jobs (``"owner"``) and its
+progress document says what it waits for (``reason``).
 ``{"op": "progress", "id": N}``, ``{"op": "cancel", "id": N}`` and
 ``{"op": "cap", "id": N, "rate_bps": R}`` answer the job's progress document
 (``status`` RUNNING, DONE, CANCELLED or FAILED). ``"owner"`` (set by the
@@ -63,7 +66,7 @@ def handle(payload: bytes, manager: BackfillManager, running: Callable[[], Runni
                 job = manager.job(job_id) if op == "progress" else manager.cancel(job_id)
             if job is None:
                 return {"status": "UNKNOWN", "reason": f"no backfill {job_id}"}
-            return job.progress()
+            return manager.progress(job)
         if op != "start":
             return {"status": "ERROR",
                     "reason": f"unknown op {str(op)[:32]!r} (start, progress, cancel, cap)"}
@@ -81,26 +84,28 @@ def _start(request: dict[str, Any], manager: BackfillManager, running: Running |
     if running is None:
         return {"status": "ERROR", "reason": "no config runs: nothing to backfill"}
     subscriber = request.get("subscriber")
-    if not isinstance(subscriber, str) or not any(
-            subscriber in ps.subscribers for ps in running.plan.streams):
-        return {"status": "ERROR", "reason": f"no subscriber {subscriber!r} in the running plan"}
+    if not isinstance(subscriber, str) or not manager.knows(running, subscriber):
+        return {"status": "ERROR",
+                "reason": f"no subscriber {subscriber!r} in the plans of this mission"}
     until = covered_until(running)
+    began = manager.mission_start(running)
     if request.get("gaps"):
-        from_ns, to_ns = running.epoch_ns, until
+        from_ns, to_ns = began, until
     else:
         f, t = _int(request, "from_ns"), _int(request, "to_ns")
         if f is None or t is None:
             raise ValueError("give gaps: true, or from_ns and to_ns")
         if t <= f:
             raise ValueError("to_ns must be after from_ns")
-        from_ns, to_ns = max(f, running.epoch_ns), min(t, until)
+        from_ns, to_ns = max(f, began), min(t, until)
     rate = _int(request, "rate_bps")
     if rate is not None and not 1 <= rate <= MAX_RATE_BPS:
         raise ValueError(f"rate_bps must be in 1..{MAX_RATE_BPS}")
     spare = spare_budget(running)
     pace = min(rate, spare) if rate and spare else (rate or spare)
     runs = manager.gaps(running, subscriber, from_ns, to_ns) if to_ns > from_ns else []
-    job: Job = manager.start(subscriber, runs, pace)
-    out = job.progress()
+    owner = request.get("owner")
+    job: Job = manager.start(subscriber, runs, pace, owner if isinstance(owner, str) else "")
+    out = manager.progress(job)
     out["from_ns"], out["to_ns"] = from_ns, to_ns
     return out

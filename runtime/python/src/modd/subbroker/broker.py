@@ -89,7 +89,7 @@ class SubBroker:
         records = config.record_dir or (config.state_dir / "records" if config.state_dir
                                         else None)
         self.record = BaseRecord(records, self.drone) if records is not None else None
-        self.backfill = BackfillManager(self.link.send_frame, self._sinks)
+        self.backfill = BackfillManager(self.link.send_frame, self._sinks, self._state)
         self.link.backfill_sink = self.backfill.on_frame
         self.link.on_up = self._link_up
 
@@ -170,6 +170,7 @@ class SubBroker:
             self._zenoh.close()
         if self.record is not None:
             self.record.close()
+        self.backfill.close()
         if self._own_session and self._session is not None:
             self._session.close()  # type: ignore[no-untyped-call]
 
@@ -259,6 +260,7 @@ class SubBroker:
                 self._by_id[previous.config.config_id] = previous
             self._running = running
             self._model, self._meta = model, meta
+        self.backfill.on_config(running)
         if self._tcp is not None:
             self._tcp.set_endpoints(tcp_endpoints(model))
         if self.record is not None:
@@ -300,12 +302,15 @@ class SubBroker:
             policy = sub.get("backfill", "off")
             if policy == "off":
                 continue
-            start = running.epoch_ns if policy == "mission" else since_ns
+            start = self.backfill.mission_start(running) if policy == "mission" else since_ns
+            if self.backfill.running(sub["name"], "(policy)"):
+                continue  # a flapping link: the job of an earlier reconnection runs on
             runs = self.backfill.gaps(running, sub["name"], start, until)
             if runs:
                 log.info("backfill of %s (%s): %d runs after the outage", sub["name"], policy,
                          len(runs))
-                self.backfill.start(sub["name"], runs, backfill_query.spare_budget(running))
+                self.backfill.start(sub["name"], runs, backfill_query.spare_budget(running),
+                                    "(policy)")
 
     def _sinks(self) -> list[Sink]:
         return [s for s in (self._zenoh, self._tcp, self.record) if s is not None]

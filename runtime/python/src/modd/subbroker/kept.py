@@ -147,3 +147,11 @@ class StateDir:
         return [s for s in subs if isinstance(s, dict)
                 and all(isinstance(s.get(k), str) for k in ("name", "topic", "period_s",
                                                                "aggregation", "owner"))]
+
+    # -- the window record (backfill) ---------------------------------------------
+
+    def save_windows(self, doc: dict[str, Any]) -> None:
+        self._write("windows.json", doc)
+
+    def load_windows(self) -> Any:
+        return self._read("windows.json")

@@ -1,0 +1,137 @@
+"""The window record across config epochs (modd.subbroker.window_record): the gaps of a
+subscriber over several configs (SubBroker restart, PubBroker restart, redeploy), each on
+its own epoch's grid, against an independent count window by window; and the record kept
+in the state directory reads back the same."""
+
+from __future__ import annotations
+
+import json
+import random
+import time
+from fractions import Fraction
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+from modd.subbroker.window_record import Due, Epoch, WindowRecord
+from modd_plan.streams import StreamKey
+
+S = 1_000_000_000
+T0 = 1_700_000_000 * S
+FAST = StreamKey("usv.a.x", "MIN", Fraction(1, 4))
+SLOW = StreamKey("usv.a.x", "MIN", Fraction(2))
+OTHER = StreamKey("usv.b.y", "AVERAGE", Fraction(1, 2))
+
+
+def three_epochs() -> WindowRecord:
+    rec = WindowRecord()
+    # config 1 from T0: sub derived MIN/2 s from MIN/0.25 s; config 2 (a SubBroker restart,
+    # epoch not on config 1's grid) the same; config 3 (a redeploy) asks OTHER instead
+    rec.begin(Epoch("m", 1, T0, [Due("sub", SLOW, FAST, "m", "float32")]))
+    rec.begin(Epoch("m", 2, T0 + 60 * S + 123_456, [Due("sub", SLOW, FAST, "m", "float32")]))
+    rec.begin(Epoch("m", 3, T0 + 120 * S + 77, [Due("sub", OTHER, OTHER, "K", "float64"),
+                                                 Due("other", FAST, FAST, "m", "float32")]))
+    return rec
+
+
+def windows(epoch: int, period: int, lo: int, hi: int) -> set[int]:
+    return {s for s in range(epoch, hi, period) if s >= lo and s + period <= hi}
+
+
+def test_gaps_span_every_epoch_on_its_own_grid() -> None:
+    rec = three_epochs()
+    rng = random.Random(7)
+    got_live: set[tuple[StreamKey, int, int]] = set()
+    for e, (stream, until) in zip(rec.epochs, [(FAST, T0 + 60 * S), (FAST, T0 + 120 * S),
+                                               (OTHER, T0 + 200 * S)], strict=True):
+        q = int(stream.period * S)
+        for s in sorted(windows(e.epoch_ns, q, e.epoch_ns, until)):
+            if rng.random() < 0.7:  # the link delivered 70 % of the live windows
+                rec.add_received(stream, s, s + q)
+                got_live.add((stream, s, s + q))
+    lo, hi = T0 + 10 * S, T0 + 190 * S
+    runs = rec.gaps("sub", lo, hi)
+    asked = {(r.stream, r.from_ns + k * int(r.stream.period * S), r.config_id)
+             for r in runs for k in range(r.windows)}
+    # independently: every window due in [lo, hi) whose source windows did not all arrive
+    want = set()
+    for e, end in zip(rec.epochs, [rec.epochs[1].epoch_ns, rec.epochs[2].epoch_ns, hi],
+                      strict=True):
+        (due,) = [d for d in e.due if d.subscriber == "sub"]
+        q, qs = int(due.stream.period * S), int(due.source.period * S)
+        for s in windows(e.epoch_ns, q, max(lo, e.epoch_ns), min(end, hi)):
+            if not all((due.source, t, t + qs) in got_live for t in range(s, s + q, qs)):
+                want.add((due.stream, s, e.config_id))
+    assert asked == want and len(want) > 50
+    assert {c for _, _, c in asked} == {1, 2, 3}  # earlier configs' windows too
+    assert all(r.value_type == ("float64" if r.stream == OTHER else "float32") for r in runs)
+
+
+def test_backfilled_windows_are_not_asked_again() -> None:
+    rec = three_epochs()
+    (first, *_) = rec.gaps("sub", T0, T0 + 30 * S)
+    rec.add_filled("sub", first.stream, first.from_ns, first.from_ns + first.windows * 2 * S)
+    assert first not in rec.gaps("sub", T0, T0 + 30 * S)
+    assert rec.gaps("sub", T0, T0 + 30 * S) == []
+
+
+def test_kept_record_reads_back_the_same() -> None:
+    rec = three_epochs()
+    rec.add_received(FAST, T0, T0 + 10 * S)
+    rec.add_received(FAST, T0 + 20 * S, T0 + 30 * S)
+    rec.add_filled("sub", SLOW, T0 + 10 * S, T0 + 12 * S)
+    back = WindowRecord.from_json(json.loads(json.dumps(rec.to_json())))
+    assert back.to_json() == rec.to_json()
+    assert back.gaps("sub", T0, T0 + 200 * S) == rec.gaps("sub", T0, T0 + 200 * S)
+    assert back.received_until() == T0 + 30 * S
+
+
+@pytest.mark.parametrize("doc", [{}, {"epochs": [{"mission": "m"}]},
+                                 {"epochs": [], "received": {"usv.a.x/MIN/0.25": [[5, 1]]},
+                                  "filled": []},
+                                 {"epochs": [], "received": {"nonsense": []}, "filled": []}])
+def test_a_damaged_record_is_refused(doc: object) -> None:
+    with pytest.raises((KeyError, TypeError, ValueError)):
+        WindowRecord.from_json(doc)
+
+
+def test_the_mission_starts_at_its_first_epoch_and_names_its_subscribers() -> None:
+    rec = three_epochs()
+    rec.begin(Epoch("older", 9, T0 - 100 * S, [Due("gone", FAST, FAST, "m", "float32")]))
+    assert rec.mission_start("m") == T0
+    assert rec.subscribers(T0) == {"sub", "other"}
+    assert rec.subscribers(T0 + 130 * S) == {"sub", "other"}
+    rec.begin(Epoch("m2", 4, T0 + 300 * S, []))
+    assert rec.mission_start("m") is None and rec.mission_start("m2") == T0 + 300 * S
+
+
+def test_the_manager_keeps_the_record_without_a_clean_stop(tmp_path: Path) -> None:
+    """Written within SAVE_S of a live window (a kill -9 loses at most that), read back by
+    the next SubBroker: the earlier epoch's gaps are still known."""
+    from modd.link.frames import Value
+    from modd.link.receiver import Window
+    from modd.subbroker.backfill import SAVE_S, BackfillManager
+    from modd.subbroker.kept import StateDir
+
+    ps = SimpleNamespace(stream=FAST, sources=(), subscribers=["sub"])
+    running = SimpleNamespace(plan=SimpleNamespace(streams=[ps]), model={"name": "m"},
+                              topic_info={FAST.topic: ("m", "float32")},
+                              config=SimpleNamespace(config_id=1), epoch_ns=T0,
+                              fanout=SimpleNamespace(sent=[FAST]))
+    m = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
+    m.on_config(running)  # type: ignore[arg-type]
+    q = S // 4
+    m.on_windows(running, [Window(1, k, 0, T0 + k * q, T0 + (k + 1) * q, Value(True, 1.0))  # type: ignore[arg-type]
+                           for k in range(40) if not 10 <= k < 20])
+    deadline = time.monotonic() + SAVE_S + 5
+    while True:  # no close(): as after a kill -9
+        doc = StateDir(tmp_path).load_windows()
+        if doc and doc["received"]:
+            break
+        assert time.monotonic() < deadline, "the record was not written"
+        time.sleep(0.05)
+    again = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
+    assert again.received_until() == T0 + 40 * q
+    assert [(r.from_ns, r.windows, r.config_id) for r in again.record.gaps("sub", T0, T0 + 10 * S)
+            ] == [(T0 + 10 * q, 10, 1)]
+    m.close()
