@@ -12,7 +12,9 @@ Example::
 
 from __future__ import annotations
 
+#: The byte a line is split at, and what ends a line written to the device, per terminator.
 TERMINATORS = {"crlf": b"\n", "lf": b"\n", "cr": b"\r"}
+LINE_ENDS = {"crlf": b"\r\n", "lf": b"\n", "cr": b"\r"}
 
 
 class LineSplitter:

@@ -43,6 +43,16 @@ def checksum(body: str) -> int:
     return out
 
 
+def sentence(talker: str, kind: str, fields: list[str]) -> str:
+    """The line (with its checksum, without terminator) that ``parse_sentence`` reads back.
+
+    >>> sentence("II", "MTW", ["12.5", "C"])
+    '$IIMTW,12.5,C*15'
+    """
+    body = ",".join([talker + kind, *fields])
+    return f"${body}*{checksum(body):02X}"
+
+
 def parse_sentence(line: str) -> Sentence:
     """One line (terminator stripped) → its sentence; BadSentence says why not."""
     if len(line) > MAX_LINE:

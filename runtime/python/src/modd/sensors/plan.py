@@ -20,7 +20,7 @@ from modd_model.numbers import to_fraction
 from modd_model.query import DEFAULT_VALUE_TYPE, topic_name
 
 from .ascii import Column, Key, LineFormat, Where
-from .lines import TERMINATORS
+from .lines import LINE_ENDS, TERMINATORS
 
 INSTRUMENT_KINDS = ("nmea", "ascii", "modbus")
 
@@ -67,6 +67,7 @@ class SensorPlan:
     line: LineFormat = field(default_factory=LineFormat)
     terminator: bytes = b"\n"
     start_command: str | None = None
+    line_end: bytes = b"\r\n"  # ends the start command
     poll_s: float = 1.0  # modbus
 
 
@@ -117,18 +118,20 @@ def _sensor_plan(
         return None
     dev = sensor["device"]
     line = sensor.get("line", {})
+    terminator = line.get("terminator", "crlf")
     return SensorPlan(
-        sensor["name"],
-        kind,
-        Device(
+        name=sensor["name"],
+        kind=kind,
+        device=Device(
             dev["path"], dev.get("baud", 9600), dev.get("parity", "none"), dev.get("stopBits", 1)
         ),
-        tuple(mappings),
-        sensor.get("clock") == "instrument",
-        _line_format(sensor),
-        TERMINATORS[line.get("terminator", "crlf")],
-        line.get("startCommand"),
-        min(periods),
+        mappings=tuple(mappings),
+        instrument_clock=sensor.get("clock") == "instrument",
+        line=_line_format(sensor),
+        terminator=TERMINATORS[terminator],
+        start_command=line.get("startCommand"),
+        line_end=LINE_ENDS[terminator],
+        poll_s=min(periods),
     )
 
 

@@ -93,7 +93,7 @@ class SensorThread:
     def _read(self, port: serial.Serial) -> None:
         decoder = LineDecoder(self.plan, self.health)
         if self.plan.start_command:
-            port.write(self.plan.start_command.encode() + self.plan.terminator)
+            port.write(self.plan.start_command.encode() + self.plan.line_end)
         while not self._stop.is_set():
             data = read_some(port)
             if data:
