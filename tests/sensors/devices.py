@@ -96,7 +96,7 @@ class ModbusDevice:
         self.reader_side = PtyDevice(path)
         self.server_master, server_path, self.server_slave = _pty()
         # address 1 of the block is register 0 on the wire (FIELD_NOTES, pymodbus 3.16)
-        self.block = ModbusSequentialDataBlock(1, registers)
+        self.block = ModbusSequentialDataBlock(1, registers)  # type: ignore[no-untyped-call]
         context = ModbusServerContext(devices={1: ModbusDeviceContext(hr=self.block)}, single=False)
         self._stop = threading.Event()
         self._loop: asyncio.AbstractEventLoop | None = None

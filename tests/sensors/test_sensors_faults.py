@@ -104,7 +104,7 @@ def test_bad_lines_are_counted_and_never_published(
     sounder.write(bad_checksum + truncated + merged + good)
     ctd.write(b"12.5,45.1\r\n12.6\r\nS>\r\n12.7,4x\r\n")
     wait_until(
-        lambda: reader.out.values("depth") and len(reader.out.values("t")) == 1,
+        lambda: bool(reader.out.values("depth")) and len(reader.out.values("t")) == 1,
         10,
         "the good lines published",
     )
@@ -178,10 +178,9 @@ def test_a_flooding_device_does_not_starve_the_others(
     try:
         for i in range(30):
             ctd.write(f"{i}.5,1.0\r\n".encode())
+            expected = i + 0.5
             wait_until(
-                lambda i=i: float(i) + 0.5 in reader.out.values("t"),
-                0.5,  # type: ignore[misc]
-                f"CTD line {i} under the flood",
+                lambda: expected in reader.out.values("t"), 0.5, f"CTD line {i} under the flood"
             )
             time.sleep(0.1)
     finally:
