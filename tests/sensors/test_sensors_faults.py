@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +38,9 @@ class Recorder:
     def values(self, topic: str) -> list[float]:
         with self.lock:
             return [v for t, _, v in self.samples if t.endswith("." + topic)]
+
+    def has(self, topic: str, value: float) -> Callable[[], bool]:
+        return lambda: value in self.values(topic)
 
     def flush(self, timeout: float = 5.0) -> bool:
         return True
@@ -178,10 +181,7 @@ def test_a_flooding_device_does_not_starve_the_others(
     try:
         for i in range(30):
             ctd.write(f"{i}.5,1.0\r\n".encode())
-            expected = i + 0.5
-            wait_until(
-                lambda: expected in reader.out.values("t"), 0.5, f"CTD line {i} under the flood"
-            )
+            wait_until(reader.out.has("t", i + 0.5), 0.5, f"CTD line {i} under the flood")
             time.sleep(0.1)
     finally:
         stop.set()
