@@ -136,8 +136,8 @@ def test_four_instruments_archived_with_no_driver_code(tmp_path: Path) -> None:
     finally:
         up.send_signal(signal.SIGTERM)
         out, _ = up.communicate(timeout=60)
-        for d in (gnss, sounder, ctd):
-            d.close()
+        for device in (gnss, sounder, ctd):
+            device.close()
         sonde.close()
     assert up.returncode == 0, out
     assert "started sensors" in out
