@@ -166,4 +166,4 @@ def instrument_time_ns(s: Sentence) -> int | None:
             return None
     except (NoValue, ValueError, OverflowError):
         return None
-    return int((midnight + seconds) * 1e9)
+    return midnight * 1_000_000_000 + round(seconds * 1e9)

@@ -33,9 +33,8 @@ def _raw(m: TopicMapping, value: float) -> float:
 
 def _coordinate(value: float, degree_digits: int) -> tuple[str, str]:
     hemi = ("N" if value >= 0 else "S") if degree_digits == 2 else ("E" if value >= 0 else "W")
-    a = abs(value)
-    degrees = int(a)
-    return f"{degrees:0{degree_digits}d}{(a - degrees) * 60:07.4f}", hemi
+    degrees, minutes = divmod(round(abs(value) * 60, 4), 60)  # 59.99996' is 1 degree on
+    return f"{int(degrees):0{degree_digits}d}{minutes:07.4f}", hemi
 
 
 def _stamp(kind: str, now: float) -> str:
@@ -69,12 +68,13 @@ def _fields(kind: str, mapped: list[tuple[TopicMapping, float]], now: float) -> 
 def nmea_lines(plan: SensorPlan, values: Mapping[str, float], now: float) -> list[str]:
     """One sentence per sentence type the sensor's variables read (and a ZDA when
     the model stamps with the instrument's clock)."""
-    by_kind: dict[str, list[tuple[TopicMapping, float]]] = {}
+    # the time first, as receivers start an epoch with it
+    by_kind: dict[str, list[tuple[TopicMapping, float]]] = (
+        {"ZDA": []} if plan.instrument_clock else {}
+    )
     for m in plan.mappings:
         if m.topic in values:
             by_kind.setdefault(m.where[0], []).append((m, values[m.topic]))  # type: ignore[index]
-    if plan.instrument_clock:
-        by_kind.setdefault("ZDA", [])
     out = []
     for kind, mapped in by_kind.items():
         fields = _fields(kind, mapped, now)
