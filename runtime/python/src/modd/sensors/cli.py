@@ -65,12 +65,9 @@ def main(argv: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
-    if args.ingress:
-        ingress = args.ingress
-    else:
-        from modd_gen.ingress import ingress_of
+    from modd_gen.ingress import ingress_of  # the model's ingress, as the generators write it
 
-        ingress = ingress_of(model).address
+    ingress = args.ingress or ingress_of(model).address
     names = sorted({m.publisher for p in plans for m in p.mappings})
     sinks = {n: Publisher(n, ingress) for n in names}
     runner = Runner(plans, sinks, log, args.status_file, args.status_period)
