@@ -7,7 +7,7 @@ from modd_gen import generate
 from modd_model import parse_text
 
 SENSORS = """
-Sensor gnss kind nmea on "/dev/ttyACM0" measures { lat("deg", float64) from GGA.lat; }
+Sensor gnss kind nmea on "/dev/ttyACM0" measures { lat("deg", float64) from sentence GGA.lat; }
 Sensor ctd kind ascii on "/dev/ttyUSB1" measures { t(DEGREE_CELSIUS) from column 1; }
 Sensor sonde kind modbus on "/dev/ttyUSB2" measures { ph(NONE) from register 0 float32; }
 """

@@ -16,9 +16,9 @@ SENSORS = r"""
 Sensor gnss "u-blox" kind nmea on "/dev/serial/by-id/usb-u-blox" {
     baud = 9600; clock = instrument;
 } measures {
-    lat("deg", float64) from GGA.lat;
-    sats(NONE, int) from GGA.satellites;
-    depth(METER) from DBT.f3 scale 1.0 offset -0.5;
+    lat("deg", float64) from sentence GGA.lat;
+    sats(NONE, int) from sentence GGA.satellites;
+    depth(METER) from sentence DBT.f3 scale 1.0 offset -0.5;
 }
 Sensor ctd kind ascii on "/dev/ttyUSB1" {
     separator = " "; terminator = lf; start = "START"; pattern = "T=(?P<T>\\S+) C=(\\S+)";
@@ -86,34 +86,34 @@ def _errors(sensors: str) -> dict[str, tuple[str, int]]:
     ("sensor", "pointer", "words"),
     [
         (
-            'Sensor g kind nmea on "/d" measures { x(NONE) from ABC.f1; }',
+            'Sensor g kind nmea on "/d" measures { x(NONE) from sentence ABC.f1; }',
             "/drone/sensors/0/variables/0/nmea/field",
             "unknown NMEA sentence 'ABC'",
         ),
         (
-            'Sensor g kind nmea on "/d" measures { x(NONE) from DBT.f7; }',
+            'Sensor g kind nmea on "/d" measures { x(NONE) from sentence DBT.f7; }',
             "/drone/sensors/0/variables/0/nmea/field",
             "DBT has 6 fields: f7 is out of range",
         ),
         (
-            'Sensor g kind nmea on "/d" measures { x(NONE) from GGA.time; }',
+            'Sensor g kind nmea on "/d" measures { x(NONE) from sentence GGA.time; }',
             "/drone/sensors/0/variables/0/nmea/field",
             "GGA.time holds time, not a number",
         ),
         (
-            'Sensor g kind nmea on "/d" measures { x(NONE) from GGA.height; }',
+            'Sensor g kind nmea on "/d" measures { x(NONE) from sentence GGA.height; }',
             "/drone/sensors/0/variables/0/nmea/field",
             "GGA has no field 'height'",
         ),
         (
-            "Sensor g kind nmea measures { x(NONE) from GGA.lat; }",
+            "Sensor g kind nmea measures { x(NONE) from sentence GGA.lat; }",
             "/drone/sensors/0",
             "needs its serial device",
         ),
         (
             'Sensor g kind nmea on "/d" measures { x(NONE); }',
             "/drone/sensors/0/variables/0",
-            "needs a source: from SENTENCE.field",
+            "needs a source: from sentence SENTENCE.field",
         ),
         (
             'Sensor g on "/d" measures { x(NONE); }',
@@ -188,7 +188,7 @@ def test_same_register_read_alike_is_fine() -> None:
 
 def test_talker_is_not_part_of_the_sentence() -> None:
     """The sentence names the type only: GPGGA is refused, with the known types listed."""
-    errors = _errors('Sensor g kind nmea on "/d" measures { x(NONE) from GPGGA.f1; }')
+    errors = _errors('Sensor g kind nmea on "/d" measures { x(NONE) from sentence GPGGA.f1; }')
     message, _ = errors["/drone/sensors/0/variables/0/nmea/sentence"]
     assert "'GPGGA' is not one of" in message
 
@@ -198,7 +198,7 @@ def test_schema_refuses_bad_device_settings() -> None:
     doc, _ = parse_text(
         _model(
             'Sensor g kind nmea on "/d" { parity = mark; baud = 7; } '
-            "measures { x(NONE) from GGA.lat; }"
+            "measures { x(NONE) from sentence GGA.lat; }"
         )
     )
     pointers = {d.pointer for d in validate(doc) if d.severity == "error"}

@@ -52,7 +52,7 @@ class Recorder:
 def _model(tmp: Path, extra: str = "", topics: str = "") -> dict[str, Any]:
     doc, _ = parse_text(f'''
 Drone usv {{ Sensors {{
-    Sensor sounder kind nmea on "{tmp}/sounder" measures {{ depth(METER) from DPT.depth; }}
+    Sensor sounder kind nmea on "{tmp}/sounder" measures {{ depth(METER) from sentence DPT.depth; }}
     Sensor ctd kind ascii on "{tmp}/ctd" {{ start = "GO"; }} measures {{
         t(DEGREE_CELSIUS) from column 1; c("mS/cm") from column 2; }}
     {extra}

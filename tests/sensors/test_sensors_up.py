@@ -26,11 +26,11 @@ from modd.ports import free_port
 MODEL = """
 Drone usv {{ Sensors {{
     Sensor gnss "u-blox" kind nmea on "{dev}/gnss" {{ baud = 9600; }} measures {{
-        lat("deg", float64) from GGA.lat; lon("deg", float64) from GGA.lon;
-        speed(METER_PER_SECOND) from RMC.speed_knots scale 0.514444;
+        lat("deg", float64) from sentence GGA.lat; lon("deg", float64) from sentence GGA.lon;
+        speed(METER_PER_SECOND) from sentence RMC.speed_knots scale 0.514444;
     }}
     Sensor sounder kind nmea on "{dev}/sounder" {{ baud = 4800; }} measures {{
-        depth(METER) from DBT.depth_meters;
+        depth(METER) from sentence DBT.depth_meters;
     }}
     Sensor ctd kind ascii on "{dev}/ctd" {{ separator = ","; start = "START"; }} measures {{
         temperature(DEGREE_CELSIUS) from column 1;

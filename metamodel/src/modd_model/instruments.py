@@ -79,7 +79,7 @@ def _variable_mapping(s: dict[str, Any], v: dict[str, Any], ptr: str) -> Iterato
             )
     if kind in INSTRUMENT_KINDS and kind not in v:
         how = {
-            "nmea": "from SENTENCE.field",
+            "nmea": "from sentence SENTENCE.field",
             "ascii": "from column N or from key NAME",
             "modbus": "from register N TYPE",
         }[kind]

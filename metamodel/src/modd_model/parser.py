@@ -358,30 +358,28 @@ class _Builder:
                                 f"{', '.join(SENSOR_KINDS)}", ptr + "/kind")
                 sensor["kind"] = str(kind)
             elif child.data == "device":
-                sensor.update(self._device(child, ptr))
+                path = child.children[0]
+                assert isinstance(path, Tree) and isinstance(path.children[0], Token)
+                self._mark(ptr + "/device", child)
+                self._mark(ptr + "/device/path", path.children[0])
+                sensor["device"] = {"path": _word(path.children[0])}
+            elif child.data == "settings":
+                self._sensor_settings(sensor, child, ptr)
             else:
-                variables.append(self._variable(child, f"{ptr}/variables/{len(variables)}",
-                                                sensor.get("kind")))
+                variables.append(self._variable(child, f"{ptr}/variables/{len(variables)}"))
         sensor["variables"] = variables
         return sensor
 
-    def _device(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
-        """``on "PATH" { settings }`` → the sensor's device, line and clock properties."""
-        path, *rest = node.children
-        assert isinstance(path, Tree) and isinstance(path.children[0], Token)
-        self._mark(ptr + "/device", node)
-        self._mark(ptr + "/device/path", path.children[0])
-        out: dict[str, Any] = {"device": {"path": _word(path.children[0])}}
-        flat = self._settings(rest[0], ptr, SENSOR_SETTINGS) if rest else {}
-        for prop, value in flat.items():
+    def _sensor_settings(self, sensor: dict[str, Any], node: Tree[Token], ptr: str) -> None:
+        """``{ baud = 9600; ... }`` into the sensor's device, line and clock properties."""
+        for prop, value in self._settings(node, ptr, SENSOR_SETTINGS).items():
             head, _, tail = prop.partition("/")
             if tail:
-                out.setdefault(head, {})[tail] = value
+                sensor.setdefault(head, {})[tail] = value
             else:
-                out[head] = value
-        return out
+                sensor[head] = value
 
-    def _variable(self, node: Tree[Token], ptr: str, kind: str | None) -> dict[str, Any]:
+    def _variable(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
         name, unit_node, *rest = node.children
         assert isinstance(name, Token) and isinstance(unit_node, Tree)
         self._mark(ptr, node)
@@ -405,7 +403,7 @@ class _Builder:
                     self._error(child, f"unknown value type {str(child)!r}; expected one of "
                                 f"{', '.join(VALUE_TYPES)}", ptr + "/type")
                 var["type"] = str(child)
-            elif child.data == "source" and kind == "nmea":
+            elif child.data == "sentence_source":
                 var["nmea"] = self._nmea_source(child, ptr + "/nmea")
             elif child.data == "source":
                 var["source"] = self._source(child, ptr + "/source")

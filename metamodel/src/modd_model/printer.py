@@ -16,7 +16,7 @@ INDENT = "    "
 #: Words of the grammar: a name spelled like one is written ^-escaped (^Sensor).
 KEYWORDS = frozenset({"DataCollector", "Drone", "Sensors", "Sensor", "measures", "kind", "from",
                       "scale", "offset", "PubBroker", "SubBroker", "Link", "Publishers",
-                      "Publisher", "Subscriptions", "Subscriber", "on", "column", "key",
+                      "Publisher", "Subscriptions", "Subscriber", "on", "sentence", "column", "key",
                       "register", "unit", "table", "order"})
 
 
@@ -57,7 +57,7 @@ def _factors(src: dict[str, Any]) -> str:
 def _instrument_source(v: dict[str, Any]) -> str:
     """The ``from`` of an nmea, ascii or modbus variable ("" when it has none)."""
     if "nmea" in v:
-        return f" from {v['nmea']['sentence']}.{v['nmea']['field']}{_factors(v['nmea'])}"
+        return f" from sentence {v['nmea']['sentence']}.{v['nmea']['field']}{_factors(v['nmea'])}"
     if "ascii" in v:
         a = v["ascii"]
         where = f"column {a['column']}" if "column" in a else f"key {quote(a['key'])}"
@@ -73,14 +73,15 @@ def _instrument_source(v: dict[str, Any]) -> str:
 
 
 def _device(s: dict[str, Any]) -> str:
-    """`` on "PATH" { settings }`` of an instrument sensor ("" without a device)."""
-    if "device" not in s:
-        return ""
-    flat = {f"{part}/{k}": v for part in ("device", "line") for k, v in s.get(part, {}).items()}
+    """`` on "PATH" { settings }`` of an instrument sensor ("" when it has neither)."""
+    flat = {f"{part}/{k}": v for part in ("device", "line") for k, v in s.get(part, {}).items()
+            if (part, k) != ("device", "path")}
     if "clock" in s:
         flat["clock"] = s["clock"]
     settings = " ".join(line.strip() for line in _settings(flat, SENSOR_SETTINGS, 0))
-    return f" on {quote(s['device']['path'])}" + (f" {{ {settings} }}" if settings else "")
+    path = s.get("device", {}).get("path")
+    return (f" on {quote(path)}" if path is not None else "") + \
+        (f" {{ {settings} }}" if settings else "")
 
 
 def _settings(values: dict[str, Any], known: dict[str, tuple[str, str]], depth: int) -> list[str]:

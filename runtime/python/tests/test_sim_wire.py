@@ -17,8 +17,8 @@ from modd_model import parse_text
 MODEL = """
 Drone d { Sensors {
     Sensor gnss kind nmea on "/g" { clock = instrument; } measures {
-        lat("deg", float64) from GGA.lat; lon("deg", float64) from GGA.lon;
-        depth(METER) from DBT.depth_meters; p(BAR) from XDR.f6 scale 0.001;
+        lat("deg", float64) from sentence GGA.lat; lon("deg", float64) from sentence GGA.lon;
+        depth(METER) from sentence DBT.depth_meters; p(BAR) from sentence XDR.f6 scale 0.001;
     }
     Sensor ctd kind ascii on "/c" { separator = ";"; } measures {
         t(DEGREE_CELSIUS) from column 2; c("mS/cm") from key "C" scale 0.1;
