@@ -4,12 +4,16 @@ integrator makes is reported at its place (JSON pointer and line:col)."""
 
 from __future__ import annotations
 
+import string
 from typing import Any
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from modd_model import parse_text, print_model
 from modd_model.parser import parse_lenient
 from modd_model.validate import validate
+from modd_model.vocabulary import NMEA_SENTENCES
 
 BROKERS = 'PubBroker("127.0.0.1":1, "/l"); SubBroker("127.0.0.1":2, "/c");'
 SENSORS = r"""
@@ -203,3 +207,97 @@ def test_schema_refuses_bad_device_settings() -> None:
     )
     pointers = {d.pointer for d in validate(doc) if d.severity == "error"}
     assert {"/drone/sensors/0/device/parity", "/drone/sensors/0/device/baud"} <= pointers
+
+
+# -- any instrument sensor round-trips (print -> parse -> the same document) ------------
+
+_names = st.from_regex(r"[a-z_][a-z0-9_]{0,8}", fullmatch=True)
+_finite = st.floats(allow_nan=False, allow_infinity=False)
+_factors = {"scale": _finite, "offset": _finite}
+_text = st.text(
+    alphabet=string.printable.replace("\x0b", "").replace("\x0c", ""), min_size=1, max_size=12
+)
+_sources = st.one_of(
+    st.fixed_dictionaries(
+        {
+            "nmea": st.fixed_dictionaries(
+                {"sentence": st.sampled_from(list(NMEA_SENTENCES)), "field": _names},
+                optional=_factors,
+            )
+        }
+    ),
+    st.fixed_dictionaries(
+        {
+            "ascii": st.one_of(
+                st.fixed_dictionaries({"column": st.integers(1, 256)}, optional=_factors),
+                st.fixed_dictionaries({"key": _text}, optional=_factors),
+            )
+        }
+    ),
+    st.fixed_dictionaries(
+        {
+            "modbus": st.fixed_dictionaries(
+                {"register": st.integers(0, 65535), "type": st.sampled_from(["int16", "float32"])},
+                optional={
+                    "unit": st.integers(1, 247),
+                    "table": st.sampled_from(["holding", "input"]),
+                    "wordOrder": st.sampled_from(["big", "little"]),
+                    **_factors,
+                },
+            )
+        }
+    ),
+    st.just({}),
+)
+_sensors = st.fixed_dictionaries(
+    {
+        "name": _names,
+        "variables": st.lists(
+            st.builds(lambda n, s: {"name": n, "unit": "NONE", **s}, _names, _sources),
+            min_size=1,
+            max_size=3,
+        ),
+    },
+    optional={
+        "kind": st.sampled_from(["generic", "mavlink", "nmea", "ascii", "modbus"]),
+        "device": st.fixed_dictionaries(
+            {},
+            optional={
+                "path": _text,
+                "baud": st.integers(300, 4_000_000),
+                "parity": st.sampled_from(["none", "even", "odd"]),
+                "stopBits": st.integers(1, 2),
+            },
+        ),
+        "line": st.fixed_dictionaries(
+            {},
+            optional={
+                "separator": _text,
+                "terminator": st.sampled_from(["crlf", "lf", "cr"]),
+                "startCommand": _text,
+                "pattern": _text,
+            },
+        ),
+        "clock": st.sampled_from(["receive", "instrument"]),
+    },
+)
+
+
+@settings(max_examples=200)
+@given(st.lists(_sensors, min_size=1, max_size=3))
+def test_any_instrument_sensor_round_trips(sensors: list[dict[str, Any]]) -> None:
+    for s in sensors:
+        if s.get("device") == {}:
+            del s["device"]
+        if s.get("line") == {}:
+            del s["line"]
+    doc = {
+        "schemaVersion": "1.0",
+        "drone": {"name": "d", "sensors": sensors},
+        "pubBroker": {"endpoint": {"host": "127.0.0.1", "port": 1}, "logPath": "/l"},
+        "subBroker": {"endpoint": {"host": "127.0.0.1", "port": 2}, "configPath": "/c"},
+        "publishers": [],
+        "subscribers": [],
+    }
+    again, _ = parse_text(print_model(doc))
+    assert again == doc

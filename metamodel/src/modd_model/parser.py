@@ -358,19 +358,22 @@ class _Builder:
                                 f"{', '.join(SENSOR_KINDS)}", ptr + "/kind")
                 sensor["kind"] = str(kind)
             elif child.data == "device":
-                path = child.children[0]
+                path, *settings = child.children
                 assert isinstance(path, Tree) and isinstance(path.children[0], Token)
                 self._mark(ptr + "/device", child)
                 self._mark(ptr + "/device/path", path.children[0])
                 sensor["device"] = {"path": _word(path.children[0])}
-            elif child.data == "settings":
-                self._sensor_settings(sensor, child, ptr)
+                for block in settings:
+                    self._sensor_settings(sensor, block, ptr)
+            elif child.data == "sensor_settings":
+                self._sensor_settings(sensor, child.children[0], ptr)
             else:
                 variables.append(self._variable(child, f"{ptr}/variables/{len(variables)}"))
         sensor["variables"] = variables
         return sensor
 
-    def _sensor_settings(self, sensor: dict[str, Any], node: Tree[Token], ptr: str) -> None:
+    def _sensor_settings(self, sensor: dict[str, Any], node: Tree[Token] | Token,
+                         ptr: str) -> None:
         """``{ baud = 9600; ... }`` into the sensor's device, line and clock properties."""
         for prop, value in self._settings(node, ptr, SENSOR_SETTINGS).items():
             head, _, tail = prop.partition("/")

@@ -16,8 +16,8 @@ INDENT = "    "
 #: Words of the grammar: a name spelled like one is written ^-escaped (^Sensor).
 KEYWORDS = frozenset({"DataCollector", "Drone", "Sensors", "Sensor", "measures", "kind", "from",
                       "scale", "offset", "PubBroker", "SubBroker", "Link", "Publishers",
-                      "Publisher", "Subscriptions", "Subscriber", "on", "sentence", "column", "key",
-                      "register", "unit", "table", "order"})
+                      "Publisher", "Subscriptions", "Subscriber", "on", "with", "sentence",
+                      "column", "key", "register", "unit", "table", "order"})
 
 
 def name(text: str) -> str:
@@ -80,8 +80,8 @@ def _device(s: dict[str, Any]) -> str:
         flat["clock"] = s["clock"]
     settings = " ".join(line.strip() for line in _settings(flat, SENSOR_SETTINGS, 0))
     path = s.get("device", {}).get("path")
-    return (f" on {quote(path)}" if path is not None else "") + \
-        (f" {{ {settings} }}" if settings else "")
+    head = f" on {quote(path)}" if path is not None else " with" if settings else ""
+    return head + (f" {{ {settings} }}" if settings else "")
 
 
 def _settings(values: dict[str, Any], known: dict[str, tuple[str, str]], depth: int) -> list[str]:

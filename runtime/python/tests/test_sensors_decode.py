@@ -23,7 +23,8 @@ MODEL = r"""
 Drone usv { Sensors {
     Sensor gnss kind nmea on "/dev/gnss" { clock = instrument; } measures {
         lat("deg", float64) from sentence GGA.lat; lon("deg", float64) from sentence GGA.lon;
-        depth(METER) from sentence DBT.depth_meters; heading("deg") from sentence HDT.heading scale 1 offset 0.5;
+        depth(METER) from sentence DBT.depth_meters;
+        heading("deg") from sentence HDT.heading scale 1 offset 0.5;
     }
     Sensor ctd kind ascii on "/dev/ctd" measures {
         t(DEGREE_CELSIUS) from column 1; c("mS/cm") from key "C" scale 0.1;

@@ -53,9 +53,11 @@ class SensorThread:
         self.thread = threading.Thread(target=self._run, name=f"sensor-{plan.name}", daemon=True)
         self._stop = threading.Event()
         self._opened = False
+        self.started_ns = 0  # when reading began: silence is counted from there
 
     def start(self, stop: threading.Event) -> None:
         self._stop = stop
+        self.started_ns = time.time_ns()
         self.thread.start()
 
     def publish(self, samples: list[Sample]) -> None:
@@ -146,8 +148,6 @@ class SensorThread:
             h.silences += 1
             self.log(f"{self.plan.name}: silent for {(now_ns - since) / 1e9:.1f} s")
 
-    started_ns = 0
-
 
 class Runner:
     def __init__(
@@ -179,9 +179,7 @@ class Runner:
         os.replace(tmp, self.status_file)
 
     def run(self, stop: threading.Event, tick_s: float = 0.25) -> None:
-        start = time.time_ns()
         for s in self.sensors:
-            s.started_ns = start
             s.start(stop)
         next_status = time.monotonic() + self.status_period_s
         try:
