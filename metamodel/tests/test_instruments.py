@@ -217,7 +217,7 @@ _factors = {"scale": _finite, "offset": _finite}
 _text = st.text(
     alphabet=string.printable.replace("\x0b", "").replace("\x0c", ""), min_size=1, max_size=12
 )
-_sources = st.one_of(
+_sources: st.SearchStrategy[dict[str, Any]] = st.one_of(
     st.fixed_dictionaries(
         {
             "nmea": st.fixed_dictionaries(
