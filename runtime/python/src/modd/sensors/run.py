@@ -71,11 +71,19 @@ class SensorThread:
                 h.refused += 1
 
     def _run(self) -> None:
+        waiting = False  # said once per absence, not every RETRY_S
         while not self._stop.is_set():
             port = open_port(self.plan.device)
             if port is None:
+                if not waiting:
+                    self.log(
+                        f"{self.plan.name}: waiting for {self.plan.device.path} "
+                        f"(retried every {RETRY_S} s)"
+                    )
+                waiting = True
                 self._stop.wait(RETRY_S)
                 continue
+            waiting = False
             if self._opened:
                 self.health.reconnects += 1
                 self.log(f"{self.plan.name}: {self.plan.device.path} reopened")
