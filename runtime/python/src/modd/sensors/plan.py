@@ -16,13 +16,12 @@ import re
 from dataclasses import dataclass, field
 from typing import Any
 
+from modd_model.instruments import INSTRUMENT_KINDS
 from modd_model.numbers import to_fraction
 from modd_model.query import DEFAULT_VALUE_TYPE, topic_name
 
 from .ascii import Column, Key, LineFormat, Where
 from .lines import LINE_ENDS, TERMINATORS
-
-INSTRUMENT_KINDS = ("nmea", "ascii", "modbus")
 
 
 @dataclass(frozen=True)

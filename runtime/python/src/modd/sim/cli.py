@@ -33,7 +33,7 @@ def mavlink_topics(model: dict[str, Any]) -> set[str]:
 
 def instrument_topics(model: dict[str, Any]) -> set[str]:
     """The topics of the model's ``kind nmea``, ``ascii`` and ``modbus`` sensors."""
-    from ..sensors.plan import INSTRUMENT_KINDS
+    from modd_model.instruments import INSTRUMENT_KINDS
 
     drone = model["drone"]["name"]
     return {f"{drone}.{s['name']}.{v['name']}" for s in model["drone"]["sensors"]
