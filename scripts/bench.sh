@@ -40,6 +40,7 @@ run tests/bench/bench_backend_plan.py --runs 30
 run tests/bench/bench_subbroker.py --seconds "${SUBBROKER_SECONDS:-10}" --profile
 run tests/bench/bench_fleet.py --drones "${FLEET_DRONES:-20}" --seconds "${FLEET_SECONDS:-60}"
 run tests/bench/bench_health_ws.py --ops 20000
+run tests/bench/bench_sensors.py --seconds "${SENSORS_SECONDS:-20}"
 run tests/bench/bench_health_csv.py --clients 70 --seconds "${HEALTH_CSV_SECONDS:-20}"
 run tests/bench/bench_backfill.py --minutes "${BACKFILL_MINUTES:-10}" --rate 3600
 run tests/bench/flap_windows.py "${FLAP_SECONDS:-60}" 2

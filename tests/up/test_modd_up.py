@@ -98,8 +98,9 @@ def test_up_with_simulator_delivers_live_values(tmp_path: Path, modd_cmd: str,
                for v in values["track_lat"]), values
     bridge_log = (tmp_path / "run" / "logs" / "bridge.log").read_text()
     assert "autopilot accepted GLOBAL_POSITION_INT every 0.2 s" in bridge_log, bridge_log
-    assert len(re.findall(r"\(pid (\d+)\)", out)) == 4, out
+    assert len(re.findall(r"\(pid (\d+)\)", out)) == 5, out  # + modd-sensors (the CTD)
     assert "stopped bridge (exit 0)" in out and "stopped simulator (exit 0)" in out
+    assert "stopped sensors (exit 0)" in out
     assert f"credentials='{viewer}'" in out
 
 

@@ -80,8 +80,14 @@ export interface Sensor {
   name: Name;
   /** Free text shown in the workbench. */
   description?: Text;
-  /** How the sensor is read: generic (a driver publishes through a publisher client) or mavlink (the MAVLink bridge publishes fields of an autopilot's messages, mapped per variable). generic when absent. */
-  kind?: "generic" | "mavlink";
+  /** How the sensor is read: generic (a driver publishes through a publisher client), mavlink (the MAVLink bridge publishes fields of an autopilot's messages, mapped per variable), or an instrument read by modd-sensors on a serial device with no driver code: nmea (NMEA 0183 sentences), ascii (one text line per sample) or modbus (Modbus RTU registers, polled). generic when absent. */
+  kind?: "generic" | "mavlink" | "nmea" | "ascii" | "modbus";
+  /** For an nmea, ascii or modbus sensor: the serial device it is read from. */
+  device?: SerialDevice;
+  /** For an ascii sensor: how its lines are written. */
+  line?: AsciiLine;
+  /** For an nmea sensor: which clock stamps its samples: receive (the reader's clock when the line arrives) or instrument (the UTC time of the instrument's last ZDA or RMC sentence, advanced by the receive time since). receive when absent. */
+  clock?: "receive" | "instrument";
   /** What the sensor measures (1 to 256 variables). */
   variables: MeasuredVariable[];
 }
@@ -98,6 +104,12 @@ export interface MeasuredVariable {
   description?: Text;
   /** For a variable of a mavlink sensor: the MAVLink message field it is read from. */
   source?: MavlinkField;
+  /** For a variable of an nmea sensor: the sentence field it is read from. */
+  nmea?: NmeaField;
+  /** For a variable of an ascii sensor: the column or key of the line it is read from. */
+  ascii?: AsciiField;
+  /** For a variable of a modbus sensor: the register it is read from. */
+  modbus?: ModbusRegister;
 }
 
 /** A field of a MAVLink message, converted to the variable's unit as value = raw * scale + offset. */
@@ -107,6 +119,72 @@ export interface MavlinkField {
   /** Field of the message, e.g. lat. */
   field: Name;
   /** Factor applied to the raw field (e.g. 1e-7 for degE7 to degrees). */
+  scale?: number;
+  /** Added after scaling. */
+  offset?: number;
+}
+
+/** A serial device an instrument is read from (RS-232, RS-485 adapter, USB serial). */
+export interface SerialDevice {
+  /** The character device, e.g. /dev/ttyUSB0; a /dev/serial/by-id/ link keeps working when the adapter is renumbered (it is resolved at each reopen). */
+  path: Path;
+  /** Baud rate. */
+  baud?: number;
+  /** Parity bit. */
+  parity?: "none" | "even" | "odd";
+  /** Stop bits. */
+  stopBits?: number;
+}
+
+/** How an ascii instrument writes its lines: columns split by a separator, key=value pairs, or the named groups of a regular expression. */
+export interface AsciiLine {
+  /** What splits columns and key=value pairs; a single space means any run of spaces or tabs. */
+  separator?: string;
+  /** What ends a line: crlf, lf (a line ends at LF; a CR before it is dropped) or cr. */
+  terminator?: "crlf" | "lf" | "cr";
+  /** Sent to the instrument (with the terminator) each time the device is opened, e.g. START. */
+  startCommand?: string;
+  /** A regular expression a whole line must match (Python syntax); variables read its named groups (key) or numbered groups (column). */
+  pattern?: string;
+}
+
+/** A field of an NMEA 0183 sentence, talker-agnostic (GPGGA, GNGGA and GLGGA are all GGA), converted as value = raw * scale + offset. Latitude and longitude fields are signed decimal degrees (their N/S/E/W field applied). */
+export interface NmeaField {
+  /** Sentence type without the talker, e.g. GGA. */
+  sentence: "GGA" | "GLL" | "RMC" | "VTG" | "GSA" | "ZDA" | "DBT" | "DPT" | "MTW" | "MWV" | "HDG" | "HDT" | "MDA" | "XDR";
+  /** A field name of the sentence (x-sentences), or fN for its N-th field (1-based). */
+  field: Name;
+  /** Factor applied to the field. */
+  scale?: number;
+  /** Added after scaling. */
+  offset?: number;
+}
+
+/** Where a value is in an ascii instrument's line (exactly one of column and key), converted as value = raw * scale + offset. */
+export interface AsciiField {
+  /** Column number, 1 for the first (or group number, with a pattern). */
+  column?: number;
+  /** Key of a key=value pair (or group name, with a pattern). */
+  key?: string;
+  /** Factor applied to the value read. */
+  scale?: number;
+  /** Added after scaling. */
+  offset?: number;
+}
+
+/** A Modbus RTU register (or pair) read at the sensor's publisher period, converted as value = raw * scale + offset. */
+export interface ModbusRegister {
+  /** Unit (slave) id on the bus. */
+  unit?: number;
+  /** Register address (0-based, as on the wire). */
+  register: number;
+  /** holding (function 3) or input (function 4) registers. */
+  table?: "holding" | "input";
+  /** What the register holds: int16, uint16 (one register), int32, uint32, float32 (two). */
+  type?: "int16" | "uint16" | "int32" | "uint32" | "float32";
+  /** For two registers: big (high word first, Modbus's usual order) or little (low word first). */
+  wordOrder?: "big" | "little";
+  /** Factor applied to the raw number. */
   scale?: number;
   /** Added after scaling. */
   offset?: number;

@@ -136,16 +136,36 @@ export function formFor(root: JsonSchema, kind: ElementKind): FieldSpec[] {
   return fieldsOf(root, def, [], true);
 }
 
+/** Where a variable's value comes from, per sensor kind (the variable's property). */
+const SOURCE_OF_KIND: Record<string, string> = { mavlink: "source", nmea: "nmea", ascii: "ascii", modbus: "modbus" };
+/** A sensor's properties that belong to some kinds only. */
+const SENSOR_PART_KINDS: Record<string, readonly string[]> = {
+  device: ["nmea", "ascii", "modbus"], line: ["ascii"], clock: ["nmea"],
+};
+
 /**
- * The fields the inspector shows for an element: `formFor`, less the MAVLink
- * field mapping (`source.*`) of a variable whose sensor is not a MAVLink one.
+ * The fields the inspector shows for an element: `formFor`, less what does
+ * not apply to the sensor's kind: a variable shows only the source of its
+ * sensor's kind (MAVLink field, NMEA field, ASCII column or key, Modbus
+ * register); a sensor shows its serial device, line format and clock only
+ * for the kinds that have them.
  *
  * @example
  *   shownFields(schema, "topic", "generic").some((f) => f.path[0] === "source") // false
+ *   shownFields(schema, "sensor", "nmea").some((f) => f.path.join(".") === "device.baud") // true
  */
 export function shownFields(root: JsonSchema, kind: ElementKind, sensorKind?: string): FieldSpec[] {
   const all = formFor(root, kind);
-  return kind === "topic" && sensorKind !== "mavlink" ? all.filter((f) => f.path[0] !== "source") : all;
+  const sensor = sensorKind ?? "generic";
+  if (kind === "topic") {
+    const mine = SOURCE_OF_KIND[sensor];
+    const sources = Object.values(SOURCE_OF_KIND);
+    return all.filter((f) => !sources.includes(f.path[0]) || f.path[0] === mine);
+  }
+  if (kind === "sensor") {
+    return all.filter((f) => !(f.path[0] in SENSOR_PART_KINDS) || SENSOR_PART_KINDS[f.path[0]].includes(sensor));
+  }
+  return all;
 }
 
 /** Description of an element kind, from the schema. */

@@ -60,6 +60,17 @@ LINK_SETTINGS = {
     "beta": ("beta", "decimal"),
 }
 INGRESS_SETTINGS = {"socket": ("unixSocket", "string"), "port": ("tcpPort", "int")}
+# An instrument sensor's settings (`on "PATH" { ... }`): a "/" in the property nests it.
+SENSOR_SETTINGS = {
+    "baud": ("device/baud", "int"),
+    "parity": ("device/parity", "word"),
+    "stop": ("device/stopBits", "int"),
+    "separator": ("line/separator", "string"),
+    "terminator": ("line/terminator", "word"),
+    "start": ("line/startCommand", "string"),
+    "pattern": ("line/pattern", "string"),
+    "clock": ("clock", "word"),
+}
 
 _TERMINAL_NAMES = {
     "NAME": "a name",
@@ -346,10 +357,30 @@ class _Builder:
                     self._error(kind, f"unknown sensor kind {str(kind)!r}; expected one of "
                                 f"{', '.join(SENSOR_KINDS)}", ptr + "/kind")
                 sensor["kind"] = str(kind)
+            elif child.data == "device":
+                path, *settings = child.children
+                assert isinstance(path, Tree) and isinstance(path.children[0], Token)
+                self._mark(ptr + "/device", child)
+                self._mark(ptr + "/device/path", path.children[0])
+                sensor["device"] = {"path": _word(path.children[0])}
+                for block in settings:
+                    self._sensor_settings(sensor, block, ptr)
+            elif child.data == "sensor_settings":
+                self._sensor_settings(sensor, child.children[0], ptr)
             else:
                 variables.append(self._variable(child, f"{ptr}/variables/{len(variables)}"))
         sensor["variables"] = variables
         return sensor
+
+    def _sensor_settings(self, sensor: dict[str, Any], node: Tree[Token] | Token,
+                         ptr: str) -> None:
+        """``{ baud = 9600; ... }`` into the sensor's device, line and clock properties."""
+        for prop, value in self._settings(node, ptr, SENSOR_SETTINGS).items():
+            head, _, tail = prop.partition("/")
+            if tail:
+                sensor.setdefault(head, {})[tail] = value
+            else:
+                sensor[head] = value
 
     def _variable(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
         name, unit_node, *rest = node.children
@@ -375,8 +406,14 @@ class _Builder:
                     self._error(child, f"unknown value type {str(child)!r}; expected one of "
                                 f"{', '.join(VALUE_TYPES)}", ptr + "/type")
                 var["type"] = str(child)
+            elif child.data == "sentence_source":
+                var["nmea"] = self._nmea_source(child, ptr + "/nmea")
             elif child.data == "source":
                 var["source"] = self._source(child, ptr + "/source")
+            elif child.data in ("column_source", "key_source"):
+                var["ascii"] = self._ascii_source(child, ptr + "/ascii")
+            elif child.data == "register_source":
+                var["modbus"] = self._register_source(child, ptr + "/modbus")
             else:
                 var["description"] = _unquote(child.children[0])  # type: ignore[arg-type]
         return var
@@ -391,6 +428,60 @@ class _Builder:
             assert isinstance(tok, Token)
             source[str(factor.data)] = float(tok)
         return source
+
+    def _factors(self, nodes: list[Tree[Token] | Token], out: dict[str, Any],
+                 ptr: str) -> dict[str, Any]:
+        """``scale X offset Y`` into ``out`` (located)."""
+        for factor in nodes:
+            assert isinstance(factor, Tree)
+            tok = factor.children[0]
+            assert isinstance(tok, Token)
+            self._mark(f"{ptr}/{factor.data}", tok)
+            out[str(factor.data)] = float(tok)
+        return out
+
+    def _nmea_source(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
+        sentence, field, *factors = node.children
+        self._mark(ptr, node)
+        self._mark(ptr + "/sentence", sentence)
+        self._mark(ptr + "/field", field)
+        return self._factors(factors, {"sentence": str(sentence), "field": str(field)}, ptr)
+
+    def _ascii_source(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
+        where, *factors = node.children
+        assert isinstance(where, Token)
+        self._mark(ptr, node)
+        if node.data == "column_source":
+            self._mark(ptr + "/column", where)
+            return self._factors(factors, {"column": self._int(where, ptr + "/column")}, ptr)
+        self._mark(ptr + "/key", where)
+        return self._factors(factors, {"key": _word(where)}, ptr)
+
+    def _register_source(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
+        register, rtype, *rest = node.children
+        assert isinstance(register, Token) and isinstance(rtype, Token)
+        self._mark(ptr, node)
+        self._mark(ptr + "/register", register)
+        self._mark(ptr + "/type", rtype)
+        src: dict[str, Any] = {}
+        factors: list[Tree[Token] | Token] = []
+        for option in rest:
+            assert isinstance(option, Tree)
+            tok = option.children[0]
+            assert isinstance(tok, Token)
+            if option.data in ("scale", "offset"):
+                factors.append(option)
+            elif option.data == "unit_id":
+                self._mark(ptr + "/unit", tok)
+                src["unit"] = self._int(tok, ptr + "/unit")
+            else:
+                key = "table" if option.data == "table" else "wordOrder"
+                self._mark(f"{ptr}/{key}", tok)
+                src[key] = str(tok)
+        src["register"] = self._int(register, ptr + "/register")
+        src["type"] = str(rtype)
+        order = ("unit", "register", "table", "type", "wordOrder")
+        return self._factors(factors, {k: src[k] for k in order if k in src}, ptr)
 
     def _endpoint(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
         host, port = node.children

@@ -9,14 +9,15 @@ from __future__ import annotations
 
 from typing import Any
 
-from .parser import INGRESS_SETTINGS, LINK_SETTINGS
+from .parser import INGRESS_SETTINGS, LINK_SETTINGS, SENSOR_SETTINGS
 from .vocabulary import KNOWN_UNITS
 
 INDENT = "    "
 #: Words of the grammar: a name spelled like one is written ^-escaped (^Sensor).
 KEYWORDS = frozenset({"DataCollector", "Drone", "Sensors", "Sensor", "measures", "kind", "from",
                       "scale", "offset", "PubBroker", "SubBroker", "Link", "Publishers",
-                      "Publisher", "Subscriptions", "Subscriber"})
+                      "Publisher", "Subscriptions", "Subscriber", "on", "with", "sentence",
+                      "column", "key", "register", "unit", "table", "order"})
 
 
 def name(text: str) -> str:
@@ -49,6 +50,40 @@ def _source(src: dict[str, Any]) -> str:
     return text
 
 
+def _factors(src: dict[str, Any]) -> str:
+    return "".join(f" {key} {float(src[key])!r}" for key in ("scale", "offset") if key in src)
+
+
+def _instrument_source(v: dict[str, Any]) -> str:
+    """The ``from`` of an nmea, ascii or modbus variable ("" when it has none)."""
+    if "nmea" in v:
+        return f" from sentence {v['nmea']['sentence']}.{v['nmea']['field']}{_factors(v['nmea'])}"
+    if "ascii" in v:
+        a = v["ascii"]
+        where = f"column {a['column']}" if "column" in a else f"key {quote(a['key'])}"
+        return f" from {where}{_factors(a)}"
+    if "modbus" in v:
+        m = v["modbus"]
+        text = f" from register {m['register']} {m.get('type', 'uint16')}"
+        for key, word in (("unit", "unit"), ("table", "table"), ("wordOrder", "order")):
+            if key in m:
+                text += f" {word} {m[key]}"
+        return text + _factors(m)
+    return ""
+
+
+def _device(s: dict[str, Any]) -> str:
+    """`` on "PATH" { settings }`` of an instrument sensor ("" when it has neither)."""
+    flat = {f"{part}/{k}": v for part in ("device", "line") for k, v in s.get(part, {}).items()
+            if (part, k) != ("device", "path")}
+    if "clock" in s:
+        flat["clock"] = s["clock"]
+    settings = " ".join(line.strip() for line in _settings(flat, SENSOR_SETTINGS, 0))
+    path = s.get("device", {}).get("path")
+    head = f" on {quote(path)}" if path is not None else " with" if settings else ""
+    return head + (f" {{ {settings} }}" if settings else "")
+
+
 def _settings(values: dict[str, Any], known: dict[str, tuple[str, str]], depth: int) -> list[str]:
     pad = INDENT * depth
     lines: list[str] = []
@@ -65,11 +100,12 @@ def _drone(drone: dict[str, Any]) -> list[str]:
     out = [f"Drone {name(drone['name'])}{_description(drone)} {{", f"{INDENT}Sensors {{"]
     for s in drone["sensors"]:
         kind = f" kind {s['kind']}" if "kind" in s else ""
-        out.append(f"{INDENT * 2}Sensor {name(s['name'])}{_description(s)}{kind} measures {{")
+        out.append(f"{INDENT * 2}Sensor {name(s['name'])}{_description(s)}{kind}{_device(s)} "
+                   "measures {")
         for v in s["variables"]:
             unit = v["unit"] if v["unit"] in KNOWN_UNITS else quote(v["unit"])
             vtype = f", {v['type']}" if "type" in v else ""
-            source = _source(v["source"]) if "source" in v else ""
+            source = _source(v["source"]) if "source" in v else _instrument_source(v)
             out.append(f"{INDENT * 3}{name(v['name'])}({unit}{vtype}){_description(v)}{source};")
         out.append(f"{INDENT * 2}}}")
     out += [f"{INDENT}}}", "}"]

@@ -194,8 +194,21 @@ def generate_md(schema: dict[str, Any]) -> str:
                 out.append(f"| `{prop}` | {_md_type(ps)} | {req} | {default} | {desc} |")
         else:
             out.append(f"Type: {_md_type(s)}.")
+        out += _md_sentences(s)
         out.append("")
     return "\n".join(out)
+
+
+def _md_sentences(s: dict[str, Any]) -> list[str]:
+    """The NMEA sentence table (``x-sentences``) as a table: fields in order, with kinds."""
+    if "x-sentences" not in s:
+        return []
+    out = ["", s.get("x-sentences-doc", ""), "",
+           "| sentence | fields (1, 2, ...: what each holds) |", "| --- | --- |"]
+    for sentence, fields in s["x-sentences"].items():
+        cells = ", ".join(f"`{name}` {kind}" for name, kind in fields.items())
+        out.append(f"| {sentence} | {cells} |")
+    return out
 
 
 GENERATORS = {"ts": generate_ts, "py": generate_py, "md": generate_md}

@@ -51,7 +51,10 @@ class Sensor(TypedDict):
 
     name: Name
     description: NotRequired[Text]
-    kind: NotRequired[Literal["generic", "mavlink"]]
+    kind: NotRequired[Literal["generic", "mavlink", "nmea", "ascii", "modbus"]]
+    device: NotRequired[SerialDevice]
+    line: NotRequired[AsciiLine]
+    clock: NotRequired[Literal["receive", "instrument"]]
     variables: list[MeasuredVariable]
 
 
@@ -63,6 +66,9 @@ class MeasuredVariable(TypedDict):
     type: NotRequired[ValueType]
     description: NotRequired[Text]
     source: NotRequired[MavlinkField]
+    nmea: NotRequired[NmeaField]
+    ascii: NotRequired[AsciiField]
+    modbus: NotRequired[ModbusRegister]
 
 
 class MavlinkField(TypedDict):
@@ -70,6 +76,54 @@ class MavlinkField(TypedDict):
 
     message: str
     field: Name
+    scale: NotRequired[float]
+    offset: NotRequired[float]
+
+
+class SerialDevice(TypedDict):
+    """A serial device an instrument is read from (RS-232, RS-485 adapter, USB serial)."""
+
+    path: Path
+    baud: NotRequired[int]
+    parity: NotRequired[Literal["none", "even", "odd"]]
+    stopBits: NotRequired[int]
+
+
+class AsciiLine(TypedDict):
+    """How an ascii instrument writes its lines: columns split by a separator, key=value pairs, or the named groups of a regular expression."""
+
+    separator: NotRequired[str]
+    terminator: NotRequired[Literal["crlf", "lf", "cr"]]
+    startCommand: NotRequired[str]
+    pattern: NotRequired[str]
+
+
+class NmeaField(TypedDict):
+    """A field of an NMEA 0183 sentence, talker-agnostic (GPGGA, GNGGA and GLGGA are all GGA), converted as value = raw * scale + offset. Latitude and longitude fields are signed decimal degrees (their N/S/E/W field applied)."""
+
+    sentence: Literal["GGA", "GLL", "RMC", "VTG", "GSA", "ZDA", "DBT", "DPT", "MTW", "MWV", "HDG", "HDT", "MDA", "XDR"]
+    field: Name
+    scale: NotRequired[float]
+    offset: NotRequired[float]
+
+
+class AsciiField(TypedDict):
+    """Where a value is in an ascii instrument's line (exactly one of column and key), converted as value = raw * scale + offset."""
+
+    column: NotRequired[int]
+    key: NotRequired[str]
+    scale: NotRequired[float]
+    offset: NotRequired[float]
+
+
+class ModbusRegister(TypedDict):
+    """A Modbus RTU register (or pair) read at the sensor's publisher period, converted as value = raw * scale + offset."""
+
+    unit: NotRequired[int]
+    register: int
+    table: NotRequired[Literal["holding", "input"]]
+    type: NotRequired[Literal["int16", "uint16", "int32", "uint32", "float32"]]
+    wordOrder: NotRequired[Literal["big", "little"]]
     scale: NotRequired[float]
     offset: NotRequired[float]
 
@@ -149,4 +203,4 @@ class Position(TypedDict):
     y: float
 
 
-__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "MavlinkField", "PubBroker", "Ingress", "SubBroker", "Link", "Publisher", "Subscriber", "Layout", "Position"]
+__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "MavlinkField", "SerialDevice", "AsciiLine", "NmeaField", "AsciiField", "ModbusRegister", "PubBroker", "Ingress", "SubBroker", "Link", "Publisher", "Subscriber", "Layout", "Position"]

@@ -15,6 +15,7 @@ from modd_contracts.aggregations import AGGREGATIONS
 
 from .bounds import size_errors
 from .diagnostics import Diagnostic, pointer_join
+from .instruments import instrument_sensors
 from .numbers import to_fraction, to_micros
 from .query import topic_name
 from .schema import definition, load_schema
@@ -400,3 +401,6 @@ def unused_topics(doc: dict[str, Any]) -> Iterator[Diagnostic]:
             if topic_name(drone, s["name"], v["name"]) not in published:
                 yield Diagnostic(f"no publisher publishes {s['name']}.{v['name']}; it will not "
                                  "be archived", f"/drone/sensors/{i}/variables/{j}", "warning")
+
+
+check(instrument_sensors)

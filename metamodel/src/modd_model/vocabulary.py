@@ -11,3 +11,5 @@ AGGREGATIONS: tuple[str, ...] = tuple(definition("Aggregation")["enum"])
 SENSOR_KINDS: tuple[str, ...] = tuple(definition("Sensor")["properties"]["kind"]["enum"])
 BACKFILL_POLICIES: tuple[str, ...] = tuple(
     definition("Subscriber")["properties"]["backfill"]["enum"])
+#: NMEA 0183 sentence type -> {field name: what it holds}, fields in order (field 1 first).
+NMEA_SENTENCES: dict[str, dict[str, str]] = definition("NmeaField")["x-sentences"]

@@ -35,6 +35,25 @@ describe("InspectorPanel", () => {
     expect(document.querySelector('[data-field^="source"]')).not.toBeNull();
   });
 
+  it("edits an NMEA sensor as a form: its device, then each variable's sentence field", () => {
+    const store = mount("integrator", ["sensor:accelerometer"]);
+    expect(document.querySelector('[data-field^="device"]')).toBeNull();
+    act(() => store.dispatch({ type: "setField", id: "sensor:accelerometer", path: ["kind"], value: "nmea" }));
+    expect(document.querySelector('[data-field="device.baud"]')).not.toBeNull();
+    expect(document.querySelector('[data-field^="line"]')).toBeNull();
+    act(() => store.dispatch({ type: "setField", id: "sensor:accelerometer", path: ["device", "path"], value: "/dev/ttyUSB0" }));
+    act(() => store.dispatch({ type: "select", ids: ["topic:accelerometer.accel_x"] }));
+    expect(document.querySelector('[data-field^="source"]')).toBeNull();
+    expect(document.querySelector('[data-field^="modbus"]')).toBeNull();
+    const sentence = screen.getByLabelText(/^nmea sentence/) as HTMLSelectElement;
+    expect([...sentence.options].map((o) => o.value)).toContain("GGA");
+    act(() => store.dispatch({ type: "setField", id: "topic:accelerometer.accel_x", path: ["nmea", "sentence"], value: "DPT" }));
+    act(() => store.dispatch({ type: "setField", id: "topic:accelerometer.accel_x", path: ["nmea", "field"], value: "depth" }));
+    const sensor = currentModel(store.getState().wb).drone.sensors[0];
+    expect(sensor.device?.path).toBe("/dev/ttyUSB0");
+    expect(sensor.variables[0].nmea).toEqual({ sentence: "DPT", field: "depth" });
+  });
+
   it("commits text fields on Enter, as one undoable edit", () => {
     const store = mount("scientist", ["sub:sub_1"]);
     const period = screen.getByLabelText(/^period/) as HTMLInputElement;

@@ -67,7 +67,8 @@ export default function InspectorPanel() {
   if (!value) return <section className="inspector"><p>This element no longer exists.</p></section>;
   const readOnly = !canEdit(role, kind);
   const parsed = parseId(id)!;
-  const sensorKind = kind === "topic" ? model.drone.sensors.find((x) => x.name === parsed.sensor)?.kind : undefined;
+  const sensorKind = kind === "topic" ? model.drone.sensors.find((x) => x.name === parsed.sensor)?.kind
+    : kind === "sensor" ? (value as { kind?: string }).kind : undefined;
   const mine = placed.filter((d) => d.elementId === id);
   const fieldErrors = (path: string[]) => mine.filter((d) => d.field.slice(0, path.length).join("/") === path.join("/") && d.field.length >= path.length).map((d) => d.message);
   const general = mine.filter((d) => d.field.length === 0).map((d) => d.message);

@@ -7,10 +7,13 @@ User-owned (written once): ``src/driver.cpp`` (a read function per topic, where
 the integrator's code goes, and the main loop with one publish call per topic)
 and ``user.cmake`` (additions to the build).
 
-Topics of MAVLink sensors get no read function: the MAVLink bridge
-(``modd-mavlink``, docs/mavlink.md) publishes them from the autopilot's
-messages, as the model maps them. A publisher of MAVLink topics only gets no
-driver at all."""
+Topics of plug-and-play sensors get no read function: the MAVLink bridge
+(``modd-mavlink``, docs/mavlink.md) publishes the autopilot's (``kind
+mavlink``), ``modd-sensors`` (docs/sensors.md) the NMEA, ASCII and Modbus
+instruments' (``kind nmea``, ``ascii``, ``modbus``), as the model maps them.
+A publisher of such topics only gets no driver at all; a model with
+instruments gets ``integrator/PLUG-AND-PLAY.md`` saying which sensors need no
+driver (and, when none does, that there is nothing to write)."""
 
 from __future__ import annotations
 
@@ -53,13 +56,33 @@ def _python(ctx: Context, pub: PublisherView) -> Artifact:
                     executable=True)
 
 
+_READER = {"mavlink": "modd-mavlink", "nmea": "modd-sensors", "ascii": "modd-sensors",
+           "modbus": "modd-sensors"}
+
+
 def _driven(ctx: Context) -> list[PublisherView]:
-    """The publishers with their topics that a driver reads (not the MAVLink bridge)."""
-    bridged = {s["name"] for s in ctx.model["drone"]["sensors"] if s.get("kind") == "mavlink"}
+    """The publishers with their topics that a driver reads (not a plug-and-play reader)."""
+    bridged = {s["name"] for s in ctx.model["drone"]["sensors"]
+               if s.get("kind", "generic") in _READER}
     views = [PublisherView(p.name, p.period_s, [t for t in p.topics if t.sensor not in bridged])
              for p in ctx.publishers]
     return [v for v in views if v.topics]
 
 
+def _plug_and_play(ctx: Context, driven: list[PublisherView]) -> list[Artifact]:
+    """The note on the sensors no driver reads, for a model with instruments."""
+    sensors = ctx.model["drone"]["sensors"]
+    if not any(s.get("kind") in ("nmea", "ascii", "modbus") for s in sensors):
+        return []
+    rows = [{"name": s["name"], "kind": s["kind"], "reader": _READER[s["kind"]],
+             "device": s.get("device", {}).get("path", "(the bridge's --connect)")}
+            for s in sensors if s.get("kind", "generic") in _READER]
+    text = render("cpp_driver/plug_and_play.md.j2", drone=ctx.drone, sensors=rows,
+                  driven=driven)
+    return [Artifact("integrator/PLUG-AND-PLAY.md", text, "integrator")]
+
+
 def artifacts(ctx: Context) -> list[Artifact]:
-    return [a for pub in _driven(ctx) for a in [*_project(ctx, pub), _python(ctx, pub)]]
+    driven = _driven(ctx)
+    return [a for pub in driven for a in [*_project(ctx, pub), _python(ctx, pub)]] + \
+        _plug_and_play(ctx, driven)

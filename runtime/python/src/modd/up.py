@@ -8,6 +8,10 @@ Stops everything (by PID, in reverse order) on Ctrl-C or SIGTERM.
 
 Options:
 
+- Sensors of ``kind nmea``, ``ascii`` or ``modbus`` are read by ``modd-sensors``
+  from their devices (with ``--simulate``: from the simulator's pseudo-terminals,
+  linked under ``<workdir>/devices``); each sensor's health is kept in
+  ``<workdir>/sensors.json`` (docs/sensors.md).
 - ``--simulate``: also run ``modd-sim`` (the simulated drone) against the
   PubBroker's ingress and, when the model has ``kind mavlink`` sensors, the
   MAVLink bridge ``modd-mavlink`` reading the simulator's autopilot over UDP
@@ -197,6 +201,12 @@ def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
         if getattr(args, "relay", None):
             sub += ["--link", "{}:{}".format(*args.relay)]
         stack.processes.append(Process("subbroker", sub, logs / "subbroker.log"))
+    from .sensors.plan import has_instrument_sensors
+
+    if drone and has_instrument_sensors(model):  # nmea, ascii, modbus: read by modd-sensors
+        stack.processes.append(Process("sensors", [
+            str(bin_dir / "modd-sensors"), "--model", str(configs / "model.json"),
+            "--status-file", str(workdir / "sensors.json")], logs / "sensors.log"))
     if args.simulate and drone:
         stack.processes += simulation(model, configs / "model.json", bin_dir, logs)
     return stack
@@ -222,6 +232,10 @@ def run(args: argparse.Namespace) -> int:
     except (uplink.LinkSetupError, FileNotFoundError) as exc:
         print(f"modd up: {exc}", file=sys.stderr)
         return 1
+    if args.simulate:  # simulated instruments on pseudo-terminals of this run, never real ones
+        from .sim.instruments import simulated_devices
+
+        model = simulated_devices(model, workdir / "devices")
     local, configs = prepare(model, workdir, args.transport, devices)
     if args.part != "drone":
         print(kept_note(workdir / "state", args.resume), end="", flush=True)

@@ -9,6 +9,12 @@
 - Simulated **scientific sensors** (``sensors.py``): every other topic is
   published through the Python publisher client, at its publisher's period,
   to the PubBroker's ingress (the model's, or ``--ingress``).
+- Simulated **instruments** (``instruments.py``): the model's ``kind nmea``,
+  ``ascii`` and ``modbus`` sensors each get a pseudo-terminal linked at their
+  device path, where their wire format is written (``wire.py``: NMEA
+  sentences, CSV or ``key=value`` lines, answers to Modbus reads) for
+  ``modd-sensors`` to read (``--no-instruments``: their topics are published
+  directly instead).
 - ``--no-mavlink``: no autopilot; every topic of the model, the mavlink
   sensors' included, is published directly at its publisher's period. Models
   with no mavlink sensor run no autopilot either.

@@ -31,6 +31,15 @@ def mavlink_topics(model: dict[str, Any]) -> set[str]:
             if s.get("kind", "generic") == "mavlink" for v in s["variables"]}
 
 
+def instrument_topics(model: dict[str, Any]) -> set[str]:
+    """The topics of the model's ``kind nmea``, ``ascii`` and ``modbus`` sensors."""
+    from modd_model.instruments import INSTRUMENT_KINDS
+
+    drone = model["drone"]["name"]
+    return {f"{drone}.{s['name']}.{v['name']}" for s in model["drone"]["sensors"]
+            if s.get("kind", "generic") in INSTRUMENT_KINDS for v in s["variables"]}
+
+
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="modd-sim", description="The simulated drone of a model: "
                                 "a MAVLink autopilot and the scientific sensors.")
@@ -40,6 +49,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                    help=f"where the simulated autopilot sends (default {DEFAULT_MAVLINK})")
     p.add_argument("--no-mavlink", action="store_true",
                    help="no simulated autopilot: publish the mavlink sensors' topics directly")
+    p.add_argument("--no-instruments", action="store_true",
+                   help="no simulated instruments on pseudo-terminals: publish the nmea, ascii "
+                        "and modbus sensors' topics directly")
     p.add_argument("--system-id", type=int, default=1, metavar="ID",
                    help="the simulated autopilot's MAVLink system id (default 1)")
     p.add_argument("--start-time", type=float, metavar="UNIX_S",
@@ -60,13 +72,14 @@ def main(argv: list[str] | None = None) -> int:
     start = time.time() if args.start_time is None else args.start_time
     ingress = args.ingress or default_ingress(model)
     autopilot_topics = set() if args.no_mavlink else mavlink_topics(model)
+    wired = set() if args.no_instruments else instrument_topics(model)
     tops = topics(model)
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     threads = []
     for i, p in enumerate(model["publishers"]):
-        mine = [tops[t] for t in p["topics"] if t not in autopilot_topics]
+        mine = [tops[t] for t in p["topics"] if t not in autopilot_topics | wired]
         if mine:
             threads.append(threading.Thread(
                 target=run_publisher, name=p["name"], daemon=True,
@@ -84,6 +97,15 @@ def main(argv: list[str] | None = None) -> int:
                                         daemon=True))
     for th in threads:
         th.start()
+    if wired:
+        from .instruments import start_instruments
+
+        try:
+            threads += start_instruments(model, start, stop, log)
+        except OSError as exc:
+            print(f"modd-sim: cannot simulate the instruments: {exc}", file=sys.stderr)
+            stop.set()
+            return 1
     log(f"drone {model['drone']['name']}: {publishers} publishers -> {ingress}"
         + (f"; autopilot -> {args.mavlink}" if autopilot_topics else "")
         + f"; track started at {start:.3f}")

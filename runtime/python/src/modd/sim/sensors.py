@@ -23,7 +23,7 @@ from collections.abc import Callable
 from modd_model.query import Topic
 
 from ..publisher import Publisher
-from .track import Pose, altitude, plume, survey_pose, waves
+from .track import LEG_M, Pose, altitude, plume, survey_pose, waves
 
 Signal = Callable[[float, Pose], float | int | bool]
 
@@ -45,6 +45,7 @@ def topic_signal(topic: Topic, rng: random.Random) -> Signal:
         "water_temperature": lambda t, p: 12.0 + 4.0 * plume(p) + rng.gauss(0, 0.02),
         "temperature": lambda t, p: 12.0 + 4.0 * plume(p) + rng.gauss(0, 0.02),
         "conductivity": lambda t, p: 52.0 - 20.0 * plume(p) + rng.gauss(0, 0.05),
+        "depth": lambda t, p: 3.0 + 6.0 * p.y / LEG_M + 0.05 * math.sin(t),  # a sloping bottom
     }
     if v in named:
         return named[v]

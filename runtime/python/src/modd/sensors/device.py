@@ -1,0 +1,44 @@
+"""A sensor's serial device: opened by path at each attempt (so a
+``/dev/serial/by-id/...`` link that udev points at a renumbered adapter is
+followed), closed on any error, reopened every ``RETRY_S`` until it is back.
+
+Example::
+
+    port = open_port(Device("/dev/ttyUSB0", 9600))   # None while unplugged
+"""
+
+from __future__ import annotations
+
+import serial
+
+from .plan import Device
+
+RETRY_S = 0.2
+READ_TIMEOUT_S = 0.1
+PARITY = {"none": serial.PARITY_NONE, "even": serial.PARITY_EVEN, "odd": serial.PARITY_ODD}
+Errors = (serial.SerialException, OSError, ValueError)
+
+
+def open_port(device: Device, timeout: float = READ_TIMEOUT_S) -> serial.Serial | None:
+    """The open port, or None when the device is not there (or not a serial port)."""
+    try:
+        return serial.Serial(
+            device.path,
+            device.baud,
+            parity=PARITY[device.parity],
+            stopbits=device.stop_bits,
+            timeout=timeout,
+            write_timeout=1.0,
+            exclusive=True,
+        )
+    except Errors:
+        return None
+
+
+def read_some(port: serial.Serial) -> bytes:
+    """What the device sent, waiting at most the port's timeout for the first byte;
+    raises one of ``Errors`` when the device is gone (a pty whose other end closed
+    reads as ready with no data: pyserial raises SerialException)."""
+    waiting = port.in_waiting
+    data: bytes = port.read(min(max(waiting, 1), 65536))
+    return data

@@ -1,0 +1,211 @@
+"""The reader's I/O: one thread per sensor (so a device that floods or hangs
+delays no other), reading the device, feeding the decoder and handing the
+samples to the model's publishers; the device reopened after any loss.
+
+Example::
+
+    runner = Runner(plans, {"gnss": Publisher("gnss", ingress)}, log=print)
+    runner.run(stop_event)     # returns when stop_event is set, publishers flushed
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import threading
+import time
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Protocol
+
+import serial
+
+from . import modbus
+from .decode import Block, LineDecoder, Sample, block_samples, blocks
+from .device import RETRY_S, Errors, open_port, read_some
+from .health import Health, status_line
+from .plan import SensorPlan
+
+MODBUS_TIMEOUT_S = 0.5
+SILENT_PERIODS, SILENT_MIN_S = 3, 2.0
+
+
+class Sink(Protocol):
+    """What the reader needs of a publisher (``modd.publisher.Publisher`` is one)."""
+
+    def declare(self, topic: str, vtype: str) -> None: ...
+
+    def publish(self, topic: str, timestamp_ns: int, value: float) -> bool: ...
+
+    def flush(self, timeout: float = 5.0) -> bool: ...
+
+    def close(self, timeout: float = 2.0) -> None: ...
+
+
+class SensorThread:
+    def __init__(
+        self, plan: SensorPlan, sinks: Mapping[str, Sink], log: Callable[[str], None]
+    ) -> None:
+        self.plan = plan
+        self.sinks = sinks
+        self.log = log
+        self.health = Health()
+        self.thread = threading.Thread(target=self._run, name=f"sensor-{plan.name}", daemon=True)
+        self._stop = threading.Event()
+        self._opened = False
+        self.started_ns = 0  # when reading began: silence is counted from there
+
+    def start(self, stop: threading.Event) -> None:
+        self._stop = stop
+        self.started_ns = time.time_ns()
+        self.thread.start()
+
+    def publish(self, samples: list[Sample]) -> None:
+        h = self.health
+        for m, stamp, value in samples:
+            if self.sinks[m.publisher].publish(m.topic, stamp, value):
+                h.values += 1
+                h.last_value_ns = time.time_ns()
+                h.silent = False
+            else:
+                h.refused += 1
+
+    def _run(self) -> None:
+        waiting = False  # said once per absence, not every RETRY_S
+        while not self._stop.is_set():
+            port = open_port(self.plan.device)
+            if port is None:
+                if not waiting:
+                    self.log(
+                        f"{self.plan.name}: waiting for {self.plan.device.path} "
+                        f"(retried every {RETRY_S} s)"
+                    )
+                waiting = True
+                self._stop.wait(RETRY_S)
+                continue
+            waiting = False
+            if self._opened:
+                self.health.reconnects += 1
+                self.log(f"{self.plan.name}: {self.plan.device.path} reopened")
+            self._opened = True
+            self.health.connected = True
+            try:
+                if self.plan.kind == "modbus":
+                    self._poll(port)
+                else:
+                    self._read(port)
+            except Errors as exc:
+                self.log(f"{self.plan.name}: {self.plan.device.path} lost ({exc}); reopening")
+            finally:
+                self.health.connected = False
+                port.close()
+
+    def _read(self, port: serial.Serial) -> None:
+        decoder = LineDecoder(self.plan, self.health)
+        if self.plan.start_command:
+            port.write(self.plan.start_command.encode() + self.plan.line_end)
+        while not self._stop.is_set():
+            data = read_some(port)
+            if data:
+                self.publish(decoder.feed(data, time.time_ns()))
+
+    def _poll(self, port: serial.Serial) -> None:
+        reads = blocks(self.plan)
+        due = time.monotonic()
+        while not self._stop.wait(max(0.0, due - time.monotonic())):
+            for block in reads:
+                self._ask(port, block)
+            due = max(due + self.plan.poll_s, time.monotonic())
+
+    def _ask(self, port: serial.Serial, block: Block) -> None:
+        port.reset_input_buffer()  # what came late for an earlier request
+        port.write(block.request())
+        reply, deadline = b"", time.monotonic() + MODBUS_TIMEOUT_S
+        while time.monotonic() < deadline:
+            reply += read_some(port)
+            need = modbus.reply_length(reply, block.function)
+            if need is not None and len(reply) >= need:
+                break
+        stamp = time.time_ns()
+        need = modbus.reply_length(reply, block.function)
+        h = self.health
+        if need is None or len(reply) < need:
+            h.timeouts += 1
+            h.last_bad = f"unit {block.unit}: no reply in {MODBUS_TIMEOUT_S} s"
+            return
+        try:
+            words = modbus.parse_reply(reply[:need], block.unit, block.function, block.count)
+        except modbus.ExceptionReply as exc:
+            h.exceptions += 1
+            h.last_bad = f"unit {block.unit} register {block.address}: {exc}"
+            return
+        except modbus.BadReply as exc:
+            h.bad(f"unit {block.unit}: {exc}")
+            return
+        h.lines_ok += 1
+        self.publish(block_samples(block, words, stamp))
+
+    def watch(self, now_ns: int) -> None:
+        """Marks the sensor silent when no value came for SILENT_PERIODS periods
+        (at least SILENT_MIN_S), counting each silence once."""
+        h = self.health
+        since = h.last_value_ns or self.started_ns
+        limit = max(SILENT_MIN_S, SILENT_PERIODS * self.plan.poll_s) * 1e9
+        if not h.silent and now_ns - since > limit:
+            h.silent = True
+            h.silences += 1
+            self.log(f"{self.plan.name}: silent for {(now_ns - since) / 1e9:.1f} s")
+
+
+class Runner:
+    def __init__(
+        self,
+        plans: list[SensorPlan],
+        sinks: Mapping[str, Sink],
+        log: Callable[[str], None] = print,
+        status_file: Path | None = None,
+        status_period_s: float = 10.0,
+    ) -> None:
+        self.sinks = sinks
+        self.log = log
+        self.sensors = [SensorThread(p, sinks, log) for p in plans]
+        self.status_file = status_file
+        self.status_period_s = status_period_s
+        for p in plans:
+            for m in p.mappings:
+                sinks[m.publisher].declare(m.topic, m.type)
+
+    def health(self) -> dict[str, dict[str, object]]:
+        now = time.time_ns()
+        return {s.plan.name: s.health.as_dict(now) for s in self.sensors}
+
+    def write_status(self) -> None:
+        if self.status_file is None:
+            return
+        tmp = self.status_file.with_name(self.status_file.name + ".tmp")
+        tmp.write_text(json.dumps({"sensors": self.health()}, indent=1) + "\n")
+        os.replace(tmp, self.status_file)
+
+    def run(self, stop: threading.Event, tick_s: float = 0.25) -> None:
+        for s in self.sensors:
+            s.start(stop)
+        next_status = time.monotonic() + self.status_period_s
+        try:
+            while not stop.wait(tick_s):
+                now = time.time_ns()
+                for s in self.sensors:
+                    s.watch(now)
+                self.write_status()
+                if time.monotonic() >= next_status:
+                    next_status += self.status_period_s
+                    for s in self.sensors:
+                        self.log(status_line(s.plan.name, s.health, now))
+        finally:
+            for s in self.sensors:
+                s.thread.join(2.0)
+            for sink in self.sinks.values():
+                sink.flush(2.0)
+                sink.close()
+            self.write_status()
+            for s in self.sensors:
+                self.log(status_line(s.plan.name, s.health, time.time_ns()))

@@ -1,0 +1,140 @@
+"""What a simulated instrument writes on its wire, from the values the
+simulator gives its topics: the model's mapping run backwards
+(``raw = (value - offset) / scale``), laid out as the NMEA sentences, ASCII
+lines or Modbus replies ``modd-sensors`` reads, so the demo and the tests run
+the real reader.
+
+Example::
+
+    lines = nmea_lines(plan, {"usv.gnss.lat": 47.7}, time.time())
+    # ['$GPGGA,101500.00,4742.0000,N,,,,,,,,,,,*..', '$GPZDA,...']
+"""
+
+from __future__ import annotations
+
+import struct
+import time
+from collections.abc import Mapping
+
+from modd_model.vocabulary import NMEA_SENTENCES
+
+from ..sensors import modbus
+from ..sensors.ascii import Column
+from ..sensors.nmea import sentence
+from ..sensors.plan import Mapping as TopicMapping
+from ..sensors.plan import Register, SensorPlan
+
+TALKER = "GP"
+
+
+def _raw(m: TopicMapping, value: float) -> float:
+    return (value - m.offset) / m.scale
+
+
+def _coordinate(value: float, degree_digits: int) -> tuple[str, str]:
+    hemi = ("N" if value >= 0 else "S") if degree_digits == 2 else ("E" if value >= 0 else "W")
+    degrees, minutes = divmod(round(abs(value) * 60, 4), 60)  # 59.99996' is 1 degree on
+    return f"{int(degrees):0{degree_digits}d}{minutes:07.4f}", hemi
+
+
+def _stamp(kind: str, now: float) -> str:
+    t = time.gmtime(now)
+    if kind == "time":
+        return time.strftime("%H%M%S", t) + f".{int(now * 100) % 100:02d}"
+    return time.strftime("%d%m%y", t) if kind == "date" else "A" if kind == "status" else ""
+
+
+def _fields(kind: str, mapped: list[tuple[TopicMapping, float]], now: float) -> list[str]:
+    table = list(NMEA_SENTENCES[kind].items())
+    fields = [_stamp(k, now) for _, k in table]
+    for m, value in mapped:
+        field = m.where[1]  # type: ignore[index]
+        i = (
+            [n for n, _ in table].index(field)
+            if field in NMEA_SENTENCES[kind]
+            else int(field[1:]) - 1
+        )
+        fields += [""] * (i + 2 - len(fields))
+        what = table[i % len(table)][1]
+        if what in ("latitude", "longitude"):
+            fields[i], fields[i + 1] = _coordinate(_raw(m, value), 2 if what == "latitude" else 3)
+        else:
+            fields[i] = f"{_raw(m, value):.4f}"
+    if kind == "XDR":  # groups of four
+        return fields + [""] * (-len(fields) % 4)
+    return fields[: len(table)]
+
+
+def nmea_lines(plan: SensorPlan, values: Mapping[str, float], now: float) -> list[str]:
+    """One sentence per sentence type the sensor's variables read (and a ZDA when
+    the model stamps with the instrument's clock)."""
+    # the time first, as receivers start an epoch with it
+    by_kind: dict[str, list[tuple[TopicMapping, float]]] = (
+        {"ZDA": []} if plan.instrument_clock else {}
+    )
+    for m in plan.mappings:
+        if m.topic in values:
+            by_kind.setdefault(m.where[0], []).append((m, values[m.topic]))  # type: ignore[index]
+    out = []
+    for kind, mapped in by_kind.items():
+        fields = _fields(kind, mapped, now)
+        if kind == "ZDA":
+            t = time.gmtime(now)
+            fields[1:6] = [f"{t.tm_mday:02d}", f"{t.tm_mon:02d}", str(t.tm_year), "00", "00"]
+        out.append(sentence(TALKER, kind, fields))
+    return out
+
+
+def ascii_line(plan: SensorPlan, values: Mapping[str, float]) -> str:
+    """One line with the sensor's columns and key=value pairs (a pattern is not inverted:
+    write the model's separator-and-key form)."""
+    columns: dict[int, str] = {}
+    pairs: list[str] = []
+    for m in plan.mappings:
+        if m.topic not in values:
+            continue
+        text = f"{_raw(m, values[m.topic]):.4f}"
+        if isinstance(m.where, Column):
+            columns[m.where.number] = text
+        else:
+            pairs.append(f"{m.where.name}={text}")  # type: ignore[union-attr]
+    cells = [columns.get(i, "0") for i in range(1, max(columns, default=0) + 1)] + pairs
+    return (" " if plan.line.separator == " " else plan.line.separator).join(cells)
+
+
+def _words(r: Register, raw: float) -> list[int]:
+    fmt = {"int16": ">h", "uint16": ">H", "int32": ">i", "uint32": ">I", "float32": ">f"}[r.type]
+    number: float | int = raw if r.type == "float32" else round(raw)
+    try:
+        data = struct.pack(fmt, number)
+    except struct.error:  # beyond the register's range: what a saturating device sends
+        data = b"\xff" * struct.calcsize(fmt)
+    words = list(struct.unpack(f">{len(data) // 2}H", data))
+    return words[::-1] if r.order == "little" else words
+
+
+def registers(plan: SensorPlan, values: Mapping[str, float]) -> dict[tuple[int, int, int], int]:
+    """(unit, function, address) → word of every mapped register."""
+    out: dict[tuple[int, int, int], int] = {}
+    for m in plan.mappings:
+        r = m.where
+        if isinstance(r, Register) and m.topic in values:
+            for i, w in enumerate(_words(r, _raw(m, values[m.topic]))):
+                out[(r.unit, modbus.TABLE_FUNCTION[r.table], r.address + i)] = w
+    return out
+
+
+def modbus_reply(request: bytes, regs: Mapping[tuple[int, int, int], int]) -> bytes | None:
+    """A device's answer to one read request (exception 2 for an unknown register);
+    None for a request that is not for a read or fails its CRC (a device stays silent)."""
+    if len(request) != 8 or modbus.crc16(request[:-2]) != struct.unpack("<H", request[-2:])[0]:
+        return None
+    unit, function, address, count = struct.unpack(">BBHH", request[:6])
+    if function not in (modbus.HOLDING, modbus.INPUT):
+        return None
+    try:
+        words = [regs[(unit, function, address + i)] for i in range(count)]
+        pdu = struct.pack(f">BBB{count}H", unit, function, 2 * count, *words)
+    except KeyError:
+        pdu = bytes([unit, function | 0x80, 2])
+    return pdu + struct.pack("<H", modbus.crc16(pdu))
