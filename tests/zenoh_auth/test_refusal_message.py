@@ -7,34 +7,14 @@ through the CLI (`modd backfill`) as a user runs it."""
 
 from __future__ import annotations
 
-import socket
 import subprocess
 import sys
-from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 from modd.zenoh_auth import Credentials, CredentialStore
-from modd.zenoh_session import ZenohSettings, client_settings, open_session, secured
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-@pytest.fixture(scope="module")
-def router(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, CredentialStore]]:
-    store = CredentialStore(tmp_path_factory.mktemp("zenoh") / "credentials")
-    endpoint = f"tcp/127.0.0.1:{_free_port()}"
-    session = open_session(
-        secured(ZenohSettings(mode="router", listen=(endpoint,)), store, "subbroker", "usv")
-    )
-    try:
-        yield endpoint, store
-    finally:
-        session.close()  # type: ignore[no-untyped-call]
+from modd.zenoh_session import client_settings, open_session
 
 
 def _refused(endpoint: str, who: Credentials | None) -> str:
@@ -43,33 +23,35 @@ def _refused(endpoint: str, who: Credentials | None) -> str:
     return str(info.value)
 
 
-def test_no_credentials_says_they_are_needed_and_where(router: tuple[str, CredentialStore]) -> None:
-    endpoint, _ = router
+def test_no_credentials_says_they_are_needed_and_where(
+    router: tuple[str, CredentialStore, Any],
+) -> None:
+    endpoint, _, _ = router
     said = _refused(endpoint, None)
     assert f"the router at {endpoint} needs credentials and none were given" in said
     assert "data/credentials/viewer.cred" in said and "--credentials" in said
     assert "Unable to connect" not in said and ".rs:" not in said
 
 
-def test_wrong_credentials_are_named(router: tuple[str, CredentialStore]) -> None:
-    endpoint, _ = router
+def test_wrong_credentials_are_named(router: tuple[str, CredentialStore, Any]) -> None:
+    endpoint, _, _ = router
     said = _refused(endpoint, Credentials("viewer", "not-the-password"))
     assert "refused the credentials of user 'viewer'" in said and "viewer.cred" in said
 
 
-def test_nothing_listening_is_not_blamed_on_credentials() -> None:
-    said = _refused(f"tcp/127.0.0.1:{_free_port()}", None)
+def test_nothing_listening_is_not_blamed_on_credentials(unused_endpoint: str) -> None:
+    said = _refused(unused_endpoint, None)
     assert "nothing answers at" in said and "needs credentials" not in said
 
 
-def test_the_right_credentials_open(router: tuple[str, CredentialStore]) -> None:
-    endpoint, store = router
+def test_the_right_credentials_open(router: tuple[str, CredentialStore, Any]) -> None:
+    endpoint, store, _ = router
     session = open_session(client_settings(endpoint, store.cred_file("viewer")))
     session.close()  # type: ignore[no-untyped-call]
 
 
-def test_modd_backfill_without_credentials(router: tuple[str, CredentialStore]) -> None:
-    endpoint, _ = router
+def test_modd_backfill_without_credentials(router: tuple[str, CredentialStore, Any]) -> None:
+    endpoint, _, _ = router
     res = subprocess.run(
         [
             str(Path(sys.executable).parent / "modd"),
