@@ -54,6 +54,22 @@ describe("PlanPanel", () => {
     expect(store.getState().wb.selection).toEqual(["sub:sub_4"]);
   });
 
+  it("labels its two delays apart: the planner's schedule delay and the delay on the link", () => {
+    const budget = {
+      transport: "udp" as const, rate_bps: 3600, max_packet: 1472, accepted_delay_s: 1,
+      drone_to_base: 100.8, base_to_drone: 1.4, packets_per_s: 0.8, share: 0.028,
+      delays_s: { sub_1: 1.03 }, over_budget: [], error: null,
+    };
+    mount({ ...(planJson as unknown as PlanJson), link_budget: budget });
+    expect(screen.queryByText("Max delay")).toBeNull();
+    const schedule = screen.getByText("Max schedule delay").parentElement!;
+    const link = screen.getByLabelText("Delay per subscription");
+    expect(link.textContent).toMatch(/^Delay on the link \(.*after the schedule\)/);
+    expect(schedule.title).toMatch(/buffer size × publisher period/);
+    expect(link.title).toMatch(/air|rate/);
+    expect(screen.getByRole("columnheader", { name: /schedule delay/ })).toBeTruthy();
+  });
+
   it("shows no budget error within the budget", () => {
     const budget = {
       transport: "udp" as const, rate_bps: 3600, max_packet: 1472, accepted_delay_s: 1,
