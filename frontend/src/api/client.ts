@@ -30,7 +30,7 @@ export function createApi(opts: HttpOptions) {
     // --- auth
     /** A cookie session (HttpOnly, SameSite=Strict; spans tabs): the answer carries the CSRF token, no bearer token. */
     login: (username: string, password: string) =>
-      http.request<LoginResult>("/api/auth/login", { method: "POST", json: { username, password, session: "cookie" } }),
+      http.request<LoginResult>("/api/auth/login", { method: "POST", json: { username, password, session: "cookie" }, waitTurn: false }),
     logout: () => http.request<void>("/api/auth/logout", { method: "POST", as: "none" }),
     me: () => http.request<User & { csrf?: string | null }>("/api/auth/me"),
 
