@@ -188,11 +188,16 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await expectText(page.getByTestId("deploy-result"), /Acked/, 30000);
       await view("Scientist");
       await panel("Map");
-      await page.getByLabel("Colour by").selectOption("sub_temp");
+      // coloured at first by a value of the place (water temperature), not the accelerometer of sub_1
+      const first = await page.getByLabel("Colour by").inputValue();
+      if (first !== "sub_temp") throw new Error(`the map is coloured by ${first} at first, not the water temperature`);
       await expectText(page.getByTestId("map-legend"), /sub_temp.*°C/);
       const canvas = page.getByTestId("map-canvas");
       await waitUntil(async () => Number(await canvas.getAttribute("data-points")) >= 8, 60000,
         async () => `${await canvas.getAttribute("data-points")} fixes on the map`);
+      // the vehicle is drawn heading along its course
+      const heading = await canvas.getAttribute("data-heading");
+      if (!heading || !(Number(heading) >= 0 && Number(heading) < 360)) throw new Error(`no vehicle heading on the map: ${heading}`);
       await expand(true);
       await page.waitForTimeout(1500);
       const px = JSON.parse((await canvas.getAttribute("data-track-px")) ?? "[]");
