@@ -12,7 +12,7 @@ import { Http, type HttpOptions } from "./http";
 import type {
   ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress,
   DeployedDiff, Deployment, DynamicReply, DynamicRequest,
-  LoginResult, ModelInput, ModelVersion, PlanResult, Project, User, ValidateResult, Version,
+  LoginResult, ModelInput, ModelVersion, PlanResult, Project, RunningDrone, User, ValidateResult, Version,
 } from "./types";
 
 /**
@@ -58,6 +58,8 @@ export function createApi(opts: HttpOptions) {
       http.request<ModelVersion>(`/api/projects/${projectId}/model`, {
         method: "PUT", json: { model, base_revision: baseRevision, message },
       }),
+    /** Drones reporting now, with their PubBroker and SubBroker endpoints (defaults for a new project). */
+    runningDrones: () => http.request<RunningDrone[]>("/api/running-drones"),
     listVersions: (projectId: number) => http.request<Version[]>(`/api/projects/${projectId}/versions`),
     exportModel: (projectId: number, format: "modd" | "json" | "collector" = "modd", revision?: number) =>
       http.request<string>(`/api/projects/${projectId}/export`, { query: { format, revision }, as: "text" }),

@@ -26,6 +26,7 @@ import { ConflictBanner, DraftNotice, RemoteSaveNotice } from "./ConflictBanner"
 import { useProjectEvents } from "./useProjectEvents";
 import { useDrafts } from "./useDrafts";
 import { FirstStep } from "./FirstStep";
+import { RunningDroneHint } from "./RunningDroneHint";
 import { readDraft, writeDraft } from "./drafts";
 import { goTo, type Route } from "./routes";
 import { sameValue } from "../core/merge";
@@ -106,6 +107,7 @@ export function Workbench({ project, user, onLogout, onProjects, route }: Props)
           <DraftNotice />
           <LinkBanner />
           <FirstStep />
+          <RunningDroneHint />
           <div className="main">
             <Palette />
             <div className="center">
