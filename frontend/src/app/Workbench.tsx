@@ -115,7 +115,7 @@ export function Workbench({ project, user, onLogout, onProjects, route }: Props)
                   diagram under a click already under way, or that click is lost. */}
               <Notice />
               <Canvas />
-              <Dock />
+              <Dock user={user.username} />
             </div>
             <aside className="side">
               <PanelBoundary title="Inspector"><InspectorPanel /></PanelBoundary>

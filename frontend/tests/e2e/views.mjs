@@ -257,6 +257,45 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await expand(false);
     }],
 
+    ["panel layout: the Monitor and the map side by side at 1280×800, resizable, remembered per user and role, reset in one click", async () => {
+      if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
+      await page.setViewportSize({ width: 1280, height: 800 });
+      await view("Scientist");
+      await panel("Monitor");
+      await page.getByLabel("Panel beside").selectOption("map");
+      const monitor = page.getByRole("tabpanel", { name: "Monitor", exact: true });
+      const map = page.getByRole("region", { name: "Map", exact: true });
+      const together = async () => {
+        await expectVisible(monitor);
+        await expectVisible(map);
+        await waitUntil(async () => Number(await page.getByTestId("map-canvas").getAttribute("data-points")) >= 2, 30000, async () => "no track on the map beside the Monitor");
+        const a = await monitor.boundingBox(), b = await map.boundingBox();
+        const inView = (r) => r && r.x >= 0 && r.y >= 0 && r.x + r.width <= 1281 && r.y + r.height <= 801 && r.width >= 250 && r.height >= 150;
+        if (!inView(a) || !inView(b) || a.x + a.width > b.x + 1) throw new Error(`not side by side in view: ${JSON.stringify({ a, b })}`);
+        return { a, b };
+      };
+      const { a } = await together();
+      // narrower Monitor by the divider's keyboard, then the arrangement survives a reload
+      const divider = page.getByRole("separator", { name: "Resize the panels' widths" });
+      await divider.focus();
+      await page.keyboard.press("ArrowLeft");
+      await page.keyboard.press("ArrowLeft");
+      const narrower = (await monitor.boundingBox()).width;
+      if (!(narrower < a.width - 50)) throw new Error(`the divider did not resize: ${a.width} → ${narrower}`);
+      await shot("panels-side-by-side");
+      await page.reload();
+      await view("Scientist");
+      await panel("Monitor");
+      await together();
+      if (Math.abs((await monitor.boundingBox()).width - narrower) > 4) throw new Error("the panels' widths were not remembered");
+      // another role keeps its own (one panel), and one click resets this one
+      await view("Operator");
+      if (await page.getByRole("region", { name: "Map", exact: true }).count()) throw new Error("the scientist's layout leaked into the operator view");
+      await view("Scientist");
+      await page.getByRole("button", { name: "Reset layout" }).click();
+      if (await map.count()) throw new Error("the map is still beside the Monitor after Reset layout");
+    }],
+
     ["archives: a time range played back through the charts (seek, play, pause)", async () => {
       if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
       await panel("Archives");
