@@ -63,12 +63,11 @@ export function Dock({ user = "" }: { user?: string }) {
               onClick={() => store.patch({ panel: p.id })}>{p.title}</button>
           ))}
         </div>
-        <label className="dock-beside">Beside{" "}
-          <select aria-label="Panel beside" value={beside?.id ?? ""} onChange={(e) => change({ beside: (e.target.value || null) as PanelId | null })}>
-            <option value="">—</option>
-            {PANELS.filter((p) => p.id !== panel.id).map((p) => <option key={p.id} value={p.id}>{p.title}</option>)}
-          </select>
-        </label>
+        <select className="dock-beside" aria-label="Panel beside" title="Show a second panel beside this one"
+          value={beside?.id ?? ""} onChange={(e) => change({ beside: (e.target.value || null) as PanelId | null })}>
+          <option value="">+ beside</option>
+          {PANELS.filter((p) => p.id !== panel.id).map((p) => <option key={p.id} value={p.id}>beside: {p.title}</option>)}
+        </select>
         {!isDefault && <button onClick={() => setLayout(resetLayout(window.localStorage, user, role))}>Reset layout</button>}
         <button className="dock-toggle" aria-pressed={expanded} onClick={() => setExpanded((e) => !e)}>
           {expanded ? "Shrink panel" : "Expand panel"}
