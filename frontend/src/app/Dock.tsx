@@ -68,7 +68,10 @@ export function Dock({ user = "" }: { user?: string }) {
           <option value="">+ beside</option>
           {PANELS.filter((p) => p.id !== panel.id).map((p) => <option key={p.id} value={p.id}>beside: {p.title}</option>)}
         </select>
-        {!isDefault && <button onClick={() => setLayout(resetLayout(window.localStorage, user, role))}>Reset layout</button>}
+        {!isDefault && (
+          <button className="dock-reset" aria-label="Reset layout" title="Reset layout: one panel, the default height"
+            onClick={() => setLayout(resetLayout(window.localStorage, user, role))}>↺</button>
+        )}
         <button className="dock-toggle" aria-pressed={expanded} onClick={() => setExpanded((e) => !e)}>
           {expanded ? "Shrink panel" : "Expand panel"}
         </button>
