@@ -53,6 +53,8 @@ export interface PlanState {
   error: string | null;
   lastValid?: PlanJson | null;
   previous?: PlanJson | null;
+  /** The planKey of the model `result` answers (core/planKey). */
+  modelKey?: string;
 }
 
 export interface EditorStore {
