@@ -29,6 +29,8 @@ if [ "$OFFSET" = 0 ]; then DATA="${MODD_DATA:-$PWD/data}"; else DATA="${MODD_DAT
 # the user's alone (docs/security.md), as is everything made from here on.
 mkdir -p "$DATA"
 chmod 700 "$DATA"
+# What the terminal shows: scripts/run-lines.sh (paths relative to the checkout).
+. scripts/run-lines.sh
 
 modd validate -q "$MODEL"
 # The drone's link ends (PubBroker and SubBroker ports): the model's, unless moved.
@@ -46,10 +48,11 @@ fi
 if [ -f frontend/package.json ]; then
   if [ -f frontend/dist/index.html ] && [ -z "$(find frontend/src frontend/index.html frontend/package.json \
        frontend/vite.config.ts metamodel/modd.schema.json -newer frontend/dist/index.html -print -quit 2>/dev/null)" ]; then
-    echo "modd: the frontend is up to date (frontend/dist)"
+    :
   else
-    echo "modd: building the frontend"
-    (cd frontend && npm run build --silent >/dev/null) || echo "modd: the frontend did not build; serving the API only" >&2
+    echo "modd: building the frontend (log in $(rel "$DATA")/frontend-build.log)"
+    (cd frontend && npm run build --silent >"$DATA/frontend-build.log" 2>&1) \
+      || echo "modd: the frontend did not build; serving the API only (see $(rel "$DATA")/frontend-build.log)" >&2
   fi
 fi
 
@@ -58,8 +61,8 @@ fi
 PWFILE="$DATA/admin-password"
 if [ ! -s "$PWFILE" ]; then
   if [ -f "$DATA/backend/modd.sqlite3" ]; then
-    echo "modd: $DATA/backend was made by an older run without $PWFILE;" \
-         "its admin password is in $DATA/backend.log (or remove $DATA to start afresh)" >&2
+    echo "modd: $(rel "$DATA")/backend was made by an older run without $(rel "$PWFILE");" \
+         "its admin password is in $(rel "$DATA")/backend.log (or remove $(rel "$DATA") to start afresh)" >&2
   else
     (umask 077; python3 -c 'import secrets; print(secrets.token_urlsafe(12))' >"$PWFILE")
   fi
@@ -80,8 +83,12 @@ trap stop INT TERM EXIT
 ZENOH="tcp/127.0.0.1:$ZENOH_PORT"
 CREDS="$DATA/credentials"
 python3 -c 'import sys; from modd.zenoh_auth import CredentialStore; CredentialStore(sys.argv[1]).ensure()' "$CREDS"
-modd up "$MODEL" --workdir "$DATA/run" --credentials "$CREDS" --simulate --zenoh-listen "$ZENOH" &
+# modd up's own lines (every process started, its log, the kept deployment) go
+# to its log: the terminal shows the few lines a user needs first.
+modd up "$MODEL" --workdir "$DATA/run" --credentials "$CREDS" --simulate --zenoh-listen "$ZENOH" \
+  >>"$DATA/up.log" &
 pids+=($!)
+DRONE="$(modd convert "$MODEL" --to json | python3 -c 'import json,sys; print(json.load(sys.stdin)["drone"]["name"])')"
 
 modd-backend --host 127.0.0.1 --port "$PORT" --data "$DATA/backend" --zenoh-connect "$ZENOH" \
   --zenoh-credentials "$CREDS/backend.cred" --deploy-key "$CREDS/deploy.key" \
@@ -94,13 +101,15 @@ answers() { python3 -c "import urllib.request as u; u.urlopen('$URL/api/health',
 up=0
 for _ in $(seq 150); do
   answers && { up=1; break; }
-  kill -0 "${pids[1]}" 2>/dev/null || { echo "modd: the backend stopped; see $DATA/backend.log" >&2; exit 1; }
+  kill -0 "${pids[1]}" 2>/dev/null || { echo "modd: the backend stopped; see $(rel "$DATA")/backend.log" >&2; exit 1; }
   sleep 0.2
 done
 if [ "$up" != 1 ]; then
-  echo "modd: the workbench does not answer at $URL/api/health after 30 s; see $DATA/backend.log" >&2
+  echo "modd: the workbench does not answer at $URL/api/health after 30 s; see $(rel "$DATA")/backend.log" >&2
   exit 1
 fi
+# First, as soon as it answers: where the workbench is and how to log in.
+say_workbench "$URL" "$MODD_ADMIN_PASSWORD" "$PWFILE" "$DATA"
 
 # The demo project, loaded and deployed through the workbench's own API.
 PROJECT="${MODD_PROJECT:-demo}"
@@ -110,28 +119,12 @@ if [ -n "$MODD_ADMIN_PASSWORD" ]; then
     || echo "modd: the demo project was not deployed (see above); the workbench still runs" >&2
 fi
 
-DRONE="$(modd convert "$MODEL" --to json | python3 -c 'import json,sys; print(json.load(sys.stdin)["drone"]["name"])')"
-echo
-echo "modd: workbench at $URL/  (API docs: $URL/docs)"
-if [ -n "$MODD_ADMIN_PASSWORD" ]; then
-  echo "modd: login 'admin', password '$MODD_ADMIN_PASSWORD' (kept in $PWFILE)"
-else
-  echo "modd: login 'admin'; its password is in $DATA/backend.log"
-fi
-echo "modd: project '$PROJECT' runs on the simulated drone '$DRONE': ingress socket $DATA/run/ingress.sock, archive in $DATA/run/archive, logs in $DATA/run/logs and $DATA/backend.log"
-if [ "$FOXGLOVE_PORT" != 0 ]; then
-  echo "modd: Foxglove/Lichtblick live at ws://127.0.0.1:$FOXGLOVE_PORT (Open connection > Foxglove WebSocket; docs/ecosystem.md)"
-fi
-if [ "$REPLAY_PORT" != 0 ]; then
-  echo "modd: Foxglove/Lichtblick replay of an archive (Archives panel > Replay in Foxglove) at ws://127.0.0.1:$REPLAY_PORT"
-fi
-echo "modd: zenoh $ZENOH requires credentials; a viewer connects with"
-echo "      modd.subscribe('$DRONE', SUBSCRIBER, connect='$ZENOH', credentials='$CREDS/viewer.cred')"
+say_running "$PROJECT" "$DRONE" "$DATA" "$ZENOH" "$CREDS/viewer.cred" "$FOXGLOVE_PORT" "$REPLAY_PORT"
 # Only a workbench that answers is announced as running.
 if answers; then
   echo "modd: Ctrl-C to stop"
 else
-  echo "modd: the workbench stopped answering at $URL; see $DATA/backend.log" >&2
+  echo "modd: the workbench stopped answering at $URL; see $(rel "$DATA")/backend.log" >&2
   exit 1
 fi
 wait -n "${pids[@]}" || true

@@ -18,7 +18,7 @@ async function main() {
     args: ["--headless", "--no-sandbox", "--disable-gpu", "--use-gl=swiftshader",
       "--enable-unsafe-swiftshader", "--no-first-run", "--disable-background-networking"],
   });
-  const report = { status: 0, csp: "", connected: false, frames: 0, refused: [], errors: [] };
+  const report = { status: 0, csp: "", connected: false, frames: 0, refused: [], errors: [], devControls: null };
   try {
     const page = await context.newPage();
     page.on("console", (m) => {
@@ -40,6 +40,11 @@ async function main() {
       await page.waitForTimeout(250);
     }
     await page.waitForTimeout(1000);
+    // viser's developer controls (Save Canvas, Dev Settings) are not for users
+    report.devControls = [];
+    for (const text of ["Save Canvas", "Dev Settings", "Share"]) {
+      if (await page.getByText(text, { exact: true }).first().isVisible().catch(() => false)) report.devControls.push(text);
+    }
   } finally {
     await context.close().catch(() => undefined);
     rmSync(profile, { recursive: true, force: true });

@@ -92,6 +92,12 @@ def test_deploy_is_acked_recorded_and_diffed(
     assert [d["id"] for d in listed] == [record["id"]]
     same = live.get(f"/api/projects/{pid}/deployed-diff", headers=operator).json()
     assert same["changes"] == [] and same["same_project"]
+    # a new project starts from the running drone's link ends
+    running = live.get("/api/running-drones", headers=people["designer"]).json()
+    usv = next(d for d in running if d["drone"] == "usv")
+    assert (usv["project_id"], usv["revision"]) == (pid, 1)
+    assert usv["pub_broker"] == station.model["pubBroker"]["endpoint"]
+    assert usv["sub_broker"] == station.model["subBroker"]["endpoint"]
     model = live.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
     model["subscribers"][0]["periodS"] = "4"
     live.put(f"/api/projects/{pid}/model", headers=admin,

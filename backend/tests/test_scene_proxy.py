@@ -180,6 +180,7 @@ def test_scene_in_a_browser_under_its_csp(base: str) -> None:
     assert report.get("status") == 200, (report, proc.stderr[-2000:])
     assert report["connected"] and report["frames"] > 0, report
     assert report["refused"] == [], report  # no script, style or socket refused
+    assert report["devControls"] == [], report  # no Save Canvas, Dev Settings, Share shown
     # viser's Gaussian-splat sorter compiles code with Function(): refused
     # (no 'unsafe-eval'); the MoDD scene draws no splats.
     assert all("unsafe-eval" in e for e in report["errors"]), report

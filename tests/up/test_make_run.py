@@ -83,7 +83,7 @@ def check_zenoh_is_closed(data: Path, zport: int, log: Path) -> None:
     endpoint = f"tcp/127.0.0.1:{zport}"
     creds = data / "credentials"
     out = log.read_text()
-    assert f"credentials='{creds / 'viewer.cred'}'" in out
+    assert f"need credentials: {creds / 'viewer.cred'}" in out
     for name in ("viewer.cred", "backend.cred", "subbroker.cred", "deploy.key", "users"):
         assert (creds / name).stat().st_mode & 0o777 == 0o600, name
         if name.endswith(".cred"):
@@ -167,6 +167,10 @@ def test_make_run_serves_the_demo_live_and_stops(
         password = (data / "admin-password").read_text().strip()
         assert f"login 'admin', password '{password}'" in out
         assert f"workbench at {base}/" in out
+        # the URL and login first (before the deploy's lines), in at most 8 lines
+        said = [line for line in out.splitlines() if not line.startswith("modd: building")]
+        assert said[0].startswith("modd: workbench at") and "login 'admin'" in said[1], out
+        assert len(said[:said.index("modd: Ctrl-C to stop") + 1]) <= 8, out
 
         with urllib.request.urlopen(base + "/", timeout=10) as resp:
             assert b'<div id="root">' in resp.read()  # the built frontend, not the API only
@@ -214,7 +218,8 @@ def test_make_run_serves_the_demo_live_and_stops(
         stop(proc, log)
     out = log.read_text()
     assert out.rstrip().endswith("modd: stopped"), out
-    pids = [int(p) for p in re.findall(r"started \w+ \(pid (\d+)\)", out)]
+    pids = [int(p) for p in re.findall(r"started \w+ \(pid (\d+)\)",
+                                       (data / "up.log").read_text())]
     assert len(pids) >= 4, out  # PubBroker, SubBroker, simulator, MAVLink bridge
     assert [p for p in pids if alive(p)] == []
     with pytest.raises(OSError):  # nothing serves the workbench any more
@@ -228,6 +233,7 @@ def test_make_run_serves_the_demo_live_and_stops(
         again = log.read_text()
         assert f"password '{password}'" in again
         assert "project 'demo' (id 1) exists: kept as it is, running revision 1" in again
+        assert "not resumed" not in again  # modd up's note on the kept deployment: in its log
     finally:
         stop(proc, log)
 

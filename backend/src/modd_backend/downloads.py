@@ -12,6 +12,7 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
+from modd_gen.context import Station
 from modd_gen.generate import ROLES, generate
 
 TARGETS: tuple[str, ...] = tuple(ROLES)
@@ -39,10 +40,27 @@ def as_run(model: dict[str, Any], archive_dir: Path | None) -> dict[str, Any]:
     return {**model, "pubBroker": broker}
 
 
-def role_zip(model: dict[str, Any], role: str, folder: str) -> bytes:
+def station_of(connect: tuple[str, ...], credentials: Path | None) -> Station | None:
+    """The base station this backend connects to, for the scientist's
+    subscribers: the SubBroker's zenoh endpoint, and the viewer's credentials
+    file beside the backend's own (``make run``'s ``data/credentials``), named
+    by its path, never read.
+
+    >>> station_of(("tcp/127.0.0.1:7447",), None)
+    Station(zenoh_connect='tcp/127.0.0.1:7447', viewer_credentials=None)
+    """
+    if not connect:
+        return None
+    viewer = credentials.parent / "viewer.cred" if credentials is not None else None
+    shown = str(viewer) if viewer is not None and viewer.exists() else None
+    return Station(connect[0], shown)
+
+
+def role_zip(model: dict[str, Any], role: str, folder: str,
+             station: Station | None = None) -> bytes:
     """The role's artefacts under ``folder/`` in a zip, with INDEX.txt listing
     each file and whether it is regenerated or the user's once written."""
-    artifacts = generate(model, role)
+    artifacts = generate(model, role, station)
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
         index = [f"{a.ownership.value:<9} {a.path}" for a in artifacts]

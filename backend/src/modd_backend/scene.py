@@ -131,9 +131,20 @@ class SceneServer:
         if not ipaddress.ip_address(host).is_loopback:
             raise ValueError(f"the 3D scene listens on loopback only, not {host!r}")
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self._user_controls()
         self.host = host
         self.port = self.server.get_port()
         self._lock = threading.Lock()
+
+    def _user_controls(self) -> None:
+        """What the panel shows users: a legend. viser shows its developer
+        controls (Save Canvas, Dev Settings, share) while a scene has no GUI
+        of its own; with one they stay behind its settings button."""
+        gui = self.server.gui
+        gui.configure_theme(show_logo=False, show_share_button=False)
+        gui.add_markdown("**Drone tracks**: each point a position, coloured by the "
+                         "chosen value; the axes show the attitude. Drag to orbit, "
+                         "scroll to zoom.")
 
     def draw(self, drone: str, track: Track) -> None:
         import numpy as np

@@ -12,7 +12,7 @@ import { Http, type HttpOptions } from "./http";
 import type {
   ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress,
   DeployedDiff, Deployment, DynamicReply, DynamicRequest,
-  LoginResult, ModelInput, ModelVersion, PlanResult, Project, User, ValidateResult, Version,
+  LoginResult, ModelInput, ModelVersion, PlanResult, Project, RunningDrone, User, ValidateResult, Version,
 } from "./types";
 
 /**
@@ -30,7 +30,7 @@ export function createApi(opts: HttpOptions) {
     // --- auth
     /** A cookie session (HttpOnly, SameSite=Strict; spans tabs): the answer carries the CSRF token, no bearer token. */
     login: (username: string, password: string) =>
-      http.request<LoginResult>("/api/auth/login", { method: "POST", json: { username, password, session: "cookie" } }),
+      http.request<LoginResult>("/api/auth/login", { method: "POST", json: { username, password, session: "cookie" }, waitTurn: false }),
     logout: () => http.request<void>("/api/auth/logout", { method: "POST", as: "none" }),
     me: () => http.request<User & { csrf?: string | null }>("/api/auth/me"),
 
@@ -58,6 +58,8 @@ export function createApi(opts: HttpOptions) {
       http.request<ModelVersion>(`/api/projects/${projectId}/model`, {
         method: "PUT", json: { model, base_revision: baseRevision, message },
       }),
+    /** Drones reporting now, with their PubBroker and SubBroker endpoints (defaults for a new project). */
+    runningDrones: () => http.request<RunningDrone[]>("/api/running-drones"),
     listVersions: (projectId: number) => http.request<Version[]>(`/api/projects/${projectId}/versions`),
     exportModel: (projectId: number, format: "modd" | "json" | "collector" = "modd", revision?: number) =>
       http.request<string>(`/api/projects/${projectId}/export`, { query: { format, revision }, as: "text" }),

@@ -73,4 +73,37 @@ describe("cookie session", () => {
     expect((f.mock.calls[1][1]!.headers as Record<string, string>)["X-CSRF-Token"]).toBeUndefined();
     expect(api.streamUrl("usv", "http://h:1")).toBe("ws://h:1/api/drones/usv/stream");
   });
+
+  it("waits its turn when the backend's heavy slots are taken, instead of failing", async () => {
+    let calls = 0;
+    const f = vi.fn(async () => {
+      calls += 1;
+      if (calls <= 2) {
+        return new Response(JSON.stringify({ detail: "at most 2 heavy requests at once per user (CSV, series, deploy); retry shortly" }),
+          { status: calls === 1 ? 429 : 503, headers: { "Content-Type": "application/json", "Retry-After": "1" } });
+      }
+      return new Response(JSON.stringify({ points: [[1, 2]] }), { status: 200, headers: { "Content-Type": "application/json" } });
+    });
+    const sleep = vi.fn(async () => {});
+    const http = new Http({ baseUrl: "", fetch: f as unknown as typeof fetch, token: () => null, sleep });
+    const got = await http.request<{ points: number[][] }>("/api/drones/usv/archives/a.mcap/series");
+    expect(got.points).toEqual([[1, 2]]);
+    expect(f).toHaveBeenCalledTimes(3);
+    expect(sleep.mock.calls.map((c) => (c as unknown[])[0])).toEqual([1000, 1000]);
+  });
+
+  it("does not wait on a long Retry-After, nor for a login", async () => {
+    const sleep = vi.fn(async () => {});
+    const busy = (after: string) => vi.fn(async () => new Response(JSON.stringify({ detail: "too many failed logins; try again later" }),
+      { status: 429, headers: { "Content-Type": "application/json", "Retry-After": after } }));
+    const long = busy("60");
+    const http = new Http({ baseUrl: "", fetch: long as unknown as typeof fetch, token: () => null, sleep });
+    expect((await http.request("/api/x").catch((e: ApiError) => e) as ApiError).status).toBe(429);
+    const login = busy("1");
+    const http2 = new Http({ baseUrl: "", fetch: login as unknown as typeof fetch, token: () => null, sleep });
+    await http2.request("/api/auth/login", { method: "POST", json: {}, waitTurn: false }).catch(() => null);
+    expect(long).toHaveBeenCalledOnce();
+    expect(login).toHaveBeenCalledOnce();
+    expect(sleep).not.toHaveBeenCalled();
+  });
 });

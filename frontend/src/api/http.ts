@@ -41,6 +41,32 @@ export interface HttpOptions {
   csrf?: () => string | null;
   /** Called on a 401 so the app can return to the login page. */
   onUnauthorized?: () => void;
+  /** How to wait for a turn (tests pass a fake clock); default setTimeout. */
+  sleep?: (ms: number, signal?: AbortSignal) => Promise<void>;
+}
+
+/**
+ * Heavy requests (archive series, CSV, deploy) beyond the backend's slots are
+ * refused before any work with 429/503 and Retry-After (backend guards.py):
+ * such a request waits its turn here, a Retry-After of at most
+ * `MAX_TURN_WAIT_S` at a time and `MAX_TURNS` times, instead of telling the
+ * user to click again.
+ */
+export const MAX_TURN_WAIT_S = 5;
+export const MAX_TURNS = 30;
+
+function sleepFor(ms: number, signal?: AbortSignal): Promise<void> {
+  return new Promise((resolve, reject) => {
+    const t = setTimeout(resolve, ms);
+    signal?.addEventListener("abort", () => { clearTimeout(t); reject(new DOMException("aborted", "AbortError")); }, { once: true });
+  });
+}
+
+/** Seconds to wait before asking again, or null when this answer is not "wait your turn". */
+export function turnWait(res: Pick<Response, "status" | "headers">): number | null {
+  if (res.status !== 429 && res.status !== 503) return null;
+  const s = Number(res.headers.get("Retry-After"));
+  return Number.isFinite(s) && s > 0 && s <= MAX_TURN_WAIT_S ? s : null;
 }
 
 export interface RequestOptions {
@@ -51,6 +77,8 @@ export interface RequestOptions {
   signal?: AbortSignal;
   /** How to read a successful body. */
   as?: "json" | "text" | "blob" | "none";
+  /** Wait for a turn when the backend says it is busy (default true; a login does not). */
+  waitTurn?: boolean;
 }
 
 /** A readable message from FastAPI's bodies: a string detail or a list of validation errors. */
@@ -91,14 +119,13 @@ export class Http {
       headers["Content-Type"] = "text/plain; charset=utf-8";
       body = o.text;
     }
-    let res: Response;
-    try {
-      res = await this.opts.fetch(this.url(path, o.query), {
-        method: o.method ?? "GET", headers, body, signal: o.signal, credentials: "same-origin",
-      });
-    } catch (e) {
-      if ((e as { name?: string }).name === "AbortError") throw e;
-      throw new ApiError(0, `the backend cannot be reached (${(e as Error).message})`);
+    const init: RequestInit = { method: o.method ?? "GET", headers, body, signal: o.signal, credentials: "same-origin" };
+    let res = await this.send(path, o, init);
+    for (let turn = 0; turn < MAX_TURNS && o.waitTurn !== false; turn++) {
+      const wait = turnWait(res);
+      if (wait === null) break;
+      await (this.opts.sleep ?? sleepFor)(wait * 1000, o.signal);
+      res = await this.send(path, o, init);
     }
     if (!res.ok) {
       let errBody: ErrorBody = {};
@@ -111,6 +138,15 @@ export class Http {
       case "text": return (await res.text()) as T;
       case "blob": return (await res.blob()) as T;
       default: return (res.status === 204 ? undefined : await res.json()) as T;
+    }
+  }
+
+  private async send(path: string, o: RequestOptions, init: RequestInit): Promise<Response> {
+    try {
+      return await this.opts.fetch(this.url(path, o.query), init);
+    } catch (e) {
+      if ((e as { name?: string }).name === "AbortError") throw e;
+      throw new ApiError(0, `the backend cannot be reached (${(e as Error).message})`);
     }
   }
 }

@@ -73,6 +73,15 @@ export interface Deployment {
   error: string | null;
 }
 
+/** A drone reporting its status now, with the link ends of the model last deployed to it. */
+export interface RunningDrone {
+  drone: string;
+  project_id: number | null;
+  revision: number | null;
+  pub_broker: { host: string; port: number } | null;
+  sub_broker: { host: string; port: number } | null;
+}
+
 export interface DeployedDiff {
   drone: string;
   head_revision: number;

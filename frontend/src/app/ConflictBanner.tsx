@@ -8,6 +8,7 @@ import { mergeModels, type Side } from "../core/merge";
 import { fieldInWords, valueInWords } from "../core/changeWords";
 import "./collab.css";
 import { useEditor, useEditorStore } from "../editor/useEditor";
+import { isDirty } from "../editor/store";
 import { useSaveModel } from "./useSaveModel";
 
 export function ConflictBanner() {
@@ -65,7 +66,7 @@ export function RemoteSaveNotice() {
   const saved = useEditor((s) => s.savedRevision);
   const busy = useEditor((s) => s.save.busy);
   const conflict = useEditor((s) => s.conflict);
-  const dirty = useEditor((s) => s.wb.history.present !== s.savedModel);
+  const dirty = useEditor(isDirty);
   const { startMerge } = useSaveModel();
   if (!remote || busy || conflict || remote.revision <= saved) return null;
   return (

@@ -1,4 +1,5 @@
-/** Project, role views, save state and the user. */
+/** Project, role views, save state (with the revision's message, shown in History) and the user. */
+import { useState } from "react";
 import { VIEW_TITLES, viewsFor, type Role, type ViewRole } from "../core/roles";
 import { isDirty } from "../editor/store";
 import { useEditor, useEditorStore } from "../editor/useEditor";
@@ -16,6 +17,11 @@ export function TopBar({ user, onLogout, onProjects }: { user: User; onLogout: (
   const { save: doSave, reload } = useSaveModel();
   const views = viewsFor(user.roles as Role[]);
   const canSave = role !== "operator";
+  const [message, setMessage] = useState("");
+  const saveNow = async () => {
+    await doSave(message.trim());
+    if (!store.getState().save.error && !isDirty(store.getState())) setMessage("");
+  };
 
   return (
     <header className="topbar">
@@ -37,7 +43,12 @@ export function TopBar({ user, onLogout, onProjects }: { user: User; onLogout: (
           {save.conflictRevision !== null && <button onClick={() => void reload()}>Load revision {save.conflictRevision}</button>}
         </span>
       )}
-      <button className="primary" disabled={!canSave || !dirty || save.busy} onClick={() => void doSave()}
+      {canSave && (
+        <input className="save-message" aria-label="Revision message" placeholder="What changed (optional)" value={message}
+          maxLength={500} onChange={(e) => setMessage(e.target.value)}
+          onKeyDown={(e) => { if (e.key === "Enter" && dirty && !save.busy) void saveNow(); }} />
+      )}
+      <button className="primary" disabled={!canSave || !dirty || save.busy} onClick={() => void saveNow()}
         title={canSave ? "Save a new revision" : "The operator view does not edit the model"}>
         {save.busy ? "Saving…" : "Save"}
       </button>

@@ -26,6 +26,7 @@ import { ConflictBanner, DraftNotice, RemoteSaveNotice } from "./ConflictBanner"
 import { useProjectEvents } from "./useProjectEvents";
 import { useDrafts } from "./useDrafts";
 import { FirstStep } from "./FirstStep";
+import { RunningDroneHint } from "./RunningDroneHint";
 import { readDraft, writeDraft } from "./drafts";
 import { goTo, type Route } from "./routes";
 import { sameValue } from "../core/merge";
@@ -106,6 +107,7 @@ export function Workbench({ project, user, onLogout, onProjects, route }: Props)
           <DraftNotice />
           <LinkBanner />
           <FirstStep />
+          <RunningDroneHint />
           <div className="main">
             <Palette />
             <div className="center">
@@ -113,7 +115,7 @@ export function Workbench({ project, user, onLogout, onProjects, route }: Props)
                   diagram under a click already under way, or that click is lost. */}
               <Notice />
               <Canvas />
-              <Dock />
+              <Dock user={user.username} />
             </div>
             <aside className="side">
               <PanelBoundary title="Inspector"><InspectorPanel /></PanelBoundary>

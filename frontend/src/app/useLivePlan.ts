@@ -10,12 +10,7 @@ import { useEditorStore, useModel } from "../editor/useEditor";
 import type { PlanState } from "../editor/store";
 import type { PlanResult } from "../api/types";
 import { useServices } from "./services";
-
-function semantic(m: ModdModel): string {
-  const { layout: _layout, ...rest } = m;
-  void _layout;
-  return JSON.stringify(rest);
-}
+import { planKey } from "../core/planKey";
 
 /** The plan state after an answer: a valid plan becomes the last valid one, the one before it `previous`. */
 export function nextPlanState(prev: PlanState, result: PlanResult): PlanState {
@@ -27,7 +22,7 @@ export function useLivePlan(delayMs = 400): void {
   const { api } = useServices();
   const store = useEditorStore();
   const model = useModel();
-  const key = semantic(model);
+  const key = planKey(model);
   const last = useRef<string | null>(null);
 
   useEffect(() => {
@@ -38,7 +33,7 @@ export function useLivePlan(delayMs = 400): void {
       try {
         const result = await api.plan({ model: JSON.parse(key) as ModdModel }, ctl.signal);
         last.current = key;
-        store.patch((s) => ({ plan: nextPlanState(s.plan, result) }));
+        store.patch((s) => ({ plan: { ...nextPlanState(s.plan, result), modelKey: key } }));
       } catch (e) {
         if ((e as Error).name === "AbortError") return;
         store.patch((s) => ({ plan: { ...s.plan, busy: false, error: (e as Error).message } }));

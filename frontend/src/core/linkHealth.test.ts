@@ -10,7 +10,13 @@ describe("linkHealth", () => {
   });
 
   it("is lost when the link is down, frames stop, statuses stop or the stream closes", () => {
-    expect(linkHealth({ stream: "open", status: { ...up, connected: false, state: "connecting" }, statusAt: 100, now: 100 }).reason).toBe("link connecting");
+    expect(linkHealth({ stream: "open", status: { ...up, connected: false, state: "connecting" }, statusAt: 100, now: 100 }).reason).toBe("the base station is trying to reach the drone");
+    // the session's state names are not the reason's words ("link handshake" said nothing to an operator)
+    for (const state of ["handshake", "down", "stopped", undefined] as const) {
+      const reason = linkHealth({ stream: "open", status: { ...up, connected: false, state }, statusAt: 100, now: 100 }).reason ?? "";
+      expect(reason).toMatch(/drone|base station/);
+      expect(reason).not.toMatch(/^link /);
+    }
     const stale = linkHealth({ stream: "open", status: { ...up, lastFrameAgeS: 4 }, statusAt: 100, now: 102 });
     expect(stale).toEqual({ down: true, reason: "no frame from the drone for 6 s", lastFrameAt: 96 });
     expect(linkHealth({ stream: "open", status: up, statusAt: 100, now: 112 }).reason).toBe("no status from the base station for 12 s");

@@ -42,9 +42,19 @@ export function linkHealth({ stream, status, statusAt, now, staleS = 5, statusTi
   if (stream === "closed" || stream === "error") return down("the workbench's stream is closed");
   if (now - statusAt > statusTimeoutS) return down(`no status from the base station for ${Math.round(now - statusAt)} s`);
   // A deploy reconfigures the link for a moment: not a loss.
-  if (!status.connected && status.state !== "configuring") return down(`link ${status.state ?? "down"}`);
+  if (!status.connected && status.state !== "configuring") return down(linkStateWords(status.state));
   if (lastFrameAt !== null && now - lastFrameAt > staleS) return down(`no frame from the drone for ${Math.round(now - lastFrameAt)} s`);
   return { down: false, reason: null, lastFrameAt };
+}
+
+/** Why a link that is not up is lost, in the operator's words (not the session's state names). */
+export function linkStateWords(state: LinkStatus["state"] | null | undefined): string {
+  switch (state) {
+    case "connecting": return "the base station is trying to reach the drone";
+    case "handshake": return "the drone has not yet answered the base station's key check";
+    case "stopped": return "the base station stopped the link";
+    default: return "the drone's link is down";
+  }
 }
 
 /** "12 s", "3 min 4 s", "2 h 5 min". */

@@ -13,6 +13,7 @@ import { useAutoLayout } from "./useAutoLayout";
 import { FIT } from "./fit";
 import { removeSelection } from "./selectionActions";
 import { QuickSubscribe } from "./QuickSubscribe";
+import { QuickSensor } from "./QuickSensor";
 
 /** The sensor a new variable goes to: the selected sensor, or the sensor of the selected topic, or the first. */
 function targetSensor(selection: string[], sensors: string[]): string | undefined {
@@ -43,6 +44,7 @@ export function Palette() {
     <nav className="palette" aria-label="Palette">
       <h2>Create</h2>
       <button disabled={!canEdit(role, "sensor")} onClick={() => store.dispatch({ type: "addSensor", pos: nextPosition(model(), "sensor") })}>+ Sensor</button>
+      {canEdit(role, "sensor") && canEdit(role, "topic") && <QuickSensor />}
       <button
         disabled={!canEdit(role, "topic") || !sensor}
         title={sensor ? `adds a measured variable to ${sensor}` : "add a sensor first"}

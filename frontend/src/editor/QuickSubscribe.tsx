@@ -1,8 +1,10 @@
 /**
- * The scientist's shortcut: topic, period and aggregation, then Add — one
- * subscriber connected to its topic in a few clicks. The topics are grouped
- * by sensor, each under its full name (as everywhere in the workbench) with
- * its unit.
+ * The scientist's shortcut: topics, periods and aggregations, then Subscribe —
+ * a subscriber connected to its topic for every topic × period × aggregation
+ * chosen (Ctrl/Shift-click picks several topics or aggregations; periods are
+ * written "2.0, 0.25"). The topics are grouped by sensor, each under its full
+ * name (as everywhere in the workbench) with its unit; what will be made is
+ * spelled out in full under the form, where the narrow palette cuts nothing.
  */
 import { useState } from "react";
 import { AggregationValues, type Aggregation } from "../core/model.gen";
@@ -11,28 +13,36 @@ import { listTopics } from "../core/query";
 import { nextPosition } from "../core/graph";
 import { currentModel } from "../core/workbench";
 import { topicLabel } from "../core/topicLabel";
+import { parsePeriods, subscriptionGrid } from "../core/subscriptionGrid";
 import { useEditorStore, useModel } from "./useEditor";
+
+const selected = (e: React.ChangeEvent<HTMLSelectElement>) => [...e.target.selectedOptions].map((o) => o.value);
 
 export function QuickSubscribe() {
   const store = useEditorStore();
   const model = useModel();
   const topics = listTopics(model);
-  const [topic, setTopic] = useState("");
-  const [periodS, setPeriod] = useState("1.0");
-  const [aggregation, setAggregation] = useState<Aggregation>(AGGREGATION.AVERAGE);
-  const chosen = topic || topics[0]?.name || "";
+  const [picked, setTopics] = useState<string[]>([]);
+  const [periodText, setPeriod] = useState("1.0");
+  const [aggregations, setAggregations] = useState<Aggregation[]>([AGGREGATION.AVERAGE]);
+  const known = picked.filter((t) => topics.some((x) => x.name === t));
+  const chosen = known.length ? known : topics.slice(0, 1).map((t) => t.name);
+  const { periods, bad } = parsePeriods(periodText);
+  const grid = subscriptionGrid(chosen, periods, aggregations);
   return (
     <form
       className="quick-subscribe"
       aria-label="Quick subscription"
       onSubmit={(e) => {
         e.preventDefault();
-        if (!chosen) return;
-        store.dispatch({ type: "addSubscriber", topic: chosen, periodS, aggregation, pos: nextPosition(currentModel(store.getState().wb), "subscriber") });
+        for (const g of grid) {
+          store.dispatch({ type: "addSubscriber", ...g, pos: nextPosition(currentModel(store.getState().wb), "subscriber") });
+        }
       }}
     >
       <label>Topic
-        <select value={chosen} title={chosen} onChange={(e) => setTopic(e.target.value)} disabled={!topics.length}>
+        <select multiple size={Math.min(6, topics.length + model.drone.sensors.length) || 1} value={chosen}
+          title={chosen.join(", ")} onChange={(e) => setTopics(selected(e))} disabled={!topics.length}>
           {model.drone.sensors.map((sensor) => (
             <optgroup key={sensor.name} label={`${sensor.name}${sensor.description ? ` — ${sensor.description}` : ""}`}>
               {topics.filter((t) => t.sensor === sensor).map((t) => <option key={t.id} value={t.name}>{topicLabel(model, t.name)}</option>)}
@@ -41,14 +51,20 @@ export function QuickSubscribe() {
         </select>
       </label>
       <label>Every (s)
-        <input value={periodS} onChange={(e) => setPeriod(e.target.value)} inputMode="decimal" size={5} />
+        <input value={periodText} onChange={(e) => setPeriod(e.target.value)} inputMode="decimal" size={5}
+          aria-invalid={bad.length > 0} title="One period or several: 2.0, 0.25" />
       </label>
+      {bad.length > 0 && <span className="error" role="alert">Not a period: {bad.join(", ")}</span>}
       <label>Aggregation
-        <select value={aggregation} onChange={(e) => setAggregation(e.target.value as Aggregation)}>
+        <select multiple size={3} value={aggregations} onChange={(e) => setAggregations(selected(e) as Aggregation[])}>
           {AggregationValues.map((a) => <option key={a}>{a}</option>)}
         </select>
       </label>
-      <button type="submit" disabled={!chosen}>Subscribe</button>
+      <output className="quick-subscribe-summary" aria-label="Subscriptions to make">
+        {grid.length === 1 ? "" : `${grid.length} subscriptions: `}
+        {grid.map((g) => `${topicLabel(model, g.topic)} ${g.aggregation} every ${g.periodS} s`).join("; ")}
+      </output>
+      <button type="submit" disabled={!grid.length || bad.length > 0}>{grid.length > 1 ? `Subscribe (${grid.length})` : "Subscribe"}</button>
     </form>
   );
 }

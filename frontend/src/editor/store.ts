@@ -6,6 +6,7 @@
  * reducer) or `patch` (server results).
  */
 import type { ModdModel } from "../core/model.gen";
+import { canonicalJson } from "../core/canonical";
 import { currentModel, initialState, reduce, type Action, type WorkbenchState } from "../core/workbench";
 import type { Role } from "../core/roles";
 import type { PlanResult } from "../api/types";
@@ -52,6 +53,8 @@ export interface PlanState {
   error: string | null;
   lastValid?: PlanJson | null;
   previous?: PlanJson | null;
+  /** The planKey of the model `result` answers (core/planKey). */
+  modelKey?: string;
 }
 
 export interface EditorStore {
@@ -104,4 +107,22 @@ export function loadRevision(store: EditorStore, project: { id: number; name: st
   store.patch({ project, savedRevision: revision, savedModel: currentModel(s.wb), save: { busy: false, error: null, conflictRevision: null }, conflict: null });
 }
 
-export const isDirty = (s: EditorState): boolean => currentModel(s.wb) !== s.savedModel;
+/** Per edited model, whether it equals a saved one (compared once per pair, not per render). */
+const sameAsSaved = new WeakMap<ModdModel, { saved: ModdModel; same: boolean }>();
+
+/**
+ * Are there edits to save? Not only "was anything edited": values set back
+ * by hand to what was saved are no edit (the top bar stops saying
+ * "unsaved"). Compared in canonical form (core/canonical), as the backend
+ * compares revisions.
+ */
+export const isDirty = (s: EditorState): boolean => {
+  const current = currentModel(s.wb);
+  if (current === s.savedModel) return false;
+  if (!s.savedModel) return true;
+  const known = sameAsSaved.get(current);
+  if (known?.saved === s.savedModel) return !known.same;
+  const same = canonicalJson(current) === canonicalJson(s.savedModel);
+  sameAsSaved.set(current, { saved: s.savedModel, same });
+  return !same;
+};

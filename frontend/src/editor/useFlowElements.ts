@@ -8,6 +8,7 @@ import { modelToGraph } from "../core/graph";
 import { nodeMarkers } from "../core/markers";
 import { canEdit, canEditEdge } from "../core/roles";
 import { localDiagnostics } from "../core/diagnostics";
+import { diagnosticsFor, planKey } from "../core/planKey";
 import { MODD_SCHEMA } from "../core/schema";
 import { useEditor, useModel, useRole, useSelection } from "./useEditor";
 import type { ElementNode } from "./nodes/types";
@@ -15,8 +16,12 @@ import type { ElementNode } from "./nodes/types";
 export function useDiagnostics() {
   const model = useModel();
   const backend = useEditor((s) => s.plan.result?.diagnostics);
+  const answeredFor = useEditor((s) => s.plan.modelKey);
+  const key = useMemo(() => planKey(model), [model]);
   const local = useMemo(() => localDiagnostics(model, MODD_SCHEMA), [model]);
-  return useMemo(() => [...local, ...(backend ?? []).map((d) => ({ ...d, source: "backend" }))], [local, backend]);
+  // The backend's are shown only for the model they answer (not a renamed element's old name).
+  const fresh = diagnosticsFor(backend, answeredFor, key);
+  return useMemo(() => [...local, ...fresh.map((d) => ({ ...d, source: "backend" }))], [local, fresh]);
 }
 
 export function useFlowElements(): { nodes: ElementNode[]; edges: Edge[] } {

@@ -188,11 +188,16 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await expectText(page.getByTestId("deploy-result"), /Acked/, 30000);
       await view("Scientist");
       await panel("Map");
-      await page.getByLabel("Colour by").selectOption("sub_temp");
+      // coloured at first by a value of the place (water temperature), not the accelerometer of sub_1
+      const first = await page.getByLabel("Colour by").inputValue();
+      if (first !== "sub_temp") throw new Error(`the map is coloured by ${first} at first, not the water temperature`);
       await expectText(page.getByTestId("map-legend"), /sub_temp.*°C/);
       const canvas = page.getByTestId("map-canvas");
       await waitUntil(async () => Number(await canvas.getAttribute("data-points")) >= 8, 60000,
         async () => `${await canvas.getAttribute("data-points")} fixes on the map`);
+      // the vehicle is drawn heading along its course
+      const heading = await canvas.getAttribute("data-heading");
+      if (!heading || !(Number(heading) >= 0 && Number(heading) < 360)) throw new Error(`no vehicle heading on the map: ${heading}`);
       await expand(true);
       await page.waitForTimeout(1500);
       const px = JSON.parse((await canvas.getAttribute("data-track-px")) ?? "[]");
@@ -250,6 +255,45 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       if (tiles.requests.slice(n).some((r) => r.host.startsWith("localhost"))) throw new Error("a tile from an origin the service does not allow was fetched");
       await page.getByLabel("Tile URL").fill("");
       await expand(false);
+    }],
+
+    ["panel layout: the Monitor and the map side by side at 1280×800, resizable, remembered per user and role, reset in one click", async () => {
+      if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
+      await page.setViewportSize({ width: 1280, height: 800 });
+      await view("Scientist");
+      await panel("Monitor");
+      await page.getByLabel("Panel beside").selectOption("map");
+      const monitor = page.getByRole("tabpanel", { name: "Monitor", exact: true });
+      const map = page.getByRole("region", { name: "Map", exact: true });
+      const together = async () => {
+        await expectVisible(monitor);
+        await expectVisible(map);
+        await waitUntil(async () => Number(await page.getByTestId("map-canvas").getAttribute("data-points")) >= 2, 30000, async () => "no track on the map beside the Monitor");
+        const a = await monitor.boundingBox(), b = await map.boundingBox();
+        const inView = (r) => r && r.x >= 0 && r.y >= 0 && r.x + r.width <= 1281 && r.y + r.height <= 801 && r.width >= 250 && r.height >= 150;
+        if (!inView(a) || !inView(b) || a.x + a.width > b.x + 1) throw new Error(`not side by side in view: ${JSON.stringify({ a, b })}`);
+        return { a, b };
+      };
+      const { a } = await together();
+      // narrower Monitor by the divider's keyboard, then the arrangement survives a reload
+      const divider = page.getByRole("separator", { name: "Resize the panels' widths" });
+      await divider.focus();
+      await page.keyboard.press("ArrowLeft");
+      await page.keyboard.press("ArrowLeft");
+      const narrower = (await monitor.boundingBox()).width;
+      if (!(narrower < a.width - 50)) throw new Error(`the divider did not resize: ${a.width} → ${narrower}`);
+      await shot("panels-side-by-side");
+      await page.reload();
+      await view("Scientist");
+      await panel("Monitor");
+      await together();
+      if (Math.abs((await monitor.boundingBox()).width - narrower) > 4) throw new Error("the panels' widths were not remembered");
+      // another role keeps its own (one panel), and one click resets this one
+      await view("Operator");
+      if (await page.getByRole("region", { name: "Map", exact: true }).count()) throw new Error("the scientist's layout leaked into the operator view");
+      await view("Scientist");
+      await page.getByRole("button", { name: "Reset layout" }).click();
+      if (await map.count()) throw new Error("the map is still beside the Monitor after Reset layout");
     }],
 
     ["archives: a time range played back through the charts (seek, play, pause)", async () => {
@@ -503,6 +547,47 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       }, 180000, async () => `the operator's Fill gaps: "${await progress.textContent()}"`);
       console.log(`    operator: ${await progress.textContent()}${reason ? ` (seen while running:${reason})` : ""}`);
       await view("Scientist");
+    }],
+
+    ["scenario 1 from an empty project in at most 20 counted actions (clicks, typed fields, choices), the plan at 28/28/6", async () => {
+      await page.getByRole("button", { name: "MoDD", exact: true }).click();
+      await page.getByLabel("Project name").fill("scenario1-counted");
+      await page.getByLabel("Drone name").fill("usv");
+      await page.getByRole("button", { name: "Create" }).click();
+      await expectVisible(node("drone"));
+      let actions = 0;
+      const act = async (what) => { actions += 1; await what(); };
+      await act(() => view("Sensor integrator"));
+      const sensor = page.getByRole("form", { name: "New sensor" });
+      await act(() => sensor.getByLabel("Sensor name").fill("accelerometer"));
+      await act(() => sensor.getByLabel("Variables").fill("accel_x, accel_y, accel_z"));
+      await act(() => sensor.getByLabel("Unit").fill("METER_PER_SECOND_SQUARED"));
+      await act(() => sensor.getByRole("button", { name: "Add sensor (3 variables)" }).click());
+      await act(() => view("System designer"));
+      await act(() => page.getByRole("button", { name: "+ Publisher" }).click());
+      await act(() => setText("periodS", "0.04")); // one typed field (Enter applies it)
+      await act(() => inspector.getByRole("button", { name: "All of accelerometer" }).click());
+      await act(() => view("Scientist"));
+      const quick = page.getByRole("form", { name: "Quick subscription" });
+      const topics = (...vs) => vs.map((v) => `usv.accelerometer.${v}`);
+      // x and y, every 2.0 and 0.25 s, AVERAGE (the default): sub_1 … sub_4 in one submit
+      await act(() => quick.getByLabel("Topic").selectOption(topics("accel_x", "accel_y")));
+      await act(() => quick.getByLabel("Every (s)").fill("2.0, 0.25"));
+      await act(() => quick.getByRole("button", { name: "Subscribe (4)" }).click());
+      // z every 0.25 s: MIN and MAX, then MAX once more (scenario 1 has it twice)
+      await act(() => quick.getByLabel("Topic").selectOption(topics("accel_z")));
+      await act(() => quick.getByLabel("Every (s)").fill("0.25"));
+      await act(() => quick.getByLabel("Aggregation").selectOption(["MIN", "MAX"]));
+      await act(() => quick.getByRole("button", { name: "Subscribe (2)" }).click());
+      await act(() => quick.getByLabel("Aggregation").selectOption(["MAX"]));
+      await act(() => quick.getByRole("button", { name: "Subscribe", exact: true }).click());
+      console.log(`    scenario 1 from an empty project: ${actions} counted actions`);
+      if (actions > 20) throw new Error(`scenario 1 took ${actions} actions`);
+      const subscribers = page.locator(".react-flow__node.react-flow__node-subscriber");
+      await waitUntil(async () => (await subscribers.count()) === 7, 10000, async () => `${await subscribers.count()} subscribers`);
+      await panel("Plan");
+      await waitUntil(async () => (await page.getByTestId("buffer-size").allTextContents()).join(",") === "28,28,6", 20000,
+        async () => `buffer sizes ${(await page.getByTestId("buffer-size").allTextContents()).join(",")}`);
     }],
   ];
 

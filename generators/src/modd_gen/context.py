@@ -19,6 +19,16 @@ class PublisherView:
     topics: list[Topic]
 
 
+@dataclass(frozen=True)
+class Station:
+    """Where the subscribers of a running deployment connect: the SubBroker's
+    zenoh endpoint, and the path of a viewer's credentials file there (a path
+    given at run time, never the password)."""
+
+    zenoh_connect: str
+    viewer_credentials: str | None = None
+
+
 @dataclass
 class Context:
     model: dict[str, Any]
@@ -29,6 +39,7 @@ class Context:
     ingress: Ingress
     key_ref: str
     extra: dict[str, Any] = field(default_factory=dict)
+    station: Station | None = None
 
 
 DEFAULT_KEY_REF = "env:MODD_LINK_KEY"

@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Any
 
 from .collector import print_collector
-from .io import LoadResult, dumps, format_of, load_file, load_or_report, write_atomic
-from .parser import has_comments
+from .comments import keep_comments
+from .io import LoadResult, decode, dumps, format_of, load_file, load_or_report, write_atomic
 
 
 def _report(result: LoadResult, quiet_warnings: bool = False) -> None:
@@ -60,19 +60,12 @@ def run_fmt(args: argparse.Namespace) -> int:
         if not result.ok or result.model is None:
             status = 1
             continue
-        text = dumps(result.model, format_of(path))
         current = Path(path).read_bytes()
+        text = _canonical(path, result, current, args)
         if current == text.encode("utf-8"):
             continue
         if args.check:
             print(f"{path}: not in canonical form", file=sys.stderr)
-            status = 1
-            continue
-        # Comments are not part of the model: refuse to lose them silently.
-        if format_of(path) == "modd" and not args.drop_comments \
-                and has_comments(current.decode("utf-8", errors="replace")):
-            print(f"{path}: has comments, which the canonical form does not keep; not "
-                  "rewritten (--drop-comments to rewrite it anyway)", file=sys.stderr)
             status = 1
             continue
         try:
@@ -84,6 +77,18 @@ def run_fmt(args: argparse.Namespace) -> int:
             continue
         print(f"{path}: reformatted")
     return status
+
+
+def _canonical(path: str, result: LoadResult, current: bytes, args: argparse.Namespace) -> str:
+    """The canonical text of a loaded file, its comments kept in their places
+    (unless --drop-comments): they are not part of the model, so the printer
+    alone would lose them."""
+    assert result.model is not None
+    text = dumps(result.model, format_of(path))
+    if format_of(path) != "modd" or args.drop_comments:
+        return text
+    source, _ = decode(current, path, args.encoding)
+    return text if source is None else keep_comments(source, result.source_map, text)
 
 
 def register_validate(sub: Any) -> None:
@@ -111,7 +116,7 @@ def register_fmt(sub: Any) -> None:
     p.add_argument("--check", action="store_true", help="only report files not in canonical "
                    "form (exit 1)")
     p.add_argument("--drop-comments", action="store_true",
-                   help="rewrite files that have comments too (the comments are lost)")
+                   help="leave the comments out of the canonical form (kept by default)")
     _encoding_option(p)
     p.set_defaults(func=run_fmt)
 

@@ -125,15 +125,6 @@ def parse_lenient(text: str, filename: str = "<text>"
     return doc, builder.source_map, builder.diagnostics
 
 
-def has_comments(text: str) -> bool:
-    """True when ``text`` holds a // or /* */ comment (outside strings)."""
-    try:
-        return any(tok.type in ("LINE_COMMENT", "BLOCK_COMMENT")
-                   for tok in _parser().lex(text, dont_ignore=True))
-    except UnexpectedInput:
-        return "//" in text or "/*" in text
-
-
 def _describe_expected(expected: set[str]) -> str:
     names: list[str] = []
     terminals = {t.name: t for t in _parser().terminals}
@@ -305,10 +296,12 @@ class _Builder:
                 doc["link"] = self._settings(block.children[0], "/link", LINK_SETTINGS)
                 self._mark("/link", block)
             elif kind == "publishers":
+                self._mark("/publishers", block)
                 for p in block.children:
                     assert isinstance(p, Tree)
                     publishers.append(self._publisher(p, len(publishers)))
             elif kind == "subscriptions":
+                self._mark("/subscribers", block)
                 for s in block.children:
                     assert isinstance(s, Tree)
                     subscribers.append(self._subscriber(s, len(subscribers)))
@@ -332,6 +325,7 @@ class _Builder:
             if child.data == "description":
                 drone["description"] = _unquote(child.children[0])  # type: ignore[arg-type]
                 continue
+            self._mark("/drone/sensors", child)
             for s in child.children:
                 assert isinstance(s, Tree)
                 sensors.append(self._sensor(s, f"/drone/sensors/{len(sensors)}"))

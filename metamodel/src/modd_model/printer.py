@@ -2,8 +2,9 @@
 
 The canonical form is the paper's Listing 1 (top-level blocks, no
 ``DataCollector`` wrapper), four-space indents, every statement ended by ``;``.
-Comments and the diagram layout are not part of the text: they do not survive
-a JSON → .modd → JSON trip (the layout stays in the JSON form)."""
+Comments are not part of the model: ``comments.keep_comments`` puts those of a
+source text back into its canonical form (``modd fmt``). The diagram layout is
+not part of the text (it stays in the JSON form)."""
 
 from __future__ import annotations
 

@@ -130,3 +130,33 @@ def deployed_diff(
         source="drone" if reports is not None else "record",
         drone_reports=reports,
     )
+
+
+class RunningDroneOut(BaseModel):
+    """A drone that reports its status now, and the link ends of the model last
+    deployed to it (null when no deployment of this workbench is known)."""
+
+    drone: str
+    project_id: int | None
+    revision: int | None
+    pub_broker: dict[str, Any] | None
+    sub_broker: dict[str, Any] | None
+
+
+@router.get("/running-drones")
+def running_drones(db: DbDep, _user: UserDep, state: StateDep) -> list[RunningDroneOut]:
+    """The drones reporting lately, with the PubBroker and SubBroker endpoints
+    of what they run: a new project starts from those (`make run` moves them
+    with MODD_PORT)."""
+    statuses = state.statuses
+    out: list[RunningDroneOut] = []
+    for name in sorted(statuses.drones() if statuses is not None else []):
+        if statuses is None or statuses.latest(name) is None:
+            continue
+        record = last_acked(db, name)
+        model = model_of(get_version(db, record.project_id, record.revision)) if record else {}
+        ends = {p: (model.get(p) or {}).get("endpoint") for p in ("pubBroker", "subBroker")}
+        out.append(RunningDroneOut(drone=name, project_id=record.project_id if record else None,
+                                   revision=record.revision if record else None,
+                                   pub_broker=ends["pubBroker"], sub_broker=ends["subBroker"]))
+    return out

@@ -12,7 +12,7 @@ from fastapi.responses import Response
 from modd_model import validate
 
 from ..deps import DbDep, StateDep, UserDep, has_role
-from ..downloads import as_run, role_zip
+from ..downloads import as_run, role_zip, station_of
 from ..errors import ApiError
 from ..layouts import foxglove_layout
 from ..modelio import diagnostics_json
@@ -42,7 +42,8 @@ def download(
     """integrator: C++ driver projects (naming the ingress socket and archive
     directory of the run this backend watches, e.g. ``make run``'s, when there
     is one); operator: PubBroker and SubBroker configs; scientist: Python and
-    C++ subscriber stubs."""
+    C++ subscriber stubs (connecting to the SubBroker this backend connects to,
+    and naming the viewer's credentials file beside the backend's)."""
     if not has_role(user, Role(target)):
         raise ApiError(403, f"the {target} downloads need the role {target}")
     project = get_project(db, project_id)
@@ -56,7 +57,10 @@ def download(
     try:
         if target == "integrator":
             model = as_run(model, state.settings.archive_dir)
-        data = role_zip(model, target, folder)
+        settings = state.settings
+        station = station_of(settings.zenoh_connect, settings.zenoh_credentials) \
+            if target == "scientist" and settings.zenoh_enabled else None
+        data = role_zip(model, target, folder, station)
     except ValueError as exc:
         raise ApiError(422, f"the generators cannot handle this model: {exc}") from None
     return Response(data, media_type="application/zip",

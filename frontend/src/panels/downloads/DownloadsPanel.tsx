@@ -8,11 +8,7 @@ import { useEditor } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
 import { saveBlob } from "../saveBlob";
 
-const TARGETS = [
-  { target: "integrator", title: "Driver stubs (C++)", who: "Sensor integrator" },
-  { target: "scientist", title: "Subscriber stubs (Python, C++)", who: "Scientist" },
-  { target: "operator", title: "Broker configurations", who: "Operator" },
-];
+import { TARGETS } from "./targets";
 
 
 export default function DownloadsPanel() {

@@ -7,8 +7,7 @@
 import { useState } from "react";
 import type { Version } from "../../api/types";
 import { diffModels } from "../../core/diff";
-import { currentModel } from "../../core/workbench";
-import { loadRevision } from "../../editor/store";
+import { isDirty, loadRevision } from "../../editor/store";
 import { useEditor, useEditorStore } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
 import { LoadState, usePanelData } from "../usePanelData";
@@ -38,7 +37,7 @@ export default function HistoryPanel() {
   };
   const restore = async (rev: number) => {
     const s = store.getState();
-    const dirty = currentModel(s.wb) !== s.savedModel;
+    const dirty = isDirty(s);
     if (!window.confirm(`Restore revision ${rev} as a new revision on top of r${s.savedRevision}?`
       + (dirty ? " Your unsaved edits stay in the editor; you will be offered to merge them." : ""))) return;
     try {

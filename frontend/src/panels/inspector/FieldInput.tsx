@@ -102,6 +102,7 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
       control = (
         <fieldset id={id} className="topic-checks" aria-describedby={describedBy} disabled={readOnly}>
           {topics.length === 0 && <span className="muted">no measured variables yet</span>}
+          <SensorChoices topics={topics} chosen={chosen} onCommit={onCommit} />
           {topics.map((t) => (
             <label key={t.id}>
               <input type="checkbox" checked={chosen.has(t.name)}
@@ -136,6 +137,21 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
       {control}
       {errors.map((e) => <div key={e} className="field-error" role="alert">{e}</div>)}
       <div id={describedBy} className="field-help">{spec.description}</div>
+    </div>
+  );
+}
+
+/** One choice per sensor: all of its topics at once (a publisher often takes every variable of a sensor). */
+function SensorChoices({ topics, chosen, onCommit }: { topics: TopicRef[]; chosen: Set<string>; onCommit: (value: unknown) => void }) {
+  const sensors = [...new Set(topics.map((t) => t.sensor.name))];
+  const of = (sensor: string) => topics.filter((t) => t.sensor.name === sensor).map((t) => t.name);
+  const all = sensors.filter((s) => of(s).length > 1 && of(s).some((n) => !chosen.has(n)));
+  if (!all.length) return null;
+  return (
+    <div className="sensor-choices">
+      {all.map((s) => (
+        <button key={s} type="button" onClick={() => onCommit([...chosen, ...of(s).filter((n) => !chosen.has(n))])}>All of {s}</button>
+      ))}
     </div>
   );
 }

@@ -22,6 +22,7 @@ import { useServices } from "../../app/services";
 import { useDroneStream } from "../../app/useDroneStream";
 import type { DataSource } from "../../dataSources/types";
 import { drawMap, tileOrigin, tileUrlProblem, type TileCount } from "./drawMap";
+import { defaultColour } from "./marker";
 
 const TILE_KEY = "modd.map.tileUrl";
 
@@ -69,7 +70,7 @@ interface TrackMapProps {
 
 export function TrackMap({ source, lat, lon, choices, onColour, id = "map", missing }: TrackMapProps) {
   const drone = useModel().drone.name;
-  const [colour, setColour] = useState(() => choices[0]?.channel ?? "");
+  const [colour, setColour] = useState(() => defaultColour(choices));
   const [tileUrl, setTileUrl] = useState(() => window.localStorage.getItem(TILE_KEY) ?? "");
   const [tiles, setTiles] = useState<TileCount>({ asked: 0, drawn: 0, failed: 0 });
   const points = useTrack(source, lat, lon, colour);
@@ -91,6 +92,7 @@ export function TrackMap({ source, lat, lon, choices, onColour, id = "map", miss
     const drawn = drawMap(el, points, range, { tileUrl, onTile: () => setRedraw((n) => n + 1) });
     el.dataset.trackPx = JSON.stringify(drawn.px);
     el.dataset.origin = points.length ? `${points[0].lat},${points[0].lon}` : "";
+    el.dataset.heading = drawn.heading === null ? "" : drawn.heading.toFixed(0);
     setTiles((t) => (t.asked === drawn.tiles.asked && t.drawn === drawn.tiles.drawn && t.failed === drawn.tiles.failed ? t : drawn.tiles));
   }, [points, range?.[0], range?.[1], tileUrl, redraw]); // eslint-disable-line react-hooks/exhaustive-deps
 

@@ -5,6 +5,7 @@
  * (grey when the colour subscription had no value yet) joined by a thin line.
  */
 import { colourOf, EARTH_RADIUS_M, formatDistance, gridStep, type TrackPoint } from "../../core/track";
+import { courseDeg } from "./marker";
 
 interface Options { tileUrl: string; onTile: () => void }
 
@@ -12,7 +13,7 @@ interface Options { tileUrl: string; onTile: () => void }
 export interface TileCount { asked: number; drawn: number; failed: number }
 
 /** What a drawing did: where (CSS pixels in the canvas) up to 40 of the fixes were drawn, and its tiles. */
-export interface Drawn { px: Array<[number, number]>; tiles: TileCount }
+export interface Drawn { px: Array<[number, number]>; tiles: TileCount; /** The vehicle's course drawn, degrees from north (null: unknown). */ heading: number | null }
 
 const tiles = new Map<string, HTMLImageElement>();
 const failedTiles = new Set<string>();
@@ -57,7 +58,7 @@ export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], ra
   el.width = Math.round(w * dpr);
   el.height = Math.round(h * dpr);
   const ctx = el.getContext("2d");
-  if (!ctx) return { px: [], tiles: tileCount };
+  if (!ctx) return { px: [], tiles: tileCount, heading: null };
   ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
   ctx.fillStyle = "#f8fafc";
   ctx.fillRect(0, 0, w, h);
@@ -65,7 +66,7 @@ export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], ra
   if (points.length === 0) {
     ctx.fillStyle = "#64748b";
     ctx.fillText("waiting for positions…", 12, 20);
-    return { px: [], tiles: tileCount };
+    return { px: [], tiles: tileCount, heading: null };
   }
   const xs = points.map((p) => p.east), ys = points.map((p) => p.north);
   const minX = Math.min(...xs), maxX = Math.max(...xs), minY = Math.min(...ys), maxY = Math.max(...ys);
@@ -106,9 +107,8 @@ export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], ra
     ctx.fill();
   }
   const last = points[points.length - 1];
-  ctx.strokeStyle = "#0f172a";
-  ctx.lineWidth = 2;
-  ctx.beginPath(); ctx.arc(X(last.east), Y(last.north), 6, 0, 2 * Math.PI); ctx.stroke();
+  const heading = courseDeg(points);
+  drawVehicle(ctx, X(last.east), Y(last.north), heading);
 
   // Scale bar (one grid step) and north arrow.
   ctx.fillStyle = "#0f172a";
@@ -116,7 +116,24 @@ export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], ra
   ctx.fillText(formatDistance(step), w - 16 - step * s, h - 26);
   ctx.fillText("N ↑", w - 28, 16);
   const every = Math.max(1, Math.ceil(points.length / 40));
-  return { px: points.filter((_, i) => i % every === 0).map((p) => [Math.round(X(p.east)), Math.round(Y(p.north))]), tiles: tileCount };
+  return { px: points.filter((_, i) => i % every === 0).map((p) => [Math.round(X(p.east)), Math.round(Y(p.north))]), tiles: tileCount, heading };
+}
+
+/** The vehicle at its last fix: an arrow along its course (a ring while the course is unknown). */
+function drawVehicle(ctx: CanvasRenderingContext2D, x: number, y: number, heading: number | null): void {
+  ctx.strokeStyle = "#ffffff";
+  ctx.fillStyle = "#0f172a";
+  ctx.lineWidth = 2;
+  if (heading === null) {
+    ctx.beginPath(); ctx.arc(x, y, 6, 0, 2 * Math.PI); ctx.stroke();
+    return;
+  }
+  ctx.save();
+  ctx.translate(x, y);
+  ctx.rotate((heading * Math.PI) / 180); // canvas y points down: 0° (north) is up
+  ctx.beginPath(); ctx.moveTo(0, -11); ctx.lineTo(7, 8); ctx.lineTo(0, 4); ctx.lineTo(-7, 8); ctx.closePath();
+  ctx.fill(); ctx.stroke();
+  ctx.restore();
 }
 
 function drawTiles(ctx: CanvasRenderingContext2D, origin: TrackPoint, s: number, X: (e: number) => number, Y: (n: number) => number,

@@ -5,6 +5,7 @@
  * make the plan exceed the budget (figures from the planning engine only).
  */
 import { formatRate, TRANSPORT_HEADERS, type LinkBudget } from "../../core/plan";
+import { LINK_DELAY_HELP } from "./delayWords";
 
 export function LinkBudgetView({ budget, onSelect }: { budget: LinkBudget; onSelect: (subscriber: string) => void }) {
   const delays = Object.entries(budget.delays_s);
@@ -31,8 +32,8 @@ export function LinkBudgetView({ budget, onSelect }: { budget: LinkBudget; onSel
         </div>
       )}
       {delays.length > 0 && (
-        <p className="muted" aria-label="Delay per subscription">
-          Delay on the link: {delays.map(([n, d]) => `${n} ${d.toFixed(2)} s`).join(", ")}
+        <p className="muted" aria-label="Delay per subscription" title={LINK_DELAY_HELP}>
+          Delay on the link (waiting for the packet and its air time, after the schedule): {delays.map(([n, d]) => `${n} ${d.toFixed(2)} s`).join(", ")}
         </p>
       )}
     </section>

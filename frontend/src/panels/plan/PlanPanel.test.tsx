@@ -17,6 +17,13 @@ function mount(plan: PlanJson | null, diagnostics = [] as Array<{ severity: "err
   return store;
 }
 
+/** A link budget within its radio's rate (udp, 3600 B/s). */
+const UDP_BUDGET = {
+  transport: "udp" as const, rate_bps: 3600, max_packet: 1472, accepted_delay_s: 1,
+  drone_to_base: 100.8, base_to_drone: 1.4, packets_per_s: 0.8, share: 0.028,
+  delays_s: { sub_1: 1.03 }, over_budget: [], error: null,
+};
+
 describe("PlanPanel", () => {
   it("shows the planner's figures: hyperperiod, buffer sizes, delays, link cost", () => {
     mount(planJson as unknown as PlanJson);
@@ -54,13 +61,19 @@ describe("PlanPanel", () => {
     expect(store.getState().wb.selection).toEqual(["sub:sub_4"]);
   });
 
+  it("labels its two delays apart: the planner's schedule delay and the delay on the link", () => {
+    mount({ ...(planJson as unknown as PlanJson), link_budget: UDP_BUDGET });
+    expect(screen.queryByText("Max delay")).toBeNull();
+    const schedule = screen.getByText("Max schedule delay").parentElement!;
+    const link = screen.getByLabelText("Delay per subscription");
+    expect(link.textContent).toMatch(/^Delay on the link \(.*after the schedule\)/);
+    expect(schedule.title).toMatch(/buffer size × publisher period/);
+    expect(link.title).toMatch(/air|rate/);
+    expect(screen.getByRole("columnheader", { name: /schedule delay/ })).toBeTruthy();
+  });
+
   it("shows no budget error within the budget", () => {
-    const budget = {
-      transport: "udp" as const, rate_bps: 3600, max_packet: 1472, accepted_delay_s: 1,
-      drone_to_base: 100.8, base_to_drone: 1.4, packets_per_s: 0.8, share: 0.028,
-      delays_s: { sub_1: 1.03 }, over_budget: [], error: null,
-    };
-    mount({ ...(planJson as unknown as PlanJson), link_budget: budget });
+    mount({ ...(planJson as unknown as PlanJson), link_budget: UDP_BUDGET });
     expect(screen.getByTestId("transport").textContent).toBe("udp");
     expect(screen.queryByTestId("budget-error")).toBeNull();
   });

@@ -17,6 +17,7 @@ import { findTopicByName } from "../../core/query";
 import { topicLabel } from "../../core/topicLabel";
 import { useEditor, useEditorStore, useModel } from "../../editor/useEditor";
 import { LinkBudgetView } from "./LinkBudget";
+import { SCHEDULE_DELAY_HELP } from "./delayWords";
 import { Timeline } from "./Timeline";
 
 function PlanChanges({ changes }: { changes: PlanChange[] }) {
@@ -48,7 +49,7 @@ function PlanView({ plan, changed, stale, elapsedMs, busy }: ViewProps) {
         <div className="figure"><span>Link, drone → base</span><strong className={mark("bytes")} title={was("bytes")}>{formatRate(link.drone_to_base)}</strong></div>
         <div className="figure"><span>Plain pub/sub</span><strong>{formatRate(link.plain_pubsub)}</strong></div>
         <div className="figure"><span>Saving</span><strong>{(link.saving_ratio * 100).toFixed(1)} %</strong></div>
-        <div className="figure"><span>Max delay</span><strong className={mark("maxDelay")} title={was("maxDelay")}>{plan.max_delay_s} s</strong></div>
+        <div className="figure" title={SCHEDULE_DELAY_HELP}><span>Max schedule delay</span><strong className={mark("maxDelay")} title={was("maxDelay")}>{plan.max_delay_s} s</strong></div>
         <div className="figure muted"><span>Planned in</span><strong>{elapsedMs.toFixed(0)} ms</strong></div>
       </div>
       {plan.link_budget && <LinkBudgetView budget={plan.link_budget} onSelect={(n) => select(subscriberId(n))} />}
@@ -68,7 +69,7 @@ function PlanView({ plan, changed, stale, elapsedMs, busy }: ViewProps) {
       )}
       <div className="plan-grid">
         <table className="buffer-table" aria-label="Buffer sizes">
-          <thead><tr><th>Topic</th><th>Published every</th><th>Buffer size</th><th>Subscribers (delay)</th></tr></thead>
+          <thead><tr><th>Topic</th><th>Published every</th><th>Buffer size</th><th title={SCHEDULE_DELAY_HELP}>Subscribers (schedule delay)</th></tr></thead>
           <tbody>
             {rows.map((r) => {
               const t = findTopicByName(model, r.topic);
@@ -93,6 +94,7 @@ function PlanView({ plan, changed, stale, elapsedMs, busy }: ViewProps) {
     </div>
   );
 }
+
 
 export default function PlanPanel() {
   const model = useModel();

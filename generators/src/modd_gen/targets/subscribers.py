@@ -26,7 +26,8 @@ def delivered_value_header() -> str:
 
 def _python(ctx: Context, sub: dict[str, Any]) -> Artifact:
     topic = ctx.topics[sub["topic"]]
-    text = render("py_subscriber/subscriber.py.j2", sub=sub, topic=topic, drone=ctx.drone)
+    text = render("py_subscriber/subscriber.py.j2", sub=sub, topic=topic, drone=ctx.drone,
+                  station=ctx.station)
     return Artifact(f"scientist/python/{sub['name']}.py", text, "scientist", executable=True)
 
 
@@ -54,6 +55,7 @@ def artifacts(ctx: Context) -> list[Artifact]:
             out += _cpp(ctx, sub)
     if ctx.model["subscribers"]:
         out.append(Artifact("scientist/README.md", render(
-            "py_subscriber/README.md.j2", subs=ctx.model["subscribers"], drone=ctx.drone),
+            "py_subscriber/README.md.j2", subs=ctx.model["subscribers"], drone=ctx.drone,
+            station=ctx.station),
             "scientist"))
     return out

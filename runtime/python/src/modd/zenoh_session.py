@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import os
+import socket
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -186,7 +187,8 @@ def zenoh_config(settings: ZenohSettings) -> zenoh.Config:
 
 
 def open_session(settings: ZenohSettings) -> zenoh.Session:
-    """Open a session; raises ValueError naming the endpoints if it cannot."""
+    """Open a session; raises ValueError naming the endpoints if it cannot,
+    and, for a client the router turned away, the credentials it needs."""
     import zenoh
 
     if settings.listen:
@@ -195,7 +197,51 @@ def open_session(settings: ZenohSettings) -> zenoh.Session:
         return zenoh.open(zenoh_config(settings))
     except zenoh.ZError as exc:
         where = ", ".join(settings.listen + settings.connect) or "no endpoint"
-        raise ValueError(f"cannot open a zenoh session ({settings.mode}, {where}): {exc}") from exc
+        head = f"cannot open a zenoh session ({settings.mode}, {where})"
+        if settings.mode != "client" or not settings.connect:
+            raise ValueError(f"{head}: {exc}") from exc
+        answers = tcp_answers(settings.connect[0])
+        raise ValueError(f"{head}: {refusal(settings, answers)}") from exc
+
+
+#: Where `make run` and `modd up` keep a viewer's credentials (docs/security.md).
+CREDENTIALS_HINT = ("`make run` keeps a viewer's in data/credentials/viewer.cred "
+                    "(data-<port>/ with MODD_PORT), `modd up` in <workdir>/credentials/viewer.cred")
+
+
+def refusal(settings: ZenohSettings, answers: bool | None) -> str:
+    """Why a client could not connect, in the user's words: ``answers`` says
+    whether something accepts TCP connections at the endpoint (None: unknown).
+    zenoh itself only says "Unable to connect" in every case.
+
+    >>> refusal(ZenohSettings(mode="client", connect=("tcp/127.0.0.1:7447",)), True)[:49]
+    'the router at tcp/127.0.0.1:7447 needs credentials'
+    """
+    endpoint = settings.connect[0]
+    if answers is False:
+        return (f"nothing answers at {endpoint}: is the SubBroker running (`make run` or "
+                "`modd up`), and is this its zenoh endpoint (--connect or $MODD_ZENOH_CONNECT)?")
+    if settings.credentials is None:
+        said = "needs credentials and none were given"
+    else:
+        said = f"refused the credentials of user {settings.credentials.user!r}"
+    maybe = "" if answers else " (or nothing answers there)"
+    return (f"the router at {endpoint} {said}{maybe}: give a credentials file with "
+            f"--credentials FILE or $MODD_ZENOH_CREDENTIALS; {CREDENTIALS_HINT}")
+
+
+def tcp_answers(endpoint: str, timeout_s: float = 1.0) -> bool | None:
+    """Whether a TCP connection to a ``tcp/host:port`` endpoint is accepted
+    (None for another kind of endpoint)."""
+    kind, _, address = endpoint.partition("/")
+    host, _, port = address.rpartition(":")
+    if kind != "tcp" or not port.isdigit():
+        return None
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
+            return True
+    except OSError:
+        return False
 
 
 def _room_for_pending() -> None:

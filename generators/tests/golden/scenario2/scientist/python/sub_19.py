@@ -7,19 +7,25 @@ Prints each value as the base-station SubBroker delivers it on zenoh, or, with
 DataFrame and writes it as CSV. Needs the MoDD Python runtime (``import modd``)
 and a SubBroker reachable through zenoh (default tcp/127.0.0.1:7447;
 --connect or MODD_ZENOH_CONNECT to change it), which lets in only known users:
-give a viewer's credentials file (--credentials FILE or MODD_ZENOH_CREDENTIALS;
-`modd up` and `make run` print where theirs is).
+give a viewer's credentials file at run time
+(--credentials FILE or MODD_ZENOH_CREDENTIALS; `make run` keeps it in
+data/credentials/viewer.cred, `modd up` in <workdir>/credentials/viewer.cred).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 import modd
 
 DRONE = 'usv'
 SUBSCRIBER = 'sub_19'
+#: The SubBroker's zenoh endpoint (None: tcp/127.0.0.1:7447).
+CONNECT = None
+#: Where it keeps a viewer's credentials (named when they are missing, not read unasked).
+VIEWER_CREDENTIALS = None
 
 
 def main() -> int:
@@ -29,15 +35,19 @@ def main() -> int:
     parser.add_argument("--count", type=int, help="stop after this many values")
     parser.add_argument("--connect", metavar="ENDPOINT",
                         help="the SubBroker's zenoh endpoint (default $MODD_ZENOH_CONNECT, "
-                        "else tcp/127.0.0.1:7447)")
+                        "else CONNECT)")
     parser.add_argument("--credentials", metavar="FILE",
                         help="a viewer's credentials file (default $MODD_ZENOH_CREDENTIALS)")
     args = parser.parse_args()
     try:
-        sub = modd.subscribe(DRONE, SUBSCRIBER, connect=args.connect,
-                             credentials=args.credentials)
+        connect = args.connect or os.environ.get("MODD_ZENOH_CONNECT") or CONNECT
+        sub = modd.subscribe(DRONE, SUBSCRIBER, connect=connect, credentials=args.credentials)
     except ValueError as exc:  # nothing listens there, or the credentials were refused
         print(f"{SUBSCRIBER}: {exc}", file=sys.stderr)
+        given = args.credentials or os.environ.get("MODD_ZENOH_CREDENTIALS")
+        if VIEWER_CREDENTIALS and not given:
+            print(f"{SUBSCRIBER}: this deployment's viewer credentials: --credentials "
+                  f"{VIEWER_CREDENTIALS}", file=sys.stderr)
         return 1
     if args.dataframe is not None:
         frame = sub.dataframe(duration_s=args.dataframe)
