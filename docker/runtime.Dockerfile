@@ -51,6 +51,7 @@ COPY generators generators
 # runtime/cpp; modd_gen.cpp_client reads them, a wheel includes them).
 COPY runtime/cpp/include/modd/client runtime/cpp/include/modd/client
 COPY runtime/cpp/src/client runtime/cpp/src/client
+COPY runtime/cpp/include/modd/ingress/wire.hpp runtime/cpp/include/modd/ingress/wire.hpp
 COPY runtime/python runtime/python
 RUN uv sync --frozen --no-dev --package modd-runtime
 

@@ -1,6 +1,6 @@
 """The C++ client sources the generators carry into generated projects
-(publisher client into driver projects, subscriber client into subscriber
-projects).
+(publisher client, with the ingress wire header it shares with the
+PubBroker, into driver projects; subscriber client into subscriber projects).
 
 Their one home is runtime/cpp (built and tested there); nothing is committed
 here. A wheel gets them at build time (``force-include`` in
@@ -26,6 +26,7 @@ ORIGINALS = {
     "subscriber.hpp": "runtime/cpp/include/modd/client/subscriber.hpp",
     "subscriber.cpp": "runtime/cpp/src/client/subscriber.cpp",
     "delivered_value.gen.hpp": "runtime/cpp/include/modd/client/delivered_value.gen.hpp",
+    "wire.hpp": "runtime/cpp/include/modd/ingress/wire.hpp",  # the publisher's, shared
 }
 
 #: The checkout this package sits in (src/modd_gen/cpp_client -> the repository).
