@@ -150,22 +150,28 @@ def test_a_cycle_is_found(tmp_path: Path) -> None:
     ]
 
 
-def layer_violations(roots: Mapping[str, Path], upper: str, lower: str,
-                     allowed: frozenset[tuple[str, str]]) -> list[tuple[str, str]]:
+def layer_violations(
+    roots: Mapping[str, Path], upper: str, lower: str, allowed: frozenset[tuple[str, str]]
+) -> list[tuple[str, str]]:
     """``(module, imported)`` where a module under the root ``lower`` imports
     one under ``upper`` (the arrow running back up), less the ``allowed`` ones."""
     known = modules(roots)
     below = set(modules({lower: roots[lower]}))
     above = set(modules({upper: roots[upper]}))
     graph = import_graph(known)
-    return sorted((name, target) for name in below for target in graph[name]
-                  if target in above and (name, target) not in allowed)
+    return sorted(
+        (name, target)
+        for name in below
+        for target in graph[name]
+        if target in above and (name, target) not in allowed
+    )
 
 
 def test_runtime_does_not_import_the_generators() -> None:
     roots = {root: REPO / root for root in ROOTS}
-    assert layer_violations(roots, "generators/src", "runtime/python/src",
-                            RUNTIME_TO_GENERATORS) == []
+    assert (
+        layer_violations(roots, "generators/src", "runtime/python/src", RUNTIME_TO_GENERATORS) == []
+    )
 
 
 def test_a_layer_violation_is_found(tmp_path: Path) -> None:

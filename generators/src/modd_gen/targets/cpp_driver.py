@@ -19,7 +19,6 @@ from ..context import Context, PublisherView
 from ..cpp_client import client, read
 from ..render import render
 
-
 #: The ingress wire header the client shares with the PubBroker, where the client includes it.
 WIRE = "modd/include/modd/ingress/wire.hpp"
 

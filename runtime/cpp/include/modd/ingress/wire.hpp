@@ -19,15 +19,24 @@ inline constexpr uint8_t kMinVersion = 1;
 inline constexpr size_t kMaxFrame = 1 << 20;  // bytes after the length prefix
 
 enum class MsgType : uint8_t {
-  Hello = 0x01, Register = 0x02, Samples = 0x03,                // publisher -> broker
-  Catalogue = 0x81, Ack = 0x82, Reject = 0x83,                  // broker -> publisher (version 2)
+  // publisher -> broker
+  Hello = 0x01,
+  Register = 0x02,
+  Samples = 0x03,
+  // broker -> publisher (version 2)
+  Catalogue = 0x81,
+  Ack = 0x82,
+  Reject = 0x83,
 };
 
 namespace wire {
 
 // LEB128 varint.
 inline void put_varint(std::vector<uint8_t>& b, uint64_t v) {
-  while (v >= 0x80) { b.push_back(static_cast<uint8_t>(v | 0x80)); v >>= 7; }
+  while (v >= 0x80) {
+    b.push_back(static_cast<uint8_t>(v | 0x80));
+    v >>= 7;
+  }
   b.push_back(static_cast<uint8_t>(v));
 }
 // Little-endian fixed-width value (the project targets little-endian hosts).
