@@ -19,9 +19,6 @@ from ..context import Context, PublisherView
 from ..cpp_client import client, read
 from ..render import render
 
-#: The ingress wire header the client shares with the PubBroker, where the client includes it.
-WIRE = "modd/include/modd/ingress/wire.hpp"
-
 
 def client_sources() -> tuple[str, str]:
     """The C++ publisher client, carried into every driver project (package data)."""
@@ -42,7 +39,9 @@ def _project(ctx: Context, pub: PublisherView) -> list[Artifact]:
     out = [Artifact(f"{root}/{path}", render(tpl, **args), "integrator") for path, tpl in gen]
     out += [Artifact(f"{root}/modd/include/modd/client/publisher.hpp", header, "integrator"),
             Artifact(f"{root}/modd/src/publisher.cpp", source, "integrator"),
-            Artifact(f"{root}/{WIRE}", read("wire.hpp"), "integrator")]
+            # the ingress wire header the client shares with the PubBroker
+            Artifact(f"{root}/modd/include/modd/ingress/wire.hpp", read("wire.hpp"),
+                     "integrator")]
     user = [("src/driver.cpp", "cpp_driver/driver.cpp.j2"),
             ("user.cmake", "cpp_driver/user.cmake.j2")]
     out += [Artifact(f"{root}/{path}", render(tpl, **args), "integrator", Ownership.USER)
