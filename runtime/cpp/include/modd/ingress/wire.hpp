@@ -18,16 +18,13 @@ inline constexpr uint8_t kVersion = 2;
 inline constexpr uint8_t kMinVersion = 1;
 inline constexpr size_t kMaxFrame = 1 << 20;  // bytes after the length prefix
 
+// One line a direction.
+// clang-format off
 enum class MsgType : uint8_t {
-  // publisher -> broker
-  Hello = 0x01,
-  Register = 0x02,
-  Samples = 0x03,
-  // broker -> publisher (version 2)
-  Catalogue = 0x81,
-  Ack = 0x82,
-  Reject = 0x83,
+  Hello = 0x01, Register = 0x02, Samples = 0x03,  // publisher -> broker
+  Catalogue = 0x81, Ack = 0x82, Reject = 0x83,    // broker -> publisher (version 2)
 };
+// clang-format on
 
 namespace wire {
 
