@@ -47,6 +47,11 @@ COPY backend/pyproject.toml backend/pyproject.toml
 RUN uv sync --frozen --no-dev --no-install-workspace --package modd-runtime
 COPY metamodel metamodel
 COPY generators generators
+# The C++ client sources the generators carry into generated projects (one home:
+# runtime/cpp; modd_gen.cpp_client reads them, a wheel includes them).
+COPY runtime/cpp/include/modd/client runtime/cpp/include/modd/client
+COPY runtime/cpp/src/client runtime/cpp/src/client
+COPY runtime/cpp/include/modd/ingress/wire.hpp runtime/cpp/include/modd/ingress/wire.hpp
 COPY runtime/python runtime/python
 RUN uv sync --frozen --no-dev --package modd-runtime
 

@@ -27,7 +27,6 @@ static_checks() {
   step "contracts and model types up to date"
   python -m modd_model.typegen --check
   python -m modd_contracts.typegen --check
-  python -m modd_gen.cpp_client --check
   step "mypy (strict: sources, component tests, cross-process tests and benchmarks)"
   mypy --no-error-summary metamodel/src backend/src generators/src runtime/python/src
   mypy --no-error-summary --explicit-package-bases \

@@ -3,7 +3,8 @@ Docker image copies: the COPY set of the image's Python stage is reproduced
 in a temporary directory (no Docker), wheels of the metamodel and the
 generators are built from it and installed, and the integrator download (the
 C++ driver projects, which carry the publisher client) is generated from them,
-outside the checkout."""
+outside the checkout. The client sources are not committed in the
+generators: the wheel gets them from runtime/cpp at build time."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from modd_gen.cpp_client import ORIGINALS
 
 REPO = Path(__file__).resolve().parents[2]
 UV = shutil.which("uv")
@@ -69,11 +71,14 @@ def test_integrator_download_from_installed_wheels(tmp_path: Path, dockerfile: s
     pairs = copy_set(REPO / "docker" / dockerfile, stage)
     assert ("generators", "generators") in pairs and ("metamodel", "metamodel") in pairs
     reproduce(pairs, image)
-    assert not (image / "runtime" / "cpp").exists()  # what the old code needed
+    # Of runtime/cpp, only the client sources the wheel carries (their one home).
+    assert sorted(p.name for p in (image / "runtime" / "cpp").rglob("*.?pp")) == sorted(
+        ORIGINALS)
     dist, site = tmp_path / "dist", tmp_path / "site"
     for member in ("metamodel", "generators"):
         subprocess.run([str(UV), "build", "--wheel", "--quiet", "--out-dir", str(dist),
                         str(image / member)], check=True, timeout=300, cwd=image)
+    shutil.rmtree(image / "runtime")  # the installed wheel must not need the checkout
     subprocess.run([str(UV), "pip", "install", "--quiet", "--no-deps", "--python", sys.executable,
                     "--target", str(site), *map(str, dist.glob("*.whl"))],
                    check=True, timeout=300)

@@ -10,6 +10,11 @@ module of its own (``modd.subbroker.running``).
 
 The graph is read from the sources with ``ast`` (nothing is imported), so a
 cycle is found even where Python would tolerate it at run time.
+
+Layers: no arrow runs back up from the runtime (``runtime/python/src``) to the
+generators (``generators/src``); what both need lives below them, in the
+metamodel's packages (``modd_model``, ``modd_contracts``). The one known
+exception is :data:`RUNTIME_TO_GENERATORS` (docs/architecture.md, "Parts").
 """
 
 from __future__ import annotations
@@ -26,6 +31,13 @@ ROOTS = ("metamodel/src", "generators/src", "runtime/python/src", "backend/src")
 #: Generated third-party code: Lark's standalone parser keeps Lark's own
 #: ``from . import __version__`` (in its cache branch, never taken here).
 GENERATED = frozenset({"modd_model._modd_parser"})
+
+
+#: The imports from the runtime into the generators that are allowed: ``modd
+#: up``'s one ``from modd_gen import generate, write_artifacts`` (it generates
+#: the configs it starts; it moves to a launcher package that may depend on
+#: both, issue #29). Any other import back up fails the test.
+RUNTIME_TO_GENERATORS = frozenset({("modd.up", "modd_gen"), ("modd.up", "modd_gen.generate")})
 
 
 def modules(roots: Mapping[str, Path]) -> dict[str, Path]:
@@ -136,3 +148,41 @@ def test_a_cycle_is_found(tmp_path: Path) -> None:
         ["pkg.a", "pkg.b"],
         ["pkg.c", "pkg.d"],
     ]
+
+
+def layer_violations(
+    roots: Mapping[str, Path], upper: str, lower: str, allowed: frozenset[tuple[str, str]]
+) -> list[tuple[str, str]]:
+    """``(module, imported)`` where a module under the root ``lower`` imports
+    one under ``upper`` (the arrow running back up), less the ``allowed`` ones."""
+    known = modules(roots)
+    below = set(modules({lower: roots[lower]}))
+    above = set(modules({upper: roots[upper]}))
+    graph = import_graph(known)
+    return sorted(
+        (name, target)
+        for name in below
+        for target in graph[name]
+        if target in above and (name, target) not in allowed
+    )
+
+
+def test_runtime_does_not_import_the_generators() -> None:
+    roots = {root: REPO / root for root in ROOTS}
+    assert (
+        layer_violations(roots, "generators/src", "runtime/python/src", RUNTIME_TO_GENERATORS) == []
+    )
+
+
+def test_a_layer_violation_is_found(tmp_path: Path) -> None:
+    """The rule's own sample: a lazy import back up is found, the allowed one
+    and an import downwards are not."""
+    upper, lower = tmp_path / "gen", tmp_path / "rt"
+    for root, pkg in ((upper, "g"), (lower, "r")):
+        (root / pkg).mkdir(parents=True)
+        (root / pkg / "__init__.py").write_text("")
+    (upper / "g" / "a.py").write_text("import r.b\n")
+    (lower / "r" / "b.py").write_text("def f():\n    from g.a import x\n")
+    (lower / "r" / "c.py").write_text("from g import a\n")
+    roots = {"gen": upper, "rt": lower}
+    assert layer_violations(roots, "gen", "rt", frozenset({("r.c", "g.a")})) == [("r.b", "g.a")]

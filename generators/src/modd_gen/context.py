@@ -6,10 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from modd_model.ingress import Ingress, ingress_of
 from modd_model.query import Topic, link_settings, topics
 from modd_plan import Plan, make_plan
-
-from .ingress import Ingress, ingress_of
 
 
 @dataclass

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from ..artifact import Artifact, Ownership
 from ..context import Context, PublisherView
-from ..cpp_client import client
+from ..cpp_client import client, read
 from ..render import render
 
 
@@ -41,7 +41,10 @@ def _project(ctx: Context, pub: PublisherView) -> list[Artifact]:
     ]
     out = [Artifact(f"{root}/{path}", render(tpl, **args), "integrator") for path, tpl in gen]
     out += [Artifact(f"{root}/modd/include/modd/client/publisher.hpp", header, "integrator"),
-            Artifact(f"{root}/modd/src/publisher.cpp", source, "integrator")]
+            Artifact(f"{root}/modd/src/publisher.cpp", source, "integrator"),
+            # the ingress wire header the client shares with the PubBroker
+            Artifact(f"{root}/modd/include/modd/ingress/wire.hpp", read("wire.hpp"),
+                     "integrator")]
     user = [("src/driver.cpp", "cpp_driver/driver.cpp.j2"),
             ("user.cmake", "cpp_driver/user.cmake.j2")]
     out += [Artifact(f"{root}/{path}", render(tpl, **args), "integrator", Ownership.USER)

@@ -2,11 +2,11 @@
 ``package.xml``, ``CMakeLists.txt``) for the integrator, so that ROS 2 nodes
 can read what ``modd-ros2`` publishes (docs/ecosystem.md). The package is the
 same for every model; ``Window.msg`` is the one source of the message (the
-bridge reads it too, :func:`window_msg`)."""
+bridge reads it too, :func:`modd_contracts.ros2.window_msg`)."""
 
 from __future__ import annotations
 
-from importlib.resources import files
+from modd_contracts.ros2 import window_msg
 
 from ..artifact import Artifact
 from ..context import Context
@@ -14,11 +14,6 @@ from ..render import render
 
 ROOT = "integrator/ros2/modd_msgs"
 VERSION = "0.1.0"
-
-
-def window_msg() -> str:
-    """The text of ``modd_msgs/msg/Window.msg``."""
-    return (files("modd_gen") / "templates" / "ros2" / "Window.msg").read_text(encoding="utf-8")
 
 
 def artifacts(ctx: Context) -> list[Artifact]:

@@ -1,4 +1,5 @@
 #include "modd/client/publisher.hpp"
+#include "modd/ingress/wire.hpp"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -18,33 +19,16 @@ namespace modd {
 
 namespace {
 
-constexpr uint8_t kVersion = 2;
-constexpr uint8_t kHello = 0x01, kRegister = 0x02, kSamples = 0x03;
-constexpr uint8_t kCatalogue = 0x81, kAck = 0x82, kReject = 0x83;
-constexpr size_t kMaxReply = 1 << 20;
+// The wire, as the broker writes and reads it (modd/ingress/wire.hpp, carried with the client).
+using ingress::kMaxFrame;
+using ingress::kVersion;
+using ingress::MsgType;
+using ingress::wire::put_fixed;
+using ingress::wire::put_frame;
+using ingress::wire::put_string;
+using ingress::wire::put_varint;
 const char* const kReasons[] = {"unknown topic", "wrong type", "value not finite", "timestamp out of bounds",
                                 "archive queue full", "malformed", "over its fair share of the archive queue"};
-
-// Framing of docs/ingress.md: varint length, type byte, body.
-void put_varint(std::vector<uint8_t>& b, uint64_t v) {
-  while (v >= 0x80) { b.push_back(static_cast<uint8_t>(v | 0x80)); v >>= 7; }
-  b.push_back(static_cast<uint8_t>(v));
-}
-template <typename T>
-void put_le(std::vector<uint8_t>& b, T v) {
-  uint8_t x[sizeof(T)];
-  std::memcpy(x, &v, sizeof(T));
-  b.insert(b.end(), x, x + sizeof(T));
-}
-void put_string(std::vector<uint8_t>& b, const std::string& s) {
-  put_varint(b, s.size());
-  b.insert(b.end(), s.begin(), s.end());
-}
-void frame(std::vector<uint8_t>& out, uint8_t type, const std::vector<uint8_t>& body) {
-  put_varint(out, body.size() + 1);
-  out.push_back(type);
-  out.insert(out.end(), body.begin(), body.end());
-}
 
 // Bounds-checked reader of a reply body; `ok` turns false on a short or bad field.
 struct Reader {
@@ -371,7 +355,7 @@ bool Publisher::connect_and_hello() {
   std::vector<uint8_t> out, body;
   body.push_back(kVersion);
   put_string(body, name_);
-  frame(out, kHello, body);
+  put_frame(out, MsgType::Hello, body);
   if (!send_all(out)) { disconnect(); return false; }
   std::lock_guard lk(mu_);
   connected_ = true;
@@ -390,7 +374,7 @@ bool Publisher::connect_and_hello() {
 void Publisher::handle_reply(uint8_t type, const uint8_t* p, size_t n) {
   Reader r{p, n};
   std::lock_guard lk(mu_);
-  if (type == kCatalogue) {
+  if (type == static_cast<uint8_t>(MsgType::Catalogue)) {
     Catalogue c;
     c.drone = r.string();
     c.max_future_ms = r.varint();
@@ -406,7 +390,7 @@ void Publisher::handle_reply(uint8_t type, const uint8_t* p, size_t n) {
     c.known = true;
     catalogue_ = std::move(c);
     idle_cv_.notify_all();
-  } else if (type == kAck) {
+  } else if (type == static_cast<uint8_t>(MsgType::Ack)) {
     uint64_t received = r.varint(), settled = r.varint(), archived = r.varint();
     if (!r.ok) return;
     (void)received;
@@ -414,7 +398,7 @@ void Publisher::handle_reply(uint8_t type, const uint8_t* p, size_t n) {
     if (archived > conn_archived_) stats_.on_disk += archived - conn_archived_;
     conn_archived_ = std::max(conn_archived_, archived);
     idle_cv_.notify_all();
-  } else if (type == kReject) {
+  } else if (type == static_cast<uint8_t>(MsgType::Reject)) {
     uint64_t id = r.varint();
     uint8_t reason = r.u8();
     uint64_t count = r.varint();
@@ -446,7 +430,7 @@ void Publisher::read_replies() {
     Reader r{inbuf_.data() + at, inbuf_.size() - at};
     uint64_t len = r.varint();
     if (!r.ok) break;  // length not complete yet
-    if (len == 0 || len > kMaxReply) { disconnect(); return; }
+    if (len == 0 || len > kMaxFrame) { disconnect(); return; }
     if (r.n - r.at < len) break;
     handle_reply(inbuf_[at + r.at], inbuf_.data() + at + r.at + 1, len - 1);
     at += r.at + len;
@@ -512,21 +496,21 @@ void Publisher::run() {
       put_varint(body, first_new + i);
       body.push_back(static_cast<uint8_t>(new_topics[i].type));
       put_string(body, new_topics[i].name);
-      frame(out, kRegister, body);
+      put_frame(out, MsgType::Register, body);
     }
     std::vector<uint8_t> body;
     put_varint(body, batch.size());
     for (const Record& r : batch) {
       put_varint(body, r.id);
-      put_le<int64_t>(body, r.ts);
+      put_fixed<int64_t>(body, r.ts);
       switch (types[r.id]) {
-        case ValueType::Float32: put_le<float>(body, static_cast<float>(r.number)); break;
-        case ValueType::Float64: put_le<double>(body, r.number); break;
-        case ValueType::Int: put_le<int64_t>(body, r.integer); break;
+        case ValueType::Float32: put_fixed<float>(body, static_cast<float>(r.number)); break;
+        case ValueType::Float64: put_fixed<double>(body, r.number); break;
+        case ValueType::Int: put_fixed<int64_t>(body, r.integer); break;
         case ValueType::Bool: body.push_back(r.integer ? 1 : 0); break;
       }
     }
-    frame(out, kSamples, body);
+    put_frame(out, MsgType::Samples, body);
     if (!send_all(out)) {
       disconnect();
       std::lock_guard lk(mu_);

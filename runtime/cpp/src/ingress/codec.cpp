@@ -4,21 +4,14 @@
 
 namespace modd::ingress {
 
-namespace {
-void frame(std::vector<uint8_t>& out, MsgType t, const std::vector<uint8_t>& body) {
-  ByteWriter w(out);
-  w.varint(body.size() + 1);
-  w.u8(static_cast<uint8_t>(t));
-  w.bytes(body);
-}
-}  // namespace
+using wire::put_frame;  // the framing the client writes too (modd/ingress/wire.hpp)
 
 void encode_hello(std::vector<uint8_t>& out, const Hello& h) {
   std::vector<uint8_t> b;
   ByteWriter w(b);
   w.u8(h.version);
   w.string(h.publisher);
-  frame(out, MsgType::Hello, b);
+  put_frame(out, MsgType::Hello, b);
 }
 
 void encode_register(std::vector<uint8_t>& out, const Register& r) {
@@ -27,7 +20,7 @@ void encode_register(std::vector<uint8_t>& out, const Register& r) {
   w.varint(r.local_id);
   w.u8(static_cast<uint8_t>(r.type));
   w.string(r.topic);
-  frame(out, MsgType::Register, b);
+  put_frame(out, MsgType::Register, b);
 }
 
 void encode_samples(std::vector<uint8_t>& out, std::span<const Record> records,
@@ -46,7 +39,7 @@ void encode_samples(std::vector<uint8_t>& out, std::span<const Record> records,
       case ValueType::Bool: w.u8(r.integer ? 1 : 0); break;
     }
   }
-  frame(out, MsgType::Samples, b);
+  put_frame(out, MsgType::Samples, b);
 }
 
 void encode_catalogue(std::vector<uint8_t>& out, const Catalogue& c) {
@@ -61,7 +54,7 @@ void encode_catalogue(std::vector<uint8_t>& out, const Catalogue& c) {
     w.u8(static_cast<uint8_t>(t.type));
     w.string(t.name);
   }
-  frame(out, MsgType::Catalogue, b);
+  put_frame(out, MsgType::Catalogue, b);
 }
 
 void encode_ack(std::vector<uint8_t>& out, const Ack& a) {
@@ -70,7 +63,7 @@ void encode_ack(std::vector<uint8_t>& out, const Ack& a) {
   w.varint(a.received);
   w.varint(a.settled);
   w.varint(a.archived);
-  frame(out, MsgType::Ack, b);
+  put_frame(out, MsgType::Ack, b);
 }
 
 void encode_reject(std::vector<uint8_t>& out, const RejectMsg& r) {
@@ -80,7 +73,7 @@ void encode_reject(std::vector<uint8_t>& out, const RejectMsg& r) {
   w.u8(r.reason);
   w.varint(r.count);
   w.string(r.detail.size() > 255 ? r.detail.substr(0, 255) : r.detail);
-  frame(out, MsgType::Reject, b);
+  put_frame(out, MsgType::Reject, b);
 }
 
 void decode_reply(const RawFrame& f, ReplyHandler& h) {

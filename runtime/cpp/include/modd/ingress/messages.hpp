@@ -6,21 +6,13 @@
 #include <string>
 #include <vector>
 
+#include "modd/ingress/wire.hpp"
 #include "modd/link/messages.hpp"
 
 namespace modd::ingress {
 
 using link::ValueType;
-// Version 2 adds the broker's answers (CATALOGUE, ACK, REJECT); a version-1 publisher
-// gets none of them (the broker never writes to it).
-inline constexpr uint8_t kVersion = 2;
-inline constexpr uint8_t kMinVersion = 1;
-inline constexpr size_t kMaxFrame = 1 << 20;
-
-enum class MsgType : uint8_t {
-  Hello = 0x01, Register = 0x02, Samples = 0x03,                // publisher -> broker
-  Catalogue = 0x81, Ack = 0x82, Reject = 0x83,                  // broker -> publisher (version 2)
-};
+// kVersion, kMinVersion, kMaxFrame and MsgType: modd/ingress/wire.hpp (shared with the client).
 
 struct Hello { uint8_t version = kVersion; std::string publisher; };
 

@@ -78,7 +78,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.ingress:
         ingress = args.ingress
     else:
-        from modd_gen.ingress import ingress_of
+        from modd_model.ingress import ingress_of
 
         ingress = ingress_of(model).address
     try:

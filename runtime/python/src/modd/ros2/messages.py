@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from modd_gen.targets.ros2_msgs import window_msg
+from modd_contracts.ros2 import window_msg
 
 from .typehash import Field, MessageType, type_hash
 
@@ -34,7 +34,7 @@ WINDOW = MessageType("modd_msgs/msg/Window", (
     Field("count", "uint32"),
     Field("aggregation", "string"),
 ))
-#: The .msg text of modd_msgs/msg/Window: the generators' (one source).
+#: The .msg text of modd_msgs/msg/Window (one source, in the contracts).
 WINDOW_MSG = window_msg()
 
 FLOAT64_HASH = type_hash(FLOAT64)

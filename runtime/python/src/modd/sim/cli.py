@@ -19,7 +19,7 @@ DEFAULT_MAVLINK = "udpout:127.0.0.1:14550"
 
 
 def default_ingress(model: dict[str, Any]) -> str:
-    from modd_gen.ingress import ingress_of
+    from modd_model.ingress import ingress_of
 
     return ingress_of(model).address
 

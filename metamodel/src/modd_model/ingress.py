@@ -1,5 +1,6 @@
 """Where publishers reach the PubBroker: the model's ingress settings, or
-defaults derived from the model so that generated configs and stubs agree."""
+defaults derived from the model so that generated configs and stubs agree
+(a model query: the generators and the runtime's bridges read it)."""
 
 from __future__ import annotations
 
