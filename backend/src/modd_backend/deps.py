@@ -19,6 +19,7 @@ from sqlalchemy.orm import Session as Db
 from .accounts import user_for_token
 from .db import Store
 from .foxglove import FoxgloveLive
+from .loopback_tls import LoopbackTls
 from .project_events import ProjectEvents
 from .roles import Role, parse_roles
 from .scene import SceneService
@@ -26,6 +27,7 @@ from .security import csrf_for
 from .settings import Settings
 from .tables import User
 from .throttle import Throttle
+from .tickets import ViewerTickets
 from .zenoh_session import ZenohSession
 
 if TYPE_CHECKING:
@@ -59,6 +61,10 @@ class AppState:
     login_addresses: Throttle = field(default_factory=lambda: Throttle(50, 300))
     #: Live WebSocket subscriptions per user id (event loop only).
     ws_counts: Counter[int] = field(default_factory=Counter)
+    #: Single-use tickets standing for a session in a viewer's URL (Foxglove).
+    tickets: ViewerTickets = field(default_factory=ViewerTickets)
+    #: The certificate the loopback Foxglove servers present (only the proxy trusts it).
+    loopback_tls: LoopbackTls | None = None
     #: Result of the last background database ping (health).
     database: Literal["ok", "error", "unknown"] = "unknown"
 

@@ -24,6 +24,7 @@ from .archives import (
     ReplayOut,
     serve_replay,
 )
+from .foxglove import ViewerLinks
 
 router = APIRouter(prefix="/api/drones/{drone}/records", tags=["archives"])
 
@@ -46,8 +47,9 @@ def download_record(drone: Drone, name: Name, state: StateDep, _user: UserDep) -
     422: {"description": "nothing in the range, or more than a replay holds"}},
     dependencies=[Heavy])
 def replay_record(drone: Drone, name: Name, body: ReplayIn, state: StateDep,
-                  user: Annotated[User, Depends(REPLAYERS)]) -> ReplayOut:
+                  user: Annotated[User, Depends(REPLAYERS)], link: ViewerLinks) -> ReplayOut:
     """The base-station record of a mission (what was delivered, live and
     backfilled) in Foxglove/Lichtblick: seek, play, pause; the same replay
     server as the drone's archives."""
-    return serve_replay(state, state.settings.effective_record_dir, drone, name, body, user)
+    return serve_replay(state, state.settings.effective_record_dir, drone, name, body, user,
+                        link)
