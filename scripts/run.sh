@@ -9,7 +9,8 @@
 # and the deploy key are made once in $DATA/credentials (0600) and kept.
 # Environment: MODEL, MODD_PORT, MODD_ZENOH_PORT, MODD_DATA, MODD_PROJECT,
 # MODD_PUB_PORT and MODD_SUB_PORT (the drone's link ends),
-# MODD_FOXGLOVE_PORT (Foxglove/Lichtblick live server, 0: none; docs/ecosystem.md),
+# MODD_FOXGLOVE_PORT (Foxglove/Lichtblick live server on loopback, reached through the
+# workbench's /foxglove/live; 0: none; docs/ecosystem.md),
 # MODD_FOXGLOVE_REPLAY_PORT (its replay of an archive chosen in the workbench, 0: none).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -120,10 +121,10 @@ else
 fi
 echo "modd: project '$PROJECT' runs on the simulated drone '$DRONE': ingress socket $DATA/run/ingress.sock, archive in $DATA/run/archive, logs in $DATA/run/logs and $DATA/backend.log"
 if [ "$FOXGLOVE_PORT" != 0 ]; then
-  echo "modd: Foxglove/Lichtblick live at ws://127.0.0.1:$FOXGLOVE_PORT (Open connection > Foxglove WebSocket; docs/ecosystem.md)"
+  echo "modd: Foxglove/Lichtblick live at ws://127.0.0.1:$PORT/foxglove/live with a ticket: the workbench's Foxglove links (Open connection > Foxglove WebSocket; docs/ecosystem.md)"
 fi
 if [ "$REPLAY_PORT" != 0 ]; then
-  echo "modd: Foxglove/Lichtblick replay of an archive (Archives panel > Replay in Foxglove) at ws://127.0.0.1:$REPLAY_PORT"
+  echo "modd: Foxglove/Lichtblick replay of an archive (Archives panel > Replay in Foxglove) at ws://127.0.0.1:$PORT/foxglove/replay with a ticket"
 fi
 echo "modd: zenoh $ZENOH requires credentials; a viewer connects with"
 echo "      modd.subscribe('$DRONE', SUBSCRIBER, connect='$ZENOH', credentials='$CREDS/viewer.cred')"

@@ -86,6 +86,11 @@ def test_refused_at_the_upgrade(base: tuple[str, int]) -> None:
     url, _port = base
     sci = _login(url, "sci", "pw-sci-12345")
     assert _refused(_live_url(url, sci), "http://evil.example") == 403
+    with _open(_live_url(url, sci), "null") as ws:  # a desktop viewer's page, with a ticket
+        assert ws.recv(timeout=10)
+    cookie_null = {"Cookie": f"modd_session={sci}"}
+    assert _refused(f"ws://{url[7:]}/foxglove/live", "null",
+                    additional_headers=cookie_null) == 403
     assert _refused(f"ws://{url[7:]}/foxglove/live") == 403  # no session
     assert _refused(f"ws://{url[7:]}/foxglove/live?ticket=made-up") == 403
     cookie = {"Cookie": f"modd_session={sci}"}

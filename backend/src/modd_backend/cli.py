@@ -57,11 +57,12 @@ def parse_args(argv: list[str] | None = None) -> Settings:
     p.add_argument("--scene-port", type=int, default=0,
                    help="port of the 3D scene (viser); 0: any free port; -1: no scene")
     p.add_argument("--foxglove-port", type=int, default=8765,
-                   help="port of the Foxglove WebSocket server (live values for Foxglove and "
-                   "Lichtblick, on --host, no authentication: docs/ecosystem.md); 0: none")
+                   help="loopback port of the Foxglove server (live values for Foxglove and "
+                   "Lichtblick); viewers connect through /foxglove/live with a ticket "
+                   "(docs/ecosystem.md); 0: none")
     p.add_argument("--foxglove-replay-port", type=int, default=8865,
-                   help="port of the Foxglove replay of an archive chosen in the workbench "
-                   "(on --host, no authentication); 0: none")
+                   help="loopback port of the Foxglove replay of an archive chosen in the "
+                   "workbench (viewers connect through /foxglove/replay); 0: none")
     p.add_argument("--admin-password-file", type=Path, metavar="FILE",
                    help="file holding the first admin's password (first line)")
     p.add_argument("--admin-password",
@@ -169,9 +170,6 @@ def main(argv: list[str] | None = None) -> int:
     if not _is_loopback(settings.host):
         print(f"modd-backend: warning: listening on {settings.host}, not loopback",
               file=sys.stderr)
-        if settings.foxglove_port:
-            print("modd-backend: warning: the Foxglove server has no authentication; "
-                  "see docs/ecosystem.md", file=sys.stderr)
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="info",
                 **server_options(settings))
     return 0

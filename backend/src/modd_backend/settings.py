@@ -61,9 +61,11 @@ class Settings:
     preload_milp: bool = False
     #: Port of the viser 3D scene on ``host``; None: no scene, 0: any free port.
     scene_port: int | None = None
-    #: Port of the Foxglove WebSocket server on ``host`` (docs/ecosystem.md); 0: none.
+    #: Loopback port of the Foxglove live server (TLS; viewers come in through
+    #: ``/foxglove/live``: routers/foxglove.py, docs/ecosystem.md); 0: none.
     foxglove_port: int = 0
-    #: Port of the Foxglove replay of an archive the user picks (docs/ecosystem.md); 0: none.
+    #: Loopback port of the Foxglove replay of an archive the user picks (through
+    #: ``/foxglove/replay``); 0: none.
     foxglove_replay_port: int = 0
     cors_origins: tuple[str, ...] = field(default_factory=tuple)
     #: Origins (scheme://host[:port]) the map may load tiles from; none by default,

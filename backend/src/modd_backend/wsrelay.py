@@ -3,7 +3,7 @@ scene's viser, the Foxglove live and replay servers), behind the workbench's
 rules, checked at the upgrade (docs/security.md):
 
 - the ``Origin`` must be this service's own or a configured CORS origin (a
-  desktop viewer sends none);
+  desktop viewer sends none, or with a ticket an opaque one: ``null``);
 - a session: an ``Authorization: Bearer`` header, the session cookie (only
   with an Origin: a browser), or, where the route allows it, a viewer ticket
   in the URL (tickets.py, spent on use);
@@ -28,6 +28,9 @@ from .roles import parse_roles
 from .sessionwatch import watch_session
 
 Seen = tuple[int, str]
+#: Origins of desktop viewers (an Electron page loaded from a file), allowed
+#: with a ticket only: a ticket comes from a signed-in user, never a cookie.
+OPAQUE_ORIGINS = frozenset({"null", "file://"})
 
 
 def socket_token(websocket: WebSocket) -> str | None:
@@ -52,10 +55,11 @@ async def admit(websocket: WebSocket, state: AppState, what: str, *,
     (closed with 4403 for an Origin or a missing role, 4401 without a session)."""
     from .routers.live import origin_allowed
 
-    if not origin_allowed(websocket, state.settings):
+    ticket = websocket.query_params.get("ticket") if tickets else None
+    opaque = ticket is not None and websocket.headers.get("origin") in OPAQUE_ORIGINS
+    if not (opaque or origin_allowed(websocket, state.settings)):
         await websocket.close(code=4403, reason="Origin not allowed")
         return None
-    ticket = websocket.query_params.get("ticket") if tickets else None
     token = state.tickets.redeem(ticket) if ticket is not None else socket_token(websocket)
     seen = None if token is None else await run_in_threadpool(_session, state, token)
     if token is None or seen is None:
