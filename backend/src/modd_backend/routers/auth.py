@@ -1,8 +1,10 @@
 """Sessions: log in (a bearer token for API clients, or an HttpOnly cookie
 for the workbench), log out, who am I, change my password.
 
-Failed logins are throttled per account and per client address (429 with
-``Retry-After``); an unknown user name costs the same time as a wrong password."""
+Login attempts are throttled per account and per client address (429 with
+``Retry-After``), counted before the password check so that concurrent guesses
+cannot outrun the count (throttle.py); an unknown user name costs the same
+time as a wrong password."""
 
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ from ..deps import SESSION_COOKIE, CredsDep, DbDep, StateDep, TokenDep, UserDep,
 from ..errors import ApiError, retry_later
 from ..security import csrf_for, hash_password, verify_password
 from ..tables import User
+from ..throttle import address_key
 
 router = APIRouter(prefix="/api/auth", tags=["auth"])
 
@@ -65,17 +68,20 @@ def client_address(request: Request) -> str:
 def login(body: LoginIn, db: DbDep, state: StateDep, request: Request,
           response: Response) -> LoginOut:
     account = body.username.lower()
-    address = client_address(request)
-    wait = max(state.login_accounts.retry_after(account),
-               state.login_addresses.retry_after(address))
+    address = address_key(client_address(request))
+    # counted before the password check, atomically (throttle.py)
+    wait = state.login_addresses.take(address)
+    if wait == 0:
+        wait = state.login_accounts.take(account)
+        if wait > 0:
+            state.login_addresses.give_back(address)
     if wait > 0:
         raise retry_later(429, "too many failed logins; try again later", wait)
     found = accounts.login(db, body.username, body.password, state.settings.token_ttl_s)
     if found is None:
-        state.login_accounts.fail(account)
-        state.login_addresses.fail(address)
         raise ApiError(401, "wrong user name or password")
     state.login_accounts.clear(account)
+    state.login_addresses.give_back(address)
     token, user = found
     if body.session == "cookie":
         response.set_cookie(
