@@ -149,3 +149,29 @@ def test_ticket_store_forgets_and_expires(tmp_path: Path) -> None:
     assert t.redeem(second, now=11) is None  # late
     assert t.redeem(third, now=9) == "c" and t.redeem(third, now=9) is None
     assert t.redeem("x" * 500) is None
+
+
+def test_sockets_per_user_are_capped(tmp_path: Path) -> None:
+    settings = Settings(data_dir=tmp_path / "data", initial_admin_password=ADMIN_PASSWORD,
+                        zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
+                        foxglove_port=free_port(), ws_sockets_per_user=5)
+    with serve(settings) as url:
+        admin = _bearer(_login(url, "admin", ADMIN_PASSWORD))
+        live = f"ws://{url[7:]}/foxglove/live"
+        opened = [_open(live, additional_headers=admin) for _ in range(5)]
+        try:
+            for ws in opened:
+                assert ws.recv(timeout=10)
+            assert _refused(live, additional_headers=admin) == 403  # the 6th: 4429
+            opened.pop().close()
+            deadline = time.monotonic() + 10
+            while True:  # the slot comes back once the proxy has seen the close
+                try:
+                    opened.append(_open(live, additional_headers=admin))
+                    break
+                except InvalidStatus:
+                    assert time.monotonic() < deadline, "the slot never came back"
+                    time.sleep(0.1)
+        finally:
+            for ws in opened:
+                ws.close()

@@ -51,6 +51,7 @@ from .routers import (
 )
 from .scene import SceneServer, SceneService
 from .settings import Settings
+from .socketcaps import SocketCaps
 from .spa import mount_frontend
 from .throttle import Throttle
 from .versions import get_version, model_of
@@ -169,6 +170,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
             heavy=HeavyLimiter(settings.heavy_per_user, settings.heavy_total),
             login_accounts=Throttle(settings.login_limit_account, settings.login_window_s),
             login_addresses=Throttle(settings.login_limit_address, settings.login_window_s),
+            socket_caps=SocketCaps(settings.ws_sockets_per_user, settings.ws_sockets_per_address),
         )
         app.state.modd = state
         state.database = "ok"  # just opened and migrated

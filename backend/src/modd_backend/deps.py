@@ -25,6 +25,7 @@ from .roles import Role, parse_roles
 from .scene import SceneService
 from .security import csrf_for
 from .settings import Settings
+from .socketcaps import SocketCaps
 from .tables import User
 from .throttle import Throttle
 from .tickets import ViewerTickets
@@ -35,6 +36,7 @@ if TYPE_CHECKING:
     from .hub import SubscriptionHub
     from .reconcile import DroneStatuses
     from .replay import ReplaySlot
+    from .sessionwatch import SessionWatches
 
 #: The workbench's session cookie (HttpOnly, SameSite=Strict) and the header
 #: a cookie session must add to every unsafe request (CSRF).
@@ -65,6 +67,10 @@ class AppState:
     tickets: ViewerTickets = field(default_factory=ViewerTickets)
     #: The certificate the loopback Foxglove servers present (only the proxy trusts it).
     loopback_tls: LoopbackTls | None = None
+    #: Open WebSockets per user and per client address (socketcaps.py).
+    socket_caps: SocketCaps = field(default_factory=lambda: SocketCaps(64, 512))
+    #: One shared session re-check per session of open sockets (sessionwatch.py).
+    session_watches: SessionWatches | None = None
     #: Result of the last background database ping (health).
     database: Literal["ok", "error", "unknown"] = "unknown"
 

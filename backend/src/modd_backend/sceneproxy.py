@@ -26,12 +26,13 @@ import contextlib
 import hashlib
 import html
 import re
+from collections.abc import Awaitable
 from dataclasses import dataclass
 
 import zstandard
 from starlette.websockets import WebSocket
+from websockets.asyncio.client import ClientConnection
 from websockets.asyncio.client import connect as ws_connect
-from websockets.exceptions import ConnectionClosed, InvalidHandshake
 from websockets.typing import Subprotocol
 
 from .deps import AppState
@@ -200,11 +201,10 @@ async def relay_socket(websocket: WebSocket, state: AppState, port: int, secret:
     if admitted is None:
         return
     offered = [Subprotocol(p) for p in websocket.scope.get("subprotocols", [])][:4]
-    try:
-        upstream = await ws_connect(f"ws://127.0.0.1:{port}", subprotocols=offered or None,
-                                    compression=None, max_size=64 * 1024 * 1024,
-                                    open_timeout=5, additional_headers={SECRET_HEADER: secret})
-    except (OSError, TimeoutError, ConnectionClosed, InvalidHandshake) as exc:
-        await websocket.close(code=1011, reason=f"the 3D scene is not running: {exc}"[:120])
-        return
-    await relay(websocket, upstream, state, *admitted)
+
+    def connect() -> Awaitable[ClientConnection]:
+        return ws_connect(f"ws://127.0.0.1:{port}", subprotocols=offered or None,
+                          compression=None, max_size=64 * 1024 * 1024,
+                          open_timeout=5, additional_headers={SECRET_HEADER: secret})
+
+    await relay(websocket, state, admitted, connect, "the 3D scene")

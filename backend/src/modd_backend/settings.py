@@ -95,6 +95,10 @@ class Settings:
     #: Live subscriptions per WebSocket and per user (over all their sockets).
     ws_subscriptions_per_socket: int = 256
     ws_subscriptions_per_user: int = 1024
+    #: Open WebSockets (streams, 3D scene, Foxglove) per user and per client
+    #: address (all loopback addresses are one); beyond: closed with 4429.
+    ws_sockets_per_user: int = 64
+    ws_sockets_per_address: int = 512
     #: How often an open WebSocket re-checks its session and roles (seconds).
     ws_recheck_s: float = 0.4
 

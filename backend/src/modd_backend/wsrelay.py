@@ -7,25 +7,28 @@ rules, checked at the upgrade (docs/security.md):
 - a session: an ``Authorization: Bearer`` header, the session cookie (only
   with an Origin: a browser), or, where the route allows it, a viewer ticket
   in the URL (tickets.py, spent on use);
-- a role; then frames flow both ways until either side closes, and the
-  socket is closed (4401/4403) within ``ws_recheck_s`` of a logout, expiry or
-  role change (sessionwatch.py)."""
+- a role, and a free socket slot of the user and address (socketcaps.py,
+  4429 otherwise); then frames flow both ways until either side closes, and
+  the socket is closed (4401/4403) within ``ws_recheck_s`` of a logout,
+  expiry or role change (sessionwatch.py: one shared check per session)."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from starlette.concurrency import run_in_threadpool
 from starlette.websockets import WebSocket, WebSocketDisconnect
 from websockets.asyncio.client import ClientConnection
-from websockets.exceptions import ConnectionClosed
+from websockets.exceptions import ConnectionClosed, InvalidHandshake
 
 from .accounts import session_state
 from .deps import SESSION_COOKIE, AppState
 from .roles import parse_roles
 from .sessionwatch import watch_session
+from .socketcaps import CAP_CLOSE, SocketFull
 
 Seen = tuple[int, str]
 #: Origins of desktop viewers (an Electron page loaded from a file), allowed
@@ -71,29 +74,46 @@ async def admit(websocket: WebSocket, state: AppState, what: str, *,
     return token, seen
 
 
-async def relay(websocket: WebSocket, upstream: ClientConnection, state: AppState,
-                token: str, seen: Seen) -> None:
-    """Accept ``websocket`` with the upstream's subprotocol and relay frames
+async def relay(websocket: WebSocket, state: AppState, admitted: tuple[str, Seen],
+                connect: Callable[[], Awaitable[ClientConnection]], what: str) -> None:
+    """Take a socket slot of the user (socketcaps.py), connect upstream,
+    accept ``websocket`` with the upstream's subprotocol and relay frames
     both ways until either side closes or the session ends."""
+    token, seen = admitted
+    address = websocket.client.host if websocket.client is not None else "unknown"
+    try:
+        with state.socket_caps.slot(seen[0], address):
+            try:
+                upstream = await connect()
+            except (OSError, TimeoutError, ConnectionClosed, InvalidHandshake) as exc:
+                await websocket.close(code=1011, reason=f"{what} did not answer: {exc}"[:120])
+                return
+            try:
+                await _pump(websocket, upstream, state, token, seen)
+            finally:
+                await upstream.close()
+    except SocketFull as exc:
+        await websocket.close(code=CAP_CLOSE, reason=str(exc)[:120])
+
+
+async def _pump(websocket: WebSocket, upstream: ClientConnection, state: AppState,
+                token: str, seen: Seen) -> None:
     await websocket.accept(subprotocol=upstream.subprotocol)
     tasks = {asyncio.create_task(_down(upstream, websocket)),
              asyncio.create_task(_up(websocket, upstream)),
              asyncio.create_task(watch_session(state, token, seen))}
-    try:
-        done, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
-        for task in pending:
-            task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await task
-        ended: Any = None
-        for task in done:
-            if not task.cancelled() and task.exception() is None:
-                ended = task.result() or ended
-        code, reason = ended if isinstance(ended, tuple) else (1000, "")
-        with contextlib.suppress(Exception):
-            await websocket.close(code=code, reason=reason)
-    finally:
-        await upstream.close()
+    done, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+    for task in pending:
+        task.cancel()
+        with contextlib.suppress(asyncio.CancelledError, Exception):
+            await task
+    ended: Any = None
+    for task in done:
+        if not task.cancelled() and task.exception() is None:
+            ended = task.result() or ended
+    code, reason = ended if isinstance(ended, tuple) else (1000, "")
+    with contextlib.suppress(Exception):
+        await websocket.close(code=code, reason=reason)
 
 
 async def _down(upstream: ClientConnection, websocket: WebSocket) -> None:

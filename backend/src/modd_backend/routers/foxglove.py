@@ -11,13 +11,13 @@ ticket spent on use and good for 5 minutes (tickets.py)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Annotated
 
 from fastapi import APIRouter, Depends, Request, WebSocket
 from pydantic import BaseModel
+from websockets.asyncio.client import ClientConnection
 from websockets.asyncio.client import connect as ws_connect
-from websockets.exceptions import ConnectionClosed, InvalidHandshake
 from websockets.typing import Subprotocol
 
 from ..deps import AppState, CredsDep, StateDep, UserDep, roles_of, ws_state
@@ -74,16 +74,14 @@ async def _relay(websocket: WebSocket, state: AppState, port: int | None, what: 
         return
     offered = [Subprotocol(p) for p in websocket.scope.get("subprotocols", [])
                if p in SUBPROTOCOLS]
-    try:
-        upstream = await ws_connect(f"wss://127.0.0.1:{port}",
-                                    ssl=state.loopback_tls.client_context(),
-                                    subprotocols=offered or [Subprotocol(SUBPROTOCOLS[0])],
-                                    compression=None, max_size=64 * 1024 * 1024,
-                                    open_timeout=5)
-    except (OSError, TimeoutError, ConnectionClosed, InvalidHandshake) as exc:
-        await websocket.close(code=1011, reason=f"{what} did not answer: {exc}"[:120])
-        return
-    await relay(websocket, upstream, state, *admitted)
+    tls = state.loopback_tls.client_context()
+
+    def connect() -> Awaitable[ClientConnection]:
+        return ws_connect(f"wss://127.0.0.1:{port}", ssl=tls,
+                          subprotocols=offered or [Subprotocol(SUBPROTOCOLS[0])],
+                          compression=None, max_size=64 * 1024 * 1024, open_timeout=5)
+
+    await relay(websocket, state, admitted, connect, what)
 
 
 @router.websocket("/foxglove/live")
