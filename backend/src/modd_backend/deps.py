@@ -12,6 +12,7 @@ from collections.abc import AsyncIterator, Callable, Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Annotated, Literal
 
+from anyio import CapacityLimiter
 from fastapi import Depends, HTTPException, Request, WebSocket
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from sqlalchemy.orm import Session as Db
@@ -67,6 +68,8 @@ class AppState:
     tickets: ViewerTickets = field(default_factory=ViewerTickets)
     #: The certificate the loopback Foxglove servers present (only the proxy trusts it).
     loopback_tls: LoopbackTls | None = None
+    #: The login's own threads (routers/auth.py), set at start-up.
+    login_threads: CapacityLimiter | None = None
     #: Open WebSockets per user and per client address (socketcaps.py).
     socket_caps: SocketCaps = field(default_factory=lambda: SocketCaps(64, 512))
     #: One shared session re-check per session of open sockets (sessionwatch.py).

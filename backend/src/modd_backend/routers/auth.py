@@ -10,11 +10,21 @@ from __future__ import annotations
 
 from typing import Literal
 
+from anyio import to_thread
 from fastapi import APIRouter, Request, Response
 from pydantic import BaseModel, Field
 
 from .. import accounts
-from ..deps import SESSION_COOKIE, CredsDep, DbDep, StateDep, TokenDep, UserDep, roles_of
+from ..deps import (
+    SESSION_COOKIE,
+    AppState,
+    CredsDep,
+    DbDep,
+    StateDep,
+    TokenDep,
+    UserDep,
+    roles_of,
+)
 from ..errors import ApiError, retry_later
 from ..security import csrf_for, hash_password, verify_password
 from ..tables import User
@@ -65,8 +75,10 @@ def client_address(request: Request) -> str:
 
 @router.post("/login", responses={401: {"description": "wrong user name or password"},
                                   429: {"description": "too many failed logins; Retry-After"}})
-def login(body: LoginIn, db: DbDep, state: StateDep, request: Request,
-          response: Response) -> LoginOut:
+async def login(body: LoginIn, state: StateDep, request: Request,
+                response: Response) -> LoginOut:
+    """Throttled on the event loop; the password is checked in the login's
+    own threads (``Settings.login_threads``), never queued behind saves."""
     account = body.username.lower()
     address = address_key(client_address(request))
     # counted before the password check, atomically (throttle.py)
@@ -77,7 +89,7 @@ def login(body: LoginIn, db: DbDep, state: StateDep, request: Request,
             state.login_addresses.give_back(address)
     if wait > 0:
         raise retry_later(429, "too many failed logins; try again later", wait)
-    found = accounts.login(db, body.username, body.password, state.settings.token_ttl_s)
+    found = await to_thread.run_sync(_check_login, state, body, limiter=state.login_threads)
     if found is None:
         raise ApiError(401, "wrong user name or password")
     state.login_accounts.clear(account)
@@ -88,8 +100,14 @@ def login(body: LoginIn, db: DbDep, state: StateDep, request: Request,
             SESSION_COOKIE, token, max_age=state.settings.token_ttl_s, path="/",
             httponly=True, samesite="strict", secure=request.url.scheme == "https",
         )
-        return LoginOut(token=None, csrf=csrf_for(token), user=user_out(user))
-    return LoginOut(token=token, user=user_out(user))
+        return LoginOut(token=None, csrf=csrf_for(token), user=user)
+    return LoginOut(token=token, user=user)
+
+
+def _check_login(state: AppState, body: LoginIn) -> tuple[str, UserOut] | None:
+    with state.store.session() as db:
+        found = accounts.login(db, body.username, body.password, state.settings.token_ttl_s)
+        return None if found is None else (found[0], user_out(found[1]))
 
 
 @router.post("/logout", status_code=204)
