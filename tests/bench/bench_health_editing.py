@@ -21,6 +21,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
 import threading
 import time
 from collections import Counter
@@ -29,6 +34,7 @@ from typing import Any
 
 import httpx2 as httpx
 from bench_health_csv import PASSWORD, TOPIC, login, write_archive
+from bench_health_ws import _poll
 from modd.ports import free_port
 from websockets.sync.client import ClientConnection, connect
 
@@ -118,8 +124,6 @@ def hold_sockets(port: int, token: str, n: int, load: Load) -> list[ClientConnec
 
 
 def run(a: argparse.Namespace, tmp: Path) -> None:
-    from bench_health_ws import _poll  # the same health poller
-
     port = free_port()
     base = f"http://127.0.0.1:{port}"
     write_archive(tmp / "archives" / "usv" / "run-0000.mcap", a.samples)
@@ -162,10 +166,6 @@ def run(a: argparse.Namespace, tmp: Path) -> None:
 
 
 def start(tmp: Path, port: int, database_url: str | None) -> Any:
-    import os
-    import subprocess
-    import sys
-
     exe = Path(sys.executable).with_name("modd-backend")
     extra = ["--database-url", database_url] if database_url else []
     return subprocess.Popen(
@@ -188,9 +188,6 @@ def wait_login(base: str, proc: Any) -> dict[str, str]:
 
 
 def stop(proc: Any) -> None:
-    import signal
-    import subprocess
-
     proc.send_signal(signal.SIGTERM)
     try:
         proc.wait(30)
@@ -200,8 +197,6 @@ def stop(proc: Any) -> None:
 
 
 def main() -> int:
-    import tempfile
-
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--editors", type=int, default=50)
     ap.add_argument("--viewers", type=int, default=10)

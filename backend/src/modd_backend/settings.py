@@ -89,11 +89,8 @@ class Settings:
     #: Largest request body any route accepts (413 beyond), and JSON nesting depth (422).
     max_body_bytes: int = 4 * 1024 * 1024
     max_json_depth: int = 64
-    #: Threads running the sync routes and store calls. Few on purpose: every
-    #: thread running Python competes with the event loop (and /api/health)
-    #: for the interpreter lock; requests beyond wait without holding it.
-    worker_threads: int = 8
-    #: Threads of their own for login: never queued behind that work.
+    #: Threads of their own for login: never queued behind the worker threads
+    #: that run the other sync routes (saves, reads).
     login_threads: int = 2
     #: Heavy routes (CSV export, series, deploy): at once per user and in all.
     heavy_per_user: int = 2
