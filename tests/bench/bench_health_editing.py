@@ -3,7 +3,7 @@ projects in a loop (read the head, change the link, save on it, wait
 ``--think`` seconds), V viewers
 hold a stream WebSocket each (watching a project: every save is announced to
 them), X clients export CSV of an archive, and one user holds S extra
-sockets (the per-user cap refuses those past it); meanwhile
+sockets (the per-user cap refuses those past it; another user than the editors); meanwhile
 ``GET /api/health`` is polled every 10 ms. Prints the health and save
 latency percentiles, and how the sockets and exports were answered. A real
 ``modd-backend`` process on loopback (SQLite, or ``--database-url``).
@@ -115,7 +115,9 @@ def hold_sockets(port: int, token: str, n: int, load: Load) -> list[ClientConnec
         try:
             ws = connect(f"ws://127.0.0.1:{port}/api/drones/usv/stream", open_timeout=30)
             ws.send(json.dumps({"op": "auth", "token": token}))
-            ws.recv(timeout=30)  # authenticated, or the cap's close
+            ws.send(json.dumps({"op": "ping"}))
+            ws.recv(timeout=30)  # authenticated
+            ws.recv(timeout=30)  # pong, or the cap's close (4429)
             held.append(ws)
             load.count("socket opened")
         except Exception:  # closed by the cap (4429)
@@ -137,7 +139,10 @@ def run(a: argparse.Namespace, tmp: Path) -> None:
             "name": f"p{i}", "model": {"text": text}}).json()["id"] for i in range(a.editors)]
         load = Load(base, admin, a.think)
         token = admin["Authorization"][7:]
-        held = hold_sockets(port, token, a.sockets, load)
+        httpx.post(f"{base}/api/users", headers=admin, timeout=60, json={
+            "username": "crowd", "password": PASSWORD, "roles": ["scientist"]})
+        crowd = login(base, "crowd", PASSWORD)["Authorization"][7:]
+        held = hold_sockets(port, crowd, a.sockets, load)
         threads = [threading.Thread(target=load.editor, args=(p,)) for p in pids]
         threads += [threading.Thread(target=load.viewer, args=(port, token, pids[i % len(pids)]))
                     for i in range(a.viewers)]
