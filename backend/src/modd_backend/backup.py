@@ -110,8 +110,8 @@ def check_sqlite_copy(src: Path) -> None:
         raise SystemExit(f"modd-backend: {src} is not a store of this workbench (missing: "
                          f"{sorted(missing) or 'none'}; not ours: {foreign or 'none'}); "
                          "nothing restored")
-    known = ScriptDirectory.from_config(alembic_config())
-    if len(versions) != 1 or known.get_revision(versions[0]) is None:
+    known = {r.revision for r in ScriptDirectory.from_config(alembic_config()).walk_revisions()}
+    if len(versions) != 1 or versions[0] not in known:
         raise SystemExit(f"modd-backend: {src} is at no migration this backend knows "
                          f"({versions}); nothing restored")
 
