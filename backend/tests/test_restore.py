@@ -7,6 +7,7 @@ out); what a restore writes is 0600 in a 0700 directory."""
 from __future__ import annotations
 
 import io
+import os
 import sqlite3
 import subprocess
 import sys
@@ -92,7 +93,8 @@ def test_restore_revokes_every_session(tmp_path: Path) -> None:
 def test_restore_into_a_new_directory_is_private(copy: Path, tmp_path: Path) -> None:
     data = tmp_path / "fresh" / "data"
     res = subprocess.run([sys.executable, "-m", "modd_backend.cli", "restore", "--data",
-                          str(data), str(copy)], capture_output=True, text=True, timeout=120)
+                          str(data), str(copy)], capture_output=True, text=True, timeout=120,
+                         preexec_fn=lambda: os.umask(0o022))  # an operator's usual umask
     assert res.returncode == 0, res.stderr
     assert data.stat().st_mode & 0o777 == 0o700
     for f in data.iterdir():
