@@ -8,9 +8,11 @@ from __future__ import annotations
 
 import io
 import os
+import shutil
 import sqlite3
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -19,6 +21,7 @@ from modd_backend import Settings, create_app
 from modd_backend.backup import backup, restore
 
 from .conftest import ADMIN_PASSWORD, login
+from .test_postgres import postgres_url  # noqa: F401  (the fixture)
 
 
 def _settings(data: Path) -> Settings:
@@ -103,3 +106,49 @@ def test_restore_into_a_new_directory_is_private(copy: Path, tmp_path: Path) -> 
                           str(data), str(tmp_path / "nothing")], capture_output=True,
                          text=True, timeout=120)
     assert res.returncode != 0 and "no backup at" in res.stderr
+
+
+def _psql(url: str, sql: str) -> None:
+    subprocess.run(["psql", "--dbname", url.replace("+psycopg", ""), "-v", "ON_ERROR_STOP=1",
+                    "-c", sql], check=True, capture_output=True)
+
+
+def test_a_hostile_postgresql_dump_runs_nothing(postgres_url: str,  # noqa: F811
+                                                tmp_path: Path) -> None:
+    """A dump of this schema plus a function that runs a program on the
+    server (called when its materialised view is refreshed, as pg_restore
+    does): restoring it runs nothing and changes nothing. A clean dump
+    restores its rows, without its sessions."""
+    marker = Path(tempfile.mkdtemp(prefix="modd-pwn-")) / "ran"
+    os.chmod(marker.parent, 0o777)  # the server runs as postgres
+    base = postgres_url.rsplit("/", 1)[0]
+    for name in ("hostile", "target"):
+        _psql(postgres_url, f"CREATE DATABASE {name}")
+    hostile, target = f"{base}/hostile", f"{base}/target"
+    for url in (hostile, target):
+        settings = Settings(data_dir=tmp_path / url.rsplit("/", 1)[1], database_url=url,
+                            zenoh_enabled=False, initial_admin_password=ADMIN_PASSWORD)
+        with TestClient(create_app(settings, out=io.StringIO())) as c:
+            login(c, "admin", ADMIN_PASSWORD)
+    clean = tmp_path / "clean.dump"
+    backup(hostile, clean)
+    _psql(hostile, f"""
+        CREATE TABLE pwn_out (x text);
+        CREATE FUNCTION pwn() RETURNS int LANGUAGE plpgsql AS $$
+        BEGIN
+          IF current_database() <> 'hostile' THEN
+            EXECUTE 'COPY pwn_out FROM PROGRAM ''touch {marker}''';
+          END IF;
+          RETURN 1;
+        END $$;
+        CREATE MATERIALIZED VIEW pwn_view AS SELECT pwn() AS v;""")
+    bad = tmp_path / "hostile.dump"
+    backup(hostile, bad)
+    with pytest.raises(SystemExit, match="nothing restored"):
+        restore(target, bad)
+    assert not marker.exists(), "the dump ran a program on the server"
+    restore(target, clean)
+    settings = Settings(data_dir=tmp_path / "again", database_url=target, zenoh_enabled=False)
+    with TestClient(create_app(settings, out=io.StringIO())) as c:
+        login(c, "admin", ADMIN_PASSWORD)  # the dump's admin, its password
+    shutil.rmtree(marker.parent, ignore_errors=True)

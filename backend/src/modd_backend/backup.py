@@ -11,8 +11,9 @@ store; then it stages the copy beside the store with every session removed
 and writes the staged copy into the live file in one step under SQLite's
 own lock: running requests see the old store or the new one, never a mix.
 Files are written 0600 in a 0700 directory. PostgreSQL: ``pg_dump
---format=custom`` and ``pg_restore --clean``; the password travels in
-``PGPASSWORD``, never in argv.
+--format=custom``; a restore loads the archive's rows of this project's
+tables itself and runs nothing of the archive (pgrestore.py); the password
+travels in ``PGPASSWORD``, never in argv.
 
     modd-backend backup --data ./data store.backup
     modd-backend restore --data ./data store.backup
@@ -137,6 +138,36 @@ def _restore_sqlite(path: Path, src: Path) -> None:
             os.chmod(f, 0o600)
 
 
+def _restore_postgres(url: str, src: Path) -> None:
+    """The archive's rows of this project's tables, loaded by the backend
+    itself: nothing of the archive runs on the server (pgrestore.py)."""
+    from sqlalchemy import create_engine
+
+    from .pgrestore import DumpRefused, load, parse_dump
+
+    exe = shutil.which("pg_restore")
+    if exe is None:
+        raise SystemExit("modd-backend: pg_restore not found (apt-get install postgresql-client)")
+    text = subprocess.run([exe, "--data-only", "--file", "-", str(src)],  # no connection
+                          capture_output=True, check=False)
+    if text.returncode != 0:
+        raise SystemExit(f"modd-backend: {src} is not a pg_dump archive "
+                         f"({text.stderr.decode(errors='replace').strip()[:200]}); "
+                         "nothing restored")
+    try:
+        dump = parse_dump(text.stdout.decode("utf-8", errors="replace"))
+    except DumpRefused as exc:
+        raise SystemExit(f"modd-backend: {src}: {exc}; nothing restored") from None
+    if "users" not in dump.rows:
+        raise SystemExit(f"modd-backend: {src} holds no users; nothing restored")
+    engine = create_engine(url)
+    try:
+        with engine.begin() as conn:
+            load(conn.connection.driver_connection, dump)
+    finally:
+        engine.dispose()
+
+
 def restore(url: str, src: Path) -> None:
     """Put the copy ``src`` back into the store at ``url`` (its contents replaced),
     once it is checked; every session ends."""
@@ -146,9 +177,7 @@ def restore(url: str, src: Path) -> None:
     if path is not None:
         _restore_sqlite(path, src)
     elif url.startswith("postgresql"):
-        cmd, env = _pg_command("pg_restore", url)
-        subprocess.run([*cmd, "--clean", "--if-exists", "--no-owner", "--single-transaction",
-                        str(src)], env=env, check=True)
+        _restore_postgres(url, src)
     else:
         raise SystemExit(f"modd-backend: cannot restore {make_url(url).drivername}")
 
