@@ -16,6 +16,7 @@ from ..archive_work import csv_text, in_worker, series
 from ..archives import archive_path, file_info, list_files
 from ..deps import AppState, Heavy, StateDep, UserDep, require
 from ..downloads import content_disposition
+from ..filesnapshot import file_snapshot
 from ..roles import Role
 from ..schemas import Responses
 from ..tables import User
@@ -152,9 +153,9 @@ def serve_replay(state: AppState, root: FsPath, drone: str, name: str, body: Rep
 
 @router.get("/{name}", response_class=FileResponse,
             responses={**NOT_FOUND, 200: {"content": {"application/octet-stream": {}}}})
-def download(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> FileResponse:
+def download(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> Response:
     path = archive_path(state.settings.effective_archive_dir, drone, name)
-    return FileResponse(path, media_type="application/octet-stream", filename=path.name)
+    return file_snapshot(path)  # a file still being written: what it held at the start
 
 
 replay_router = APIRouter(prefix="/api/replay", tags=["archives"])

@@ -8,10 +8,11 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import APIRouter, Depends
-from fastapi.responses import FileResponse
+from fastapi.responses import FileResponse, Response
 
 from ..archives import archive_path, file_info, list_files
 from ..deps import Heavy, StateDep, UserDep
+from ..filesnapshot import file_snapshot
 from ..tables import User
 from .archives import (
     BUSY,
@@ -37,9 +38,9 @@ def list_records(drone: Drone, state: StateDep, _user: UserDep) -> list[ArchiveO
 
 @router.get("/{name}", response_class=FileResponse,
             responses={**NOT_FOUND, 200: {"content": {"application/octet-stream": {}}}})
-def download_record(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> FileResponse:
+def download_record(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> Response:
     path = archive_path(state.settings.effective_record_dir, drone, name)
-    return FileResponse(path, media_type="application/octet-stream", filename=path.name)
+    return file_snapshot(path)  # a file still being written: what it held at the start
 
 
 @router.post("/{name}/replay", responses={
