@@ -22,6 +22,7 @@ from websockets.typing import Origin, Subprotocol
 
 from .conftest import ADMIN_PASSWORD
 from .served import serve
+from .test_scene_proxy import _bearer, _login, make_users
 
 FOXGLOVE = [Subprotocol("foxglove.sdk.v1")]
 
@@ -34,24 +35,8 @@ def base(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, int]]:
                         zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
                         foxglove_port=port, ws_recheck_s=0.2)
     with serve(settings) as url:
-        admin = _login(url, "admin", ADMIN_PASSWORD)
-        for name, roles in (("nobody", []), ("sci", ["scientist"])):
-            r = httpx.post(url + "/api/users", headers=_bearer(admin), timeout=30,
-                           json={"username": name, "password": f"pw-{name}-12345",
-                                 "roles": roles})
-            assert r.status_code == 201, r.text
+        make_users(url)
         yield url, port
-
-
-def _bearer(token: str) -> dict[str, str]:
-    return {"Authorization": f"Bearer {token}"}
-
-
-def _login(base: str, user: str, password: str) -> str:
-    r = httpx.post(base + "/api/auth/login", json={"username": user, "password": password},
-                   timeout=30)
-    assert r.status_code == 200, r.text
-    return str(r.json()["token"])
 
 
 def _live_url(base: str, token: str) -> str:

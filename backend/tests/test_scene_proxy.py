@@ -41,13 +41,17 @@ def base(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
                         initial_admin_password=ADMIN_PASSWORD, zenoh_connect=(),
                         scene_port=0, ws_recheck_s=0.2)
     with serve(settings) as url:
-        admin = _login(url, "admin", ADMIN_PASSWORD)
-        for name, roles in (("nobody", []), ("sci", ["scientist"])):
-            r = httpx.post(url + "/api/users", headers=_bearer(admin), timeout=30,
-                           json={"username": name, "password": f"pw-{name}-12345",
-                                 "roles": roles})
-            assert r.status_code == 201, r.text
+        make_users(url)
         yield url
+
+
+def make_users(url: str) -> None:
+    """``nobody`` (no role) and ``sci`` (scientist), password ``pw-NAME-12345``."""
+    admin = _login(url, "admin", ADMIN_PASSWORD)
+    for name, roles in (("nobody", []), ("sci", ["scientist"])):
+        r = httpx.post(url + "/api/users", headers=_bearer(admin), timeout=30,
+                       json={"username": name, "password": f"pw-{name}-12345", "roles": roles})
+        assert r.status_code == 201, r.text
 
 
 def _bearer(token: str) -> dict[str, str]:
