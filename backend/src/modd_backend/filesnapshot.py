@@ -39,5 +39,11 @@ def file_snapshot(path: Path, media_type: str = "application/octet-stream") -> S
     """The first ``size`` bytes of ``path``, ``size`` taken from the open file."""
     f = path.open("rb")
     size = os.fstat(f.fileno()).st_size
-    return StreamingResponse(_read(f, size), media_type=media_type, headers={
-        "Content-Length": str(size), "Content-Disposition": content_disposition(path.name)})
+    return StreamingResponse(
+        _read(f, size),
+        media_type=media_type,
+        headers={
+            "Content-Length": str(size),
+            "Content-Disposition": content_disposition(path.name),
+        },
+    )

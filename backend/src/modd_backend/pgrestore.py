@@ -26,9 +26,11 @@ from typing import Any
 _COPY = re.compile(r"COPY public\.([a-z_]+) \(([a-z_, ]+)\) FROM stdin;")
 _SETVAL = re.compile(r"SELECT pg_catalog\.setval\('public\.([a-z_]+)', ([0-9]+), (true|false)\);")
 #: Lines of pg_restore's data-only text read and ignored (settings, comments).
-_HARMLESS = re.compile(r"(--.*|SET [a-z_]+ = [A-Za-z0-9_' .-]*;"
-                       r"|SELECT pg_catalog\.set_config\('search_path', '', false\);"
-                       r"|\\(un)?restrict [A-Za-z0-9]+|)")
+_HARMLESS = re.compile(
+    r"(--.*|SET [a-z_]+ = [A-Za-z0-9_' .-]*;"
+    r"|SELECT pg_catalog\.set_config\('search_path', '', false\);"
+    r"|\\(un)?restrict [A-Za-z0-9]+|)"
+)
 
 
 class DumpRefused(ValueError):
@@ -60,8 +62,10 @@ def parse_dump(text: str) -> Dump:
                 _skip_copy(lines)
                 continue
             if table not in tables or not set(columns) <= set(tables[table]):
-                raise DumpRefused(f"line {n}: rows of {table!r} ({', '.join(columns)}) are "
-                                  "not of this workbench's tables")
+                raise DumpRefused(
+                    f"line {n}: rows of {table!r} ({', '.join(columns)}) are "
+                    "not of this workbench's tables"
+                )
             out.rows[table] = (columns, _copy_rows(lines))
         elif (s := _SETVAL.fullmatch(line)) is not None:
             known = {f"{t}_{c}_seq" for t, cs in tables.items() for c in cs}
@@ -69,8 +73,7 @@ def parse_dump(text: str) -> Dump:
                 raise DumpRefused(f"line {n}: sequence {s[1]!r} is not of this workbench")
             out.sequences.append((s[1], int(s[2]), s[3] == "true"))
         elif not _HARMLESS.fullmatch(line):
-            raise DumpRefused(f"line {n}: {line[:80]!r} is not data of this workbench's "
-                              "tables")
+            raise DumpRefused(f"line {n}: {line[:80]!r} is not data of this workbench's tables")
     return out
 
 
@@ -94,14 +97,18 @@ def load(conn: Any, dump: Dump) -> None:
 
     tables = [t for t in _tables() if t != "alembic_version"]
     with conn.cursor() as cur:
-        cur.execute(sql.SQL("TRUNCATE {} RESTART IDENTITY").format(
-            sql.SQL(", ").join(sql.Identifier(t) for t in tables)))
+        cur.execute(
+            sql.SQL("TRUNCATE {} RESTART IDENTITY").format(
+                sql.SQL(", ").join(sql.Identifier(t) for t in tables)
+            )
+        )
         for table in tables:
             if table not in dump.rows:
                 continue
             columns, rows = dump.rows[table]
             stmt = sql.SQL("COPY {} ({}) FROM STDIN").format(
-                sql.Identifier(table), sql.SQL(", ").join(sql.Identifier(c) for c in columns))
+                sql.Identifier(table), sql.SQL(", ").join(sql.Identifier(c) for c in columns)
+            )
             with cur.copy(stmt) as copy:
                 for row in rows:
                     copy.write(row.encode("utf-8") + b"\n")

@@ -57,8 +57,9 @@ def _gated_serve(real_serve: Callable[..., Any], secret: str) -> Callable[..., A
     def serve(*args: Any, process_request: Any = None, **kwargs: Any) -> Any:
         def check(connection: Any, request: Any) -> Any:
             if not admitted(request.headers, secret):
-                return connection.respond(http.HTTPStatus.FORBIDDEN,
-                                          "the 3D scene is served through the workbench\n")
+                return connection.respond(
+                    http.HTTPStatus.FORBIDDEN, "the 3D scene is served through the workbench\n"
+                )
             return None if process_request is None else process_request(connection, request)
 
         return real_serve(*args, process_request=check, **kwargs)
@@ -73,8 +74,12 @@ def gated_viser(secret: str) -> Iterator[None]:
     import websockets.asyncio.server as server
     from viser.infra import _infra
 
-    view = _View(websockets, asyncio=_View(
-        websockets.asyncio, server=_View(server, serve=_gated_serve(server.serve, secret))))
+    view = _View(
+        websockets,
+        asyncio=_View(
+            websockets.asyncio, server=_View(server, serve=_gated_serve(server.serve, secret))
+        ),
+    )
     with _swap:
         real = vars(_infra)["websockets"]
         setattr(_infra, "websockets", view)  # noqa: B010 (a name mypy cannot see)

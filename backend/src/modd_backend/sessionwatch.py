@@ -93,6 +93,7 @@ class SessionWatches:
 def watches_for(state: AppState) -> SessionWatches:
     """The state's shared watches (made on first use, on the event loop)."""
     if state.session_watches is None:
+
         async def check(token: str) -> Seen | None:
             return await run_in_threadpool(_recheck, state, token)
 

@@ -52,8 +52,9 @@ def _session(state: AppState, token: str) -> Seen | None:
         return session_state(db, token)
 
 
-async def admit(websocket: WebSocket, state: AppState, what: str, *,
-                tickets: bool = False) -> tuple[str, Seen] | None:
+async def admit(
+    websocket: WebSocket, state: AppState, what: str, *, tickets: bool = False
+) -> tuple[str, Seen] | None:
     """The session and roles of an upgrade, or None once it is refused
     (closed with 4403 for an Origin or a missing role, 4401 without a session)."""
     from .routers.live import origin_allowed
@@ -74,8 +75,13 @@ async def admit(websocket: WebSocket, state: AppState, what: str, *,
     return token, seen
 
 
-async def relay(websocket: WebSocket, state: AppState, admitted: tuple[str, Seen],
-                connect: Callable[[], Awaitable[ClientConnection]], what: str) -> None:
+async def relay(
+    websocket: WebSocket,
+    state: AppState,
+    admitted: tuple[str, Seen],
+    connect: Callable[[], Awaitable[ClientConnection]],
+    what: str,
+) -> None:
     """Take a socket slot of the user (socketcaps.py), connect upstream,
     accept ``websocket`` with the upstream's subprotocol and relay frames
     both ways until either side closes or the session ends."""
@@ -96,12 +102,15 @@ async def relay(websocket: WebSocket, state: AppState, admitted: tuple[str, Seen
         await websocket.close(code=CAP_CLOSE, reason=str(exc)[:120])
 
 
-async def _pump(websocket: WebSocket, upstream: ClientConnection, state: AppState,
-                token: str, seen: Seen) -> None:
+async def _pump(
+    websocket: WebSocket, upstream: ClientConnection, state: AppState, token: str, seen: Seen
+) -> None:
     await websocket.accept(subprotocol=upstream.subprotocol)
-    tasks = {asyncio.create_task(_down(upstream, websocket)),
-             asyncio.create_task(_up(websocket, upstream)),
-             asyncio.create_task(watch_session(state, token, seen))}
+    tasks = {
+        asyncio.create_task(_down(upstream, websocket)),
+        asyncio.create_task(_up(websocket, upstream)),
+        asyncio.create_task(watch_session(state, token, seen)),
+    }
     done, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
     for task in pending:
         task.cancel()

@@ -60,9 +60,11 @@ def links(state: StateDep, user: UserDep, link: ViewerLinks) -> LinksOut:
     if not roles_of(user):
         raise ApiError(403, "live values need a role")
     replay = state.replay.serving_port() if state.replay is not None else None
-    return LinksOut(live=link("live") if state.foxglove is not None else None,
-                    replay=link("replay") if replay is not None else None,
-                    ticket_ttl_s=state.tickets.ttl_s)
+    return LinksOut(
+        live=link("live") if state.foxglove is not None else None,
+        replay=link("replay") if replay is not None else None,
+        ticket_ttl_s=state.tickets.ttl_s,
+    )
 
 
 async def _relay(websocket: WebSocket, state: AppState, port: int | None, what: str) -> None:
@@ -72,14 +74,18 @@ async def _relay(websocket: WebSocket, state: AppState, port: int | None, what: 
     if port is None or state.loopback_tls is None:
         await websocket.close(code=4404, reason=f"{what} is not running")
         return
-    offered = [Subprotocol(p) for p in websocket.scope.get("subprotocols", [])
-               if p in SUBPROTOCOLS]
+    offered = [Subprotocol(p) for p in websocket.scope.get("subprotocols", []) if p in SUBPROTOCOLS]
     tls = state.loopback_tls.client_context()
 
     def connect() -> Awaitable[ClientConnection]:
-        return ws_connect(f"wss://127.0.0.1:{port}", ssl=tls,
-                          subprotocols=offered or [Subprotocol(SUBPROTOCOLS[0])],
-                          compression=None, max_size=64 * 1024 * 1024, open_timeout=5)
+        return ws_connect(
+            f"wss://127.0.0.1:{port}",
+            ssl=tls,
+            subprotocols=offered or [Subprotocol(SUBPROTOCOLS[0])],
+            compression=None,
+            max_size=64 * 1024 * 1024,
+            open_timeout=5,
+        )
 
     await relay(websocket, state, admitted, connect, what)
 
