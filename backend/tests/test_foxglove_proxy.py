@@ -87,7 +87,7 @@ def test_refused_at_the_upgrade(base: tuple[str, int]) -> None:
                     additional_headers=_bearer(nobody)) == 403
 
 
-def _closed_within(ws: ClientConnection, act: Any, code: int) -> float:
+def _closed_within(ws: Any, act: Any, code: int) -> float:
     assert ws.recv(timeout=10)
     t0 = time.monotonic()
     act()

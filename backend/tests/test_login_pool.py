@@ -21,7 +21,9 @@ def test_login_answers_with_every_worker_thread_taken(tmp_path: Path) -> None:
     holders = [object() for _ in range(4)]
     with TestClient(create_app(settings, out=io.StringIO()),
                     base_url="http://127.0.0.1") as c:
-        limiter = c.portal.call(to_thread.current_default_thread_limiter)
+        portal = c.portal
+        assert portal is not None
+        limiter = portal.call(to_thread.current_default_thread_limiter)
 
         async def take_all() -> None:
             limiter.total_tokens = 4  # a busy service: every thread at work
@@ -32,7 +34,7 @@ def test_login_answers_with_every_worker_thread_taken(tmp_path: Path) -> None:
             for holder in holders:
                 limiter.release_on_behalf_of(holder)
 
-        c.portal.call(take_all)
+        portal.call(take_all)
         answers: dict[str, int] = {}
 
         def ask(name: str, method: str, url: str, **kw: object) -> None:
@@ -48,7 +50,7 @@ def test_login_answers_with_every_worker_thread_taken(tmp_path: Path) -> None:
             assert answers.get("login") == 200, answers
             assert "projects" not in answers  # the shared pool's route still waits
         finally:
-            c.portal.call(give_back)
+            portal.call(give_back)
             login.join(30)
             queued.join(30)
         assert answers["projects"] == 401

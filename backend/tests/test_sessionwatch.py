@@ -14,6 +14,7 @@ from modd_backend.db import Store
 from modd_backend.deps import AppState
 from modd_backend.sessionwatch import watch_session
 from modd_backend.settings import Settings
+from sqlalchemy.orm import Session
 
 
 def test_a_thousand_sockets_share_one_check(tmp_path: Path) -> None:
@@ -31,7 +32,7 @@ def test_a_thousand_sockets_share_one_check(tmp_path: Path) -> None:
     opened = store.session
 
     @contextlib.contextmanager
-    def counted() -> Iterator[object]:
+    def counted() -> Iterator[Session]:
         nonlocal queries
         queries += 1
         with opened() as db:

@@ -25,6 +25,7 @@ from .project_events import ProjectEvents
 from .roles import Role, parse_roles
 from .scene import SceneService
 from .security import csrf_for
+from .sessionwatches import SessionWatches
 from .settings import Settings
 from .socketcaps import SocketCaps
 from .tables import User
@@ -37,7 +38,6 @@ if TYPE_CHECKING:
     from .hub import SubscriptionHub
     from .reconcile import DroneStatuses
     from .replay import ReplaySlot
-    from .sessionwatch import SessionWatches
 
 #: The workbench's session cookie (HttpOnly, SameSite=Strict) and the header
 #: a cookie session must add to every unsafe request (CSRF).
