@@ -111,8 +111,8 @@ def check_foxglove_live(base: str, token: str, log: Path) -> None:
     from ecosystem_support import node_json
     from modd_model.io import load_model
 
-    assert f"Foxglove live at ws://127.0.0.1:{base.rsplit(':', 1)[1]}/foxglove/live" \
-        in log.read_text()
+    port = base.rsplit(":", 1)[1]
+    assert f"Foxglove/Lichtblick live at ws://127.0.0.1:{port}/foxglove/live" in log.read_text()
     model = load_model(REPO / "metamodel" / "examples" / "demo.modd")
     req = urllib.request.Request(f"{base}/api/foxglove/links", data=b"", method="POST",
                                  headers={"Authorization": f"Bearer {token}"})
