@@ -78,12 +78,19 @@ def parse_args(argv: list[str] | None = None) -> Settings:
                    default=[o for o in os.environ.get("MODD_TILE_ORIGINS", "").split() if o],
                    help="an origin (https://host[:port]) the map may load tiles from (repeat; "
                    "default $MODD_TILE_ORIGINS, space-separated; none: no foreign images)")
+    p.add_argument("--viewer-origin", action="append", metavar="ORIGIN",
+                   default=[o for o in os.environ.get("MODD_VIEWER_ORIGINS", "").split() if o],
+                   help="the origin (https://host[:port]) of a web viewer allowed to open the "
+                   "WebSockets, e.g. a Lichtblick web app (repeat; default "
+                   "$MODD_VIEWER_ORIGINS; docs/ecosystem.md)")
     a = p.parse_args(argv)
-    for origin in a.tile_origin:
-        try:
-            check_origin(origin)
-        except ValueError as exc:
-            p.error(f"--tile-origin: {exc}")
+    for option, origins in (("--tile-origin", a.tile_origin),
+                            ("--viewer-origin", a.viewer_origin)):
+        for origin in origins:
+            try:
+                check_origin(origin)
+            except ValueError as exc:
+                p.error(f"{option}: {exc}")
     password = os.environ.get("MODD_ADMIN_PASSWORD")
     if a.admin_password_file is not None:
         try:  # a small regular file (not /dev/zero, not a link), like every secret
@@ -116,6 +123,7 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         allowed_hosts=tuple(a.allowed_host),
         trusted_proxies=tuple(a.trusted_proxy),
         tile_origins=tuple(a.tile_origin),
+        cors_origins=tuple(a.viewer_origin),
         preload_milp=True,
         scene_port=None if a.scene_port < 0 else a.scene_port,
         foxglove_port=a.foxglove_port,
