@@ -22,7 +22,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import signal
 import subprocess
 import sys
 import tempfile
@@ -33,7 +32,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx2 as httpx
-from bench_health_csv import PASSWORD, TOPIC, login, write_archive
+from bench_health_csv import PASSWORD, TOPIC, login, stop_backend, write_archive
 from bench_health_ws import _poll
 from modd.ports import free_port
 from websockets.sync.client import ClientConnection, connect
@@ -167,7 +166,7 @@ def run(a: argparse.Namespace, tmp: Path) -> None:
         print(f"  saves:             {summary(load.saves)}")
         print(f"  answers: {dict(sorted(load.answers.items()))}")
     finally:
-        stop(proc)
+        stop_backend(proc)
 
 
 def start(tmp: Path, port: int, database_url: str | None) -> Any:
@@ -190,15 +189,6 @@ def wait_login(base: str, proc: Any) -> dict[str, str]:
         except httpx.TransportError:
             assert time.monotonic() < deadline and proc.poll() is None, "no backend"
             time.sleep(0.2)
-
-
-def stop(proc: Any) -> None:
-    proc.send_signal(signal.SIGTERM)
-    try:
-        proc.wait(30)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.wait(10)
 
 
 def main() -> int:
