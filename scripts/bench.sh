@@ -42,6 +42,8 @@ run tests/bench/bench_fleet.py --drones "${FLEET_DRONES:-20}" --seconds "${FLEET
 run tests/bench/bench_health_ws.py --ops 20000
 run tests/bench/bench_sensors.py --seconds "${SENSORS_SECONDS:-20}"
 run tests/bench/bench_health_csv.py --clients 70 --seconds "${HEALTH_CSV_SECONDS:-20}"
+run tests/bench/bench_health_editing.py --seconds "${HEALTH_EDITING_SECONDS:-20}"
+run tests/bench/bench_health_editing.py --seconds "${HEALTH_EDITING_SECONDS:-20}" --sockets 1000
 run tests/bench/bench_backfill.py --minutes "${BACKFILL_MINUTES:-10}" --rate 3600
 run tests/bench/flap_windows.py "${FLAP_SECONDS:-60}" 2
 if [ -n "${SOAK:-}" ]; then  # make bench SOAK=1: the 30-minute soak with faults (docs/reliability.md)

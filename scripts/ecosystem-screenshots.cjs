@@ -65,7 +65,7 @@ function serve() {
     if (req.method === "HEAD") res.end();
     else fs.createReadStream(file).pipe(res);
   });
-  return new Promise((resolve) => server.listen(0, "127.0.0.1", () => resolve(server)));
+  return new Promise((resolve) => server.listen(Number(process.env.MODD_APP_PORT || 0), "127.0.0.1", () => resolve(server)));
 }
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));

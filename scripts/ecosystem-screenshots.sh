@@ -24,7 +24,10 @@ free() { "$PY" -c 'from modd.ports import free_port; print(free_port())'; }
 WORK="$(mktemp -d /tmp/modd-eco-shots.XXXXXX)"
 export MODD_DATA="$WORK/data" MODD_PORT="$(free)" MODD_FOXGLOVE_PORT="$(free)" \
   MODD_FOXGLOVE_REPLAY_PORT="$(free)" MODD_ZENOH_PORT="$(free)" MODD_PUB_PORT="$(free)" \
-  MODD_SUB_PORT="$(free)"
+  MODD_SUB_PORT="$(free)" MODD_APP_PORT="$(free)"
+# Lichtblick's page (served by the .cjs on MODD_APP_PORT) may open the backend's
+# WebSockets (/foxglove/live and /foxglove/replay check the Origin).
+export MODD_VIEWER_ORIGINS="http://127.0.0.1:$MODD_APP_PORT"
 BASE="http://127.0.0.1:$MODD_PORT"
 
 RUN_PID=""
@@ -102,10 +105,13 @@ with open(f"{work}/modd-archive-layout.json", "w") as f:
 replay = call(f"/api/drones/usv/archives/{archive['name']}/replay", {"autoplay": True}, "POST")
 with open(f"{work}/replay-url", "w") as f:
     f.write(replay["url"])
+# The live URL with its single-use ticket (the Downloads panel's "Foxglove link").
+with open(f"{work}/live-url", "w") as f:
+    f.write(call("/api/foxglove/links", {}, "POST")["live"])
 EOF
 # The archive the drone is writing, as a closed and indexed copy (what a
 # scientist downloads from the Archives panel, recovered).
 .venv/bin/modd archive recover "$MODD_DATA/run/archive/$(cat "$WORK/archive-name")" -o "$WORK/archive.mcap"
 
 NODE_PATH="$PWD/frontend/node_modules" node scripts/ecosystem-screenshots.cjs \
-  "$LICHTBLICK_DIST" "$WORK" "$OUT" "ws://127.0.0.1:$MODD_FOXGLOVE_PORT"
+  "$LICHTBLICK_DIST" "$WORK" "$OUT" "$(cat "$WORK/live-url")"

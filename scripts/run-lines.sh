@@ -22,15 +22,19 @@ say_workbench() {
   fi
 }
 
-# say_running PROJECT DRONE DATA ZENOH VIEWER_CRED FOXGLOVE_PORT REPLAY_PORT
+# say_running PROJECT DRONE DATA ZENOH VIEWER_CRED FOXGLOVE_PORT REPLAY_PORT WORKBENCH_PORT
+# The Foxglove servers listen on loopback behind the workbench: viewers connect
+# through its /foxglove/live and /foxglove/replay with a ticket (docs/ecosystem.md).
 say_running() {
   echo "modd: project '$1' runs on the simulated drone '$2'; viewers on zenoh $4 need credentials: $(rel "$5")"
-  local live="live at ws://127.0.0.1:$6" replay="archive replay at ws://127.0.0.1:$7"
+  local base="ws://127.0.0.1:$8/foxglove"
+  local live="live at $base/live" replay="replay at …/foxglove/replay"
+  local how="with a ticket (Downloads panel)"
   if [ "$6" != 0 ] && [ "$7" != 0 ]; then
-    echo "modd: Foxglove/Lichtblick $live, $replay (docs/ecosystem.md)"
+    echo "modd: Foxglove/Lichtblick $live, $replay, $how"
   elif [ "$6" != 0 ]; then
-    echo "modd: Foxglove/Lichtblick $live (docs/ecosystem.md)"
+    echo "modd: Foxglove/Lichtblick $live $how"
   elif [ "$7" != 0 ]; then
-    echo "modd: Foxglove/Lichtblick $replay (docs/ecosystem.md)"
+    echo "modd: Foxglove/Lichtblick replay at $base/replay $how"
   fi
 }

@@ -9,7 +9,8 @@
 # and the deploy key are made once in $DATA/credentials (0600) and kept.
 # Environment: MODEL, MODD_PORT, MODD_ZENOH_PORT, MODD_DATA, MODD_PROJECT,
 # MODD_PUB_PORT and MODD_SUB_PORT (the drone's link ends),
-# MODD_FOXGLOVE_PORT (Foxglove/Lichtblick live server, 0: none; docs/ecosystem.md),
+# MODD_FOXGLOVE_PORT (Foxglove/Lichtblick live server on loopback, reached through the
+# workbench's /foxglove/live; 0: none; docs/ecosystem.md),
 # MODD_FOXGLOVE_REPLAY_PORT (its replay of an archive chosen in the workbench, 0: none).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -119,7 +120,7 @@ if [ -n "$MODD_ADMIN_PASSWORD" ]; then
     || echo "modd: the demo project was not deployed (see above); the workbench still runs" >&2
 fi
 
-say_running "$PROJECT" "$DRONE" "$DATA" "$ZENOH" "$CREDS/viewer.cred" "$FOXGLOVE_PORT" "$REPLAY_PORT"
+say_running "$PROJECT" "$DRONE" "$DATA" "$ZENOH" "$CREDS/viewer.cred" "$FOXGLOVE_PORT" "$REPLAY_PORT" "$PORT"
 # Only a workbench that answers is announced as running.
 if answers; then
   echo "modd: Ctrl-C to stop"

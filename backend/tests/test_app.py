@@ -91,6 +91,13 @@ def test_cli_defaults_to_loopback(tmp_path: Path) -> None:
     assert s.tile_origins == ()
 
 
+def test_cli_viewer_origins(tmp_path: Path) -> None:
+    s = parse_args(["--data", str(tmp_path), "--viewer-origin", "http://127.0.0.1:8123"])
+    assert s.cors_origins == ("http://127.0.0.1:8123",)
+    with pytest.raises(SystemExit):
+        parse_args(["--data", str(tmp_path), "--viewer-origin", "http://x/path"])
+
+
 def test_cli_tile_origins(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                           capsys: pytest.CaptureFixture[str]) -> None:
     monkeypatch.delenv("MODD_TILE_ORIGINS", raising=False)

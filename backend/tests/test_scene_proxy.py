@@ -41,13 +41,17 @@ def base(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
                         initial_admin_password=ADMIN_PASSWORD, zenoh_connect=(),
                         scene_port=0, ws_recheck_s=0.2)
     with serve(settings) as url:
-        admin = _login(url, "admin", ADMIN_PASSWORD)
-        for name, roles in (("nobody", []), ("sci", ["scientist"])):
-            r = httpx.post(url + "/api/users", headers=_bearer(admin), timeout=30,
-                           json={"username": name, "password": f"pw-{name}-12345",
-                                 "roles": roles})
-            assert r.status_code == 201, r.text
+        make_users(url)
         yield url
+
+
+def make_users(url: str) -> None:
+    """``nobody`` (no role) and ``sci`` (scientist), password ``pw-NAME-12345``."""
+    admin = _login(url, "admin", ADMIN_PASSWORD)
+    for name, roles in (("nobody", []), ("sci", ["scientist"])):
+        r = httpx.post(url + "/api/users", headers=_bearer(admin), timeout=30,
+                       json={"username": name, "password": f"pw-{name}-12345", "roles": roles})
+        assert r.status_code == 201, r.text
 
 
 def _bearer(token: str) -> dict[str, str]:
@@ -163,6 +167,33 @@ def test_viser_listens_on_loopback_only(tmp_path: Path) -> None:
         assert scene.server.host == "127.0.0.1"
     finally:
         scene.server.stop()
+
+
+def test_viser_port_answers_the_proxy_alone() -> None:
+    """A page or a process going to viser's own loopback port, around the
+    proxy, gets 403 on the page and on the WebSocket (no secret, or an
+    Origin); the proxy's secret opens it."""
+    from modd_backend.scenegate import SECRET_HEADER
+
+    scene = SceneServer("127.0.0.1", 0)
+    try:
+        url = f"http://127.0.0.1:{scene.port}"
+        assert httpx.get(url + "/", timeout=30).status_code == 403
+        ok = httpx.get(url + "/", headers={SECRET_HEADER: scene.secret}, timeout=30)
+        assert ok.status_code == 200 and b"<html" in ok.content.lower()
+        for headers, origin in (({}, None), ({}, url),
+                                ({SECRET_HEADER: "guess"}, None),
+                                ({SECRET_HEADER: scene.secret}, url)):  # a browser: refused
+            with pytest.raises(InvalidStatus) as refused:
+                connect(f"ws://127.0.0.1:{scene.port}", additional_headers=headers,
+                        origin=None if origin is None else Origin(origin),
+                        subprotocols=[Subprotocol(VISER)], open_timeout=10)
+            assert refused.value.response.status_code == 403, (headers, origin)
+        with connect(f"ws://127.0.0.1:{scene.port}", subprotocols=[Subprotocol(VISER)],
+                     additional_headers={SECRET_HEADER: scene.secret}, open_timeout=10) as ws:
+            assert ws.subprotocol == VISER
+    finally:
+        scene.stop()
 
 
 def test_scene_in_a_browser_under_its_csp(base: str) -> None:

@@ -59,6 +59,15 @@ def start_backend(tmp: Path, port: int) -> subprocess.Popen[bytes]:
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
+def stop_backend(proc: subprocess.Popen[bytes]) -> None:
+    proc.send_signal(signal.SIGTERM)
+    try:
+        proc.wait(30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(10)
+
+
 def login(base: str, user: str, password: str) -> dict[str, str]:
     r = httpx.post(base + "/api/auth/login", timeout=30,
                    json={"username": user, "password": password})
@@ -136,12 +145,7 @@ def main() -> int:
                   f"max {lat[-1]:.1f} ms")
             print(f"  exports answered: {dict(sorted(answers.items()))}")
         finally:
-            proc.send_signal(signal.SIGTERM)
-            try:
-                proc.wait(30)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(10)
+            stop_backend(proc)
     return 0
 
 

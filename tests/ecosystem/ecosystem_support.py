@@ -34,3 +34,16 @@ def node_json(script: str, *args: str, timeout: float = 60.0) -> Any:
     if proc.returncode != 0:
         raise AssertionError(f"{script} failed ({proc.returncode}): {proc.stderr[-2000:]}")
     return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def foxglove_links(base: str, user: str, password: str) -> dict[str, Any]:
+    """The workbench's Foxglove URLs (each with a single-use ticket) for ``user``."""
+    import httpx2 as httpx
+
+    token = httpx.post(f"{base}/api/auth/login", json={"username": user, "password": password},
+                       timeout=30).json()["token"]
+    r = httpx.post(f"{base}/api/foxglove/links", headers={"Authorization": f"Bearer {token}"},
+                   timeout=30)
+    assert r.status_code == 200, r.text
+    out: dict[str, Any] = r.json()
+    return out

@@ -17,12 +17,13 @@ from typing import Any
 
 import pytest
 import zenoh
-from ecosystem_support import node_json
+from ecosystem_support import foxglove_links, node_json
 from fastapi.testclient import TestClient
 from modd.ports import free_port
 from modd.zenoh_session import client_settings, open_session
 from modd_backend import Settings, create_app
 from modd_model import load_model
+from served import serve
 from station import PUBBROKER, Station
 from viewer_schema import refusals
 
@@ -48,16 +49,16 @@ def station(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Station]:
 
 
 @pytest.fixture(scope="module")
-def backend(station: Station, tmp_path_factory: pytest.TempPathFactory
-            ) -> Iterator[tuple[TestClient, int]]:
-    port = free_port()
+def backend(station: Station, tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """The backend's base URL (served: the Foxglove client comes in through
+    its ``/foxglove/live``)."""
     settings = Settings(data_dir=tmp_path_factory.mktemp("backend"),
                         zenoh_connect=(station.zenoh,), initial_admin_password="pw-12345678",
                         zenoh_credentials=station.credentials.cred_file("backend"),
                         deploy_key_file=station.credentials.deploy_key_file,
-                        foxglove_port=port)
-    with TestClient(create_app(settings, out=io.StringIO()), base_url="http://127.0.0.1") as c:
-        yield c, port
+                        foxglove_port=free_port())
+    with serve(settings) as base:
+        yield base
 
 
 class ZenohOracle:
@@ -87,9 +88,8 @@ class ZenohOracle:
         self.session.close()  # type: ignore[no-untyped-call]
 
 
-def test_every_subscriber_live_in_foxglove(backend: tuple[TestClient, int],
-                                           station: Station) -> None:
-    _client, port = backend
+def test_every_subscriber_live_in_foxglove(backend: str, station: Station) -> None:
+    live_url = foxglove_links(backend, "admin", "pw-12345678")["live"]
     oracle = ZenohOracle(station.zenoh, station.credentials.cred_file("backend"))
     try:
         time.sleep(1.0)  # the zenoh oracle is connected before the Foxglove client
@@ -107,7 +107,7 @@ def test_every_subscriber_live_in_foxglove(backend: tuple[TestClient, int],
 
         t = threading.Thread(target=dynamic)
         t.start()
-        report = node_json("foxglove_client.cjs", f"ws://127.0.0.1:{port}", "9", timeout=60)
+        report = node_json("foxglove_client.cjs", live_url, "9", timeout=60)
         t.join()
         time.sleep(0.5)
     finally:

@@ -11,12 +11,14 @@ import signal
 from collections.abc import Iterator
 from pathlib import Path
 
+import httpx2 as httpx
 import pytest
 from ecosystem_support import node_json
 from mcap.writer import Writer
 from modd.ports import free_port
 from modd_backend.foxglove_replay import Player, Recorded, ReplayServer, load_recording
 from pubbroker_harness import BIN, PubBroker, run_load
+from served import serve
 
 T0 = 1_795_000_000_000_000_000
 TOPICS = ("usv.ctd.temperature", "usv.ctd.conductivity")
@@ -135,7 +137,8 @@ def test_a_pubbroker_archive_loads_for_replay(tmp_path: Path) -> None:
 def test_the_workbench_replays_an_archive_in_foxglove(tmp_path: Path, minute: Path) -> None:
     """Archives panel > Replay in Foxglove: the backend serves the chosen
     range of a drone's archive — here a file still being written (no summary,
-    cut mid-record) — on its replay port; Foxglove seeks and plays it."""
+    cut mid-record) — at its ``/foxglove/replay`` (the URL it answers carries
+    a single-use ticket); Foxglove seeks and plays it."""
     import io
 
     from fastapi.testclient import TestClient
@@ -146,28 +149,27 @@ def test_the_workbench_replays_an_archive_in_foxglove(tmp_path: Path, minute: Pa
     folder.mkdir(parents=True)
     data = minute.read_bytes()
     (folder / "writing.mcap").write_bytes(data[: len(data) * 2 // 3])  # no summary, cut
-    port = free_port()
     settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
                         initial_admin_password="pw-12345678", archive_dir=tmp_path / "archives",
-                        foxglove_replay_port=port)
-    with TestClient(create_app(settings, out=io.StringIO()),
-                    base_url="http://127.0.0.1") as c:
-        url = "/api/drones/usv/archives/writing.mcap/replay"
-        assert c.post(url, json={}).status_code == 401
-        token = c.post("/api/auth/login", json={"username": "admin",
-                                                "password": "pw-12345678"}).json()["token"]
+                        foxglove_replay_port=free_port())
+    with serve(settings) as base:
+        url = f"{base}/api/drones/usv/archives/writing.mcap/replay"
+        assert httpx.post(url, json={}).status_code == 401
+        token = httpx.post(f"{base}/api/auth/login", json={
+            "username": "admin", "password": "pw-12345678"}).json()["token"]
         auth = {"Authorization": f"Bearer {token}"}
-        assert c.post("/api/drones/usv/archives/../x.mcap/replay", json={},
-                      headers=auth).status_code == 404
-        r = c.post(url, json={"start_ns": T0 + 70_000_000_000}, headers=auth)
+        assert httpx.post(f"{base}/api/drones/usv/archives/..%2Fx.mcap/replay", json={},
+                          headers=auth).status_code == 404
+        r = httpx.post(url, json={"start_ns": T0 + 70_000_000_000}, headers=auth, timeout=30)
         assert r.status_code == 422 and "no message in that range" in r.json()["detail"], r.text
         assert str(folder) not in r.text
-        r = c.post(url, json={"start_ns": T0 + 10_000_000_000}, headers=auth)
+        r = httpx.post(url, json={"start_ns": T0 + 10_000_000_000}, headers=auth, timeout=30)
         assert r.status_code == 200, r.text
         info = r.json()
-        assert info["url"] == f"ws://127.0.0.1:{port}" and info["topics"] == sorted(TOPICS)
+        assert info["url"].startswith(f"ws://{base[7:]}/foxglove/replay?ticket=")
+        assert info["topics"] == sorted(TOPICS)
         assert info["start_ns"] == T0 + 10_000_000_000
-        assert c.get("/api/replay", headers=auth).json()["file"] == "writing.mcap"
+        assert httpx.get(f"{base}/api/replay", headers=auth).json()["file"] == "writing.mcap"
 
         seek = T0 + 20_000_000_000
         report = node_json("foxglove_client.cjs", info["url"], "3", "--seek", str(seek),
@@ -180,16 +182,20 @@ def test_the_workbench_replays_an_archive_in_foxglove(tmp_path: Path, minute: Pa
             assert [m["msg"]["value"] for m in msgs] == [value(i, k) for k in ks]
         # the cut: nothing past the file's last complete record is played
         assert info["end_ns"] < T0 + 60_000_000_000
+        # the ticket is spent: the same URL opens nothing now
+        again = node_json("foxglove_client.cjs", info["url"], "1", timeout=30)
+        assert not again["messages"] and again["protocol"] in (None, "")
 
         # "play at once": a viewer that only subscribes gets the range from its start
-        r = c.post(url, json={"start_ns": T0 + 10_000_000_000, "autoplay": True}, headers=auth)
+        r = httpx.post(url, json={"start_ns": T0 + 10_000_000_000, "autoplay": True},
+                       headers=auth, timeout=30)
         assert r.status_code == 200 and r.json()["autoplay"] is True, r.text
         report = node_json("foxglove_client.cjs", r.json()["url"], "2", timeout=30)
         ks = [(int(m["logTime"]) - T0) // 100_000_000 for m in report["messages"][TOPICS[0]]]
         assert ks[:1] == [100] and ks == list(range(100, 100 + len(ks))), ks[:5]
 
-        assert c.delete("/api/replay", headers=auth).status_code == 204
-        assert c.get("/api/replay", headers=auth).json() is None
+        assert httpx.delete(f"{base}/api/replay", headers=auth).status_code == 204
+        assert httpx.get(f"{base}/api/replay", headers=auth).json() is None
 
     off = Settings(data_dir=tmp_path / "data2", zenoh_enabled=False,
                    initial_admin_password="pw-12345678", archive_dir=tmp_path / "archives")
@@ -205,29 +211,24 @@ def test_the_base_station_record_replays_through_the_same_server(tmp_path: Path,
                                                                   minute: Path) -> None:
     """Archives panel, base-station records: the record of what was delivered
     plays on the same replay server as the drone's archives (seek and play)."""
-    import io
 
-    from fastapi.testclient import TestClient
-    from modd_backend.app import create_app
     from modd_backend.settings import Settings
 
     folder = tmp_path / "records" / "usv"
     folder.mkdir(parents=True)
     (folder / "usv-mission.mcap").write_bytes(minute.read_bytes())
-    port = free_port()
     settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
                         initial_admin_password="pw-12345678", record_dir=tmp_path / "records",
-                        foxglove_replay_port=port)
-    with TestClient(create_app(settings, out=io.StringIO()),
-                    base_url="http://127.0.0.1") as c:
-        url = "/api/drones/usv/records/usv-mission.mcap/replay"
-        token = c.post("/api/auth/login", json={"username": "admin",
-                                                "password": "pw-12345678"}).json()["token"]
+                        foxglove_replay_port=free_port())
+    with serve(settings) as base:
+        url = f"{base}/api/drones/usv/records/usv-mission.mcap/replay"
+        token = httpx.post(f"{base}/api/auth/login", json={
+            "username": "admin", "password": "pw-12345678"}).json()["token"]
         auth = {"Authorization": f"Bearer {token}"}
-        assert c.post(url, json={}).status_code == 401
-        assert c.post("/api/drones/usv/records/nothing.mcap/replay", json={},
-                      headers=auth).status_code == 404
-        r = c.post(url, json={}, headers=auth)
+        assert httpx.post(url, json={}).status_code == 401
+        assert httpx.post(f"{base}/api/drones/usv/records/nothing.mcap/replay", json={},
+                          headers=auth).status_code == 404
+        r = httpx.post(url, json={}, headers=auth, timeout=30)
         assert r.status_code == 200, r.text
         info = r.json()
         assert info["file"] == "usv-mission.mcap" and info["topics"] == sorted(TOPICS)

@@ -103,7 +103,7 @@ def check_zenoh_is_closed(data: Path, zport: int, log: Path) -> None:
         viewer.close()  # type: ignore[no-untyped-call]
 
 
-def check_foxglove_live(fport: int, log: Path) -> None:
+def check_foxglove_live(base: str, token: str, log: Path) -> None:
     """A Foxglove client (@foxglove/ws-protocol, as Foxglove and Lichtblick
     speak it) on `make run`'s live server gets values of every subscriber of
     the demo model, its link status and its position (docs/ecosystem.md)."""
@@ -111,10 +111,15 @@ def check_foxglove_live(fport: int, log: Path) -> None:
     from ecosystem_support import node_json
     from modd_model.io import load_model
 
-    assert f"Foxglove/Lichtblick live at ws://127.0.0.1:{fport}" in log.read_text()
+    port = base.rsplit(":", 1)[1]
+    assert f"Foxglove/Lichtblick live at ws://127.0.0.1:{port}/foxglove/live" in log.read_text()
     model = load_model(REPO / "metamodel" / "examples" / "demo.modd")
+    req = urllib.request.Request(f"{base}/api/foxglove/links", data=b"", method="POST",
+                                 headers={"Authorization": f"Bearer {token}"})
+    with urllib.request.urlopen(req, timeout=30) as resp:
+        live = json.loads(resp.read())["live"]
     # 6 s: every demo subscriber's period is at most 2 s
-    report = node_json("foxglove_client.cjs", f"ws://127.0.0.1:{fport}", "6", timeout=60)
+    report = node_json("foxglove_client.cjs", live, "6", timeout=60)
     assert report["protocol"] == "foxglove.sdk.v1" and not report["errors"], report["errors"]
     got = {t.split("/")[2] for t, msgs in report["messages"].items()
            if t.startswith("/usv/") and msgs}
@@ -124,7 +129,7 @@ def check_foxglove_live(fport: int, log: Path) -> None:
     assert lat["aggregation"] == "LAST" and lat["value"] >= ORIGIN_LAT - 1e-6, lat
 
 
-def check_foxglove_replay(base: str, token: str, rport: int) -> None:
+def check_foxglove_replay(base: str, token: str) -> None:
     """Archives panel > Replay in Foxglove on the archive the drone is
     writing: a Foxglove client seeks into it and plays from there, in order,
     every value equal to the archive's (read by the Python MCAP reader)."""
@@ -138,8 +143,8 @@ def check_foxglove_replay(base: str, token: str, rport: int) -> None:
                                           "Authorization": f"Bearer {token}"})
     with urllib.request.urlopen(req, timeout=30) as resp:
         info = json.loads(resp.read())
-    assert info["url"] == f"ws://127.0.0.1:{rport}" and "usv.ctd.water_temperature" in info[
-        "topics"], info
+    assert info["url"].startswith(f"ws://{base[7:]}/foxglove/replay?ticket=") and \
+        "usv.ctd.water_temperature" in info["topics"], info
     seek = (info["start_ns"] + info["end_ns"]) // 2
     report = node_json("foxglove_client.cjs", info["url"], "3", "--seek", str(seek),
                        "--after", "1", timeout=30)
@@ -212,8 +217,8 @@ def test_make_run_serves_the_demo_live_and_stops(
         assert track["usv"]["points"] > 0, scene
 
         check_zenoh_is_closed(data, zport, log)
-        check_foxglove_live(fport, log)
-        check_foxglove_replay(base, token, rport)
+        check_foxglove_live(base, token, log)
+        check_foxglove_replay(base, token)
     finally:
         stop(proc, log)
     out = log.read_text()

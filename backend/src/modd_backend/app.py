@@ -16,6 +16,7 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from typing import Any, TextIO
 
+from anyio import CapacityLimiter
 from fastapi import APIRouter, FastAPI
 from sqlalchemy import text
 from starlette.concurrency import run_in_threadpool
@@ -30,6 +31,7 @@ from .deps import AppState
 from .foxglove import FoxgloveLive
 from .guards import Guard, HeavyLimiter
 from .hub import SubscriptionHub
+from .loopback_tls import LOOPBACK, LoopbackTls
 from .planning import preload_milp
 from .reconcile import DroneStatuses, reconcile
 from .routers import (
@@ -38,6 +40,7 @@ from .routers import (
     backfill,
     deploy,
     downloads,
+    foxglove,
     health,
     live,
     models,
@@ -49,6 +52,7 @@ from .routers import (
 )
 from .scene import SceneServer, SceneService
 from .settings import Settings
+from .socketcaps import SocketCaps
 from .spa import mount_frontend
 from .throttle import Throttle
 from .versions import get_version, model_of
@@ -70,6 +74,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     archives.replay_router,
     scene.router,
     scene.proxy,
+    foxglove.router,
     backfill.router,
     records.router,
 )
@@ -90,16 +95,19 @@ def start_scene(settings: Settings, store: Store) -> SceneService:
     return SceneService(SceneServer("127.0.0.1", port), deployed_model)
 
 
-def start_foxglove(settings: Settings, out: TextIO) -> FoxgloveLive | None:
-    """The Foxglove server, or None (said on ``out``) when its port is taken:
+def start_foxglove(settings: Settings, tls: LoopbackTls, out: TextIO) -> FoxgloveLive | None:
+    """The Foxglove server on loopback behind TLS (viewers come in through
+    ``/foxglove/live``), or None (said on ``out``) when its port is taken:
     the workbench runs without it rather than not at all."""
     try:
-        server = FoxgloveLive(settings.host, settings.foxglove_port)
+        server = FoxgloveLive(LOOPBACK, settings.foxglove_port, tls=tls)
     except RuntimeError as exc:  # the SDK's FoxgloveError
-        print(f"modd-backend: no Foxglove server on {settings.host}:{settings.foxglove_port}: "
+        print(f"modd-backend: no Foxglove server on {LOOPBACK}:{settings.foxglove_port}: "
               f"{exc}", file=out, flush=True)
         return None
-    print(f"modd-backend: Foxglove server at {server.url}", file=out, flush=True)
+    print(f"modd-backend: Foxglove live at ws://{settings.host}:{settings.port}/foxglove/live "
+          "(with a ticket: the workbench's Foxglove links, docs/ecosystem.md)",
+          file=out, flush=True)
     return server
 
 
@@ -163,9 +171,13 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
             heavy=HeavyLimiter(settings.heavy_per_user, settings.heavy_total),
             login_accounts=Throttle(settings.login_limit_account, settings.login_window_s),
             login_addresses=Throttle(settings.login_limit_address, settings.login_window_s),
+            socket_caps=SocketCaps(settings.ws_sockets_per_user, settings.ws_sockets_per_address),
         )
         app.state.modd = state
         state.database = "ok"  # just opened and migrated
+        state.login_threads = CapacityLimiter(settings.login_threads)
+        if settings.foxglove_port or settings.foxglove_replay_port:
+            state.loopback_tls = LoopbackTls.generate()
         if zenoh_session is not None:
             state.hub = SubscriptionHub()
             state.statuses = DroneStatuses()
@@ -174,15 +186,16 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
             if settings.scene_port is not None:
                 state.scene = start_scene(settings, store)
                 state.hub.listen_all(state.scene.on_value)
-            if settings.foxglove_port:
-                state.foxglove = start_foxglove(settings, out)
+            if settings.foxglove_port and state.loopback_tls is not None:
+                state.foxglove = start_foxglove(settings, state.loopback_tls, out)
                 if state.foxglove is not None:
                     state.hub.listen_all(state.foxglove.on_value)
                     state.hub.listen_all_status(state.foxglove.on_status)
         if settings.foxglove_replay_port:
             from .replay import ReplaySlot
 
-            state.replay = ReplaySlot(settings.host, settings.foxglove_replay_port)
+            state.replay = ReplaySlot(LOOPBACK, settings.foxglove_replay_port,
+                                      tls=state.loopback_tls)
         stop = asyncio.Event()
         tasks = [asyncio.create_task(_ping_database(state, stop))]
         if state.statuses is not None:

@@ -57,11 +57,12 @@ def parse_args(argv: list[str] | None = None) -> Settings:
     p.add_argument("--scene-port", type=int, default=0,
                    help="port of the 3D scene (viser); 0: any free port; -1: no scene")
     p.add_argument("--foxglove-port", type=int, default=8765,
-                   help="port of the Foxglove WebSocket server (live values for Foxglove and "
-                   "Lichtblick, on --host, no authentication: docs/ecosystem.md); 0: none")
+                   help="loopback port of the Foxglove server (live values for Foxglove and "
+                   "Lichtblick); viewers connect through /foxglove/live with a ticket "
+                   "(docs/ecosystem.md); 0: none")
     p.add_argument("--foxglove-replay-port", type=int, default=8865,
-                   help="port of the Foxglove replay of an archive chosen in the workbench "
-                   "(on --host, no authentication); 0: none")
+                   help="loopback port of the Foxglove replay of an archive chosen in the "
+                   "workbench (viewers connect through /foxglove/replay); 0: none")
     p.add_argument("--admin-password-file", type=Path, metavar="FILE",
                    help="file holding the first admin's password (first line)")
     p.add_argument("--admin-password",
@@ -77,12 +78,19 @@ def parse_args(argv: list[str] | None = None) -> Settings:
                    default=[o for o in os.environ.get("MODD_TILE_ORIGINS", "").split() if o],
                    help="an origin (https://host[:port]) the map may load tiles from (repeat; "
                    "default $MODD_TILE_ORIGINS, space-separated; none: no foreign images)")
+    p.add_argument("--viewer-origin", action="append", metavar="ORIGIN",
+                   default=[o for o in os.environ.get("MODD_VIEWER_ORIGINS", "").split() if o],
+                   help="the origin (https://host[:port]) of a web viewer allowed to open the "
+                   "WebSockets, e.g. a Lichtblick web app (repeat; default "
+                   "$MODD_VIEWER_ORIGINS; docs/ecosystem.md)")
     a = p.parse_args(argv)
-    for origin in a.tile_origin:
-        try:
-            check_origin(origin)
-        except ValueError as exc:
-            p.error(f"--tile-origin: {exc}")
+    for option, origins in (("--tile-origin", a.tile_origin),
+                            ("--viewer-origin", a.viewer_origin)):
+        for origin in origins:
+            try:
+                check_origin(origin)
+            except ValueError as exc:
+                p.error(f"{option}: {exc}")
     password = os.environ.get("MODD_ADMIN_PASSWORD")
     if a.admin_password_file is not None:
         try:  # a small regular file (not /dev/zero, not a link), like every secret
@@ -115,6 +123,7 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         allowed_hosts=tuple(a.allowed_host),
         trusted_proxies=tuple(a.trusted_proxy),
         tile_origins=tuple(a.tile_origin),
+        cors_origins=tuple(a.viewer_origin),
         preload_milp=True,
         scene_port=None if a.scene_port < 0 else a.scene_port,
         foxglove_port=a.foxglove_port,
@@ -169,9 +178,6 @@ def main(argv: list[str] | None = None) -> int:
     if not _is_loopback(settings.host):
         print(f"modd-backend: warning: listening on {settings.host}, not loopback",
               file=sys.stderr)
-        if settings.foxglove_port:
-            print("modd-backend: warning: the Foxglove server has no authentication; "
-                  "see docs/ecosystem.md", file=sys.stderr)
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="info",
                 **server_options(settings))
     return 0

@@ -12,6 +12,7 @@ from collections.abc import AsyncIterator, Callable, Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Annotated, Literal
 
+from anyio import CapacityLimiter
 from fastapi import Depends, HTTPException, Request, WebSocket
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from sqlalchemy.orm import Session as Db
@@ -19,13 +20,17 @@ from sqlalchemy.orm import Session as Db
 from .accounts import user_for_token
 from .db import Store
 from .foxglove import FoxgloveLive
+from .loopback_tls import LoopbackTls
 from .project_events import ProjectEvents
 from .roles import Role, parse_roles
 from .scene import SceneService
 from .security import csrf_for
+from .sessionwatches import SessionWatches
 from .settings import Settings
+from .socketcaps import SocketCaps
 from .tables import User
 from .throttle import Throttle
+from .tickets import ViewerTickets
 from .zenoh_session import ZenohSession
 
 if TYPE_CHECKING:
@@ -59,6 +64,16 @@ class AppState:
     login_addresses: Throttle = field(default_factory=lambda: Throttle(50, 300))
     #: Live WebSocket subscriptions per user id (event loop only).
     ws_counts: Counter[int] = field(default_factory=Counter)
+    #: Single-use tickets standing for a session in a viewer's URL (Foxglove).
+    tickets: ViewerTickets = field(default_factory=ViewerTickets)
+    #: The certificate the loopback Foxglove servers present (only the proxy trusts it).
+    loopback_tls: LoopbackTls | None = None
+    #: The login's own threads (routers/auth.py), set at start-up.
+    login_threads: CapacityLimiter | None = None
+    #: Open WebSockets per user and per client address (socketcaps.py).
+    socket_caps: SocketCaps = field(default_factory=lambda: SocketCaps(64, 512))
+    #: One shared session re-check per session of open sockets (sessionwatch.py).
+    session_watches: SessionWatches | None = None
     #: Result of the last background database ping (health).
     database: Literal["ok", "error", "unknown"] = "unknown"
 

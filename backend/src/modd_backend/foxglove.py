@@ -16,8 +16,10 @@ Contract: :meth:`FoxgloveLive.on_value` and :meth:`FoxgloveLive.on_status`
 are zenoh callbacks: they never block (``channel.log`` queues per client in
 the SDK, which drops a slow client's oldest data messages first).
 
-The SDK's server has no authentication: it binds to the backend's host
-(loopback by default); docs/ecosystem.md says what to do on a shared network.
+The SDK's server has no authentication: the backend runs it on loopback
+behind TLS with a certificate only its proxy trusts, and viewers connect
+through ``/foxglove/live`` on the backend's own port, with a session
+(foxgloveproxy.py, docs/ecosystem.md).
 
 >>> window_message({"value": 1.5, "count": 3, "aggregation": "AVERAGE", "start_ns": 0,
 ...                 "end_ns": 2_500_000_000})["window_end"]
@@ -29,7 +31,7 @@ from __future__ import annotations
 import json
 import logging
 import threading
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from modd_contracts import aggregations as agg
 from modd_contracts.delivered import load_delivered
@@ -37,6 +39,9 @@ from modd_contracts.keys import match_status_key, match_sub_key
 from modd_contracts.types import DeliveredValue
 
 from .scene import position_roles
+
+if TYPE_CHECKING:
+    from .loopback_tls import LoopbackTls
 
 log = logging.getLogger("modd.foxglove")
 
@@ -154,15 +159,19 @@ def routed_subscribers(status: dict[str, Any]) -> set[str] | None:
 class FoxgloveLive:
     """A Foxglove server on ``host:port`` fed with delivered values and
     statuses (``modd/*/sub/*``, ``modd/*/status``) by the backend's zenoh
-    session. ``port`` 0 picks a free port (:attr:`port` says which)."""
+    session. ``port`` 0 picks a free port (:attr:`port` says which). With
+    ``tls`` it speaks ``wss://`` only: the backend runs it so on loopback,
+    reached through its authenticated proxy (foxgloveproxy.py)."""
 
-    def __init__(self, host: str, port: int, name: str = "MoDD base station") -> None:
+    def __init__(self, host: str, port: int, name: str = "MoDD base station",
+                 tls: LoopbackTls | None = None) -> None:
         import foxglove
 
         self._foxglove = foxglove
         self.context = foxglove.Context()
-        self.server = foxglove.start_server(name=name, host=host, port=port,
-                                            context=self.context)
+        self.server = foxglove.start_server(
+            name=name, host=host, port=port, context=self.context,
+            tls_cert=tls.cert_pem if tls else None, tls_key=tls.key_pem if tls else None)
         self.host = host
         self.port = self.server.port
         self._channels: dict[str, Any] = {}

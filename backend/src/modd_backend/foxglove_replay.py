@@ -24,7 +24,10 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .loopback_tls import LoopbackTls
 
 #: Messages kept in memory at most (a mission day at 100 Hz on 50 topics).
 MAX_MESSAGES = 5_000_000
@@ -177,12 +180,14 @@ class Player:
 
 
 class ReplayServer:
-    """A ranged-playback Foxglove server over a recording, on ``host:port``."""
+    """A ranged-playback Foxglove server over a recording, on ``host:port``;
+    with ``tls``, it speaks ``wss://`` only (the backend's replay slot, reached
+    through its proxy: loopback_tls.py)."""
 
     def __init__(self, paths: Sequence[Path], host: str = "127.0.0.1", port: int = 8766,
                  tick_s: float = 0.02, *,
                  recording: tuple[dict[str, RecordedChannel], list[Recorded]] | None = None,
-                 autoplay: bool = False) -> None:
+                 autoplay: bool = False, tls: LoopbackTls | None = None) -> None:
         import foxglove
         from foxglove.websocket import Capability, ServerListener
 
@@ -214,7 +219,8 @@ class ReplayServer:
             name="MoDD replay", host=host, port=port, context=self.context,
             capabilities=[Capability.PlaybackControl, Capability.Time],
             server_listener=Listener(),
-            playback_time_range=(self.player.start, self.player.end))
+            playback_time_range=(self.player.start, self.player.end),
+            tls_cert=tls.cert_pem if tls else None, tls_key=tls.key_pem if tls else None)
         self.port = self.server.port
         self.host = host
         self._tick = tick_s

@@ -5,6 +5,10 @@ one, and optionally deploy it. It speaks only the public REST API
 
 The password comes from ``$MODD_PASSWORD`` or ``--password-file``, never from
 the command line (which other users of the machine can read in ``ps``).
+Redirects are not followed (the bearer token would travel to wherever they
+point): the error names the address to give instead. A plain ``http://``
+server that is not loopback gets a warning: the password and token cross the
+network in clear.
 
 Deploying needs the drone's SubBroker to answer; ``--wait S`` retries a
 failed deploy until then (e.g. right after ``modd up`` started it).
@@ -31,6 +35,42 @@ class PushError(Exception):
     """The workbench refused or could not be reached; the message says which step."""
 
 
+class _NoRedirect(urllib.request.HTTPRedirectHandler):
+    """A redirect ends the push (urllib would send the token along)."""
+
+    def redirect_request(self, req: urllib.request.Request, fp: Any, code: int, msg: str,
+                         headers: Any, newurl: str) -> urllib.request.Request | None:
+        raise PushError(f"{req.get_method()} {req.full_url}: the server redirects to "
+                        f"{newurl[:200]!r}; not followed (the token would go along): give "
+                        "the workbench's own address with --server")
+
+
+_OPENER = urllib.request.build_opener(_NoRedirect)
+
+
+def plain_http_warning(server: str) -> str | None:
+    """A warning when ``server`` is plain http:// to a host not on loopback.
+
+    >>> plain_http_warning("http://127.0.0.1:8080") is None
+    True
+    >>> plain_http_warning("http://base.example:8080")[:40]
+    'warning: http://base.example:8080 is pla'
+    """
+    import ipaddress
+
+    url = urllib.parse.urlsplit(server)
+    host = url.hostname or ""
+    if url.scheme != "http" or host == "localhost" or host.endswith(".localhost"):
+        return None
+    try:
+        if ipaddress.ip_address(host).is_loopback:
+            return None
+    except ValueError:
+        pass
+    return (f"warning: {server} is plain http to another machine: the password and the "
+            "session token cross the network in clear (use https://)")
+
+
 @dataclass
 class Client:
     """The few REST calls a push needs, on the standard library only."""
@@ -48,13 +88,17 @@ class Client:
         if self.token:
             req.add_header("Authorization", f"Bearer {self.token}")
         try:
-            with urllib.request.urlopen(req, timeout=self.timeout_s) as resp:
-                text = resp.read().decode()
+            with _OPENER.open(req, timeout=self.timeout_s) as resp:
+                text = resp.read().decode(errors="replace")
         except urllib.error.HTTPError as exc:
             raise PushError(f"{method} {path}: HTTP {exc.code}: {_detail(exc.read())}") from None
         except (urllib.error.URLError, OSError) as exc:
             raise PushError(f"{method} {path}: cannot reach {self.server}: {exc}") from None
-        return json.loads(text) if text else None
+        try:
+            return json.loads(text) if text else None
+        except ValueError:
+            raise PushError(f"{method} {path}: {self.server} answered something that is not "
+                            f"the workbench's JSON: {text[:120]!r}") from None
 
     def login(self, user: str, password: str) -> None:
         out = self.call("POST", "/api/auth/login", {"username": user, "password": password})
@@ -147,6 +191,9 @@ def run(args: argparse.Namespace) -> int:
     path = Path(args.model)
     fmt = "json" if path.suffix == ".json" else "modd"
     name = args.project or path.stem
+    warning = plain_http_warning(args.server)
+    if warning is not None:
+        print(f"modd push: {warning}", file=sys.stderr)
     try:
         text = path.read_text()
         client = Client(args.server)
@@ -166,11 +213,15 @@ def run(args: argparse.Namespace) -> int:
     except (OSError, PushError) as exc:
         print(f"modd push: {exc}", file=sys.stderr)
         return 1
-    if record["status"] != "acked":
-        print(f"modd push: deploy to drone {record['drone']!r} {record['status']}: "
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:  # not the API's shape
+        print(f"modd push: unexpected answer from {args.server} (is it a MoDD workbench?): "
+              f"{type(exc).__name__}: {str(exc)[:120]}", file=sys.stderr)
+        return 1
+    if record.get("status") != "acked":
+        print(f"modd push: deploy to drone {record.get('drone')!r} {record.get('status')}: "
               f"{record.get('error')}", file=sys.stderr)
         return 1
-    print(f"modd push: deployed revision {revision} to drone {record['drone']!r} (acked)")
+    print(f"modd push: deployed revision {revision} to drone {record.get('drone')!r} (acked)")
     return 0
 
 

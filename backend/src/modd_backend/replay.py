@@ -2,7 +2,8 @@
 (modd_backend.foxglove_replay) at a time, on the backend's host and
 ``--foxglove-replay-port``, over an archive file the user picked in the
 Archives panel — a closed file, or the one the drone is still writing (its
-complete part). Starting another replay replaces the current one."""
+complete part). Starting another replay replaces the current one. Viewers
+reach it at ``/foxglove/replay`` on the backend's port (foxgloveproxy.py)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from .foxglove_replay import ReplayServer, load_recording
+from .loopback_tls import LoopbackTls
 
 #: Messages one replay holds in memory at most (≈ 200 B each).
 MAX_REPLAY_MESSAGES = 1_000_000
@@ -32,9 +34,13 @@ class ReplayInfo:
 
 
 class ReplaySlot:
-    def __init__(self, host: str, port: int,
-                 max_messages: int = MAX_REPLAY_MESSAGES) -> None:
+    """With ``tls`` the server speaks ``wss://`` only (reached through the
+    backend's proxy, foxgloveproxy.py); ``port`` 0: a free port each time."""
+
+    def __init__(self, host: str, port: int, max_messages: int = MAX_REPLAY_MESSAGES,
+                 tls: LoopbackTls | None = None) -> None:
         self.host, self.port, self.max_messages = host, port, max_messages
+        self.tls = tls
         self._lock = threading.Lock()
         self._server: ReplayServer | None = None
         self.info: ReplayInfo | None = None
@@ -61,11 +67,16 @@ class ReplaySlot:
         while True:
             try:
                 return ReplayServer([path], self.host, self.port, recording=recording,
-                                    autoplay=autoplay)
+                                    autoplay=autoplay, tls=self.tls)
             except RuntimeError as exc:  # the SDK's FoxgloveError
                 if "in use" not in str(exc) or time.monotonic() > deadline:
                     raise OSError(str(exc)) from None
                 time.sleep(0.1)
+
+    def serving_port(self) -> int | None:
+        """The port of the replay being served now, or None."""
+        with self._lock:
+            return None if self._server is None else self._server.port
 
     def stop(self) -> None:
         with self._lock:

@@ -120,17 +120,23 @@ class Track:
 
 class SceneServer:
     """A viser server drawing the tracks; thread-safe ``draw``. It listens
-    on a loopback address only (``host`` anything else is refused): the
-    backend's proxy is the way in."""
+    on a loopback address only (``host`` anything else is refused) and
+    answers only requests carrying :attr:`secret`: the backend's proxy is the
+    way in."""
 
     def __init__(self, host: str, port: int) -> None:
         import ipaddress
 
         import viser  # imported here: only a backend with a scene pays for it
 
+        from .scenegate import gated_viser, new_secret
+
         if not ipaddress.ip_address(host).is_loopback:
             raise ValueError(f"the 3D scene listens on loopback only, not {host!r}")
-        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        #: What the proxy sends; without it viser's port answers 403 (scenegate.py).
+        self.secret = new_secret()
+        with gated_viser(self.secret):
+            self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self._user_controls()
         self.host = host
         self.port = self.server.get_port()

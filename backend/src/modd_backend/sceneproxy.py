@@ -5,10 +5,9 @@ Contract (docs/security.md, "3D scene"):
 
 - every request needs a session (cookie or bearer header) of a user holding
   a role (401 / 403 otherwise), like live values on the stream WebSocket;
-- the WebSocket upgrade is refused unless its ``Origin`` is this service's own
-  (or a configured CORS origin), and a cookie counts only with an Origin;
-  the session is re-checked every ``ws_recheck_s`` and the socket closed when
-  it ends or the roles change;
+- the WebSocket upgrade follows the rules of wsrelay.py (Origin, session,
+  role, closed when the session ends or the roles change);
+- viser's own port answers only the proxy (a per-server secret: scenegate.py);
 - viser's page is one HTML file whose inline bootstrap unpacks and inserts an
   inline module script. The page gets its own Content-Security-Policy that
   allows exactly those two scripts by their SHA-256 (computed here from the
@@ -27,21 +26,18 @@ import contextlib
 import hashlib
 import html
 import re
+from collections.abc import Awaitable
 from dataclasses import dataclass
-from typing import Any
 
 import zstandard
-from starlette.concurrency import run_in_threadpool
-from starlette.websockets import WebSocket, WebSocketDisconnect
+from starlette.websockets import WebSocket
 from websockets.asyncio.client import ClientConnection
 from websockets.asyncio.client import connect as ws_connect
-from websockets.exceptions import ConnectionClosed
 from websockets.typing import Subprotocol
 
-from .accounts import user_for_token
-from .deps import SESSION_COOKIE, AppState
-from .roles import parse_roles
-from .sessionwatch import watch_session
+from .deps import AppState
+from .scenegate import SECRET_HEADER
+from .wsrelay import admit, relay
 
 #: Largest upstream answer relayed (viser's page is ~0.8 MB).
 MAX_UPSTREAM_BYTES = 32 * 1024 * 1024
@@ -145,14 +141,15 @@ class Upstream:
     body: bytes
 
 
-async def fetch(port: int, path: str, timeout_s: float = 10.0) -> Upstream:
+async def fetch(port: int, path: str, secret: str, timeout_s: float = 10.0) -> Upstream:
     """GET ``path`` from the viser server on 127.0.0.1:``port`` (HTTP/1.1,
-    identity encoding, bounded size)."""
+    identity encoding, bounded size), with the secret it asks for (scenegate.py)."""
 
     async def run() -> Upstream:
         reader, writer = await asyncio.open_connection("127.0.0.1", port)
         try:
             writer.write(f"GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
+                         f"{SECRET_HEADER}: {secret}\r\n"
                          "Accept-Encoding: identity\r\nConnection: close\r\n\r\n".encode())
             await writer.drain()
             head = await reader.readuntil(b"\r\n\r\n")
@@ -197,86 +194,17 @@ class PagePolicies:
 
 # --- the WebSocket ---------------------------------------------------------
 
-def _session(state: AppState, token: str) -> tuple[int, str] | None:
-    with state.store.session() as db:
-        user = user_for_token(db, token)
-        return None if user is None else (user.id, user.roles)
-
-
-def socket_token(websocket: WebSocket) -> str | None:
-    """The session of a WebSocket upgrade: an ``Authorization: Bearer``
-    header, or the cookie when the browser named an Origin (checked before)."""
-    auth = websocket.headers.get("authorization", "")
-    if auth.lower().startswith("bearer ") and len(auth) < 300:
-        return auth[7:].strip()
-    if websocket.headers.get("origin") is not None:
-        return websocket.cookies.get(SESSION_COOKIE)
-    return None
-
-
-async def relay_socket(websocket: WebSocket, state: AppState, port: int) -> None:
-    """Authenticate the upgrade, then relay frames both ways with the viser
-    server until either side closes or the session ends."""
-    from .routers.live import origin_allowed
-
-    if not origin_allowed(websocket, state.settings):
-        await websocket.close(code=4403, reason="Origin not allowed")
-        return
-    token = socket_token(websocket)
-    seen = None if token is None else await run_in_threadpool(_session, state, token)
-    if token is None or seen is None:
-        await websocket.close(code=4401, reason="the 3D scene needs a session")
-        return
-    if not parse_roles(seen[1]):
-        await websocket.close(code=4403, reason="the 3D scene needs a role")
+async def relay_socket(websocket: WebSocket, state: AppState, port: int, secret: str) -> None:
+    """Authenticate the upgrade (wsrelay.admit), then relay frames both ways
+    with the viser server until either side closes or the session ends."""
+    admitted = await admit(websocket, state, "the 3D scene")
+    if admitted is None:
         return
     offered = [Subprotocol(p) for p in websocket.scope.get("subprotocols", [])][:4]
-    try:
-        upstream = await ws_connect(f"ws://127.0.0.1:{port}", subprotocols=offered or None,
-                                    compression=None, max_size=64 * 1024 * 1024,
-                                    open_timeout=5)
-    except (OSError, TimeoutError, ConnectionClosed) as exc:
-        await websocket.close(code=1011, reason=f"the 3D scene is not running: {exc}"[:120])
-        return
-    await websocket.accept(subprotocol=upstream.subprotocol)
-    tasks = {asyncio.create_task(_down(upstream, websocket)),
-             asyncio.create_task(_up(websocket, upstream)),
-             asyncio.create_task(watch_session(state, token, seen))}
-    try:
-        done, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
-        for task in pending:
-            task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await task
-        ended: Any = None
-        for task in done:
-            if not task.cancelled() and task.exception() is None:
-                ended = task.result() or ended
-        code, reason = ended if isinstance(ended, tuple) else (1000, "")
-        with contextlib.suppress(Exception):
-            await websocket.close(code=code, reason=reason)
-    finally:
-        await upstream.close()
 
+    def connect() -> Awaitable[ClientConnection]:
+        return ws_connect(f"ws://127.0.0.1:{port}", subprotocols=offered or None,
+                          compression=None, max_size=64 * 1024 * 1024,
+                          open_timeout=5, additional_headers={SECRET_HEADER: secret})
 
-async def _down(upstream: ClientConnection, websocket: WebSocket) -> None:
-    with contextlib.suppress(ConnectionClosed, RuntimeError, WebSocketDisconnect):
-        async for message in upstream:
-            if isinstance(message, bytes):
-                await websocket.send_bytes(message)
-            else:
-                await websocket.send_text(message)
-
-
-async def _up(websocket: WebSocket, upstream: ClientConnection) -> None:
-    with contextlib.suppress(ConnectionClosed, RuntimeError, WebSocketDisconnect):
-        while True:
-            message = await websocket.receive()
-            if message["type"] == "websocket.disconnect":
-                return
-            if message.get("bytes") is not None:
-                await upstream.send(message["bytes"])
-            elif message.get("text") is not None:
-                await upstream.send(message["text"])
-
-
+    await relay(websocket, state, admitted, connect, "the 3D scene")

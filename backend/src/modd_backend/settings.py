@@ -61,9 +61,11 @@ class Settings:
     preload_milp: bool = False
     #: Port of the viser 3D scene on ``host``; None: no scene, 0: any free port.
     scene_port: int | None = None
-    #: Port of the Foxglove WebSocket server on ``host`` (docs/ecosystem.md); 0: none.
+    #: Loopback port of the Foxglove live server (TLS; viewers come in through
+    #: ``/foxglove/live``: routers/foxglove.py, docs/ecosystem.md); 0: none.
     foxglove_port: int = 0
-    #: Port of the Foxglove replay of an archive the user picks (docs/ecosystem.md); 0: none.
+    #: Loopback port of the Foxglove replay of an archive the user picks (through
+    #: ``/foxglove/replay``); 0: none.
     foxglove_replay_port: int = 0
     cors_origins: tuple[str, ...] = field(default_factory=tuple)
     #: Origins (scheme://host[:port]) the map may load tiles from; none by default,
@@ -87,12 +89,19 @@ class Settings:
     #: Largest request body any route accepts (413 beyond), and JSON nesting depth (422).
     max_body_bytes: int = 4 * 1024 * 1024
     max_json_depth: int = 64
+    #: Threads of their own for login: never queued behind the worker threads
+    #: that run the other sync routes (saves, reads).
+    login_threads: int = 2
     #: Heavy routes (CSV export, series, deploy): at once per user and in all.
     heavy_per_user: int = 2
     heavy_total: int = 8
     #: Live subscriptions per WebSocket and per user (over all their sockets).
     ws_subscriptions_per_socket: int = 256
     ws_subscriptions_per_user: int = 1024
+    #: Open WebSockets (streams, 3D scene, Foxglove) per user and per client
+    #: address (all loopback addresses are one); beyond: closed with 4429.
+    ws_sockets_per_user: int = 64
+    ws_sockets_per_address: int = 512
     #: How often an open WebSocket re-checks its session and roles (seconds).
     ws_recheck_s: float = 0.4
 

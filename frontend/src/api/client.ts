@@ -11,7 +11,7 @@ import type { Role } from "../core/roles";
 import { Http, type HttpOptions } from "./http";
 import type {
   ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress,
-  DeployedDiff, Deployment, DynamicReply, DynamicRequest,
+  DeployedDiff, Deployment, DynamicReply, DynamicRequest, FoxgloveLinks,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, RunningDrone, User, ValidateResult, Version,
 } from "./types";
 
@@ -89,6 +89,8 @@ export function createApi(opts: HttpOptions) {
     /** Foxglove/Lichtblick layout for the live mission (scientist): docs/ecosystem.md. */
     foxgloveLayout: (projectId: number) =>
       http.request<Blob>(`/api/projects/${projectId}/foxglove-layout`, { as: "blob" }),
+    /** URLs to open in Foxglove/Lichtblick, each with a ticket good for one connection. */
+    foxgloveLinks: () => http.request<FoxgloveLinks>("/api/foxglove/links", { method: "POST" }),
 
     // --- live (scientist): dynamic subscriptions; values come over the stream WebSocket
     addDynamic: (drone: string, body: DynamicRequest) =>

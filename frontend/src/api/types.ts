@@ -136,7 +136,14 @@ export interface ArchiveFile {
   topics: Array<{ topic: string; messages: number }>;
 }
 
-/** A replay served to Foxglove/Lichtblick (backend routers/archives.py). */
+/** Viewer URLs with single-use tickets (backend routers/foxglove.py); null: not served. */
+export interface FoxgloveLinks {
+  live: string | null;
+  replay: string | null;
+  ticket_ttl_s: number;
+}
+
+/** A replay served to Foxglove/Lichtblick (backend routers/archives.py); `url` carries a single-use ticket. */
 export interface ArchiveReplay {
   url: string;
   drone: string;

@@ -44,6 +44,17 @@ describe("three-way merge", () => {
     expect(mergeModels(base, changed, gone, { [`/subscribers/${base.subscribers[0].name}`]: "mine" }).model.subscribers.length).toBe(base.subscribers.length);
   });
 
+  it("shows a conflict, dropping nothing, when two elements share a name on one side", () => {
+    // a work in progress: a copied subscriber not renamed yet, then edited
+    const first = base.subscribers[0];
+    const mine = edit(base, (m) => { m.subscribers.push({ ...structuredClone(first), periodS: "7.5" }); });
+    const theirs = edit(base, (m) => { m.subscribers[1].aggregation = "MAX"; });
+    const r = mergeModels(base, mine, theirs);
+    expect(r.conflicts.map((c) => c.pointer)).toEqual(["/subscribers"]);
+    const kept = mergeModels(base, mine, theirs, { "/subscribers": "mine" }).model.subscribers;
+    expect(kept.filter((s) => s.name === first.name).map((s) => s.periodS)).toEqual([first.periodS, "7.5"]);
+  });
+
   it("compares values semantically (key order)", () => {
     expect(sameValue({ a: 1, b: [1, { c: 2, d: 3 }] }, { b: [1, { d: 3, c: 2 }], a: 1 })).toBe(true);
     expect(sameValue({ a: 1 }, { a: 1, b: 2 })).toBe(false);

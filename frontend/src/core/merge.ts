@@ -3,7 +3,9 @@
  * started from, `mine` the local edit, `theirs` the revision saved meanwhile.
  *
  * Contract: the merge goes element by element (arrays of named elements are
- * matched by name, like core/diff.ts) and field by field inside an element.
+ * matched by name, like core/diff.ts) and field by field inside an element;
+ * a list where one side has two elements of one name is one conflict as a
+ * whole (nothing is dropped).
  * A field changed on one side only takes that side; changed alike on both,
  * either. Changed differently on both sides — or an element removed on one
  * side and changed on the other — is a `Conflict`: the merged model takes
@@ -41,6 +43,11 @@ const MISSING = undefined;
 
 function isNamedList(v: unknown): v is Named[] {
   return Array.isArray(v) && v.every((x) => x !== null && typeof x === "object" && typeof (x as Named).name === "string");
+}
+
+/** No two elements share a name (a model being edited may hold two for a while). */
+function uniqueNames(v: Named[]): boolean {
+  return new Set(v.map((x) => x.name)).size === v.length;
 }
 
 function isObject(v: unknown): v is Record<string, unknown> {
@@ -81,7 +88,10 @@ function merge(base: unknown, mine: unknown, theirs: unknown, pointer: string, c
     if (base === MISSING && isObject(mine) && isObject(theirs)) return mergeObjects({}, mine, theirs, pointer, ctx);
     return conflict(ctx, pointer, base, mine, theirs);
   }
-  if (isNamedList(base) && isNamedList(mine) && isNamedList(theirs)) return mergeNamed(base, mine, theirs, pointer, ctx);
+  if (isNamedList(base) && isNamedList(mine) && isNamedList(theirs)
+    && uniqueNames(base) && uniqueNames(mine) && uniqueNames(theirs)) return mergeNamed(base, mine, theirs, pointer, ctx);
+  // Two elements of one name on a side cannot be matched by name: the whole
+  // list is one conflict below (matching would silently drop one of them).
   if (isObject(base) && isObject(mine) && isObject(theirs)) return mergeObjects(base, mine, theirs, pointer, ctx);
   if (Array.isArray(base) && Array.isArray(mine) && Array.isArray(theirs) && mine.every((x) => typeof x === "string")
     && theirs.every((x) => typeof x === "string") && base.every((x) => typeof x === "string")) {

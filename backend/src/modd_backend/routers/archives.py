@@ -4,6 +4,7 @@ user may read; paths are confined to ``<archive_dir>/<drone>/``."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path as FsPath
 from typing import Annotated, Any
 
@@ -15,9 +16,11 @@ from ..archive_work import csv_text, in_worker, series
 from ..archives import archive_path, file_info, list_files
 from ..deps import AppState, Heavy, StateDep, UserDep, require
 from ..downloads import content_disposition
+from ..filesnapshot import file_snapshot
 from ..roles import Role
 from ..schemas import Responses
 from ..tables import User
+from .foxglove import ViewerLinks
 
 router = APIRouter(prefix="/api/drones/{drone}/archives", tags=["archives"])
 Drone = Annotated[str, Path(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64)]
@@ -62,7 +65,8 @@ class ReplayIn(BaseModel):
 
 class ReplayOut(BaseModel):
     """Where Foxglove or Lichtblick connects (Open connection > Foxglove
-    WebSocket) to seek, play and pause the range."""
+    WebSocket) to seek, play and pause the range: the backend's
+    ``/foxglove/replay`` with a single-use ticket (routers/foxglove.py)."""
 
     url: str
     drone: str
@@ -122,15 +126,16 @@ async def export_csv(
     422: {"description": "nothing in the range, or more than a replay holds"}},
     dependencies=[Heavy])
 def start_replay(drone: Drone, name: Name, body: ReplayIn, state: StateDep,
-                 user: Annotated[User, Depends(REPLAYERS)]) -> ReplayOut:
+                 user: Annotated[User, Depends(REPLAYERS)], link: ViewerLinks) -> ReplayOut:
     """Serves the range to Foxglove/Lichtblick with seek, play and pause
     (replacing the replay running now). A file still being written plays up
     to its last complete record."""
-    return serve_replay(state, state.settings.effective_archive_dir, drone, name, body, user)
+    return serve_replay(state, state.settings.effective_archive_dir, drone, name, body, user,
+                        link)
 
 
 def serve_replay(state: AppState, root: FsPath, drone: str, name: str, body: ReplayIn,
-                 user: User) -> ReplayOut:
+                 user: User, link: Callable[[str], str]) -> ReplayOut:
     """The replay of ``<root>/<drone>/<name>`` (an archive or a base-station record)."""
     if state.replay is None:
         raise HTTPException(409, "replay is off on this backend (--foxglove-replay-port 0)")
@@ -143,24 +148,25 @@ def serve_replay(state: AppState, root: FsPath, drone: str, name: str, body: Rep
     except OSError as exc:
         raise HTTPException(409, f"the replay server cannot start: {exc.strerror or exc}"
                             ) from None
-    return ReplayOut.model_validate(info.__dict__)
+    return ReplayOut.model_validate({**info.__dict__, "url": link("replay")})
 
 
 @router.get("/{name}", response_class=FileResponse,
             responses={**NOT_FOUND, 200: {"content": {"application/octet-stream": {}}}})
-def download(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> FileResponse:
+def download(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> Response:
     path = archive_path(state.settings.effective_archive_dir, drone, name)
-    return FileResponse(path, media_type="application/octet-stream", filename=path.name)
+    return file_snapshot(path)  # a file still being written: what it held at the start
 
 
 replay_router = APIRouter(prefix="/api/replay", tags=["archives"])
 
 
 @replay_router.get("")
-def current_replay(state: StateDep, _user: UserDep) -> ReplayOut | None:
-    """The replay being served now, or null."""
+def current_replay(state: StateDep, _user: UserDep, link: ViewerLinks) -> ReplayOut | None:
+    """The replay being served now (with a fresh ticket), or null."""
     info = state.replay.info if state.replay is not None else None
-    return None if info is None else ReplayOut.model_validate(info.__dict__)
+    return None if info is None else ReplayOut.model_validate({**info.__dict__,
+                                                               "url": link("replay")})
 
 
 @replay_router.delete("", status_code=204)

@@ -1,21 +1,34 @@
 """Sessions: log in (a bearer token for API clients, or an HttpOnly cookie
 for the workbench), log out, who am I, change my password.
 
-Failed logins are throttled per account and per client address (429 with
-``Retry-After``); an unknown user name costs the same time as a wrong password."""
+Login attempts are throttled per account and per client address (429 with
+``Retry-After``), counted before the password check so that concurrent guesses
+cannot outrun the count (throttle.py); an unknown user name costs the same
+time as a wrong password."""
 
 from __future__ import annotations
 
 from typing import Literal
 
+from anyio import to_thread
 from fastapi import APIRouter, Request, Response
 from pydantic import BaseModel, Field
 
 from .. import accounts
-from ..deps import SESSION_COOKIE, CredsDep, DbDep, StateDep, TokenDep, UserDep, roles_of
+from ..deps import (
+    SESSION_COOKIE,
+    AppState,
+    CredsDep,
+    DbDep,
+    StateDep,
+    TokenDep,
+    UserDep,
+    roles_of,
+)
 from ..errors import ApiError, retry_later
 from ..security import csrf_for, hash_password, verify_password
 from ..tables import User
+from ..throttle import address_key
 
 router = APIRouter(prefix="/api/auth", tags=["auth"])
 
@@ -62,28 +75,39 @@ def client_address(request: Request) -> str:
 
 @router.post("/login", responses={401: {"description": "wrong user name or password"},
                                   429: {"description": "too many failed logins; Retry-After"}})
-def login(body: LoginIn, db: DbDep, state: StateDep, request: Request,
-          response: Response) -> LoginOut:
+async def login(body: LoginIn, state: StateDep, request: Request,
+                response: Response) -> LoginOut:
+    """Throttled on the event loop; the password is checked in the login's
+    own threads (``Settings.login_threads``), never queued behind saves."""
     account = body.username.lower()
-    address = client_address(request)
-    wait = max(state.login_accounts.retry_after(account),
-               state.login_addresses.retry_after(address))
+    address = address_key(client_address(request))
+    # counted before the password check, atomically (throttle.py)
+    wait = state.login_addresses.take(address)
+    if wait == 0:
+        wait = state.login_accounts.take(account)
+        if wait > 0:
+            state.login_addresses.give_back(address)
     if wait > 0:
         raise retry_later(429, "too many failed logins; try again later", wait)
-    found = accounts.login(db, body.username, body.password, state.settings.token_ttl_s)
+    found = await to_thread.run_sync(_check_login, state, body, limiter=state.login_threads)
     if found is None:
-        state.login_accounts.fail(account)
-        state.login_addresses.fail(address)
         raise ApiError(401, "wrong user name or password")
     state.login_accounts.clear(account)
+    state.login_addresses.give_back(address)
     token, user = found
     if body.session == "cookie":
         response.set_cookie(
             SESSION_COOKIE, token, max_age=state.settings.token_ttl_s, path="/",
             httponly=True, samesite="strict", secure=request.url.scheme == "https",
         )
-        return LoginOut(token=None, csrf=csrf_for(token), user=user_out(user))
-    return LoginOut(token=token, user=user_out(user))
+        return LoginOut(token=None, csrf=csrf_for(token), user=user)
+    return LoginOut(token=token, user=user)
+
+
+def _check_login(state: AppState, body: LoginIn) -> tuple[str, UserOut] | None:
+    with state.store.session() as db:
+        found = accounts.login(db, body.username, body.password, state.settings.token_ttl_s)
+        return None if found is None else (found[0], user_out(found[1]))
 
 
 @router.post("/logout", status_code=204)

@@ -43,6 +43,7 @@ from ..project_events import ProjectWatches
 from ..roles import Role
 from ..sessionwatch import watch_session
 from ..settings import Settings
+from ..socketcaps import CAP_CLOSE, SocketFull
 from ..tables import User
 
 router = APIRouter(prefix="/api/drones", tags=["streams"])
@@ -162,6 +163,18 @@ async def stream(websocket: WebSocket, drone: str) -> None:
             return
     user, roles = session
     assert token is not None
+    address = websocket.client.host if websocket.client is not None else "unknown"
+    try:
+        with state.socket_caps.slot(user.id, address):
+            await _serve_stream(websocket, state, drone, token, user, roles)
+    except SocketFull as exc:
+        with contextlib.suppress(Exception):
+            await websocket.close(code=CAP_CLOSE, reason=str(exc)[:120])
+
+
+async def _serve_stream(websocket: WebSocket, state: AppState, drone: str, token: str,
+                        user: User, roles: str) -> None:
+    assert state.hub is not None
     settings = state.settings
     relay = LiveRelay(state.hub, drone, settings.stream_queue_size, user_id=user.id,
                         per_socket=settings.ws_subscriptions_per_socket,

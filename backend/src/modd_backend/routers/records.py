@@ -8,10 +8,11 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import APIRouter, Depends
-from fastapi.responses import FileResponse
+from fastapi.responses import FileResponse, Response
 
 from ..archives import archive_path, file_info, list_files
 from ..deps import Heavy, StateDep, UserDep
+from ..filesnapshot import file_snapshot
 from ..tables import User
 from .archives import (
     BUSY,
@@ -24,6 +25,7 @@ from .archives import (
     ReplayOut,
     serve_replay,
 )
+from .foxglove import ViewerLinks
 
 router = APIRouter(prefix="/api/drones/{drone}/records", tags=["archives"])
 
@@ -36,9 +38,9 @@ def list_records(drone: Drone, state: StateDep, _user: UserDep) -> list[ArchiveO
 
 @router.get("/{name}", response_class=FileResponse,
             responses={**NOT_FOUND, 200: {"content": {"application/octet-stream": {}}}})
-def download_record(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> FileResponse:
+def download_record(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> Response:
     path = archive_path(state.settings.effective_record_dir, drone, name)
-    return FileResponse(path, media_type="application/octet-stream", filename=path.name)
+    return file_snapshot(path)  # a file still being written: what it held at the start
 
 
 @router.post("/{name}/replay", responses={
@@ -46,8 +48,9 @@ def download_record(drone: Drone, name: Name, state: StateDep, _user: UserDep) -
     422: {"description": "nothing in the range, or more than a replay holds"}},
     dependencies=[Heavy])
 def replay_record(drone: Drone, name: Name, body: ReplayIn, state: StateDep,
-                  user: Annotated[User, Depends(REPLAYERS)]) -> ReplayOut:
+                  user: Annotated[User, Depends(REPLAYERS)], link: ViewerLinks) -> ReplayOut:
     """The base-station record of a mission (what was delivered, live and
     backfilled) in Foxglove/Lichtblick: seek, play, pause; the same replay
     server as the drone's archives."""
-    return serve_replay(state, state.settings.effective_record_dir, drone, name, body, user)
+    return serve_replay(state, state.settings.effective_record_dir, drone, name, body, user,
+                        link)

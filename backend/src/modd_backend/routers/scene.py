@@ -87,7 +87,7 @@ async def scene_page(path: str, request: Request, state: StateDep,
     if ".." in path.split("/") or "\\" in path or len(path) > 256:
         raise ApiError(404, "no such file in the 3D scene")
     try:
-        got = await fetch(scene.server.port, "/" + path)
+        got = await fetch(scene.server.port, "/" + path, scene.server.secret)
     except (OSError, ValueError, TimeoutError) as exc:
         raise ApiError(502, f"the 3D scene server did not answer: {exc}") from exc
     if got.status != 200:
@@ -108,4 +108,4 @@ async def scene_socket(websocket: WebSocket) -> None:
     if state.scene is None:
         await websocket.close(code=4404, reason="this backend runs no 3D scene")
         return
-    await relay_socket(websocket, state, state.scene.server.port)
+    await relay_socket(websocket, state, state.scene.server.port, state.scene.server.secret)

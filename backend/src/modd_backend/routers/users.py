@@ -8,6 +8,7 @@ from fastapi import APIRouter, Depends
 from pydantic import BaseModel, Field
 from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm.exc import ObjectDeletedError, StaleDataError
 
 from ..accounts import admins_left, create_user, revoke_sessions
 from ..deps import DbDep, UserDep, require
@@ -61,19 +62,24 @@ def add_user(body: UserIn, db: DbDep) -> UserOut:
                                          409: {"description": "the last admin"}})
 def change_user(user_id: Id, body: UserPatch, db: DbDep) -> UserOut:
     """A new password ends every session of the user; the last admin keeps
-    the role admin (409)."""
+    the role admin (409). A user deleted meanwhile (a racing DELETE): 404."""
     user = _user(db, user_id)
-    if body.roles is not None:
-        user.roles = format_roles({r.value for r in body.roles})
-        db.flush()
-        if admins_left(db) == 0:
-            db.rollback()
-            raise ApiError(409, "the last admin cannot lose the role admin")
-    if body.password is not None:
-        user.password_hash = hash_password(body.password)
-        revoke_sessions(db, user.id)
-    db.commit()
-    return user_out(user)
+    try:
+        if body.roles is not None:
+            user.roles = format_roles({r.value for r in body.roles})
+            db.flush()
+            if admins_left(db) == 0:
+                db.rollback()
+                raise ApiError(409, "the last admin cannot lose the role admin")
+        if body.password is not None:
+            user.password_hash = hash_password(body.password)
+            revoke_sessions(db, user.id)
+        out = user_out(user)
+        db.commit()
+    except (StaleDataError, ObjectDeletedError):  # the row went while we changed it
+        db.rollback()
+        raise ApiError(404, f"no user {user_id}") from None
+    return out
 
 
 @router.delete("/{user_id}", status_code=204, responses={404: {"description": "no such user"}})

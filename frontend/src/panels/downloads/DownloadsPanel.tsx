@@ -16,6 +16,7 @@ export default function DownloadsPanel() {
   const project = useEditor((s) => s.project);
   const revision = useEditor((s) => s.savedRevision);
   const [status, setStatus] = useState<Record<string, string>>({});
+  const [live, setLive] = useState<string | null>(null);
   if (!project) return <div className="panel-body">No project.</div>;
 
   const get = async (target: string, name: string, fetcher: () => Promise<Blob | string>) => {
@@ -48,6 +49,15 @@ export default function DownloadsPanel() {
           </button>
           <span className="muted"> for the Scientist: open it in Foxglove or Lichtblick against the base station's Foxglove server</span>
           {status.foxglove && <span role="status"> — {status.foxglove}</span>}
+        </li>
+        <li>
+          <button onClick={() => void api.foxgloveLinks().then(
+            (l) => { setLive(l.live ?? "this backend runs no Foxglove server"); },
+            (e: Error) => { setLive(e.message); })}>
+            Foxglove link
+          </button>
+          <span className="muted"> the live mission in Foxglove or Lichtblick (Open connection → Foxglove WebSocket); opens one connection, within 5 minutes</span>
+          {live && <code role="status" aria-label="Foxglove live link"> {live}</code>}
         </li>
         <li>
           <button onClick={() => void get("modd", `${project.name}-r${revision}.modd`, () => api.exportModel(project.id, "modd"))}>Download the model (.modd)</button>
