@@ -44,6 +44,7 @@ class Drone(TypedDict):
     name: Name
     description: NotRequired[Text]
     sensors: list[Sensor]
+    position: NotRequired[PlatformPosition]
 
 
 class Sensor(TypedDict):
@@ -63,6 +64,19 @@ class MeasuredVariable(TypedDict):
     type: NotRequired[ValueType]
     description: NotRequired[Text]
     source: NotRequired[MavlinkField]
+    standardName: NotRequired[str]
+    longName: NotRequired[str]
+    validMin: NotRequired[float]
+    validMax: NotRequired[float]
+
+
+class PlatformPosition(TypedDict):
+    """Which topics give the platform's position, for datasets (modd dataset interpolates it to every sample). When absent, the MAVLink autopilot's GLOBAL_POSITION_INT lat, lon and alt are used if the model maps them."""
+
+    latitude: TopicName
+    longitude: TopicName
+    altitude: NotRequired[TopicName]
+    maxGapS: NotRequired[Decimal]
 
 
 class MavlinkField(TypedDict):
@@ -149,4 +163,4 @@ class Position(TypedDict):
     y: float
 
 
-__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "MavlinkField", "PubBroker", "Ingress", "SubBroker", "Link", "Publisher", "Subscriber", "Layout", "Position"]
+__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "PlatformPosition", "MavlinkField", "PubBroker", "Ingress", "SubBroker", "Link", "Publisher", "Subscriber", "Layout", "Position"]
