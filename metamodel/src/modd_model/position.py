@@ -9,8 +9,9 @@ sensor maps them. ``modd dataset`` interpolates these to every sample.
 ...      "field": "lat"}},
 ...     {"name": "lon", "unit": "degree_east", "source": {"message": "GLOBAL_POSITION_INT",
 ...      "field": "lon"}}]}]}}
->>> platform_position(doc)
-PlatformPosition(latitude='d.ap.lat', longitude='d.ap.lon', altitude=None, max_gap_s=10.0, declared=False)
+>>> p = platform_position(doc)
+>>> p.latitude, p.longitude, p.altitude, p.declared
+('d.ap.lat', 'd.ap.lon', None, False)
 """
 
 from __future__ import annotations

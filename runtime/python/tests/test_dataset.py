@@ -37,7 +37,10 @@ Drone boat "Test boat" {
             wet(NONE, bool);
         }
     }
-    Position { latitude = "boat.gps.lat"; longitude = "boat.gps.lon"; altitude = "boat.gps.alt"; maxGap = 3; }
+    Position {
+        latitude = "boat.gps.lat"; longitude = "boat.gps.lon"; altitude = "boat.gps.alt";
+        maxGap = 3;
+    }
 }
 PubBroker("127.0.0.1":7171, "/tmp/l"); SubBroker("127.0.0.1":7272, "/tmp/c");
 Publishers {
@@ -83,7 +86,7 @@ def write_archive(path: Path, messages: Messages, chunk_size: int = 4096) -> Non
                                         c["schema_data"].encode())
                 ids[topic] = w.register_channel(topic, c["message_encoding"], sid, c["metadata"])
             w.add_message(ids[topic], log_time=t, data=_data(value), publish_time=t)
-        w.finish()
+        w.finish()  # type: ignore[no-untyped-call]
 
 
 def lat_at(t: float) -> float:

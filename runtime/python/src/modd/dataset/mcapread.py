@@ -26,8 +26,9 @@ from pathlib import Path
 from typing import BinaryIO
 
 import numpy as np
+from modd_contracts.archive_record import channel_type
 
-from .record import RecordError, channel_type, decode_values
+from .record import RecordError, decode_values
 
 MAGIC = b"\x89MCAP0\r\n"
 OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK, OP_DATA_END = (
