@@ -39,6 +39,7 @@ COPY backend/pyproject.toml backend/pyproject.toml
 RUN uv sync --frozen --no-dev --no-install-workspace --package modd-backend
 COPY metamodel metamodel
 COPY generators generators
+COPY runtime/python runtime/python
 COPY backend backend
 RUN uv sync --frozen --no-dev --package modd-backend
 COPY --from=frontend /src/frontend/dist frontend/dist
