@@ -5,6 +5,7 @@ user may read; paths are confined to ``<archive_dir>/<drone>/``."""
 from __future__ import annotations
 
 import json
+import os
 import tempfile
 from pathlib import Path as FsPath
 from typing import Annotated, Any, Literal
@@ -162,9 +163,9 @@ async def export_dataset(drone: Drone, body: ExportIn, state: StateDep,
     if not paths:
         raise HTTPException(404, f"no archives for drone {drone!r}")
     media, suffix = EXPORT_TYPES[body.format]
-    tmp = tempfile.NamedTemporaryFile(prefix="modd-export-", suffix=suffix, delete=False)
-    tmp.close()
-    out = FsPath(tmp.name)
+    fd, tmp = tempfile.mkstemp(prefix="modd-export-", suffix=suffix)
+    os.close(fd)
+    out = FsPath(tmp)
     try:
         notes = await in_worker(dataset_file, paths, body.model, body.format, out,
                                 body.start_ns, body.end_ns, body.topics, body.resample_s,
