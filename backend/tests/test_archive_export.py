@@ -39,8 +39,12 @@ def client(tmp_path: Path) -> Iterator[tuple[TestClient, Headers, Path]]:
     root = tmp_path / "archives"
     (root / "usv").mkdir(parents=True)
     write_archive(root / "usv" / "run-0000.mcap", 500)
-    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
-                        initial_admin_password=ADMIN_PASSWORD, archive_dir=root)
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        initial_admin_password=ADMIN_PASSWORD,
+        archive_dir=root,
+    )
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         yield c, login(c, "admin", ADMIN_PASSWORD), root
 
@@ -48,8 +52,9 @@ def client(tmp_path: Path) -> Iterator[tuple[TestClient, Headers, Path]]:
 URL = "/api/drones/usv/archives/export"
 
 
-def test_export_parquet_is_every_sample(client: tuple[TestClient, Headers, Path],
-                                        tmp_path: Path) -> None:
+def test_export_parquet_is_every_sample(
+    client: tuple[TestClient, Headers, Path], tmp_path: Path
+) -> None:
     c, h, _ = client
     r = c.post(URL, json={"model": _model(), "format": "parquet"}, headers=h)
     assert r.status_code == 200, r.text
@@ -64,13 +69,17 @@ def test_export_parquet_is_every_sample(client: tuple[TestClient, Headers, Path]
     assert set(x["unit"]) == {"m s-2"}
 
 
-def test_export_netcdf_of_a_range(client: tuple[TestClient, Headers, Path],
-                                  tmp_path: Path) -> None:
+def test_export_netcdf_of_a_range(client: tuple[TestClient, Headers, Path], tmp_path: Path) -> None:
     import xarray as xr
 
     c, h, _ = client
-    body = {"model": _model(), "format": "netcdf", "start_ns": T0 + 100 * STEP,
-            "end_ns": T0 + 200 * STEP, "topics": ["accel_z"]}
+    body = {
+        "model": _model(),
+        "format": "netcdf",
+        "start_ns": T0 + 100 * STEP,
+        "end_ns": T0 + 200 * STEP,
+        "topics": ["accel_z"],
+    }
     r = c.post(URL, json=body, headers=h)
     assert r.status_code == 200, r.text
     (tmp_path / "d.nc").write_bytes(r.content)
@@ -79,11 +88,11 @@ def test_export_netcdf_of_a_range(client: tuple[TestClient, Headers, Path],
         assert "accelerometer_accel_x" not in ds
 
 
-def test_bad_requests_get_a_clear_4xx(client: tuple[TestClient, Headers, Path],
-                                      monkeypatch: pytest.MonkeyPatch) -> None:
+def test_bad_requests_get_a_clear_4xx(
+    client: tuple[TestClient, Headers, Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
     c, h, root = client
-    empty = c.post(URL, json={"model": _model(), "format": "csv", "start_ns": T0 * 2},
-                   headers=h)
+    empty = c.post(URL, json={"model": _model(), "format": "csv", "start_ns": T0 * 2}, headers=h)
     assert empty.status_code == 422 and "nothing to export" in empty.json()["detail"]
     bad = _model()
     bad["drone"]["sensors"][0]["variables"][0]["unit"] = "bananas"

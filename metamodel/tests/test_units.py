@@ -35,14 +35,24 @@ POSITION = 'Position { latitude = "usv.gps.lat"; longitude = "usv.gps.lon"; maxG
 
 
 def _load(unit: str = "degC", attrs: str = "", position: str = POSITION) -> Any:
-    return load_text(BASE.replace("UNIT", unit).replace("ATTRS", attrs)
-                     .replace("POSITION", position), "m.modd")
+    return load_text(
+        BASE.replace("UNIT", unit).replace("ATTRS", attrs).replace("POSITION", position), "m.modd"
+    )
 
 
 def test_every_paper_unit_is_its_udunits_equivalent() -> None:
-    expected = {"METER": "m", "METER_PER_SECOND": "m/s", "METER_PER_SECOND_SQUARED": "m/s2",
-                "DEGREE_CELSIUS": "Celsius", "RADIAN": "radian", "RADIAN_PER_SECOND": "radian/s",
-                "BAR": "100 kPa", "LITER": "dm3", "GRAM": "kg/1000", "NONE": "1"}
+    expected = {
+        "METER": "m",
+        "METER_PER_SECOND": "m/s",
+        "METER_PER_SECOND_SQUARED": "m/s2",
+        "DEGREE_CELSIUS": "Celsius",
+        "RADIAN": "radian",
+        "RADIAN_PER_SECOND": "radian/s",
+        "BAR": "100 kPa",
+        "LITER": "dm3",
+        "GRAM": "kg/1000",
+        "NONE": "1",
+    }
     assert set(PAPER_UNITS) == set(KNOWN_UNITS) == set(expected)
     for name, same in expected.items():
         ours = cf_units.Unit(udunits(name))
@@ -50,8 +60,17 @@ def test_every_paper_unit_is_its_udunits_equivalent() -> None:
         assert _load(name).ok, name
 
 
-@pytest.mark.parametrize("typed,same", [("m/s²", "m s-2"), ("°C", "degC"), ("µS/cm", "uS cm-1"),
-                                        ("kg·m⁻³", "kg m-3"), ("PSU", "1"), ("deg", "degree")])
+@pytest.mark.parametrize(
+    "typed,same",
+    [
+        ("m/s²", "m s-2"),
+        ("°C", "degC"),
+        ("µS/cm", "uS cm-1"),
+        ("kg·m⁻³", "kg m-3"),
+        ("PSU", "1"),
+        ("deg", "degree"),
+    ],
+)
 def test_typed_symbols_are_read_as_udunits(typed: str, same: str) -> None:
     text = udunits(typed)
     assert text.isascii()
@@ -71,16 +90,25 @@ def test_a_unit_udunits_does_not_know_is_a_located_error() -> None:
 def test_standard_names_come_from_the_shipped_cf_table() -> None:
     assert table_version().startswith("CF standard name table version 93")
     assert canonical_units("sea_water_temperature") == "K"
-    ok = _load(attrs='{ standardName = sea_water_temperature; longName = "T"; validMin = -2; '
-                     'validMax = 40; }')
+    ok = _load(
+        attrs='{ standardName = sea_water_temperature; longName = "T"; validMin = -2; '
+        "validMax = 40; }"
+    )
     assert ok.ok, [str(d) for d in ok.diagnostics]
     var = ok.model["drone"]["sensors"][0]["variables"][0]
-    assert var == {"name": "temp", "unit": "degC", "standardName": "sea_water_temperature",
-                   "longName": "T", "validMin": -2.0, "validMax": 40.0}
+    assert var == {
+        "name": "temp",
+        "unit": "degC",
+        "standardName": "sea_water_temperature",
+        "longName": "T",
+        "validMin": -2.0,
+        "validMax": 40.0,
+    }
     wrong_unit = _load("METER", "{ standardName = sea_water_temperature; }")
     assert [e.message for e in wrong_unit.errors] == [
         "unit 'METER' does not convert to 'K', the unit of the standard name "
-        "'sea_water_temperature'"]
+        "'sea_water_temperature'"
+    ]
     unknown = _load(attrs="{ standardName = water_warmth; }")
     assert unknown.errors[0].pointer == "/drone/sensors/0/variables/0/standardName"
     reversed_range = _load(attrs="{ validMin = 5; validMax = 1; }")
@@ -93,8 +121,11 @@ def test_attributes_and_position_round_trip_through_text_and_json() -> None:
     for fmt in ("modd", "json"):
         again = load_text(dumps(result.model, fmt), f"again.{fmt}", fmt)
         assert again.ok and again.model == result.model, fmt
-    assert result.model["drone"]["position"] == {"latitude": "usv.gps.lat",
-                                                 "longitude": "usv.gps.lon", "maxGapS": "4.0"}
+    assert result.model["drone"]["position"] == {
+        "latitude": "usv.gps.lat",
+        "longitude": "usv.gps.lon",
+        "maxGapS": "4.0",
+    }
 
 
 def test_the_collector_form_leaves_the_new_parts_out_and_says_so() -> None:
@@ -117,27 +148,36 @@ def test_the_position_is_checked_and_defaults_to_the_autopilot() -> None:
     assert messages["/drone/position/longitude"] == "unknown topic 'usv.gps.nope'"
     none = _load(position="")
     assert none.ok and none.model is not None and platform_position(none.model) is None
-    auto = load_text(BASE.replace("UNIT", "degC").replace("ATTRS", "").replace("POSITION", "")
-                     .replace("Sensor gps measures { lat(degree_north, float64); "
-                              "lon(degree_east, float64); }",
-                              "Sensor gps kind mavlink measures { lat(degree_north, float64) "
-                              "from GLOBAL_POSITION_INT.lat scale 1e-7; lon(degree_east, float64)"
-                              " from GLOBAL_POSITION_INT.lon scale 1e-7; }"), "auto.modd")
+    auto = load_text(
+        BASE.replace("UNIT", "degC")
+        .replace("ATTRS", "")
+        .replace("POSITION", "")
+        .replace(
+            "Sensor gps measures { lat(degree_north, float64); lon(degree_east, float64); }",
+            "Sensor gps kind mavlink measures { lat(degree_north, float64) "
+            "from GLOBAL_POSITION_INT.lat scale 1e-7; lon(degree_east, float64)"
+            " from GLOBAL_POSITION_INT.lon scale 1e-7; }",
+        ),
+        "auto.modd",
+    )
     assert auto.model is not None
     pos = platform_position(auto.model)
     assert pos is not None and (pos.latitude, pos.longitude, pos.declared) == (
-        "usv.gps.lat", "usv.gps.lon", False)
+        "usv.gps.lat",
+        "usv.gps.lon",
+        False,
+    )
 
 
 def test_validate_says_when_a_dataset_would_have_no_position(
-        tmp_path: Any, capsys: pytest.CaptureFixture[str]) -> None:
+    tmp_path: Any, capsys: pytest.CaptureFixture[str]
+) -> None:
     path = tmp_path / "m.modd"
     path.write_text(BASE.replace("UNIT", "degC").replace("ATTRS", "").replace("POSITION", ""))
     args = argparse.Namespace(files=[str(path)], encoding=None, quiet=False)
     assert run_validate(args) == 0
     err = capsys.readouterr().err
     assert "warning: no platform position: datasets (modd dataset) will have no latitude" in err
-    path.write_text(BASE.replace("UNIT", "degC").replace("ATTRS", "").replace("POSITION",
-                                                                               POSITION))
+    path.write_text(BASE.replace("UNIT", "degC").replace("ATTRS", "").replace("POSITION", POSITION))
     assert run_validate(args) == 0
     assert "no platform position" not in capsys.readouterr().err

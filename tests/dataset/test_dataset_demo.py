@@ -50,9 +50,21 @@ def mission(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, float
     text = (ROOT / "metamodel" / "examples" / "demo.modd").read_text()
     model.write_text(text.replace('"127.0.0.1":7171', f'"127.0.0.1":{free_port()}'))
     run = tmp / "run"
-    up = subprocess.Popen([str(BIN / "modd"), "up", str(model), "--simulate", "--workdir",
-                           str(run), "--zenoh-listen", f"tcp/127.0.0.1:{free_port()}"],
-                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    up = subprocess.Popen(
+        [
+            str(BIN / "modd"),
+            "up",
+            str(model),
+            "--simulate",
+            "--workdir",
+            str(run),
+            "--zenoh-listen",
+            f"tcp/127.0.0.1:{free_port()}",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         _wait(run / "logs" / "subbroker.log", "config 1 running", 60)
         deadline = time.monotonic() + 60
@@ -79,8 +91,10 @@ def _archived_fixes(folder: Path) -> int:
                 for rec in StreamReader(fh).records:
                     if type(rec).__name__ == "Channel":
                         channels[rec.id] = rec.topic  # type: ignore[attr-defined]
-                    elif type(rec).__name__ == "Message" and \
-                            channels.get(rec.channel_id) == "usv.autopilot.latitude":  # type: ignore[attr-defined]
+                    elif (
+                        type(rec).__name__ == "Message"
+                        and channels.get(rec.channel_id) == "usv.autopilot.latitude"
+                    ):  # type: ignore[attr-defined]
                         n += 1
         except Exception:  # noqa: BLE001 - a file being written ends in a torn record
             pass
@@ -97,39 +111,74 @@ def _official(folder: Path) -> dict[str, list[tuple[int, Any]]]:
 
 
 @pytest.fixture(scope="module")
-def exports(mission: tuple[Path, Path, float], tmp_path_factory: pytest.TempPathFactory
-            ) -> dict[str, Path]:
+def exports(
+    mission: tuple[Path, Path, float], tmp_path_factory: pytest.TempPathFactory
+) -> dict[str, Path]:
     archive, model, _ = mission
     out = tmp_path_factory.mktemp("exports")
     paths = {}
     for fmt, suffix in FORMATS.items():
         paths[fmt] = out / f"demo.{suffix}"
-        done = subprocess.run([str(BIN / "modd"), "dataset", str(archive), "--model", str(model),
-                               "--format", fmt, "-o", str(paths[fmt])],
-                              capture_output=True, text=True, timeout=120)
+        done = subprocess.run(
+            [
+                str(BIN / "modd"),
+                "dataset",
+                str(archive),
+                "--model",
+                str(model),
+                "--format",
+                fmt,
+                "-o",
+                str(paths[fmt]),
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert done.returncode == 0, done.stderr
         assert "Traceback" not in done.stderr
     return paths
 
 
-def test_netcdf_passes_the_ioos_compliance_checker(exports: dict[str, Path],
-                                                   tmp_path: Path) -> None:
+def test_netcdf_passes_the_ioos_compliance_checker(
+    exports: dict[str, Path], tmp_path: Path
+) -> None:
     report = tmp_path / "cc.json"
-    subprocess.run([str(BIN / "compliance-checker"), "--test", "cf:1.11", "--test", "acdd:1.3",
-                    "-f", "json", "-o", str(report), str(exports["netcdf"])],
-                   capture_output=True, timeout=120)
+    subprocess.run(
+        [
+            str(BIN / "compliance-checker"),
+            "--test",
+            "cf:1.11",
+            "--test",
+            "acdd:1.3",
+            "-f",
+            "json",
+            "-o",
+            str(report),
+            str(exports["netcdf"]),
+        ],
+        capture_output=True,
+        timeout=120,
+    )
     results = json.loads(report.read_text())
-    failed = {suite: [(r["name"], r["msgs"]) for r in res["high_priorities"]
-                      if r["value"][0] != r["value"][1]] for suite, res in results.items()}
+    failed = {
+        suite: [
+            (r["name"], r["msgs"]) for r in res["high_priorities"] if r["value"][0] != r["value"][1]
+        ]
+        for suite, res in results.items()
+    }
     assert failed["cf:1.11"] == []
     # ACDD rates standard_name "highly recommended": the CF table has none for a
     # platform's linear acceleration, so the demo's three accelerometer axes go without.
-    assert all(msgs == ["standard_name"] and "accelerometer_accel" in name
-               for name, msgs in failed["acdd:1.3"]), failed["acdd:1.3"]
+    assert all(
+        msgs == ["standard_name"] and "accelerometer_accel" in name
+        for name, msgs in failed["acdd:1.3"]
+    ), failed["acdd:1.3"]
 
 
-def test_every_value_is_the_archives(mission: tuple[Path, Path, float],
-                                     exports: dict[str, Path]) -> None:
+def test_every_value_is_the_archives(
+    mission: tuple[Path, Path, float], exports: dict[str, Path]
+) -> None:
     import xarray as xr
 
     truth = _official(mission[0])
@@ -146,8 +195,9 @@ def test_every_value_is_the_archives(mission: tuple[Path, Path, float],
             assert np.abs(times - [t for t, _ in samples]).max() < 1000, topic
 
 
-def test_every_position_is_the_simulators(mission: tuple[Path, Path, float],
-                                          exports: dict[str, Path]) -> None:
+def test_every_position_is_the_simulators(
+    mission: tuple[Path, Path, float], exports: dict[str, Path]
+) -> None:
     _, _, start = mission
     table = pq.read_table(exports["parquet"]).to_pandas()
     placed = table.dropna(subset=["lat", "lon"])
@@ -170,5 +220,7 @@ def test_tracks_open_as_geojson_and_gpx(exports: dict[str, Path]) -> None:
     assert "ctd_water_temperature" in features[1]["properties"]
     pts = ET.parse(exports["gpx"]).getroot().findall(".//{http://www.topografix.com/GPX/1/1}trkpt")
     assert len(pts) == len(features) - 1
-    assert exports["csv"].read_text().splitlines()[0] == \
-        '"time","topic","value","unit","lat","lon","alt"'
+    assert (
+        exports["csv"].read_text().splitlines()[0]
+        == '"time","topic","value","unit","lat","lon","alt"'
+    )

@@ -34,8 +34,8 @@ NON_FINITE = {"nan": float("nan"), "inf": float("inf"), "-inf": float("-inf")}
 def channel_type(schema_name: str, metadata: dict[str, str]) -> str | None:
     """The value type of a channel (schema ``modd.<type>``, or its metadata);
     None for a channel that is not a MoDD topic."""
-    if schema_name.startswith(SCHEMA_PREFIX) and schema_name[len(SCHEMA_PREFIX):] in VALUE_TYPES:
-        return schema_name[len(SCHEMA_PREFIX):]
+    if schema_name.startswith(SCHEMA_PREFIX) and schema_name[len(SCHEMA_PREFIX) :] in VALUE_TYPES:
+        return schema_name[len(SCHEMA_PREFIX) :]
     t = metadata.get(TYPE_KEY)
     return t if t in VALUE_TYPES else None
 
@@ -43,8 +43,8 @@ def channel_type(schema_name: str, metadata: dict[str, str]) -> str | None:
 def value_of(data: bytes) -> Any:
     """One record's value whatever its channel's type (None when it is not a record)."""
     text = data.decode("utf-8", "replace").strip()
-    if text.startswith(PREFIX.decode()) and text[len(PREFIX):-1].strip() in NON_FINITE:
-        return NON_FINITE[text[len(PREFIX):-1].strip()]
+    if text.startswith(PREFIX.decode()) and text[len(PREFIX) : -1].strip() in NON_FINITE:
+        return NON_FINITE[text[len(PREFIX) : -1].strip()]
     try:
         doc = json.loads(text)
     except ValueError:

@@ -429,6 +429,7 @@ def generate_archive_record_cpp() -> str:
         return json.dumps(text)
 
     compact = [lit(json.dumps(channels[t], separators=(",", ":"))) for t in CPP_VALUE_TYPES]
+    sv = "inline constexpr std::string_view"
     out = [
         f"// {HEADER}",
         "// The archive record (metamodel/src/modd_contracts/schemas/archive_record.schema.json):",
@@ -443,13 +444,13 @@ def generate_archive_record_cpp() -> str:
         "",
         f"inline constexpr int64_t kVersion = {int(schema['x-version'])};",
         "// The one field of a message: the sample.",
-        f"inline constexpr std::string_view kValue = {lit(next(iter(schema['properties'])))};",
+        f"{sv} kValue = {lit(next(iter(schema['properties'])))};",
         "// A channel's schema is named kSchemaPrefix + value type.",
-        f"inline constexpr std::string_view kSchemaPrefix = {lit(schema['x-schema-prefix'])};",
-        f"inline constexpr std::string_view kSchemaEncoding = {lit(schema['x-schema-encoding'])};",
-        f"inline constexpr std::string_view kMessageEncoding = {lit(schema['x-message-encoding'])};",
+        f"{sv} kSchemaPrefix = {lit(schema['x-schema-prefix'])};",
+        f"{sv} kSchemaEncoding = {lit(schema['x-schema-encoding'])};",
+        f"{sv} kMessageEncoding = {lit(schema['x-message-encoding'])};",
         "// The channel metadata key holding the value type.",
-        f"inline constexpr std::string_view kTypeMetadataKey = {lit(schema['x-type-metadata-key'])};",
+        f"{sv} kTypeMetadataKey = {lit(schema['x-type-metadata-key'])};",
         "// Schema data of a channel, by value type (link::ValueType's order).",
         "inline constexpr std::string_view kChannelSchemas[] = {",
         *[f"    {c}," for c in compact],

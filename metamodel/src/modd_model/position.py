@@ -43,9 +43,13 @@ def platform_position(model: dict[str, Any]) -> PlatformPosition | None:
     drone = model["drone"]
     declared = drone.get("position")
     if declared is not None:
-        return PlatformPosition(declared["latitude"], declared["longitude"],
-                                declared.get("altitude"),
-                                float(declared.get("maxGapS", DEFAULT_MAX_GAP_S)), True)
+        return PlatformPosition(
+            declared["latitude"],
+            declared["longitude"],
+            declared.get("altitude"),
+            float(declared.get("maxGapS", DEFAULT_MAX_GAP_S)),
+            True,
+        )
     found: dict[str, str] = {}
     for sensor in drone["sensors"]:
         if sensor.get("kind") != "mavlink":
@@ -57,5 +61,6 @@ def platform_position(model: dict[str, Any]) -> PlatformPosition | None:
                 found[role] = topic_name(drone["name"], sensor["name"], var["name"])
     if "latitude" not in found or "longitude" not in found:
         return None
-    return PlatformPosition(found["latitude"], found["longitude"], found.get("altitude"),
-                            DEFAULT_MAX_GAP_S, False)
+    return PlatformPosition(
+        found["latitude"], found["longitude"], found.get("altitude"), DEFAULT_MAX_GAP_S, False
+    )

@@ -46,15 +46,23 @@ def standard_names_known(doc: Doc) -> Iterator[Diagnostic]:
             continue
         canonical = canonical_units(name)
         if canonical is None:
-            yield Diagnostic(f"{name!r} is not a CF standard name (CF standard name table)",
-                             ptr + "/standardName")
+            yield Diagnostic(
+                f"{name!r} is not a CF standard name (CF standard name table)",
+                ptr + "/standardName",
+            )
             continue
         if (renamed := current_name(name)) is not None:
-            yield Diagnostic(f"{name!r} is an alias of the CF standard name {renamed!r}",
-                             ptr + "/standardName", "warning")
+            yield Diagnostic(
+                f"{name!r} is an alias of the CF standard name {renamed!r}",
+                ptr + "/standardName",
+                "warning",
+            )
         if unit_problem(v["unit"]) is None and not convertible(v["unit"], canonical):
-            yield Diagnostic(f"unit {v['unit']!r} does not convert to {canonical!r}, the unit "
-                             f"of the standard name {name!r}", ptr + "/unit")
+            yield Diagnostic(
+                f"unit {v['unit']!r} does not convert to {canonical!r}, the unit "
+                f"of the standard name {name!r}",
+                ptr + "/unit",
+            )
 
 
 def valid_range_ordered(doc: Doc) -> Iterator[Diagnostic]:
@@ -74,10 +82,14 @@ def no_position(doc: Doc) -> Diagnostic | None:
     export, like the paper's scenarios, validate clean)."""
     if platform_position(doc) is not None:
         return None
-    return Diagnostic("no platform position: datasets (modd dataset) will have no latitude or "
-                      "longitude; declare Position { latitude = \"...\"; longitude = \"...\"; } "
-                      "in the Drone block, or map the autopilot's GLOBAL_POSITION_INT lat and "
-                      "lon", "/drone", "warning")
+    return Diagnostic(
+        "no platform position: datasets (modd dataset) will have no latitude or "
+        'longitude; declare Position { latitude = "..."; longitude = "..."; } '
+        "in the Drone block, or map the autopilot's GLOBAL_POSITION_INT lat and "
+        "lon",
+        "/drone",
+        "warning",
+    )
 
 
 def position_resolves(doc: Doc) -> Iterator[Diagnostic]:
@@ -95,15 +107,23 @@ def position_resolves(doc: Doc) -> Iterator[Diagnostic]:
         if topic not in units:
             yield Diagnostic(f"unknown topic {topic!r}", ptr)
         elif not convertible(units[topic], want):
-            yield Diagnostic(f"the {role} topic {topic!r} is in {units[topic]!r}, which does "
-                             f"not convert to {want!r}", ptr)
+            yield Diagnostic(
+                f"the {role} topic {topic!r} is in {units[topic]!r}, which does "
+                f"not convert to {want!r}",
+                ptr,
+            )
         elif topic not in published:
-            yield Diagnostic(f"no publisher publishes {topic!r}: datasets will have no "
-                             f"{role}", ptr, "warning")
+            yield Diagnostic(
+                f"no publisher publishes {topic!r}: datasets will have no {role}", ptr, "warning"
+            )
     gap = declared.get("maxGapS")
     if isinstance(gap, str) and to_fraction(gap) <= 0:
         yield Diagnostic("maxGap must be greater than zero", "/drone/position/maxGapS")
 
 
 CHECKS: tuple[Callable[[Doc], Iterator[Diagnostic]], ...] = (
-    units_are_udunits, standard_names_known, valid_range_ordered, position_resolves)
+    units_are_udunits,
+    standard_names_known,
+    valid_range_ordered,
+    position_resolves,
+)

@@ -62,9 +62,11 @@ def convert(xml_path: Path) -> str:
     """The shipped table's text, from the CF table's XML."""
     root = ET.parse(xml_path).getroot()  # noqa: S314 - a file the maintainer chose
     version = root.findtext("version_number", "?")
-    lines = [f"# CF standard name table version {version}, "
-             f"{root.findtext('last_modified', '?')} (from {xml_path.name}): "
-             "name<TAB>canonical units, or alias<TAB>=name"]
+    lines = [
+        f"# CF standard name table version {version}, "
+        f"{root.findtext('last_modified', '?')} (from {xml_path.name}): "
+        "name<TAB>canonical units, or alias<TAB>=name"
+    ]
     for entry in root.iter("entry"):
         lines.append(f"{entry.get('id')}\t{(entry.findtext('canonical_units') or '').strip()}")
     for alias in root.iter("alias"):

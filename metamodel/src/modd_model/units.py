@@ -28,10 +28,26 @@ PAPER_UNITS: dict[str, str] = dict(definition("KnownUnit")["x-udunits"])
 #: salinity is dimensionless in CF (PSU is not a unit), ``deg`` is an angle.
 ALIASES = {"PSU": "1", "psu": "1", "deg": "degree", "degrees": "degree"}
 #: Typed symbols -> ASCII UDUNITS (superscripts, degree sign, micro, middle dot).
-_SYMBOLS = str.maketrans({
-    "⁰": "0", "¹": "1", "²": "2", "³": "3", "⁴": "4", "⁵": "5", "⁶": "6", "⁷": "7",
-    "⁸": "8", "⁹": "9", "⁻": "-", "µ": "u", "μ": "u", "·": ".", "⋅": ".", "℃": "degC",
-})
+_SYMBOLS = str.maketrans(
+    {
+        "⁰": "0",
+        "¹": "1",
+        "²": "2",
+        "³": "3",
+        "⁴": "4",
+        "⁵": "5",
+        "⁶": "6",
+        "⁷": "7",
+        "⁸": "8",
+        "⁹": "9",
+        "⁻": "-",
+        "µ": "u",
+        "μ": "u",
+        "·": ".",
+        "⋅": ".",
+        "℃": "degC",
+    }
+)
 EXAMPLES = "m s-2, degC, degree_north, 1"
 
 

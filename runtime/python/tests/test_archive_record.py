@@ -15,8 +15,11 @@ from modd_backend.archives import _value as backend_value
 from modd_contracts.archive_record import SCHEMA_PREFIX, channel_type, value_of
 from modd_contracts.schema import load, validate
 
-VECTORS = json.loads((Path(__file__).resolve().parents[3] / "contracts" / "vectors" /
-                      "archive_record.json").read_text())
+VECTORS = json.loads(
+    (
+        Path(__file__).resolve().parents[3] / "contracts" / "vectors" / "archive_record.json"
+    ).read_text()
+)
 
 
 def _same(got: Any, want: Any) -> bool:

@@ -49,8 +49,14 @@ Publishers {
 }
 Subscriptions { }
 """
-TYPES = {"boat.gps.lat": "float64", "boat.gps.lon": "float64", "boat.gps.alt": "float32",
-         "boat.ctd.temp": "float32", "boat.ctd.count": "int", "boat.ctd.wet": "bool"}
+TYPES = {
+    "boat.gps.lat": "float64",
+    "boat.gps.lon": "float64",
+    "boat.gps.alt": "float32",
+    "boat.ctd.temp": "float32",
+    "boat.ctd.count": "int",
+    "boat.ctd.wet": "bool",
+}
 Messages = list[tuple[str, int, Any]]
 
 
@@ -73,8 +79,9 @@ def _data(value: Any) -> bytes:
 
 def write_archive(path: Path, messages: Messages, chunk_size: int = 4096) -> None:
     """An archive by the official writer, channels as the contract says."""
-    channels = {c["type"]: c for c in json.loads((VECTORS / "archive_record.json").read_text())
-                ["channels"]}
+    channels = {
+        c["type"]: c for c in json.loads((VECTORS / "archive_record.json").read_text())["channels"]
+    }
     with path.open("wb") as f:
         w = Writer(f, chunk_size=chunk_size, compression=CompressionType.ZSTD)
         w.start(profile="", library="test")
@@ -82,8 +89,9 @@ def write_archive(path: Path, messages: Messages, chunk_size: int = 4096) -> Non
         for topic, t, value in messages:
             if topic not in ids:
                 c = channels[TYPES[topic]]
-                sid = w.register_schema(c["schema_name"], c["schema_encoding"],
-                                        c["schema_data"].encode())
+                sid = w.register_schema(
+                    c["schema_name"], c["schema_encoding"], c["schema_data"].encode()
+                )
                 ids[topic] = w.register_channel(topic, c["message_encoding"], sid, c["metadata"])
             w.add_message(ids[topic], log_time=t, data=_data(value), publish_time=t)
         w.finish()  # type: ignore[no-untyped-call]
@@ -102,12 +110,18 @@ def mission(seconds: int = 20) -> Messages:
     out: Messages = []
     for i in range(seconds):
         t = T0 + i * S
-        out += [("boat.gps.lat", t, lat_at(i)), ("boat.gps.lon", t, lon_at(i)),
-                ("boat.gps.alt", t, float(i % 3))]
+        out += [
+            ("boat.gps.lat", t, lat_at(i)),
+            ("boat.gps.lon", t, lon_at(i)),
+            ("boat.gps.alt", t, float(i % 3)),
+        ]
         for k in range(10):
             tk = t + k * S // 10 + 12_345
-            out += [("boat.ctd.temp", tk, round(12 + 0.01 * (10 * i + k), 2)),
-                    ("boat.ctd.count", tk, 10 * i + k - 7), ("boat.ctd.wet", tk, k % 2 == 0)]
+            out += [
+                ("boat.ctd.temp", tk, round(12 + 0.01 * (10 * i + k), 2)),
+                ("boat.ctd.count", tk, 10 * i + k - 7),
+                ("boat.ctd.wet", tk, k % 2 == 0),
+            ]
     return out
 
 
@@ -127,8 +141,9 @@ def archive(tmp_path: Path) -> Path:
     return path
 
 
-def test_parquet_long_has_every_sample_with_the_archives_value(archive: Path,
-                                                               tmp_path: Path) -> None:
+def test_parquet_long_has_every_sample_with_the_archives_value(
+    archive: Path, tmp_path: Path
+) -> None:
     out = tmp_path / "d.parquet"
     summary = make_dataset([archive], _model(), "parquet", out)
     table = pq.read_table(out).to_pandas()
@@ -192,7 +207,7 @@ def test_tracks_have_points_and_measurements(archive: Path, tmp_path: Path) -> N
     points = features[1:]
     assert len(points) >= 18 and all("ctd_temp" in p["properties"] for p in points)
     lon, lat = points[3]["geometry"]["coordinates"][:2]
-    t = (np.datetime64(points[3]["properties"]["time"].rstrip("Z"), "ns").astype("int64") - T0)
+    t = np.datetime64(points[3]["properties"]["time"].rstrip("Z"), "ns").astype("int64") - T0
     assert lat == pytest.approx(lat_at(t / 1e9), abs=1e-9)
     import xml.etree.ElementTree as ET
 
@@ -255,8 +270,9 @@ def test_a_cut_file_exports_up_to_its_last_complete_chunk(archive: Path, tmp_pat
     assert got == [float(v) for _, v in truth[: len(got)]]  # a prefix, exactly
 
 
-def test_a_corrupt_chunk_is_a_located_error_and_leaves_no_file(archive: Path,
-                                                               tmp_path: Path) -> None:
+def test_a_corrupt_chunk_is_a_located_error_and_leaves_no_file(
+    archive: Path, tmp_path: Path
+) -> None:
     data = bytearray(archive.read_bytes())
     at = data.index(b"zstd") + 4 + 8 + 20  # inside the first chunk's compressed records
     data[at] ^= 0xFF
@@ -280,14 +296,17 @@ def test_an_archive_of_another_model_is_said(tmp_path: Path) -> None:
         make_dataset([path], mismatch, "csv", tmp_path / "m.csv")
 
 
-@pytest.mark.parametrize("kwargs,message", [
-    ({"start_ns": T0 + 1000 * S}, "nothing to export"),
-    ({"topics": ["ctd.salinity"]}, "unknown topic"),
-    ({"start_ns": T0 + 5 * S, "end_ns": T0}, "--to must be after --from"),
-])
-def test_requests_with_nothing_to_answer_are_refused(archive: Path, tmp_path: Path,
-                                                     kwargs: dict[str, Any],
-                                                     message: str) -> None:
+@pytest.mark.parametrize(
+    "kwargs,message",
+    [
+        ({"start_ns": T0 + 1000 * S}, "nothing to export"),
+        ({"topics": ["ctd.salinity"]}, "unknown topic"),
+        ({"start_ns": T0 + 5 * S, "end_ns": T0}, "--to must be after --from"),
+    ],
+)
+def test_requests_with_nothing_to_answer_are_refused(
+    archive: Path, tmp_path: Path, kwargs: dict[str, Any], message: str
+) -> None:
     with pytest.raises(DatasetError, match=message):
         make_dataset([archive], _model(), "parquet", tmp_path / "x.parquet", **kwargs)
 

@@ -21,8 +21,13 @@ from .resample import Resampler, WideTable
 
 #: GeoJSON and GPX are tracks: one point per period, this one unless resample_s says.
 TRACK_PERIOD_S = 1.0
-SUFFIXES = {"netcdf": ".nc", "parquet": ".parquet", "csv": ".csv", "geojson": ".geojson",
-            "gpx": ".gpx"}
+SUFFIXES = {
+    "netcdf": ".nc",
+    "parquet": ".parquet",
+    "csv": ".csv",
+    "geojson": ".geojson",
+    "gpx": ".gpx",
+}
 
 
 class DatasetError(Exception):
@@ -44,10 +49,19 @@ def _sink(fmt: str, out: Path, resample_s: float | None) -> Sink:
     return Resampler(resample_s, wide)
 
 
-def make_dataset(paths: list[Path], model: dict[str, Any], fmt: str, out: Path, *,
-                 start_ns: int | None = None, end_ns: int | None = None,
-                 topics: list[str] | None = None, resample_s: float | None = None,
-                 progress: bool = False, options: Options | None = None) -> Summary:
+def make_dataset(
+    paths: list[Path],
+    model: dict[str, Any],
+    fmt: str,
+    out: Path,
+    *,
+    start_ns: int | None = None,
+    end_ns: int | None = None,
+    topics: list[str] | None = None,
+    resample_s: float | None = None,
+    progress: bool = False,
+    options: Options | None = None,
+) -> Summary:
     """Writes the dataset to ``out``; raises DatasetError."""
     if fmt not in SUFFIXES:
         raise DatasetError(f"unknown format {fmt!r}; one of {', '.join(SUFFIXES)}")
@@ -55,11 +69,18 @@ def make_dataset(paths: list[Path], model: dict[str, Any], fmt: str, out: Path, 
     try:
         plan = plan_export(model, topics, start_ns, end_ns)
         if fmt in ("geojson", "gpx") and plan.position is None:
-            raise PlanError(f"a {fmt} track needs the platform's position, and the model "
-                            "declares none (Position { latitude = ...; longitude = ...; })")
+            raise PlanError(
+                f"a {fmt} track needs the platform's position, and the model "
+                "declares none (Position { latitude = ...; longitude = ...; })"
+            )
         files = find_files(paths)
-        summary = export(files, plan, _sink(fmt, tmp, resample_s), options or Options(),
-                         print_progress if progress else None)
+        summary = export(
+            files,
+            plan,
+            _sink(fmt, tmp, resample_s),
+            options or Options(),
+            print_progress if progress else None,
+        )
         if summary.samples == 0:
             raise PlanError("nothing to export: no sample of the chosen topics in the range")
         os.replace(tmp, out)

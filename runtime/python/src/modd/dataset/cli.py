@@ -22,22 +22,42 @@ FORMATS = ("netcdf", "parquet", "csv", "geojson", "gpx")
 
 
 def register(sub: Any) -> None:
-    p = sub.add_parser("dataset", help="export the archive as a dataset (NetCDF, Parquet, "
-                       "CSV, GeoJSON, GPX) with units and positions",
-                       description=__doc__.split("\n\n")[1] if __doc__ else None)
+    p = sub.add_parser(
+        "dataset",
+        help="export the archive as a dataset (NetCDF, Parquet, "
+        "CSV, GeoJSON, GPX) with units and positions",
+        description=__doc__.split("\n\n")[1] if __doc__ else None,
+    )
     p.add_argument("paths", nargs="+", type=Path, metavar="ARCHIVE_DIR_OR_FILES")
     p.add_argument("--model", required=True, type=Path, help="the model the archive was made with")
     p.add_argument("--format", required=True, choices=FORMATS)
     p.add_argument("-o", "--output", required=True, type=Path, metavar="OUT")
-    p.add_argument("--from", dest="start", type=parse_time, metavar="T0",
-                   help="first time (ISO 8601 or Unix seconds)")
+    p.add_argument(
+        "--from",
+        dest="start",
+        type=parse_time,
+        metavar="T0",
+        help="first time (ISO 8601 or Unix seconds)",
+    )
     p.add_argument("--to", dest="end", type=parse_time, metavar="T1", help="end time (excluded)")
-    p.add_argument("--topics", nargs="+", metavar="TOPIC",
-                   help="topics to export (drone.sensor.variable, sensor.variable or variable)")
-    p.add_argument("--resample", type=parse_period, metavar="PERIOD",
-                   help="wide form: the mean of each topic per PERIOD seconds")
-    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                   help="progress on stderr (default: when stderr is a terminal)")
+    p.add_argument(
+        "--topics",
+        nargs="+",
+        metavar="TOPIC",
+        help="topics to export (drone.sensor.variable, sensor.variable or variable)",
+    )
+    p.add_argument(
+        "--resample",
+        type=parse_period,
+        metavar="PERIOD",
+        help="wide form: the mean of each topic per PERIOD seconds",
+    )
+    p.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="progress on stderr (default: when stderr is a terminal)",
+    )
     p.set_defaults(func=run)
 
 
@@ -50,8 +70,9 @@ def parse_time(text: str) -> int:
     try:
         t = dt.datetime.fromisoformat(text.replace("Z", "+00:00"))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a time (ISO 8601 or Unix seconds)"
-                                         ) from None
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a time (ISO 8601 or Unix seconds)"
+        ) from None
     if t.tzinfo is None:
         t = t.replace(tzinfo=dt.UTC)
     return int(t.timestamp()) * 1_000_000_000 + t.microsecond * 1000
@@ -77,14 +98,24 @@ def run(args: argparse.Namespace) -> int:
         return 1
     progress = sys.stderr.isatty() if args.progress is None else args.progress
     try:
-        summary = make_dataset(args.paths, model, args.format, args.output, start_ns=args.start,
-                               end_ns=args.end, topics=args.topics, resample_s=args.resample,
-                               progress=progress)
+        summary = make_dataset(
+            args.paths,
+            model,
+            args.format,
+            args.output,
+            start_ns=args.start,
+            end_ns=args.end,
+            topics=args.topics,
+            resample_s=args.resample,
+            progress=progress,
+        )
     except DatasetError as exc:
         print(f"modd dataset: {exc}", file=sys.stderr)
         return 1
     for note in summary.notes:
         print(f"modd dataset: note: {note}", file=sys.stderr)
-    print(f"{args.output}: {summary.samples:,} samples of {len(summary.per_topic)} topics "
-          f"({args.format})")
+    print(
+        f"{args.output}: {summary.samples:,} samples of {len(summary.per_topic)} topics "
+        f"({args.format})"
+    )
     return 0

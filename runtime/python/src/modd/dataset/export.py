@@ -52,8 +52,15 @@ class Sink(Protocol):
 
     def open(self, plan: ExportPlan, track: Track | None) -> None: ...
 
-    def write(self, var: Variable, time_ns: np.ndarray, value: np.ndarray,
-              lat: np.ndarray, lon: np.ndarray, alt: np.ndarray) -> None: ...
+    def write(
+        self,
+        var: Variable,
+        time_ns: np.ndarray,
+        value: np.ndarray,
+        lat: np.ndarray,
+        lon: np.ndarray,
+        alt: np.ndarray,
+    ) -> None: ...
 
     def close(self, plan: ExportPlan, summary: Summary) -> None: ...
 
@@ -96,21 +103,27 @@ def read_track(files: list[Path], plan: ExportPlan, options: Options) -> Track |
     if pos.altitude:
         roles[pos.altitude] = "altitude"
     parts: dict[str, tuple[list[np.ndarray], list[np.ndarray]]] = {
-        r: ([], []) for r in roles.values()}
+        r: ([], []) for r in roles.values()
+    }
     for path in files:
-        for b in read_file(path):
+        for b in read_file(path, only=set(roles)):
             if b.topic in roles:
                 ts, vs = parts[roles[b.topic]]
                 ts.append(b.time_ns)
                 vs.append(b.value.astype(np.float64))
-    fixes = {r: (np.concatenate(ts) if ts else np.zeros(0, np.int64),
-                 np.concatenate(vs) if vs else np.zeros(0))
-             for r, (ts, vs) in parts.items()}
+    fixes = {
+        r: (
+            np.concatenate(ts) if ts else np.zeros(0, np.int64),
+            np.concatenate(vs) if vs else np.zeros(0),
+        )
+        for r, (ts, vs) in parts.items()
+    }
     return build_track(fixes, pos.max_gap_s, options.max_speed_ms, options.max_climb_ms)
 
 
-def _account(s: Summary, var: Variable, b: Batch, lat: np.ndarray, lon: np.ndarray,
-             alt: np.ndarray) -> None:
+def _account(
+    s: Summary, var: Variable, b: Batch, lat: np.ndarray, lon: np.ndarray, alt: np.ndarray
+) -> None:
     n = len(b.time_ns)
     s.samples += n
     s.per_topic[var.topic] = s.per_topic.get(var.topic, 0) + n
@@ -127,23 +140,75 @@ def _account(s: Summary, var: Variable, b: Batch, lat: np.ndarray, lon: np.ndarr
             setattr(s, attr, new if old is None else (min(old[0], new[0]), max(old[1], new[1])))
 
 
-def _check_batch(plan: ExportPlan, b: Batch, path: Path, s: Summary,
-                 strangers: set[str]) -> Variable | None:
+def _check_batch(
+    plan: ExportPlan, b: Batch, path: Path, s: Summary, strangers: set[str]
+) -> Variable | None:
     var = plan.variables.get(b.topic)
     if var is None:
         if b.topic not in strangers and not b.topic.startswith(plan.drone + "."):
             strangers.add(b.topic)
-            s.notes.append(f"{path}: topic {b.topic} is not in the model (an archive of "
-                           "another model or revision?): left out")
+            s.notes.append(
+                f"{path}: topic {b.topic} is not in the model (an archive of "
+                "another model or revision?): left out"
+            )
         return None
     if var.value_type != b.value_type:
-        raise PlanError(f"{path}: topic {b.topic} is archived as {b.value_type} but the model "
-                        f"says {var.value_type} (an archive of another model revision?)")
+        raise PlanError(
+            f"{path}: topic {b.topic} is archived as {b.value_type} but the model "
+            f"says {var.value_type} (an archive of another model revision?)"
+        )
     return var
 
 
-def export(files: list[Path], plan: ExportPlan, sink: Sink, options: Options,
-           progress: Callable[[str, int, int], None] | None = None) -> Summary:
+#: Samples of one topic gathered before a writer sees them (a writer's cost is per call),
+#: and the most held in all (the memory bound: ~40 B a sample).
+BATCH = 1 << 16
+HELD = 1 << 20
+
+
+class _Batcher:
+    """Gathers each topic's samples into large batches for ``emit``."""
+
+    def __init__(self, emit: Callable[[Variable, Batch], None]) -> None:
+        self.emit = emit
+        self.parts: dict[str, tuple[Variable, list[Batch]]] = {}
+        self.counts: dict[str, int] = {}
+        self.held = 0
+
+    def add(self, var: Variable, b: Batch) -> None:
+        self.parts.setdefault(var.topic, (var, []))[1].append(b)
+        n = self.counts[var.topic] = self.counts.get(var.topic, 0) + len(b.time_ns)
+        self.held += len(b.time_ns)
+        if n >= BATCH:
+            self.flush(var.topic)
+        elif self.held >= HELD:
+            for topic in list(self.parts):
+                self.flush(topic)
+
+    def flush(self, topic: str) -> None:
+        var, parts = self.parts.pop(topic)
+        self.held -= self.counts.pop(topic)
+        if len(parts) == 1:
+            self.emit(var, parts[0])
+            return
+        time_ns = np.concatenate([p.time_ns for p in parts])
+        self.emit(
+            var,
+            Batch(topic, parts[0].value_type, time_ns, np.concatenate([p.value for p in parts])),
+        )
+
+    def close(self) -> None:
+        for topic in list(self.parts):
+            self.flush(topic)
+
+
+def export(
+    files: list[Path],
+    plan: ExportPlan,
+    sink: Sink,
+    options: Options,
+    progress: Callable[[str, int, int], None] | None = None,
+) -> Summary:
     """Writes the dataset into ``sink``. Raises PlanError or mcapread.ArchiveError."""
     summary = Summary()
     track = read_track(files, plan, options)
@@ -152,38 +217,48 @@ def export(files: list[Path], plan: ExportPlan, sink: Sink, options: Options,
     sink.open(plan, track)
     strangers: set[str] = set()
     nonfinite: dict[str, int] = {}
+
+    def emit(var: Variable, b: Batch) -> None:
+        nan = np.full(len(b.time_ns), np.nan)
+        lat, lon, alt = track.at(b.time_ns) if track else (nan, nan, nan)
+        sink.write(var, b.time_ns, b.value, lat, lon, alt)
+        _account(summary, var, b, lat, lon, alt)
+
+    batcher, seen = _Batcher(emit), 0
     for path in files:
         state = FileState(path)
         size = path.stat().st_size
         tick = (lambda done, p=path, n=size: progress(p.name, done, n)) if progress else None
         for raw in read_file(path, state, tick):
             var = _check_batch(plan, raw, path, summary, strangers)
-            if var is None:
+            b = _in_range(plan, raw) if var is not None else raw
+            if var is None or len(b.time_ns) == 0:
                 continue
-            b = _in_range(plan, raw)
-            if len(b.time_ns) == 0:
-                continue
-            if options.max_samples is not None and \
-                    summary.samples + len(b.time_ns) > options.max_samples:
-                raise TooMany(f"more than {options.max_samples:,} samples in the range: "
-                              "narrow the time range or the topics")
+            seen += len(b.time_ns)
+            if options.max_samples is not None and seen > options.max_samples:
+                raise TooMany(
+                    f"more than {options.max_samples:,} samples in the range: "
+                    "narrow the time range or the topics"
+                )
             if b.value.dtype.kind == "f" and not np.isfinite(b.value).all():
-                nonfinite[var.topic] = nonfinite.get(var.topic, 0) + int(
-                    (~np.isfinite(b.value)).sum())
-            lat, lon, alt = track.at(b.time_ns) if track else (np.full(len(b.time_ns), np.nan),) * 3
-            sink.write(var, b.time_ns, b.value, lat, lon, alt)
-            _account(summary, var, b, lat, lon, alt)
+                bad = int((~np.isfinite(b.value)).sum())
+                nonfinite[var.topic] = nonfinite.get(var.topic, 0) + bad
+            batcher.add(var, b)
         if state.cut_at is not None:
-            summary.notes.append(f"{path}: not closed (cut or still being written): exported up "
-                                 f"to offset {state.cut_at} of {size} bytes; "
-                                 "`modd archive recover` closes it")
+            summary.notes.append(
+                f"{path}: not closed (cut or still being written): exported up "
+                f"to offset {state.cut_at} of {size} bytes; "
+                "`modd archive recover` closes it"
+            )
+    batcher.close()
     _final_notes(plan, summary, nonfinite, track)
     sink.close(plan, summary)
     return summary
 
 
-def _final_notes(plan: ExportPlan, s: Summary, nonfinite: dict[str, int],
-                 track: Track | None) -> None:
+def _final_notes(
+    plan: ExportPlan, s: Summary, nonfinite: dict[str, int], track: Track | None
+) -> None:
     for topic, n in nonfinite.items():
         s.notes.append(f"topic {topic}: {n} NaN/Inf samples, kept as they were archived")
     for topic in plan.variables:
@@ -192,9 +267,11 @@ def _final_notes(plan: ExportPlan, s: Summary, nonfinite: dict[str, int],
     if plan.position is None:
         s.notes.append("the model declares no position: latitude and longitude are fill values")
     elif track is not None and s.samples and s.positioned < s.samples:
-        s.notes.append(f"{s.samples - s.positioned} of {s.samples} samples are outside the "
-                       f"track or in a gap of more than {track.max_gap_ns / 1e9:g} s between "
-                       "fixes: their position is the fill value")
+        s.notes.append(
+            f"{s.samples - s.positioned} of {s.samples} samples are outside the "
+            f"track or in a gap of more than {track.max_gap_ns / 1e9:g} s between "
+            "fixes: their position is the fill value"
+        )
 
 
 def print_progress(name: str, done: int, total: int) -> None:

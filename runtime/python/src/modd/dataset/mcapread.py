@@ -18,6 +18,7 @@ an :class:`ArchiveError`.
 
 from __future__ import annotations
 
+import re
 import struct
 import zlib
 from collections.abc import Callable, Iterator
@@ -28,11 +29,18 @@ from typing import BinaryIO
 import numpy as np
 from modd_contracts.archive_record import channel_type
 
-from .record import RecordError, decode_values
+from .record import PREFIX, RecordError, decode_texts, decode_values
 
 MAGIC = b"\x89MCAP0\r\n"
 OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK, OP_DATA_END = (
-    0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x0F)
+    0x01,
+    0x02,
+    0x03,
+    0x04,
+    0x05,
+    0x06,
+    0x0F,
+)
 _REC = struct.Struct("<BQ")
 _MSG = struct.Struct("<HIQ")  # channel id, sequence, log time (publish time follows)
 _MSG_HEAD = 2 + 4 + 8 + 8
@@ -72,7 +80,7 @@ class FileState:
 
 def _string(buf: bytes, at: int) -> tuple[str, int]:
     (n,) = struct.unpack_from("<I", buf, at)
-    return buf[at + 4:at + 4 + n].decode("utf-8"), at + 4 + n
+    return buf[at + 4 : at + 4 + n].decode("utf-8"), at + 4 + n
 
 
 def _schema(state: FileState, buf: bytes) -> None:
@@ -113,16 +121,51 @@ def _chunk(state: FileState, buf: bytes, offset: int) -> bytes:
     compression, at = _string(buf, 28)
     (n,) = struct.unpack_from("<Q", buf, at)
     try:
-        data = _decompress(compression, buf[at + 8:at + 8 + n], size)
+        data = _decompress(compression, buf[at + 8 : at + 8 + n], size)
     except Exception as exc:  # noqa: BLE001 - zstd/lz4 raise their own types
         raise ArchiveError(state.path, offset, f"chunk does not decompress ({exc})") from None
     if len(data) != size or (crc and zlib.crc32(data) != crc):
-        raise ArchiveError(state.path, offset, "chunk CRC mismatch (corrupt chunk); "
-                           "`modd archive recover` keeps every valid chunk")
+        raise ArchiveError(
+            state.path,
+            offset,
+            "chunk CRC mismatch (corrupt chunk); `modd archive recover` keeps every valid chunk",
+        )
     return data
 
 
 Pending = dict[int, tuple[list[int], list[bytes]]]
+#: A chunk of the PubBroker's is messages only, each ``{"value":TEXT}``: one regular
+#: expression pass (in C) finds every value text; the records' offsets follow from the
+#: texts' lengths, and the headers are gathered from those offsets by NumPy. Used only
+#: when the records so found tile the chunk exactly, with the opcodes and lengths they
+#: declare; else the record loop reads the chunk.
+_TEXT = re.compile(rb"\x05.{30}" + re.escape(PREFIX) + rb"([^}]*)\}", re.DOTALL)
+_HEAD = np.dtype([("len", "<u8"), ("ch", "<u2"), ("seq", "<u4"), ("log", "<u8"), ("pub", "<u8")])
+_HEAD_AT = np.arange(1, 1 + _HEAD.itemsize)
+
+
+def _fast(buf: bytes) -> dict[int, tuple[np.ndarray, np.ndarray]] | None:
+    """(log times, value texts) per channel of a messages-only chunk, or None."""
+    text = np.array(_TEXT.findall(buf), dtype=bytes)
+    if len(text) == 0:
+        return None
+    sizes = 9 + _MSG_HEAD + len(PREFIX) + 1 + np.char.str_len(text).astype(np.int64)
+    ends = np.cumsum(sizes)
+    if int(ends[-1]) != len(buf):
+        return None  # other records too (schemas, channels): the record loop reads it
+    starts = ends - sizes
+    raw = np.frombuffer(buf, dtype=np.uint8)
+    if not (raw[starts] == OP_MESSAGE).all():
+        return None
+    head = raw[starts[:, None] + _HEAD_AT].copy().view(_HEAD).ravel()
+    if not np.array_equal(head["len"], sizes - 9):
+        return None
+    channels, times = head["ch"], head["log"].astype(np.int64)
+    out = {}
+    for cid in np.unique(channels).tolist():
+        mask = channels == cid
+        out[cid] = (times[mask], text[mask])
+    return out
 
 
 def _records(state: FileState, buf: bytes, base: int, pending: Pending) -> None:
@@ -140,26 +183,34 @@ def _records(state: FileState, buf: bytes, base: int, pending: Pending) -> None:
             cid, _seq, t = _MSG.unpack_from(buf, body)
             times, datas = pending.setdefault(cid, ([], []))
             times.append(t)
-            datas.append(buf[body + _MSG_HEAD:body + length])
+            datas.append(buf[body + _MSG_HEAD : body + length])
         elif op == OP_SCHEMA:
-            _schema(state, buf[body:body + length])
+            _schema(state, buf[body : body + length])
         elif op == OP_CHANNEL:
-            _channel(state, buf[body:body + length])
+            _channel(state, buf[body : body + length])
         at = body + length
 
 
-def _batches(state: FileState, pending: Pending, offset: int) -> Iterator[Batch]:
+def _batches(
+    state: FileState,
+    pending: Pending | dict[int, tuple[np.ndarray, np.ndarray]],
+    offset: int,
+    only: set[str] | None,
+) -> Iterator[Batch]:
     for cid, (times, datas) in pending.items():
         topic, vtype = state.topics.get(cid, (None, None))
         if topic is None:
             raise ArchiveError(state.path, offset, f"message on unknown channel {cid}")
-        if vtype is None:
-            continue  # not a MoDD topic (another tool's channel): not ours to export
+        if vtype is None or (only is not None and topic not in only):
+            continue  # not a MoDD topic (another tool's channel), or not asked for
         try:
-            values = decode_values(vtype, datas)
+            if isinstance(datas, np.ndarray):
+                values = decode_texts(vtype, datas)
+            else:
+                values = decode_values(vtype, datas)
         except RecordError as exc:
             raise ArchiveError(state.path, offset, f"topic {topic}: {exc}") from None
-        yield Batch(topic, vtype, np.array(times, dtype=np.int64), values)
+        yield Batch(topic, vtype, np.asarray(times, dtype=np.int64), values)
 
 
 def _read_record(f: BinaryIO, state: FileState, offset: int) -> tuple[int, bytes] | None:
@@ -178,12 +229,17 @@ def _read_record(f: BinaryIO, state: FileState, offset: int) -> tuple[int, bytes
     return op, f.read(length)
 
 
-def read_file(path: Path, state: FileState | None = None,
-              progress: Callable[[int], None] | None = None) -> Iterator[Batch]:
+def read_file(
+    path: Path,
+    state: FileState | None = None,
+    progress: Callable[[int], None] | None = None,
+    only: set[str] | None = None,
+) -> Iterator[Batch]:
     """Every sample of ``path`` as batches (one per topic per chunk).
 
     ``state`` (filled as the file is read) tells the caller about a cut;
-    ``progress`` is called with the bytes read so far after each chunk."""
+    ``progress`` is called with the bytes read so far after each chunk; ``only``
+    limits the batches to those topics (the others are not decoded)."""
     st = state if state is not None else FileState(path)
     st.size = path.stat().st_size
     with path.open("rb") as f:
@@ -195,15 +251,20 @@ def read_file(path: Path, state: FileState | None = None,
             if rec is None:
                 return
             op, body = rec
-            pending: Pending = {}
+            pending: Pending | dict[int, tuple[np.ndarray, np.ndarray]] = {}
             if op == OP_CHUNK:
-                _records(st, _chunk(st, body, offset), offset, pending)
+                data = _chunk(st, body, offset)
+                fast = _fast(data)
+                if fast is not None:
+                    pending = fast
+                else:
+                    _records(st, data, offset, pending)  # type: ignore[arg-type]
             elif op in (OP_SCHEMA, OP_CHANNEL, OP_MESSAGE):
                 _records(st, _REC.pack(op, len(body)) + body, offset, pending)
             elif op == OP_FOOTER:
                 st.closed = True
                 return
-            yield from _batches(st, pending, offset)
+            yield from _batches(st, pending, offset, only)
             offset += 9 + len(body)
             if progress is not None:
                 progress(offset)

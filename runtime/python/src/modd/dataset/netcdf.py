@@ -30,9 +30,15 @@ _INT_FILL = {np.dtype(np.int64): np.int64(-(2**63)), np.dtype(np.int8): np.int8(
 TIME_UNITS = "seconds since 1970-01-01 00:00:00"
 CHUNK = 16384
 #: Standard names CF reads as vertical coordinates, which then need ``positive``.
-_VERTICAL = {"altitude": "up", "height": "up", "height_above_mean_sea_level": "up",
-             "height_above_geoid": "up", "height_above_reference_ellipsoid": "up",
-             "depth": "down", "depth_below_geoid": "down"}
+_VERTICAL = {
+    "altitude": "up",
+    "height": "up",
+    "height_above_mean_sea_level": "up",
+    "height_above_geoid": "up",
+    "height_above_reference_ellipsoid": "up",
+    "depth": "down",
+    "depth_below_geoid": "down",
+}
 
 
 def modd_version() -> str:
@@ -51,29 +57,53 @@ def _iso(ns: int | None) -> str:
 def _coord(ds: Any, name: str, dim: str, kind: str) -> None:
     attrs = {
         # Unix time counts no leap seconds
-        "time": {"units": TIME_UNITS, "standard_name": "time", "long_name": "time of the sample",
-                 "calendar": "standard", "axis": "T", "units_metadata": "leap_seconds: none"},
-        "lat": {"units": "degree_north", "standard_name": "latitude", "axis": "Y",
-                "long_name": "platform latitude, interpolated to the sample's time"},
-        "lon": {"units": "degree_east", "standard_name": "longitude", "axis": "X",
-                "long_name": "platform longitude, interpolated to the sample's time"},
-        "alt": {"units": "m", "standard_name": "altitude", "axis": "Z", "positive": "up",
-                "long_name": "platform altitude, interpolated to the sample's time"},
+        "time": {
+            "units": TIME_UNITS,
+            "standard_name": "time",
+            "long_name": "time of the sample",
+            "calendar": "standard",
+            "axis": "T",
+            "units_metadata": "leap_seconds: none",
+        },
+        "lat": {
+            "units": "degree_north",
+            "standard_name": "latitude",
+            "axis": "Y",
+            "long_name": "platform latitude, interpolated to the sample's time",
+        },
+        "lon": {
+            "units": "degree_east",
+            "standard_name": "longitude",
+            "axis": "X",
+            "long_name": "platform longitude, interpolated to the sample's time",
+        },
+        "alt": {
+            "units": "m",
+            "standard_name": "altitude",
+            "axis": "Z",
+            "positive": "up",
+            "long_name": "platform altitude, interpolated to the sample's time",
+        },
     }[kind]
     fill = None if kind == "time" else np.nan
-    v = ds.createVariable(name, "f8", (dim,), fill_value=fill, chunksizes=(CHUNK,), zlib=True,
-                          complevel=1)
+    v = ds.createVariable(
+        name, "f8", (dim,), fill_value=fill, chunksizes=(CHUNK,), zlib=True, complevel=1
+    )
     v.setncatts(attrs | {"coverage_content_type": "coordinate"})
 
 
 def _data_var(ds: Any, var: Variable, name: str, dim: str, coords: str) -> None:
     dtype = np.dtype(dtype_of(var.value_type))
     fill = np.float32(np.nan) if dtype.kind == "f" else _INT_FILL[dtype]
-    v = ds.createVariable(name, dtype, (dim,), fill_value=fill, chunksizes=(CHUNK,), zlib=True,
-                          complevel=1)
-    attrs: dict[str, Any] = {"long_name": var.long_name, "coordinates": coords,
-                             "modd_topic": var.topic,
-                             "coverage_content_type": "physicalMeasurement"}
+    v = ds.createVariable(
+        name, dtype, (dim,), fill_value=fill, chunksizes=(CHUNK,), zlib=True, complevel=1
+    )
+    attrs: dict[str, Any] = {
+        "long_name": var.long_name,
+        "coordinates": coords,
+        "modd_topic": var.topic,
+        "coverage_content_type": "physicalMeasurement",
+    }
     if var.standard_name in _VERTICAL:
         attrs["positive"] = _VERTICAL[var.standard_name]
     if var.temperature:
@@ -98,10 +128,12 @@ def _globals(plan: ExportPlan) -> dict[str, Any]:
         "featureType": "trajectory",
         "cdm_data_type": "Trajectory",
         "title": f"{plan.description}: samples of drone {plan.drone}",
-        "summary": (f"Every sample archived on board drone {plan.drone} by the MoDD PubBroker, "
-                    "at its own time, with the platform position linearly interpolated to it."),
-        "keywords": "drone, trajectory, in situ, " + ", ".join(
-            sorted({v.standard_name for v in plan.variables.values() if v.standard_name})),
+        "summary": (
+            f"Every sample archived on board drone {plan.drone} by the MoDD PubBroker, "
+            "at its own time, with the platform position linearly interpolated to it."
+        ),
+        "keywords": "drone, trajectory, in situ, "
+        + ", ".join(sorted({v.standard_name for v in plan.variables.values() if v.standard_name})),
         "platform": plan.drone,
         "source": "MoDD on-board archive (MCAP)",
         "history": f"{now} modd dataset (MoDD {modd_version()})",
@@ -113,7 +145,7 @@ def _globals(plan: ExportPlan) -> dict[str, Any]:
         "id": f"{plan.drone}-{plan.model_revision}",
         "naming_authority": "modd",
         "comment": "Positions are linear interpolations between the platform's fixes; a sample "
-                   "in a gap longer than the model's maxGap has none (fill value).",
+        "in a gap longer than the model's maxGap has none (fill value).",
         "standard_name_vocabulary": "CF Standard Name Table v93",
     }
 
@@ -122,16 +154,19 @@ def _coverage(ds: Any, s: Summary) -> None:
     if s.start_ns is not None and s.end_ns is not None:
         ds.time_coverage_start, ds.time_coverage_end = _iso(s.start_ns), _iso(s.end_ns)
         ds.time_coverage_duration = f"PT{(s.end_ns - s.start_ns) / 1e9:.3f}S"
-    for key, rng, units in (("lat", s.lat_range, "degree_north"),
-                            ("lon", s.lon_range, "degree_east")):
+    for key, rng, units in (
+        ("lat", s.lat_range, "degree_north"),
+        ("lon", s.lon_range, "degree_east"),
+    ):
         if rng is not None:
             setattr(ds, f"geospatial_{key}_min", rng[0])
             setattr(ds, f"geospatial_{key}_max", rng[1])
             setattr(ds, f"geospatial_{key}_units", units)
     if s.lat_range is not None and s.lon_range is not None:
         (la0, la1), (lo0, lo1) = s.lat_range, s.lon_range
-        ds.geospatial_bounds = (f"POLYGON (({la0} {lo0}, {la1} {lo0}, {la1} {lo1}, {la0} {lo1}, "
-                                f"{la0} {lo0}))")
+        ds.geospatial_bounds = (
+            f"POLYGON (({la0} {lo0}, {la1} {lo0}, {la1} {lo1}, {la0} {lo1}, {la0} {lo0}))"
+        )
         ds.geospatial_bounds_crs = "EPSG:4326"
     if s.alt_range is not None:
         ds.geospatial_vertical_min, ds.geospatial_vertical_max = s.alt_range
@@ -168,8 +203,15 @@ class NetcdfSink:
             _data_var(self.ds, var, var.name, dim, " ".join(names))
             self.filled[var.name] = 0
 
-    def write(self, var: Variable, time_ns: np.ndarray, value: np.ndarray, lat: np.ndarray,
-              lon: np.ndarray, alt: np.ndarray) -> None:
+    def write(
+        self,
+        var: Variable,
+        time_ns: np.ndarray,
+        value: np.ndarray,
+        lat: np.ndarray,
+        lon: np.ndarray,
+        alt: np.ndarray,
+    ) -> None:
         at, n = self.filled[var.name], len(time_ns)
         sl = slice(at, at + n)
         self.ds[f"time_{var.name}"][sl] = time_ns / 1e9
@@ -198,8 +240,17 @@ def write_wide(path: Path, plan: ExportPlan, table: WideTable, summary: Summary)
         ds["time"][:] = table.time_ns / 1e9
         ds["lat"][:], ds["lon"][:], ds["alt"][:] = table.lat, table.lon, table.alt
         for var in plan.variables.values():
-            mean = Variable(var.topic, var.name, var.unit, "float64", var.standard_name,
-                            var.long_name, var.valid_min, var.valid_max, var.temperature)
+            mean = Variable(
+                var.topic,
+                var.name,
+                var.unit,
+                "float64",
+                var.standard_name,
+                var.long_name,
+                var.valid_min,
+                var.valid_max,
+                var.temperature,
+            )
             _data_var(ds, mean, var.name, "obs", "time lat lon alt")
             ds[var.name].cell_methods = f"time: mean (interval: {table.period_s:g} s)"
             ds[var.name][:] = table.columns[var.topic]

@@ -63,29 +63,49 @@ def model_revision(model: dict[str, Any]) -> str:
 def _variable(drone: str, sensor: dict[str, Any], var: dict[str, Any]) -> Variable:
     topic = f"{drone}.{sensor['name']}.{var['name']}"
     return Variable(
-        topic=topic, name=_safe(f"{sensor['name']}_{var['name']}"), unit=udunits(var["unit"]),
-        value_type=var.get("type", DEFAULT_VALUE_TYPE), standard_name=var.get("standardName"),
+        topic=topic,
+        name=_safe(f"{sensor['name']}_{var['name']}"),
+        unit=udunits(var["unit"]),
+        value_type=var.get("type", DEFAULT_VALUE_TYPE),
+        standard_name=var.get("standardName"),
         long_name=var.get("longName") or var.get("description") or topic,
-        valid_min=var.get("validMin"), valid_max=var.get("validMax"),
-        temperature=convertible(var["unit"], "K"))
+        valid_min=var.get("validMin"),
+        valid_max=var.get("validMax"),
+        temperature=convertible(var["unit"], "K"),
+    )
 
 
-def plan_export(model: dict[str, Any], topics: list[str] | None,
-                start_ns: int | None = None, end_ns: int | None = None) -> ExportPlan:
+def plan_export(
+    model: dict[str, Any],
+    topics: list[str] | None,
+    start_ns: int | None = None,
+    end_ns: int | None = None,
+) -> ExportPlan:
     """The plan for ``topics`` (all the model's when None). Raises PlanError."""
     drone = model["drone"]["name"]
-    every = {v.topic: v for s in model["drone"]["sensors"] for v in
-             (_variable(drone, s, var) for var in s["variables"])}
+    every = {
+        v.topic: v
+        for s in model["drone"]["sensors"]
+        for v in (_variable(drone, s, var) for var in s["variables"])
+    }
     chosen = every
     if topics:
         short = {t.split(".", 1)[1]: t for t in every} | {t.rsplit(".", 1)[1]: t for t in every}
         unknown = [t for t in topics if t not in every and t not in short]
         if unknown:
-            raise PlanError(f"unknown topic(s) {', '.join(unknown)}; the model has "
-                            f"{', '.join(every)}")
+            raise PlanError(
+                f"unknown topic(s) {', '.join(unknown)}; the model has {', '.join(every)}"
+            )
         wanted = {every.get(t) or every[short[t]] for t in topics}
         chosen = {t: v for t, v in every.items() if v in wanted}
     if start_ns is not None and end_ns is not None and end_ns <= start_ns:
         raise PlanError("--to must be after --from")
-    return ExportPlan(drone, model["drone"].get("description", drone), chosen,
-                      platform_position(model), model_revision(model), start_ns, end_ns)
+    return ExportPlan(
+        drone,
+        model["drone"].get("description", drone),
+        chosen,
+        platform_position(model),
+        model_revision(model),
+        start_ns,
+        end_ns,
+    )

@@ -48,22 +48,27 @@ def _slow(value_type: str, data: bytes) -> Any:
     return value
 
 
-def decode_values(value_type: str, datas: list[bytes]) -> np.ndarray:
-    """The samples of ``datas`` (message data of one channel) as an array."""
-    dtype = _DTYPES[value_type]
-    n = len(PREFIX)
+def decode_texts(value_type: str, texts: np.ndarray) -> np.ndarray:
+    """The samples of value texts (what stands between the prefix and ``}``)."""
     try:
-        if not all(d.startswith(PREFIX) and d.endswith(b"}") for d in datas):
-            raise ValueError
-        texts = np.array([d[n:-1] for d in datas], dtype=bytes)
         if value_type == "bool":
             true, false = texts == b"true", texts == b"false"
             if not np.all(true | false):
                 raise ValueError
             flags: np.ndarray = true.astype(np.int8)
             return flags
-        out: np.ndarray = texts.astype(dtype)
+        out: np.ndarray = texts.astype(_DTYPES[value_type])
         return out
     except ValueError:
-        slow: np.ndarray = np.array([_slow(value_type, d) for d in datas], dtype=dtype)
+        datas = [PREFIX + bytes(t) + b"}" for t in texts.tolist()]
+        slow: np.ndarray = np.array([_slow(value_type, d) for d in datas], _DTYPES[value_type])
         return slow
+
+
+def decode_values(value_type: str, datas: list[bytes]) -> np.ndarray:
+    """The samples of ``datas`` (message data of one channel) as an array."""
+    n = len(PREFIX)
+    if all(d.startswith(PREFIX) and d.endswith(b"}") for d in datas):
+        return decode_texts(value_type, np.array([d[n:-1] for d in datas], dtype=bytes))
+    slow: np.ndarray = np.array([_slow(value_type, d) for d in datas], _DTYPES[value_type])
+    return slow

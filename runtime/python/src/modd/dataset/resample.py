@@ -62,8 +62,15 @@ class Resampler:
             old = acc.get(k, (0.0, 0))
             acc[k] = (old[0] + s, old[1] + n)
 
-    def write(self, var: Variable, time_ns: np.ndarray, value: np.ndarray, lat: np.ndarray,
-              lon: np.ndarray, alt: np.ndarray) -> None:
+    def write(
+        self,
+        var: Variable,
+        time_ns: np.ndarray,
+        value: np.ndarray,
+        lat: np.ndarray,
+        lon: np.ndarray,
+        alt: np.ndarray,
+    ) -> None:
         self.add(var.topic, time_ns, value)
 
     def table(self) -> WideTable:

@@ -23,10 +23,17 @@ ROWS_PER_GROUP = 1 << 20
 def _long_schema() -> Any:
     import pyarrow as pa
 
-    return pa.schema([
-        ("time", pa.timestamp("ns", tz="UTC")), ("topic", pa.dictionary(pa.int32(), pa.string())),
-        ("value", pa.float64()), ("unit", pa.dictionary(pa.int32(), pa.string())),
-        ("lat", pa.float64()), ("lon", pa.float64()), ("alt", pa.float64())])
+    return pa.schema(
+        [
+            ("time", pa.timestamp("ns", tz="UTC")),
+            ("topic", pa.dictionary(pa.int32(), pa.string())),
+            ("value", pa.float64()),
+            ("unit", pa.dictionary(pa.int32(), pa.string())),
+            ("lat", pa.float64()),
+            ("lon", pa.float64()),
+            ("alt", pa.float64()),
+        ]
+    )
 
 
 class TableSink:
@@ -48,17 +55,34 @@ class TableSink:
         else:
             self.writer = pcsv.CSVWriter(self.path, schema)
 
-    def write(self, var: Variable, time_ns: np.ndarray, value: np.ndarray, lat: np.ndarray,
-              lon: np.ndarray, alt: np.ndarray) -> None:
+    def write(
+        self,
+        var: Variable,
+        time_ns: np.ndarray,
+        value: np.ndarray,
+        lat: np.ndarray,
+        lon: np.ndarray,
+        alt: np.ndarray,
+    ) -> None:
         import pyarrow as pa
 
         n = len(time_ns)
         topic = pa.DictionaryArray.from_arrays(np.zeros(n, np.int32), pa.array([var.topic]))
         unit = pa.DictionaryArray.from_arrays(np.zeros(n, np.int32), pa.array([var.unit]))
-        self.parts.append(pa.record_batch(
-            [pa.array(time_ns, pa.timestamp("ns", tz="UTC")), topic,
-             pa.array(value.astype(np.float64)), unit, pa.array(lat), pa.array(lon),
-             pa.array(alt)], schema=_long_schema()))
+        self.parts.append(
+            pa.record_batch(
+                [
+                    pa.array(time_ns, pa.timestamp("ns", tz="UTC")),
+                    topic,
+                    pa.array(value.astype(np.float64)),
+                    unit,
+                    pa.array(lat),
+                    pa.array(lon),
+                    pa.array(alt),
+                ],
+                schema=_long_schema(),
+            )
+        )
         self.rows += n
         if self.rows >= ROWS_PER_GROUP:
             self._flush()
@@ -85,8 +109,12 @@ def write_wide(path: Path, fmt: str, plan: ExportPlan, table: WideTable) -> None
     import pyarrow.csv as pcsv
     import pyarrow.parquet as pq
 
-    cols: dict[str, Any] = {"time": pa.array(table.time_ns, pa.timestamp("ns", tz="UTC")),
-                            "lat": table.lat, "lon": table.lon, "alt": table.alt}
+    cols: dict[str, Any] = {
+        "time": pa.array(table.time_ns, pa.timestamp("ns", tz="UTC")),
+        "lat": table.lat,
+        "lon": table.lon,
+        "alt": table.alt,
+    }
     for var in plan.variables.values():
         cols[var.name] = table.columns[var.topic]
     arrow = pa.table(cols)

@@ -47,17 +47,30 @@ def write_geojson(path: Path, plan: ExportPlan, table: WideTable, summary: Summa
         units = {v.name: v.unit for v in plan.variables.values()}
         f.write('{"type":"FeatureCollection","features":[')
         line = [[round(float(table.lon[i]), 8), round(float(table.lat[i]), 8)] for i in rows]
-        f.write(json.dumps({"type": "Feature", "geometry": {"type": "LineString",
-                            "coordinates": line},
-                            "properties": {"drone": plan.drone, "units": units,
-                                           "period_s": table.period_s}}))
+        f.write(
+            json.dumps(
+                {
+                    "type": "Feature",
+                    "geometry": {"type": "LineString", "coordinates": line},
+                    "properties": {"drone": plan.drone, "units": units, "period_s": table.period_s},
+                }
+            )
+        )
         for i in rows:
             coords = [float(table.lon[i]), float(table.lat[i])]
             if math.isfinite(table.alt[i]):
                 coords.append(float(table.alt[i]))
             props = {"time": _iso(int(table.time_ns[i])), **_props(plan, table, i)}
-            f.write(",\n" + json.dumps({"type": "Feature", "properties": props,
-                                        "geometry": {"type": "Point", "coordinates": coords}}))
+            f.write(
+                ",\n"
+                + json.dumps(
+                    {
+                        "type": "Feature",
+                        "properties": props,
+                        "geometry": {"type": "Point", "coordinates": coords},
+                    }
+                )
+            )
         f.write("]}\n")
 
 
@@ -65,10 +78,12 @@ def write_gpx(path: Path, plan: ExportPlan, table: WideTable, summary: Summary) 
     rows = _positioned(table)
     _note_unplaced(table, rows, summary)
     with path.open("w", encoding="utf-8") as f:
-        f.write('<?xml version="1.0" encoding="UTF-8"?>\n'
-                f'<gpx version="1.1" creator="MoDD modd dataset" '
-                f'xmlns="http://www.topografix.com/GPX/1/1" xmlns:modd="{GPX_NS}">\n'
-                f"<trk><name>{escape(plan.drone)}</name><trkseg>\n")
+        f.write(
+            '<?xml version="1.0" encoding="UTF-8"?>\n'
+            f'<gpx version="1.1" creator="MoDD modd dataset" '
+            f'xmlns="http://www.topografix.com/GPX/1/1" xmlns:modd="{GPX_NS}">\n'
+            f"<trk><name>{escape(plan.drone)}</name><trkseg>\n"
+        )
         for i in rows:
             f.write(f'<trkpt lat="{table.lat[i]:.8f}" lon="{table.lon[i]:.8f}">')
             if math.isfinite(table.alt[i]):
@@ -84,5 +99,6 @@ def write_gpx(path: Path, plan: ExportPlan, table: WideTable, summary: Summary) 
 def _note_unplaced(table: WideTable, rows: np.ndarray, summary: Summary) -> None:
     left = len(table.time_ns) - len(rows)
     if left:
-        summary.notes.append(f"{left} of {len(table.time_ns)} track points have no position "
-                             "and were left out")
+        summary.notes.append(
+            f"{left} of {len(table.time_ns)} track points have no position and were left out"
+        )
