@@ -27,9 +27,9 @@ from pathlib import Path
 from typing import BinaryIO
 
 import numpy as np
-from modd_contracts.archive_record import channel_type
+from modd_contracts.archive_record import PREFIX, channel_type
 
-from .record import PREFIX, RecordError, decode_texts, decode_values
+from .record import RecordError, decode_texts, decode_values
 
 MAGIC = b"\x89MCAP0\r\n"
 OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK, OP_DATA_END = (
@@ -251,20 +251,19 @@ def read_file(
             if rec is None:
                 return
             op, body = rec
-            pending: Pending | dict[int, tuple[np.ndarray, np.ndarray]] = {}
+            slow: Pending = {}
+            fast = None
             if op == OP_CHUNK:
                 data = _chunk(st, body, offset)
                 fast = _fast(data)
-                if fast is not None:
-                    pending = fast
-                else:
-                    _records(st, data, offset, pending)  # type: ignore[arg-type]
+                if fast is None:
+                    _records(st, data, offset, slow)
             elif op in (OP_SCHEMA, OP_CHANNEL, OP_MESSAGE):
-                _records(st, _REC.pack(op, len(body)) + body, offset, pending)
+                _records(st, _REC.pack(op, len(body)) + body, offset, slow)
             elif op == OP_FOOTER:
                 st.closed = True
                 return
-            yield from _batches(st, pending, offset, only)
+            yield from _batches(st, fast if fast is not None else slow, offset, only)
             offset += 9 + len(body)
             if progress is not None:
                 progress(offset)
