@@ -6,6 +6,7 @@ the simulator's own track (every position)."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import re
@@ -85,10 +86,8 @@ def _archived_fixes(folder: Path) -> int:
 
     n = 0
     for f in folder.glob("*.mcap"):
-        try:
+        with contextlib.suppress(ArchiveError):  # a file being written
             n += sum(len(b.time_ns) for b in read_file(f, only={"usv.autopilot.latitude"}))
-        except ArchiveError:
-            pass  # a file being written
     return n
 
 
