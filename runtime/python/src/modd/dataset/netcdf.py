@@ -29,6 +29,9 @@ from .resample import WideTable
 _INT_FILL = {np.dtype(np.int64): np.int64(-(2**63)), np.dtype(np.int8): np.int8(-127)}
 TIME_UNITS = "seconds since 1970-01-01 00:00:00"
 CHUNK = 16384
+#: HDF5 chunk cache per variable (the library's default is megabytes per variable, and a
+#: dataset of 20 topics has 100 variables): a few chunks each is all a stream needs.
+CACHE_BYTES = 4 * CHUNK * 8
 #: Standard names CF reads as vertical coordinates, which then need ``positive``.
 _VERTICAL = {
     "altitude": "up",
@@ -89,6 +92,7 @@ def _coord(ds: Any, name: str, dim: str, kind: str) -> None:
     v = ds.createVariable(
         name, "f8", (dim,), fill_value=fill, chunksizes=(CHUNK,), zlib=True, complevel=1
     )
+    v.set_var_chunk_cache(size=CACHE_BYTES)
     v.setncatts(attrs | {"coverage_content_type": "coordinate"})
 
 
@@ -98,6 +102,7 @@ def _data_var(ds: Any, var: Variable, name: str, dim: str, coords: str) -> None:
     v = ds.createVariable(
         name, dtype, (dim,), fill_value=fill, chunksizes=(CHUNK,), zlib=True, complevel=1
     )
+    v.set_var_chunk_cache(size=CACHE_BYTES)
     attrs: dict[str, Any] = {
         "long_name": var.long_name,
         "coordinates": coords,
