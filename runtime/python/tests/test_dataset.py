@@ -270,6 +270,23 @@ def test_a_cut_file_exports_up_to_its_last_complete_chunk(archive: Path, tmp_pat
     assert got == [float(v) for _, v in truth[: len(got)]]  # a prefix, exactly
 
 
+def test_a_cut_file_after_recover_exports_like_a_closed_one(archive: Path, tmp_path: Path) -> None:
+    from modd.archive.recover import recover
+
+    data = archive.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) // 2])
+    fixed = tmp_path / "fixed.mcap"
+    recover(cut, fixed)
+    as_cut = make_dataset([cut], _model(), "parquet", tmp_path / "a.parquet")
+    recovered = make_dataset([fixed], _model(), "parquet", tmp_path / "b.parquet")
+    assert not any("not closed" in n for n in recovered.notes)
+    assert recovered.samples == as_cut.samples
+    a = pq.read_table(tmp_path / "a.parquet").to_pandas()
+    b = pq.read_table(tmp_path / "b.parquet").to_pandas()
+    assert a.equals(b)
+
+
 def test_a_corrupt_chunk_is_a_located_error_and_leaves_no_file(
     archive: Path, tmp_path: Path
 ) -> None:
