@@ -46,6 +46,7 @@ CROSS_PROCESS = (
     "runtime/python/tests/test_radio.py",
     "backend/tests/test_app.py",
     "backend/tests/test_archives.py",
+    "backend/tests/test_archive_export.py",
     "backend/tests/test_frontend.py",
     "backend/tests/test_hardening.py",
     "backend/tests/test_live.py",

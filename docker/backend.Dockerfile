@@ -44,6 +44,7 @@ COPY generators generators
 COPY runtime/cpp/include/modd/client runtime/cpp/include/modd/client
 COPY runtime/cpp/src/client runtime/cpp/src/client
 COPY runtime/cpp/include/modd/ingress/wire.hpp runtime/cpp/include/modd/ingress/wire.hpp
+COPY runtime/python runtime/python
 COPY backend backend
 RUN uv sync --frozen --no-dev --package modd-backend
 COPY --from=frontend /src/frontend/dist frontend/dist

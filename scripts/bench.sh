@@ -45,6 +45,7 @@ run tests/bench/bench_health_csv.py --clients 70 --seconds "${HEALTH_CSV_SECONDS
 run tests/bench/bench_health_editing.py --seconds "${HEALTH_EDITING_SECONDS:-20}"
 run tests/bench/bench_health_editing.py --seconds "${HEALTH_EDITING_SECONDS:-20}" --sockets 1000
 run tests/bench/bench_backfill.py --minutes "${BACKFILL_MINUTES:-10}" --rate 3600
+run tests/bench/bench_dataset.py --samples "${DATASET_SAMPLES:-10000000}" --json build/bench/dataset.json
 run tests/bench/flap_windows.py "${FLAP_SECONDS:-60}" 2
 if [ -n "${SOAK:-}" ]; then  # make bench SOAK=1: the 30-minute soak with faults (docs/reliability.md)
   run tests/bench/soak.py --seconds "${SOAK_SECONDS:-1800}"

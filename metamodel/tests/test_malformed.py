@@ -47,7 +47,14 @@ CASES = [
     ("eof-inside-block",
      "    Subscriber sub_2(\"127.0.0.1\":7402, \"usv.imu.ay\", 0.25, MIN);\n}\n",
      "", "unexpected end of file", 16),
-    ("unknown-unit", "ay(METER_PER_SECOND_SQUARED)", "ay(METRE)", "unknown unit 'METRE'", 5),
+    ("unknown-unit", "ay(METER_PER_SECOND_SQUARED)", "ay(METER_PER_SECOND_SQUARD)",
+     "'METER_PER_SECOND_SQUARD' is not a UDUNITS-2 unit", 5),
+    ("unknown-standard-name", "ay(METER_PER_SECOND_SQUARED)",
+     'ay(METER_PER_SECOND_SQUARED) { standardName = sea_acceleration; }',
+     "'sea_acceleration' is not a CF standard name", 5),
+    ("unit-against-standard-name", "ay(METER_PER_SECOND_SQUARED)",
+     'ay(METER_PER_SECOND_SQUARED) { standardName = sea_water_temperature; }',
+     "does not convert to 'K'", 5),
     ("unknown-type", "flag(NONE, bool)", "flag(NONE, boolean)", "unknown value type", 6),
     ("unknown-aggregation", "0.25, MIN", "0.25, MEDIAN", "unknown aggregation 'MEDIAN'", 17),
     ("unknown-topic-sub", '"usv.imu.ay", 0.25', '"usv.imu.az", 0.25', "unknown topic 'usv.imu.az'",
@@ -139,11 +146,11 @@ def test_syntax_error_shows_line_and_caret() -> None:
 def test_all_errors_reported_at_once() -> None:
     text = (BASE.replace("0.25, MIN", "0.25, MEDIAN")
             .replace('"usv.imu.ax", 2.0', '"usv.imu.zz", 2.0')
-            .replace("ay(METER_PER_SECOND_SQUARED)", "ay(FURLONG)"))
+            .replace("ay(METER_PER_SECOND_SQUARED)", "ay(WOMBAT)"))
     messages = [d.message for d in load_text(text, "m.modd").errors]
     assert any("MEDIAN" in m for m in messages)
     assert any("usv.imu.zz" in m for m in messages)
-    assert any("FURLONG" in m for m in messages)
+    assert any("WOMBAT" in m for m in messages)
 
 
 def test_warning_for_topic_nobody_publishes() -> None:

@@ -10,7 +10,6 @@ archive directory can be reached."""
 
 from __future__ import annotations
 
-import json
 import re
 import struct
 from collections.abc import Iterator
@@ -22,6 +21,7 @@ from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap.records import Channel, Message
 from mcap.stream_reader import StreamReader
+from modd_contracts.archive_record import value_of
 
 from .errors import ApiError
 
@@ -76,11 +76,8 @@ def list_files(root: Path, drone: str) -> list[Path]:
 
 
 def _value(data: bytes) -> Any:
-    try:
-        doc = json.loads(data)
-    except (ValueError, UnicodeDecodeError):
-        return None
-    return doc.get("value") if isinstance(doc, dict) else None
+    """The sample of an archive record (contract ``archive_record``), None if it is not one."""
+    return value_of(data)
 
 
 def _stream(path: Path) -> Iterator[tuple[str, Message]]:

@@ -10,7 +10,7 @@ import type { ModdModel } from "../core/model.gen";
 import type { Role } from "../core/roles";
 import { Http, type HttpOptions } from "./http";
 import type {
-  ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress,
+  ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress, DatasetRequest,
   DeployedDiff, Deployment, DynamicReply, DynamicRequest, FoxgloveLinks,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, RunningDrone, User, ValidateResult, Version,
 } from "./types";
@@ -127,6 +127,9 @@ export function createApi(opts: HttpOptions) {
       }),
     downloadRecord: (drone: string, file: string) =>
       http.request<Blob>(`/api/drones/${drone}/records/${encodeURIComponent(file)}`, { as: "blob" }),
+    /** The archive as a dataset file (`modd dataset`: NetCDF, Parquet, CSV, GeoJSON, GPX), made by the backend. */
+    exportDataset: (drone: string, request: DatasetRequest) =>
+      http.request<Blob>(`/api/drones/${drone}/archives/export`, { method: "POST", json: request, as: "blob" }),
     archiveCsv: (drone: string, file: string, topic: string, startNs?: number, endNs?: number) =>
       http.request<Blob>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}/csv`, { query: { topic, start_ns: startNs, end_ns: endNs }, as: "blob" }),
 

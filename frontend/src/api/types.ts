@@ -158,6 +158,21 @@ export interface ArchiveReplay {
 }
 
 /** A topic over a time range; `points` are [log time ns, value], min/max-reduced to at most max_points. */
+/** The dataset formats of `modd dataset` (backend routers/archives.py ExportIn). */
+export const DATASET_FORMATS = ["netcdf", "parquet", "csv", "geojson", "gpx"] as const;
+export type DatasetFormat = (typeof DATASET_FORMATS)[number];
+
+/** POST /api/drones/<drone>/archives/export: the model the archive was made with, and what to keep. */
+export interface DatasetRequest {
+  model: ModdModel;
+  format: DatasetFormat;
+  files?: string[];
+  start_ns?: number | null;
+  end_ns?: number | null;
+  topics?: string[] | null;
+  resample_s?: number | null;
+}
+
 export interface ArchiveSeries {
   topic: string;
   total: number;

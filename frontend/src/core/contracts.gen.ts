@@ -4,6 +4,7 @@ export const DELIVERED_VALUE_VERSION = 1;
 export const STATUS_VERSION = 1;
 export const PLAN_VERSION = 1;
 export const PUBBROKER_VERSION = 1;
+export const ARCHIVE_RECORD_VERSION = 1;
 
 /** One window of one subscription, as the SubBroker puts it on modd/<drone>/sub/<subscriber> and writes it on a TCP delivery connection (one compact JSON object a line). Producer: runtime/python/src/modd/subbroker/payload.py. Consumers: the backend (stream relay, 3D scene, Foxglove), the generated C++ and Python subscriber clients, the browser's WebSocketSource. docs/subbroker.md, "Delivered values". */
 export interface DeliveredValue {
@@ -354,6 +355,12 @@ export interface PubBrokerLog {
   file?: string;
   max_bytes?: number;
   keep?: number;
+}
+
+/** One sample in the PubBroker's MCAP archive: the data of one MCAP Message, on the channel of its topic (channel topic = the topic's name, message encoding json, channel metadata {"type": <value type>}), whose MCAP Schema is named modd.<value type> with encoding jsonschema and the data given in x-channel-schemas; the message's log time is the sample's time (ns since the Unix epoch on the drone's clock). Written compact, exactly as the vectors show ({"value":1.5}). A non-finite float is written as the bare word nan, inf or -inf (what std::to_chars gives; not JSON): readers accept those three words in place of a number. Producer: runtime/cpp/src/archive/archiver.cpp (format_sample_json, sample_json_schema via archive_record.gen.hpp). Consumers: runtime/cpp/src/archive/reader.cpp (backfill), backend archives.py, modd dataset (runtime/python/src/modd/dataset/mcapread.py). Vectors: contracts/vectors/archive_record.json. */
+export interface ArchiveRecord {
+  /** The sample: a number for float32, float64 and int topics (an integer for int), a boolean for bool topics. */
+  value: number | boolean;
 }
 
 /** The aggregation table (modd.schema.json Aggregation x-table). */

@@ -49,10 +49,10 @@ export type Text = string;
 /** A file or directory path: printable characters only (no control characters, no invisible or bidirectional formatting characters). */
 export type Path = string;
 
-/** Physical unit of a measured variable: one of the paper's units, or a free-form unit string (e.g. "mS/cm"). */
+/** Physical unit of a measured variable: a UDUNITS-2 unit string, as CF requires (m s-2, degC, degree_north, 1, mS/cm; symbols people type such as m/s² are accepted and read as UDUNITS; PSU reads as 1), or one of the paper's unit names, read as its UDUNITS equivalent (KnownUnit x-udunits). Validation checks it with UDUNITS-2. */
 export type Unit = KnownUnit | string;
 
-/** The units of the paper's reference implementation. */
+/** The units of the paper's reference implementation, kept so that its models load; each reads as the UDUNITS-2 unit of x-udunits. */
 export type KnownUnit = "METER" | "METER_PER_SECOND" | "METER_PER_SECOND_SQUARED" | "DEGREE_CELSIUS" | "RADIAN" | "RADIAN_PER_SECOND" | "BAR" | "LITER" | "GRAM" | "NONE";
 export const KnownUnitValues = ["METER", "METER_PER_SECOND", "METER_PER_SECOND_SQUARED", "DEGREE_CELSIUS", "RADIAN", "RADIAN_PER_SECOND", "BAR", "LITER", "GRAM", "NONE"] as const;
 
@@ -72,6 +72,8 @@ export interface Drone {
   description?: Text;
   /** Sensors on board (at most 1,000). */
   sensors: Sensor[];
+  /** Which topics are the platform's position (datasets). */
+  position?: PlatformPosition;
 }
 
 /** A sensor on board; each of its measured variables is a topic. */
@@ -110,6 +112,26 @@ export interface MeasuredVariable {
   ascii?: AsciiField;
   /** For a variable of a modbus sensor: the register it is read from. */
   modbus?: ModbusRegister;
+  /** CF standard name (e.g. sea_water_temperature), checked against the CF standard-name table shipped with MoDD; the unit must convert to the name's canonical unit. Written as standard_name in datasets. */
+  standardName?: string;
+  /** A human-readable name for datasets (CF long_name). */
+  longName?: string;
+  /** Smallest valid value, in the variable's unit (CF valid_min); a dataset keeps samples outside the range, and says the range. */
+  validMin?: number;
+  /** Largest valid value, in the variable's unit (CF valid_max). */
+  validMax?: number;
+}
+
+/** Which topics give the platform's position, for datasets (modd dataset interpolates it to every sample). When absent, the MAVLink autopilot's GLOBAL_POSITION_INT lat, lon and alt are used if the model maps them. */
+export interface PlatformPosition {
+  /** The topic of the latitude (a unit convertible to degree_north). */
+  latitude: TopicName;
+  /** The topic of the longitude (a unit convertible to degree_east). */
+  longitude: TopicName;
+  /** The topic of the altitude (a unit convertible to m, positive up). */
+  altitude?: TopicName;
+  /** Longest gap between two fixes, in seconds, across which the position is interpolated; a sample in a longer gap gets no position (a fill value). */
+  maxGapS?: Decimal;
 }
 
 /** A field of a MAVLink message, converted to the variable's unit as value = raw * scale + offset. */

@@ -11,7 +11,8 @@ describe("forms from the schema", () => {
   it("lists each kind's fields in schema order, objects flattened, arrays of objects left out", () => {
     expect(paths("subscriber")).toEqual(["name", "endpoint.host", "endpoint.port", "topic", "periodS", "aggregation", "backfill"]);
     expect(paths("publisher")).toEqual(["name", "endpoint.host", "endpoint.port", "periodS", "topics"]);
-    expect(paths("drone")).toEqual(["name", "description"]);
+    expect(paths("drone")).toEqual(["name", "description", "position.latitude", "position.longitude",
+      "position.altitude", "position.maxGapS"]);
     // The schema grows (e.g. MAVLink sensors): new properties appear, arrays of objects stay out.
     expect(paths("sensor").slice(0, 2)).toEqual(["name", "description"]);
     expect(paths("sensor")).not.toContain("variables");
@@ -23,7 +24,11 @@ describe("forms from the schema", () => {
   it("takes inputs, options and help from the schema", () => {
     expect(field("subscriber", "aggregation")).toMatchObject({ input: "enum", options: [...AggregationValues], required: true });
     expect(field("subscriber", "aggregation").description).toMatch(/reduced/);
-    expect(field("topic", "unit")).toMatchObject({ input: "enumOrText", options: [...KnownUnitValues] });
+    // Units are offered as the symbols people type (UDUNITS), never as the paper's enum names.
+    const unit = field("topic", "unit");
+    expect(unit.input).toBe("enumOrText");
+    expect(unit.options).toEqual(expect.arrayContaining(["m s-2", "degC", "degree_north", "m/s²"]));
+    expect(unit.options?.filter((o) => (KnownUnitValues as readonly string[]).includes(o))).toEqual([]);
     expect(field("subscriber", "topic").input).toBe("topic");
     expect(field("publisher", "topics")).toMatchObject({ input: "topics", minItems: 1 });
     expect(field("subscriber", "periodS").input).toBe("decimal");

@@ -26,6 +26,7 @@ export interface JsonSchema {
   enum?: string[];
   const?: unknown;
   anyOf?: JsonSchema[];
+  examples?: string[];
   pattern?: string;
   minimum?: number;
   maximum?: number;
@@ -98,7 +99,8 @@ function inputOf(root: JsonSchema, prop: JsonSchema, refs: string[], s: JsonSche
     return null;
   }
   if (s.anyOf) {
-    const options = s.anyOf.map((a) => resolve(root, a).schema).find((a) => a.enum)?.enum;
+    // A unit offers the symbols people type (the schema's examples: "m s-2", "degC"), not the paper's enum names.
+    const options = s.examples ?? s.anyOf.map((a) => resolve(root, a).schema).find((a) => a.enum)?.enum;
     const free = s.anyOf.map((a) => resolve(root, a).schema).find((a) => !a.enum);
     return { input: "enumOrText", options, minLength: free?.minLength, maxLength: free?.maxLength };
   }

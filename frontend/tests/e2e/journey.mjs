@@ -8,7 +8,7 @@
  * `steps` runs the named steps in order; after a failure the rest are
  * reported as not run.
  */
-import { mkdirSync } from "node:fs";
+import { mkdirSync, readFileSync } from "node:fs";
 import { join } from "node:path";
 
 export function journey({ page, baseUrl, password, imagesDir, ports, drone, liveValues }) {
@@ -337,6 +337,19 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
         // The same file served to Foxglove/Lichtblick (seek, play, pause) on the replay port.
         await page.getByRole("button", { name: "Replay in Foxglove", exact: true }).click();
         await expectText(page.getByRole("status", { name: "Foxglove replay" }), /\d+ messages.*ws:\/\/127\.0\.0\.1:\d+/, 15000);
+        // Export dataset: the file as the scientist's CSV (modd dataset, run by the backend),
+        // downloaded and opened: every sample with its UDUNITS unit (scenario 1 declares no
+        // position, so its lat/lon columns are empty; tests/dataset checks positions).
+        const exportForm = page.getByRole("form", { name: "Export dataset" });
+        await exportForm.getByLabel("Dataset format").selectOption("csv");
+        const [download] = await Promise.all([
+          page.waitForEvent("download", { timeout: 60000 }),
+          exportForm.getByRole("button", { name: "Export", exact: true }).click(),
+        ]);
+        const rows = readFileSync(await download.path(), "utf8").trim().split("\n");
+        if (rows[0] !== '"time","topic","value","unit","lat","lon","alt"') throw new Error(`dataset CSV header: ${rows[0]}`);
+        const accel = rows.filter((r) => /"usv\.accelerometer\.accel_[xyz]",-?[0-9.e+-]+,"m s-2"/.test(r));
+        if (accel.length < 10) throw new Error(`dataset CSV: ${accel.length} accelerometer rows with their unit (${rows.length} rows; ${rows[1]})`);
         // The base-station record of what was delivered, live and backfilled.
         await expectText(page.getByRole("table", { name: "Base-station record files" }), /\.mcap/, 15000);
         await expand(true);

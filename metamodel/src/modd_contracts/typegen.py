@@ -8,7 +8,10 @@ re-types them by hand:
   (the metamodel's ``Aggregation`` ``x-table``) for Python;
 - ``runtime/cpp/include/modd/link/aggregation_table.gen.hpp``: the same for C++;
 - ``runtime/cpp/include/modd/client/delivered_value.gen.hpp``: the delivered
-  value's field names and version, for the C++ subscriber client's parser.
+  value's field names and version, for the C++ subscriber client's parser;
+- ``runtime/cpp/include/modd/archive/archive_record.gen.hpp``: the archive
+  record's field, MCAP schema names and channel schemas, for the PubBroker's
+  archive writer and reader.
 
 Run ``python -m modd_contracts.typegen`` to rewrite them; ``--check`` exits 1
 when one is stale (``make check`` does that, and a test).
@@ -37,6 +40,7 @@ OUTPUTS = {
     "aggcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "link" / "aggregation_table.gen.hpp",
     "owners": REPO / "metamodel" / "src" / "modd_contracts" / "owners.py",
     "dvcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "client" / "delivered_value.gen.hpp",
+    "arcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "archive" / "archive_record.gen.hpp",
 }
 
 
@@ -411,6 +415,53 @@ def generate_delivered_value_cpp() -> str:
     return "\n".join(out)
 
 
+#: The value types in the order of the C++ ``link::ValueType`` (its wire codes).
+CPP_VALUE_TYPES = ("float32", "float64", "int", "bool")
+
+
+def generate_archive_record_cpp() -> str:
+    schema = load("archive_record")
+    channels = schema["x-channel-schemas"]
+    if tuple(channels) != CPP_VALUE_TYPES:
+        raise ValueError(f"archive_record x-channel-schemas must list {CPP_VALUE_TYPES}")
+
+    def lit(text: str) -> str:
+        return json.dumps(text)
+
+    compact = [lit(json.dumps(channels[t], separators=(",", ":"))) for t in CPP_VALUE_TYPES]
+    sv = "inline constexpr std::string_view"
+    out = [
+        f"// {HEADER}",
+        "// The archive record (metamodel/src/modd_contracts/schemas/archive_record.schema.json):",
+        "// the MCAP message, schema and channel of one sample, written by the archiver",
+        "// and read by the archive reader (docs/pubbroker.md).",
+        "#pragma once",
+        "",
+        "#include <cstdint>",
+        "#include <string_view>",
+        "",
+        "namespace modd::archive_record {",
+        "",
+        f"inline constexpr int64_t kVersion = {int(schema['x-version'])};",
+        "// The one field of a message: the sample.",
+        f"{sv} kValue = {lit(next(iter(schema['properties'])))};",
+        "// A channel's schema is named kSchemaPrefix + value type.",
+        f"{sv} kSchemaPrefix = {lit(schema['x-schema-prefix'])};",
+        f"{sv} kSchemaEncoding = {lit(schema['x-schema-encoding'])};",
+        f"{sv} kMessageEncoding = {lit(schema['x-message-encoding'])};",
+        "// The channel metadata key holding the value type.",
+        f"{sv} kTypeMetadataKey = {lit(schema['x-type-metadata-key'])};",
+        "// Schema data of a channel, by value type (link::ValueType's order).",
+        "inline constexpr std::string_view kChannelSchemas[] = {",
+        *[f"    {c}," for c in compact],
+        "};",
+        "",
+        "}  // namespace modd::archive_record",
+        "",
+    ]
+    return "\n".join(out)
+
+
 GENERATORS: dict[str, Callable[[], str]] = {
     "py": generate_py,
     "ts": generate_ts,
@@ -418,6 +469,7 @@ GENERATORS: dict[str, Callable[[], str]] = {
     "aggcpp": generate_agg_cpp,
     "owners": generate_owners_py,
     "dvcpp": generate_delivered_value_cpp,
+    "arcpp": generate_archive_record_cpp,
 }
 
 

@@ -9,6 +9,7 @@ DELIVERED_VALUE_VERSION = 1
 STATUS_VERSION = 1
 PLAN_VERSION = 1
 PUBBROKER_VERSION = 1
+ARCHIVE_RECORD_VERSION = 1
 
 
 LinkState = Literal["connecting", "handshake", "configuring", "up", "down", "stopped"]
@@ -297,6 +298,12 @@ class PubBrokerLog(TypedDict):
     keep: NotRequired[int]
 
 
+class ArchiveRecord(TypedDict):
+    """One sample in the PubBroker's MCAP archive: the data of one MCAP Message, on the channel of its topic (channel topic = the topic's name, message encoding json, channel metadata {"type": <value type>}), whose MCAP Schema is named modd.<value type> with encoding jsonschema and the data given in x-channel-schemas; the message's log time is the sample's time (ns since the Unix epoch on the drone's clock)."""
+
+    value: float | bool
+
+
 @dataclass(frozen=True)
 class DeliveredValueFields:
     """The fields of :class:`DeliveredValue` but v, as a record."""
@@ -320,4 +327,4 @@ class DeliveredValueFields:
 DELIVERED_VALUE_REQUIRED: tuple[str, ...] = ("subscriber", "topic", "aggregation", "period_s", "unit", "config_id", "slot", "start_ns", "end_ns", "value", "count", "delivered_ns", "v",)
 
 
-__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "DeliveredValueFields", "DELIVERED_VALUE_REQUIRED"]
+__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "ARCHIVE_RECORD_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "ArchiveRecord", "DeliveredValueFields", "DELIVERED_VALUE_REQUIRED"]

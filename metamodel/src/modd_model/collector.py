@@ -22,6 +22,7 @@ from modd_contracts import aggregations as agg
 from .diagnostics import Diagnostic
 from .printer import INDENT, endpoint, name, quote
 from .query import DEFAULT_VALUE_TYPE
+from .units import PAPER_UNITS
 from .vocabulary import KNOWN_UNITS
 
 #: Aggregations the original metamodel knows.
@@ -46,6 +47,8 @@ class _Writer:
 def _drone(w: _Writer, drone: dict[str, Any]) -> None:
     if "description" in drone:
         w.omit("/drone/description", "the drone's description")
+    if "position" in drone:
+        w.omit("/drone/position", "the platform's position topics")
     w.add(1, f"Drone {name(drone['name'])} {{")
     w.add(2, "Sensors {")
     for i, s in enumerate(drone["sensors"]):
@@ -65,10 +68,13 @@ def _drone(w: _Writer, drone: dict[str, Any]) -> None:
 
 def _variable(w: _Writer, v: dict[str, Any], ptr: str, sensor: str) -> None:
     label = f"{sensor}.{v['name']}"
-    unit = v["unit"]
-    if unit not in KNOWN_UNITS:
-        w.omit(ptr + "/unit", f"the unit {unit!r} of {label} (written as NONE)")
+    unit = _paper_unit(v["unit"])
+    if unit is None:
+        w.omit(ptr + "/unit", f"the unit {v['unit']!r} of {label} (written as NONE)")
         unit = "NONE"
+    for prop in ("standardName", "longName", "validMin", "validMax"):
+        if prop in v:
+            w.omit(f"{ptr}/{prop}", f"the {prop} of {label}")
     if v.get("type", DEFAULT_VALUE_TYPE) != DEFAULT_VALUE_TYPE:
         w.omit(ptr + "/type", f"the value type {v['type']} of {label}")
     if "description" in v:
@@ -76,6 +82,13 @@ def _variable(w: _Writer, v: dict[str, Any], ptr: str, sensor: str) -> None:
     if "source" in v:
         w.omit(ptr + "/source", f"the MAVLink source of {label}")
     w.add(4, f"{name(v['name'])}({unit});")
+
+
+def _paper_unit(unit: str) -> str | None:
+    """The paper's name of a unit: itself, or the name whose UDUNITS spelling it is."""
+    if unit in KNOWN_UNITS:
+        return unit
+    return next((k for k, text in PAPER_UNITS.items() if text == unit), None)
 
 
 def _broker(w: _Writer, doc: dict[str, Any], key: str, word: str, path_key: str) -> None:

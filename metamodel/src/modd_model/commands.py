@@ -10,6 +10,7 @@ from typing import Any
 from .collector import print_collector
 from .comments import keep_comments
 from .io import LoadResult, decode, dumps, format_of, load_file, load_or_report, write_atomic
+from .science import no_position
 
 
 def _report(result: LoadResult, quiet_warnings: bool = False) -> None:
@@ -26,7 +27,10 @@ def run_validate(args: argparse.Namespace) -> int:
         _report(result)
         if not result.ok:
             status = 1
-        elif not args.quiet:
+            continue
+        if result.model is not None and (note := no_position(result.model)) is not None:
+            print(f"{path}: {note.severity}: {note.message} [{note.pointer}]", file=sys.stderr)
+        if not args.quiet:
             print(f"{path}: valid")
     return status
 

@@ -35,7 +35,6 @@ from .numbers import canonical_decimal
 from .vocabulary import (
     AGGREGATIONS,
     BACKFILL_POLICIES,
-    KNOWN_UNITS,
     SCHEMA_VERSION,
     SENSOR_KINDS,
     VALUE_TYPES,
@@ -70,6 +69,20 @@ SENSOR_SETTINGS = {
     "start": ("line/startCommand", "string"),
     "pattern": ("line/pattern", "string"),
     "clock": ("clock", "word"),
+}
+POSITION_SETTINGS = {
+    "latitude": ("latitude", "string"),
+    "longitude": ("longitude", "string"),
+    "altitude": ("altitude", "string"),
+    "maxGap": ("maxGapS", "decimal"),
+}
+# A variable's attributes block: DSL word -> (JSON property, kind); kind "number"
+# takes a signed number, "text" a string, "name" a bare word.
+VARIABLE_ATTRIBUTES = {
+    "standardName": ("standardName", "name"),
+    "longName": ("longName", "text"),
+    "validMin": ("validMin", "number"),
+    "validMax": ("validMax", "number"),
 }
 
 _TERMINAL_NAMES = {
@@ -325,12 +338,20 @@ class _Builder:
             if child.data == "description":
                 drone["description"] = _unquote(child.children[0])  # type: ignore[arg-type]
                 continue
+            if child.data == "position":
+                if "position" in drone:
+                    self._error(child, "a second Position block", "/drone/position")
+                self._mark("/drone/position", child)
+                drone["position"] = self._settings(child.children[0], "/drone/position",
+                                                   POSITION_SETTINGS)
+                continue
             self._mark("/drone/sensors", child)
             for s in child.children:
                 assert isinstance(s, Tree)
                 sensors.append(self._sensor(s, f"/drone/sensors/{len(sensors)}"))
         drone["sensors"] = sensors
-        return drone
+        order = ["name", "description", "sensors", "position"]
+        return {k: drone[k] for k in order if k in drone}
 
     def _sensor(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
         name = node.children[0]
@@ -384,14 +405,9 @@ class _Builder:
         unit_tok = unit_node.children[0]
         assert isinstance(unit_tok, Token)
         self._mark(ptr + "/unit", unit_tok)
-        if unit_tok.type == "STRING":
-            unit = _unquote(unit_tok)
-        else:
-            unit = str(unit_tok)
-            if unit not in KNOWN_UNITS:
-                self._error(unit_tok, f"unknown unit {unit!r}; known units are "
-                            f"{', '.join(KNOWN_UNITS)}; write other units in quotes, "
-                            f"e.g. \"mS/cm\"", ptr + "/unit")
+        # A bare word (the paper's METER_PER_SECOND_SQUARED, or degC) or a string
+        # ("m s-2"): validation checks it is a UDUNITS unit (units.py).
+        unit = _unquote(unit_tok) if unit_tok.type == "STRING" else str(unit_tok)
         var: dict[str, Any] = {"name": _word(name), "unit": unit}
         for child in rest:
             if isinstance(child, Token):
@@ -408,9 +424,37 @@ class _Builder:
                 var["ascii"] = self._ascii_source(child, ptr + "/ascii")
             elif child.data == "register_source":
                 var["modbus"] = self._register_source(child, ptr + "/modbus")
+            elif child.data == "meaning":
+                var.update(self._attributes(child, ptr))
             else:
                 var["description"] = _unquote(child.children[0])  # type: ignore[arg-type]
         return var
+
+    def _attributes(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
+        """``{ standardName = ...; longName = "..."; validMin = -2; }`` of a variable."""
+        out: dict[str, Any] = {}
+        for attr in node.children:
+            assert isinstance(attr, Tree)
+            key_tok, value = attr.children
+            assert isinstance(key_tok, Token) and isinstance(value, Token)
+            key = str(key_tok)
+            if key not in VARIABLE_ATTRIBUTES:
+                self._error(key_tok, f"unknown attribute {key!r}; expected one of "
+                            f"{', '.join(VARIABLE_ATTRIBUTES)}", ptr)
+                continue
+            prop, kind = VARIABLE_ATTRIBUTES[key]
+            self._mark(f"{ptr}/{prop}", attr)
+            if prop in out:
+                self._error(key_tok, f"attribute {key!r} given twice", f"{ptr}/{prop}")
+            found = {"SCALAR": "number", "STRING": "text", "NAME": "name"}[value.type]
+            if found != kind:
+                wanted = {"number": "a number", "text": "a string", "name": "a name"}[kind]
+                self._error(value, f"attribute {key!r} takes {wanted}", f"{ptr}/{prop}")
+                continue
+            text = str(value)
+            out[prop] = float(text) if kind == "number" else (
+                _unquote(value) if kind == "text" else text)
+        return {p: out[p] for p, _ in VARIABLE_ATTRIBUTES.values() if p in out}
 
     def _source(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
         message, field, *factors = node.children

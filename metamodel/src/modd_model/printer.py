@@ -10,15 +10,16 @@ from __future__ import annotations
 
 from typing import Any
 
-from .parser import INGRESS_SETTINGS, LINK_SETTINGS, SENSOR_SETTINGS
+from .parser import (INGRESS_SETTINGS, LINK_SETTINGS, POSITION_SETTINGS, SENSOR_SETTINGS,
+                     VARIABLE_ATTRIBUTES)
 from .vocabulary import KNOWN_UNITS
 
 INDENT = "    "
 #: Words of the grammar: a name spelled like one is written ^-escaped (^Sensor).
 KEYWORDS = frozenset({"DataCollector", "Drone", "Sensors", "Sensor", "measures", "kind", "from",
                       "scale", "offset", "PubBroker", "SubBroker", "Link", "Publishers",
-                      "Publisher", "Subscriptions", "Subscriber", "on", "with", "sentence",
-                      "column", "key", "register", "unit", "table", "order"})
+                      "Publisher", "Subscriptions", "Subscriber", "Position", "on", "with",
+                      "sentence", "column", "key", "register", "unit", "table", "order"})
 
 
 def name(text: str) -> str:
@@ -107,10 +108,27 @@ def _drone(drone: dict[str, Any]) -> list[str]:
             unit = v["unit"] if v["unit"] in KNOWN_UNITS else quote(v["unit"])
             vtype = f", {v['type']}" if "type" in v else ""
             source = _source(v["source"]) if "source" in v else _instrument_source(v)
-            out.append(f"{INDENT * 3}{name(v['name'])}({unit}{vtype}){_description(v)}{source};")
+            out.append(f"{INDENT * 3}{name(v['name'])}({unit}{vtype}){_description(v)}{source}"
+                       f"{_attributes(v)};")
         out.append(f"{INDENT * 2}}}")
-    out += [f"{INDENT}}}", "}"]
+    out.append(f"{INDENT}}}")
+    if "position" in drone:
+        out += [f"{INDENT}Position {{", *_settings(drone["position"], POSITION_SETTINGS, 1),
+                f"{INDENT}}}"]
+    out.append("}")
     return out
+
+
+def _attributes(v: dict[str, Any]) -> str:
+    """`` { standardName = ...; longName = "..."; }`` when the variable has any."""
+    parts = []
+    for word, (prop, kind) in VARIABLE_ATTRIBUTES.items():
+        if prop in v:
+            value = v[prop]
+            text = quote(value) if kind == "text" else repr(float(value)) if kind == "number" \
+                else str(value)
+            parts.append(f"{word} = {text};")
+    return f" {{ {' '.join(parts)} }}" if parts else ""
 
 
 def _broker(word: str, broker: dict[str, Any], path_key: str) -> list[str]:

@@ -44,6 +44,7 @@ class Drone(TypedDict):
     name: Name
     description: NotRequired[Text]
     sensors: list[Sensor]
+    position: NotRequired[PlatformPosition]
 
 
 class Sensor(TypedDict):
@@ -69,6 +70,19 @@ class MeasuredVariable(TypedDict):
     nmea: NotRequired[NmeaField]
     ascii: NotRequired[AsciiField]
     modbus: NotRequired[ModbusRegister]
+    standardName: NotRequired[str]
+    longName: NotRequired[str]
+    validMin: NotRequired[float]
+    validMax: NotRequired[float]
+
+
+class PlatformPosition(TypedDict):
+    """Which topics give the platform's position, for datasets (modd dataset interpolates it to every sample). When absent, the MAVLink autopilot's GLOBAL_POSITION_INT lat, lon and alt are used if the model maps them."""
+
+    latitude: TopicName
+    longitude: TopicName
+    altitude: NotRequired[TopicName]
+    maxGapS: NotRequired[Decimal]
 
 
 class MavlinkField(TypedDict):
@@ -203,4 +217,4 @@ class Position(TypedDict):
     y: float
 
 
-__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "MavlinkField", "SerialDevice", "AsciiLine", "NmeaField", "AsciiField", "ModbusRegister", "PubBroker", "Ingress", "SubBroker", "Link", "Publisher", "Subscriber", "Layout", "Position"]
+__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "PlatformPosition", "MavlinkField", "SerialDevice", "AsciiLine", "NmeaField", "AsciiField", "ModbusRegister", "PubBroker", "Ingress", "SubBroker", "Link", "Publisher", "Subscriber", "Layout", "Position"]

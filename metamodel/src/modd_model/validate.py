@@ -19,13 +19,15 @@ from .instruments import instrument_sensors
 from .numbers import to_fraction, to_micros
 from .query import topic_name
 from .schema import definition, load_schema
+from .science import CHECKS as SCIENCE_CHECKS
 
 if TYPE_CHECKING:  # jsonschema is imported on first validation (it is slow to import)
     from jsonschema import Draft202012Validator
     from jsonschema.exceptions import ValidationError
 
 Check = Callable[[dict[str, Any]], Iterator[Diagnostic]]
-CHECKS: list[Check] = []
+#: Units, standard names, valid ranges and the platform position (science.py) first.
+CHECKS: list[Check] = list(SCIENCE_CHECKS)
 
 # Aggregations that make no sense on booleans (their mean or sum is not a bool):
 # the aggregation table's numericOnly.
@@ -149,8 +151,9 @@ def _schema_diagnostic(err: ValidationError) -> Diagnostic:
     elif err.validator == "pattern":
         message = f"{err.instance!r} is not well-formed ({_pattern_hint(err)})"
     elif err.validator == "anyOf" and isinstance(err.instance, str):
-        message = (f"{err.instance!r} is not a valid unit (one of the known units, or 1 to 64 "
-                   "printable characters without control or invisible formatting characters)")
+        message = (f"{err.instance!r} is not a valid unit (a UDUNITS-2 unit or one of the "
+                   "paper's unit names, 1 to 64 printable characters without control or "
+                   "invisible formatting characters)")
     else:
         message = err.message
     return Diagnostic(message, pointer)

@@ -3,9 +3,17 @@
 // SubBroker writes, and the link's aggregation names are the generated table's.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "modd/archive/archive_record.gen.hpp"
+#include "modd/archive/archiver.hpp"
+#include "modd/archive/mcap_writer.hpp"
+#include "modd/archive/reader.hpp"
 #include "modd/client/subscriber.hpp"
 #include "modd/link/aggregation_table.gen.hpp"
 #include "modd/link/messages.hpp"
@@ -63,4 +71,84 @@ TEST(Contracts, AggregationNamesAreTheTables) {
     ASSERT_TRUE(modd::link::parse_aggregation(row.name, parsed));
     EXPECT_EQ(parsed, a);
   }
+}
+
+// The archive record (contracts/vectors/archive_record.json): the archiver writes each
+// vector's bytes and channel schema, and the archive reader reads each value back.
+namespace {
+
+modd::link::ValueType value_type(const std::string& name) {
+  modd::link::ValueType t{};
+  EXPECT_TRUE(modd::link::parse_value_type(name, t)) << name;
+  return t;
+}
+
+// The vector's value as the broker holds it (non-finite floats are spelled as strings).
+modd::archive::Sample sample_of(const json& v) {
+  modd::archive::Sample s{1, 1, 0, 0};
+  if (v.is_string()) {
+    std::string w = v.get<std::string>();
+    s.number = w == "nan" ? std::nan("") : w == "inf" ? HUGE_VAL : -HUGE_VAL;
+  } else if (v.is_boolean()) {
+    s.integer = v.get<bool>() ? 1 : 0;
+  } else if (v.is_number_integer()) {
+    s.integer = v.get<int64_t>();
+    s.number = v.get<double>();
+  } else {
+    s.number = v.get<double>();
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST(Contracts, ArchiverWritesEveryArchiveRecord) {
+  json v = vectors("archive_record");
+  ASSERT_FALSE(v["records"].empty());
+  for (const auto& c : v["channels"]) {
+    auto t = value_type(c["type"].get<std::string>());
+    EXPECT_EQ(modd::archive::sample_json_schema(t), c["schema_data"].get<std::string>()) << c["type"];
+    EXPECT_EQ(std::string(modd::archive_record::kSchemaPrefix) + modd::link::value_type_name(t),
+              c["schema_name"].get<std::string>());
+    EXPECT_EQ(modd::archive_record::kSchemaEncoding, c["schema_encoding"].get<std::string>());
+    EXPECT_EQ(modd::archive_record::kMessageEncoding, c["message_encoding"].get<std::string>());
+  }
+  for (const auto& c : v["records"]) {
+    std::string out;
+    modd::archive::format_sample_json(out, value_type(c["type"].get<std::string>()), sample_of(c["value"]));
+    EXPECT_EQ(out, c["data"].get<std::string>()) << c["name"];
+  }
+}
+
+TEST(Contracts, ArchiveReaderReadsEveryArchiveRecord) {
+  json v = vectors("archive_record");
+  auto dir = std::filesystem::temp_directory_path() / ("modd-contracts-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  for (const auto& c : v["records"]) {
+    std::string name = c["name"].get<std::string>();
+    auto t = value_type(c["type"].get<std::string>());
+    std::string data = c["data"].get<std::string>();
+    {
+      modd::archive::McapWriter w((dir / (name + "-0.mcap")).string(), modd::archive::WriterOptions{});
+      uint16_t schema = w.add_schema("modd." + c["type"].get<std::string>(), "jsonschema",
+                                     modd::archive::sample_json_schema(t));
+      uint16_t ch = w.add_channel(schema, "d.s." + name, "json");
+      w.add_message(ch, 0, 5, 5, std::span(reinterpret_cast<const uint8_t*>(data.data()), data.size()));
+      w.close();
+    }
+    modd::archive::TopicReader r(dir.string(), name, "d.s." + name, t);
+    auto got = r.peek(0);
+    ASSERT_TRUE(got.has_value()) << name;
+    modd::archive::Sample want = sample_of(c["value"]);
+    if (t == modd::link::ValueType::Int || t == modd::link::ValueType::Bool) {
+      EXPECT_EQ(got->integer, want.integer) << name;
+    } else if (std::isnan(want.number)) {
+      EXPECT_TRUE(std::isnan(got->number)) << name;
+    } else {
+      double expect = t == modd::link::ValueType::Float32 ? static_cast<double>(static_cast<float>(want.number))
+                                                          : want.number;
+      EXPECT_EQ(got->number, expect) << name;
+    }
+  }
+  std::filesystem::remove_all(dir);
 }

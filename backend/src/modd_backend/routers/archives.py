@@ -4,15 +4,20 @@ user may read; paths are confined to ``<archive_dir>/<drone>/``."""
 
 from __future__ import annotations
 
+import json
+import os
+import tempfile
 from collections.abc import Callable
 from pathlib import Path as FsPath
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Depends, HTTPException, Path, Query
 from fastapi.responses import FileResponse, Response
-from pydantic import BaseModel
+from pydantic import BaseModel, Field
+from starlette.background import BackgroundTask
 
-from ..archive_work import csv_text, in_worker, series
+from .. import archive_work
+from ..archive_work import MAX_EXPORT_SAMPLES, csv_text, dataset_file, in_worker, series
 from ..archives import archive_path, file_info, list_files
 from ..deps import AppState, Heavy, StateDep, UserDep, require
 from ..downloads import content_disposition
@@ -119,6 +124,65 @@ async def export_csv(
     stem = f"{name.removesuffix('.mcap')}-{topic}.csv"
     return Response(text, media_type="text/csv; charset=utf-8",
                     headers={"Content-Disposition": content_disposition(stem)})
+
+
+class ExportIn(BaseModel):
+    """A dataset of the drone's archive (``modd dataset``, docs/user-guide/datasets.md):
+    the model the archive was made with (the workbench's), the format, and what to
+    keep. ``files``: the archive files to read (all of the drone's when empty)."""
+
+    model: dict[str, Any]
+    format: Literal["netcdf", "parquet", "csv", "geojson", "gpx"]
+    files: list[Annotated[str, Field(max_length=255)]] = Field(default=[], max_length=1000)
+    start_ns: int | None = Field(default=None, ge=0, le=2**63 - 1)
+    end_ns: int | None = Field(default=None, ge=0, le=2**63 - 1)
+    topics: list[Annotated[str, Field(max_length=200)]] | None = Field(default=None,
+                                                                       max_length=1000)
+    resample_s: float | None = Field(default=None, gt=0, le=86_400)
+
+
+EXPORT_TYPES = {"netcdf": ("application/x-netcdf", ".nc"),
+                "parquet": ("application/vnd.apache.parquet", ".parquet"),
+                "csv": ("text/csv", ".csv"), "geojson": ("application/geo+json", ".geojson"),
+                "gpx": ("application/gpx+xml", ".gpx")}
+
+
+@router.post("/export", response_class=FileResponse, dependencies=[Heavy], responses={
+    **NOT_FOUND, **BUSY, 200: {"content": {t: {} for t, _ in EXPORT_TYPES.values()}},
+    413: {"description": f"more than {MAX_EXPORT_SAMPLES:,} samples in the range"},
+    422: {"description": "an invalid model, or nothing to export"}})
+async def export_dataset(drone: Drone, body: ExportIn, state: StateDep,
+                         _user: UserDep) -> FileResponse:
+    """The archive as a dataset file, streamed as a download (made in a worker
+    process, bounded to MAX_EXPORT_SAMPLES samples; notes in ``X-Modd-Notes``)."""
+    from modd.dataset.build import DatasetError
+    from modd_model import validate
+
+    errors = [str(d) for d in validate(body.model) if d.severity == "error"]
+    if errors:
+        raise HTTPException(422, {"message": "the model is not valid", "errors": errors[:20]})
+    root = state.settings.effective_archive_dir
+    paths = ([archive_path(root, drone, n) for n in body.files] if body.files
+             else list_files(root, drone))
+    if not paths:
+        raise HTTPException(404, f"no archives for drone {drone!r}")
+    media, suffix = EXPORT_TYPES[body.format]
+    fd, tmp = tempfile.mkstemp(prefix="modd-export-", suffix=suffix)
+    os.close(fd)
+    out = FsPath(tmp)
+    try:
+        notes = await in_worker(dataset_file, paths, body.model, body.format, out,
+                                body.start_ns, body.end_ns, body.topics, body.resample_s,
+                                archive_work.MAX_EXPORT_SAMPLES)
+    except DatasetError as exc:
+        out.unlink(missing_ok=True)
+        text = str(exc).replace(str(root), "<archives>")
+        raise HTTPException(413 if "more than" in text and "samples" in text else 422,
+                            text) from None
+    name = f"{drone}-dataset{suffix}"
+    headers = {"X-Modd-Notes": json.dumps(notes[:20], ensure_ascii=True)}
+    return FileResponse(out, media_type=media, filename=name, headers=headers,
+                        background=BackgroundTask(out.unlink, missing_ok=True))
 
 
 @router.post("/{name}/replay", responses={

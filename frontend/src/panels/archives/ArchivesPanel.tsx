@@ -2,7 +2,8 @@
  * Archives: the drone's MCAP files (from the backend, which reads them with
  * the official mcap reader); plot a topic over a time range (min/max-reduced
  * by the backend for plotting); download the file or the range as CSV; play
- * a range back through the monitor's charts (Playback: seek, play, pause).
+ * a range back through the monitor's charts (Playback: seek, play, pause);
+ * export the archive as a dataset (ExportDataset: NetCDF, Parquet, CSV, GeoJSON, GPX).
  */
 import { useEffect, useRef, useState } from "react";
 import uPlot from "uplot";
@@ -14,6 +15,7 @@ import { BaseRecords } from "./BaseRecords";
 import { saveBlob } from "../saveBlob";
 import type { ArchiveFile, ArchiveReplay, ArchiveSeries } from "../../api/types";
 import { Playback } from "./Playback";
+import { ExportDataset } from "./ExportDataset";
 import { topicLabel } from "../../core/topicLabel";
 
 function SeriesChart({ series, name }: { series: ArchiveSeries; name: string }) {
@@ -117,6 +119,7 @@ export default function ArchivesPanel() {
               {series.busy && <span role="status">Reading…</span>}
               {series.error && <span className="error" role="alert">{series.error}</span>}
             </form>
+            <ExportDataset model={model} file={file} />
             {replay && (
               <p role="status" aria-label="Foxglove replay">
                 Replay of {replay.file} ({replay.messages} messages, {replay.topics.length} topics): in Foxglove or Lichtblick,

@@ -7,6 +7,7 @@
 #include <ctime>
 #include <filesystem>
 
+#include "modd/archive/archive_record.gen.hpp"
 #include "modd/archive/recover.hpp"
 #include "modd/util/error.hpp"
 #include "modd/util/log.hpp"
@@ -15,7 +16,10 @@ namespace modd::archive {
 
 void format_sample_json(std::string& out, link::ValueType type, const Sample& s) {
   char buf[64];
-  out.assign("{\"value\":");
+  // {"<kValue>":<sample>}: the archive record (contracts/vectors/archive_record.json)
+  out.assign("{\"");
+  out.append(archive_record::kValue);
+  out.append("\":");
   char* end = buf;
   switch (type) {
     case link::ValueType::Float32: end = std::to_chars(buf, buf + sizeof buf, static_cast<float>(s.number)).ptr; break;
@@ -28,8 +32,7 @@ void format_sample_json(std::string& out, link::ValueType type, const Sample& s)
 }
 
 std::string sample_json_schema(link::ValueType type) {
-  const char* t = type == link::ValueType::Int ? "integer" : type == link::ValueType::Bool ? "boolean" : "number";
-  return std::string(R"({"type":"object","properties":{"value":{"type":")") + t + R"("}},"required":["value"]})";
+  return std::string(archive_record::kChannelSchemas[static_cast<int>(type) & 3]);
 }
 
 Archiver::Archiver(ArchiverOptions options) : opt_(std::move(options)) {
@@ -298,10 +301,12 @@ bool Archiver::write_item(Item& item) {
     const TopicInfo* key = item.topic.get();
     auto it = channels_.find(key);
     if (it == channels_.end()) {
-      uint16_t schema = writer_->add_schema(std::string("modd.") + link::value_type_name(item.topic->type), "jsonschema",
+      const char* type = link::value_type_name(item.topic->type);
+      uint16_t schema = writer_->add_schema(std::string(archive_record::kSchemaPrefix) + type,
+                                            std::string(archive_record::kSchemaEncoding),
                                             sample_json_schema(item.topic->type));
-      uint16_t ch = writer_->add_channel(schema, item.topic->name, "json",
-                                         {{"type", link::value_type_name(item.topic->type)}});
+      uint16_t ch = writer_->add_channel(schema, item.topic->name, std::string(archive_record::kMessageEncoding),
+                                         {{std::string(archive_record::kTypeMetadataKey), type}});
       it = channels_.emplace(key, ch).first;
       keep_.push_back(item.topic);
     }

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string_view>
 
+#include "modd/archive/archive_record.gen.hpp"
 #include "modd/archive/recover.hpp"
 #include "modd/util/error.hpp"
 
@@ -25,10 +26,13 @@ T get(const uint8_t* p) {
 }
 
 bool parse_value(std::string_view json, link::ValueType type, ArchivedSample& s) {
-  constexpr std::string_view key = "\"value\"";
+  const std::string_view key = archive_record::kValue;
   size_t at = json.find(key);
-  if (at == std::string_view::npos) return false;
-  const char* b = json.data() + at + key.size();
+  // the field name in quotes: "value"
+  if (at == 0 || at == std::string_view::npos || at + key.size() >= json.size() || json[at - 1] != '"' ||
+      json[at + key.size()] != '"')
+    return false;
+  const char* b = json.data() + at + key.size() + 1;
   const char* e = json.data() + json.size();
   auto space = [&] { while (b < e && (*b == ' ' || *b == '\t' || *b == '\n' || *b == '\r')) ++b; };
   space();

@@ -1,0 +1,65 @@
+/**
+ * Archives → Export dataset: the picked file (or every file) as a dataset
+ * scientists open in their tools (`modd dataset` run by the backend): CF
+ * NetCDF, Parquet, CSV, GeoJSON or GPX; a time range, topics, and an optional
+ * resampling period. The file arrives as a download.
+ */
+import { useState } from "react";
+import { useServices } from "../../app/services";
+import { saveBlob } from "../saveBlob";
+import { DATASET_FORMATS, type ArchiveFile, type DatasetFormat } from "../../api/types";
+import type { ModdModel } from "../../core/model.gen";
+import { topicLabel } from "../../core/topicLabel";
+import { datasetFileName, datasetRequest, type ExportChoice } from "./exportForm";
+
+const FORMAT_WORDS: Record<DatasetFormat, string> = {
+  netcdf: "NetCDF (CF trajectory)", parquet: "Parquet", csv: "CSV", geojson: "GeoJSON track", gpx: "GPX track",
+};
+
+export function ExportDataset({ model, file }: { model: ModdModel; file: ArchiveFile | null }) {
+  const { api } = useServices();
+  const drone = model.drone.name;
+  const [choice, setChoice] = useState<ExportChoice>({ format: "netcdf", from: "", to: "", topics: [], resample: "" });
+  const [state, setState] = useState<{ busy?: boolean; error?: string; done?: string }>({});
+  const topics = file?.topics.map((t) => t.topic) ?? [];
+
+  const run = async (e: React.FormEvent) => {
+    e.preventDefault();
+    const request = datasetRequest(model, choice, file);
+    if (typeof request === "string") { setState({ error: request }); return; }
+    setState({ busy: true });
+    try {
+      const name = datasetFileName(drone, file, choice.format);
+      saveBlob(await api.exportDataset(drone, request), name);
+      setState({ done: name });
+    } catch (err) {
+      setState({ error: (err as Error).message });
+    }
+  };
+
+  return (
+    <form onSubmit={run} className="archive-form" aria-label="Export dataset">
+      <strong>Export dataset</strong> {file ? `of ${file.name}` : "of every file"}
+      <select aria-label="Dataset format" value={choice.format} onChange={(e) => setChoice({ ...choice, format: e.target.value as DatasetFormat })}>
+        {DATASET_FORMATS.map((f) => <option key={f} value={f}>{FORMAT_WORDS[f]}</option>)}
+      </select>
+      <input aria-label="Export from (s after the start)" placeholder="from s" size={6} value={choice.from} disabled={!file}
+        onChange={(e) => setChoice({ ...choice, from: e.target.value })} />
+      <input aria-label="Export to (s after the start)" placeholder="to s" size={6} value={choice.to} disabled={!file}
+        onChange={(e) => setChoice({ ...choice, to: e.target.value })} />
+      <input aria-label="Resample period (s)" placeholder="resample s" size={8} value={choice.resample}
+        title="Empty: every sample at its own time. A period: the mean of each topic per period (wide form)."
+        onChange={(e) => setChoice({ ...choice, resample: e.target.value })} />
+      {topics.length > 0 && (
+        <select multiple aria-label="Export topics" value={choice.topics} size={Math.min(4, topics.length)}
+          onChange={(e) => setChoice({ ...choice, topics: [...e.target.selectedOptions].map((o) => o.value) })}>
+          {topics.map((t) => <option key={t} value={t}>{topicLabel(model, t)}</option>)}
+        </select>
+      )}
+      <button type="submit" disabled={state.busy}>Export</button>
+      {state.busy && <span role="status">Exporting…</span>}
+      {state.done && <span role="status">Saved {state.done}</span>}
+      {state.error && <span className="error" role="alert">{state.error}</span>}
+    </form>
+  );
+}

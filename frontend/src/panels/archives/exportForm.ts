@@ -1,0 +1,46 @@
+/**
+ * The Export dataset form's rules, apart from the component: what request a
+ * filled form makes, and the name the download gets.
+ *
+ *   datasetRequest(model, { format: "netcdf", from: "10", to: "", topics: [], resample: "" }, file)
+ *   // { model, format: "netcdf", files: [file.name], start_ns: file.start_ns + 10e9, ... }
+ */
+import type { ArchiveFile, DatasetFormat, DatasetRequest } from "../../api/types";
+import type { ModdModel } from "../../core/model.gen";
+
+export interface ExportChoice {
+  format: DatasetFormat;
+  from: string; // seconds after the file's first message ("" = its start)
+  to: string;
+  topics: string[]; // none chosen = every topic
+  resample: string; // seconds; "" = every raw sample at its own time
+}
+
+export const DATASET_SUFFIX: Record<DatasetFormat, string> = {
+  netcdf: "nc", parquet: "parquet", csv: "csv", geojson: "geojson", gpx: "gpx",
+};
+
+/** What a form asks for; an error text instead when a field cannot be read. */
+export function datasetRequest(model: ModdModel, c: ExportChoice, file: ArchiveFile | null): DatasetRequest | string {
+  const seconds = (text: string, what: string): number | null | string => {
+    if (text.trim() === "") return null;
+    const n = Number(text);
+    return Number.isFinite(n) && n >= 0 ? n : `${what}: a number of seconds, please`;
+  };
+  const from = seconds(c.from, "from"), to = seconds(c.to, "to"), resample = seconds(c.resample, "resample");
+  for (const v of [from, to, resample]) if (typeof v === "string") return v;
+  if (resample === 0) return "resample: a period greater than zero";
+  const base = file?.start_ns ?? null;
+  const at = (s: number | null) => (s === null || base === null ? null : base + Math.round(s * 1e9));
+  return {
+    model, format: c.format, files: file ? [file.name] : [],
+    start_ns: at(from as number | null), end_ns: at(to as number | null),
+    topics: c.topics.length ? c.topics : null, resample_s: resample as number | null,
+  };
+}
+
+/** `usv-run-0000.nc`, or `usv-dataset.nc` for every file. */
+export function datasetFileName(drone: string, file: ArchiveFile | null, format: DatasetFormat): string {
+  const stem = file ? file.name.replace(/\.mcap$/, "") : `${drone}-dataset`;
+  return `${stem}.${DATASET_SUFFIX[format]}`;
+}

@@ -1,0 +1,94 @@
+"""One call from request to file: pick the sink for the format, run the
+export into a temporary file beside the output, and move it into place only
+when it is complete (a failed export leaves nothing behind). Used by
+``modd dataset`` and the backend's export route.
+
+>>> make_dataset([Path("archive/")], model, "netcdf", Path("mission.nc"))  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import os
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+from . import netcdf, tables, tracks
+from .export import Options, Sink, Summary, export, find_files, print_progress
+from .mcapread import ArchiveError
+from .plan import ExportPlan, PlanError, plan_export
+from .resample import Resampler, WideTable
+
+#: GeoJSON and GPX are tracks: one point per period, this one unless resample_s says.
+TRACK_PERIOD_S = 1.0
+SUFFIXES = {
+    "netcdf": ".nc",
+    "parquet": ".parquet",
+    "csv": ".csv",
+    "geojson": ".geojson",
+    "gpx": ".gpx",
+}
+
+
+class DatasetError(Exception):
+    """Why a dataset could not be made, located (file and offset, topic, option)."""
+
+
+def _sink(fmt: str, out: Path, resample_s: float | None) -> Sink:
+    if fmt in ("geojson", "gpx"):
+        write = tracks.write_geojson if fmt == "geojson" else tracks.write_gpx
+        return Resampler(resample_s or TRACK_PERIOD_S, partial(write, out))
+    if resample_s is None:
+        return netcdf.NetcdfSink(out) if fmt == "netcdf" else tables.TableSink(out, fmt)
+    if fmt == "netcdf":
+        return Resampler(resample_s, partial(netcdf.write_wide, out))
+
+    def wide(plan: ExportPlan, table: WideTable, summary: Summary) -> None:
+        tables.write_wide(out, fmt, plan, table)
+
+    return Resampler(resample_s, wide)
+
+
+def make_dataset(
+    paths: list[Path],
+    model: dict[str, Any],
+    fmt: str,
+    out: Path,
+    *,
+    start_ns: int | None = None,
+    end_ns: int | None = None,
+    topics: list[str] | None = None,
+    resample_s: float | None = None,
+    progress: bool = False,
+    options: Options | None = None,
+) -> Summary:
+    """Writes the dataset to ``out``; raises DatasetError."""
+    if fmt not in SUFFIXES:
+        raise DatasetError(f"unknown format {fmt!r}; one of {', '.join(SUFFIXES)}")
+    tmp = out.with_name(f".{out.name}.{os.getpid()}.part")
+    try:
+        plan = plan_export(model, topics, start_ns, end_ns)
+        if fmt in ("geojson", "gpx") and plan.position is None:
+            raise PlanError(
+                f"a {fmt} track needs the platform's position, and the model "
+                "declares none (Position { latitude = ...; longitude = ...; })"
+            )
+        files = find_files(paths)
+        summary = export(
+            files,
+            plan,
+            _sink(fmt, tmp, resample_s),
+            options or Options(),
+            print_progress if progress else None,
+        )
+        if summary.samples == 0:
+            raise PlanError("nothing to export: no sample of the chosen topics in the range")
+        os.replace(tmp, out)
+        return summary
+    except (PlanError, ArchiveError) as exc:
+        raise DatasetError(str(exc)) from None
+    except OSError as exc:
+        where = exc.filename or out
+        raise DatasetError(f"{where}: {exc.strerror or exc}") from None
+    finally:
+        tmp.unlink(missing_ok=True)

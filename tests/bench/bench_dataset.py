@@ -1,0 +1,202 @@
+"""`modd dataset` throughput and memory on an archive written by the real PubBroker,
+side by side with the naive reference a scientist writes today (the workbench's per-topic
+CSV export read with pandas, positions joined with merge_asof). Prints figures; asserts
+nothing. The issue's targets: >= 1 M samples/s for netcdf and parquet, peak RSS <= 500 MB.
+
+    .venv/bin/python tests/bench/bench_dataset.py [--samples 10000000] [--topics 20]
+                                                  [--json build/bench/dataset.json]
+
+The archive: ``--topics`` float32 topics at one rate, two of them the platform's latitude
+and longitude (a straight track), blasted through the ingress (zstd chunks), as
+bench_pubbroker.py's ingest does.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+REPO = Path(__file__).resolve().parents[2]
+sys.path[:0] = [str(REPO / "tests" / "runtime"), str(REPO / "tests" / "subbroker")]
+
+import numpy as np  # noqa: E402
+from modd.link.codec import varint  # noqa: E402
+from modd.link.frames import ValueType  # noqa: E402
+from modd.publisher import encode_hello, encode_register  # noqa: E402
+from pubbroker_harness import PubBroker  # noqa: E402
+
+BIN = Path(sys.executable).parent
+
+
+def model_text(names: list[str]) -> str:
+    variables = " ".join(f'{n.split(".")[2]}("1");' for n in names[2:])
+    topics = ", ".join(f'"{n}"' for n in names)
+    return (
+        f"Drone usv {{ Sensors {{ Sensor gps measures {{ lat(degree_north); "
+        f"lon(degree_east); }} Sensor ins measures {{ {variables} }} }}\n"
+        f'Position {{ latitude = "usv.gps.lat"; longitude = "usv.gps.lon"; }} }}\n'
+        f'PubBroker("127.0.0.1":7171, "/l"); SubBroker("127.0.0.1":7272, "/c");\n'
+        f"Publishers {{ Publisher p(0.01, {topics}); }}\nSubscriptions {{ }}\n"
+    )
+
+
+def write_archive(tmp: Path, total: int, topics: int, batch: int = 4096) -> tuple[Path, Path]:
+    """(archive folder, model file): ``total`` samples through the real PubBroker."""
+    names = ["usv.gps.lat", "usv.gps.lon"] + [f"usv.ins.t{i}" for i in range(topics - 2)]
+    b = PubBroker(
+        tmp,
+        [(n, "float32") for n in names],
+        archive={"queue_limit_samples": 50_000_000, "flush_interval_ms": 1000},
+        # a mission's worth of 1 kHz samples, stamped in the past
+        ingress={"max_future_ms": 0, "max_past_ms": 0},
+        default_buffer_size=1000,
+        log_period_s=1,
+    ).start()
+    rec = np.dtype([("id", "u1"), ("ts", "<i8"), ("v", "<f4")])
+    arr = np.zeros(batch, dtype=rec)
+    arr["id"] = np.arange(batch) % topics
+    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    s.connect(b.unix_path)
+    s.sendall(
+        encode_hello("bench")
+        + b"".join(encode_register(i, ValueType.FLOAT32, n) for i, n in enumerate(names))
+    )
+    head = bytes([0x03]) + varint(batch)
+    frame_len = varint(len(head) + batch * rec.itemsize)
+    ts0, sent = time.time_ns() - (total // topics + 1) * 1_000_000, 0
+    while sent < total:
+        k = np.arange(sent, sent + batch)
+        arr["ts"] = ts0 + (k // topics) * 1_000_000  # one sample per topic per ms
+        step = k // topics
+        arr["v"] = np.where(
+            arr["id"] == 0,
+            47.7 + step * 1e-8,
+            np.where(arr["id"] == 1, -3.35 + step * 1e-8, np.sin(step * 0.01)),
+        )
+        s.sendall(frame_len + head + arr.tobytes())
+        sent += batch
+    s.close()
+    deadline = time.monotonic() + 600
+    while f"samples_archived={sent} " not in b.log() and time.monotonic() < deadline:
+        time.sleep(0.1)
+    b.stop()
+    if f"samples_archived={sent} " not in b.log():
+        raise RuntimeError(f"the PubBroker did not archive all {sent} samples: {b.log()[-600:]}")
+    model = tmp / "bench.modd"
+    model.write_text(model_text(names))
+    return b.archive_dir, model
+
+
+def timed(argv: list[str]) -> dict[str, Any]:
+    """Wall time and peak RSS (the child's, from wait4) of one command."""
+    t0 = time.monotonic()
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    _, status, usage = os.wait4(proc.pid, 0)
+    wall = time.monotonic() - t0
+    out = (proc.stdout.read() if proc.stdout else "") + (proc.stderr.read() if proc.stderr else "")
+    if os.waitstatus_to_exitcode(status) != 0:
+        raise RuntimeError(f"{argv[:3]} failed: {out[-2000:]}")
+    return {
+        "seconds": round(wall, 2),
+        "peak_rss_mb": round(usage.ru_maxrss / 1024, 1),
+        "cpu_s": round(usage.ru_utime + usage.ru_stime, 2),
+    }
+
+
+REFERENCE = r"""
+import sys, glob, pandas as pd
+csvs, out = sys.argv[1], sys.argv[2]
+frames = {p: pd.read_csv(p) for p in sorted(glob.glob(csvs + "/*.csv"))}
+lat = next(f for p, f in frames.items() if p.endswith("usv.gps.lat.csv")).rename(
+    columns={"value": "lat"})[["log_time_ns", "lat"]]
+lon = next(f for p, f in frames.items() if p.endswith("usv.gps.lon.csv")).rename(
+    columns={"value": "lon"})[["log_time_ns", "lon"]]
+samples = pd.concat(frames.values(), ignore_index=True).sort_values("log_time_ns")
+samples = pd.merge_asof(samples, lat, on="log_time_ns", direction="nearest")
+samples = pd.merge_asof(samples, lon, on="log_time_ns", direction="nearest")
+samples.to_parquet(out)
+print(len(samples))
+"""
+
+
+def reference_csvs(archive: Path, out: Path) -> float:
+    """The workbench's per-topic CSV export (backend archive_work.csv_text), timed."""
+    from modd_backend.archive_work import csv_text
+    from modd_backend.archives import file_info
+
+    out.mkdir()
+    t0 = time.monotonic()
+    for path in sorted(archive.glob("*.mcap")):
+        for topic in file_info(path).topics:
+            with (out / f"{path.stem}-{topic}.csv").open("a") as f:
+                f.write(csv_text(path, topic, None, None))
+    return time.monotonic() - t0
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--samples", type=int, default=10_000_000)
+    p.add_argument("--topics", type=int, default=20)
+    p.add_argument("--no-reference", action="store_true", help="skip the pandas reference")
+    p.add_argument("--json", type=Path)
+    args = p.parse_args()
+    results: dict[str, Any] = {"samples": args.samples, "topics": args.topics}
+    with tempfile.TemporaryDirectory(prefix="modd-bench-dataset-") as d:
+        tmp = Path(d)
+        t0 = time.monotonic()
+        (tmp / "broker").mkdir()
+        archive, model = write_archive(tmp / "broker", args.samples, args.topics)
+        size = sum(f.stat().st_size for f in archive.glob("*.mcap"))
+        print(
+            f"archive: {args.samples:,} samples of {args.topics} topics by the PubBroker in "
+            f"{time.monotonic() - t0:.1f} s, {size / 1e6:.1f} MB"
+        )
+        for fmt, suffix in (("netcdf", "nc"), ("parquet", "parquet")):
+            r = timed(
+                [
+                    str(BIN / "modd"),
+                    "dataset",
+                    str(archive),
+                    "--model",
+                    str(model),
+                    "--format",
+                    fmt,
+                    "-o",
+                    str(tmp / f"out.{suffix}"),
+                    "--no-progress",
+                ]
+            )
+            r["samples_per_s"] = round(args.samples / r["seconds"])
+            results[fmt] = r
+            print(
+                f"modd dataset --format {fmt}: {r['seconds']} s, {r['samples_per_s']:,} "
+                f"samples/s (target >= 1,000,000), peak RSS {r['peak_rss_mb']} MB "
+                f"(target <= 500)"
+            )
+        if not args.no_reference:
+            export_s = reference_csvs(archive, tmp / "csv")
+            r = timed([sys.executable, "-c", REFERENCE, str(tmp / "csv"), str(tmp / "ref.parquet")])
+            r["samples_per_s"] = round(args.samples / r["seconds"])
+            r["csv_export_seconds"] = round(export_s, 1)
+            results["reference"] = r
+            print(
+                f"reference (pandas read_csv + merge_asof, then parquet): {r['seconds']} s, "
+                f"{r['samples_per_s']:,} samples/s, peak RSS {r['peak_rss_mb']} MB; its input, "
+                f"the workbench's per-topic CSV export, took {export_s:.1f} s more"
+            )
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(results, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

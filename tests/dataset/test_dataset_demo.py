@@ -1,0 +1,216 @@
+"""From mission to dataset, for real: `modd up metamodel/examples/demo.modd
+--simulate` writes an archive; `modd dataset` exports it in the five formats.
+Checked against tools we did not write: the IOOS compliance checker (CF-1.11,
+ACDD-1.3), xarray's CF decoding, the official `mcap` reader (every value), and
+the simulator's own track (every position)."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+from mcap.reader import make_reader
+from modd.ports import free_port
+from modd.sim.track import survey_pose
+
+ROOT = Path(__file__).resolve().parents[2]
+BIN = Path(sys.executable).parent
+FORMATS = {"netcdf": "nc", "parquet": "parquet", "csv": "csv", "geojson": "geojson", "gpx": "gpx"}
+#: How far an interpolated position may be from the simulator's truth: the boat
+#: moves at 2 m/s, fixes come every 0.2 s, and a fix is stamped on board after
+#: crossing UDP, the bridge and the ingress (tens of ms, up to ~1 s on a loaded
+#: machine): docs/user-guide/datasets.md says the same.
+TOLERANCE_M = 5.0
+
+
+def _wait(path: Path, text: str, timeout: float) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if path.exists() and text in path.read_text(errors="replace"):
+            return
+        time.sleep(0.2)
+    raise AssertionError(f"{text!r} never appeared in {path}")
+
+
+@pytest.fixture(scope="module")
+def mission(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, float]:
+    """(archive folder, model, track start): ~12 s of the demo, simulated."""
+    tmp = tmp_path_factory.mktemp("mission")
+    model = tmp / "demo.modd"
+    text = (ROOT / "metamodel" / "examples" / "demo.modd").read_text()
+    model.write_text(text.replace('"127.0.0.1":7171', f'"127.0.0.1":{free_port()}'))
+    run = tmp / "run"
+    up = subprocess.Popen(
+        [
+            str(BIN / "modd"),
+            "up",
+            str(model),
+            "--simulate",
+            "--workdir",
+            str(run),
+            "--zenoh-listen",
+            f"tcp/127.0.0.1:{free_port()}",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+    try:
+        _wait(run / "logs" / "subbroker.log", "config 1 running", 60)
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and _archived_fixes(run / "archive") < 40:
+            time.sleep(1.0)
+    finally:
+        up.send_signal(signal.SIGTERM)
+        out, _ = up.communicate(timeout=60)
+    assert up.returncode == 0, out
+    start = re.search(r"track started at ([0-9.]+)", (run / "logs" / "simulator.log").read_text())
+    assert start, "the simulator says when its track started"
+    return run / "archive", model, float(start.group(1))
+
+
+def _archived_fixes(folder: Path) -> int:
+    """Latitude fixes flushed so far (only to know when to stop: not an oracle)."""
+    from modd.dataset.mcapread import ArchiveError, read_file
+
+    n = 0
+    for f in folder.glob("*.mcap"):
+        with contextlib.suppress(ArchiveError):  # a file being written
+            n += sum(len(b.time_ns) for b in read_file(f, only={"usv.autopilot.latitude"}))
+    return n
+
+
+def _official(folder: Path) -> dict[str, list[tuple[int, Any]]]:
+    out: dict[str, list[tuple[int, Any]]] = {}
+    for path in sorted(folder.glob("*.mcap")):
+        with path.open("rb") as f:
+            for _s, ch, m in make_reader(f).iter_messages(log_time_order=False):
+                out.setdefault(ch.topic, []).append((m.log_time, json.loads(m.data)["value"]))
+    return out
+
+
+@pytest.fixture(scope="module")
+def exports(
+    mission: tuple[Path, Path, float], tmp_path_factory: pytest.TempPathFactory
+) -> dict[str, Path]:
+    archive, model, _ = mission
+    out = tmp_path_factory.mktemp("exports")
+    paths = {}
+    for fmt, suffix in FORMATS.items():
+        paths[fmt] = out / f"demo.{suffix}"
+        done = subprocess.run(
+            [
+                str(BIN / "modd"),
+                "dataset",
+                str(archive),
+                "--model",
+                str(model),
+                "--format",
+                fmt,
+                "-o",
+                str(paths[fmt]),
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert done.returncode == 0, done.stderr
+        assert "Traceback" not in done.stderr
+    return paths
+
+
+def test_netcdf_passes_the_ioos_compliance_checker(
+    exports: dict[str, Path], tmp_path: Path
+) -> None:
+    report = tmp_path / "cc.json"
+    subprocess.run(
+        [
+            str(BIN / "compliance-checker"),
+            "--test",
+            "cf:1.11",
+            "--test",
+            "acdd:1.3",
+            "-f",
+            "json",
+            "-o",
+            str(report),
+            str(exports["netcdf"]),
+        ],
+        capture_output=True,
+        timeout=120,
+    )
+    results = json.loads(report.read_text())
+    failed = {
+        suite: [
+            (r["name"], r["msgs"]) for r in res["high_priorities"] if r["value"][0] != r["value"][1]
+        ]
+        for suite, res in results.items()
+    }
+    assert failed["cf:1.11"] == []
+    # ACDD rates standard_name "highly recommended": the CF table has none for a
+    # platform's linear acceleration, so the demo's three accelerometer axes go without.
+    assert all(
+        msgs == ["standard_name"] and "accelerometer_accel" in name
+        for name, msgs in failed["acdd:1.3"]
+    ), failed["acdd:1.3"]
+
+
+def test_every_value_is_the_archives(
+    mission: tuple[Path, Path, float], exports: dict[str, Path]
+) -> None:
+    import xarray as xr
+
+    truth = _official(mission[0])
+    table = pq.read_table(exports["parquet"]).to_pandas()
+    assert len(table) == sum(len(v) for v in truth.values())
+    with xr.open_dataset(exports["netcdf"]) as ds:  # CF decoding: times become datetimes
+        for topic, samples in truth.items():
+            rows = table[table["topic"] == topic]
+            assert rows["value"].tolist() == [float(v) for _, v in samples], topic
+            name = topic.split(".", 1)[1].replace(".", "_")
+            var = ds[name]
+            assert np.array_equal(var.values, np.array([v for _, v in samples], var.dtype))
+            times = ds[f"time_{name}"].values.astype("datetime64[ns]").astype("int64")
+            assert np.abs(times - [t for t, _ in samples]).max() < 1000, topic
+
+
+def test_every_position_is_the_simulators(
+    mission: tuple[Path, Path, float], exports: dict[str, Path]
+) -> None:
+    _, _, start = mission
+    table = pq.read_table(exports["parquet"]).to_pandas()
+    placed = table.dropna(subset=["lat", "lon"])
+    assert len(placed) > 0.9 * len(table)
+    secs = placed["time"].astype("int64").to_numpy() / 1e9 - start
+    worst = 0.0
+    for s, lat, lon in zip(secs, placed["lat"], placed["lon"], strict=True):
+        p = survey_pose(s)
+        north = (lat - p.lat) * 111_320.0
+        east = (lon - p.lon) * 111_320.0 * math.cos(math.radians(p.lat))
+        worst = max(worst, math.hypot(north, east))
+    assert worst < TOLERANCE_M, f"{worst:.2f} m"
+
+
+def test_tracks_open_as_geojson_and_gpx(exports: dict[str, Path]) -> None:
+    import xml.etree.ElementTree as ET
+
+    features = json.loads(exports["geojson"].read_text())["features"]
+    assert features[0]["geometry"]["type"] == "LineString" and len(features) > 5
+    assert "ctd_water_temperature" in features[1]["properties"]
+    pts = ET.parse(exports["gpx"]).getroot().findall(".//{http://www.topografix.com/GPX/1/1}trkpt")
+    assert len(pts) == len(features) - 1
+    assert (
+        exports["csv"].read_text().splitlines()[0]
+        == '"time","topic","value","unit","lat","lon","alt"'
+    )
