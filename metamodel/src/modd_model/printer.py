@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .parser import INGRESS_SETTINGS, LINK_SETTINGS
+from .parser import INGRESS_SETTINGS, LINK_SETTINGS, RADIO_SETTINGS
 from .vocabulary import KNOWN_UNITS
 
 INDENT = "    "
@@ -56,7 +56,7 @@ def _settings(values: dict[str, Any], known: dict[str, tuple[str, str]], depth: 
         if prop not in values:
             continue
         v = values[prop]
-        text = quote(v) if kind == "string" else str(v)
+        text = quote(v) if kind == "string" else str(v).lower() if kind == "bool" else str(v)
         lines.append(f"{pad}{INDENT}{word} = {text};")
     return lines
 
@@ -92,7 +92,9 @@ def print_model(doc: dict[str, Any]) -> str:
     out += _broker("PubBroker", doc["pubBroker"], "logPath")
     out += _broker("SubBroker", doc["subBroker"], "configPath")
     if "link" in doc:
-        out += ["Link {", *_settings(doc["link"], LINK_SETTINGS, 0), "}"]
+        link = dict(doc["link"])  # the radio profile is written flat (parser.RADIO_SETTINGS)
+        link.update({f"radio/{k}": v for k, v in link.pop("radio", {}).items()})
+        out += ["Link {", *_settings(link, LINK_SETTINGS | RADIO_SETTINGS, 0), "}"]
     out.append("Publishers {")
     for p in doc["publishers"]:
         args = [endpoint(p["endpoint"])] if "endpoint" in p else []
