@@ -15,6 +15,7 @@ from modd_model.io import load_file, locate
 from modd_model.numbers import fraction_to_decimal, to_fraction
 
 from .linkbudget import budget_lines
+from .radio import radio_lines
 from .plan import METHODS, Plan, PlanningError, make_plan
 
 #: Slots printed in the human-readable schedule.
@@ -51,8 +52,9 @@ def register(subparsers: Any) -> None:
 
 def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Load, plan, print. Exit 0 when feasible, 1 on a bad model, 3 when the
-    plan violates the 3 x PING cap, 4 when it exceeds the link's byte budget
-    (the plan is still printed)."""
+    plan violates the 3 x PING cap, 4 when it exceeds the link's byte budget,
+    5 when its radio refuses it (over the duty-cycle limit; the plan and the
+    nearest plans that fit are still printed)."""
     out = out or sys.stdout
     result = load_file(args.file)
     if not result.ok or result.model is None:
@@ -75,7 +77,9 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
         out.write(render_text(plan))
     if plan.buffers.infeasible:
         return 3
-    return 4 if plan.budget is not None and plan.budget.error else 0
+    if plan.budget is not None and plan.budget.error:
+        return 4
+    return 5 if plan.radio is not None and not plan.radio.fits else 0
 
 
 def _sec(value: Fraction) -> str:
@@ -121,6 +125,8 @@ def render_text(plan: Plan) -> str:
     ]
     if plan.budget is not None:
         lines += budget_lines(plan.budget)
+    if plan.radio is not None:
+        lines += radio_lines(plan.radio, plan.proposals)
     lines += _infeasible_lines(plan)
     return "\n".join(lines) + "\n"
 
