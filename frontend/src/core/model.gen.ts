@@ -170,6 +170,7 @@ export interface Link {
   alpha?: Decimal;
   /** Weight of the largest deviation in the planner's objective. */
   beta?: Decimal;
+  /** The drone's radio (sik, wifi, lora) for the planner's air time, duty cycle and energy per hour; none when absent. */
   radio?: Radio;
 }
 

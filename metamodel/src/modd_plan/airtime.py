@@ -37,9 +37,16 @@ def lora_symbol_s(sf: int, bandwidth_hz: int) -> float:
     return float(2**sf) / bandwidth_hz
 
 
-def lora_time_on_air(payload: int, sf: int, bandwidth_hz: int, coding_rate: int = 5,
-                     preamble: int = 8, explicit_header: bool = True, crc: bool = True,
-                     low_data_rate: bool | None = None) -> float:
+def lora_time_on_air(
+    payload: int,
+    sf: int,
+    bandwidth_hz: int,
+    coding_rate: int = 5,
+    preamble: int = 8,
+    explicit_header: bool = True,
+    crc: bool = True,
+    low_data_rate: bool | None = None,
+) -> float:
     """Seconds on air of one LoRa packet of ``payload`` bytes; ``coding_rate``
     is the denominator of 4/5..4/8; ``low_data_rate`` None: on when a symbol
     lasts more than 16 ms (the datasheet's rule).

@@ -36,9 +36,9 @@ from .buffers import (
 )
 from .linkbudget import LinkBudget, LinkSettings, link_budget
 from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
+from .planjson import plan_to_json
 from .proposals import Proposal, propose
 from .radio import RadioProfile, RadioReport, radio_report
-from .planjson import plan_to_json
 from .schedule import Schedule, ScheduleTooLarge
 from .streams import (
     PlannedStream,

@@ -89,8 +89,7 @@ def propose(model: Mapping[str, Any], plan: Planner) -> list[Proposal]:
     return _pareto(found)[:MAX_PROPOSALS]
 
 
-def _try(model: Mapping[str, Any], delay: Fraction, factor: int, plan: Planner
-         ) -> Proposal | None:
+def _try(model: Mapping[str, Any], delay: Fraction, factor: int, plan: Planner) -> Proposal | None:
     candidate = changed(model, delay, factor)
     result = plan(candidate)
     if result is None or not result[0].fits:
@@ -98,8 +97,9 @@ def _try(model: Mapping[str, Any], delay: Fraction, factor: int, plan: Planner
     return Proposal(delay, factor, result[1], result[0], candidate)
 
 
-def _smallest_fitting(model: Mapping[str, Any], ladder: list[Fraction], factor: int,
-                      plan: Planner) -> Proposal | None:
+def _smallest_fitting(
+    model: Mapping[str, Any], ladder: list[Fraction], factor: int, plan: Planner
+) -> Proposal | None:
     best = _try(model, ladder[-1], factor, plan)
     if best is None:
         return None
@@ -118,7 +118,12 @@ def _pareto(found: list[Proposal]) -> list[Proposal]:
     def key(p: Proposal) -> tuple[float, float, float]:
         return (p.max_delay_s, p.report.energy_j_per_hour, p.report.bytes_per_s)
 
-    front = [p for p in found
-             if not any(all(a <= b for a, b in zip(key(q), key(p), strict=True))
-                        and key(q) != key(p) for q in found)]
+    front = [
+        p
+        for p in found
+        if not any(
+            all(a <= b for a, b in zip(key(q), key(p), strict=True)) and key(q) != key(p)
+            for q in found
+        )
+    ]
     return sorted(front, key=key)

@@ -25,19 +25,16 @@ Default powers, from the datasheets (check your module's; override them):
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from math import ceil
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from modd_contracts.types import PlanRadio
 
 from .airtime import lora_time_on_air, sik_time_on_air, wifi_time_on_air
 from .linkbudget import KEEPALIVE_BYTES, KEEPALIVE_S, LinkBudget, wire_bytes
 from .linkcost import TCP_IP_HEADER_BYTES
-
-if TYPE_CHECKING:  # proposals.py reads reports of this module
-    from .proposals import Proposal
 
 HOUR_S = 3600.0
 #: largest LoRa payload per spreading factor: LoRaWAN Regional Parameters
@@ -85,23 +82,37 @@ class RadioProfile:
             return float(radio[key]) if key in radio else default
 
         return RadioProfile(
-            kind=kind, tx_w=dec("txW", tx) or 0.0, rx_w=dec("rxW", rx) or 0.0,
+            kind=kind,
+            tx_w=dec("txW", tx) or 0.0,
+            rx_w=dec("rxW", rx) or 0.0,
             idle_w=dec("idleW", idle) or 0.0,
             max_payload=int(radio.get("maxPayload", payload)),
-            duty_cycle=dec("dutyCycle", duty), battery_wh=dec("batteryWh", None),
-            air_rate_bps=int(radio.get("airRateBps", rate)), ecc=bool(radio.get("ecc", False)),
-            sf=sf, bandwidth_hz=int(radio.get("bandwidthHz", 125_000)),
-            coding_rate=int(radio.get("codingRate", 5)), preamble=int(radio.get("preamble", 8)),
+            duty_cycle=dec("dutyCycle", duty),
+            battery_wh=dec("batteryWh", None),
+            air_rate_bps=int(radio.get("airRateBps", rate)),
+            ecc=bool(radio.get("ecc", False)),
+            sf=sf,
+            bandwidth_hz=int(radio.get("bandwidthHz", 125_000)),
+            coding_rate=int(radio.get("codingRate", 5)),
+            preamble=int(radio.get("preamble", 8)),
             explicit_header=bool(radio.get("explicitHeader", True)),
-            crc=bool(radio.get("crc", True)), low_data_rate=radio.get("lowDataRate"),
+            crc=bool(radio.get("crc", True)),
+            low_data_rate=radio.get("lowDataRate"),
         )
 
     def one_packet_s(self, payload: int) -> float:
         """Air time of one radio packet of ``payload`` bytes."""
         if self.kind == "lora":
-            return lora_time_on_air(payload, self.sf, self.bandwidth_hz, self.coding_rate,
-                                    self.preamble, self.explicit_header, self.crc,
-                                    self.low_data_rate)
+            return lora_time_on_air(
+                payload,
+                self.sf,
+                self.bandwidth_hz,
+                self.coding_rate,
+                self.preamble,
+                self.explicit_header,
+                self.crc,
+                self.low_data_rate,
+            )
         if self.kind == "sik":
             return sik_time_on_air(payload, self.air_rate_bps, self.ecc)
         return wifi_time_on_air(payload, self.air_rate_bps)
@@ -164,12 +175,15 @@ class RadioReport:
         if self.fits:
             return None
         p = self.profile
-        top = ", ".join(f"{c.name} {c.air_s_per_hour:.1f} s/h ({c.bytes_per_s:.1f} B/s)"
-                        for c in self.costs[:5])
-        return (f"the plan transmits {self.air_s_per_hour:.1f} s per hour on the {p.kind} "
-                f"radio, over its duty-cycle limit of {100 * (p.duty_cycle or 0):g} % "
-                f"({(p.duty_cycle or 0) * HOUR_S:.1f} s per hour); the subscriptions that cost "
-                f"most: {top}")
+        top = ", ".join(
+            f"{c.name} {c.air_s_per_hour:.1f} s/h ({c.bytes_per_s:.1f} B/s)" for c in self.costs[:5]
+        )
+        return (
+            f"the plan transmits {self.air_s_per_hour:.1f} s per hour on the {p.kind} "
+            f"radio, over its duty-cycle limit of {100 * (p.duty_cycle or 0):g} % "
+            f"({(p.duty_cycle or 0) * HOUR_S:.1f} s per hour); the subscriptions that cost "
+            f"most: {top}"
+        )
 
     def to_json(self) -> PlanRadio:
         """The report (``diagnostics`` and ``proposals`` empty: planjson.py
@@ -185,8 +199,14 @@ class RadioReport:
             "energy_j_per_hour": round(self.energy_j_per_hour, 3),
             "battery_wh": self.profile.battery_wh,
             "battery_share_per_hour": round(battery, 6) if battery is not None else None,
-            "costs": [{"subscription": c.name, "bytes_per_s": round(c.bytes_per_s, 3),
-                       "air_time_s_per_hour": round(c.air_s_per_hour, 3)} for c in self.costs],
+            "costs": [
+                {
+                    "subscription": c.name,
+                    "bytes_per_s": round(c.bytes_per_s, 3),
+                    "air_time_s_per_hour": round(c.air_s_per_hour, 3),
+                }
+                for c in self.costs
+            ],
             "error": self.error,
             "diagnostics": [],
             "proposals": [],
@@ -212,8 +232,9 @@ def radio_report(profile: RadioProfile, budget: LinkBudget) -> RadioReport:
     rx_h = min(rx_h, HOUR_S - min(air_h, HOUR_S))
     idle_h = max(HOUR_S - air_h - rx_h, 0.0)
     energy = profile.tx_w * air_h + profile.rx_w * rx_h + profile.idle_w * idle_h
-    return RadioReport(profile, budget.drone_to_base, packets_h, air_h, rx_h, energy,
-                       _costs(budget, air_h))
+    return RadioReport(
+        profile, budget.drone_to_base, packets_h, air_h, rx_h, energy, _costs(budget, air_h)
+    )
 
 
 def _costs(budget: LinkBudget, air_h: float) -> tuple[SubscriptionCost, ...]:
@@ -231,27 +252,3 @@ def _costs(budget: LinkBudget, air_h: float) -> tuple[SubscriptionCost, ...]:
             entry[1] += share * air_h
     costs = [SubscriptionCost(n, b, a) for n, (b, a) in by_name.items()]
     return tuple(sorted(costs, key=lambda c: (-c.air_s_per_hour, c.name)))
-
-
-def radio_lines(report: RadioReport, proposals: Sequence[Proposal]) -> list[str]:
-    """The radio's figures for a person (``modd plan``'s text output)."""
-    p = report.profile
-    lines = ["", f"radio ({p.kind}): {report.bytes_per_s:.1f} B/s, "
-             f"{report.packets_per_hour:.0f} packets/h, air time {report.air_s_per_hour:.1f} s/h, "
-             f"energy {report.energy_j_per_hour:.1f} J/h"]
-    share = report.duty_share
-    if share is not None:
-        lines.append(f"  {100 * share:.1f} % of the {100 * (p.duty_cycle or 0):g} % duty-cycle "
-                     "limit")
-    battery = report.battery_share
-    if battery is not None:
-        lines.append(f"  {100 * battery:.3f} % of the declared {p.battery_wh:g} Wh battery per "
-                     "hour")
-    if report.error:
-        lines += ["", f"REFUSED BY THE RADIO: {report.error}"]
-        lines.append("nearest plans that fit:" if proposals else "no nearer plan fits")
-        lines += [f"  {q.describe()}: delay {q.max_delay_s:.3f} s, "
-                  f"{q.report.bytes_per_s:.1f} B/s, air time {q.report.air_s_per_hour:.1f} s/h "
-                  f"({100 * (q.report.duty_share or 0):.0f} %), "
-                  f"{q.report.energy_j_per_hour:.1f} J/h" for q in proposals]
-    return lines
