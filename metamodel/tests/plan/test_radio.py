@@ -46,8 +46,9 @@ def test_lora_time_on_air_published_figures() -> None:
     assert lora_time_on_air(13, 9, 125_000) == pytest.approx(0.164864, abs=1e-9)
 
 
-def _lr1110_symbols(pl: int, sf: int, cr: int, preamble: int, header: bool, crc: bool,
-                    ldro: bool) -> float:
+def _lr1110_symbols(
+    pl: int, sf: int, cr: int, preamble: int, header: bool, crc: bool, ldro: bool
+) -> float:
     """Semtech LR1110 user manual (UM.LR1110.W.APP rev 1.0, section 8.2.2.4),
     SF7-SF12: N = Npreamble + 4.25 + 8 + ceil(max(8 PL + NbitCRC - 4 SF + 8
     + NsymbolHeader, 0) / (4 (SF - 2 LDRO))) x (CR + 4), CR 1..4."""
@@ -120,11 +121,15 @@ def test_proposals_fit_when_planned_again(scenarios_dir: Path) -> None:
     model = _model(scenarios_dir, "scenario1.modd", LORA_SF7)
     plan = make_plan(model)
     assert plan.proposals
-    keys = [(p.max_delay_s, p.report.energy_j_per_hour, p.report.bytes_per_s)
-            for p in plan.proposals]
+    keys = [
+        (p.max_delay_s, p.report.energy_j_per_hour, p.report.bytes_per_s) for p in plan.proposals
+    ]
     for i, a in enumerate(keys):  # a Pareto front: none dominates another
-        assert not any(all(x <= y for x, y in zip(b, a, strict=True)) and b != a
-                       for j, b in enumerate(keys) if j != i)
+        assert not any(
+            all(x <= y for x, y in zip(b, a, strict=True)) and b != a
+            for j, b in enumerate(keys)
+            if j != i
+        )
     for p in plan.proposals:
         candidate = changed(model, p.accepted_delay_s, p.period_factor)
         assert validate(candidate) == []
