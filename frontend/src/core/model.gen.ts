@@ -184,8 +184,8 @@ export interface Radio {
   ecc?: boolean;
   /** lora: spreading factor SF6 to SF12. */
   spreadingFactor?: number;
-  /** lora: bandwidth in Hz (7800 to 500000). */
-  bandwidthHz?: "7800" | "10400" | "15600" | "20800" | "31250" | "41700" | "62500" | "125000" | "250000" | "500000";
+  /** lora: bandwidth in Hz, one of 7800, 10400, 15600, 20800, 31250, 41700, 62500, 125000, 250000, 500000. */
+  bandwidthHz?: number;
   /** lora: coding rate 4/5 to 4/8, given as its denominator 5 to 8. */
   codingRate?: number;
   /** lora: programmed preamble length in symbols. */

@@ -124,7 +124,7 @@ class Radio(TypedDict):
     airRateBps: NotRequired[int]
     ecc: NotRequired[bool]
     spreadingFactor: NotRequired[int]
-    bandwidthHz: NotRequired[Literal["7800", "10400", "15600", "20800", "31250", "41700", "62500", "125000", "250000", "500000"]]
+    bandwidthHz: NotRequired[int]
     codingRate: NotRequired[int]
     preamble: NotRequired[int]
     explicitHeader: NotRequired[bool]

@@ -172,3 +172,40 @@ def test_modd_plan_refuses_with_exit_5(scenarios_dir: Path, tmp_path: Path) -> N
     doc = json.loads(out.getvalue())
     assert doc["radio"]["proposals"] and doc["radio"]["duty_share"] > 1
     assert validate_contract("plan", doc) == []
+
+
+def test_radio_settings_round_trip_and_located_errors(scenarios_dir: Path) -> None:
+    link = (
+        LORA_SF7 + " bandwidth = 250000; codingRate = 8; preamble = 12; explicitHeader = false;"
+        " crc = false; lowDataRate = true; dutyCycle = 0.1; txW = 0.1; idleW = 0;"
+    )
+    model = _model(scenarios_dir, "scenario1.modd", link)
+    radio = model["link"]["radio"]
+    assert (radio["kind"], radio["bandwidthHz"], radio["codingRate"], radio["preamble"]) == (
+        "lora",
+        250000,
+        8,
+        12,
+    )
+    assert (radio["explicitHeader"], radio["crc"], radio["lowDataRate"]) == (False, False, True)
+    profile = RadioProfile.of(radio)
+    assert (profile.duty_cycle, profile.tx_w, profile.idle_w, profile.battery_wh) == (
+        0.1,
+        0.1,
+        0.0,
+        50.0,
+    )
+    again = load_text(print_model(model), "again.modd")
+    assert again.model == model
+    base = (scenarios_dir / "scenario1.modd").read_text()
+    for setting, pointer, words in (
+        ("bandwidth = 100000;", "/link/radio/bandwidthHz", "not a LoRa bandwidth"),
+        ("dutyCycle = 1.5;", "/link/radio/dutyCycle", "must be in (0, 1]"),
+        ("battery = 0;", "/link/radio/batteryWh", "must be > 0"),
+        ("sf = 13;", "/link/radio/spreadingFactor", "maximum of 12"),
+        ("crc = yes;", "/link/radio/crc", "takes true or false"),
+    ):
+        text = base + f'Link {{ transport = serial; device = "/d"; radio = lora; {setting} }}\n'
+        diags = load_text(text, "bad.modd").diagnostics
+        hits = [d for d in diags if d.pointer == pointer and words in d.message]
+        assert hits and hits[0].location is not None and hits[0].location.line > 0, diags
