@@ -49,19 +49,26 @@ def _is_data(packet: bytes) -> bool:
         return False
 
 
+# SiK: no duty-cycle limit; LoRa SF7 at a 20 % limit: the plan fits (502 s of
+# air per hour), the radio's silence after each packet (4 x 0.17 s) ends
+# before the next one (every 1.25 s)
+PROFILES = {"sik": {"kind": "sik"}, "lora": {"kind": "lora", "dutyCycle": "0.2"}}
+
+
+@pytest.mark.parametrize("name", sorted(PROFILES))
 def test_planned_air_time_is_what_the_emulator_measures(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(relay, "AirtimeChannel", _Recording)
     base, base_path = relay.open_pty_pair()
     drone, drone_path = relay.open_pty_pair()
     model_path = model_copy(tmp_path, "scenario1.modd")
     model = json.loads(model_path.read_text())
-    model["link"] = {"transport": "serial", "device": base_path, "radio": {"kind": "sik"}}
+    model["link"] = {"transport": "serial", "device": base_path, "radio": PROFILES[name]}
     model_path.write_text(json.dumps(model))
     profile = RadioProfile.of(model["link"]["radio"])
     predicted = make_plan(model).radio
-    assert predicted is not None
+    assert predicted is not None and predicted.fits
 
     stopping = threading.Event()
     out: list[tuple[Any, Any]] = []
@@ -92,13 +99,16 @@ def test_planned_air_time_is_what_the_emulator_measures(
         thread.join(10)
     up, down = out[0]
     assert isinstance(down, _Recording) and isinstance(up, _Recording)
+    assert not down.dropped, down.summary()  # a plan that fits: nothing refused
     data = [(t, air) for t, packet, air in down.sent if _is_data(packet)]
     assert len(data) > 12, down.summary()
     # between the first and the last DATA frame: every frame after the first
     span = data[-1][0] - data[0][0]
     measured = sum(air for _, air in data[1:]) * 3600 / span
+    print(f"{name}: air {measured:.3f} s/h measured, {predicted.air_s_per_hour:.3f} planned")
     assert measured == pytest.approx(predicted.air_s_per_hour, rel=0.05)
     # energy over the same span: transmitting, receiving the base station's packets, idle
     rx = sum(air for t, _, air in up.sent if data[0][0] <= t <= data[-1][0]) * 3600 / span
     energy = profile.tx_w * measured + profile.rx_w * rx + profile.idle_w * (3600 - measured - rx)
+    print(f"{name}: energy {energy:.3f} J/h measured, {predicted.energy_j_per_hour:.3f} planned")
     assert energy == pytest.approx(predicted.energy_j_per_hour, rel=0.05)
