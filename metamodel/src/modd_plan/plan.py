@@ -303,8 +303,8 @@ def make_plan(
                                max_buffer=max_buffer, method=method)
             except PlanningError:
                 return None
-            if p.radio is None or p.budget is None:
-                return None
+            if p.radio is None or p.budget is None or len(p.infeasible) > len(plan.infeasible):
+                return None  # a candidate must not break the delay cap the plan meets
             return p.radio, max(p.budget.delays_s.values(), default=0.0)
 
         return replace(plan, proposals=tuple(propose(model, replan)))
