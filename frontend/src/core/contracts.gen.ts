@@ -316,8 +316,8 @@ export interface PlanRadioDiagnostic {
 /** A nearer plan that fits, verified by planning it again (metamodel/src/modd_plan/proposals.py). */
 export interface PlanProposal {
   accepted_delay_s: number;
-  /** Every subscription's period multiplied by this. */
-  period_factor: number;
+  /** Every subscription period shorter than this raised to it (s), else null. */
+  min_period_s: number | null;
   max_delay_s: number;
   bytes_per_s: number;
   air_time_s_per_hour: number;

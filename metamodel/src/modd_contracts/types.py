@@ -258,7 +258,7 @@ class PlanProposal(TypedDict):
     """A nearer plan that fits, verified by planning it again (metamodel/src/modd_plan/proposals.py)."""
 
     accepted_delay_s: float
-    period_factor: int
+    min_period_s: float | None
     max_delay_s: float
     bytes_per_s: float
     air_time_s_per_hour: float

@@ -1,13 +1,17 @@
 """The nearest plans that fit the radio's duty cycle, when a plan does not:
 a longer accepted delay (more slots per packet, fewer headers and preambles)
 and longer subscription periods (fewer values), each candidate planned again
-by the same planner and kept only if its own report fits; then the Pareto
-front of (largest delay, energy per hour, bytes/s), lowest delay first.
+by the same planner and kept only if its own report fits and it meets the
+delay cap wherever the plan did; then the Pareto front of (largest delay,
+energy per hour, bytes/s), lowest delay first.
 
-For each period factor (x1, x2, x4 ...) the smallest accepted delay of a
-ladder that fits is found by bisection (air time falls as the delay grows),
-so a refusal costs a few dozen plans (~1.5 ms each for the paper's
-scenarios).
+Longer periods are a floor: every subscription faster than P gets period P
+(the fastest, costliest ones change; the slow ones stay, and the spread of a
+topic's periods, which the 3 x PING cap bounds, shrinks). The floors are the
+model's own subscription periods, then the longest x 2, x 4 ... For each
+floor the smallest accepted delay of a ladder that fits is found by
+bisection (air time falls as the delay grows), so a refusal costs a few
+dozen plans (~1.5 ms each for the paper's scenarios).
 """
 
 from __future__ import annotations
@@ -25,8 +29,8 @@ from .radio import RadioReport
 
 #: multipliers of the accepted delay tried (the model's delay x k)
 DELAY_STEPS = (1, 2, 4, 8, 16, 32, 64, 128)
-#: multipliers of every subscription's period tried
-PERIOD_FACTORS = (1, 2, 4, 8, 16, 32, 64)
+#: multipliers of the longest subscription period tried as floors
+FLOOR_STEPS = (2, 4, 8, 16, 32)
 #: proposals returned at most
 MAX_PROPOSALS = 5
 
@@ -39,7 +43,7 @@ class Proposal:
     """A changed model that fits, with its report and largest delay (s)."""
 
     accepted_delay_s: Fraction
-    period_factor: int
+    min_period_s: Fraction | None  # the floor of every subscription's period, None: unchanged
     max_delay_s: float
     report: RadioReport
     model: dict[str, Any]
@@ -48,7 +52,7 @@ class Proposal:
         r = self.report
         return {
             "accepted_delay_s": float(self.accepted_delay_s),
-            "period_factor": self.period_factor,
+            "min_period_s": float(self.min_period_s) if self.min_period_s else None,
             "max_delay_s": round(self.max_delay_s, 6),
             "bytes_per_s": round(r.bytes_per_s, 3),
             "air_time_s_per_hour": round(r.air_s_per_hour, 3),
@@ -59,19 +63,31 @@ class Proposal:
 
     def describe(self) -> str:
         parts = [f"accepted delay {fraction_to_decimal(self.accepted_delay_s)} s"]
-        if self.period_factor > 1:
-            parts.append(f"every subscription's period x {self.period_factor}")
+        if self.min_period_s is not None:
+            floor = fraction_to_decimal(self.min_period_s)
+            parts.append(f"every subscription's period at least {floor} s")
         return ", ".join(parts)
 
 
-def changed(model: Mapping[str, Any], delay: Fraction, factor: int) -> dict[str, Any]:
-    """``model`` with this accepted delay and every subscription's period
-    multiplied by ``factor``."""
+def changed(model: Mapping[str, Any], delay: Fraction, floor: Fraction | None) -> dict[str, Any]:
+    """``model`` with this accepted delay and every subscription period
+    shorter than ``floor`` raised to it."""
     out = deepcopy(dict(model))
     out.setdefault("link", {})["acceptedDelayS"] = fraction_to_decimal(delay)
-    for sub in out.get("subscribers", []):
-        sub["periodS"] = fraction_to_decimal(to_fraction(sub["periodS"]) * factor)
+    if floor is not None:
+        for sub in out.get("subscribers", []):
+            if to_fraction(sub["periodS"]) < floor:
+                sub["periodS"] = fraction_to_decimal(floor)
     return out
+
+
+def floors(model: Mapping[str, Any]) -> list[Fraction | None]:
+    """None (periods unchanged), the model's subscription periods above the
+    shortest, then the longest x :data:`FLOOR_STEPS`."""
+    periods = sorted({to_fraction(s["periodS"]) for s in model.get("subscribers", [])})
+    if not periods:
+        return [None]
+    return [None, *periods[1:], *(periods[-1] * k for k in FLOOR_STEPS)]
 
 
 def propose(model: Mapping[str, Any], plan: Planner) -> list[Proposal]:
@@ -80,8 +96,8 @@ def propose(model: Mapping[str, Any], plan: Planner) -> list[Proposal]:
     base = to_fraction(model.get("link", {}).get("acceptedDelayS", "1"))
     ladder = [base * k for k in DELAY_STEPS]
     found: list[Proposal] = []
-    for factor in PERIOD_FACTORS:
-        hit = _smallest_fitting(model, ladder, factor, plan)
+    for floor in floors(model):
+        hit = _smallest_fitting(model, ladder, floor, plan)
         if hit is not None:
             found.append(hit)
             if hit.accepted_delay_s == base:
@@ -89,24 +105,26 @@ def propose(model: Mapping[str, Any], plan: Planner) -> list[Proposal]:
     return _pareto(found)[:MAX_PROPOSALS]
 
 
-def _try(model: Mapping[str, Any], delay: Fraction, factor: int, plan: Planner) -> Proposal | None:
-    candidate = changed(model, delay, factor)
+def _try(
+    model: Mapping[str, Any], delay: Fraction, floor: Fraction | None, plan: Planner
+) -> Proposal | None:
+    candidate = changed(model, delay, floor)
     result = plan(candidate)
     if result is None or not result[0].fits:
         return None
-    return Proposal(delay, factor, result[1], result[0], candidate)
+    return Proposal(delay, floor, result[1], result[0], candidate)
 
 
 def _smallest_fitting(
-    model: Mapping[str, Any], ladder: list[Fraction], factor: int, plan: Planner
+    model: Mapping[str, Any], ladder: list[Fraction], floor: Fraction | None, plan: Planner
 ) -> Proposal | None:
-    best = _try(model, ladder[-1], factor, plan)
+    best = _try(model, ladder[-1], floor, plan)
     if best is None:
         return None
     lo, hi = 0, len(ladder) - 1  # ladder[hi] fits
     while lo < hi:
         mid = (lo + hi) // 2
-        hit = _try(model, ladder[mid], factor, plan)
+        hit = _try(model, ladder[mid], floor, plan)
         if hit is None:
             lo = mid + 1
         else:

@@ -24,8 +24,8 @@ const refused: Radio = {
   error: "the plan transmits 502.1 s per hour on the lora radio, over its duty-cycle limit of 1 % (36.0 s per hour); the subscriptions that cost most: sub_5 111.6 s/h (18.1 B/s)",
   diagnostics: [{ pointer: "/subscribers/4", message: "sub_5 costs 111.6 s of air time per hour (18.1 B/s)" }],
   proposals: [
-    { accepted_delay_s: 1, period_factor: 32, max_delay_s: 0, bytes_per_s: 4, air_time_s_per_hour: 32.371, duty_share: 0.8992, energy_j_per_hour: 28.315, change: "accepted delay 1.0 s, every subscription's period x 32" },
-    { accepted_delay_s: 16, period_factor: 16, max_delay_s: 16, bytes_per_s: 5.1, air_time_s_per_hour: 31.38, duty_share: 0.87168, energy_j_per_hour: 28.036, change: "accepted delay 16.0 s, every subscription's period x 16" },
+    { accepted_delay_s: 1, min_period_s: 8, max_delay_s: 0, bytes_per_s: 4, air_time_s_per_hour: 32.371, duty_share: 0.8992, energy_j_per_hour: 28.315, change: "accepted delay 1.0 s, every subscription's period at least 8.0 s" },
+    { accepted_delay_s: 16, min_period_s: 4, max_delay_s: 16, bytes_per_s: 5.1, air_time_s_per_hour: 31.38, duty_share: 0.87168, energy_j_per_hour: 28.036, change: "accepted delay 16.0 s, every subscription's period at least 4.0 s" },
   ],
 };
 
@@ -48,7 +48,7 @@ describe("AirTime (the Plan panel's radio)", () => {
     expect(screen.getByTestId("radio-error").textContent).toMatch(/Refused by the radio.*duty-cycle limit of 1 %/);
     const rows = screen.getAllByTestId("proposal").map((r) => r.textContent);
     expect(rows).toHaveLength(2);
-    expect(rows[0]).toMatch(/period x 32.*0\.0 s.*32\.4 s \(89\.9 %\).*28\.3 J/);
+    expect(rows[0]).toMatch(/at least 8\.0 s.*0\.0 s.*32\.4 s \(89\.9 %\).*28\.3 J/);
     act(() => { fireEvent.click(screen.getByRole("button", { name: "sub_5 (111.6 s/h)" })); });
     expect(store.getState().wb.selection).toEqual(["sub:sub_5"]);
   });
