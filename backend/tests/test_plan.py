@@ -99,3 +99,15 @@ def test_bodies_that_are_not_a_model_input_get_fastapis_422(
     spec = client.get("/openapi.json").json()
     body = spec["paths"]["/api/plan"]["post"]["requestBody"]
     assert body["content"]["application/json"]["schema"]["$ref"].endswith("/ModelInput")
+
+
+def test_a_plan_refused_by_its_radio_carries_its_report(
+    client: TestClient, admin: Headers, scenario1: str
+) -> None:
+    link = 'Link { transport = serial; device = "/dev/ttyUSB0"; radio = lora; sf = 7; }\n'
+    body = client.post("/api/plan", headers=admin, json={"text": scenario1 + link}).json()
+    assert body["ok"]
+    radio = body["plan"]["radio"]
+    assert radio["duty_share"] > 1 and radio["proposals"]
+    warnings = [(d["pointer"], d["severity"]) for d in body["diagnostics"]]
+    assert ("/link/radio", "warning") in warnings and ("/subscribers/4", "warning") in warnings

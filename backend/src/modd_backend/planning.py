@@ -63,6 +63,9 @@ def live_plan(result: LoadResult, method: Method = "exact") -> LivePlan:
     if result.model is not None and not result.errors:
         try:
             plan = make_plan(result.model, method=method).to_json()
+            # a refusal by the radio, pinned in the editor (the plan is still shown)
+            diags += [Diagnostic(d["message"], d["pointer"], "warning")
+                      for d in plan.get("radio", {}).get("diagnostics", [])]
         except ModelError as exc:  # the planner's bounds, located at the subscriptions
             diags.extend(exc.diagnostics)
         except (ValueError, KeyError, ArithmeticError) as exc:

@@ -11,7 +11,10 @@ describe("canonical values", () => {
     for (const [text, want] of cases) expect(canonicalDecimal(text), text).toBe(want);
   });
   it("finds the decimal fields in the schema", () => {
-    expect([...decimalFields()].sort()).toEqual(["acceptedDelayS", "alpha", "beta", "expectedRttS", "maxGapS", "periodS", "pingS"]);
+    expect([...decimalFields()].sort()).toEqual([
+      "acceptedDelayS", "alpha", "batteryWh", "beta", "dutyCycle", "expectedRttS", "idleW", "maxGapS", "periodS", "pingS", "rxW",
+      "txW",
+    ]);
   });
   it("compares by meaning: key order and decimal spelling aside, names untouched", () => {
     expect(sameMeaning({ name: "a", periodS: "5" }, { periodS: "5.0", name: "a" })).toBe(true);

@@ -200,6 +200,8 @@ export interface PlanDocument {
   predicted_link_bytes_per_s: PredictedLink;
   /** The declared transport's link budget (modd_plan.linkbudget), else null. */
   link_budget: PlanLinkBudget | null;
+  /** Only when the model declares link.radio: the radio's air time, duty cycle and energy per hour (modd_plan.radio), and the nearest plans that fit when it refuses the plan (modd_plan.proposals). */
+  radio?: PlanRadio;
   /** Subscriptions the planner could not serve. */
   infeasible: PlanInfeasible[];
   /** True when no buffer sizes meet the delay cap. */
@@ -277,6 +279,52 @@ export interface PlanLinkBudget {
   delays_s: Record<string, number>;
   over_budget: string[];
   error: string | null;
+}
+
+/** The declared radio's figures per hour of the plan (metamodel/src/modd_plan/radio.py). */
+export interface PlanRadio {
+  kind: "sik" | "wifi" | "lora";
+  bytes_per_s: number;
+  packets_per_hour: number;
+  air_time_s_per_hour: number;
+  /** The duty-cycle limit (0.01: 1 %), else null. */
+  duty_cycle: number | null;
+  /** Air time over the limit's (above 1: refused), else null. */
+  duty_share: number | null;
+  energy_j_per_hour: number;
+  battery_wh: number | null;
+  battery_share_per_hour: number | null;
+  costs: PlanRadioCost[];
+  /** Why the plan is refused (over the duty-cycle limit), else null. */
+  error: string | null;
+  /** The refusal located in the model: the duty-cycle limit and the subscriptions that cost most. */
+  diagnostics: PlanRadioDiagnostic[];
+  proposals: PlanProposal[];
+}
+
+export interface PlanRadioCost {
+  subscription: string;
+  bytes_per_s: number;
+  air_time_s_per_hour: number;
+}
+
+export interface PlanRadioDiagnostic {
+  /** JSON pointer into the model. */
+  pointer: string;
+  message: string;
+}
+
+/** A nearer plan that fits, verified by planning it again (metamodel/src/modd_plan/proposals.py). */
+export interface PlanProposal {
+  accepted_delay_s: number;
+  /** Every subscription period shorter than this raised to it (s), else null. */
+  min_period_s: number | null;
+  max_delay_s: number;
+  bytes_per_s: number;
+  air_time_s_per_hour: number;
+  duty_share: number;
+  energy_j_per_hour: number;
+  change: string;
 }
 
 export interface PlanInfeasible {

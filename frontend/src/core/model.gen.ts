@@ -270,6 +270,44 @@ export interface Link {
   alpha?: Decimal;
   /** Weight of the largest deviation in the planner's objective. */
   beta?: Decimal;
+  /** The drone's radio (sik, wifi, lora) for the planner's air time, duty cycle and energy per hour; none when absent. */
+  radio?: Radio;
+}
+
+/** The drone's radio, for the planner's air time, duty cycle and energy per hour (docs/planning.md, "Radio profiles"). Absent settings take the kind's datasheet defaults. */
+export interface Radio {
+  /** sik (a SiK/RFD900-class FHSS serial radio), wifi (802.11 OFDM) or lora (a LoRa modem, SX127x-class). */
+  kind: "sik" | "wifi" | "lora";
+  /** sik and wifi: the air data rate in bit/s (sik 64000, wifi 24000000 when absent). */
+  airRateBps?: number;
+  /** sik: Golay error correction on (doubles the bits on air). */
+  ecc?: boolean;
+  /** lora: spreading factor SF6 to SF12. */
+  spreadingFactor?: number;
+  /** lora: bandwidth in Hz, one of 7800, 10400, 15600, 20800, 31250, 41700, 62500, 125000, 250000, 500000. */
+  bandwidthHz?: number;
+  /** lora: coding rate 4/5 to 4/8, given as its denominator 5 to 8. */
+  codingRate?: number;
+  /** lora: programmed preamble length in symbols. */
+  preamble?: number;
+  /** lora: explicit header mode (implicit when false). */
+  explicitHeader?: boolean;
+  /** lora: payload CRC on. */
+  crc?: boolean;
+  /** lora: low-data-rate optimisation; when absent, on when a symbol lasts more than 16 ms (SF11 and SF12 at 125 kHz). */
+  lowDataRate?: boolean;
+  /** Largest radio packet payload in bytes; lora: the EU868 table per spreading factor when absent (59 B at SF10-12, 123 B at SF9, 250 B at SF7-8); sik 252. */
+  maxPayload?: number;
+  /** Regional duty-cycle limit: the largest share of each hour the radio may transmit (0.01: EU868's 1 % sub-band). lora: 0.01 when absent; none for sik and wifi unless given. */
+  dutyCycle?: Decimal;
+  /** Power drawn while transmitting, in watts (the kind's datasheet default when absent). */
+  txW?: Decimal;
+  /** Power drawn while receiving the base station's packets, in watts. */
+  rxW?: Decimal;
+  /** Power drawn between packets, in watts. */
+  idleW?: Decimal;
+  /** The battery energy, in watt-hours, declared for the link's share (the planner reports the radio's share of it per hour). */
+  batteryWh?: Decimal;
 }
 
 /** A process on board (a sensor driver) that publishes some measured variables every period. */

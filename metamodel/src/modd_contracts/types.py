@@ -139,6 +139,7 @@ class PlanDocument(TypedDict):
     max_delay_s: DecimalString
     predicted_link_bytes_per_s: PredictedLink
     link_budget: PlanLinkBudget | None
+    radio: NotRequired[PlanRadio]
     infeasible: list[PlanInfeasible]
     violates_delay_cap: bool
     constants: dict[str, Any]
@@ -219,6 +220,52 @@ class PlanLinkBudget(TypedDict):
     delays_s: dict[str, float]
     over_budget: list[str]
     error: str | None
+
+
+class PlanRadio(TypedDict):
+    """The declared radio's figures per hour of the plan (metamodel/src/modd_plan/radio.py)."""
+
+    kind: Literal["sik", "wifi", "lora"]
+    bytes_per_s: float
+    packets_per_hour: float
+    air_time_s_per_hour: float
+    duty_cycle: float | None
+    duty_share: float | None
+    energy_j_per_hour: float
+    battery_wh: float | None
+    battery_share_per_hour: float | None
+    costs: list[PlanRadioCost]
+    error: str | None
+    diagnostics: list[PlanRadioDiagnostic]
+    proposals: list[PlanProposal]
+
+
+class PlanRadioCost(TypedDict):
+    """PlanRadioCost."""
+
+    subscription: str
+    bytes_per_s: float
+    air_time_s_per_hour: float
+
+
+class PlanRadioDiagnostic(TypedDict):
+    """PlanRadioDiagnostic."""
+
+    pointer: str
+    message: str
+
+
+class PlanProposal(TypedDict):
+    """A nearer plan that fits, verified by planning it again (metamodel/src/modd_plan/proposals.py)."""
+
+    accepted_delay_s: float
+    min_period_s: float | None
+    max_delay_s: float
+    bytes_per_s: float
+    air_time_s_per_hour: float
+    duty_share: float
+    energy_j_per_hour: float
+    change: str
 
 
 class PlanInfeasible(TypedDict):
@@ -327,4 +374,4 @@ class DeliveredValueFields:
 DELIVERED_VALUE_REQUIRED: tuple[str, ...] = ("subscriber", "topic", "aggregation", "period_s", "unit", "config_id", "slot", "start_ns", "end_ns", "value", "count", "delivered_ns", "v",)
 
 
-__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "ARCHIVE_RECORD_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "ArchiveRecord", "DeliveredValueFields", "DELIVERED_VALUE_REQUIRED"]
+__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "ARCHIVE_RECORD_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanRadio", "PlanRadioCost", "PlanRadioDiagnostic", "PlanProposal", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "ArchiveRecord", "DeliveredValueFields", "DELIVERED_VALUE_REQUIRED"]

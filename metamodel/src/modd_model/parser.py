@@ -58,6 +58,26 @@ LINK_SETTINGS = {
     "alpha": ("alpha", "decimal"),
     "beta": ("beta", "decimal"),
 }
+# The link's radio profile, written flat inside `Link { ... }` (radio = lora;
+# sf = 7; ...) and held in JSON as link.radio: the "radio/" prefix nests it.
+RADIO_SETTINGS = {
+    "radio": ("radio/kind", "word"),
+    "airRate": ("radio/airRateBps", "int"),
+    "ecc": ("radio/ecc", "bool"),
+    "sf": ("radio/spreadingFactor", "int"),
+    "bandwidth": ("radio/bandwidthHz", "int"),
+    "codingRate": ("radio/codingRate", "int"),
+    "preamble": ("radio/preamble", "int"),
+    "explicitHeader": ("radio/explicitHeader", "bool"),
+    "crc": ("radio/crc", "bool"),
+    "lowDataRate": ("radio/lowDataRate", "bool"),
+    "maxPayload": ("radio/maxPayload", "int"),
+    "dutyCycle": ("radio/dutyCycle", "decimal"),
+    "txW": ("radio/txW", "decimal"),
+    "rxW": ("radio/rxW", "decimal"),
+    "idleW": ("radio/idleW", "decimal"),
+    "battery": ("radio/batteryWh", "decimal"),
+}
 INGRESS_SETTINGS = {"socket": ("unixSocket", "string"), "port": ("tcpPort", "int")}
 # An instrument sensor's settings (`on "PATH" { ... }`): a "/" in the property nests it.
 SENSOR_SETTINGS = {
@@ -306,7 +326,8 @@ class _Builder:
             elif kind == "subbroker":
                 doc["subBroker"] = self._broker(block, "/subBroker", "configPath")
             elif kind == "link":
-                doc["link"] = self._settings(block.children[0], "/link", LINK_SETTINGS)
+                doc["link"] = _nest(self._settings(block.children[0], "/link",
+                                                   LINK_SETTINGS | RADIO_SETTINGS))
                 self._mark("/link", block)
             elif kind == "publishers":
                 self._mark("/publishers", block)
@@ -578,11 +599,13 @@ class _Builder:
         tok = value.children[0]
         assert isinstance(tok, Token)
         found = {"number": "decimal", "string": "string", "word": "word"}[str(value.data)]
+        if kind == "bool" and found == "word" and str(tok) in ("true", "false"):
+            return str(tok) == "true"
         if kind == "int" and found == "decimal":
             return self._int(tok, ptr)
         if kind != found:
             wanted = {"decimal": "a number", "int": "a whole number", "string": "a string",
-                      "word": "a name"}[kind]
+                      "word": "a name", "bool": "true or false"}[kind]
             self._error(tok, f"setting {key!r} takes {wanted}", ptr)
             return None
         if kind == "string":
@@ -681,3 +704,16 @@ def _ordered(doc: dict[str, Any]) -> dict[str, Any]:
 
 
 __all__ = ["parse_text", "SourceMap", "pointer_join"]
+
+
+def _nest(settings: dict[str, Any]) -> dict[str, Any]:
+    """Settings whose property is ``outer/inner`` gathered into ``outer``
+    (the radio profile inside the link), in order."""
+    out: dict[str, Any] = {}
+    for prop, value in settings.items():
+        outer, _, inner = prop.partition("/")
+        if inner:
+            out.setdefault(outer, {})[inner] = value
+        else:
+            out[prop] = value
+    return out

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from .parser import (INGRESS_SETTINGS, LINK_SETTINGS, POSITION_SETTINGS, SENSOR_SETTINGS,
-                     VARIABLE_ATTRIBUTES)
+from .parser import (INGRESS_SETTINGS, LINK_SETTINGS, POSITION_SETTINGS, RADIO_SETTINGS,
+                     SENSOR_SETTINGS, VARIABLE_ATTRIBUTES)
 from .vocabulary import KNOWN_UNITS
 
 INDENT = "    "
@@ -93,7 +93,7 @@ def _settings(values: dict[str, Any], known: dict[str, tuple[str, str]], depth: 
         if prop not in values:
             continue
         v = values[prop]
-        text = quote(v) if kind == "string" else str(v)
+        text = quote(v) if kind == "string" else str(v).lower() if kind == "bool" else str(v)
         lines.append(f"{pad}{INDENT}{word} = {text};")
     return lines
 
@@ -147,7 +147,9 @@ def print_model(doc: dict[str, Any]) -> str:
     out += _broker("PubBroker", doc["pubBroker"], "logPath")
     out += _broker("SubBroker", doc["subBroker"], "configPath")
     if "link" in doc:
-        out += ["Link {", *_settings(doc["link"], LINK_SETTINGS, 0), "}"]
+        link = dict(doc["link"])  # the radio profile is written flat (parser.RADIO_SETTINGS)
+        link.update({f"radio/{k}": v for k, v in link.pop("radio", {}).items()})
+        out += ["Link {", *_settings(link, LINK_SETTINGS | RADIO_SETTINGS, 0), "}"]
     out.append("Publishers {")
     for p in doc["publishers"]:
         args = [endpoint(p["endpoint"])] if "endpoint" in p else []

@@ -182,6 +182,28 @@ class Link(TypedDict):
     pingS: NotRequired[Decimal]
     alpha: NotRequired[Decimal]
     beta: NotRequired[Decimal]
+    radio: NotRequired[Radio]
+
+
+class Radio(TypedDict):
+    """The drone's radio, for the planner's air time, duty cycle and energy per hour (docs/planning.md, "Radio profiles"). Absent settings take the kind's datasheet defaults."""
+
+    kind: Literal["sik", "wifi", "lora"]
+    airRateBps: NotRequired[int]
+    ecc: NotRequired[bool]
+    spreadingFactor: NotRequired[int]
+    bandwidthHz: NotRequired[int]
+    codingRate: NotRequired[int]
+    preamble: NotRequired[int]
+    explicitHeader: NotRequired[bool]
+    crc: NotRequired[bool]
+    lowDataRate: NotRequired[bool]
+    maxPayload: NotRequired[int]
+    dutyCycle: NotRequired[Decimal]
+    txW: NotRequired[Decimal]
+    rxW: NotRequired[Decimal]
+    idleW: NotRequired[Decimal]
+    batteryWh: NotRequired[Decimal]
 
 
 class Publisher(TypedDict):
@@ -217,4 +239,4 @@ class Position(TypedDict):
     y: float
 
 
-__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "PlatformPosition", "MavlinkField", "SerialDevice", "AsciiLine", "NmeaField", "AsciiField", "ModbusRegister", "PubBroker", "Ingress", "SubBroker", "Link", "Publisher", "Subscriber", "Layout", "Position"]
+__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "PlatformPosition", "MavlinkField", "SerialDevice", "AsciiLine", "NmeaField", "AsciiField", "ModbusRegister", "PubBroker", "Ingress", "SubBroker", "Link", "Radio", "Publisher", "Subscriber", "Layout", "Position"]

@@ -407,3 +407,29 @@ def unused_topics(doc: dict[str, Any]) -> Iterator[Diagnostic]:
 
 
 check(instrument_sensors)
+
+
+# LoRa's bandwidths (SX127x RegModemConfig1), in Hz
+_LORA_BANDWIDTHS = (7800, 10400, 15600, 20800, 31250, 41700, 62500, 125000, 250000, 500000)
+
+
+@check
+def radio_profile(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    """The link's radio: a LoRa bandwidth, a duty cycle in (0, 1], powers
+    and battery that the planner can use."""
+    radio = doc.get("link", {}).get("radio")
+    if not isinstance(radio, dict):
+        return
+    bw = radio.get("bandwidthHz")
+    if isinstance(bw, int) and bw not in _LORA_BANDWIDTHS:
+        yield Diagnostic(f"bandwidth {bw} Hz is not a LoRa bandwidth; expected one of "
+                         f"{', '.join(map(str, _LORA_BANDWIDTHS))}", "/link/radio/bandwidthHz")
+    for key, low, high in (("dutyCycle", 0, 1), ("txW", 0, None), ("rxW", 0, None),
+                           ("idleW", 0, None), ("batteryWh", 0, None)):
+        if key not in radio:
+            continue
+        value = to_fraction(radio[key])
+        open_low = key in ("dutyCycle", "batteryWh")
+        if value < low or (open_low and value == low) or (high is not None and value > high):
+            bound = f"in (0, {high}]" if high is not None else "> 0" if open_low else ">= 0"
+            yield Diagnostic(f"{key} {radio[key]} must be {bound}", f"/link/radio/{key}")

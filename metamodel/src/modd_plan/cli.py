@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Sequence
 from fractions import Fraction
 from typing import Any, TextIO
 
@@ -16,6 +17,8 @@ from modd_model.numbers import fraction_to_decimal, to_fraction
 
 from .linkbudget import budget_lines
 from .plan import METHODS, Plan, PlanningError, make_plan
+from .proposals import Proposal
+from .radio import RadioReport
 
 #: Slots printed in the human-readable schedule.
 TEXT_SLOT_LIMIT = 40
@@ -51,8 +54,9 @@ def register(subparsers: Any) -> None:
 
 def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Load, plan, print. Exit 0 when feasible, 1 on a bad model, 3 when the
-    plan violates the 3 x PING cap, 4 when it exceeds the link's byte budget
-    (the plan is still printed)."""
+    plan violates the 3 x PING cap, 4 when it exceeds the link's byte budget,
+    5 when its radio refuses it (over the duty-cycle limit; the plan and the
+    nearest plans that fit are still printed)."""
     out = out or sys.stdout
     result = load_file(args.file)
     if not result.ok or result.model is None:
@@ -75,7 +79,9 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
         out.write(render_text(plan))
     if plan.buffers.infeasible:
         return 3
-    return 4 if plan.budget is not None and plan.budget.error else 0
+    if plan.budget is not None and plan.budget.error:
+        return 4
+    return 5 if plan.radio is not None and not plan.radio.fits else 0
 
 
 def _sec(value: Fraction) -> str:
@@ -121,6 +127,8 @@ def render_text(plan: Plan) -> str:
     ]
     if plan.budget is not None:
         lines += budget_lines(plan.budget)
+    if plan.radio is not None:
+        lines += _radio_lines(plan.radio, plan.proposals)
     lines += _infeasible_lines(plan)
     return "\n".join(lines) + "\n"
 
@@ -134,4 +142,36 @@ def _infeasible_lines(plan: Plan) -> list[str]:
     lines += [
         f"  {x.topic} ({', '.join(x.subscribers)}): {x.reason}" for x in plan.infeasible
     ]
+    return lines
+
+
+def _radio_lines(report: RadioReport, proposals: Sequence[Proposal]) -> list[str]:
+    """The radio's figures for a person (``modd plan``'s text output)."""
+    p = report.profile
+    lines = [
+        "",
+        f"radio ({p.kind}): {report.bytes_per_s:.1f} B/s, "
+        f"{report.packets_per_hour:.0f} packets/h, air time {report.air_s_per_hour:.1f} s/h, "
+        f"energy {report.energy_j_per_hour:.1f} J/h",
+    ]
+    share = report.duty_share
+    if share is not None:
+        lines.append(
+            f"  {100 * share:.1f} % of the {100 * (p.duty_cycle or 0):g} % duty-cycle limit"
+        )
+    battery = report.battery_share
+    if battery is not None:
+        lines.append(
+            f"  {100 * battery:.3f} % of the declared {p.battery_wh:g} Wh battery per hour"
+        )
+    if report.error:
+        lines += ["", f"REFUSED BY THE RADIO: {report.error}"]
+        lines.append("nearest plans that fit:" if proposals else "no nearer plan fits")
+        lines += [
+            f"  {q.describe()}: delay {q.max_delay_s:.3f} s, "
+            f"{q.report.bytes_per_s:.1f} B/s, air time {q.report.air_s_per_hour:.1f} s/h "
+            f"({100 * (q.report.duty_share or 0):.0f} %), "
+            f"{q.report.energy_j_per_hour:.1f} J/h"
+            for q in proposals
+        ]
     return lines

@@ -120,6 +120,12 @@ class LinkBudget:
     packets_per_s: float
     delays_s: dict[str, float]
     over_budget: tuple[str, ...] = field(default=())
+    #: for the radio's air time (radio.py), not in the JSON: the walk's span
+    #: (s), the size on the wire of each packet sent over it, drone to base,
+    #: and each sent stream's value bytes/s with the subscriptions it serves
+    span_s: float = 0.0
+    packet_sizes: tuple[int, ...] = field(default=())
+    streams: tuple[tuple[float, tuple[str, ...]], ...] = field(default=())
 
     @property
     def share(self) -> float | None:
@@ -204,7 +210,7 @@ def _slot_walk(schedule: Schedule, window_bytes: Sequence[Fraction], delay: Frac
     return out
 
 
-def _tcp(settings: LinkSettings, slots: list[WalkedSlot], span_s: float
+def _tcp(settings: LinkSettings, slots: list[WalkedSlot], span_s: float, sizes: list[int]
          ) -> tuple[float, float, float, dict[int, float]]:
     wire = 0
     segments = 0
@@ -213,6 +219,7 @@ def _tcp(settings: LinkSettings, slots: list[WalkedSlot], span_s: float
         segs = ceil(frame / TCP_MSS)
         segments += segs
         wire += frame + segs * TCP_IP_HEADER_BYTES
+        sizes += [min(TCP_MSS, frame - k * TCP_MSS) + TCP_IP_HEADER_BYTES for k in range(segs)]
     rate = settings.rate_bps
     delays: dict[int, float] = {}  # per period
     for _, values, count, due in slots:
@@ -222,8 +229,8 @@ def _tcp(settings: LinkSettings, slots: list[WalkedSlot], span_s: float
     return wire / span_s, segments * TCP_IP_HEADER_BYTES / span_s, segments / span_s, delays
 
 
-def _datagrams(settings: LinkSettings, slots: list[WalkedSlot], span_s: float
-               ) -> tuple[float, float, float, dict[int, float]]:
+def _datagrams(settings: LinkSettings, slots: list[WalkedSlot], span_s: float,
+               sizes: list[int]) -> tuple[float, float, float, dict[int, float]]:
     """Pack slots as the PubBroker does: a datagram holds consecutive slots
     while its first slot has waited at most the accepted delay and it fits
     the packet; it is sent at its last slot's date."""
@@ -245,6 +252,7 @@ def _datagrams(settings: LinkSettings, slots: list[WalkedSlot], span_s: float
         size = DGRAM_HEADER_BYTES + values + TAG_BYTES
         bytes_on_wire = wire_bytes(t, size)
         wire += bytes_on_wire
+        sizes.append(bytes_on_wire)
         packets += 1
         sent = group[-1][0]
         air = bytes_on_wire / rate if rate else 0.0
@@ -260,8 +268,10 @@ def _datagrams(settings: LinkSettings, slots: list[WalkedSlot], span_s: float
             per = room - FRAGMENT_BYTE
             n = ceil(values / per)
             size = n * (DGRAM_HEADER_BYTES + FRAGMENT_BYTE + TAG_BYTES) + values
-            wire += sum(wire_bytes(t, DGRAM_HEADER_BYTES + FRAGMENT_BYTE + TAG_BYTES
-                                   + min(per, values - k * per)) for k in range(n))
+            fragments = [wire_bytes(t, DGRAM_HEADER_BYTES + FRAGMENT_BYTE + TAG_BYTES
+                                    + min(per, values - k * per)) for k in range(n)]
+            wire += sum(fragments)
+            sizes += fragments
             packets += n
             air = wire_bytes(t, size // n) * n / rate if rate else 0.0
             for p in due:
@@ -292,14 +302,18 @@ def link_budget(
         return LinkBudget(settings, 0.0, 0.0, 0.0, dict.fromkeys(subscriptions, 0.0))
     span_s = slots[-1][0] / 1e6  # slot dates start after 0: the walk covers (0, last]
     walk = _tcp if settings.transport == "tcp" else _datagrams
-    down, up, packets, period_delay = walk(settings, slots, span_s)
+    sizes: list[int] = []
+    down, up, packets, period_delay = walk(settings, slots, span_s, sizes)
     delays = dict.fromkeys(subscriptions, 0.0)
     for i, subs in enumerate(subscribers_of):
         d = period_delay.get(schedule.periods_us[i], 0.0)
         for s in subs:
             delays[s] = max(delays.get(s, 0.0), d)
+    streams = tuple((float(b) / (p / 1e6), tuple(subs)) for b, p, subs
+                    in zip(window_bytes, schedule.periods_us, subscribers_of, strict=True))
     return LinkBudget(settings, down, up, packets, delays,
-                      _over_budget(settings, down, schedule, window_bytes, subscribers_of))
+                      _over_budget(settings, down, schedule, window_bytes, subscribers_of),
+                      span_s, tuple(sizes), streams)
 
 
 def _over_budget(settings: LinkSettings, total: float, schedule: Schedule,

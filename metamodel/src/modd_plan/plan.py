@@ -15,7 +15,7 @@ from __future__ import annotations
 import gc
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from functools import lru_cache
 from math import lcm
@@ -37,6 +37,8 @@ from .buffers import (
 from .linkbudget import LinkBudget, LinkSettings, link_budget
 from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
 from .planjson import plan_to_json
+from .proposals import Proposal, propose
+from .radio import RadioProfile, RadioReport, radio_report
 from .schedule import Schedule, ScheduleTooLarge
 from .streams import (
     PlannedStream,
@@ -141,6 +143,8 @@ class Plan:
     constants: PlannerConstants
     link: LinkCost
     budget: LinkBudget | None = None  # the declared transport's budget (linkbudget.py)
+    radio: RadioReport | None = None  # the declared radio's figures (radio.py)
+    proposals: tuple[Proposal, ...] = ()  # when the radio refuses it (proposals.py)
 
     @property
     def sent_streams(self) -> list[PlannedStream]:
@@ -278,15 +282,32 @@ def make_plan(
     beta: Fraction | None = None,
     max_buffer: int | None = None,
     method: str = "exact",
+    proposals: bool = True,
 ) -> Plan:
     """Plan a validated model. ``method`` picks the buffer-size solver:
     ``"exact"`` (fast, default) or ``"cvxpy"`` (the MILP with HiGHS); both
-    give the same sizes. Overrides replace the model's planner constants."""
+    give the same sizes. Overrides replace the model's planner constants.
+    A plan over its radio's duty-cycle limit carries the nearest plans that
+    fit (``proposals=False``: not searched)."""
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
     with gc_paused():
-        return _make_plan(model, ping_s=ping_s, alpha=alpha, beta=beta,
+        plan = _make_plan(model, ping_s=ping_s, alpha=alpha, beta=beta,
                           max_buffer=max_buffer, method=method)
+        if not proposals or plan.radio is None or plan.radio.fits:
+            return plan
+
+        def replan(candidate: Mapping[str, Any]) -> tuple[RadioReport, float] | None:
+            try:
+                p = _make_plan(candidate, ping_s=ping_s, alpha=alpha, beta=beta,
+                               max_buffer=max_buffer, method=method)
+            except PlanningError:
+                return None
+            if p.radio is None or p.budget is None or len(p.infeasible) > len(plan.infeasible):
+                return None  # a candidate must not break the delay cap the plan meets
+            return p.radio, max(p.budget.delays_s.values(), default=0.0)
+
+        return replace(plan, proposals=tuple(propose(model, replan)))
 
 
 @contextmanager
@@ -372,6 +393,8 @@ def _make_plan(
         return _bytes(stream.aggregation, topic[0], pn * topic[2], pd * topic[1])
 
     window_bytes = [window(s.stream) for s in sent]
+    budget = _budget(model, sched, sent, streams, window_bytes)
+    radio = model.get("link", {}).get("radio")
     return Plan(
         topics=tuple(tops.values()),
         streams=streams,
@@ -381,7 +404,8 @@ def _make_plan(
         unpublished=unpublished,
         constants=constants,
         link=_link_cost(model, sched, window_bytes, tops),
-        budget=_budget(model, sched, sent, streams, window_bytes),
+        budget=budget,
+        radio=radio_report(RadioProfile.of(radio), budget) if radio else None,
     )
 
 

@@ -14,13 +14,22 @@ from functools import lru_cache
 from operator import itemgetter
 from typing import Any, Protocol
 
-from modd_contracts.types import PlanDocument, PlanSchedule, PlanSentStream, PlanStream
+from modd_contracts.types import (
+    PlanDocument,
+    PlanRadio,
+    PlanRadioDiagnostic,
+    PlanSchedule,
+    PlanSentStream,
+    PlanStream,
+)
 from modd_model.numbers import MICROS_PER_SECOND
 from modd_model.query import Topic
 
 from .buffers import BufferSolution, Infeasibility
 from .linkbudget import LinkBudget
 from .linkcost import LinkCost
+from .proposals import Proposal
+from .radio import RadioReport
 from .schedule import Schedule, Slot
 from .streams import PlannedStream, StreamKey, _decimal_of, decimal_of
 
@@ -56,6 +65,10 @@ class PlanView(Protocol):
     def buffer_sizes(self) -> dict[str, int]: ...
     @property
     def infeasible(self) -> tuple[Infeasibility, ...]: ...
+    @property
+    def radio(self) -> RadioReport | None: ...
+    @property
+    def proposals(self) -> tuple[Proposal, ...]: ...
 
 #: Slots listed in the JSON schedule (the first hyperperiod when it is
 #: shorter), and at most this many stream ids over the listed slots, so that
@@ -149,7 +162,7 @@ def plan_to_json(plan: PlanView) -> PlanDocument:
     """Every field of the shared contract (docs/planning.md, "Plan JSON")."""
     sizes = plan.buffer_sizes
     streams, sent = _streams_json(plan.streams)
-    return {
+    doc: PlanDocument = {
         "hyperperiod_s": _dec(plan.schedule.hyperperiod),
         "messages_per_hyperperiod": plan.schedule.messages_per_hyperperiod,
         "topics": [
@@ -179,3 +192,23 @@ def plan_to_json(plan: PlanView) -> PlanDocument:
         "violates_delay_cap": bool(plan.buffers.infeasible),
         "constants": plan.constants.to_json(),
     }
+    if plan.radio is not None:  # absent without link.radio: such plans' JSON is unchanged
+        doc["radio"] = _radio_json(plan, plan.radio)
+    return doc
+
+
+def _radio_json(plan: PlanView, radio: RadioReport) -> PlanRadio:
+    """The radio's report, its refusal located (the duty-cycle limit and the
+    subscriptions that cost most, by their place in the model) and the
+    proposals that fit."""
+    out = radio.to_json()
+    if radio.error is not None:
+        position = {name: i for i, name in enumerate(plan.subscriptions)}
+        located: list[PlanRadioDiagnostic] = [{"pointer": "/link/radio", "message": radio.error}]
+        out["diagnostics"] = located + [
+            {"pointer": f"/subscribers/{position[c.name]}",
+             "message": f"{c.name} costs {c.air_s_per_hour:.1f} s of air time per hour "
+                        f"({c.bytes_per_s:.1f} B/s)"}
+            for c in radio.costs[:5] if c.name in position]
+    out["proposals"] = [p.to_json() for p in plan.proposals]
+    return out

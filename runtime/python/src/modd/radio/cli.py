@@ -15,6 +15,9 @@ import socket
 import sys
 import time
 
+from modd_model.io import load_file
+from modd_plan.radio import RadioProfile
+
 from .channel import Channel, RadioSpec
 from .relay import open_pty_pair, run_serial, run_udp
 
@@ -46,6 +49,17 @@ def _same_endpoint(a: tuple[str, int], b: tuple[str, int]) -> bool:
         return False
 
 
+def _profile(path: str) -> RadioProfile:
+    """The radio profile of a model file (its errors, located, refuse it)."""
+    result = load_file(path)
+    if result.model is None or result.errors:
+        raise argparse.ArgumentTypeError("; ".join(str(d) for d in result.errors) or path)
+    radio = result.model.get("link", {}).get("radio")
+    if radio is None:
+        raise argparse.ArgumentTypeError(f"{path}: the model's link names no radio")
+    return RadioProfile.of(radio)
+
+
 def _print(up: Channel, down: Channel) -> None:
     print(f"radio: base->drone {up.summary()}; drone->base {down.summary()}", flush=True)
 
@@ -63,6 +77,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--radio", type=_spec, default=RadioSpec(), metavar="SPEC",
                    help='e.g. "rate=3600,packet=252,loss=0.05,latency_ms=80,jitter_ms=20,'
                         'outage=10+30,seed=7"')
+    p.add_argument("--profile", type=_profile, metavar="MODEL",
+                   help="emulate the air time and duty cycle of this model's link.radio")
     p.add_argument("--report", type=float, default=10.0, metavar="S")
     p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
     args = p.parse_args(argv)
@@ -82,12 +98,14 @@ def main(argv: list[str] | None = None) -> int:
         return bool(stopping) or (end is not None and time.monotonic() >= end)
 
     if args.udp:
-        up, down = run_udp(args.radio, args.udp, args.to, stop, _print, args.report)
+        up, down = run_udp(args.radio, args.udp, args.to, stop, _print, args.report,
+                           profile=args.profile)
     else:
         base, base_path = open_pty_pair()
         drone, drone_path = open_pty_pair()
         print(f"base={base_path} drone={drone_path}", flush=True)
-        up, down = run_serial(args.radio, base, drone, stop, _print, args.report)
+        up, down = run_serial(args.radio, base, drone, stop, _print, args.report,
+                              profile=args.profile)
     _print(up, down)
     return 0
 

@@ -14,6 +14,9 @@ import time
 from collections.abc import Callable
 from functools import partial
 
+from modd_plan.radio import RadioProfile
+
+from .airtime import AirtimeChannel
 from .channel import Channel, RadioSpec
 
 MAX_DATAGRAM = 65535
@@ -38,18 +41,24 @@ class _Pending:
         return self.heap[0][0] - now if self.heap else None
 
 
-def channels(spec: RadioSpec, start: float) -> tuple[Channel, Channel]:
-    """(up: base -> drone, down: drone -> base), seeded apart."""
+def channels(spec: RadioSpec, start: float, profile: RadioProfile | None = None
+             ) -> tuple[Channel, Channel]:
+    """(up: base -> drone, down: drone -> base), seeded apart; with a radio
+    profile, its air time and duty cycle (airtime.py)."""
+    if profile is not None:
+        return (AirtimeChannel(spec, spec.seed * 2 + 1, start, profile=profile),
+                AirtimeChannel(spec, spec.seed * 2 + 2, start, profile=profile))
     return Channel(spec, spec.seed * 2 + 1, start), Channel(spec, spec.seed * 2 + 2, start)
 
 
 def run_udp(spec: RadioSpec, listen: tuple[str, int], target: tuple[str, int],
             stop: Callable[[], bool], report: Callable[[Channel, Channel], None] | None = None,
-            report_every: float = 10.0) -> tuple[Channel, Channel]:
+            report_every: float = 10.0, profile: RadioProfile | None = None,
+) -> tuple[Channel, Channel]:
     """Relay datagrams between whoever sends to ``listen`` (the base station)
     and ``target`` (the PubBroker) until ``stop()``."""
     start = time.monotonic()
-    up, down = channels(spec, start)
+    up, down = channels(spec, start, profile)
     front = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     back = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     front.bind(listen)
@@ -124,13 +133,14 @@ def open_pty_pair() -> tuple[int, str]:
 
 def run_serial(spec: RadioSpec, base_master: int, drone_master: int,
                stop: Callable[[], bool], report: Callable[[Channel, Channel], None] | None = None,
-               report_every: float = 10.0) -> tuple[Channel, Channel]:
+               report_every: float = 10.0, profile: RadioProfile | None = None,
+) -> tuple[Channel, Channel]:
     """Relay bytes between two pseudo-terminal masters (the base station's and
     the drone's ends), cut into radio packets of at most ``spec.packet``
     bytes: after each 0x00 (a frame's end, as a SiK radio aligns packets to
     frames), when full, or after 20 ms without bytes."""
     start = time.monotonic()
-    up, down = channels(spec, start)
+    up, down = channels(spec, start, profile)
     limit = spec.packet or 252
     pending = _Pending()
     sel = selectors.DefaultSelector()

@@ -1,0 +1,114 @@
+"""The planner's air time per hour against the radio emulator's measurement
+(modd-radio with a profile, airtime.py): scenario 1 over serial through a
+SiK profile, real processes (the C++ PubBroker, the publisher load, the
+SubBroker); the relay runs in this process so that every packet it carried
+is seen. The oracle is the DATA frames the PubBroker actually sent, timed
+by the relay, each at the profile's air time."""
+
+from __future__ import annotations
+
+import json
+import threading
+from pathlib import Path
+from typing import Any
+
+import pytest
+from modd.link.datagram import DGRAM_DATA
+from modd.link.serialframe import cobs_decode
+from modd.radio import relay
+from modd.radio.airtime import AirtimeChannel
+from modd.radio.channel import RadioSpec
+from modd_plan import make_plan
+from modd_plan.radio import RadioProfile
+from radio_harness import start_pubbroker_dgram, subbroker_dgram_config
+from subbroker_harness import free_port, model_copy, processes, start_load, start_subbroker
+
+pytestmark = pytest.mark.usefixtures("needs_pubbroker")
+
+LOAD_S = 24.0
+
+
+class _Recording(AirtimeChannel):
+    """Records (time, size, air time) of every packet it transmits."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.sent: list[tuple[float, bytes, float]] = []
+
+    def offer(self, packet: bytes, now: float) -> float | None:
+        before = self.air_s
+        at = super().offer(packet, now)
+        self.sent.append((now, packet, self.air_s - before))
+        return at
+
+
+def _is_data(packet: bytes) -> bool:
+    try:
+        return packet.endswith(b"\x00") and cobs_decode(packet.rstrip(b"\x00"))[0] == DGRAM_DATA
+    except (ValueError, IndexError):
+        return False
+
+
+# SiK: no duty-cycle limit; LoRa SF7 at a 20 % limit: the plan fits (502 s of
+# air per hour), the radio's silence after each packet (4 x 0.17 s) ends
+# before the next one (every 1.25 s)
+PROFILES = {"sik": {"kind": "sik"}, "lora": {"kind": "lora", "dutyCycle": "0.2"}}
+
+
+@pytest.mark.parametrize("name", sorted(PROFILES))
+def test_planned_air_time_is_what_the_emulator_measures(
+    name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(relay, "AirtimeChannel", _Recording)
+    base, base_path = relay.open_pty_pair()
+    drone, drone_path = relay.open_pty_pair()
+    model_path = model_copy(tmp_path, "scenario1.modd")
+    model = json.loads(model_path.read_text())
+    model["link"] = {"transport": "serial", "device": base_path, "radio": PROFILES[name]}
+    model_path.write_text(json.dumps(model))
+    profile = RadioProfile.of(model["link"]["radio"])
+    predicted = make_plan(model).radio
+    assert predicted is not None and predicted.fits
+
+    stopping = threading.Event()
+    out: list[tuple[Any, Any]] = []
+    thread = threading.Thread(
+        target=lambda: out.append(
+            relay.run_serial(RadioSpec(), base, drone, stopping.is_set, profile=profile)
+        ),
+        daemon=True,
+    )
+    thread.start()
+    zport, ingress = free_port(), free_port()
+    pb = start_pubbroker_dgram(
+        tmp_path, model_path, {"transport": "serial", "device": drone_path, "port": 1}, ingress
+    )
+    cfg = subbroker_dgram_config(
+        tmp_path, model_path, "127.0.0.1:1", zport, "serial", device=base_path
+    )
+    sb = start_subbroker(tmp_path, cfg)
+    try:
+        with processes(pb, sb):
+            assert sb.wait_log("running", 30), sb.log()[-3000:]
+            load = start_load(tmp_path, model_path, ingress, LOAD_S)
+            load.p.wait(LOAD_S + 30)
+            with processes(load):
+                pass
+    finally:
+        stopping.set()
+        thread.join(10)
+    up, down = out[0]
+    assert isinstance(down, _Recording) and isinstance(up, _Recording)
+    assert not down.dropped, down.summary()  # a plan that fits: nothing refused
+    data = [(t, air) for t, packet, air in down.sent if _is_data(packet)]
+    assert len(data) > 12, down.summary()
+    # between the first and the last DATA frame: every frame after the first
+    span = data[-1][0] - data[0][0]
+    measured = sum(air for _, air in data[1:]) * 3600 / span
+    print(f"{name}: air {measured:.3f} s/h measured, {predicted.air_s_per_hour:.3f} planned")
+    assert measured == pytest.approx(predicted.air_s_per_hour, rel=0.05)
+    # energy over the same span: transmitting, receiving the base station's packets, idle
+    rx = sum(air for t, _, air in up.sent if data[0][0] <= t <= data[-1][0]) * 3600 / span
+    energy = profile.tx_w * measured + profile.rx_w * rx + profile.idle_w * (3600 - measured - rx)
+    print(f"{name}: energy {energy:.3f} J/h measured, {predicted.energy_j_per_hour:.3f} planned")
+    assert energy == pytest.approx(predicted.energy_j_per_hour, rel=0.05)
