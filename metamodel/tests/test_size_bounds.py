@@ -17,7 +17,7 @@ from modd_model.schema import schema_path
 
 SCHEMA: dict[str, Any] = json.loads(schema_path().read_text())
 #: The documented bound on a legal model's JSON text in UTF-8 (docs/metamodel.md).
-DOCUMENTED_MAX_BYTES = 2 * 1024**3
+DOCUMENTED_MAX_BYTES = 3 * 1024**3
 
 
 def _nodes(node: Any, path: str = "#") -> Iterator[tuple[str, dict[str, Any]]]:

@@ -26,9 +26,8 @@ def lines(script: str) -> list[str]:
 def test_url_and_login_first_with_relative_paths() -> None:
     data = REPO / "data-8090"
     first = lines(f"say_workbench http://127.0.0.1:8090 s3cret {data}/admin-password {data}")
-    rest = lines(
-        f"say_running demo usv {data} tcp/127.0.0.1:7457 {data}/credentials/viewer.cred 8775 8875 8090"
-    )
+    cred = f"{data}/credentials/viewer.cred"
+    rest = lines(f"say_running demo usv {data} tcp/127.0.0.1:7457 {cred} 8775 8875 8090")
     assert (
         first[0]
         == "modd: workbench at http://127.0.0.1:8090/  (API docs: http://127.0.0.1:8090/docs)"

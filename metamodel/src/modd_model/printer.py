@@ -10,8 +10,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from .parser import (INGRESS_SETTINGS, LINK_SETTINGS, POSITION_SETTINGS, RADIO_SETTINGS,
-                     SENSOR_SETTINGS, VARIABLE_ATTRIBUTES)
+from .parser import (
+    INGRESS_SETTINGS,
+    LINK_SETTINGS,
+    POSITION_SETTINGS,
+    RADIO_SETTINGS,
+    SENSOR_SETTINGS,
+    VARIABLE_ATTRIBUTES,
+)
 from .vocabulary import KNOWN_UNITS
 
 INDENT = "    "
