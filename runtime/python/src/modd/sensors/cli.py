@@ -65,7 +65,7 @@ def main(argv: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
-    from modd_gen.ingress import ingress_of  # the model's ingress, as the generators write it
+    from modd_model.ingress import ingress_of  # the model's ingress, as the generators write it
 
     ingress = args.ingress or ingress_of(model).address
     names = sorted({m.publisher for p in plans for m in p.mappings})
