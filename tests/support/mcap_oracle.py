@@ -14,7 +14,7 @@ from __future__ import annotations
 import struct
 import zlib
 
-import lz4.frame  # type: ignore[import-untyped]
+import lz4.frame
 import zstandard
 
 MAGIC = b"\x89MCAP0\r\n"
