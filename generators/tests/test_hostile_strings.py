@@ -119,7 +119,8 @@ def test_python_compiles_and_holds_the_strings_as_constants(generated: Path) -> 
             assert len(comments) == 2 and all(
                 ast.literal_eval(c.replace("?\\?", "??")) == UNIT for c in comments)
         else:
-            assert top == {"DRONE", "SUBSCRIBER", "main"}
+            # CONNECT and VIEWER_CREDENTIALS: None here (no running deployment to name)
+            assert top == {"DRONE", "SUBSCRIBER", "CONNECT", "VIEWER_CREDENTIALS", "main"}
             doc = ast.get_docstring(tree, clean=False)
             assert doc is not None and f"({UNIT})" in doc
 
