@@ -145,6 +145,9 @@ class DatagramSession(LinkSession):
             else None
         )
 
+    def _over(self) -> str:
+        return f" over {self.transport}"
+
     def _authenticated(self, nonce: bytes, server_nonce: bytes) -> None:
         self.runs.old_key, self._key = self._key, session_key(self._psk, nonce, server_nonce)
         self._window = ReplayWindow(64)

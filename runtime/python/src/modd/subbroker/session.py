@@ -134,6 +134,11 @@ class LinkSession:
     def _wrap_handshake(self, frame: bytes) -> list[bytes]:
         return self._wrap(frame)
 
+    def _over(self) -> str:
+        """What the authentication log line says of the transport ("" over tcp; the
+        datagram links name theirs, as the tests and operators read it)."""
+        return ""
+
     def _authenticated(self, nonce: bytes, server_nonce: bytes) -> None:
         """The handshake proved the key both ways (a datagram session derives its key)."""
 
@@ -277,7 +282,12 @@ class LinkSession:
             self._authenticated(hs.nonce, hs.server_nonce)
             self.stats.connects += 1
             self.stats.backpressure.reset(self.clock.time_ns())
-            log.info("link to %s authenticated (PubBroker config %d)", self.where, msg.config_id)
+            log.info(
+                "link to %s authenticated%s (PubBroker config %d)",
+                self.where,
+                self._over(),
+                msg.config_id,
+            )
             hs.ok, hs.step, hs.ping = msg, "PING", -1
             self._next_ping(self.clock.monotonic())
         elif strict:
