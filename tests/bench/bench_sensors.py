@@ -65,7 +65,7 @@ _FORMAT = {
 def model_text(devices: Path) -> str:
     nmea = "\n".join(
         f'Sensor g{i} kind nmea on "{devices}/g{i}" measures {{ seq(NONE, float64) from '
-        f'HDT.heading; lat("deg", float64) from sentence GGA.lat; }}'
+        f'sentence HDT.heading; lat("deg", float64) from sentence GGA.lat; }}'
         for i in range(NMEA_DEVICES)
     )
     sondes = "\n".join(
