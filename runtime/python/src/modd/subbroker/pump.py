@@ -16,6 +16,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any, Protocol
@@ -62,7 +63,7 @@ class Link(Protocol):
         ...
 
 
-class Pump:
+class Pump(ABC):
     """Keeps one authenticated link to the PubBroker up, on a daemon thread."""
 
     #: After a session that was up for ``backoff_max_s`` (a flapping radio, not a peer that
@@ -81,18 +82,21 @@ class Pump:
 
     # -- what a transport provides --------------------------------------------------
 
+    @abstractmethod
     def _open(self) -> None:
-        raise NotImplementedError
+        """Open the transport (a connect or a port); raise OSError when it cannot."""
 
+    @abstractmethod
     def _read(self) -> None:
         """Wait a little for what comes, and feed it to the session."""
-        raise NotImplementedError
 
+    @abstractmethod
     def _write(self, data: bytes) -> None:
-        raise NotImplementedError
+        """Send bytes the session queued."""
 
+    @abstractmethod
     def _close(self, stopping: bool) -> None:
-        raise NotImplementedError
+        """Close the transport (``stopping``: for good, not to reconnect)."""
 
     # -- public ------------------------------------------------------------------------
 

@@ -24,6 +24,7 @@ import os
 import statistics
 import struct
 import threading
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
@@ -81,7 +82,7 @@ class _Handshake:
     ping: int = 0
 
 
-class LinkSession:
+class LinkSession(ABC):
     """The lifecycle and control frames of one link client's sessions (see the module)."""
 
     #: How long a handshake step waits for its answer, and how many times it is sent.
@@ -124,12 +125,12 @@ class LinkSession:
 
     # -- what a transport provides --------------------------------------------------
 
-    def _setup(self) -> None:
+    def _setup(self) -> None:  # noqa: B027 (an optional hook: nothing by default)
         """The transport's own state (called at the end of ``__init__``)."""
 
+    @abstractmethod
     def _wrap(self, frame: bytes) -> list[bytes]:
         """What carries one link frame of an established session."""
-        raise NotImplementedError
 
     def _wrap_handshake(self, frame: bytes) -> list[bytes]:
         return self._wrap(frame)
@@ -139,16 +140,16 @@ class LinkSession:
         datagram links name theirs, as the tests and operators read it)."""
         return ""
 
-    def _authenticated(self, nonce: bytes, server_nonce: bytes) -> None:
+    def _authenticated(self, nonce: bytes, server_nonce: bytes) -> None:  # noqa: B027
         """The handshake proved the key both ways (a datagram session derives its key)."""
 
+    @abstractmethod
     def _accept_config(self, config: Config, ack: ConfigAck) -> None:
         """A CONFIG the PubBroker acked: its DATA is decoded from now on."""
-        raise NotImplementedError
 
+    @abstractmethod
     def _check_silence(self, now: float) -> None:
         """PING a silent PubBroker, raise LinkDown when it stays silent too long."""
-        raise NotImplementedError
 
     # -- the pump's side ---------------------------------------------------------------
 
