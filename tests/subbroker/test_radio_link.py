@@ -201,6 +201,15 @@ def test_outage_and_reboots_through_the_emulator(tmp_path: Path, zenoh_client: A
                 raise AssertionError(f"over {transport}: {exc}") from exc
 
 
+def _missing_report(missing: set[int], got: Collector, radio: Proc, pb: Proc) -> str:
+    """What a failure needs to be understood, short enough not to be cut: the missing
+    windows as a count and span, both sides' link counters and the emulator's."""
+    pb_link = [line for line in pb.log().splitlines() if "modd-pubbroker: link:" in line]
+    return (f"{len(missing)} windows missing, {min(missing)}..{max(missing)}; "
+            f"SubBroker radio {got.status[-1]['radio']}; PubBroker {pb_link[-1:]}; "
+            f"{radio_counts(radio)}")
+
+
 def _outage_and_reboots(tmp: Path, transport: str, zenoh_client: Any) -> None:
     tmp.mkdir()
     model = model_copy(tmp, "scenario1.modd")
@@ -251,7 +260,7 @@ def _outage_and_reboots(tmp: Path, transport: str, zenoh_client: Any) -> None:
             if share == 1.0 or time.monotonic() > deadline:
                 break
         assert check_against_archive(values, archive) > 100
-        assert share == 1.0, (sorted(missing), got.status[-1]["radio"], radio_counts(radio))
+        assert share == 1.0, _missing_report(missing, got, radio, pb)
         assert "outage" in radio_counts(radio)
         r = got.status[-1]["radio"]
         # a new session, and the outage's 120 slots of 0.25 s resent from the ring

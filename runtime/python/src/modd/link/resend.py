@@ -62,19 +62,26 @@ class GapTracker:
                 kept.append(g)
                 continue
             self.recovered += min(end, g_end) - max(first, g.first)
+            # an answer is arriving: what is left of the gap waits a full interval
+            # from now before it is asked again (a resend still on a slow link is not
+            # asked for twice, which would spend the sender's resend budget on copies)
+            last = max(g.last_ask, now) if g.asks else g.last_ask
             if first > g.first:
-                kept.append(_Gap(g.first, first - g.first, g.asks, g.last_ask))
+                kept.append(_Gap(g.first, first - g.first, g.asks, last))
             if end < g_end:
-                kept.append(_Gap(end, g_end - end, g.asks, g.last_ask))
+                kept.append(_Gap(end, g_end - end, g.asks, last))
         self.gaps = kept
 
     def due(self, now: float, every: float) -> list[tuple[int, int]]:
-        """Ranges to NACK now: gaps not asked for within ``every`` seconds; a gap
-        asked ``max_asks`` times is given up (counted in ``lost``)."""
+        """Ranges to NACK now: gaps whose last ask is older than ``every`` seconds,
+        doubled at each ask after the first (a loaded machine or a slow radio gets
+        time to answer, as TCP's retransmission timer backs off); a gap asked
+        ``max_asks`` times is given up (counted in ``lost``)."""
         ranges: list[tuple[int, int]] = []
         kept: list[_Gap] = []
         for g in self.gaps:
-            if now - g.last_ask < every or len(ranges) >= MAX_NACK_RANGES:
+            wait = every * (1 << max(0, g.asks - 1))
+            if now - g.last_ask < wait or len(ranges) >= MAX_NACK_RANGES:
                 kept.append(g)
                 continue
             if g.asks >= self.max_asks:
