@@ -100,6 +100,42 @@ def test_autoplay_serves_a_viewer_without_playback_controls(minute: Path, autopl
     assert report["playbackStates"] and report["playbackStates"][0]["status"] == 0
 
 
+def test_autoplay_drops_nothing_of_a_viewer_subscribing_channel_by_channel(tmp_path: Path
+                                                                          ) -> None:
+    """Eleven channels (the demo record's count) subscribed 40 ms apart, as
+    Lichtblick's panels do: every channel gets every message of the file, as
+    the official ``mcap`` reader reads it (autoplay began on the first
+    subscription and lost 0.24-0.40 s of 8 of 11 channels)."""
+    from mcap.reader import make_reader
+
+    path = tmp_path / "eleven.mcap"
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start()
+        sid = w.register_schema("modd.Sample", "jsonschema", SCHEMA)
+        cids = [w.register_channel(f"/usv/sub_{i}", "json", sid) for i in range(11)]
+        for k in range(15):  # 1.5 s at 10 Hz, from the range's very start
+            for i, cid in enumerate(cids):
+                t = T0 + k * 100_000_000
+                w.add_message(cid, t, json.dumps({"value": value(i, k)}).encode(), t)
+        w.finish()  # type: ignore[no-untyped-call]
+    with open(path, "rb") as f:
+        archived: dict[str, list[tuple[int, float]]] = {}
+        for _, ch, m in make_reader(f).iter_messages():
+            archived.setdefault(ch.topic, []).append((m.log_time, json.loads(m.data)["value"]))
+    server = ReplayServer([path], "127.0.0.1", free_port(), autoplay=True)
+    try:
+        report = node_json("foxglove_client.cjs", server.url, "4", "--subscribe-gap", "40",
+                           timeout=30)
+    finally:
+        server.stop()
+    assert not report["errors"] and len(archived) == 11
+    got = {t: [(int(m["logTime"]), m["msg"]["value"]) for m in ms]
+           for t, ms in report["messages"].items()}
+    assert {t: len(v) for t, v in got.items()} == {t: len(v) for t, v in archived.items()}
+    assert got == archived
+
+
 def test_player_seek_pause_speed() -> None:
     msgs = [Recorded(t, "a", b"{}") for t in range(0, 10_000_000_000, 1_000_000_000)]
     p = Player(msgs)
