@@ -22,7 +22,6 @@ from modd_contracts.types import DeliveredValue as DeliveredDict
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from support.loopback import shared_credentials, zenoh_router  # noqa: E402
 
-
 VECTORS = Path(__file__).resolve().parents[2] / "contracts" / "vectors" / "delivered_value.json"
 
 
