@@ -10,6 +10,7 @@ import json
 import signal
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import httpx2 as httpx
 import pytest
@@ -19,6 +20,7 @@ from modd.ports import free_port
 from modd_backend.foxglove_replay import Player, Recorded, ReplayServer, load_recording
 from pubbroker_harness import BIN, PubBroker, run_load
 from served import serve
+from viewer_schema import refusals
 
 T0 = 1_795_000_000_000_000_000
 TOPICS = ("usv.ctd.temperature", "usv.ctd.conductivity")
@@ -134,6 +136,52 @@ def test_autoplay_drops_nothing_of_a_viewer_subscribing_channel_by_channel(tmp_p
            for t, ms in report["messages"].items()}
     assert {t: len(v) for t, v in got.items()} == {t: len(v) for t, v in archived.items()}
     assert got == archived
+
+
+def test_a_base_station_record_replays_valid_against_its_schemas(tmp_path: Path) -> None:
+    """The SubBroker's record (empty MIN windows, ALL lists, boolean LAST)
+    replayed: every message a Foxglove client receives validates against the
+    schema advertised for its channel (``jsonschema``), and equals the record's
+    window read by the official reader (a null left out, a boolean as 1/0)."""
+    from mcap.reader import make_reader
+    from modd.subbroker.payload import DeliveredValue
+    from modd.subbroker.record import BaseRecord
+    from test_viewer_schemas import violations
+
+    rec = BaseRecord(tmp_path / "records", "usv")
+    rec.begin("m", T0)
+    for k in range(10):
+        start, end = T0 + k * 100_000_000, T0 + (k + 1) * 100_000_000
+        for name, agg, value, count in (
+                ("avg", "AVERAGE", 0.5 * k, 4), ("low", "MIN", None if k % 3 else -1.0 * k, None),
+                ("all", "ALL", [float(i) for i in range(k % 3)], k % 3),
+                ("pump", "LAST", k % 2 == 0, None)):
+            rec.put(name, DeliveredValue(name, f"usv.a.{name}", agg, "0.1", "1", 1, k, start, end,
+                                         value, count, end + 1).to_json())
+    rec.close()
+    path = next((tmp_path / "records" / "usv").glob("*.mcap"))
+    with open(path, "rb") as f:
+        recorded: dict[str, list[dict[str, Any]]] = {}
+        for _, ch, m in make_reader(f).iter_messages():
+            recorded.setdefault(ch.topic, []).append(json.loads(m.data))
+    server = ReplayServer([path], "127.0.0.1", free_port(), autoplay=True)
+    try:
+        report = node_json("foxglove_client.cjs", server.url, "3", timeout=30)
+    finally:
+        server.stop()
+    assert not report["errors"]
+    schemas = {a["topic"]: json.loads(a["schema"]) for a in report["advertised"]}
+    got = report["messages"]
+    assert set(got) == set(recorded) and len(recorded) == 4
+    for topic, msgs in got.items():
+        assert not refusals(schemas[topic]), topic
+        for m in msgs:
+            assert violations(schemas[topic], m["msg"]) == [], (topic, m["msg"])
+        want = [{k: (int(v) if isinstance(v, bool) else v) for k, v in d.items() if v is not None}
+                for d in recorded[topic]]
+        # JSON numbers are doubles in the client: ns times agree to the microsecond
+        assert [{k: pytest.approx(v, abs=1000) if k.endswith("_ns") else v
+                 for k, v in m["msg"].items()} for m in msgs] == want, topic
 
 
 def test_player_seek_pause_speed() -> None:

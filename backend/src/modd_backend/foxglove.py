@@ -40,7 +40,7 @@ from modd_contracts.schema import load as contract_schema
 from modd_contracts.types import DeliveredValue
 
 from .scene import position_roles
-from .viewer_json import for_viewers, without_nulls
+from .viewer_json import as_numbers, for_viewers, without_nulls
 
 if TYPE_CHECKING:
     from .loopback_tls import LoopbackTls
@@ -126,7 +126,7 @@ def window_message(delivered: DeliveredValue) -> dict[str, Any]:
     """The Foxglove message of one delivered value (docs/subbroker.md)."""
     start = int(delivered.get("start_ns") or 0)
     end = int(delivered.get("end_ns") or 0)
-    value, count = _number(delivered.get("value")), delivered.get("count")
+    value, count = as_numbers(delivered.get("value")), delivered.get("count")
     message: dict[str, Any] = without_nulls({
         "value": value,
         "count": count if isinstance(count, int) and not isinstance(count, bool) else None,
@@ -140,13 +140,6 @@ def window_message(delivered: DeliveredValue) -> dict[str, Any]:
         "delivered": _time(int(delivered.get("delivered_ns") or 0)),
     })
     return message
-
-
-def _number(value: Any) -> Any:
-    """A value as the schema's number (or array of numbers): a boolean as 1/0."""
-    if isinstance(value, list):
-        return [_number(v) for v in value]
-    return int(value) if isinstance(value, bool) else value
 
 
 def routed_subscribers(status: dict[str, Any]) -> set[str] | None:

@@ -19,12 +19,15 @@ from __future__ import annotations
 
 import argparse
 import bisect
+import json
 import threading
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+from .viewer_json import as_numbers, delivered_schema, without_nulls
 
 if TYPE_CHECKING:
     from .loopback_tls import LoopbackTls
@@ -106,7 +109,41 @@ def load_recording(paths: Sequence[Path], max_messages: int = MAX_MESSAGES, *,
     if not messages:
         raise ValueError("nothing to play: the files hold no message in that range")
     messages.sort(key=lambda r: r.log_time)
-    return channels, messages
+    return _delivered_for_viewers(channels, messages)
+
+
+#: The schema name of the base-station record's channels (modd.subbroker.record).
+DELIVERED = "modd.DeliveredValue"
+
+
+def _delivered_for_viewers(channels: dict[str, RecordedChannel], messages: list[Recorded]
+                           ) -> tuple[dict[str, RecordedChannel], list[Recorded]]:
+    """A base-station record's windows as the live server sends them: every
+    message valid against its channel's schema (the delivered-value contract
+    with one type per field; a null left out, a boolean as 1/0). The record
+    itself keeps the delivered bytes."""
+    record = {t for t, c in channels.items() if c.schema_name == DELIVERED}
+    if not record:
+        return channels, messages
+    aggregation: dict[str, str] = {}
+    out: list[Recorded] = []
+    for m in messages:
+        if m.topic not in record:
+            out.append(m)
+            continue
+        try:
+            doc = json.loads(m.data)
+        except (ValueError, UnicodeDecodeError):
+            continue  # not a delivered value: nothing a viewer could read
+        if not isinstance(doc, dict):
+            continue
+        aggregation.setdefault(m.topic, str(doc.get("aggregation", "")))
+        doc["value"] = as_numbers(doc.get("value"))
+        out.append(Recorded(m.log_time, m.topic, json.dumps(without_nulls(doc)).encode()))
+    for topic in record:
+        schema = json.dumps(delivered_schema(aggregation.get(topic, ""))).encode()
+        channels[topic] = replace(channels[topic], schema=schema)
+    return channels, out
 
 
 def _load_partial(path: Path, keep: Any) -> None:

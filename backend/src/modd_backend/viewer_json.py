@@ -90,6 +90,31 @@ def _nullable(node: dict[str, Any] | None, root: dict[str, Any]) -> bool:
     return any(a.get("type") == "null" for a in node.get("anyOf", []))
 
 
+def as_numbers(value: Any) -> Any:
+    """A value as a schema's number (or array of numbers): a boolean as 1/0."""
+    if isinstance(value, list):
+        return [as_numbers(v) for v in value]
+    return int(value) if isinstance(value, bool) else value
+
+
+def delivered_schema(aggregation: str) -> dict[str, Any]:
+    """The delivered-value contract's schema as the viewers read it, for one
+    subscriber: ``value`` an array of numbers for ``ALL``, a number otherwise
+    (true/false as 1/0, absent for an empty window)."""
+    from modd_contracts.schema import load
+
+    contract = load("delivered_value")
+    value = (
+        {"type": "array", "items": {"type": "number"}}
+        if aggregation == "ALL"
+        else {"type": "number"}
+    )
+    props = {**contract["properties"], "value": {**value, "description": "the window's value"}}
+    schema = for_viewers({**contract, "properties": props})
+    schema["required"] = [r for r in schema.get("required", []) if r != "value"]
+    return schema
+
+
 def without_nulls(doc: Any) -> Any:
     """``doc`` with every null left out, at any depth (object members, array items)."""
     if isinstance(doc, dict):
