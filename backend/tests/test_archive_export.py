@@ -133,13 +133,31 @@ def test_export_the_windows_the_subscribers_received(tmp_path: Path) -> None:
     for k in range(40):
         start = T0 + k * 500_000_000
         value = None if k == 5 else 0.25 * k
-        rec.put("avg", DeliveredValue("avg", "usv.accelerometer.accel_x", "AVERAGE", "0.5",
-                                      "M", 1, k, start, start + 500_000_000, value,
-                                      0 if value is None else 12, start + 600_000_000).to_json())
+        rec.put(
+            "avg",
+            DeliveredValue(
+                "avg",
+                "usv.accelerometer.accel_x",
+                "AVERAGE",
+                "0.5",
+                "M",
+                1,
+                k,
+                start,
+                start + 500_000_000,
+                value,
+                0 if value is None else 12,
+                start + 600_000_000,
+            ).to_json(),
+        )
     rec.close()
-    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
-                        initial_admin_password=ADMIN_PASSWORD, archive_dir=tmp_path / "none",
-                        record_dir=tmp_path / "records")
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        initial_admin_password=ADMIN_PASSWORD,
+        archive_dir=tmp_path / "none",
+        record_dir=tmp_path / "records",
+    )
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         h = login(c, "admin", ADMIN_PASSWORD)
         body = {"model": result.model, "format": "parquet", "source": "received"}
@@ -155,5 +173,6 @@ def test_export_the_windows_the_subscribers_received(tmp_path: Path) -> None:
         windows = [json.loads(m.data) for _s, _c, m in make_reader(f).iter_messages()]
     assert table["time"].astype("int64").tolist() == [w["end_ns"] for w in windows]
     assert table["value"].fillna(-1.0).tolist() == [
-        -1.0 if w["value"] is None else w["value"] for w in windows]
+        -1.0 if w["value"] is None else w["value"] for w in windows
+    ]
     assert set(table["topic"]) == {"avg"} and set(table["unit"]) == {"m s-2"}

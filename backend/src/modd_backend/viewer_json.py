@@ -19,6 +19,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from modd_contracts import aggregations as agg
+
 #: Keywords kept from a contract schema (the rest is its own bookkeeping).
 _KEPT = ("title", "description", "enum", "const")
 _JSON_TYPES = {bool: "boolean", int: "integer", float: "number", str: "string"}
@@ -106,7 +108,7 @@ def delivered_schema(aggregation: str) -> dict[str, Any]:
     contract = load("delivered_value")
     value = (
         {"type": "array", "items": {"type": "number"}}
-        if aggregation == "ALL"
+        if aggregation == agg.ALL
         else {"type": "number"}
     )
     props = {**contract["properties"], "value": {**value, "description": "the window's value"}}
