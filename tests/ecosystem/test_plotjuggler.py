@@ -104,7 +104,9 @@ def test_every_contract_vector_plots_as_its_samples() -> None:
         doc = json.loads(vector["line"])
         series = plotted(datagrams("usv", doc["subscriber"], doc))
         values = series.pop(f"/usv/{doc['subscriber']}/value", [])
-        assert [(pytest.approx(t), v) for t, v in vector["samples"]] == values, vector["name"]
+        assert len(values) == len(vector["samples"]), vector["name"]
+        for (t, v), (want_t, want_v) in zip(values, vector["samples"], strict=True):
+            assert t == pytest.approx(want_t) and v == want_v, vector["name"]
         assert set(series) <= {f"/usv/{doc['subscriber']}/count"}, vector["name"]
 
 
