@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 import signal
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -31,21 +31,25 @@ def value(topic: int, k: int) -> float:
     return round(10.0 * topic + k / 10.0, 3)
 
 
-@pytest.fixture
-def minute(tmp_path: Path) -> Path:
-    """A minute at 10 Hz on two topics, written like the PubBroker's archive."""
-    path = tmp_path / "usv-minute.mcap"
+def write_archive(path: Path, topics: Sequence[str], n: int) -> Path:
+    """``n`` samples at 10 Hz from T0 on each topic, written like the PubBroker's archive."""
     with open(path, "wb") as f:
         w = Writer(f)
         w.start()
         sid = w.register_schema("modd.Sample", "jsonschema", SCHEMA)
-        cids = [w.register_channel(t, "json", sid, {"type": "float32"}) for t in TOPICS]
-        for k in range(600):
+        cids = [w.register_channel(t, "json", sid, {"type": "float32"}) for t in topics]
+        for k in range(n):
             for i, cid in enumerate(cids):
                 t = T0 + k * 100_000_000
                 w.add_message(cid, t, json.dumps({"value": value(i, k)}).encode(), t)
         w.finish()  # type: ignore[no-untyped-call]
     return path
+
+
+@pytest.fixture
+def minute(tmp_path: Path) -> Path:
+    """A minute at 10 Hz on two topics."""
+    return write_archive(tmp_path / "usv-minute.mcap", TOPICS, 600)
 
 
 @pytest.fixture
@@ -110,17 +114,8 @@ def test_autoplay_drops_nothing_of_a_viewer_subscribing_channel_by_channel(tmp_p
     subscription and lost 0.24-0.40 s of 8 of 11 channels)."""
     from mcap.reader import make_reader
 
-    path = tmp_path / "eleven.mcap"
-    with open(path, "wb") as f:
-        w = Writer(f)
-        w.start()
-        sid = w.register_schema("modd.Sample", "jsonschema", SCHEMA)
-        cids = [w.register_channel(f"/usv/sub_{i}", "json", sid) for i in range(11)]
-        for k in range(15):  # 1.5 s at 10 Hz, from the range's very start
-            for i, cid in enumerate(cids):
-                t = T0 + k * 100_000_000
-                w.add_message(cid, t, json.dumps({"value": value(i, k)}).encode(), t)
-        w.finish()  # type: ignore[no-untyped-call]
+    # 1.5 s at 10 Hz, from the range's very start
+    path = write_archive(tmp_path / "eleven.mcap", [f"/usv/sub_{i}" for i in range(11)], 15)
     with open(path, "rb") as f:
         archived: dict[str, list[tuple[int, float]]] = {}
         for _, ch, m in make_reader(f).iter_messages():
