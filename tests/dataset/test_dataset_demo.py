@@ -100,6 +100,15 @@ def _official(folder: Path) -> dict[str, list[tuple[int, Any]]]:
     return out
 
 
+def _modd_dataset(
+    files: Path, model: Path, fmt: str, out: Path, *more: str
+) -> subprocess.CompletedProcess[str]:
+    command = [str(BIN / "modd"), "dataset", str(files), *more, "--model", str(model)]
+    return subprocess.run(
+        [*command, "--format", fmt, "-o", str(out)], capture_output=True, text=True, timeout=120
+    )
+
+
 @pytest.fixture(scope="module")
 def exports(
     mission: tuple[Path, Path, float], tmp_path_factory: pytest.TempPathFactory
@@ -109,22 +118,7 @@ def exports(
     paths = {}
     for fmt, suffix in FORMATS.items():
         paths[fmt] = out / f"demo.{suffix}"
-        done = subprocess.run(
-            [
-                str(BIN / "modd"),
-                "dataset",
-                str(archive),
-                "--model",
-                str(model),
-                "--format",
-                fmt,
-                "-o",
-                str(paths[fmt]),
-            ],
-            capture_output=True,
-            text=True,
-            timeout=120,
-        )
+        done = _modd_dataset(archive, model, fmt, paths[fmt])
         assert done.returncode == 0, done.stderr
         assert "Traceback" not in done.stderr
     return paths
@@ -180,22 +174,8 @@ def received(
     paths = {}
     for fmt in ("netcdf", "parquet"):
         paths[fmt] = out / f"received.{FORMATS[fmt]}"
-        done = subprocess.run(
-            [
-                str(BIN / "modd"),
-                "dataset",
-                str(archive.parent / "records" / "usv"),
-                "--received",
-                "--model",
-                str(model),
-                "--format",
-                fmt,
-                "-o",
-                str(paths[fmt]),
-            ],
-            capture_output=True,
-            text=True,
-            timeout=120,
+        done = _modd_dataset(
+            archive.parent / "records" / "usv", model, fmt, paths[fmt], "--received"
         )
         assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
         assert "values of 14 subscribers" in done.stdout, done.stdout

@@ -82,16 +82,23 @@ def test_seek_then_play_in_foxglove(server: ReplayServer) -> None:
         assert [m["msg"]["value"] for m in msgs] == [value(i, k) for k in ks]
 
 
+def played(path: Path, autoplay: bool, *options: str) -> dict[str, Any]:
+    """What a Foxglove client that only subscribes receives in 4 s of a replay."""
+    server = ReplayServer([path], "127.0.0.1", free_port(), autoplay=autoplay)
+    try:
+        report: dict[str, Any] = node_json("foxglove_client.cjs", server.url, "4", *options,
+                                           timeout=30)
+    finally:
+        server.stop()
+    assert not report["errors"], report["errors"]
+    return report
+
+
 @pytest.mark.parametrize("autoplay", [True, False])
 def test_autoplay_serves_a_viewer_without_playback_controls(minute: Path, autoplay: bool) -> None:
     # Lichtblick's WebSocket player subscribes and never sends a playback
     # request: with autoplay the range plays from its start; without, nothing.
-    server = ReplayServer([minute], "127.0.0.1", free_port(), autoplay=autoplay)
-    try:
-        report = node_json("foxglove_client.cjs", server.url, "3", timeout=30)
-    finally:
-        server.stop()
-    assert not report["errors"]
+    report = played(minute, autoplay)
     got = report["messages"]
     if not autoplay:
         assert not any(got.get(t) for t in TOPICS)
@@ -120,13 +127,8 @@ def test_autoplay_drops_nothing_of_a_viewer_subscribing_channel_by_channel(tmp_p
         archived: dict[str, list[tuple[int, float]]] = {}
         for _, ch, m in make_reader(f).iter_messages():
             archived.setdefault(ch.topic, []).append((m.log_time, json.loads(m.data)["value"]))
-    server = ReplayServer([path], "127.0.0.1", free_port(), autoplay=True)
-    try:
-        report = node_json("foxglove_client.cjs", server.url, "4", "--subscribe-gap", "40",
-                           timeout=30)
-    finally:
-        server.stop()
-    assert not report["errors"] and len(archived) == 11
+    report = played(path, True, "--subscribe-gap", "40")
+    assert len(archived) == 11
     got = {t: [(int(m["logTime"]), m["msg"]["value"]) for m in ms]
            for t, ms in report["messages"].items()}
     assert {t: len(v) for t, v in got.items()} == {t: len(v) for t, v in archived.items()}
@@ -159,12 +161,7 @@ def test_a_base_station_record_replays_valid_against_its_schemas(tmp_path: Path)
         recorded: dict[str, list[dict[str, Any]]] = {}
         for _, ch, m in make_reader(f).iter_messages():
             recorded.setdefault(ch.topic, []).append(json.loads(m.data))
-    server = ReplayServer([path], "127.0.0.1", free_port(), autoplay=True)
-    try:
-        report = node_json("foxglove_client.cjs", server.url, "3", timeout=30)
-    finally:
-        server.stop()
-    assert not report["errors"]
+    report = played(path, True)
     schemas = {a["topic"]: json.loads(a["schema"]) for a in report["advertised"]}
     got = report["messages"]
     assert set(got) == set(recorded) and len(recorded) == 4
