@@ -222,6 +222,7 @@ def test_subscribers_chosen_and_a_cut_record(record: Path, tmp_path: Path) -> No
         [record], _model(), "csv", out, received=True, topics=["temp_min", "boat.gps.lat"]
     )
     assert set(summary.per_topic) == {"temp_min", "fix_lat"}
+    assert any("subscriber wet left out" in n for n in summary.notes), summary.notes
     with pytest.raises(DatasetError, match="no subscriber of nope"):
         make_dataset([record], _model(), "csv", out, received=True, topics=["nope"])
     # a record cut by a crash: exported up to its last complete chunk, with a note

@@ -152,7 +152,15 @@ def _check_batch(
 ) -> Variable | None:
     var = plan.variables.get(b.topic)
     if var is None:
-        if b.topic not in strangers and not b.topic.startswith(plan.drone + "."):
+        if b.topic in strangers:
+            return None
+        if plan.source == "received":
+            strangers.add(b.topic)  # the subscribers chosen are known: say which were not
+            s.notes.append(
+                f"{path}: subscriber {b.topic} left out (not chosen, or not in the "
+                "model: a dynamic subscription or another model revision)"
+            )
+        elif not b.topic.startswith(plan.drone + "."):
             strangers.add(b.topic)
             s.notes.append(
                 f"{path}: topic {b.topic} is not in the model (an archive of "
