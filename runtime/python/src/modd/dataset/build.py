@@ -92,7 +92,10 @@ def make_dataset(
         )
         if summary.samples == 0:
             what = "window of the chosen subscribers" if received else "sample of the chosen topics"
-            raise PlanError(f"nothing to export: no {what} in the range")
+            hint = (
+                "; a record being written is read up to its last complete chunk" if received else ""
+            )
+            raise PlanError(f"nothing to export: no {what} in the range{hint}")
         os.replace(tmp, out)
         return summary
     except (PlanError, ArchiveError) as exc:
