@@ -241,3 +241,26 @@ def test_subscribers_chosen_and_a_cut_record(record: Path, tmp_path: Path) -> No
     # an archive is not a record: nothing of it is a subscriber's window
     with pytest.raises(DatasetError, match="no window of the chosen subscribers"):
         make_dataset([record], _model(), "csv", out, received=True, start_ns=T0 + 1000 * S)
+
+
+def test_a_record_being_written_exports_up_to_its_last_chunk(tmp_path: Path) -> None:
+    """The SubBroker's record, still open: its windows reach the disk in small
+    chunks, so an export made during the mission has all but the last seconds."""
+    rec = BaseRecord(tmp_path / "records", "boat")
+    rec.begin("survey", T0)
+    sub = next(s for s in _model()["subscribers"] if s["name"] == "temp_avg")
+    try:
+        for k in range(2000):  # ~0.5 MB of windows: half a chunk of the mcap writer's default
+            rec.put(sub["name"], _window(sub, k).to_json())
+        summary = make_dataset(
+            [tmp_path / "records" / "boat"],
+            _model(),
+            "csv",
+            tmp_path / "live.csv",
+            received=True,
+            topics=["temp_avg"],
+        )
+    finally:
+        rec.close()
+    assert 1500 < summary.samples < 2000, summary.samples
+    assert any("not closed" in n for n in summary.notes)
