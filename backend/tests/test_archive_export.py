@@ -110,3 +110,69 @@ def test_bad_requests_get_a_clear_4xx(
     assert "<archives>/usv/run-0000.mcap: offset" in corrupt.json()["detail"]
     assert c.get("/api/health").status_code == 200  # the service keeps answering
     assert c.post(URL, json={"model": _model(), "format": "csv"}).status_code == 401
+
+
+def test_export_the_windows_the_subscribers_received(tmp_path: Path) -> None:
+    """``source: received``: the base-station record's windows (written by the
+    SubBroker's recorder), equal to the record read by the official reader."""
+    import json
+
+    from mcap.reader import make_reader
+    from modd.subbroker.payload import DeliveredValue
+    from modd.subbroker.record import BaseRecord
+
+    text = MODEL.replace(
+        "Subscriptions { }",
+        'Subscriptions { Subscriber avg("127.0.0.1":7401, "usv.accelerometer.accel_x", 0.5,'
+        " AVERAGE); }",
+    )
+    result = load_text(text)
+    assert result.ok and result.model is not None
+    rec = BaseRecord(tmp_path / "records", "usv")
+    rec.begin("m", T0)
+    for k in range(40):
+        start = T0 + k * 500_000_000
+        value = None if k == 5 else 0.25 * k
+        rec.put(
+            "avg",
+            DeliveredValue(
+                "avg",
+                "usv.accelerometer.accel_x",
+                "AVERAGE",
+                "0.5",
+                "M",
+                1,
+                k,
+                start,
+                start + 500_000_000,
+                value,
+                0 if value is None else 12,
+                start + 600_000_000,
+            ).to_json(),
+        )
+    rec.close()
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        initial_admin_password=ADMIN_PASSWORD,
+        archive_dir=tmp_path / "none",
+        record_dir=tmp_path / "records",
+    )
+    with TestClient(create_app(settings, out=io.StringIO())) as c:
+        h = login(c, "admin", ADMIN_PASSWORD)
+        body = {"model": result.model, "format": "parquet", "source": "received"}
+        r = c.post(URL, json=body, headers=h)
+        assert r.status_code == 200, r.text
+        assert 'filename="usv-received.parquet"' in r.headers["content-disposition"]
+        assert "1 empty windows" in r.headers["x-modd-notes"]
+        none = c.post(URL, json=body | {"source": "archive"}, headers=h)
+        assert none.status_code == 404
+    (tmp_path / "r.parquet").write_bytes(r.content)
+    table = pq.read_table(tmp_path / "r.parquet").to_pandas()
+    with next((tmp_path / "records" / "usv").glob("*.mcap")).open("rb") as f:
+        windows = [json.loads(m.data) for _s, _c, m in make_reader(f).iter_messages()]
+    assert table["time"].astype("int64").tolist() == [w["end_ns"] for w in windows]
+    assert table["value"].fillna(-1.0).tolist() == [
+        -1.0 if w["value"] is None else w["value"] for w in windows
+    ]
+    assert set(table["topic"]) == {"avg"} and set(table["unit"]) == {"m s-2"}

@@ -100,6 +100,15 @@ def _official(folder: Path) -> dict[str, list[tuple[int, Any]]]:
     return out
 
 
+def _modd_dataset(
+    files: Path, model: Path, fmt: str, out: Path, *more: str
+) -> subprocess.CompletedProcess[str]:
+    command = [str(BIN / "modd"), "dataset", str(files), *more, "--model", str(model)]
+    return subprocess.run(
+        [*command, "--format", fmt, "-o", str(out)], capture_output=True, text=True, timeout=120
+    )
+
+
 @pytest.fixture(scope="module")
 def exports(
     mission: tuple[Path, Path, float], tmp_path_factory: pytest.TempPathFactory
@@ -109,31 +118,14 @@ def exports(
     paths = {}
     for fmt, suffix in FORMATS.items():
         paths[fmt] = out / f"demo.{suffix}"
-        done = subprocess.run(
-            [
-                str(BIN / "modd"),
-                "dataset",
-                str(archive),
-                "--model",
-                str(model),
-                "--format",
-                fmt,
-                "-o",
-                str(paths[fmt]),
-            ],
-            capture_output=True,
-            text=True,
-            timeout=120,
-        )
+        done = _modd_dataset(archive, model, fmt, paths[fmt])
         assert done.returncode == 0, done.stderr
         assert "Traceback" not in done.stderr
     return paths
 
 
-def test_netcdf_passes_the_ioos_compliance_checker(
-    exports: dict[str, Path], tmp_path: Path
-) -> None:
-    report = tmp_path / "cc.json"
+def _cc_failures(path: Path, out: Path) -> dict[str, list[tuple[str, Any]]]:
+    """The IOOS compliance checker's failed high-priority checks, per suite."""
     subprocess.run(
         [
             str(BIN / "compliance-checker"),
@@ -144,19 +136,25 @@ def test_netcdf_passes_the_ioos_compliance_checker(
             "-f",
             "json",
             "-o",
-            str(report),
-            str(exports["netcdf"]),
+            str(out),
+            str(path),
         ],
         capture_output=True,
         timeout=120,
     )
-    results = json.loads(report.read_text())
-    failed = {
+    results = json.loads(out.read_text())
+    return {
         suite: [
             (r["name"], r["msgs"]) for r in res["high_priorities"] if r["value"][0] != r["value"][1]
         ]
         for suite, res in results.items()
     }
+
+
+def test_netcdf_passes_the_ioos_compliance_checker(
+    exports: dict[str, Path], tmp_path: Path
+) -> None:
+    failed = _cc_failures(exports["netcdf"], tmp_path / "cc.json")
     assert failed["cf:1.11"] == []
     # ACDD rates standard_name "highly recommended": the CF table has none for a
     # platform's linear acceleration, so the demo's three accelerometer axes go without.
@@ -164,6 +162,56 @@ def test_netcdf_passes_the_ioos_compliance_checker(
         msgs == ["standard_name"] and "accelerometer_accel" in name
         for name, msgs in failed["acdd:1.3"]
     ), failed["acdd:1.3"]
+
+
+@pytest.fixture(scope="module")
+def received(
+    mission: tuple[Path, Path, float], tmp_path_factory: pytest.TempPathFactory
+) -> dict[str, Path]:
+    """``modd dataset --received`` of the mission's base-station record."""
+    archive, model, _ = mission
+    out = tmp_path_factory.mktemp("received")
+    paths = {}
+    for fmt in ("netcdf", "parquet"):
+        paths[fmt] = out / f"received.{FORMATS[fmt]}"
+        done = _modd_dataset(
+            archive.parent / "records" / "usv", model, fmt, paths[fmt], "--received"
+        )
+        assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+        assert "values of 14 subscribers" in done.stdout, done.stdout
+    return paths
+
+
+def test_the_received_windows_are_the_records(
+    mission: tuple[Path, Path, float], received: dict[str, Path], tmp_path: Path
+) -> None:
+    """Every window the SubBroker recorded, read independently (the official
+    reader), is in the export at its end; its NetCDF passes the IOOS checker."""
+    import xarray as xr
+
+    truth: dict[str, list[tuple[int, float]]] = {}
+    for path in sorted((mission[0].parent / "records").rglob("*.mcap")):
+        with path.open("rb") as f:
+            for _s, ch, m in make_reader(f).iter_messages(log_time_order=False):
+                d = json.loads(m.data)
+                v = float("nan") if d["value"] is None else float(d["value"])
+                truth.setdefault(ch.topic.rsplit("/", 1)[1], []).append((d["end_ns"], v))
+    assert len(truth) == 14 and all(len(v) >= 2 for v in truth.values())
+    table = pq.read_table(received["parquet"]).to_pandas()
+    with xr.open_dataset(received["netcdf"]) as ds:
+        for name, windows in truth.items():
+            rows = table[table["topic"] == name]
+            assert rows["time"].astype("int64").tolist() == [t for t, _ in windows], name
+            assert np.allclose(rows["value"], [v for _, v in windows], equal_nan=True), name
+            assert np.allclose(ds[name].values, [v for _, v in windows], equal_nan=True), name
+    failed = _cc_failures(received["netcdf"], tmp_path / "cc.json")
+    assert failed["cf:1.11"] == []
+    # ACDD: standard_name only, where the topic has none (the accelerometer's axes)
+    accel = {f"sub_{i}" for i in range(1, 8)}
+    missing = {
+        re.sub(r'.*variable "(\w+)".*', r"\1", name): msgs for name, msgs in failed["acdd:1.3"]
+    }
+    assert set(missing) <= accel and all(m == ["standard_name"] for m in missing.values()), missing
 
 
 def test_every_value_is_the_archives(

@@ -3,6 +3,9 @@
 // to every advertised channel, records advertise/unadvertise and every
 // message (JSON-decoded), and prints one JSON report at the end.
 //   node --experimental-websocket foxglove_client.cjs URL SECONDS [--seek NS --after S]
+//        [--subscribe-gap MS]
+// --subscribe-gap subscribes to the advertised channels one at a time, MS
+// apart, as a viewer whose panels mount one after the other (Lichtblick).
 // --seek sends a playback control request (Play, seek to NS) after S seconds:
 // FoxgloveClient has no playback API, so the request is written on the same
 // socket with the SDK's layout (opcode 3: command u8, speed f32, had_seek u8,
@@ -70,6 +73,9 @@ function main() {
   const seek = seekAt >= 0 ? rest[seekAt + 1] : null;
   const afterAt = rest.indexOf("--after");
   const after = afterAt >= 0 ? Number(rest[afterAt + 1]) : 1;
+  const gapAt = rest.indexOf("--subscribe-gap");
+  const gapMs = gapAt >= 0 ? Number(rest[gapAt + 1]) : 0;
+  let pending = Promise.resolve(); // subscriptions in order, gapMs apart
   const report = {
     protocol: null, serverInfo: null, advertised: [], unadvertised: [], errors: [],
     statuses: [], resubscribed: [],
@@ -87,7 +93,14 @@ function main() {
       topics.set(ch.id, ch.topic);
       report.advertised.push({ topic: ch.topic, encoding: ch.encoding, schemaName: ch.schemaName,
                                schema: ch.schema });
-      subscriptions.set(client.subscribe(ch.id), ch.topic);
+      if (gapMs > 0) {
+        pending = pending.then(() => new Promise((done) => setTimeout(() => {
+          if (topics.has(ch.id)) subscriptions.set(client.subscribe(ch.id), ch.topic);
+          done();
+        }, gapMs)));
+      } else {
+        subscriptions.set(client.subscribe(ch.id), ch.topic);
+      }
     }
   });
   client.on("unadvertise", (ids) => {

@@ -8,8 +8,9 @@ from __future__ import annotations
 
 import json
 import signal
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
+from typing import Any
 
 import httpx2 as httpx
 import pytest
@@ -19,6 +20,7 @@ from modd.ports import free_port
 from modd_backend.foxglove_replay import Player, Recorded, ReplayServer, load_recording
 from pubbroker_harness import BIN, PubBroker, run_load
 from served import serve
+from viewer_schema import refusals
 
 T0 = 1_795_000_000_000_000_000
 TOPICS = ("usv.ctd.temperature", "usv.ctd.conductivity")
@@ -29,21 +31,25 @@ def value(topic: int, k: int) -> float:
     return round(10.0 * topic + k / 10.0, 3)
 
 
-@pytest.fixture
-def minute(tmp_path: Path) -> Path:
-    """A minute at 10 Hz on two topics, written like the PubBroker's archive."""
-    path = tmp_path / "usv-minute.mcap"
+def write_archive(path: Path, topics: Sequence[str], n: int) -> Path:
+    """``n`` samples at 10 Hz from T0 on each topic, written like the PubBroker's archive."""
     with open(path, "wb") as f:
         w = Writer(f)
         w.start()
         sid = w.register_schema("modd.Sample", "jsonschema", SCHEMA)
-        cids = [w.register_channel(t, "json", sid, {"type": "float32"}) for t in TOPICS]
-        for k in range(600):
+        cids = [w.register_channel(t, "json", sid, {"type": "float32"}) for t in topics]
+        for k in range(n):
             for i, cid in enumerate(cids):
                 t = T0 + k * 100_000_000
                 w.add_message(cid, t, json.dumps({"value": value(i, k)}).encode(), t)
         w.finish()  # type: ignore[no-untyped-call]
     return path
+
+
+@pytest.fixture
+def minute(tmp_path: Path) -> Path:
+    """A minute at 10 Hz on two topics."""
+    return write_archive(tmp_path / "usv-minute.mcap", TOPICS, 600)
 
 
 @pytest.fixture
@@ -76,16 +82,23 @@ def test_seek_then_play_in_foxglove(server: ReplayServer) -> None:
         assert [m["msg"]["value"] for m in msgs] == [value(i, k) for k in ks]
 
 
+def played(path: Path, autoplay: bool, *options: str) -> dict[str, Any]:
+    """What a Foxglove client that only subscribes receives in 4 s of a replay."""
+    server = ReplayServer([path], "127.0.0.1", free_port(), autoplay=autoplay)
+    try:
+        report: dict[str, Any] = node_json("foxglove_client.cjs", server.url, "4", *options,
+                                           timeout=30)
+    finally:
+        server.stop()
+    assert not report["errors"], report["errors"]
+    return report
+
+
 @pytest.mark.parametrize("autoplay", [True, False])
 def test_autoplay_serves_a_viewer_without_playback_controls(minute: Path, autoplay: bool) -> None:
     # Lichtblick's WebSocket player subscribes and never sends a playback
     # request: with autoplay the range plays from its start; without, nothing.
-    server = ReplayServer([minute], "127.0.0.1", free_port(), autoplay=autoplay)
-    try:
-        report = node_json("foxglove_client.cjs", server.url, "3", timeout=30)
-    finally:
-        server.stop()
-    assert not report["errors"]
+    report = played(minute, autoplay)
     got = report["messages"]
     if not autoplay:
         assert not any(got.get(t) for t in TOPICS)
@@ -98,6 +111,69 @@ def test_autoplay_serves_a_viewer_without_playback_controls(minute: Path, autopl
         assert [m["msg"]["value"] for m in got[topic]] == [value(i, k) for k in ks]
     # PlaybackState status 0 = Playing (the SDK's PlaybackStatus)
     assert report["playbackStates"] and report["playbackStates"][0]["status"] == 0
+
+
+def test_autoplay_drops_nothing_of_a_viewer_subscribing_channel_by_channel(tmp_path: Path
+                                                                          ) -> None:
+    """Eleven channels (the demo record's count) subscribed 40 ms apart, as
+    Lichtblick's panels do: every channel gets every message of the file, as
+    the official ``mcap`` reader reads it (autoplay began on the first
+    subscription and lost 0.24-0.40 s of 8 of 11 channels)."""
+    from mcap.reader import make_reader
+
+    # 1.5 s at 10 Hz, from the range's very start
+    path = write_archive(tmp_path / "eleven.mcap", [f"/usv/sub_{i}" for i in range(11)], 15)
+    with open(path, "rb") as f:
+        archived: dict[str, list[tuple[int, float]]] = {}
+        for _, ch, m in make_reader(f).iter_messages():
+            archived.setdefault(ch.topic, []).append((m.log_time, json.loads(m.data)["value"]))
+    report = played(path, True, "--subscribe-gap", "40")
+    assert len(archived) == 11
+    got = {t: [(int(m["logTime"]), m["msg"]["value"]) for m in ms]
+           for t, ms in report["messages"].items()}
+    assert {t: len(v) for t, v in got.items()} == {t: len(v) for t, v in archived.items()}
+    assert got == archived
+
+
+def test_a_base_station_record_replays_valid_against_its_schemas(tmp_path: Path) -> None:
+    """The SubBroker's record (empty MIN windows, ALL lists, boolean LAST)
+    replayed: every message a Foxglove client receives validates against the
+    schema advertised for its channel (``jsonschema``), and equals the record's
+    window read by the official reader (a null left out, a boolean as 1/0)."""
+    from mcap.reader import make_reader
+    from modd.subbroker.payload import DeliveredValue
+    from modd.subbroker.record import BaseRecord
+    from test_viewer_schemas import violations
+
+    rec = BaseRecord(tmp_path / "records", "usv")
+    rec.begin("m", T0)
+    for k in range(10):
+        start, end = T0 + k * 100_000_000, T0 + (k + 1) * 100_000_000
+        for name, agg, value, count in (
+                ("avg", "AVERAGE", 0.5 * k, 4), ("low", "MIN", None if k % 3 else -1.0 * k, None),
+                ("all", "ALL", [float(i) for i in range(k % 3)], k % 3),
+                ("pump", "LAST", k % 2 == 0, None)):
+            rec.put(name, DeliveredValue(name, f"usv.a.{name}", agg, "0.1", "1", 1, k, start, end,
+                                         value, count, end + 1).to_json())
+    rec.close()
+    path = next((tmp_path / "records" / "usv").glob("*.mcap"))
+    with open(path, "rb") as f:
+        recorded: dict[str, list[dict[str, Any]]] = {}
+        for _, ch, m in make_reader(f).iter_messages():
+            recorded.setdefault(ch.topic, []).append(json.loads(m.data))
+    report = played(path, True)
+    schemas = {a["topic"]: json.loads(a["schema"]) for a in report["advertised"]}
+    got = report["messages"]
+    assert set(got) == set(recorded) and len(recorded) == 4
+    for topic, msgs in got.items():
+        assert not refusals(schemas[topic]), topic
+        for m in msgs:
+            assert violations(schemas[topic], m["msg"]) == [], (topic, m["msg"])
+        want = [{k: (int(v) if isinstance(v, bool) else v) for k, v in d.items() if v is not None}
+                for d in recorded[topic]]
+        # JSON numbers are doubles in the client: ns times agree to the microsecond
+        assert [{k: pytest.approx(v, abs=1000) if k.endswith("_ns") else v
+                 for k, v in m["msg"].items()} for m in msgs] == want, topic
 
 
 def test_player_seek_pause_speed() -> None:

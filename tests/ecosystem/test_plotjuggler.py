@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, cast
 
 import pytest
-from modd.plotjuggler import datagram, parse_udp
+from modd.plotjuggler import datagrams, parse_udp
 from modd.ports import free_port
 from modd.subbroker.payload import DeliveredValue
 from modd_contracts.types import DeliveredValue as DeliveredDict
@@ -22,9 +22,13 @@ from modd_contracts.types import DeliveredValue as DeliveredDict
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from support.loopback import shared_credentials, zenoh_router  # noqa: E402
 
+VECTORS = Path(__file__).resolve().parents[2] / "contracts" / "vectors" / "delivered_value.json"
+
 
 def flatten(doc: dict[str, object], prefix: str = "") -> dict[str, object]:
-    """PlotJuggler's JSON parser: nested keys joined by '/', arrays indexed."""
+    """PlotJuggler's JSON parser (plugins/ParserJSON, 3.9): nested keys joined
+    by '/', an array's items as ``name[i]``, one point per leaf at the
+    message's timestamp."""
     out: dict[str, object] = {}
     for k, v in doc.items():
         if isinstance(v, dict):
@@ -62,7 +66,7 @@ def test_datagrams_from_delivered_values() -> None:
                                      1_000_000_000, [1.0, 2.0], 2, 0))
         for v in values:
             station.put(f"modd/usv/sub/{v.subscriber}", v.to_json())
-        got = [json.loads(udp.recv(65536)) for _ in range(4)]
+        got = [json.loads(udp.recv(65536)) for _ in range(5)]
         udp.settimeout(0.5)
         with pytest.raises(TimeoutError):
             udp.recv(65536)
@@ -76,8 +80,34 @@ def test_datagrams_from_delivered_values() -> None:
     series = [flatten(g) for g in got]
     assert series[:3] == [{"/timestamp": (k + 1) * 0.25, "/usv/sub_3/value": 0.5 * k,
                            "/usv/sub_3/count": 4} for k in range(1, 4)]
-    assert series[3] == {"/timestamp": 1.0, "/usv/all_1/value[0]": 1.0,
-                         "/usv/all_1/value[1]": 2.0, "/usv/all_1/count": 2}
+    assert series[3:] == [{"/timestamp": 0.5, "/usv/all_1/value": 1.0},
+                          {"/timestamp": 1.0, "/usv/all_1/value": 2.0, "/usv/all_1/count": 2}]
+
+
+def plotted(lines: list[bytes]) -> dict[str, list[tuple[float, object]]]:
+    """The series PlotJuggler makes of datagrams: name -> [(t, value)]."""
+    out: dict[str, list[tuple[float, object]]] = {}
+    for line in lines:
+        flat = flatten(json.loads(line))
+        t = flat.pop("/timestamp")
+        assert isinstance(t, float)
+        for name, v in flat.items():
+            out.setdefault(name, []).append((t, v))
+    return out
+
+
+def test_every_contract_vector_plots_as_its_samples() -> None:
+    """The delivered-value contract says what a chart plots (``samples``: ALL
+    spread over the window): PlotJuggler gets exactly that, as one series per
+    subscriber (an ALL window was 14 unrelated ``value[i]`` series before)."""
+    for vector in json.loads(VECTORS.read_text())["vectors"]:
+        doc = json.loads(vector["line"])
+        series = plotted(datagrams("usv", doc["subscriber"], doc))
+        values = series.pop(f"/usv/{doc['subscriber']}/value", [])
+        assert len(values) == len(vector["samples"]), vector["name"]
+        for (t, v), (want_t, want_v) in zip(values, vector["samples"], strict=True):
+            assert t == pytest.approx(want_t) and v == want_v, vector["name"]
+        assert set(series) <= {f"/usv/{doc['subscriber']}/count"}, vector["name"]
 
 
 def partial(fields: dict[str, Any]) -> DeliveredDict:
@@ -86,11 +116,13 @@ def partial(fields: dict[str, Any]) -> DeliveredDict:
 
 
 def test_bad_values_and_options() -> None:
-    assert datagram("usv", "s", partial({"end_ns": 1, "value": float("nan")})) is None
-    assert datagram("usv", "s", partial({"value": 1.0})) is None
-    assert datagram("usv", "s", partial({"end_ns": 10**9, "value": [0.0] * 20_000})) is None
+    assert datagrams("usv", "s", partial({"end_ns": 1, "value": float("nan")})) == []
+    assert datagrams("usv", "s", partial({"value": 1.0})) == []
+    assert datagrams("usv", "s", partial({"end_ns": 10**9, "value": [1.0]})) == []  # no start
+    many = datagrams("usv", "s", partial({"start_ns": 0, "end_ns": 10**9, "value": [0.5] * 20_000}))
+    assert len(many) == 20_000 and all(len(d) < 100 for d in many)
     backfilled = partial({"end_ns": 10**9, "value": 1, "backfilled": True})
-    assert json.loads(datagram("usv", "s", backfilled) or b"{}")["usv"]["s"]["backfilled"] == 1
+    assert json.loads(datagrams("usv", "s", backfilled)[0])["usv"]["s"]["backfilled"] == 1
     assert parse_udp("127.0.0.1:9870") == ("127.0.0.1", 9870)
     assert parse_udp("[::1]:9870") == ("::1", 9870)
     for bad in ("9870", "host:", "host:0", "host:x"):

@@ -79,10 +79,18 @@ def decode_window(cdr: bytes) -> dict[str, Any]:
     s0, n0, s1, n1 = struct.unpack_from("<iIiI", body, 0)
     (value,) = struct.unpack_from("<d", body, 16)  # offset 16: already 8-aligned
     (count, slen) = struct.unpack_from("<II", body, 24)
-    text = body[32:32 + slen]
+    end = 32 + slen
+    text = body[32:end]
     assert text[-1:] == b"\x00", "CDR strings end with NUL"
+    has_count = body[end]
+    at = (end + 1 + 3) // 4 * 4  # the sequence's length: uint32, 4-aligned
+    (n,) = struct.unpack_from("<I", body, at)
+    at = (at + 4 + 7) // 8 * 8 if n else at + 4  # float64 items, 8-aligned
+    samples = list(struct.unpack_from(f"<{n}d", body, at))
+    assert len(body) == at + 8 * n, "nothing after the samples"
     return {"start_ns": s0 * 10**9 + n0, "end_ns": s1 * 10**9 + n1, "value": value,
-            "count": count, "aggregation": text[:-1].decode()}
+            "count": count, "aggregation": text[:-1].decode(), "has_count": has_count,
+            "samples": samples}
 
 
 def test_bridge_publishes_as_rmw_zenoh(networks: tuple[zenoh.Session, zenoh.Session, str, str]
@@ -117,12 +125,17 @@ def test_bridge_publishes_as_rmw_zenoh(networks: tuple[zenoh.Session, zenoh.Sess
                            1_795_000_000_250_000_000 + k * 250_000_000,
                            -0.1 * k, 6, 0) for k in range(5)
         ] + [DeliveredValue("sub_5", "usv.accelerometer.accel_z", "MIN", "0.25", "M", 1, 9,
-                            1_795_000_000_000_000_000, 1_795_000_000_250_000_000, None, None, 0)]
+                            1_795_000_000_000_000_000, 1_795_000_000_250_000_000, None, None, 0),
+             DeliveredValue("sub_6", "usv.accelerometer.accel_z", "MAX", "0.25", "M", 1, 9,
+                            1_795_000_000_000_000_000, 1_795_000_000_250_000_000, 2.5, None, 0),
+             DeliveredValue("sub_7", "usv.accelerometer.accel_z", "ALL", "0.25", "M", 1, 9,
+                            1_795_000_000_000_000_000, 1_795_000_000_250_000_000,
+                            [1.5, -2.25, 3.0], 3, 0)]
         for v in values:
             modd.put(f"modd/usv/sub/{v.subscriber}", v.to_json())
             time.sleep(0.02)
         deadline = time.monotonic() + 10
-        while time.monotonic() < deadline and sum(len(v) for v in got.values()) < 12:
+        while time.monotonic() < deadline and sum(len(v) for v in got.values()) < 16:
             time.sleep(0.05)
         # liveliness tokens are also answered to a query (late joiners: ros2 topic list)
         queried = [str(r.ok.key_expr) for r in ros.liveliness().get("@ros2_lv/0/**", timeout=3)
@@ -141,12 +154,20 @@ def test_bridge_publishes_as_rmw_zenoh(networks: tuple[zenoh.Session, zenoh.Sess
     assert set(got) >= {window_key, float_key}
     windows = [decode_window(p) for p, _ in got[window_key]]
     assert windows == [{"start_ns": v.start_ns, "end_ns": v.end_ns, "value": v.value,
-                        "count": 6, "aggregation": "AVERAGE"} for v in values[:5]]
+                        "count": 6, "aggregation": "AVERAGE", "has_count": 1, "samples": []}
+                       for v in values[:5]]
     floats = [struct.unpack("<d", p[4:])[0] for p, _ in got[float_key]]
     assert [p[:4] for p, _ in got[float_key]] == [b"\x00\x01\x00\x00"] * 5
     assert floats == [v.value for v in values[:5]]
     empty = decode_window(got[f"0/usv/sub_5/modd_msgs::msg::dds_::Window_/{WINDOW_HASH}"][0][0])
-    assert math.isnan(empty["value"]) and empty["count"] == 0
+    assert math.isnan(empty["value"]) and (empty["count"], empty["has_count"]) == (0, 1)
+    # a MIN/MAX/LAST window: the drone does not say how many samples; the type says so
+    most = decode_window(got[f"0/usv/sub_6/modd_msgs::msg::dds_::Window_/{WINDOW_HASH}"][0][0])
+    assert (most["value"], most["count"], most["has_count"]) == (2.5, 0, 0)
+    # an ALL window carries its samples
+    every = decode_window(got[f"0/usv/sub_7/modd_msgs::msg::dds_::Window_/{WINDOW_HASH}"][0][0])
+    assert math.isnan(every["value"])
+    assert (every["samples"], every["count"], every["has_count"]) == ([1.5, -2.25, 3.0], 3, 1)
 
     # attachment: sequence number from 1, source timestamp now, GID of 16 bytes
     atts = [ze.z_deserialize(tuple[ze.Int64, ze.Int64, bytes], zenoh.ZBytes(a))

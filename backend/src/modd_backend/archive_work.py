@@ -89,12 +89,14 @@ MAX_EXPORT_SAMPLES = 20_000_000
 
 def dataset_file(paths: list[Path], model: dict[str, Any], fmt: str, out: Path,
                  start_ns: int | None, end_ns: int | None, topics: list[str] | None,
-                 resample_s: float | None, max_samples: int) -> list[str]:
-    """``modd dataset`` into ``out`` (in a worker); its notes. Raises DatasetError."""
+                 resample_s: float | None, max_samples: int, received: bool = False
+                 ) -> list[str]:
+    """``modd dataset`` (``--received`` with ``received``) into ``out`` (in a
+    worker); its notes. Raises DatasetError."""
     from modd.dataset.build import make_dataset
     from modd.dataset.export import Options
 
     summary = make_dataset(paths, model, fmt, out, start_ns=start_ns, end_ns=end_ns,
                            topics=topics, resample_s=resample_s,
-                           options=Options(max_samples=max_samples))
+                           options=Options(max_samples=max_samples), received=received)
     return summary.notes

@@ -36,9 +36,11 @@ from typing import TYPE_CHECKING, Any
 from modd_contracts import aggregations as agg
 from modd_contracts.delivered import load_delivered
 from modd_contracts.keys import match_status_key, match_sub_key
+from modd_contracts.schema import load as contract_schema
 from modd_contracts.types import DeliveredValue
 
 from .scene import position_roles
+from .viewer_json import as_numbers, for_viewers, without_nulls
 
 if TYPE_CHECKING:
     from .loopback_tls import LoopbackTls
@@ -55,25 +57,28 @@ _TIME = {"type": "object", "properties": {"sec": {"type": "integer"},
 # One JSON type per field: Foxglove's and Lichtblick's JSON-schema reader
 # (packages/mcap-support parseJsonSchema) refuses a list of types such as
 # ["number", "null"] and then drops the whole channel ("Failed to parse channel
-# schema"). A null still travels where a field says number: the viewers do not
-# validate messages against the schema, they only read its field types.
+# schema"). So a null is left out of the message (viewer_json.py), and every
+# message validates against its channel's schema.
 
 
 def window_schema(aggregation: str = "") -> dict[str, Any]:
     """The ``modd.Window`` schema of a subscriber: ``value`` is an array of
     numbers for ``ALL``, a number otherwise (null for an empty window)."""
     value: dict[str, Any] = (
-        {"description": "the window's samples", "type": "array", "items": {"type": "number"}}
+        {"description": "the window's samples (true/false as 1/0); absent for an empty "
+                        "window", "type": "array", "items": {"type": "number"}}
         if aggregation == agg.ALL else
-        {"description": "the aggregate; null for an empty window", "type": "number"})
+        {"description": "the aggregate (true/false as 1/0); absent for an empty window",
+         "type": "number"})
     return {
         "title": "modd.Window",
         "description": "One window of a MoDD subscription (docs/subbroker.md, delivered value)",
         "type": "object",
         "properties": {
             "value": value,
-            "count": {"description": "samples behind the value (AVERAGE, COUNT, ALL); "
-                                     "null when not carried", "type": "integer"},
+            "count": {"description": "samples in the window (AVERAGE, COUNT, ALL); absent "
+                                     "when the drone does not send it (MIN, MAX, LAST)",
+                      "type": "integer"},
             "aggregation": {"type": "string"},
             "window_start": _TIME,
             "window_end": _TIME,
@@ -84,6 +89,9 @@ def window_schema(aggregation: str = "") -> dict[str, Any]:
             "unit": {"type": "string"},
             "delivered": _TIME,
         },
+        "required": ["aggregation", "window_start", "window_end", "backfilled", "topic",
+                     "period_s", "unit", "delivered"],
+        "additionalProperties": False,
     }
 
 
@@ -102,21 +110,10 @@ LOCATION_SCHEMA: dict[str, Any] = {
         "position_covariance_type": {"type": "integer"},
     },
 }
-LINK_SCHEMA: dict[str, Any] = {
-    "title": "modd.LinkStatus",
-    "description": "The SubBroker's status of one drone (docs/subbroker.md, status); "
-                   "rtt_s, config_id and last_error are null when unknown",
-    "type": "object",
-    "properties": {
-        "link": {"type": "string"},
-        "rtt_s": {"type": "number"},
-        "config_id": {"type": "integer"},
-        "delivered": {"type": "integer"},
-        "bytes_in_per_s": {"type": "number"},
-        "ip_bytes_in_per_s": {"type": "number"},
-        "last_error": {"type": "string"},
-    },
-}
+#: The SubBroker's status contract (status.schema.json) as the viewers read it:
+#: every field declared (a null is left out of the message).
+LINK_SCHEMA: dict[str, Any] = {**for_viewers(contract_schema("status")),
+                               "title": "modd.LinkStatus"}
 
 
 def _time(ns: int) -> dict[str, int]:
@@ -129,9 +126,10 @@ def window_message(delivered: DeliveredValue) -> dict[str, Any]:
     """The Foxglove message of one delivered value (docs/subbroker.md)."""
     start = int(delivered.get("start_ns") or 0)
     end = int(delivered.get("end_ns") or 0)
-    return {
-        "value": delivered.get("value"),
-        "count": delivered.get("count"),
+    value, count = as_numbers(delivered.get("value")), delivered.get("count")
+    message: dict[str, Any] = without_nulls({
+        "value": value,
+        "count": count if isinstance(count, int) and not isinstance(count, bool) else None,
         "aggregation": delivered.get("aggregation", ""),
         "window_start": _time(start),
         "window_end": _time(end),
@@ -140,7 +138,8 @@ def window_message(delivered: DeliveredValue) -> dict[str, Any]:
         "period_s": str(delivered.get("period_s", "")),
         "unit": delivered.get("unit", ""),
         "delivered": _time(int(delivered.get("delivered_ns") or 0)),
-    }
+    })
+    return message
 
 
 def routed_subscribers(status: dict[str, Any]) -> set[str] | None:
@@ -251,7 +250,7 @@ class FoxgloveLive:
             return
         time_ns = status.get("time_ns")
         link = self._channel(f"/{drone}/link", LINK_SCHEMA, "modd.LinkStatus")
-        link.log(status, log_time=time_ns if isinstance(time_ns, int) else None)
+        link.log(without_nulls(status), log_time=time_ns if isinstance(time_ns, int) else None)
         routed = routed_subscribers(status)
         if routed is None:
             return

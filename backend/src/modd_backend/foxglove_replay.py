@@ -19,18 +19,25 @@ from __future__ import annotations
 
 import argparse
 import bisect
+import json
 import threading
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+from .viewer_json import as_numbers, delivered_schema, without_nulls
 
 if TYPE_CHECKING:
     from .loopback_tls import LoopbackTls
 
 #: Messages kept in memory at most (a mission day at 100 Hz on 50 topics).
 MAX_MESSAGES = 5_000_000
+#: Autoplay starts this long after a viewer's last new subscription when it
+#: has not subscribed to every channel (a viewer subscribes to what its panels
+#: show): its subscriptions arrive one by one, over a few hundred ms.
+AUTOPLAY_SETTLE_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -102,7 +109,41 @@ def load_recording(paths: Sequence[Path], max_messages: int = MAX_MESSAGES, *,
     if not messages:
         raise ValueError("nothing to play: the files hold no message in that range")
     messages.sort(key=lambda r: r.log_time)
-    return channels, messages
+    return _delivered_for_viewers(channels, messages)
+
+
+#: The schema name of the base-station record's channels (modd.subbroker.record).
+DELIVERED = "modd.DeliveredValue"
+
+
+def _delivered_for_viewers(channels: dict[str, RecordedChannel], messages: list[Recorded]
+                           ) -> tuple[dict[str, RecordedChannel], list[Recorded]]:
+    """A base-station record's windows as the live server sends them: every
+    message valid against its channel's schema (the delivered-value contract
+    with one type per field; a null left out, a boolean as 1/0). The record
+    itself keeps the delivered bytes."""
+    record = {t for t, c in channels.items() if c.schema_name == DELIVERED}
+    if not record:
+        return channels, messages
+    aggregation: dict[str, str] = {}
+    out: list[Recorded] = []
+    for m in messages:
+        if m.topic not in record:
+            out.append(m)
+            continue
+        try:
+            doc = json.loads(m.data)
+        except (ValueError, UnicodeDecodeError):
+            continue  # not a delivered value: nothing a viewer could read
+        if not isinstance(doc, dict):
+            continue
+        aggregation.setdefault(m.topic, str(doc.get("aggregation", "")))
+        doc["value"] = as_numbers(doc.get("value"))
+        out.append(Recorded(m.log_time, m.topic, json.dumps(without_nulls(doc)).encode()))
+    for topic in record:
+        schema = json.dumps(delivered_schema(aggregation.get(topic, ""))).encode()
+        channels[topic] = replace(channels[topic], schema=schema)
+    return channels, out
 
 
 def _load_partial(path: Path, keep: Any) -> None:
@@ -194,10 +235,15 @@ class ReplayServer:
         channels, messages = recording if recording is not None else load_recording(paths)
         self.player = Player(messages)
         # Lichtblick's WebSocket player (1.28) has no playback controls: it
-        # subscribes and waits. With autoplay the first subscription plays the
-        # range once from its start, unless a client has already taken control.
+        # subscribes and waits. With autoplay the range plays once from its
+        # start when the viewer has subscribed (every channel, or no new one
+        # for AUTOPLAY_SETTLE_S), unless a client has already taken control:
+        # starting on the first subscription lost the start of the channels
+        # subscribed after it (0.24-0.40 s of 8 of 11 channels).
         self.autoplay = autoplay
         self._controlled = False
+        self._subscribed: set[str] = set()
+        self._autoplay_at: float | None = None  # monotonic time autoplay starts
         self.context = foxglove.Context()
         self.channels = {
             t: foxglove.Channel(t, message_encoding=c.encoding or "json", context=self.context,
@@ -213,7 +259,7 @@ class ReplayServer:
                 return replay.on_request(request)
 
             def on_subscribe(self, client: Any, channel: Any) -> None:
-                replay.on_subscribe()
+                replay.on_subscribe(str(channel.topic))
 
         self.server = foxglove.start_server(
             name="MoDD replay", host=host, port=port, context=self.context,
@@ -241,15 +287,26 @@ class ReplayServer:
         return PlaybackState(status=status, current_time=p.current, playback_speed=p.speed,
                              did_seek=did_seek, request_id=request_id)
 
-    def on_subscribe(self) -> None:
-        if self.autoplay and not self._controlled:
-            self._controlled = True  # once: later subscriptions join the running playback
+    def on_subscribe(self, topic: str) -> None:
+        if not self.autoplay or self._controlled:
+            return  # later subscriptions join the running playback
+        self._subscribed.add(topic)
+        every = self._subscribed >= set(self.channels)
+        self._autoplay_at = time.monotonic() + (0.0 if every else AUTOPLAY_SETTLE_S)
+
+    def _autoplay(self, now: float) -> None:
+        """Starts the autoplay when its time has come (the player thread)."""
+        at = self._autoplay_at
+        if at is not None and now >= at and not self._controlled:
+            self._controlled = True  # once
+            self._autoplay_at = None
             self.player.control(True, self.player.speed, None)
 
     def on_request(self, request: Any) -> Any:
         from foxglove.websocket import PlaybackCommand
 
         self._controlled = True
+        self._autoplay_at = None
         self.player.control(request.playback_command == PlaybackCommand.Play,
                             float(request.playback_speed), request.seek_time)
         return self.state(request.request_id, request.seek_time is not None)
@@ -262,6 +319,7 @@ class ReplayServer:
             for m in self.player.advance(now - last):
                 self.channels[m.topic].log(m.data, log_time=m.log_time)
             last = now
+            self._autoplay(now)
             if self.player.playing and not was_playing:
                 self.server.broadcast_playback_state(self.state(None, False))  # autoplay began
             if self.player.playing or was_playing:

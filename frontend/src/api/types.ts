@@ -162,10 +162,14 @@ export interface ArchiveReplay {
 export const DATASET_FORMATS = ["netcdf", "parquet", "csv", "geojson", "gpx"] as const;
 export type DatasetFormat = (typeof DATASET_FORMATS)[number];
 
+/** What a dataset holds: the samples archived on board, or the windows the subscribers received (base-station records). */
+export type DatasetSource = "archive" | "received";
+
 /** POST /api/drones/<drone>/archives/export: the model the archive was made with, and what to keep. */
 export interface DatasetRequest {
   model: ModdModel;
   format: DatasetFormat;
+  source?: DatasetSource;
   files?: string[];
   start_ns?: number | null;
   end_ns?: number | null;

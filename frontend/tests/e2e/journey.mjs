@@ -352,6 +352,17 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
         if (accel.length < 10) throw new Error(`dataset CSV: ${accel.length} accelerometer rows with their unit (${rows.length} rows; ${rows[1]})`);
         // The base-station record of what was delivered, live and backfilled.
         await expectText(page.getByRole("table", { name: "Base-station record files" }), /\.mcap/, 15000);
+        // Export dataset of what the subscribers received: the record's windows, one row per
+        // window at its end, named by subscriber, with the unit of its topic.
+        await exportForm.getByLabel("Dataset source").selectOption("received");
+        const [received] = await Promise.all([
+          page.waitForEvent("download", { timeout: 60000 }),
+          exportForm.getByRole("button", { name: "Export", exact: true }).click(),
+        ]);
+        if (!/-received\.csv$/.test(received.suggestedFilename())) throw new Error(`received: ${received.suggestedFilename()}`);
+        const windows = readFileSync(await received.path(), "utf8").trim().split("\n");
+        const bySubscriber = windows.filter((r) => /^[^,]+,"[A-Za-z_]\w*",(-?[0-9.e+-]+)?,"m s-2"/.test(r));
+        if (bySubscriber.length < 3) throw new Error(`received CSV: ${bySubscriber.length} windows of accelerometer subscribers (${windows.length} rows; ${windows[1]})`);
         await expand(true);
       }
       await page.waitForTimeout(500);

@@ -129,7 +129,10 @@ async def export_csv(
 class ExportIn(BaseModel):
     """A dataset of the drone's archive (``modd dataset``, docs/user-guide/datasets.md):
     the model the archive was made with (the workbench's), the format, and what to
-    keep. ``files``: the archive files to read (all of the drone's when empty)."""
+    keep. ``source``: ``archive`` for the samples archived on board, ``received``
+    for the windows the subscribers received (the base-station records; ``topics``
+    then names subscribers or their topics). ``files``: the files to read (all the
+    drone's archives, or records, when empty)."""
 
     model: dict[str, Any]
     format: Literal["netcdf", "parquet", "csv", "geojson", "gpx"]
@@ -139,6 +142,7 @@ class ExportIn(BaseModel):
     topics: list[Annotated[str, Field(max_length=200)]] | None = Field(default=None,
                                                                        max_length=1000)
     resample_s: float | None = Field(default=None, gt=0, le=86_400)
+    source: Literal["archive", "received"] = "archive"
 
 
 EXPORT_TYPES = {"netcdf": ("application/x-netcdf", ".nc"),
@@ -153,19 +157,23 @@ EXPORT_TYPES = {"netcdf": ("application/x-netcdf", ".nc"),
     422: {"description": "an invalid model, or nothing to export"}})
 async def export_dataset(drone: Drone, body: ExportIn, state: StateDep,
                          _user: UserDep) -> FileResponse:
-    """The archive as a dataset file, streamed as a download (made in a worker
-    process, bounded to MAX_EXPORT_SAMPLES samples; notes in ``X-Modd-Notes``)."""
+    """The archive (or the windows the subscribers received) as a dataset file,
+    streamed as a download (made in a worker process, bounded to
+    MAX_EXPORT_SAMPLES samples; notes in ``X-Modd-Notes``)."""
     from modd.dataset.build import DatasetError
     from modd_model import validate
 
     errors = [str(d) for d in validate(body.model) if d.severity == "error"]
     if errors:
         raise HTTPException(422, {"message": "the model is not valid", "errors": errors[:20]})
-    root = state.settings.effective_archive_dir
+    received = body.source == "received"
+    root = (state.settings.effective_record_dir if received
+            else state.settings.effective_archive_dir)
     paths = ([archive_path(root, drone, n) for n in body.files] if body.files
              else list_files(root, drone))
     if not paths:
-        raise HTTPException(404, f"no archives for drone {drone!r}")
+        raise HTTPException(404, f"no {'records' if received else 'archives'} for drone "
+                                 f"{drone!r}")
     media, suffix = EXPORT_TYPES[body.format]
     fd, tmp = tempfile.mkstemp(prefix="modd-export-", suffix=suffix)
     os.close(fd)
@@ -173,13 +181,13 @@ async def export_dataset(drone: Drone, body: ExportIn, state: StateDep,
     try:
         notes = await in_worker(dataset_file, paths, body.model, body.format, out,
                                 body.start_ns, body.end_ns, body.topics, body.resample_s,
-                                archive_work.MAX_EXPORT_SAMPLES)
+                                archive_work.MAX_EXPORT_SAMPLES, received)
     except DatasetError as exc:
         out.unlink(missing_ok=True)
-        text = str(exc).replace(str(root), "<archives>")
+        text = str(exc).replace(str(root), "<records>" if received else "<archives>")
         raise HTTPException(413 if "more than" in text and "samples" in text else 422,
                             text) from None
-    name = f"{drone}-dataset{suffix}"
+    name = f"{drone}-{'received' if received else 'dataset'}{suffix}"
     headers = {"X-Modd-Notes": json.dumps(notes[:20], ensure_ascii=True)}
     return FileResponse(out, media_type=media, filename=name, headers=headers,
                         background=BackgroundTask(out.unlink, missing_ok=True))

@@ -7,10 +7,10 @@
 import { useState } from "react";
 import { useServices } from "../../app/services";
 import { saveBlob } from "../saveBlob";
-import { DATASET_FORMATS, type ArchiveFile, type DatasetFormat } from "../../api/types";
+import { DATASET_FORMATS, type ArchiveFile, type DatasetFormat, type DatasetSource } from "../../api/types";
 import type { ModdModel } from "../../core/model.gen";
 import { topicLabel } from "../../core/topicLabel";
-import { datasetFileName, datasetRequest, type ExportChoice } from "./exportForm";
+import { datasetFileName, datasetRequest, exportables, type ExportChoice } from "./exportForm";
 
 const FORMAT_WORDS: Record<DatasetFormat, string> = {
   netcdf: "NetCDF (CF trajectory)", parquet: "Parquet", csv: "CSV", geojson: "GeoJSON track", gpx: "GPX track",
@@ -21,7 +21,8 @@ export function ExportDataset({ model, file }: { model: ModdModel; file: Archive
   const drone = model.drone.name;
   const [choice, setChoice] = useState<ExportChoice>({ format: "netcdf", from: "", to: "", topics: [], resample: "" });
   const [state, setState] = useState<{ busy?: boolean; error?: string; done?: string }>({});
-  const topics = file?.topics.map((t) => t.topic) ?? [];
+  const topics = exportables(model, file, choice.source);
+  const received = choice.source === "received";
 
   const run = async (e: React.FormEvent) => {
     e.preventDefault();
@@ -29,7 +30,7 @@ export function ExportDataset({ model, file }: { model: ModdModel; file: Archive
     if (typeof request === "string") { setState({ error: request }); return; }
     setState({ busy: true });
     try {
-      const name = datasetFileName(drone, file, choice.format);
+      const name = datasetFileName(drone, file, choice.format, choice.source);
       saveBlob(await api.exportDataset(drone, request), name);
       setState({ done: name });
     } catch (err) {
@@ -40,6 +41,12 @@ export function ExportDataset({ model, file }: { model: ModdModel; file: Archive
   return (
     <form onSubmit={run} className="archive-form" aria-label="Export dataset">
       <strong>Export dataset</strong> {file ? `of ${file.name}` : "of every file"}
+      <select aria-label="Dataset source" value={choice.source ?? "archive"}
+        title="The samples the drone archived, or the windows the subscribers received (the base-station records)"
+        onChange={(e) => setChoice({ ...choice, source: e.target.value as DatasetSource, topics: [] })}>
+        <option value="archive">samples archived on board</option>
+        <option value="received">windows the subscribers received</option>
+      </select>
       <select aria-label="Dataset format" value={choice.format} onChange={(e) => setChoice({ ...choice, format: e.target.value as DatasetFormat })}>
         {DATASET_FORMATS.map((f) => <option key={f} value={f}>{FORMAT_WORDS[f]}</option>)}
       </select>
@@ -51,9 +58,9 @@ export function ExportDataset({ model, file }: { model: ModdModel; file: Archive
         title="Empty: every sample at its own time. A period: the mean of each topic per period (wide form)."
         onChange={(e) => setChoice({ ...choice, resample: e.target.value })} />
       {topics.length > 0 && (
-        <select multiple aria-label="Export topics" value={choice.topics} size={Math.min(4, topics.length)}
+        <select multiple aria-label={received ? "Export subscribers" : "Export topics"} value={choice.topics} size={Math.min(4, topics.length)}
           onChange={(e) => setChoice({ ...choice, topics: [...e.target.selectedOptions].map((o) => o.value) })}>
-          {topics.map((t) => <option key={t} value={t}>{topicLabel(model, t)}</option>)}
+          {topics.map((t) => <option key={t} value={t}>{received ? t : topicLabel(model, t)}</option>)}
         </select>
       )}
       <button type="submit" disabled={state.busy}>Export</button>

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { datasetFileName, datasetRequest, type ExportChoice } from "./exportForm";
+import { datasetFileName, datasetRequest, exportables, type ExportChoice } from "./exportForm";
 import type { ArchiveFile } from "../../api/types";
 import type { ModdModel } from "../../core/model.gen";
 
@@ -21,6 +21,18 @@ describe("the Export dataset form", () => {
   it("says which field it cannot read", () => {
     expect(datasetRequest(model, { ...choice, from: "soon" }, file)).toBe("from: a number of seconds, please");
     expect(datasetRequest(model, { ...choice, resample: "0" }, file)).toBe("resample: a period greater than zero");
+  });
+
+  it("asks for the windows the subscribers received from every record, by subscriber", () => {
+    const withSubs = { ...model, subscribers: [{ name: "sub_1" }, { name: "track_lat" }] } as unknown as ModdModel;
+    expect(datasetRequest(withSubs, { ...choice, source: "received", from: "2", topics: ["sub_1"] }, file)).toEqual({
+      model: withSubs, format: "netcdf", source: "received", files: [], start_ns: 1_002_000_000_000, end_ns: null,
+      topics: ["sub_1"], resample_s: null,
+    });
+    expect(exportables(withSubs, file, "received")).toEqual(["sub_1", "track_lat"]);
+    expect(exportables(withSubs, { ...file, topics: [{ topic: "usv.a.x", messages: 3 }] }, "archive")).toEqual(["usv.a.x"]);
+    expect(datasetFileName("usv", file, "csv", "received")).toBe("usv-0000-received.csv");
+    expect(datasetFileName("usv", null, "parquet", "received")).toBe("usv-received.parquet");
   });
 
   it("names the download after the file and the format", () => {

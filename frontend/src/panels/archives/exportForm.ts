@@ -5,11 +5,13 @@
  *   datasetRequest(model, { format: "netcdf", from: "10", to: "", topics: [], resample: "" }, file)
  *   // { model, format: "netcdf", files: [file.name], start_ns: file.start_ns + 10e9, ... }
  */
-import type { ArchiveFile, DatasetFormat, DatasetRequest } from "../../api/types";
+import type { ArchiveFile, DatasetFormat, DatasetRequest, DatasetSource } from "../../api/types";
 import type { ModdModel } from "../../core/model.gen";
 
 export interface ExportChoice {
   format: DatasetFormat;
+  /** "received": the windows the subscribers received (every base-station record of the drone). */
+  source?: DatasetSource;
   from: string; // seconds after the file's first message ("" = its start)
   to: string;
   topics: string[]; // none chosen = every topic
@@ -32,15 +34,26 @@ export function datasetRequest(model: ModdModel, c: ExportChoice, file: ArchiveF
   if (resample === 0) return "resample: a period greater than zero";
   const base = file?.start_ns ?? null;
   const at = (s: number | null) => (s === null || base === null ? null : base + Math.round(s * 1e9));
+  const received = c.source === "received";
   return {
-    model, format: c.format, files: file ? [file.name] : [],
+    model, format: c.format, ...(received ? { source: "received" as const } : {}),
+    // the records are the drone's (the range, on the same drone clock, picks the mission)
+    files: file && !received ? [file.name] : [],
     start_ns: at(from as number | null), end_ns: at(to as number | null),
     topics: c.topics.length ? c.topics : null, resample_s: resample as number | null,
   };
 }
 
-/** `usv-run-0000.nc`, or `usv-dataset.nc` for every file. */
-export function datasetFileName(drone: string, file: ArchiveFile | null, format: DatasetFormat): string {
-  const stem = file ? file.name.replace(/\.mcap$/, "") : `${drone}-dataset`;
+/** What can be chosen to export: the file's topics, or the model's subscribers for received windows. */
+export function exportables(model: ModdModel, file: ArchiveFile | null, source: DatasetSource | undefined): string[] {
+  if (source === "received") return (model.subscribers ?? []).map((s) => s.name);
+  return file?.topics.map((t) => t.topic) ?? [];
+}
+
+/** `usv-run-0000.nc`, or `usv-dataset.nc` for every file, `usv-run-0000-received.nc` for the windows received. */
+export function datasetFileName(drone: string, file: ArchiveFile | null, format: DatasetFormat,
+  source?: DatasetSource): string {
+  const base = file ? file.name.replace(/\.mcap$/, "") : `${drone}-dataset`;
+  const stem = source === "received" ? `${file ? base : drone}-received` : base;
   return `${stem}.${DATASET_SUFFIX[format]}`;
 }

@@ -9,8 +9,11 @@ available" with field ``timestamp`` in PlotJuggler):
 
     {"timestamp": 1795000000.25, "usv": {"sub_3": {"value": -0.0966, "count": 6}}}
 
-Empty windows (no sample) send no value; ``ALL`` windows send the list, which
-PlotJuggler shows as ``value[0]``, ``value[1]``, ...
+Empty windows (no sample) send no value. An ``ALL`` window sends one datagram
+per sample, each at its own time (the delivered-value contract spreads the
+samples over the window, the last at its end), so the samples form the one
+series ``/<drone>/<subscriber>/value``; the window's ``count`` rides with its
+last sample.
 
     modd-plotjuggler --udp 127.0.0.1:9870 --drone usv
 """
@@ -37,30 +40,46 @@ from .zenoh_session import DEFAULT_ENDPOINT, client_settings, open_session
 log = logging.getLogger("modd.plotjuggler")
 #: PlotJuggler's default UDP server port.
 DEFAULT_UDP = "127.0.0.1:9870"
-#: Above this a datagram is not sent (an ALL window of thousands of samples).
+#: Above this a datagram is not sent (a subscriber name of megabytes).
 MAX_DATAGRAM = 65_000
 
 
-def datagram(drone: str, subscriber: str, delivered: DeliveredValue) -> bytes | None:
-    """The datagram of one delivered value; None when it has nothing to plot.
+def datagrams(drone: str, subscriber: str, delivered: DeliveredValue) -> list[bytes]:
+    """The datagrams of one delivered value (none when it has nothing to plot).
 
-    >>> datagram("usv", "sub_3", {"end_ns": 2_500_000_000, "value": 1.5, "count": 6})
-    b'{"timestamp":2.5,"usv":{"sub_3":{"value":1.5,"count":6}}}'
+    >>> datagrams("usv", "sub_3", {"end_ns": 2_500_000_000, "value": 1.5, "count": 6})
+    [b'{"timestamp":2.5,"usv":{"sub_3":{"value":1.5,"count":6}}}']
+    >>> [d[:16] for d in datagrams("usv", "a", {"start_ns": 0, "end_ns": 10**9,
+    ...                                          "value": [1.0, 2.0], "count": 2})]
+    [b'{"timestamp":0.5', b'{"timestamp":1.0']
     """
-    value = delivered.get("value")
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return None
-    fields: dict[str, Any] = {"value": value}
-    if isinstance(delivered.get("count"), int):
-        fields["count"] = delivered["count"]
-    if delivered.get("backfilled"):
-        fields["backfilled"] = 1
-    end = delivered.get("end_ns")
-    if not isinstance(end, int):
-        return None
-    doc = {"timestamp": end / 1e9, drone: {subscriber: fields}}
-    out = json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()
-    return out if len(out) <= MAX_DATAGRAM else None
+    value, end = delivered.get("value"), delivered.get("end_ns")
+    if not isinstance(end, int) or value is None:
+        return []
+    start = delivered.get("start_ns")
+    points: list[tuple[float, Any]]
+    if isinstance(value, list):
+        if not value or not isinstance(start, int):
+            return []
+        step = (end - start) / len(value)
+        points = [((start + (i + 1) * step) / 1e9, v) for i, v in enumerate(value)]
+    else:
+        points = [(end / 1e9, value)]
+    out: list[bytes] = []
+    for i, (t, v) in enumerate(points):
+        if v is None or (isinstance(v, float) and not math.isfinite(v)):
+            continue
+        fields: dict[str, Any] = {"value": v}
+        if i == len(points) - 1:
+            if isinstance(delivered.get("count"), int):
+                fields["count"] = delivered["count"]
+            if delivered.get("backfilled"):
+                fields["backfilled"] = 1
+        doc = {"timestamp": t, drone: {subscriber: fields}}
+        data = json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()
+        if len(data) <= MAX_DATAGRAM:
+            out.append(data)
+    return out
 
 
 def parse_udp(text: str) -> tuple[str, int]:
@@ -86,14 +105,13 @@ class PlotJugglerOut:
         delivered = load_delivered(sample.payload.to_bytes())
         if found is None or delivered is None:
             return
-        data = datagram(*found, delivered)
-        if data is None:
-            return
-        try:
-            self.sock.sendto(data, self.target)
-            self.sent += 1
-        except OSError as exc:  # nobody listening is fine for UDP; say other errors once
-            log.debug("datagram not sent: %s", exc)
+        for data in datagrams(*found, delivered):
+            try:
+                self.sock.sendto(data, self.target)
+                self.sent += 1
+            except OSError as exc:  # nobody listening is fine for UDP
+                log.debug("datagram not sent: %s", exc)
+                return
 
     def close(self) -> None:
         self.sub.undeclare()

@@ -15,8 +15,9 @@ from typing import Any
 
 from . import netcdf, tables, tracks
 from .export import Options, Sink, Summary, export, find_files, print_progress
-from .mcapread import ArchiveError
+from .mcapread import ArchiveError, read_file
 from .plan import ExportPlan, PlanError, plan_export
+from .received import plan_received, read_record
 from .resample import Resampler, WideTable
 
 #: GeoJSON and GPX are tracks: one point per period, this one unless resample_s says.
@@ -61,13 +62,20 @@ def make_dataset(
     resample_s: float | None = None,
     progress: bool = False,
     options: Options | None = None,
+    received: bool = False,
 ) -> Summary:
-    """Writes the dataset to ``out``; raises DatasetError."""
+    """Writes the dataset to ``out``; raises DatasetError. With ``received``,
+    ``paths`` are base-station records and the dataset holds the windows the
+    subscribers received (``topics`` then names subscribers or their topics)."""
     if fmt not in SUFFIXES:
         raise DatasetError(f"unknown format {fmt!r}; one of {', '.join(SUFFIXES)}")
     tmp = out.with_name(f".{out.name}.{os.getpid()}.part")
     try:
-        plan = plan_export(model, topics, start_ns, end_ns)
+        plan = (
+            plan_received(model, topics, start_ns, end_ns)
+            if received
+            else plan_export(model, topics, start_ns, end_ns)
+        )
         if fmt in ("geojson", "gpx") and plan.position is None:
             raise PlanError(
                 f"a {fmt} track needs the platform's position, and the model "
@@ -80,9 +88,14 @@ def make_dataset(
             _sink(fmt, tmp, resample_s),
             options or Options(),
             print_progress if progress else None,
+            read_record if received else read_file,
         )
         if summary.samples == 0:
-            raise PlanError("nothing to export: no sample of the chosen topics in the range")
+            what = "window of the chosen subscribers" if received else "sample of the chosen topics"
+            hint = (
+                "; a record being written is read up to its last complete chunk" if received else ""
+            )
+            raise PlanError(f"nothing to export: no {what} in the range{hint}")
         os.replace(tmp, out)
         return summary
     except (PlanError, ArchiveError) as exc:

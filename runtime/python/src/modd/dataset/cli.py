@@ -1,7 +1,11 @@
 """``modd dataset`` (entry point ``modd.commands`` ``dataset``)::
 
     modd dataset ARCHIVE_DIR_OR_FILES... --model MODEL --format netcdf|parquet|csv|geojson|gpx
-                 -o OUT [--from T0 --to T1] [--topics T ...] [--resample PERIOD]
+                 -o OUT [--from T0 --to T1] [--topics T ...] [--resample PERIOD] [--received]
+
+With --received the files are base-station records (the SubBroker's
+``record/<drone>/*.mcap``) and the dataset holds the windows the subscribers
+received; --topics then names subscribers or their topics.
 
 Times are ISO 8601 (``2026-11-27T10:00:00Z``; UTC when no offset is given) or
 seconds since the Unix epoch; PERIOD is seconds (``0.5``, ``10s``). Exit 0
@@ -51,6 +55,11 @@ def register(sub: Any) -> None:
         type=parse_period,
         metavar="PERIOD",
         help="wide form: the mean of each topic per PERIOD seconds",
+    )
+    p.add_argument(
+        "--received",
+        action="store_true",
+        help="the files are base-station records: export the windows the subscribers received",
     )
     p.add_argument(
         "--progress",
@@ -108,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
             topics=args.topics,
             resample_s=args.resample,
             progress=progress,
+            received=args.received,
         )
     except DatasetError as exc:
         print(f"modd dataset: {exc}", file=sys.stderr)
@@ -115,7 +125,12 @@ def run(args: argparse.Namespace) -> int:
     for note in summary.notes:
         print(f"modd dataset: note: {note}", file=sys.stderr)
     print(
-        f"{args.output}: {summary.samples:,} samples of {len(summary.per_topic)} topics "
-        f"({args.format})"
+        f"{args.output}: {summary.samples:,} "
+        + (
+            f"values of {len(summary.per_topic)} subscribers"
+            if args.received
+            else f"samples of {len(summary.per_topic)} topics"
+        )
+        + f" ({args.format})"
     )
     return 0

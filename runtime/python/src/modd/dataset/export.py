@@ -10,7 +10,7 @@ length (the wide form adds one row per resampling period).
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Protocol
@@ -20,6 +20,11 @@ import numpy as np
 from .mcapread import Batch, FileState, read_file
 from .plan import ExportPlan, PlanError, Variable
 from .position import Track, build_track
+
+#: Reads one file as batches: (path, state, progress, only topics).
+Reader = Callable[
+    [Path, FileState | None, Callable[[int], None] | None, set[str] | None], Iterator[Batch]
+]
 
 
 @dataclass(frozen=True)
@@ -93,7 +98,9 @@ def _in_range(plan: ExportPlan, b: Batch) -> Batch:
     return b if keep.all() else Batch(b.topic, b.value_type, b.time_ns[keep], b.value[keep])
 
 
-def read_track(files: list[Path], plan: ExportPlan, options: Options) -> Track | None:
+def read_track(
+    files: list[Path], plan: ExportPlan, options: Options, reader: Reader = read_file
+) -> Track | None:
     """Pass 1: the position topics' fixes (all of them: interpolation needs
     the fixes just outside the asked range too)."""
     pos = plan.position
@@ -106,7 +113,7 @@ def read_track(files: list[Path], plan: ExportPlan, options: Options) -> Track |
         r: ([], []) for r in roles.values()
     }
     for path in files:
-        for b in read_file(path, only=set(roles)):
+        for b in reader(path, None, None, set(roles)):
             if b.topic in roles:
                 ts, vs = parts[roles[b.topic]]
                 ts.append(b.time_ns)
@@ -145,7 +152,15 @@ def _check_batch(
 ) -> Variable | None:
     var = plan.variables.get(b.topic)
     if var is None:
-        if b.topic not in strangers and not b.topic.startswith(plan.drone + "."):
+        if b.topic in strangers:
+            return None
+        if plan.source == "received":
+            strangers.add(b.topic)  # the subscribers chosen are known: say which were not
+            s.notes.append(
+                f"{path}: subscriber {b.topic} left out (not chosen, or not in the "
+                "model: a dynamic subscription or another model revision)"
+            )
+        elif not b.topic.startswith(plan.drone + "."):
             strangers.add(b.topic)
             s.notes.append(
                 f"{path}: topic {b.topic} is not in the model (an archive of "
@@ -208,10 +223,13 @@ def export(
     sink: Sink,
     options: Options,
     progress: Callable[[str, int, int], None] | None = None,
+    reader: Reader = read_file,
 ) -> Summary:
-    """Writes the dataset into ``sink``. Raises PlanError or mcapread.ArchiveError."""
+    """Writes the dataset into ``sink``: the samples of archive files, or with
+    ``reader`` another kind of file (received.read_record: the windows of
+    base-station records). Raises PlanError or mcapread.ArchiveError."""
     summary = Summary()
-    track = read_track(files, plan, options)
+    track = read_track(files, plan, options, reader)
     if track is not None:
         summary.notes += track.notes
     sink.open(plan, track)
@@ -229,7 +247,7 @@ def export(
         state = FileState(path)
         size = path.stat().st_size
         tick = (lambda done, p=path, n=size: progress(p.name, done, n)) if progress else None
-        for raw in read_file(path, state, tick):
+        for raw in reader(path, state, tick, None):
             var = _check_batch(plan, raw, path, summary, strangers)
             b = _in_range(plan, raw) if var is not None else raw
             if var is None or len(b.time_ns) == 0:
@@ -259,11 +277,20 @@ def export(
 def _final_notes(
     plan: ExportPlan, s: Summary, nonfinite: dict[str, int], track: Track | None
 ) -> None:
+    received = plan.source == "received"
     for topic, n in nonfinite.items():
-        s.notes.append(f"topic {topic}: {n} NaN/Inf samples, kept as they were archived")
+        s.notes.append(
+            f"subscriber {topic}: {n} empty windows (no sample): fill values"
+            if received
+            else f"topic {topic}: {n} NaN/Inf samples, kept as they were archived"
+        )
     for topic in plan.variables:
         if topic not in s.per_topic:
-            s.notes.append(f"topic {topic}: no sample in the range")
+            s.notes.append(
+                f"subscriber {topic}: no window in the range"
+                if received
+                else f"topic {topic}: no sample in the range"
+            )
     if plan.position is None:
         s.notes.append("the model declares no position: latitude and longitude are fill values")
     elif track is not None and s.samples and s.positioned < s.samples:

@@ -119,11 +119,38 @@ def _data_var(ds: Any, var: Variable, name: str, dim: str, coords: str) -> None:
         attrs["units"] = var.unit
     if var.standard_name:
         attrs["standard_name"] = var.standard_name
+    if var.cell_methods:
+        attrs["cell_methods"] = var.cell_methods
     if var.valid_min is not None:
         attrs["valid_min"] = np.array(var.valid_min, dtype=dtype)
     if var.valid_max is not None:
         attrs["valid_max"] = np.array(var.valid_max, dtype=dtype)
     v.setncatts(attrs)
+
+
+def _what(plan: ExportPlan) -> dict[str, str]:
+    """The attributes that say what the dataset holds: samples or received windows."""
+    if plan.source == "received":
+        return {
+            "title": f"{plan.description}: windows received from drone {plan.drone}",
+            "summary": (
+                f"Every window the MoDD subscribers of drone {plan.drone} received (the "
+                "base-station record, live and backfilled), at the window's end, with the "
+                "platform position interpolated from the received position windows."
+            ),
+            "source": "MoDD base-station record (MCAP)",
+            "processing_level": "aggregated on board per subscription (cell_methods); "
+            "position interpolated",
+        }
+    return {
+        "title": f"{plan.description}: samples of drone {plan.drone}",
+        "summary": (
+            f"Every sample archived on board drone {plan.drone} by the MoDD PubBroker, "
+            "at its own time, with the platform position linearly interpolated to it."
+        ),
+        "source": "MoDD on-board archive (MCAP)",
+        "processing_level": "raw samples; position interpolated",
+    }
 
 
 def _globals(plan: ExportPlan) -> dict[str, Any]:
@@ -132,18 +159,12 @@ def _globals(plan: ExportPlan) -> dict[str, Any]:
         "Conventions": "CF-1.11, ACDD-1.3",
         "featureType": "trajectory",
         "cdm_data_type": "Trajectory",
-        "title": f"{plan.description}: samples of drone {plan.drone}",
-        "summary": (
-            f"Every sample archived on board drone {plan.drone} by the MoDD PubBroker, "
-            "at its own time, with the platform position linearly interpolated to it."
-        ),
+        **_what(plan),
         "keywords": "drone, trajectory, in situ, "
         + ", ".join(sorted({v.standard_name for v in plan.variables.values() if v.standard_name})),
         "platform": plan.drone,
-        "source": "MoDD on-board archive (MCAP)",
         "history": f"{now} modd dataset (MoDD {modd_version()})",
         "date_created": now,
-        "processing_level": "raw samples; position interpolated",
         "product_version": modd_version(),
         "modd_version": modd_version(),
         "modd_model_revision": plan.model_revision,

@@ -37,6 +37,7 @@ class Variable:
     valid_min: float | None
     valid_max: float | None
     temperature: bool = False  # a temperature on a scale (CF units_metadata)
+    cell_methods: str | None = None  # a received window's aggregation (CF §7.3)
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,9 @@ class ExportPlan:
     model_revision: str  # sha256 of the model's JSON, first 16 hex digits
     start_ns: int | None
     end_ns: int | None
+    #: "archive": the samples archived on board; "received": the windows the
+    #: subscribers received (the base-station record, received.py).
+    source: str = "archive"
 
 
 def _safe(text: str) -> str:

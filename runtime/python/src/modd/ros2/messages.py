@@ -6,8 +6,9 @@
 - ``std_msgs/msg/Float64``: the plain value.
 
 An empty window (no sample) has ``value`` NaN and ``count`` 0. An ``ALL``
-window (a list of samples) has ``value`` NaN and ``count`` the list's length:
-the samples themselves stay on MoDD's own keys.
+window has ``value`` NaN, its samples in ``samples`` and ``count`` their
+number. ``has_count`` says whether ``count`` is known: the drone does not send
+it for a non-empty MIN, MAX or LAST window (``count`` 0 then means unknown).
 
 >>> cdr = window_cdr(start_ns=1_500_000_000, end_ns=2_000_000_000, value=2.5, count=3,
 ...                  aggregation="AVERAGE")
@@ -33,6 +34,8 @@ WINDOW = MessageType("modd_msgs/msg/Window", (
     Field("value", "float64"),
     Field("count", "uint32"),
     Field("aggregation", "string"),
+    Field("has_count", "bool"),
+    Field("samples", "float64[]"),
 ))
 #: The .msg text of modd_msgs/msg/Window (one source, in the contracts).
 WINDOW_MSG = window_msg()
@@ -72,11 +75,20 @@ def as_float(value: Any) -> float:
 def window_cdr(start_ns: int, end_ns: int, value: Any, count: int | None,
                aggregation: str) -> bytes:
     """CDR (little endian, with its 4-byte encapsulation header)."""
+    import numpy as np
+
     store = typestore()
     W = store.types[WINDOW.name]
-    n = count if isinstance(count, int) else (len(value) if isinstance(value, list) else 0)
+    samples = [as_float(v) for v in value] if isinstance(value, list) else []
+    if isinstance(count, int) and not isinstance(count, bool):
+        n: int | None = count
+    elif value is None or isinstance(value, list):
+        n = len(samples)  # an empty window holds 0 samples, an ALL window its list
+    else:
+        n = None  # MIN, MAX, LAST: the drone does not say how many
     msg = W(window_start=_time(start_ns), window_end=_time(end_ns), value=as_float(value),
-            count=n, aggregation=aggregation)
+            count=n or 0, aggregation=aggregation, has_count=n is not None,
+            samples=np.asarray(samples, dtype=np.float64))
     return bytes(store.serialize_cdr(msg, WINDOW.name))
 
 

@@ -24,12 +24,14 @@ FIELD_TYPE_IDS: dict[str, int] = {
     "byte": 16, "string": 17,
 }
 NESTED_TYPE = 1
+#: Added to a type's id for an unbounded sequence (``float64[]``), as in FieldType.
+UNBOUNDED_SEQUENCE = 144
 
 
 @dataclass(frozen=True)
 class Field:
-    """A field: a primitive type name (``float64``) or a message type
-    (``builtin_interfaces/msg/Time``)."""
+    """A field: a primitive type name (``float64``), an unbounded sequence of
+    one (``float64[]``) or a message type (``builtin_interfaces/msg/Time``)."""
 
     name: str
     type: str
@@ -42,7 +44,9 @@ class MessageType:
 
 
 def _field(f: Field) -> dict[str, Any]:
-    if f.type in FIELD_TYPE_IDS:
+    if f.type.endswith("[]") and f.type[:-2] in FIELD_TYPE_IDS:
+        type_id, nested = FIELD_TYPE_IDS[f.type[:-2]] + UNBOUNDED_SEQUENCE, ""
+    elif f.type in FIELD_TYPE_IDS:
         type_id, nested = FIELD_TYPE_IDS[f.type], ""
     elif f.type.count("/") == 2:
         type_id, nested = NESTED_TYPE, f.type
@@ -64,7 +68,7 @@ def type_hash(t: MessageType, referenced: Sequence[MessageType] = ()) -> str:
     stack = [t]
     while stack:
         for f in stack.pop().fields:
-            if f.type not in FIELD_TYPE_IDS and f.type not in needed:
+            if f.type.removesuffix("[]") not in FIELD_TYPE_IDS and f.type not in needed:
                 if f.type not in known:
                     raise ValueError(f"{t.name}: the description of {f.type} is missing")
                 needed[f.type] = known[f.type]
