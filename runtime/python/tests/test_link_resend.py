@@ -93,12 +93,13 @@ def test_gap_given_up_after_max_asks() -> None:
 
 
 def test_asks_back_off() -> None:
-    """Each ask after the first waits twice as long as the one before (1, 2, 4 s)."""
+    """Each ask after the first waits twice as long as the one before, at most four
+    times the first (1, 2, 4, 4 s)."""
     gaps = GapTracker(max_asks=5)
     gaps.received(0, 1, 0.0)
     gaps.received(5, 1, 0.0)
     asked = [t / 10 for t in range(0, 200) if gaps.due(t / 10, 1.0)]
-    assert asked == [0.0, 1.0, 3.0, 7.0, 15.0]
+    assert asked == [0.0, 1.0, 3.0, 7.0, 11.0]
 
 
 def test_an_answer_in_progress_is_not_asked_again() -> None:

@@ -74,13 +74,14 @@ class GapTracker:
 
     def due(self, now: float, every: float) -> list[tuple[int, int]]:
         """Ranges to NACK now: gaps whose last ask is older than ``every`` seconds,
-        doubled at each ask after the first (a loaded machine or a slow radio gets
-        time to answer, as TCP's retransmission timer backs off); a gap asked
+        doubled at each ask after the first up to four times ``every`` (a loaded
+        machine or a slow radio gets time to answer, as TCP's retransmission timer
+        backs off, while a lost slot is still given up within seconds); a gap asked
         ``max_asks`` times is given up (counted in ``lost``)."""
         ranges: list[tuple[int, int]] = []
         kept: list[_Gap] = []
         for g in self.gaps:
-            wait = every * (1 << max(0, g.asks - 1))
+            wait = every * (1 << min(max(0, g.asks - 1), 2))  # 1, 2, 4, 4... x every
             if now - g.last_ask < wait or len(ranges) >= MAX_NACK_RANGES:
                 kept.append(g)
                 continue
