@@ -63,6 +63,8 @@ Message from_json(const json& m) {
       c.streams.push_back(s);
     }
     if (m.contains("accepted_delay_ms")) c.accepted_delay_ms = m["accepted_delay_ms"].get<uint32_t>();
+    if (m.contains("resolutions"))
+      for (const auto& x : m["resolutions"]) c.resolutions.push_back(x.is_null() ? 0.0 : x.get<double>());
     return c;
   }
   ADD_FAILURE() << "unknown vector type " << t;
@@ -118,7 +120,7 @@ TEST(Vectors, DataVectors) {
       Aggregation a;
       ASSERT_TRUE(parse_value_type(k["type"], t));
       ASSERT_TRUE(parse_aggregation(k["aggregation"], a));
-      kinds.push_back(value_kind(t, a));
+      kinds.push_back(value_kind(t, a, k.value("resolution", 0.0)));
     }
     const json& m = v["message"];
     Data d;
