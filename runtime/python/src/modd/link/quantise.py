@@ -14,7 +14,7 @@ every value. A unit decodes on its own: a lost datagram never corrupts another.
 >>> b = bytearray()
 >>> put_number(b, chain, 0, 1.234, 0.01); put_number(b, chain, 0, 1.25, 0.01)
 >>> bytes(b).hex()
-'f70104'
+'f70105'
 >>> r = Reader(bytes(b)); back: dict[int, int] = {}
 >>> [round(get_number(r, back, 0, 0.01), 6) for _ in range(2)]
 [1.23, 1.25]
