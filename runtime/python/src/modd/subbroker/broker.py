@@ -37,7 +37,7 @@ from .fanout import FanOut
 from .kept import Deployment, StateDir, same_model
 from .keys import backfill_key, deploy_key, subscribe_key
 from .linkhooks import ConfigRejected, LinkDown
-from .planning import accepted_delay_ms, config_for, plan_within
+from .planning import config_for, plan_within, trailing_fields
 from .record import BaseRecord
 from .request import MAX_DEPLOY_BYTES, MAX_SMALL_BYTES, read_request
 from .running import Running
@@ -194,7 +194,8 @@ class SubBroker:
         plan = plan_within(model, self.link.stats.rtt_s, self.config.link.plan_budget_s)
         if not plan.sent_streams:
             raise ValueError("the plan sends nothing over the link (no published subscription)")
-        delay_ms = accepted_delay_ms(model, self.config.model, self.config.transport)
+        delay_ms, resolutions = trailing_fields(model, self.config.model, self.config.transport,
+                                                plan)
         with self._lock:
             cid = self._last_id % 255 + 1
             if cid == avoid:
@@ -205,7 +206,8 @@ class SubBroker:
             self._planned[cid] = (model, plan, meta)
             for stale in list(self._planned)[:-8]:
                 del self._planned[stale]
-        return config_for(plan, cid, self.config.link.pubbroker_status_period_s, delay_ms)
+        return config_for(plan, cid, self.config.link.pubbroker_status_period_s, delay_ms,
+                          resolutions)
 
     # -- LinkHandler -------------------------------------------------------------
 
