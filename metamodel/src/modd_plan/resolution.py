@@ -10,11 +10,21 @@ derivations, MIN, MAX, an AVERAGE of AVERAGEs, keep the error of their sources).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from fractions import Fraction
+from math import ceil
 from typing import Any
 
-from modd_model.query import topic_name
+from modd_model.query import Topic, topic_name
 
+from .linkcost import SAMPLE_BYTES, aggregate_value_type, varint_size
 from .streams import PlannedStream
+
+#: Bytes of a delta between consecutive windows (|delta| <= 63 steps): the
+#: planner assumes a signal that moves less than 64 steps a window.
+DELTA_BYTES = 1
+#: Step count assumed for a stream's first value in a datagram when its
+#: variable declares no validMin/validMax: 2^20 steps (3 bytes).
+UNBOUNDED_STEPS = 1 << 20
 
 
 def needed(model: Mapping[str, Any]) -> dict[str, float | None]:
@@ -45,3 +55,47 @@ def stream_resolutions(model: Mapping[str, Any], sent: Sequence[PlannedStream],
                      for n in s.subscribers]
     return [None if not asks[id(s.stream)] or None in asks[id(s.stream)]
             else min(r for r in asks[id(s.stream)] if r is not None) for s in sent]
+
+
+def _key_bytes(model: Mapping[str, Any], topic: str, resolution: float) -> int:
+    """Bytes of an absolute value: the largest step count of the valid range."""
+    drone = model["drone"]["name"]
+    for s in model["drone"]["sensors"]:
+        for v in s["variables"]:
+            if topic_name(drone, s["name"], v["name"]) == topic:
+                bounds = [abs(b) for b in (v.get("validMin"), v.get("validMax"))
+                          if isinstance(b, int | float)]
+                steps = ceil(max(bounds) / resolution) if len(bounds) == 2 else UNBOUNDED_STEPS
+                return varint_size(2 * steps + 1)
+    return varint_size(2 * UNBOUNDED_STEPS + 1)
+
+
+def quantised_window_bytes(model: Mapping[str, Any], sent: Sequence[PlannedStream],
+                           streams: Sequence[PlannedStream], exact: Sequence[Fraction],
+                           tops: Mapping[str, Topic], transport: str,
+                           accepted_delay: Fraction) -> list[Fraction]:
+    """``exact`` (bytes of one window's value per sent stream) with the float
+    values of streams that have a resolution counted as steps: one absolute
+    value per datagram (per DATA frame over tcp), deltas of DELTA_BYTES else."""
+    out = list(exact)
+    for i, (s, r) in enumerate(zip(sent, stream_resolutions(model, sent, streams),
+                                   strict=True)):
+        topic = tops.get(s.stream.topic)
+        if r is None or topic is None:
+            continue
+        wire = aggregate_value_type(s.stream.aggregation, topic.type)
+        if s.stream.aggregation == "COUNT" or wire not in ("float32", "float64"):
+            continue
+        key = _key_bytes(model, s.stream.topic, r)
+        period = s.stream.period
+        # keys per window: one a datagram, which holds the windows of the accepted
+        # delay and one more (its first slot waits at most the delay)
+        share = Fraction(1) if transport == "tcp" else period / (accepted_delay + period)
+        value = DELTA_BYTES + (key - DELTA_BYTES) * share
+        if s.stream.aggregation == "ALL":
+            samples = (exact[i] - 1) / SAMPLE_BYTES[wire]  # the count's varint, roughly 1 B
+            out[i] = exact[i] - samples * SAMPLE_BYTES[wire] + samples * DELTA_BYTES \
+                + (key - DELTA_BYTES) * share
+        else:
+            out[i] = exact[i] - SAMPLE_BYTES[wire] + value
+    return out

@@ -8,6 +8,8 @@ import copy
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from modd_model import load_model
 from modd_plan import make_plan
 from modd_plan.resolution import stream_resolutions
@@ -58,3 +60,35 @@ def test_a_sum_source_is_sent_finer_by_its_factor() -> None:
     ]
     got = _resolutions(model)
     assert list(got.values()) == [0.05]  # 1 s from 4 windows: 0.2 / 4, finer than 0.08
+
+
+def test_the_planner_counts_quantised_bytes() -> None:
+    model = _scenario1()
+    model["link"] = {"transport": "serial", "device": "/dev/x"}
+    exact = make_plan(model).budget
+    for v in model["drone"]["sensors"][0]["variables"]:
+        v.update(resolution=0.01, validMin=-20, validMax=20)
+    quantised = make_plan(model).budget
+    assert exact is not None and quantised is not None
+    # 5 slots a datagram: a 2-byte key (|q| <= 2000) then 1-byte deltas, per value
+    # (2 AVERAGE + count, MIN, MAX): 4 x (2 + 4 x 1) + 10 counts = 34 B, the key
+    # spread over the windows (1.2 B a value) and each slot rounded up to whole bytes
+    # (7 B): 35 B, + 8 header and tag + 4 serial framing, 0.8 datagrams a second
+    assert exact.drone_to_base == 81.6
+    assert quantised.drone_to_base == pytest.approx(0.8 * 47)
+
+
+def test_a_refused_radio_plan_may_be_proposed_coarser_resolutions() -> None:
+    model = _scenario1()
+    model["link"] = {"transport": "serial", "device": "/dev/x",
+                     "radio": {"kind": "lora", "sf": 7, "bandwidth": 125000, "dutyCycle": "0.01"}}
+    for v in model["drone"]["sensors"][0]["variables"]:
+        v.update(resolution=0.001, validMin=-20, validMax=20)
+    plan = make_plan(model)
+    assert plan.radio is not None and not plan.radio.fits
+    coarser = [p for p in plan.proposals if p.coarser is not None]
+    assert coarser and all(p.report.fits for p in plan.proposals)
+    assert "resolution 4 x coarser" in coarser[0].describe()
+    assert coarser[0].model["drone"]["sensors"][0]["variables"][0]["resolution"] == 0.004
+    figures = [(p.accepted_delay_s, p.min_period_s, p.report.bytes_per_s) for p in plan.proposals]
+    assert len(set(figures)) == len(figures)  # no coarser twin of the same plan

@@ -415,10 +415,12 @@ class SubBroker:
             except LinkDown as exc:
                 return {"status": "LINK_DOWN", "reason": str(exc)}
             except TimeoutError as exc:
-                return {"status": "TIMEOUT", "reason": f"{exc} within {request.timeout_s} s"}
+                return {"status": "TIMEOUT", "reason": f"{exc} within {request.timeout_s} s"
+                        + _older_peer(config)}
             except ConfigRejected as exc:
                 if exc.status != ErrorCode.BUSY or time.monotonic() + delay >= deadline:
-                    return {"status": "NACK", "reason": str(exc), "code": exc.status,
+                    hint = _older_peer(config) if exc.status == ErrorCode.BAD_FRAME else ""
+                    return {"status": "NACK", "reason": str(exc) + hint, "code": exc.status,
                             "busy_retries": busy}
                 # a CONFIG still waits for its switch date: send again after a backoff
                 busy += 1
@@ -500,3 +502,14 @@ def _located(exc: ValueError, model: dict[str, Any]) -> list[dict[str, object]]:
             pointer = f"/subscribers/{i}"
             break
     return [Diagnostic(str(exc), pointer).to_json()]
+
+
+def _older_peer(config: Config) -> str:
+    """Why a CONFIG with declared resolutions may be refused: a PubBroker older
+    than them reads its resolution field as trailing bytes (docs/protocol.md,
+    "Quantised values": BAD_FRAME over tcp, dropped as malformed over udp/serial)."""
+    if config.resolutions is None:
+        return ""
+    return ("; this CONFIG declares resolutions (protocol 1 with quantised values): a "
+            "PubBroker older than them refuses it; update the PubBroker, or deploy the "
+            "model without resolutions")
