@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 
 import pytest
-
 from modd_model import load_text
 from modd_model.printer import print_model
 from modd_model.validate import validate
@@ -48,22 +47,43 @@ def test_resolutions_parse_and_print_back() -> None:
 
 def _errors(text: str) -> list[tuple[str, int, str]]:
     result = load_text(text, "m.modd")
-    return [(d.message, d.location.line if d.location else 0, d.pointer)
-            for d in result.diagnostics
-            if d.severity == "error"]
+    return [
+        (d.message, d.location.line if d.location else 0, d.pointer)
+        for d in result.diagnostics
+        if d.severity == "error"
+    ]
 
 
-@pytest.mark.parametrize(("old", "new", "pointer", "words"), [
-    ("sub_2(\"usv.imu.az\", 0.25, MIN, resolution = 1e-3)",
-     "sub_2(\"usv.imu.ax\", 0.25, MIN, resolution = 1e-3)", "/subscribers/1/resolution",
-     "finer than its variable's"),
-    ("resolution = 0.05)", "resolution = 0)", "/subscribers/0/resolution", "0"),
-    ("resolution = 0.01;", "resolution = -0.01;", "/drone/sensors/0/variables/0/resolution", "0"),
-    ("resolution = 0.01;", "resolution = 1e-18;", "/drone/sensors/0/variables/0/resolution",
-     "2^53"),
-    ("validMin = -20; validMax = 20;", "validMin = 20; validMax = -20;",
-     "/drone/sensors/0/variables/0/validMin", "above validMax"),
-])
+@pytest.mark.parametrize(
+    ("old", "new", "pointer", "words"),
+    [
+        (
+            'sub_2("usv.imu.az", 0.25, MIN, resolution = 1e-3)',
+            'sub_2("usv.imu.ax", 0.25, MIN, resolution = 1e-3)',
+            "/subscribers/1/resolution",
+            "finer than its variable's",
+        ),
+        ("resolution = 0.05)", "resolution = 0)", "/subscribers/0/resolution", "0"),
+        (
+            "resolution = 0.01;",
+            "resolution = -0.01;",
+            "/drone/sensors/0/variables/0/resolution",
+            "0",
+        ),
+        (
+            "resolution = 0.01;",
+            "resolution = 1e-18;",
+            "/drone/sensors/0/variables/0/resolution",
+            "2^53",
+        ),
+        (
+            "validMin = -20; validMax = 20;",
+            "validMin = 20; validMax = -20;",
+            "/drone/sensors/0/variables/0/validMin",
+            "above validMax",
+        ),
+    ],
+)
 def test_a_bad_resolution_is_located(old: str, new: str, pointer: str, words: str) -> None:
     assert old in MODEL
     errors = _errors(MODEL.replace(old, new))

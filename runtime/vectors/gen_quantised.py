@@ -60,7 +60,8 @@ def write(here: Path) -> None:
               "delta against slot 0's), 1e30 on MIN z escapes (code 0, f64le), the next MIN "
               "z is a delta against the last quantised one", S1, s1_types,
               [([0, 1, 2, 3], _s1(0)),
-               ([0, 1, 2, 3], [Value(True, 0.52, 0, 6), Value(), Value(True, 1e30), Value(True, 10.0)]),
+               ([0, 1, 2, 3], [Value(True, 0.52, 0, 6), Value(), Value(True, 1e30),
+                               Value(True, 10.0)]),
                ([0, 1, 2, 3], _s1(2))]),
         _unit("mixed_periods_and_all", "streams 0 (f64 ALL, 0.5) and 1 (f32 AVERAGE, 0.01) "
               "at 0.25 s, stream 2 (f64 LAST, 0.001) at 0.5 s: ALL's samples chain one after "

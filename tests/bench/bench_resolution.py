@@ -66,25 +66,29 @@ def max_error(values: dict[str, list[Any]], archive: dict[str, Any]) -> float:
     worst = 0.0
     for vals in values.values():
         for v in vals:
-            want, _ = oracle_value(v.aggregation, window_samples(archive.get(v.topic, []),
-                                                                 v.start_ns, v.end_ns))
+            want, _ = oracle_value(
+                v.aggregation, window_samples(archive.get(v.topic, []), v.start_ns, v.end_ns)
+            )
             if want is not None and v.value is not None:
                 worst = max(worst, abs(v.value - want))
     return worst
 
 
-def run(tmp: Path, scenario: str, resolution: float | None, signal: str, spec: str,
-        seconds: float) -> dict[str, Any]:
+def run(
+    tmp: Path, scenario: str, resolution: float | None, signal: str, spec: str, seconds: float
+) -> dict[str, Any]:
     model = _model(tmp, scenario, resolution)
     doc = json.loads(model.read_text())
     doc["link"] = {**doc.get("link", {}), "transport": "serial", "device": "/dev/null"}
     predicted = make_plan(doc).budget
     zport, ingress = free_port(), free_port()
     radio, base, drone = start_radio_serial(tmp, spec or "seed=1")
-    pb = start_pubbroker_dgram(tmp, model, {"transport": "serial", "device": drone, "port": 1},
-                               ingress)
-    sb = start_subbroker(tmp, subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport,
-                                                     "serial", device=base))
+    pb = start_pubbroker_dgram(
+        tmp, model, {"transport": "serial", "device": drone, "port": 1}, ingress
+    )
+    sb = start_subbroker(
+        tmp, subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport, "serial", device=base)
+    )
     session = None
     try:
         session, got = _watch(zport)
@@ -107,11 +111,17 @@ def run(tmp: Path, scenario: str, resolution: float | None, signal: str, spec: s
             session.close()
     archive = read_archive(tmp / "archive", model)
     delivered, expected, _ = delivery(values, archive)
-    return {"scenario": scenario, "resolution": resolution, "signal": signal, "radio": spec,
-            "down_Bps": round((c1[3] - c0[3]) / (t1 - t0), 1),
-            "planned_Bps": round(predicted.drone_to_base, 1) if predicted else None,
-            "delivered": delivered, "expected": expected,
-            "max_error": max_error(values, archive)}
+    return {
+        "scenario": scenario,
+        "resolution": resolution,
+        "signal": signal,
+        "radio": spec,
+        "down_Bps": round((c1[3] - c0[3]) / (t1 - t0), 1),
+        "planned_Bps": round(predicted.drone_to_base, 1) if predicted else None,
+        "delivered": delivered,
+        "expected": expected,
+        "max_error": max_error(values, archive),
+    }
 
 
 def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
@@ -124,7 +134,7 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
     from modd_plan.radio import RadioProfile
     from test_radio_airtime import _is_data, _Recording
 
-    relay.AirtimeChannel = _Recording  # type: ignore[misc]
+    relay.AirtimeChannel = _Recording  # type: ignore[attr-defined]
     base, base_path = relay.open_pty_pair()
     drone, drone_path = relay.open_pty_pair()
     path = _model(tmp, "scenario1.modd", STEP)
@@ -138,14 +148,20 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
     profile = RadioProfile.of(LORA)
     stopping = threading.Event()
     out: list[Any] = []
-    thread = threading.Thread(target=lambda: out.append(relay.run_serial(
-        RadioSpec(), base, drone, stopping.is_set, profile=profile)), daemon=True)
+    thread = threading.Thread(
+        target=lambda: out.append(
+            relay.run_serial(RadioSpec(), base, drone, stopping.is_set, profile=profile)
+        ),
+        daemon=True,
+    )
     thread.start()
     zport, ingress = free_port(), free_port()
-    pb = start_pubbroker_dgram(tmp, path, {"transport": "serial", "device": drone_path,
-                                           "port": 1}, ingress)
-    sb = start_subbroker(tmp, subbroker_dgram_config(tmp, path, "127.0.0.1:1", zport, "serial",
-                                                     device=base_path))
+    pb = start_pubbroker_dgram(
+        tmp, path, {"transport": "serial", "device": drone_path, "port": 1}, ingress
+    )
+    sb = start_subbroker(
+        tmp, subbroker_dgram_config(tmp, path, "127.0.0.1:1", zport, "serial", device=base_path)
+    )
     try:
         with processes(pb, sb):
             if not sb.wait_log("running", 60):
@@ -163,38 +179,51 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
     air = sum(a for _, a in data[1:]) * 3600 / span
     rx = sum(a for t, _, a in up.sent if data[0][0] <= t <= data[-1][0]) * 3600 / span
     energy = profile.tx_w * air + profile.rx_w * rx + profile.idle_w * (3600 - air - rx)
-    return {"refused": refused.radio.error,
-            "proposal": chosen.describe(), "packets": len(data),
-            "planned_air_s_per_hour": round(predicted.air_s_per_hour, 2),
-            "measured_air_s_per_hour": round(air, 2),
-            "planned_energy_j_per_hour": round(predicted.energy_j_per_hour, 1),
-            "measured_energy_j_per_hour": round(energy, 1),
-            "dropped_by_radio": dict(down.dropped)}
+    return {
+        "refused": refused.radio.error,
+        "proposal": chosen.describe(),
+        "packets": len(data),
+        "planned_air_s_per_hour": round(predicted.air_s_per_hour, 2),
+        "measured_air_s_per_hour": round(air, 2),
+        "planned_energy_j_per_hour": round(predicted.energy_j_per_hour, 1),
+        "measured_energy_j_per_hour": round(energy, 1),
+        "dropped_by_radio": dict(down.dropped),
+    }
 
 
 def main() -> int:
-    p = argparse.ArgumentParser(description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     p.add_argument("--seconds", type=float, default=30.0)
     p.add_argument("--json", type=Path)
     args = p.parse_args()
-    plan = [("scenario1.modd", None, "wave", ""), ("scenario1.modd", STEP, "wave", ""),
-            ("scenario1.modd", STEP, "wave", "loss=0.05,latency_ms=40,seed=5"),
-            ("scenario1.modd", None, "uniform", ""), ("scenario1.modd", STEP, "uniform", ""),
-            ("scenario2.modd", None, "wave", ""), ("scenario2.modd", STEP, "wave", "")]
+    plan = [
+        ("scenario1.modd", None, "wave", ""),
+        ("scenario1.modd", STEP, "wave", ""),
+        ("scenario1.modd", STEP, "wave", "loss=0.05,latency_ms=40,seed=5"),
+        ("scenario1.modd", None, "uniform", ""),
+        ("scenario1.modd", STEP, "uniform", ""),
+        ("scenario2.modd", None, "wave", ""),
+        ("scenario2.modd", STEP, "wave", ""),
+    ]
     rows = []
     for scenario, resolution, signal, spec in plan:
         with TemporaryDirectory(prefix="modd-bench-res-") as d:
             rows.append(run(Path(d), scenario, resolution, signal, spec, args.seconds))
         print(json.dumps(rows[-1]), flush=True)
-    print("\n| scenario | resolution | load | radio | drone→base B/s | planned B/s | "
-          "delivered | max error vs archive |")
+    print(
+        "\n| scenario | resolution | load | radio | drone→base B/s | planned B/s | "
+        "delivered | max error vs archive |"
+    )
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     for r in rows:
         share = f"{100 * r['delivered'] / r['expected']:.2f} %" if r["expected"] else "—"
-        print(f"| {r['scenario']} | {r['resolution'] or 'float32'} | {r['signal']} | "
-              f"{r['radio'] or '—'} | {r['down_Bps']} | {r['planned_Bps']} | {share} "
-              f"({r['delivered']}/{r['expected']}) | {r['max_error']:.2e} |")
+        print(
+            f"| {r['scenario']} | {r['resolution'] or 'float32'} | {r['signal']} | "
+            f"{r['radio'] or '—'} | {r['down_Bps']} | {r['planned_Bps']} | {share} "
+            f"({r['delivered']}/{r['expected']}) | {r['max_error']:.2e} |"
+        )
     with TemporaryDirectory(prefix="modd-bench-lora-") as d:
         try:
             lora = run_lora(Path(d), max(60.0, 2 * args.seconds))
@@ -202,8 +231,10 @@ def main() -> int:
             lora = {"error": repr(exc)}
     print("\nLoRa SF7/125 kHz, 1 % duty cycle, scenario 1 at 0.01 m/s2 (wave load):")
     print(json.dumps(lora, indent=1))
-    print(f"\ntarget: scenario 1 over serial at {STEP} m/s2 <= {TARGET} B/s, every window "
-          f"within {STEP / 2} of the archive's")
+    print(
+        f"\ntarget: scenario 1 over serial at {STEP} m/s2 <= {TARGET} B/s, every window "
+        f"within {STEP / 2} of the archive's"
+    )
     if args.json:
         args.json.write_text(json.dumps({"serial": rows, "lora": lora}, indent=1))
     return 0

@@ -14,8 +14,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from radio_harness import radio_counts, start_pubbroker_dgram, start_radio_serial, \
-    subbroker_dgram_config
+from radio_harness import (
+    radio_counts,
+    start_pubbroker_dgram,
+    start_radio_serial,
+    subbroker_dgram_config,
+)
 from subbroker_harness import (
     free_port,
     load_counts,
@@ -58,13 +62,15 @@ def _check_within_half_a_step(values: dict[str, list[Any]], archive: Any) -> int
     return checked
 
 
-def test_quantised_scenario1_over_serial_at_5_percent_loss(tmp_path: Path,
-                                                           zenoh_client: Any) -> None:
+def test_quantised_scenario1_over_serial_at_5_percent_loss(
+    tmp_path: Path, zenoh_client: Any
+) -> None:
     model = _with_resolution(tmp_path)
     zport, ingress = free_port(), free_port()
     radio, base, drone = start_radio_serial(tmp_path, "loss=0.05,latency_ms=40,seed=5")
-    pb = start_pubbroker_dgram(tmp_path, model, {"transport": "serial", "device": drone,
-                                                 "port": 1}, ingress)
+    pb = start_pubbroker_dgram(
+        tmp_path, model, {"transport": "serial", "device": drone, "port": 1}, ingress
+    )
     cfg = subbroker_dgram_config(tmp_path, model, "127.0.0.1:1", zport, "serial", device=base)
     sb = start_subbroker(tmp_path, cfg)
     with processes(radio, pb, sb):

@@ -24,8 +24,12 @@ MAX_STEPS = 1 << 53
 
 
 def _bad(value: Any) -> bool:
-    return not isinstance(value, int | float) or isinstance(value, bool) or \
-        not math.isfinite(value) or value <= 0
+    return (
+        not isinstance(value, int | float)
+        or isinstance(value, bool)
+        or not math.isfinite(value)
+        or value <= 0
+    )
 
 
 def _variable(ptr: str, v: dict[str, Any]) -> Iterator[Diagnostic]:
@@ -38,9 +42,12 @@ def _variable(ptr: str, v: dict[str, Any]) -> Iterator[Diagnostic]:
     bounds = [b for b in (v.get("validMin"), v.get("validMax")) if isinstance(b, int | float)]
     widest = max((abs(b) for b in bounds if math.isfinite(b)), default=0.0)
     if widest / r > MAX_STEPS:
-        yield Diagnostic(f"resolution {r:g} over the valid range needs {widest / r:.3g} steps: "
-                         f"more than the link's integer coding holds (2^53); declare a coarser "
-                         f"resolution or a narrower validMin/validMax", ptr + "/resolution")
+        yield Diagnostic(
+            f"resolution {r:g} over the valid range needs {widest / r:.3g} steps: "
+            f"more than the link's integer coding holds (2^53); declare a coarser "
+            f"resolution or a narrower validMin/validMax",
+            ptr + "/resolution",
+        )
 
 
 def resolutions_valid(doc: dict[str, Any]) -> Iterator[Diagnostic]:
@@ -56,13 +63,17 @@ def resolutions_valid(doc: dict[str, Any]) -> Iterator[Diagnostic]:
             continue
         ptr = f"/subscribers/{i}/resolution"
         if _bad(r):
-            yield Diagnostic(f"subscriber {sub['name']!r}: resolution {r!r} is not a positive "
-                             f"number", ptr)
+            yield Diagnostic(
+                f"subscriber {sub['name']!r}: resolution {r!r} is not a positive number", ptr
+            )
             continue
         finest = declared.get(sub.get("topic", ""), {}).get("resolution")
         if not _bad(finest) and r < finest:
-            yield Diagnostic(f"subscriber {sub['name']!r}: resolution {r:g} is finer than its "
-                             f"variable's ({finest:g}); a subscription may only be coarser", ptr)
+            yield Diagnostic(
+                f"subscriber {sub['name']!r}: resolution {r:g} is finer than its "
+                f"variable's ({finest:g}); a subscription may only be coarser",
+                ptr,
+            )
 
 
 CHECKS: tuple[Callable[[dict[str, Any]], Iterator[Diagnostic]], ...] = (resolutions_valid,)

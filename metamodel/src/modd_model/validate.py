@@ -18,8 +18,8 @@ from .diagnostics import Diagnostic, pointer_join
 from .instruments import instrument_sensors
 from .numbers import to_fraction, to_micros
 from .query import topic_name
-from .schema import definition, load_schema
 from .resolution import CHECKS as RESOLUTION_CHECKS
+from .schema import definition, load_schema
 from .science import CHECKS as SCIENCE_CHECKS
 
 if TYPE_CHECKING:  # jsonschema is imported on first validation (it is slow to import)

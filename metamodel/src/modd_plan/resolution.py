@@ -30,19 +30,26 @@ UNBOUNDED_STEPS = 1 << 20
 def needed(model: Mapping[str, Any]) -> dict[str, float | None]:
     """Each subscriber's resolution: its own, else its variable's, else None."""
     drone = model["drone"]["name"]
-    declared = {topic_name(drone, s["name"], v["name"]): v.get("resolution")
-                for s in model["drone"]["sensors"] for v in s["variables"]}
-    return {sub["name"]: sub.get("resolution", declared.get(sub["topic"]))
-            for sub in model.get("subscribers", [])}
+    declared = {
+        topic_name(drone, s["name"], v["name"]): v.get("resolution")
+        for s in model["drone"]["sensors"]
+        for v in s["variables"]
+    }
+    return {
+        sub["name"]: sub.get("resolution", declared.get(sub["topic"]))
+        for sub in model.get("subscribers", [])
+    }
 
 
-def stream_resolutions(model: Mapping[str, Any], sent: Sequence[PlannedStream],
-                       streams: Sequence[PlannedStream]) -> list[float | None]:
+def stream_resolutions(
+    model: Mapping[str, Any], sent: Sequence[PlannedStream], streams: Sequence[PlannedStream]
+) -> list[float | None]:
     """One resolution per sent stream, in ``sent``'s order."""
     need = needed(model)
     # by identity, as plan._budget: a derived stream's sources hold its source's key
-    asks: dict[int, list[float | None]] = {id(s.stream): [need.get(n) for n in s.subscribers]
-                                          for s in sent}
+    asks: dict[int, list[float | None]] = {
+        id(s.stream): [need.get(n) for n in s.subscribers] for s in sent
+    }
     for s in streams:
         if s.id is not None:
             continue
@@ -51,10 +58,16 @@ def stream_resolutions(model: Mapping[str, Any], sent: Sequence[PlannedStream],
             if into is None:
                 continue
             divide = src.factor if src.stream.aggregation == "SUM" else 1
-            into += [None if need.get(n) is None else need[n] / divide  # type: ignore[operator]
-                     for n in s.subscribers]
-    return [None if not asks[id(s.stream)] or None in asks[id(s.stream)]
-            else min(r for r in asks[id(s.stream)] if r is not None) for s in sent]
+            into += [
+                None if need.get(n) is None else need[n] / divide  # type: ignore[operator]
+                for n in s.subscribers
+            ]
+    return [
+        None
+        if not asks[id(s.stream)] or None in asks[id(s.stream)]
+        else min(r for r in asks[id(s.stream)] if r is not None)
+        for s in sent
+    ]
 
 
 def _key_bytes(model: Mapping[str, Any], topic: str, resolution: float) -> int:
@@ -63,23 +76,30 @@ def _key_bytes(model: Mapping[str, Any], topic: str, resolution: float) -> int:
     for s in model["drone"]["sensors"]:
         for v in s["variables"]:
             if topic_name(drone, s["name"], v["name"]) == topic:
-                bounds = [abs(b) for b in (v.get("validMin"), v.get("validMax"))
-                          if isinstance(b, int | float)]
+                bounds = [
+                    abs(b)
+                    for b in (v.get("validMin"), v.get("validMax"))
+                    if isinstance(b, int | float)
+                ]
                 steps = ceil(max(bounds) / resolution) if len(bounds) == 2 else UNBOUNDED_STEPS
                 return varint_size(2 * steps + 1)
     return varint_size(2 * UNBOUNDED_STEPS + 1)
 
 
-def quantised_window_bytes(model: Mapping[str, Any], sent: Sequence[PlannedStream],
-                           streams: Sequence[PlannedStream], exact: Sequence[Fraction],
-                           tops: Mapping[str, Topic], transport: str,
-                           accepted_delay: Fraction) -> list[Fraction]:
+def quantised_window_bytes(
+    model: Mapping[str, Any],
+    sent: Sequence[PlannedStream],
+    streams: Sequence[PlannedStream],
+    exact: Sequence[Fraction],
+    tops: Mapping[str, Topic],
+    transport: str,
+    accepted_delay: Fraction,
+) -> list[Fraction]:
     """``exact`` (bytes of one window's value per sent stream) with the float
     values of streams that have a resolution counted as steps: one absolute
     value per datagram (per DATA frame over tcp), deltas of DELTA_BYTES else."""
     out = list(exact)
-    for i, (s, r) in enumerate(zip(sent, stream_resolutions(model, sent, streams),
-                                   strict=True)):
+    for i, (s, r) in enumerate(zip(sent, stream_resolutions(model, sent, streams), strict=True)):
         topic = tops.get(s.stream.topic)
         if r is None or topic is None:
             continue
@@ -94,8 +114,12 @@ def quantised_window_bytes(model: Mapping[str, Any], sent: Sequence[PlannedStrea
         value = DELTA_BYTES + (key - DELTA_BYTES) * share
         if s.stream.aggregation == "ALL":
             samples = (exact[i] - 1) / SAMPLE_BYTES[wire]  # the count's varint, roughly 1 B
-            out[i] = exact[i] - samples * SAMPLE_BYTES[wire] + samples * DELTA_BYTES \
+            out[i] = (
+                exact[i]
+                - samples * SAMPLE_BYTES[wire]
+                + samples * DELTA_BYTES
                 + (key - DELTA_BYTES) * share
+            )
         else:
             out[i] = exact[i] - SAMPLE_BYTES[wire] + value
     return out

@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-
 from modd_model import load_model
 from modd_plan import make_plan
 from modd_plan.resolution import stream_resolutions
@@ -20,8 +19,10 @@ SCENARIO1 = Path(__file__).resolve().parents[2] / "examples" / "scenarios" / "sc
 def _resolutions(model: dict[str, Any]) -> dict[str, float | None]:
     plan = make_plan(model)
     sent = plan.sent_streams
-    return {s.stream.key: r for s, r in zip(sent, stream_resolutions(model, sent, plan.streams),
-                                            strict=True)}
+    return {
+        s.stream.key: r
+        for s, r in zip(sent, stream_resolutions(model, sent, plan.streams), strict=True)
+    }
 
 
 def _scenario1(**by_variable: float) -> dict[str, Any]:
@@ -53,10 +54,20 @@ def test_the_finest_subscriber_wins_and_one_without_keeps_full_precision() -> No
 def test_a_sum_source_is_sent_finer_by_its_factor() -> None:
     model = _scenario1(accel_x=0.01)
     model["subscribers"] = [
-        {"name": "s_fast", "topic": "usv.accelerometer.accel_x", "periodS": "0.25",
-         "aggregation": "SUM", "resolution": 0.08},
-        {"name": "s_slow", "topic": "usv.accelerometer.accel_x", "periodS": "1",
-         "aggregation": "SUM", "resolution": 0.2},
+        {
+            "name": "s_fast",
+            "topic": "usv.accelerometer.accel_x",
+            "periodS": "0.25",
+            "aggregation": "SUM",
+            "resolution": 0.08,
+        },
+        {
+            "name": "s_slow",
+            "topic": "usv.accelerometer.accel_x",
+            "periodS": "1",
+            "aggregation": "SUM",
+            "resolution": 0.2,
+        },
     ]
     got = _resolutions(model)
     assert list(got.values()) == [0.05]  # 1 s from 4 windows: 0.2 / 4, finer than 0.08
@@ -80,8 +91,11 @@ def test_the_planner_counts_quantised_bytes() -> None:
 
 def test_a_refused_radio_plan_may_be_proposed_coarser_resolutions() -> None:
     model = _scenario1()
-    model["link"] = {"transport": "serial", "device": "/dev/x",
-                     "radio": {"kind": "lora", "sf": 7, "bandwidth": 125000, "dutyCycle": "0.01"}}
+    model["link"] = {
+        "transport": "serial",
+        "device": "/dev/x",
+        "radio": {"kind": "lora", "sf": 7, "bandwidth": 125000, "dutyCycle": "0.01"},
+    }
     for v in model["drone"]["sensors"][0]["variables"]:
         v.update(resolution=0.001, validMin=-20, validMax=20)
     plan = make_plan(model)

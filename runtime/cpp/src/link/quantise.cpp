@@ -27,7 +27,8 @@ void Chain::set(uint32_t stream, int64_t steps) {
 std::optional<int64_t> quantise_steps(double x, double resolution) {
   if (!std::isfinite(x)) return std::nullopt;
   double ratio = x / resolution;
-  if (!std::isfinite(ratio) || std::fabs(ratio) > static_cast<double>(kMaxSteps)) return std::nullopt;
+  if (!std::isfinite(ratio) || std::fabs(ratio) > static_cast<double>(kMaxSteps))
+    return std::nullopt;
   double q = std::nearbyint(ratio);  // the default rounding mode: to nearest, ties to even
   if (std::fabs(q * resolution - x) > resolution / 2) return std::nullopt;
   return static_cast<int64_t>(q);
@@ -49,10 +50,12 @@ double get_number(ByteReader& r, Chain& chain, uint32_t stream, double resolutio
   uint64_t code = r.varint();
   if (code == kEscape) return r.fixed<double>();
   int64_t delta = zigzag_decode(code - 1);
-  if (delta > kMaxDelta || delta < -kMaxDelta) r.fail("quantised delta " + std::to_string(delta) + " beyond 2^54 steps");
+  if (delta > kMaxDelta || delta < -kMaxDelta)
+    r.fail("quantised delta " + std::to_string(delta) + " beyond 2^54 steps");
   const int64_t* prev = chain.find(stream);
   int64_t q = prev ? *prev + delta : delta;
-  if (q > kMaxSteps || q < -kMaxSteps) r.fail("quantised value of " + std::to_string(q) + " steps beyond 2^53");
+  if (q > kMaxSteps || q < -kMaxSteps)
+    r.fail("quantised value of " + std::to_string(q) + " steps beyond 2^53");
   chain.set(stream, q);
   return static_cast<double>(q) * resolution;
 }

@@ -48,8 +48,7 @@ def steps(x: float, resolution: float) -> int | None:
     return q
 
 
-def put_number(b: bytearray, chain: dict[int, int], key: int, x: float,
-               resolution: float) -> None:
+def put_number(b: bytearray, chain: dict[int, int], key: int, x: float, resolution: float) -> None:
     """One quantised value of stream ``key`` (its step count joins the chain)."""
     q = steps(x, resolution)
     if q is None:
