@@ -17,7 +17,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import threading
 import time
 from pathlib import Path
 from tempfile import TemporaryDirectory
@@ -34,6 +33,7 @@ from radio_harness import (  # noqa: E402
     start_pubbroker_dgram,
     start_radio_serial,
     subbroker_dgram_config,
+    through_profile,
 )
 from subbroker_harness import (  # noqa: E402
     model_copy,
@@ -130,7 +130,6 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
     the LoRa profile (the relay in this process, recording each packet's air
     time, as test_radio_airtime.py); planned and measured air time and energy."""
     from modd.radio import relay
-    from modd.radio.channel import RadioSpec
     from modd_plan.radio import RadioProfile
     from test_radio_airtime import _is_data, _Recording
 
@@ -146,34 +145,9 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
     path.write_text(json.dumps(chosen.model))
     predicted = chosen.report
     profile = RadioProfile.of(LORA)
-    stopping = threading.Event()
-    out: list[Any] = []
-    thread = threading.Thread(
-        target=lambda: out.append(
-            relay.run_serial(RadioSpec(), base, drone, stopping.is_set, profile=profile)
-        ),
-        daemon=True,
+    up, down = through_profile(
+        tmp, path, (base, base_path, drone, drone_path), profile, seconds, signal="wave"
     )
-    thread.start()
-    zport, ingress = free_port(), free_port()
-    pb = start_pubbroker_dgram(
-        tmp, path, {"transport": "serial", "device": drone_path, "port": 1}, ingress
-    )
-    sb = start_subbroker(
-        tmp, subbroker_dgram_config(tmp, path, "127.0.0.1:1", zport, "serial", device=base_path)
-    )
-    try:
-        with processes(pb, sb):
-            if not sb.wait_log("running", 60):
-                raise RuntimeError(sb.log()[-2000:])
-            load = start_load(tmp, path, ingress, seconds, signal="wave")
-            load.p.wait(seconds + 30)
-            with processes(load):
-                pass
-    finally:
-        stopping.set()
-        thread.join(10)
-    up, down = out[0]
     data = [(t, air) for t, packet, air in down.sent if _is_data(packet)]
     span = data[-1][0] - data[0][0]
     air = sum(a for _, a in data[1:]) * 3600 / span

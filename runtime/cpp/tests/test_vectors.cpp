@@ -72,6 +72,15 @@ Message from_json(const json& m) {
   return Ping{};
 }
 
+// A vector's value kind: type, aggregation and the optional declared resolution.
+ValueKind kind_of(const json& k) {
+  ValueType t{};
+  Aggregation a{};
+  EXPECT_TRUE(parse_value_type(k["type"], t)) << k;
+  EXPECT_TRUE(parse_aggregation(k["aggregation"], a)) << k;
+  return value_kind(t, a, k.value("resolution", 0.0));
+}
+
 bool same(const Message& a, const Message& b) {
   std::vector<uint8_t> x, y;
   encode(x, a);
@@ -116,13 +125,7 @@ TEST(Vectors, DataVectors) {
     if (!v.contains("message") || v["message"]["type"] != "DATA") continue;
     SCOPED_TRACE(name);
     std::vector<ValueKind> kinds;
-    for (const auto& k : v["kinds"]) {
-      ValueType t;
-      Aggregation a;
-      ASSERT_TRUE(parse_value_type(k["type"], t));
-      ASSERT_TRUE(parse_aggregation(k["aggregation"], a));
-      kinds.push_back(value_kind(t, a, k.value("resolution", 0.0)));
-    }
+    for (const auto& k : v["kinds"]) kinds.push_back(kind_of(k));
     const json& m = v["message"];
     Data d;
     d.sync = m["sync"];
@@ -212,13 +215,7 @@ TEST(Vectors, QuantisedUnitsDecodeAndEncodeByteForByte) {
   for (const auto& u : v["units"]) {
     SCOPED_TRACE(u["name"].get<std::string>());
     std::vector<ValueKind> kinds;
-    for (const auto& k : u["kinds"]) {
-      ValueType t;
-      Aggregation a;
-      ASSERT_TRUE(parse_value_type(k["type"], t));
-      ASSERT_TRUE(parse_aggregation(k["aggregation"], a));
-      kinds.push_back(value_kind(t, a, k.value("resolution", 0.0)));
-    }
+    for (const auto& k : u["kinds"]) kinds.push_back(kind_of(k));
     auto wire = from_hex(u["hex"].get<std::string>());
     ByteReader r(wire);
     Chain chain, again_chain;

@@ -199,3 +199,14 @@ def test_a_config_with_resolutions_round_trips_and_names_them_by_stream() -> Non
     assert [k.resolution for k in c.kinds()] == [0.5, None, 0.25]
     with pytest.raises(ValueError, match="accepted delay"):
         codec.encode(Config(1, 0, topics, streams, None, (0.5, None, 0.25)))
+
+
+def test_a_refused_config_with_resolutions_says_an_older_pubbroker_may_be_why() -> None:
+    from modd.link.frames import Config, StreamSpec, TopicSpec
+    from modd.subbroker.broker import _older_peer
+
+    topics = (TopicSpec("d.s.v", ValueType.FLOAT32, 1),)
+    streams = (StreamSpec(0, Aggregation.MIN, 250_000),)
+    assert _older_peer(Config(1, 0, topics, streams)) == ""
+    hint = _older_peer(Config(1, 0, topics, streams, 1000, (0.01,)))
+    assert "declares resolutions" in hint and "update the PubBroker" in hint
