@@ -48,7 +48,7 @@ from subbroker_harness import (  # noqa: E402
 STEP = 0.01
 TARGET = 40.0  # scenario 1 over serial at 0.01 m/s², drone->base B/s
 RANGE = 20  # validMin/validMax declared with the resolution (±20 m/s², the wave is ±1.1)
-LORA = {"kind": "lora", "sf": 7, "bandwidth": 125000, "dutyCycle": "0.01"}
+LORA = {"kind": "lora", "spreadingFactor": 7, "bandwidthHz": 125000, "dutyCycle": "0.01"}
 
 
 def _model(tmp: Path, scenario: str, resolution: float | None) -> Path:
@@ -145,8 +145,12 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
     path.write_text(json.dumps(chosen.model))
     predicted = chosen.report
     profile = RadioProfile.of(LORA)
+    # The emulator times every packet with the LoRa profile but enforces no duty
+    # limit: at 1 % each side, the handshake and the CONFIG (0.3 s of air, then 30 s
+    # of silence) take minutes; the measured air time is compared with the limit.
+    emulated = RadioProfile.of({**LORA, "dutyCycle": "1"})
     up, down = through_profile(
-        tmp, path, (base, base_path, drone, drone_path), profile, seconds, signal="wave"
+        tmp, path, (base, base_path, drone, drone_path), emulated, seconds, signal="wave"
     )
     data = [(t, air) for t, packet, air in down.sent if _is_data(packet)]
     span = data[-1][0] - data[0][0]
@@ -162,6 +166,7 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
         "planned_energy_j_per_hour": round(predicted.energy_j_per_hour, 1),
         "measured_energy_j_per_hour": round(energy, 1),
         "dropped_by_radio": dict(down.dropped),
+        "limit_air_s_per_hour": 3600 * float(LORA["dutyCycle"]),
     }
 
 

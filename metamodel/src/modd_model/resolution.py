@@ -16,11 +16,13 @@ import math
 from collections.abc import Callable, Iterator
 from typing import Any
 
+from modd_contracts.quantised import MAX_STEPS_BITS
+
 from .diagnostics import Diagnostic
 from .query import topic_name
 
-#: The largest step count the link codes exactly (modd.link.quantise.MAX_STEPS).
-MAX_STEPS = 1 << 53
+#: The largest step count the link codes exactly (docs/protocol.md, "Quantised values").
+MAX_STEPS = 1 << MAX_STEPS_BITS
 
 
 def _bad(value: Any) -> bool:

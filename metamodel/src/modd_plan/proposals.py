@@ -75,8 +75,9 @@ class Proposal:
         return ", ".join(parts)
 
 
-def changed(model: Mapping[str, Any], delay: Fraction, floor: Fraction | None,
-            coarser: int | None = None) -> dict[str, Any]:
+def changed(
+    model: Mapping[str, Any], delay: Fraction, floor: Fraction | None, coarser: int | None = None
+) -> dict[str, Any]:
     """``model`` with this accepted delay, every subscription period shorter
     than ``floor`` raised to it, and every declared resolution x ``coarser``."""
     out = deepcopy(dict(model))
@@ -98,8 +99,7 @@ def _variables(model: Mapping[str, Any]) -> list[dict[str, Any]]:
 
 def coarsenings(model: Mapping[str, Any]) -> list[int | None]:
     """None (resolutions unchanged), then :data:`COARSER` if any is declared."""
-    declared = any("resolution" in x for x in [*_variables(model),
-                                                *model.get("subscribers", [])])
+    declared = any("resolution" in x for x in [*_variables(model), *model.get("subscribers", [])])
     return [None, *COARSER] if declared else [None]
 
 
@@ -143,7 +143,10 @@ def _gaining(found: list[Proposal]) -> list[Proposal]:
 
 
 def _try(
-    model: Mapping[str, Any], delay: Fraction, floor: Fraction | None, plan: Planner,
+    model: Mapping[str, Any],
+    delay: Fraction,
+    floor: Fraction | None,
+    plan: Planner,
     coarser: int | None = None,
 ) -> Proposal | None:
     candidate = changed(model, delay, floor, coarser)
@@ -154,7 +157,10 @@ def _try(
 
 
 def _smallest_fitting(
-    model: Mapping[str, Any], ladder: list[Fraction], floor: Fraction | None, plan: Planner,
+    model: Mapping[str, Any],
+    ladder: list[Fraction],
+    floor: Fraction | None,
+    plan: Planner,
     coarser: int | None = None,
 ) -> Proposal | None:
     best = _try(model, ladder[-1], floor, plan, coarser)

@@ -14,6 +14,7 @@ from fractions import Fraction
 from math import ceil
 from typing import Any
 
+from modd_contracts import aggregations as agg
 from modd_model.query import Topic, topic_name
 
 from .linkcost import SAMPLE_BYTES, aggregate_value_type, varint_size
@@ -57,7 +58,7 @@ def stream_resolutions(
             into = asks.get(id(src.stream))
             if into is None:
                 continue
-            divide = src.factor if src.stream.aggregation == "SUM" else 1
+            divide = src.factor if src.stream.aggregation == agg.SUM else 1
             into += [
                 None if need.get(n) is None else need[n] / divide  # type: ignore[operator]
                 for n in s.subscribers
@@ -104,7 +105,7 @@ def quantised_window_bytes(
         if r is None or topic is None:
             continue
         wire = aggregate_value_type(s.stream.aggregation, topic.type)
-        if s.stream.aggregation == "COUNT" or wire not in ("float32", "float64"):
+        if s.stream.aggregation == agg.COUNT or wire not in ("float32", "float64"):
             continue
         key = _key_bytes(model, s.stream.topic, r)
         period = s.stream.period
@@ -112,7 +113,7 @@ def quantised_window_bytes(
         # delay and one more (its first slot waits at most the delay)
         share = Fraction(1) if transport == "tcp" else period / (accepted_delay + period)
         value = DELTA_BYTES + (key - DELTA_BYTES) * share
-        if s.stream.aggregation == "ALL":
+        if s.stream.aggregation == agg.ALL:
             samples = (exact[i] - 1) / SAMPLE_BYTES[wire]  # the count's varint, roughly 1 B
             out[i] = (
                 exact[i]

@@ -94,7 +94,7 @@ def test_a_refused_radio_plan_may_be_proposed_coarser_resolutions() -> None:
     model["link"] = {
         "transport": "serial",
         "device": "/dev/x",
-        "radio": {"kind": "lora", "sf": 7, "bandwidth": 125000, "dutyCycle": "0.01"},
+        "radio": {"kind": "lora", "spreadingFactor": 7, "bandwidthHz": 125000, "dutyCycle": "0.01"},
     }
     for v in model["drone"]["sensors"][0]["variables"]:
         v.update(resolution=0.001, validMin=-20, validMax=20)

@@ -17,10 +17,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from modd.link import codec
+from modd.link.codec import get_number, put_number
 from modd.link.datagram import session_key
 from modd.link.dgreceiver import DatagramReceiver, DatagramSender
 from modd.link.frames import Aggregation, ProtocolError, Value, ValueType, value_kind
-from modd.link.quantise import MAX_STEPS, get_number, put_number, steps
+from modd.link.quantise import MAX_STEPS, steps
 from modd.radio.channel import Channel, RadioSpec
 
 VECTORS = Path(__file__).resolve().parents[2] / "vectors"

@@ -6,7 +6,7 @@
 namespace modd::link {
 
 namespace {
-constexpr uint64_t kEscape = 0;
+constexpr uint64_t kEscape = quantised::kEscape;
 }
 
 const int64_t* Chain::find(uint32_t stream) const {

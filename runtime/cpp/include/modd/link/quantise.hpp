@@ -11,12 +11,13 @@
 #include <utility>
 #include <vector>
 
+#include "modd/link/quantised.gen.hpp"
 #include "modd/util/bytes.hpp"
 
 namespace modd::link {
 
-inline constexpr int64_t kMaxSteps = int64_t{1} << 53;  // exact in a double on both ends
-inline constexpr int64_t kMaxDelta = int64_t{1} << 54;
+inline constexpr int64_t kMaxSteps = int64_t{1} << quantised::kMaxStepsBits;  // exact in a double
+inline constexpr int64_t kMaxDelta = int64_t{1} << quantised::kMaxDeltaBits;
 
 // The last step count of each stream in the unit being written or read.
 class Chain {

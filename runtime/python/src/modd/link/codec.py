@@ -37,6 +37,7 @@ from modd.link.frames import (
     ValueKind,
     ValueType,
 )
+from modd.link.quantise import ESCAPE, MAX_DELTA, MAX_STEPS, steps
 
 MAX_PING = 64
 MAX_LIST = 65535
@@ -186,6 +187,43 @@ def _put_scalar(b: bytearray, k: Scalar, number: float, integer: int, count: int
         b.append(1 if integer else 0)
     else:
         b += varint(count)
+
+
+def put_number(b: bytearray, chain: dict[int, int], key: int, x: float,
+               resolution: float) -> None:
+    """One value of a stream with a declared resolution (modd.link.quantise): its
+    steps against the unit's ``chain`` (updated), or the escape and the exact value.
+
+    >>> b, chain = bytearray(), {}
+    >>> put_number(b, chain, 0, 1.234, 0.01); put_number(b, chain, 0, 1.25, 0.01)
+    >>> bytes(b).hex()
+    'f70105'
+    >>> r = Reader(bytes(b)); back: dict[int, int] = {}
+    >>> [round(get_number(r, back, 0, 0.01), 6) for _ in range(2)]
+    [1.23, 1.25]
+    """
+    q = steps(x, resolution)
+    if q is None:
+        b += varint(ESCAPE) + struct.pack("<d", x)
+        return
+    prev = chain.get(key)
+    b += varint(zigzag(q - prev if prev is not None else q) + 1)
+    chain[key] = q
+
+
+def get_number(r: Reader, chain: dict[int, int], key: int, resolution: float) -> float:
+    code = r.varint()
+    if code == ESCAPE:
+        return float(r.fixed("<d"))
+    delta = unzigzag(code - 1)
+    if abs(delta) > MAX_DELTA:
+        raise r.fail(f"quantised delta {delta} beyond 2^54 steps")
+    prev = chain.get(key)
+    q = prev + delta if prev is not None else delta
+    if abs(q) > MAX_STEPS:
+        raise r.fail(f"quantised value of {q} steps beyond 2^53")
+    chain[key] = q
+    return q * resolution
 
 
 def _put_value(b: bytearray, k: ValueKind, v: Value, chain: dict[int, int] | None = None,
@@ -498,6 +536,3 @@ def decode_data(f: RawFrame, kinds: Sequence[ValueKind]) -> Data:
               for i, (k, p) in enumerate(zip(kinds, present, strict=True))]
     r.end()
     return Data(h.sync, h.config_id, h.slot, h.seq8, values)
-
-
-from .quantise import get_number, put_number  # noqa: E402 (it reads this module's primitives)
