@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from fractions import Fraction
-from math import ceil
+from math import ceil, floor
 from typing import Any
 
 from modd_contracts import aggregations as agg
@@ -111,7 +111,8 @@ def quantised_window_bytes(
         period = s.stream.period
         # keys per window: one a datagram, which holds the windows of the accepted
         # delay and one more (its first slot waits at most the delay)
-        share = Fraction(1) if transport == "tcp" else period / (accepted_delay + period)
+        per_datagram = 1 if transport == "tcp" else floor(accepted_delay / period) + 1
+        share = Fraction(1, per_datagram)
         value = DELTA_BYTES + (key - DELTA_BYTES) * share
         if s.stream.aggregation == agg.ALL:
             samples = (exact[i] - 1) / SAMPLE_BYTES[wire]  # the count's varint, roughly 1 B
