@@ -67,8 +67,9 @@ def test_planned_air_time_is_what_the_emulator_measures(
     profile = RadioProfile.of(model["link"]["radio"])
     predicted = make_plan(model).radio
     assert predicted is not None and predicted.fits
-    up, down = through_profile(tmp_path, model_path, (base, base_path, drone, drone_path),
-                               profile, LOAD_S)
+    up, down = through_profile(
+        tmp_path, model_path, (base, base_path, drone, drone_path), profile, LOAD_S
+    )
     assert isinstance(down, _Recording) and isinstance(up, _Recording)
     assert not down.dropped, down.summary()  # a plan that fits: nothing refused
     data = [(t, air) for t, packet, air in down.sent if _is_data(packet)]
