@@ -48,7 +48,12 @@ from subbroker_harness import (  # noqa: E402
 STEP = 0.01
 TARGET = 40.0  # scenario 1 over serial at 0.01 m/s², drone->base B/s
 RANGE = 20  # validMin/validMax declared with the resolution (±20 m/s², the wave is ±1.1)
-LORA = {"kind": "lora", "spreadingFactor": 7, "bandwidthHz": 125000, "dutyCycle": "0.01"}
+LORA: dict[str, Any] = {
+    "kind": "lora",
+    "spreadingFactor": 7,
+    "bandwidthHz": 125000,
+    "dutyCycle": "0.01",
+}
 
 
 def _model(tmp: Path, scenario: str, resolution: float | None) -> Path:
