@@ -28,7 +28,9 @@ from subbroker_harness import (
     processes,
     read_archive,
     start_load,
+    start_pubbroker,
     start_subbroker,
+    subbroker_config,
     window_samples,
 )
 from test_radio_link import _delivered_share, _watch
@@ -58,6 +60,8 @@ def _check_within_half_a_step(values: dict[str, list[Any]], archive: Any) -> int
             assert abs(v.value - want) <= STEP / 2 + 1e-9, (name, v, want)
             if v.aggregation == "AVERAGE":
                 assert v.count == count, (name, v, count)
+            if float(v.period_s) == 0.25:  # as sent: whole steps (the 2 s ones are merged)
+                assert abs(v.value / STEP - round(v.value / STEP)) < 1e-6, (name, v)
             checked += 1
     return checked
 
@@ -96,3 +100,24 @@ def test_quantised_scenario1_over_serial_at_5_percent_loss(
     rate = (int(m1.group(1)) - int(m0.group(1))) / (t1 - t0)
     print(f"drone->base {rate:.1f} B/s through the emulator (5 % loss, resends included)")
     assert rate < 60, rate  # the float32 link: 81.6 B/s without loss
+
+
+def test_quantised_scenario1_over_tcp(tmp_path: Path, zenoh_client: Any) -> None:
+    """Over tcp every DATA frame is a unit of its own: each value its absolute steps."""
+    model = _with_resolution(tmp_path)
+    link, ingress, zport = free_port(), free_port(), free_port()
+    pb = start_pubbroker(tmp_path, model, link, ingress)
+    sb = start_subbroker(tmp_path, subbroker_config(tmp_path, model, link, zport))
+    with processes(pb, sb):
+        got = _watch(zenoh_client, zport)
+        assert sb.wait_log("running", 20), sb.log()[-3000:]
+        load = start_load(tmp_path, model, ingress, 6.0)
+        load.p.wait(30)
+        time.sleep(1.5)
+        with processes(load):
+            pass
+        values = got.snapshot()
+    archive = read_archive(tmp_path / "archive", model)
+    assert _check_within_half_a_step(values, archive) > 60
+    share, missing = _delivered_share(values, archive)
+    assert share == 1.0, sorted(missing)
