@@ -30,6 +30,7 @@ start=$(date +%s)
 echo "bench: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%Y-%m-%dT%H:%MZ)"
 run tests/bench/bench_link.py --seconds "${LINK_SECONDS:-60}"
 run tests/bench/bench_radio.py --seconds "${RADIO_SECONDS:-30}"
+run tests/bench/bench_resolution.py --seconds "${RADIO_SECONDS:-30}"
 run tests/bench/bench_ingest.py
 run tests/bench/bench_latency.py --seconds "${LATENCY_SECONDS:-20}"
 run tests/bench/bench_footprint.py --seconds "${FOOTPRINT_SECONDS:-30}"

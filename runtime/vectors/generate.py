@@ -73,6 +73,7 @@ def msg_json(m: Message) -> dict[str, Any]:
             "streams": [{"topic": s.topic, "aggregation": s.aggregation.name,
                          "period_us": s.period_us} for s in m.streams],
             **({} if m.accepted_delay_ms is None else {"accepted_delay_ms": m.accepted_delay_ms}),
+            **({} if m.resolutions is None else {"resolutions": list(m.resolutions)}),
         }
     if isinstance(m, ConfigAck):
         return {"type": "CONFIG_ACK", "config_id": m.config_id, "status": m.status,
@@ -93,11 +94,15 @@ def data_json(d: Data) -> dict[str, Any]:
     }
 
 
+Kind = tuple[ValueType, Aggregation] | tuple[ValueType, Aggregation, float]
+
+
 def write(name: str, meaning: str, wire: bytes, message: dict[str, Any],
-          kinds: list[tuple[ValueType, Aggregation]] | None = None) -> None:
+          kinds: list[Kind] | None = None) -> None:
     doc: dict[str, Any] = {"name": name, "meaning": meaning, "hex": wire.hex(), "message": message}
-    if kinds is not None:
-        doc["kinds"] = [{"type": t.label, "aggregation": a.name} for t, a in kinds]
+    if kinds is not None:  # a third item: the stream's declared resolution
+        doc["kinds"] = [{"type": k[0].label, "aggregation": k[1].name,
+                         **({"resolution": k[2]} if len(k) > 2 else {})} for k in kinds]
     (HERE / f"{name}.json").write_text(json.dumps(doc, indent=1) + "\n")
 
 
@@ -105,9 +110,10 @@ def simple(name: str, meaning: str, m: Message) -> None:
     write(name, meaning, codec.encode(m), msg_json(m))
 
 
-def data(name: str, meaning: str, d: Data, kinds: list[tuple[ValueType, Aggregation]]) -> None:
+def data(name: str, meaning: str, d: Data, kinds: list[Kind]) -> None:
     from modd.link.frames import value_kind
-    wire = codec.encode_data(d, [value_kind(t, a) for t, a in kinds])
+    wire = codec.encode_data(d, [value_kind(k[0], k[1], k[2] if len(k) > 2 else None)
+                                 for k in kinds])
     write(name, meaning, wire, data_json(d), kinds)
 
 
@@ -124,6 +130,10 @@ def main() -> None:
     simple("config_scenario1_delay", "scenario 1 on a datagram link, with the optional "
            "trailing accepted delay (250 ms): the PubBroker packs slots with it",
            Config(1, 30, S1_TOPICS, S1_STREAMS, 250))
+    simple("config_scenario1_resolution", "scenario 1 with declared resolutions (after the "
+           "delay: 3 streams, the gaps 0 0 1 before streams 0, 1, 3): 0.01 m/s2 on the "
+           "AVERAGEs, 0.05 on MAX z, MIN z unquantised",
+           Config(1, 30, S1_TOPICS, S1_STREAMS, 1000, (0.01, 0.01, None, 0.05)))
     simple("config_mixed", "every type and aggregation, one topic of each type", Config(
         200, 0,
         (TopicSpec("d.s.f64", ValueType.FLOAT64, 1, 0), TopicSpec("d.s.i", ValueType.INT, 1000, 10000),
@@ -151,6 +161,13 @@ def main() -> None:
                                           Value(True, 9.75), Value(True, 10.5)]), s1_kinds)
     data("data_sync_absent", "sync frame with a bitmap: config 7, slot 3, only stream 2 present",
          Data(True, 7, 3, 3, [Value(), Value(), Value(True, -2.0), Value()]), s1_kinds)
+    q_kinds: list[Kind] = [(ValueType.FLOAT32, Aggregation.AVERAGE, 0.01)] * 2 + [
+        (ValueType.FLOAT32, Aggregation.MIN), (ValueType.FLOAT32, Aggregation.MAX, 0.05)]
+    data("data_scenario1_quantised", "scenario 1 slot 5 with declared resolutions: the AVERAGEs "
+         "as steps of 0.01 (50 -> zigzag 100 + 1 = 0x65, then its count; -125 -> 249 + 1 = "
+         "0xfa 0x01), MIN unquantised (f32), MAX 10.5 as 210 steps of 0.05 (421 = 0xa5 0x03)",
+         Data(False, 0, 0, 5, [Value(True, 0.5, 0, 6), Value(True, -1.25, 0, 7),
+                               Value(True, 9.75), Value(True, 10.5)]), q_kinds)
     mixed = [(ValueType.FLOAT64, Aggregation.FIRST), (ValueType.INT, Aggregation.ALL),
              (ValueType.INT, Aggregation.COUNT), (ValueType.INT, Aggregation.SUM),
              (ValueType.BOOL, Aggregation.AVERAGE), (ValueType.BOOL, Aggregation.MAX),
@@ -201,6 +218,16 @@ def main() -> None:
          "accepted delay 3600001 ms (above one hour)"),
         ("config_two_trailing_fields", fr("07 01 00 01 0161 00 01 00 01 00 00 01 01 01"),
          "a byte after the accepted delay"),
+        ("config_resolution_count_zero", fr("07 01 00 01 0161 00 01 00 01 00 00 01 01 00"),
+         "a resolution field declaring no stream"),
+        ("config_resolution_beyond_streams", fr("07 01 00 01 0161 00 01 00 01 00 00 01 01 01 01 "
+                                                "7b14ae47e17a843f"), "resolution of stream 1 of 1"),
+        ("config_resolution_negative", fr("07 01 00 01 0161 00 01 00 01 00 00 01 01 01 00 "
+                                          "7b14ae47e17a84bf"), "resolution -0.01"),
+        ("config_resolution_nan", fr("07 01 00 01 0161 00 01 00 01 00 00 01 01 01 00 "
+                                     "000000000000f87f"), "resolution NaN"),
+        ("config_resolution_zero", fr("07 01 00 01 0161 00 01 00 01 00 00 01 01 01 00 "
+                                      "0000000000000000"), "resolution 0"),
         ("status_overlong_varint", fr("20 01 ffffffffffffffffffff7f"), "varint longer than 64 bits"),
     ]
     (HERE / "invalid.json").write_text(json.dumps({
@@ -213,6 +240,8 @@ def main() -> None:
     write_datagrams(HERE)
     from gen_backfill import write as write_backfill
     write_backfill(HERE)
+    from gen_quantised import write as write_quantised
+    write_quantised(HERE)
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import random
 import signal
 import socket
@@ -56,6 +57,12 @@ def value_for(rng: random.Random, vtype: str) -> float | int:
     return rng.uniform(-10.0, 10.0)
 
 
+def wave(rng: random.Random, topic: int, t: float) -> float:
+    """A smooth signal, as an accelerometer on a boat: what a declared resolution
+    is for (consecutive windows a few steps apart)."""
+    return math.sin(2 * math.pi * t / 8.0 + topic) + rng.gauss(0.0, 0.01)
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser()
     p.add_argument("--model", required=True)
@@ -63,6 +70,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seconds", type=float, default=30.0)
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--record", help="append every sample sent to this file (JSON lines)")
+    p.add_argument("--signal", choices=("uniform", "wave"), default="uniform",
+                   help="float values: uniform in [-10, 10] (default), or a sea wave "
+                        "(1 m/s2, 8 s period, a phase per topic) plus 0.01 of noise")
     args = p.parse_args(argv)
     model = load_model(args.model)
     types = {
@@ -101,7 +111,9 @@ def main(argv: list[str] | None = None) -> int:
             time.sleep(delay)
         now = time.time_ns()
         records = b""
-        values = [value_for(rng, types[topic]) for topic in pubs[i][1]]
+        values = [wave(rng, ids[topic], time.monotonic() - start)
+                  if args.signal == "wave" and types[topic].startswith("float")
+                  else value_for(rng, types[topic]) for topic in pubs[i][1]]
         for topic, value in zip(pubs[i][1], values, strict=True):
             code, fmt = TYPES[types[topic]]
             records += varint(ids[topic]) + struct.pack("<q", now) + struct.pack(fmt, value)

@@ -18,7 +18,14 @@ from typing import Any
 from modd.ports import free_port
 from modd_model import load_model
 from modd_model.query import topics
-from subbroker_harness import PUBBROKER, Proc, shared_credentials
+from subbroker_harness import (
+    PUBBROKER,
+    Proc,
+    processes,
+    shared_credentials,
+    start_load,
+    start_subbroker,
+)
 
 RADIO = [str(Path(sys.executable)), "-m", "modd.radio.cli"]
 
@@ -141,3 +148,39 @@ class Injector:
                     self.front.sendto(data, self.peer)
                     self.forged_down += 1
                     self.replayed_down += 1
+
+
+def through_profile(tmp: Path, model_path: Path, ptys: tuple[int, str, int, str], profile: Any,
+                    load_s: float, signal: str = "uniform") -> tuple[Any, Any]:
+    """The model's processes over serial through a radio profile: the relay in
+    this process (``modd.radio.relay``, whose AirtimeChannel the caller may have
+    replaced to record) between the pseudo-terminals ``ptys`` (base fd, path,
+    drone fd, path), the PubBroker, the SubBroker and ``load_s`` of load; the
+    relay's (up, down) channels once everything has stopped."""
+    from modd.radio import relay
+    from modd.radio.channel import RadioSpec
+
+    base, base_path, drone, drone_path = ptys
+    stopping = threading.Event()
+    out: list[tuple[Any, Any]] = []
+    thread = threading.Thread(
+        target=lambda: out.append(
+            relay.run_serial(RadioSpec(), base, drone, stopping.is_set, profile=profile)),
+        daemon=True)
+    thread.start()
+    zport, ingress = free_port(), free_port()
+    pb = start_pubbroker_dgram(
+        tmp, model_path, {"transport": "serial", "device": drone_path, "port": 1}, ingress)
+    sb = start_subbroker(tmp, subbroker_dgram_config(tmp, model_path, "127.0.0.1:1", zport,
+                                                     "serial", device=base_path))
+    try:
+        with processes(pb, sb):
+            assert sb.wait_log("running", 60), sb.log()[-3000:]
+            load = start_load(tmp, model_path, ingress, load_s, signal=signal)
+            load.p.wait(load_s + 30)
+            with processes(load):
+                pass
+    finally:
+        stopping.set()
+        thread.join(10)
+    return out[0]

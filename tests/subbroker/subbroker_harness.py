@@ -184,8 +184,9 @@ def start_subbroker(tmp: Path, config: Path, tag: str = "sb") -> Proc:
 
 
 def start_load(tmp: Path, model_path: Path, ingress_port: int, seconds: float,
-               tag: str = "load", seed: int = 1, record: Path | None = None) -> Proc:
-    extra = ["--record", str(record)] if record else []
+               tag: str = "load", seed: int = 1, record: Path | None = None,
+               signal: str = "uniform") -> Proc:
+    extra = (["--record", str(record)] if record else []) + ["--signal", signal]
     return Proc(tag, [*LOADGEN, "--model", str(model_path), "--ingress",
                       f"127.0.0.1:{ingress_port}", "--seconds", str(seconds),
                       "--seed", str(seed), *extra], tmp / f"{tag}.log")

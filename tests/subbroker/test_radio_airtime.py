@@ -8,7 +8,6 @@ by the relay, each at the profile's air time."""
 from __future__ import annotations
 
 import json
-import threading
 from pathlib import Path
 from typing import Any
 
@@ -17,11 +16,10 @@ from modd.link.datagram import DGRAM_DATA
 from modd.link.serialframe import cobs_decode
 from modd.radio import relay
 from modd.radio.airtime import AirtimeChannel
-from modd.radio.channel import RadioSpec
 from modd_plan import make_plan
 from modd_plan.radio import RadioProfile
-from radio_harness import start_pubbroker_dgram, subbroker_dgram_config
-from subbroker_harness import free_port, model_copy, processes, start_load, start_subbroker
+from radio_harness import through_profile
+from subbroker_harness import model_copy
 
 pytestmark = pytest.mark.usefixtures("needs_pubbroker")
 
@@ -69,35 +67,9 @@ def test_planned_air_time_is_what_the_emulator_measures(
     profile = RadioProfile.of(model["link"]["radio"])
     predicted = make_plan(model).radio
     assert predicted is not None and predicted.fits
-
-    stopping = threading.Event()
-    out: list[tuple[Any, Any]] = []
-    thread = threading.Thread(
-        target=lambda: out.append(
-            relay.run_serial(RadioSpec(), base, drone, stopping.is_set, profile=profile)
-        ),
-        daemon=True,
+    up, down = through_profile(
+        tmp_path, model_path, (base, base_path, drone, drone_path), profile, LOAD_S
     )
-    thread.start()
-    zport, ingress = free_port(), free_port()
-    pb = start_pubbroker_dgram(
-        tmp_path, model_path, {"transport": "serial", "device": drone_path, "port": 1}, ingress
-    )
-    cfg = subbroker_dgram_config(
-        tmp_path, model_path, "127.0.0.1:1", zport, "serial", device=base_path
-    )
-    sb = start_subbroker(tmp_path, cfg)
-    try:
-        with processes(pb, sb):
-            assert sb.wait_log("running", 30), sb.log()[-3000:]
-            load = start_load(tmp_path, model_path, ingress, LOAD_S)
-            load.p.wait(LOAD_S + 30)
-            with processes(load):
-                pass
-    finally:
-        stopping.set()
-        thread.join(10)
-    up, down = out[0]
     assert isinstance(down, _Recording) and isinstance(up, _Recording)
     assert not down.dropped, down.summary()  # a plan that fits: nothing refused
     data = [(t, air) for t, packet, air in down.sent if _is_data(packet)]

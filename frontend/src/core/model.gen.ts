@@ -120,6 +120,8 @@ export interface MeasuredVariable {
   validMin?: number;
   /** Largest valid value, in the variable's unit (CF valid_max). */
   validMax?: number;
+  /** The precision needed live, in the variable's unit (e.g. 0.01): the link sends its float values as whole steps of this size, within half a step (docs/protocol.md, "Quantised values"); validMin and validMax, when given, bound the steps. The archive stays exact. Unquantised when absent. */
+  resolution?: number;
 }
 
 /** Which topics give the platform's position, for datasets (modd dataset interpolates it to every sample). When absent, the MAVLink autopilot's GLOBAL_POSITION_INT lat, lon and alt are used if the model maps them. */
@@ -334,6 +336,8 @@ export interface Subscriber {
   periodS: Period;
   /** How the samples of each period are reduced. */
   aggregation: Aggregation;
+  /** The precision this subscription needs live, in the topic's unit: at least the variable's resolution (coarser still); the stream is sent at the finest resolution of the subscriptions it serves, unquantised if one of them declares none. */
+  resolution?: number;
   /** What the SubBroker fills by itself from the drone's archive after a link outage: off (nothing; a backfill can still be asked for), gaps (the windows missed since the last connection) or mission (every window missed since the running config began). */
   backfill?: "off" | "gaps" | "mission";
 }

@@ -16,6 +16,7 @@ import { freePort, start, stop, waitForHttp } from "./processes.mjs";
 import { journey } from "./journey.mjs";
 import { collaboration } from "./collab.mjs";
 import { views } from "./views.mjs";
+import { radio } from "./radio.mjs";
 import { startTileServer } from "./tiles.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
@@ -108,13 +109,15 @@ try {
   // MODD_E2E_ONLY=collab: only the collaboration steps (frontend/tests/e2e/collab.mjs);
   // MODD_E2E_ONLY=views: the journey and views.mjs, without them.
   const only = process.env.MODD_E2E_ONLY;
-  const steps = [
+  // MODD_E2E_ONLY=radio: log in, then only the radio budget steps (radio.mjs).
+  const steps = only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radio({ page })] : [
     ...(only === "collab" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
     ...(only === "collab" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
       archiveDir: join(tmp, "drone", "archive"),
       survey: surveyModel(pubPort, subPort), tiles })),
     ...(only === "views" ? [] : collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) })),
+    ...(only === "views" || only === "collab" ? [] : radio({ page })),
   ];
   let broken = null;
   // MODD_E2E_KEEP_GOING=1: the later steps still run after a failure (to see them locally; they

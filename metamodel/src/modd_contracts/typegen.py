@@ -41,6 +41,7 @@ OUTPUTS = {
     "owners": REPO / "metamodel" / "src" / "modd_contracts" / "owners.py",
     "dvcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "client" / "delivered_value.gen.hpp",
     "arcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "archive" / "archive_record.gen.hpp",
+    "qcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "link" / "quantised.gen.hpp",
 }
 
 
@@ -462,6 +463,27 @@ def generate_archive_record_cpp() -> str:
     return "\n".join(out)
 
 
+def generate_quantised_cpp() -> str:
+    """The wire constants of quantised values (modd_contracts/quantised.py)."""
+    from .quantised import CONSTANTS
+
+    out = [
+        f"// {HEADER}",
+        "// The wire constants of quantised values (modd_contracts/quantised.py,",
+        '// docs/protocol.md "Quantised values"), read by link/quantise.cpp.',
+        "#pragma once",
+        "",
+        "#include <cstdint>",
+        "",
+        "namespace modd::link::quantised {",
+        "",
+    ]
+    for name, value, doc in CONSTANTS:
+        out += [f"// {doc}", f"inline constexpr uint64_t {_cpp_ident(name.lower())} = {value};"]
+    out += ["", "}  // namespace modd::link::quantised", ""]
+    return "\n".join(out)
+
+
 GENERATORS: dict[str, Callable[[], str]] = {
     "py": generate_py,
     "ts": generate_ts,
@@ -470,6 +492,7 @@ GENERATORS: dict[str, Callable[[], str]] = {
     "owners": generate_owners_py,
     "dvcpp": generate_delivered_value_cpp,
     "arcpp": generate_archive_record_cpp,
+    "qcpp": generate_quantised_cpp,
 }
 
 

@@ -103,6 +103,7 @@ VARIABLE_ATTRIBUTES = {
     "longName": ("longName", "text"),
     "validMin": ("validMin", "number"),
     "validMax": ("validMax", "number"),
+    "resolution": ("resolution", "number"),
 }
 
 _TERMINAL_NAMES = {
@@ -652,6 +653,11 @@ class _Builder:
                     self._error(word, f"unknown backfill policy {str(word)!r}; expected one of "
                                 f"{', '.join(BACKFILL_POLICIES)}", ptr + "/backfill")
                 sub["backfill"] = str(word)
+            elif isinstance(child, Tree) and child.data == "resolution":
+                number = child.children[0]
+                assert isinstance(number, Token)
+                self._mark(ptr + "/resolution", number)
+                sub["resolution"] = float(number)
             elif isinstance(child, Tree) or child.type == "STRING":
                 sub["topic"] = _topic(child)
                 self._mark(ptr + "/topic", child)

@@ -169,6 +169,8 @@ def print_model(doc: dict[str, Any]) -> str:
         args += [quote(s["topic"]), s["periodS"], s["aggregation"]]
         if "backfill" in s:  # "off" too when set: the text keeps what the model says
             args.append(f"backfill = {s['backfill']}")
+        if "resolution" in s:
+            args.append(f"resolution = {float(s['resolution'])!r}")
         out.append(f"{INDENT}Subscriber {name(s['name'])}({', '.join(args)});")
     out.append("}")
     return "\n".join(out) + "\n"

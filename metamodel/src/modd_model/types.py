@@ -74,6 +74,7 @@ class MeasuredVariable(TypedDict):
     longName: NotRequired[str]
     validMin: NotRequired[float]
     validMax: NotRequired[float]
+    resolution: NotRequired[float]
 
 
 class PlatformPosition(TypedDict):
@@ -223,6 +224,7 @@ class Subscriber(TypedDict):
     topic: TopicName
     periodS: Period
     aggregation: Aggregation
+    resolution: NotRequired[float]
     backfill: NotRequired[Literal["off", "gaps", "mission"]]
 
 

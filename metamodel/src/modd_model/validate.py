@@ -18,6 +18,7 @@ from .diagnostics import Diagnostic, pointer_join
 from .instruments import instrument_sensors
 from .numbers import to_fraction, to_micros
 from .query import topic_name
+from .resolution import CHECKS as RESOLUTION_CHECKS
 from .schema import definition, load_schema
 from .science import CHECKS as SCIENCE_CHECKS
 
@@ -27,7 +28,7 @@ if TYPE_CHECKING:  # jsonschema is imported on first validation (it is slow to i
 
 Check = Callable[[dict[str, Any]], Iterator[Diagnostic]]
 #: Units, standard names, valid ranges and the platform position (science.py) first.
-CHECKS: list[Check] = list(SCIENCE_CHECKS)
+CHECKS: list[Check] = [*SCIENCE_CHECKS, *RESOLUTION_CHECKS]
 
 # Aggregations that make no sense on booleans (their mean or sum is not a bool):
 # the aggregation table's numericOnly.

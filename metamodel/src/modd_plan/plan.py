@@ -39,6 +39,7 @@ from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
 from .planjson import plan_to_json
 from .proposals import Proposal, propose
 from .radio import RadioProfile, RadioReport, radio_report
+from .resolution import quantised_window_bytes
 from .schedule import Schedule, ScheduleTooLarge
 from .streams import (
     PlannedStream,
@@ -393,6 +394,9 @@ def _make_plan(
         return _bytes(stream.aggregation, topic[0], pn * topic[2], pd * topic[1])
 
     window_bytes = [window(s.stream) for s in sent]
+    link = LinkSettings.of(model)
+    window_bytes = quantised_window_bytes(model, sent, streams, window_bytes, tops,
+                                          link.transport, link.accepted_delay)
     budget = _budget(model, sched, sent, streams, window_bytes)
     radio = model.get("link", {}).get("radio")
     return Plan(

@@ -1,6 +1,7 @@
 """The nearest plans that fit the radio's duty cycle, when a plan does not:
-a longer accepted delay (more slots per packet, fewer headers and preambles)
-and longer subscription periods (fewer values), each candidate planned again
+a longer accepted delay (more slots per packet, fewer headers and preambles),
+longer subscription periods (fewer values) and, when the model declares
+resolutions, coarser ones (x 4, x 16: fewer bytes a value), each candidate planned again
 by the same planner and kept only if its own report fits and it meets the
 delay cap wherever the plan did; then the Pareto front of (largest delay,
 energy per hour, bytes/s), lowest delay first.
@@ -31,6 +32,8 @@ from .radio import RadioReport
 DELAY_STEPS = (1, 2, 4, 8, 16, 32, 64, 128)
 #: multipliers of the longest subscription period tried as floors
 FLOOR_STEPS = (2, 4, 8, 16, 32)
+#: factors the declared resolutions are coarsened by (when the model declares any)
+COARSER = (4, 16)
 #: proposals returned at most
 MAX_PROPOSALS = 5
 
@@ -47,6 +50,7 @@ class Proposal:
     max_delay_s: float
     report: RadioReport
     model: dict[str, Any]
+    coarser: int | None = None  # the declared resolutions x this, None: unchanged
 
     def to_json(self) -> PlanProposal:
         r = self.report
@@ -66,19 +70,37 @@ class Proposal:
         if self.min_period_s is not None:
             floor = fraction_to_decimal(self.min_period_s)
             parts.append(f"every subscription's period at least {floor} s")
+        if self.coarser is not None:
+            parts.append(f"every declared resolution {self.coarser} x coarser")
         return ", ".join(parts)
 
 
-def changed(model: Mapping[str, Any], delay: Fraction, floor: Fraction | None) -> dict[str, Any]:
-    """``model`` with this accepted delay and every subscription period
-    shorter than ``floor`` raised to it."""
+def changed(
+    model: Mapping[str, Any], delay: Fraction, floor: Fraction | None, coarser: int | None = None
+) -> dict[str, Any]:
+    """``model`` with this accepted delay, every subscription period shorter
+    than ``floor`` raised to it, and every declared resolution x ``coarser``."""
     out = deepcopy(dict(model))
     out.setdefault("link", {})["acceptedDelayS"] = fraction_to_decimal(delay)
     if floor is not None:
         for sub in out.get("subscribers", []):
             if to_fraction(sub["periodS"]) < floor:
                 sub["periodS"] = fraction_to_decimal(floor)
+    if coarser is not None:
+        for item in [*_variables(out), *out.get("subscribers", [])]:
+            if "resolution" in item:
+                item["resolution"] = item["resolution"] * coarser
     return out
+
+
+def _variables(model: Mapping[str, Any]) -> list[dict[str, Any]]:
+    return [v for s in model.get("drone", {}).get("sensors", []) for v in s["variables"]]
+
+
+def coarsenings(model: Mapping[str, Any]) -> list[int | None]:
+    """None (resolutions unchanged), then :data:`COARSER` if any is declared."""
+    declared = any("resolution" in x for x in [*_variables(model), *model.get("subscribers", [])])
+    return [None, *COARSER] if declared else [None]
 
 
 def floors(model: Mapping[str, Any]) -> list[Fraction | None]:
@@ -96,35 +118,58 @@ def propose(model: Mapping[str, Any], plan: Planner) -> list[Proposal]:
     base = to_fraction(model.get("link", {}).get("acceptedDelayS", "1"))
     ladder = [base * k for k in DELAY_STEPS]
     found: list[Proposal] = []
-    for floor in floors(model):
-        hit = _smallest_fitting(model, ladder, floor, plan)
-        if hit is not None:
-            found.append(hit)
-            if hit.accepted_delay_s == base:
-                break  # longer periods would only cost freshness
-    return _pareto(found)[:MAX_PROPOSALS]
+    for coarser in coarsenings(model):
+        for floor in floors(model):
+            hit = _smallest_fitting(model, ladder, floor, plan, coarser)
+            if hit is not None:
+                found.append(hit)
+                if hit.accepted_delay_s == base:
+                    break  # longer periods would only cost freshness
+    return _pareto(_gaining(found))[:MAX_PROPOSALS]
+
+
+def _gaining(found: list[Proposal]) -> list[Proposal]:
+    """Without the coarser resolutions that gain nothing over the same plan at
+    finer ones (``found`` is in coarsening order; a value's delta often fits one
+    byte either way)."""
+    seen: set[tuple[Fraction, Fraction | None, float]] = set()
+    out = []
+    for p in found:
+        key = (p.accepted_delay_s, p.min_period_s, p.report.bytes_per_s)
+        if key not in seen:
+            seen.add(key)
+            out.append(p)
+    return out
 
 
 def _try(
-    model: Mapping[str, Any], delay: Fraction, floor: Fraction | None, plan: Planner
+    model: Mapping[str, Any],
+    delay: Fraction,
+    floor: Fraction | None,
+    plan: Planner,
+    coarser: int | None = None,
 ) -> Proposal | None:
-    candidate = changed(model, delay, floor)
+    candidate = changed(model, delay, floor, coarser)
     result = plan(candidate)
     if result is None or not result[0].fits:
         return None
-    return Proposal(delay, floor, result[1], result[0], candidate)
+    return Proposal(delay, floor, result[1], result[0], candidate, coarser)
 
 
 def _smallest_fitting(
-    model: Mapping[str, Any], ladder: list[Fraction], floor: Fraction | None, plan: Planner
+    model: Mapping[str, Any],
+    ladder: list[Fraction],
+    floor: Fraction | None,
+    plan: Planner,
+    coarser: int | None = None,
 ) -> Proposal | None:
-    best = _try(model, ladder[-1], floor, plan)
+    best = _try(model, ladder[-1], floor, plan, coarser)
     if best is None:
         return None
     lo, hi = 0, len(ladder) - 1  # ladder[hi] fits
     while lo < hi:
         mid = (lo + hi) // 2
-        hit = _try(model, ladder[mid], floor, plan)
+        hit = _try(model, ladder[mid], floor, plan, coarser)
         if hit is None:
             lo = mid + 1
         else:

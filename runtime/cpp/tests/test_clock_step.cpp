@@ -29,8 +29,8 @@ struct SlotLink : LinkOutput {
     return true;
   }
   bool datagrams() const override { return true; }
-  bool link_slot(uint8_t, uint64_t, int64_t, std::vector<uint8_t>&& values,
-                 std::vector<bool>&&) override {
+  bool link_slot(uint8_t, uint64_t, int64_t, std::vector<uint8_t>&& values, std::vector<bool>&&,
+                 link::SlotEncoder&&) override {
     ++slots;
     bytes += values.size() + 1;
     return true;

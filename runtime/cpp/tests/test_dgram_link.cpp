@@ -331,3 +331,42 @@ TEST(DgramLink, ALargeControlMessageGoesAsControlFragments) {
   ASSERT_TRUE(whole.has_value());
   EXPECT_EQ(std::get<bf::End>(bf::decode(*split_frame(*whole))), end);
 }
+
+// Declared resolution: a slot that joins the open datagram is written against its
+// chain (deltas), one that starts a datagram against an empty chain; so each
+// datagram decodes on its own, and a lost one corrupts no other.
+TEST(DgramLink, QuantisedSlotsChainWithinADatagramOnly) {
+  Session s;
+  s.handshake(1, 0);
+  size_t before = s.out.sent.size();
+  const int64_t q = 250'000'000;
+  const std::vector<ValueKind> kinds = {value_kind(ValueType::Float32, Aggregation::Max, 0.01)};
+  const std::vector<uint32_t> ids = {0};
+  auto value = [](uint64_t k) { return 20.0 + 0.03 * static_cast<double>(k); };
+  for (uint64_t k = 0; k < 10; ++k) {
+    Value v;
+    v.present = true;
+    v.number = value(k);
+    Chain empty;
+    std::vector<uint8_t> alone;
+    encode_slot_values(alone, std::vector<Value>{v}, kinds, ids, empty);
+    SlotEncoder enc = [v, kinds, ids](Chain& chain) {
+      std::vector<uint8_t> out;
+      encode_slot_values(out, std::vector<Value>{v}, kinds, ids, chain);
+      return out;
+    };
+    s.link.add_slot(1, k, static_cast<int64_t>(k + 1) * q, std::move(alone), {true}, std::move(enc));
+    s.link.tick(static_cast<int64_t>(k + 1) * q);
+  }
+  s.link.tick(20 * q);
+  ASSERT_EQ(s.out.sent.size(), before + 2);  // slots 0..4 and 5..9
+  for (size_t d = 0; d < 2; ++d) {
+    auto v = dg::verify_data(s.out.sent[before + d], s.key, dg::kDroneToBase, 0);
+    EXPECT_EQ(v.values.size(), 2u + 4 * 1) << "an absolute 2-byte value, then 1-byte deltas";
+    ByteReader r(v.values);
+    Chain chain;  // each datagram alone, as the receiver decodes it
+    for (uint64_t k = v.slot; k < v.slot + 5; ++k)
+      EXPECT_NEAR(decode_slot_value(r, kinds[0], chain, 0).number, value(k), 0.005) << k;
+    r.expect_end();
+  }
+}

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "modd/link/auth.hpp"
@@ -63,10 +64,21 @@ Message from_json(const json& m) {
       c.streams.push_back(s);
     }
     if (m.contains("accepted_delay_ms")) c.accepted_delay_ms = m["accepted_delay_ms"].get<uint32_t>();
+    if (m.contains("resolutions"))
+      for (const auto& x : m["resolutions"]) c.resolutions.push_back(x.is_null() ? 0.0 : x.get<double>());
     return c;
   }
   ADD_FAILURE() << "unknown vector type " << t;
   return Ping{};
+}
+
+// A vector's value kind: type, aggregation and the optional declared resolution.
+ValueKind kind_of(const json& k) {
+  ValueType t{};
+  Aggregation a{};
+  EXPECT_TRUE(parse_value_type(k["type"], t)) << k;
+  EXPECT_TRUE(parse_aggregation(k["aggregation"], a)) << k;
+  return value_kind(t, a, k.value("resolution", 0.0));
 }
 
 bool same(const Message& a, const Message& b) {
@@ -113,13 +125,7 @@ TEST(Vectors, DataVectors) {
     if (!v.contains("message") || v["message"]["type"] != "DATA") continue;
     SCOPED_TRACE(name);
     std::vector<ValueKind> kinds;
-    for (const auto& k : v["kinds"]) {
-      ValueType t;
-      Aggregation a;
-      ASSERT_TRUE(parse_value_type(k["type"], t));
-      ASSERT_TRUE(parse_aggregation(k["aggregation"], a));
-      kinds.push_back(value_kind(t, a));
-    }
+    for (const auto& k : v["kinds"]) kinds.push_back(kind_of(k));
     const json& m = v["message"];
     Data d;
     d.sync = m["sync"];
@@ -199,4 +205,61 @@ TEST(Vectors, SlotTable) {
     EXPECT_EQ(got.offset_us, s["offset_us"].get<uint64_t>());
     EXPECT_EQ(got.streams, s["streams"].get<std::vector<uint32_t>>());
   }
+}
+
+// Declared resolution (runtime/vectors/quantised.json): each unit is the values of the
+// slots of one DATA datagram, one chain of steps per stream starting empty.
+TEST(Vectors, QuantisedUnitsDecodeAndEncodeByteForByte) {
+  json v = load("quantised.json");
+  ASSERT_GE(v["units"].size(), 3u);
+  for (const auto& u : v["units"]) {
+    SCOPED_TRACE(u["name"].get<std::string>());
+    std::vector<ValueKind> kinds;
+    for (const auto& k : u["kinds"]) kinds.push_back(kind_of(k));
+    auto wire = from_hex(u["hex"].get<std::string>());
+    ByteReader r(wire);
+    Chain chain, again_chain;
+    std::vector<uint8_t> again;
+    for (const auto& slot : u["slots"]) {
+      std::vector<Value> values;
+      std::vector<ValueKind> slot_kinds;
+      std::vector<uint32_t> ids;
+      for (size_t i = 0; i < slot["streams"].size(); ++i) {
+        uint32_t s = slot["streams"][i];
+        const json& want = slot["values"][i];
+        Value x;
+        x.present = want["present"];
+        if (x.present) {
+          Value got = decode_slot_value(r, kinds[s], chain, s);
+          if (kinds[s].aggregation == Aggregation::All) {
+            EXPECT_EQ(got.numbers, want["samples"].get<std::vector<double>>());
+          } else {
+            EXPECT_EQ(got.number, want["number"].get<double>());
+          }
+          EXPECT_EQ(got.count, want["count"].get<uint64_t>());
+          x = got;
+        }
+        values.push_back(x);
+        slot_kinds.push_back(kinds[s]);
+        ids.push_back(s);
+      }
+      encode_slot_values(again, values, slot_kinds, ids, again_chain);
+    }
+    r.expect_end();
+    EXPECT_EQ(to_hex(again), u["hex"].get<std::string>());
+  }
+}
+
+TEST(Vectors, QuantisedStepsMatchThePythonRounding) {
+  EXPECT_EQ(*quantise_steps(0.125, 0.25), 0);   // ties to even, as Python's round()
+  EXPECT_EQ(*quantise_steps(0.375, 0.25), 2);
+  EXPECT_EQ(*quantise_steps(-700.25, 0.5), -1400);  // -1400.5 steps, to even
+  EXPECT_FALSE(quantise_steps(1e300, 0.01));
+  EXPECT_FALSE(quantise_steps(std::numeric_limits<double>::quiet_NaN(), 0.01));
+  std::vector<uint8_t> big;
+  ByteWriter w(big);
+  w.varint((uint64_t{1} << 55) + 1);  // a delta of -2^54 - 1 steps
+  ByteReader r(big);
+  Chain c;
+  EXPECT_THROW(get_number(r, c, 0, 1.0), Error);
 }

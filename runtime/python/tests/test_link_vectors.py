@@ -65,6 +65,7 @@ def from_json(m: dict[str, Any]) -> Message:
             tuple(StreamSpec(x["topic"], Aggregation[x["aggregation"]], x["period_us"])
                   for x in m["streams"]),
             m.get("accepted_delay_ms"),
+            tuple(m["resolutions"]) if "resolutions" in m else None,
         )
     raise AssertionError(t)
 
@@ -84,8 +85,8 @@ def test_vector_byte_for_byte(path: Path) -> None:
         assert codec.decode(raw) == expected
         assert codec.encode(expected) == wire
         return
-    kinds = [value_kind(ValueType.parse(k["type"]), Aggregation[k["aggregation"]])
-             for k in v["kinds"]]
+    kinds = [value_kind(ValueType.parse(k["type"]), Aggregation[k["aggregation"]],
+                        k.get("resolution")) for k in v["kinds"]]
     values = [Value(x["present"], x["number"], x["integer"], x["count"], x["samples"])
               for x in m["values"]]
     data = Data(m["sync"], m["config_id"], m["slot"], m["seq8"], values)

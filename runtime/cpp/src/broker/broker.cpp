@@ -522,7 +522,7 @@ bool Broker::send_data(std::vector<uint8_t>&& frame) {
 }
 
 bool Broker::send_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
-                       std::vector<bool>&& presence) {
+                       std::vector<bool>&& presence, link::SlotEncoder&& enc) {
   if (!out_.link_ready()) return false;
   if (status_pending_) {
     // STATUS goes in a CONTROL datagram of its own: DATA datagrams carry slots only.
@@ -531,7 +531,7 @@ bool Broker::send_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::v
     if (out_.link_write(std::move(frame))) status_pending_ = false;
   }
   size_t n = values.size();
-  if (!out_.link_slot(config_id, slot, date_ns, std::move(values), std::move(presence))) return false;
+  if (!out_.link_slot(config_id, slot, date_ns, std::move(values), std::move(presence), std::move(enc))) return false;
   counters_.link_bytes_sent += n;
   return true;
 }

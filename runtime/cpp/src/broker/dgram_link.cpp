@@ -351,23 +351,43 @@ void DatagramLink::send_fragments(uint8_t config_id, uint64_t slot, const SlotEn
   keep(std::move(s));
 }
 
+bool DatagramLink::joins_group(uint8_t config_id, uint64_t slot, int64_t date_ns) const {
+  return !group_.empty() && config_id == group_config_ && slot == group_first_ + group_.size() &&
+         date_ns - group_date_ <= delay_ns_ && group_.size() < 255;
+}
+
 bool DatagramLink::add_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
-                            std::vector<bool>&& presence) {
+                            std::vector<bool>&& presence, link::SlotEncoder&& enc) {
   if (!ready_) {
     if (!group_.empty()) flush();
     ++c_.dropped;
     return false;
   }
-  SlotEntry e{std::move(values), std::move(presence)};
+  SlotEntry e{std::move(values), std::move(presence)};  // values: against an empty chain
   if (alone_size(e) > opt_.max_datagram) {
     flush();  // the slots before it go first, in order
     send_fragments(config_id, slot, e);
     return true;
   }
-  if (!group_.empty() &&
-      (config_id != group_config_ || slot != group_first_ + group_.size() || date_ns - group_date_ > delay_ns_ ||
-       group_.size() >= 255 || group_size(&e) > opt_.max_datagram))
-    flush();
+  // A slot that starts a datagram is written against an empty chain (e.values as
+  // given); one that joins the open datagram, against its chain.
+  bool joins = joins_group(config_id, slot, date_ns);
+  link::Chain chain;
+  if (enc && joins) {
+    link::Chain joined = chain_;
+    std::vector<uint8_t> delta = enc(joined);
+    if (group_size(&e) - e.values.size() + delta.size() <= opt_.max_datagram) {
+      e.values = std::move(delta);
+      chain = std::move(joined);
+    } else {
+      joins = false;  // starts the next datagram
+      enc(chain);
+    }
+  } else if (enc) {
+    enc(chain);
+  }
+  if (!group_.empty() && (!joins || group_size(&e) > opt_.max_datagram)) flush();
+  if (enc) chain_ = std::move(chain);
   if (group_.empty()) {
     group_config_ = config_id;
     group_first_ = slot;
@@ -393,6 +413,7 @@ void DatagramLink::flush() {
     if (!all) s.d.presence.insert(s.d.presence.end(), e.presence.begin(), e.presence.end());
   }
   group_.clear();
+  chain_ = link::Chain{};
   if (!ready_) return;
   s.raws = {dg::encode_data(s.d, key_, dg::kDroneToBase)};
   resend_budget_.earn(static_cast<double>(s.raws[0].size()));

@@ -17,7 +17,7 @@ std::unique_ptr<Executor::Active> Executor::build(const link::Config& cfg, const
       throw Error(ErrorCode::BadConfig, "stream " + std::to_string(id) + " names a missing topic");
     link::ValueType type = cfg.topics[s.topic].type;
     a->acc.emplace_back(type, s.aggregation);
-    a->kinds.push_back(link::value_kind(type, s.aggregation));
+    a->kinds.push_back(link::value_kind(type, s.aggregation, cfg.resolutions.empty() ? 0 : cfg.resolutions[id]));
     uint32_t g = globals[s.topic];
     if (a->by_topic.size() <= g) a->by_topic.resize(g + 1);
     a->by_topic[g].push_back(id);
@@ -60,7 +60,7 @@ void Executor::advance(int64_t t, FrameSink& sink) {
 }
 
 void Executor::fire_slot(FrameSink& sink, const link::Data& d, const std::vector<link::ValueKind>& kinds,
-                         int64_t date) {
+                         const std::vector<uint32_t>& streams, int64_t date) {
   // The values as a DATA frame lays them out, without the frame's header (length, type,
   // seq8) and bitmap: the datagram carries its own header and one bitmap for all its slots.
   link::Data body = d;
@@ -77,7 +77,17 @@ void Executor::fire_slot(FrameSink& sink, const link::Data& d, const std::vector
   while (frame[len_bytes - 1] & 0x80) ++len_bytes;
   size_t skip = len_bytes + 2 + (all ? 0 : (d.values.size() + 7) / 8);
   std::vector<uint8_t> values(frame.begin() + static_cast<std::ptrdiff_t>(skip), frame.end());
-  if (sink.send_slot(d.config_id, d.slot, date, std::move(values), std::move(presence))) {
+  // Quantised streams are written against the datagram the slot joins (its chain).
+  link::SlotEncoder enc;
+  bool quantised = false;
+  for (const auto& k : kinds) quantised = quantised || k.resolution > 0;
+  if (quantised)
+    enc = [vals = d.values, kinds, streams](link::Chain& chain) {
+      std::vector<uint8_t> out;
+      link::encode_slot_values(out, vals, kinds, streams, chain);
+      return out;
+    };
+  if (sink.send_slot(d.config_id, d.slot, date, std::move(values), std::move(presence), std::move(enc))) {
     ++counters_.frames_sent;
     need_sync_ = false;
   } else {
@@ -106,7 +116,7 @@ void Executor::fire(FrameSink& sink) {
   }
   if (sink.wants_slots()) {
     if (!any) ++counters_.slots_empty;
-    fire_slot(sink, d, kinds, date);
+    fire_slot(sink, d, kinds, slot.streams, date);
     return;
   }
   if (!any) {

@@ -161,8 +161,8 @@ LinkDatagramCounts Server::datagram_counts() const {
 }
 
 bool Server::link_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
-                       std::vector<bool>&& presence) {
-  return dlink_ && dlink_->add_slot(config_id, slot, date_ns, std::move(values), std::move(presence));
+                       std::vector<bool>&& presence, link::SlotEncoder&& enc) {
+  return dlink_ && dlink_->add_slot(config_id, slot, date_ns, std::move(values), std::move(presence), std::move(enc));
 }
 
 bool Server::link_ready() const {

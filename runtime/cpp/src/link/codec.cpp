@@ -1,6 +1,7 @@
 #include "modd/link/codec.hpp"
 
 #include <cmath>
+#include <cstdint>
 
 #include "modd/util/bytes.hpp"
 
@@ -34,16 +35,21 @@ void put_scalar(ByteWriter& w, ScalarKind k, double number, int64_t integer, uin
   }
 }
 
-void put_value(ByteWriter& w, const ValueKind& k, const Value& v) {
+// chain: the unit's last steps by stream, for a kind with a declared resolution.
+void put_value(ByteWriter& w, const ValueKind& k, const Value& v, Chain& chain, uint32_t stream) {
+  bool quantised = k.resolution > 0;
   if (k.aggregation == Aggregation::All) {
     bool is_float = k.scalar == ScalarKind::F32 || k.scalar == ScalarKind::F64;
     size_t n = is_float ? v.numbers.size() : v.integers.size();
     w.varint(n);
-    for (size_t i = 0; i < n; ++i)
-      put_scalar(w, k.scalar, is_float ? v.numbers[i] : 0, is_float ? 0 : v.integers[i], 0);
+    for (size_t i = 0; i < n; ++i) {
+      if (quantised) put_number(w, chain, stream, v.numbers[i], k.resolution);
+      else put_scalar(w, k.scalar, is_float ? v.numbers[i] : 0, is_float ? 0 : v.integers[i], 0);
+    }
     return;
   }
-  put_scalar(w, k.scalar, v.number, v.integer, v.count);
+  if (quantised) put_number(w, chain, stream, v.number, k.resolution);
+  else put_scalar(w, k.scalar, v.number, v.integer, v.count);
   if (k.aggregation == Aggregation::Average) w.varint(v.count);
 }
 
@@ -62,33 +68,84 @@ void get_scalar(ByteReader& r, ScalarKind k, double& number, int64_t& integer, u
   }
 }
 
-Value get_value(ByteReader& r, const ValueKind& k) {
+Value get_value(ByteReader& r, const ValueKind& k, Chain& chain, uint32_t stream) {
   Value v;
   v.present = true;
+  bool quantised = k.resolution > 0;
   if (k.aggregation == Aggregation::All) {
     uint64_t n = r.varint();
     if (n > r.remaining()) r.fail("ALL count exceeds frame");
     bool is_float = k.scalar == ScalarKind::F32 || k.scalar == ScalarKind::F64;
     for (uint64_t i = 0; i < n; ++i) {
       double d = 0; int64_t x = 0; uint64_t c = 0;
-      get_scalar(r, k.scalar, d, x, c);
+      if (quantised) d = get_number(r, chain, stream, k.resolution);
+      else get_scalar(r, k.scalar, d, x, c);
       if (is_float) v.numbers.push_back(d); else v.integers.push_back(x);
     }
     v.count = n;
     return v;
   }
-  get_scalar(r, k.scalar, v.number, v.integer, v.count);
+  if (quantised) v.number = get_number(r, chain, stream, k.resolution);
+  else get_scalar(r, k.scalar, v.number, v.integer, v.count);
   if (k.aggregation == Aggregation::Average) v.count = r.varint();
   return v;
+}
+
+// The optional resolution field: count, then per declared stream its index gap and f64le step.
+void put_resolutions(ByteWriter& w, const Config& c) {
+  if (c.resolutions.empty()) return;
+  if (!c.accepted_delay_ms || c.resolutions.size() != c.streams.size())
+    throw Error(ErrorCode::Internal, "a CONFIG with resolutions needs the delay and one per stream");
+  size_t n = 0;
+  for (double x : c.resolutions) n += x > 0 ? 1 : 0;
+  w.varint(n);
+  int64_t last = -1;
+  for (size_t i = 0; i < c.resolutions.size(); ++i) {
+    if (!(c.resolutions[i] > 0)) continue;
+    w.varint(static_cast<uint64_t>(static_cast<int64_t>(i) - last - 1));
+    w.fixed<double>(c.resolutions[i]);
+    last = static_cast<int64_t>(i);
+  }
+}
+
+void get_resolutions(ByteReader& r, Config& c) {
+  uint64_t n = r.varint();
+  if (n < 1 || n > c.streams.size()) r.fail("resolution count " + std::to_string(n) + " out of 1.." + std::to_string(c.streams.size()));
+  c.resolutions.assign(c.streams.size(), 0);
+  uint64_t i = UINT64_MAX;  // i + gap + 1 wraps to the first index
+  for (uint64_t k = 0; k < n; ++k) {
+    uint64_t gap = r.varint();
+    if (gap >= c.streams.size()) r.fail("resolution of a stream beyond the " + std::to_string(c.streams.size()));
+    i += gap + 1;
+    if (i >= c.streams.size()) r.fail("resolution of stream " + std::to_string(i) + " of " + std::to_string(c.streams.size()));
+    double x = r.fixed<double>();
+    if (!(std::isfinite(x) && x > 0)) r.fail("resolution of stream " + std::to_string(i) + " is not a positive number");
+    c.resolutions[i] = x;
+  }
 }
 
 }  // namespace
 
 void encode_value(std::vector<uint8_t>& out, const ValueKind& k, const Value& v) {
   ByteWriter w(out);
-  put_value(w, k, v);
+  Chain chain;
+  put_value(w, k, v, chain, 0);
 }
-Value decode_value(ByteReader& r, const ValueKind& k) { return get_value(r, k); }
+Value decode_value(ByteReader& r, const ValueKind& k) {
+  Chain chain;
+  return get_value(r, k, chain, 0);
+}
+
+void encode_slot_values(std::vector<uint8_t>& out, std::span<const Value> values, std::span<const ValueKind> kinds,
+                        std::span<const uint32_t> streams, Chain& chain) {
+  ByteWriter w(out);
+  for (size_t i = 0; i < values.size(); ++i)
+    if (values[i].present) put_value(w, kinds[i], values[i], chain, streams[i]);
+}
+
+Value decode_slot_value(ByteReader& r, const ValueKind& k, Chain& chain, uint32_t stream) {
+  return get_value(r, k, chain, stream);
+}
 
 void encode(std::vector<uint8_t>& out, const Message& m) {
   std::vector<uint8_t> body;
@@ -130,6 +187,7 @@ void encode(std::vector<uint8_t>& out, const Message& m) {
             w.varint(s.period_us);
           }
           if (msg.accepted_delay_ms) w.varint(*msg.accepted_delay_ms);
+          put_resolutions(w, msg);
         } else if constexpr (std::is_same_v<T, ConfigAck>) {
           type = MsgType::ConfigAck;
           w.u8(msg.config_id);
@@ -171,8 +229,9 @@ void encode_data(std::vector<uint8_t>& out, const Data& d, std::span<const Value
     for (size_t i = 0; i < d.values.size(); ++i)
       if (d.values[i].present) body[at + i / 8] |= static_cast<uint8_t>(1u << (i % 8));
   }
+  Chain chain;  // a DATA frame decodes on its own
   for (size_t i = 0; i < d.values.size(); ++i)
-    if (d.values[i].present) put_value(w, kinds[i], d.values[i]);
+    if (d.values[i].present) put_value(w, kinds[i], d.values[i], chain, static_cast<uint32_t>(i));
   uint8_t type = static_cast<uint8_t>(MsgType::Data) | (all_present ? 0 : 1) | (d.sync ? 2 : 0);
   ByteWriter o(out);
   o.varint(body.size() + 1);
@@ -271,6 +330,7 @@ Message decode(const RawFrame& f) {
         if (d > kMaxAcceptedDelayMs) r.fail("accepted delay above one hour");
         c.accepted_delay_ms = static_cast<uint32_t>(d);
       }
+      if (r.remaining() > 0) get_resolutions(r, c);
       return done(c);
     }
     case MsgType::ConfigAck: {
@@ -332,8 +392,9 @@ Data decode_data(const RawFrame& f, std::span<const ValueKind> kinds) {
     for (size_t i = kinds.size(); i < bm.size() * 8; ++i)
       if ((bm[i / 8] >> (i % 8)) & 1) r.fail("presence bit set beyond the slot's streams");
   }
+  Chain chain;
   for (size_t i = 0; i < kinds.size(); ++i)
-    if (present[i]) d.values[i] = get_value(r, kinds[i]);
+    if (present[i]) d.values[i] = get_value(r, kinds[i], chain, static_cast<uint32_t>(i));
   r.expect_end();
   return d;
 }

@@ -29,15 +29,17 @@ bool parse_aggregation(const std::string& s, Aggregation& out) {
   return false;
 }
 
-ValueKind value_kind(ValueType type, Aggregation a) {
+ValueKind value_kind(ValueType type, Aggregation a, double resolution) {
   // The wire type of the value per topic type is the table's `result`; a COUNT,
   // never negative, is written as an unsigned varint rather than zigzag.
   if (a == Aggregation::Count) return {a, ScalarKind::UVarint};
   static constexpr ScalarKind kScalar[] = {ScalarKind::F32, ScalarKind::F64, ScalarKind::ZigZag,
                                            ScalarKind::Bool};
   int i = static_cast<int>(a);
-  if (i >= table::kAggregationCount) return {a, kScalar[static_cast<int>(type) & 3]};
-  return {a, kScalar[table::kAggregations[i].result[static_cast<int>(type) & 3]]};
+  ScalarKind k = i >= table::kAggregationCount ? kScalar[static_cast<int>(type) & 3]
+                                               : kScalar[table::kAggregations[i].result[static_cast<int>(type) & 3]];
+  bool is_float = k == ScalarKind::F32 || k == ScalarKind::F64;
+  return {a, k, is_float ? resolution : 0};
 }
 
 }  // namespace modd::link

@@ -35,7 +35,8 @@ class LinkOutput {
   // through link_write as CONTROL datagrams.
   virtual bool datagrams() const { return false; }
   virtual bool link_slot(uint8_t /*config_id*/, uint64_t /*slot*/, int64_t /*date_ns*/,
-                         std::vector<uint8_t>&& /*values*/, std::vector<bool>&& /*presence*/) {
+                         std::vector<uint8_t>&& /*values*/, std::vector<bool>&& /*presence*/,
+                         link::SlotEncoder&& /*enc*/) {
     return false;
   }
   // Datagram transports: the link's counters for STATUS (fields 24..29), zeros over tcp.
@@ -155,7 +156,7 @@ class Broker final : public LinkHooks, public FrameSink {
   bool send_data(std::vector<uint8_t>&& frame) override;
   bool wants_slots() const override { return out_.datagrams(); }
   bool send_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
-                 std::vector<bool>&& presence) override;
+                 std::vector<bool>&& presence, link::SlotEncoder&& enc = {}) override;
 
   Counters& counters() { return counters_; }
   uint64_t topics_generation() const { return generation_; }

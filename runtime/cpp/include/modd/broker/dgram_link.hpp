@@ -70,9 +70,10 @@ class DatagramLink {
 
   void on_datagram(std::span<const uint8_t> raw, int64_t now);
   // One fired slot: its values encoded as in DATA (no seq8, no bitmap) and one
-  // presence flag per stream of the slot. False when no session is up.
+  // presence flag per stream of the slot. False when no session is up. enc (slots
+  // with quantised streams) writes them again against the open datagram's chain.
   bool add_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
-                std::vector<bool>&& presence);
+                std::vector<bool>&& presence, link::SlotEncoder&& enc = {});
   // A link frame (STATUS) in a CONTROL datagram; false when no session is up.
   bool send_frame(std::span<const uint8_t> frame);
   void tick(int64_t now);
@@ -133,6 +134,8 @@ class DatagramLink {
   uint64_t group_first_ = 0;
   int64_t group_date_ = 0;
   std::vector<SlotEntry> group_;
+  link::Chain chain_;  // the open datagram's last steps by stream (quantised streams)
+  bool joins_group(uint8_t config_id, uint64_t slot, int64_t date_ns) const;
   // resend ring
   std::deque<Sent> ring_;
   size_t ring_bytes_ = 0;

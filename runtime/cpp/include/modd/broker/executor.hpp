@@ -18,6 +18,7 @@
 
 #include "modd/broker/accumulator.hpp"
 #include "modd/link/messages.hpp"
+#include "modd/link/quantise.hpp"
 #include "modd/link/schedule.hpp"
 
 namespace modd::broker {
@@ -30,8 +31,11 @@ class FrameSink {
   // Datagram transports (udp, serial) take every slot, empty ones included, as its
   // encoded values and presence flags (send_slot), instead of DATA frames.
   virtual bool wants_slots() const { return false; }
+  // enc, set when the slot has quantised streams, writes its values against the chain
+  // of the datagram it joins (values are the same written against an empty chain).
   virtual bool send_slot(uint8_t /*config_id*/, uint64_t /*slot*/, int64_t /*date_ns*/,
-                         std::vector<uint8_t>&& /*values*/, std::vector<bool>&& /*presence*/) {
+                         std::vector<uint8_t>&& /*values*/, std::vector<bool>&& /*presence*/,
+                         link::SlotEncoder&& /*enc*/ = {}) {
     return false;
   }
 };
@@ -72,7 +76,8 @@ class Executor {
   };
   std::unique_ptr<Active> build(const link::Config& cfg, const std::vector<uint32_t>& topic_globals, int64_t epoch);
   void fire(FrameSink& sink);
-  void fire_slot(FrameSink& sink, const link::Data& d, const std::vector<link::ValueKind>& kinds, int64_t date);
+  void fire_slot(FrameSink& sink, const link::Data& d, const std::vector<link::ValueKind>& kinds,
+                 const std::vector<uint32_t>& streams, int64_t date);
 
   std::unique_ptr<Active> active_, pending_;
   int64_t switch_at_ = kNever;

@@ -30,7 +30,7 @@ class Server final : public LinkOutput, public DatagramOut {
   bool datagrams() const override { return dlink_ != nullptr; }
   LinkDatagramCounts datagram_counts() const override;
   bool link_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
-                 std::vector<bool>&& presence) override;
+                 std::vector<bool>&& presence, link::SlotEncoder&& enc) override;
   // DatagramOut: to the current port (a serial device is opened again after it went away)
   void send(std::vector<uint8_t>&& datagram, bool reply) override;
   void adopt_source() override;

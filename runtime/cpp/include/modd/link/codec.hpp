@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "modd/link/messages.hpp"
+#include "modd/link/quantise.hpp"
 #include "modd/util/bytes.hpp"
 #include "modd/util/error.hpp"
 
@@ -46,5 +47,11 @@ Data decode_data(const RawFrame& f, std::span<const ValueKind> kinds);
 // One value as DATA lays it out (table "Values"); shared with the backfill frames.
 void encode_value(std::vector<uint8_t>& out, const ValueKind& k, const Value& v);
 Value decode_value(ByteReader& r, const ValueKind& k);
+
+// A slot's present values as a DATA datagram lays them out (values[i] of stream
+// streams[i]); quantised ones against chain, the datagram's (updated).
+void encode_slot_values(std::vector<uint8_t>& out, std::span<const Value> values, std::span<const ValueKind> kinds,
+                        std::span<const uint32_t> streams, Chain& chain);
+Value decode_slot_value(ByteReader& r, const ValueKind& k, Chain& chain, uint32_t stream);
 
 }  // namespace modd::link

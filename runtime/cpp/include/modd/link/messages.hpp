@@ -68,6 +68,9 @@ struct Config {
   // Optional trailing field (datagram links): the accepted delay the PubBroker packs
   // slots with; absent = the delay of its config file (docs/protocol.md, "CONFIG").
   std::optional<uint32_t> accepted_delay_ms;
+  // Optional trailing field after the delay: each stream's declared resolution (0 =
+  // none); empty when no stream declares one (docs/protocol.md, "Quantised values").
+  std::vector<double> resolutions;
   bool operator==(const Config&) const = default;
 };
 inline bool operator==(const TopicSpec& a, const TopicSpec& b) {
@@ -107,7 +110,9 @@ enum class ScalarKind : uint8_t { F32, F64, ZigZag, Bool, UVarint };
 struct ValueKind {
   Aggregation aggregation;
   ScalarKind scalar;  // the value, or each element of ALL; UVarint for COUNT
+  double resolution = 0;  // > 0: float values go as integer steps (link/quantise.hpp)
 };
-ValueKind value_kind(ValueType type, Aggregation aggregation);
+// resolution is kept for F32/F64 values only (the others are exact already).
+ValueKind value_kind(ValueType type, Aggregation aggregation, double resolution = 0);
 
 }  // namespace modd::link

@@ -6,6 +6,7 @@ within the frame body.
 
 from __future__ import annotations
 
+import math
 import struct
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -36,6 +37,7 @@ from modd.link.frames import (
     ValueKind,
     ValueType,
 )
+from modd.link.quantise import ESCAPE, MAX_DELTA, MAX_STEPS, steps
 
 MAX_PING = 64
 MAX_LIST = 65535
@@ -161,6 +163,7 @@ def encode(m: Message) -> bytes:
                 raise ValueError(f"accepted delay {m.accepted_delay_ms} ms out of "
                                  f"0..{MAX_ACCEPTED_DELAY_MS}")
             b += varint(m.accepted_delay_ms)
+        b += _resolutions(m)
         return _frame(MsgType.CONFIG, bytes(b))
     if isinstance(m, ConfigAck):
         body = bytes([m.config_id, m.status]) + struct.pack("<Q", m.epoch_ns)
@@ -186,13 +189,59 @@ def _put_scalar(b: bytearray, k: Scalar, number: float, integer: int, count: int
         b += varint(count)
 
 
-def _put_value(b: bytearray, k: ValueKind, v: Value) -> None:
+def put_number(b: bytearray, chain: dict[int, int], key: int, x: float,
+               resolution: float) -> None:
+    """One value of a stream with a declared resolution (modd.link.quantise): its
+    steps against the unit's ``chain`` (updated), or the escape and the exact value.
+
+    >>> b, chain = bytearray(), {}
+    >>> put_number(b, chain, 0, 1.234, 0.01); put_number(b, chain, 0, 1.25, 0.01)
+    >>> bytes(b).hex()
+    'f70105'
+    >>> r = Reader(bytes(b)); back: dict[int, int] = {}
+    >>> [round(get_number(r, back, 0, 0.01), 6) for _ in range(2)]
+    [1.23, 1.25]
+    """
+    q = steps(x, resolution)
+    if q is None:
+        b += varint(ESCAPE) + struct.pack("<d", x)
+        return
+    prev = chain.get(key)
+    b += varint(zigzag(q - prev if prev is not None else q) + 1)
+    chain[key] = q
+
+
+def get_number(r: Reader, chain: dict[int, int], key: int, resolution: float) -> float:
+    code = r.varint()
+    if code == ESCAPE:
+        return float(r.fixed("<d"))
+    delta = unzigzag(code - 1)
+    if abs(delta) > MAX_DELTA:
+        raise r.fail(f"quantised delta {delta} beyond 2^54 steps")
+    prev = chain.get(key)
+    q = prev + delta if prev is not None else delta
+    if abs(q) > MAX_STEPS:
+        raise r.fail(f"quantised value of {q} steps beyond 2^53")
+    chain[key] = q
+    return q * resolution
+
+
+def _put_value(b: bytearray, k: ValueKind, v: Value, chain: dict[int, int] | None = None,
+               key: int = 0) -> None:
+    """``chain``: the unit's last step counts by stream (declared resolution)."""
+    links = {} if chain is None else chain
     if k.aggregation == Aggregation.ALL:
         b += varint(len(v.samples))
         for s in v.samples:
-            _put_scalar(b, k.scalar, float(s), int(s), 0)
+            if k.resolution is not None:
+                put_number(b, links, key, float(s), k.resolution)
+            else:
+                _put_scalar(b, k.scalar, float(s), int(s), 0)
         return
-    _put_scalar(b, k.scalar, v.number, v.integer, v.count)
+    if k.resolution is not None:
+        put_number(b, links, key, v.number, k.resolution)
+    else:
+        _put_scalar(b, k.scalar, v.number, v.integer, v.count)
     if k.aggregation == Aggregation.AVERAGE:
         b += varint(v.count)
 
@@ -213,11 +262,23 @@ def encode_data(d: Data, kinds: Sequence[ValueKind]) -> bytes:
             if v.present:
                 bm[i // 8] |= 1 << (i % 8)
         b += bm
-    for v, k in zip(d.values, kinds, strict=True):
+    chain: dict[int, int] = {}  # a DATA frame decodes on its own
+    for i, (v, k) in enumerate(zip(d.values, kinds, strict=True)):
         if v.present:
-            _put_value(b, k, v)
+            _put_value(b, k, v, chain, i)
     t = MsgType.DATA | (0 if all_present else 1) | (2 if d.sync else 0)
     return _frame(t, bytes(b))
+
+
+def encode_slot_values(values: Sequence[Value], kinds: Sequence[ValueKind],
+                       streams: Sequence[int], chain: dict[int, int]) -> bytes:
+    """A slot's present values as a DATA datagram lays them out, quantised ones
+    against ``chain`` (the datagram's last steps by stream id, updated)."""
+    b = bytearray()
+    for v, k, s in zip(values, kinds, streams, strict=True):
+        if v.present:
+            _put_value(b, k, v, chain, s)
+    return bytes(b)
 
 
 @dataclass(frozen=True)
@@ -353,7 +414,44 @@ def _decode_config(r: Reader) -> Config:
         delay = r.varint()
         if delay > MAX_ACCEPTED_DELAY_MS:
             raise r.fail("accepted delay above one hour")
-    return Config(config_id, sp, tuple(topics), tuple(streams), delay)
+    resolutions = _read_resolutions(r, ns) if r.remaining() else None
+    return Config(config_id, sp, tuple(topics), tuple(streams), delay, resolutions)
+
+
+def _resolutions(m: Config) -> bytes:
+    """The optional resolution field (after the accepted delay, which it needs)."""
+    if m.resolutions is None:
+        return b""
+    if m.accepted_delay_ms is None:
+        raise ValueError("a CONFIG with resolutions carries the accepted delay too")
+    if len(m.resolutions) != len(m.streams):
+        raise ValueError(f"{len(m.resolutions)} resolutions for {len(m.streams)} streams")
+    declared = [(i, x) for i, x in enumerate(m.resolutions) if x is not None]
+    b = bytearray(varint(len(declared)))
+    last = -1
+    for i, x in declared:
+        if not (math.isfinite(x) and x > 0):
+            raise ValueError(f"stream {i}: resolution {x} is not a positive number")
+        b += varint(i - last - 1) + struct.pack("<d", x)
+        last = i
+    return bytes(b)
+
+
+def _read_resolutions(r: Reader, streams: int) -> tuple[float | None, ...]:
+    n = r.varint()
+    if not 1 <= n <= streams:
+        raise r.fail(f"resolution count {n} out of 1..{streams}")
+    out: list[float | None] = [None] * streams
+    i = -1
+    for _ in range(n):
+        i += r.varint() + 1
+        if i >= streams:
+            raise r.fail(f"resolution of stream {i} of {streams}")
+        x = float(r.fixed("<d"))
+        if not (math.isfinite(x) and x > 0):
+            raise r.fail(f"resolution {x} of stream {i} is not a positive number")
+        out[i] = x
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -394,17 +492,24 @@ def _get_scalar(r: Reader, k: Scalar) -> float | int:
     return r.varint()
 
 
-def _get_value(r: Reader, k: ValueKind) -> Value:
+def _get_value(r: Reader, k: ValueKind, chain: dict[int, int] | None = None,
+               key: int = 0) -> Value:
     v = Value(present=True)
     is_float = k.scalar in (Scalar.F32, Scalar.F64)
+    links = {} if chain is None else chain
+    res = k.resolution
     if k.aggregation == Aggregation.ALL:
         n = r.varint()
         if n > r.remaining():
             raise r.fail("ALL count exceeds frame")
-        v.samples = [_get_scalar(r, k.scalar) for _ in range(n)]
+        v.samples = [get_number(r, links, key, res) if res is not None
+                     else _get_scalar(r, k.scalar) for _ in range(n)]
         v.count = n
         return v
-    x = _get_scalar(r, k.scalar)
+    if res is not None:
+        x: float | int = get_number(r, links, key, res)
+    else:
+        x = _get_scalar(r, k.scalar)
     if k.scalar == Scalar.UVARINT:
         v.count = int(x)
     elif is_float:
@@ -426,6 +531,8 @@ def decode_data(f: RawFrame, kinds: Sequence[ValueKind]) -> Data:
         for i in range(len(kinds), len(bm) * 8):
             if bm[i // 8] >> (i % 8) & 1:
                 raise r.fail("presence bit set beyond the slot's streams")
-    values = [_get_value(r, k) if p else Value() for k, p in zip(kinds, present, strict=True)]
+    chain: dict[int, int] = {}
+    values = [_get_value(r, k, chain, i) if p else Value()
+              for i, (k, p) in enumerate(zip(kinds, present, strict=True))]
     r.end()
     return Data(h.sync, h.config_id, h.slot, h.seq8, values)

@@ -9,7 +9,7 @@ resend ring, in Python for tests, benchmarks and the reference)."""
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from . import codec
@@ -168,13 +168,14 @@ class DatagramReceiver:
         out: list[tuple[int, list[Value]]] = []
         bit = 0
         slot = first
+        chain: dict[int, int] = {}  # quantised values: a datagram decodes on its own
         while (count is None and r.remaining()) or (count is not None and len(out) < count):
             streams = next(it).streams
             vals: list[Value] = []
             for s in streams:
                 present = presence is None or bool(presence[bit // 8] >> (bit % 8) & 1)
                 bit += 1
-                vals.append(codec._get_value(r, self.kinds[s]) if present else Value())
+                vals.append(codec._get_value(r, self.kinds[s], chain, s) if present else Value())
             out.append((slot, vals))
             slot += 1
         r.end()
@@ -203,6 +204,7 @@ class DatagramSender:
         self.room = room
         self.ring = ResendRing()
         self.group: list[tuple[int, float, bytes]] = []
+        self.chain: dict[int, int] = {}  # the open datagram's last steps by stream
         self.window = ReplayWindow(64)
 
     def add_slot(self, slot: int, date: float, values: bytes) -> list[bytes]:
@@ -211,6 +213,24 @@ class DatagramSender:
         if self.group and (date - self.group[0][1] > self.delay_s
                            or sum(len(v) for *_, v in self.group) + len(values) > self.room):
             out.append(self.flush())
+        self.group.append((slot, date, values))
+        return out
+
+    def add_values(self, slot: int, date: float,
+                   encode: Callable[[dict[int, int]], bytes]) -> list[bytes]:
+        """Queue one all-present slot whose values ``encode`` writes against the
+        datagram's chain of quantised values (a slot that starts a datagram is
+        written against an empty chain: every datagram decodes on its own)."""
+        out: list[bytes] = []
+        if self.group and date - self.group[0][1] > self.delay_s:
+            out.append(self.flush())
+        chain = dict(self.chain)
+        values = encode(chain)
+        if self.group and sum(len(v) for *_, v in self.group) + len(values) > self.room:
+            out.append(self.flush())
+            chain = {}
+            values = encode(chain)
+        self.chain = chain
         self.group.append((slot, date, values))
         return out
 
@@ -226,6 +246,7 @@ class DatagramSender:
                           self.key, DRONE_TO_BASE)
         self.ring.add(first, len(self.group), raw)
         self.group.clear()
+        self.chain = {}
         return raw
 
     def on_control(self, raw: bytes) -> list[bytes]:

@@ -71,15 +71,18 @@ class ValueKind:
 
     aggregation: Aggregation
     scalar: Scalar
+    #: Declared resolution: float values go as integer steps (modd.link.quantise).
+    resolution: float | None = None
 
 
-def value_kind(vtype: ValueType, agg: Aggregation) -> ValueKind:
+def value_kind(vtype: ValueType, agg: Aggregation, resolution: float | None = None) -> ValueKind:
     """The wire type of the value is the aggregation table's result type for
     the topic type; a COUNT, never negative, is an unsigned varint rather than
     zigzag (the C++ ``value_kind`` reads the same table)."""
     if agg == Aggregation.COUNT:
         return ValueKind(agg, Scalar.UVARINT)
-    return ValueKind(agg, _SCALAR[AGGREGATIONS[agg].result[vtype.label]])
+    scalar = _SCALAR[AGGREGATIONS[agg].result[vtype.label]]
+    return ValueKind(agg, scalar, resolution if scalar in (Scalar.F32, Scalar.F64) else None)
 
 
 _SCALAR = {"float32": Scalar.F32, "float64": Scalar.F64, "int": Scalar.ZIGZAG, "bool": Scalar.BOOL}
@@ -157,9 +160,14 @@ class Config:
     #: Optional trailing field (datagram links): the accepted delay the PubBroker packs
     #: slots with; None = the delay of its config file (docs/protocol.md, "CONFIG").
     accepted_delay_ms: int | None = None
+    #: Optional trailing field after the delay: each stream's declared resolution (None:
+    #: sent as without one); None when no stream declares one (docs/protocol.md, "CONFIG").
+    resolutions: tuple[float | None, ...] | None = None
 
     def kinds(self) -> list[ValueKind]:
-        return [value_kind(self.topics[s.topic].type, s.aggregation) for s in self.streams]
+        steps = self.resolutions or (None,) * len(self.streams)
+        return [value_kind(self.topics[s.topic].type, s.aggregation, r)
+                for s, r in zip(self.streams, steps, strict=True)]
 
 
 @dataclass(frozen=True)

@@ -37,7 +37,7 @@ from .fanout import FanOut
 from .kept import Deployment, StateDir, same_model
 from .keys import backfill_key, deploy_key, subscribe_key
 from .linkhooks import ConfigRejected, LinkDown
-from .planning import accepted_delay_ms, config_for, plan_within
+from .planning import config_for, plan_within, trailing_fields
 from .record import BaseRecord
 from .request import MAX_DEPLOY_BYTES, MAX_SMALL_BYTES, read_request
 from .running import Running
@@ -194,7 +194,8 @@ class SubBroker:
         plan = plan_within(model, self.link.stats.rtt_s, self.config.link.plan_budget_s)
         if not plan.sent_streams:
             raise ValueError("the plan sends nothing over the link (no published subscription)")
-        delay_ms = accepted_delay_ms(model, self.config.model, self.config.transport)
+        delay_ms, resolutions = trailing_fields(model, self.config.model, self.config.transport,
+                                                plan)
         with self._lock:
             cid = self._last_id % 255 + 1
             if cid == avoid:
@@ -205,7 +206,8 @@ class SubBroker:
             self._planned[cid] = (model, plan, meta)
             for stale in list(self._planned)[:-8]:
                 del self._planned[stale]
-        return config_for(plan, cid, self.config.link.pubbroker_status_period_s, delay_ms)
+        return config_for(plan, cid, self.config.link.pubbroker_status_period_s, delay_ms,
+                          resolutions)
 
     # -- LinkHandler -------------------------------------------------------------
 
@@ -413,10 +415,12 @@ class SubBroker:
             except LinkDown as exc:
                 return {"status": "LINK_DOWN", "reason": str(exc)}
             except TimeoutError as exc:
-                return {"status": "TIMEOUT", "reason": f"{exc} within {request.timeout_s} s"}
+                return {"status": "TIMEOUT", "reason": f"{exc} within {request.timeout_s} s"
+                        + _older_peer(config)}
             except ConfigRejected as exc:
                 if exc.status != ErrorCode.BUSY or time.monotonic() + delay >= deadline:
-                    return {"status": "NACK", "reason": str(exc), "code": exc.status,
+                    hint = _older_peer(config) if exc.status == ErrorCode.BAD_FRAME else ""
+                    return {"status": "NACK", "reason": str(exc) + hint, "code": exc.status,
                             "busy_retries": busy}
                 # a CONFIG still waits for its switch date: send again after a backoff
                 busy += 1
@@ -498,3 +502,14 @@ def _located(exc: ValueError, model: dict[str, Any]) -> list[dict[str, object]]:
             pointer = f"/subscribers/{i}"
             break
     return [Diagnostic(str(exc), pointer).to_json()]
+
+
+def _older_peer(config: Config) -> str:
+    """Why a CONFIG with declared resolutions may be refused: a PubBroker older
+    than them reads its resolution field as trailing bytes (docs/protocol.md,
+    "Quantised values": BAD_FRAME over tcp, dropped as malformed over udp/serial)."""
+    if config.resolutions is None:
+        return ""
+    return ("; this CONFIG declares resolutions (protocol 1 with quantised values): a "
+            "PubBroker older than them refuses it; update the PubBroker, or deploy the "
+            "model without resolutions")

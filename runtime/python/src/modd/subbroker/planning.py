@@ -17,6 +17,7 @@ from modd_model.numbers import MICROS_PER_SECOND
 from modd_model.query import link_settings
 from modd_plan import Plan, make_plan
 from modd_plan.linkbudget import LinkSettings
+from modd_plan.resolution import stream_resolutions
 
 from modd.link.frames import (
     MAX_ACCEPTED_DELAY_MS,
@@ -104,9 +105,11 @@ def accepted_delay_ms(model: dict[str, Any], configured: dict[str, Any],
 
 
 def config_for(plan: Plan, config_id: int, status_period_s: int = 60,
-               accepted_delay_ms: int | None = None) -> Config:
+               accepted_delay_ms: int | None = None,
+               resolutions: tuple[float | None, ...] | None = None) -> Config:
     """The CONFIG frame of a plan. Topics nobody publishes get buffer size 1;
-    ``accepted_delay_ms`` is the optional trailing field (datagram links)."""
+    ``accepted_delay_ms`` and ``resolutions`` (one per sent stream, see
+    :func:`resolutions_of`) are the optional trailing fields."""
     if not 1 <= config_id <= 255:
         raise ValueError("config_id must be 1..255")
     sizes = plan.buffer_sizes
@@ -124,4 +127,22 @@ def config_for(plan: Plan, config_id: int, status_period_s: int = 60,
         StreamSpec(index[s.stream.topic], Aggregation[s.stream.aggregation], period_us(s.stream))
         for s in plan.sent_streams
     )
-    return Config(config_id, status_period_s, topics, streams, accepted_delay_ms)
+    return Config(config_id, status_period_s, topics, streams, accepted_delay_ms, resolutions)
+
+
+def resolutions_of(model: dict[str, Any], plan: Plan) -> tuple[float | None, ...] | None:
+    """The sent streams' declared resolutions, None when no stream has one (the
+    CONFIG then stays byte for byte the one an older PubBroker reads)."""
+    found = stream_resolutions(model, plan.sent_streams, plan.streams)
+    return tuple(found) if any(r is not None for r in found) else None
+
+
+def trailing_fields(model: dict[str, Any], configured: dict[str, Any], transport: str,
+                    plan: Plan) -> tuple[int | None, tuple[float | None, ...] | None]:
+    """The CONFIG's optional accepted delay and resolutions: the resolution field
+    follows the delay, so a plan with resolutions carries the model's delay too."""
+    delay = accepted_delay_ms(model, configured, transport)
+    resolutions = resolutions_of(model, plan)
+    if resolutions is not None and delay is None:
+        delay = min(int(LinkSettings.of(model).accepted_delay * 1000), MAX_ACCEPTED_DELAY_MS)
+    return delay, resolutions

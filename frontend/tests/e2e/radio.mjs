@@ -1,0 +1,102 @@
+/**
+ * Declared resolution and the radio's budget (issue 34), as a scientist clicks
+ * them: scenario 1 imported with a LoRa SF7 radio at a 1 % duty cycle and
+ * 0.01 m/s² on the accelerometer; the Plan panel shows the air time, the share
+ * of the duty cycle, the energy and the nearest plans that fit (figures from the
+ * planner, on the backend). The integrator drops accel_z's resolution (full
+ * precision: more bytes), the scientist asks 0.05 on its two subscriptions
+ * (fewer): every figure follows.
+ */
+import { waitUntil } from "./journey.mjs";
+
+const MODEL = `
+Drone usv {
+    Sensors {
+        Sensor accelerometer measures {
+            accel_x(METER_PER_SECOND_SQUARED) { validMin = -20; validMax = 20; resolution = 0.01; };
+            accel_y(METER_PER_SECOND_SQUARED) { validMin = -20; validMax = 20; resolution = 0.01; };
+            accel_z(METER_PER_SECOND_SQUARED) { validMin = -20; validMax = 20; resolution = 0.01; };
+        }
+    }
+}
+PubBroker("127.0.0.1":7171, "/tmp/modd/logs");
+SubBroker("127.0.0.1":7272, "/tmp/modd/conf");
+Link { transport = serial; device = "/dev/ttyUSB0"; radio = lora; sf = 7; bandwidth = 125000; dutyCycle = 0.01; }
+Publishers {
+    Publisher pub_1("127.0.0.1":7373, 0.04, "usv.accelerometer.accel_x", "usv.accelerometer.accel_y", "usv.accelerometer.accel_z");
+}
+Subscriptions {
+    Subscriber sub_1("usv.accelerometer.accel_x", 2.0, AVERAGE);
+    Subscriber sub_2("usv.accelerometer.accel_y", 2.0, AVERAGE);
+    Subscriber sub_3("usv.accelerometer.accel_x", 0.25, AVERAGE);
+    Subscriber sub_4("usv.accelerometer.accel_y", 0.25, AVERAGE);
+    Subscriber sub_5("usv.accelerometer.accel_z", 0.25, MIN);
+    Subscriber sub_6("usv.accelerometer.accel_z", 0.25, MAX);
+}
+`;
+
+export function radio({ page }) {
+  const node = (id) => page.locator(`.react-flow__node[data-id="${id}"]`);
+  const inspector = page.getByRole("region", { name: "Inspector" });
+  const field = (path) => inspector.locator(`[data-field="${path}"]`).locator("input, select").first();
+  const view = (name) => page.getByRole("tab", { name, exact: true }).click();
+  const panel = (name) => page.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
+  const select = async (id) => {
+    await node(id).click();
+    await inspector.locator("h2").first().waitFor({ state: "visible", timeout: 10000 });
+  };
+  const figures = async () => Object.fromEntries(await Promise.all(["air-time", "duty-share", "energy"].map(
+    async (id) => [id, (await page.getByTestId(id).textContent()) ?? ""])));
+  const proposals = async () => (await page.getByTestId("proposal").allTextContents()).join(" | ");
+  const changed = async (before, what) => {
+    await waitUntil(async () => {
+      const now = await figures();
+      return Object.keys(before).every((k) => now[k] !== before[k]);
+    }, 20000, async () => `${what}: figures stayed ${JSON.stringify(await figures())}`);
+  };
+
+  return [
+    ["radio budget: a LoRa plan with declared resolutions, refused with the proposals that fit", async () => {
+      await page.getByRole("button", { name: "MoDD", exact: true }).click().catch(() => undefined);
+      await page.locator('input[type="file"]').setInputFiles({ name: "lora.modd", mimeType: "text/plain", buffer: Buffer.from(MODEL) });
+      await node("drone").waitFor({ state: "visible", timeout: 20000 });
+      await panel("Plan");
+      await page.getByTestId("air-time").waitFor({ state: "visible", timeout: 30000 });
+      await waitUntil(async () => /LoRa|lora/i.test((await page.getByTestId("radio-kind").textContent()) ?? ""), 10000);
+      await page.getByTestId("radio-error").waitFor({ state: "visible", timeout: 10000 });
+      await waitUntil(async () => (await page.getByTestId("proposal").count()) > 0, 10000, proposals);
+    }],
+
+    ["radio budget: full precision on accel_z costs air time, energy and changes the proposals", async () => {
+      const before = await figures();
+      const offers = await proposals();
+      await view("Sensor integrator"); // a variable's resolution is the integrator's to edit
+      await select("topic:accelerometer.accel_z");
+      const f = field("resolution");
+      await f.fill("");
+      await f.press("Enter");
+      await panel("Plan");
+      await changed(before, "accel_z without a resolution");
+      const after = await figures();
+      const seconds = (t) => Number.parseFloat(t);
+      if (!(seconds(after["air-time"]) > seconds(before["air-time"])))
+        throw new Error(`air time ${before["air-time"]} -> ${after["air-time"]}: expected more`);
+      await waitUntil(async () => (await proposals()) !== offers, 10000, async () => `proposals stayed ${offers}`);
+    }],
+
+    ["radio budget: the scientist asks 0.05 m/s² on the subscriptions of accel_z: less air time", async () => {
+      const before = await figures();
+      await view("Scientist");
+      for (const sub of ["sub_5", "sub_6"]) {
+        await select(`sub:${sub}`);
+        await field("resolution").fill("0.05");
+        await field("resolution").press("Enter");
+      }
+      await panel("Plan");
+      await changed(before, "sub_5 and sub_6 at 0.05");
+      const after = await figures();
+      if (!(Number.parseFloat(after["air-time"]) < Number.parseFloat(before["air-time"])))
+        throw new Error(`air time ${before["air-time"]} -> ${after["air-time"]}: expected less`);
+    }],
+  ];
+}

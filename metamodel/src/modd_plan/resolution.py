@@ -1,0 +1,127 @@
+"""The resolution each sent stream goes with (docs/planning.md, "Declared
+resolution"): the finest of what the subscriptions it serves need, directly or
+through the streams derived from it; None (unquantised) as soon as one of them
+needs full precision. A subscription needs its own ``resolution``, else its
+variable's. A SUM source of k windows is sent k times finer, so that the sum of
+k errors of half a step stays within half of the subscriber's step (the other
+derivations, MIN, MAX, an AVERAGE of AVERAGEs, keep the error of their sources).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from fractions import Fraction
+from math import ceil, floor
+from typing import Any
+
+from modd_contracts import aggregations as agg
+from modd_model.query import Topic, topic_name
+
+from .linkcost import SAMPLE_BYTES, aggregate_value_type, varint_size
+from .streams import PlannedStream
+
+#: Bytes of a delta between consecutive windows (|delta| <= 63 steps): the
+#: planner assumes a signal that moves less than 64 steps a window.
+DELTA_BYTES = 1
+#: Step count assumed for a stream's first value in a datagram when its
+#: variable declares no validMin/validMax: 2^20 steps (3 bytes).
+UNBOUNDED_STEPS = 1 << 20
+
+
+def needed(model: Mapping[str, Any]) -> dict[str, float | None]:
+    """Each subscriber's resolution: its own, else its variable's, else None."""
+    drone = model["drone"]["name"]
+    declared = {
+        topic_name(drone, s["name"], v["name"]): v.get("resolution")
+        for s in model["drone"]["sensors"]
+        for v in s["variables"]
+    }
+    return {
+        sub["name"]: sub.get("resolution", declared.get(sub["topic"]))
+        for sub in model.get("subscribers", [])
+    }
+
+
+def stream_resolutions(
+    model: Mapping[str, Any], sent: Sequence[PlannedStream], streams: Sequence[PlannedStream]
+) -> list[float | None]:
+    """One resolution per sent stream, in ``sent``'s order."""
+    need = needed(model)
+    # by identity, as plan._budget: a derived stream's sources hold its source's key
+    asks: dict[int, list[float | None]] = {
+        id(s.stream): [need.get(n) for n in s.subscribers] for s in sent
+    }
+    for s in streams:
+        if s.id is not None:
+            continue
+        for src in s.sources:
+            into = asks.get(id(src.stream))
+            if into is None:
+                continue
+            divide = src.factor if src.stream.aggregation == agg.SUM else 1
+            into += [
+                None if need.get(n) is None else need[n] / divide  # type: ignore[operator]
+                for n in s.subscribers
+            ]
+    return [
+        None
+        if not asks[id(s.stream)] or None in asks[id(s.stream)]
+        else min(r for r in asks[id(s.stream)] if r is not None)
+        for s in sent
+    ]
+
+
+def _key_bytes(model: Mapping[str, Any], topic: str, resolution: float) -> int:
+    """Bytes of an absolute value: the largest step count of the valid range."""
+    drone = model["drone"]["name"]
+    for s in model["drone"]["sensors"]:
+        for v in s["variables"]:
+            if topic_name(drone, s["name"], v["name"]) == topic:
+                bounds = [
+                    abs(b)
+                    for b in (v.get("validMin"), v.get("validMax"))
+                    if isinstance(b, int | float)
+                ]
+                steps = ceil(max(bounds) / resolution) if len(bounds) == 2 else UNBOUNDED_STEPS
+                return varint_size(2 * steps + 1)
+    return varint_size(2 * UNBOUNDED_STEPS + 1)
+
+
+def quantised_window_bytes(
+    model: Mapping[str, Any],
+    sent: Sequence[PlannedStream],
+    streams: Sequence[PlannedStream],
+    exact: Sequence[Fraction],
+    tops: Mapping[str, Topic],
+    transport: str,
+    accepted_delay: Fraction,
+) -> list[Fraction]:
+    """``exact`` (bytes of one window's value per sent stream) with the float
+    values of streams that have a resolution counted as steps: one absolute
+    value per datagram (per DATA frame over tcp), deltas of DELTA_BYTES else."""
+    out = list(exact)
+    for i, (s, r) in enumerate(zip(sent, stream_resolutions(model, sent, streams), strict=True)):
+        topic = tops.get(s.stream.topic)
+        if r is None or topic is None:
+            continue
+        wire = aggregate_value_type(s.stream.aggregation, topic.type)
+        if s.stream.aggregation == agg.COUNT or wire not in ("float32", "float64"):
+            continue
+        key = _key_bytes(model, s.stream.topic, r)
+        period = s.stream.period
+        # keys per window: one a datagram, which holds the windows of the accepted
+        # delay and one more (its first slot waits at most the delay)
+        per_datagram = 1 if transport == "tcp" else floor(accepted_delay / period) + 1
+        share = Fraction(1, per_datagram)
+        value = DELTA_BYTES + (key - DELTA_BYTES) * share
+        if s.stream.aggregation == agg.ALL:
+            samples = (exact[i] - 1) / SAMPLE_BYTES[wire]  # the count's varint, roughly 1 B
+            out[i] = (
+                exact[i]
+                - samples * SAMPLE_BYTES[wire]
+                + samples * DELTA_BYTES
+                + (key - DELTA_BYTES) * share
+            )
+        else:
+            out[i] = exact[i] - SAMPLE_BYTES[wire] + value
+    return out
