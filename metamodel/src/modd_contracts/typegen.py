@@ -11,7 +11,10 @@ re-types them by hand:
   value's field names and version, for the C++ subscriber client's parser;
 - ``runtime/cpp/include/modd/archive/archive_record.gen.hpp``: the archive
   record's field, MCAP schema names and channel schemas, for the PubBroker's
-  archive writer and reader.
+  archive writer and reader;
+- the link and ingress protocols' enumerations, counts and limits
+  (``wire.json``, written by :mod:`modd_contracts.wiregen`):
+  ``modd_contracts/{link,ingress}_wire_gen.py`` and ``wire.gen.hpp`` headers.
 
 Run ``python -m modd_contracts.typegen`` to rewrite them; ``--check`` exits 1
 when one is stale (``make check`` does that, and a test).
@@ -29,6 +32,7 @@ from typing import Any
 from modd_model.schema import definition, load_schema
 from modd_model.typegen import _dependency_order, _py_type, _ts_doc, _ts_type
 
+from . import wiregen
 from .schema import NAMES, load
 
 HEADER = "Generated from the contracts by `python -m modd_contracts.typegen`. Do not edit."
@@ -471,6 +475,16 @@ GENERATORS: dict[str, Callable[[], str]] = {
     "dvcpp": generate_delivered_value_cpp,
     "arcpp": generate_archive_record_cpp,
 }
+
+
+def _wire_output(rel: str) -> Callable[[], str]:
+    return lambda: wiregen.outputs()[rel]
+
+
+# The wire contract's headers and modules (wiregen.py), one key each.
+for _rel in wiregen.outputs():
+    OUTPUTS[f"wire:{_rel}"] = REPO / _rel
+    GENERATORS[f"wire:{_rel}"] = _wire_output(_rel)
 
 
 def stale_outputs() -> list[Path]:
