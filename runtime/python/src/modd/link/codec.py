@@ -10,6 +10,15 @@ import struct
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from modd_contracts.aggregations import AGGREGATIONS
+from modd_contracts.link_wire_gen import (
+    MAX_BUFFER_SIZE,
+    MAX_LIST,
+    MAX_NAME,
+    MAX_PERIOD_US,
+    MAX_PING,
+)
+
 from modd.link.frames import (
     MAX_ACCEPTED_DELAY_MS,
     MAX_FRAME,
@@ -36,9 +45,6 @@ from modd.link.frames import (
     ValueKind,
     ValueType,
 )
-
-MAX_PING = 64
-MAX_LIST = 65535
 
 
 def varint(v: int) -> bytes:
@@ -325,13 +331,13 @@ def _decode_config(r: Reader) -> Config:
         raise r.fail(f"topic count {nt} too large")
     topics = []
     for _ in range(nt):
-        name = r.string(255)
+        name = r.string(MAX_NAME)
         ty = r.u8()
-        if ty > 3:
+        if ty >= len(ValueType):
             raise r.fail(f"unknown value type {ty}")
         bs = r.varint()
-        if not 1 <= bs <= 1_000_000:
-            raise r.fail(f"buffer size {bs} out of 1..1000000")
+        if not 1 <= bs <= MAX_BUFFER_SIZE:
+            raise r.fail(f"buffer size {bs} out of 1..{MAX_BUFFER_SIZE}")
         topics.append(TopicSpec(name, ValueType(ty), bs, r.varint()))
     ns = r.varint()
     if ns > MAX_LIST or ns > r.remaining():
@@ -342,10 +348,10 @@ def _decode_config(r: Reader) -> Config:
         if topic >= nt:
             raise r.fail(f"stream {i} names topic {topic} of {nt}")
         a = r.u8()
-        if a > 7:
+        if a >= len(AGGREGATIONS):
             raise r.fail(f"unknown aggregation {a}")
         p = r.varint()
-        if p == 0 or p > 366 * 86400 * 1_000_000:
+        if p == 0 or p > MAX_PERIOD_US:
             raise r.fail("stream period out of range")
         streams.append(StreamSpec(topic, Aggregation(a), p))
     delay = None
