@@ -20,7 +20,6 @@ import sys
 from pathlib import Path
 
 import pytest
-
 from modd_contracts import link_wire_gen, wiregen
 from modd_model.schema import definition
 
@@ -71,13 +70,17 @@ def _fake_tree(root: Path) -> Path:
     a fake frame type and limit in wire.json; its typegen run. Returns its src."""
     src = root / "metamodel" / "src"
     for pkg in ("modd_model", "modd_plan", "modd_contracts"):
-        shutil.copytree(REPO / "metamodel" / "src" / pkg, src / pkg,
-                        ignore=shutil.ignore_patterns("__pycache__"))
+        shutil.copytree(
+            REPO / "metamodel" / "src" / pkg,
+            src / pkg,
+            ignore=shutil.ignore_patterns("__pycache__"),
+        )
     schema = json.loads((REPO / "metamodel" / "modd.schema.json").read_text(encoding="utf-8"))
     agg = schema["$defs"]["Aggregation"]
     agg["enum"].append("FAKE")
-    agg["x-table"].append({**agg["x-table"][0], "name": "FAKE", "code": 8,
-                           "derivableFrom": ["FAKE"]})
+    agg["x-table"].append(
+        {**agg["x-table"][0], "name": "FAKE", "code": 8, "derivableFrom": ["FAKE"]}
+    )
     (root / "metamodel" / "modd.schema.json").write_text(json.dumps(schema), encoding="utf-8")
     wire_file = src / "modd_contracts" / "wire.json"
     wire = json.loads(wire_file.read_text(encoding="utf-8"))
@@ -85,9 +88,14 @@ def _fake_tree(root: Path) -> Path:
     link["constants"].append({"name": "MAX_FAKE", "type": "size_t", "value": 42, "doc": "Fake."})
     link["enums"][0]["values"].append({"name": "FAKE_FRAME", "value": "0x7E"})
     wire_file.write_text(json.dumps(wire), encoding="utf-8")
-    run = subprocess.run([sys.executable, "-m", "modd_contracts.typegen"], cwd=root,
-                         env={**os.environ, "PYTHONPATH": str(src)}, capture_output=True,
-                         text=True, timeout=120)
+    run = subprocess.run(
+        [sys.executable, "-m", "modd_contracts.typegen"],
+        cwd=root,
+        env={**os.environ, "PYTHONPATH": str(src)},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert run.returncode == 0, run.stderr
     return src
 
@@ -96,18 +104,26 @@ def test_a_fake_value_reaches_both_codecs_and_validation(tmp_path: Path) -> None
     src = _fake_tree(tmp_path)
     path = os.pathsep.join([str(src), str(REPO / "runtime" / "python" / "src")])
     model = REPO / "metamodel" / "tests" / "data" / "scenario1_datacollector.modd"
-    run = subprocess.run([sys.executable, "-c", CHILD, str(model)], cwd=tmp_path,
-                         env={**os.environ, "PYTHONPATH": path}, capture_output=True,
-                         text=True, timeout=120)
+    run = subprocess.run(
+        [sys.executable, "-c", CHILD, str(model)],
+        cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": path},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert run.returncode == 0 and run.stdout.strip() == "ok", run.stderr
     compiler = shutil.which("g++") or shutil.which("clang++")
     if compiler is None:
         pytest.skip("no C++ compiler")
     (tmp_path / "fake.cpp").write_text(CPP, encoding="utf-8")
     include = tmp_path / "runtime" / "cpp" / "include"
-    cc = subprocess.run([compiler, "-std=c++20", "-fsyntax-only", f"-I{include}",
-                         str(tmp_path / "fake.cpp")], capture_output=True, text=True,
-                        timeout=120)
+    cc = subprocess.run(
+        [compiler, "-std=c++20", "-fsyntax-only", f"-I{include}", str(tmp_path / "fake.cpp")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert cc.returncode == 0, cc.stderr
 
 
