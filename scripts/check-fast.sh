@@ -28,7 +28,7 @@ static_checks() {
   python -m modd_model.typegen --check
   python -m modd_contracts.typegen --check
   step "mypy (strict: sources, component tests, cross-process tests and benchmarks)"
-  mypy --no-error-summary metamodel/src backend/src generators/src runtime/python/src
+  mypy --no-error-summary metamodel/src backend/src generators/src runtime/python/src launcher/src
   mypy --no-error-summary --explicit-package-bases \
     metamodel/tests generators/tests runtime/python/tests backend/tests
   # The cross-process tests and benchmarks import their harnesses by bare name
