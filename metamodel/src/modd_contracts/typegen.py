@@ -16,6 +16,13 @@ re-types them by hand:
   (``wire.json``, written by :mod:`modd_contracts.wiregen`):
   ``modd_contracts/{link,ingress}_wire_gen.py`` and ``wire.gen.hpp`` headers.
 
+It also writes the metamodel's outputs (:mod:`modd_model.typegen`: the model's
+TypeScript and Python types, docs/metamodel.md): this is the one command that
+writes every generated file (``python -m modd_model.typegen`` still writes the
+metamodel's alone). The .modd parser (``modd_model/_modd_parser.py``) is lark's
+standalone tool's output (the command is in its header), and
+docs/generated-code.md is the generators' (``python -m modd_gen.table2``).
+
 Run ``python -m modd_contracts.typegen`` to rewrite them; ``--check`` exits 1
 when one is stale (``make check`` does that, and a test).
 """
@@ -29,6 +36,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from modd_model import typegen as model_typegen
 from modd_model.schema import definition, load_schema
 from modd_model.typegen import _dependency_order, _py_type, _ts_doc, _ts_type
 
@@ -479,6 +487,17 @@ GENERATORS: dict[str, Callable[[], str]] = {
 
 def _wire_output(rel: str) -> Callable[[], str]:
     return lambda: wiregen.outputs()[rel]
+
+
+def _model_output(key: str) -> Callable[[], str]:
+    return lambda: model_typegen.GENERATORS[key](load_schema())
+
+
+# The metamodel's own outputs (modd_model.typegen: model types, docs/metamodel.md),
+# so that this one command writes every generated file.
+for _key, _path in model_typegen.OUTPUTS.items():
+    OUTPUTS[f"model:{_key}"] = _path
+    GENERATORS[f"model:{_key}"] = _model_output(_key)
 
 
 # The wire contract's headers and modules (wiregen.py), one key each.
