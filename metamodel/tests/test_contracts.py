@@ -158,7 +158,7 @@ def test_plan_json_conforms(path: Path) -> None:
 def _cpp_defaults() -> dict[str, str]:
     """``name = value`` default initialisers of config.hpp's BrokerConfig."""
     text = (REPO / "runtime/cpp/include/modd/broker/config.hpp").read_text()
-    found = re.findall(r"\b(\w+) = ([^;]+);", text)
+    found = re.findall(r"\b(\w+)\s*=\s*([^;]+);", text)  # an initialiser may wrap
     return {k: v.strip().strip('"').replace("'", "") for k, v in found}
 
 
