@@ -13,8 +13,8 @@ from typing import Any
 import pytest
 from jsonschema import Draft202012Validator
 from modd_contracts import keys
-from modd_contracts.aggregations import AGGREGATIONS, BY_NAME
-from modd_contracts.owners import MODEL_PART_OWNERS
+from modd_contracts.aggregations_gen import AGGREGATIONS, BY_NAME
+from modd_contracts.owners_gen import MODEL_PART_OWNERS
 from modd_contracts.schema import NAMES, load, validate
 from modd_contracts.typegen import part_owners, stale_outputs
 from modd_model import load_model

@@ -32,7 +32,7 @@ from pathlib import Path
 
 from modd.link import codec, frames
 from modd_contracts import link_wire_gen
-from modd_contracts.aggregations import Aggregation
+from modd_contracts.aggregations_gen import Aggregation
 from modd_model import load_text
 
 assert Aggregation.FAKE == 8

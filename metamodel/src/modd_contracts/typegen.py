@@ -1,10 +1,10 @@
 """Types and tables generated from the contracts, so that no language
 re-types them by hand:
 
-- ``metamodel/src/modd_contracts/types.py``: Python TypedDicts of the contract
+- ``metamodel/src/modd_contracts/types_gen.py``: Python TypedDicts of the contract
   schemas (``schemas/*.schema.json``) and their versions;
 - ``frontend/src/core/contracts.gen.ts``: the same as TypeScript types;
-- ``metamodel/src/modd_contracts/aggregations.py``: the aggregation table
+- ``metamodel/src/modd_contracts/aggregations_gen.py``: the aggregation table
   (the metamodel's ``Aggregation`` ``x-table``) for Python;
 - ``runtime/cpp/include/modd/link/aggregation_table.gen.hpp``: the same for C++;
 - ``runtime/cpp/include/modd/client/delivered_value.gen.hpp``: the delivered
@@ -19,7 +19,7 @@ re-types them by hand:
 It also writes the metamodel's outputs (:mod:`modd_model.typegen`: the model's
 TypeScript and Python types, docs/metamodel.md): this is the one command that
 writes every generated file (``python -m modd_model.typegen`` still writes the
-metamodel's alone). The .modd parser (``modd_model/_modd_parser.py``) is lark's
+metamodel's alone). The .modd parser (``modd_model/_modd_parser_gen.py``) is lark's
 standalone tool's output (the command is in its header), and
 docs/generated-code.md is the generators' (``python -m modd_gen.table2``).
 
@@ -46,11 +46,11 @@ from .schema import NAMES, load
 HEADER = "Generated from the contracts by `python -m modd_contracts.typegen`. Do not edit."
 REPO = Path(__file__).resolve().parents[3]
 OUTPUTS = {
-    "py": REPO / "metamodel" / "src" / "modd_contracts" / "types.py",
+    "py": REPO / "metamodel" / "src" / "modd_contracts" / "types_gen.py",
     "ts": REPO / "frontend" / "src" / "core" / "contracts.gen.ts",
-    "aggpy": REPO / "metamodel" / "src" / "modd_contracts" / "aggregations.py",
+    "aggpy": REPO / "metamodel" / "src" / "modd_contracts" / "aggregations_gen.py",
     "aggcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "link" / "aggregation_table.gen.hpp",
-    "owners": REPO / "metamodel" / "src" / "modd_contracts" / "owners.py",
+    "owners": REPO / "metamodel" / "src" / "modd_contracts" / "owners_gen.py",
     "dvcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "client" / "delivered_value.gen.hpp",
     "arcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "archive" / "archive_record.gen.hpp",
 }

@@ -134,12 +134,18 @@ def _cpp_enum(enum: dict[str, Any]) -> list[str]:
     members = _values(enum)
     out = ["", *_comment("// ", enum["doc"]), f"enum class {name} : {enum['type']} {{"]
     out += [f"  {_camel(n)} = {v}," + (f"  // {d}" if d else "") for n, v, d in members]
-    return [
-        *out,
+    out += [
         "};",
         f"// The number of {name} values.",
         f"inline constexpr size_t k{name}Count = {len(members)};",
     ]
+    if "fromSchema" in enum:
+        labels = ", ".join(json.dumps(x) for x in definition(enum["fromSchema"])["enum"])
+        out += [
+            f"// The metamodel's label of each {name}, by code.",
+            f"inline constexpr const char* k{name}Labels[] = {{{labels}}};",
+        ]
+    return out
 
 
 def _cpp_group(group: dict[str, Any]) -> list[str]:

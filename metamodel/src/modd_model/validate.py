@@ -11,7 +11,7 @@ from collections.abc import Callable, Iterator
 from functools import cache, lru_cache
 from typing import TYPE_CHECKING, Any
 
-from modd_contracts.aggregations import AGGREGATIONS
+from modd_contracts.aggregations_gen import AGGREGATIONS
 from modd_contracts.link_wire_gen import MAX_PERIOD_US
 
 from .bounds import size_errors

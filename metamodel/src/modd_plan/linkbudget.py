@@ -33,7 +33,7 @@ from typing import Any
 
 from modd_contracts.link_wire_gen import CONTROL_TAG_BYTES as CONTROL_TAG_BYTES
 from modd_contracts.link_wire_gen import TAG_BYTES as TAG_BYTES  # the datagrams' HMAC tags
-from modd_contracts.types import PlanLinkBudget
+from modd_contracts.types_gen import PlanLinkBudget
 
 from .linkcost import (
     TCP_IP_HEADER_BYTES,

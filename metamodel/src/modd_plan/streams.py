@@ -26,8 +26,8 @@ from fractions import Fraction
 from functools import cached_property, lru_cache
 from typing import Any
 
-from modd_contracts import aggregations as agg
-from modd_contracts.aggregations import NAMES
+from modd_contracts import aggregations_gen as agg
+from modd_contracts.aggregations_gen import NAMES
 from modd_model.numbers import fraction_to_decimal, to_fraction
 
 from .derive import PAIR_SOURCE_RULES, SINGLE_SOURCE_RULES

@@ -57,6 +57,8 @@ enum class ValueType : uint8_t {
 };
 // The number of ValueType values.
 inline constexpr size_t kValueTypeCount = 4;
+// The metamodel's label of each ValueType, by code.
+inline constexpr const char* kValueTypeLabels[] = {"float32", "float64", "int", "bool"};
 
 }  // namespace modd::link
 

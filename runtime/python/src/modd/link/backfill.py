@@ -22,7 +22,7 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass, field
 
-from modd_contracts.aggregations import AGGREGATIONS
+from modd_contracts.aggregations_gen import AGGREGATIONS
 
 # The backfill frames' codes and limits, generated from modd_contracts/wire.json.
 from modd_contracts.link_wire_gen import MAX_BATCH as MAX_BATCH

@@ -10,7 +10,7 @@ import struct
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from modd_contracts.aggregations import AGGREGATIONS
+from modd_contracts.aggregations_gen import AGGREGATIONS
 from modd_contracts.link_wire_gen import (
     MAX_BUFFER_SIZE,
     MAX_LIST,

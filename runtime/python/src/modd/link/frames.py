@@ -5,8 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from enum import IntEnum
 
-from modd_contracts.aggregations import AGGREGATIONS
-from modd_contracts.aggregations import Aggregation as Aggregation  # the wire codes, generated
+from modd_contracts.aggregations_gen import AGGREGATIONS
+from modd_contracts.aggregations_gen import Aggregation as Aggregation  # the wire codes, generated
 
 # The wire's codes and limits, generated from modd_contracts/wire.json.
 from modd_contracts.link_wire_gen import MAX_ACCEPTED_DELAY_MS as MAX_ACCEPTED_DELAY_MS
