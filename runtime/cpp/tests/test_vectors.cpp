@@ -1,4 +1,4 @@
-// The shared vectors in runtime/vectors/: the C++ codec decodes each hex to the
+// The shared vectors in contracts/vectors/link/: the C++ codec decodes each hex to the
 // listed message and encodes the message back to the same bytes.
 #include <gtest/gtest.h>
 

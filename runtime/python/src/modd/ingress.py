@@ -3,7 +3,7 @@ publisher contract's value conversion and topic-name resolution.
 
 Shared by the Python publisher client (``modd.publisher``) and the tests; the C++ side is
 ``runtime/cpp/src/ingress/codec.cpp`` (broker) and ``src/client/publisher.cpp`` (client),
-checked against the same vectors (runtime/vectors/ingress_*.json).
+checked against the same vectors (contracts/vectors/ingress/replies.json).
 
 Example::
 

@@ -50,6 +50,10 @@ def vectors() -> list[dict[str, Any]]:
     ]
 
 
-if __name__ == "__main__":
-    (HERE / "replies.json").write_text(json.dumps(vectors(), indent=1) + "\n")
+def write(here: Path) -> None:
+    (here / "replies.json").write_text(json.dumps(vectors(), indent=1) + "\n")
+
+
+if __name__ == "__main__":  # contracts/vectors/generate.py writes every vector
+    write(HERE)
     print(f"wrote {HERE / 'replies.json'}")
