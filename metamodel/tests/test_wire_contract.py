@@ -167,3 +167,17 @@ def test_no_wire_number_written_by_hand(rel: str) -> None:
     text = (REPO / rel).read_text(encoding="utf-8")
     found = [p for p in LITERALS[rel] if re.search(p, text)]
     assert not found, f"{rel}: {found} (take them from modd_contracts/wire.json)"
+
+
+def test_the_model_s_packet_bounds_are_the_link_s() -> None:
+    """link.maxPacket is validated (schema) with the bounds the PubBroker's config
+    and the radio use (wire.json), and the planner's defaults are the contract's."""
+    from modd_plan.linkbudget import DEFAULT_PACKET
+
+    prop = definition("Link")["properties"]["maxPacket"]
+    assert (prop["minimum"], prop["maximum"]) == (
+        link_wire_gen.MIN_PACKET,
+        link_wire_gen.MAX_PACKET,
+    )
+    assert DEFAULT_PACKET["udp"] == link_wire_gen.DEFAULT_UDP_PACKET
+    assert DEFAULT_PACKET["serial"] == link_wire_gen.DEFAULT_SERIAL_PACKET

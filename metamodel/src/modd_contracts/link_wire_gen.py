@@ -138,6 +138,15 @@ FRAGMENT_HEAD: Final = 5
 TAG_BYTES: Final = 4
 #: Truncated HMAC tag of a control datagram, in bytes.
 CONTROL_TAG_BYTES: Final = 8
+#: Smallest packet a radio may carry (link.maxPacket), in bytes.
+MIN_PACKET: Final = 32
+#: Largest packet (link.maxPacket): the largest UDP payload, in bytes.
+MAX_PACKET: Final = 65507
+#: The packet of a udp link when the model gives none: Ethernet's MTU less the IP and UDP
+#: headers.
+DEFAULT_UDP_PACKET: Final = 1472
+#: The packet of a serial link when the model gives none (a SiK radio's frame).
+DEFAULT_SERIAL_PACKET: Final = 252
 
 
 __all__ = [
@@ -169,4 +178,8 @@ __all__ = [
     "FRAGMENT_HEAD",
     "TAG_BYTES",
     "CONTROL_TAG_BYTES",
+    "MIN_PACKET",
+    "MAX_PACKET",
+    "DEFAULT_UDP_PACKET",
+    "DEFAULT_SERIAL_PACKET",
 ]

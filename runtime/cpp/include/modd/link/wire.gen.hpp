@@ -122,5 +122,14 @@ inline constexpr size_t kFragmentHead = 5;
 inline constexpr size_t kTag = 4;
 // Truncated HMAC tag of a control datagram, in bytes.
 inline constexpr size_t kControlTag = 8;
+// Smallest packet a radio may carry (link.maxPacket), in bytes.
+inline constexpr uint32_t kMinPacket = 32;
+// Largest packet (link.maxPacket): the largest UDP payload, in bytes.
+inline constexpr uint32_t kMaxPacket = 65507;
+// The packet of a udp link when the model gives none: Ethernet's MTU less the IP and UDP
+// headers.
+inline constexpr uint32_t kDefaultUdpPacket = 1472;
+// The packet of a serial link when the model gives none (a SiK radio's frame).
+inline constexpr uint32_t kDefaultSerialPacket = 252;
 
 }  // namespace modd::link::dgram
