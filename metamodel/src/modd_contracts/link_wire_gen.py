@@ -85,6 +85,11 @@ class ErrorCode(IntEnum):
     IO = 10  # file or socket error
 
 
+# -- varints: The LEB128 varints of both protocols: unsigned 64-bit values.
+#: Longest varint, in bytes (7 bits each; the tenth holds bit 63 alone).
+MAX_VARINT_BYTES: Final = 10
+
+
 # -- backfill: Backfill frames of the link (docs/protocol.md, "Backfill").
 #: Most windows of one request.
 MAX_WINDOWS: Final = 4294967295
@@ -162,6 +167,7 @@ __all__ = [
     "MsgType",
     "ValueType",
     "ErrorCode",
+    "MAX_VARINT_BYTES",
     "MAX_WINDOWS",
     "MAX_BATCH",
     "BackfillType",

@@ -17,6 +17,7 @@ from modd_contracts.link_wire_gen import (
     MAX_NAME,
     MAX_PERIOD_US,
     MAX_PING,
+    MAX_VARINT_BYTES,
 )
 
 from modd.link.frames import (
@@ -97,7 +98,7 @@ class Reader:
 
     def varint(self) -> int:
         v = 0
-        for shift in range(0, 70, 7):
+        for shift in range(0, 7 * MAX_VARINT_BYTES, 7):
             b = self.u8()
             if shift == 63 and b > 1:
                 self.pos -= 1
@@ -105,7 +106,7 @@ class Reader:
             v |= (b & 0x7F) << shift
             if not b & 0x80:
                 return v
-        raise self.fail("varint longer than 10 bytes")
+        raise self.fail(f"varint longer than {MAX_VARINT_BYTES} bytes")
 
     def fixed(self, fmt: str) -> float | int:
         n = struct.calcsize(fmt)
