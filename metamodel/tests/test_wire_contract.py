@@ -152,12 +152,15 @@ def test_a_model_topic_name_fits_the_link() -> None:
 
 #: Hand-written wire numbers the contract replaced, by file: none may come back.
 LITERALS = {
-    "runtime/cpp/src/link/codec.cpp": [r"\ba > 7\b", r"\bty > 3\b", r"366", r"1'000'000"],
+    "runtime/cpp/src/link/codec.cpp": [r"\ba > 7\b", r"\bty > 3\b", r"366", r"1'000'000", r"86400"],
     "runtime/cpp/include/modd/util/bytes.hpp": [r"shift < 70", r"than 10 bytes"],
+    "runtime/cpp/src/link/datagram.cpp": [r"> 255\b"],
+    "runtime/python/src/modd/link/datagram.py": [r"> 255\b", r"<= 65535"],
     "runtime/cpp/src/link/backfill.cpp": [r"\ba > 7\b", r"\bty > 3\b", r"366"],
     "runtime/cpp/src/ingress/codec.cpp": [r"\bt[y]? > 3\b", r"65535", r"\b255\b"],
-    "runtime/cpp/src/broker/dgram_link.cpp": [r"= 0x09", r"kMaxNackRanges = 32"],
+    "runtime/cpp/src/broker/dgram_link.cpp": [r"= 0x09", r"kMaxNackRanges = 32", r"65535"],
     "runtime/python/src/modd/link/codec.py": [
+        r"86400",
         r"\ba > 7\b",
         r"\bty > 3\b",
         r"366",

@@ -17,6 +17,8 @@ MAX_FRAME: Final = 1048576
 MAX_ACCEPTED_DELAY_MS: Final = 3600000
 #: Largest PING or PONG payload, in bytes.
 MAX_PING: Final = 64
+#: Longest STATUS period a CONFIG may ask for, in seconds: one day (0: no STATUS).
+MAX_STATUS_PERIOD_S: Final = 86400
 #: Most topics, or streams, of one CONFIG.
 MAX_LIST: Final = 65535
 #: Longest topic name, in bytes.
@@ -135,6 +137,10 @@ DGRAM_CONTROL_FRAGMENT: Final = 0x42
 NACK: Final = 0x09
 #: Most ranges of one NACK (the fewest is 1).
 MAX_NACK_RANGES: Final = 32
+#: Most slots of one NACK range (the fewest is 1).
+MAX_NACK_RANGE_SLOTS: Final = 65535
+#: Most slots of one DATA datagram (its slot count is one byte).
+MAX_DATAGRAM_SLOTS: Final = 255
 #: Most fragments of one slot.
 MAX_FRAGMENTS: Final = 16
 #: Bytes before a fragment's piece: type, config id, slot16, fragment byte.
@@ -159,6 +165,7 @@ __all__ = [
     "MAX_FRAME",
     "MAX_ACCEPTED_DELAY_MS",
     "MAX_PING",
+    "MAX_STATUS_PERIOD_S",
     "MAX_LIST",
     "MAX_NAME",
     "MAX_BUFFER_SIZE",
@@ -180,6 +187,8 @@ __all__ = [
     "DGRAM_CONTROL_FRAGMENT",
     "NACK",
     "MAX_NACK_RANGES",
+    "MAX_NACK_RANGE_SLOTS",
+    "MAX_DATAGRAM_SLOTS",
     "MAX_FRAGMENTS",
     "FRAGMENT_HEAD",
     "TAG_BYTES",

@@ -228,7 +228,8 @@ void DatagramLink::on_nack(std::span<const uint8_t> body) {
   std::vector<std::pair<uint64_t, uint64_t>> ranges;
   for (uint64_t i = 0; i < n; ++i) {
     uint64_t first = r.varint(), count = r.varint();
-    if (count < 1 || count > 65535) r.fail("NACK range of 0 or more than 65535 slots");
+    if (count < 1 || count > dg::kMaxNackRangeSlots)
+      r.fail("NACK range of 0 or more than " + std::to_string(dg::kMaxNackRangeSlots) + " slots");
     ranges.emplace_back(first, count);
   }
   // Paced: at most per_nack_ bytes for this NACK and what live DATA has earned; what does

@@ -149,7 +149,7 @@ DataFrame decode_data(const RawFrame& f, const ValueKind& kind) {
   r.varint();
   d.first = r.varint();
   uint64_t n = r.varint();
-  if (n < 1 || n > kMaxBatch) r.fail("window count " + std::to_string(n) + " out of 1..65535");
+  if (n < 1 || n > kMaxBatch) r.fail("window count " + std::to_string(n) + " out of 1.." + std::to_string(kMaxBatch));
   if (d.first + n > kMaxWindows) r.fail("windows beyond the largest request");
   auto bm = r.bytes((n + 7) / 8);
   for (size_t i = n; i < bm.size() * 8; ++i)

@@ -233,7 +233,7 @@ Message decode(const RawFrame& f) {
       Config c;
       c.config_id = r.u8();
       uint64_t sp = r.varint();
-      if (sp > 86400) r.fail("status period above one day");
+      if (sp > kMaxStatusPeriodS) r.fail("status period above one day");
       c.status_period_s = static_cast<uint32_t>(sp);
       uint64_t nt = r.varint();
       if (nt > kMaxList || nt > r.remaining()) r.fail("topic count " + std::to_string(nt) + " too large");

@@ -16,6 +16,8 @@ inline constexpr size_t kMaxFrame = 1048576;
 inline constexpr uint32_t kMaxAcceptedDelayMs = 3600000;
 // Largest PING or PONG payload, in bytes.
 inline constexpr size_t kMaxPing = 64;
+// Longest STATUS period a CONFIG may ask for, in seconds: one day (0: no STATUS).
+inline constexpr uint64_t kMaxStatusPeriodS = 86400;
 // Most topics, or streams, of one CONFIG.
 inline constexpr size_t kMaxList = 65535;
 // Longest topic name, in bytes.
@@ -114,6 +116,10 @@ inline constexpr uint8_t kControlFragment = 0x42;
 inline constexpr uint8_t kNack = 0x09;
 // Most ranges of one NACK (the fewest is 1).
 inline constexpr size_t kMaxNackRanges = 32;
+// Most slots of one NACK range (the fewest is 1).
+inline constexpr uint64_t kMaxNackRangeSlots = 65535;
+// Most slots of one DATA datagram (its slot count is one byte).
+inline constexpr size_t kMaxDatagramSlots = 255;
 // Most fragments of one slot.
 inline constexpr size_t kMaxFragments = 16;
 // Bytes before a fragment's piece: type, config id, slot16, fragment byte.

@@ -17,6 +17,7 @@ from modd_contracts.link_wire_gen import (
     MAX_NAME,
     MAX_PERIOD_US,
     MAX_PING,
+    MAX_STATUS_PERIOD_S,
     MAX_VARINT_BYTES,
 )
 
@@ -325,7 +326,7 @@ def decode(f: RawFrame) -> Message:
 def _decode_config(r: Reader) -> Config:
     config_id = r.u8()
     sp = r.varint()
-    if sp > 86400:
+    if sp > MAX_STATUS_PERIOD_S:
         raise r.fail("status period above one day")
     nt = r.varint()
     if nt > MAX_LIST or nt > r.remaining():

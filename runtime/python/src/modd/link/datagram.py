@@ -50,7 +50,13 @@ from modd_contracts.link_wire_gen import (
     FRAGMENT_HEAD as FRAGMENT_HEAD,
 )
 from modd_contracts.link_wire_gen import (
+    MAX_DATAGRAM_SLOTS as MAX_DATAGRAM_SLOTS,
+)
+from modd_contracts.link_wire_gen import (
     MAX_FRAGMENTS as MAX_FRAGMENTS,
+)
+from modd_contracts.link_wire_gen import (
+    MAX_NACK_RANGE_SLOTS as MAX_NACK_RANGE_SLOTS,
 )
 from modd_contracts.link_wire_gen import (
     MAX_NACK_RANGES as MAX_NACK_RANGES,
@@ -120,8 +126,9 @@ def encode_data(d: DataDatagram, key: bytes, direction: bytes) -> bytes:
         head.append(d.config_id)
         head += struct.pack("<H", d.slot & 0xFFFF)
     else:
-        if len(d.slots) > 255:
-            raise ValueError("at most 255 slots in a datagram with a presence bitmap")
+        if len(d.slots) > MAX_DATAGRAM_SLOTS:
+            raise ValueError(
+                f"at most {MAX_DATAGRAM_SLOTS} slots in a datagram with a presence bitmap")
         head.append(DGRAM_DATA_BITMAP)
         head.append(d.config_id)
         head += struct.pack("<H", d.slot & 0xFFFF)
@@ -395,8 +402,8 @@ def decode_nack(body: bytes) -> list[tuple[int, int]]:
     out = []
     for _ in range(n):
         first, count = r.varint(), r.varint()
-        if not 1 <= count <= 65535:
-            raise r.fail("NACK range of 0 or more than 65535 slots")
+        if not 1 <= count <= MAX_NACK_RANGE_SLOTS:
+            raise r.fail(f"NACK range of 0 or more than {MAX_NACK_RANGE_SLOTS} slots")
         out.append((first, count))
     r.end()
     return out
