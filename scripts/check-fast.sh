@@ -12,7 +12,7 @@ export PATH="$PWD/.venv/bin:$PATH"
 # 1: the formatters check the whole tree (scripts/format-all.sh --check), once
 # scripts/format-all.sh has been run and committed; 0: only the paths of
 # scripts/formatted.txt.
-FORMAT_WHOLE_TREE=0
+FORMAT_WHOLE_TREE=1
 
 step() { printf '\n== %s\n' "$*"; }
 formatted() { grep -v '^\s*#' scripts/formatted.txt | grep -v '^\s*$'; }
