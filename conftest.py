@@ -36,6 +36,7 @@ def expected(scenarios_dir: Path) -> dict[str, Any]:
 CROSS_PROCESS = (
     "tests/",
     "metamodel/tests/test_cli.py",
+    "metamodel/tests/test_wire_contract.py::test_a_fake_value_reaches_both_codecs_and_validation",
     "metamodel/tests/test_collector.py::test_convert_to_collector_cli",
     "metamodel/tests/test_collector.py::test_validate_with_encoding_option",
     "metamodel/tests/plan/test_plan_json.py::test_plan_does_not_depend_on_the_hash_seed",

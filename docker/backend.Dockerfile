@@ -36,6 +36,7 @@ COPY metamodel/pyproject.toml metamodel/pyproject.toml
 COPY generators/pyproject.toml generators/pyproject.toml
 COPY runtime/python/pyproject.toml runtime/python/pyproject.toml
 COPY backend/pyproject.toml backend/pyproject.toml
+COPY launcher/pyproject.toml launcher/pyproject.toml
 RUN uv sync --frozen --no-dev --no-install-workspace --package modd-backend
 COPY metamodel metamodel
 COPY generators generators
@@ -44,6 +45,7 @@ COPY generators generators
 COPY runtime/cpp/include/modd/client runtime/cpp/include/modd/client
 COPY runtime/cpp/src/client runtime/cpp/src/client
 COPY runtime/cpp/include/modd/ingress/wire.hpp runtime/cpp/include/modd/ingress/wire.hpp
+COPY runtime/cpp/include/modd/ingress/wire.gen.hpp runtime/cpp/include/modd/ingress/wire.gen.hpp
 COPY runtime/python runtime/python
 COPY backend backend
 RUN uv sync --frozen --no-dev --package modd-backend

@@ -44,7 +44,8 @@ COPY metamodel/pyproject.toml metamodel/pyproject.toml
 COPY generators/pyproject.toml generators/pyproject.toml
 COPY runtime/python/pyproject.toml runtime/python/pyproject.toml
 COPY backend/pyproject.toml backend/pyproject.toml
-RUN uv sync --frozen --no-dev --no-install-workspace --package modd-runtime
+COPY launcher/pyproject.toml launcher/pyproject.toml
+RUN uv sync --frozen --no-dev --no-install-workspace --package modd-launcher
 COPY metamodel metamodel
 COPY generators generators
 # The C++ client sources the generators carry into generated projects (one home:
@@ -52,8 +53,11 @@ COPY generators generators
 COPY runtime/cpp/include/modd/client runtime/cpp/include/modd/client
 COPY runtime/cpp/src/client runtime/cpp/src/client
 COPY runtime/cpp/include/modd/ingress/wire.hpp runtime/cpp/include/modd/ingress/wire.hpp
+COPY runtime/cpp/include/modd/ingress/wire.gen.hpp runtime/cpp/include/modd/ingress/wire.gen.hpp
 COPY runtime/python runtime/python
-RUN uv sync --frozen --no-dev --package modd-runtime
+# `modd up` is the launcher's (it depends on the runtime and the generators).
+COPY launcher launcher
+RUN uv sync --frozen --no-dev --package modd-launcher
 
 # `modd up` finds the PubBroker at build/bin/ of the repository, as in a checkout.
 COPY --from=pubbroker /src/build/bin/modd-pubbroker build/bin/modd-pubbroker

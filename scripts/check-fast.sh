@@ -9,26 +9,35 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$PWD/.venv/bin:$PATH"
 
+# 1: the formatters check the whole tree (scripts/format-all.sh --check), once
+# scripts/format-all.sh has been run and committed; 0: only the paths of
+# scripts/formatted.txt.
+FORMAT_WHOLE_TREE=1
+
 step() { printf '\n== %s\n' "$*"; }
 formatted() { grep -v '^\s*#' scripts/formatted.txt | grep -v '^\s*$'; }
 
 static_checks() {
   step "ruff check"
   ruff check --quiet .
-  step "ruff format --check (scripts/formatted.txt)"
-  mapfile -t py < <(formatted | while read -r p; do
-    if [ -d "$p" ] || [[ "$p" == *.py ]]; then echo "$p"; fi; done)
-  ruff format --check --quiet --force-exclude "${py[@]}"
-  if command -v clang-format >/dev/null 2>&1; then
-    step "clang-format (scripts/formatted.txt)"
-    mapfile -t cxx < <(formatted | grep -E '\.(hpp|cpp|h)$' || true)
-    [ ${#cxx[@]} -eq 0 ] || clang-format --dry-run --Werror --style=file "${cxx[@]}"
+  if [ "$FORMAT_WHOLE_TREE" -eq 1 ]; then
+    step "formatters, whole tree (scripts/format-all.sh --check)"
+    scripts/format-all.sh --check
+  else
+    step "ruff format --check (scripts/formatted.txt)"
+    mapfile -t py < <(formatted | while read -r p; do
+      if [ -d "$p" ] || [[ "$p" == *.py ]]; then echo "$p"; fi; done)
+    ruff format --check --quiet --force-exclude "${py[@]}"
+    if command -v clang-format >/dev/null 2>&1; then
+      step "clang-format (scripts/formatted.txt)"
+      mapfile -t cxx < <(formatted | grep -E '\.(hpp|cpp|h)$' || true)
+      [ ${#cxx[@]} -eq 0 ] || clang-format --dry-run --Werror --style=file "${cxx[@]}"
+    fi
   fi
-  step "contracts and model types up to date"
-  python -m modd_model.typegen --check
+  step "generated files up to date (python -m modd_contracts.typegen --check)"
   python -m modd_contracts.typegen --check
   step "mypy (strict: sources, component tests, cross-process tests and benchmarks)"
-  mypy --no-error-summary metamodel/src backend/src generators/src runtime/python/src
+  mypy --no-error-summary metamodel/src backend/src generators/src runtime/python/src launcher/src
   mypy --no-error-summary --explicit-package-bases \
     metamodel/tests generators/tests runtime/python/tests backend/tests
   # The cross-process tests and benchmarks import their harnesses by bare name

@@ -37,7 +37,7 @@ uv sync --quiet --all-packages --compile-bytecode
 # the same for the workspace's own sources (editable: not in site-packages);
 # compileall skips the files whose bytecode is current
 .venv/bin/python -m compileall -q -j 0 metamodel/src runtime/python/src backend/src \
-  generators/src >/dev/null
+  generators/src launcher/src >/dev/null
 
 if [ -f frontend/package.json ]; then
   if [ ! -d frontend/node_modules ] || [ frontend/package-lock.json -nt frontend/node_modules/.package-lock.json ]; then

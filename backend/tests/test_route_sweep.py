@@ -43,9 +43,10 @@ def world(tmp_path_factory: pytest.TempPathFactory, scenarios_dir: Path
             r = c.post("/api/users", headers=admin, json={
                 "username": name, "password": f"pw-{name}-12345", "roles": roles})
             users[name] = r.json()["id"]
+        openapi = c.app.openapi()  # type: ignore[attr-defined]
         yield {"c": c, "admin": admin, "pid": pid, "users": users,
                "nobody": login(c, "nobody", "pw-nobody-12345"),
-               "ops": _operations(c.app.openapi(), pid, users["victim"])}  # type: ignore[attr-defined]
+               "ops": _operations(openapi, pid, users["victim"])}
 
 
 def _operations(spec: dict[str, Any], pid: int, uid: int) -> list[tuple[str, str, bool]]:

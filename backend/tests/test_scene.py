@@ -7,7 +7,7 @@ import math
 
 import pytest
 from modd_backend.scene import Track, position_roles
-from modd_contracts.types import DeliveredValue
+from modd_contracts.types_gen import DeliveredValue
 
 
 def _v(value: float | None) -> DeliveredValue:

@@ -19,7 +19,8 @@ GOLDEN = Path(__file__).parent / "golden"
 DATA = Path(__file__).resolve().parents[2] / "metamodel" / "tests" / "data"
 CARRIED = ("modd/include/modd/client/publisher.hpp", "modd/src/publisher.cpp",
            "modd/include/modd/client/subscriber.hpp", "modd/src/subscriber.cpp",
-           "modd/include/modd/client/delivered_value.gen.hpp", "modd/include/modd/ingress/wire.hpp")
+           "modd/include/modd/client/delivered_value.gen.hpp", "modd/include/modd/ingress/wire.hpp",
+           "modd/include/modd/ingress/wire.gen.hpp")
 
 
 def _models(scenarios_dir: Path) -> dict[str, Path]:
@@ -58,6 +59,8 @@ def test_carried_client_is_the_runtime_client(scenarios_dir: Path) -> None:
     assert artifacts["integrator/pub_1-driver/" + CARRIED[1]] == source
     assert artifacts["integrator/pub_1-driver/" + CARRIED[5]] == (
         repo / "runtime/cpp/include/modd/ingress/wire.hpp").read_text("utf-8")
+    assert artifacts["integrator/pub_1-driver/" + CARRIED[6]] == (
+        repo / "runtime/cpp/include/modd/ingress/wire.gen.hpp").read_text("utf-8")
     sub_header, sub_source = subscriber_client_sources()
     assert artifacts["scientist/cpp/sub_5/" + CARRIED[2]] == sub_header
     assert artifacts["scientist/cpp/sub_5/" + CARRIED[3]] == sub_source

@@ -13,8 +13,8 @@ from typing import Any
 import pytest
 from jsonschema import Draft202012Validator
 from modd_contracts import keys
-from modd_contracts.aggregations import AGGREGATIONS, BY_NAME
-from modd_contracts.owners import MODEL_PART_OWNERS
+from modd_contracts.aggregations_gen import AGGREGATIONS, BY_NAME
+from modd_contracts.owners_gen import MODEL_PART_OWNERS
 from modd_contracts.schema import NAMES, load, validate
 from modd_contracts.typegen import part_owners, stale_outputs
 from modd_model import load_model
@@ -158,7 +158,7 @@ def test_plan_json_conforms(path: Path) -> None:
 def _cpp_defaults() -> dict[str, str]:
     """``name = value`` default initialisers of config.hpp's BrokerConfig."""
     text = (REPO / "runtime/cpp/include/modd/broker/config.hpp").read_text()
-    found = re.findall(r"\b(\w+) = ([^;]+);", text)
+    found = re.findall(r"\b(\w+)\s*=\s*([^;]+);", text)  # an initialiser may wrap
     return {k: v.strip().strip('"').replace("'", "") for k, v in found}
 
 

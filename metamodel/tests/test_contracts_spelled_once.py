@@ -26,7 +26,7 @@ import tokenize
 from pathlib import Path
 
 import pytest
-from modd_contracts.aggregations import NAMES
+from modd_contracts.aggregations_gen import NAMES
 from modd_contracts.keys import ROOT
 from modd_contracts.schema import load
 
@@ -45,8 +45,8 @@ PAYLOAD_FIELDS = frozenset(load("delivered_value")["properties"])
 #: The contracts home and the files generated from it (or from the schema).
 ALLOWED = (
     "metamodel/src/modd_contracts/",
-    "metamodel/src/modd_model/types.py",
-    "metamodel/src/modd_model/_modd_parser.py",
+    "metamodel/src/modd_model/types_gen.py",
+    "metamodel/src/modd_model/_modd_parser_gen.py",
 )
 
 
@@ -253,7 +253,7 @@ def test_no_payload_field_spelled_outside_its_types(
     found = [f for rel, text in _files(roots, suffixes) for f in scan(rel, text)]
     assert found == [], (
         f"{language}: delivered-value fields read outside the contract's types "
-        "(modd_contracts.types.DeliveredValue and modd_contracts.delivered.load_delivered, "
+        "(modd_contracts.types_gen.DeliveredValue and modd_contracts.delivered.load_delivered, "
         "contracts.gen.ts, delivered_value.gen.hpp):\n" + "\n".join(found)
     )
 

@@ -17,9 +17,9 @@ def test_generated_parser_is_fresh() -> None:
     """The header names the grammar it was generated from (lark's output is
     not byte-for-byte reproducible, so its hash is what is compared)."""
     digest = hashlib.sha256((SRC / "modd.lark").read_bytes()).hexdigest()
-    header = (SRC / "_modd_parser.py").read_text(encoding="utf-8").splitlines()[:3]
+    header = (SRC / "_modd_parser_gen.py").read_text(encoding="utf-8").splitlines()[:3]
     assert f"modd.lark sha256 {digest}" in "\n".join(header), (
-        "modd.lark changed: regenerate _modd_parser.py with the command in its header "
+        "modd.lark changed: regenerate _modd_parser_gen.py with the command in its header "
         "and put the grammar's new sha256 in it")
 
 

@@ -17,7 +17,7 @@ import pytest
 from modd.plotjuggler import datagrams, parse_udp
 from modd.ports import free_port
 from modd.subbroker.payload import DeliveredValue
-from modd_contracts.types import DeliveredValue as DeliveredDict
+from modd_contracts.types_gen import DeliveredValue as DeliveredDict
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from support.loopback import shared_credentials, zenoh_router  # noqa: E402

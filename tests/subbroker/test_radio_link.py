@@ -92,8 +92,10 @@ def _run(tmp: Path, model: Path, pb: Proc, sb: Proc, got: Collector, seconds: fl
 
 
 def _ingress(pb: Proc) -> int:
-    return int(re.search(r'"port": (\d+)', (pb.log_path.with_suffix(".json")).read_text()
-                         .split('"ingress"')[1]).group(1))  # type: ignore[union-attr]
+    ingress = pb.log_path.with_suffix(".json").read_text().split('"ingress"')[1]
+    found = re.search(r'"port": (\d+)', ingress)
+    assert found, ingress
+    return int(found.group(1))
 
 
 def _start(tmp: Path, transport: str, spec: str | None, pb_status_s: int = 60,

@@ -33,11 +33,11 @@ import logging
 import threading
 from typing import TYPE_CHECKING, Any
 
-from modd_contracts import aggregations as agg
+from modd_contracts import aggregations_gen as agg
 from modd_contracts.delivered import load_delivered
 from modd_contracts.keys import match_status_key, match_sub_key
 from modd_contracts.schema import load as contract_schema
-from modd_contracts.types import DeliveredValue
+from modd_contracts.types_gen import DeliveredValue
 
 from .scene import position_roles
 from .viewer_json import as_numbers, for_viewers, without_nulls

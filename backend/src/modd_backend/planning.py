@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any, Literal, TypeVar
 
 from fastapi import HTTPException
-from modd_contracts.types import PlanDocument
+from modd_contracts.types_gen import PlanDocument
 from modd_model import LoadResult, validate
 from modd_model.diagnostics import Diagnostic, ModelError
 from modd_plan import make_plan

@@ -12,7 +12,7 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import Any
 
-from modd_contracts.owners import MODEL_PART_OWNERS
+from modd_contracts.owners_gen import MODEL_PART_OWNERS
 
 
 class Role(StrEnum):

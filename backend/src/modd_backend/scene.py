@@ -22,7 +22,7 @@ from typing import Any
 
 from modd_contracts.delivered import load_delivered
 from modd_contracts.keys import match_sub_key
-from modd_contracts.types import DeliveredValue
+from modd_contracts.types_gen import DeliveredValue
 
 #: Variable names (last part of a topic) read as a position or an attitude.
 ROLE_NAMES: dict[str, tuple[str, ...]] = {

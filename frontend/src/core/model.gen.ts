@@ -1,4 +1,4 @@
-// Generated from metamodel/modd.schema.json by `python -m modd_model.typegen`. Do not edit.
+// Generated from metamodel/modd.schema.json by `python -m modd_contracts.typegen`. Do not edit.
 
 /** A MoDD mission: the drone with its sensors and measured variables (the topics), the on-board PubBroker and the base-station SubBroker, the link between them, the publishers that feed the PubBroker and the subscribers that receive aggregated values. The one source of truth for what a model is: the Python and TypeScript types are generated from this file. */
 export interface ModdModel {

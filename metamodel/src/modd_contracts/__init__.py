@@ -5,10 +5,10 @@
 - ``schemas/``: JSON Schemas of the delivered value, the SubBroker status
   document, the plan JSON and the PubBroker's ``pubbroker.json``, loaded
   with :func:`modd_contracts.schema.load`;
-- :mod:`modd_contracts.types`: TypedDicts generated from those schemas
+- :mod:`modd_contracts.types_gen`: TypedDicts generated from those schemas
   (``python -m modd_contracts.typegen``, which also writes the TypeScript
   types and the C++ aggregation table);
-- :mod:`modd_contracts.aggregations`: the aggregation table, generated from
+- :mod:`modd_contracts.aggregations_gen`: the aggregation table, generated from
   the metamodel's ``Aggregation`` definition.
 
 Dependency-free (standard library only), so every process can import it.

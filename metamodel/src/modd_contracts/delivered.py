@@ -1,7 +1,7 @@
 """Reading a delivered value (``schemas/delivered_value.schema.json``) as its
 contract's type, for the consumers that take its fields one by one (the
 backend's 3D scene and Foxglove server, the ROS 2 and PlotJuggler bridges):
-they hold a :class:`~modd_contracts.types.DeliveredValue`, so mypy checks every
+they hold a :class:`~modd_contracts.types_gen.DeliveredValue`, so mypy checks every
 field name they read (``delivered.get("value")``, ``delivered["end_ns"]``).
 
 >>> doc = load_delivered(b'{"topic": "usv.a.z", "value": 1.5}')
@@ -20,7 +20,7 @@ from __future__ import annotations
 import json
 from typing import cast
 
-from .types import DeliveredValue
+from .types_gen import DeliveredValue
 
 
 def load_delivered(raw: bytes | str) -> DeliveredValue | None:

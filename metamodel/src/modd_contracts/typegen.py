@@ -1,17 +1,27 @@
 """Types and tables generated from the contracts, so that no language
 re-types them by hand:
 
-- ``metamodel/src/modd_contracts/types.py``: Python TypedDicts of the contract
+- ``metamodel/src/modd_contracts/types_gen.py``: Python TypedDicts of the contract
   schemas (``schemas/*.schema.json``) and their versions;
 - ``frontend/src/core/contracts.gen.ts``: the same as TypeScript types;
-- ``metamodel/src/modd_contracts/aggregations.py``: the aggregation table
+- ``metamodel/src/modd_contracts/aggregations_gen.py``: the aggregation table
   (the metamodel's ``Aggregation`` ``x-table``) for Python;
 - ``runtime/cpp/include/modd/link/aggregation_table.gen.hpp``: the same for C++;
 - ``runtime/cpp/include/modd/client/delivered_value.gen.hpp``: the delivered
   value's field names and version, for the C++ subscriber client's parser;
 - ``runtime/cpp/include/modd/archive/archive_record.gen.hpp``: the archive
   record's field, MCAP schema names and channel schemas, for the PubBroker's
-  archive writer and reader.
+  archive writer and reader;
+- the link and ingress protocols' enumerations, counts and limits
+  (``wire.json``, written by :mod:`modd_contracts.wiregen`):
+  ``modd_contracts/{link,ingress}_wire_gen.py`` and ``wire.gen.hpp`` headers.
+
+It also writes the metamodel's outputs (:mod:`modd_model.typegen`: the model's
+TypeScript and Python types, docs/metamodel.md): this is the one command that
+writes every generated file (``python -m modd_model.typegen`` still writes the
+metamodel's alone). The .modd parser (``modd_model/_modd_parser_gen.py``) is lark's
+standalone tool's output (the command is in its header), and
+docs/generated-code.md is the generators' (``python -m modd_gen.table2``).
 
 Run ``python -m modd_contracts.typegen`` to rewrite them; ``--check`` exits 1
 when one is stale (``make check`` does that, and a test).
@@ -26,19 +36,21 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from modd_model import typegen as model_typegen
 from modd_model.schema import definition, load_schema
 from modd_model.typegen import _dependency_order, _py_type, _ts_doc, _ts_type
 
+from . import wiregen
 from .schema import NAMES, load
 
 HEADER = "Generated from the contracts by `python -m modd_contracts.typegen`. Do not edit."
 REPO = Path(__file__).resolve().parents[3]
 OUTPUTS = {
-    "py": REPO / "metamodel" / "src" / "modd_contracts" / "types.py",
+    "py": REPO / "metamodel" / "src" / "modd_contracts" / "types_gen.py",
     "ts": REPO / "frontend" / "src" / "core" / "contracts.gen.ts",
-    "aggpy": REPO / "metamodel" / "src" / "modd_contracts" / "aggregations.py",
+    "aggpy": REPO / "metamodel" / "src" / "modd_contracts" / "aggregations_gen.py",
     "aggcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "link" / "aggregation_table.gen.hpp",
-    "owners": REPO / "metamodel" / "src" / "modd_contracts" / "owners.py",
+    "owners": REPO / "metamodel" / "src" / "modd_contracts" / "owners_gen.py",
     "dvcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "client" / "delivered_value.gen.hpp",
     "arcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "archive" / "archive_record.gen.hpp",
     "qcpp": REPO / "runtime" / "cpp" / "include" / "modd" / "link" / "quantised.gen.hpp",
@@ -494,6 +506,27 @@ GENERATORS: dict[str, Callable[[], str]] = {
     "arcpp": generate_archive_record_cpp,
     "qcpp": generate_quantised_cpp,
 }
+
+
+def _wire_output(rel: str) -> Callable[[], str]:
+    return lambda: wiregen.outputs()[rel]
+
+
+def _model_output(key: str) -> Callable[[], str]:
+    return lambda: model_typegen.GENERATORS[key](load_schema())
+
+
+# The metamodel's own outputs (modd_model.typegen: model types, docs/metamodel.md),
+# so that this one command writes every generated file.
+for _key, _path in model_typegen.OUTPUTS.items():
+    OUTPUTS[f"model:{_key}"] = _path
+    GENERATORS[f"model:{_key}"] = _model_output(_key)
+
+
+# The wire contract's headers and modules (wiregen.py), one key each.
+for _rel in wiregen.outputs():
+    OUTPUTS[f"wire:{_rel}"] = REPO / _rel
+    GENERATORS[f"wire:{_rel}"] = _wire_output(_rel)
 
 
 def stale_outputs() -> list[Path]:

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from modd_contracts import aggregations as agg
+from modd_contracts import aggregations_gen as agg
 
 from .diagnostics import Diagnostic
 from .printer import INDENT, endpoint, name, quote

@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Literal
 if TYPE_CHECKING:
     from lark.exceptions import UnexpectedInput
 else:
-    from ._modd_parser import UnexpectedInput
+    from ._modd_parser_gen import UnexpectedInput
 
 from .diagnostics import Location, pointer_parent
 from .parser import SourceMap, _parser, parse_text

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
         UnexpectedToken,
     )
 else:  # the standalone parser generated from modd.lark: lark is not imported at run time
-    from ._modd_parser import (
+    from ._modd_parser_gen import (
         Lark,
         Token,
         Tree,
@@ -118,9 +118,9 @@ _TERMINAL_NAMES = {
 @cache
 def _parser() -> Lark:
     """The LALR parser of modd.lark (``parser="lalr", propagate_positions=True,
-    maybe_placeholders=False``), generated ahead of time into _modd_parser.py:
+    maybe_placeholders=False``), generated ahead of time into _modd_parser_gen.py:
     building it from the grammar at each start cost ~0.27 s of CPU."""
-    from ._modd_parser import Lark_StandAlone
+    from ._modd_parser_gen import Lark_StandAlone
 
     parser: Lark = Lark_StandAlone()  # type: ignore[no-untyped-call]
     return parser

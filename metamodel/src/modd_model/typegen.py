@@ -2,7 +2,7 @@
 re-types the metamodel by hand:
 
 - ``frontend/src/core/model.gen.ts``: TypeScript types for the workbench;
-- ``metamodel/src/modd_model/types.py``: Python TypedDicts;
+- ``metamodel/src/modd_model/types_gen.py``: Python TypedDicts;
 - ``docs/metamodel.md``: the metamodel reference.
 
 Run ``python -m modd_model.typegen`` to rewrite them; ``--check`` exits 1 when
@@ -19,11 +19,12 @@ from typing import Any
 
 from .schema import load_schema
 
-HEADER = "Generated from metamodel/modd.schema.json by `python -m modd_model.typegen`. Do not edit."
+HEADER = ("Generated from metamodel/modd.schema.json by `python -m modd_contracts.typegen`."
+          " Do not edit.")
 REPO = Path(__file__).resolve().parents[3]
 OUTPUTS = {
     "ts": REPO / "frontend" / "src" / "core" / "model.gen.ts",
-    "py": REPO / "metamodel" / "src" / "modd_model" / "types.py",
+    "py": REPO / "metamodel" / "src" / "modd_model" / "types_gen.py",
     "md": REPO / "docs" / "metamodel.md",
 }
 ROOT_NAME = "ModdModel"

@@ -11,7 +11,8 @@ from collections.abc import Callable, Iterator
 from functools import cache, lru_cache
 from typing import TYPE_CHECKING, Any
 
-from modd_contracts.aggregations import AGGREGATIONS
+from modd_contracts.aggregations_gen import AGGREGATIONS
+from modd_contracts.link_wire_gen import MAX_PERIOD_US
 
 from .bounds import size_errors
 from .diagnostics import Diagnostic, pointer_join
@@ -236,8 +237,9 @@ def references_resolve(doc: dict[str, Any]) -> Iterator[Diagnostic]:
 
 
 #: Longest period (s) a model may use: about 11.6 days. It bounds the
-#: planner's integers (hyperperiods, buffer-size candidates).
-MAX_PERIOD_S = 1_000_000
+#: planner's integers (hyperperiods, buffer-size candidates), and never exceeds
+#: the link's own bound (modd_contracts/wire.json), so a valid model's CONFIG decodes.
+MAX_PERIOD_S = min(1_000_000, MAX_PERIOD_US // 1_000_000)
 
 
 @lru_cache(maxsize=65_536)  # bounded: a model repeats few period texts

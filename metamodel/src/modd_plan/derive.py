@@ -32,8 +32,8 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from modd_contracts import aggregations as agg
-from modd_contracts.aggregations import AGGREGATIONS
+from modd_contracts import aggregations_gen as agg
+from modd_contracts.aggregations_gen import AGGREGATIONS
 
 Sample = float | int | bool
 Window = Any

@@ -31,7 +31,10 @@ from fractions import Fraction
 from math import ceil
 from typing import Any
 
-from modd_contracts.types import PlanLinkBudget
+from modd_contracts.link_wire_gen import CONTROL_TAG_BYTES as CONTROL_TAG_BYTES
+from modd_contracts.link_wire_gen import DEFAULT_SERIAL_PACKET, DEFAULT_UDP_PACKET
+from modd_contracts.link_wire_gen import TAG_BYTES as TAG_BYTES  # the datagrams' HMAC tags
+from modd_contracts.types_gen import PlanLinkBudget
 
 from .linkcost import (
     TCP_IP_HEADER_BYTES,
@@ -45,10 +48,8 @@ TRANSPORTS = ("tcp", "udp", "serial")
 TCP_MSS = 1448  # Ethernet MTU 1500 - IPv4 20 - TCP 20 - timestamps 12
 DGRAM_HEADER_BYTES = 4  # type, config id, slot u16le
 FRAGMENT_BYTE = 1  # fragment index (high nibble) and count - 1 (low nibble)
-TAG_BYTES = 4  # truncated HMAC-SHA256 of a DATA datagram
-CONTROL_TAG_BYTES = 8  # truncated HMAC-SHA256 of a control datagram
 SERIAL_CRC_BYTES = 2
-DEFAULT_PACKET = {"tcp": TCP_MSS, "udp": 1472, "serial": 252}
+DEFAULT_PACKET = {"tcp": TCP_MSS, "udp": DEFAULT_UDP_PACKET, "serial": DEFAULT_SERIAL_PACKET}
 KEEPALIVE_S = 30
 #: slots walked at most to predict packing and delays (bounded work per plan)
 WALK_LIMIT = 400

@@ -33,9 +33,9 @@ from fractions import Fraction
 from functools import lru_cache
 from math import ceil, lcm
 
-from modd_contracts import aggregations as agg
-from modd_contracts.aggregations import BY_NAME
-from modd_contracts.types import PredictedLink
+from modd_contracts import aggregations_gen as agg
+from modd_contracts.aggregations_gen import BY_NAME
+from modd_contracts.types_gen import PredictedLink
 
 from .schedule import Schedule
 

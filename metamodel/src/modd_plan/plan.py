@@ -21,7 +21,7 @@ from functools import lru_cache
 from math import lcm
 from typing import Any
 
-from modd_contracts.types import PlanDocument
+from modd_contracts.types_gen import PlanDocument
 from modd_model.diagnostics import Diagnostic, ModelError
 from modd_model.numbers import MICROS_PER_SECOND, fraction_to_decimal
 from modd_model.query import Topic, link_settings, topics

@@ -14,7 +14,7 @@ from functools import lru_cache
 from operator import itemgetter
 from typing import Any, Protocol
 
-from modd_contracts.types import (
+from modd_contracts.types_gen import (
     PlanDocument,
     PlanRadio,
     PlanRadioDiagnostic,

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
-from modd_contracts.types import PlanProposal
+from modd_contracts.types_gen import PlanProposal
 from modd_model.numbers import fraction_to_decimal, to_fraction
 
 from .radio import RadioReport

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from math import ceil
 from typing import Any
 
-from modd_contracts.types import PlanRadio
+from modd_contracts.types_gen import PlanRadio
 
 from .airtime import lora_time_on_air, sik_time_on_air, wifi_time_on_air
 from .linkbudget import KEEPALIVE_BYTES, KEEPALIVE_S, LinkBudget, wire_bytes

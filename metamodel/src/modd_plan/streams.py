@@ -26,8 +26,8 @@ from fractions import Fraction
 from functools import cached_property, lru_cache
 from typing import Any
 
-from modd_contracts import aggregations as agg
-from modd_contracts.aggregations import NAMES
+from modd_contracts import aggregations_gen as agg
+from modd_contracts.aggregations_gen import NAMES
 from modd_model.numbers import fraction_to_decimal, to_fraction
 
 from .derive import PAIR_SOURCE_RULES, SINGLE_SOURCE_RULES
@@ -361,8 +361,8 @@ class _Relations:
             options = [j for j in group if kept[j]] + ([n] if k in joined else [])
             if not options:
                 return None
-            factors = [(an * bd) // (ad * bn) for bn, bd in
-                       (self.nds[j] if j < n else helper._nd for j in options)]  # type: ignore
+            nds = [self.nds[j] if j < n else helper._nd for j in options]  # type: ignore
+            factors = [(an * bd) // (ad * bn) for bn, bd in nds]
             f = min(factors)
             j = options[factors.index(f)]
             chosen.append(Source(self.streams[j] if j < n else helper, f))  # type: ignore[arg-type]
@@ -509,8 +509,9 @@ def plan_streams(
             kept[i] = True
         streams = relations.streams
         # contract order: aggregation order, then period
-        ranked = sorted(zip([_AGG_INDEX[a] for a in relations.aggs],
-                            [s._sort_period for s in streams], range(n), strict=True))  # type: ignore
+        periods = [s._sort_period for s in streams]  # type: ignore
+        aggs = [_AGG_INDEX[a] for a in relations.aggs]
+        ranked = sorted(zip(aggs, periods, range(n), strict=True))
         if helper is not None:  # nobody's: its place among the others
             ranked.append((_AGG_INDEX[agg.ALL], helper._sort_period, n))  # type: ignore
             ranked.sort()

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Any, Protocol
 
-from modd_contracts import aggregations as agg
+from modd_contracts import aggregations_gen as agg
 
 Scalar = float | int | bool
 Value = Scalar | list[Scalar] | None

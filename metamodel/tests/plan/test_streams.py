@@ -5,7 +5,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any
 
-from modd_contracts.types import PlanDocument, PlanStream
+from modd_contracts.types_gen import PlanDocument, PlanStream
 from modd_plan.plan import make_plan
 from modd_plan.streams import StreamKey, find_sources
 

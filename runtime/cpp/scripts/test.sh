@@ -37,7 +37,7 @@ for t in "${TARGETS[@]}"; do
   mkdir -p "$corpus"
   if [ "$t" = link_decoder ]; then
     # Seed with the shared vectors' bytes.
-    for v in runtime/vectors/*.json; do
+    for v in contracts/vectors/link/*.json; do
       python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); h=d.get("hex"); h and sys.stdout.buffer.write(bytes.fromhex(h))' \
         "$v" > "$corpus/$(basename "$v" .json)"
     done

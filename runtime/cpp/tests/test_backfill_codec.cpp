@@ -1,4 +1,4 @@
-// Backfill frames: the shared vectors runtime/vectors/backfill.json (written by
+// Backfill frames: the shared vectors contracts/vectors/link/backfill.json (written by
 // the Python codec) decoded and re-encoded byte for byte by the C++ codec, and
 // the invalid ones refused.
 #include <gtest/gtest.h>

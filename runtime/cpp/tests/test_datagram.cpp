@@ -1,4 +1,4 @@
-// Datagram transports: the shared vectors runtime/vectors/datagram.json (written
+// Datagram transports: the shared vectors contracts/vectors/link/datagram.json (written
 // by the Python codec) verified and re-encoded byte for byte by the C++ codec;
 // forged, reflected, replayed and corrupt datagrams are refused.
 #include <gtest/gtest.h>

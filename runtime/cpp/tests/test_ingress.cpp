@@ -88,9 +88,9 @@ TEST(Ingress, RejectsBadFrames) {
   }
 }
 
-// The shared vectors (runtime/vectors/ingress/replies.json, written by the Python codec).
+// The shared vectors (contracts/vectors/ingress/replies.json, written by the Python codec).
 TEST(IngressVectors, RepliesDecodeAndEncodeByteForByte) {
-  std::ifstream f(std::string(MODD_VECTORS_DIR) + "/ingress/replies.json");
+  std::ifstream f(std::string(MODD_VECTORS_DIR) + "/../ingress/replies.json");
   ASSERT_TRUE(f);
   auto vectors = nlohmann::json::parse(f);
   struct H : modd::ingress::ReplyHandler {

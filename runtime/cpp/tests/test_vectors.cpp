@@ -1,4 +1,4 @@
-// The shared vectors in runtime/vectors/: the C++ codec decodes each hex to the
+// The shared vectors in contracts/vectors/link/: the C++ codec decodes each hex to the
 // listed message and encodes the message back to the same bytes.
 #include <gtest/gtest.h>
 
@@ -207,7 +207,7 @@ TEST(Vectors, SlotTable) {
   }
 }
 
-// Declared resolution (runtime/vectors/quantised.json): each unit is the values of the
+// Declared resolution (contracts/vectors/link/quantised.json): each unit is the values of the
 // slots of one DATA datagram, one chain of steps per stream starting empty.
 TEST(Vectors, QuantisedUnitsDecodeAndEncodeByteForByte) {
   json v = load("quantised.json");

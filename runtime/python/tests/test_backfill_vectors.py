@@ -1,4 +1,4 @@
-"""The Python backfill codec against runtime/vectors/backfill.json (C++ passes them too)."""
+"""The Python backfill codec against contracts/vectors/link/backfill.json (C++ passes them too)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,8 @@ from modd.link import backfill as bf
 from modd.link.codec import FrameSplitter
 from modd.link.frames import Aggregation, ProtocolError, Value, ValueType, value_kind
 
-DOC = json.loads((Path(__file__).resolve().parents[2] / "vectors" / "backfill.json").read_text())
+LINK_VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors" / "link"
+DOC = json.loads((LINK_VECTORS / "backfill.json").read_text())
 
 
 def _from_json(m: dict[str, Any]) -> bf.BackfillMessage:

@@ -11,9 +11,9 @@ from typing import Any
 
 from modd.link.frames import Aggregation
 from modd.subbroker.payload import DeliveredValue, StreamPayload, subscriber_prefix
-from modd_contracts.aggregations import AGGREGATIONS
+from modd_contracts.aggregations_gen import AGGREGATIONS
 from modd_contracts.schema import load, validate, version
-from modd_contracts.types import DeliveredValueFields
+from modd_contracts.types_gen import DeliveredValueFields
 
 VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors"
 

@@ -1,5 +1,5 @@
 """Datagram transports (udp, serial): the shared vectors in
-runtime/vectors/datagram.json checked against an independent computation of
+contracts/vectors/link/datagram.json checked against an independent computation of
 the tags (hashlib/hmac directly) and the stream codec's values, plus forged,
 reflected, replayed and corrupt datagrams, which are dropped before decoding."""
 
@@ -39,8 +39,8 @@ from modd.link.dgreceiver import DatagramReceiver, Reassembly
 from modd.link.frames import Aggregation, ProtocolError, ValueType, value_kind
 from modd.link.serialframe import Deframer, cobs_decode, cobs_encode, crc16, encode_frame
 
-VECTORS = json.loads((Path(__file__).resolve().parents[2] / "vectors" / "datagram.json")
-                     .read_text())
+LINK_VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors" / "link"
+VECTORS = json.loads((LINK_VECTORS / "datagram.json").read_text())
 KEY = bytes.fromhex(VECTORS["session_key"])
 BY_NAME: dict[str, dict[str, Any]] = {v["name"]: v for v in VECTORS["vectors"]}
 S1_KINDS = [value_kind(ValueType.FLOAT32, a) for a in

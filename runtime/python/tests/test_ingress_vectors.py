@@ -1,4 +1,4 @@
-"""The shared ingress vectors (runtime/vectors/ingress/replies.json) with the Python codec:
+"""The shared ingress vectors (contracts/vectors/ingress/replies.json) with the Python codec:
 decode to the listed message, encode back to the same bytes (the C++ side: test_ingress.cpp)."""
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from modd.ingress import (
 from modd.link import codec
 from modd.link.frames import ValueType
 
-VECTORS = Path(__file__).resolve().parents[2] / "vectors" / "ingress" / "replies.json"
+VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors" / "ingress" / "replies.json"
 
 
 def expected(m: dict[str, Any]) -> Catalogue | Ack | Reject:

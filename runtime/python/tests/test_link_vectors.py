@@ -1,4 +1,4 @@
-"""The Python codec against the shared vectors in runtime/vectors/ (C++ passes them too)."""
+"""The Python codec against the shared vectors in contracts/vectors/link/ (C++ passes them too)."""
 
 from __future__ import annotations
 
@@ -32,7 +32,7 @@ from modd.link.frames import (
 )
 from modd.link.schedule import SlotIterator
 
-VECTORS = Path(__file__).resolve().parents[2] / "vectors"
+VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors" / "link"
 ALL = sorted(p for p in VECTORS.glob("*.json"))
 MESSAGES = [p for p in ALL if "message" in json.loads(p.read_text())]
 
@@ -128,20 +128,22 @@ def test_slot_table() -> None:
             s["index"], s["offset_us"], s["streams"])
 
 
-def test_vectors_are_current() -> None:
-    """generate.py reproduces the committed files (the vectors are not edited by hand)."""
+def test_vectors_are_current(tmp_path: Path) -> None:
+    """The one writer (contracts/vectors/generate.py) reproduces the committed link and
+    ingress vectors (they are not edited by hand)."""
     import importlib.util
-    import tempfile
 
-    spec = importlib.util.spec_from_file_location("gen", VECTORS / "generate.py")
+    spec = importlib.util.spec_from_file_location("gen", VECTORS.parent / "generate.py")
     assert spec and spec.loader
     gen = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(gen)
-    with tempfile.TemporaryDirectory() as d:
-        gen.HERE = Path(d)  # type: ignore[attr-defined]
-        gen.main()
-        for p in Path(d).glob("*.json"):
-            assert p.read_text() == (VECTORS / p.name).read_text(), p.name
+    gen.main(tmp_path)
+    written = sorted(tmp_path.glob("*/*.json"))
+    assert {p.parent.name for p in written} == {"link", "ingress"}
+    assert len(written) == len(ALL) + 1
+    for p in written:
+        committed = VECTORS.parent / p.parent.name / p.name
+        assert p.read_text() == committed.read_text(), p.relative_to(tmp_path)
 
 
 def test_link_key_file_is_a_small_regular_file(tmp_path: Path) -> None:

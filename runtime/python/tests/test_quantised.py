@@ -1,5 +1,5 @@
 """Declared resolution on the live link (docs/protocol.md, "Quantised values"):
-the shared vectors (runtime/vectors/quantised.json), the error bound for any
+the shared vectors (contracts/vectors/link/quantised.json), the error bound for any
 value (Hypothesis), and loss: datagrams of quantised slots through the emulated
 radio at 5 % loss (with NACK repair, and with none), every delivered value
 within half a step of what the sender aggregated."""
@@ -24,7 +24,7 @@ from modd.link.frames import Aggregation, ProtocolError, Value, ValueType, value
 from modd.link.quantise import MAX_STEPS, steps
 from modd.radio.channel import Channel, RadioSpec
 
-VECTORS = Path(__file__).resolve().parents[2] / "vectors"
+VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors" / "link"
 STEP = 0.01
 KINDS = [
     value_kind(ValueType.FLOAT32, a, STEP)

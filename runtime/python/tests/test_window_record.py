@@ -121,8 +121,9 @@ def test_the_manager_keeps_the_record_without_a_clean_stop(tmp_path: Path) -> No
     m = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
     m.on_config(running)  # type: ignore[arg-type]
     q = S // 4
-    m.on_windows(running, [Window(1, k, 0, T0 + k * q, T0 + (k + 1) * q, Value(True, 1.0))  # type: ignore[arg-type]
-                           for k in range(40) if not 10 <= k < 20])
+    windows = [Window(1, k, 0, T0 + k * q, T0 + (k + 1) * q, Value(True, 1.0))
+               for k in range(40) if not 10 <= k < 20]
+    m.on_windows(running, windows)  # type: ignore[arg-type]
     deadline = time.monotonic() + SAVE_S + 5
     while True:  # no close(): as after a kill -9
         doc = StateDir(tmp_path).load_windows()

@@ -27,6 +27,8 @@ ORIGINALS = {
     "subscriber.cpp": "runtime/cpp/src/client/subscriber.cpp",
     "delivered_value.gen.hpp": "runtime/cpp/include/modd/client/delivered_value.gen.hpp",
     "wire.hpp": "runtime/cpp/include/modd/ingress/wire.hpp",  # the publisher's, shared
+    # its codes and limits, generated from modd_contracts/wire.json
+    "wire.gen.hpp": "runtime/cpp/include/modd/ingress/wire.gen.hpp",
 }
 
 #: The checkout this package sits in (src/modd_gen/cpp_client -> the repository).

@@ -44,6 +44,8 @@ def _project(ctx: Context, pub: PublisherView) -> list[Artifact]:
             Artifact(f"{root}/modd/src/publisher.cpp", source, "integrator"),
             # the ingress wire header the client shares with the PubBroker
             Artifact(f"{root}/modd/include/modd/ingress/wire.hpp", read("wire.hpp"),
+                     "integrator"),
+            Artifact(f"{root}/modd/include/modd/ingress/wire.gen.hpp", read("wire.gen.hpp"),
                      "integrator")]
     user = [("src/driver.cpp", "cpp_driver/driver.cpp.j2"),
             ("user.cmake", "cpp_driver/user.cmake.j2")]

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "modd/link/wire.gen.hpp"  // packet bounds and defaults (wire.json)
 #include "modd/util/error.hpp"
 
 namespace modd::broker {
@@ -91,8 +92,12 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
     c.fail("/link/device", "missing: a serial link needs the radio's device, e.g. /dev/ttyUSB0");
   get(c, l, "/link", "baud", cfg.link_baud);
   get(c, l, "/link", "max_packet", cfg.link_max_packet);
-  if (cfg.link_max_packet == 0) cfg.link_max_packet = cfg.link_transport == "serial" ? 252 : 1472;
-  if (cfg.link_max_packet < 32 || cfg.link_max_packet > 65507) c.fail("/link/max_packet", "expected 32..65507");
+  namespace dg = modd::link::dgram;
+  if (cfg.link_max_packet == 0)
+    cfg.link_max_packet = cfg.link_transport == "serial" ? dg::kDefaultSerialPacket : dg::kDefaultUdpPacket;
+  if (cfg.link_max_packet < dg::kMinPacket || cfg.link_max_packet > dg::kMaxPacket)
+    c.fail("/link/max_packet",
+           "expected " + std::to_string(dg::kMinPacket) + ".." + std::to_string(dg::kMaxPacket));
   get(c, l, "/link", "delay_ms", cfg.link_delay_ms);
   if (cfg.link_delay_ms > 3'600'000) c.fail("/link/delay_ms", "above one hour");
   get(c, l, "/link", "keepalive_timeout_s", cfg.link_keepalive_timeout_s);

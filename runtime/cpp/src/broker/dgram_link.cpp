@@ -16,9 +16,6 @@ namespace dg = modd::link::dgram;
 
 namespace {
 
-constexpr uint8_t kNack = 0x09;  // control frame: ranges of slots to resend
-constexpr size_t kMaxNackRanges = 32;
-
 size_t varint_size(uint64_t v) {
   size_t n = 1;
   while (v >= 0x80) {
@@ -184,7 +181,7 @@ void DatagramLink::on_control_fragment(std::span<const uint8_t> raw, int64_t now
 void DatagramLink::on_control_frame(const std::vector<uint8_t>& frame) {
   auto f = split_frame(frame);
   if (!f || f->size != frame.size()) throw Error(ErrorCode::BadFrame, "not one control frame", 0);
-  if (f->type == kNack) {
+  if (f->type == dg::kNack) {
     on_nack(f->body);
     return;
   }
@@ -225,12 +222,14 @@ void DatagramLink::on_control_frame(const std::vector<uint8_t>& frame) {
 void DatagramLink::on_nack(std::span<const uint8_t> body) {
   ByteReader r(body);
   uint64_t n = r.varint();
-  if (n < 1 || n > kMaxNackRanges) r.fail("a NACK holds 1..32 ranges");
+  if (n < 1 || n > dg::kMaxNackRanges)
+    r.fail("a NACK holds 1.." + std::to_string(dg::kMaxNackRanges) + " ranges");
   ++c_.nacks;
   std::vector<std::pair<uint64_t, uint64_t>> ranges;
   for (uint64_t i = 0; i < n; ++i) {
     uint64_t first = r.varint(), count = r.varint();
-    if (count < 1 || count > 65535) r.fail("NACK range of 0 or more than 65535 slots");
+    if (count < 1 || count > dg::kMaxNackRangeSlots)
+      r.fail("NACK range of 0 or more than " + std::to_string(dg::kMaxNackRangeSlots) + " slots");
     ranges.emplace_back(first, count);
   }
   // Paced: at most per_nack_ bytes for this NACK and what live DATA has earned; what does

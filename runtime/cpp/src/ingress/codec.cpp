@@ -72,7 +72,7 @@ void encode_reject(std::vector<uint8_t>& out, const RejectMsg& r) {
   w.varint(r.local_id);
   w.u8(r.reason);
   w.varint(r.count);
-  w.string(r.detail.size() > 255 ? r.detail.substr(0, 255) : r.detail);
+  w.string(r.detail.size() > kMaxName ? r.detail.substr(0, kMaxName) : r.detail);
   put_frame(out, MsgType::Reject, b);
 }
 
@@ -81,7 +81,7 @@ void decode_reply(const RawFrame& f, ReplyHandler& h) {
   switch (static_cast<MsgType>(f.type)) {
     case MsgType::Catalogue: {
       Catalogue c;
-      c.drone = r.string(255);
+      c.drone = r.string(kMaxName);
       c.max_future_ms = r.varint();
       c.max_past_ms = r.varint();
       uint8_t u = r.u8();
@@ -92,9 +92,9 @@ void decode_reply(const RawFrame& f, ReplyHandler& h) {
       for (uint64_t i = 0; i < n; ++i) {
         CatalogueTopic t;
         uint8_t ty = r.u8();
-        if (ty > 3) r.fail("unknown value type " + std::to_string(ty));
+        if (ty >= link::kValueTypeCount) r.fail("unknown value type " + std::to_string(ty));
         t.type = static_cast<ValueType>(ty);
-        t.name = r.string(255);
+        t.name = r.string(kMaxName);
         if (t.name.empty()) r.fail("empty topic name");
         c.topics.push_back(std::move(t));
       }
@@ -115,11 +115,11 @@ void decode_reply(const RawFrame& f, ReplyHandler& h) {
     case MsgType::Reject: {
       RejectMsg m;
       uint64_t id = r.varint();
-      if (id > 65535) r.fail("local topic id above 65535");
+      if (id > kMaxLocalId) r.fail("local topic id above " + std::to_string(kMaxLocalId));
       m.local_id = static_cast<uint32_t>(id);
       m.reason = r.u8();
       m.count = r.varint();
-      m.detail = r.string(255);
+      m.detail = r.string(kMaxName);
       r.expect_end();
       h.on_reject(m);
       return;
@@ -138,7 +138,7 @@ void decode(const RawFrame& f, Handler& h, uint64_t* records_left) {
       m.version = r.u8();
       if (m.version < kMinVersion || m.version > kVersion)
         r.fail("unsupported ingress version " + std::to_string(m.version));
-      m.publisher = r.string(255);
+      m.publisher = r.string(kMaxName);
       r.expect_end();
       h.on_hello(m);
       return;
@@ -146,12 +146,12 @@ void decode(const RawFrame& f, Handler& h, uint64_t* records_left) {
     case MsgType::Register: {
       Register m;
       uint64_t id = r.varint();
-      if (id > 65535) r.fail("local topic id above 65535");
+      if (id > kMaxLocalId) r.fail("local topic id above " + std::to_string(kMaxLocalId));
       m.local_id = static_cast<uint32_t>(id);
       uint8_t t = r.u8();
-      if (t > 3) r.fail("unknown value type " + std::to_string(t));
+      if (t >= link::kValueTypeCount) r.fail("unknown value type " + std::to_string(t));
       m.type = static_cast<ValueType>(t);
-      m.topic = r.string(255);
+      m.topic = r.string(kMaxName);
       if (m.topic.empty()) r.fail("empty topic name");
       r.expect_end();
       h.on_register(m);
@@ -165,7 +165,7 @@ void decode(const RawFrame& f, Handler& h, uint64_t* records_left) {
         Record rec;
         uint64_t id = r.varint();
         ValueType t;
-        if (id > 65535 || !h.type_of(static_cast<uint32_t>(id), t))
+        if (id > kMaxLocalId || !h.type_of(static_cast<uint32_t>(id), t))
           r.fail("record " + std::to_string(i) + " uses unregistered local id " + std::to_string(id));
         rec.local_id = static_cast<uint32_t>(id);
         rec.timestamp_ns = r.fixed<int64_t>();

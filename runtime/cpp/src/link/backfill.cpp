@@ -6,8 +6,6 @@ namespace modd::link::backfill {
 
 namespace {
 
-constexpr uint64_t kMaxPeriodUs = 366ull * 86400 * 1'000'000;
-
 void put_frame(std::vector<uint8_t>& out, Type type, const std::vector<uint8_t>& body) {
   ByteWriter w(out);
   w.varint(body.size() + 1);
@@ -89,12 +87,12 @@ Message decode(const RawFrame& f) {
     case Type::Request: {
       Request q;
       q.request_id = r.varint();
-      q.topic = r.string(255);
+      q.topic = r.string(kMaxName);
       uint8_t ty = r.u8();
-      if (ty > 3) r.fail("unknown value type " + std::to_string(ty));
+      if (ty >= kValueTypeCount) r.fail("unknown value type " + std::to_string(ty));
       q.type = static_cast<ValueType>(ty);
       uint8_t a = r.u8();
-      if (a > 7) r.fail("unknown aggregation " + std::to_string(a));
+      if (a >= table::kAggregationCount) r.fail("unknown aggregation " + std::to_string(a));
       q.aggregation = static_cast<Aggregation>(a);
       q.period_us = r.varint();
       if (q.period_us < 1 || q.period_us > kMaxPeriodUs) r.fail("window period out of range");
@@ -151,7 +149,7 @@ DataFrame decode_data(const RawFrame& f, const ValueKind& kind) {
   r.varint();
   d.first = r.varint();
   uint64_t n = r.varint();
-  if (n < 1 || n > kMaxBatch) r.fail("window count " + std::to_string(n) + " out of 1..65535");
+  if (n < 1 || n > kMaxBatch) r.fail("window count " + std::to_string(n) + " out of 1.." + std::to_string(kMaxBatch));
   if (d.first + n > kMaxWindows) r.fail("windows beyond the largest request");
   auto bm = r.bytes((n + 7) / 8);
   for (size_t i = n; i < bm.size() * 8; ++i)

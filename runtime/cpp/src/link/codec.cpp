@@ -9,9 +9,6 @@ namespace modd::link {
 
 namespace {
 
-constexpr size_t kMaxPing = 64;
-constexpr size_t kMaxList = 65535;
-
 void put_frame(std::vector<uint8_t>& out, MsgType type, const std::vector<uint8_t>& body) {
   ByteWriter w(out);
   w.varint(body.size() + 1);
@@ -295,18 +292,19 @@ Message decode(const RawFrame& f) {
       Config c;
       c.config_id = r.u8();
       uint64_t sp = r.varint();
-      if (sp > 86400) r.fail("status period above one day");
+      if (sp > kMaxStatusPeriodS) r.fail("status period above one day");
       c.status_period_s = static_cast<uint32_t>(sp);
       uint64_t nt = r.varint();
       if (nt > kMaxList || nt > r.remaining()) r.fail("topic count " + std::to_string(nt) + " too large");
       for (uint64_t i = 0; i < nt; ++i) {
         TopicSpec t;
-        t.name = r.string(255);
+        t.name = r.string(kMaxName);
         uint8_t ty = r.u8();
-        if (ty > 3) r.fail("unknown value type " + std::to_string(ty));
+        if (ty >= kValueTypeCount) r.fail("unknown value type " + std::to_string(ty));
         t.type = static_cast<ValueType>(ty);
         uint64_t bs = r.varint();
-        if (bs < 1 || bs > 1'000'000) r.fail("buffer size " + std::to_string(bs) + " out of 1..1000000");
+        if (bs < 1 || bs > kMaxBufferSize)
+          r.fail("buffer size " + std::to_string(bs) + " out of 1.." + std::to_string(kMaxBufferSize));
         t.buffer_size = static_cast<uint32_t>(bs);
         t.period_us = r.varint();
         c.topics.push_back(std::move(t));
@@ -319,10 +317,10 @@ Message decode(const RawFrame& f) {
         if (topic >= nt) r.fail("stream " + std::to_string(i) + " names topic " + std::to_string(topic) + " of " + std::to_string(nt));
         s.topic = static_cast<uint32_t>(topic);
         uint8_t a = r.u8();
-        if (a > 7) r.fail("unknown aggregation " + std::to_string(a));
+        if (a >= table::kAggregationCount) r.fail("unknown aggregation " + std::to_string(a));
         s.aggregation = static_cast<Aggregation>(a);
         s.period_us = r.varint();
-        if (s.period_us == 0 || s.period_us > 366ull * 86400 * 1'000'000) r.fail("stream period out of range");
+        if (s.period_us == 0 || s.period_us > kMaxPeriodUs) r.fail("stream period out of range");
         c.streams.push_back(s);
       }
       if (r.remaining() > 0) {

@@ -58,7 +58,8 @@ std::vector<uint8_t> encode_data(const DataDatagram& d, const Mac& key, uint8_t 
   w.u8(static_cast<uint8_t>(d.slot & 0xFF));
   w.u8(static_cast<uint8_t>((d.slot >> 8) & 0xFF));
   if (!d.presence.empty()) {
-    if (d.slots.size() > 255) throw std::invalid_argument("more than 255 slots");
+    if (d.slots.size() > kMaxDatagramSlots)
+      throw std::invalid_argument("more than " + std::to_string(kMaxDatagramSlots) + " slots");
     w.u8(static_cast<uint8_t>(d.slots.size()));
     w.varint(d.presence.size());
     std::vector<uint8_t> bm((d.presence.size() + 7) / 8);

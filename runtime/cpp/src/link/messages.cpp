@@ -4,23 +4,21 @@
 
 namespace modd::link {
 
-namespace {
-constexpr const char* kTypeNames[] = {"float32", "float64", "int", "bool"};
-// The aggregation table and enum are generated from the metamodel
-// (python -m modd_contracts.typegen), the enum in wire-code order.
-static_assert(table::kAggregationCount == static_cast<int>(Aggregation::Sum) + 1,
-              "Aggregation enum and the generated aggregation table differ");
-}  // namespace
+// The value types' labels (wire.gen.hpp) and the aggregation table and enum are
+// generated from the metamodel (python -m modd_contracts.typegen), in wire-code order.
 
-const char* value_type_name(ValueType t) { return kTypeNames[static_cast<int>(t) & 3]; }
+const char* value_type_name(ValueType t) {
+  size_t i = static_cast<size_t>(t);
+  return i < kValueTypeCount ? kValueTypeLabels[i] : "?";
+}
 const char* aggregation_name(Aggregation a) {
   int i = static_cast<int>(a);
   return i < table::kAggregationCount ? table::kAggregations[i].name : "?";
 }
 
 bool parse_value_type(const std::string& s, ValueType& out) {
-  for (int i = 0; i < 4; ++i)
-    if (s == kTypeNames[i]) { out = static_cast<ValueType>(i); return true; }
+  for (size_t i = 0; i < kValueTypeCount; ++i)
+    if (s == kValueTypeLabels[i]) { out = static_cast<ValueType>(i); return true; }
   return false;
 }
 bool parse_aggregation(const std::string& s, Aggregation& out) {

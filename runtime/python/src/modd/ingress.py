@@ -3,7 +3,7 @@ publisher contract's value conversion and topic-name resolution.
 
 Shared by the Python publisher client (``modd.publisher``) and the tests; the C++ side is
 ``runtime/cpp/src/ingress/codec.cpp`` (broker) and ``src/client/publisher.cpp`` (client),
-checked against the same vectors (runtime/vectors/ingress_*.json).
+checked against the same vectors (contracts/vectors/ingress/replies.json).
 
 Example::
 
@@ -18,13 +18,15 @@ import struct
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from modd_contracts.ingress_wire_gen import MAX_FRAME as MAX_FRAME
+from modd_contracts.ingress_wire_gen import MAX_LOCAL_ID, MAX_NAME, VERSION, MsgType
+
 from modd.link.codec import Reader, string, varint
 from modd.link.frames import ValueType
 
-INGRESS_VERSION = 2
-HELLO, REGISTER, SAMPLES = 0x01, 0x02, 0x03
-CATALOGUE, ACK, REJECT = 0x81, 0x82, 0x83
-MAX_FRAME = 1 << 20
+INGRESS_VERSION = VERSION
+HELLO, REGISTER, SAMPLES = MsgType.HELLO, MsgType.REGISTER, MsgType.SAMPLES
+CATALOGUE, ACK, REJECT = MsgType.CATALOGUE, MsgType.ACK, MsgType.REJECT
 # REJECT reason codes (the broker's Reject enum, runtime/cpp/include/modd/broker/counters.hpp).
 REASONS = ("unknown topic", "wrong type", "value not finite", "timestamp out of bounds",
            "archive queue full", "malformed", "over its fair share of the archive queue")
@@ -103,7 +105,7 @@ def encode_ack(a: Ack) -> bytes:
 
 def encode_reject(r: Reject) -> bytes:
     return frame(REJECT, varint(r.local_id) + bytes([r.reason]) + varint(r.count)
-                 + string(r.detail[:255]))
+                 + string(r.detail[:MAX_NAME]))
 
 
 def decode_reply(mtype: int, body: bytes) -> Reply:
@@ -111,16 +113,16 @@ def decode_reply(mtype: int, body: bytes) -> Reply:
     r = Reader(body, 1)
     out: Reply
     if mtype == CATALOGUE:
-        c = Catalogue(r.string(255), r.varint(), r.varint())
+        c = Catalogue(r.string(MAX_NAME), r.varint(), r.varint())
         flag = r.u8()
         if flag > 1:
             raise r.fail("accept_unknown not 0 or 1")
         c.accept_unknown = flag == 1
         for _ in range(r.varint()):
             t = r.u8()
-            if t > 3:
+            if t >= len(ValueType):
                 raise r.fail(f"unknown value type {t}")
-            c.topics[r.string(255)] = ValueType(t)
+            c.topics[r.string(MAX_NAME)] = ValueType(t)
         out = c
     elif mtype == ACK:
         out = Ack(r.varint(), r.varint(), r.varint())
@@ -128,9 +130,9 @@ def decode_reply(mtype: int, body: bytes) -> Reply:
             raise r.fail("ACK counts out of order")
     elif mtype == REJECT:
         lid = r.varint()
-        if lid > 65535:
-            raise r.fail("local topic id above 65535")
-        out = Reject(lid, r.u8(), r.varint(), r.string(255))
+        if lid > MAX_LOCAL_ID:
+            raise r.fail(f"local topic id above {MAX_LOCAL_ID}")
+        out = Reject(lid, r.u8(), r.varint(), r.string(MAX_NAME))
     else:
         raise r.fail(f"unknown ingress reply type {mtype}")
     r.end()

@@ -33,7 +33,7 @@ from typing import Any
 
 from modd_contracts import keys
 from modd_contracts.delivered import load_delivered
-from modd_contracts.types import DeliveredValue
+from modd_contracts.types_gen import DeliveredValue
 
 from .zenoh_session import DEFAULT_ENDPOINT, client_settings, open_session
 

@@ -29,7 +29,7 @@ from dataclasses import asdict, fields
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
-from modd_contracts.types import DeliveredValueFields
+from modd_contracts.types_gen import DeliveredValueFields
 
 from .subbroker.keys import sub_key, subscribe_key
 from .subbroker.payload import DeliveredValue

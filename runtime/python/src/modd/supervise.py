@@ -53,7 +53,7 @@ DEFAULT_POLICY = RestartPolicy()
 
 
 class Child(Protocol):
-    """A process of the run (``modd.up.Process``)."""
+    """A process of the run (``modd_launch.up.Process``)."""
 
     name: str
     log: Path

@@ -10,21 +10,11 @@
 #include <string_view>
 #include <vector>
 
+// kVersion, kMinVersion, kMaxFrame, MsgType (generated from wire.json; it travels
+// with this header)
+#include "modd/ingress/wire.gen.hpp"
+
 namespace modd::ingress {
-
-// Version 2 adds the broker's answers (CATALOGUE, ACK, REJECT); a version-1 publisher
-// gets none of them (the broker never writes to it).
-inline constexpr uint8_t kVersion = 2;
-inline constexpr uint8_t kMinVersion = 1;
-inline constexpr size_t kMaxFrame = 1 << 20;  // bytes after the length prefix
-
-// One line a direction.
-// clang-format off
-enum class MsgType : uint8_t {
-  Hello = 0x01, Register = 0x02, Samples = 0x03,  // publisher -> broker
-  Catalogue = 0x81, Ack = 0x82, Reject = 0x83,    // broker -> publisher (version 2)
-};
-// clang-format on
 
 namespace wire {
 

@@ -33,8 +33,8 @@ class ClientProofs {
 };
 Nonce random_nonce();
 
-// Shorter link keys are refused where they are read (here and in the SubBroker).
-constexpr size_t kMinKeyBytes = 16;
+// Shorter link keys than kMinKeyBytes (modd/link/wire.gen.hpp) are refused where
+// they are read (here and in the SubBroker).
 
 // Resolves a key reference: "env:NAME" or "file:PATH" (file content, trailing
 // newline stripped). Throws Error(BadConfig) naming the reference, and for a key

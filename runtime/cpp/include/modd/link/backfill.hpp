@@ -14,11 +14,7 @@
 
 namespace modd::link::backfill {
 
-enum class Type : uint8_t { Request = 0x50, Data = 0x51, Progress = 0x52, End = 0x53, Cancel = 0x54 };
-enum class EndStatus : uint8_t { Done = 0, Cancelled = 1, UnknownTopic = 2, BadRequest = 3, Busy = 4, Io = 5 };
-
-inline constexpr uint64_t kMaxWindows = (1ull << 32) - 1;  // windows of one request
-inline constexpr size_t kMaxBatch = 65535;                  // windows of one BACKFILL_DATA
+// Type, EndStatus, kMaxWindows and kMaxBatch: modd/link/wire.gen.hpp (wire.json).
 
 // Windows [from_ns + k·P, from_ns + (k+1)·P) for k = resume .. windows-1.
 struct Request {

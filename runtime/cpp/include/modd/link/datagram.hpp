@@ -17,16 +17,7 @@
 
 namespace modd::link::dgram {
 
-constexpr uint8_t kData = 0x30;
-constexpr uint8_t kDataBitmap = 0x31;
-constexpr uint8_t kFragment = 0x32;
-constexpr size_t kMaxFragments = 16;
-constexpr size_t kFragmentHead = 5;  // type, config id, slot16, frag
-constexpr uint8_t kControl = 0x40;
-constexpr uint8_t kHandshake = 0x41;
-constexpr uint8_t kControlFragment = 0x42;
-constexpr size_t kTag = 4;
-constexpr size_t kControlTag = 8;
+// Datagram types, tag sizes and fragment limits: modd/link/wire.gen.hpp (wire.json).
 constexpr uint8_t kDroneToBase = 'D';
 constexpr uint8_t kBaseToDrone = 'B';
 

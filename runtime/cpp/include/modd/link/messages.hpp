@@ -8,31 +8,9 @@
 #include <vector>
 
 #include "modd/link/aggregation_table.gen.hpp"  // the Aggregation enum, generated
+#include "modd/link/wire.gen.hpp"  // versions, limits, MsgType, ValueType (wire.json)
 
 namespace modd::link {
-
-inline constexpr uint8_t kVersion = 1;
-inline constexpr size_t kMaxFrame = 1 << 20;  // bytes after the length prefix
-inline constexpr uint32_t kMaxAcceptedDelayMs = 3'600'000;  // CONFIG's optional accepted delay: one hour
-
-enum class MsgType : uint8_t {
-  Hello = 0x01,
-  Challenge = 0x02,
-  Auth = 0x03,
-  AuthOk = 0x04,
-  Ping = 0x05,
-  Pong = 0x06,
-  Config = 0x07,
-  ConfigAck = 0x08,
-  Data = 0x10,            // seq8, values (all streams present)
-  DataBitmap = 0x11,      // seq8, presence bitmap, values
-  DataSync = 0x12,        // config id, full slot number, values
-  DataSyncBitmap = 0x13,  // config id, full slot number, presence bitmap, values
-  Status = 0x20,
-  Error = 0x7F,
-};
-
-enum class ValueType : uint8_t { Float32 = 0, Float64 = 1, Int = 2, Bool = 3 };
 
 const char* value_type_name(ValueType t);
 const char* aggregation_name(Aggregation a);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "modd/util/error.hpp"
+#include "modd/util/varint.gen.hpp"  // kMaxVarintBytes (wire.json)
 
 namespace modd {
 
@@ -65,14 +66,14 @@ class ByteReader {
   }
   uint64_t varint() {
     uint64_t v = 0;
-    for (int shift = 0; shift < 70; shift += 7) {
+    for (int shift = 0; shift < 7 * kMaxVarintBytes; shift += 7) {
       need(1);
       uint8_t b = d_[pos_++];
       if (shift == 63 && b > 1) fail("varint overflows 64 bits");
       v |= static_cast<uint64_t>(b & 0x7F) << shift;
       if (!(b & 0x80)) return v;
     }
-    fail("varint longer than 10 bytes");
+    fail("varint longer than " + std::to_string(kMaxVarintBytes) + " bytes");
   }
   int64_t svarint() { return zigzag_decode(varint()); }
   template <typename T>

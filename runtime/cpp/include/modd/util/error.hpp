@@ -6,19 +6,9 @@
 #include <stdexcept>
 #include <string>
 
-namespace modd {
+#include "modd/util/error_code.gen.hpp"  // ErrorCode, the ERROR frame's codes (wire.json)
 
-enum class ErrorCode : uint8_t {
-  BadFrame = 1,          // malformed bytes (truncated, overlong varint, bad type code)
-  Version = 2,           // unsupported protocol version
-  AuthFailed = 3,        // HMAC proof did not verify
-  NotAuthenticated = 4,  // message other than the handshake before authentication
-  BadConfig = 5,         // CONFIG (or config file) inconsistent
-  Busy = 6,              // a CONFIG is already waiting for its switch date
-  Timeout = 8,           // handshake or peer timeout
-  Internal = 9,          // system call failure and the like
-  Io = 10,               // file or socket error
-};
+namespace modd {
 
 const char* error_code_name(ErrorCode code);
 

@@ -1,6 +1,6 @@
 """The MoDD link protocol in Python (docs/protocol.md): frames, codec, handshake, slots.
 
-The C++ PubBroker and this codec agree byte for byte on the vectors in runtime/vectors/.
+The C++ PubBroker and this codec agree byte for byte on the vectors in contracts/vectors/link/.
 
 Example::
 

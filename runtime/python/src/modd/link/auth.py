@@ -16,6 +16,8 @@ import hmac
 import os
 import socket
 
+from modd_contracts.link_wire_gen import MIN_KEY_BYTES as MIN_KEY_BYTES  # as the PubBroker's
+
 from modd.link import codec
 from modd.link.frames import (
     VERSION,
@@ -31,7 +33,6 @@ from modd.zenoh_auth import read_secret
 
 CLIENT_LABEL = b"MODD1C"
 SERVER_LABEL = b"MODD1S"
-MIN_KEY_BYTES = 16  # as the PubBroker (link/auth.hpp, kMinKeyBytes): shorter keys are refused
 
 
 def check_key_length(key: bytes, reference: str) -> bytes:

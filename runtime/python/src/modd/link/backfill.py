@@ -21,7 +21,15 @@ from __future__ import annotations
 
 import struct
 from dataclasses import dataclass, field
-from enum import IntEnum
+
+from modd_contracts.aggregations_gen import AGGREGATIONS
+
+# The backfill frames' codes and limits, generated from modd_contracts/wire.json.
+from modd_contracts.link_wire_gen import MAX_BATCH as MAX_BATCH
+from modd_contracts.link_wire_gen import MAX_NAME, MAX_PERIOD_US
+from modd_contracts.link_wire_gen import MAX_WINDOWS as MAX_WINDOWS
+from modd_contracts.link_wire_gen import BackfillType as BackfillType
+from modd_contracts.link_wire_gen import EndStatus as EndStatus
 
 from modd.link.codec import RawFrame, Reader, _frame, _get_value, _put_value, string, varint
 from modd.link.frames import (
@@ -33,27 +41,6 @@ from modd.link.frames import (
     ValueType,
     value_kind,
 )
-
-MAX_WINDOWS = (1 << 32) - 1  # windows of one request
-MAX_BATCH = 65535  # windows of one BACKFILL_DATA frame
-MAX_PERIOD_US = 366 * 86400 * 1_000_000
-
-
-class BackfillType(IntEnum):
-    REQUEST = 0x50
-    DATA = 0x51
-    PROGRESS = 0x52
-    END = 0x53
-    CANCEL = 0x54
-
-
-class EndStatus(IntEnum):
-    DONE = 0  # every window from the resume point to the end was sent
-    CANCELLED = 1  # a BACKFILL_CANCEL (or a newer request with the same id) stopped it
-    UNKNOWN_TOPIC = 2  # the broker has no such topic in its archive
-    BAD_REQUEST = 3  # type differs from the archive's, or the range is out of bounds
-    BUSY = 4  # too many backfills at once: ask again later
-    IO = 5  # the archive could not be read
 
 
 @dataclass(frozen=True)
@@ -162,12 +149,12 @@ def decode(f: RawFrame) -> BackfillMessage:
     m: BackfillMessage
     if f.type == BackfillType.REQUEST:
         rid = r.varint()
-        topic = r.string(255)
+        topic = r.string(MAX_NAME)
         ty = r.u8()
-        if ty > 3:
+        if ty >= len(ValueType):
             raise r.fail(f"unknown value type {ty}")
         agg = r.u8()
-        if agg > 7:
+        if agg >= len(AGGREGATIONS):
             raise r.fail(f"unknown aggregation {agg}")
         period = r.varint()
         if not 1 <= period <= MAX_PERIOD_US:

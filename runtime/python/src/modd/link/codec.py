@@ -11,6 +11,17 @@ import struct
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from modd_contracts.aggregations_gen import AGGREGATIONS
+from modd_contracts.link_wire_gen import (
+    MAX_BUFFER_SIZE,
+    MAX_LIST,
+    MAX_NAME,
+    MAX_PERIOD_US,
+    MAX_PING,
+    MAX_STATUS_PERIOD_S,
+    MAX_VARINT_BYTES,
+)
+
 from modd.link.frames import (
     MAX_ACCEPTED_DELAY_MS,
     MAX_FRAME,
@@ -38,9 +49,6 @@ from modd.link.frames import (
     ValueType,
 )
 from modd.link.quantise import ESCAPE, MAX_DELTA, MAX_STEPS, steps
-
-MAX_PING = 64
-MAX_LIST = 65535
 
 
 def varint(v: int) -> bytes:
@@ -93,7 +101,7 @@ class Reader:
 
     def varint(self) -> int:
         v = 0
-        for shift in range(0, 70, 7):
+        for shift in range(0, 7 * MAX_VARINT_BYTES, 7):
             b = self.u8()
             if shift == 63 and b > 1:
                 self.pos -= 1
@@ -101,7 +109,7 @@ class Reader:
             v |= (b & 0x7F) << shift
             if not b & 0x80:
                 return v
-        raise self.fail("varint longer than 10 bytes")
+        raise self.fail(f"varint longer than {MAX_VARINT_BYTES} bytes")
 
     def fixed(self, fmt: str) -> float | int:
         n = struct.calcsize(fmt)
@@ -379,20 +387,20 @@ def decode(f: RawFrame) -> Message:
 def _decode_config(r: Reader) -> Config:
     config_id = r.u8()
     sp = r.varint()
-    if sp > 86400:
+    if sp > MAX_STATUS_PERIOD_S:
         raise r.fail("status period above one day")
     nt = r.varint()
     if nt > MAX_LIST or nt > r.remaining():
         raise r.fail(f"topic count {nt} too large")
     topics = []
     for _ in range(nt):
-        name = r.string(255)
+        name = r.string(MAX_NAME)
         ty = r.u8()
-        if ty > 3:
+        if ty >= len(ValueType):
             raise r.fail(f"unknown value type {ty}")
         bs = r.varint()
-        if not 1 <= bs <= 1_000_000:
-            raise r.fail(f"buffer size {bs} out of 1..1000000")
+        if not 1 <= bs <= MAX_BUFFER_SIZE:
+            raise r.fail(f"buffer size {bs} out of 1..{MAX_BUFFER_SIZE}")
         topics.append(TopicSpec(name, ValueType(ty), bs, r.varint()))
     ns = r.varint()
     if ns > MAX_LIST or ns > r.remaining():
@@ -403,10 +411,10 @@ def _decode_config(r: Reader) -> Config:
         if topic >= nt:
             raise r.fail(f"stream {i} names topic {topic} of {nt}")
         a = r.u8()
-        if a > 7:
+        if a >= len(AGGREGATIONS):
             raise r.fail(f"unknown aggregation {a}")
         p = r.varint()
-        if p == 0 or p > 366 * 86400 * 1_000_000:
+        if p == 0 or p > MAX_PERIOD_US:
             raise r.fail("stream period out of range")
         streams.append(StreamSpec(topic, Aggregation(a), p))
     delay = None

@@ -23,23 +23,57 @@ import struct
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+# Types, tags and limits, generated from modd_contracts/wire.json (re-exported: the
+# transports import them from here).
+from modd_contracts.link_wire_gen import (
+    CONTROL_TAG_BYTES as CONTROL_TAG_BYTES,
+)
+from modd_contracts.link_wire_gen import (
+    DGRAM_CONTROL as DGRAM_CONTROL,
+)
+from modd_contracts.link_wire_gen import (
+    DGRAM_CONTROL_FRAGMENT as DGRAM_CONTROL_FRAGMENT,
+)
+from modd_contracts.link_wire_gen import (
+    DGRAM_DATA as DGRAM_DATA,
+)
+from modd_contracts.link_wire_gen import (
+    DGRAM_DATA_BITMAP as DGRAM_DATA_BITMAP,
+)
+from modd_contracts.link_wire_gen import (
+    DGRAM_FRAGMENT as DGRAM_FRAGMENT,
+)
+from modd_contracts.link_wire_gen import (
+    DGRAM_HANDSHAKE as DGRAM_HANDSHAKE,
+)
+from modd_contracts.link_wire_gen import (
+    FRAGMENT_HEAD as FRAGMENT_HEAD,
+)
+from modd_contracts.link_wire_gen import (
+    MAX_DATAGRAM_SLOTS as MAX_DATAGRAM_SLOTS,
+)
+from modd_contracts.link_wire_gen import (
+    MAX_FRAGMENTS as MAX_FRAGMENTS,
+)
+from modd_contracts.link_wire_gen import (
+    MAX_NACK_RANGE_SLOTS as MAX_NACK_RANGE_SLOTS,
+)
+from modd_contracts.link_wire_gen import (
+    MAX_NACK_RANGES as MAX_NACK_RANGES,
+)
+from modd_contracts.link_wire_gen import (
+    NACK as NACK,
+)
+from modd_contracts.link_wire_gen import (
+    TAG_BYTES as TAG_BYTES,
+)
+
 from .codec import Reader, varint
 from .frames import ErrorCode, ProtocolError
 
-DGRAM_DATA = 0x30
-DGRAM_DATA_BITMAP = 0x31
-DGRAM_FRAGMENT = 0x32
-DGRAM_CONTROL = 0x40
-DGRAM_HANDSHAKE = 0x41
-DGRAM_CONTROL_FRAGMENT = 0x42
-NACK = 0x09  # control frame type: ranges of slots to resend
-
-TAG_BYTES = 4
-CONTROL_TAG_BYTES = 8
 SESSION_LABEL = b"MODD1K"
 DRONE_TO_BASE = b"D"
 BASE_TO_DRONE = b"B"
-MAX_NACK_RANGES = 32
 
 
 def session_key(psk: bytes, client_nonce: bytes, server_nonce: bytes) -> bytes:
@@ -92,8 +126,9 @@ def encode_data(d: DataDatagram, key: bytes, direction: bytes) -> bytes:
         head.append(d.config_id)
         head += struct.pack("<H", d.slot & 0xFFFF)
     else:
-        if len(d.slots) > 255:
-            raise ValueError("at most 255 slots in a datagram with a presence bitmap")
+        if len(d.slots) > MAX_DATAGRAM_SLOTS:
+            raise ValueError(
+                f"at most {MAX_DATAGRAM_SLOTS} slots in a datagram with a presence bitmap")
         head.append(DGRAM_DATA_BITMAP)
         head.append(d.config_id)
         head += struct.pack("<H", d.slot & 0xFFFF)
@@ -145,10 +180,6 @@ def verify_data(raw: bytes, key: bytes, direction: bytes, expected_slot: int) ->
         if bm[i // 8] >> (i % 8) & 1:
             raise r.fail("presence bit set beyond the datagram's streams")
     return VerifiedData(config_id, slot, count, bytes(bm), streams, bytes(body[r.pos:]))
-
-
-MAX_FRAGMENTS = 16
-FRAGMENT_HEAD = 5  # type, config id, slot16, frag
 
 
 def slot_bitmap_body(streams: Sequence[bool], values: bytes) -> bytes:
@@ -371,8 +402,8 @@ def decode_nack(body: bytes) -> list[tuple[int, int]]:
     out = []
     for _ in range(n):
         first, count = r.varint(), r.varint()
-        if not 1 <= count <= 65535:
-            raise r.fail("NACK range of 0 or more than 65535 slots")
+        if not 1 <= count <= MAX_NACK_RANGE_SLOTS:
+            raise r.fail(f"NACK range of 0 or more than {MAX_NACK_RANGE_SLOTS} slots")
         out.append((first, count))
     r.end()
     return out

@@ -5,56 +5,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from enum import IntEnum
 
-from modd_contracts.aggregations import AGGREGATIONS
-from modd_contracts.aggregations import Aggregation as Aggregation  # the wire codes, generated
+from modd_contracts.aggregations_gen import AGGREGATIONS
+from modd_contracts.aggregations_gen import Aggregation as Aggregation  # the wire codes, generated
 
-VERSION = 1
-MAX_FRAME = 1 << 20
-
-
-class MsgType(IntEnum):
-    HELLO = 0x01
-    CHALLENGE = 0x02
-    AUTH = 0x03
-    AUTH_OK = 0x04
-    PING = 0x05
-    PONG = 0x06
-    CONFIG = 0x07
-    CONFIG_ACK = 0x08
-    DATA = 0x10
-    DATA_BITMAP = 0x11
-    DATA_SYNC = 0x12
-    DATA_SYNC_BITMAP = 0x13
-    STATUS = 0x20
-    ERROR = 0x7F
-
-
-class ValueType(IntEnum):
-    FLOAT32 = 0
-    FLOAT64 = 1
-    INT = 2
-    BOOL = 3
-
-    @classmethod
-    def parse(cls, name: str) -> ValueType:
-        names = {"float32": cls.FLOAT32, "float64": cls.FLOAT64, "int": cls.INT, "bool": cls.BOOL}
-        return names[name]
-
-    @property
-    def label(self) -> str:
-        return ("float32", "float64", "int", "bool")[self]
-
-
-class ErrorCode(IntEnum):
-    BAD_FRAME = 1
-    VERSION = 2
-    AUTH_FAILED = 3
-    NOT_AUTHENTICATED = 4
-    BAD_CONFIG = 5
-    BUSY = 6
-    TIMEOUT = 8
-    INTERNAL = 9
-    IO = 10
+# The wire's codes and limits, generated from modd_contracts/wire.json.
+from modd_contracts.link_wire_gen import MAX_ACCEPTED_DELAY_MS as MAX_ACCEPTED_DELAY_MS
+from modd_contracts.link_wire_gen import MAX_FRAME as MAX_FRAME
+from modd_contracts.link_wire_gen import VERSION as VERSION
+from modd_contracts.link_wire_gen import ErrorCode as ErrorCode
+from modd_contracts.link_wire_gen import MsgType as MsgType
+from modd_contracts.link_wire_gen import ValueType as ValueType
 
 
 class Scalar(IntEnum):
@@ -145,10 +105,6 @@ class StreamSpec:
     topic: int
     aggregation: Aggregation
     period_us: int
-
-
-#: The largest accepted delay a CONFIG may carry (one hour, as the PubBroker's link.delay_ms).
-MAX_ACCEPTED_DELAY_MS = 3_600_000
 
 
 @dataclass(frozen=True)

@@ -14,8 +14,9 @@ import random
 from collections import Counter
 from dataclasses import dataclass, field
 
-#: The largest UDP payload (IPv4): a larger ``packet`` bound means nothing.
-MAX_PACKET = 65507
+# The largest UDP payload (IPv4, the link contract's): a larger ``packet`` means nothing.
+from modd_contracts.link_wire_gen import MAX_PACKET as MAX_PACKET
+
 #: Settings beyond these are mistakes (a radio that holds a packet for more than
 #: ten minutes, or a queue of an hour, is not a radio any link could use).
 MAX_LATENCY_MS = 600_000.0

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 from modd_contracts import keys
 from modd_contracts.delivered import load_delivered
-from modd_contracts.types import DeliveredValue
+from modd_contracts.types_gen import DeliveredValue
 
 from . import rmw
 from .messages import FLOAT64, FLOAT64_HASH, WINDOW, WINDOW_HASH, float64_cdr, window_cdr

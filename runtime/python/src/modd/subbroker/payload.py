@@ -25,12 +25,12 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
 from typing import Any, cast
 
-from modd_contracts.types import (
+from modd_contracts.types_gen import (
     DELIVERED_VALUE_REQUIRED,
     DELIVERED_VALUE_VERSION,
     DeliveredValueFields,
 )
-from modd_contracts.types import DeliveredValue as DeliveredValueDoc
+from modd_contracts.types_gen import DeliveredValue as DeliveredValueDoc
 from modd_plan.windows import Value
 
 #: Version of the payload (the contract's ``x-version``); a reader rejects a higher one.
@@ -91,7 +91,7 @@ def json_depth_error(raw: bytes | str, limit: int = MAX_DEPTH) -> str | None:
 class DeliveredValue(DeliveredValueFields):
     """One window of a subscription: the fields are the contract's
     (``schemas/delivered_value.schema.json``, generated into
-    :class:`modd_contracts.types.DeliveredValueFields`), the methods read and
+    :class:`modd_contracts.types_gen.DeliveredValueFields`), the methods read and
     write the payload.
 
     ``value`` is ``None`` when the window had no sample (the link's presence

@@ -1,4 +1,4 @@
-"""Generated from metamodel/modd.schema.json by `python -m modd_model.typegen`. Do not edit."""
+"""Generated from metamodel/modd.schema.json by `python -m modd_contracts.typegen`. Do not edit."""
 
 from __future__ import annotations
 

@@ -56,13 +56,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from . import uplink
-from .ports import free_port
-from .supervise import watch
-from .zenoh_auth import CredentialStore, private_dir
-from .zenoh_session import DEFAULT_ENDPOINT
+from modd import uplink
+from modd.ports import free_port
+from modd.supervise import watch
+from modd.zenoh_auth import CredentialStore, private_dir
+from modd.zenoh_session import DEFAULT_ENDPOINT
 
-REPO = Path(__file__).resolve().parents[4]
+REPO = Path(__file__).resolve().parents[3]
 STOP_TIMEOUT_S = 10.0
 
 
@@ -201,7 +201,7 @@ def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
         if getattr(args, "relay", None):
             sub += ["--link", "{}:{}".format(*args.relay)]
         stack.processes.append(Process("subbroker", sub, logs / "subbroker.log"))
-    from .sensors.plan import has_instrument_sensors
+    from modd.sensors.plan import has_instrument_sensors
 
     if drone and has_instrument_sensors(model):  # nmea, ascii, modbus: read by modd-sensors
         stack.processes.append(Process("sensors", [
@@ -233,7 +233,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"modd up: {exc}", file=sys.stderr)
         return 1
     if args.simulate:  # simulated instruments on pseudo-terminals of this run, never real ones
-        from .sim.instruments import simulated_devices
+        from modd.sim.instruments import simulated_devices
 
         model = simulated_devices(model, workdir / "devices")
     local, configs = prepare(model, workdir, args.transport, devices)
@@ -283,7 +283,7 @@ def run(args: argparse.Namespace) -> int:
 
 def kept_note(state: Path, resume: bool) -> str:
     """What happens to a deployment an earlier run kept in ``state``."""
-    from .subbroker.kept import StateDir
+    from modd.subbroker.kept import StateDir
 
     kept = StateDir(state).load_deployment()
     if kept is None:

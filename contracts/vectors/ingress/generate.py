@@ -1,7 +1,7 @@
 # ruff: noqa: E501  (the vector table reads best one vector per line)
 """Writes the shared ingress-protocol (version 2) test vectors with the Python codec.
 
-Run: .venv/bin/python runtime/vectors/ingress/generate.py
+Run: .venv/bin/python contracts/vectors/generate.py (the one writer)
 The C++ codec (runtime/cpp/tests/test_ingress.cpp) and the Python codec
 (runtime/python/tests/test_ingress_vectors.py) both decode every vector's hex to the listed
 message and encode the message back to the same hex.
@@ -50,6 +50,10 @@ def vectors() -> list[dict[str, Any]]:
     ]
 
 
-if __name__ == "__main__":
-    (HERE / "replies.json").write_text(json.dumps(vectors(), indent=1) + "\n")
+def write(here: Path) -> None:
+    (here / "replies.json").write_text(json.dumps(vectors(), indent=1) + "\n")
+
+
+if __name__ == "__main__":  # contracts/vectors/generate.py writes every vector
+    write(HERE)
     print(f"wrote {HERE / 'replies.json'}")

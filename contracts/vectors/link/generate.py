@@ -1,7 +1,7 @@
 # ruff: noqa: E501  (the vector table reads best one vector per line)
 """Writes the shared link-protocol test vectors (one JSON file each) with the Python codec.
 
-Run: .venv/bin/python runtime/vectors/generate.py
+Run: .venv/bin/python contracts/vectors/generate.py (the one writer: this and the ingress vectors)
 The C++ codec (runtime/cpp/tests/test_vectors.cpp) and the Python codec
 (runtime/python/tests/test_vectors.py) both decode every vector's hex to the listed message
 and encode the message back to the same hex. Values are exactly representable in float32.

@@ -1,0 +1,43 @@
+"""Generated from the contracts by `python -m modd_contracts.typegen`. Do not edit.
+
+Wire enumerations, counts and limits (modd_contracts/wire.json).
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+from typing import Final
+
+# -- ingress: The PubBroker's ingress protocol (docs/ingress.md).
+#: Protocol version; 2 adds the broker's answers (CATALOGUE, ACK, REJECT).
+VERSION: Final = 2
+#: Oldest version a broker accepts (a version-1 publisher gets no answers).
+MIN_VERSION: Final = 1
+#: Largest frame, in bytes after the length prefix.
+MAX_FRAME: Final = 1048576
+#: Largest local topic id of a publisher.
+MAX_LOCAL_ID: Final = 65535
+#: Longest topic, publisher or drone name and REJECT detail, in bytes.
+MAX_NAME: Final = 255
+
+
+class MsgType(IntEnum):
+    """The type byte of a frame: publisher -> broker below 0x80, broker -> publisher (version
+    2) above."""
+
+    HELLO = 0x01
+    REGISTER = 0x02
+    SAMPLES = 0x03
+    CATALOGUE = 0x81
+    ACK = 0x82
+    REJECT = 0x83
+
+
+__all__ = [
+    "VERSION",
+    "MIN_VERSION",
+    "MAX_FRAME",
+    "MAX_LOCAL_ID",
+    "MAX_NAME",
+    "MsgType",
+]

@@ -1,0 +1,141 @@
+// Generated from the contracts by `python -m modd_contracts.typegen`. Do not edit.
+// Wire enumerations, counts and limits (modd_contracts/wire.json).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+// The link protocol's frames (docs/protocol.md).
+namespace modd::link {
+
+// Protocol version of HELLO and CHALLENGE.
+inline constexpr uint8_t kVersion = 1;
+// Largest frame, in bytes after the length prefix.
+inline constexpr size_t kMaxFrame = 1048576;
+// Largest accepted delay a CONFIG may carry (one hour, as the PubBroker's link.delay_ms).
+inline constexpr uint32_t kMaxAcceptedDelayMs = 3600000;
+// Largest PING or PONG payload, in bytes.
+inline constexpr size_t kMaxPing = 64;
+// Longest STATUS period a CONFIG may ask for, in seconds: one day (0: no STATUS).
+inline constexpr uint64_t kMaxStatusPeriodS = 86400;
+// Most topics, or streams, of one CONFIG.
+inline constexpr size_t kMaxList = 65535;
+// Longest topic name, in bytes.
+inline constexpr size_t kMaxName = 255;
+// Largest buffer size of a CONFIG topic (the smallest is 1).
+inline constexpr uint64_t kMaxBufferSize = 1000000;
+// Longest stream period of a CONFIG or a backfill request, in microseconds: 366 days (the
+// smallest is 1).
+inline constexpr uint64_t kMaxPeriodUs = 31622400000000;
+// Shortest pre-shared key, in bytes: shorter keys are refused.
+inline constexpr size_t kMinKeyBytes = 16;
+
+// The type byte of a frame.
+enum class MsgType : uint8_t {
+  Hello = 0x01,
+  Challenge = 0x02,
+  Auth = 0x03,
+  AuthOk = 0x04,
+  Ping = 0x05,
+  Pong = 0x06,
+  Config = 0x07,
+  ConfigAck = 0x08,
+  Data = 0x10,  // seq8, values (all streams present)
+  DataBitmap = 0x11,  // seq8, presence bitmap, values
+  DataSync = 0x12,  // config id, full slot number, values
+  DataSyncBitmap = 0x13,  // config id, full slot number, presence bitmap, values
+  Status = 0x20,
+  Error = 0x7F,
+};
+// The number of MsgType values.
+inline constexpr size_t kMsgTypeCount = 14;
+
+// A topic's value type: the metamodel's ValueType enum, coded in its order.
+enum class ValueType : uint8_t {
+  Float32 = 0,
+  Float64 = 1,
+  Int = 2,
+  Bool = 3,
+};
+// The number of ValueType values.
+inline constexpr size_t kValueTypeCount = 4;
+// The metamodel's label of each ValueType, by code.
+inline constexpr const char* kValueTypeLabels[] = {"float32", "float64", "int", "bool"};
+
+}  // namespace modd::link
+
+// Backfill frames of the link (docs/protocol.md, "Backfill").
+namespace modd::link::backfill {
+
+// Most windows of one request.
+inline constexpr uint64_t kMaxWindows = 4294967295;
+// Most windows of one BACKFILL_DATA frame.
+inline constexpr size_t kMaxBatch = 65535;
+
+// The type byte of a backfill frame.
+enum class Type : uint8_t {
+  Request = 0x50,
+  Data = 0x51,
+  Progress = 0x52,
+  End = 0x53,
+  Cancel = 0x54,
+};
+// The number of Type values.
+inline constexpr size_t kTypeCount = 5;
+
+// How a backfill ended (BACKFILL_END).
+enum class EndStatus : uint8_t {
+  Done = 0,  // every window from the resume point to the end was sent
+  Cancelled = 1,  // a BACKFILL_CANCEL (or a newer request with the same id) stopped it
+  UnknownTopic = 2,  // the broker has no such topic in its archive
+  BadRequest = 3,  // type differs from the archive's, or the range is out of bounds
+  Busy = 4,  // too many backfills at once: ask again later
+  Io = 5,  // the archive could not be read
+};
+// The number of EndStatus values.
+inline constexpr size_t kEndStatusCount = 6;
+
+}  // namespace modd::link::backfill
+
+// Datagram form of the link (docs/protocol.md, "Datagram transports").
+namespace modd::link::dgram {
+
+// DATA datagram of consecutive slots.
+inline constexpr uint8_t kData = 0x30;
+// DATA datagram with a presence bitmap.
+inline constexpr uint8_t kDataBitmap = 0x31;
+// A piece of a slot too large for one datagram.
+inline constexpr uint8_t kFragment = 0x32;
+// Control datagram: one tagged link frame.
+inline constexpr uint8_t kControl = 0x40;
+// Handshake datagram (untagged).
+inline constexpr uint8_t kHandshake = 0x41;
+// A piece of a control frame too large for one datagram.
+inline constexpr uint8_t kControlFragment = 0x42;
+// Control frame type: ranges of slots to resend.
+inline constexpr uint8_t kNack = 0x09;
+// Most ranges of one NACK (the fewest is 1).
+inline constexpr size_t kMaxNackRanges = 32;
+// Most slots of one NACK range (the fewest is 1).
+inline constexpr uint64_t kMaxNackRangeSlots = 65535;
+// Most slots of one DATA datagram (its slot count is one byte).
+inline constexpr size_t kMaxDatagramSlots = 255;
+// Most fragments of one slot.
+inline constexpr size_t kMaxFragments = 16;
+// Bytes before a fragment's piece: type, config id, slot16, fragment byte.
+inline constexpr size_t kFragmentHead = 5;
+// Truncated HMAC tag of a DATA datagram, in bytes.
+inline constexpr size_t kTag = 4;
+// Truncated HMAC tag of a control datagram, in bytes.
+inline constexpr size_t kControlTag = 8;
+// Smallest packet a radio may carry (link.maxPacket), in bytes.
+inline constexpr uint32_t kMinPacket = 32;
+// Largest packet (link.maxPacket): the largest UDP payload, in bytes.
+inline constexpr uint32_t kMaxPacket = 65507;
+// The packet of a udp link when the model gives none: Ethernet's MTU less the IP and UDP
+// headers.
+inline constexpr uint32_t kDefaultUdpPacket = 1472;
+// The packet of a serial link when the model gives none (a SiK radio's frame).
+inline constexpr uint32_t kDefaultSerialPacket = 252;
+
+}  // namespace modd::link::dgram
