@@ -332,7 +332,24 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
 
     ["3D and archives panels", async () => {
       await panel("3D");
-      await page.waitForTimeout(500);
+      // viser's developer controls (Save Canvas, Dev Settings) never show, also while it connects:
+      // covered until the scene's own panel (the legend) is drawn, then the cover goes.
+      const iframe = page.locator('iframe[title="3D scene of the drone"]');
+      await iframe.waitFor({ timeout: 15000 });
+      const scene = page.frameLocator('iframe[title="3D scene of the drone"]');
+      const cover = page.getByRole("status").filter({ hasText: "Connecting to the 3D scene" });
+      const t0 = Date.now();
+      let covered = 0;
+      for (;;) {
+        const dev = (await Promise.all(["Save Canvas", "Dev Settings"].map((t) => scene.getByText(t, { exact: true }).first().isVisible().catch(() => false)))).some(Boolean);
+        const hidden = await cover.isVisible();
+        if (dev && !hidden) throw new Error("viser's developer controls shown to the user");
+        covered += hidden ? 1 : 0;
+        if (!hidden && await scene.getByText("Drone tracks").isVisible().catch(() => false)) break;
+        if (Date.now() - t0 > 30000) throw new Error(`the 3D scene did not show its legend within 30 s (covered: ${hidden})`);
+        await page.waitForTimeout(100);
+      }
+      console.log(`    3D scene: its own panel after ${Date.now() - t0} ms, covered in ${covered} checks`);
       await shot("scene3d");
       await panel("Archives");
       if (liveValues) {
