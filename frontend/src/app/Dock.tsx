@@ -31,17 +31,19 @@ function Pane({ panel, role, share }: { panel: PanelInfo; role: "tabpanel" | "re
   );
 }
 
-/** The choice of the panel in place `index` with the tab's (none: the first option). */
+/** The choice of the panel in place `index` with the tab's ("none": the first option), after its words. */
 function BesideSelect({ index, label, empty, layout, active, onChange }: {
   index: number; label: string; empty: string; layout: DockLayout; active: PanelId; onChange: (l: DockLayout) => void;
 }) {
   const others = layout.beside.filter((_, i) => i !== index);
   return (
-    <select className="dock-beside" aria-label={label} title={`${label}: shown with this one`}
-      value={layout.beside[index] ?? ""} onChange={(e) => onChange(setBeside(layout, index, (e.target.value || null) as PanelId | null))}>
-      <option value="">{empty}</option>
-      {PANELS.filter((p) => p.id !== active && !others.includes(p.id)).map((p) => <option key={p.id} value={p.id}>with: {p.title}</option>)}
-    </select>
+    <label>{empty}
+      <select className="dock-beside" aria-label={label}
+        value={layout.beside[index] ?? ""} onChange={(e) => onChange(setBeside(layout, index, (e.target.value || null) as PanelId | null))}>
+        <option value="">none</option>
+        {PANELS.filter((p) => p.id !== active && !others.includes(p.id)).map((p) => <option key={p.id} value={p.id}>{p.title}</option>)}
+      </select>
+    </label>
   );
 }
 
@@ -54,7 +56,7 @@ function Divider({ index, layout, body, onMove }: {
   const before = layout.sizes.slice(0, index).reduce((a, b) => a + b, 0);
   return (
     <div className="dock-divider" role="separator" aria-orientation={stacked ? "horizontal" : "vertical"} tabIndex={0}
-      aria-label={`Resize the panels' ${stacked ? "heights" : "widths"} (${index + 1})`}
+      aria-label={stacked ? `Resize the stacked panels (${index + 1})` : `Resize the panels' widths (${index + 1})`}
       aria-valuenow={Math.round((before + layout.sizes[index]) * 100)} aria-valuemin={0} aria-valuemax={100}
       onKeyDown={(e) => {
         if (e.key !== less && e.key !== more) return;
@@ -107,15 +109,18 @@ export function Dock({ user = "" }: { user?: string }) {
               onClick={() => store.patch({ panel: p.id })}>{p.title}</button>
           ))}
         </div>
-        <BesideSelect index={0} label="Panel beside" empty="+ beside" layout={layout} active={panel.id} onChange={change} />
-        {layout.beside.length > 0 && (
-          <>
-            <BesideSelect index={1} label="Third panel" empty="+ third" layout={layout} active={panel.id} onChange={change} />
-            <button className="dock-icon" aria-label="Stack the panels" aria-pressed={layout.stacked}
-              title={layout.stacked ? "Stacked: click to put the panels side by side" : "Side by side: click to stack the panels"}
-              onClick={() => change({ stacked: !layout.stacked })}>{layout.stacked ? "☰" : "▥"}</button>
-          </>
-        )}
+        <details className="dock-layout">
+          <summary aria-label="Panel layout" title="Panel layout: more panels with this one, side by side or stacked">⊞</summary>
+          <div className="dock-layout-menu" role="group" aria-label="Panel layout">
+            <BesideSelect index={0} label="Panel beside" empty="With this one " layout={layout} active={panel.id} onChange={change} />
+            {layout.beside.length > 0 && (
+              <>
+                <BesideSelect index={1} label="Third panel" empty="and " layout={layout} active={panel.id} onChange={change} />
+                <label><input type="checkbox" checked={layout.stacked} onChange={(e) => change({ stacked: e.target.checked })} /> Stacked</label>
+              </>
+            )}
+          </div>
+        </details>
         {!isDefault(layout) && (
           <button className="dock-icon" aria-label="Reset layout" title="Reset layout: one panel, the default height"
             onClick={() => setLayout(resetLayout(window.localStorage, user, role))}>↺</button>
