@@ -12,8 +12,9 @@ from modd_backend.errors import ApiError
 from modd_backend.guards import HeavyLimiter
 
 
-async def _hold(lim: HeavyLimiter, user: int, log: list[str], name: str,
-                release: asyncio.Event) -> None:
+async def _hold(
+    lim: HeavyLimiter, user: int, log: list[str], name: str, release: asyncio.Event
+) -> None:
     async with lim.turn(user):
         log.append(name)
         await release.wait()
@@ -55,8 +56,10 @@ def test_the_queue_is_bounded_per_user_and_in_all() -> None:
     async def main() -> None:
         lim = HeavyLimiter(per_user=1, total=8, queue_per_user=1, queue_total=2, poll_s=0.01)
         release = asyncio.Event()
-        tasks = [asyncio.create_task(_hold(lim, 1, [], "run", release)),
-                 asyncio.create_task(_hold(lim, 1, [], "wait", release))]
+        tasks = [
+            asyncio.create_task(_hold(lim, 1, [], "run", release)),
+            asyncio.create_task(_hold(lim, 1, [], "wait", release)),
+        ]
         await _settle(lim, waiting=1, in_flight=1)
         with pytest.raises(ApiError) as exc:  # the user's queue is full: at once
             async with lim.turn(1):
@@ -67,9 +70,8 @@ def test_the_queue_is_bounded_per_user_and_in_all() -> None:
         tasks += [asyncio.create_task(_hold(lim, 2, [], "other waits", release))]
         await _settle(lim, waiting=2, in_flight=2)
         with pytest.raises(ApiError):  # two waiting in all: the bound
-            async with lim.turn(3):
-                async with lim.turn(3):
-                    pass
+            async with lim.turn(3), lim.turn(3):
+                pass
         release.set()
         await asyncio.gather(*tasks)
         assert (lim.in_flight, lim.waiting) == (0, 0)
