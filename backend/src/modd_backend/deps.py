@@ -177,12 +177,12 @@ async def _heavy(state: StateDep, user: UserDep) -> AsyncIterator[None]:
     if state.heavy is None:
         yield
         return
-    with state.heavy.slot(user.id):
+    async with state.heavy.turn(user.id):
         yield
 
 
 #: Route dependency of heavy routes (CSV, series, deploy): a slot of the
-#: HeavyLimiter or 429/503 with Retry-After at once.
+#: HeavyLimiter, waited for in its bounded queue, or 429/503 with Retry-After.
 Heavy = Depends(_heavy)
 
 

@@ -12,23 +12,27 @@ the bound on heavy routes.
   Referrer-Policy).
 
 Heavy routes (CSV export, series, deploy) take a slot of :class:`HeavyLimiter`
-or are refused at once with 429 (this user's share is taken) or 503 (all are),
-both with ``Retry-After``; nothing queues behind them, ``/api/health`` least.
+or wait their turn in a bounded queue (a few per user, a bound in all, at most
+``wait_s``); beyond it they are refused with 429 (this user's share is taken)
+or 503 (all are), both with ``Retry-After``; ``/api/health`` never waits.
 """
 
 from __future__ import annotations
 
+import asyncio
 import json
 import threading
-from collections.abc import Iterator
-from contextlib import contextmanager
+import time
+from collections import deque
+from collections.abc import AsyncIterator, Iterator
+from contextlib import asynccontextmanager, contextmanager
 from typing import Any
 
 from modd_model.jsondepth import json_depth
 from starlette.concurrency import run_in_threadpool
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from .errors import retry_later
+from .errors import ApiError, retry_later
 from .settings import Settings
 
 #: Mount point of the reverse-proxied 3D scene (routers/scene.py).
@@ -186,39 +190,127 @@ async def _plain(send: Send, status: int, text: str, path: str, host: str) -> No
     await _json_error(send, status, {"detail": text}, path, host)
 
 
+def _behind_earlier() -> ApiError:
+    """A user's heavy request behind that user's earlier ones (the queue full, or not yet first)."""
+    return retry_later(429, "this user's earlier heavy requests are waiting their turn; "
+                       "retry shortly", 1)
+
+
 class HeavyLimiter:
     """Slots for heavy requests: ``per_user`` each and ``total`` in all.
-    Never waits: a request finding no slot is refused at once."""
 
-    def __init__(self, per_user: int, total: int) -> None:
+    :meth:`turn` (the routes' way in) waits for a slot: a user's requests in
+    the order they came, polled every ``poll_s`` on the event loop (a waiting
+    request holds no thread), at most ``wait_s``; at most ``queue_per_user``
+    of a user's requests and ``queue_total`` in all wait, and one beyond is
+    refused at once, as is one that waited ``wait_s``: 429 (this user's share
+    is taken) or 503 (all are), with ``Retry-After``. :meth:`slot` never
+    waits."""
+
+    def __init__(self, per_user: int, total: int, *, queue_per_user: int = 4,
+                 queue_total: int = 32, wait_s: float = 30.0, poll_s: float = 0.05) -> None:
         self.per_user = per_user
         self.total = total
+        self.queue_per_user = queue_per_user
+        self.queue_total = queue_total
+        self.wait_s = wait_s
+        self.poll_s = poll_s
         self.in_flight = 0
         self._by_user: dict[int, int] = {}
+        self._waiting: dict[int, deque[object]] = {}
         self._lock = threading.Lock()
 
     @property
     def saturated(self) -> bool:
         return self.in_flight >= self.total
 
+    @property
+    def waiting(self) -> int:
+        return sum(len(q) for q in self._waiting.values())
+
+    def _refusal(self, user_id: int) -> ApiError | None:
+        """Why no slot is free for this user now (under the lock), or None."""
+        if self._by_user.get(user_id, 0) >= self.per_user:
+            return retry_later(429, f"at most {self.per_user} heavy requests at once per user "
+                               f"(CSV, series, deploy), {self.queue_per_user} more waiting their "
+                               "turn; retry shortly", 1)
+        if self.in_flight >= self.total:
+            return retry_later(503, "the service is busy with heavy requests; retry shortly", 1)
+        return None
+
+    def _take(self, user_id: int) -> None:
+        self.in_flight += 1
+        self._by_user[user_id] = self._by_user.get(user_id, 0) + 1
+
+    def _release(self, user_id: int) -> None:
+        with self._lock:
+            self.in_flight -= 1
+            left = self._by_user[user_id] - 1
+            if left:
+                self._by_user[user_id] = left
+            else:
+                del self._by_user[user_id]
+
     @contextmanager
     def slot(self, user_id: int) -> Iterator[None]:
         with self._lock:
-            if self._by_user.get(user_id, 0) >= self.per_user:
-                raise retry_later(429, f"at most {self.per_user} heavy requests at once "
-                                  "per user (CSV, series, deploy); retry shortly", 1)
-            if self.in_flight >= self.total:
-                raise retry_later(503, "the service is busy with heavy requests; retry "
-                                  "shortly", 1)
-            self.in_flight += 1
-            self._by_user[user_id] = self._by_user.get(user_id, 0) + 1
+            refused = self._refusal(user_id)
+            if refused is not None:
+                raise refused
+            self._take(user_id)
         try:
             yield
         finally:
-            with self._lock:
-                self.in_flight -= 1
-                left = self._by_user[user_id] - 1
-                if left:
-                    self._by_user[user_id] = left
-                else:
-                    del self._by_user[user_id]
+            self._release(user_id)
+
+    def _enqueue(self, user_id: int) -> object | None:
+        """A slot at once (None), or a place in the user's queue; refused when that is full."""
+        with self._lock:
+            queue = self._waiting.get(user_id)
+            refused = self._refusal(user_id)
+            if refused is None and not queue:
+                self._take(user_id)
+                return None
+            if refused is None:
+                refused = _behind_earlier()
+            full = queue is not None and len(queue) >= self.queue_per_user
+            if full or self.waiting >= self.queue_total:
+                raise refused
+            ticket = object()
+            self._waiting.setdefault(user_id, deque()).append(ticket)
+            return ticket
+
+    def _try_take(self, user_id: int, ticket: object) -> ApiError | None:
+        """Take a slot if one is free and this ticket is the user's first; else why not."""
+        with self._lock:
+            refused = self._refusal(user_id) or (
+                None if self._waiting[user_id][0] is ticket else _behind_earlier())
+            if refused is None:
+                self._take(user_id)
+                self._leave(user_id, ticket)
+            return refused
+
+    def _leave(self, user_id: int, ticket: object) -> None:
+        queue = self._waiting.get(user_id)
+        if queue is not None and ticket in queue:
+            queue.remove(ticket)
+            if not queue:
+                del self._waiting[user_id]
+
+    @asynccontextmanager
+    async def turn(self, user_id: int) -> AsyncIterator[None]:
+        ticket = self._enqueue(user_id)
+        if ticket is not None:
+            deadline = time.monotonic() + self.wait_s
+            try:
+                while (why := self._try_take(user_id, ticket)) is not None:
+                    if time.monotonic() >= deadline:
+                        raise why
+                    await asyncio.sleep(self.poll_s)
+            finally:
+                with self._lock:
+                    self._leave(user_id, ticket)
+        try:
+            yield
+        finally:
+            self._release(user_id)

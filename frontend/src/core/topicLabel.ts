@@ -7,6 +7,7 @@
  * @example
  *   topicLabel(model, "usv.accelerometer.accel_x")      // "usv.accelerometer.accel_x (m/s²)"
  *   topicLabel(model, "usv.gps.latitude")               // "usv.gps.latitude" (unit NONE)
+ *   variableLabel(ref)                                  // "accel_x (m/s²)" (under its sensor's heading)
  *   topicLabel(model, "usv.gone.x")                     // "usv.gone.x" (not in the model: the name alone)
  *   subscriptionLabel(model, sub)                       // "usv.accelerometer.accel_x (m/s²) AVERAGE every 2.0 s"
  */
@@ -18,6 +19,16 @@ import { findTopicByName, type TopicRef } from "./query";
 export function topicRefLabel(t: TopicRef): string {
   const unit = unitLabel(t.variable.unit);
   return unit ? `${t.name} (${unit})` : t.name;
+}
+
+/**
+ * A topic under its sensor's heading (the Quick subscription's list, grouped by
+ * sensor, in the narrow palette): the variable and its unit; the full name is
+ * the option's tooltip and is spelled out under the form.
+ */
+export function variableLabel(t: TopicRef): string {
+  const unit = unitLabel(t.variable.unit);
+  return unit ? `${t.variable.name} (${unit})` : t.variable.name;
 }
 
 /**

@@ -27,6 +27,14 @@ describe("QuickSubscribe", () => {
       .toBe("usv.accelerometer.accel_x (m/s²) AVERAGE every 1.0 s");
   });
 
+  it("lists each topic under its sensor by its variable and unit, the full name as its tooltip", () => {
+    mount();
+    const select = screen.getByLabelText("Topic") as HTMLSelectElement;
+    const accel = [...select.querySelectorAll("optgroup")].find((g) => g.label === "accelerometer");
+    expect([...(accel?.querySelectorAll("option") ?? [])].map((o) => [o.textContent, o.title])).toEqual(
+      ["accel_x", "accel_y", "accel_z"].map((v) => [`${v} (m/s²)`, `usv.accelerometer.${v} (m/s²)`]));
+  });
+
   it("makes every topic × period × aggregation in one submit", () => {
     const store = mount();
     const before = currentModel(store.getState().wb).subscribers.length;

@@ -2,9 +2,9 @@
  * The scientist's shortcut: topics, periods and aggregations, then Subscribe —
  * a subscriber connected to its topic for every topic × period × aggregation
  * chosen (Ctrl/Shift-click picks several topics or aggregations; periods are
- * written "2.0, 0.25"). The topics are grouped by sensor, each under its full
- * name (as everywhere in the workbench) with its unit; what will be made is
- * spelled out in full under the form, where the narrow palette cuts nothing.
+ * written "2.0, 0.25"). The topics are grouped under their sensor's name, each
+ * by its variable and unit so that the narrow palette cuts no name (the full
+ * name is the tooltip); what will be made is spelled out in full under the form.
  */
 import { useState } from "react";
 import { AggregationValues, type Aggregation } from "../core/model.gen";
@@ -12,7 +12,7 @@ import { AGGREGATION } from "../core/contracts.gen";
 import { listTopics } from "../core/query";
 import { nextPosition } from "../core/graph";
 import { currentModel } from "../core/workbench";
-import { topicLabel } from "../core/topicLabel";
+import { topicLabel, topicRefLabel, variableLabel } from "../core/topicLabel";
 import { parsePeriods, subscriptionGrid } from "../core/subscriptionGrid";
 import { useEditorStore, useModel } from "./useEditor";
 
@@ -44,8 +44,10 @@ export function QuickSubscribe() {
         <select multiple size={Math.min(6, topics.length + model.drone.sensors.length) || 1} value={chosen}
           title={chosen.join(", ")} onChange={(e) => setTopics(selected(e))} disabled={!topics.length}>
           {model.drone.sensors.map((sensor) => (
-            <optgroup key={sensor.name} label={`${sensor.name}${sensor.description ? ` — ${sensor.description}` : ""}`}>
-              {topics.filter((t) => t.sensor === sensor).map((t) => <option key={t.id} value={t.name}>{topicLabel(model, t.name)}</option>)}
+            <optgroup key={sensor.name} label={sensor.name} title={sensor.description || undefined}>
+              {topics.filter((t) => t.sensor === sensor).map((t) => (
+                <option key={t.id} value={t.name} title={topicRefLabel(t)}>{variableLabel(t)}</option>
+              ))}
             </optgroup>
           ))}
         </select>

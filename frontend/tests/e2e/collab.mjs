@@ -372,6 +372,19 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
         if (await note.count()) throw new Error(`the ${view} first step stays after "Got it"`);
       }
     }],
+
+    ["names-only mode: sub_7 and accel_x keep their underscores whole at fit-to-screen", async () => {
+      await page.getByRole("tab", { name: "System designer", exact: true }).click();
+      await page.getByRole("button", { name: "Zoom to fit" }).click();
+      await page.locator(".canvas.canvas-far").waitFor();
+      await page.waitForTimeout(500);
+      for (const name of ["sub_7", "accel_x"]) {
+        const label = page.locator(".react-flow__node .node-label", { hasText: new RegExp(`^${name}$`) }).first();
+        const { drawn, whole } = await underscoreInk(page, label);
+        // the underscore's ink as drawn, against the same name unclipped (tall line, nothing hidden)
+        if (!(drawn >= 0.9 * whole && whole > 0)) throw new Error(`${name}: ${Math.round((100 * drawn) / whole)} % of its underscore is drawn (reads "${name.replace("_", " ")}")`);
+      }
+    }],
   ];
 }
 
@@ -390,6 +403,49 @@ export async function tokenClient(baseUrl, username, password) {
     if (!r.ok) throw new Error(`${method} ${path}: HTTP ${r.status} ${await r.text()}`);
     return r.status === 204 ? null : r.json();
   };
+}
+
+/**
+ * How much of the first "_" of a label is drawn: the label's picture with the
+ * underscore, less the picture with it hidden (the same layout); and the same
+ * with the label unclipped. Changes the label's DOM for a moment and puts back
+ * its own nodes.
+ */
+async function underscoreInk(page, label) {
+  const variant = (hide, free) => label.evaluate((l, [hide, free]) => {
+    l.__own ??= [...l.childNodes];
+    const text = l.__own.map((n) => n.textContent).join("");
+    const i = text.indexOf("_");
+    const gap = Object.assign(document.createElement("span"), { textContent: "_" });
+    gap.style.visibility = "hidden";
+    l.replaceChildren(...(hide ? [text.slice(0, i), gap, text.slice(i + 1)] : l.__own));
+    l.style.cssText = free ? "overflow: visible; display: block; line-height: 2; padding: 0" : "";
+  }, [hide, free]);
+  const shots = [];
+  for (const [hide, free] of [[false, false], [true, false], [false, true], [true, true]]) {
+    await variant(hide, free);
+    shots.push((await label.screenshot()).toString("base64"));
+  }
+  await variant(false, false);
+  const [drawn, whole] = await page.evaluate(async (shots) => {
+    const pixels = async (s) => {
+      const img = new Image();
+      img.src = `data:image/png;base64,${s}`;
+      await img.decode();
+      const c = Object.assign(document.createElement("canvas"), { width: img.width, height: img.height });
+      const ctx = c.getContext("2d");
+      ctx.drawImage(img, 0, 0);
+      return ctx.getImageData(0, 0, img.width, img.height).data;
+    };
+    const diff = async (a, b) => {
+      const [p, q] = [await pixels(a), await pixels(b)];
+      let sum = 0;
+      for (let i = 0; i < Math.min(p.length, q.length); i++) if (i % 4 !== 3) sum += Math.abs(p[i] - q[i]);
+      return sum;
+    };
+    return [await diff(shots[0], shots[1]), await diff(shots[2], shots[3])];
+  }, shots);
+  return { drawn, whole };
 }
 
 async function expectText(locator, re, timeout = 10000) {

@@ -154,7 +154,15 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       // Readable: the topics grouped by sensor, each by its full name with its unit.
       const groups = await quick.getByLabel("Topic").locator("optgroup").evaluateAll((gs) => gs.map((g) => g.label));
       if (!groups.some((g) => g.startsWith("accelerometer"))) throw new Error(`quick subscription topics not grouped by sensor: ${JSON.stringify(groups)}`);
-      await expectText(quick.getByLabel("Topic").locator("option").first(), /^usv\.accelerometer\.accel_x \(m\/s²\)$/);
+      // Each topic under its sensor by its variable and unit (the full name its tooltip), none cut by the narrow palette.
+      await expectText(quick.getByLabel("Topic").locator("option").first(), /^accel_x \(m\/s²\)$/);
+      if (await quick.getByLabel("Topic").locator("option").first().getAttribute("title") !== "usv.accelerometer.accel_x (m/s²)") throw new Error("the topic's full name is not its tooltip");
+      const cut = await quick.getByLabel("Topic").evaluate((select) => {
+        const ctx = document.createElement("canvas").getContext("2d");
+        const room = select.clientWidth - 2 * parseFloat(getComputedStyle(select).paddingLeft) - 8; // an option's own padding
+        return [...select.options].filter((o) => { ctx.font = getComputedStyle(o).font; return ctx.measureText(o.textContent).width > room; }).map((o) => o.textContent);
+      });
+      if (cut.length) throw new Error(`topics cut by the palette's width: ${cut.join(", ")}`);
       const subs = [
         ["accel_x", "2.0", "AVERAGE"], ["accel_y", "2.0", "AVERAGE"], ["accel_x", "0.25", "AVERAGE"],
         ["accel_y", "0.25", "AVERAGE"], ["accel_z", "0.25", "MIN"], ["accel_z", "0.25", "MAX"],
@@ -324,7 +332,24 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
 
     ["3D and archives panels", async () => {
       await panel("3D");
-      await page.waitForTimeout(500);
+      // viser's developer controls (Save Canvas, Dev Settings) never show, also while it connects:
+      // covered until the scene's own panel (the legend) is drawn, then the cover goes.
+      const iframe = page.locator('iframe[title="3D scene of the drone"]');
+      await iframe.waitFor({ timeout: 15000 });
+      const scene = page.frameLocator('iframe[title="3D scene of the drone"]');
+      const cover = page.getByRole("status").filter({ hasText: "Connecting to the 3D scene" });
+      const t0 = Date.now();
+      let covered = 0;
+      for (;;) {
+        const dev = (await Promise.all(["Save Canvas", "Dev Settings"].map((t) => scene.getByText(t, { exact: true }).first().isVisible().catch(() => false)))).some(Boolean);
+        const hidden = await cover.isVisible();
+        if (dev && !hidden) throw new Error("viser's developer controls shown to the user");
+        covered += hidden ? 1 : 0;
+        if (!hidden && await scene.getByText("Drone tracks").isVisible().catch(() => false)) break;
+        if (Date.now() - t0 > 30000) throw new Error(`the 3D scene did not show its legend within 30 s (covered: ${hidden})`);
+        await page.waitForTimeout(100);
+      }
+      console.log(`    3D scene: its own panel after ${Date.now() - t0} ms, covered in ${covered} checks`);
       await shot("scene3d");
       await panel("Archives");
       if (liveValues) {

@@ -29,6 +29,10 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
   };
   const view = (name) => page.getByRole("tab", { name, exact: true }).click();
   const panel = (name) => page.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
+  // the dock's layout menu (⊞), opened if it is not
+  const layoutMenu = async () => {
+    if ((await page.locator(".dock-layout").getAttribute("open")) === null) await page.locator(".dock-layout > summary").click();
+  };
   const expand = async (on) => {
     const b = page.locator(".dock-toggle");
     if ((await b.getAttribute("aria-pressed")) !== String(on)) await b.click();
@@ -257,11 +261,12 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await expand(false);
     }],
 
-    ["panel layout: the Monitor and the map side by side at 1280×800, resizable, remembered per user and role, reset in one click", async () => {
+    ["panel layout: the Monitor and the map side by side at 1280×800, then the Plan as a third, then the three stacked; resizable, remembered per user and role, reset in one click", async () => {
       if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
       await page.setViewportSize({ width: 1280, height: 800 });
       await view("Scientist");
       await panel("Monitor");
+      await layoutMenu();
       await page.getByLabel("Panel beside").selectOption("map");
       const monitor = page.getByRole("tabpanel", { name: "Monitor", exact: true });
       const map = page.getByRole("region", { name: "Map", exact: true });
@@ -276,7 +281,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       };
       const { a } = await together();
       // narrower Monitor by the divider's keyboard, then the arrangement survives a reload
-      const divider = page.getByRole("separator", { name: "Resize the panels' widths" });
+      const divider = page.getByRole("separator", { name: "Resize the panels' widths (1)" });
       await divider.focus();
       await page.keyboard.press("ArrowLeft");
       await page.keyboard.press("ArrowLeft");
@@ -288,6 +293,35 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await panel("Monitor");
       await together();
       if (Math.abs((await monitor.boundingBox()).width - narrower) > 4) throw new Error("the panels' widths were not remembered");
+      // a third panel: Monitor, map and Plan in a row, then stacked in a taller dock; remembered
+      await layoutMenu();
+      await page.getByLabel("Third panel").selectOption("plan");
+      const plan = page.getByRole("region", { name: "Plan", exact: true });
+      const boxes = async () => Promise.all([monitor, map, plan].map(async (p) => { await expectVisible(p); return p.boundingBox(); }));
+      const shown = (r, w, h) => r && r.x >= 0 && r.y >= 0 && r.x + r.width <= 1281 && r.y + r.height <= 801 && r.width >= w && r.height >= h;
+      const row = await boxes();
+      if (!row.every((r) => shown(r, 250, 150)) || !(row[0].x + row[0].width <= row[1].x + 1 && row[1].x + row[1].width <= row[2].x + 1))
+        throw new Error(`three panels not side by side in view: ${JSON.stringify(row)}`);
+      const tabs = await page.locator(".dock-tablist").evaluate((l) => l.scrollWidth - l.clientWidth);
+      if (tabs > 1) throw new Error(`with three panels ${tabs} px of the dock's tabs are out of view`);
+      await page.getByLabel("Stacked").check();
+      await page.locator(".dock-layout > summary").click(); // the menu closed again
+      const edge = await page.getByRole("separator", { name: "Resize the panels' height", exact: true }).boundingBox();
+      await page.mouse.move(edge.x + 200, edge.y + edge.height / 2);
+      await page.mouse.down();
+      await page.mouse.move(edge.x + 200, 150, { steps: 5 });
+      await page.mouse.up();
+      const stacked = async () => {
+        const col = await boxes();
+        if (!col.every((r) => shown(r, 600, 120)) || !(col[0].y + col[0].height <= col[1].y + 1 && col[1].y + col[1].height <= col[2].y + 1))
+          throw new Error(`three panels not stacked in view: ${JSON.stringify(col)}`);
+      };
+      await stacked();
+      await shot("panels-stacked");
+      await page.reload();
+      await view("Scientist");
+      await panel("Monitor");
+      await stacked();
       // another role keeps its own (one panel), and one click resets this one
       await view("Operator");
       if (await page.getByRole("region", { name: "Map", exact: true }).count()) throw new Error("the scientist's layout leaked into the operator view");

@@ -49,6 +49,20 @@ export function tileOrigin(url: string): string {
   return new URL(url.replace(/\{[xyz]\}/g, "0")).origin;
 }
 
+/** The track's margin on every side, in CSS pixels. */
+const MARGIN = 28;
+
+/**
+ * Pixels per metre that fit a track of extent dx × dy (at least 10 m) in a
+ * w × h canvas with MARGIN all round; null when the canvas cannot hold the
+ * margins (a map in a narrow panel: a scale of 0 or less would never end the
+ * grid's loops).
+ */
+export function fitScale(w: number, h: number, dx: number, dy: number): number | null {
+  const s = Math.min((w - 2 * MARGIN) / Math.max(dx, 10), (h - 2 * MARGIN) / Math.max(dy, 10));
+  return s > 0 && Number.isFinite(s) ? s : null;
+}
+
 /** Draws the map; see `Drawn`. */
 export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], range: [number, number] | null, opts: Options): Drawn {
   const tileCount: TileCount = { asked: 0, drawn: 0, failed: 0 };
@@ -70,9 +84,13 @@ export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], ra
   }
   const xs = points.map((p) => p.east), ys = points.map((p) => p.north);
   const minX = Math.min(...xs), maxX = Math.max(...xs), minY = Math.min(...ys), maxY = Math.max(...ys);
-  const margin = 28;
   const span = Math.max(maxX - minX, maxY - minY, 10);
-  const s = Math.min((w - 2 * margin) / Math.max(maxX - minX, 10), (h - 2 * margin) / Math.max(maxY - minY, 10));
+  const s = fitScale(w, h, maxX - minX, maxY - minY);
+  if (s === null) {
+    ctx.fillStyle = "#64748b";
+    ctx.fillText("too small to draw", 2, 12);
+    return { px: [], tiles: tileCount, heading: null };
+  }
   const cx = (minX + maxX) / 2, cy = (minY + maxY) / 2;
   const X = (e: number) => w / 2 + (e - cx) * s;
   const Y = (n: number) => h / 2 - (n - cy) * s;
