@@ -202,6 +202,34 @@ TEST(Broker, StatusGoesAloneOnlyWhenNoDataCarriesIt) {
   EXPECT_EQ(link.writes.size(), 1u);  // sent once per period
 }
 
+TEST(Broker, InstrumentHealthRidesInStatusWhileItsPublisherIsConnected) {
+  FakeClock clock;
+  FakeLink link;
+  Broker b(test_config("health"), "key", clock, link);
+  Config c;
+  c.config_id = 4;
+  c.status_period_s = 1;
+  c.topics = {{"usv.x", ValueType::Float32, 2, 0}};
+  c.streams = {{0, Aggregation::Last, 250000}};
+  b.on_config(c);
+  auto status_now = [&] {
+    link.writes.clear();
+    b.status_due(clock.now_ns());
+    b.send_overdue_status(clock.now_ns() + 2000 * kMs);
+    return std::get<Status>(decode(*split_frame(link.writes.at(0))));
+  };
+  auto s = std::make_unique<IngressSession>(b);
+  std::vector<uint8_t> bytes;
+  ingress::encode_hello(bytes, {ingress::kVersion, "sensors"});
+  ingress::encode_health(bytes, {{"gnss", {1, 10, 2, 0}}, {"ctd", {2, 5}}});
+  ingress::encode_health(bytes, {{"gnss", {1, 12, 3, 1}}, {"ctd", {1, 6}}});  // replaces the first
+  ASSERT_TRUE(s->on_bytes(bytes));
+  std::vector<SensorHealth> want = {{"ctd", {1, 6}}, {"gnss", {1, 12, 3, 1}}};
+  EXPECT_EQ(status_now().sensors, want);
+  s.reset();  // modd-sensors gone: its health is no longer reported as current
+  EXPECT_TRUE(status_now().sensors.empty());
+}
+
 TEST(Broker, VanishingPublisherAndFullQueueAreCounted) {
   FakeClock clock;
   FakeLink link;

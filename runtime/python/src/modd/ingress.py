@@ -18,11 +18,11 @@ import struct
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from modd.link.codec import Reader, string, varint
-from modd.link.frames import ValueType
+from modd.link.codec import Reader, encode_sensor_health, string, varint
+from modd.link.frames import SensorHealth, ValueType
 
 INGRESS_VERSION = 2
-HELLO, REGISTER, SAMPLES = 0x01, 0x02, 0x03
+HELLO, REGISTER, SAMPLES, HEALTH = 0x01, 0x02, 0x03, 0x04
 CATALOGUE, ACK, REJECT = 0x81, 0x82, 0x83
 MAX_FRAME = 1 << 20
 # REJECT reason codes (the broker's Reject enum, runtime/cpp/include/modd/broker/counters.hpp).
@@ -54,6 +54,12 @@ def encode_samples(records: Sequence[tuple[int, int, Number]], types: Sequence[V
         v: Number = (1 if value else 0) if t == ValueType.BOOL else value
         parts.append(varint(lid) + struct.pack("<q", ts) + struct.pack(_VALUE_FORMAT[t], v))
     return frame(SAMPLES, b"".join(parts))
+
+
+def encode_health(sensors: Sequence[SensorHealth]) -> bytes:
+    """HEALTH: the publisher's instruments (modd-sensors), forwarded in the link's STATUS
+    while the connection lasts; each replaces the one before."""
+    return frame(HEALTH, encode_sensor_health(sensors))
 
 
 @dataclass

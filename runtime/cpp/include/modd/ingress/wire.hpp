@@ -21,7 +21,7 @@ inline constexpr size_t kMaxFrame = 1 << 20;  // bytes after the length prefix
 // One line a direction.
 // clang-format off
 enum class MsgType : uint8_t {
-  Hello = 0x01, Register = 0x02, Samples = 0x03,  // publisher -> broker
+  Hello = 0x01, Register = 0x02, Samples = 0x03, Health = 0x04,  // publisher -> broker
   Catalogue = 0x81, Ack = 0x82, Reject = 0x83,    // broker -> publisher (version 2)
 };
 // clang-format on

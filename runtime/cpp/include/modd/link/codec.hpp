@@ -47,4 +47,9 @@ Data decode_data(const RawFrame& f, std::span<const ValueKind> kinds);
 void encode_value(std::vector<uint8_t>& out, const ValueKind& k, const Value& v);
 Value decode_value(ByteReader& r, const ValueKind& k);
 
+// Instruments' health as STATUS and the ingress's HEALTH carry it: `count:varint` then
+// `count` x { `name:string` `n:varint` `n` x `field:varint` } (bounds: kMaxHealth*).
+void write_sensor_health(ByteWriter& w, const std::vector<SensorHealth>& sensors);
+std::vector<SensorHealth> read_sensor_health(ByteReader& r);
+
 }  // namespace modd::link

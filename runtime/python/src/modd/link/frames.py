@@ -180,9 +180,32 @@ STATUS_FIELDS: tuple[str, ...] = (
 )
 
 
+# One instrument's health in STATUS (docs/protocol.md, "STATUS"), fields in this order; a
+# newer modd-sensors may append fields (kept as field_<i>).
+HEALTH_FIELDS: tuple[str, ...] = (
+    "state", "lines_ok", "lines_bad", "reconnects", "last_value_ms", "values", "missing",
+    "refused", "timeouts", "exceptions", "silences",
+)
+HEALTH_STATES = ("closed", "open", "silent")  # `state`'s codes
+MAX_HEALTH_SENSORS, MAX_HEALTH_FIELDS, MAX_HEALTH_NAME = 64, 32, 64
+
+
+@dataclass(frozen=True)
+class SensorHealth:
+    name: str
+    fields: tuple[int, ...]
+
+    def as_dict(self) -> dict[str, int]:
+        return {
+            (HEALTH_FIELDS[i] if i < len(HEALTH_FIELDS) else f"field_{i}"): v
+            for i, v in enumerate(self.fields)
+        }
+
+
 @dataclass(frozen=True)
 class Status:
     counters: tuple[int, ...]
+    sensors: tuple[SensorHealth, ...] = ()  # after the counters, only when there is one
 
     def as_dict(self) -> dict[str, int]:
         """Known fields by name; fields a newer broker appends are kept as field_<i>."""

@@ -70,7 +70,10 @@ def main(argv: list[str] | None = None) -> int:
     ingress = args.ingress or ingress_of(model).address
     names = sorted({m.publisher for p in plans for m in p.mappings})
     sinks = {n: Publisher(n, ingress) for n in names}
-    runner = Runner(plans, sinks, log, args.status_file, args.status_period)
+    # the health rides on one publisher's connection (the broker forwards it in STATUS)
+    runner = Runner(
+        plans, sinks, log, args.status_file, args.status_period, sinks[names[0]].report_health
+    )
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     signal.signal(signal.SIGINT, lambda *_: stop.set())
