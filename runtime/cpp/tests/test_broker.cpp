@@ -226,6 +226,17 @@ TEST(Broker, InstrumentHealthRidesInStatusWhileItsPublisherIsConnected) {
   ASSERT_TRUE(s->on_bytes(bytes));
   std::vector<SensorHealth> want = {{"ctd", {1, 6}}, {"gnss", {1, 12, 3, 1}}};
   EXPECT_EQ(status_now().sensors, want);
+  // A state change (the CTD unplugged) goes out at once, not at the next period.
+  link.writes.clear();
+  std::vector<uint8_t> unplugged;
+  ingress::encode_health(unplugged, {{"gnss", {1, 13, 3, 1}}, {"ctd", {0, 6}}});
+  ASSERT_TRUE(s->on_bytes(unplugged));
+  ASSERT_EQ(link.writes.size(), 1u);
+  EXPECT_EQ(std::get<Status>(decode(*split_frame(link.writes[0]))).sensors[0], (SensorHealth{"ctd", {0, 6}}));
+  std::vector<uint8_t> counts_only;  // counters alone change: no STATUS of its own
+  ingress::encode_health(counts_only, {{"gnss", {1, 14, 3, 1}}, {"ctd", {0, 6}}});
+  ASSERT_TRUE(s->on_bytes(counts_only));
+  EXPECT_EQ(link.writes.size(), 1u);
   s.reset();  // modd-sensors gone: its health is no longer reported as current
   EXPECT_TRUE(status_now().sensors.empty());
 }

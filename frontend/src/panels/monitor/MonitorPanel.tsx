@@ -30,6 +30,7 @@ import { keepSubscribed, useChartLayout } from "./useChartLayout";
 import { ArchiveSpaceNote } from "./ArchiveSpaceNote";
 import { FillGaps } from "./FillGaps";
 import { RadioLine } from "./RadioLine";
+import { InstrumentsHealth } from "./InstrumentsHealth";
 
 export default function MonitorPanel() {
   const model = useModel();
@@ -102,6 +103,7 @@ export default function MonitorPanel() {
         </>}
         {!link && state === "open" && " · waiting for the drone's status…"}
       </div>
+      {link?.sensors && <InstrumentsHealth sensors={link.sensors} />}
       <div className="monitor-grid">
         <aside className="watch-list" aria-label="Subscriptions to watch">
           <h3>Watch</h3>
