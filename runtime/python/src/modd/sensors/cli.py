@@ -17,9 +17,8 @@ import threading
 import time
 from pathlib import Path
 
-from modd_model import load_or_report
-
 from ..publisher import Publisher
+from .check import checked_model
 from .plan import plan_sensors
 from .run import Runner
 
@@ -55,7 +54,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    model = load_or_report(args.model)
+    model = checked_model(args.model)
     if model is None:
         return 1
     plans = plan_sensors(model)
