@@ -86,6 +86,14 @@ def model_text(devices: Path) -> str:
         Publishers {{ Publisher nav(0.1, {fast}); Publisher water(1.0, {slow}); }}""")
 
 
+def _recv(conn: socket.socket) -> bytes:
+    """What a reader sent; nothing once it went away (terminated with bytes unread)."""
+    try:
+        return conn.recv(65536)
+    except OSError:
+        return b""
+
+
 class Ingress:
     """The PubBroker's ingress as far as a publisher sees it; notes each sample's arrival."""
 
@@ -112,7 +120,7 @@ class Ingress:
         names: dict[int, str] = {}
         types: dict[int, ValueType] = {}
         conn.sendall(encode_catalogue(Catalogue("b", accept_unknown=True)))
-        while data := conn.recv(65536):
+        while data := _recv(conn):
             now = time.monotonic_ns()
             for f in splitter.feed(data):
                 r = Reader(f.body)
