@@ -42,14 +42,14 @@ void IngressSession::on_register(const ingress::Register& r) {
 }
 
 void IngressSession::on_health(std::vector<link::SensorHealth>&& sensors) {
-  // A change of an instrument's state (field 0: closed, open, silent) is sent at once, as a
-  // change of archive state is: the operator hears of an unplugged device now.
+  // New instruments, or a change of one's state (field 0: closed, open, silent), are sent at
+  // once, as a change of archive state is: the operator hears of an unplugged device now.
   auto states = [](const std::vector<link::SensorHealth>& v) {
     std::vector<std::pair<std::string, uint64_t>> out;
     for (const auto& h : v) out.emplace_back(h.name, h.fields.empty() ? 0 : h.fields[0]);
     return out;
   };
-  bool changed = !health_.empty() && states(health_) != states(sensors);
+  bool changed = states(health_) != states(sensors);
   health_ = std::move(sensors);
   if (changed) broker_.instruments_changed();
 }

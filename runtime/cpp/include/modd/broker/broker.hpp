@@ -139,7 +139,7 @@ class Broker final : public LinkHooks, public FrameSink {
   std::vector<uint64_t> status_counters();
   // The counters and the connected publishers' instruments' health (sorted by name).
   link::Status status_message();
-  // An instrument changed state: STATUS goes out now, whatever the period.
+  // Instruments appeared or one changed state: STATUS goes out now, whatever the period.
   void instruments_changed() { send_status_now(); }
   std::string log_summary();
 
