@@ -98,7 +98,10 @@ export function instruments({ page, ports, drone, liveValues }) {
       await view("System designer");
       await page.getByRole("button", { name: "+ Publisher" }).click();
       await set("periodS", PERIOD_S);
-      for (const s of SENSORS) await inspector.getByRole("button", { name: `All of ${s.name}` }).click();
+      for (const s of SENSORS) {
+        if (s.variables.length > 1) await inspector.getByRole("button", { name: `All of ${s.name}` }).click();
+        else await inspector.getByRole("checkbox", { name: new RegExp(`^usv\\.${s.name}\\.${s.variables[0].name} `) }).check();
+      }
       await select("pubBroker");
       await set("endpoint.port", String(ports.pub));
       await select("subBroker");
