@@ -61,6 +61,16 @@ std::vector<uint8_t> publisher_bytes(const std::vector<ingress::Register>& regs,
 
 constexpr int64_t kMs = 1'000'000;
 
+// One topic, one LAST stream, a STATUS a second.
+Config status_config(uint8_t id) {
+  Config c;
+  c.config_id = id;
+  c.status_period_s = 1;
+  c.topics = {{"usv.x", ValueType::Float32, 2, 0}};
+  c.streams = {{0, Aggregation::Last, 250000}};
+  return c;
+}
+
 }  // namespace
 
 TEST(Broker, RejectionsAreCountedByReason) {
@@ -183,12 +193,7 @@ TEST(Broker, StatusGoesAloneOnlyWhenNoDataCarriesIt) {
   FakeClock clock;
   FakeLink link;
   Broker b(test_config("status"), "key", clock, link);
-  Config c;
-  c.config_id = 3;
-  c.status_period_s = 1;
-  c.topics = {{"usv.x", ValueType::Float32, 2, 0}};
-  c.streams = {{0, Aggregation::Last, 250000}};
-  b.on_config(c);
+  b.on_config(status_config(3));
   int64_t t0 = clock.now_ns();
   b.status_due(t0);
   b.send_overdue_status(t0 + 500 * kMs);
@@ -206,12 +211,7 @@ TEST(Broker, InstrumentHealthRidesInStatusWhileItsPublisherIsConnected) {
   FakeClock clock;
   FakeLink link;
   Broker b(test_config("health"), "key", clock, link);
-  Config c;
-  c.config_id = 4;
-  c.status_period_s = 1;
-  c.topics = {{"usv.x", ValueType::Float32, 2, 0}};
-  c.streams = {{0, Aggregation::Last, 250000}};
-  b.on_config(c);
+  b.on_config(status_config(4));
   auto status_now = [&] {
     link.writes.clear();
     b.status_due(clock.now_ns());
