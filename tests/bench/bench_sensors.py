@@ -297,7 +297,8 @@ def median_rows(runs: list[list[list[object]]]) -> list[list[object]]:
     for i, first in enumerate(runs[0]):
         row: list[object] = [first[0]]
         for col in range(1, len(first)):
-            xs = sorted(float(r[i][col]) for r in runs if isinstance(r[i][col], (int, float)))
+            cells = [r[i][col] for r in runs]
+            xs = sorted(float(c) for c in cells if isinstance(c, (int, float)))
             row.append(round(statistics.median(xs), 2) if xs else "—")
         out.append(row)
     return out
