@@ -30,6 +30,7 @@ describe("InstrumentsHealth", () => {
       ["sounder", "open", "10:15:02 UTC", "42", "1", "0"],
     ]);
     expect(screen.queryByRole("alert")).toBeNull();
+    expect(screen.getByText(/^Instruments: 2/).textContent).toBe("Instruments: 2 (2 open)");
   });
 
   it("flags a closed, a silent and a garbage-only instrument, with Modbus timeouts and exceptions", () => {
@@ -43,10 +44,11 @@ describe("InstrumentsHealth", () => {
       ["sonde", "silent", "none yet", "0", "0", "0", "12", "1"],
       ["wind", "open", "none yet", "0", "80", "0", "0", "0"],
     ]);
-    expect(screen.getAllByRole("alert").map((a) => a.getAttribute("title"))).toEqual([
-      "device closed (unplugged or lost)", "silent: no value for 3 periods",
-      "only bad lines (wrong baud rate or format?)",
-    ]);
+    // the one-line summary names each flagged instrument and why
+    expect(screen.getByText(/^Instruments: 3/).textContent).toMatch(/^Instruments: 3 \(1 open, 1 silent, 1 closed\)/);
+    expect(screen.getByRole("alert").textContent).toBe(
+      " · ctd: device closed (unplugged or lost); sonde: silent: no value for 3 periods; "
+      + "wind: only bad lines (wrong baud rate or format?)");
   });
 
   it("shows nothing when no instrument reports", () => {
