@@ -127,9 +127,9 @@ export function instruments({ page, ports, drone, liveValues }) {
     ["instruments: the operator sees their values and each one's health", async () => {
       if (!drone || !liveValues) throw new Error("needs the simulated drone (modd up --simulate)");
       await panel("Monitor");
-      // one line under the link status, opening on the table
-      const summary = page.locator("details.instruments-health summary");
-      await expectText(summary, /^Instruments: 4 \(4 open\)$/, 30000);
+      // one item of the link status line, opening on the table
+      const summary = page.getByRole("status", { name: "Link status" }).locator("details.instruments-health summary");
+      await expectText(summary, /Instruments: 4 \(4 open\)$/, 30000);
       await summary.click();
       const health = page.getByRole("table", { name: "Instruments' health" });
       await expectVisible(health);

@@ -30,7 +30,7 @@ describe("InstrumentsHealth", () => {
       ["sounder", "open", "10:15:02 UTC", "42", "1", "0"],
     ]);
     expect(screen.queryByRole("alert")).toBeNull();
-    expect(screen.getByText(/^Instruments: 2/).textContent).toBe("Instruments: 2 (2 open)");
+    expect(screen.getByText(/Instruments: 2/).textContent).toBe(" · Instruments: 2 (2 open)");
   });
 
   it("flags a closed, a silent and a garbage-only instrument, with Modbus timeouts and exceptions", () => {
@@ -45,7 +45,7 @@ describe("InstrumentsHealth", () => {
       ["wind", "open", "none yet", "0", "80", "0", "0", "0"],
     ]);
     // the one-line summary names each flagged instrument and why
-    expect(screen.getByText(/^Instruments: 3/).textContent).toMatch(/^Instruments: 3 \(1 open, 1 silent, 1 closed\)/);
+    expect(screen.getByText(/Instruments: 3/).textContent).toMatch(/^ · Instruments: 3 \(1 open, 1 silent, 1 closed\)/);
     expect(screen.getByRole("alert").textContent).toBe(
       " · ctd: device closed (unplugged or lost); sonde: silent: no value for 3 periods; "
       + "wind: only bad lines (wrong baud rate or format?)");

@@ -1,9 +1,9 @@
 import { formatClock, type InstrumentHealth } from "../../core/instrumentHealth";
 
-/** The plug-and-play instruments (core/instrumentHealth.ts) in one line under
- * the link status — how many, in which state, and any flagged one (closed,
- * silent, garbage only) as an alert — that opens on a table, one row per
- * instrument: state, last value time, lines ok and bad, reconnects; Modbus
+/** The plug-and-play instruments (core/instrumentHealth.ts) as one more item
+ * of the link status line — how many, in which state, and any flagged one
+ * (closed, silent, garbage only) as an alert — that opens on a table, one row
+ * per instrument: state, last value time, lines ok and bad, reconnects; Modbus
  * timeouts and exceptions when any. Closed by default, so the charts keep
  * their place. */
 export function InstrumentsHealth({ sensors }: { sensors: InstrumentHealth[] }) {
@@ -16,7 +16,7 @@ export function InstrumentsHealth({ sensors }: { sensors: InstrumentHealth[] }) 
   return (
     <details className="instruments-health">
       <summary>
-        Instruments: {sensors.length} ({states})
+        {" "}· Instruments: {sensors.length} ({states})
         {flagged.length > 0 && <strong className="behind" role="alert">
           {" "}· {flagged.map((s) => `${s.name}: ${s.alert}`).join("; ")}
         </strong>}

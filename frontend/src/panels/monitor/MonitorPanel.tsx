@@ -102,8 +102,8 @@ export default function MonitorPanel() {
           </strong>}
         </>}
         {!link && state === "open" && " · waiting for the drone's status…"}
+        {link?.sensors && <InstrumentsHealth sensors={link.sensors} />}
       </div>
-      {link?.sensors && <InstrumentsHealth sensors={link.sensors} />}
       <div className="monitor-grid">
         <aside className="watch-list" aria-label="Subscriptions to watch">
           <h3>Watch</h3>
