@@ -87,6 +87,11 @@ def _frame(mtype: int, body: bytes) -> bytes:
 
 
 TYPES = {"float32": (0, "<f"), "float64": (1, "<d"), "int": (2, "<q"), "bool": (3, "<B")}
+# An instrument's health as modd-sensors reports it (docs/ingress.md, HEALTH; fields in
+# docs/protocol.md's order): the PubBroker forwards it in STATUS, the SubBroker puts it in
+# its status document's `sensors`.
+HEALTH = {"ctd": {"state": 1, "lines_ok": 120, "lines_bad": 3, "reconnects": 2,
+                  "last_value_ms": 1_700_000_000_123}}
 
 
 def _sample(topic: str, i: int, rng: random.Random) -> float:
@@ -127,6 +132,9 @@ class Publisher(threading.Thread):
                         code = TYPES[self.types[topic]][0]
                         sock.sendall(_frame(0x02, _varint(ids[topic]) + bytes([code])
                                             + _string(topic)))
+            sock.sendall(_frame(0x04, _varint(len(HEALTH)) + b"".join(
+                _string(name) + _varint(len(h)) + b"".join(_varint(v) for v in h.values())
+                for name, h in HEALTH.items())))
             start = time.monotonic()
             due = [start + float(p["periodS"]) for p in pubs]
             count = [0] * len(pubs)
@@ -181,6 +189,7 @@ class Station:
         (self.tmp / "sb.toml").write_text(
             f'model = {json.dumps(str(self.model_path))}\n[link]\n'
             f'endpoint = "127.0.0.1:{self.link}"\nkey = "env:MODD_LINK_KEY"\n'
+            "pubbroker_status_period_s = 1\n"  # the PubBroker's STATUS (and HEALTH) every second
             f'[zenoh]\nlisten = ["{self.zenoh}"]\n'
             f'credentials_dir = {json.dumps(str(self.credentials.dir))}\n[delivery]\ntcp = false\n'
             f"status_period_s = 0.5\n"

@@ -19,7 +19,7 @@ from modd_model import load_model
 from starlette.testclient import WebSocketTestSession
 
 from .conftest import ADMIN_PASSWORD, Headers, login
-from .station import Station
+from .station import HEALTH, Station
 
 DEMO = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.modd"
 
@@ -130,6 +130,17 @@ def test_stream_relays_values_and_status(live: TestClient, people: dict[str, Hea
         ws.send_json({"op": "subscribe", "subscriber": "no such/key"})
         err = _receive_until(ws, lambda m: m["type"] == "error")
         assert "identifier" in err["message"]
+
+
+def test_stream_relays_the_instruments_health(live: TestClient,
+                                              people: dict[str, Headers]) -> None:
+    """What a publisher reports in HEALTH reaches the browser in the status (issue 32)."""
+    token = people["operator"]["Authorization"].split()[1]
+    with live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws:
+        ws.send_json({"op": "auth", "token": token})
+        assert ws.receive_json()["type"] == "authenticated"
+        status = _receive_until(ws, lambda m: m["type"] == "status" and "sensors" in m["data"])
+        assert status["data"]["sensors"] == HEALTH
 
 
 def test_dynamic_subscriptions(live: TestClient, people: dict[str, Headers]) -> None:

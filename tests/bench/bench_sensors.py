@@ -1,16 +1,19 @@
 """modd-sensors under the issue's load, side by side with a hand-written driver
-(pynmea2 parsing, the Python publisher client the generated stub uses) in
-the same run: 20 NMEA devices at 10 Hz and 4 Modbus devices at 1 Hz, each on
-a pseudo-terminal the bench writes (Modbus: answers read requests).
+(pynmea2 parsing, pymodbus's client polling the sondes, the Python publisher
+client the generated stub uses) in the same run: 20 NMEA devices at 10 Hz and 4
+Modbus devices at 1 Hz, each on a pseudo-terminal the bench writes (Modbus:
+answers read requests).
 
 Each reader publishes to a stand-in ingress in this process (the real
 protocol: HELLO, CATALOGUE, REGISTER, SAMPLES, ACK), which notes when each
 sample arrives. An NMEA device's HDT heading carries a sequence number, so
 receive-to-ingress latency is the sample's arrival at the ingress minus the
 time its line was written. CPU (% of one core) and RSS are the reader
-process's, from /proc, over the measured seconds.
+process's, from /proc, over the measured seconds. With ``--runs N`` the two
+readers take turns N times and each figure is the median of its N runs (the
+machine is shared: one run says little).
 
-    .venv/bin/python tests/bench/bench_sensors.py [--seconds 20]
+    .venv/bin/python tests/bench/bench_sensors.py [--seconds 20] [--runs 1]
 
 Goal (issue 32): modd-sensors CPU <= 3 % of one core, RSS <= 60 MB,
 latency p99 <= 5 ms. Asserts nothing.
@@ -23,6 +26,7 @@ import contextlib
 import json
 import os
 import socket
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -38,6 +42,7 @@ sys.path[:0] = [str(HERE)]
 from benchkit.footprint import Sampler  # noqa: E402
 from benchkit.report import table  # noqa: E402
 from modd.ingress import (  # noqa: E402
+    HEALTH,
     HELLO,
     REGISTER,
     SAMPLES,
@@ -81,6 +86,14 @@ def model_text(devices: Path) -> str:
         Publishers {{ Publisher nav(0.1, {fast}); Publisher water(1.0, {slow}); }}""")
 
 
+def _recv(conn: socket.socket) -> bytes:
+    """What a reader sent; nothing once it went away (terminated with bytes unread)."""
+    try:
+        return conn.recv(65536)
+    except OSError:
+        return b""
+
+
 class Ingress:
     """The PubBroker's ingress as far as a publisher sees it; notes each sample's arrival."""
 
@@ -107,7 +120,7 @@ class Ingress:
         names: dict[int, str] = {}
         types: dict[int, ValueType] = {}
         conn.sendall(encode_catalogue(Catalogue("b", accept_unknown=True)))
-        while data := conn.recv(65536):
+        while data := _recv(conn):
             now = time.monotonic_ns()
             for f in splitter.feed(data):
                 r = Reader(f.body)
@@ -127,7 +140,7 @@ class Ingress:
                     with self.lock:
                         self.samples += n
                     conn.sendall(encode_ack(Ack(received, received, received)))
-                elif f.type != HELLO:
+                elif f.type not in (HELLO, HEALTH):  # HEALTH: modd-sensors' instruments
                     raise RuntimeError(f"unexpected ingress frame {f.type}")
 
     def close(self) -> None:
@@ -224,8 +237,24 @@ def read(path, name):
                 pub.publish(f"b.{name}.seq", now, float(msg.heading))
             elif msg.sentence_type == "GGA":
                 pub.publish(f"b.{name}.lat", now, msg.latitude)
+def poll(path, name):
+    from pymodbus.client import ModbusSerialClient as Client
+    client = Client(path, baudrate=9600, timeout=0.5, retries=0)
+    client.connect()
+    while True:
+        due = time.monotonic() + 1.0
+        r = client.read_holding_registers(0, count=3, device_id=1)
+        now = time.time_ns()
+        if not r.isError():
+            ph = client.convert_from_registers(r.registers[:2], Client.DATATYPE.FLOAT32)
+            water.publish(f"b.{name}.ph", now, ph)
+            water.publish(f"b.{name}.o2", now, r.registers[2] * 0.01)
+        time.sleep(max(0.0, due - time.monotonic()))
+water = Publisher("water", sys.argv[1])
 for path in sys.argv[2:]:
-    threading.Thread(target=read, args=(path, path.rsplit("/", 1)[1]), daemon=True).start()
+    name = path.rsplit("/", 1)[1]
+    worker = poll if name.startswith("s") else read
+    threading.Thread(target=worker, args=(path, name), daemon=True).start()
 threading.Event().wait()
 """
 
@@ -262,9 +291,35 @@ def measure(
     ]
 
 
+def median_rows(runs: list[list[list[object]]]) -> list[list[object]]:
+    """Per reader, the median of each figure over the runs."""
+    out = []
+    for i, first in enumerate(runs[0]):
+        row: list[object] = [first[0]]
+        for col in range(1, len(first)):
+            cells = [r[i][col] for r in runs]
+            xs = sorted(float(c) for c in cells if isinstance(c, (int, float)))
+            row.append(round(statistics.median(xs), 2) if xs else "—")
+        out.append(row)
+    return out
+
+
+def one_run(root: Path, ingress: Ingress, devices: Devices, seconds: float) -> list[list[object]]:
+    bin_dir = Path(sys.executable).parent
+    address = f"unix:{root / 'ingress.sock'}"
+    model = str(root / "model.json")
+    sensors = [str(bin_dir / "modd-sensors"), "--model", model, "--ingress", address]
+    hand = [sys.executable, "-c", HAND_DRIVER, address, *(p.device.path for p in devices.plans)]
+    return [
+        measure("modd-sensors", sensors, ingress, devices, seconds),
+        measure("hand driver: pynmea2, pymodbus + Publisher", hand, ingress, devices, seconds),
+    ]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=20.0)
+    ap.add_argument("--runs", type=int, default=1, help="turns per reader; medians reported")
     args = ap.parse_args()
     from modd_model import parse_text
 
@@ -274,50 +329,16 @@ def main() -> None:
         (root / "model.json").write_text(json.dumps(doc))
         ingress = Ingress(root / "ingress.sock")
         devices = Devices(doc)
-        bin_dir = Path(sys.executable).parent
-        rows = [
-            measure(
-                "modd-sensors (20 NMEA at 10 Hz + 4 Modbus at 1 Hz)",
-                [
-                    str(bin_dir / "modd-sensors"),
-                    "--model",
-                    str(root / "model.json"),
-                    "--ingress",
-                    f"unix:{root / 'ingress.sock'}",
-                ],
-                ingress,
-                devices,
-                args.seconds,
-            )
-        ]
-        paths = [p.device.path for p in devices.plans if p.kind == "nmea"]
-        rows.append(
-            measure(
-                "hand driver: pynmea2 + Publisher (the 20 NMEA only)",
-                [sys.executable, "-c", HAND_DRIVER, f"unix:{root / 'ingress.sock'}", *paths],
-                ingress,
-                devices,
-                args.seconds,
-            )
-        )
+        runs = [one_run(root, ingress, devices, args.seconds) for _ in range(args.runs)]
         devices.close()
         ingress.close()
-    print(f"bench_sensors: {args.seconds:g} s measured per reader, {os.cpu_count()} cores")
     print(
-        table(
-            [
-                "reader",
-                "CPU % of a core",
-                "RSS MB",
-                "samples/s",
-                "latency p50 ms",
-                "p90 ms",
-                "p99 ms",
-                "max ms",
-            ],
-            rows,
-        )
+        f"bench_sensors: {NMEA_DEVICES} NMEA devices at {NMEA_HZ} Hz + {MODBUS_DEVICES} Modbus "
+        f"at 1 Hz; {args.seconds:g} s measured per reader, median of {args.runs} run(s), "
+        f"{os.cpu_count()} cores"
     )
+    heads = ["reader", "CPU % of a core", "RSS MB", "samples/s", "latency p50 ms", "p90 ms"]
+    print(table([*heads, "p99 ms", "max ms"], median_rows(runs)))
 
 
 if __name__ == "__main__":

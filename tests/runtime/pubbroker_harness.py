@@ -143,6 +143,7 @@ class Received:
     errors: list[ErrorMsg] = field(default_factory=list)
     data_frames: int = 0
     data_bytes: int = 0
+    sensors: dict[str, dict[str, int]] = field(default_factory=dict)  # last STATUS's instruments
 
 
 class BaseStation:
@@ -197,6 +198,7 @@ class BaseStation:
             m = codec.decode(f)
             if isinstance(m, Status):
                 self.got.statuses.append(m.as_dict())
+                self.got.sensors = {h.name: h.as_dict() for h in m.sensors}
             elif isinstance(m, ConfigAck):
                 self.got.acks.append(m)
                 if m.status == 0 and m.config_id in self._sent:
@@ -232,7 +234,7 @@ class BaseStation:
         with self._lock:
             return Received(list(self.got.windows), list(self.got.statuses), list(self.got.acks),
                             list(self.got.pongs), list(self.got.errors), self.got.data_frames,
-                            self.got.data_bytes)
+                            self.got.data_bytes, dict(self.got.sensors))
 
     def close(self) -> None:
         self._stop.set()

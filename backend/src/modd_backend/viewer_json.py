@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from modd_contracts import aggregations as agg
+from modd_contracts import aggregations_gen as agg
 
 #: Keywords kept from a contract schema (the rest is its own bookkeeping).
 _KEPT = ("title", "description", "enum", "const")

@@ -28,6 +28,7 @@ from modd.link.frames import (
     Message,
     Ping,
     Pong,
+    SensorHealth,
     Status,
     StreamSpec,
     TopicSpec,
@@ -79,7 +80,9 @@ def msg_json(m: Message) -> dict[str, Any]:
         return {"type": "CONFIG_ACK", "config_id": m.config_id, "status": m.status,
                 "epoch_ns": m.epoch_ns}
     if isinstance(m, Status):
-        return {"type": "STATUS", "counters": list(m.counters)}
+        return {"type": "STATUS", "counters": list(m.counters),
+                **({"sensors": [{"name": h.name, "fields": list(h.fields)} for h in m.sensors]}
+                   if m.sensors else {})}
     if isinstance(m, ErrorMsg):
         return {"type": "ERROR", "code": m.code, "message": m.message}
     raise TypeError(m)
@@ -146,6 +149,10 @@ def main() -> None:
     simple("config_ack_busy", "CONFIG 2 refused: BUSY (another waits for its switch date)", ConfigAck(2, 6, 0))
     simple("status", "STATUS with 20 counters (docs/protocol.md order)", Status(
         (3600, 270000, 269990, 1, 2, 3, 4, 0, 0, 0, 1, 1, 14400, 0, 317000, 51200, 42, 2, 1, 1)))
+    simple("status_sensors", "STATUS with 3 counters and two instruments' health "
+           "(state, lines_ok, lines_bad, reconnects, last_value_ms...)", Status(
+               (60, 1200, 1190), (SensorHealth("ctd", (1, 600, 2, 0, 1_763_700_000_500)),
+                                  SensorHealth("gnss", (2, 590, 0, 1, 1_763_700_000_000, 590)))))
     simple("error_auth", "ERROR AUTH_FAILED with a message", ErrorMsg(3, "HMAC proof does not verify"))
 
     s1_kinds = [(ValueType.FLOAT32, Aggregation.AVERAGE)] * 2 + [

@@ -106,6 +106,8 @@ export interface SubBrokerStatus {
   link_budget?: object | null;
   /** Over udp and serial: what the datagram link measures (docs/subbroker.md, "Status"); null over tcp. */
   radio?: RadioStatus | null;
+  /** The plug-and-play instruments' health (modd-sensors, docs/sensors.md "Health") from the PubBroker's last STATUS, by sensor name; absent when no instrument reports. Carried as docs/protocol.md, STATUS, "Instruments' health". */
+  sensors?: Record<string, SensorHealth>;
 }
 
 /** A datagram link's figures (modd.subbroker.dglink.DatagramLinkClient.radio_status): the wire bytes/s per direction over the last 10 s, the share of slots lost or repaired, the datagrams refused, and the PubBroker's own counters from its last STATUS. */
@@ -175,6 +177,32 @@ export interface TcpSender {
   connected: boolean;
   sent: number;
   dropped: number;
+}
+
+/** One instrument as modd-sensors counts it since it started; a field a newer modd-sensors appends is kept as field_<i>. */
+export interface SensorHealth {
+  /** 0 closed (device absent or lost), 1 open, 2 silent (open, no value for 3 periods and at least 2 s). */
+  state?: number;
+  /** Sentences, lines or Modbus replies that passed every check. */
+  lines_ok?: number;
+  /** Refused: checksum, form, CRC, truncated, garbage. */
+  lines_bad?: number;
+  /** Times the device was reopened after a loss. */
+  reconnects?: number;
+  /** Receive time of the last value, ms since the Unix epoch (drone clock); 0: none yet. */
+  last_value_ms?: number;
+  /** Samples handed to the publishers. */
+  values?: number;
+  /** Mapped fields with no value in a good line. */
+  missing?: number;
+  /** Samples the publisher refused at the call. */
+  refused?: number;
+  /** Modbus requests with no complete reply in time. */
+  timeouts?: number;
+  /** Modbus exception replies. */
+  exceptions?: number;
+  /** Times the instrument fell silent. */
+  silences?: number;
 }
 
 /** The plan as one JSON object (docs/planning.md, "Plan JSON"). Producer: metamodel/src/modd_plan/planjson.py (`modd plan --json`, the backend's live plan). Consumers: the backend, the workbench's plan panel (frontend/src/core/plan.ts), the SubBroker's CONFIG builder. Periods and delays are exact decimal strings, wire periods integer microseconds. */

@@ -170,6 +170,7 @@ describe("the contracts' vectors (contracts/vectors)", () => {
       expect(got.plannedBytesPerS, c.name).toBe(want.plannedBytesPerS);
       expect(got.behind, c.name).toBe(want.behind);
       expect(got.lagS, c.name).toBe(want.lagS);
+      expect(got.sensors ?? null, c.name).toEqual("sensors" in want ? want.sensors : null);
       if (want.rttMs === null) expect(got.rttMs).toBeNull();
       else expect(got.rttMs, c.name).toBeCloseTo(want.rttMs, 9);
       if (want.lastFrameAgeS === null) expect(got.lastFrameAgeS).toBeNull();

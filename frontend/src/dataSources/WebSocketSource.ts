@@ -21,6 +21,7 @@
 import type { DeliveredValue, SubBrokerStatus } from "../core/contracts.gen";
 import { RingBuffer } from "./RingBuffer";
 import { archiveSpace } from "../core/archiveSpace";
+import { instrumentsHealth } from "../core/instrumentHealth";
 import type { ChannelListener, ConnectionState, DataSource, LinkStatus, Sample, SavedEvent } from "./types";
 
 export interface SocketLike {
@@ -103,6 +104,7 @@ export function toLinkStatus(d: Partial<SubBrokerStatus>): LinkStatus {
     state: typeof d.link === "string" ? d.link : undefined,
     ...(typeof d.behind === "boolean" ? { behind: d.behind, lagS: num(d.lag_s) } : {}),
     ...(archive ? { archive } : {}),
+    ...(d.sensors ? { sensors: instrumentsHealth(d.sensors) } : {}),
     ...(radio ? {
       radio: {
         transport: String(radio.transport ?? ""),

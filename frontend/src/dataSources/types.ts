@@ -1,4 +1,5 @@
 import type { ArchiveSpace } from "../core/archiveSpace";
+import type { InstrumentHealth } from "../core/instrumentHealth";
 /**
  * Live data behind one interface. Panels never open sockets: they get a
  * `DataSource` from the services context and subscribe to channels.
@@ -44,6 +45,8 @@ export interface LinkStatus {
   archive?: ArchiveSpace | null;
   /** Over udp or serial (status' `radio`): what the datagram link measures. */
   radio?: RadioFigures;
+  /** The plug-and-play instruments' health (status' `sensors`), when the drone reports it. */
+  sensors?: InstrumentHealth[];
 }
 
 /** A datagram link's figures (docs/subbroker.md, "Status": `radio`). */

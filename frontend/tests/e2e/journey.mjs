@@ -406,16 +406,16 @@ export async function waitUntil(check, timeoutMs, describe) {
   throw new Error(`timed out: ${describe ? await describe() : "condition"}`);
 }
 
-async function expectVisible(locator, timeout = 10000) {
+export async function expectVisible(locator, timeout = 10000) {
   await locator.waitFor({ state: "visible", timeout });
 }
 
-async function expectText(locator, re, timeout = 10000) {
+export async function expectText(locator, re, timeout = 10000) {
   await waitUntil(async () => re.test((await locator.first().textContent().catch(() => "")) ?? ""), timeout,
     async () => `${re} not in "${(await locator.first().textContent().catch(() => "")) ?? ""}"`);
 }
 
-async function expectCount(locator, n, timeout = 10000) {
+export async function expectCount(locator, n, timeout = 10000) {
   await waitUntil(async () => (await locator.count()) === n, timeout, async () => `expected ${n} elements, found ${await locator.count()}`);
 }
 

@@ -17,6 +17,7 @@ import { journey } from "./journey.mjs";
 import { collaboration } from "./collab.mjs";
 import { views } from "./views.mjs";
 import { radio } from "./radio.mjs";
+import { instrumentParts, instruments } from "./instruments.mjs";
 import { startTileServer } from "./tiles.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
@@ -70,6 +71,10 @@ try {
   const liveValues = drone && existsSync(simulatorBin);
   if (drone) {
     const model = scenario1(pubPort, subPort);
+    // The plug-and-play instruments (instruments.mjs): simulated on pseudo-terminals, read by modd-sensors.
+    const instr = instrumentParts();
+    model.drone.sensors.push(...instr.sensors);
+    model.publishers.push(instr.publisher);
     writeFileSync(join(tmp, "scenario1.json"), JSON.stringify(model));
     // The SubBroker's zenoh router authenticates its clients (docs/security.md): the
     // credentials and the deploy key, made here so that the backend has them at once.
@@ -107,17 +112,21 @@ try {
   const expected = (m) => m.includes("'unsafe-eval' is not an allowed source of script");
   page.on("pageerror", (e) => { if (!expected(e.message)) errors.push(e.message); });
   // MODD_E2E_ONLY=collab: only the collaboration steps (frontend/tests/e2e/collab.mjs);
-  // MODD_E2E_ONLY=views: the journey and views.mjs, without them.
+  // MODD_E2E_ONLY=views: the journey and views.mjs, without them;
+  // MODD_E2E_ONLY=instruments: only the instruments' steps (instruments.mjs).
   const only = process.env.MODD_E2E_ONLY;
   // MODD_E2E_ONLY=radio: log in, then only the radio budget steps (radio.mjs).
   const steps = only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radio({ page })] : [
-    ...(only === "collab" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
+    ...(only === "collab" || only === "instruments" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
-    ...(only === "collab" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
+    ...(only === "collab" || only === "instruments" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
       archiveDir: join(tmp, "drone", "archive"),
       survey: surveyModel(pubPort, subPort), tiles })),
-    ...(only === "views" ? [] : collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) })),
-    ...(only === "views" || only === "collab" ? [] : radio({ page })),
+    ...(only === "views" || only === "instruments" ? [] : collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) })),
+    ...(only === "views" || only === "collab" || only === "instruments" ? [] : radio({ page })),
+    // Issue 32: the four plug-and-play instruments declared, deployed and watched (last: it deploys its own model).
+    ...(only === "instruments" ? [loginStep(page, baseUrl)] : []),
+    ...(only === "views" || only === "collab" ? [] : instruments({ page, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
   ];
   let broken = null;
   // MODD_E2E_KEEP_GOING=1: the later steps still run after a failure (to see them locally; they
@@ -156,6 +165,17 @@ try {
 }
 console.log(`${passed} passed, ${failed} failed`);
 process.exit(failed ? 1 : 0);
+
+/** Logs in as the admin (the journey's first step does it otherwise). */
+function loginStep(page, baseUrl) {
+  return ["log in", async () => {
+    await page.goto(baseUrl);
+    await page.getByLabel("User name").fill("admin");
+    await page.getByLabel("Password").fill(PASSWORD);
+    await page.getByRole("button", { name: "Log in" }).click();
+    await page.getByRole("heading", { name: "MoDD projects" }).waitFor({ state: "visible", timeout: 10000 });
+  }];
+}
 
 /**
  * The backend plans in worker processes started on the first request (each

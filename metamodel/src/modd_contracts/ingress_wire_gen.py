@@ -28,6 +28,7 @@ class MsgType(IntEnum):
     HELLO = 0x01
     REGISTER = 0x02
     SAMPLES = 0x03
+    HEALTH = 0x04
     CATALOGUE = 0x81
     ACK = 0x82
     REJECT = 0x83

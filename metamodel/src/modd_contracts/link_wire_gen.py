@@ -17,6 +17,12 @@ MAX_FRAME: Final = 1048576
 MAX_ACCEPTED_DELAY_MS: Final = 3600000
 #: Largest PING or PONG payload, in bytes.
 MAX_PING: Final = 64
+#: Most instruments in one STATUS or HEALTH (docs/protocol.md, STATUS).
+MAX_HEALTH_SENSORS: Final = 64
+#: Most counters of one instrument's health.
+MAX_HEALTH_FIELDS: Final = 32
+#: Longest instrument name in a health report, in bytes.
+MAX_HEALTH_NAME: Final = 64
 #: Longest STATUS period a CONFIG may ask for, in seconds: one day (0: no STATUS).
 MAX_STATUS_PERIOD_S: Final = 86400
 #: Most topics, or streams, of one CONFIG.
@@ -165,6 +171,9 @@ __all__ = [
     "MAX_FRAME",
     "MAX_ACCEPTED_DELAY_MS",
     "MAX_PING",
+    "MAX_HEALTH_SENSORS",
+    "MAX_HEALTH_FIELDS",
+    "MAX_HEALTH_NAME",
     "MAX_STATUS_PERIOD_S",
     "MAX_LIST",
     "MAX_NAME",

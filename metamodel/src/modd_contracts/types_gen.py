@@ -71,6 +71,7 @@ class SubBrokerStatus(TypedDict):
     transport: NotRequired[str]
     link_budget: NotRequired[dict[str, Any] | None]
     radio: NotRequired[RadioStatus | None]
+    sensors: NotRequired[dict[str, SensorHealth]]
 
 
 class RadioStatus(TypedDict):
@@ -123,6 +124,22 @@ class TcpSender(TypedDict):
     connected: bool
     sent: int
     dropped: int
+
+
+class SensorHealth(TypedDict):
+    """One instrument as modd-sensors counts it since it started; a field a newer modd-sensors appends is kept as field_<i>."""
+
+    state: NotRequired[int]
+    lines_ok: NotRequired[int]
+    lines_bad: NotRequired[int]
+    reconnects: NotRequired[int]
+    last_value_ms: NotRequired[int]
+    values: NotRequired[int]
+    missing: NotRequired[int]
+    refused: NotRequired[int]
+    timeouts: NotRequired[int]
+    exceptions: NotRequired[int]
+    silences: NotRequired[int]
 
 
 class PlanDocument(TypedDict):
@@ -374,4 +391,4 @@ class DeliveredValueFields:
 DELIVERED_VALUE_REQUIRED: tuple[str, ...] = ("subscriber", "topic", "aggregation", "period_s", "unit", "config_id", "slot", "start_ns", "end_ns", "value", "count", "delivered_ns", "v",)
 
 
-__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "ARCHIVE_RECORD_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanRadio", "PlanRadioCost", "PlanRadioDiagnostic", "PlanProposal", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "ArchiveRecord", "DeliveredValueFields", "DELIVERED_VALUE_REQUIRED"]
+__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "ARCHIVE_RECORD_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "SensorHealth", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanRadio", "PlanRadioCost", "PlanRadioDiagnostic", "PlanProposal", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "ArchiveRecord", "DeliveredValueFields", "DELIVERED_VALUE_REQUIRED"]

@@ -14,7 +14,7 @@ from fractions import Fraction
 from math import ceil, floor
 from typing import Any
 
-from modd_contracts import aggregations as agg
+from modd_contracts import aggregations_gen as agg
 from modd_model.query import Topic, topic_name
 
 from .linkcost import SAMPLE_BYTES, aggregate_value_type, varint_size

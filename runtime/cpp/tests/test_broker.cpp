@@ -61,6 +61,16 @@ std::vector<uint8_t> publisher_bytes(const std::vector<ingress::Register>& regs,
 
 constexpr int64_t kMs = 1'000'000;
 
+// One topic, one LAST stream, a STATUS a second.
+Config status_config(uint8_t id) {
+  Config c;
+  c.config_id = id;
+  c.status_period_s = 1;
+  c.topics = {{"usv.x", ValueType::Float32, 2, 0}};
+  c.streams = {{0, Aggregation::Last, 250000}};
+  return c;
+}
+
 }  // namespace
 
 TEST(Broker, RejectionsAreCountedByReason) {
@@ -183,12 +193,7 @@ TEST(Broker, StatusGoesAloneOnlyWhenNoDataCarriesIt) {
   FakeClock clock;
   FakeLink link;
   Broker b(test_config("status"), "key", clock, link);
-  Config c;
-  c.config_id = 3;
-  c.status_period_s = 1;
-  c.topics = {{"usv.x", ValueType::Float32, 2, 0}};
-  c.streams = {{0, Aggregation::Last, 250000}};
-  b.on_config(c);
+  b.on_config(status_config(3));
   int64_t t0 = clock.now_ns();
   b.status_due(t0);
   b.send_overdue_status(t0 + 500 * kMs);
@@ -200,6 +205,40 @@ TEST(Broker, StatusGoesAloneOnlyWhenNoDataCarriesIt) {
   EXPECT_EQ(std::get<Status>(decode(*f)).counters[kConfigId], 3u);
   b.send_overdue_status(t0 + 3000 * kMs);
   EXPECT_EQ(link.writes.size(), 1u);  // sent once per period
+}
+
+TEST(Broker, InstrumentHealthRidesInStatusWhileItsPublisherIsConnected) {
+  FakeClock clock;
+  FakeLink link;
+  Broker b(test_config("health"), "key", clock, link);
+  b.on_config(status_config(4));
+  auto status_now = [&] {
+    link.writes.clear();
+    b.status_due(clock.now_ns());
+    b.send_overdue_status(clock.now_ns() + 2000 * kMs);
+    return std::get<Status>(decode(*split_frame(link.writes.at(0))));
+  };
+  auto s = std::make_unique<IngressSession>(b);
+  std::vector<uint8_t> bytes;
+  ingress::encode_hello(bytes, {ingress::kVersion, "sensors"});
+  ingress::encode_health(bytes, {{"gnss", {1, 10, 2, 0}}, {"ctd", {2, 5}}});
+  ingress::encode_health(bytes, {{"gnss", {1, 12, 3, 1}}, {"ctd", {1, 6}}});  // replaces the first
+  ASSERT_TRUE(s->on_bytes(bytes));
+  std::vector<SensorHealth> want = {{"ctd", {1, 6}}, {"gnss", {1, 12, 3, 1}}};
+  EXPECT_EQ(status_now().sensors, want);
+  // A state change (the CTD unplugged) goes out at once, not at the next period.
+  link.writes.clear();
+  std::vector<uint8_t> unplugged;
+  ingress::encode_health(unplugged, {{"gnss", {1, 13, 3, 1}}, {"ctd", {0, 6}}});
+  ASSERT_TRUE(s->on_bytes(unplugged));
+  ASSERT_EQ(link.writes.size(), 1u);
+  EXPECT_EQ(std::get<Status>(decode(*split_frame(link.writes[0]))).sensors[0], (SensorHealth{"ctd", {0, 6}}));
+  std::vector<uint8_t> counts_only;  // counters alone change: no STATUS of its own
+  ingress::encode_health(counts_only, {{"gnss", {1, 14, 3, 1}}, {"ctd", {0, 6}}});
+  ASSERT_TRUE(s->on_bytes(counts_only));
+  EXPECT_EQ(link.writes.size(), 1u);
+  s.reset();  // modd-sensors gone: its health is no longer reported as current
+  EXPECT_TRUE(status_now().sensors.empty());
 }
 
 TEST(Broker, VanishingPublisherAndFullQueueAreCounted) {

@@ -28,6 +28,7 @@ TEST(LinkCodec, RoundTripEveryControlMessage) {
   c.streams = {{0, Aggregation::Sum, 1}, {1, Aggregation::All, 2'000'000'000}};
   std::vector<Message> msgs = {Hello{1, {1, 2, 3}}, Challenge{1, {9}}, Auth{{7}}, AuthOk{{1}, 3, 123456789},
                                Ping{{1, 2, 3}}, Pong{{}}, c, ConfigAck{9, 0, 42}, Status{{0, 1, 300, 1ull << 40}},
+                               Status{{5}, {{"gnss", {1, 2, 1ull << 40}}, {"ctd", {}}}},
                                ErrorMsg{3, "no"}};
   for (const auto& m : msgs) {
     auto b = enc(m);
@@ -36,6 +37,20 @@ TEST(LinkCodec, RoundTripEveryControlMessage) {
     EXPECT_EQ(enc(back), b);
   }
   EXPECT_EQ(std::get<Config>(dec(enc(c))), c);
+}
+
+TEST(LinkCodec, StatusCarriesInstrumentHealthOnlyWhenThereIsSome) {
+  Status with{{7, 8}, {{"gnss", {1, 300}}}};
+  auto back = std::get<Status>(dec(enc(with)));
+  EXPECT_EQ(back.counters, with.counters);
+  EXPECT_EQ(back.sensors, with.sensors);
+  // Without instruments the frame is the counters alone, as before.
+  EXPECT_EQ(enc(Status{{7, 8}}), (std::vector<uint8_t>{0x04, 0x20, 0x02, 0x07, 0x08}));
+  std::vector<uint8_t> empty_name = enc(Status{{7}, {{"x", {}}}});
+  empty_name[5] = 0;  // the name's length
+  empty_name.pop_back(), empty_name.pop_back();
+  empty_name[0] = static_cast<uint8_t>(empty_name.size() - 1);
+  EXPECT_THROW(dec(empty_name), Error);
 }
 
 TEST(LinkCodec, SplitNeedsWholeFrames) {

@@ -42,7 +42,12 @@ Message from_json(const json& m) {
   if (t == "PING") return Ping{from_hex(m["payload"].get<std::string>())};
   if (t == "PONG") return Pong{from_hex(m["payload"].get<std::string>())};
   if (t == "CONFIG_ACK") return ConfigAck{m["config_id"], m["status"], m["epoch_ns"]};
-  if (t == "STATUS") return Status{m["counters"].get<std::vector<uint64_t>>()};
+  if (t == "STATUS") {
+    Status s{m["counters"].get<std::vector<uint64_t>>()};
+    for (const auto& h : m.value("sensors", json::array()))
+      s.sensors.push_back({h["name"], h["fields"].get<std::vector<uint64_t>>()});
+    return s;
+  }
   if (t == "ERROR") return ErrorMsg{m["code"], m["message"]};
   if (t == "CONFIG") {
     Config c;

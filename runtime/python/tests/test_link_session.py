@@ -40,6 +40,7 @@ from modd.link.frames import (
     Ping,
     Pong,
     ProtocolError,
+    SensorHealth,
     Status,
     StreamSpec,
     TopicSpec,
@@ -296,6 +297,25 @@ def test_data_frames_become_windows_and_backfill_goes_to_the_sink() -> None:
     s.feed(codec.encode(Status((11, 22, 33))))
     assert handler.statuses == [Status((11, 22, 33))]
     assert list(s.stats.pubbroker.values()) == [11, 22, 33]
+    assert s.stats.sensors == {}
+    gnss = SensorHealth("gnss", (1, 40, 2, 1, 1700, 80, 0, 0, 0, 0, 3, 9))
+    s.feed(codec.encode(Status((11,), (gnss,))))
+    assert s.stats.sensors == {
+        "gnss": {
+            "state": 1,
+            "lines_ok": 40,
+            "lines_bad": 2,
+            "reconnects": 1,
+            "last_value_ms": 1700,
+            "values": 80,
+            "missing": 0,
+            "refused": 0,
+            "timeouts": 0,
+            "exceptions": 0,
+            "silences": 3,
+            "field_11": 9,
+        }
+    }
 
 
 def test_silence_gets_one_ping_then_ends_the_session() -> None:

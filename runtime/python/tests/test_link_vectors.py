@@ -23,6 +23,7 @@ from modd.link.frames import (
     Ping,
     Pong,
     ProtocolError,
+    SensorHealth,
     Status,
     StreamSpec,
     TopicSpec,
@@ -54,7 +55,8 @@ def from_json(m: dict[str, Any]) -> Message:
     if t == "CONFIG_ACK":
         return ConfigAck(m["config_id"], m["status"], m["epoch_ns"])
     if t == "STATUS":
-        return Status(tuple(m["counters"]))
+        return Status(tuple(m["counters"]), tuple(
+            SensorHealth(h["name"], tuple(h["fields"])) for h in m.get("sensors", [])))
     if t == "ERROR":
         return ErrorMsg(m["code"], m["message"])
     if t == "CONFIG":

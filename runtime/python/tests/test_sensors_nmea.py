@@ -17,14 +17,19 @@ from modd_model.vocabulary import NMEA_SENTENCES
 TALKERS = ["GP", "GN", "GL", "GA", "II", "SD"]
 
 
+def _ddmm(x: float, width: int) -> str:
+    """Degrees and minutes to 1e-4 minute, rounded as a whole (never '60.0000' minutes)."""
+    deg, tenths = divmod(round(abs(x) * 600_000), 600_000)
+    return f"{deg:0{width}d}{tenths // 10_000:02d}.{tenths % 10_000:04d}"
+
+
 def _gga(talker: str, lat: float, lon: float, alt: float) -> str:
     """A GGA built by pynmea2 (it computes the checksum) from decimal degrees."""
-    la, lo = abs(lat), abs(lon)
     fields = (
         "123519.00",
-        f"{int(la):02d}{(la - int(la)) * 60:07.4f}",
+        _ddmm(lat, 2),
         "N" if lat >= 0 else "S",
-        f"{int(lo):03d}{(lo - int(lo)) * 60:07.4f}",
+        _ddmm(lon, 3),
         "E" if lon >= 0 else "W",
         "1",
         "08",

@@ -30,6 +30,7 @@ import { keepSubscribed, useChartLayout } from "./useChartLayout";
 import { ArchiveSpaceNote } from "./ArchiveSpaceNote";
 import { FillGaps } from "./FillGaps";
 import { RadioLine } from "./RadioLine";
+import { InstrumentsHealth } from "./InstrumentsHealth";
 
 export default function MonitorPanel() {
   const model = useModel();
@@ -101,6 +102,7 @@ export default function MonitorPanel() {
           </strong>}
         </>}
         {!link && state === "open" && " · waiting for the drone's status…"}
+        {link?.sensors && <InstrumentsHealth sensors={link.sensors} />}
       </div>
       <div className="monitor-grid">
         <aside className="watch-list" aria-label="Subscriptions to watch">

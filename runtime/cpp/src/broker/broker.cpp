@@ -41,6 +41,19 @@ void IngressSession::on_register(const ingress::Register& r) {
   l.generation = broker_.topics_generation();
 }
 
+void IngressSession::on_health(std::vector<link::SensorHealth>&& sensors) {
+  // New instruments, or a change of one's state (field 0: closed, open, silent), are sent at
+  // once, as a change of archive state is: the operator hears of an unplugged device now.
+  auto states = [](const std::vector<link::SensorHealth>& v) {
+    std::vector<std::pair<std::string, uint64_t>> out;
+    for (const auto& h : v) out.emplace_back(h.name, h.fields.empty() ? 0 : h.fields[0]);
+    return out;
+  };
+  bool changed = states(health_) != states(sensors);
+  health_ = std::move(sensors);
+  if (changed) broker_.instruments_changed();
+}
+
 bool IngressSession::type_of(uint32_t id, link::ValueType& out) const {
   if (id >= locals_.size() || !locals_[id].used) return false;
   out = locals_[id].type;
@@ -512,7 +525,7 @@ bool Broker::send_data(std::vector<uint8_t>&& frame) {
   if (!out_.link_ready()) return false;
   if (status_pending_) {
     // STATUS rides in the same write as the DATA frame: no segment of its own.
-    link::encode(frame, link::Status{status_counters()});
+    link::encode(frame, status_message());
     status_pending_ = false;
   }
   size_t n = frame.size();
@@ -527,7 +540,7 @@ bool Broker::send_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::v
   if (status_pending_) {
     // STATUS goes in a CONTROL datagram of its own: DATA datagrams carry slots only.
     std::vector<uint8_t> frame;
-    link::encode(frame, link::Status{status_counters()});
+    link::encode(frame, status_message());
     if (out_.link_write(std::move(frame))) status_pending_ = false;
   }
   size_t n = values.size();
@@ -545,12 +558,21 @@ void Broker::send_overdue_status(int64_t now) {
   int64_t period = int64_t{status_period_s_} * 1'000'000'000;
   if (!status_pending_ || period == 0 || now - status_due_since_ < period || !out_.link_ready()) return;
   std::vector<uint8_t> frame;
-  link::encode(frame, link::Status{status_counters()});
+  link::encode(frame, status_message());
   size_t n = frame.size();
   if (out_.link_write(std::move(frame))) {
     counters_.link_bytes_sent += n;
     status_pending_ = false;
   }
+}
+
+link::Status Broker::status_message() {
+  link::Status st{status_counters()};
+  for (const IngressSession* s : sessions_)
+    for (const auto& h : s->health())
+      if (st.sensors.size() < link::kMaxHealthSensors) st.sensors.push_back(h);
+  std::ranges::sort(st.sensors, {}, &link::SensorHealth::name);
+  return st;
 }
 
 std::vector<uint64_t> Broker::status_counters() {

@@ -42,6 +42,13 @@ void encode_samples(std::vector<uint8_t>& out, std::span<const Record> records,
   put_frame(out, MsgType::Samples, b);
 }
 
+void encode_health(std::vector<uint8_t>& out, const std::vector<link::SensorHealth>& sensors) {
+  std::vector<uint8_t> b;
+  ByteWriter w(b);
+  link::write_sensor_health(w, sensors);
+  put_frame(out, MsgType::Health, b);
+}
+
 void encode_catalogue(std::vector<uint8_t>& out, const Catalogue& c) {
   std::vector<uint8_t> b;
   ByteWriter w(b);
@@ -184,6 +191,12 @@ void decode(const RawFrame& f, Handler& h, uint64_t* records_left) {
       }
       if (records_left) *records_left = 0;
       r.expect_end();
+      return;
+    }
+    case MsgType::Health: {
+      auto sensors = link::read_sensor_health(r);
+      r.expect_end();
+      h.on_health(std::move(sensors));
       return;
     }
     case MsgType::Catalogue: case MsgType::Ack: case MsgType::Reject: break;  // broker -> publisher only

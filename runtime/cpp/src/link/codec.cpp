@@ -144,6 +144,29 @@ Value decode_slot_value(ByteReader& r, const ValueKind& k, Chain& chain, uint32_
   return get_value(r, k, chain, stream);
 }
 
+void write_sensor_health(ByteWriter& w, const std::vector<SensorHealth>& sensors) {
+  w.varint(sensors.size());
+  for (const auto& s : sensors) {
+    w.string(s.name);
+    w.varint(s.fields.size());
+    for (uint64_t f : s.fields) w.varint(f);
+  }
+}
+
+std::vector<SensorHealth> read_sensor_health(ByteReader& r) {
+  uint64_t n = r.varint();
+  if (n > kMaxHealthSensors) r.fail("more than " + std::to_string(kMaxHealthSensors) + " sensors' health");
+  std::vector<SensorHealth> out(n);
+  for (auto& s : out) {
+    s.name = r.string(kMaxHealthName);
+    if (s.name.empty()) r.fail("empty sensor name");
+    uint64_t k = r.varint();
+    if (k > kMaxHealthFields) r.fail("more than " + std::to_string(kMaxHealthFields) + " health fields");
+    for (uint64_t i = 0; i < k; ++i) s.fields.push_back(r.varint());
+  }
+  return out;
+}
+
 void encode(std::vector<uint8_t>& out, const Message& m) {
   std::vector<uint8_t> body;
   ByteWriter w(body);
@@ -194,6 +217,7 @@ void encode(std::vector<uint8_t>& out, const Message& m) {
           type = MsgType::Status;
           w.varint(msg.counters.size());
           for (uint64_t c : msg.counters) w.varint(c);
+          if (!msg.sensors.empty()) write_sensor_health(w, msg.sensors);
         } else if constexpr (std::is_same_v<T, ErrorMsg>) {
           type = MsgType::Error;
           w.u8(msg.code);
@@ -343,6 +367,7 @@ Message decode(const RawFrame& f) {
       uint64_t n = r.varint();
       if (n > r.remaining()) r.fail("counter count exceeds frame");
       for (uint64_t i = 0; i < n; ++i) s.counters.push_back(r.varint());
+      if (r.remaining() > 0) s.sensors = read_sensor_health(r);
       return done(s);
     }
     case MsgType::Error: {

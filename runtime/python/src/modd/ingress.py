@@ -21,11 +21,11 @@ from dataclasses import dataclass, field
 from modd_contracts.ingress_wire_gen import MAX_FRAME as MAX_FRAME
 from modd_contracts.ingress_wire_gen import MAX_LOCAL_ID, MAX_NAME, VERSION, MsgType
 
-from modd.link.codec import Reader, string, varint
-from modd.link.frames import ValueType
+from modd.link.codec import Reader, encode_sensor_health, string, varint
+from modd.link.frames import SensorHealth, ValueType
 
 INGRESS_VERSION = VERSION
-HELLO, REGISTER, SAMPLES = MsgType.HELLO, MsgType.REGISTER, MsgType.SAMPLES
+HELLO, REGISTER, SAMPLES, HEALTH = MsgType.HELLO, MsgType.REGISTER, MsgType.SAMPLES, MsgType.HEALTH
 CATALOGUE, ACK, REJECT = MsgType.CATALOGUE, MsgType.ACK, MsgType.REJECT
 # REJECT reason codes (the broker's Reject enum, runtime/cpp/include/modd/broker/counters.hpp).
 REASONS = ("unknown topic", "wrong type", "value not finite", "timestamp out of bounds",
@@ -56,6 +56,12 @@ def encode_samples(records: Sequence[tuple[int, int, Number]], types: Sequence[V
         v: Number = (1 if value else 0) if t == ValueType.BOOL else value
         parts.append(varint(lid) + struct.pack("<q", ts) + struct.pack(_VALUE_FORMAT[t], v))
     return frame(SAMPLES, b"".join(parts))
+
+
+def encode_health(sensors: Sequence[SensorHealth]) -> bytes:
+    """HEALTH: the publisher's instruments (modd-sensors), forwarded in the link's STATUS
+    while the connection lasts; each replaces the one before."""
+    return frame(HEALTH, encode_sensor_health(sensors))
 
 
 @dataclass

@@ -29,7 +29,7 @@ import socket
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from modd.ingress import (
@@ -42,6 +42,7 @@ from modd.ingress import (
     Reject,
     convert,
     decode_reply,
+    encode_health,
     encode_hello,
     encode_register,
     encode_samples,
@@ -49,7 +50,7 @@ from modd.ingress import (
     resolve,
 )
 from modd.link.codec import FrameSplitter
-from modd.link.frames import ProtocolError, ValueType
+from modd.link.frames import ProtocolError, SensorHealth, ValueType
 
 __all__ = ["INGRESS_VERSION", "Publisher", "PublisherStats", "connect", "encode_hello",
            "encode_register", "encode_samples", "frame"]
@@ -128,6 +129,7 @@ class Publisher:
         self._conn_sent = 0
         self._conn_archived = 0
         self._sock: socket.socket | None = None
+        self._health: bytes | None = None  # a HEALTH frame to send (the latest replaces)
         self._thread = threading.Thread(target=self._run, name=f"modd-pub-{name}", daemon=True)
         self._thread.start()
         with self._lock:
@@ -227,6 +229,14 @@ class Publisher:
             return True
         except Exception:  # never raise into the caller's sensor loop
             return False
+
+    def report_health(self, sensors: Sequence[SensorHealth]) -> None:
+        """Tells the broker these instruments' health (docs/ingress.md, HEALTH); sent with
+        the next write, replacing a report not yet sent. Needs a broker that knows HEALTH."""
+        frame = encode_health(sensors)
+        with self._lock:
+            self._health = frame
+            self._wake.notify()
 
     def _drained(self) -> bool:
         return not self._queue and not self._resend and not self._in_flight
@@ -351,7 +361,8 @@ class Publisher:
         while True:
             with self._lock:
                 self._wake.wait_for(lambda: self._stopping or (
-                    bool(self._queue or self._resend) and self._sock is not None), 0.02)
+                    bool(self._queue or self._resend or self._health) and self._sock is not None),
+                    0.02)
                 if self._stopping and (self._sock is None or not (self._queue or self._resend)):
                     if self._sock is None:
                         self._stats.dropped_at_close += len(self._queue) + len(self._resend)
@@ -368,6 +379,12 @@ class Publisher:
                 registered = 0
                 splitter = FrameSplitter(MAX_FRAME)
             if not self._read_replies(splitter):
+                self._disconnect()
+                next_attempt = 0.0
+                continue
+            with self._lock:
+                health, self._health = self._health, None
+            if health is not None and not self._send(health):
                 self._disconnect()
                 next_attempt = 0.0
                 continue

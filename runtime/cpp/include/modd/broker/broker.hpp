@@ -58,6 +58,9 @@ class IngressSession final : public ingress::Handler {
   void on_register(const ingress::Register& r) override;
   bool type_of(uint32_t local_id, link::ValueType& out) const override;
   void on_record(const ingress::Record& r) override;
+  // The publisher's instruments (HEALTH), forwarded in STATUS while it stays connected.
+  void on_health(std::vector<link::SensorHealth>&& sensors) override;
+  const std::vector<link::SensorHealth>& health() const { return health_; }
   // Feeds received bytes, stamped `stamp`. Returns false (after counting) on a malformed frame.
   bool on_bytes(std::span<const uint8_t> in);
   // The publisher went away. A frame it left half-sent is counted as malformed (with the
@@ -93,6 +96,7 @@ class IngressSession final : public ingress::Handler {
   uint8_t version_ = 0;
   std::vector<Local> locals_;
   std::vector<uint8_t> inbuf_, out_;
+  std::vector<link::SensorHealth> health_;
   int64_t stamp_ = 0;
   uint64_t received_ = 0, accepted_ = 0, settled_ = 0, archived_ = 0;
   uint64_t acked_received_ = UINT64_MAX, acked_settled_ = 0;
@@ -134,6 +138,10 @@ class Broker final : public LinkHooks, public FrameSink {
   // status period after it fell due (idle publishers), it is sent on its own.
   void send_overdue_status(int64_t now);
   std::vector<uint64_t> status_counters();
+  // The counters and the connected publishers' instruments' health (sorted by name).
+  link::Status status_message();
+  // Instruments appeared or one changed state: STATUS goes out now, whatever the period.
+  void instruments_changed() { send_status_now(); }
   std::string log_summary();
 
   // LinkHooks

@@ -19,6 +19,9 @@ void encode_register(std::vector<uint8_t>& out, const Register& r);
 void encode_samples(std::vector<uint8_t>& out, std::span<const Record> records,
                     const std::function<ValueType(uint32_t)>& type_of);
 
+// HEALTH: the publisher's instruments (modd-sensors), replacing what it said before.
+void encode_health(std::vector<uint8_t>& out, const std::vector<link::SensorHealth>& sensors);
+
 void encode_catalogue(std::vector<uint8_t>& out, const Catalogue& c);
 void encode_ack(std::vector<uint8_t>& out, const Ack& a);
 void encode_reject(std::vector<uint8_t>& out, const RejectMsg& r);
@@ -43,6 +46,7 @@ class Handler {
   // Type of a registered local id, or false if the id was never registered.
   virtual bool type_of(uint32_t local_id, ValueType& out) const = 0;
   virtual void on_record(const Record& r) = 0;
+  virtual void on_health(std::vector<link::SensorHealth>&& /*sensors*/) {}
 };
 
 

@@ -25,11 +25,12 @@ enum class MsgType : uint8_t {
   Hello = 0x01,
   Register = 0x02,
   Samples = 0x03,
+  Health = 0x04,
   Catalogue = 0x81,
   Ack = 0x82,
   Reject = 0x83,
 };
 // The number of MsgType values.
-inline constexpr size_t kMsgTypeCount = 6;
+inline constexpr size_t kMsgTypeCount = 7;
 
 }  // namespace modd::ingress

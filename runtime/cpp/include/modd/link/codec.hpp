@@ -54,4 +54,9 @@ void encode_slot_values(std::vector<uint8_t>& out, std::span<const Value> values
                         std::span<const uint32_t> streams, Chain& chain);
 Value decode_slot_value(ByteReader& r, const ValueKind& k, Chain& chain, uint32_t stream);
 
+// Instruments' health as STATUS and the ingress's HEALTH carry it: `count:varint` then
+// `count` x { `name:string` `n:varint` `n` x `field:varint` } (bounds: kMaxHealth*).
+void write_sensor_health(ByteWriter& w, const std::vector<SensorHealth>& sensors);
+std::vector<SensorHealth> read_sensor_health(ByteReader& r);
+
 }  // namespace modd::link

@@ -59,7 +59,17 @@ inline bool operator==(const StreamSpec& a, const StreamSpec& b) {
 }
 
 struct ConfigAck { uint8_t config_id = 0; uint8_t status = 0; uint64_t epoch_ns = 0; };
-struct Status { std::vector<uint64_t> counters; };
+// One plug-and-play instrument's health (docs/protocol.md, "STATUS"; fields in the order
+// of the table there), as modd-sensors reports it through the ingress (HEALTH) and the
+// PubBroker forwards it in STATUS.
+struct SensorHealth {
+  std::string name;
+  std::vector<uint64_t> fields;
+  bool operator==(const SensorHealth&) const = default;
+};
+// kMaxHealthSensors, kMaxHealthFields, kMaxHealthName: wire.gen.hpp (contract wire.json)
+// `sensors` travel after the counters, only when there is one (older frames are unchanged).
+struct Status { std::vector<uint64_t> counters; std::vector<SensorHealth> sensors = {}; };
 struct ErrorMsg { uint8_t code = 0; std::string message; };
 
 // One stream's value in a DATA frame. Which fields are used depends on the

@@ -16,6 +16,12 @@ inline constexpr size_t kMaxFrame = 1048576;
 inline constexpr uint32_t kMaxAcceptedDelayMs = 3600000;
 // Largest PING or PONG payload, in bytes.
 inline constexpr size_t kMaxPing = 64;
+// Most instruments in one STATUS or HEALTH (docs/protocol.md, STATUS).
+inline constexpr size_t kMaxHealthSensors = 64;
+// Most counters of one instrument's health.
+inline constexpr size_t kMaxHealthFields = 32;
+// Longest instrument name in a health report, in bytes.
+inline constexpr size_t kMaxHealthName = 64;
 // Longest STATUS period a CONFIG may ask for, in seconds: one day (0: no STATUS).
 inline constexpr uint64_t kMaxStatusPeriodS = 86400;
 // Most topics, or streams, of one CONFIG.

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from modd_contracts import aggregations as agg
+from modd_contracts import aggregations_gen as agg
 from modd_contracts.keys import match_sub_key
 from modd_model.position import PlatformPosition
 

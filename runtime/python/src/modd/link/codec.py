@@ -25,6 +25,9 @@ from modd_contracts.link_wire_gen import (
 from modd.link.frames import (
     MAX_ACCEPTED_DELAY_MS,
     MAX_FRAME,
+    MAX_HEALTH_FIELDS,
+    MAX_HEALTH_NAME,
+    MAX_HEALTH_SENSORS,
     Aggregation,
     Auth,
     AuthOk,
@@ -41,6 +44,7 @@ from modd.link.frames import (
     Pong,
     ProtocolError,
     Scalar,
+    SensorHealth,
     Status,
     StreamSpec,
     TopicSpec,
@@ -178,6 +182,8 @@ def encode(m: Message) -> bytes:
         return _frame(MsgType.CONFIG_ACK, body)
     if isinstance(m, Status):
         body = varint(len(m.counters)) + b"".join(varint(c) for c in m.counters)
+        if m.sensors:
+            body += encode_sensor_health(m.sensors)
         return _frame(MsgType.STATUS, body)
     if isinstance(m, ErrorMsg):
         return _frame(MsgType.ERROR, bytes([m.code]) + string(m.message))
@@ -375,13 +381,38 @@ def decode(f: RawFrame) -> Message:
         n = r.varint()
         if n > r.remaining():
             raise r.fail("counter count exceeds frame")
-        m = Status(tuple(r.varint() for _ in range(n)))
+        counters = tuple(r.varint() for _ in range(n))
+        m = Status(counters, read_sensor_health(r) if r.remaining() else ())
     elif t == MsgType.ERROR:
         m = ErrorMsg(r.u8(), r.string(1024))
     else:
         raise ProtocolError(ErrorCode.BAD_FRAME, f"unknown message type 0x{t:02x}", 0)
     r.end()
     return m
+
+
+def encode_sensor_health(sensors: Sequence[SensorHealth]) -> bytes:
+    """STATUS's tail and the ingress's HEALTH body: count, then name, n, n fields."""
+    out = bytearray(varint(len(sensors)))
+    for s in sensors:
+        out += string(s.name) + varint(len(s.fields)) + b"".join(varint(f) for f in s.fields)
+    return bytes(out)
+
+
+def read_sensor_health(r: Reader) -> tuple[SensorHealth, ...]:
+    n = r.varint()
+    if n > MAX_HEALTH_SENSORS:
+        raise r.fail(f"more than {MAX_HEALTH_SENSORS} sensors' health")
+    out = []
+    for _ in range(n):
+        name = r.string(MAX_HEALTH_NAME)
+        if not name:
+            raise r.fail("empty sensor name")
+        k = r.varint()
+        if k > MAX_HEALTH_FIELDS:
+            raise r.fail(f"more than {MAX_HEALTH_FIELDS} health fields")
+        out.append(SensorHealth(name, tuple(r.varint() for _ in range(k))))
+    return tuple(out)
 
 
 def _decode_config(r: Reader) -> Config:

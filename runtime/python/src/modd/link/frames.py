@@ -11,6 +11,9 @@ from modd_contracts.aggregations_gen import Aggregation as Aggregation  # the wi
 # The wire's codes and limits, generated from modd_contracts/wire.json.
 from modd_contracts.link_wire_gen import MAX_ACCEPTED_DELAY_MS as MAX_ACCEPTED_DELAY_MS
 from modd_contracts.link_wire_gen import MAX_FRAME as MAX_FRAME
+from modd_contracts.link_wire_gen import MAX_HEALTH_FIELDS as MAX_HEALTH_FIELDS
+from modd_contracts.link_wire_gen import MAX_HEALTH_NAME as MAX_HEALTH_NAME
+from modd_contracts.link_wire_gen import MAX_HEALTH_SENSORS as MAX_HEALTH_SENSORS
 from modd_contracts.link_wire_gen import VERSION as VERSION
 from modd_contracts.link_wire_gen import ErrorCode as ErrorCode
 from modd_contracts.link_wire_gen import MsgType as MsgType
@@ -144,9 +147,31 @@ STATUS_FIELDS: tuple[str, ...] = (
 )
 
 
+# One instrument's health in STATUS (docs/protocol.md, "STATUS"), fields in this order; a
+# newer modd-sensors may append fields (kept as field_<i>).
+HEALTH_FIELDS: tuple[str, ...] = (
+    "state", "lines_ok", "lines_bad", "reconnects", "last_value_ms", "values", "missing",
+    "refused", "timeouts", "exceptions", "silences",
+)
+HEALTH_STATES = ("closed", "open", "silent")  # `state`'s codes
+
+
+@dataclass(frozen=True)
+class SensorHealth:
+    name: str
+    fields: tuple[int, ...]
+
+    def as_dict(self) -> dict[str, int]:
+        return {
+            (HEALTH_FIELDS[i] if i < len(HEALTH_FIELDS) else f"field_{i}"): v
+            for i, v in enumerate(self.fields)
+        }
+
+
 @dataclass(frozen=True)
 class Status:
     counters: tuple[int, ...]
+    sensors: tuple[SensorHealth, ...] = ()  # after the counters, only when there is one
 
     def as_dict(self) -> dict[str, int]:
         """Known fields by name; fields a newer broker appends are kept as field_<i>."""

@@ -10,6 +10,14 @@ counts every refusal in the sensor's ``Health``; ``run`` owns the devices
 (``device``), one thread per sensor, reopened after any loss.
 """
 
-from .cli import main
+from __future__ import annotations
 
 __all__ = ["main"]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``modd-sensors`` (cli.py; imported here on call, so that ``python -m
+    modd.sensors.check`` loads no reader)."""
+    from .cli import main as run
+
+    return run(argv)

@@ -17,9 +17,8 @@ import threading
 import time
 from pathlib import Path
 
-from modd_model import load_or_report
-
 from ..publisher import Publisher
+from .check import checked_model
 from .plan import plan_sensors
 from .run import Runner
 
@@ -55,7 +54,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    model = load_or_report(args.model)
+    model = checked_model(args.model)
     if model is None:
         return 1
     plans = plan_sensors(model)
@@ -70,7 +69,10 @@ def main(argv: list[str] | None = None) -> int:
     ingress = args.ingress or ingress_of(model).address
     names = sorted({m.publisher for p in plans for m in p.mappings})
     sinks = {n: Publisher(n, ingress) for n in names}
-    runner = Runner(plans, sinks, log, args.status_file, args.status_period)
+    # the health rides on one publisher's connection (the broker forwards it in STATUS)
+    runner = Runner(
+        plans, sinks, log, args.status_file, args.status_period, sinks[names[0]].report_health
+    )
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     signal.signal(signal.SIGINT, lambda *_: stop.set())

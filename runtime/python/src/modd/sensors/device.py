@@ -9,6 +9,9 @@ Example::
 
 from __future__ import annotations
 
+import os
+import select
+
 import serial
 
 from .plan import Device
@@ -37,8 +40,17 @@ def open_port(device: Device, timeout: float = READ_TIMEOUT_S) -> serial.Serial 
 
 def read_some(port: serial.Serial) -> bytes:
     """What the device sent, waiting at most the port's timeout for the first byte;
-    raises one of ``Errors`` when the device is gone (a pty whose other end closed
-    reads as ready with no data: pyserial raises SerialException)."""
-    waiting = port.in_waiting
-    data: bytes = port.read(min(max(waiting, 1), 65536))
+    raises one of ``Errors`` when the device is gone (ready with no data: a pty whose
+    other end closed, an adapter pulled out).
+
+    One ``select`` and one ``read`` of the descriptor per burst: pyserial's own
+    ``read(in_waiting or 1)`` takes a byte, then the rest on a second wake-up, and
+    costs a third of the reader's CPU at 20 devices × 10 Hz."""
+    fd = port.fileno()
+    ready, _, _ = select.select([fd], [], [], port.timeout)
+    if not ready:
+        return b""
+    data = os.read(fd, 65536)
+    if not data:
+        raise serial.SerialException("the device is ready to read but gives no data (unplugged?)")
     return data

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
+from modd.link.frames import HEALTH_FIELDS, SensorHealth
+
 
 @dataclass
 class Health:
@@ -32,6 +34,17 @@ class Health:
     def bad(self, why: str) -> None:
         self.lines_bad += 1
         self.last_bad = why[:120]
+
+    @property
+    def state(self) -> int:
+        """0 closed, 1 open, 2 silent (HEALTH_STATES): a lost device is closed, however long
+        it has been silent."""
+        return 0 if not self.connected else 2 if self.silent else 1
+
+    def report(self, name: str) -> SensorHealth:
+        """The sensor as the ingress's HEALTH and the link's STATUS carry it."""
+        known = {**asdict(self), "state": self.state, "last_value_ms": self.last_value_ns // 10**6}
+        return SensorHealth(name, tuple(int(known[f]) for f in HEALTH_FIELDS))
 
     def as_dict(self, now_ns: int) -> dict[str, object]:
         """The status document's per-sensor entry (camelCase, as the status is)."""

@@ -20,6 +20,8 @@ from typing import Protocol
 
 import serial
 
+from modd.link.frames import SensorHealth
+
 from . import modbus
 from .decode import Block, LineDecoder, Sample, block_samples, blocks
 from .device import RETRY_S, Errors, open_port, read_some
@@ -27,6 +29,7 @@ from .health import Health, status_line
 from .plan import SensorPlan
 
 MODBUS_TIMEOUT_S = 0.5
+HEALTH_PERIOD_S = 1.0  # how often the PubBroker hears of the sensors' health
 SILENT_PERIODS, SILENT_MIN_S = 3, 2.0
 
 
@@ -165,8 +168,12 @@ class Runner:
         log: Callable[[str], None] = print,
         status_file: Path | None = None,
         status_period_s: float = 10.0,
+        report_health: Callable[[list[SensorHealth]], None] | None = None,
+        health_period_s: float = HEALTH_PERIOD_S,
     ) -> None:
         self.sinks = sinks
+        self.report_health = report_health
+        self.health_period_s = health_period_s
         self.log = log
         self.sensors = [SensorThread(p, sinks, log) for p in plans]
         self.status_file = status_file
@@ -179,6 +186,11 @@ class Runner:
         now = time.time_ns()
         return {s.plan.name: s.health.as_dict(now) for s in self.sensors}
 
+    def send_health(self) -> None:
+        """Every sensor's health to the PubBroker (HEALTH), which forwards it in STATUS."""
+        if self.report_health is not None:
+            self.report_health([s.health.report(s.plan.name) for s in self.sensors])
+
     def write_status(self) -> None:
         if self.status_file is None:
             return
@@ -190,12 +202,16 @@ class Runner:
         for s in self.sensors:
             s.start(stop)
         next_status = time.monotonic() + self.status_period_s
+        next_health = time.monotonic()
         try:
             while not stop.wait(tick_s):
                 now = time.time_ns()
                 for s in self.sensors:
                     s.watch(now)
                 self.write_status()
+                if time.monotonic() >= next_health:
+                    next_health = time.monotonic() + self.health_period_s
+                    self.send_health()
                 if time.monotonic() >= next_status:
                     next_status += self.status_period_s
                     for s in self.sensors:
@@ -203,6 +219,7 @@ class Runner:
         finally:
             for s in self.sensors:
                 s.thread.join(2.0)
+            self.send_health()  # the last counts, before the publishers close
             for sink in self.sinks.values():
                 sink.flush(2.0)
                 sink.close()

@@ -482,6 +482,7 @@ class SubBroker:
             "dynamic": self.dynamic.names(),
             "tcp": self._tcp.stats() if self._tcp else {},
             "pubbroker": dict(stats.pubbroker),
+            **({"sensors": dict(stats.sensors)} if stats.sensors else {}),
             "transport": self.config.transport,
             "link_budget": (running.plan.budget.to_json()
                             if running is not None and running.plan.budget is not None else None),

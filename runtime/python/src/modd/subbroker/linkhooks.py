@@ -75,4 +75,5 @@ class LinkStats:
     last_data_ns: int | None = None
     last_error: str | None = None
     pubbroker: dict[str, int] = field(default_factory=dict)
+    sensors: dict[str, dict[str, int]] = field(default_factory=dict)  # instruments' health
     backpressure: Backpressure = field(default_factory=Backpressure)

@@ -362,6 +362,7 @@ class LinkSession(ABC):
             self._on_ack(msg)
         elif isinstance(msg, Status):
             self.stats.pubbroker = msg.as_dict()
+            self.stats.sensors = {h.name: h.as_dict() for h in msg.sensors}
             self.handler.on_status(msg)
         elif isinstance(msg, Ping):
             self.send(codec.encode(Pong(msg.payload)))

@@ -1,0 +1,66 @@
+/**
+ * The plug-and-play instruments' health (modd-sensors on board, forwarded by
+ * the PubBroker in STATUS; the SubBroker's status `sensors`, docs/sensors.md
+ * "Health"), one row per sensor for the operator.
+ *
+ * A sensor is flagged when its device is closed (unplugged, renumbered), it
+ * fell silent, or it gave only bad lines. The last value's time is the
+ * drone's clock, as the instrument's values are stamped.
+ *
+ * @example
+ *   instrumentsHealth({ ctd: { state: 1, lines_ok: 9, lines_bad: 0, last_value_ms: 1999000 } })
+ *   // [{ name: "ctd", state: "open", linesOk: 9, linesBad: 0, lastValueMs: 1999000, ... }]
+ */
+import type { SensorHealth } from "./contracts.gen";
+
+export type InstrumentState = "closed" | "open" | "silent" | "unknown";
+const STATES: InstrumentState[] = ["closed", "open", "silent"];  // the protocol's codes
+
+export interface InstrumentHealth {
+  name: string;
+  state: InstrumentState;
+  linesOk: number;
+  linesBad: number;
+  reconnects: number;
+  /** When the last value was received on board, ms since the epoch (null: none yet). */
+  lastValueMs: number | null;
+  values: number;
+  /** Modbus requests with no reply, and exception replies. */
+  timeouts: number;
+  exceptions: number;
+  silences: number;
+  /** Why the operator should look, in words (null: nothing to say). */
+  alert: string | null;
+}
+
+const count = (x: unknown): number => (typeof x === "number" && Number.isFinite(x) ? x : 0);
+
+/** Rows sorted by sensor name. */
+export function instrumentsHealth(sensors: Record<string, SensorHealth> | null | undefined): InstrumentHealth[] {
+  if (!sensors) return [];
+  return Object.keys(sensors).sort().map((name) => {
+    const h = sensors[name];
+    const state = STATES[count(h.state)] ?? "unknown";
+    const last = count(h.last_value_ms);
+    const row = {
+      name, state,
+      linesOk: count(h.lines_ok), linesBad: count(h.lines_bad), reconnects: count(h.reconnects),
+      lastValueMs: last > 0 ? last : null,
+      values: count(h.values), timeouts: count(h.timeouts), exceptions: count(h.exceptions),
+      silences: count(h.silences),
+    };
+    return { ...row, alert: alertOf(row) };
+  });
+}
+
+function alertOf(h: Omit<InstrumentHealth, "alert">): string | null {
+  if (h.state === "closed") return "device closed (unplugged or lost)";
+  if (h.state === "silent") return "silent: no value for 3 periods";
+  if (h.values === 0 && h.linesBad > 0) return "only bad lines (wrong baud rate or format?)";
+  return null;
+}
+
+/** A time of day in UTC, to the second: "10:15:02 UTC". */
+export function formatClock(ms: number): string {
+  return `${new Date(ms).toISOString().slice(11, 19)} UTC`;
+}

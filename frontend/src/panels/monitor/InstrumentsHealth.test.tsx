@@ -1,0 +1,58 @@
+// @vitest-environment jsdom
+import { afterEach, describe, expect, it } from "vitest";
+import { cleanup, render, screen, within } from "@testing-library/react";
+import { InstrumentsHealth } from "./InstrumentsHealth";
+import { toLinkStatus } from "../../dataSources/WebSocketSource";
+import type { SubBrokerStatus } from "../../core/contracts.gen";
+
+afterEach(cleanup);
+
+/** The operator's table from a status document as the SubBroker sends it. */
+function show(sensors: SubBrokerStatus["sensors"]) {
+  const link = toLinkStatus({ link: "up", time_ns: 1_700_000_010_000_000_000, sensors });
+  render(<InstrumentsHealth sensors={link.sensors ?? []} />);
+  return screen.queryByRole("table", { name: "Instruments' health" });
+}
+
+const cells = (table: HTMLElement) =>
+  within(table).getAllByRole("row").slice(1).map((r) => within(r).getAllByRole("cell").map((c) => c.textContent));
+
+describe("InstrumentsHealth", () => {
+  it("shows per sensor its state, last value time, lines ok and bad, reconnects", () => {
+    const table = show({
+      sounder: { state: 1, lines_ok: 42, lines_bad: 1, reconnects: 0, values: 42, last_value_ms: Date.UTC(2026, 10, 27, 10, 15, 2) },
+      gnss: { state: 1, lines_ok: 5400, lines_bad: 3, reconnects: 2, values: 10800, last_value_ms: Date.UTC(2026, 10, 27, 10, 15, 3, 900) },
+    })!;
+    expect(within(table).getAllByRole("columnheader").map((h) => h.textContent))
+      .toEqual(["Instrument", "State", "Last value", "Lines ok", "Lines bad", "Reconnects"]);
+    expect(cells(table)).toEqual([
+      ["gnss", "open", "10:15:03 UTC", "5400", "3", "2"],
+      ["sounder", "open", "10:15:02 UTC", "42", "1", "0"],
+    ]);
+    expect(screen.queryByRole("alert")).toBeNull();
+    expect(screen.getByText(/Instruments: 2/).textContent).toBe(" · Instruments: 2 (2 open)");
+  });
+
+  it("flags a closed, a silent and a garbage-only instrument, with Modbus timeouts and exceptions", () => {
+    const table = show({
+      ctd: { state: 0, lines_ok: 10, lines_bad: 0, reconnects: 1, last_value_ms: Date.UTC(2026, 10, 27, 9, 0, 0) },
+      sonde: { state: 2, lines_ok: 0, lines_bad: 0, reconnects: 0, last_value_ms: 0, timeouts: 12, exceptions: 1 },
+      wind: { state: 1, lines_ok: 0, lines_bad: 80, reconnects: 0, last_value_ms: 0, values: 0 },
+    })!;
+    expect(cells(table)).toEqual([
+      ["ctd", "closed", "09:00:00 UTC", "10", "0", "1", "0", "0"],
+      ["sonde", "silent", "none yet", "0", "0", "0", "12", "1"],
+      ["wind", "open", "none yet", "0", "80", "0", "0", "0"],
+    ]);
+    // the one-line summary names each flagged instrument and why
+    expect(screen.getByText(/Instruments: 3/).textContent).toMatch(/^ · Instruments: 3 \(1 open, 1 silent, 1 closed\)/);
+    expect(screen.getByRole("alert").textContent).toBe(
+      " · ctd: device closed (unplugged or lost); sonde: silent: no value for 3 periods; "
+      + "wind: only bad lines (wrong baud rate or format?)");
+  });
+
+  it("shows nothing when no instrument reports", () => {
+    expect(show(undefined)).toBeNull();
+    expect(show({})).toBeNull();
+  });
+});

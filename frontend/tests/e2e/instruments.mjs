@@ -1,0 +1,151 @@
+/**
+ * Plug-and-play instruments in the workbench (issue 32, "Done when"): the
+ * integrator declares an NMEA GNSS, an NMEA echo sounder, an ASCII CTD and a
+ * Modbus sonde in the form (kind, device, and per variable where its value
+ * is), the designer has them published, the scientist subscribes, the model
+ * is saved and deployed, and the operator's Monitor shows their values and
+ * each instrument's health (state, last value, lines ok/bad, reconnects).
+ *
+ * The drone is `modd up --simulate` (run.mjs) started with the same four
+ * instruments (`instrumentParts`): the simulator writes their wire formats
+ * into pseudo-terminals (NMEA sentences, CSV lines, Modbus RTU replies) and
+ * `modd-sensors` reads them, as on a drone; its health reaches the browser
+ * through the PubBroker's STATUS and the SubBroker's status.
+ */
+import { expectCount, expectText, expectVisible, waitUntil } from "./journey.mjs";
+
+/** The four instruments as the form declares them; `source` is each variable's mapping. */
+const SENSORS = [
+  { name: "gnss", kind: "nmea", path: "/dev/ttyGNSS", variables: [
+    { name: "lat", unit: "deg", source: { "nmea.sentence": "GGA", "nmea.field": "lat" } },
+    { name: "lon", unit: "deg", source: { "nmea.sentence": "GGA", "nmea.field": "lon" } }] },
+  { name: "sounder", kind: "nmea", path: "/dev/ttySOUNDER", variables: [
+    { name: "depth", unit: "METER", source: { "nmea.sentence": "DBT", "nmea.field": "depth_meters" } }] },
+  { name: "sbe_ctd", kind: "ascii", path: "/dev/ttyCTD", variables: [
+    { name: "temperature", unit: "DEGREE_CELSIUS", source: { "ascii.column": "1" } }] },
+  { name: "sonde", kind: "modbus", path: "/dev/ttySONDE", variables: [
+    { name: "ph", unit: "NONE", source: { "modbus.register": "0", "modbus.type": "float32" } },
+    { name: "oxygen", unit: "mg/l", source: { "modbus.register": "2", "modbus.type": "uint16", "modbus.scale": "0.01" } }] },
+];
+const PERIOD_S = "0.5";
+
+/** The same instruments in the model `modd up --simulate` runs (the drone's side). */
+export function instrumentParts() {
+  const mapping = (source) => {
+    const out = {};
+    for (const [path, value] of Object.entries(source)) {
+      const [kind, key] = path.split(".");
+      out[kind] ??= {};
+      out[kind][key] = /^-?[\d.]+$/.test(value) ? Number(value) : value;
+    }
+    return out;
+  };
+  const sensors = SENSORS.map((s) => ({
+    name: s.name, kind: s.kind, device: { path: s.path },
+    variables: s.variables.map((v) => ({ name: v.name, unit: v.unit, ...mapping(v.source) })),
+  }));
+  const topics = SENSORS.flatMap((s) => s.variables.map((v) => `usv.${s.name}.${v.name}`));
+  return { sensors, publisher: { name: "pub_instruments", periodS: PERIOD_S, topics } };
+}
+
+export function instruments({ page, ports, drone, liveValues }) {
+  const node = (id) => page.locator(`.react-flow__node[data-id="${id}"]`);
+  const inspector = page.getByRole("region", { name: "Inspector" });
+  const view = (name) => page.getByRole("tab", { name, exact: true }).click();
+  const panel = (name) => page.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
+  // A form field by its schema path: a list is chosen, a text typed and committed with Enter.
+  const set = async (path, value) => {
+    const f = inspector.locator(`[data-field="${path}"]`).locator("input, select").first();
+    if (await f.evaluate((el) => el.tagName === "SELECT")) await f.selectOption(value);
+    else {
+      await f.fill(value);
+      await f.press("Enter");
+    }
+  };
+  const select = async (id) => {
+    await node(id).click({ timeout: 5000 }).catch(() => node(id).dispatchEvent("click"));
+    await expectVisible(inspector.locator("h2").first());
+  };
+  const topics = SENSORS.flatMap((s) => s.variables.map((v) => `usv.${s.name}.${v.name}`));
+
+  return [
+    ["instruments: the integrator declares an NMEA GNSS, an NMEA sounder, an ASCII CTD and a Modbus sonde in the form", async () => {
+      const projects = page.getByRole("heading", { name: "MoDD projects" });
+      if (!(await projects.isVisible())) await page.getByRole("button", { name: "MoDD", exact: true }).click();
+      await expectVisible(projects);
+      await page.getByLabel("Project name").fill("instruments");
+      await page.getByLabel("Drone name").fill("usv");
+      await page.getByRole("button", { name: "Create" }).click();
+      await expectVisible(node("drone"));
+      await view("Sensor integrator");
+      for (const s of SENSORS) {
+        await page.getByRole("button", { name: "+ Sensor" }).click();
+        await set("name", s.name);
+        await set("kind", s.kind);
+        await set("device.path", s.path);
+        for (const [i, v] of s.variables.entries()) {
+          if (i === 0) await select(`topic:${s.name}.var_1`);
+          else await page.getByRole("button", { name: "+ Variable" }).click();
+          await set("name", v.name);
+          await set("unit", v.unit);
+          for (const [path, value] of Object.entries(v.source)) await set(path, value);
+        }
+      }
+      await expectCount(page.locator(".react-flow__node.react-flow__node-topic"), topics.length);
+    }],
+
+    ["instruments: published, subscribed, saved and deployed", async () => {
+      await view("System designer");
+      await page.getByRole("button", { name: "+ Publisher" }).click();
+      await set("periodS", PERIOD_S);
+      for (const s of SENSORS) {
+        if (s.variables.length > 1) await inspector.getByRole("button", { name: `All of ${s.name}` }).click();
+        else await inspector.getByRole("checkbox", { name: new RegExp(`^usv\\.${s.name}\\.${s.variables[0].name} `) }).check();
+      }
+      await select("pubBroker");
+      await set("endpoint.port", String(ports.pub));
+      await select("subBroker");
+      await set("endpoint.port", String(ports.sub));
+      await view("Scientist");
+      const quick = page.getByRole("form", { name: "Quick subscription" });
+      for (const t of topics) {
+        await quick.getByLabel("Topic").selectOption(t);
+        await quick.getByLabel("Every (s)").fill("1.0");
+        await quick.getByLabel("Aggregation").selectOption("LAST");
+        await quick.getByRole("button", { name: "Subscribe" }).click();
+      }
+      await expectCount(page.locator(".react-flow__node .marker-error"), 0);
+      await page.getByRole("button", { name: "Save", exact: true }).click();
+      await expectText(page.locator(".topbar .revision"), /^r2$/);
+      await view("Operator");
+      await page.getByRole("button", { name: "Deploy revision 2" }).click();
+      const result = page.getByTestId("deploy-result");
+      await expectVisible(result, 30000);
+      if (drone && !/Acked/.test((await result.textContent()) ?? "")) throw new Error(`deploy not acked: ${await result.textContent()}`);
+    }],
+
+    ["instruments: the operator sees their values and each one's health", async () => {
+      if (!drone || !liveValues) throw new Error("needs the simulated drone (modd up --simulate)");
+      await panel("Monitor");
+      // one item of the link status line, opening on the table
+      const summary = page.getByRole("status", { name: "Link status" }).locator("details.instruments-health summary");
+      await expectText(summary, /Instruments: 4 \(4 open\)$/, 30000);
+      await summary.click();
+      const health = page.getByRole("table", { name: "Instruments' health" });
+      await expectVisible(health);
+      const rows = () => health.locator("tbody tr").evaluateAll((trs) => trs.map((tr) => [...tr.querySelectorAll("td")].map((td) => td.textContent)));
+      // every instrument open, values received (a UTC time), lines counted and none refused
+      await waitUntil(async () => {
+        const r = await rows();
+        return r.length === 4 && r.every(([, state, last, ok, bad]) => state === "open" && /UTC$/.test(last) && Number(ok) > 0 && bad === "0");
+      }, 60000, async () => `instruments' health: ${JSON.stringify(await rows())}`);
+      const names = (await rows()).map((r) => r[0]);
+      if (names.join(",") !== "gnss,sbe_ctd,sonde,sounder") throw new Error(`instruments listed: ${names}`);
+      // their values, charted from the deployed subscriptions
+      for (const [i] of topics.entries()) {
+        await page.getByRole("checkbox", { name: new RegExp(`^sub_${i + 1} `) }).check();
+      }
+      for (const [i] of topics.entries()) await expectText(page.getByTestId(`last-sub_${i + 1}`), /last -?\d/, 30000);
+    }],
+  ];
+}
