@@ -28,8 +28,10 @@ def router_config(store: CredentialStore, drone: str | None) -> dict[str, object
     return {
         "mode": "router",
         "scouting": {"multicast": {"enabled": False}, "gossip": {"enabled": False}},
-        "transport": {"auth": {"usrpwd": {"dictionary_file": str(store.dictionary)}},
-                      "unicast": unicast},
+        "transport": {
+            "auth": {"usrpwd": {"dictionary_file": str(store.dictionary)}},
+            "unicast": unicast,
+        },
         "access_control": acl(drone),
     }
 

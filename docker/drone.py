@@ -36,8 +36,12 @@ def listening_copy(model_path: str, host: str, workdir: Path) -> Path:
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="drone.py", description=__doc__.splitlines()[0])
-    p.add_argument("--listen", default="0.0.0.0", metavar="HOST",
-                   help="address the PubBroker's link listens on (default all interfaces)")
+    p.add_argument(
+        "--listen",
+        default="0.0.0.0",
+        metavar="HOST",
+        help="address the PubBroker's link listens on (default all interfaces)",
+    )
     p.add_argument("--workdir", required=True, metavar="DIR", help="modd up's run directory")
     p.add_argument("model", metavar="MODEL")
     args, rest = p.parse_known_args(argv)

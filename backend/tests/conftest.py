@@ -30,6 +30,8 @@ def _loopback_host() -> Iterator[None]:
     starlette.testclient.TestClient.__init__ = loopback_init  # type: ignore[method-assign]
     yield
     starlette.testclient.TestClient.__init__ = init  # type: ignore[method-assign]
+
+
 Headers = dict[str, str]
 
 
@@ -66,7 +68,8 @@ def user_factory(client: TestClient, admin: Headers) -> Callable[..., Headers]:
     def make(name: str, *roles: str) -> Headers:
         password = f"pw-{name}-12345"
         r = client.post(
-            "/api/users", headers=admin,
+            "/api/users",
+            headers=admin,
             json={"username": name, "password": password, "roles": list(roles)},
         )
         assert r.status_code == 201, r.text

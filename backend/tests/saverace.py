@@ -16,11 +16,18 @@ from modd_backend.roles import owners_of_changes
 from .conftest import Headers
 
 
-def race_saves(client: TestClient, admin: Headers, designer: Headers, scientist: Headers,
-               text: str, rounds: int) -> tuple[list[int], Counter[str]]:
+def race_saves(
+    client: TestClient,
+    admin: Headers,
+    designer: Headers,
+    scientist: Headers,
+    text: str,
+    rounds: int,
+) -> tuple[list[int], Counter[str]]:
     """(scientist revisions that changed a part not theirs, scientist statuses)."""
-    pid = client.post("/api/projects", headers=admin,
-                      json={"name": "race", "model": {"text": text}}).json()["id"]
+    pid = client.post(
+        "/api/projects", headers=admin, json={"name": "race", "model": {"text": text}}
+    ).json()["id"]
     url = f"/api/projects/{pid}/model"
     statuses: Counter[str] = Counter()
     for i in range(rounds):
@@ -34,11 +41,18 @@ def race_saves(client: TestClient, admin: Headers, designer: Headers, scientist:
         go = threading.Barrier(3)
         got: dict[str, int] = {}
 
-        def put(who: str, h: Headers, base: int, body: dict[str, Any],
-                go: threading.Barrier = go, got: dict[str, int] = got) -> None:
+        def put(
+            who: str,
+            h: Headers,
+            base: int,
+            body: dict[str, Any],
+            go: threading.Barrier = go,
+            got: dict[str, int] = got,
+        ) -> None:
             go.wait()
-            got[who] = client.put(url, headers=h,
-                                  json={"base_revision": base, "model": body}).status_code
+            got[who] = client.put(
+                url, headers=h, json={"base_revision": base, "model": body}
+            ).status_code
 
         threads = [
             threading.Thread(target=put, args=("designer", designer, rev, legit)),
@@ -51,8 +65,10 @@ def race_saves(client: TestClient, admin: Headers, designer: Headers, scientist:
             t.join()
         statuses[f"attack {got['attack']}"] += 1
         statuses[f"honest {got['honest']}"] += 1
-    history = {v["revision"]: v for v in client.get(f"/api/projects/{pid}/versions",
-                                                   headers=designer).json()}
+    history = {
+        v["revision"]: v
+        for v in client.get(f"/api/projects/{pid}/versions", headers=designer).json()
+    }
     bad = []
     for rev in sorted(history):
         if rev == 1 or history[rev]["author"] != "sci":

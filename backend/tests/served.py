@@ -20,9 +20,14 @@ from modd_backend.cli import server_options
 def serve(settings: Settings, **config: Any) -> Iterator[str]:
     """Base URL (http://127.0.0.1:PORT) of the running backend."""
     port = free_port()
-    server = uvicorn.Server(uvicorn.Config(
-        create_app(settings, out=io.StringIO()), host="127.0.0.1", port=port,
-        **{**server_options(settings), **config}))
+    server = uvicorn.Server(
+        uvicorn.Config(
+            create_app(settings, out=io.StringIO()),
+            host="127.0.0.1",
+            port=port,
+            **{**server_options(settings), **config},
+        )
+    )
     thread = threading.Thread(target=server.run, daemon=True)
     thread.start()
     deadline = time.monotonic() + 60

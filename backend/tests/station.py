@@ -27,8 +27,6 @@ PUBBROKER = REPO / "build" / "bin" / "modd-pubbroker"
 KEY = "modd-backend-test-key"
 
 
-
-
 def wait_port(port: int, timeout_s: float = 10.0) -> None:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
@@ -90,8 +88,15 @@ TYPES = {"float32": (0, "<f"), "float64": (1, "<d"), "int": (2, "<q"), "bool": (
 # An instrument's health as modd-sensors reports it (docs/ingress.md, HEALTH; fields in
 # docs/protocol.md's order): the PubBroker forwards it in STATUS, the SubBroker puts it in
 # its status document's `sensors`.
-HEALTH = {"ctd": {"state": 1, "lines_ok": 120, "lines_bad": 3, "reconnects": 2,
-                  "last_value_ms": 1_700_000_000_123}}
+HEALTH = {
+    "ctd": {
+        "state": 1,
+        "lines_ok": 120,
+        "lines_bad": 3,
+        "reconnects": 2,
+        "last_value_ms": 1_700_000_000_123,
+    }
+}
 
 
 def _sample(topic: str, i: int, rng: random.Random) -> float:
@@ -116,8 +121,11 @@ class Publisher(threading.Thread):
         self.model, self.port = model, port
         self.stop_event = threading.Event()
         drone = model["drone"]["name"]
-        self.types = {f"{drone}.{s['name']}.{v['name']}": v.get("type", "float32")
-                      for s in model["drone"]["sensors"] for v in s["variables"]}
+        self.types = {
+            f"{drone}.{s['name']}.{v['name']}": v.get("type", "float32")
+            for s in model["drone"]["sensors"]
+            for v in s["variables"]
+        }
 
     def run(self) -> None:
         rng = random.Random(7)
@@ -130,11 +138,19 @@ class Publisher(threading.Thread):
                     if topic not in ids:
                         ids[topic] = len(ids)
                         code = TYPES[self.types[topic]][0]
-                        sock.sendall(_frame(0x02, _varint(ids[topic]) + bytes([code])
-                                            + _string(topic)))
-            sock.sendall(_frame(0x04, _varint(len(HEALTH)) + b"".join(
-                _string(name) + _varint(len(h)) + b"".join(_varint(v) for v in h.values())
-                for name, h in HEALTH.items())))
+                        sock.sendall(
+                            _frame(0x02, _varint(ids[topic]) + bytes([code]) + _string(topic))
+                        )
+            sock.sendall(
+                _frame(
+                    0x04,
+                    _varint(len(HEALTH))
+                    + b"".join(
+                        _string(name) + _varint(len(h)) + b"".join(_varint(v) for v in h.values())
+                        for name, h in HEALTH.items()
+                    ),
+                )
+            )
             start = time.monotonic()
             due = [start + float(p["periodS"]) for p in pubs]
             count = [0] * len(pubs)
@@ -143,7 +159,8 @@ class Publisher(threading.Thread):
                 self.stop_event.wait(max(0.0, due[k] - time.monotonic()))
                 now = time.time_ns()
                 records = b"".join(
-                    _varint(ids[t]) + struct.pack("<q", now)
+                    _varint(ids[t])
+                    + struct.pack("<q", now)
                     + struct.pack(TYPES[self.types[t]][1], _sample(t, count[k], rng))
                     for t in pubs[k]["topics"]
                 )
@@ -177,25 +194,33 @@ class Station:
             "link": {"host": "127.0.0.1", "port": self.link, "key": "env:MODD_LINK_KEY"},
             "ingress": {"host": "127.0.0.1", "port": self.ingress},
             "archive": {"dir": str(self.archive), "flush_interval_ms": 200},
-            "topics": [{"name": f"{self.model['drone']['name']}.{s['name']}.{v['name']}",
-                        "type": v.get("type", "float32")}
-                       for s in self.model["drone"]["sensors"] for v in s["variables"]],
+            "topics": [
+                {
+                    "name": f"{self.model['drone']['name']}.{s['name']}.{v['name']}",
+                    "type": v.get("type", "float32"),
+                }
+                for s in self.model["drone"]["sensors"]
+                for v in s["variables"]
+            ],
             "status_period_s": 60,
         }
         (self.tmp / "pb.json").write_text(json.dumps(cfg))
-        self.procs.append(Proc([str(PUBBROKER), "--config", str(self.tmp / "pb.json")],
-                               self.tmp / "pb.log"))
+        self.procs.append(
+            Proc([str(PUBBROKER), "--config", str(self.tmp / "pb.json")], self.tmp / "pb.log")
+        )
         wait_port(self.link)
         (self.tmp / "sb.toml").write_text(
-            f'model = {json.dumps(str(self.model_path))}\n[link]\n'
+            f"model = {json.dumps(str(self.model_path))}\n[link]\n"
             f'endpoint = "127.0.0.1:{self.link}"\nkey = "env:MODD_LINK_KEY"\n'
             "pubbroker_status_period_s = 1\n"  # the PubBroker's STATUS (and HEALTH) every second
             f'[zenoh]\nlisten = ["{self.zenoh}"]\n'
-            f'credentials_dir = {json.dumps(str(self.credentials.dir))}\n[delivery]\ntcp = false\n'
+            f"credentials_dir = {json.dumps(str(self.credentials.dir))}\n[delivery]\ntcp = false\n"
             f"status_period_s = 0.5\n"
         )
-        sb = Proc([sys.executable, "-m", "modd.subbroker.cli", "--config",
-                   str(self.tmp / "sb.toml")], self.tmp / "sb.log")
+        sb = Proc(
+            [sys.executable, "-m", "modd.subbroker.cli", "--config", str(self.tmp / "sb.toml")],
+            self.tmp / "sb.log",
+        )
         self.procs.append(sb)
         if not sb.wait_log("running", 30):
             raise RuntimeError("the SubBroker did not start a config:\n" + sb.log())

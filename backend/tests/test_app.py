@@ -26,8 +26,14 @@ from sqlalchemy import create_engine, inspect
 def test_openapi_lists_every_router(client: TestClient) -> None:
     spec = client.get("/openapi.json").json()
     paths = set(spec["paths"])
-    for p in ("/api/auth/login", "/api/users", "/api/projects", "/api/projects/{project_id}/model",
-              "/api/plan", "/api/validate"):
+    for p in (
+        "/api/auth/login",
+        "/api/users",
+        "/api/projects",
+        "/api/projects/{project_id}/model",
+        "/api/plan",
+        "/api/validate",
+    ):
         assert p in paths
     assert "HTTPBearer" in spec["components"]["securitySchemes"]
 
@@ -98,20 +104,29 @@ def test_cli_viewer_origins(tmp_path: Path) -> None:
         parse_args(["--data", str(tmp_path), "--viewer-origin", "http://x/path"])
 
 
-def test_cli_tile_origins(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                          capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_tile_origins(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     monkeypatch.delenv("MODD_TILE_ORIGINS", raising=False)
-    s = parse_args(["--data", str(tmp_path), "--tile-origin", "https://tile.openstreetmap.org",
-                    "--tile-origin", "http://127.0.0.1:8123"])
+    s = parse_args(
+        [
+            "--data",
+            str(tmp_path),
+            "--tile-origin",
+            "https://tile.openstreetmap.org",
+            "--tile-origin",
+            "http://127.0.0.1:8123",
+        ]
+    )
     assert s.tile_origins == ("https://tile.openstreetmap.org", "http://127.0.0.1:8123")
     monkeypatch.setenv("MODD_TILE_ORIGINS", "https://a.tile.example https://b.tile.example")
     assert parse_args(["--data", str(tmp_path)]).tile_origins == (
-        "https://a.tile.example", "https://b.tile.example")
+        "https://a.tile.example",
+        "https://b.tile.example",
+    )
     with pytest.raises(SystemExit):
         parse_args(["--data", str(tmp_path), "--tile-origin", "https://t.example/{z}/{x}/{y}.png"])
     assert "--tile-origin" in capsys.readouterr().err
-
-
 
 
 @pytest.mark.slow
@@ -121,16 +136,29 @@ def test_console_script_serves_the_api(tmp_path: Path) -> None:
     log = tmp_path / "backend.log"
     with log.open("w") as out:
         proc = subprocess.Popen(
-            [str(exe), "--host", "127.0.0.1", "--port", str(port), "--data", str(tmp_path),
-             "--no-zenoh", "--admin-password", "cli-admin-pw"],
-            stdout=out, stderr=subprocess.STDOUT,
+            [
+                str(exe),
+                "--host",
+                "127.0.0.1",
+                "--port",
+                str(port),
+                "--data",
+                str(tmp_path),
+                "--no-zenoh",
+                "--admin-password",
+                "cli-admin-pw",
+            ],
+            stdout=out,
+            stderr=subprocess.STDOUT,
         )
     try:
         deadline = time.monotonic() + 20
         while True:
             try:
-                r = httpx.post(f"http://127.0.0.1:{port}/api/auth/login",
-                               json={"username": "admin", "password": "cli-admin-pw"})
+                r = httpx.post(
+                    f"http://127.0.0.1:{port}/api/auth/login",
+                    json={"username": "admin", "password": "cli-admin-pw"},
+                )
                 break
             except httpx.TransportError:
                 assert proc.poll() is None, log.read_text()
@@ -146,13 +174,20 @@ def test_console_script_serves_the_api(tmp_path: Path) -> None:
 def test_health_needs_no_login_and_checks_the_database(client: TestClient) -> None:
     r = client.get("/api/health")
     assert r.status_code == 200, r.text
-    assert r.json() == {"status": "ok", "database": "ok", "zenoh": "disabled", "scene": False,
-                        "ready": True, "saturated": False, "heavy_in_flight": 0,
-                        "heavy_limit": 8}
+    assert r.json() == {
+        "status": "ok",
+        "database": "ok",
+        "zenoh": "disabled",
+        "scene": False,
+        "ready": True,
+        "saturated": False,
+        "heavy_in_flight": 0,
+        "heavy_limit": 8,
+    }
 
 
 def test_admin_password_from_file_or_environment_not_argv(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """The first admin's password need not be in argv (/proc/PID/cmdline is
     readable by every local user): a file or $MODD_ADMIN_PASSWORD; the

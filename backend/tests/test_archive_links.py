@@ -22,8 +22,9 @@ SECRET = b"outside the archive"
 
 
 @pytest.fixture(scope="module")
-def trees(tmp_path_factory: pytest.TempPathFactory
-          ) -> Iterator[tuple[TestClient, Headers, dict[str, Path]]]:
+def trees(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> Iterator[tuple[TestClient, Headers, dict[str, Path]]]:
     tmp = tmp_path_factory.mktemp("links")
     outside = tmp / "outside"
     outside.mkdir()
@@ -45,20 +46,33 @@ def trees(tmp_path_factory: pytest.TempPathFactory
         (root / "away").symlink_to(outside, target_is_directory=True)  # a drone folder out
         (root / "self").symlink_to(root, target_is_directory=True)  # the root itself
         (root / "chain").symlink_to(root / "away", target_is_directory=True)  # link to a link
-    settings = Settings(data_dir=tmp / "data", zenoh_enabled=False,
-                        initial_admin_password=ADMIN_PASSWORD, archive_dir=roots["archives"],
-                        record_dir=roots["records"], foxglove_replay_port=0)
+    settings = Settings(
+        data_dir=tmp / "data",
+        zenoh_enabled=False,
+        initial_admin_password=ADMIN_PASSWORD,
+        archive_dir=roots["archives"],
+        record_dir=roots["records"],
+        foxglove_replay_port=0,
+    )
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         yield c, login(c, "admin", ADMIN_PASSWORD), roots
 
 
-FILES = ("out.mcap", "rel.mcap", "sibling.mcap", "dangling.mcap", "zero.mcap", "fifo.mcap",
-         "dir.mcap")
+FILES = (
+    "out.mcap",
+    "rel.mcap",
+    "sibling.mcap",
+    "dangling.mcap",
+    "zero.mcap",
+    "fifo.mcap",
+    "dir.mcap",
+)
 
 
 @pytest.mark.parametrize("tree", ["archives", "records"])
 def test_no_link_or_special_file_is_listed(
-        trees: tuple[TestClient, Headers, dict[str, Path]], tree: str) -> None:
+    trees: tuple[TestClient, Headers, dict[str, Path]], tree: str
+) -> None:
     c, h, _ = trees
     r = c.get(f"/api/drones/usv/{tree}", headers=h)
     assert r.status_code == 200 and r.json() == [], r.text
@@ -68,15 +82,25 @@ def test_no_link_or_special_file_is_listed(
 
 
 @pytest.mark.parametrize("tree", ["archives", "records"])
-@pytest.mark.parametrize("where", [f"usv/{{tree}}/{f}" for f in FILES] + [
-    "away/{tree}/run-0000.mcap", "away/{tree}/secret.mcap", "self/{tree}/x.mcap",
-    "chain/{tree}/secret.mcap", "self/{tree}/..%2Foutside%2Fsecret.mcap"])
+@pytest.mark.parametrize(
+    "where",
+    [f"usv/{{tree}}/{f}" for f in FILES]
+    + [
+        "away/{tree}/run-0000.mcap",
+        "away/{tree}/secret.mcap",
+        "self/{tree}/x.mcap",
+        "chain/{tree}/secret.mcap",
+        "self/{tree}/..%2Foutside%2Fsecret.mcap",
+    ],
+)
 def test_no_link_or_special_file_is_served(
-        trees: tuple[TestClient, Headers, dict[str, Path]], tree: str, where: str) -> None:
+    trees: tuple[TestClient, Headers, dict[str, Path]], tree: str, where: str
+) -> None:
     c, h, _ = trees
     base = "/api/drones/" + where.format(tree=tree)
-    urls = [base] + ([f"{base}/csv?topic=x", f"{base}/series?topic=x"]
-                     if tree == "archives" else [])
+    urls = [base] + (
+        [f"{base}/csv?topic=x", f"{base}/series?topic=x"] if tree == "archives" else []
+    )
     for url in urls:
         r = c.get(url, headers=h)
         assert r.status_code in (404, 422), (url, r.status_code, r.text[:200])

@@ -44,11 +44,17 @@ def test_password_is_stored_hashed(client: TestClient, admin: Headers, settings:
 
 def test_change_own_password(client: TestClient, user_factory: Callable[..., Headers]) -> None:
     ann = user_factory("ann", "scientist")
-    r = client.put("/api/auth/password", headers=ann,
-                   json={"old_password": "wrong", "new_password": "new-password-1"})
+    r = client.put(
+        "/api/auth/password",
+        headers=ann,
+        json={"old_password": "wrong", "new_password": "new-password-1"},
+    )
     assert r.status_code == 403
-    r = client.put("/api/auth/password", headers=ann,
-                   json={"old_password": "pw-ann-12345", "new_password": "new-password-1"})
+    r = client.put(
+        "/api/auth/password",
+        headers=ann,
+        json={"old_password": "pw-ann-12345", "new_password": "new-password-1"},
+    )
     assert r.status_code == 204
     login(client, "ann", "new-password-1")
 
@@ -59,22 +65,32 @@ def test_user_management_is_admin_only(
     for role in ("designer", "integrator", "scientist", "operator"):
         h = user_factory(f"u_{role}", role)
         assert client.get("/api/users", headers=h).status_code == 403
-        r = client.post("/api/users", headers=h,
-                        json={"username": "x", "password": "12345678", "roles": ["admin"]})
+        r = client.post(
+            "/api/users",
+            headers=h,
+            json={"username": "x", "password": "12345678", "roles": ["admin"]},
+        )
         assert r.status_code == 403
     users = client.get("/api/users", headers=admin).json()
     bob = next(u for u in users if u["username"] == "u_operator")
-    r = client.patch(f"/api/users/{bob['id']}", headers=admin,
-                     json={"roles": ["operator", "scientist"]})
+    r = client.patch(
+        f"/api/users/{bob['id']}", headers=admin, json={"roles": ["operator", "scientist"]}
+    )
     assert r.json()["roles"] == ["operator", "scientist"]
-    dup = client.post("/api/users", headers=admin,
-                      json={"username": "u_operator", "password": "12345678", "roles": []})
+    dup = client.post(
+        "/api/users",
+        headers=admin,
+        json={"username": "u_operator", "password": "12345678", "roles": []},
+    )
     assert dup.status_code == 409
     assert client.delete(f"/api/users/{bob['id']}", headers=admin).status_code == 204
     assert client.delete(f"/api/users/{bob['id']}", headers=admin).status_code == 404
 
 
 def test_unknown_role_is_rejected(client: TestClient, admin: Headers) -> None:
-    r = client.post("/api/users", headers=admin,
-                    json={"username": "x", "password": "12345678", "roles": ["pilot"]})
+    r = client.post(
+        "/api/users",
+        headers=admin,
+        json={"username": "x", "password": "12345678", "roles": ["pilot"]},
+    )
     assert r.status_code == 422

@@ -33,29 +33,40 @@ def test_model_bodies_are_read_off_the_event_loop(
         return read_as(body, is_json, cls)
 
     monkeypatch.setattr(bodies, "read_as", recording)
-    r = client.post("/api/projects", headers=admin,
-                    json={"name": "offloop", "model": {"text": scenario1}})
+    r = client.post(
+        "/api/projects", headers=admin, json={"name": "offloop", "model": {"text": scenario1}}
+    )
     assert r.status_code == 201, r.text
     pid = r.json()["id"]
     assert client.post("/api/validate", headers=admin, json={"text": scenario1}).json()["ok"]
     model = client.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
-    r = client.put(f"/api/projects/{pid}/model", headers=admin,
-                   json={"base_revision": 1, "model": model})
+    r = client.put(
+        f"/api/projects/{pid}/model", headers=admin, json={"base_revision": 1, "model": model}
+    )
     assert r.status_code == 200, r.text
     assert seen == [("ProjectIn", False), ("ModelInput", False), ("SaveIn", False)]
 
 
-@pytest.mark.parametrize(("content", "kinds"), [
-    (b"{not json", {"json_invalid"}), (b"", {"missing"}),
-    (b'{"model": {}, "text": "x"}', {"value_error", "missing"}),  # missing: name, base_revision
-    (b'[1]', {"model_type"})])
+@pytest.mark.parametrize(
+    ("content", "kinds"),
+    [
+        (b"{not json", {"json_invalid"}),
+        (b"", {"missing"}),
+        (b'{"model": {}, "text": "x"}', {"value_error", "missing"}),  # missing: name, base_revision
+        (b"[1]", {"model_type"}),
+    ],
+)
 def test_a_body_that_is_not_the_model_is_fastapis_422(
     client: TestClient, admin: Headers, content: bytes, kinds: set[str]
 ) -> None:
-    for method, url in (("POST", "/api/validate"), ("PUT", "/api/projects/1/model"),
-                        ("POST", "/api/projects")):
-        r = client.request(method, url, headers={**admin, "content-type": "application/json"},
-                           content=content)
+    for method, url in (
+        ("POST", "/api/validate"),
+        ("PUT", "/api/projects/1/model"),
+        ("POST", "/api/projects"),
+    ):
+        r = client.request(
+            method, url, headers={**admin, "content-type": "application/json"}, content=content
+        )
         assert r.status_code == 422, (url, r.text)
         detail = r.json()["detail"]
         assert detail[0]["loc"][0] == "body", (url, r.text)
@@ -65,10 +76,12 @@ def test_a_body_that_is_not_the_model_is_fastapis_422(
 def test_the_bodies_schemas_are_in_the_openapi_description(client: TestClient) -> None:
     spec = client.get("/openapi.json").json()
     schemas = spec["components"]["schemas"]
-    for path, method, name in (("/api/validate", "post", "ModelInput"),
-                               ("/api/projects/{project_id}/model", "put", "SaveIn"),
-                               ("/api/projects", "post", "ProjectIn"),
-                               ("/api/plan", "post", "ModelInput")):
+    for path, method, name in (
+        ("/api/validate", "post", "ModelInput"),
+        ("/api/projects/{project_id}/model", "put", "SaveIn"),
+        ("/api/projects", "post", "ProjectIn"),
+        ("/api/plan", "post", "ModelInput"),
+    ):
         body = spec["paths"][path][method]["requestBody"]["content"]["application/json"]
         assert body["schema"]["$ref"] == f"#/components/schemas/{name}"
         assert "properties" in schemas[name]

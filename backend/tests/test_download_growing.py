@@ -31,17 +31,28 @@ def test_downloads_of_a_growing_file_complete(tmp_path: Path) -> None:
                 f.write(os.urandom(8 * 1024))
                 f.flush()
 
-    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False, scene_port=None,
-                        initial_admin_password=ADMIN_PASSWORD, archive_dir=tmp_path / "archives")
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        scene_port=None,
+        initial_admin_password=ADMIN_PASSWORD,
+        archive_dir=tmp_path / "archives",
+    )
     writer = threading.Thread(target=write)
     with serve(settings) as base:
-        token = httpx.post(f"{base}/api/auth/login", timeout=30, json={
-            "username": "admin", "password": ADMIN_PASSWORD}).json()["token"]
+        token = httpx.post(
+            f"{base}/api/auth/login",
+            timeout=30,
+            json={"username": "admin", "password": ADMIN_PASSWORD},
+        ).json()["token"]
 
         def download(_: int) -> str:
             try:
-                r = httpx.get(f"{base}/api/drones/usv/archives/writing.mcap", timeout=60,
-                              headers={"Authorization": f"Bearer {token}"})
+                r = httpx.get(
+                    f"{base}/api/drones/usv/archives/writing.mcap",
+                    timeout=60,
+                    headers={"Authorization": f"Bearer {token}"},
+                )
             except httpx.TransportError as exc:
                 return f"aborted: {exc}"
             if r.status_code != 200 or len(r.content) != int(r.headers["content-length"]):

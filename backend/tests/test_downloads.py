@@ -24,8 +24,9 @@ def test_each_role_downloads_its_zip(
     client: TestClient, admin: Headers, user_factory: Callable[..., Headers], scenario1: str
 ) -> None:
     pid = _project(client, admin, scenario1)
-    people = {r: user_factory(f"dl_{r}", r) for r in ("integrator", "operator", "scientist",
-                                                      "designer")}
+    people = {
+        r: user_factory(f"dl_{r}", r) for r in ("integrator", "operator", "scientist", "designer")
+    }
     for target in ("integrator", "operator", "scientist"):
         for role, h in people.items():
             r = client.get(f"/api/projects/{pid}/downloads/{target}", headers=h)
@@ -35,8 +36,9 @@ def test_each_role_downloads_its_zip(
         names = zipfile.ZipFile(io.BytesIO(r.content)).namelist()
         assert names[0] == f"dl-r1-{target}/INDEX.txt"
         assert len(names) > 1
-    ops = zipfile.ZipFile(io.BytesIO(
-        client.get(f"/api/projects/{pid}/downloads/operator", headers=admin).content))
+    ops = zipfile.ZipFile(
+        io.BytesIO(client.get(f"/api/projects/{pid}/downloads/operator", headers=admin).content)
+    )
     pb = next(n for n in ops.namelist() if n.endswith("pubbroker.json"))
     cfg = json.loads(ops.read(pb))
     sizes = {t["name"]: t["buffer_size"] for t in cfg["topics"]}
@@ -51,8 +53,9 @@ def test_invalid_revision_and_unknown_target(
     pid = _project(client, admin, scenario1)
     model = client.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
     model["subscribers"][0]["aggregation"] = "MEDIAN"
-    client.put(f"/api/projects/{pid}/model", headers=admin,
-               json={"base_revision": 1, "model": model})
+    client.put(
+        f"/api/projects/{pid}/model", headers=admin, json={"base_revision": 1, "model": model}
+    )
     bad = client.get(f"/api/projects/{pid}/downloads/scientist", headers=admin)
     assert bad.status_code == 422 and bad.json()["diagnostics"]
     ok = client.get(f"/api/projects/{pid}/downloads/scientist?revision=1", headers=admin)
@@ -66,13 +69,18 @@ def test_driver_readme_names_the_run_s_ingress_and_archive(tmp_path: Path, scena
     run = tmp_path / "run"
     (run / "archive").mkdir(parents=True)
     (run / "ingress.sock").touch()  # modd up's PubBroker socket (a plain file stands in)
-    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
-                        initial_admin_password=ADMIN_PASSWORD, archive_dir=run / "archive")
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        initial_admin_password=ADMIN_PASSWORD,
+        archive_dir=run / "archive",
+    )
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         admin = login(c, "admin", ADMIN_PASSWORD)
         pid = _project(c, admin, scenario1)
-        z = zipfile.ZipFile(io.BytesIO(c.get(f"/api/projects/{pid}/downloads/integrator",
-                                             headers=admin).content))
+        z = zipfile.ZipFile(
+            io.BytesIO(c.get(f"/api/projects/{pid}/downloads/integrator", headers=admin).content)
+        )
         readme = z.read(next(n for n in z.namelist() if n.endswith("README.md"))).decode()
         assert f"unix:{run / 'ingress.sock'}" in readme
         assert str(run / "archive") in readme

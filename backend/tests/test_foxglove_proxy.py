@@ -30,10 +30,13 @@ FOXGLOVE = [Subprotocol("foxglove.sdk.v1")]
 @pytest.fixture(scope="module")
 def base(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, int]]:
     port = free_port()
-    settings = Settings(data_dir=tmp_path_factory.mktemp("fg") / "data",
-                        initial_admin_password=ADMIN_PASSWORD,
-                        zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
-                        foxglove_port=port, ws_recheck_s=0.2)
+    settings = Settings(
+        data_dir=tmp_path_factory.mktemp("fg") / "data",
+        initial_admin_password=ADMIN_PASSWORD,
+        zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
+        foxglove_port=port,
+        ws_recheck_s=0.2,
+    )
     with serve(settings) as url:
         make_users(url)
         yield url, port
@@ -48,8 +51,13 @@ def _live_url(base: str, token: str) -> str:
 
 
 def _open(url: str, origin: str | None = None, **kw: Any) -> ClientConnection:
-    return connect(url, subprotocols=FOXGLOVE, open_timeout=10,
-                   origin=None if origin is None else Origin(origin), **kw)
+    return connect(
+        url,
+        subprotocols=FOXGLOVE,
+        open_timeout=10,
+        origin=None if origin is None else Origin(origin),
+        **kw,
+    )
 
 
 def _refused(url: str, origin: str | None = None, **kw: Any) -> int:
@@ -74,8 +82,7 @@ def test_refused_at_the_upgrade(base: tuple[str, int]) -> None:
     with _open(_live_url(url, sci), "null") as ws:  # a desktop viewer's page, with a ticket
         assert ws.recv(timeout=10)
     cookie_null = {"Cookie": f"modd_session={sci}"}
-    assert _refused(f"ws://{url[7:]}/foxglove/live", "null",
-                    additional_headers=cookie_null) == 403
+    assert _refused(f"ws://{url[7:]}/foxglove/live", "null", additional_headers=cookie_null) == 403
     assert _refused(f"ws://{url[7:]}/foxglove/live") == 403  # no session
     assert _refused(f"ws://{url[7:]}/foxglove/live?ticket=made-up") == 403
     cookie = {"Cookie": f"modd_session={sci}"}
@@ -83,8 +90,9 @@ def test_refused_at_the_upgrade(base: tuple[str, int]) -> None:
     nobody = _login(url, "nobody", "pw-nobody-12345")
     r = httpx.post(url + "/api/foxglove/links", headers=_bearer(nobody), timeout=30)
     assert r.status_code == 403
-    assert _refused(f"ws://{url[7:]}/foxglove/live", None,
-                    additional_headers=_bearer(nobody)) == 403
+    assert (
+        _refused(f"ws://{url[7:]}/foxglove/live", None, additional_headers=_bearer(nobody)) == 403
+    )
 
 
 def _closed_within(ws: Any, act: Any, code: int) -> float:
@@ -102,17 +110,22 @@ def test_logout_and_role_removal_close_within_a_second(base: tuple[str, int]) ->
     url, _port = base
     sci = _login(url, "sci", "pw-sci-12345")
     with _open(_live_url(url, sci)) as ws:
-        took = _closed_within(ws, lambda: httpx.post(url + "/api/auth/logout",
-                                                     headers=_bearer(sci), timeout=30), 4401)
+        took = _closed_within(
+            ws, lambda: httpx.post(url + "/api/auth/logout", headers=_bearer(sci), timeout=30), 4401
+        )
         assert took < 1.0, took
     admin = _login(url, "admin", ADMIN_PASSWORD)
     users = httpx.get(url + "/api/users", headers=_bearer(admin), timeout=30).json()
     uid = next(u["id"] for u in users if u["username"] == "sci")
     sci = _login(url, "sci", "pw-sci-12345")
     with _open(_live_url(url, sci)) as ws:
-        took = _closed_within(ws, lambda: httpx.patch(
-            f"{url}/api/users/{uid}", json={"roles": []}, headers=_bearer(admin),
-            timeout=30), 4403)
+        took = _closed_within(
+            ws,
+            lambda: httpx.patch(
+                f"{url}/api/users/{uid}", json={"roles": []}, headers=_bearer(admin), timeout=30
+            ),
+            4403,
+        )
         assert took < 1.0, took
 
 
@@ -137,9 +150,13 @@ def test_ticket_store_forgets_and_expires(tmp_path: Path) -> None:
 
 
 def test_sockets_per_user_are_capped(tmp_path: Path) -> None:
-    settings = Settings(data_dir=tmp_path / "data", initial_admin_password=ADMIN_PASSWORD,
-                        zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
-                        foxglove_port=free_port(), ws_sockets_per_user=5)
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        initial_admin_password=ADMIN_PASSWORD,
+        zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
+        foxglove_port=free_port(),
+        ws_sockets_per_user=5,
+    )
     with serve(settings) as url:
         admin = _bearer(_login(url, "admin", ADMIN_PASSWORD))
         live = f"ws://{url[7:]}/foxglove/live"

@@ -15,8 +15,12 @@ def test_serves_dist_with_spa_fallback(tmp_path: Path) -> None:
     (dist / "assets").mkdir(parents=True)
     (dist / "index.html").write_text("<!doctype html><title>MoDD</title>")
     (dist / "assets" / "app.js").write_text("console.log('modd')")
-    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False, frontend_dist=dist,
-                        initial_admin_password="x" * 12)
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        frontend_dist=dist,
+        initial_admin_password="x" * 12,
+    )
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         assert "MoDD" in c.get("/").text
         assert c.get("/assets/app.js").text == "console.log('modd')"
@@ -28,8 +32,12 @@ def test_serves_dist_with_spa_fallback(tmp_path: Path) -> None:
 
 
 def test_no_dist_no_frontend(tmp_path: Path) -> None:
-    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
-                        frontend_dist=tmp_path / "missing", initial_admin_password="x" * 12)
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        frontend_dist=tmp_path / "missing",
+        initial_admin_password="x" * 12,
+    )
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         assert c.get("/").status_code == 404
         assert c.get("/openapi.json").status_code == 200

@@ -28,24 +28,32 @@ from .served import serve
 
 
 def _settings(tmp_path: Path, **kw: Any) -> Settings:
-    base: dict[str, Any] = {"data_dir": tmp_path / "data", "initial_admin_password": ADMIN_PASSWORD,
-                            "zenoh_enabled": False}
+    base: dict[str, Any] = {
+        "data_dir": tmp_path / "data",
+        "initial_admin_password": ADMIN_PASSWORD,
+        "zenoh_enabled": False,
+    }
     base.update(kw)
     return Settings(**base)
 
 
 # --- live WebSockets on a served backend (zenoh session with no peers) -------
 
+
 @pytest.fixture
 def live_base(tmp_path: Path) -> Iterator[str]:
-    settings = _settings(tmp_path, zenoh_enabled=True, zenoh_connect=(),
-                         ws_subscriptions_per_socket=100, ws_subscriptions_per_user=150)
+    settings = _settings(
+        tmp_path,
+        zenoh_enabled=True,
+        zenoh_connect=(),
+        ws_subscriptions_per_socket=100,
+        ws_subscriptions_per_user=150,
+    )
     with serve(settings) as base:
         yield base
 
 
-def _api(base: str, method: str, path: str, token: str | None = None,
-         **kw: Any) -> httpx.Response:
+def _api(base: str, method: str, path: str, token: str | None = None, **kw: Any) -> httpx.Response:
     headers = {"Authorization": f"Bearer {token}"} if token else {}
     return httpx.request(method, base + path, headers=headers, timeout=30, **kw)
 
@@ -57,8 +65,13 @@ def _token(base: str, user: str, password: str) -> str:
 
 
 def _user(base: str, admin: str, name: str, *roles: str) -> tuple[int, str]:
-    r = _api(base, "POST", "/api/users", admin,
-             json={"username": name, "password": f"pw-{name}-12345", "roles": list(roles)})
+    r = _api(
+        base,
+        "POST",
+        "/api/users",
+        admin,
+        json={"username": name, "password": f"pw-{name}-12345", "roles": list(roles)},
+    )
     assert r.status_code == 201, r.text
     return int(r.json()["id"]), _token(base, name, f"pw-{name}-12345")
 
@@ -94,8 +107,13 @@ def test_websocket_closed_within_1s_of_session_change(live_base: str, action: st
     if action == "logout":
         assert _api(base, "POST", "/api/auth/logout", tok).status_code == 204
     elif action == "password":
-        r = _api(base, "PUT", "/api/auth/password", other,
-                 json={"old_password": "pw-sam-12345", "new_password": "new-pw-123456"})
+        r = _api(
+            base,
+            "PUT",
+            "/api/auth/password",
+            other,
+            json={"old_password": "pw-sam-12345", "new_password": "new-pw-123456"},
+        )
         assert r.status_code == 204
         assert _api(base, "GET", "/api/auth/me", tok).status_code == 401  # others revoked
         assert _api(base, "GET", "/api/auth/me", other).status_code == 200  # this one kept
@@ -166,21 +184,36 @@ def test_websocket_refuses_token_in_url_and_foreign_origin(live_base: str) -> No
     tok = _token(base, "admin", ADMIN_PASSWORD)
     url = base.replace("http", "ws") + "/api/drones/usv/stream"
     for extra, origin in ((f"?token={tok}", None), ("", Origin("http://evil.example"))):
-        with pytest.raises(Exception, match="403|440"), \
-                connect(url + extra, open_timeout=10, origin=origin) as ws:
+        with (
+            pytest.raises(Exception, match="403|440"),
+            connect(url + extra, open_timeout=10, origin=origin) as ws,
+        ):
             ws.recv(timeout=5)
     # a cookie session from the workbench's own origin works
-    r = httpx.post(base + "/api/auth/login", timeout=30,
-                   json={"username": "admin", "password": ADMIN_PASSWORD, "session": "cookie"})
+    r = httpx.post(
+        base + "/api/auth/login",
+        timeout=30,
+        json={"username": "admin", "password": ADMIN_PASSWORD, "session": "cookie"},
+    )
     cookie = r.cookies["modd_session"]
-    with connect(url, open_timeout=10, origin=Origin(base),
-                 additional_headers={"Cookie": f"modd_session={cookie}"}) as ws:
+    with connect(
+        url,
+        open_timeout=10,
+        origin=Origin(base),
+        additional_headers={"Cookie": f"modd_session={cookie}"},
+    ) as ws:
         ws.send(json.dumps({"op": "ping", "id": 1}))
         assert json.loads(ws.recv(timeout=10))["type"] == "pong"
     # ... but not from another origin (refused at the handshake)
-    with pytest.raises(Exception, match="403|4403"), connect(
-            url, open_timeout=10, origin=Origin("http://evil.example"),
-            additional_headers={"Cookie": f"modd_session={cookie}"}) as ws:
+    with (
+        pytest.raises(Exception, match="403|4403"),
+        connect(
+            url,
+            open_timeout=10,
+            origin=Origin("http://evil.example"),
+            additional_headers={"Cookie": f"modd_session={cookie}"},
+        ) as ws,
+    ):
         ws.recv(timeout=5)
 
 
@@ -204,9 +237,13 @@ def test_no_token_in_any_log(tmp_path: Path, capfd: pytest.CaptureFixture[str]) 
 
 # --- HTTP, on the test client ------------------------------------------------
 
+
 def test_login_throttled_per_account_and_address(tmp_path: Path) -> None:
-    with TestClient(create_app(_settings(tmp_path, login_limit_account=5,
-                                         login_limit_address=8), out=io.StringIO())) as c:
+    with TestClient(
+        create_app(
+            _settings(tmp_path, login_limit_account=5, login_limit_address=8), out=io.StringIO()
+        )
+    ) as c:
         for _ in range(5):
             r = c.post("/api/auth/login", json={"username": "admin", "password": "wrong"})
             assert r.status_code == 401
@@ -219,12 +256,19 @@ def test_login_throttled_per_account_and_address(tmp_path: Path) -> None:
 
 
 def test_unknown_user_answers_as_slowly_as_a_wrong_password(tmp_path: Path) -> None:
-    with TestClient(create_app(_settings(tmp_path, login_limit_account=10**6,
-                                         login_limit_address=10**6), out=io.StringIO())) as c:
+    with TestClient(
+        create_app(
+            _settings(tmp_path, login_limit_account=10**6, login_limit_address=10**6),
+            out=io.StringIO(),
+        )
+    ) as c:
+
         def timed(user: str) -> float:
             t = time.perf_counter()
-            assert c.post("/api/auth/login",
-                          json={"username": user, "password": "wrong"}).status_code == 401
+            assert (
+                c.post("/api/auth/login", json={"username": user, "password": "wrong"}).status_code
+                == 401
+            )
             return time.perf_counter() - t
 
         known, unknown = [], []
@@ -238,16 +282,18 @@ def test_unknown_user_answers_as_slowly_as_a_wrong_password(tmp_path: Path) -> N
 
 @pytest.fixture
 def small(tmp_path: Path) -> Iterator[TestClient]:
-    with TestClient(create_app(_settings(tmp_path, max_body_bytes=200_000),
-                               out=io.StringIO())) as c:
+    with TestClient(
+        create_app(_settings(tmp_path, max_body_bytes=200_000), out=io.StringIO())
+    ) as c:
         yield c
 
 
 def test_oversized_and_overdeep_bodies_store_nothing(small: TestClient, scenario1: str) -> None:
     c = small
     h = login(c, "admin", ADMIN_PASSWORD)
-    pid = c.post("/api/projects", headers=h,
-                 json={"name": "p", "model": {"text": scenario1}}).json()["id"]
+    pid = c.post(
+        "/api/projects", headers=h, json={"name": "p", "model": {"text": scenario1}}
+    ).json()["id"]
     model = c.get(f"/api/projects/{pid}/model", headers=h).json()["model"]
     big = dict(model, subscribers=model["subscribers"] * 2000)
     r = c.put(f"/api/projects/{pid}/model", headers=h, json={"base_revision": 1, "model": big})
@@ -259,16 +305,22 @@ def test_oversized_and_overdeep_bodies_store_nothing(small: TestClient, scenario
             yield b"a" * 10_000
         yield b'"}}'
 
-    r = c.put(f"/api/projects/{pid}/model", content=chunks(),
-              headers={**h, "Content-Type": "application/json"})
+    r = c.put(
+        f"/api/projects/{pid}/model",
+        content=chunks(),
+        headers={**h, "Content-Type": "application/json"},
+    )
     assert r.status_code == 413
     r = c.post("/api/projects/import?name=big", headers=h, content=b"x" * 300_000)
     assert r.status_code == 413
     deep: Any = 1
     for _ in range(300):
         deep = {"n": deep}
-    r = c.put(f"/api/projects/{pid}/model", headers=h,
-              json={"base_revision": 1, "model": dict(model, layout={"deep": deep})})
+    r = c.put(
+        f"/api/projects/{pid}/model",
+        headers=h,
+        json={"base_revision": 1, "model": dict(model, layout={"deep": deep})},
+    )
     assert r.status_code == 422 and "nested" in r.json()["detail"]
     versions = c.get(f"/api/projects/{pid}/versions", headers=h).json()
     assert [v["revision"] for v in versions] == [1]
@@ -277,8 +329,12 @@ def test_oversized_and_overdeep_bodies_store_nothing(small: TestClient, scenario
 
 
 def test_security_headers_on_every_answer(client: TestClient, admin: Headers) -> None:
-    for path, h in (("/api/health", {}), ("/api/projects", admin), ("/api/nothing", {}),
-                    ("/api/projects", {})):
+    for path, h in (
+        ("/api/health", {}),
+        ("/api/projects", admin),
+        ("/api/nothing", {}),
+        ("/api/projects", {}),
+    ):
         r = client.get(path, headers=h)
         csp = r.headers["content-security-policy"]
         script = next(d for d in csp.split(";") if d.strip().startswith("script-src"))
@@ -291,6 +347,7 @@ def test_security_headers_on_every_answer(client: TestClient, admin: Headers) ->
 def test_map_tiles_only_from_configured_origins(tmp_path: Path) -> None:
     """No foreign image by default; a configured tile origin is allowed for images
     only (not scripts, frames or connections); a malformed one is refused."""
+
     def img_src(settings: Settings) -> tuple[str, str]:
         with TestClient(create_app(settings, out=io.StringIO())) as c:
             csp = c.get("/api/health").headers["content-security-policy"]
@@ -302,8 +359,12 @@ def test_map_tiles_only_from_configured_origins(tmp_path: Path) -> None:
     images, csp = img_src(_settings(tmp_path / "b", tile_origins=(tiles,)))
     assert images.split() == ["img-src", "'self'", "data:", "blob:", tiles]
     assert csp.count(tiles) == 1
-    for bad in ("http://127.0.0.1:8123/{z}/{x}/{y}.png", "javascript:alert(1)", "https://a b",
-                "http://x; script-src *"):
+    for bad in (
+        "http://127.0.0.1:8123/{z}/{x}/{y}.png",
+        "javascript:alert(1)",
+        "https://a b",
+        "http://x; script-src *",
+    ):
         with pytest.raises(ValueError, match="tile origin"):
             _settings(tmp_path / "c", tile_origins=(bad,))
 
@@ -329,14 +390,18 @@ def test_last_admin_cannot_be_demoted_or_deleted(
     r = client.delete(f"/api/users/{me['id']}", headers=other)
     assert r.status_code == 204
     root2 = client.get("/api/auth/me", headers=other).json()
-    assert client.patch(f"/api/users/{root2['id']}", headers=other,
-                        json={"roles": []}).status_code == 409
+    assert (
+        client.patch(f"/api/users/{root2['id']}", headers=other, json={"roles": []}).status_code
+        == 409
+    )
     assert client.get("/api/users", headers=other).status_code == 200
 
 
 def test_cookie_session_needs_csrf_header_on_unsafe_methods(client: TestClient) -> None:
-    r = client.post("/api/auth/login", json={"username": "admin", "password": ADMIN_PASSWORD,
-                                             "session": "cookie"})
+    r = client.post(
+        "/api/auth/login",
+        json={"username": "admin", "password": ADMIN_PASSWORD, "session": "cookie"},
+    )
     assert r.status_code == 200 and r.json()["token"] is None
     set_cookie = r.headers["set-cookie"].lower()
     assert "httponly" in set_cookie and "samesite=strict" in set_cookie
@@ -345,10 +410,13 @@ def test_cookie_session_needs_csrf_header_on_unsafe_methods(client: TestClient) 
     assert client.get("/api/auth/me").json()["csrf"] == csrf
     body = {"name": "p"}
     assert client.post("/api/projects", json=body).status_code == 403
-    assert client.post("/api/projects", json=body,
-                       headers={"X-CSRF-Token": "0" * 32}).status_code == 403
-    assert client.post("/api/projects", json=body,
-                       headers={"X-CSRF-Token": csrf}).status_code == 201
+    assert (
+        client.post("/api/projects", json=body, headers={"X-CSRF-Token": "0" * 32}).status_code
+        == 403
+    )
+    assert (
+        client.post("/api/projects", json=body, headers={"X-CSRF-Token": csrf}).status_code == 201
+    )
     assert client.post("/api/auth/logout", headers={"X-CSRF-Token": csrf}).status_code == 204
     assert client.get("/api/projects").status_code == 401
 
@@ -365,8 +433,9 @@ def test_heavy_limiter_refuses_at_once() -> None:
     assert lim.in_flight == 0
 
 
-def test_scene_colour_needs_a_role(client: TestClient, user_factory: Callable[..., Headers]
-                                   ) -> None:
+def test_scene_colour_needs_a_role(
+    client: TestClient, user_factory: Callable[..., Headers]
+) -> None:
     nobody = user_factory("nobody")
     r = client.put("/api/scene/usv/colour", headers=nobody, json={"subscriber": None})
     assert r.status_code == 403

@@ -25,14 +25,17 @@ def _leaves(tree: Any) -> Iterator[str]:
 def test_scientist_downloads_the_layout(
     client: TestClient, admin: Headers, user_factory: Callable[..., Headers], scenario1: str
 ) -> None:
-    pid = client.post("/api/projects", headers=admin,
-                      json={"name": "fox glove", "model": {"text": scenario1}}).json()["id"]
+    pid = client.post(
+        "/api/projects", headers=admin, json={"name": "fox glove", "model": {"text": scenario1}}
+    ).json()["id"]
     sci, designer = user_factory("fx_sci", "scientist"), user_factory("fx_des", "designer")
     assert client.get(f"/api/projects/{pid}/foxglove-layout", headers=designer).status_code == 403
     r = client.get(f"/api/projects/{pid}/foxglove-layout", headers=sci)
     assert r.status_code == 200 and r.headers["content-type"] == "application/json"
-    assert r.headers["content-disposition"] == \
-        'attachment; filename="fox_glove-r1-foxglove-layout.json"'
+    assert (
+        r.headers["content-disposition"]
+        == 'attachment; filename="fox_glove-r1-foxglove-layout.json"'
+    )
     layout = r.json()
     model = client.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
     drone, subs = model["drone"]["name"], model["subscribers"]
@@ -55,9 +58,13 @@ def test_scientist_downloads_the_layout(
 
 
 def test_layout_is_deterministic() -> None:
-    model = {"drone": {"name": "d"}, "subscribers": [
-        {"name": n, "topic": t, "aggregation": "MIN", "periodS": "1"}
-        for n, t in [("b", "d.x.y"), ("a", "d.x.y"), ("c", "d.x.z")]]}
+    model = {
+        "drone": {"name": "d"},
+        "subscribers": [
+            {"name": n, "topic": t, "aggregation": "MIN", "periodS": "1"}
+            for n, t in [("b", "d.x.y"), ("a", "d.x.y"), ("c", "d.x.z")]
+        ],
+    }
     one = json.dumps(foxglove_layout(model))
     assert one == json.dumps(foxglove_layout(model))
     tabs = foxglove_layout(model)["configById"]["Tab!topics"]["tabs"]

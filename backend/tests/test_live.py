@@ -38,8 +38,7 @@ def station(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Station]:
 
 
 @pytest.fixture(scope="module")
-def live(station: Station, tmp_path_factory: pytest.TempPathFactory
-         ) -> Iterator[TestClient]:
+def live(station: Station, tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
     settings = Settings(
         data_dir=tmp_path_factory.mktemp("backend"),
         zenoh_connect=(station.zenoh,),
@@ -59,14 +58,18 @@ def people(live: TestClient) -> dict[str, Headers]:
     admin = login(live, "admin", ADMIN_PASSWORD)
     out = {"admin": admin}
     for role in ("operator", "scientist", "designer", "integrator"):
-        live.post("/api/users", headers=admin,
-                  json={"username": role, "password": f"{role}-password", "roles": [role]})
+        live.post(
+            "/api/users",
+            headers=admin,
+            json={"username": role, "password": f"{role}-password", "roles": [role]},
+        )
         out[role] = login(live, role, f"{role}-password")
     return out
 
 
-def _receive_until(ws: WebSocketTestSession, pred: Callable[[dict[str, Any]], bool],
-                   limit: int = 500) -> dict[str, Any]:
+def _receive_until(
+    ws: WebSocketTestSession, pred: Callable[[dict[str, Any]], bool], limit: int = 500
+) -> dict[str, Any]:
     for _ in range(limit):
         msg: dict[str, Any] = ws.receive_json()
         if pred(msg):
@@ -78,8 +81,9 @@ def test_deploy_is_acked_recorded_and_diffed(
     live: TestClient, people: dict[str, Headers], station: Station
 ) -> None:
     admin, operator = people["admin"], people["operator"]
-    pid = live.post("/api/projects", headers=admin,
-                    json={"name": "mission", "model": {"model": station.model}}).json()["id"]
+    pid = live.post(
+        "/api/projects", headers=admin, json={"name": "mission", "model": {"model": station.model}}
+    ).json()["id"]
     before = live.get(f"/api/projects/{pid}/deployed-diff", headers=operator).json()
     assert before["deployed"] is None and before["changes"]
     r = live.post(f"/api/projects/{pid}/deployments", headers=operator, json={})
@@ -100,11 +104,11 @@ def test_deploy_is_acked_recorded_and_diffed(
     assert usv["sub_broker"] == station.model["subBroker"]["endpoint"]
     model = live.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
     model["subscribers"][0]["periodS"] = "4"
-    live.put(f"/api/projects/{pid}/model", headers=admin,
-             json={"base_revision": 1, "model": model})
+    live.put(f"/api/projects/{pid}/model", headers=admin, json={"base_revision": 1, "model": model})
     changed = live.get(f"/api/projects/{pid}/deployed-diff", headers=operator).json()
-    assert changed["changes"] == [{"op": "replace", "pointer": "/subscribers/0/periodS",
-                                   "before": "2.0", "after": "4"}]
+    assert changed["changes"] == [
+        {"op": "replace", "pointer": "/subscribers/0/periodS", "before": "2.0", "after": "4"}
+    ]
     denied = live.post(f"/api/projects/{pid}/deployments", headers=people["designer"], json={})
     assert denied.status_code == 403
 
@@ -116,8 +120,12 @@ def test_stream_relays_values_and_status(live: TestClient, people: dict[str, Hea
         assert ws.receive_json()["type"] == "authenticated"
         ws.send_json({"op": "subscribe", "subscriber": "sub_5", "id": 1})
         ack = _receive_until(ws, lambda m: m["type"] == "subscribed")
-        assert ack == {"type": "subscribed", "subscriber": "sub_5", "key": "modd/usv/sub/sub_5",
-                       "id": 1}
+        assert ack == {
+            "type": "subscribed",
+            "subscriber": "sub_5",
+            "key": "modd/usv/sub/sub_5",
+            "id": 1,
+        }
         value = _receive_until(ws, lambda m: m["type"] == "value")
         data = value["data"]
         assert value["subscriber"] == "sub_5"
@@ -132,8 +140,7 @@ def test_stream_relays_values_and_status(live: TestClient, people: dict[str, Hea
         assert "identifier" in err["message"]
 
 
-def test_stream_relays_the_instruments_health(live: TestClient,
-                                              people: dict[str, Headers]) -> None:
+def test_stream_relays_the_instruments_health(live: TestClient, people: dict[str, Headers]) -> None:
     """What a publisher reports in HEALTH reaches the browser in the status (issue 32)."""
     token = people["operator"]["Authorization"].split()[1]
     with live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws:
@@ -149,8 +156,15 @@ def test_dynamic_subscriptions(live: TestClient, people: dict[str, Headers]) -> 
     with live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws:
         ws.send_json({"op": "auth", "token": token})
         assert ws.receive_json()["type"] == "authenticated"
-        ws.send_json({"op": "dynamic", "topic": "usv.accelerometer.accel_x", "period_s": "4",
-                      "aggregation": "AVERAGE", "subscriber": "dyn_avg4"})
+        ws.send_json(
+            {
+                "op": "dynamic",
+                "topic": "usv.accelerometer.accel_x",
+                "period_s": "4",
+                "aggregation": "AVERAGE",
+                "subscriber": "dyn_avg4",
+            }
+        )
         reply = _receive_until(ws, lambda m: m["type"] == "dynamic")["reply"]
         assert reply["status"] == "ACCEPTED", reply
         assert reply["key"] == "modd/usv/sub/dyn_avg4"
@@ -160,14 +174,18 @@ def test_dynamic_subscriptions(live: TestClient, people: dict[str, Headers]) -> 
         ws.send_json({"op": "cancel", "subscriber": "dyn_avg4"})
         cancelled = _receive_until(ws, lambda m: m["type"] == "dynamic")["reply"]
         assert cancelled["status"] == "CANCELLED"
-    r = live.post("/api/drones/usv/subscriptions", headers=sci,
-                  json={"topic": "usv.accelerometer.accel_x", "period_s": "1",
-                        "aggregation": "MIN"})
+    r = live.post(
+        "/api/drones/usv/subscriptions",
+        headers=sci,
+        json={"topic": "usv.accelerometer.accel_x", "period_s": "1", "aggregation": "MIN"},
+    )
     assert r.status_code == 200
     assert r.json()["status"] == "NOT_AVAILABLE" and r.json()["reason"]
-    op = live.post("/api/drones/usv/subscriptions", headers=people["operator"],
-                   json={"topic": "usv.accelerometer.accel_x", "period_s": "4",
-                         "aggregation": "AVERAGE"})
+    op = live.post(
+        "/api/drones/usv/subscriptions",
+        headers=people["operator"],
+        json={"topic": "usv.accelerometer.accel_x", "period_s": "4", "aggregation": "AVERAGE"},
+    )
     assert op.status_code == 403
 
 
@@ -177,19 +195,27 @@ def test_deploy_to_a_silent_drone_fails_and_is_recorded(
     model = json.loads(json.dumps(station.model))
     model["drone"]["name"] = "ghost"
     text = json.dumps(model).replace('"usv.', '"ghost.')
-    pid = live.post("/api/projects", headers=people["admin"],
-                    json={"name": "ghost", "model": {"text": text, "format": "json"}}).json()["id"]
+    pid = live.post(
+        "/api/projects",
+        headers=people["admin"],
+        json={"name": "ghost", "model": {"text": text, "format": "json"}},
+    ).json()["id"]
     start = time.monotonic()
-    record = live.post(f"/api/projects/{pid}/deployments", headers=people["operator"],
-                       json={}).json()
+    record = live.post(
+        f"/api/projects/{pid}/deployments", headers=people["operator"], json={}
+    ).json()
     assert record["status"] == "failed"
     assert "nobody answers on modd/ghost/deploy" in record["error"]
     assert time.monotonic() - start < 5
     listed = live.get(f"/api/projects/{pid}/deployments", headers=people["operator"]).json()
     assert listed[0]["status"] == "failed"
     # The deploy matrix: operator and admin deploy; the other roles may not.
-    for role, status in (("admin", 201), ("scientist", 403), ("designer", 403),
-                         ("integrator", 403)):
+    for role, status in (
+        ("admin", 201),
+        ("scientist", 403),
+        ("designer", 403),
+        ("integrator", 403),
+    ):
         r = live.post(f"/api/projects/{pid}/deployments", headers=people[role], json={})
         assert r.status_code == status, role
 
@@ -197,14 +223,18 @@ def test_deploy_to_a_silent_drone_fails_and_is_recorded(
 def test_websocket_needs_a_token(live: TestClient) -> None:
     from starlette.websockets import WebSocketDisconnect
 
-    with pytest.raises(WebSocketDisconnect) as exc, \
-            live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws:
+    with (
+        pytest.raises(WebSocketDisconnect) as exc,
+        live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws,
+    ):
         ws.send_json({"op": "auth", "token": "bad"})
         ws.receive_json()
     assert exc.value.code == 4401
     # a token in the URL is refused outright (URLs end up in logs)
-    with pytest.raises(WebSocketDisconnect) as exc, \
-            live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream?token=x") as ws:
+    with (
+        pytest.raises(WebSocketDisconnect) as exc,
+        live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream?token=x") as ws,
+    ):
         ws.receive_json()
     assert exc.value.code == 4400
 
@@ -221,8 +251,11 @@ def test_archive_of_the_running_pubbroker(live: TestClient, people: dict[str, He
         assert time.monotonic() < deadline, files
         time.sleep(0.2)
     name = files[0]["name"]
-    series = live.get(f"/api/drones/usv/archives/{name}/series", headers=h,
-                      params={"topic": "usv.accelerometer.accel_z"}).json()
+    series = live.get(
+        f"/api/drones/usv/archives/{name}/series",
+        headers=h,
+        params={"topic": "usv.accelerometer.accel_z"},
+    ).json()
     assert series["total"] > 5
     assert all(-9 <= v <= 9 for _t, v in series["points"])  # the publisher's range
 
@@ -233,8 +266,10 @@ def test_scene_draws_the_track_of_the_deployed_model(
     """After the deploy (first test), the scene reads the deployed model's
     position subscribers (track_lat, track_lon) and draws their values."""
     h = people["scientist"]
-    assert live.put("/api/scene/usv/colour", headers=h,
-                    json={"subscriber": "water_temp"}).status_code == 204
+    assert (
+        live.put("/api/scene/usv/colour", headers=h, json={"subscriber": "water_temp"}).status_code
+        == 204
+    )
     deadline = time.monotonic() + 15
     while True:
         scene = live.get("/api/scene", headers=h).json()
@@ -256,22 +291,33 @@ def test_backfill_routes_and_roles(live: TestClient, people: dict[str, Headers])
     operator caps and cancels; the other roles may not."""
     sci, op = people["scientist"], people["operator"]
     body = {"subscriber": "sub_5", "gaps": True}
-    assert live.post("/api/drones/usv/backfill", headers=people["designer"],
-                     json=body).status_code == 403
-    assert live.post("/api/drones/usv/backfill", headers=sci,
-                     json={"subscriber": "sub_5"}).status_code == 422
+    assert (
+        live.post("/api/drones/usv/backfill", headers=people["designer"], json=body).status_code
+        == 403
+    )
+    assert (
+        live.post("/api/drones/usv/backfill", headers=sci, json={"subscriber": "sub_5"}).status_code
+        == 422
+    )
     started = live.post("/api/drones/usv/backfill", headers=sci, json=body).json()
     assert started["status"] in ("RUNNING", "DONE"), started
     job = started["id"]
     p = live.get(f"/api/drones/usv/backfill/{job}", headers=sci).json()
     assert p["id"] == job and p["windows_total"] >= p["windows_done"] >= 0
-    assert live.post(f"/api/drones/usv/backfill/{job}/cap", headers=sci,
-                     json={"rate_bps": 100}).status_code == 403
-    capped = live.post(f"/api/drones/usv/backfill/{job}/cap", headers=op,
-                       json={"rate_bps": 100}).json()
+    assert (
+        live.post(
+            f"/api/drones/usv/backfill/{job}/cap", headers=sci, json={"rate_bps": 100}
+        ).status_code
+        == 403
+    )
+    capped = live.post(
+        f"/api/drones/usv/backfill/{job}/cap", headers=op, json={"rate_bps": 100}
+    ).json()
     assert capped["id"] == job
-    assert live.delete(f"/api/drones/usv/backfill/{job}",
-                       headers=people["integrator"]).status_code == 403
+    assert (
+        live.delete(f"/api/drones/usv/backfill/{job}", headers=people["integrator"]).status_code
+        == 403
+    )
     gone = live.delete(f"/api/drones/usv/backfill/{job}", headers=op).json()
     assert gone["status"] in ("CANCELLED", "DONE"), gone
     unknown = live.get("/api/drones/usv/backfill/999999", headers=sci).json()
@@ -288,8 +334,11 @@ def test_drone_wide_fill_gaps_by_the_operator_and_the_scientist_at_once(
     jobs = []
     for who in ("operator", "scientist"):
         for name in names:
-            p = live.post("/api/drones/usv/backfill", headers=people[who],
-                          json={"subscriber": name, "gaps": True}).json()
+            p = live.post(
+                "/api/drones/usv/backfill",
+                headers=people[who],
+                json={"subscriber": name, "gaps": True},
+            ).json()
             assert p["status"] in ("RUNNING", "DONE"), (who, name, p)
             jobs.append((who, p["id"]))
     deadline = time.monotonic() + 60
@@ -313,8 +362,11 @@ def test_saves_are_announced_to_the_project_watchers(
 ) -> None:
     """Everyone with a project open hears of a save over the stream socket."""
     admin = people["admin"]
-    pid = live.post("/api/projects", headers=admin,
-                    json={"name": "watched", "model": {"text": DEMO.read_text()}}).json()["id"]
+    pid = live.post(
+        "/api/projects",
+        headers=admin,
+        json={"name": "watched", "model": {"text": DEMO.read_text()}},
+    ).json()["id"]
     model = live.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
     token = people["scientist"]["Authorization"].split()[1]
     with live.websocket_connect("ws://127.0.0.1/api/drones/usv/stream") as ws:
@@ -324,14 +376,25 @@ def test_saves_are_announced_to_the_project_watchers(
         assert "project id" in _receive_until(ws, lambda m: m["type"] == "error")["message"]
         ws.send_json({"op": "watch", "project": pid, "id": 7})
         assert _receive_until(ws, lambda m: m["type"] == "watching") == {
-            "type": "watching", "project": pid, "id": 7}
+            "type": "watching",
+            "project": pid,
+            "id": 7,
+        }
         model["subscribers"][0]["periodS"] = "4.0"
-        saved = live.put(f"/api/projects/{pid}/model", headers=people["scientist"],
-                         json={"model": model, "base_revision": 1, "message": "slower"})
+        saved = live.put(
+            f"/api/projects/{pid}/model",
+            headers=people["scientist"],
+            json={"model": model, "base_revision": 1, "message": "slower"},
+        )
         assert saved.status_code == 200, saved.text
         event = _receive_until(ws, lambda m: m["type"] == "saved")
-        assert event == {"type": "saved", "project": pid, "revision": 2,
-                         "author": "scientist", "message": "slower"}
+        assert event == {
+            "type": "saved",
+            "project": pid,
+            "revision": 2,
+            "author": "scientist",
+            "message": "slower",
+        }
         ws.send_json({"op": "unwatch", "project": pid})
         _receive_until(ws, lambda m: m["type"] == "unwatched")
     assert live.app.state.modd.project_events.watchers(pid) == 0  # type: ignore[attr-defined]

@@ -16,11 +16,11 @@ from .conftest import ADMIN_PASSWORD
 
 
 def test_login_answers_with_every_worker_thread_taken(tmp_path: Path) -> None:
-    settings = Settings(data_dir=tmp_path, zenoh_enabled=False,
-                        initial_admin_password=ADMIN_PASSWORD)
+    settings = Settings(
+        data_dir=tmp_path, zenoh_enabled=False, initial_admin_password=ADMIN_PASSWORD
+    )
     holders = [object() for _ in range(4)]
-    with TestClient(create_app(settings, out=io.StringIO()),
-                    base_url="http://127.0.0.1") as c:
+    with TestClient(create_app(settings, out=io.StringIO()), base_url="http://127.0.0.1") as c:
         portal = c.portal
         assert portal is not None
         limiter = portal.call(to_thread.current_default_thread_limiter)
@@ -40,8 +40,11 @@ def test_login_answers_with_every_worker_thread_taken(tmp_path: Path) -> None:
         def ask(name: str, method: str, url: str, **kw: object) -> None:
             answers[name] = c.request(method, url, **kw).status_code  # type: ignore[arg-type]
 
-        login = threading.Thread(target=ask, args=("login", "POST", "/api/auth/login"), kwargs={
-            "json": {"username": "admin", "password": ADMIN_PASSWORD}})
+        login = threading.Thread(
+            target=ask,
+            args=("login", "POST", "/api/auth/login"),
+            kwargs={"json": {"username": "admin", "password": ADMIN_PASSWORD}},
+        )
         queued = threading.Thread(target=ask, args=("projects", "GET", "/api/projects"))
         try:
             queued.start()

@@ -24,16 +24,20 @@ LIMIT = 10
 def _attempt(base: str, i: int) -> int:
     # a source address of its own: 127.0.x.y (all loopback, all one client)
     source = f"127.0.{1 + i // 250}.{1 + i % 250}"
-    with httpx.Client(transport=httpx.HTTPTransport(local_address=source),
-                      timeout=120) as c:
+    with httpx.Client(transport=httpx.HTTPTransport(local_address=source), timeout=120) as c:
         r = c.post(f"{base}/api/auth/login", json={"username": "admin", "password": "wrong"})
         return r.status_code
 
 
 def test_200_concurrent_wrong_logins_from_rotated_addresses(tmp_path: Path) -> None:
-    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
-                        initial_admin_password=ADMIN_PASSWORD, scene_port=None,
-                        login_limit_account=LIMIT, login_limit_address=10**6)
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        initial_admin_password=ADMIN_PASSWORD,
+        scene_port=None,
+        login_limit_account=LIMIT,
+        login_limit_address=10**6,
+    )
     with serve(settings) as base, ThreadPoolExecutor(64) as pool:
         codes = list(pool.map(lambda i: _attempt(base, i), range(200)))
     assert set(codes) <= {401, 429}, codes
@@ -42,16 +46,25 @@ def test_200_concurrent_wrong_logins_from_rotated_addresses(tmp_path: Path) -> N
 
 
 def test_rotated_loopback_addresses_are_one_client(tmp_path: Path) -> None:
-    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
-                        initial_admin_password=ADMIN_PASSWORD, scene_port=None,
-                        login_limit_account=10**6, login_limit_address=5)
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        initial_admin_password=ADMIN_PASSWORD,
+        scene_port=None,
+        login_limit_account=10**6,
+        login_limit_address=5,
+    )
     with serve(settings) as base:
         codes = []
         for i in range(8):  # a new account name and a new source address each time
-            with httpx.Client(transport=httpx.HTTPTransport(local_address=f"127.0.9.{i + 1}"),
-                              timeout=60) as c:
-                codes.append(c.post(f"{base}/api/auth/login",
-                                    json={"username": f"u{i}", "password": "x"}).status_code)
+            with httpx.Client(
+                transport=httpx.HTTPTransport(local_address=f"127.0.9.{i + 1}"), timeout=60
+            ) as c:
+                codes.append(
+                    c.post(
+                        f"{base}/api/auth/login", json={"username": f"u{i}", "password": "x"}
+                    ).status_code
+                )
     assert codes == [401] * 5 + [429] * 3, codes
 
 

@@ -28,8 +28,11 @@ def test_create_read_and_versions(client: TestClient, admin: Headers, scenario1:
     assert client.get(f"/api/projects/{pid}", headers=admin).json()["head_revision"] == 1
     model = got["model"]
     model["subscribers"][0]["periodS"] = "4"
-    r = client.put(f"/api/projects/{pid}/model", headers=admin,
-                   json={"base_revision": 1, "model": model, "message": "slower"})
+    r = client.put(
+        f"/api/projects/{pid}/model",
+        headers=admin,
+        json={"base_revision": 1, "model": model, "message": "slower"},
+    )
     assert r.status_code == 200 and r.json()["revision"] == 2
     versions = client.get(f"/api/projects/{pid}/versions", headers=admin).json()
     assert [(v["revision"], v["message"]) for v in versions] == [(2, "slower"), (1, "created")]
@@ -45,11 +48,16 @@ def test_stale_save_gets_409_with_current_revision(
     pid = _create(client, admin, scenario1)
     model = client.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
     first = dict(model, link={"maxBuffer": 500})
-    assert client.put(f"/api/projects/{pid}/model", headers=admin,
-                      json={"base_revision": 1, "model": first}).status_code == 200
+    assert (
+        client.put(
+            f"/api/projects/{pid}/model", headers=admin, json={"base_revision": 1, "model": first}
+        ).status_code
+        == 200
+    )
     second = dict(model, link={"maxBuffer": 400})
-    r = client.put(f"/api/projects/{pid}/model", headers=admin,
-                   json={"base_revision": 1, "model": second})
+    r = client.put(
+        f"/api/projects/{pid}/model", headers=admin, json={"base_revision": 1, "model": second}
+    )
     assert r.status_code == 409
     assert r.json()["current_revision"] == 2
     head = client.get(f"/api/projects/{pid}/model", headers=admin).json()
@@ -59,8 +67,9 @@ def test_stale_save_gets_409_with_current_revision(
 def test_syntax_error_is_located(client: TestClient, admin: Headers, scenario1: str) -> None:
     pid = _create(client, admin, scenario1)
     broken = scenario1.replace("Publishers {", "Publishers {{")
-    r = client.put(f"/api/projects/{pid}/model", headers=admin,
-                   json={"base_revision": 1, "text": broken})
+    r = client.put(
+        f"/api/projects/{pid}/model", headers=admin, json={"base_revision": 1, "text": broken}
+    )
     assert r.status_code == 422
     diag = r.json()["diagnostics"][0]
     assert diag["severity"] == "error" and diag["line"] > 1 and diag["col"] >= 1
@@ -76,7 +85,7 @@ def test_text_diagnostics_reach_the_client_with_their_end(
     assert len(diags) == 1, r.json()
     d = diags[0]
     line = bad.splitlines()[d["line"] - 1]
-    assert d["end_line"] == d["line"] and line[d["col"] - 1:d["end_col"] - 1] == "AVERAGED"
+    assert d["end_line"] == d["line"] and line[d["col"] - 1 : d["end_col"] - 1] == "AVERAGED"
 
 
 def test_invalid_model_is_saved_with_pointed_diagnostics(
@@ -85,8 +94,11 @@ def test_invalid_model_is_saved_with_pointed_diagnostics(
     pid = _create(client, admin, scenario1)
     model = client.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
     model["subscribers"][1]["aggregation"] = "MEDIAN"
-    r = client.put(f"/api/projects/{pid}/model", headers=admin,
-                   json={"base_revision": 1, "model": model, "message": "wip"})
+    r = client.put(
+        f"/api/projects/{pid}/model",
+        headers=admin,
+        json={"base_revision": 1, "model": model, "message": "wip"},
+    )
     assert r.status_code == 200  # work in progress is never lost
     body = r.json()
     assert body["valid"] is False
@@ -98,11 +110,13 @@ def test_text_save_keeps_layout(client: TestClient, admin: Headers, scenario1: s
     pid = _create(client, admin, scenario1)
     model = client.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
     model["layout"] = {"nodes": {"drone": {"x": 1.5, "y": 2}}}
-    client.put(f"/api/projects/{pid}/model", headers=admin,
-               json={"base_revision": 1, "model": model})
+    client.put(
+        f"/api/projects/{pid}/model", headers=admin, json={"base_revision": 1, "model": model}
+    )
     edited = scenario1.replace("2.0, AVERAGE", "4.0, AVERAGE")
-    r = client.put(f"/api/projects/{pid}/model", headers=admin,
-                   json={"base_revision": 2, "text": edited})
+    r = client.put(
+        f"/api/projects/{pid}/model", headers=admin, json={"base_revision": 2, "text": edited}
+    )
     assert r.status_code == 200
     assert r.json()["model"]["layout"] == model["layout"]
     assert r.json()["model"]["subscribers"][0]["periodS"] == "4.0"
@@ -111,8 +125,12 @@ def test_text_save_keeps_layout(client: TestClient, admin: Headers, scenario1: s
 def test_import_and_export_both_notations(
     client: TestClient, user_factory: Callable[..., Headers], admin: Headers, scenario1: str
 ) -> None:
-    r = client.post("/api/projects/import", params={"name": "imported", "format": "modd"},
-                    headers={**admin, "Content-Type": "text/plain"}, content=scenario1.encode())
+    r = client.post(
+        "/api/projects/import",
+        params={"name": "imported", "format": "modd"},
+        headers={**admin, "Content-Type": "text/plain"},
+        content=scenario1.encode(),
+    )
     assert r.status_code == 201, r.text
     pid = r.json()["id"]
     text = client.get(f"/api/projects/{pid}/export?format=modd", headers=admin)
@@ -121,28 +139,42 @@ def test_import_and_export_both_notations(
     assert load_text(text.text, "x.modd").model == load_text(scenario1, "s.modd").model
     js = client.get(f"/api/projects/{pid}/export?format=json", headers=admin)
     doc: dict[str, Any] = json.loads(js.text)
-    r = client.post("/api/projects/import", params={"name": "again", "format": "json"},
-                    headers={**admin, "Content-Type": "application/json"}, content=js.content)
+    r = client.post(
+        "/api/projects/import",
+        params={"name": "again", "format": "json"},
+        headers={**admin, "Content-Type": "application/json"},
+        content=js.content,
+    )
     assert r.status_code == 201
     again = client.get(f"/api/projects/{r.json()['id']}/model", headers=admin).json()["model"]
     assert again == doc
-    bad = client.post("/api/projects/import", params={"name": "bad", "format": "json"},
-                      headers=admin, content=b"{not json")
+    bad = client.post(
+        "/api/projects/import",
+        params={"name": "bad", "format": "json"},
+        headers=admin,
+        content=b"{not json",
+    )
     assert bad.status_code == 422
     assert bad.json()["diagnostics"][0]["line"] == 1
-    binary = client.post("/api/projects/import", params={"name": "bin"}, headers=admin,
-                         content=b"\xff\xfe\x00")
+    binary = client.post(
+        "/api/projects/import", params={"name": "bin"}, headers=admin, content=b"\xff\xfe\x00"
+    )
     assert binary.status_code == 422
-    dup = client.post("/api/projects/import", params={"name": "again", "format": "json"},
-                      headers=admin, content=js.content)
+    dup = client.post(
+        "/api/projects/import",
+        params={"name": "again", "format": "json"},
+        headers=admin,
+        content=js.content,
+    )
     assert dup.status_code == 409
 
 
 def test_validate_endpoint(client: TestClient, admin: Headers, scenario1: str) -> None:
     ok = client.post("/api/validate", headers=admin, json={"text": scenario1}).json()
     assert ok["ok"] and ok["model"]["drone"]["name"] == "usv"
-    bad = client.post("/api/validate", headers=admin,
-                      json={"text": scenario1.replace("MIN", "MEAN")}).json()
+    bad = client.post(
+        "/api/validate", headers=admin, json={"text": scenario1.replace("MIN", "MEAN")}
+    ).json()
     assert not bad["ok"]
     d = bad["diagnostics"][0]
     assert "MEAN" in d["message"] and d["line"] and d["pointer"].startswith("/subscribers/")
@@ -169,17 +201,23 @@ def test_import_collector_in_windows_1252_and_export_back(
 ) -> None:
     """A file of the original tool, saved by Eclipse in windows-1252, imports;
     the export for the original tool loads back to the same model."""
-    text = ("// Mission de température – 25 °C\n"
-            + dumps(load_text(scenario1, "s.modd").model or {}, "modd"))
-    text = "DataCollector {\n" + text.replace('PubBroker(', 'PubBroker broker(').replace(
-        'SubBroker(', 'SubBroker base(') + "}\n"
-    r = client.post("/api/projects/import", params={"name": "original", "format": "modd"},
-                    headers={**admin, "Content-Type": "text/plain"},
-                    content=text.encode("cp1252"))
+    text = "// Mission de température – 25 °C\n" + dumps(
+        load_text(scenario1, "s.modd").model or {}, "modd"
+    )
+    text = (
+        "DataCollector {\n"
+        + text.replace("PubBroker(", "PubBroker broker(").replace("SubBroker(", "SubBroker base(")
+        + "}\n"
+    )
+    r = client.post(
+        "/api/projects/import",
+        params={"name": "original", "format": "modd"},
+        headers={**admin, "Content-Type": "text/plain"},
+        content=text.encode("cp1252"),
+    )
     assert r.status_code == 201, r.text
     pid = r.json()["id"]
-    out = client.get(f"/api/projects/{pid}/export", params={"format": "collector"},
-                     headers=admin)
+    out = client.get(f"/api/projects/{pid}/export", params={"format": "collector"}, headers=admin)
     assert out.status_code == 200
     assert out.text.startswith("DataCollector {")
     back = load_text(out.text, "back.collector").model

@@ -14,7 +14,10 @@ from .conftest import Headers
 
 
 def test_scenario1_plan_is_the_planners(
-    client: TestClient, admin: Headers, scenarios_dir: Path, scenario1: str,
+    client: TestClient,
+    admin: Headers,
+    scenarios_dir: Path,
+    scenario1: str,
     expected: dict[str, Any],
 ) -> None:
     r = client.post("/api/plan", headers=admin, json={"text": scenario1})
@@ -42,8 +45,9 @@ def test_scenario2_with_the_milp(
 def test_bad_model_gives_diagnostics_not_a_plan(
     client: TestClient, admin: Headers, scenario1: str
 ) -> None:
-    body = client.post("/api/plan", headers=admin,
-                       json={"text": scenario1.replace("2.0, AVERAGE", "2.0, MEDIAN")}).json()
+    body = client.post(
+        "/api/plan", headers=admin, json={"text": scenario1.replace("2.0, AVERAGE", "2.0, MEDIAN")}
+    ).json()
     assert body["ok"] is False and body["plan"] is None
     assert body["diagnostics"][0]["pointer"] == "/subscribers/0/aggregation"
     syntax = client.post("/api/plan", headers=admin, json={"text": "Drone {"}).json()
@@ -64,8 +68,9 @@ def test_infeasibility_is_reported(client: TestClient, admin: Headers, scenario1
 
 
 def test_plan_of_a_stored_revision(client: TestClient, admin: Headers, scenario1: str) -> None:
-    pid = client.post("/api/projects", headers=admin,
-                      json={"name": "p", "model": {"text": scenario1}}).json()["id"]
+    pid = client.post(
+        "/api/projects", headers=admin, json={"name": "p", "model": {"text": scenario1}}
+    ).json()["id"]
     body = client.get(f"/api/projects/{pid}/plan", headers=admin).json()
     assert body["plan"]["buffer_sizes"]["usv.accelerometer.accel_z"] == 6
     assert client.get("/api/plan").status_code == 405
@@ -78,6 +83,7 @@ def test_bodies_that_are_not_a_model_input_get_fastapis_422(
     """The body is read in the planning worker, not by FastAPI on the event
     loop: the answers to bodies that are not a ModelInput keep FastAPI's
     422 form (``detail`` items with ``loc`` from ``body``)."""
+
     def post(**kw: Any) -> Any:
         return client.post("/api/plan", headers={**admin, **kw.pop("headers", {})}, **kw)
 

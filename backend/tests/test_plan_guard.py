@@ -29,17 +29,31 @@ def big_model(n_topics: int, n_subs: int) -> dict[str, Any]:
     topics = [f"d.s{i}.v{j}" for i in range(n_topics // 10) for j in range(10)]
     return {
         "schemaVersion": "1.0",
-        "drone": {"name": "d", "sensors": [
-            {"name": f"s{i}", "variables": [{"name": f"v{j}", "unit": "NONE"} for j in range(10)]}
-            for i in range(n_topics // 10)]},
+        "drone": {
+            "name": "d",
+            "sensors": [
+                {
+                    "name": f"s{i}",
+                    "variables": [{"name": f"v{j}", "unit": "NONE"} for j in range(10)],
+                }
+                for i in range(n_topics // 10)
+            ],
+        },
         "pubBroker": {"endpoint": {"host": "127.0.0.1", "port": 7171}, "logPath": "/tmp/l"},
         "subBroker": {"endpoint": {"host": "127.0.0.1", "port": 7272}, "configPath": "/tmp/c"},
-        "publishers": [{"name": f"p{i}", "periodS": "0.01", "topics": topics[10 * i:10 * i + 10]}
-                       for i in range(n_topics // 10)],
-        "subscribers": [{"name": f"sub{k}", "topic": rng.choice(topics),
-                         "periodS": rng.choice(["0.25", "0.5", "1.0", "0.3", "0.7"]),
-                         "aggregation": rng.choice(["MIN", "MAX", "AVERAGE"])}
-                        for k in range(n_subs)],
+        "publishers": [
+            {"name": f"p{i}", "periodS": "0.01", "topics": topics[10 * i : 10 * i + 10]}
+            for i in range(n_topics // 10)
+        ],
+        "subscribers": [
+            {
+                "name": f"sub{k}",
+                "topic": rng.choice(topics),
+                "periodS": rng.choice(["0.25", "0.5", "1.0", "0.3", "0.7"]),
+                "aggregation": rng.choice(["MIN", "MAX", "AVERAGE"]),
+            }
+            for k in range(n_subs)
+        ],
     }
 
 
@@ -58,11 +72,41 @@ def test_over_the_time_budget_is_a_diagnostic_and_the_pool_recovers(
 
 def test_the_planners_bound_is_located(client: TestClient, admin: Headers) -> None:
     model = big_model(30, 0)
-    primes = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71, 73, 79,
-              83, 89]
+    primes = [
+        2,
+        3,
+        5,
+        7,
+        11,
+        13,
+        17,
+        19,
+        23,
+        29,
+        31,
+        37,
+        41,
+        43,
+        47,
+        53,
+        59,
+        61,
+        67,
+        71,
+        73,
+        79,
+        83,
+        89,
+    ]
     model["subscribers"] = [
-        {"name": f"sub{i}", "topic": f"d.s0.v{i % 10}", "aggregation": "MAX",
-         "periodS": f"{primes[i] * primes[(i + 1) % 24] / 100:.2f}"} for i in range(24)]
+        {
+            "name": f"sub{i}",
+            "topic": f"d.s0.v{i % 10}",
+            "aggregation": "MAX",
+            "periodS": f"{primes[i] * primes[(i + 1) % 24] / 100:.2f}",
+        }
+        for i in range(24)
+    ]
     body = client.post("/api/plan", headers=admin, json={"model": model}).json()
     assert not body["ok"]
     pointers = {d["pointer"] for d in body["diagnostics"]}

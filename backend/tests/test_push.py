@@ -22,11 +22,15 @@ DEMO = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.mo
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    settings = Settings(data_dir=tmp_path_factory.mktemp("push"), zenoh_enabled=False,
-                        initial_admin_password=ADMIN_PASSWORD)
+    settings = Settings(
+        data_dir=tmp_path_factory.mktemp("push"),
+        zenoh_enabled=False,
+        initial_admin_password=ADMIN_PASSWORD,
+    )
     port = free_port()
-    config = uvicorn.Config(create_app(settings, out=io.StringIO()), host="127.0.0.1",
-                            port=port, log_level="warning")
+    config = uvicorn.Config(
+        create_app(settings, out=io.StringIO()), host="127.0.0.1", port=port, log_level="warning"
+    )
     srv = uvicorn.Server(config)
     thread = threading.Thread(target=srv.run, daemon=True)
     thread.start()
@@ -44,8 +48,8 @@ def push(server: str, *args: str) -> int:
 
 
 def test_push_creates_then_revises_only_on_change(
-        server: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-        capsys: pytest.CaptureFixture[str]) -> None:
+    server: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     monkeypatch.setenv("MODD_PASSWORD", ADMIN_PASSWORD)
     model = tmp_path / "mission.modd"
     model.write_text(DEMO.read_text())
@@ -59,8 +63,8 @@ def test_push_creates_then_revises_only_on_change(
 
 
 def test_push_reports_refusals_with_where(
-        server: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-        capsys: pytest.CaptureFixture[str]) -> None:
+    server: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     monkeypatch.setenv("MODD_PASSWORD", "not-the-password")
     assert push(server, str(DEMO), "--project", "x") == 1
     assert "HTTP 401" in capsys.readouterr().err
@@ -80,8 +84,9 @@ def test_push_reports_refusals_with_where(
     assert "no password" in capsys.readouterr().err
 
 
-def test_push_to_nothing_says_so(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                 capsys: pytest.CaptureFixture[str]) -> None:
+def test_push_to_nothing_says_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     port = free_port()  # closed again: nothing listens there
     monkeypatch.setenv("MODD_PASSWORD", "x")
     assert push(f"http://127.0.0.1:{port}", str(DEMO)) == 1
@@ -89,8 +94,8 @@ def test_push_to_nothing_says_so(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 
 
 def test_push_if_new_keeps_an_existing_project(
-        server: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-        capsys: pytest.CaptureFixture[str]) -> None:
+    server: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     """`make run` restarted: the user's revisions stay the head."""
     monkeypatch.setenv("MODD_PASSWORD", ADMIN_PASSWORD)
     model = tmp_path / "restart.modd"

@@ -43,8 +43,12 @@ def answering(host: str, answer: Answer, seen: list[dict[str, str]]) -> Iterator
         server.server_close()
 
 
-def _send(h: http.server.BaseHTTPRequestHandler, status: int, body: bytes,
-          headers: dict[str, str] | None = None) -> None:
+def _send(
+    h: http.server.BaseHTTPRequestHandler,
+    status: int,
+    body: bytes,
+    headers: dict[str, str] | None = None,
+) -> None:
     h.send_response(status)
     for k, v in (headers or {}).items():
         h.send_header(k, v)
@@ -53,11 +57,13 @@ def _send(h: http.server.BaseHTTPRequestHandler, status: int, body: bytes,
     h.wfile.write(body)
 
 
-def test_a_redirect_elsewhere_gets_no_token(monkeypatch: pytest.MonkeyPatch,
-                                             capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_redirect_elsewhere_gets_no_token(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     monkeypatch.setenv("MODD_PASSWORD", "pw")
     elsewhere: list[dict[str, str]] = []
     with answering("127.0.0.2", lambda h: _send(h, 200, b"[]"), elsewhere) as other:
+
         def workbench(h: http.server.BaseHTTPRequestHandler) -> None:
             if h.path == "/api/auth/login":
                 _send(h, 200, json.dumps({"token": "secret-token"}).encode())
@@ -72,8 +78,9 @@ def test_a_redirect_elsewhere_gets_no_token(monkeypatch: pytest.MonkeyPatch,
 
 
 @pytest.mark.parametrize("body", [b"<html>a login page</html>", b'{"ok": true}', b"[1, 2]"])
-def test_an_unexpected_answer_is_one_line(body: bytes, monkeypatch: pytest.MonkeyPatch,
-                                          capsys: pytest.CaptureFixture[str]) -> None:
+def test_an_unexpected_answer_is_one_line(
+    body: bytes, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     monkeypatch.setenv("MODD_PASSWORD", "pw")
     with answering("127.0.0.1", lambda h: _send(h, 200, body), []) as base:
         assert modd(["push", str(DEMO), "--server", base]) == 1
@@ -87,6 +94,11 @@ def test_plain_http_to_another_machine_is_warned() -> None:
 
     assert plain_http_warning("http://10.1.2.3:8080") is not None
     assert plain_http_warning("http://base-station.lan") is not None
-    for fine in ("https://base-station.lan", "http://127.0.0.1:8080", "http://localhost:8080",
-                 "http://[::1]:8080", "http://127.5.5.5"):
+    for fine in (
+        "https://base-station.lan",
+        "http://127.0.0.1:8080",
+        "http://localhost:8080",
+        "http://[::1]:8080",
+        "http://127.5.5.5",
+    ):
         assert plain_http_warning(fine) is None, fine

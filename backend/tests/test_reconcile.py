@@ -41,12 +41,27 @@ class Backend:
     def __init__(self, tmp: Path, station: Station, database_url: str | None = None) -> None:
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
-        self.cmd = [str(Path(sys.executable).with_name("modd-backend")), "--port", str(self.port),
-                    "--data", str(tmp / "data"), "--zenoh-connect", station.zenoh,
-                    "--zenoh-credentials", str(station.credentials.cred_file("backend")),
-                    "--deploy-key", str(station.credentials.deploy_key_file),
-                    "--deploy-timeout", "3", "--scene-port", "-1", "--foxglove-port", "0",
-                    "--frontend", str(tmp / "nofrontend")]
+        self.cmd = [
+            str(Path(sys.executable).with_name("modd-backend")),
+            "--port",
+            str(self.port),
+            "--data",
+            str(tmp / "data"),
+            "--zenoh-connect",
+            station.zenoh,
+            "--zenoh-credentials",
+            str(station.credentials.cred_file("backend")),
+            "--deploy-key",
+            str(station.credentials.deploy_key_file),
+            "--deploy-timeout",
+            "3",
+            "--scene-port",
+            "-1",
+            "--foxglove-port",
+            "0",
+            "--frontend",
+            str(tmp / "nofrontend"),
+        ]
         if database_url:
             self.cmd += ["--database-url", database_url]
         self.log = tmp / "backend.log"
@@ -56,13 +71,20 @@ class Backend:
     def start(self) -> float:
         """Start and log in; the monotonic time it first answered."""
         with self.log.open("ab") as out:
-            self.proc = subprocess.Popen(self.cmd, stdout=out, stderr=subprocess.STDOUT,
-                                         env={**os.environ, "MODD_ADMIN_PASSWORD": PASSWORD})
+            self.proc = subprocess.Popen(
+                self.cmd,
+                stdout=out,
+                stderr=subprocess.STDOUT,
+                env={**os.environ, "MODD_ADMIN_PASSWORD": PASSWORD},
+            )
         deadline = time.monotonic() + 60
         while True:
             try:
-                r = httpx.post(f"{self.url}/api/auth/login",
-                               json={"username": "admin", "password": PASSWORD}, timeout=5)
+                r = httpx.post(
+                    f"{self.url}/api/auth/login",
+                    json={"username": "admin", "password": PASSWORD},
+                    timeout=5,
+                )
                 break
             except httpx.TransportError:
                 assert self.proc.poll() is None, self.log.read_text()
@@ -122,30 +144,37 @@ def _wait(pred: Any, timeout_s: float, what: str) -> None:
 
 @pytest.mark.parametrize("database", ["sqlite", "postgresql"])
 def test_a_backend_killed_mid_deploy_settles_its_records_with_the_drone(
-        tmp_path: Path, station: Station, database: str, request: pytest.FixtureRequest) -> None:
+    tmp_path: Path, station: Station, database: str, request: pytest.FixtureRequest
+) -> None:
     url = None
     if database == "postgresql":  # the store several backends share (issue 23)
         pg = request.getfixturevalue("postgres_url")
         url = pg.rsplit("/", 1)[0] + "/reconcile"
-        subprocess.run(["psql", "--dbname", pg.replace("+psycopg", ""), "-c",
-                        "CREATE DATABASE reconcile"], check=True, capture_output=True)
+        subprocess.run(
+            ["psql", "--dbname", pg.replace("+psycopg", ""), "-c", "CREATE DATABASE reconcile"],
+            check=True,
+            capture_output=True,
+        )
     backend = Backend(tmp_path, station, url)
     backend.start()
     pubbroker, subbroker = station.procs[0], station.procs[1]
     try:
         model = copy.deepcopy(station.model)
-        pid = backend.call("POST", "/api/projects",
-                           json={"name": "mission", "model": {"model": model}}).json()["id"]
+        pid = backend.call(
+            "POST", "/api/projects", json={"name": "mission", "model": {"model": model}}
+        ).json()["id"]
         rev2 = copy.deepcopy(model)
         rev2["subscribers"][0]["periodS"] = "4"
-        r = backend.call("PUT", f"/api/projects/{pid}/model",
-                         json={"base_revision": 1, "model": rev2})
+        r = backend.call(
+            "PUT", f"/api/projects/{pid}/model", json={"base_revision": 1, "model": rev2}
+        )
         assert r.status_code == 200, r.text
         # revision 3 the PubBroker refuses: a topic it knows as float32 declared float64
         rev3 = copy.deepcopy(rev2)
         rev3["drone"]["sensors"][0]["variables"][0]["type"] = "float64"
-        r = backend.call("PUT", f"/api/projects/{pid}/model",
-                         json={"base_revision": 2, "model": rev3})
+        r = backend.call(
+            "PUT", f"/api/projects/{pid}/model", json={"base_revision": 2, "model": rev3}
+        )
         assert r.status_code == 200, r.text
 
         os.kill(pubbroker.p.pid, signal.SIGSTOP)  # CONFIG waits in its socket
@@ -154,8 +183,11 @@ def test_a_backend_killed_mid_deploy_settles_its_records_with_the_drone(
             assert subbroker.wait_log("deploy of revision 2 signed", 10), subbroker.log()
             _post_in_background(backend, f"/api/projects/{pid}/deployments", {"revision": 3})
             # (the SubBroker serves deploys one at a time: revision 3 waits for 2 there)
-            _wait(lambda: len(backend.call("GET", f"/api/projects/{pid}/deployments").json())
-                  == 2, 10, "the second deploy was not recorded")
+            _wait(
+                lambda: len(backend.call("GET", f"/api/projects/{pid}/deployments").json()) == 2,
+                10,
+                "the second deploy was not recorded",
+            )
             time.sleep(0.3)  # its query is on its way
             backend.kill9()
         finally:
@@ -169,8 +201,9 @@ def test_a_backend_killed_mid_deploy_settles_its_records_with_the_drone(
 
         _wait(settled, 10, "records still pending 10 s after the restart")
         took = time.monotonic() - up
-        rows = {d["revision"]: d for d in
-                backend.call("GET", f"/api/projects/{pid}/deployments").json()}
+        rows = {
+            d["revision"]: d for d in backend.call("GET", f"/api/projects/{pid}/deployments").json()
+        }
         assert rows[2]["status"] == "acked", rows[2]
         assert rows[3]["status"] == "failed", rows[3]
         assert "the drone runs revision 2" in rows[3]["error"], rows[3]

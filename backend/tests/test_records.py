@@ -18,13 +18,30 @@ def test_records_listed_and_downloaded(tmp_path: Path) -> None:
     rec = BaseRecord(tmp_path / "records", "usv")
     rec.begin("scenario1", 1_795_000_000_000_000_000)
     for i in range(4):
-        v = DeliveredValue("sub_5", "usv.a.z", "MIN", "0.25", "M", 1, i, i * 250, i * 250 + 250,
-                           -0.5, None, 9, backfilled=i == 2)
+        v = DeliveredValue(
+            "sub_5",
+            "usv.a.z",
+            "MIN",
+            "0.25",
+            "M",
+            1,
+            i,
+            i * 250,
+            i * 250 + 250,
+            -0.5,
+            None,
+            9,
+            backfilled=i == 2,
+        )
         rec.put("sub_5", v.to_json())
     rec.close()
     (tmp_path / "secret.mcap").write_bytes(b"x")
-    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
-                        initial_admin_password=ADMIN_PASSWORD, record_dir=tmp_path / "records")
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        initial_admin_password=ADMIN_PASSWORD,
+        record_dir=tmp_path / "records",
+    )
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         h = login(c, "admin", ADMIN_PASSWORD)
         files = c.get("/api/drones/usv/records", headers=h).json()

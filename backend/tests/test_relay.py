@@ -77,7 +77,8 @@ def test_diff_matches_named_items_by_name() -> None:
     ]
     assert diff({"x": [1, 2]}, {"x": [1]}) == [{"op": "remove", "pointer": "/x/1", "before": 2}]
     assert diff({"a/b": 1}, {"a/b": True}) == [
-        {"op": "replace", "pointer": "/a~1b", "before": 1, "after": True}]
+        {"op": "replace", "pointer": "/a~1b", "before": 1, "after": True}
+    ]
 
 
 def test_role_ownership_rules() -> None:

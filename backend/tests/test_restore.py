@@ -34,8 +34,9 @@ def copy(tmp_path: Path) -> Path:
     settings = _settings(tmp_path / "origin")
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         h = login(c, "admin", ADMIN_PASSWORD)
-        assert c.post("/api/projects", headers=h, json={
-            "name": "kept", "model": {"text": "model m"}}).status_code in (201, 422)
+        assert c.post(
+            "/api/projects", headers=h, json={"name": "kept", "model": {"text": "model m"}}
+        ).status_code in (201, 422)
     out = tmp_path / "store.backup"
     backup(settings.effective_database_url, out)
     return out
@@ -50,19 +51,25 @@ def _hostile(copy: Path, tmp_path: Path, sql: str) -> Path:
     return bad
 
 
-@pytest.mark.parametrize("case", ["empty", "not sqlite", "other schema", "trigger", "view",
-                                  "unknown migration"])
+@pytest.mark.parametrize(
+    "case", ["empty", "not sqlite", "other schema", "trigger", "view", "unknown migration"]
+)
 def test_a_bad_copy_is_refused_and_the_running_store_kept(
-        case: str, copy: Path, tmp_path: Path) -> None:
+    case: str, copy: Path, tmp_path: Path
+) -> None:
     bad = {
         "empty": lambda: _write(tmp_path / "empty.backup", b""),
         "not sqlite": lambda: _write(tmp_path / "x.backup", b"PGDMP" + bytes(range(256)) * 8),
         "other schema": lambda: _hostile(copy, tmp_path, "CREATE TABLE notes (x TEXT);"),
-        "trigger": lambda: _hostile(copy, tmp_path, "CREATE TRIGGER t AFTER INSERT ON users "
-                                    "BEGIN DELETE FROM projects; END;"),
+        "trigger": lambda: _hostile(
+            copy,
+            tmp_path,
+            "CREATE TRIGGER t AFTER INSERT ON users BEGIN DELETE FROM projects; END;",
+        ),
         "view": lambda: _hostile(copy, tmp_path, "CREATE VIEW v AS SELECT * FROM users;"),
-        "unknown migration": lambda: _hostile(copy, tmp_path,
-                                              "UPDATE alembic_version SET version_num='9999';"),
+        "unknown migration": lambda: _hostile(
+            copy, tmp_path, "UPDATE alembic_version SET version_num='9999';"
+        ),
     }[case]()
     settings = _settings(tmp_path / "live")
     with TestClient(create_app(settings, out=io.StringIO())) as c:
@@ -89,32 +96,51 @@ def test_restore_revokes_every_session(tmp_path: Path) -> None:
         restore(settings.effective_database_url, out)
         assert c.get("/api/auth/me", headers=before).status_code == 401  # not resurrected
         assert c.get("/api/auth/me", headers=during).status_code == 401  # revoked
-        assert c.get("/api/auth/me", headers=login(c, "admin", ADMIN_PASSWORD)
-                     ).status_code == 200
+        assert c.get("/api/auth/me", headers=login(c, "admin", ADMIN_PASSWORD)).status_code == 200
 
 
 def test_restore_into_a_new_directory_is_private(copy: Path, tmp_path: Path) -> None:
     data = tmp_path / "fresh" / "data"
-    res = subprocess.run([sys.executable, "-m", "modd_backend.cli", "restore", "--data",
-                          str(data), str(copy)], capture_output=True, text=True, timeout=120,
-                         preexec_fn=lambda: os.umask(0o022))  # an operator's usual umask
+    res = subprocess.run(
+        [sys.executable, "-m", "modd_backend.cli", "restore", "--data", str(data), str(copy)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        preexec_fn=lambda: os.umask(0o022),
+    )  # an operator's usual umask
     assert res.returncode == 0, res.stderr
     assert data.stat().st_mode & 0o777 == 0o700
     for f in data.iterdir():
         assert f.stat().st_mode & 0o077 == 0, f"{f} is readable by others"
-    res = subprocess.run([sys.executable, "-m", "modd_backend.cli", "restore", "--data",
-                          str(data), str(tmp_path / "nothing")], capture_output=True,
-                         text=True, timeout=120)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "modd_backend.cli",
+            "restore",
+            "--data",
+            str(data),
+            str(tmp_path / "nothing"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert res.returncode != 0 and "no backup at" in res.stderr
 
 
 def _psql(url: str, sql: str) -> None:
-    subprocess.run(["psql", "--dbname", url.replace("+psycopg", ""), "-v", "ON_ERROR_STOP=1",
-                    "-c", sql], check=True, capture_output=True)
+    subprocess.run(
+        ["psql", "--dbname", url.replace("+psycopg", ""), "-v", "ON_ERROR_STOP=1", "-c", sql],
+        check=True,
+        capture_output=True,
+    )
 
 
-def test_a_hostile_postgresql_dump_runs_nothing(postgres_url: str,  # noqa: F811
-                                                tmp_path: Path) -> None:
+def test_a_hostile_postgresql_dump_runs_nothing(
+    postgres_url: str,  # noqa: F811
+    tmp_path: Path,
+) -> None:
     """A dump of this schema plus a function that runs a program on the
     server (called when its materialised view is refreshed, as pg_restore
     does): restoring it runs nothing and changes nothing. A clean dump
@@ -126,13 +152,19 @@ def test_a_hostile_postgresql_dump_runs_nothing(postgres_url: str,  # noqa: F811
         _psql(postgres_url, f"CREATE DATABASE {name}")
     hostile, target = f"{base}/hostile", f"{base}/target"
     for url in (hostile, target):
-        settings = Settings(data_dir=tmp_path / url.rsplit("/", 1)[1], database_url=url,
-                            zenoh_enabled=False, initial_admin_password=ADMIN_PASSWORD)
+        settings = Settings(
+            data_dir=tmp_path / url.rsplit("/", 1)[1],
+            database_url=url,
+            zenoh_enabled=False,
+            initial_admin_password=ADMIN_PASSWORD,
+        )
         with TestClient(create_app(settings, out=io.StringIO())) as c:
             login(c, "admin", ADMIN_PASSWORD)
     clean = tmp_path / "clean.dump"
     backup(hostile, clean)
-    _psql(hostile, f"""
+    _psql(
+        hostile,
+        f"""
         CREATE TABLE pwn_out (x text);
         CREATE FUNCTION pwn() RETURNS int LANGUAGE plpgsql AS $$
         BEGIN
@@ -141,7 +173,8 @@ def test_a_hostile_postgresql_dump_runs_nothing(postgres_url: str,  # noqa: F811
           END IF;
           RETURN 1;
         END $$;
-        CREATE MATERIALIZED VIEW pwn_view AS SELECT pwn() AS v;""")
+        CREATE MATERIALIZED VIEW pwn_view AS SELECT pwn() AS v;""",
+    )
     bad = tmp_path / "hostile.dump"
     backup(hostile, bad)
     with pytest.raises(SystemExit, match="nothing restored"):

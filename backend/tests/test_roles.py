@@ -75,8 +75,9 @@ def users(user_factory: Callable[..., Headers], admin: Headers) -> dict[str, Hea
 
 @pytest.fixture
 def project(client: TestClient, admin: Headers, scenario1: str) -> int:
-    r = client.post("/api/projects", headers=admin,
-                    json={"name": "matrix", "model": {"text": scenario1}})
+    r = client.post(
+        "/api/projects", headers=admin, json={"name": "matrix", "model": {"text": scenario1}}
+    )
     assert r.status_code == 201, r.text
     return int(r.json()["id"])
 
@@ -90,9 +91,15 @@ def test_model_edit_matrix(
         head = client.get(f"/api/projects/{project}/model", headers=users[role]).json()
         model = copy.deepcopy(head["model"])
         edit(model, i)
-        r = client.put(f"/api/projects/{project}/model", headers=users[role],
-                       json={"base_revision": head["revision"], "model": model,
-                             "message": f"{role} edits {part}"})
+        r = client.put(
+            f"/api/projects/{project}/model",
+            headers=users[role],
+            json={
+                "base_revision": head["revision"],
+                "model": model,
+                "message": f"{role} edits {part}",
+            },
+        )
         expected = 200 if role in allowed else 403
         assert r.status_code == expected, (role, part, r.text)
         if expected == 403 and role != "operator":  # an editor: told which part is whose
@@ -100,7 +107,9 @@ def test_model_edit_matrix(
 
 
 def test_mixed_edit_needs_every_owning_role(
-    client: TestClient, users: dict[str, Headers], project: int,
+    client: TestClient,
+    users: dict[str, Headers],
+    project: int,
     user_factory: Callable[..., Headers],
 ) -> None:
     head = client.get(f"/api/projects/{project}/model", headers=users["scientist"]).json()
@@ -124,8 +133,9 @@ def test_project_matrix(
         assert client.get(f"/api/projects/{project}/model", headers=h).status_code == 200
         empty = client.post("/api/projects", headers=h, json={"name": f"empty_{role}"})
         assert empty.status_code == (403 if role == "operator" else 201), role
-        full = client.post("/api/projects", headers=h,
-                           json={"name": f"full_{role}", "model": {"text": scenario1}})
+        full = client.post(
+            "/api/projects", headers=h, json={"name": f"full_{role}", "model": {"text": scenario1}}
+        )
         # A whole model spans every editing role's parts: only admin holds them all.
         assert full.status_code == (201 if role == "admin" else 403), role
     for role in ROLES:

@@ -22,37 +22,62 @@ from .conftest import ADMIN_PASSWORD, login
 PUBLIC = {("GET", "/api/health"), ("POST", "/api/auth/login")}
 #: Routes any logged-in user may use: their own session, and computations
 #: that store nothing.
-OWN_OR_STATELESS = {("POST", "/api/auth/logout"), ("PUT", "/api/auth/password"),
-                    ("POST", "/api/validate"), ("POST", "/api/print"), ("POST", "/api/plan")}
+OWN_OR_STATELESS = {
+    ("POST", "/api/auth/logout"),
+    ("PUT", "/api/auth/password"),
+    ("POST", "/api/validate"),
+    ("POST", "/api/print"),
+    ("POST", "/api/plan"),
+}
 UNSAFE = {"POST", "PUT", "PATCH", "DELETE"}
 
 
 @pytest.fixture(scope="module")
-def world(tmp_path_factory: pytest.TempPathFactory, scenarios_dir: Path
-          ) -> Iterator[dict[str, Any]]:
-    settings = Settings(data_dir=tmp_path_factory.mktemp("sweep") / "data",
-                        zenoh_enabled=False, initial_admin_password=ADMIN_PASSWORD,
-                        max_body_bytes=256 * 1024)
+def world(
+    tmp_path_factory: pytest.TempPathFactory, scenarios_dir: Path
+) -> Iterator[dict[str, Any]]:
+    settings = Settings(
+        data_dir=tmp_path_factory.mktemp("sweep") / "data",
+        zenoh_enabled=False,
+        initial_admin_password=ADMIN_PASSWORD,
+        max_body_bytes=256 * 1024,
+    )
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         admin = login(c, "admin", ADMIN_PASSWORD)
         text = (scenarios_dir / "scenario1.modd").read_text()
-        pid = c.post("/api/projects", headers=admin,
-                     json={"name": "p", "model": {"text": text}}).json()["id"]
+        pid = c.post(
+            "/api/projects", headers=admin, json={"name": "p", "model": {"text": text}}
+        ).json()["id"]
         users = {}
         for name, roles in (("nobody", []), ("victim", ["designer"])):
-            r = c.post("/api/users", headers=admin, json={
-                "username": name, "password": f"pw-{name}-12345", "roles": roles})
+            r = c.post(
+                "/api/users",
+                headers=admin,
+                json={"username": name, "password": f"pw-{name}-12345", "roles": roles},
+            )
             users[name] = r.json()["id"]
         openapi = c.app.openapi()  # type: ignore[attr-defined]
-        yield {"c": c, "admin": admin, "pid": pid, "users": users,
-               "nobody": login(c, "nobody", "pw-nobody-12345"),
-               "ops": _operations(openapi, pid, users["victim"])}
+        yield {
+            "c": c,
+            "admin": admin,
+            "pid": pid,
+            "users": users,
+            "nobody": login(c, "nobody", "pw-nobody-12345"),
+            "ops": _operations(openapi, pid, users["victim"]),
+        }
 
 
 def _operations(spec: dict[str, Any], pid: int, uid: int) -> list[tuple[str, str, bool]]:
-    values = {"project_id": str(pid), "user_id": str(uid), "drone": "usv",
-              "subscriber": "sub_1", "name": "x.mcap", "target": "cpp-driver",
-              "job_id": "1", "revision": "1"}
+    values = {
+        "project_id": str(pid),
+        "user_id": str(uid),
+        "drone": "usv",
+        "subscriber": "sub_1",
+        "name": "x.mcap",
+        "target": "cpp-driver",
+        "job_id": "1",
+        "revision": "1",
+    }
     out = []
     for path, ops in spec["paths"].items():
         for method, op in ops.items():
@@ -70,8 +95,11 @@ def _state(w: dict[str, Any]) -> Any:
     versions = c.get(f"/api/projects/{w['pid']}/versions", headers=admin).json()
     users = c.get("/api/users", headers=admin).json()
     projects = c.get("/api/projects", headers=admin).json()
-    return (len(versions), sorted((u["username"], tuple(u["roles"])) for u in users),
-            sorted(p["name"] for p in projects))
+    return (
+        len(versions),
+        sorted((u["username"], tuple(u["roles"])) for u in users),
+        sorted(p["name"] for p in projects),
+    )
 
 
 def _path_of(url: str, w: dict[str, Any]) -> str:
@@ -91,8 +119,10 @@ def test_no_route_answers_without_a_session(world: dict[str, Any]) -> None:
 
 def test_cookie_without_csrf_header_changes_nothing(world: dict[str, Any]) -> None:
     c = world["c"]
-    r = c.post("/api/auth/login", json={"username": "admin", "password": ADMIN_PASSWORD,
-                                        "session": "cookie"})
+    r = c.post(
+        "/api/auth/login",
+        json={"username": "admin", "password": ADMIN_PASSWORD, "session": "cookie"},
+    )
     cookie = r.cookies["modd_session"]
     c.cookies.clear()
     before = _state(world)
@@ -114,8 +144,11 @@ def test_a_user_without_a_role_changes_nothing(world: dict[str, Any]) -> None:
         "/api/projects": {"name": "q", "model": model["model"]},
         f"/api/projects/{world['pid']}/model": {"base_revision": 1, "model": model["model"]},
         f"/api/projects/{world['pid']}/deployments": {"revision": 1},
-        "/api/drones/usv/subscriptions": {"topic": "usv.a.b", "period_s": "1",
-                                          "aggregation": "MIN"},
+        "/api/drones/usv/subscriptions": {
+            "topic": "usv.a.b",
+            "period_s": "1",
+            "aggregation": "MIN",
+        },
         "/api/scene/usv/colour": {"subscriber": None},
     }
     for method, url, _ in world["ops"]:
@@ -133,11 +166,19 @@ def test_every_body_route_refuses_oversized_and_overdeep_bodies(world: dict[str,
     for method, url, has_body in world["ops"]:
         if not has_body:
             continue
-        big = c.request(method, url, content=b'{"x": "' + b"a" * 300_000 + b'"}',
-                        headers={**world["admin"], "Content-Type": "application/json"})
+        big = c.request(
+            method,
+            url,
+            content=b'{"x": "' + b"a" * 300_000 + b'"}',
+            headers={**world["admin"], "Content-Type": "application/json"},
+        )
         assert big.status_code == 413, (method, url, big.status_code)
-        nested = c.request(method, url, content=deep.encode(),
-                           headers={**world["admin"], "Content-Type": "application/json"})
+        nested = c.request(
+            method,
+            url,
+            content=deep.encode(),
+            headers={**world["admin"], "Content-Type": "application/json"},
+        )
         assert nested.status_code == 422 and "nested" in nested.json()["detail"], (method, url)
         assert "frame-ancestors 'none'" in nested.headers["content-security-policy"]
     assert _state(world) == before

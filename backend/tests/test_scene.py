@@ -12,19 +12,33 @@ from modd_contracts.types_gen import DeliveredValue
 
 def _v(value: float | None) -> DeliveredValue:
     """A whole delivered value (the contract's type: mypy checks its fields)."""
-    return DeliveredValue(subscriber="s", topic="usv.a.b", aggregation="LAST", period_s="1",
-                          unit="NONE", config_id=1, slot=0, start_ns=0, end_ns=1, value=value,
-                          count=None, delivered_ns=1, v=1)
+    return DeliveredValue(
+        subscriber="s",
+        topic="usv.a.b",
+        aggregation="LAST",
+        period_s="1",
+        unit="NONE",
+        config_id=1,
+        slot=0,
+        start_ns=0,
+        end_ns=1,
+        value=value,
+        count=None,
+        delivered_ns=1,
+        v=1,
+    )
 
 
 def test_roles_from_the_model() -> None:
-    model = {"subscribers": [
-        {"name": "a", "topic": "usv.autopilot.latitude"},
-        {"name": "b", "topic": "usv.autopilot.longitude"},
-        {"name": "c", "topic": "usv.autopilot.altitude"},
-        {"name": "d", "topic": "usv.autopilot.yaw"},
-        {"name": "e", "topic": "usv.ctd.conductivity"},
-    ]}
+    model = {
+        "subscribers": [
+            {"name": "a", "topic": "usv.autopilot.latitude"},
+            {"name": "b", "topic": "usv.autopilot.longitude"},
+            {"name": "c", "topic": "usv.autopilot.altitude"},
+            {"name": "d", "topic": "usv.autopilot.yaw"},
+            {"name": "e", "topic": "usv.ctd.conductivity"},
+        ]
+    }
     assert position_roles(model) == {"a": "lat", "b": "lon", "c": "alt", "d": "yaw"}
 
 

@@ -37,9 +37,13 @@ VISER = f"viser-v{importlib.metadata.version('viser')}"
 
 @pytest.fixture(scope="module")
 def base(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    settings = Settings(data_dir=tmp_path_factory.mktemp("scene") / "data",
-                        initial_admin_password=ADMIN_PASSWORD, zenoh_connect=(),
-                        scene_port=0, ws_recheck_s=0.2)
+    settings = Settings(
+        data_dir=tmp_path_factory.mktemp("scene") / "data",
+        initial_admin_password=ADMIN_PASSWORD,
+        zenoh_connect=(),
+        scene_port=0,
+        ws_recheck_s=0.2,
+    )
     with serve(settings) as url:
         make_users(url)
         yield url
@@ -49,8 +53,12 @@ def make_users(url: str) -> None:
     """``nobody`` (no role) and ``sci`` (scientist), password ``pw-NAME-12345``."""
     admin = _login(url, "admin", ADMIN_PASSWORD)
     for name, roles in (("nobody", []), ("sci", ["scientist"])):
-        r = httpx.post(url + "/api/users", headers=_bearer(admin), timeout=30,
-                       json={"username": name, "password": f"pw-{name}-12345", "roles": roles})
+        r = httpx.post(
+            url + "/api/users",
+            headers=_bearer(admin),
+            timeout=30,
+            json={"username": name, "password": f"pw-{name}-12345", "roles": roles},
+        )
         assert r.status_code == 201, r.text
 
 
@@ -68,9 +76,13 @@ def _login(base: str, user: str, password: str, cookie: bool = False) -> str:
 
 
 def _socket(base: str, headers: dict[str, str], origin: str | None) -> ClientConnection:
-    return connect(base.replace("http", "ws") + "/scene", additional_headers=headers,
-                   origin=None if origin is None else Origin(origin),
-                   subprotocols=[Subprotocol(VISER)], open_timeout=10)
+    return connect(
+        base.replace("http", "ws") + "/scene",
+        additional_headers=headers,
+        origin=None if origin is None else Origin(origin),
+        subprotocols=[Subprotocol(VISER)],
+        open_timeout=10,
+    )
 
 
 def test_scene_page_needs_a_session_with_a_role(base: str) -> None:
@@ -84,8 +96,9 @@ def test_scene_page_needs_a_session_with_a_role(base: str) -> None:
     r = httpx.get(base + "/scene/", cookies={"modd_session": cookie}, timeout=30)
     assert r.status_code == 200
     # the workbench frames what /api/scene names: the proxy, on this origin
-    assert httpx.get(base + "/api/scene", headers=_bearer(sci), timeout=30).json()["url"] \
-        == "/scene/"
+    assert (
+        httpx.get(base + "/api/scene", headers=_bearer(sci), timeout=30).json()["url"] == "/scene/"
+    )
     # nothing but viser's files: no way out of its folder
     for path in ("/scene/..%2f..%2fetc/passwd", "/scene/nothing.js"):
         assert httpx.get(base + path, headers=_bearer(sci), timeout=30).status_code == 404
@@ -122,9 +135,13 @@ def test_workbench_csp_not_widened_by_the_scene(base: str) -> None:
 
 def test_scene_socket_refuses_foreign_origin_and_no_session(base: str) -> None:
     cookie = {"Cookie": f"modd_session={_login(base, 'sci', 'pw-sci-12345', cookie=True)}"}
-    for headers, origin in ((cookie, "http://evil.example"), ({}, base), ({}, None),
-                            (cookie, None),  # a cookie without an Origin is not honoured
-                            ({"Cookie": "modd_session=forged"}, base)):
+    for headers, origin in (
+        (cookie, "http://evil.example"),
+        ({}, base),
+        ({}, None),
+        (cookie, None),  # a cookie without an Origin is not honoured
+        ({"Cookie": "modd_session=forged"}, base),
+    ):
         with pytest.raises(InvalidStatus) as refused:
             _socket(base, headers, origin)
         assert refused.value.response.status_code == 403, (headers, origin)
@@ -141,8 +158,12 @@ def test_scene_socket_relays_viser_and_closes_at_logout(base: str) -> None:
         first = ws.recv(timeout=15)
         assert isinstance(first, bytes) and first  # viser's scene messages (msgpack)
         t0 = time.monotonic()
-        r = httpx.post(base + "/api/auth/logout", cookies={"modd_session": token},
-                       headers={"X-CSRF-Token": _csrf(base, token)}, timeout=30)
+        r = httpx.post(
+            base + "/api/auth/logout",
+            cookies={"modd_session": token},
+            headers={"X-CSRF-Token": _csrf(base, token)},
+            timeout=30,
+        )
         assert r.status_code == 204
         with pytest.raises(ConnectionClosed) as closed:
             while time.monotonic() - t0 < 5:
@@ -181,16 +202,27 @@ def test_viser_port_answers_the_proxy_alone() -> None:
         assert httpx.get(url + "/", timeout=30).status_code == 403
         ok = httpx.get(url + "/", headers={SECRET_HEADER: scene.secret}, timeout=30)
         assert ok.status_code == 200 and b"<html" in ok.content.lower()
-        for headers, origin in (({}, None), ({}, url),
-                                ({SECRET_HEADER: "guess"}, None),
-                                ({SECRET_HEADER: scene.secret}, url)):  # a browser: refused
+        for headers, origin in (
+            ({}, None),
+            ({}, url),
+            ({SECRET_HEADER: "guess"}, None),
+            ({SECRET_HEADER: scene.secret}, url),
+        ):  # a browser: refused
             with pytest.raises(InvalidStatus) as refused:
-                connect(f"ws://127.0.0.1:{scene.port}", additional_headers=headers,
-                        origin=None if origin is None else Origin(origin),
-                        subprotocols=[Subprotocol(VISER)], open_timeout=10)
+                connect(
+                    f"ws://127.0.0.1:{scene.port}",
+                    additional_headers=headers,
+                    origin=None if origin is None else Origin(origin),
+                    subprotocols=[Subprotocol(VISER)],
+                    open_timeout=10,
+                )
             assert refused.value.response.status_code == 403, (headers, origin)
-        with connect(f"ws://127.0.0.1:{scene.port}", subprotocols=[Subprotocol(VISER)],
-                     additional_headers={SECRET_HEADER: scene.secret}, open_timeout=10) as ws:
+        with connect(
+            f"ws://127.0.0.1:{scene.port}",
+            subprotocols=[Subprotocol(VISER)],
+            additional_headers={SECRET_HEADER: scene.secret},
+            open_timeout=10,
+        ) as ws:
             assert ws.subprotocol == VISER
     finally:
         scene.stop()
@@ -205,8 +237,12 @@ def test_scene_in_a_browser_under_its_csp(base: str) -> None:
         pytest.fail("node or the frontend's npm packages are missing (run scripts/setup.sh)")
     proc = subprocess.run(
         [node, str(Path(__file__).with_name("scene_browser.cjs")), base, "sci", "pw-sci-12345"],
-        capture_output=True, text=True, timeout=120,
-        env=dict(os.environ, NODE_PATH=str(modules)), check=False)
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=dict(os.environ, NODE_PATH=str(modules)),
+        check=False,
+    )
     report = json.loads(proc.stdout.strip().splitlines()[-1])
     assert report.get("status") == 200, (report, proc.stderr[-2000:])
     assert report["connected"] and report["frames"] > 0, report

@@ -24,16 +24,24 @@ from .conftest import ADMIN_PASSWORD
 
 
 @pytest.fixture(scope="module")
-def server(tmp_path_factory: pytest.TempPathFactory, scenarios_dir: Path
-           ) -> Iterator[dict[str, Any]]:
+def server(
+    tmp_path_factory: pytest.TempPathFactory, scenarios_dir: Path
+) -> Iterator[dict[str, Any]]:
     data = tmp_path_factory.mktemp("schemathesis")
     port = free_port()
-    app = create_app(Settings(
-        data_dir=data, initial_admin_password=ADMIN_PASSWORD, deploy_timeout_s=0.5,
-        subscribe_timeout_s=0.5, zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
-    ), out=io.StringIO())
-    srv = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning",
-                                        lifespan="on"))
+    app = create_app(
+        Settings(
+            data_dir=data,
+            initial_admin_password=ADMIN_PASSWORD,
+            deploy_timeout_s=0.5,
+            subscribe_timeout_s=0.5,
+            zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
+        ),
+        out=io.StringIO(),
+    )
+    srv = uvicorn.Server(
+        uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning", lifespan="on")
+    )
     thread = threading.Thread(target=srv.run, daemon=True)
     thread.start()
     base = f"http://127.0.0.1:{port}"
@@ -41,12 +49,14 @@ def server(tmp_path_factory: pytest.TempPathFactory, scenarios_dir: Path
     while not srv.started:
         assert time.monotonic() < deadline and thread.is_alive(), "uvicorn did not start"
         time.sleep(0.05)
-    token = httpx.post(f"{base}/api/auth/login",
-                       json={"username": "admin", "password": ADMIN_PASSWORD}).json()["token"]
+    token = httpx.post(
+        f"{base}/api/auth/login", json={"username": "admin", "password": ADMIN_PASSWORD}
+    ).json()["token"]
     headers = {"Authorization": f"Bearer {token}"}
     text = (scenarios_dir / "scenario1.modd").read_text()
-    httpx.post(f"{base}/api/projects", headers=headers,
-               json={"name": "seed", "model": {"text": text}}).raise_for_status()
+    httpx.post(
+        f"{base}/api/projects", headers=headers, json={"name": "seed", "model": {"text": text}}
+    ).raise_for_status()
     try:
         yield {"base": base, "headers": headers, "spec": httpx.get(f"{base}/openapi.json").json()}
     finally:
@@ -59,9 +69,11 @@ def test_no_server_errors(server: dict[str, Any]) -> None:
     # Logging out, taking the admin's roles away or deleting the seed project
     # would only turn the rest of the run into 401s, 403s and 404s (all three
     # are tested in test_auth.py and test_roles.py).
-    schema = schema.exclude(path="/api/auth/logout").exclude(
-        method="PATCH", path="/api/users/{user_id}").exclude(
-        method="DELETE", path="/api/projects/{project_id}")
+    schema = (
+        schema.exclude(path="/api/auth/logout")
+        .exclude(method="PATCH", path="/api/users/{user_id}")
+        .exclude(method="DELETE", path="/api/projects/{project_id}")
+    )
     failures: list[str] = []
     succeeded: set[str] = set()
     operations = 0
@@ -69,16 +81,19 @@ def test_no_server_errors(server: dict[str, Any]) -> None:
         operation = result.ok()
         operations += 1
 
-        @settings(max_examples=12, deadline=None, database=None,
-                  suppress_health_check=list(HealthCheck))
+        @settings(
+            max_examples=12, deadline=None, database=None, suppress_health_check=list(HealthCheck)
+        )
         @given(case=operation.as_strategy())
         def check(case: schemathesis.Case[Any]) -> None:
             response = case.call(base_url=server["base"], headers=server["headers"])
             if response.status_code < 300:
                 succeeded.add(f"{case.method} {case.path}")
             if response.status_code >= 500:
-                failures.append(f"{case.method} {case.formatted_path}: "
-                                f"{response.status_code} {response.text[:300]}")
+                failures.append(
+                    f"{case.method} {case.formatted_path}: "
+                    f"{response.status_code} {response.text[:300]}"
+                )
 
         check()
     assert operations >= 25

@@ -28,13 +28,15 @@ def _files(tmp_path: Path) -> tuple[Path, list[Path]]:
 
 
 def test_admin_password_file_is_a_small_regular_file(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-        caplog: pytest.LogCaptureFixture) -> None:
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
     monkeypatch.delenv("MODD_ADMIN_PASSWORD", raising=False)
     good, bad = _files(tmp_path)
     args = ["--data", str(tmp_path)]
-    assert parse_args([*args, "--admin-password-file", str(good)]
-                      ).initial_admin_password == "the-password-123"
+    assert (
+        parse_args([*args, "--admin-password-file", str(good)]).initial_admin_password
+        == "the-password-123"
+    )
     for path in bad:
         with pytest.raises(SystemExit):
             parse_args([*args, "--admin-password-file", str(path)])
@@ -53,8 +55,8 @@ def test_push_password_file_is_a_small_regular_file(tmp_path: Path) -> None:
 
 
 def test_database_url_with_a_password_in_argv_warns(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-        capsys: pytest.CaptureFixture[str]) -> None:
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     monkeypatch.delenv("MODD_DATABASE_URL", raising=False)
     url = "postgresql+psycopg://modd:s3cret@127.0.0.1/modd"
     parse_args(["--data", str(tmp_path), "--database-url", url])

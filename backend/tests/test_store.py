@@ -37,9 +37,15 @@ with TestClient(create_app(s, out=io.StringIO()), base_url="http://127.0.0.1") a
 
 
 def _start_together(data: Path, url: str) -> list[subprocess.CompletedProcess[str]]:
-    procs = [subprocess.Popen([sys.executable, "-c", _START, str(data), url],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-             for _ in range(STARTERS)]
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", _START, str(data), url],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for _ in range(STARTERS)
+    ]
     out = []
     try:
         for p in procs:  # each imports the whole backend: minutes on a loaded machine
@@ -68,11 +74,19 @@ def test_backends_start_together_on_an_empty_sqlite_store(tmp_path: Path) -> Non
     assert _admins(f"sqlite:///{tmp_path / 'modd.sqlite3'}") == 1
 
 
-def test_backends_start_together_on_an_empty_postgresql(
-        postgres_url: str, tmp_path: Path) -> None:  # noqa: F811
+def test_backends_start_together_on_an_empty_postgresql(postgres_url: str, tmp_path: Path) -> None:  # noqa: F811
     url = postgres_url.rsplit("/", 1)[0] + "/together"
-    subprocess.run(["psql", "--dbname", postgres_url.replace("+psycopg", ""), "-c",
-                    "CREATE DATABASE together"], check=True, capture_output=True)
+    subprocess.run(
+        [
+            "psql",
+            "--dbname",
+            postgres_url.replace("+psycopg", ""),
+            "-c",
+            "CREATE DATABASE together",
+        ],
+        check=True,
+        capture_output=True,
+    )
     results = _start_together(tmp_path, url)
     assert [r.returncode for r in results] == [0] * STARTERS, [r.stderr[-800:] for r in results]
     assert _admins(url) == 1
@@ -83,24 +97,33 @@ def _project_names(c: TestClient, h: dict[str, str]) -> list[str]:
 
 
 @pytest.mark.parametrize("database", ["sqlite", "postgresql"])
-def test_backup_then_restore(database: str, request: pytest.FixtureRequest, tmp_path: Path,
-                             scenario1: str) -> None:
+def test_backup_then_restore(
+    database: str, request: pytest.FixtureRequest, tmp_path: Path, scenario1: str
+) -> None:
     url = None if database == "sqlite" else request.getfixturevalue("postgres_url")
-    settings = Settings(data_dir=tmp_path / "data", database_url=url, zenoh_enabled=False,
-                        initial_admin_password=ADMIN_PASSWORD)
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        database_url=url,
+        zenoh_enabled=False,
+        initial_admin_password=ADMIN_PASSWORD,
+    )
     copy = tmp_path / "store.backup"
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         h = login(c, "admin", ADMIN_PASSWORD)
         for name in (f"kept_{database}", f"also_kept_{database}"):
-            r = c.post("/api/projects", headers=h, json={"name": name,
-                                                          "model": {"text": scenario1}})
+            r = c.post(
+                "/api/projects", headers=h, json={"name": name, "model": {"text": scenario1}}
+            )
             assert r.status_code == 201, r.text
         before = _project_names(c, h)
         # a consistent copy while the service runs
         backup(settings.effective_database_url, copy)
         assert copy.stat().st_mode & 0o777 == 0o600
-        c.post("/api/projects", headers=h, json={"name": f"after_{database}",
-                                                  "model": {"text": scenario1}})
+        c.post(
+            "/api/projects",
+            headers=h,
+            json={"name": f"after_{database}", "model": {"text": scenario1}},
+        )
         assert _project_names(c, h) != before
     restore(settings.effective_database_url, copy)
     with TestClient(create_app(settings, out=io.StringIO())) as c:
@@ -109,8 +132,19 @@ def test_backup_then_restore(database: str, request: pytest.FixtureRequest, tmp_
 
 
 def test_backup_cli_reports_a_missing_database(tmp_path: Path) -> None:
-    res = subprocess.run([sys.executable, "-m", "modd_backend.cli", "backup", "--data",
-                          str(tmp_path / "nothing"), str(tmp_path / "out.backup")],
-                         capture_output=True, text=True, timeout=120)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "modd_backend.cli",
+            "backup",
+            "--data",
+            str(tmp_path / "nothing"),
+            str(tmp_path / "out.backup"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert res.returncode != 0 and "no database at" in res.stderr
     assert not (tmp_path / "out.backup").exists()

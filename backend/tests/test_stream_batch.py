@@ -28,8 +28,7 @@ async def _run(batched: bool, items: list[dict[str, Any]], size: int) -> list[An
     for item in items:
         queue.put(item)
     sock = FakeSocket()
-    task = asyncio.create_task(
-        live._send_loop(sock, SimpleNamespace(queue=queue), batched))  # type: ignore[arg-type]
+    task = asyncio.create_task(live._send_loop(sock, SimpleNamespace(queue=queue), batched))  # type: ignore[arg-type]
     await asyncio.sleep(0.05)
     queue.put({"type": "value", "subscriber": "late", "data": {}})
     await asyncio.sleep(0.05)
@@ -44,8 +43,11 @@ ITEMS = [{"type": "value", "subscriber": f"s{i % 2}", "data": {"end_ns": i}} for
 def test_sender_order_and_drops(batched: bool) -> None:
     frames = asyncio.run(_run(batched, ITEMS, 4))
     flat = [m for f in frames for m in (f["messages"] if f["type"] == "batch" else [f])]
-    assert flat == [{"type": "dropped", "count": 2}, *ITEMS[2:],
-                    {"type": "value", "subscriber": "late", "data": {}}]
+    assert flat == [
+        {"type": "dropped", "count": 2},
+        *ITEMS[2:],
+        {"type": "value", "subscriber": "late", "data": {}},
+    ]
     if batched:
         assert frames[0]["type"] == "batch" and len(frames[0]["messages"]) == 5
         assert frames[1]["type"] == "value"  # a lone message is sent as itself

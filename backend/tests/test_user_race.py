@@ -22,10 +22,14 @@ def _delete_meanwhile(client: TestClient, name: str) -> None:
 
 
 @pytest.mark.parametrize("change", ["password", "roles"])
-def test_patch_racing_delete_answers_404(client: TestClient, admin: Headers,
-                                         monkeypatch: pytest.MonkeyPatch, change: str) -> None:
-    r = client.post("/api/users", headers=admin, json={
-        "username": "gone", "password": "pw-gone-12345", "roles": ["scientist"]})
+def test_patch_racing_delete_answers_404(
+    client: TestClient, admin: Headers, monkeypatch: pytest.MonkeyPatch, change: str
+) -> None:
+    r = client.post(
+        "/api/users",
+        headers=admin,
+        json={"username": "gone", "password": "pw-gone-12345", "roles": ["scientist"]},
+    )
     assert r.status_code == 201, r.text
     uid = r.json()["id"]
     hooked = "hash_password" if change == "password" else "format_roles"

@@ -31,18 +31,24 @@ def base(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[str]:
         original(self, data)
 
     monkeypatch.setattr(parent, "data_received", spy)
-    settings = Settings(data_dir=tmp_path / "data", initial_admin_password=ADMIN_PASSWORD,
-                        zenoh_connect=(), ws_subscriptions_per_socket=50)
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        initial_admin_password=ADMIN_PASSWORD,
+        zenoh_connect=(),
+        ws_subscriptions_per_socket=50,
+    )
     with serve(settings) as url:
         yield url
     assert slices and max(slices) <= PacedWebSocketProtocol.CHUNK
 
 
 def test_backlog_arrives_whole_and_in_order(base: str) -> None:
-    token = httpx.post(base + "/api/auth/login", timeout=30,
-                       json={"username": "admin", "password": ADMIN_PASSWORD}).json()["token"]
-    ws = connect(base.replace("http", "ws") + "/api/drones/usv/stream", open_timeout=10,
-                 max_size=None)
+    token = httpx.post(
+        base + "/api/auth/login", timeout=30, json={"username": "admin", "password": ADMIN_PASSWORD}
+    ).json()["token"]
+    ws = connect(
+        base.replace("http", "ws") + "/api/drones/usv/stream", open_timeout=10, max_size=None
+    )
     ws.send(json.dumps({"op": "auth", "token": token}))
     assert json.loads(ws.recv(timeout=10))["type"] == "authenticated"
     n = 3000

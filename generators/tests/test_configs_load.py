@@ -28,8 +28,10 @@ def test_pubbroker_config_has_planned_buffer_sizes(scenarios_dir: Path, tmp_path
     write_artifacts(tmp_path, generate(model, "operator"))
     config = json.loads((tmp_path / "operator" / "pubbroker.json").read_text())
     assert {t["name"]: t["buffer_size"] for t in config["topics"]} == {
-        "usv.accelerometer.accel_x": 28, "usv.accelerometer.accel_y": 28,
-        "usv.accelerometer.accel_z": 6}
+        "usv.accelerometer.accel_x": 28,
+        "usv.accelerometer.accel_y": 28,
+        "usv.accelerometer.accel_z": 6,
+    }
     assert config["link"] == {"host": "127.0.0.1", "port": 7171, "key": "env:MODD_LINK_KEY"}
     assert config["archive"]["dir"] == "/tmp/modd/logs"
 
@@ -39,7 +41,13 @@ def test_toml_writer_round_trips_hostile_strings() -> None:
 
     from modd_gen.tomlwriter import dumps
 
-    doc = {"a": 'x"\n[zenoh]\nlisten = ["tcp/0.0.0.0:1"]\n#\\', "b": "\x00\x1f\x7f\t\r µ 米 🚁",
-           "n": 3, "t": True, "f": 0.5, "l": ["p\nq", "r"],
-           "zenoh": {"mode": "peer", "weird key\n": "v", "sub": {"k": "\u2028"}}}
+    doc = {
+        "a": 'x"\n[zenoh]\nlisten = ["tcp/0.0.0.0:1"]\n#\\',
+        "b": "\x00\x1f\x7f\t\r µ 米 🚁",
+        "n": 3,
+        "t": True,
+        "f": 0.5,
+        "l": ["p\nq", "r"],
+        "zenoh": {"mode": "peer", "weird key\n": "v", "sub": {"k": "\u2028"}},
+    }
     assert tomllib.loads(dumps(doc)) == doc

@@ -23,14 +23,15 @@ PUBBROKER = REPO / "build" / "bin" / "modd-pubbroker"
 READINGS = 40
 
 
-
-
 def _build(project: Path) -> Path:
     build = project / "build"
-    subprocess.run(["cmake", "-S", str(project), "-B", str(build), "-G", "Ninja"], check=True,
-                   capture_output=True, timeout=300)
-    subprocess.run(["cmake", "--build", str(build)], check=True, capture_output=True,
-                   timeout=600)
+    subprocess.run(
+        ["cmake", "-S", str(project), "-B", str(build), "-G", "Ninja"],
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
+    subprocess.run(["cmake", "--build", str(build)], check=True, capture_output=True, timeout=600)
     (exe,) = [p for p in build.iterdir() if p.name.endswith("_driver")]
     return exe
 
@@ -46,8 +47,9 @@ def _archived(archive: Path) -> dict[str, list[float]]:
 
 
 @pytest.mark.parametrize("scenario", ["scenario1", "scenario2"])
-def test_generated_driver_builds_runs_and_is_archived(scenarios_dir: Path, tmp_path: Path,
-                                                      scenario: str) -> None:
+def test_generated_driver_builds_runs_and_is_archived(
+    scenarios_dir: Path, tmp_path: Path, scenario: str
+) -> None:
     if not PUBBROKER.is_file():
         pytest.fail(f"{PUBBROKER} is missing: run `make build` first")
     model = load_model(scenarios_dir / f"{scenario}.modd")
@@ -60,17 +62,24 @@ def test_generated_driver_builds_runs_and_is_archived(scenarios_dir: Path, tmp_p
     config["link"]["port"] = free_port()
     (tmp_path / "pubbroker.json").write_text(json.dumps(config))
     env = {**os.environ, "MODD_LINK_KEY": "a-test-link-key-of-16+"}
-    broker = subprocess.Popen([str(PUBBROKER), "--config", str(tmp_path / "pubbroker.json")],
-                              env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    broker = subprocess.Popen(
+        [str(PUBBROKER), "--config", str(tmp_path / "pubbroker.json")],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+    )
     try:
         deadline = time.monotonic() + 10
         while not (tmp_path / "ingress.sock").exists():
             assert time.monotonic() < deadline, "the PubBroker did not open its ingress socket"
             assert broker.poll() is None, broker.stdout.read() if broker.stdout else ""
             time.sleep(0.05)
-        run = subprocess.run([str(exe), "--count", str(READINGS), "--ingress",
-                              f"unix:{tmp_path / 'ingress.sock'}"], capture_output=True,
-                             text=True, timeout=60)
+        run = subprocess.run(
+            [str(exe), "--count", str(READINGS), "--ingress", f"unix:{tmp_path / 'ingress.sock'}"],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
         assert run.returncode == 0, run.stderr
         assert "cannot reach" not in run.stderr, run.stderr
     finally:
@@ -94,8 +103,9 @@ def _says_unreachable_at_once(cmd: list[str], ingress: str) -> None:
     """Runs a driver with nothing listening at `ingress`: its first line on stderr, while it
     still runs, names the PubBroker it cannot reach; it ends (failing) once its flush gives up."""
     start = time.monotonic()
-    with subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                          text=True) as proc:
+    with subprocess.Popen(
+        cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
+    ) as proc:
         try:
             assert proc.stderr is not None
             first = proc.stderr.readline()
@@ -114,10 +124,12 @@ def _says_unreachable_at_once(cmd: list[str], ingress: str) -> None:
 
 
 def test_generated_python_driver_says_at_once_it_cannot_reach_the_broker(
-        scenarios_dir: Path, tmp_path: Path) -> None:
+    scenarios_dir: Path, tmp_path: Path
+) -> None:
     model = load_model(scenarios_dir / "scenario1.modd")
     write_artifacts(tmp_path / "gen", generate(model))
     script = tmp_path / "gen" / "integrator" / "python" / "pub_1.py"
     ingress = f"unix:{tmp_path / 'gone.sock'}"
-    _says_unreachable_at_once([sys.executable, str(script), "--count", "1", "--ingress", ingress],
-                              ingress)
+    _says_unreachable_at_once(
+        [sys.executable, str(script), "--count", "1", "--ingress", ingress], ingress
+    )

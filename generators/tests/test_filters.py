@@ -6,10 +6,15 @@ import pytest
 from modd_gen import filters
 
 
-@pytest.mark.parametrize("vt,cpp,enum,py", [("float32", "float", "Float32", "float"),
-                                            ("float64", "double", "Float64", "float"),
-                                            ("int", "int64_t", "Int", "int"),
-                                            ("bool", "bool", "Bool", "bool")])
+@pytest.mark.parametrize(
+    "vt,cpp,enum,py",
+    [
+        ("float32", "float", "Float32", "float"),
+        ("float64", "double", "Float64", "float"),
+        ("int", "int64_t", "Int", "int"),
+        ("bool", "bool", "Bool", "bool"),
+    ],
+)
 def test_type_mapping(vt: str, cpp: str, enum: str, py: str) -> None:
     assert filters.cpp_type(vt) == cpp
     assert filters.cpp_value_type(vt) == enum
@@ -36,8 +41,10 @@ def test_string_literals_escape() -> None:
     assert filters.py_string("it's") == '"it\'s"'
 
 
-@pytest.mark.parametrize("period,us,ms", [("0.04", 40000, 40), ("2.0", 2000000, 2000),
-                                          ("0.0005", 500, 1), ("0.0015", 1500, 2)])
+@pytest.mark.parametrize(
+    "period,us,ms",
+    [("0.04", 40000, 40), ("2.0", 2000000, 2000), ("0.0005", 500, 1), ("0.0015", 1500, 2)],
+)
 def test_periods(period: str, us: int, ms: int) -> None:
     assert filters.period_us(period) == us
     assert filters.period_ms(period) == ms
@@ -45,10 +52,19 @@ def test_periods(period: str, us: int, ms: int) -> None:
 
 # -- escaping of model strings -------------------------------------------------
 
-HOSTILE = ['m\n#include <cstdlib>\nint p=std::system("id>PWNED");//', "*/ /* \"\"\" ''' \\",
-           "${HOME} $(id) `id` ??/ ??=", "\r\x0b\x0c\x1b\x7f\x85\u2028\u2029\u202e",
-           "µS/cm 米/秒² Ωμέγα ∑ 🚁", "a\\", "\\", '"', "x|y <b>&amp;</b> [a](b) *c* _d_",
-           "\U0001F681\\\n", ""]
+HOSTILE = [
+    'm\n#include <cstdlib>\nint p=std::system("id>PWNED");//',
+    "*/ /* \"\"\" ''' \\",
+    "${HOME} $(id) `id` ??/ ??=",
+    "\r\x0b\x0c\x1b\x7f\x85\u2028\u2029\u202e",
+    "µS/cm 米/秒² Ωμέγα ∑ 🚁",
+    "a\\",
+    "\\",
+    '"',
+    "x|y <b>&amp;</b> [a](b) *c* _d_",
+    "\U0001f681\\\n",
+    "",
+]
 
 
 def _c_literal_value(literal: str) -> bytes:
@@ -65,7 +81,7 @@ def _c_literal_value(literal: str) -> bytes:
                 out.append(ord(nxt))
                 i += 2
             else:
-                out.append(int(body[i + 1:i + 4], 8))
+                out.append(int(body[i + 1 : i + 4], 8))
                 i += 4
         else:
             assert c != '"'

@@ -17,16 +17,23 @@ from modd_model import load_model
 
 GOLDEN = Path(__file__).parent / "golden"
 DATA = Path(__file__).resolve().parents[2] / "metamodel" / "tests" / "data"
-CARRIED = ("modd/include/modd/client/publisher.hpp", "modd/src/publisher.cpp",
-           "modd/include/modd/client/subscriber.hpp", "modd/src/subscriber.cpp",
-           "modd/include/modd/client/delivered_value.gen.hpp", "modd/include/modd/ingress/wire.hpp",
-           "modd/include/modd/ingress/wire.gen.hpp")
+CARRIED = (
+    "modd/include/modd/client/publisher.hpp",
+    "modd/src/publisher.cpp",
+    "modd/include/modd/client/subscriber.hpp",
+    "modd/src/subscriber.cpp",
+    "modd/include/modd/client/delivered_value.gen.hpp",
+    "modd/include/modd/ingress/wire.hpp",
+    "modd/include/modd/ingress/wire.gen.hpp",
+)
 
 
 def _models(scenarios_dir: Path) -> dict[str, Path]:
-    return {"scenario1": scenarios_dir / "scenario1.modd",
-            "scenario2": scenarios_dir / "scenario2.modd",
-            "extended": DATA / "extended.modd"}
+    return {
+        "scenario1": scenarios_dir / "scenario1.modd",
+        "scenario2": scenarios_dir / "scenario2.modd",
+        "extended": DATA / "extended.modd",
+    }
 
 
 @pytest.mark.parametrize("name", ["scenario1", "scenario2", "extended"])
@@ -39,8 +46,11 @@ def test_output_matches_golden(scenarios_dir: Path, name: str) -> None:
         for path, content in produced.items():
             (root / path).parent.mkdir(parents=True, exist_ok=True)
             (root / path).write_text(content, encoding="utf-8")
-    golden = {str(p.relative_to(root)): p.read_text(encoding="utf-8")
-              for p in root.rglob("*") if p.is_file()}
+    golden = {
+        str(p.relative_to(root)): p.read_text(encoding="utf-8")
+        for p in root.rglob("*")
+        if p.is_file()
+    }
     assert sorted(produced) == sorted(golden)
     for path, content in produced.items():
         assert content == golden[path], f"{name}/{path} differs from the golden file"
@@ -58,21 +68,27 @@ def test_carried_client_is_the_runtime_client(scenarios_dir: Path) -> None:
     assert artifacts["integrator/pub_1-driver/" + CARRIED[0]] == header
     assert artifacts["integrator/pub_1-driver/" + CARRIED[1]] == source
     assert artifacts["integrator/pub_1-driver/" + CARRIED[5]] == (
-        repo / "runtime/cpp/include/modd/ingress/wire.hpp").read_text("utf-8")
+        repo / "runtime/cpp/include/modd/ingress/wire.hpp"
+    ).read_text("utf-8")
     assert artifacts["integrator/pub_1-driver/" + CARRIED[6]] == (
-        repo / "runtime/cpp/include/modd/ingress/wire.gen.hpp").read_text("utf-8")
+        repo / "runtime/cpp/include/modd/ingress/wire.gen.hpp"
+    ).read_text("utf-8")
     sub_header, sub_source = subscriber_client_sources()
     assert artifacts["scientist/cpp/sub_5/" + CARRIED[2]] == sub_header
     assert artifacts["scientist/cpp/sub_5/" + CARRIED[3]] == sub_source
-    assert artifacts["scientist/cpp/sub_5/" + CARRIED[4]] == delivered_value_header() == (
-        repo / "runtime/cpp/include/modd/client/delivered_value.gen.hpp").read_text("utf-8")
+    assert (
+        artifacts["scientist/cpp/sub_5/" + CARRIED[4]]
+        == delivered_value_header()
+        == (repo / "runtime/cpp/include/modd/client/delivered_value.gen.hpp").read_text("utf-8")
+    )
 
 
 def test_roles_partition_the_output(scenarios_dir: Path) -> None:
     model = load_model(scenarios_dir / "scenario1.modd")
     everything = {a.path for a in generate(model)}
-    by_role = [{a.path for a in generate(model, role)} for role in
-               ("integrator", "operator", "scientist")]
+    by_role = [
+        {a.path for a in generate(model, role)} for role in ("integrator", "operator", "scientist")
+    ]
     assert set().union(*by_role) == everything
     assert sum(len(r) for r in by_role) == len(everything)
     assert all(p.startswith("integrator/") for p in by_role[0])
@@ -99,6 +115,9 @@ def test_mavlink_topics_get_no_driver_stub() -> None:
     bridged = ("integrator/mavlink-driver/", "integrator/python/mavlink")
     assert not [p for p in paths if p.startswith(bridged)]
     assert "integrator/imu-driver/src/driver.cpp" in paths
-    driven = "\n".join(a.content for a in generate(load_model(DATA / "extended.modd"))
-                       if a.path.startswith("integrator/"))
+    driven = "\n".join(
+        a.content
+        for a in generate(load_model(DATA / "extended.modd"))
+        if a.path.startswith("integrator/")
+    )
     assert "usv.autopilot." not in driven

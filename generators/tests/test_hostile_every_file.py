@@ -47,7 +47,7 @@ def test_no_model_string_starts_a_line_of_code(files: list[Path]) -> None:
     for path in files:
         text = path.read_text(errors="replace")
         hit = INJECTED_LINES.search(text)
-        assert hit is None, f"{path.name}: {text[max(0, hit.start() - 80):hit.end()]!r}"
+        assert hit is None, f"{path.name}: {text[max(0, hit.start() - 80) : hit.end()]!r}"
 
 
 def test_structured_files_parse(files: list[Path]) -> None:
@@ -66,8 +66,11 @@ def test_structured_files_parse(files: list[Path]) -> None:
             kinds.add("xml")
         elif path.suffix == ".py":
             compile(text, str(path), "exec")
-            calls = {n.func.attr for n in ast.walk(ast.parse(text))
-                     if isinstance(n, ast.Call) and isinstance(n.func, ast.Attribute)}
+            calls = {
+                n.func.attr
+                for n in ast.walk(ast.parse(text))
+                if isinstance(n, ast.Call) and isinstance(n.func, ast.Attribute)
+            }
             assert not calls & {"system", "popen"}, path
             kinds.add("py")
         elif path.suffix == ".msg":

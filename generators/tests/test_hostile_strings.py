@@ -44,40 +44,69 @@ def hostile_model(unit: str = UNIT, path: str = PATH, host: str = "127.0.0.1") -
     ep = {"host": "127.0.0.1"}
     return {
         "schemaVersion": "1.0",
-        "drone": {"name": "int", "description": DESCRIPTION, "sensors": [
-            {"name": "class", "description": DESCRIPTION, "variables": [
-                {"name": "def", "unit": unit, "description": DESCRIPTION},
-                {"name": "lambda", "unit": unit, "type": "int"}]}]},
-        "pubBroker": {"name": "namespace", "endpoint": {"host": host, "port": 7171},
-                      "logPath": PATH, "ingress": {"unixSocket": PATH}},
-        "subBroker": {"endpoint": {"host": "base-station.local", "port": 7272},
-                      "configPath": path},
+        "drone": {
+            "name": "int",
+            "description": DESCRIPTION,
+            "sensors": [
+                {
+                    "name": "class",
+                    "description": DESCRIPTION,
+                    "variables": [
+                        {"name": "def", "unit": unit, "description": DESCRIPTION},
+                        {"name": "lambda", "unit": unit, "type": "int"},
+                    ],
+                }
+            ],
+        },
+        "pubBroker": {
+            "name": "namespace",
+            "endpoint": {"host": host, "port": 7171},
+            "logPath": PATH,
+            "ingress": {"unixSocket": PATH},
+        },
+        "subBroker": {"endpoint": {"host": "base-station.local", "port": 7272}, "configPath": path},
         "link": {"keyRef": KEY_REF},
-        "publishers": [{"name": "new", "periodS": "0.5",
-                        "topics": ["int.class.def", "int.class.lambda"]}],
+        "publishers": [
+            {"name": "new", "periodS": "0.5", "topics": ["int.class.def", "int.class.lambda"]}
+        ],
         "subscribers": [
-            {"name": "None", "endpoint": {**ep, "port": 7401}, "topic": "int.class.def",
-             "periodS": "1", "aggregation": "AVERAGE"},
-            {"name": "delete", "endpoint": {**ep, "port": 7402}, "topic": "int.class.lambda",
-             "periodS": "1", "aggregation": "ALL"}],
+            {
+                "name": "None",
+                "endpoint": {**ep, "port": 7401},
+                "topic": "int.class.def",
+                "periodS": "1",
+                "aggregation": "AVERAGE",
+            },
+            {
+                "name": "delete",
+                "endpoint": {**ep, "port": 7402},
+                "topic": "int.class.lambda",
+                "periodS": "1",
+                "aggregation": "ALL",
+            },
+        ],
         "layout": {"nodes": {DESCRIPTION.replace("\n", " ").replace("\t", " "): {"x": 0, "y": 0}}},
     }
 
 
 def _build(project: Path) -> Path:
     build = project / "build"
-    for cmd in (["cmake", "-S", str(project), "-B", str(build), "-G", "Ninja"],
-                ["cmake", "--build", str(build)]):
+    for cmd in (
+        ["cmake", "-S", str(project), "-B", str(build), "-G", "Ninja"],
+        ["cmake", "--build", str(build)],
+    ):
         run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
         assert run.returncode == 0, run.stdout + run.stderr
-    (exe,) = [p for p in build.iterdir() if p.is_file() and p.name.endswith(("_driver",
-                                                                             "_subscriber"))]
+    (exe,) = [
+        p for p in build.iterdir() if p.is_file() and p.name.endswith(("_driver", "_subscriber"))
+    ]
     return exe
 
 
 def _imports(exe: Path) -> set[str]:
-    out = subprocess.run(["nm", "-D", "--undefined-only", str(exe)], capture_output=True,
-                         text=True, check=True).stdout
+    out = subprocess.run(
+        ["nm", "-D", "--undefined-only", str(exe)], capture_output=True, text=True, check=True
+    ).stdout
     return {line.split()[-1].split("@")[0] for line in out.splitlines() if line.strip()}
 
 
@@ -106,18 +135,34 @@ def test_python_compiles_and_holds_the_strings_as_constants(generated: Path) -> 
         tree = ast.parse(source, str(f))
         compile(tree, str(f), "exec")
         top = {n.name for n in tree.body if isinstance(n, ast.FunctionDef)}
-        top |= {t.id for n in tree.body if isinstance(n, ast.Assign) for t in n.targets
-                if isinstance(t, ast.Name)}
+        top |= {
+            t.id
+            for n in tree.body
+            if isinstance(n, ast.Assign)
+            for t in n.targets
+            if isinstance(t, ast.Name)
+        }
         if f.parent.name == "python" and f.parent.parent.name == "integrator":
-            assert top == {"PUBLISHER", "DEFAULT_INGRESS", "PERIOD_S", "TOPICS", "read_def_",
-                           "read_lambda_", "main"}
+            assert top == {
+                "PUBLISHER",
+                "DEFAULT_INGRESS",
+                "PERIOD_S",
+                "TOPICS",
+                "read_def_",
+                "read_lambda_",
+                "main",
+            }
             constants = {n.value for n in ast.walk(tree) if isinstance(n, ast.Constant)}
             assert f"unix:{PATH}" in constants and "int.class.def" in constants
-            comments = [line.split("  # ", 1)[1] for line in source.splitlines()
-                        if "  # " in line and "米" in line]
+            comments = [
+                line.split("  # ", 1)[1]
+                for line in source.splitlines()
+                if "  # " in line and "米" in line
+            ]
             # each comment is the unit quoted and escaped (?\? keeps a ?? from being a trigraph)
             assert len(comments) == 2 and all(
-                ast.literal_eval(c.replace("?\\?", "??")) == UNIT for c in comments)
+                ast.literal_eval(c.replace("?\\?", "??")) == UNIT for c in comments
+            )
         else:
             # CONNECT and VIEWER_CREDENTIALS: None here (no running deployment to name)
             assert top == {"DRONE", "SUBSCRIBER", "CONNECT", "VIEWER_CREDENTIALS", "main"}
@@ -136,8 +181,9 @@ def test_cpp_subscriber_builds_without_injected_code(generated: Path) -> None:
     exe = _build(generated / "scientist" / "cpp" / "None")
     assert "system" not in _imports(exe)
     header = (generated / "scientist" / "cpp" / "None" / "src" / "main.cpp").read_text()
-    assert header.count("\n") == (generated / "scientist" / "cpp" / "delete" / "src" /
-                                  "main.cpp").read_text().count("\n")
+    assert header.count("\n") == (
+        generated / "scientist" / "cpp" / "delete" / "src" / "main.cpp"
+    ).read_text().count("\n")
 
 
 def test_configs_parse_to_the_model_strings(tmp_path: Path) -> None:
@@ -169,11 +215,14 @@ def test_markdown_tables_keep_their_cells(generated: Path) -> None:
 # -- the attacks of the issue -----------------------------------------------------
 
 
-@pytest.mark.parametrize("field,model", [
-    ("/drone/sensors/0/variables/0/unit", hostile_model(unit=ATTACK_UNIT)),
-    ("/subBroker/configPath", hostile_model(path=ATTACK_PATH)),
-    ("/pubBroker/endpoint/host", hostile_model(host=ATTACK_HOST)),
-])
+@pytest.mark.parametrize(
+    "field,model",
+    [
+        ("/drone/sensors/0/variables/0/unit", hostile_model(unit=ATTACK_UNIT)),
+        ("/subBroker/configPath", hostile_model(path=ATTACK_PATH)),
+        ("/pubBroker/endpoint/host", hostile_model(host=ATTACK_HOST)),
+    ],
+)
 def test_the_issue_attacks_are_rejected_at_their_field(field: str, model: dict[str, Any]) -> None:
     errors = [d for d in validate(model) if d.severity == "error"]
     assert errors and any(d.pointer.startswith(field) for d in errors), [str(d) for d in errors]
@@ -194,7 +243,10 @@ def test_the_unit_attack_is_inert_even_unvalidated(tmp_path: Path) -> None:
 
 
 def test_the_toml_attacks_are_inert_even_unvalidated(tmp_path: Path) -> None:
-    write_artifacts(tmp_path, generate(hostile_model(path=ATTACK_PATH, host=ATTACK_HOST)),)
+    write_artifacts(
+        tmp_path,
+        generate(hostile_model(path=ATTACK_PATH, host=ATTACK_HOST)),
+    )
     raw = tomllib.loads((tmp_path / "operator" / "subbroker.toml").read_text())
     assert raw["state_dir"] == ATTACK_PATH
     assert raw["link"]["endpoint"] == f"{ATTACK_HOST}:7171"

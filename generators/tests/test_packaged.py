@@ -52,8 +52,12 @@ def reproduce(pairs: list[tuple[str, str]], root: Path) -> None:
         target = root / dest if not dest.endswith("/") and dest not in ("./", ".") else root
         origin = REPO / src
         if origin.is_dir():
-            shutil.copytree(origin, target, ignore=shutil.ignore_patterns(
-                "__pycache__", "tests", "node_modules", "*.egg-info"), dirs_exist_ok=True)
+            shutil.copytree(
+                origin,
+                target,
+                ignore=shutil.ignore_patterns("__pycache__", "tests", "node_modules", "*.egg-info"),
+                dirs_exist_ok=True,
+            )
         else:
             if dest.endswith("/") or dest in ("./", "."):
                 target = target / origin.name
@@ -61,10 +65,12 @@ def reproduce(pairs: list[tuple[str, str]], root: Path) -> None:
             shutil.copy2(origin, target)
 
 
-@pytest.mark.parametrize(("dockerfile", "stage"), [("backend.Dockerfile", "backend"),
-                                                   ("runtime.Dockerfile", "runtime")])
-def test_integrator_download_from_installed_wheels(tmp_path: Path, dockerfile: str,
-                                                   stage: str) -> None:
+@pytest.mark.parametrize(
+    ("dockerfile", "stage"), [("backend.Dockerfile", "backend"), ("runtime.Dockerfile", "runtime")]
+)
+def test_integrator_download_from_installed_wheels(
+    tmp_path: Path, dockerfile: str, stage: str
+) -> None:
     if UV is None:  # make test installs it (scripts/setup.sh): missing is a setup bug
         pytest.fail("uv is missing: run scripts/setup.sh")
     image = tmp_path / "image"
@@ -72,20 +78,42 @@ def test_integrator_download_from_installed_wheels(tmp_path: Path, dockerfile: s
     assert ("generators", "generators") in pairs and ("metamodel", "metamodel") in pairs
     reproduce(pairs, image)
     # Of runtime/cpp, only the client sources the wheel carries (their one home).
-    assert sorted(p.name for p in (image / "runtime" / "cpp").rglob("*.?pp")) == sorted(
-        ORIGINALS)
+    assert sorted(p.name for p in (image / "runtime" / "cpp").rglob("*.?pp")) == sorted(ORIGINALS)
     dist, site = tmp_path / "dist", tmp_path / "site"
     for member in ("metamodel", "generators"):
-        subprocess.run([str(UV), "build", "--wheel", "--quiet", "--out-dir", str(dist),
-                        str(image / member)], check=True, timeout=300, cwd=image)
+        subprocess.run(
+            [str(UV), "build", "--wheel", "--quiet", "--out-dir", str(dist), str(image / member)],
+            check=True,
+            timeout=300,
+            cwd=image,
+        )
     shutil.rmtree(image / "runtime")  # the installed wheel must not need the checkout
-    subprocess.run([str(UV), "pip", "install", "--quiet", "--no-deps", "--python", sys.executable,
-                    "--target", str(site), *map(str, dist.glob("*.whl"))],
-                   check=True, timeout=300)
+    subprocess.run(
+        [
+            str(UV),
+            "pip",
+            "install",
+            "--quiet",
+            "--no-deps",
+            "--python",
+            sys.executable,
+            "--target",
+            str(site),
+            *map(str, dist.glob("*.whl")),
+        ],
+        check=True,
+        timeout=300,
+    )
     model = image / "metamodel" / "examples" / "demo.modd"
     env = {**os.environ, "PYTHONPATH": str(site)}
-    out = subprocess.run([sys.executable, "-c", _SCRIPT, str(model)], capture_output=True,
-                         text=True, timeout=120, cwd=tmp_path, env=env)
+    out = subprocess.run(
+        [sys.executable, "-c", _SCRIPT, str(model)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp_path,
+        env=env,
+    )
     assert out.returncode == 0, out.stderr
     got = json.loads(out.stdout)
     assert got["modd_gen"].startswith(str(site)) and got["modd_model"].startswith(str(site))

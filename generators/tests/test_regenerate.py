@@ -10,8 +10,12 @@ from pathlib import Path
 
 
 def _generate(model: Path, out: Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "modd_model.cli", "generate", str(model),
-                           "--out", str(out)], capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "modd_model.cli", "generate", str(model), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 def test_user_files_survive_regeneration(scenarios_dir: Path, tmp_path: Path) -> None:
@@ -34,8 +38,11 @@ def test_user_files_survive_regeneration(scenarios_dir: Path, tmp_path: Path) ->
     kept = {f["path"] for f in index["files"] if f["action"] == "kept"}
     users = {f["path"] for f in index["files"] if f["ownership"] == "user"}
     assert kept == users
-    assert {"integrator/pub_1-driver/src/driver.cpp", "integrator/pub_1-driver/user.cmake",
-            "scientist/cpp/sub_5/src/main.cpp"} <= kept
+    assert {
+        "integrator/pub_1-driver/src/driver.cpp",
+        "integrator/pub_1-driver/user.cmake",
+        "scientist/cpp/sub_5/src/main.cpp",
+    } <= kept
 
 
 def test_invalid_model_generates_nothing(tmp_path: Path) -> None:

@@ -18,8 +18,9 @@ def run(*args: str) -> subprocess.CompletedProcess[str]:
 
 
 def test_validate_ok_and_failures(scenarios_dir: Path, tmp_path: Path) -> None:
-    ok = run("validate", str(scenarios_dir / "scenario1.modd"),
-             str(scenarios_dir / "scenario2.modd"))
+    ok = run(
+        "validate", str(scenarios_dir / "scenario1.modd"), str(scenarios_dir / "scenario2.modd")
+    )
     assert ok.returncode == 0, ok.stderr
     bad = tmp_path / "bad.modd"
     bad.write_text((scenarios_dir / "scenario1.modd").read_text().replace("MIN", "MEAN"))
@@ -36,8 +37,9 @@ def test_convert_both_ways(scenarios_dir: Path, tmp_path: Path) -> None:
     back = run("convert", str(out), "--to", "modd")
     assert back.returncode == 0
     assert back.stdout.startswith("Drone usv {")
-    assert 'Subscriber sub_7("127.0.0.1":7407, "usv.accelerometer.accel_z", 0.25, MAX);' \
-        in back.stdout
+    assert (
+        'Subscriber sub_7("127.0.0.1":7407, "usv.accelerometer.accel_z", 0.25, MAX);' in back.stdout
+    )
 
 
 def test_fmt_check_and_rewrite(scenarios_dir: Path, tmp_path: Path) -> None:
@@ -64,7 +66,8 @@ def test_console_script_is_installed() -> None:
 
 
 def test_write_atomic_leaves_the_original_on_a_failed_write(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """A full disk during `modd fmt` or `convert -o`: the user's file is untouched,
     no temporary file is left behind."""
     import errno
@@ -100,13 +103,23 @@ def _modules_after(*argv: str) -> set[str]:
         "        pass\n"
         "print(json.dumps(sorted(sys.modules)))\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=60, check=True).stdout
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=True
+    ).stdout
     return {m.split(".")[0] for m in json.loads(out.strip().splitlines()[-1])}
 
 
-HEAVY = {"fastapi", "sqlalchemy", "starlette", "pydantic", "cvxpy", "zenoh", "modd_backend",
-         "modd_gen", "modd"}
+HEAVY = {
+    "fastapi",
+    "sqlalchemy",
+    "starlette",
+    "pydantic",
+    "cvxpy",
+    "zenoh",
+    "modd_backend",
+    "modd_gen",
+    "modd",
+}
 
 
 def test_help_imports_no_plugin() -> None:
@@ -128,20 +141,24 @@ def test_builtin_commands_are_the_declared_entry_points() -> None:
 
     from modd_model.cli import BUILTIN
 
-    declared = {ep.name: ep.value for ep in entry_points(group="modd.commands")
-                if ep.name in BUILTIN}
+    declared = {
+        ep.name: ep.value for ep in entry_points(group="modd.commands") if ep.name in BUILTIN
+    }
     assert declared == BUILTIN
 
 
 def test_plan_reads_no_entry_points(scenarios_dir: Path) -> None:
     """``modd plan`` of a small model: no entry-point scan, no lark (the
     parser is generated), no jsonschema (the compiled validator), no numpy."""
-    code = ("import sys, contextlib, io\n"
-            "from modd_model.cli import main\n"
-            "with contextlib.redirect_stdout(io.StringIO()):\n"
-            f"    main(['plan', {str(scenarios_dir / 'scenario1.modd')!r}])\n"
-            "print(sorted(m for m in ('importlib.metadata', 'lark', 'jsonschema', 'numpy')\n"
-            "             if m in sys.modules))\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=60, check=True).stdout
+    code = (
+        "import sys, contextlib, io\n"
+        "from modd_model.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        f"    main(['plan', {str(scenarios_dir / 'scenario1.modd')!r}])\n"
+        "print(sorted(m for m in ('importlib.metadata', 'lark', 'jsonschema', 'numpy')\n"
+        "             if m in sys.modules))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=True
+    ).stdout
     assert out.strip().splitlines()[-1] == "[]"

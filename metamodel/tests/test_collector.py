@@ -19,7 +19,8 @@ from modd_model.vocabulary import KNOWN_UNITS
 
 # The random documents of the print/parse property tests, shared.
 _spec = importlib.util.spec_from_file_location(
-    "roundtrip_strategies", Path(__file__).with_name("test_roundtrip_property.py"))
+    "roundtrip_strategies", Path(__file__).with_name("test_roundtrip_property.py")
+)
 assert _spec is not None and _spec.loader is not None
 _strategies = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(_strategies)
@@ -66,10 +67,15 @@ def test_every_unit_and_aggregation_of_the_original() -> None:
 
 
 def test_topic_published_twice_is_a_warning() -> None:
-    text = (DATA / "original_example.collector").read_text().replace(
-        'Publisher thermometer("127.0.0.1":7373, 1.0, "usv.thermometer.temperature")',
-        'Publisher thermometer("127.0.0.1":7373, 1.0, "usv.thermometer.temperature",'
-        ' "usv.accelerometer.accel_x")')
+    text = (
+        (DATA / "original_example.collector")
+        .read_text()
+        .replace(
+            'Publisher thermometer("127.0.0.1":7373, 1.0, "usv.thermometer.temperature")',
+            'Publisher thermometer("127.0.0.1":7373, 1.0, "usv.thermometer.temperature",'
+            ' "usv.accelerometer.accel_x")',
+        )
+    )
     result = load_text(text, "twice.collector")
     assert result.ok
     [w] = [d for d in result.diagnostics if "also published by" in d.message]
@@ -81,8 +87,11 @@ def test_lexical_forms_of_the_original_grammar() -> None:
     m = _load(DATA / "lexical_forms.collector")
     assert m["drone"]["name"] == "boat"
     assert [v["name"] for v in m["drone"]["sensors"][0]["variables"]] == ["Sensor", "gyro_z"]
-    assert m["pubBroker"] == {"name": "onboard", "endpoint": {"host": "localhost", "port": 7171},
-                              "logPath": "logs"}
+    assert m["pubBroker"] == {
+        "name": "onboard",
+        "endpoint": {"host": "localhost", "port": 7171},
+        "logPath": "logs",
+    }
     assert m["subBroker"]["name"] == "base" and m["subBroker"]["configPath"] == "conf"
     assert m["publishers"][0]["name"] == "p1"
     assert m["publishers"][0]["periodS"] == "0.04"
@@ -93,29 +102,37 @@ def test_lexical_forms_of_the_original_grammar() -> None:
 
 
 def test_short_topic_references_resolve_when_unambiguous() -> None:
-    text = (DATA / "original_example.collector").read_text().replace(
-        '"usv.thermometer.temperature", 4.0E0', "temperature, 4.0E0").replace(
-        '"usv.accelerometer.accel_z", .25', "'accelerometer.accel_z', .25")
+    text = (
+        (DATA / "original_example.collector")
+        .read_text()
+        .replace('"usv.thermometer.temperature", 4.0E0', "temperature, 4.0E0")
+        .replace('"usv.accelerometer.accel_z", .25', "'accelerometer.accel_z', .25")
+    )
     m = load_text(text, "short.collector").model
     assert m is not None
     assert m["subscribers"][2]["topic"] == "usv.thermometer.temperature"
     assert m["subscribers"][1]["topic"] == "usv.accelerometer.accel_z"
     # a short name two sensors share stays as written: an unknown topic, located
-    both = text.replace("temperature(DEGREE_CELSIUS);",
-                        "temperature(DEGREE_CELSIUS); accel_x(NONE);")
+    both = text.replace(
+        "temperature(DEGREE_CELSIUS);", "temperature(DEGREE_CELSIUS); accel_x(NONE);"
+    )
     twice = load_text(both.replace('"usv.accelerometer.accel_x", 2.0', "accel_x, 2.0"), "x")
     assert any("unknown topic 'accel_x'" in d.message for d in twice.errors)
 
 
 def test_string_escapes_and_newlines() -> None:
-    text = (DATA / "lexical_forms.collector").read_text().replace(
-        "'logs'", "'lo\\tgs\\u00e9\\'\nnext'")
+    text = (
+        (DATA / "lexical_forms.collector")
+        .read_text()
+        .replace("'logs'", "'lo\\tgs\\u00e9\\'\nnext'")
+    )
     m = load_text(text, "esc.collector").model
     assert m is not None and m["pubBroker"]["logPath"] == "lo\tgsé'\nnext"
 
 
-@pytest.mark.parametrize("number,canonical", [("4.0E-2", "0.04"), ("2E0", "2.0"),
-                                              ("0.5e1", "5.0"), (".25e+1", "2.5")])
+@pytest.mark.parametrize(
+    "number,canonical", [("4.0E-2", "0.04"), ("2E0", "2.0"), ("0.5e1", "5.0"), (".25e+1", "2.5")]
+)
 def test_exponent_numbers(number: str, canonical: str) -> None:
     text = (DATA / "lexical_forms.collector").read_text().replace("4.0E-2", number)
     m = load_text(text, "n.collector").model
@@ -134,8 +151,10 @@ def test_quoted_name_still_follows_the_identifier_rule() -> None:
     text = (DATA / "lexical_forms.collector").read_text().replace('"p1"', '"p 1"')
     result = load_text(text, "bad.collector")
     assert not result.ok
-    assert any(d.pointer == "/publishers/0/name" and d.location and d.location.line == 16
-               for d in result.errors), [str(d) for d in result.diagnostics]
+    assert any(
+        d.pointer == "/publishers/0/name" and d.location and d.location.line == 16
+        for d in result.errors
+    ), [str(d) for d in result.diagnostics]
 
 
 def test_runaway_string_points_at_its_start() -> None:
@@ -147,14 +166,15 @@ def test_runaway_string_points_at_its_start() -> None:
 
 
 def test_windows_1252_file_is_detected(tmp_path: Path) -> None:
-    text = "// Capteur de température, 25 °C – essai\n" + \
-        (DATA / "original_example.collector").read_text()
+    text = (
+        "// Capteur de température, 25 °C – essai\n"
+        + (DATA / "original_example.collector").read_text()
+    )
     f = tmp_path / "cp1252.collector"
     f.write_bytes(text.encode("cp1252"))
     result = load_file(f)
     assert result.ok
-    assert any("windows-1252" in d.message and d.severity == "warning"
-               for d in result.diagnostics)
+    assert any("windows-1252" in d.message and d.severity == "warning" for d in result.diagnostics)
     assert result.model == _load(DATA / "original_example.collector")
     # --encoding makes it exact: as UTF-8 the same bytes are a located error
     strict = load_file(f, "utf-8")
@@ -174,8 +194,9 @@ def test_utf8_with_bom_loads(tmp_path: Path) -> None:
 # -- export back -------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", ["original_example.collector", "lexical_forms.collector",
-                                  "all_words.collector"])
+@pytest.mark.parametrize(
+    "name", ["original_example.collector", "lexical_forms.collector", "all_words.collector"]
+)
 def test_collector_round_trip(name: str) -> None:
     model = _load(DATA / name)
     text, omitted = print_collector(model)
@@ -217,22 +238,45 @@ def test_demo_export_says_what_it_leaves_out() -> None:
 def _expressible(doc: dict[str, Any]) -> dict[str, Any]:
     """What the original form keeps of ``doc``."""
     out: dict[str, Any] = {"schemaVersion": doc["schemaVersion"]}
-    out["drone"] = {"name": doc["drone"]["name"], "sensors": [
-        {"name": s["name"], "variables": [
-            {"name": v["name"], "unit": v["unit"] if v["unit"] in KNOWN_UNITS else "NONE"}
-            for v in s["variables"]]} for s in doc["drone"]["sensors"]]}
-    for key, path, default in (("pubBroker", "logPath", "broker"),
-                               ("subBroker", "configPath", "base")):
+    out["drone"] = {
+        "name": doc["drone"]["name"],
+        "sensors": [
+            {
+                "name": s["name"],
+                "variables": [
+                    {"name": v["name"], "unit": v["unit"] if v["unit"] in KNOWN_UNITS else "NONE"}
+                    for v in s["variables"]
+                ],
+            }
+            for s in doc["drone"]["sensors"]
+        ],
+    }
+    for key, path, default in (
+        ("pubBroker", "logPath", "broker"),
+        ("subBroker", "configPath", "base"),
+    ):
         b = doc[key]
         out[key] = {"name": b.get("name", default), "endpoint": b["endpoint"], path: b[path]}
-    out["publishers"] = [{"name": p["name"],
-                          "endpoint": p.get("endpoint", doc["pubBroker"]["endpoint"]),
-                          "periodS": p["periodS"], "topics": p["topics"]}
-                         for p in doc["publishers"]]
-    out["subscribers"] = [{"name": s["name"], "endpoint": s["endpoint"], "topic": s["topic"],
-                           "periodS": s["periodS"], "aggregation": s["aggregation"]}
-                          for s in doc["subscribers"]
-                          if "endpoint" in s and s["aggregation"] in ORIGINAL_AGGREGATIONS]
+    out["publishers"] = [
+        {
+            "name": p["name"],
+            "endpoint": p.get("endpoint", doc["pubBroker"]["endpoint"]),
+            "periodS": p["periodS"],
+            "topics": p["topics"],
+        }
+        for p in doc["publishers"]
+    ]
+    out["subscribers"] = [
+        {
+            "name": s["name"],
+            "endpoint": s["endpoint"],
+            "topic": s["topic"],
+            "periodS": s["periodS"],
+            "aggregation": s["aggregation"],
+        }
+        for s in doc["subscribers"]
+        if "endpoint" in s and s["aggregation"] in ORIGINAL_AGGREGATIONS
+    ]
     return out
 
 
@@ -250,23 +294,35 @@ def test_any_document_exports_to_what_the_original_form_keeps(doc: dict[str, Any
 def test_convert_to_collector_cli(tmp_path: Path) -> None:
     demo = Path(__file__).parents[1] / "examples" / "demo.modd"
     out = tmp_path / "demo.collector"
-    res = subprocess.run([*MODD, "convert", str(demo), "--to", "collector", "-o", str(out)],
-                         capture_output=True, text=True, timeout=180)
+    res = subprocess.run(
+        [*MODD, "convert", str(demo), "--to", "collector", "-o", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=180,
+    )
     assert res.returncode == 0, res.stderr
     assert "left out of the .collector form" in res.stderr
     assert load_file(out).ok
-    back = subprocess.run([*MODD, "convert", str(out), "--to", "modd"],
-                          capture_output=True, text=True, timeout=180)
+    back = subprocess.run(
+        [*MODD, "convert", str(out), "--to", "modd"], capture_output=True, text=True, timeout=180
+    )
     assert back.returncode == 0 and back.stdout.startswith("Drone ")
 
 
 def test_validate_with_encoding_option(tmp_path: Path) -> None:
     f = tmp_path / "latin.collector"
-    f.write_bytes(("// é\n" + (DATA / "original_example.collector").read_text())
-                  .encode("latin-1"))
-    res = subprocess.run([*MODD, "validate", "--encoding", "utf-8", str(f)],
-                         capture_output=True, text=True, timeout=180)
+    f.write_bytes(("// é\n" + (DATA / "original_example.collector").read_text()).encode("latin-1"))
+    res = subprocess.run(
+        [*MODD, "validate", "--encoding", "utf-8", str(f)],
+        capture_output=True,
+        text=True,
+        timeout=180,
+    )
     assert res.returncode == 1 and f"{f}:1:4: error: byte 0xe9" in res.stderr
-    ok = subprocess.run([*MODD, "validate", "--encoding", "latin-1", str(f)],
-                        capture_output=True, text=True, timeout=180)
+    ok = subprocess.run(
+        [*MODD, "validate", "--encoding", "latin-1", str(f)],
+        capture_output=True,
+        text=True,
+        timeout=180,
+    )
     assert ok.returncode == 0, ok.stderr

@@ -45,9 +45,14 @@ def test_serial_link_parses_and_prints_back() -> None:
     result = load_text(_with_link(SERIAL), "m.modd")
     assert result.ok, [str(d) for d in result.diagnostics]
     assert result.model is not None
-    assert result.model["link"] == {"transport": "serial", "device": "/dev/ttyUSB0",
-                                  "baud": 57600, "rateBps": 3600, "maxPacket": 252,
-                                  "acceptedDelayS": "1.5"}
+    assert result.model["link"] == {
+        "transport": "serial",
+        "device": "/dev/ttyUSB0",
+        "baud": 57600,
+        "rateBps": 3600,
+        "maxPacket": 252,
+        "acceptedDelayS": "1.5",
+    }
     printed = print_model(result.model)
     assert SERIAL in printed
     again = load_text(printed, "p.modd")
@@ -60,20 +65,34 @@ def test_udp_link_parses() -> None:
     assert result.model is not None and result.model["link"]["transport"] == "udp"
 
 
-@pytest.mark.parametrize(("link", "fragment", "pointer", "line"), [
-    ("Link { transport = radio; }\n", "'radio' is not one of", "/link/transport", 11),
-    ("Link { transport = serial; }\n", "needs the radio's device", "/link", 11),
-    ('Link { transport = udp;\n device = "/dev/x"; }\n', "only for a serial link",
-     "/link/device", 12),
-    ("Link { delay = 0; }\n", "accepted delay must be greater than zero",
-     "/link/acceptedDelayS", 11),
-    ("Link { packet = 8; }\n", "8 is less than the minimum of 32", "/link/maxPacket", 11),
-    ('Link { transport = serial; device = "/dev/x";\n packet = 9000; }\n',
-     "larger than any telemetry radio", "/link/maxPacket", 12),
-    ('Link { rate = "fast"; }\n', "takes a whole number", "/link/rateBps", 11),
-])
-def test_bad_link_settings_are_located(link: str, fragment: str, pointer: str,
-                                       line: int) -> None:
+@pytest.mark.parametrize(
+    ("link", "fragment", "pointer", "line"),
+    [
+        ("Link { transport = radio; }\n", "'radio' is not one of", "/link/transport", 11),
+        ("Link { transport = serial; }\n", "needs the radio's device", "/link", 11),
+        (
+            'Link { transport = udp;\n device = "/dev/x"; }\n',
+            "only for a serial link",
+            "/link/device",
+            12,
+        ),
+        (
+            "Link { delay = 0; }\n",
+            "accepted delay must be greater than zero",
+            "/link/acceptedDelayS",
+            11,
+        ),
+        ("Link { packet = 8; }\n", "8 is less than the minimum of 32", "/link/maxPacket", 11),
+        (
+            'Link { transport = serial; device = "/dev/x";\n packet = 9000; }\n',
+            "larger than any telemetry radio",
+            "/link/maxPacket",
+            12,
+        ),
+        ('Link { rate = "fast"; }\n', "takes a whole number", "/link/rateBps", 11),
+    ],
+)
+def test_bad_link_settings_are_located(link: str, fragment: str, pointer: str, line: int) -> None:
     result = load_text(_with_link(link), "m.modd")
     hits = [d for d in result.diagnostics if fragment in d.message]
     assert hits, [str(d) for d in result.diagnostics]

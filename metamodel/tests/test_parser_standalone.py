@@ -20,32 +20,51 @@ def test_generated_parser_is_fresh() -> None:
     header = (SRC / "_modd_parser_gen.py").read_text(encoding="utf-8").splitlines()[:3]
     assert f"modd.lark sha256 {digest}" in "\n".join(header), (
         "modd.lark changed: regenerate _modd_parser_gen.py with the command in its header "
-        "and put the grammar's new sha256 in it")
+        "and put the grammar's new sha256 in it"
+    )
 
 
 def _shape(node: Any) -> Any:
     """A tree as plain data: rule names, tokens with their positions."""
     if isinstance(node, str) and hasattr(node, "type"):  # a Token
         tok: Any = node
-        return ("token", tok.type, str(tok), tok.line, tok.column, tok.end_line,
-                tok.end_column, tok.start_pos, tok.end_pos)
+        return (
+            "token",
+            tok.type,
+            str(tok),
+            tok.line,
+            tok.column,
+            tok.end_line,
+            tok.end_column,
+            tok.start_pos,
+            tok.end_pos,
+        )
     meta = node.meta
-    return (str(node.data), [_shape(c) for c in node.children],
-            (meta.line, meta.column, meta.end_line, meta.end_column) if not meta.empty else None)
+    return (
+        str(node.data),
+        [_shape(c) for c in node.children],
+        (meta.line, meta.column, meta.end_line, meta.end_column) if not meta.empty else None,
+    )
 
 
 def test_standalone_parses_as_lark() -> None:
     from lark import Lark
     from modd_model.parser import _parser
 
-    reference = Lark((SRC / "modd.lark").read_text(encoding="utf-8"), parser="lalr",
-                     propagate_positions=True, maybe_placeholders=False)
+    reference = Lark(
+        (SRC / "modd.lark").read_text(encoding="utf-8"),
+        parser="lalr",
+        propagate_positions=True,
+        maybe_placeholders=False,
+    )
     texts = [p.read_text(encoding="utf-8") for p in sorted(SCENARIOS.glob("*.modd"))]
-    texts += [p.read_text(encoding="utf-8")
-              for p in sorted((Path(__file__).parent / "data").glob("*.modd"))]
+    texts += [
+        p.read_text(encoding="utf-8")
+        for p in sorted((Path(__file__).parent / "data").glob("*.modd"))
+    ]
     assert len(texts) >= 3
     for text in texts:
         assert _shape(_parser().parse(text)) == _shape(reference.parse(text))
         assert [(t.type, str(t)) for t in _parser().lex(text, dont_ignore=True)] == [
-            (t.type, str(t)) for t in reference.lex(text, dont_ignore=True)]
-
+            (t.type, str(t)) for t in reference.lex(text, dont_ignore=True)
+        ]

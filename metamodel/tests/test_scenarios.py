@@ -33,13 +33,20 @@ def test_scenario1_content(scenarios_dir: Path) -> None:
     model = load_model(scenarios_dir / "scenario1.modd")
     assert model["drone"]["name"] == "usv"
     assert [v["name"] for v in model["drone"]["sensors"][0]["variables"]] == [
-        "accel_x", "accel_y", "accel_z"]
+        "accel_x",
+        "accel_y",
+        "accel_z",
+    ]
     assert model["publishers"][0]["periodS"] == "0.04"
     assert [s["periodS"] for s in model["subscribers"]] == ["2.0", "2.0"] + ["0.25"] * 5
     assert model["pubBroker"]["endpoint"] == {"host": "127.0.0.1", "port": 7171}
     assert model["subscribers"][6] == {
-        "name": "sub_7", "endpoint": {"host": "127.0.0.1", "port": 7407},
-        "topic": "usv.accelerometer.accel_z", "periodS": "0.25", "aggregation": "MAX"}
+        "name": "sub_7",
+        "endpoint": {"host": "127.0.0.1", "port": 7407},
+        "topic": "usv.accelerometer.accel_z",
+        "periodS": "0.25",
+        "aggregation": "MAX",
+    }
 
 
 def test_scenario2_has_19_topics_and_subscriptions(scenarios_dir: Path) -> None:
@@ -78,17 +85,33 @@ def test_product_extensions_round_trip() -> None:
     assert result.ok, [str(d) for d in result.diagnostics]
     model = result.model
     assert model is not None
-    assert model["link"] == {"transport": "tcp", "keyRef": "env:MODD_PSK", "expectedRttS": "0.05",
-                             "maxBuffer": 500, "pingS": "0.5", "alpha": "1.0", "beta": "2.5"}
-    assert model["pubBroker"]["ingress"] == {"unixSocket": "/tmp/modd/ingress.sock",
-                                             "tcpPort": 7170}
+    assert model["link"] == {
+        "transport": "tcp",
+        "keyRef": "env:MODD_PSK",
+        "expectedRttS": "0.05",
+        "maxBuffer": 500,
+        "pingS": "0.5",
+        "alpha": "1.0",
+        "beta": "2.5",
+    }
+    assert model["pubBroker"]["ingress"] == {
+        "unixSocket": "/tmp/modd/ingress.sock",
+        "tcpPort": 7170,
+    }
     water = model["drone"]["sensors"][1]["variables"]
-    assert water[1] == {"name": "conductivity", "unit": "mS/cm", "type": "float64",
-                        "description": "Water conductivity \"EC25\""}
+    assert water[1] == {
+        "name": "conductivity",
+        "unit": "mS/cm",
+        "type": "float64",
+        "description": 'Water conductivity "EC25"',
+    }
     assert "endpoint" not in model["subscribers"][1]
     autopilot = model["drone"]["sensors"][2]
     assert autopilot["kind"] == "mavlink"
-    assert autopilot["variables"][0]["source"] == {"message": "GLOBAL_POSITION_INT",
-                                                   "field": "lat", "scale": 1e-7}
+    assert autopilot["variables"][0]["source"] == {
+        "message": "GLOBAL_POSITION_INT",
+        "field": "lat",
+        "scale": 1e-7,
+    }
     assert autopilot["variables"][1]["source"]["offset"] == -0.5
     assert load_text(dumps(model, "modd"), "again.modd").model == model

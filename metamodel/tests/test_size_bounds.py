@@ -38,8 +38,11 @@ def test_every_collection_and_string_of_the_schema_is_bounded() -> None:
             unbounded.append(f"{path}: array without maxItems")
         if kind == "string" and not ({"maxLength", "const", "enum"} & node.keys()):
             unbounded.append(f"{path}: string without maxLength")
-        if kind == "object" and node.get("additionalProperties") not in (False, None) \
-                and "maxProperties" not in node:
+        if (
+            kind == "object"
+            and node.get("additionalProperties") not in (False, None)
+            and "maxProperties" not in node
+        ):
             unbounded.append(f"{path}: open object without maxProperties")
     assert unbounded == []
 
@@ -92,12 +95,16 @@ def base(scenarios_dir: Any) -> dict[str, Any]:
     return load_model(scenarios_dir / "scenario1.modd")
 
 
-@pytest.mark.parametrize(("pointer", "limit"), [
-    ("/drone/sensors/0/variables", 256),
-    ("/publishers/0/topics", 256),
-])
+@pytest.mark.parametrize(
+    ("pointer", "limit"),
+    [
+        ("/drone/sensors/0/variables", 256),
+        ("/publishers/0/topics", 256),
+    ],
+)
 def test_lists_past_their_bound_refused_at_their_pointer(
-        base: dict[str, Any], pointer: str, limit: int) -> None:
+    base: dict[str, Any], pointer: str, limit: int
+) -> None:
     doc = copy.deepcopy(base)
     node: Any = doc
     for part in pointer.strip("/").split("/"):

@@ -48,8 +48,11 @@ REJECTED = [
     ("host-space", "/subBroker/endpoint/host", "a b"),
     ("host-not-an-address", "/subBroker/endpoint/host", "999.1.1.1"),
     ("host-bad-ipv6", "/subBroker/endpoint/host", "1::2::3"),
-    ("config-path-toml-injection", "/subBroker/configPath",
-     '/conf"\n[zenoh]\nlisten = ["tcp/0.0.0.0:7447"]\n#'),
+    (
+        "config-path-toml-injection",
+        "/subBroker/configPath",
+        '/conf"\n[zenoh]\nlisten = ["tcp/0.0.0.0:7447"]\n#',
+    ),
     ("log-path-control", "/pubBroker/logPath", "/logs\x1b[2J"),
     ("socket-path-newline", "/pubBroker/ingress/unixSocket", "/run/x.sock\n"),
     ("path-too-long", "/pubBroker/logPath", "/" + "a" * 1024),
@@ -57,15 +60,19 @@ REJECTED = [
     ("key-ref-env-not-a-name", "/link/keyRef", "env:A B"),
     ("description-escape", "/drone/description", "the \x1b[31mred\x1b[0m boat"),
     ("description-too-long", "/drone/description", "x" * 1001),
-    ("mavlink-message-newline", "/drone/sensors/0/variables/0/source",
-     {"message": "RAW_IMU\n", "field": "xacc"}),
+    (
+        "mavlink-message-newline",
+        "/drone/sensors/0/variables/0/source",
+        {"message": "RAW_IMU\n", "field": "xacc"},
+    ),
     ("layout-node-id-control", "/layout/nodes", {"a\x00b": {"x": 0, "y": 0}}),
 ]
 
 
 @pytest.mark.parametrize("case_id,pointer,value", REJECTED, ids=[c[0] for c in REJECTED])
-def test_hostile_string_is_rejected_at_its_pointer(base: dict[str, Any], case_id: str,
-                                                   pointer: str, value: Any) -> None:
+def test_hostile_string_is_rejected_at_its_pointer(
+    base: dict[str, Any], case_id: str, pointer: str, value: Any
+) -> None:
     doc = _set(base, pointer, value)
     errors = [d for d in validate(doc) if d.severity == "error"]
     assert errors, f"{case_id}: accepted"
@@ -76,19 +83,23 @@ ACCEPTED = [
     # a unit is checked by UDUNITS-2 too (test_units.py); the long name takes any text
     ("unit-symbols", "/drone/sensors/0/variables/0/unit", "µS/cm"),
     ("long-name-unicode", "/drone/sensors/0/variables/0/longName", "µS/cm · °C · 米/秒²"),
-    ("long-name-quotes-and-comment", "/drone/sensors/0/variables/0/longName",
-     '*/ "m" \'s\' \\ ${x} $(id)'),
+    (
+        "long-name-quotes-and-comment",
+        "/drone/sensors/0/variables/0/longName",
+        "*/ \"m\" 's' \\ ${x} $(id)",
+    ),
     ("host-name", "/subBroker/endpoint/host", "base-station.local"),
     ("host-ipv6", "/subBroker/endpoint/host", "::1"),
-    ("path-unicode", "/subBroker/configPath", "/données/конфиг \"q\" $(id)"),
+    ("path-unicode", "/subBroker/configPath", '/données/конфиг "q" $(id)'),
     ("description-multiline", "/drone/description", "line one\nline two\ttabbed"),
     ("key-ref-file", "/link/keyRef", "file:/etc/modd/link key"),
 ]
 
 
 @pytest.mark.parametrize("case_id,pointer,value", ACCEPTED, ids=[c[0] for c in ACCEPTED])
-def test_printable_text_is_accepted(base: dict[str, Any], case_id: str, pointer: str,
-                                    value: Any) -> None:
+def test_printable_text_is_accepted(
+    base: dict[str, Any], case_id: str, pointer: str, value: Any
+) -> None:
     doc = _set(base, pointer, value)
     assert [str(d) for d in validate(doc) if d.severity == "error"] == []
 
@@ -97,7 +108,8 @@ def test_dsl_escape_cannot_smuggle_a_newline_into_a_unit() -> None:
     text = (
         'Drone usv { Sensors { Sensor imu measures { ax("m\\n#include <cstdlib>"); } } }\n'
         'PubBroker("127.0.0.1":7171, "/logs");\nSubBroker("127.0.0.1":7272, "/conf");\n'
-        'Publishers { Publisher pub_1(0.04, "usv.imu.ax"); }\nSubscriptions { }\n')
+        'Publishers { Publisher pub_1(0.04, "usv.imu.ax"); }\nSubscriptions { }\n'
+    )
     result = load_text(text, "m.modd")
     # the grammar keeps the backslash: then the unit holds no newline
     if result.ok and result.model is not None:

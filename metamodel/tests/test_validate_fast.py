@@ -18,9 +18,18 @@ validate_module = importlib.import_module("modd_model.validate")
 
 BASE: dict[str, Any] = {
     "schemaVersion": "1.0",
-    "drone": {"name": "d", "sensors": [
-        {"name": "imu", "variables": [{"name": "ax", "unit": "METER"},
-                                      {"name": "flag", "unit": "NONE", "type": "bool"}]}]},
+    "drone": {
+        "name": "d",
+        "sensors": [
+            {
+                "name": "imu",
+                "variables": [
+                    {"name": "ax", "unit": "METER"},
+                    {"name": "flag", "unit": "NONE", "type": "bool"},
+                ],
+            }
+        ],
+    },
     "pubBroker": {"endpoint": {"host": "127.0.0.1", "port": 7171}, "logPath": "/tmp/l"},
     "subBroker": {"endpoint": {"host": "127.0.0.1", "port": 7272}, "configPath": "/tmp/c"},
     "publishers": [{"name": "p", "periodS": "0.04", "topics": ["d.imu.ax", "d.imu.flag"]}],
@@ -30,8 +39,27 @@ BASE: dict[str, Any] = {
     ],
 }
 
-STRINGS = ["a\n", "a\r", "a\u200b", "\u0000", "a b", "1a", "é", "\u0661", "", "a$", "A" * 300,
-           "x.y", "d.imu.ax\n", "0.1\n", "-1", "1e3", " 1.0", "file:\u2028", "env:A\n"]
+STRINGS = [
+    "a\n",
+    "a\r",
+    "a\u200b",
+    "\u0000",
+    "a b",
+    "1a",
+    "é",
+    "\u0661",
+    "",
+    "a$",
+    "A" * 300,
+    "x.y",
+    "d.imu.ax\n",
+    "0.1\n",
+    "-1",
+    "1e3",
+    " 1.0",
+    "file:\u2028",
+    "env:A\n",
+]
 VALUES: list[Any] = [*STRINGS, 0, -1, 1.5, 10**30, 1e300, True, None, [], {}, ["a"]]
 
 

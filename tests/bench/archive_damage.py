@@ -18,8 +18,10 @@ import tempfile
 import time
 from pathlib import Path
 
-sys.path[:0] = [str(Path(__file__).resolve().parents[1] / "runtime"),
-                str(Path(__file__).resolve().parents[1])]
+sys.path[:0] = [
+    str(Path(__file__).resolve().parents[1] / "runtime"),
+    str(Path(__file__).resolve().parents[1]),
+]
 
 import pubbroker_harness  # noqa: E402
 from mcap.reader import make_reader  # noqa: E402
@@ -58,8 +60,7 @@ def damaged_copies(data: bytes, layout: list[oracle.Record], d: Path) -> dict[st
     return want
 
 
-def startup(label: str, binary: Path, data: bytes, layout: list[oracle.Record],
-            tmp: Path) -> None:
+def startup(label: str, binary: Path, data: bytes, layout: list[oracle.Record], tmp: Path) -> None:
     d = tmp / f"archive-{label}"
     want = damaged_copies(data, layout, d)
     pubbroker_harness.BIN = binary
@@ -71,10 +72,12 @@ def startup(label: str, binary: Path, data: bytes, layout: list[oracle.Record],
     b.stop()
     got = {name: count(d / name) for name in want}
     single = [(want[n], got[n]) for n in want if n != "usv-flipall.mcap"]
-    print(f"{label} PubBroker start-up on 26 crashed files: {took:.2f} s; single flips: kept = "
-          f"oracle in {sum(w == g for w, g in single)}/25, fewest kept "
-          f"{min(g for _, g in single)}; all 25 flips: kept {got['usv-flipall.mcap']}, oracle "
-          f"{want['usv-flipall.mcap']}")
+    print(
+        f"{label} PubBroker start-up on 26 crashed files: {took:.2f} s; single flips: kept = "
+        f"oracle in {sum(w == g for w, g in single)}/25, fewest kept "
+        f"{min(g for _, g in single)}; all 25 flips: kept {got['usv-flipall.mcap']}, oracle "
+        f"{want['usv-flipall.mcap']}"
+    )
 
 
 def cli(data: bytes, layout: list[oracle.Record], tmp: Path) -> None:
@@ -86,13 +89,18 @@ def cli(data: bytes, layout: list[oracle.Record], tmp: Path) -> None:
     for name, n in want.items():
         out = d / f"out-{name}"
         start = time.monotonic()
-        r = subprocess.run([str(modd), "archive", "recover", str(d / name), "-o", str(out)],
-                           capture_output=True, text=True)
+        r = subprocess.run(
+            [str(modd), "archive", "recover", str(d / name), "-o", str(out)],
+            capture_output=True,
+            text=True,
+        )
         took.append(time.monotonic() - start)
         tracebacks += "Traceback" in r.stderr
         equal += r.returncode == 0 and count(out) == n
-    print(f"modd archive recover, each of the 26 files: median {sorted(took)[13]:.2f} s "
-          f"(the command's start included); kept = oracle in {equal}/26; tracebacks {tracebacks}")
+    print(
+        f"modd archive recover, each of the 26 files: median {sorted(took)[13]:.2f} s "
+        f"(the command's start included); kept = oracle in {equal}/26; tracebacks {tracebacks}"
+    )
 
 
 def main() -> int:
@@ -104,8 +112,10 @@ def main() -> int:
         data = crashed_file(tmp)
         layout = oracle.records(data)
         chunks = sum(1 for op, _, _ in layout if op == oracle.CHUNK)
-        print(f"crashed file: {len(data)} bytes, {chunks} chunks, "
-              f"{oracle.count_valid(data, layout)} messages")
+        print(
+            f"crashed file: {len(data)} bytes, {chunks} chunks, "
+            f"{oracle.count_valid(data, layout)} messages"
+        )
         startup("this", BIN, data, layout, tmp)
         if args.compare:
             startup("compared", args.compare, data, layout, tmp)

@@ -39,15 +39,24 @@ SCENARIOS = REPO / "metamodel" / "examples" / "scenarios"
 PASSWORD = "bench-admin-password"
 
 
-
-
 def start_backend(data: Path, port: int) -> subprocess.Popen[bytes]:
     exe = Path(sys.executable).with_name("modd-backend")
     log = (data / "backend.log").open("wb")
     proc = subprocess.Popen(
-        [str(exe), "--host", "127.0.0.1", "--port", str(port), "--data", str(data),
-         "--no-zenoh", "--admin-password", PASSWORD],
-        stdout=log, stderr=subprocess.STDOUT,
+        [
+            str(exe),
+            "--host",
+            "127.0.0.1",
+            "--port",
+            str(port),
+            "--data",
+            str(data),
+            "--no-zenoh",
+            "--admin-password",
+            PASSWORD,
+        ],
+        stdout=log,
+        stderr=subprocess.STDOUT,
     )
     log.close()
     deadline = time.monotonic() + 120
@@ -118,13 +127,15 @@ def health_during_big_plans(c: httpx.Client, port: int, plans: int, backend_pid:
     body = {"model": valid_synthetic(5000, 25000)}
     trips: list[float] = []
     oks: list[bool] = []
-    c.post("/api/plan", json={"text": (SCENARIOS / "scenario1.modd").read_text()},
-           timeout=300).raise_for_status()  # the workers started: a running service's
+    c.post(
+        "/api/plan", json={"text": (SCENARIOS / "scenario1.modd").read_text()}, timeout=300
+    ).raise_for_status()  # the workers started: a running service's
     before = cpu_seconds(backend_pid)
 
     def plan() -> None:
-        with httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=120,
-                          headers=dict(c.headers)) as pc:
+        with httpx.Client(
+            base_url=f"http://127.0.0.1:{port}", timeout=120, headers=dict(c.headers)
+        ) as pc:
             for _ in range(plans):
                 start = time.perf_counter()
                 r = pc.post("/api/plan", json=body)
@@ -144,24 +155,33 @@ def health_during_big_plans(c: httpx.Client, port: int, plans: int, backend_pid:
     after = cpu_seconds(backend_pid)
     health.sort()
     p99 = health[max(0, int(len(health) * 0.99) - 1)]
-    print(f"\nPOST /api/plan, 5,000 topics x 25,000 subscribers: round trip median "
-          f"{statistics.median(trips):.2f} s, max {max(trips):.2f} s, {sum(oks)}/{len(oks)} ok")
-    print(f"GET /api/health meanwhile ({len(health)} requests): median "
-          f"{statistics.median(health):.1f} ms, p99 {p99:.1f} ms, max {health[-1]:.1f} ms; "
-          "target p99 <= 50 ms")
+    print(
+        f"\nPOST /api/plan, 5,000 topics x 25,000 subscribers: round trip median "
+        f"{statistics.median(trips):.2f} s, max {max(trips):.2f} s, {sum(oks)}/{len(oks)} ok"
+    )
+    print(
+        f"GET /api/health meanwhile ({len(health)} requests): median "
+        f"{statistics.median(health):.1f} ms, p99 {p99:.1f} ms, max {health[-1]:.1f} ms; "
+        "target p99 <= 50 ms"
+    )
     loop, work = ((a - b) / plans for a, b in zip(after, before, strict=True))
-    print(f"CPU per 5,000 x 25,000 plan request: backend process {loop:.2f} s (event loop, "
-          f"health polls included), planning workers {work:.2f} s, total {loop + work:.2f} s")
+    print(
+        f"CPU per 5,000 x 25,000 plan request: backend process {loop:.2f} s (event loop, "
+        f"health polls included), planning workers {work:.2f} s, total {loop + work:.2f} s"
+    )
     before = cpu_seconds(backend_pid)
     start = time.perf_counter()
-    with httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=120,
-                      headers=dict(c.headers)) as pc:
+    with httpx.Client(
+        base_url=f"http://127.0.0.1:{port}", timeout=120, headers=dict(c.headers)
+    ) as pc:
         ok = pc.post("/api/plan", json=body).json()["ok"]
     trip = time.perf_counter() - start
     loop, work = (a - b for a, b in zip(cpu_seconds(backend_pid), before, strict=True))
-    print(f"one plan alone: round trip {trip:.2f} s ({'ok' if ok else 'NOT planned'}); CPU: "
-          f"backend process {loop:.2f} s, planning worker {work:.2f} s, total "
-          f"{loop + work:.2f} s (the machine-independent figure); target: round trip <= 3 s")
+    print(
+        f"one plan alone: round trip {trip:.2f} s ({'ok' if ok else 'NOT planned'}); CPU: "
+        f"backend process {loop:.2f} s, planning worker {work:.2f} s, total "
+        f"{loop + work:.2f} s (the machine-independent figure); target: round trip <= 3 s"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -182,19 +202,25 @@ def main(argv: list[str] | None = None) -> int:
                 if args.big_only:
                     return 0
                 print(f"POST /api/plan, {args.runs} requests each, modd-backend on loopback")
-                print(f"{'scenario':<10} {'input':<5} {'method':<6} "
-                      f"{'median ms':>9} {'p95 ms':>7} {'max ms':>7}")
+                print(
+                    f"{'scenario':<10} {'input':<5} {'method':<6} "
+                    f"{'median ms':>9} {'p95 ms':>7} {'max ms':>7}"
+                )
                 for name in ("scenario1", "scenario2"):
                     path = SCENARIOS / f"{name}.modd"
-                    bodies: dict[str, dict[str, object]] = {"modd": {"text": path.read_text()},
-                              "json": {"model": load_model(path)}}
+                    bodies: dict[str, dict[str, object]] = {
+                        "modd": {"text": path.read_text()},
+                        "json": {"model": load_model(path)},
+                    }
                     for kind, body in bodies.items():
                         for method in ("exact", "cvxpy"):
                             measure(c, body, method, 3)  # warm-up
                             t = sorted(measure(c, body, method, args.runs))
                             p95 = t[max(0, int(len(t) * 0.95) - 1)]
-                            print(f"{name:<10} {kind:<5} {method:<6} "
-                                  f"{statistics.median(t):>9.1f} {p95:>7.1f} {t[-1]:>7.1f}")
+                            print(
+                                f"{name:<10} {kind:<5} {method:<6} "
+                                f"{statistics.median(t):>9.1f} {p95:>7.1f} {t[-1]:>7.1f}"
+                            )
         finally:
             os.kill(proc.pid, signal.SIGTERM)
             proc.wait(10)

@@ -68,13 +68,15 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--minutes", type=float, default=10.0)
     ap.add_argument("--rate", type=int, default=3600, help="pace in bytes/s (SiK with ECC)")
-    ap.add_argument("--live", action="store_true",
-                    help="also live latency with vs without a running backfill")
+    ap.add_argument(
+        "--live", action="store_true", help="also live latency with vs without a running backfill"
+    )
     ap.add_argument("--live-only", action="store_true", help="only the --live part")
     ap.add_argument("--live-rate", type=int, default=600, help="the radio's bytes/s (--live)")
     ap.add_argument("--outage", type=float, default=80.0, help="outage to fill, s (< 90) (--live)")
-    ap.add_argument("--phase", type=float, default=6.0,
-                    help="seconds of a phase without backfill (--live)")
+    ap.add_argument(
+        "--phase", type=float, default=6.0, help="seconds of a phase without backfill (--live)"
+    )
     ap.add_argument("--pairs", type=int, default=5, help="at most 5 pairs (--live)")
     args = ap.parse_args()
     pacing = 0 if args.live_only else pace(args)
@@ -92,16 +94,38 @@ def live(args: argparse.Namespace) -> int:
         print("live latency: no pair measured (nothing to backfill)")
         return 1
     rows, ratio = report(pairs, facts)
-    print(f"\nlive latency (window end -> delivery, ms), scenario 1 over udp through the radio "
-          f"emulator at {args.live_rate} B/s, after a {args.outage:g} s outage; phases of "
-          f"{args.phase:g} s without a backfill / with one subscriber's gaps filled\n")
-    print(table(["pair (gap of)", "values", "p50", "p99", "values (bf)", "p50 (bf)", "p99 (bf)",
-                 "windows filled", "backfill B/s", "radio B/s down", "radio queue drops"], rows))
+    print(
+        f"\nlive latency (window end -> delivery, ms), scenario 1 over udp through the radio "
+        f"emulator at {args.live_rate} B/s, after a {args.outage:g} s outage; phases of "
+        f"{args.phase:g} s without a backfill / with one subscriber's gaps filled\n"
+    )
+    print(
+        table(
+            [
+                "pair (gap of)",
+                "values",
+                "p50",
+                "p99",
+                "values (bf)",
+                "p50 (bf)",
+                "p99 (bf)",
+                "windows filled",
+                "backfill B/s",
+                "radio B/s down",
+                "radio queue drops",
+            ],
+            rows,
+        )
+    )
     before, after = facts["load_before"], facts.get("load_after", (0, 0, 0))
-    print(f"\np99 with / without backfill (medians of {len(pairs)} pairs): {ratio:.3f} "
-          f"({ratio - 1:+.1%}; target within +10%)")
-    print(f"load average (1 min) {before[0]:.1f} before, {after[0]:.1f} after, on "
-          f"{os.cpu_count()} cores; {' '.join(facts.get('radio', []))}")
+    print(
+        f"\np99 with / without backfill (medians of {len(pairs)} pairs): {ratio:.3f} "
+        f"({ratio - 1:+.1%}; target within +10%)"
+    )
+    print(
+        f"load average (1 min) {before[0]:.1f} before, {after[0]:.1f} after, on "
+        f"{os.cpu_count()} cores; {' '.join(facts.get('radio', []))}"
+    )
     return 0
 
 
@@ -112,25 +136,33 @@ def pace(args: argparse.Namespace) -> int:
     start_ns = (time.time_ns() // 1_000_000_000 - seconds - 60) * 1_000_000_000
     samples = write_archive(tmp / "archive", start_ns, seconds)
     link, ingress = free_port(), free_port()
-    cfg = {"name": "usv", "link": {"host": "127.0.0.1", "port": link, "key": "env:MODD_LINK_KEY"},
-           "ingress": {"host": "127.0.0.1", "port": ingress},
-           "archive": {"dir": str(tmp / "archive"), "flush_interval_ms": 200},
-           "topics": [{"name": TOPIC, "type": "float32"}], "status_period_s": 0}
+    cfg = {
+        "name": "usv",
+        "link": {"host": "127.0.0.1", "port": link, "key": "env:MODD_LINK_KEY"},
+        "ingress": {"host": "127.0.0.1", "port": ingress},
+        "archive": {"dir": str(tmp / "archive"), "flush_interval_ms": 200},
+        "topics": [{"name": TOPIC, "type": "float32"}],
+        "status_period_s": 0,
+    }
     (tmp / "pb.json").write_text(json.dumps(cfg))
     pb = Proc("pb", [str(PUBBROKER), "--config", str(tmp / "pb.json")], tmp / "pb.log")
     budget_s = 0.0
     try:
         wait_port(link)
         pcap = tmp / "bf.pcap"
-        tshark = Proc("tshark", ["tshark", "-q", "-i", "lo", "-f", f"tcp port {link}",
-                                 "-w", str(pcap)], tmp / "tshark.log")
+        tshark = Proc(
+            "tshark",
+            ["tshark", "-q", "-i", "lo", "-f", f"tcp port {link}", "-w", str(pcap)],
+            tmp / "tshark.log",
+        )
         assert tshark.wait_log("Capture started", 15), tshark.log()
         time.sleep(0.5)
         sock = socket.create_connection(("127.0.0.1", link))
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         _, splitter = client_handshake(sock, KEY.encode())
-        req = bf.BackfillRequest(1, TOPIC, ValueType.FLOAT32, Aggregation.ALL, 1_000_000,
-                                 start_ns, seconds, 0, args.rate)
+        req = bf.BackfillRequest(
+            1, TOPIC, ValueType.FLOAT32, Aggregation.ALL, 1_000_000, start_ns, seconds, 0, args.rate
+        )
         began = time.monotonic()
         sock.sendall(bf.encode(req))
         got = frames = 0
@@ -155,11 +187,31 @@ def pace(args: argparse.Namespace) -> int:
         tshark.stop()
     finally:
         pb.stop()
-    out = subprocess.run(["tshark", "-r", str(pcap), "-T", "fields", "-e", "frame.time_relative",
-                          "-e", "tcp.srcport", "-e", "ip.len", "-e", "tcp.len"],
-                         check=True, capture_output=True, text=True).stdout
-    down = [(float(t), int(n), int(p)) for t, s, n, p in
-            (ln.split("\t") for ln in out.splitlines()) if int(s) == link]
+    out = subprocess.run(
+        [
+            "tshark",
+            "-r",
+            str(pcap),
+            "-T",
+            "fields",
+            "-e",
+            "frame.time_relative",
+            "-e",
+            "tcp.srcport",
+            "-e",
+            "ip.len",
+            "-e",
+            "tcp.len",
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    down = [
+        (float(t), int(n), int(p))
+        for t, s, n, p in (ln.split("\t") for ln in out.splitlines())
+        if int(s) == link
+    ]
     segments = [(t, n) for t, n, p in down if p > 0]
     wire = sum(n for _, n in segments)
     biggest = max(n for _, n in segments)
@@ -167,17 +219,27 @@ def pace(args: argparse.Namespace) -> int:
     for i, (t0, _) in enumerate(segments):
         worst = max(worst, sum(n for t, n in segments[i:] if t < t0 + 1.0))
     budget_s = wire / args.rate
-    print(f"backfill: {args.minutes:g} min of one {HZ} Hz float32 topic, ALL in 1 s windows, "
-          f"pace {args.rate} B/s\n")
-    print(table(["figure", "value"], [
-        ["samples in the archive / received", f"{samples} / {got}"],
-        ["BACKFILL_DATA frames", frames],
-        ["wire bytes drone->base (IP+TCP, data segments)", wire],
-        ["time the budget allows (wire bytes / pace)", f"{budget_s:.1f} s"],
-        ["backfill took (request -> END)", f"{took:.1f} s ({took / budget_s - 1:+.1%})"],
-        ["largest data segment", f"{biggest} B"],
-        ["most wire bytes in any 1 s", f"{worst} B (cap + one frame = {args.rate + biggest} B)"],
-    ]))
+    print(
+        f"backfill: {args.minutes:g} min of one {HZ} Hz float32 topic, ALL in 1 s windows, "
+        f"pace {args.rate} B/s\n"
+    )
+    print(
+        table(
+            ["figure", "value"],
+            [
+                ["samples in the archive / received", f"{samples} / {got}"],
+                ["BACKFILL_DATA frames", frames],
+                ["wire bytes drone->base (IP+TCP, data segments)", wire],
+                ["time the budget allows (wire bytes / pace)", f"{budget_s:.1f} s"],
+                ["backfill took (request -> END)", f"{took:.1f} s ({took / budget_s - 1:+.1%})"],
+                ["largest data segment", f"{biggest} B"],
+                [
+                    "most wire bytes in any 1 s",
+                    f"{worst} B (cap + one frame = {args.rate + biggest} B)",
+                ],
+            ],
+        )
+    )
     return 0 if got == samples and worst <= args.rate + biggest else 1
 
 

@@ -66,8 +66,12 @@ def drone_model(index: int, extra: int) -> dict[str, Any]:
     for sub in model["subscribers"]:
         sub.pop("endpoint", None)
     model["subscribers"] += [
-        {"name": f"x{k}", "topic": rng.choice(topics), "periodS": rng.choice(EXTRA_PERIODS),
-         "aggregation": rng.choice(EXTRA_AGGREGATIONS)}
+        {
+            "name": f"x{k}",
+            "topic": rng.choice(topics),
+            "periodS": rng.choice(EXTRA_PERIODS),
+            "aggregation": rng.choice(EXTRA_AGGREGATIONS),
+        }
         for k in range(extra)
     ]
     return model
@@ -91,8 +95,9 @@ class Drone:
         return sum(1 / float(s["periodS"]) for s in self.model["subscribers"])
 
 
-def subbroker_toml(tmp: Path, drone: Drone, model_path: Path, router: int,
-                   credentials: Path) -> Path:
+def subbroker_toml(
+    tmp: Path, drone: Drone, model_path: Path, router: int, credentials: Path
+) -> Path:
     path = tmp / f"{drone.name}.toml"
     path.write_text(f"""
 model = {json.dumps(str(model_path))}
@@ -142,8 +147,7 @@ class Browser:
             self.max_lag_s = max(self.max_lag_s, float(data.get("lag_s") or 0.0))
 
 
-async def browse(url: str, token: str, drone: Drone, browser: Browser,
-                 stop: asyncio.Event) -> None:
+async def browse(url: str, token: str, drone: Drone, browser: Browser, stop: asyncio.Event) -> None:
     import websockets
 
     async with websockets.connect(url, max_queue=None) as ws:
@@ -177,8 +181,10 @@ class Result:
         med = statistics.median
 
         def cpu(fps: list[Footprint]) -> str:
-            return (f"{med(f.cpu_percent for f in fps):.1f} % "
-                    f"(max {max(f.cpu_percent for f in fps):.1f} %)")
+            return (
+                f"{med(f.cpu_percent for f in fps):.1f} % "
+                f"(max {max(f.cpu_percent for f in fps):.1f} %)"
+            )
 
         def rss(fps: list[Footprint]) -> str:
             return f"{med(f.rss_median_kb for f in fps) / 1024:.1f} MB"
@@ -216,12 +222,26 @@ def start_backend(tmp: Path, router: int, credentials: Path) -> tuple[Proc, int]
     exe = str(Path(PYTHON).with_name("modd-backend"))
     data = tmp / "backend"
     data.mkdir()
-    proc = Proc("backend", [exe, "--port", str(port), "--data", str(data),
-                            "--zenoh-connect", f"tcp/127.0.0.1:{router}",
-                            "--zenoh-credentials", str(credentials / "backend.cred"),
-                            "--deploy-key", str(credentials / "deploy.key"),
-                            "--scene-port", "-1"],
-                tmp / "backend.log", env={"MODD_ADMIN_PASSWORD": PASSWORD})
+    proc = Proc(
+        "backend",
+        [
+            exe,
+            "--port",
+            str(port),
+            "--data",
+            str(data),
+            "--zenoh-connect",
+            f"tcp/127.0.0.1:{router}",
+            "--zenoh-credentials",
+            str(credentials / "backend.cred"),
+            "--deploy-key",
+            str(credentials / "deploy.key"),
+            "--scene-port",
+            "-1",
+        ],
+        tmp / "backend.log",
+        env={"MODD_ADMIN_PASSWORD": PASSWORD},
+    )
     return proc, port
 
 
@@ -231,8 +251,7 @@ def start_drone(tmp: Path, drone: Drone, model_path: Path) -> Proc:
     for attempt in range(3):
         drone.link, drone.ingress = free_port(), free_port()
         try:
-            proc = start_pubbroker(tmp, model_path, drone.link, drone.ingress,
-                                   tag=f"pb{attempt}")
+            proc = start_pubbroker(tmp, model_path, drone.link, drone.ingress, tag=f"pb{attempt}")
         except TimeoutError:  # it died before listening
             continue
         time.sleep(0.1)
@@ -242,8 +261,9 @@ def start_drone(tmp: Path, drone: Drone, model_path: Path) -> Proc:
     raise RuntimeError(f"{drone.name}: the PubBroker did not start (see {tmp})")
 
 
-def wait_all_seen(browser: Browser, drones: list[Drone], procs: list[Proc],
-                  timeout_s: float) -> None:
+def wait_all_seen(
+    browser: Browser, drones: list[Drone], procs: list[Proc], timeout_s: float
+) -> None:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if all(browser.seen.get(d.name, set()) >= set(d.subscribers) for d in drones):
@@ -252,8 +272,11 @@ def wait_all_seen(browser: Browser, drones: list[Drone], procs: list[Proc],
             if not p.alive():
                 raise RuntimeError(f"{p.name} exited:\n{p.log()[-2000:]}")
         time.sleep(0.2)
-    missing = {d.name: sorted(set(d.subscribers) - browser.seen.get(d.name, set()))[:5]
-               for d in drones if set(d.subscribers) - browser.seen.get(d.name, set())}
+    missing = {
+        d.name: sorted(set(d.subscribers) - browser.seen.get(d.name, set()))[:5]
+        for d in drones
+        if set(d.subscribers) - browser.seen.get(d.name, set())
+    }
     raise RuntimeError(f"no value within {timeout_s} s for {missing}")
 
 
@@ -264,9 +287,21 @@ async def _run(tmp: Path, n: int, seconds: float, extra: int, batched: bool = Tr
     # as deployed: the router authenticates every client and applies access control
     credentials = tmp / "credentials"
     CredentialStore(credentials).ensure()
-    procs.append(Proc("router", [str(PYTHON), kit, "router", "--listen",
-                                 f"tcp/127.0.0.1:{router}", "--credentials", str(credentials)],
-                      tmp / "router.log"))
+    procs.append(
+        Proc(
+            "router",
+            [
+                str(PYTHON),
+                kit,
+                "router",
+                "--listen",
+                f"tcp/127.0.0.1:{router}",
+                "--credentials",
+                str(credentials),
+            ],
+            tmp / "router.log",
+        )
+    )
     try:
         if not procs[0].wait_log("ready", 30):
             raise RuntimeError(f"router: {procs[0].log()}")
@@ -280,14 +315,26 @@ async def _run(tmp: Path, n: int, seconds: float, extra: int, batched: bool = Tr
             path = dtmp / "model.json"
             path.write_text(json.dumps(d.model))
             d.pubbroker = start_drone(dtmp, d, path)
-            d.subbroker = Proc(f"sb-{d.name}", [*SUBBROKER, "--config",
-                                                str(subbroker_toml(dtmp, d, path, router,
-                                                                   credentials))],
-                               dtmp / "sb.log")
+            d.subbroker = Proc(
+                f"sb-{d.name}",
+                [*SUBBROKER, "--config", str(subbroker_toml(dtmp, d, path, router, credentials))],
+                dtmp / "sb.log",
+            )
             procs += [d.pubbroker, d.subbroker]
             targets.append([d.name, d.ingress, str(path)])
-        load = Proc("load", [str(PYTHON), kit, "load", "--targets", json.dumps(targets),
-                             "--seconds", str(seconds + 300)], tmp / "load.log")
+        load = Proc(
+            "load",
+            [
+                str(PYTHON),
+                kit,
+                "load",
+                "--targets",
+                json.dumps(targets),
+                "--seconds",
+                str(seconds + 300),
+            ],
+            tmp / "load.log",
+        )
         procs.append(load)
         await asyncio.to_thread(wait_port, port, 180)
         tokens = {}
@@ -299,26 +346,45 @@ async def _run(tmp: Path, n: int, seconds: float, extra: int, batched: bool = Tr
             # live subscriptions per user (1,024) and a fleet asks for more
             for d in drones:
                 user = f"scientist_{d.name}"
-                r = await c.post("/api/users", headers=admin, json={
-                    "username": user, "password": PASSWORD, "roles": ["scientist"]})
+                r = await c.post(
+                    "/api/users",
+                    headers=admin,
+                    json={"username": user, "password": PASSWORD, "roles": ["scientist"]},
+                )
                 r.raise_for_status()
-                r = await c.post("/api/auth/login", json={"username": user,
-                                                          "password": PASSWORD})
+                r = await c.post("/api/auth/login", json={"username": user, "password": PASSWORD})
                 r.raise_for_status()
                 tokens[d.name] = r.json()["token"]
         browser, stop = Browser(), asyncio.Event()
-        tasks = [asyncio.create_task(browse(
-            f"ws://127.0.0.1:{port}/api/drones/{d.name}/stream"
-            + ("?batch=1" if batched else ""), tokens[d.name], d, browser, stop))
-            for d in drones]
+        tasks = [
+            asyncio.create_task(
+                browse(
+                    f"ws://127.0.0.1:{port}/api/drones/{d.name}/stream"
+                    + ("?batch=1" if batched else ""),
+                    tokens[d.name],
+                    d,
+                    browser,
+                    stop,
+                )
+            )
+            for d in drones
+        ]
         await asyncio.to_thread(wait_all_seen, browser, drones, procs, 60 + 3 * n)
-        samplers = [Sampler(p.pid).start() for d in drones
-                    for p in (d.pubbroker, d.subbroker) if p is not None]
-        shared = {"zenoh router (Python, router mode)": procs[0], "backend": backend,
-                  "publisher load (all drones, Python)": load}
+        samplers = [
+            Sampler(p.pid).start()
+            for d in drones
+            for p in (d.pubbroker, d.subbroker)
+            if p is not None
+        ]
+        shared = {
+            "zenoh router (Python, router mode)": procs[0],
+            "backend": backend,
+            "publisher load (all drones, Python)": load,
+        }
         shared_samplers = {k: Sampler(p.pid).start() for k, p in shared.items()}
-        shared_samplers["WebSocket clients (this process, all drones)"] = \
-            Sampler(os.getpid()).start()
+        shared_samplers["WebSocket clients (this process, all drones)"] = Sampler(
+            os.getpid()
+        ).start()
         browser.marked = True
         t0 = time.monotonic()
         await asyncio.sleep(seconds)
@@ -330,8 +396,15 @@ async def _run(tmp: Path, n: int, seconds: float, extra: int, batched: bool = Tr
         for t in tasks:
             t.cancel()
         await asyncio.gather(*tasks, return_exceptions=True)
-        return Result(n, measured, sum(d.values_per_s for d in drones), browser,
-                      fps[0::2], fps[1::2], shared_fps)
+        return Result(
+            n,
+            measured,
+            sum(d.values_per_s for d in drones),
+            browser,
+            fps[0::2],
+            fps[1::2],
+            shared_fps,
+        )
     finally:
         for p in reversed(procs):
             p.stop()
@@ -347,8 +420,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--drones", type=int, default=20)
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--extra-subscribers", type=int, default=50)
-    ap.add_argument("--unbatched", action="store_true",
-                    help="one WebSocket frame per value (the stream's default without ?batch=1)")
+    ap.add_argument(
+        "--unbatched",
+        action="store_true",
+        help="one WebSocket frame per value (the stream's default without ?batch=1)",
+    )
     args = ap.parse_args(argv)
     start = time.monotonic()
     result = run(args.drones, args.seconds, args.extra_subscribers, not args.unbatched)

@@ -27,8 +27,11 @@ NAMES = {"modd": "PubBroker", "mosquitto": "Mosquitto"}
 
 
 def run(scenarios: list[int], seconds: float) -> list[tuple[Scenario, Run]]:
-    return [(sc, measure(kind, sc, seconds, capture=False, footprint=True))
-            for sc in map(load, scenarios) for kind in NAMES]
+    return [
+        (sc, measure(kind, sc, seconds, capture=False, footprint=True))
+        for sc in map(load, scenarios)
+        for kind in NAMES
+    ]
 
 
 def render(results: list[tuple[Scenario, Run]], seconds: float) -> str:
@@ -37,18 +40,42 @@ def render(results: list[tuple[Scenario, Run]], seconds: float) -> str:
     for sc, r in results:
         assert r.footprint is not None
         fp = by_scenario.setdefault(sc.number, {})[r.kind] = r.footprint
-        rows.append([f"scenario {sc.number} ({sc.samples_per_s:g} samples/s)", NAMES[r.kind],
-                     fp.cpu_percent, fp.cpu_seconds, fp.rss_median_kb / 1024,
-                     fp.rss_peak_kb / 1024, r.delivery.values_per_s])
+        rows.append(
+            [
+                f"scenario {sc.number} ({sc.samples_per_s:g} samples/s)",
+                NAMES[r.kind],
+                fp.cpu_percent,
+                fp.cpu_seconds,
+                fp.rss_median_kb / 1024,
+                fp.rss_peak_kb / 1024,
+                r.delivery.values_per_s,
+            ]
+        )
         fps = by_scenario[sc.number]
         if len(fps) == len(NAMES):
-            rows.append([f"scenario {sc.number}", "ratio PubBroker / Mosquitto",
-                         ratio(fps["modd"].cpu_percent, fps["mosquitto"].cpu_percent), "",
-                         ratio(fps["modd"].rss_median_kb, fps["mosquitto"].rss_median_kb), "",
-                         ""])
-    return (f"Broker footprint at the scenario loads, {seconds:g} s per broker\n\n"
-            + table(["load", "broker", "CPU % of a core", "CPU-s", "RSS MB (median)",
-                     "RSS MB (peak)", "values/s delivered"], rows))
+            rows.append(
+                [
+                    f"scenario {sc.number}",
+                    "ratio PubBroker / Mosquitto",
+                    ratio(fps["modd"].cpu_percent, fps["mosquitto"].cpu_percent),
+                    "",
+                    ratio(fps["modd"].rss_median_kb, fps["mosquitto"].rss_median_kb),
+                    "",
+                    "",
+                ]
+            )
+    return f"Broker footprint at the scenario loads, {seconds:g} s per broker\n\n" + table(
+        [
+            "load",
+            "broker",
+            "CPU % of a core",
+            "CPU-s",
+            "RSS MB (median)",
+            "RSS MB (peak)",
+            "values/s delivered",
+        ],
+        rows,
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -39,24 +39,46 @@ def write_archive(path: Path, samples: int) -> None:
     with path.open("wb") as f:
         w = Writer(f)
         w.start(profile="", library="bench")
-        schema = w.register_schema(name="modd.float32", encoding="jsonschema",
-                                   data=b'{"type":"object","properties":{"value":{"type":"number"}}}')
+        schema = w.register_schema(
+            name="modd.float32",
+            encoding="jsonschema",
+            data=b'{"type":"object","properties":{"value":{"type":"number"}}}',
+        )
         chan = w.register_channel(topic=TOPIC, message_encoding="json", schema_id=schema)
         for i in range(samples):
             t = T0 + i * 10_000_000
-            w.add_message(chan, log_time=t, publish_time=t,
-                          data=json.dumps({"value": (i % 97) * 0.5}).encode())
+            w.add_message(
+                chan,
+                log_time=t,
+                publish_time=t,
+                data=json.dumps({"value": (i % 97) * 0.5}).encode(),
+            )
         w.finish()  # type: ignore[no-untyped-call]
 
 
 def start_backend(tmp: Path, port: int) -> subprocess.Popen[bytes]:
     exe = Path(sys.executable).with_name("modd-backend")
     return subprocess.Popen(
-        [str(exe), "--port", str(port), "--data", str(tmp / "data"), "--no-zenoh",
-         "--scene-port", "-1", "--foxglove-port", "0", "--archives", str(tmp / "archives"),
-         "--frontend", str(tmp / "none")],
+        [
+            str(exe),
+            "--port",
+            str(port),
+            "--data",
+            str(tmp / "data"),
+            "--no-zenoh",
+            "--scene-port",
+            "-1",
+            "--foxglove-port",
+            "0",
+            "--archives",
+            str(tmp / "archives"),
+            "--frontend",
+            str(tmp / "none"),
+        ],
         env={**os.environ, "MODD_ADMIN_PASSWORD": PASSWORD},
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
 
 
 def stop_backend(proc: subprocess.Popen[bytes]) -> None:
@@ -69,8 +91,9 @@ def stop_backend(proc: subprocess.Popen[bytes]) -> None:
 
 
 def login(base: str, user: str, password: str) -> dict[str, str]:
-    r = httpx.post(base + "/api/auth/login", timeout=30,
-                   json={"username": user, "password": password})
+    r = httpx.post(
+        base + "/api/auth/login", timeout=30, json={"username": user, "password": password}
+    )
     r.raise_for_status()
     return {"Authorization": f"Bearer {r.json()['token']}"}
 
@@ -99,8 +122,12 @@ def main() -> int:
             users = []
             for i in range((a.clients + 1) // 2):
                 name, pw = f"sci{i}", f"bench-scientist-password-{i}"
-                httpx.post(base + "/api/users", headers=admin, timeout=30, json={
-                    "username": name, "password": pw, "roles": ["scientist"]}).raise_for_status()
+                httpx.post(
+                    base + "/api/users",
+                    headers=admin,
+                    timeout=30,
+                    json={"username": name, "password": pw, "roles": ["scientist"]},
+                ).raise_for_status()
                 users.append(login(base, name, pw))
             stop = threading.Event()
             answers: Counter[int] = Counter()
@@ -116,8 +143,9 @@ def main() -> int:
                         if r.status_code != 200:
                             stop.wait(float(r.headers.get("Retry-After", "1")))
 
-            threads = [threading.Thread(target=export, args=(users[i // 2],))
-                       for i in range(a.clients)]
+            threads = [
+                threading.Thread(target=export, args=(users[i // 2],)) for i in range(a.clients)
+            ]
             for t in threads:
                 t.start()
             time.sleep(1.0)  # every client has sent its first request
@@ -139,10 +167,14 @@ def main() -> int:
             def pct(p: float) -> float:
                 return lat[min(len(lat) - 1, int(p / 100 * len(lat)))]
 
-            print(f"health during {a.clients} parallel CSV exports of {a.samples:,} samples "
-                  f"({a.seconds:g} s, {len(lat)} health requests; readiness {dict(ready)}):")
-            print(f"  p50 {pct(50):.1f} ms  p90 {pct(90):.1f} ms  p99 {pct(99):.1f} ms  "
-                  f"max {lat[-1]:.1f} ms")
+            print(
+                f"health during {a.clients} parallel CSV exports of {a.samples:,} samples "
+                f"({a.seconds:g} s, {len(lat)} health requests; readiness {dict(ready)}):"
+            )
+            print(
+                f"  p50 {pct(50):.1f} ms  p90 {pct(90):.1f} ms  p99 {pct(99):.1f} ms  "
+                f"max {lat[-1]:.1f} ms"
+            )
             print(f"  exports answered: {dict(sorted(answers.items()))}")
         finally:
             stop_backend(proc)

@@ -46,8 +46,10 @@ def pct(lat: list[float], p: float) -> float:
 
 
 def summary(lat: list[float]) -> str:
-    return (f"{len(lat)} requests, p50 {pct(lat, 50):.1f} ms  p90 {pct(lat, 90):.1f} ms  "
-            f"p99 {pct(lat, 99):.1f} ms  max {max(lat, default=float('nan')):.1f} ms")
+    return (
+        f"{len(lat)} requests, p50 {pct(lat, 50):.1f} ms  p90 {pct(lat, 90):.1f} ms  "
+        f"p99 {pct(lat, 99):.1f} ms  max {max(lat, default=float('nan')):.1f} ms"
+    )
 
 
 class Load:
@@ -70,8 +72,9 @@ class Load:
             i = 0
             while not self.stop.is_set():
                 head = c.get(url).json()
-                model = dict(head["model"], link=dict(head["model"].get("link") or {},
-                                                       maxBuffer=1000 + i))
+                model = dict(
+                    head["model"], link=dict(head["model"].get("link") or {}, maxBuffer=1000 + i)
+                )
                 t0 = time.perf_counter()
                 r = c.put(url, json={"model": model, "base_revision": head["revision"]})
                 took = (time.perf_counter() - t0) * 1e3
@@ -134,19 +137,33 @@ def run(a: argparse.Namespace, tmp: Path) -> None:
         with httpx.Client(timeout=30) as c:
             idle = _poll(c, base, lambda: False, seconds=3.0)
         text = DEMO.read_text()
-        pids = [httpx.post(f"{base}/api/projects", headers=admin, timeout=60, json={
-            "name": f"p{i}", "model": {"text": text}}).json()["id"] for i in range(a.editors)]
+        pids = [
+            httpx.post(
+                f"{base}/api/projects",
+                headers=admin,
+                timeout=60,
+                json={"name": f"p{i}", "model": {"text": text}},
+            ).json()["id"]
+            for i in range(a.editors)
+        ]
         load = Load(base, admin, a.think)
         token = admin["Authorization"][7:]
-        httpx.post(f"{base}/api/users", headers=admin, timeout=60, json={
-            "username": "crowd", "password": PASSWORD, "roles": ["scientist"]})
+        httpx.post(
+            f"{base}/api/users",
+            headers=admin,
+            timeout=60,
+            json={"username": "crowd", "password": PASSWORD, "roles": ["scientist"]},
+        )
         crowd = login(base, "crowd", PASSWORD)["Authorization"][7:]
         held = hold_sockets(port, crowd, a.sockets, load)
         threads = [threading.Thread(target=load.editor, args=(p,)) for p in pids]
-        threads += [threading.Thread(target=load.viewer, args=(port, token, pids[i % len(pids)]))
-                    for i in range(a.viewers)]
-        threads += [threading.Thread(target=load.exporter, args=(admin,))
-                    for _ in range(a.exporters)]
+        threads += [
+            threading.Thread(target=load.viewer, args=(port, token, pids[i % len(pids)]))
+            for i in range(a.viewers)
+        ]
+        threads += [
+            threading.Thread(target=load.exporter, args=(admin,)) for _ in range(a.exporters)
+        ]
         for t in threads:
             t.start()
         time.sleep(2.0)  # every client is at work
@@ -158,9 +175,11 @@ def run(a: argparse.Namespace, tmp: Path) -> None:
         for ws in held:
             ws.close()
         db = "PostgreSQL" if a.database_url else "SQLite"
-        print(f"{db}: {a.editors} editors (a save every {a.think:g} s + its answer), "
-              f"{a.viewers} viewers, {a.exporters} CSV exporters, {a.sockets} extra sockets "
-              f"of one user, {a.seconds:g} s")
+        print(
+            f"{db}: {a.editors} editors (a save every {a.think:g} s + its answer), "
+            f"{a.viewers} viewers, {a.exporters} CSV exporters, {a.sockets} extra sockets "
+            f"of one user, {a.seconds:g} s"
+        )
         print(f"  health idle:       {summary(idle)}")
         print(f"  health under load: {summary(lat)}")
         print(f"  saves:             {summary(load.saves)}")
@@ -173,12 +192,30 @@ def start(tmp: Path, port: int, database_url: str | None) -> Any:
     exe = Path(sys.executable).with_name("modd-backend")
     extra = ["--database-url", database_url] if database_url else []
     return subprocess.Popen(
-        [str(exe), "--port", str(port), "--data", str(tmp / "data"), "--scene-port", "-1",
-         "--foxglove-port", "0", "--foxglove-replay-port", "0",
-         "--zenoh-connect", f"tcp/127.0.0.1:{free_port()}",
-         "--archives", str(tmp / "archives"), "--frontend", str(tmp / "none"), *extra],
+        [
+            str(exe),
+            "--port",
+            str(port),
+            "--data",
+            str(tmp / "data"),
+            "--scene-port",
+            "-1",
+            "--foxglove-port",
+            "0",
+            "--foxglove-replay-port",
+            "0",
+            "--zenoh-connect",
+            f"tcp/127.0.0.1:{free_port()}",
+            "--archives",
+            str(tmp / "archives"),
+            "--frontend",
+            str(tmp / "none"),
+            *extra,
+        ],
         env={**os.environ, "MODD_ADMIN_PASSWORD": PASSWORD},
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
 
 
 def wait_login(base: str, proc: Any) -> dict[str, str]:
@@ -198,8 +235,12 @@ def main() -> int:
     ap.add_argument("--exporters", type=int, default=4)
     ap.add_argument("--sockets", type=int, default=0)
     ap.add_argument("--seconds", type=float, default=20.0)
-    ap.add_argument("--think", type=float, default=1.0,
-                    help="seconds an editor waits between saves (a person editing)")
+    ap.add_argument(
+        "--think",
+        type=float,
+        default=1.0,
+        help="seconds an editor waits between saves (a person editing)",
+    )
     ap.add_argument("--samples", type=int, default=200_000, help="archive samples")
     ap.add_argument("--database-url")
     a = ap.parse_args()

@@ -33,8 +33,9 @@ from websockets.sync.client import connect
 PASSWORD = "bench-admin-password"
 
 
-def _poll(c: httpx.Client, base: str, stop: Callable[[], bool],
-          seconds: float = 600.0) -> list[float]:
+def _poll(
+    c: httpx.Client, base: str, stop: Callable[[], bool], seconds: float = 600.0
+) -> list[float]:
     """Latencies (ms) of GET /api/health every 5 ms until ``stop()`` or ``seconds``."""
     lat: list[float] = []
     t0 = time.monotonic()
@@ -52,8 +53,10 @@ def _summary(lat: list[float]) -> str:
     def pct(p: float) -> float:
         return lat[min(len(lat) - 1, int(p / 100 * len(lat)))]
 
-    return (f"{len(lat)} requests, p50 {pct(50):.1f} ms  p90 {pct(90):.1f} ms  "
-            f"p99 {pct(99):.1f} ms  max {lat[-1]:.1f} ms")
+    return (
+        f"{len(lat)} requests, p50 {pct(50):.1f} ms  p90 {pct(90):.1f} ms  "
+        f"p99 {pct(99):.1f} ms  max {lat[-1]:.1f} ms"
+    )
 
 
 def main() -> int:
@@ -65,16 +68,30 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         exe = Path(sys.executable).with_name("modd-backend")
         proc = subprocess.Popen(
-            [str(exe), "--port", str(port), "--data", tmp, "--scene-port", "-1",
-             "--zenoh-connect", f"tcp/127.0.0.1:{free_port()}"],
+            [
+                str(exe),
+                "--port",
+                str(port),
+                "--data",
+                tmp,
+                "--scene-port",
+                "-1",
+                "--zenoh-connect",
+                f"tcp/127.0.0.1:{free_port()}",
+            ],
             env={**os.environ, "MODD_ADMIN_PASSWORD": PASSWORD},
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         try:
             deadline = time.monotonic() + 120
             while True:
                 try:
-                    r = httpx.post(base + "/api/auth/login", timeout=5,
-                                   json={"username": "admin", "password": PASSWORD})
+                    r = httpx.post(
+                        base + "/api/auth/login",
+                        timeout=5,
+                        json={"username": "admin", "password": PASSWORD},
+                    )
                     break
                 except httpx.TransportError:
                     assert time.monotonic() < deadline and proc.poll() is None
@@ -113,8 +130,10 @@ def main() -> int:
             for t in threads:
                 t.join()
             print(f"health with no load: {_summary(idle)}")
-            print(f"health during {a.ops} subscribe ops on one socket and their replies "
-                  f"({took:.1f} s, {drained[0]} replies read): {_summary(lat)}")
+            print(
+                f"health during {a.ops} subscribe ops on one socket and their replies "
+                f"({took:.1f} s, {drained[0]} replies read): {_summary(lat)}"
+            )
         finally:
             proc.send_signal(signal.SIGTERM)
             proc.wait(30)

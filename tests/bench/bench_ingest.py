@@ -59,8 +59,9 @@ class Ingest:
     @property
     def check(self) -> str:
         what = "archived" if self.unit == "samples" else "received ($SYS, end markers out)"
-        return f"{self.confirmed:,} {what}" + (f", {self.rejected:,} rejected"
-                                               if self.rejected else "")
+        return f"{self.confirmed:,} {what}" + (
+            f", {self.rejected:,} rejected" if self.rejected else ""
+        )
 
     @property
     def rate(self) -> float:
@@ -73,13 +74,32 @@ def pin(pid: int, cpu: int) -> None:
         os.sched_setaffinity(int(tid), {cpu})
 
 
-def start_blasters(protocol: str, port: int, topics: list[list[str]],
-                   count_each: int) -> tuple[list[subprocess.Popen[str]], float]:
+def start_blasters(
+    protocol: str, port: int, topics: list[list[str]], count_each: int
+) -> tuple[list[subprocess.Popen[str]], float]:
     """Blasters connected and waiting; returns them and the time they were told to go."""
-    procs = [subprocess.Popen(
-        ["taskset", "-c", str(LOAD_CPU), sys.executable, str(HERE / "benchkit" / "blaster.py"),
-         protocol, "--port", str(port), "--topics", ",".join(ts), "--count", str(count_each)],
-        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True) for ts in topics]
+    procs = [
+        subprocess.Popen(
+            [
+                "taskset",
+                "-c",
+                str(LOAD_CPU),
+                sys.executable,
+                str(HERE / "benchkit" / "blaster.py"),
+                protocol,
+                "--port",
+                str(port),
+                "--topics",
+                ",".join(ts),
+                "--count",
+                str(count_each),
+            ],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        for ts in topics
+    ]
     for p in procs:
         assert p.stdout is not None
         if p.stdout.readline().strip() != "ready":
@@ -128,10 +148,13 @@ class PeakRss:
 
 
 def pubbroker(tmp: Path, total: int) -> Ingest:
-    b = PubBroker(tmp, [(t, "float32") for t in TOPICS],
-                  archive={"queue_limit_samples": 50_000_000, "fsync": "chunk",
-                           "flush_interval_ms": 1000},
-                  default_buffer_size=1000, log_period_s=1).start()
+    b = PubBroker(
+        tmp,
+        [(t, "float32") for t in TOPICS],
+        archive={"queue_limit_samples": 50_000_000, "fsync": "chunk", "flush_interval_ms": 1000},
+        default_buffer_size=1000,
+        log_period_s=1,
+    ).start()
     assert b.proc is not None
     pid = b.proc.pid
     pin(pid, BROKER_CPU)
@@ -150,8 +173,17 @@ def pubbroker(tmp: Path, total: int) -> Ingest:
         raise RuntimeError(f"no counters line in the PubBroker's log:\n{b.log()[-2000:]}")
     archived = int(re.findall(r"samples_archived=(\d+)", last[0])[0])
     rejected = sum(int(n) for n in re.findall(r"rejected_\w+=(\d+)", last[0]))
-    return Ingest("PubBroker (archive on)", "samples", sent, seconds, watch.cpu - cpu0,
-                  watch.peak, archived, rejected, watch.main_cpu - main0)
+    return Ingest(
+        "PubBroker (archive on)",
+        "samples",
+        sent,
+        seconds,
+        watch.cpu - cpu0,
+        watch.peak,
+        archived,
+        rejected,
+        watch.main_cpu - main0,
+    )
 
 
 def sys_counter(port: int, topic: str, at_least: int, timeout_s: float = 5.0) -> int:
@@ -188,8 +220,15 @@ def mosquitto(tmp: Path, total: int) -> Ingest:
         received = sys_counter(m.link_port, "$SYS/broker/publish/messages/received", sent)
     finally:
         m.stop()
-    return Ingest("Mosquitto (QoS 0, no subscriber)", "messages", sent, seconds, cpu,
-                  watch.peak, received - CONNECTIONS)
+    return Ingest(
+        "Mosquitto (QoS 0, no subscriber)",
+        "messages",
+        sent,
+        seconds,
+        cpu,
+        watch.peak,
+        received - CONNECTIONS,
+    )
 
 
 def run(samples: int, messages: int) -> tuple[Ingest, Ingest]:
@@ -202,19 +241,60 @@ def run(samples: int, messages: int) -> tuple[Ingest, Ingest]:
 
 def render(pb: Ingest, mq: Ingest) -> str:
     rows: list[list[object]] = [
-        [r.system, f"{r.count:,} {r.unit}", r.seconds, r.rate, r.cpu_s,
-         r.count / r.cpu_s if r.cpu_s else float("nan"), r.peak_rss_kb / 1024, r.check]
-        for r in (pb, mq)]
+        [
+            r.system,
+            f"{r.count:,} {r.unit}",
+            r.seconds,
+            r.rate,
+            r.cpu_s,
+            r.count / r.cpu_s if r.cpu_s else float("nan"),
+            r.peak_rss_kb / 1024,
+            r.check,
+        ]
+        for r in (pb, mq)
+    ]
     if pb.main_thread_cpu_s:
-        rows.append(["PubBroker ingest thread alone (no archive work)", "", "", "",
-                     pb.main_thread_cpu_s, pb.count / pb.main_thread_cpu_s, "", ""])
-    rows.append(["ratio PubBroker / Mosquitto", "", "", ratio(pb.rate, mq.rate), "",
-                 ratio(pb.count / pb.cpu_s, mq.count / mq.cpu_s) if pb.cpu_s and mq.cpu_s
-                 else "—", "", "goal ≥ 10×"])
-    return (f"Ingest on one core (broker pinned to cpu {BROKER_CPU}, load on cpu {LOAD_CPU}, "
-            f"{CONNECTIONS} loopback TCP connections)\n\n"
-            + table(["broker", "sent", "wall s", "per s", "broker CPU-s", "per CPU-s",
-                     "peak RSS MB", "check"], rows))
+        rows.append(
+            [
+                "PubBroker ingest thread alone (no archive work)",
+                "",
+                "",
+                "",
+                pb.main_thread_cpu_s,
+                pb.count / pb.main_thread_cpu_s,
+                "",
+                "",
+            ]
+        )
+    rows.append(
+        [
+            "ratio PubBroker / Mosquitto",
+            "",
+            "",
+            ratio(pb.rate, mq.rate),
+            "",
+            ratio(pb.count / pb.cpu_s, mq.count / mq.cpu_s) if pb.cpu_s and mq.cpu_s else "—",
+            "",
+            "goal ≥ 10×",
+        ]
+    )
+    return (
+        f"Ingest on one core (broker pinned to cpu {BROKER_CPU}, load on cpu {LOAD_CPU}, "
+        f"{CONNECTIONS} loopback TCP connections)\n\n"
+        + table(
+            [
+                "broker",
+                "sent",
+                "wall s",
+                "per s",
+                "broker CPU-s",
+                "per CPU-s",
+                "peak RSS MB",
+                "check",
+            ],
+            rows,
+        )
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -25,15 +25,21 @@ from benchkit.report import table  # noqa: E402
 from benchkit.run import Run, measure  # noqa: E402
 from benchkit.scenario import Scenario, load  # noqa: E402
 
-DEFINITION = {"modd": "window end → delivery", "mosquitto": "publish → delivery",
-              "zenoh": "publish → delivery"}
+DEFINITION = {
+    "modd": "window end → delivery",
+    "mosquitto": "publish → delivery",
+    "zenoh": "publish → delivery",
+}
 PAPER = {"modd": "modd", "mosquitto": "mqtt"}
 SYSTEMS = ("modd", "mosquitto", "zenoh")
 
 
 def run(scenarios: list[int], seconds: float) -> list[tuple[Scenario, Run]]:
-    return [(sc, measure(kind, sc, seconds, capture=False, footprint=False))
-            for sc in map(load, scenarios) for kind in SYSTEMS]
+    return [
+        (sc, measure(kind, sc, seconds, capture=False, footprint=False))
+        for sc in map(load, scenarios)
+        for kind in SYSTEMS
+    ]
 
 
 def render(results: list[tuple[Scenario, Run]], seconds: float) -> str:
@@ -41,12 +47,22 @@ def render(results: list[tuple[Scenario, Run]], seconds: float) -> str:
     for sc, r in results:
         d = r.delivery
         paper = sc.paper["paper_latency_s"].get(PAPER.get(r.kind, ""))
-        rows.append([f"scenario {sc.number}", r.system, DEFINITION[r.kind], len(d.latencies_ns),
-                     d.latency_ms(0.5), d.latency_ms(0.99), d.latency_ms(1.0),
-                     f"{paper * 1000:,.0f}" if paper is not None else "—"])
-    return (f"Delivery latency on loopback, {seconds:g} s per system\n\n"
-            + table(["load", "system", "from → to", "values", "p50 ms", "p99 ms", "max ms",
-                     "paper Table V ms"], rows))
+        rows.append(
+            [
+                f"scenario {sc.number}",
+                r.system,
+                DEFINITION[r.kind],
+                len(d.latencies_ns),
+                d.latency_ms(0.5),
+                d.latency_ms(0.99),
+                d.latency_ms(1.0),
+                f"{paper * 1000:,.0f}" if paper is not None else "—",
+            ]
+        )
+    return f"Delivery latency on loopback, {seconds:g} s per system\n\n" + table(
+        ["load", "system", "from → to", "values", "p50 ms", "p99 ms", "max ms", "paper Table V ms"],
+        rows,
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

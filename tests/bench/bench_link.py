@@ -44,58 +44,135 @@ def rows(sc: Scenario, runs: list[Run]) -> list[list[object]]:
     for r in runs:
         assert r.wire is not None
         d, u = r.wire.rates()["drone_to_base"], r.wire.rates()["base_to_drone"]
-        out.append([r.system, d["bytes_per_s"], d["packets_per_s"],
-                    f"{fmt(d['data_bytes_per_s'])} / {fmt(d['ack_bytes_per_s'])}",
-                    u["bytes_per_s"], u["packets_per_s"],
-                    f"{fmt(u['data_bytes_per_s'])} / {fmt(u['ack_bytes_per_s'])}",
-                    r.delivery.values_per_s, ratio(d["bytes_per_s"], sc.paper_modd_down),
-                    ratio(d["bytes_per_s"], sc.floor_down)])
-    out.append(["planner prediction", sc.planned_down, sc.slots_per_s, "", sc.planned_up,
-                sc.slots_per_s, "", "", ratio(sc.planned_down, sc.paper_modd_down),
-                ratio(sc.planned_down, sc.floor_down)])
-    out.append(["information floor", sc.floor_down, sc.slots_per_s, "", "", "", "",
-                sc.sent_values_per_s, ratio(sc.floor_down, sc.paper_modd_down), "1.00×"])
-    out.append(["paper, MoDD", sc.paper_modd_down, "", "", "", "", "", "", "1.00×",
-                ratio(sc.paper_modd_down, sc.floor_down)])
+        out.append(
+            [
+                r.system,
+                d["bytes_per_s"],
+                d["packets_per_s"],
+                f"{fmt(d['data_bytes_per_s'])} / {fmt(d['ack_bytes_per_s'])}",
+                u["bytes_per_s"],
+                u["packets_per_s"],
+                f"{fmt(u['data_bytes_per_s'])} / {fmt(u['ack_bytes_per_s'])}",
+                r.delivery.values_per_s,
+                ratio(d["bytes_per_s"], sc.paper_modd_down),
+                ratio(d["bytes_per_s"], sc.floor_down),
+            ]
+        )
+    out.append(
+        [
+            "planner prediction",
+            sc.planned_down,
+            sc.slots_per_s,
+            "",
+            sc.planned_up,
+            sc.slots_per_s,
+            "",
+            "",
+            ratio(sc.planned_down, sc.paper_modd_down),
+            ratio(sc.planned_down, sc.floor_down),
+        ]
+    )
+    out.append(
+        [
+            "information floor",
+            sc.floor_down,
+            sc.slots_per_s,
+            "",
+            "",
+            "",
+            "",
+            sc.sent_values_per_s,
+            ratio(sc.floor_down, sc.paper_modd_down),
+            "1.00×",
+        ]
+    )
+    out.append(
+        [
+            "paper, MoDD",
+            sc.paper_modd_down,
+            "",
+            "",
+            "",
+            "",
+            "",
+            "",
+            "1.00×",
+            ratio(sc.paper_modd_down, sc.floor_down),
+        ]
+    )
     mqtt = float(sc.paper["paper_bytes_per_s"]["drone_to_subscribers_mqtt"])
-    out.append(["paper, MQTT (to subscribers)", mqtt, "", "", "", "", "", "",
-                ratio(mqtt, sc.paper_modd_down), ratio(mqtt, sc.floor_down)])
+    out.append(
+        [
+            "paper, MQTT (to subscribers)",
+            mqtt,
+            "",
+            "",
+            "",
+            "",
+            "",
+            "",
+            ratio(mqtt, sc.paper_modd_down),
+            ratio(mqtt, sc.floor_down),
+        ]
+    )
     return out
 
 
-HEADER = ["system", "drone→base B/s", "pkt/s", "data / ACK B/s", "base→drone B/s", "pkt/s",
-          "data / ACK B/s", "values/s delivered", "× paper MoDD", "× floor"]
+HEADER = [
+    "system",
+    "drone→base B/s",
+    "pkt/s",
+    "data / ACK B/s",
+    "base→drone B/s",
+    "pkt/s",
+    "data / ACK B/s",
+    "values/s delivered",
+    "× paper MoDD",
+    "× floor",
+]
 
 
 def summary(run: Run) -> dict[str, Any]:
-    return {"system": run.system, "seconds": run.seconds,
-            "wire": run.wire.rates() if run.wire else None,
-            "delivered_per_subscriber": run.delivery.per_subscriber}
+    return {
+        "system": run.system,
+        "seconds": run.seconds,
+        "wire": run.wire.rates() if run.wire else None,
+        "delivered_per_subscriber": run.delivery.per_subscriber,
+    }
 
 
-def run(scenarios: list[int], systems: list[str],
-        seconds: float) -> list[tuple[Scenario, list[Run]]]:
+def run(
+    scenarios: list[int], systems: list[str], seconds: float
+) -> list[tuple[Scenario, list[Run]]]:
     """Each scenario, each system in turn, ``seconds`` of capture each."""
-    return [(sc, [measure(k, sc, seconds, footprint=False) for k in systems])
-            for sc in map(load, scenarios)]
+    return [
+        (sc, [measure(k, sc, seconds, footprint=False) for k in systems])
+        for sc in map(load, scenarios)
+    ]
 
 
 def render(results: list[tuple[Scenario, list[Run]]], seconds: float) -> str:
-    out = [f"Link bytes on the wire: loopback, tshark, IP bytes (headers included), "
-           f"{seconds:g} s of steady state per system"]
+    out = [
+        f"Link bytes on the wire: loopback, tshark, IP bytes (headers included), "
+        f"{seconds:g} s of steady state per system"
+    ]
     for sc, runs in results:
-        out.append(f"\n## Scenario {sc.number}: {len(sc.subscriptions)} subscriptions, "
-                   f"{sc.samples_per_s:g} samples/s published; target drone→base "
-                   f"≤ {TARGETS[sc.number]:g} B/s for the MoDD link\n")
+        out.append(
+            f"\n## Scenario {sc.number}: {len(sc.subscriptions)} subscriptions, "
+            f"{sc.samples_per_s:g} samples/s published; target drone→base "
+            f"≤ {TARGETS[sc.number]:g} B/s for the MoDD link\n"
+        )
         out.append(table(HEADER, rows(sc, runs)))
         for r in runs:
             if r.system.startswith("zenoh"):
                 asked = sum(1 / float(s.period_s) for s in sc.subscriptions)
-                out.append(f"\nzenoh: {r.delivery.values_per_s:.2f} values/s delivered for "
-                           f"the {asked:.2f} windows/s asked: the interceptor drops samples "
-                           "(it forwards the first one at least 1/freq after the last one "
-                           "forwarded) and does not aggregate: a MIN/MAX/AVERAGE subscriber "
-                           "gets one raw sample per window, not its aggregate.")
+                out.append(
+                    f"\nzenoh: {r.delivery.values_per_s:.2f} values/s delivered for "
+                    f"the {asked:.2f} windows/s asked: the interceptor drops samples "
+                    "(it forwards the first one at least 1/freq after the last one "
+                    "forwarded) and does not aggregate: a MIN/MAX/AVERAGE subscriber "
+                    "gets one raw sample per window, not its aggregate."
+                )
     return "\n".join(out)
 
 
@@ -111,8 +188,12 @@ def main(argv: list[str] | None = None) -> int:
     print(render(results, args.seconds))
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps({f"scenario{sc.number}": [summary(r) for r in runs]
-                                         for sc, runs in results}, indent=1))
+        args.json.write_text(
+            json.dumps(
+                {f"scenario{sc.number}": [summary(r) for r in runs] for sc, runs in results},
+                indent=1,
+            )
+        )
     return 0
 
 

@@ -48,7 +48,9 @@ def _planner_at(revision: str, into: Path) -> ModuleType:
     name = "modd_plan_at_" + "".join(c for c in revision if c.isalnum())
     archive = subprocess.run(
         ["git", "-C", str(REPO), "archive", revision, "metamodel/src/modd_plan"],
-        check=True, capture_output=True).stdout
+        check=True,
+        capture_output=True,
+    ).stdout
     subprocess.run(["tar", "-x", "-C", str(into)], input=archive, check=True)
     (into / "metamodel/src/modd_plan").rename(into / name)
     sys.path.append(str(into))
@@ -68,8 +70,11 @@ def _runs(xs: list[float]) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--runs", type=int, default=3)
-    ap.add_argument("--against", default=ISSUE_REVISION,
-                    help="git revision whose planner runs side by side ('none': not)")
+    ap.add_argument(
+        "--against",
+        default=ISSUE_REVISION,
+        help="git revision whose planner runs side by side ('none': not)",
+    )
     args = ap.parse_args(argv)
     plan_module = importlib.import_module("modd_plan.plan")
     validate = importlib.import_module("modd_model.validate").validate
@@ -82,10 +87,14 @@ def main(argv: list[str] | None = None) -> int:
         start = time.process_time()
         validate(valid)
         checks.append(time.process_time() - start)
-    print(f"make_plan + to_json, 5,000 x 25,000: CPU median {statistics.median(plans):.2f} s "
-          f"(runs {_runs(plans)}); target <= {TARGET_SECONDS:g} s")
-    print(f"validate, 5,000 x 25,000 (valid): CPU median {statistics.median(checks):.2f} s "
-          f"(runs {_runs(checks)})")
+    print(
+        f"make_plan + to_json, 5,000 x 25,000: CPU median {statistics.median(plans):.2f} s "
+        f"(runs {_runs(plans)}); target <= {TARGET_SECONDS:g} s"
+    )
+    print(
+        f"validate, 5,000 x 25,000 (valid): CPU median {statistics.median(checks):.2f} s "
+        f"(runs {_runs(checks)})"
+    )
     if args.against == "none":
         return 0
     with tempfile.TemporaryDirectory(prefix="modd-plan-") as tmp:
@@ -100,12 +109,17 @@ def main(argv: list[str] | None = None) -> int:
             theirs.append(_cpu(other, model))
             ours.append(_cpu(plan_module, model))
     a, b = statistics.median(theirs), statistics.median(ours)
-    print(f"side by side, interleaved run by run: the planner of {args.against} "
-          f"{a:.2f} s (runs {_runs(theirs)}), this tree's {b:.2f} s (runs {_runs(ours)}): "
-          f"ratio {b / a:.2f}"
-          + (f"; the target's ratio {TARGET_SECONDS / ISSUE_SECONDS:.2f} "
-             f"({TARGET_SECONDS:g} s where the issue measured {ISSUE_SECONDS} s)"
-             if args.against == ISSUE_REVISION else ""))
+    print(
+        f"side by side, interleaved run by run: the planner of {args.against} "
+        f"{a:.2f} s (runs {_runs(theirs)}), this tree's {b:.2f} s (runs {_runs(ours)}): "
+        f"ratio {b / a:.2f}"
+        + (
+            f"; the target's ratio {TARGET_SECONDS / ISSUE_SECONDS:.2f} "
+            f"({TARGET_SECONDS:g} s where the issue measured {ISSUE_SECONDS} s)"
+            if args.against == ISSUE_REVISION
+            else ""
+        )
+    )
     return 0
 
 

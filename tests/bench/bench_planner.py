@@ -55,13 +55,20 @@ def synthetic(n_topics: int, n_subs: int, seed: int = 1) -> dict[str, Any]:
         "pubBroker": {"endpoint": {"host": "127.0.0.1", "port": 7171}, "logPath": "/tmp/l"},
         "subBroker": {"endpoint": {"host": "127.0.0.1", "port": 7272}, "configPath": "/tmp/c"},
         "publishers": [
-            {"name": f"p{i}", "periodS": rng.choice(PUB_PERIODS),
-             "topics": topics[10 * i : 10 * i + 10]}
+            {
+                "name": f"p{i}",
+                "periodS": rng.choice(PUB_PERIODS),
+                "topics": topics[10 * i : 10 * i + 10],
+            }
             for i in range(n_topics // 10)
         ],
         "subscribers": [
-            {"name": f"sub{k}", "topic": rng.choice(topics),
-             "periodS": rng.choice(SUB_PERIODS), "aggregation": rng.choice(AGGS)}
+            {
+                "name": f"sub{k}",
+                "topic": rng.choice(topics),
+                "periodS": rng.choice(SUB_PERIODS),
+                "aggregation": rng.choice(AGGS),
+            }
             for k in range(n_subs)
         ],
     }
@@ -86,9 +93,9 @@ def period_set(kind: str, e: int) -> list[str]:
     shared factors) or a cycle of prime pairs (x 1 ms: one connected group,
     the lattice's worst case)."""
     if kind == "primes":
-        return [f"{p / 100:.2f}" for p in PRIMES[1:e + 1]]
+        return [f"{p / 100:.2f}" for p in PRIMES[1 : e + 1]]
     if kind == "grid":
-        return [f"{p / 10:.1f}" for p in PRIMES[1:e + 1]]
+        return [f"{p / 10:.1f}" for p in PRIMES[1 : e + 1]]
     if kind == "consecutive":
         return [f"{k / 1000:.3f}" for k in range(e, 2 * e)]
     return [f"{PRIMES[i] * PRIMES[(i + 1) % e] / 1000:.3f}" for i in range(e)]
@@ -100,8 +107,8 @@ def periods_model(periods: list[str], pub: str) -> dict[str, Any]:
     for p in model["publishers"]:
         p["periodS"] = pub
     model["subscribers"] = [
-        {"name": f"sub{k}", "topic": f"d.s{k // 10}.v{k % 10}", "periodS": p,
-         "aggregation": "MAX"} for k, p in enumerate(periods)
+        {"name": f"sub{k}", "topic": f"d.s{k // 10}.v{k % 10}", "periodS": p, "aggregation": "MAX"}
+        for k, p in enumerate(periods)
     ]
     return model
 
@@ -116,8 +123,13 @@ def grid_model(n_topics: int, n_subs: int, seed: int = 1) -> dict[str, Any]:
     tops = [t for p in model["publishers"] for t in p["topics"]]
     grid = [f"{p / 10:.1f}" for p in PRIMES[1:30]]
     model["subscribers"] = [
-        {"name": f"sub{k}", "topic": rng.choice(tops), "periodS": grid[k % len(grid)],
-         "aggregation": rng.choice(["MIN", "MAX", "AVERAGE"])} for k in range(n_subs)
+        {
+            "name": f"sub{k}",
+            "topic": rng.choice(tops),
+            "periodS": grid[k % len(grid)],
+            "aggregation": rng.choice(["MIN", "MAX", "AVERAGE"]),
+        }
+        for k in range(n_subs)
     ]
     return model
 
@@ -152,8 +164,11 @@ def worst_case(name: str) -> dict[str, Any]:
     start = time.process_time()
     try:
         plan = make_plan(model, max_buffer=10**8 if name == "maxbuffer" else None).to_json()
-        outcome = f"{plan['messages_per_hyperperiod']:.3g} messages" if plan[
-            "messages_per_hyperperiod"] > 10**6 else f"{plan['messages_per_hyperperiod']} messages"
+        outcome = (
+            f"{plan['messages_per_hyperperiod']:.3g} messages"
+            if plan["messages_per_hyperperiod"] > 10**6
+            else f"{plan['messages_per_hyperperiod']} messages"
+        )
     except ModelError as exc:
         outcome = f"located error ({len(exc.diagnostics)} subscriptions)"
     except ValueError as exc:  # e.g. a hyperperiod past the decimal strings' range
@@ -176,20 +191,31 @@ def cli_cpu(*argv: str) -> float:
 
 
 def worst_cases(quick: bool) -> None:
-    names = [f"e:{kind}:{e}" for kind in ("primes", "grid", "consecutive", "cycle")
-             for e in ((16, 24, 40) if quick else (16, 20, 24, 32, 40))]
-    names += ["grid:10:25", "grid:100:500", "synthetic:5000:25000", "validate:5000:25000",
-              "maxbuffer"]
+    names = [
+        f"e:{kind}:{e}"
+        for kind in ("primes", "grid", "consecutive", "cycle")
+        for e in ((16, 24, 40) if quick else (16, 20, 24, 32, 40))
+    ]
+    names += [
+        "grid:10:25",
+        "grid:100:500",
+        "synthetic:5000:25000",
+        "validate:5000:25000",
+        "maxbuffer",
+    ]
     print("\nworst cases (issue 18), each in a fresh process; e = non-dividing sent periods")
     print(f"{'case':34} {'CPU':>9} {'peak RSS':>9}  outcome")
     for name in names:
-        out = subprocess.run([sys.executable, __file__, "--case", name], check=True,
-                             capture_output=True, text=True).stdout
+        out = subprocess.run(
+            [sys.executable, __file__, "--case", name], check=True, capture_output=True, text=True
+        ).stdout
         r = json.loads(out.strip().splitlines()[-1])
         print(f"{name:34} {r['cpu_s'] * 1e3:7.1f} ms {r['peak_mb']:6.0f} MB  {r['outcome']}")
     print(f"{'modd --help':34} {cli_cpu('--help') * 1e3:7.1f} ms CPU")
-    print(f"{'modd plan scenario1.modd':34} "
-          f"{cli_cpu('plan', str(SCENARIOS / 'scenario1.modd')) * 1e3:7.1f} ms CPU")
+    print(
+        f"{'modd plan scenario1.modd':34} "
+        f"{cli_cpu('plan', str(SCENARIOS / 'scenario1.modd')) * 1e3:7.1f} ms CPU"
+    )
 
 
 def paper_milp(model: dict[str, Any]) -> None:
@@ -211,8 +237,11 @@ def timed(fn: Callable[[], object], repeat: int) -> tuple[float, float]:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true", help="fewer repetitions")
-    ap.add_argument("--all", action="store_true",
-                    help="also plan 2000 x 10000 with the cvxpy tie-break (minutes)")
+    ap.add_argument(
+        "--all",
+        action="store_true",
+        help="also plan 2000 x 10000 with the cvxpy tie-break (minutes)",
+    )
     ap.add_argument("--worst-only", action="store_true", help="only the issue 18 worst cases")
     ap.add_argument("--case", help=argparse.SUPPRESS)  # one worst case, JSON out
     args = ap.parse_args(argv)
@@ -230,12 +259,15 @@ def main(argv: list[str] | None = None) -> int:
         ("2000 topics x 10000 subs", synthetic(2000, 10000)),
     ]
     make_plan(cases[0][1], method="cvxpy")  # import cvxpy once, outside the timings
-    print(f"{'case':34} {'plan, exact':>12} {'plan, cvxpy':>12} {'paper MILP':>11}  "
-          "hyperperiod, messages   (median of runs)")
+    print(
+        f"{'case':34} {'plan, exact':>12} {'plan, cvxpy':>12} {'paper MILP':>11}  "
+        "hyperperiod, messages   (median of runs)"
+    )
     for name, model in cases:
         repeat = 3 if args.quick else 7
         exact = timed(lambda m=model: make_plan(m), repeat)  # type: ignore[misc]
         big = len(model["subscribers"]) > 5000
+
         def by_milp(m: Any = model) -> Any:
             return make_plan(m, method="cvxpy")
 
@@ -243,8 +275,10 @@ def main(argv: list[str] | None = None) -> int:
         plan = make_plan(model).to_json()
         stage1 = timed(lambda m=model: paper_milp(m), 1 if big else repeat)  # type: ignore[misc]
         milp_s = f"{milp[0] * 1e3:9.1f} ms" if milp else "skipped"
-        print(f"{name:34} {exact[0] * 1e3:9.1f} ms {milp_s:>12} {stage1[0] * 1e3:8.1f} ms  "
-              f"{plan['hyperperiod_s']} s, {plan['messages_per_hyperperiod']}")
+        print(
+            f"{name:34} {exact[0] * 1e3:9.1f} ms {milp_s:>12} {stage1[0] * 1e3:8.1f} ms  "
+            f"{plan['hyperperiod_s']} s, {plan['messages_per_hyperperiod']}"
+        )
     worst_cases(args.quick)
     return 0
 

@@ -26,8 +26,11 @@ from pathlib import Path
 from typing import Any
 
 REPO = Path(__file__).resolve().parents[2]
-sys.path[:0] = [str(REPO / "tests" / "runtime"), str(REPO / "tests" / "subbroker"),
-                str(REPO / "tests" / "bench")]
+sys.path[:0] = [
+    str(REPO / "tests" / "runtime"),
+    str(REPO / "tests" / "subbroker"),
+    str(REPO / "tests" / "bench"),
+]
 
 import numpy as np  # noqa: E402
 from benchkit.capture import Capture, Wire  # noqa: E402
@@ -56,14 +59,18 @@ def threads(pid: int) -> list[int]:
 
 # ---- ingest ------------------------------------------------------------------------------
 
+
 def ingest(tmp: Path, total: int, topics: int = 19, batch: int = 4096) -> dict[str, Any]:
     """Blasts pre-encoded SAMPLES frames over the Unix socket as fast as the broker reads them
     (archive on: zstd chunks, fsync per chunk); every sample is accepted and archived."""
     names = [f"usv.ins.t{i}" for i in range(topics)]
-    b = PubBroker(tmp, [(n, "float32") for n in names],
-                  archive={"queue_limit_samples": 50_000_000, "fsync": "chunk",
-                           "flush_interval_ms": 1000},
-                  default_buffer_size=1000, log_period_s=1).start()
+    b = PubBroker(
+        tmp,
+        [(n, "float32") for n in names],
+        archive={"queue_limit_samples": 50_000_000, "fsync": "chunk", "flush_interval_ms": 1000},
+        default_buffer_size=1000,
+        log_period_s=1,
+    ).start()
     assert b.proc is not None
     pid = b.proc.pid
     rec = np.dtype([("id", "u1"), ("ts", "<i8"), ("v", "<f4")])
@@ -74,8 +81,10 @@ def ingest(tmp: Path, total: int, topics: int = 19, batch: int = 4096) -> dict[s
     frame_len = varint(len(head) + batch * rec.itemsize)
     s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     s.connect(b.unix_path)
-    s.sendall(encode_hello("bench") + b"".join(encode_register(i, ValueType.FLOAT32, n)
-                                               for i, n in enumerate(names)))
+    s.sendall(
+        encode_hello("bench")
+        + b"".join(encode_register(i, ValueType.FLOAT32, n) for i, n in enumerate(names))
+    )
     main_tid = threads(pid)[0]
     cpu0, tcpu0 = cpu_seconds(pid), cpu_seconds(pid, main_tid)
     t0 = time.monotonic()
@@ -101,7 +110,8 @@ def ingest(tmp: Path, total: int, topics: int = 19, batch: int = 4096) -> dict[s
     files = list(b.archive_dir.glob("*.mcap"))
     size = sum(f.stat().st_size for f in files)
     return {
-        "samples": sent, "seconds_to_ingest": round(t_sent, 3),
+        "samples": sent,
+        "seconds_to_ingest": round(t_sent, 3),
         "samples_per_s_wall": round(sent / t_sent),
         "ingest_thread_cpu_s": round(ingest_cpu, 3),
         "samples_per_s_ingest_core": round(sent / ingest_cpu) if ingest_cpu else None,
@@ -110,21 +120,28 @@ def ingest(tmp: Path, total: int, topics: int = 19, batch: int = 4096) -> dict[s
         "seconds_until_archived": round(t_archived, 3),
         "process_cpu_s": round(cpu - cpu0, 3),
         "samples_per_cpu_s_archive_on": round(sent / (cpu - cpu0)),
-        "rss_kb": rss, "peak_rss_kb": hwm,
-        "archive_bytes": size, "archive_bytes_per_sample": round(size / sent, 2),
+        "rss_kb": rss,
+        "peak_rss_kb": hwm,
+        "archive_bytes": size,
+        "archive_bytes_per_sample": round(size / sent, 2),
     }
 
 
 # ---- a scenario on the wire ----------------------------------------------------------------
 
+
 def wire_figures(wire: Wire) -> dict[str, Any]:
     rates = wire.rates()
-    return {d: {"bytes_per_s": round(r["bytes_per_s"], 1),
-                "packets_per_s": round(r["packets_per_s"], 2),
-                "data_packets_per_s": round(r["data_packets_per_s"], 2),
-                "pure_ack_bytes_per_s": round(r["ack_bytes_per_s"], 1),
-                "seconds": round(span, 2)}
-            for (d, r), span in zip(rates.items(), (wire.down_span, wire.up_span), strict=True)}
+    return {
+        d: {
+            "bytes_per_s": round(r["bytes_per_s"], 1),
+            "packets_per_s": round(r["packets_per_s"], 2),
+            "data_packets_per_s": round(r["data_packets_per_s"], 2),
+            "pure_ack_bytes_per_s": round(r["ack_bytes_per_s"], 1),
+            "seconds": round(span, 2),
+        }
+        for (d, r), span in zip(rates.items(), (wire.down_span, wire.up_span), strict=True)
+    }
 
 
 def scenario(tmp: Path, n: int, seconds: float, status_period_s: int) -> dict[str, Any]:
@@ -134,21 +151,27 @@ def scenario(tmp: Path, n: int, seconds: float, status_period_s: int) -> dict[st
     plan = make_plan(load_model(SCENARIOS / f"scenario{n}.modd")).to_json()
     config = scenario_config(n, status_period_s=status_period_s)
     names = [t.name for t in config.topics]
-    b = PubBroker(tmp, [(t, "float32") for t in names], status_period_s=status_period_s,
-                  log_period_s=0).start()
+    b = PubBroker(
+        tmp, [(t, "float32") for t in names], status_period_s=status_period_s, log_period_s=0
+    ).start()
     assert b.proc is not None
     pid = b.proc.pid
     base = BaseStation(b.link_port)
     base.configure(config)
     base.start()
     stop = threading.Event()
-    loader = threading.Thread(target=run_load, args=(f"unix:{b.unix_path}", names, 25.0,
-                                                     seconds + 6.0), kwargs={"stop": stop})
+    loader = threading.Thread(
+        target=run_load,
+        args=(f"unix:{b.unix_path}", names, 25.0, seconds + 6.0),
+        kwargs={"stop": stop},
+    )
     loader.start()
     time.sleep(2.0)  # steady state
-    result: dict[str, Any] = {"scenario": n, "seconds": seconds,
-                              "planner_drone_to_base_bytes_per_s":
-                                  plan["predicted_link_bytes_per_s"]["drone_to_base"]}
+    result: dict[str, Any] = {
+        "scenario": n,
+        "seconds": seconds,
+        "planner_drone_to_base_bytes_per_s": plan["predicted_link_bytes_per_s"]["drone_to_base"],
+    }
     have_tshark = shutil.which("tshark") is not None and os.geteuid() == 0
     cap = Capture(tmp, b.link_port, seconds) if have_tshark else None
     cpu0, t0 = cpu_seconds(pid), time.monotonic()
@@ -164,12 +187,15 @@ def scenario(tmp: Path, n: int, seconds: float, status_period_s: int) -> dict[st
     got = base.snapshot()
     base.close()
     b.stop()
-    result.update({
-        "cpu_percent": round(100 * (cpu1 - cpu0) / (t1 - t0), 3),
-        "rss_kb": rss, "peak_rss_kb": hwm,
-        "data_frames": got.data_frames,
-        "mean_data_frame_bytes": round(got.data_bytes / max(got.data_frames, 1), 2),
-    })
+    result.update(
+        {
+            "cpu_percent": round(100 * (cpu1 - cpu0) / (t1 - t0), 3),
+            "rss_kb": rss,
+            "peak_rss_kb": hwm,
+            "data_frames": got.data_frames,
+            "mean_data_frame_bytes": round(got.data_bytes / max(got.data_frames, 1), 2),
+        }
+    )
     return result
 
 
@@ -187,40 +213,55 @@ def main() -> None:
         (tmp / "ingest").mkdir()
         r = ingest(tmp / "ingest", args.ingest_samples)
         results["ingest"] = r
-        print("\n== PubBroker ingest (archive on: zstd chunks, fsync every flush tick;"
-              " 19 float32 topics, batches of 4096 over the Unix socket)")
-        print(f"  {r['samples']:,} samples in {r['seconds_to_ingest']} s: "
-              f"{r['samples_per_s_wall']:,} samples/s wall; ingest thread CPU "
-              f"{r['ingest_thread_cpu_s']} s -> {r['samples_per_s_ingest_core']:,} samples/s "
-              f"per core (target >= 2,000,000)")
-        print(f"  all ingest + archive work: {r['process_cpu_s']} CPU-s ->"
-              f" {r['samples_per_cpu_s_archive_on']:,} samples per CPU-second, archive on")
-        print(f"  archived and closed after {r['seconds_until_archived_and_closed']} s "
-              f"({r['samples_per_s_archived']:,} samples/s end to end), "
-              f"{r['archive_bytes_per_sample']} B/sample on disk, peak RSS {r['peak_rss_kb']} kB")
+        print(
+            "\n== PubBroker ingest (archive on: zstd chunks, fsync every flush tick;"
+            " 19 float32 topics, batches of 4096 over the Unix socket)"
+        )
+        print(
+            f"  {r['samples']:,} samples in {r['seconds_to_ingest']} s: "
+            f"{r['samples_per_s_wall']:,} samples/s wall; ingest thread CPU "
+            f"{r['ingest_thread_cpu_s']} s -> {r['samples_per_s_ingest_core']:,} samples/s "
+            f"per core (target >= 2,000,000)"
+        )
+        print(
+            f"  all ingest + archive work: {r['process_cpu_s']} CPU-s ->"
+            f" {r['samples_per_cpu_s_archive_on']:,} samples per CPU-second, archive on"
+        )
+        print(
+            f"  archived and closed after {r['seconds_until_archived_and_closed']} s "
+            f"({r['samples_per_s_archived']:,} samples/s end to end), "
+            f"{r['archive_bytes_per_sample']} B/sample on disk, peak RSS {r['peak_rss_kb']} kB"
+        )
         for n in (1, 2):
             (tmp / f"s{n}").mkdir()
             s = scenario(tmp / f"s{n}", n, args.seconds, args.status_period)
             results[f"scenario{n}"] = s
             paper = expected[f"scenario{n}"]["paper_bytes_per_s"]["drone_to_base_modd"]
             target = 300 if n == 1 else 140
-            print(f"\n== Scenario {n}, {args.seconds:.0f} s steady state (25 Hz publisher,"
-                  f" STATUS every {args.status_period} s)")
+            print(
+                f"\n== Scenario {n}, {args.seconds:.0f} s steady state (25 Hz publisher,"
+                f" STATUS every {args.status_period} s)"
+            )
             w = s["wire"]
             if isinstance(w, dict):
                 d2b, b2d = w["drone_to_base"], w["base_to_drone"]
-                print(f"  drone->base {d2b['bytes_per_s']} B/s ({d2b['packets_per_s']} pkt/s)"
-                      f" | planner {s['planner_drone_to_base_bytes_per_s']} B/s"
-                      f" | paper MoDD {paper} B/s | target <= {target} B/s"
-                      f" | {paper / d2b['bytes_per_s']:.1f}x less than the paper")
-                print(f"  base->drone {b2d['bytes_per_s']} B/s ({b2d['packets_per_s']} pkt/s,"
-                      f" pure ACKs {b2d['pure_ack_bytes_per_s']} B/s)")
+                print(
+                    f"  drone->base {d2b['bytes_per_s']} B/s ({d2b['packets_per_s']} pkt/s)"
+                    f" | planner {s['planner_drone_to_base_bytes_per_s']} B/s"
+                    f" | paper MoDD {paper} B/s | target <= {target} B/s"
+                    f" | {paper / d2b['bytes_per_s']:.1f}x less than the paper"
+                )
+                print(
+                    f"  base->drone {b2d['bytes_per_s']} B/s ({b2d['packets_per_s']} pkt/s,"
+                    f" pure ACKs {b2d['pure_ack_bytes_per_s']} B/s)"
+                )
             else:
                 print(f"  wire: {w}")
-            print(f"  mean DATA frame {s['mean_data_frame_bytes']} B; PubBroker CPU"
-                  f" {s['cpu_percent']} % of a core, RSS {s['rss_kb']} kB"
-                  f" (peak {s['peak_rss_kb']} kB)"
-                  + ("  [targets < 1 %, < 10 MB]" if n == 2 else ""))
+            print(
+                f"  mean DATA frame {s['mean_data_frame_bytes']} B; PubBroker CPU"
+                f" {s['cpu_percent']} % of a core, RSS {s['rss_kb']} kB"
+                f" (peak {s['peak_rss_kb']} kB)" + ("  [targets < 1 %, < 10 MB]" if n == 2 else "")
+            )
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(results, indent=1))
     print(f"\nfigures written to {args.json}")

@@ -47,8 +47,10 @@ from subbroker_harness import (  # noqa: E402
 )
 
 UDP_IP = 28
-LINE = re.compile(r"radio: base->drone passed (\d+) \((\d+) B\).*?; drone->base passed (\d+) "
-                  r"\((\d+) B\)")
+LINE = re.compile(
+    r"radio: base->drone passed (\d+) \((\d+) B\).*?; drone->base passed (\d+) "
+    r"\((\d+) B\)"
+)
 TARGETS = {"s1_udp": 110.0, "s2_udp": 110.0, "s1_serial": 85.0, "up": 5.0}
 
 
@@ -73,16 +75,16 @@ def _watch(zport: int) -> Any:
     from conftest import Collector
 
     wait_port(zport, 60)
-    session = open_session(client_settings(f"tcp/127.0.0.1:{zport}",
-                                           shared_credentials().cred_file("backend")))
+    session = open_session(
+        client_settings(f"tcp/127.0.0.1:{zport}", shared_credentials().cred_file("backend"))
+    )
     assert wait_connected(session)
     got = Collector()
     session.declare_subscriber("modd/*/sub/*", got.on_sample)
     return session, got
 
 
-def run_link(tmp: Path, scenario: str, transport: str, spec: str, seconds: float
-             ) -> dict[str, Any]:
+def run_link(tmp: Path, scenario: str, transport: str, spec: str, seconds: float) -> dict[str, Any]:
     """One run; bytes/s each way as the emulator counted them, and delivery."""
     model = model_copy(tmp, scenario)
     zport, ingress = free_port(), free_port()
@@ -90,14 +92,27 @@ def run_link(tmp: Path, scenario: str, transport: str, spec: str, seconds: float
     if transport == "udp":
         port, relay = free_port("udp"), free_port("udp")
         pb = start_pubbroker_dgram(tmp, model, {"transport": "udp", "port": port}, ingress)
-        radio = Proc("radio", [*RADIO, "--udp", f"127.0.0.1:{relay}", "--to",
-                               f"127.0.0.1:{port}", "--radio", radio_spec, "--report", "1"],
-                     tmp / "radio.log")
+        radio = Proc(
+            "radio",
+            [
+                *RADIO,
+                "--udp",
+                f"127.0.0.1:{relay}",
+                "--to",
+                f"127.0.0.1:{port}",
+                "--radio",
+                radio_spec,
+                "--report",
+                "1",
+            ],
+            tmp / "radio.log",
+        )
         cfg = subbroker_dgram_config(tmp, model, f"127.0.0.1:{relay}", zport, "udp")
     else:
         radio, base, drone = start_radio_serial(tmp, radio_spec)
-        pb = start_pubbroker_dgram(tmp, model, {"transport": "serial", "device": drone,
-                                                "port": 1}, ingress)
+        pb = start_pubbroker_dgram(
+            tmp, model, {"transport": "serial", "device": drone, "port": 1}, ingress
+        )
         cfg = subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport, "serial", device=base)
     sb = start_subbroker(tmp, cfg)
     session = None
@@ -125,15 +140,22 @@ def run_link(tmp: Path, scenario: str, transport: str, spec: str, seconds: float
     header = UDP_IP if transport == "udp" else 0
     archive = read_archive(tmp / "archive", model)
     delivered, expected, prompt = delivery(values, archive)
-    return {"scenario": scenario, "transport": transport, "radio": spec,
-            "down_Bps": round((down_b + header * down_pkts) / span, 1),
-            "up_Bps": round((up_b + header * up_pkts) / span, 1),
-            "down_packets_per_s": round(down_pkts / span, 3),
-            "delivered": delivered, "expected": expected, "within_3_delays": prompt}
+    return {
+        "scenario": scenario,
+        "transport": transport,
+        "radio": spec,
+        "down_Bps": round((down_b + header * down_pkts) / span, 1),
+        "up_Bps": round((up_b + header * up_pkts) / span, 1),
+        "down_packets_per_s": round(down_pkts / span, 3),
+        "delivered": delivered,
+        "expected": expected,
+        "within_3_delays": prompt,
+    }
 
 
-def delivery(values: dict[str, list[Any]], archive: dict[str, list[tuple[int, Any]]]
-             ) -> tuple[int, int, int]:
+def delivery(
+    values: dict[str, list[Any]], archive: dict[str, list[tuple[int, Any]]]
+) -> tuple[int, int, int]:
     """(windows delivered, windows expected, delivered within 3 s) over the
     subscribers' windows that hold archived samples, away from the run's edges."""
     delivered = expected = prompt = 0
@@ -152,6 +174,7 @@ def delivery(values: dict[str, list[Any]], archive: dict[str, list[tuple[int, An
         while end < lo:
             end += period
         import bisect
+
         while end <= hi:
             i = bisect.bisect_left(stamps, end - period)
             if i < len(stamps) and stamps[i] < end:
@@ -177,9 +200,21 @@ def run_mavlink(tmp: Path, scenario: str, spec: str, seconds: float) -> dict[str
     sink = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sink.bind(("127.0.0.1", 0))
     relay = free_port("udp")
-    radio = Proc("mavradio", [*RADIO, "--udp", f"127.0.0.1:{relay}", "--to",
-                              f"127.0.0.1:{sink.getsockname()[1]}", "--radio", spec or "seed=1",
-                              "--report", "1"], tmp / "mavradio.log")
+    radio = Proc(
+        "mavradio",
+        [
+            *RADIO,
+            "--udp",
+            f"127.0.0.1:{relay}",
+            "--to",
+            f"127.0.0.1:{sink.getsockname()[1]}",
+            "--radio",
+            spec or "seed=1",
+            "--report",
+            "1",
+        ],
+        tmp / "mavradio.log",
+    )
     # the drone sends to the relay's far side: here the "base" sends, the "drone" receives,
     # so the relay's base->drone direction carries the stream
     out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -200,7 +235,8 @@ def run_mavlink(tmp: Path, scenario: str, spec: str, seconds: float) -> dict[str
                 if now >= due[i]:
                     due[i] = (due[i] or now) + p
                     msg = mavlink2.MAVLink_named_value_float_message(
-                        int((now - start) * 1000), f"v{i}".encode(), float(i))
+                        int((now - start) * 1000), f"v{i}".encode(), float(i)
+                    )
                     out.sendto(msg.pack(mav), ("127.0.0.1", relay))
                     sent += 1
             while True:
@@ -219,10 +255,17 @@ def run_mavlink(tmp: Path, scenario: str, spec: str, seconds: float) -> dict[str
         sink.close()
     c0 = c0 or (0, 0, 0, 0)
     pkts, b = c1[0] - c0[0], c1[1] - c0[1]
-    return {"scenario": scenario, "transport": "udp (MAVLink 2)", "radio": spec,
-            "down_Bps": round((b + UDP_IP * pkts) / (t1 - t0), 1), "up_Bps": 0.0,
-            "down_packets_per_s": round(pkts / (t1 - t0), 3),
-            "delivered": received, "expected": sent, "within_3_delays": received}
+    return {
+        "scenario": scenario,
+        "transport": "udp (MAVLink 2)",
+        "radio": spec,
+        "down_Bps": round((b + UDP_IP * pkts) / (t1 - t0), 1),
+        "up_Bps": 0.0,
+        "down_packets_per_s": round(pkts / (t1 - t0), 3),
+        "delivered": received,
+        "expected": sent,
+        "within_3_delays": received,
+    }
 
 
 def run_zenoh(tmp: Path, number: int, spec: str, seconds: float) -> dict[str, Any]:
@@ -237,21 +280,44 @@ def run_zenoh(tmp: Path, number: int, spec: str, seconds: float) -> dict[str, An
     sc = load(number)
     port, relay = free_port("udp"), free_port("udp")
     keys: list[tuple[str, str, float]] = [
-        (f"bench/{sc.drone}/sub/{s.name}", s.topic, 1 / float(s.period_s))
-        for s in sc.subscriptions]
+        (f"bench/{sc.drone}/sub/{s.name}", s.topic, 1 / float(s.period_s)) for s in sc.subscriptions
+    ]
     plan = {"publishers": [[float(p), ts] for p, ts in sc.publishers], "keys": keys}
-    drone = Proc("zenoh-drone", [sys.executable, str(HERE / "benchkit" / "zenoh_drone.py"),
-                                 "--listen", f"udp/127.0.0.1:{port}", "--plan", json.dumps(plan),
-                                 "--seconds", str(seconds + 30)], tmp / "zenoh-drone.log")
-    radio = Proc("zradio", [*RADIO, "--udp", f"127.0.0.1:{relay}", "--to", f"127.0.0.1:{port}",
-                            "--radio", spec or "seed=1", "--report", "1"], tmp / "zradio.log")
+    drone = Proc(
+        "zenoh-drone",
+        [
+            sys.executable,
+            str(HERE / "benchkit" / "zenoh_drone.py"),
+            "--listen",
+            f"udp/127.0.0.1:{port}",
+            "--plan",
+            json.dumps(plan),
+            "--seconds",
+            str(seconds + 30),
+        ],
+        tmp / "zenoh-drone.log",
+    )
+    radio = Proc(
+        "zradio",
+        [
+            *RADIO,
+            "--udp",
+            f"127.0.0.1:{relay}",
+            "--to",
+            f"127.0.0.1:{port}",
+            "--radio",
+            spec or "seed=1",
+            "--report",
+            "1",
+        ],
+        tmp / "zradio.log",
+    )
     received = [0]
     session = None
     try:
         if not drone.wait_log("ready", 30):
             raise RuntimeError(drone.log()[-2000:])
-        session = open_session(ZenohSettings(mode="peer",
-                                             connect=(f"udp/127.0.0.1:{relay}",)))
+        session = open_session(ZenohSettings(mode="peer", connect=(f"udp/127.0.0.1:{relay}",)))
 
         def on_sample(sample: Any) -> None:
             struct.unpack("<qfI", sample.payload.to_bytes())
@@ -271,50 +337,77 @@ def run_zenoh(tmp: Path, number: int, spec: str, seconds: float) -> dict[str, An
             pass
     span = t1 - t0
     wanted = sum(span / float(s.period_s) for s in sc.subscriptions)
-    return {"scenario": f"scenario{number}.modd", "transport": "udp (zenoh, downsampling)",
-            "radio": spec, "down_Bps": round((c1[3] - c0[3] + UDP_IP * (c1[2] - c0[2])) / span, 1),
-            "up_Bps": round((c1[1] - c0[1] + UDP_IP * (c1[0] - c0[0])) / span, 1),
-            "down_packets_per_s": round((c1[2] - c0[2]) / span, 3),
-            "delivered": r1 - r0, "expected": round(wanted), "within_3_delays": r1 - r0}
+    return {
+        "scenario": f"scenario{number}.modd",
+        "transport": "udp (zenoh, downsampling)",
+        "radio": spec,
+        "down_Bps": round((c1[3] - c0[3] + UDP_IP * (c1[2] - c0[2])) / span, 1),
+        "up_Bps": round((c1[1] - c0[1] + UDP_IP * (c1[0] - c0[0])) / span, 1),
+        "down_packets_per_s": round((c1[2] - c0[2]) / span, 3),
+        "delivered": r1 - r0,
+        "expected": round(wanted),
+        "within_3_delays": r1 - r0,
+    }
 
 
 def main() -> int:
-    p = argparse.ArgumentParser(description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     p.add_argument("--seconds", type=float, default=30.0)
     p.add_argument("--json", type=Path)
     args = p.parse_args()
     rows: list[dict[str, Any]] = []
-    plan = [("scenario1.modd", "udp", ""), ("scenario2.modd", "udp", ""),
-            ("scenario1.modd", "serial", "packet=252"), ("scenario2.modd", "serial", "packet=252"),
-            ("scenario1.modd", "udp", "loss=0.05,latency_ms=80,jitter_ms=20,seed=5"),
-            ("scenario1.modd", "udp", "loss=0.20,latency_ms=80,jitter_ms=20,seed=6")]
+    plan = [
+        ("scenario1.modd", "udp", ""),
+        ("scenario2.modd", "udp", ""),
+        ("scenario1.modd", "serial", "packet=252"),
+        ("scenario2.modd", "serial", "packet=252"),
+        ("scenario1.modd", "udp", "loss=0.05,latency_ms=80,jitter_ms=20,seed=5"),
+        ("scenario1.modd", "udp", "loss=0.20,latency_ms=80,jitter_ms=20,seed=6"),
+    ]
     for scenario, transport, spec in plan:
         with TemporaryDirectory(prefix="modd-bench-radio-") as d:
             rows.append(run_link(Path(d), scenario, transport, spec, args.seconds))
             print(json.dumps(rows[-1]), flush=True)
-    for scenario, spec in (("scenario1.modd", ""), ("scenario2.modd", ""),
-                           ("scenario1.modd", "loss=0.05,seed=5"),
-                           ("scenario1.modd", "loss=0.20,seed=6")):
+    for scenario, spec in (
+        ("scenario1.modd", ""),
+        ("scenario2.modd", ""),
+        ("scenario1.modd", "loss=0.05,seed=5"),
+        ("scenario1.modd", "loss=0.20,seed=6"),
+    ):
         with TemporaryDirectory(prefix="modd-bench-mav-") as d:
             try:
                 rows.append(run_mavlink(Path(d), scenario, spec, args.seconds))
             except Exception as exc:  # a comparison row must not hide the others
-                rows.append({"scenario": scenario, "transport": "udp (MAVLink 2)",
-                             "radio": spec, "error": str(exc)})
+                rows.append(
+                    {
+                        "scenario": scenario,
+                        "transport": "udp (MAVLink 2)",
+                        "radio": spec,
+                        "error": str(exc),
+                    }
+                )
             print(json.dumps(rows[-1]), flush=True)
     for number, spec in ((1, ""), (2, ""), (1, "loss=0.05,seed=5"), (1, "loss=0.20,seed=6")):
         with TemporaryDirectory(prefix="modd-bench-zenoh-") as d:
             try:
                 rows.append(run_zenoh(Path(d), number, spec, args.seconds))
             except Exception as exc:
-                rows.append({"scenario": f"scenario{number}.modd",
-                             "transport": "udp (zenoh, downsampling)", "radio": spec,
-                             "error": str(exc)})
+                rows.append(
+                    {
+                        "scenario": f"scenario{number}.modd",
+                        "transport": "udp (zenoh, downsampling)",
+                        "radio": spec,
+                        "error": str(exc),
+                    }
+                )
             print(json.dumps(rows[-1]), flush=True)
     print()
-    print("| scenario | transport | radio | drone→base B/s | base→drone B/s | packets/s | "
-          "delivered | within 3× delay |")
+    print(
+        "| scenario | transport | radio | drone→base B/s | base→drone B/s | packets/s | "
+        "delivered | within 3× delay |"
+    )
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     for r in rows:
         if "error" in r:
@@ -322,12 +415,16 @@ def main() -> int:
             continue
         share = f"{100 * r['delivered'] / r['expected']:.2f} %" if r["expected"] else "—"
         prompt = f"{100 * r['within_3_delays'] / r['expected']:.2f} %" if r["expected"] else "—"
-        print(f"| {r['scenario']} | {r['transport']} | {r['radio'] or '—'} | {r['down_Bps']} | "
-              f"{r['up_Bps']} | {r['down_packets_per_s']} | {share} ({r['delivered']}/"
-              f"{r['expected']}) | {prompt} |")
-    print(f"\ntargets: scenario 1 and 2 over udp <= {TARGETS['s1_udp']} B/s, scenario 1 over "
-          f"serial <= {TARGETS['s1_serial']} B/s, base->drone <= {TARGETS['up']} B/s while "
-          "nothing is lost, delivered >= 99.9 % / 99 % at 5 % / 20 % loss within 3 s")
+        print(
+            f"| {r['scenario']} | {r['transport']} | {r['radio'] or '—'} | {r['down_Bps']} | "
+            f"{r['up_Bps']} | {r['down_packets_per_s']} | {share} ({r['delivered']}/"
+            f"{r['expected']}) | {prompt} |"
+        )
+    print(
+        f"\ntargets: scenario 1 and 2 over udp <= {TARGETS['s1_udp']} B/s, scenario 1 over "
+        f"serial <= {TARGETS['s1_serial']} B/s, base->drone <= {TARGETS['up']} B/s while "
+        "nothing is lost, delivered >= 99.9 % / 99 % at 5 % / 20 % loss within 3 s"
+    )
     if args.json:
         args.json.write_text(json.dumps(rows, indent=2))
     return 0

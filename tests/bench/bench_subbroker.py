@@ -76,14 +76,20 @@ def model(n_topics: int, n_subs: int, seed: int = 1) -> dict[str, Any]:
     topics = [f"d.s.{n}" for n in names]
     return {
         "schemaVersion": "1.0",
-        "drone": {"name": "d", "sensors": [
-            {"name": "s", "variables": [{"name": n, "unit": "METER"} for n in names]}]},
+        "drone": {
+            "name": "d",
+            "sensors": [{"name": "s", "variables": [{"name": n, "unit": "METER"} for n in names]}],
+        },
         "pubBroker": {"endpoint": {"host": "127.0.0.1", "port": 7171}, "logPath": "/tmp/l"},
         "subBroker": {"endpoint": {"host": "127.0.0.1", "port": 7272}, "configPath": "/tmp/c"},
         "publishers": [{"name": "p", "periodS": "0.04", "topics": topics}],
         "subscribers": [
-            {"name": f"sub{k}", "topic": rng.choice(topics), "periodS": rng.choice(PERIODS),
-             "aggregation": rng.choice(AGGREGATIONS)}
+            {
+                "name": f"sub{k}",
+                "topic": rng.choice(topics),
+                "periodS": rng.choice(PERIODS),
+                "aggregation": rng.choice(AGGREGATIONS),
+            }
             for k in range(n_subs)
         ],
     }
@@ -98,9 +104,19 @@ def slots(config: Config, epoch_ns: int, count: int, seed: int = 2) -> list[list
     for _ in range(count):
         s = next(walk)
         end = epoch_ns + s.offset_us * 1000
-        out.append([Window(config.config_id, s.index, sid, end - periods[sid] * 1000, end,
-                           Value(True, rng.uniform(-10, 10), 0, rng.randint(1, 25), []))
-                    for sid in s.streams])
+        out.append(
+            [
+                Window(
+                    config.config_id,
+                    s.index,
+                    sid,
+                    end - periods[sid] * 1000,
+                    end,
+                    Value(True, rng.uniform(-10, 10), 0, rng.randint(1, 25), []),
+                )
+                for sid in s.streams
+            ]
+        )
     return out
 
 
@@ -117,9 +133,11 @@ class Phase:
         return 1e6 * self.cpu_s / max(1, self.delivered)
 
     def row(self) -> str:
-        return (f"| {self.name} | {self.delivered:,} | {self.received:,} | "
-                f"{self.delivered / self.wall_s:,.0f} | {100 * self.cpu_s / self.wall_s:.0f} % | "
-                f"**{self.us_per_value:.1f}** | {1e6 / self.us_per_value:,.0f} |")
+        return (
+            f"| {self.name} | {self.delivered:,} | {self.received:,} | "
+            f"{self.delivered / self.wall_s:,.0f} | {100 * self.cpu_s / self.wall_s:.0f} % | "
+            f"**{self.us_per_value:.1f}** | {1e6 / self.us_per_value:,.0f} |"
+        )
 
 
 class Bench:
@@ -128,16 +146,22 @@ class Bench:
     def __init__(self, m: dict[str, Any]) -> None:
         os.environ.setdefault("MODD_LINK_KEY", "bench-link-key-16b")
         port = free_port()
-        self.session = open_session(ZenohSettings(mode="peer",
-                                                  listen=(f"tcp/127.0.0.1:{port}",)))
+        self.session = open_session(ZenohSettings(mode="peer", listen=(f"tcp/127.0.0.1:{port}",)))
         self.receiver = subprocess.Popen(
             [sys.executable, "-c", RECEIVER, f"tcp/127.0.0.1:{port}", "modd/d/sub/**"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
         assert self.receiver.stdout is not None and self.receiver.stdin is not None
         if self.receiver.stdout.readline().strip() != "ready":
             raise RuntimeError("the receiver process did not start")
-        cfg = SubBrokerConfig(model=m, drone="d", link=_no_link(),
-                              delivery=DeliveryOptions(tcp=False, status_period_s=3600))
+        cfg = SubBrokerConfig(
+            model=m,
+            drone="d",
+            link=_no_link(),
+            delivery=DeliveryOptions(tcp=False, status_period_s=3600),
+        )
         self.broker = SubBroker(cfg, self.session)
         self.broker.start()
         self.broker.link.stop()  # the windows come from this bench, not from a PubBroker
@@ -152,8 +176,13 @@ class Bench:
         self.receiver.stdin.flush()
         return int(self.receiver.stdout.readline())
 
-    def run(self, name: str, batch: list[list[Window]], pace_s: list[float] | None,
-            profile: cProfile.Profile | None = None) -> Phase:
+    def run(
+        self,
+        name: str,
+        batch: list[list[Window]],
+        pace_s: list[float] | None,
+        profile: cProfile.Profile | None = None,
+    ) -> Phase:
         before, got0 = self.broker.delivered, self.received()
         cpu0, t0 = time.process_time(), time.perf_counter()
         if profile is not None:
@@ -225,8 +254,10 @@ def end_to_end(m: dict[str, Any], seconds: float) -> None:
                 with lock:
                     status.append(json.loads(sample.payload.to_bytes()))
 
-            subs = [session.declare_subscriber("modd/d/sub/**", on_value),
-                    session.declare_subscriber("modd/d/status", on_status)]
+            subs = [
+                session.declare_subscriber("modd/d/sub/**", on_value),
+                session.declare_subscriber("modd/d/status", on_status),
+            ]
             procs.append(start_load(tmp, model_path, ingress, seconds + 120))
             deadline = time.monotonic() + 120
             while time.monotonic() < deadline and not (status and status[-1]["delivered"]):
@@ -250,19 +281,25 @@ def end_to_end(m: dict[str, Any], seconds: float) -> None:
             got = received[0] - got0
             delivered = last["delivered"] - first["delivered"]
             dt = (last["time_ns"] - first["time_ns"]) / 1e9
-            print(f"End to end: PubBroker -> MoDD link -> SubBroker process -> zenoh, "
-                  f"{len(m['subscribers']):,} subscriptions, {asked:,.0f} values/s asked, "
-                  f"{fp.seconds:.0f} s\n")
+            print(
+                f"End to end: PubBroker -> MoDD link -> SubBroker process -> zenoh, "
+                f"{len(m['subscribers']):,} subscriptions, {asked:,.0f} values/s asked, "
+                f"{fp.seconds:.0f} s\n"
+            )
             frames = (last["data_frames"] - first["data_frames"]) / dt
-            print("| DATA frames /s | delivered /s (status) | received /s | SubBroker CPU "
-                  "| CPU us per value | RSS MB | behind | lag_s (last, max) | receive backlog |")
+            print(
+                "| DATA frames /s | delivered /s (status) | received /s | SubBroker CPU "
+                "| CPU us per value | RSS MB | behind | lag_s (last, max) | receive backlog |"
+            )
             print("| ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: |")
             per_value = 1e6 * fp.cpu_seconds / max(1.0, delivered / dt * fp.seconds)
-            print(f"| {frames:.1f} | {delivered / dt:,.0f} | {got / fp.seconds:,.0f} | "
-                  f"{fp.cpu_percent:.0f} % | "
-                  f"**{per_value:.1f}** | {fp.rss_median_kb / 1024:.0f} "
-                  f"| {last.get('behind')} | {last.get('lag_s')}, {last.get('max_lag_s')} | "
-                  f"{last.get('recv_backlog_bytes')} B |")
+            print(
+                f"| {frames:.1f} | {delivered / dt:,.0f} | {got / fp.seconds:,.0f} | "
+                f"{fp.cpu_percent:.0f} % | "
+                f"**{per_value:.1f}** | {fp.rss_median_kb / 1024:.0f} "
+                f"| {last.get('behind')} | {last.get('lag_s')}, {last.get('max_lag_s')} | "
+                f"{last.get('recv_backlog_bytes')} B |"
+            )
             for sub in subs:
                 sub.undeclare()  # type: ignore[no-untyped-call]
             session.close()  # type: ignore[no-untyped-call]
@@ -293,25 +330,33 @@ def main(argv: list[str] | None = None) -> int:
         n_paced = int(args.seconds * 4)  # 0.25 s slots
         n_flat = args.flat_slots
         batch = slots(config, bench.epoch_ns, 16 + n_paced + 2 * n_flat)
-        warmup, paced = batch[:16], batch[16:16 + n_paced]
-        flat, profiled = batch[16 + n_paced:16 + n_paced + n_flat], batch[16 + n_paced + n_flat:]
+        warmup, paced = batch[:16], batch[16 : 16 + n_paced]
+        flat, profiled = batch[16 + n_paced : 16 + n_paced + n_flat], batch[16 + n_paced + n_flat :]
         bench.run("warm-up", warmup, None)  # publishers declared, caches filled
         dates = [(w[0].end_ns - paced[0][0].end_ns) / 1e9 / args.speed for w in paced]
         profile = cProfile.Profile() if args.profile else None
         results = [
-            bench.run(f"paced, model rate x{args.speed:g} ({float(per_s) * args.speed:,.0f} "
-                      "values/s asked)", paced, dates),
+            bench.run(
+                f"paced, model rate x{args.speed:g} ({float(per_s) * args.speed:,.0f} "
+                "values/s asked)",
+                paced,
+                dates,
+            ),
             bench.run("flat out (slots back to back)", flat, None),
         ]
         if profile is not None:
             results.append(bench.run("flat out, under cProfile", profiled, None, profile))
         running = bench.broker._running
         assert running is not None
-        print(f"SubBroker data path: {args.subs:,} subscriptions on {args.topics} topics, "
-              f"{len(config.streams)} streams sent, {len(running.fanout.routes())}"
-              f" routed (hyperperiod {hyper:g} s), {float(per_s):,.0f} values/s asked\n")
-        print("| phase | values delivered | received | values/s | CPU (of a core) "
-              "| CPU us per value | values/s per core |")
+        print(
+            f"SubBroker data path: {args.subs:,} subscriptions on {args.topics} topics, "
+            f"{len(config.streams)} streams sent, {len(running.fanout.routes())}"
+            f" routed (hyperperiod {hyper:g} s), {float(per_s):,.0f} values/s asked\n"
+        )
+        print(
+            "| phase | values delivered | received | values/s | CPU (of a core) "
+            "| CPU us per value | values/s per core |"
+        )
         print("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
         for r in results:
             print(r.row())

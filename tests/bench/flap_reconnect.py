@@ -93,8 +93,10 @@ def main() -> None:
                 time.sleep(0.0005)
             costs.append(time.monotonic() - t)
         link.stop()
-    print(f"{cuts} cuts every {period} s: reconnect (cut -> authenticated, RTT measured) "
-          f"median {statistics.median(costs) * 1000:.1f} ms, max {max(costs) * 1000:.1f} ms")
+    print(
+        f"{cuts} cuts every {period} s: reconnect (cut -> authenticated, RTT measured) "
+        f"median {statistics.median(costs) * 1000:.1f} ms, max {max(costs) * 1000:.1f} ms"
+    )
 
 
 if __name__ == "__main__":

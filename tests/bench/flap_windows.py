@@ -62,8 +62,9 @@ def main() -> None:
             wait_port(zport)
             if not sb.wait_log("running", 30):
                 raise SystemExit("the SubBroker did not start: " + sb.log())
-            session = open_session(client_settings(
-                f"tcp/127.0.0.1:{zport}", shared_credentials().cred_file("backend")))
+            session = open_session(
+                client_settings(f"tcp/127.0.0.1:{zport}", shared_credentials().cred_file("backend"))
+            )
             try:
                 assert wait_connected(session, 10)
                 session.declare_subscriber("modd/usv/**", on_sample)
@@ -79,11 +80,16 @@ def main() -> None:
             finally:
                 session.close()  # type: ignore[no-untyped-call]
     with lock:
-        live = {v.end_ns for v in got if t0 < v.end_ns <= t1 and not v.backfilled
-                and v.value is not None}
+        live = {
+            v.end_ns
+            for v in got
+            if t0 < v.end_ns <= t1 and not v.backfilled and v.value is not None
+        }
     expected = int(seconds * 1e9) // PERIOD_NS
-    print(f"link cut every {period:g} s for {seconds:g} s ({cuts} cuts): {len(live)} of "
-          f"{expected} windows of {SUBSCRIBER} live")
+    print(
+        f"link cut every {period:g} s for {seconds:g} s ({cuts} cuts): {len(live)} of "
+        f"{expected} windows of {SUBSCRIBER} live"
+    )
 
 
 if __name__ == "__main__":

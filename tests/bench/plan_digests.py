@@ -44,10 +44,11 @@ def random_model(seed: int, n_topics: int, n_subs: int) -> dict[str, Any]:
 
 
 def models(big: bool) -> list[tuple[str, dict[str, Any]]]:
-    out = [(f"rnd{seed}", random_model(seed, 10 * (1 + seed % 5), 30 + 20 * seed))
-           for seed in range(40)]
-    out += [(f"syn{seed}", synthetic(100 + 50 * seed, 500 + 300 * seed, seed))
-            for seed in range(6)]
+    out = [
+        (f"rnd{seed}", random_model(seed, 10 * (1 + seed % 5), 30 + 20 * seed))
+        for seed in range(40)
+    ]
+    out += [(f"syn{seed}", synthetic(100 + 50 * seed, 500 + 300 * seed, seed)) for seed in range(6)]
     out += [("grid", grid_model(100, 1000)), ("26d", twenty_six_days())]
     if big:
         out += [("big", synthetic(2000, 10000)), ("huge", synthetic(5000, 25000))]

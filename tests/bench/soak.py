@@ -81,8 +81,9 @@ def frame(mtype: int, body: bytes) -> bytes:
     return varint(len(body) + 1) + bytes([mtype]) + body
 
 
-def raw_publisher(port: int, name: str, topic: str, stamp: Callable[[], int], seconds: float,
-                  batch: int) -> int:
+def raw_publisher(
+    port: int, name: str, topic: str, stamp: Callable[[], int], seconds: float, batch: int
+) -> int:
     """Samples of one float32 topic, ``batch`` per frame, for ``seconds``; the
     number sent. Replies are read and discarded so that the socket never stalls."""
     data = name.encode()
@@ -94,8 +95,10 @@ def raw_publisher(port: int, name: str, topic: str, stamp: Callable[[], int], se
         s.sendall(frame(0x02, varint(0) + bytes([0]) + varint(len(t)) + t))
         end = time.monotonic() + seconds
         while time.monotonic() < end:
-            records = b"".join(varint(0) + struct.pack("<q", stamp()) + struct.pack("<f", 1.5)
-                               for _ in range(batch))
+            records = b"".join(
+                varint(0) + struct.pack("<q", stamp()) + struct.pack("<f", 1.5)
+                for _ in range(batch)
+            )
             try:
                 s.sendall(frame(0x03, varint(batch) + records))
             except OSError:
@@ -116,29 +119,53 @@ class Backend:
         cred = shared_credentials()
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
-        self.cmd = [str(Path(sys.executable).with_name("modd-backend")), "--port", str(self.port),
-                    "--data", str(tmp / "backend"), "--zenoh-connect", zenoh,
-                    "--zenoh-credentials", str(cred.cred_file("backend")),
-                    "--deploy-key", str(cred.deploy_key_file), "--deploy-timeout", "3",
-                    "--scene-port", "-1", "--foxglove-port", "0", "--frontend", str(tmp / "none")]
+        self.cmd = [
+            str(Path(sys.executable).with_name("modd-backend")),
+            "--port",
+            str(self.port),
+            "--data",
+            str(tmp / "backend"),
+            "--zenoh-connect",
+            zenoh,
+            "--zenoh-credentials",
+            str(cred.cred_file("backend")),
+            "--deploy-key",
+            str(cred.deploy_key_file),
+            "--deploy-timeout",
+            "3",
+            "--scene-port",
+            "-1",
+            "--foxglove-port",
+            "0",
+            "--frontend",
+            str(tmp / "none"),
+        ]
         self.log = tmp / "backend.log"
         self.proc: subprocess.Popen[bytes] | None = None
         self.headers: dict[str, str] = {}
 
     def start(self) -> None:
         with self.log.open("ab") as out:
-            self.proc = subprocess.Popen(self.cmd, stdout=out, stderr=subprocess.STDOUT,
-                                         env={**os.environ, "MODD_ADMIN_PASSWORD": PASSWORD})
+            self.proc = subprocess.Popen(
+                self.cmd,
+                stdout=out,
+                stderr=subprocess.STDOUT,
+                env={**os.environ, "MODD_ADMIN_PASSWORD": PASSWORD},
+            )
         deadline = time.monotonic() + 90
         while True:
             try:
-                r = httpx.post(self.url + "/api/auth/login", timeout=10,
-                               json={"username": "admin", "password": PASSWORD})
+                r = httpx.post(
+                    self.url + "/api/auth/login",
+                    timeout=10,
+                    json={"username": "admin", "password": PASSWORD},
+                )
                 break
             except httpx.TransportError:
                 if time.monotonic() > deadline or self.proc.poll() is not None:
-                    raise RuntimeError("the backend did not start: "
-                                       + self.log.read_text()) from None
+                    raise RuntimeError(
+                        "the backend did not start: " + self.log.read_text()
+                    ) from None
                 time.sleep(0.1)
         self.headers = {"Authorization": f"Bearer {r.json()['token']}"}
 
@@ -166,8 +193,11 @@ def mount_tmpfs(directory: Path, size_mb: int = 512) -> bool:
     file left open by a crash finishes it in place (a few KiB, docs/reliability.md)."""
     if os.geteuid() != 0 or shutil.which("mount") is None:
         return False
-    r = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size_mb}m,mode=0700", "tmpfs",
-                        str(directory)], capture_output=True, check=False)
+    r = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", f"size={size_mb}m,mode=0700", "tmpfs", str(directory)],
+        capture_output=True,
+        check=False,
+    )
     return r.returncode == 0
 
 
@@ -192,8 +222,9 @@ class Soak:
         self.pb_count = 0
         self.pb = self.start_pb()
         self.proxy = Blackhole(self.link)
-        self.cfg = subbroker_config(tmp, self.model, self.proxy.port, self.zport,
-                                    state_dir=tmp / "state")
+        self.cfg = subbroker_config(
+            tmp, self.model, self.proxy.port, self.zport, state_dir=tmp / "state"
+        )
         self.sb = start_subbroker(tmp, self.cfg)
         wait_port(self.zport)
         if not self.sb.wait_log("running", 30):
@@ -209,8 +240,9 @@ class Soak:
 
     def start_pb(self) -> Proc:
         self.pb_count += 1
-        return start_pubbroker(self.tmp, self.model, self.link, self.ingress,
-                               tag=f"pb{self.pb_count}")
+        return start_pubbroker(
+            self.tmp, self.model, self.link, self.ingress, tag=f"pb{self.pb_count}"
+        )
 
     def note(self, text: str) -> None:
         line = f"{time.monotonic() - self.t0:7.1f} s  {text}"
@@ -261,8 +293,10 @@ class Soak:
                 pass
         full_at = time.monotonic()
         told = self.pb.wait_log("archive: write failed", 5)
-        self.note(f"disk full for 5 s (the PubBroker said so: {told}, after "
-                  f"{time.monotonic() - full_at:.2f} s)")
+        self.note(
+            f"disk full for 5 s (the PubBroker said so: {told}, after "
+            f"{time.monotonic() - full_at:.2f} s)"
+        )
         time.sleep(max(0.0, 5 - (time.monotonic() - full_at)))
         with contextlib.suppress(OSError):
             filler.unlink()
@@ -276,8 +310,14 @@ class Soak:
         self.rss["pubbroker"] = []
         self.started["pubbroker"] = time.monotonic()
         self.load.stop()  # its connection died with the broker: a new publisher run
-        self.load = start_load(self.tmp, self.model, self.ingress, self.seconds * 4 + 600,
-                               tag=f"load{self.pb_count}", seed=self.pb_count)
+        self.load = start_load(
+            self.tmp,
+            self.model,
+            self.ingress,
+            self.seconds * 4 + 600,
+            tag=f"load{self.pb_count}",
+            seed=self.pb_count,
+        )
 
     def kill_backend(self) -> None:
         self.note("kill -9 backend, restart")
@@ -289,15 +329,19 @@ class Soak:
         projects = b.call("GET", "/api/projects")
         model = json.loads(self.model.read_text())
         if not projects:
-            pid = b.call("POST", "/api/projects",
-                         json={"name": "soak", "model": {"model": model}})["id"]
+            pid = b.call("POST", "/api/projects", json={"name": "soak", "model": {"model": model}})[
+                "id"
+            ]
         else:
             pid = projects[0]["id"]
         head = b.call("GET", f"/api/projects/{pid}/model")
         nxt = copy.deepcopy(head["model"])
         nxt["subscribers"][0]["periodS"] = "4" if nxt["subscribers"][0]["periodS"] != "4" else "2"
-        rev = b.call("PUT", f"/api/projects/{pid}/model",
-                     json={"base_revision": head["revision"], "model": nxt})["revision"]
+        rev = b.call(
+            "PUT",
+            f"/api/projects/{pid}/model",
+            json={"base_revision": head["revision"], "model": nxt},
+        )["revision"]
         self.note(f"deploy of revision {rev}, backend killed (kill -9) in the middle")
         os.kill(self.pb.pid, signal.SIGSTOP)
         try:
@@ -326,19 +370,24 @@ class Soak:
         self.note(f"lying publisher: one sample stamped in 2107, then {sent - 1} normal ones")
 
     def flooding_publisher(self) -> None:
-        sent = raw_publisher(self.ingress, "flood", "usv.accelerometer.accel_y", time.time_ns,
-                             3.0, 500)
+        sent = raw_publisher(
+            self.ingress, "flood", "usv.accelerometer.accel_y", time.time_ns, 3.0, 500
+        )
         self.note(f"flooding publisher: {sent} samples in 3 s")
 
     # -- run ---------------------------------------------------------------------
 
     def run(self) -> None:
         schedule: list[tuple[float, Callable[[], None]]] = [
-            (0.10, self.link_cut), (0.20, self.kill_subbroker),
-            (0.30, self.deploy_and_kill_backend), (0.42, self.lying_publisher),
-            (0.50, self.flooding_publisher), (0.55, self.disk_full),
+            (0.10, self.link_cut),
+            (0.20, self.kill_subbroker),
+            (0.30, self.deploy_and_kill_backend),
+            (0.42, self.lying_publisher),
+            (0.50, self.flooding_publisher),
+            (0.55, self.disk_full),
             (0.60, self.kill_pubbroker),
-            (0.72, self.link_stall), (0.80, self.kill_backend),
+            (0.72, self.link_stall),
+            (0.80, self.kill_backend),
         ]
         for at, fault in schedule:
             while time.monotonic() - self.t0 < at * self.seconds:
@@ -369,11 +418,15 @@ def check(soak: Soak) -> list[str]:
     else:
         c = {k: int(v) for k, v in re.findall(r"(\w+)=(\d+)", line[-1])}
         refused = sum(v for k, v in c.items() if k.startswith("rejected_"))
-        print(f"last PubBroker run: samples_in {c['samples_in']:,} = archived "
-              f"{c['samples_archived']:,} + archive_failed {c['archive_failed']} + refused "
-              f"{refused:,} (pending {c.get('samples_pending')})")
-        if c["samples_in"] != c["samples_archived"] + c["archive_failed"] + refused \
-                or c.get("samples_pending", 0) != 0:
+        print(
+            f"last PubBroker run: samples_in {c['samples_in']:,} = archived "
+            f"{c['samples_archived']:,} + archive_failed {c['archive_failed']} + refused "
+            f"{refused:,} (pending {c.get('samples_pending')})"
+        )
+        if (
+            c["samples_in"] != c["samples_archived"] + c["archive_failed"] + refused
+            or c.get("samples_pending", 0) != 0
+        ):
             failed.append(f"counters do not reconcile: {c}")
     # 2. every archive file read completely by two readers
     files = sorted((tmp / "archive").glob("*.mcap"))
@@ -392,14 +445,18 @@ def check(soak: Soak) -> list[str]:
     if node is None or not (NODE_MODULES / "@mcap" / "core").is_dir():
         failed.append("node or @mcap/core missing (scripts/setup.sh)")
     elif files:
-        out = subprocess.run([node, str(MCAP_COUNT), *map(str, files)], capture_output=True,
-                             text=True, timeout=300, env={**os.environ,
-                                                          "NODE_PATH": str(NODE_MODULES)})
+        out = subprocess.run(
+            [node, str(MCAP_COUNT), *map(str, files)],
+            capture_output=True,
+            text=True,
+            timeout=300,
+            env={**os.environ, "NODE_PATH": str(NODE_MODULES)},
+        )
         if out.returncode != 0:
             failed.append(f"@mcap/core failed: {out.stderr[-500:]}")
         else:
             doc = json.loads(out.stdout.strip().splitlines()[-1])
-            for path, res in (doc.items() if isinstance(doc, dict) else []):
+            for path, res in doc.items() if isinstance(doc, dict) else []:
                 if res.get("error") or not res.get("complete", True):
                     failed.append(f"@mcap/core: {path}: {res}")
                 ts[Path(path).name] = sum(res.get("counts", {}).values())
@@ -407,8 +464,10 @@ def check(soak: Soak) -> list[str]:
         if ts and ts.get(name) != n:
             failed.append(f"{name}: python mcap reads {n}, @mcap/core {ts.get(name)}")
     bad = [f for f in failed if "mcap" in f]
-    print(f"archive: {len(files)} files, {sum(py.values()):,} messages, read completely by "
-          f"python mcap and @mcap/core: {'yes' if not bad else 'NO'}")
+    print(
+        f"archive: {len(files)} files, {sum(py.values()):,} messages, read completely by "
+        f"python mcap and @mcap/core: {'yes' if not bad else 'NO'}"
+    )
     failed += check_runs(tmp / "archive", py)
     return failed
 
@@ -427,8 +486,9 @@ def check_runs(archive: Path, read: dict[str, int]) -> list[str]:
     for r in runs:
         c, files, name = r["counters"], r["files"], r["run"]
         refused = sum(v for k, v in c.items() if k.startswith("rejected_"))
-        if c["samples_in"] != (c["samples_archived"] + c["archive_failed"] + refused
-                               + c["samples_pending"]):
+        if c["samples_in"] != (
+            c["samples_archived"] + c["archive_failed"] + refused + c["samples_pending"]
+        ):
             failed.append(f"run {name}: its counters do not reconcile: {c}")
         owned |= set(files)
         missing = [f for f in files if f not in read]
@@ -441,17 +501,22 @@ def check_runs(archive: Path, read: dict[str, int]) -> list[str]:
         late = held - c["samples_archived"]
         if r["final"]:
             if late != 0 or c["samples_pending"] != 0:
-                failed.append(f"run {name} (stopped): its files hold {held}, it counted "
-                              f"{c['samples_archived']} archived, pending {c['samples_pending']}")
+                failed.append(
+                    f"run {name} (stopped): its files hold {held}, it counted "
+                    f"{c['samples_archived']} archived, pending {c['samples_pending']}"
+                )
         else:
             seconds = max(1e-9, (r["updated_ns"] - r["started_ns"]) / 1e9)
             bound = c["samples_pending"] + int(c["samples_in"] / seconds * 2.0) + 1
-            print(f"run {name} ended by kill -9: its last record {seconds:.1f} s into it; "
-                  f"{late:,} written after it (bound {bound:,}: pending {c['samples_pending']:,} "
-                  f"+ 2 s of input)")
+            print(
+                f"run {name} ended by kill -9: its last record {seconds:.1f} s into it; "
+                f"{late:,} written after it (bound {bound:,}: pending {c['samples_pending']:,} "
+                f"+ 2 s of input)"
+            )
             if late < 0 or late > bound:
-                failed.append(f"run {name}: {late} messages written after its last record "
-                              f"(bound {bound})")
+                failed.append(
+                    f"run {name}: {late} messages written after its last record (bound {bound})"
+                )
         tot["in"] += c["samples_in"]
         tot["archived"] += c["samples_archived"]
         tot["failed"] += c["archive_failed"]
@@ -462,11 +527,13 @@ def check_runs(archive: Path, read: dict[str, int]) -> list[str]:
     if orphans:
         failed.append(f"archive files no run counts: {orphans}")
     killed = sum(1 for r in runs if not r["final"])
-    print(f"every PubBroker run ({len(runs)}, {killed} ended by kill -9): samples_in "
-          f"{tot['in']:,} = archived {tot['archived']:,} + archive_failed {tot['failed']} + "
-          f"refused {tot['refused']:,} + pending at a kill {tot['pending']:,}; the archive holds "
-          f"{sum(read.values()):,} = {tot['archived']:,} counted + {tot['late']:,} written after "
-          f"a killed run's last record")
+    print(
+        f"every PubBroker run ({len(runs)}, {killed} ended by kill -9): samples_in "
+        f"{tot['in']:,} = archived {tot['archived']:,} + archive_failed {tot['failed']} + "
+        f"refused {tot['refused']:,} + pending at a kill {tot['pending']:,}; the archive holds "
+        f"{sum(read.values()):,} = {tot['archived']:,} counted + {tot['late']:,} written after "
+        f"a killed run's last record"
+    )
     if not runs:
         failed.append("no run kept its counters")
     elif sum(read.values()) != tot["archived"] + tot["late"]:
@@ -482,16 +549,17 @@ def check_records(soak: Soak) -> list[str]:
         projects = b.call("GET", "/api/projects")
         rows = [d for p in projects for d in b.call("GET", f"/api/projects/{p['id']}/deployments")]
         pending = [d for d in rows if d["status"] == "pending"]
-        diff = (b.call("GET", f"/api/projects/{projects[0]['id']}/deployed-diff")
-                if projects else {})
+        diff = b.call("GET", f"/api/projects/{projects[0]['id']}/deployed-diff") if projects else {}
         if not pending and diff.get("source") == "drone" or time.monotonic() > deadline:
             break
         time.sleep(0.5)
     acked = sorted((d for d in rows if d["status"] == "acked"), key=lambda d: d["id"])
     reports = diff.get("drone_reports") or {}
-    print(f"deploy records: {len(rows)} ({len(acked)} acked, {len(pending)} pending); the drone "
-          f"reports revision {reports.get('revision')} ({reports.get('source')}); "
-          f"the last acked record: revision {acked[-1]['revision'] if acked else None}")
+    print(
+        f"deploy records: {len(rows)} ({len(acked)} acked, {len(pending)} pending); the drone "
+        f"reports revision {reports.get('revision')} ({reports.get('source')}); "
+        f"the last acked record: revision {acked[-1]['revision'] if acked else None}"
+    )
     if pending:
         failed.append(f"records still pending: {pending}")
     if diff.get("source") != "drone":
@@ -513,8 +581,10 @@ def check_memory(soak: Soak) -> list[str]:
             continue
         start = samples[len(samples) // 4][1]
         end = samples[-1][1]
-        print(f"memory {name} (last instance, {samples[-1][0] - samples[0][0]:.0f} s after "
-              f"warm-up): {start / 1024:.1f} MiB -> {end / 1024:.1f} MiB at the end")
+        print(
+            f"memory {name} (last instance, {samples[-1][0] - samples[0][0]:.0f} s after "
+            f"warm-up): {start / 1024:.1f} MiB -> {end / 1024:.1f} MiB at the end"
+        )
         if end > start * 1.25 + 4096:
             failed.append(f"{name} memory grew from {start} KiB to {end} KiB")
     return failed
@@ -544,8 +614,10 @@ def main() -> int:
                 subprocess.run(["umount", str(soak.archive)], check=False)
         for f in failed:
             print(f"soak: FAILED: {f}")
-        print(f"soak: {len(soak.events)} faults in {a.seconds:g} s; "
-              f"{'all checks held' if not failed else f'{len(failed)} checks failed'}")
+        print(
+            f"soak: {len(soak.events)} faults in {a.seconds:g} s; "
+            f"{'all checks held' if not failed else f'{len(failed)} checks failed'}"
+        )
         return 1 if failed else 0
 
 

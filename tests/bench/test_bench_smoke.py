@@ -46,8 +46,9 @@ def test_link_bytes() -> None:
     assert mqtt.down.bytes > 10 * modd.down.bytes
     assert zenoh.down.bytes > modd.down.bytes
     # the MoDD link carries what the planner predicts (frames fall on the capture's edges)
-    assert 0.6 * sc.planned_down < modd.rates()["drone_to_base"]["bytes_per_s"] \
-        < 1.6 * sc.planned_down
+    assert (
+        0.6 * sc.planned_down < modd.rates()["drone_to_base"]["bytes_per_s"] < 1.6 * sc.planned_down
+    )
     assert modd.up.data_bytes == 0  # base -> drone: pure ACKs while DATA flows
     mqtt_contiguous(by["mosquitto"])
     text = bench_link.render(results, SECONDS)
@@ -110,7 +111,11 @@ def test_backfill() -> None:
     """30 s of archive backfilled raw at 3,600 B/s: every sample back, the pace kept."""
     import subprocess
 
-    out = subprocess.run([sys.executable, str(HERE / "bench_backfill.py"), "--minutes", "0.5"],
-                         capture_output=True, text=True, timeout=120)
+    out = subprocess.run(
+        [sys.executable, str(HERE / "bench_backfill.py"), "--minutes", "0.5"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert out.returncode == 0, out.stdout + out.stderr
     assert "750 / 750" in out.stdout, out.stdout

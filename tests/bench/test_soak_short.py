@@ -19,8 +19,13 @@ HERE = Path(__file__).resolve().parent
 
 @pytest.mark.slow
 def test_soak_short() -> None:
-    out = subprocess.run([sys.executable, str(HERE / "soak.py"), "--seconds", "75"],
-                         capture_output=True, text=True, timeout=600, check=False)
+    out = subprocess.run(
+        [sys.executable, str(HERE / "soak.py"), "--seconds", "75"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
     print(out.stdout[-4000:])
     assert out.returncode == 0, out.stdout[-4000:] + out.stderr[-4000:]
     assert "all checks held" in out.stdout

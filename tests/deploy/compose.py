@@ -156,8 +156,11 @@ def project_scripts() -> set[str]:
 
 def modd_commands() -> set[str]:
     """Subcommands of ``modd`` (the ``modd.commands`` entry points)."""
-    return {name for p in _pyprojects()
-            for name in p["project"].get("entry-points", {}).get("modd.commands", {})}
+    return {
+        name
+        for p in _pyprojects()
+        for name in p["project"].get("entry-points", {}).get("modd.commands", {})
+    }
 
 
 def toml_text(data: dict[str, Any], prefix: str = "") -> str:
@@ -209,15 +212,20 @@ class Loopback:
     def endpoints(self, text: str) -> str:
         """host:port for a service, 0.0.0.0 or 127.0.0.1 -> 127.0.0.1:mapped port."""
         names = "|".join(re.escape(h) for h in sorted(self.hosts | {"0.0.0.0", "127.0.0.1"}))
-        return re.sub(rf"(?<![\w.-])({names}):(\d+)\b",
-                      lambda m: f"127.0.0.1:{self.port(int(m.group(2)))}", text)
+        return re.sub(
+            rf"(?<![\w.-])({names}):(\d+)\b",
+            lambda m: f"127.0.0.1:{self.port(int(m.group(2)))}",
+            text,
+        )
 
     def model(self, path: Path) -> Path:
         """A copy of a model file whose "127.0.0.1":PORT endpoints use mapped ports."""
         if path not in self.models:
-            text = re.sub(r'"127\.0\.0\.1"\s*:\s*(\d+)',
-                          lambda m: f'"127.0.0.1":{self.port(int(m.group(1)))}',
-                          path.read_text())
+            text = re.sub(
+                r'"127\.0\.0\.1"\s*:\s*(\d+)',
+                lambda m: f'"127.0.0.1":{self.port(int(m.group(1)))}',
+                path.read_text(),
+            )
             copy = self.tmp / "models" / path.name
             copy.parent.mkdir(parents=True, exist_ok=True)
             copy.write_text(text)
@@ -233,8 +241,9 @@ class Loopback:
             data["model"] = str(self.model(path.parent / model))
         if "state_dir" in data:
             state = str(data["state_dir"])
-            data["state_dir"] = str(self.path(state, image.workdir) if state.startswith("/")
-                                    else path.parent / state)
+            data["state_dir"] = str(
+                self.path(state, image.workdir) if state.startswith("/") else path.parent / state
+            )
         creds = data.get("zenoh", {}).get("credentials_dir")
         if isinstance(creds, str) and creds.startswith("/"):
             data["zenoh"]["credentials_dir"] = str(self.path(creds, image.workdir))
@@ -272,8 +281,7 @@ class Loopback:
         store = self.tmp / "volumes" / volume
         link = self.path(target, image.workdir)
         link.parent.mkdir(parents=True, exist_ok=True)
-        if read_only and not store.is_symlink() and not link.exists() \
-                and not link.is_symlink():
+        if read_only and not store.is_symlink() and not link.exists() and not link.is_symlink():
             store.mkdir(parents=True, exist_ok=True)
             shutil.move(str(store), str(link))
             store.symlink_to(link, target_is_directory=True)

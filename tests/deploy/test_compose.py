@@ -83,8 +83,9 @@ def argv_of(service: dict[str, Any]) -> list[str]:
     image = image_of(service)
     entry = service.get("entrypoint", image.entrypoint)
     command = service.get("command", image.cmd)
-    assert isinstance(entry, list) and isinstance(command, list), \
+    assert isinstance(entry, list) and isinstance(command, list), (
         "entrypoint and command must be lists (exec form: signals reach the process)"
+    )
     return [str(w) for w in [*entry, *command]]
 
 
@@ -131,8 +132,11 @@ def test_every_copy_source_exists_and_is_in_the_context(compose: dict[str, Any])
     for path in files:
         for src in copy_sources(path):
             assert list(REPO.glob(src)), f"{path.name}: COPY {src}: not in the repository"
-            hit = [pat for pat in ignored if fnmatch.fnmatch(src, pat)
-                   or src.startswith(pat.rstrip("/") + "/")]
+            hit = [
+                pat
+                for pat in ignored
+                if fnmatch.fnmatch(src, pat) or src.startswith(pat.rstrip("/") + "/")
+            ]
             assert not hit, f"{path.name}: COPY {src} is excluded by .dockerignore ({hit})"
 
 
@@ -254,7 +258,8 @@ class Run:
         env = {k: v for k, v in os.environ.items() if not k.startswith("MODD_")}
         for k, v in image.env.items():
             env[k] = v.replace(f"{image.workdir}/.venv/bin", str(VENV_BIN)).replace(
-                "$PATH", os.environ["PATH"])
+                "$PATH", os.environ["PATH"]
+            )
         for k, v in (svc.get("environment") or {}).items():
             env[k] = interpolate(str(v), self.env)
         return env
@@ -318,8 +323,7 @@ def archive_grows(directory: Path, timeout_s: float) -> None:
 
 
 @pytest.mark.timeout(180)
-def test_the_services_start_on_loopback_and_become_ready(compose: dict[str, Any],
-                                                         run: Run) -> None:
+def test_the_services_start_on_loopback_and_become_ready(compose: dict[str, Any], run: Run) -> None:
     order = [n for n in start_order(compose) if n not in (ROUTER, "credentials")]
     made = run.start("credentials")
     assert made.p.wait(60) == 0, made.log()
@@ -344,11 +348,13 @@ def test_the_services_start_on_loopback_and_become_ready(compose: dict[str, Any]
             assert files.status_code == 200 and files.json(), files.text
             # a deploy goes backend -> router -> SubBroker -> drone and is kept in its volume
             demo = load_model(REPO / "metamodel" / "examples" / "demo.modd")
-            project = backend.request("POST", "/projects",
-                                      json={"name": "demo", "model": {"model": demo}})
+            project = backend.request(
+                "POST", "/projects", json={"name": "demo", "model": {"model": demo}}
+            )
             assert project.status_code == 201, project.text
-            record = backend.request("POST", f"/projects/{project.json()['id']}/deployments",
-                                     json={}).json()
+            record = backend.request(
+                "POST", f"/projects/{project.json()['id']}/deployments", json={}
+            ).json()
             assert record["status"] == "acked", record
             assert (run.lb.tmp / "volumes" / "subbroker-state" / "deployed.json").is_file()
             with backend.stream("usv") as ws:

@@ -29,8 +29,14 @@ def node_json(script: str, *args: str, timeout: float = 60.0) -> Any:
     version = subprocess.run([node, "--version"], capture_output=True, text=True, check=True)
     major = int(version.stdout.strip().lstrip("v").split(".")[0])
     flags = ["--experimental-websocket"] if major < 22 else []  # global WebSocket from 22 on
-    proc = subprocess.run([node, *flags, str(HERE / script), *args],
-                          capture_output=True, text=True, timeout=timeout, env=env, check=False)
+    proc = subprocess.run(
+        [node, *flags, str(HERE / script), *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
+        check=False,
+    )
     if proc.returncode != 0:
         raise AssertionError(f"{script} failed ({proc.returncode}): {proc.stderr[-2000:]}")
     return json.loads(proc.stdout.strip().splitlines()[-1])
@@ -40,10 +46,12 @@ def foxglove_links(base: str, user: str, password: str) -> dict[str, Any]:
     """The workbench's Foxglove URLs (each with a single-use ticket) for ``user``."""
     import httpx2 as httpx
 
-    token = httpx.post(f"{base}/api/auth/login", json={"username": user, "password": password},
-                       timeout=30).json()["token"]
-    r = httpx.post(f"{base}/api/foxglove/links", headers={"Authorization": f"Bearer {token}"},
-                   timeout=30)
+    token = httpx.post(
+        f"{base}/api/auth/login", json={"username": user, "password": password}, timeout=30
+    ).json()["token"]
+    r = httpx.post(
+        f"{base}/api/foxglove/links", headers={"Authorization": f"Bearer {token}"}, timeout=30
+    )
     assert r.status_code == 200, r.text
     out: dict[str, Any] = r.json()
     return out

@@ -25,7 +25,6 @@ TOPICS = [(f"usv.accelerometer.accel_{a}", "float32") for a in "xyz"]
 NAMES = [t for t, _ in TOPICS]
 
 
-
 @pytest.fixture(autouse=True)
 def _pubbroker_built() -> None:
     """make test builds it: missing is a setup bug, not a skip."""
@@ -107,8 +106,7 @@ def test_default_files_open_in_the_indexed_typescript_reader(tmp_path: Path) -> 
     assert dict(total) == published
 
 
-def test_files_without_message_indexes_are_refused_by_the_indexed_reader(
-        tmp_path: Path) -> None:
+def test_files_without_message_indexes_are_refused_by_the_indexed_reader(tmp_path: Path) -> None:
     """Why the default is on: the same files without message indexes."""
     files, _ = closed_archive(tmp_path, message_index=False)
     ts = node_json("mcap_count.cjs", str(files[0]))
@@ -124,8 +122,7 @@ def test_recover_makes_unindexed_files_open_in_the_indexed_reader(tmp_path: Path
     assert ts[str(out)]["counts"] == python_counts(files[0]) == python_counts(out)
 
 
-def test_a_file_cut_by_kill9_reads_the_same_and_recovers(broker: PubBroker,
-                                                        tmp_path: Path) -> None:
+def test_a_file_cut_by_kill9_reads_the_same_and_recovers(broker: PubBroker, tmp_path: Path) -> None:
     load = run_load(f"unix:{broker.unix_path}", NAMES, 200.0, 1.0)
     time.sleep(0.6)  # > flush interval: everything handed over has been written
     broker.stop(signal.SIGKILL)
@@ -176,8 +173,9 @@ def test_archive_is_a_modd_command() -> None:
     assert eps.get("archive") == "modd.archive.cli:register"
 
 
-def test_modd_archive_recover_and_info_commands(broker: PubBroker, tmp_path: Path,
-                                               capsys: pytest.CaptureFixture[str]) -> None:
+def test_modd_archive_recover_and_info_commands(
+    broker: PubBroker, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     run_load(f"unix:{broker.unix_path}", NAMES, 100.0, 0.5)
     time.sleep(0.4)
     broker.stop(signal.SIGKILL)

@@ -32,7 +32,6 @@ from viewer_schema import refusals
 DEMO = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.modd"
 
 
-
 @pytest.fixture(autouse=True)
 def _pubbroker_built() -> None:
     """make test builds it: missing is a setup bug, not a skip."""
@@ -54,11 +53,14 @@ def station(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Station]:
 def backend(station: Station, tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     """The backend's base URL (served: the Foxglove client comes in through
     its ``/foxglove/live``)."""
-    settings = Settings(data_dir=tmp_path_factory.mktemp("backend"),
-                        zenoh_connect=(station.zenoh,), initial_admin_password="pw-12345678",
-                        zenoh_credentials=station.credentials.cred_file("backend"),
-                        deploy_key_file=station.credentials.deploy_key_file,
-                        foxglove_port=free_port())
+    settings = Settings(
+        data_dir=tmp_path_factory.mktemp("backend"),
+        zenoh_connect=(station.zenoh,),
+        initial_admin_password="pw-12345678",
+        zenoh_credentials=station.credentials.cred_file("backend"),
+        deploy_key_file=station.credentials.deploy_key_file,
+        foxglove_port=free_port(),
+    )
     with serve(settings) as base:
         yield base
 
@@ -99,9 +101,15 @@ def test_every_subscriber_live_in_foxglove(backend: str, station: Station) -> No
 
         def dynamic() -> None:
             time.sleep(3.0)
-            reply = oracle.query("modd/usv/subscribe",
-                                 {"topic": "usv.accelerometer.accel_z", "period_s": "0.5",
-                                  "aggregation": "MIN", "subscriber": dyn})
+            reply = oracle.query(
+                "modd/usv/subscribe",
+                {
+                    "topic": "usv.accelerometer.accel_z",
+                    "period_s": "0.5",
+                    "aggregation": "MIN",
+                    "subscriber": dyn,
+                },
+            )
             assert reply["status"] == "ACCEPTED", reply
             time.sleep(3.0)
             cancel = oracle.query("modd/usv/subscribe", {"action": "cancel", "subscriber": dyn})
@@ -124,12 +132,16 @@ def test_every_subscriber_live_in_foxglove(backend: str, station: Station) -> No
     assert {"link", "position"} <= got
     assert expected <= got, f"no Foxglove values for {sorted(expected - got)}"
     # latency: SubBroker's put (delivered) to the client's receipt, same machine and clock
-    lat_ms = sorted(m["recvMs"] - (m["msg"]["delivered"]["sec"] * 1e3
-                                   + m["msg"]["delivered"]["nsec"] / 1e6)
-                    for t, msgs in received.items() if t.split("/")[2] not in ("link", "position")
-                    for m in msgs)
-    print(f"foxglove live: {len(lat_ms)} values, SubBroker put -> client: median "
-          f"{lat_ms[len(lat_ms) // 2]:.1f} ms, p95 {lat_ms[int(len(lat_ms) * 0.95)]:.1f} ms")
+    lat_ms = sorted(
+        m["recvMs"] - (m["msg"]["delivered"]["sec"] * 1e3 + m["msg"]["delivered"]["nsec"] / 1e6)
+        for t, msgs in received.items()
+        if t.split("/")[2] not in ("link", "position")
+        for m in msgs
+    )
+    print(
+        f"foxglove live: {len(lat_ms)} values, SubBroker put -> client: median "
+        f"{lat_ms[len(lat_ms) // 2]:.1f} ms, p95 {lat_ms[int(len(lat_ms) * 0.95)]:.1f} ms"
+    )
     # each Foxglove message is a value delivered on zenoh, field for field
     for topic, msgs in received.items():
         name = topic.split("/")[2]
@@ -152,8 +164,10 @@ def test_every_subscriber_live_in_foxglove(backend: str, station: Station) -> No
             assert w.get("count") == v["count"] and w["aggregation"] == v["aggregation"]
             assert w["backfilled"] is False
             assert w["window_end"] == {"sec": v["end_ns"] // 10**9, "nsec": v["end_ns"] % 10**9}
-            assert w["window_start"] == {"sec": v["start_ns"] // 10**9,
-                                         "nsec": v["start_ns"] % 10**9}
+            assert w["window_start"] == {
+                "sec": v["start_ns"] // 10**9,
+                "nsec": v["start_ns"] % 10**9,
+            }
     schema = next(a for a in report["advertised"] if a["topic"] == "/usv/sub_5")
     assert schema["encoding"] == "json" and schema["schemaName"] == "modd.Window"
     # every channel is one the viewers can read (else Lichtblick drops it), and
@@ -161,16 +175,27 @@ def test_every_subscriber_live_in_foxglove(backend: str, station: Station) -> No
     schemas = {a["topic"]: json.loads(a["schema"]) for a in report["advertised"]}
     for topic, declared in schemas.items():
         assert not refusals(declared), (topic, declared)
-    bad = [(t, m["msg"], violations(schemas[t], m["msg"])) for t, msgs in received.items()
-           for m in msgs if violations(schemas[t], m["msg"])]
+    bad = [
+        (t, m["msg"], violations(schemas[t], m["msg"]))
+        for t, msgs in received.items()
+        for m in msgs
+        if violations(schemas[t], m["msg"])
+    ]
     checked = sum(len(msgs) for msgs in received.values())
-    print(f"foxglove live: {checked} messages on {len(received)} channels validated, "
-          f"{len(bad)} invalid")
+    print(
+        f"foxglove live: {checked} messages on {len(received)} channels validated, "
+        f"{len(bad)} invalid"
+    )
     assert not bad, bad[:3]
-    assert len(schemas["/usv/link"]["properties"]) == len(
-        contract_schema("status")["properties"])
+    assert len(schemas["/usv/link"]["properties"]) == len(contract_schema("status")["properties"])
     assert set(json.loads(schema["schema"])["properties"]) >= {
-        "value", "count", "aggregation", "window_start", "window_end", "backfilled"}
+        "value",
+        "count",
+        "aggregation",
+        "window_start",
+        "window_end",
+        "backfilled",
+    }
     # the dynamic subscription came and went
     assert f"/usv/{dyn}" in received and received[f"/usv/{dyn}"]
     assert f"/usv/{dyn}" in report["unadvertised"]
@@ -184,8 +209,12 @@ def test_a_taken_port_leaves_the_backend_running(tmp_path: Path) -> None:
         busy.listen()
         port = busy.getsockname()[1]
         out = io.StringIO()
-        settings = Settings(data_dir=tmp_path, zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
-                            initial_admin_password="pw-12345678", foxglove_port=port)
+        settings = Settings(
+            data_dir=tmp_path,
+            zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),
+            initial_admin_password="pw-12345678",
+            foxglove_port=port,
+        )
         with TestClient(create_app(settings, out=out), base_url="http://127.0.0.1") as c:
             assert c.get("/api/health").status_code == 200
             assert c.app.state.modd.foxglove is None  # type: ignore[attr-defined]
@@ -199,15 +228,27 @@ def test_channels_follow_a_new_deploy() -> None:
 
     live = FoxgloveLive("127.0.0.1", free_port())
     try:
-        v = {"v": 1, "value": 1.0, "count": None, "aggregation": "MIN", "start_ns": 0,
-             "end_ns": 250_000_000, "topic": "usv.a.z", "delivered_ns": 1}
+        v = {
+            "v": 1,
+            "value": 1.0,
+            "count": None,
+            "aggregation": "MIN",
+            "start_ns": 0,
+            "end_ns": 250_000_000,
+            "topic": "usv.a.z",
+            "delivered_ns": 1,
+        }
         for name in ("sub_1", "sub_2"):
             live.on_value(f"modd/usv/sub/{name}", json.dumps(v).encode())
         live.on_value("modd/usv/sub/bad key", b"not json")
         assert live.topics() == ["/usv/sub_1", "/usv/sub_2"]
-        status = {"drone": "usv", "link": "up", "time_ns": 5, "routes": {"usv.a.z/MIN/0.25":
-                                                                          ["sub_2"]},
-                  "dynamic": []}
+        status = {
+            "drone": "usv",
+            "link": "up",
+            "time_ns": 5,
+            "routes": {"usv.a.z/MIN/0.25": ["sub_2"]},
+            "dynamic": [],
+        }
         live.on_status("modd/usv/status", json.dumps(status).encode())
         assert live.topics() == ["/usv/link", "/usv/sub_2"]
         live.on_value("modd/usv/sub/sub_9", json.dumps(v).encode())
@@ -224,8 +265,15 @@ def test_an_all_subscriber_changes_its_channel_schema() -> None:
 
     live = FoxgloveLive("127.0.0.1", free_port())
     try:
-        v = {"value": [1.0, 2.0], "count": 2, "aggregation": "ALL", "start_ns": 0,
-             "end_ns": 250_000_000, "topic": "usv.a.z", "delivered_ns": 1}
+        v = {
+            "value": [1.0, 2.0],
+            "count": 2,
+            "aggregation": "ALL",
+            "start_ns": 0,
+            "end_ns": 250_000_000,
+            "topic": "usv.a.z",
+            "delivered_ns": 1,
+        }
         live.on_value("modd/usv/sub/s", json.dumps(v).encode())
         first = live._channels["/usv/s"]
         assert json.loads(live._schemas["/usv/s"])["properties"]["value"]["type"] == "array"

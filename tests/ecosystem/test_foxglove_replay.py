@@ -63,11 +63,13 @@ def server(minute: Path) -> Iterator[ReplayServer]:
 
 def test_seek_then_play_in_foxglove(server: ReplayServer) -> None:
     seek = T0 + 30_000_000_000
-    report = node_json("foxglove_client.cjs", server.url, "4", "--seek", str(seek),
-                       "--after", "1", timeout=30)
+    report = node_json(
+        "foxglove_client.cjs", server.url, "4", "--seek", str(seek), "--after", "1", timeout=30
+    )
     assert report["protocol"] == "foxglove.sdk.v1" and not report["errors"]
-    assert "playbackControl" in report["serverInfo"]["capabilities"] or \
-        "rangedPlayback" in json.dumps(report["serverInfo"])
+    assert "playbackControl" in report["serverInfo"][
+        "capabilities"
+    ] or "rangedPlayback" in json.dumps(report["serverInfo"])
     assert {a["topic"] for a in report["advertised"]} == set(TOPICS)
     states = report["playbackStates"]
     assert states and int(states[0]["currentTime"]) == seek
@@ -86,8 +88,9 @@ def played(path: Path, autoplay: bool, *options: str) -> dict[str, Any]:
     """What a Foxglove client that only subscribes receives in 4 s of a replay."""
     server = ReplayServer([path], "127.0.0.1", free_port(), autoplay=autoplay)
     try:
-        report: dict[str, Any] = node_json("foxglove_client.cjs", server.url, "4", *options,
-                                           timeout=30)
+        report: dict[str, Any] = node_json(
+            "foxglove_client.cjs", server.url, "4", *options, timeout=30
+        )
     finally:
         server.stop()
     assert not report["errors"], report["errors"]
@@ -113,8 +116,7 @@ def test_autoplay_serves_a_viewer_without_playback_controls(minute: Path, autopl
     assert report["playbackStates"] and report["playbackStates"][0]["status"] == 0
 
 
-def test_autoplay_drops_nothing_of_a_viewer_subscribing_channel_by_channel(tmp_path: Path
-                                                                          ) -> None:
+def test_autoplay_drops_nothing_of_a_viewer_subscribing_channel_by_channel(tmp_path: Path) -> None:
     """Eleven channels (the demo record's count) subscribed 40 ms apart, as
     Lichtblick's panels do: every channel gets every message of the file, as
     the official ``mcap`` reader reads it (autoplay began on the first
@@ -129,8 +131,10 @@ def test_autoplay_drops_nothing_of_a_viewer_subscribing_channel_by_channel(tmp_p
             archived.setdefault(ch.topic, []).append((m.log_time, json.loads(m.data)["value"]))
     report = played(path, True, "--subscribe-gap", "40")
     assert len(archived) == 11
-    got = {t: [(int(m["logTime"]), m["msg"]["value"]) for m in ms]
-           for t, ms in report["messages"].items()}
+    got = {
+        t: [(int(m["logTime"]), m["msg"]["value"]) for m in ms]
+        for t, ms in report["messages"].items()
+    }
     assert {t: len(v) for t, v in got.items()} == {t: len(v) for t, v in archived.items()}
     assert got == archived
 
@@ -150,11 +154,17 @@ def test_a_base_station_record_replays_valid_against_its_schemas(tmp_path: Path)
     for k in range(10):
         start, end = T0 + k * 100_000_000, T0 + (k + 1) * 100_000_000
         for name, agg, value, count in (
-                ("avg", "AVERAGE", 0.5 * k, 4), ("low", "MIN", None if k % 3 else -1.0 * k, None),
-                ("all", "ALL", [float(i) for i in range(k % 3)], k % 3),
-                ("pump", "LAST", k % 2 == 0, None)):
-            rec.put(name, DeliveredValue(name, f"usv.a.{name}", agg, "0.1", "1", 1, k, start, end,
-                                         value, count, end + 1).to_json())
+            ("avg", "AVERAGE", 0.5 * k, 4),
+            ("low", "MIN", None if k % 3 else -1.0 * k, None),
+            ("all", "ALL", [float(i) for i in range(k % 3)], k % 3),
+            ("pump", "LAST", k % 2 == 0, None),
+        ):
+            rec.put(
+                name,
+                DeliveredValue(
+                    name, f"usv.a.{name}", agg, "0.1", "1", 1, k, start, end, value, count, end + 1
+                ).to_json(),
+            )
     rec.close()
     path = next((tmp_path / "records" / "usv").glob("*.mcap"))
     with open(path, "rb") as f:
@@ -169,11 +179,15 @@ def test_a_base_station_record_replays_valid_against_its_schemas(tmp_path: Path)
         assert not refusals(schemas[topic]), topic
         for m in msgs:
             assert violations(schemas[topic], m["msg"]) == [], (topic, m["msg"])
-        want = [{k: (int(v) if isinstance(v, bool) else v) for k, v in d.items() if v is not None}
-                for d in recorded[topic]]
+        want = [
+            {k: (int(v) if isinstance(v, bool) else v) for k, v in d.items() if v is not None}
+            for d in recorded[topic]
+        ]
         # JSON numbers are doubles in the client: ns times agree to the microsecond
-        assert [{k: pytest.approx(v, abs=1000) if k.endswith("_ns") else v
-                 for k, v in m["msg"].items()} for m in msgs] == want, topic
+        assert [
+            {k: pytest.approx(v, abs=1000) if k.endswith("_ns") else v for k, v in m["msg"].items()}
+            for m in msgs
+        ] == want, topic
 
 
 def test_player_seek_pause_speed() -> None:
@@ -225,17 +239,26 @@ def test_the_workbench_replays_an_archive_in_foxglove(tmp_path: Path, minute: Pa
     folder.mkdir(parents=True)
     data = minute.read_bytes()
     (folder / "writing.mcap").write_bytes(data[: len(data) * 2 // 3])  # no summary, cut
-    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
-                        initial_admin_password="pw-12345678", archive_dir=tmp_path / "archives",
-                        foxglove_replay_port=free_port())
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        initial_admin_password="pw-12345678",
+        archive_dir=tmp_path / "archives",
+        foxglove_replay_port=free_port(),
+    )
     with serve(settings) as base:
         url = f"{base}/api/drones/usv/archives/writing.mcap/replay"
         assert httpx.post(url, json={}).status_code == 401
-        token = httpx.post(f"{base}/api/auth/login", json={
-            "username": "admin", "password": "pw-12345678"}).json()["token"]
+        token = httpx.post(
+            f"{base}/api/auth/login", json={"username": "admin", "password": "pw-12345678"}
+        ).json()["token"]
         auth = {"Authorization": f"Bearer {token}"}
-        assert httpx.post(f"{base}/api/drones/usv/archives/..%2Fx.mcap/replay", json={},
-                          headers=auth).status_code == 404
+        assert (
+            httpx.post(
+                f"{base}/api/drones/usv/archives/..%2Fx.mcap/replay", json={}, headers=auth
+            ).status_code
+            == 404
+        )
         r = httpx.post(url, json={"start_ns": T0 + 70_000_000_000}, headers=auth, timeout=30)
         assert r.status_code == 422 and "no message in that range" in r.json()["detail"], r.text
         assert str(folder) not in r.text
@@ -248,8 +271,9 @@ def test_the_workbench_replays_an_archive_in_foxglove(tmp_path: Path, minute: Pa
         assert httpx.get(f"{base}/api/replay", headers=auth).json()["file"] == "writing.mcap"
 
         seek = T0 + 20_000_000_000
-        report = node_json("foxglove_client.cjs", info["url"], "3", "--seek", str(seek),
-                           "--after", "1", timeout=30)
+        report = node_json(
+            "foxglove_client.cjs", info["url"], "3", "--seek", str(seek), "--after", "1", timeout=30
+        )
         assert not report["errors"] and int(report["playbackStates"][0]["currentTime"]) == seek
         for i, topic in enumerate(TOPICS):
             msgs = report["messages"][topic]
@@ -263,8 +287,9 @@ def test_the_workbench_replays_an_archive_in_foxglove(tmp_path: Path, minute: Pa
         assert not again["messages"] and again["protocol"] in (None, "")
 
         # "play at once": a viewer that only subscribes gets the range from its start
-        r = httpx.post(url, json={"start_ns": T0 + 10_000_000_000, "autoplay": True},
-                       headers=auth, timeout=30)
+        r = httpx.post(
+            url, json={"start_ns": T0 + 10_000_000_000, "autoplay": True}, headers=auth, timeout=30
+        )
         assert r.status_code == 200 and r.json()["autoplay"] is True, r.text
         report = node_json("foxglove_client.cjs", r.json()["url"], "2", timeout=30)
         ks = [(int(m["logTime"]) - T0) // 100_000_000 for m in report["messages"][TOPICS[0]]]
@@ -273,18 +298,27 @@ def test_the_workbench_replays_an_archive_in_foxglove(tmp_path: Path, minute: Pa
         assert httpx.delete(f"{base}/api/replay", headers=auth).status_code == 204
         assert httpx.get(f"{base}/api/replay", headers=auth).json() is None
 
-    off = Settings(data_dir=tmp_path / "data2", zenoh_enabled=False,
-                   initial_admin_password="pw-12345678", archive_dir=tmp_path / "archives")
+    off = Settings(
+        data_dir=tmp_path / "data2",
+        zenoh_enabled=False,
+        initial_admin_password="pw-12345678",
+        archive_dir=tmp_path / "archives",
+    )
     with TestClient(create_app(off, out=io.StringIO()), base_url="http://127.0.0.1") as c:
-        token = c.post("/api/auth/login", json={"username": "admin",
-                                                "password": "pw-12345678"}).json()["token"]
-        r = c.post("/api/drones/usv/archives/writing.mcap/replay", json={},
-                   headers={"Authorization": f"Bearer {token}"})
+        token = c.post(
+            "/api/auth/login", json={"username": "admin", "password": "pw-12345678"}
+        ).json()["token"]
+        r = c.post(
+            "/api/drones/usv/archives/writing.mcap/replay",
+            json={},
+            headers={"Authorization": f"Bearer {token}"},
+        )
         assert r.status_code == 409 and "--foxglove-replay-port" in r.json()["detail"]
 
 
-def test_the_base_station_record_replays_through_the_same_server(tmp_path: Path,
-                                                                  minute: Path) -> None:
+def test_the_base_station_record_replays_through_the_same_server(
+    tmp_path: Path, minute: Path
+) -> None:
     """Archives panel, base-station records: the record of what was delivered
     plays on the same replay server as the drone's archives (seek and play)."""
 
@@ -293,25 +327,35 @@ def test_the_base_station_record_replays_through_the_same_server(tmp_path: Path,
     folder = tmp_path / "records" / "usv"
     folder.mkdir(parents=True)
     (folder / "usv-mission.mcap").write_bytes(minute.read_bytes())
-    settings = Settings(data_dir=tmp_path / "data", zenoh_enabled=False,
-                        initial_admin_password="pw-12345678", record_dir=tmp_path / "records",
-                        foxglove_replay_port=free_port())
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        initial_admin_password="pw-12345678",
+        record_dir=tmp_path / "records",
+        foxglove_replay_port=free_port(),
+    )
     with serve(settings) as base:
         url = f"{base}/api/drones/usv/records/usv-mission.mcap/replay"
-        token = httpx.post(f"{base}/api/auth/login", json={
-            "username": "admin", "password": "pw-12345678"}).json()["token"]
+        token = httpx.post(
+            f"{base}/api/auth/login", json={"username": "admin", "password": "pw-12345678"}
+        ).json()["token"]
         auth = {"Authorization": f"Bearer {token}"}
         assert httpx.post(url, json={}).status_code == 401
-        assert httpx.post(f"{base}/api/drones/usv/records/nothing.mcap/replay", json={},
-                          headers=auth).status_code == 404
+        assert (
+            httpx.post(
+                f"{base}/api/drones/usv/records/nothing.mcap/replay", json={}, headers=auth
+            ).status_code
+            == 404
+        )
         r = httpx.post(url, json={}, headers=auth, timeout=30)
         assert r.status_code == 200, r.text
         info = r.json()
         assert info["file"] == "usv-mission.mcap" and info["topics"] == sorted(TOPICS)
         assert info["messages"] == 1200 and info["start_ns"] == T0
         seek = T0 + 45_000_000_000
-        report = node_json("foxglove_client.cjs", info["url"], "2", "--seek", str(seek),
-                           "--after", "1", timeout=30)
+        report = node_json(
+            "foxglove_client.cjs", info["url"], "2", "--seek", str(seek), "--after", "1", timeout=30
+        )
         assert not report["errors"] and int(report["playbackStates"][0]["currentTime"]) == seek
         times = [int(m["logTime"]) for m in report["messages"][TOPICS[0]]]
         assert times and times[0] == seek and times == sorted(times)

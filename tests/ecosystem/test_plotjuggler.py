@@ -50,20 +50,54 @@ def test_datagrams_from_delivered_values() -> None:
     router = zenoh_router(port)
     station = router.__enter__()
     viewer = str(shared_credentials().cred_file("viewer"))
-    proc = subprocess.Popen([sys.executable, "-m", "modd.plotjuggler", "--modd-connect", zep,
-                             "--credentials", viewer,
-                             "--udp", f"127.0.0.1:{udp.getsockname()[1]}", "--drone", "usv"],
-                            stdout=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "modd.plotjuggler",
+            "--modd-connect",
+            zep,
+            "--credentials",
+            viewer,
+            "--udp",
+            f"127.0.0.1:{udp.getsockname()[1]}",
+            "--drone",
+            "usv",
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert proc.stdout is not None and "modd-plotjuggler" in proc.stdout.readline()
         time.sleep(1.0)
-        values = [DeliveredValue("sub_3", "usv.a.x", "AVERAGE", "0.25", "M", 1, k,
-                                 k * 250_000_000, (k + 1) * 250_000_000, 0.5 * k, 4, 0)
-                  for k in range(1, 4)]
-        values.insert(1, DeliveredValue("sub_5", "usv.a.z", "MIN", "0.25", "M", 1, 0, 0,
-                                        250_000_000, None, None, 0))  # empty: nothing sent
-        values.append(DeliveredValue("all_1", "usv.a.z", "ALL", "1", "M", 1, 0, 0,
-                                     1_000_000_000, [1.0, 2.0], 2, 0))
+        values = [
+            DeliveredValue(
+                "sub_3",
+                "usv.a.x",
+                "AVERAGE",
+                "0.25",
+                "M",
+                1,
+                k,
+                k * 250_000_000,
+                (k + 1) * 250_000_000,
+                0.5 * k,
+                4,
+                0,
+            )
+            for k in range(1, 4)
+        ]
+        values.insert(
+            1,
+            DeliveredValue(
+                "sub_5", "usv.a.z", "MIN", "0.25", "M", 1, 0, 0, 250_000_000, None, None, 0
+            ),
+        )  # empty: nothing sent
+        values.append(
+            DeliveredValue(
+                "all_1", "usv.a.z", "ALL", "1", "M", 1, 0, 0, 1_000_000_000, [1.0, 2.0], 2, 0
+            )
+        )
         for v in values:
             station.put(f"modd/usv/sub/{v.subscriber}", v.to_json())
         got = [json.loads(udp.recv(65536)) for _ in range(5)]
@@ -78,10 +112,14 @@ def test_datagrams_from_delivered_values() -> None:
         router.__exit__(None, None, None)
         udp.close()
     series = [flatten(g) for g in got]
-    assert series[:3] == [{"/timestamp": (k + 1) * 0.25, "/usv/sub_3/value": 0.5 * k,
-                           "/usv/sub_3/count": 4} for k in range(1, 4)]
-    assert series[3:] == [{"/timestamp": 0.5, "/usv/all_1/value": 1.0},
-                          {"/timestamp": 1.0, "/usv/all_1/value": 2.0, "/usv/all_1/count": 2}]
+    assert series[:3] == [
+        {"/timestamp": (k + 1) * 0.25, "/usv/sub_3/value": 0.5 * k, "/usv/sub_3/count": 4}
+        for k in range(1, 4)
+    ]
+    assert series[3:] == [
+        {"/timestamp": 0.5, "/usv/all_1/value": 1.0},
+        {"/timestamp": 1.0, "/usv/all_1/value": 2.0, "/usv/all_1/count": 2},
+    ]
 
 
 def plotted(lines: list[bytes]) -> dict[str, list[tuple[float, object]]]:

@@ -88,13 +88,20 @@ def decode_window(cdr: bytes) -> dict[str, Any]:
     at = (at + 4 + 7) // 8 * 8 if n else at + 4  # float64 items, 8-aligned
     samples = list(struct.unpack_from(f"<{n}d", body, at))
     assert len(body) == at + 8 * n, "nothing after the samples"
-    return {"start_ns": s0 * 10**9 + n0, "end_ns": s1 * 10**9 + n1, "value": value,
-            "count": count, "aggregation": text[:-1].decode(), "has_count": has_count,
-            "samples": samples}
+    return {
+        "start_ns": s0 * 10**9 + n0,
+        "end_ns": s1 * 10**9 + n1,
+        "value": value,
+        "count": count,
+        "aggregation": text[:-1].decode(),
+        "has_count": has_count,
+        "samples": samples,
+    }
 
 
-def test_bridge_publishes_as_rmw_zenoh(networks: tuple[zenoh.Session, zenoh.Session, str, str]
-                                       ) -> None:
+def test_bridge_publishes_as_rmw_zenoh(
+    networks: tuple[zenoh.Session, zenoh.Session, str, str],
+) -> None:
     modd, ros, modd_ep, ros_ep = networks
     got: dict[str, list[tuple[bytes, bytes]]] = {}
     lock = threading.Lock()
@@ -112,25 +119,86 @@ def test_bridge_publishes_as_rmw_zenoh(networks: tuple[zenoh.Session, zenoh.Sess
         (tokens if s.kind == zenoh.SampleKind.PUT else withdrawn).append(str(s.key_expr))
 
     live_sub = ros.liveliness().declare_subscriber("@ros2_lv/0/**", on_token)
-    proc = subprocess.Popen([sys.executable, "-m", "modd.ros2.cli", "--modd-connect", modd_ep,
-                             "--ros-connect", ros_ep, "--drone", "usv"],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "modd.ros2.cli",
+            "--modd-connect",
+            modd_ep,
+            "--ros-connect",
+            ros_ep,
+            "--drone",
+            "usv",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         assert proc.stdout is not None
         assert "modd-ros2: node /modd_bridge" in proc.stdout.readline()
         time.sleep(1.0)  # the bridge's sessions are connected
         values = [
-            DeliveredValue("sub_3", "usv.accelerometer.accel_x", "AVERAGE", "0.25", "M", 1, k,
-                           1_795_000_000_000_000_000 + k * 250_000_000,
-                           1_795_000_000_250_000_000 + k * 250_000_000,
-                           -0.1 * k, 6, 0) for k in range(5)
-        ] + [DeliveredValue("sub_5", "usv.accelerometer.accel_z", "MIN", "0.25", "M", 1, 9,
-                            1_795_000_000_000_000_000, 1_795_000_000_250_000_000, None, None, 0),
-             DeliveredValue("sub_6", "usv.accelerometer.accel_z", "MAX", "0.25", "M", 1, 9,
-                            1_795_000_000_000_000_000, 1_795_000_000_250_000_000, 2.5, None, 0),
-             DeliveredValue("sub_7", "usv.accelerometer.accel_z", "ALL", "0.25", "M", 1, 9,
-                            1_795_000_000_000_000_000, 1_795_000_000_250_000_000,
-                            [1.5, -2.25, 3.0], 3, 0)]
+            DeliveredValue(
+                "sub_3",
+                "usv.accelerometer.accel_x",
+                "AVERAGE",
+                "0.25",
+                "M",
+                1,
+                k,
+                1_795_000_000_000_000_000 + k * 250_000_000,
+                1_795_000_000_250_000_000 + k * 250_000_000,
+                -0.1 * k,
+                6,
+                0,
+            )
+            for k in range(5)
+        ] + [
+            DeliveredValue(
+                "sub_5",
+                "usv.accelerometer.accel_z",
+                "MIN",
+                "0.25",
+                "M",
+                1,
+                9,
+                1_795_000_000_000_000_000,
+                1_795_000_000_250_000_000,
+                None,
+                None,
+                0,
+            ),
+            DeliveredValue(
+                "sub_6",
+                "usv.accelerometer.accel_z",
+                "MAX",
+                "0.25",
+                "M",
+                1,
+                9,
+                1_795_000_000_000_000_000,
+                1_795_000_000_250_000_000,
+                2.5,
+                None,
+                0,
+            ),
+            DeliveredValue(
+                "sub_7",
+                "usv.accelerometer.accel_z",
+                "ALL",
+                "0.25",
+                "M",
+                1,
+                9,
+                1_795_000_000_000_000_000,
+                1_795_000_000_250_000_000,
+                [1.5, -2.25, 3.0],
+                3,
+                0,
+            ),
+        ]
         for v in values:
             modd.put(f"modd/usv/sub/{v.subscriber}", v.to_json())
             time.sleep(0.02)
@@ -138,8 +206,11 @@ def test_bridge_publishes_as_rmw_zenoh(networks: tuple[zenoh.Session, zenoh.Sess
         while time.monotonic() < deadline and sum(len(v) for v in got.values()) < 16:
             time.sleep(0.05)
         # liveliness tokens are also answered to a query (late joiners: ros2 topic list)
-        queried = [str(r.ok.key_expr) for r in ros.liveliness().get("@ros2_lv/0/**", timeout=3)
-                   if r.ok is not None]
+        queried = [
+            str(r.ok.key_expr)
+            for r in ros.liveliness().get("@ros2_lv/0/**", timeout=3)
+            if r.ok is not None
+        ]
     finally:
         proc.terminate()
         proc.wait(10)
@@ -153,9 +224,18 @@ def test_bridge_publishes_as_rmw_zenoh(networks: tuple[zenoh.Session, zenoh.Sess
     float_key = f"0/usv/sub_3/value/std_msgs::msg::dds_::Float64_/{PUBLISHED_FLOAT64}"
     assert set(got) >= {window_key, float_key}
     windows = [decode_window(p) for p, _ in got[window_key]]
-    assert windows == [{"start_ns": v.start_ns, "end_ns": v.end_ns, "value": v.value,
-                        "count": 6, "aggregation": "AVERAGE", "has_count": 1, "samples": []}
-                       for v in values[:5]]
+    assert windows == [
+        {
+            "start_ns": v.start_ns,
+            "end_ns": v.end_ns,
+            "value": v.value,
+            "count": 6,
+            "aggregation": "AVERAGE",
+            "has_count": 1,
+            "samples": [],
+        }
+        for v in values[:5]
+    ]
     floats = [struct.unpack("<d", p[4:])[0] for p, _ in got[float_key]]
     assert [p[:4] for p, _ in got[float_key]] == [b"\x00\x01\x00\x00"] * 5
     assert floats == [v.value for v in values[:5]]
@@ -170,8 +250,10 @@ def test_bridge_publishes_as_rmw_zenoh(networks: tuple[zenoh.Session, zenoh.Sess
     assert (every["samples"], every["count"], every["has_count"]) == ([1.5, -2.25, 3.0], 3, 1)
 
     # attachment: sequence number from 1, source timestamp now, GID of 16 bytes
-    atts = [ze.z_deserialize(tuple[ze.Int64, ze.Int64, bytes], zenoh.ZBytes(a))
-            for _, a in got[window_key]]
+    atts = [
+        ze.z_deserialize(tuple[ze.Int64, ze.Int64, bytes], zenoh.ZBytes(a))
+        for _, a in got[window_key]
+    ]
     assert all(len(a) == 33 for _, a in got[window_key])
     assert [a[0] for a in atts] == [1, 2, 3, 4, 5]
     assert all(abs(a[1] - time.time_ns()) < 60 * 10**9 for a in atts)
@@ -184,8 +266,15 @@ def test_bridge_publishes_as_rmw_zenoh(networks: tuple[zenoh.Session, zenoh.Sess
     node = [t for t in tokens if "/NN/" in t]
     assert len(node) == 1
     _admin, domain, zid, nid, eid, kind, enclave, ns, name = node[0].split("/")
-    assert (domain, nid, eid, kind, enclave, ns, name) == ("0", "0", "0", "NN", "%", "%",
-                                                            "modd_bridge")
+    assert (domain, nid, eid, kind, enclave, ns, name) == (
+        "0",
+        "0",
+        "0",
+        "NN",
+        "%",
+        "%",
+        "modd_bridge",
+    )
     pubs = {t.split("/")[9]: t.split("/") for t in tokens if "/MP/" in t}
     w = pubs["%usv%sub_3"]
     assert len(w) == 13 and w[2] == zid and w[5] == "MP"

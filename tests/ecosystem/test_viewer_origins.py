@@ -67,40 +67,65 @@ def _sockets(base: str, links: dict[str, Any], ports: dict[str, int]) -> list[di
         {"name": "live proxy (ticket)", "url": links["live"], "protocols": FOXGLOVE},
         {"name": "replay proxy (ticket)", "url": links["replay"], "protocols": FOXGLOVE},
         {"name": "scene proxy (cookie)", "url": f"ws://{host}/scene", "protocols": VISER},
-        *({"name": f"{n} port {scheme}", "url": f"{scheme}://127.0.0.1:{p}",
-           "protocols": VISER if n == "viser" else FOXGLOVE}
-          for n, p in ports.items() for scheme in ("ws", "wss")),
+        *(
+            {
+                "name": f"{n} port {scheme}",
+                "url": f"{scheme}://127.0.0.1:{p}",
+                "protocols": VISER if n == "viser" else FOXGLOVE,
+            }
+            for n, p in ports.items()
+            for scheme in ("ws", "wss")
+        ),
     ]
 
 
-def test_a_foreign_page_reads_nothing_from_any_viewer_server(
-        tmp_path: Path, foreign: str) -> None:
+def test_a_foreign_page_reads_nothing_from_any_viewer_server(tmp_path: Path, foreign: str) -> None:
     _archive(tmp_path / "archives" / "usv")
     ports = {"live": free_port(), "replay": free_port(), "viser": free_port()}
-    settings = Settings(data_dir=tmp_path / "data", initial_admin_password=PASSWORD,
-                        zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),  # no router: no data
-                        archive_dir=tmp_path / "archives", foxglove_port=ports["live"],
-                        foxglove_replay_port=ports["replay"], scene_port=ports["viser"])
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        initial_admin_password=PASSWORD,
+        zenoh_connect=(f"tcp/127.0.0.1:{free_port()}",),  # no router: no data
+        archive_dir=tmp_path / "archives",
+        foxglove_port=ports["live"],
+        foxglove_replay_port=ports["replay"],
+        scene_port=ports["viser"],
+    )
     with serve(settings) as base:
-        token = httpx.post(f"{base}/api/auth/login", timeout=30, json={
-            "username": "admin", "password": PASSWORD}).json()["token"]
-        r = httpx.post(f"{base}/api/drones/usv/archives/minute.mcap/replay", timeout=30,
-                       json={"autoplay": True}, headers={"Authorization": f"Bearer {token}"})
+        token = httpx.post(
+            f"{base}/api/auth/login", timeout=30, json={"username": "admin", "password": PASSWORD}
+        ).json()["token"]
+        r = httpx.post(
+            f"{base}/api/drones/usv/archives/minute.mcap/replay",
+            timeout=30,
+            json={"autoplay": True},
+            headers={"Authorization": f"Bearer {token}"},
+        )
         assert r.status_code == 200, r.text
         login = (base, "admin", PASSWORD)
 
         stolen = foxglove_links(base, "admin", PASSWORD)  # valid tickets, wrong origin
-        got = node_json("origin_probe.cjs", foreign, "3",
-                        json.dumps(_sockets(base, stolen, ports)), *login, timeout=90)
+        got = node_json(
+            "origin_probe.cjs",
+            foreign,
+            "3",
+            json.dumps(_sockets(base, stolen, ports)),
+            *login,
+            timeout=90,
+        )
         assert "fatal" not in got, got
         assert len(got) == 10
         for name, seen in got.items():
             assert seen["frames"] == 0 and not seen["opened"], (name, seen)
 
         own = foxglove_links(base, "admin", PASSWORD)
-        mine = [s for s in _sockets(base, own, ports) if "proxy" in s["name"]
-                and s["name"] != "live proxy (cookie)"]  # the cookie path is the scene's
-        got = node_json("origin_probe.cjs", f"{base}/api/health", "3", json.dumps(mine),
-                        *login, timeout=90)
+        mine = [
+            s
+            for s in _sockets(base, own, ports)
+            if "proxy" in s["name"] and s["name"] != "live proxy (cookie)"
+        ]  # the cookie path is the scene's
+        got = node_json(
+            "origin_probe.cjs", f"{base}/api/health", "3", json.dumps(mine), *login, timeout=90
+        )
         for name, seen in got.items():
             assert seen["opened"] and seen["frames"] > 0, (name, seen)

@@ -21,8 +21,10 @@ VECTORS = Path(__file__).resolve().parents[2] / "contracts" / "vectors"
 def violations(schema: dict[str, Any], message: Any) -> list[str]:
     """What a JSON Schema validator (``jsonschema``, draft 2020-12) finds wrong."""
     Draft202012Validator.check_schema(schema)
-    return [f"/{'/'.join(map(str, e.absolute_path))}: {e.message}"
-            for e in Draft202012Validator(schema).iter_errors(message)]
+    return [
+        f"/{'/'.join(map(str, e.absolute_path))}: {e.message}"
+        for e in Draft202012Validator(schema).iter_errors(message)
+    ]
 
 
 def declared(schema: dict[str, Any], path: str = "") -> set[str]:
@@ -64,30 +66,46 @@ def test_the_link_status_declares_every_field_and_its_messages_are_valid() -> No
 
 def test_the_rules_refuse_what_lichtblick_refused() -> None:
     # the first schemas: Lichtblick 1.28 said "Unsupported type [...] for value"
-    old = {"type": "object", "properties": {
-        "value": {"type": ["number", "boolean", "array", "null"]},
-        "t": {"type": "object", "properties": {"sec": {"type": "integer"}}},
-        "rtt_s": {"type": ["number", "null"]}, "untyped": {},
-        "list": {"type": "array", "items": {"type": "null"}}}}
+    old = {
+        "type": "object",
+        "properties": {
+            "value": {"type": ["number", "boolean", "array", "null"]},
+            "t": {"type": "object", "properties": {"sec": {"type": "integer"}}},
+            "rtt_s": {"type": ["number", "null"]},
+            "untyped": {},
+            "list": {"type": "array", "items": {"type": "null"}},
+        },
+    }
     assert refusals(old) == [
         "value: unsupported type ['number', 'boolean', 'array', 'null']",
         "rtt_s: unsupported type ['number', 'null']",
         "untyped: unsupported type None",
-        "list: unsupported type 'null' for array items"]
-    assert refusals({"type": "array"}) == ["<root>: expected \"type\": \"object\", got 'array'"]
-    nested = {"type": "object", "properties": {"fix": {"type": "object", "properties": {
-        "lat": {"type": ["number", "null"]}}}}}
+        "list: unsupported type 'null' for array items",
+    ]
+    assert refusals({"type": "array"}) == ['<root>: expected "type": "object", got \'array\'']
+    nested = {
+        "type": "object",
+        "properties": {
+            "fix": {"type": "object", "properties": {"lat": {"type": ["number", "null"]}}}
+        },
+    }
     assert refusals(nested) == ["fix.lat: unsupported type ['number', 'null']"]
 
 
 def test_every_schema_modd_serves_is_read_by_the_viewers() -> None:
-    schemas = {"window": window_schema("AVERAGE"), "window ALL": window_schema("ALL"),
-               "link": LINK_SCHEMA, "position": LOCATION_SCHEMA,
-               "base-station record": json.loads(record._SCHEMA)}
+    schemas = {
+        "window": window_schema("AVERAGE"),
+        "window ALL": window_schema("ALL"),
+        "link": LINK_SCHEMA,
+        "position": LOCATION_SCHEMA,
+        "base-station record": json.loads(record._SCHEMA),
+    }
     for archive_type in ("number", "integer", "boolean"):  # the PubBroker's archive.cpp
         schemas[f"archive {archive_type}"] = {
-            "type": "object", "properties": {"value": {"type": archive_type}},
-            "required": ["value"]}
+            "type": "object",
+            "properties": {"value": {"type": archive_type}},
+            "required": ["value"],
+        }
     for name, schema in schemas.items():
         assert not refusals(schema), (name, refusals(schema))
     assert window_schema("ALL")["properties"]["value"]["items"] == {"type": "number"}

@@ -19,7 +19,7 @@ def refusals(schema: Any, path: str = "") -> list[str]:
     """The reasons the viewer refuses ``schema`` (empty: it reads it)."""
     if not isinstance(schema, dict) or schema.get("type") != "object":
         got = schema.get("type") if isinstance(schema, dict) else schema
-        return [f"{path or '<root>'}: expected \"type\": \"object\", got {got!r}"]
+        return [f'{path or "<root>"}: expected "type": "object", got {got!r}']
     out: list[str] = []
     for name, field in (schema.get("properties") or {}).items():
         where = f"{path}.{name}" if path else name

@@ -24,18 +24,15 @@ PUBBROKER = REPO / "build" / "bin" / "modd-pubbroker"
 LINK_KEY = "mavlink-test-key"
 
 
-
-
-
-
 class Proc:
     """A process with its output in a log file; stop() sends SIGTERM, then kills."""
 
     def __init__(self, argv: list[str], log: Path, env: dict[str, str] | None = None) -> None:
         self.log_path = log
         self._out = log.open("wb")
-        self.popen = subprocess.Popen(argv, stdout=self._out, stderr=subprocess.STDOUT,
-                                      env=env or dict(os.environ))
+        self.popen = subprocess.Popen(
+            argv, stdout=self._out, stderr=subprocess.STDOUT, env=env or dict(os.environ)
+        )
 
     def log(self) -> str:
         return self.log_path.read_text(errors="replace")
@@ -83,8 +80,11 @@ def start_pubbroker(model: dict[str, Any], workdir: Path) -> tuple[Proc, dict[st
         pytest.fail(f"{PUBBROKER} is missing: run `make build`")
     local, configs = prepare(model, workdir)
     env = dict(os.environ, MODD_LINK_KEY=LINK_KEY)
-    proc = Proc([str(PUBBROKER), "--config", str(configs / "pubbroker.json")],
-                workdir / "pubbroker.log", env)
+    proc = Proc(
+        [str(PUBBROKER), "--config", str(configs / "pubbroker.json")],
+        workdir / "pubbroker.log",
+        env,
+    )
     sock = Path(local["pubBroker"]["ingress"]["unixSocket"])
     deadline = time.monotonic() + 10
     while not sock.exists():
@@ -155,9 +155,16 @@ class Autopilot:
     def heartbeat(self) -> bytes:
         from modd.mavlink.dialect import MAV
 
-        return self.frame(MAV.MAVLink_heartbeat_message(
-            MAV.MAV_TYPE_SURFACE_BOAT, MAV.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0,
-            MAV.MAV_STATE_ACTIVE, 3))
+        return self.frame(
+            MAV.MAVLink_heartbeat_message(
+                MAV.MAV_TYPE_SURFACE_BOAT,
+                MAV.MAV_AUTOPILOT_ARDUPILOTMEGA,
+                0,
+                0,
+                MAV.MAV_STATE_ACTIVE,
+                3,
+            )
+        )
 
     def attitude(self, yaw: float, boot_ms: int = 1000) -> bytes:
         from modd.mavlink.dialect import MAV
@@ -167,8 +174,11 @@ class Autopilot:
     def position(self, lat_e7: int, lon_e7: int, alt_mm: int, boot_ms: int = 1000) -> bytes:
         from modd.mavlink.dialect import MAV
 
-        return self.frame(MAV.MAVLink_global_position_int_message(
-            boot_ms, lat_e7, lon_e7, alt_mm, alt_mm, 0, 0, 0, 0))
+        return self.frame(
+            MAV.MAVLink_global_position_int_message(
+                boot_ms, lat_e7, lon_e7, alt_mm, alt_mm, 0, 0, 0, 0
+            )
+        )
 
     def ack(self, command: int, result: int) -> bytes:
         from modd.mavlink.dialect import MAV

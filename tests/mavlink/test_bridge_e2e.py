@@ -49,23 +49,52 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> Run:
     start = time.time() - 195.0  # the first turn comes 5 s into the run
     procs: dict[str, Proc] = {"pubbroker": broker}
     try:
-        procs["bridge"] = Proc([str(BIN / "modd-mavlink"), "--model", str(model_json),
-                                "--connect", f"udpin:127.0.0.1:{port}", "--status-period", "1"],
-                               tmp / "bridge.log")
+        procs["bridge"] = Proc(
+            [
+                str(BIN / "modd-mavlink"),
+                "--model",
+                str(model_json),
+                "--connect",
+                f"udpin:127.0.0.1:{port}",
+                "--status-period",
+                "1",
+            ],
+            tmp / "bridge.log",
+        )
         procs["bridge"].wait_for("waiting for the autopilot", 20)
-        procs["sim"] = Proc([str(BIN / "modd-sim"), "--model", str(model_json), "--mavlink",
-                             f"udpout:127.0.0.1:{port}", "--start-time", repr(start)],
-                            tmp / "sim.log")
-        for line in ("accepted ATTITUDE", "accepted GLOBAL_POSITION_INT",
-                     "accepted SYS_STATUS", "REFUSED WIND"):
+        procs["sim"] = Proc(
+            [
+                str(BIN / "modd-sim"),
+                "--model",
+                str(model_json),
+                "--mavlink",
+                f"udpout:127.0.0.1:{port}",
+                "--start-time",
+                repr(start),
+            ],
+            tmp / "sim.log",
+        )
+        for line in (
+            "accepted ATTITUDE",
+            "accepted GLOBAL_POSITION_INT",
+            "accepted SYS_STATUS",
+            "REFUSED WIND",
+        ):
             procs["bridge"].wait_for(line, 20)
         ready_ns = time.time_ns()
         time.sleep(RUN_S)
     finally:
-        codes: dict[str, int] = {name: procs[name].stop() for name in ("sim", "bridge", "pubbroker")
-                 if name in procs}
-    return Run(read_archive(tmp / "run" / "archive"), start, ready_ns, procs["bridge"].log(),
-               procs["sim"].log(), codes)
+        codes: dict[str, int] = {
+            name: procs[name].stop() for name in ("sim", "bridge", "pubbroker") if name in procs
+        }
+    return Run(
+        read_archive(tmp / "run" / "archive"),
+        start,
+        ready_ns,
+        procs["bridge"].log(),
+        procs["sim"].log(),
+        codes,
+    )
 
 
 def test_the_processes_stop_cleanly(run: Run) -> None:
@@ -76,14 +105,17 @@ def test_the_processes_stop_cleanly(run: Run) -> None:
 def test_the_autopilot_gets_the_rates_the_model_needs(run: Run) -> None:
     # nav publishes every 0.1 s, power every 0.5 s (boat.modd)
     asked = dict(re.findall(r"SET_MESSAGE_INTERVAL (\w+) (\d+) us", run.sim_log))
-    assert asked == {"GLOBAL_POSITION_INT": "100000", "ATTITUDE": "100000",
-                     "SYS_STATUS": "500000", "WIND": "500000"}, run.sim_log
+    assert asked == {
+        "GLOBAL_POSITION_INT": "100000",
+        "ATTITUDE": "100000",
+        "SYS_STATUS": "500000",
+        "WIND": "500000",
+    }, run.sim_log
     assert "WIND 500000 us: MAV_RESULT_DENIED" in run.sim_log
     assert "REFUSED WIND every 0.5 s: MAV_RESULT_DENIED" in run.bridge_log
 
 
-@pytest.mark.parametrize(("topic", "hz"), [("latitude", 10.0), ("yaw", 10.0),
-                                           ("battery_mv", 2.0)])
+@pytest.mark.parametrize(("topic", "hz"), [("latitude", 10.0), ("yaw", 10.0), ("battery_mv", 2.0)])
 def test_the_observed_rate_is_the_rate_asked(run: Run, topic: str, hz: float) -> None:
     t0, t1 = run.ready_ns + 300_000_000, run.ready_ns + int((RUN_S - 0.3) * 1e9)
     n = sum(1 for ts, _ in run.archive[f"boat.autopilot.{topic}"] if t0 <= ts < t1)
@@ -91,8 +123,9 @@ def test_the_observed_rate_is_the_rate_asked(run: Run, topic: str, hz: float) ->
     assert abs(observed - hz) <= 0.2 * hz + 0.5, (topic, observed)
 
 
-def _near_track(value: float, ts: int, start: float, quantum: float,
-                f: Callable[[float], float], speed: float) -> bool:
+def _near_track(
+    value: float, ts: int, start: float, quantum: float, f: Callable[[float], float], speed: float
+) -> bool:
     """Whether value is f(t) for some t in [receive - LAG_S, receive], within quantum."""
     t = ts / 1e9 - start
     samples = [f(t - LAG_S * k / 10) for k in range(11)]
@@ -115,14 +148,15 @@ def test_archived_values_follow_the_simulated_track(run: Run) -> None:
     }
     for name, (f, quantum, speed) in checks.items():
         assert len(a[name]) >= 5, name
-        bad = [(ts, v) for ts, v in a[name]
-               if not _near_track(v, ts, run.start, quantum, f, speed)]
+        bad = [(ts, v) for ts, v in a[name] if not _near_track(v, ts, run.start, quantum, f, speed)]
         assert not bad, (name, bad[:3], [f(ts / 1e9 - run.start) for ts, _ in bad[:3]])
     assert all(isinstance(v, int) for _, v in a["battery_mv"])
     # the same SYS_STATUS frame gives both battery topics, scaled by 1e-3
     assert [ts for ts, _ in a["battery_mv"]] == [ts for ts, _ in a["battery_v"]]
-    assert all(abs(v - mv * 1e-3) < 1e-9 for (_, mv), (_, v) in zip(a["battery_mv"],
-                                                                   a["battery_v"], strict=True))
+    assert all(
+        abs(v - mv * 1e-3) < 1e-9
+        for (_, mv), (_, v) in zip(a["battery_mv"], a["battery_v"], strict=True)
+    )
 
 
 def test_autopilot_topics_come_only_through_the_bridge(run: Run) -> None:
@@ -141,8 +175,13 @@ def test_bridge_refuses_a_model_it_cannot_map(tmp_path: Path) -> None:
 
     text = (HERE / "boat.modd").read_text().replace("ATTITUDE.yaw", "ATTITUDE.heading")
     (tmp_path / "bad.modd").write_text(text)
-    res = subprocess.run([str(BIN / "modd-mavlink"), "--model", str(tmp_path / "bad.modd")],
-                         capture_output=True, text=True, timeout=30)
+    res = subprocess.run(
+        [str(BIN / "modd-mavlink"), "--model", str(tmp_path / "bad.modd")],
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
     assert res.returncode == 1
-    assert "/drone/sensors/0/variables/3/source/field: ATTITUDE has no field heading" \
-        in res.stderr, res.stderr
+    assert (
+        "/drone/sensors/0/variables/3/source/field: ATTITUDE has no field heading" in res.stderr
+    ), res.stderr

@@ -80,9 +80,13 @@ def rig() -> Iterator[Rig]:
     port = free_port("udp")
     sinks = {p.name: Recorder() for p in plan.publishers}
     logs: list[str] = []
-    bridge = Bridge(plan, open_transport(f"udpin:127.0.0.1:{port}"), sinks,
-                    BridgeSettings(heartbeat_timeout_s=TIMEOUT_S, status_period_s=0.5),
-                    logs.append)
+    bridge = Bridge(
+        plan,
+        open_transport(f"udpin:127.0.0.1:{port}"),
+        sinks,
+        BridgeSettings(heartbeat_timeout_s=TIMEOUT_S, status_period_s=0.5),
+        logs.append,
+    )
     stop = threading.Event()
     thread = threading.Thread(target=bridge.run, args=(stop,))
     thread.start()
@@ -98,8 +102,7 @@ def rig() -> Iterator[Rig]:
     assert all(s.flushed and s.closed for s in sinks.values())
 
 
-def _answer_rates(rig: Rig, refuse: str, per_round: list[int] | None = None
-                  ) -> dict[int, float]:
+def _answer_rates(rig: Rig, refuse: str, per_round: list[int] | None = None) -> dict[int, float]:
     """Acknowledges each SET_MESSAGE_INTERVAL as it comes (refusing one message), with a
     HEARTBEAT every 0.3 s; returns message id → interval asked. ``per_round`` gets the
     number of requests received in each 0.3 s round."""
@@ -125,12 +128,17 @@ def test_rates_are_asked_one_by_one_and_refusals_reported(rig: Rig) -> None:
     per_round: list[int] = []
     asked = _answer_rates(rig, refuse="SYS_STATUS", per_round=per_round)
     assert per_round == [1, 1, 1, 1]  # the next request only after the last one's ACK
-    assert asked == {MAV.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 100_000,
-                     MAV.MAVLINK_MSG_ID_ATTITUDE: 100_000,
-                     MAV.MAVLINK_MSG_ID_SYS_STATUS: 500_000,
-                     MAV.MAVLINK_MSG_ID_WIND: 500_000}, rig.log_text()
-    wait_until(lambda: "REFUSED SYS_STATUS" in rig.log_text()
-               and len(rig.bridge.autopilot.accepted) == 3, 3, rig.log_text)
+    assert asked == {
+        MAV.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 100_000,
+        MAV.MAVLINK_MSG_ID_ATTITUDE: 100_000,
+        MAV.MAVLINK_MSG_ID_SYS_STATUS: 500_000,
+        MAV.MAVLINK_MSG_ID_WIND: 500_000,
+    }, rig.log_text()
+    wait_until(
+        lambda: "REFUSED SYS_STATUS" in rig.log_text() and len(rig.bridge.autopilot.accepted) == 3,
+        3,
+        rig.log_text,
+    )
     assert rig.bridge.autopilot.refused == {"SYS_STATUS": "MAV_RESULT_DENIED"}
     assert set(rig.bridge.autopilot.accepted) == {"GLOBAL_POSITION_INT", "ATTITUDE", "WIND"}
 
@@ -155,8 +163,9 @@ def test_junk_bad_crc_and_unknown_messages_are_counted_and_mapping_goes_on(rig: 
     assert rig.samples("boat.autopilot.height") == pytest.approx([11.5])  # 1500 mm + 10 m
     assert (c.bad, c.unknown, c.mapped) == (4, 1, 3)
     assert c.ignored >= 2  # the early GLOBAL_POSITION_INT, the other vehicle's ATTITUDE
-    wait_until(lambda: "status: mapped 3 (samples 5), unknown 1, bad 4" in rig.log_text(), 3,
-               rig.log_text)
+    wait_until(
+        lambda: "status: mapped 3 (samples 5), unknown 1, bad 4" in rig.log_text(), 3, rig.log_text
+    )
     log = rig.log_text()
     assert "ignoring unknown MAVLink message id 61680" in log
     assert "invalid MAVLink CRC" in log and "truncated frame" in log
@@ -179,8 +188,7 @@ def test_a_silent_autopilot_is_reported_lost_once_then_back(rig: Rig) -> None:
     again = _answer_rates(rig, refuse="")  # the rates are asked again
     assert len(again) == 4
     rig.send(ap.attitude(0.1))
-    wait_until(lambda: rig.samples("boat.autopilot.yaw") == pytest.approx([0.1]), 3,
-               rig.log_text)
+    wait_until(lambda: rig.samples("boat.autopilot.yaw") == pytest.approx([0.1]), 3, rig.log_text)
 
 
 def test_a_reboot_asks_for_the_rates_again(rig: Rig) -> None:

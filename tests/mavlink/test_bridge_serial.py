@@ -39,8 +39,13 @@ def test_bridge_reads_and_writes_a_serial_port(uart: tuple[int, str]) -> None:
     plan = plan_bridge(load_model(HERE / "boat.modd", free_port()))
     sinks = {p.name: Recorder() for p in plan.publishers}
     logs: list[str] = []
-    bridge = Bridge(plan, open_transport(f"{path},921600"), sinks,
-                    BridgeSettings(heartbeat_timeout_s=2.0, status_period_s=0.5), logs.append)
+    bridge = Bridge(
+        plan,
+        open_transport(f"{path},921600"),
+        sinks,
+        BridgeSettings(heartbeat_timeout_s=2.0, status_period_s=0.5),
+        logs.append,
+    )
     stop = threading.Event()
     thread = threading.Thread(target=bridge.run, args=(stop,))
     thread.start()
@@ -51,9 +56,10 @@ def test_bridge_reads_and_writes_a_serial_port(uart: tuple[int, str]) -> None:
         # Frames written in odd-sized pieces and glued together, as a UART delivers them.
         stream = ap.heartbeat() + b"".join(
             ap.position(477_000_000 + i, -33_500_000, 1500 + i, boot_ms=1000 + 100 * i)
-            for i in range(20))
+            for i in range(20)
+        )
         for k in range(0, len(stream), 7):
-            os.write(master, stream[k:k + 7])
+            os.write(master, stream[k : k + 7])
         deadline = time.monotonic() + 10
         while time.monotonic() < deadline and not commands:
             ready, _, _ = select.select([master], [], [], 0.2)

@@ -14,8 +14,12 @@ from modd.mavlink.mapping import plan_bridge
 
 MODEL = load_model(HERE / "boat.modd", 7171)
 AP = Autopilot()
-GOOD = [AP.heartbeat(), AP.attitude(0.5), AP.position(477_000_000, -33_500_000, 200),
-        Autopilot(system=9).attitude(1.0)]
+GOOD = [
+    AP.heartbeat(),
+    AP.attitude(0.5),
+    AP.position(477_000_000, -33_500_000, 200),
+    Autopilot(system=9).attitude(1.0),
+]
 
 
 class Wire:
@@ -56,8 +60,7 @@ def garbled(draw: Any) -> bytes:
     return bytes(frame[:cut]) + bytes(tail)
 
 
-chunks = st.lists(st.one_of(st.binary(max_size=300), garbled(),
-                            st.sampled_from(GOOD)), max_size=12)
+chunks = st.lists(st.one_of(st.binary(max_size=300), garbled(), st.sampled_from(GOOD)), max_size=12)
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -82,5 +85,6 @@ def test_over_udp_a_good_datagram_after_junk_is_mapped(junk: list[bytes]) -> Non
     before = len(sinks["nav"].samples)
     b.handle(AP.attitude(0.25), now=0.2, now_ns=2)
     after = sinks["nav"].samples[before:]
-    assert [(t, v) for t, _, v in after if t == "boat.autopilot.yaw"] == [("boat.autopilot.yaw",
-                                                                          0.25)]
+    assert [(t, v) for t, _, v in after if t == "boat.autopilot.yaw"] == [
+        ("boat.autopilot.yaw", 0.25)
+    ]

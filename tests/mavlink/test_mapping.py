@@ -28,27 +28,40 @@ def test_the_demo_needs_position_and_attitude_every_publisher_period() -> None:
 
 def test_the_fastest_publisher_sets_the_interval_and_unpublished_topics_are_named() -> None:
     model = demo()
-    model["publishers"].append({"name": "fast", "periodS": "0.05",
-                                "topics": ["usv.autopilot.roll"]})
+    model["publishers"].append(
+        {"name": "fast", "periodS": "0.05", "topics": ["usv.autopilot.roll"]}
+    )
     for gone in ("usv.autopilot.roll", "usv.autopilot.altitude"):
         model["publishers"][1]["topics"].remove(gone)
     plan = plan_bridge(model)
     assert plan.intervals_us == {"GLOBAL_POSITION_INT": 200_000, "ATTITUDE": 50_000}
     assert [(p.name, len(p.mappings)) for p in plan.publishers] == [("mavlink", 4), ("fast", 1)]
-    assert plan.warnings == ["topic usv.autopilot.altitude is read over MAVLink but no "
-                             "publisher carries it: not published"]
+    assert plan.warnings == [
+        "topic usv.autopilot.altitude is read over MAVLink but no "
+        "publisher carries it: not published"
+    ]
 
 
-@pytest.mark.parametrize(("source", "problem"), [
-    ({"message": "NO_SUCH_MESSAGE", "field": "lat"},
-     "/drone/sensors/1/variables/0/source/message: unknown MAVLink message NO_SUCH_MESSAGE"),
-    ({"message": "GLOBAL_POSITION_INT", "field": "latitude"},
-     "/drone/sensors/1/variables/0/source/field: GLOBAL_POSITION_INT has no field latitude"),
-    ({"message": "STATUSTEXT", "field": "text"},
-     "/drone/sensors/1/variables/0/source/field: STATUSTEXT.text is not a single number"),
-])
-def test_a_source_the_dialect_cannot_read_is_named_by_its_pointer(source: dict[str, str],
-                                                                  problem: str) -> None:
+@pytest.mark.parametrize(
+    ("source", "problem"),
+    [
+        (
+            {"message": "NO_SUCH_MESSAGE", "field": "lat"},
+            "/drone/sensors/1/variables/0/source/message: unknown MAVLink message NO_SUCH_MESSAGE",
+        ),
+        (
+            {"message": "GLOBAL_POSITION_INT", "field": "latitude"},
+            "/drone/sensors/1/variables/0/source/field: GLOBAL_POSITION_INT has no field latitude",
+        ),
+        (
+            {"message": "STATUSTEXT", "field": "text"},
+            "/drone/sensors/1/variables/0/source/field: STATUSTEXT.text is not a single number",
+        ),
+    ],
+)
+def test_a_source_the_dialect_cannot_read_is_named_by_its_pointer(
+    source: dict[str, str], problem: str
+) -> None:
     model = demo()
     model["drone"]["sensors"][1]["variables"][0]["source"] = source
     with pytest.raises(MappingError) as err:
@@ -71,8 +84,9 @@ def test_values_are_scaled_offset_and_typed_per_topic() -> None:
 
 def test_requests_are_retried_then_given_up_and_reasked_after_a_reboot() -> None:
     logs: list[str] = []
-    ap = AutopilotState({"ATTITUDE": 100_000, "SYS_STATUS": 500_000}, logs.append,
-                        heartbeat_timeout_s=100)
+    ap = AutopilotState(
+        {"ATTITUDE": 100_000, "SYS_STATUS": 500_000}, logs.append, heartbeat_timeout_s=100
+    )
     decoder = Decoder()
     fake = Autopilot()
 
@@ -85,7 +99,12 @@ def test_requests_are_retried_then_given_up_and_reasked_after_a_reboot() -> None
     sent = [ap.poll(t) for t in (0.0, 0.5, 1.01, 2.02, 3.03)]
     # ATTITUDE asked at 0, again at 1.01 and 2.02 (confirmation 1, 2), then given up
     assert [[(int(c.param1), c.confirmation) for c in s] for s in sent] == [
-        [(30, 0)], [], [(30, 1)], [(30, 2)], [(1, 0)]]
+        [(30, 0)],
+        [],
+        [(30, 1)],
+        [(30, 2)],
+        [(1, 0)],
+    ]
     assert ap.refused == {"ATTITUDE": "NO_ANSWER"}
     feed(fake.ack(MAV.MAV_CMD_SET_MESSAGE_INTERVAL, MAV.MAV_RESULT_ACCEPTED), 3.1)
     assert ap.accepted == {"SYS_STATUS": 500_000} and ap.poll(3.2) == []

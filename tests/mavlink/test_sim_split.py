@@ -52,9 +52,15 @@ def test_who_publishes_the_autopilot_topics(tmp_path: Path, no_mavlink: bool) ->
     udp_port = free_port("udp")
     udp.bind(("127.0.0.1", udp_port))
     server = socket.create_server(("127.0.0.1", 0))
-    argv = [str(BIN / "modd-sim"), "--model", str(HERE / "boat.modd"), "--ingress",
-            f"tcp:127.0.0.1:{server.getsockname()[1]}", "--mavlink",
-            f"udpout:127.0.0.1:{udp_port}"] + (["--no-mavlink"] if no_mavlink else [])
+    argv = [
+        str(BIN / "modd-sim"),
+        "--model",
+        str(HERE / "boat.modd"),
+        "--ingress",
+        f"tcp:127.0.0.1:{server.getsockname()[1]}",
+        "--mavlink",
+        f"udpout:127.0.0.1:{udp_port}",
+    ] + (["--no-mavlink"] if no_mavlink else [])
     sim = Proc(argv, tmp_path / "sim.log")
     try:
         # the publisher waits up to 1 s for a catalogue this plain server never sends
@@ -72,6 +78,10 @@ def test_who_publishes_the_autopilot_topics(tmp_path: Path, no_mavlink: bool) ->
     assert b"boat.ctd.water_temperature" in ingress, sim.log()
     assert (b"boat.autopilot.latitude" in ingress) is no_mavlink
     decoder = Decoder()
-    kinds = {f.message.get_type() for d in datagrams for f in decoder.feed(d, datagram=True)
-             if f.kind is Kind.MESSAGE}
+    kinds = {
+        f.message.get_type()
+        for d in datagrams
+        for f in decoder.feed(d, datagram=True)
+        if f.kind is Kind.MESSAGE
+    }
     assert ("HEARTBEAT" in kinds) is not no_mavlink, kinds

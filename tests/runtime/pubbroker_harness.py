@@ -49,8 +49,6 @@ SCENARIOS = REPO / "metamodel" / "examples" / "scenarios"
 KEY = b"pubbroker-test-key"
 
 
-
-
 def f32(x: float) -> float:
     return float(struct.unpack("<f", struct.pack("<f", x))[0])
 
@@ -67,11 +65,19 @@ class PubBroker:
         (tmp / "key").write_bytes(KEY + b"\n")
         self.config: dict[str, Any] = {
             "name": "usv",
-            "link": {"host": "127.0.0.1", "port": self.link_port, "key": f"file:{tmp / 'key'}",
-                     "handshake_timeout_ms": 2000},
+            "link": {
+                "host": "127.0.0.1",
+                "port": self.link_port,
+                "key": f"file:{tmp / 'key'}",
+                "handshake_timeout_ms": 2000,
+            },
             "ingress": {"unix_path": self.unix_path, "host": "127.0.0.1", "port": self.tcp_port},
-            "archive": {"dir": str(self.archive_dir), "prefix": "usv", "flush_interval_ms": 200,
-                        "fsync": "never"},
+            "archive": {
+                "dir": str(self.archive_dir),
+                "prefix": "usv",
+                "flush_interval_ms": 200,
+                "fsync": "never",
+            },
             "topics": [{"name": n, "type": t} for n, t in topics],
             "default_buffer_size": 25,
             "status_period_s": 1,
@@ -91,8 +97,11 @@ class PubBroker:
         if not BIN.exists():
             raise RuntimeError(f"{BIN} is missing: run `make build` first")
         self._log = open(self.log_path, "wb")  # noqa: SIM115 (closed in stop)
-        self.proc = subprocess.Popen([str(BIN), "--config", str(self.config_path)],
-                                     stdout=self._log, stderr=subprocess.STDOUT)
+        self.proc = subprocess.Popen(
+            [str(BIN), "--config", str(self.config_path)],
+            stdout=self._log,
+            stderr=subprocess.STDOUT,
+        )
         deadline = time.monotonic() + 10
         while time.monotonic() < deadline:
             if self.proc.poll() is not None:
@@ -232,9 +241,16 @@ class BaseStation:
 
     def snapshot(self) -> Received:
         with self._lock:
-            return Received(list(self.got.windows), list(self.got.statuses), list(self.got.acks),
-                            list(self.got.pongs), list(self.got.errors), self.got.data_frames,
-                            self.got.data_bytes, dict(self.got.sensors))
+            return Received(
+                list(self.got.windows),
+                list(self.got.statuses),
+                list(self.got.acks),
+                list(self.got.pongs),
+                list(self.got.errors),
+                self.got.data_frames,
+                self.got.data_bytes,
+                dict(self.got.sensors),
+            )
 
     def close(self) -> None:
         self._stop.set()
@@ -256,11 +272,15 @@ def scenario_config(n: int, config_id: int = 1, status_period_s: int = 1) -> Con
 def hand_config_scenario1(config_id: int = 1, status_period_s: int = 1) -> Config:
     """Scenario 1 from the paper's numbers (buffer sizes 28, 28, 6; 4 streams sent)."""
     names = [f"usv.accelerometer.accel_{a}" for a in "xyz"]
-    topics = tuple(TopicSpec(n, ValueType.FLOAT32, b, 40000) for n, b in zip(names, (28, 28, 6),
-                                                                                  strict=True))
-    streams = (StreamSpec(0, Aggregation.AVERAGE, 250000),
-               StreamSpec(1, Aggregation.AVERAGE, 250000),
-               StreamSpec(2, Aggregation.MIN, 250000), StreamSpec(2, Aggregation.MAX, 250000))
+    topics = tuple(
+        TopicSpec(n, ValueType.FLOAT32, b, 40000) for n, b in zip(names, (28, 28, 6), strict=True)
+    )
+    streams = (
+        StreamSpec(0, Aggregation.AVERAGE, 250000),
+        StreamSpec(1, Aggregation.AVERAGE, 250000),
+        StreamSpec(2, Aggregation.MIN, 250000),
+        StreamSpec(2, Aggregation.MAX, 250000),
+    )
     return Config(config_id, status_period_s, topics, streams)
 
 
@@ -275,9 +295,14 @@ class LoadResult:
     per_topic: dict[str, int]
 
 
-def run_load(address: str, topics: Sequence[str], hz: float, seconds: float,
-             value: Callable[[int, int], float] = signal_value,
-             stop: threading.Event | None = None) -> LoadResult:
+def run_load(
+    address: str,
+    topics: Sequence[str],
+    hz: float,
+    seconds: float,
+    value: Callable[[int, int], float] = signal_value,
+    stop: threading.Event | None = None,
+) -> LoadResult:
     """Publishes every topic at `hz` for `seconds`, paced on the wall clock (the paper's load)."""
     per_topic: dict[str, int] = defaultdict(int)
     with Publisher("pub_1", address) as pub:
@@ -342,8 +367,9 @@ def recompute(agg: Aggregation, values: list[Any]) -> Any:
     return list(values)
 
 
-def check_windows(windows: Sequence[Window], configs: dict[int, Config],
-                  archive: dict[str, list[Archived]]) -> int:
+def check_windows(
+    windows: Sequence[Window], configs: dict[int, Config], archive: dict[str, list[Archived]]
+) -> int:
     """The oracle: every received window equals the aggregate recomputed from the archive
     (exact for MIN/MAX/FIRST/LAST/COUNT, float32 tolerance for AVERAGE/SUM), and no window
     with archived samples is missing between the first and the last window received.
@@ -367,8 +393,10 @@ def check_windows(windows: Sequence[Window], configs: dict[int, Config],
         assert vals, f"window {w} present but the archive has no sample in it"
         want = recompute(s.aggregation, vals)
         v = w.value
-        where = (f"config {w.config_id} stream {w.stream} ({topic.name} {s.aggregation.name})"
-                 f" slot {w.slot}")
+        where = (
+            f"config {w.config_id} stream {w.stream} ({topic.name} {s.aggregation.name})"
+            f" slot {w.slot}"
+        )
         if s.aggregation in (Aggregation.MIN, Aggregation.MAX, Aggregation.FIRST, Aggregation.LAST):
             got = v.number if topic.type in (ValueType.FLOAT32, ValueType.FLOAT64) else v.integer
             assert got == want, f"{where}: {got} != {want}"
@@ -377,7 +405,8 @@ def check_windows(windows: Sequence[Window], configs: dict[int, Config],
         elif s.aggregation == Aggregation.AVERAGE:
             assert v.count == len(vals), f"{where}: count {v.count} != {len(vals)}"
             assert math.isclose(v.number, want, rel_tol=1e-6, abs_tol=1e-6), (
-                f"{where}: {v.number} != {want}")
+                f"{where}: {v.number} != {want}"
+            )
         elif s.aggregation == Aggregation.SUM:
             assert math.isclose(v.number or v.integer, want, rel_tol=1e-6, abs_tol=1e-5), where
         else:

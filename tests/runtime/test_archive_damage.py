@@ -33,7 +33,8 @@ def official_count(path: Path) -> int:
 
 
 def test_a_crashed_file_with_25_flipped_bytes_keeps_every_chunk_whose_data_checks(
-        broker_factory: Any) -> None:
+    broker_factory: Any,
+) -> None:
     b = broker_factory(archive={"chunk_bytes": 2048})
     run_load(f"unix:{b.unix_path}", TOPICS, 400.0, 1.5)
     time.sleep(0.5)  # flushed (every 200 ms)

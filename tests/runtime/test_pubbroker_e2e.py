@@ -32,8 +32,10 @@ def test_help() -> None:
 
 def test_bad_config_file_is_named(tmp_path: Any) -> None:
     p = tmp_path / "c.json"
-    p.write_text('{"link": {"key": "env:X"}, "ingress": {"port": 1}, "archive": {"dir": "/tmp/x"},'
-                 ' "topics": [{"name": "a", "type": "float16"}]}')
+    p.write_text(
+        '{"link": {"key": "env:X"}, "ingress": {"port": 1}, "archive": {"dir": "/tmp/x"},'
+        ' "topics": [{"name": "a", "type": "float16"}]}'
+    )
     out = subprocess.run([str(BIN), "--config", str(p)], capture_output=True, text=True, timeout=10)
     assert out.returncode == 1
     assert f"{p}: /topics/0/type" in out.stderr
@@ -96,12 +98,24 @@ def test_bad_input_is_counted_never_archived(broker_factory: Any) -> None:
     s = connect(f"tcp:127.0.0.1:{b.tcp_port}")
     types = [ValueType.FLOAT32, ValueType.FLOAT32, ValueType.FLOAT64]
     t0 = time.time_ns()
-    s.sendall(encode_hello("bad") + encode_register(0, ValueType.FLOAT32, x)
-              + encode_register(1, ValueType.FLOAT32, "usv.nope")
-              + encode_register(2, ValueType.FLOAT64, z)
-              + encode_samples([(0, t0, 1.5), (0, t0 + 1, float("nan")), (0, t0 - 5, 2.0),
-                                (1, t0, 1.0), (2, t0, 1.0), (0, t0 + 2, float("inf")),
-                                (0, t0 + 3, 2.5)], types))
+    s.sendall(
+        encode_hello("bad")
+        + encode_register(0, ValueType.FLOAT32, x)
+        + encode_register(1, ValueType.FLOAT32, "usv.nope")
+        + encode_register(2, ValueType.FLOAT64, z)
+        + encode_samples(
+            [
+                (0, t0, 1.5),
+                (0, t0 + 1, float("nan")),
+                (0, t0 - 5, 2.0),
+                (1, t0, 1.0),
+                (2, t0, 1.0),
+                (0, t0 + 2, float("inf")),
+                (0, t0 + 3, 2.5),
+            ],
+            types,
+        )
+    )
     # A corrupt frame: the broker counts it, drops this publisher, keeps serving the others.
     s.sendall(bytes([0x05, 0x03, 0x05, 0x00, 0x01, 0x02]))
     s.settimeout(5)
@@ -168,11 +182,18 @@ def test_config_switch_at_a_slot_boundary_and_reconnect(broker_factory: Any) -> 
     b = broker_factory()
     names = [f"usv.accelerometer.accel_{a}" for a in "xyz"]
     c1 = hand_config_scenario1(config_id=1)
-    c2 = Config(2, 1, c1.topics, (StreamSpec(0, Aggregation.COUNT, 100000),
-                                  StreamSpec(1, Aggregation.SUM, 300000),
-                                  StreamSpec(2, Aggregation.LAST, 500000),
-                                  StreamSpec(2, Aggregation.FIRST, 500000),
-                                  StreamSpec(1, Aggregation.ALL, 200000)))
+    c2 = Config(
+        2,
+        1,
+        c1.topics,
+        (
+            StreamSpec(0, Aggregation.COUNT, 100000),
+            StreamSpec(1, Aggregation.SUM, 300000),
+            StreamSpec(2, Aggregation.LAST, 500000),
+            StreamSpec(2, Aggregation.FIRST, 500000),
+            StreamSpec(1, Aggregation.ALL, 200000),
+        ),
+    )
     base = BaseStation(b.link_port)
     ack1 = base.configure(c1)
     base.start()
@@ -215,8 +236,9 @@ def test_config_switch_at_a_slot_boundary_and_reconnect(broker_factory: Any) -> 
     # config-1 AVERAGE window of accel_x cover the samples around the switch exactly.
     switch = ack2.epoch_ns
     before = [w for w in first.windows if w.config_id == 1 and w.stream == 0 and w.end_ns == switch]
-    after = [w for w in first.windows if w.config_id == 2 and w.stream == 0
-             and w.start_ns == switch]
+    after = [
+        w for w in first.windows if w.config_id == 2 and w.stream == 0 and w.start_ns == switch
+    ]
     assert before and after
     xs = [a.log_time for a in archive[names[0]]]
     assert before[0].value.count == sum(switch - 250_000_000 <= t < switch for t in xs)
@@ -244,8 +266,7 @@ def test_sigterm_flushes_everything_and_closes_the_file(broker_factory: Any) -> 
 
 
 def test_archive_rotates_and_every_file_reads_back(broker_factory: Any) -> None:
-    b = broker_factory(archive={"rotate_bytes": 3000, "chunk_bytes": 1000,
-                                "compression": "lz4"})
+    b = broker_factory(archive={"rotate_bytes": 3000, "chunk_bytes": 1000, "compression": "lz4"})
     names = [f"usv.accelerometer.accel_{a}" for a in "xyz"]
     load = run_load(f"unix:{b.unix_path}", names, 300.0, 1.0)
     assert b.stop() == 0

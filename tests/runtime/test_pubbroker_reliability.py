@@ -83,8 +83,11 @@ def test_a_far_future_sample_blocks_nothing_and_its_publisher_is_told(broker_fac
     now = time.time_ns()
     bad = 4_354_000_000_000_000_000  # year 2107: microseconds taken for nanoseconds and the like
     records = [(0, bad, 1.0)] + [(0, now + i * 1_000_000, f32(0.5 * i)) for i in range(20)]
-    s.sendall(encode_hello("liar") + encode_register(0, ValueType.FLOAT32, X)
-              + encode_samples(records, [ValueType.FLOAT32]))
+    s.sendall(
+        encode_hello("liar")
+        + encode_register(0, ValueType.FLOAT32, X)
+        + encode_samples(records, [ValueType.FLOAT32])
+    )
     got = replies(s, 5.0, lambda r: any(isinstance(x, Ack) and x.settled == 21 for x in r))
     s.close()
     rejects = [r for r in got if isinstance(r, Reject)]
@@ -106,9 +109,10 @@ def test_a_far_future_sample_blocks_nothing_and_its_publisher_is_told(broker_fac
 
 def test_a_flooding_publisher_loses_only_its_own_samples(broker_factory: Any) -> None:
     flood_topic = "usv.flood.value"
-    b = broker_factory(topics=[(X, "float32"), (Y, "float32"), (Z, "float32"),
-                               (flood_topic, "float32")],
-                       archive={"queue_limit_samples": 40_000, "message_index": True})
+    b = broker_factory(
+        topics=[(X, "float32"), (Y, "float32"), (Z, "float32"), (flood_topic, "float32")],
+        archive={"queue_limit_samples": 40_000, "message_index": True},
+    )
     stop = threading.Event()
     sent = [0]
 
@@ -130,8 +134,10 @@ def test_a_flooding_publisher_loses_only_its_own_samples(broker_factory: Any) ->
     def calm(i: int, topics: list[str]) -> None:
         results[i] = run_load(f"unix:{b.unix_path}", topics, 200.0, 2.0)
 
-    calms = [threading.Thread(target=calm, args=(0, [X, Y])),
-             threading.Thread(target=calm, args=(1, [Z]))]
+    calms = [
+        threading.Thread(target=calm, args=(0, [X, Y])),
+        threading.Thread(target=calm, args=(1, [Z])),
+    ]
     for t in calms:
         t.start()
     for t in calms:
@@ -168,8 +174,10 @@ def test_a_file_left_open_by_a_crash_is_recovered_at_start(broker_factory: Any) 
     assert b2.stop() == 0
     assert len(read_archive(b.archive_dir)[X]) >= 75
     # Each run kept its counters beside its files; the killed one's last record too.
-    records = {r["run"].rsplit("-", 1)[1]: r for r in (
-        json.loads(p.read_text()) for p in b.archive_dir.glob("usv-run-*.counters.json"))}
+    records = {
+        r["run"].rsplit("-", 1)[1]: r
+        for r in (json.loads(p.read_text()) for p in b.archive_dir.glob("usv-run-*.counters.json"))
+    }
     killed, clean = records[str(b.proc.pid)], records[str(b2.proc.pid)]
     for r in (killed, clean):
         assert_reconciled_record(r["counters"])
@@ -187,8 +195,9 @@ def test_a_file_left_open_by_a_crash_is_recovered_at_start(broker_factory: Any) 
 
 def assert_reconciled_record(c: dict[str, int]) -> None:
     rejected = sum(v for k, v in c.items() if k.startswith("rejected_"))
-    assert c["samples_in"] == (c["samples_archived"] + c["archive_failed"] + rejected
-                               + c["samples_pending"]), c
+    assert c["samples_in"] == (
+        c["samples_archived"] + c["archive_failed"] + rejected + c["samples_pending"]
+    ), c
 
 
 class NamespacedBroker(PubBroker):
@@ -207,13 +216,16 @@ class NamespacedBroker(PubBroker):
         self.archive_dir.mkdir(parents=True, exist_ok=True)
         self.copied.mkdir()
         pidfile = self.tmp / "pid"
-        script = (f"mount -t tmpfs -o size={self.size_kib}k tmpfs '{self.archive_dir}' || exit 97\n"
-                  f"{self.prelude}\n"
-                  f"'{BIN}' --config '{self.config_path}' & echo $! > '{pidfile}'\n"
-                  f"wait $!; rc=$?; cp -a '{self.archive_dir}/.' '{self.copied}/'; exit $rc\n")
+        script = (
+            f"mount -t tmpfs -o size={self.size_kib}k tmpfs '{self.archive_dir}' || exit 97\n"
+            f"{self.prelude}\n"
+            f"'{BIN}' --config '{self.config_path}' & echo $! > '{pidfile}'\n"
+            f"wait $!; rc=$?; cp -a '{self.archive_dir}/.' '{self.copied}/'; exit $rc\n"
+        )
         self._log = open(self.log_path, "wb")  # noqa: SIM115 (closed in stop)
-        self.proc = subprocess.Popen(["unshare", "-rm", "sh", "-c", script],
-                                     stdout=self._log, stderr=subprocess.STDOUT)
+        self.proc = subprocess.Popen(
+            ["unshare", "-rm", "sh", "-c", script], stdout=self._log, stderr=subprocess.STDOUT
+        )
         deadline = time.monotonic() + 10
         while time.monotonic() < deadline:
             if self.proc.poll() is not None:
@@ -250,8 +262,11 @@ def test_disk_full_then_space_back(tmp_path: Path) -> None:
         base.start()
         stop = threading.Event()
         result: list[Any] = []
-        load = threading.Thread(target=lambda: result.append(
-            run_load(f"unix:{b.unix_path}", [X, Y, Z], 100.0, full_s + 8.0, stop=stop)))
+        load = threading.Thread(
+            target=lambda: result.append(
+                run_load(f"unix:{b.unix_path}", [X, Y, Z], 100.0, full_s + 8.0, stop=stop)
+            )
+        )
         load.start()
         time.sleep(1.5)
         filler = b.inside("filler")
@@ -314,7 +329,8 @@ def wait_log(b: PubBroker, text: str, timeout: float) -> bool:
 
 @needs_mount_namespace
 def test_a_crashed_file_is_recovered_without_room_for_a_copy_and_when_space_returns(
-        tmp_path: Path, broker_factory: Any) -> None:
+    tmp_path: Path, broker_factory: Any
+) -> None:
     from mcap.reader import make_reader
 
     # small chunks: the summary's chunk indexes (~7 KiB) cannot hide in the slack of the
@@ -332,9 +348,12 @@ def test_a_crashed_file_is_recovered_without_room_for_a_copy_and_when_space_retu
         d.mkdir()
         nb = NamespacedBroker(d, size // 1024 + 256)
         a = nb.archive_dir
-        fill = (f"cat /dev/zero > '{a}/filler' 2>/dev/null; true" if leave_blocks is None else
-                f"n=$(stat -f -c %a '{a}'); dd if=/dev/zero of='{a}/filler' "
-                f"bs=$(stat -f -c %S '{a}') count=$((n - {leave_blocks})) 2>/dev/null")
+        fill = (
+            f"cat /dev/zero > '{a}/filler' 2>/dev/null; true"
+            if leave_blocks is None
+            else f"n=$(stat -f -c %a '{a}'); dd if=/dev/zero of='{a}/filler' "
+            f"bs=$(stat -f -c %S '{a}') count=$((n - {leave_blocks})) 2>/dev/null"
+        )
         nb.prelude = f"cp '{crashed}' '{a}/' && {fill}"
         return nb.start()
 
@@ -368,7 +387,8 @@ def test_a_crashed_file_is_recovered_without_room_for_a_copy_and_when_space_retu
 
 
 def test_kill_9_loses_nothing_acknowledged_on_disk_and_the_publisher_replays_the_rest(
-        broker_factory: Any) -> None:
+    broker_factory: Any,
+) -> None:
     """A publisher's `on_disk` is the broker's promise: after kill -9 of the broker, every
     sample it counted on disk is in the archive (read by the official reader after recovery),
     and what was sent but not acknowledged is sent again to the restarted broker, so that
@@ -408,9 +428,11 @@ def test_kill_9_loses_nothing_acknowledged_on_disk_and_the_publisher_replays_the
     # publisher was told is on disk
     from mcap.reader import make_reader
 
-    [killed] = [r for r in (json.loads(p.read_text())
-                            for p in b.archive_dir.glob("usv-run-*.counters.json"))
-                if r["run"].endswith(f"-{b.proc.pid}")]
+    [killed] = [
+        r
+        for r in (json.loads(p.read_text()) for p in b.archive_dir.glob("usv-run-*.counters.json"))
+        if r["run"].endswith(f"-{b.proc.pid}")
+    ]
     held_by_killed = 0
     for name in killed["files"]:
         with open(b.archive_dir / name, "rb") as f:
@@ -420,12 +442,15 @@ def test_kill_9_loses_nothing_acknowledged_on_disk_and_the_publisher_replays_the
         held = {a.publish_time for a in archive[t]}
         assert seen <= held, (t, len(seen - held))  # every published sample, at least once
     assert st.replayed > 0
-    print(f"kill -9: {at_kill.on_disk} on disk of {at_kill.sent} sent at the kill; "
-          f"{st.replayed} replayed; {sum(map(len, published.values()))} published, all archived")
+    print(
+        f"kill -9: {at_kill.on_disk} on disk of {at_kill.sent} sent at the kill; "
+        f"{st.replayed} replayed; {sum(map(len, published.values()))} published, all archived"
+    )
 
 
 def test_a_publisher_that_disconnects_mid_frame_is_counted_and_harms_nobody(
-        broker_factory: Any) -> None:
+    broker_factory: Any,
+) -> None:
     """A publisher dying in the middle of a SAMPLES frame: its whole samples before it are
     archived, the announced records of the cut frame counted as malformed (the equation
     still holds), and another publisher on the same topic loses nothing."""
@@ -434,8 +459,12 @@ def test_a_publisher_that_disconnects_mid_frame_is_counted_and_harms_nobody(
     now = time.time_ns()
     whole = encode_samples([(0, now + i, f32(i)) for i in range(10)], [ValueType.FLOAT32])
     cut = encode_samples([(0, now + 100 + i, f32(i)) for i in range(40)], [ValueType.FLOAT32])
-    s.sendall(encode_hello("dying") + encode_register(0, ValueType.FLOAT32, X) + whole
-              + cut[: len(cut) // 2])
+    s.sendall(
+        encode_hello("dying")
+        + encode_register(0, ValueType.FLOAT32, X)
+        + whole
+        + cut[: len(cut) // 2]
+    )
     time.sleep(0.3)
     s.close()
     later = run_load(f"unix:{b.unix_path}", [X], 50.0, 0.5)

@@ -70,9 +70,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seconds", type=float, default=30.0)
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--record", help="append every sample sent to this file (JSON lines)")
-    p.add_argument("--signal", choices=("uniform", "wave"), default="uniform",
-                   help="float values: uniform in [-10, 10] (default), or a sea wave "
-                        "(1 m/s2, 8 s period, a phase per topic) plus 0.01 of noise")
+    p.add_argument(
+        "--signal",
+        choices=("uniform", "wave"),
+        default="uniform",
+        help="float values: uniform in [-10, 10] (default), or a sea wave "
+        "(1 m/s2, 8 s period, a phase per topic) plus 0.01 of noise",
+    )
     args = p.parse_args(argv)
     model = load_model(args.model)
     types = {
@@ -98,8 +102,11 @@ def main(argv: list[str] | None = None) -> int:
         for topic in pub["topics"]:
             if topic not in ids:
                 ids[topic] = len(ids)
-                sock.sendall(frame(0x02, varint(ids[topic]) + bytes([TYPES[types[topic]][0]])
-                                   + string(topic)))
+                sock.sendall(
+                    frame(
+                        0x02, varint(ids[topic]) + bytes([TYPES[types[topic]][0]]) + string(topic)
+                    )
+                )
     pubs = [(Fraction(pub["periodS"]), pub["topics"]) for pub in model.get("publishers", [])]
     sent = dict.fromkeys(ids, 0)
     start = time.monotonic()
@@ -111,9 +118,12 @@ def main(argv: list[str] | None = None) -> int:
             time.sleep(delay)
         now = time.time_ns()
         records = b""
-        values = [wave(rng, ids[topic], time.monotonic() - start)
-                  if args.signal == "wave" and types[topic].startswith("float")
-                  else value_for(rng, types[topic]) for topic in pubs[i][1]]
+        values = [
+            wave(rng, ids[topic], time.monotonic() - start)
+            if args.signal == "wave" and types[topic].startswith("float")
+            else value_for(rng, types[topic])
+            for topic in pubs[i][1]
+        ]
         for topic, value in zip(pubs[i][1], values, strict=True):
             code, fmt = TYPES[types[topic]]
             records += varint(ids[topic]) + struct.pack("<q", now) + struct.pack(fmt, value)

@@ -30,8 +30,14 @@ from subbroker_harness import (
 RADIO = [str(Path(sys.executable)), "-m", "modd.radio.cli"]
 
 
-def start_pubbroker_dgram(tmp: Path, model_path: Path, link: dict[str, Any], ingress_port: int,
-                          tag: str = "pb", archive: str = "archive") -> Proc:
+def start_pubbroker_dgram(
+    tmp: Path,
+    model_path: Path,
+    link: dict[str, Any],
+    ingress_port: int,
+    tag: str = "pb",
+    archive: str = "archive",
+) -> Proc:
     """A PubBroker whose link is ``link`` (transport, port or device, ...)."""
     model = load_model(model_path)
     cfg = {
@@ -50,9 +56,17 @@ def start_pubbroker_dgram(tmp: Path, model_path: Path, link: dict[str, Any], ing
     return proc
 
 
-def subbroker_dgram_config(tmp: Path, model_path: Path, endpoint: str, zenoh_port: int,
-                           transport: str, device: str = "", tag: str = "sb",
-                           pb_status_s: int = 60, ping_period_s: float = 0.0) -> Path:
+def subbroker_dgram_config(
+    tmp: Path,
+    model_path: Path,
+    endpoint: str,
+    zenoh_port: int,
+    transport: str,
+    device: str = "",
+    tag: str = "sb",
+    pb_status_s: int = 60,
+    ping_period_s: float = 0.0,
+) -> Path:
     """``pb_status_s``: the PubBroker's STATUS period asked in CONFIG;
     ``ping_period_s``: the SubBroker's periodic PINGs (0: none)."""
     dev = f"device = {json.dumps(device)}" if device else ""
@@ -79,8 +93,21 @@ status_period_s = 0.5
 def start_radio_udp(tmp: Path, target: int, spec: str, tag: str = "radio") -> tuple[Proc, int]:
     """modd-radio as a UDP relay to 127.0.0.1:target; (process, its port)."""
     port = free_port("udp")
-    proc = Proc(tag, [*RADIO, "--udp", f"127.0.0.1:{port}", "--to", f"127.0.0.1:{target}",
-                      "--radio", spec, "--report", "1"], tmp / f"{tag}.log")
+    proc = Proc(
+        tag,
+        [
+            *RADIO,
+            "--udp",
+            f"127.0.0.1:{port}",
+            "--to",
+            f"127.0.0.1:{target}",
+            "--radio",
+            spec,
+            "--report",
+            "1",
+        ],
+        tmp / f"{tag}.log",
+    )
     time.sleep(0.3)
     return proc, port
 
@@ -150,8 +177,14 @@ class Injector:
                     self.replayed_down += 1
 
 
-def through_profile(tmp: Path, model_path: Path, ptys: tuple[int, str, int, str], profile: Any,
-                    load_s: float, signal: str = "uniform") -> tuple[Any, Any]:
+def through_profile(
+    tmp: Path,
+    model_path: Path,
+    ptys: tuple[int, str, int, str],
+    profile: Any,
+    load_s: float,
+    signal: str = "uniform",
+) -> tuple[Any, Any]:
     """The model's processes over serial through a radio profile: the relay in
     this process (``modd.radio.relay``, whose AirtimeChannel the caller may have
     replaced to record) between the pseudo-terminals ``ptys`` (base fd, path,
@@ -165,14 +198,19 @@ def through_profile(tmp: Path, model_path: Path, ptys: tuple[int, str, int, str]
     out: list[tuple[Any, Any]] = []
     thread = threading.Thread(
         target=lambda: out.append(
-            relay.run_serial(RadioSpec(), base, drone, stopping.is_set, profile=profile)),
-        daemon=True)
+            relay.run_serial(RadioSpec(), base, drone, stopping.is_set, profile=profile)
+        ),
+        daemon=True,
+    )
     thread.start()
     zport, ingress = free_port(), free_port()
     pb = start_pubbroker_dgram(
-        tmp, model_path, {"transport": "serial", "device": drone_path, "port": 1}, ingress)
-    sb = start_subbroker(tmp, subbroker_dgram_config(tmp, model_path, "127.0.0.1:1", zport,
-                                                     "serial", device=base_path))
+        tmp, model_path, {"transport": "serial", "device": drone_path, "port": 1}, ingress
+    )
+    sb = start_subbroker(
+        tmp,
+        subbroker_dgram_config(tmp, model_path, "127.0.0.1:1", zport, "serial", device=base_path),
+    )
     try:
         with processes(pb, sb):
             assert sb.wait_log("running", 60), sb.log()[-3000:]

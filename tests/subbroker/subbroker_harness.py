@@ -53,13 +53,17 @@ def signed(request_body: dict[str, Any]) -> dict[str, Any]:
     return sign_request(shared_credentials().deploy_key(), request_body)
 
 
-
-
 class Proc:
     """A child process with its log file; stopped by PID."""
 
-    def __init__(self, name: str, cmd: list[str], log: Path, env: dict[str, str] | None = None,
-                 dumps_stacks: bool = False):
+    def __init__(
+        self,
+        name: str,
+        cmd: list[str],
+        log: Path,
+        env: dict[str, str] | None = None,
+        dumps_stacks: bool = False,
+    ):
         self.name, self.cmd, self.log_path = name, cmd, log
         # SIGUSR1 prints the threads' stacks into the log (modd-subbroker only)
         self.dumps_stacks = dumps_stacks
@@ -136,8 +140,9 @@ def model_copy(tmp: Path, scenario: str, tcp_ports: dict[str, int] | None = None
     return path
 
 
-def start_pubbroker(tmp: Path, model_path: Path, link_port: int, ingress_port: int,
-                    tag: str = "pb", **extra: Any) -> Proc:
+def start_pubbroker(
+    tmp: Path, model_path: Path, link_port: int, ingress_port: int, tag: str = "pb", **extra: Any
+) -> Proc:
     model = load_model(model_path)
     cfg = {
         "name": model["drone"]["name"],
@@ -155,9 +160,16 @@ def start_pubbroker(tmp: Path, model_path: Path, link_port: int, ingress_port: i
     return proc
 
 
-def subbroker_config(tmp: Path, model_path: Path, link_port: int, zenoh_port: int,
-                     tcp: bool = False, tag: str = "sb", state_dir: Path | None = None,
-                     **link: Any) -> Path:
+def subbroker_config(
+    tmp: Path,
+    model_path: Path,
+    link_port: int,
+    zenoh_port: int,
+    tcp: bool = False,
+    tag: str = "sb",
+    state_dir: Path | None = None,
+    **link: Any,
+) -> Path:
     link_lines = "\n".join(f"{k} = {json.dumps(v)}" for k, v in link.items())
     state = f"state_dir = {json.dumps(str(state_dir))}" if state_dir else ""
     path = tmp / f"{tag}.toml"
@@ -179,17 +191,36 @@ status_period_s = 0.5
 
 
 def start_subbroker(tmp: Path, config: Path, tag: str = "sb") -> Proc:
-    return Proc(tag, [*SUBBROKER, "--config", str(config)], tmp / f"{tag}.log",
-                dumps_stacks=True)
+    return Proc(tag, [*SUBBROKER, "--config", str(config)], tmp / f"{tag}.log", dumps_stacks=True)
 
 
-def start_load(tmp: Path, model_path: Path, ingress_port: int, seconds: float,
-               tag: str = "load", seed: int = 1, record: Path | None = None,
-               signal: str = "uniform") -> Proc:
+def start_load(
+    tmp: Path,
+    model_path: Path,
+    ingress_port: int,
+    seconds: float,
+    tag: str = "load",
+    seed: int = 1,
+    record: Path | None = None,
+    signal: str = "uniform",
+) -> Proc:
     extra = (["--record", str(record)] if record else []) + ["--signal", signal]
-    return Proc(tag, [*LOADGEN, "--model", str(model_path), "--ingress",
-                      f"127.0.0.1:{ingress_port}", "--seconds", str(seconds),
-                      "--seed", str(seed), *extra], tmp / f"{tag}.log")
+    return Proc(
+        tag,
+        [
+            *LOADGEN,
+            "--model",
+            str(model_path),
+            "--ingress",
+            f"127.0.0.1:{ingress_port}",
+            "--seconds",
+            str(seconds),
+            "--seed",
+            str(seed),
+            *extra,
+        ],
+        tmp / f"{tag}.log",
+    )
 
 
 def load_counts(proc: Proc) -> dict[str, int]:
@@ -208,8 +239,9 @@ def f32(x: float) -> float:
 Archive = dict[str, list[tuple[int, Any]]]
 
 
-def read_archive(directory: Path, model_path: Path | None = None,
-                 published: bool = False) -> Archive:
+def read_archive(
+    directory: Path, model_path: Path | None = None, published: bool = False
+) -> Archive:
     """Every sample of every MCAP file, per topic: (log_time ns, value), in
     time order. Read with the official reader's stream API, which stops at a
     truncated tail (a PubBroker killed with -9) instead of failing. With the
@@ -218,8 +250,9 @@ def read_archive(directory: Path, model_path: Path | None = None,
     of the PubBroker's log times."""
     f32_topics = set()
     if model_path is not None:
-        f32_topics = {t.name for t in topics(load_model(model_path)).values()
-                      if t.type == "float32"}
+        f32_topics = {
+            t.name for t in topics(load_model(model_path)).values() if t.type == "float32"
+        }
     from mcap.records import Channel, Message
     from mcap.stream_reader import StreamReader
 
@@ -272,8 +305,7 @@ def close_enough(aggregation: str, got: Any, want: Any) -> bool:
     return bool(got == want)
 
 
-def check_against_archive(values: dict[str, list[Any]],
-                          archive: Archive) -> int:
+def check_against_archive(values: dict[str, list[Any]], archive: Archive) -> int:
     """Every delivered window equals the archive's; returns how many were checked."""
     checked = 0
     for name, vals in values.items():
@@ -292,7 +324,6 @@ def assert_contiguous(vals: list[Any], period_ns: int) -> None:
     assert ends == sorted(ends)
     gaps = [b - a for a, b in zip(ends, ends[1:], strict=False) if b - a != period_ns]
     assert not gaps, f"missing windows: gaps {gaps[:5]} (period {period_ns})"
-
 
 
 # -- a proxy that can drop the traffic -------------------------------------------------

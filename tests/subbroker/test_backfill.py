@@ -55,11 +55,24 @@ def listen(zenoh_client: Any, port: int) -> Collector:
 
 
 def run_cli(zport: int, *args: str, timeout_s: float = 60) -> tuple[int, str, str]:
-    env = {**os.environ,
-           "MODD_ZENOH_CREDENTIALS": str(shared_credentials().cred_file("backend"))}
-    p = subprocess.run([str(PYTHON), "-m", "modd_model.cli", "backfill", "--drone", "usv",
-                        "--connect", f"tcp/127.0.0.1:{zport}", *args],
-                       capture_output=True, text=True, timeout=timeout_s, env=env)
+    env = {**os.environ, "MODD_ZENOH_CREDENTIALS": str(shared_credentials().cred_file("backend"))}
+    p = subprocess.run(
+        [
+            str(PYTHON),
+            "-m",
+            "modd_model.cli",
+            "backfill",
+            "--drone",
+            "usv",
+            "--connect",
+            f"tcp/127.0.0.1:{zport}",
+            *args,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=timeout_s,
+        env=env,
+    )
     return p.returncode, p.stdout, p.stderr
 
 
@@ -73,8 +86,9 @@ def ask(session: Any, request: dict[str, Any]) -> dict[str, Any]:
 
 def wait_live(got: Collector, name: str, after_ns: int, timeout_s: float = 60) -> None:
     deadline = time.monotonic() + timeout_s
-    while not any(v.end_ns > after_ns and v.value is not None
-                  for v in got.snapshot().get(name, [])):
+    while not any(
+        v.end_ns > after_ns and v.value is not None for v in got.snapshot().get(name, [])
+    ):
         assert time.monotonic() < deadline, f"no live value for {name}"
         time.sleep(0.1)
 
@@ -96,8 +110,9 @@ def test_outage_filled_once_with_the_archive_values(tmp_path: Path, zenoh_client
     model = model_copy(tmp_path, "scenario1.modd")
     pb = start_pubbroker(tmp_path, model, link, ingress)
     proxy = Blackhole(link)
-    sb = start_subbroker(tmp_path, subbroker_config(tmp_path, model, proxy.port, zport,
-                                                    state_dir=tmp_path / "state"))
+    sb = start_subbroker(
+        tmp_path, subbroker_config(tmp_path, model, proxy.port, zport, state_dir=tmp_path / "state")
+    )
     load = None
     figures: dict[str, dict[str, Any]] = {}
     asked: dict[str, int] = {}
@@ -142,11 +157,11 @@ def test_outage_filled_once_with_the_archive_values(tmp_path: Path, zenoh_client
     with record.open("rb") as f:
         recorded = [json.loads(m.data) for _, _, m in make_reader(f).iter_messages()]
     assert sum(1 for r in recorded if r.get("backfilled")) == sum(
-        f["windows"] for f in figures.values())
+        f["windows"] for f in figures.values()
+    )
 
 
-def test_backfill_survives_a_cut_and_a_pubbroker_restart(tmp_path: Path,
-                                                         zenoh_client: Any) -> None:
+def test_backfill_survives_a_cut_and_a_pubbroker_restart(tmp_path: Path, zenoh_client: Any) -> None:
     link, ingress, zport = free_port(), free_port(), free_port()
     model = model_copy(tmp_path, "scenario1.modd")
     pb = start_pubbroker(tmp_path, model, link, ingress)
@@ -169,8 +184,7 @@ def test_backfill_survives_a_cut_and_a_pubbroker_restart(tmp_path: Path,
         # slow enough to be cut in the middle: the outage's ~150 B of MIN windows in
         # frames of 64 B at most, 3 s apart
         asked = time.time_ns() - 1_000_000_000
-        job = ask(session, {"op": "start", "subscriber": "sub_5", "gaps": True,
-                            "rate_bps": 24})
+        job = ask(session, {"op": "start", "subscriber": "sub_5", "gaps": True, "rate_bps": 24})
         assert job["status"] == "RUNNING", job
         deadline = time.monotonic() + 20
         while ask(session, {"op": "progress", "id": job["id"]})["windows_done"] < 3:
@@ -231,6 +245,7 @@ def test_policy_gaps_fills_by_itself(tmp_path: Path, zenoh_client: Any) -> None:
     values = got.snapshot()
     back = [v for v in values["sub_5"] if v.backfilled]
     assert back and all(v.end_ns > cut_ns - 1_000_000_000 for v in back)
-    check_complete([v for v in values["sub_5"] if v.end_ns > cut_ns - 1_000_000_000],
-                   250_000_000, asked)
+    check_complete(
+        [v for v in values["sub_5"] if v.end_ns > cut_ns - 1_000_000_000], 250_000_000, asked
+    )
     assert not any(v.backfilled for v in values["sub_6"])  # policy off

@@ -48,18 +48,34 @@ PERIOD_NS = 250_000_000  # sub_5: accel_z MIN every 0.25 s
 
 
 def _backfill(zport: int, subscriber: str) -> tuple[int, str, str]:
-    env = {**os.environ,
-           "MODD_ZENOH_CREDENTIALS": str(shared_credentials().cred_file("backend"))}
-    p = subprocess.run([str(PYTHON), "-m", "modd_model.cli", "backfill", "--drone", "usv",
-                        "--connect", f"tcp/127.0.0.1:{zport}", "--subscriber", subscriber,
-                        "--gaps", "--json"],
-                       capture_output=True, text=True, timeout=90, env=env)
+    env = {**os.environ, "MODD_ZENOH_CREDENTIALS": str(shared_credentials().cred_file("backend"))}
+    p = subprocess.run(
+        [
+            str(PYTHON),
+            "-m",
+            "modd_model.cli",
+            "backfill",
+            "--drone",
+            "usv",
+            "--connect",
+            f"tcp/127.0.0.1:{zport}",
+            "--subscriber",
+            subscriber,
+            "--gaps",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=90,
+        env=env,
+    )
     return p.returncode, p.stdout, p.stderr
 
 
 @pytest.mark.parametrize("transport", ["udp"])
-def test_backfill_after_an_outage_ends_done(transport: str, tmp_path: Path,
-                                            zenoh_client: Any) -> None:
+def test_backfill_after_an_outage_ends_done(
+    transport: str, tmp_path: Path, zenoh_client: Any
+) -> None:
     model = model_copy(tmp_path, "scenario1.modd")
     zport, ingress = free_port(), free_port()
     spec = f"rate=600,queue_s=0.3,outage={OUTAGE_AT_S}+{OUTAGE_S},seed=1"
@@ -71,10 +87,10 @@ def test_backfill_after_an_outage_ends_done(transport: str, tmp_path: Path,
         cfg = subbroker_dgram_config(tmp_path, model, f"127.0.0.1:{relay}", zport, "udp")
     else:
         radio, base, drone = start_radio_serial(tmp_path, spec)
-        pb = start_pubbroker_dgram(tmp_path, model, {"transport": "serial", "device": drone,
-                                                     "port": 1}, ingress)
-        cfg = subbroker_dgram_config(tmp_path, model, "127.0.0.1:1", zport, "serial",
-                                     device=base)
+        pb = start_pubbroker_dgram(
+            tmp_path, model, {"transport": "serial", "device": drone, "port": 1}, ingress
+        )
+        cfg = subbroker_dgram_config(tmp_path, model, "127.0.0.1:1", zport, "serial", device=base)
     sb = start_subbroker(tmp_path, cfg)
     load = None
     with processes(radio, pb, sb):
@@ -91,8 +107,10 @@ def test_backfill_after_an_outage_ends_done(transport: str, tmp_path: Path,
             time.sleep(max(0.0, OUTAGE_AT_S + OUTAGE_S + 4 - (time.monotonic() - began)))
             deadline = time.monotonic() + 30  # live values again after the outage
             outage_end_ns = time.time_ns() - 4 * 10**9
-            while not any(v.end_ns > outage_end_ns and not v.backfilled
-                          for v in got.snapshot().get("sub_5", [])):
+            while not any(
+                v.end_ns > outage_end_ns and not v.backfilled
+                for v in got.snapshot().get("sub_5", [])
+            ):
                 assert time.monotonic() < deadline, "no live value after the outage"
                 time.sleep(0.2)
             code, out, err = _backfill(zport, "sub_5")
@@ -104,8 +122,10 @@ def test_backfill_after_an_outage_ends_done(transport: str, tmp_path: Path,
     values = got.snapshot()
     filled = [v for v in values["sub_5"] if v.backfilled]
     assert len(filled) == fig["windows"]
-    assert check_against_archive({"sub_5": values["sub_5"]},
-                                 read_archive(tmp_path / "archive", model)) > 40
+    assert (
+        check_against_archive({"sub_5": values["sub_5"]}, read_archive(tmp_path / "archive", model))
+        > 40
+    )
     ends = sorted(v.end_ns for v in values["sub_5"])
     assert len(ends) == len(set(ends)), "a window delivered twice"
     lo, hi = min(v.end_ns for v in filled), max(v.end_ns for v in filled)

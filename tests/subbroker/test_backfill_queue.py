@@ -57,12 +57,30 @@ def with_budget(path: Path) -> Path:
 
 
 def cli_at_once(zport: int, names: list[str]) -> dict[str, tuple[int, str, str]]:
-    env = {**os.environ,
-           "MODD_ZENOH_CREDENTIALS": str(shared_credentials().cred_file("backend"))}
-    procs = {n: subprocess.Popen(
-        [str(PYTHON), "-m", "modd_model.cli", "backfill", "--drone", "usv", "--connect",
-         f"tcp/127.0.0.1:{zport}", "--subscriber", n, "--gaps", "--json"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env) for n in names}
+    env = {**os.environ, "MODD_ZENOH_CREDENTIALS": str(shared_credentials().cred_file("backend"))}
+    procs = {
+        n: subprocess.Popen(
+            [
+                str(PYTHON),
+                "-m",
+                "modd_model.cli",
+                "backfill",
+                "--drone",
+                "usv",
+                "--connect",
+                f"tcp/127.0.0.1:{zport}",
+                "--subscriber",
+                n,
+                "--gaps",
+                "--json",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        for n in names
+    }
     out = {}
     deadline = time.monotonic() + 120  # all of them (on main: 5 ended, 8 stalled > 5 min)
     for n, p in procs.items():
@@ -142,9 +160,11 @@ def test_thirteen_concurrent_gaps_all_done(tmp_path: Path, zenoh_client: Any) ->
     spare = RATE_BPS - 19 * 8  # the plan's live bytes/s is well under 10 B per stream
     total = sum(f["bytes"] for f in figures.values())
     assert took < total / spare + 13 * 1.0 + 30, (took, total, figures)
-    print(f"13 concurrent backfills: {sum(f['windows'] for f in figures.values())} windows,"
-          f" {total} B in {took:.1f} s with the CLIs' start-up, the longest job"
-          f" {max(f['seconds'] for f in figures.values()):.2f} s in the SubBroker")
+    print(
+        f"13 concurrent backfills: {sum(f['windows'] for f in figures.values())} windows,"
+        f" {total} B in {took:.1f} s with the CLIs' start-up, the longest job"
+        f" {max(f['seconds'] for f in figures.values()):.2f} s in the SubBroker"
+    )
 
 
 def gaps_cli(zport: int, sb: Proc) -> dict[str, Any]:
@@ -164,8 +184,7 @@ def redeployed(model: Path) -> dict[str, Any]:
     return signed({"text": json.dumps(doc), "format": "json"})
 
 
-def test_gaps_fill_the_earlier_configs_after_restarts(tmp_path: Path,
-                                                       zenoh_client: Any) -> None:
+def test_gaps_fill_the_earlier_configs_after_restarts(tmp_path: Path, zenoh_client: Any) -> None:
     """Config 1 → SubBroker outage → config 2 → PubBroker restart → config 3 → link
     outage → redeploy → config 4: each `--gaps` fills the windows of the earlier one."""
     link, ingress, zport = free_port(), free_port(), free_port()
@@ -199,8 +218,7 @@ def test_gaps_fill_the_earlier_configs_after_restarts(tmp_path: Path,
         fig = gaps_cli(zport, sb)
         assert fig["windows"] >= (CUT_S - 1.5) * 4, fig
         both = [(first, stopped_ns), (second, 1 << 63)]
-        check_epochs([v for v in merged(both)["sub_5"] if v.end_ns > first_ns],
-                     250_000_000, asked)
+        check_epochs([v for v in merged(both)["sub_5"] if v.end_ns > first_ns], 250_000_000, asked)
         # 2. a PubBroker restart: the SubBroker stays, the drone runs a new config
         pb.stop()
         time.sleep(1)
@@ -234,7 +252,9 @@ def test_gaps_fill_the_earlier_configs_after_restarts(tmp_path: Path,
     assert len(back) == fig["windows"] + fig2["windows"] + fig3["windows"]
     assert {v.config_id for v in back} == {1, 2, 3}  # the earlier configs' windows
     assert check_against_archive({"sub_5": back}, read_archive(tmp_path / "archive", model))
-    print(f"after a {CUT_S:.0f} s SubBroker outage: {fig['windows']} windows filled in"
-          f" {fig['seconds']:.1f} s; after a PubBroker restart: {fig2['windows']} in"
-          f" {fig2['seconds']:.1f} s; after a link outage and a redeploy: {fig3['windows']} in"
-          f" {fig3['seconds']:.1f} s")
+    print(
+        f"after a {CUT_S:.0f} s SubBroker outage: {fig['windows']} windows filled in"
+        f" {fig['seconds']:.1f} s; after a PubBroker restart: {fig2['windows']} in"
+        f" {fig2['seconds']:.1f} s; after a link outage and a redeploy: {fig3['windows']} in"
+        f" {fig3['seconds']:.1f} s"
+    )

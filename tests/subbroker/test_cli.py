@@ -17,8 +17,9 @@ CLI = [sys.executable, "-m", "modd.subbroker.cli"]
 
 
 def run(args: list[str], env: dict[str, str]) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=30,
-                          env={**os.environ, **env})
+    return subprocess.run(
+        [*CLI, *args], capture_output=True, text=True, timeout=30, env={**os.environ, **env}
+    )
 
 
 def test_bad_config_and_missing_key_exit_2(tmp_path: Path) -> None:
@@ -27,8 +28,13 @@ def test_bad_config_and_missing_key_exit_2(tmp_path: Path) -> None:
     r = run(["--config", str(bad)], {})
     assert r.returncode == 2 and "nowhere.modd" in r.stderr
     env = {k: v for k, v in os.environ.items() if k != "MODD_LINK_KEY"}
-    r = subprocess.run([*CLI, "--model", str(SCENARIOS / "scenario1.modd")], capture_output=True,
-                       text=True, timeout=30, env=env)
+    r = subprocess.run(
+        [*CLI, "--model", str(SCENARIOS / "scenario1.modd")],
+        capture_output=True,
+        text=True,
+        timeout=30,
+        env=env,
+    )
     assert r.returncode == 2 and "MODD_LINK_KEY" in r.stderr
     r = run(["--model", str(SCENARIOS / "scenario1.modd"), "--link", "nope"], {})
     assert r.returncode == 2 and "--link" in r.stderr
@@ -37,9 +43,19 @@ def test_bad_config_and_missing_key_exit_2(tmp_path: Path) -> None:
 def test_model_mode_runs_and_stops_on_sigterm(tmp_path: Path) -> None:
     zport = free_port()
     p = subprocess.Popen(
-        [*CLI, "--model", str(SCENARIOS / "scenario1.modd"), "--link", f"127.0.0.1:{free_port()}",
-         "--zenoh-listen", f"tcp/127.0.0.1:{zport}", "--no-tcp-delivery"],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        [
+            *CLI,
+            "--model",
+            str(SCENARIOS / "scenario1.modd"),
+            "--link",
+            f"127.0.0.1:{free_port()}",
+            "--zenoh-listen",
+            f"tcp/127.0.0.1:{zport}",
+            "--no-tcp-delivery",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
         env={**os.environ, "MODD_LINK_KEY": "a-test-link-key-of-16+"},
     )
     try:
@@ -62,11 +78,17 @@ def test_client_mode_listens_nowhere_unless_told() -> None:
     from modd.subbroker.cli import _parser, build_config
 
     model = str(SCENARIOS / "scenario1.modd")
-    client = build_config(_parser().parse_args(
-        ["--model", model, "--zenoh-mode", "client", "--zenoh-connect", "tcp/127.0.0.1:7999"]))
+    client = build_config(
+        _parser().parse_args(
+            ["--model", model, "--zenoh-mode", "client", "--zenoh-connect", "tcp/127.0.0.1:7999"]
+        )
+    )
     assert client.zenoh.listen == () and client.zenoh.connect == ("tcp/127.0.0.1:7999",)
-    told = build_config(_parser().parse_args(
-        ["--model", model, "--zenoh-mode", "client", "--zenoh-listen", "tcp/127.0.0.1:7998"]))
+    told = build_config(
+        _parser().parse_args(
+            ["--model", model, "--zenoh-mode", "client", "--zenoh-listen", "tcp/127.0.0.1:7998"]
+        )
+    )
     assert told.zenoh.listen == ("tcp/127.0.0.1:7998",)
     peer = build_config(_parser().parse_args(["--model", model]))
     assert peer.zenoh.listen == ("tcp/127.0.0.1:7447",)  # the embedded default

@@ -23,17 +23,21 @@ from modd.subbroker.delivery_auth import GREETING, LABEL, DeliveryKeyError, load
 
 def _config(tmp: Path, scenarios_dir: Path, delivery: str) -> Path:
     path = tmp / "sb.toml"
-    path.write_text(f'model = "{scenarios_dir / "scenario1.modd"}"\n'
-                    f'[zenoh]\nlisten = ["tcp/127.0.0.1:{free_port()}"]\n'
-                    f'credentials_dir = "cred"\n[delivery]\n{delivery}\n')
+    path.write_text(
+        f'model = "{scenarios_dir / "scenario1.modd"}"\n'
+        f'[zenoh]\nlisten = ["tcp/127.0.0.1:{free_port()}"]\n'
+        f'credentials_dir = "cred"\n[delivery]\n{delivery}\n'
+    )
     return path
 
 
 def test_key_setting_read_relative_to_the_config(tmp_path: Path, scenarios_dir: Path) -> None:
     config = load_config(_config(tmp_path, scenarios_dir, 'key = "file:keys/delivery.key"'))
     assert config.delivery.key == f"file:{tmp_path / 'keys' / 'delivery.key'}"
-    assert load_config(_config(tmp_path, scenarios_dir, 'key = "env:MY_KEY"')).delivery.key \
+    assert (
+        load_config(_config(tmp_path, scenarios_dir, 'key = "env:MY_KEY"')).delivery.key
         == "env:MY_KEY"
+    )
     for bad in ('key = "plain-secret"', 'key = "file:"', "key = 3"):
         with pytest.raises(ConfigError, match="delivery"):
             load_config(_config(tmp_path, scenarios_dir, bad))
@@ -65,11 +69,17 @@ def test_configured_key_proves_itself(tmp_path: Path, monkeypatch: pytest.Monkey
 
 
 def test_unreadable_configured_key_stops_the_subbroker_at_start(
-        tmp_path: Path, scenarios_dir: Path) -> None:
+    tmp_path: Path, scenarios_dir: Path
+) -> None:
     config = _config(tmp_path, scenarios_dir, 'key = "file:missing.key"\ntcp = true')
-    proc = subprocess.run([sys.executable, "-m", "modd.subbroker.cli", "--config", str(config)],
-                          capture_output=True, text=True, timeout=60, check=False,
-                          env={**os.environ, "MODD_LINK_KEY": "link-key-for-tests"})
+    proc = subprocess.run(
+        [sys.executable, "-m", "modd.subbroker.cli", "--config", str(config)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+        env={**os.environ, "MODD_LINK_KEY": "link-key-for-tests"},
+    )
     assert proc.returncode == 2, proc.stderr
     assert "missing.key" in proc.stderr
 

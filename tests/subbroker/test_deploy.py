@@ -44,22 +44,29 @@ def test_deploy_switches_the_running_plan(tmp_path: Path, zenoh_client: Any) -> 
         got = Collector()
         session.declare_subscriber("modd/usv/**", got.on_sample)
         assert sb.wait_log("config 1 running", 10), sb.log()
-        dyn = request(session, "modd/usv/subscribe", {
-            "topic": "usv.accelerometer.accel_x", "period_s": "4.0", "aggregation": "AVERAGE"})
+        dyn = request(
+            session,
+            "modd/usv/subscribe",
+            {"topic": "usv.accelerometer.accel_x", "period_s": "4.0", "aggregation": "AVERAGE"},
+        )
         assert dyn["status"] == "ACCEPTED"
 
-        bad = request(session, "modd/usv/deploy",
-                      signed({"text": "Drone usv {", "filename": "x.modd"}))
+        bad = request(
+            session, "modd/usv/deploy", signed({"text": "Drone usv {", "filename": "x.modd"})
+        )
         assert bad["status"] == "INVALID" and bad["diagnostics"]
         assert "x.modd" in str(bad["diagnostics"][0])
-        other = request(session, "modd/usv/deploy",
-                        signed({"text": (SCENARIOS / "scenario1.modd").read_text()
-                                .replace("usv", "uav")}))
+        other = request(
+            session,
+            "modd/usv/deploy",
+            signed({"text": (SCENARIOS / "scenario1.modd").read_text().replace("usv", "uav")}),
+        )
         assert other["status"] == "REJECTED" and "'uav'" in other["reason"]
 
         t0 = time.monotonic()
-        reply = request(session, "modd/usv/deploy",
-                        signed({"text": s2.read_text(), "format": "json"}))
+        reply = request(
+            session, "modd/usv/deploy", signed({"text": s2.read_text(), "format": "json"})
+        )
         assert reply["status"] == "ACKED", reply
         assert reply["config_id"] == 2 and reply["streams_sent"] == 19
         assert reply["messages_per_hyperperiod"] == 1 and reply["epoch_ns"] > 0
@@ -90,8 +97,11 @@ def test_deploy_switches_the_running_plan(tmp_path: Path, zenoh_client: Any) -> 
         pb.stop()
         time.sleep(0.3)
         t0 = time.monotonic()
-        down = request(session, "modd/usv/deploy", signed({
-            "text": s2.read_text(), "format": "json", "timeout_s": 1.0}))
+        down = request(
+            session,
+            "modd/usv/deploy",
+            signed({"text": s2.read_text(), "format": "json", "timeout_s": 1.0}),
+        )
         assert down["status"] in ("LINK_DOWN", "TIMEOUT"), down
         assert time.monotonic() - t0 < 3
     finally:

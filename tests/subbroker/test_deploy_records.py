@@ -45,8 +45,16 @@ pytestmark = pytest.mark.usefixtures("needs_pubbroker")
 
 
 def _deploy(session: Any, model: Path, revision: int, **more: Any) -> dict[str, Any]:
-    body = signed({"text": model.read_text(), "format": "json", "project_id": 7,
-                   "revision": revision, "deployed_by": "operator", **more})
+    body = signed(
+        {
+            "text": model.read_text(),
+            "format": "json",
+            "project_id": 7,
+            "revision": revision,
+            "deployed_by": "operator",
+            **more,
+        }
+    )
     reply: dict[str, Any] = request(session, "modd/usv/deploy", body, timeout_s=15)
     return reply
 
@@ -62,7 +70,8 @@ def _status_where(got: Collector, pred: Any, timeout_s: float = 5.0) -> dict[str
 
 
 def test_the_status_names_what_runs_and_a_restart_resumes_it_loudly(
-        tmp_path: Path, zenoh_client: Any) -> None:
+    tmp_path: Path, zenoh_client: Any
+) -> None:
     link, ingress, zport = free_port(), free_port(), free_port()
     s1 = model_copy(tmp_path, "scenario1.modd")
     s2 = model_copy(tmp_path, "scenario2.modd")
@@ -101,8 +110,15 @@ def test_the_status_names_what_runs_and_a_restart_resumes_it_loudly(
 
         # the same signed request again: a replay, refused, but told it is what runs
         accepted = pb.log().count("accepted")
-        again = signed({"text": s2.read_text(), "format": "json", "project_id": 7,
-                        "revision": 4, "deployed_by": "operator"})
+        again = signed(
+            {
+                "text": s2.read_text(),
+                "format": "json",
+                "project_id": 7,
+                "revision": 4,
+                "deployed_by": "operator",
+            }
+        )
         assert request(session, "modd/usv/deploy", again, timeout_s=15)["status"] == "ACKED"
         dup = request(session, "modd/usv/deploy", again, timeout_s=15)
         assert dup["status"] == "UNAUTHORISED" and dup.get("already_running") is True, dup
@@ -111,9 +127,17 @@ def test_the_status_names_what_runs_and_a_restart_resumes_it_loudly(
         assert pb.log().count("accepted") == accepted + 1
 
         # a dynamic subscription of one owner, kept across the restart
-        dyn = request(session, "modd/usv/subscribe", {
-            "topic": "usv.ins.accel_x", "period_s": "2.0", "aggregation": "MIN",
-            "owner": "alice", "subscriber": "dyn_alice"})
+        dyn = request(
+            session,
+            "modd/usv/subscribe",
+            {
+                "topic": "usv.ins.accel_x",
+                "period_s": "2.0",
+                "aggregation": "MIN",
+                "owner": "alice",
+                "subscriber": "dyn_alice",
+            },
+        )
         assert dyn["status"] == "ACCEPTED", dyn
         kept = json.loads((tmp_path / "state" / "dynamic.json").read_text())
         assert kept["subscriptions"][0]["owner"] == "alice"
@@ -126,8 +150,9 @@ def test_the_status_names_what_runs_and_a_restart_resumes_it_loudly(
         assert "RESUMING the deployment kept in" in head and "revision 4 of project 7" in head
         assert "by operator" in head and "DIFFERS from the configured model" in head
         time.sleep(1.2)  # the client session reconnects by itself
-        resumed = _status_where(got, lambda s: (s.get("deployment") or {}).get("source")
-                                == "kept", 10)
+        resumed = _status_where(
+            got, lambda s: (s.get("deployment") or {}).get("source") == "kept", 10
+        )
         assert resumed["deployment"]["revision"] == 4
         assert resumed["deployment"]["differs_from_configured"] is True
         assert resumed["deployment"]["resumed_at_ns"] > meta["deployed_at_ns"]
@@ -139,14 +164,18 @@ def test_the_status_names_what_runs_and_a_restart_resumes_it_loudly(
 
         # told not to resume: the configured model runs, and the status says so
         sb2.stop()
-        sb3 = Proc("sb3", [*SUBBROKER, "--config", str(cfg), "--no-resume"],
-                   tmp_path / "sb3.log")
+        sb3 = Proc("sb3", [*SUBBROKER, "--config", str(cfg), "--no-resume"], tmp_path / "sb3.log")
         procs.append(sb3)
         assert sb3.wait_log("running", 15), sb3.log()
         assert "NOT resuming the deployment kept in" in sb3.log()
         time.sleep(1.2)
-        fresh = _status_where(got, lambda s: (s.get("deployment") or {}).get("source")
-                              == "configured" and s.get("dynamic") == [], 10)
+        fresh = _status_where(
+            got,
+            lambda s: (
+                (s.get("deployment") or {}).get("source") == "configured" and s.get("dynamic") == []
+            ),
+            10,
+        )
         assert fresh["deployment"]["revision"] is None
     finally:
         with processes(*procs):
@@ -158,10 +187,14 @@ def _slow_model(tmp: Path, base: Path, extra: int) -> Path:
     65 of them the slot bound refuses the model with a located error."""
     model = json.loads(base.read_text())
     for i in range(extra):
-        model["subscribers"].append({
-            "name": f"big_{i}", "topic": "usv.accelerometer.accel_y",
-            "periodS": str(round(0.04 * (i + 2), 2)),
-            "aggregation": ("MIN", "MAX", "AVERAGE")[i % 3]})
+        model["subscribers"].append(
+            {
+                "name": f"big_{i}",
+                "topic": "usv.accelerometer.accel_y",
+                "periodS": str(round(0.04 * (i + 2), 2)),
+                "aggregation": ("MIN", "MAX", "AVERAGE")[i % 3],
+            }
+        )
     path = tmp / "slow.json"
     path.write_text(json.dumps(model))
     return path
@@ -175,22 +208,28 @@ def _large_model(tmp: Path, base: Path, extra: int) -> Path:
     model = json.loads(base.read_text())
     names = list(topics(model))
     for i in range(extra):
-        model["subscribers"].append({
-            "name": f"many_{i}", "topic": names[i % len(names)],
-            "periodS": ("0.5", "1.0", "2.0", "5.0")[(i // len(names)) % 4],
-            "aggregation": ("MIN", "MAX", "AVERAGE")[i % 3]})
+        model["subscribers"].append(
+            {
+                "name": f"many_{i}",
+                "topic": names[i % len(names)],
+                "periodS": ("0.5", "1.0", "2.0", "5.0")[(i // len(names)) % 4],
+                "aggregation": ("MIN", "MAX", "AVERAGE")[i % 3],
+            }
+        )
     path = tmp / "large.json"
     path.write_text(json.dumps(model))
     return path
 
 
 def test_a_deploy_over_the_planning_budget_is_refused_and_the_config_keeps_running(
-        tmp_path: Path, zenoh_client: Any) -> None:
+    tmp_path: Path, zenoh_client: Any
+) -> None:
     link, ingress, zport = free_port(), free_port(), free_port()
     s1 = model_copy(tmp_path, "scenario1.modd")
     pb = start_pubbroker(tmp_path, s1, link, ingress)
-    cfg = subbroker_config(tmp_path, s1, link, zport, state_dir=tmp_path / "state",
-                           plan_budget_s=0.05)
+    cfg = subbroker_config(
+        tmp_path, s1, link, zport, state_dir=tmp_path / "state", plan_budget_s=0.05
+    )
     sb = start_subbroker(tmp_path, cfg)
     try:
         wait_port(zport)
@@ -208,8 +247,10 @@ def test_a_deploy_over_the_planning_budget_is_refused_and_the_config_keeps_runni
         # a model that cannot be planned at all: the planner's located error
         bad = _deploy(session, _slow_model(tmp_path, s1, 80), 3)
         assert bad["status"] == "REJECTED", bad
-        assert any(d["pointer"].startswith("/subscribers/") for d in bad["diagnostics"]) \
-            or "still being planned" in bad["reason"], bad
+        assert (
+            any(d["pointer"].startswith("/subscribers/") for d in bad["diagnostics"])
+            or "still being planned" in bad["reason"]
+        ), bad
         time.sleep(1.0)
         status = got.status[-1]
         assert status["config_id"] == 1 and status["link"] == "up"

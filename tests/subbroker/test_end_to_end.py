@@ -90,16 +90,18 @@ def test_scenario1_delivery_matches_archive(tmp_path: Path, zenoh_client: Any) -
         assert dyn["derived_from"] == "usv.accelerometer.accel_z/MAX/0.25" and dyn["factor"] == 4
         no = request(session, "modd/usv/subscribe", {**ask, "aggregation": "FIRST"})
         assert no["status"] == "NOT_AVAILABLE" and "FIRST" in no["reason"]
-        avg = subscribe_dynamic("usv", "usv.accelerometer.accel_y", "0.5", "AVERAGE",
-                                session=session)
+        avg = subscribe_dynamic(
+            "usv", "usv.accelerometer.accel_y", "0.5", "AVERAGE", session=session
+        )
         sub4 = modd.subscribe("usv", "sub_4", session=session)
         load.p.wait(RUN_S + 10)
         time.sleep(0.6)
         avg_vals, sub4_vals = avg.collect(duration_s=0.1), sub4.collect(duration_s=0.1)
         avg.close()  # cancels it at the SubBroker
         sub4.close()
-        cancel = request(session, "modd/usv/subscribe",
-                         {"action": "cancel", "subscriber": dyn["subscriber"]})
+        cancel = request(
+            session, "modd/usv/subscribe", {"action": "cancel", "subscriber": dyn["subscriber"]}
+        )
         assert cancel["status"] == "CANCELLED"
         time.sleep(1.2)
         status = got.status[-1]
@@ -116,7 +118,7 @@ def test_scenario1_delivery_matches_archive(tmp_path: Path, zenoh_client: Any) -
     assert set(values) == {f"sub_{i}" for i in range(1, 8)} | {dyn["subscriber"], avg_name}
     assert status["dynamic"] == []  # both cancelled
     assert len(avg_vals) >= 2 * RUN_S - 4 and avg_vals == values[avg_name][: len(avg_vals)]
-    assert sub4_vals == values["sub_4"][-len(sub4_vals):] and len(sub4_vals) >= 4 * RUN_S - 8
+    assert sub4_vals == values["sub_4"][-len(sub4_vals) :] and len(sub4_vals) >= 4 * RUN_S - 8
     n = check_against_archive(values, archive)
     for name, vals in values.items():
         period = int(float(vals[0].period_s) * 1e9)
@@ -131,7 +133,8 @@ def test_scenario1_delivery_matches_archive(tmp_path: Path, zenoh_client: Any) -
     # the TCP subscriber got the same values as zenoh's sub_5
     tcp_vals = [DeliveredValue.from_dict(x) for x in tcp.lines]
     assert [(v.end_ns, v.value) for v in tcp_vals] == [
-        (v.end_ns, v.value) for v in values["sub_5"]][: len(tcp_vals)]
+        (v.end_ns, v.value) for v in values["sub_5"]
+    ][: len(tcp_vals)]
     assert len(tcp_vals) >= len(values["sub_5"]) - 2
     assert status["link"] == "up" and status["config_id"] == 1
     assert 0 < status["predicted_link_bytes_per_s"]["drone_to_base"] <= 300

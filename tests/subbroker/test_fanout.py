@@ -16,8 +16,12 @@ from modd_plan.windows import window_of
 Q = Fraction(1, 4)
 
 
-def _drive(fan: FanOut, sent: list[StreamKey], samples_per_quarter: list[list[float]],
-           start_quarter: int = 1) -> list[Output]:
+def _drive(
+    fan: FanOut,
+    sent: list[StreamKey],
+    samples_per_quarter: list[list[float]],
+    start_quarter: int = 1,
+) -> list[Output]:
     """Feed quarter-second windows of every sent stream (all of period 0.25 s)."""
     outs = []
     for q, samples in enumerate(samples_per_quarter, start=start_quarter):
@@ -26,9 +30,19 @@ def _drive(fan: FanOut, sent: list[StreamKey], samples_per_quarter: list[list[fl
     return outs
 
 
-@pytest.mark.parametrize("agg,source", [("MIN", "MIN"), ("MAX", "MAX"), ("AVERAGE", "AVERAGE"),
-                                        ("FIRST", "FIRST"), ("LAST", "LAST"), ("COUNT", "AVERAGE"),
-                                        ("SUM", "ALL"), ("MAX", "ALL")])
+@pytest.mark.parametrize(
+    "agg,source",
+    [
+        ("MIN", "MIN"),
+        ("MAX", "MAX"),
+        ("AVERAGE", "AVERAGE"),
+        ("FIRST", "FIRST"),
+        ("LAST", "LAST"),
+        ("COUNT", "AVERAGE"),
+        ("SUM", "ALL"),
+        ("MAX", "ALL"),
+    ],
+)
 def test_derived_window_equals_aggregate_of_raw_samples(agg: str, source: str) -> None:
     rng = random.Random(7)
     sent = [StreamKey("d.s.x", source, Q)]
@@ -39,7 +53,7 @@ def test_derived_window_equals_aggregate_of_raw_samples(agg: str, source: str) -
     outs = _drive(fan, sent, quarters)
     assert [o.end_us for o in outs] == [2_000_000, 4_000_000, 6_000_000, 8_000_000]
     for k, out in enumerate(outs):
-        raw = [x for q in quarters[8 * k: 8 * k + 8] for x in q]
+        raw = [x for q in quarters[8 * k : 8 * k + 8] for x in q]
         expected = aggregate(agg, raw)
         if agg == "AVERAGE" and expected is not None:
             assert out.value[0] == pytest.approx(expected[0], rel=1e-12)

@@ -120,8 +120,9 @@ def test_link_traffic_dropped(tmp_path: Path, zenoh_client: Any) -> None:
         proxy.drop()
         cut_ns = time.time_ns()
         time.sleep(CUT_S)
-        during = [v for vals in got.snapshot().values() for v in vals
-                  if v.end_ns > cut_ns + 500_000_000]
+        during = [
+            v for vals in got.snapshot().values() for v in vals if v.end_ns > cut_ns + 500_000_000
+        ]
         assert during == []
         restore_ns = time.time_ns()
         proxy.restore()
@@ -175,8 +176,10 @@ def test_pubbroker_kill9_archive_bound_and_recovery(tmp_path: Path, zenoh_client
             assert kept == [(ts, f32(v)) for ts, v in samples[: len(kept)]]
             lost = len(samples) - len(kept)
             assert 0 <= lost <= kill9_bound(sizes[topic], 0.2, 0.04), (topic, lost)
-            print(f"kill -9: {topic} lost {lost} of {len(samples)} (bound "
-                  f"{kill9_bound(sizes[topic], 0.2, 0.04)})")
+            print(
+                f"kill -9: {topic} lost {lost} of {len(samples)} (bound "
+                f"{kill9_bound(sizes[topic], 0.2, 0.04)})"
+            )
         # restart: the SubBroker reconnects and configures it again
         pb2 = start_pubbroker(tmp_path, model, link, ingress, tag="pb2")
         restart_ns = time.time_ns()
@@ -228,6 +231,9 @@ def test_subbroker_stopped_then_continued(tmp_path: Path, zenoh_client: Any) -> 
     assert_all_archived(load, archive)
     values = got.snapshot()
     assert check_against_archive(values, archive) > 20
-    after = [v for v in values["sub_6"] if v.end_ns > continued_ns + 1_000_000_000
-             and v.value is not None]
+    after = [
+        v
+        for v in values["sub_6"]
+        if v.end_ns > continued_ns + 1_000_000_000 and v.value is not None
+    ]
     assert_contiguous(after, 250_000_000)

@@ -44,10 +44,12 @@ def missing_windows(values: list[Any], period_ns: int, until_ns: int) -> int:
 def test_backfill_over_udp_fills_what_the_ring_lost(tmp_path: Path, zenoh_client: Any) -> None:
     model = model_copy(tmp_path, "scenario1.modd")
     zport, ingress, port, relay = free_port(), free_port(), free_port("udp"), free_port("udp")
-    pb = start_pubbroker_dgram(tmp_path, model, {"transport": "udp", "port": port,
-                                                 "ring_bytes": 256}, ingress)
-    sb = start_subbroker(tmp_path, subbroker_dgram_config(
-        tmp_path, model, f"127.0.0.1:{relay}", zport, "udp"))
+    pb = start_pubbroker_dgram(
+        tmp_path, model, {"transport": "udp", "port": port, "ring_bytes": 256}, ingress
+    )
+    sb = start_subbroker(
+        tmp_path, subbroker_dgram_config(tmp_path, model, f"127.0.0.1:{relay}", zport, "udp")
+    )
     radio: Proc | None = None
     load: Proc | None = None
     try:
@@ -56,10 +58,21 @@ def test_backfill_over_udp_fills_what_the_ring_lost(tmp_path: Path, zenoh_client
         assert wait_connected(session, 5)
         got = Collector()
         session.declare_subscriber("modd/usv/**", got.on_sample)  # values and status
-        radio = Proc("radio", [*RADIO, "--udp", f"127.0.0.1:{relay}", "--to",
-                               f"127.0.0.1:{port}", "--radio",
-                               "latency_ms=20,outage=5+6,seed=3", "--report", "1"],
-                     tmp_path / "radio.log")
+        radio = Proc(
+            "radio",
+            [
+                *RADIO,
+                "--udp",
+                f"127.0.0.1:{relay}",
+                "--to",
+                f"127.0.0.1:{port}",
+                "--radio",
+                "latency_ms=20,outage=5+6,seed=3",
+                "--report",
+                "1",
+            ],
+            tmp_path / "radio.log",
+        )
         assert sb.wait_log("running", 30), sb.log()[-3000:]
         load = start_load(tmp_path, model, ingress, 40.0)
         time.sleep(max(0.0, radio.started + 11.0 - time.monotonic()))  # the outage's end
@@ -67,8 +80,9 @@ def test_backfill_over_udp_fills_what_the_ring_lost(tmp_path: Path, zenoh_client
         time.sleep(8.0)  # the NACKs of the outage's slots, answered "too old", given up
         asked = time.time_ns() - 1_000_000_000
         holes = missing_windows(got.snapshot().get("sub_5", []), PERIOD_NS, asked)
-        code, out, err = run_cli(zport, "--subscriber", "sub_5", "--gaps", "--json",
-                                 "--timeout", "40")
+        code, out, err = run_cli(
+            zport, "--subscriber", "sub_5", "--gaps", "--json", "--timeout", "40"
+        )
         assert code == 0, (out, err, sb.log()[-3000:], pb.log()[-2000:])
         figures = json.loads(out.strip().splitlines()[-1])
         time.sleep(0.5)

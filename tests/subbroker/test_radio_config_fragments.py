@@ -53,8 +53,9 @@ def _model(tmp: Path) -> Path:
 
 
 @pytest.mark.parametrize("loss", [0.0, 0.1])
-def test_scenario2_deploys_over_a_sik_radio_in_control_fragments(loss: float, tmp_path: Path,
-                                                                 zenoh_client: Any) -> None:
+def test_scenario2_deploys_over_a_sik_radio_in_control_fragments(
+    loss: float, tmp_path: Path, zenoh_client: Any
+) -> None:
     model = _model(tmp_path)
     config = config_for(make_plan(json.loads(model.read_text())), 1)
     one_datagram = len(encode_control(1 << 20, codec.encode(config), bytes(32), BASE_TO_DRONE))
@@ -62,10 +63,16 @@ def test_scenario2_deploys_over_a_sik_radio_in_control_fragments(loss: float, tm
     spec = f"packet={PACKET},loss={loss},latency_ms=20,seed=5"
     radio, base, drone = start_radio_serial(tmp_path, spec)
     zport, ingress = free_port(), free_port()
-    pb = start_pubbroker_dgram(tmp_path, model, {"transport": "serial", "device": drone,
-                                                 "port": 1, "max_packet": PACKET}, ingress)
-    sb = start_subbroker(tmp_path, subbroker_dgram_config(
-        tmp_path, model, "127.0.0.1:1", zport, "serial", device=base))
+    pb = start_pubbroker_dgram(
+        tmp_path,
+        model,
+        {"transport": "serial", "device": drone, "port": 1, "max_packet": PACKET},
+        ingress,
+    )
+    sb = start_subbroker(
+        tmp_path,
+        subbroker_dgram_config(tmp_path, model, "127.0.0.1:1", zport, "serial", device=base),
+    )
     with processes(radio, pb, sb):
         wait_port(zport, 40)
         session = zenoh_client(zport)

@@ -74,8 +74,15 @@ def test_a_deploy_changes_the_packing_delay(tmp_path: Path, zenoh_client: Any) -
         time.sleep(4.0)
         b, wb = _radio(got), _passed(radio)
         assert b["accepted_delay_s"] == 1.0
-        body = signed({"text": fast.read_text(), "format": "json", "project_id": 7,
-                       "revision": 2, "deployed_by": "operator"})
+        body = signed(
+            {
+                "text": fast.read_text(),
+                "format": "json",
+                "project_id": 7,
+                "revision": 2,
+                "deployed_by": "operator",
+            }
+        )
         reply = request(zenoh_client(zport), "modd/usv/deploy", body, timeout_s=15)
         assert reply["status"] == "ACKED", reply
         time.sleep(1.5)  # the switch date, the last datagram packed the old way
@@ -91,8 +98,9 @@ def test_a_deploy_changes_the_packing_delay(tmp_path: Path, zenoh_client: Any) -
     archive = read_archive(tmp_path / "archive", model)
 
     def per_datagram(x: dict[str, Any], y: dict[str, Any]) -> float:
-        return float((y["slots_received"] - x["slots_received"])
-                     / (y["datagrams_in"] - x["datagrams_in"]))
+        return float(
+            (y["slots_received"] - x["slots_received"]) / (y["datagrams_in"] - x["datagrams_in"])
+        )
 
     before, after = per_datagram(a, b), per_datagram(c, d)
     # 4 slots/s (0.25 s windows): up to 1 s, 4 or 5 slots a datagram; up to 0.25 s, 1 or 2
@@ -103,12 +111,13 @@ def test_a_deploy_changes_the_packing_delay(tmp_path: Path, zenoh_client: Any) -
     # comes every second, so each figure may be a second stale (hence 1.4, not 2.5)
     rate_before = (wb[1] - wa[1]) / (wb[0] - wa[0])
     rate_after = (wd[1] - wc[1]) / (wd[0] - wc[0])
-    print(f"slots a datagram {before:.2f} -> {after:.2f}; "
-          f"emulator drone->base datagrams/s {rate_before:.2f} -> {rate_after:.2f}")
+    print(
+        f"slots a datagram {before:.2f} -> {after:.2f}; "
+        f"emulator drone->base datagrams/s {rate_before:.2f} -> {rate_after:.2f}"
+    )
     assert rate_after >= 1.4 * rate_before, (rate_before, rate_after)
     # delivery complete across the switch: the archive is the oracle
     assert {t: len(s) for t, s in archive.items()} == load_counts(load)
     assert check_against_archive(values, archive) > 100
     share, missing = _delivered_share(values, archive)
     assert share == 1.0, sorted(missing)
-

@@ -50,8 +50,14 @@ def _model(tmp: Path) -> Path:
     model["link"] = {"transport": "serial", "device": "/dev/null", "maxPacket": PACKET}
     # without sub_3 (accel_x every 0.25 s) the plan cannot derive sub_8 from short windows
     model["subscribers"] = [s for s in model["subscribers"] if s["name"] != "sub_3"]
-    model["subscribers"].append({"name": "sub_8", "topic": "usv.accelerometer.accel_x",
-                                 "periodS": "2.0", "aggregation": "ALL"})
+    model["subscribers"].append(
+        {
+            "name": "sub_8",
+            "topic": "usv.accelerometer.accel_x",
+            "periodS": "2.0",
+            "aggregation": "ALL",
+        }
+    )
     path.write_text(json.dumps(model))
     return path
 
@@ -61,16 +67,23 @@ def _ends(values: dict[str, list[Any]], name: str) -> list[int]:
 
 
 @pytest.mark.parametrize("loss", [0.0, 0.1])
-def test_slots_larger_than_the_packet_arrive_as_fragments(loss: float, tmp_path: Path,
-                                                          zenoh_client: Any) -> None:
+def test_slots_larger_than_the_packet_arrive_as_fragments(
+    loss: float, tmp_path: Path, zenoh_client: Any
+) -> None:
     model = _model(tmp_path)
     spec = f"packet={PACKET},loss={loss},latency_ms=20,seed=11"
     radio, base, drone = start_radio_serial(tmp_path, spec)
     zport, ingress = free_port(), free_port()
-    pb = start_pubbroker_dgram(tmp_path, model, {"transport": "serial", "device": drone,
-                                                 "port": 1, "max_packet": PACKET}, ingress)
-    sb = start_subbroker(tmp_path, subbroker_dgram_config(
-        tmp_path, model, "127.0.0.1:1", zport, "serial", device=base))
+    pb = start_pubbroker_dgram(
+        tmp_path,
+        model,
+        {"transport": "serial", "device": drone, "port": 1, "max_packet": PACKET},
+        ingress,
+    )
+    sb = start_subbroker(
+        tmp_path,
+        subbroker_dgram_config(tmp_path, model, "127.0.0.1:1", zport, "serial", device=base),
+    )
     with processes(radio, pb, sb):
         wait_port(zport, 40)
         session = zenoh_client(zport)
@@ -92,12 +105,20 @@ def test_slots_larger_than_the_packet_arrive_as_fragments(loss: float, tmp_path:
     ends = _ends(values, "sub_8")
     stamps = [t for t, _ in archive["usv.accelerometer.accel_x"]]
     # every 2 s window with archived samples, from the first delivered on
-    want = [e for e in range(ends[0], max(stamps) + PERIOD_NS + 1, PERIOD_NS)
-            if any(e - PERIOD_NS <= t < e for t in stamps)] if ends else []
+    want = (
+        [
+            e
+            for e in range(ends[0], max(stamps) + PERIOD_NS + 1, PERIOD_NS)
+            if any(e - PERIOD_NS <= t < e for t in stamps)
+        ]
+        if ends
+        else []
+    )
     assert len(ends) >= 3 and ends == want, (ends, want, counts)
     # the windows between the load's first and last are full: 25 Hz x 2 s
-    assert max(len(v.value) for v in values["sub_8"] if isinstance(v.value, list)) >= 45, \
-        values["sub_8"]
+    assert max(len(v.value) for v in values["sub_8"] if isinstance(v.value, list)) >= 45, values[
+        "sub_8"
+    ]
     frags = [int(x) for x in re.findall(r"link: .*fragments=(\d+)", pb_log)]
     # two fragments a full window (the edge windows, partly filled, may fit one packet)
     assert frags and frags[-1] >= 2 * (len(ends) - 2), pb_log[-1500:]

@@ -59,8 +59,13 @@ def _windows(values: dict[str, list[Any]], name: str) -> set[int]:
     return {v.end_ns for v in values.get(name, []) if v.value is not None}
 
 
-def _expected(archive: dict[str, list[tuple[int, Any]]], topic: str, period_ns: int,
-              first_end: int, last_end: int) -> set[int]:
+def _expected(
+    archive: dict[str, list[tuple[int, Any]]],
+    topic: str,
+    period_ns: int,
+    first_end: int,
+    last_end: int,
+) -> set[int]:
     """Window ends in [first_end, last_end] whose window holds archived samples."""
     stamps = [t for t, _ in archive[topic]]
     out = set()
@@ -70,8 +75,9 @@ def _expected(archive: dict[str, list[tuple[int, Any]]], topic: str, period_ns: 
     return out
 
 
-def _delivered_share(values: dict[str, list[Any]], archive: dict[str, Any],
-                     name: str = "sub_5") -> tuple[float, set[int]]:
+def _delivered_share(
+    values: dict[str, list[Any]], archive: dict[str, Any], name: str = "sub_5"
+) -> tuple[float, set[int]]:
     """Share of sub_5's windows (accel_z MAX every 0.25 s) delivered, between its
     first and last delivered window, and the missing window ends."""
     got = _windows(values, name)
@@ -80,8 +86,9 @@ def _delivered_share(values: dict[str, list[Any]], archive: dict[str, Any],
     return len(got & want) / len(want), want - got
 
 
-def _run(tmp: Path, model: Path, pb: Proc, sb: Proc, got: Collector, seconds: float,
-         settle: float = 2.0) -> tuple[dict[str, list[Any]], dict[str, Any], Proc]:
+def _run(
+    tmp: Path, model: Path, pb: Proc, sb: Proc, got: Collector, seconds: float, settle: float = 2.0
+) -> tuple[dict[str, list[Any]], dict[str, Any], Proc]:
     assert sb.wait_log("running", 20), sb.log()[-3000:]
     load = start_load(tmp, model, _ingress(pb), seconds)
     load.p.wait(seconds + 20)
@@ -98,8 +105,9 @@ def _ingress(pb: Proc) -> int:
     return int(found.group(1))
 
 
-def _start(tmp: Path, transport: str, spec: str | None, pb_status_s: int = 60,
-           ping_period_s: float = 0.0) -> tuple[Path, Proc, Proc, Proc | None, int]:
+def _start(
+    tmp: Path, transport: str, spec: str | None, pb_status_s: int = 60, ping_period_s: float = 0.0
+) -> tuple[Path, Proc, Proc, Proc | None, int]:
     model = model_copy(tmp, "scenario1.modd")
     zport, ingress = free_port(), free_port()
     radio: Proc | None = None
@@ -109,21 +117,38 @@ def _start(tmp: Path, transport: str, spec: str | None, pb_status_s: int = 60,
         endpoint = port
         if spec is not None:
             radio, endpoint = start_radio_udp(tmp, port, spec)
-        cfg = subbroker_dgram_config(tmp, model, f"127.0.0.1:{endpoint}", zport, "udp",
-                                     pb_status_s=pb_status_s, ping_period_s=ping_period_s)
+        cfg = subbroker_dgram_config(
+            tmp,
+            model,
+            f"127.0.0.1:{endpoint}",
+            zport,
+            "udp",
+            pb_status_s=pb_status_s,
+            ping_period_s=ping_period_s,
+        )
     else:
         radio, base, drone = start_radio_serial(tmp, spec or "")
-        pb = start_pubbroker_dgram(tmp, model, {"transport": "serial", "device": drone,
-                                                "port": 1}, ingress)
-        cfg = subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport, "serial", device=base,
-                                     pb_status_s=pb_status_s, ping_period_s=ping_period_s)
+        pb = start_pubbroker_dgram(
+            tmp, model, {"transport": "serial", "device": drone, "port": 1}, ingress
+        )
+        cfg = subbroker_dgram_config(
+            tmp,
+            model,
+            "127.0.0.1:1",
+            zport,
+            "serial",
+            device=base,
+            pb_status_s=pb_status_s,
+            ping_period_s=ping_period_s,
+        )
     sb = start_subbroker(tmp, cfg)
     return model, pb, sb, radio, zport
 
 
 @pytest.mark.parametrize("transport", ["udp", "serial"])
-def test_transport_delivers_what_the_archive_holds(transport: str, tmp_path: Path,
-                                                   zenoh_client: Any) -> None:
+def test_transport_delivers_what_the_archive_holds(
+    transport: str, tmp_path: Path, zenoh_client: Any
+) -> None:
     model, pb, sb, radio, zport = _start(tmp_path, transport, None, pb_status_s=2)
     with processes(*([radio] if radio else []), pb, sb):
         got = _watch(zenoh_client, zport)
@@ -142,8 +167,11 @@ def test_transport_delivers_what_the_archive_holds(transport: str, tmp_path: Pat
     assert 0 < radio_st["wire_bytes_in_per_s"] < 300
     assert validate("status", status) == []  # the contract, radio figures included
     # the PubBroker's side, from its STATUS (fields 24..29)
-    pb_side = next(s["radio"]["pubbroker"] for s in reversed(got.status)
-                   if s["radio"] and s["radio"]["pubbroker"])
+    pb_side = next(
+        s["radio"]["pubbroker"]
+        for s in reversed(got.status)
+        if s["radio"] and s["radio"]["pubbroker"]
+    )
     assert pb_side["datagrams_sent"] > 10 and pb_side["datagrams_resent"] == 0, pb_side
     assert pb_side["forged"] == 0 and pb_side["replayed"] == 0 and pb_side["nacks"] == 0
 
@@ -152,8 +180,7 @@ def test_periodic_pings_measure_the_radio_round_trip(tmp_path: Path, zenoh_clien
     """``ping_period_s``: PINGs go every 0.1 s besides the data (the quiet link of
     the test above sends under 20 B/s), and the RTT they measure is the radio's
     (60 ms of latency each way)."""
-    model, pb, sb, radio, zport = _start(tmp_path, "udp", "latency_ms=60,seed=1",
-                                         ping_period_s=0.1)
+    model, pb, sb, radio, zport = _start(tmp_path, "udp", "latency_ms=60,seed=1", ping_period_s=0.1)
     assert radio is not None
     with processes(radio, pb, sb):
         got = _watch(zenoh_client, zport)
@@ -165,8 +192,9 @@ def test_periodic_pings_measure_the_radio_round_trip(tmp_path: Path, zenoh_clien
 
 
 @pytest.mark.parametrize("transport", ["udp", "serial"])
-def test_loss_reordering_duplication_are_repaired(transport: str, tmp_path: Path,
-                                                  zenoh_client: Any) -> None:
+def test_loss_reordering_duplication_are_repaired(
+    transport: str, tmp_path: Path, zenoh_client: Any
+) -> None:
     spec = "loss=0.15,latency_ms=40,jitter_ms=30,duplicate=0.1,seed=5"
     model, pb, sb, radio, zport = _start(tmp_path, transport, spec)
     assert radio is not None
@@ -194,8 +222,10 @@ def test_outage_and_reboots_through_the_emulator(tmp_path: Path, zenoh_client: A
     restarted, each get the link back through the emulator without anyone's
     help."""
     with ThreadPoolExecutor(2) as pool:
-        runs = {t: pool.submit(_outage_and_reboots, tmp_path / t, t, zenoh_client)
-                for t in ("udp", "serial")}
+        runs = {
+            t: pool.submit(_outage_and_reboots, tmp_path / t, t, zenoh_client)
+            for t in ("udp", "serial")
+        }
         for transport, run in runs.items():
             try:
                 run.result()
@@ -207,9 +237,11 @@ def _missing_report(missing: set[int], got: Collector, radio: Proc, pb: Proc) ->
     """What a failure needs to be understood, short enough not to be cut: the missing
     windows as a count and span, both sides' link counters and the emulator's."""
     pb_link = [line for line in pb.log().splitlines() if "modd-pubbroker: link:" in line]
-    return (f"{len(missing)} windows missing, {min(missing)}..{max(missing)}; "
-            f"SubBroker radio {got.status[-1]['radio']}; PubBroker {pb_link[-1:]}; "
-            f"{radio_counts(radio)}")
+    return (
+        f"{len(missing)} windows missing, {min(missing)}..{max(missing)}; "
+        f"SubBroker radio {got.status[-1]['radio']}; PubBroker {pb_link[-1:]}; "
+        f"{radio_counts(radio)}"
+    )
 
 
 def _outage_and_reboots(tmp: Path, transport: str, zenoh_client: Any) -> None:
@@ -224,25 +256,39 @@ def _outage_and_reboots(tmp: Path, transport: str, zenoh_client: Any) -> None:
             port, relay = free_port("udp"), free_port("udp")
             link: dict[str, Any] = {"transport": "udp", "port": port}
             pb = start_pubbroker_dgram(tmp, model, link, ingress)
-            sb = start_subbroker(tmp, subbroker_dgram_config(
-                tmp, model, f"127.0.0.1:{relay}", zport, "udp"))
+            sb = start_subbroker(
+                tmp, subbroker_dgram_config(tmp, model, f"127.0.0.1:{relay}", zport, "udp")
+            )
             got = _watch(zenoh_client, zport)
             # the emulator starts once the SubBroker is up, so that its outage falls
             # while the load runs; the handshake waits for it
             outage_at = 4.0
-            radio = Proc("radio", [*RADIO, "--udp", f"127.0.0.1:{relay}", "--to",
-                                   f"127.0.0.1:{port}", "--radio",
-                                   f"latency_ms=30,outage={outage_at}+{OUTAGE_S},seed=2",
-                                   "--report", "1"], tmp / "radio.log")
+            radio = Proc(
+                "radio",
+                [
+                    *RADIO,
+                    "--udp",
+                    f"127.0.0.1:{relay}",
+                    "--to",
+                    f"127.0.0.1:{port}",
+                    "--radio",
+                    f"latency_ms=30,outage={outage_at}+{OUTAGE_S},seed=2",
+                    "--report",
+                    "1",
+                ],
+                tmp / "radio.log",
+            )
         else:
             # the emulator makes the pseudo-terminals: it comes first, its outage later
             outage_at = 14.0
             radio, base, drone = start_radio_serial(
-                tmp, f"latency_ms=30,outage={outage_at}+{OUTAGE_S},seed=2")
+                tmp, f"latency_ms=30,outage={outage_at}+{OUTAGE_S},seed=2"
+            )
             link = {"transport": "serial", "device": drone, "port": 1}
             pb = start_pubbroker_dgram(tmp, model, link, ingress)
-            sb = start_subbroker(tmp, subbroker_dgram_config(
-                tmp, model, "127.0.0.1:1", zport, "serial", device=base))
+            sb = start_subbroker(
+                tmp, subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport, "serial", device=base)
+            )
             got = _watch(zenoh_client, zport)
         started = radio.started
         assert sb.wait_log("running", 30), sb.log()[-3000:]
@@ -298,22 +344,26 @@ def _outage_and_reboots(tmp: Path, transport: str, zenoh_client: Any) -> None:
         after = got.snapshot()
         assert len(after.get("sub_5", [])) > before + 8, sb.log()[-2000:]
         archive2 = read_archive(tmp / "archive2", model)
-        late = {k: [v for v in vs if v.start_ns > max(t for t, _ in archive[v.topic])]
-                for k, vs in after.items()}
+        late = {
+            k: [v for v in vs if v.start_ns > max(t for t, _ in archive[v.topic])]
+            for k, vs in after.items()
+        }
         assert check_against_archive(late, archive2) > 20
     finally:
         with processes(radio, pb, sb):
             pass
 
 
-def test_forged_and_replayed_datagrams_are_dropped_and_counted(tmp_path: Path,
-                                                               zenoh_client: Any) -> None:
+def test_forged_and_replayed_datagrams_are_dropped_and_counted(
+    tmp_path: Path, zenoh_client: Any
+) -> None:
     model = model_copy(tmp_path, "scenario1.modd")
     zport, ingress, port = free_port(), free_port(), free_port("udp")
     pb = start_pubbroker_dgram(tmp_path, model, {"transport": "udp", "port": port}, ingress)
     tap = Injector(port)
-    sb = start_subbroker(tmp_path, subbroker_dgram_config(
-        tmp_path, model, f"127.0.0.1:{tap.port}", zport, "udp"))
+    sb = start_subbroker(
+        tmp_path, subbroker_dgram_config(tmp_path, model, f"127.0.0.1:{tap.port}", zport, "udp")
+    )
     try:
         with processes(pb, sb):
             got = _watch(zenoh_client, zport)
@@ -342,8 +392,9 @@ def _attacks(counts: str, direction: str) -> tuple[int, int]:
 
 
 @pytest.mark.parametrize("transport", ["udp", "serial"])
-def test_forged_and_replayed_on_the_air_are_dropped(transport: str, tmp_path: Path,
-                                                     zenoh_client: Any) -> None:
+def test_forged_and_replayed_on_the_air_are_dropped(
+    transport: str, tmp_path: Path, zenoh_client: Any
+) -> None:
     """An attacker on the radio (the emulator) forges a share of the datagrams
     each way (over serial with a good CRC, so the tag must refuse them) and
     replays others 1.5 s later: none is decoded, each is counted, and the

@@ -14,7 +14,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from support.namespaces import needs_mount_namespace  # noqa: E402
 
-CHILD = r'''
+CHILD = r"""
 import json, logging, os, sys, time
 from pathlib import Path
 from modd.subbroker import record
@@ -53,7 +53,7 @@ try:
 except Exception as exc:
     out["raised"] = repr(exc)
 print(json.dumps(out))
-'''
+"""
 
 
 @needs_mount_namespace
@@ -63,11 +63,18 @@ def test_a_full_disk_never_stops_delivery_and_the_record_resumes(tmp_path: Path)
     root, out = tmp_path / "records", tmp_path / "out"
     root.mkdir()
     out.mkdir()
-    script = (f"mount -t tmpfs -o size=4m tmpfs '{root}' || exit 97\n"
-              f"'{sys.executable}' -c \"$CHILD\" '{root}'; rc=$?\n"
-              f"rm -f '{root}/filler'; cp -a '{root}/.' '{out}/'; exit $rc\n")
-    r = subprocess.run(["unshare", "-rm", "sh", "-c", script], capture_output=True, text=True,
-                       timeout=120, env={"CHILD": CHILD, "PATH": "/usr/bin:/bin"})
+    script = (
+        f"mount -t tmpfs -o size=4m tmpfs '{root}' || exit 97\n"
+        f"'{sys.executable}' -c \"$CHILD\" '{root}'; rc=$?\n"
+        f"rm -f '{root}/filler'; cp -a '{root}/.' '{out}/'; exit $rc\n"
+    )
+    r = subprocess.run(
+        ["unshare", "-rm", "sh", "-c", script],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={"CHILD": CHILD, "PATH": "/usr/bin:/bin"},
+    )
     assert r.returncode == 0, r.stderr
     res = json.loads(r.stdout.strip().splitlines()[-1])
     assert res["raised"] is None, res  # put() never raised into the link thread

@@ -68,22 +68,27 @@ def test_anonymous_and_wrong_password_refused(station: dict[str, Any]) -> None:
     port = station["port"]
     with pytest.raises(ValueError, match="cannot open"):
         _anonymous(port, None)
-    for who in (Credentials("viewer", "not-the-password"), Credentials("admin", "admin"),
-                Credentials("backend", shared_credentials().credentials("viewer").password)):
+    for who in (
+        Credentials("viewer", "not-the-password"),
+        Credentials("admin", "admin"),
+        Credentials("backend", shared_credentials().credentials("viewer").password),
+    ):
         with pytest.raises(ValueError, match="cannot open"):
             _anonymous(port, who)
 
 
 def test_viewer_reads_but_cannot_deploy_subscribe_or_forge(
-        station: dict[str, Any], zenoh_client: Any) -> None:
+    station: dict[str, Any], zenoh_client: Any
+) -> None:
     port = station["port"]
     reader = zenoh_client(port, "backend")
     viewer = zenoh_client(port, "viewer")
     assert wait_connected(reader) and wait_connected(viewer)
     seen: list[tuple[str, bytes]] = []
     mine: list[str] = []
-    reader.declare_subscriber("modd/usv/**",
-                              lambda s: seen.append((str(s.key_expr), s.payload.to_bytes())))
+    reader.declare_subscriber(
+        "modd/usv/**", lambda s: seen.append((str(s.key_expr), s.payload.to_bytes()))
+    )
     viewer.declare_subscriber("modd/usv/**", lambda s: mine.append(str(s.key_expr)))
     forged = {"subscriber": "sub_3", "topic": "usv.ins.accel_x", "value": 1e9, "slot": 999999}
     deadline = time.monotonic() + 3
@@ -102,8 +107,9 @@ def test_viewer_reads_but_cannot_deploy_subscribe_or_forge(
     assert "deploy" not in station["sb"].log().split("config 1 running", 1)[1]
 
 
-def test_unsigned_forged_or_replayed_deploy_refused(station: dict[str, Any],
-                                                    zenoh_client: Any) -> None:
+def test_unsigned_forged_or_replayed_deploy_refused(
+    station: dict[str, Any], zenoh_client: Any
+) -> None:
     backend = zenoh_client(station["port"], "backend")
     assert wait_connected(backend)
     body = {"text": Path(station["model"]).read_text(), "format": "json", "timeout_s": 5}
@@ -137,22 +143,30 @@ def test_dynamic_quota_owner_scope_and_names(station: dict[str, Any], zenoh_clie
     assert ask(owner="bob")["status"] == "ACCEPTED"  # the quota is per owner
     listed = request(backend, "modd/usv/subscribe", {"action": "list", "owner": "bob"})
     assert len(listed["subscriptions"]) == 1 and listed["subscriptions"][0]["owner"] == "bob"
-    theft = request(backend, "modd/usv/subscribe",
-                    {"action": "cancel", "subscriber": names[0], "owner": "bob"})
+    theft = request(
+        backend, "modd/usv/subscribe", {"action": "cancel", "subscriber": names[0], "owner": "bob"}
+    )
     assert theft["status"] == "ERROR"
-    mine = request(backend, "modd/usv/subscribe",
-                   {"action": "cancel", "subscriber": names[0], "owner": "alice"})
+    mine = request(
+        backend,
+        "modd/usv/subscribe",
+        {"action": "cancel", "subscriber": names[0], "owner": "alice"},
+    )
     assert mine["status"] == "CANCELLED"
     for bad in ("x" * 10_000, "sub_ok\n", "a/b", "*"):
         reply = ask(owner="carol", subscriber=bad)
         assert reply["status"] == "ERROR", (bad[:20], reply)
     for name in names[1:]:
-        request(backend, "modd/usv/subscribe",
-                {"action": "cancel", "subscriber": name, "owner": "alice"})
+        request(
+            backend,
+            "modd/usv/subscribe",
+            {"action": "cancel", "subscriber": name, "owner": "alice"},
+        )
 
 
 def test_replayed_deploy_refused_after_a_subbroker_restart(
-        station: dict[str, Any], zenoh_client: Any, tmp_path: Path) -> None:
+    station: dict[str, Any], zenoh_client: Any, tmp_path: Path
+) -> None:
     backend = zenoh_client(station["port"], "backend")
     assert wait_connected(backend)
     body = {"text": Path(station["model"]).read_text(), "format": "json", "timeout_s": 5}
@@ -187,7 +201,8 @@ def _replies(session: Any, key: str, body: dict[str, Any]) -> list[dict[str, Any
 
 
 def test_no_identity_but_the_subbroker_answers_or_forges(
-        station: dict[str, Any], zenoh_client: Any) -> None:
+    station: dict[str, Any], zenoh_client: Any
+) -> None:
     """Held-out: a viewer, or a stolen backend credential, declares queryables
     on the control keys to answer in the SubBroker's place, and the backend
     puts forged values and status: none of it reaches anyone."""
@@ -201,8 +216,11 @@ def test_no_identity_but_the_subbroker_answers_or_forges(
     def answer(query: Any) -> None:
         query.reply(query.key_expr, forged_reply.encode())
 
-    fakes = [s.declare_queryable(k, answer) for s in (viewer, other)
-             for k in ("modd/usv/deploy", "modd/usv/subscribe", "modd/**")]
+    fakes = [
+        s.declare_queryable(k, answer)
+        for s in (viewer, other)
+        for k in ("modd/usv/deploy", "modd/usv/subscribe", "modd/**")
+    ]
     seen: list[bytes] = []
     viewer.declare_subscriber("modd/**", lambda s: seen.append(s.payload.to_bytes()))
     time.sleep(0.5)
@@ -223,7 +241,8 @@ def test_no_identity_but_the_subbroker_answers_or_forges(
 
 
 def test_oversized_or_deep_queries_are_refused_before_parsing(
-        station: dict[str, Any], zenoh_client: Any) -> None:
+    station: dict[str, Any], zenoh_client: Any
+) -> None:
     """Held-out: a stolen ``backend`` credential sends 30,000-deep and
     oversized documents to every queryable. Before, the parser's recursion
     answered "internal error" (a traceback logged per query) and a 20 MB
@@ -235,8 +254,11 @@ def test_oversized_or_deep_queries_are_refused_before_parsing(
     big = json.dumps({"action": "list", "owner": "x" * 70_000}).encode()
     for key in ("modd/usv/deploy", "modd/usv/subscribe", "modd/usv/backfill"):
         for payload, words in ((deep, "nested"), (big, "bytes")):
-            replies = [json.loads(r.ok.payload.to_bytes())
-                       for r in backend.get(key, payload=payload, timeout=5) if r.ok is not None]
+            replies = [
+                json.loads(r.ok.payload.to_bytes())
+                for r in backend.get(key, payload=payload, timeout=5)
+                if r.ok is not None
+            ]
             if key.endswith("deploy") and payload is big:  # within a deploy's bound
                 assert replies and replies[0]["status"] != "ACKED", replies
                 continue

@@ -22,8 +22,20 @@ from subbroker_harness import free_port, shared_credentials
 
 
 def value(i: int, sub: str = "sub_1") -> DeliveredValue:
-    return DeliveredValue(sub, "usv.a.x", "AVERAGE", "0.25", "METER", 1, i,
-                          i * 250_000_000, (i + 1) * 250_000_000, 0.5 * i, 6, 10**18 + i)
+    return DeliveredValue(
+        sub,
+        "usv.a.x",
+        "AVERAGE",
+        "0.25",
+        "METER",
+        1,
+        i,
+        i * 250_000_000,
+        (i + 1) * 250_000_000,
+        0.5 * i,
+        6,
+        10**18 + i,
+    )
 
 
 @pytest.fixture
@@ -73,11 +85,17 @@ def test_iterate_collect_dataframe_and_callback(pair: Any) -> None:
 def test_dynamic_without_subbroker_is_no_reply() -> None:
     """A router with no SubBroker behind it: no reply, said as such."""
     port = free_port()
-    router = open_session(ZenohSettings(
-        mode="router", listen=(f"tcp/127.0.0.1:{port}",), access_control=acl(None),
-        dictionary_file=str(shared_credentials().dictionary)))
-    session = open_session(client_settings(f"tcp/127.0.0.1:{port}",
-                                           shared_credentials().cred_file("backend")))
+    router = open_session(
+        ZenohSettings(
+            mode="router",
+            listen=(f"tcp/127.0.0.1:{port}",),
+            access_control=acl(None),
+            dictionary_file=str(shared_credentials().dictionary),
+        )
+    )
+    session = open_session(
+        client_settings(f"tcp/127.0.0.1:{port}", shared_credentials().cred_file("backend"))
+    )
     try:
         assert wait_connected(session, 2.0)
         with pytest.raises(NoReply):
@@ -120,8 +138,7 @@ def test_a_malformed_value_is_dropped_alone_and_the_rest_is_kept(pair: Any) -> N
     def put(payload: str | bytes) -> None:
         # blocking, not zenoh's default of dropping when a queue is full: the
         # 200 KB value, put in a burst to two sessions, was once dropped for one
-        server.put("modd/usv/sub/sub_1", payload,
-                   congestion_control=zenoh.CongestionControl.BLOCK)
+        server.put("modd/usv/sub/sub_1", payload, congestion_control=zenoh.CongestionControl.BLOCK)
 
     put(value(0).to_json())
     for b in bad:

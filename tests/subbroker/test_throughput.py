@@ -35,9 +35,27 @@ from modd.zenoh_session import ZenohSettings, open_session
 from modd_model.query import topics
 from modd_plan.windows import split_window, window_of
 
-VALUES: list[Any] = [0.0, -0.0, 1.5, -123.456e-7, 1e300, 3, -7, 0, True, False, None,
-                     [], [1.0, 2.5], [1, 2, 3], [True, False], float("nan"), float("inf"),
-                     float(Fraction(1, 3)), 2**70]
+VALUES: list[Any] = [
+    0.0,
+    -0.0,
+    1.5,
+    -123.456e-7,
+    1e300,
+    3,
+    -7,
+    0,
+    True,
+    False,
+    None,
+    [],
+    [1.0, 2.5],
+    [1, 2, 3],
+    [True, False],
+    float("nan"),
+    float("inf"),
+    float(Fraction(1, 3)),
+    2**70,
+]
 
 
 @pytest.mark.parametrize("value", VALUES, ids=repr)
@@ -45,13 +63,24 @@ def test_payload_bytes_equal_the_reference_encoding(value: Any) -> None:
     rng = random.Random(repr(value))
     for name in ("sub_1", "dyn_1a2b3c4d", "x"):
         count = rng.choice([None, 0, 17])
-        ref = DeliveredValue(name, "usv.ins.accel_x", "AVERAGE", "0.25",
-                             "METER_PER_SECOND_SQUARED", 200, rng.randrange(2**40),
-                             1_795_241_220_643_782_675, 1_795_241_220_893_782_675, value, count,
-                             time.time_ns())
+        ref = DeliveredValue(
+            name,
+            "usv.ins.accel_x",
+            "AVERAGE",
+            "0.25",
+            "METER_PER_SECOND_SQUARED",
+            200,
+            rng.randrange(2**40),
+            1_795_241_220_643_782_675,
+            1_795_241_220_893_782_675,
+            value,
+            count,
+            time.time_ns(),
+        )
         head = StreamPayload(ref.topic, ref.aggregation, ref.period_s, ref.unit, ref.config_id)
-        fast = subscriber_prefix(name) + head.tail(ref.slot, ref.start_ns, ref.end_ns,
-                                                   ref.value, ref.count, ref.delivered_ns)
+        fast = subscriber_prefix(name) + head.tail(
+            ref.slot, ref.start_ns, ref.end_ns, ref.value, ref.count, ref.delivered_ns
+        )
         assert fast == ref.to_json()
         if not (isinstance(value, float) and not math.isfinite(value)):
             assert DeliveredValue.from_json(fast) == ref
@@ -63,16 +92,30 @@ def _model(n_subs: int) -> dict[str, Any]:
     types = ["float32", "float64", "int", "bool"]
     return {
         "schemaVersion": "1.0",
-        "drone": {"name": "d", "sensors": [{"name": "s", "variables": [
-            {"name": n, "unit": "METER", "type": t} for n, t in zip(names, types, strict=True)]}]},
+        "drone": {
+            "name": "d",
+            "sensors": [
+                {
+                    "name": "s",
+                    "variables": [
+                        {"name": n, "unit": "METER", "type": t}
+                        for n, t in zip(names, types, strict=True)
+                    ],
+                }
+            ],
+        },
         "pubBroker": {"endpoint": {"host": "127.0.0.1", "port": 7171}, "logPath": "/tmp/l"},
         "subBroker": {"endpoint": {"host": "127.0.0.1", "port": 7272}, "configPath": "/tmp/c"},
         "publishers": [{"name": "p", "periodS": "0.05", "topics": [f"d.s.{n}" for n in names]}],
         "subscribers": [
-            {"name": f"sub{k}", "topic": f"d.s.{rng.choice(names)}",
-             "periodS": rng.choice(["0.25", "0.5", "1.0", "2.0"]),
-             "aggregation": rng.choice(["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "COUNT", "SUM",
-                                        "ALL"])}
+            {
+                "name": f"sub{k}",
+                "topic": f"d.s.{rng.choice(names)}",
+                "periodS": rng.choice(["0.25", "0.5", "1.0", "2.0"]),
+                "aggregation": rng.choice(
+                    ["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "COUNT", "SUM", "ALL"]
+                ),
+            }
             for k in range(n_subs)
         ],
     }
@@ -82,11 +125,17 @@ def _value(rng: random.Random, vtype: str, aggregation: str) -> Value:
     if rng.random() < 0.1:
         return Value(False)
     if aggregation == "ALL":
-        samples: list[float | int] = [rng.randint(0, 1) if vtype == "bool" else rng.uniform(-5, 5)
-                                      for _ in range(rng.randint(1, 4))]
+        samples: list[float | int] = [
+            rng.randint(0, 1) if vtype == "bool" else rng.uniform(-5, 5)
+            for _ in range(rng.randint(1, 4))
+        ]
         return Value(True, samples=samples)
-    return Value(True, rng.uniform(-5, 5), rng.randint(-9, 9) if vtype != "bool"
-                 else rng.randint(0, 1), rng.randint(1, 9))
+    return Value(
+        True,
+        rng.uniform(-5, 5),
+        rng.randint(-9, 9) if vtype != "bool" else rng.randint(0, 1),
+        rng.randint(1, 9),
+    )
 
 
 class Recorder:
@@ -118,22 +167,41 @@ def test_slot_delivery_equals_the_value_by_value_path() -> None:
     for _ in range(40):
         slot = next(walk)
         end = epoch + slot.offset_us * 1000
-        windows = [Window(config.config_id, slot.index, sid, end - periods[sid] * 1000, end,
-                          _value(rng, info[sent[sid].topic][1], sent[sid].aggregation))
-                   for sid in slot.streams]
+        windows = [
+            Window(
+                config.config_id,
+                slot.index,
+                sid,
+                end - periods[sid] * 1000,
+                end,
+                _value(rng, info[sent[sid].topic][1], sent[sid].aggregation),
+            )
+            for sid in slot.streams
+        ]
         n = fast.deliver(windows, [rec, rec])
         # the reference: the fan-out's outputs, one DeliveredValue per subscriber
-        by_id = {w.stream: window_of(w.value, sent[w.stream].aggregation,
-                                     info[sent[w.stream].topic][1]) for w in windows}
+        by_id = {
+            w.stream: window_of(w.value, sent[w.stream].aggregation, info[sent[w.stream].topic][1])
+            for w in windows
+        }
         expected = 0
         for out in ref_fan.on_slot(slot.index, slot.offset_us, by_id):
             value, count = split_window(out.stream.aggregation, out.value)
             for sub in out.subscribers:
-                ref = DeliveredValue(sub, out.stream.topic, out.stream.aggregation,
-                                     out.stream.key.rsplit("/", 1)[1], info[out.stream.topic][0],
-                                     config.config_id, slot.index,
-                                     epoch + (slot.offset_us - period_us(out.stream)) * 1000,
-                                     end, value, count, 0)
+                ref = DeliveredValue(
+                    sub,
+                    out.stream.topic,
+                    out.stream.aggregation,
+                    out.stream.key.rsplit("/", 1)[1],
+                    info[out.stream.topic][0],
+                    config.config_id,
+                    slot.index,
+                    epoch + (slot.offset_us - period_us(out.stream)) * 1000,
+                    end,
+                    value,
+                    count,
+                    0,
+                )
                 want += [(sub, ref.to_json())] * 2  # two sinks
                 expected += 1
         assert n == expected
@@ -143,8 +211,10 @@ def test_slot_delivery_equals_the_value_by_value_path() -> None:
         delivered = DeliveredValue.from_json(got)
         assert delivered.delivered_ns > 0
         # delivered_ns is the delivery time: compare everything else byte for byte
-        assert DeliveredValue.from_dict({**delivered.to_dict(), "delivered_ns": 0}).to_json() \
+        assert (
+            DeliveredValue.from_dict({**delivered.to_dict(), "delivered_ns": 0}).to_json()
             == ref_bytes
+        )
         assert got.startswith(subscriber_prefix(name))
 
 

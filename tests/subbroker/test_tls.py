@@ -24,17 +24,58 @@ def openssl(*args: str, cwd: Path) -> None:
 
 
 def make_ca(d: Path, name: str) -> None:
-    openssl("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "1", "-subj",
-            f"/CN={name}", "-keyout", f"{name}.key", "-out", f"{name}.pem", cwd=d)
+    openssl(
+        "req",
+        "-x509",
+        "-newkey",
+        "rsa:2048",
+        "-nodes",
+        "-days",
+        "1",
+        "-subj",
+        f"/CN={name}",
+        "-keyout",
+        f"{name}.key",
+        "-out",
+        f"{name}.pem",
+        cwd=d,
+    )
 
 
 def make_cert(d: Path, ca: str, name: str) -> None:
     ext = d / f"{name}.ext"
     ext.write_text("subjectAltName=DNS:localhost,IP:127.0.0.1\n")
-    openssl("req", "-newkey", "rsa:2048", "-nodes", "-subj", f"/CN={name}",
-            "-keyout", f"{name}.key", "-out", f"{name}.csr", cwd=d)
-    openssl("x509", "-req", "-in", f"{name}.csr", "-CA", f"{ca}.pem", "-CAkey", f"{ca}.key",
-            "-CAcreateserial", "-days", "1", "-extfile", ext.name, "-out", f"{name}.pem", cwd=d)
+    openssl(
+        "req",
+        "-newkey",
+        "rsa:2048",
+        "-nodes",
+        "-subj",
+        f"/CN={name}",
+        "-keyout",
+        f"{name}.key",
+        "-out",
+        f"{name}.csr",
+        cwd=d,
+    )
+    openssl(
+        "x509",
+        "-req",
+        "-in",
+        f"{name}.csr",
+        "-CA",
+        f"{ca}.pem",
+        "-CAkey",
+        f"{ca}.key",
+        "-CAcreateserial",
+        "-days",
+        "1",
+        "-extfile",
+        ext.name,
+        "-out",
+        f"{name}.pem",
+        cwd=d,
+    )
 
 
 def tls(d: Path, ca: str, role: str, cert: str | None) -> dict[str, str]:
@@ -54,17 +95,28 @@ def test_mutual_tls_with_credentials(tmp_path: Path) -> None:
     make_cert(tmp_path, "other_ca", "stranger")
     store = CredentialStore(tmp_path / "credentials").ensure()
     endpoint = f"tls/127.0.0.1:{free_port()}"
-    router = open_session(ZenohSettings(
-        mode="router", listen=(endpoint,), dictionary_file=str(store.dictionary),
-        access_control=acl("usv"),
-        extra=tls(tmp_path, "ca", "listen", "router")))
+    router = open_session(
+        ZenohSettings(
+            mode="router",
+            listen=(endpoint,),
+            dictionary_file=str(store.dictionary),
+            access_control=acl("usv"),
+            extra=tls(tmp_path, "ca", "listen", "router"),
+        )
+    )
     sessions = [router]
     try:
+
         def client(ca: str, cert: str | None) -> object:
             base = client_settings(endpoint, store.cred_file("viewer"))
-            s = open_session(ZenohSettings(mode="client", connect=base.connect,
-                                           credentials=base.credentials,
-                                           extra=tls(tmp_path, ca, "connect", cert)))
+            s = open_session(
+                ZenohSettings(
+                    mode="client",
+                    connect=base.connect,
+                    credentials=base.credentials,
+                    extra=tls(tmp_path, ca, "connect", cert),
+                )
+            )
             sessions.append(s)
             return s
 
@@ -72,7 +124,8 @@ def test_mutual_tls_with_credentials(tmp_path: Path) -> None:
         assert wait_connected(viewer)  # type: ignore[arg-type]
         got: list[bytes] = []
         viewer.declare_subscriber(  # type: ignore[attr-defined]
-            "modd/usv/sub/*", lambda s: got.append(s.payload.to_bytes()))
+            "modd/usv/sub/*", lambda s: got.append(s.payload.to_bytes())
+        )
         deadline = time.monotonic() + 5
         while not got and time.monotonic() < deadline:
             router.put("modd/usv/sub/sub_1", b"over tls")

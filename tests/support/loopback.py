@@ -35,8 +35,20 @@ from subbroker_harness import (  # noqa: E402
     wait_port,
 )
 
-__all__ = ["PUBBROKER", "REPO", "VENV_BIN", "Backend", "Proc", "StatusWatch", "free_port",
-           "receive_until", "start_pubbroker", "shared_credentials", "wait_port", "zenoh_router"]
+__all__ = [
+    "PUBBROKER",
+    "REPO",
+    "VENV_BIN",
+    "Backend",
+    "Proc",
+    "StatusWatch",
+    "free_port",
+    "receive_until",
+    "start_pubbroker",
+    "shared_credentials",
+    "wait_port",
+    "zenoh_router",
+]
 
 REPO = Path(__file__).resolve().parents[2]
 VENV_BIN = Path(sys.executable).parent
@@ -53,10 +65,15 @@ def zenoh_router(port: int, config: dict[str, Any] | None = None) -> Iterator[An
     if config is not None:
         dictionary = config["transport"]["auth"]["usrpwd"]["dictionary_file"]
         rules = config["access_control"]
-    session = open_session(ZenohSettings(
-        mode="router", listen=(f"tcp/127.0.0.1:{port}",),
-        dictionary_file=dictionary, access_control=rules,
-        extra={"scouting/gossip/enabled": "false"}))
+    session = open_session(
+        ZenohSettings(
+            mode="router",
+            listen=(f"tcp/127.0.0.1:{port}",),
+            dictionary_file=dictionary,
+            access_control=rules,
+            extra={"scouting/gossip/enabled": "false"},
+        )
+    )
     try:
         yield session
     finally:
@@ -80,8 +97,9 @@ class StatusWatch:
         with self._lock:
             return self.last.get(drone)
 
-    def wait(self, drone: str, pred: Callable[[dict[str, Any]], bool],
-             timeout_s: float) -> dict[str, Any]:
+    def wait(
+        self, drone: str, pred: Callable[[dict[str, Any]], bool], timeout_s: float
+    ) -> dict[str, Any]:
         """The first status of ``drone`` for which ``pred`` holds; fails with the last one."""
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
@@ -89,8 +107,9 @@ class StatusWatch:
             if status is not None and pred(status):
                 return status
             time.sleep(0.1)
-        raise AssertionError(f"no status of {drone} as expected within {timeout_s} s; "
-                             f"last: {self.get(drone)}")
+        raise AssertionError(
+            f"no status of {drone} as expected within {timeout_s} s; last: {self.get(drone)}"
+        )
 
     def close(self) -> None:
         self._sub.undeclare()
@@ -105,15 +124,32 @@ class Backend:
         self.token = ""
 
     @classmethod
-    def start(cls, tmp: Path, zenoh_connect: str, admin_password: str,
-              extra: list[str] | None = None) -> Backend:
+    def start(
+        cls, tmp: Path, zenoh_connect: str, admin_password: str, extra: list[str] | None = None
+    ) -> Backend:
         port = free_port()
-        argv = [str(VENV_BIN / "modd-backend"), "--host", "127.0.0.1", "--port", str(port),
-                "--data", str(tmp / "backend"), "--zenoh-connect", zenoh_connect,
-                "--admin-password", admin_password, "--frontend", str(tmp / "no-frontend"),
-                "--scene-port", "-1",
-                "--zenoh-credentials", str(shared_credentials().cred_file("backend")),
-                "--deploy-key", str(shared_credentials().deploy_key_file), *(extra or [])]
+        argv = [
+            str(VENV_BIN / "modd-backend"),
+            "--host",
+            "127.0.0.1",
+            "--port",
+            str(port),
+            "--data",
+            str(tmp / "backend"),
+            "--zenoh-connect",
+            zenoh_connect,
+            "--admin-password",
+            admin_password,
+            "--frontend",
+            str(tmp / "no-frontend"),
+            "--scene-port",
+            "-1",
+            "--zenoh-credentials",
+            str(shared_credentials().cred_file("backend")),
+            "--deploy-key",
+            str(shared_credentials().deploy_key_file),
+            *(extra or []),
+        ]
         return cls(Proc("backend", argv, tmp / "backend.log"), port)
 
     def sign_in(self, password: str, timeout_s: float = 90.0) -> None:
@@ -121,8 +157,11 @@ class Backend:
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline and self.proc.alive():
             with contextlib.suppress(httpx.TransportError):
-                r = httpx.post(f"{self.base}/api/auth/login", timeout=5,
-                               json={"username": "admin", "password": password})
+                r = httpx.post(
+                    f"{self.base}/api/auth/login",
+                    timeout=5,
+                    json={"username": "admin", "password": password},
+                )
                 assert r.status_code == 200, r.text
                 self.token = r.json()["token"]
                 return
@@ -131,8 +170,9 @@ class Backend:
 
     def request(self, method: str, path: str, **kwargs: Any) -> httpx.Response:
         headers = {"Authorization": f"Bearer {self.token}"}
-        return httpx.request(method, f"{self.base}/api{path}", headers=headers,
-                             timeout=30, **kwargs)
+        return httpx.request(
+            method, f"{self.base}/api{path}", headers=headers, timeout=30, **kwargs
+        )
 
     def stream(self, drone: str) -> ClientConnection:
         """The live stream WebSocket of ``drone``."""
@@ -141,8 +181,9 @@ class Backend:
         return ws
 
 
-def receive_until(ws: Connection, pred: Callable[[dict[str, Any]], bool],
-                  timeout_s: float = 20.0) -> list[dict[str, Any]]:
+def receive_until(
+    ws: Connection, pred: Callable[[dict[str, Any]], bool], timeout_s: float = 20.0
+) -> list[dict[str, Any]]:
     """Messages received until one satisfies ``pred`` (included, last)."""
     got: list[dict[str, Any]] = []
     deadline = time.monotonic() + timeout_s

@@ -43,11 +43,11 @@ def chunk_messages(data: bytes, at: int, size: int) -> list[tuple[int, int]] | N
     usize, crc, name_len = struct.unpack_from("<QII", data, at + 9 + 16)
     if name_len > 4 or usize > 1 << 26:
         return None
-    name = data[at + 41:at + 41 + name_len]
+    name = data[at + 41 : at + 41 + name_len]
     (clen,) = struct.unpack_from("<Q", data, at + 41 + name_len)
     if 9 + 40 + name_len + clen != size:
         return None
-    comp = data[at + 49 + name_len:at + size]
+    comp = data[at + 49 + name_len : at + size]
     try:
         if name == b"zstd":
             plain = zstandard.ZstdDecompressor().decompress(comp, max_output_size=usize)
@@ -92,11 +92,22 @@ def crashed_mcap(messages: int, per_chunk: int = 40, channels: int = 3) -> bytes
     channels, zstd chunks each followed by its Message Index records, no
     summary, and a torn last chunk."""
     out = bytearray(MAGIC + _record(0x01, _string("") + _string("oracle")))
-    out += _record(0x03, struct.pack("<H", 1) + _string("modd.float32") + _string("jsonschema")
-                   + struct.pack("<I", 2) + b"{}")
+    out += _record(
+        0x03,
+        struct.pack("<H", 1)
+        + _string("modd.float32")
+        + _string("jsonschema")
+        + struct.pack("<I", 2)
+        + b"{}",
+    )
     for ch in range(channels):
-        out += _record(0x04, struct.pack("<HH", ch, 1) + _string(f"usv.c{ch}") + _string("json")
-                       + struct.pack("<I", 0))
+        out += _record(
+            0x04,
+            struct.pack("<HH", ch, 1)
+            + _string(f"usv.c{ch}")
+            + _string("json")
+            + struct.pack("<I", 0),
+        )
     for first in range(0, messages, per_chunk):
         plain, index = bytearray(), dict[int, list[tuple[int, int]]]()
         for i in range(first, min(messages, first + per_chunk)):
@@ -105,9 +116,19 @@ def crashed_mcap(messages: int, per_chunk: int = 40, channels: int = 3) -> bytes
             data = b'{"value":%d.%d}' % (i * 37 % 1001, i % 7)
             plain += _record(MESSAGE, struct.pack("<HIQQ", ch, i, t, t - 1) + data)
         comp = zstandard.ZstdCompressor(level=1).compress(bytes(plain))
-        out += _record(CHUNK, struct.pack("<QQQI", 1_000_000 + first, 1_000_000 + first
-                                          + per_chunk, len(plain), zlib.crc32(plain))
-                       + _string("zstd") + struct.pack("<Q", len(comp)) + comp)
+        out += _record(
+            CHUNK,
+            struct.pack(
+                "<QQQI",
+                1_000_000 + first,
+                1_000_000 + first + per_chunk,
+                len(plain),
+                zlib.crc32(plain),
+            )
+            + _string("zstd")
+            + struct.pack("<Q", len(comp))
+            + comp,
+        )
         for ch, entries in sorted(index.items()):
             body = b"".join(struct.pack("<QQ", t, o) for t, o in entries)
             out += _record(MESSAGE_INDEX, struct.pack("<HI", ch, len(body)) + body)
@@ -129,11 +150,18 @@ def flips(data: bytes, layout: list[Record]) -> list[tuple[int, int]]:
             return p
         return next(at for at in chunks if at > p) + 20
 
-    out = [(in_data(first + 1 + k * (len(data) - first - 2) // 18), 1 << (k % 8))
-           for k in range(19)]
+    out = [
+        (in_data(first + 1 + k * (len(data) - first - 2) // 18), 1 << (k % 8)) for k in range(19)
+    ]
     after = [next(i for i in indexes if i > chunks[c]) for c in (11, 13)]
-    out += [(chunks[3], 0xFF), (chunks[5] + 3, 0xFF), (chunks[7] + 9 + 24, 0xFF),
-            (chunks[9] + 9 + 19, 0xFF), (after[0] + 2, 0xFF), (after[1] + 9, 0xFF)]
+    out += [
+        (chunks[3], 0xFF),
+        (chunks[5] + 3, 0xFF),
+        (chunks[7] + 9 + 24, 0xFF),
+        (chunks[9] + 9 + 19, 0xFF),
+        (after[0] + 2, 0xFF),
+        (after[1] + 9, 0xFF),
+    ]
     return out
 
 

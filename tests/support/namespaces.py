@@ -13,10 +13,16 @@ def mount_namespace_works() -> bool:
     small tmpfs can be mounted (the full-disk tests fill one)."""
     if shutil.which("unshare") is None:
         return False
-    return subprocess.run(["unshare", "-rm", "sh", "-c", "mount -t tmpfs -o size=64k tmpfs /mnt"],
-                          capture_output=True).returncode == 0
+    return (
+        subprocess.run(
+            ["unshare", "-rm", "sh", "-c", "mount -t tmpfs -o size=64k tmpfs /mnt"],
+            capture_output=True,
+        ).returncode
+        == 0
+    )
 
 
 #: The mark of a test that needs :func:`mount_namespace_works`.
 needs_mount_namespace = pytest.mark.skipif(
-    not mount_namespace_works(), reason="no unprivileged mount namespace (unshare -rm)")
+    not mount_namespace_works(), reason="no unprivileged mount namespace (unshare -rm)"
+)

@@ -76,8 +76,12 @@ def drone_model(tmp: Path, name: str, extra_subscriber: str | None) -> tuple[Pat
     text = text.replace('"127.0.0.1":7171', f'"127.0.0.1":{link}')
     text = text.replace('"127.0.0.1":7373', f'"127.0.0.1":{ingress}')
     if extra_subscriber:
-        text = text.replace("Subscriptions {", "Subscriptions {\n    Subscriber "
-                            f'{extra_subscriber}("{name}.ctd.conductivity", 0.5, MAX);', 1)
+        text = text.replace(
+            "Subscriptions {",
+            "Subscriptions {\n    Subscriber "
+            f'{extra_subscriber}("{name}.ctd.conductivity", 0.5, MAX);',
+            1,
+        )
     path = tmp / f"{name}.modd"
     path.write_text(text)
     return path, link, ingress
@@ -92,17 +96,44 @@ def start_drone(tmp: Path, name: str, router: str, extra_subscriber: str | None 
     key_file.write_text(key)
     drone = Drone(name, path, load_model(path), link, ingress, key, [])
     env = {"MODD_LINK_KEY": "not-this-drone's"}  # each side reads its own key file
-    drone.procs.append(start_pubbroker(d, path, link, ingress, tag=f"{name}-pubbroker", link={
-        "host": "127.0.0.1", "port": link, "key": f"file:{key_file}"}))
-    drone.procs.append(Proc(f"{name}-sim", [str(VENV_BIN / "modd-sim"), "--model", str(path),
-                                            "--ingress", f"tcp:127.0.0.1:{ingress}"],
-                            d / f"{name}-sim.log", env=env))
+    drone.procs.append(
+        start_pubbroker(
+            d,
+            path,
+            link,
+            ingress,
+            tag=f"{name}-pubbroker",
+            link={"host": "127.0.0.1", "port": link, "key": f"file:{key_file}"},
+        )
+    )
+    drone.procs.append(
+        Proc(
+            f"{name}-sim",
+            [
+                str(VENV_BIN / "modd-sim"),
+                "--model",
+                str(path),
+                "--ingress",
+                f"tcp:127.0.0.1:{ingress}",
+            ],
+            d / f"{name}-sim.log",
+            env=env,
+        )
+    )
     config = d / f"{name}-subbroker.toml"
-    config.write_text(SUBBROKER_TOML.format(model=path, link=link, key=key_file, router=router,
-                                              credentials=shared_credentials().dir))
-    drone.procs.append(Proc(f"{name}-subbroker", [str(VENV_BIN / "modd-subbroker"), "--config",
-                                                   str(config)], d / f"{name}-subbroker.log",
-                            env=env))
+    config.write_text(
+        SUBBROKER_TOML.format(
+            model=path, link=link, key=key_file, router=router, credentials=shared_credentials().dir
+        )
+    )
+    drone.procs.append(
+        Proc(
+            f"{name}-subbroker",
+            [str(VENV_BIN / "modd-subbroker"), "--config", str(config)],
+            d / f"{name}-subbroker.log",
+            env=env,
+        )
+    )
     return drone
 
 
@@ -127,8 +158,7 @@ def values(messages: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 @pytest.mark.timeout(90)
-def test_two_drones_have_their_own_deploys_and_streams(tmp_path: Path,
-                                                       started: list[Proc]) -> None:
+def test_two_drones_have_their_own_deploys_and_streams(tmp_path: Path, started: list[Proc]) -> None:
     assert PUBBROKER.exists(), f"{PUBBROKER} is not built: run make build (make test does)"
     router_port = free_port()
     router = f"tcp/127.0.0.1:{router_port}"
@@ -156,8 +186,9 @@ def check_deploys(backend: Backend, watch: StatusWatch, usv: Drone, asv: Drone) 
     """A deploy reaches its own drone's SubBroker and leaves the other's config alone."""
     projects = {}
     for d in (usv, asv):
-        r = backend.request("POST", "/projects",
-                            json={"name": f"{d.name} mission", "model": {"model": d.model}})
+        r = backend.request(
+            "POST", "/projects", json={"name": f"{d.name} mission", "model": {"model": d.model}}
+        )
         assert r.status_code == 201, r.text
         projects[d.name] = r.json()["id"]
     for d, other in ((usv, asv), (asv, usv)):
@@ -165,6 +196,7 @@ def check_deploys(backend: Backend, watch: StatusWatch, usv: Drone, asv: Drone) 
         record = deploy(backend, projects[d.name])
         assert record["drone"] == d.name, record
         config_id = record["reply"]["config_id"]
+
         def running(s: dict[str, Any], c: int = config_id) -> bool:
             return bool(s["config_id"] == c)
 
@@ -172,8 +204,10 @@ def check_deploys(backend: Backend, watch: StatusWatch, usv: Drone, asv: Drone) 
         time.sleep(1.0)  # two status periods of the other SubBroker
         after = watch.get(other.name)
         assert after is not None
-        assert (after["config_id"], after["epoch_ns"]) == (before["config_id"],
-                                                           before["epoch_ns"]), (before, after)
+        assert (after["config_id"], after["epoch_ns"]) == (
+            before["config_id"],
+            before["epoch_ns"],
+        ), (before, after)
         assert set(after["routes"]) == set(before["routes"])
     for d in (usv, asv):
         listed = backend.request("GET", f"/projects/{projects[d.name]}/deployments").json()
@@ -191,11 +225,15 @@ def check_streams(backend: Backend, usv: Drone, asv: Drone) -> None:
         for d, ws in ((usv, ws_usv), (asv, ws_asv)):
             msgs: list[dict[str, Any]] = []
 
-            def enough(m: dict[str, Any], msgs: list[dict[str, Any]] = msgs,
-                       want: set[str] = wanted[d.name]) -> bool:
+            def enough(
+                m: dict[str, Any],
+                msgs: list[dict[str, Any]] = msgs,
+                want: set[str] = wanted[d.name],
+            ) -> bool:
                 msgs.append(m)
-                return (want <= {v["subscriber"] for v in values(msgs)}
-                        and any(x["type"] == "status" for x in msgs))
+                return want <= {v["subscriber"] for v in values(msgs)} and any(
+                    x["type"] == "status" for x in msgs
+                )
 
             receive_until(ws, enough, 20)
             got[d.name] = msgs

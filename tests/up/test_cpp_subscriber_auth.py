@@ -61,22 +61,30 @@ def exe(scenarios_dir: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("sub")
     write_artifacts(out, generate(load_model(scenarios_dir / "scenario1.modd"), "scientist"))
     project = out / "scientist" / "cpp" / "sub_5"
-    for cmd in (["cmake", "-S", str(project), "-B", str(project / "build"), "-G", "Ninja"],
-                ["cmake", "--build", str(project / "build")]):
+    for cmd in (
+        ["cmake", "-S", str(project), "-B", str(project / "build"), "-G", "Ninja"],
+        ["cmake", "--build", str(project / "build")],
+    ):
         subprocess.run(cmd, check=True, capture_output=True, timeout=600)
     return project / "build" / "sub_5_subscriber"
 
 
 @pytest.fixture
-def subscriber(exe: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-               ) -> Iterator[tuple[int, Output]]:
+def subscriber(
+    exe: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> Iterator[tuple[int, Output]]:
     key_file = tmp_path / "delivery.key"
     key_file.write_text(KEY + "\n")
     key_file.chmod(0o600)
     monkeypatch.setenv("MODD_DELIVERY_KEY", f"file:{key_file}")  # this process's SubBroker side
     port = free_port()
-    proc = subprocess.Popen([str(exe)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True, env={**os.environ, "MODD_SUBSCRIBER_PORT": str(port)})
+    proc = subprocess.Popen(
+        [str(exe)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env={**os.environ, "MODD_SUBSCRIBER_PORT": str(port)},
+    )
     out = Output(proc)
     try:
         out.wait("listening on", 10)
@@ -89,10 +97,20 @@ def subscriber(exe: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 
 
 def _value(end_ns: int, value: float) -> DeliveredValue:
-    return DeliveredValue(subscriber="sub_5", topic="usv.accelerometer.accel_z",
-                          aggregation="MIN", period_s="0.25", unit="METER_PER_SECOND_SQUARED",
-                          config_id=1, slot=end_ns, start_ns=end_ns - 1, end_ns=end_ns,
-                          value=value, count=None, delivered_ns=end_ns)
+    return DeliveredValue(
+        subscriber="sub_5",
+        topic="usv.accelerometer.accel_z",
+        aggregation="MIN",
+        period_s="0.25",
+        unit="METER_PER_SECOND_SQUARED",
+        config_id=1,
+        slot=end_ns,
+        start_ns=end_ns - 1,
+        end_ns=end_ns,
+        value=value,
+        count=None,
+        delivered_ns=end_ns,
+    )
 
 
 def _line(v: DeliveredValue) -> bytes:
@@ -107,7 +125,7 @@ def _greeting(sock: socket.socket) -> str:
         assert chunk, "closed before the challenge"
         data += chunk
     assert data.startswith(delivery_auth.GREETING)
-    return data[len(delivery_auth.GREETING):-1].decode()
+    return data[len(delivery_auth.GREETING) : -1].decode()
 
 
 def test_idle_sockets_do_not_hold_back_values(subscriber: tuple[int, Output]) -> None:
@@ -131,11 +149,14 @@ def test_idle_sockets_do_not_hold_back_values(subscriber: tuple[int, Output]) ->
             s.close()
 
 
-@pytest.mark.parametrize("answer", [
-    b"",  # no proof at all: the forged value is the first line
-    b"AUTH " + b"0" * 64 + b"\n",  # a wrong proof
-    b"AUTH " + delivery_auth.proof(b"another key", "00").encode() + b"\n",
-])
+@pytest.mark.parametrize(
+    "answer",
+    [
+        b"",  # no proof at all: the forged value is the first line
+        b"AUTH " + b"0" * 64 + b"\n",  # a wrong proof
+        b"AUTH " + delivery_auth.proof(b"another key", "00").encode() + b"\n",
+    ],
+)
 def test_forged_values_are_refused(subscriber: tuple[int, Output], answer: bytes) -> None:
     port, out = subscriber
     with socket.create_connection(("127.0.0.1", port)) as forger:
@@ -159,8 +180,12 @@ def test_a_proof_from_the_key_is_accepted(subscriber: tuple[int, Output]) -> Non
     port, out = subscriber
     with socket.create_connection(("127.0.0.1", port)) as peer:
         nonce = _greeting(peer)
-        peer.sendall(b"AUTH " + delivery_auth.proof(KEY.encode(), nonce).encode() + b"\n"
-                     + _line(_value(4_000_000_004, -0.75)))
+        peer.sendall(
+            b"AUTH "
+            + delivery_auth.proof(KEY.encode(), nonce).encode()
+            + b"\n"
+            + _line(_value(4_000_000_004, -0.75))
+        )
         out.wait("4000000004 usv.accelerometer.accel_z MIN = -0.75", 5)
         # Proven, the connection outlives the 5 s handshake timeout (the idle one is 300 s).
         time.sleep(5.5)
@@ -168,14 +193,19 @@ def test_a_proof_from_the_key_is_accepted(subscriber: tuple[int, Output]) -> Non
         out.wait("4000000005 usv.accelerometer.accel_z MIN = 0.125", 5)
 
 
-def test_out_of_range_integers_are_malformed_not_undefined(subscriber: tuple[int, Output]
-                                                           ) -> None:
+def test_out_of_range_integers_are_malformed_not_undefined(subscriber: tuple[int, Output]) -> None:
     port, out = subscriber
     with socket.create_connection(("127.0.0.1", port)) as peer:
         nonce = _greeting(peer)
         bad = json.loads(_line(_value(5_000_000_005, 1.0)))
         bad["end_ns"] = 1e300
-        peer.sendall(b"AUTH " + delivery_auth.proof(KEY.encode(), nonce).encode() + b"\n"
-                     + json.dumps(bad).encode() + b"\n" + _line(_value(6_000_000_006, 2.0)))
+        peer.sendall(
+            b"AUTH "
+            + delivery_auth.proof(KEY.encode(), nonce).encode()
+            + b"\n"
+            + json.dumps(bad).encode()
+            + b"\n"
+            + _line(_value(6_000_000_006, 2.0))
+        )
         out.wait("6000000006 usv.accelerometer.accel_z MIN = 2", 5)
     assert not any(line.startswith("-9223372036854775808") for line in out.lines)

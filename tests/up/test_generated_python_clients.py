@@ -15,30 +15,56 @@ from modd_gen import generate, write_artifacts
 from modd_model import load_model
 
 
-def test_generated_publisher_and_subscriber(scenarios_dir: Path, tmp_path: Path, modd_cmd: str,
-                                            free_port: Callable[[], int],
-                                            wait_for: Callable[..., None]) -> None:
+def test_generated_publisher_and_subscriber(
+    scenarios_dir: Path,
+    tmp_path: Path,
+    modd_cmd: str,
+    free_port: Callable[[], int],
+    wait_for: Callable[..., None],
+) -> None:
     model_path = tmp_path / "model.modd"
-    model_path.write_text((scenarios_dir / "scenario1.modd").read_text()
-                          .replace('"127.0.0.1":7171', f'"127.0.0.1":{free_port()}'))
+    model_path.write_text(
+        (scenarios_dir / "scenario1.modd")
+        .read_text()
+        .replace('"127.0.0.1":7171', f'"127.0.0.1":{free_port()}')
+    )
     write_artifacts(tmp_path / "gen", generate(load_model(model_path)))
     zenoh = f"tcp/127.0.0.1:{free_port()}"
     run = tmp_path / "run"
-    up = subprocess.Popen([modd_cmd, "up", str(model_path), "--workdir", str(run),
-                           "--zenoh-listen", zenoh], stdout=subprocess.PIPE,
-                          stderr=subprocess.STDOUT, text=True)
+    up = subprocess.Popen(
+        [modd_cmd, "up", str(model_path), "--workdir", str(run), "--zenoh-listen", zenoh],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     publisher = None
     try:
         wait_for(run / "logs" / "subbroker.log", "config 1 running", 30)
         publisher = subprocess.Popen(
-            [sys.executable, str(tmp_path / "gen/integrator/python/pub_1.py"),
-             "--ingress", f"unix:{run / 'ingress.sock'}"],
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            [
+                sys.executable,
+                str(tmp_path / "gen/integrator/python/pub_1.py"),
+                "--ingress",
+                f"unix:{run / 'ingress.sock'}",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
         sub = subprocess.run(
-            [sys.executable, str(tmp_path / "gen/scientist/python/sub_5.py"), "--count", "3",
-             "--credentials", str(run / "credentials" / "viewer.cred")],
-            env={**os.environ, "MODD_ZENOH_CONNECT": zenoh}, capture_output=True, text=True,
-            timeout=60)
+            [
+                sys.executable,
+                str(tmp_path / "gen/scientist/python/sub_5.py"),
+                "--count",
+                "3",
+                "--credentials",
+                str(run / "credentials" / "viewer.cred"),
+            ],
+            env={**os.environ, "MODD_ZENOH_CONNECT": zenoh},
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
     finally:
         if publisher is not None:
             publisher.send_signal(signal.SIGTERM)

@@ -29,15 +29,27 @@ REPO = Path(__file__).resolve().parents[2]
 LIVE_TIMEOUT_S = 90.0
 
 
-def start(data: Path, port: int, zenoh_port: int, run: int, foxglove_port: int = 0,
-          replay_port: int = 0) -> tuple[subprocess.Popen[bytes], Path]:
+def start(
+    data: Path, port: int, zenoh_port: int, run: int, foxglove_port: int = 0, replay_port: int = 0
+) -> tuple[subprocess.Popen[bytes], Path]:
     log = data.parent / f"run-{run}.log"
-    env = {**os.environ, "MODD_PORT": str(port), "MODD_ZENOH_PORT": str(zenoh_port),
-           "MODD_DATA": str(data), "MODD_FOXGLOVE_PORT": str(foxglove_port),
-           "MODD_FOXGLOVE_REPLAY_PORT": str(replay_port)}
+    env = {
+        **os.environ,
+        "MODD_PORT": str(port),
+        "MODD_ZENOH_PORT": str(zenoh_port),
+        "MODD_DATA": str(data),
+        "MODD_FOXGLOVE_PORT": str(foxglove_port),
+        "MODD_FOXGLOVE_REPLAY_PORT": str(replay_port),
+    }
     with log.open("ab") as out:
-        proc = subprocess.Popen(["bash", str(REPO / "scripts" / "run.sh")], cwd=REPO, env=env,
-                                stdout=out, stderr=subprocess.STDOUT, start_new_session=True)
+        proc = subprocess.Popen(
+            ["bash", str(REPO / "scripts" / "run.sh")],
+            cwd=REPO,
+            env=env,
+            stdout=out,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
     return proc, log
 
 
@@ -54,8 +66,11 @@ def stop(proc: subprocess.Popen[bytes], log: Path) -> None:
 
 
 def api(url: str, token: str | None = None, body: Any = None) -> Any:
-    req = urllib.request.Request(url, data=None if body is None else json.dumps(body).encode(),
-                                 headers={"Content-Type": "application/json"})
+    req = urllib.request.Request(
+        url,
+        data=None if body is None else json.dumps(body).encode(),
+        headers={"Content-Type": "application/json"},
+    )
     if token:
         req.add_header("Authorization", f"Bearer {token}")
     with urllib.request.urlopen(req, timeout=10) as resp:
@@ -114,15 +129,20 @@ def check_foxglove_live(base: str, token: str, log: Path) -> None:
     port = base.rsplit(":", 1)[1]
     assert f"Foxglove/Lichtblick live at ws://127.0.0.1:{port}/foxglove/live" in log.read_text()
     model = load_model(REPO / "metamodel" / "examples" / "demo.modd")
-    req = urllib.request.Request(f"{base}/api/foxglove/links", data=b"", method="POST",
-                                 headers={"Authorization": f"Bearer {token}"})
+    req = urllib.request.Request(
+        f"{base}/api/foxglove/links",
+        data=b"",
+        method="POST",
+        headers={"Authorization": f"Bearer {token}"},
+    )
     with urllib.request.urlopen(req, timeout=30) as resp:
         live = json.loads(resp.read())["live"]
     # 6 s: every demo subscriber's period is at most 2 s
     report = node_json("foxglove_client.cjs", live, "6", timeout=60)
     assert report["protocol"] == "foxglove.sdk.v1" and not report["errors"], report["errors"]
-    got = {t.split("/")[2] for t, msgs in report["messages"].items()
-           if t.startswith("/usv/") and msgs}
+    got = {
+        t.split("/")[2] for t, msgs in report["messages"].items() if t.startswith("/usv/") and msgs
+    }
     expected = {s["name"] for s in model["subscribers"]} | {"link", "position"}
     assert expected <= got, f"no Foxglove values for {sorted(expected - got)}"
     lat = report["messages"]["/usv/track_lat"][-1]["msg"]
@@ -137,29 +157,38 @@ def check_foxglove_replay(base: str, token: str) -> None:
 
     files = api(f"{base}/api/drones/usv/archives", token)
     name = files[-1]["name"]
-    req = urllib.request.Request(f"{base}/api/drones/usv/archives/{name}/replay",
-                                 data=b"{}", method="POST",
-                                 headers={"Content-Type": "application/json",
-                                          "Authorization": f"Bearer {token}"})
+    req = urllib.request.Request(
+        f"{base}/api/drones/usv/archives/{name}/replay",
+        data=b"{}",
+        method="POST",
+        headers={"Content-Type": "application/json", "Authorization": f"Bearer {token}"},
+    )
     with urllib.request.urlopen(req, timeout=30) as resp:
         info = json.loads(resp.read())
-    assert info["url"].startswith(f"ws://{base[7:]}/foxglove/replay?ticket=") and \
-        "usv.ctd.water_temperature" in info["topics"], info
+    assert (
+        info["url"].startswith(f"ws://{base[7:]}/foxglove/replay?ticket=")
+        and "usv.ctd.water_temperature" in info["topics"]
+    ), info
     seek = (info["start_ns"] + info["end_ns"]) // 2
-    report = node_json("foxglove_client.cjs", info["url"], "3", "--seek", str(seek),
-                       "--after", "1", timeout=30)
+    report = node_json(
+        "foxglove_client.cjs", info["url"], "3", "--seek", str(seek), "--after", "1", timeout=30
+    )
     assert not report["errors"] and int(report["playbackStates"][0]["currentTime"]) == seek
     temps = report["messages"]["usv.ctd.water_temperature"]
     times = [int(m["logTime"]) for m in temps]
     assert times and times[0] >= seek and times == sorted(times), times[:5]
-    series = api(f"{base}/api/drones/usv/archives/{name}/series?topic=usv.ctd.water_temperature"
-                 f"&start_ns={seek}&max_points=100000", token)
+    series = api(
+        f"{base}/api/drones/usv/archives/{name}/series?topic=usv.ctd.water_temperature"
+        f"&start_ns={seek}&max_points=100000",
+        token,
+    )
     archived = {t: v for t, v in series["points"]}
     assert all(archived[int(m["logTime"])] == m["msg"]["value"] for m in temps)
 
 
 def test_make_run_serves_the_demo_live_and_stops(
-        tmp_path: Path, free_port: FreePort, wait_for: WaitFor) -> None:
+    tmp_path: Path, free_port: FreePort, wait_for: WaitFor
+) -> None:
     data = tmp_path / "data"
     port, zport, fport, rport = free_port(), free_port(), free_port(), free_port()
     base = f"http://127.0.0.1:{port}"
@@ -175,12 +204,13 @@ def test_make_run_serves_the_demo_live_and_stops(
         # the URL and login first (before the deploy's lines), in at most 8 lines
         said = [line for line in out.splitlines() if not line.startswith("modd: building")]
         assert said[0].startswith("modd: workbench at") and "login 'admin'" in said[1], out
-        assert len(said[:said.index("modd: Ctrl-C to stop") + 1]) <= 8, out
+        assert len(said[: said.index("modd: Ctrl-C to stop") + 1]) <= 8, out
 
         with urllib.request.urlopen(base + "/", timeout=10) as resp:
             assert b'<div id="root">' in resp.read()  # the built frontend, not the API only
-        token = api(base + "/api/auth/login",
-                    body={"username": "admin", "password": password})["token"]
+        token = api(base + "/api/auth/login", body={"username": "admin", "password": password})[
+            "token"
+        ]
         projects = api(base + "/api/projects", token)
         assert [(p["name"], p["head_revision"]) for p in projects] == [("demo", 1)]
         deployments = api(f"{base}/api/projects/{projects[0]['id']}/deployments", token)
@@ -207,8 +237,9 @@ def test_make_run_serves_the_demo_live_and_stops(
 
         scene = api(base + "/api/scene", token)
         assert scene["url"] == "/scene/"  # proxied on the workbench's origin, behind the session
-        page = urllib.request.Request(base + "/scene/",
-                                      headers={"Authorization": f"Bearer {token}"})
+        page = urllib.request.Request(
+            base + "/scene/", headers={"Authorization": f"Bearer {token}"}
+        )
         with urllib.request.urlopen(page, timeout=30) as resp:
             assert "'sha256-" in resp.headers["Content-Security-Policy"]
         with pytest.raises(urllib.error.HTTPError):  # no session, no scene
@@ -223,8 +254,7 @@ def test_make_run_serves_the_demo_live_and_stops(
         stop(proc, log)
     out = log.read_text()
     assert out.rstrip().endswith("modd: stopped"), out
-    pids = [int(p) for p in re.findall(r"started \w+ \(pid (\d+)\)",
-                                       (data / "up.log").read_text())]
+    pids = [int(p) for p in re.findall(r"started \w+ \(pid (\d+)\)", (data / "up.log").read_text())]
     assert len(pids) >= 4, out  # PubBroker, SubBroker, simulator, MAVLink bridge
     assert [p for p in pids if alive(p)] == []
     with pytest.raises(OSError):  # nothing serves the workbench any more
@@ -241,4 +271,3 @@ def test_make_run_serves_the_demo_live_and_stops(
         assert "not resumed" not in again  # modd up's note on the kept deployment: in its log
     finally:
         stop(proc, log)
-

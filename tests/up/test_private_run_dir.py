@@ -22,8 +22,9 @@ def test_default_run_dir_is_private(tmp_path: Path, monkeypatch: pytest.MonkeyPa
         assert p.stat().st_mode & 0o777 == 0o700 and p.stat().st_uid == os.getuid()
 
 
-def test_symlinked_run_dir_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                      modd_cmd: str) -> None:
+def test_symlinked_run_dir_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, modd_cmd: str
+) -> None:
     monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
     victim = tmp_path / "victim"
     victim.mkdir()
@@ -32,8 +33,9 @@ def test_symlinked_run_dir_is_refused(tmp_path: Path, monkeypatch: pytest.Monkey
     with pytest.raises(ValueError, match="symbolic link"):
         run_dir(None, "usv")
     env = {**os.environ, "XDG_RUNTIME_DIR": str(tmp_path)}
-    res = subprocess.run([modd_cmd, "up", str(DEMO)], env=env, capture_output=True, text=True,
-                         timeout=60)
+    res = subprocess.run(
+        [modd_cmd, "up", str(DEMO)], env=env, capture_output=True, text=True, timeout=60
+    )
     assert res.returncode == 1 and "symbolic link" in res.stderr, res.stderr
     assert list(victim.iterdir()) == []
     link = tmp_path / "link"
@@ -43,8 +45,9 @@ def test_symlinked_run_dir_is_refused(tmp_path: Path, monkeypatch: pytest.Monkey
 
 
 @pytest.mark.skipif(os.getuid() != 0, reason="giving a directory to another user needs root")
-def test_run_dir_of_another_user_is_refused(tmp_path: Path,
-                                            monkeypatch: pytest.MonkeyPatch) -> None:
+def test_run_dir_of_another_user_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
     theirs = tmp_path / "modd-up"
     theirs.mkdir(mode=0o755)

@@ -23,17 +23,35 @@ def _log_count(path: Path, text: str) -> int:
 
 
 def test_a_killed_subbroker_is_restarted_and_ctrl_c_stops_everything(
-        scenarios_dir: Path, tmp_path: Path, modd_cmd: str, free_port: Callable[[], int],
-        wait_for: Callable[..., None]) -> None:
+    scenarios_dir: Path,
+    tmp_path: Path,
+    modd_cmd: str,
+    free_port: Callable[[], int],
+    wait_for: Callable[..., None],
+) -> None:
     model = tmp_path / "model.modd"
-    model.write_text((scenarios_dir / "scenario1.modd").read_text()
-                     .replace('"127.0.0.1":7171', f'"127.0.0.1":{free_port()}'))
+    model.write_text(
+        (scenarios_dir / "scenario1.modd")
+        .read_text()
+        .replace('"127.0.0.1":7171', f'"127.0.0.1":{free_port()}')
+    )
     out_path = tmp_path / "up.out"
     sub_log = tmp_path / "run" / "logs" / "subbroker.log"
     with open(out_path, "w") as out:
-        up = subprocess.Popen([modd_cmd, "up", str(model), "--workdir", str(tmp_path / "run"),
-                               "--zenoh-listen", f"tcp/127.0.0.1:{free_port()}"],
-                              stdout=out, stderr=subprocess.STDOUT, text=True)
+        up = subprocess.Popen(
+            [
+                modd_cmd,
+                "up",
+                str(model),
+                "--workdir",
+                str(tmp_path / "run"),
+                "--zenoh-listen",
+                f"tcp/127.0.0.1:{free_port()}",
+            ],
+            stdout=out,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
     restarted = 0
     pids: dict[str, int] = {}
     try:

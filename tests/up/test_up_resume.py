@@ -16,9 +16,21 @@ from modd_model import load_model
 
 
 def _up(modd_cmd: str, model: Path, run: Path, port: int, *more: str) -> subprocess.Popen[str]:
-    return subprocess.Popen([modd_cmd, "up", str(model), "--workdir", str(run),
-                             "--zenoh-listen", f"tcp/127.0.0.1:{port}", *more],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    return subprocess.Popen(
+        [
+            modd_cmd,
+            "up",
+            str(model),
+            "--workdir",
+            str(run),
+            "--zenoh-listen",
+            f"tcp/127.0.0.1:{port}",
+            *more,
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
 
 
 def _stop(up: subprocess.Popen[str]) -> str:
@@ -29,12 +41,19 @@ def _stop(up: subprocess.Popen[str]) -> str:
 
 
 def test_up_runs_model_and_resumes_a_kept_deployment_only_when_told(
-        scenarios_dir: Path, tmp_path: Path, modd_cmd: str,
-        free_port: Callable[[], int], wait_for: Callable[..., None]) -> None:
+    scenarios_dir: Path,
+    tmp_path: Path,
+    modd_cmd: str,
+    free_port: Callable[[], int],
+    wait_for: Callable[..., None],
+) -> None:
     model = tmp_path / "model.modd"
     port = free_port()
-    model.write_text((scenarios_dir / "scenario1.modd").read_text()
-                     .replace('"127.0.0.1":7171', f'"127.0.0.1":{port}'))
+    model.write_text(
+        (scenarios_dir / "scenario1.modd")
+        .read_text()
+        .replace('"127.0.0.1":7171', f'"127.0.0.1":{port}')
+    )
     run = tmp_path / "run"
     # an earlier run's deployment: scenario 2 (19 streams), revision 5 by "operator"
     kept = load_model(scenarios_dir / "scenario2.modd")

@@ -97,6 +97,5 @@ def session_state(db: Db, token: str) -> tuple[int, str] | None:
 def admins_left(db: Db) -> int:
     """Admins in the store, their rows locked until commit (PostgreSQL), so
     two concurrent demotions cannot both see another admin."""
-    rows = db.scalars(select(User).where(User.roles.contains(Role.admin.value))
-                      .with_for_update())
+    rows = db.scalars(select(User).where(User.roles.contains(Role.admin.value)).with_for_update())
     return sum(1 for u in rows if Role.admin.value in u.roles.split(","))

@@ -102,12 +102,18 @@ def start_foxglove(settings: Settings, tls: LoopbackTls, out: TextIO) -> Foxglov
     try:
         server = FoxgloveLive(LOOPBACK, settings.foxglove_port, tls=tls)
     except RuntimeError as exc:  # the SDK's FoxgloveError
-        print(f"modd-backend: no Foxglove server on {LOOPBACK}:{settings.foxglove_port}: "
-              f"{exc}", file=out, flush=True)
+        print(
+            f"modd-backend: no Foxglove server on {LOOPBACK}:{settings.foxglove_port}: {exc}",
+            file=out,
+            flush=True,
+        )
         return None
-    print(f"modd-backend: Foxglove live at ws://{settings.host}:{settings.port}/foxglove/live "
-          "(with a ticket: the workbench's Foxglove links, docs/ecosystem.md)",
-          file=out, flush=True)
+    print(
+        f"modd-backend: Foxglove live at ws://{settings.host}:{settings.port}/foxglove/live "
+        "(with a ticket: the workbench's Foxglove links, docs/ecosystem.md)",
+        file=out,
+        flush=True,
+    )
     return server
 
 
@@ -122,8 +128,9 @@ def _reconcile(state: AppState) -> None:
         reconcile(db, state.statuses, state.settings.deploy_timeout_s)
 
 
-async def _reconcile_deployments(state: AppState, stop: asyncio.Event,
-                                 every_s: float = 1.0) -> None:
+async def _reconcile_deployments(
+    state: AppState, stop: asyncio.Event, every_s: float = 1.0
+) -> None:
     """Settle deploy records with what the drones report (reconcile.py)."""
     while not stop.is_set():
         await asyncio.sleep(every_s)
@@ -155,6 +162,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         os.umask(0o077)  # the store, logs and state this process writes: owner only
         settings.data_dir.mkdir(parents=True, exist_ok=True)
+
         def first_start(store: Store) -> None:
             with store.session() as db:
                 ensure_first_admin(db, settings.initial_admin_password, out)
@@ -162,12 +170,15 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         store = Store.open(settings.effective_database_url, init=first_start)
         zenoh_session = None
         if settings.zenoh_enabled:
-            zenoh_session = ZenohSession.open(settings.zenoh_connect, settings.zenoh_listen,
-                                              settings.zenoh_credentials)
+            zenoh_session = ZenohSession.open(
+                settings.zenoh_connect, settings.zenoh_listen, settings.zenoh_credentials
+            )
         if settings.preload_milp:
             preload_milp()
         state = AppState(
-            settings, store, zenoh_session,
+            settings,
+            store,
+            zenoh_session,
             heavy=HeavyLimiter(settings.heavy_per_user, settings.heavy_total),
             login_accounts=Throttle(settings.login_limit_account, settings.login_window_s),
             login_addresses=Throttle(settings.login_limit_address, settings.login_window_s),
@@ -194,8 +205,9 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         if settings.foxglove_replay_port:
             from .replay import ReplaySlot
 
-            state.replay = ReplaySlot(LOOPBACK, settings.foxglove_replay_port,
-                                      tls=state.loopback_tls)
+            state.replay = ReplaySlot(
+                LOOPBACK, settings.foxglove_replay_port, tls=state.loopback_tls
+            )
         stop = asyncio.Event()
         tasks = [asyncio.create_task(_ping_database(state, stop))]
         if state.statuses is not None:

@@ -41,8 +41,9 @@ def csv_text(path: Path, topic: str, start_ns: int | None, end_ns: int | None) -
     return out.getvalue()
 
 
-def series(path: Path, topic: str, start_ns: int | None, end_ns: int | None,
-           max_points: int) -> tuple[int, list[Sample]]:
+def series(
+    path: Path, topic: str, start_ns: int | None, end_ns: int | None, max_points: int
+) -> tuple[int, list[Sample]]:
     """(how many samples the range holds, at most ``max_points`` of them)."""
     samples = read_topic(path, topic, start_ns, end_ns)
     return len(samples), reduce_minmax(samples, max_points)
@@ -52,8 +53,9 @@ def _get_pool() -> ProcessPoolExecutor:
     global _pool
     with _lock:
         if _pool is None:
-            _pool = ProcessPoolExecutor(ARCHIVE_WORKERS,
-                                        mp_context=multiprocessing.get_context("spawn"))
+            _pool = ProcessPoolExecutor(
+                ARCHIVE_WORKERS, mp_context=multiprocessing.get_context("spawn")
+            )
         return _pool
 
 
@@ -87,16 +89,33 @@ def shutdown_pool() -> None:
 MAX_EXPORT_SAMPLES = 20_000_000
 
 
-def dataset_file(paths: list[Path], model: dict[str, Any], fmt: str, out: Path,
-                 start_ns: int | None, end_ns: int | None, topics: list[str] | None,
-                 resample_s: float | None, max_samples: int, received: bool = False
-                 ) -> list[str]:
+def dataset_file(
+    paths: list[Path],
+    model: dict[str, Any],
+    fmt: str,
+    out: Path,
+    start_ns: int | None,
+    end_ns: int | None,
+    topics: list[str] | None,
+    resample_s: float | None,
+    max_samples: int,
+    received: bool = False,
+) -> list[str]:
     """``modd dataset`` (``--received`` with ``received``) into ``out`` (in a
     worker); its notes. Raises DatasetError."""
     from modd.dataset.build import make_dataset
     from modd.dataset.export import Options
 
-    summary = make_dataset(paths, model, fmt, out, start_ns=start_ns, end_ns=end_ns,
-                           topics=topics, resample_s=resample_s,
-                           options=Options(max_samples=max_samples), received=received)
+    summary = make_dataset(
+        paths,
+        model,
+        fmt,
+        out,
+        start_ns=start_ns,
+        end_ns=end_ns,
+        topics=topics,
+        resample_s=resample_s,
+        options=Options(max_samples=max_samples),
+        received=received,
+    )
     return summary.notes

@@ -105,8 +105,11 @@ class FileInfo:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "name": self.name, "size": self.size, "complete": self.complete,
-            "start_ns": self.start_ns, "end_ns": self.end_ns,
+            "name": self.name,
+            "size": self.size,
+            "complete": self.complete,
+            "start_ns": self.start_ns,
+            "end_ns": self.end_ns,
             "topics": [{"topic": t, "messages": n} for t, n in sorted(self.topics.items())],
         }
 
@@ -120,12 +123,16 @@ def file_info(path: Path) -> FileInfo:
     if summary is not None and summary.statistics is not None:
         st = summary.statistics
         counts = {
-            ch.topic: st.channel_message_counts.get(cid, 0)
-            for cid, ch in summary.channels.items()
+            ch.topic: st.channel_message_counts.get(cid, 0) for cid, ch in summary.channels.items()
         }
-        return FileInfo(path.name, path.stat().st_size, True,
-                        st.message_start_time if st.message_count else None,
-                        st.message_end_time if st.message_count else None, counts)
+        return FileInfo(
+            path.name,
+            path.stat().st_size,
+            True,
+            st.message_start_time if st.message_count else None,
+            st.message_end_time if st.message_count else None,
+            counts,
+        )
     topics: dict[str, int] = {}
     first = last = None
     for topic, msg in _stream(path):
@@ -135,8 +142,7 @@ def file_info(path: Path) -> FileInfo:
     return FileInfo(path.name, path.stat().st_size, False, first, last, topics)
 
 
-def read_topic(path: Path, topic: str, start_ns: int | None, end_ns: int | None
-               ) -> list[Sample]:
+def read_topic(path: Path, topic: str, start_ns: int | None, end_ns: int | None) -> list[Sample]:
     """(log time ns, value) of ``topic`` in [start, end), in time order."""
     try:
         with path.open("rb") as f:
@@ -145,14 +151,16 @@ def read_topic(path: Path, topic: str, start_ns: int | None, end_ns: int | None
                 return [
                     (m.log_time, _value(m.data))
                     for _s, _c, m in reader.iter_messages(
-                        topics=[topic], starting_at=start_ns, ending_before=end_ns)
+                        topics=[topic], starting_at=start_ns, ending_before=end_ns
+                    )
                 ]
     except _BROKEN:
         pass
     out = [
         (m.log_time, _value(m.data))
         for t, m in _stream(path)
-        if t == topic and (start_ns is None or m.log_time >= start_ns)
+        if t == topic
+        and (start_ns is None or m.log_time >= start_ns)
         and (end_ns is None or m.log_time < end_ns)
     ]
     out.sort(key=lambda s: s[0])

@@ -93,28 +93,38 @@ def check_sqlite_copy(src: Path) -> None:
     from .db import alembic_config
 
     try:
-        with contextlib.closing(sqlite3.connect(f"{src.resolve().as_uri()}?mode=ro",
-                                                uri=True)) as db:
+        with contextlib.closing(
+            sqlite3.connect(f"{src.resolve().as_uri()}?mode=ro", uri=True)
+        ) as db:
             intact = db.execute("PRAGMA integrity_check").fetchone()
-            entries = {(str(t), str(n)) for t, n in
-                       db.execute("SELECT type, name FROM sqlite_master")}
-            versions = [r[0] for r in db.execute("SELECT version_num FROM alembic_version")] \
-                if ("table", "alembic_version") in entries else []
+            entries = {
+                (str(t), str(n)) for t, n in db.execute("SELECT type, name FROM sqlite_master")
+            }
+            versions = (
+                [r[0] for r in db.execute("SELECT version_num FROM alembic_version")]
+                if ("table", "alembic_version") in entries
+                else []
+            )
     except sqlite3.DatabaseError as exc:
-        raise SystemExit(f"modd-backend: {src} is not a SQLite database ({exc}); "
-                         "nothing restored") from None
+        raise SystemExit(
+            f"modd-backend: {src} is not a SQLite database ({exc}); nothing restored"
+        ) from None
     if intact != ("ok",):
         raise SystemExit(f"modd-backend: {src} is damaged ({intact}); nothing restored")
     missing = {n for t, n in _schema_entries() if t == "table"} - {n for _, n in entries}
     foreign = sorted(f"{t} {n}" for t, n in entries - _schema_entries())
     if missing or foreign:
-        raise SystemExit(f"modd-backend: {src} is not a store of this workbench (missing: "
-                         f"{sorted(missing) or 'none'}; not ours: {foreign or 'none'}); "
-                         "nothing restored")
+        raise SystemExit(
+            f"modd-backend: {src} is not a store of this workbench (missing: "
+            f"{sorted(missing) or 'none'}; not ours: {foreign or 'none'}); "
+            "nothing restored"
+        )
     known = {r.revision for r in ScriptDirectory.from_config(alembic_config()).walk_revisions()}
     if len(versions) != 1 or versions[0] not in known:
-        raise SystemExit(f"modd-backend: {src} is at no migration this backend knows "
-                         f"({versions}); nothing restored")
+        raise SystemExit(
+            f"modd-backend: {src} is at no migration this backend knows "
+            f"({versions}); nothing restored"
+        )
 
 
 def _restore_sqlite(path: Path, src: Path) -> None:
@@ -123,13 +133,17 @@ def _restore_sqlite(path: Path, src: Path) -> None:
     staged = path.with_name(f".{path.name}.restore")
     staged.unlink(missing_ok=True)
     try:
-        with contextlib.closing(sqlite3.connect(src)) as copy, \
-                contextlib.closing(sqlite3.connect(staged)) as stage:
+        with (
+            contextlib.closing(sqlite3.connect(src)) as copy,
+            contextlib.closing(sqlite3.connect(staged)) as stage,
+        ):
             copy.backup(stage)
             stage.execute("DELETE FROM sessions")  # no session outlives a restore
             stage.commit()
-        with contextlib.closing(sqlite3.connect(staged)) as stage, \
-                contextlib.closing(sqlite3.connect(path)) as live:
+        with (
+            contextlib.closing(sqlite3.connect(staged)) as stage,
+            contextlib.closing(sqlite3.connect(path)) as live,
+        ):
             stage.backup(live)  # one step, under the live file's write lock
     finally:
         staged.unlink(missing_ok=True)
@@ -148,12 +162,17 @@ def _restore_postgres(url: str, src: Path) -> None:
     exe = shutil.which("pg_restore")
     if exe is None:
         raise SystemExit("modd-backend: pg_restore not found (apt-get install postgresql-client)")
-    text = subprocess.run([exe, "--data-only", "--file", "-", str(src)],  # no connection
-                          capture_output=True, check=False)
+    text = subprocess.run(
+        [exe, "--data-only", "--file", "-", str(src)],  # no connection
+        capture_output=True,
+        check=False,
+    )
     if text.returncode != 0:
-        raise SystemExit(f"modd-backend: {src} is not a pg_dump archive "
-                         f"({text.stderr.decode(errors='replace').strip()[:200]}); "
-                         "nothing restored")
+        raise SystemExit(
+            f"modd-backend: {src} is not a pg_dump archive "
+            f"({text.stderr.decode(errors='replace').strip()[:200]}); "
+            "nothing restored"
+        )
     try:
         dump = parse_dump(text.stdout.decode("utf-8", errors="replace"))
     except DumpRefused as exc:
@@ -185,11 +204,15 @@ def restore(url: str, src: Path) -> None:
 def main(argv: list[str]) -> int:
     """``modd-backend backup|restore [--data DIR] [--database-url URL] FILE``."""
     command, rest = argv[0], argv[1:]
-    p = argparse.ArgumentParser(prog=f"modd-backend {command}",
-                                description=f"{command} the workbench's store")
+    p = argparse.ArgumentParser(
+        prog=f"modd-backend {command}", description=f"{command} the workbench's store"
+    )
     p.add_argument("--data", type=Path, default=Path("data"), help="data directory")
-    p.add_argument("--database-url", default=os.environ.get("MODD_DATABASE_URL"),
-                   help="SQLAlchemy URL (default: $MODD_DATABASE_URL, else SQLite in --data)")
+    p.add_argument(
+        "--database-url",
+        default=os.environ.get("MODD_DATABASE_URL"),
+        help="SQLAlchemy URL (default: $MODD_DATABASE_URL, else SQLite in --data)",
+    )
     p.add_argument("file", type=Path, help="the backup file")
     a = p.parse_args(rest)
     os.umask(0o077)  # what a backup or a restore writes: owner only

@@ -51,7 +51,8 @@ def is_json(content_type: str | None) -> bool:
     message["content-type"] = content_type
     subtype = message.get_content_subtype()
     return message.get_content_maintype() == "application" and (
-        subtype == "json" or subtype.endswith("+json"))
+        subtype == "json" or subtype.endswith("+json")
+    )
 
 
 async def request_body(request: Request) -> Body:
@@ -68,24 +69,41 @@ def read_as(body: bytes, json_body: bool, cls: type[M]) -> M | list[dict[str, An
     wherever it is called (a thread, a worker process)."""
     try:
         if not body:
-            return [{"type": "missing", "loc": ("body",), "msg": "Field required",
-                     "input": None}]
+            return [{"type": "missing", "loc": ("body",), "msg": "Field required", "input": None}]
         data: Any = body
         if json_body:
             try:
                 data = json.loads(body)
             except json.JSONDecodeError as exc:
-                return [{"type": "json_invalid", "loc": ("body", exc.pos),
-                         "msg": "JSON decode error", "input": {}, "ctx": {"error": exc.msg}}]
+                return [
+                    {
+                        "type": "json_invalid",
+                        "loc": ("body", exc.pos),
+                        "msg": "JSON decode error",
+                        "input": {},
+                        "ctx": {"error": exc.msg},
+                    }
+                ]
             except UnicodeDecodeError as exc:
-                return [{"type": "json_invalid", "loc": ("body", exc.start),
-                         "msg": "JSON decode error", "input": {}, "ctx": {"error": str(exc)}}]
+                return [
+                    {
+                        "type": "json_invalid",
+                        "loc": ("body", exc.start),
+                        "msg": "JSON decode error",
+                        "input": {},
+                        "ctx": {"error": str(exc)},
+                    }
+                ]
         return cls.model_validate(data)
     except ValidationError as exc:
-        return [{**e, "loc": ("body", *e["loc"]), **({"ctx": {k: str(v) for k, v in
-                                                              e["ctx"].items()}}
-                                                     if "ctx" in e else {})}
-                for e in exc.errors(include_url=False, include_input=False)]
+        return [
+            {
+                **e,
+                "loc": ("body", *e["loc"]),
+                **({"ctx": {k: str(v) for k, v in e["ctx"].items()}} if "ctx" in e else {}),
+            }
+            for e in exc.errors(include_url=False, include_input=False)
+        ]
 
 
 def parse_as(body: Body, cls: type[M]) -> M:
@@ -105,8 +123,14 @@ _DOCUMENTED: dict[str, type[BaseModel]] = {}
 def documented(cls: type[BaseModel]) -> dict[str, Any]:
     """A route's ``openapi_extra``: its JSON body is a ``cls``."""
     _DOCUMENTED[cls.__name__] = cls
-    return {"requestBody": {"required": True, "content": {"application/json": {
-        "schema": {"$ref": f"#/components/schemas/{cls.__name__}"}}}}}
+    return {
+        "requestBody": {
+            "required": True,
+            "content": {
+                "application/json": {"schema": {"$ref": f"#/components/schemas/{cls.__name__}"}}
+            },
+        }
+    }
 
 
 def install_schemas(app: FastAPI) -> None:

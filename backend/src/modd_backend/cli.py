@@ -1,7 +1,7 @@
 """``modd-backend``: run the service (loopback unless told otherwise).
 
-    modd-backend --host 127.0.0.1 --port 8000 --data ./data
-    modd-backend backup --data ./data FILE     # and restore: see backup.py
+modd-backend --host 127.0.0.1 --port 8000 --data ./data
+modd-backend backup --data ./data FILE     # and restore: see backup.py
 """
 
 from __future__ import annotations
@@ -34,58 +34,112 @@ def parse_args(argv: list[str] | None = None) -> Settings:
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default loopback)")
     p.add_argument("--port", type=int, default=8000)
     p.add_argument("--data", type=Path, default=Path("data"), help="data directory")
-    p.add_argument("--database-url", default=os.environ.get("MODD_DATABASE_URL"),
-                   help="SQLAlchemy URL (default: $MODD_DATABASE_URL, else a SQLite file in "
-                   "--data); a URL with a password belongs in the environment, not here")
-    p.add_argument("--zenoh-connect", action="append", metavar="ENDPOINT",
-                   help=f"zenoh endpoint to connect to (default {DEFAULT_ZENOH_CONNECT[0]})")
+    p.add_argument(
+        "--database-url",
+        default=os.environ.get("MODD_DATABASE_URL"),
+        help="SQLAlchemy URL (default: $MODD_DATABASE_URL, else a SQLite file in "
+        "--data); a URL with a password belongs in the environment, not here",
+    )
+    p.add_argument(
+        "--zenoh-connect",
+        action="append",
+        metavar="ENDPOINT",
+        help=f"zenoh endpoint to connect to (default {DEFAULT_ZENOH_CONNECT[0]})",
+    )
     p.add_argument("--zenoh-listen", action="append", metavar="ENDPOINT", default=[])
-    p.add_argument("--zenoh-credentials", type=Path,
-                   default=os.environ.get("MODD_ZENOH_CREDENTIALS") or None, metavar="FILE",
-                   help="the backend's zenoh user:password file (default "
-                   "$MODD_ZENOH_CREDENTIALS; docs/security.md)")
-    p.add_argument("--deploy-key", type=Path, default=os.environ.get("MODD_DEPLOY_KEY") or None,
-                   metavar="FILE", help="key file that signs deploys, the SubBroker's deploy.key "
-                   "(default $MODD_DEPLOY_KEY)")
+    p.add_argument(
+        "--zenoh-credentials",
+        type=Path,
+        default=os.environ.get("MODD_ZENOH_CREDENTIALS") or None,
+        metavar="FILE",
+        help="the backend's zenoh user:password file (default "
+        "$MODD_ZENOH_CREDENTIALS; docs/security.md)",
+    )
+    p.add_argument(
+        "--deploy-key",
+        type=Path,
+        default=os.environ.get("MODD_DEPLOY_KEY") or None,
+        metavar="FILE",
+        help="key file that signs deploys, the SubBroker's deploy.key (default $MODD_DEPLOY_KEY)",
+    )
     p.add_argument("--no-zenoh", action="store_true", help="no zenoh session (no deploy/streams)")
-    p.add_argument("--frontend", type=Path, default=Path("frontend/dist"),
-                   help="built frontend to serve at / when it exists")
+    p.add_argument(
+        "--frontend",
+        type=Path,
+        default=Path("frontend/dist"),
+        help="built frontend to serve at / when it exists",
+    )
     p.add_argument("--archives", type=Path, help="archive directory (default DATA/archives)")
-    p.add_argument("--records", type=Path,
-                   help="base-station records directory (default DATA/records)")
+    p.add_argument(
+        "--records", type=Path, help="base-station records directory (default DATA/records)"
+    )
     p.add_argument("--deploy-timeout", type=float, default=10.0, help="seconds")
-    p.add_argument("--scene-port", type=int, default=0,
-                   help="port of the 3D scene (viser); 0: any free port; -1: no scene")
-    p.add_argument("--foxglove-port", type=int, default=8765,
-                   help="loopback port of the Foxglove server (live values for Foxglove and "
-                   "Lichtblick); viewers connect through /foxglove/live with a ticket "
-                   "(docs/ecosystem.md); 0: none")
-    p.add_argument("--foxglove-replay-port", type=int, default=8865,
-                   help="loopback port of the Foxglove replay of an archive chosen in the "
-                   "workbench (viewers connect through /foxglove/replay); 0: none")
-    p.add_argument("--admin-password-file", type=Path, metavar="FILE",
-                   help="file holding the first admin's password (first line)")
-    p.add_argument("--admin-password",
-                   help="deprecated: visible to every local user in the process list; use "
-                   "--admin-password-file or $MODD_ADMIN_PASSWORD")
-    p.add_argument("--allowed-host", action="append", default=[], metavar="NAME",
-                   help="a Host name clients may use besides the loopback names (repeat)")
-    p.add_argument("--trusted-proxy", action="append", metavar="ADDRESS",
-                   default=[a for a in os.environ.get("MODD_TRUSTED_PROXIES", "").split() if a],
-                   help="address of a reverse proxy whose X-Forwarded-For/-Proto headers are "
-                   "believed (repeat; default $MODD_TRUSTED_PROXIES; none: they are ignored)")
-    p.add_argument("--tile-origin", action="append", metavar="ORIGIN",
-                   default=[o for o in os.environ.get("MODD_TILE_ORIGINS", "").split() if o],
-                   help="an origin (https://host[:port]) the map may load tiles from (repeat; "
-                   "default $MODD_TILE_ORIGINS, space-separated; none: no foreign images)")
-    p.add_argument("--viewer-origin", action="append", metavar="ORIGIN",
-                   default=[o for o in os.environ.get("MODD_VIEWER_ORIGINS", "").split() if o],
-                   help="the origin (https://host[:port]) of a web viewer allowed to open the "
-                   "WebSockets, e.g. a Lichtblick web app (repeat; default "
-                   "$MODD_VIEWER_ORIGINS; docs/ecosystem.md)")
+    p.add_argument(
+        "--scene-port",
+        type=int,
+        default=0,
+        help="port of the 3D scene (viser); 0: any free port; -1: no scene",
+    )
+    p.add_argument(
+        "--foxglove-port",
+        type=int,
+        default=8765,
+        help="loopback port of the Foxglove server (live values for Foxglove and "
+        "Lichtblick); viewers connect through /foxglove/live with a ticket "
+        "(docs/ecosystem.md); 0: none",
+    )
+    p.add_argument(
+        "--foxglove-replay-port",
+        type=int,
+        default=8865,
+        help="loopback port of the Foxglove replay of an archive chosen in the "
+        "workbench (viewers connect through /foxglove/replay); 0: none",
+    )
+    p.add_argument(
+        "--admin-password-file",
+        type=Path,
+        metavar="FILE",
+        help="file holding the first admin's password (first line)",
+    )
+    p.add_argument(
+        "--admin-password",
+        help="deprecated: visible to every local user in the process list; use "
+        "--admin-password-file or $MODD_ADMIN_PASSWORD",
+    )
+    p.add_argument(
+        "--allowed-host",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="a Host name clients may use besides the loopback names (repeat)",
+    )
+    p.add_argument(
+        "--trusted-proxy",
+        action="append",
+        metavar="ADDRESS",
+        default=[a for a in os.environ.get("MODD_TRUSTED_PROXIES", "").split() if a],
+        help="address of a reverse proxy whose X-Forwarded-For/-Proto headers are "
+        "believed (repeat; default $MODD_TRUSTED_PROXIES; none: they are ignored)",
+    )
+    p.add_argument(
+        "--tile-origin",
+        action="append",
+        metavar="ORIGIN",
+        default=[o for o in os.environ.get("MODD_TILE_ORIGINS", "").split() if o],
+        help="an origin (https://host[:port]) the map may load tiles from (repeat; "
+        "default $MODD_TILE_ORIGINS, space-separated; none: no foreign images)",
+    )
+    p.add_argument(
+        "--viewer-origin",
+        action="append",
+        metavar="ORIGIN",
+        default=[o for o in os.environ.get("MODD_VIEWER_ORIGINS", "").split() if o],
+        help="the origin (https://host[:port]) of a web viewer allowed to open the "
+        "WebSockets, e.g. a Lichtblick web app (repeat; default "
+        "$MODD_VIEWER_ORIGINS; docs/ecosystem.md)",
+    )
     a = p.parse_args(argv)
-    for option, origins in (("--tile-origin", a.tile_origin),
-                            ("--viewer-origin", a.viewer_origin)):
+    for option, origins in (("--tile-origin", a.tile_origin), ("--viewer-origin", a.viewer_origin)):
         for origin in origins:
             try:
                 check_origin(origin)
@@ -96,16 +150,26 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         try:  # a small regular file (not /dev/zero, not a link), like every secret
             password = read_secret(a.admin_password_file, "admin password file").splitlines()[0]
         except (OSError, ValueError, IndexError) as exc:
-            p.error(f"--admin-password-file {a.admin_password_file}: cannot read a password "
-                    f"({exc or 'empty file'})")
-    if a.database_url and a.database_url != os.environ.get("MODD_DATABASE_URL") \
-            and _has_password(a.database_url):
-        print("modd-backend: warning: --database-url shows the database password to every "
-              "local user (process list); use $MODD_DATABASE_URL", file=sys.stderr)
+            p.error(
+                f"--admin-password-file {a.admin_password_file}: cannot read a password "
+                f"({exc or 'empty file'})"
+            )
+    if (
+        a.database_url
+        and a.database_url != os.environ.get("MODD_DATABASE_URL")
+        and _has_password(a.database_url)
+    ):
+        print(
+            "modd-backend: warning: --database-url shows the database password to every "
+            "local user (process list); use $MODD_DATABASE_URL",
+            file=sys.stderr,
+        )
     if a.admin_password is not None:
-        print("modd-backend: warning: --admin-password shows the password to every local "
-              "user (process list); use --admin-password-file or $MODD_ADMIN_PASSWORD",
-              file=sys.stderr)
+        print(
+            "modd-backend: warning: --admin-password shows the password to every local "
+            "user (process list); use --admin-password-file or $MODD_ADMIN_PASSWORD",
+            file=sys.stderr,
+        )
         password = a.admin_password
     return Settings(
         data_dir=a.data,
@@ -149,8 +213,11 @@ class RedactQuery(logging.Filter):
     def filter(self, record: logging.LogRecord) -> bool:
         if isinstance(record.args, tuple):
             record.args = tuple(
-                a.split("?", 1)[0] + "?…" if isinstance(a, str) and "?" in a and
-                a.startswith("/") else a for a in record.args)
+                a.split("?", 1)[0] + "?…"
+                if isinstance(a, str) and "?" in a and a.startswith("/")
+                else a
+                for a in record.args
+            )
         return True
 
 
@@ -176,10 +243,14 @@ def main(argv: list[str] | None = None) -> int:
 
     settings = parse_args(argv)
     if not _is_loopback(settings.host):
-        print(f"modd-backend: warning: listening on {settings.host}, not loopback",
-              file=sys.stderr)
-    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="info",
-                **server_options(settings))
+        print(f"modd-backend: warning: listening on {settings.host}, not loopback", file=sys.stderr)
+    uvicorn.run(
+        create_app(settings),
+        host=settings.host,
+        port=settings.port,
+        log_level="info",
+        **server_options(settings),
+    )
     return 0
 
 
@@ -190,9 +261,13 @@ def server_options(settings: Settings) -> dict[str, Any]:
     from .wspacing import PacedWebSocketProtocol
 
     proxies = list(settings.trusted_proxies)
-    return {"log_config": log_config(), "ws_max_size": 1024 * 1024,
-            "ws": PacedWebSocketProtocol, "proxy_headers": bool(proxies),
-            "forwarded_allow_ips": proxies or None}
+    return {
+        "log_config": log_config(),
+        "ws_max_size": 1024 * 1024,
+        "ws": PacedWebSocketProtocol,
+        "proxy_headers": bool(proxies),
+        "forwarded_allow_ips": proxies or None,
+    }
 
 
 if __name__ == "__main__":

@@ -59,13 +59,22 @@ def deploy(
 ) -> Deployment:
     """Send ``model`` to its drone's SubBroker and record the outcome."""
     drone = str(model["drone"]["name"])
-    body: dict[str, Any] = {"model": model, "timeout_s": timeout_s, "revision": version.revision,
-                            "project_id": version.project_id, "deployed_by": user}
+    body: dict[str, Any] = {
+        "model": model,
+        "timeout_s": timeout_s,
+        "revision": version.revision,
+        "project_id": version.project_id,
+        "deployed_by": user,
+    }
     if key is not None:
         body = sign_request(key, body)
     record = Deployment(
-        project_id=version.project_id, revision=version.revision, drone=drone,
-        requested_by=user, status="pending", nonce=body.get("nonce"),
+        project_id=version.project_id,
+        revision=version.revision,
+        drone=drone,
+        requested_by=user,
+        status="pending",
+        nonce=body.get("nonce"),
     )
     db.add(record)
     db.commit()

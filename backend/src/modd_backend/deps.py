@@ -123,11 +123,14 @@ def credentials(
             sent = request.headers.get(CSRF_HEADER, "")
             if not hmac.compare_digest(sent.encode(), csrf_for(cookie).encode()):
                 raise HTTPException(
-                    403, f"a cookie session needs the {CSRF_HEADER} header on "
-                    f"{request.method} (given by login and /api/auth/me)")
+                    403,
+                    f"a cookie session needs the {CSRF_HEADER} header on "
+                    f"{request.method} (given by login and /api/auth/me)",
+                )
         return Credentials(cookie, True)
-    raise HTTPException(401, "missing bearer token or session cookie",
-                        headers={"WWW-Authenticate": "Bearer"})
+    raise HTTPException(
+        401, "missing bearer token or session cookie", headers={"WWW-Authenticate": "Bearer"}
+    )
 
 
 CredsDep = Annotated[Credentials, Depends(credentials)]
@@ -143,9 +146,7 @@ TokenDep = Annotated[str, Depends(bearer_token)]
 def current_user(db: DbDep, token: TokenDep) -> User:
     user = user_for_token(db, token)
     if user is None:
-        raise HTTPException(
-            401, "invalid or expired token", headers={"WWW-Authenticate": "Bearer"}
-        )
+        raise HTTPException(401, "invalid or expired token", headers={"WWW-Authenticate": "Bearer"})
     return user
 
 

@@ -35,8 +35,11 @@ def as_run(model: dict[str, Any], archive_dir: Path | None) -> dict[str, Any]:
     socket = archive_dir.parent / "ingress.sock"
     if not socket.exists() or not isinstance(model.get("pubBroker"), dict):
         return model
-    broker = {**model["pubBroker"], "logPath": str(archive_dir),
-              "ingress": {**model["pubBroker"].get("ingress", {}), "unixSocket": str(socket)}}
+    broker = {
+        **model["pubBroker"],
+        "logPath": str(archive_dir),
+        "ingress": {**model["pubBroker"].get("ingress", {}), "unixSocket": str(socket)},
+    }
     return {**model, "pubBroker": broker}
 
 
@@ -56,8 +59,9 @@ def station_of(connect: tuple[str, ...], credentials: Path | None) -> Station | 
     return Station(connect[0], shown)
 
 
-def role_zip(model: dict[str, Any], role: str, folder: str,
-             station: Station | None = None) -> bytes:
+def role_zip(
+    model: dict[str, Any], role: str, folder: str, station: Station | None = None
+) -> bytes:
     """The role's artefacts under ``folder/`` in a zip, with INDEX.txt listing
     each file and whether it is regenerated or the user's once written."""
     artifacts = generate(model, role, station)
@@ -87,6 +91,5 @@ def content_disposition(filename: str) -> str:
     """
     from urllib.parse import quote
 
-    fallback = "".join(c if 0x20 <= ord(c) < 0x7F and c not in '"\\;/' else "_"
-                       for c in filename)
+    fallback = "".join(c if 0x20 <= ord(c) < 0x7F and c not in '"\\;/' else "_" for c in filename)
     return f"attachment; filename=\"{fallback}\"; filename*=UTF-8''{quote(filename, safe='')}"

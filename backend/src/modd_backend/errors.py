@@ -19,8 +19,9 @@ MAX_VALIDATION_ERRORS = 50
 
 
 class ApiError(Exception):
-    def __init__(self, status: int, detail: str, *, headers: dict[str, str] | None = None,
-                 **extra: Any) -> None:
+    def __init__(
+        self, status: int, detail: str, *, headers: dict[str, str] | None = None, **extra: Any
+    ) -> None:
         super().__init__(detail)
         self.status = status
         self.body = {"detail": detail, **extra}
@@ -35,8 +36,7 @@ async def _handle(_request: Request, exc: Exception) -> JSONResponse:
 def retry_later(status: int, detail: str, retry_after_s: float) -> ApiError:
     """429 or 503 with ``Retry-After`` in whole seconds (at least 1)."""
     seconds = max(1, int(retry_after_s + 0.999))
-    return ApiError(status, detail, headers={"Retry-After": str(seconds)},
-                    retry_after_s=seconds)
+    return ApiError(status, detail, headers={"Retry-After": str(seconds)}, retry_after_s=seconds)
 
 
 async def _invalid(_request: Request, exc: Exception) -> Response:
@@ -45,12 +45,19 @@ async def _invalid(_request: Request, exc: Exception) -> Response:
     500, and a large body was echoed whole. ``type``, ``loc``, ``msg`` and
     ``ctx`` (as text) are kept; the text is ASCII JSON, so any key is safe."""
     assert isinstance(exc, RequestValidationError)
-    errors = [{"type": str(e.get("type", "")), "loc": [x if isinstance(x, int) else str(x)
-                                                       for x in e.get("loc", ())],
-               "msg": str(e.get("msg", "")),
-               **({"ctx": {str(k): str(v) for k, v in e["ctx"].items()}}
-                  if isinstance(e.get("ctx"), dict) else {})}
-              for e in list(exc.errors())[:MAX_VALIDATION_ERRORS]]
+    errors = [
+        {
+            "type": str(e.get("type", "")),
+            "loc": [x if isinstance(x, int) else str(x) for x in e.get("loc", ())],
+            "msg": str(e.get("msg", "")),
+            **(
+                {"ctx": {str(k): str(v) for k, v in e["ctx"].items()}}
+                if isinstance(e.get("ctx"), dict)
+                else {}
+            ),
+        }
+        for e in list(exc.errors())[:MAX_VALIDATION_ERRORS]
+    ]
     body = json.dumps({"detail": errors}, ensure_ascii=True)
     return Response(body, status_code=422, media_type="application/json")
 

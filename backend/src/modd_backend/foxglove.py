@@ -52,8 +52,7 @@ SUBPROTOCOL = "foxglove.sdk.v1"
 #: Default port, as Foxglove's own servers.
 DEFAULT_PORT = 8765
 
-_TIME = {"type": "object", "properties": {"sec": {"type": "integer"},
-                                          "nsec": {"type": "integer"}}}
+_TIME = {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}}
 # One JSON type per field: Foxglove's and Lichtblick's JSON-schema reader
 # (packages/mcap-support parseJsonSchema) refuses a list of types such as
 # ["number", "null"] and then drops the whole channel ("Failed to parse channel
@@ -65,32 +64,47 @@ def window_schema(aggregation: str = "") -> dict[str, Any]:
     """The ``modd.Window`` schema of a subscriber: ``value`` is an array of
     numbers for ``ALL``, a number otherwise (null for an empty window)."""
     value: dict[str, Any] = (
-        {"description": "the window's samples (true/false as 1/0); absent for an empty "
-                        "window", "type": "array", "items": {"type": "number"}}
-        if aggregation == agg.ALL else
-        {"description": "the aggregate (true/false as 1/0); absent for an empty window",
-         "type": "number"})
+        {
+            "description": "the window's samples (true/false as 1/0); absent for an empty window",
+            "type": "array",
+            "items": {"type": "number"},
+        }
+        if aggregation == agg.ALL
+        else {
+            "description": "the aggregate (true/false as 1/0); absent for an empty window",
+            "type": "number",
+        }
+    )
     return {
         "title": "modd.Window",
         "description": "One window of a MoDD subscription (docs/subbroker.md, delivered value)",
         "type": "object",
         "properties": {
             "value": value,
-            "count": {"description": "samples in the window (AVERAGE, COUNT, ALL); absent "
-                                     "when the drone does not send it (MIN, MAX, LAST)",
-                      "type": "integer"},
+            "count": {
+                "description": "samples in the window (AVERAGE, COUNT, ALL); absent "
+                "when the drone does not send it (MIN, MAX, LAST)",
+                "type": "integer",
+            },
             "aggregation": {"type": "string"},
             "window_start": _TIME,
             "window_end": _TIME,
-            "backfilled": {"description": "delivered late, after a link outage",
-                           "type": "boolean"},
+            "backfilled": {"description": "delivered late, after a link outage", "type": "boolean"},
             "topic": {"type": "string"},
             "period_s": {"type": "string"},
             "unit": {"type": "string"},
             "delivered": _TIME,
         },
-        "required": ["aggregation", "window_start", "window_end", "backfilled", "topic",
-                     "period_s", "unit", "delivered"],
+        "required": [
+            "aggregation",
+            "window_start",
+            "window_end",
+            "backfilled",
+            "topic",
+            "period_s",
+            "unit",
+            "delivered",
+        ],
         "additionalProperties": False,
     }
 
@@ -112,8 +126,7 @@ LOCATION_SCHEMA: dict[str, Any] = {
 }
 #: The SubBroker's status contract (status.schema.json) as the viewers read it:
 #: every field declared (a null is left out of the message).
-LINK_SCHEMA: dict[str, Any] = {**for_viewers(contract_schema("status")),
-                               "title": "modd.LinkStatus"}
+LINK_SCHEMA: dict[str, Any] = {**for_viewers(contract_schema("status")), "title": "modd.LinkStatus"}
 
 
 def _time(ns: int) -> dict[str, int]:
@@ -127,18 +140,20 @@ def window_message(delivered: DeliveredValue) -> dict[str, Any]:
     start = int(delivered.get("start_ns") or 0)
     end = int(delivered.get("end_ns") or 0)
     value, count = as_numbers(delivered.get("value")), delivered.get("count")
-    message: dict[str, Any] = without_nulls({
-        "value": value,
-        "count": count if isinstance(count, int) and not isinstance(count, bool) else None,
-        "aggregation": delivered.get("aggregation", ""),
-        "window_start": _time(start),
-        "window_end": _time(end),
-        "backfilled": bool(delivered.get("backfilled", False)),
-        "topic": delivered.get("topic", ""),
-        "period_s": str(delivered.get("period_s", "")),
-        "unit": delivered.get("unit", ""),
-        "delivered": _time(int(delivered.get("delivered_ns") or 0)),
-    })
+    message: dict[str, Any] = without_nulls(
+        {
+            "value": value,
+            "count": count if isinstance(count, int) and not isinstance(count, bool) else None,
+            "aggregation": delivered.get("aggregation", ""),
+            "window_start": _time(start),
+            "window_end": _time(end),
+            "backfilled": bool(delivered.get("backfilled", False)),
+            "topic": delivered.get("topic", ""),
+            "period_s": str(delivered.get("period_s", "")),
+            "unit": delivered.get("unit", ""),
+            "delivered": _time(int(delivered.get("delivered_ns") or 0)),
+        }
+    )
     return message
 
 
@@ -162,15 +177,21 @@ class FoxgloveLive:
     ``tls`` it speaks ``wss://`` only: the backend runs it so on loopback,
     reached through its authenticated proxy (foxgloveproxy.py)."""
 
-    def __init__(self, host: str, port: int, name: str = "MoDD base station",
-                 tls: LoopbackTls | None = None) -> None:
+    def __init__(
+        self, host: str, port: int, name: str = "MoDD base station", tls: LoopbackTls | None = None
+    ) -> None:
         import foxglove
 
         self._foxglove = foxglove
         self.context = foxglove.Context()
         self.server = foxglove.start_server(
-            name=name, host=host, port=port, context=self.context,
-            tls_cert=tls.cert_pem if tls else None, tls_key=tls.key_pem if tls else None)
+            name=name,
+            host=host,
+            port=port,
+            context=self.context,
+            tls_cert=tls.cert_pem if tls else None,
+            tls_key=tls.key_pem if tls else None,
+        )
         self.host = host
         self.port = self.server.port
         self._channels: dict[str, Any] = {}
@@ -199,8 +220,12 @@ class FoxgloveLive:
                 ch = None
             if ch is None:
                 fg = self._foxglove
-                ch = fg.Channel(topic, message_encoding="json", context=self.context,
-                                schema=fg.Schema(name=title, encoding="jsonschema", data=data))
+                ch = fg.Channel(
+                    topic,
+                    message_encoding="json",
+                    context=self.context,
+                    schema=fg.Schema(name=title, encoding="jsonschema", data=data),
+                )
                 self._channels[topic] = ch
                 self._schemas[topic] = data
             return ch
@@ -213,22 +238,30 @@ class FoxgloveLive:
             return
         drone, subscriber = found
         msg = window_message(delivered)
-        ch = self._channel(f"/{drone}/{subscriber}",
-                           window_schema(str(delivered.get("aggregation", ""))), "modd.Window")
+        ch = self._channel(
+            f"/{drone}/{subscriber}",
+            window_schema(str(delivered.get("aggregation", ""))),
+            "modd.Window",
+        )
         end_ns = int(delivered.get("end_ns") or 0)
         ch.log(msg, log_time=end_ns or None)
         self.logged += 1
         self._position(drone, subscriber, delivered, end_ns)
 
-    def _position(self, drone: str, subscriber: str, delivered: DeliveredValue,
-                  end_ns: int) -> None:
+    def _position(
+        self, drone: str, subscriber: str, delivered: DeliveredValue, end_ns: int
+    ) -> None:
         """``/<drone>/position`` (LocationFix) from the subscriptions whose
         topic is a latitude, longitude or altitude (the 3D scene's rule)."""
-        role = position_roles({"subscribers": [
-            {"name": subscriber, "topic": delivered.get("topic", "")}]}).get(subscriber)
+        role = position_roles(
+            {"subscribers": [{"name": subscriber, "topic": delivered.get("topic", "")}]}
+        ).get(subscriber)
         value = delivered.get("value")
-        if role not in ("lat", "lon", "alt") or isinstance(value, bool) \
-                or not isinstance(value, int | float):
+        if (
+            role not in ("lat", "lon", "alt")
+            or isinstance(value, bool)
+            or not isinstance(value, int | float)
+        ):
             return
         with self._lock:
             fix = self._fix.setdefault(drone, {})
@@ -237,9 +270,18 @@ class FoxgloveLive:
                 return
             lat, lon, alt = fix.pop("lat"), fix.pop("lon"), fix.get("alt", 0.0)
         ch = self._channel(f"/{drone}/position", LOCATION_SCHEMA, "foxglove.LocationFix")
-        ch.log({"timestamp": _time(end_ns), "frame_id": drone, "latitude": lat,
-                "longitude": lon, "altitude": alt, "position_covariance": [0.0] * 9,
-                "position_covariance_type": 0}, log_time=end_ns or None)
+        ch.log(
+            {
+                "timestamp": _time(end_ns),
+                "frame_id": drone,
+                "latitude": lat,
+                "longitude": lon,
+                "altitude": alt,
+                "position_covariance": [0.0] * 9,
+                "position_covariance_type": 0,
+            },
+            log_time=end_ns or None,
+        )
 
     def on_status(self, key: str, payload: bytes) -> None:
         """zenoh callback for ``modd/<drone>/status``: the link channel, and
@@ -256,8 +298,11 @@ class FoxgloveLive:
             return
         prefix = f"/{drone}/"
         with self._lock:
-            gone = [t for t in self._channels if t.startswith(prefix)
-                    and t[len(prefix):] not in routed | {"link", "position"}]
+            gone = [
+                t
+                for t in self._channels
+                if t.startswith(prefix) and t[len(prefix) :] not in routed | {"link", "position"}
+            ]
             closing = [self._channels.pop(t) for t in gone]
             for t in gone:
                 self._schemas.pop(t, None)

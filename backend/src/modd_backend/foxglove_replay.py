@@ -56,10 +56,14 @@ class RecordedChannel:
     schema: bytes
 
 
-def load_recording(paths: Sequence[Path], max_messages: int = MAX_MESSAGES, *,
-                   partial: bool = False, start_ns: int | None = None,
-                   end_ns: int | None = None
-                   ) -> tuple[dict[str, RecordedChannel], list[Recorded]]:
+def load_recording(
+    paths: Sequence[Path],
+    max_messages: int = MAX_MESSAGES,
+    *,
+    partial: bool = False,
+    start_ns: int | None = None,
+    end_ns: int | None = None,
+) -> tuple[dict[str, RecordedChannel], list[Recorded]]:
     """Channels and messages (sorted by log time) of MCAP files, those whose
     log time is in [start_ns, end_ns). A file without a summary (still being
     written, or cut by a crash) is refused unless ``partial``: then its
@@ -71,16 +75,22 @@ def load_recording(paths: Sequence[Path], max_messages: int = MAX_MESSAGES, *,
 
     def keep(topic: str, schema: Any, encoding: str, log_time: int, data: bytes) -> None:
         if (start_ns is not None and log_time < start_ns) or (
-                end_ns is not None and log_time >= end_ns):
+            end_ns is not None and log_time >= end_ns
+        ):
             return
         if topic not in channels:
             channels[topic] = RecordedChannel(
-                topic, encoding, schema.name if schema else "",
-                schema.encoding if schema else "", schema.data if schema else b"")
+                topic,
+                encoding,
+                schema.name if schema else "",
+                schema.encoding if schema else "",
+                schema.data if schema else b"",
+            )
         messages.append(Recorded(log_time, topic, data))
         if len(messages) > max_messages:
-            raise ValueError(f"more than {max_messages} messages to play: choose a shorter "
-                             "time range")
+            raise ValueError(
+                f"more than {max_messages} messages to play: choose a shorter time range"
+            )
 
     for path in paths:
         first = len(messages)  # a fallback to the partial reader starts this file again
@@ -89,21 +99,26 @@ def load_recording(paths: Sequence[Path], max_messages: int = MAX_MESSAGES, *,
                 reader = make_reader(f)
                 if partial and reader.get_summary() is None:
                     raise EOFError("no summary")
-                for schema, ch, m in reader.iter_messages(starting_at=start_ns,
-                                                          ending_before=end_ns):
+                for schema, ch, m in reader.iter_messages(
+                    starting_at=start_ns, ending_before=end_ns
+                ):
                     keep(ch.topic, schema, ch.message_encoding, m.log_time, m.data)
             except ValueError as exc:
                 if "messages to play" in str(exc):
                     raise ValueError(f"{path}: {exc}") from None
                 if not partial:
-                    raise ValueError(f"{path}: cannot be read ({exc}); if a crash cut it, run "
-                                     "`modd archive recover` first") from None
+                    raise ValueError(
+                        f"{path}: cannot be read ({exc}); if a crash cut it, run "
+                        "`modd archive recover` first"
+                    ) from None
                 del messages[first:]
                 _load_partial(path, keep)
             except Exception as exc:  # the reader's errors have no common base
                 if not partial:
-                    raise ValueError(f"{path}: cannot be read ({exc}); if a crash cut it, run "
-                                     "`modd archive recover` first") from None
+                    raise ValueError(
+                        f"{path}: cannot be read ({exc}); if a crash cut it, run "
+                        "`modd archive recover` first"
+                    ) from None
                 del messages[first:]
                 _load_partial(path, keep)
     if not messages:
@@ -116,8 +131,9 @@ def load_recording(paths: Sequence[Path], max_messages: int = MAX_MESSAGES, *,
 DELIVERED = "modd.DeliveredValue"
 
 
-def _delivered_for_viewers(channels: dict[str, RecordedChannel], messages: list[Recorded]
-                           ) -> tuple[dict[str, RecordedChannel], list[Recorded]]:
+def _delivered_for_viewers(
+    channels: dict[str, RecordedChannel], messages: list[Recorded]
+) -> tuple[dict[str, RecordedChannel], list[Recorded]]:
     """A base-station record's windows as the live server sends them: every
     message valid against its channel's schema (the delivered-value contract
     with one type per field; a null left out, a boolean as 1/0). The record
@@ -166,8 +182,13 @@ def _load_partial(path: Path, keep: Any) -> None:
                     channels[rec.id] = rec
                 elif isinstance(rec, Message) and rec.channel_id in channels:
                     ch = channels[rec.channel_id]
-                    keep(ch.topic, schemas.get(ch.schema_id), ch.message_encoding,
-                         rec.log_time, rec.data)
+                    keep(
+                        ch.topic,
+                        schemas.get(ch.schema_id),
+                        ch.message_encoding,
+                        rec.log_time,
+                        rec.data,
+                    )
         except (McapError, EOFError, OSError, struct.error):
             return
         except ValueError as exc:
@@ -209,7 +230,7 @@ class Player:
                 return []
             self.current = min(self.end, self.current + int(elapsed_s * self.speed * 1e9))
             stop = bisect.bisect_right(self._times, self.current)
-            out = self.messages[self._cursor:stop]
+            out = self.messages[self._cursor : stop]
             self._cursor = stop
             if self.current >= self.end:
                 self.playing = False
@@ -225,10 +246,17 @@ class ReplayServer:
     with ``tls``, it speaks ``wss://`` only (the backend's replay slot, reached
     through its proxy: loopback_tls.py)."""
 
-    def __init__(self, paths: Sequence[Path], host: str = "127.0.0.1", port: int = 8766,
-                 tick_s: float = 0.02, *,
-                 recording: tuple[dict[str, RecordedChannel], list[Recorded]] | None = None,
-                 autoplay: bool = False, tls: LoopbackTls | None = None) -> None:
+    def __init__(
+        self,
+        paths: Sequence[Path],
+        host: str = "127.0.0.1",
+        port: int = 8766,
+        tick_s: float = 0.02,
+        *,
+        recording: tuple[dict[str, RecordedChannel], list[Recorded]] | None = None,
+        autoplay: bool = False,
+        tls: LoopbackTls | None = None,
+    ) -> None:
         import foxglove
         from foxglove.websocket import Capability, ServerListener
 
@@ -246,10 +274,16 @@ class ReplayServer:
         self._autoplay_at: float | None = None  # monotonic time autoplay starts
         self.context = foxglove.Context()
         self.channels = {
-            t: foxglove.Channel(t, message_encoding=c.encoding or "json", context=self.context,
-                                schema=foxglove.Schema(name=c.schema_name or t,
-                                                       encoding=c.schema_encoding or "jsonschema",
-                                                       data=c.schema))
+            t: foxglove.Channel(
+                t,
+                message_encoding=c.encoding or "json",
+                context=self.context,
+                schema=foxglove.Schema(
+                    name=c.schema_name or t,
+                    encoding=c.schema_encoding or "jsonschema",
+                    data=c.schema,
+                ),
+            )
             for t, c in channels.items()
         }
         replay = self
@@ -262,11 +296,16 @@ class ReplayServer:
                 replay.on_subscribe(str(channel.topic))
 
         self.server = foxglove.start_server(
-            name="MoDD replay", host=host, port=port, context=self.context,
+            name="MoDD replay",
+            host=host,
+            port=port,
+            context=self.context,
             capabilities=[Capability.PlaybackControl, Capability.Time],
             server_listener=Listener(),
             playback_time_range=(self.player.start, self.player.end),
-            tls_cert=tls.cert_pem if tls else None, tls_key=tls.key_pem if tls else None)
+            tls_cert=tls.cert_pem if tls else None,
+            tls_key=tls.key_pem if tls else None,
+        )
         self.port = self.server.port
         self.host = host
         self._tick = tick_s
@@ -282,10 +321,20 @@ class ReplayServer:
         from foxglove.websocket import PlaybackState, PlaybackStatus
 
         p = self.player
-        status = (PlaybackStatus.Ended if p.ended else
-                  PlaybackStatus.Playing if p.playing else PlaybackStatus.Paused)
-        return PlaybackState(status=status, current_time=p.current, playback_speed=p.speed,
-                             did_seek=did_seek, request_id=request_id)
+        status = (
+            PlaybackStatus.Ended
+            if p.ended
+            else PlaybackStatus.Playing
+            if p.playing
+            else PlaybackStatus.Paused
+        )
+        return PlaybackState(
+            status=status,
+            current_time=p.current,
+            playback_speed=p.speed,
+            did_seek=did_seek,
+            request_id=request_id,
+        )
 
     def on_subscribe(self, topic: str) -> None:
         if not self.autoplay or self._controlled:
@@ -307,8 +356,11 @@ class ReplayServer:
 
         self._controlled = True
         self._autoplay_at = None
-        self.player.control(request.playback_command == PlaybackCommand.Play,
-                            float(request.playback_speed), request.seek_time)
+        self.player.control(
+            request.playback_command == PlaybackCommand.Play,
+            float(request.playback_speed),
+            request.seek_time,
+        )
         return self.state(request.request_id, request.seek_time is not None)
 
     def _run(self) -> None:
@@ -337,22 +389,30 @@ class ReplayServer:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="modd-foxglove-replay",
-                                description="Ranged playback of MCAP files for Foxglove/Lichtblick")
+    p = argparse.ArgumentParser(
+        prog="modd-foxglove-replay",
+        description="Ranged playback of MCAP files for Foxglove/Lichtblick",
+    )
     p.add_argument("files", nargs="+", type=Path, metavar="FILE")
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default loopback)")
     p.add_argument("--port", type=int, default=8766)
-    p.add_argument("--autoplay", action="store_true",
-                   help="play once from the start when a viewer subscribes (for viewers "
-                        "without playback controls, such as Lichtblick)")
+    p.add_argument(
+        "--autoplay",
+        action="store_true",
+        help="play once from the start when a viewer subscribes (for viewers "
+        "without playback controls, such as Lichtblick)",
+    )
     a = p.parse_args(argv)
     try:
         server = ReplayServer(a.files, a.host, a.port, autoplay=a.autoplay)
     except (ValueError, OSError) as exc:
         print(f"modd-foxglove-replay: {exc}")
         return 1
-    print(f"modd-foxglove-replay: {server.url} plays {len(server.player.messages)} messages "
-          f"on {len(server.channels)} channels (Ctrl-C to stop)", flush=True)
+    print(
+        f"modd-foxglove-replay: {server.url} plays {len(server.player.messages)} messages "
+        f"on {len(server.channels)} channels (Ctrl-C to stop)",
+        flush=True,
+    )
     try:
         threading.Event().wait()
     except KeyboardInterrupt:

@@ -40,6 +40,8 @@ SCENE_PREFIX = "/scene/"
 _BODY_METHODS = frozenset({"POST", "PUT", "PATCH", "DELETE"})
 #: Bodies from this size on are depth-checked off the event loop.
 _THREAD_BODY_BYTES = 64 * 1024
+
+
 def csp(path: str, host: str, tile_origins: tuple[str, ...] = ()) -> str:
     """The Content-Security-Policy of an answer: no inline or foreign
     scripts; only the 3D scene (same origin) may be framed, by the workbench.
@@ -48,14 +50,18 @@ def csp(path: str, host: str, tile_origins: tuple[str, ...] = ()) -> str:
     service was configured with (``Settings.tile_origins``)."""
     scene = path.startswith(SCENE_PREFIX)
     if path == "/docs":  # Swagger UI: an inline bootstrap, its files served here (apidocs.py)
-        return ("default-src 'self'; script-src 'self' 'unsafe-inline'; "
-                "style-src 'self' 'unsafe-inline'; img-src 'self' data:; "
-                "frame-ancestors 'none'; object-src 'none'")
+        return (
+            "default-src 'self'; script-src 'self' 'unsafe-inline'; "
+            "style-src 'self' 'unsafe-inline'; img-src 'self' data:; "
+            "frame-ancestors 'none'; object-src 'none'"
+        )
     if path == "/redoc":  # FastAPI's ReDoc page: inline bootstrap, CDN assets
         cdn = "https://cdn.jsdelivr.net"
-        return (f"default-src 'self'; script-src 'self' 'unsafe-inline' {cdn}; "
-                f"style-src 'self' 'unsafe-inline' {cdn}; img-src 'self' data: "
-                "https://fastapi.tiangolo.com; frame-ancestors 'none'; object-src 'none'")
+        return (
+            f"default-src 'self'; script-src 'self' 'unsafe-inline' {cdn}; "
+            f"style-src 'self' 'unsafe-inline' {cdn}; img-src 'self' data: "
+            "https://fastapi.tiangolo.com; frame-ancestors 'none'; object-src 'none'"
+        )
     ancestors = "'self'" if scene else "'none'"
     images = " ".join(("'self' data: blob:", *tile_origins))
     return (
@@ -69,8 +75,9 @@ def csp(path: str, host: str, tile_origins: tuple[str, ...] = ()) -> str:
     )
 
 
-def security_headers(path: str, host: str,
-                     tile_origins: tuple[str, ...] = ()) -> list[tuple[bytes, bytes]]:
+def security_headers(
+    path: str, host: str, tile_origins: tuple[str, ...] = ()
+) -> list[tuple[bytes, bytes]]:
     framing = b"SAMEORIGIN" if path.startswith(SCENE_PREFIX) else b"DENY"
     return [
         (b"content-security-policy", csp(path, host, tile_origins).encode()),
@@ -96,16 +103,21 @@ class Guard:
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
-        headers = {k.decode("latin-1").lower(): v.decode("latin-1")
-                   for k, v in scope.get("headers", [])}
+        headers = {
+            k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope.get("headers", [])
+        }
         host = headers.get("host", "")
         if not self.settings.host_allowed(host):
             if scope["type"] == "websocket":
-                await send({"type": "websocket.close", "code": 4400,
-                            "reason": "Host not allowed"})
+                await send({"type": "websocket.close", "code": 4400, "reason": "Host not allowed"})
                 return
-            await _plain(send, 400, f"Host {host!r} is not allowed here "
-                         "(settings: allowed_hosts)", scope["path"], "localhost")
+            await _plain(
+                send,
+                400,
+                f"Host {host!r} is not allowed here (settings: allowed_hosts)",
+                scope["path"],
+                "localhost",
+            )
             return
         if scope["type"] == "websocket":
             await self.app(scope, receive, send)
@@ -117,7 +129,8 @@ class Guard:
             if message["type"] == "http.response.start":
                 names = {k.lower() for k, _ in message.get("headers", [])}
                 message["headers"] = list(message.get("headers", [])) + [
-                    h for h in extra if h[0] not in names]
+                    h for h in extra if h[0] not in names
+                ]
             await send(message)
 
         if scope["method"] not in _BODY_METHODS:
@@ -136,12 +149,22 @@ class Guard:
         ctype = headers.get("content-type", "")
         if body[:1] in (b"{", b"[") or "json" in ctype:
             # a model of megabytes is checked in a thread: the loop keeps serving
-            depth = (json_depth(body) if len(body) < _THREAD_BODY_BYTES
-                     else await run_in_threadpool(json_depth, body))
+            depth = (
+                json_depth(body)
+                if len(body) < _THREAD_BODY_BYTES
+                else await run_in_threadpool(json_depth, body)
+            )
             if depth > self.settings.max_json_depth:
-                await _json_error(send, 422, {
-                    "detail": f"the JSON body is nested {depth} levels deep; at most "
-                              f"{self.settings.max_json_depth} are accepted"}, path, host)
+                await _json_error(
+                    send,
+                    422,
+                    {
+                        "detail": f"the JSON body is nested {depth} levels deep; at most "
+                        f"{self.settings.max_json_depth} are accepted"
+                    },
+                    path,
+                    host,
+                )
                 return
         replayed = False
 
@@ -172,18 +195,31 @@ async def _read_body(receive: Receive, limit: int) -> bytes:
     return b"".join(chunks)
 
 
-async def _json_error(send: Send, status: int, body: dict[str, Any], path: str,
-                      host: str) -> None:
+async def _json_error(send: Send, status: int, body: dict[str, Any], path: str, host: str) -> None:
     data = json.dumps(body).encode()
-    await send({"type": "http.response.start", "status": status, "headers": [
-        (b"content-type", b"application/json"), (b"content-length", str(len(data)).encode()),
-        (b"connection", b"close"), *security_headers(path, host)]})
+    await send(
+        {
+            "type": "http.response.start",
+            "status": status,
+            "headers": [
+                (b"content-type", b"application/json"),
+                (b"content-length", str(len(data)).encode()),
+                (b"connection", b"close"),
+                *security_headers(path, host),
+            ],
+        }
+    )
     await send({"type": "http.response.body", "body": data})
 
 
 async def _too_large(send: Send, limit: int, path: str, host: str) -> None:
-    await _json_error(send, 413, {"detail": f"the request body exceeds {limit} bytes",
-                                  "limit_bytes": limit}, path, host)
+    await _json_error(
+        send,
+        413,
+        {"detail": f"the request body exceeds {limit} bytes", "limit_bytes": limit},
+        path,
+        host,
+    )
 
 
 async def _plain(send: Send, status: int, text: str, path: str, host: str) -> None:
@@ -192,8 +228,9 @@ async def _plain(send: Send, status: int, text: str, path: str, host: str) -> No
 
 def _behind_earlier() -> ApiError:
     """A user's heavy request behind that user's earlier ones (the queue full, or not yet first)."""
-    return retry_later(429, "this user's earlier heavy requests are waiting their turn; "
-                       "retry shortly", 1)
+    return retry_later(
+        429, "this user's earlier heavy requests are waiting their turn; retry shortly", 1
+    )
 
 
 class HeavyLimiter:
@@ -207,8 +244,16 @@ class HeavyLimiter:
     is taken) or 503 (all are), with ``Retry-After``. :meth:`slot` never
     waits."""
 
-    def __init__(self, per_user: int, total: int, *, queue_per_user: int = 4,
-                 queue_total: int = 32, wait_s: float = 30.0, poll_s: float = 0.05) -> None:
+    def __init__(
+        self,
+        per_user: int,
+        total: int,
+        *,
+        queue_per_user: int = 4,
+        queue_total: int = 32,
+        wait_s: float = 30.0,
+        poll_s: float = 0.05,
+    ) -> None:
         self.per_user = per_user
         self.total = total
         self.queue_per_user = queue_per_user
@@ -231,9 +276,13 @@ class HeavyLimiter:
     def _refusal(self, user_id: int) -> ApiError | None:
         """Why no slot is free for this user now (under the lock), or None."""
         if self._by_user.get(user_id, 0) >= self.per_user:
-            return retry_later(429, f"at most {self.per_user} heavy requests at once per user "
-                               f"(CSV, series, deploy), {self.queue_per_user} more waiting their "
-                               "turn; retry shortly", 1)
+            return retry_later(
+                429,
+                f"at most {self.per_user} heavy requests at once per user "
+                f"(CSV, series, deploy), {self.queue_per_user} more waiting their "
+                "turn; retry shortly",
+                1,
+            )
         if self.in_flight >= self.total:
             return retry_later(503, "the service is busy with heavy requests; retry shortly", 1)
         return None
@@ -284,7 +333,8 @@ class HeavyLimiter:
         """Take a slot if one is free and this ticket is the user's first; else why not."""
         with self._lock:
             refused = self._refusal(user_id) or (
-                None if self._waiting[user_id][0] is ticket else _behind_earlier())
+                None if self._waiting[user_id][0] is ticket else _behind_earlier()
+            )
             if refused is None:
                 self._take(user_id)
                 self._leave(user_id, ticket)

@@ -44,8 +44,10 @@ class SubscriptionHub:
 
     def start(self, zenoh_session: ZenohSession) -> None:
         """Declare the two wildcard subscribers (blocking; call at start-up)."""
-        self._declared = [zenoh_session.subscribe(VALUES, self.on_value),
-                          zenoh_session.subscribe(STATUS, self.on_status)]
+        self._declared = [
+            zenoh_session.subscribe(VALUES, self.on_value),
+            zenoh_session.subscribe(STATUS, self.on_status),
+        ]
 
     def stop(self) -> None:
         for sub in self._declared:

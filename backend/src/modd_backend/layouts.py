@@ -24,9 +24,12 @@ def _tree(ids: list[str], direction: str = "column") -> Any:
     if len(ids) == 1:
         return ids[0]
     half = len(ids) // 2
-    return {"direction": direction, "first": _tree(ids[:half], direction),
-            "second": _tree(ids[half:], direction),
-            "splitPercentage": round(100 * half / len(ids), 1)}
+    return {
+        "direction": direction,
+        "first": _tree(ids[:half], direction),
+        "second": _tree(ids[half:], direction),
+        "splitPercentage": round(100 * half / len(ids), 1),
+    }
 
 
 def _plot(drone: str, sub: dict[str, Any]) -> dict[str, Any]:
@@ -34,10 +37,20 @@ def _plot(drone: str, sub: dict[str, Any]) -> dict[str, Any]:
     label = f"{name}: {sub.get('aggregation', '')} every {sub.get('periodS', '?')} s"
     return {
         "title": label,
-        "paths": [{"value": f"/{drone}/{name}.value", "enabled": True,
-                   "timestampMethod": "receiveTime", "label": label}],
-        "showXAxisLabels": True, "showYAxisLabels": True, "showLegend": True,
-        "legendDisplay": "floating", "isSynced": True, "xAxisVal": "timestamp",
+        "paths": [
+            {
+                "value": f"/{drone}/{name}.value",
+                "enabled": True,
+                "timestampMethod": "receiveTime",
+                "label": label,
+            }
+        ],
+        "showXAxisLabels": True,
+        "showYAxisLabels": True,
+        "showLegend": True,
+        "legendDisplay": "floating",
+        "isSynced": True,
+        "xAxisVal": "timestamp",
         "followingViewWidth": 120,
     }
 
@@ -58,8 +71,14 @@ def foxglove_layout(model: dict[str, Any]) -> dict[str, Any]:
         tabs.append({"title": topic, "layout": _tree(ids)})
     config["Tab!topics"] = {"activeTabIdx": 0, "tabs": tabs}
     map_id, table_id = f"map!{drone}-position", f"Table!{drone}-link"
-    config[map_id] = {"center": None, "disabledTopics": [], "followTopic": f"/{drone}/position",
-                      "layer": "map", "topicColors": {}, "zoomLevel": 14}
+    config[map_id] = {
+        "center": None,
+        "disabledTopics": [],
+        "followTopic": f"/{drone}/position",
+        "layer": "map",
+        "topicColors": {},
+        "zoomLevel": 14,
+    }
     config[table_id] = {"topicPath": f"/{drone}/link"}
     side = {"direction": "column", "first": map_id, "second": table_id, "splitPercentage": 60}
     return {
@@ -67,6 +86,10 @@ def foxglove_layout(model: dict[str, Any]) -> dict[str, Any]:
         "globalVariables": {"drone": drone},
         "userNodes": {},
         "playbackConfig": {"speed": 1},
-        "layout": {"direction": "row", "first": "Tab!topics", "second": side,
-                   "splitPercentage": 65},
+        "layout": {
+            "direction": "row",
+            "first": "Tab!topics",
+            "second": side,
+            "splitPercentage": 65,
+        },
     }

@@ -38,9 +38,17 @@ class LiveRelay:
     ``per_user`` is shared by all sockets of the app (user id -> live
     subscriptions); it is only touched from the event loop."""
 
-    def __init__(self, hub: SubscriptionHub, drone: str, queue_size: int, *,
-                 user_id: int = 0, per_socket: int = 256, per_user: int = 1024,
-                 per_user_counts: Counter[int] | None = None) -> None:
+    def __init__(
+        self,
+        hub: SubscriptionHub,
+        drone: str,
+        queue_size: int,
+        *,
+        user_id: int = 0,
+        per_socket: int = 256,
+        per_user: int = 1024,
+        per_user_counts: Counter[int] | None = None,
+    ) -> None:
         self.drone = check_name("drone", drone)
         self.hub = hub
         self.queue: DropOldestQueue[dict[str, Any]] = DropOldestQueue(queue_size)
@@ -103,8 +111,9 @@ class LiveRelay:
             self._started = False
 
 
-def dynamic_request(zenoh_session: ZenohSession, drone: str, request: dict[str, Any],
-                    timeout_s: float) -> dict[str, Any]:
+def dynamic_request(
+    zenoh_session: ZenohSession, drone: str, request: dict[str, Any], timeout_s: float
+) -> dict[str, Any]:
     """Ask the SubBroker's ``modd/<drone>/subscribe`` queryable; its reply
     (``ACCEPTED`` with the key, ``NOT_AVAILABLE`` with the reason, ...) or a
     ``NO_REPLY`` status when nobody answers. Blocking."""

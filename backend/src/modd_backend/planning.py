@@ -64,8 +64,10 @@ def live_plan(result: LoadResult, method: Method = "exact") -> LivePlan:
         try:
             plan = make_plan(result.model, method=method).to_json()
             # a refusal by the radio, pinned in the editor (the plan is still shown)
-            diags += [Diagnostic(d["message"], d["pointer"], "warning")
-                      for d in plan.get("radio", {}).get("diagnostics", [])]
+            diags += [
+                Diagnostic(d["message"], d["pointer"], "warning")
+                for d in plan.get("radio", {}).get("diagnostics", [])
+            ]
         except ModelError as exc:  # the planner's bounds, located at the subscriptions
             diags.extend(exc.diagnostics)
         except (ValueError, KeyError, ArithmeticError) as exc:
@@ -107,8 +109,10 @@ def _get_pool() -> ProcessPoolExecutor:
         if _pool is None:
             os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # a small address space
             _pool = ProcessPoolExecutor(
-                PLAN_WORKERS, mp_context=multiprocessing.get_context("spawn"),
-                initializer=_limit_worker, initargs=(PLAN_MEMORY_BYTES,),
+                PLAN_WORKERS,
+                mp_context=multiprocessing.get_context("spawn"),
+                initializer=_limit_worker,
+                initargs=(PLAN_MEMORY_BYTES,),
             )
         return _pool
 
@@ -146,7 +150,10 @@ def _over_time(_signum: int, _frame: object) -> None:
 
 
 def plan_request(
-    model: dict[str, Any] | None, text: str | None, fmt: str, method: Method,
+    model: dict[str, Any] | None,
+    text: str | None,
+    fmt: str,
+    method: Method,
     timeout_s: float = PLAN_TIMEOUT_S,
 ) -> dict[str, Any]:
     """In a worker: read (parse, validate) and plan within ``timeout_s``
@@ -166,11 +173,15 @@ def plan_request(
             result = read_text(text, "modd" if fmt == "modd" else "json")
         return live_plan(result, method).to_json()
     except _OverTime:
-        return _failed(f"planning this model takes longer than the budget of {timeout_s:g} s",
-                       (time.perf_counter() - start) * 1000)
+        return _failed(
+            f"planning this model takes longer than the budget of {timeout_s:g} s",
+            (time.perf_counter() - start) * 1000,
+        )
     except MemoryError:
-        return _failed(f"the planner ran out of its memory budget "
-                       f"({PLAN_MEMORY_BYTES >> 20} MiB)", (time.perf_counter() - start) * 1000)
+        return _failed(
+            f"the planner ran out of its memory budget ({PLAN_MEMORY_BYTES >> 20} MiB)",
+            (time.perf_counter() - start) * 1000,
+        )
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
@@ -189,8 +200,7 @@ async def guarded_call(fn: Callable[..., T], *args: Any) -> T | dict[str, Any]:
     many requests already wait."""
     global _waiting
     if _waiting >= PLAN_QUEUE:
-        raise HTTPException(503, "the planner is busy; retry shortly",
-                            headers={"Retry-After": "1"})
+        raise HTTPException(503, "the planner is busy; retry shortly", headers={"Retry-After": "1"})
     _waiting += 1
     start = time.perf_counter()
     pool = _get_pool()
@@ -199,11 +209,16 @@ async def guarded_call(fn: Callable[..., T], *args: Any) -> T | dict[str, Any]:
         return await asyncio.wait_for(asyncio.wrap_future(future), PLAN_TIMEOUT_S + PLAN_START_S)
     except TimeoutError:  # the worker's own timer did not stop it: kill it
         _discard_pool(pool)
-        return _failed(f"planning this model takes longer than the budget of "
-                       f"{PLAN_TIMEOUT_S:g} s", (time.perf_counter() - start) * 1000)
+        return _failed(
+            f"planning this model takes longer than the budget of {PLAN_TIMEOUT_S:g} s",
+            (time.perf_counter() - start) * 1000,
+        )
     except BrokenProcessPool:
         _discard_pool(pool)
-        return _failed("the planner's worker stopped (over its memory budget of "
-                       f"{PLAN_MEMORY_BYTES >> 20} MiB?)", (time.perf_counter() - start) * 1000)
+        return _failed(
+            "the planner's worker stopped (over its memory budget of "
+            f"{PLAN_MEMORY_BYTES >> 20} MiB?)",
+            (time.perf_counter() - start) * 1000,
+        )
     finally:
         _waiting -= 1

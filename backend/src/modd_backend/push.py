@@ -38,11 +38,14 @@ class PushError(Exception):
 class _NoRedirect(urllib.request.HTTPRedirectHandler):
     """A redirect ends the push (urllib would send the token along)."""
 
-    def redirect_request(self, req: urllib.request.Request, fp: Any, code: int, msg: str,
-                         headers: Any, newurl: str) -> urllib.request.Request | None:
-        raise PushError(f"{req.get_method()} {req.full_url}: the server redirects to "
-                        f"{newurl[:200]!r}; not followed (the token would go along): give "
-                        "the workbench's own address with --server")
+    def redirect_request(
+        self, req: urllib.request.Request, fp: Any, code: int, msg: str, headers: Any, newurl: str
+    ) -> urllib.request.Request | None:
+        raise PushError(
+            f"{req.get_method()} {req.full_url}: the server redirects to "
+            f"{newurl[:200]!r}; not followed (the token would go along): give "
+            "the workbench's own address with --server"
+        )
 
 
 _OPENER = urllib.request.build_opener(_NoRedirect)
@@ -67,8 +70,10 @@ def plain_http_warning(server: str) -> str | None:
             return None
     except ValueError:
         pass
-    return (f"warning: {server} is plain http to another machine: the password and the "
-            "session token cross the network in clear (use https://)")
+    return (
+        f"warning: {server} is plain http to another machine: the password and the "
+        "session token cross the network in clear (use https://)"
+    )
 
 
 @dataclass
@@ -79,8 +84,15 @@ class Client:
     token: str | None = None
     timeout_s: float = 30.0
 
-    def call(self, method: str, path: str, body: Any = None, *, raw: bytes | None = None,
-             content_type: str = "application/json") -> Any:
+    def call(
+        self,
+        method: str,
+        path: str,
+        body: Any = None,
+        *,
+        raw: bytes | None = None,
+        content_type: str = "application/json",
+    ) -> Any:
         data = raw if raw is not None else (None if body is None else json.dumps(body).encode())
         req = urllib.request.Request(self.server.rstrip("/") + path, data=data, method=method)
         if data is not None:
@@ -97,8 +109,10 @@ class Client:
         try:
             return json.loads(text) if text else None
         except ValueError:
-            raise PushError(f"{method} {path}: {self.server} answered something that is not "
-                            f"the workbench's JSON: {text[:120]!r}") from None
+            raise PushError(
+                f"{method} {path}: {self.server} answered something that is not "
+                f"the workbench's JSON: {text[:120]!r}"
+            ) from None
 
     def login(self, user: str, password: str) -> None:
         out = self.call("POST", "/api/auth/login", {"username": user, "password": password})
@@ -113,8 +127,11 @@ def _detail(body: bytes) -> str:
     if isinstance(parsed, dict):
         detail = str(parsed.get("detail", parsed))
         diags = parsed.get("diagnostics") or []
-        lines = [f"  {d.get('file') or ''}:{d.get('line') or ''}: {d.get('message')}"
-                 for d in diags[:10] if isinstance(d, dict)]
+        lines = [
+            f"  {d.get('file') or ''}:{d.get('line') or ''}: {d.get('message')}"
+            for d in diags[:10]
+            if isinstance(d, dict)
+        ]
         return "\n".join([detail, *lines])
     return str(parsed)
 
@@ -130,17 +147,25 @@ def push_model(client: Client, text: str, fmt: str, name: str, message: str) -> 
     project = find_project(client, name)
     if project is None:
         query = urllib.parse.urlencode({"name": name, "format": fmt})
-        created = client.call("POST", f"/api/projects/import?{query}", raw=text.encode(),
-                              content_type="text/plain")
+        created = client.call(
+            "POST", f"/api/projects/import?{query}", raw=text.encode(), content_type="text/plain"
+        )
         return int(created["id"]), int(created["head_revision"])
     pid = int(project["id"])
     head = client.call("GET", f"/api/projects/{pid}/model") if project["head_revision"] else None
     checked = client.call("POST", "/api/validate", {"text": text, "format": fmt})
     if head is not None and _content(checked.get("model")) == _content(head["model"]):
         return pid, int(head["revision"])
-    saved = client.call("PUT", f"/api/projects/{pid}/model", {
-        "base_revision": project["head_revision"], "text": text, "format": fmt,
-        "message": message})
+    saved = client.call(
+        "PUT",
+        f"/api/projects/{pid}/model",
+        {
+            "base_revision": project["head_revision"],
+            "text": text,
+            "format": fmt,
+            "message": message,
+        },
+    )
     return pid, int(saved["revision"])
 
 
@@ -170,7 +195,8 @@ def deploy(client: Client, project_id: int, revision: int, wait_s: float) -> dic
     deadline = time.monotonic() + wait_s
     while True:
         record: dict[str, Any] = client.call(
-            "POST", f"/api/projects/{project_id}/deployments", {"revision": revision})
+            "POST", f"/api/projects/{project_id}/deployments", {"revision": revision}
+        )
         if record["status"] == "acked" or time.monotonic() >= deadline:
             return record
         time.sleep(1.0)
@@ -201,11 +227,14 @@ def run(args: argparse.Namespace) -> int:
         kept = keep_project(client, name) if args.if_new else None
         if kept is not None:
             pid, revision = kept
-            print(f"modd push: project {name!r} (id {pid}) exists: kept as it is, "
-                  f"running revision {revision}")
+            print(
+                f"modd push: project {name!r} (id {pid}) exists: kept as it is, "
+                f"running revision {revision}"
+            )
         else:
-            pid, revision = push_model(client, text, fmt, name,
-                                       args.message or f"pushed {path.name}")
+            pid, revision = push_model(
+                client, text, fmt, name, args.message or f"pushed {path.name}"
+            )
             print(f"modd push: project {name!r} (id {pid}) at revision {revision}")
         if not args.deploy:
             return 0
@@ -214,12 +243,18 @@ def run(args: argparse.Namespace) -> int:
         print(f"modd push: {exc}", file=sys.stderr)
         return 1
     except (KeyError, TypeError, ValueError, AttributeError) as exc:  # not the API's shape
-        print(f"modd push: unexpected answer from {args.server} (is it a MoDD workbench?): "
-              f"{type(exc).__name__}: {str(exc)[:120]}", file=sys.stderr)
+        print(
+            f"modd push: unexpected answer from {args.server} (is it a MoDD workbench?): "
+            f"{type(exc).__name__}: {str(exc)[:120]}",
+            file=sys.stderr,
+        )
         return 1
     if record.get("status") != "acked":
-        print(f"modd push: deploy to drone {record.get('drone')!r} {record.get('status')}: "
-              f"{record.get('error')}", file=sys.stderr)
+        print(
+            f"modd push: deploy to drone {record.get('drone')!r} {record.get('status')}: "
+            f"{record.get('error')}",
+            file=sys.stderr,
+        )
         return 1
     print(f"modd push: deployed revision {revision} to drone {record.get('drone')!r} (acked)")
     return 0
@@ -233,10 +268,18 @@ def register(sub: Any) -> None:
     p.add_argument("--password-file", metavar="FILE", help="default: $MODD_PASSWORD")
     p.add_argument("--project", metavar="NAME", help="project name (default: the file's stem)")
     p.add_argument("--message", help="revision message")
-    p.add_argument("--if-new", action="store_true",
-                   help="load the model only into a new project; an existing one is kept "
-                        "(--deploy then deploys its last deployed revision, else its head)")
+    p.add_argument(
+        "--if-new",
+        action="store_true",
+        help="load the model only into a new project; an existing one is kept "
+        "(--deploy then deploys its last deployed revision, else its head)",
+    )
     p.add_argument("--deploy", action="store_true", help="deploy the pushed revision")
-    p.add_argument("--wait", type=float, default=0.0, metavar="S",
-                   help="retry a failed deploy for up to S seconds")
+    p.add_argument(
+        "--wait",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="retry a failed deploy for up to S seconds",
+    )
     p.set_defaults(func=run)

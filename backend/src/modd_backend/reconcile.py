@@ -96,17 +96,24 @@ class DroneStatuses:
 def _describe(meta: dict[str, Any] | None) -> str:
     if not meta or meta.get("source") == "configured":
         return "its configured model"
-    return (f"revision {meta.get('revision')} of project {meta.get('project_id')} "
-            f"(deployed by {meta.get('deployed_by')})")
+    return (
+        f"revision {meta.get('revision')} of project {meta.get('project_id')} "
+        f"(deployed by {meta.get('deployed_by')})"
+    )
 
 
 def _acked(record: Deployment, status: dict[str, Any], how: str) -> None:
     record.status = "acked"
     record.error = None
-    record.ack_json = json.dumps({"status": "ACKED", "reconciled": how,
-                                  "config_id": status.get("config_id"),
-                                  "epoch_ns": status.get("epoch_ns"),
-                                  "deployment": status.get("deployment")})
+    record.ack_json = json.dumps(
+        {
+            "status": "ACKED",
+            "reconciled": how,
+            "config_id": status.get("config_id"),
+            "epoch_ns": status.get("epoch_ns"),
+            "deployment": status.get("deployment"),
+        }
+    )
     record.finished_at = record.finished_at or utcnow()
 
 
@@ -120,9 +127,11 @@ def reconcile(db: Db, statuses: DroneStatuses, timeout_s: float) -> list[int]:
         if status is None or not isinstance(nonce, str):
             continue
         # the drone runs this one: whatever its record says, it is acked
-        for record in db.scalars(select(Deployment).where(
-                Deployment.drone == drone, Deployment.nonce == nonce,
-                Deployment.status != "acked")):
+        for record in db.scalars(
+            select(Deployment).where(
+                Deployment.drone == drone, Deployment.nonce == nonce, Deployment.status != "acked"
+            )
+        ):
             how = "was pending" if record.status == "pending" else "acknowledged late"
             _acked(record, status, f"the drone reports it runs it ({how})")
             changed.append(record.id)
@@ -135,12 +144,16 @@ def reconcile(db: Db, statuses: DroneStatuses, timeout_s: float) -> list[int]:
             continue
         status = statuses.latest(record.drone, after=due)
         if status is not None:
-            record.error = ("interrupted before its answer (the backend stopped mid-deploy); "
-                            f"the drone runs {_describe(statuses.deployment(record.drone))}")
+            record.error = (
+                "interrupted before its answer (the backend stopped mid-deploy); "
+                f"the drone runs {_describe(statuses.deployment(record.drone))}"
+            )
         elif now >= due + timedelta(seconds=SILENT_S):
-            record.error = ("interrupted before its answer (the backend stopped mid-deploy), "
-                            "and the drone's SubBroker does not report: unknown whether it "
-                            "runs it (the record turns acked if it reports it)")
+            record.error = (
+                "interrupted before its answer (the backend stopped mid-deploy), "
+                "and the drone's SubBroker does not report: unknown whether it "
+                "runs it (the record turns acked if it reports it)"
+            )
         else:
             continue
         record.status = "failed"

@@ -37,27 +37,50 @@ class ReplaySlot:
     """With ``tls`` the server speaks ``wss://`` only (reached through the
     backend's proxy, foxgloveproxy.py); ``port`` 0: a free port each time."""
 
-    def __init__(self, host: str, port: int, max_messages: int = MAX_REPLAY_MESSAGES,
-                 tls: LoopbackTls | None = None) -> None:
+    def __init__(
+        self,
+        host: str,
+        port: int,
+        max_messages: int = MAX_REPLAY_MESSAGES,
+        tls: LoopbackTls | None = None,
+    ) -> None:
         self.host, self.port, self.max_messages = host, port, max_messages
         self.tls = tls
         self._lock = threading.Lock()
         self._server: ReplayServer | None = None
         self.info: ReplayInfo | None = None
 
-    def start(self, drone: str, path: Path, start_ns: int | None, end_ns: int | None,
-              user: str, *, autoplay: bool = False) -> ReplayInfo:
+    def start(
+        self,
+        drone: str,
+        path: Path,
+        start_ns: int | None,
+        end_ns: int | None,
+        user: str,
+        *,
+        autoplay: bool = False,
+    ) -> ReplayInfo:
         """Loads the range (ValueError: nothing in it, or too much), then
         swaps the server; the old one stops first so the port is free."""
-        recording = load_recording([path], self.max_messages, partial=True,
-                                   start_ns=start_ns, end_ns=end_ns)
+        recording = load_recording(
+            [path], self.max_messages, partial=True, start_ns=start_ns, end_ns=end_ns
+        )
         with self._lock:
             self._stop_locked()
             server = self._bind(path, recording, autoplay)
             self._server = server
             p = server.player
-            self.info = ReplayInfo(server.url, drone, path.name, p.start, p.end,
-                                   len(p.messages), sorted(server.channels), user, autoplay)
+            self.info = ReplayInfo(
+                server.url,
+                drone,
+                path.name,
+                p.start,
+                p.end,
+                len(p.messages),
+                sorted(server.channels),
+                user,
+                autoplay,
+            )
             return self.info
 
     def _bind(self, path: Path, recording: Any, autoplay: bool) -> ReplayServer:
@@ -66,8 +89,14 @@ class ReplaySlot:
         deadline = time.monotonic() + 3.0
         while True:
             try:
-                return ReplayServer([path], self.host, self.port, recording=recording,
-                                    autoplay=autoplay, tls=self.tls)
+                return ReplayServer(
+                    [path],
+                    self.host,
+                    self.port,
+                    recording=recording,
+                    autoplay=autoplay,
+                    tls=self.tls,
+                )
             except RuntimeError as exc:  # the SDK's FoxgloveError
                 if "in use" not in str(exc) or time.monotonic() > deadline:
                     raise OSError(str(exc)) from None

@@ -112,10 +112,20 @@ class Track:
     def quaternion(self) -> tuple[float, float, float, float]:
         """wxyz from roll, pitch, yaw (radians, ZYX order)."""
         r, p, y = (self.attitude.get(k, 0.0) / 2 for k in ("roll", "pitch", "yaw"))
-        cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), \
-            math.cos(y), math.sin(y)
-        return (cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
-                cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy)
+        cr, sr, cp, sp, cy, sy = (
+            math.cos(r),
+            math.sin(r),
+            math.cos(p),
+            math.sin(p),
+            math.cos(y),
+            math.sin(y),
+        )
+        return (
+            cr * cp * cy + sr * sp * sy,
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy,
+        )
 
 
 class SceneServer:
@@ -148,9 +158,11 @@ class SceneServer:
         of its own; with one they stay behind its settings button."""
         gui = self.server.gui
         gui.configure_theme(show_logo=False, show_share_button=False)
-        gui.add_markdown("**Drone tracks**: each point a position, coloured by the "
-                         "chosen value; the axes show the attitude. Drag to orbit, "
-                         "scroll to zoom.")
+        gui.add_markdown(
+            "**Drone tracks**: each point a position, coloured by the "
+            "chosen value; the axes show the attitude. Drag to orbit, "
+            "scroll to zoom."
+        )
 
     def draw(self, drone: str, track: Track) -> None:
         import numpy as np
@@ -158,13 +170,18 @@ class SceneServer:
         with self._lock:
             if track.points:
                 self.server.scene.add_point_cloud(
-                    f"/{drone}/track", np.array(track.points, dtype=np.float32),
-                    np.array(track.colours(), dtype=np.uint8), point_size=1.0,
+                    f"/{drone}/track",
+                    np.array(track.points, dtype=np.float32),
+                    np.array(track.colours(), dtype=np.uint8),
+                    point_size=1.0,
                     precision="float32",
                 )
                 self.server.scene.add_frame(
-                    f"/{drone}/attitude", axes_length=5.0, axes_radius=0.3,
-                    wxyz=track.quaternion(), position=track.points[-1],
+                    f"/{drone}/attitude",
+                    axes_length=5.0,
+                    axes_radius=0.3,
+                    wxyz=track.quaternion(),
+                    position=track.points[-1],
                 )
 
     def stop(self) -> None:

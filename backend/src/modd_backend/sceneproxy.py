@@ -43,8 +43,9 @@ from .wsrelay import admit, relay
 MAX_UPSTREAM_BYTES = 32 * 1024 * 1024
 _SCRIPT = re.compile(r"<script([^>]*)>(.*?)</script>", re.DOTALL | re.IGNORECASE)
 _ATTR = re.compile(r'data-(p|ss|cs)="([^"]*)"')
-_ALPHABET = ("!#$%()*+,-./0123456789:;=?@ABCDEFGHIJKLMNOPQRSTUVWXYZ[\\]^_"
-             "abcdefghijklmnopqrstuvwxyz{|}~")
+_ALPHABET = (
+    "!#$%()*+,-./0123456789:;=?@ABCDEFGHIJKLMNOPQRSTUVWXYZ[\\]^_abcdefghijklmnopqrstuvwxyz{|}~"
+)
 _DIGIT = {c: i for i, c in enumerate(_ALPHABET)}
 
 
@@ -65,7 +66,7 @@ def base88_decode(text: str) -> bytes:
     whole = len(text) - len(text) % 5
     for i in range(0, whole, 5):
         v = 0
-        for ch in text[i:i + 5]:
+        for ch in text[i : i + 5]:
             v = v * 88 + _DIGIT[ch]
         out += (v & 0xFFFFFFFF).to_bytes(4, "big")
     tail = text[whole:]
@@ -82,7 +83,7 @@ def base88_encode(data: bytes) -> str:
     out = []
     whole = len(data) - len(data) % 4
     for i in range(0, whole, 4):
-        v = int.from_bytes(data[i:i + 4], "big")
+        v = int.from_bytes(data[i : i + 4], "big")
         out.append("".join(_ALPHABET[v // 88**k % 88] for k in range(4, -1, -1)))
     tail = data[whole:]
     if tail:
@@ -102,7 +103,7 @@ def _unpacked_module(attrs: str) -> str | None:
         return None
     packed = base88_decode(html.unescape(found["p"]))
     raw = zstandard.ZstdDecompressor().decompress(packed, max_output_size=ss + cs)
-    return raw[ss:ss + cs].decode("utf-8", errors="replace")
+    return raw[ss : ss + cs].decode("utf-8", errors="replace")
 
 
 def script_hashes(page: str) -> list[str]:
@@ -148,15 +149,19 @@ async def fetch(port: int, path: str, secret: str, timeout_s: float = 10.0) -> U
     async def run() -> Upstream:
         reader, writer = await asyncio.open_connection("127.0.0.1", port)
         try:
-            writer.write(f"GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
-                         f"{SECRET_HEADER}: {secret}\r\n"
-                         "Accept-Encoding: identity\r\nConnection: close\r\n\r\n".encode())
+            writer.write(
+                f"GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
+                f"{SECRET_HEADER}: {secret}\r\n"
+                "Accept-Encoding: identity\r\nConnection: close\r\n\r\n".encode()
+            )
             await writer.drain()
             head = await reader.readuntil(b"\r\n\r\n")
             lines = head.decode("latin-1").split("\r\n")
             status = int(lines[0].split(" ", 2)[1])
-            headers = {k.strip().lower(): v.strip() for k, _, v in
-                       (line.partition(":") for line in lines[1:] if line)}
+            headers = {
+                k.strip().lower(): v.strip()
+                for k, _, v in (line.partition(":") for line in lines[1:] if line)
+            }
             length = int(headers.get("content-length", "-1"))
             if length > MAX_UPSTREAM_BYTES:
                 raise ValueError("the scene's answer is too large")
@@ -194,6 +199,7 @@ class PagePolicies:
 
 # --- the WebSocket ---------------------------------------------------------
 
+
 async def relay_socket(websocket: WebSocket, state: AppState, port: int, secret: str) -> None:
     """Authenticate the upgrade (wsrelay.admit), then relay frames both ways
     with the viser server until either side closes or the session ends."""
@@ -203,8 +209,13 @@ async def relay_socket(websocket: WebSocket, state: AppState, port: int, secret:
     offered = [Subprotocol(p) for p in websocket.scope.get("subprotocols", [])][:4]
 
     def connect() -> Awaitable[ClientConnection]:
-        return ws_connect(f"ws://127.0.0.1:{port}", subprotocols=offered or None,
-                          compression=None, max_size=64 * 1024 * 1024,
-                          open_timeout=5, additional_headers={SECRET_HEADER: secret})
+        return ws_connect(
+            f"ws://127.0.0.1:{port}",
+            subprotocols=offered or None,
+            compression=None,
+            max_size=64 * 1024 * 1024,
+            open_timeout=5,
+            additional_headers={SECRET_HEADER: secret},
+        )
 
     await relay(websocket, state, admitted, connect, "the 3D scene")

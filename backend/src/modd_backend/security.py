@@ -38,7 +38,11 @@ def verify_password(password: str, stored: str) -> bool:
             return False
         expected = _unb64(digest)
         got = hashlib.scrypt(
-            password.encode(), salt=_unb64(salt), n=int(n), r=int(r), p=int(p),
+            password.encode(),
+            salt=_unb64(salt),
+            n=int(n),
+            r=int(r),
+            p=int(p),
             dklen=len(expected),
         )
     except (ValueError, TypeError):

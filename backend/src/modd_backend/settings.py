@@ -17,7 +17,9 @@ DEFAULT_ZENOH_CONNECT = ("tcp/127.0.0.1:7447",)
 
 #: A Host header: a name or a bracketed IPv6 address, then at most a port.
 _HOST = re.compile(r"(?:\[(?P<v6>[0-9a-f:.]+)\]|(?P<name>[a-z0-9_.-]+))(?::[0-9]{1,5})?")
-_ORIGIN = re.compile(r"https?://[A-Za-z0-9.-]+(:[0-9]{1,5})?|https?://\[[0-9A-Fa-f:.]+\](:[0-9]{1,5})?")
+_ORIGIN = re.compile(
+    r"https?://[A-Za-z0-9.-]+(:[0-9]{1,5})?|https?://\[[0-9A-Fa-f:.]+\](:[0-9]{1,5})?"
+)
 
 
 def check_origin(origin: str) -> str:
@@ -27,8 +29,10 @@ def check_origin(origin: str) -> str:
     'https://tile.openstreetmap.org'
     """
     if not _ORIGIN.fullmatch(origin):
-        raise ValueError(f"tile origin {origin!r}: expected scheme://host[:port] "
-                         "(http or https, no path), e.g. https://tile.openstreetmap.org")
+        raise ValueError(
+            f"tile origin {origin!r}: expected scheme://host[:port] "
+            "(http or https, no path), e.g. https://tile.openstreetmap.org"
+        )
     return origin
 
 

@@ -39,8 +39,8 @@ class PacedWebSocketProtocol(WebSocketsSansIOProtocol):
         if self.disconnected:
             self._pending.clear()
             return
-        chunk = bytes(self._pending[:self.CHUNK])
-        del self._pending[:self.CHUNK]
+        chunk = bytes(self._pending[: self.CHUNK])
+        del self._pending[: self.CHUNK]
         super().data_received(chunk)
         if self._pending:
             self._feeding = True

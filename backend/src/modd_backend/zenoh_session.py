@@ -54,9 +54,11 @@ MAX_SECRET_BYTES = 64 * 1024
 RETRY_S = 0.5
 #: When the backend listens: bounds against connections that never authenticate (the mirror of
 #: modd.zenoh_session.LISTENER_LIMITS; docs/security.md, "Idle connections").
-LISTENER_LIMITS = {"transport/unicast/accept_timeout": "2000",
-                   "transport/unicast/accept_pending": "2000",
-                   "transport/unicast/max_sessions": "256"}
+LISTENER_LIMITS = {
+    "transport/unicast/accept_timeout": "2000",
+    "transport/unicast/accept_pending": "2000",
+    "transport/unicast/max_sessions": "256",
+}
 
 
 def read_secret(path: Path, what: str) -> str:
@@ -66,8 +68,9 @@ def read_secret(path: Path, what: str) -> str:
     try:
         st = os.fstat(fd)
         if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_SECRET_BYTES:
-            raise ValueError(f"{what} {path}: not a regular file of at most "
-                             f"{MAX_SECRET_BYTES} bytes")
+            raise ValueError(
+                f"{what} {path}: not a regular file of at most {MAX_SECRET_BYTES} bytes"
+            )
         if st.st_mode & 0o077:
             log.warning("%s %s can be read by group or others: chmod 600 it", what, path)
         data = os.read(fd, MAX_SECRET_BYTES)
@@ -79,8 +82,9 @@ def read_secret(path: Path, what: str) -> str:
     return text
 
 
-def zenoh_config(connect: tuple[str, ...], listen: tuple[str, ...],
-                 credentials: Path | None = None) -> zenoh.Config:
+def zenoh_config(
+    connect: tuple[str, ...], listen: tuple[str, ...], credentials: Path | None = None
+) -> zenoh.Config:
     c = zenoh.Config()
     c.insert_json5("mode", '"peer"' if listen or not connect else '"client"')
     c.insert_json5("scouting/multicast/enabled", "false")
@@ -115,8 +119,12 @@ class _Pending:
 
 
 class ZenohSession:
-    def __init__(self, session: zenoh.Session | None,
-                 config: Callable[[], zenoh.Config] | None = None, where: str = "") -> None:
+    def __init__(
+        self,
+        session: zenoh.Session | None,
+        config: Callable[[], zenoh.Config] | None = None,
+        where: str = "",
+    ) -> None:
         self._session = session
         self._config = config
         self._where = where
@@ -126,15 +134,21 @@ class ZenohSession:
         self._opener: threading.Thread | None = None
 
     @classmethod
-    def open(cls, connect: tuple[str, ...] = (), listen: tuple[str, ...] = (),
-             credentials: Path | None = None) -> ZenohSession:
+    def open(
+        cls,
+        connect: tuple[str, ...] = (),
+        listen: tuple[str, ...] = (),
+        credentials: Path | None = None,
+    ) -> ZenohSession:
         """Opens at once when the router is up, else keeps trying in the background
         (the credentials file is read at each try: it may not be made yet)."""
-        opened = cls(None, lambda: zenoh_config(connect, listen, credentials),
-                     ", ".join(connect + listen))
+        opened = cls(
+            None, lambda: zenoh_config(connect, listen, credentials), ", ".join(connect + listen)
+        )
         if not opened._try_open():
-            opened._opener = threading.Thread(target=opened._keep_trying, daemon=True,
-                                              name="modd-zenoh-open")
+            opened._opener = threading.Thread(
+                target=opened._keep_trying, daemon=True, name="modd-zenoh-open"
+            )
             opened._opener.start()
         return opened
 
@@ -156,8 +170,7 @@ class ZenohSession:
         return True
 
     def _keep_trying(self) -> None:
-        log.warning("zenoh router %s not reachable (or credentials refused); retrying",
-                    self._where)
+        log.warning("zenoh router %s not reachable (or credentials refused); retrying", self._where)
         while not self._closed.wait(RETRY_S):
             if self._try_open():
                 return
@@ -166,8 +179,12 @@ class ZenohSession:
         """Blocking ``get``; call it from a worker thread."""
         session = self._session
         if session is None:
-            return QueryResult(False, b"", f"the zenoh router {self._where} is not reachable "
-                               "(or refused the backend's credentials)")
+            return QueryResult(
+                False,
+                b"",
+                f"the zenoh router {self._where} is not reachable "
+                "(or refused the backend's credentials)",
+            )
         replies = session.get(key, payload=payload, timeout=timeout_s)
         for reply in replies:
             if reply.ok is not None:

@@ -21,13 +21,24 @@ def run(args: argparse.Namespace) -> int:
         return 1
     out = Path(args.out)
     written = write_artifacts(out, generate(model, args.role))
-    index = [{"path": w.artifact.path, "role": w.artifact.role,
-              "ownership": w.artifact.ownership.value, "action": w.action} for w in written]
-    (out / INDEX).write_text(json.dumps({"model": str(args.file), "files": index}, indent=2)
-                             + "\n", encoding="utf-8")
+    index = [
+        {
+            "path": w.artifact.path,
+            "role": w.artifact.role,
+            "ownership": w.artifact.ownership.value,
+            "action": w.action,
+        }
+        for w in written
+    ]
+    (out / INDEX).write_text(
+        json.dumps({"model": str(args.file), "files": index}, indent=2) + "\n", encoding="utf-8"
+    )
     for entry in index:
-        note = " (yours: kept)" if entry["action"] == "kept" else (
-            " (yours: written once)" if entry["ownership"] == "user" else "")
+        note = (
+            " (yours: kept)"
+            if entry["action"] == "kept"
+            else (" (yours: written once)" if entry["ownership"] == "user" else "")
+        )
         print(f"{entry['path']}{note}")
     print(f"{len(index)} files under {out} (index: {out / INDEX})")
     return 0

@@ -46,8 +46,16 @@ DEFAULT_KEY_REF = "env:MODD_LINK_KEY"
 
 def build_context(model: dict[str, Any]) -> Context:
     tops = topics(model)
-    pubs = [PublisherView(p["name"], p["periodS"], [tops[t] for t in p["topics"]])
-            for p in model["publishers"]]
-    return Context(model=model, drone=model["drone"]["name"], topics=tops, publishers=pubs,
-                   plan=make_plan(model), ingress=ingress_of(model),
-                   key_ref=link_settings(model).key_ref or DEFAULT_KEY_REF)
+    pubs = [
+        PublisherView(p["name"], p["periodS"], [tops[t] for t in p["topics"]])
+        for p in model["publishers"]
+    ]
+    return Context(
+        model=model,
+        drone=model["drone"]["name"],
+        topics=tops,
+        publishers=pubs,
+        plan=make_plan(model),
+        ingress=ingress_of(model),
+        key_ref=link_settings(model).key_ref or DEFAULT_KEY_REF,
+    )

@@ -25,8 +25,9 @@ def register_target(role: str, target: Target) -> None:
         ROLES[role].append(target)
 
 
-def generate(model: dict[str, Any], role: str | None = None,
-             station: Station | None = None) -> list[Artifact]:
+def generate(
+    model: dict[str, Any], role: str | None = None, station: Station | None = None
+) -> list[Artifact]:
     """Every artifact of a validated model, or only those of one role; sorted by path.
     ``station``: the base station of the deployment the artifacts are for (the
     scientist's subscribers connect there), when it is known."""

@@ -96,8 +96,9 @@ class Process:
     def start(self, env: dict[str, str]) -> None:
         self.log.parent.mkdir(parents=True, exist_ok=True)
         with self.log.open("ab") as out:
-            self.popen = subprocess.Popen(self.argv, stdout=out, stderr=subprocess.STDOUT,
-                                          env=env, start_new_session=True)
+            self.popen = subprocess.Popen(
+                self.argv, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True
+            )
 
     def stop(self) -> int | None:
         """SIGTERM, then SIGKILL after STOP_TIMEOUT_S; the exit code."""
@@ -134,8 +135,12 @@ class Stack:
             print(f"modd up: stopped {p.name} (exit {code})", flush=True)
 
 
-def prepare(model: dict[str, Any], workdir: Path, transport: str | None = None,
-            devices: tuple[str, str] | None = None) -> tuple[dict[str, Any], Path]:
+def prepare(
+    model: dict[str, Any],
+    workdir: Path,
+    transport: str | None = None,
+    devices: tuple[str, str] | None = None,
+) -> tuple[dict[str, Any], Path]:
     """The model as run locally (archive and config dirs under workdir, the
     run's transport) and the directory of the generated operator configs."""
     from modd_gen import generate, write_artifacts
@@ -150,14 +155,11 @@ def prepare(model: dict[str, Any], workdir: Path, transport: str | None = None,
     return local, workdir / "generated" / "operator"
 
 
-
-
 def has_mavlink_sensors(model: dict[str, Any]) -> bool:
     return any(s.get("kind") == "mavlink" for s in model["drone"]["sensors"])
 
 
-def simulation(model: dict[str, Any], model_json: Path, bin_dir: Path,
-               logs: Path) -> list[Process]:
+def simulation(model: dict[str, Any], model_json: Path, bin_dir: Path, logs: Path) -> list[Process]:
     """The simulator and, when the model has mavlink sensors, the MAVLink bridge reading
     the simulator's autopilot on a loopback UDP port of this run (bridge first: it listens)."""
     sim = bin_dir / "modd-sim"
@@ -170,28 +172,43 @@ def simulation(model: dict[str, Any], model_json: Path, bin_dir: Path,
         if not bridge.exists():
             raise FileNotFoundError(f"{bridge} not found: the MAVLink bridge is not installed")
         port = free_port("udp")
-        out.append(Process("bridge", [str(bridge), "--model", str(model_json),
-                                              "--connect", f"udpin:127.0.0.1:{port}"],
-                           logs / "bridge.log"))
+        out.append(
+            Process(
+                "bridge",
+                [str(bridge), "--model", str(model_json), "--connect", f"udpin:127.0.0.1:{port}"],
+                logs / "bridge.log",
+            )
+        )
         sim_argv += ["--mavlink", f"udpout:127.0.0.1:{port}"]
     out.append(Process("simulator", sim_argv, logs / "simulator.log"))
     return out
 
 
-def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
-                configs: Path) -> Stack:
+def build_stack(
+    args: argparse.Namespace, model: dict[str, Any], workdir: Path, configs: Path
+) -> Stack:
     logs = workdir / "logs"
     bin_dir = Path(sys.executable).parent
     drone, station = args.part in ("drone", "all"), args.part in ("station", "all")
     stack = Stack()
     if drone:
-        stack.processes.append(Process("pubbroker", [str(pubbroker_binary()), "--config",
-                                                     str(configs / "pubbroker.json")],
-                                       logs / "pubbroker.log"))
+        stack.processes.append(
+            Process(
+                "pubbroker",
+                [str(pubbroker_binary()), "--config", str(configs / "pubbroker.json")],
+                logs / "pubbroker.log",
+            )
+        )
     if station:
-        sub = [str(bin_dir / "modd-subbroker"), "--config", str(configs / "subbroker.toml"),
-               "--credentials", str(args.credentials_dir),
-               "--record-dir", str(workdir / "records")]  # the base-station record
+        sub = [
+            str(bin_dir / "modd-subbroker"),
+            "--config",
+            str(configs / "subbroker.toml"),
+            "--credentials",
+            str(args.credentials_dir),
+            "--record-dir",
+            str(workdir / "records"),
+        ]  # the base-station record
         for endpoint in args.zenoh_listen or ():
             sub += ["--zenoh-listen", endpoint]
         for endpoint in args.zenoh_connect or ():
@@ -204,9 +221,19 @@ def build_stack(args: argparse.Namespace, model: dict[str, Any], workdir: Path,
     from modd.sensors.plan import has_instrument_sensors
 
     if drone and has_instrument_sensors(model):  # nmea, ascii, modbus: read by modd-sensors
-        stack.processes.append(Process("sensors", [
-            str(bin_dir / "modd-sensors"), "--model", str(configs / "model.json"),
-            "--status-file", str(workdir / "sensors.json")], logs / "sensors.log"))
+        stack.processes.append(
+            Process(
+                "sensors",
+                [
+                    str(bin_dir / "modd-sensors"),
+                    "--model",
+                    str(configs / "model.json"),
+                    "--status-file",
+                    str(workdir / "sensors.json"),
+                ],
+                logs / "sensors.log",
+            )
+        )
     if args.simulate and drone:
         stack.processes += simulation(model, configs / "model.json", bin_dir, logs)
     return stack
@@ -240,13 +267,16 @@ def run(args: argparse.Namespace) -> int:
     if args.part != "drone":
         print(kept_note(workdir / "state", args.resume), end="", flush=True)
     env = dict(os.environ)
-    key_ref = (local.get("link", {}).get("keyRef") or "env:MODD_LINK_KEY")
+    key_ref = local.get("link", {}).get("keyRef") or "env:MODD_LINK_KEY"
     kind, _, name = key_ref.partition(":")
     if kind == "env" and not env.get(name):
         if args.part != "all":
             # the other part runs elsewhere: a key made up here could never match its key
-            print(f"modd up: --part {args.part} needs the link key in ${name} (the model's "
-                  f"keyRef {key_ref}), the same on the drone and the station", file=sys.stderr)
+            print(
+                f"modd up: --part {args.part} needs the link key in ${name} (the model's "
+                f"keyRef {key_ref}), the same on the drone and the station",
+                file=sys.stderr,
+            )
             return 1
         env[name] = secrets.token_hex(16)  # a key for this local run only
     try:
@@ -268,14 +298,20 @@ def run(args: argparse.Namespace) -> int:
     signal.signal(signal.SIGTERM, on_signal)
     stack.start(env)
     where = f"archive in {workdir / 'archive'}" if args.part != "station" else f"logs in {workdir}"
-    print(f"modd up: drone {local['drone']['name']} ({args.part}) running; {where};"
-          " Ctrl-C to stop", flush=True)
+    print(
+        f"modd up: drone {local['drone']['name']} ({args.part}) running; {where}; Ctrl-C to stop",
+        flush=True,
+    )
     if args.part != "drone":
         print(viewer_hint(args, store), flush=True)
     code = 1
     try:
-        code = watch(stack.processes, env, lambda: stopping,
-                     say=lambda line: print(line, file=sys.stderr, flush=True))
+        code = watch(
+            stack.processes,
+            env,
+            lambda: stopping,
+            say=lambda line: print(line, file=sys.stderr, flush=True),
+        )
     finally:
         stack.stop()
     return code
@@ -290,12 +326,19 @@ def kept_note(state: Path, resume: bool) -> str:
         return ""
     where = state / "deployed.json"
     if resume:
-        return (f"modd up: --resume: the SubBroker resumes the deployment kept in {where} "
-                f"({kept[1].describe()}), not MODEL\n")
-    return (f"modd up: running MODEL; the deployment kept in {where} ({kept[1].describe()}) "
-            "is not resumed (--resume resumes it)\n")
-def start_radio(args: argparse.Namespace, model: dict[str, Any], workdir: Path
-                ) -> tuple[Process | None, tuple[str, str] | None]:
+        return (
+            f"modd up: --resume: the SubBroker resumes the deployment kept in {where} "
+            f"({kept[1].describe()}), not MODEL\n"
+        )
+    return (
+        f"modd up: running MODEL; the deployment kept in {where} ({kept[1].describe()}) "
+        "is not resumed (--resume resumes it)\n"
+    )
+
+
+def start_radio(
+    args: argparse.Namespace, model: dict[str, Any], workdir: Path
+) -> tuple[Process | None, tuple[str, str] | None]:
     """Check --link/--radio; start the emulator when the run needs one (serial
     with both parts here: always, it makes the pseudo-terminals; udp: with
     --radio). Returns it (started) and, over serial, the (base, drone) devices."""
@@ -303,16 +346,19 @@ def start_radio(args: argparse.Namespace, model: dict[str, Any], workdir: Path
     transport = uplink.check(args.link, args.radio, model)
     args.transport = transport if args.link or args.radio else None  # None: the model's own
     needs = (transport == "serial" and args.part == "all") or (
-        transport == "udp" and args.radio is not None)
+        transport == "udp" and args.radio is not None
+    )
     if args.radio is not None and args.part != "all":
         raise uplink.LinkSetupError("--radio needs both ends of the link here (--part all)")
     if not needs:
         return None, None
     ep = model["pubBroker"]["endpoint"]
-    argv, args.relay = uplink.radio_argv(Path(sys.executable).parent, transport, args.radio,
-                                         (str(ep["host"]), int(ep["port"])))
-    radio = Process("radio", argv, workdir / "logs" / "radio.log",
-                    restartable=transport != "serial")
+    argv, args.relay = uplink.radio_argv(
+        Path(sys.executable).parent, transport, args.radio, (str(ep["host"]), int(ep["port"]))
+    )
+    radio = Process(
+        "radio", argv, workdir / "logs" / "radio.log", restartable=transport != "serial"
+    )
     if radio.log.exists():
         radio.log.unlink()  # the devices line of an earlier run must not be read
     radio.start(dict(os.environ))
@@ -341,37 +387,73 @@ def run_dir(workdir: str | None, drone: str) -> Path:
 def viewer_hint(args: argparse.Namespace, store: CredentialStore) -> str:
     """How a viewer connects (which file holds its credentials), never a password."""
     endpoint = (args.zenoh_listen or [DEFAULT_ENDPOINT])[0]
-    return (f"modd up: zenoh {endpoint} requires credentials; a viewer connects with "
-            f"modd.subscribe(DRONE, SUBSCRIBER, connect={endpoint!r}, "
-            f"credentials={str(store.cred_file('viewer'))!r}) (the workbench: "
-            f"modd-backend --zenoh-credentials {store.cred_file('backend')} "
-            f"--deploy-key {store.deploy_key_file})")
+    return (
+        f"modd up: zenoh {endpoint} requires credentials; a viewer connects with "
+        f"modd.subscribe(DRONE, SUBSCRIBER, connect={endpoint!r}, "
+        f"credentials={str(store.cred_file('viewer'))!r}) (the workbench: "
+        f"modd-backend --zenoh-credentials {store.cred_file('backend')} "
+        f"--deploy-key {store.deploy_key_file})"
+    )
 
 
 def register(sub: Any) -> None:
     p = sub.add_parser("up", help="run a model locally: PubBroker, SubBroker, simulated sensors")
     p.add_argument("model", metavar="MODEL", help=".modd or .json model")
-    p.add_argument("--simulate", action="store_true", help="also run the simulated drone "
-                   "(sensors, autopilot) and the MAVLink bridge")
-    p.add_argument("--workdir", metavar="DIR", help="run directory, private "
-                   "(default $XDG_RUNTIME_DIR/modd-up/<drone> or /tmp/modd-up-<uid>/<drone>)")
-    p.add_argument("--credentials", metavar="DIR", help="zenoh credentials and deploy key, "
-                   "made at first start (default <workdir>/credentials)")
-    p.add_argument("--part", choices=("drone", "station", "all"), default="all",
-                   help="drone: PubBroker (+ simulator and bridge); station: SubBroker; "
-                        "all: both (default)")
-    p.add_argument("--zenoh-listen", action="append", default=None, metavar="ENDPOINT",
-                   help="the SubBroker's zenoh listen endpoint (repeatable; "
-                        "default tcp/127.0.0.1:7447)")
-    p.add_argument("--zenoh-connect", action="append", default=None, metavar="ENDPOINT",
-                   help="a zenoh endpoint the SubBroker connects to (repeatable)")
-    p.add_argument("--resume", action="store_true",
-                   help="resume the deployment (and dynamic subscriptions) a workbench made "
-                   "in an earlier run of this drone, instead of running MODEL")
-    p.add_argument("--link", choices=("tcp", "udp", "serial"), default=None,
-                   help="the link's transport for this run (default: the model's); serial "
-                        "runs the radio emulator between two pseudo-terminals")
-    p.add_argument("--radio", metavar="SPEC", default=None,
-                   help='an emulated radio in the path (udp or serial), e.g. '
-                        '"rate=3600,loss=0.05,latency_ms=80" (modd-radio --help)')
+    p.add_argument(
+        "--simulate",
+        action="store_true",
+        help="also run the simulated drone (sensors, autopilot) and the MAVLink bridge",
+    )
+    p.add_argument(
+        "--workdir",
+        metavar="DIR",
+        help="run directory, private "
+        "(default $XDG_RUNTIME_DIR/modd-up/<drone> or /tmp/modd-up-<uid>/<drone>)",
+    )
+    p.add_argument(
+        "--credentials",
+        metavar="DIR",
+        help="zenoh credentials and deploy key, "
+        "made at first start (default <workdir>/credentials)",
+    )
+    p.add_argument(
+        "--part",
+        choices=("drone", "station", "all"),
+        default="all",
+        help="drone: PubBroker (+ simulator and bridge); station: SubBroker; all: both (default)",
+    )
+    p.add_argument(
+        "--zenoh-listen",
+        action="append",
+        default=None,
+        metavar="ENDPOINT",
+        help="the SubBroker's zenoh listen endpoint (repeatable; default tcp/127.0.0.1:7447)",
+    )
+    p.add_argument(
+        "--zenoh-connect",
+        action="append",
+        default=None,
+        metavar="ENDPOINT",
+        help="a zenoh endpoint the SubBroker connects to (repeatable)",
+    )
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="resume the deployment (and dynamic subscriptions) a workbench made "
+        "in an earlier run of this drone, instead of running MODEL",
+    )
+    p.add_argument(
+        "--link",
+        choices=("tcp", "udp", "serial"),
+        default=None,
+        help="the link's transport for this run (default: the model's); serial "
+        "runs the radio emulator between two pseudo-terminals",
+    )
+    p.add_argument(
+        "--radio",
+        metavar="SPEC",
+        default=None,
+        help="an emulated radio in the path (udp or serial), e.g. "
+        '"rate=3600,loss=0.05,latency_ms=80" (modd-radio --help)',
+    )
     p.set_defaults(func=run)

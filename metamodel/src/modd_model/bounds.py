@@ -52,8 +52,9 @@ def schema_bounds() -> tuple[Bound, ...]:
     return tuple(found)
 
 
-def _at(doc: Any, path: tuple[str, ...], where: tuple[str | int, ...] = ()
-        ) -> list[tuple[tuple[str | int, ...], Any]]:
+def _at(
+    doc: Any, path: tuple[str, ...], where: tuple[str | int, ...] = ()
+) -> list[tuple[tuple[str | int, ...], Any]]:
     if not path:
         return [(where, doc)]
     head, rest = path[0], path[1:]
@@ -76,7 +77,10 @@ def size_errors(doc: Any) -> list[Diagnostic]:
     for path, limit, what in schema_bounds():
         for where, value in _at(doc, path):
             if isinstance(value, list | dict) and len(value) > limit:
-                out.append(Diagnostic(
-                    f"{len(value):,} {what}: at most {limit:,} are allowed here (is too long)",
-                    pointer_join(*where)))
+                out.append(
+                    Diagnostic(
+                        f"{len(value):,} {what}: at most {limit:,} are allowed here (is too long)",
+                        pointer_join(*where),
+                    )
+                )
     return out

@@ -37,8 +37,9 @@ class _Writer:
         self.omitted: list[Diagnostic] = []
 
     def omit(self, pointer: str, what: str) -> None:
-        self.omitted.append(Diagnostic(f"left out of the .collector form: {what}", pointer,
-                                       "warning"))
+        self.omitted.append(
+            Diagnostic(f"left out of the .collector form: {what}", pointer, "warning")
+        )
 
     def add(self, depth: int, text: str) -> None:
         self.lines.append(INDENT * depth + text)
@@ -56,8 +57,10 @@ def _drone(w: _Writer, drone: dict[str, Any]) -> None:
         if "description" in s:
             w.omit(ptr + "/description", f"the description of sensor {s['name']}")
         if "kind" in s:
-            w.omit(ptr + "/kind", f"sensor {s['name']} is of kind {s['kind']} (the original "
-                   "tool has drivers only)")
+            w.omit(
+                ptr + "/kind",
+                f"sensor {s['name']} is of kind {s['kind']} (the original tool has drivers only)",
+            )
         w.add(3, f"Sensor {name(s['name'])} measures {{")
         for j, v in enumerate(s["variables"]):
             _variable(w, v, f"{ptr}/variables/{j}", s["name"])
@@ -96,8 +99,9 @@ def _broker(w: _Writer, doc: dict[str, Any], key: str, word: str, path_key: str)
     broker_name = broker.get("name", DEFAULT_BROKER_NAMES[key])
     if "ingress" in broker:
         w.omit(f"/{key}/ingress", "the PubBroker's ingress settings")
-    w.add(1, f"{word} {name(broker_name)}({endpoint(broker['endpoint'])}, "
-          f"{quote(broker[path_key])});")
+    w.add(
+        1, f"{word} {name(broker_name)}({endpoint(broker['endpoint'])}, {quote(broker[path_key])});"
+    )
 
 
 def _publishers(w: _Writer, doc: dict[str, Any]) -> None:
@@ -107,8 +111,10 @@ def _publishers(w: _Writer, doc: dict[str, Any]) -> None:
         if ep is None:
             # The original requires one; a publisher runs on board, where the PubBroker is.
             ep = doc["pubBroker"]["endpoint"]
-            w.omit(f"/publishers/{i}", f"publisher {p['name']} has no endpoint; the PubBroker's "
-                   "is written in its place")
+            w.omit(
+                f"/publishers/{i}",
+                f"publisher {p['name']} has no endpoint; the PubBroker's is written in its place",
+            )
         args = [endpoint(ep), p["periodS"], *(quote(t) for t in p["topics"])]
         w.add(2, f"Publisher {name(p['name'])}({', '.join(args)});")
     w.add(1, "}")
@@ -119,8 +125,11 @@ def _subscriptions(w: _Writer, doc: dict[str, Any]) -> None:
     for i, s in enumerate(doc["subscribers"]):
         ptr = f"/subscribers/{i}"
         if "endpoint" not in s:
-            w.omit(ptr, f"subscriber {s['name']} (served on zenoh only; the original tool "
-                   "delivers to endpoints)")
+            w.omit(
+                ptr,
+                f"subscriber {s['name']} (served on zenoh only; the original tool "
+                "delivers to endpoints)",
+            )
             continue
         if s["aggregation"] not in ORIGINAL_AGGREGATIONS:
             w.omit(ptr, f"subscriber {s['name']} (the original tool has no {s['aggregation']})")
@@ -130,8 +139,9 @@ def _subscriptions(w: _Writer, doc: dict[str, Any]) -> None:
     w.add(1, "}")
 
 
-def print_collector(doc: dict[str, Any], *, note_omissions: bool = False
-                    ) -> tuple[str, list[Diagnostic]]:
+def print_collector(
+    doc: dict[str, Any], *, note_omissions: bool = False
+) -> tuple[str, list[Diagnostic]]:
     """The model in the original tool's form, and what had to be left out;
     with ``note_omissions`` the file opens with a comment line per omission."""
     w = _Writer()
@@ -147,6 +157,9 @@ def print_collector(doc: dict[str, Any], *, note_omissions: bool = False
         w.omit("/layout", "the diagram layout")
     w.add(0, "}")
     # a line comment ends at \n or \r (Xtext's SL_COMMENT): keep each note on its line
-    notes = [" ".join(f"// {d.message} [{d.pointer}]".splitlines()) for d in w.omitted] \
-        if note_omissions else []
+    notes = (
+        [" ".join(f"// {d.message} [{d.pointer}]".splitlines()) for d in w.omitted]
+        if note_omissions
+        else []
+    )
     return "\n".join(notes + w.lines) + "\n", w.omitted

@@ -75,8 +75,10 @@ def run_fmt(args: argparse.Namespace) -> int:
         try:
             write_atomic(path, text)
         except OSError as exc:
-            print(f"{path}: cannot write ({exc.strerror or exc}); the file is unchanged",
-                  file=sys.stderr)
+            print(
+                f"{path}: cannot write ({exc.strerror or exc}); the file is unchanged",
+                file=sys.stderr,
+            )
             status = 1
             continue
         print(f"{path}: reformatted")
@@ -104,11 +106,16 @@ def register_validate(sub: Any) -> None:
 
 
 def register_convert(sub: Any) -> None:
-    p = sub.add_parser("convert", help="convert a model between .modd, JSON and the "
-                       "original tool's .collector")
+    p = sub.add_parser(
+        "convert", help="convert a model between .modd, JSON and the original tool's .collector"
+    )
     p.add_argument("file", metavar="FILE")
-    p.add_argument("--to", choices=["json", "modd", "collector"], required=True,
-                   help="collector: the original tool's form (says what it leaves out)")
+    p.add_argument(
+        "--to",
+        choices=["json", "modd", "collector"],
+        required=True,
+        help="collector: the original tool's form (says what it leaves out)",
+    )
     p.add_argument("-o", "--output", metavar="OUT", help="output file (default: stdout)")
     _encoding_option(p)
     p.set_defaults(func=run_convert)
@@ -117,14 +124,22 @@ def register_convert(sub: Any) -> None:
 def register_fmt(sub: Any) -> None:
     p = sub.add_parser("fmt", help="rewrite models in canonical form")
     p.add_argument("files", nargs="+", metavar="FILE")
-    p.add_argument("--check", action="store_true", help="only report files not in canonical "
-                   "form (exit 1)")
-    p.add_argument("--drop-comments", action="store_true",
-                   help="leave the comments out of the canonical form (kept by default)")
+    p.add_argument(
+        "--check", action="store_true", help="only report files not in canonical form (exit 1)"
+    )
+    p.add_argument(
+        "--drop-comments",
+        action="store_true",
+        help="leave the comments out of the canonical form (kept by default)",
+    )
     _encoding_option(p)
     p.set_defaults(func=run_fmt)
 
 
 def _encoding_option(p: Any) -> None:
-    p.add_argument("--encoding", metavar="NAME", help="the file's text encoding (default: "
-                   "UTF-8, or windows-1252 for a file that is not UTF-8)")
+    p.add_argument(
+        "--encoding",
+        metavar="NAME",
+        help="the file's text encoding (default: "
+        "UTF-8, or windows-1252 for a file that is not UTF-8)",
+    )

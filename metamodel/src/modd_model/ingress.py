@@ -24,5 +24,8 @@ def ingress_of(model: dict[str, Any]) -> Ingress:
     broker = model["pubBroker"]
     ingress = broker.get("ingress", {})
     default_socket = f"/tmp/modd/{model['drone']['name']}/ingress.sock"
-    return Ingress(unix_socket=ingress.get("unixSocket", default_socket),
-                   tcp_host=broker["endpoint"]["host"], tcp_port=ingress.get("tcpPort"))
+    return Ingress(
+        unix_socket=ingress.get("unixSocket", default_socket),
+        tcp_host=broker["endpoint"]["host"],
+        tcp_port=ingress.get("tcpPort"),
+    )

@@ -69,16 +69,27 @@ def load_text(text: str, filename: str = "<text>", fmt: Format = "modd") -> Load
     if fmt == "json":
         depth = json_depth(text.encode("utf-8", "surrogatepass"))
         if depth > MAX_DEPTH:
-            return LoadResult(None, [Diagnostic(
-                f"invalid JSON: nested {depth} levels deep; at most {MAX_DEPTH} are read",
-                "", "error", Location(filename, 1, 1), lines[0][:200] if lines else None)], {})
+            return LoadResult(
+                None,
+                [
+                    Diagnostic(
+                        f"invalid JSON: nested {depth} levels deep; at most {MAX_DEPTH} are read",
+                        "",
+                        "error",
+                        Location(filename, 1, 1),
+                        lines[0][:200] if lines else None,
+                    )
+                ],
+                {},
+            )
         try:
             doc: Any = json.loads(text)
         except json.JSONDecodeError as exc:
             loc = Location(filename, exc.lineno, exc.colno)
             src = lines[exc.lineno - 1] if 0 < exc.lineno <= len(lines) else None
-            return LoadResult(None, [Diagnostic(f"invalid JSON: {exc.msg}", "", "error", loc,
-                                                src)], {})
+            return LoadResult(
+                None, [Diagnostic(f"invalid JSON: {exc.msg}", "", "error", loc, src)], {}
+            )
         # JSON has no line:col per pointer here: the file and the pointer locate it.
         whole_file = Location(filename, 0, 0)
         return LoadResult(doc, [replace(d, location=whole_file) for d in validate(doc)], {})
@@ -93,12 +104,16 @@ def load_text(text: str, filename: str = "<text>", fmt: Format = "modd") -> Load
 
 #: Largest model file read (a legal model is far smaller; see docs/dsl.md).
 MAX_FILE_BYTES = 16 * 1024 * 1024
-_BOMS = ((codecs.BOM_UTF8, "utf-8-sig"), (codecs.BOM_UTF16_LE, "utf-16"),
-         (codecs.BOM_UTF16_BE, "utf-16"))
+_BOMS = (
+    (codecs.BOM_UTF8, "utf-8-sig"),
+    (codecs.BOM_UTF16_LE, "utf-16"),
+    (codecs.BOM_UTF16_BE, "utf-16"),
+)
 
 
-def decode(data: bytes, filename: str, encoding: str | None = None
-           ) -> tuple[str | None, list[Diagnostic]]:
+def decode(
+    data: bytes, filename: str, encoding: str | None = None
+) -> tuple[str | None, list[Diagnostic]]:
     """The text of a model file, and a note on how it was decoded.
 
     With ``encoding`` given, exactly that (an undecodable byte is an error with
@@ -114,26 +129,37 @@ def decode(data: bytes, filename: str, encoding: str | None = None
             return data.decode("utf-8"), []
         except UnicodeDecodeError:
             text = data.decode("cp1252", errors=_LATIN1_FALLBACK)
-            note = Diagnostic("not UTF-8: read as windows-1252 (choose another encoding "
-                              "with --encoding)", "", "warning", Location(filename, 1, 1))
+            note = Diagnostic(
+                "not UTF-8: read as windows-1252 (choose another encoding with --encoding)",
+                "",
+                "warning",
+                Location(filename, 1, 1),
+            )
             return text, [note]
     try:
         return data.decode(encoding), []
     except LookupError:
-        return None, [Diagnostic(f"unknown encoding {encoding!r}", "", "error",
-                                 Location(filename, 0, 0))]
+        return None, [
+            Diagnostic(f"unknown encoding {encoding!r}", "", "error", Location(filename, 0, 0))
+        ]
     except UnicodeDecodeError as exc:
-        head = data[:exc.start]
+        head = data[: exc.start]
         line = head.count(b"\n") + 1
         col = exc.start - (head.rfind(b"\n") + 1) + 1
-        return None, [Diagnostic(f"byte 0x{data[exc.start]:02x} is not valid {encoding}",
-                                 "", "error", Location(filename, line, col))]
+        return None, [
+            Diagnostic(
+                f"byte 0x{data[exc.start]:02x} is not valid {encoding}",
+                "",
+                "error",
+                Location(filename, line, col),
+            )
+        ]
 
 
 def _latin1(exc: UnicodeError) -> tuple[str, int]:
     # cp1252 leaves five bytes undefined; Latin-1 gives them a meaning.
     assert isinstance(exc, UnicodeDecodeError)
-    return exc.object[exc.start:exc.end].decode("latin-1"), exc.end
+    return exc.object[exc.start : exc.end].decode("latin-1"), exc.end
 
 
 _LATIN1_FALLBACK = "modd-latin1"
@@ -149,8 +175,18 @@ def load_file(path: str | Path, encoding: str | None = None) -> LoadResult:
     except OSError as exc:
         return LoadResult(None, [Diagnostic(f"cannot read {p}: {exc.strerror or exc}")], {})
     if len(data) > MAX_FILE_BYTES:
-        return LoadResult(None, [Diagnostic(f"{p} is larger than {MAX_FILE_BYTES} bytes",
-                                            "", "error", Location(str(path), 0, 0))], {})
+        return LoadResult(
+            None,
+            [
+                Diagnostic(
+                    f"{p} is larger than {MAX_FILE_BYTES} bytes",
+                    "",
+                    "error",
+                    Location(str(path), 0, 0),
+                )
+            ],
+            {},
+        )
     text, notes = decode(data, str(path), encoding)
     if text is None:
         return LoadResult(None, notes, {})
@@ -190,9 +226,13 @@ def locate(diags: list[Diagnostic], result: LoadResult, path: str | Path) -> lis
     return _locate(diags, result.source_map, lines)
 
 
-def load_or_report(path: str | Path, *, quiet_warnings: bool = False,
-                   out: TextIO | None = None, encoding: str | None = None
-                   ) -> dict[str, Any] | None:
+def load_or_report(
+    path: str | Path,
+    *,
+    quiet_warnings: bool = False,
+    out: TextIO | None = None,
+    encoding: str | None = None,
+) -> dict[str, Any] | None:
     """The valid model of a file, or None; every diagnostic goes to ``out``
     (stderr), as each command-line tool reports a model it was given."""
     result = load_file(path, encoding)

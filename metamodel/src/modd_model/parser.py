@@ -142,8 +142,9 @@ def parse_text(text: str, filename: str = "<text>") -> tuple[dict[str, Any], Sou
     return doc, smap
 
 
-def parse_lenient(text: str, filename: str = "<text>"
-                  ) -> tuple[dict[str, Any] | None, SourceMap, list[Diagnostic]]:
+def parse_lenient(
+    text: str, filename: str = "<text>"
+) -> tuple[dict[str, Any] | None, SourceMap, list[Diagnostic]]:
     """Like parse_text, but returns the document even when some words in it are
     wrong (unknown unit, aggregation, ...), with those errors, so that the
     validator can report the model's other problems in the same run. The
@@ -192,10 +193,15 @@ def _runaway_string(text: str, error: Diagnostic, lines: list[str]) -> Diagnosti
         return None
     line, col = suspect.line or 1, suspect.column or 1
     src = lines[line - 1] if 0 < line <= len(lines) else None
-    return Diagnostic(f"the string that starts here runs over the end of its line and on to "
-                      f"line {suspect.end_line}, where the syntax error is ({error.message}); "
-                      f"is a closing quote missing?", "", "error",
-                      Location(error.location.file, line, col), src)
+    return Diagnostic(
+        f"the string that starts here runs over the end of its line and on to "
+        f"line {suspect.end_line}, where the syntax error is ({error.message}); "
+        f"is a closing quote missing?",
+        "",
+        "error",
+        Location(error.location.file, line, col),
+        src,
+    )
 
 
 def _syntax_diagnostic(exc: UnexpectedInput, filename: str, lines: list[str]) -> Diagnostic:
@@ -204,8 +210,9 @@ def _syntax_diagnostic(exc: UnexpectedInput, filename: str, lines: list[str]) ->
     if isinstance(exc, UnexpectedToken) and exc.token.type == "$END":
         line, col = max(len(lines), 1), len(lines[-1]) + 1 if lines else 1
         message = f"unexpected end of file, expected {_describe_expected(exc.expected)}"
-    elif isinstance(exc, UnexpectedToken) and exc.token.type == "SCALAR" \
-            and "NUMBER" in exc.expected:
+    elif (
+        isinstance(exc, UnexpectedToken) and exc.token.type == "SCALAR" and "NUMBER" in exc.expected
+    ):
         message = f"expected an unsigned decimal number, found {exc.token.value!r}"
     elif isinstance(exc, UnexpectedToken):
         message = f"unexpected {exc.token.value!r}, expected {_describe_expected(exc.expected)}"
@@ -236,8 +243,8 @@ def _unquote(token: Token) -> str:
         c = body[i]
         if c == "\\" and i + 1 < len(body):
             nxt = body[i + 1]
-            if nxt == "u" and len(body) >= i + 6 and set(body[i + 2:i + 6]) <= _HEX:
-                out.append(chr(int(body[i + 2:i + 6], 16)))
+            if nxt == "u" and len(body) >= i + 6 and set(body[i + 2 : i + 6]) <= _HEX:
+                out.append(chr(int(body[i + 2 : i + 6], 16)))
                 i += 6
                 continue
             out.append(_ESCAPES.get(nxt, nxt))
@@ -275,8 +282,9 @@ class _Builder:
     # -- helpers -------------------------------------------------------
     def _loc(self, node: Tree[Token] | Token) -> Location:
         if isinstance(node, Token):
-            return Location(self.filename, node.line or 1, node.column or 1,
-                            node.end_line, node.end_column)
+            return Location(
+                self.filename, node.line or 1, node.column or 1, node.end_line, node.end_column
+            )
         meta = node.meta
         if getattr(meta, "empty", True):
             return Location(self.filename, 1, 1)
@@ -316,8 +324,10 @@ class _Builder:
             if kind in ("drone", "pubbroker", "subbroker", "link"):
                 if kind in seen:
                     first = self._loc(seen[kind])
-                    self._error(block, f"a second {_BLOCK_WORD[kind]} block; the first is at "
-                                       f"line {first.line}")
+                    self._error(
+                        block,
+                        f"a second {_BLOCK_WORD[kind]} block; the first is at line {first.line}",
+                    )
                     continue
                 seen[kind] = block
             if kind == "drone":
@@ -327,8 +337,9 @@ class _Builder:
             elif kind == "subbroker":
                 doc["subBroker"] = self._broker(block, "/subBroker", "configPath")
             elif kind == "link":
-                doc["link"] = _nest(self._settings(block.children[0], "/link",
-                                                   LINK_SETTINGS | RADIO_SETTINGS))
+                doc["link"] = _nest(
+                    self._settings(block.children[0], "/link", LINK_SETTINGS | RADIO_SETTINGS)
+                )
                 self._mark("/link", block)
             elif kind == "publishers":
                 self._mark("/publishers", block)
@@ -364,8 +375,9 @@ class _Builder:
                 if "position" in drone:
                     self._error(child, "a second Position block", "/drone/position")
                 self._mark("/drone/position", child)
-                drone["position"] = self._settings(child.children[0], "/drone/position",
-                                                   POSITION_SETTINGS)
+                drone["position"] = self._settings(
+                    child.children[0], "/drone/position", POSITION_SETTINGS
+                )
                 continue
             self._mark("/drone/sensors", child)
             for s in child.children:
@@ -391,8 +403,12 @@ class _Builder:
                 assert isinstance(kind, Token)
                 self._mark(ptr + "/kind", kind)
                 if str(kind) not in SENSOR_KINDS:
-                    self._error(kind, f"unknown sensor kind {str(kind)!r}; expected one of "
-                                f"{', '.join(SENSOR_KINDS)}", ptr + "/kind")
+                    self._error(
+                        kind,
+                        f"unknown sensor kind {str(kind)!r}; expected one of "
+                        f"{', '.join(SENSOR_KINDS)}",
+                        ptr + "/kind",
+                    )
                 sensor["kind"] = str(kind)
             elif child.data == "device":
                 path, *settings = child.children
@@ -409,8 +425,7 @@ class _Builder:
         sensor["variables"] = variables
         return sensor
 
-    def _sensor_settings(self, sensor: dict[str, Any], node: Tree[Token] | Token,
-                         ptr: str) -> None:
+    def _sensor_settings(self, sensor: dict[str, Any], node: Tree[Token] | Token, ptr: str) -> None:
         """``{ baud = 9600; ... }`` into the sensor's device, line and clock properties."""
         for prop, value in self._settings(node, ptr, SENSOR_SETTINGS).items():
             head, _, tail = prop.partition("/")
@@ -435,8 +450,12 @@ class _Builder:
             if isinstance(child, Token):
                 self._mark(ptr + "/type", child)
                 if str(child) not in VALUE_TYPES:
-                    self._error(child, f"unknown value type {str(child)!r}; expected one of "
-                                f"{', '.join(VALUE_TYPES)}", ptr + "/type")
+                    self._error(
+                        child,
+                        f"unknown value type {str(child)!r}; expected one of "
+                        f"{', '.join(VALUE_TYPES)}",
+                        ptr + "/type",
+                    )
                 var["type"] = str(child)
             elif child.data == "sentence_source":
                 var["nmea"] = self._nmea_source(child, ptr + "/nmea")
@@ -461,8 +480,11 @@ class _Builder:
             assert isinstance(key_tok, Token) and isinstance(value, Token)
             key = str(key_tok)
             if key not in VARIABLE_ATTRIBUTES:
-                self._error(key_tok, f"unknown attribute {key!r}; expected one of "
-                            f"{', '.join(VARIABLE_ATTRIBUTES)}", ptr)
+                self._error(
+                    key_tok,
+                    f"unknown attribute {key!r}; expected one of {', '.join(VARIABLE_ATTRIBUTES)}",
+                    ptr,
+                )
                 continue
             prop, kind = VARIABLE_ATTRIBUTES[key]
             self._mark(f"{ptr}/{prop}", attr)
@@ -474,8 +496,9 @@ class _Builder:
                 self._error(value, f"attribute {key!r} takes {wanted}", f"{ptr}/{prop}")
                 continue
             text = str(value)
-            out[prop] = float(text) if kind == "number" else (
-                _unquote(value) if kind == "text" else text)
+            out[prop] = (
+                float(text) if kind == "number" else (_unquote(value) if kind == "text" else text)
+            )
         return {p: out[p] for p, _ in VARIABLE_ATTRIBUTES.values() if p in out}
 
     def _source(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
@@ -489,8 +512,9 @@ class _Builder:
             source[str(factor.data)] = float(tok)
         return source
 
-    def _factors(self, nodes: list[Tree[Token] | Token], out: dict[str, Any],
-                 ptr: str) -> dict[str, Any]:
+    def _factors(
+        self, nodes: list[Tree[Token] | Token], out: dict[str, Any], ptr: str
+    ) -> dict[str, Any]:
         """``scale X offset Y`` into ``out`` (located)."""
         for factor in nodes:
             assert isinstance(factor, Tree)
@@ -576,8 +600,9 @@ class _Builder:
         order = ["name", "endpoint", path_key, "ingress"]
         return {k: broker[k] for k in order if k in broker}
 
-    def _settings(self, node: Tree[Token] | Token, ptr: str,
-                  known: dict[str, tuple[str, str]]) -> dict[str, Any]:
+    def _settings(
+        self, node: Tree[Token] | Token, ptr: str, known: dict[str, tuple[str, str]]
+    ) -> dict[str, Any]:
         out: dict[str, Any] = {}
         assert isinstance(node, Tree)
         for setting in node.children:
@@ -586,8 +611,9 @@ class _Builder:
             assert isinstance(key_tok, Token) and isinstance(value, Tree)
             key = str(key_tok)
             if key not in known:
-                self._error(key_tok, f"unknown setting {key!r}; expected one of "
-                            f"{', '.join(known)}", ptr)
+                self._error(
+                    key_tok, f"unknown setting {key!r}; expected one of {', '.join(known)}", ptr
+                )
                 continue
             prop, kind = known[key]
             self._mark(f"{ptr}/{prop}", setting)
@@ -605,8 +631,13 @@ class _Builder:
         if kind == "int" and found == "decimal":
             return self._int(tok, ptr)
         if kind != found:
-            wanted = {"decimal": "a number", "int": "a whole number", "string": "a string",
-                      "word": "a name", "bool": "true or false"}[kind]
+            wanted = {
+                "decimal": "a number",
+                "int": "a whole number",
+                "string": "a string",
+                "word": "a name",
+                "bool": "true or false",
+            }[kind]
             self._error(tok, f"setting {key!r} takes {wanted}", ptr)
             return None
         if kind == "string":
@@ -650,8 +681,12 @@ class _Builder:
                 assert isinstance(word, Token)
                 self._mark(ptr + "/backfill", word)
                 if str(word) not in BACKFILL_POLICIES:
-                    self._error(word, f"unknown backfill policy {str(word)!r}; expected one of "
-                                f"{', '.join(BACKFILL_POLICIES)}", ptr + "/backfill")
+                    self._error(
+                        word,
+                        f"unknown backfill policy {str(word)!r}; expected one of "
+                        f"{', '.join(BACKFILL_POLICIES)}",
+                        ptr + "/backfill",
+                    )
                 sub["backfill"] = str(word)
             elif isinstance(child, Tree) and child.data == "resolution":
                 number = child.children[0]
@@ -667,8 +702,12 @@ class _Builder:
             else:
                 self._mark(ptr + "/aggregation", child)
                 if str(child) not in AGGREGATIONS:
-                    self._error(child, f"unknown aggregation {str(child)!r}; expected one of "
-                                f"{', '.join(AGGREGATIONS)}", ptr + "/aggregation")
+                    self._error(
+                        child,
+                        f"unknown aggregation {str(child)!r}; expected one of "
+                        f"{', '.join(AGGREGATIONS)}",
+                        ptr + "/aggregation",
+                    )
                 sub["aggregation"] = str(child)
         return sub
 
@@ -699,10 +738,17 @@ def _qualify_topics(doc: dict[str, Any]) -> None:
             sub["topic"] = full(sub["topic"])
 
 
-_BLOCK_WORD = {"drone": "Drone", "pubbroker": "PubBroker", "subbroker": "SubBroker",
-               "link": "Link"}
-_TOP_ORDER = ["schemaVersion", "drone", "pubBroker", "subBroker", "link", "publishers",
-              "subscribers", "layout"]
+_BLOCK_WORD = {"drone": "Drone", "pubbroker": "PubBroker", "subbroker": "SubBroker", "link": "Link"}
+_TOP_ORDER = [
+    "schemaVersion",
+    "drone",
+    "pubBroker",
+    "subBroker",
+    "link",
+    "publishers",
+    "subscribers",
+    "layout",
+]
 
 
 def _ordered(doc: dict[str, Any]) -> dict[str, Any]:

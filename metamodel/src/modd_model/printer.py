@@ -22,10 +22,36 @@ from .vocabulary import KNOWN_UNITS
 
 INDENT = "    "
 #: Words of the grammar: a name spelled like one is written ^-escaped (^Sensor).
-KEYWORDS = frozenset({"DataCollector", "Drone", "Sensors", "Sensor", "measures", "kind", "from",
-                      "scale", "offset", "PubBroker", "SubBroker", "Link", "Publishers",
-                      "Publisher", "Subscriptions", "Subscriber", "Position", "on", "with",
-                      "sentence", "column", "key", "register", "unit", "table", "order"})
+KEYWORDS = frozenset(
+    {
+        "DataCollector",
+        "Drone",
+        "Sensors",
+        "Sensor",
+        "measures",
+        "kind",
+        "from",
+        "scale",
+        "offset",
+        "PubBroker",
+        "SubBroker",
+        "Link",
+        "Publishers",
+        "Publisher",
+        "Subscriptions",
+        "Subscriber",
+        "Position",
+        "on",
+        "with",
+        "sentence",
+        "column",
+        "key",
+        "register",
+        "unit",
+        "table",
+        "order",
+    }
+)
 
 
 def name(text: str) -> str:
@@ -33,8 +59,9 @@ def name(text: str) -> str:
     return "^" + text if text in KEYWORDS else text
 
 
-_QUOTE_ESCAPES = str.maketrans({"\\": "\\\\", '"': '\\"', "\n": "\\n", "\t": "\\t",
-                                "\r": "\\r", "\b": "\\b", "\f": "\\f"})
+_QUOTE_ESCAPES = str.maketrans(
+    {"\\": "\\\\", '"': '\\"', "\n": "\\n", "\t": "\\t", "\r": "\\r", "\b": "\\b", "\f": "\\f"}
+)
 
 
 def quote(text: str) -> str:
@@ -43,7 +70,7 @@ def quote(text: str) -> str:
 
 
 def endpoint(ep: dict[str, Any]) -> str:
-    return f'{quote(ep["host"])}:{ep["port"]}'
+    return f"{quote(ep['host'])}:{ep['port']}"
 
 
 def _description(obj: dict[str, Any]) -> str:
@@ -82,8 +109,12 @@ def _instrument_source(v: dict[str, Any]) -> str:
 
 def _device(s: dict[str, Any]) -> str:
     """`` on "PATH" { settings }`` of an instrument sensor ("" when it has neither)."""
-    flat = {f"{part}/{k}": v for part in ("device", "line") for k, v in s.get(part, {}).items()
-            if (part, k) != ("device", "path")}
+    flat = {
+        f"{part}/{k}": v
+        for part in ("device", "line")
+        for k, v in s.get(part, {}).items()
+        if (part, k) != ("device", "path")
+    }
     if "clock" in s:
         flat["clock"] = s["clock"]
     settings = " ".join(line.strip() for line in _settings(flat, SENSOR_SETTINGS, 0))
@@ -108,19 +139,25 @@ def _drone(drone: dict[str, Any]) -> list[str]:
     out = [f"Drone {name(drone['name'])}{_description(drone)} {{", f"{INDENT}Sensors {{"]
     for s in drone["sensors"]:
         kind = f" kind {s['kind']}" if "kind" in s else ""
-        out.append(f"{INDENT * 2}Sensor {name(s['name'])}{_description(s)}{kind}{_device(s)} "
-                   "measures {")
+        out.append(
+            f"{INDENT * 2}Sensor {name(s['name'])}{_description(s)}{kind}{_device(s)} measures {{"
+        )
         for v in s["variables"]:
             unit = v["unit"] if v["unit"] in KNOWN_UNITS else quote(v["unit"])
             vtype = f", {v['type']}" if "type" in v else ""
             source = _source(v["source"]) if "source" in v else _instrument_source(v)
-            out.append(f"{INDENT * 3}{name(v['name'])}({unit}{vtype}){_description(v)}{source}"
-                       f"{_attributes(v)};")
+            out.append(
+                f"{INDENT * 3}{name(v['name'])}({unit}{vtype}){_description(v)}{source}"
+                f"{_attributes(v)};"
+            )
         out.append(f"{INDENT * 2}}}")
     out.append(f"{INDENT}}}")
     if "position" in drone:
-        out += [f"{INDENT}Position {{", *_settings(drone["position"], POSITION_SETTINGS, 1),
-                f"{INDENT}}}"]
+        out += [
+            f"{INDENT}Position {{",
+            *_settings(drone["position"], POSITION_SETTINGS, 1),
+            f"{INDENT}}}",
+        ]
     out.append("}")
     return out
 
@@ -131,8 +168,13 @@ def _attributes(v: dict[str, Any]) -> str:
     for word, (prop, kind) in VARIABLE_ATTRIBUTES.items():
         if prop in v:
             value = v[prop]
-            text = quote(value) if kind == "text" else repr(float(value)) if kind == "number" \
+            text = (
+                quote(value)
+                if kind == "text"
+                else repr(float(value))
+                if kind == "number"
                 else str(value)
+            )
             parts.append(f"{word} = {text};")
     return f" {{ {' '.join(parts)} }}" if parts else ""
 

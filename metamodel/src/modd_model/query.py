@@ -34,12 +34,27 @@ class Topic:
     publisher: str | None  # name of the publisher that publishes it, if any
     period: Fraction | None  # publication period in seconds, if published
 
-    def __init__(self, name: str, sensor: str, variable: str, unit: str, type: str,  # noqa: A002
-                 publisher: str | None, period: Fraction | None) -> None:
+    def __init__(
+        self,
+        name: str,
+        sensor: str,
+        variable: str,
+        unit: str,
+        type: str,  # noqa: A002
+        publisher: str | None,
+        period: Fraction | None,
+    ) -> None:
         # one dictionary update, not a frozen dataclass's setattr per field
         # (a plan of 5,000 topics builds 5,000)
-        self.__dict__.update(name=name, sensor=sensor, variable=variable, unit=unit, type=type,
-                             publisher=publisher, period=period)
+        self.__dict__.update(
+            name=name,
+            sensor=sensor,
+            variable=variable,
+            unit=unit,
+            type=type,
+            publisher=publisher,
+            period=period,
+        )
 
 
 @dataclass(frozen=True)

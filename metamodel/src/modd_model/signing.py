@@ -44,8 +44,9 @@ NONCE = re.compile(r"[0-9]{1,20}-[0-9a-f]{32}")
 
 def _message(request: dict[str, Any]) -> bytes:
     body = {k: v for k, v in request.items() if k != "signature"}
-    return DOMAIN + json.dumps(body, sort_keys=True, separators=(",", ":"),
-                               ensure_ascii=True).encode()
+    return (
+        DOMAIN + json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=True).encode()
+    )
 
 
 def signature(key: bytes, request: dict[str, Any]) -> str:

@@ -19,8 +19,9 @@ from typing import Any
 
 from .schema import load_schema
 
-HEADER = ("Generated from metamodel/modd.schema.json by `python -m modd_contracts.typegen`."
-          " Do not edit.")
+HEADER = (
+    "Generated from metamodel/modd.schema.json by `python -m modd_contracts.typegen`. Do not edit."
+)
 REPO = Path(__file__).resolve().parents[3]
 OUTPUTS = {
     "ts": REPO / "frontend" / "src" / "core" / "model.gen.ts",
@@ -41,6 +42,7 @@ def _definitions(schema: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
 
 # -- TypeScript ---------------------------------------------------------------
 
+
 def _ts_type(s: dict[str, Any]) -> str:
     if "$ref" in s:
         return _ref_name(s["$ref"])
@@ -57,8 +59,13 @@ def _ts_type(s: dict[str, Any]) -> str:
     if t == "object" and "properties" not in s:
         extra = s.get("additionalProperties")
         return f"Record<string, {_ts_type(extra)}>" if isinstance(extra, dict) else "object"
-    return {"string": "string", "integer": "number", "number": "number",
-            "boolean": "boolean", "null": "null"}.get(str(t), "unknown")
+    return {
+        "string": "string",
+        "integer": "number",
+        "number": "number",
+        "boolean": "boolean",
+        "null": "null",
+    }.get(str(t), "unknown")
 
 
 def _ts_doc(text: str | None, indent: str = "") -> list[str]:
@@ -88,6 +95,7 @@ def generate_ts(schema: dict[str, Any]) -> str:
 
 # -- Python ---------------------------------------------------------------------
 
+
 def _py_type(s: dict[str, Any]) -> str:
     if "$ref" in s:
         return _ref_name(s["$ref"])
@@ -103,8 +111,13 @@ def _py_type(s: dict[str, Any]) -> str:
     if t == "object" and "properties" not in s:
         extra = s.get("additionalProperties")
         return f"dict[str, {_py_type(extra)}]" if isinstance(extra, dict) else "dict[str, Any]"
-    return {"string": "str", "integer": "int", "number": "float", "boolean": "bool",
-            "null": "None"}.get(str(t), "Any")
+    return {
+        "string": "str",
+        "integer": "int",
+        "number": "float",
+        "boolean": "bool",
+        "null": "None",
+    }.get(str(t), "Any")
 
 
 def _refs(s: Any) -> set[str]:
@@ -131,11 +144,17 @@ def _dependency_order(items: list[tuple[str, dict[str, Any]]]) -> list[tuple[str
 
 
 def generate_py(schema: dict[str, Any]) -> str:
-    out = [f'"""{HEADER}"""', "", "from __future__ import annotations", "",
-           "from typing import Any, Literal, NotRequired, TypedDict", "", ""]
+    out = [
+        f'"""{HEADER}"""',
+        "",
+        "from __future__ import annotations",
+        "",
+        "from typing import Any, Literal, NotRequired, TypedDict",
+        "",
+        "",
+    ]
     objects = [(n, s) for n, s in _definitions(schema) if "properties" in s]
-    aliases = _dependency_order([(n, s) for n, s in _definitions(schema)
-                                 if "properties" not in s])
+    aliases = _dependency_order([(n, s) for n, s in _definitions(schema) if "properties" not in s])
     for name, s in aliases:
         out.append(f"{name} = {_py_type(s)}")
     out += ["", ""]
@@ -156,6 +175,7 @@ def generate_py(schema: dict[str, Any]) -> str:
 
 
 # -- Markdown reference ------------------------------------------------------------
+
 
 def _md_type(s: dict[str, Any]) -> str:
     if "$ref" in s:
@@ -178,16 +198,25 @@ def _md_type(s: dict[str, Any]) -> str:
 
 
 def generate_md(schema: dict[str, Any]) -> str:
-    out = ["# Metamodel reference", "", f"<!-- {HEADER} -->", "",
-           schema["description"], "",
-           "A model is a JSON document of this form; the `.modd` text (see "
-           "[dsl.md](dsl.md)) is another notation for the same document.", ""]
+    out = [
+        "# Metamodel reference",
+        "",
+        f"<!-- {HEADER} -->",
+        "",
+        schema["description"],
+        "",
+        "A model is a JSON document of this form; the `.modd` text (see "
+        "[dsl.md](dsl.md)) is another notation for the same document.",
+        "",
+    ]
     for name, s in _definitions(schema):
         out += [f"## {name}", "", s.get("description", ""), ""]
         if "properties" in s:
             required = set(s.get("required", []))
-            out += ["| property | type | required | default | description |",
-                    "| --- | --- | --- | --- | --- |"]
+            out += [
+                "| property | type | required | default | description |",
+                "| --- | --- | --- | --- | --- |",
+            ]
             for prop, ps in s["properties"].items():
                 default = f"`{ps['default']}`" if "default" in ps else ""
                 req = "yes" if prop in required else ""
@@ -204,8 +233,13 @@ def _md_sentences(s: dict[str, Any]) -> list[str]:
     """The NMEA sentence table (``x-sentences``) as a table: fields in order, with kinds."""
     if "x-sentences" not in s:
         return []
-    out = ["", s.get("x-sentences-doc", ""), "",
-           "| sentence | fields (1, 2, ...: what each holds) |", "| --- | --- |"]
+    out = [
+        "",
+        s.get("x-sentences-doc", ""),
+        "",
+        "| sentence | fields (1, 2, ...: what each holds) |",
+        "| --- | --- |",
+    ]
     for sentence, fields in s["x-sentences"].items():
         cells = ", ".join(f"`{name}` {kind}" for name, kind in fields.items())
         out.append(f"| {sentence} | {cells} |")
@@ -232,8 +266,9 @@ def main(argv: list[str] | None = None) -> int:
     stale = stale_outputs()
     if args.check:
         for p in stale:
-            print(f"stale: {p.relative_to(REPO)} (run python -m modd_model.typegen)",
-                  file=sys.stderr)
+            print(
+                f"stale: {p.relative_to(REPO)} (run python -m modd_model.typegen)", file=sys.stderr
+            )
         return 1 if stale else 0
     schema = load_schema()
     for key, path in OUTPUTS.items():

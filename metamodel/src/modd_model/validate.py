@@ -82,8 +82,10 @@ def _schema_diagnostics(doc: Any) -> list[Diagnostic]:
                 return []
         except Exception:  # noqa: BLE001 - anything it cannot read: the reference decides
             pass
-    return sorted((_schema_diagnostic(e) for e in _schema_validator().iter_errors(doc)),
-                  key=lambda d: d.pointer)
+    return sorted(
+        (_schema_diagnostic(e) for e in _schema_validator().iter_errors(doc)),
+        key=lambda d: d.pointer,
+    )
 
 
 @cache
@@ -110,7 +112,7 @@ def ecma_regex(pattern: str) -> re.Pattern[str]:
     while i < len(pattern):
         c = pattern[i]
         if c == "\\":
-            out.append(pattern[i:i + 2])
+            out.append(pattern[i : i + 2])
             i += 2
             continue
         if c == "[":
@@ -136,7 +138,8 @@ def _validator_class() -> Any:
     from jsonschema import Draft202012Validator, validators
 
     return validators.extend(  # type: ignore[no-untyped-call]
-        Draft202012Validator, {"pattern": _pattern})
+        Draft202012Validator, {"pattern": _pattern}
+    )
 
 
 def _schema_validator() -> Draft202012Validator:
@@ -153,9 +156,11 @@ def _schema_diagnostic(err: ValidationError) -> Diagnostic:
     elif err.validator == "pattern":
         message = f"{err.instance!r} is not well-formed ({_pattern_hint(err)})"
     elif err.validator == "anyOf" and isinstance(err.instance, str):
-        message = (f"{err.instance!r} is not a valid unit (a UDUNITS-2 unit or one of the "
-                   "paper's unit names, 1 to 64 printable characters without control or "
-                   "invisible formatting characters)")
+        message = (
+            f"{err.instance!r} is not a valid unit (a UDUNITS-2 unit or one of the "
+            "paper's unit names, 1 to 64 printable characters without control or "
+            "invisible formatting characters)"
+        )
     else:
         message = err.message
     return Diagnostic(message, pointer)
@@ -182,23 +187,34 @@ def _duplicates(items: list[tuple[str, str]], what: str) -> Iterator[Diagnostic]
 def unique_names(doc: dict[str, Any]) -> Iterator[Diagnostic]:
     sensors = doc["drone"]["sensors"]
     yield from _duplicates(
-        [(s["name"], f"/drone/sensors/{i}/name") for i, s in enumerate(sensors)], "sensor")
+        [(s["name"], f"/drone/sensors/{i}/name") for i, s in enumerate(sensors)], "sensor"
+    )
     for i, s in enumerate(sensors):
         yield from _duplicates(
-            [(v["name"], f"/drone/sensors/{i}/variables/{j}/name")
-             for j, v in enumerate(s["variables"])], f"variable of sensor {s['name']!r}")
+            [
+                (v["name"], f"/drone/sensors/{i}/variables/{j}/name")
+                for j, v in enumerate(s["variables"])
+            ],
+            f"variable of sensor {s['name']!r}",
+        )
     # Publishers and subscribers are two name spaces (as in the original tool):
     # their generated files, diagram nodes and zenoh keys never meet.
-    yield from _duplicates([(p["name"], f"/publishers/{i}/name")
-                            for i, p in enumerate(doc["publishers"])], "publisher")
-    yield from _duplicates([(s["name"], f"/subscribers/{i}/name")
-                            for i, s in enumerate(doc["subscribers"])], "subscriber")
+    yield from _duplicates(
+        [(p["name"], f"/publishers/{i}/name") for i, p in enumerate(doc["publishers"])], "publisher"
+    )
+    yield from _duplicates(
+        [(s["name"], f"/subscribers/{i}/name") for i, s in enumerate(doc["subscribers"])],
+        "subscriber",
+    )
 
 
 def _declared_topics(doc: dict[str, Any]) -> dict[str, dict[str, Any]]:
     drone = doc["drone"]["name"]
-    return {topic_name(drone, s["name"], v["name"]): v
-            for s in doc["drone"]["sensors"] for v in s["variables"]}
+    return {
+        topic_name(drone, s["name"], v["name"]): v
+        for s in doc["drone"]["sensors"]
+        for v in s["variables"]
+    }
 
 
 def _unknown_topic(topic: str, doc: dict[str, Any], ptr: str) -> Diagnostic:
@@ -221,9 +237,13 @@ def references_resolve(doc: dict[str, Any]) -> Iterator[Diagnostic]:
             elif t in publisher_of:
                 # Runnable (the broker archives both), but the planner sizes the
                 # buffer for the first publisher's period: say so.
-                yield Diagnostic(f"topic {t!r} is also published by {publisher_of[t]!r}; "
-                                 "buffer sizes are planned for the first publisher's "
-                                 "period only", ptr, "warning")
+                yield Diagnostic(
+                    f"topic {t!r} is also published by {publisher_of[t]!r}; "
+                    "buffer sizes are planned for the first publisher's "
+                    "period only",
+                    ptr,
+                    "warning",
+                )
             else:
                 publisher_of[t] = pub["name"]
     for i, sub in enumerate(doc["subscribers"]):
@@ -232,8 +252,11 @@ def references_resolve(doc: dict[str, Any]) -> Iterator[Diagnostic]:
         if t not in declared:
             yield _unknown_topic(t, doc, ptr)
         elif t not in publisher_of:
-            yield Diagnostic(f"no publisher publishes {t!r}, so subscriber "
-                             f"{sub['name']!r} would never receive a value", ptr)
+            yield Diagnostic(
+                f"no publisher publishes {t!r}, so subscriber "
+                f"{sub['name']!r} would never receive a value",
+                ptr,
+            )
 
 
 #: Longest period (s) a model may use: about 11.6 days. It bounds the
@@ -283,9 +306,11 @@ def subscription_periods(doc: dict[str, Any]) -> Iterator[Diagnostic]:
             shorter[pair] = 0 < to_fraction(sub["periodS"]) < to_fraction(pm_text)
         if shorter[pair]:
             pm = to_fraction(pm_text)
-            yield Diagnostic(f"subscription period {sub['periodS']} s is shorter than the "
-                             f"publication period {float(pm):g} s of {sub['topic']!r}",
-                             f"/subscribers/{i}/periodS")
+            yield Diagnostic(
+                f"subscription period {sub['periodS']} s is shorter than the "
+                f"publication period {float(pm):g} s of {sub['topic']!r}",
+                f"/subscribers/{i}/periodS",
+            )
 
 
 @check
@@ -294,8 +319,10 @@ def aggregation_fits_type(doc: dict[str, Any]) -> Iterator[Diagnostic]:
     for i, sub in enumerate(doc["subscribers"]):
         var = declared.get(sub["topic"])
         if var and var.get("type") == "bool" and sub["aggregation"] in _NUMERIC_ONLY:
-            yield Diagnostic(f"{sub['aggregation']} is not defined for the bool topic "
-                             f"{sub['topic']!r}", f"/subscribers/{i}/aggregation")
+            yield Diagnostic(
+                f"{sub['aggregation']} is not defined for the bool topic {sub['topic']!r}",
+                f"/subscribers/{i}/aggregation",
+            )
 
 
 @check
@@ -306,15 +333,22 @@ def mavlink_sources(doc: dict[str, Any]) -> Iterator[Diagnostic]:
         for j, v in enumerate(s["variables"]):
             ptr = f"/drone/sensors/{i}/variables/{j}"
             if mavlink and "source" not in v:
-                yield Diagnostic(f"variable {v['name']!r} of the mavlink sensor {s['name']!r} "
-                                 "needs a source: from MESSAGE.field", ptr)
+                yield Diagnostic(
+                    f"variable {v['name']!r} of the mavlink sensor {s['name']!r} "
+                    "needs a source: from MESSAGE.field",
+                    ptr,
+                )
             elif not mavlink and "source" in v:
-                yield Diagnostic(f"variable {v['name']!r} has a MAVLink source but sensor "
-                                 f"{s['name']!r} is not of kind mavlink", ptr + "/source")
+                yield Diagnostic(
+                    f"variable {v['name']!r} has a MAVLink source but sensor "
+                    f"{s['name']!r} is not of kind mavlink",
+                    ptr + "/source",
+                )
             scale = v.get("source", {}).get("scale", 1)
             if scale != scale or scale in (float("inf"), float("-inf")) or scale == 0:
-                yield Diagnostic("scale must be a finite number other than zero",
-                                 ptr + "/source/scale")
+                yield Diagnostic(
+                    "scale must be a finite number other than zero", ptr + "/source/scale"
+                )
 
 
 _SERIAL_ONLY = ("device", "droneDevice", "baud")
@@ -327,20 +361,25 @@ def link_transport(doc: dict[str, Any]) -> Iterator[Diagnostic]:
     link = doc.get("link", {})
     transport = link.get("transport", "tcp")
     if transport == "serial" and "device" not in link:
-        yield Diagnostic("a serial link needs the radio's device, e.g. "
-                         'device = "/dev/ttyUSB0"', "/link")
+        yield Diagnostic(
+            'a serial link needs the radio\'s device, e.g. device = "/dev/ttyUSB0"', "/link"
+        )
     if transport != "serial":
         for key in _SERIAL_ONLY:
             if key in link:
-                yield Diagnostic(f"{key} is only for a serial link (this link is "
-                                 f"{transport})", f"/link/{key}")
+                yield Diagnostic(
+                    f"{key} is only for a serial link (this link is {transport})", f"/link/{key}"
+                )
     delay = link.get("acceptedDelayS")
     if delay is not None and to_fraction(delay) <= 0:
         yield Diagnostic("the accepted delay must be greater than zero", "/link/acceptedDelayS")
     packet = link.get("maxPacket")
     if transport == "serial" and packet is not None and packet > 4096:
-        yield Diagnostic(f"a serial frame of {packet} B is larger than any telemetry radio "
-                         "carries (at most 4096)", "/link/maxPacket")
+        yield Diagnostic(
+            f"a serial frame of {packet} B is larger than any telemetry radio "
+            "carries (at most 4096)",
+            "/link/maxPacket",
+        )
 
 
 @check
@@ -392,8 +431,12 @@ def endpoints_distinct(doc: dict[str, Any]) -> Iterator[Diagnostic]:
         if kind == "listener" or (other_kind == "listener" and kind == "subscribers"):
             yield Diagnostic(f"endpoint {host}:{port} is already used by {other}", ptr)
         elif kind == "subscribers" and other_kind == "subscribers":
-            yield Diagnostic(f"endpoint {host}:{port} is shared with {other}: one program "
-                             "must receive both subscriptions there", ptr, "warning")
+            yield Diagnostic(
+                f"endpoint {host}:{port} is shared with {other}: one program "
+                "must receive both subscriptions there",
+                ptr,
+                "warning",
+            )
         else:
             yield Diagnostic(f"endpoint {host}:{port} is also used by {other}", ptr, "warning")
 
@@ -405,8 +448,11 @@ def unused_topics(doc: dict[str, Any]) -> Iterator[Diagnostic]:
     for i, s in enumerate(doc["drone"]["sensors"]):
         for j, v in enumerate(s["variables"]):
             if topic_name(drone, s["name"], v["name"]) not in published:
-                yield Diagnostic(f"no publisher publishes {s['name']}.{v['name']}; it will not "
-                                 "be archived", f"/drone/sensors/{i}/variables/{j}", "warning")
+                yield Diagnostic(
+                    f"no publisher publishes {s['name']}.{v['name']}; it will not be archived",
+                    f"/drone/sensors/{i}/variables/{j}",
+                    "warning",
+                )
 
 
 check(instrument_sensors)
@@ -425,10 +471,18 @@ def radio_profile(doc: dict[str, Any]) -> Iterator[Diagnostic]:
         return
     bw = radio.get("bandwidthHz")
     if isinstance(bw, int) and bw not in _LORA_BANDWIDTHS:
-        yield Diagnostic(f"bandwidth {bw} Hz is not a LoRa bandwidth; expected one of "
-                         f"{', '.join(map(str, _LORA_BANDWIDTHS))}", "/link/radio/bandwidthHz")
-    for key, low, high in (("dutyCycle", 0, 1), ("txW", 0, None), ("rxW", 0, None),
-                           ("idleW", 0, None), ("batteryWh", 0, None)):
+        yield Diagnostic(
+            f"bandwidth {bw} Hz is not a LoRa bandwidth; expected one of "
+            f"{', '.join(map(str, _LORA_BANDWIDTHS))}",
+            "/link/radio/bandwidthHz",
+        )
+    for key, low, high in (
+        ("dutyCycle", 0, 1),
+        ("txW", 0, None),
+        ("rxW", 0, None),
+        ("idleW", 0, None),
+        ("batteryWh", 0, None),
+    ):
         if key not in radio:
             continue
         value = to_fraction(radio[key])

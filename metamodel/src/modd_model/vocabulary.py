@@ -10,6 +10,7 @@ VALUE_TYPES: tuple[str, ...] = tuple(definition("ValueType")["enum"])
 AGGREGATIONS: tuple[str, ...] = tuple(definition("Aggregation")["enum"])
 SENSOR_KINDS: tuple[str, ...] = tuple(definition("Sensor")["properties"]["kind"]["enum"])
 BACKFILL_POLICIES: tuple[str, ...] = tuple(
-    definition("Subscriber")["properties"]["backfill"]["enum"])
+    definition("Subscriber")["properties"]["backfill"]["enum"]
+)
 #: NMEA 0183 sentence type -> {field name: what it holds}, fields in order (field 1 first).
 NMEA_SENTENCES: dict[str, dict[str, str]] = definition("NmeaField")["x-sentences"]

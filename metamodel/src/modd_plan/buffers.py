@@ -209,8 +209,12 @@ def _half_seconds(us: int) -> str:
 
 
 def _explain(
-    topic: str, subs: Sequence[Subscription], pm_us: int, m: IntArray | Sequence[int],
-    cap_us: int, first_n: int
+    topic: str,
+    subs: Sequence[Subscription],
+    pm_us: int,
+    m: IntArray | Sequence[int],
+    cap_us: int,
+    first_n: int,
 ) -> str:
     sec = _seconds
     lo = min(subs, key=lambda s: s.period_us)
@@ -241,7 +245,8 @@ def _fronts(problem: BufferProblem) -> tuple[list[_Front | None], list[Infeasibi
 
 
 def _fronts_both(
-    problem: BufferProblem, rows: list[Row] | None = None,
+    problem: BufferProblem,
+    rows: list[Row] | None = None,
 ) -> tuple[list[_Front | None], list[Infeasibility], list[_Front | None]]:
     """The fronts, the infeasible topics and the fronts with the cap lifted
     for them, from one table per topic. All topics' tables are computed
@@ -261,8 +266,9 @@ def _fronts_both(
     caps = [problem.cap_for(topic) for _, topic, *_ in rows]
     m_all = tables[1]
     starts = tables[3]
-    cap_arr = np.repeat(np.array([-1 if c is None else c for c in caps], dtype=np.int64),
-                        np.diff(starts))
+    cap_arr = np.repeat(
+        np.array([-1 if c is None else c for c in caps], dtype=np.int64), np.diff(starts)
+    )
     uncapped = np.repeat(np.array([c is None for c in caps]), np.diff(starts))
     allowed = uncapped | (m_all <= cap_arr)
     any_allowed = np.logical_or.reduceat(allowed, starts[:-1])
@@ -276,16 +282,19 @@ def _fronts_both(
             continue
         cap = caps[r]
         assert cap is not None
-        m = m_all[starts[r]:starts[r + 1]]
+        m = m_all[starts[r] : starts[r + 1]]
         infeasible.append(
-            Infeasibility(topic, tuple([x.name for x in subs]), _explain(topic, subs, pm_us, m, cap,
-                                                                       lo)))
+            Infeasibility(
+                topic, tuple([x.name for x in subs]), _explain(topic, subs, pm_us, m, cap, lo)
+            )
+        )
         relaxed[i] = everything[r]
     return fronts, infeasible, relaxed
 
 
 def _front_arrays(
-    problem: BufferProblem, rows: list[Row],
+    problem: BufferProblem,
+    rows: list[Row],
 ) -> tuple[IntArray, IntArray, IntArray, IntArray, list[Infeasibility]]:
     """:func:`_fronts_both`'s fronts with the cap lifted for the infeasible
     topics, end to end as :func:`_concat` gives them (M, S, n, each row's
@@ -298,8 +307,7 @@ def _front_arrays(
     caps = [problem.cap_for(topic) for _, topic, *_ in rows]
     m_all, starts = tables[1], tables[3]
     lengths = np.diff(starts)
-    cap_arr = np.repeat(np.array([-1 if c is None else c for c in caps], dtype=np.int64),
-                        lengths)
+    cap_arr = np.repeat(np.array([-1 if c is None else c for c in caps], dtype=np.int64), lengths)
     uncapped = np.repeat(np.array([c is None for c in caps]), lengths)
     allowed = uncapped | (m_all <= cap_arr)
     any_allowed = np.logical_or.reduceat(allowed, starts[:-1])
@@ -308,17 +316,20 @@ def _front_arrays(
     bad = np.flatnonzero(~any_allowed).tolist()
     if bad:
         parts = _segment_front_arrays(tables, np.repeat(~any_allowed, lengths))
-        m, s, n, seg = (np.concatenate(pair) for pair in zip((m, s, n, seg), parts,
-                                                                 strict=True))
+        m, s, n, seg = (np.concatenate(pair) for pair in zip((m, s, n, seg), parts, strict=True))
         order = np.argsort(seg, kind="stable")  # rows in order, each row's points kept
         m, s, n, seg = m[order], s[order], n[order], seg[order]
         for r in bad:
             _, topic, pm_us, subs, _, lo, _ = rows[r]
             cap = caps[r]
             assert cap is not None
-            infeasible.append(Infeasibility(
-                topic, tuple([x.name for x in subs]),
-                _explain(topic, subs, pm_us, m_all[starts[r]:starts[r + 1]], cap, lo)))
+            infeasible.append(
+                Infeasibility(
+                    topic,
+                    tuple([x.name for x in subs]),
+                    _explain(topic, subs, pm_us, m_all[starts[r] : starts[r + 1]], cap, lo),
+                )
+            )
     bounds = np.searchsorted(seg, np.arange(len(rows) + 1, dtype=np.int64))
     return m, s, n, bounds, infeasible
 
@@ -391,10 +402,14 @@ def _tables(
     per_row = [r[4] for r in rows]
     big_ps = max(p[-1] for p in per_row)
     big_x = max(hi * pm for _, _, pm, *_, hi in rows)
-    if (max(big_ps, big_x).bit_length() >= _BATCH_VALUE_BITS
-            or len(rows).bit_length() >= _BATCH_ROWS_BITS):
-        parts = [topic_table(periods, pm, problem.max_buffer, lo, hi)
-                 for _, _, pm, _, periods, lo, hi in rows]
+    if (
+        max(big_ps, big_x).bit_length() >= _BATCH_VALUE_BITS
+        or len(rows).bit_length() >= _BATCH_ROWS_BITS
+    ):
+        parts = [
+            topic_table(periods, pm, problem.max_buffer, lo, hi)
+            for _, _, pm, _, periods, lo, hi in rows
+        ]
         n = np.concatenate([np.arange(lo, hi + 1, dtype=np.int64) for *_, lo, hi in rows])
         s_all = np.concatenate([p[0] for p in parts])
         m_all = np.concatenate([p[1] for p in parts])
@@ -468,7 +483,7 @@ def _segment_front_arrays(
         _, rank = np.unique(s, return_inverse=True)
         shifted = rank.astype(np.int64).ravel() + (rows - seg) * (len(s) + 1)
     running = np.minimum.accumulate(shifted)
-    keep = np.concatenate(([True], shifted[1:] < running[:-1]))[:len(s)]
+    keep = np.concatenate(([True], shifted[1:] < running[:-1]))[: len(s)]
     return m[keep], s[keep], n[keep], seg[keep]
 
 
@@ -480,8 +495,12 @@ def _concat(fronts: Sequence[_Front]) -> tuple[IntArray, IntArray, IntArray, Int
 
     lengths = np.array([len(f.m) for f in fronts], dtype=np.int64)
     starts = np.concatenate(([0], np.cumsum(lengths))).astype(np.int64)
-    return (np.concatenate([f.m for f in fronts]), np.concatenate([f.s for f in fronts]),
-            np.concatenate([f.n for f in fronts]), starts)
+    return (
+        np.concatenate([f.m for f in fronts]),
+        np.concatenate([f.s for f in fronts]),
+        np.concatenate([f.n for f in fronts]),
+        starts,
+    )
 
 
 def _last_at_most(m: IntArray, starts: IntArray, w: int) -> IntArray:
@@ -561,8 +580,7 @@ def _solve_small(problem: BufferProblem) -> BufferSolution:
         first, last = ps[0], ps[-1]  # sorted
         xs = [n * pm_us for n in range(lo, hi + 1)]
         m = [max(last - x, x - first) for x in xs]
-        s = ([0] * len(xs) if problem.alpha == 0
-             else [sum(abs(p - x) for p in ps) for x in xs])
+        s = [0] * len(xs) if problem.alpha == 0 else [sum(abs(p - x) for p in ps) for x in xs]
         cap = problem.cap_for(topic)
         allowed = [k for k, mk in enumerate(m) if cap is None or mk <= cap]
         if not allowed:
@@ -590,14 +608,12 @@ def _solve_small(problem: BufferProblem) -> BufferSolution:
     return solution
 
 
-def _best_w_small(fronts: Sequence[tuple[list[int], list[int], list[int]]], a: int, b: int
-                  ) -> int:
+def _best_w_small(fronts: Sequence[tuple[list[int], list[int], list[int]]], a: int, b: int) -> int:
     """:func:`_best_w` on lists."""
     w0 = max(f[0][0] for f in fronts)
     f0 = sum(f[1][bisect_right(f[0], w0) - 1] for f in fronts)
     events: list[tuple[int, int]] = [
-        (fm[j], fs[j] - fs[j - 1]) for fm, fs, _ in fronts for j in range(1, len(fm))
-        if fm[j] > w0
+        (fm[j], fs[j] - fs[j - 1]) for fm, fs, _ in fronts for j in range(1, len(fm)) if fm[j] > w0
     ]
     if not events:
         return w0

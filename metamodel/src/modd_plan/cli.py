@@ -65,8 +65,12 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
         return 1
     try:
         plan = make_plan(
-            result.model, ping_s=args.ping, alpha=args.alpha, beta=args.beta,
-            max_buffer=args.max_buffer, method=args.method,
+            result.model,
+            ping_s=args.ping,
+            alpha=args.alpha,
+            beta=args.beta,
+            max_buffer=args.max_buffer,
+            method=args.method,
         )
     except PlanningError as exc:
         for d in locate(exc.diagnostics, result, args.file):
@@ -103,8 +107,7 @@ def render_text(plan: Plan) -> str:
     if derived:
         lines.append("derived at the SubBroker:")
         lines += [
-            f"  {s.stream.key} <- "
-            + " + ".join(f"{x.factor} x {x.stream.key}" for x in s.sources)
+            f"  {s.stream.key} <- " + " + ".join(f"{x.factor} x {x.stream.key}" for x in s.sources)
             for s in derived
         ]
     lines += ["", "schedule (date -> streams):"]
@@ -137,11 +140,12 @@ def _infeasible_lines(plan: Plan) -> list[str]:
     if not plan.infeasible:
         return []
     cap = _sec(Fraction(plan.constants.cap_us, 1_000_000))
-    lines = ["", f"INFEASIBLE: the delay cap 3 x PING = {cap} cannot be met; "
-             "the plan above lifts it for these topics only:"]
-    lines += [
-        f"  {x.topic} ({', '.join(x.subscribers)}): {x.reason}" for x in plan.infeasible
+    lines = [
+        "",
+        f"INFEASIBLE: the delay cap 3 x PING = {cap} cannot be met; "
+        "the plan above lifts it for these topics only:",
     ]
+    lines += [f"  {x.topic} ({', '.join(x.subscribers)}): {x.reason}" for x in plan.infeasible]
     return lines
 
 

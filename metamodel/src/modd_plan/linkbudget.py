@@ -107,8 +107,9 @@ class LinkSettings:
         if t not in TRANSPORTS:
             raise ValueError(f"unknown transport {t!r}; expected one of {', '.join(TRANSPORTS)}")
         packet = link.get("maxPacket", DEFAULT_PACKET[t]) if t != "tcp" else TCP_MSS
-        return LinkSettings(t, link.get("rateBps"), packet,
-                            Fraction(link.get("acceptedDelayS", "1")))
+        return LinkSettings(
+            t, link.get("rateBps"), packet, Fraction(link.get("acceptedDelayS", "1"))
+        )
 
 
 @dataclass(frozen=True)
@@ -139,9 +140,11 @@ class LinkBudget:
         if rate is None or self.drone_to_base <= rate:
             return None
         names = ", ".join(self.over_budget)
-        return (f"the plan needs {self.drone_to_base:.1f} B/s on the {self.settings.transport} "
-                f"link, more than its {rate} B/s; the subscriptions that exceed the budget: "
-                f"{names}")
+        return (
+            f"the plan needs {self.drone_to_base:.1f} B/s on the {self.settings.transport} "
+            f"link, more than its {rate} B/s; the subscriptions that exceed the budget: "
+            f"{names}"
+        )
 
     def to_json(self) -> PlanLinkBudget:
         s = self.settings
@@ -185,8 +188,9 @@ def exact_sum(values: Iterable[Fraction]) -> Fraction:
     return sum((Fraction(n, d) for d, n in by_den.items()), Fraction(0))
 
 
-def _slot_walk(schedule: Schedule, window_bytes: Sequence[Fraction], delay: Fraction
-               ) -> list[WalkedSlot]:
+def _slot_walk(
+    schedule: Schedule, window_bytes: Sequence[Fraction], delay: Fraction
+) -> list[WalkedSlot]:
     """The first slots: one hyperperiod, or more until they span 20 accepted
     delays (so that packing reaches its steady state), at most
     :data:`WALK_LIMIT` slots (beyond, the walk is a sample of the schedule's
@@ -211,8 +215,9 @@ def _slot_walk(schedule: Schedule, window_bytes: Sequence[Fraction], delay: Frac
     return out
 
 
-def _tcp(settings: LinkSettings, slots: list[WalkedSlot], span_s: float, sizes: list[int]
-         ) -> tuple[float, float, float, dict[int, float]]:
+def _tcp(
+    settings: LinkSettings, slots: list[WalkedSlot], span_s: float, sizes: list[int]
+) -> tuple[float, float, float, dict[int, float]]:
     wire = 0
     segments = 0
     for _, values, count, _ in slots:
@@ -230,8 +235,9 @@ def _tcp(settings: LinkSettings, slots: list[WalkedSlot], span_s: float, sizes: 
     return wire / span_s, segments * TCP_IP_HEADER_BYTES / span_s, segments / span_s, delays
 
 
-def _datagrams(settings: LinkSettings, slots: list[WalkedSlot], span_s: float,
-               sizes: list[int]) -> tuple[float, float, float, dict[int, float]]:
+def _datagrams(
+    settings: LinkSettings, slots: list[WalkedSlot], span_s: float, sizes: list[int]
+) -> tuple[float, float, float, dict[int, float]]:
     """Pack slots as the PubBroker does: a datagram holds consecutive slots
     while its first slot has waited at most the accepted delay and it fits
     the packet; it is sent at its last slot's date."""
@@ -269,8 +275,12 @@ def _datagrams(settings: LinkSettings, slots: list[WalkedSlot], span_s: float,
             per = room - FRAGMENT_BYTE
             n = ceil(values / per)
             size = n * (DGRAM_HEADER_BYTES + FRAGMENT_BYTE + TAG_BYTES) + values
-            fragments = [wire_bytes(t, DGRAM_HEADER_BYTES + FRAGMENT_BYTE + TAG_BYTES
-                                    + min(per, values - k * per)) for k in range(n)]
+            fragments = [
+                wire_bytes(
+                    t, DGRAM_HEADER_BYTES + FRAGMENT_BYTE + TAG_BYTES + min(per, values - k * per)
+                )
+                for k in range(n)
+            ]
             wire += sum(fragments)
             sizes += fragments
             packets += n
@@ -278,8 +288,9 @@ def _datagrams(settings: LinkSettings, slots: list[WalkedSlot], span_s: float,
             for p in due:
                 delays[p] = max(delays.get(p, 0.0), air)
             continue
-        if group and (date - group[0][0] > delay_us
-                      or sum(v for _, v, _, _ in group) + values > room):
+        if group and (
+            date - group[0][0] > delay_us or sum(v for _, v, _, _ in group) + values > room
+        ):
             flush()
         group.append(slot)
     flush()
@@ -310,24 +321,42 @@ def link_budget(
         d = period_delay.get(schedule.periods_us[i], 0.0)
         for s in subs:
             delays[s] = max(delays.get(s, 0.0), d)
-    streams = tuple((float(b) / (p / 1e6), tuple(subs)) for b, p, subs
-                    in zip(window_bytes, schedule.periods_us, subscribers_of, strict=True))
-    return LinkBudget(settings, down, up, packets, delays,
-                      _over_budget(settings, down, schedule, window_bytes, subscribers_of),
-                      span_s, tuple(sizes), streams)
+    streams = tuple(
+        (float(b) / (p / 1e6), tuple(subs))
+        for b, p, subs in zip(window_bytes, schedule.periods_us, subscribers_of, strict=True)
+    )
+    return LinkBudget(
+        settings,
+        down,
+        up,
+        packets,
+        delays,
+        _over_budget(settings, down, schedule, window_bytes, subscribers_of),
+        span_s,
+        tuple(sizes),
+        streams,
+    )
 
 
-def _over_budget(settings: LinkSettings, total: float, schedule: Schedule,
-                 window_bytes: Sequence[Fraction], subscribers_of: Sequence[Sequence[str]]
-                 ) -> tuple[str, ...]:
+def _over_budget(
+    settings: LinkSettings,
+    total: float,
+    schedule: Schedule,
+    window_bytes: Sequence[Fraction],
+    subscribers_of: Sequence[Sequence[str]],
+) -> tuple[str, ...]:
     """The subscriptions of the most expensive sent streams (value bytes/s),
     in that order, until dropping them brings the plan under the budget."""
     rate = settings.rate_bps
     if rate is None or total <= rate:
         return ()
-    cost = sorted(((float(b) / (p / 1e6), i) for i, (b, p)
-                   in enumerate(zip(window_bytes, schedule.periods_us, strict=True))),
-                  reverse=True)
+    cost = sorted(
+        (
+            (float(b) / (p / 1e6), i)
+            for i, (b, p) in enumerate(zip(window_bytes, schedule.periods_us, strict=True))
+        ),
+        reverse=True,
+    )
     # headers scale with the packets; values are what a subscription adds
     excess = total - rate
     names: list[str] = []
@@ -341,16 +370,19 @@ def _over_budget(settings: LinkSettings, total: float, schedule: Schedule,
     return tuple(names)
 
 
-
 def budget_lines(budget: LinkBudget) -> list[str]:
     """The budget for a person (``modd plan``'s text output)."""
     s = budget.settings
-    headers = {"tcp": "IP+TCP headers", "udp": "IP+UDP headers",
-               "serial": "COBS+CRC framing"}[s.transport]
-    lines = ["", f"link budget ({s.transport}, packet {s.max_packet} B, accepted delay "
-             f"{float(s.accepted_delay):g} s): {budget.drone_to_base:.1f} B/s drone->base, "
-             f"{budget.base_to_drone:.1f} B/s base->drone ({headers} included), "
-             f"{budget.packets_per_s:.3f} packets/s"]
+    headers = {"tcp": "IP+TCP headers", "udp": "IP+UDP headers", "serial": "COBS+CRC framing"}[
+        s.transport
+    ]
+    lines = [
+        "",
+        f"link budget ({s.transport}, packet {s.max_packet} B, accepted delay "
+        f"{float(s.accepted_delay):g} s): {budget.drone_to_base:.1f} B/s drone->base, "
+        f"{budget.base_to_drone:.1f} B/s base->drone ({headers} included), "
+        f"{budget.packets_per_s:.3f} packets/s",
+    ]
     share = budget.share
     if share is not None:
         lines.append(f"  {100 * share:.1f} % of the radio's {s.rate_bps} B/s")

@@ -115,9 +115,7 @@ class LinkCost:
         }
 
 
-def _frame_bytes_per_hyperperiod(
-    schedule: Schedule, window_bytes: Sequence[Fraction]
-) -> Fraction:
+def _frame_bytes_per_hyperperiod(schedule: Schedule, window_bytes: Sequence[Fraction]) -> Fraction:
     """Sum of the DATA frames' sizes over one hyperperiod."""
     m = schedule.messages_per_hyperperiod
     if m == 0:
@@ -182,8 +180,9 @@ def predict(
         if id(pm) not in floats:
             floats[id(pm)] = float(pm)
     plain_rate = sum(1 / floats[id(pm)] for pm, _ in plain_streams.values())
-    plain = sum((TCP_IP_HEADER_BYTES + size) / floats[id(pm)]
-                for pm, size in plain_streams.values())
+    plain = sum(
+        (TCP_IP_HEADER_BYTES + size) / floats[id(pm)] for pm, size in plain_streams.values()
+    )
     return LinkCost(
         drone_to_base=data + frames * TCP_IP_HEADER_BYTES,
         base_to_drone=frames * TCP_IP_HEADER_BYTES,

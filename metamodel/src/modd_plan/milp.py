@@ -102,8 +102,12 @@ def _ms(us: float) -> float:
 
 
 def _tie_break(
-    cp: ModuleType, problem: BufferProblem, base: list[Any], nzw: tuple[Any, Any, Any],
-    stage1: Any, sizes: list[int],
+    cp: ModuleType,
+    problem: BufferProblem,
+    base: list[Any],
+    nzw: tuple[Any, Any, Any],
+    stage1: Any,
+    sizes: list[int],
 ) -> list[int]:
     """Stages 2-4, each bounded by the exact value of the previous stage's sizes."""
     n, z, w = nzw

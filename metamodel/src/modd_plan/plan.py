@@ -75,8 +75,9 @@ def _key_us(key: StreamKey) -> int:
 def _us_of(numerator: int, denominator: int) -> int:
     us, rest = divmod(numerator * MICROS_PER_SECOND, denominator)
     if rest:
-        raise ValueError(f"{Fraction(numerator, denominator)} s is not a whole number of "
-                         "microseconds")
+        raise ValueError(
+            f"{Fraction(numerator, denominator)} s is not a whole number of microseconds"
+        )
     return us
 
 
@@ -222,16 +223,19 @@ def _bytes(aggregation: str, topic_type: str, samples_num: int, samples_den: int
 
 
 @lru_cache(maxsize=65_536)  # keyed by integers: a plan repeats few (period, topic) kinds
-def _cost(aggregation: str, topic_type: str, p_num: int, p_den: int, pm_num: int,
-          pm_den: int) -> float:
+def _cost(
+    aggregation: str, topic_type: str, p_num: int, p_den: int, pm_num: int, pm_den: int
+) -> float:
     """Value bytes per second of a stream of period p on a topic of period pm."""
     window = _bytes(aggregation, topic_type, p_num * pm_den, p_den * pm_num)
     return float(window / Fraction(p_num, p_den))
 
 
 def _link_cost(
-    model: Mapping[str, Any], sched: Schedule, window_bytes: list[Fraction],
-    tops: Mapping[str, Topic]
+    model: Mapping[str, Any],
+    sched: Schedule,
+    window_bytes: list[Fraction],
+    tops: Mapping[str, Topic],
 ) -> LinkCost:
     plain: dict[str, tuple[Fraction, int]] = {}
     per_topic: dict[str, tuple[Fraction, int] | None] = {}  # computed once per topic
@@ -243,14 +247,21 @@ def _link_cost(
             topic = tops.get(name)
             entry = per_topic[name] = (
                 (topic.period, plain_message_bytes(topic.name, topic.type))
-                if topic is not None and topic.period is not None else None)
+                if topic is not None and topic.period is not None
+                else None
+            )
         if entry is not None:
             plain[sub["name"]] = entry
     return predict(sched, window_bytes, plain)
 
 
-def _budget(model: Mapping[str, Any], sched: Schedule, sent: list[PlannedStream],
-            streams: Sequence[PlannedStream], window_bytes: list[Fraction]) -> LinkBudget:
+def _budget(
+    model: Mapping[str, Any],
+    sched: Schedule,
+    sent: list[PlannedStream],
+    streams: Sequence[PlannedStream],
+    window_bytes: list[Fraction],
+) -> LinkBudget:
     # by identity: plan_streams gives each stream one key object, which its
     # derived streams' sources hold (no StreamKey hashed or compared)
     served: dict[int, list[str]] = {id(s.stream): list(s.subscribers) for s in sent}
@@ -261,10 +272,13 @@ def _budget(model: Mapping[str, Any], sched: Schedule, sent: list[PlannedStream]
             names = served.get(id(src.stream))
             if names is not None:
                 names += [n for n in s.subscribers if n not in names]
-    return link_budget(LinkSettings.of(model), sched,
-                       window_bytes,
-                       [served[id(s.stream)] for s in sent],
-                       [sub["name"] for sub in model.get("subscribers", [])])
+    return link_budget(
+        LinkSettings.of(model),
+        sched,
+        window_bytes,
+        [served[id(s.stream)] for s in sent],
+        [sub["name"] for sub in model.get("subscribers", [])],
+    )
 
 
 def _solve_buffers(problem: BufferProblem, method: str) -> BufferSolution:
@@ -293,15 +307,22 @@ def make_plan(
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
     with gc_paused():
-        plan = _make_plan(model, ping_s=ping_s, alpha=alpha, beta=beta,
-                          max_buffer=max_buffer, method=method)
+        plan = _make_plan(
+            model, ping_s=ping_s, alpha=alpha, beta=beta, max_buffer=max_buffer, method=method
+        )
         if not proposals or plan.radio is None or plan.radio.fits:
             return plan
 
         def replan(candidate: Mapping[str, Any]) -> tuple[RadioReport, float] | None:
             try:
-                p = _make_plan(candidate, ping_s=ping_s, alpha=alpha, beta=beta,
-                               max_buffer=max_buffer, method=method)
+                p = _make_plan(
+                    candidate,
+                    ping_s=ping_s,
+                    alpha=alpha,
+                    beta=beta,
+                    max_buffer=max_buffer,
+                    method=method,
+                )
             except PlanningError:
                 return None
             if p.radio is None or p.budget is None or len(p.infeasible) > len(plan.infeasible):
@@ -344,9 +365,7 @@ def _make_plan(
     max_buffer: int | None,
     method: str,
 ) -> Plan:
-    constants = constants_for(
-        model, ping_s=ping_s, alpha=alpha, beta=beta, max_buffer=max_buffer
-    )
+    constants = constants_for(model, ping_s=ping_s, alpha=alpha, beta=beta, max_buffer=max_buffer)
     tops = topics(dict(model))
     index = {name: i for i, name in enumerate(tops)}
     requested, subscriptions = asked_streams(model)
@@ -354,18 +373,23 @@ def _make_plan(
         if key.topic not in index:
             index[key.topic] = len(index)
 
-    published = {t.name: (t.type, t.period.numerator, t.period.denominator)
-                 for t in tops.values() if t.period is not None}
+    published = {
+        t.name: (t.type, t.period.numerator, t.period.denominator)
+        for t in tops.values()
+        if t.period is not None
+    }
 
     def pricing(topic_name: str) -> Price:  # value bytes per second of a stream
         topic = published.get(topic_name)
         if topic is None:
             return lambda aggregation, p_num, p_den: float(
                 _window_bytes(StreamKey(topic_name, aggregation, Fraction(p_num, p_den)), tops)
-                / Fraction(p_num, p_den))
+                / Fraction(p_num, p_den)
+            )
         topic_type, pm_num, pm_den = topic
-        return lambda aggregation, p_num, p_den: _cost(aggregation, topic_type, p_num, p_den,
-                                                       pm_num, pm_den)
+        return lambda aggregation, p_num, p_den: _cost(
+            aggregation, topic_type, p_num, p_den, pm_num, pm_den
+        )
 
     streams = plan_streams(requested, index, pricing)
     sent = sorted((s for s in streams if s.id is not None), key=lambda s: s.id or 0)
@@ -380,11 +404,15 @@ def _make_plan(
         buffers = _solve_buffers(problem, method)
     except BufferTooLarge as exc:
         position = {sub["name"]: i for i, sub in enumerate(model.get("subscribers", []))}
-        raise PlanningError([
-            Diagnostic(f"subscriber {name!r}: the planner cannot size the buffer of {exc}",
-                       f"/subscribers/{position[name]}/periodS")
-            for name in exc.subscribers[:_MAX_NAMED]
-        ]) from exc
+        raise PlanningError(
+            [
+                Diagnostic(
+                    f"subscriber {name!r}: the planner cannot size the buffer of {exc}",
+                    f"/subscribers/{position[name]}/periodS",
+                )
+                for name in exc.subscribers[:_MAX_NAMED]
+            ]
+        ) from exc
 
     def window(stream: StreamKey) -> Fraction:  # _window_bytes, from the topic's integers
         topic = published.get(stream.topic)
@@ -395,8 +423,9 @@ def _make_plan(
 
     window_bytes = [window(s.stream) for s in sent]
     link = LinkSettings.of(model)
-    window_bytes = quantised_window_bytes(model, sent, streams, window_bytes, tops,
-                                          link.transport, link.accepted_delay)
+    window_bytes = quantised_window_bytes(
+        model, sent, streams, window_bytes, tops, link.transport, link.accepted_delay
+    )
     budget = _budget(model, sched, sent, streams, window_bytes)
     radio = model.get("link", {}).get("radio")
     return Plan(
@@ -420,17 +449,22 @@ def _hyperperiod_us(model: Mapping[str, Any], requested: Sequence[StreamKey]) ->
         hyper = lcm(hyper, us)
         if hyper.bit_length() > HYPERPERIOD_BITS_LIMIT:
             culprits = {_us(k.period) for k in requested if hyper % _us(k.period) == 0}
-            subs = [(i, sub) for i, sub in enumerate(model.get("subscribers", []))
-                    if _us(period_of(sub["periodS"])) in culprits][:20]
-            raise PlanningError([
-                Diagnostic(
-                    f"subscriber {sub['name']!r}: the hyperperiod (the least common multiple "
-                    f"of the subscription periods) exceeds 2^{HYPERPERIOD_BITS_LIMIT} µs; "
-                    "choose periods that are multiples of one another",
-                    f"/subscribers/{i}/periodS",
-                )
-                for i, sub in subs
-            ])
+            subs = [
+                (i, sub)
+                for i, sub in enumerate(model.get("subscribers", []))
+                if _us(period_of(sub["periodS"])) in culprits
+            ][:20]
+            raise PlanningError(
+                [
+                    Diagnostic(
+                        f"subscriber {sub['name']!r}: the hyperperiod (the least common multiple "
+                        f"of the subscription periods) exceeds 2^{HYPERPERIOD_BITS_LIMIT} µs; "
+                        "choose periods that are multiples of one another",
+                        f"/subscribers/{i}/periodS",
+                    )
+                    for i, sub in subs
+                ]
+            )
     return hyper
 
 
@@ -458,11 +492,16 @@ def _schedule_diagnostics(
             continue  # a helper stream nobody asked for: named with its topic's others
         others = names[1:_MAX_NAMED]
         more = len(names) - 1 - len(others)
-        also = (f" (also {', '.join(others)}" + (f" and {more} more" if more else "") + ")"
-                if others else "")
-        out.append(Diagnostic(
-            f"subscriber {names[0]!r}{also}: sent every {_seconds(p)} s; the planner cannot "
-            f"schedule {exc}",
-            f"/subscribers/{position.get(names[0], 0)}/periodS",
-        ))
+        also = (
+            f" (also {', '.join(others)}" + (f" and {more} more" if more else "") + ")"
+            if others
+            else ""
+        )
+        out.append(
+            Diagnostic(
+                f"subscriber {names[0]!r}{also}: sent every {_seconds(p)} s; the planner cannot "
+                f"schedule {exc}",
+                f"/subscribers/{position.get(names[0], 0)}/periodS",
+            )
+        )
     return out or [Diagnostic(f"the planner cannot schedule {exc}", "/subscribers")]

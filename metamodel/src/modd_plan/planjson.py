@@ -70,6 +70,7 @@ class PlanView(Protocol):
     @property
     def proposals(self) -> tuple[Proposal, ...]: ...
 
+
 #: Slots listed in the JSON schedule (the first hyperperiod when it is
 #: shorter), and at most this many stream ids over the listed slots, so that
 #: a plan of 10,000 subscriptions stays a small document.
@@ -100,8 +101,9 @@ def _dec_us(us: int) -> str:
     return decimal_of(Fraction(us, MICROS_PER_SECOND))
 
 
-def _streams_json(streams: Sequence[PlannedStream]
-                  ) -> tuple[list[PlanStream], list[PlanSentStream]]:
+def _streams_json(
+    streams: Sequence[PlannedStream],
+) -> tuple[list[PlanStream], list[PlanSentStream]]:
     """The streams' JSON objects, and the schedule's (the sent streams by
     id). A plan repeats few periods: their decimal and microsecond forms are
     computed once per period, not per stream."""
@@ -119,20 +121,23 @@ def _streams_json(streams: Sequence[PlannedStream]
         first = sources[0] if sources else None
         if s.id is not None:
             sent.append({"id": s.id, "key": key.key, "period_us": period[1]})
-        append({
-            "id": s.id,
-            "key": key.key,
-            "topic": key.topic,
-            "aggregation": key.aggregation,
-            "period_s": period[0],
-            "period_us": period[1],
-            "sent": s.id is not None,
-            "derived_from": first.stream.key if first else None,
-            "factor": first.factor if first else 1,
-            "sources": ([{"key": x.stream.key, "factor": x.factor} for x in sources]
-                        if sources else []),  # a sent stream's: no comprehension to run
-            "subscribers": list(s.subscribers),
-        })
+        append(
+            {
+                "id": s.id,
+                "key": key.key,
+                "topic": key.topic,
+                "aggregation": key.aggregation,
+                "period_s": period[0],
+                "period_us": period[1],
+                "sent": s.id is not None,
+                "derived_from": first.stream.key if first else None,
+                "factor": first.factor if first else 1,
+                "sources": (
+                    [{"key": x.stream.key, "factor": x.factor} for x in sources] if sources else []
+                ),  # a sent stream's: no comprehension to run
+                "subscribers": list(s.subscribers),
+            }
+        )
     sent.sort(key=itemgetter("id"))  # in order already from plan_streams: one linear pass
     return out, sent
 
@@ -150,9 +155,7 @@ def _schedule_json(plan: PlanView, streams: list[PlanSentStream]) -> PlanSchedul
     return {
         "epoch_phase_s": "0.0",
         "streams": streams,
-        "slots": [
-            {"slot": k, "date_s": _dec(date), "streams": ids} for k, date, ids in slots
-        ],
+        "slots": [{"slot": k, "date_s": _dec(date), "streams": ids} for k, date, ids in slots],
         "slots_listed": len(slots),
         "slots_truncated": sched.messages_per_hyperperiod > len(slots),
     }
@@ -206,9 +209,13 @@ def _radio_json(plan: PlanView, radio: RadioReport) -> PlanRadio:
         position = {name: i for i, name in enumerate(plan.subscriptions)}
         located: list[PlanRadioDiagnostic] = [{"pointer": "/link/radio", "message": radio.error}]
         out["diagnostics"] = located + [
-            {"pointer": f"/subscribers/{position[c.name]}",
-             "message": f"{c.name} costs {c.air_s_per_hour:.1f} s of air time per hour "
-                        f"({c.bytes_per_s:.1f} B/s)"}
-            for c in radio.costs[:5] if c.name in position]
+            {
+                "pointer": f"/subscribers/{position[c.name]}",
+                "message": f"{c.name} costs {c.air_s_per_hour:.1f} s of air time per hour "
+                f"({c.bytes_per_s:.1f} B/s)",
+            }
+            for c in radio.costs[:5]
+            if c.name in position
+        ]
     out["proposals"] = [p.to_json() for p in plan.proposals]
     return out

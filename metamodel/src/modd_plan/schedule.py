@@ -310,8 +310,11 @@ class Schedule:
         for base, numbers, lattice in groups:
             group_period = lcm(*numbers)
             period *= group_period
-            unhit *= (_unhit_lattice(base, numbers) if lattice
-                      else _unhit_inclusion_exclusion(numbers, group_period))
+            unhit *= (
+                _unhit_lattice(base, numbers)
+                if lattice
+                else _unhit_inclusion_exclusion(numbers, group_period)
+            )
         return (self.hyperperiod_us // (g * period)) * (period - unhit)
 
     @cached_property
@@ -414,4 +417,3 @@ class Schedule:
     def value_count_per_hyperperiod(self, stream_id: int) -> int:
         """How many windows of a stream fall in one hyperperiod."""
         return self.hyperperiod_us // self.periods_us[stream_id]
-

@@ -49,8 +49,9 @@ class StreamKey:
     aggregation: str
     period: Fraction
 
-    def __init__(self, topic: str, aggregation: str, period: Fraction,
-                 nd: tuple[int, int] | None = None) -> None:
+    def __init__(
+        self, topic: str, aggregation: str, period: Fraction, nd: tuple[int, int] | None = None
+    ) -> None:
         # All attributes written into the instance's __dict__ at once (a
         # frozen dataclass's __init__ sets each through object.__setattr__).
         # Fraction.__hash__ computes a modular inverse and its numerator and
@@ -115,8 +116,13 @@ class PlannedStream:
     sources: tuple[Source, ...]
     subscribers: tuple[str, ...]
 
-    def __init__(self, stream: StreamKey, id: int | None,  # noqa: A002 (the field's name)
-                 sources: tuple[Source, ...], subscribers: tuple[str, ...]) -> None:
+    def __init__(
+        self,
+        stream: StreamKey,
+        id: int | None,  # noqa: A002 (the field's name)
+        sources: tuple[Source, ...],
+        subscribers: tuple[str, ...],
+    ) -> None:
         # one dictionary update, not a frozen dataclass's setattr per field
         self.__dict__.update(stream=stream, id=id, sources=sources, subscribers=subscribers)
 
@@ -234,8 +240,7 @@ def stream_order(
     order, period ascending."""
 
     def order(s: StreamKey) -> tuple[int, int, tuple[float, Fraction]]:
-        return (topic_index[s.topic], _AGG_INDEX[s.aggregation],
-                s._sort_period)  # type: ignore[attr-defined]
+        return (topic_index[s.topic], _AGG_INDEX[s.aggregation], s._sort_period)  # type: ignore[attr-defined]
 
     return order
 
@@ -245,8 +250,9 @@ def stream_order(
 #: groups an ALL stream joins.
 _ALL_SERVES = {a: agg.ALL in rules for a, rules in SINGLE_SOURCE_RULES.items()}
 _RULE_RANK = {a: {x: k for k, x in enumerate(rules)} for a, rules in SINGLE_SOURCE_RULES.items()}
-_ALL_PAIR = {a: [g for g, x in enumerate(pair) if x == agg.ALL]
-             for a, pair in PAIR_SOURCE_RULES.items()}
+_ALL_PAIR = {
+    a: [g for g, x in enumerate(pair) if x == agg.ALL] for a, pair in PAIR_SOURCE_RULES.items()
+}
 
 
 class _Relations:
@@ -262,9 +268,16 @@ class _Relations:
         # one sort of plain tuples: cost and period descending, aggregation
         # order ascending (its index negated); (aggregation, period) is
         # unique within a topic, so the position is never compared
-        ranked = sorted(zip(costs, [s._sort_period for s in required],  # type: ignore
-                            [-_AGG_INDEX[s.aggregation] for s in required],
-                            range(len(required)), strict=True), reverse=True)
+        ranked = sorted(
+            zip(
+                costs,
+                [s._sort_period for s in required],  # type: ignore
+                [-_AGG_INDEX[s.aggregation] for s in required],
+                range(len(required)),
+                strict=True,
+            ),
+            reverse=True,
+        )
         self.order = order = [t[3] for t in ranked]
         self.costs = [t[0] for t in ranked]
         self.streams = streams = [required[i] for i in order]
@@ -284,12 +297,23 @@ class _Relations:
             # j serves r: j's aggregation is a rule of r's and target period /
             # period j is whole
             a = aggs[r]
-            singles.append([j for b in SINGLE_SOURCE_RULES[a] for j, bn, bd in by_agg.get(b, empty)
-                            if j != r and (an * bd) % (ad * bn) == 0])
+            singles.append(
+                [
+                    j
+                    for b in SINGLE_SOURCE_RULES[a]
+                    for j, bn, bd in by_agg.get(b, empty)
+                    if j != r and (an * bd) % (ad * bn) == 0
+                ]
+            )
             pair = PAIR_SOURCE_RULES.get(a)
-            pairs.append(None if pair is None else
-                         [[j for j, bn, bd in by_agg.get(b, empty) if (an * bd) % (ad * bn) == 0]
-                          for b in pair])
+            pairs.append(
+                None
+                if pair is None
+                else [
+                    [j for j, bn, bd in by_agg.get(b, empty) if (an * bd) % (ad * bn) == 0]
+                    for b in pair
+                ]
+            )
         self.singles, self.pairs = singles, pairs
 
     def drop(self, helper: tuple[int, int] | None = None) -> list[int]:
@@ -313,6 +337,7 @@ class _Relations:
                     pairs[r] = [[*g, n] if k in joined else g for k, g in enumerate(groups)]
         kept = [True] * (n + 1)  # the helper (index n) stays kept
         is_kept = kept.__getitem__
+
         def derivable(r: int) -> bool:
             if any(map(is_kept, singles[r])):
                 return True
@@ -331,8 +356,9 @@ class _Relations:
         out = [i for i in range(n) if kept[i]]
         return out + [n] if helper is not None else out
 
-    def sources(self, r: int, kept: Sequence[bool], helper: StreamKey | None
-                ) -> tuple[Source, ...] | None:
+    def sources(
+        self, r: int, kept: Sequence[bool], helper: StreamKey | None
+    ) -> tuple[Source, ...] | None:
         """:func:`find_sources` of the stream at position ``r`` from the kept
         positions (``kept[len(streams)]``: the helper, when there is one):
         the same preference, on the relations already computed."""
@@ -396,7 +422,8 @@ Price = Callable[[str, int, int], float]
 
 
 def _choose_for_topic(
-    streams: Sequence[StreamKey], cost_per_s: Callable[[StreamKey], float],
+    streams: Sequence[StreamKey],
+    cost_per_s: Callable[[StreamKey], float],
     cost_of: CostOf | None = None,
 ) -> list[StreamKey]:
     topic = streams[0].topic
@@ -413,7 +440,9 @@ def _choose_for_topic(
 
 
 def _choose(
-    streams: Sequence[StreamKey], stream_costs: Sequence[float], price: Price,
+    streams: Sequence[StreamKey],
+    stream_costs: Sequence[float],
+    price: Price,
 ) -> tuple[_Relations, list[int], StreamKey | None]:
     """The choice for one topic's streams (their costs given): the
     relations, the kept positions (the helper's is ``len(streams)``) and the
@@ -456,7 +485,8 @@ def _choose(
 
 
 def choose_sent(
-    requested: Iterable[StreamKey], cost_per_s: Callable[[StreamKey], float],
+    requested: Iterable[StreamKey],
+    cost_per_s: Callable[[StreamKey], float],
     cost_of: CostOf | None = None,
 ) -> set[StreamKey]:
     """The sent set: per topic, the cheapest of the requested streams minus
@@ -467,8 +497,9 @@ def choose_sent(
         by_topic.setdefault(s.topic, []).append(s)
     sent: set[StreamKey] = set()
     for streams in by_topic.values():
-        sent.update(_choose_for_topic(streams, cost_per_s, cost_of)
-                    if len(streams) > 1 else streams)
+        sent.update(
+            _choose_for_topic(streams, cost_per_s, cost_of) if len(streams) > 1 else streams
+        )
     return sent
 
 
@@ -500,8 +531,7 @@ def plan_streams(
             continue
         price = pricing(topic)
         keys = [k for k, _ in pairs]
-        relations, best, helper = _choose(
-            keys, [price(k.aggregation, *k._nd) for k in keys], price)  # type: ignore
+        relations, best, helper = _choose(keys, [price(k.aggregation, *k._nd) for k in keys], price)  # type: ignore
         n = len(pairs)
         names_at = [pairs[i][1] for i in relations.order]
         kept = [False] * (n + 1)

@@ -16,8 +16,18 @@ from modd_plan.buffers import BufferProblem, BufferSolution, Subscription, solve
 from modd_plan.milp import solve_milp
 
 PUB_US = [40_000, 100_000, 300_000, 500_000, 1_000_000, 70_000]
-SUB_US = [100_000, 250_000, 500_000, 1_000_000, 1_500_000, 2_000_000, 3_000_000, 5_000_000,
-          8_000_000, 330_000]
+SUB_US = [
+    100_000,
+    250_000,
+    500_000,
+    1_000_000,
+    1_500_000,
+    2_000_000,
+    3_000_000,
+    5_000_000,
+    8_000_000,
+    330_000,
+]
 WEIGHTS = [Fraction(0), Fraction(1, 2), Fraction(1), Fraction(2), Fraction(3, 10)]
 CAPS_US = [None, 300_000, 1_000_000, 2_490_000]
 
@@ -62,8 +72,10 @@ def oracle(p: BufferProblem) -> tuple[dict[str, int], list[str]]:
     grid = list(itertools.product(range(1, p.max_buffer + 1), repeat=len(p.topics)))
     cap = p.cap_us
     infeasible = [
-        t for t in p.topics
-        if cap is not None and any(s.topic == t for s in p.subscriptions)
+        t
+        for t in p.topics
+        if cap is not None
+        and any(s.topic == t for s in p.subscriptions)
         and not any(
             all(abs(s.period_us - n * pm) <= cap for s in p.subscriptions if s.topic == t)
             for n in range(1, p.max_buffer + 1)
@@ -93,7 +105,8 @@ def test_random_problems_cover_the_interesting_cases() -> None:
     problems = _problems(1, 300)
     assert sum(bool(oracle(p)[1]) for p in problems) >= 20  # infeasible ones
     mixed = [  # an infeasible topic beside a subscribed one that must keep the cap
-        p for p in problems
+        p
+        for p in problems
         if oracle(p)[1] and {s.topic for s in p.subscriptions} - set(oracle(p)[1])
     ]
     assert len(mixed) >= 10
@@ -124,8 +137,10 @@ def test_both_ways_agree_on_larger_random_problems(monkeypatch: pytest.MonkeyPat
         p = BufferProblem(
             topics=topics,
             publication_us=tuple(rng.choice(PUB_US) for _ in topics),
-            subscriptions=tuple(Subscription(f"s{j}", rng.choice(topics), rng.choice(SUB_US))
-                                for j in range(rng.randint(0, 60))),
+            subscriptions=tuple(
+                Subscription(f"s{j}", rng.choice(topics), rng.choice(SUB_US))
+                for j in range(rng.randint(0, 60))
+            ),
             max_buffer=rng.choice([5, 50, 1000]),
             cap_us=rng.choice(CAPS_US),
             alpha=rng.choice(WEIGHTS),
@@ -196,8 +211,9 @@ def test_front_range_keeps_the_whole_front() -> None:
     narrower = 0
     for _ in range(2000):
         pm = rng.choice(PUB_US + [10_000, 1_000, 37_000])
-        periods = sorted(rng.choice(SUB_US + [rng.randrange(1_000, 9_000_000)])
-                         for _ in range(rng.randint(1, 9)))
+        periods = sorted(
+            rng.choice(SUB_US + [rng.randrange(1_000, 9_000_000)]) for _ in range(rng.randint(1, 9))
+        )
         lo, hi = buffers.candidate_range(periods, pm, rng.choice([3, 50, 10**6]))
         a, b = buffers.front_range(periods, pm, lo, hi)
         assert lo <= a <= b <= hi
@@ -212,7 +228,13 @@ def test_front_range_keeps_the_whole_front() -> None:
                 allowed = np.ones(len(m), dtype=bool) if cap is None else m <= cap
                 front = buffers._front(s, m, allowed, first) if allowed.any() else None
                 best = (int(m.min()), int(m.argmin()) + first)
-                fronts.append((best, None if front is None else
-                               (front.m.tolist(), front.s.tolist(), front.n.tolist())))
+                fronts.append(
+                    (
+                        best,
+                        None
+                        if front is None
+                        else (front.m.tolist(), front.s.tolist(), front.n.tolist()),
+                    )
+                )
             assert fronts[0] == fronts[1], (periods, pm, lo, hi, cap)
     assert narrower > 500

@@ -36,19 +36,24 @@ def test_text_output(scenarios_dir: Path) -> None:
     code, text = _run([str(scenarios_dir / "scenario1.modd")])
     assert code == 0
     assert "hyperperiod 2.0 s, 8 messages per hyperperiod" in text
-    assert "usv.accelerometer.accel_x/AVERAGE/2.0 <- 8 x usv.accelerometer.accel_x/AVERAGE/0.25" \
+    assert (
+        "usv.accelerometer.accel_x/AVERAGE/2.0 <- 8 x usv.accelerometer.accel_x/AVERAGE/0.25"
         in text
+    )
     assert "usv.accelerometer.accel_x: 28" in text and "sub_1: 0.88 s" in text
     assert "plain pub/sub:" in text
 
 
 def test_overrides_and_infeasible_exit_code(scenarios_dir: Path) -> None:
-    code, text = _run([str(scenarios_dir / "scenario1.modd"), "--ping", "0.1", "--json",
-                       "--method", "cvxpy"])
+    code, text = _run(
+        [str(scenarios_dir / "scenario1.modd"), "--ping", "0.1", "--json", "--method", "cvxpy"]
+    )
     j = json.loads(text)
     assert code == 3
     assert [x["topic"] for x in j["infeasible"]] == [
-        "usv.accelerometer.accel_x", "usv.accelerometer.accel_y"]
+        "usv.accelerometer.accel_x",
+        "usv.accelerometer.accel_y",
+    ]
     assert j["constants"]["ping_s"] == "0.1"
     code, text = _run([str(scenarios_dir / "scenario1.modd"), "--ping", "0.1"])
     assert code == 3 and "INFEASIBLE" in text

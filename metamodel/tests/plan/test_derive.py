@@ -10,15 +10,24 @@ from modd_plan.derive import aggregate, derive_value, merge
 from modd_plan.streams import AGGREGATIONS
 
 RULES = [
-    ("MIN", "MIN"), ("MAX", "MAX"), ("FIRST", "FIRST"), ("LAST", "LAST"), ("SUM", "SUM"),
-    ("COUNT", "COUNT"), ("COUNT", "AVERAGE"), ("ALL", "ALL"), ("AVERAGE", "AVERAGE"),
+    ("MIN", "MIN"),
+    ("MAX", "MAX"),
+    ("FIRST", "FIRST"),
+    ("LAST", "LAST"),
+    ("SUM", "SUM"),
+    ("COUNT", "COUNT"),
+    ("COUNT", "AVERAGE"),
+    ("ALL", "ALL"),
+    ("AVERAGE", "AVERAGE"),
 ] + [(a, "ALL") for a in AGGREGATIONS]
 
 
 def _windows(rng: random.Random) -> list[list[int]]:
     # integer samples keep sums exact; some windows empty
-    return [[rng.randint(-50, 50) for _ in range(rng.choice([0, 1, 3, 5]))]
-            for _ in range(rng.randint(1, 8))]
+    return [
+        [rng.randint(-50, 50) for _ in range(rng.choice([0, 1, 3, 5]))]
+        for _ in range(rng.randint(1, 8))
+    ]
 
 
 @pytest.mark.parametrize(("target", "source"), RULES)

@@ -22,7 +22,10 @@ def test_accepts_multiples_of_sent_streams(plan: Plan) -> None:
     got = check_dynamic(plan, X, "4", "AVERAGE")
     assert isinstance(got, Accepted)
     assert (got.stream, got.derived_from, got.factor) == (
-        f"{X}/AVERAGE/4.0", f"{X}/AVERAGE/0.25", 16)
+        f"{X}/AVERAGE/4.0",
+        f"{X}/AVERAGE/0.25",
+        16,
+    )
     same = check_dynamic(plan, Z, Fraction(1, 4), "MIN")
     assert isinstance(same, Accepted) and same.factor == 1
     count = check_dynamic(plan, X, "0.5", "COUNT")  # AVERAGE carries its count

@@ -45,8 +45,9 @@ def test_scenario1_udp_and_serial_by_hand(scenarios_dir: Path) -> None:
     assert abs(udp.drone_to_base - 0.8 * (98 + 28)) < 1e-9
     assert udp.base_to_drone < 5
     assert udp.error is None and abs(udp.share - udp.drone_to_base / 3600) < 1e-12
-    serial = _plan_with(scenarios_dir, "scenario1.modd",
-                        'transport = serial; device = "/dev/ttyUSB0";').budget
+    serial = _plan_with(
+        scenarios_dir, "scenario1.modd", 'transport = serial; device = "/dev/ttyUSB0";'
+    ).budget
     assert serial is not None
     assert abs(serial.drone_to_base - 0.8 * (98 + 2 + 1 + 1)) < 1e-9
     assert serial.settings.max_packet == 252
@@ -55,8 +56,7 @@ def test_scenario1_udp_and_serial_by_hand(scenarios_dir: Path) -> None:
 
 
 def test_accepted_delay_bounds_packing(scenarios_dir: Path) -> None:
-    budget = _plan_with(scenarios_dir, "scenario1.modd",
-                        "transport = udp; delay = 0.25;").budget
+    budget = _plan_with(scenarios_dir, "scenario1.modd", "transport = udp; delay = 0.25;").budget
     assert budget is not None
     # 2 slots per datagram: 4 + 36 + 4 = 44 B, 2 datagrams/s
     assert abs(budget.drone_to_base - 2 * (44 + 28)) < 1e-9
@@ -66,8 +66,9 @@ def test_accepted_delay_bounds_packing(scenarios_dir: Path) -> None:
 def test_small_packet_splits_datagrams(scenarios_dir: Path) -> None:
     # scenario 2: one slot of 19 MIN f32 (76 B) a second; a 100 B serial packet
     # holds one slot (96 B payload room): no packing, 1 datagram/s of 84 B + framing
-    budget = _plan_with(scenarios_dir, "scenario2.modd",
-                        'transport = serial; device = "/dev/x"; packet = 100;').budget
+    budget = _plan_with(
+        scenarios_dir, "scenario2.modd", 'transport = serial; device = "/dev/x"; packet = 100;'
+    ).budget
     assert budget is not None
     assert abs(budget.packets_per_s - 1) < 1e-9
     assert abs(budget.drone_to_base - serial_frame_bytes(4 + 76 + 4)) < 1e-9
@@ -79,16 +80,18 @@ def test_small_packet_splits_datagrams(scenarios_dir: Path) -> None:
 
 
 def test_over_budget_names_the_subscriptions(scenarios_dir: Path) -> None:
-    plan = _plan_with(scenarios_dir, "scenario1.modd",
-                      'transport = serial; device = "/dev/x"; rate = 60;')
+    plan = _plan_with(
+        scenarios_dir, "scenario1.modd", 'transport = serial; device = "/dev/x"; rate = 60;'
+    )
     budget = plan.budget
     assert budget is not None and budget.error is not None
     assert "81.6 B/s" in budget.error and "60 B/s" in budget.error
     assert budget.over_budget and all(n in budget.error for n in budget.over_budget)
     j = plan.to_json()["link_budget"]
     assert j["error"] == budget.error and j["over_budget"] == list(budget.over_budget)
-    ok = _plan_with(scenarios_dir, "scenario1.modd", 'transport = serial; device = "/dev/x"; '
-                    "rate = 3600;").budget
+    ok = _plan_with(
+        scenarios_dir, "scenario1.modd", 'transport = serial; device = "/dev/x"; rate = 3600;'
+    ).budget
     assert ok is not None and ok.error is None and ok.over_budget == ()
 
 
@@ -101,8 +104,10 @@ def test_exact_sum_equals_the_fraction_sum() -> None:
 
     rng = random.Random(7)
     for _ in range(200):
-        values = [Fraction(rng.randint(-10**6, 10**6), rng.choice([1, 2, 3, 7, 10, 12, 10**6]))
-                  for _ in range(rng.randint(0, 40))]
+        values = [
+            Fraction(rng.randint(-(10**6), 10**6), rng.choice([1, 2, 3, 7, 10, 12, 10**6]))
+            for _ in range(rng.randint(0, 40))
+        ]
         assert exact_sum(values) == sum(values, Fraction(0))
         assert isinstance(exact_sum(values), Fraction)
         # the same objects many times (a plan's window sizes), and temporaries
@@ -110,4 +115,5 @@ def test_exact_sum_equals_the_fraction_sum() -> None:
         repeated = [rng.choice(values or [Fraction(1, 3)]) for _ in range(50)]
         assert exact_sum(repeated) == sum(repeated, Fraction(0))
         assert exact_sum(Fraction(v.numerator + 1, v.denominator) for v in repeated) == sum(
-            (Fraction(v.numerator + 1, v.denominator) for v in repeated), Fraction(0))
+            (Fraction(v.numerator + 1, v.denominator) for v in repeated), Fraction(0)
+        )

@@ -69,14 +69,16 @@ def test_frame_size_matches_the_python_link_codec() -> None:
     zigzag varint takes INT_VALUE_BYTES."""
     import modd.link.codec as codec
     import modd.link.frames as frames
+
     big_int = 2**21  # zigzag 2**22: a 4-byte varint
     for vtype in TYPES:
         for agg in AGGS:
             kind = frames.value_kind(frames.ValueType.parse(vtype), frames.Aggregation[agg])
             sample: float | int = big_int if vtype == "int" else 1 if vtype == "bool" else 1.5
             integer = 6 if agg == "SUM" and vtype == "bool" else int(sample)
-            value = frames.Value(present=True, number=float(sample), integer=integer, count=6,
-                                 samples=[sample] * 6)
+            value = frames.Value(
+                present=True, number=float(sample), integer=integer, count=6, samples=[sample] * 6
+            )
             data = frames.Data(sync=False, config_id=0, slot=0, seq8=0, values=[value])
             encoded = codec.encode_data(data, [kind])
             predicted = data_frame_bytes(int(window_value_bytes(agg, vtype, Fraction(6))), 1)
@@ -94,8 +96,11 @@ def test_ceil_of_sums_is_the_ceiling_of_the_fraction_sum() -> None:
 
     rng = random.Random(3)
     for case in range(400):
-        dens = [1, 2, 3, 4, 7, 10, 25, 1000] if case % 2 else [rng.randrange(2, 10**40) | 1
-                                                               for _ in range(3)]
+        dens = (
+            [1, 2, 3, 4, 7, 10, 25, 1000]
+            if case % 2
+            else [rng.randrange(2, 10**40) | 1 for _ in range(3)]
+        )
         values = {k: Fraction(rng.randrange(0, 10**6), rng.choice(dens)) for k in range(12)}
         ceil_sum = ceil_of_sums(values)
         for _ in range(5):

@@ -12,8 +12,16 @@ from typing import Any
 from modd_plan.plan import make_plan
 
 CONTRACT_KEYS = {
-    "hyperperiod_s", "messages_per_hyperperiod", "topics", "streams", "subscriptions",
-    "buffer_sizes", "schedule", "delays", "predicted_link_bytes_per_s", "infeasible",
+    "hyperperiod_s",
+    "messages_per_hyperperiod",
+    "topics",
+    "streams",
+    "subscriptions",
+    "buffer_sizes",
+    "schedule",
+    "delays",
+    "predicted_link_bytes_per_s",
+    "infeasible",
     "constants",
 }
 
@@ -24,18 +32,42 @@ def test_contract_fields(scenario1_dict: Any) -> None:
     json.dumps(j)  # serialisable as it is
     assert isinstance(j["hyperperiod_s"], str) and isinstance(j["messages_per_hyperperiod"], int)
     assert j["topics"][2] == {
-        "id": 2, "name": "d.accelerometer.accel_z", "type": "float32", "unit": "NONE",
-        "publication_period_s": "0.04", "period_us": 40000, "buffer_size": 6,
+        "id": 2,
+        "name": "d.accelerometer.accel_z",
+        "type": "float32",
+        "unit": "NONE",
+        "publication_period_s": "0.04",
+        "period_us": 40000,
+        "buffer_size": 6,
     }
     stream = j["streams"][0]
-    assert set(stream) >= {"id", "key", "topic", "aggregation", "period_s", "period_us", "sent",
-                           "derived_from", "factor", "subscribers"}
+    assert set(stream) >= {
+        "id",
+        "key",
+        "topic",
+        "aggregation",
+        "period_s",
+        "period_us",
+        "sent",
+        "derived_from",
+        "factor",
+        "subscribers",
+    }
     assert j["schedule"]["streams"][3] == {
-        "id": 3, "key": "d.accelerometer.accel_z/MAX/0.25", "period_us": 250000}
+        "id": 3,
+        "key": "d.accelerometer.accel_z/MAX/0.25",
+        "period_us": 250000,
+    }
     assert {"drone_to_base", "base_to_drone", "plain_pubsub"} <= set(
-        j["predicted_link_bytes_per_s"])
-    assert j["constants"] == {"max_buffer": 1000, "ping_s": "0.83", "alpha": "1.0",
-                              "beta": "1.0", "delay_cap_s": "2.49"}
+        j["predicted_link_bytes_per_s"]
+    )
+    assert j["constants"] == {
+        "max_buffer": 1000,
+        "ping_s": "0.83",
+        "alpha": "1.0",
+        "beta": "1.0",
+        "delay_cap_s": "2.49",
+    }
 
 
 def test_infeasible_names_topics_and_subscribers_and_keeps_the_uncapped_plan(
@@ -57,8 +89,13 @@ def test_infeasible_names_topics_and_subscribers_and_keeps_the_uncapped_plan(
 
 
 def test_the_cap_is_lifted_only_for_the_offending_topic(make_model: Any) -> None:
-    subs = [("fast", "a", "0.25", "MIN"), ("slow", "a", "8.0", "MIN"),
-            ("c1", "c", "0.25", "MIN"), ("c2", "c", "0.25", "MAX"), ("c3", "c", "5.0", "MIN")]
+    subs = [
+        ("fast", "a", "0.25", "MIN"),
+        ("slow", "a", "8.0", "MIN"),
+        ("c1", "c", "0.25", "MIN"),
+        ("c2", "c", "0.25", "MAX"),
+        ("c3", "c", "5.0", "MIN"),
+    ]
     j = make_plan(make_model(["a", "c"], [("p", "0.05", ["a", "c"])], subs)).to_json()
     assert [x["topic"] for x in j["infeasible"]] == ["d.s.a"]
     # uncapped, c would follow its median (n = 22, c3 waits 3.9 s); capped at
@@ -74,13 +111,17 @@ def test_publication_period_too_long_for_the_cap(make_model: Any) -> None:
 
 
 def test_unpublished_and_unsubscribed_topics(make_model: Any) -> None:
-    model = make_model(["a", "b", "c"], [("p", "0.1", ["a", "b"])],
-                       [("s", "a", "1.0", "MIN"), ("t", "c", "1.0", "MIN")])
+    model = make_model(
+        ["a", "b", "c"],
+        [("p", "0.1", ["a", "b"])],
+        [("s", "a", "1.0", "MIN"), ("t", "c", "1.0", "MIN")],
+    )
     j = make_plan(model).to_json()
     assert j["buffer_sizes"] == {"d.s.a": 10, "d.s.b": 1}  # b: nobody asks, smallest n
     assert j["topics"][2]["buffer_size"] is None
     assert j["infeasible"] == [
-        {"topic": "d.s.c", "subscribers": ["t"], "reason": "no publisher publishes this topic"}]
+        {"topic": "d.s.c", "subscribers": ["t"], "reason": "no publisher publishes this topic"}
+    ]
 
 
 def test_overrides_change_the_constants(scenario1_dict: Any) -> None:
@@ -129,7 +170,10 @@ json.dump(make_plan(model).to_json(), sys.stdout, sort_keys=True)
 def test_plan_does_not_depend_on_the_hash_seed() -> None:
     outputs = {
         subprocess.run(
-            [sys.executable, "-c", _HASH_SCRIPT], capture_output=True, text=True, check=True,
+            [sys.executable, "-c", _HASH_SCRIPT],
+            capture_output=True,
+            text=True,
+            check=True,
             env={**os.environ, "PYTHONHASHSEED": seed},
         ).stdout
         for seed in ("1", "2")

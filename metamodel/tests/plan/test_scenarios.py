@@ -23,7 +23,15 @@ def test_scenario1(scenarios_dir: Path, expected: dict[str, Any], method: str) -
     assert j["delays"]["sub_1"] == "0.88" and j["delays"]["sub_3"] == "0.87"
     assert j["delays"]["sub_5"] == "0.01"
     assert [s["date_s"] for s in j["schedule"]["slots"]] == [
-        "0.25", "0.5", "0.75", "1.0", "1.25", "1.5", "1.75", "2.0"]
+        "0.25",
+        "0.5",
+        "0.75",
+        "1.0",
+        "1.25",
+        "1.5",
+        "1.75",
+        "2.0",
+    ]
     assert all(s["streams"] == [0, 1, 2, 3] for s in j["schedule"]["slots"])
 
 
@@ -42,7 +50,8 @@ def test_scenario2(scenarios_dir: Path, expected: dict[str, Any], method: str) -
 
 def test_scenario1_link_cost(scenarios_dir: Path) -> None:
     link = make_plan(load_model(scenarios_dir / "scenario1.modd")).to_json()[
-        "predicted_link_bytes_per_s"]
+        "predicted_link_bytes_per_s"
+    ]
     # 4 frames/s of 3 B header + 2 x (4 B average + 1 B count) + 2 x 4 B, + 52 B IP/TCP
     assert link["frames_per_s"] == 4.0
     assert link["drone_to_base"] == 4 * (3 + 10 + 8 + 52)

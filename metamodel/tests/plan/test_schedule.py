@@ -52,8 +52,9 @@ def test_hyperperiod_may_be_longer_than_the_sent_periods() -> None:
 
 
 def test_twenty_six_day_hyperperiod_plans_in_milliseconds() -> None:
-    periods = [int(Fraction(p) * 1_000_000) for p in
-               ["0.3", "0.7", "1.1", "2.3", "1.3", "1.7", "1.9"]]
+    periods = [
+        int(Fraction(p) * 1_000_000) for p in ["0.3", "0.7", "1.1", "2.3", "1.3", "1.7", "1.9"]
+    ]
     start = time.perf_counter()
     s = Schedule.from_periods_us(periods)
     count = s.messages_per_hyperperiod
@@ -69,7 +70,8 @@ def test_twenty_six_day_hyperperiod_plans_in_milliseconds() -> None:
     h = 22309287
     expected = sum(
         (-1) ** (len(c) + 1) * (h // lcm(*c))
-        for r in range(1, 8) for c in itertools.combinations(units, r)
+        for r in range(1, 8)
+        for c in itertools.combinations(units, r)
     )
     assert count == expected
     assert elapsed < 0.05
@@ -86,17 +88,23 @@ def test_same_slots_as_the_link_runtime() -> None:
     """The shared contract: the link's slot iterator (runtime/python) and the
     planner's schedule agree slot by slot."""
     import modd.link.schedule as link_schedule
+
     rng = random.Random(11)
     for _ in range(50):
-        periods = [rng.choice([250_000, 300_000, 700_000, 1_000_000, 2_000_000])
-                   for _ in range(rng.randint(1, 6))]
+        periods = [
+            rng.choice([250_000, 300_000, 700_000, 1_000_000, 2_000_000])
+            for _ in range(rng.randint(1, 6))
+        ]
         theirs = link_schedule.SlotIterator(periods)
         ours = Schedule.from_periods_us(periods).iter_slots()
         for _ in range(60):
             slot = next(theirs)
             index, date, ids = next(ours)
             assert (slot.index, slot.offset_us, list(slot.streams)) == (
-                index, int(date * 1_000_000), ids)
+                index,
+                int(date * 1_000_000),
+                ids,
+            )
 
 
 def test_twenty_six_day_model_plans_in_milliseconds(make_model: Any) -> None:

@@ -49,7 +49,8 @@ def oracle_count(periods: list[int], t: int) -> int:
 
 periods_st = st.lists(
     st.builds(lambda a, b: a * b, st.integers(1, 90), st.sampled_from([1, 2, 6, 10, 100, 10_000])),
-    min_size=1, max_size=10,
+    min_size=1,
+    max_size=10,
 )
 
 
@@ -83,7 +84,7 @@ def test_count_matches_a_listing(periods: list[int]) -> None:
 def test_coprime_base(numbers: list[int]) -> None:
     base = coprime_base(numbers)
     assert all(b > 1 for b in base)
-    assert all(lcm(a, b) == a * b for i, a in enumerate(base) for b in base[i + 1:])
+    assert all(lcm(a, b) == a * b for i, a in enumerate(base) for b in base[i + 1 :])
     for n in numbers:
         for b in base:
             while n % b == 0:
@@ -101,8 +102,8 @@ def pair_cycle(e: int) -> list[int]:
 
 
 ADVERSARIAL = {
-    "primes": lambda e: [p * 10_000 for p in PRIMES[1:e + 1]],
-    "0.1 s grid": lambda e: [p * 100_000 for p in PRIMES[1:e + 1]],
+    "primes": lambda e: [p * 10_000 for p in PRIMES[1 : e + 1]],
+    "0.1 s grid": lambda e: [p * 100_000 for p in PRIMES[1 : e + 1]],
     "consecutive": lambda e: [k * 1000 for k in range(e, 2 * e)],
     "pair cycle": pair_cycle,
 }
@@ -197,8 +198,15 @@ def test_cli_prints_the_located_error(make_model: Any, tmp_path: Any, capsys: An
     subs = [(f"sub{i}", names[i], p, "MAX") for i, p in enumerate(cycle)]
     path = tmp_path / "worst.modd"
     path.write_text(dumps(make_model(names, [("p", "0.001", names)], subs), "modd"))
-    args = argparse.Namespace(file=str(path), json=False, ping=None, alpha=None, beta=None,
-                              max_buffer=None, method="exact")
+    args = argparse.Namespace(
+        file=str(path),
+        json=False,
+        ping=None,
+        alpha=None,
+        beta=None,
+        max_buffer=None,
+        method="exact",
+    )
     assert run_plan(args) == 1
     err = capsys.readouterr().err
     lines = [x for x in err.splitlines() if ": error: subscriber 'sub" in x]
@@ -227,9 +235,16 @@ def test_max_buffer_is_bounded_and_costs_nothing(scenario1_dict: Any) -> None:
 
 
 def test_buffer_candidates_beyond_the_bound_are_a_located_error(make_model: Any) -> None:
-    model = make_model(["a", "b"], [("p", "0.000001", ["a", "b"])],
-                       [("fast", "a", "0.001", "MAX"), ("slow", "a", "100000", "MAX"),
-                        ("fine", "b", "1.0", "MAX")], link={"maxBuffer": 10**6})
+    model = make_model(
+        ["a", "b"],
+        [("p", "0.000001", ["a", "b"])],
+        [
+            ("fast", "a", "0.001", "MAX"),
+            ("slow", "a", "100000", "MAX"),
+            ("fine", "b", "1.0", "MAX"),
+        ],
+        link={"maxBuffer": 10**6},
+    )
     start = time.process_time()
     with pytest.raises(PlanningError) as info:
         make_plan(model)
@@ -256,8 +271,10 @@ def _grid_model(make_model: Any, n_topics: int, n_subs: int) -> Any:
     11.3 s, 29 of them), published every 0.1 s; hyperperiod about 10^45 s."""
     grid = [f"{p / 10:.1f}" for p in PRIMES[1:30]]
     names = [f"v{i}" for i in range(n_topics)]
-    subs = [(f"sub{k}", names[k % n_topics], grid[k % len(grid)], ("MIN", "MAX", "AVERAGE")[k % 3])
-            for k in range(n_subs)]
+    subs = [
+        (f"sub{k}", names[k % n_topics], grid[k % len(grid)], ("MIN", "MAX", "AVERAGE")[k % 3])
+        for k in range(n_subs)
+    ]
     return make_model(names, [("p", "0.1", names)], subs)
 
 
@@ -274,8 +291,9 @@ def test_hyperperiods_past_forty_digits_make_valid_plans(make_model: Any, case: 
         units = PRIMES[1:41]
         scale = 10_000 if case == "e:primes:40" else 100_000
         names = [f"v{i}" for i in range(40)]
-        subs = [(f"sub{i}", names[i], f"{p * scale / 10**6:.2f}", "MAX")
-                for i, p in enumerate(units)]
+        subs = [
+            (f"sub{i}", names[i], f"{p * scale / 10**6:.2f}", "MAX") for i, p in enumerate(units)
+        ]
         model = make_model(names, [("p", "0.01", names)], subs)
     start = time.process_time()
     j = make_plan(model).to_json()

@@ -31,8 +31,10 @@ def test_scenario1_derives_the_2s_average_and_shares_the_max(scenario1_dict: Any
     # ids: topic order, then aggregation enum order (MIN before MAX), then period
     sent = sorted((s for s in j["streams"] if s["sent"]), key=lambda s: s["id"] or 0)
     assert [s["key"] for s in sent] == [
-        f"{X}/AVERAGE/0.25", "d.accelerometer.accel_y/AVERAGE/0.25",
-        f"{Z}/MIN/0.25", f"{Z}/MAX/0.25",
+        f"{X}/AVERAGE/0.25",
+        "d.accelerometer.accel_y/AVERAGE/0.25",
+        f"{Z}/MIN/0.25",
+        f"{Z}/MAX/0.25",
     ]
     assert [s["id"] for s in sent] == [0, 1, 2, 3]
 
@@ -45,8 +47,13 @@ def test_min_is_not_derived_from_max_nor_from_a_non_multiple(make_model: Any) ->
 
 
 def test_all_feeds_every_aggregation_at_multiples(make_model: Any) -> None:
-    subs = [("a", "t", "0.5", "ALL"), ("b", "t", "1.0", "MIN"), ("c", "t", "0.5", "SUM"),
-            ("d", "t", "1.5", "AVERAGE"), ("e", "t", "0.2", "LAST")]
+    subs = [
+        ("a", "t", "0.5", "ALL"),
+        ("b", "t", "1.0", "MIN"),
+        ("c", "t", "0.5", "SUM"),
+        ("d", "t", "1.5", "AVERAGE"),
+        ("e", "t", "0.2", "LAST"),
+    ]
     j = make_plan(make_model(["t"], [("p", "0.05", ["t"])], subs)).to_json()
     streams = _by_key(j)
     assert [k for k, s in streams.items() if s["sent"]] == ["d.s.t/LAST/0.2", "d.s.t/ALL/0.5"]
@@ -77,7 +84,9 @@ def test_cheapest_cover_average_from_sum_and_count(make_model: Any) -> None:
     # AVERAGE (4 B + count) is dropped: SUM (4 B) and COUNT (1 B) give it
     assert not streams["d.s.t/AVERAGE/1.0"]["sent"]
     assert [x["key"] for x in streams["d.s.t/AVERAGE/1.0"]["sources"]] == [
-        "d.s.t/SUM/1.0", "d.s.t/COUNT/1.0"]
+        "d.s.t/SUM/1.0",
+        "d.s.t/COUNT/1.0",
+    ]
     assert streams["d.s.t/SUM/1.0"]["sent"] and streams["d.s.t/COUNT/1.0"]["sent"]
 
 
@@ -89,8 +98,11 @@ def test_count_derived_from_average(make_model: Any) -> None:
 
 def test_find_sources_prefers_same_aggregation_and_fewest_windows() -> None:
     t = "d.s.t"
-    sent = [StreamKey(t, "ALL", Fraction(1, 2)), StreamKey(t, "MIN", Fraction(1, 2)),
-            StreamKey(t, "MIN", Fraction(1))]
+    sent = [
+        StreamKey(t, "ALL", Fraction(1, 2)),
+        StreamKey(t, "MIN", Fraction(1, 2)),
+        StreamKey(t, "MIN", Fraction(1)),
+    ]
     (src,) = find_sources(StreamKey(t, "MIN", Fraction(3)), sent) or ()
     assert (src.stream.period, src.factor) == (Fraction(1), 3)
     assert find_sources(StreamKey(t, "MAX", Fraction(3)), sent[1:]) is None

@@ -16,10 +16,14 @@ from modd_plan.streams import AGGREGATIONS, StreamKey, find_sources
 PERIODS = [Fraction(x) for x in ("0.25", "0.5", "1", "2", "2.5", "5", "10", "0.3", "0.7", "1.5")]
 
 
-def _reference_drop(required: Sequence[StreamKey], cost: Callable[[StreamKey], float],
-                    helper: StreamKey | None = None) -> list[StreamKey]:
-    ordered = sorted(required, key=lambda s: (-cost(s), -s.period,
-                                              AGGREGATIONS.index(s.aggregation)))
+def _reference_drop(
+    required: Sequence[StreamKey],
+    cost: Callable[[StreamKey], float],
+    helper: StreamKey | None = None,
+) -> list[StreamKey]:
+    ordered = sorted(
+        required, key=lambda s: (-cost(s), -s.period, AGGREGATIONS.index(s.aggregation))
+    )
     kept = [True] * len(ordered)
     extra = [helper] if helper is not None else []
     for i in range(len(ordered)):
@@ -31,8 +35,9 @@ def _reference_drop(required: Sequence[StreamKey], cost: Callable[[StreamKey], f
     return [s for s, k in zip(ordered, kept, strict=True) if k] + extra
 
 
-def _reference_choose(required: Sequence[StreamKey], cost: Callable[[StreamKey], float]
-                      ) -> list[StreamKey]:
+def _reference_choose(
+    required: Sequence[StreamKey], cost: Callable[[StreamKey], float]
+) -> list[StreamKey]:
     best = _reference_drop(required, cost)
     best_cost = sum(cost(s) for s in best)
     for period in sorted({s.period for s in required}):
@@ -64,16 +69,18 @@ def test_choice_matches_the_reference(seed: int) -> None:
         reference = _reference_choose(required, cost)
         assert streams._choose_for_topic(required, cost) == reference
 
-        def cost_of(topic: str, aggregation: str, num: int, den: int,
-                    table: dict[StreamKey, float] = table) -> float:
+        def cost_of(
+            topic: str, aggregation: str, num: int, den: int, table: dict[StreamKey, float] = table
+        ) -> float:
             return table[StreamKey(topic, aggregation, Fraction(num, den))]
 
         # pricing a helper from its parts, before its key is built: the same choice
         assert streams._choose_for_topic(required, cost, cost_of) == reference
         helper = StreamKey("d.s.v", "ALL", rng.choice(PERIODS))
         if helper not in required:
-            assert (streams._drop_derivable(required, cost, helper)
-                    == _reference_drop(required, cost, helper))
+            assert streams._drop_derivable(required, cost, helper) == _reference_drop(
+                required, cost, helper
+            )
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -86,17 +93,23 @@ def test_plan_streams_sources_match_find_sources(seed: int) -> None:
         topics = [f"d.s.v{t}" for t in range(rng.randint(1, 4))]
         requested: dict[StreamKey, list[str]] = {}
         for t in topics:
-            for s in rng.sample([StreamKey(t, a, p) for a in AGGREGATIONS for p in PERIODS],
-                                rng.randint(1, 10)):
+            for s in rng.sample(
+                [StreamKey(t, a, p) for a in AGGREGATIONS for p in PERIODS], rng.randint(1, 10)
+            ):
                 requested[s] = [f"sub{len(requested)}"]
         levels = [rng.choice([1.0, 2.0, 4.0, 0.5]) for _ in range(3)]
         prices: dict[tuple[str, str, int, int], float] = {}
 
-        def pricing(topic: str, prices: dict[tuple[str, str, int, int], float] = prices,
-                    levels: list[float] = levels) -> streams.Price:
+        def pricing(
+            topic: str,
+            prices: dict[tuple[str, str, int, int], float] = prices,
+            levels: list[float] = levels,
+        ) -> streams.Price:
             def price(aggregation: str, num: int, den: int) -> float:
-                return prices.setdefault((topic, aggregation, num, den),
-                                         rng.choice(levels) * den / num)
+                return prices.setdefault(
+                    (topic, aggregation, num, den), rng.choice(levels) * den / num
+                )
+
             return price
 
         index = {t: i for i, t in enumerate(topics)}
@@ -134,13 +147,17 @@ def test_relations_sources_match_find_sources(seed: int) -> None:
 
 
 def test_asked_streams_one_stream_per_period_whatever_its_text() -> None:
-    model = {"subscribers": [
-        {"name": f"s{k}", "topic": "d.s.v", "aggregation": "MAX", "periodS": p}
-        for k, p in enumerate(["1", "2.0", "1.0", "2", "1.00", "0.5"])
-    ]}
+    model = {
+        "subscribers": [
+            {"name": f"s{k}", "topic": "d.s.v", "aggregation": "MAX", "periodS": p}
+            for k, p in enumerate(["1", "2.0", "1.0", "2", "1.00", "0.5"])
+        ]
+    }
     requested, subscriptions = streams.asked_streams(model)
     assert [(k.key, names) for k, names in requested] == [
-        ("d.s.v/MAX/1.0", ["s0", "s2", "s4"]), ("d.s.v/MAX/2.0", ["s1", "s3"]),
-        ("d.s.v/MAX/0.5", ["s5"])]
+        ("d.s.v/MAX/1.0", ["s0", "s2", "s4"]),
+        ("d.s.v/MAX/2.0", ["s1", "s3"]),
+        ("d.s.v/MAX/0.5", ["s5"]),
+    ]
     assert subscriptions["s4"] is requested[0][0] and subscriptions["s3"] is requested[1][0]
     assert len(subscriptions) == 6

@@ -14,7 +14,8 @@ using namespace modd::link;
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;
   // First byte picks the value kind of BACKFILL_DATA; the rest is a frame stream.
-  ValueKind kind = value_kind(static_cast<ValueType>(data[0] & 3), static_cast<Aggregation>((data[0] >> 2) & 7));
+  ValueKind kind =
+      value_kind(static_cast<ValueType>(data[0] & 3), static_cast<Aggregation>((data[0] >> 2) & 7));
   std::span<const uint8_t> in(data + 1, size - 1);
   size_t at = 0;
   try {
@@ -30,7 +31,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         if (!g || !(backfill::decode(*g) == backfill::decode(*f))) std::abort();
       }
     }
-  } catch (const Error&) {
-  }
+  } catch (const Error&) {}
   return 0;
 }

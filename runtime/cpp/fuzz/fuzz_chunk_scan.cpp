@@ -21,7 +21,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     for (const Skipped& k : s.skipped)
       if (k.offset + k.length > size) std::abort();
-    if (messages != s.messages || s.clean_end > size || s.clean_chunks > s.chunks.size()) std::abort();
+    if (messages != s.messages || s.clean_end > size || s.clean_chunks > s.chunks.size())
+      std::abort();
   }
   return 0;
 }

@@ -34,7 +34,8 @@ struct Sink : broker::DatagramOut {
 void fuzz_session(std::span<const uint8_t> in) {
   static NoHooks hooks;
   static Sink out;
-  static broker::DatagramLink session("a-link-key-of-32-bytes-for-fuzzing", hooks, out, {}, link::Mac{});
+  static broker::DatagramLink session("a-link-key-of-32-bytes-for-fuzzing", hooks, out, {},
+                                      link::Mac{});
   static int64_t now = 0;
   now += 7'000'000;  // 7 ms a datagram: rate limits and expiry are exercised
   session.on_datagram(in, now);
@@ -50,26 +51,22 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // 2^-32 per input: a verifying random datagram would be a finding worth seeing
     std::abort();
   } catch (const Forged&) {
-  } catch (const Error&) {
-  }
+  } catch (const Error&) {}
   try {
     verify_control(in, key, kBaseToDrone);
     std::abort();
   } catch (const Forged&) {
-  } catch (const Error&) {
-  }
+  } catch (const Error&) {}
   try {
     verify_fragment(in, key, kDroneToBase, 70000);
     std::abort();
   } catch (const Forged&) {
-  } catch (const Error&) {
-  }
+  } catch (const Error&) {}
   try {
     verify_control_fragment(in, key, kBaseToDrone);
     std::abort();
   } catch (const Forged&) {
-  } catch (const Error&) {
-  }
+  } catch (const Error&) {}
   // control messages cut and put back together, in reverse order, bounded: the frames
   // come back whole, each datagram within the packet
   if (size > 0) {
@@ -83,8 +80,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         whole = pieces.add(verify_control_fragment(frags[k], key, kBaseToDrone));
       }
       if (!whole || *whole != std::vector<uint8_t>(in.begin(), in.end())) std::abort();
-    } catch (const std::invalid_argument&) {
-    }
+    } catch (const std::invalid_argument&) {}
   }
   // the sender's cutting: pieces put back together give the body, each within the packet
   if (size > 0) {
@@ -98,8 +94,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         whole.insert(whole.end(), got.piece.begin(), got.piece.end());
       }
       if (whole != std::vector<uint8_t>(in.begin(), in.end())) std::abort();
-    } catch (const std::invalid_argument&) {
-    }
+    } catch (const std::invalid_argument&) {}
   }
   fuzz_session(in);
   Deframer df(252);

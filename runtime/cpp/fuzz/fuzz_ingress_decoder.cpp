@@ -1,10 +1,10 @@
 // libFuzzer target: a publisher connection's bytes into the broker's ingress
 // session (registration, records, validation, counting, archive hand-off).
+#include <unistd.h>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
-#include <unistd.h>
 
 #include "modd/broker/broker.hpp"
 
@@ -20,7 +20,9 @@ struct NoLink : LinkOutput {
 // The archive of the fuzzed broker lives in a per-process directory removed at exit (this
 // object is built before the broker, so it is destroyed after it).
 struct ArchiveDir {
-  std::string path = (std::filesystem::temp_directory_path() / ("modd-fuzz-ingress-" + std::to_string(getpid()))).string();
+  std::string path =
+      (std::filesystem::temp_directory_path() / ("modd-fuzz-ingress-" + std::to_string(getpid())))
+          .string();
   ~ArchiveDir() { std::filesystem::remove_all(path); }
 };
 
@@ -31,7 +33,9 @@ Broker& the_broker() {
   static std::unique_ptr<Broker> b = [] {
     BrokerConfig cfg;
     cfg.archive_dir = dir.path;
-    cfg.topics = {{"a", link::ValueType::Float32, 4}, {"b", link::ValueType::Int, 2}, {"c", link::ValueType::Bool, 1}};
+    cfg.topics = {{"a", link::ValueType::Float32, 4},
+                  {"b", link::ValueType::Int, 2},
+                  {"c", link::ValueType::Bool, 1}};
     cfg.accept_unknown_topics = true;
     cfg.rotate_bytes = 1 << 20;
     cfg.queue_limit_samples = 10000;

@@ -29,14 +29,14 @@ bool close(double a, double b, double r) {
 // back within half a step (an escaped value may come back as steps).
 void check_quantised(const RawFrame& f) {
   static const std::vector<ValueKind> kinds = {
-      value_kind(ValueType::Float32, Aggregation::Average, 0.01), value_kind(ValueType::Float64, Aggregation::All, 0.5),
-      value_kind(ValueType::Float32, Aggregation::Max, 1e-9), value_kind(ValueType::Int, Aggregation::Sum, 0.1)};
+      value_kind(ValueType::Float32, Aggregation::Average, 0.01),
+      value_kind(ValueType::Float64, Aggregation::All, 0.5),
+      value_kind(ValueType::Float32, Aggregation::Max, 1e-9),
+      value_kind(ValueType::Int, Aggregation::Sum, 0.1)};
   Data d;
   try {
     d = decode_data(f, kinds);
-  } catch (const Error&) {
-    return;
-  }
+  } catch (const Error&) { return; }
   std::vector<uint8_t> out;
   encode_data(out, d, kinds);
   Data back = decode_data(*split_frame(out), kinds);
@@ -61,8 +61,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       if (is_data_type(f->type)) {
         check_quantised(*f);
         static const std::vector<ValueKind> kinds = {
-            value_kind(ValueType::Float32, Aggregation::Average), value_kind(ValueType::Int, Aggregation::All),
-            value_kind(ValueType::Bool, Aggregation::Min), value_kind(ValueType::Float64, Aggregation::Count),
+            value_kind(ValueType::Float32, Aggregation::Average),
+            value_kind(ValueType::Int, Aggregation::All),
+            value_kind(ValueType::Bool, Aggregation::Min),
+            value_kind(ValueType::Float64, Aggregation::Count),
             value_kind(ValueType::Int, Aggregation::Sum)};
         (void)decode_data(*f, kinds);
       } else {
@@ -76,8 +78,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         }
       }
     }
-  } catch (const Error&) {
-  }
+  } catch (const Error&) {}
   // 2. A session: the handshake done with the right key, then the fuzz bytes.
   Hooks h;
   const std::string key = "fuzz";

@@ -34,7 +34,7 @@ TEST(Accumulator, IntAggregatesAndReset) {
   EXPECT_EQ(v.integer, -7);
   EXPECT_FALSE(acc.take().present);  // an empty window is absent
   acc.add(0, 9);
-  EXPECT_EQ(acc.take().integer, 9);   // nothing of the previous window leaks
+  EXPECT_EQ(acc.take().integer, 9);  // nothing of the previous window leaks
   Accumulator sum(ValueType::Int, Aggregation::Sum);
   sum.add(0, 1);
   sum.add(0, -70001);

@@ -54,7 +54,8 @@ bf::Message from_json(const json& m) {
   }
   if (t == "BACKFILL_PROGRESS")
     return bf::Progress{m["request_id"], m["next"], m["windows"], m["bytes_sent"], m["rate_bps"]};
-  if (t == "BACKFILL_END") return bf::End{m["request_id"], status_of(m["status"]), m["next"], m["message"]};
+  if (t == "BACKFILL_END")
+    return bf::End{m["request_id"], status_of(m["status"]), m["next"], m["message"]};
   return bf::Cancel{m["request_id"]};
 }
 

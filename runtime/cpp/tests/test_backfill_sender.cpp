@@ -26,7 +26,9 @@ struct Fixture {
   std::string dir;
   std::vector<archive::Sample> samples;  // 25 Hz with jitter, 60 s, float32 values
   explicit Fixture(const std::string& name, size_t rotate_bytes = 256u << 20) {
-    dir = (std::filesystem::temp_directory_path() / ("modd-bf-" + name + std::to_string(::getpid()))).string();
+    dir =
+        (std::filesystem::temp_directory_path() / ("modd-bf-" + name + std::to_string(::getpid())))
+            .string();
     std::filesystem::remove_all(dir);
     std::mt19937 rng(7);
     std::uniform_int_distribution<int64_t> jitter(0, 9'000'000);
@@ -38,11 +40,14 @@ struct Fixture {
     o.writer.chunk_bytes = 4096;  // many chunks: the reader crosses chunk borders
     o.rotate_bytes = rotate_bytes;
     archive::Archiver a(o);
-    auto topic = std::make_shared<const archive::TopicInfo>(archive::TopicInfo{"usv.imu.x", link::ValueType::Float32});
-    auto other = std::make_shared<const archive::TopicInfo>(archive::TopicInfo{"usv.imu.y", link::ValueType::Float32});
+    auto topic = std::make_shared<const archive::TopicInfo>(
+        archive::TopicInfo{"usv.imu.x", link::ValueType::Float32});
+    auto other = std::make_shared<const archive::TopicInfo>(
+        archive::TopicInfo{"usv.imu.y", link::ValueType::Float32});
     for (size_t at = 0; at < samples.size(); at += 25) {
-      std::vector<archive::Sample> part(samples.begin() + static_cast<long>(at),
-                                        samples.begin() + static_cast<long>(std::min(at + 25, samples.size())));
+      std::vector<archive::Sample> part(
+          samples.begin() + static_cast<long>(at),
+          samples.begin() + static_cast<long>(std::min(at + 25, samples.size())));
       a.submit(other, std::vector<archive::Sample>(part));  // interleaved channel, to be skipped
       a.submit(topic, std::move(part));
     }
@@ -75,7 +80,7 @@ bf::Request request(link::Aggregation agg, uint64_t windows, uint64_t resume, ui
 struct Outcome {
   std::map<uint64_t, link::Value> windows;
   std::vector<std::pair<int64_t, size_t>> sent;  // (time, bytes of the write)
-  std::vector<size_t> data_bytes;                 // of its BACKFILL_DATA frame
+  std::vector<size_t> data_bytes;                // of its BACKFILL_DATA frame
   bf::EndStatus status = bf::EndStatus::Io;
   int duplicates = 0;
 };
@@ -91,7 +96,8 @@ Outcome run(BackfillSender& s, const bf::Request& r, int64_t live_period_ns = 0)
   link::ValueKind kind = link::value_kind(r.type, r.aggregation);
   int64_t now = kT0 + 3600'000'000'000;
   for (int step = 0; step < 2'000'000 && s.active(); ++step) {
-    BackfillSender::Env env{now, now, live_period_ns ? (now / live_period_ns + 1) * live_period_ns : INT64_MAX, true};
+    BackfillSender::Env env{
+        now, now, live_period_ns ? (now / live_period_ns + 1) * live_period_ns : INT64_MAX, true};
     std::vector<std::vector<uint8_t>> frames;
     s.pump(env, frames);
     for (const auto& f : frames) {
@@ -120,7 +126,8 @@ Outcome run(BackfillSender& s, const bf::Request& r, int64_t live_period_ns = 0)
 
 TEST(BackfillSender, WindowsEqualTheLiveAccumulatorOverTheArchive) {
   Fixture fx("eq", 64 * 1024);  // several files too
-  for (auto agg : {link::Aggregation::Min, link::Aggregation::Average, link::Aggregation::All, link::Aggregation::Count}) {
+  for (auto agg : {link::Aggregation::Min, link::Aggregation::Average, link::Aggregation::All,
+                   link::Aggregation::Count}) {
     BackfillSender s(fx.dir, "modd", 100000);
     auto r = request(agg, 250, 0, 0);
     Outcome out = run(s, r);
@@ -170,7 +177,8 @@ static void check_pace(const std::string& name, size_t overhead) {
     // Every 1 s interval starting at a frame: bytes (with the link's overhead) <= rate + one frame.
     for (size_t i = 0; i < out.sent.size(); ++i) {
       size_t bytes = 0;
-      for (size_t j = i; j < out.sent.size() && out.sent[j].first < out.sent[i].first + 1'000'000'000; ++j)
+      for (size_t j = i;
+           j < out.sent.size() && out.sent[j].first < out.sent[i].first + 1'000'000'000; ++j)
         bytes += out.sent[j].second + head;
       EXPECT_LE(bytes, rate + biggest) << "interval starting at frame " << i;
     }
@@ -179,7 +187,8 @@ static void check_pace(const std::string& name, size_t overhead) {
     double secs = static_cast<double>(out.sent.back().first - out.sent.front().first) / 1e9;
     if (!live_period) {
       // Nothing else on the link: the whole run takes what the rate allows.
-      EXPECT_NEAR(secs, static_cast<double>(total) / rate, 0.1 * static_cast<double>(total) / rate + 0.5);
+      EXPECT_NEAR(secs, static_cast<double>(total) / rate,
+                  0.1 * static_cast<double>(total) / rate + 0.5);
       continue;
     }
     // Live slots every 250 ms: no slower than what the rate allows plus the guards' gaps.
@@ -251,7 +260,8 @@ TEST(BackfillSender, RefusesAWrongTypeAndCancels) {
   reply.clear();
   s.on_cancel(5, reply);
   EXPECT_EQ(s.active(), 0u);
-  EXPECT_EQ(std::get<bf::End>(bf::decode(*link::split_frame(reply))).status, bf::EndStatus::Cancelled);
+  EXPECT_EQ(std::get<bf::End>(bf::decode(*link::split_frame(reply))).status,
+            bf::EndStatus::Cancelled);
 }
 
 TEST(BackfillSender, FramesFitTheDatagramLinksPacket) {

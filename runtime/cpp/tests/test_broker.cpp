@@ -2,8 +2,8 @@
 // CONFIG, DATA through the link output, and the archive at shutdown.
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <thread>
 
@@ -36,7 +36,9 @@ struct TempDirs {
 
 BrokerConfig test_config(const std::string& name) {
   BrokerConfig c;
-  c.archive_dir = (std::filesystem::temp_directory_path() / ("modd-broker-" + name + std::to_string(getpid()))).string();
+  c.archive_dir =
+      (std::filesystem::temp_directory_path() / ("modd-broker-" + name + std::to_string(getpid())))
+          .string();
   std::filesystem::remove_all(c.archive_dir);
   temp_dirs.dirs.push_back(c.archive_dir);
   c.topics = {{"usv.x", ValueType::Float32, 4}, {"usv.n", ValueType::Int, 0}};
@@ -47,7 +49,8 @@ BrokerConfig test_config(const std::string& name) {
   return c;
 }
 
-std::vector<uint8_t> publisher_bytes(const std::vector<ingress::Register>& regs, const std::vector<ingress::Record>& recs) {
+std::vector<uint8_t> publisher_bytes(const std::vector<ingress::Register>& regs,
+                                     const std::vector<ingress::Record>& recs) {
   std::vector<uint8_t> b;
   ingress::encode_hello(b, {ingress::kVersion, "p"});
   for (const auto& r : regs) ingress::encode_register(b, r);
@@ -83,8 +86,8 @@ TEST(Broker, RejectionsAreCountedByReason) {
                                          {1, ValueType::Float32, "usv.unknown"},
                                          {2, ValueType::Float64, "usv.n"}};
   std::vector<ingress::Record> recs = {
-      {0, 100, 1.0, 0},  {0, 200, NAN, 0},   {0, 50, 2.0, 0},  // out of order: accepted
-      {1, 300, 1.0, 0},  {2, 300, 1.0, 0},   {0, 200, INFINITY, 0}, {0, 200, 3.0, 0}};
+      {0, 100, 1.0, 0}, {0, 200, NAN, 0}, {0, 50, 2.0, 0},  // out of order: accepted
+      {1, 300, 1.0, 0}, {2, 300, 1.0, 0}, {0, 200, INFINITY, 0}, {0, 200, 3.0, 0}};
   ASSERT_TRUE(s.on_bytes(publisher_bytes(regs, recs)));
   Counters& c = b.counters();
   EXPECT_EQ(c.samples_in, 7u);
@@ -126,7 +129,8 @@ TEST(Broker, ConfigThenDataFramesFromStampedSamples) {
   // Stamped exactly at the boundary: belongs to the next window.
   clock.set(E + 250 * kMs);
   std::vector<uint8_t> more;
-  ingress::encode_samples(more, std::vector<ingress::Record>{{0, 3, 100.0, 0}}, [](uint32_t) { return ValueType::Float32; });
+  ingress::encode_samples(more, std::vector<ingress::Record>{{0, 3, 100.0, 0}},
+                          [](uint32_t) { return ValueType::Float32; });
   ASSERT_TRUE(s.on_bytes(more));
   ASSERT_EQ(link.writes.size(), 1u);
   std::vector<ValueKind> k1 = {value_kind(ValueType::Float32, Aggregation::Max)};
@@ -184,7 +188,8 @@ TEST(Broker, TopicsAddedByConfigAreAcceptedFromEarlierRegistrations) {
   c.topics = {{"usv.late", ValueType::Float64, 2, 0}};
   b.on_config(c);
   std::vector<uint8_t> more;
-  ingress::encode_samples(more, std::vector<ingress::Record>{{0, 2, 2.0, 0}}, [](uint32_t) { return ValueType::Float64; });
+  ingress::encode_samples(more, std::vector<ingress::Record>{{0, 2, 2.0, 0}},
+                          [](uint32_t) { return ValueType::Float64; });
   ASSERT_TRUE(s.on_bytes(more));
   EXPECT_EQ(b.counters().accepted, 1u);
 }
@@ -232,7 +237,8 @@ TEST(Broker, InstrumentHealthRidesInStatusWhileItsPublisherIsConnected) {
   ingress::encode_health(unplugged, {{"gnss", {1, 13, 3, 1}}, {"ctd", {0, 6}}});
   ASSERT_TRUE(s->on_bytes(unplugged));
   ASSERT_EQ(link.writes.size(), 1u);
-  EXPECT_EQ(std::get<Status>(decode(*split_frame(link.writes[0]))).sensors[0], (SensorHealth{"ctd", {0, 6}}));
+  EXPECT_EQ(std::get<Status>(decode(*split_frame(link.writes[0]))).sensors[0],
+            (SensorHealth{"ctd", {0, 6}}));
   std::vector<uint8_t> counts_only;  // counters alone change: no STATUS of its own
   ingress::encode_health(counts_only, {{"gnss", {1, 14, 3, 1}}, {"ctd", {0, 6}}});
   ASSERT_TRUE(s->on_bytes(counts_only));
@@ -259,7 +265,8 @@ TEST(Broker, VanishingPublisherAndFullQueueAreCounted) {
   EXPECT_EQ(b.counters().rej(Reject::Overflow), 3u);
   // Half a SAMPLES frame of 4 records, then the publisher is gone.
   std::vector<uint8_t> more;
-  ingress::encode_samples(more, std::span(recs).first(4), [](uint32_t) { return ValueType::Float32; });
+  ingress::encode_samples(more, std::span(recs).first(4),
+                          [](uint32_t) { return ValueType::Float32; });
   more.resize(more.size() / 2);
   ASSERT_TRUE(s.on_bytes(more));
   EXPECT_TRUE(s.on_close());
@@ -304,7 +311,8 @@ TEST(Broker, AFarFutureSampleIsRefusedAloneAndThePublisherToldWhy) {
   Broker b(cfg, "key", clock, link);
   IngressSession s(b);
   int64_t now = clock.now_ns();
-  std::vector<ingress::Record> recs = {{0, 4'354'000'000'000'000'000, 1.0, 0}};  // 2107: a driver's unit error
+  std::vector<ingress::Record> recs = {
+      {0, 4'354'000'000'000'000'000, 1.0, 0}};  // 2107: a driver's unit error
   for (int i = 0; i < 20; ++i) recs.push_back({0, now - (20 - i) * kMs, 1.0 * i, 0});
   recs.push_back({0, now - 2 * 3'600'000 * kMs, 9.0, 0});  // two hours old
   ASSERT_TRUE(s.on_bytes(publisher_bytes({{0, ValueType::Float32, "usv.x"}}, recs)));
@@ -323,7 +331,8 @@ TEST(Broker, AFarFutureSampleIsRefusedAloneAndThePublisherToldWhy) {
   ASSERT_EQ(r.rejects.size(), 1u);
   EXPECT_EQ(r.rejects[0].reason, static_cast<uint8_t>(Reject::Timestamp));
   EXPECT_EQ(r.rejects[0].count, 2u);
-  EXPECT_NE(r.rejects[0].detail.find("ahead of the broker clock"), std::string::npos) << r.rejects[0].detail;
+  EXPECT_NE(r.rejects[0].detail.find("ahead of the broker clock"), std::string::npos)
+      << r.rejects[0].detail;
   ASSERT_EQ(r.acks.size(), 1u);
   EXPECT_EQ(r.acks[0].received, 22u);
   EXPECT_EQ(r.acks[0].settled, 22u);
@@ -352,7 +361,8 @@ TEST(Broker, AClockJumpingBackBlocksNothing) {
   clock.set(after);
   std::vector<ingress::Record> later;
   for (int i = 0; i < 10; ++i) later.push_back({0, after + i * kMs, 10.0 + i, 0});
-  later.push_back({0, before + 60'000 * kMs, 99.0, 0});  // a minute ahead of the old time: 2 h ahead now
+  later.push_back(
+      {0, before + 60'000 * kMs, 99.0, 0});  // a minute ahead of the old time: 2 h ahead now
   std::vector<uint8_t> bytes;
   ingress::encode_samples(bytes, later, [](uint32_t) { return ValueType::Float32; });
   ASSERT_TRUE(s.on_bytes(bytes));
@@ -367,7 +377,8 @@ TEST(Broker, AFloodingPublisherLosesOnlyItsOwnSamples) {
   FakeLink link;
   BrokerConfig cfg = test_config("flood");
   cfg.queue_limit_samples = 100;
-  cfg.topics = {{"usv.a", ValueType::Float32, 1000}, {"usv.b", ValueType::Float32, 1000}};  // never swapped
+  cfg.topics = {{"usv.a", ValueType::Float32, 1000},
+                {"usv.b", ValueType::Float32, 1000}};  // never swapped
   Broker b(cfg, "key", clock, link);
   IngressSession flooder(b), calm(b);
   b.counters().publishers_connected = 2;

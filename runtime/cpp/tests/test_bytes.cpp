@@ -7,8 +7,9 @@
 using namespace modd;
 
 TEST(Bytes, VarintRoundTripAndSizes) {
-  for (uint64_t v : std::initializer_list<uint64_t>{0, 1, 127, 128, 300, 16383, 16384, (1ull << 35) + 7,
-                     std::numeric_limits<uint64_t>::max()}) {
+  for (uint64_t v :
+       std::initializer_list<uint64_t>{0, 1, 127, 128, 300, 16383, 16384, (1ull << 35) + 7,
+                                       std::numeric_limits<uint64_t>::max()}) {
     std::vector<uint8_t> b;
     ByteWriter w(b);
     w.varint(v);
@@ -20,8 +21,8 @@ TEST(Bytes, VarintRoundTripAndSizes) {
 }
 
 TEST(Bytes, ZigZag) {
-  for (int64_t v : {int64_t{0}, int64_t{-1}, int64_t{1}, int64_t{-70000}, std::numeric_limits<int64_t>::min(),
-                    std::numeric_limits<int64_t>::max()})
+  for (int64_t v : {int64_t{0}, int64_t{-1}, int64_t{1}, int64_t{-70000},
+                    std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max()})
     EXPECT_EQ(zigzag_decode(zigzag_encode(v)), v);
   EXPECT_EQ(zigzag_encode(-1), 1u);
   EXPECT_EQ(zigzag_encode(1), 2u);

@@ -10,9 +10,7 @@ namespace {
 std::string error_of(const std::string& json) {
   try {
     parse_config(json, "f.json");
-  } catch (const Error& e) {
-    return e.what();
-  }
+  } catch (const Error& e) { return e.what(); }
   return "";
 }
 }  // namespace
@@ -26,7 +24,8 @@ TEST(Config, ParsesEveryKey) {
                 "compression": "lz4", "chunk_bytes": 4096, "flush_interval_ms": 500, "queue_limit_samples": 99},
     "topics": [{"name": "usv.a.x", "type": "float64", "buffer_size": 28}, {"name": "usv.a.y"}],
     "default_buffer_size": 7, "accept_unknown_topics": true, "status_period_s": 5, "log_period_s": 0
-  })", "t");
+  })",
+                        "t");
   EXPECT_EQ(c.link_port, 7171);
   EXPECT_EQ(c.key_ref, "env:K");
   EXPECT_EQ(c.ingress_port, 7373);
@@ -40,15 +39,21 @@ TEST(Config, ParsesEveryKey) {
 }
 
 TEST(Config, ErrorsNameTheFileAndPointer) {
-  std::string base = R"("link": {"key": "env:K"}, "ingress": {"port": 1}, "archive": {"dir": "/tmp/a"})";
+  std::string base =
+      R"("link": {"key": "env:K"}, "ingress": {"port": 1}, "archive": {"dir": "/tmp/a"})";
   EXPECT_EQ(error_of("{" + base + "}"), "");
-  EXPECT_NE(error_of("{" + base + R"(, "bogus": 1})").find("f.json: /bogus: unknown key"), std::string::npos);
-  EXPECT_NE(error_of(R"({"link": {}, "ingress": {"port": 1}, "archive": {"dir": "/a"}})").find("/link/key"),
+  EXPECT_NE(error_of("{" + base + R"(, "bogus": 1})").find("f.json: /bogus: unknown key"),
             std::string::npos);
-  EXPECT_NE(error_of("{" + base + R"(, "topics": [{"name": "a", "type": "float16"}]})").find("/topics/0/type"),
+  EXPECT_NE(error_of(R"({"link": {}, "ingress": {"port": 1}, "archive": {"dir": "/a"}})")
+                .find("/link/key"),
             std::string::npos);
-  EXPECT_NE(error_of(R"({"link": {"key": "env:K", "port": 70000}, "ingress": {"port": 1}, "archive": {"dir": "/a"}})")
-                .find("/link/port"),
+  EXPECT_NE(error_of("{" + base + R"(, "topics": [{"name": "a", "type": "float16"}]})")
+                .find("/topics/0/type"),
             std::string::npos);
+  EXPECT_NE(
+      error_of(
+          R"({"link": {"key": "env:K", "port": 70000}, "ingress": {"port": 1}, "archive": {"dir": "/a"}})")
+          .find("/link/port"),
+      std::string::npos);
   EXPECT_NE(error_of("{ nope").find("f.json"), std::string::npos);
 }

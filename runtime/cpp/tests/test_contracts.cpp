@@ -54,7 +54,8 @@ TEST(Contracts, SubscriberParsesEveryDeliveredValue) {
     EXPECT_EQ(d.present, !samples.empty()) << c["name"];
     if (doc["value"].is_array()) {
       ASSERT_EQ(d.values.size(), samples.size()) << c["name"];
-      for (size_t i = 0; i < samples.size(); ++i) EXPECT_DOUBLE_EQ(d.values[i], samples[i][1].get<double>());
+      for (size_t i = 0; i < samples.size(); ++i)
+        EXPECT_DOUBLE_EQ(d.values[i], samples[i][1].get<double>());
     } else if (!samples.empty()) {
       EXPECT_DOUBLE_EQ(d.value, samples[0][1].get<double>()) << c["name"];
     }
@@ -107,7 +108,8 @@ TEST(Contracts, ArchiverWritesEveryArchiveRecord) {
   ASSERT_FALSE(v["records"].empty());
   for (const auto& c : v["channels"]) {
     auto t = value_type(c["type"].get<std::string>());
-    EXPECT_EQ(modd::archive::sample_json_schema(t), c["schema_data"].get<std::string>()) << c["type"];
+    EXPECT_EQ(modd::archive::sample_json_schema(t), c["schema_data"].get<std::string>())
+        << c["type"];
     EXPECT_EQ(std::string(modd::archive_record::kSchemaPrefix) + modd::link::value_type_name(t),
               c["schema_name"].get<std::string>());
     EXPECT_EQ(modd::archive_record::kSchemaEncoding, c["schema_encoding"].get<std::string>());
@@ -115,25 +117,29 @@ TEST(Contracts, ArchiverWritesEveryArchiveRecord) {
   }
   for (const auto& c : v["records"]) {
     std::string out;
-    modd::archive::format_sample_json(out, value_type(c["type"].get<std::string>()), sample_of(c["value"]));
+    modd::archive::format_sample_json(out, value_type(c["type"].get<std::string>()),
+                                      sample_of(c["value"]));
     EXPECT_EQ(out, c["data"].get<std::string>()) << c["name"];
   }
 }
 
 TEST(Contracts, ArchiveReaderReadsEveryArchiveRecord) {
   json v = vectors("archive_record");
-  auto dir = std::filesystem::temp_directory_path() / ("modd-contracts-" + std::to_string(::getpid()));
+  auto dir =
+      std::filesystem::temp_directory_path() / ("modd-contracts-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   for (const auto& c : v["records"]) {
     std::string name = c["name"].get<std::string>();
     auto t = value_type(c["type"].get<std::string>());
     std::string data = c["data"].get<std::string>();
     {
-      modd::archive::McapWriter w((dir / (name + "-0.mcap")).string(), modd::archive::WriterOptions{});
+      modd::archive::McapWriter w((dir / (name + "-0.mcap")).string(),
+                                  modd::archive::WriterOptions{});
       uint16_t schema = w.add_schema("modd." + c["type"].get<std::string>(), "jsonschema",
                                      modd::archive::sample_json_schema(t));
       uint16_t ch = w.add_channel(schema, "d.s." + name, "json");
-      w.add_message(ch, 0, 5, 5, std::span(reinterpret_cast<const uint8_t*>(data.data()), data.size()));
+      w.add_message(ch, 0, 5, 5,
+                    std::span(reinterpret_cast<const uint8_t*>(data.data()), data.size()));
       w.close();
     }
     modd::archive::TopicReader r(dir.string(), name, "d.s." + name, t);
@@ -145,8 +151,9 @@ TEST(Contracts, ArchiveReaderReadsEveryArchiveRecord) {
     } else if (std::isnan(want.number)) {
       EXPECT_TRUE(std::isnan(got->number)) << name;
     } else {
-      double expect = t == modd::link::ValueType::Float32 ? static_cast<double>(static_cast<float>(want.number))
-                                                          : want.number;
+      double expect = t == modd::link::ValueType::Float32
+                          ? static_cast<double>(static_cast<float>(want.number))
+                          : want.number;
       EXPECT_EQ(got->number, expect) << name;
     }
   }

@@ -128,9 +128,7 @@ TEST(Datagram, RandomBytesNeverVerify) {
       verify_data(raw, key, kDroneToBase, 70000);
       ADD_FAILURE() << "random bytes verified: " << to_hex(raw);
     } catch (const Forged&) {
-    } catch (const Error& e) {
-      EXPECT_EQ(e.code(), ErrorCode::BadFrame);
-    }
+    } catch (const Error& e) { EXPECT_EQ(e.code(), ErrorCode::BadFrame); }
   }
 }
 
@@ -156,7 +154,8 @@ TEST(Datagram, FragmentVectorsVerifyAndEncodeBack) {
   for (bool p : c["presence"]) presence.push_back(p);
   auto body = slot_bitmap_body(presence, from_hex(c["values"].get<std::string>()));
   EXPECT_EQ(to_hex(body), c["body"].get<std::string>());
-  auto frags = encode_fragments(1, c["slot"].get<uint64_t>(), body, c["max_datagram"].get<size_t>(), key, kDroneToBase);
+  auto frags = encode_fragments(1, c["slot"].get<uint64_t>(), body, c["max_datagram"].get<size_t>(),
+                                key, kDroneToBase);
   ASSERT_EQ(frags.size(), c["fragments"].size());
   std::vector<uint8_t> whole;
   for (size_t i = 0; i < frags.size(); ++i) {
@@ -168,7 +167,8 @@ TEST(Datagram, FragmentVectorsVerifyAndEncodeBack) {
     whole.insert(whole.end(), f.piece.begin(), f.piece.end());
   }
   EXPECT_EQ(whole, body);
-  EXPECT_THROW(encode_fragments(1, 5, std::vector<uint8_t>(17 * 11), 20, key, kDroneToBase), std::invalid_argument);
+  EXPECT_THROW(encode_fragments(1, 5, std::vector<uint8_t>(17 * 11), 20, key, kDroneToBase),
+               std::invalid_argument);
 }
 
 TEST(Datagram, InvalidFragmentsAreRefused) {
@@ -186,9 +186,7 @@ TEST(Datagram, InvalidFragmentsAreRefused) {
       try {
         verify_fragment(raw, key, dir(c), expected);
         ADD_FAILURE() << c["name"];
-      } catch (const Error& e) {
-        EXPECT_EQ(e.code(), ErrorCode::BadFrame);
-      }
+      } catch (const Error& e) { EXPECT_EQ(e.code(), ErrorCode::BadFrame); }
     }
   }
   EXPECT_EQ(seen, 2);
@@ -200,7 +198,8 @@ TEST(Datagram, ControlFragmentVectorsVerifyAndEncodeBack) {
   const auto& c = by_name(v, "control_fragments_of_a_config");
   auto frames = from_hex(c["frames"].get<std::string>());
   uint64_t counter = c["counter"].get<uint64_t>();
-  auto frags = encode_control_fragments(counter, frames, c["max_datagram"].get<size_t>(), key, kBaseToDrone);
+  auto frags =
+      encode_control_fragments(counter, frames, c["max_datagram"].get<size_t>(), key, kBaseToDrone);
   ASSERT_EQ(frags.size(), c["fragments"].size());
   ASSERT_GT(frags.size(), 1u);
   ControlPieces pieces;
@@ -218,7 +217,8 @@ TEST(Datagram, ControlFragmentVectorsVerifyAndEncodeBack) {
   }
   ASSERT_TRUE(whole.has_value());
   EXPECT_EQ(*whole, frames);
-  EXPECT_THROW(encode_control_fragments(1, std::vector<uint8_t>(17 * 10), 25, key, kBaseToDrone), std::invalid_argument);
+  EXPECT_THROW(encode_control_fragments(1, std::vector<uint8_t>(17 * 10), 25, key, kBaseToDrone),
+               std::invalid_argument);
 }
 
 TEST(Datagram, InvalidControlFragmentsAreRefused) {
@@ -250,13 +250,16 @@ TEST(Datagram, ControlPiecesAreBoundedAndRefuseAChangedCount) {
   for (size_t i = 0; i < frames.size(); ++i) frames[i] = static_cast<uint8_t>(i);
   ControlPieces pieces;
   std::vector<std::vector<std::vector<uint8_t>>> messages;
-  for (uint64_t k = 1; k <= 6; ++k) messages.push_back(encode_control_fragments(100 * k, frames, 60, key, kBaseToDrone));
-  for (auto& m : messages) EXPECT_FALSE(pieces.add(verify_control_fragment(m[0], key, kBaseToDrone)));
-  EXPECT_EQ(pieces.given_up(), 2u);  // the oldest two
+  for (uint64_t k = 1; k <= 6; ++k)
+    messages.push_back(encode_control_fragments(100 * k, frames, 60, key, kBaseToDrone));
+  for (auto& m : messages)
+    EXPECT_FALSE(pieces.add(verify_control_fragment(m[0], key, kBaseToDrone)));
+  EXPECT_EQ(pieces.given_up(), 2u);                // the oldest two
   for (size_t i = 1; i < messages[0].size(); ++i)  // the rest of a message given up: never whole
     EXPECT_FALSE(pieces.add(verify_control_fragment(messages[0][i], key, kBaseToDrone)));
   std::optional<std::vector<uint8_t>> done;
-  for (size_t i = 1; i < messages[5].size(); ++i) done = pieces.add(verify_control_fragment(messages[5][i], key, kBaseToDrone));
+  for (size_t i = 1; i < messages[5].size(); ++i)
+    done = pieces.add(verify_control_fragment(messages[5][i], key, kBaseToDrone));
   ASSERT_TRUE(done.has_value());
   EXPECT_EQ(*done, frames);
   auto other = encode_control_fragments(500, std::vector<uint8_t>(300), 60, key, kBaseToDrone);

@@ -43,7 +43,9 @@ struct Out : DatagramOut {
 };
 
 const std::string kPsk = "psk";
-std::span<const uint8_t> psk() { return {reinterpret_cast<const uint8_t*>(kPsk.data()), kPsk.size()}; }
+std::span<const uint8_t> psk() {
+  return {reinterpret_cast<const uint8_t*>(kPsk.data()), kPsk.size()};
+}
 
 template <typename T>
 std::vector<uint8_t> hs(const T& m) {
@@ -60,7 +62,8 @@ Message answer(const std::vector<uint8_t>& d) {
 struct Session {
   Hooks hooks;
   Out out;
-  DatagramLink link{kPsk, hooks, out, DgramOptions{200, 1'000'000'000, 5'000'000'000, 256, 65536}, Mac{}};
+  DatagramLink link{kPsk, hooks, out, DgramOptions{200, 1'000'000'000, 5'000'000'000, 256, 65536},
+                    Mac{}};
   Mac key{};
   uint64_t counter = 0;
 
@@ -101,7 +104,8 @@ TEST(DgramLink, RepeatedHelloGetsTheSameChallengeAndAuthOpensTheSession) {
   c.fill(9);
   s.link.on_datagram(hs(Hello{kVersion, c}), 0);
   s.link.on_datagram(hs(Hello{kVersion, c}), 1);
-  EXPECT_EQ(std::get<Challenge>(answer(s.out.sent[0])).nonce, std::get<Challenge>(answer(s.out.sent[1])).nonce);
+  EXPECT_EQ(std::get<Challenge>(answer(s.out.sent[0])).nonce,
+            std::get<Challenge>(answer(s.out.sent[1])).nonce);
   EXPECT_FALSE(s.link.ready());
   s.link.on_datagram(hs(Auth{Mac{}}), 2);  // a wrong proof
   EXPECT_FALSE(s.link.ready());
@@ -275,7 +279,8 @@ TEST(DgramLink, AConfigCutIntoControlFragmentsIsAppliedOnce) {
   Config cfg;
   cfg.config_id = 4;
   for (uint32_t i = 0; i < 20; ++i) {
-    cfg.topics.push_back(TopicSpec{"usv.accelerometer.accel_" + std::to_string(i), ValueType::Float32, 28, 10'000});
+    cfg.topics.push_back(
+        TopicSpec{"usv.accelerometer.accel_" + std::to_string(i), ValueType::Float32, 28, 10'000});
     cfg.streams.push_back(StreamSpec{i, Aggregation::Average, 250'000});
   }
   std::vector<uint8_t> frame;
@@ -290,7 +295,7 @@ TEST(DgramLink, AConfigCutIntoControlFragmentsIsAppliedOnce) {
   EXPECT_EQ(s.link.counters().forged, 1u);
   size_t before = s.out.sent.size();
   for (size_t k = pieces.size(); k-- > 1;) s.link.on_datagram(pieces[k], 2);
-  EXPECT_EQ(s.hooks.configs, 0);  // piece 0 still missing
+  EXPECT_EQ(s.hooks.configs, 0);     // piece 0 still missing
   s.link.on_datagram(pieces[2], 3);  // a replay
   EXPECT_EQ(s.link.counters().replayed, 1u);
   s.link.on_datagram(pieces[0], 4);
@@ -319,7 +324,8 @@ TEST(DgramLink, ALargeControlMessageGoesAsControlFragments) {
   bf::encode(cancel, bf::Message{bf::Cancel{7}});
   size_t before = s.out.sent.size();
   s.link.on_datagram(s.control(cancel), 1);
-  std::vector<std::vector<uint8_t>> frags(s.out.sent.begin() + static_cast<std::ptrdiff_t>(before), s.out.sent.end());
+  std::vector<std::vector<uint8_t>> frags(s.out.sent.begin() + static_cast<std::ptrdiff_t>(before),
+                                          s.out.sent.end());
   ASSERT_GE(frags.size(), 3u);
   dg::ControlPieces pieces;
   std::optional<std::vector<uint8_t>> whole;
@@ -355,7 +361,8 @@ TEST(DgramLink, QuantisedSlotsChainWithinADatagramOnly) {
       encode_slot_values(out, std::vector<Value>{v}, kinds, ids, chain);
       return out;
     };
-    s.link.add_slot(1, k, static_cast<int64_t>(k + 1) * q, std::move(alone), {true}, std::move(enc));
+    s.link.add_slot(1, k, static_cast<int64_t>(k + 1) * q, std::move(alone), {true},
+                    std::move(enc));
     s.link.tick(static_cast<int64_t>(k + 1) * q);
   }
   s.link.tick(20 * q);

@@ -24,14 +24,17 @@ Config scenario1(uint8_t id) {
   Config c;
   c.config_id = id;
   for (const char* n : {"x", "y", "z"}) c.topics.push_back({n, ValueType::Float32, 28, 40000});
-  c.streams = {{0, Aggregation::Average, 250000}, {1, Aggregation::Average, 250000},
-               {2, Aggregation::Min, 250000}, {2, Aggregation::Max, 250000}};
+  c.streams = {{0, Aggregation::Average, 250000},
+               {1, Aggregation::Average, 250000},
+               {2, Aggregation::Min, 250000},
+               {2, Aggregation::Max, 250000}};
   return c;
 }
 
 std::vector<ValueKind> kinds(const Config& c, const std::vector<uint32_t>& ids) {
   std::vector<ValueKind> k;
-  for (uint32_t i : ids) k.push_back(value_kind(c.topics[c.streams[i].topic].type, c.streams[i].aggregation));
+  for (uint32_t i : ids)
+    k.push_back(value_kind(c.topics[c.streams[i].topic].type, c.streams[i].aggregation));
   return k;
 }
 
@@ -116,10 +119,10 @@ TEST(Executor, NewConfigSwitchesAtTheNextSlotWithoutLosingSamples) {
   ex.on_sample(0, 1.0, 0);
   auto epoch2 = ex.apply(c2, kGlobals, E + 100 * kMs);
   ASSERT_TRUE(epoch2);
-  EXPECT_EQ(*epoch2, E + 250 * kMs);       // at the running config's next slot
+  EXPECT_EQ(*epoch2, E + 250 * kMs);                    // at the running config's next slot
   EXPECT_FALSE(ex.apply(c2, kGlobals, E + 120 * kMs));  // one at a time: BUSY
-  ex.on_sample(0, 3.0, 0);                 // still the old config's window
-  ex.advance(E + 250 * kMs, sink);         // old slot fires, then the switch
+  ex.on_sample(0, 3.0, 0);                              // still the old config's window
+  ex.advance(E + 250 * kMs, sink);                      // old slot fires, then the switch
   EXPECT_EQ(ex.config_id(), 2);
   EXPECT_EQ(ex.epoch_ns(), E + 250 * kMs);
   ex.on_sample(0, 9.0, 0);

@@ -17,7 +17,10 @@ struct Collect : Handler {
   void on_register(const Register& r) override { regs.push_back(r); }
   bool type_of(uint32_t id, ValueType& t) const override {
     for (const auto& r : regs)
-      if (r.local_id == id) { t = r.type; return true; }
+      if (r.local_id == id) {
+        t = r.type;
+        return true;
+      }
     return false;
   }
   void on_record(const Record& r) override { recs.push_back(r); }
@@ -40,7 +43,8 @@ TEST(Ingress, RoundTripOfEveryType) {
   encode_register(b, {1, ValueType::Float64, "b"});
   encode_register(b, {2, ValueType::Int, "c"});
   encode_register(b, {3, ValueType::Bool, "d"});
-  std::vector<Record> rs = {{0, 10, 1.5, 0}, {1, 11, 1e-300, 0}, {2, 12, 0, -5}, {3, 13, 0, 1}, {0, -1, -0.25, 0}};
+  std::vector<Record> rs = {
+      {0, 10, 1.5, 0}, {1, 11, 1e-300, 0}, {2, 12, 0, -5}, {3, 13, 0, 1}, {0, -1, -0.25, 0}};
   ValueType types[] = {ValueType::Float32, ValueType::Float64, ValueType::Int, ValueType::Bool};
   encode_samples(b, rs, [&](uint32_t id) { return types[id]; });
   Collect c;
@@ -75,11 +79,11 @@ TEST(Ingress, UnregisteredIdIsAnErrorWithRecordsLeft) {
 TEST(Ingress, RejectsBadFrames) {
   Collect c;
   std::vector<std::vector<uint8_t>> bad = {
-      {0x02, 0x01, 0x07},                     // HELLO version 7
-      {0x04, 0x02, 0x00, 0x09, 0x00},         // REGISTER type 9
-      {0x04, 0x02, 0x00, 0x00, 0x00},         // REGISTER with an empty name
-      {0x03, 0x03, 0x7F, 0x00},               // SAMPLES announcing 127 records in 1 byte
-      {0x01, 0x09},                           // unknown type
+      {0x02, 0x01, 0x07},              // HELLO version 7
+      {0x04, 0x02, 0x00, 0x09, 0x00},  // REGISTER type 9
+      {0x04, 0x02, 0x00, 0x00, 0x00},  // REGISTER with an empty name
+      {0x03, 0x03, 0x7F, 0x00},        // SAMPLES announcing 127 records in 1 byte
+      {0x01, 0x09},                    // unknown type
   };
   for (const auto& b : bad) {
     auto f = split_frame(b);
@@ -95,19 +99,25 @@ TEST(IngressVectors, RepliesDecodeAndEncodeByteForByte) {
   auto vectors = nlohmann::json::parse(f);
   struct H : modd::ingress::ReplyHandler {
     std::vector<uint8_t> again;
-    void on_catalogue(const modd::ingress::Catalogue& c) override { modd::ingress::encode_catalogue(again, c); }
+    void on_catalogue(const modd::ingress::Catalogue& c) override {
+      modd::ingress::encode_catalogue(again, c);
+    }
     void on_ack(const modd::ingress::Ack& a) override { modd::ingress::encode_ack(again, a); }
-    void on_reject(const modd::ingress::RejectMsg& r) override { modd::ingress::encode_reject(again, r); }
+    void on_reject(const modd::ingress::RejectMsg& r) override {
+      modd::ingress::encode_reject(again, r);
+    }
   };
   size_t n = 0;
   for (const auto& v : vectors) {
     std::string hex = v["hex"];
     std::vector<uint8_t> wire;
-    for (size_t i = 0; i + 1 < hex.size(); i += 2) wire.push_back(static_cast<uint8_t>(std::stoi(hex.substr(i, 2), nullptr, 16)));
+    for (size_t i = 0; i + 1 < hex.size(); i += 2)
+      wire.push_back(static_cast<uint8_t>(std::stoi(hex.substr(i, 2), nullptr, 16)));
     const auto& m = v["message"];
     if (m["type"] == "HELLO") {
       std::vector<uint8_t> out;
-      modd::ingress::encode_hello(out, {static_cast<uint8_t>(m["version"].get<int>()), m["publisher"].get<std::string>()});
+      modd::ingress::encode_hello(
+          out, {static_cast<uint8_t>(m["version"].get<int>()), m["publisher"].get<std::string>()});
       EXPECT_EQ(out, wire);
       ++n;
       continue;

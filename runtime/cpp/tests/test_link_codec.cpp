@@ -26,8 +26,15 @@ TEST(LinkCodec, RoundTripEveryControlMessage) {
   c.status_period_s = 17;
   c.topics = {{"a.b.c", ValueType::Float64, 1000, 40000}, {"x", ValueType::Bool, 1, 0}};
   c.streams = {{0, Aggregation::Sum, 1}, {1, Aggregation::All, 2'000'000'000}};
-  std::vector<Message> msgs = {Hello{1, {1, 2, 3}}, Challenge{1, {9}}, Auth{{7}}, AuthOk{{1}, 3, 123456789},
-                               Ping{{1, 2, 3}}, Pong{{}}, c, ConfigAck{9, 0, 42}, Status{{0, 1, 300, 1ull << 40}},
+  std::vector<Message> msgs = {Hello{1, {1, 2, 3}},
+                               Challenge{1, {9}},
+                               Auth{{7}},
+                               AuthOk{{1}, 3, 123456789},
+                               Ping{{1, 2, 3}},
+                               Pong{{}},
+                               c,
+                               ConfigAck{9, 0, 42},
+                               Status{{0, 1, 300, 1ull << 40}},
                                Status{{5}, {{"gnss", {1, 2, 1ull << 40}}, {"ctd", {}}}},
                                ErrorMsg{3, "no"}};
   for (const auto& m : msgs) {

@@ -44,7 +44,9 @@ std::vector<uint8_t> enc(const T& m) {
 }
 
 const std::string kKey = "k3y";
-std::span<const uint8_t> key_bytes() { return {reinterpret_cast<const uint8_t*>(kKey.data()), kKey.size()}; }
+std::span<const uint8_t> key_bytes() {
+  return {reinterpret_cast<const uint8_t*>(kKey.data()), kKey.size()};
+}
 const Nonce kServerNonce = {5, 5, 5};
 
 }  // namespace
@@ -89,7 +91,8 @@ TEST(LinkSession, WrongKeyIsRejectedAndLogged) {
   s.on_bytes(enc(Hello{kVersion, cn}), out);
   out.clear();
   std::string wrong = "nope";
-  Mac bad = client_proof({reinterpret_cast<const uint8_t*>(wrong.data()), wrong.size()}, cn, kServerNonce);
+  Mac bad = client_proof({reinterpret_cast<const uint8_t*>(wrong.data()), wrong.size()}, cn,
+                         kServerNonce);
   EXPECT_FALSE(s.on_bytes(enc(Auth{bad}), out));
   auto e = std::get<ErrorMsg>(frames_of(out)[0]);
   EXPECT_EQ(e.code, static_cast<uint8_t>(ErrorCode::AuthFailed));
@@ -103,7 +106,8 @@ TEST(LinkSession, NothingBeforeTheHandshake) {
   std::vector<uint8_t> out;
   Config c;
   EXPECT_FALSE(s.on_bytes(enc(c), out));
-  EXPECT_EQ(std::get<ErrorMsg>(frames_of(out)[0]).code, static_cast<uint8_t>(ErrorCode::NotAuthenticated));
+  EXPECT_EQ(std::get<ErrorMsg>(frames_of(out)[0]).code,
+            static_cast<uint8_t>(ErrorCode::NotAuthenticated));
   EXPECT_EQ(h.configs, 0);
   Hooks h2;
   LinkSession s2(kKey, h2, [] { return kServerNonce; });
@@ -122,7 +126,8 @@ TEST(LinkSession, NothingBeforeTheHandshake) {
 // never through a final symlink; file:/dev/zero used to exhaust memory.
 TEST(KeyFile, RegularBoundedAndNoSymlink) {
   const std::string dir = ::testing::TempDir();
-  const std::string key = dir + "/modd_key_ok", big = dir + "/modd_key_big", lnk = dir + "/modd_key_lnk";
+  const std::string key = dir + "/modd_key_ok", big = dir + "/modd_key_big",
+                    lnk = dir + "/modd_key_lnk";
   { std::ofstream(key) << "a-secret-of-16-bytes\n"; }
   { std::ofstream(big) << std::string(100000, 'x'); }
   std::remove(lnk.c_str());

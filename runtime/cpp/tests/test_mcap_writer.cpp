@@ -27,7 +27,8 @@ struct TempDirs {
 } temp_dirs;
 
 std::string tmpdir(const std::string& name) {
-  auto p = std::filesystem::temp_directory_path() / ("modd-test-" + name + "-" + std::to_string(::getpid()));
+  auto p = std::filesystem::temp_directory_path() /
+           ("modd-test-" + name + "-" + std::to_string(::getpid()));
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
   temp_dirs.dirs.push_back(p);
@@ -53,7 +54,8 @@ const uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', 0x30, '\r', '\n'};
 TEST(Crc32, KnownValue) {
   const char* s = "123456789";
   EXPECT_EQ(crc32(0, std::span(reinterpret_cast<const uint8_t*>(s), 9)), 0xCBF43926u);
-  auto a = std::span(reinterpret_cast<const uint8_t*>(s), 4), b = std::span(reinterpret_cast<const uint8_t*>(s + 4), 5);
+  auto a = std::span(reinterpret_cast<const uint8_t*>(s), 4),
+       b = std::span(reinterpret_cast<const uint8_t*>(s + 4), 5);
   EXPECT_EQ(crc32(crc32(0, a), b), 0xCBF43926u);
 }
 
@@ -88,10 +90,11 @@ TEST_P(McapWriterTest, FileStructureAndCrcs) {
   {
     WriterOptions o;
     o.compression = GetParam();
-    o.chunk_bytes = 2000;  // several chunks
+    o.chunk_bytes = 2000;                               // several chunks
     o.message_index = GetParam() != Compression::None;  // both layouts, across the parameters
     McapWriter w(path, o);
-    uint16_t s = w.add_schema("modd.float32", "jsonschema", sample_json_schema(modd::link::ValueType::Float32));
+    uint16_t s = w.add_schema("modd.float32", "jsonschema",
+                              sample_json_schema(modd::link::ValueType::Float32));
     uint16_t c0 = w.add_channel(s, "a", "json");
     uint16_t c1 = w.add_channel(s, "b", "json");
     std::string js;
@@ -112,7 +115,8 @@ TEST_P(McapWriterTest, FileStructureAndCrcs) {
   uint64_t summary_start = rd<uint64_t>(b, footer + 9);
   uint32_t summary_crc = rd<uint32_t>(b, footer + 9 + 16);
   ASSERT_LT(summary_start, footer);
-  EXPECT_EQ(crc32(0, std::span(b.data() + summary_start, footer + 9 + 16 - summary_start)), summary_crc);
+  EXPECT_EQ(crc32(0, std::span(b.data() + summary_start, footer + 9 + 16 - summary_start)),
+            summary_crc);
   // Walk the data section: every chunk's records decompress to their CRC.
   size_t at = 8;
   int chunks = 0;
@@ -235,7 +239,8 @@ TEST(McapRecover, AFileCutByACrashKeepsItsCompleteChunksAndGetsASummary) {
     uint16_t ch = w.add_channel(s, "usv.x", "json", {{"type", "float32"}});
     std::string m = "{\"value\":1.5}";
     for (uint32_t i = 0; i < 200; ++i)
-      w.add_message(ch, i, 1000 + i, 900 + i, std::span(reinterpret_cast<const uint8_t*>(m.data()), m.size()));
+      w.add_message(ch, i, 1000 + i, 900 + i,
+                    std::span(reinterpret_cast<const uint8_t*>(m.data()), m.size()));
     flushed = w.flushed_messages();
     ASSERT_GT(flushed, 0u);
     ASSERT_LT(flushed, 200u);  // the last chunk is still open, as at a kill -9
@@ -263,9 +268,9 @@ TEST(McapWriter, AWriteErrorLosesNothingAndResumes) {
   McapWriter w("/dev/full", o);
   uint16_t ch = w.add_channel(0, "usv.x", "json");
   std::string m = "{\"value\":1}";
-  EXPECT_THROW(
-      for (uint32_t i = 0; i < 10; ++i) w.add_message(ch, i, i, i, std::span(reinterpret_cast<const uint8_t*>(m.data()), m.size())),
-      modd::Error);
+  EXPECT_THROW(for (uint32_t i = 0; i < 10; ++i) w.add_message(
+                   ch, i, i, i, std::span(reinterpret_cast<const uint8_t*>(m.data()), m.size())),
+               modd::Error);
   EXPECT_EQ(w.flushed_messages(), 0u);
   EXPECT_GT(w.pending_bytes(), 0u);
   uint64_t pending = w.pending_bytes();
@@ -287,8 +292,10 @@ TEST(McapRecover, AFileIsFinishedInPlaceAndAChunkWithoutAllItsIndexesGetsThemWri
     uint16_t a = w.add_channel(s, "usv.a", "json");
     uint16_t b = w.add_channel(s, "usv.b", "json");
     std::string m = "{\"value\":1.5}";
-    for (uint32_t i = 0; i < 200; ++i)  // both channels in every chunk: two Message Index records each
-      w.add_message(i % 2 ? a : b, i, 1000 + i, 900 + i, std::span(reinterpret_cast<const uint8_t*>(m.data()), m.size()));
+    for (uint32_t i = 0; i < 200;
+         ++i)  // both channels in every chunk: two Message Index records each
+      w.add_message(i % 2 ? a : b, i, 1000 + i, 900 + i,
+                    std::span(reinterpret_cast<const uint8_t*>(m.data()), m.size()));
     w.flush_chunk();
     flushed = w.flushed_messages();
     w.abandon();
@@ -300,7 +307,8 @@ TEST(McapRecover, AFileIsFinishedInPlaceAndAChunkWithoutAllItsIndexesGetsThemWri
   ASSERT_EQ(rs.size(), 1u);
   EXPECT_FALSE(rs[0].failed);
   EXPECT_FALSE(rs[0].rewritten);
-  EXPECT_EQ(rs[0].messages, flushed);  // the last chunk's data checks: kept, its indexes written again
+  EXPECT_EQ(rs[0].messages,
+            flushed);  // the last chunk's data checks: kept, its indexes written again
   auto after = slurp(path);
   uint64_t kept = before.size() - 10 - rs[0].dropped_bytes;
   // In place: the kept bytes are the original ones (up to the last chunk), then its indexes

@@ -7,9 +7,9 @@
 
 #include <cmath>
 #include <cstring>
-#include <thread>
 #include <filesystem>
 #include <map>
+#include <thread>
 
 #include "modd/client/publisher.hpp"
 #include "modd/ingress/codec.hpp"
@@ -76,11 +76,14 @@ void read_records(int fd, Sink& s, size_t want, int64_t until_ts = -1) {
 }  // namespace
 
 TEST(Publisher, SendsRegistrationsAndBatchesAndReconnects) {
-  std::string path = (std::filesystem::temp_directory_path() / ("modd-pub-" + std::to_string(getpid()) + ".sock")).string();
+  std::string path =
+      (std::filesystem::temp_directory_path() / ("modd-pub-" + std::to_string(getpid()) + ".sock"))
+          .string();
   Listener l(path);
   modd::Publisher pub("pub_1", "unix:" + path, {.connect_wait_ms = 100});
   pub.declare("usv.a.x", modd::ValueType::Float32);
-  for (int i = 0; i < 100; ++i) EXPECT_TRUE(pub.publish("usv.a.x", int64_t{i}, static_cast<float>(i) * 0.5f));
+  for (int i = 0; i < 100; ++i)
+    EXPECT_TRUE(pub.publish("usv.a.x", int64_t{i}, static_cast<float>(i) * 0.5f));
   EXPECT_TRUE(pub.publish("usv.a.n", int64_t{7}, -3));  // a plain int: an int topic
   int c = ::accept(l.fd, nullptr, nullptr);
   ASSERT_GE(c, 0);
@@ -114,7 +117,9 @@ TEST(Publisher, SendsRegistrationsAndBatchesAndReconnects) {
 }
 
 TEST(Publisher, QueueIsBoundedAndNeverBlocks) {
-  modd::Publisher pub("p", "unix:/nonexistent/dir/x.sock", {.queue_capacity = 10, .batch_max = 4, .reconnect_ms = 50, .connect_wait_ms = 0});
+  modd::Publisher pub(
+      "p", "unix:/nonexistent/dir/x.sock",
+      {.queue_capacity = 10, .batch_max = 4, .reconnect_ms = 50, .connect_wait_ms = 0});
   auto t0 = std::chrono::steady_clock::now();
   int ok = 0;
   for (int i = 0; i < 1000; ++i) ok += pub.publish("t", int64_t{i}, 1.0);
@@ -122,13 +127,16 @@ TEST(Publisher, QueueIsBoundedAndNeverBlocks) {
   auto st = pub.stats();
   EXPECT_EQ(st.published + st.dropped_queue_full, 1000u);
   EXPECT_LE(st.published, 14u);
-  EXPECT_FALSE(pub.publish("t", int64_t{5}, std::nan("")));  // refused at the call, before the queue
+  EXPECT_FALSE(
+      pub.publish("t", int64_t{5}, std::nan("")));  // refused at the call, before the queue
   EXPECT_EQ(pub.stats().dropped_bad_topic, 1u);
   EXPECT_EQ(pub.stats().refused_out_of_range, 1u);
 }
 
 TEST(Publisher, TheCatalogueRefusesAtTheCallAndResolvesShortNames) {
-  std::string path = (std::filesystem::temp_directory_path() / ("modd-pubc-" + std::to_string(getpid()) + ".sock")).string();
+  std::string path =
+      (std::filesystem::temp_directory_path() / ("modd-pubc-" + std::to_string(getpid()) + ".sock"))
+          .string();
   Listener l(path);
   int c = -1;
   std::thread broker([&] {
@@ -147,8 +155,9 @@ TEST(Publisher, TheCatalogueRefusesAtTheCallAndResolvesShortNames) {
     ASSERT_EQ(::write(c, out.data(), out.size()), static_cast<ssize_t>(out.size()));
   });
   std::vector<std::string> errors;
-  modd::Publisher pub("pub_1", "unix:" + path,
-                      {.on_error = [&](const std::string&, const std::string& why) { errors.push_back(why); }});
+  modd::Publisher pub(
+      "pub_1", "unix:" + path,
+      {.on_error = [&](const std::string&, const std::string& why) { errors.push_back(why); }});
   broker.join();
   ASSERT_GE(c, 0);
   timespec ts{};
@@ -157,17 +166,19 @@ TEST(Publisher, TheCatalogueRefusesAtTheCallAndResolvesShortNames) {
   // The paper's Listing 2: short name, a double on a float32 topic.
   double value = 9.81;
   EXPECT_TRUE(pub.publish("accel_z", now, value));
-  EXPECT_TRUE(pub.publish("accelerometer.accel_z", now, 1));    // an int on a float topic: converted
-  EXPECT_TRUE(pub.publish("count", now, 2.6));                    // rounded to 3
+  EXPECT_TRUE(pub.publish("accelerometer.accel_z", now, 1));  // an int on a float topic: converted
+  EXPECT_TRUE(pub.publish("count", now, 2.6));                // rounded to 3
   EXPECT_TRUE(pub.publish("fix", now, 1));
-  EXPECT_FALSE(pub.publish("fix", now, 2));                       // a bool takes 0 or 1
-  EXPECT_FALSE(pub.publish("accel_zz", now, 1.0));                // unknown
-  EXPECT_NE(pub.last_error().find("unknown topic 'accel_zz'"), std::string::npos) << pub.last_error();
-  EXPECT_NE(pub.last_error().find("usv.accelerometer.accel_z"), std::string::npos);  // says what exists
-  EXPECT_FALSE(pub.publish("temp", now, 1.0));                    // ambiguous
+  EXPECT_FALSE(pub.publish("fix", now, 2));         // a bool takes 0 or 1
+  EXPECT_FALSE(pub.publish("accel_zz", now, 1.0));  // unknown
+  EXPECT_NE(pub.last_error().find("unknown topic 'accel_zz'"), std::string::npos)
+      << pub.last_error();
+  EXPECT_NE(pub.last_error().find("usv.accelerometer.accel_z"),
+            std::string::npos);                 // says what exists
+  EXPECT_FALSE(pub.publish("temp", now, 1.0));  // ambiguous
   EXPECT_NE(pub.last_error().find("ambiguous"), std::string::npos);
-  EXPECT_FALSE(pub.publish("accel_z", now, 1e39));                // beyond float32
-  EXPECT_FALSE(pub.publish("count", now, uint64_t{1} << 63));     // beyond int64
+  EXPECT_FALSE(pub.publish("accel_z", now, 1e39));                         // beyond float32
+  EXPECT_FALSE(pub.publish("count", now, uint64_t{1} << 63));              // beyond int64
   EXPECT_FALSE(pub.publish("accel_z", now + 3'600'000'000'000'000, 1.0));  // an hour ahead
   auto st = pub.stats();
   EXPECT_EQ(st.published, 4u);

@@ -6,10 +6,10 @@
 #include <unistd.h>
 #include <zstd.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <algorithm>
 #include <optional>
 #include <set>
 #include <tuple>
@@ -25,7 +25,8 @@ namespace {
 using Bytes = std::vector<uint8_t>;
 
 std::string fresh_dir(const std::string& name) {
-  auto p = std::filesystem::temp_directory_path() / ("modd-recover-" + name + "-" + std::to_string(::getpid()));
+  auto p = std::filesystem::temp_directory_path() /
+           ("modd-recover-" + name + "-" + std::to_string(::getpid()));
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
   return p;
@@ -41,7 +42,8 @@ void spill(const std::string& path, const Bytes& b) {
   f.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
 }
 
-template <typename T> T rd(const Bytes& b, size_t at) {
+template <typename T>
+T rd(const Bytes& b, size_t at) {
   T v;
   std::memcpy(&v, b.data() + at, sizeof(T));
   return v;
@@ -75,13 +77,16 @@ std::vector<Record> records(const Bytes& b) {
 }
 
 // The messages (channel, log_time, offset) of the chunk record at `at` if its data checks.
-std::optional<std::vector<std::tuple<uint16_t, uint64_t, uint64_t>>> chunk_messages(const Bytes& b, size_t at,
-                                                                                     size_t size) {
-  if (at + size > b.size() || b[at] != 0x06 || rd<uint64_t>(b, at + 1) != size - 9) return std::nullopt;
+std::optional<std::vector<std::tuple<uint16_t, uint64_t, uint64_t>>> chunk_messages(const Bytes& b,
+                                                                                    size_t at,
+                                                                                    size_t size) {
+  if (at + size > b.size() || b[at] != 0x06 || rd<uint64_t>(b, at + 1) != size - 9)
+    return std::nullopt;
   uint64_t usize = rd<uint64_t>(b, at + 9 + 16);
   uint32_t crc = rd<uint32_t>(b, at + 9 + 24);
   uint32_t name = rd<uint32_t>(b, at + 9 + 28);
-  if (name != 4 || std::memcmp(&b[at + 9 + 32], "zstd", 4) != 0 || usize > (1u << 26)) return std::nullopt;
+  if (name != 4 || std::memcmp(&b[at + 9 + 32], "zstd", 4) != 0 || usize > (1u << 26))
+    return std::nullopt;
   uint64_t clen = rd<uint64_t>(b, at + 9 + 36);
   if (9 + 44 + clen != size) return std::nullopt;
   Bytes plain(usize);
@@ -90,7 +95,8 @@ std::optional<std::vector<std::tuple<uint16_t, uint64_t, uint64_t>>> chunk_messa
   std::vector<std::tuple<uint16_t, uint64_t, uint64_t>> msgs;
   for (size_t p = 0; p + 9 <= plain.size();) {
     uint64_t len = rd<uint64_t>(plain, p + 1);
-    if (plain[p] == 0x05) msgs.emplace_back(rd<uint16_t>(plain, p + 9), rd<uint64_t>(plain, p + 15), p);
+    if (plain[p] == 0x05)
+      msgs.emplace_back(rd<uint16_t>(plain, p + 9), rd<uint64_t>(plain, p + 15), p);
     p += 9 + len;
   }
   return msgs;
@@ -107,7 +113,8 @@ Bytes crashed_file(const std::string& dir) {
   uint16_t ch[3] = {w.add_channel(s, "usv.a", "json"), w.add_channel(s, "usv.b", "json"),
                     w.add_channel(s, "usv.c", "json")};
   for (uint32_t i = 0; i < 3000; ++i) {
-    std::string m = "{\"value\":" + std::to_string(i * 37 % 1001) + "." + std::to_string(i % 7) + "}";
+    std::string m =
+        "{\"value\":" + std::to_string(i * 37 % 1001) + "." + std::to_string(i % 7) + "}";
     w.add_message(ch[i % 3 == 2 ? 2 : i % 2], i, 1000 + i, 900 + i,
                   std::span(reinterpret_cast<const uint8_t*>(m.data()), m.size()));
   }
@@ -162,7 +169,8 @@ std::vector<std::pair<size_t, uint8_t>> flips(const Bytes& b, const std::vector<
   std::vector<std::pair<size_t, uint8_t>> out;
   size_t first = chunks.front();
   for (size_t k = 0; k < 19; ++k)
-    out.emplace_back(first + 1 + k * (b.size() - first - 2) / 18, static_cast<uint8_t>(1u << (k % 8)));
+    out.emplace_back(first + 1 + k * (b.size() - first - 2) / 18,
+                     static_cast<uint8_t>(1u << (k % 8)));
   auto after = [&](size_t chunk) {  // the first Message Index record after that chunk
     for (size_t at : indexes)
       if (at > chunks[chunk]) return at;
@@ -182,7 +190,8 @@ struct Fixture {
   std::string dir;
   Bytes clean;
   std::vector<Record> layout;
-  explicit Fixture(const std::string& name) : dir(fresh_dir(name)), clean(crashed_file(dir)), layout(records(clean)) {}
+  explicit Fixture(const std::string& name)
+      : dir(fresh_dir(name)), clean(crashed_file(dir)), layout(records(clean)) {}
   ~Fixture() { std::filesystem::remove_all(dir); }
 };
 
@@ -200,7 +209,9 @@ Recovered recover_one(const std::string& dir, const Bytes& b) {
 TEST(McapRecoverDamage, EachOf25SingleByteFlipsKeepsEveryChunkWhoseDataChecks) {
   Fixture fx("flips");
   const auto& [dir, clean, layout] = std::tie(fx.dir, fx.clean, fx.layout);
-  ASSERT_GT(std::count_if(layout.begin(), layout.end(), [](const Record& r) { return r.op == 0x06; }), 30);
+  ASSERT_GT(
+      std::count_if(layout.begin(), layout.end(), [](const Record& r) { return r.op == 0x06; }),
+      30);
   const uint64_t all = oracle_count(clean, layout);
   int rewritten = 0;
   for (auto [at, mask] : flips(clean, layout)) {
@@ -214,9 +225,7 @@ TEST(McapRecoverDamage, EachOf25SingleByteFlipsKeepsEveryChunkWhoseDataChecks) {
     Bytes out = slurp(dir + "/usv-crashed.mcap");
     EXPECT_EQ(read_back(out), want) << "flip at " << at;
     rewritten += r.rewritten;
-    if (want < all) {
-      EXPECT_FALSE(r.skipped.empty()) << "flip at " << at;
-    }
+    if (want < all) { EXPECT_FALSE(r.skipped.empty()) << "flip at " << at; }
   }
   EXPECT_GT(rewritten, 10);  // most flips land before the last chunk: the copy path ran
 }
@@ -255,8 +264,8 @@ TEST(McapRecoverDamage, ACraftedHugeLengthOrSizeIsSkippedNotAllocated) {
     if (r.op == 0x06) chunks.push_back(r.at);
   Bytes d = fx.clean;
   uint64_t huge = ~0ull >> 1;
-  std::memcpy(&d[chunks[2] + 1], &huge, 8);        // record length
-  std::memcpy(&d[chunks[6] + 9 + 16], &huge, 8);   // uncompressed size
+  std::memcpy(&d[chunks[2] + 1], &huge, 8);       // record length
+  std::memcpy(&d[chunks[6] + 9 + 16], &huge, 8);  // uncompressed size
   uint64_t want = oracle_count(d, fx.layout);
   Recovered r = recover_one(fx.dir, d);
   EXPECT_EQ(r.messages, want);

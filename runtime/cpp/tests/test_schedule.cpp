@@ -22,7 +22,8 @@ TEST(Schedule, MergesDueDatesOfDifferentPeriods) {
   SlotIterator it(p);
   // dates: 0.5 {1}, 0.75 {2}, 1.0 {1}, 1.5 {1,2}, 2.0 {0,1}, 2.25 {2}
   std::vector<std::pair<uint64_t, std::vector<uint32_t>>> want = {
-      {500000, {1}}, {750000, {2}}, {1000000, {1}}, {1500000, {1, 2}}, {2000000, {0, 1}}, {2250000, {2}}};
+      {500000, {1}},     {750000, {2}},     {1000000, {1}},
+      {1500000, {1, 2}}, {2000000, {0, 1}}, {2250000, {2}}};
   for (const auto& [t, ids] : want) {
     EXPECT_EQ(it.peek_offset_us(), t);
     Slot s = it.next();

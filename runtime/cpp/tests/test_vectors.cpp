@@ -38,7 +38,8 @@ Message from_json(const json& m) {
   if (t == "HELLO") return Hello{m["version"].get<uint8_t>(), arr<16>(m["nonce"])};
   if (t == "CHALLENGE") return Challenge{m["version"].get<uint8_t>(), arr<16>(m["nonce"])};
   if (t == "AUTH") return Auth{arr<32>(m["mac"])};
-  if (t == "AUTH_OK") return AuthOk{arr<32>(m["mac"]), m["config_id"].get<uint8_t>(), m["epoch_ns"].get<uint64_t>()};
+  if (t == "AUTH_OK")
+    return AuthOk{arr<32>(m["mac"]), m["config_id"].get<uint8_t>(), m["epoch_ns"].get<uint64_t>()};
   if (t == "PING") return Ping{from_hex(m["payload"].get<std::string>())};
   if (t == "PONG") return Pong{from_hex(m["payload"].get<std::string>())};
   if (t == "CONFIG_ACK") return ConfigAck{m["config_id"], m["status"], m["epoch_ns"]};
@@ -68,9 +69,11 @@ Message from_json(const json& m) {
       s.period_us = sj["period_us"];
       c.streams.push_back(s);
     }
-    if (m.contains("accepted_delay_ms")) c.accepted_delay_ms = m["accepted_delay_ms"].get<uint32_t>();
+    if (m.contains("accepted_delay_ms"))
+      c.accepted_delay_ms = m["accepted_delay_ms"].get<uint32_t>();
     if (m.contains("resolutions"))
-      for (const auto& x : m["resolutions"]) c.resolutions.push_back(x.is_null() ? 0.0 : x.get<double>());
+      for (const auto& x : m["resolutions"])
+        c.resolutions.push_back(x.is_null() ? 0.0 : x.get<double>());
     return c;
   }
   ADD_FAILURE() << "unknown vector type " << t;
@@ -113,9 +116,7 @@ TEST(Vectors, EveryMessageVectorDecodesAndEncodesByteForByte) {
     std::vector<uint8_t> out;
     encode(out, expected);
     EXPECT_EQ(to_hex(out), v["hex"].get<std::string>());
-    if (auto* c = std::get_if<Config>(&decoded)) {
-      EXPECT_EQ(*c, std::get<Config>(expected));
-    }
+    if (auto* c = std::get_if<Config>(&decoded)) { EXPECT_EQ(*c, std::get<Config>(expected)); }
     ++n;
   }
   EXPECT_GE(n, 12);
@@ -144,8 +145,10 @@ TEST(Vectors, DataVectors) {
       x.integer = vj["integer"];
       x.count = vj["count"];
       for (const auto& s : vj["samples"]) {
-        if (s.is_number_integer()) x.integers.push_back(s.get<int64_t>());
-        else x.numbers.push_back(s.get<double>());
+        if (s.is_number_integer())
+          x.integers.push_back(s.get<int64_t>());
+        else
+          x.numbers.push_back(s.get<double>());
       }
       d.values.push_back(x);
     }
@@ -256,7 +259,7 @@ TEST(Vectors, QuantisedUnitsDecodeAndEncodeByteForByte) {
 }
 
 TEST(Vectors, QuantisedStepsMatchThePythonRounding) {
-  EXPECT_EQ(*quantise_steps(0.125, 0.25), 0);   // ties to even, as Python's round()
+  EXPECT_EQ(*quantise_steps(0.125, 0.25), 0);  // ties to even, as Python's round()
   EXPECT_EQ(*quantise_steps(0.375, 0.25), 2);
   EXPECT_EQ(*quantise_steps(-700.25, 0.5), -1400);  // -1400.5 steps, to even
   EXPECT_FALSE(quantise_steps(1e300, 0.01));

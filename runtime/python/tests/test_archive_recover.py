@@ -49,8 +49,9 @@ def crashed() -> tuple[bytes, list[oracle.Record]]:
     return data, oracle.records(data)
 
 
-def test_the_fixture_is_what_the_oracle_expects(crashed: tuple[bytes, list[oracle.Record]],
-                                                tmp_path: Path) -> None:
+def test_the_fixture_is_what_the_oracle_expects(
+    crashed: tuple[bytes, list[oracle.Record]], tmp_path: Path
+) -> None:
     data, layout = crashed
     assert sum(1 for op, _, _ in layout if op == oracle.CHUNK) == 75
     assert oracle.count_valid(data, layout) == 3000  # the last chunk whole, its index torn
@@ -65,7 +66,8 @@ def test_the_fixture_is_what_the_oracle_expects(crashed: tuple[bytes, list[oracl
 
 
 def test_each_of_25_single_byte_flips_keeps_every_chunk_whose_data_checks(
-        crashed: tuple[bytes, list[oracle.Record]], tmp_path: Path) -> None:
+    crashed: tuple[bytes, list[oracle.Record]], tmp_path: Path
+) -> None:
     data, layout = crashed
     everything = 3000
     for at, mask in oracle.flips(data, layout):
@@ -81,8 +83,9 @@ def test_each_of_25_single_byte_flips_keeps_every_chunk_whose_data_checks(
             assert r.skipped and r.skipped[0].offset <= at, (at, r.skipped)
 
 
-def test_all_25_flips_in_one_file(crashed: tuple[bytes, list[oracle.Record]],
-                                  tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_all_25_flips_in_one_file(
+    crashed: tuple[bytes, list[oracle.Record]], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     data, layout = crashed
     damaged = data
     for at, mask in oracle.flips(data, layout):
@@ -96,8 +99,11 @@ def test_all_25_flips_in_one_file(crashed: tuple[bytes, list[oracle.Record]],
     assert official_count(tmp_path / "out.mcap") == want
     # every damaged chunk lies in a skipped region, and the report names each region
     r = recover(src, tmp_path / "again.mcap")
-    bad = [at for op, at, size in layout
-           if op == oracle.CHUNK and oracle.chunk_messages(damaged, at, size) is None]
+    bad = [
+        at
+        for op, at, size in layout
+        if op == oracle.CHUNK and oracle.chunk_messages(damaged, at, size) is None
+    ]
     assert len(bad) >= 10
     for at in bad:
         assert any(s.offset <= at < s.offset + s.length for s in r.skipped), at
@@ -113,8 +119,8 @@ def chunk_record(comp: bytes, usize: int, crc: int) -> bytes:
 
 
 def test_a_zstd_bomb_and_crafted_sizes_are_skipped_without_a_traceback(
-        crashed: tuple[bytes, list[oracle.Record]], tmp_path: Path,
-        capsys: pytest.CaptureFixture[str]) -> None:
+    crashed: tuple[bytes, list[oracle.Record]], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     data, layout = crashed
     first = next(at for op, at, _ in layout if op == oracle.CHUNK)
     zeros = bytes(64 << 20)
@@ -134,14 +140,20 @@ def test_a_zstd_bomb_and_crafted_sizes_are_skipped_without_a_traceback(
         assert f"offset {first}," in out and "3000 messages" in out, (i, out)
 
 
-def test_no_input_gives_a_traceback(crashed: tuple[bytes, list[oracle.Record]],
-                                    tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_no_input_gives_a_traceback(
+    crashed: tuple[bytes, list[oracle.Record]], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """Random damage of every kind (flips, cuts, inserted and deleted bytes,
     garbage): the command answers 0 with a report or 1 with a one-line error."""
     data, _ = crashed
     rng = random.Random(28)
-    inputs = [b"", oracle.MAGIC, oracle.MAGIC + bytes(9), rng.randbytes(5000),
-              oracle.MAGIC + rng.randbytes(5000)]
+    inputs = [
+        b"",
+        oracle.MAGIC,
+        oracle.MAGIC + bytes(9),
+        rng.randbytes(5000),
+        oracle.MAGIC + rng.randbytes(5000),
+    ]
     for _ in range(60):
         b = bytearray(data)
         for _ in range(rng.randint(1, 30)):
@@ -152,10 +164,10 @@ def test_no_input_gives_a_traceback(crashed: tuple[bytes, list[oracle.Record]],
             elif kind == 1:
                 b[at:at] = rng.randbytes(rng.randint(1, 50))
             elif kind == 2:
-                del b[at:at + rng.randint(1, 50)]
+                del b[at : at + rng.randint(1, 50)]
             else:
-                b[at:at + 8] = struct.pack("<Q", rng.getrandbits(64))
-        inputs.append(bytes(b[:rng.randint(len(b) // 2, len(b))]))
+                b[at : at + 8] = struct.pack("<Q", rng.getrandbits(64))
+        inputs.append(bytes(b[: rng.randint(len(b) // 2, len(b))]))
     for i, b in enumerate(inputs):
         src = tmp_path / f"in-{i}.mcap"
         src.write_bytes(b)

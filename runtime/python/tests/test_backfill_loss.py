@@ -65,10 +65,12 @@ class LossyPubBroker:
             for first in range(req.resume, req.windows, BATCH):
                 last = min(first + BATCH, req.windows)
                 vals = [Value(True, float(k)) for k in range(first, last)]
-                self._send("data", bf.encode_data(bf.BackfillData(req.request_id, first, vals),
-                                                  kind))
-            self._send("end", bf.encode(bf.BackfillEnd(req.request_id, bf.EndStatus.DONE,
-                                                       req.windows)))
+                self._send(
+                    "data", bf.encode_data(bf.BackfillData(req.request_id, first, vals), kind)
+                )
+            self._send(
+                "end", bf.encode(bf.BackfillEnd(req.request_id, bf.EndStatus.DONE, req.windows))
+            )
 
     def pump(self, manager: BackfillManager) -> bool:
         with self.lock:
@@ -80,13 +82,16 @@ class LossyPubBroker:
         return bool(frames)
 
 
-def run_backfill(drop: Callable[[str, int], bool], windows: int = 20,
-                 timeout_s: float = 10.0) -> tuple[dict[str, object], Sink, LossyPubBroker]:
+def run_backfill(
+    drop: Callable[[str, int], bool], windows: int = 20, timeout_s: float = 10.0
+) -> tuple[dict[str, object], Sink, LossyPubBroker]:
     sink = Sink()
     pb = LossyPubBroker(drop)
-    m = BackfillManager(pb.receive, lambda: [sink],
-                        timing=Timing(stall_s=0.3, resume_grace_s=0.2, ack_s=0.3,
-                                      min_resend_s=0.05))
+    m = BackfillManager(
+        pb.receive,
+        lambda: [sink],
+        timing=Timing(stall_s=0.3, resume_grace_s=0.2, ack_s=0.3, min_resend_s=0.05),
+    )
     stream = StreamKey("usv.a.z", "MIN", PERIOD)
     run = Run("sub_5", stream, stream, "float32", "m/s2", 1, FROM_NS, windows)
     job = m.start("sub_5", [run], 100_000)

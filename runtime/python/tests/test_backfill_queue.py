@@ -29,8 +29,13 @@ DT = 0.01
 
 
 class FakePubBroker:
-    def __init__(self, rate_bps: int, busy: int = 0, max_jobs: int = 8,
-                 drop: Callable[[str, int], bool] = lambda kind, n: False) -> None:
+    def __init__(
+        self,
+        rate_bps: int,
+        busy: int = 0,
+        max_jobs: int = 8,
+        drop: Callable[[str, int], bool] = lambda kind, n: False,
+    ) -> None:
         self.rate = rate_bps
         self.busy = busy  # requests answered BUSY first
         self.max_jobs = max_jobs
@@ -68,8 +73,9 @@ class FakePubBroker:
         self.jobs[m.request_id] = [m, m.resume]
         self.most_at_once = max(self.most_at_once, len(self.jobs))
         if not self._lost("ack"):
-            self.out.append(bf.encode(bf.BackfillProgress(m.request_id, m.resume, m.windows, 0,
-                                                          m.rate_bps)))
+            self.out.append(
+                bf.encode(bf.BackfillProgress(m.request_id, m.resume, m.windows, 0, m.rate_bps))
+            )
 
     def forget(self) -> None:  # a new link session
         self.jobs.clear()
@@ -132,8 +138,9 @@ class Bench:
                 f = self.q.flight
                 if f is None or bf.data_request_id(raw) != f.request.request_id:
                     continue
-                filled, frames = self.q.on_data(bf.decode_data(raw, f.request.kind()),
-                                                len(raw.body) + 2, self.now)
+                filled, frames = self.q.on_data(
+                    bf.decode_data(raw, f.request.kind()), len(raw.body) + 2, self.now
+                )
                 if filled is not None:
                     for i, v in enumerate(filled.data.values):
                         start = filled.request.window_start_ns(filled.data.first + i)
@@ -157,22 +164,29 @@ class Bench:
     def run_until(self, done: Callable[[], bool], limit_s: float) -> float:
         start = self.now
         while not done():
-            assert self.now - start < limit_s, [self.q.progress(j, self.now)
-                                                for j in self.q.jobs.values()]
+            assert self.now - start < limit_s, [
+                self.q.progress(j, self.now) for j in self.q.jobs.values()
+            ]
             self.step()
         return self.now - start
 
 
 def runs_of(subscriber: str, n_runs: int, windows: int, offset: int = 0) -> list[Run]:
     s = StreamKey("usv.a.x", "MIN", Fraction(1, 4))
-    return [Run(subscriber, s, s, "float64", "m", 1, T0 + (offset + 100 * k) * Q, windows)
-            for k in range(n_runs)]
+    return [
+        Run(subscriber, s, s, "float64", "m", 1, T0 + (offset + 100 * k) * Q, windows)
+        for k in range(n_runs)
+    ]
 
 
-def expected(subscriber: str, n_runs: int, windows: int, offset: int = 0) -> dict[
-        tuple[str, int], float]:
-    return {(subscriber, r.from_ns + k * Q): (r.from_ns + k * Q) / 1e9
-            for r in runs_of(subscriber, n_runs, windows, offset) for k in range(windows)}
+def expected(
+    subscriber: str, n_runs: int, windows: int, offset: int = 0
+) -> dict[tuple[str, int], float]:
+    return {
+        (subscriber, r.from_ns + k * Q): (r.from_ns + k * Q) / 1e9
+        for r in runs_of(subscriber, n_runs, windows, offset)
+        for k in range(windows)
+    }
 
 
 def test_thirteen_jobs_at_once_all_done_one_request_at_a_time_in_the_paced_time() -> None:
@@ -195,8 +209,9 @@ def test_thirteen_jobs_at_once_all_done_one_request_at_a_time_in_the_paced_time(
 
 def test_owners_are_served_in_turn() -> None:
     b = Bench(FakePubBroker(rate_bps=10_000))
-    a_jobs = [b.submit("sub_a", runs_of("sub_a", 4, 8, 1000 * i), 10_000, owner="alice")
-              for i in range(3)]
+    a_jobs = [
+        b.submit("sub_a", runs_of("sub_a", 4, 8, 1000 * i), 10_000, owner="alice") for i in range(3)
+    ]
     bob = b.submit("sub_b", runs_of("sub_b", 1, 8), 10_000, owner="bob")
     b.run_until(lambda: bob.status == "DONE", 60)
     # bob's one run came second, not after alice's twelve
@@ -253,8 +268,7 @@ def test_a_flapping_link_never_sends_more_than_one_request_a_second() -> None:
 def test_silence_after_the_ack_asks_again_from_the_resume_point() -> None:
     # the second and third data frames are lost, and so is the END: a silence
     drop = {("data", 1), ("data", 2), ("end", 0)}
-    b = Bench(FakePubBroker(rate_bps=5000, drop=lambda k, n: (k, n) in drop),
-              Timing(stall_s=3.0))
+    b = Bench(FakePubBroker(rate_bps=5000, drop=lambda k, n: (k, n) in drop), Timing(stall_s=3.0))
     job = b.submit("sub_1", runs_of("sub_1", 1, 24), 5000)
     b.run_until(lambda: job.status != "RUNNING", 60)
     assert job.status == "DONE" and b.got == expected("sub_1", 1, 24) and b.twice == 0
@@ -275,8 +289,7 @@ def test_cancel_and_a_refusal_move_the_queue_on() -> None:
     fourth = b.submit("sub_4", runs_of("sub_4", 1, 8), 5000)
     rid = b.q.flight.request.request_id if b.q.flight else -1
     b.pb.jobs.pop(rid)
-    b.send(b.q.on_end(bf.BackfillEnd(rid, bf.EndStatus.UNKNOWN_TOPIC, 0, "no such topic"),
-                      b.now))
+    b.send(b.q.on_end(bf.BackfillEnd(rid, bf.EndStatus.UNKNOWN_TOPIC, 0, "no such topic"), b.now))
     assert third.status == "FAILED" and "UNKNOWN_TOPIC" in third.reason
     b.run_until(lambda: fourth.status == "DONE", 30)
 
@@ -294,8 +307,9 @@ def test_many_owners_loss_flaps_and_busy_every_window_once(seed: int) -> None:
     jobs = []
     for i in range(12):
         name, runs = f"sub_{i}", 1 + i % 3
-        jobs.append(b.submit(name, runs_of(name, runs, 10 + 3 * i, 1000 * i), 2000,
-                             owner=f"user_{i % 3}"))
+        jobs.append(
+            b.submit(name, runs_of(name, runs, 10 + 3 * i, 1000 * i), 2000, owner=f"user_{i % 3}")
+        )
         want |= expected(name, runs, 10 + 3 * i, 1000 * i)
     last_sent: dict[int, float] = {}
     for _ in range(60_000):

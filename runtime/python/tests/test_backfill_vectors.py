@@ -18,12 +18,21 @@ DOC = json.loads((LINK_VECTORS / "backfill.json").read_text())
 def _from_json(m: dict[str, Any]) -> bf.BackfillMessage:
     t = m["type"]
     if t == "BACKFILL_REQUEST":
-        return bf.BackfillRequest(m["request_id"], m["topic"], ValueType.parse(m["value_type"]),
-                                  Aggregation[m["aggregation"]], m["period_us"], m["from_ns"],
-                                  m["windows"], m["resume"], m["rate_bps"])
+        return bf.BackfillRequest(
+            m["request_id"],
+            m["topic"],
+            ValueType.parse(m["value_type"]),
+            Aggregation[m["aggregation"]],
+            m["period_us"],
+            m["from_ns"],
+            m["windows"],
+            m["resume"],
+            m["rate_bps"],
+        )
     if t == "BACKFILL_PROGRESS":
-        return bf.BackfillProgress(m["request_id"], m["next"], m["windows"], m["bytes_sent"],
-                                   m["rate_bps"])
+        return bf.BackfillProgress(
+            m["request_id"], m["next"], m["windows"], m["bytes_sent"], m["rate_bps"]
+        )
     if t == "BACKFILL_END":
         return bf.BackfillEnd(m["request_id"], bf.EndStatus[m["status"]], m["next"], m["message"])
     assert t == "BACKFILL_CANCEL"
@@ -40,9 +49,14 @@ def test_vector_byte_for_byte(v: dict[str, Any]) -> None:
         kind = value_kind(ValueType.parse(m["value_type"]), Aggregation[m["aggregation"]])
         assert bf.data_request_id(raw) == m["request_id"]
         d = bf.decode_data(raw, kind)
-        expected = bf.BackfillData(m["request_id"], m["first"], [
-            Value(x["present"], x["number"], x["integer"], x["count"], x["samples"])
-            for x in m["values"]])
+        expected = bf.BackfillData(
+            m["request_id"],
+            m["first"],
+            [
+                Value(x["present"], x["number"], x["integer"], x["count"], x["samples"])
+                for x in m["values"]
+            ],
+        )
         assert d == expected
         assert bf.encode_data(d, kind) == wire
     else:

@@ -14,8 +14,7 @@ def test_live_payload_unchanged_and_backfilled_marked() -> None:
     head = StreamPayload("usv.a.z", "MIN", "0.25", "M", 1)
     assert subscriber_prefix("sub_5") + head.tail(7, 0, 250, -0.5, None, 9) == live.to_json()
     assert b"backfilled" not in live.to_json()
-    back = DeliveredValue("sub_5", "usv.a.z", "MIN", "0.25", "M", 1, 7, 0, 250, -0.5, None, 9,
-                          True)
+    back = DeliveredValue("sub_5", "usv.a.z", "MIN", "0.25", "M", 1, 7, 0, 250, -0.5, None, 9, True)
     assert b'"backfilled":true' in back.to_json()
     assert DeliveredValue.from_json(back.to_json()).backfilled
     assert not DeliveredValue.from_json(live.to_json()).backfilled

@@ -14,23 +14,30 @@ from modd.link.dgreceiver import DatagramReceiver, DatagramSender
 from modd.link.frames import Aggregation, Data, Value, ValueType, value_kind
 from modd.radio.channel import Channel, RadioSpec
 
-KINDS = [value_kind(ValueType.FLOAT32, a) for a in
-         (Aggregation.AVERAGE, Aggregation.AVERAGE, Aggregation.MIN, Aggregation.MAX)]
+KINDS = [
+    value_kind(ValueType.FLOAT32, a)
+    for a in (Aggregation.AVERAGE, Aggregation.AVERAGE, Aggregation.MIN, Aggregation.MAX)
+]
 PERIODS = [250_000] * 4
 KEY = session_key(b"psk", bytes(16), bytes(range(16)))
 
 
 def _values(slot: int) -> list[Value]:
-    return [Value(True, float(slot % 1000), 0, 6), Value(True, -1.0, 0, 7),
-            Value(True, float(slot % 97)), Value(True, 2.5)]
+    return [
+        Value(True, float(slot % 1000), 0, 6),
+        Value(True, -1.0, 0, 7),
+        Value(True, float(slot % 97)),
+        Value(True, 2.5),
+    ]
 
 
 def _encoded(slot: int) -> bytes:
     return codec.encode_data(Data(False, 0, 0, 0, _values(slot)), KINDS)[3:]
 
 
-def _run(spec: RadioSpec, seconds: float, forge: bool = False
-         ) -> tuple[dict[int, list[Value]], DatagramReceiver, Channel, Channel]:
+def _run(
+    spec: RadioSpec, seconds: float, forge: bool = False
+) -> tuple[dict[int, list[Value]], DatagramReceiver, Channel, Channel]:
     sender = DatagramSender(KEY, 1, delay_s=1.0, room=1400)
     receiver = DatagramReceiver(KEY, 1, PERIODS, KINDS)
     down, up = Channel(spec, 1), Channel(spec, 2)
@@ -71,8 +78,9 @@ def _run(spec: RadioSpec, seconds: float, forge: bool = False
 def test_no_loss_every_slot_and_nothing_back() -> None:
     got, receiver, down, up = _run(RadioSpec(rate=3600, latency_ms=80), 120)
     assert set(got) >= set(range(0, 470))
-    assert all(got[k][0].number == float(k % 1000) and got[k][2].number == float(k % 97)
-               for k in got)
+    assert all(
+        got[k][0].number == float(k % 1000) and got[k][2].number == float(k % 97) for k in got
+    )
     assert receiver.stats.nacks == 0 and up.passed == 0  # nothing flows back
     # drone->base bytes as the planner predicts: 0.8 datagrams/s of 98 B (+28 IP/UDP)
     assert abs(down.passed_bytes / 120 - 0.8 * 98) < 2
@@ -81,7 +89,8 @@ def test_no_loss_every_slot_and_nothing_back() -> None:
 def test_loss_jitter_is_repaired() -> None:
     for loss, target in ((0.05, 0.999), (0.20, 0.99)):
         got, receiver, down, _ = _run(
-            RadioSpec(rate=3600, loss=loss, latency_ms=80, jitter_ms=60, seed=4), 250)
+            RadioSpec(rate=3600, loss=loss, latency_ms=80, jitter_ms=60, seed=4), 250
+        )
         expected = set(range(0, 980))
         share = len(set(got) & expected) / len(expected)
         assert share >= target, (loss, share, receiver.gaps.lost)
@@ -133,8 +142,9 @@ def test_control_datagram_with_several_frames_delivers_each() -> None:
     client._key = key
     got: list[codec.RawFrame] = []
     client.backfill_sink = got.append
-    frames = (bf.encode(bf.BackfillProgress(7, 24, 24, 96, 20000))
-              + bf.encode(bf.BackfillEnd(7, bf.EndStatus.DONE, 24, "")))
+    frames = bf.encode(bf.BackfillProgress(7, 24, 24, 96, 20000)) + bf.encode(
+        bf.BackfillEnd(7, bf.EndStatus.DONE, 24, "")
+    )
     assert client.datagram(encode_control(1, frames, key, DRONE_TO_BASE))
     assert [f.type for f in got] == [bf.BackfillType.PROGRESS, bf.BackfillType.END]
     assert not client.datagram(encode_control(2, frames[:-1], key, DRONE_TO_BASE))

@@ -43,8 +43,10 @@ LINK_VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors" / "
 VECTORS = json.loads((LINK_VECTORS / "datagram.json").read_text())
 KEY = bytes.fromhex(VECTORS["session_key"])
 BY_NAME: dict[str, dict[str, Any]] = {v["name"]: v for v in VECTORS["vectors"]}
-S1_KINDS = [value_kind(ValueType.FLOAT32, a) for a in
-            (Aggregation.AVERAGE, Aggregation.AVERAGE, Aggregation.MIN, Aggregation.MAX)]
+S1_KINDS = [
+    value_kind(ValueType.FLOAT32, a)
+    for a in (Aggregation.AVERAGE, Aggregation.AVERAGE, Aggregation.MIN, Aggregation.MAX)
+]
 DIRS = {"D": DRONE_TO_BASE, "B": BASE_TO_DRONE}
 
 
@@ -93,8 +95,9 @@ def test_control_datagrams() -> None:
     f = codec.split_frame(frame)
     assert counter == 3 and f is not None and f.type == 0x09
     assert decode_nack(f.body) == [tuple(r) for r in nack["ranges"]]
-    counter, frame = verify_control(bytes.fromhex(BY_NAME["control_ping"]["hex"]), KEY,
-                                    BASE_TO_DRONE)
+    counter, frame = verify_control(
+        bytes.fromhex(BY_NAME["control_ping"]["hex"]), KEY, BASE_TO_DRONE
+    )
     f = codec.split_frame(frame)
     assert counter == 4 and f is not None and f.type == 0x05 and f.body == b"\x07\x01"
     hello = bytes.fromhex(BY_NAME["handshake_hello"]["hex"])
@@ -151,10 +154,12 @@ def test_control_fragment_vector_layout_and_reassembly() -> None:
         counter = v["counter"] + i
         head = bytes([0x42, 0x80 | (counter & 0x7F), counter >> 7, i << 4 | (len(frags) - 1)])
         assert f[:4] == head and len(f) <= v["max_datagram"]
-        assert f[4:-8] == frames[i * room:(i + 1) * room]
+        assert f[4:-8] == frames[i * room : (i + 1) * room]
         assert f[-8:] == _hmac_tag(b"B", counter, f[:-8], 8)
-    assert encode_control_fragments(v["counter"], frames, v["max_datagram"], KEY,
-                                    BASE_TO_DRONE) == frags
+    assert (
+        encode_control_fragments(v["counter"], frames, v["max_datagram"], KEY, BASE_TO_DRONE)
+        == frags
+    )
     pieces = ControlPieces()
     got = [pieces.add(verify_control_fragment(f, KEY, BASE_TO_DRONE)) for f in frags[::-1]]
     assert got[:-1] == [None] * (len(frags) - 1) and got[-1] == frames
@@ -164,8 +169,9 @@ def test_control_fragment_vector_layout_and_reassembly() -> None:
 def test_control_pieces_are_bounded_and_refuse_a_changed_count() -> None:
     frames = bytes(range(200))
     pieces = ControlPieces()
-    messages = [encode_control_fragments(100 * k, frames, 60, KEY, BASE_TO_DRONE)
-                for k in range(1, 7)]
+    messages = [
+        encode_control_fragments(100 * k, frames, 60, KEY, BASE_TO_DRONE) for k in range(1, 7)
+    ]
     for m in messages:  # the first piece of six messages: the oldest two given up
         assert pieces.add(verify_control_fragment(m[0], KEY, BASE_TO_DRONE)) is None
     assert pieces.given_up == 2
@@ -192,7 +198,7 @@ def test_fragment_vector_layout_and_reassembly() -> None:
     assert len(frags) == -(-len(body) // room) and all(len(f) <= v["max_datagram"] for f in frags)
     for i, raw in enumerate(frags):
         head = bytes([0x32, 1, 0x01, 0x00, i << 4 | (len(frags) - 1)])
-        assert raw[:5] == head and raw[5:-4] == body[i * room:(i + 1) * room]
+        assert raw[:5] == head and raw[5:-4] == body[i * room : (i + 1) * room]
         assert raw[-4:] == _hmac_tag(b"D", 65537, raw[:-4], 4)
     assert encode_fragments(1, 65537, body, v["max_datagram"], KEY, DRONE_TO_BASE) == frags
     got = [verify_fragment(f, KEY, DRONE_TO_BASE, v["expected_slot"]) for f in frags]
@@ -285,10 +291,15 @@ def test_planner_serial_and_datagram_sizes_match_the_codec() -> None:
         assert len(raw) == DGRAM_HEADER_BYTES + 18 * slots + TAG_BYTES
 
 
-@given(st.binary(min_size=1, max_size=400), st.integers(14, 250), st.integers(0, 2**20),
-       st.randoms(use_true_random=False))
-def test_fragments_round_trip_in_any_order(body: bytes, max_datagram: int, slot: int,
-                                           rng: random.Random) -> None:
+@given(
+    st.binary(min_size=1, max_size=400),
+    st.integers(14, 250),
+    st.integers(0, 2**20),
+    st.randoms(use_true_random=False),
+)
+def test_fragments_round_trip_in_any_order(
+    body: bytes, max_datagram: int, slot: int, rng: random.Random
+) -> None:
     room = max_datagram - 9
     if -(-len(body) // room) > 16:
         return
@@ -309,10 +320,15 @@ def test_fuzzed_fragments_never_deliver(raws: list[bytes]) -> None:
     assert rx.stats.forged + rx.stats.malformed == len(raws)
 
 
-@given(st.binary(min_size=1, max_size=1200), st.integers(16, 250), st.integers(0, 2**34),
-       st.randoms(use_true_random=False))
-def test_control_fragments_round_trip_in_any_order(frames: bytes, max_datagram: int,
-                                                   counter: int, rng: random.Random) -> None:
+@given(
+    st.binary(min_size=1, max_size=1200),
+    st.integers(16, 250),
+    st.integers(0, 2**34),
+    st.randoms(use_true_random=False),
+)
+def test_control_fragments_round_trip_in_any_order(
+    frames: bytes, max_datagram: int, counter: int, rng: random.Random
+) -> None:
     if -(-len(frames) // (max_datagram - 15)) > 16:
         with pytest.raises(ValueError, match="at most 16"):
             encode_control_fragments(counter, frames, max_datagram, KEY, BASE_TO_DRONE)

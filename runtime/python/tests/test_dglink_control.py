@@ -38,15 +38,18 @@ KEY = session_key(b"psk", bytes(16), bytes(range(16)))
 
 
 def _end_with_progress() -> bytes:
-    return (bf.encode(bf.BackfillProgress(7, 55, 55, 309, 499))
-            + bf.encode(bf.BackfillEnd(7, bf.EndStatus.DONE, 55)))
+    return bf.encode(bf.BackfillProgress(7, 55, 55, 309, 499)) + bf.encode(
+        bf.BackfillEnd(7, bf.EndStatus.DONE, 55)
+    )
 
 
 def test_control_frames_splits_every_frame_in_order() -> None:
     frames = control_frames(_end_with_progress())
     assert frames is not None
-    assert [bf.decode(f) for f in frames] == [bf.BackfillProgress(7, 55, 55, 309, 499),
-                                              bf.BackfillEnd(7, bf.EndStatus.DONE, 55)]
+    assert [bf.decode(f) for f in frames] == [
+        bf.BackfillProgress(7, 55, 55, 309, 499),
+        bf.BackfillEnd(7, bf.EndStatus.DONE, 55),
+    ]
     one = bf.encode(bf.BackfillEnd(7, bf.EndStatus.DONE, 55))
     assert [f.type for f in control_frames(one) or []] == [codec.split_frame(one).type]  # type: ignore[union-attr]
 
@@ -64,8 +67,10 @@ def test_the_datagram_link_hands_on_the_end_behind_a_progress() -> None:
     got: list[object] = []
     client.backfill_sink = lambda f: got.append(bf.decode(f))
     assert client.datagram(encode_control(1, _end_with_progress(), KEY, DRONE_TO_BASE))
-    assert got == [bf.BackfillProgress(7, 55, 55, 309, 499),
-                   bf.BackfillEnd(7, bf.EndStatus.DONE, 55)]
+    assert got == [
+        bf.BackfillProgress(7, 55, 55, 309, 499),
+        bf.BackfillEnd(7, bf.EndStatus.DONE, 55),
+    ]
     assert client.stats.frames_in == 2
     # a torn payload is malformed, nothing of it handed on
     assert not client.datagram(encode_control(2, _end_with_progress()[:-1], KEY, DRONE_TO_BASE))
@@ -73,8 +78,9 @@ def test_the_datagram_link_hands_on_the_end_behind_a_progress() -> None:
 
 
 def _config(topics: int) -> Config:
-    names = tuple(TopicSpec(f"usv.sensor.topic_{i:03d}", ValueType.FLOAT32, 1)
-                  for i in range(topics))
+    names = tuple(
+        TopicSpec(f"usv.sensor.topic_{i:03d}", ValueType.FLOAT32, 1) for i in range(topics)
+    )
     streams = tuple(StreamSpec(i, Aggregation.AVERAGE, 250_000) for i in range(topics))
     return Config(3, 0, names, streams)
 
@@ -88,8 +94,14 @@ class _Port:
 
 class _Client(DatagramSession):
     def __init__(self, max_packet: int, port: _Port) -> None:
-        super().__init__("serial", b"psk", LinkOptions(), None,  # type: ignore[arg-type]
-                         max_packet=max_packet, where="serial /dev/radio")
+        super().__init__(
+            "serial",
+            b"psk",
+            LinkOptions(),
+            None,  # type: ignore[arg-type]
+            max_packet=max_packet,
+            where="serial /dev/radio",
+        )
         self._key, self._port = KEY, port
         self._counter = 41
 

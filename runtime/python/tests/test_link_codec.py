@@ -22,13 +22,20 @@ from modd.link.frames import (
     value_kind,
 )
 
-S1_KINDS = [value_kind(ValueType.FLOAT32, a) for a in
-            (Aggregation.AVERAGE, Aggregation.AVERAGE, Aggregation.MIN, Aggregation.MAX)]
+S1_KINDS = [
+    value_kind(ValueType.FLOAT32, a)
+    for a in (Aggregation.AVERAGE, Aggregation.AVERAGE, Aggregation.MIN, Aggregation.MAX)
+]
 
 
 def test_scenario_frame_sizes() -> None:
-    d = Data(False, 0, 0, 1, [Value(True, 1.0, 0, 6), Value(True, 1.0, 0, 7),
-                              Value(True, 1.0), Value(True, 1.0)])
+    d = Data(
+        False,
+        0,
+        0,
+        1,
+        [Value(True, 1.0, 0, 6), Value(True, 1.0, 0, 7), Value(True, 1.0), Value(True, 1.0)],
+    )
     assert len(codec.encode_data(d, S1_KINDS)) == 21
     k2 = [value_kind(ValueType.FLOAT32, Aggregation.MIN)] * 19
     d2 = Data(False, 0, 0, 1, [Value(True, 1.0)] * 19)
@@ -54,25 +61,37 @@ def test_config_accepted_delay_round_trip(delay: int | None, cid: int) -> None:
     if delay is None:
         assert wire == old
     else:  # one more varint, and the length prefix counts it
-        assert wire[-len(codec.varint(delay)):] == codec.varint(delay)
+        assert wire[-len(codec.varint(delay)) :] == codec.varint(delay)
         assert len(wire) - len(old) in (len(codec.varint(delay)), len(codec.varint(delay)) + 1)
     (raw,) = codec.FrameSplitter().feed(wire)
     assert codec.decode(raw) == m
 
 
 def test_config_accepted_delay_out_of_range() -> None:
-    c = Config(1, 0, (TopicSpec("a", ValueType.FLOAT32, 1),),
-               (StreamSpec(0, Aggregation.MIN, 1),), MAX_ACCEPTED_DELAY_MS + 1)
+    c = Config(
+        1,
+        0,
+        (TopicSpec("a", ValueType.FLOAT32, 1),),
+        (StreamSpec(0, Aggregation.MIN, 1),),
+        MAX_ACCEPTED_DELAY_MS + 1,
+    )
     with pytest.raises(ValueError, match="accepted delay"):
         codec.encode(c)
 
 
-@given(st.lists(st.tuples(st.booleans(), st.floats(width=32, allow_nan=False),
-                          st.integers(1, 10000)), min_size=4, max_size=4),
-       st.integers(0, 10**9), st.booleans())
+@given(
+    st.lists(
+        st.tuples(st.booleans(), st.floats(width=32, allow_nan=False), st.integers(1, 10000)),
+        min_size=4,
+        max_size=4,
+    ),
+    st.integers(0, 10**9),
+    st.booleans(),
+)
 def test_data_round_trip(vals: list[tuple[bool, float, int]], slot: int, sync: bool) -> None:
-    values = [Value(p, x, 0, n if i < 2 else 0) if p else Value()
-              for i, (p, x, n) in enumerate(vals)]
+    values = [
+        Value(p, x, 0, n if i < 2 else 0) if p else Value() for i, (p, x, n) in enumerate(vals)
+    ]
     d = Data(sync, 3, slot, slot & 0xFF, values)
     wire = codec.encode_data(d, S1_KINDS)
     (raw,) = codec.FrameSplitter().feed(wire)

@@ -130,8 +130,12 @@ def test_the_round_trip_is_measured_when_the_pubbroker_answers() -> None:
 def test_periodic_pings_follow_a_link_that_slows_down() -> None:
     server = _SilentPubBroker(pongs=True)
     handler = _Handler()
-    client = LinkClient(("127.0.0.1", server.port), KEY,
-                        LinkOptions(connect_timeout_s=2.0, ping_period_s=0.1), handler)
+    client = LinkClient(
+        ("127.0.0.1", server.port),
+        KEY,
+        LinkOptions(connect_timeout_s=2.0, ping_period_s=0.1),
+        handler,
+    )
     client.start()
     try:
         deadline = time.monotonic() + 10

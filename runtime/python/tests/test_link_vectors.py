@@ -55,17 +55,24 @@ def from_json(m: dict[str, Any]) -> Message:
     if t == "CONFIG_ACK":
         return ConfigAck(m["config_id"], m["status"], m["epoch_ns"])
     if t == "STATUS":
-        return Status(tuple(m["counters"]), tuple(
-            SensorHealth(h["name"], tuple(h["fields"])) for h in m.get("sensors", [])))
+        return Status(
+            tuple(m["counters"]),
+            tuple(SensorHealth(h["name"], tuple(h["fields"])) for h in m.get("sensors", [])),
+        )
     if t == "ERROR":
         return ErrorMsg(m["code"], m["message"])
     if t == "CONFIG":
         return Config(
-            m["config_id"], m["status_period_s"],
-            tuple(TopicSpec(x["name"], ValueType.parse(x["type"]), x["buffer_size"], x["period_us"])
-                  for x in m["topics"]),
-            tuple(StreamSpec(x["topic"], Aggregation[x["aggregation"]], x["period_us"])
-                  for x in m["streams"]),
+            m["config_id"],
+            m["status_period_s"],
+            tuple(
+                TopicSpec(x["name"], ValueType.parse(x["type"]), x["buffer_size"], x["period_us"])
+                for x in m["topics"]
+            ),
+            tuple(
+                StreamSpec(x["topic"], Aggregation[x["aggregation"]], x["period_us"])
+                for x in m["streams"]
+            ),
             m.get("accepted_delay_ms"),
             tuple(m["resolutions"]) if "resolutions" in m else None,
         )
@@ -87,10 +94,14 @@ def test_vector_byte_for_byte(path: Path) -> None:
         assert codec.decode(raw) == expected
         assert codec.encode(expected) == wire
         return
-    kinds = [value_kind(ValueType.parse(k["type"]), Aggregation[k["aggregation"]],
-                        k.get("resolution")) for k in v["kinds"]]
-    values = [Value(x["present"], x["number"], x["integer"], x["count"], x["samples"])
-              for x in m["values"]]
+    kinds = [
+        value_kind(ValueType.parse(k["type"]), Aggregation[k["aggregation"]], k.get("resolution"))
+        for k in v["kinds"]
+    ]
+    values = [
+        Value(x["present"], x["number"], x["integer"], x["count"], x["samples"])
+        for x in m["values"]
+    ]
     data = Data(m["sync"], m["config_id"], m["slot"], m["seq8"], values)
     assert codec.encode_data(data, kinds) == wire
     back = codec.decode_data(raw, kinds)
@@ -127,7 +138,10 @@ def test_slot_table() -> None:
     for s in v["slots"]:
         got = next(it)
         assert (got.index, got.offset_us, list(got.streams)) == (
-            s["index"], s["offset_us"], s["streams"])
+            s["index"],
+            s["offset_us"],
+            s["streams"],
+        )
 
 
 def test_vectors_are_current(tmp_path: Path) -> None:
@@ -158,14 +172,19 @@ def test_link_key_file_is_a_small_regular_file(tmp_path: Path) -> None:
     (tmp_path / "via-link").symlink_to(key)
     big = tmp_path / "big.key"
     big.write_bytes(b"k" * (64 * 1024 + 1))
-    for ref in ("file:/dev/zero", f"file:{tmp_path / 'via-link'}", f"file:{big}",
-                f"file:{tmp_path}"):
+    for ref in (
+        "file:/dev/zero",
+        f"file:{tmp_path / 'via-link'}",
+        f"file:{big}",
+        f"file:{tmp_path}",
+    ):
         with pytest.raises(ValueError, match="link key"):
             resolve_key(ref)
 
 
-def test_a_link_key_shorter_than_16_bytes_is_refused(tmp_path: Path,
-                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_link_key_shorter_than_16_bytes_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """A 1-byte key was accepted: the PubBroker and the SubBroker refuse keys under 16 bytes."""
     short = tmp_path / "short.key"
     short.write_text("0123456789abcde\n")  # 15 bytes

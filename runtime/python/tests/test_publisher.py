@@ -64,8 +64,9 @@ def test_registers_batches_and_reconnects(tmp_path: Path) -> None:
 
 
 def test_bounded_queue_never_blocks_nor_raises() -> None:
-    pub = Publisher("p", "unix:/nonexistent/x.sock", queue_capacity=10, reconnect_s=0.05,
-                    connect_wait_s=0)
+    pub = Publisher(
+        "p", "unix:/nonexistent/x.sock", queue_capacity=10, reconnect_s=0.05, connect_wait_s=0
+    )
     t = time.monotonic()
     ok = sum(pub.publish("t", i, 1.0) for i in range(1000))
     assert time.monotonic() - t < 0.5
@@ -81,5 +82,7 @@ def test_bounded_queue_never_blocks_nor_raises() -> None:
 
 def test_samples_encoding_matches_the_spec() -> None:
     wire = encode_samples([(0, 1, 1.5), (1, -2, True)], [ValueType.FLOAT32, ValueType.BOOL])
-    assert wire.hex() == "190302" + "00" + "0100000000000000" + "0000c03f" + "01" + \
-        "feffffffffffffff" + "01"
+    assert (
+        wire.hex()
+        == "190302" + "00" + "0100000000000000" + "0000c03f" + "01" + "feffffffffffffff" + "01"
+    )

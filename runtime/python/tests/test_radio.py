@@ -19,10 +19,20 @@ from modd.radio.relay import open_pty_pair, run_serial, run_udp
 
 def test_spec_parse_and_errors() -> None:
     s = RadioSpec.parse("rate=3600,loss=0.05,latency_ms=80,packet=252,outage=10+30,seed=7")
-    assert (s.rate, s.loss, s.latency_ms, s.packet, s.outages, s.seed) == \
-        (3600, 0.05, 80, 252, ((10.0, 30.0),), 7)
-    for bad, msg in (("rate=x", "not a number"), ("loss=2", "out of range"),
-                     ("speed=3", "unknown radio setting 'speed'"), ("rate", "name=value")):
+    assert (s.rate, s.loss, s.latency_ms, s.packet, s.outages, s.seed) == (
+        3600,
+        0.05,
+        80,
+        252,
+        ((10.0, 30.0),),
+        7,
+    )
+    for bad, msg in (
+        ("rate=x", "not a number"),
+        ("loss=2", "out of range"),
+        ("speed=3", "unknown radio setting 'speed'"),
+        ("rate", "name=value"),
+    ):
         with pytest.raises(ValueError, match=msg):
             RadioSpec.parse(bad)
 
@@ -86,8 +96,11 @@ def test_udp_relay_both_ways_with_loss_and_latency() -> None:
     stop = threading.Event()
     spec = RadioSpec(loss=0.2, latency_ms=30, seed=5)
     result: list[tuple[Channel, Channel]] = []
-    t = threading.Thread(target=lambda: result.append(
-        run_udp(spec, ("127.0.0.1", port), target.getsockname(), stop.is_set)))
+    t = threading.Thread(
+        target=lambda: result.append(
+            run_udp(spec, ("127.0.0.1", port), target.getsockname(), stop.is_set)
+        )
+    )
     t.start()
     base = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     base.settimeout(2)
@@ -132,10 +145,12 @@ def test_serial_relay_between_pseudo_terminals() -> None:
     stop = threading.Event()
     result: list[tuple[Channel, Channel]] = []
     spec = RadioSpec(rate=20000, packet=64, seed=1)
-    t = threading.Thread(target=lambda: result.append(
-        run_serial(spec, base_master, drone_master, stop.is_set)))
+    t = threading.Thread(
+        target=lambda: result.append(run_serial(spec, base_master, drone_master, stop.is_set))
+    )
     t.start()
     import tty
+
     b = os.open(base_path, os.O_RDWR | os.O_NOCTTY)
     d = os.open(drone_path, os.O_RDWR | os.O_NOCTTY)
     tty.setraw(b)
@@ -167,9 +182,22 @@ def test_cli_prints_passed_and_dropped() -> None:
     port = free_port("udp")
     host, tport = target.getsockname()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "modd.radio.cli", "--udp", f"127.0.0.1:{port}", "--to",
-         f"{host}:{tport}", "--radio", "loss=0.5,seed=2", "--duration", "1.5"],
-        stdout=subprocess.PIPE, text=True)
+        [
+            sys.executable,
+            "-m",
+            "modd.radio.cli",
+            "--udp",
+            f"127.0.0.1:{port}",
+            "--to",
+            f"{host}:{tport}",
+            "--radio",
+            "loss=0.5,seed=2",
+            "--duration",
+            "1.5",
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         time.sleep(0.5)
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:

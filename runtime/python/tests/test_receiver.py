@@ -17,8 +17,12 @@ from modd.link.frames import (
 from modd.link.receiver import Receiver
 from modd.link.schedule import SlotIterator
 
-CFG = Config(1, 0, (TopicSpec("x", ValueType.FLOAT32, 1),),
-             (StreamSpec(0, Aggregation.MIN, 500_000), StreamSpec(0, Aggregation.COUNT, 1_000_000)))
+CFG = Config(
+    1,
+    0,
+    (TopicSpec("x", ValueType.FLOAT32, 1),),
+    (StreamSpec(0, Aggregation.MIN, 500_000), StreamSpec(0, Aggregation.COUNT, 1_000_000)),
+)
 EPOCH = 1_000_000_000_000
 
 
@@ -33,7 +37,8 @@ def test_windows_are_labelled_from_the_epoch() -> None:
     rx.add_config(CFG, EPOCH)
     w = rx.on_frame(frame(Data(True, 1, 0, 0, [Value(True, 2.0)]), (0,)))
     assert [(x.stream, x.start_ns, x.end_ns, x.value.number) for x in w] == [
-        (0, EPOCH, EPOCH + 500_000_000, 2.0)]
+        (0, EPOCH, EPOCH + 500_000_000, 2.0)
+    ]
     w = rx.on_frame(frame(Data(False, 0, 0, 1, [Value(True, 1.0), Value(True, count=50)]), (0, 1)))
     assert [(x.stream, x.start_ns) for x in w] == [(0, EPOCH + 500_000_000), (1, EPOCH)]
     assert w[1].value.count == 50

@@ -68,16 +68,19 @@ def test_defaults_from_model() -> None:
     assert cfg.zenoh.inserts()["mode"] == '"router"'  # authenticating its clients
 
 
-@pytest.mark.parametrize("body,message", [
-    ('model = "m.modd"\nbogus = 1', "unknown key 'bogus'"),
-    ('drone = "usv"', "missing key 'model'"),
-    ('model = "m.modd"\n[link]\nendpoint = "nope"', "link.endpoint: expected host:port"),
-    ('model = "m.modd"\n[link]\nping_count = "3"', "link.ping_count: expected int"),
-    ('model = "m.modd"\n[zenoh]\nmode = "mesh"', "zenoh mode 'mesh'"),
-    ('model = "m.modd"\ndrone = "uav"', "drone 'uav' but the model is for 'usv'"),
-    ('model = "missing.modd"', "missing.modd"),
-    ("model = [", "sb.toml"),
-])
+@pytest.mark.parametrize(
+    "body,message",
+    [
+        ('model = "m.modd"\nbogus = 1', "unknown key 'bogus'"),
+        ('drone = "usv"', "missing key 'model'"),
+        ('model = "m.modd"\n[link]\nendpoint = "nope"', "link.endpoint: expected host:port"),
+        ('model = "m.modd"\n[link]\nping_count = "3"', "link.ping_count: expected int"),
+        ('model = "m.modd"\n[zenoh]\nmode = "mesh"', "zenoh mode 'mesh'"),
+        ('model = "m.modd"\ndrone = "uav"', "drone 'uav' but the model is for 'usv'"),
+        ('model = "missing.modd"', "missing.modd"),
+        ("model = [", "sb.toml"),
+    ],
+)
 def test_config_errors_name_file_and_key(tmp_path: Path, body: str, message: str) -> None:
     (tmp_path / "m.modd").write_text(S1.read_text())
     (tmp_path / "sb.toml").write_text(body)
@@ -100,8 +103,11 @@ def test_resolve_key(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     # key files: regular, bounded, no final symlink (docs/security.md, "Local surfaces")
     (tmp_path / "big").write_bytes(b"x" * (1 << 20))
     (tmp_path / "link").symlink_to(tmp_path / "k")
-    for ref, why in (("file:/dev/zero", "not a regular file"), (f"file:{tmp_path}/big", "bytes"),
-                     (f"file:{tmp_path}/link", "link")):
+    for ref, why in (
+        ("file:/dev/zero", "not a regular file"),
+        (f"file:{tmp_path}/big", "bytes"),
+        (f"file:{tmp_path}/link", "link"),
+    ):
         with pytest.raises(ConfigError, match=why):
             resolve_key(ref)
 
@@ -138,8 +144,10 @@ def test_deploy_request_parsing() -> None:
     assert parse_request(b'{"text": "x", "timeout_s": -1}', "usv").reply["status"] == "ERROR"
     wrong = parse_request(json.dumps({"text": text}).encode(), "uav")
     assert wrong.reply["status"] == "REJECTED" and "'usv'" in wrong.reply["reason"]
-    bad = parse_request(json.dumps({"text": text.replace("AVERAGE", "AVERAGED", 1),
-                                    "filename": "m.modd"}).encode(), "usv")
+    bad = parse_request(
+        json.dumps({"text": text.replace("AVERAGE", "AVERAGED", 1), "filename": "m.modd"}).encode(),
+        "usv",
+    )
     assert bad.reply["status"] == "INVALID"
     diag = bad.reply["diagnostics"][0]
     assert diag["severity"] == "error" and "m.modd" in json.dumps(diag)
@@ -154,8 +162,11 @@ def test_planning_config_matches_plan_contract() -> None:
     assert [t.buffer_size for t in cfg.topics] == [28, 28, 6]
     assert all(t.type == ValueType.FLOAT32 and t.period_us == 40_000 for t in cfg.topics)
     assert [(s.topic, s.aggregation, s.period_us) for s in cfg.streams] == [
-        (0, Aggregation.AVERAGE, 250_000), (1, Aggregation.AVERAGE, 250_000),
-        (2, Aggregation.MIN, 250_000), (2, Aggregation.MAX, 250_000)]
+        (0, Aggregation.AVERAGE, 250_000),
+        (1, Aggregation.AVERAGE, 250_000),
+        (2, Aggregation.MIN, 250_000),
+        (2, Aggregation.MAX, 250_000),
+    ]
     slow = plan_for(model, rtt_s=2.0)  # a slow link loosens the delay cap
     assert slow.constants.ping_s == 2
     with pytest.raises(ValueError):
@@ -204,10 +215,12 @@ def test_queries_bounded_before_parsing() -> None:
     from modd.subbroker.request import MAX_DEPLOY_BYTES, MAX_SMALL_BYTES, read_request
 
     deep = b"[" * 100_000 + b"]" * 100_000
-    for payload, bound, words in ((deep, MAX_SMALL_BYTES * 10, "nested"),
-                                  (b" " * (MAX_SMALL_BYTES + 1), MAX_SMALL_BYTES, "bytes"),
-                                  (b"[1]", MAX_SMALL_BYTES, "object"),
-                                  (b"{", MAX_SMALL_BYTES, "not JSON")):
+    for payload, bound, words in (
+        (deep, MAX_SMALL_BYTES * 10, "nested"),
+        (b" " * (MAX_SMALL_BYTES + 1), MAX_SMALL_BYTES, "bytes"),
+        (b"[1]", MAX_SMALL_BYTES, "object"),
+        (b"{", MAX_SMALL_BYTES, "not JSON"),
+    ):
         request, problem = read_request(payload, bound)
         assert request is None and problem is not None and words in problem, problem
     assert parse_request(deep, "usv").reply["status"] == "ERROR"

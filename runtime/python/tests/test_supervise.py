@@ -51,15 +51,23 @@ class Fake:
         return 1000 + len(self.starts)
 
 
-def run(children: list[Fake], clock: list[float], until: float,
-        policy: RestartPolicy = DEFAULT_POLICY) -> tuple[int, list[str]]:
+def run(
+    children: list[Fake], clock: list[float], until: float, policy: RestartPolicy = DEFAULT_POLICY
+) -> tuple[int, list[str]]:
     said: list[str] = []
 
     def sleep(s: float) -> None:
         clock[0] += s
 
-    code = watch(children, {"K": "v"}, lambda: clock[0] >= until, policy, said.append,
-                 lambda: clock[0], sleep)
+    code = watch(
+        children,
+        {"K": "v"},
+        lambda: clock[0] >= until,
+        policy,
+        said.append,
+        lambda: clock[0],
+        sleep,
+    )
     return code, said
 
 

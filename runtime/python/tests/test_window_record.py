@@ -29,8 +29,14 @@ def three_epochs() -> WindowRecord:
     # epoch not on config 1's grid) the same; config 3 (a redeploy) asks OTHER instead
     rec.begin(Epoch("m", 1, T0, [Due("sub", SLOW, FAST, "m", "float32")]))
     rec.begin(Epoch("m", 2, T0 + 60 * S + 123_456, [Due("sub", SLOW, FAST, "m", "float32")]))
-    rec.begin(Epoch("m", 3, T0 + 120 * S + 77, [Due("sub", OTHER, OTHER, "K", "float64"),
-                                                 Due("other", FAST, FAST, "m", "float32")]))
+    rec.begin(
+        Epoch(
+            "m",
+            3,
+            T0 + 120 * S + 77,
+            [Due("sub", OTHER, OTHER, "K", "float64"), Due("other", FAST, FAST, "m", "float32")],
+        )
+    )
     return rec
 
 
@@ -42,8 +48,9 @@ def test_gaps_span_every_epoch_on_its_own_grid() -> None:
     rec = three_epochs()
     rng = random.Random(7)
     got_live: set[tuple[StreamKey, int, int]] = set()
-    for e, (stream, until) in zip(rec.epochs, [(FAST, T0 + 60 * S), (FAST, T0 + 120 * S),
-                                               (OTHER, T0 + 200 * S)], strict=True):
+    for e, (stream, until) in zip(
+        rec.epochs, [(FAST, T0 + 60 * S), (FAST, T0 + 120 * S), (OTHER, T0 + 200 * S)], strict=True
+    ):
         q = int(stream.period * S)
         for s in sorted(windows(e.epoch_ns, q, e.epoch_ns, until)):
             if rng.random() < 0.7:  # the link delivered 70 % of the live windows
@@ -51,12 +58,16 @@ def test_gaps_span_every_epoch_on_its_own_grid() -> None:
                 got_live.add((stream, s, s + q))
     lo, hi = T0 + 10 * S, T0 + 190 * S
     runs = rec.gaps("sub", lo, hi)
-    asked = {(r.stream, r.from_ns + k * int(r.stream.period * S), r.config_id)
-             for r in runs for k in range(r.windows)}
+    asked = {
+        (r.stream, r.from_ns + k * int(r.stream.period * S), r.config_id)
+        for r in runs
+        for k in range(r.windows)
+    }
     # independently: every window due in [lo, hi) whose source windows did not all arrive
     want = set()
-    for e, end in zip(rec.epochs, [rec.epochs[1].epoch_ns, rec.epochs[2].epoch_ns, hi],
-                      strict=True):
+    for e, end in zip(
+        rec.epochs, [rec.epochs[1].epoch_ns, rec.epochs[2].epoch_ns, hi], strict=True
+    ):
         (due,) = [d for d in e.due if d.subscriber == "sub"]
         q, qs = int(due.stream.period * S), int(due.source.period * S)
         for s in windows(e.epoch_ns, q, max(lo, e.epoch_ns), min(end, hi)):
@@ -86,10 +97,15 @@ def test_kept_record_reads_back_the_same() -> None:
     assert back.received_until() == T0 + 30 * S
 
 
-@pytest.mark.parametrize("doc", [{}, {"epochs": [{"mission": "m"}]},
-                                 {"epochs": [], "received": {"usv.a.x/MIN/0.25": [[5, 1]]},
-                                  "filled": []},
-                                 {"epochs": [], "received": {"nonsense": []}, "filled": []}])
+@pytest.mark.parametrize(
+    "doc",
+    [
+        {},
+        {"epochs": [{"mission": "m"}]},
+        {"epochs": [], "received": {"usv.a.x/MIN/0.25": [[5, 1]]}, "filled": []},
+        {"epochs": [], "received": {"nonsense": []}, "filled": []},
+    ],
+)
 def test_a_damaged_record_is_refused(doc: object) -> None:
     with pytest.raises((KeyError, TypeError, ValueError)):
         WindowRecord.from_json(doc)
@@ -114,15 +130,22 @@ def test_the_manager_keeps_the_record_without_a_clean_stop(tmp_path: Path) -> No
     from modd.subbroker.kept import StateDir
 
     ps = SimpleNamespace(stream=FAST, sources=(), subscribers=["sub"])
-    running = SimpleNamespace(plan=SimpleNamespace(streams=[ps]), model={"name": "m"},
-                              topic_info={FAST.topic: ("m", "float32")},
-                              config=SimpleNamespace(config_id=1), epoch_ns=T0,
-                              fanout=SimpleNamespace(sent=[FAST]))
+    running = SimpleNamespace(
+        plan=SimpleNamespace(streams=[ps]),
+        model={"name": "m"},
+        topic_info={FAST.topic: ("m", "float32")},
+        config=SimpleNamespace(config_id=1),
+        epoch_ns=T0,
+        fanout=SimpleNamespace(sent=[FAST]),
+    )
     m = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
     m.on_config(running)  # type: ignore[arg-type]
     q = S // 4
-    windows = [Window(1, k, 0, T0 + k * q, T0 + (k + 1) * q, Value(True, 1.0))
-               for k in range(40) if not 10 <= k < 20]
+    windows = [
+        Window(1, k, 0, T0 + k * q, T0 + (k + 1) * q, Value(True, 1.0))
+        for k in range(40)
+        if not 10 <= k < 20
+    ]
     m.on_windows(running, windows)  # type: ignore[arg-type]
     deadline = time.monotonic() + SAVE_S + 5
     while True:  # no close(): as after a kill -9
@@ -133,6 +156,7 @@ def test_the_manager_keeps_the_record_without_a_clean_stop(tmp_path: Path) -> No
         time.sleep(0.05)
     again = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
     assert again.received_until() == T0 + 40 * q
-    assert [(r.from_ns, r.windows, r.config_id) for r in again.record.gaps("sub", T0, T0 + 10 * S)
-            ] == [(T0 + 10 * q, 10, 1)]
+    assert [
+        (r.from_ns, r.windows, r.config_id) for r in again.record.gaps("sub", T0, T0 + 10 * S)
+    ] == [(T0 + 10 * q, 10, 1)]
     m.close()

@@ -30,13 +30,17 @@ def test_a_client_keeps_zenohs_defaults() -> None:
 
 
 def test_settings_and_a_config_file_override_the_limits(tmp_path: Path) -> None:
-    s = ZenohSettings(mode="router", listen=("tcp/127.0.0.1:7447",),
-                      extra={f"{UNICAST}/accept_timeout": "5000"})
+    s = ZenohSettings(
+        mode="router", listen=("tcp/127.0.0.1:7447",), extra={f"{UNICAST}/accept_timeout": "5000"}
+    )
     assert unicast(zenoh_config(s))["accept_timeout"] == 5000
     f = tmp_path / "zenoh.json5"
-    f.write_text('{transport: {unicast: {accept_pending: 50}}}')
-    got = unicast(zenoh_config(ZenohSettings(mode="router", listen=("tcp/127.0.0.1:7447",),
-                                             config_file=str(f))))
+    f.write_text("{transport: {unicast: {accept_pending: 50}}}")
+    got = unicast(
+        zenoh_config(
+            ZenohSettings(mode="router", listen=("tcp/127.0.0.1:7447",), config_file=str(f))
+        )
+    )
     assert got["accept_pending"] == 50 and got["accept_timeout"] == 2000
 
 

@@ -108,8 +108,9 @@ def _ask(session: Any, request: dict[str, Any]) -> dict[str, Any]:
     raise RuntimeError(f"no reply from the backfill queryable to {request}")
 
 
-def _measure(rx: Receiver, radio: Proc, phase: Phase, session: Any | None, subscriber: str,
-             seconds: float) -> Phase:
+def _measure(
+    rx: Receiver, radio: Proc, phase: Phase, session: Any | None, subscriber: str, seconds: float
+) -> Phase:
     """One phase: ``seconds`` without a backfill, or ``subscriber``'s gaps filled from the
     request to DONE (cancelled after 4 x ``seconds``)."""
     t0 = time.monotonic()
@@ -137,8 +138,9 @@ def _measure(rx: Receiver, radio: Proc, phase: Phase, session: Any | None, subsc
     return phase
 
 
-def run(tmp: Path, rate: int, outage_s: float, seconds: float,
-        pairs: int) -> tuple[list[tuple[Phase, Phase]], dict[str, Any]]:
+def run(
+    tmp: Path, rate: int, outage_s: float, seconds: float, pairs: int
+) -> tuple[list[tuple[Phase, Phase]], dict[str, Any]]:
     """``pairs`` (without, with) phases after one outage; and the run's facts."""
     model_path = model_copy(tmp, "scenario1.modd")
     model = json.loads(model_path.read_text())
@@ -147,19 +149,33 @@ def run(tmp: Path, rate: int, outage_s: float, seconds: float,
     zport, ingress, port, relay = free_port(), free_port(), free_port("udp"), free_port("udp")
     settle = 12.0  # handshake, CONFIG, first live values before the radio goes dark
     pb = start_pubbroker_dgram(tmp, model_path, {"transport": "udp", "port": port}, ingress)
-    radio = Proc("radio", [*RADIO, "--udp", f"127.0.0.1:{relay}", "--to", f"127.0.0.1:{port}",
-                           "--radio", f"rate={rate},outage={settle}+{outage_s},seed=1",
-                           "--report", "1"], tmp / "radio.log")
-    sb = start_subbroker(tmp, subbroker_dgram_config(tmp, model_path, f"127.0.0.1:{relay}",
-                                                     zport, "udp"))
+    radio = Proc(
+        "radio",
+        [
+            *RADIO,
+            "--udp",
+            f"127.0.0.1:{relay}",
+            "--to",
+            f"127.0.0.1:{port}",
+            "--radio",
+            f"rate={rate},outage={settle}+{outage_s},seed=1",
+            "--report",
+            "1",
+        ],
+        tmp / "radio.log",
+    )
+    sb = start_subbroker(
+        tmp, subbroker_dgram_config(tmp, model_path, f"127.0.0.1:{relay}", zport, "udp")
+    )
     load = start_load(tmp, model_path, ingress, settle + outage_s + pairs * 6 * seconds + 120)
     session = None
     out: list[tuple[Phase, Phase]] = []
     facts: dict[str, Any] = {"load_before": os.getloadavg()}
     try:
         wait_port(zport, 60)
-        session = open_session(client_settings(f"tcp/127.0.0.1:{zport}",
-                                               shared_credentials().cred_file("backend")))
+        session = open_session(
+            client_settings(f"tcp/127.0.0.1:{zport}", shared_credentials().cred_file("backend"))
+        )
         if not wait_connected(session, 60) or not sb.wait_log("running", 60):
             raise RuntimeError(f"the SubBroker is not running: {sb.log()[-2000:]}")
         rx = Receiver()
@@ -170,7 +186,7 @@ def run(tmp: Path, rate: int, outage_s: float, seconds: float,
             raise RuntimeError("no live value reached the base station")
         for i, sub in enumerate(ORDER[:pairs]):
             quiet, busy = Phase(False), Phase(True)
-            for p in ((quiet, busy) if i % 2 == 0 else (busy, quiet)):
+            for p in (quiet, busy) if i % 2 == 0 else (busy, quiet):
                 _measure(rx, radio, p, session if p.backfill else None, sub, seconds)
             out.append((quiet, busy))
         facts["load_after"] = os.getloadavg()
@@ -183,26 +199,45 @@ def run(tmp: Path, rate: int, outage_s: float, seconds: float,
     return out, facts
 
 
-def report(pairs: list[tuple[Phase, Phase]], facts: dict[str, Any]
-           ) -> tuple[list[list[object]], float]:
+def report(
+    pairs: list[tuple[Phase, Phase]], facts: dict[str, Any]
+) -> tuple[list[list[object]], float]:
     """Rows per pair and the summary; returns (rows, ratio of the medians of p99)."""
     rows: list[list[object]] = []
     for i, (quiet, busy) in enumerate(pairs):
-        rows.append([ORDER[i], len(quiet.latencies_ns), f"{quiet.p(0.5):.0f}",
-                     f"{quiet.p(0.99):.0f}", len(busy.latencies_ns), f"{busy.p(0.5):.0f}",
-                     f"{busy.p(0.99):.0f}", busy.windows,
-                     f"{busy.bytes / busy.seconds:.0f}" if busy.seconds else "—",
-                     f"{quiet.radio_bps():.0f} / {busy.radio_bps():.0f}",
-                     f"{quiet.queue_drops} / {busy.queue_drops}"])
+        rows.append(
+            [
+                ORDER[i],
+                len(quiet.latencies_ns),
+                f"{quiet.p(0.5):.0f}",
+                f"{quiet.p(0.99):.0f}",
+                len(busy.latencies_ns),
+                f"{busy.p(0.5):.0f}",
+                f"{busy.p(0.99):.0f}",
+                busy.windows,
+                f"{busy.bytes / busy.seconds:.0f}" if busy.seconds else "—",
+                f"{quiet.radio_bps():.0f} / {busy.radio_bps():.0f}",
+                f"{quiet.queue_drops} / {busy.queue_drops}",
+            ]
+        )
     med_quiet = statistics.median(q.p(0.99) for q, _ in pairs)
     med_busy = statistics.median(b.p(0.99) for _, b in pairs)
     all_quiet = Phase(False, [x for q, _ in pairs for x in q.latencies_ns])
     all_busy = Phase(True, [x for _, b in pairs for x in b.latencies_ns])
     rows.append(["median", "", "", f"{med_quiet:.0f}", "", "", f"{med_busy:.0f}", "", "", "", ""])
-    rows.append(["pooled", len(all_quiet.latencies_ns), f"{all_quiet.p(0.5):.0f}",
-                 f"{all_quiet.p(0.99):.0f}", len(all_busy.latencies_ns),
-                 f"{all_busy.p(0.5):.0f}", f"{all_busy.p(0.99):.0f}",
-                 sum(b.windows for _, b in pairs), "", "",
-                 f"{sum(q.queue_drops for q, _ in pairs)} / "
-                 f"{sum(b.queue_drops for _, b in pairs)}"])
+    rows.append(
+        [
+            "pooled",
+            len(all_quiet.latencies_ns),
+            f"{all_quiet.p(0.5):.0f}",
+            f"{all_quiet.p(0.99):.0f}",
+            len(all_busy.latencies_ns),
+            f"{all_busy.p(0.5):.0f}",
+            f"{all_busy.p(0.99):.0f}",
+            sum(b.windows for _, b in pairs),
+            "",
+            "",
+            f"{sum(q.queue_drops for q, _ in pairs)} / {sum(b.queue_drops for _, b in pairs)}",
+        ]
+    )
     return rows, med_busy / med_quiet

@@ -45,8 +45,10 @@ RECORD = np.dtype([("id", "u1"), ("ts", "<i8"), ("v", "<f4")])
 
 def blast_modd(port: int, topics: list[str], count: int) -> int:
     s = socket.create_connection(("127.0.0.1", port))
-    s.sendall(encode_hello("blaster") + b"".join(
-        encode_register(i, ValueType.FLOAT32, t) for i, t in enumerate(topics)))
+    s.sendall(
+        encode_hello("blaster")
+        + b"".join(encode_register(i, ValueType.FLOAT32, t) for i, t in enumerate(topics))
+    )
     arr = np.zeros(BATCH, dtype=RECORD)
     arr["id"] = np.arange(BATCH) % len(topics)
     head = bytes([0x03]) + varint(BATCH)
@@ -70,8 +72,9 @@ def blast_modd(port: int, topics: list[str], count: int) -> int:
 
 def blast_mqtt(port: int, topics: list[str], count: int) -> int:
     s = open_client(port, f"blaster-{topics[0]}")
-    chunk = b"".join(publish_packet(topics[i % len(topics)], PAYLOAD.pack(i, 0.5, i))
-                     for i in range(BATCH))
+    chunk = b"".join(
+        publish_packet(topics[i % len(topics)], PAYLOAD.pack(i, 0.5, i)) for i in range(BATCH)
+    )
     print("ready", flush=True)
     sys.stdin.readline()
     sent = 0

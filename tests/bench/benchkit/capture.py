@@ -17,8 +17,9 @@ from subbroker_harness import Proc
 
 def check_capture() -> None:
     if shutil.which("tshark") is None:
-        raise RuntimeError("tshark is not installed: apt-get install tshark "
-                           "(scripts/setup.sh does)")
+        raise RuntimeError(
+            "tshark is not installed: apt-get install tshark (scripts/setup.sh does)"
+        )
     if os.geteuid() != 0:
         raise RuntimeError("capturing on lo needs root (or CAP_NET_RAW for dumpcap)")
 
@@ -33,11 +34,14 @@ class Direction:
     ack_packets: int
 
     def per_s(self, seconds: float) -> dict[str, float]:
-        return {"bytes_per_s": self.bytes / seconds, "packets_per_s": self.packets / seconds,
-                "data_bytes_per_s": self.data_bytes / seconds,
-                "data_packets_per_s": self.data_packets / seconds,
-                "ack_bytes_per_s": self.ack_bytes / seconds,
-                "ack_packets_per_s": self.ack_packets / seconds}
+        return {
+            "bytes_per_s": self.bytes / seconds,
+            "packets_per_s": self.packets / seconds,
+            "data_bytes_per_s": self.data_bytes / seconds,
+            "data_packets_per_s": self.data_packets / seconds,
+            "ack_bytes_per_s": self.ack_bytes / seconds,
+            "ack_packets_per_s": self.ack_packets / seconds,
+        }
 
 
 @dataclass(frozen=True)
@@ -49,8 +53,10 @@ class Wire:
     up_span: float
 
     def rates(self) -> dict[str, dict[str, float]]:
-        return {"drone_to_base": self.down.per_s(self.down_span),
-                "base_to_drone": self.up.per_s(self.up_span)}
+        return {
+            "drone_to_base": self.down.per_s(self.down_span),
+            "base_to_drone": self.up.per_s(self.up_span),
+        }
 
 
 class Capture:
@@ -60,9 +66,22 @@ class Capture:
         check_capture()
         self.port, self.seconds = port, seconds
         self.pcap = tmp / f"{tag}.pcap"
-        self.proc = Proc(f"tshark-{tag}", [
-            "tshark", "-q", "-i", "lo", "-f", f"tcp port {port}",
-            "-a", f"duration:{seconds:g}", "-w", str(self.pcap)], tmp / f"{tag}.tshark.log")
+        self.proc = Proc(
+            f"tshark-{tag}",
+            [
+                "tshark",
+                "-q",
+                "-i",
+                "lo",
+                "-f",
+                f"tcp port {port}",
+                "-a",
+                f"duration:{seconds:g}",
+                "-w",
+                str(self.pcap),
+            ],
+            tmp / f"{tag}.tshark.log",
+        )
         if not self.proc.wait_log("Capturing on", 15):
             self.proc.stop()
             raise RuntimeError(f"tshark did not start capturing: {self.proc.log()}")
@@ -80,9 +99,25 @@ def read_pcap(pcap: Path, server_port: int, seconds: float) -> Wire:
     the time between them: a periodic flow's exact rate, whatever the capture's edges cut.
     ``seconds`` (the capture's duration) is kept for a direction with fewer than 2 packets."""
     out = subprocess.run(
-        ["tshark", "-r", str(pcap), "-T", "fields", "-e", "frame.time_relative",
-         "-e", "tcp.srcport", "-e", "ip.len", "-e", "tcp.len"],
-        check=True, capture_output=True, text=True).stdout
+        [
+            "tshark",
+            "-r",
+            str(pcap),
+            "-T",
+            "fields",
+            "-e",
+            "frame.time_relative",
+            "-e",
+            "tcp.srcport",
+            "-e",
+            "ip.len",
+            "-e",
+            "tcp.len",
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
     pkts: dict[bool, list[tuple[float, int, int]]] = {True: [], False: []}
     for line in out.splitlines():
         t, src, iplen, tcplen = line.split("\t")
@@ -94,7 +129,8 @@ def read_pcap(pcap: Path, server_port: int, seconds: float) -> Wire:
         body = ps[:-1] if span > 0 else ps
         data = [p[1] for p in body if p[2] > 0]
         acks = [p[1] for p in body if p[2] == 0]
-        dirs.append(Direction(sum(data) + sum(acks), len(body), sum(data), len(data),
-                              sum(acks), len(acks)))
+        dirs.append(
+            Direction(sum(data) + sum(acks), len(body), sum(data), len(data), sum(acks), len(acks))
+        )
         spans.append(span if span > 0 else seconds)
     return Wire(seconds, dirs[0], dirs[1], spans[0], spans[1])

@@ -34,9 +34,15 @@ def router(listen: str, credentials: str) -> None:
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda s, f: stop.set())
     store = CredentialStore(credentials).ensure()
-    session = open_session(ZenohSettings(
-        mode="router", listen=(listen,), dictionary_file=str(store.dictionary),
-        access_control=acl(None), extra={"scouting/gossip/enabled": "false"}))
+    session = open_session(
+        ZenohSettings(
+            mode="router",
+            listen=(listen,),
+            dictionary_file=str(store.dictionary),
+            access_control=acl(None),
+            extra={"scouting/gossip/enabled": "false"},
+        )
+    )
     print("ready", flush=True)
     stop.wait()
     session.close()  # type: ignore[no-untyped-call]
@@ -56,8 +62,11 @@ def load(targets: list[tuple[str, int, str]], seconds: float) -> None:
     start = time.monotonic()
     for _, port, path in targets:
         model = json.loads(Path(path).read_text())
-        types = {f"{model['drone']['name']}.{s['name']}.{v['name']}": v.get("type", "float32")
-                 for s in model["drone"]["sensors"] for v in s["variables"]}
+        types = {
+            f"{model['drone']['name']}.{s['name']}.{v['name']}": v.get("type", "float32")
+            for s in model["drone"]["sensors"]
+            for v in s["variables"]
+        }
         sock = socket.create_connection(("127.0.0.1", port))
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         sock.sendall(frame(0x01, bytes([1]) + string("fleet-load")))
@@ -67,8 +76,12 @@ def load(targets: list[tuple[str, int, str]], seconds: float) -> None:
             for topic in pub["topics"]:
                 if topic not in ids:
                     ids[topic] = len(ids)
-                    sock.sendall(frame(0x02, varint(ids[topic]) + bytes([TYPES[types[topic]][0]])
-                                       + string(topic)))
+                    sock.sendall(
+                        frame(
+                            0x02,
+                            varint(ids[topic]) + bytes([TYPES[types[topic]][0]]) + string(topic),
+                        )
+                    )
                 topics.append((ids[topic], types[topic]))
             period = float(pub["periodS"])
             jobs.append([start + period, period, sock, topics])
@@ -80,9 +93,10 @@ def load(targets: list[tuple[str, int, str]], seconds: float) -> None:
         if delay > 0:
             time.sleep(delay)
         now = time.time_ns()
-        body = b"".join(varint(i) + struct.pack("<q", now) + struct.pack(TYPES[t][1],
-                                                                          value_for(rng, t))
-                        for i, t in job[3])
+        body = b"".join(
+            varint(i) + struct.pack("<q", now) + struct.pack(TYPES[t][1], value_for(rng, t))
+            for i, t in job[3]
+        )
         try:
             job[2].sendall(frame(0x03, varint(len(job[3])) + body))
         except OSError:

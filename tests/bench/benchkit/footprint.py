@@ -61,6 +61,10 @@ class Sampler:
         self._thread.join()
         self._rss.append(rss_kb(self.pid))
         cpu = cpu1 - self._cpu0
-        return Footprint(cpu_percent=100 * cpu / (t1 - self._t0), cpu_seconds=cpu,
-                         seconds=t1 - self._t0, rss_median_kb=int(statistics.median(self._rss)),
-                         rss_peak_kb=max(self._rss))
+        return Footprint(
+            cpu_percent=100 * cpu / (t1 - self._t0),
+            cpu_seconds=cpu,
+            seconds=t1 - self._t0,
+            rss_median_kb=int(statistics.median(self._rss)),
+            rss_peak_kb=max(self._rss),
+        )

@@ -88,8 +88,9 @@ def wait_puback(s: socket.socket, packet_id: int = 1, timeout_s: float = 120.0) 
 def check_installed() -> str:
     path = shutil.which(MOSQUITTO) or shutil.which("/usr/sbin/mosquitto")
     if path is None:
-        raise RuntimeError("mosquitto is not installed: apt-get install mosquitto "
-                           "(scripts/setup.sh does)")
+        raise RuntimeError(
+            "mosquitto is not installed: apt-get install mosquitto (scripts/setup.sh does)"
+        )
     return path
 
 
@@ -101,19 +102,23 @@ class Mosquitto:
         binary = check_installed()
         self.drone_port, self.link_port = free_port(), free_port()
         conf = tmp / "mosquitto.conf"
-        conf.write_text("\n".join([
-            "user root",  # we run as root in CI; do not switch to the mosquitto user
-            "persistence false",
-            "log_dest stderr",
-            "log_type error",
-            "log_type warning",
-            f"sys_interval {sys_interval_s}",
-            "max_queued_messages 100000",
-            "allow_anonymous true",
-            f"listener {self.drone_port} 127.0.0.1",
-            f"listener {self.link_port} 127.0.0.1",
-            "",
-        ]))
+        conf.write_text(
+            "\n".join(
+                [
+                    "user root",  # we run as root in CI; do not switch to the mosquitto user
+                    "persistence false",
+                    "log_dest stderr",
+                    "log_type error",
+                    "log_type warning",
+                    f"sys_interval {sys_interval_s}",
+                    "max_queued_messages 100000",
+                    "allow_anonymous true",
+                    f"listener {self.drone_port} 127.0.0.1",
+                    f"listener {self.link_port} 127.0.0.1",
+                    "",
+                ]
+            )
+        )
         cmd = [binary, "-c", str(conf)]
         if cpu is not None:
             cmd = ["taskset", "-c", str(cpu), *cmd]

@@ -13,10 +13,20 @@ def table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
     right = [all(numeric(r[i]) for r in cells[1:]) for i in range(len(header))]
 
     def line(r: list[str]) -> str:
-        return "| " + " | ".join(c.rjust(w) if right[i] else c.ljust(w)
-                                 for i, (c, w) in enumerate(zip(r, widths, strict=True))) + " |"
-    sep = "| " + " | ".join(("-" * (w - 1) + ":" if right[i] else "-" * w)
-                            for i, w in enumerate(widths)) + " |"
+        return (
+            "| "
+            + " | ".join(
+                c.rjust(w) if right[i] else c.ljust(w)
+                for i, (c, w) in enumerate(zip(r, widths, strict=True))
+            )
+            + " |"
+        )
+
+    sep = (
+        "| "
+        + " | ".join(("-" * (w - 1) + ":" if right[i] else "-" * w) for i, w in enumerate(widths))
+        + " |"
+    )
     return "\n".join([line(cells[0]), sep, *(line(r) for r in cells[1:])])
 
 

@@ -34,8 +34,15 @@ class Run:
     extra: dict[str, Any]
 
 
-def measure(kind: str, sc: Scenario, seconds: float, *, capture: bool = True,
-            footprint: bool = True, settle_s: float = 1.0) -> Run:
+def measure(
+    kind: str,
+    sc: Scenario,
+    seconds: float,
+    *,
+    capture: bool = True,
+    footprint: bool = True,
+    settle_s: float = 1.0,
+) -> Run:
     """``kind``: modd | mosquitto | zenoh."""
     with tempfile.TemporaryDirectory(prefix=f"modd-bench-{kind}-") as d:
         tmp = Path(d)

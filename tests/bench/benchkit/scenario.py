@@ -61,11 +61,16 @@ def load(number: int) -> Scenario:
     sched = plan.schedule
     expected = json.loads((SCENARIOS / "expected.json").read_text())
     return Scenario(
-        number=number, path=path, drone=model["drone"]["name"],
+        number=number,
+        path=path,
+        drone=model["drone"]["name"],
         publishers=[(Fraction(p["periodS"]), list(p["topics"])) for p in model["publishers"]],
-        subscriptions=[Subscription(s["name"], s["topic"], Fraction(s["periodS"]),
-                                    s["aggregation"]) for s in model["subscribers"]],
-        planned_down=float(link.drone_to_base), planned_up=float(link.base_to_drone),
+        subscriptions=[
+            Subscription(s["name"], s["topic"], Fraction(s["periodS"]), s["aggregation"])
+            for s in model["subscribers"]
+        ],
+        planned_down=float(link.drone_to_base),
+        planned_up=float(link.base_to_drone),
         sent_values_per_s=float(sum(1 / s.stream.period for s in plan.sent_streams)),
         slots_per_s=float(sched.messages_per_hyperperiod / sched.hyperperiod),
         paper=expected[f"scenario{number}"],

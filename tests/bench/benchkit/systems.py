@@ -72,8 +72,12 @@ class Tally:
     def freeze(self) -> Delivery:
         with self._lock:
             self.marked = False
-            return Delivery(time.monotonic() - self._t0, dict(self.counted),
-                            list(self.latencies_ns), {n: list(s) for n, s in self.seqs.items()})
+            return Delivery(
+                time.monotonic() - self._t0,
+                dict(self.counted),
+                list(self.latencies_ns),
+                {n: list(s) for n, s in self.seqs.items()},
+            )
 
 
 @dataclass
@@ -142,8 +146,10 @@ class ModdLink:
             wait_port(zport, 15)
             viewer = shared_credentials().cred_file("viewer")  # the SubBroker authenticates
             self.session = open_session(client_settings(f"tcp/127.0.0.1:{zport}", viewer))
-            self.subs = [modd.subscribe(sc.drone, s.name, self._receiver(s.name),
-                                        session=self.session) for s in sc.subscriptions]
+            self.subs = [
+                modd.subscribe(sc.drone, s.name, self._receiver(s.name), session=self.session)
+                for s in sc.subscriptions
+            ]
             self.load = start_load(tmp, model, ingress, seconds + 30)
             self.procs.append(self.load)
             slowest = max(float(s.period_s) for s in sc.subscriptions)
@@ -156,6 +162,7 @@ class ModdLink:
     def _receiver(self, name: str) -> Any:
         def on_value(v: Any) -> None:  # window end (drone clock) -> receipt (same host)
             self.tally.add(name, time.time_ns() - v.end_ns)
+
         return on_value
 
     def stop(self) -> dict[str, Any]:
@@ -193,10 +200,20 @@ class MosquittoLink:
                 if not subscribed.wait(10):
                     raise RuntimeError(f"{s.name}: no SUBACK from Mosquitto")
             load = json.dumps([[float(p), [mqtt_topic(t) for t in ts]] for p, ts in sc.publishers])
-            self.pub = Proc("mqtt-publisher", [PYTHON, str(HERE / "mqtt_publisher.py"), "--port",
-                                               str(self.broker.drone_port), "--load", load,
-                                               "--seconds", str(seconds + 30)],
-                            tmp / "mqtt-publisher.log")
+            self.pub = Proc(
+                "mqtt-publisher",
+                [
+                    PYTHON,
+                    str(HERE / "mqtt_publisher.py"),
+                    "--port",
+                    str(self.broker.drone_port),
+                    "--load",
+                    load,
+                    "--seconds",
+                    str(seconds + 30),
+                ],
+                tmp / "mqtt-publisher.log",
+            )
             self.procs.append(self.pub)
             wait_all_delivered(self.tally, self.procs, 15)
         except BaseException:
@@ -207,6 +224,7 @@ class MosquittoLink:
         def on_message(client: Any, userdata: Any, msg: Any) -> None:
             sent_ns, _, seq = PAYLOAD.unpack(msg.payload)
             self.tally.add(name, time.time_ns() - sent_ns, seq)
+
         return on_message
 
     def stop(self) -> dict[str, Any]:
@@ -232,21 +250,35 @@ class ZenohLink:
         self.tally = Tally([s.name for s in sc.subscriptions])
         keys: list[tuple[str, str, float]] = [
             (f"bench/{sc.drone}/sub/{s.name}", s.topic, 1 / float(s.period_s))
-            for s in sc.subscriptions]
+            for s in sc.subscriptions
+        ]
         plan = {"publishers": [[float(p), ts] for p, ts in sc.publishers], "keys": keys}
-        self.drone = Proc("zenoh-drone", [PYTHON, str(HERE / "zenoh_drone.py"), "--listen",
-                                          f"tcp/127.0.0.1:{self.link_port}", "--plan",
-                                          json.dumps(plan), "--seconds", str(seconds + 30)],
-                          tmp / "zenoh-drone.log")
+        self.drone = Proc(
+            "zenoh-drone",
+            [
+                PYTHON,
+                str(HERE / "zenoh_drone.py"),
+                "--listen",
+                f"tcp/127.0.0.1:{self.link_port}",
+                "--plan",
+                json.dumps(plan),
+                "--seconds",
+                str(seconds + 30),
+            ],
+            tmp / "zenoh-drone.log",
+        )
         self.broker_pid = self.drone.pid
         try:
             if not self.drone.wait_log("ready", 15):
                 raise RuntimeError(f"zenoh drone did not start: {self.drone.log()}")
             # a peer of the drone-side router, as measured before (docs/benchmarks.md)
-            self.session = open_session(ZenohSettings(
-                mode="peer", connect=(f"tcp/127.0.0.1:{self.link_port}",)))
-            self.subs = [self.session.declare_subscriber(k, self._receiver(s.name))
-                         for (k, _, _), s in zip(keys, sc.subscriptions, strict=True)]
+            self.session = open_session(
+                ZenohSettings(mode="peer", connect=(f"tcp/127.0.0.1:{self.link_port}",))
+            )
+            self.subs = [
+                self.session.declare_subscriber(k, self._receiver(s.name))
+                for (k, _, _), s in zip(keys, sc.subscriptions, strict=True)
+            ]
             slowest = max(float(s.period_s) for s in sc.subscriptions)
             wait_all_delivered(self.tally, [self.drone], 15 + 2 * slowest)
         except BaseException:
@@ -257,6 +289,7 @@ class ZenohLink:
         def on_sample(sample: Any) -> None:
             sent_ns, _, seq = PAYLOAD.unpack(sample.payload.to_bytes())
             self.tally.add(name, time.time_ns() - sent_ns, seq)
+
         return on_sample
 
     def stop(self) -> dict[str, Any]:
@@ -269,4 +302,7 @@ class ZenohLink:
 
 
 SYSTEMS: dict[str, type[ModdLink] | type[MosquittoLink] | type[ZenohLink]] = {
-    "modd": ModdLink, "mosquitto": MosquittoLink, "zenoh": ZenohLink}
+    "modd": ModdLink,
+    "mosquitto": MosquittoLink,
+    "zenoh": ZenohLink,
+}

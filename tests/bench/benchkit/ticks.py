@@ -7,8 +7,9 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 
 
-def publisher_ticks(periods_s: Sequence[float], seconds: float,
-                    stopped: Callable[[], bool]) -> Iterator[tuple[int, int]]:
+def publisher_ticks(
+    periods_s: Sequence[float], seconds: float, stopped: Callable[[], bool]
+) -> Iterator[tuple[int, int]]:
     """``(publisher index, wall-clock ns)`` each time a publisher is due, earliest
     first, sleeping until then, for ``seconds`` or until ``stopped()``."""
     start = time.monotonic()

@@ -38,8 +38,9 @@ def router_config(listen: str, keys: list[tuple[str, str, float]]) -> zenoh.Conf
     c.insert_json5("scouting/delay", "0")
     c.insert_json5("listen/endpoints", json.dumps([listen]))
     rules = [{"key_expr": key, "freq": freq} for key, _, freq in keys]
-    c.insert_json5("downsampling", json.dumps(
-        [{"messages": ["put"], "flows": ["egress"], "rules": rules}]))
+    c.insert_json5(
+        "downsampling", json.dumps([{"messages": ["put"], "flows": ["egress"], "rules": rules}])
+    )
     return c
 
 

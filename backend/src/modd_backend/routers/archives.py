@@ -33,8 +33,10 @@ Name = Annotated[str, Path(max_length=255)]
 Topic = Annotated[str, Query(max_length=200)]
 Nanos = Annotated[int | None, Query(ge=0, le=2**63 - 1)]
 NOT_FOUND: Responses = {404: {"description": "no such archive file"}}
-BUSY: Responses = {429: {"description": "this user's heavy requests are running; Retry-After"},
-                   503: {"description": "all heavy slots are taken; Retry-After"}}
+BUSY: Responses = {
+    429: {"description": "this user's heavy requests are running; Retry-After"},
+    503: {"description": "all heavy slots are taken; Retry-After"},
+}
 
 
 class TopicCount(BaseModel):
@@ -102,8 +104,13 @@ def list_archives(drone: Drone, state: StateDep, _user: UserDep) -> list[Archive
 
 @router.get("/{name}/series", responses={**NOT_FOUND, **BUSY}, dependencies=[Heavy])
 async def read_series(
-    drone: Drone, name: Name, topic: Topic, state: StateDep, _user: UserDep,
-    start_ns: Nanos = None, end_ns: Nanos = None,
+    drone: Drone,
+    name: Name,
+    topic: Topic,
+    state: StateDep,
+    _user: UserDep,
+    start_ns: Nanos = None,
+    end_ns: Nanos = None,
     max_points: Annotated[int, Query(ge=2, le=100_000)] = 2000,
 ) -> SeriesOut:
     path = archive_path(state.settings.effective_archive_dir, drone, name)
@@ -111,19 +118,30 @@ async def read_series(
     return SeriesOut(topic=topic, total=total, reduced=len(points) < total, points=points)
 
 
-@router.get("/{name}/csv", responses={**NOT_FOUND, **BUSY, 200: {"content": {"text/csv": {}}}},
-            dependencies=[Heavy])
+@router.get(
+    "/{name}/csv",
+    responses={**NOT_FOUND, **BUSY, 200: {"content": {"text/csv": {}}}},
+    dependencies=[Heavy],
+)
 async def export_csv(
-    drone: Drone, name: Name, topic: Topic, state: StateDep, _user: UserDep,
-    start_ns: Nanos = None, end_ns: Nanos = None,
+    drone: Drone,
+    name: Name,
+    topic: Topic,
+    state: StateDep,
+    _user: UserDep,
+    start_ns: Nanos = None,
+    end_ns: Nanos = None,
 ) -> Response:
     """Every sample of the range, unreduced: ``log_time_ns,topic,value``
     (read in a worker process: archive_work.py)."""
     path = archive_path(state.settings.effective_archive_dir, drone, name)
     text = await in_worker(csv_text, path, topic, start_ns, end_ns)
     stem = f"{name.removesuffix('.mcap')}-{topic}.csv"
-    return Response(text, media_type="text/csv; charset=utf-8",
-                    headers={"Content-Disposition": content_disposition(stem)})
+    return Response(
+        text,
+        media_type="text/csv; charset=utf-8",
+        headers={"Content-Disposition": content_disposition(stem)},
+    )
 
 
 class ExportIn(BaseModel):
@@ -139,24 +157,37 @@ class ExportIn(BaseModel):
     files: list[Annotated[str, Field(max_length=255)]] = Field(default=[], max_length=1000)
     start_ns: int | None = Field(default=None, ge=0, le=2**63 - 1)
     end_ns: int | None = Field(default=None, ge=0, le=2**63 - 1)
-    topics: list[Annotated[str, Field(max_length=200)]] | None = Field(default=None,
-                                                                       max_length=1000)
+    topics: list[Annotated[str, Field(max_length=200)]] | None = Field(
+        default=None, max_length=1000
+    )
     resample_s: float | None = Field(default=None, gt=0, le=86_400)
     source: Literal["archive", "received"] = "archive"
 
 
-EXPORT_TYPES = {"netcdf": ("application/x-netcdf", ".nc"),
-                "parquet": ("application/vnd.apache.parquet", ".parquet"),
-                "csv": ("text/csv", ".csv"), "geojson": ("application/geo+json", ".geojson"),
-                "gpx": ("application/gpx+xml", ".gpx")}
+EXPORT_TYPES = {
+    "netcdf": ("application/x-netcdf", ".nc"),
+    "parquet": ("application/vnd.apache.parquet", ".parquet"),
+    "csv": ("text/csv", ".csv"),
+    "geojson": ("application/geo+json", ".geojson"),
+    "gpx": ("application/gpx+xml", ".gpx"),
+}
 
 
-@router.post("/export", response_class=FileResponse, dependencies=[Heavy], responses={
-    **NOT_FOUND, **BUSY, 200: {"content": {t: {} for t, _ in EXPORT_TYPES.values()}},
-    413: {"description": f"more than {MAX_EXPORT_SAMPLES:,} samples in the range"},
-    422: {"description": "an invalid model, or nothing to export"}})
-async def export_dataset(drone: Drone, body: ExportIn, state: StateDep,
-                         _user: UserDep) -> FileResponse:
+@router.post(
+    "/export",
+    response_class=FileResponse,
+    dependencies=[Heavy],
+    responses={
+        **NOT_FOUND,
+        **BUSY,
+        200: {"content": {t: {} for t, _ in EXPORT_TYPES.values()}},
+        413: {"description": f"more than {MAX_EXPORT_SAMPLES:,} samples in the range"},
+        422: {"description": "an invalid model, or nothing to export"},
+    },
+)
+async def export_dataset(
+    drone: Drone, body: ExportIn, state: StateDep, _user: UserDep
+) -> FileResponse:
     """The archive (or the windows the subscribers received) as a dataset file,
     streamed as a download (made in a worker process, bounded to
     MAX_EXPORT_SAMPLES samples; notes in ``X-Modd-Notes``)."""
@@ -167,64 +198,102 @@ async def export_dataset(drone: Drone, body: ExportIn, state: StateDep,
     if errors:
         raise HTTPException(422, {"message": "the model is not valid", "errors": errors[:20]})
     received = body.source == "received"
-    root = (state.settings.effective_record_dir if received
-            else state.settings.effective_archive_dir)
-    paths = ([archive_path(root, drone, n) for n in body.files] if body.files
-             else list_files(root, drone))
+    root = state.settings.effective_record_dir if received else state.settings.effective_archive_dir
+    paths = (
+        [archive_path(root, drone, n) for n in body.files]
+        if body.files
+        else list_files(root, drone)
+    )
     if not paths:
-        raise HTTPException(404, f"no {'records' if received else 'archives'} for drone "
-                                 f"{drone!r}")
+        raise HTTPException(404, f"no {'records' if received else 'archives'} for drone {drone!r}")
     media, suffix = EXPORT_TYPES[body.format]
     fd, tmp = tempfile.mkstemp(prefix="modd-export-", suffix=suffix)
     os.close(fd)
     out = FsPath(tmp)
     try:
-        notes = await in_worker(dataset_file, paths, body.model, body.format, out,
-                                body.start_ns, body.end_ns, body.topics, body.resample_s,
-                                archive_work.MAX_EXPORT_SAMPLES, received)
+        notes = await in_worker(
+            dataset_file,
+            paths,
+            body.model,
+            body.format,
+            out,
+            body.start_ns,
+            body.end_ns,
+            body.topics,
+            body.resample_s,
+            archive_work.MAX_EXPORT_SAMPLES,
+            received,
+        )
     except DatasetError as exc:
         out.unlink(missing_ok=True)
         text = str(exc).replace(str(root), "<records>" if received else "<archives>")
-        raise HTTPException(413 if "more than" in text and "samples" in text else 422,
-                            text) from None
+        raise HTTPException(
+            413 if "more than" in text and "samples" in text else 422, text
+        ) from None
     name = f"{drone}-{'received' if received else 'dataset'}{suffix}"
     headers = {"X-Modd-Notes": json.dumps(notes[:20], ensure_ascii=True)}
-    return FileResponse(out, media_type=media, filename=name, headers=headers,
-                        background=BackgroundTask(out.unlink, missing_ok=True))
+    return FileResponse(
+        out,
+        media_type=media,
+        filename=name,
+        headers=headers,
+        background=BackgroundTask(out.unlink, missing_ok=True),
+    )
 
 
-@router.post("/{name}/replay", responses={
-    **NOT_FOUND, **BUSY, 409: {"description": "replay is off (--foxglove-replay-port 0)"},
-    422: {"description": "nothing in the range, or more than a replay holds"}},
-    dependencies=[Heavy])
-def start_replay(drone: Drone, name: Name, body: ReplayIn, state: StateDep,
-                 user: Annotated[User, Depends(REPLAYERS)], link: ViewerLinks) -> ReplayOut:
+@router.post(
+    "/{name}/replay",
+    responses={
+        **NOT_FOUND,
+        **BUSY,
+        409: {"description": "replay is off (--foxglove-replay-port 0)"},
+        422: {"description": "nothing in the range, or more than a replay holds"},
+    },
+    dependencies=[Heavy],
+)
+def start_replay(
+    drone: Drone,
+    name: Name,
+    body: ReplayIn,
+    state: StateDep,
+    user: Annotated[User, Depends(REPLAYERS)],
+    link: ViewerLinks,
+) -> ReplayOut:
     """Serves the range to Foxglove/Lichtblick with seek, play and pause
     (replacing the replay running now). A file still being written plays up
     to its last complete record."""
-    return serve_replay(state, state.settings.effective_archive_dir, drone, name, body, user,
-                        link)
+    return serve_replay(state, state.settings.effective_archive_dir, drone, name, body, user, link)
 
 
-def serve_replay(state: AppState, root: FsPath, drone: str, name: str, body: ReplayIn,
-                 user: User, link: Callable[[str], str]) -> ReplayOut:
+def serve_replay(
+    state: AppState,
+    root: FsPath,
+    drone: str,
+    name: str,
+    body: ReplayIn,
+    user: User,
+    link: Callable[[str], str],
+) -> ReplayOut:
     """The replay of ``<root>/<drone>/<name>`` (an archive or a base-station record)."""
     if state.replay is None:
         raise HTTPException(409, "replay is off on this backend (--foxglove-replay-port 0)")
     path = archive_path(root, drone, name)
     try:
-        info = state.replay.start(drone, path, body.start_ns, body.end_ns, user.username,
-                                  autoplay=body.autoplay)
+        info = state.replay.start(
+            drone, path, body.start_ns, body.end_ns, user.username, autoplay=body.autoplay
+        )
     except ValueError as exc:
         raise HTTPException(422, f"{name}: {exc}".replace(str(path), name)) from None
     except OSError as exc:
-        raise HTTPException(409, f"the replay server cannot start: {exc.strerror or exc}"
-                            ) from None
+        raise HTTPException(409, f"the replay server cannot start: {exc.strerror or exc}") from None
     return ReplayOut.model_validate({**info.__dict__, "url": link("replay")})
 
 
-@router.get("/{name}", response_class=FileResponse,
-            responses={**NOT_FOUND, 200: {"content": {"application/octet-stream": {}}}})
+@router.get(
+    "/{name}",
+    response_class=FileResponse,
+    responses={**NOT_FOUND, 200: {"content": {"application/octet-stream": {}}}},
+)
 def download(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> Response:
     path = archive_path(state.settings.effective_archive_dir, drone, name)
     return file_snapshot(path)  # a file still being written: what it held at the start
@@ -237,8 +306,9 @@ replay_router = APIRouter(prefix="/api/replay", tags=["archives"])
 def current_replay(state: StateDep, _user: UserDep, link: ViewerLinks) -> ReplayOut | None:
     """The replay being served now (with a fresh ticket), or null."""
     info = state.replay.info if state.replay is not None else None
-    return None if info is None else ReplayOut.model_validate({**info.__dict__,
-                                                               "url": link("replay")})
+    return (
+        None if info is None else ReplayOut.model_validate({**info.__dict__, "url": link("replay")})
+    )
 
 
 @replay_router.delete("", status_code=204)

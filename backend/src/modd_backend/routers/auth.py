@@ -73,10 +73,14 @@ def client_address(request: Request) -> str:
     return request.client.host if request.client is not None else "unknown"
 
 
-@router.post("/login", responses={401: {"description": "wrong user name or password"},
-                                  429: {"description": "too many failed logins; Retry-After"}})
-async def login(body: LoginIn, state: StateDep, request: Request,
-                response: Response) -> LoginOut:
+@router.post(
+    "/login",
+    responses={
+        401: {"description": "wrong user name or password"},
+        429: {"description": "too many failed logins; Retry-After"},
+    },
+)
+async def login(body: LoginIn, state: StateDep, request: Request, response: Response) -> LoginOut:
     """Throttled on the event loop; the password is checked in the login's
     own threads (``Settings.login_threads``), never queued behind saves."""
     account = body.username.lower()
@@ -97,8 +101,13 @@ async def login(body: LoginIn, state: StateDep, request: Request,
     token, user = found
     if body.session == "cookie":
         response.set_cookie(
-            SESSION_COOKIE, token, max_age=state.settings.token_ttl_s, path="/",
-            httponly=True, samesite="strict", secure=request.url.scheme == "https",
+            SESSION_COOKIE,
+            token,
+            max_age=state.settings.token_ttl_s,
+            path="/",
+            httponly=True,
+            samesite="strict",
+            secure=request.url.scheme == "https",
         )
         return LoginOut(token=None, csrf=csrf_for(token), user=user)
     return LoginOut(token=token, user=user)
@@ -119,8 +128,9 @@ def logout(db: DbDep, creds: CredsDep, response: Response) -> None:
 
 @router.get("/me")
 def me(user: UserDep, creds: CredsDep) -> MeOut:
-    return MeOut(**user_out(user).model_dump(),
-                 csrf=csrf_for(creds.token) if creds.via_cookie else None)
+    return MeOut(
+        **user_out(user).model_dump(), csrf=csrf_for(creds.token) if creds.via_cookie else None
+    )
 
 
 @router.put("/password", status_code=204, responses={403: {"description": "wrong password"}})

@@ -87,8 +87,11 @@ Operator = Depends(require(Role.operator))
 async def start(drone: Drone, body: BackfillIn, state: StateDep, user: UserDep) -> Progress:
     if not body.gaps and (body.from_ns is None or body.to_ns is None):
         raise HTTPException(422, "give gaps: true, or from_ns and to_ns")
-    request: dict[str, Any] = {"op": "start", **body.model_dump(exclude_none=True),
-                               "owner": user.username}
+    request: dict[str, Any] = {
+        "op": "start",
+        **body.model_dump(exclude_none=True),
+        "owner": user.username,
+    }
     reply = await run_in_threadpool(_ask, zenoh_session_of(state), drone, request)
     if reply.id is not None:
         with _lock:
@@ -100,14 +103,16 @@ async def start(drone: Drone, body: BackfillIn, state: StateDep, user: UserDep) 
 
 @router.get("/{drone}/backfill/{job_id}", dependencies=[Either])
 async def progress(drone: Drone, job_id: JobId, state: StateDep) -> Progress:
-    return await run_in_threadpool(_ask, zenoh_session_of(state), drone,
-                                   {"op": "progress", "id": job_id})
+    return await run_in_threadpool(
+        _ask, zenoh_session_of(state), drone, {"op": "progress", "id": job_id}
+    )
 
 
 @router.post("/{drone}/backfill/{job_id}/cap", dependencies=[Operator])
 async def cap(drone: Drone, job_id: JobId, body: CapIn, state: StateDep) -> Progress:
-    return await run_in_threadpool(_ask, zenoh_session_of(state), drone,
-                                   {"op": "cap", "id": job_id, "rate_bps": body.rate_bps})
+    return await run_in_threadpool(
+        _ask, zenoh_session_of(state), drone, {"op": "cap", "id": job_id, "rate_bps": body.rate_bps}
+    )
 
 
 @router.delete("/{drone}/backfill/{job_id}", dependencies=[Either])
@@ -116,5 +121,6 @@ async def cancel(drone: Drone, job_id: JobId, state: StateDep, user: UserDep) ->
         starter = _started.get((drone, job_id))
     if not has_role(user, Role.operator) and starter != user.username:
         raise HTTPException(403, "only the operator or who started it may cancel a backfill")
-    return await run_in_threadpool(_ask, zenoh_session_of(state), drone,
-                                   {"op": "cancel", "id": job_id})
+    return await run_in_threadpool(
+        _ask, zenoh_session_of(state), drone, {"op": "cancel", "id": job_id}
+    )

@@ -25,8 +25,9 @@ router = APIRouter(prefix="/api", tags=["deploy"])
 
 
 class DeployIn(BaseModel):
-    revision: int | None = Field(default=None, ge=1, le=2**31 - 1,
-                                 description="the head when absent")
+    revision: int | None = Field(
+        default=None, ge=1, le=2**31 - 1, description="the head when absent"
+    )
 
 
 class DeploymentOut(BaseModel):
@@ -64,8 +65,10 @@ class DeployedDiffOut(BaseModel):
     "/projects/{project_id}/deployments",
     status_code=201,
     dependencies=[Depends(require(Role.operator)), Heavy],
-    responses={404: {"description": "no such project or revision"},
-               422: {"model": InvalidModelOut, "description": "the version is not valid"}},
+    responses={
+        404: {"description": "no such project or revision"},
+        422: {"model": InvalidModelOut, "description": "the version is not valid"},
+    },
 )
 def deploy_version(
     project_id: Id, body: DeployIn, db: DbDep, user: UserDep, state: StateDep
@@ -75,10 +78,20 @@ def deploy_version(
     version = get_version(db, project_id, body.revision)
     if not version.valid:
         diags = diagnostics_json(validate(model_of(version)))
-        raise ApiError(422, f"revision {version.revision} has errors: fix them before deploying",
-                       diagnostics=diags)
-    record = deploy(db, zenoh_session_of(state), version, model_of(version), user.username,
-                    state.settings.deploy_timeout_s, signing_key(state.settings.deploy_key_file))
+        raise ApiError(
+            422,
+            f"revision {version.revision} has errors: fix them before deploying",
+            diagnostics=diags,
+        )
+    record = deploy(
+        db,
+        zenoh_session_of(state),
+        version,
+        model_of(version),
+        user.username,
+        state.settings.deploy_timeout_s,
+        signing_key(state.settings.deploy_key_file),
+    )
     if record.status == "acked" and state.scene is not None:
         state.scene.forget(record.drone)  # the 3D scene re-reads the drone's model
     return DeploymentOut.model_validate(record_json(record))
@@ -88,14 +101,15 @@ def deploy_version(
 def list_deployments(project_id: Id, db: DbDep, _user: UserDep) -> list[DeploymentOut]:
     get_project(db, project_id)
     rows = db.scalars(
-        select(Deployment).where(Deployment.project_id == project_id)
-        .order_by(Deployment.id.desc())
+        select(Deployment).where(Deployment.project_id == project_id).order_by(Deployment.id.desc())
     )
     return [DeploymentOut.model_validate(record_json(d)) for d in rows]
 
 
-@router.get("/projects/{project_id}/deployed-diff",
-            responses={404: {"description": "no project or no model"}})
+@router.get(
+    "/projects/{project_id}/deployed-diff",
+    responses={404: {"description": "no project or no model"}},
+)
 def deployed_diff(
     project_id: Id,
     db: DbDep,
@@ -114,8 +128,11 @@ def deployed_diff(
     if reports is not None:
         nonce = reports.get("nonce")
         if isinstance(nonce, str):
-            running = db.scalar(select(Deployment).where(Deployment.drone == name,
-                                                         Deployment.nonce == nonce).limit(1))
+            running = db.scalar(
+                select(Deployment)
+                .where(Deployment.drone == name, Deployment.nonce == nonce)
+                .limit(1)
+            )
     elif name:
         running = last_acked(db, name)
     deployed: dict[str, Any] = {}
@@ -156,7 +173,13 @@ def running_drones(db: DbDep, _user: UserDep, state: StateDep) -> list[RunningDr
         record = last_acked(db, name)
         model = model_of(get_version(db, record.project_id, record.revision)) if record else {}
         ends = {p: (model.get(p) or {}).get("endpoint") for p in ("pubBroker", "subBroker")}
-        out.append(RunningDroneOut(drone=name, project_id=record.project_id if record else None,
-                                   revision=record.revision if record else None,
-                                   pub_broker=ends["pubBroker"], sub_broker=ends["subBroker"]))
+        out.append(
+            RunningDroneOut(
+                drone=name,
+                project_id=record.project_id if record else None,
+                revision=record.revision if record else None,
+                pub_broker=ends["pubBroker"],
+                sub_broker=ends["subBroker"],
+            )
+        )
     return out

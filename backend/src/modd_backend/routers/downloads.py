@@ -51,26 +51,40 @@ def download(
     model = model_of(version)
     errors = [d for d in validate(model) if d.severity == "error"]
     if errors:
-        raise ApiError(422, f"revision {version.revision} has errors: fix them first",
-                       diagnostics=diagnostics_json(errors))
+        raise ApiError(
+            422,
+            f"revision {version.revision} has errors: fix them first",
+            diagnostics=diagnostics_json(errors),
+        )
     folder = f"{project.name}-r{version.revision}-{target}".replace(" ", "_")
     try:
         if target == "integrator":
             model = as_run(model, state.settings.archive_dir)
         settings = state.settings
-        station = station_of(settings.zenoh_connect, settings.zenoh_credentials) \
-            if target == "scientist" and settings.zenoh_enabled else None
+        station = (
+            station_of(settings.zenoh_connect, settings.zenoh_credentials)
+            if target == "scientist" and settings.zenoh_enabled
+            else None
+        )
         data = role_zip(model, target, folder, station)
     except ValueError as exc:
         raise ApiError(422, f"the generators cannot handle this model: {exc}") from None
-    return Response(data, media_type="application/zip",
-                    headers={"Content-Disposition": f'attachment; filename="{folder}.zip"'})
+    return Response(
+        data,
+        media_type="application/zip",
+        headers={"Content-Disposition": f'attachment; filename="{folder}.zip"'},
+    )
 
 
-@router.get("/{project_id}/foxglove-layout", responses={
-    200: {"content": {"application/json": {}}},
-    403: {"description": "not a scientist"}, 404: {"description": "no such project or revision"},
-    422: {"description": "the revision has errors"}})
+@router.get(
+    "/{project_id}/foxglove-layout",
+    responses={
+        200: {"content": {"application/json": {}}},
+        403: {"description": "not a scientist"},
+        404: {"description": "no such project or revision"},
+        422: {"description": "the revision has errors"},
+    },
+)
 def foxglove_layout_download(
     project_id: Id,
     db: DbDep,
@@ -87,10 +101,16 @@ def foxglove_layout_download(
     model = model_of(version)
     errors = [d for d in validate(model) if d.severity == "error"]
     if errors:  # an invalid revision may lack any part the layout reads
-        raise ApiError(422, f"revision {version.revision} has errors: fix them first",
-                       diagnostics=diagnostics_json(errors))
+        raise ApiError(
+            422,
+            f"revision {version.revision} has errors: fix them first",
+            diagnostics=diagnostics_json(errors),
+        )
     safe = re.sub(r"[^A-Za-z0-9_.-]", "_", project.name)
     name = f"{safe}-r{version.revision}-foxglove-layout"
     body = json.dumps(foxglove_layout(model), indent=1).encode()
-    return Response(body, media_type="application/json",
-                    headers={"Content-Disposition": f'attachment; filename="{name}.json"'})
+    return Response(
+        body,
+        media_type="application/json",
+        headers={"Content-Disposition": f'attachment; filename="{name}.json"'},
+    )

@@ -77,19 +77,19 @@ Scientist = Depends(require(Role.scientist))
 @router.post("/{drone}/subscriptions", dependencies=[Scientist])
 def add_dynamic(drone: Drone, body: DynamicIn, state: StateDep, user: UserDep) -> DynamicOut:
     # the SubBroker scopes quotas, listing and cancelling to the owner
-    request = {"action": "subscribe", **body.model_dump(exclude_none=True),
-               "owner": user.username}
-    reply = dynamic_request(zenoh_session_of(state), drone, request,
-                            state.settings.subscribe_timeout_s)
+    request = {"action": "subscribe", **body.model_dump(exclude_none=True), "owner": user.username}
+    reply = dynamic_request(
+        zenoh_session_of(state), drone, request, state.settings.subscribe_timeout_s
+    )
     return DynamicOut.model_validate(reply)
 
 
 @router.delete("/{drone}/subscriptions/{subscriber}", dependencies=[Scientist])
-def cancel_dynamic(drone: Drone, subscriber: Name, state: StateDep,
-                   user: UserDep) -> DynamicOut:
+def cancel_dynamic(drone: Drone, subscriber: Name, state: StateDep, user: UserDep) -> DynamicOut:
     request = {"action": "cancel", "subscriber": subscriber, "owner": user.username}
-    reply = dynamic_request(zenoh_session_of(state), drone, request,
-                            state.settings.subscribe_timeout_s)
+    reply = dynamic_request(
+        zenoh_session_of(state), drone, request, state.settings.subscribe_timeout_s
+    )
     return DynamicOut.model_validate(reply)
 
 
@@ -131,8 +131,11 @@ async def stream(websocket: WebSocket, drone: str) -> None:
     first message. Never by a token in the URL (URLs end up in logs)."""
     state = ws_state(websocket)
     if "token" in websocket.query_params:
-        await websocket.close(code=4400, reason="no token in a URL: send "
-                              '{"op": "auth", "token": ...} first, or use the session cookie')
+        await websocket.close(
+            code=4400,
+            reason="no token in a URL: send "
+            '{"op": "auth", "token": ...} first, or use the session cookie',
+        )
         return
     if not origin_allowed(websocket, state.settings):
         await websocket.close(code=4403, reason="Origin not allowed")
@@ -172,20 +175,27 @@ async def stream(websocket: WebSocket, drone: str) -> None:
             await websocket.close(code=CAP_CLOSE, reason=str(exc)[:120])
 
 
-async def _serve_stream(websocket: WebSocket, state: AppState, drone: str, token: str,
-                        user: User, roles: str) -> None:
+async def _serve_stream(
+    websocket: WebSocket, state: AppState, drone: str, token: str, user: User, roles: str
+) -> None:
     assert state.hub is not None
     settings = state.settings
-    relay = LiveRelay(state.hub, drone, settings.stream_queue_size, user_id=user.id,
-                        per_socket=settings.ws_subscriptions_per_socket,
-                        per_user=settings.ws_subscriptions_per_user,
-                        per_user_counts=state.ws_counts)
+    relay = LiveRelay(
+        state.hub,
+        drone,
+        settings.stream_queue_size,
+        user_id=user.id,
+        per_socket=settings.ws_subscriptions_per_socket,
+        per_user=settings.ws_subscriptions_per_user,
+        per_user_counts=state.ws_counts,
+    )
     relay.queue.bind(asyncio.get_running_loop())
     relay.start()
     watches = ProjectWatches(state.project_events, relay.queue.put)
     tasks: set[asyncio.Task[Any]] = {
-        asyncio.create_task(_send_loop(websocket, relay,
-                                       websocket.query_params.get("batch") == "1")),
+        asyncio.create_task(
+            _send_loop(websocket, relay, websocket.query_params.get("batch") == "1")
+        ),
         asyncio.create_task(_receive_loop(websocket, relay, state, user, watches)),
     }
     watcher = asyncio.create_task(watch_session(state, token, (user.id, roles)))
@@ -227,8 +237,9 @@ async def _first_message_auth(
     return token, session
 
 
-async def _receive_loop(websocket: WebSocket, relay: LiveRelay, state: AppState,
-                        user: User, watches: ProjectWatches) -> None:
+async def _receive_loop(
+    websocket: WebSocket, relay: LiveRelay, state: AppState, user: User, watches: ProjectWatches
+) -> None:
     try:
         while True:
             text = await websocket.receive_text()
@@ -269,7 +280,8 @@ async def _send_loop(websocket: WebSocket, relay: LiveRelay, batched: bool = Fal
         if batched and len(batch) > 1:
             for k in range(0, len(batch), BATCH_LIMIT):
                 await websocket.send_text(
-                    _dumps({"type": "batch", "messages": batch[k:k + BATCH_LIMIT]}))
+                    _dumps({"type": "batch", "messages": batch[k : k + BATCH_LIMIT]})
+                )
                 await asyncio.sleep(0)
             continue
         for item in batch:
@@ -312,6 +324,8 @@ async def _handle(
     if ident is not None:
         out["id"] = ident
     return out
+
+
 async def _dynamic(
     op: str, message: dict[str, Any], relay: LiveRelay, state: AppState, user: User
 ) -> dict[str, Any]:
@@ -324,7 +338,10 @@ async def _dynamic(
         request = {"action": "cancel", "subscriber": message.get("subscriber")}
     request["owner"] = user.username  # the SubBroker scopes quotas and cancels to it
     reply = await run_in_threadpool(
-        dynamic_request, zenoh_session_of(state), relay.drone, request,
+        dynamic_request,
+        zenoh_session_of(state),
+        relay.drone,
+        request,
         state.settings.subscribe_timeout_s,
     )
     if reply.get("status") == "ACCEPTED" and isinstance(reply.get("subscriber"), str):

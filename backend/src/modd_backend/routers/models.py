@@ -59,12 +59,10 @@ def read_model(project_id: Id, db: DbDep, _user: UserDep, revision: Revision = N
 @router.put(
     "/projects/{project_id}/model",
     dependencies=[Depends(require(*EDITORS))],
-    responses={**NOT_FOUND, **DENIED, 409: {"model": ConflictOut},
-               422: {"model": InvalidModelOut}},
+    responses={**NOT_FOUND, **DENIED, 409: {"model": ConflictOut}, 422: {"model": InvalidModelOut}},
     openapi_extra=documented(SaveIn),
 )
-def save_model(project_id: Id, raw: BodyDep, db: DbDep, user: UserDep,
-               state: StateDep) -> ModelOut:
+def save_model(project_id: Id, raw: BodyDep, db: DbDep, user: UserDep, state: StateDep) -> ModelOut:
     """Save a new revision (the body is a :class:`SaveIn`, read and
     validated in the thread pool, not on the event loop: modd_backend.bodies).
     Text input keeps the current diagram layout (the .modd text has none).
@@ -81,18 +79,25 @@ def save_model(project_id: Id, raw: BodyDep, db: DbDep, user: UserDep,
         check_edit(user, before, after)
         return after
 
-    version = save_version(db, project_id, body.base_revision, model, user.username,
-                           body.message, check)
+    version = save_version(
+        db, project_id, body.base_revision, model, user.username, body.message, check
+    )
     announce_save(state, version)
     return ModelOut.model_validate(version_json(version))
 
 
 def announce_save(state: AppState, version: ModelVersion) -> None:
     """Tell the project's watchers that a revision was saved."""
-    state.project_events.publish(version.project_id, {
-        "type": "saved", "project": version.project_id, "revision": version.revision,
-        "author": version.author, "message": version.message[:200],
-    })
+    state.project_events.publish(
+        version.project_id,
+        {
+            "type": "saved",
+            "project": version.project_id,
+            "revision": version.revision,
+            "author": version.author,
+            "message": version.message[:200],
+        },
+    )
 
 
 @router.get("/projects/{project_id}/versions", responses=NOT_FOUND)
@@ -108,12 +113,18 @@ def list_versions(project_id: Id, db: DbDep, _user: UserDep) -> list[VersionOut]
 
 @router.get(
     "/projects/{project_id}/export",
-    responses={**NOT_FOUND, 200: {"content": {"text/plain": {}, "application/json": {}}},
-               422: {"description": "an invalid revision cannot be printed as .modd"}},
+    responses={
+        **NOT_FOUND,
+        200: {"content": {"text/plain": {}, "application/json": {}}},
+        422: {"description": "an invalid revision cannot be printed as .modd"},
+    },
 )
 def export_model(
-    project_id: Id, db: DbDep, _user: UserDep,
-    format: Format | Literal["collector"] = "modd", revision: Revision = None
+    project_id: Id,
+    db: DbDep,
+    _user: UserDep,
+    format: Format | Literal["collector"] = "modd",
+    revision: Revision = None,
 ) -> Response:
     """The model as a file: canonical .modd text, JSON (layout kept in JSON only)
     or the original MoDD tool's .collector form, which opens with a comment per
@@ -135,8 +146,9 @@ def export_model(
     )
 
 
-@router.post("/validate", responses={422: {"model": InvalidModelOut}},
-             openapi_extra=documented(ModelInput))
+@router.post(
+    "/validate", responses={422: {"model": InvalidModelOut}}, openapi_extra=documented(ModelInput)
+)
 def validate_model(raw: BodyDep, _user: UserDep) -> ValidateOut:
     """Parse and validate without saving; ``model`` is the parsed JSON
     document. The body (a :class:`ModelInput`) is read in the thread pool,
@@ -155,8 +167,13 @@ class PrintIn(BaseModel):
     model: dict[str, Any]
 
 
-@router.post("/print", responses={200: {"content": {"text/plain": {}}},
-                                  422: {"description": "not valid enough to print as .modd"}})
+@router.post(
+    "/print",
+    responses={
+        200: {"content": {"text/plain": {}}},
+        422: {"description": "not valid enough to print as .modd"},
+    },
+)
 def print_modd(body: PrintIn, _user: UserDep) -> Response:
     """The .modd text of a model as the diagram holds it, saved or not, so the
     text view can follow diagram edits before a save."""
@@ -165,4 +182,3 @@ def print_modd(body: PrintIn, _user: UserDep) -> Response:
     except Exception as exc:  # any shape may arrive from an editor mid-edit: never a 500
         raise ApiError(422, f"the model is not valid enough to print as .modd: {exc!r}") from None
     return Response(text, media_type="text/plain; charset=utf-8")
-

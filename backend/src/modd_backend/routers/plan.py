@@ -36,8 +36,11 @@ def plan_response_json(
     """In a worker: :func:`plan_request`, and its answer as :class:`PlanOut`
     JSON (pydantic's serialiser: 0.1 s for a plan of 10 MB, where FastAPI's
     encoder on the event loop took 2 s and stalled every other request)."""
-    return PlanOut.model_validate(plan_request(model, text, fmt, method, timeout_s)
-                                  ).model_dump_json().encode()
+    return (
+        PlanOut.model_validate(plan_request(model, text, fmt, method, timeout_s))
+        .model_dump_json()
+        .encode()
+    )
 
 
 def plan_body_json(
@@ -55,16 +58,21 @@ def plan_body_json(
     return plan_response_json(parsed.model, parsed.text, parsed.format, method, timeout_s)
 
 
-async def _plan_response(model: dict[str, Any] | None, text: str | None, fmt: str,
-                         method: Method) -> Response:
+async def _plan_response(
+    model: dict[str, Any] | None, text: str | None, fmt: str, method: Method
+) -> Response:
     out = await guarded_call(plan_response_json, model, text, fmt, method)
     if isinstance(out, dict):  # the worker's failure (over time or memory)
         out = PlanOut.model_validate(out).model_dump_json().encode()
     return Response(out, media_type="application/json")
 
 
-@router.post("/plan", response_model=PlanOut, openapi_extra=documented(ModelInput),
-             responses={503: {"description": "the planner is busy; retry"}})
+@router.post(
+    "/plan",
+    response_model=PlanOut,
+    openapi_extra=documented(ModelInput),
+    responses={503: {"description": "the planner is busy; retry"}},
+)
 async def plan_model(body: BodyDep, _user: UserDep, method: Method = "exact") -> Response:
     """The body is a :class:`ModelInput`. Its parse, its validation, the
     planning and the answer's JSON all run in a worker process within a time
@@ -78,8 +86,14 @@ async def plan_model(body: BodyDep, _user: UserDep, method: Method = "exact") ->
     return Response(out, media_type="application/json")
 
 
-@router.get("/projects/{project_id}/plan", response_model=PlanOut, responses={
-    404: {"description": "no such revision"}, 503: {"description": "the planner is busy; retry"}})
+@router.get(
+    "/projects/{project_id}/plan",
+    response_model=PlanOut,
+    responses={
+        404: {"description": "no such revision"},
+        503: {"description": "the planner is busy; retry"},
+    },
+)
 async def plan_version(
     project_id: Id,
     db: DbDep,

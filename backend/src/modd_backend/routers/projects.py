@@ -84,8 +84,13 @@ def list_projects(db: DbDep, _user: UserDep) -> list[ProjectOut]:
     return [project_out(db, p) for p in db.scalars(select(Project).order_by(Project.id))]
 
 
-@router.post("", status_code=201, dependencies=[Editor], openapi_extra=documented(ProjectIn),
-             responses={**DENIED, 409: {"description": "name taken"}})
+@router.post(
+    "",
+    status_code=201,
+    dependencies=[Editor],
+    openapi_extra=documented(ProjectIn),
+    responses={**DENIED, 409: {"description": "name taken"}},
+)
 def add_project(raw: BodyDep, db: DbDep, user: UserDep) -> ProjectOut:
     """Create a project, empty or with a model (the body is a
     :class:`ProjectIn`, read in the thread pool: modd_backend.bodies)."""
@@ -105,8 +110,13 @@ _RAW_BODY = {
 }
 
 
-@router.post("/import", status_code=201, dependencies=[Editor], openapi_extra=_RAW_BODY,
-             responses={**DENIED, 409: {"description": "name taken"}})
+@router.post(
+    "/import",
+    status_code=201,
+    dependencies=[Editor],
+    openapi_extra=_RAW_BODY,
+    responses={**DENIED, 409: {"description": "name taken"}},
+)
 def import_project(
     raw: RawBody,
     db: DbDep,
@@ -124,8 +134,12 @@ def read_project(project_id: Id, db: DbDep, _user: UserDep) -> ProjectOut:
     return project_out(db, get_project(db, project_id))
 
 
-@router.delete("/{project_id}", status_code=204, dependencies=[Depends(require(Role.admin))],
-               responses={404: {"description": "no such project"}})
+@router.delete(
+    "/{project_id}",
+    status_code=204,
+    dependencies=[Depends(require(Role.admin))],
+    responses={404: {"description": "no such project"}},
+)
 def delete_project(project_id: Id, db: DbDep) -> None:
     db.delete(get_project(db, project_id))
     db.commit()

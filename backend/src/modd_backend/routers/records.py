@@ -36,21 +36,35 @@ def list_records(drone: Drone, state: StateDep, _user: UserDep) -> list[ArchiveO
     return [ArchiveOut.model_validate(file_info(p).to_json()) for p in list_files(root, drone)]
 
 
-@router.get("/{name}", response_class=FileResponse,
-            responses={**NOT_FOUND, 200: {"content": {"application/octet-stream": {}}}})
+@router.get(
+    "/{name}",
+    response_class=FileResponse,
+    responses={**NOT_FOUND, 200: {"content": {"application/octet-stream": {}}}},
+)
 def download_record(drone: Drone, name: Name, state: StateDep, _user: UserDep) -> Response:
     path = archive_path(state.settings.effective_record_dir, drone, name)
     return file_snapshot(path)  # a file still being written: what it held at the start
 
 
-@router.post("/{name}/replay", responses={
-    **NOT_FOUND, **BUSY, 409: {"description": "replay is off (--foxglove-replay-port 0)"},
-    422: {"description": "nothing in the range, or more than a replay holds"}},
-    dependencies=[Heavy])
-def replay_record(drone: Drone, name: Name, body: ReplayIn, state: StateDep,
-                  user: Annotated[User, Depends(REPLAYERS)], link: ViewerLinks) -> ReplayOut:
+@router.post(
+    "/{name}/replay",
+    responses={
+        **NOT_FOUND,
+        **BUSY,
+        409: {"description": "replay is off (--foxglove-replay-port 0)"},
+        422: {"description": "nothing in the range, or more than a replay holds"},
+    },
+    dependencies=[Heavy],
+)
+def replay_record(
+    drone: Drone,
+    name: Name,
+    body: ReplayIn,
+    state: StateDep,
+    user: Annotated[User, Depends(REPLAYERS)],
+    link: ViewerLinks,
+) -> ReplayOut:
     """The base-station record of a mission (what was delivered, live and
     backfilled) in Foxglove/Lichtblick: seek, play, pause; the same replay
     server as the drone's archives."""
-    return serve_replay(state, state.settings.effective_record_dir, drone, name, body, user,
-                        link)
+    return serve_replay(state, state.settings.effective_record_dir, drone, name, body, user, link)

@@ -39,8 +39,7 @@ class SceneOut(BaseModel):
 
 
 class ColourIn(BaseModel):
-    subscriber: str | None = Field(default=None, pattern=r"^[A-Za-z_][A-Za-z0-9_]*$",
-                                   max_length=64)
+    subscriber: str | None = Field(default=None, pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64)
 
 
 def _scene(state: StateDep) -> SceneService:
@@ -59,9 +58,14 @@ def read_scene(state: StateDep, _user: UserDep) -> SceneOut:
     return SceneOut(url=SCENE_URL, drones=drones)
 
 
-@router.put("/{drone}/colour", status_code=204,
-            responses={403: {"description": "a user without any role"},
-                       404: {"description": "no scene configured"}})
+@router.put(
+    "/{drone}/colour",
+    status_code=204,
+    responses={
+        403: {"description": "a user without any role"},
+        404: {"description": "no scene configured"},
+    },
+)
 def set_colour(drone: Drone, body: ColourIn, state: StateDep, user: UserDep) -> None:
     """Colour the drone's track by this subscriber's values (null: plain);
     the scene is shared, so a user holding no role may not change it."""
@@ -71,14 +75,15 @@ def set_colour(drone: Drone, body: ColourIn, state: StateDep, user: UserDep) -> 
 
 
 _SCENE_ERRORS: dict[int | str, dict[str, Any]] = {
-    401: {"description": "no session"}, 403: {"description": "a user without any role"},
+    401: {"description": "no session"},
+    403: {"description": "a user without any role"},
     404: {"description": "no scene configured, or no such file"},
-    502: {"description": "the scene server did not answer"}}
+    502: {"description": "the scene server did not answer"},
+}
 
 
 @proxy.get("/scene/{path:path}", responses=_SCENE_ERRORS, include_in_schema=False)
-async def scene_page(path: str, request: Request, state: StateDep,
-                     user: UserDep) -> Response:
+async def scene_page(path: str, request: Request, state: StateDep, user: UserDep) -> Response:
     """viser's web client, relayed from its loopback port. Its HTML page
     carries its own CSP: the page's inline scripts by hash (sceneproxy.py)."""
     if not roles_of(user):

@@ -19,9 +19,7 @@ from ..security import hash_password
 from ..tables import User
 from .auth import UserOut, user_out
 
-router = APIRouter(
-    prefix="/api/users", tags=["users"], dependencies=[Depends(require(Role.admin))]
-)
+router = APIRouter(prefix="/api/users", tags=["users"], dependencies=[Depends(require(Role.admin))])
 
 
 class UserIn(BaseModel):
@@ -58,8 +56,10 @@ def add_user(body: UserIn, db: DbDep) -> UserOut:
     return user_out(user)
 
 
-@router.patch("/{user_id}", responses={404: {"description": "no such user"},
-                                         409: {"description": "the last admin"}})
+@router.patch(
+    "/{user_id}",
+    responses={404: {"description": "no such user"}, 409: {"description": "the last admin"}},
+)
 def change_user(user_id: Id, body: UserPatch, db: DbDep) -> UserOut:
     """A new password ends every session of the user; the last admin keeps
     the role admin (409). A user deleted meanwhile (a racing DELETE): 404."""

@@ -45,8 +45,10 @@ def read(name: str) -> str:
         return packaged.read_text(encoding="utf-8")
     original = CHECKOUT / ORIGINALS[name]
     if not original.is_file():
-        raise FileNotFoundError(f"C++ client source {name!r} is neither in the package "
-                                f"nor at {original} (build the wheel from a checkout)")
+        raise FileNotFoundError(
+            f"C++ client source {name!r} is neither in the package "
+            f"nor at {original} (build the wheel from a checkout)"
+        )
     return original.read_text(encoding="utf-8")
 
 

@@ -31,8 +31,12 @@ def client_sources() -> tuple[str, str]:
 def _project(ctx: Context, pub: PublisherView) -> list[Artifact]:
     root = f"integrator/{pub.name}-driver"
     header, source = client_sources()
-    args = {"pub": pub, "drone": ctx.drone, "ingress": ctx.ingress,
-            "archive_dir": ctx.model["pubBroker"]["logPath"]}
+    args = {
+        "pub": pub,
+        "drone": ctx.drone,
+        "ingress": ctx.ingress,
+        "archive_dir": ctx.model["pubBroker"]["logPath"],
+    }
     gen = [
         ("CMakeLists.txt", "cpp_driver/CMakeLists.txt.j2"),
         ("README.md", "cpp_driver/README.md.j2"),
@@ -40,37 +44,51 @@ def _project(ctx: Context, pub: PublisherView) -> list[Artifact]:
         ("cmake/aarch64-linux-gnu.cmake", "cpp_driver/aarch64-linux-gnu.cmake.j2"),
     ]
     out = [Artifact(f"{root}/{path}", render(tpl, **args), "integrator") for path, tpl in gen]
-    out += [Artifact(f"{root}/modd/include/modd/client/publisher.hpp", header, "integrator"),
-            Artifact(f"{root}/modd/src/publisher.cpp", source, "integrator"),
-            # the ingress wire header the client shares with the PubBroker
-            Artifact(f"{root}/modd/include/modd/ingress/wire.hpp", read("wire.hpp"),
-                     "integrator"),
-            Artifact(f"{root}/modd/include/modd/ingress/wire.gen.hpp", read("wire.gen.hpp"),
-                     "integrator")]
-    user = [("src/driver.cpp", "cpp_driver/driver.cpp.j2"),
-            ("user.cmake", "cpp_driver/user.cmake.j2")]
-    out += [Artifact(f"{root}/{path}", render(tpl, **args), "integrator", Ownership.USER)
-            for path, tpl in user]
+    out += [
+        Artifact(f"{root}/modd/include/modd/client/publisher.hpp", header, "integrator"),
+        Artifact(f"{root}/modd/src/publisher.cpp", source, "integrator"),
+        # the ingress wire header the client shares with the PubBroker
+        Artifact(f"{root}/modd/include/modd/ingress/wire.hpp", read("wire.hpp"), "integrator"),
+        Artifact(
+            f"{root}/modd/include/modd/ingress/wire.gen.hpp", read("wire.gen.hpp"), "integrator"
+        ),
+    ]
+    user = [
+        ("src/driver.cpp", "cpp_driver/driver.cpp.j2"),
+        ("user.cmake", "cpp_driver/user.cmake.j2"),
+    ]
+    out += [
+        Artifact(f"{root}/{path}", render(tpl, **args), "integrator", Ownership.USER)
+        for path, tpl in user
+    ]
     return out
 
 
 def _python(ctx: Context, pub: PublisherView) -> Artifact:
     """The same driver in Python, on the Python publisher client (user-owned)."""
     text = render("py_publisher/publisher.py.j2", pub=pub, drone=ctx.drone, ingress=ctx.ingress)
-    return Artifact(f"integrator/python/{pub.name}.py", text, "integrator", Ownership.USER,
-                    executable=True)
+    return Artifact(
+        f"integrator/python/{pub.name}.py", text, "integrator", Ownership.USER, executable=True
+    )
 
 
-_READER = {"mavlink": "modd-mavlink", "nmea": "modd-sensors", "ascii": "modd-sensors",
-           "modbus": "modd-sensors"}
+_READER = {
+    "mavlink": "modd-mavlink",
+    "nmea": "modd-sensors",
+    "ascii": "modd-sensors",
+    "modbus": "modd-sensors",
+}
 
 
 def _driven(ctx: Context) -> list[PublisherView]:
     """The publishers with their topics that a driver reads (not a plug-and-play reader)."""
-    bridged = {s["name"] for s in ctx.model["drone"]["sensors"]
-               if s.get("kind", "generic") in _READER}
-    views = [PublisherView(p.name, p.period_s, [t for t in p.topics if t.sensor not in bridged])
-             for p in ctx.publishers]
+    bridged = {
+        s["name"] for s in ctx.model["drone"]["sensors"] if s.get("kind", "generic") in _READER
+    }
+    views = [
+        PublisherView(p.name, p.period_s, [t for t in p.topics if t.sensor not in bridged])
+        for p in ctx.publishers
+    ]
     return [v for v in views if v.topics]
 
 
@@ -79,15 +97,22 @@ def _plug_and_play(ctx: Context, driven: list[PublisherView]) -> list[Artifact]:
     sensors = ctx.model["drone"]["sensors"]
     if not any(s.get("kind") in ("nmea", "ascii", "modbus") for s in sensors):
         return []
-    rows = [{"name": s["name"], "kind": s["kind"], "reader": _READER[s["kind"]],
-             "device": s.get("device", {}).get("path", "(the bridge's --connect)")}
-            for s in sensors if s.get("kind", "generic") in _READER]
-    text = render("cpp_driver/plug_and_play.md.j2", drone=ctx.drone, sensors=rows,
-                  driven=driven)
+    rows = [
+        {
+            "name": s["name"],
+            "kind": s["kind"],
+            "reader": _READER[s["kind"]],
+            "device": s.get("device", {}).get("path", "(the bridge's --connect)"),
+        }
+        for s in sensors
+        if s.get("kind", "generic") in _READER
+    ]
+    text = render("cpp_driver/plug_and_play.md.j2", drone=ctx.drone, sensors=rows, driven=driven)
     return [Artifact("integrator/PLUG-AND-PLAY.md", text, "integrator")]
 
 
 def artifacts(ctx: Context) -> list[Artifact]:
     driven = _driven(ctx)
-    return [a for pub in driven for a in [*_project(ctx, pub), _python(ctx, pub)]] + \
-        _plug_and_play(ctx, driven)
+    return [a for pub in driven for a in [*_project(ctx, pub), _python(ctx, pub)]] + _plug_and_play(
+        ctx, driven
+    )

@@ -42,8 +42,11 @@ def link_transport(model: dict[str, Any]) -> dict[str, Any]:
     if transport == "tcp":
         return {}
     settings = LinkSettings.of(model)
-    out: dict[str, Any] = {"transport": transport, "max_packet": settings.max_packet,
-                           "delay_ms": int(settings.accepted_delay * 1000)}
+    out: dict[str, Any] = {
+        "transport": transport,
+        "max_packet": settings.max_packet,
+        "delay_ms": int(settings.accepted_delay * 1000),
+    }
     if transport == "serial":
         out["device"] = link.get("droneDevice") or link["device"]
         out["baud"] = link.get("baud", 57600)
@@ -53,21 +56,36 @@ def link_transport(model: dict[str, Any]) -> dict[str, Any]:
 def config(ctx: Context) -> dict[str, Any]:
     broker = ctx.model["pubBroker"]
     sizes = ctx.plan.buffer_sizes
-    ingress: dict[str, Any] = {"unix_path": ctx.ingress.unix_socket,
-                               "max_future_ms": MAX_FUTURE_MS, "max_past_ms": MAX_PAST_MS}
+    ingress: dict[str, Any] = {
+        "unix_path": ctx.ingress.unix_socket,
+        "max_future_ms": MAX_FUTURE_MS,
+        "max_past_ms": MAX_PAST_MS,
+    }
     if ctx.ingress.tcp_port:
         ingress.update(host=ctx.ingress.tcp_host, port=ctx.ingress.tcp_port)
     return {
         "name": ctx.drone,
-        "link": {"host": broker["endpoint"]["host"], "port": broker["endpoint"]["port"],
-                 "key": ctx.key_ref, **link_transport(ctx.model)},
+        "link": {
+            "host": broker["endpoint"]["host"],
+            "port": broker["endpoint"]["port"],
+            "key": ctx.key_ref,
+            **link_transport(ctx.model),
+        },
         "ingress": ingress,
-        "archive": {"dir": broker["logPath"], "prefix": ctx.drone, "rotate_bytes": ROTATE_BYTES,
-                    "rotate_s": ROTATE_S, "fsync": "chunk", "compression": "zstd",
-                    "low_space_mb": LOW_SPACE_MB},
-        "topics": [{"name": t.name, "type": t.type,
-                    "buffer_size": sizes.get(t.name, DEFAULT_BUFFER_SIZE)}
-                   for t in ctx.topics.values() if t.publisher is not None],
+        "archive": {
+            "dir": broker["logPath"],
+            "prefix": ctx.drone,
+            "rotate_bytes": ROTATE_BYTES,
+            "rotate_s": ROTATE_S,
+            "fsync": "chunk",
+            "compression": "zstd",
+            "low_space_mb": LOW_SPACE_MB,
+        },
+        "topics": [
+            {"name": t.name, "type": t.type, "buffer_size": sizes.get(t.name, DEFAULT_BUFFER_SIZE)}
+            for t in ctx.topics.values()
+            if t.publisher is not None
+        ],
         "default_buffer_size": DEFAULT_BUFFER_SIZE,
         "status_period_s": STATUS_PERIOD_S,
         "log_period_s": LOG_PERIOD_S,

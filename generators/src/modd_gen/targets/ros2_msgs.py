@@ -20,7 +20,8 @@ def artifacts(ctx: Context) -> list[Artifact]:
     del ctx  # the package does not depend on the model
     return [
         Artifact(f"{ROOT}/msg/Window.msg", window_msg(), "integrator"),
-        Artifact(f"{ROOT}/package.xml", render("ros2/package.xml.j2", version=VERSION),
-                 "integrator"),
+        Artifact(
+            f"{ROOT}/package.xml", render("ros2/package.xml.j2", version=VERSION), "integrator"
+        ),
         Artifact(f"{ROOT}/CMakeLists.txt", render("ros2/CMakeLists.txt.j2"), "integrator"),
     ]

@@ -20,8 +20,10 @@ ZENOH_LISTEN = "tcp/127.0.0.1:7447"
 def config(ctx: Context) -> dict[str, Any]:
     """The settings of subbroker.toml (docs/subbroker.md)."""
     endpoint = ctx.model["pubBroker"]["endpoint"]
-    link: dict[str, Any] = {"endpoint": f"{endpoint['host']}:{endpoint['port']}",
-                            "key": ctx.key_ref}
+    link: dict[str, Any] = {
+        "endpoint": f"{endpoint['host']}:{endpoint['port']}",
+        "key": ctx.key_ref,
+    }
     model_link = ctx.model.get("link", {})
     if model_link.get("transport", "tcp") != "tcp":
         link["transport"] = model_link["transport"]
@@ -40,9 +42,10 @@ def config(ctx: Context) -> dict[str, Any]:
 
 def artifacts(ctx: Context) -> list[Artifact]:
     plan = ctx.plan.to_json()
-    header = render("operator/subbroker.toml.j2", drone=ctx.drone, plan=plan,
-                    delays=plan["delays"])
+    header = render("operator/subbroker.toml.j2", drone=ctx.drone, plan=plan, delays=plan["delays"])
     text = header + dumps(config(ctx))
     model_json = json.dumps(ctx.model, indent=2, ensure_ascii=False) + "\n"
-    return [Artifact("operator/subbroker.toml", text, "operator"),
-            Artifact("operator/model.json", model_json, "operator")]
+    return [
+        Artifact("operator/subbroker.toml", text, "operator"),
+        Artifact("operator/model.json", model_json, "operator"),
+    ]

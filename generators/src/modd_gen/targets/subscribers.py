@@ -26,8 +26,9 @@ def delivered_value_header() -> str:
 
 def _python(ctx: Context, sub: dict[str, Any]) -> Artifact:
     topic = ctx.topics[sub["topic"]]
-    text = render("py_subscriber/subscriber.py.j2", sub=sub, topic=topic, drone=ctx.drone,
-                  station=ctx.station)
+    text = render(
+        "py_subscriber/subscriber.py.j2", sub=sub, topic=topic, drone=ctx.drone, station=ctx.station
+    )
     return Artifact(f"scientist/python/{sub['name']}.py", text, "scientist", executable=True)
 
 
@@ -36,14 +37,24 @@ def _cpp(ctx: Context, sub: dict[str, Any]) -> list[Artifact]:
     header, source = subscriber_client_sources()
     args = {"sub": sub, "topic": ctx.topics[sub["topic"]], "drone": ctx.drone}
     return [
-        Artifact(f"{root}/CMakeLists.txt", render("cpp_subscriber/CMakeLists.txt.j2", **args),
-                 "scientist"),
+        Artifact(
+            f"{root}/CMakeLists.txt",
+            render("cpp_subscriber/CMakeLists.txt.j2", **args),
+            "scientist",
+        ),
         Artifact(f"{root}/modd/include/modd/client/subscriber.hpp", header, "scientist"),
-        Artifact(f"{root}/modd/include/modd/client/delivered_value.gen.hpp",
-                 delivered_value_header(), "scientist"),
+        Artifact(
+            f"{root}/modd/include/modd/client/delivered_value.gen.hpp",
+            delivered_value_header(),
+            "scientist",
+        ),
         Artifact(f"{root}/modd/src/subscriber.cpp", source, "scientist"),
-        Artifact(f"{root}/src/main.cpp", render("cpp_subscriber/main.cpp.j2", **args),
-                 "scientist", Ownership.USER),
+        Artifact(
+            f"{root}/src/main.cpp",
+            render("cpp_subscriber/main.cpp.j2", **args),
+            "scientist",
+            Ownership.USER,
+        ),
     ]
 
 
@@ -54,8 +65,16 @@ def artifacts(ctx: Context) -> list[Artifact]:
         if "endpoint" in sub:
             out += _cpp(ctx, sub)
     if ctx.model["subscribers"]:
-        out.append(Artifact("scientist/README.md", render(
-            "py_subscriber/README.md.j2", subs=ctx.model["subscribers"], drone=ctx.drone,
-            station=ctx.station),
-            "scientist"))
+        out.append(
+            Artifact(
+                "scientist/README.md",
+                render(
+                    "py_subscriber/README.md.j2",
+                    subs=ctx.model["subscribers"],
+                    drone=ctx.drone,
+                    station=ctx.station,
+                ),
+                "scientist",
+            )
+        )
     return out

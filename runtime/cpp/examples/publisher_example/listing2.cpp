@@ -13,7 +13,8 @@
 #include "modd/client/publisher.hpp"
 
 static int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
 
@@ -34,8 +35,8 @@ int main(int argc, char** argv) {
   std::string why = publisher->last_error();
   bool on_disk = publisher->wait_on_disk(std::chrono::seconds(5));
   auto s = publisher->stats();
-  std::printf("accepted %d, refused wrong name %d (%s), on disk %llu, rejected by broker %llu\n", accepted, refused,
-              why.c_str(), static_cast<unsigned long long>(s.on_disk),
+  std::printf("accepted %d, refused wrong name %d (%s), on disk %llu, rejected by broker %llu\n",
+              accepted, refused, why.c_str(), static_cast<unsigned long long>(s.on_disk),
               static_cast<unsigned long long>(s.rejected_by_broker));
   bool ok = accepted == count && refused && why.find("accel_zz") != std::string::npos && on_disk &&
             s.on_disk == static_cast<uint64_t>(count) && s.rejected_by_broker == 0;

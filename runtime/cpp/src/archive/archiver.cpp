@@ -22,10 +22,14 @@ void format_sample_json(std::string& out, link::ValueType type, const Sample& s)
   out.append("\":");
   char* end = buf;
   switch (type) {
-    case link::ValueType::Float32: end = std::to_chars(buf, buf + sizeof buf, static_cast<float>(s.number)).ptr; break;
+    case link::ValueType::Float32:
+      end = std::to_chars(buf, buf + sizeof buf, static_cast<float>(s.number)).ptr;
+      break;
     case link::ValueType::Float64: end = std::to_chars(buf, buf + sizeof buf, s.number).ptr; break;
     case link::ValueType::Int: end = std::to_chars(buf, buf + sizeof buf, s.integer).ptr; break;
-    case link::ValueType::Bool: end = std::copy_n(s.integer ? "true" : "false", s.integer ? 4 : 5, buf); break;
+    case link::ValueType::Bool:
+      end = std::copy_n(s.integer ? "true" : "false", s.integer ? 4 : 5, buf);
+      break;
   }
   out.append(buf, end);
   out.push_back('}');
@@ -38,7 +42,8 @@ std::string sample_json_schema(link::ValueType type) {
 Archiver::Archiver(ArchiverOptions options) : opt_(std::move(options)) {
   std::error_code ec;
   std::filesystem::create_directories(opt_.dir, ec);
-  if (ec) throw Error(ErrorCode::Io, "cannot create archive directory " + opt_.dir + ": " + ec.message());
+  if (ec)
+    throw Error(ErrorCode::Io, "cannot create archive directory " + opt_.dir + ": " + ec.message());
   // Files a crash left open (no summary, torn tail) get finalised before anything new is written.
   for (Recovered& r : recover_dir(opt_.dir, opt_.prefix, opt_.writer))
     if (r.failed) unrecovered_.push_back(std::move(r.path));
@@ -174,11 +179,13 @@ void Archiver::open_file() {
   char stamp[32];
   std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
   char name[64];
-  std::snprintf(name, sizeof name, "-%s-%04llu.mcap", stamp, static_cast<unsigned long long>(file_counter_++));
+  std::snprintf(name, sizeof name, "-%s-%04llu.mcap", stamp,
+                static_cast<unsigned long long>(file_counter_++));
   std::string path = opt_.dir + "/" + opt_.prefix + name;
   std::error_code ec;
   while (std::filesystem::exists(path, ec)) {  // a restart within the same second: never overwrite
-    std::snprintf(name, sizeof name, "-%s-%04llu.mcap", stamp, static_cast<unsigned long long>(file_counter_++));
+    std::snprintf(name, sizeof name, "-%s-%04llu.mcap", stamp,
+                  static_cast<unsigned long long>(file_counter_++));
     path = opt_.dir + "/" + opt_.prefix + name;
   }
   writer_ = std::make_unique<McapWriter>(path, opt_.writer);
@@ -224,9 +231,12 @@ void Archiver::set_disk_full(bool full, const std::string& why) {
       std::lock_guard lk(mu_);
       last_error_ = why;
     }
-    log_line("archive: write failed (%s): holding %llu queued samples in memory, no new file, retrying every "
-             "%u..%u ms", why.c_str(), static_cast<unsigned long long>(counters_.queued.load()), opt_.retry_first_ms,
-             opt_.retry_max_ms);
+    log_line(
+        "archive: write failed (%s): holding %llu queued samples in memory, no new file, retrying "
+        "every "
+        "%u..%u ms",
+        why.c_str(), static_cast<unsigned long long>(counters_.queued.load()), opt_.retry_first_ms,
+        opt_.retry_max_ms);
   } else {
     log_line("archive: writing again (%s resumed where it stopped)", current_file().c_str());
     next_recovery_ = {};  // room again: a file left by a crash is finished now too
@@ -245,9 +255,7 @@ bool Archiver::retry() {
     }
     set_disk_full(false, "");
     return true;
-  } catch (const Error&) {
-    return false;
-  }
+  } catch (const Error&) { return false; }
 }
 
 void Archiver::retry_recovery() {
@@ -256,9 +264,7 @@ void Archiver::retry_recovery() {
     try {
       Recovered r = recover_mcap(path, opt_.writer);
       log_recovered(std::filesystem::path(path).filename().string(), r, " now that there is room");
-    } catch (const Error&) {
-      still.push_back(std::move(path));
-    }
+    } catch (const Error&) { still.push_back(std::move(path)); }
   }
   unrecovered_ = std::move(still);
   next_recovery_ = std::chrono::steady_clock::now() + std::chrono::seconds(2);
@@ -268,8 +274,9 @@ void Archiver::give_up() {
   uint64_t lost = 0;
   if (writer_) {
     lost += writer_->message_count() - writer_->flushed_messages();
-    log_line("archive: stopping with the disk still full: %s left unfinished (recovered at next start)",
-             writer_->path().c_str());
+    log_line(
+        "archive: stopping with the disk still full: %s left unfinished (recovered at next start)",
+        writer_->path().c_str());
     writer_->abandon();
     writer_.reset();
   }
@@ -305,7 +312,8 @@ bool Archiver::write_item(Item& item) {
       uint16_t schema = writer_->add_schema(std::string(archive_record::kSchemaPrefix) + type,
                                             std::string(archive_record::kSchemaEncoding),
                                             sample_json_schema(item.topic->type));
-      uint16_t ch = writer_->add_channel(schema, item.topic->name, std::string(archive_record::kMessageEncoding),
+      uint16_t ch = writer_->add_channel(schema, item.topic->name,
+                                         std::string(archive_record::kMessageEncoding),
                                          {{std::string(archive_record::kTypeMetadataKey), type}});
       it = channels_.emplace(key, ch).first;
       keep_.push_back(item.topic);
@@ -315,8 +323,9 @@ bool Archiver::write_item(Item& item) {
     while (item.done < item.samples.size()) {
       const Sample& s = item.samples[item.done];
       format_sample_json(json, item.topic->type, s);
-      writer_->append_message(it->second, seq++, static_cast<uint64_t>(s.stamp_ns), static_cast<uint64_t>(s.publish_ns),
-                              std::span(reinterpret_cast<const uint8_t*>(json.data()), json.size()));
+      writer_->append_message(
+          it->second, seq++, static_cast<uint64_t>(s.stamp_ns), static_cast<uint64_t>(s.publish_ns),
+          std::span(reinterpret_cast<const uint8_t*>(json.data()), json.size()));
       ++item.done;
       if (writer_->chunk_full()) {
         writer_->flush_chunk();
@@ -328,7 +337,8 @@ bool Archiver::write_item(Item& item) {
     count_flushed();
     // Age on the monotonic clock: a wall-clock step neither rotates nor holds the file.
     int64_t age = steady_s() - file_opened_s_;
-    if (writer_->file_bytes() >= opt_.rotate_bytes || (opt_.rotate_s > 0 && age >= static_cast<int64_t>(opt_.rotate_s)))
+    if (writer_->file_bytes() >= opt_.rotate_bytes ||
+        (opt_.rotate_s > 0 && age >= static_cast<int64_t>(opt_.rotate_s)))
       close_file();
     return true;
   } catch (const Error& e) {

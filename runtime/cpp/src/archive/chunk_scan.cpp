@@ -16,11 +16,17 @@ namespace {
 
 constexpr uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', 0x30, '\r', '\n'};
 enum Op : uint8_t {
-  kHeader = 0x01, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06, kMessageIndex = 0x07,
+  kHeader = 0x01,
+  kSchema = 0x03,
+  kChannel = 0x04,
+  kMessage = 0x05,
+  kChunk = 0x06,
+  kMessageIndex = 0x07,
   kDataEnd = 0x0F,
 };
 
-template <typename T> T rd(const uint8_t* p) {
+template <typename T>
+T rd(const uint8_t* p) {
   T v;
   std::memcpy(&v, p, sizeof(T));
   return v;
@@ -31,7 +37,8 @@ struct Cursor {
   const uint8_t* p;
   size_t n, at = 0;
   struct Short {};
-  template <typename T> T get() {
+  template <typename T>
+  T get() {
     if (n - at < sizeof(T)) throw Short{};
     T v = rd<T>(p + at);
     at += sizeof(T);
@@ -57,12 +64,14 @@ bool plausible(const std::string& comp, std::span<const uint8_t> in, uint64_t si
   if (comp.empty()) return in.size() == size;
   if (comp == "zstd") {  // the size in the frame's header (the writer puts it there) must agree
     unsigned long long declared = ZSTD_getFrameContentSize(in.data(), in.size());
-    return declared != ZSTD_CONTENTSIZE_ERROR && (declared == ZSTD_CONTENTSIZE_UNKNOWN || declared == size);
+    return declared != ZSTD_CONTENTSIZE_ERROR &&
+           (declared == ZSTD_CONTENTSIZE_UNKNOWN || declared == size);
   }
   return comp == "lz4" && size <= in.size() * 256ull + 64;  // LZ4's ratio is below 255:1
 }
 
-bool decompress(const std::string& comp, std::span<const uint8_t> in, uint64_t size, std::vector<uint8_t>& out) {
+bool decompress(const std::string& comp, std::span<const uint8_t> in, uint64_t size,
+                std::vector<uint8_t>& out) {
   if (!plausible(comp, in, size)) return false;
   out.resize(size);
   if (comp.empty()) {
@@ -99,7 +108,8 @@ bool parse_schema(Cursor c, FileSpan at, uint16_t& id, FileScan::Schema& s) {
   return c.done() && id != 0;
 }
 
-bool parse_channel(Cursor c, FileSpan at, const Schemas& schemas, uint16_t& id, FileScan::Channel& ch) {
+bool parse_channel(Cursor c, FileSpan at, const Schemas& schemas, uint16_t& id,
+                   FileScan::Channel& ch) {
   id = c.get<uint16_t>();
   ch.schema = c.get<uint16_t>();
   ch.topic = c.str();
@@ -117,7 +127,8 @@ bool parse_channel(Cursor c, FileSpan at, const Schemas& schemas, uint16_t& id, 
 // The Message Index records a writer puts after a chunk of these records (one per channel,
 // entries in record order), and the messages per channel. False if the records are not well
 // formed or use a channel never defined.
-bool index_chunk(const std::vector<uint8_t>& recs, Schemas& schemas, Channels& channels, ScannedChunk& out) {
+bool index_chunk(const std::vector<uint8_t>& recs, Schemas& schemas, Channels& channels,
+                 ScannedChunk& out) {
   std::map<uint16_t, std::vector<std::pair<uint64_t, uint64_t>>> entries;
   Schemas s2 = schemas;
   Channels c2 = channels;
@@ -153,12 +164,17 @@ bool index_chunk(const std::vector<uint8_t>& recs, Schemas& schemas, Channels& c
     uint64_t len = 2 + 4 + es.size() * 16;
     uint32_t elen = static_cast<uint32_t>(es.size() * 16);
     out.index.push_back(kMessageIndex);
-    out.index.insert(out.index.end(), reinterpret_cast<const uint8_t*>(&len), reinterpret_cast<const uint8_t*>(&len) + 8);
-    out.index.insert(out.index.end(), reinterpret_cast<const uint8_t*>(&ch), reinterpret_cast<const uint8_t*>(&ch) + 2);
-    out.index.insert(out.index.end(), reinterpret_cast<const uint8_t*>(&elen), reinterpret_cast<const uint8_t*>(&elen) + 4);
+    out.index.insert(out.index.end(), reinterpret_cast<const uint8_t*>(&len),
+                     reinterpret_cast<const uint8_t*>(&len) + 8);
+    out.index.insert(out.index.end(), reinterpret_cast<const uint8_t*>(&ch),
+                     reinterpret_cast<const uint8_t*>(&ch) + 2);
+    out.index.insert(out.index.end(), reinterpret_cast<const uint8_t*>(&elen),
+                     reinterpret_cast<const uint8_t*>(&elen) + 4);
     for (const auto& [t, off] : es) {
-      out.index.insert(out.index.end(), reinterpret_cast<const uint8_t*>(&t), reinterpret_cast<const uint8_t*>(&t) + 8);
-      out.index.insert(out.index.end(), reinterpret_cast<const uint8_t*>(&off), reinterpret_cast<const uint8_t*>(&off) + 8);
+      out.index.insert(out.index.end(), reinterpret_cast<const uint8_t*>(&t),
+                       reinterpret_cast<const uint8_t*>(&t) + 8);
+      out.index.insert(out.index.end(), reinterpret_cast<const uint8_t*>(&off),
+                       reinterpret_cast<const uint8_t*>(&off) + 8);
     }
   }
   schemas = std::move(s2);
@@ -220,7 +236,8 @@ bool definition_at(std::span<const uint8_t> f, size_t at, FileScan& s, bool add)
   size_t next = at + 9 + len;
   if (next != f.size()) {
     uint8_t op = f[next];
-    if (op != kSchema && op != kChannel && op != kChunk && op != kMessageIndex && op != kDataEnd) return false;
+    if (op != kSchema && op != kChannel && op != kChunk && op != kMessageIndex && op != kDataEnd)
+      return false;
   }
   Cursor c{&f[at + 9], len};
   uint16_t id = 0;
@@ -235,9 +252,7 @@ bool definition_at(std::span<const uint8_t> f, size_t at, FileScan& s, bool add)
       if (!parse_channel(c, span, s.schemas, id, ch)) return false;
       if (add) s.channels.emplace(id, std::move(ch));
     }
-  } catch (const Cursor::Short&) {
-    return false;
-  }
+  } catch (const Cursor::Short&) { return false; }
   return true;
 }
 
@@ -285,8 +300,10 @@ struct Walk {
   bool prefix_open = true;  // no damage and no rewritten index met yet
 
   void keep(uint64_t end) {
-    if (prefix_open) s.clean_end = end;
-    else s.in_place = false;
+    if (prefix_open)
+      s.clean_end = end;
+    else
+      s.in_place = false;
   }
   void skip_from(size_t at, const char* why) {
     size_t to = resync(f, at + 1, s, plain);
@@ -297,10 +314,15 @@ struct Walk {
   void chunk(ScannedChunk c) {
     size_t end = c.ci.offset + c.ci.length;
     FileSpan idx = indexes_after(f, end);
-    bool same = idx.length == c.index.size() && std::memcmp(&f[end], c.index.data(), idx.length) == 0;
+    bool same =
+        idx.length == c.index.size() && std::memcmp(&f[end], c.index.data(), idx.length) == 0;
     c.index_intact = same || (idx.length == 0 && !message_index);
     if (c.index_intact && !same) c.index.clear(), c.index_at.clear();
-    s.messages += [&] { uint64_t n = 0; for (const auto& [ch, k] : c.counts) n += k; return n; }();
+    s.messages += [&] {
+      uint64_t n = 0;
+      for (const auto& [ch, k] : c.counts) n += k;
+      return n;
+    }();
     pos = end + idx.length;
     if (prefix_open) {
       s.clean_end = c.index_intact ? pos : end;
@@ -331,12 +353,16 @@ void Walk::run() {
     }
     const size_t next = at + 9 + len;
     if (op == kChunk) {
-      if (auto c = check_chunk(f, at, s, plain)) chunk(std::move(*c));
-      else skip_from(at, "a chunk whose data does not check (CRC, size or records)");
+      if (auto c = check_chunk(f, at, s, plain))
+        chunk(std::move(*c));
+      else
+        skip_from(at, "a chunk whose data does not check (CRC, size or records)");
     } else if (op == kSchema || op == kChannel) {
-      bool known = op == kSchema ? s.schemas.count(rd<uint16_t>(&f[at + 9])) : s.channels.count(rd<uint16_t>(&f[at + 9]));
+      bool known = op == kSchema ? s.schemas.count(rd<uint16_t>(&f[at + 9]))
+                                 : s.channels.count(rd<uint16_t>(&f[at + 9]));
       if (len < 2 || !definition_at(f, at, s, true)) {
-        skip_from(at, op == kSchema ? "a schema record that does not parse" : "a channel record that does not parse");
+        skip_from(at, op == kSchema ? "a schema record that does not parse"
+                                    : "a channel record that does not parse");
         continue;
       }
       if (!known) keep(next);

@@ -5,8 +5,8 @@
 #include <unistd.h>
 #include <zstd.h>
 
-#include <cerrno>
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <memory>
 
@@ -19,20 +19,36 @@ namespace {
 
 constexpr uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', 0x30, '\r', '\n'};
 enum Op : uint8_t {
-  kHeader = 0x01, kFooter = 0x02, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06,
-  kMessageIndex = 0x07, kChunkIndex = 0x08, kStatistics = 0x0B, kSummaryOffset = 0x0E, kDataEnd = 0x0F,
+  kHeader = 0x01,
+  kFooter = 0x02,
+  kSchema = 0x03,
+  kChannel = 0x04,
+  kMessage = 0x05,
+  kChunk = 0x06,
+  kMessageIndex = 0x07,
+  kChunkIndex = 0x08,
+  kStatistics = 0x0B,
+  kSummaryOffset = 0x0E,
+  kDataEnd = 0x0F,
 };
 
 // Little-endian record builder.
 struct Rec {
   std::vector<uint8_t> b;
-  explicit Rec(uint8_t op) { b.push_back(op); b.resize(9); }  // opcode + u64 length placeholder
-  template <typename T> void put(T v) {
+  explicit Rec(uint8_t op) {
+    b.push_back(op);
+    b.resize(9);
+  }  // opcode + u64 length placeholder
+  template <typename T>
+  void put(T v) {
     uint8_t x[sizeof(T)];
     std::memcpy(x, &v, sizeof(T));
     b.insert(b.end(), x, x + sizeof(T));
   }
-  void str(const std::string& s) { put<uint32_t>(static_cast<uint32_t>(s.size())); b.insert(b.end(), s.begin(), s.end()); }
+  void str(const std::string& s) {
+    put<uint32_t>(static_cast<uint32_t>(s.size()));
+    b.insert(b.end(), s.begin(), s.end());
+  }
   void raw(std::span<const uint8_t> d) { b.insert(b.end(), d.begin(), d.end()); }
   std::vector<uint8_t>&& done() {
     uint64_t len = b.size() - 9;
@@ -49,18 +65,21 @@ std::vector<uint8_t> compress(Compression c, const std::vector<uint8_t>& in) {
   std::vector<uint8_t> out;
   if (c == Compression::Zstd) {
     // One context per thread, reused: a fresh one per chunk costs its allocation and setup.
-    thread_local std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> cctx{ZSTD_createCCtx(), ZSTD_freeCCtx};
+    thread_local std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> cctx{ZSTD_createCCtx(),
+                                                                         ZSTD_freeCCtx};
     if (!cctx) throw Error(ErrorCode::Internal, "zstd: cannot create a compression context");
     out.resize(ZSTD_compressBound(in.size()));
     size_t n = ZSTD_compressCCtx(cctx.get(), out.data(), out.size(), in.data(), in.size(), 1);
-    if (ZSTD_isError(n)) throw Error(ErrorCode::Internal, std::string("zstd: ") + ZSTD_getErrorName(n));
+    if (ZSTD_isError(n))
+      throw Error(ErrorCode::Internal, std::string("zstd: ") + ZSTD_getErrorName(n));
     out.resize(n);
   } else if (c == Compression::Lz4) {
     LZ4F_preferences_t prefs{};
     prefs.frameInfo.contentSize = in.size();
     out.resize(LZ4F_compressFrameBound(in.size(), &prefs));
     size_t n = LZ4F_compressFrame(out.data(), out.size(), in.data(), in.size(), &prefs);
-    if (LZ4F_isError(n)) throw Error(ErrorCode::Internal, std::string("lz4: ") + LZ4F_getErrorName(n));
+    if (LZ4F_isError(n))
+      throw Error(ErrorCode::Internal, std::string("lz4: ") + LZ4F_getErrorName(n));
     out.resize(n);
   } else {
     out = in;
@@ -71,22 +90,31 @@ std::vector<uint8_t> compress(Compression c, const std::vector<uint8_t>& in) {
 }  // namespace
 
 bool parse_compression(const std::string& s, Compression& out) {
-  if (s == "zstd") out = Compression::Zstd;
-  else if (s == "lz4") out = Compression::Lz4;
-  else if (s == "none") out = Compression::None;
-  else return false;
+  if (s == "zstd")
+    out = Compression::Zstd;
+  else if (s == "lz4")
+    out = Compression::Lz4;
+  else if (s == "none")
+    out = Compression::None;
+  else
+    return false;
   return true;
 }
 
 bool parse_fsync(const std::string& s, FsyncPolicy& out) {
-  if (s == "never") out = FsyncPolicy::Never;
-  else if (s == "chunk") out = FsyncPolicy::Chunk;
-  else if (s == "close") out = FsyncPolicy::Close;
-  else return false;
+  if (s == "never")
+    out = FsyncPolicy::Never;
+  else if (s == "chunk")
+    out = FsyncPolicy::Chunk;
+  else if (s == "close")
+    out = FsyncPolicy::Close;
+  else
+    return false;
   return true;
 }
 
-McapWriter::McapWriter(const std::string& path, WriterOptions options) : path_(path), opt_(std::move(options)) {
+McapWriter::McapWriter(const std::string& path, WriterOptions options)
+    : path_(path), opt_(std::move(options)) {
   fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd_ < 0) throw Error(ErrorCode::Io, "cannot create " + path + ": " + std::strerror(errno));
   emit(kMagic);
@@ -102,7 +130,8 @@ McapWriter::McapWriter(const std::string& path, WriterOptions options, Resume at
     : path_(path), opt_(std::move(options)) {
   fd_ = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
   if (fd_ < 0) throw Error(ErrorCode::Io, "cannot open " + path + ": " + std::strerror(errno));
-  if (::ftruncate(fd_, static_cast<off_t>(at.offset)) != 0 || ::lseek(fd_, static_cast<off_t>(at.offset), SEEK_SET) < 0) {
+  if (::ftruncate(fd_, static_cast<off_t>(at.offset)) != 0 ||
+      ::lseek(fd_, static_cast<off_t>(at.offset), SEEK_SET) < 0) {
     int err = errno;
     ::close(fd_);
     fd_ = -1;
@@ -117,12 +146,14 @@ void McapWriter::adopt_schema(uint16_t id, const std::string& name, const std::s
   schemas_.push_back({id, name, encoding, data});
 }
 
-void McapWriter::adopt_channel(uint16_t id, uint16_t schema_id, const std::string& topic, const std::string& encoding,
+void McapWriter::adopt_channel(uint16_t id, uint16_t schema_id, const std::string& topic,
+                               const std::string& encoding,
                                const std::map<std::string, std::string>& metadata) {
   channels_.push_back({id, schema_id, topic, encoding, metadata});
 }
 
-void McapWriter::adopt_chunk(const ChunkIndex& chunk, const std::map<uint16_t, uint64_t>& channel_counts) {
+void McapWriter::adopt_chunk(const ChunkIndex& chunk,
+                             const std::map<uint16_t, uint64_t>& channel_counts) {
   uint64_t n = 0;
   for (const auto& [ch, k] : channel_counts) {
     channel_counts_[ch] += k;
@@ -138,7 +169,9 @@ void McapWriter::adopt_chunk(const ChunkIndex& chunk, const std::map<uint16_t, u
 }
 
 McapWriter::~McapWriter() {
-  try { close(); } catch (...) {}
+  try {
+    close();
+  } catch (...) {}
   if (fd_ >= 0) ::close(fd_);
 }
 
@@ -189,12 +222,17 @@ std::vector<uint8_t> McapWriter::channel_record(const ChannelRec& c) const {
   uint32_t mlen = 0;
   for (const auto& [k, v] : c.metadata) mlen += static_cast<uint32_t>(8 + k.size() + v.size());
   r.put<uint32_t>(mlen);
-  for (const auto& [k, v] : c.metadata) { r.str(k); r.str(v); }
+  for (const auto& [k, v] : c.metadata) {
+    r.str(k);
+    r.str(v);
+  }
   return r.done();
 }
 
-uint16_t McapWriter::add_schema(const std::string& name, const std::string& encoding, const std::string& data) {
-  SchemaRec s{static_cast<uint16_t>(schemas_.size() + 1), name, encoding, data};  // id 0 is reserved
+uint16_t McapWriter::add_schema(const std::string& name, const std::string& encoding,
+                                const std::string& data) {
+  SchemaRec s{static_cast<uint16_t>(schemas_.size() + 1), name, encoding,
+              data};  // id 0 is reserved
   // Outside chunks, so that a reader sees it before any message using it.
   auto rec = schema_record(s);
   emit(rec);
@@ -202,7 +240,8 @@ uint16_t McapWriter::add_schema(const std::string& name, const std::string& enco
   return schemas_.back().id;
 }
 
-uint16_t McapWriter::add_channel(uint16_t schema_id, const std::string& topic, const std::string& enc,
+uint16_t McapWriter::add_channel(uint16_t schema_id, const std::string& topic,
+                                 const std::string& enc,
                                  const std::map<std::string, std::string>& metadata) {
   ChannelRec c{static_cast<uint16_t>(channels_.size()), schema_id, topic, enc, metadata};
   emit(channel_record(c));
@@ -210,14 +249,14 @@ uint16_t McapWriter::add_channel(uint16_t schema_id, const std::string& topic, c
   return channels_.back().id;
 }
 
-void McapWriter::add_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time, uint64_t publish_time,
-                             std::span<const uint8_t> data) {
+void McapWriter::add_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time,
+                             uint64_t publish_time, std::span<const uint8_t> data) {
   append_message(channel_id, sequence, log_time, publish_time, data);
   if (chunk_full()) flush_chunk();
 }
 
-void McapWriter::append_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time, uint64_t publish_time,
-                                std::span<const uint8_t> data) {
+void McapWriter::append_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time,
+                                uint64_t publish_time, std::span<const uint8_t> data) {
   uint64_t at = chunk_.size();
   uint8_t head[1 + 8 + 2 + 4 + 8 + 8];
   uint64_t len = 2 + 4 + 8 + 8 + data.size();
@@ -267,7 +306,10 @@ void McapWriter::flush_chunk() {
     Rec m(kMessageIndex);
     m.put<uint16_t>(ch);
     m.put<uint32_t>(static_cast<uint32_t>(entries.size() * 16));
-    for (const auto& [t, off] : entries) { m.put<uint64_t>(t); m.put<uint64_t>(off); }
+    for (const auto& [t, off] : entries) {
+      m.put<uint64_t>(t);
+      m.put<uint64_t>(off);
+    }
     ci.index_offsets[ch] = file_bytes();
     emit(m.done());
   }
@@ -301,7 +343,10 @@ void McapWriter::close() {
 
   uint64_t summary_start = file_bytes();
   std::vector<uint8_t> summary;
-  struct Group { uint8_t op; uint64_t start, length; };
+  struct Group {
+    uint8_t op;
+    uint64_t start, length;
+  };
   std::vector<Group> groups;
   auto add_group = [&](uint8_t op, const std::vector<std::vector<uint8_t>>& recs) {
     if (recs.empty()) return;
@@ -327,7 +372,10 @@ void McapWriter::close() {
     st.put<uint64_t>(message_count_ ? first_time_ : 0);
     st.put<uint64_t>(message_count_ ? last_time_ : 0);
     st.put<uint32_t>(static_cast<uint32_t>(channel_counts_.size() * 10));
-    for (const auto& [ch, n] : channel_counts_) { st.put<uint16_t>(ch); st.put<uint64_t>(n); }
+    for (const auto& [ch, n] : channel_counts_) {
+      st.put<uint16_t>(ch);
+      st.put<uint64_t>(n);
+    }
     recs.push_back(st.done());
   }
   add_group(kStatistics, recs);
@@ -339,7 +387,10 @@ void McapWriter::close() {
     r.put<uint64_t>(ci.offset);
     r.put<uint64_t>(ci.length);
     r.put<uint32_t>(static_cast<uint32_t>(ci.index_offsets.size() * 10));
-    for (const auto& [ch, off] : ci.index_offsets) { r.put<uint16_t>(ch); r.put<uint64_t>(off); }
+    for (const auto& [ch, off] : ci.index_offsets) {
+      r.put<uint16_t>(ch);
+      r.put<uint64_t>(off);
+    }
     r.put<uint64_t>(ci.index_length);
     r.str(ci.compression);
     r.put<uint64_t>(ci.compressed_size);

@@ -15,7 +15,13 @@ namespace modd::archive {
 namespace {
 
 constexpr uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', 0x30, '\r', '\n'};
-enum Op : uint8_t { kFooter = 0x02, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06, kDataEnd = 0x0F };
+enum Op : uint8_t {
+  kFooter = 0x02,
+  kChannel = 0x04,
+  kMessage = 0x05,
+  kChunk = 0x06,
+  kDataEnd = 0x0F
+};
 constexpr uint64_t kMaxRecord = 1ull << 31;
 
 template <typename T>
@@ -29,12 +35,14 @@ bool parse_value(std::string_view json, link::ValueType type, ArchivedSample& s)
   const std::string_view key = archive_record::kValue;
   size_t at = json.find(key);
   // the field name in quotes: "value"
-  if (at == 0 || at == std::string_view::npos || at + key.size() >= json.size() || json[at - 1] != '"' ||
-      json[at + key.size()] != '"')
+  if (at == 0 || at == std::string_view::npos || at + key.size() >= json.size() ||
+      json[at - 1] != '"' || json[at + key.size()] != '"')
     return false;
   const char* b = json.data() + at + key.size() + 1;
   const char* e = json.data() + json.size();
-  auto space = [&] { while (b < e && (*b == ' ' || *b == '\t' || *b == '\n' || *b == '\r')) ++b; };
+  auto space = [&] {
+    while (b < e && (*b == ' ' || *b == '\t' || *b == '\n' || *b == '\r')) ++b;
+  };
   space();
   if (b == e || *b++ != ':') return false;
   space();
@@ -45,15 +53,16 @@ bool parse_value(std::string_view json, link::ValueType type, ArchivedSample& s)
       s.number = f;
       return true;
     }
-    case link::ValueType::Float64:
-      return std::from_chars(b, e, s.number).ec == std::errc();
-    case link::ValueType::Int:
-      return std::from_chars(b, e, s.integer).ec == std::errc();
+    case link::ValueType::Float64: return std::from_chars(b, e, s.number).ec == std::errc();
+    case link::ValueType::Int: return std::from_chars(b, e, s.integer).ec == std::errc();
     case link::ValueType::Bool: {
       std::string_view rest(b, static_cast<size_t>(e - b));
-      if (rest.starts_with("true")) s.integer = 1;
-      else if (rest.starts_with("false")) s.integer = 0;
-      else return false;
+      if (rest.starts_with("true"))
+        s.integer = 1;
+      else if (rest.starts_with("false"))
+        s.integer = 0;
+      else
+        return false;
       return true;
     }
   }
@@ -62,7 +71,8 @@ bool parse_value(std::string_view json, link::ValueType type, ArchivedSample& s)
 
 }  // namespace
 
-TopicReader::TopicReader(std::string dir, std::string prefix, std::string topic, link::ValueType type)
+TopicReader::TopicReader(std::string dir, std::string prefix, std::string topic,
+                         link::ValueType type)
     : dir_(std::move(dir)), prefix_(std::move(prefix)), topic_(std::move(topic)), type_(type) {}
 
 bool TopicReader::next_file() {
@@ -76,7 +86,9 @@ bool TopicReader::next_file() {
   std::sort(files_.begin(), files_.end());  // <prefix>-<UTC stamp>-<counter>.mcap: time order
   auto it = std::upper_bound(files_.begin(), files_.end(), current);
   if (it == files_.end()) {
-    if (file_open_) file_ = static_cast<size_t>(std::find(files_.begin(), files_.end(), current) - files_.begin());
+    if (file_open_)
+      file_ =
+          static_cast<size_t>(std::find(files_.begin(), files_.end(), current) - files_.begin());
     return false;
   }
   file_ = static_cast<size_t>(it - files_.begin());
@@ -112,7 +124,8 @@ bool TopicReader::take_message(const uint8_t* p, uint64_t len, int64_t from) {
   std::string_view json(reinterpret_cast<const char*>(p + 22), len - 22);
   if (!parse_value(json, type_, sample_))
     throw Error(ErrorCode::Io, files_[file_] + ": a message of " + topic_ + " is not a " +
-                                   link::value_type_name(type_) + " sample: " + std::string(json.substr(0, 64)));
+                                   link::value_type_name(type_) +
+                                   " sample: " + std::string(json.substr(0, 64)));
   return true;
 }
 
@@ -123,7 +136,8 @@ void TopicReader::scan_chunk_records(int64_t from) {
     if (chunk_.size() - chunk_at_ - 9 < len) break;  // cannot happen after a CRC-checked chunk
     const uint8_t* body = chunk_.data() + chunk_at_ + 9;
     chunk_at_ += 9 + len;
-    if (op == kChannel) channel(body, len);
+    if (op == kChannel)
+      channel(body, len);
     else if (op == kMessage && take_message(body, len, from)) {
       have_ = true;
       return;
@@ -143,7 +157,9 @@ bool TopicReader::read_record(int64_t from) {
   in_.read(reinterpret_cast<char*>(head), 9);
   uint8_t op = head[0];
   uint64_t len = get<uint64_t>(head + 1);
-  if (len > kMaxRecord) throw Error(ErrorCode::Io, files_[file_] + ": record too long at byte " + std::to_string(offset_));
+  if (len > kMaxRecord)
+    throw Error(ErrorCode::Io,
+                files_[file_] + ": record too long at byte " + std::to_string(offset_));
   if (size - offset_ - 9 < len) return false;  // being written
   if (op == kChunk && len >= 16) {
     in_.read(reinterpret_cast<char*>(head + 9), 16);
@@ -162,15 +178,22 @@ bool TopicReader::read_record(int64_t from) {
       channel(packed_.data(), len);
     } else {
       const uint8_t* p = packed_.data();
-      if (len < 32) throw Error(ErrorCode::Io, files_[file_] + ": short chunk at byte " + std::to_string(offset_));
+      if (len < 32)
+        throw Error(ErrorCode::Io,
+                    files_[file_] + ": short chunk at byte " + std::to_string(offset_));
       uint64_t usize = get<uint64_t>(p + 16);
       uint32_t clen_name = get<uint32_t>(p + 28);
-      if (len < 32 + clen_name + 8ull) throw Error(ErrorCode::Io, files_[file_] + ": bad chunk at byte " + std::to_string(offset_));
+      if (len < 32 + clen_name + 8ull)
+        throw Error(ErrorCode::Io,
+                    files_[file_] + ": bad chunk at byte " + std::to_string(offset_));
       std::string comp(reinterpret_cast<const char*>(p + 32), clen_name);
       uint64_t clen = get<uint64_t>(p + 32 + clen_name);
-      if (len - 40 - clen_name < clen) throw Error(ErrorCode::Io, files_[file_] + ": bad chunk at byte " + std::to_string(offset_));
+      if (len - 40 - clen_name < clen)
+        throw Error(ErrorCode::Io,
+                    files_[file_] + ": bad chunk at byte " + std::to_string(offset_));
       if (!decompress_chunk(comp, std::span(p + 40 + clen_name, clen), usize, chunk_))
-        throw Error(ErrorCode::Io, files_[file_] + ": chunk at byte " + std::to_string(offset_) + " does not decompress");
+        throw Error(ErrorCode::Io, files_[file_] + ": chunk at byte " + std::to_string(offset_) +
+                                       " does not decompress");
       chunk_at_ = 0;
     }
   } else if (op == kDataEnd || op == kFooter) {

@@ -27,7 +27,7 @@ struct Mapped {
   explicit Mapped(const std::string& path) {
     int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0) throw Error(ErrorCode::Io, "cannot read " + path + ": " + std::strerror(errno));
-    struct stat st{};
+    struct stat st {};
     if (::fstat(fd, &st) == 0 && st.st_size > 0) {
       void* m = ::mmap(nullptr, static_cast<size_t>(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
       if (m != MAP_FAILED) {
@@ -50,7 +50,8 @@ struct Mapped {
 // indexes are taken to start right after it at `index_start[i]`.
 void adopt(McapWriter& w, const FileScan& s, const std::vector<uint64_t>& chunk_at) {
   for (const auto& [id, sc] : s.schemas) w.adopt_schema(id, sc.name, sc.encoding, sc.data);
-  for (const auto& [id, ch] : s.channels) w.adopt_channel(id, ch.schema, ch.topic, ch.encoding, ch.meta);
+  for (const auto& [id, ch] : s.channels)
+    w.adopt_channel(id, ch.schema, ch.topic, ch.encoding, ch.meta);
   for (size_t i = 0; i < chunk_at.size(); ++i) {
     const ScannedChunk& c = s.chunks[i];
     ChunkIndex ci = c.ci;
@@ -94,7 +95,8 @@ void sync_path(const std::string& path) {
 void finish_in_place(const std::string& path, const FileScan& s, std::span<const uint8_t> file,
                      const WriterOptions& options) {
   std::vector<uint8_t> tail;
-  if (s.clean_chunks && !s.chunks[s.clean_chunks - 1].index_intact) tail = s.chunks[s.clean_chunks - 1].index;
+  if (s.clean_chunks && !s.chunks[s.clean_chunks - 1].index_intact)
+    tail = s.chunks[s.clean_chunks - 1].index;
   uint32_t crc = crc32(crc32(0, file.first(s.clean_end)), tail);
   {
     int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
@@ -119,7 +121,8 @@ void finish_in_place(const std::string& path, const FileScan& s, std::span<const
 
 // Writes the trusted records beside the original (`.recovering`): magic, header, schemas,
 // channels, then each kept chunk as it was with its Message Index records, then the summary.
-void write_copy(const std::string& tmp, const FileScan& s, std::span<const uint8_t> file, const WriterOptions& options) {
+void write_copy(const std::string& tmp, const FileScan& s, std::span<const uint8_t> file,
+                const WriterOptions& options) {
   int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw Error(ErrorCode::Io, "cannot create " + tmp + ": " + std::strerror(errno));
   Out out{fd, tmp};
@@ -226,19 +229,24 @@ void log_recovered(const std::string& name, const Recovered& r, const char* when
     return;
   }
   if (r.foreign) {
-    log_line("archive: %s is not an MCAP file (no magic, no record found): left as it is", name.c_str());
+    log_line("archive: %s is not an MCAP file (no magic, no record found): left as it is",
+             name.c_str());
     return;
   }
-  log_line("archive: recovered %s left open by a crash%s%s: %llu messages in %llu chunks kept, %llu damaged or "
-           "torn bytes dropped in %zu regions", name.c_str(), when,
-           r.rewritten ? " (written beside it, read back, then renamed over it)" : "", u(r.messages), u(r.chunks),
-           u(r.dropped_bytes), r.skipped.size());
+  log_line(
+      "archive: recovered %s left open by a crash%s%s: %llu messages in %llu chunks kept, %llu "
+      "damaged or "
+      "torn bytes dropped in %zu regions",
+      name.c_str(), when,
+      r.rewritten ? " (written beside it, read back, then renamed over it)" : "", u(r.messages),
+      u(r.chunks), u(r.dropped_bytes), r.skipped.size());
   for (size_t i = 0; i < r.skipped.size() && i < 20; ++i)
-    log_line("archive:   skipped %llu bytes at offset %llu: %s", u(r.skipped[i].length), u(r.skipped[i].offset),
-             r.skipped[i].why.c_str());
+    log_line("archive:   skipped %llu bytes at offset %llu: %s", u(r.skipped[i].length),
+             u(r.skipped[i].offset), r.skipped[i].why.c_str());
 }
 
-std::vector<Recovered> recover_dir(const std::string& dir, const std::string& prefix, const WriterOptions& options) {
+std::vector<Recovered> recover_dir(const std::string& dir, const std::string& prefix,
+                                   const WriterOptions& options) {
   std::vector<Recovered> out;
   std::error_code ec;
   for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
@@ -255,7 +263,8 @@ std::vector<Recovered> recover_dir(const std::string& dir, const std::string& pr
       log_recovered(name, r);
       out.push_back(std::move(r));
     } catch (const Error& err) {
-      log_line("archive: cannot recover %s yet: %s (tried again while the broker runs)", name.c_str(), err.what());
+      log_line("archive: cannot recover %s yet: %s (tried again while the broker runs)",
+               name.c_str(), err.what());
       Recovered r;
       r.path = e.path().string();
       r.failed = true;

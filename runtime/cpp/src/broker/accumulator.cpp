@@ -11,15 +11,22 @@ void Accumulator::add(double number, int64_t integer) {
   ++n_;
   switch (agg_) {
     case Aggregation::Min:
-      if (is_float()) d_ = first ? number : std::min(d_, number);
-      else i_ = first ? integer : std::min(i_, integer);
+      if (is_float())
+        d_ = first ? number : std::min(d_, number);
+      else
+        i_ = first ? integer : std::min(i_, integer);
       break;
     case Aggregation::Max:
-      if (is_float()) d_ = first ? number : std::max(d_, number);
-      else i_ = first ? integer : std::max(i_, integer);
+      if (is_float())
+        d_ = first ? number : std::max(d_, number);
+      else
+        i_ = first ? integer : std::max(i_, integer);
       break;
     case Aggregation::First:
-      if (first) { d_ = number; i_ = integer; }
+      if (first) {
+        d_ = number;
+        i_ = integer;
+      }
       break;
     case Aggregation::Last:
       d_ = number;
@@ -27,11 +34,12 @@ void Accumulator::add(double number, int64_t integer) {
       break;
     case Aggregation::Average:
     case Aggregation::Sum:
-      if (is_float()) dsum_ += number;
-      else isum_ += integer;  // wraps like int64 (documented)
+      if (is_float())
+        dsum_ += number;
+      else
+        isum_ += integer;  // wraps like int64 (documented)
       break;
-    case Aggregation::Count:
-      break;
+    case Aggregation::Count: break;
     case Aggregation::All:
       if (is_float()) {
         if (all_.numbers.size() < kMaxAll) all_.numbers.push_back(number);
@@ -47,7 +55,10 @@ link::Value Accumulator::take() {
   v.present = n_ > 0;
   if (v.present) {
     switch (agg_) {
-      case Aggregation::Min: case Aggregation::Max: case Aggregation::First: case Aggregation::Last:
+      case Aggregation::Min:
+      case Aggregation::Max:
+      case Aggregation::First:
+      case Aggregation::Last:
         v.number = d_;
         v.integer = i_;
         break;
@@ -60,9 +71,7 @@ link::Value Accumulator::take() {
         v.number = dsum_;
         v.integer = isum_;
         break;
-      case Aggregation::Count:
-        v.count = n_;
-        break;
+      case Aggregation::Count: v.count = n_; break;
       case Aggregation::All:
         v = std::move(all_);
         v.present = true;

@@ -17,11 +17,17 @@ constexpr int64_t kGuardNs = 100'000'000;
 }  // namespace
 
 BackfillSender::Job::Job(const bf::Request& r, const std::string& dir, const std::string& prefix)
-    : req(r), kind(link::value_kind(r.type, r.aggregation)), acc(r.type, r.aggregation),
-      reader(dir, prefix, r.topic, r.type), next(r.resume), progress_next(r.resume) {}
+    : req(r),
+      kind(link::value_kind(r.type, r.aggregation)),
+      acc(r.type, r.aggregation),
+      reader(dir, prefix, r.topic, r.type),
+      next(r.resume),
+      progress_next(r.resume) {}
 
 BackfillSender::BackfillSender(std::string dir, std::string prefix, uint64_t default_rate_bps)
-    : dir_(std::move(dir)), prefix_(std::move(prefix)), default_rate_(std::max<uint64_t>(default_rate_bps, 1)) {}
+    : dir_(std::move(dir)),
+      prefix_(std::move(prefix)),
+      default_rate_(std::max<uint64_t>(default_rate_bps, 1)) {}
 
 uint64_t BackfillSender::rate() const {
   uint64_t r = std::numeric_limits<uint64_t>::max();
@@ -40,35 +46,42 @@ size_t BackfillSender::window_bytes_cap() const {
 }
 
 size_t BackfillSender::frame_budget() const {
-  return std::min(static_cast<size_t>(std::clamp<uint64_t>(rate() / 16, 64, 16384)), window_bytes_cap());
+  return std::min(static_cast<size_t>(std::clamp<uint64_t>(rate() / 16, 64, 16384)),
+                  window_bytes_cap());
 }
 
 void BackfillSender::on_request(const bf::Request& r, std::optional<link::ValueType> known_type,
                                 std::vector<uint8_t>& out) {
   std::erase_if(jobs_, [&](const auto& j) { return j->req.request_id == r.request_id; });
   auto refuse = [&](bf::EndStatus st, const std::string& why) {
-    log_line("backfill %llu of %s refused: %s", static_cast<unsigned long long>(r.request_id), r.topic.c_str(),
-             why.c_str());
+    log_line("backfill %llu of %s refused: %s", static_cast<unsigned long long>(r.request_id),
+             r.topic.c_str(), why.c_str());
     bf::encode(out, bf::End{r.request_id, st, r.resume, why});
   };
   if (known_type && *known_type != r.type)
-    return refuse(bf::EndStatus::BadRequest, "topic " + r.topic + " is " + link::value_type_name(*known_type) +
+    return refuse(bf::EndStatus::BadRequest, "topic " + r.topic + " is " +
+                                                 link::value_type_name(*known_type) +
                                                  " here, not " + link::value_type_name(r.type));
   // The last window must end before 2262 (int64 nanoseconds).
-  unsigned __int128 end = static_cast<unsigned __int128>(r.windows) * r.period_us * 1000 + r.from_ns;
+  unsigned __int128 end =
+      static_cast<unsigned __int128>(r.windows) * r.period_us * 1000 + r.from_ns;
   if (end > static_cast<unsigned __int128>(std::numeric_limits<int64_t>::max()))
     return refuse(bf::EndStatus::BadRequest, "the range ends beyond the year 2262");
   if (r.resume >= r.windows) {
     bf::encode(out, bf::End{r.request_id, bf::EndStatus::Done, r.windows, ""});
     return;
   }
-  if (jobs_.size() >= kMaxJobs) return refuse(bf::EndStatus::Busy, "too many backfills at once, ask again later");
+  if (jobs_.size() >= kMaxJobs)
+    return refuse(bf::EndStatus::Busy, "too many backfills at once, ask again later");
   jobs_.push_back(std::make_unique<Job>(r, dir_, prefix_));
   // The acknowledgement: the base station sends a request again until it hears of it.
-  bf::encode(out, bf::Progress{r.request_id, r.resume, r.windows, 0, r.rate_bps ? r.rate_bps : default_rate_});
-  log_line("backfill %llu: %s %s over %llu us, windows %llu..%llu, %llu B/s", static_cast<unsigned long long>(r.request_id),
-           r.topic.c_str(), link::aggregation_name(r.aggregation), static_cast<unsigned long long>(r.period_us),
-           static_cast<unsigned long long>(r.resume), static_cast<unsigned long long>(r.windows - 1),
+  bf::encode(out, bf::Progress{r.request_id, r.resume, r.windows, 0,
+                               r.rate_bps ? r.rate_bps : default_rate_});
+  log_line("backfill %llu: %s %s over %llu us, windows %llu..%llu, %llu B/s",
+           static_cast<unsigned long long>(r.request_id), r.topic.c_str(),
+           link::aggregation_name(r.aggregation), static_cast<unsigned long long>(r.period_us),
+           static_cast<unsigned long long>(r.resume),
+           static_cast<unsigned long long>(r.windows - 1),
            static_cast<unsigned long long>(r.rate_bps ? r.rate_bps : default_rate_));
 }
 
@@ -107,15 +120,16 @@ void BackfillSender::fill(Job& j, const Env& env) {
   }
 }
 
-void BackfillSender::end(Job& j, bf::EndStatus st, const std::string& why, std::vector<std::vector<uint8_t>>& frames) {
+void BackfillSender::end(Job& j, bf::EndStatus st, const std::string& why,
+                         std::vector<std::vector<uint8_t>>& frames) {
   std::vector<uint8_t> f;
   bf::encode(f, bf::Progress{j.req.request_id, j.next, j.req.windows, j.bytes_sent, rate()});
   bf::encode(f, bf::End{j.req.request_id, st, j.next, why});
   frames.push_back(std::move(f));
   log_line("backfill %llu of %s ended (%d) at window %llu, %llu bytes%s%s",
-           static_cast<unsigned long long>(j.req.request_id), j.req.topic.c_str(), static_cast<int>(st),
-           static_cast<unsigned long long>(j.next), static_cast<unsigned long long>(j.bytes_sent),
-           why.empty() ? "" : ": ", why.c_str());
+           static_cast<unsigned long long>(j.req.request_id), j.req.topic.c_str(),
+           static_cast<int>(st), static_cast<unsigned long long>(j.next),
+           static_cast<unsigned long long>(j.bytes_sent), why.empty() ? "" : ": ", why.c_str());
 }
 
 void BackfillSender::pump(const Env& env, std::vector<std::vector<uint8_t>>& frames) {
@@ -146,7 +160,8 @@ void BackfillSender::pump(const Env& env, std::vector<std::vector<uint8_t>>& fra
         sent = true;
         break;
       }
-      if (j.batch_bytes < frame_budget() && j.batch.size() < bf::kMaxBatch && !last && !j.waiting) continue;
+      if (j.batch_bytes < frame_budget() && j.batch.size() < bf::kMaxBatch && !last && !j.waiting)
+        continue;
       std::vector<uint8_t> f;
       bf::encode_data(f, bf::DataFrame{j.req.request_id, j.next, j.batch}, j.kind);
       double cost = static_cast<double>(f.size() + frame_overhead_);
@@ -178,7 +193,9 @@ void BackfillSender::pump(const Env& env, std::vector<std::vector<uint8_t>>& fra
 int64_t BackfillSender::next_wake_ns(int64_t now) const {
   if (jobs_.empty()) return std::numeric_limits<int64_t>::max();
   int64_t wait = kPollNs;
-  if (credit_ < 0) wait = std::max<int64_t>(static_cast<int64_t>(-credit_ * 1e9 / static_cast<double>(rate())), 1'000'000);
+  if (credit_ < 0)
+    wait = std::max<int64_t>(static_cast<int64_t>(-credit_ * 1e9 / static_cast<double>(rate())),
+                             1'000'000);
   return now + std::min(wait, int64_t{1'000'000'000});
 }
 

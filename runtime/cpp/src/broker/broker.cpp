@@ -145,8 +145,7 @@ bool IngressSession::on_close() {
       n = std::min<uint64_t>(n, ingress::kMaxFrame / 10);
       c.samples_in += n;
       c.rej(Reject::Malformed) += n;
-    } catch (const Error&) {
-    }
+    } catch (const Error&) {}
   }
   inbuf_.clear();
   return true;
@@ -155,7 +154,11 @@ bool IngressSession::on_close() {
 // ---- broker ----------------------------------------------------------------
 
 Broker::Broker(const BrokerConfig& cfg, std::string key, Clock& clock, LinkOutput& out)
-    : cfg_(cfg), key_(std::move(key)), time_(clock), out_(out), status_period_s_(cfg.status_period_s),
+    : cfg_(cfg),
+      key_(std::move(key)),
+      time_(clock),
+      out_(out),
+      status_period_s_(cfg.status_period_s),
       backfill_(cfg.archive_dir, cfg.archive_prefix, cfg.backfill_default_rate_bps) {
   archive::ArchiverOptions ao;
   ao.dir = cfg.archive_dir;
@@ -178,7 +181,8 @@ Broker::Broker(const BrokerConfig& cfg, std::string key, Clock& clock, LinkOutpu
 
 Broker::~Broker() { shutdown(); }
 
-uint32_t Broker::add_topic(const std::string& name, link::ValueType type, uint32_t capacity, bool known) {
+uint32_t Broker::add_topic(const std::string& name, link::ValueType type, uint32_t capacity,
+                           bool known) {
   auto it = by_name_.find(name);
   if (it != by_name_.end()) {
     Topic& t = topics_[it->second];
@@ -222,10 +226,12 @@ int64_t Broker::now() {
   int64_t t = time_.now();
   clock_now_ = time_.wall();
   if (Timeline::Step st = time_.last_step(); st.delta_ns != 0) {
-    log_line("clock: CLOCK_REALTIME stepped %+.3f s; stamps and the schedule keep the monotonic timeline "
-             "(wall - timeline now %+.3f s, %llu step(s) this run)",
-             static_cast<double>(st.delta_ns) / 1e9, static_cast<double>(time_.offset_ns()) / 1e9,
-             static_cast<unsigned long long>(time_.steps()));
+    log_line(
+        "clock: CLOCK_REALTIME stepped %+.3f s; stamps and the schedule keep the monotonic "
+        "timeline "
+        "(wall - timeline now %+.3f s, %llu step(s) this run)",
+        static_cast<double>(st.delta_ns) / 1e9, static_cast<double>(time_.offset_ns()) / 1e9,
+        static_cast<unsigned long long>(time_.steps()));
     run_record_->note_clock(time_.steps(), time_.offset_ns(), st);
   }
   return t;
@@ -266,9 +272,11 @@ Reject Broker::ingest(int64_t global, Reject why, link::ValueType declared, int6
     // Fair share: with the queue half full, a publisher (or topic) holding more than its share
     // of the samples not yet on disk loses its own samples, not the others'.
     uint64_t n = std::max<uint64_t>(counters_.publishers_connected, 1);
-    uint64_t share = cfg_.publisher_quota_samples ? cfg_.publisher_quota_samples : cfg_.queue_limit_samples / 2 / n;
+    uint64_t share = cfg_.publisher_quota_samples ? cfg_.publisher_quota_samples
+                                                  : cfg_.queue_limit_samples / 2 / n;
     if (who && who->outstanding() >= share) return refuse(Reject::Quota);
-    uint64_t tshare = cfg_.topic_quota_samples ? cfg_.topic_quota_samples : cfg_.queue_limit_samples / 4;
+    uint64_t tshare =
+        cfg_.topic_quota_samples ? cfg_.topic_quota_samples : cfg_.queue_limit_samples / 4;
     if (t.accepted - t.durable_accepted >= tshare) return refuse(Reject::Quota);
   }
   ++counters_.accepted;
@@ -284,16 +292,19 @@ Reject Broker::ingest(int64_t global, Reject why, link::ValueType declared, int6
   return Reject::kCount;
 }
 
-std::string Broker::describe(Reject why, const std::string& topic, int64_t stamp, const ingress::Record& r) const {
+std::string Broker::describe(Reject why, const std::string& topic, int64_t stamp,
+                             const ingress::Record& r) const {
   char buf[320];
   switch (why) {
     case Reject::UnknownTopic:
-      std::snprintf(buf, sizeof buf, "topic '%s' is not published on drone '%s'", topic.c_str(), cfg_.name.c_str());
+      std::snprintf(buf, sizeof buf, "topic '%s' is not published on drone '%s'", topic.c_str(),
+                    cfg_.name.c_str());
       break;
     case Reject::WrongType: {
       auto it = by_name_.find(topic);
-      std::snprintf(buf, sizeof buf, "topic '%s' is %s on this drone", topic.c_str(),
-                    it == by_name_.end() ? "?" : link::value_type_name(topics_[it->second].info->type));
+      std::snprintf(
+          buf, sizeof buf, "topic '%s' is %s on this drone", topic.c_str(),
+          it == by_name_.end() ? "?" : link::value_type_name(topics_[it->second].info->type));
       break;
     }
     case Reject::NotFinite:
@@ -301,11 +312,14 @@ std::string Broker::describe(Reject why, const std::string& topic, int64_t stamp
       break;
     case Reject::Timestamp: {
       (void)stamp;
-      double ahead_s = (static_cast<double>(r.timestamp_ns) - static_cast<double>(clock_now_)) / 1e9;
+      double ahead_s =
+          (static_cast<double>(r.timestamp_ns) - static_cast<double>(clock_now_)) / 1e9;
       std::snprintf(buf, sizeof buf,
-                    "topic '%s': timestamp %lld ns is %.3g s %s the broker clock (bounds: %llu ms ahead, %llu ms behind)",
+                    "topic '%s': timestamp %lld ns is %.3g s %s the broker clock (bounds: %llu ms "
+                    "ahead, %llu ms behind)",
                     topic.c_str(), static_cast<long long>(r.timestamp_ns), std::fabs(ahead_s),
-                    ahead_s > 0 ? "ahead of" : "behind", static_cast<unsigned long long>(cfg_.max_future_ms),
+                    ahead_s > 0 ? "ahead of" : "behind",
+                    static_cast<unsigned long long>(cfg_.max_future_ms),
                     static_cast<unsigned long long>(cfg_.max_past_ms));
       break;
     }
@@ -314,11 +328,12 @@ std::string Broker::describe(Reject why, const std::string& topic, int64_t stamp
                     static_cast<unsigned long long>(cfg_.queue_limit_samples));
       break;
     case Reject::Quota:
-      std::snprintf(buf, sizeof buf, "topic '%s': over this publisher's (or topic's) fair share of the archive queue",
-                    topic.c_str());
+      std::snprintf(
+          buf, sizeof buf,
+          "topic '%s': over this publisher's (or topic's) fair share of the archive queue",
+          topic.c_str());
       break;
-    default:
-      std::snprintf(buf, sizeof buf, "topic '%s': %s", topic.c_str(), reject_name(why));
+    default: std::snprintf(buf, sizeof buf, "topic '%s': %s", topic.c_str(), reject_name(why));
   }
   return buf;
 }
@@ -379,7 +394,8 @@ void Broker::check_archive(int64_t now) {
     // that counts it archived.
     write_run_record(now, false);
     for (IngressSession* s : sessions_) s->report(durable);
-  } else if (ac.files != record_files_ || (now >= next_record_ns_ && counters_.samples_in != record_samples_in_)) {
+  } else if (ac.files != record_files_ ||
+             (now >= next_record_ns_ && counters_.samples_in != record_samples_in_)) {
     write_run_record(now, false);
   }
   for (IngressSession* s : sessions_) s->send_catalogue_if_changed();
@@ -390,7 +406,7 @@ void Broker::check_archive(int64_t now) {
   }
   if (now >= next_space_check_) {
     next_space_check_ = now + 1'000'000'000;
-    struct statvfs sv{};
+    struct statvfs sv {};
     if (statvfs(cfg_.archive_dir.c_str(), &sv) == 0) {
       uint64_t free_mb = static_cast<uint64_t>(sv.f_bavail) * sv.f_frsize / (1024 * 1024);
       bool low = free_mb < cfg_.low_space_mb;
@@ -398,16 +414,21 @@ void Broker::check_archive(int64_t now) {
         low_space_ = low;
         changed = true;
         if (low)
-          log_line("archive: low space: %llu MiB free under %s (threshold %llu MiB, writing %llu B/s)",
-                   static_cast<unsigned long long>(free_mb), cfg_.archive_dir.c_str(),
-                   static_cast<unsigned long long>(cfg_.low_space_mb), static_cast<unsigned long long>(rate_bps_));
+          log_line(
+              "archive: low space: %llu MiB free under %s (threshold %llu MiB, writing %llu B/s)",
+              static_cast<unsigned long long>(free_mb), cfg_.archive_dir.c_str(),
+              static_cast<unsigned long long>(cfg_.low_space_mb),
+              static_cast<unsigned long long>(rate_bps_));
         else
-          log_line("archive: space back above the threshold: %llu MiB free", static_cast<unsigned long long>(free_mb));
+          log_line("archive: space back above the threshold: %llu MiB free",
+                   static_cast<unsigned long long>(free_mb));
       }
     }
     if (now - rate_since_ >= 10'000'000'000) {
       uint64_t b = ac.bytes;
-      if (rate_since_) rate_bps_ = (b - std::min(b, rate_bytes_)) * 1'000'000'000 / static_cast<uint64_t>(now - rate_since_);
+      if (rate_since_)
+        rate_bps_ = (b - std::min(b, rate_bytes_)) * 1'000'000'000 /
+                    static_cast<uint64_t>(now - rate_since_);
       rate_bytes_ = b;
       rate_since_ = now;
     }
@@ -438,7 +459,8 @@ void Broker::write_run_record(int64_t now, bool final) {
   std::vector<uint64_t> v = status_counters();  // `archived` read before the files: never more
   std::vector<std::pair<std::string, uint64_t>> counters;
   counters.reserve(v.size());
-  for (int i = 0; i < kStatusFieldCount; ++i) counters.emplace_back(kStatusFieldNames[i], v[static_cast<size_t>(i)]);
+  for (int i = 0; i < kStatusFieldCount; ++i)
+    counters.emplace_back(kStatusFieldNames[i], v[static_cast<size_t>(i)]);
   run_record_->write(counters, archiver_->files(), final, now);
   record_files_ = v[kArchiveFiles];
   record_samples_in_ = counters_.samples_in;
@@ -454,8 +476,9 @@ link::ConfigAck Broker::on_config(const link::Config& cfg) {
     auto it = by_name_.find(t.name);
     if (it != by_name_.end() && topics_[it->second].info->type != t.type) {
       ack.status = static_cast<uint8_t>(ErrorCode::BadConfig);
-      log_line("config %u rejected: topic %s is %s here, %s in CONFIG", cfg.config_id, t.name.c_str(),
-               link::value_type_name(topics_[it->second].info->type), link::value_type_name(t.type));
+      log_line("config %u rejected: topic %s is %s here, %s in CONFIG", cfg.config_id,
+               t.name.c_str(), link::value_type_name(topics_[it->second].info->type),
+               link::value_type_name(t.type));
       return ack;
     }
   }
@@ -463,7 +486,8 @@ link::ConfigAck Broker::on_config(const link::Config& cfg) {
     ack.status = static_cast<uint8_t>(ErrorCode::Busy);
     return ack;
   }
-  for (const auto& t : cfg.topics) globals.push_back(add_topic(t.name, t.type, t.buffer_size, true));
+  for (const auto& t : cfg.topics)
+    globals.push_back(add_topic(t.name, t.type, t.buffer_size, true));
   int64_t now = stamp_now();
   auto epoch = executor_.apply(cfg, globals, now);
   if (!epoch) {
@@ -472,8 +496,8 @@ link::ConfigAck Broker::on_config(const link::Config& cfg) {
   }
   ack.epoch_ns = static_cast<uint64_t>(*epoch);
   status_period_s_ = cfg.status_period_s;
-  log_line("config %u accepted: %zu topics, %zu streams, epoch %lld", cfg.config_id, cfg.topics.size(),
-           cfg.streams.size(), static_cast<long long>(*epoch));
+  log_line("config %u accepted: %zu topics, %zu streams, epoch %lld", cfg.config_id,
+           cfg.topics.size(), cfg.streams.size(), static_cast<long long>(*epoch));
   return ack;
 }
 
@@ -493,7 +517,8 @@ void Broker::on_authenticated() {
 
 void Broker::on_backfill(const link::RawFrame& f, std::vector<uint8_t>& out) {
   namespace bf = link::backfill;
-  if (f.type == static_cast<uint8_t>(bf::Type::Data) || f.type == static_cast<uint8_t>(bf::Type::Progress) ||
+  if (f.type == static_cast<uint8_t>(bf::Type::Data) ||
+      f.type == static_cast<uint8_t>(bf::Type::Progress) ||
       f.type == static_cast<uint8_t>(bf::Type::End))
     throw Error(ErrorCode::BadFrame, "backfill answers are sent by the PubBroker only", 0);
   bf::Message m = bf::decode(f);
@@ -507,7 +532,8 @@ void Broker::on_backfill(const link::RawFrame& f, std::vector<uint8_t>& out) {
 
 void Broker::pump_backfill(int64_t now) {
   if (!backfill_.active()) return;
-  BackfillSender::Env env{now, archived_until_, executor_.next_due_ns(), out_.link_ready() && out_.link_backlog() == 0};
+  BackfillSender::Env env{now, archived_until_, executor_.next_due_ns(),
+                          out_.link_ready() && out_.link_backlog() == 0};
   std::vector<std::vector<uint8_t>> frames;
   backfill_.pump(env, frames);
   for (auto& f : frames) {
@@ -534,8 +560,9 @@ bool Broker::send_data(std::vector<uint8_t>&& frame) {
   return true;
 }
 
-bool Broker::send_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
-                       std::vector<bool>&& presence, link::SlotEncoder&& enc) {
+bool Broker::send_slot(uint8_t config_id, uint64_t slot, int64_t date_ns,
+                       std::vector<uint8_t>&& values, std::vector<bool>&& presence,
+                       link::SlotEncoder&& enc) {
   if (!out_.link_ready()) return false;
   if (status_pending_) {
     // STATUS goes in a CONTROL datagram of its own: DATA datagrams carry slots only.
@@ -544,7 +571,9 @@ bool Broker::send_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::v
     if (out_.link_write(std::move(frame))) status_pending_ = false;
   }
   size_t n = values.size();
-  if (!out_.link_slot(config_id, slot, date_ns, std::move(values), std::move(presence), std::move(enc))) return false;
+  if (!out_.link_slot(config_id, slot, date_ns, std::move(values), std::move(presence),
+                      std::move(enc)))
+    return false;
   counters_.link_bytes_sent += n;
   return true;
 }
@@ -556,7 +585,8 @@ void Broker::status_due(int64_t now) {
 
 void Broker::send_overdue_status(int64_t now) {
   int64_t period = int64_t{status_period_s_} * 1'000'000'000;
-  if (!status_pending_ || period == 0 || now - status_due_since_ < period || !out_.link_ready()) return;
+  if (!status_pending_ || period == 0 || now - status_due_since_ < period || !out_.link_ready())
+    return;
   std::vector<uint8_t> frame;
   link::encode(frame, status_message());
   size_t n = frame.size();
@@ -596,7 +626,7 @@ std::vector<uint64_t> Broker::status_counters() {
   v[kFramesSent] = ec.frames_sent;
   v[kFramesDropped] = ec.frames_dropped;
   v[kLinkBytesSent] = counters_.link_bytes_sent;
-  struct statvfs sv{};
+  struct statvfs sv {};
   if (statvfs(cfg_.archive_dir.c_str(), &sv) == 0)
     v[kDiskFreeMb] = static_cast<uint64_t>(sv.f_bavail) * sv.f_frsize / (1024 * 1024);
   uint64_t fill = 0;

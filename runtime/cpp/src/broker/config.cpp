@@ -32,14 +32,16 @@ void get(const Ctx& c, const json& obj, const std::string& ptr, const char* key,
     if (!v.is_boolean()) c.fail(p, "expected true or false");
     out = v.get<bool>();
   } else {
-    if (!v.is_number_integer() || v.get<int64_t>() < 0) c.fail(p, "expected a non-negative integer");
+    if (!v.is_number_integer() || v.get<int64_t>() < 0)
+      c.fail(p, "expected a non-negative integer");
     uint64_t x = v.get<uint64_t>();
     if (x > static_cast<uint64_t>(std::numeric_limits<T>::max())) c.fail(p, "value too large");
     out = static_cast<T>(x);
   }
 }
 
-void check_keys(const Ctx& c, const json& obj, const std::string& ptr, std::initializer_list<const char*> keys) {
+void check_keys(const Ctx& c, const json& obj, const std::string& ptr,
+                std::initializer_list<const char*> keys) {
   if (!obj.is_object()) c.fail(ptr.empty() ? "/" : ptr, "expected an object");
   for (const auto& [k, _] : obj.items()) {
     bool known = false;
@@ -56,11 +58,13 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   try {
     j = json::parse(text);
   } catch (const json::parse_error& e) {
-    throw Error(ErrorCode::BadConfig, origin + ": byte " + std::to_string(e.byte) + ": " + e.what());
+    throw Error(ErrorCode::BadConfig,
+                origin + ": byte " + std::to_string(e.byte) + ": " + e.what());
   }
   BrokerConfig cfg;
-  check_keys(c, j, "", {"name", "link", "ingress", "archive", "topics", "default_buffer_size",
-                        "accept_unknown_topics", "status_period_s", "log_period_s", "log", "backfill"});
+  check_keys(c, j, "",
+             {"name", "link", "ingress", "archive", "topics", "default_buffer_size",
+              "accept_unknown_topics", "status_period_s", "log_period_s", "log", "backfill"});
   get(c, j, "", "name", cfg.name);
   get(c, j, "", "default_buffer_size", cfg.default_buffer_size);
   get(c, j, "", "accept_unknown_topics", cfg.accept_unknown_topics);
@@ -68,7 +72,8 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   if (j.contains("backfill")) {
     check_keys(c, j["backfill"], "/backfill", {"default_rate_bps"});
     get(c, j["backfill"], "/backfill", "default_rate_bps", cfg.backfill_default_rate_bps);
-    if (cfg.backfill_default_rate_bps < 1) c.fail("/backfill/default_rate_bps", "must be at least 1");
+    if (cfg.backfill_default_rate_bps < 1)
+      c.fail("/backfill/default_rate_bps", "must be at least 1");
   }
   get(c, j, "", "log_period_s", cfg.log_period_s);
   if (j.contains("log")) {
@@ -82,8 +87,9 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   if (cfg.default_buffer_size < 1) c.fail("/default_buffer_size", "must be at least 1");
   if (!j.contains("link")) c.fail("/link", "missing (the link endpoint and key are required)");
   const json& l = j["link"];
-  check_keys(c, l, "/link", {"host", "port", "key", "handshake_timeout_ms", "transport", "device", "baud",
-                              "max_packet", "delay_ms", "keepalive_timeout_s", "ring_bytes"});
+  check_keys(c, l, "/link",
+             {"host", "port", "key", "handshake_timeout_ms", "transport", "device", "baud",
+              "max_packet", "delay_ms", "keepalive_timeout_s", "ring_bytes"});
   get(c, l, "/link", "transport", cfg.link_transport);
   if (cfg.link_transport != "tcp" && cfg.link_transport != "udp" && cfg.link_transport != "serial")
     c.fail("/link/transport", "expected tcp, udp or serial");
@@ -94,7 +100,8 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   get(c, l, "/link", "max_packet", cfg.link_max_packet);
   namespace dg = modd::link::dgram;
   if (cfg.link_max_packet == 0)
-    cfg.link_max_packet = cfg.link_transport == "serial" ? dg::kDefaultSerialPacket : dg::kDefaultUdpPacket;
+    cfg.link_max_packet =
+        cfg.link_transport == "serial" ? dg::kDefaultSerialPacket : dg::kDefaultUdpPacket;
   if (cfg.link_max_packet < dg::kMinPacket || cfg.link_max_packet > dg::kMaxPacket)
     c.fail("/link/max_packet",
            "expected " + std::to_string(dg::kMinPacket) + ".." + std::to_string(dg::kMaxPacket));
@@ -102,7 +109,8 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   if (cfg.link_delay_ms > 3'600'000) c.fail("/link/delay_ms", "above one hour");
   get(c, l, "/link", "keepalive_timeout_s", cfg.link_keepalive_timeout_s);
   get(c, l, "/link", "ring_bytes", cfg.link_ring_bytes);
-  if (cfg.link_ring_bytes < 256 || cfg.link_ring_bytes > (16u << 20)) c.fail("/link/ring_bytes", "expected 256..16777216");
+  if (cfg.link_ring_bytes < 256 || cfg.link_ring_bytes > (16u << 20))
+    c.fail("/link/ring_bytes", "expected 256..16777216");
   get(c, l, "/link", "host", cfg.link_host);
   get(c, l, "/link", "port", cfg.link_port);
   get(c, l, "/link", "key", cfg.key_ref);
@@ -110,24 +118,29 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   if (cfg.key_ref.empty()) c.fail("/link/key", "missing: a key reference env:NAME or file:PATH");
   if (j.contains("ingress")) {
     const json& i = j["ingress"];
-    check_keys(c, i, "/ingress", {"unix_path", "host", "port", "max_future_ms", "max_past_ms",
-                                  "publisher_quota_samples", "topic_quota_samples"});
+    check_keys(c, i, "/ingress",
+               {"unix_path", "host", "port", "max_future_ms", "max_past_ms",
+                "publisher_quota_samples", "topic_quota_samples"});
     get(c, i, "/ingress", "max_future_ms", cfg.max_future_ms);
     get(c, i, "/ingress", "max_past_ms", cfg.max_past_ms);
     get(c, i, "/ingress", "publisher_quota_samples", cfg.publisher_quota_samples);
     get(c, i, "/ingress", "topic_quota_samples", cfg.topic_quota_samples);
-    if (cfg.max_future_ms > 100ull * 365 * 86400 * 1000) c.fail("/ingress/max_future_ms", "above 100 years");
-    if (cfg.max_past_ms > 100ull * 365 * 86400 * 1000) c.fail("/ingress/max_past_ms", "above 100 years");
+    if (cfg.max_future_ms > 100ull * 365 * 86400 * 1000)
+      c.fail("/ingress/max_future_ms", "above 100 years");
+    if (cfg.max_past_ms > 100ull * 365 * 86400 * 1000)
+      c.fail("/ingress/max_past_ms", "above 100 years");
     get(c, i, "/ingress", "unix_path", cfg.ingress_unix);
     get(c, i, "/ingress", "host", cfg.ingress_host);
     get(c, i, "/ingress", "port", cfg.ingress_port);
   }
-  if (cfg.ingress_unix.empty() && cfg.ingress_port == 0) c.fail("/ingress", "needs unix_path or port");
+  if (cfg.ingress_unix.empty() && cfg.ingress_port == 0)
+    c.fail("/ingress", "needs unix_path or port");
   if (!j.contains("archive")) c.fail("/archive", "missing");
   const json& a = j["archive"];
-  check_keys(c, a, "/archive", {"dir", "prefix", "rotate_bytes", "rotate_s", "fsync", "compression",
-                                "chunk_bytes", "flush_interval_ms", "queue_limit_samples", "message_index",
-                                "low_space_mb", "retry_max_ms"});
+  check_keys(c, a, "/archive",
+             {"dir", "prefix", "rotate_bytes", "rotate_s", "fsync", "compression", "chunk_bytes",
+              "flush_interval_ms", "queue_limit_samples", "message_index", "low_space_mb",
+              "retry_max_ms"});
   get(c, a, "/archive", "low_space_mb", cfg.low_space_mb);
   get(c, a, "/archive", "retry_max_ms", cfg.retry_max_ms);
   if (cfg.retry_max_ms < 250) c.fail("/archive/retry_max_ms", "must be at least 250");
@@ -145,7 +158,8 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
   if (cfg.chunk_bytes > (64u << 20)) c.fail("/archive/chunk_bytes", "must be at most 67108864");
   std::string s;
   get(c, a, "/archive", "fsync", s);
-  if (!s.empty() && !archive::parse_fsync(s, cfg.fsync)) c.fail("/archive/fsync", "expected never, chunk or close");
+  if (!s.empty() && !archive::parse_fsync(s, cfg.fsync))
+    c.fail("/archive/fsync", "expected never, chunk or close");
   s.clear();
   get(c, a, "/archive", "compression", s);
   if (!s.empty() && !archive::parse_compression(s, cfg.compression))
@@ -161,7 +175,8 @@ BrokerConfig parse_config(const std::string& text, const std::string& origin) {
       if (td.name.empty()) c.fail(p + "/name", "missing");
       std::string ty = "float32";
       get(c, t, p, "type", ty);
-      if (!link::parse_value_type(ty, td.type)) c.fail(p + "/type", "expected float32, float64, int or bool");
+      if (!link::parse_value_type(ty, td.type))
+        c.fail(p + "/type", "expected float32, float64, int or bool");
       get(c, t, p, "buffer_size", td.buffer_size);
       cfg.topics.push_back(td);
     }

@@ -52,7 +52,9 @@ DatagramLink::DatagramLink(std::string psk, LinkHooks& hooks, DatagramOut& out, 
       opt_(opt),
       delay_ns_(opt.delay_ns),
       challenges_(opt.challenges, cookie_secret),
-      resend_budget_(0, static_cast<double>(opt.resend_burst_bytes ? opt.resend_burst_bytes : opt.ring_bytes), 0),
+      resend_budget_(
+          0, static_cast<double>(opt.resend_burst_bytes ? opt.resend_burst_bytes : opt.ring_bytes),
+          0),
       per_nack_(opt.resend_per_nack_bytes ? opt.resend_per_nack_bytes : opt.ring_bytes / 4) {}
 
 void DatagramLink::emit(std::vector<uint8_t>&& d, bool reply) {
@@ -77,9 +79,7 @@ void DatagramLink::on_datagram(std::span<const uint8_t> raw, int64_t now) {
     } else {
       ++c_.malformed;  // DATA goes drone -> base only
     }
-  } catch (const dg::Forged&) {
-    ++c_.forged;
-  } catch (const Error&) {
+  } catch (const dg::Forged&) { ++c_.forged; } catch (const Error&) {
     ++c_.malformed;
   }
 }
@@ -97,19 +97,22 @@ void DatagramLink::on_handshake(std::span<const uint8_t> frame, int64_t now) {
   std::span<const uint8_t> key(reinterpret_cast<const uint8_t*>(psk_.data()), psk_.size());
   if (auto* h = std::get_if<Hello>(&m)) {
     if (h->version != kVersion) {
-      send_handshake(ErrorMsg{static_cast<uint8_t>(ErrorCode::Version),
-                              "unsupported version " + std::to_string(h->version) + ", this broker speaks 1"},
-                     true);
+      send_handshake(
+          ErrorMsg{static_cast<uint8_t>(ErrorCode::Version),
+                   "unsupported version " + std::to_string(h->version) + ", this broker speaks 1"},
+          true);
       return;
     }
     // A cookie: a repeated HELLO (its answer was lost) gets the same CHALLENGE. Over a
     // rate limit, no answer (bounded air time); the HELLO is remembered all the same.
-    if (auto c = challenges_.on_hello(h->nonce, out_.source(), now)) send_handshake(Challenge{kVersion, *c}, true);
+    if (auto c = challenges_.on_hello(h->nonce, out_.source(), now))
+      send_handshake(Challenge{kVersion, *c}, true);
     return;
   }
   auto* a = std::get_if<Auth>(&m);
   if (!a) throw Error(ErrorCode::BadFrame, "unexpected handshake frame", 0);
-  if (ready_ && out_.from_peer() && macs_equal(a->mac, client_proof(key, session_client_, session_server_))) {
+  if (ready_ && out_.from_peer() &&
+      macs_equal(a->mac, client_proof(key, session_client_, session_server_))) {
     // AUTH repeated because AUTH_OK was lost: answer again, to the peer only.
     AuthOk ok = hooks_.current_config();
     ok.mac = server_proof(key, session_client_, session_server_);
@@ -120,7 +123,8 @@ void DatagramLink::on_handshake(std::span<const uint8_t> frame, int64_t now) {
   if (got.status == Challenges::AuthResult::Limited) return;  // an AUTH flood: no air time
   if (got.status == Challenges::AuthResult::Failed) {
     hooks_.on_rejected("datagram AUTH does not verify (wrong key, or a stale challenge)");
-    send_handshake(ErrorMsg{static_cast<uint8_t>(ErrorCode::AuthFailed), "HMAC proof does not verify"}, true);
+    send_handshake(
+        ErrorMsg{static_cast<uint8_t>(ErrorCode::AuthFailed), "HMAC proof does not verify"}, true);
     return;
   }
   session_client_ = got.hello;
@@ -185,7 +189,8 @@ void DatagramLink::on_control_frame(const std::vector<uint8_t>& frame) {
     on_nack(f->body);
     return;
   }
-  if (link::backfill::is_backfill_type(f->type)) {  // request or cancel (docs/protocol.md, "Backfill")
+  if (link::backfill::is_backfill_type(
+          f->type)) {  // request or cancel (docs/protocol.md, "Backfill")
     std::vector<uint8_t> out;
     hooks_.on_backfill(*f, out);
     if (!out.empty()) send_control(out);
@@ -210,7 +215,8 @@ void DatagramLink::on_control_frame(const std::vector<uint8_t>& frame) {
       last_ack_ = out;
       // a deploy may change the accepted delay: packing follows it from now on
       // (absent: the config file's), the group being packed included
-      delay_ns_ = cfg->accepted_delay_ms ? int64_t{*cfg->accepted_delay_ms} * 1'000'000 : opt_.delay_ns;
+      delay_ns_ =
+          cfg->accepted_delay_ms ? int64_t{*cfg->accepted_delay_ms} * 1'000'000 : opt_.delay_ns;
     }
     send_control(out);
   } else if (auto* e = std::get_if<ErrorMsg>(&m)) {
@@ -267,7 +273,8 @@ void DatagramLink::send_control(std::span<const uint8_t> frame, bool reply) {
   // larger than one packet (a backfill END with a long reason): control fragments
   std::vector<std::vector<uint8_t>> pieces;
   try {
-    pieces = dg::encode_control_fragments(counter_ + 1, frame, opt_.max_datagram, key_, dg::kDroneToBase);
+    pieces = dg::encode_control_fragments(counter_ + 1, frame, opt_.max_datagram, key_,
+                                          dg::kDroneToBase);
   } catch (const std::invalid_argument& e) {
     log_line("link: a control frame of %zu B not sent: %s", frame.size(), e.what());
     return;
@@ -313,7 +320,8 @@ void DatagramLink::retag(Sent& s) {  // tagged again under the current session's
   if (s.frag_body.empty())
     s.raws = {dg::encode_data(s.d, key_, dg::kDroneToBase)};
   else
-    s.raws = dg::encode_fragments(s.d.config_id, s.first, s.frag_body, opt_.max_datagram, key_, dg::kDroneToBase);
+    s.raws = dg::encode_fragments(s.d.config_id, s.first, s.frag_body, opt_.max_datagram, key_,
+                                  dg::kDroneToBase);
   s.key_epoch = key_epoch_;
 }
 
@@ -335,11 +343,13 @@ void DatagramLink::send_fragments(uint8_t config_id, uint64_t slot, const SlotEn
   s.d.slot = slot;
   s.frag_body = dg::slot_bitmap_body(e.presence, e.values);
   try {
-    s.raws = dg::encode_fragments(config_id, slot, s.frag_body, opt_.max_datagram, key_, dg::kDroneToBase);
+    s.raws = dg::encode_fragments(config_id, slot, s.frag_body, opt_.max_datagram, key_,
+                                  dg::kDroneToBase);
   } catch (const std::invalid_argument& err) {
     // Lost to the live view only (the archive has every sample); the planner refuses such a
     // plan, so this is a config the planner did not check. Counted, logged once per 100.
-    if (c_.dropped++ % 100 == 0) log_line("link: slot %llu dropped: %s", static_cast<unsigned long long>(slot), err.what());
+    if (c_.dropped++ % 100 == 0)
+      log_line("link: slot %llu dropped: %s", static_cast<unsigned long long>(slot), err.what());
     return;
   }
   for (const auto& raw : s.raws) {
@@ -355,8 +365,9 @@ bool DatagramLink::joins_group(uint8_t config_id, uint64_t slot, int64_t date_ns
          date_ns - group_date_ <= delay_ns_ && group_.size() < 255;
 }
 
-bool DatagramLink::add_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
-                            std::vector<bool>&& presence, link::SlotEncoder&& enc) {
+bool DatagramLink::add_slot(uint8_t config_id, uint64_t slot, int64_t date_ns,
+                            std::vector<uint8_t>&& values, std::vector<bool>&& presence,
+                            link::SlotEncoder&& enc) {
   if (!ready_) {
     if (!group_.empty()) flush();
     ++c_.dropped;
@@ -425,34 +436,41 @@ void DatagramLink::tick(int64_t now) {
   if (ready_ && opt_.keepalive_timeout_ns > 0 && now - last_heard_ > opt_.keepalive_timeout_ns) {
     ready_ = false;
     ++c_.timeouts;
-    log_line("link: nothing authenticated from the base station for %lld s: DATA paused until a new handshake",
-             static_cast<long long>((now - last_heard_) / 1'000'000'000));
+    log_line(
+        "link: nothing authenticated from the base station for %lld s: DATA paused until a new "
+        "handshake",
+        static_cast<long long>((now - last_heard_) / 1'000'000'000));
   }
 }
 
 int64_t DatagramLink::next_due_ns() const {
   int64_t next = INT64_MAX;
   if (!group_.empty()) next = group_date_ + delay_ns_;
-  if (ready_ && opt_.keepalive_timeout_ns > 0) next = std::min(next, last_heard_ + opt_.keepalive_timeout_ns + 1);
+  if (ready_ && opt_.keepalive_timeout_ns > 0)
+    next = std::min(next, last_heard_ + opt_.keepalive_timeout_ns + 1);
   return next;
 }
 
 std::string DatagramLink::summary() const {
   char buf[600];
-  std::snprintf(buf, sizeof buf,
-                "datagrams_in=%llu datagrams_out=%llu bytes_out=%llu forged=%llu replayed=%llu malformed=%llu "
-                "nacks=%llu resent=%llu too_old=%llu handshakes=%llu timeouts=%llu fragments=%llu dropped=%llu "
-                "foreign=%llu resend_paced=%llu challenges=%llu hellos_unanswered=%llu",
-                static_cast<unsigned long long>(c_.datagrams_in), static_cast<unsigned long long>(c_.datagrams_out),
-                static_cast<unsigned long long>(c_.bytes_out), static_cast<unsigned long long>(c_.forged),
-                static_cast<unsigned long long>(c_.replayed), static_cast<unsigned long long>(c_.malformed),
-                static_cast<unsigned long long>(c_.nacks), static_cast<unsigned long long>(c_.resent),
-                static_cast<unsigned long long>(c_.too_old), static_cast<unsigned long long>(c_.handshakes),
-                static_cast<unsigned long long>(c_.timeouts), static_cast<unsigned long long>(c_.fragments),
-                static_cast<unsigned long long>(c_.dropped), static_cast<unsigned long long>(c_.foreign),
-                static_cast<unsigned long long>(c_.resend_paced),
-                static_cast<unsigned long long>(challenges_.counters().challenges),
-                static_cast<unsigned long long>(challenges_.counters().unanswered));
+  std::snprintf(
+      buf, sizeof buf,
+      "datagrams_in=%llu datagrams_out=%llu bytes_out=%llu forged=%llu replayed=%llu "
+      "malformed=%llu "
+      "nacks=%llu resent=%llu too_old=%llu handshakes=%llu timeouts=%llu fragments=%llu "
+      "dropped=%llu "
+      "foreign=%llu resend_paced=%llu challenges=%llu hellos_unanswered=%llu",
+      static_cast<unsigned long long>(c_.datagrams_in),
+      static_cast<unsigned long long>(c_.datagrams_out),
+      static_cast<unsigned long long>(c_.bytes_out), static_cast<unsigned long long>(c_.forged),
+      static_cast<unsigned long long>(c_.replayed), static_cast<unsigned long long>(c_.malformed),
+      static_cast<unsigned long long>(c_.nacks), static_cast<unsigned long long>(c_.resent),
+      static_cast<unsigned long long>(c_.too_old), static_cast<unsigned long long>(c_.handshakes),
+      static_cast<unsigned long long>(c_.timeouts), static_cast<unsigned long long>(c_.fragments),
+      static_cast<unsigned long long>(c_.dropped), static_cast<unsigned long long>(c_.foreign),
+      static_cast<unsigned long long>(c_.resend_paced),
+      static_cast<unsigned long long>(challenges_.counters().challenges),
+      static_cast<unsigned long long>(challenges_.counters().unanswered));
   return buf;
 }
 

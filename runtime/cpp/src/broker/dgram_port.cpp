@@ -17,7 +17,8 @@ namespace modd::broker {
 namespace {
 
 constexpr size_t kMaxUdp = 65535;
-constexpr size_t kSerialBacklog = 16 * 1024;  // unsent serial bytes above which a datagram is dropped
+constexpr size_t kSerialBacklog =
+    16 * 1024;  // unsent serial bytes above which a datagram is dropped
 
 [[noreturn]] void sys_fail(const std::string& what) {
   throw Error(ErrorCode::Io, what + ": " + std::strerror(errno));
@@ -31,7 +32,8 @@ class UdpPort final : public DgramPort {
     sockaddr_in a{};
     a.sin_family = AF_INET;
     a.sin_port = htons(port);
-    if (inet_pton(AF_INET, host.c_str(), &a.sin_addr) != 1) throw Error(ErrorCode::BadConfig, "bad IPv4 address " + host);
+    if (inet_pton(AF_INET, host.c_str(), &a.sin_addr) != 1)
+      throw Error(ErrorCode::BadConfig, "bad IPv4 address " + host);
     if (::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) < 0)
       sys_fail("bind udp " + host + ":" + std::to_string(port));
     socklen_t len = sizeof a;
@@ -47,7 +49,8 @@ class UdpPort final : public DgramPort {
     std::vector<uint8_t> buf(kMaxUdp);
     for (int i = 0; i < 64; ++i) {  // bounded per wake-up
       source_len_ = sizeof source_;
-      ssize_t n = ::recvfrom(fd_, buf.data(), buf.size(), 0, reinterpret_cast<sockaddr*>(&source_), &source_len_);
+      ssize_t n = ::recvfrom(fd_, buf.data(), buf.size(), 0, reinterpret_cast<sockaddr*>(&source_),
+                             &source_len_);
       if (n < 0) return;  // EAGAIN, or an ICMP error of an earlier send: nothing to read
       bytes_in += static_cast<uint64_t>(n);
       fn(std::span<const uint8_t>(buf.data(), static_cast<size_t>(n)));
@@ -58,7 +61,8 @@ class UdpPort final : public DgramPort {
     const sockaddr_storage& to = reply ? source_ : peer_;
     socklen_t len = reply ? source_len_ : peer_len_;
     if (len == 0) return;
-    if (::sendto(fd_, d.data(), d.size(), MSG_NOSIGNAL, reinterpret_cast<const sockaddr*>(&to), len) < 0)
+    if (::sendto(fd_, d.data(), d.size(), MSG_NOSIGNAL, reinterpret_cast<const sockaddr*>(&to),
+                 len) < 0)
       ++dropped_out;
     else
       bytes_out += d.size();
@@ -99,7 +103,8 @@ speed_t speed_of(uint32_t baud) {
 
 class SerialPort final : public DgramPort {
  public:
-  SerialPort(const std::string& device, uint32_t baud, size_t max_frame) : deframer_(max_frame), where_("serial " + device) {
+  SerialPort(const std::string& device, uint32_t baud, size_t max_frame)
+      : deframer_(max_frame), where_("serial " + device) {
     fd_ = ::open(device.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
     if (fd_ < 0) sys_fail("open " + device);
     termios t{};

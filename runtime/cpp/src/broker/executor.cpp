@@ -5,7 +5,8 @@
 
 namespace modd::broker {
 
-std::unique_ptr<Executor::Active> Executor::build(const link::Config& cfg, const std::vector<uint32_t>& globals,
+std::unique_ptr<Executor::Active> Executor::build(const link::Config& cfg,
+                                                  const std::vector<uint32_t>& globals,
                                                   int64_t epoch) {
   auto a = std::make_unique<Active>();
   a->config_id = cfg.config_id;
@@ -17,18 +18,21 @@ std::unique_ptr<Executor::Active> Executor::build(const link::Config& cfg, const
       throw Error(ErrorCode::BadConfig, "stream " + std::to_string(id) + " names a missing topic");
     link::ValueType type = cfg.topics[s.topic].type;
     a->acc.emplace_back(type, s.aggregation);
-    a->kinds.push_back(link::value_kind(type, s.aggregation, cfg.resolutions.empty() ? 0 : cfg.resolutions[id]));
+    a->kinds.push_back(
+        link::value_kind(type, s.aggregation, cfg.resolutions.empty() ? 0 : cfg.resolutions[id]));
     uint32_t g = globals[s.topic];
     if (a->by_topic.size() <= g) a->by_topic.resize(g + 1);
     a->by_topic[g].push_back(id);
     periods.push_back(s.period_us);
   }
   a->slots = std::make_unique<link::SlotIterator>(periods);
-  a->next_due = a->slots->empty() ? kNever : epoch + static_cast<int64_t>(a->slots->peek_offset_us()) * 1000;
+  a->next_due =
+      a->slots->empty() ? kNever : epoch + static_cast<int64_t>(a->slots->peek_offset_us()) * 1000;
   return a;
 }
 
-std::optional<int64_t> Executor::apply(const link::Config& cfg, const std::vector<uint32_t>& globals, int64_t now) {
+std::optional<int64_t> Executor::apply(const link::Config& cfg,
+                                       const std::vector<uint32_t>& globals, int64_t now) {
   if (pending_) return std::nullopt;
   if (!active_ || active_->next_due == kNever) {
     active_ = build(cfg, globals, now);
@@ -59,7 +63,8 @@ void Executor::advance(int64_t t, FrameSink& sink) {
   }
 }
 
-void Executor::fire_slot(FrameSink& sink, const link::Data& d, const std::vector<link::ValueKind>& kinds,
+void Executor::fire_slot(FrameSink& sink, const link::Data& d,
+                         const std::vector<link::ValueKind>& kinds,
                          const std::vector<uint32_t>& streams, int64_t date) {
   // The values as a DATA frame lays them out, without the frame's header (length, type,
   // seq8) and bitmap: the datagram carries its own header and one bitmap for all its slots.
@@ -87,7 +92,8 @@ void Executor::fire_slot(FrameSink& sink, const link::Data& d, const std::vector
       link::encode_slot_values(out, vals, kinds, streams, chain);
       return out;
     };
-  if (sink.send_slot(d.config_id, d.slot, date, std::move(values), std::move(presence), std::move(enc))) {
+  if (sink.send_slot(d.config_id, d.slot, date, std::move(values), std::move(presence),
+                     std::move(enc))) {
     ++counters_.frames_sent;
     need_sync_ = false;
   } else {

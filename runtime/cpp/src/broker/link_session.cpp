@@ -12,7 +12,8 @@ using namespace modd::link;
 LinkSession::LinkSession(std::string key, LinkHooks& hooks, std::function<Nonce()> nonce_source)
     : key_(std::move(key)), hooks_(hooks), nonce_source_(std::move(nonce_source)) {}
 
-void LinkSession::close_with_error(ErrorCode code, const std::string& why, std::vector<uint8_t>& out) {
+void LinkSession::close_with_error(ErrorCode code, const std::string& why,
+                                   std::vector<uint8_t>& out) {
   if (state_ != State::Ready) hooks_.on_rejected(why);
   encode(out, ErrorMsg{static_cast<uint8_t>(code), why});
   state_ = State::Closed;
@@ -58,7 +59,9 @@ bool LinkSession::handle(uint8_t type, std::span<const uint8_t> body, std::vecto
         return false;
       }
       if (h->version != kVersion) {
-        close_with_error(ErrorCode::Version, "unsupported version " + std::to_string(h->version) + ", this broker speaks 1", out);
+        close_with_error(
+            ErrorCode::Version,
+            "unsupported version " + std::to_string(h->version) + ", this broker speaks 1", out);
         return false;
       }
       client_nonce_ = h->nonce;
@@ -100,10 +103,10 @@ bool LinkSession::handle(uint8_t type, std::span<const uint8_t> body, std::vecto
         state_ = State::Closed;
         return false;
       }
-      throw Error(ErrorCode::BadFrame, "unexpected message type " + std::to_string(type) + " from the base station", 0);
+      throw Error(ErrorCode::BadFrame,
+                  "unexpected message type " + std::to_string(type) + " from the base station", 0);
     }
-    case State::Closed:
-      return false;
+    case State::Closed: return false;
   }
   return false;
 }

@@ -31,7 +31,8 @@ void RunRecord::note_clock(uint64_t steps, int64_t wall_minus_timeline_ns, Timel
 }
 
 bool RunRecord::write(const std::vector<std::pair<std::string, uint64_t>>& counters,
-                      const std::vector<std::pair<std::string, uint64_t>>& files, bool final, int64_t now_ns) {
+                      const std::vector<std::pair<std::string, uint64_t>>& files, bool final,
+                      int64_t now_ns) {
   nlohmann::ordered_json doc;
   doc["run"] = run_;
   doc["started_ns"] = started_ns_;
@@ -70,8 +71,8 @@ bool RunRecord::write(const std::vector<std::pair<std::string, uint64_t>>& count
   if (ok == failing_) {
     failing_ = !ok;
     if (failing_)
-      log_line("archive: cannot write the run's counters %s: %s (the last copy stays)", path_.c_str(),
-               std::strerror(err));
+      log_line("archive: cannot write the run's counters %s: %s (the last copy stays)",
+               path_.c_str(), std::strerror(err));
     else
       log_line("archive: the run's counters are written again (%s)", path_.c_str());
   }

@@ -21,9 +21,12 @@ namespace modd::broker {
 
 namespace {
 
-constexpr size_t kReadChunk = 64 * 1024;     // per connection per wake-up: no publisher starves the others
-constexpr size_t kLinkBacklog = 64 * 1024;   // unsent link bytes above which DATA is dropped (and counted)
-constexpr size_t kIngressBacklog = 64 * 1024;  // unsent bytes to a publisher above which replies wait
+constexpr size_t kReadChunk =
+    64 * 1024;  // per connection per wake-up: no publisher starves the others
+constexpr size_t kLinkBacklog =
+    64 * 1024;  // unsent link bytes above which DATA is dropped (and counted)
+constexpr size_t kIngressBacklog =
+    64 * 1024;  // unsent bytes to a publisher above which replies wait
 
 [[noreturn]] void sys_fail(const std::string& what) {
   throw Error(ErrorCode::Io, what + ": " + std::strerror(errno));
@@ -37,8 +40,10 @@ int tcp_listen(const std::string& host, uint16_t port, uint16_t& bound) {
   sockaddr_in a{};
   a.sin_family = AF_INET;
   a.sin_port = htons(port);
-  if (inet_pton(AF_INET, host.c_str(), &a.sin_addr) != 1) throw Error(ErrorCode::BadConfig, "bad IPv4 address " + host);
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) < 0) sys_fail("bind " + host + ":" + std::to_string(port));
+  if (inet_pton(AF_INET, host.c_str(), &a.sin_addr) != 1)
+    throw Error(ErrorCode::BadConfig, "bad IPv4 address " + host);
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) < 0)
+    sys_fail("bind " + host + ":" + std::to_string(port));
   if (::listen(fd, 16) < 0) sys_fail("listen");
   socklen_t len = sizeof a;
   getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
@@ -51,7 +56,8 @@ int unix_listen(const std::string& path) {
   if (fd < 0) sys_fail("socket");
   sockaddr_un a{};
   a.sun_family = AF_UNIX;
-  if (path.size() >= sizeof a.sun_path) throw Error(ErrorCode::BadConfig, "unix socket path too long: " + path);
+  if (path.size() >= sizeof a.sun_path)
+    throw Error(ErrorCode::BadConfig, "unix socket path too long: " + path);
   std::memcpy(a.sun_path, path.c_str(), path.size() + 1);
   ::unlink(path.c_str());
   if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) < 0) sys_fail("bind " + path);
@@ -79,20 +85,24 @@ Server::Server(const BrokerConfig& cfg, std::string key, Clock& clock)
     add_fd(tcp_listen(cfg_.link_host, cfg_.link_port, link_port_), Kind::LinkListen);
   } else {
     DgramOptions o;
-    o.max_datagram = cfg_.link_transport == "serial" ? serial_capacity(cfg_.link_max_packet) : cfg_.link_max_packet;
+    o.max_datagram = cfg_.link_transport == "serial" ? serial_capacity(cfg_.link_max_packet)
+                                                     : cfg_.link_max_packet;
     o.delay_ns = int64_t{cfg_.link_delay_ms} * 1'000'000;
     o.keepalive_timeout_ns = int64_t{cfg_.link_keepalive_timeout_s} * 1'000'000'000;
     o.ring_bytes = cfg_.link_ring_bytes;
     dlink_ = std::make_unique<DatagramLink>(key_, *broker_, *this, o);
-    broker_->set_backfill_link(o.max_datagram, control_frame_overhead(cfg_.link_transport == "serial"));
+    broker_->set_backfill_link(o.max_datagram,
+                               control_frame_overhead(cfg_.link_transport == "serial"));
     open_dgram_port();
     if (!port_) throw Error(ErrorCode::Io, "cannot open the link device " + cfg_.link_device);
   }
   if (!cfg_.ingress_unix.empty()) add_fd(unix_listen(cfg_.ingress_unix), Kind::IngressUnixListen);
-  if (cfg_.ingress_port) add_fd(tcp_listen(cfg_.ingress_host, cfg_.ingress_port, ingress_port_), Kind::IngressTcpListen);
+  if (cfg_.ingress_port)
+    add_fd(tcp_listen(cfg_.ingress_host, cfg_.ingress_port, ingress_port_), Kind::IngressTcpListen);
   int64_t now = broker_->now();
   next_flush_ = now + int64_t{cfg_.flush_interval_ms} * 1'000'000;
-  next_log_ = cfg_.log_period_s ? now + int64_t{cfg_.log_period_s} * 1'000'000'000 : Executor::kNever;
+  next_log_ =
+      cfg_.log_period_s ? now + int64_t{cfg_.log_period_s} * 1'000'000'000 : Executor::kNever;
   next_status_ = now + int64_t{std::max<uint32_t>(broker_->status_period_s(), 1)} * 1'000'000'000;
 }
 
@@ -150,19 +160,24 @@ void Server::adopt_source() {
   if (port_) port_->adopt_source();
 }
 
-std::vector<uint8_t> Server::source() const { return port_ ? port_->source() : std::vector<uint8_t>{}; }
+std::vector<uint8_t> Server::source() const {
+  return port_ ? port_->source() : std::vector<uint8_t>{};
+}
 
 bool Server::from_peer() const { return !port_ || port_->from_peer(); }
 
 LinkDatagramCounts Server::datagram_counts() const {
   if (!dlink_) return {};
   const DgramCounters& c = dlink_->counters();
-  return {c.datagrams_out, c.resent, c.nacks, c.dropped, c.forged + c.foreign, c.replayed};  // foreign: forged's row
+  return {c.datagrams_out,      c.resent,  c.nacks, c.dropped,
+          c.forged + c.foreign, c.replayed};  // foreign: forged's row
 }
 
-bool Server::link_slot(uint8_t config_id, uint64_t slot, int64_t date_ns, std::vector<uint8_t>&& values,
-                       std::vector<bool>&& presence, link::SlotEncoder&& enc) {
-  return dlink_ && dlink_->add_slot(config_id, slot, date_ns, std::move(values), std::move(presence), std::move(enc));
+bool Server::link_slot(uint8_t config_id, uint64_t slot, int64_t date_ns,
+                       std::vector<uint8_t>&& values, std::vector<bool>&& presence,
+                       link::SlotEncoder&& enc) {
+  return dlink_ && dlink_->add_slot(config_id, slot, date_ns, std::move(values),
+                                    std::move(presence), std::move(enc));
 }
 
 bool Server::link_ready() const {
@@ -251,8 +266,8 @@ void Server::on_readable(Conn& c) {
   std::span<const uint8_t> in(buf, static_cast<size_t>(n));
   if (c.kind == Kind::Ingress) {
     if (!c.ingress->on_bytes(in)) {
-      log_line("ingress: publisher '%s' sent a malformed frame, disconnected: %s", c.ingress->publisher().c_str(),
-               c.ingress->last_error.c_str());
+      log_line("ingress: publisher '%s' sent a malformed frame, disconnected: %s",
+               c.ingress->publisher().c_str(), c.ingress->last_error.c_str());
       to_close_.push_back(c.fd);
       return;
     }
@@ -275,7 +290,8 @@ void Server::on_readable(Conn& c) {
 void Server::send_ingress_output(Conn& c) {
   auto bytes = c.ingress->take_output();
   if (bytes.empty()) return;
-  if (c.out.size() > kIngressBacklog) return;  // a publisher that does not read: ACKs are cumulative
+  if (c.out.size() > kIngressBacklog)
+    return;  // a publisher that does not read: ACKs are cumulative
   c.out.insert(c.out.end(), bytes.begin(), bytes.end());
   flush_out(c);
 }
@@ -284,7 +300,8 @@ void Server::timers(int64_t now) {
   broker_->tick(now);
   broker_->pump_backfill(now);
   if (dlink_) {
-    dlink_->tick(now);  // after the slots due now were added: a full group leaves at its last slot's date
+    dlink_->tick(
+        now);  // after the slots due now were added: a full group leaves at its last slot's date
     if (port_) port_->flush_pending();
     if (!port_ && now >= port_retry_ns_) {
       open_dgram_port();
@@ -301,7 +318,8 @@ void Server::timers(int64_t now) {
   {
     uint32_t p = broker_->status_period_s();
     int64_t period_ns = int64_t{std::max<uint32_t>(p, 1)} * 1'000'000'000;
-    if (next_status_ > now + period_ns) next_status_ = now + period_ns;  // a CONFIG shortened the period
+    if (next_status_ > now + period_ns)
+      next_status_ = now + period_ns;  // a CONFIG shortened the period
     if (now >= next_status_) {
       if (p) broker_->status_due(now);
       next_status_ = now + period_ns;
@@ -323,7 +341,8 @@ void Server::timers(int64_t now) {
 }
 
 int Server::timeout_ms(int64_t now) const {
-  int64_t next = std::min({broker_->next_due_ns(), next_flush_, next_log_, next_status_, broker_->backfill_wake_ns(now)});
+  int64_t next = std::min({broker_->next_due_ns(), next_flush_, next_log_, next_status_,
+                           broker_->backfill_wake_ns(now)});
   if (dlink_) next = std::min(next, dlink_->next_due_ns());
   for (const auto& [fd, c] : conns_)
     if (c.kind == Kind::Link && !c.link->ready()) next = std::min(next, c.deadline_ns);
@@ -336,7 +355,8 @@ void Server::run() {
   log_line("started: link %s %s:%u, ingress %s%s%s, archive %s",
            port_ ? port_->describe().c_str() : "tcp", cfg_.link_host.c_str(), link_port_,
            cfg_.ingress_unix.c_str(), cfg_.ingress_port ? " tcp:" : "",
-           cfg_.ingress_port ? std::to_string(ingress_port_).c_str() : "", cfg_.archive_dir.c_str());
+           cfg_.ingress_port ? std::to_string(ingress_port_).c_str() : "",
+           cfg_.archive_dir.c_str());
   epoll_event events[64];
   while (!stop_) {
     int n = epoll_wait(epfd_, events, 64, timeout_ms(broker_->now()));
@@ -351,12 +371,10 @@ void Server::run() {
           while (::read(sigfd_, &si, sizeof si) == sizeof si) stop_ = true;
           break;
         }
-        case Kind::LinkListen: case Kind::IngressUnixListen: case Kind::IngressTcpListen:
-          accept_on(c);
-          break;
-        case Kind::Dgram:
-          on_dgram_readable();
-          break;
+        case Kind::LinkListen:
+        case Kind::IngressUnixListen:
+        case Kind::IngressTcpListen: accept_on(c); break;
+        case Kind::Dgram: on_dgram_readable(); break;
         default:
           if (events[i].events & EPOLLOUT) flush_out(c);
           if (events[i].events & (EPOLLIN | EPOLLHUP | EPOLLERR)) on_readable(c);

@@ -27,8 +27,13 @@ using ingress::wire::put_fixed;
 using ingress::wire::put_frame;
 using ingress::wire::put_string;
 using ingress::wire::put_varint;
-const char* const kReasons[] = {"unknown topic", "wrong type", "value not finite", "timestamp out of bounds",
-                                "archive queue full", "malformed", "over its fair share of the archive queue"};
+const char* const kReasons[] = {"unknown topic",
+                                "wrong type",
+                                "value not finite",
+                                "timestamp out of bounds",
+                                "archive queue full",
+                                "malformed",
+                                "over its fair share of the archive queue"};
 
 // Bounds-checked reader of a reply body; `ok` turns false on a short or bad field.
 struct Reader {
@@ -47,12 +52,18 @@ struct Reader {
     return 0;
   }
   uint8_t u8() {
-    if (at >= n) { ok = false; return 0; }
+    if (at >= n) {
+      ok = false;
+      return 0;
+    }
     return p[at++];
   }
   std::string string() {
     uint64_t len = varint();
-    if (!ok || len > n - at) { ok = false; return {}; }
+    if (!ok || len > n - at) {
+      ok = false;
+      return {};
+    }
     std::string s(reinterpret_cast<const char*>(p + at), len);
     at += len;
     return s;
@@ -68,7 +79,10 @@ int open_socket(const std::string& ingress) {
     if (fd < 0) return -1;
     a.sun_family = AF_UNIX;
     std::memcpy(a.sun_path, path.c_str(), path.size() + 1);
-    if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) < 0) { ::close(fd); return -1; }
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) < 0) {
+      ::close(fd);
+      return -1;
+    }
     return fd;
   }
   if (ingress.rfind("tcp:", 0) == 0) {
@@ -83,7 +97,10 @@ int open_socket(const std::string& ingress) {
     if (fd < 0) return -1;
     int one = 1;
     setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-    if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) < 0) { ::close(fd); return -1; }
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) < 0) {
+      ::close(fd);
+      return -1;
+    }
     return fd;
   }
   return -1;
@@ -107,13 +124,15 @@ const char* type_name(ValueType t) {
 
 }  // namespace
 
-Publisher::Publisher(std::string name, std::string ingress) : Publisher(std::move(name), std::move(ingress), Options{}) {}
+Publisher::Publisher(std::string name, std::string ingress)
+    : Publisher(std::move(name), std::move(ingress), Options{}) {}
 
 Publisher::Publisher(std::string name, std::string ingress, Options options)
     : name_(std::move(name)), ingress_(std::move(ingress)), opt_(std::move(options)) {
   thread_ = std::thread([this] { run(); });
   std::unique_lock lk(mu_);
-  idle_cv_.wait_for(lk, std::chrono::milliseconds(opt_.connect_wait_ms), [&] { return catalogue_.known; });
+  idle_cv_.wait_for(lk, std::chrono::milliseconds(opt_.connect_wait_ms),
+                    [&] { return catalogue_.known; });
 }
 
 Publisher::~Publisher() {
@@ -124,7 +143,9 @@ Publisher::~Publisher() {
     std::lock_guard lk(mu_);
     v2 = catalogue_.known;
   }
-  if (v2) wait_on_disk(std::chrono::duration_cast<std::chrono::milliseconds>(until - std::chrono::steady_clock::now()));
+  if (v2)
+    wait_on_disk(std::chrono::duration_cast<std::chrono::milliseconds>(
+        until - std::chrono::steady_clock::now()));
   {
     std::lock_guard lk(mu_);
     stopping_ = true;
@@ -138,14 +159,15 @@ void Publisher::declare(const std::string& topic, ValueType type) noexcept {
   try {
     std::lock_guard lk(mu_);
     declared_[topic] = type;
-  } catch (...) {
-  }
+  } catch (...) {}
 }
 
 void Publisher::report(const std::string& topic, const std::string& why) {
   if (!reported_.insert({topic, why.substr(0, why.find(':'))}).second) return;
-  if (opt_.on_error) opt_.on_error(topic, why);
-  else std::fprintf(stderr, "modd::Publisher %s: %s\n", name_.c_str(), why.c_str());
+  if (opt_.on_error)
+    opt_.on_error(topic, why);
+  else
+    std::fprintf(stderr, "modd::Publisher %s: %s\n", name_.c_str(), why.c_str());
 }
 
 bool Publisher::refuse(const std::string& topic, uint64_t Stats::*counter, const std::string& why) {
@@ -163,7 +185,8 @@ bool Publisher::resolve(const std::string& given, std::string& full, std::string
   }
   std::vector<std::string> hits;
   for (const auto& [name, type] : catalogue_.topics)
-    if (name.size() > given.size() && name.compare(name.size() - given.size(), given.size(), given) == 0 &&
+    if (name.size() > given.size() &&
+        name.compare(name.size() - given.size(), given.size(), given) == 0 &&
         name[name.size() - given.size() - 1] == '.')
       hits.push_back(name);
   if (hits.size() == 1) {
@@ -180,8 +203,8 @@ bool Publisher::resolve(const std::string& given, std::string& full, std::string
     for (const auto& [name, type] : catalogue_.topics) list += (list.empty() ? "" : ", ") + name;
   else
     for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-  why = hits.empty() ? "unknown topic '" + given + "': drone '" + catalogue_.drone + "' publishes " +
-                           (list.empty() ? std::string("no topic") : list)
+  why = hits.empty() ? "unknown topic '" + given + "': drone '" + catalogue_.drone +
+                           "' publishes " + (list.empty() ? std::string("no topic") : list)
                      : "ambiguous topic '" + given + "': matches " + list + " (use the full name)";
   return false;
 }
@@ -195,7 +218,8 @@ bool Publisher::push(const std::string& topic, int64_t ts, In v) noexcept {
       id = it->second;
     } else {
       std::string full = topic, why;
-      if (catalogue_.known && !resolve(topic, full, why)) return refuse(topic, &Stats::refused_unknown_topic, why);
+      if (catalogue_.known && !resolve(topic, full, why))
+        return refuse(topic, &Stats::refused_unknown_topic, why);
       ValueType type;
       auto cat = catalogue_.topics.find(full);
       auto dec = declared_.find(full);
@@ -204,13 +228,15 @@ bool Publisher::push(const std::string& topic, int64_t ts, In v) noexcept {
         type = cat->second;
         if (dec != declared_.end() && dec->second != type)
           return refuse(topic, &Stats::refused_wrong_type,
-                        "wrong type: topic '" + full + "' is " + type_name(type) + " on drone '" + catalogue_.drone +
-                            "', declared " + type_name(dec->second));
+                        "wrong type: topic '" + full + "' is " + type_name(type) + " on drone '" +
+                            catalogue_.drone + "', declared " + type_name(dec->second));
       } else if (dec != declared_.end()) {
         type = dec->second;
       } else {
-        type = v.kind == In::Float32 ? ValueType::Float32 : v.kind == In::Float64 ? ValueType::Float64
-               : v.kind == In::Bool  ? ValueType::Bool : ValueType::Int;
+        type = v.kind == In::Float32   ? ValueType::Float32
+               : v.kind == In::Float64 ? ValueType::Float64
+               : v.kind == In::Bool    ? ValueType::Bool
+                                       : ValueType::Int;
       }
       auto f = full_ids_.find(full);
       if (f == full_ids_.end()) {
@@ -224,11 +250,14 @@ bool Publisher::push(const std::string& topic, int64_t ts, In v) noexcept {
     // The value, converted to the declared type (rules in publisher.hpp and docs/ingress.md).
     double number = 0;
     int64_t integer = 0;
-    double x = v.kind == In::Signed ? static_cast<double>(v.i) : v.kind == In::Unsigned ? static_cast<double>(v.u)
-               : v.kind == In::Bool ? static_cast<double>(v.i) : v.d;
+    double x = v.kind == In::Signed     ? static_cast<double>(v.i)
+               : v.kind == In::Unsigned ? static_cast<double>(v.u)
+               : v.kind == In::Bool     ? static_cast<double>(v.i)
+                                        : v.d;
     auto out_of_range = [&](const char* what) {
       return refuse(topic, &Stats::refused_out_of_range,
-                    std::string("value out of range: ") + what + " for topic '" + t.name + "' (" + type_name(t.type) + ")");
+                    std::string("value out of range: ") + what + " for topic '" + t.name + "' (" +
+                        type_name(t.type) + ")");
     };
     switch (t.type) {
       case ValueType::Float32:
@@ -249,7 +278,8 @@ bool Publisher::push(const std::string& topic, int64_t ts, In v) noexcept {
         } else {
           if (!std::isfinite(x)) return out_of_range("NaN or infinite");
           double r = std::round(x);
-          if (r < -9223372036854775808.0 || r >= 9223372036854775808.0) return out_of_range("beyond int64");
+          if (r < -9223372036854775808.0 || r >= 9223372036854775808.0)
+            return out_of_range("beyond int64");
           integer = static_cast<int64_t>(r);
         }
         break;
@@ -260,13 +290,19 @@ bool Publisher::push(const std::string& topic, int64_t ts, In v) noexcept {
     }
     if (catalogue_.known && (catalogue_.max_future_ms || catalogue_.max_past_ms)) {
       __int128 ahead = static_cast<__int128>(ts) - realtime_ns();
-      if ((catalogue_.max_future_ms && ahead > static_cast<__int128>(catalogue_.max_future_ms) * 1'000'000) ||
-          (catalogue_.max_past_ms && -ahead > static_cast<__int128>(catalogue_.max_past_ms) * 1'000'000)) {
+      if ((catalogue_.max_future_ms &&
+           ahead > static_cast<__int128>(catalogue_.max_future_ms) * 1'000'000) ||
+          (catalogue_.max_past_ms &&
+           -ahead > static_cast<__int128>(catalogue_.max_past_ms) * 1'000'000)) {
         char buf[200];
-        std::snprintf(buf, sizeof buf, "timestamp out of bounds: %lld ns is %.3g s %s this clock (bounds %llu ms ahead, "
-                      "%llu ms behind)", static_cast<long long>(ts), std::fabs(static_cast<double>(ahead)) / 1e9,
-                      ahead > 0 ? "ahead of" : "behind", static_cast<unsigned long long>(catalogue_.max_future_ms),
-                      static_cast<unsigned long long>(catalogue_.max_past_ms));
+        std::snprintf(
+            buf, sizeof buf,
+            "timestamp out of bounds: %lld ns is %.3g s %s this clock (bounds %llu ms ahead, "
+            "%llu ms behind)",
+            static_cast<long long>(ts), std::fabs(static_cast<double>(ahead)) / 1e9,
+            ahead > 0 ? "ahead of" : "behind",
+            static_cast<unsigned long long>(catalogue_.max_future_ms),
+            static_cast<unsigned long long>(catalogue_.max_past_ms));
         return refuse(topic, &Stats::refused_timestamp, "topic '" + t.name + "': " + buf);
       }
     }
@@ -276,9 +312,7 @@ bool Publisher::push(const std::string& topic, int64_t ts, In v) noexcept {
     }
     queue_.push_back({id, ts, number, integer});
     ++stats_.published;
-  } catch (...) {
-    return false;
-  }
+  } catch (...) { return false; }
   cv_.notify_one();
   return true;
 }
@@ -299,14 +333,16 @@ bool Publisher::publish(const std::string& topic, int64_t ts, bool v) noexcept {
 bool Publisher::flush(std::chrono::milliseconds timeout) noexcept {
   std::unique_lock lk(mu_);
   cv_.notify_one();
-  return idle_cv_.wait_for(lk, timeout, [&] { return queue_.empty() && resend_.empty() && !in_flight_; });
+  return idle_cv_.wait_for(lk, timeout,
+                           [&] { return queue_.empty() && resend_.empty() && !in_flight_; });
 }
 
 bool Publisher::wait_on_disk(std::chrono::milliseconds timeout) noexcept {
   std::unique_lock lk(mu_);
   cv_.notify_one();
-  return idle_cv_.wait_for(lk, timeout,
-                           [&] { return queue_.empty() && resend_.empty() && !in_flight_ && unacked_.empty(); });
+  return idle_cv_.wait_for(lk, timeout, [&] {
+    return queue_.empty() && resend_.empty() && !in_flight_ && unacked_.empty();
+  });
 }
 
 bool Publisher::connected() const noexcept {
@@ -323,9 +359,7 @@ std::string Publisher::last_error() const noexcept {
   try {
     std::lock_guard lk(mu_);
     return last_error_;
-  } catch (...) {
-    return {};
-  }
+  } catch (...) { return {}; }
 }
 
 void Publisher::disconnect() {
@@ -356,7 +390,10 @@ bool Publisher::connect_and_hello() {
   body.push_back(kVersion);
   put_string(body, name_);
   put_frame(out, MsgType::Hello, body);
-  if (!send_all(out)) { disconnect(); return false; }
+  if (!send_all(out)) {
+    disconnect();
+    return false;
+  }
   std::lock_guard lk(mu_);
   connected_ = true;
   registered_ = 0;
@@ -406,8 +443,10 @@ void Publisher::handle_reply(uint8_t type, const uint8_t* p, size_t n) {
     if (!r.ok) return;
     stats_.rejected_by_broker += count;
     std::string topic = id < topics_.size() ? topics_[id].name : "?";
-    std::string why = std::string("refused by the broker (") +
-                      (reason < sizeof kReasons / sizeof *kReasons ? kReasons[reason] : "unknown reason") + "): " + detail;
+    std::string why =
+        std::string("refused by the broker (") +
+        (reason < sizeof kReasons / sizeof *kReasons ? kReasons[reason] : "unknown reason") +
+        "): " + detail;
     last_error_ = why;
     report(topic, "broker " + std::to_string(reason) + ": " + why);
   }
@@ -417,7 +456,10 @@ void Publisher::read_replies() {
   uint8_t buf[4096];
   for (;;) {
     ssize_t n = ::recv(fd_, buf, sizeof buf, MSG_DONTWAIT);
-    if (n == 0) { disconnect(); return; }
+    if (n == 0) {
+      disconnect();
+      return;
+    }
     if (n < 0) {
       if (errno == EINTR) continue;
       if (errno != EAGAIN && errno != EWOULDBLOCK) disconnect();
@@ -430,7 +472,10 @@ void Publisher::read_replies() {
     Reader r{inbuf_.data() + at, inbuf_.size() - at};
     uint64_t len = r.varint();
     if (!r.ok) break;  // length not complete yet
-    if (len == 0 || len > kMaxFrame) { disconnect(); return; }
+    if (len == 0 || len > kMaxFrame) {
+      disconnect();
+      return;
+    }
     if (r.n - r.at < len) break;
     handle_reply(inbuf_[at + r.at], inbuf_.data() + at + r.at + 1, len - 1);
     at += r.at + len;
@@ -446,8 +491,9 @@ void Publisher::run() {
   for (;;) {
     {
       std::unique_lock lk(mu_);
-      cv_.wait_for(lk, std::chrono::milliseconds(20),
-                   [&] { return stopping_ || ((!queue_.empty() || !resend_.empty()) && !in_flight_ && fd_ >= 0); });
+      cv_.wait_for(lk, std::chrono::milliseconds(20), [&] {
+        return stopping_ || ((!queue_.empty() || !resend_.empty()) && !in_flight_ && fd_ >= 0);
+      });
       if (stopping_ && (fd_ < 0 || (queue_.empty() && resend_.empty()))) {
         if (fd_ < 0) stats_.dropped_at_close += queue_.size() + resend_.size();
         queue_.clear();
@@ -514,7 +560,8 @@ void Publisher::run() {
     if (!send_all(out)) {
       disconnect();
       std::lock_guard lk(mu_);
-      for (auto it = batch.rbegin(); it != batch.rend(); ++it) resend_.push_front(*it);  // sent again, first
+      for (auto it = batch.rbegin(); it != batch.rend(); ++it)
+        resend_.push_front(*it);  // sent again, first
       batch.clear();
       in_flight_ = false;
       next_attempt = clock::now();

@@ -95,7 +95,9 @@ class Reader {
       if (pos_ >= s_.size()) return false;
       char e = s_[pos_++];
       switch (e) {
-        case '"': case '\\': case '/': out.push_back(e); break;
+        case '"':
+        case '\\':
+        case '/': out.push_back(e); break;
         case 'b': out.push_back('\b'); break;
         case 'f': out.push_back('\f'); break;
         case 'n': out.push_back('\n'); break;
@@ -107,10 +109,14 @@ class Reader {
           for (int i = 0; i < 4; ++i) {
             char h = s_[pos_++];
             code <<= 4;
-            if (h >= '0' && h <= '9') code |= unsigned(h - '0');
-            else if (h >= 'a' && h <= 'f') code |= unsigned(h - 'a' + 10);
-            else if (h >= 'A' && h <= 'F') code |= unsigned(h - 'A' + 10);
-            else return false;
+            if (h >= '0' && h <= '9')
+              code |= unsigned(h - '0');
+            else if (h >= 'a' && h <= 'f')
+              code |= unsigned(h - 'a' + 10);
+            else if (h >= 'A' && h <= 'F')
+              code |= unsigned(h - 'A' + 10);
+            else
+              return false;
           }
           out.push_back(code < 0x80 ? char(code) : '?');  // names and units are ASCII
           break;
@@ -175,9 +181,12 @@ class Reader {
 };
 
 bool scalar(const Json& j, double& out) {
-  if (j.kind == Json::Number) out = j.number;
-  else if (j.kind == Json::Bool) out = j.boolean ? 1 : 0;
-  else return false;
+  if (j.kind == Json::Number)
+    out = j.number;
+  else if (j.kind == Json::Bool)
+    out = j.boolean ? 1 : 0;
+  else
+    return false;
   return true;
 }
 
@@ -224,11 +233,26 @@ void sha256_block(uint32_t h[8], const uint8_t* p) {
   }
   uint32_t a = h[0], b = h[1], c = h[2], d = h[3], e = h[4], f = h[5], g = h[6], k = h[7];
   for (int i = 0; i < 64; ++i) {
-    uint32_t t1 = k + (rotr(e, 6) ^ rotr(e, 11) ^ rotr(e, 25)) + ((e & f) ^ (~e & g)) + kK[i] + w[i];
+    uint32_t t1 =
+        k + (rotr(e, 6) ^ rotr(e, 11) ^ rotr(e, 25)) + ((e & f) ^ (~e & g)) + kK[i] + w[i];
     uint32_t t2 = (rotr(a, 2) ^ rotr(a, 13) ^ rotr(a, 22)) + ((a & b) ^ (a & c) ^ (b & c));
-    k = g; g = f; f = e; e = d + t1; d = c; c = b; b = a; a = t1 + t2;
+    k = g;
+    g = f;
+    f = e;
+    e = d + t1;
+    d = c;
+    c = b;
+    b = a;
+    a = t1 + t2;
   }
-  h[0] += a; h[1] += b; h[2] += c; h[3] += d; h[4] += e; h[5] += f; h[6] += g; h[7] += k;
+  h[0] += a;
+  h[1] += b;
+  h[2] += c;
+  h[3] += d;
+  h[4] += e;
+  h[5] += f;
+  h[6] += g;
+  h[7] += k;
 }
 
 std::string hex(const uint8_t* p, size_t n) {
@@ -255,7 +279,7 @@ constexpr size_t kMaxKeyFile = 4096;
 std::string read_key_file(const std::string& path) {
   int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
   if (fd < 0) throw std::runtime_error("delivery key file:" + path + ": " + std::strerror(errno));
-  struct stat st{};
+  struct stat st {};
   std::string data;
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size > off_t(kMaxKeyFile)) {
     ::close(fd);
@@ -264,7 +288,8 @@ std::string read_key_file(const std::string& path) {
   char buf[kMaxKeyFile + 1];
   ssize_t n = ::read(fd, buf, sizeof buf);
   ::close(fd);
-  if (n < 0 || size_t(n) > kMaxKeyFile) throw std::runtime_error("delivery key file:" + path + ": unreadable");
+  if (n < 0 || size_t(n) > kMaxKeyFile)
+    throw std::runtime_error("delivery key file:" + path + ": unreadable");
   data.assign(buf, size_t(n));
   if (!data.empty() && data.back() == '\n') data.pop_back();
   if (data.empty()) throw std::runtime_error("delivery key file:" + path + ": empty");
@@ -286,7 +311,8 @@ void create_key_file(const std::string& path) {
   ::mkdir(parent.c_str(), 0700);
   ::mkdir(dir.c_str(), 0700);
   uint8_t raw[32];
-  if (::getrandom(raw, sizeof raw, 0) != ssize_t(sizeof raw)) throw std::runtime_error("getrandom failed");
+  if (::getrandom(raw, sizeof raw, 0) != ssize_t(sizeof raw))
+    throw std::runtime_error("getrandom failed");
   std::string key = hex(raw, sizeof raw) + "\n";
   std::string tmp = path + ".tmp" + std::to_string(::getpid());
   int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0600);
@@ -305,7 +331,8 @@ Digest sha256(std::string_view data) {
   uint32_t h[8] = {0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a,
                    0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19};
   size_t full = data.size() / 64;
-  for (size_t i = 0; i < full; ++i) sha256_block(h, reinterpret_cast<const uint8_t*>(data.data()) + 64 * i);
+  for (size_t i = 0; i < full; ++i)
+    sha256_block(h, reinterpret_cast<const uint8_t*>(data.data()) + 64 * i);
   uint8_t tail[128] = {};
   size_t rest = data.size() - 64 * full;
   std::memcpy(tail, data.data() + 64 * full, rest);
@@ -374,8 +401,8 @@ bool parse_delivered(std::string_view line, Delivered& out, std::string* error) 
   namespace f = delivered_value;
   for (const auto& [key, v] : fields) {
     int64_t n = 0;
-    if (key == f::kSubscriber || key == f::kTopic || key == f::kAggregation ||
-        key == f::kPeriodS || key == f::kUnit) {
+    if (key == f::kSubscriber || key == f::kTopic || key == f::kAggregation || key == f::kPeriodS ||
+        key == f::kUnit) {
       if (v.kind != Json::String) return bad(key);
       std::string* dst = key == f::kSubscriber    ? &out.subscriber
                          : key == f::kTopic       ? &out.topic
@@ -464,7 +491,9 @@ void Subscriber::stop() noexcept {
   [[maybe_unused]] auto n = ::write(wake_[1], &b, 1);  // async-signal-safe
 }
 
-void Subscriber::start() { thread_ = std::thread([this] { run(); }); }
+void Subscriber::start() {
+  thread_ = std::thread([this] { run(); });
+}
 
 Subscriber::Stats Subscriber::stats() const noexcept {
   return Stats{received_.load(), malformed_.load(), connections_.load(), refused_.load()};
@@ -489,7 +518,8 @@ void Subscriber::accept_one(std::vector<Connection>& conns) {
   if (conns.size() >= options_.max_connections) {
     // Make room by dropping the oldest connection that has not proven itself;
     // when every one has, the newcomer is the one refused.
-    auto victim = std::find_if(conns.begin(), conns.end(), [](const Connection& c) { return !c.proven; });
+    auto victim =
+        std::find_if(conns.begin(), conns.end(), [](const Connection& c) { return !c.proven; });
     if (victim == conns.end()) {
       ++refused_;
       ::close(fd);

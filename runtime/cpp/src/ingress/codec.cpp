@@ -173,7 +173,8 @@ void decode(const RawFrame& f, Handler& h, uint64_t* records_left) {
         uint64_t id = r.varint();
         ValueType t;
         if (id > kMaxLocalId || !h.type_of(static_cast<uint32_t>(id), t))
-          r.fail("record " + std::to_string(i) + " uses unregistered local id " + std::to_string(id));
+          r.fail("record " + std::to_string(i) + " uses unregistered local id " +
+                 std::to_string(id));
         rec.local_id = static_cast<uint32_t>(id);
         rec.timestamp_ns = r.fixed<int64_t>();
         switch (t) {
@@ -199,7 +200,9 @@ void decode(const RawFrame& f, Handler& h, uint64_t* records_left) {
       h.on_health(std::move(sensors));
       return;
     }
-    case MsgType::Catalogue: case MsgType::Ack: case MsgType::Reject: break;  // broker -> publisher only
+    case MsgType::Catalogue:
+    case MsgType::Ack:
+    case MsgType::Reject: break;  // broker -> publisher only
   }
   throw Error(ErrorCode::BadFrame, "unknown ingress message type " + std::to_string(f.type), 0);
 }

@@ -23,7 +23,8 @@ constexpr off_t kMaxKeyFile = 64 * 1024;
 Mac hmac_sha256(std::span<const uint8_t> key, std::span<const uint8_t> data) {
   Mac out{};
   unsigned int len = 0;
-  if (!HMAC(EVP_sha256(), key.data(), static_cast<int>(key.size()), data.data(), data.size(), out.data(), &len))
+  if (!HMAC(EVP_sha256(), key.data(), static_cast<int>(key.size()), data.data(), data.size(),
+            out.data(), &len))
     throw Error(ErrorCode::Internal, "HMAC failed");
   return out;
 }
@@ -42,7 +43,9 @@ Mac server_proof(std::span<const uint8_t> key, const Nonce& client, const Nonce&
   return proof(key, "MODD1S", client, server);
 }
 
-bool macs_equal(const Mac& a, const Mac& b) { return CRYPTO_memcmp(a.data(), b.data(), a.size()) == 0; }
+bool macs_equal(const Mac& a, const Mac& b) {
+  return CRYPTO_memcmp(a.data(), b.data(), a.size()) == 0;
+}
 
 ClientProofs::ClientProofs(std::span<const uint8_t> key)
     : inner_(EVP_MD_CTX_new()), outer_(EVP_MD_CTX_new()), work_(EVP_MD_CTX_new()) {
@@ -89,7 +92,8 @@ Mac ClientProofs::operator()(const Nonce& client, const Nonce& server) {
 
 Nonce random_nonce() {
   Nonce n{};
-  if (RAND_bytes(n.data(), static_cast<int>(n.size())) != 1) throw Error(ErrorCode::Internal, "RAND_bytes failed");
+  if (RAND_bytes(n.data(), static_cast<int>(n.size())) != 1)
+    throw Error(ErrorCode::Internal, "RAND_bytes failed");
   return n;
 }
 
@@ -99,7 +103,7 @@ static std::string read_key_file(const std::string& ref) {
   const std::string path = ref.substr(5);
   const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) throw Error(ErrorCode::BadConfig, "key reference " + ref + ": cannot open the file");
-  struct stat st{};
+  struct stat st {};
   std::string key;
   std::string problem;
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
@@ -128,18 +132,21 @@ std::string resolve_key(const std::string& ref) {
   std::string key;
   if (ref.rfind("env:", 0) == 0) {
     const char* v = std::getenv(ref.substr(4).c_str());
-    if (!v) throw Error(ErrorCode::BadConfig, "key reference " + ref + ": environment variable not set");
+    if (!v)
+      throw Error(ErrorCode::BadConfig, "key reference " + ref + ": environment variable not set");
     key = v;
   } else if (ref.rfind("file:", 0) == 0) {
     key = read_key_file(ref);
     while (!key.empty() && (key.back() == '\n' || key.back() == '\r')) key.pop_back();
   } else {
-    throw Error(ErrorCode::BadConfig, "key reference '" + ref + "' is neither env:NAME nor file:PATH");
+    throw Error(ErrorCode::BadConfig,
+                "key reference '" + ref + "' is neither env:NAME nor file:PATH");
   }
   if (key.size() < kMinKeyBytes)
-    throw Error(ErrorCode::BadConfig, "key reference " + ref + " gives a key of " + std::to_string(key.size()) +
-                                          " bytes; a link key needs at least " + std::to_string(kMinKeyBytes) +
-                                          " (e.g. openssl rand -hex 16)");
+    throw Error(ErrorCode::BadConfig,
+                "key reference " + ref + " gives a key of " + std::to_string(key.size()) +
+                    " bytes; a link key needs at least " + std::to_string(kMinKeyBytes) +
+                    " (e.g. openssl rand -hex 16)");
   return key;
 }
 

@@ -14,9 +14,11 @@ void put_frame(std::vector<uint8_t>& out, Type type, const std::vector<uint8_t>&
 }
 
 void check_windows(const ByteReader& r, uint64_t windows, uint64_t resume) {
-  if (windows < 1 || windows > kMaxWindows) r.fail("window count " + std::to_string(windows) + " out of range");
+  if (windows < 1 || windows > kMaxWindows)
+    r.fail("window count " + std::to_string(windows) + " out of range");
   if (resume > windows)
-    r.fail("resume point " + std::to_string(resume) + " beyond the " + std::to_string(windows) + " windows");
+    r.fail("resume point " + std::to_string(resume) + " beyond the " + std::to_string(windows) +
+           " windows");
 }
 
 }  // namespace
@@ -65,7 +67,8 @@ void encode(std::vector<uint8_t>& out, const Message& m) {
 
 void encode_data(std::vector<uint8_t>& out, const DataFrame& d, const ValueKind& kind) {
   size_t n = d.values.size();
-  if (n < 1 || n > kMaxBatch) throw Error(ErrorCode::Internal, "BACKFILL_DATA with " + std::to_string(n) + " windows");
+  if (n < 1 || n > kMaxBatch)
+    throw Error(ErrorCode::Internal, "BACKFILL_DATA with " + std::to_string(n) + " windows");
   std::vector<uint8_t> body;
   ByteWriter w(body);
   w.varint(d.request_id);
@@ -119,16 +122,15 @@ Message decode(const RawFrame& f) {
       End e;
       e.request_id = r.varint();
       uint8_t st = r.u8();
-      if (st > static_cast<uint8_t>(EndStatus::Io)) r.fail("unknown backfill end status " + std::to_string(st));
+      if (st > static_cast<uint8_t>(EndStatus::Io))
+        r.fail("unknown backfill end status " + std::to_string(st));
       e.status = static_cast<EndStatus>(st);
       e.next = r.varint();
       e.message = r.string(1024);
       m = e;
       break;
     }
-    case Type::Cancel:
-      m = Cancel{r.varint()};
-      break;
+    case Type::Cancel: m = Cancel{r.varint()}; break;
     default:
       throw Error(ErrorCode::BadFrame, "not a backfill message type " + std::to_string(f.type), 0);
   }
@@ -137,7 +139,8 @@ Message decode(const RawFrame& f) {
 }
 
 uint64_t data_request_id(const RawFrame& f) {
-  if (f.type != static_cast<uint8_t>(Type::Data)) throw Error(ErrorCode::BadFrame, "not a BACKFILL_DATA frame", 0);
+  if (f.type != static_cast<uint8_t>(Type::Data))
+    throw Error(ErrorCode::BadFrame, "not a BACKFILL_DATA frame", 0);
   ByteReader r(f.body, 0);
   return r.varint();
 }
@@ -149,7 +152,8 @@ DataFrame decode_data(const RawFrame& f, const ValueKind& kind) {
   r.varint();
   d.first = r.varint();
   uint64_t n = r.varint();
-  if (n < 1 || n > kMaxBatch) r.fail("window count " + std::to_string(n) + " out of 1.." + std::to_string(kMaxBatch));
+  if (n < 1 || n > kMaxBatch)
+    r.fail("window count " + std::to_string(n) + " out of 1.." + std::to_string(kMaxBatch));
   if (d.first + n > kMaxWindows) r.fail("windows beyond the largest request");
   auto bm = r.bytes((n + 7) / 8);
   for (size_t i = n; i < bm.size() * 8; ++i)

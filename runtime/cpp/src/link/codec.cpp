@@ -40,13 +40,17 @@ void put_value(ByteWriter& w, const ValueKind& k, const Value& v, Chain& chain, 
     size_t n = is_float ? v.numbers.size() : v.integers.size();
     w.varint(n);
     for (size_t i = 0; i < n; ++i) {
-      if (quantised) put_number(w, chain, stream, v.numbers[i], k.resolution);
-      else put_scalar(w, k.scalar, is_float ? v.numbers[i] : 0, is_float ? 0 : v.integers[i], 0);
+      if (quantised)
+        put_number(w, chain, stream, v.numbers[i], k.resolution);
+      else
+        put_scalar(w, k.scalar, is_float ? v.numbers[i] : 0, is_float ? 0 : v.integers[i], 0);
     }
     return;
   }
-  if (quantised) put_number(w, chain, stream, v.number, k.resolution);
-  else put_scalar(w, k.scalar, v.number, v.integer, v.count);
+  if (quantised)
+    put_number(w, chain, stream, v.number, k.resolution);
+  else
+    put_scalar(w, k.scalar, v.number, v.integer, v.count);
   if (k.aggregation == Aggregation::Average) w.varint(v.count);
 }
 
@@ -74,16 +78,25 @@ Value get_value(ByteReader& r, const ValueKind& k, Chain& chain, uint32_t stream
     if (n > r.remaining()) r.fail("ALL count exceeds frame");
     bool is_float = k.scalar == ScalarKind::F32 || k.scalar == ScalarKind::F64;
     for (uint64_t i = 0; i < n; ++i) {
-      double d = 0; int64_t x = 0; uint64_t c = 0;
-      if (quantised) d = get_number(r, chain, stream, k.resolution);
-      else get_scalar(r, k.scalar, d, x, c);
-      if (is_float) v.numbers.push_back(d); else v.integers.push_back(x);
+      double d = 0;
+      int64_t x = 0;
+      uint64_t c = 0;
+      if (quantised)
+        d = get_number(r, chain, stream, k.resolution);
+      else
+        get_scalar(r, k.scalar, d, x, c);
+      if (is_float)
+        v.numbers.push_back(d);
+      else
+        v.integers.push_back(x);
     }
     v.count = n;
     return v;
   }
-  if (quantised) v.number = get_number(r, chain, stream, k.resolution);
-  else get_scalar(r, k.scalar, v.number, v.integer, v.count);
+  if (quantised)
+    v.number = get_number(r, chain, stream, k.resolution);
+  else
+    get_scalar(r, k.scalar, v.number, v.integer, v.count);
   if (k.aggregation == Aggregation::Average) v.count = r.varint();
   return v;
 }
@@ -92,7 +105,8 @@ Value get_value(ByteReader& r, const ValueKind& k, Chain& chain, uint32_t stream
 void put_resolutions(ByteWriter& w, const Config& c) {
   if (c.resolutions.empty()) return;
   if (!c.accepted_delay_ms || c.resolutions.size() != c.streams.size())
-    throw Error(ErrorCode::Internal, "a CONFIG with resolutions needs the delay and one per stream");
+    throw Error(ErrorCode::Internal,
+                "a CONFIG with resolutions needs the delay and one per stream");
   size_t n = 0;
   for (double x : c.resolutions) n += x > 0 ? 1 : 0;
   w.varint(n);
@@ -107,16 +121,22 @@ void put_resolutions(ByteWriter& w, const Config& c) {
 
 void get_resolutions(ByteReader& r, Config& c) {
   uint64_t n = r.varint();
-  if (n < 1 || n > c.streams.size()) r.fail("resolution count " + std::to_string(n) + " out of 1.." + std::to_string(c.streams.size()));
+  if (n < 1 || n > c.streams.size())
+    r.fail("resolution count " + std::to_string(n) + " out of 1.." +
+           std::to_string(c.streams.size()));
   c.resolutions.assign(c.streams.size(), 0);
   uint64_t i = UINT64_MAX;  // i + gap + 1 wraps to the first index
   for (uint64_t k = 0; k < n; ++k) {
     uint64_t gap = r.varint();
-    if (gap >= c.streams.size()) r.fail("resolution of a stream beyond the " + std::to_string(c.streams.size()));
+    if (gap >= c.streams.size())
+      r.fail("resolution of a stream beyond the " + std::to_string(c.streams.size()));
     i += gap + 1;
-    if (i >= c.streams.size()) r.fail("resolution of stream " + std::to_string(i) + " of " + std::to_string(c.streams.size()));
+    if (i >= c.streams.size())
+      r.fail("resolution of stream " + std::to_string(i) + " of " +
+             std::to_string(c.streams.size()));
     double x = r.fixed<double>();
-    if (!(std::isfinite(x) && x > 0)) r.fail("resolution of stream " + std::to_string(i) + " is not a positive number");
+    if (!(std::isfinite(x) && x > 0))
+      r.fail("resolution of stream " + std::to_string(i) + " is not a positive number");
     c.resolutions[i] = x;
   }
 }
@@ -133,8 +153,9 @@ Value decode_value(ByteReader& r, const ValueKind& k) {
   return get_value(r, k, chain, 0);
 }
 
-void encode_slot_values(std::vector<uint8_t>& out, std::span<const Value> values, std::span<const ValueKind> kinds,
-                        std::span<const uint32_t> streams, Chain& chain) {
+void encode_slot_values(std::vector<uint8_t>& out, std::span<const Value> values,
+                        std::span<const ValueKind> kinds, std::span<const uint32_t> streams,
+                        Chain& chain) {
   ByteWriter w(out);
   for (size_t i = 0; i < values.size(); ++i)
     if (values[i].present) put_value(w, kinds[i], values[i], chain, streams[i]);
@@ -155,13 +176,15 @@ void write_sensor_health(ByteWriter& w, const std::vector<SensorHealth>& sensors
 
 std::vector<SensorHealth> read_sensor_health(ByteReader& r) {
   uint64_t n = r.varint();
-  if (n > kMaxHealthSensors) r.fail("more than " + std::to_string(kMaxHealthSensors) + " sensors' health");
+  if (n > kMaxHealthSensors)
+    r.fail("more than " + std::to_string(kMaxHealthSensors) + " sensors' health");
   std::vector<SensorHealth> out(n);
   for (auto& s : out) {
     s.name = r.string(kMaxHealthName);
     if (s.name.empty()) r.fail("empty sensor name");
     uint64_t k = r.varint();
-    if (k > kMaxHealthFields) r.fail("more than " + std::to_string(kMaxHealthFields) + " health fields");
+    if (k > kMaxHealthFields)
+      r.fail("more than " + std::to_string(kMaxHealthFields) + " health fields");
     for (uint64_t i = 0; i < k; ++i) s.fields.push_back(r.varint());
   }
   return out;
@@ -230,8 +253,9 @@ void encode(std::vector<uint8_t>& out, const Message& m) {
 
 void encode_data(std::vector<uint8_t>& out, const Data& d, std::span<const ValueKind> kinds) {
   if (d.values.size() != kinds.size())
-    throw Error(ErrorCode::Internal, "DATA has " + std::to_string(d.values.size()) + " values for " +
-                                         std::to_string(kinds.size()) + " streams");
+    throw Error(ErrorCode::Internal, "DATA has " + std::to_string(d.values.size()) +
+                                         " values for " + std::to_string(kinds.size()) +
+                                         " streams");
   bool all_present = true;
   for (const auto& v : d.values) all_present = all_present && v.present;
   std::vector<uint8_t> body;
@@ -272,7 +296,9 @@ std::optional<RawFrame> split_frame(std::span<const uint8_t> buf, size_t max_fra
   }
   if (len == 0) throw Error(ErrorCode::BadFrame, "frame length 0", 0);
   if (len > max_frame)
-    throw Error(ErrorCode::BadFrame, "frame length " + std::to_string(len) + " above limit " + std::to_string(max_frame), 0);
+    throw Error(ErrorCode::BadFrame,
+                "frame length " + std::to_string(len) + " above limit " + std::to_string(max_frame),
+                0);
   if (buf.size() - i < len) return std::nullopt;
   RawFrame f;
   f.type = buf[i];
@@ -285,9 +311,13 @@ bool is_data_type(uint8_t type) { return type >= 0x10 && type <= 0x13; }
 
 Message decode(const RawFrame& f) {
   ByteReader r(f.body, 0);
-  auto done = [&](Message m) { r.expect_end(); return m; };
+  auto done = [&](Message m) {
+    r.expect_end();
+    return m;
+  };
   switch (static_cast<MsgType>(f.type)) {
-    case MsgType::Hello: case MsgType::Challenge: {
+    case MsgType::Hello:
+    case MsgType::Challenge: {
       uint8_t version = r.u8();
       Nonce n;
       get_array(r, n);
@@ -306,7 +336,8 @@ Message decode(const RawFrame& f) {
       a.epoch_ns = r.fixed<uint64_t>();
       return done(a);
     }
-    case MsgType::Ping: case MsgType::Pong: {
+    case MsgType::Ping:
+    case MsgType::Pong: {
       if (f.body.size() > kMaxPing) r.fail("PING/PONG payload above 64 bytes");
       std::vector<uint8_t> p(f.body.begin(), f.body.end());
       if (f.type == static_cast<uint8_t>(MsgType::Ping)) return Ping{p};
@@ -319,7 +350,8 @@ Message decode(const RawFrame& f) {
       if (sp > kMaxStatusPeriodS) r.fail("status period above one day");
       c.status_period_s = static_cast<uint32_t>(sp);
       uint64_t nt = r.varint();
-      if (nt > kMaxList || nt > r.remaining()) r.fail("topic count " + std::to_string(nt) + " too large");
+      if (nt > kMaxList || nt > r.remaining())
+        r.fail("topic count " + std::to_string(nt) + " too large");
       for (uint64_t i = 0; i < nt; ++i) {
         TopicSpec t;
         t.name = r.string(kMaxName);
@@ -328,17 +360,21 @@ Message decode(const RawFrame& f) {
         t.type = static_cast<ValueType>(ty);
         uint64_t bs = r.varint();
         if (bs < 1 || bs > kMaxBufferSize)
-          r.fail("buffer size " + std::to_string(bs) + " out of 1.." + std::to_string(kMaxBufferSize));
+          r.fail("buffer size " + std::to_string(bs) + " out of 1.." +
+                 std::to_string(kMaxBufferSize));
         t.buffer_size = static_cast<uint32_t>(bs);
         t.period_us = r.varint();
         c.topics.push_back(std::move(t));
       }
       uint64_t ns = r.varint();
-      if (ns > kMaxList || ns > r.remaining()) r.fail("stream count " + std::to_string(ns) + " too large");
+      if (ns > kMaxList || ns > r.remaining())
+        r.fail("stream count " + std::to_string(ns) + " too large");
       for (uint64_t i = 0; i < ns; ++i) {
         StreamSpec s;
         uint64_t topic = r.varint();
-        if (topic >= nt) r.fail("stream " + std::to_string(i) + " names topic " + std::to_string(topic) + " of " + std::to_string(nt));
+        if (topic >= nt)
+          r.fail("stream " + std::to_string(i) + " names topic " + std::to_string(topic) + " of " +
+                 std::to_string(nt));
         s.topic = static_cast<uint32_t>(topic);
         uint8_t a = r.u8();
         if (a >= table::kAggregationCount) r.fail("unknown aggregation " + std::to_string(a));
@@ -376,10 +412,10 @@ Message decode(const RawFrame& f) {
       e.message = r.string(1024);
       return done(e);
     }
-    default:
-      break;
+    default: break;
   }
-  throw Error(ErrorCode::BadFrame, "unknown message type 0x" + to_hex(std::span<const uint8_t>(&f.type, 1)), 0);
+  throw Error(ErrorCode::BadFrame,
+              "unknown message type 0x" + to_hex(std::span<const uint8_t>(&f.type, 1)), 0);
 }
 
 DataHeader decode_data_header(const RawFrame& f) {

@@ -43,7 +43,10 @@ uint64_t extend16(uint16_t low, uint64_t expected) {
   int64_t best = -1;
   for (int64_t c : {base - 0x10000, base, base + 0x10000}) {
     if (c < 0) continue;
-    auto dist = [&](int64_t x) { return x > static_cast<int64_t>(expected) ? x - static_cast<int64_t>(expected) : static_cast<int64_t>(expected) - x; };
+    auto dist = [&](int64_t x) {
+      return x > static_cast<int64_t>(expected) ? x - static_cast<int64_t>(expected)
+                                                : static_cast<int64_t>(expected) - x;
+    };
     if (best < 0 || dist(c) < dist(best)) best = c;
   }
   return static_cast<uint64_t>(best);
@@ -91,7 +94,8 @@ VerifiedData verify_data(std::span<const uint8_t> raw, const Mac& key, uint8_t d
   if (raw[0] == kDataBitmap) {
     uint8_t count = r.u8();
     uint64_t streams = r.varint();
-    if (count == 0 || streams > 8 * r.remaining()) r.fail("presence bitmap longer than the datagram");
+    if (count == 0 || streams > 8 * r.remaining())
+      r.fail("presence bitmap longer than the datagram");
     auto bm = r.bytes(static_cast<size_t>((streams + 7) / 8));
     for (size_t i = streams; i < bm.size() * 8; ++i)
       if (bm[i / 8] >> (i % 8) & 1) r.fail("presence bit set beyond the datagram's streams");
@@ -104,7 +108,8 @@ VerifiedData verify_data(std::span<const uint8_t> raw, const Mac& key, uint8_t d
   return v;
 }
 
-std::vector<uint8_t> slot_bitmap_body(const std::vector<bool>& presence, std::span<const uint8_t> values) {
+std::vector<uint8_t> slot_bitmap_body(const std::vector<bool>& presence,
+                                      std::span<const uint8_t> values) {
   std::vector<uint8_t> out;
   ByteWriter w(out);
   w.u8(1);
@@ -118,19 +123,22 @@ std::vector<uint8_t> slot_bitmap_body(const std::vector<bool>& presence, std::sp
 }
 
 std::vector<std::vector<uint8_t>> encode_fragments(uint8_t config_id, uint64_t slot,
-                                                   std::span<const uint8_t> body, size_t max_datagram,
-                                                   const Mac& key, uint8_t direction) {
+                                                   std::span<const uint8_t> body,
+                                                   size_t max_datagram, const Mac& key,
+                                                   uint8_t direction) {
   if (config_id == 0 || max_datagram <= kFragmentHead + kTag || body.empty())
     throw std::invalid_argument("a fragment needs a config id, a body and room for a piece");
   size_t room = max_datagram - kFragmentHead - kTag;
   size_t count = (body.size() + room - 1) / room;
   if (count > kMaxFragments)
-    throw std::invalid_argument("a slot of " + std::to_string(body.size()) + " B needs " + std::to_string(count) +
-                                " fragments of " + std::to_string(room) + " B (at most 16)");
+    throw std::invalid_argument("a slot of " + std::to_string(body.size()) + " B needs " +
+                                std::to_string(count) + " fragments of " + std::to_string(room) +
+                                " B (at most 16)");
   std::vector<std::vector<uint8_t>> out;
   for (size_t i = 0; i < count; ++i) {
     std::vector<uint8_t> d{kFragment, config_id, static_cast<uint8_t>(slot & 0xFF),
-                           static_cast<uint8_t>((slot >> 8) & 0xFF), static_cast<uint8_t>(i << 4 | (count - 1))};
+                           static_cast<uint8_t>((slot >> 8) & 0xFF),
+                           static_cast<uint8_t>(i << 4 | (count - 1))};
     auto piece = body.subspan(i * room, std::min(room, body.size() - i * room));
     d.insert(d.end(), piece.begin(), piece.end());
     auto t = tag(key, direction, slot, d, kTag);
@@ -174,10 +182,12 @@ std::vector<uint8_t> encode_control(uint64_t counter, std::span<const uint8_t> f
 // A control datagram or control fragment (`kind`) whose tag verified: a reader of its body
 // after the counter, and the counter. The tag is checked before anything after the counter
 // is read.
-static std::pair<ByteReader, uint64_t> verified_control(std::span<const uint8_t> raw, const Mac& key,
-                                                        uint8_t direction, uint8_t kind, size_t min_body,
+static std::pair<ByteReader, uint64_t> verified_control(std::span<const uint8_t> raw,
+                                                        const Mac& key, uint8_t direction,
+                                                        uint8_t kind, size_t min_body,
                                                         const std::string& what) {
-  if (raw.size() < min_body + kControlTag || raw[0] != kind) throw Error(ErrorCode::BadFrame, "not a " + what, 0);
+  if (raw.size() < min_body + kControlTag || raw[0] != kind)
+    throw Error(ErrorCode::BadFrame, "not a " + what, 0);
   auto body = raw.first(raw.size() - kControlTag);
   ByteReader r(body);
   r.u8();
@@ -194,15 +204,20 @@ std::pair<uint64_t, std::vector<uint8_t>> verify_control(std::span<const uint8_t
   return {counter, {rest.begin(), rest.end()}};
 }
 
-std::vector<std::vector<uint8_t>> encode_control_fragments(uint64_t counter, std::span<const uint8_t> frames,
-                                                           size_t max_datagram, const Mac& key, uint8_t direction) {
-  if (max_datagram <= kControlFragmentOverhead || frames.empty() || counter + kMaxFragments >= (uint64_t{1} << 35))
-    throw std::invalid_argument("a control fragment needs frames, room for a piece and a counter below 2^35");
+std::vector<std::vector<uint8_t>> encode_control_fragments(uint64_t counter,
+                                                           std::span<const uint8_t> frames,
+                                                           size_t max_datagram, const Mac& key,
+                                                           uint8_t direction) {
+  if (max_datagram <= kControlFragmentOverhead || frames.empty() ||
+      counter + kMaxFragments >= (uint64_t{1} << 35))
+    throw std::invalid_argument(
+        "a control fragment needs frames, room for a piece and a counter below 2^35");
   size_t room = max_datagram - kControlFragmentOverhead;
   size_t count = (frames.size() + room - 1) / room;
   if (count > kMaxFragments)
-    throw std::invalid_argument("a control message of " + std::to_string(frames.size()) + " B needs " +
-                                std::to_string(count) + " fragments of " + std::to_string(room) + " B (at most 16)");
+    throw std::invalid_argument("a control message of " + std::to_string(frames.size()) +
+                                " B needs " + std::to_string(count) + " fragments of " +
+                                std::to_string(room) + " B (at most 16)");
   std::vector<std::vector<uint8_t>> out;
   for (size_t i = 0; i < count; ++i) {
     std::vector<uint8_t> d;
@@ -218,8 +233,10 @@ std::vector<std::vector<uint8_t>> encode_control_fragments(uint64_t counter, std
   return out;
 }
 
-ControlFragment verify_control_fragment(std::span<const uint8_t> raw, const Mac& key, uint8_t direction) {
-  auto [r, counter] = verified_control(raw, key, direction, kControlFragment, 4, "control fragment");
+ControlFragment verify_control_fragment(std::span<const uint8_t> raw, const Mac& key,
+                                        uint8_t direction) {
+  auto [r, counter] =
+      verified_control(raw, key, direction, kControlFragment, 4, "control fragment");
   size_t at = r.pos();
   uint8_t frag = r.u8();
   ControlFragment f;
@@ -227,7 +244,9 @@ ControlFragment verify_control_fragment(std::span<const uint8_t> raw, const Mac&
   f.index = frag >> 4;
   f.count = (frag & 0x0F) + 1u;
   if (f.index >= f.count || counter < f.index)
-    throw Error(ErrorCode::BadFrame, "control fragment " + std::to_string(f.index) + " of " + std::to_string(f.count), at);
+    throw Error(ErrorCode::BadFrame,
+                "control fragment " + std::to_string(f.index) + " of " + std::to_string(f.count),
+                at);
   auto rest = r.bytes(r.remaining());
   f.piece.assign(rest.begin(), rest.end());
   return f;
@@ -262,7 +281,8 @@ bool ReplayWindow::accept(uint64_t seq) {
   if (!any_ || seq > top_) {
     top_ = seq;
     any_ = true;
-    if (seen_.size() > size_ && top_ >= size_) seen_.erase(seen_.begin(), seen_.upper_bound(top_ - size_));
+    if (seen_.size() > size_ && top_ >= size_)
+      seen_.erase(seen_.begin(), seen_.upper_bound(top_ - size_));
   }
   return true;
 }
@@ -272,7 +292,8 @@ uint16_t crc16(std::span<const uint8_t> data) {
   for (uint8_t b : data) {
     crc ^= static_cast<uint16_t>(b << 8);
     for (int i = 0; i < 8; ++i)
-      crc = (crc & 0x8000) ? static_cast<uint16_t>((crc << 1) ^ 0x1021) : static_cast<uint16_t>(crc << 1);
+      crc = (crc & 0x8000) ? static_cast<uint16_t>((crc << 1) ^ 0x1021)
+                           : static_cast<uint16_t>(crc << 1);
   }
   return crc;
 }

@@ -18,12 +18,18 @@ const char* aggregation_name(Aggregation a) {
 
 bool parse_value_type(const std::string& s, ValueType& out) {
   for (size_t i = 0; i < kValueTypeCount; ++i)
-    if (s == kValueTypeLabels[i]) { out = static_cast<ValueType>(i); return true; }
+    if (s == kValueTypeLabels[i]) {
+      out = static_cast<ValueType>(i);
+      return true;
+    }
   return false;
 }
 bool parse_aggregation(const std::string& s, Aggregation& out) {
   for (int i = 0; i < table::kAggregationCount; ++i)
-    if (s == table::kAggregations[i].name) { out = static_cast<Aggregation>(i); return true; }
+    if (s == table::kAggregations[i].name) {
+      out = static_cast<Aggregation>(i);
+      return true;
+    }
   return false;
 }
 
@@ -34,8 +40,9 @@ ValueKind value_kind(ValueType type, Aggregation a, double resolution) {
   static constexpr ScalarKind kScalar[] = {ScalarKind::F32, ScalarKind::F64, ScalarKind::ZigZag,
                                            ScalarKind::Bool};
   int i = static_cast<int>(a);
-  ScalarKind k = i >= table::kAggregationCount ? kScalar[static_cast<int>(type) & 3]
-                                               : kScalar[table::kAggregations[i].result[static_cast<int>(type) & 3]];
+  ScalarKind k = i >= table::kAggregationCount
+                     ? kScalar[static_cast<int>(type) & 3]
+                     : kScalar[table::kAggregations[i].result[static_cast<int>(type) & 3]];
   bool is_float = k == ScalarKind::F32 || k == ScalarKind::F64;
   return {a, k, is_float ? resolution : 0};
 }

@@ -8,7 +8,8 @@ namespace modd::link {
 
 SlotIterator::SlotIterator(std::span<const uint64_t> periods) {
   for (uint32_t id = 0; id < periods.size(); ++id) {
-    if (periods[id] == 0) throw Error(ErrorCode::BadConfig, "stream " + std::to_string(id) + " has period 0");
+    if (periods[id] == 0)
+      throw Error(ErrorCode::BadConfig, "stream " + std::to_string(id) + " has period 0");
     auto it = std::find(periods_.begin(), periods_.end(), periods[id]);
     if (it == periods_.end()) {
       periods_.push_back(periods[id]);

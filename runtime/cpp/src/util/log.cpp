@@ -69,7 +69,8 @@ void log_line(const char* fmt, ...) {
   std::vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
   char line[1200];
-  int n = std::snprintf(line, sizeof line, "%s.%03ldZ modd-pubbroker: %s\n", head, ts.tv_nsec / 1000000, msg);
+  int n = std::snprintf(line, sizeof line, "%s.%03ldZ modd-pubbroker: %s\n", head,
+                        ts.tv_nsec / 1000000, msg);
   size_t len = n < 0 ? 0 : std::min<size_t>(static_cast<size_t>(n), sizeof line - 1);
   Sink& s = sink();
   std::lock_guard lk(s.mu);

@@ -38,7 +38,8 @@ def parse_time(text: str) -> int:
         when = datetime.fromisoformat(text.replace("Z", "+00:00"))
     except ValueError as exc:
         raise argparse.ArgumentTypeError(
-            f"{text!r} is neither seconds since the epoch nor ISO 8601 UTC") from exc
+            f"{text!r} is neither seconds since the epoch nor ISO 8601 UTC"
+        ) from exc
     if when.tzinfo is None:
         when = when.replace(tzinfo=UTC)
     return int(when.timestamp()) * 1_000_000_000 + when.microsecond * 1000
@@ -49,20 +50,34 @@ def register(sub: Any) -> None:
     p.add_argument("--drone", required=True, help="the drone's name (its SubBroker's keys)")
     p.add_argument("--subscriber", required=True, help="whose subscriptions to fill")
     span = p.add_mutually_exclusive_group(required=True)
-    span.add_argument("--gaps", action="store_true",
-                      help="every window missed since the running config began")
-    span.add_argument("--from", dest="t0", type=parse_time, metavar="T0",
-                      help="start: seconds since the epoch or ISO 8601 UTC (with --to)")
+    span.add_argument(
+        "--gaps", action="store_true", help="every window missed since the running config began"
+    )
+    span.add_argument(
+        "--from",
+        dest="t0",
+        type=parse_time,
+        metavar="T0",
+        help="start: seconds since the epoch or ISO 8601 UTC (with --to)",
+    )
     p.add_argument("--to", dest="t1", type=parse_time, metavar="T1", help="end (with --from)")
-    p.add_argument("--rate", type=int, metavar="B/s",
-                   help="cap the pace (default: the link's spare budget)")
+    p.add_argument(
+        "--rate", type=int, metavar="B/s", help="cap the pace (default: the link's spare budget)"
+    )
     p.add_argument("--json", action="store_true", help="end with one JSON line of figures")
-    p.add_argument("--connect", default=None,
-                   help="the SubBroker's zenoh (default tcp/127.0.0.1:7447)")
-    p.add_argument("--credentials", default=None,
-                   help="a backend .cred file (default $MODD_ZENOH_CREDENTIALS)")
-    p.add_argument("--timeout", type=float, default=3600.0, metavar="S",
-                   help="give up (and cancel) after S seconds")
+    p.add_argument(
+        "--connect", default=None, help="the SubBroker's zenoh (default tcp/127.0.0.1:7447)"
+    )
+    p.add_argument(
+        "--credentials", default=None, help="a backend .cred file (default $MODD_ZENOH_CREDENTIALS)"
+    )
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=3600.0,
+        metavar="S",
+        help="give up (and cancel) after S seconds",
+    )
     p.set_defaults(func=run)
 
 
@@ -71,8 +86,9 @@ def _ask(session: Any, key: str, request: dict[str, Any]) -> dict[str, Any]:
         if reply.ok is not None:
             out: dict[str, Any] = json.loads(reply.ok.payload.to_bytes())
             return out
-    raise ConnectionError(f"no answer on {key}: is the SubBroker running (and are the "
-                          "credentials a backend's)?")
+    raise ConnectionError(
+        f"no answer on {key}: is the SubBroker running (and are the credentials a backend's)?"
+    )
 
 
 def _bar(p: dict[str, Any]) -> str:
@@ -81,10 +97,15 @@ def _bar(p: dict[str, Any]) -> str:
     filled = width if total == 0 else width * done // total
     left = p.get("seconds_left")
     eta = f"  {left:.0f} s left" if isinstance(left, int | float) else ""
-    why = f"  ({str(p.get('reason'))[:60]})" if p.get("status") == "RUNNING" and p.get(
-        "reason") else ""
-    return (f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} windows  "
-            f"{p.get('bytes_per_s', 0):.0f}/{p.get('rate_bps') or '-'} B/s{eta}{why}   ")
+    why = (
+        f"  ({str(p.get('reason'))[:60]})"
+        if p.get("status") == "RUNNING" and p.get("reason")
+        else ""
+    )
+    return (
+        f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} windows  "
+        f"{p.get('bytes_per_s', 0):.0f}/{p.get('rate_bps') or '-'} B/s{eta}{why}   "
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -138,6 +159,14 @@ def _follow(session: Any, key: str, request: dict[str, Any], args: argparse.Name
     if p.get("status") != "DONE":
         print(f"modd backfill: {p.get('status')}: {p.get('reason')}", file=sys.stderr)
     if args.json:
-        print(json.dumps({"windows": p.get("windows", 0), "duplicates": p.get("duplicates", 0),
-                          "bytes": p.get("bytes", 0), "seconds": p.get("seconds", 0.0)}))
+        print(
+            json.dumps(
+                {
+                    "windows": p.get("windows", 0),
+                    "duplicates": p.get("duplicates", 0),
+                    "bytes": p.get("bytes", 0),
+                    "seconds": p.get("seconds", 0.0),
+                }
+            )
+        )
     return 0 if p.get("status") == "DONE" else 1

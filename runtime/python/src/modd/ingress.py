@@ -28,10 +28,21 @@ INGRESS_VERSION = VERSION
 HELLO, REGISTER, SAMPLES, HEALTH = MsgType.HELLO, MsgType.REGISTER, MsgType.SAMPLES, MsgType.HEALTH
 CATALOGUE, ACK, REJECT = MsgType.CATALOGUE, MsgType.ACK, MsgType.REJECT
 # REJECT reason codes (the broker's Reject enum, runtime/cpp/include/modd/broker/counters.hpp).
-REASONS = ("unknown topic", "wrong type", "value not finite", "timestamp out of bounds",
-           "archive queue full", "malformed", "over its fair share of the archive queue")
-_VALUE_FORMAT = {ValueType.FLOAT32: "<f", ValueType.FLOAT64: "<d", ValueType.INT: "<q",
-                 ValueType.BOOL: "<B"}
+REASONS = (
+    "unknown topic",
+    "wrong type",
+    "value not finite",
+    "timestamp out of bounds",
+    "archive queue full",
+    "malformed",
+    "over its fair share of the archive queue",
+)
+_VALUE_FORMAT = {
+    ValueType.FLOAT32: "<f",
+    ValueType.FLOAT64: "<d",
+    ValueType.INT: "<q",
+    ValueType.BOOL: "<B",
+}
 FLT_MAX = 3.4028234663852886e38
 Number = float | int | bool
 
@@ -110,8 +121,10 @@ def encode_ack(a: Ack) -> bytes:
 
 
 def encode_reject(r: Reject) -> bytes:
-    return frame(REJECT, varint(r.local_id) + bytes([r.reason]) + varint(r.count)
-                 + string(r.detail[:MAX_NAME]))
+    return frame(
+        REJECT,
+        varint(r.local_id) + bytes([r.reason]) + varint(r.count) + string(r.detail[:MAX_NAME]),
+    )
 
 
 def decode_reply(mtype: int, body: bytes) -> Reply:
@@ -193,7 +206,8 @@ def resolve(catalogue: Catalogue, given: str) -> str:
     if not hits and catalogue.accept_unknown:
         return given
     if hits:
-        raise KeyError(f"ambiguous topic {given!r}: matches {', '.join(sorted(hits))} "
-                       "(use the full name)")
+        raise KeyError(
+            f"ambiguous topic {given!r}: matches {', '.join(sorted(hits))} (use the full name)"
+        )
     known = ", ".join(sorted(catalogue.topics)) or "no topic"
     raise KeyError(f"unknown topic {given!r}: drone {catalogue.drone!r} publishes {known}")

@@ -98,7 +98,8 @@ class PlotJugglerOut:
         self.sock = socket.socket(family, socket.SOCK_DGRAM)
         self.sent = 0
         self.sub = session.declare_subscriber(
-            keys.values_of(None if drone == "*" else drone), self._on)
+            keys.values_of(None if drone == "*" else drone), self._on
+        )
 
     def _on(self, sample: Any) -> None:
         found = keys.match_sub_key(str(sample.key_expr))
@@ -120,15 +121,24 @@ class PlotJugglerOut:
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="modd-plotjuggler", description=__doc__.splitlines()[0])
-    p.add_argument("--udp", default=DEFAULT_UDP, metavar="HOST:PORT",
-                   help=f"PlotJuggler's UDP server (default {DEFAULT_UDP})")
+    p.add_argument(
+        "--udp",
+        default=DEFAULT_UDP,
+        metavar="HOST:PORT",
+        help=f"PlotJuggler's UDP server (default {DEFAULT_UDP})",
+    )
     p.add_argument("--drone", default="*", help="drone name (default: every drone)")
-    p.add_argument("--modd-connect", default=os.environ.get("MODD_ZENOH_CONNECT",
-                                                            DEFAULT_ENDPOINT),
-                   metavar="ENDPOINT", help="the SubBroker's zenoh endpoint")
-    p.add_argument("--credentials", metavar="FILE",
-                   help="a viewer's .cred file (default $MODD_ZENOH_CREDENTIALS; "
-                        "docs/security.md)")
+    p.add_argument(
+        "--modd-connect",
+        default=os.environ.get("MODD_ZENOH_CONNECT", DEFAULT_ENDPOINT),
+        metavar="ENDPOINT",
+        help="the SubBroker's zenoh endpoint",
+    )
+    p.add_argument(
+        "--credentials",
+        metavar="FILE",
+        help="a viewer's .cred file (default $MODD_ZENOH_CREDENTIALS; docs/security.md)",
+    )
     a = p.parse_args(argv)
     try:
         target = parse_udp(a.udp)
@@ -138,8 +148,11 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     out = PlotJugglerOut(session, target, a.drone)
     values = keys.values_of(None if a.drone == "*" else a.drone)
-    print(f"modd-plotjuggler: {values} -> udp {target[0]}:{target[1]} "
-          "(PlotJuggler: UDP Server, JSON, timestamp field 'timestamp')", flush=True)
+    print(
+        f"modd-plotjuggler: {values} -> udp {target[0]}:{target[1]} "
+        "(PlotJuggler: UDP Server, JSON, timestamp field 'timestamp')",
+        flush=True,
+    )
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     try:

@@ -52,8 +52,16 @@ from modd.ingress import (
 from modd.link.codec import FrameSplitter
 from modd.link.frames import ProtocolError, SensorHealth, ValueType
 
-__all__ = ["INGRESS_VERSION", "Publisher", "PublisherStats", "connect", "encode_hello",
-           "encode_register", "encode_samples", "frame"]
+__all__ = [
+    "INGRESS_VERSION",
+    "Publisher",
+    "PublisherStats",
+    "connect",
+    "encode_hello",
+    "encode_register",
+    "encode_samples",
+    "frame",
+]
 log = logging.getLogger("modd.publisher")
 Record = tuple[int, int, Number]
 
@@ -97,10 +105,17 @@ class PublisherStats:
 
 
 class Publisher:
-    def __init__(self, name: str, ingress: str, queue_capacity: int = 65536,
-                 batch_max: int = 256, reconnect_s: float = 0.2, connect_wait_s: float = 1.0,
-                 replay_capacity: int = 65536,
-                 on_error: Callable[[str, str], None] | None = None) -> None:
+    def __init__(
+        self,
+        name: str,
+        ingress: str,
+        queue_capacity: int = 65536,
+        batch_max: int = 256,
+        reconnect_s: float = 0.2,
+        connect_wait_s: float = 1.0,
+        replay_capacity: int = 65536,
+        on_error: Callable[[str, str], None] | None = None,
+    ) -> None:
         self.name = name
         self.ingress = ingress
         self._capacity = queue_capacity
@@ -179,13 +194,20 @@ class Publisher:
         if cat is not None and full in cat.topics:
             vtype = cat.topics[full]
             if declared is not None and declared != vtype:
-                return (f"refused_wrong_type|wrong type: topic {full!r} is {vtype.label} on drone "
-                        f"{cat.drone!r}, declared {declared.label}")
+                return (
+                    f"refused_wrong_type|wrong type: topic {full!r} is {vtype.label} on drone "
+                    f"{cat.drone!r}, declared {declared.label}"
+                )
         elif declared is not None:
             vtype = declared
         else:
-            vtype = (ValueType.BOOL if isinstance(value, bool) else
-                     ValueType.INT if isinstance(value, int) else ValueType.FLOAT64)
+            vtype = (
+                ValueType.BOOL
+                if isinstance(value, bool)
+                else ValueType.INT
+                if isinstance(value, int)
+                else ValueType.FLOAT64
+            )
         lid = self._full_ids.get(full)
         if lid is None:
             lid = self._full_ids[full] = len(self._names)
@@ -212,14 +234,17 @@ class Publisher:
                 ts = int(timestamp_ns)
                 if cat is not None:
                     ahead = ts - time.time_ns()
-                    if ((cat.max_future_ms and ahead > cat.max_future_ms * 1_000_000)
-                            or (cat.max_past_ms and -ahead > cat.max_past_ms * 1_000_000)):
+                    if (cat.max_future_ms and ahead > cat.max_future_ms * 1_000_000) or (
+                        cat.max_past_ms and -ahead > cat.max_past_ms * 1_000_000
+                    ):
                         return self._refuse(
-                            topic, "refused_timestamp",
+                            topic,
+                            "refused_timestamp",
                             f"topic {full!r}: timestamp out of bounds: {ts} ns is "
                             f"{abs(ahead) / 1e9:.3g} s "
                             f"{'ahead of' if ahead > 0 else 'behind'} this clock (bounds "
-                            f"{cat.max_future_ms} ms ahead, {cat.max_past_ms} ms behind)")
+                            f"{cat.max_future_ms} ms ahead, {cat.max_past_ms} ms behind)",
+                        )
                 if len(self._queue) >= self._capacity:
                     self._stats.dropped_queue_full += 1
                     return False
@@ -360,9 +385,16 @@ class Publisher:
         splitter = FrameSplitter(MAX_FRAME)
         while True:
             with self._lock:
-                self._wake.wait_for(lambda: self._stopping or (
-                    bool(self._queue or self._resend or self._health) and self._sock is not None),
-                    0.02)
+                self._wake.wait_for(
+                    lambda: (
+                        self._stopping
+                        or (
+                            bool(self._queue or self._resend or self._health)
+                            and self._sock is not None
+                        )
+                    ),
+                    0.02,
+                )
                 if self._stopping and (self._sock is None or not (self._queue or self._resend)):
                     if self._sock is None:
                         self._stats.dropped_at_close += len(self._queue) + len(self._resend)
@@ -401,8 +433,9 @@ class Publisher:
                 self._in_flight = True
                 names = list(self._names)
                 types = list(self._types)
-            out = b"".join(encode_register(i, types[i], names[i])
-                           for i in range(registered, len(names)))
+            out = b"".join(
+                encode_register(i, types[i], names[i]) for i in range(registered, len(names))
+            )
             out += encode_samples(batch, types)
             if not self._send(out):
                 self._disconnect()

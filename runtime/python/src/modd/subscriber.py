@@ -78,8 +78,9 @@ class Subscription:
         except ValueError as exc:  # json's errors and over-deep input are ValueErrors
             self.malformed += 1
             if self.malformed <= 10 or self.malformed % 1000 == 0:
-                log.warning("%s: malformed value dropped (%d so far): %s", self.key,
-                            self.malformed, exc)
+                log.warning(
+                    "%s: malformed value dropped (%d so far): %s", self.key, self.malformed, exc
+                )
             return
         if self._callback is not None:
             try:
@@ -170,8 +171,11 @@ def to_dataframe(values: list[DeliveredValue]) -> pandas.DataFrame:
     return df
 
 
-def _session(session: zenoh.Session | None, connect: str | None,
-             credentials: str | os.PathLike[str] | None = None) -> tuple[zenoh.Session, bool]:
+def _session(
+    session: zenoh.Session | None,
+    connect: str | None,
+    credentials: str | os.PathLike[str] | None = None,
+) -> tuple[zenoh.Session, bool]:
     if session is not None:
         return session, False
     from .zenoh_session import client_settings, open_session, wait_connected
@@ -223,9 +227,12 @@ def subscribe_dynamic(
     s, own = _session(session, connect, credentials)
     period = period_s if isinstance(period_s, str) else str(float(period_s))
     try:
-        reply = request(s, subscribe_key(drone),
-                        {"topic": topic, "period_s": period, "aggregation": aggregation},
-                        timeout_s)
+        reply = request(
+            s,
+            subscribe_key(drone),
+            {"topic": topic, "period_s": period, "aggregation": aggregation},
+            timeout_s,
+        )
         if reply.get("status") != "ACCEPTED":
             raise NotAvailable(str(reply.get("reason", reply)))
     except BaseException:
@@ -235,8 +242,12 @@ def subscribe_dynamic(
 
     def cancel() -> None:
         try:
-            request(s, subscribe_key(drone),
-                    {"action": "cancel", "subscriber": reply["subscriber"]}, timeout_s)
+            request(
+                s,
+                subscribe_key(drone),
+                {"action": "cancel", "subscriber": reply["subscriber"]},
+                timeout_s,
+            )
         except Exception as exc:  # the SubBroker may be gone: nothing left to cancel
             log.info("cancel of %s: %s", reply["subscriber"], exc)
 

@@ -66,10 +66,15 @@ class Child(Protocol):
     def pid(self) -> int | None: ...
 
 
-def watch(children: Sequence[Child], env: Mapping[str, str], stopping: Callable[[], bool],
-          policy: RestartPolicy = DEFAULT_POLICY, say: Callable[[str], None] = print,
-          clock: Callable[[], float] = time.monotonic,
-          sleep: Callable[[float], None] = time.sleep) -> int:
+def watch(
+    children: Sequence[Child],
+    env: Mapping[str, str],
+    stopping: Callable[[], bool],
+    policy: RestartPolicy = DEFAULT_POLICY,
+    say: Callable[[str], None] = print,
+    clock: Callable[[], float] = time.monotonic,
+    sleep: Callable[[float], None] = time.sleep,
+) -> int:
     """Restarts each child that dies (when it is restartable) until ``stopping()``
     (0) or until one dies more often than ``policy`` allows (1). The caller
     stops them all after it returns."""
@@ -85,19 +90,25 @@ def watch(children: Sequence[Child], env: Mapping[str, str], stopping: Callable[
                 del due[c.name]
                 c.start(dict(env))
                 started[c.name] = now
-                say(f"modd up: restarted {c.name} (pid {c.pid()}), "
-                    f"restart {restarts.count(c.name)} of at most {policy.max_restarts}")
+                say(
+                    f"modd up: restarted {c.name} (pid {c.pid()}), "
+                    f"restart {restarts.count(c.name)} of at most {policy.max_restarts}"
+                )
             code = c.exit_code()
             if code is None:
                 continue
             at = restarts.on_exit(c.name, now, now - started[c.name]) if c.restartable else None
             if at is None:
-                why = "it cannot be restarted" if not c.restartable else (
-                    f"{policy.max_restarts} restarts within {policy.window_s:.0f} s")
+                why = (
+                    "it cannot be restarted"
+                    if not c.restartable
+                    else (f"{policy.max_restarts} restarts within {policy.window_s:.0f} s")
+                )
                 say(f"modd up: {c.name} exited ({code}); see {c.log}; stopping the run: {why}")
                 return 1
             due[c.name] = at
-            say(f"modd up: {c.name} exited ({code}); see {c.log}; restarting it in "
-                f"{at - now:.0f} s")
+            say(
+                f"modd up: {c.name} exited ({code}); see {c.log}; restarting it in {at - now:.0f} s"
+            )
         sleep(0.2)
     return 0

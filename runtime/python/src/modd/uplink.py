@@ -37,8 +37,9 @@ def check(link: str | None, radio: str | None, model: dict[str, Any]) -> str:
         except ValueError as exc:
             raise LinkSetupError(f"--radio: {exc}") from None
         if transport == "tcp":
-            raise LinkSetupError("--radio emulates a radio of datagrams: use it with --link udp "
-                                 "or --link serial")
+            raise LinkSetupError(
+                "--radio emulates a radio of datagrams: use it with --link udp or --link serial"
+            )
     return str(transport)
 
 
@@ -53,8 +54,9 @@ def apply(model: dict[str, Any], transport: str, devices: tuple[str, str] | None
         link["device"], link["droneDevice"] = devices
 
 
-def radio_argv(bin_dir: Path, transport: str, radio: str | None,
-               target: tuple[str, int]) -> tuple[list[str], tuple[str, int] | None]:
+def radio_argv(
+    bin_dir: Path, transport: str, radio: str | None, target: tuple[str, int]
+) -> tuple[list[str], tuple[str, int] | None]:
     """The emulator's command line and, over udp, the relay endpoint the
     SubBroker sends to (None over serial)."""
     argv = [str(bin_dir / "modd-radio"), "--report", "10"]

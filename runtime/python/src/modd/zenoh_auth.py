@@ -65,11 +65,16 @@ def read_secret(path: str | Path, what: str = "secret") -> bytes:
         if not stat.S_ISREG(st.st_mode):
             raise ValueError(f"{what} file {path}: not a regular file")
         if st.st_size > MAX_SECRET_BYTES:
-            raise ValueError(f"{what} file {path}: {st.st_size} bytes, more than "
-                             f"{MAX_SECRET_BYTES}")
+            raise ValueError(
+                f"{what} file {path}: {st.st_size} bytes, more than {MAX_SECRET_BYTES}"
+            )
         if st.st_mode & 0o077:
-            log.warning("%s file %s can be read by group or others (mode %o): chmod 600 it",
-                        what, path, stat.S_IMODE(st.st_mode))
+            log.warning(
+                "%s file %s can be read by group or others (mode %o): chmod 600 it",
+                what,
+                path,
+                stat.S_IMODE(st.st_mode),
+            )
         data = os.read(fd, MAX_SECRET_BYTES + 1)
     finally:
         os.close(fd)
@@ -170,8 +175,13 @@ class CredentialStore:
 
 
 def _rule(rid: str, messages: list[str], flows: list[str], keys: list[str]) -> dict[str, Any]:
-    return {"id": rid, "messages": messages, "flows": flows, "permission": "allow",
-            "key_exprs": keys}
+    return {
+        "id": rid,
+        "messages": messages,
+        "flows": flows,
+        "permission": "allow",
+        "key_exprs": keys,
+    }
 
 
 def acl(drone: str | None = None) -> dict[str, Any]:
@@ -186,10 +196,18 @@ def acl(drone: str | None = None) -> dict[str, Any]:
     read = [keys.values_tree(None), keys.ALL_STATUS]
     rules = [
         # the SubBroker: its values and status, its queryables (when it is a client)
-        _rule("subbroker_out", ["put", "delete", "declare_queryable", "reply"], ["ingress"],
-              [*own, *queries]),
-        _rule("subbroker_in", ["declare_subscriber", "query", "declare_queryable"], ["egress"],
-              [*read, *queries]),
+        _rule(
+            "subbroker_out",
+            ["put", "delete", "declare_queryable", "reply"],
+            ["ingress"],
+            [*own, *queries],
+        ),
+        _rule(
+            "subbroker_in",
+            ["declare_subscriber", "query", "declare_queryable"],
+            ["egress"],
+            [*read, *queries],
+        ),
         # readers (backend and viewers): subscribe to values and status; a
         # subscription may be as wide as modd/**, only these keys' puts reach it
         _rule("read_in", ["declare_subscriber"], ["ingress", "egress"], [keys.EVERYTHING]),
@@ -201,9 +219,17 @@ def acl(drone: str | None = None) -> dict[str, Any]:
     subjects = [{"id": ident, "usernames": [ident]} for ident in IDENTITIES]
     policies = [
         {"id": "subbroker", "rules": ["subbroker_out", "subbroker_in"], "subjects": ["subbroker"]},
-        {"id": "backend", "rules": ["read_in", "read_out", "ask", "answer"],
-         "subjects": ["backend"]},
+        {
+            "id": "backend",
+            "rules": ["read_in", "read_out", "ask", "answer"],
+            "subjects": ["backend"],
+        },
         {"id": "viewer", "rules": ["read_in", "read_out"], "subjects": ["viewer"]},
     ]
-    return {"enabled": True, "default_permission": "deny", "rules": rules,
-            "subjects": subjects, "policies": policies}
+    return {
+        "enabled": True,
+        "default_permission": "deny",
+        "rules": rules,
+        "subjects": subjects,
+        "policies": policies,
+    }

@@ -130,9 +130,10 @@ def _str_list(value: Any, where: str) -> list[str]:
     return list(value)
 
 
-def client_settings(connect: str | None = None,
-                    credentials: Credentials | str | os.PathLike[str] | None = None,
-                    ) -> ZenohSettings:
+def client_settings(
+    connect: str | None = None,
+    credentials: Credentials | str | os.PathLike[str] | None = None,
+) -> ZenohSettings:
     """Settings for a consumer on the base station: a client that listens
     nowhere and connects to the SubBroker or a router (``MODD_ZENOH_CONNECT``
     or :data:`DEFAULT_ENDPOINT` when ``connect`` is not given), with the user
@@ -146,8 +147,9 @@ def client_settings(connect: str | None = None,
     return ZenohSettings(mode="client", connect=(endpoint,), credentials=credentials)
 
 
-def secured(settings: ZenohSettings, store: CredentialStore, identity: str,
-            drone: str | None) -> ZenohSettings:
+def secured(
+    settings: ZenohSettings, store: CredentialStore, identity: str, drone: str | None
+) -> ZenohSettings:
     """``settings`` with the credentials plumbing of ``store``: when it
     listens, it authenticates whoever connects (the store's dictionary) and
     applies :func:`~modd.zenoh_auth.acl` for ``drone``, gossip off (no peer
@@ -205,8 +207,10 @@ def open_session(settings: ZenohSettings) -> zenoh.Session:
 
 
 #: Where `make run` and `modd up` keep a viewer's credentials (docs/security.md).
-CREDENTIALS_HINT = ("`make run` keeps a viewer's in data/credentials/viewer.cred "
-                    "(data-<port>/ with MODD_PORT), `modd up` in <workdir>/credentials/viewer.cred")
+CREDENTIALS_HINT = (
+    "`make run` keeps a viewer's in data/credentials/viewer.cred "
+    "(data-<port>/ with MODD_PORT), `modd up` in <workdir>/credentials/viewer.cred"
+)
 
 
 def refusal(settings: ZenohSettings, answers: bool | None) -> str:
@@ -219,15 +223,19 @@ def refusal(settings: ZenohSettings, answers: bool | None) -> str:
     """
     endpoint = settings.connect[0]
     if answers is False:
-        return (f"nothing answers at {endpoint}: is the SubBroker running (`make run` or "
-                "`modd up`), and is this its zenoh endpoint (--connect or $MODD_ZENOH_CONNECT)?")
+        return (
+            f"nothing answers at {endpoint}: is the SubBroker running (`make run` or "
+            "`modd up`), and is this its zenoh endpoint (--connect or $MODD_ZENOH_CONNECT)?"
+        )
     if settings.credentials is None:
         said = "needs credentials and none were given"
     else:
         said = f"refused the credentials of user {settings.credentials.user!r}"
     maybe = "" if answers else " (or nothing answers there)"
-    return (f"the router at {endpoint} {said}{maybe}: give a credentials file with "
-            f"--credentials FILE or $MODD_ZENOH_CREDENTIALS; {CREDENTIALS_HINT}")
+    return (
+        f"the router at {endpoint} {said}{maybe}: give a credentials file with "
+        f"--credentials FILE or $MODD_ZENOH_CREDENTIALS; {CREDENTIALS_HINT}"
+    )
 
 
 def tcp_answers(endpoint: str, timeout_s: float = 1.0) -> bool | None:

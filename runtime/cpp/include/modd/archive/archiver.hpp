@@ -22,10 +22,11 @@
 namespace modd::archive {
 
 struct Sample {
-  int64_t stamp_ns;   // broker timeline on ingest (util/clock.hpp): the MCAP log_time and the window key
-  int64_t publish_ns; // the publisher's own timestamp: the MCAP publish_time
-  double number;      // float topics
-  int64_t integer;    // int and bool topics
+  int64_t
+      stamp_ns;  // broker timeline on ingest (util/clock.hpp): the MCAP log_time and the window key
+  int64_t publish_ns;  // the publisher's own timestamp: the MCAP publish_time
+  double number;       // float topics
+  int64_t integer;     // int and bool topics
 };
 
 struct TopicInfo {
@@ -39,19 +40,21 @@ struct ArchiverOptions {
   uint64_t rotate_bytes = 256ull << 20;
   uint64_t rotate_s = 3600;
   WriterOptions writer;
-  uint32_t retry_first_ms = 250;   // after a write error: retry after this, doubling,
-  uint32_t retry_max_ms = 2000;    // up to this
+  uint32_t retry_first_ms = 250;  // after a write error: retry after this, doubling,
+  uint32_t retry_max_ms = 2000;   // up to this
 };
 
 struct ArchiveCounters {
-  std::atomic<uint64_t> archived{0};      // samples in a written chunk
-  std::atomic<uint64_t> failed{0};        // samples lost to a write error (counted, logged)
+  std::atomic<uint64_t> archived{0};  // samples in a written chunk
+  std::atomic<uint64_t> failed{0};    // samples lost to a write error (counted, logged)
   std::atomic<uint64_t> files{0};
-  std::atomic<uint64_t> bytes{0};         // bytes of closed files + current file
-  std::atomic<uint64_t> queued{0};        // samples waiting for the writer
-  std::atomic<uint64_t> durable_flush{0}; // id of the last flush() whose samples are all in the file
-  std::atomic<bool> disk_full{false};     // a write failed; the writer holds the queue and retries
-  std::atomic<uint64_t> state_changes{0}; // +1 at each disk_full change (the broker sends STATUS at once)
+  std::atomic<uint64_t> bytes{0};   // bytes of closed files + current file
+  std::atomic<uint64_t> queued{0};  // samples waiting for the writer
+  std::atomic<uint64_t> durable_flush{
+      0};                              // id of the last flush() whose samples are all in the file
+  std::atomic<bool> disk_full{false};  // a write failed; the writer holds the queue and retries
+  std::atomic<uint64_t> state_changes{
+      0};  // +1 at each disk_full change (the broker sends STATUS at once)
 };
 
 class Archiver {
@@ -91,9 +94,9 @@ class Archiver {
   void close_file();
   void count_flushed();
   void set_disk_full(bool full, const std::string& why);
-  bool retry();                 // resumes the interrupted write; true when it went through
-  void give_up();               // at stop with the disk still full
-  void retry_recovery();        // files a crash left that could not be finished at start
+  bool retry();           // resumes the interrupted write; true when it went through
+  void give_up();         // at stop with the disk still full
+  void retry_recovery();  // files a crash left that could not be finished at start
 
   ArchiverOptions opt_;
   ArchiveCounters counters_;

@@ -35,7 +35,7 @@ struct WriterOptions {
 // A chunk as the summary's Chunk Index describes it.
 struct ChunkIndex {
   uint64_t start = 0, end = 0, offset = 0, length = 0;  // log times; the Chunk record's place
-  std::map<uint16_t, uint64_t> index_offsets;            // channel -> its Message Index record
+  std::map<uint16_t, uint64_t> index_offsets;           // channel -> its Message Index record
   uint64_t index_length = 0, compressed_size = 0, uncompressed_size = 0;
   std::string compression;
 };
@@ -53,8 +53,10 @@ class McapWriter {
     uint32_t data_crc;
   };
   McapWriter(const std::string& path, WriterOptions options, Resume at);
-  void adopt_schema(uint16_t id, const std::string& name, const std::string& encoding, const std::string& data);
-  void adopt_channel(uint16_t id, uint16_t schema_id, const std::string& topic, const std::string& encoding,
+  void adopt_schema(uint16_t id, const std::string& name, const std::string& encoding,
+                    const std::string& data);
+  void adopt_channel(uint16_t id, uint16_t schema_id, const std::string& topic,
+                     const std::string& encoding,
                      const std::map<std::string, std::string>& metadata);
   // A chunk already in the file, with its messages per channel.
   void adopt_chunk(const ChunkIndex& chunk, const std::map<uint16_t, uint64_t>& channel_counts);
@@ -62,22 +64,24 @@ class McapWriter {
   McapWriter(const McapWriter&) = delete;
   McapWriter& operator=(const McapWriter&) = delete;
 
-  uint16_t add_schema(const std::string& name, const std::string& encoding, const std::string& data);
-  uint16_t add_channel(uint16_t schema_id, const std::string& topic, const std::string& message_encoding,
+  uint16_t add_schema(const std::string& name, const std::string& encoding,
+                      const std::string& data);
+  uint16_t add_channel(uint16_t schema_id, const std::string& topic,
+                       const std::string& message_encoding,
                        const std::map<std::string, std::string>& metadata = {});
   void add_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time, uint64_t publish_time,
                    std::span<const uint8_t> data);
   // The same without closing a full chunk: the caller calls flush_chunk() when chunk_full().
-  void append_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time, uint64_t publish_time,
-                      std::span<const uint8_t> data);
+  void append_message(uint16_t channel_id, uint32_t sequence, uint64_t log_time,
+                      uint64_t publish_time, std::span<const uint8_t> data);
   bool chunk_full() const { return chunk_.size() >= opt_.chunk_bytes; }
   // Writes the open chunk (if any) and its message indexes. On a write error (Error(Io),
   // e.g. disk full) nothing is lost: what was not written stays pending, and a later
   // flush_chunk() or close() writes it from where the file ends.
   void flush_chunk();
-  void sync();         // fsync of what was written
-  void close();        // flush, summary, footer, magic; idempotent; resumable after a write error
-  void abandon();      // closes the descriptor as the file is (left for recovery at next start)
+  void sync();     // fsync of what was written
+  void close();    // flush, summary, footer, magic; idempotent; resumable after a write error
+  void abandon();  // closes the descriptor as the file is (left for recovery at next start)
   uint64_t file_bytes() const { return offset_ + pending_.size(); }
   uint64_t message_count() const { return message_count_; }
   uint64_t flushed_messages() const { return flushed_messages_; }  // in chunks written to the file
@@ -86,11 +90,18 @@ class McapWriter {
   const std::string& path() const { return path_; }
 
  private:
-  struct SchemaRec { uint16_t id; std::string name, encoding, data; };
-  struct ChannelRec { uint16_t id, schema_id; std::string topic, encoding; std::map<std::string, std::string> metadata; };
+  struct SchemaRec {
+    uint16_t id;
+    std::string name, encoding, data;
+  };
+  struct ChannelRec {
+    uint16_t id, schema_id;
+    std::string topic, encoding;
+    std::map<std::string, std::string> metadata;
+  };
   using ChunkIndexRec = ChunkIndex;
   void emit(std::span<const uint8_t> b);  // appends to the file, updating offset and CRC
-  void write_out();                        // pending_ -> fd
+  void write_out();                       // pending_ -> fd
   void finish_close();
   std::vector<uint8_t> schema_record(const SchemaRec& s) const;
   std::vector<uint8_t> channel_record(const ChannelRec& c) const;
@@ -99,7 +110,7 @@ class McapWriter {
   WriterOptions opt_;
   int fd_ = -1;
   bool closed_ = false;
-  uint64_t offset_ = 0;          // bytes already written to fd
+  uint64_t offset_ = 0;           // bytes already written to fd
   std::vector<uint8_t> pending_;  // emitted but not yet written
   uint32_t data_crc_ = 0;
   std::vector<SchemaRec> schemas_;

@@ -20,14 +20,14 @@ namespace modd::archive {
 
 struct Recovered {
   std::string path;
-  uint64_t messages = 0;       // kept
-  uint64_t chunks = 0;         // kept
-  uint64_t dropped_bytes = 0;  // damaged regions and torn tail
+  uint64_t messages = 0;         // kept
+  uint64_t chunks = 0;           // kept
+  uint64_t dropped_bytes = 0;    // damaged regions and torn tail
   std::vector<Skipped> skipped;  // the damaged regions (offset, length, why), in file order
-  bool rewritten = false;      // written beside and renamed over (a trusted record lay past damage)
-  bool removed = false;        // empty file (nothing but a partial magic/header): removed
-  bool foreign = false;        // no magic and no record found: left as it is
-  bool failed = false;         // could not be finished (e.g. disk full): to be tried again
+  bool rewritten = false;  // written beside and renamed over (a trusted record lay past damage)
+  bool removed = false;    // empty file (nothing but a partial magic/header): removed
+  bool foreign = false;    // no magic and no record found: left as it is
+  bool failed = false;     // could not be finished (e.g. disk full): to be tried again
 };
 
 // Decompresses one chunk's records ("", "zstd" or "lz4") into out (exactly `size` bytes).
@@ -43,6 +43,7 @@ void log_recovered(const std::string& name, const Recovered& r, const char* when
 // Recovers every `<prefix>*.mcap` file of `dir` that is not complete (and removes stale
 // `.recovering` files an older version's interrupted recovery left). Errors are logged, not
 // thrown: a file that could not be finished is returned with `failed` set.
-std::vector<Recovered> recover_dir(const std::string& dir, const std::string& prefix, const WriterOptions& options);
+std::vector<Recovered> recover_dir(const std::string& dir, const std::string& prefix,
+                                   const WriterOptions& options);
 
 }  // namespace modd::archive

@@ -13,7 +13,8 @@ class Accumulator {
  public:
   static constexpr size_t kMaxAll = 65535;  // ALL keeps at most this many samples per window
 
-  Accumulator(link::ValueType type, link::Aggregation aggregation) : type_(type), agg_(aggregation) {}
+  Accumulator(link::ValueType type, link::Aggregation aggregation)
+      : type_(type), agg_(aggregation) {}
   // Float topics pass `number`, int and bool topics pass `integer`.
   void add(double number, int64_t integer);
   link::Value take();
@@ -22,7 +23,9 @@ class Accumulator {
   link::Aggregation aggregation() const { return agg_; }
 
  private:
-  bool is_float() const { return type_ == link::ValueType::Float32 || type_ == link::ValueType::Float64; }
+  bool is_float() const {
+    return type_ == link::ValueType::Float32 || type_ == link::ValueType::Float64;
+  }
   link::ValueType type_;
   link::Aggregation agg_;
   uint64_t n_ = 0;

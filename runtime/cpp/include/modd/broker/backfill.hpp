@@ -38,7 +38,9 @@ class BackfillSender {
   void on_request(const link::backfill::Request& r, std::optional<link::ValueType> known_type,
                   std::vector<uint8_t>& out);
   void on_cancel(uint64_t request_id, std::vector<uint8_t>& out);
-  void clear() { jobs_.clear(); }  // a new link session: the base station asks again with resume points
+  void clear() {
+    jobs_.clear();
+  }  // a new link session: the base station asks again with resume points
   // Appends the frames the pace allows now (each to be sent as its own write) to `frames`.
   void pump(const Env& env, std::vector<std::vector<uint8_t>>& frames);
   // When pump() next has something to do (INT64_MAX: nothing runs).
@@ -74,12 +76,13 @@ class BackfillSender {
   uint64_t rate() const;
   size_t frame_budget() const;  // the pace's, capped by window_bytes_cap()
   void fill(Job& j, const Env& env);
-  void end(Job& j, link::backfill::EndStatus st, const std::string& why, std::vector<std::vector<uint8_t>>& frames);
+  void end(Job& j, link::backfill::EndStatus st, const std::string& why,
+           std::vector<std::vector<uint8_t>>& frames);
 
   std::string dir_, prefix_;
   uint64_t default_rate_;
   std::vector<std::unique_ptr<Job>> jobs_;
-  size_t turn_ = 0;  // round robin between jobs
+  size_t turn_ = 0;    // round robin between jobs
   double credit_ = 0;  // token bucket, bytes; a frame goes when credit >= 0
   int64_t refilled_at_ = 0;
   uint64_t bytes_sent_ = 0;

@@ -89,8 +89,13 @@ class IngressSession final : public ingress::Handler {
     std::string topic;
     uint64_t generation = 0;
   };
-  struct Checkpoint { uint64_t flush_id, received, accepted; };
-  struct Refused { uint64_t count = 0; std::string detail; };
+  struct Checkpoint {
+    uint64_t flush_id, received, accepted;
+  };
+  struct Refused {
+    uint64_t count = 0;
+    std::string detail;
+  };
   Broker& broker_;
   std::string publisher_;
   uint8_t version_ = 0;
@@ -118,10 +123,11 @@ class Broker final : public LinkHooks, public FrameSink {
   const Timeline& timeline() const { return time_; }
   // One record, validated and counted: Reject::kCount when accepted, else the reason.
   // `who` (may be null) is charged for the fair share of the archive queue.
-  Reject ingest(int64_t global, Reject why, link::ValueType declared, int64_t stamp, const ingress::Record& r,
-                const IngressSession* who = nullptr);
+  Reject ingest(int64_t global, Reject why, link::ValueType declared, int64_t stamp,
+                const ingress::Record& r, const IngressSession* who = nullptr);
   // Words for a refusal, sent to the publisher (REJECT detail).
-  std::string describe(Reject why, const std::string& topic, int64_t stamp, const ingress::Record& r) const;
+  std::string describe(Reject why, const std::string& topic, int64_t stamp,
+                       const ingress::Record& r) const;
   ingress::Catalogue catalogue() const;
   void attach(IngressSession* s) { sessions_.push_back(s); }
   void detach(IngressSession* s) { std::erase(sessions_, s); }
@@ -129,9 +135,9 @@ class Broker final : public LinkHooks, public FrameSink {
   void check_archive(int64_t now);
   int64_t find_topic(const std::string& name, link::ValueType declared, Reject& why);
   // Timers.
-  void tick(int64_t now);      // fires due slots (no sample arrived)
-  void flush_buffers();        // every flush interval: partial front buffers to the archive
-  void shutdown();             // SIGTERM: everything to the archive, files closed
+  void tick(int64_t now);  // fires due slots (no sample arrived)
+  void flush_buffers();    // every flush interval: partial front buffers to the archive
+  void shutdown();         // SIGTERM: everything to the archive, files closed
   int64_t next_due_ns() const { return executor_.next_due_ns(); }
   void status_due(int64_t now);
   // STATUS normally rides with the next DATA frame; when no DATA has gone out for a whole
@@ -179,7 +185,7 @@ class Broker final : public LinkHooks, public FrameSink {
     bool known = false;
     uint32_t capacity = 1;
     std::vector<archive::Sample> front;
-    uint64_t accepted = 0, durable_accepted = 0;  // fair share per topic
+    uint64_t accepted = 0, durable_accepted = 0;            // fair share per topic
     std::deque<std::pair<uint64_t, uint64_t>> checkpoints;  // (flush id, accepted)
   };
   uint32_t add_topic(const std::string& name, link::ValueType type, uint32_t capacity, bool known);
@@ -197,7 +203,8 @@ class Broker final : public LinkHooks, public FrameSink {
   std::vector<Topic> topics_;
   std::unordered_map<std::string, uint32_t> by_name_;
   int64_t last_stamp_ = 0;
-  int64_t clock_now_ = 0;  // the wall clock's last reading: publishers' timestamps are judged against it
+  int64_t clock_now_ =
+      0;  // the wall clock's last reading: publishers' timestamps are judged against it
   int64_t started_ns_ = 0;
   uint64_t front_samples_ = 0;
   uint64_t generation_ = 1;
@@ -206,13 +213,14 @@ class Broker final : public LinkHooks, public FrameSink {
   uint32_t status_period_s_ = 0;
   std::vector<IngressSession*> sessions_;
   uint64_t flush_id_ = 0, durable_seen_ = 0, archive_state_changes_ = 0;
-  uint8_t archive_state_ = 0;   // ArchiveStateCode
+  uint8_t archive_state_ = 0;  // ArchiveStateCode
   bool low_space_ = false;
   int64_t next_space_check_ = 0, rate_since_ = 0;
   uint64_t rate_bytes_ = 0, rate_bps_ = 0;
   BackfillSender backfill_;
-  std::deque<std::pair<uint64_t, int64_t>> flush_stamps_;  // (flush id, stamp horizon at that flush)
-  int64_t archived_until_ = 0;  // samples stamped before this are in written chunks
+  std::deque<std::pair<uint64_t, int64_t>>
+      flush_stamps_;                       // (flush id, stamp horizon at that flush)
+  int64_t archived_until_ = 0;             // samples stamped before this are in written chunks
   std::unique_ptr<RunRecord> run_record_;  // this run's counters beside its archive files
   int64_t next_record_ns_ = 0;
   uint64_t record_files_ = 0, record_samples_in_ = 0;

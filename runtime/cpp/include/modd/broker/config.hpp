@@ -31,7 +31,7 @@ struct BrokerConfig {
   uint32_t link_max_packet = 0;   // udp: datagram payload; serial: frame; 0: 1472 / 252
   uint32_t link_delay_ms = 1000;  // accepted delay: slots packed into one datagram up to it
   uint32_t link_keepalive_timeout_s = 90;  // silence after which DATA stops (0: never)
-  uint32_t link_ring_bytes = 64 * 1024;    // udp/serial: the resend ring's bound (also 256 datagrams)
+  uint32_t link_ring_bytes = 64 * 1024;  // udp/serial: the resend ring's bound (also 256 datagrams)
   // ingress: where publishers connect
   std::string ingress_unix;  // empty: no Unix socket
   std::string ingress_host = "127.0.0.1";
@@ -57,8 +57,9 @@ struct BrokerConfig {
   bool message_index = true;
   uint32_t flush_interval_ms = 1000;
   uint64_t queue_limit_samples = 1'000'000;
-  uint64_t low_space_mb = 256;       // free space under which the operator is warned (STATUS + log)
-  uint32_t retry_max_ms = 2000;      // write retry backoff (from 250 ms, doubling) while the disk is full
+  uint64_t low_space_mb = 256;  // free space under which the operator is warned (STATUS + log)
+  uint32_t retry_max_ms =
+      2000;  // write retry backoff (from 250 ms, doubling) while the disk is full
   // backfill (docs/protocol.md, "Backfill"): the pace of a request that sets no rate
   uint64_t backfill_default_rate_bps = 1000;
   // topics

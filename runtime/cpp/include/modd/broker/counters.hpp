@@ -8,7 +8,16 @@ namespace modd::broker {
 
 // Why a record was refused. The numbers are also the REJECT reason codes of the ingress
 // protocol (docs/ingress.md); keep them stable.
-enum class Reject : uint8_t { UnknownTopic, WrongType, NotFinite, Timestamp, Overflow, Malformed, Quota, kCount };
+enum class Reject : uint8_t {
+  UnknownTopic,
+  WrongType,
+  NotFinite,
+  Timestamp,
+  Overflow,
+  Malformed,
+  Quota,
+  kCount
+};
 const char* reject_name(Reject r);
 
 struct Counters {
@@ -31,11 +40,36 @@ struct Counters {
 
 // The STATUS counter list (index = position on the wire; fields are only ever appended).
 enum StatusField : uint8_t {
-  kUptimeS, kSamplesIn, kSamplesArchived, kRejUnknownTopic, kRejWrongType, kRejNotFinite, kRejTimestamp,
-  kRejOverflow, kRejMalformed, kArchiveFailed, kIngressMalformedFrames, kPublishersConnected, kFramesSent,
-  kFramesDropped, kLinkBytesSent, kDiskFreeMb, kBufferFillPct, kArchiveFiles, kAuthFailures, kConfigId,
-  kRejQuota, kArchiveState, kArchiveRateBps, kSamplesPending,
-  kDgramSent, kDgramResent, kDgramNacks, kDgramDropped, kDgramForged, kDgramReplayed,
+  kUptimeS,
+  kSamplesIn,
+  kSamplesArchived,
+  kRejUnknownTopic,
+  kRejWrongType,
+  kRejNotFinite,
+  kRejTimestamp,
+  kRejOverflow,
+  kRejMalformed,
+  kArchiveFailed,
+  kIngressMalformedFrames,
+  kPublishersConnected,
+  kFramesSent,
+  kFramesDropped,
+  kLinkBytesSent,
+  kDiskFreeMb,
+  kBufferFillPct,
+  kArchiveFiles,
+  kAuthFailures,
+  kConfigId,
+  kRejQuota,
+  kArchiveState,
+  kArchiveRateBps,
+  kSamplesPending,
+  kDgramSent,
+  kDgramResent,
+  kDgramNacks,
+  kDgramDropped,
+  kDgramForged,
+  kDgramReplayed,
   kStatusFieldCount
 };
 

@@ -39,14 +39,15 @@ class DatagramOut {
 };
 
 struct DgramOptions {
-  size_t max_datagram = 1472;       // largest datagram (udp payload; serial: frame minus framing)
-  int64_t delay_ns = 1'000'000'000;  // accepted delay: a group is sent when its first slot waited this
+  size_t max_datagram = 1472;  // largest datagram (udp payload; serial: frame minus framing)
+  int64_t delay_ns =
+      1'000'000'000;  // accepted delay: a group is sent when its first slot waited this
   int64_t keepalive_timeout_ns = 90'000'000'000;  // silence after which DATA stops (3 x 30 s PING)
   size_t ring_datagrams = 256;
   size_t ring_bytes = 64 * 1024;
   // NACK resends: earned one byte per live DATA byte sent, from none (so resends never add
-  // more than the plan's own bytes) up to `resend_burst_bytes`, and at most `resend_per_nack_bytes` for
-  // one NACK (docs/protocol.md, "Resends"). 0: ring_bytes, ring_bytes / 4.
+  // more than the plan's own bytes) up to `resend_burst_bytes`, and at most `resend_per_nack_bytes`
+  // for one NACK (docs/protocol.md, "Resends"). 0: ring_bytes, ring_bytes / 4.
   size_t resend_burst_bytes = 0;
   size_t resend_per_nack_bytes = 0;
   link::ChallengeLimits challenges{};
@@ -58,9 +59,11 @@ struct DgramCounters {
   uint64_t nacks = 0, resent = 0, too_old = 0;
   uint64_t handshakes = 0, timeouts = 0;
   uint64_t fragments = 0;  // 0x32 datagrams sent for slots larger than a packet
-  uint64_t dropped = 0;    // slots not sent: no session, or too large for 16 fragments (archived all the same)
-  uint64_t foreign = 0;    // datagrams of the session from another address than its peer's: dropped
-  uint64_t resend_paced = 0;  // NACKed datagrams not resent: over the resend budget (asked again later)
+  uint64_t dropped =
+      0;  // slots not sent: no session, or too large for 16 fragments (archived all the same)
+  uint64_t foreign = 0;  // datagrams of the session from another address than its peer's: dropped
+  uint64_t resend_paced =
+      0;  // NACKed datagrams not resent: over the resend budget (asked again later)
 };
 
 class DatagramLink {

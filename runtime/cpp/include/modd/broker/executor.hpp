@@ -54,7 +54,8 @@ class Executor {
   // topic_globals[i]: the broker's topic index for CONFIG topic i.
   // Returns the epoch (ns) at which the config takes effect, or nullopt if a
   // config is already waiting for its switch date (answer BUSY).
-  std::optional<int64_t> apply(const link::Config& cfg, const std::vector<uint32_t>& topic_globals, int64_t now);
+  std::optional<int64_t> apply(const link::Config& cfg, const std::vector<uint32_t>& topic_globals,
+                               int64_t now);
   void advance(int64_t t, FrameSink& sink);
   void on_sample(uint32_t global_topic, double number, int64_t integer);
   int64_t next_due_ns() const;
@@ -74,7 +75,8 @@ class Executor {
     std::unique_ptr<link::SlotIterator> slots;
     int64_t next_due = kNever;
   };
-  std::unique_ptr<Active> build(const link::Config& cfg, const std::vector<uint32_t>& topic_globals, int64_t epoch);
+  std::unique_ptr<Active> build(const link::Config& cfg, const std::vector<uint32_t>& topic_globals,
+                                int64_t epoch);
   void fire(FrameSink& sink);
   void fire_slot(FrameSink& sink, const link::Data& d, const std::vector<link::ValueKind>& kinds,
                  const std::vector<uint32_t>& streams, int64_t date);

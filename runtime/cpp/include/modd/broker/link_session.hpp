@@ -19,12 +19,16 @@ class LinkHooks {
  public:
   virtual ~LinkHooks() = default;
   virtual link::ConfigAck on_config(const link::Config& cfg) = 0;
-  virtual link::AuthOk current_config() = 0;  // config id and epoch for AUTH_OK (mac filled by the session)
+  virtual link::AuthOk
+  current_config() = 0;  // config id and epoch for AUTH_OK (mac filled by the session)
   virtual void on_authenticated() = 0;
   virtual void on_rejected(const std::string& why) = 0;  // logged and counted by the broker
-  // A backfill frame from the base station (BACKFILL_REQUEST, BACKFILL_CANCEL); replies go to `out`.
-  // Throws Error(BadFrame) on a malformed or misdirected frame. Default: ignored.
-  virtual void on_backfill(const link::RawFrame& f, std::vector<uint8_t>& out) { (void)f; (void)out; }
+  // A backfill frame from the base station (BACKFILL_REQUEST, BACKFILL_CANCEL); replies go to
+  // `out`. Throws Error(BadFrame) on a malformed or misdirected frame. Default: ignored.
+  virtual void on_backfill(const link::RawFrame& f, std::vector<uint8_t>& out) {
+    (void)f;
+    (void)out;
+  }
 };
 
 class LinkSession {

@@ -27,7 +27,8 @@ class RunRecord {
   // False when it cannot be written (disk full): the previous copy stays; one log line per
   // change between written and not written.
   bool write(const std::vector<std::pair<std::string, uint64_t>>& counters,
-             const std::vector<std::pair<std::string, uint64_t>>& files, bool final, int64_t now_ns);
+             const std::vector<std::pair<std::string, uint64_t>>& files, bool final,
+             int64_t now_ns);
   const std::string& path() const { return path_; }
   // Wall-clock steps seen this run (util/clock.hpp, Timeline): written as "clock" with the
   // next record, so that a reader can map the archive's log times to the wall clock.

@@ -61,14 +61,14 @@ class Publisher {
     uint64_t on_disk = 0;             // acknowledged by the broker as in the archive file
     uint64_t rejected_by_broker = 0;  // refused by the broker (REJECT), reason logged
     uint64_t dropped_queue_full = 0;
-    uint64_t dropped_bad_topic = 0;   // refused at the call, every reason (the four below)
+    uint64_t dropped_bad_topic = 0;  // refused at the call, every reason (the four below)
     uint64_t refused_unknown_topic = 0;
     uint64_t refused_wrong_type = 0;
     uint64_t refused_out_of_range = 0;  // includes NaN/inf
     uint64_t refused_timestamp = 0;
-    uint64_t dropped_at_close = 0;    // still queued when destroyed with no broker
-    uint64_t replayed = 0;            // sent again after a reconnection (not yet on disk before)
-    uint64_t replay_dropped = 0;      // not yet on disk but pushed out of the replay buffer
+    uint64_t dropped_at_close = 0;  // still queued when destroyed with no broker
+    uint64_t replayed = 0;          // sent again after a reconnection (not yet on disk before)
+    uint64_t replay_dropped = 0;    // not yet on disk but pushed out of the replay buffer
     uint64_t connects = 0;
   };
 
@@ -87,12 +87,16 @@ class Publisher {
   bool publish(const std::string& topic, int64_t timestamp_ns, bool value) noexcept;
   // Any other arithmetic type (int, unsigned, long double, uint8_t, ...).
   template <typename T>
-    requires(std::is_arithmetic_v<T> && !std::is_same_v<T, bool> && !std::is_same_v<T, int64_t> &&
-             !std::is_same_v<T, float> && !std::is_same_v<T, double>)
-  bool publish(const std::string& topic, int64_t timestamp_ns, T value) noexcept {
-    if constexpr (std::is_floating_point_v<T>) return publish(topic, timestamp_ns, static_cast<double>(value));
-    else if constexpr (std::is_signed_v<T>) return publish(topic, timestamp_ns, static_cast<int64_t>(value));
-    else return push(topic, timestamp_ns, In{In::Unsigned, 0, 0, static_cast<uint64_t>(value)});
+  requires(std::is_arithmetic_v<T> && !std::is_same_v<T, bool> && !std::is_same_v<T, int64_t> &&
+           !std::is_same_v<T, float> &&
+           !std::is_same_v<T, double>) bool publish(const std::string& topic, int64_t timestamp_ns,
+                                                    T value) noexcept {
+    if constexpr (std::is_floating_point_v<T>)
+      return publish(topic, timestamp_ns, static_cast<double>(value));
+    else if constexpr (std::is_signed_v<T>)
+      return publish(topic, timestamp_ns, static_cast<int64_t>(value));
+    else
+      return push(topic, timestamp_ns, In{In::Unsigned, 0, 0, static_cast<uint64_t>(value)});
   }
   // Waits until the queue is empty and written (true) or the timeout passes.
   bool flush(std::chrono::milliseconds timeout) noexcept;
@@ -145,7 +149,7 @@ class Publisher {
   std::deque<std::pair<uint64_t, Record>> unacked_;  // (record number on this connection, record)
   std::unordered_map<std::string, uint32_t> ids_;    // name as given -> local id
   std::unordered_map<std::string, uint32_t> full_ids_;  // full name -> local id
-  std::vector<Topic> topics_;                        // local id -> full name and type
+  std::vector<Topic> topics_;                           // local id -> full name and type
   std::map<std::string, ValueType> declared_;
   Catalogue catalogue_;
   Stats stats_;

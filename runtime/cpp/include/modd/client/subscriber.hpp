@@ -39,11 +39,11 @@ struct Delivered {
   uint64_t slot = 0;
   int64_t start_ns = 0, end_ns = 0;  // the window [start, end), ns since the Unix epoch
   int64_t delivered_ns = 0;
-  bool present = false;              // false: no sample in the window
-  double value = 0;                  // the aggregate (bools as 0/1); unset for ALL
-  std::vector<double> values;        // ALL: every raw sample of the window
-  int64_t count = -1;                // samples behind the value, when known; else -1
-  bool backfilled = false;           // recomputed from the drone's archive after the link missed it
+  bool present = false;        // false: no sample in the window
+  double value = 0;            // the aggregate (bools as 0/1); unset for ALL
+  std::vector<double> values;  // ALL: every raw sample of the window
+  int64_t count = -1;          // samples behind the value, when known; else -1
+  bool backfilled = false;     // recomputed from the drone's archive after the link missed it
 };
 
 // Parses one delivered line. On malformed input returns false and says why.
@@ -71,7 +71,7 @@ class Subscriber {
     uint64_t received = 0;   // values passed to the callback
     uint64_t malformed = 0;  // lines that did not parse (skipped)
     uint64_t connections = 0;
-    uint64_t refused = 0;    // connections dropped: no or wrong proof, idle, over the limit
+    uint64_t refused = 0;  // connections dropped: no or wrong proof, idle, over the limit
   };
   struct Options {
     std::string key;                  // the delivery key; empty: load_delivery_key()
@@ -88,9 +88,9 @@ class Subscriber {
   Subscriber(const Subscriber&) = delete;
   Subscriber& operator=(const Subscriber&) = delete;
 
-  void run();                 // serves until stop()
-  void start();               // run() on a background thread
-  void stop() noexcept;       // safe from any thread and from a signal handler
+  void run();            // serves until stop()
+  void start();          // run() on a background thread
+  void stop() noexcept;  // safe from any thread and from a signal handler
   uint16_t port() const noexcept { return port_; }
   Stats stats() const noexcept;
 

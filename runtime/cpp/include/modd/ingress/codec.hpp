@@ -49,7 +49,6 @@ class Handler {
   virtual void on_health(std::vector<link::SensorHealth>&& /*sensors*/) {}
 };
 
-
 // Decodes one frame and calls the handler. Throws Error(BadFrame) with the
 // offset; records decoded before the error have been delivered already, and
 // `records_left` tells how many the batch announced but did not deliver.

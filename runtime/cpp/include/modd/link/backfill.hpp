@@ -57,8 +57,8 @@ using Message = std::variant<Request, Progress, End, Cancel>;
 bool is_backfill_type(uint8_t type);
 void encode(std::vector<uint8_t>& out, const Message& m);  // any but DATA
 void encode_data(std::vector<uint8_t>& out, const DataFrame& d, const ValueKind& kind);
-Message decode(const RawFrame& f);                          // any but DATA
-uint64_t data_request_id(const RawFrame& f);                // which request (so which kind)
+Message decode(const RawFrame& f);            // any but DATA
+uint64_t data_request_id(const RawFrame& f);  // which request (so which kind)
 DataFrame decode_data(const RawFrame& f, const ValueKind& kind);
 
 }  // namespace modd::link::backfill

@@ -50,8 +50,9 @@ Value decode_value(ByteReader& r, const ValueKind& k);
 
 // A slot's present values as a DATA datagram lays them out (values[i] of stream
 // streams[i]); quantised ones against chain, the datagram's (updated).
-void encode_slot_values(std::vector<uint8_t>& out, std::span<const Value> values, std::span<const ValueKind> kinds,
-                        std::span<const uint32_t> streams, Chain& chain);
+void encode_slot_values(std::vector<uint8_t>& out, std::span<const Value> values,
+                        std::span<const ValueKind> kinds, std::span<const uint32_t> streams,
+                        Chain& chain);
 Value decode_slot_value(ByteReader& r, const ValueKind& k, Chain& chain, uint32_t stream);
 
 // Instruments' health as STATUS and the ingress's HEALTH carry it: `count:varint` then

@@ -58,10 +58,12 @@ VerifiedData verify_data(std::span<const uint8_t> raw, const Mac& key, uint8_t d
 // 0x31 body (k = 1, stream count, presence bitmap, values): at most 16 pieces,
 // each datagram at most `max_datagram` bytes, each tagged with the full slot.
 // Throws std::invalid_argument when 16 pieces cannot hold it.
-std::vector<uint8_t> slot_bitmap_body(const std::vector<bool>& presence, std::span<const uint8_t> values);
+std::vector<uint8_t> slot_bitmap_body(const std::vector<bool>& presence,
+                                      std::span<const uint8_t> values);
 std::vector<std::vector<uint8_t>> encode_fragments(uint8_t config_id, uint64_t slot,
-                                                   std::span<const uint8_t> body, size_t max_datagram,
-                                                   const Mac& key, uint8_t direction);
+                                                   std::span<const uint8_t> body,
+                                                   size_t max_datagram, const Mac& key,
+                                                   uint8_t direction);
 struct Fragment {
   uint8_t config_id = 0;
   uint64_t slot = 0;
@@ -94,10 +96,13 @@ constexpr size_t kControlFragmentOverhead = 1 + 5 + 1 + kControlTag;
 // The 0x42 datagrams of a control message too large for one datagram: `frames` cut in
 // order into at most 16 pieces, piece i under counter `counter + i`, each datagram at most
 // `max_datagram` bytes. Throws std::invalid_argument beyond 16 pieces.
-std::vector<std::vector<uint8_t>> encode_control_fragments(uint64_t counter, std::span<const uint8_t> frames,
-                                                           size_t max_datagram, const Mac& key, uint8_t direction);
+std::vector<std::vector<uint8_t>> encode_control_fragments(uint64_t counter,
+                                                           std::span<const uint8_t> frames,
+                                                           size_t max_datagram, const Mac& key,
+                                                           uint8_t direction);
 // Throws Forged (tag) or Error(BadFrame) with the offset in the datagram.
-ControlFragment verify_control_fragment(std::span<const uint8_t> raw, const Mac& key, uint8_t direction);
+ControlFragment verify_control_fragment(std::span<const uint8_t> raw, const Mac& key,
+                                        uint8_t direction);
 
 // Control messages put back together from their fragments, bounded: at most kMaxPartial
 // messages in progress (the oldest given up), kMaxFragments pieces each. add() returns the

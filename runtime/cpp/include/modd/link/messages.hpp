@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "modd/link/aggregation_table.gen.hpp"  // the Aggregation enum, generated
-#include "modd/link/wire.gen.hpp"  // versions, limits, MsgType, ValueType (wire.json)
+#include "modd/link/wire.gen.hpp"               // versions, limits, MsgType, ValueType (wire.json)
 
 namespace modd::link {
 
@@ -20,12 +20,28 @@ bool parse_aggregation(const std::string& s, Aggregation& out);
 using Nonce = std::array<uint8_t, 16>;
 using Mac = std::array<uint8_t, 32>;
 
-struct Hello { uint8_t version = kVersion; Nonce nonce{}; };
-struct Challenge { uint8_t version = kVersion; Nonce nonce{}; };
-struct Auth { Mac mac{}; };
-struct AuthOk { Mac mac{}; uint8_t config_id = 0; uint64_t epoch_ns = 0; };
-struct Ping { std::vector<uint8_t> payload; };
-struct Pong { std::vector<uint8_t> payload; };
+struct Hello {
+  uint8_t version = kVersion;
+  Nonce nonce{};
+};
+struct Challenge {
+  uint8_t version = kVersion;
+  Nonce nonce{};
+};
+struct Auth {
+  Mac mac{};
+};
+struct AuthOk {
+  Mac mac{};
+  uint8_t config_id = 0;
+  uint64_t epoch_ns = 0;
+};
+struct Ping {
+  std::vector<uint8_t> payload;
+};
+struct Pong {
+  std::vector<uint8_t> payload;
+};
 
 struct TopicSpec {
   std::string name;
@@ -52,13 +68,18 @@ struct Config {
   bool operator==(const Config&) const = default;
 };
 inline bool operator==(const TopicSpec& a, const TopicSpec& b) {
-  return a.name == b.name && a.type == b.type && a.buffer_size == b.buffer_size && a.period_us == b.period_us;
+  return a.name == b.name && a.type == b.type && a.buffer_size == b.buffer_size &&
+         a.period_us == b.period_us;
 }
 inline bool operator==(const StreamSpec& a, const StreamSpec& b) {
   return a.topic == b.topic && a.aggregation == b.aggregation && a.period_us == b.period_us;
 }
 
-struct ConfigAck { uint8_t config_id = 0; uint8_t status = 0; uint64_t epoch_ns = 0; };
+struct ConfigAck {
+  uint8_t config_id = 0;
+  uint8_t status = 0;
+  uint64_t epoch_ns = 0;
+};
 // One plug-and-play instrument's health (docs/protocol.md, "STATUS"; fields in the order
 // of the table there), as modd-sensors reports it through the ingress (HEALTH) and the
 // PubBroker forwards it in STATUS.
@@ -69,35 +90,42 @@ struct SensorHealth {
 };
 // kMaxHealthSensors, kMaxHealthFields, kMaxHealthName: wire.gen.hpp (contract wire.json)
 // `sensors` travel after the counters, only when there is one (older frames are unchanged).
-struct Status { std::vector<uint64_t> counters; std::vector<SensorHealth> sensors = {}; };
-struct ErrorMsg { uint8_t code = 0; std::string message; };
+struct Status {
+  std::vector<uint64_t> counters;
+  std::vector<SensorHealth> sensors = {};
+};
+struct ErrorMsg {
+  uint8_t code = 0;
+  std::string message;
+};
 
 // One stream's value in a DATA frame. Which fields are used depends on the
 // stream's ValueKind (see value_kind()).
 struct Value {
   bool present = false;
-  double number = 0;            // F32, F64, and the mean of AVERAGE
-  int64_t integer = 0;          // ZigZag and Bool kinds
-  uint64_t count = 0;           // AVERAGE sample count, COUNT
-  std::vector<double> numbers;  // ALL of float topics
+  double number = 0;              // F32, F64, and the mean of AVERAGE
+  int64_t integer = 0;            // ZigZag and Bool kinds
+  uint64_t count = 0;             // AVERAGE sample count, COUNT
+  std::vector<double> numbers;    // ALL of float topics
   std::vector<int64_t> integers;  // ALL of int/bool topics
 };
 
 struct Data {
-  bool sync = false;       // types 0x12/0x13: config id and full slot number
-  uint8_t config_id = 0;   // only on the wire when sync
-  uint64_t slot = 0;       // full slot number (only on the wire when sync)
-  uint8_t seq8 = 0;        // slot mod 256 (on the wire when !sync)
+  bool sync = false;          // types 0x12/0x13: config id and full slot number
+  uint8_t config_id = 0;      // only on the wire when sync
+  uint64_t slot = 0;          // full slot number (only on the wire when sync)
+  uint8_t seq8 = 0;           // slot mod 256 (on the wire when !sync)
   std::vector<Value> values;  // one per stream due in the slot, stream-id order
 };
 
-using Message = std::variant<Hello, Challenge, Auth, AuthOk, Ping, Pong, Config, ConfigAck, Status, ErrorMsg>;
+using Message =
+    std::variant<Hello, Challenge, Auth, AuthOk, Ping, Pong, Config, ConfigAck, Status, ErrorMsg>;
 
 // How a (topic type, aggregation) pair is written in DATA.
 enum class ScalarKind : uint8_t { F32, F64, ZigZag, Bool, UVarint };
 struct ValueKind {
   Aggregation aggregation;
-  ScalarKind scalar;  // the value, or each element of ALL; UVarint for COUNT
+  ScalarKind scalar;      // the value, or each element of ALL; UVarint for COUNT
   double resolution = 0;  // > 0: float values go as integer steps (link/quantise.hpp)
 };
 // resolution is kept for F32/F64 values only (the others are exact already).

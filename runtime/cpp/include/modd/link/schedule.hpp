@@ -11,9 +11,9 @@
 namespace modd::link {
 
 struct Slot {
-  uint64_t index = 0;               // k
-  uint64_t offset_us = 0;           // due date after the epoch
-  std::vector<uint32_t> streams;    // stream ids due, ascending
+  uint64_t index = 0;             // k
+  uint64_t offset_us = 0;         // due date after the epoch
+  std::vector<uint32_t> streams;  // stream ids due, ascending
 };
 
 class SlotIterator {
@@ -30,8 +30,8 @@ class SlotIterator {
     uint32_t group;  // index into periods_
     bool operator>(const Entry& o) const { return due != o.due ? due > o.due : group > o.group; }
   };
-  std::vector<uint64_t> periods_;                  // distinct periods
-  std::vector<std::vector<uint32_t>> groups_;      // stream ids per distinct period
+  std::vector<uint64_t> periods_;              // distinct periods
+  std::vector<std::vector<uint32_t>> groups_;  // stream ids per distinct period
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap_;
   uint64_t next_index_ = 0;
 };

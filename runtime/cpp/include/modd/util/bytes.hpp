@@ -22,7 +22,10 @@ inline int64_t zigzag_decode(uint64_t v) {
 }
 inline size_t varint_size(uint64_t v) {
   size_t n = 1;
-  while (v >= 0x80) { v >>= 7; ++n; }
+  while (v >= 0x80) {
+    v >>= 7;
+    ++n;
+  }
   return n;
 }
 
@@ -31,7 +34,10 @@ class ByteWriter {
   explicit ByteWriter(std::vector<uint8_t>& out) : out_(out) {}
   void u8(uint8_t v) { out_.push_back(v); }
   void varint(uint64_t v) {
-    while (v >= 0x80) { out_.push_back(static_cast<uint8_t>(v | 0x80)); v >>= 7; }
+    while (v >= 0x80) {
+      out_.push_back(static_cast<uint8_t>(v | 0x80));
+      v >>= 7;
+    }
     out_.push_back(static_cast<uint8_t>(v));
   }
   void svarint(int64_t v) { varint(zigzag_encode(v)); }

@@ -30,8 +30,18 @@ MAX_CHUNK_BYTES = 1 << 28
 MAX_DEFINITION_BYTES = 1 << 20
 
 #: What parsing a damaged record can raise; any of them means "not trusted".
-PARSE_ERRORS = (McapError, EOFError, struct.error, ValueError, UnicodeDecodeError,
-                IndexError, KeyError, OverflowError, zstandard.ZstdError, RuntimeError)
+PARSE_ERRORS = (
+    McapError,
+    EOFError,
+    struct.error,
+    ValueError,
+    UnicodeDecodeError,
+    IndexError,
+    KeyError,
+    OverflowError,
+    zstandard.ZstdError,
+    RuntimeError,
+)
 
 _U64 = struct.Struct("<Q")
 _U32 = struct.Struct("<I")
@@ -118,14 +128,15 @@ def decompress(compression: str, data: bytes, size: int) -> bytes:
     return out
 
 
-def check_chunk(buf: bytes | memoryview, at: int, schemas: set[int],
-                channels: set[int]) -> ChunkContent:
+def check_chunk(
+    buf: bytes | memoryview, at: int, schemas: set[int], channels: set[int]
+) -> ChunkContent:
     """The records of the Chunk record at ``at`` if its data checks (its
     messages' channels defined before or inside it); raises :class:`Damaged`."""
     if not chunk_header_fits(buf, at):
         raise Damaged("a chunk header that does not fit its record")
     length = u64(buf, at + 1)
-    body = ReadDataStream(io.BytesIO(bytes(buf[at + 9:at + 9 + length])))
+    body = ReadDataStream(io.BytesIO(bytes(buf[at + 9 : at + 9 + length])))
     try:
         body.read8(), body.read8()  # message start and end times
         size, crc = body.read8(), body.read4()
@@ -180,7 +191,7 @@ def definition_at(buf: bytes | memoryview, at: int, schemas: set[int]) -> Schema
     follows = (Opcode.SCHEMA, Opcode.CHANNEL, Opcode.CHUNK, Opcode.MESSAGE_INDEX, Opcode.DATA_END)
     if nxt != size and buf[nxt] not in follows:
         return None
-    body = ReadDataStream(io.BytesIO(bytes(buf[at + 9:nxt])))
+    body = ReadDataStream(io.BytesIO(bytes(buf[at + 9 : nxt])))
     try:
         rec: Schema | Channel
         if buf[at] == Opcode.SCHEMA:

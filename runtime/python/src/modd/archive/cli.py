@@ -21,9 +21,13 @@ def register(sub: Any) -> None:
     info = cmds.add_parser("info", help="topics, message counts, time range and gaps")
     info.add_argument("file", metavar="FILE", type=Path)
     info.add_argument("--json", action="store_true", help="machine-readable output")
-    info.add_argument("--gap-s", type=float, default=None, metavar="S",
-                      help="report silences longer than S seconds (default: 5 x the "
-                           "topic's median interval)")
+    info.add_argument(
+        "--gap-s",
+        type=float,
+        default=None,
+        metavar="S",
+        help="report silences longer than S seconds (default: 5 x the topic's median interval)",
+    )
     info.set_defaults(func=run_info)
     rec = cmds.add_parser("recover", help="rewrite a crashed file with its summary and index")
     rec.add_argument("file", metavar="FILE", type=Path)

@@ -50,19 +50,29 @@ class ArchiveInfo:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "file": str(self.path), "complete": self.complete, "stopped_at": self.stopped_at,
-            "messages": self.messages, "start_ns": self.start_ns, "end_ns": self.end_ns,
+            "file": str(self.path),
+            "complete": self.complete,
+            "stopped_at": self.stopped_at,
+            "messages": self.messages,
+            "start_ns": self.start_ns,
+            "end_ns": self.end_ns,
             "topics": [
-                {"topic": t.topic, "count": t.count, "first_ns": t.first_ns, "last_ns": t.last_ns,
-                 "median_interval_ns": t.median_interval_ns,
-                 "gaps": [{"from_ns": a, "to_ns": b} for a, b in t.gaps]}
+                {
+                    "topic": t.topic,
+                    "count": t.count,
+                    "first_ns": t.first_ns,
+                    "last_ns": t.last_ns,
+                    "median_interval_ns": t.median_interval_ns,
+                    "gaps": [{"from_ns": a, "to_ns": b} for a, b in t.gaps],
+                }
                 for t in sorted(self.topics.values(), key=lambda t: t.topic)
             ],
         }
 
 
-def find_gaps(times: list[int], factor: float = GAP_FACTOR,
-              min_gap_ns: int | None = None) -> tuple[int | None, list[tuple[int, int]]]:
+def find_gaps(
+    times: list[int], factor: float = GAP_FACTOR, min_gap_ns: int | None = None
+) -> tuple[int | None, list[tuple[int, int]]]:
     """Median interval of sorted ``times`` and the silences longer than
     ``factor`` times it (or than ``min_gap_ns`` when given).
 
@@ -91,8 +101,14 @@ def archive_info(path: str | Path, min_gap_ns: int | None = None) -> ArchiveInfo
     for topic, times in by_topic.items():
         times.sort()
         median, gaps = find_gaps(times, min_gap_ns=min_gap_ns)
-        topics[topic] = TopicInfo(topic, len(times), times[0] if times else None,
-                                  times[-1] if times else None, median, gaps)
+        topics[topic] = TopicInfo(
+            topic,
+            len(times),
+            times[0] if times else None,
+            times[-1] if times else None,
+            median,
+            gaps,
+        )
     return ArchiveInfo(Path(path), scan.complete, scan.error, len(scan.messages), topics)
 
 
@@ -108,15 +124,19 @@ def _iso(ns: int | None) -> str:
 def format_info(info: ArchiveInfo) -> str:
     """The human-readable report of ``modd archive info``."""
     state = "closed" if info.complete else "NOT CLOSED (crash?): run `modd archive recover`"
-    lines = [f"{info.path}: {info.messages} messages, {len(info.topics)} topics, {state}",
-             f"time range: {_iso(info.start_ns)} .. {_iso(info.end_ns)}"]
+    lines = [
+        f"{info.path}: {info.messages} messages, {len(info.topics)} topics, {state}",
+        f"time range: {_iso(info.start_ns)} .. {_iso(info.end_ns)}",
+    ]
     if info.stopped_at:
         lines.append(f"skipped: {info.stopped_at}")
     width = max((len(t) for t in info.topics), default=5)
     for t in sorted(info.topics.values(), key=lambda t: t.topic):
         period = f"{t.median_interval_ns / 1e6:.1f} ms" if t.median_interval_ns else "-"
-        lines.append(f"  {t.topic:<{width}}  {t.count:>9}  {_iso(t.first_ns)} .. "
-                     f"{_iso(t.last_ns)}  every {period}  gaps {len(t.gaps)}")
+        lines.append(
+            f"  {t.topic:<{width}}  {t.count:>9}  {_iso(t.first_ns)} .. "
+            f"{_iso(t.last_ns)}  every {period}  gaps {len(t.gaps)}"
+        )
         for a, b in t.gaps[:10]:
             lines.append(f"  {'':<{width}}    gap {(b - a) / 1e9:.3f} s from {_iso(a)}")
         if len(t.gaps) > 10:

@@ -39,8 +39,9 @@ def default_output(path: Path) -> Path:
     return path.with_name(f"{path.stem}-recovered{path.suffix or '.mcap'}")
 
 
-def recover(source: str | Path, output: str | Path | None = None,
-            chunk_size: int = 1 << 20) -> Recovered:
+def recover(
+    source: str | Path, output: str | Path | None = None, chunk_size: int = 1 << 20
+) -> Recovered:
     """Writes the readable part of ``source`` to ``output`` (default
     :func:`default_output`; ``output == source`` replaces it atomically)."""
     src = Path(source)
@@ -57,13 +58,15 @@ def recover(source: str | Path, output: str | Path | None = None,
             channel_ids: dict[int, int] = {}
             for cid, c in sorted(scan.channels.items()):
                 channel_ids[cid] = w.register_channel(
-                    c.topic, c.message_encoding, schema_ids.get(c.schema_id, 0), dict(c.metadata))
+                    c.topic, c.message_encoding, schema_ids.get(c.schema_id, 0), dict(c.metadata)
+                )
             kept = 0
             for m in sorted(scan.messages, key=lambda m: (m.log_time, m.channel_id, m.sequence)):
                 if m.channel_id not in channel_ids:
                     continue  # a message whose channel record was lost: unreadable anyway
-                w.add_message(channel_ids[m.channel_id], m.log_time, m.data, m.publish_time,
-                              m.sequence)
+                w.add_message(
+                    channel_ids[m.channel_id], m.log_time, m.data, m.publish_time, m.sequence
+                )
                 kept += 1
             w.finish()  # type: ignore[no-untyped-call]
             f.flush()
@@ -71,16 +74,26 @@ def recover(source: str | Path, output: str | Path | None = None,
         os.replace(tmp, dst)
     finally:
         tmp.unlink(missing_ok=True)
-    return Recovered(src, dst, kept, len(channel_ids), scan.complete, scan.error, scan.chunks,
-                     tuple(scan.skipped))
+    return Recovered(
+        src,
+        dst,
+        kept,
+        len(channel_ids),
+        scan.complete,
+        scan.error,
+        scan.chunks,
+        tuple(scan.skipped),
+    )
 
 
 def format_report(r: Recovered, limit: int = 50) -> str:
     """What ``modd archive recover`` prints: what was written, then each
     damaged region skipped (offset and length in bytes, why)."""
     state = "was closed" if r.was_complete else "was not closed"
-    lines = [f"{r.source} ({state}): {r.messages} messages on {r.channels} channels in "
-             f"{r.chunks} chunks written to {r.output}"]
+    lines = [
+        f"{r.source} ({state}): {r.messages} messages on {r.channels} channels in "
+        f"{r.chunks} chunks written to {r.output}"
+    ]
     if r.skipped:
         total = sum(s.length for s in r.skipped)
         lines.append(f"  skipped {len(r.skipped)} damaged or torn region(s), {total} bytes:")

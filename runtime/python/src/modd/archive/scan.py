@@ -76,8 +76,10 @@ class Scan:
         if not self.skipped:
             return None
         first = self.skipped[0]
-        return (f"{self.path}: {len(self.skipped)} damaged or torn region(s) skipped "
-                f"({self.skipped_bytes} bytes), the first at offset {first.offset}: {first.why}")
+        return (
+            f"{self.path}: {len(self.skipped)} damaged or torn region(s) skipped "
+            f"({self.skipped_bytes} bytes), the first at offset {first.offset}: {first.why}"
+        )
 
 
 def scan_file(path: str | Path, max_messages: int = 50_000_000) -> Scan:
@@ -123,12 +125,13 @@ class _Walk:
             elif op in (Opcode.SCHEMA, Opcode.CHANNEL):
                 self._definition(at)
             elif (op == Opcode.HEADER and at == 8) or (
-                    op == Opcode.MESSAGE_INDEX and index_fits(buf, at)):
+                op == Opcode.MESSAGE_INDEX and index_fits(buf, at)
+            ):
                 self.pos = at + 9 + length  # indexes are written again by the recovery
             elif op == Opcode.MESSAGE:
                 self._message(at, length)
             elif op == Opcode.DATA_END and length >= 4 and self._data_end_holds(at):
-                self.scan.complete = bytes(buf[size - 8:]) == MAGIC
+                self.scan.complete = bytes(buf[size - 8 :]) == MAGIC
                 break  # the summary follows: written again
             else:
                 self._skip(at, "an unexpected record")
@@ -166,7 +169,7 @@ class _Walk:
     def _message(self, at: int, length: int) -> None:
         """A message outside chunks (an unchunked file): kept if it parses."""
         try:
-            m = read_message(bytes(self.buf[at + 9:at + 9 + length]))
+            m = read_message(bytes(self.buf[at + 9 : at + 9 + length]))
         except Damaged:
             m = None
         if m is None or m.channel_id not in self.scan.channels:

@@ -39,8 +39,10 @@ def check_key_length(key: bytes, reference: str) -> bytes:
     """``key`` if it holds at least :data:`MIN_KEY_BYTES` bytes, else ValueError naming
     ``reference`` and the length."""
     if len(key) < MIN_KEY_BYTES:
-        raise ValueError(f"key reference {reference} gives a key of {len(key)} bytes; a link key "
-                         f"needs at least {MIN_KEY_BYTES} (e.g. openssl rand -hex 16)")
+        raise ValueError(
+            f"key reference {reference} gives a key of {len(key)} bytes; a link key "
+            f"needs at least {MIN_KEY_BYTES} (e.g. openssl rand -hex 16)"
+        )
     return key
 
 

@@ -163,8 +163,17 @@ def decode(f: RawFrame) -> BackfillMessage:
         windows = r.varint()
         resume = r.varint()
         _check_windows(r, windows, resume)
-        m = BackfillRequest(rid, topic, ValueType(ty), Aggregation(agg), period, from_ns,
-                            windows, resume, r.varint())
+        m = BackfillRequest(
+            rid,
+            topic,
+            ValueType(ty),
+            Aggregation(agg),
+            period,
+            from_ns,
+            windows,
+            resume,
+            r.varint(),
+        )
     elif f.type == BackfillType.PROGRESS:
         rid, nxt, windows = r.varint(), r.varint(), r.varint()
         _check_windows(r, windows, nxt)

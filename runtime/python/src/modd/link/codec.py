@@ -172,8 +172,9 @@ def encode(m: Message) -> bytes:
             b += varint(s.topic) + bytes([s.aggregation]) + varint(s.period_us)
         if m.accepted_delay_ms is not None:
             if not 0 <= m.accepted_delay_ms <= MAX_ACCEPTED_DELAY_MS:
-                raise ValueError(f"accepted delay {m.accepted_delay_ms} ms out of "
-                                 f"0..{MAX_ACCEPTED_DELAY_MS}")
+                raise ValueError(
+                    f"accepted delay {m.accepted_delay_ms} ms out of 0..{MAX_ACCEPTED_DELAY_MS}"
+                )
             b += varint(m.accepted_delay_ms)
         b += _resolutions(m)
         return _frame(MsgType.CONFIG, bytes(b))
@@ -203,8 +204,7 @@ def _put_scalar(b: bytearray, k: Scalar, number: float, integer: int, count: int
         b += varint(count)
 
 
-def put_number(b: bytearray, chain: dict[int, int], key: int, x: float,
-               resolution: float) -> None:
+def put_number(b: bytearray, chain: dict[int, int], key: int, x: float, resolution: float) -> None:
     """One value of a stream with a declared resolution (modd.link.quantise): its
     steps against the unit's ``chain`` (updated), or the escape and the exact value.
 
@@ -240,8 +240,9 @@ def get_number(r: Reader, chain: dict[int, int], key: int, resolution: float) ->
     return q * resolution
 
 
-def _put_value(b: bytearray, k: ValueKind, v: Value, chain: dict[int, int] | None = None,
-               key: int = 0) -> None:
+def _put_value(
+    b: bytearray, k: ValueKind, v: Value, chain: dict[int, int] | None = None, key: int = 0
+) -> None:
     """``chain``: the unit's last step counts by stream (declared resolution)."""
     links = {} if chain is None else chain
     if k.aggregation == Aggregation.ALL:
@@ -284,8 +285,12 @@ def encode_data(d: Data, kinds: Sequence[ValueKind]) -> bytes:
     return _frame(t, bytes(b))
 
 
-def encode_slot_values(values: Sequence[Value], kinds: Sequence[ValueKind],
-                       streams: Sequence[int], chain: dict[int, int]) -> bytes:
+def encode_slot_values(
+    values: Sequence[Value],
+    kinds: Sequence[ValueKind],
+    streams: Sequence[int],
+    chain: dict[int, int],
+) -> bytes:
     """A slot's present values as a DATA datagram lays them out, quantised ones
     against ``chain`` (the datagram's last steps by stream id, updated)."""
     b = bytearray()
@@ -531,8 +536,7 @@ def _get_scalar(r: Reader, k: Scalar) -> float | int:
     return r.varint()
 
 
-def _get_value(r: Reader, k: ValueKind, chain: dict[int, int] | None = None,
-               key: int = 0) -> Value:
+def _get_value(r: Reader, k: ValueKind, chain: dict[int, int] | None = None, key: int = 0) -> Value:
     v = Value(present=True)
     is_float = k.scalar in (Scalar.F32, Scalar.F64)
     links = {} if chain is None else chain
@@ -541,8 +545,10 @@ def _get_value(r: Reader, k: ValueKind, chain: dict[int, int] | None = None,
         n = r.varint()
         if n > r.remaining():
             raise r.fail("ALL count exceeds frame")
-        v.samples = [get_number(r, links, key, res) if res is not None
-                     else _get_scalar(r, k.scalar) for _ in range(n)]
+        v.samples = [
+            get_number(r, links, key, res) if res is not None else _get_scalar(r, k.scalar)
+            for _ in range(n)
+        ]
         v.count = n
         return v
     if res is not None:
@@ -571,7 +577,9 @@ def decode_data(f: RawFrame, kinds: Sequence[ValueKind]) -> Data:
             if bm[i // 8] >> (i % 8) & 1:
                 raise r.fail("presence bit set beyond the slot's streams")
     chain: dict[int, int] = {}
-    values = [_get_value(r, k, chain, i) if p else Value()
-              for i, (k, p) in enumerate(zip(kinds, present, strict=True))]
+    values = [
+        _get_value(r, k, chain, i) if p else Value()
+        for i, (k, p) in enumerate(zip(kinds, present, strict=True))
+    ]
     r.end()
     return Data(h.sync, h.config_id, h.slot, h.seq8, values)

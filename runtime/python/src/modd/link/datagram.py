@@ -128,7 +128,8 @@ def encode_data(d: DataDatagram, key: bytes, direction: bytes) -> bytes:
     else:
         if len(d.slots) > MAX_DATAGRAM_SLOTS:
             raise ValueError(
-                f"at most {MAX_DATAGRAM_SLOTS} slots in a datagram with a presence bitmap")
+                f"at most {MAX_DATAGRAM_SLOTS} slots in a datagram with a presence bitmap"
+            )
         head.append(DGRAM_DATA_BITMAP)
         head.append(d.config_id)
         head += struct.pack("<H", d.slot & 0xFFFF)
@@ -170,7 +171,7 @@ def verify_data(raw: bytes, key: bytes, direction: bytes, expected_slot: int) ->
     config_id = r.u8()
     r.take(2)
     if raw[0] == DGRAM_DATA:
-        return VerifiedData(config_id, slot, None, None, 0, bytes(body[r.pos:]))
+        return VerifiedData(config_id, slot, None, None, 0, bytes(body[r.pos :]))
     count = r.u8()
     streams = r.varint()
     if count == 0 or streams > 8 * r.remaining():
@@ -179,7 +180,7 @@ def verify_data(raw: bytes, key: bytes, direction: bytes, expected_slot: int) ->
     for i in range(streams, len(bm) * 8):
         if bm[i // 8] >> (i % 8) & 1:
             raise r.fail("presence bit set beyond the datagram's streams")
-    return VerifiedData(config_id, slot, count, bytes(bm), streams, bytes(body[r.pos:]))
+    return VerifiedData(config_id, slot, count, bytes(bm), streams, bytes(body[r.pos :]))
 
 
 def slot_bitmap_body(streams: Sequence[bool], values: bytes) -> bytes:
@@ -193,8 +194,9 @@ def slot_bitmap_body(streams: Sequence[bool], values: bytes) -> bytes:
     return b"\x01" + varint(len(streams)) + bytes(bm) + values
 
 
-def encode_fragments(config_id: int, slot: int, body: bytes, max_datagram: int,
-                     key: bytes, direction: bytes) -> list[bytes]:
+def encode_fragments(
+    config_id: int, slot: int, body: bytes, max_datagram: int, key: bytes, direction: bytes
+) -> list[bytes]:
     """The 0x32 datagrams of one slot too large for a packet: ``body`` (see
     :func:`slot_bitmap_body`) in at most 16 pieces, each datagram at most
     ``max_datagram`` bytes, each tagged with the full slot as its sequence.
@@ -208,12 +210,13 @@ def encode_fragments(config_id: int, slot: int, body: bytes, max_datagram: int,
         raise ValueError("a fragment needs a config id 1..255, a body and room for a piece")
     count = -(-len(body) // room)
     if count > MAX_FRAGMENTS:
-        raise ValueError(f"a slot of {len(body)} B needs {count} fragments of {room} B "
-                         f"(at most {MAX_FRAGMENTS})")
+        raise ValueError(
+            f"a slot of {len(body)} B needs {count} fragments of {room} B (at most {MAX_FRAGMENTS})"
+        )
     out = []
     for i in range(count):
         head = bytes([DGRAM_FRAGMENT, config_id]) + struct.pack("<H", slot & 0xFFFF)
-        frag = head + bytes([i << 4 | (count - 1)]) + body[i * room:(i + 1) * room]
+        frag = head + bytes([i << 4 | (count - 1)]) + body[i * room : (i + 1) * room]
         out.append(frag + tag(key, direction, slot, frag, TAG_BYTES))
     return out
 
@@ -256,7 +259,7 @@ def verify_slot_body(config_id: int, slot: int, body: bytes) -> VerifiedData:
     for i in range(streams, len(bm) * 8):
         if bm[i // 8] >> (i % 8) & 1:
             raise r.fail("presence bit set beyond the slot's streams")
-    return VerifiedData(config_id, slot, 1, bytes(bm), streams, bytes(body[r.pos:]))
+    return VerifiedData(config_id, slot, 1, bytes(bm), streams, bytes(body[r.pos :]))
 
 
 def encode_control(counter: int, frame: bytes, key: bytes, direction: bytes) -> bytes:
@@ -265,8 +268,9 @@ def encode_control(counter: int, frame: bytes, key: bytes, direction: bytes) -> 
     return body + tag(key, direction, counter, body, CONTROL_TAG_BYTES)
 
 
-def _verified_control(raw: bytes, key: bytes, direction: bytes, kind: int, min_body: int,
-                      what: str) -> tuple[Reader, int]:
+def _verified_control(
+    raw: bytes, key: bytes, direction: bytes, kind: int, min_body: int, what: str
+) -> tuple[Reader, int]:
     """A control datagram or control fragment (``kind``) whose tag verified:
     a reader of its body after the counter, and the counter. The tag is
     checked before anything after the counter is read."""
@@ -292,8 +296,9 @@ def verify_control(raw: bytes, key: bytes, direction: bytes) -> tuple[int, bytes
 CONTROL_FRAGMENT_OVERHEAD = 1 + 5 + 1 + CONTROL_TAG_BYTES
 
 
-def encode_control_fragments(counter: int, frames: bytes, max_datagram: int, key: bytes,
-                             direction: bytes) -> list[bytes]:
+def encode_control_fragments(
+    counter: int, frames: bytes, max_datagram: int, key: bytes, direction: bytes
+) -> list[bytes]:
     """The 0x42 datagrams of a control message too large for one packet:
     ``frames`` cut in order into at most 16 pieces, piece ``i`` under counter
     ``counter + i`` (consecutive: the receiver finds a message's first
@@ -306,16 +311,19 @@ def encode_control_fragments(counter: int, frames: bytes, max_datagram: int, key
     """
     room = max_datagram - CONTROL_FRAGMENT_OVERHEAD
     if room < 1 or not frames or counter + MAX_FRAGMENTS >= 1 << 35:
-        raise ValueError("a control fragment needs frames, room for a piece and a counter "
-                         "below 2^35")
+        raise ValueError(
+            "a control fragment needs frames, room for a piece and a counter below 2^35"
+        )
     count = -(-len(frames) // room)
     if count > MAX_FRAGMENTS:
-        raise ValueError(f"a control message of {len(frames)} B needs {count} fragments of "
-                         f"{room} B (at most {MAX_FRAGMENTS})")
+        raise ValueError(
+            f"a control message of {len(frames)} B needs {count} fragments of "
+            f"{room} B (at most {MAX_FRAGMENTS})"
+        )
     out = []
     for i in range(count):
         head = bytes([DGRAM_CONTROL_FRAGMENT]) + varint(counter + i)
-        body = head + bytes([i << 4 | (count - 1)]) + frames[i * room:(i + 1) * room]
+        body = head + bytes([i << 4 | (count - 1)]) + frames[i * room : (i + 1) * room]
         out.append(body + tag(key, direction, counter + i, body, CONTROL_TAG_BYTES))
     return out
 
@@ -338,8 +346,9 @@ class ControlFragment:
 def verify_control_fragment(raw: bytes, key: bytes, direction: bytes) -> ControlFragment:
     """Check a control fragment's tag before anything else; raises Forged or
     ProtocolError."""
-    r, counter = _verified_control(raw, key, direction, DGRAM_CONTROL_FRAGMENT, 4,
-                                   "control fragment")
+    r, counter = _verified_control(
+        raw, key, direction, DGRAM_CONTROL_FRAGMENT, 4, "control fragment"
+    )
     frag = r.u8()
     index, count = frag >> 4, (frag & 0x0F) + 1
     if index >= count or counter < index:

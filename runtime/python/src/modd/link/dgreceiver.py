@@ -62,8 +62,10 @@ class LinkStats:
         if len(self._recent) < 2:
             return 0.0, 0.0
         span = max(self._recent[-1][0] - self._recent[0][0], 1.0)
-        return (sum(i for _, i, _ in self._recent) / span,
-                sum(o for _, _, o in self._recent) / span)
+        return (
+            sum(i for _, i, _ in self._recent) / span,
+            sum(o for _, _, o in self._recent) / span,
+        )
 
 
 class Reassembly:
@@ -89,8 +91,9 @@ class Reassembly:
         config_id, count, pieces = self.partial.get(f.slot, (f.config_id, f.count, {}))
         if (config_id, count) != (f.config_id, f.count):
             del self.partial[f.slot]
-            raise ProtocolError(ErrorCode.BAD_FRAME,
-                                f"fragment of slot {f.slot} disagrees with the others", 4)
+            raise ProtocolError(
+                ErrorCode.BAD_FRAME, f"fragment of slot {f.slot} disagrees with the others", 4
+            )
         pieces[f.index] = f.piece  # a duplicate piece replaces its twin
         if len(pieces) == count:
             self.partial.pop(f.slot, None)
@@ -106,8 +109,14 @@ class DatagramReceiver:
     """Decodes DATA datagrams of one config into ``(slot, values)`` where
     values lists the slot's streams in order (absent ones not present)."""
 
-    def __init__(self, key: bytes, config_id: int, periods_us: Sequence[int],
-                 kinds: Sequence[ValueKind], window: int = 1024) -> None:
+    def __init__(
+        self,
+        key: bytes,
+        config_id: int,
+        periods_us: Sequence[int],
+        kinds: Sequence[ValueKind],
+        window: int = 1024,
+    ) -> None:
         self.key = key
         self.config_id = config_id
         self.periods_us = list(periods_us)
@@ -160,8 +169,9 @@ class DatagramReceiver:
         self.stats.slots += len(out)
         return out
 
-    def _decode(self, first: int, count: int | None, presence: bytes | None,
-                values: bytes) -> list[tuple[int, list[Value]]]:
+    def _decode(
+        self, first: int, count: int | None, presence: bytes | None, values: bytes
+    ) -> list[tuple[int, list[Value]]]:
         r = codec.Reader(values)
         it = SlotIterator(self.periods_us)
         it.skip_to(first)
@@ -210,14 +220,17 @@ class DatagramSender:
     def add_slot(self, slot: int, date: float, values: bytes) -> list[bytes]:
         """Queue one all-present slot; returns the datagrams to send now."""
         out: list[bytes] = []
-        if self.group and (date - self.group[0][1] > self.delay_s
-                           or sum(len(v) for *_, v in self.group) + len(values) > self.room):
+        if self.group and (
+            date - self.group[0][1] > self.delay_s
+            or sum(len(v) for *_, v in self.group) + len(values) > self.room
+        ):
             out.append(self.flush())
         self.group.append((slot, date, values))
         return out
 
-    def add_values(self, slot: int, date: float,
-                   encode: Callable[[dict[int, int]], bytes]) -> list[bytes]:
+    def add_values(
+        self, slot: int, date: float, encode: Callable[[dict[int, int]], bytes]
+    ) -> list[bytes]:
         """Queue one all-present slot whose values ``encode`` writes against the
         datagram's chain of quantised values (a slot that starts a datagram is
         written against an empty chain: every datagram decodes on its own)."""
@@ -242,8 +255,11 @@ class DatagramSender:
 
     def flush(self) -> bytes:
         first = self.group[0][0]
-        raw = encode_data(DataDatagram(self.config_id, first, [v for *_, v in self.group]),
-                          self.key, DRONE_TO_BASE)
+        raw = encode_data(
+            DataDatagram(self.config_id, first, [v for *_, v in self.group]),
+            self.key,
+            DRONE_TO_BASE,
+        )
         self.ring.add(first, len(self.group), raw)
         self.group.clear()
         self.chain = {}

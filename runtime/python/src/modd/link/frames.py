@@ -125,8 +125,10 @@ class Config:
 
     def kinds(self) -> list[ValueKind]:
         steps = self.resolutions or (None,) * len(self.streams)
-        return [value_kind(self.topics[s.topic].type, s.aggregation, r)
-                for s, r in zip(self.streams, steps, strict=True)]
+        return [
+            value_kind(self.topics[s.topic].type, s.aggregation, r)
+            for s, r in zip(self.streams, steps, strict=True)
+        ]
 
 
 @dataclass(frozen=True)
@@ -137,21 +139,53 @@ class ConfigAck:
 
 
 STATUS_FIELDS: tuple[str, ...] = (
-    "uptime_s", "samples_in", "samples_archived", "rejected_unknown_topic", "rejected_wrong_type",
-    "rejected_not_finite", "rejected_timestamp", "rejected_overflow", "rejected_malformed",
-    "archive_failed", "ingress_malformed_frames", "publishers_connected", "frames_sent",
-    "frames_dropped", "link_bytes_sent", "disk_free_mb", "buffer_fill_pct", "archive_files",
-    "auth_failures", "config_id", "rejected_quota", "archive_state", "archive_rate_bps",
-    "samples_pending", "link_datagrams_sent", "link_datagrams_resent", "link_nacks",
-    "link_slots_dropped", "link_forged", "link_replayed",
+    "uptime_s",
+    "samples_in",
+    "samples_archived",
+    "rejected_unknown_topic",
+    "rejected_wrong_type",
+    "rejected_not_finite",
+    "rejected_timestamp",
+    "rejected_overflow",
+    "rejected_malformed",
+    "archive_failed",
+    "ingress_malformed_frames",
+    "publishers_connected",
+    "frames_sent",
+    "frames_dropped",
+    "link_bytes_sent",
+    "disk_free_mb",
+    "buffer_fill_pct",
+    "archive_files",
+    "auth_failures",
+    "config_id",
+    "rejected_quota",
+    "archive_state",
+    "archive_rate_bps",
+    "samples_pending",
+    "link_datagrams_sent",
+    "link_datagrams_resent",
+    "link_nacks",
+    "link_slots_dropped",
+    "link_forged",
+    "link_replayed",
 )
 
 
 # One instrument's health in STATUS (docs/protocol.md, "STATUS"), fields in this order; a
 # newer modd-sensors may append fields (kept as field_<i>).
 HEALTH_FIELDS: tuple[str, ...] = (
-    "state", "lines_ok", "lines_bad", "reconnects", "last_value_ms", "values", "missing",
-    "refused", "timeouts", "exceptions", "silences",
+    "state",
+    "lines_ok",
+    "lines_bad",
+    "reconnects",
+    "last_value_ms",
+    "values",
+    "missing",
+    "refused",
+    "timeouts",
+    "exceptions",
+    "silences",
 )
 HEALTH_STATES = ("closed", "open", "silent")  # `state`'s codes
 

@@ -54,7 +54,7 @@ def cobs_decode(data: bytes) -> bytes:
         code = data[i]
         if code == 0 or i + code > len(data) + (0 if code == 1 else 0):
             raise ValueError(f"bad COBS code at byte {i}")
-        block = data[i + 1:i + code]
+        block = data[i + 1 : i + code]
         if len(block) != code - 1 or 0 in block:
             raise ValueError(f"bad COBS block at byte {i}")
         out += block

@@ -41,10 +41,16 @@ class Request:
 
 
 class Autopilot:
-    def __init__(self, intervals_us: dict[str, int], log: Callable[[str], None],
-                 heartbeat_timeout_s: float = 3.0, target_system: int | None = None,
-                 ack_timeout_s: float = 1.0, attempts: int = 3,
-                 target_component: int | None = None) -> None:
+    def __init__(
+        self,
+        intervals_us: dict[str, int],
+        log: Callable[[str], None],
+        heartbeat_timeout_s: float = 3.0,
+        target_system: int | None = None,
+        ack_timeout_s: float = 1.0,
+        attempts: int = 3,
+        target_component: int | None = None,
+    ) -> None:
         self.intervals_us = dict(intervals_us)
         self.log = log
         self.heartbeat_timeout_s = heartbeat_timeout_s
@@ -71,8 +77,11 @@ class Autopilot:
 
     def is_mine(self, msg: Any) -> bool:
         """Whether a decoded message comes from the autopilot (after its first HEARTBEAT)."""
-        return (self.known and msg.get_srcSystem() == self.system
-                and msg.get_srcComponent() == self.component)
+        return (
+            self.known
+            and msg.get_srcSystem() == self.system
+            and msg.get_srcComponent() == self.component
+        )
 
     def on_message(self, msg: Any, now: float) -> None:
         kind = msg.get_type()
@@ -85,9 +94,11 @@ class Autopilot:
         boot_ms = getattr(msg, "time_boot_ms", None)
         if isinstance(boot_ms, int) and self.is_mine(msg):
             if self._boot_ms is not None and boot_ms + REBOOT_JUMP_MS < self._boot_ms:
-                self.log(f"autopilot {self.system} rebooted (time since boot went back from "
-                         f"{self._boot_ms / 1000:.1f} s to {boot_ms / 1000:.1f} s): "
-                         "asking for the message rates again")
+                self.log(
+                    f"autopilot {self.system} rebooted (time since boot went back from "
+                    f"{self._boot_ms / 1000:.1f} s to {boot_ms / 1000:.1f} s): "
+                    "asking for the message rates again"
+                )
                 self._ask_all()
             self._boot_ms = boot_ms
 
@@ -107,15 +118,19 @@ class Autopilot:
             self.log(f"autopilot {self.system} replaced by system {src}")
         if not self.known or src != self.system:
             version = 2 if msg.get_msgbuf()[0] == MAV.PROTOCOL_MARKER_V2 else 1
-            self.log(f"autopilot found: system {src} component {comp} "
-                     f"(MAV_TYPE {msg.type}, MAV_AUTOPILOT {msg.autopilot}, "
-                     f"MAVLink {version})")
+            self.log(
+                f"autopilot found: system {src} component {comp} "
+                f"(MAV_TYPE {msg.type}, MAV_AUTOPILOT {msg.autopilot}, "
+                f"MAVLink {version})"
+            )
             self.system, self.component = src, comp
             self._boot_ms = None
             self._ask_all()
         elif self.lost:
-            self.log(f"autopilot {src} back after {now - (self.last_heartbeat or now):.1f} s "
-                     "of silence: asking for the message rates again")
+            self.log(
+                f"autopilot {src} back after {now - (self.last_heartbeat or now):.1f} s "
+                "of silence: asking for the message rates again"
+            )
             self._ask_all()
         self.lost = False
         self.last_heartbeat = now
@@ -133,8 +148,10 @@ class Autopilot:
             self.log(f"autopilot accepted {req.message} every {req.interval_us / 1e6:g} s")
         else:
             self.refused[req.message] = result_name(msg.result)
-            self.log(f"autopilot REFUSED {req.message} every {req.interval_us / 1e6:g} s: "
-                     f"{result_name(msg.result)}")
+            self.log(
+                f"autopilot REFUSED {req.message} every {req.interval_us / 1e6:g} s: "
+                f"{result_name(msg.result)}"
+            )
 
     def _ask_all(self) -> None:
         self._queue = deque(Request(m, i) for m, i in sorted(self.intervals_us.items()))
@@ -156,8 +173,10 @@ class Autopilot:
         if req is not None and now - req.sent_at < self.ack_timeout_s:
             return []
         if req is not None and req.attempts >= self.max_attempts:
-            self.log(f"autopilot never answered SET_MESSAGE_INTERVAL for {req.message} "
-                     f"({req.attempts} attempts)")
+            self.log(
+                f"autopilot never answered SET_MESSAGE_INTERVAL for {req.message} "
+                f"({req.attempts} attempts)"
+            )
             self.refused[req.message] = "NO_ANSWER"
             req = self._in_flight = None
         if req is None:
@@ -166,6 +185,18 @@ class Autopilot:
             req = self._in_flight = self._queue.popleft()
         req.attempts += 1
         req.sent_at = now
-        return [MAV.MAVLink_command_long_message(
-            self.system, self.component or 0, MAV.MAV_CMD_SET_MESSAGE_INTERVAL,
-            req.attempts - 1, message_id(req.message), req.interval_us, 0, 0, 0, 0, 0)]
+        return [
+            MAV.MAVLink_command_long_message(
+                self.system,
+                self.component or 0,
+                MAV.MAV_CMD_SET_MESSAGE_INTERVAL,
+                req.attempts - 1,
+                message_id(req.message),
+                req.interval_us,
+                0,
+                0,
+                0,
+                0,
+                0,
+            )
+        ]

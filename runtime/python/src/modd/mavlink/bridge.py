@@ -65,9 +65,14 @@ class BridgeSettings:
 
 
 class Bridge:
-    def __init__(self, plan: BridgePlan, transport: Transport, sinks: Mapping[str, Sink],
-                 settings: BridgeSettings | None = None,
-                 log: Callable[[str], None] = print) -> None:
+    def __init__(
+        self,
+        plan: BridgePlan,
+        transport: Transport,
+        sinks: Mapping[str, Sink],
+        settings: BridgeSettings | None = None,
+        log: Callable[[str], None] = print,
+    ) -> None:
         self.plan = plan
         self.transport = transport
         self.sinks = dict(sinks)
@@ -75,9 +80,13 @@ class Bridge:
         self.log = log
         self.counters = Counters()
         self.decoder = Decoder(self.settings.signing_key)
-        self.autopilot = Autopilot(plan.intervals_us, log, self.settings.heartbeat_timeout_s,
-                                   self.settings.target_system,
-                                   target_component=self.settings.target_component)
+        self.autopilot = Autopilot(
+            plan.intervals_us,
+            log,
+            self.settings.heartbeat_timeout_s,
+            self.settings.target_system,
+            target_component=self.settings.target_component,
+        )
         self.rate = RateBound(plan.intervals_us)
         self._packer = parser(self.settings.source_system, self.settings.source_component)
         self._unknown_ids: set[str] = set()
@@ -104,8 +113,11 @@ class Bridge:
             c.last_bad = frame.reason[:120]
             self._bad_logged += 1
             if self._bad_logged <= BAD_LOGS_PER_STATUS:
-                more = " (no more until the next status line)" \
-                    if self._bad_logged == BAD_LOGS_PER_STATUS else ""
+                more = (
+                    " (no more until the next status line)"
+                    if self._bad_logged == BAD_LOGS_PER_STATUS
+                    else ""
+                )
                 self.log(f"bad MAVLink data: {c.last_bad} ({c.bad} bad in all){more}")
             return
         if frame.kind is Kind.UNKNOWN:
@@ -144,9 +156,16 @@ class Bridge:
         """Sends what is due (own HEARTBEAT, rate requests) and the status line."""
         if now >= self._next_heartbeat:
             self._next_heartbeat = now + HEARTBEAT_PERIOD_S
-            self._send(MAV.MAVLink_heartbeat_message(
-                MAV.MAV_TYPE_ONBOARD_CONTROLLER, MAV.MAV_AUTOPILOT_INVALID, 0, 0,
-                MAV.MAV_STATE_ACTIVE, 3))
+            self._send(
+                MAV.MAVLink_heartbeat_message(
+                    MAV.MAV_TYPE_ONBOARD_CONTROLLER,
+                    MAV.MAV_AUTOPILOT_INVALID,
+                    0,
+                    0,
+                    MAV.MAV_STATE_ACTIVE,
+                    3,
+                )
+            )
         for msg in self.autopilot.poll(now):
             self._send(msg)
         if self._next_status is None:
@@ -163,8 +182,9 @@ class Bridge:
 
     def run(self, stop: threading.Event, tick_s: float = 0.1) -> None:
         """Reads and maps until ``stop`` is set, then flushes and closes the publishers."""
-        rates = ", ".join(f"{m} every {i / 1e6:g} s"
-                          for m, i in sorted(self.plan.intervals_us.items()))
+        rates = ", ".join(
+            f"{m} every {i / 1e6:g} s" for m, i in sorted(self.plan.intervals_us.items())
+        )
         self.log(f"will ask for {rates or 'no messages'}")
         try:
             next_tick = 0.0

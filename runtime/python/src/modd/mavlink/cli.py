@@ -35,26 +35,62 @@ def log(line: str) -> None:
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(prog="modd-mavlink", description="MAVLink bridge: autopilot "
-                                "messages → the model's topics → the PubBroker's ingress")
+    p = argparse.ArgumentParser(
+        prog="modd-mavlink",
+        description="MAVLink bridge: autopilot "
+        "messages → the model's topics → the PubBroker's ingress",
+    )
     p.add_argument("--model", required=True, help=".modd or .json model")
-    p.add_argument("--connect", default=DEFAULT_CONNECT, metavar="URL",
-                   help="udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT or DEVICE[,BAUD] "
-                        f"(default {DEFAULT_CONNECT})")
+    p.add_argument(
+        "--connect",
+        default=DEFAULT_CONNECT,
+        metavar="URL",
+        help="udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT or DEVICE[,BAUD] "
+        f"(default {DEFAULT_CONNECT})",
+    )
     p.add_argument("--ingress", help="unix:/path or tcp:host:port (default: the model's)")
-    p.add_argument("--source-system", type=int, default=255, metavar="ID",
-                   help="the bridge's own MAVLink system id (default 255)")
-    p.add_argument("--target-system", type=int, default=None, metavar="ID",
-                   help="the autopilot's system id (default: the first autopilot heard)")
-    p.add_argument("--target-component", type=int, default=None, metavar="ID",
-                   help="the autopilot's component id (default: the first autopilot's)")
-    p.add_argument("--signing-key", default=None, metavar="file:PATH",
-                   help="accept only MAVLink 2 signed with this key (SHA-256 of the file's "
-                        "text, as MAVProxy's signing setup; docs/security.md)")
-    p.add_argument("--heartbeat-timeout", type=float, default=3.0, metavar="S",
-                   help="report the autopilot lost after this long without HEARTBEAT (3)")
-    p.add_argument("--status-period", type=float, default=10.0, metavar="S",
-                   help="seconds between status lines (default 10)")
+    p.add_argument(
+        "--source-system",
+        type=int,
+        default=255,
+        metavar="ID",
+        help="the bridge's own MAVLink system id (default 255)",
+    )
+    p.add_argument(
+        "--target-system",
+        type=int,
+        default=None,
+        metavar="ID",
+        help="the autopilot's system id (default: the first autopilot heard)",
+    )
+    p.add_argument(
+        "--target-component",
+        type=int,
+        default=None,
+        metavar="ID",
+        help="the autopilot's component id (default: the first autopilot's)",
+    )
+    p.add_argument(
+        "--signing-key",
+        default=None,
+        metavar="file:PATH",
+        help="accept only MAVLink 2 signed with this key (SHA-256 of the file's "
+        "text, as MAVProxy's signing setup; docs/security.md)",
+    )
+    p.add_argument(
+        "--heartbeat-timeout",
+        type=float,
+        default=3.0,
+        metavar="S",
+        help="report the autopilot lost after this long without HEARTBEAT (3)",
+    )
+    p.add_argument(
+        "--status-period",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="seconds between status lines (default 10)",
+    )
     return p.parse_args(argv)
 
 
@@ -72,8 +108,10 @@ def main(argv: list[str] | None = None) -> int:
     for warning in plan.warnings:
         log(warning)
     if not plan.publishers:
-        print(f"modd-mavlink: {args.model}: no published topic of a kind mavlink sensor",
-              file=sys.stderr)
+        print(
+            f"modd-mavlink: {args.model}: no published topic of a kind mavlink sensor",
+            file=sys.stderr,
+        )
         return 1
     if args.ingress:
         ingress = args.ingress
@@ -92,17 +130,23 @@ def main(argv: list[str] | None = None) -> int:
         print(f"modd-mavlink: {exc}", file=sys.stderr)
         return 1
     sinks = {p.name: Publisher(p.name, ingress) for p in plan.publishers}
-    settings = BridgeSettings(source_system=args.source_system, target_system=args.target_system,
-                              target_component=args.target_component, signing_key=key,
-                              heartbeat_timeout_s=args.heartbeat_timeout,
-                              status_period_s=args.status_period)
+    settings = BridgeSettings(
+        source_system=args.source_system,
+        target_system=args.target_system,
+        target_component=args.target_component,
+        signing_key=key,
+        heartbeat_timeout_s=args.heartbeat_timeout,
+        status_period_s=args.status_period,
+    )
     bridge = Bridge(plan, transport, sinks, settings, log)
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     topics = sum(len(p.mappings) for p in plan.publishers)
-    log(f"drone {model['drone']['name']}: {topics} topics from {args.connect} -> {ingress}, "
-        "waiting for the autopilot's HEARTBEAT")
+    log(
+        f"drone {model['drone']['name']}: {topics} topics from {args.connect} -> {ingress}, "
+        "waiting for the autopilot's HEARTBEAT"
+    )
     bridge.run(stop)
     log("stopped")
     return 0

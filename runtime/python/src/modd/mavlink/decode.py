@@ -60,8 +60,13 @@ class Decoder:
             return [Frame(Kind.BAD, reason=f"parser error: {exc}")]
         frames = [self._classify(m) for m in messages]
         if datagram and self._mav.buf_len() > 0:
-            frames.append(Frame(Kind.BAD, reason=f"truncated frame ({self._mav.buf_len()} bytes "
-                                                 "at the end of a datagram)"))
+            frames.append(
+                Frame(
+                    Kind.BAD,
+                    reason=f"truncated frame ({self._mav.buf_len()} bytes "
+                    "at the end of a datagram)",
+                )
+            )
             self._reset()
         return frames
 

@@ -87,8 +87,10 @@ def _check_source(src: dict[str, Any], pointer: str) -> str | None:
     if cls is None:
         return f"{pointer}/message: unknown MAVLink message {src['message']}"
     if src["field"] not in cls.fieldnames:
-        return (f"{pointer}/field: {src['message']} has no field {src['field']} "
-                f"(fields: {', '.join(cls.fieldnames)})")
+        return (
+            f"{pointer}/field: {src['message']} has no field {src['field']} "
+            f"(fields: {', '.join(cls.fieldnames)})"
+        )
     i = cls.fieldnames.index(src["field"])
     if cls.array_lengths[i] or cls.fieldtypes[i] == "char":
         return f"{pointer}/field: {src['message']}.{src['field']} is not a single number"
@@ -114,10 +116,14 @@ def mavlink_mappings(model: dict[str, Any]) -> dict[str, FieldMapping]:
                 problems.append(problem)
                 continue
             name = topic_name(drone, sensor["name"], var["name"])
-            out[name] = FieldMapping(topic=name, type=var.get("type", DEFAULT_VALUE_TYPE),
-                                     message=src["message"], field=src["field"],
-                                     scale=float(src.get("scale", 1)),
-                                     offset=float(src.get("offset", 0)))
+            out[name] = FieldMapping(
+                topic=name,
+                type=var.get("type", DEFAULT_VALUE_TYPE),
+                message=src["message"],
+                field=src["field"],
+                scale=float(src.get("scale", 1)),
+                offset=float(src.get("offset", 0)),
+            )
     if problems:
         raise MappingError(problems)
     return out
@@ -138,9 +144,9 @@ def plan_bridge(model: dict[str, Any]) -> BridgePlan:
         for m in mine:
             plan.by_message.setdefault(m.message, []).append((pub["name"], m))
             interval = max(1, round(period * 1e6))
-            plan.intervals_us[m.message] = min(plan.intervals_us.get(m.message, interval),
-                                               interval)
+            plan.intervals_us[m.message] = min(plan.intervals_us.get(m.message, interval), interval)
     for name in mappings.keys() - carried:
-        plan.warnings.append(f"topic {name} is read over MAVLink but no publisher carries it: "
-                             "not published")
+        plan.warnings.append(
+            f"topic {name} is read over MAVLink but no publisher carries it: not published"
+        )
     return plan

@@ -25,8 +25,7 @@ class Counters:
     last_bad: str = ""  # the reason of the last bad frame
 
 
-def status_line(c: Counters, heartbeat_age: float | None, lost: bool,
-                system: int | None) -> str:
+def status_line(c: Counters, heartbeat_age: float | None, lost: bool, system: int | None) -> str:
     if heartbeat_age is None:
         beat = "no HEARTBEAT yet"
     else:
@@ -39,5 +38,7 @@ def status_line(c: Counters, heartbeat_age: float | None, lost: bool,
     if c.limited:
         extra += f", rate-limited {c.limited}"
     last = f" (last: {c.last_bad})" if c.bad and c.last_bad else ""
-    return (f"status: mapped {c.mapped} (samples {c.samples}), unknown {c.unknown}, "
-            f"bad {c.bad}{last}, ignored {c.ignored}{extra}, {beat}")
+    return (
+        f"status: mapped {c.mapped} (samples {c.samples}), unknown {c.unknown}, "
+        f"bad {c.bad}{last}, ignored {c.ignored}{extra}, {beat}"
+    )

@@ -38,8 +38,9 @@ def split_serial(url: str) -> tuple[str, int]:
     """``/dev/ttyUSB0,57600`` → (``/dev/ttyUSB0``, 57600); the baud rate defaults to 57600."""
     device, _, baud = url.partition(",")
     if baud and not baud.isdigit():
-        raise ValueError(f"bad baud rate in {url!r}: expected DEVICE,BAUD such as "
-                         "/dev/ttyUSB0,57600")
+        raise ValueError(
+            f"bad baud rate in {url!r}: expected DEVICE,BAUD such as /dev/ttyUSB0,57600"
+        )
     return device, int(baud or 57600)
 
 
@@ -51,12 +52,13 @@ class MavutilTransport:
         self.datagram = url.startswith(DATAGRAM_PREFIXES)
         device, baud = (url, 115200) if ":" in url else split_serial(url)
         try:
-            self._conn: Any = mavutil.mavlink_connection(device, baud=baud,
-                                                         source_system=source_system,
-                                                         source_component=source_component)
+            self._conn: Any = mavutil.mavlink_connection(
+                device, baud=baud, source_system=source_system, source_component=source_component
+            )
         except ModuleNotFoundError as exc:
-            raise RuntimeError(f"{url}: serial ports need the pyserial package "
-                               f"(pip install pyserial): {exc}") from exc
+            raise RuntimeError(
+                f"{url}: serial ports need the pyserial package (pip install pyserial): {exc}"
+            ) from exc
 
     def wait(self, timeout: float) -> bool:
         fd = getattr(self._conn, "fd", None)

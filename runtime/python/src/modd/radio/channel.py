@@ -46,6 +46,7 @@ class RadioSpec:
 
     def __post_init__(self) -> None:
         """Refuses settings no radio has, naming the setting and its range."""
+
         def bad(name: str, value: object, want: str) -> ValueError:
             return ValueError(f"radio setting {name}={value} is out of range: expected {want}")
 
@@ -65,8 +66,9 @@ class RadioSpec:
             raise bad("seed", self.seed, "a whole number >= 0")
         for start, length in self.outages:
             if not (math.isfinite(start) and start >= 0 and math.isfinite(length) and length > 0):
-                raise bad("outage", f"{start}+{length}", "start+duration in s, start >= 0, "
-                          "duration > 0")
+                raise bad(
+                    "outage", f"{start}+{length}", "start+duration in s, start >= 0, duration > 0"
+                )
 
     @staticmethod
     def parse(text: str) -> RadioSpec:
@@ -89,11 +91,23 @@ class RadioSpec:
                 value = float(raw)
             except ValueError:
                 raise ValueError(f"radio setting {key!r}: {raw!r} is not a number") from None
-            if key not in ("rate", "packet", "loss", "latency_ms", "jitter_ms", "queue_s",
-                           "seed", "duplicate", "forge", "replay"):
-                raise ValueError(f"unknown radio setting {key!r}; expected rate, packet, loss, "
-                                 "latency_ms, jitter_ms, outage, queue_s, seed, duplicate, "
-                                 "forge or replay")
+            if key not in (
+                "rate",
+                "packet",
+                "loss",
+                "latency_ms",
+                "jitter_ms",
+                "queue_s",
+                "seed",
+                "duplicate",
+                "forge",
+                "replay",
+            ):
+                raise ValueError(
+                    f"unknown radio setting {key!r}; expected rate, packet, loss, "
+                    "latency_ms, jitter_ms, outage, queue_s, seed, duplicate, "
+                    "forge or replay"
+                )
             if key in values:
                 raise ValueError(f"radio setting {key!r} given twice")
             if key in ("packet", "seed") and not (math.isfinite(value) and value.is_integer()):
@@ -102,12 +116,18 @@ class RadioSpec:
                 raise ValueError(f"radio setting {key}={raw}: expected a finite number")
             values[key] = value
         return RadioSpec(
-            rate=values.get("rate"), packet=int(values["packet"]) if "packet" in values else None,
-            loss=values.get("loss", 0.0), latency_ms=values.get("latency_ms", 0.0),
-            jitter_ms=values.get("jitter_ms", 0.0), outages=tuple(outages),
-            queue_s=values.get("queue_s", 2.0), seed=int(values.get("seed", 0)),
-            duplicate=values.get("duplicate", 0.0), forge=values.get("forge", 0.0),
-            replay=values.get("replay", 0.0))
+            rate=values.get("rate"),
+            packet=int(values["packet"]) if "packet" in values else None,
+            loss=values.get("loss", 0.0),
+            latency_ms=values.get("latency_ms", 0.0),
+            jitter_ms=values.get("jitter_ms", 0.0),
+            outages=tuple(outages),
+            queue_s=values.get("queue_s", 2.0),
+            seed=int(values.get("seed", 0)),
+            duplicate=values.get("duplicate", 0.0),
+            forge=values.get("forge", 0.0),
+            replay=values.get("replay", 0.0),
+        )
 
 
 @dataclass

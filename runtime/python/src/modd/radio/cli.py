@@ -65,28 +65,48 @@ def _print(up: Channel, down: Channel) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="modd-radio", description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        prog="modd-radio", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     mode = p.add_mutually_exclusive_group(required=True)
-    mode.add_argument("--udp", type=_hostport, metavar="HOST:PORT",
-                      help="listen here for the base station's datagrams")
-    mode.add_argument("--serial", action="store_true",
-                      help="relay between two new pseudo-terminals")
-    p.add_argument("--to", type=_hostport, metavar="HOST:PORT",
-                   help="the PubBroker's UDP endpoint (with --udp)")
-    p.add_argument("--radio", type=_spec, default=RadioSpec(), metavar="SPEC",
-                   help='e.g. "rate=3600,packet=252,loss=0.05,latency_ms=80,jitter_ms=20,'
-                        'outage=10+30,seed=7"')
-    p.add_argument("--profile", type=_profile, metavar="MODEL",
-                   help="emulate the air time and duty cycle of this model's link.radio")
+    mode.add_argument(
+        "--udp",
+        type=_hostport,
+        metavar="HOST:PORT",
+        help="listen here for the base station's datagrams",
+    )
+    mode.add_argument(
+        "--serial", action="store_true", help="relay between two new pseudo-terminals"
+    )
+    p.add_argument(
+        "--to",
+        type=_hostport,
+        metavar="HOST:PORT",
+        help="the PubBroker's UDP endpoint (with --udp)",
+    )
+    p.add_argument(
+        "--radio",
+        type=_spec,
+        default=RadioSpec(),
+        metavar="SPEC",
+        help='e.g. "rate=3600,packet=252,loss=0.05,latency_ms=80,jitter_ms=20,outage=10+30,seed=7"',
+    )
+    p.add_argument(
+        "--profile",
+        type=_profile,
+        metavar="MODEL",
+        help="emulate the air time and duty cycle of this model's link.radio",
+    )
     p.add_argument("--report", type=float, default=10.0, metavar="S")
     p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
     args = p.parse_args(argv)
     if args.udp and not args.to:
         p.error("--udp needs --to HOST:PORT (the PubBroker's endpoint)")
     if args.udp and _same_endpoint(args.udp, args.to):
-        p.error(f"--to {args.to[0]}:{args.to[1]} is where the radio listens (--udp): it would "
-                "relay every datagram to itself; give the PubBroker's endpoint")
+        p.error(
+            f"--to {args.to[0]}:{args.to[1]} is where the radio listens (--udp): it would "
+            "relay every datagram to itself; give the PubBroker's endpoint"
+        )
     if args.report <= 0 or (args.duration is not None and args.duration <= 0):
         p.error("--report and --duration take seconds > 0")
     stopping: list[bool] = []
@@ -98,14 +118,16 @@ def main(argv: list[str] | None = None) -> int:
         return bool(stopping) or (end is not None and time.monotonic() >= end)
 
     if args.udp:
-        up, down = run_udp(args.radio, args.udp, args.to, stop, _print, args.report,
-                           profile=args.profile)
+        up, down = run_udp(
+            args.radio, args.udp, args.to, stop, _print, args.report, profile=args.profile
+        )
     else:
         base, base_path = open_pty_pair()
         drone, drone_path = open_pty_pair()
         print(f"base={base_path} drone={drone_path}", flush=True)
-        up, down = run_serial(args.radio, base, drone, stop, _print, args.report,
-                              profile=args.profile)
+        up, down = run_serial(
+            args.radio, base, drone, stop, _print, args.report, profile=args.profile
+        )
     _print(up, down)
     return 0
 

@@ -41,19 +41,27 @@ class _Pending:
         return self.heap[0][0] - now if self.heap else None
 
 
-def channels(spec: RadioSpec, start: float, profile: RadioProfile | None = None
-             ) -> tuple[Channel, Channel]:
+def channels(
+    spec: RadioSpec, start: float, profile: RadioProfile | None = None
+) -> tuple[Channel, Channel]:
     """(up: base -> drone, down: drone -> base), seeded apart; with a radio
     profile, its air time and duty cycle (airtime.py)."""
     if profile is not None:
-        return (AirtimeChannel(spec, spec.seed * 2 + 1, start, profile=profile),
-                AirtimeChannel(spec, spec.seed * 2 + 2, start, profile=profile))
+        return (
+            AirtimeChannel(spec, spec.seed * 2 + 1, start, profile=profile),
+            AirtimeChannel(spec, spec.seed * 2 + 2, start, profile=profile),
+        )
     return Channel(spec, spec.seed * 2 + 1, start), Channel(spec, spec.seed * 2 + 2, start)
 
 
-def run_udp(spec: RadioSpec, listen: tuple[str, int], target: tuple[str, int],
-            stop: Callable[[], bool], report: Callable[[Channel, Channel], None] | None = None,
-            report_every: float = 10.0, profile: RadioProfile | None = None,
+def run_udp(
+    spec: RadioSpec,
+    listen: tuple[str, int],
+    target: tuple[str, int],
+    stop: Callable[[], bool],
+    report: Callable[[Channel, Channel], None] | None = None,
+    report_every: float = 10.0,
+    profile: RadioProfile | None = None,
 ) -> tuple[Channel, Channel]:
     """Relay datagrams between whoever sends to ``listen`` (the base station)
     and ``target`` (the PubBroker) until ``stop()``."""
@@ -86,8 +94,9 @@ def run_udp(spec: RadioSpec, listen: tuple[str, int], target: tuple[str, int],
                     data = back.recv(MAX_DATAGRAM)
                     at = down.offer(data, now)
                     if at is not None and peer:
-                        _deliver(pending, down, at, partial(_sendto, front, peer[0]), data,
-                                 serial=False)
+                        _deliver(
+                            pending, down, at, partial(_sendto, front, peer[0]), data, serial=False
+                        )
             if report and time.monotonic() >= next_report:
                 report(up, down)
                 next_report += report_every
@@ -98,8 +107,14 @@ def run_udp(spec: RadioSpec, listen: tuple[str, int], target: tuple[str, int],
     return up, down
 
 
-def _deliver(pending: _Pending, ch: Channel, at: float, fn: Callable[[bytes], object],
-             data: bytes, serial: bool) -> None:
+def _deliver(
+    pending: _Pending,
+    ch: Channel,
+    at: float,
+    fn: Callable[[bytes], object],
+    data: bytes,
+    serial: bool,
+) -> None:
     """Schedule a packet that passed, with its duplicate, forgery or replay."""
     pending.add(at, partial(_send, fn, data))
     if ch.duplicates():
@@ -131,9 +146,14 @@ def open_pty_pair() -> tuple[int, str]:
     return master, path
 
 
-def run_serial(spec: RadioSpec, base_master: int, drone_master: int,
-               stop: Callable[[], bool], report: Callable[[Channel, Channel], None] | None = None,
-               report_every: float = 10.0, profile: RadioProfile | None = None,
+def run_serial(
+    spec: RadioSpec,
+    base_master: int,
+    drone_master: int,
+    stop: Callable[[], bool],
+    report: Callable[[Channel, Channel], None] | None = None,
+    report_every: float = 10.0,
+    profile: RadioProfile | None = None,
 ) -> tuple[Channel, Channel]:
     """Relay bytes between two pseudo-terminal masters (the base station's and
     the drone's ends), cut into radio packets of at most ``spec.packet``
@@ -161,8 +181,9 @@ def run_serial(spec: RadioSpec, base_master: int, drone_master: int,
         while not stop():
             now = time.monotonic()
             wait = pending.run_due(now)
-            for key, _ in sel.select(min(wait if wait is not None else SERIAL_IDLE_S,
-                                         SERIAL_IDLE_S)):
+            for key, _ in sel.select(
+                min(wait if wait is not None else SERIAL_IDLE_S, SERIAL_IDLE_S)
+            ):
                 fd = int(key.fd)
                 try:
                     data = os.read(fd, 4096)

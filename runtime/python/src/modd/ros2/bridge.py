@@ -47,8 +47,9 @@ class RosPublisher:
 
     def publish(self, payload: bytes) -> None:
         self.sequence += 1
-        self.publisher.put(payload, attachment=rmw.attachment(self.sequence, time.time_ns(),
-                                                              self.gid))
+        self.publisher.put(
+            payload, attachment=rmw.attachment(self.sequence, time.time_ns(), self.gid)
+        )
 
     def close(self) -> None:
         self.token.undeclare()
@@ -56,8 +57,14 @@ class RosPublisher:
 
 
 class Ros2Bridge:
-    def __init__(self, modd: zenoh.Session, ros: zenoh.Session, drones: str = "*",
-                 domain_id: int = 0, node: str = "modd_bridge") -> None:
+    def __init__(
+        self,
+        modd: zenoh.Session,
+        ros: zenoh.Session,
+        drones: str = "*",
+        domain_id: int = 0,
+        node: str = "modd_bridge",
+    ) -> None:
         self.modd, self.ros = modd, ros
         self.drones, self.domain_id, self.node = drones, domain_id, node
         #: The values this bridge reads (modd_contracts.keys).
@@ -73,7 +80,8 @@ class Ros2Bridge:
 
     def start(self) -> Ros2Bridge:
         self._node_token = self.ros.liveliness().declare_token(
-            rmw.node_token(self.domain_id, self.zid, self.node_id, self.node))
+            rmw.node_token(self.domain_id, self.zid, self.node_id, self.node)
+        )
         self._sub = self.modd.declare_subscriber(self.key, self._on_sample)
         return self
 
@@ -83,11 +91,25 @@ class Ros2Bridge:
             if pub is None:
                 entity_id, self._next_id = self._next_id, self._next_id + 1
                 key = rmw.topic_key(self.domain_id, topic, ros_type, type_hash)
-                token_key = rmw.publisher_token(self.domain_id, self.zid, self.node_id,
-                                                entity_id, self.node, topic, ros_type, type_hash)
-                pub = RosPublisher(topic, ros_type, key, token_key, rmw.gid(token_key),
-                                   self.ros.declare_publisher(key),
-                                   self.ros.liveliness().declare_token(token_key))
+                token_key = rmw.publisher_token(
+                    self.domain_id,
+                    self.zid,
+                    self.node_id,
+                    entity_id,
+                    self.node,
+                    topic,
+                    ros_type,
+                    type_hash,
+                )
+                pub = RosPublisher(
+                    topic,
+                    ros_type,
+                    key,
+                    token_key,
+                    rmw.gid(token_key),
+                    self.ros.declare_publisher(key),
+                    self.ros.liveliness().declare_token(token_key),
+                )
                 self._pubs[topic] = pub
                 log.info("publishing %s (%s) on %s", topic, ros_type, key)
             return pub
@@ -102,15 +124,20 @@ class Ros2Bridge:
     def on_value(self, drone: str, subscriber: str, delivered: DeliveredValue) -> None:
         base = f"/{drone}/{subscriber}"
         try:
-            window = window_cdr(int(delivered["start_ns"]), int(delivered["end_ns"]),
-                                delivered.get("value"), delivered.get("count"),
-                                str(delivered.get("aggregation", "")))
+            window = window_cdr(
+                int(delivered["start_ns"]),
+                int(delivered["end_ns"]),
+                delivered.get("value"),
+                delivered.get("count"),
+                str(delivered.get("aggregation", "")),
+            )
         except (KeyError, TypeError, ValueError) as exc:
             log.warning("%s: value skipped (%s)", base, exc)
             return
         self._publisher(base, WINDOW.name, WINDOW_HASH).publish(window)
         self._publisher(f"{base}/value", FLOAT64.name, FLOAT64_HASH).publish(
-            float64_cdr(delivered.get("value")))
+            float64_cdr(delivered.get("value"))
+        )
         self.published += 1
 
     def topics(self) -> dict[str, RosPublisher]:

@@ -22,22 +22,38 @@ from ..zenoh_session import DEFAULT_ENDPOINT, ZenohSettings, client_settings, op
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="modd-ros2", description=__doc__.splitlines()[0])
-    p.add_argument("--modd-connect", default=os.environ.get("MODD_ZENOH_CONNECT",
-                                                            DEFAULT_ENDPOINT),
-                   metavar="ENDPOINT", help="the SubBroker's zenoh endpoint")
-    p.add_argument("--credentials", metavar="FILE",
-                   help="a viewer's .cred file for the SubBroker's zenoh (default "
-                        "$MODD_ZENOH_CREDENTIALS; docs/security.md)")
-    p.add_argument("--ros-connect", metavar="ENDPOINT",
-                   help="the ROS 2 zenoh router (rmw_zenohd); default: the same session as "
-                        "--modd-connect (then its access control must let this identity "
-                        "put ROS 2 keys and liveliness tokens)")
-    p.add_argument("--ros-mode", choices=("peer", "client"), default="peer",
-                   help="zenoh mode of the ROS side's session (rmw_zenoh's nodes are peers)")
+    p.add_argument(
+        "--modd-connect",
+        default=os.environ.get("MODD_ZENOH_CONNECT", DEFAULT_ENDPOINT),
+        metavar="ENDPOINT",
+        help="the SubBroker's zenoh endpoint",
+    )
+    p.add_argument(
+        "--credentials",
+        metavar="FILE",
+        help="a viewer's .cred file for the SubBroker's zenoh (default "
+        "$MODD_ZENOH_CREDENTIALS; docs/security.md)",
+    )
+    p.add_argument(
+        "--ros-connect",
+        metavar="ENDPOINT",
+        help="the ROS 2 zenoh router (rmw_zenohd); default: the same session as "
+        "--modd-connect (then its access control must let this identity "
+        "put ROS 2 keys and liveliness tokens)",
+    )
+    p.add_argument(
+        "--ros-mode",
+        choices=("peer", "client"),
+        default="peer",
+        help="zenoh mode of the ROS side's session (rmw_zenoh's nodes are peers)",
+    )
     p.add_argument("--drone", default="*", help="drone name (default: every drone)")
-    p.add_argument("--domain-id", type=int,
-                   default=int(os.environ.get("ROS_DOMAIN_ID", "0")),
-                   help="ROS domain id (default $ROS_DOMAIN_ID or 0)")
+    p.add_argument(
+        "--domain-id",
+        type=int,
+        default=int(os.environ.get("ROS_DOMAIN_ID", "0")),
+        help="ROS domain id (default $ROS_DOMAIN_ID or 0)",
+    )
     p.add_argument("--node", default="modd_bridge", help="ROS node name")
     return p.parse_args(argv)
 
@@ -49,15 +65,21 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="modd-ros2: %(message)s")
     try:
         modd = open_session(client_settings(a.modd_connect, a.credentials))
-        ros = modd if not a.ros_connect or a.ros_connect == a.modd_connect else open_session(
-            ZenohSettings(mode=a.ros_mode, connect=(a.ros_connect,)))
+        ros = (
+            modd
+            if not a.ros_connect or a.ros_connect == a.modd_connect
+            else open_session(ZenohSettings(mode=a.ros_mode, connect=(a.ros_connect,)))
+        )
     except ValueError as exc:
         print(f"modd-ros2: {exc}", file=sys.stderr)
         return 1
     bridge = Ros2Bridge(modd, ros, a.drone, a.domain_id, a.node).start()
-    print(f"modd-ros2: node /{a.node} on ROS domain {a.domain_id}: values of "
-          f"{bridge.key} as /<drone>/<subscriber> (modd_msgs/msg/Window) and "
-          f"/<drone>/<subscriber>/value (std_msgs/msg/Float64)", flush=True)
+    print(
+        f"modd-ros2: node /{a.node} on ROS domain {a.domain_id}: values of "
+        f"{bridge.key} as /<drone>/<subscriber> (modd_msgs/msg/Window) and "
+        f"/<drone>/<subscriber>/value (std_msgs/msg/Float64)",
+        flush=True,
+    )
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     try:

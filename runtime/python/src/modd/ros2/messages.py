@@ -25,18 +25,22 @@ from modd_contracts.ros2 import window_msg
 
 from .typehash import Field, MessageType, type_hash
 
-TIME = MessageType("builtin_interfaces/msg/Time", (Field("sec", "int32"),
-                                                   Field("nanosec", "uint32")))
+TIME = MessageType(
+    "builtin_interfaces/msg/Time", (Field("sec", "int32"), Field("nanosec", "uint32"))
+)
 FLOAT64 = MessageType("std_msgs/msg/Float64", (Field("data", "float64"),))
-WINDOW = MessageType("modd_msgs/msg/Window", (
-    Field("window_start", TIME.name),
-    Field("window_end", TIME.name),
-    Field("value", "float64"),
-    Field("count", "uint32"),
-    Field("aggregation", "string"),
-    Field("has_count", "bool"),
-    Field("samples", "float64[]"),
-))
+WINDOW = MessageType(
+    "modd_msgs/msg/Window",
+    (
+        Field("window_start", TIME.name),
+        Field("window_end", TIME.name),
+        Field("value", "float64"),
+        Field("count", "uint32"),
+        Field("aggregation", "string"),
+        Field("has_count", "bool"),
+        Field("samples", "float64[]"),
+    ),
+)
 #: The .msg text of modd_msgs/msg/Window (one source, in the contracts).
 WINDOW_MSG = window_msg()
 
@@ -72,8 +76,9 @@ def as_float(value: Any) -> float:
     return math.nan
 
 
-def window_cdr(start_ns: int, end_ns: int, value: Any, count: int | None,
-               aggregation: str) -> bytes:
+def window_cdr(
+    start_ns: int, end_ns: int, value: Any, count: int | None, aggregation: str
+) -> bytes:
     """CDR (little endian, with its 4-byte encapsulation header)."""
     import numpy as np
 
@@ -86,9 +91,15 @@ def window_cdr(start_ns: int, end_ns: int, value: Any, count: int | None,
         n = len(samples)  # an empty window holds 0 samples, an ALL window its list
     else:
         n = None  # MIN, MAX, LAST: the drone does not say how many
-    msg = W(window_start=_time(start_ns), window_end=_time(end_ns), value=as_float(value),
-            count=n or 0, aggregation=aggregation, has_count=n is not None,
-            samples=np.asarray(samples, dtype=np.float64))
+    msg = W(
+        window_start=_time(start_ns),
+        window_end=_time(end_ns),
+        value=as_float(value),
+        count=n or 0,
+        aggregation=aggregation,
+        has_count=n is not None,
+        samples=np.asarray(samples, dtype=np.float64),
+    )
     return bytes(store.serialize_cdr(msg, WINDOW.name))
 
 

@@ -50,18 +50,54 @@ def mangle(name: str) -> str:
     return name.replace("/", "%")
 
 
-def node_token(domain_id: int, zid: str, node_id: int, node: str, namespace: str = "/",
-               enclave: str = "/") -> str:
-    return "/".join([ADMIN_SPACE, str(domain_id), zid, str(node_id), str(node_id), "NN",
-                     mangle(enclave), mangle(namespace), mangle(node)])
+def node_token(
+    domain_id: int, zid: str, node_id: int, node: str, namespace: str = "/", enclave: str = "/"
+) -> str:
+    return "/".join(
+        [
+            ADMIN_SPACE,
+            str(domain_id),
+            zid,
+            str(node_id),
+            str(node_id),
+            "NN",
+            mangle(enclave),
+            mangle(namespace),
+            mangle(node),
+        ]
+    )
 
 
-def publisher_token(domain_id: int, zid: str, node_id: int, entity_id: int, node: str,
-                    topic: str, ros_type: str, type_hash: str, namespace: str = "/",
-                    enclave: str = "/", qos: str = DEFAULT_QOS) -> str:
-    return "/".join([ADMIN_SPACE, str(domain_id), zid, str(node_id), str(entity_id), "MP",
-                     mangle(enclave), mangle(namespace), mangle(node), mangle(topic),
-                     mangle(dds_type_name(ros_type)), mangle(type_hash), qos])
+def publisher_token(
+    domain_id: int,
+    zid: str,
+    node_id: int,
+    entity_id: int,
+    node: str,
+    topic: str,
+    ros_type: str,
+    type_hash: str,
+    namespace: str = "/",
+    enclave: str = "/",
+    qos: str = DEFAULT_QOS,
+) -> str:
+    return "/".join(
+        [
+            ADMIN_SPACE,
+            str(domain_id),
+            zid,
+            str(node_id),
+            str(entity_id),
+            "MP",
+            mangle(enclave),
+            mangle(namespace),
+            mangle(node),
+            mangle(topic),
+            mangle(dds_type_name(ros_type)),
+            mangle(type_hash),
+            qos,
+        ]
+    )
 
 
 def gid(liveliness_key: str) -> bytes:

@@ -19,9 +19,20 @@ from typing import Any
 
 #: type_description_interfaces/msg/FieldType ids of the primitive types.
 FIELD_TYPE_IDS: dict[str, int] = {
-    "int8": 2, "uint8": 3, "int16": 4, "uint16": 5, "int32": 6, "uint32": 7,
-    "int64": 8, "uint64": 9, "float32": 10, "float64": 11, "char": 13, "bool": 15,
-    "byte": 16, "string": 17,
+    "int8": 2,
+    "uint8": 3,
+    "int16": 4,
+    "uint16": 5,
+    "int32": 6,
+    "uint32": 7,
+    "int64": 8,
+    "uint64": 9,
+    "float32": 10,
+    "float64": 11,
+    "char": 13,
+    "bool": 15,
+    "byte": 16,
+    "string": 17,
 }
 NESTED_TYPE = 1
 #: Added to a type's id for an unbounded sequence (``float64[]``), as in FieldType.
@@ -52,8 +63,15 @@ def _field(f: Field) -> dict[str, Any]:
         type_id, nested = NESTED_TYPE, f.type
     else:
         raise ValueError(f"field {f.name}: unsupported type {f.type!r}")
-    return {"name": f.name, "type": {"type_id": type_id, "capacity": 0, "string_capacity": 0,
-                                     "nested_type_name": nested}}
+    return {
+        "name": f.name,
+        "type": {
+            "type_id": type_id,
+            "capacity": 0,
+            "string_capacity": 0,
+            "nested_type_name": nested,
+        },
+    }
 
 
 def _description(t: MessageType) -> dict[str, Any]:

@@ -33,5 +33,4 @@ Example::
 from .cli import main
 from .track import LEG_M, METERS_PER_DEG_LAT, ORIGIN_LAT, ORIGIN_LON, Pose, survey_pose
 
-__all__ = ["LEG_M", "METERS_PER_DEG_LAT", "ORIGIN_LAT", "ORIGIN_LON", "Pose", "main",
-           "survey_pose"]
+__all__ = ["LEG_M", "METERS_PER_DEG_LAT", "ORIGIN_LAT", "ORIGIN_LON", "Pose", "main", "survey_pose"]

@@ -49,30 +49,73 @@ def messages_at(t: float, boot_ms: int, now_us: int) -> dict[str, tuple[Any, ...
     roll, pitch = waves(t)
     volts, amps, left = battery(t)
     return {
-        "GLOBAL_POSITION_INT": (boot_ms, lat, lon, alt_mm, alt_mm, round(north * 100),
-                                round(east * 100), 0, _cdeg(p.yaw)),
+        "GLOBAL_POSITION_INT": (
+            boot_ms,
+            lat,
+            lon,
+            alt_mm,
+            alt_mm,
+            round(north * 100),
+            round(east * 100),
+            0,
+            _cdeg(p.yaw),
+        ),
         "ATTITUDE": (boot_ms, roll, pitch, p.yaw, 0.0, 0.0, 0.0),
-        "SYS_STATUS": (SENSORS, SENSORS, SENSORS, 250, round(volts * 1000), round(amps * 100),
-                       left, 0, 0, 0, 0, 0, 0),
-        "VFR_HUD": (0.0, math.hypot(north, east), round(math.degrees(p.yaw)) % 360, 40,
-                    altitude(t), 0.0),
-        "GPS_RAW_INT": (now_us, 3, lat, lon, alt_mm, 90, 150, round(math.hypot(north, east) * 100),
-                        _cdeg(p.yaw), 14),
+        "SYS_STATUS": (
+            SENSORS,
+            SENSORS,
+            SENSORS,
+            250,
+            round(volts * 1000),
+            round(amps * 100),
+            left,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+        ),
+        "VFR_HUD": (
+            0.0,
+            math.hypot(north, east),
+            round(math.degrees(p.yaw)) % 360,
+            40,
+            altitude(t),
+            0.0,
+        ),
+        "GPS_RAW_INT": (
+            now_us,
+            3,
+            lat,
+            lon,
+            alt_mm,
+            90,
+            150,
+            round(math.hypot(north, east) * 100),
+            _cdeg(p.yaw),
+            14,
+        ),
         "SYSTEM_TIME": (now_us, boot_ms),
     }
 
 
 class SimAutopilot:
-    def __init__(self, url: str, start: float, system: int = 1, component: int = 1,
-                 log: Callable[[str], None] = print) -> None:
+    def __init__(
+        self,
+        url: str,
+        start: float,
+        system: int = 1,
+        component: int = 1,
+        log: Callable[[str], None] = print,
+    ) -> None:
         self.start = start
         self.log = log
         self.transport = open_transport(url, system, component)
         self.decoder = Decoder()
         self.packer = parser(system, component)
         self.system = system
-        self.intervals: dict[str, float] = {m: DEFAULT_INTERVAL_S for m in
-                                            messages_at(0.0, 0, 0)}
+        self.intervals: dict[str, float] = {m: DEFAULT_INTERVAL_S for m in messages_at(0.0, 0, 0)}
         self.asked: list[tuple[str, int, str]] = []  # (message, interval µs, MAV_RESULT name)
         self._boot = time.monotonic()
         self._due: dict[str, float] = {}
@@ -82,19 +125,29 @@ class SimAutopilot:
         self.packer.seq = (self.packer.seq + 1) % 256
 
     def _send_due(self, now: float) -> None:
-        due = [m for m, interval in self.intervals.items()
-               if interval > 0 and now >= self._due.get(m, 0.0)]
+        due = [
+            m
+            for m, interval in self.intervals.items()
+            if interval > 0 and now >= self._due.get(m, 0.0)
+        ]
         if now >= self._due.get("HEARTBEAT", 0.0):
             self._due["HEARTBEAT"] = now + HEARTBEAT_INTERVAL_S
-            self._send(MAV.MAVLink_heartbeat_message(
-                MAV.MAV_TYPE_SURFACE_BOAT, MAV.MAV_AUTOPILOT_ARDUPILOTMEGA,
-                MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | MAV.MAV_MODE_FLAG_SAFETY_ARMED, 10,
-                MAV.MAV_STATE_ACTIVE, 3))
+            self._send(
+                MAV.MAVLink_heartbeat_message(
+                    MAV.MAV_TYPE_SURFACE_BOAT,
+                    MAV.MAV_AUTOPILOT_ARDUPILOTMEGA,
+                    MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | MAV.MAV_MODE_FLAG_SAFETY_ARMED,
+                    10,
+                    MAV.MAV_STATE_ACTIVE,
+                    3,
+                )
+            )
         if not due:
             return
         now_us = time.time_ns() // 1000
-        fields = messages_at(now_us / 1e6 - self.start, int((now - self._boot) * 1000) % 2**32,
-                             now_us)
+        fields = messages_at(
+            now_us / 1e6 - self.start, int((now - self._boot) * 1000) % 2**32, now_us
+        )
         for m in due:
             last = self._due.get(m, now)
             # keep the cadence (no drift) unless we fell more than one interval behind
@@ -110,8 +163,11 @@ class SimAutopilot:
             result = MAV.MAV_RESULT_UNSUPPORTED
         else:
             result = self._set_interval(int(msg.param1), msg.param2)
-        self._send(MAV.MAVLink_command_ack_message(msg.command, result, 0, 0,
-                                                   msg.get_srcSystem(), msg.get_srcComponent()))
+        self._send(
+            MAV.MAVLink_command_ack_message(
+                msg.command, result, 0, 0, msg.get_srcSystem(), msg.get_srcComponent()
+            )
+        )
 
     def _set_interval(self, msgid: int, interval_us: float) -> int:
         cls = MAV.mavlink_map.get(msgid)
@@ -128,8 +184,9 @@ class SimAutopilot:
                 self.intervals[name] = max(MIN_INTERVAL_S, interval_us / 1e6)
             self._due.pop(name, None)
         self.asked.append((name, int(interval_us), result_name(result)))
-        self.log(f"autopilot: SET_MESSAGE_INTERVAL {name} {int(interval_us)} us: "
-                 f"{result_name(result)}")
+        self.log(
+            f"autopilot: SET_MESSAGE_INTERVAL {name} {int(interval_us)} us: {result_name(result)}"
+        )
         return int(result)
 
     def handle(self, data: bytes) -> None:
@@ -143,8 +200,10 @@ class SimAutopilot:
             while not stop.is_set():
                 now = time.monotonic()
                 self._send_due(now)
-                nxt = min([self._due["HEARTBEAT"]] + [self._due.get(m, now) for m, i in
-                                                      self.intervals.items() if i > 0])
+                nxt = min(
+                    [self._due["HEARTBEAT"]]
+                    + [self._due.get(m, now) for m, i in self.intervals.items() if i > 0]
+                )
                 if self.transport.wait(max(0.0, min(0.1, nxt - time.monotonic()))):
                     data = self.transport.recv()
                     if data:

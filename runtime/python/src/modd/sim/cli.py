@@ -27,8 +27,12 @@ def default_ingress(model: dict[str, Any]) -> str:
 def mavlink_topics(model: dict[str, Any]) -> set[str]:
     """The topics of the model's ``kind mavlink`` sensors."""
     drone = model["drone"]["name"]
-    return {f"{drone}.{s['name']}.{v['name']}" for s in model["drone"]["sensors"]
-            if s.get("kind", "generic") == "mavlink" for v in s["variables"]}
+    return {
+        f"{drone}.{s['name']}.{v['name']}"
+        for s in model["drone"]["sensors"]
+        if s.get("kind", "generic") == "mavlink"
+        for v in s["variables"]
+    }
 
 
 def instrument_topics(model: dict[str, Any]) -> set[str]:
@@ -36,26 +40,52 @@ def instrument_topics(model: dict[str, Any]) -> set[str]:
     from modd_model.instruments import INSTRUMENT_KINDS
 
     drone = model["drone"]["name"]
-    return {f"{drone}.{s['name']}.{v['name']}" for s in model["drone"]["sensors"]
-            if s.get("kind", "generic") in INSTRUMENT_KINDS for v in s["variables"]}
+    return {
+        f"{drone}.{s['name']}.{v['name']}"
+        for s in model["drone"]["sensors"]
+        if s.get("kind", "generic") in INSTRUMENT_KINDS
+        for v in s["variables"]
+    }
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(prog="modd-sim", description="The simulated drone of a model: "
-                                "a MAVLink autopilot and the scientific sensors.")
+    p = argparse.ArgumentParser(
+        prog="modd-sim",
+        description="The simulated drone of a model: "
+        "a MAVLink autopilot and the scientific sensors.",
+    )
     p.add_argument("--model", required=True, help=".modd or .json model")
     p.add_argument("--ingress", help="unix:/path or tcp:host:port (default: the model's)")
-    p.add_argument("--mavlink", default=DEFAULT_MAVLINK, metavar="URL",
-                   help=f"where the simulated autopilot sends (default {DEFAULT_MAVLINK})")
-    p.add_argument("--no-mavlink", action="store_true",
-                   help="no simulated autopilot: publish the mavlink sensors' topics directly")
-    p.add_argument("--no-instruments", action="store_true",
-                   help="no simulated instruments on pseudo-terminals: publish the nmea, ascii "
-                        "and modbus sensors' topics directly")
-    p.add_argument("--system-id", type=int, default=1, metavar="ID",
-                   help="the simulated autopilot's MAVLink system id (default 1)")
-    p.add_argument("--start-time", type=float, metavar="UNIX_S",
-                   help="when the survey track starts (default: now)")
+    p.add_argument(
+        "--mavlink",
+        default=DEFAULT_MAVLINK,
+        metavar="URL",
+        help=f"where the simulated autopilot sends (default {DEFAULT_MAVLINK})",
+    )
+    p.add_argument(
+        "--no-mavlink",
+        action="store_true",
+        help="no simulated autopilot: publish the mavlink sensors' topics directly",
+    )
+    p.add_argument(
+        "--no-instruments",
+        action="store_true",
+        help="no simulated instruments on pseudo-terminals: publish the nmea, ascii "
+        "and modbus sensors' topics directly",
+    )
+    p.add_argument(
+        "--system-id",
+        type=int,
+        default=1,
+        metavar="ID",
+        help="the simulated autopilot's MAVLink system id (default 1)",
+    )
+    p.add_argument(
+        "--start-time",
+        type=float,
+        metavar="UNIX_S",
+        help="when the survey track starts (default: now)",
+    )
     p.add_argument("--duration", type=float, help="stop after this many seconds")
     return p.parse_args(argv)
 
@@ -81,9 +111,22 @@ def main(argv: list[str] | None = None) -> int:
     for i, p in enumerate(model["publishers"]):
         mine = [tops[t] for t in p["topics"] if t not in autopilot_topics | wired]
         if mine:
-            threads.append(threading.Thread(
-                target=run_publisher, name=p["name"], daemon=True,
-                args=(p["name"], float(to_fraction(p["periodS"])), mine, ingress, stop, i, start)))
+            threads.append(
+                threading.Thread(
+                    target=run_publisher,
+                    name=p["name"],
+                    daemon=True,
+                    args=(
+                        p["name"],
+                        float(to_fraction(p["periodS"])),
+                        mine,
+                        ingress,
+                        stop,
+                        i,
+                        start,
+                    ),
+                )
+            )
     publishers = len(threads)
     if autopilot_topics:
         from .autopilot import SimAutopilot
@@ -93,8 +136,9 @@ def main(argv: list[str] | None = None) -> int:
         except (OSError, RuntimeError, ValueError) as exc:
             print(f"modd-sim: cannot open {args.mavlink}: {exc}", file=sys.stderr)
             return 1
-        threads.append(threading.Thread(target=autopilot.run, args=(stop,), name="autopilot",
-                                        daemon=True))
+        threads.append(
+            threading.Thread(target=autopilot.run, args=(stop,), name="autopilot", daemon=True)
+        )
     for th in threads:
         th.start()
     if wired:
@@ -106,9 +150,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"modd-sim: cannot simulate the instruments: {exc}", file=sys.stderr)
             stop.set()
             return 1
-    log(f"drone {model['drone']['name']}: {publishers} publishers -> {ingress}"
+    log(
+        f"drone {model['drone']['name']}: {publishers} publishers -> {ingress}"
         + (f"; autopilot -> {args.mavlink}" if autopilot_topics else "")
-        + f"; track started at {start:.3f}")
+        + f"; track started at {start:.3f}"
+    )
     stop.wait(args.duration)
     stop.set()
     for th in threads:

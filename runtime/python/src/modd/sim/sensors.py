@@ -34,14 +34,19 @@ def topic_signal(topic: Topic, rng: random.Random) -> Signal:
     for axis, phase in {"x": 0.0, "y": 1.3, "z": 2.1}.items():
         if v in (f"accel_{axis}", f"acc_{axis}", axis + "acc"):
             base = 9.81 if axis == "z" else 0.0
-            return lambda t, p: base + 0.8 * math.sin(2 * math.pi * 0.3 * t + phase) \
-                + rng.gauss(0, 0.05)
+            return lambda t, p: (
+                base + 0.8 * math.sin(2 * math.pi * 0.3 * t + phase) + rng.gauss(0, 0.05)
+            )
     named: dict[str, Signal] = {
-        "latitude": lambda t, p: p.lat, "lat": lambda t, p: p.lat,
-        "longitude": lambda t, p: p.lon, "lon": lambda t, p: p.lon,
-        "altitude": lambda t, p: altitude(t), "yaw": lambda t, p: p.yaw,
+        "latitude": lambda t, p: p.lat,
+        "lat": lambda t, p: p.lat,
+        "longitude": lambda t, p: p.lon,
+        "lon": lambda t, p: p.lon,
+        "altitude": lambda t, p: altitude(t),
+        "yaw": lambda t, p: p.yaw,
         "heading": lambda t, p: math.degrees(p.yaw),
-        "roll": lambda t, p: waves(t)[0], "pitch": lambda t, p: waves(t)[1],
+        "roll": lambda t, p: waves(t)[0],
+        "pitch": lambda t, p: waves(t)[1],
         "water_temperature": lambda t, p: 12.0 + 4.0 * plume(p) + rng.gauss(0, 0.02),
         "temperature": lambda t, p: 12.0 + 4.0 * plume(p) + rng.gauss(0, 0.02),
         "conductivity": lambda t, p: 52.0 - 20.0 * plume(p) + rng.gauss(0, 0.05),
@@ -57,8 +62,15 @@ def topic_signal(topic: Topic, rng: random.Random) -> Signal:
     return lambda t, p: math.sin(0.2 * t + phase)
 
 
-def run_publisher(name: str, period_s: float, tops: list[Topic], ingress: str,
-                  stop: threading.Event, seed: int, start: float) -> None:
+def run_publisher(
+    name: str,
+    period_s: float,
+    tops: list[Topic],
+    ingress: str,
+    stop: threading.Event,
+    seed: int,
+    start: float,
+) -> None:
     """Publishes every topic of ``tops`` each ``period_s`` until ``stop`` is set;
     ``start`` is the track's start (Unix seconds)."""
     rng = random.Random(seed)

@@ -64,8 +64,7 @@ def altitude(t: float) -> float:
 
 def waves(t: float) -> tuple[float, float]:
     """(roll, pitch) in radians."""
-    return (0.05 * math.sin(2 * math.pi * 0.3 * t),
-            0.03 * math.sin(2 * math.pi * 0.25 * t + 1.0))
+    return (0.05 * math.sin(2 * math.pi * 0.3 * t), 0.03 * math.sin(2 * math.pi * 0.25 * t + 1.0))
 
 
 def battery(t: float) -> tuple[float, float, int]:

@@ -65,8 +65,13 @@ def mission_of(running: Running) -> str:
 class BackfillManager:
     """The window record, the queue and the link requests of one SubBroker."""
 
-    def __init__(self, send: Callable[[bytes], None], sinks: Callable[[], Sequence[Sink]],
-                 state: StateDir | None = None, timing: Timing | None = None) -> None:
+    def __init__(
+        self,
+        send: Callable[[bytes], None],
+        sinks: Callable[[], Sequence[Sink]],
+        state: StateDir | None = None,
+        timing: Timing | None = None,
+    ) -> None:
         self._send = send
         self._sinks = sinks
         self._state = state
@@ -92,8 +97,7 @@ class BackfillManager:
         try:
             return WindowRecord.from_json(doc)
         except (KeyError, TypeError, ValueError) as exc:
-            log.error("window record in the state directory unreadable (%s): starting afresh",
-                      exc)
+            log.error("window record in the state directory unreadable (%s): starting afresh", exc)
             return WindowRecord()
 
     def save(self) -> None:
@@ -149,8 +153,9 @@ class BackfillManager:
     # -- jobs -------------------------------------------------------------------------
 
     def start(self, subscriber: str, runs: list[Run], rate_bps: int, owner: str = "") -> Job:
-        job = Job(next(self._ids), subscriber, owner, deque(runs),
-                  sum(r.windows for r in runs), rate_bps)
+        job = Job(
+            next(self._ids), subscriber, owner, deque(runs), sum(r.windows for r in runs), rate_bps
+        )
         with self._lock:
             self._jobs[job.job_id] = job
             ended = [j for j in self._jobs.values() if j.status != "RUNNING"]
@@ -166,8 +171,9 @@ class BackfillManager:
     def running(self, subscriber: str, owner: str) -> bool:
         """Whether ``owner`` has a job for ``subscriber`` that has not ended."""
         with self._lock:
-            return any(j.subscriber == subscriber and j.owner == owner
-                       for j in self._queue.jobs.values())
+            return any(
+                j.subscriber == subscriber and j.owner == owner for j in self._queue.jobs.values()
+            )
 
     def job(self, job_id: int) -> Job | None:
         return self._jobs.get(job_id)
@@ -245,8 +251,7 @@ class BackfillManager:
                 log.warning("backfill frame refused: %s", exc)
                 return
             self._transmit(frames)
-            ended = [self._jobs[i] for i in ended_before - set(self._queue.jobs)
-                     if i in self._jobs]
+            ended = [self._jobs[i] for i in ended_before - set(self._queue.jobs) if i in self._jobs]
         for job in ended:
             self._ended(job)
 
@@ -262,9 +267,21 @@ class BackfillManager:
                 continue
             window = window_of(value, run.stream.aggregation, run.value_type)
             val, count = split_window(run.stream.aggregation, window)
-            out = DeliveredValue(run.subscriber, run.stream.topic, run.stream.aggregation,
-                                 run.stream.key.rsplit("/", 1)[1], run.unit, run.config_id,
-                                 (start + q) // q, start, start + q, val, count, now, True)
+            out = DeliveredValue(
+                run.subscriber,
+                run.stream.topic,
+                run.stream.aggregation,
+                run.stream.key.rsplit("/", 1)[1],
+                run.unit,
+                run.config_id,
+                (start + q) // q,
+                start,
+                start + q,
+                val,
+                count,
+                now,
+                True,
+            )
             payload = out.to_json()
             for sink in sinks:
                 sink.put(run.subscriber, payload)
@@ -273,9 +290,17 @@ class BackfillManager:
         self._dirty = True
 
     def _ended(self, job: Job) -> None:
-        log.info("backfill %d for %s: %s (%d windows, %d duplicates, %d bytes, %d requests)%s",
-                 job.job_id, job.subscriber, job.status, job.delivered, job.duplicates,
-                 job.bytes, job.requests, f": {job.reason}" if job.reason else "")
+        log.info(
+            "backfill %d for %s: %s (%d windows, %d duplicates, %d bytes, %d requests)%s",
+            job.job_id,
+            job.subscriber,
+            job.status,
+            job.delivered,
+            job.duplicates,
+            job.bytes,
+            job.requests,
+            f": {job.reason}" if job.reason else "",
+        )
 
     # -- the clock --------------------------------------------------------------------
 

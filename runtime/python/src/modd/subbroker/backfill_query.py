@@ -47,9 +47,13 @@ def _int(request: dict[str, Any], name: str) -> int | None:
     return v
 
 
-def handle(payload: bytes, manager: BackfillManager, running: Callable[[], Running | None],
-           covered_until: Callable[[Running], int],
-           owner_of: Callable[[str], str | None] = lambda _name: None) -> dict[str, Any]:
+def handle(
+    payload: bytes,
+    manager: BackfillManager,
+    running: Callable[[], Running | None],
+    covered_until: Callable[[Running], int],
+    owner_of: Callable[[str], str | None] = lambda _name: None,
+) -> dict[str, Any]:
     request, problem = read_request(payload, MAX_SMALL_BYTES)
     if request is None:
         return {"status": "ERROR", "reason": problem}
@@ -68,25 +72,35 @@ def handle(payload: bytes, manager: BackfillManager, running: Callable[[], Runni
                 return {"status": "UNKNOWN", "reason": f"no backfill {job_id}"}
             return manager.progress(job)
         if op != "start":
-            return {"status": "ERROR",
-                    "reason": f"unknown op {str(op)[:32]!r} (start, progress, cancel, cap)"}
+            return {
+                "status": "ERROR",
+                "reason": f"unknown op {str(op)[:32]!r} (start, progress, cancel, cap)",
+            }
         owner = owner_of(str(request.get("subscriber")))
         if owner is not None and request.get("owner") not in (None, owner):
-            return {"status": "UNAUTHORISED",
-                    "reason": "a dynamic subscription is backfilled for its owner only"}
+            return {
+                "status": "UNAUTHORISED",
+                "reason": "a dynamic subscription is backfilled for its owner only",
+            }
         return _start(request, manager, running(), covered_until)
     except ValueError as exc:
         return {"status": "ERROR", "reason": str(exc)}
 
 
-def _start(request: dict[str, Any], manager: BackfillManager, running: Running | None,
-           covered_until: Callable[[Running], int]) -> dict[str, Any]:
+def _start(
+    request: dict[str, Any],
+    manager: BackfillManager,
+    running: Running | None,
+    covered_until: Callable[[Running], int],
+) -> dict[str, Any]:
     if running is None:
         return {"status": "ERROR", "reason": "no config runs: nothing to backfill"}
     subscriber = request.get("subscriber")
     if not isinstance(subscriber, str) or not manager.knows(running, subscriber):
-        return {"status": "ERROR",
-                "reason": f"no subscriber {subscriber!r} in the plans of this mission"}
+        return {
+            "status": "ERROR",
+            "reason": f"no subscriber {subscriber!r} in the plans of this mission",
+        }
     until = covered_until(running)
     began = manager.mission_start(running)
     if request.get("gaps"):

@@ -185,8 +185,9 @@ class BackfillQueue:
             f.retry_at = None  # no more waiting for an acknowledgement (a deferred send stays)
         return f
 
-    def on_data(self, d: bf.BackfillData, size: int, now: float) -> tuple[Filled | None,
-                                                                          list[bytes]]:
+    def on_data(
+        self, d: bf.BackfillData, size: int, now: float
+    ) -> tuple[Filled | None, list[bytes]]:
         f = self.heard(d.request_id, now)
         if f is None:
             return None, []  # a frame of a request cancelled, replaced or ended
@@ -217,8 +218,7 @@ class BackfillQueue:
             # BUSY: wait and ask again; CANCELLED without our cancel: the same
             f.busy += 1
             f.acked, f.sent_at = False, None
-            f.retry_at = now + min(self.timing.busy_s * 2 ** (f.busy - 1),
-                                   self.timing.busy_max_s)
+            f.retry_at = now + min(self.timing.busy_s * 2 ** (f.busy - 1), self.timing.busy_max_s)
             f.why = f"the PubBroker said {end.status.name}"
             return []
         self.flight = None
@@ -270,21 +270,31 @@ class BackfillQueue:
             return f"paced at {job.rate_bps} B/s" if job.rate_bps else "paced by the PubBroker"
         ahead = len(self.order(job)) - 1 + (self.flight is not None)
         return f"queued behind {ahead} job{'s' if ahead != 1 else ''}" + (
-            "" if self.up else ", waiting for the link")
+            "" if self.up else ", waiting for the link"
+        )
 
     def progress(self, job: Job, now: float) -> dict[str, Any]:
         secs = (job.ended if job.ended is not None else now) - job.started
         left = None
         if job.done_windows and job.status == "RUNNING":
             left = secs / job.done_windows * (job.total - job.done_windows)
-        return {"status": job.status, "id": job.job_id, "subscriber": job.subscriber,
-                "windows": job.delivered, "windows_done": job.done_windows,
-                "windows_total": job.total, "duplicates": job.duplicates, "bytes": job.bytes,
-                "rate_bps": job.rate_bps, "seconds": round(secs, 3),
-                "bytes_per_s": round(job.bytes / secs, 1) if secs > 0 else 0.0,
-                "seconds_left": None if left is None else round(left, 1),
-                "requests": job.requests, "resumes": job.resumes,
-                "reason": self.reason(job, now)}
+        return {
+            "status": job.status,
+            "id": job.job_id,
+            "subscriber": job.subscriber,
+            "windows": job.delivered,
+            "windows_done": job.done_windows,
+            "windows_total": job.total,
+            "duplicates": job.duplicates,
+            "bytes": job.bytes,
+            "rate_bps": job.rate_bps,
+            "seconds": round(secs, 3),
+            "bytes_per_s": round(job.bytes / secs, 1) if secs > 0 else 0.0,
+            "seconds_left": None if left is None else round(left, 1),
+            "requests": job.requests,
+            "resumes": job.resumes,
+            "reason": self.reason(job, now),
+        }
 
     def order(self, until: Job | None = None) -> list[Job]:
         """The waiting jobs in the order the queue serves their next runs (up to ``until``)."""
@@ -311,9 +321,16 @@ class BackfillQueue:
                 return []
             run = job.runs[0]
             req = bf.BackfillRequest(
-                self.next_request_id, run.stream.topic, ValueType.parse(run.value_type),
-                Aggregation[run.stream.aggregation], period_us(run.stream), run.from_ns,
-                run.windows, 0, job.rate_bps)
+                self.next_request_id,
+                run.stream.topic,
+                ValueType.parse(run.value_type),
+                Aggregation[run.stream.aggregation],
+                period_us(run.stream),
+                run.from_ns,
+                run.windows,
+                0,
+                job.rate_bps,
+            )
             self.next_request_id += 1
             self.flight = InFlight(job, req)
         if self.flight.sent_at is None and self.flight.retry_at is None:
@@ -335,25 +352,42 @@ class BackfillQueue:
             f.retry_at = f.last_sent + self.timing.min_resend_s  # never twice within it
             return []
         if f.why:
-            self.notes.append(f"backfill {f.job.job_id}: {f.why}, resuming at window {f.next} "
-                              f"of {f.request.windows}")
+            self.notes.append(
+                f"backfill {f.job.job_id}: {f.why}, resuming at window {f.next} "
+                f"of {f.request.windows}"
+            )
             f.why = ""
         q = f.request
-        f.request = bf.BackfillRequest(q.request_id, q.topic, q.type, q.aggregation, q.period_us,
-                                       q.from_ns, q.windows, f.next, f.job.rate_bps)
+        f.request = bf.BackfillRequest(
+            q.request_id,
+            q.topic,
+            q.type,
+            q.aggregation,
+            q.period_us,
+            q.from_ns,
+            q.windows,
+            f.next,
+            f.job.rate_bps,
+        )
         f.sends += 1
         f.sent_at = f.heard = f.last_sent = now
         f.asked_next = f.next
         f.job.requests += 1
-        f.retry_at = None if f.acked else now + min(self.timing.ack_s * 2 ** (f.sends - 1),
-                                                    self.timing.ack_max_s)
+        f.retry_at = (
+            None
+            if f.acked
+            else now + min(self.timing.ack_s * 2 ** (f.sends - 1), self.timing.ack_max_s)
+        )
         return [bf.encode(f.request)]
 
     def _resume_unless_asked(self, f: InFlight, now: float) -> list[bytes]:
         """Ask again from the resume point, unless it was asked a moment ago (frames sent
         before that request reached the PubBroker still arrive)."""
-        if f.asked_next == f.next and f.sent_at is not None \
-                and now - f.sent_at < self.timing.resume_grace_s:
+        if (
+            f.asked_next == f.next
+            and f.sent_at is not None
+            and now - f.sent_at < self.timing.resume_grace_s
+        ):
             return []
         f.acked, f.sent_at = False, None
         return self._again(f, now, f"windows from {f.next} lost")

@@ -88,8 +88,12 @@ class ChangeLog:
         self._behind = behind
         if behind and self._since is None:
             self._since, self._logging = now_ns, True
-            log.warning("falling behind the link: delivery %.2f s later than its best, "
-                        "%d bytes waiting to be decoded", lag, backlog)
+            log.warning(
+                "falling behind the link: delivery %.2f s later than its best, "
+                "%d bytes waiting to be decoded",
+                lag,
+                backlog,
+            )
         elif not behind and self._logging:
             self._logging = False
             log.info("caught up with the link (lag %.3f s, %d bytes waiting)", lag, backlog)
@@ -113,9 +117,11 @@ class ChangeLog:
         if not self._fell and not self._caught:
             self._since = None
             return ""
-        line = (f"over the last {(now_ns - self._since) / 1e9:.0f} s: fell behind the link "
-                f"{self._fell} times, caught up {self._caught} times (lag up to "
-                f"{self._max_lag:.2f} s); now {'behind' if self._behind else 'caught up'}")
+        line = (
+            f"over the last {(now_ns - self._since) / 1e9:.0f} s: fell behind the link "
+            f"{self._fell} times, caught up {self._caught} times (lag up to "
+            f"{self._max_lag:.2f} s); now {'behind' if self._behind else 'caught up'}"
+        )
         self._since, self._fell, self._caught, self._max_lag = now_ns, 0, 0, 0.0
         return line
 
@@ -123,9 +129,12 @@ class ChangeLog:
 class Backpressure:
     """The behind/caught-up state; the link thread observes, any thread reads."""
 
-    def __init__(self, behind_lag_s: float = BEHIND_LAG_S,
-                 behind_backlog_bytes: int = BEHIND_BACKLOG_BYTES,
-                 log_every_s: float = LOG_EVERY_S) -> None:
+    def __init__(
+        self,
+        behind_lag_s: float = BEHIND_LAG_S,
+        behind_backlog_bytes: int = BEHIND_BACKLOG_BYTES,
+        log_every_s: float = LOG_EVERY_S,
+    ) -> None:
         self.behind_lag_s = behind_lag_s
         self.behind_backlog_bytes = behind_backlog_bytes
         self._changes = ChangeLog(log_every_s)
@@ -148,13 +157,17 @@ class Backpressure:
             lag = (raw - self._baseline_ns) / 1e9
             self.lag_s, self.backlog_bytes = lag, backlog_bytes
             self.max_lag_s = max(self.max_lag_s, lag)
-            if not self.behind and (lag > self.behind_lag_s
-                                    or backlog_bytes > self.behind_backlog_bytes):
+            if not self.behind and (
+                lag > self.behind_lag_s or backlog_bytes > self.behind_backlog_bytes
+            ):
                 self.behind, self.since_ns = True, now_ns
                 self.episodes += 1
                 self._changes.change(True, lag, backlog_bytes, now_ns)
-            elif self.behind and lag < self.behind_lag_s / 2 \
-                    and backlog_bytes < self.behind_backlog_bytes / 2:
+            elif (
+                self.behind
+                and lag < self.behind_lag_s / 2
+                and backlog_bytes < self.behind_backlog_bytes / 2
+            ):
                 self.behind, self.since_ns = False, now_ns
                 self._changes.change(False, lag, backlog_bytes, now_ns)
             else:

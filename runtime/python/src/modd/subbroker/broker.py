@@ -86,8 +86,7 @@ class SubBroker:
         self._workers = ThreadPoolExecutor(max_workers=4, thread_name_prefix="modd-query")
         self.delivered = 0
         # Backfill (docs/subbroker.md, "Backfill") and the base-station record of every delivery.
-        records = config.record_dir or (config.state_dir / "records" if config.state_dir
-                                        else None)
+        records = config.record_dir or (config.state_dir / "records" if config.state_dir else None)
         self.record = BaseRecord(records, self.drone) if records is not None else None
         self.backfill = BackfillManager(self.link.send_frame, self._sinks, self._state)
         self.link.backfill_sink = self.backfill.on_frame
@@ -104,13 +103,21 @@ class SubBroker:
             return self.config.model, Deployment.configured()
         model, meta = kept
         if not self.config.resume:
-            log.warning("NOT resuming the deployment kept in %s (%s): running the configured "
-                        "model", where, meta.describe())
+            log.warning(
+                "NOT resuming the deployment kept in %s (%s): running the configured model",
+                where,
+                meta.describe(),
+            )
             return self.config.model, Deployment.configured()
         self._differs = not same_model(model, self.config.model)
-        log.warning("RESUMING the deployment kept in %s: %s%s", where, meta.describe(),
-                    "; it DIFFERS from the configured model" if self._differs
-                    else " (the same as the configured model)")
+        log.warning(
+            "RESUMING the deployment kept in %s: %s%s",
+            where,
+            meta.describe(),
+            "; it DIFFERS from the configured model"
+            if self._differs
+            else " (the same as the configured model)",
+        )
         return model, meta
 
     def nonce_file(self) -> Path:
@@ -145,17 +152,23 @@ class SubBroker:
         self._queryables = [
             session.declare_queryable(subscribe_key(self.drone), self._on_query(self._subscribe)),
             session.declare_queryable(deploy_key(self.drone), self._on_query(self._deploy)),
-            session.declare_queryable(backfill_key(self.drone),
-                                      self._on_query(self._backfill)),
+            session.declare_queryable(backfill_key(self.drone), self._on_query(self._backfill)),
         ]
         self._status = StatusPublisher(
-            session, self.drone, self.config.delivery.status_period_s, self.status,
+            session,
+            self.drone,
+            self.config.delivery.status_period_s,
+            self.status,
             lambda: self.link.stats,
         )
         self._status.start()
         self.link.start()
-        log.info("SubBroker for %s: link %s %s:%d", self.drone, self.config.transport,
-                 *self.config.endpoint)
+        log.info(
+            "SubBroker for %s: link %s %s:%d",
+            self.drone,
+            self.config.transport,
+            *self.config.endpoint,
+        )
 
     def stop(self) -> None:
         self.link.stop()
@@ -194,8 +207,9 @@ class SubBroker:
         plan = plan_within(model, self.link.stats.rtt_s, self.config.link.plan_budget_s)
         if not plan.sent_streams:
             raise ValueError("the plan sends nothing over the link (no published subscription)")
-        delay_ms, resolutions = trailing_fields(model, self.config.model, self.config.transport,
-                                                plan)
+        delay_ms, resolutions = trailing_fields(
+            model, self.config.model, self.config.transport, plan
+        )
         with self._lock:
             cid = self._last_id % 255 + 1
             if cid == avoid:
@@ -206,8 +220,9 @@ class SubBroker:
             self._planned[cid] = (model, plan, meta)
             for stale in list(self._planned)[:-8]:
                 del self._planned[stale]
-        return config_for(plan, cid, self.config.link.pubbroker_status_period_s, delay_ms,
-                          resolutions)
+        return config_for(
+            plan, cid, self.config.link.pubbroker_status_period_s, delay_ms, resolutions
+        )
 
     # -- LinkHandler -------------------------------------------------------------
 
@@ -223,8 +238,11 @@ class SubBroker:
         except ValueError as exc:
             if self._meta.source != "kept":
                 raise
-            log.error("the kept deployment (%s) cannot be planned: %s; running the configured "
-                      "model", self._meta.describe(), exc)
+            log.error(
+                "the kept deployment (%s) cannot be planned: %s; running the configured model",
+                self._meta.describe(),
+                exc,
+            )
             self._model, self._meta = self.config.model, Deployment.configured()
             self._differs = False
             return self._prepare(self._model, ok.config_id, self._meta)
@@ -243,8 +261,9 @@ class SubBroker:
         sent = [s.stream for s in plan.sent_streams]
         running = Running(model, plan, config, ack.epoch_ns, FanOut(sent), meta)
         running.topic_info = {t.name: (t.unit, t.type) for t in topics(model).values()}
-        running.slots = SlotDelivery(running.fanout, config.config_id, ack.epoch_ns,
-                                     running.topic_info)
+        running.slots = SlotDelivery(
+            running.fanout, config.config_id, ack.epoch_ns, running.topic_info
+        )
         for ps in plan.streams:
             for sub in ps.subscribers:
                 running.route(ps.stream, ps.sources, sub)
@@ -267,9 +286,13 @@ class SubBroker:
             self._tcp.set_endpoints(tcp_endpoints(model))
         if self.record is not None:
             self.record.begin(str(model.get("name") or self.drone), ack.epoch_ns)
-        log.info("config %d running (epoch %d ns, %d streams sent): %s", config.config_id,
-                 ack.epoch_ns, len(config.streams),
-                 meta.describe() if meta.source != "configured" else "the configured model")
+        log.info(
+            "config %d running (epoch %d ns, %d streams sent): %s",
+            config.config_id,
+            ack.epoch_ns,
+            len(config.streams),
+            meta.describe() if meta.source != "configured" else "the configured model",
+        )
         if self._status is not None:  # what runs is known at once, not a period later
             try:
                 self._status.publish_now()
@@ -309,10 +332,12 @@ class SubBroker:
                 continue  # a flapping link: the job of an earlier reconnection runs on
             runs = self.backfill.gaps(running, sub["name"], start, until)
             if runs:
-                log.info("backfill of %s (%s): %d runs after the outage", sub["name"], policy,
-                         len(runs))
-                self.backfill.start(sub["name"], runs, backfill_query.spare_budget(running),
-                                    "(policy)")
+                log.info(
+                    "backfill of %s (%s): %d runs after the outage", sub["name"], policy, len(runs)
+                )
+                self.backfill.start(
+                    sub["name"], runs, backfill_query.spare_budget(running), "(policy)"
+                )
 
     def _sinks(self) -> list[Sink]:
         return [s for s in (self._zenoh, self._tcp, self.record) if s is not None]
@@ -354,8 +379,9 @@ class SubBroker:
             got = self.backfill.received_until()
             return got if got is not None else time.time_ns()
 
-        return backfill_query.handle(payload, self.backfill, lambda: self._running, until,
-                                     self.dynamic.owner_of)
+        return backfill_query.handle(
+            payload, self.backfill, lambda: self._running, until, self.dynamic.owner_of
+        )
 
     def _deploy(self, payload: bytes) -> dict[str, Any]:
         with self._deploy_lock:  # one at a time, and a repeated request sees the first's end
@@ -383,17 +409,25 @@ class SubBroker:
             return None
         sig = request.get("signature")
         if not isinstance(sig, str) or not hmac.compare_digest(
-                sig, signature(self._deploy_key, request)):
+            sig, signature(self._deploy_key, request)
+        ):
             return None
-        return {**self._acked_reply(running, running.config, []), "status": "UNAUTHORISED",
-                "reason": "the deploy request was already applied (replayed nonce): it is the "
-                "deployment running now", "already_running": True}
+        return {
+            **self._acked_reply(running, running.config, []),
+            "status": "UNAUTHORISED",
+            "reason": "the deploy request was already applied (replayed nonce): it is the "
+            "deployment running now",
+            "already_running": True,
+        }
 
     def _verify(self, request: dict[str, Any]) -> str | None:
         refused = self._nonces.verify(self._deploy_key, request)
         if refused is None:
-            log.info("deploy of revision %s signed for %s", request.get("revision"),
-                     str(request.get("deployed_by"))[:64])
+            log.info(
+                "deploy of revision %s signed for %s",
+                request.get("revision"),
+                str(request.get("deployed_by"))[:64],
+            )
         return refused
 
     def deploy(self, request: DeployRequest) -> dict[str, Any]:
@@ -404,8 +438,11 @@ class SubBroker:
             config = self._prepare(request.model, 0, meta)
         except ValueError as exc:
             log.warning("deploy of %s refused: %s", meta.describe(), exc)
-            return {"status": "REJECTED", "reason": str(exc),
-                    "diagnostics": _located(exc, request.model)}
+            return {
+                "status": "REJECTED",
+                "reason": str(exc),
+                "diagnostics": _located(exc, request.model),
+            }
         deadline = time.monotonic() + request.timeout_s
         delay, busy = 0.05, 0
         while True:
@@ -415,13 +452,19 @@ class SubBroker:
             except LinkDown as exc:
                 return {"status": "LINK_DOWN", "reason": str(exc)}
             except TimeoutError as exc:
-                return {"status": "TIMEOUT", "reason": f"{exc} within {request.timeout_s} s"
-                        + _older_peer(config)}
+                return {
+                    "status": "TIMEOUT",
+                    "reason": f"{exc} within {request.timeout_s} s" + _older_peer(config),
+                }
             except ConfigRejected as exc:
                 if exc.status != ErrorCode.BUSY or time.monotonic() + delay >= deadline:
                     hint = _older_peer(config) if exc.status == ErrorCode.BAD_FRAME else ""
-                    return {"status": "NACK", "reason": str(exc) + hint, "code": exc.status,
-                            "busy_retries": busy}
+                    return {
+                        "status": "NACK",
+                        "reason": str(exc) + hint,
+                        "code": exc.status,
+                        "busy_retries": busy,
+                    }
                 # a CONFIG still waits for its switch date: send again after a backoff
                 busy += 1
                 time.sleep(delay)
@@ -430,8 +473,9 @@ class SubBroker:
         assert running is not None
         return {**self._acked_reply(running, config, request.warnings), "busy_retries": busy}
 
-    def _acked_reply(self, running: Running, config: Config,
-                     warnings: list[dict[str, Any]]) -> dict[str, Any]:
+    def _acked_reply(
+        self, running: Running, config: Config, warnings: list[dict[str, Any]]
+    ) -> dict[str, Any]:
         summary = running.plan.to_json()
         return {
             "status": "ACKED",
@@ -452,8 +496,11 @@ class SubBroker:
         """Which revision runs, deployed when and by whom, and whether it is
         the configured model (docs/subbroker.md, "Status")."""
         meta = running.meta if running else self._meta
-        return {**meta.as_json(), "running": running is not None,
-                "differs_from_configured": meta.source != "configured" and self._differs}
+        return {
+            **meta.as_json(),
+            "running": running is not None,
+            "differs_from_configured": meta.source != "configured" and self._differs,
+        }
 
     def status(self) -> dict[str, Any]:
         """The status document (docs/subbroker.md, "Status")."""
@@ -484,8 +531,11 @@ class SubBroker:
             "pubbroker": dict(stats.pubbroker),
             **({"sensors": dict(stats.sensors)} if stats.sensors else {}),
             "transport": self.config.transport,
-            "link_budget": (running.plan.budget.to_json()
-                            if running is not None and running.plan.budget is not None else None),
+            "link_budget": (
+                running.plan.budget.to_json()
+                if running is not None and running.plan.budget is not None
+                else None
+            ),
             "radio": self.link.radio_status(),
         }
 
@@ -511,6 +561,8 @@ def _older_peer(config: Config) -> str:
     "Quantised values": BAD_FRAME over tcp, dropped as malformed over udp/serial)."""
     if config.resolutions is None:
         return ""
-    return ("; this CONFIG declares resolutions (protocol 1 with quantised values): a "
-            "PubBroker older than them refuses it; update the PubBroker, or deploy the "
-            "model without resolutions")
+    return (
+        "; this CONFIG declares resolutions (protocol 1 with quantised values): a "
+        "PubBroker older than them refuses it; update the PubBroker, or deploy the "
+        "model without resolutions"
+    )

@@ -35,24 +35,53 @@ def _parser() -> argparse.ArgumentParser:
     src.add_argument("--model", help="model (.modd or .json) to run with the defaults")
     p.add_argument("--link", help="PubBroker link endpoint host:port (default: the model's)")
     p.add_argument("--key", help="pre-shared key reference env:NAME or file:PATH")
-    p.add_argument("--zenoh-listen", action="append", default=None, metavar="ENDPOINT",
-                   help="zenoh listen endpoint (repeatable; default tcp/127.0.0.1:7447)")
-    p.add_argument("--zenoh-connect", action="append", default=None, metavar="ENDPOINT",
-                   help="zenoh endpoint to connect to (repeatable)")
+    p.add_argument(
+        "--zenoh-listen",
+        action="append",
+        default=None,
+        metavar="ENDPOINT",
+        help="zenoh listen endpoint (repeatable; default tcp/127.0.0.1:7447)",
+    )
+    p.add_argument(
+        "--zenoh-connect",
+        action="append",
+        default=None,
+        metavar="ENDPOINT",
+        help="zenoh endpoint to connect to (repeatable)",
+    )
     p.add_argument("--zenoh-mode", choices=("peer", "client", "router"), default=None)
-    p.add_argument("--credentials", metavar="DIR", default=None,
-                   help="zenoh credentials and deploy key directory, made at first start "
-                   "(default: <state_dir>/credentials; docs/security.md)")
-    p.add_argument("--record-dir", metavar="DIR", default=None,
-                   help="base-station MCAP record of every delivered value "
-                   "(default: <state_dir>/records; none without a state_dir)")
-    p.add_argument("--no-tcp-delivery", action="store_true",
-                   help="do not deliver to the subscribers' TCP endpoints")
-    p.add_argument("--status-period", type=float, default=None, metavar="S",
-                   help="seconds between status puts (default 1)")
-    p.add_argument("--no-resume", action="store_true",
-                   help="run the configured model, not the deployment (and dynamic "
-                   "subscriptions) kept in the state directory")
+    p.add_argument(
+        "--credentials",
+        metavar="DIR",
+        default=None,
+        help="zenoh credentials and deploy key directory, made at first start "
+        "(default: <state_dir>/credentials; docs/security.md)",
+    )
+    p.add_argument(
+        "--record-dir",
+        metavar="DIR",
+        default=None,
+        help="base-station MCAP record of every delivered value "
+        "(default: <state_dir>/records; none without a state_dir)",
+    )
+    p.add_argument(
+        "--no-tcp-delivery",
+        action="store_true",
+        help="do not deliver to the subscribers' TCP endpoints",
+    )
+    p.add_argument(
+        "--status-period",
+        type=float,
+        default=None,
+        metavar="S",
+        help="seconds between status puts (default 1)",
+    )
+    p.add_argument(
+        "--no-resume",
+        action="store_true",
+        help="run the configured model, not the deployment (and dynamic "
+        "subscriptions) kept in the state directory",
+    )
     p.add_argument("--log-level", default="INFO")
     return p
 
@@ -89,8 +118,9 @@ def build_config(args: argparse.Namespace) -> SubBrokerConfig:
         delivery = replace(delivery, status_period_s=args.status_period)
     if args.record_dir:
         cfg = replace(cfg, record_dir=Path(args.record_dir))
-    return replace(cfg, link=link, zenoh=z, delivery=delivery,
-                   resume=cfg.resume and not args.no_resume)
+    return replace(
+        cfg, link=link, zenoh=z, delivery=delivery, resume=cfg.resume and not args.no_resume
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -74,7 +74,8 @@ class SubBrokerConfig:
     drone: str
     link: LinkOptions = field(default_factory=LinkOptions)
     zenoh: ZenohSettings = field(
-        default_factory=lambda: ZenohSettings(mode="router", listen=(DEFAULT_ENDPOINT,)))
+        default_factory=lambda: ZenohSettings(mode="router", listen=(DEFAULT_ENDPOINT,))
+    )
     delivery: DeliveryOptions = field(default_factory=DeliveryOptions)
     state_dir: Path | None = None  # where a deployed model is kept across restarts
     record_dir: Path | None = None  # base-station record (default <state_dir>/records)
@@ -110,8 +111,9 @@ class SubBrokerConfig:
         """tcp, udp or serial: ``[link] transport``, else the model's."""
         t = self.link.transport or self.model.get("link", {}).get("transport", "tcp")
         if t not in ("tcp", "udp", "serial"):
-            raise ConfigError(f"{self.source}: link.transport: expected tcp, udp or serial, "
-                              f"got {t!r}")
+            raise ConfigError(
+                f"{self.source}: link.transport: expected tcp, udp or serial, got {t!r}"
+            )
         return str(t)
 
     @property
@@ -119,8 +121,9 @@ class SubBrokerConfig:
         """The serial device of the base station's radio."""
         dev = self.link.device or self.model.get("link", {}).get("device", "")
         if not dev:
-            raise ConfigError(f"{self.source}: a serial link needs [link] device (or the "
-                              "model's link device)")
+            raise ConfigError(
+                f"{self.source}: a serial link needs [link] device (or the model's link device)"
+            )
         return str(dev)
 
     @property

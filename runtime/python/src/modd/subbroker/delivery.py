@@ -93,8 +93,9 @@ class ZenohDelivery:
 class _TcpSender(threading.Thread):
     """Sends one subscriber's values to its endpoint, reconnecting with backoff."""
 
-    def __init__(self, name: str, endpoint: tuple[str, int], queue_size: int,
-                 key_ref: str = "") -> None:
+    def __init__(
+        self, name: str, endpoint: tuple[str, int], queue_size: int, key_ref: str = ""
+    ) -> None:
         super().__init__(name=f"tcp-delivery-{name}", daemon=True)
         self.endpoint = endpoint
         self.key_ref = key_ref
@@ -175,7 +176,7 @@ class _TcpSender(threading.Thread):
         line = data.split(b"\n", 1)[0]
         if not line.startswith(delivery_auth.GREETING):
             raise ConnectionError(f"unexpected first line {line[:40]!r}")
-        nonce = line[len(delivery_auth.GREETING):].decode("ascii", "replace")
+        nonce = line[len(delivery_auth.GREETING) :].decode("ascii", "replace")
         if self.key is None:
             self.key = delivery_auth.load_key(self.key_ref)
         sock.sendall(b"AUTH " + delivery_auth.proof(self.key, nonce).encode() + b"\n")
@@ -204,8 +205,9 @@ class _TcpSender(threading.Thread):
 class TcpDelivery:
     """TCP delivery to the subscribers whose model entry has an endpoint."""
 
-    def __init__(self, endpoints: Mapping[str, tuple[str, int]], queue_size: int = 1000,
-                 key_ref: str = "") -> None:
+    def __init__(
+        self, endpoints: Mapping[str, tuple[str, int]], queue_size: int = 1000, key_ref: str = ""
+    ) -> None:
         """``key_ref``: where the delivery key comes from (``[delivery] key``;
         empty: ``$MODD_DELIVERY_KEY``, else the user's delivery.key)."""
         self._queue_size = queue_size
@@ -281,8 +283,13 @@ class SlotDelivery:
     concatenation and one put.
     """
 
-    def __init__(self, fanout: FanOut, config_id: int, epoch_ns: int,
-                 topic_info: Mapping[str, tuple[str, str]]) -> None:
+    def __init__(
+        self,
+        fanout: FanOut,
+        config_id: int,
+        epoch_ns: int,
+        topic_info: Mapping[str, tuple[str, str]],
+    ) -> None:
         self.fanout = fanout
         self._config_id = config_id
         self._epoch_ns = epoch_ns
@@ -294,8 +301,10 @@ class SlotDelivery:
     def _payload(self, stream: StreamKey) -> tuple[StreamPayload, int]:
         unit = self._topic_info[stream.topic][0]
         period_text = stream.key.rsplit("/", 1)[1]
-        entry = (StreamPayload(stream.topic, stream.aggregation, period_text, unit,
-                               self._config_id), period_us(stream))
+        entry = (
+            StreamPayload(stream.topic, stream.aggregation, period_text, unit, self._config_id),
+            period_us(stream),
+        )
         self._payloads[stream] = entry
         return entry
 

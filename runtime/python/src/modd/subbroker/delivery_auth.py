@@ -53,8 +53,9 @@ def _read_key_file(path: Path) -> bytes:
     with os.fdopen(fd, "rb") as f:
         st = os.fstat(f.fileno())
         if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_KEY_FILE:
-            raise DeliveryKeyError(f"delivery key file:{path}: not a regular file of at most "
-                                   f"{MAX_KEY_FILE} bytes")
+            raise DeliveryKeyError(
+                f"delivery key file:{path}: not a regular file of at most {MAX_KEY_FILE} bytes"
+            )
         data = f.read(MAX_KEY_FILE + 1)
     data = data[:-1] if data.endswith(b"\n") else data
     if not data:

@@ -37,8 +37,9 @@ def _error(status: str, reason: str, **more: Any) -> DeployRequest:
     return DeployRequest(None, reply={"status": status, "reason": reason, **more})
 
 
-def parse_request(payload: bytes, drone: str,
-                  verify: Callable[[dict[str, Any]], str | None] | None = None) -> DeployRequest:
+def parse_request(
+    payload: bytes, drone: str, verify: Callable[[dict[str, Any]], str | None] | None = None
+) -> DeployRequest:
     """Read a deploy payload: ``{"model": {...}}`` (the JSON document) or
     ``{"text": "...", "format": "modd"|"json", "filename": "..."}``, with an
     optional ``"timeout_s"``. ``verify`` (the SubBroker's signature and nonce

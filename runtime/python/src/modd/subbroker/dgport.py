@@ -26,8 +26,14 @@ from modd.link.serialframe import Deframer, encode_frame
 #: IPv4 (20) + UDP (8): what a datagram costs on the wire beyond its payload.
 UDP_IP_HEADER_BYTES = 28
 
-_BAUD = {9600: termios.B9600, 19200: termios.B19200, 38400: termios.B38400,
-         57600: termios.B57600, 115200: termios.B115200, 230400: termios.B230400}
+_BAUD = {
+    9600: termios.B9600,
+    19200: termios.B19200,
+    38400: termios.B38400,
+    57600: termios.B57600,
+    115200: termios.B115200,
+    230400: termios.B230400,
+}
 
 
 class DatagramPort(Protocol):
@@ -60,8 +66,7 @@ class UdpPort:
 
     def __init__(self, endpoint: tuple[str, int]) -> None:
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        addr = socket.getaddrinfo(endpoint[0], endpoint[1], socket.AF_INET,
-                                  socket.SOCK_DGRAM)[0][4]
+        addr = socket.getaddrinfo(endpoint[0], endpoint[1], socket.AF_INET, socket.SOCK_DGRAM)[0][4]
         self._peer = (str(addr[0]), int(addr[1]))  # as recvfrom reports it
         self.wire_in = self.wire_out = 0
 

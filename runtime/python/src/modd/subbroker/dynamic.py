@@ -79,8 +79,13 @@ def _period_text(value: Any) -> str | None:
 class DynamicSubscriptions:
     """The registry of dynamic subscriptions of one drone."""
 
-    def __init__(self, drone: str, reserved: Callable[[], set[str]] = set,
-                 per_owner: int = PER_OWNER, total: int = TOTAL) -> None:
+    def __init__(
+        self,
+        drone: str,
+        reserved: Callable[[], set[str]] = set,
+        per_owner: int = PER_OWNER,
+        total: int = TOTAL,
+    ) -> None:
         self._drone = drone
         self._per_owner = per_owner
         self._total = total
@@ -101,8 +106,9 @@ class DynamicSubscriptions:
                 except ValueError:
                     continue
                 if len(name) <= MAX_NAME:
-                    self._subs[name] = Dynamic(name, d["topic"], d["period_s"],
-                                               d["aggregation"], d["owner"])
+                    self._subs[name] = Dynamic(
+                        name, d["topic"], d["period_s"], d["aggregation"], d["owner"]
+                    )
 
     def _changed(self) -> None:
         if self.persist is None:
@@ -146,8 +152,10 @@ class DynamicSubscriptions:
         if not isinstance(topic, str) or not isinstance(agg, str) or period is None:
             return {"status": "ERROR", "reason": "expected topic, period_s and aggregation"}
         if max(len(topic), len(agg), len(period)) > MAX_FIELD:
-            return {"status": "ERROR", "reason": f"topic, period_s and aggregation: at most "
-                    f"{MAX_FIELD} characters"}
+            return {
+                "status": "ERROR",
+                "reason": f"topic, period_s and aggregation: at most {MAX_FIELD} characters",
+            }
         owner = _owner(request) or ""
         if running is None:
             return {"status": "NOT_AVAILABLE", "reason": "no plan is running on the link yet"}
@@ -158,8 +166,10 @@ class DynamicSubscriptions:
         if not isinstance(name, str):
             return {"status": "ERROR", "reason": "subscriber: expected a name"}
         if len(name) > MAX_NAME:
-            return {"status": "ERROR", "reason": f"subscriber name of {len(name)} characters: "
-                    f"at most {MAX_NAME}"}
+            return {
+                "status": "ERROR",
+                "reason": f"subscriber name of {len(name)} characters: at most {MAX_NAME}",
+            }
         try:
             check_name("subscriber", name)
         except ValueError as exc:
@@ -169,10 +179,15 @@ class DynamicSubscriptions:
                 return {"status": "ERROR", "reason": f"subscriber {name!r} already exists"}
             held = sum(1 for d in self._subs.values() if d.owner == owner)
             if held >= self._per_owner or len(self._subs) >= self._total:
-                limit = (f"{self._per_owner} per owner" if held >= self._per_owner
-                         else f"{self._total} in all")
-                return {"status": "QUOTA", "reason": f"too many dynamic subscriptions ({limit}); "
-                        "cancel one first"}
+                limit = (
+                    f"{self._per_owner} per owner"
+                    if held >= self._per_owner
+                    else f"{self._total} in all"
+                )
+                return {
+                    "status": "QUOTA",
+                    "reason": f"too many dynamic subscriptions ({limit}); cancel one first",
+                }
             self._subs[name] = Dynamic(name, topic, period, agg, owner)
         target = StreamKey.parse(verdict.stream)
         running.route(target, verdict.sources, name)

@@ -147,8 +147,7 @@ class FanOut:
             due = _Due(
                 stream,
                 -1 if route.sources else self._ids[stream],
-                tuple((self._ids[s.stream], s.factor, s.stream.aggregation)
-                      for s in route.sources),
+                tuple((self._ids[s.stream], s.factor, s.stream.aggregation) for s in route.sources),
                 tuple(route.subscribers),
             )
             groups.setdefault(period_us(stream), []).append(due)
@@ -195,8 +194,10 @@ class FanOut:
         if len(hist) < factor:
             return None
         tail = list(itertools.islice(hist, len(hist) - factor, None))
-        if tail[0][0] == last - factor + 1 and tail[-1][0] == last and all(
-            b[0] - a[0] == 1 for a, b in itertools.pairwise(tail)
+        if (
+            tail[0][0] == last - factor + 1
+            and tail[-1][0] == last
+            and all(b[0] - a[0] == 1 for a, b in itertools.pairwise(tail))
         ):
             return [w for _, w in tail]
         wanted = range(last - factor + 1, last + 1)  # out of order (never seen): look up

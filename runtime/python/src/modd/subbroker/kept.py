@@ -45,6 +45,7 @@ class Deployment:
     @classmethod
     def from_request(cls, request: dict[str, Any]) -> Deployment:
         """The metadata of a (verified) deploy request; stamped when acked."""
+
         def num(key: str) -> int | None:
             v = request.get(key)
             return v if isinstance(v, int) and not isinstance(v, bool) else None
@@ -53,8 +54,7 @@ class Deployment:
             v = request.get(key)
             return v[:128] if isinstance(v, str) else None
 
-        return cls("deploy", num("project_id"), num("revision"), text("nonce"),
-                   text("deployed_by"))
+        return cls("deploy", num("project_id"), num("revision"), text("nonce"), text("deployed_by"))
 
     def acked(self) -> Deployment:
         return replace(self, deployed_at_ns=time.time_ns())
@@ -68,8 +68,9 @@ class Deployment:
         by = f" by {self.deployed_by}" if self.deployed_by else ""
         when = ""
         if self.deployed_at_ns:
-            when = " at " + time.strftime("%Y-%m-%d %H:%M:%S UTC",
-                                          time.gmtime(self.deployed_at_ns / 1e9))
+            when = " at " + time.strftime(
+                "%Y-%m-%d %H:%M:%S UTC", time.gmtime(self.deployed_at_ns / 1e9)
+            )
         return f"{rev}{project}, deployed{when}{by}"
 
 
@@ -125,10 +126,18 @@ class StateDir:
             raw: dict[str, Any] = found if isinstance(found, dict) else {}
         else:
             model, raw = doc, {}
-        fields = {k: raw.get(k) for k in ("project_id", "revision", "nonce", "deployed_by",
-                                           "deployed_at_ns")}
-        meta = Deployment("kept", **{k: v for k, v in fields.items()  # type: ignore[arg-type]
-                                     if isinstance(v, int | str) and not isinstance(v, bool)})
+        fields = {
+            k: raw.get(k)
+            for k in ("project_id", "revision", "nonce", "deployed_by", "deployed_at_ns")
+        }
+        meta = Deployment(
+            "kept",
+            **{
+                k: v
+                for k, v in fields.items()  # type: ignore[arg-type]
+                if isinstance(v, int | str) and not isinstance(v, bool)
+            },
+        )
         return model, replace(meta, resumed_at_ns=time.time_ns())
 
     def deployment_file(self) -> Path | None:
@@ -144,9 +153,15 @@ class StateDir:
         subs = doc.get("subscriptions") if isinstance(doc, dict) else None
         if not isinstance(subs, list):
             return []
-        return [s for s in subs if isinstance(s, dict)
-                and all(isinstance(s.get(k), str) for k in ("name", "topic", "period_s",
-                                                               "aggregation", "owner"))]
+        return [
+            s
+            for s in subs
+            if isinstance(s, dict)
+            and all(
+                isinstance(s.get(k), str)
+                for k in ("name", "topic", "period_s", "aggregation", "owner")
+            )
+        ]
 
     # -- the window record (backfill) ---------------------------------------------
 

@@ -131,10 +131,15 @@ class DeliveredValue(DeliveredValueFields):
             if not _is_int(data[name]):
                 raise ValueError(f"delivered value: {name} is {data[name]!r}, not an integer")
         value, count = doc["value"], doc["count"]
-        if not (value is None or _is_scalar(value)
-                or (isinstance(value, list) and all(_is_scalar(x) for x in value))):
-            raise ValueError(f"delivered value: value is {str(value)[:80]}, not a number, a "
-                             "boolean, a list of them or null")
+        if not (
+            value is None
+            or _is_scalar(value)
+            or (isinstance(value, list) and all(_is_scalar(x) for x in value))
+        ):
+            raise ValueError(
+                f"delivered value: value is {str(value)[:80]}, not a number, a "
+                "boolean, a list of them or null"
+            )
         if count is not None and not _is_int(count):
             raise ValueError(f"delivered value: count is {count!r}, not an integer or null")
         out = cls(**{f.name: data[f.name] for f in fields(cls) if f.name in data})
@@ -180,13 +185,25 @@ class StreamPayload:
 
     __slots__ = ("_head",)
 
-    def __init__(self, topic: str, aggregation: str, period_s: str, unit: str,
-                 config_id: int) -> None:
-        fixed = json.dumps(dict(zip(_CONSTANT, (topic, aggregation, period_s, unit, config_id),
-                                    strict=True)), separators=(",", ":"))
+    def __init__(
+        self, topic: str, aggregation: str, period_s: str, unit: str, config_id: int
+    ) -> None:
+        fixed = json.dumps(
+            dict(zip(_CONSTANT, (topic, aggregation, period_s, unit, config_id), strict=True)),
+            separators=(",", ":"),
+        )
         self._head = fixed[1:-1] + _KEYS[0]
 
-    def tail(self, slot: int, start_ns: int, end_ns: int, value: Value, count: int | None,
-             delivered_ns: int) -> bytes:
-        return (f"{self._head}{slot}{_K1}{start_ns}{_K2}{end_ns}{_K3}{_json_scalar(value)}"
-                f"{_K4}{_json_scalar(count)}{_K5}{delivered_ns}{_END}").encode()
+    def tail(
+        self,
+        slot: int,
+        start_ns: int,
+        end_ns: int,
+        value: Value,
+        count: int | None,
+        delivered_ns: int,
+    ) -> bytes:
+        return (
+            f"{self._head}{slot}{_K1}{start_ns}{_K2}{end_ns}{_K3}{_json_scalar(value)}"
+            f"{_K4}{_json_scalar(count)}{_K5}{delivered_ns}{_END}"
+        ).encode()

@@ -56,8 +56,9 @@ def plan_within(model: dict[str, Any], rtt_s: float | None, budget_s: float) -> 
     thread, so while one still runs every other request is refused at once."""
     _running_over[:] = [t for t in _running_over if t.is_alive()]
     if _running_over:
-        raise OverBudget("a model given up for its planning budget is still being planned; "
-                         "retry in a moment")
+        raise OverBudget(
+            "a model given up for its planning budget is still being planned; retry in a moment"
+        )
     future: Future[Plan] = Future()
 
     def work() -> None:
@@ -71,16 +72,19 @@ def plan_within(model: dict[str, Any], rtt_s: float | None, budget_s: float) -> 
     thread.join(budget_s)
     if thread.is_alive():
         _running_over.append(thread)
-        raise OverBudget(f"planning this model takes longer than the SubBroker's budget of "
-                         f"{budget_s:g} s ([link] plan_budget_s)")
+        raise OverBudget(
+            f"planning this model takes longer than the SubBroker's budget of "
+            f"{budget_s:g} s ([link] plan_budget_s)"
+        )
     try:
         return future.result()
     except MemoryError as exc:
         raise OverBudget("planning this model ran out of memory") from exc
 
 
-def accepted_delay_ms(model: dict[str, Any], configured: dict[str, Any],
-                      transport: str) -> int | None:
+def accepted_delay_ms(
+    model: dict[str, Any], configured: dict[str, Any], transport: str
+) -> int | None:
     """The CONFIG's optional accepted delay (docs/protocol.md, "CONFIG"): on a
     datagram link, the ``model``'s ``Link.delay`` in ms when it differs from the
     ``configured`` model's (the one the PubBroker's config file was generated
@@ -104,9 +108,13 @@ def accepted_delay_ms(model: dict[str, Any], configured: dict[str, Any],
     return ms
 
 
-def config_for(plan: Plan, config_id: int, status_period_s: int = 60,
-               accepted_delay_ms: int | None = None,
-               resolutions: tuple[float | None, ...] | None = None) -> Config:
+def config_for(
+    plan: Plan,
+    config_id: int,
+    status_period_s: int = 60,
+    accepted_delay_ms: int | None = None,
+    resolutions: tuple[float | None, ...] | None = None,
+) -> Config:
     """The CONFIG frame of a plan. Topics nobody publishes get buffer size 1;
     ``accepted_delay_ms`` and ``resolutions`` (one per sent stream, see
     :func:`resolutions_of`) are the optional trailing fields."""
@@ -137,8 +145,9 @@ def resolutions_of(model: dict[str, Any], plan: Plan) -> tuple[float | None, ...
     return tuple(found) if any(r is not None for r in found) else None
 
 
-def trailing_fields(model: dict[str, Any], configured: dict[str, Any], transport: str,
-                    plan: Plan) -> tuple[int | None, tuple[float | None, ...] | None]:
+def trailing_fields(
+    model: dict[str, Any], configured: dict[str, Any], transport: str, plan: Plan
+) -> tuple[int | None, tuple[float | None, ...] | None]:
     """The CONFIG's optional accepted delay and resolutions: the resolution field
     follows the delay, so a plan with resolutions carries the model's delay too."""
     delay = accepted_delay_ms(model, configured, transport)

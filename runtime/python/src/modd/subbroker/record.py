@@ -43,9 +43,17 @@ _SAFE = re.compile(r"[^A-Za-z0-9_.-]")
 # One JSON type per field, as Foxglove and Lichtblick read schemas (a field
 # without a type makes them drop the channel); a null or an ALL window's list
 # still travels in "value".
-_SCHEMA = json.dumps({"type": "object", "properties": {
-    "value": {"type": "number"}, "start_ns": {"type": "integer"},
-    "end_ns": {"type": "integer"}, "backfilled": {"type": "boolean"}}}).encode()
+_SCHEMA = json.dumps(
+    {
+        "type": "object",
+        "properties": {
+            "value": {"type": "number"},
+            "start_ns": {"type": "integer"},
+            "end_ns": {"type": "integer"},
+            "backfilled": {"type": "boolean"},
+        },
+    }
+).encode()
 
 
 class BaseRecord:
@@ -92,11 +100,9 @@ class BaseRecord:
         # Small chunks: a chunk reaches the disk when full, so a record being
         # written is readable (replay, `modd dataset --received`) up to a few
         # seconds ago, and a crash loses at most one chunk (was 1 MiB: minutes).
-        self._writer = Writer(self._file, compression=CompressionType.ZSTD,
-                              chunk_size=RECORD_CHUNK)
+        self._writer = Writer(self._file, compression=CompressionType.ZSTD, chunk_size=RECORD_CHUNK)
         self._writer.start(profile="", library="modd-subbroker")
-        self._schema = self._writer.register_schema("modd.DeliveredValue", "jsonschema",
-                                                    _SCHEMA)
+        self._schema = self._writer.register_schema("modd.DeliveredValue", "jsonschema", _SCHEMA)
         self._channels = {}
         self._mission = (mission, epoch_ns)
         log.info("base-station record: %s", self.path)
@@ -113,7 +119,8 @@ class BaseRecord:
                 ch = self._channels.get(subscriber)
                 if ch is None:
                     ch = self._channels[subscriber] = writer.register_channel(
-                        sub_key(self.drone, subscriber), "json", self._schema)
+                        sub_key(self.drone, subscriber), "json", self._schema
+                    )
                 data: dict[str, Any] = json.loads(payload)
                 end = int(data.get("end_ns", 0))
                 writer.add_message(ch, end, payload, int(data.get("delivered_ns", end)))
@@ -125,8 +132,12 @@ class BaseRecord:
     def _fail(self, exc: OSError, mission: tuple[str, int] | None) -> None:
         """A write error: the file is dropped (left as written), recording paused."""
         if self._failed_at is None:
-            log.error("base-station record: write failed (%s): values not recorded, live "
-                      "delivery goes on; a new file is tried every %.0f s", exc, RETRY_S)
+            log.error(
+                "base-station record: write failed (%s): values not recorded, live "
+                "delivery goes on; a new file is tried every %.0f s",
+                exc,
+                RETRY_S,
+            )
         self._failed_at = time.monotonic()
         if self._file is not None:
             with contextlib.suppress(OSError):  # what the file system kept stays
@@ -147,8 +158,11 @@ class BaseRecord:
             self._fail(exc, mission)
             return False
         self._failed_at = None
-        log.warning("base-station record: writing again (%s; %d values not recorded)",
-                    self.path, self.dropped)
+        log.warning(
+            "base-station record: writing again (%s; %d values not recorded)",
+            self.path,
+            self.dropped,
+        )
         return True
 
     def _close(self) -> None:

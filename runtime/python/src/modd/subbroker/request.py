@@ -25,8 +25,7 @@ MAX_DEPLOY_BYTES = 32 * 1024 * 1024
 MAX_SMALL_BYTES = 64 * 1024
 
 
-def read_request(payload: bytes, max_bytes: int) -> tuple[dict[str, Any], None] | tuple[
-        None, str]:
+def read_request(payload: bytes, max_bytes: int) -> tuple[dict[str, Any], None] | tuple[None, str]:
     """``(request, None)``, or ``(None, reason)`` for a payload that is too
     big, nested deeper than MAX_DEPTH, not JSON, or not an object."""
     if len(payload) > max_bytes:

@@ -25,8 +25,9 @@ from .pump import Link
 DEFAULT_BAUD = 57600
 
 
-def link_client(config: SubBrokerConfig, key: bytes, handler: LinkHandler,
-                liveness: Callable[[], float]) -> Link:
+def link_client(
+    config: SubBrokerConfig, key: bytes, handler: LinkHandler, liveness: Callable[[], float]
+) -> Link:
     """The link client the configuration asks for (not started)."""
     transport = config.transport
     if transport == "tcp":
@@ -40,6 +41,14 @@ def link_client(config: SubBrokerConfig, key: bytes, handler: LinkHandler,
         baud = config.link.baud or int(config.model.get("link", {}).get("baud", DEFAULT_BAUD))
         opener = partial(SerialPort, config.device, baud, settings.max_packet)
         where = f"serial {config.device}"
-    session = DatagramSession(transport, key, config.link, handler, float(settings.accepted_delay),
-                              liveness, settings.max_packet, where=where)
+    session = DatagramSession(
+        transport,
+        key,
+        config.link,
+        handler,
+        float(settings.accepted_delay),
+        liveness,
+        settings.max_packet,
+        where=where,
+    )
     return DatagramLinkClient(opener, session, config.link)

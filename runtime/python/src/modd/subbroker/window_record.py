@@ -104,8 +104,9 @@ class WindowRecord:
         ends = [iv.spans[-1][1] for iv in self.received.values() if iv.spans]
         return max(ends) if ends else None
 
-    def delivered(self, subscriber: str, stream: StreamKey, source: StreamKey,
-                  start: int, end: int) -> bool:
+    def delivered(
+        self, subscriber: str, stream: StreamKey, source: StreamKey, start: int, end: int
+    ) -> bool:
         live = self.received.get(source)
         if live is not None and live.covers(start, end):
             return True
@@ -123,8 +124,12 @@ class WindowRecord:
     def subscribers(self, since_ns: int) -> set[str]:
         """The subscribers due windows after ``since_ns`` (in any epoch that far)."""
         nexts = [e.epoch_ns for e in self.epochs[1:]] + [1 << 63]
-        return {d.subscriber for e, end in zip(self.epochs, nexts, strict=True)
-                if end > since_ns for d in e.due}
+        return {
+            d.subscriber
+            for e, end in zip(self.epochs, nexts, strict=True)
+            if end > since_ns
+            for d in e.due
+        }
 
     def gaps(self, subscriber: str, from_ns: int, to_ns: int) -> list[Run]:
         """The runs of ``subscriber``'s windows in ``[from_ns, to_ns)`` not delivered (live
@@ -152,28 +157,50 @@ class WindowRecord:
                 if start is None:
                     start = s
             elif start is not None:
-                runs.append(Run(d.subscriber, d.stream, d.source, d.value_type, d.unit,
-                                e.config_id, start, (s - start) // q))
+                runs.append(
+                    Run(
+                        d.subscriber,
+                        d.stream,
+                        d.source,
+                        d.value_type,
+                        d.unit,
+                        e.config_id,
+                        start,
+                        (s - start) // q,
+                    )
+                )
                 start = None
         return runs
 
     # -- kept in the state directory ----------------------------------------------------
 
     def to_json(self) -> dict[str, Any]:
-        return {"epochs": [{"mission": e.mission, "config_id": e.config_id,
-                            "epoch_ns": e.epoch_ns,
-                            "due": [[d.subscriber, d.stream.key, d.source.key, d.unit,
-                                     d.value_type] for d in e.due]} for e in self.epochs],
-                "received": {k.key: iv.spans for k, iv in self.received.items()},
-                "filled": [[s, k.key, iv.spans] for (s, k), iv in self.filled.items()]}
+        return {
+            "epochs": [
+                {
+                    "mission": e.mission,
+                    "config_id": e.config_id,
+                    "epoch_ns": e.epoch_ns,
+                    "due": [
+                        [d.subscriber, d.stream.key, d.source.key, d.unit, d.value_type]
+                        for d in e.due
+                    ],
+                }
+                for e in self.epochs
+            ],
+            "received": {k.key: iv.spans for k, iv in self.received.items()},
+            "filled": [[s, k.key, iv.spans] for (s, k), iv in self.filled.items()],
+        }
 
     @classmethod
     def from_json(cls, doc: Any) -> WindowRecord:
         """The record kept; raises ValueError (or KeyError, TypeError) if it is not one."""
         rec = cls()
         for e in doc["epochs"]:
-            due = [Due(str(s), StreamKey.parse(k), StreamKey.parse(src), str(u), str(t))
-                   for s, k, src, u, t in e["due"]]
+            due = [
+                Due(str(s), StreamKey.parse(k), StreamKey.parse(src), str(u), str(t))
+                for s, k, src, u, t in e["due"]
+            ]
             rec.begin(Epoch(str(e["mission"]), int(e["config_id"]), int(e["epoch_ns"]), due))
         for k, spans in doc["received"].items():
             rec.received[StreamKey.parse(k)] = Intervals(_spans(spans))
