@@ -37,6 +37,8 @@ from modd_model import load_text
 
 assert Aggregation.FAKE == 8
 assert link_wire_gen.MsgType.FAKE_FRAME == 0x7E and link_wire_gen.MAX_FAKE == 42
+# a counter appended to STATUS is named by the SubBroker's decoder
+assert frames.STATUS_FIELDS[-1] == "fake_counter", frames.STATUS_FIELDS
 # the Python codec takes the new aggregation code both ways
 config = frames.Config(1, 0, (frames.TopicSpec("d.s.v", frames.ValueType.FLOAT32, 4),),
                        (frames.StreamSpec(0, Aggregation.FAKE, 250_000),))
@@ -61,13 +63,15 @@ static_assert(static_cast<int>(modd::link::Aggregation::Fake) == 8);
 static_assert(modd::link::table::kAggregationCount == 9);
 static_assert(static_cast<int>(modd::link::MsgType::FakeFrame) == 0x7E);
 static_assert(modd::link::kMaxFake == 42);
+static_assert(modd::link::kStatusFieldCount == 31);
+static_assert(static_cast<int>(modd::link::StatusField::FakeCounter) == 30);
 int main() { return 0; }
 """
 
 
 def _fake_tree(root: Path) -> Path:
     """A copy of the metamodel's packages with a fake aggregation in the schema and
-    a fake frame type and limit in wire.json; its typegen run. Returns its src."""
+    a fake frame type, limit and STATUS counter in wire.json; its typegen run. Returns its src."""
     src = root / "metamodel" / "src"
     for pkg in ("modd_model", "modd_plan", "modd_contracts"):
         shutil.copytree(
@@ -86,7 +90,10 @@ def _fake_tree(root: Path) -> Path:
     wire = json.loads(wire_file.read_text(encoding="utf-8"))
     link = wire["groups"][0]
     link["constants"].append({"name": "MAX_FAKE", "type": "size_t", "value": 42, "doc": "Fake."})
-    link["enums"][0]["values"].append({"name": "FAKE_FRAME", "value": "0x7E"})
+    enums = {e["name"]: e for e in link["enums"]}
+    enums["MsgType"]["values"].append({"name": "FAKE_FRAME", "value": "0x7E"})
+    counters = enums["StatusField"]["values"]
+    counters.append({"name": "FAKE_COUNTER", "value": len(counters)})
     wire_file.write_text(json.dumps(wire), encoding="utf-8")
     run = subprocess.run(
         [sys.executable, "-m", "modd_contracts.typegen"],

@@ -34,6 +34,24 @@ class MsgType(IntEnum):
     REJECT = 0x83
 
 
+class RejectReason(IntEnum):
+    """Why the broker refused a record: the reason code of REJECT, and the index of the
+    PubBroker's rejected_* counters (labels: their log names)."""
+
+    UNKNOWN_TOPIC = 0  # unknown topic
+    WRONG_TYPE = 1  # wrong type
+    NOT_FINITE = 2  # value not finite
+    TIMESTAMP = 3  # timestamp out of bounds
+    OVERFLOW = 4  # archive queue full
+    MALFORMED = 5  # malformed
+    QUOTA = 6  # over its fair share of the archive queue
+
+    @property
+    def label(self) -> str:
+        """The member's name in logs and status documents (``"uptime_s"``)."""
+        return self.name.lower()
+
+
 __all__ = [
     "VERSION",
     "MIN_VERSION",
@@ -41,4 +59,5 @@ __all__ = [
     "MAX_LOCAL_ID",
     "MAX_NAME",
     "MsgType",
+    "RejectReason",
 ]

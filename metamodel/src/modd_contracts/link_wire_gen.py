@@ -38,6 +38,48 @@ MAX_PERIOD_US: Final = 31622400000000
 MIN_KEY_BYTES: Final = 16
 
 
+class StatusField(IntEnum):
+    """The PubBroker's counters in the order STATUS carries them (docs/protocol.md, STATUS);
+    fields are only ever appended. The labels (lower case) name them in logs, the run record
+    and the SubBroker's status."""
+
+    UPTIME_S = 0
+    SAMPLES_IN = 1
+    SAMPLES_ARCHIVED = 2
+    REJECTED_UNKNOWN_TOPIC = 3
+    REJECTED_WRONG_TYPE = 4
+    REJECTED_NOT_FINITE = 5
+    REJECTED_TIMESTAMP = 6
+    REJECTED_OVERFLOW = 7
+    REJECTED_MALFORMED = 8
+    ARCHIVE_FAILED = 9
+    INGRESS_MALFORMED_FRAMES = 10
+    PUBLISHERS_CONNECTED = 11
+    FRAMES_SENT = 12
+    FRAMES_DROPPED = 13
+    LINK_BYTES_SENT = 14
+    DISK_FREE_MB = 15
+    BUFFER_FILL_PCT = 16
+    ARCHIVE_FILES = 17
+    AUTH_FAILURES = 18
+    CONFIG_ID = 19
+    REJECTED_QUOTA = 20
+    ARCHIVE_STATE = 21
+    ARCHIVE_RATE_BPS = 22
+    SAMPLES_PENDING = 23
+    LINK_DATAGRAMS_SENT = 24
+    LINK_DATAGRAMS_RESENT = 25
+    LINK_NACKS = 26
+    LINK_SLOTS_DROPPED = 27
+    LINK_FORGED = 28
+    LINK_REPLAYED = 29
+
+    @property
+    def label(self) -> str:
+        """The member's name in logs and status documents (``"uptime_s"``)."""
+        return self.name.lower()
+
+
 class MsgType(IntEnum):
     """The type byte of a frame."""
 
@@ -180,6 +222,7 @@ __all__ = [
     "MAX_BUFFER_SIZE",
     "MAX_PERIOD_US",
     "MIN_KEY_BYTES",
+    "StatusField",
     "MsgType",
     "ValueType",
     "ErrorCode",

@@ -57,6 +57,10 @@ def _check(group: dict[str, Any]) -> None:
             raise ValueError(f"wire.json {group['name']}/{enum['name']}: a name twice")
         if len({int(v, 0) for _, v, _ in members}) != len(members):
             raise ValueError(f"wire.json {group['name']}/{enum['name']}: a value twice")
+        if enum.get("labels") and [int(v, 0) for _, v, _ in members] != list(range(len(members))):
+            raise ValueError(
+                f"wire.json {group['name']}/{enum['name']}: labels need codes 0, 1, ..."
+            )
     for c in group["constants"]:
         int(str(c["value"]), 0)
 
@@ -76,6 +80,14 @@ def _py_enum(enum: dict[str, Any]) -> list[str]:
     out[-1] += '"""'
     out.append("")
     out += [f"    {n} = {v}" + (f"  # {d}" if d else "") for n, v, d in _values(enum)]
+    if enum.get("labels"):
+        out += [
+            "",
+            "    @property",
+            "    def label(self) -> str:",
+            '        """The member\'s name in logs and status documents (``"uptime_s"``)."""',
+            "        return self.name.lower()",
+        ]
     if "fromSchema" in enum:
         names = definition(enum["fromSchema"])["enum"]
         labels = "(" + ", ".join(json.dumps(x) for x in names) + ")"
@@ -139,6 +151,12 @@ def _cpp_enum(enum: dict[str, Any]) -> list[str]:
         f"// The number of {name} values.",
         f"inline constexpr size_t k{name}Count = {len(members)};",
     ]
+    if enum.get("labels"):
+        labels = ", ".join(json.dumps(n.lower()) for n, _, _ in members)
+        out += [
+            f"// Each {name}'s name in logs and status documents, by code.",
+            f"inline constexpr const char* k{name}Labels[] = {{{labels}}};",
+        ]
     if "fromSchema" in enum:
         labels = ", ".join(json.dumps(x) for x in definition(enum["fromSchema"])["enum"])
         out += [

@@ -154,8 +154,8 @@ TEST(Broker, ConfigThenDataFramesFromStampedSamples) {
   auto st = split_frame(std::span(link.writes[2]).subspan(f->size));
   ASSERT_TRUE(st);
   auto status = std::get<Status>(decode(*st));
-  EXPECT_EQ(status.counters[kSamplesIn], 4u);
-  EXPECT_EQ(status.counters[kConfigId], 1u);
+  EXPECT_EQ(status.counters[at(StatusField::SamplesIn)], 4u);
+  EXPECT_EQ(status.counters[at(StatusField::ConfigId)], 1u);
   // With no DATA for a whole status period, STATUS goes out on its own.
   b.status_due(E + 800 * kMs);
   b.send_overdue_status(E + 900 * kMs);
@@ -207,7 +207,7 @@ TEST(Broker, StatusGoesAloneOnlyWhenNoDataCarriesIt) {
   ASSERT_EQ(link.writes.size(), 1u);
   auto f = split_frame(link.writes[0]);
   ASSERT_TRUE(f);
-  EXPECT_EQ(std::get<Status>(decode(*f)).counters[kConfigId], 3u);
+  EXPECT_EQ(std::get<Status>(decode(*f)).counters[at(StatusField::ConfigId)], 3u);
   b.send_overdue_status(t0 + 3000 * kMs);
   EXPECT_EQ(link.writes.size(), 1u);  // sent once per period
 }

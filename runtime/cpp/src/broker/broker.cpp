@@ -35,7 +35,7 @@ void IngressSession::on_register(const ingress::Register& r) {
   Local& l = locals_[r.local_id];
   l.used = true;
   l.type = r.type;
-  l.reject = Reject::kCount;
+  l.reject = kAccepted;
   l.topic = r.topic;
   l.global = broker_.find_topic(r.topic, r.type, l.reject);
   l.generation = broker_.topics_generation();
@@ -64,13 +64,13 @@ void IngressSession::on_record(const ingress::Record& r) {
   Local& l = locals_[r.local_id];
   if (l.generation != broker_.topics_generation()) {
     // Topics were added or retyped (a CONFIG) since the registration: resolve again.
-    l.reject = Reject::kCount;
+    l.reject = kAccepted;
     l.global = broker_.find_topic(l.topic, l.type, l.reject);
     l.generation = broker_.topics_generation();
   }
   Reject why = broker_.ingest(l.global, l.reject, l.type, stamp_, r, this);
   ++received_;
-  if (why == Reject::kCount) {
+  if (why == kAccepted) {
     ++accepted_;
     return;
   }
@@ -289,7 +289,7 @@ Reject Broker::ingest(int64_t global, Reject why, link::ValueType declared, int6
   t.front.push_back({stamp, r.timestamp_ns, r.number, r.integer});
   ++front_samples_;
   if (t.front.size() >= t.capacity) swap_out(t);
-  return Reject::kCount;
+  return kAccepted;
 }
 
 std::string Broker::describe(Reject why, const std::string& topic, int64_t stamp,
@@ -459,10 +459,9 @@ void Broker::write_run_record(int64_t now, bool final) {
   std::vector<uint64_t> v = status_counters();  // `archived` read before the files: never more
   std::vector<std::pair<std::string, uint64_t>> counters;
   counters.reserve(v.size());
-  for (int i = 0; i < kStatusFieldCount; ++i)
-    counters.emplace_back(kStatusFieldNames[i], v[static_cast<size_t>(i)]);
+  for (size_t i = 0; i < kStatusFieldCount; ++i) counters.emplace_back(kStatusFieldLabels[i], v[i]);
   run_record_->write(counters, archiver_->files(), final, now);
-  record_files_ = v[kArchiveFiles];
+  record_files_ = v[at(StatusField::ArchiveFiles)];
   record_samples_in_ = counters_.samples_in;
   next_record_ns_ = now + 1'000'000'000;
 }
@@ -609,54 +608,56 @@ std::vector<uint64_t> Broker::status_counters() {
   std::vector<uint64_t> v(kStatusFieldCount, 0);
   const auto& ac = archiver_->counters();
   const auto& ec = executor_.counters();
-  v[kUptimeS] = static_cast<uint64_t>((now() - started_ns_) / 1'000'000'000);
-  v[kSamplesIn] = counters_.samples_in;
+  v[at(StatusField::UptimeS)] = static_cast<uint64_t>((now() - started_ns_) / 1'000'000'000);
+  v[at(StatusField::SamplesIn)] = counters_.samples_in;
   // One read of each writer counter, so that the STATUS reconciles exactly.
   const uint64_t archived = ac.archived, failed = ac.failed;
-  v[kSamplesArchived] = archived;
-  v[kRejUnknownTopic] = counters_.rejected[0];
-  v[kRejWrongType] = counters_.rejected[1];
-  v[kRejNotFinite] = counters_.rejected[2];
-  v[kRejTimestamp] = counters_.rej(Reject::Timestamp);
-  v[kRejOverflow] = counters_.rejected[4];
-  v[kRejMalformed] = counters_.rejected[5];
-  v[kArchiveFailed] = failed;
-  v[kIngressMalformedFrames] = counters_.ingress_malformed_frames;
-  v[kPublishersConnected] = counters_.publishers_connected;
-  v[kFramesSent] = ec.frames_sent;
-  v[kFramesDropped] = ec.frames_dropped;
-  v[kLinkBytesSent] = counters_.link_bytes_sent;
+  v[at(StatusField::SamplesArchived)] = archived;
+  v[at(StatusField::RejectedUnknownTopic)] = counters_.rej(Reject::UnknownTopic);
+  v[at(StatusField::RejectedWrongType)] = counters_.rej(Reject::WrongType);
+  v[at(StatusField::RejectedNotFinite)] = counters_.rej(Reject::NotFinite);
+  v[at(StatusField::RejectedTimestamp)] = counters_.rej(Reject::Timestamp);
+  v[at(StatusField::RejectedOverflow)] = counters_.rej(Reject::Overflow);
+  v[at(StatusField::RejectedMalformed)] = counters_.rej(Reject::Malformed);
+  v[at(StatusField::ArchiveFailed)] = failed;
+  v[at(StatusField::IngressMalformedFrames)] = counters_.ingress_malformed_frames;
+  v[at(StatusField::PublishersConnected)] = counters_.publishers_connected;
+  v[at(StatusField::FramesSent)] = ec.frames_sent;
+  v[at(StatusField::FramesDropped)] = ec.frames_dropped;
+  v[at(StatusField::LinkBytesSent)] = counters_.link_bytes_sent;
   struct statvfs sv {};
   if (statvfs(cfg_.archive_dir.c_str(), &sv) == 0)
-    v[kDiskFreeMb] = static_cast<uint64_t>(sv.f_bavail) * sv.f_frsize / (1024 * 1024);
+    v[at(StatusField::DiskFreeMb)] =
+        static_cast<uint64_t>(sv.f_bavail) * sv.f_frsize / (1024 * 1024);
   uint64_t fill = 0;
   for (const Topic& t : topics_)
     if (t.capacity) fill = std::max<uint64_t>(fill, t.front.size() * 100 / t.capacity);
-  v[kBufferFillPct] = fill;
-  v[kArchiveFiles] = ac.files;
-  v[kAuthFailures] = counters_.auth_failures;
-  v[kConfigId] = executor_.config_id();
-  v[kRejQuota] = counters_.rej(Reject::Quota);
-  v[kArchiveState] = archive_state_;
-  v[kArchiveRateBps] = rate_bps_;
+  v[at(StatusField::BufferFillPct)] = fill;
+  v[at(StatusField::ArchiveFiles)] = ac.files;
+  v[at(StatusField::AuthFailures)] = counters_.auth_failures;
+  v[at(StatusField::ConfigId)] = executor_.config_id();
+  v[at(StatusField::RejectedQuota)] = counters_.rej(Reject::Quota);
+  v[at(StatusField::ArchiveState)] = archive_state_;
+  v[at(StatusField::ArchiveRateBps)] = rate_bps_;
   uint64_t settled = archived + failed;
-  v[kSamplesPending] = counters_.accepted > settled ? counters_.accepted - settled : 0;
+  v[at(StatusField::SamplesPending)] =
+      counters_.accepted > settled ? counters_.accepted - settled : 0;
   const LinkDatagramCounts d = out_.datagram_counts();
-  v[kDgramSent] = d.sent;
-  v[kDgramResent] = d.resent;
-  v[kDgramNacks] = d.nacks;
-  v[kDgramDropped] = d.dropped;
-  v[kDgramForged] = d.forged;
-  v[kDgramReplayed] = d.replayed;
+  v[at(StatusField::LinkDatagramsSent)] = d.sent;
+  v[at(StatusField::LinkDatagramsResent)] = d.resent;
+  v[at(StatusField::LinkNacks)] = d.nacks;
+  v[at(StatusField::LinkSlotsDropped)] = d.dropped;
+  v[at(StatusField::LinkForged)] = d.forged;
+  v[at(StatusField::LinkReplayed)] = d.replayed;
   return v;
 }
 
 std::string Broker::log_summary() {
   auto v = status_counters();
   std::string s;
-  for (int i = 0; i < kStatusFieldCount; ++i) {
+  for (size_t i = 0; i < kStatusFieldCount; ++i) {
     if (i) s += ' ';
-    s += kStatusFieldNames[i];
+    s += kStatusFieldLabels[i];
     s += '=';
     s += std::to_string(v[i]);
   }

@@ -19,7 +19,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from modd_contracts.ingress_wire_gen import MAX_FRAME as MAX_FRAME
-from modd_contracts.ingress_wire_gen import MAX_LOCAL_ID, MAX_NAME, VERSION, MsgType
+from modd_contracts.ingress_wire_gen import MAX_LOCAL_ID, MAX_NAME, VERSION, MsgType, RejectReason
 
 from modd.link.codec import Reader, encode_sensor_health, string, varint
 from modd.link.frames import SensorHealth, ValueType
@@ -27,16 +27,17 @@ from modd.link.frames import SensorHealth, ValueType
 INGRESS_VERSION = VERSION
 HELLO, REGISTER, SAMPLES, HEALTH = MsgType.HELLO, MsgType.REGISTER, MsgType.SAMPLES, MsgType.HEALTH
 CATALOGUE, ACK, REJECT = MsgType.CATALOGUE, MsgType.ACK, MsgType.REJECT
-# REJECT reason codes (the broker's Reject enum, runtime/cpp/include/modd/broker/counters.hpp).
-REASONS = (
-    "unknown topic",
-    "wrong type",
-    "value not finite",
-    "timestamp out of bounds",
-    "archive queue full",
-    "malformed",
-    "over its fair share of the archive queue",
-)
+# What a REJECT's reason code says to the publisher's user (codes: RejectReason, the
+# contract wire.json; a newer broker's code outside it is shown by its number).
+REASONS: dict[int, str] = {
+    RejectReason.UNKNOWN_TOPIC: "unknown topic",
+    RejectReason.WRONG_TYPE: "wrong type",
+    RejectReason.NOT_FINITE: "value not finite",
+    RejectReason.TIMESTAMP: "timestamp out of bounds",
+    RejectReason.OVERFLOW: "archive queue full",
+    RejectReason.MALFORMED: "malformed",
+    RejectReason.QUOTA: "over its fair share of the archive queue",
+}
 _VALUE_FORMAT = {
     ValueType.FLOAT32: "<f",
     ValueType.FLOAT64: "<d",
@@ -103,7 +104,7 @@ class Reject:
 
     @property
     def reason_text(self) -> str:
-        return REASONS[self.reason] if self.reason < len(REASONS) else f"reason {self.reason}"
+        return REASONS.get(self.reason, f"reason {self.reason}")
 
 
 Reply = Catalogue | Ack | Reject

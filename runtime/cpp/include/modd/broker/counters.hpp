@@ -1,29 +1,29 @@
 // The PubBroker's counters, in the order STATUS carries them (docs/protocol.md).
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "modd/ingress/wire.gen.hpp"
+#include "modd/link/wire.gen.hpp"
+
 namespace modd::broker {
 
-// Why a record was refused. The numbers are also the REJECT reason codes of the ingress
-// protocol (docs/ingress.md); keep them stable.
-enum class Reject : uint8_t {
-  UnknownTopic,
-  WrongType,
-  NotFinite,
-  Timestamp,
-  Overflow,
-  Malformed,
-  Quota,
-  kCount
-};
-const char* reject_name(Reject r);
+// Why a record was refused: the REJECT reason codes of the ingress protocol and the
+// index of the rejected_* counters (generated from wire.json: ingress/wire.gen.hpp).
+using ingress::Reject;
+// The result of validating a record that was accepted (one past the last reason).
+inline constexpr Reject kAccepted = static_cast<Reject>(ingress::kRejectCount);
+inline const char* reject_name(Reject r) {
+  auto i = static_cast<size_t>(r);
+  return i < ingress::kRejectCount ? ingress::kRejectLabels[i] : "?";
+}
 
 struct Counters {
   uint64_t samples_in = 0;  // records received (accepted + rejected)
   uint64_t accepted = 0;
-  uint64_t rejected[static_cast<int>(Reject::kCount)] = {};
+  uint64_t rejected[ingress::kRejectCount] = {};
   uint64_t ingress_malformed_frames = 0;
   uint64_t publishers_connected = 0;
   uint64_t publishers_total = 0;
@@ -38,40 +38,12 @@ struct Counters {
   }
 };
 
-// The STATUS counter list (index = position on the wire; fields are only ever appended).
-enum StatusField : uint8_t {
-  kUptimeS,
-  kSamplesIn,
-  kSamplesArchived,
-  kRejUnknownTopic,
-  kRejWrongType,
-  kRejNotFinite,
-  kRejTimestamp,
-  kRejOverflow,
-  kRejMalformed,
-  kArchiveFailed,
-  kIngressMalformedFrames,
-  kPublishersConnected,
-  kFramesSent,
-  kFramesDropped,
-  kLinkBytesSent,
-  kDiskFreeMb,
-  kBufferFillPct,
-  kArchiveFiles,
-  kAuthFailures,
-  kConfigId,
-  kRejQuota,
-  kArchiveState,
-  kArchiveRateBps,
-  kSamplesPending,
-  kDgramSent,
-  kDgramResent,
-  kDgramNacks,
-  kDgramDropped,
-  kDgramForged,
-  kDgramReplayed,
-  kStatusFieldCount
-};
+// The STATUS counter list (index = position on the wire; fields are only ever appended):
+// link::StatusField, generated from wire.json (link/wire.gen.hpp) for both codecs.
+using link::kStatusFieldCount;
+using link::kStatusFieldLabels;
+using link::StatusField;
+constexpr size_t at(StatusField f) { return static_cast<size_t>(f); }
 
 // What a datagram link (udp, serial) reports in STATUS: datagrams sent (fragments and
 // resends included), datagrams resent for NACKs, NACKs received, slots not sent (no session,
@@ -82,6 +54,5 @@ struct LinkDatagramCounts {
 
 // STATUS archive_state values.
 enum ArchiveStateCode : uint8_t { kArchiveOk = 0, kArchiveLowSpace = 1, kArchiveDiskFull = 2 };
-extern const char* const kStatusFieldNames[kStatusFieldCount];
 
 }  // namespace modd::broker

@@ -33,4 +33,20 @@ enum class MsgType : uint8_t {
 // The number of MsgType values.
 inline constexpr size_t kMsgTypeCount = 7;
 
+// Why the broker refused a record: the reason code of REJECT, and the index of the PubBroker's
+// rejected_* counters (labels: their log names).
+enum class Reject : uint8_t {
+  UnknownTopic = 0,  // unknown topic
+  WrongType = 1,  // wrong type
+  NotFinite = 2,  // value not finite
+  Timestamp = 3,  // timestamp out of bounds
+  Overflow = 4,  // archive queue full
+  Malformed = 5,  // malformed
+  Quota = 6,  // over its fair share of the archive queue
+};
+// The number of Reject values.
+inline constexpr size_t kRejectCount = 7;
+// Each Reject's name in logs and status documents, by code.
+inline constexpr const char* kRejectLabels[] = {"unknown_topic", "wrong_type", "not_finite", "timestamp", "overflow", "malformed", "quota"};
+
 }  // namespace modd::ingress

@@ -36,6 +36,46 @@ inline constexpr uint64_t kMaxPeriodUs = 31622400000000;
 // Shortest pre-shared key, in bytes: shorter keys are refused.
 inline constexpr size_t kMinKeyBytes = 16;
 
+// The PubBroker's counters in the order STATUS carries them (docs/protocol.md, STATUS); fields
+// are only ever appended. The labels (lower case) name them in logs, the run record and the
+// SubBroker's status.
+enum class StatusField : uint8_t {
+  UptimeS = 0,
+  SamplesIn = 1,
+  SamplesArchived = 2,
+  RejectedUnknownTopic = 3,
+  RejectedWrongType = 4,
+  RejectedNotFinite = 5,
+  RejectedTimestamp = 6,
+  RejectedOverflow = 7,
+  RejectedMalformed = 8,
+  ArchiveFailed = 9,
+  IngressMalformedFrames = 10,
+  PublishersConnected = 11,
+  FramesSent = 12,
+  FramesDropped = 13,
+  LinkBytesSent = 14,
+  DiskFreeMb = 15,
+  BufferFillPct = 16,
+  ArchiveFiles = 17,
+  AuthFailures = 18,
+  ConfigId = 19,
+  RejectedQuota = 20,
+  ArchiveState = 21,
+  ArchiveRateBps = 22,
+  SamplesPending = 23,
+  LinkDatagramsSent = 24,
+  LinkDatagramsResent = 25,
+  LinkNacks = 26,
+  LinkSlotsDropped = 27,
+  LinkForged = 28,
+  LinkReplayed = 29,
+};
+// The number of StatusField values.
+inline constexpr size_t kStatusFieldCount = 30;
+// Each StatusField's name in logs and status documents, by code.
+inline constexpr const char* kStatusFieldLabels[] = {"uptime_s", "samples_in", "samples_archived", "rejected_unknown_topic", "rejected_wrong_type", "rejected_not_finite", "rejected_timestamp", "rejected_overflow", "rejected_malformed", "archive_failed", "ingress_malformed_frames", "publishers_connected", "frames_sent", "frames_dropped", "link_bytes_sent", "disk_free_mb", "buffer_fill_pct", "archive_files", "auth_failures", "config_id", "rejected_quota", "archive_state", "archive_rate_bps", "samples_pending", "link_datagrams_sent", "link_datagrams_resent", "link_nacks", "link_slots_dropped", "link_forged", "link_replayed"};
+
 // The type byte of a frame.
 enum class MsgType : uint8_t {
   Hello = 0x01,

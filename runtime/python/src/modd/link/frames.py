@@ -17,6 +17,7 @@ from modd_contracts.link_wire_gen import MAX_HEALTH_SENSORS as MAX_HEALTH_SENSOR
 from modd_contracts.link_wire_gen import VERSION as VERSION
 from modd_contracts.link_wire_gen import ErrorCode as ErrorCode
 from modd_contracts.link_wire_gen import MsgType as MsgType
+from modd_contracts.link_wire_gen import StatusField as StatusField
 from modd_contracts.link_wire_gen import ValueType as ValueType
 
 
@@ -138,38 +139,8 @@ class ConfigAck:
     epoch_ns: int
 
 
-STATUS_FIELDS: tuple[str, ...] = (
-    "uptime_s",
-    "samples_in",
-    "samples_archived",
-    "rejected_unknown_topic",
-    "rejected_wrong_type",
-    "rejected_not_finite",
-    "rejected_timestamp",
-    "rejected_overflow",
-    "rejected_malformed",
-    "archive_failed",
-    "ingress_malformed_frames",
-    "publishers_connected",
-    "frames_sent",
-    "frames_dropped",
-    "link_bytes_sent",
-    "disk_free_mb",
-    "buffer_fill_pct",
-    "archive_files",
-    "auth_failures",
-    "config_id",
-    "rejected_quota",
-    "archive_state",
-    "archive_rate_bps",
-    "samples_pending",
-    "link_datagrams_sent",
-    "link_datagrams_resent",
-    "link_nacks",
-    "link_slots_dropped",
-    "link_forged",
-    "link_replayed",
-)
+# The PubBroker's counters in STATUS order (generated from wire.json, as the C++ side).
+STATUS_FIELDS: tuple[str, ...] = tuple(f.label for f in StatusField)
 
 
 # One instrument's health in STATUS (docs/protocol.md, "STATUS"), fields in this order; a
