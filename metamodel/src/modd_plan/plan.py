@@ -421,10 +421,15 @@ def _make_plan(
         pn, pd = stream._nd  # type: ignore[attr-defined]
         return _bytes(stream.aggregation, topic[0], pn * topic[2], pd * topic[1])
 
-    window_bytes = [window(s.stream) for s in sent]
     link = LinkSettings.of(model)
-    window_bytes = quantised_window_bytes(
-        model, sent, streams, window_bytes, tops, link.transport, link.accepted_delay
+    window_bytes, bound = quantised_window_bytes(
+        model,
+        sent,
+        streams,
+        [window(s.stream) for s in sent],
+        tops,
+        link.transport,
+        link.accepted_delay,
     )
     budget = _budget(model, sched, sent, streams, window_bytes)
     radio = model.get("link", {}).get("radio")
@@ -438,7 +443,7 @@ def _make_plan(
         constants=constants,
         link=_link_cost(model, sched, window_bytes, tops),
         budget=budget,
-        radio=radio_report(RadioProfile.of(radio), budget) if radio else None,
+        radio=radio_report(RadioProfile.of(radio), budget, bound) if radio else None,
     )
 
 

@@ -150,6 +150,15 @@ class RadioReport:
     rx_s_per_hour: float
     energy_j_per_hour: float
     costs: tuple[SubscriptionCost, ...]
+    #: quantised values (resolution.py): True, every one sized at its declared
+    #: range, the figures are upper bounds (a smaller signal costs less); False,
+    #: some are deltas assumed small, the figures are estimates; None, exact
+    upper_bound: bool | None = None
+
+    @property
+    def at_most(self) -> str:
+        """What the figures are, before them: "at most ", "about " or ""."""
+        return {True: "at most ", False: "about ", None: ""}[self.upper_bound]
 
     @property
     def duty_share(self) -> float | None:
@@ -179,7 +188,7 @@ class RadioReport:
             f"{c.name} {c.air_s_per_hour:.1f} s/h ({c.bytes_per_s:.1f} B/s)" for c in self.costs[:5]
         )
         return (
-            f"the plan transmits {self.air_s_per_hour:.1f} s per hour on the {p.kind} "
+            f"the plan transmits {self.at_most}{self.air_s_per_hour:.1f} s per hour on the {p.kind} "
             f"radio, over its duty-cycle limit of {100 * (p.duty_cycle or 0):g} % "
             f"({(p.duty_cycle or 0) * HOUR_S:.1f} s per hour); the subscriptions that cost "
             f"most: {top}"
@@ -213,9 +222,11 @@ class RadioReport:
         }
 
 
-def radio_report(profile: RadioProfile, budget: LinkBudget) -> RadioReport:
+def radio_report(
+    profile: RadioProfile, budget: LinkBudget, upper_bound: bool | None = None
+) -> RadioReport:
     """The radio's figures for a plan's link budget (its walked packets
-    scaled to an hour)."""
+    scaled to an hour); ``upper_bound`` as :attr:`RadioReport.upper_bound`."""
     span = budget.span_s
     air, packets = 0.0, 0
     for size in budget.packet_sizes:
@@ -233,7 +244,14 @@ def radio_report(profile: RadioProfile, budget: LinkBudget) -> RadioReport:
     idle_h = max(HOUR_S - air_h - rx_h, 0.0)
     energy = profile.tx_w * air_h + profile.rx_w * rx_h + profile.idle_w * idle_h
     return RadioReport(
-        profile, budget.drone_to_base, packets_h, air_h, rx_h, energy, _costs(budget, air_h)
+        profile,
+        budget.drone_to_base,
+        packets_h,
+        air_h,
+        rx_h,
+        energy,
+        _costs(budget, air_h),
+        upper_bound,
     )
 
 

@@ -95,11 +95,16 @@ def quantised_window_bytes(
     tops: Mapping[str, Topic],
     transport: str,
     accepted_delay: Fraction,
-) -> list[Fraction]:
+) -> tuple[list[Fraction], bool | None]:
     """``exact`` (bytes of one window's value per sent stream) with the float
     values of streams that have a resolution counted as steps: one absolute
-    value per datagram (per DATA frame over tcp), deltas of DELTA_BYTES else."""
+    value per datagram (per DATA frame over tcp), deltas of DELTA_BYTES else;
+    and whether the sizes are upper bounds: True when every quantised value
+    is absolute (sized at the declared range: a signal inside it never costs
+    more), False when some are deltas (assumed small: an estimate), None when
+    nothing is quantised (exact)."""
     out = list(exact)
+    bound: bool | None = None
     for i, (s, r) in enumerate(zip(sent, stream_resolutions(model, sent, streams), strict=True)):
         topic = tops.get(s.stream.topic)
         if r is None or topic is None:
@@ -112,6 +117,7 @@ def quantised_window_bytes(
         # keys per window: one a datagram, which holds the windows of the accepted
         # delay and one more (its first slot waits at most the delay)
         per_datagram = 1 if transport == "tcp" else floor(accepted_delay / period) + 1
+        bound = (bound is not False) and per_datagram == 1 and s.stream.aggregation != agg.ALL
         share = Fraction(1, per_datagram)
         value = DELTA_BYTES + (key - DELTA_BYTES) * share
         if s.stream.aggregation == agg.ALL:
@@ -124,4 +130,4 @@ def quantised_window_bytes(
             )
         else:
             out[i] = exact[i] - SAMPLE_BYTES[wire] + value
-    return out
+    return out, bound
