@@ -159,6 +159,12 @@ def _radio_lines(report: RadioReport, proposals: Sequence[Proposal]) -> list[str
         f"{report.air_s_per_hour:.1f} s/h, energy {report.at_most}"
         f"{report.energy_j_per_hour:.1f} J/h",
     ]
+    if report.ceiling:
+        c = report.ceiling
+        lines.append(
+            f"  at most {c.air_s_per_hour:.1f} s/h and {c.energy_j_per_hour:.1f} J/h "
+            "(every delta at its variable's declared range: the duty-cycle check's)"
+        )
     share = report.duty_share
     if share is not None:
         lines.append(

@@ -154,6 +154,9 @@ class RadioReport:
     #: range, the figures are upper bounds (a smaller signal costs less); False,
     #: some are deltas assumed small, the figures are estimates; None, exact
     upper_bound: bool | None = None
+    #: the plan's bound when its figures are an estimate (deltas sized at the
+    #: declared range's width, resolution.py): the duty-cycle limit's check
+    ceiling: RadioReport | None = None
 
     @property
     def at_most(self) -> str:
@@ -162,9 +165,11 @@ class RadioReport:
 
     @property
     def duty_share(self) -> float | None:
-        """Air time over the duty-cycle limit's (1.0: exactly at the limit)."""
+        """Air time over the duty-cycle limit's (1.0: exactly at the limit),
+        the bound's when the figures are an estimate with one."""
         limit = self.profile.duty_cycle
-        return self.air_s_per_hour / (limit * HOUR_S) if limit else None
+        air = self.ceiling.air_s_per_hour if self.ceiling else self.air_s_per_hour
+        return air / (limit * HOUR_S) if limit else None
 
     @property
     def battery_share(self) -> float | None:
@@ -187,8 +192,10 @@ class RadioReport:
         top = ", ".join(
             f"{c.name} {c.air_s_per_hour:.1f} s/h ({c.bytes_per_s:.1f} B/s)" for c in self.costs[:5]
         )
+        most = f" (at most {self.ceiling.air_s_per_hour:.1f} s)" if self.ceiling else ""
         return (
-            f"the plan transmits {self.at_most}{self.air_s_per_hour:.1f} s per hour on the {p.kind} "
+            f"the plan transmits {self.at_most}{self.air_s_per_hour:.1f} s{most} per hour on "
+            f"the {p.kind} "
             f"radio, over its duty-cycle limit of {100 * (p.duty_cycle or 0):g} % "
             f"({(p.duty_cycle or 0) * HOUR_S:.1f} s per hour); the subscriptions that cost "
             f"most: {top}"
@@ -223,10 +230,14 @@ class RadioReport:
 
 
 def radio_report(
-    profile: RadioProfile, budget: LinkBudget, upper_bound: bool | None = None
+    profile: RadioProfile,
+    budget: LinkBudget,
+    upper_bound: bool | None = None,
+    ceiling: LinkBudget | None = None,
 ) -> RadioReport:
     """The radio's figures for a plan's link budget (its walked packets
-    scaled to an hour); ``upper_bound`` as :attr:`RadioReport.upper_bound`."""
+    scaled to an hour); ``upper_bound`` as :attr:`RadioReport.upper_bound`;
+    ``ceiling``, the budget of the bound when ``budget`` is an estimate."""
     span = budget.span_s
     air, packets = 0.0, 0
     for size in budget.packet_sizes:
@@ -252,6 +263,7 @@ def radio_report(
         energy,
         _costs(budget, air_h),
         upper_bound,
+        radio_report(profile, ceiling, True) if ceiling else None,
     )
 
 
