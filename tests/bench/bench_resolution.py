@@ -149,6 +149,8 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
     chosen = refused.proposals[0]
     path.write_text(json.dumps(chosen.model))
     predicted = chosen.report
+    planned = make_plan(chosen.model).budget  # the proposal's packets, as planned
+    assert planned is not None
     profile = RadioProfile.of(LORA)
     # The emulator times every packet with the LoRa profile but enforces no duty
     # limit: at 1 % each side, the handshake and the CONFIG (0.3 s of air, then 30 s
@@ -157,7 +159,8 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
     up, down = through_profile(
         tmp, path, (base, base_path, drone, drone_path), emulated, seconds, signal="wave"
     )
-    data = [(t, air) for t, packet, air in down.sent if _is_data(packet)]
+    sent = [(t, packet, air) for t, packet, air in down.sent if _is_data(packet)]
+    data = [(t, air) for t, _, air in sent]
     span = data[-1][0] - data[0][0]
     air = sum(a for _, a in data[1:]) * 3600 / span
     rx = sum(a for t, _, a in up.sent if data[0][0] <= t <= data[-1][0]) * 3600 / span
@@ -166,6 +169,11 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
         "refused": refused.radio.error,
         "proposal": chosen.describe(),
         "packets": len(data),
+        # datagram by datagram: the planner's sizes (each value at its declared
+        # range) against the emulator's, and one packet's air time for each
+        "planned_packet_bytes": _sizes(planned.packet_sizes, profile),
+        "measured_packet_bytes": _sizes([len(p) for _, p, _ in sent], profile),
+        "planned_figures_are": predicted.at_most.strip() or "exact",
         "planned_air_s_per_hour": round(predicted.air_s_per_hour, 2),
         "measured_air_s_per_hour": round(air, 2),
         "planned_energy_j_per_hour": round(predicted.energy_j_per_hour, 1),
@@ -175,12 +183,23 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
     }
 
 
+def _sizes(sizes: Any, profile: Any) -> dict[str, str]:
+    """Packet size (B) -> "count x air time (ms)"."""
+    counts: dict[int, int] = {}
+    for n in sizes:
+        counts[n] = counts.get(n, 0) + 1
+    return {
+        str(n): f"{c} x {1000 * profile.one_packet_s(n):.2f} ms" for n, c in sorted(counts.items())
+    }
+
+
 def main() -> int:
     p = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     p.add_argument("--seconds", type=float, default=30.0)
     p.add_argument("--json", type=Path)
+    p.add_argument("--lora-only", action="store_true", help="only the LoRa run")
     args = p.parse_args()
     plan = [
         ("scenario1.modd", None, "wave", ""),
@@ -191,8 +210,8 @@ def main() -> int:
         ("scenario2.modd", None, "wave", ""),
         ("scenario2.modd", STEP, "wave", ""),
     ]
-    rows = []
-    for scenario, resolution, signal, spec in plan:
+    rows: list[dict[str, Any]] = []
+    for scenario, resolution, signal, spec in [] if args.lora_only else plan:
         with TemporaryDirectory(prefix="modd-bench-res-") as d:
             rows.append(run(Path(d), scenario, resolution, signal, spec, args.seconds))
         print(json.dumps(rows[-1]), flush=True)

@@ -47,6 +47,33 @@ def _is_data(packet: bytes) -> bool:
         return False
 
 
+def _measure(
+    tmp: Path, model: dict[str, Any], load_s: float, signal: str = "uniform"
+) -> tuple[list[int], float, float]:
+    """The model over serial through its ``link.radio`` profile: the DATA
+    packets' sizes, air time and energy per hour, measured between the first
+    and the last DATA packet (every packet after the first; receiving the base
+    station's packets and idle over the same span)."""
+    base, base_path = relay.open_pty_pair()
+    drone, drone_path = relay.open_pty_pair()
+    model["link"]["device"] = base_path
+    model_path = tmp / "model.json"
+    model_path.write_text(json.dumps(model))
+    profile = RadioProfile.of(model["link"]["radio"])
+    up, down = through_profile(
+        tmp, model_path, (base, base_path, drone, drone_path), profile, load_s, signal
+    )
+    assert isinstance(down, _Recording) and isinstance(up, _Recording)
+    assert not down.dropped, down.summary()  # a plan that fits: nothing refused
+    data = [(t, len(packet), a) for t, packet, a in down.sent if _is_data(packet)]
+    assert len(data) > 12, down.summary()
+    span = data[-1][0] - data[0][0]
+    air = sum(a for _, _, a in data[1:]) * 3600 / span
+    rx = sum(a for t, _, a in up.sent if data[0][0] <= t <= data[-1][0]) * 3600 / span
+    energy = profile.tx_w * air + profile.rx_w * rx + profile.idle_w * (3600 - air - rx)
+    return [n for _, n, _ in data], air, energy
+
+
 # SiK: no duty-cycle limit; LoRa SF7 at a 20 % limit: the plan fits (502 s of
 # air per hour), the radio's silence after each packet (4 x 0.17 s) ends
 # before the next one (every 1.25 s)
@@ -58,29 +85,57 @@ def test_planned_air_time_is_what_the_emulator_measures(
     name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(relay, "AirtimeChannel", _Recording)
-    base, base_path = relay.open_pty_pair()
-    drone, drone_path = relay.open_pty_pair()
-    model_path = model_copy(tmp_path, "scenario1.modd")
-    model = json.loads(model_path.read_text())
-    model["link"] = {"transport": "serial", "device": base_path, "radio": PROFILES[name]}
-    model_path.write_text(json.dumps(model))
-    profile = RadioProfile.of(model["link"]["radio"])
+    model = json.loads(model_copy(tmp_path, "scenario1.modd").read_text())
+    model["link"] = {"transport": "serial", "device": "", "radio": PROFILES[name]}
     predicted = make_plan(model).radio
     assert predicted is not None and predicted.fits
-    up, down = through_profile(
-        tmp_path, model_path, (base, base_path, drone, drone_path), profile, LOAD_S
-    )
-    assert isinstance(down, _Recording) and isinstance(up, _Recording)
-    assert not down.dropped, down.summary()  # a plan that fits: nothing refused
-    data = [(t, air) for t, packet, air in down.sent if _is_data(packet)]
-    assert len(data) > 12, down.summary()
-    # between the first and the last DATA frame: every frame after the first
-    span = data[-1][0] - data[0][0]
-    measured = sum(air for _, air in data[1:]) * 3600 / span
-    print(f"{name}: air {measured:.3f} s/h measured, {predicted.air_s_per_hour:.3f} planned")
-    assert measured == pytest.approx(predicted.air_s_per_hour, rel=0.05)
-    # energy over the same span: transmitting, receiving the base station's packets, idle
-    rx = sum(air for t, _, air in up.sent if data[0][0] <= t <= data[-1][0]) * 3600 / span
-    energy = profile.tx_w * measured + profile.rx_w * rx + profile.idle_w * (3600 - measured - rx)
+    _, air, energy = _measure(tmp_path, model, LOAD_S)
+    print(f"{name}: air {air:.3f} s/h measured, {predicted.air_s_per_hour:.3f} planned")
+    assert air == pytest.approx(predicted.air_s_per_hour, rel=0.05)
     print(f"{name}: energy {energy:.3f} J/h measured, {predicted.energy_j_per_hour:.3f} planned")
     assert energy == pytest.approx(predicted.energy_j_per_hour, rel=0.05)
+
+
+# Declared resolutions (issue 34): 0.01 on every accelerometer variable over its
+# declared range of +-10, the load uniform in that range; a 0.2 s accepted delay
+# under the 0.25 s periods puts one window in each datagram, so every value is
+# absolute and the planner's figures are upper bounds ("at most", resolution.py).
+# LoRa at a 50 % limit: the plan fits (about 3,100 packets of 26 B per hour).
+BOUNDED = {
+    "sik": {"kind": "sik"},
+    "wifi": {"kind": "wifi"},
+    "lora": {"kind": "lora", "dutyCycle": "0.5"},
+}
+BOUNDED_LOAD_S = 12.0  # 48 datagrams
+
+
+@pytest.mark.parametrize("name", sorted(BOUNDED))
+def test_planned_air_time_with_resolutions_bounds_the_emulators(
+    name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(relay, "AirtimeChannel", _Recording)
+    model = json.loads(model_copy(tmp_path, "scenario1.modd").read_text())
+    for v in model["drone"]["sensors"][0]["variables"]:
+        v.update(resolution=0.01, validMin=-10, validMax=10)
+    model["link"] = {
+        "transport": "serial",
+        "device": "",
+        "acceptedDelayS": "0.2",
+        "radio": BOUNDED[name],
+    }
+    plan = make_plan(model)
+    predicted = plan.radio
+    assert predicted is not None and predicted.fits and predicted.upper_bound is True
+    assert plan.budget is not None
+    sizes, air, energy = _measure(tmp_path, model, BOUNDED_LOAD_S)
+    # every datagram within the planner's largest: the values inside their range
+    assert max(sizes) <= max(plan.budget.packet_sizes)
+    print(
+        f"{name}: air {air:.3f} s/h measured, at most {predicted.air_s_per_hour:.3f} planned; "
+        f"energy {energy:.3f} J/h measured, at most {predicted.energy_j_per_hour:.3f} planned"
+    )
+    # a bound (1 % for the span's timing on a loaded machine), and a close one
+    # for values that mostly need the bytes their range allows (the MIN, MAX
+    # and most AVERAGEs of 6 samples uniform in +-10 are 64 steps or more from 0)
+    assert predicted.air_s_per_hour * 0.95 <= air <= predicted.air_s_per_hour * 1.01
+    assert predicted.energy_j_per_hour * 0.95 <= energy <= predicted.energy_j_per_hour * 1.01

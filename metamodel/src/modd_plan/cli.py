@@ -155,9 +155,16 @@ def _radio_lines(report: RadioReport, proposals: Sequence[Proposal]) -> list[str
     lines = [
         "",
         f"radio ({p.kind}): {report.bytes_per_s:.1f} B/s, "
-        f"{report.packets_per_hour:.0f} packets/h, air time {report.air_s_per_hour:.1f} s/h, "
-        f"energy {report.energy_j_per_hour:.1f} J/h",
+        f"{report.packets_per_hour:.0f} packets/h, air time {report.at_most}"
+        f"{report.air_s_per_hour:.1f} s/h, energy {report.at_most}"
+        f"{report.energy_j_per_hour:.1f} J/h",
     ]
+    if report.ceiling:
+        c = report.ceiling
+        lines.append(
+            f"  at most {c.air_s_per_hour:.1f} s/h and {c.energy_j_per_hour:.1f} J/h "
+            "(every delta at its variable's declared range: the duty-cycle check's)"
+        )
     share = report.duty_share
     if share is not None:
         lines.append(
@@ -173,7 +180,8 @@ def _radio_lines(report: RadioReport, proposals: Sequence[Proposal]) -> list[str
         lines.append("nearest plans that fit:" if proposals else "no nearer plan fits")
         lines += [
             f"  {q.describe()}: delay {q.max_delay_s:.3f} s, "
-            f"{q.report.bytes_per_s:.1f} B/s, air time {q.report.air_s_per_hour:.1f} s/h "
+            f"{q.report.bytes_per_s:.1f} B/s, air time {q.report.at_most}"
+            f"{q.report.air_s_per_hour:.1f} s/h "
             f"({100 * (q.report.duty_share or 0):.0f} %), "
             f"{q.report.energy_j_per_hour:.1f} J/h"
             for q in proposals

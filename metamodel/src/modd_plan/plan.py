@@ -421,13 +421,20 @@ def _make_plan(
         pn, pd = stream._nd  # type: ignore[attr-defined]
         return _bytes(stream.aggregation, topic[0], pn * topic[2], pd * topic[1])
 
-    window_bytes = [window(s.stream) for s in sent]
+    exact = [window(s.stream) for s in sent]
     link = LinkSettings.of(model)
-    window_bytes = quantised_window_bytes(
-        model, sent, streams, window_bytes, tops, link.transport, link.accepted_delay
+    window_bytes, bound = quantised_window_bytes(
+        model, sent, streams, exact, tops, link.transport, link.accepted_delay
     )
     budget = _budget(model, sched, sent, streams, window_bytes)
     radio = model.get("link", {}).get("radio")
+    ceiling = None
+    if radio and bound is False:  # an estimate: the duty-cycle limit is checked on a bound
+        ceiling_bytes, bounded = quantised_window_bytes(
+            model, sent, streams, exact, tops, link.transport, link.accepted_delay, True
+        )
+        if bounded:
+            ceiling = _budget(model, sched, sent, streams, ceiling_bytes)
     return Plan(
         topics=tuple(tops.values()),
         streams=streams,
@@ -438,7 +445,7 @@ def _make_plan(
         constants=constants,
         link=_link_cost(model, sched, window_bytes, tops),
         budget=budget,
-        radio=radio_report(RadioProfile.of(radio), budget) if radio else None,
+        radio=radio_report(RadioProfile.of(radio), budget, bound, ceiling) if radio else None,
     )
 
 

@@ -150,12 +150,26 @@ class RadioReport:
     rx_s_per_hour: float
     energy_j_per_hour: float
     costs: tuple[SubscriptionCost, ...]
+    #: quantised values (resolution.py): True, every one sized at its declared
+    #: range, the figures are upper bounds (a smaller signal costs less); False,
+    #: some are deltas assumed small, the figures are estimates; None, exact
+    upper_bound: bool | None = None
+    #: the plan's bound when its figures are an estimate (deltas sized at the
+    #: declared range's width, resolution.py): the duty-cycle limit's check
+    ceiling: RadioReport | None = None
+
+    @property
+    def at_most(self) -> str:
+        """What the figures are, before them: "at most ", "about " or ""."""
+        return {True: "at most ", False: "about ", None: ""}[self.upper_bound]
 
     @property
     def duty_share(self) -> float | None:
-        """Air time over the duty-cycle limit's (1.0: exactly at the limit)."""
+        """Air time over the duty-cycle limit's (1.0: exactly at the limit),
+        the bound's when the figures are an estimate with one."""
         limit = self.profile.duty_cycle
-        return self.air_s_per_hour / (limit * HOUR_S) if limit else None
+        air = self.ceiling.air_s_per_hour if self.ceiling else self.air_s_per_hour
+        return air / (limit * HOUR_S) if limit else None
 
     @property
     def battery_share(self) -> float | None:
@@ -178,8 +192,10 @@ class RadioReport:
         top = ", ".join(
             f"{c.name} {c.air_s_per_hour:.1f} s/h ({c.bytes_per_s:.1f} B/s)" for c in self.costs[:5]
         )
+        most = f" (at most {self.ceiling.air_s_per_hour:.1f} s)" if self.ceiling else ""
         return (
-            f"the plan transmits {self.air_s_per_hour:.1f} s per hour on the {p.kind} "
+            f"the plan transmits {self.at_most}{self.air_s_per_hour:.1f} s{most} per hour on "
+            f"the {p.kind} "
             f"radio, over its duty-cycle limit of {100 * (p.duty_cycle or 0):g} % "
             f"({(p.duty_cycle or 0) * HOUR_S:.1f} s per hour); the subscriptions that cost "
             f"most: {top}"
@@ -213,9 +229,15 @@ class RadioReport:
         }
 
 
-def radio_report(profile: RadioProfile, budget: LinkBudget) -> RadioReport:
+def radio_report(
+    profile: RadioProfile,
+    budget: LinkBudget,
+    upper_bound: bool | None = None,
+    ceiling: LinkBudget | None = None,
+) -> RadioReport:
     """The radio's figures for a plan's link budget (its walked packets
-    scaled to an hour)."""
+    scaled to an hour); ``upper_bound`` as :attr:`RadioReport.upper_bound`;
+    ``ceiling``, the budget of the bound when ``budget`` is an estimate."""
     span = budget.span_s
     air, packets = 0.0, 0
     for size in budget.packet_sizes:
@@ -233,7 +255,15 @@ def radio_report(profile: RadioProfile, budget: LinkBudget) -> RadioReport:
     idle_h = max(HOUR_S - air_h - rx_h, 0.0)
     energy = profile.tx_w * air_h + profile.rx_w * rx_h + profile.idle_w * idle_h
     return RadioReport(
-        profile, budget.drone_to_base, packets_h, air_h, rx_h, energy, _costs(budget, air_h)
+        profile,
+        budget.drone_to_base,
+        packets_h,
+        air_h,
+        rx_h,
+        energy,
+        _costs(budget, air_h),
+        upper_bound,
+        radio_report(profile, ceiling, True) if ceiling else None,
     )
 
 

@@ -21,7 +21,8 @@ from .linkcost import SAMPLE_BYTES, aggregate_value_type, varint_size
 from .streams import PlannedStream
 
 #: Bytes of a delta between consecutive windows (|delta| <= 63 steps): the
-#: planner assumes a signal that moves less than 64 steps a window.
+#: planner's estimate assumes a signal that moves less than 64 steps a window
+#: (its bound, the declared range's width: plan.py, radio.py).
 DELTA_BYTES = 1
 #: Step count assumed for a stream's first value in a datagram when its
 #: variable declares no validMin/validMax: 2^20 steps (3 bytes).
@@ -71,20 +72,21 @@ def stream_resolutions(
     ]
 
 
-def _key_bytes(model: Mapping[str, Any], topic: str, resolution: float) -> int:
-    """Bytes of an absolute value: the largest step count of the valid range."""
+def _value_bytes(model: Mapping[str, Any], topic: str, resolution: float) -> tuple[int, int] | None:
+    """Bytes of an absolute value and of a delta at the variable's declared
+    validMin/validMax (the largest step count, the range's width in steps);
+    None when it declares no range."""
     drone = model["drone"]["name"]
     for s in model["drone"]["sensors"]:
         for v in s["variables"]:
             if topic_name(drone, s["name"], v["name"]) == topic:
-                bounds = [
-                    abs(b)
-                    for b in (v.get("validMin"), v.get("validMax"))
-                    if isinstance(b, int | float)
-                ]
-                steps = ceil(max(bounds) / resolution) if len(bounds) == 2 else UNBOUNDED_STEPS
-                return varint_size(2 * steps + 1)
-    return varint_size(2 * UNBOUNDED_STEPS + 1)
+                lo, hi = v.get("validMin"), v.get("validMax")
+                if not (isinstance(lo, int | float) and isinstance(hi, int | float)):
+                    return None
+                steps = ceil(max(abs(lo), abs(hi)) / resolution)
+                width = ceil(abs(hi - lo) / resolution)
+                return varint_size(2 * steps + 1), varint_size(2 * width + 1)
+    return None
 
 
 def quantised_window_bytes(
@@ -95,11 +97,18 @@ def quantised_window_bytes(
     tops: Mapping[str, Topic],
     transport: str,
     accepted_delay: Fraction,
-) -> list[Fraction]:
+    deltas_at_range: bool = False,
+) -> tuple[list[Fraction], bool | None]:
     """``exact`` (bytes of one window's value per sent stream) with the float
     values of streams that have a resolution counted as steps: one absolute
-    value per datagram (per DATA frame over tcp), deltas of DELTA_BYTES else."""
+    value per datagram (per DATA frame over tcp), sized at the declared range,
+    deltas of DELTA_BYTES else (at the range's width with ``deltas_at_range``);
+    and what the sizes are: True, upper bounds (every quantised value sized
+    at its declared range: a signal inside it never costs more), False, an
+    estimate (deltas assumed small, or a variable without a range), None,
+    exact (nothing quantised)."""
     out = list(exact)
+    bound: bool | None = None
     for i, (s, r) in enumerate(zip(sent, stream_resolutions(model, sent, streams), strict=True)):
         topic = tops.get(s.stream.topic)
         if r is None or topic is None:
@@ -107,21 +116,18 @@ def quantised_window_bytes(
         wire = aggregate_value_type(s.stream.aggregation, topic.type)
         if s.stream.aggregation == agg.COUNT or wire not in ("float32", "float64"):
             continue
-        key = _key_bytes(model, s.stream.topic, r)
-        period = s.stream.period
+        ranged = _value_bytes(model, s.stream.topic, r)
+        key = ranged[0] if ranged else varint_size(2 * UNBOUNDED_STEPS + 1)
+        delta = ranged[1] if ranged and deltas_at_range else DELTA_BYTES
         # keys per window: one a datagram, which holds the windows of the accepted
         # delay and one more (its first slot waits at most the delay)
-        per_datagram = 1 if transport == "tcp" else floor(accepted_delay / period) + 1
+        per_datagram = 1 if transport == "tcp" else floor(accepted_delay / s.stream.period) + 1
+        only_keys = per_datagram == 1 and s.stream.aggregation != agg.ALL
+        bound = bound is not False and ranged is not None and (only_keys or deltas_at_range)
         share = Fraction(1, per_datagram)
-        value = DELTA_BYTES + (key - DELTA_BYTES) * share
         if s.stream.aggregation == agg.ALL:
             samples = (exact[i] - 1) / SAMPLE_BYTES[wire]  # the count's varint, roughly 1 B
-            out[i] = (
-                exact[i]
-                - samples * SAMPLE_BYTES[wire]
-                + samples * DELTA_BYTES
-                + (key - DELTA_BYTES) * share
-            )
+            out[i] = exact[i] - samples * (SAMPLE_BYTES[wire] - delta) + (key - delta) * share
         else:
-            out[i] = exact[i] - SAMPLE_BYTES[wire] + value
-    return out
+            out[i] = exact[i] - SAMPLE_BYTES[wire] + delta + (key - delta) * share
+    return out, bound

@@ -106,3 +106,66 @@ def test_a_refused_radio_plan_may_be_proposed_coarser_resolutions() -> None:
     assert coarser[0].model["drone"]["sensors"][0]["variables"][0]["resolution"] == 0.004
     figures = [(p.accepted_delay_s, p.min_period_s, p.report.bytes_per_s) for p in plan.proposals]
     assert len(set(figures)) == len(figures)  # no coarser twin of the same plan
+
+
+def _codec_bytes(*values: float) -> int:
+    """Bytes the link's codec (modd.link.codec, the runtime's) writes for one
+    stream's ``values`` in one datagram at 0.01."""
+    from modd.link.codec import put_number
+
+    b: bytearray = bytearray()
+    chain: dict[int, int] = {}
+    for x in values:
+        put_number(b, chain, 0, x, 0.01)
+    return len(b)
+
+
+def test_the_radio_figures_say_whether_they_bound_the_link() -> None:
+    model = _scenario1()
+    model["link"] = {"transport": "serial", "device": "/dev/x", "radio": {"kind": "sik"}}
+    assert make_plan(model).radio.upper_bound is None  # type: ignore[union-attr]  # exact
+    for v in model["drone"]["sensors"][0]["variables"]:
+        v.update(resolution=0.01)
+    # no range: the absolute values' size is a guess, and nothing bounds it
+    unranged = make_plan(model).radio
+    assert unranged is not None and unranged.upper_bound is False and unranged.ceiling is None
+    for v in model["drone"]["sensors"][0]["variables"]:
+        v.update(validMin=-20, validMax=20)
+    # 5 windows a datagram, deltas assumed 1 B: an estimate, and its bound
+    estimate = make_plan(model).radio
+    assert estimate is not None and estimate.upper_bound is False and estimate.ceiling
+    assert estimate.ceiling.upper_bound is True
+    # the bound: each value as the codec writes the range's worst, an absolute
+    # -20 then a delta to +20, 2 B each: 4 values x 5 slots x 2 B + 10 counts,
+    # + 8 header and tag + 4 serial framing, 0.8 datagrams a second
+    assert _codec_bytes(-20.0) == 2 and _codec_bytes(-20.0, 20.0) == 4
+    assert estimate.ceiling.bytes_per_s == pytest.approx(0.8 * (4 * 5 * 2 + 10 + 12))
+    assert estimate.ceiling.air_s_per_hour > estimate.air_s_per_hour
+    assert estimate.duty_share is None  # sik: no limit
+    # under the windows' period, every datagram holds one window: every value
+    # absolute, sized at the range, the figures themselves are the bound
+    model["link"]["acceptedDelayS"] = "0.2"
+    bounded = make_plan(model).radio
+    assert bounded is not None and bounded.upper_bound is True and bounded.ceiling is None
+    assert bounded.at_most == "at most "
+
+
+def test_a_plan_is_refused_on_its_bound() -> None:
+    model = _scenario1()
+    model["link"] = {
+        "transport": "serial",
+        "device": "/dev/x",
+        "radio": {"kind": "lora", "dutyCycle": "0.5"},
+    }
+    for v in model["drone"]["sensors"][0]["variables"]:
+        v.update(resolution=0.01, validMin=-20, validMax=20)
+    # between the estimate and the bound: the limit is checked on the bound
+    report = make_plan(model).radio
+    assert report is not None and report.ceiling is not None
+    duty = round((report.air_s_per_hour + report.ceiling.air_s_per_hour) / 2 / 3600, 4)
+    model["link"]["radio"]["dutyCycle"] = str(duty)
+    between = make_plan(model).radio
+    assert between is not None and between.ceiling is not None
+    assert between.air_s_per_hour < duty * 3600 < between.ceiling.air_s_per_hour
+    assert not between.fits and between.error and "at most" in between.error
+    assert all(p.report.fits for p in make_plan(model).proposals)
