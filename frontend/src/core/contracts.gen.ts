@@ -317,8 +317,12 @@ export interface PlanRadio {
   air_time_s_per_hour: number;
   /** The duty-cycle limit (0.01: 1 %), else null. */
   duty_cycle: number | null;
-  /** Air time over the limit's (above 1: refused), else null. */
+  /** Air time (the bound's, when there is one) over the limit's (above 1: refused), else null. */
   duty_share: number | null;
+  /** What the air-time and energy figures are: exact (nothing quantised), upper_bound (every quantised value sized at its declared range) or estimate (quantised deltas assumed small; docs/planning.md, "Bounds and estimates"). */
+  figures?: "exact" | "upper_bound" | "estimate";
+  /** With estimated figures: the air time of the bound the duty-cycle check uses (duty_share is its share), else null. */
+  air_time_bound_s_per_hour?: number | null;
   energy_j_per_hour: number;
   battery_wh: number | null;
   battery_share_per_hour: number | null;
@@ -350,9 +354,14 @@ export interface PlanProposal {
   max_delay_s: number;
   bytes_per_s: number;
   air_time_s_per_hour: number;
+  /** Air time (the bound's, when there is one) over the duty-cycle limit's. */
   duty_share: number;
   energy_j_per_hour: number;
   change: string;
+  /** What the air-time and energy figures are: exact (nothing quantised), upper_bound (every quantised value sized at its declared range) or estimate (quantised deltas assumed small; docs/planning.md, "Bounds and estimates"). */
+  figures?: "exact" | "upper_bound" | "estimate";
+  /** With estimated figures: the air time of the bound the duty-cycle check uses (duty_share is its share), else null. */
+  air_time_bound_s_per_hour?: number | null;
 }
 
 export interface PlanInfeasible {

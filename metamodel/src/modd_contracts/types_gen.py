@@ -248,6 +248,8 @@ class PlanRadio(TypedDict):
     air_time_s_per_hour: float
     duty_cycle: float | None
     duty_share: float | None
+    figures: NotRequired[Literal["exact", "upper_bound", "estimate"]]
+    air_time_bound_s_per_hour: NotRequired[float | None]
     energy_j_per_hour: float
     battery_wh: float | None
     battery_share_per_hour: float | None
@@ -283,6 +285,8 @@ class PlanProposal(TypedDict):
     duty_share: float
     energy_j_per_hour: float
     change: str
+    figures: NotRequired[Literal["exact", "upper_bound", "estimate"]]
+    air_time_bound_s_per_hour: NotRequired[float | None]
 
 
 class PlanInfeasible(TypedDict):

@@ -63,6 +63,8 @@ class Proposal:
             "duty_share": round(r.duty_share or 0.0, 6),
             "energy_j_per_hour": round(r.energy_j_per_hour, 3),
             "change": self.describe(),
+            "figures": r.figures,
+            "air_time_bound_s_per_hour": r.air_bound_s_per_hour,
         }
 
     def describe(self) -> str:

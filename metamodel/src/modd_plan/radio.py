@@ -28,7 +28,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from math import ceil
-from typing import Any
+from typing import Any, Literal
 
 from modd_contracts.types_gen import PlanRadio
 
@@ -201,6 +201,21 @@ class RadioReport:
             f"most: {top}"
         )
 
+    @property
+    def figures(self) -> Literal["exact", "upper_bound", "estimate"]:
+        """What the figures are, for the plan JSON (:attr:`upper_bound`)."""
+        kinds: dict[bool | None, Literal["exact", "upper_bound", "estimate"]] = {
+            True: "upper_bound",
+            False: "estimate",
+            None: "exact",
+        }
+        return kinds[self.upper_bound]
+
+    @property
+    def air_bound_s_per_hour(self) -> float | None:
+        """The bound's air time when the figures are an estimate with one."""
+        return round(self.ceiling.air_s_per_hour, 3) if self.ceiling else None
+
     def to_json(self) -> PlanRadio:
         """The report (``diagnostics`` and ``proposals`` empty: planjson.py
         locates the refusal in the model and adds the proposals)."""
@@ -212,6 +227,8 @@ class RadioReport:
             "air_time_s_per_hour": round(self.air_s_per_hour, 3),
             "duty_cycle": self.profile.duty_cycle,
             "duty_share": round(share, 6) if share is not None else None,
+            "figures": self.figures,
+            "air_time_bound_s_per_hour": self.air_bound_s_per_hour,
             "energy_j_per_hour": round(self.energy_j_per_hour, 3),
             "battery_wh": self.profile.battery_wh,
             "battery_share_per_hour": round(battery, 6) if battery is not None else None,

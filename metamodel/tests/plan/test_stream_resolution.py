@@ -142,12 +142,18 @@ def test_the_radio_figures_say_whether_they_bound_the_link() -> None:
     assert estimate.ceiling.bytes_per_s == pytest.approx(0.8 * (4 * 5 * 2 + 10 + 12))
     assert estimate.ceiling.air_s_per_hour > estimate.air_s_per_hour
     assert estimate.duty_share is None  # sik: no limit
+    # the plan JSON says so, for the Plan panel (the contract: plan.schema.json)
+    doc = estimate.to_json()
+    assert doc["figures"] == "estimate"
+    assert doc["air_time_bound_s_per_hour"] == round(estimate.ceiling.air_s_per_hour, 3)
     # under the windows' period, every datagram holds one window: every value
     # absolute, sized at the range, the figures themselves are the bound
     model["link"]["acceptedDelayS"] = "0.2"
     bounded = make_plan(model).radio
     assert bounded is not None and bounded.upper_bound is True and bounded.ceiling is None
     assert bounded.at_most == "at most "
+    assert bounded.to_json()["figures"] == "upper_bound"
+    assert bounded.to_json()["air_time_bound_s_per_hour"] is None
 
 
 def test_a_plan_is_refused_on_its_bound() -> None:

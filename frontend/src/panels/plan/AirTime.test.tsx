@@ -53,6 +53,18 @@ describe("AirTime (the Plan panel's radio)", () => {
     expect(store.getState().wb.selection).toEqual(["sub:sub_5"]);
   });
 
+  it("says which figures are bounds and which are estimates (declared resolutions)", () => {
+    mount({
+      ...refused, figures: "estimate", air_time_bound_s_per_hour: 339.9, duty_share: 9.44,
+      proposals: [{ ...refused.proposals[0], figures: "upper_bound", air_time_bound_s_per_hour: null }],
+    });
+    expect(screen.getByTestId("air-time").textContent).toBe("about 502.1 s");
+    expect(screen.getByTestId("air-time-bound").textContent).toBe("at most 339.9 s");
+    expect(screen.getByText(/At most, of the 1\.00 % duty cycle/)).toBeTruthy();
+    expect(screen.getByTestId("energy").textContent).toBe("about 160.6 J");
+    expect(screen.getAllByTestId("proposal")[0].textContent).toMatch(/at most 32\.4 s \(89\.9 %\)/);
+  });
+
   it("a plan that fits: figures, no refusal, no proposals", () => {
     mount({ ...refused, duty_share: 0.5, error: null, proposals: [], costs: [] });
     expect(screen.getByTestId("duty-share").textContent).toBe("50.0 %");

@@ -10,17 +10,32 @@ type Radio = NonNullable<PlanJson["radio"]>;
 
 const percent = (share: number) => `${(share * 100).toFixed(share < 0.1 ? 2 : 1)} %`;
 
+/** How sure a figure is (docs/planning.md, "Bounds and estimates"): with declared
+ * resolutions the planner sizes quantised values at their declared range ("at most")
+ * or assumes small deltas ("about"); the duty-cycle share is then the bound's. */
+type Figures = { figures?: "exact" | "upper_bound" | "estimate"; air_time_bound_s_per_hour?: number | null };
+export const hedge = (f: Figures) => (f.figures === "upper_bound" ? "at most " : f.figures === "estimate" ? "about " : "");
+const FIGURES_TITLE = {
+  upper_bound: "Every quantised value sized at its declared range: a smaller signal costs less.",
+  estimate: "Quantised values assumed to change little between windows; the duty-cycle share is the bound's (every change as wide as the declared range).",
+  exact: undefined,
+} as const;
+
 export function AirTimeView({ radio, onSelect }: { radio: Radio; onSelect: (subscriber: string) => void }) {
   return (
     <section className="air-time" aria-label="Radio air time and energy">
       <div className="plan-summary">
         <div className="figure"><span>Radio</span><strong data-testid="radio-kind">{radio.kind}</strong></div>
-        <div className="figure"><span>Air time / hour</span><strong data-testid="air-time">{radio.air_time_s_per_hour.toFixed(1)} s</strong></div>
+        <div className="figure" title={FIGURES_TITLE[radio.figures ?? "exact"]}><span>Air time / hour</span>
+          <strong data-testid="air-time">{hedge(radio)}{radio.air_time_s_per_hour.toFixed(1)} s</strong>
+          {radio.air_time_bound_s_per_hour != null && (
+            <span data-testid="air-time-bound">at most {radio.air_time_bound_s_per_hour.toFixed(1)} s</span>
+          )}</div>
         {radio.duty_share !== null && radio.duty_cycle !== null && (
-          <div className="figure"><span>Share of the {percent(radio.duty_cycle)} duty cycle</span>
+          <div className="figure"><span>{radio.air_time_bound_s_per_hour != null ? "At most, of" : "Share of"} the {percent(radio.duty_cycle)} duty cycle</span>
             <strong data-testid="duty-share">{percent(radio.duty_share)}</strong></div>
         )}
-        <div className="figure"><span>Energy / hour</span><strong data-testid="energy">{radio.energy_j_per_hour.toFixed(1)} J</strong></div>
+        <div className="figure"><span>Energy / hour</span><strong data-testid="energy">{hedge(radio)}{radio.energy_j_per_hour.toFixed(1)} J</strong></div>
         {radio.battery_share_per_hour !== null && radio.battery_wh !== null && (
           <div className="figure"><span>Of the {radio.battery_wh} Wh battery / hour</span>
             <strong data-testid="battery-share">{percent(radio.battery_share_per_hour)}</strong></div>
@@ -44,7 +59,8 @@ export function AirTimeView({ radio, onSelect }: { radio: Radio; onSelect: (subs
             {radio.proposals.map((p) => (
               <tr key={p.change} data-testid="proposal">
                 <td>{p.change}</td><td>{p.max_delay_s.toFixed(1)} s</td><td>{formatRate(p.bytes_per_s)}</td>
-                <td>{p.air_time_s_per_hour.toFixed(1)} s ({percent(p.duty_share)})</td><td>{p.energy_j_per_hour.toFixed(1)} J</td>
+                <td>{hedge(p)}{p.air_time_s_per_hour.toFixed(1)} s ({p.air_time_bound_s_per_hour != null ? "at most " : ""}{percent(p.duty_share)})</td>
+                <td>{hedge(p)}{p.energy_j_per_hour.toFixed(1)} J</td>
               </tr>
             ))}
           </tbody>
