@@ -5,9 +5,10 @@ aggregate recomputed from the on-board archive (the official `mcap` reader: the 
 Over datagrams a backfill's END shares a control datagram with its PROGRESS; a SubBroker
 that read only the first frame left the job RUNNING for ever.
 
-The datagram link repairs a short outage by itself (NACKs, the PubBroker's resend ring):
-the radio here is slow (600 B/s) with a short queue (0.3 s), so the catch-up after the
-outage overflows it and windows stay missing, as on a real narrow radio."""
+The datagram link repairs a short outage by itself (NACKs, the PubBroker's resend ring,
+which also gets through the catch-up of a slow radio: 600 B/s with a 0.3 s queue here);
+the ring is made tiny (`link.ring_bytes`), so that the outage's windows stay missing
+and only the backfill can fill them."""
 
 from __future__ import annotations
 
@@ -82,13 +83,18 @@ def test_backfill_after_an_outage_ends_done(
     began = time.monotonic()
     if transport == "udp":
         port = free_port("udp")
-        pb = start_pubbroker_dgram(tmp_path, model, {"transport": "udp", "port": port}, ingress)
+        pb = start_pubbroker_dgram(
+            tmp_path, model, {"transport": "udp", "port": port, "ring_bytes": 256}, ingress
+        )
         radio, relay = start_radio_udp(tmp_path, port, spec)
         cfg = subbroker_dgram_config(tmp_path, model, f"127.0.0.1:{relay}", zport, "udp")
     else:
         radio, base, drone = start_radio_serial(tmp_path, spec)
         pb = start_pubbroker_dgram(
-            tmp_path, model, {"transport": "serial", "device": drone, "port": 1}, ingress
+            tmp_path,
+            model,
+            {"transport": "serial", "device": drone, "port": 1, "ring_bytes": 256},
+            ingress,
         )
         cfg = subbroker_dgram_config(tmp_path, model, "127.0.0.1:1", zport, "serial", device=base)
     sb = start_subbroker(tmp_path, cfg)

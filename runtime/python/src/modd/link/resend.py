@@ -73,16 +73,13 @@ class GapTracker:
         self.gaps = kept
 
     def due(self, now: float, every: float) -> list[tuple[int, int]]:
-        """Ranges to NACK now: gaps whose last ask is older than ``every`` seconds,
-        doubled at each ask after the first up to four times ``every`` (a loaded
-        machine or a slow radio gets time to answer, as TCP's retransmission timer
-        backs off, while a lost slot is still given up within seconds); a gap asked
-        ``max_asks`` times is given up (counted in ``lost``)."""
+        """Ranges to NACK now: gaps not asked for within ``every`` seconds (nor
+        answered in part within it); a gap asked ``max_asks`` times is given up
+        (counted in ``lost``), so that backfill, not a late resend, fills it."""
         ranges: list[tuple[int, int]] = []
         kept: list[_Gap] = []
         for g in self.gaps:
-            wait = every * (1 << min(max(0, g.asks - 1), 2))  # 1, 2, 4, 4... x every
-            if now - g.last_ask < wait or len(ranges) >= MAX_NACK_RANGES:
+            if now - g.last_ask < every or len(ranges) >= MAX_NACK_RANGES:
                 kept.append(g)
                 continue
             if g.asks >= self.max_asks:

@@ -22,6 +22,7 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
+from modd_plan.streams import StreamKey
 from modd_plan.windows import split_window, window_of
 
 from modd.link import backfill as bf
@@ -128,6 +129,13 @@ class BackfillManager:
             if not self._dirty:  # the clock thread saves it within SAVE_S
                 self._dirty = True
                 self._wake.notify_all()
+
+    def filled_already(self, subscriber: str, stream: StreamKey, start: int, end: int) -> bool:
+        """Did a backfill deliver this window already? (A NACK's resend may arrive
+        after the backfill that filled the same gap: it must not be delivered twice.)"""
+        with self._lock:
+            spans = self.record.filled.get((subscriber, stream))
+            return spans is not None and spans.covers(start, end)
 
     def received_until(self) -> int | None:
         with self._lock:

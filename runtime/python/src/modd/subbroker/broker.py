@@ -304,7 +304,9 @@ class SubBroker:
         if running is None or running.slots is None:
             return
         self.backfill.on_windows(running, windows)
-        self.delivered += running.slots.deliver(windows, self._sinks())
+        self.delivered += running.slots.deliver(
+            windows, self._sinks(), self.backfill.filled_already
+        )
 
     def _link_up(self) -> None:
         """After a reconnection: the running backfill resumes, and the subscriptions whose

@@ -19,7 +19,7 @@ import socket
 import threading
 import time
 from collections import deque
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Protocol
 
 from modd_plan.streams import StreamKey
@@ -273,6 +273,10 @@ class Sink(Protocol):
     def put(self, subscriber: str, payload: bytes) -> None: ...
 
 
+#: Was this window (subscriber, stream, start, end) delivered by a backfill already?
+Filled = Callable[[str, StreamKey, int, int], bool]
+
+
 class SlotDelivery:
     """One running config's way from the windows of a DATA slot to the sinks.
 
@@ -312,9 +316,16 @@ class SlotDelivery:
         prefix = self._prefixes[subscriber] = subscriber_prefix(subscriber)
         return prefix
 
-    def deliver(self, windows: Sequence[Window], sinks: Sequence[Sink]) -> int:
+    def deliver(
+        self,
+        windows: Sequence[Window],
+        sinks: Sequence[Sink],
+        filled: Filled | None = None,
+    ) -> int:
         """Deliver what the slot of ``windows`` completes; the number of values
-        (one per subscriber and window, whatever the number of sinks)."""
+        (one per subscriber and window, whatever the number of sinks). A window
+        ``filled`` says a backfill delivered already (a NACK's resend that comes
+        after the backfill it raced) is not delivered twice."""
         first = windows[0]
         slot, end_ns, epoch = first.slot, first.end_ns, self._epoch_ns
         date_us = (end_ns - epoch) // 1000
@@ -329,8 +340,10 @@ class SlotDelivery:
             start_ns = epoch + (date_us - period) * 1000
             tail = payload.tail(slot, start_ns, end_ns, value, samples, now)
             for sub in out.subscribers:
+                if filled is not None and filled(sub, out.stream, start_ns, end_ns):
+                    continue
                 data = (prefixes.get(sub) or self._prefix(sub)) + tail
                 for sink in sinks:
                     sink.put(sub, data)
-            count += len(out.subscribers)
+                count += 1
         return count
