@@ -9,31 +9,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$PWD/.venv/bin:$PATH"
 
-# 1: the formatters check the whole tree (scripts/format-all.sh --check), once
-# scripts/format-all.sh has been run and committed; 0: only the paths of
-# scripts/formatted.txt.
-FORMAT_WHOLE_TREE=1
-
 step() { printf '\n== %s\n' "$*"; }
-formatted() { grep -v '^\s*#' scripts/formatted.txt | grep -v '^\s*$'; }
 
 static_checks() {
   step "ruff check"
   ruff check --quiet .
-  if [ "$FORMAT_WHOLE_TREE" -eq 1 ]; then
-    step "formatters, whole tree (scripts/format-all.sh --check)"
-    scripts/format-all.sh --check
-  else
-    step "ruff format --check (scripts/formatted.txt)"
-    mapfile -t py < <(formatted | while read -r p; do
-      if [ -d "$p" ] || [[ "$p" == *.py ]]; then echo "$p"; fi; done)
-    ruff format --check --quiet --force-exclude "${py[@]}"
-    if command -v clang-format >/dev/null 2>&1; then
-      step "clang-format (scripts/formatted.txt)"
-      mapfile -t cxx < <(formatted | grep -E '\.(hpp|cpp|h)$' || true)
-      [ ${#cxx[@]} -eq 0 ] || clang-format --dry-run --Werror --style=file "${cxx[@]}"
-    fi
-  fi
+  step "formatters, whole tree (scripts/format-all.sh --check)"
+  scripts/format-all.sh --check
   step "generated files up to date (python -m modd_contracts.typegen --check)"
   python -m modd_contracts.typegen --check
   step "mypy (strict: sources, component tests, cross-process tests and benchmarks)"
