@@ -189,13 +189,16 @@ def exact_sum(values: Iterable[Fraction]) -> Fraction:
 
 
 def _slot_walk(
-    schedule: Schedule, window_bytes: Sequence[Fraction], delay: Fraction
+    schedule: Schedule, window_bytes: Sequence[Fraction], delay: Fraction, carry: bool = False
 ) -> list[WalkedSlot]:
     """The first slots: one hyperperiod, or more until they span 20 accepted
     delays (so that packing reaches its steady state), at most
     :data:`WALK_LIMIT` slots (beyond, the walk is a sample of the schedule's
     start). Streams of one period are due together: each slot carries its
-    periods, not its stream ids."""
+    periods, not its stream ids. A slot's value bytes are its sizes' sum
+    rounded up, or with ``carry`` (mean sizes, calibration.py) rounded so
+    that the walk's running total stays within a byte of the exact one:
+    slots of 5.5 B alternate 6 and 5, as the real values' sizes vary."""
     by_period: dict[int, list[int]] = {}
     for i, p in enumerate(schedule.periods_us):
         by_period.setdefault(p, []).append(i)
@@ -208,10 +211,17 @@ def _slot_walk(
     out: list[WalkedSlot] = []
     ceil_sum = ceil_of_sums(period_bytes)
     counts = {p: len(ids) for p, ids in by_period.items()}
+    total, emitted = Fraction(0), 0
     for index, date, due in schedule.iter_due_periods():
         if index >= limit:
             break
-        out.append((date, ceil_sum(due), sum(counts[p] for p in due), due))
+        if carry:
+            total += sum((period_bytes[p] for p in due), Fraction(0))
+            values = ceil(total) - emitted
+            emitted += values
+        else:
+            values = ceil_sum(due)
+        out.append((date, values, sum(counts[p] for p in due), due))
     return out
 
 
@@ -304,12 +314,14 @@ def link_budget(
     window_bytes: Sequence[Fraction],
     subscribers_of: Sequence[Sequence[str]],
     subscriptions: Sequence[str],
+    carry: bool = False,
 ) -> LinkBudget:
     """The budget of ``settings``'s transport for a schedule whose sent
     stream ``i`` carries ``window_bytes[i]`` per window and serves the
     subscribers ``subscribers_of[i]`` (directly or through a derived stream).
-    ``subscriptions`` lists every subscriber, each of which gets a delay."""
-    slots = _slot_walk(schedule, window_bytes, settings.accepted_delay)
+    ``subscriptions`` lists every subscriber, each of which gets a delay.
+    ``carry``: the window bytes are means, slots rounded as :func:`_slot_walk`."""
+    slots = _slot_walk(schedule, window_bytes, settings.accepted_delay, carry)
     if not slots:
         return LinkBudget(settings, 0.0, 0.0, 0.0, dict.fromkeys(subscriptions, 0.0))
     span_s = slots[-1][0] / 1e6  # slot dates start after 0: the walk covers (0, last]
