@@ -104,9 +104,10 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
             print(d, file=sys.stderr)
         return 1
     calibration = None
-    if args.calibrate is not None:
+    archive = getattr(args, "calibrate", None)  # callers may build the namespace themselves
+    if archive is not None:
         try:
-            calibration = load_calibration(args.calibrate, _topics(result.model))
+            calibration = load_calibration(archive, _topics(result.model))
         except CalibrationError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 1

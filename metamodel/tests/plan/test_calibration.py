@@ -200,3 +200,20 @@ def test_proposals_carry_the_calibration() -> None:
     for p in plan.to_json()["radio"]["proposals"]:
         assert p["calibrated_from"] == "calm.mcap" and p["figures"] == "estimate"
     assert all("calibrated_from" not in p for p in make_plan(model).to_json()["radio"]["proposals"])
+
+
+def test_calibrated_rates_are_over_whole_datagrams() -> None:
+    """0.25 s slots and a 0.5 s accepted delay: datagrams of 3 slots, one
+    every 0.75 s, 4,800 an hour. The walk of 20 accepted delays (40 slots)
+    ends inside a datagram: the bound counts that cut one as a packet (5,040
+    an hour, unchanged: an upper bound may); the calibrated estimate walks on
+    to the end of the datagram and counts whole ones."""
+    model = _lora_model(-20, 20)
+    for s in model["subscribers"]:
+        s["periodS"] = "0.25"
+    model["link"].update(acceptedDelayS="0.5", radio={"kind": "sik"})
+    cal = Calibration("calm.mcap", {t: _series(_wave, 60, i) for i, t in enumerate(TOPICS)})
+    calibrated, plain = make_plan(model, calibration=cal).radio, make_plan(model).radio
+    assert calibrated is not None and plain is not None
+    assert calibrated.packets_per_hour == pytest.approx(3600 / 0.75)
+    assert plain.packets_per_hour == pytest.approx(14 / 10 * 3600)
