@@ -9,7 +9,7 @@ sizes quantised values with them instead of the declared range
 Pure: the samples come in as ``{topic: (stamps_ns, values)}``; reading an
 archive is the runtime's (the ``modd.samples`` entry point, cli.py).
 
->>> cal = Calibration("test.mcap", {"t": ([0, 1_000_000_000], [0.0, 0.05])})
+>>> cal = Calibration("test.mcap", {"t": ([0, 10**9, 2 * 10**9], [0.0, 0.05, 9.0])})
 >>> cal.sizes("t", "LAST", Fraction(1), 0.01)
 ValueSizes(absolute=Fraction(1, 1), delta=Fraction(1, 1), windows=2)
 """
@@ -97,7 +97,10 @@ def window_numbers(
     over the first ``limit`` windows of the series: one per window, each
     element for ALL (none for COUNT: it is not quantised). Windows start at
     the first sample (the PubBroker's epoch is not in the archive: the
-    phase changes which samples share a window, not their statistics)."""
+    phase changes which samples share a window, not their statistics); the
+    window the archive ends in is cut short and left out (unless it is the
+    only one), as its AVERAGE or MIN of a part of the signal is not the
+    stream's."""
     stamps, values = series
     if not len(stamps) or aggregation == agg.COUNT:
         return []
@@ -115,6 +118,8 @@ def window_numbers(
             samples = []
         index = j
         samples.append(float(x))
+    else:  # the archive ends inside this window: it is cut short, left out
+        samples = samples if not out else []
     if samples:
         out.append(_numbers(aggregation, samples))
     return out
