@@ -96,6 +96,15 @@ def test_planned_air_time_is_what_the_emulator_measures(
     assert energy == pytest.approx(predicted.energy_j_per_hour, rel=0.05)
 
 
+def _at_resolution(tmp: Path, bound: float, delay: str, radio: dict[str, Any]) -> dict[str, Any]:
+    """Scenario 1 over serial at 0.01 on every variable, declared in +-bound."""
+    model: dict[str, Any] = json.loads(model_copy(tmp, "scenario1.modd").read_text())
+    for v in model["drone"]["sensors"][0]["variables"]:
+        v.update(resolution=0.01, validMin=-bound, validMax=bound)
+    model["link"] = {"transport": "serial", "device": "", "acceptedDelayS": delay, "radio": radio}
+    return model
+
+
 # Declared resolutions (issue 34): 0.01 on every accelerometer variable over its
 # declared range of +-10, the load uniform in that range; a 0.2 s accepted delay
 # under the 0.25 s periods puts one window in each datagram, so every value is
@@ -114,15 +123,7 @@ def test_planned_air_time_with_resolutions_bounds_the_emulators(
     name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(relay, "AirtimeChannel", _Recording)
-    model = json.loads(model_copy(tmp_path, "scenario1.modd").read_text())
-    for v in model["drone"]["sensors"][0]["variables"]:
-        v.update(resolution=0.01, validMin=-10, validMax=10)
-    model["link"] = {
-        "transport": "serial",
-        "device": "",
-        "acceptedDelayS": "0.2",
-        "radio": BOUNDED[name],
-    }
+    model = _at_resolution(tmp_path, 10, "0.2", BOUNDED[name])
     plan = make_plan(model)
     predicted = plan.radio
     assert predicted is not None and predicted.fits and predicted.upper_bound is True
@@ -182,15 +183,7 @@ def test_planned_air_time_calibrated_by_another_run_is_the_emulators(
     for name, radio in CALIBRATED.items():
         run = tmp_path / name
         run.mkdir()
-        model = json.loads(model_copy(run, "scenario1.modd").read_text())
-        for v in model["drone"]["sensors"][0]["variables"]:
-            v.update(resolution=0.01, validMin=-20, validMax=20)
-        model["link"] = {
-            "transport": "serial",
-            "device": "",
-            "acceptedDelayS": "0.5",
-            "radio": radio,
-        }
+        model = _at_resolution(run, 20, "0.5", radio)
         _, air, energy = _measure(run, model, CALIBRATED_LOAD_S, "wave")
         runs[name] = (model, air, energy, _archive_samples(run / "archive"))
     names = list(CALIBRATED)

@@ -16,14 +16,13 @@ ValueSizes(absolute=Fraction(1, 1), delta=Fraction(1, 1), windows=2)
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
 
 from modd_contracts import aggregations_gen as agg
-from modd_contracts.quantised import ESCAPE, MAX_STEPS_BITS
+from modd_contracts.quantised import ESCAPE, steps
 from modd_contracts.types_gen import PlanCalibration
 
 from .derive import aggregate
@@ -37,7 +36,6 @@ CALIBRATION_WINDOWS = 2000
 ESCAPE_BYTES = varint_size(ESCAPE) + 8
 #: Mean sizes are kept as fractions of at most this denominator.
 MEAN_DENOMINATOR = 100
-_MAX_STEPS = 1 << MAX_STEPS_BITS
 _NS = 1_000_000_000
 
 #: One topic's samples: stamps (ns, ascending) and values.
@@ -57,24 +55,6 @@ class ValueSizes:
     absolute: Fraction
     delta: Fraction
     windows: int
-
-
-def steps(x: float, resolution: float) -> int | None:
-    """The codec's step count: ``round(x / r)`` half to even, None when the
-    value is escaped (not finite, beyond 2^53 steps, not restored within r/2).
-
-    >>> steps(1.234, 0.01), steps(0.125, 0.25), steps(float("nan"), 0.01)
-    (123, 0, None)
-    """
-    if not math.isfinite(x):
-        return None
-    ratio = x / resolution
-    if not math.isfinite(ratio) or abs(ratio) > _MAX_STEPS:
-        return None
-    q = round(ratio)
-    if abs(q) > _MAX_STEPS or abs(q * resolution - x) > resolution / 2:
-        return None
-    return q
 
 
 def code_bytes(q: int | None, prev: int | None) -> int:

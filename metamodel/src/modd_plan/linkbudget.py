@@ -240,11 +240,7 @@ def _slot_walk(
 
 
 def _tcp(
-    settings: LinkSettings,
-    slots: list[WalkedSlot],
-    span_s: float,
-    sizes: list[int],
-    cut_us: int | None = None,
+    settings: LinkSettings, slots: list[WalkedSlot], span_s: float, sizes: list[int]
 ) -> tuple[float, float, float, dict[int, float], float]:
     wire = 0
     segments = 0

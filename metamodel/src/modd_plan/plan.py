@@ -312,30 +312,15 @@ def make_plan(
     too."""
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
+    options = _Options(ping_s, alpha, beta, max_buffer, method, calibration)
     with gc_paused():
-        plan = _make_plan(
-            model,
-            ping_s=ping_s,
-            alpha=alpha,
-            beta=beta,
-            max_buffer=max_buffer,
-            method=method,
-            calibration=calibration,
-        )
+        plan = _make_plan(model, options)
         if not proposals or plan.radio is None or plan.radio.fits:
             return plan
 
         def replan(candidate: Mapping[str, Any]) -> tuple[RadioReport, float] | None:
             try:
-                p = _make_plan(
-                    candidate,
-                    ping_s=ping_s,
-                    alpha=alpha,
-                    beta=beta,
-                    max_buffer=max_buffer,
-                    method=method,
-                    calibration=calibration,
-                )
+                p = _make_plan(candidate, options)
             except PlanningError:
                 return None
             if p.radio is None or p.budget is None or len(p.infeasible) > len(plan.infeasible):
@@ -369,17 +354,24 @@ def gc_paused() -> Iterator[None]:
             gc.enable()
 
 
-def _make_plan(
-    model: Mapping[str, Any],
-    *,
-    ping_s: Fraction | None,
-    alpha: Fraction | None,
-    beta: Fraction | None,
-    max_buffer: int | None,
-    method: str,
-    calibration: Calibration | None = None,
-) -> Plan:
-    constants = constants_for(model, ping_s=ping_s, alpha=alpha, beta=beta, max_buffer=max_buffer)
+@dataclass(frozen=True)
+class _Options:
+    """make_plan's options, the same for the plan and each proposal's."""
+
+    ping_s: Fraction | None
+    alpha: Fraction | None
+    beta: Fraction | None
+    max_buffer: int | None
+    method: str
+    calibration: Calibration | None
+
+
+def _make_plan(model: Mapping[str, Any], options: _Options) -> Plan:
+    o = options
+    constants = constants_for(
+        model, ping_s=o.ping_s, alpha=o.alpha, beta=o.beta, max_buffer=o.max_buffer
+    )
+    method, calibration = o.method, o.calibration
     tops = topics(dict(model))
     index = {name: i for i, name in enumerate(tops)}
     requested, subscriptions = asked_streams(model)
