@@ -18,7 +18,7 @@ from typing import Any, TextIO
 
 from modd_model.io import load_file, locate
 from modd_model.numbers import fraction_to_decimal, to_fraction
-from modd_model.query import topic_name
+from modd_model.query import topics
 
 from .calibration import Calibration, CalibrationError
 from .linkbudget import budget_lines
@@ -107,7 +107,7 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
     archive = getattr(args, "calibrate", None)  # callers may build the namespace themselves
     if archive is not None:
         try:
-            calibration = load_calibration(archive, _topics(result.model))
+            calibration = load_calibration(archive, list(topics(result.model)))
         except CalibrationError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 1
@@ -135,15 +135,6 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
     if plan.budget is not None and plan.budget.error:
         return 4
     return 5 if plan.radio is not None and not plan.radio.fits else 0
-
-
-def _topics(model: Any) -> list[str]:
-    drone = model["drone"]["name"]
-    return [
-        topic_name(drone, s["name"], v["name"])
-        for s in model["drone"]["sensors"]
-        for v in s["variables"]
-    ]
 
 
 def _sec(value: Fraction) -> str:
