@@ -241,7 +241,7 @@ def _slot_walk(
 
 def _tcp(
     settings: LinkSettings, slots: list[WalkedSlot], span_s: float, sizes: list[int]
-) -> tuple[float, float, float, dict[int, float], float]:
+) -> tuple[float, float, float, dict[int, float]]:
     wire = 0
     segments = 0
     for _, values, count, _ in slots:
@@ -256,13 +256,7 @@ def _tcp(
         air = (data_frame_bytes(values, count) + TCP_IP_HEADER_BYTES) / rate if rate else 0.0
         for p in due:
             delays[p] = max(delays.get(p, 0.0), air)
-    return (
-        wire / span_s,
-        segments * TCP_IP_HEADER_BYTES / span_s,
-        segments / span_s,
-        delays,
-        span_s,
-    )
+    return wire / span_s, segments * TCP_IP_HEADER_BYTES / span_s, segments / span_s, delays
 
 
 def _datagrams(
@@ -358,9 +352,10 @@ def link_budget(
         return LinkBudget(settings, 0.0, 0.0, 0.0, dict.fromkeys(subscriptions, 0.0))
     span_s = slots[-1][0] / 1e6  # slot dates start after 0: the walk covers (0, last]
     sizes: list[int] = []
-    if settings.transport == "tcp":
+    if settings.transport == "tcp":  # one frame a slot: nothing cut (carry's extra slots off)
         slots = slots[: _walk_limit(schedule, settings.accepted_delay)]
-        down, up, packets, period_delay, span_s = _tcp(settings, slots, slots[-1][0] / 1e6, sizes)
+        span_s = slots[-1][0] / 1e6
+        down, up, packets, period_delay = _tcp(settings, slots, span_s, sizes)
     else:
         cut = slots[min(len(slots), _walk_limit(schedule, settings.accepted_delay)) - 1][0]
         down, up, packets, period_delay, span_s = _datagrams(

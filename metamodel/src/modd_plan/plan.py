@@ -445,17 +445,7 @@ def _make_plan(model: Mapping[str, Any], options: _Options) -> Plan:
         )
         if bounded:
             ceiling = _budget(model, sched, sent, streams, ceiling_bytes)
-    report = (
-        radio_report(
-            RadioProfile.of(radio),
-            budget,
-            bound,
-            ceiling,
-            use if use and (use.sizes or use.missing) else None,
-        )
-        if radio
-        else None
-    )
+    report = radio_report(RadioProfile.of(radio), budget, bound, ceiling, use) if radio else None
     return Plan(
         topics=tuple(tops.values()),
         streams=streams,
