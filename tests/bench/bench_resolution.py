@@ -7,7 +7,11 @@ largest error of a delivered window against the window recomputed from the
 on-board archive (the official mcap reader). Two loads: a smooth sea-wave
 signal (what a resolution is for) and uniform noise in [-10, 10] (the worst
 case: consecutive windows thousands of steps apart). MAVLink 2 and zenoh rows
-come from bench_radio.py (same emulator, same scenarios). Asserts nothing.
+come from bench_radio.py (same emulator, same scenarios). The LoRa row's
+planner is also calibrated by the archive of the scenario 1 0.01 wave row (a
+different run of the same load generator; with --lora-only, a calibration run
+of --seconds first): planned at most, planned calibrated and measured, side by
+side. Asserts nothing.
 
     .venv/bin/python tests/bench/bench_resolution.py [--seconds 30] [--json F]
 """
@@ -80,8 +84,16 @@ def max_error(values: dict[str, list[Any]], archive: dict[str, Any]) -> float:
 
 
 def run(
-    tmp: Path, scenario: str, resolution: float | None, signal: str, spec: str, seconds: float
+    tmp: Path,
+    scenario: str,
+    resolution: float | None,
+    signal: str,
+    spec: str,
+    seconds: float,
+    samples: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
+    """One serial row; ``samples`` (when given) gets the archive's samples by
+    topic (modd plan --calibrate's reader), for the LoRa row's calibration."""
     model = _model(tmp, scenario, resolution)
     doc = json.loads(model.read_text())
     doc["link"] = {**doc.get("link", {}), "transport": "serial", "device": "/dev/null"}
@@ -116,6 +128,10 @@ def run(
             session.close()
     archive = read_archive(tmp / "archive", model)
     delivered, expected, _ = delivery(values, archive)
+    if samples is not None:
+        from test_radio_airtime import _archive_samples
+
+        samples.update(_archive_samples(tmp / "archive"))
     return {
         "scenario": scenario,
         "resolution": resolution,
@@ -129,12 +145,14 @@ def run(
     }
 
 
-def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
+def run_lora(tmp: Path, seconds: float, samples: dict[str, Any]) -> dict[str, Any]:
     """Scenario 1 at 0.01 m/s² over LoRa SF7/125 kHz at 1 % duty: the planner
     refuses it and proposes; the first proposal runs through the emulator with
     the LoRa profile (the relay in this process, recording each packet's air
-    time, as test_radio_airtime.py); planned and measured air time and energy."""
+    time, as test_radio_airtime.py); planned (at most, and calibrated by
+    ``samples``, another run's archive) and measured air time and energy."""
     from modd.radio import relay
+    from modd_plan.calibration import Calibration
     from modd_plan.radio import RadioProfile
     from test_radio_airtime import _is_data, _Recording
 
@@ -151,6 +169,10 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
     predicted = chosen.report
     planned = make_plan(chosen.model).budget  # the proposal's packets, as planned
     assert planned is not None
+    calibrated = make_plan(
+        chosen.model, calibration=Calibration("serial wave row", samples)
+    ).radio  # the same proposal, its values sized from the other run's samples
+    assert calibrated is not None and calibrated.calibration is not None
     profile = RadioProfile.of(LORA)
     # The emulator times every packet with the LoRa profile but enforces no duty
     # limit: at 1 % each side, the handshake and the CONFIG (0.3 s of air, then 30 s
@@ -175,9 +197,15 @@ def run_lora(tmp: Path, seconds: float) -> dict[str, Any]:
         "measured_packet_bytes": _sizes([len(p) for _, p, _ in sent], profile),
         "planned_figures_are": predicted.at_most.strip() or "exact",
         "planned_air_s_per_hour": round(predicted.air_s_per_hour, 2),
+        "calibrated_air_s_per_hour": round(calibrated.air_s_per_hour, 2),
         "measured_air_s_per_hour": round(air, 2),
         "planned_energy_j_per_hour": round(predicted.energy_j_per_hour, 1),
+        "calibrated_energy_j_per_hour": round(calibrated.energy_j_per_hour, 1),
         "measured_energy_j_per_hour": round(energy, 1),
+        "calibrated_value_bytes": {
+            k: f"{float(v.absolute):.2f} / {float(v.delta):.2f} ({v.windows} windows)"
+            for k, v in calibrated.calibration.sizes
+        },
         "dropped_by_radio": dict(down.dropped),
         "limit_air_s_per_hour": 3600 * float(LORA["dutyCycle"]),
     }
@@ -199,7 +227,11 @@ def main() -> int:
     )
     p.add_argument("--seconds", type=float, default=30.0)
     p.add_argument("--json", type=Path)
-    p.add_argument("--lora-only", action="store_true", help="only the LoRa run")
+    p.add_argument(
+        "--lora-only",
+        action="store_true",
+        help="only the LoRa run (after the serial row whose archive calibrates it)",
+    )
     args = p.parse_args()
     plan = [
         ("scenario1.modd", None, "wave", ""),
@@ -211,9 +243,11 @@ def main() -> int:
         ("scenario2.modd", STEP, "wave", ""),
     ]
     rows: list[dict[str, Any]] = []
-    for scenario, resolution, signal, spec in [] if args.lora_only else plan:
+    samples: dict[str, Any] = {}  # the calibration of the LoRa row: plan[1]'s archive
+    for scenario, resolution, signal, spec in plan[1:2] if args.lora_only else plan:
+        keep = samples if (scenario, resolution, signal, spec) == plan[1] else None
         with TemporaryDirectory(prefix="modd-bench-res-") as d:
-            rows.append(run(Path(d), scenario, resolution, signal, spec, args.seconds))
+            rows.append(run(Path(d), scenario, resolution, signal, spec, args.seconds, keep))
         print(json.dumps(rows[-1]), flush=True)
     print(
         "\n| scenario | resolution | load | radio | drone→base B/s | planned B/s | "
@@ -229,7 +263,7 @@ def main() -> int:
         )
     with TemporaryDirectory(prefix="modd-bench-lora-") as d:
         try:
-            lora = run_lora(Path(d), max(60.0, 2 * args.seconds))
+            lora = run_lora(Path(d), max(60.0, 2 * args.seconds), samples)
         except Exception as exc:  # the serial rows above stand on their own
             lora = {"error": repr(exc)}
     print("\nLoRa SF7/125 kHz, 1 % duty cycle, scenario 1 at 0.01 m/s2 (wave load):")

@@ -96,6 +96,15 @@ def test_planned_air_time_is_what_the_emulator_measures(
     assert energy == pytest.approx(predicted.energy_j_per_hour, rel=0.05)
 
 
+def _at_resolution(tmp: Path, bound: float, delay: str, radio: dict[str, Any]) -> dict[str, Any]:
+    """Scenario 1 over serial at 0.01 on every variable, declared in +-bound."""
+    model: dict[str, Any] = json.loads(model_copy(tmp, "scenario1.modd").read_text())
+    for v in model["drone"]["sensors"][0]["variables"]:
+        v.update(resolution=0.01, validMin=-bound, validMax=bound)
+    model["link"] = {"transport": "serial", "device": "", "acceptedDelayS": delay, "radio": radio}
+    return model
+
+
 # Declared resolutions (issue 34): 0.01 on every accelerometer variable over its
 # declared range of +-10, the load uniform in that range; a 0.2 s accepted delay
 # under the 0.25 s periods puts one window in each datagram, so every value is
@@ -114,15 +123,7 @@ def test_planned_air_time_with_resolutions_bounds_the_emulators(
     name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(relay, "AirtimeChannel", _Recording)
-    model = json.loads(model_copy(tmp_path, "scenario1.modd").read_text())
-    for v in model["drone"]["sensors"][0]["variables"]:
-        v.update(resolution=0.01, validMin=-10, validMax=10)
-    model["link"] = {
-        "transport": "serial",
-        "device": "",
-        "acceptedDelayS": "0.2",
-        "radio": BOUNDED[name],
-    }
+    model = _at_resolution(tmp_path, 10, "0.2", BOUNDED[name])
     plan = make_plan(model)
     predicted = plan.radio
     assert predicted is not None and predicted.fits and predicted.upper_bound is True
@@ -139,3 +140,67 @@ def test_planned_air_time_with_resolutions_bounds_the_emulators(
     # and most AVERAGEs of 6 samples uniform in +-10 are 64 steps or more from 0)
     assert predicted.air_s_per_hour * 0.95 <= air <= predicted.air_s_per_hour * 1.01
     assert predicted.energy_j_per_hour * 0.95 <= energy <= predicted.energy_j_per_hour * 1.01
+
+
+# Calibrated by an archive (modd plan --calibrate): scenario 1 at 0.01 m/s^2
+# over +-20 declared, the wave load, a 0.5 s accepted delay (2-3 slots a
+# datagram: absolute values and deltas). Each profile's run is measured
+# against the plan calibrated by the archive of ANOTHER run (the next
+# profile's: same load generator, another process); three runs in all.
+# LoRa at a 50 % limit: the plan fits.
+CALIBRATED = {
+    "lora": {"kind": "lora", "dutyCycle": "0.5"},
+    "sik": {"kind": "sik"},
+    "wifi": {"kind": "wifi"},
+}
+CALIBRATED_LOAD_S = 15.0  # about 20 datagrams
+
+
+def _archive_samples(archive_dir: Path) -> dict[str, Any]:
+    from modd.dataset.samples import read_samples
+
+    files = sorted(archive_dir.glob("*.mcap"))
+    assert files, f"no archive in {archive_dir}"
+    out: dict[str, Any] = {}
+    for f in files:  # one file a run here; several would follow each other in time
+        for topic, (stamps, values) in read_samples(f, TOPICS).items():
+            got = out.setdefault(topic, ([], []))
+            got[0].extend(stamps)
+            got[1].extend(values)
+    return out
+
+
+TOPICS = [f"usv.accelerometer.accel_{a}" for a in "xyz"]
+
+
+def test_planned_air_time_calibrated_by_another_run_is_the_emulators(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from modd_plan.calibration import Calibration
+
+    monkeypatch.setattr(relay, "AirtimeChannel", _Recording)
+    runs: dict[str, tuple[dict[str, Any], float, float, dict[str, Any]]] = {}
+    for name, radio in CALIBRATED.items():
+        run = tmp_path / name
+        run.mkdir()
+        model = _at_resolution(run, 20, "0.5", radio)
+        _, air, energy = _measure(run, model, CALIBRATED_LOAD_S, "wave")
+        runs[name] = (model, air, energy, _archive_samples(run / "archive"))
+    names = list(CALIBRATED)
+    for i, name in enumerate(names):
+        model, air, energy, _ = runs[name]
+        other = names[(i + 1) % len(names)]
+        plan = make_plan(model, calibration=Calibration(f"{other}.mcap", runs[other][3]))
+        bound = make_plan(model).radio
+        predicted = plan.radio
+        assert predicted is not None and bound is not None and predicted.fits
+        assert predicted.figures == "estimate" and predicted.calibration is not None
+        assert not predicted.calibration.missing and len(predicted.calibration.sizes) == 4
+        print(
+            f"{name}: air {air:.3f} s/h measured, {predicted.air_s_per_hour:.3f} planned "
+            f"calibrated by {other}'s run ({bound.at_most}{bound.air_s_per_hour:.3f} without); "
+            f"energy {energy:.3f} J/h measured, {predicted.energy_j_per_hour:.3f} planned "
+            f"({bound.energy_j_per_hour:.3f} without)"
+        )
+        assert air == pytest.approx(predicted.air_s_per_hour, rel=0.05)
+        assert energy == pytest.approx(predicted.energy_j_per_hour, rel=0.05)

@@ -32,7 +32,10 @@ from fastapi import HTTPException
 from modd_contracts.types_gen import PlanDocument
 from modd_model import LoadResult, validate
 from modd_model.diagnostics import Diagnostic, ModelError
+from modd_model.query import topics
 from modd_plan import make_plan
+from modd_plan.calibration import CalibrationError
+from modd_plan.cli import load_calibration
 
 from .modelio import diagnostics_json, read_text
 
@@ -55,14 +58,21 @@ class LivePlan:
         }
 
 
-def live_plan(result: LoadResult, method: Method = "exact") -> LivePlan:
-    """Plan a loaded model when it has no errors; never raises for bad models."""
+def live_plan(
+    result: LoadResult, method: Method = "exact", calibrate: str | None = None
+) -> LivePlan:
+    """Plan a loaded model when it has no errors; never raises for bad models.
+    ``calibrate``: the path of an archive whose samples size the quantised
+    values (``modd plan --calibrate``); one it cannot read is a diagnostic."""
     start = time.perf_counter()
     diags = list(result.diagnostics)
     plan = None
     if result.model is not None and not result.errors:
         try:
-            plan = make_plan(result.model, method=method).to_json()
+            calibration = None
+            if calibrate is not None:
+                calibration = load_calibration(calibrate, list(topics(result.model)))
+            plan = make_plan(result.model, method=method, calibration=calibration).to_json()
             # a refusal by the radio, pinned in the editor (the plan is still shown)
             diags += [
                 Diagnostic(d["message"], d["pointer"], "warning")
@@ -70,6 +80,8 @@ def live_plan(result: LoadResult, method: Method = "exact") -> LivePlan:
             ]
         except ModelError as exc:  # the planner's bounds, located at the subscriptions
             diags.extend(exc.diagnostics)
+        except CalibrationError as exc:
+            diags.append(Diagnostic(f"cannot calibrate the plan: {exc}", "/link/radio"))
         except (ValueError, KeyError, ArithmeticError) as exc:
             diags.append(Diagnostic(f"the planner cannot plan this model: {exc}", ""))
     return LivePlan(plan, diagnostics_json(diags), (time.perf_counter() - start) * 1000)
@@ -155,9 +167,11 @@ def plan_request(
     fmt: str,
     method: Method,
     timeout_s: float = PLAN_TIMEOUT_S,
+    calibrate: str | None = None,
 ) -> dict[str, Any]:
     """In a worker: read (parse, validate) and plan within ``timeout_s``
-    (a timer signal); the LivePlan's JSON."""
+    (a timer signal), calibrated by the archive at ``calibrate`` if given;
+    the LivePlan's JSON."""
     import signal
 
     if method == "cvxpy":
@@ -171,7 +185,7 @@ def plan_request(
         else:
             assert text is not None
             result = read_text(text, "modd" if fmt == "modd" else "json")
-        return live_plan(result, method).to_json()
+        return live_plan(result, method, calibrate).to_json()
     except _OverTime:
         return _failed(
             f"planning this model takes longer than the budget of {timeout_s:g} s",

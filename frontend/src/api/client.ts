@@ -73,8 +73,10 @@ export function createApi(opts: HttpOptions) {
       http.request<ValidateResult>("/api/validate", { method: "POST", json: input, signal }),
 
     // --- plan
-    plan: (input: ModelInput, signal?: AbortSignal) =>
-      http.request<PlanResult>("/api/plan", { method: "POST", json: input, signal }),
+    /** `calibrate`: an archive the backend holds, "DRONE/NAME.mcap", whose samples size the
+     * quantised values (docs/planning.md, "Bounds and estimates"). */
+    plan: (input: ModelInput, signal?: AbortSignal, calibrate?: string) =>
+      http.request<PlanResult>("/api/plan", { method: "POST", json: input, signal, query: { calibrate } }),
 
     // --- deploy (operator)
     deploy: (projectId: number, revision?: number) =>

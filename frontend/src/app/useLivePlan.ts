@@ -3,10 +3,11 @@
  * edits, posts the model to the backend's planner (aborting a request still
  * running) and stores the plan and its diagnostics. Layout-only edits do not
  * re-plan. Keeps the last valid plan and the one before it (nextPlanState).
+ * A calibration chosen in the Plan panel (`plan.calibrate`) re-plans too.
  */
 import { useEffect, useRef } from "react";
 import type { ModdModel } from "../core/model.gen";
-import { useEditorStore, useModel } from "../editor/useEditor";
+import { useEditor, useEditorStore, useModel } from "../editor/useEditor";
 import type { PlanState } from "../editor/store";
 import type { PlanResult } from "../api/types";
 import { useServices } from "./services";
@@ -15,7 +16,7 @@ import { planKey } from "../core/planKey";
 /** The plan state after an answer: a valid plan becomes the last valid one, the one before it `previous`. */
 export function nextPlanState(prev: PlanState, result: PlanResult): PlanState {
   if (!result.plan) return { ...prev, busy: false, result, error: null };
-  return { busy: false, result, error: null, lastValid: result.plan, previous: prev.lastValid ?? null };
+  return { busy: false, result, error: null, lastValid: result.plan, previous: prev.lastValid ?? null, calibrate: prev.calibrate };
 }
 
 export function useLivePlan(delayMs = 400): void {
@@ -23,16 +24,18 @@ export function useLivePlan(delayMs = 400): void {
   const store = useEditorStore();
   const model = useModel();
   const key = planKey(model);
+  const calibrate = useEditor((s) => s.plan.calibrate) ?? null;
   const last = useRef<string | null>(null);
 
   useEffect(() => {
-    if (key === last.current) return;
+    const asked = `${calibrate ?? ""}\n${key}`;
+    if (asked === last.current) return;
     const ctl = new AbortController();
     const timer = window.setTimeout(async () => {
       store.patch((s) => ({ plan: { ...s.plan, busy: true } }));
       try {
-        const result = await api.plan({ model: JSON.parse(key) as ModdModel }, ctl.signal);
-        last.current = key;
+        const result = await api.plan({ model: JSON.parse(key) as ModdModel }, ctl.signal, calibrate ?? undefined);
+        last.current = asked;
         store.patch((s) => ({ plan: { ...nextPlanState(s.plan, result), modelKey: key } }));
       } catch (e) {
         if ((e as Error).name === "AbortError") return;
@@ -40,5 +43,5 @@ export function useLivePlan(delayMs = 400): void {
       }
     }, delayMs);
     return () => { window.clearTimeout(timer); ctl.abort(); };
-  }, [key, api, store, delayMs]);
+  }, [key, calibrate, api, store, delayMs]);
 }

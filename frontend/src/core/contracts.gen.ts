@@ -323,6 +323,9 @@ export interface PlanRadio {
   figures?: "exact" | "upper_bound" | "estimate";
   /** With estimated figures: the air time of the bound the duty-cycle check uses (duty_share is its share), else null. */
   air_time_bound_s_per_hour?: number | null;
+  /** Only in a plan calibrated by an archive (modd plan --calibrate): its name; the quantised values were sized from its samples (figures: estimate). */
+  calibrated_from?: string;
+  calibration?: PlanCalibration;
   energy_j_per_hour: number;
   battery_wh: number | null;
   battery_share_per_hour: number | null;
@@ -362,6 +365,28 @@ export interface PlanProposal {
   figures?: "exact" | "upper_bound" | "estimate";
   /** With estimated figures: the air time of the bound the duty-cycle check uses (duty_share is its share), else null. */
   air_time_bound_s_per_hour?: number | null;
+  /** Only when the plan is calibrated: the archive the proposal's figures were sized from. */
+  calibrated_from?: string;
+}
+
+/** What an archive gave a calibrated plan (metamodel/src/modd_plan/calibration.py): the mean bytes of each quantised stream's values measured on its first windows, and the quantised streams it has no sample of (sized as without a calibration). */
+export interface PlanCalibration {
+  /** Windows of each stream recomputed at most (the archive's first). */
+  windows_limit: number;
+  streams: PlanCalibratedStream[];
+  /** Keys of the quantised streams whose topic the archive does not hold. */
+  not_calibrated: string[];
+}
+
+export interface PlanCalibratedStream {
+  /** The sent stream's key. */
+  stream: string;
+  /** Mean bytes of its first value in a unit (absolute steps). */
+  absolute_bytes: number;
+  /** Mean bytes of a later value (a delta of steps). */
+  delta_bytes: number;
+  /** Windows measured. */
+  windows: number;
 }
 
 export interface PlanInfeasible {

@@ -55,6 +55,8 @@ export interface PlanState {
   previous?: PlanJson | null;
   /** The planKey of the model `result` answers (core/planKey). */
   modelKey?: string;
+  /** The archive ("DRONE/NAME.mcap") the live plan is calibrated by, chosen in the Plan panel. */
+  calibrate?: string | null;
 }
 
 export interface EditorStore {

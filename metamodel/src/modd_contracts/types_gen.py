@@ -250,6 +250,8 @@ class PlanRadio(TypedDict):
     duty_share: float | None
     figures: NotRequired[Literal["exact", "upper_bound", "estimate"]]
     air_time_bound_s_per_hour: NotRequired[float | None]
+    calibrated_from: NotRequired[str]
+    calibration: NotRequired[PlanCalibration]
     energy_j_per_hour: float
     battery_wh: float | None
     battery_share_per_hour: float | None
@@ -287,6 +289,24 @@ class PlanProposal(TypedDict):
     change: str
     figures: NotRequired[Literal["exact", "upper_bound", "estimate"]]
     air_time_bound_s_per_hour: NotRequired[float | None]
+    calibrated_from: NotRequired[str]
+
+
+class PlanCalibration(TypedDict):
+    """What an archive gave a calibrated plan (metamodel/src/modd_plan/calibration.py): the mean bytes of each quantised stream's values measured on its first windows, and the quantised streams it has no sample of (sized as without a calibration)."""
+
+    windows_limit: int
+    streams: list[PlanCalibratedStream]
+    not_calibrated: list[str]
+
+
+class PlanCalibratedStream(TypedDict):
+    """PlanCalibratedStream."""
+
+    stream: str
+    absolute_bytes: float
+    delta_bytes: float
+    windows: int
 
 
 class PlanInfeasible(TypedDict):
@@ -395,4 +415,4 @@ class DeliveredValueFields:
 DELIVERED_VALUE_REQUIRED: tuple[str, ...] = ("subscriber", "topic", "aggregation", "period_s", "unit", "config_id", "slot", "start_ns", "end_ns", "value", "count", "delivered_ns", "v",)
 
 
-__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "ARCHIVE_RECORD_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "SensorHealth", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanRadio", "PlanRadioCost", "PlanRadioDiagnostic", "PlanProposal", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "ArchiveRecord", "DeliveredValueFields", "DELIVERED_VALUE_REQUIRED"]
+__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "ARCHIVE_RECORD_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "SensorHealth", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanRadio", "PlanRadioCost", "PlanRadioDiagnostic", "PlanProposal", "PlanCalibration", "PlanCalibratedStream", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "ArchiveRecord", "DeliveredValueFields", "DELIVERED_VALUE_REQUIRED"]

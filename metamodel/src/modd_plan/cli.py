@@ -1,6 +1,9 @@
-"""``modd plan FILE [--json]``: the plan of a model, for people or programs.
+"""``modd plan FILE [--json] [--calibrate ARCHIVE]``: the plan of a model,
+for people or programs.
 
-Registered through the ``modd.commands`` entry point ``plan``.
+Registered through the ``modd.commands`` entry point ``plan``. An archive is
+read by the reader registered in the ``modd.samples`` entry-point group (the
+runtime's ``mcap``): the metamodel does not import the runtime.
 """
 
 from __future__ import annotations
@@ -10,11 +13,14 @@ import json
 import sys
 from collections.abc import Sequence
 from fractions import Fraction
+from pathlib import Path
 from typing import Any, TextIO
 
 from modd_model.io import load_file, locate
 from modd_model.numbers import fraction_to_decimal, to_fraction
+from modd_model.query import topics
 
+from .calibration import Calibration, CalibrationError
 from .linkbudget import budget_lines
 from .plan import METHODS, Plan, PlanningError, make_plan
 from .proposals import Proposal
@@ -49,11 +55,45 @@ def register(subparsers: Any) -> None:
     p.add_argument("--beta", type=_decimal, help="weight of the largest deviation")
     p.add_argument("--max-buffer", type=_positive_int, metavar="N", help="MAX_BUFFER")
     p.add_argument("--method", choices=METHODS, default="exact", help="buffer-size solver")
+    p.add_argument(
+        "--calibrate",
+        metavar="ARCHIVE",
+        help="size quantised values from the samples of an archive (.mcap) of a test flight",
+    )
     p.set_defaults(func=run_plan)
 
 
+#: The entry-point group of archive readers: ``name = "module:function"``,
+#: ``function(path, topics) -> {topic: (stamps_ns, values)}``.
+SAMPLES_GROUP = "modd.samples"
+
+
+def load_calibration(archive: str, topics: list[str]) -> Calibration:
+    """The archive's samples of ``topics`` as a calibration; a
+    :class:`CalibrationError` when no reader is installed, the archive cannot
+    be read, or it holds none of the topics."""
+    from importlib.metadata import entry_points
+
+    readers = {ep.name: ep for ep in entry_points(group=SAMPLES_GROUP)}
+    if not readers:
+        raise CalibrationError(
+            f"{archive}: no archive reader is installed (entry-point group {SAMPLES_GROUP!r}); "
+            "install the runtime (package modd-runtime) to calibrate from an archive"
+        )
+    reader = (readers.get("mcap") or next(iter(readers.values()))).load()
+    path = Path(archive)
+    if not path.is_file():
+        raise CalibrationError(f"{archive}: no such archive")
+    series = reader(path, topics)
+    if not series:
+        raise CalibrationError(
+            f"{archive}: holds no sample of the model's topics ({', '.join(topics)})"
+        )
+    return Calibration(path.name, series)
+
+
 def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
-    """Load, plan, print. Exit 0 when feasible, 1 on a bad model, 3 when the
+    """Load, plan, print. Exit 0 when feasible, 1 on a bad model or archive, 3 when the
     plan violates the 3 x PING cap, 4 when it exceeds the link's byte budget,
     5 when its radio refuses it (over the duty-cycle limit; the plan and the
     nearest plans that fit are still printed)."""
@@ -63,6 +103,14 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
         for d in result.diagnostics:
             print(d, file=sys.stderr)
         return 1
+    calibration = None
+    archive = getattr(args, "calibrate", None)  # callers may build the namespace themselves
+    if archive is not None:
+        try:
+            calibration = load_calibration(archive, list(topics(result.model)))
+        except CalibrationError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 1
     try:
         plan = make_plan(
             result.model,
@@ -71,6 +119,7 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
             beta=args.beta,
             max_buffer=args.max_buffer,
             method=args.method,
+            calibration=calibration,
         )
     except PlanningError as exc:
         for d in locate(exc.diagnostics, result, args.file):
@@ -165,6 +214,7 @@ def _radio_lines(report: RadioReport, proposals: Sequence[Proposal]) -> list[str
             f"  at most {c.air_s_per_hour:.1f} s/h and {c.energy_j_per_hour:.1f} J/h "
             "(every delta at its variable's declared range: the duty-cycle check's)"
         )
+    lines += _calibration_lines(report)
     share = report.duty_share
     if share is not None:
         lines.append(
@@ -186,4 +236,24 @@ def _radio_lines(report: RadioReport, proposals: Sequence[Proposal]) -> list[str
             f"{q.report.energy_j_per_hour:.1f} J/h"
             for q in proposals
         ]
+    return lines
+
+
+def _calibration_lines(report: RadioReport) -> list[str]:
+    use = report.calibration
+    if use is None:
+        return []
+    lines = [
+        f"  calibrated from {use.source} (first {use.limit} windows of each stream): "
+        "mean bytes of an absolute value / a delta"
+    ]
+    lines += [
+        f"    {key}: {float(v.absolute):.2f} / {float(v.delta):.2f} ({v.windows} windows)"
+        for key, v in use.sizes
+    ]
+    if use.missing:
+        lines.append(
+            "  not calibrated (no sample in the archive; sized as without it): "
+            + ", ".join(use.missing)
+        )
     return lines

@@ -188,14 +188,26 @@ def exact_sum(values: Iterable[Fraction]) -> Fraction:
     return sum((Fraction(n, d) for d, n in by_den.items()), Fraction(0))
 
 
+def _walk_limit(schedule: Schedule, delay: Fraction) -> int:
+    """Slots walked: one hyperperiod, or 20 accepted delays, at most WALK_LIMIT."""
+    m = schedule.messages_per_hyperperiod
+    per_s = Fraction(m) / schedule.hyperperiod
+    return min(max(m, ceil(20 * delay * per_s)), WALK_LIMIT)
+
+
 def _slot_walk(
-    schedule: Schedule, window_bytes: Sequence[Fraction], delay: Fraction
+    schedule: Schedule, window_bytes: Sequence[Fraction], delay: Fraction, carry: bool = False
 ) -> list[WalkedSlot]:
     """The first slots: one hyperperiod, or more until they span 20 accepted
     delays (so that packing reaches its steady state), at most
     :data:`WALK_LIMIT` slots (beyond, the walk is a sample of the schedule's
     start). Streams of one period are due together: each slot carries its
-    periods, not its stream ids."""
+    periods, not its stream ids. A slot's value bytes are its sizes' sum
+    rounded up, or with ``carry`` (mean sizes, calibration.py) rounded so
+    that the walk's running total stays within a byte of the exact one:
+    slots of 5.5 B alternate 6 and 5, as the real values' sizes vary; the
+    walk then goes on for one accepted delay past the limit, so that its last
+    datagram is whole (:func:`_datagrams`' ``cut_us``)."""
     by_period: dict[int, list[int]] = {}
     for i, p in enumerate(schedule.periods_us):
         by_period.setdefault(p, []).append(i)
@@ -203,15 +215,27 @@ def _slot_walk(
     m = schedule.messages_per_hyperperiod
     if m == 0:
         return []
-    per_s = Fraction(m) / schedule.hyperperiod
-    limit = min(max(m, ceil(20 * delay * per_s)), WALK_LIMIT)
+    limit = _walk_limit(schedule, delay)
     out: list[WalkedSlot] = []
     ceil_sum = ceil_of_sums(period_bytes)
     counts = {p: len(ids) for p, ids in by_period.items()}
+    total, emitted = Fraction(0), 0
+    end_us: int | None = None  # with carry: one accepted delay past the limit
     for index, date, due in schedule.iter_due_periods():
         if index >= limit:
-            break
-        out.append((date, ceil_sum(due), sum(counts[p] for p in due), due))
+            if not carry or index >= 2 * limit:
+                break
+            if end_us is None:
+                end_us = out[-1][0] + int(delay * 1_000_000)
+            if date > end_us:
+                break
+        if carry:
+            total += sum((period_bytes[p] for p in due), Fraction(0))
+            values = ceil(total) - emitted
+            emitted += values
+        else:
+            values = ceil_sum(due)
+        out.append((date, values, sum(counts[p] for p in due), due))
     return out
 
 
@@ -236,11 +260,18 @@ def _tcp(
 
 
 def _datagrams(
-    settings: LinkSettings, slots: list[WalkedSlot], span_s: float, sizes: list[int]
-) -> tuple[float, float, float, dict[int, float]]:
+    settings: LinkSettings,
+    slots: list[WalkedSlot],
+    span_s: float,
+    sizes: list[int],
+    cut_us: int | None = None,
+) -> tuple[float, float, float, dict[int, float], float]:
     """Pack slots as the PubBroker does: a datagram holds consecutive slots
     while its first slot has waited at most the accepted delay and it fits
-    the packet; it is sent at its last slot's date."""
+    the packet; it is sent at its last slot's date. With ``cut_us`` the
+    datagrams that start after it are left out and the rates are over the
+    span of those counted (the last one whole, not cut by the walk's end);
+    the span used is returned last."""
     t = settings.transport
     cap = datagram_capacity(t, settings.max_packet)
     room = cap - DGRAM_HEADER_BYTES - TAG_BYTES
@@ -270,6 +301,11 @@ def _datagrams(
 
     for slot in slots:
         date, values, _, due = slot
+        if cut_us is not None and date > cut_us:
+            closes = not group or date - group[0][0] > delay_us
+            if closes or values > room or sum(v for _, v, _, _ in group) + values > room:
+                break  # this slot would start a datagram after the cut
+        span_s = date / 1e6 if cut_us is not None else span_s
         if values > room:  # one slot larger than a packet: fragments
             flush()
             per = room - FRAGMENT_BYTE
@@ -295,7 +331,7 @@ def _datagrams(
         group.append(slot)
     flush()
     keepalive = wire_bytes(t, KEEPALIVE_BYTES) / KEEPALIVE_S
-    return wire / span_s, keepalive, packets / span_s, delays
+    return wire / span_s, keepalive, packets / span_s, delays, span_s
 
 
 def link_budget(
@@ -304,18 +340,27 @@ def link_budget(
     window_bytes: Sequence[Fraction],
     subscribers_of: Sequence[Sequence[str]],
     subscriptions: Sequence[str],
+    carry: bool = False,
 ) -> LinkBudget:
     """The budget of ``settings``'s transport for a schedule whose sent
     stream ``i`` carries ``window_bytes[i]`` per window and serves the
     subscribers ``subscribers_of[i]`` (directly or through a derived stream).
-    ``subscriptions`` lists every subscriber, each of which gets a delay."""
-    slots = _slot_walk(schedule, window_bytes, settings.accepted_delay)
+    ``subscriptions`` lists every subscriber, each of which gets a delay.
+    ``carry``: the window bytes are means, slots rounded as :func:`_slot_walk`."""
+    slots = _slot_walk(schedule, window_bytes, settings.accepted_delay, carry)
     if not slots:
         return LinkBudget(settings, 0.0, 0.0, 0.0, dict.fromkeys(subscriptions, 0.0))
     span_s = slots[-1][0] / 1e6  # slot dates start after 0: the walk covers (0, last]
-    walk = _tcp if settings.transport == "tcp" else _datagrams
     sizes: list[int] = []
-    down, up, packets, period_delay = walk(settings, slots, span_s, sizes)
+    if settings.transport == "tcp":  # one frame a slot: nothing cut (carry's extra slots off)
+        slots = slots[: _walk_limit(schedule, settings.accepted_delay)]
+        span_s = slots[-1][0] / 1e6
+        down, up, packets, period_delay = _tcp(settings, slots, span_s, sizes)
+    else:
+        cut = slots[min(len(slots), _walk_limit(schedule, settings.accepted_delay)) - 1][0]
+        down, up, packets, period_delay, span_s = _datagrams(
+            settings, slots, span_s, sizes, cut if carry else None
+        )
     delays = dict.fromkeys(subscriptions, 0.0)
     for i, subs in enumerate(subscribers_of):
         d = period_delay.get(schedule.periods_us[i], 0.0)

@@ -34,12 +34,13 @@ from .buffers import (
     Subscription,
     solve_exact,
 )
+from .calibration import Calibration
 from .linkbudget import LinkBudget, LinkSettings, link_budget
 from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
 from .planjson import plan_to_json
 from .proposals import Proposal, propose
 from .radio import RadioProfile, RadioReport, radio_report
-from .resolution import quantised_window_bytes
+from .resolution import calibration_use, quantised_window_bytes
 from .schedule import Schedule, ScheduleTooLarge
 from .streams import (
     PlannedStream,
@@ -261,6 +262,7 @@ def _budget(
     sent: list[PlannedStream],
     streams: Sequence[PlannedStream],
     window_bytes: list[Fraction],
+    carry: bool = False,
 ) -> LinkBudget:
     # by identity: plan_streams gives each stream one key object, which its
     # derived streams' sources hold (no StreamKey hashed or compared)
@@ -278,6 +280,7 @@ def _budget(
         window_bytes,
         [served[id(s.stream)] for s in sent],
         [sub["name"] for sub in model.get("subscribers", [])],
+        carry,
     )
 
 
@@ -298,31 +301,26 @@ def make_plan(
     max_buffer: int | None = None,
     method: str = "exact",
     proposals: bool = True,
+    calibration: Calibration | None = None,
 ) -> Plan:
     """Plan a validated model. ``method`` picks the buffer-size solver:
     ``"exact"`` (fast, default) or ``"cvxpy"`` (the MILP with HiGHS); both
     give the same sizes. Overrides replace the model's planner constants.
     A plan over its radio's duty-cycle limit carries the nearest plans that
-    fit (``proposals=False``: not searched)."""
+    fit (``proposals=False``: not searched). ``calibration``: quantised
+    values sized from an archive's samples (calibration.py), the proposals'
+    too."""
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
+    options = _Options(ping_s, alpha, beta, max_buffer, method, calibration)
     with gc_paused():
-        plan = _make_plan(
-            model, ping_s=ping_s, alpha=alpha, beta=beta, max_buffer=max_buffer, method=method
-        )
+        plan = _make_plan(model, options)
         if not proposals or plan.radio is None or plan.radio.fits:
             return plan
 
         def replan(candidate: Mapping[str, Any]) -> tuple[RadioReport, float] | None:
             try:
-                p = _make_plan(
-                    candidate,
-                    ping_s=ping_s,
-                    alpha=alpha,
-                    beta=beta,
-                    max_buffer=max_buffer,
-                    method=method,
-                )
+                p = _make_plan(candidate, options)
             except PlanningError:
                 return None
             if p.radio is None or p.budget is None or len(p.infeasible) > len(plan.infeasible):
@@ -356,16 +354,24 @@ def gc_paused() -> Iterator[None]:
             gc.enable()
 
 
-def _make_plan(
-    model: Mapping[str, Any],
-    *,
-    ping_s: Fraction | None,
-    alpha: Fraction | None,
-    beta: Fraction | None,
-    max_buffer: int | None,
-    method: str,
-) -> Plan:
-    constants = constants_for(model, ping_s=ping_s, alpha=alpha, beta=beta, max_buffer=max_buffer)
+@dataclass(frozen=True)
+class _Options:
+    """make_plan's options, the same for the plan and each proposal's."""
+
+    ping_s: Fraction | None
+    alpha: Fraction | None
+    beta: Fraction | None
+    max_buffer: int | None
+    method: str
+    calibration: Calibration | None
+
+
+def _make_plan(model: Mapping[str, Any], options: _Options) -> Plan:
+    o = options
+    constants = constants_for(
+        model, ping_s=o.ping_s, alpha=o.alpha, beta=o.beta, max_buffer=o.max_buffer
+    )
+    method, calibration = o.method, o.calibration
     tops = topics(dict(model))
     index = {name: i for i, name in enumerate(tops)}
     requested, subscriptions = asked_streams(model)
@@ -424,9 +430,13 @@ def _make_plan(
     exact = [window(s.stream) for s in sent]
     link = LinkSettings.of(model)
     window_bytes, bound = quantised_window_bytes(
-        model, sent, streams, exact, tops, link.transport, link.accepted_delay
+        model, sent, streams, exact, tops, link.transport, link.accepted_delay, False, calibration
     )
-    budget = _budget(model, sched, sent, streams, window_bytes)
+    use = calibration_use(model, sent, streams, tops, calibration) if calibration else None
+    if use is not None and not (use.sizes or use.missing):
+        use = None  # nothing quantised: nothing to calibrate
+    calibrated = use is not None and bool(use.sizes)
+    budget = _budget(model, sched, sent, streams, window_bytes, calibrated)
     radio = model.get("link", {}).get("radio")
     ceiling = None
     if radio and bound is False:  # an estimate: the duty-cycle limit is checked on a bound
@@ -435,6 +445,7 @@ def _make_plan(
         )
         if bounded:
             ceiling = _budget(model, sched, sent, streams, ceiling_bytes)
+    report = radio_report(RadioProfile.of(radio), budget, bound, ceiling, use) if radio else None
     return Plan(
         topics=tuple(tops.values()),
         streams=streams,
@@ -445,7 +456,7 @@ def _make_plan(
         constants=constants,
         link=_link_cost(model, sched, window_bytes, tops),
         budget=budget,
-        radio=radio_report(RadioProfile.of(radio), budget, bound, ceiling) if radio else None,
+        radio=report,
     )
 
 

@@ -54,7 +54,7 @@ class Proposal:
 
     def to_json(self) -> PlanProposal:
         r = self.report
-        return {
+        out: PlanProposal = {
             "accepted_delay_s": float(self.accepted_delay_s),
             "min_period_s": float(self.min_period_s) if self.min_period_s else None,
             "max_delay_s": round(self.max_delay_s, 6),
@@ -66,6 +66,9 @@ class Proposal:
             "figures": r.figures,
             "air_time_bound_s_per_hour": r.air_bound_s_per_hour,
         }
+        if r.calibration is not None:  # absent otherwise: uncalibrated JSON unchanged
+            out["calibrated_from"] = r.calibration.source
+        return out
 
     def describe(self) -> str:
         parts = [f"accepted delay {fraction_to_decimal(self.accepted_delay_s)} s"]

@@ -33,6 +33,7 @@ from typing import Any, Literal
 from modd_contracts.types_gen import PlanRadio
 
 from .airtime import lora_time_on_air, sik_time_on_air, wifi_time_on_air
+from .calibration import CalibrationUse
 from .linkbudget import KEEPALIVE_BYTES, KEEPALIVE_S, LinkBudget, wire_bytes
 from .linkcost import TCP_IP_HEADER_BYTES
 
@@ -157,6 +158,9 @@ class RadioReport:
     #: the plan's bound when its figures are an estimate (deltas sized at the
     #: declared range's width, resolution.py): the duty-cycle limit's check
     ceiling: RadioReport | None = None
+    #: the archive the quantised values were sized from (calibration.py):
+    #: its per-stream mean sizes, and the streams it had no sample of
+    calibration: CalibrationUse | None = None
 
     @property
     def at_most(self) -> str:
@@ -218,9 +222,10 @@ class RadioReport:
 
     def to_json(self) -> PlanRadio:
         """The report (``diagnostics`` and ``proposals`` empty: planjson.py
-        locates the refusal in the model and adds the proposals)."""
+        locates the refusal in the model and adds the proposals); a
+        calibrated one adds ``calibrated_from`` and ``calibration``."""
         share, battery = self.duty_share, self.battery_share
-        return {
+        out: PlanRadio = {
             "kind": self.profile.kind,  # type: ignore[typeddict-item]  # checked by RadioProfile.of
             "bytes_per_s": round(self.bytes_per_s, 3),
             "packets_per_hour": round(self.packets_per_hour, 3),
@@ -244,6 +249,10 @@ class RadioReport:
             "diagnostics": [],
             "proposals": [],
         }
+        if self.calibration is not None:  # absent otherwise: uncalibrated JSON unchanged
+            out["calibrated_from"] = self.calibration.source
+            out["calibration"] = self.calibration.to_json()
+        return out
 
 
 def radio_report(
@@ -251,10 +260,12 @@ def radio_report(
     budget: LinkBudget,
     upper_bound: bool | None = None,
     ceiling: LinkBudget | None = None,
+    calibration: CalibrationUse | None = None,
 ) -> RadioReport:
     """The radio's figures for a plan's link budget (its walked packets
     scaled to an hour); ``upper_bound`` as :attr:`RadioReport.upper_bound`;
-    ``ceiling``, the budget of the bound when ``budget`` is an estimate."""
+    ``ceiling``, the budget of the bound when ``budget`` is an estimate;
+    ``calibration``, what the sizes were measured on."""
     span = budget.span_s
     air, packets = 0.0, 0
     for size in budget.packet_sizes:
@@ -281,6 +292,7 @@ def radio_report(
         _costs(budget, air_h),
         upper_bound,
         radio_report(profile, ceiling, True) if ceiling else None,
+        calibration,
     )
 
 

@@ -9,7 +9,7 @@ derivations, MIN, MAX, an AVERAGE of AVERAGEs, keep the error of their sources).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from fractions import Fraction
 from math import ceil, floor
 from typing import Any
@@ -17,6 +17,7 @@ from typing import Any
 from modd_contracts import aggregations_gen as agg
 from modd_model.query import Topic, topic_name
 
+from .calibration import Calibration, CalibrationUse, ValueSizes
 from .linkcost import SAMPLE_BYTES, aggregate_value_type, varint_size
 from .streams import PlannedStream
 
@@ -89,6 +90,45 @@ def _value_bytes(model: Mapping[str, Any], topic: str, resolution: float) -> tup
     return None
 
 
+def quantised_streams(
+    model: Mapping[str, Any],
+    sent: Sequence[PlannedStream],
+    streams: Sequence[PlannedStream],
+    tops: Mapping[str, Topic],
+) -> Iterator[tuple[int, PlannedStream, float, str]]:
+    """The sent streams whose values go as steps: (index in ``sent``, the
+    stream, its resolution, its value's wire type); COUNT and int or bool
+    values are exact already."""
+    for i, (s, r) in enumerate(zip(sent, stream_resolutions(model, sent, streams), strict=True)):
+        topic = tops.get(s.stream.topic)
+        if r is None or topic is None:
+            continue
+        wire = aggregate_value_type(s.stream.aggregation, topic.type)
+        if s.stream.aggregation == agg.COUNT or wire not in ("float32", "float64"):
+            continue
+        yield i, s, r, wire
+
+
+def calibration_use(
+    model: Mapping[str, Any],
+    sent: Sequence[PlannedStream],
+    streams: Sequence[PlannedStream],
+    tops: Mapping[str, Topic],
+    calibration: Calibration,
+) -> CalibrationUse:
+    """The sizes ``calibration`` gives the plan's quantised streams."""
+    sizes: list[tuple[str, ValueSizes]] = []
+    missing: list[str] = []
+    for _, s, r, _ in quantised_streams(model, sent, streams, tops):
+        k = s.stream
+        got = calibration.sizes(k.topic, k.aggregation, k.period, r)
+        if got is None:
+            missing.append(k.key)
+        else:
+            sizes.append((k.key, got))
+    return CalibrationUse(calibration.source, calibration.limit, tuple(sizes), tuple(missing))
+
+
 def quantised_window_bytes(
     model: Mapping[str, Any],
     sent: Sequence[PlannedStream],
@@ -98,34 +138,35 @@ def quantised_window_bytes(
     transport: str,
     accepted_delay: Fraction,
     deltas_at_range: bool = False,
+    calibration: Calibration | None = None,
 ) -> tuple[list[Fraction], bool | None]:
     """``exact`` (bytes of one window's value per sent stream) with the float
     values of streams that have a resolution counted as steps: one absolute
     value per datagram (per DATA frame over tcp), sized at the declared range,
     deltas of DELTA_BYTES else (at the range's width with ``deltas_at_range``);
-    and what the sizes are: True, upper bounds (every quantised value sized
-    at its declared range: a signal inside it never costs more), False, an
-    estimate (deltas assumed small, or a variable without a range), None,
-    exact (nothing quantised)."""
+    both at their mean sizes measured by ``calibration`` when its archive has
+    the stream's topic (calibration.py). And what the sizes are: True, upper
+    bounds (every quantised value sized at its declared range: a signal inside
+    it never costs more), False, an estimate (deltas assumed small, a variable
+    without a range, or calibrated sizes), None, exact (nothing quantised)."""
     out = list(exact)
     bound: bool | None = None
-    for i, (s, r) in enumerate(zip(sent, stream_resolutions(model, sent, streams), strict=True)):
-        topic = tops.get(s.stream.topic)
-        if r is None or topic is None:
-            continue
-        wire = aggregate_value_type(s.stream.aggregation, topic.type)
-        if s.stream.aggregation == agg.COUNT or wire not in ("float32", "float64"):
-            continue
-        ranged = _value_bytes(model, s.stream.topic, r)
-        key = ranged[0] if ranged else varint_size(2 * UNBOUNDED_STEPS + 1)
-        delta = ranged[1] if ranged and deltas_at_range else DELTA_BYTES
+    for i, s, r, wire in quantised_streams(model, sent, streams, tops):
+        k = s.stream
+        measured = calibration.sizes(k.topic, k.aggregation, k.period, r) if calibration else None
+        ranged = _value_bytes(model, k.topic, r)
+        key: Fraction | int = ranged[0] if ranged else varint_size(2 * UNBOUNDED_STEPS + 1)
+        delta: Fraction | int = ranged[1] if ranged and deltas_at_range else DELTA_BYTES
         # keys per window: one a datagram, which holds the windows of the accepted
         # delay and one more (its first slot waits at most the delay)
-        per_datagram = 1 if transport == "tcp" else floor(accepted_delay / s.stream.period) + 1
-        only_keys = per_datagram == 1 and s.stream.aggregation != agg.ALL
+        per_datagram = 1 if transport == "tcp" else floor(accepted_delay / k.period) + 1
+        only_keys = per_datagram == 1 and k.aggregation != agg.ALL
         bound = bound is not False and ranged is not None and (only_keys or deltas_at_range)
+        if measured is not None:
+            key, delta = measured.absolute, measured.delta
+            bound = False
         share = Fraction(1, per_datagram)
-        if s.stream.aggregation == agg.ALL:
+        if k.aggregation == agg.ALL:
             samples = (exact[i] - 1) / SAMPLE_BYTES[wire]  # the count's varint, roughly 1 B
             out[i] = exact[i] - samples * (SAMPLE_BYTES[wire] - delta) + (key - delta) * share
         else:

@@ -11,8 +11,9 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel
 
+from ..archives import archive_path
 from ..bodies import BodyDep, documented, read_as
-from ..deps import DbDep, UserDep
+from ..deps import DbDep, StateDep, UserDep
 from ..planning import Method, guarded_call, plan_request
 from ..schemas import DiagnosticOut, Id, ModelInput
 from ..versions import get_version, model_of
@@ -31,20 +32,25 @@ class PlanOut(BaseModel):
 
 
 def plan_response_json(
-    model: dict[str, Any] | None, text: str | None, fmt: str, method: Method, timeout_s: float
+    model: dict[str, Any] | None,
+    text: str | None,
+    fmt: str,
+    method: Method,
+    calibrate: str | None,
+    timeout_s: float,
 ) -> bytes:
     """In a worker: :func:`plan_request`, and its answer as :class:`PlanOut`
     JSON (pydantic's serialiser: 0.1 s for a plan of 10 MB, where FastAPI's
     encoder on the event loop took 2 s and stalled every other request)."""
     return (
-        PlanOut.model_validate(plan_request(model, text, fmt, method, timeout_s))
+        PlanOut.model_validate(plan_request(model, text, fmt, method, timeout_s, calibrate))
         .model_dump_json()
         .encode()
     )
 
 
 def plan_body_json(
-    body: bytes, is_json: bool, method: Method, timeout_s: float
+    body: bytes, is_json: bool, method: Method, calibrate: str | None, timeout_s: float
 ) -> bytes | list[dict[str, Any]]:
     """In a worker: the raw request body read as :class:`ModelInput` (the
     JSON parse and the check FastAPI would have made on the event loop: 0.1 s
@@ -55,13 +61,15 @@ def plan_body_json(
     parsed = read_as(body, is_json, ModelInput)
     if isinstance(parsed, list):
         return parsed
-    return plan_response_json(parsed.model, parsed.text, parsed.format, method, timeout_s)
+    return plan_response_json(
+        parsed.model, parsed.text, parsed.format, method, calibrate, timeout_s
+    )
 
 
 async def _plan_response(
     model: dict[str, Any] | None, text: str | None, fmt: str, method: Method
 ) -> Response:
-    out = await guarded_call(plan_response_json, model, text, fmt, method)
+    out = await guarded_call(plan_response_json, model, text, fmt, method, None)
     if isinstance(out, dict):  # the worker's failure (over time or memory)
         out = PlanOut.model_validate(out).model_dump_json().encode()
     return Response(out, media_type="application/json")
@@ -73,12 +81,31 @@ async def _plan_response(
     openapi_extra=documented(ModelInput),
     responses={503: {"description": "the planner is busy; retry"}},
 )
-async def plan_model(body: BodyDep, _user: UserDep, method: Method = "exact") -> Response:
+async def plan_model(
+    body: BodyDep,
+    state: StateDep,
+    _user: UserDep,
+    method: Method = "exact",
+    calibrate: Annotated[
+        str | None,
+        Query(
+            description="an archive the backend holds, DRONE/NAME.mcap: its samples size "
+            "the quantised values (docs/planning.md, 'Bounds and estimates')",
+            max_length=300,
+        ),
+    ] = None,
+) -> Response:
     """The body is a :class:`ModelInput`. Its parse, its validation, the
     planning and the answer's JSON all run in a worker process within a time
     and memory budget (modd_backend.planning), never on the event loop:
-    the route hands the worker the body's bytes."""
-    out = await guarded_call(plan_body_json, body.data, body.is_json, method)
+    the route hands the worker the body's bytes (and the path of the
+    ``calibrate`` archive, checked to be one of the archive directory's)."""
+    path = None
+    if calibrate is not None:
+        drone, _, name = calibrate.partition("/")
+        root = state.settings.effective_archive_dir
+        path = str(archive_path(root, drone, name))
+    out = await guarded_call(plan_body_json, body.data, body.is_json, method, path)
     if isinstance(out, list):
         raise RequestValidationError(out)
     if isinstance(out, dict):  # the worker's failure (over time or memory)

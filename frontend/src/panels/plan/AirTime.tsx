@@ -20,13 +20,14 @@ const FIGURES_TITLE = {
   estimate: "Quantised values assumed to change little between windows; the duty-cycle share is the bound's (every change as wide as the declared range).",
   exact: undefined,
 } as const;
+const CALIBRATED_TITLE = "Quantised values sized from a test flight's archive (their mean sizes in its windows); the duty-cycle share is the bound's when the variables declare ranges.";
 
 export function AirTimeView({ radio, onSelect }: { radio: Radio; onSelect: (subscriber: string) => void }) {
   return (
     <section className="air-time" aria-label="Radio air time and energy">
       <div className="plan-summary">
         <div className="figure"><span>Radio</span><strong data-testid="radio-kind">{radio.kind}</strong></div>
-        <div className="figure" title={FIGURES_TITLE[radio.figures ?? "exact"]}><span>Air time / hour</span>
+        <div className="figure" title={radio.calibrated_from ? CALIBRATED_TITLE : FIGURES_TITLE[radio.figures ?? "exact"]}><span>Air time / hour</span>
           <strong data-testid="air-time">{hedge(radio)}{radio.air_time_s_per_hour.toFixed(1)} s</strong>
           {radio.air_time_bound_s_per_hour != null && (
             <span data-testid="air-time-bound">at most {radio.air_time_bound_s_per_hour.toFixed(1)} s</span>
@@ -42,6 +43,12 @@ export function AirTimeView({ radio, onSelect }: { radio: Radio; onSelect: (subs
         )}
         <div className="figure muted"><span>Packets / hour</span><strong>{radio.packets_per_hour.toFixed(0)}</strong></div>
       </div>
+      {radio.calibrated_from && (
+        <p className="muted" data-testid="calibrated-from">
+          Quantised values sized from {radio.calibrated_from} ({radio.calibration?.streams.length ?? 0} streams
+          {radio.calibration?.not_calibrated.length ? `; not in it: ${radio.calibration.not_calibrated.join(", ")}` : ""})
+        </p>
+      )}
       {radio.error && (
         <div className="infeasible" role="alert" data-testid="radio-error">
           <strong>Refused by the radio</strong> {radio.error}

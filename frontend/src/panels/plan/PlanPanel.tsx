@@ -17,6 +17,7 @@ import { findTopicByName } from "../../core/query";
 import { topicLabel } from "../../core/topicLabel";
 import { useEditor, useEditorStore, useModel } from "../../editor/useEditor";
 import { AirTimeView } from "./AirTime";
+import { CalibrationPicker } from "./Calibration";
 import { LinkBudgetView } from "./LinkBudget";
 import { SCHEDULE_DELAY_HELP } from "./delayWords";
 import { Timeline } from "./Timeline";
@@ -54,6 +55,7 @@ function PlanView({ plan, changed, stale, elapsedMs, busy }: ViewProps) {
         <div className="figure muted"><span>Planned in</span><strong>{elapsedMs.toFixed(0)} ms</strong></div>
       </div>
       {plan.link_budget && <LinkBudgetView budget={plan.link_budget} onSelect={(n) => select(subscriberId(n))} />}
+      {plan.radio && <CalibrationPicker drone={model.drone.name} />}
       {plan.radio && <AirTimeView radio={plan.radio} onSelect={(n) => select(subscriberId(n))} />}
       {(plan.infeasible.length > 0 || plan.violates_delay_cap) && (
         <div className="infeasible" role="alert">

@@ -18,26 +18,11 @@ this module holds the rule.
 
 from __future__ import annotations
 
-import math
-
 from modd_contracts.quantised import ESCAPE as ESCAPE  # the wire constants, written once
 from modd_contracts.quantised import MAX_DELTA_BITS, MAX_STEPS_BITS
+from modd_contracts.quantised import steps as steps  # the rule, written once
 
 #: The largest step count a value may have: exact in a double on both ends.
 MAX_STEPS = 1 << MAX_STEPS_BITS
 #: The largest delta a decoder accepts (from -2^53 to 2^53).
 MAX_DELTA = 1 << MAX_DELTA_BITS
-
-
-def steps(x: float, resolution: float) -> int | None:
-    """``round(x / r)`` (half to even, as C's nearbyint) when ``q * r`` restores
-    ``x`` within half a step, else None (sent unquantised)."""
-    if not math.isfinite(x):
-        return None
-    ratio = x / resolution
-    if not math.isfinite(ratio) or abs(ratio) > MAX_STEPS:
-        return None
-    q = round(ratio)
-    if abs(q) > MAX_STEPS or abs(q * resolution - x) > resolution / 2:
-        return None
-    return q
