@@ -59,6 +59,17 @@ describe("Calibration (the Plan panel's archive picker)", () => {
     expect(store.getState().plan.calibrate).toBeNull();
   });
 
+  it("reads the archives again on focus: a test flight that arrived meanwhile can be chosen", async () => {
+    const archives = ["run-0000.mcap"];
+    mount(archives);
+    const picker = await screen.findByRole("combobox", { name: "Calibrate by archive" });
+    const options = () => Array.from(picker.querySelectorAll("option"), (o) => o.textContent);
+    await waitFor(() => expect(options()).toEqual(["no archive (declared ranges)", "run-0000.mcap"]));
+    archives.push("test_flight.mcap");
+    act(() => { fireEvent.focus(picker); });
+    await waitFor(() => expect(options()).toEqual(["no archive (declared ranges)", "run-0000.mcap", "test_flight.mcap"]));
+  });
+
   it("is hidden when the backend holds no archive of the drone", async () => {
     const { asked } = mount([]);
     await waitFor(() => expect(asked).toEqual([undefined]));
