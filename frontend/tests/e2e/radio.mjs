@@ -5,9 +5,21 @@
  * of the duty cycle, the energy and the nearest plans that fit (figures from the
  * planner, on the backend). The integrator drops accel_z's resolution (full
  * precision: more bytes), the scientist asks 0.05 on its two subscriptions
- * (fewer): every figure follows.
+ * (fewer): every figure follows. Before the edits, the scientist calibrates the
+ * plan by a test flight's archive the backend holds (a smooth signal near 0:
+ * smaller deltas than the declared ranges assume), then goes back to the
+ * declared ranges; the figures are the backend planner's for the same model,
+ * asked by the test itself.
  */
+import { execFileSync } from "node:child_process";
+import { mkdirSync, rmSync } from "node:fs";
+import { dirname, join, resolve } from "node:path";
+import { fileURLToPath } from "node:url";
 import { waitUntil } from "./journey.mjs";
+
+const here = dirname(fileURLToPath(import.meta.url));
+const python = resolve(here, "../../../.venv/bin/python");
+const FLIGHT = "test_flight.mcap";
 
 const MODEL = `
 Drone usv {
@@ -38,7 +50,20 @@ Subscriptions {
 // A figure's number past its hedge ("about 266.2 s", "at most 32.4 s": the planner's label).
 const seconds = (t) => Number.parseFloat(t.replace(/^[^\d-]*/, ""));
 
-export function radio({ page }) {
+/** The backend planner's `radio` for MODEL (the .modd text, parsed by the backend), calibrated by `calibrate` if given. */
+async function plannedRadio(baseUrl, password, calibrate) {
+  const login = await fetch(`${baseUrl}/api/auth/login`, { method: "POST", headers: { "content-type": "application/json" },
+    body: JSON.stringify({ username: "admin", password }) });
+  const { token } = await login.json();
+  const query = calibrate ? `?calibrate=${encodeURIComponent(calibrate)}` : "";
+  const r = await fetch(`${baseUrl}/api/plan${query}`, { method: "POST", headers: { "content-type": "application/json", authorization: `Bearer ${token}` },
+    body: JSON.stringify({ text: MODEL }), signal: AbortSignal.timeout(60000) });
+  const out = await r.json();
+  if (!r.ok || !out.plan?.radio) throw new Error(`planning ${calibrate ?? "uncalibrated"}: HTTP ${r.status} ${JSON.stringify(out).slice(0, 300)}`);
+  return out.plan.radio;
+}
+
+export function radio({ page, baseUrl, password, archiveDir }) {
   const node = (id) => page.locator(`.react-flow__node[data-id="${id}"]`);
   const inspector = page.getByRole("region", { name: "Inspector" });
   const field = (path) => inspector.locator(`[data-field="${path}"]`).locator("input, select").first();
@@ -68,6 +93,44 @@ export function radio({ page }) {
       await waitUntil(async () => /LoRa|lora/i.test((await page.getByTestId("radio-kind").textContent()) ?? ""), 10000);
       await page.getByTestId("radio-error").waitFor({ state: "visible", timeout: 10000 });
       await waitUntil(async () => (await page.getByTestId("proposal").count()) > 0, 10000, proposals);
+    }],
+
+    ["radio budget: calibrated by a test flight's archive, smaller 'about' figures; the declared ranges bring them back", async () => {
+      // The test flight lands in the backend's archive directory while the workbench is open.
+      mkdirSync(archiveDir, { recursive: true });
+      const flight = join(archiveDir, FLIGHT);
+      execFileSync("nice", [python, join(here, "flight_archive.py"), flight, "60"], { stdio: "inherit" });
+      try {
+        const [declared, calibrated] = await Promise.all([plannedRadio(baseUrl, password, null), plannedRadio(baseUrl, password, `usv/${FLIGHT}`)]);
+        const shown = (r) => ({ "air-time": `about ${r.air_time_s_per_hour.toFixed(1)} s`, energy: `about ${r.energy_j_per_hour.toFixed(1)} J` });
+        if (declared.figures !== "estimate" || calibrated.figures !== "estimate" || calibrated.calibrated_from !== FLIGHT)
+          throw new Error(`the planner's figures: ${declared.figures}, ${calibrated.figures} from ${calibrated.calibrated_from}`);
+        if (!(calibrated.air_time_s_per_hour < declared.air_time_s_per_hour))
+          throw new Error(`calibrated air time ${calibrated.air_time_s_per_hour} s/h, not below ${declared.air_time_s_per_hour}`);
+        const showing = async (want) => {
+          const now = await figures();
+          return Object.entries(want).every(([k, v]) => now[k] === v);
+        };
+        const expectShown = (want, what) => waitUntil(() => showing(want), 20000,
+          async () => `${what}: the panel shows ${JSON.stringify(await figures())}, the planner ${JSON.stringify(want)}`);
+        await expectShown(shown(declared), "declared ranges");
+        const picker = page.getByRole("combobox", { name: "Calibrate by archive" });
+        await picker.waitFor({ state: "visible", timeout: 10000 });
+        await picker.focus();
+        await waitUntil(async () => (await picker.locator("option").allTextContents()).includes(FLIGHT), 10000,
+          async () => `${FLIGHT} not among the picker's ${JSON.stringify(await picker.locator("option").allTextContents())}`);
+        await picker.selectOption({ label: FLIGHT });
+        const from = page.getByTestId("calibrated-from");
+        await waitUntil(async () => (await from.textContent().catch(() => ""))?.startsWith(
+          `Quantised values sized from ${FLIGHT} (${calibrated.calibration.streams.length} streams`), 20000,
+          async () => `calibrated-from says "${await from.textContent().catch(() => "(nothing)")}"`);
+        await expectShown(shown(calibrated), `calibrated by ${FLIGHT}`);
+        await picker.selectOption({ label: "no archive (declared ranges)" });
+        await expectShown(shown(declared), "back to the declared ranges");
+        await from.waitFor({ state: "detached", timeout: 10000 });
+      } finally {
+        rmSync(flight, { force: true }); // the drone's archive directory as it was
+      }
     }],
 
     ["radio budget: full precision on accel_z costs air time, energy and changes the proposals", async () => {

@@ -116,14 +116,16 @@ try {
   // MODD_E2E_ONLY=instruments: only the instruments' steps (instruments.mjs).
   const only = process.env.MODD_E2E_ONLY;
   // MODD_E2E_ONLY=radio: log in, then only the radio budget steps (radio.mjs).
-  const steps = only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radio({ page })] : [
+  // The radio steps put a test flight's archive where the backend reads archives (--archives).
+  const radioSteps = () => radio({ page, baseUrl, password: PASSWORD, archiveDir: drone ? join(tmp, "drone", "archive") : join(tmp, "archives") });
+  const steps = only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
     ...(only === "collab" || only === "instruments" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
     ...(only === "collab" || only === "instruments" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
       archiveDir: join(tmp, "drone", "archive"),
       survey: surveyModel(pubPort, subPort), tiles })),
     ...(only === "views" || only === "instruments" ? [] : collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) })),
-    ...(only === "views" || only === "collab" || only === "instruments" ? [] : radio({ page })),
+    ...(only === "views" || only === "collab" || only === "instruments" ? [] : radioSteps()),
     // Issue 32: the four plug-and-play instruments declared, deployed and watched (last: it deploys its own model).
     ...(only === "instruments" ? [loginStep(page, baseUrl)] : []),
     ...(only === "views" || only === "collab" ? [] : instruments({ page, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
