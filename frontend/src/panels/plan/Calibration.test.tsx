@@ -70,9 +70,15 @@ describe("Calibration (the Plan panel's archive picker)", () => {
     await waitFor(() => expect(options()).toEqual(["no archive (declared ranges)", "run-0000.mcap", "test_flight.mcap"]));
   });
 
-  it("is hidden when the backend holds no archive of the drone", async () => {
-    const { asked } = mount([]);
+  it("is there before the drone has an archive, and offers the first one on focus", async () => {
+    const archives: string[] = [];
+    const { asked } = mount(archives);
     await waitFor(() => expect(asked).toEqual([undefined]));
-    expect(screen.queryByRole("combobox", { name: "Calibrate by archive" })).toBeNull();
+    const picker = await screen.findByRole("combobox", { name: "Calibrate by archive" });
+    const options = () => Array.from(picker.querySelectorAll("option"), (o) => o.textContent);
+    await waitFor(() => expect(options()).toEqual(["no archive (declared ranges)", "no archive of usv yet"]));
+    archives.push("test_flight.mcap");
+    act(() => { fireEvent.focus(picker); });
+    await waitFor(() => expect(options()).toEqual(["no archive (declared ranges)", "test_flight.mcap"]));
   });
 });
