@@ -205,9 +205,9 @@ def _slot_walk(
     periods, not its stream ids. A slot's value bytes are its sizes' sum
     rounded up, or with ``carry`` (mean sizes, calibration.py) rounded so
     that the walk's running total stays within a byte of the exact one:
-    slots of 5.5 B alternate 6 and 5, as the real values' sizes vary; the
-    walk then goes on for one accepted delay past the limit, so that its last
-    datagram is whole (:func:`_datagrams`' ``cut_us``)."""
+    slots of 5.5 B alternate 6 and 5, as the real values' sizes vary. The
+    walk goes on for one accepted delay past the limit, so that its last
+    datagram is whole (:func:`_datagrams`' ``cut_us``; tcp drops those slots)."""
     by_period: dict[int, list[int]] = {}
     for i, p in enumerate(schedule.periods_us):
         by_period.setdefault(p, []).append(i)
@@ -222,8 +222,8 @@ def _slot_walk(
     total, emitted = Fraction(0), 0
     end_us: int | None = None  # with carry: one accepted delay past the limit
     for index, date, due in schedule.iter_due_periods():
-        if index >= limit:
-            if not carry or index >= 2 * limit:
+        if index >= limit:  # one accepted delay more (at most as many slots again)
+            if index >= 2 * limit:
                 break
             if end_us is None:
                 end_us = out[-1][0] + int(delay * 1_000_000)
@@ -358,9 +358,7 @@ def link_budget(
         down, up, packets, period_delay = _tcp(settings, slots, span_s, sizes)
     else:
         cut = slots[min(len(slots), _walk_limit(schedule, settings.accepted_delay)) - 1][0]
-        down, up, packets, period_delay, span_s = _datagrams(
-            settings, slots, span_s, sizes, cut if carry else None
-        )
+        down, up, packets, period_delay, span_s = _datagrams(settings, slots, span_s, sizes, cut)
     delays = dict.fromkeys(subscriptions, 0.0)
     for i, subs in enumerate(subscribers_of):
         d = period_delay.get(schedule.periods_us[i], 0.0)
