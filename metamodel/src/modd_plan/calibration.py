@@ -32,6 +32,11 @@ from .linkcost import varint_size
 #: bounds the work of a calibration (each plan and proposal reuses it); 2,000
 #: windows are 8 minutes of a 0.25 s stream, far more for slower ones.
 CALIBRATION_WINDOWS = 2000
+#: Samples of each topic an archive reader hands over at most (the first ones,
+#: in time order): bounds the memory and the reading of a long mission's
+#: archive (a reader stops once every topic has as many); 200,000 samples are
+#: 2.2 hours at 25 Hz, and 2,000 windows of a 1 s stream at 100 Hz.
+SAMPLES_LIMIT = 200_000
 #: An escaped value: code 0, then the exact f64le.
 ESCAPE_BYTES = varint_size(ESCAPE) + 8
 #: Mean sizes are kept as fractions of at most this denominator.

@@ -11,8 +11,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from fractions import Fraction
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, TextIO
 
@@ -20,7 +21,7 @@ from modd_model.io import load_file, locate
 from modd_model.numbers import fraction_to_decimal, to_fraction
 from modd_model.query import topics
 
-from .calibration import Calibration, CalibrationError
+from .calibration import Calibration, CalibrationError, Series
 from .linkbudget import budget_lines
 from .plan import METHODS, Plan, PlanningError, make_plan
 from .proposals import Proposal
@@ -84,12 +85,29 @@ def load_calibration(archive: str, topics: list[str]) -> Calibration:
     path = Path(archive)
     if not path.is_file():
         raise CalibrationError(f"{archive}: no such archive")
-    series = reader(path, topics)
+    st = path.stat()
+    state = (st.st_ino, st.st_size, st.st_mtime_ns)
+    series = _read(reader, str(path.resolve()), state, tuple(sorted(topics)))
     if not series:
         raise CalibrationError(
             f"{archive}: holds no sample of the model's topics ({', '.join(topics)})"
         )
     return Calibration(path.name, series)
+
+
+@lru_cache(maxsize=2)
+def _read(
+    reader: Callable[[Path, list[str]], dict[str, Series]],
+    path: str,
+    state: tuple[int, int, int],
+    topics: tuple[str, ...],
+) -> dict[str, Series]:
+    """An archive's samples, read once while the file stays as it is: the live
+    plan of the workbench re-plans with the same archive at every edit.
+    ``state`` (inode, size, modification time) is only the cache's key: an
+    archive still being written, or replaced, is read again."""
+    del state
+    return reader(Path(path), list(topics))
 
 
 def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:

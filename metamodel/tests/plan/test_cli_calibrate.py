@@ -141,3 +141,55 @@ def test_without_a_reader_installed(
     monkeypatch.setattr(importlib.metadata, "entry_points", lambda **_: [])
     err = _error(capsys, [str(model_file), "--calibrate", str(tmp_path / "a.mcap")])
     assert "no archive reader is installed (entry-point group 'modd.samples')" in err
+
+
+def test_a_long_archive_is_read_up_to_the_limit(tmp_path: Path) -> None:
+    """The reader hands over the first ``limit`` samples of each topic and
+    stops reading there: a damaged end past them is never reached."""
+    from modd.dataset.samples import read_samples
+    from modd_plan.calibration import CalibrationError
+
+    samples = _samples(seconds=40)  # 1,000 samples a topic, in many 4 KiB chunks
+    path = tmp_path / "long.mcap"
+    write_archive(path, samples)
+    data = bytearray(path.read_bytes())
+    at = len(data) * 8 // 10  # a chunk near the end (the summary follows the chunks)
+    data[at : at + 200] = bytes(200)
+    path.write_bytes(bytes(data))
+    got = read_samples(path, TOPICS, limit=100)
+    for topic in TOPICS:
+        stamps, values = got[topic]
+        assert list(stamps) == samples[topic][0][:100]
+        assert list(values) == pytest.approx(samples[topic][1][:100], rel=1e-6)  # float32
+    with pytest.raises(CalibrationError, match="offset"):
+        read_samples(path, TOPICS)
+
+
+class _EntryPoint:
+    def __init__(self, reader: Any) -> None:
+        self.name, self._reader = "mcap", reader
+
+    def load(self) -> Any:
+        return self._reader
+
+
+def test_the_archive_is_read_once_while_it_stays_as_it_is(tmp_path: Path, monkeypatch: Any) -> None:
+    import importlib.metadata
+
+    from modd.dataset.samples import read_samples
+
+    reads: list[Path] = []
+
+    def counting(path: Path, topics: list[str]) -> Any:
+        reads.append(path)
+        return read_samples(path, topics)
+
+    monkeypatch.setattr(importlib.metadata, "entry_points", lambda **_: [_EntryPoint(counting)])
+    path = tmp_path / "flight.mcap"
+    write_archive(path, _samples(seconds=10))
+    first = cli.load_calibration(str(path), TOPICS)
+    again = cli.load_calibration(str(path), list(reversed(TOPICS)))
+    assert len(reads) == 1 and again.series is first.series
+    write_archive(path, _samples(seconds=12))  # the archive grew: read again
+    grown = cli.load_calibration(str(path), TOPICS)
+    assert len(reads) == 2 and len(grown.series[TOPICS[0]][0]) == 300
