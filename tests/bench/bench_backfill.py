@@ -26,7 +26,6 @@ import argparse
 import json
 import os
 import socket
-import subprocess
 import sys
 import tempfile
 import time
@@ -35,7 +34,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
 sys.path.insert(0, str(Path(__file__).parent))
 
-from benchkit.capture import check_capture  # noqa: E402
+from benchkit.capture import check_capture, tcp_packets  # noqa: E402
 from benchkit.report import table  # noqa: E402
 from modd.link import backfill as bf  # noqa: E402
 from modd.link.auth import client_handshake  # noqa: E402
@@ -187,31 +186,7 @@ def pace(args: argparse.Namespace) -> int:
         tshark.stop()
     finally:
         pb.stop()
-    out = subprocess.run(
-        [
-            "tshark",
-            "-r",
-            str(pcap),
-            "-T",
-            "fields",
-            "-e",
-            "frame.time_relative",
-            "-e",
-            "tcp.srcport",
-            "-e",
-            "ip.len",
-            "-e",
-            "tcp.len",
-        ],
-        check=True,
-        capture_output=True,
-        text=True,
-    ).stdout
-    down = [
-        (float(t), int(n), int(p))
-        for t, s, n, p in (ln.split("\t") for ln in out.splitlines())
-        if int(s) == link
-    ]
+    down = [(t, n, p) for t, s, n, p in tcp_packets(pcap) if s == link]
     segments = [(t, n) for t, n, p in down if p > 0]
     wire = sum(n for _, n in segments)
     biggest = max(n for _, n in segments)

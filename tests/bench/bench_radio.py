@@ -31,9 +31,9 @@ sys.path.insert(0, str(HERE))
 from modd.ports import free_port  # noqa: E402
 from modd_model import load_model  # noqa: E402
 from radio_harness import (  # noqa: E402
-    RADIO,
     start_pubbroker_dgram,
     start_radio_serial,
+    start_radio_udp,
     subbroker_dgram_config,
 )
 from subbroker_harness import (  # noqa: E402
@@ -92,21 +92,7 @@ def run_link(tmp: Path, scenario: str, transport: str, spec: str, seconds: float
     if transport == "udp":
         port, relay = free_port("udp"), free_port("udp")
         pb = start_pubbroker_dgram(tmp, model, {"transport": "udp", "port": port}, ingress)
-        radio = Proc(
-            "radio",
-            [
-                *RADIO,
-                "--udp",
-                f"127.0.0.1:{relay}",
-                "--to",
-                f"127.0.0.1:{port}",
-                "--radio",
-                radio_spec,
-                "--report",
-                "1",
-            ],
-            tmp / "radio.log",
-        )
+        radio = start_radio_udp(tmp, port, radio_spec, relay=relay)[0]
         cfg = subbroker_dgram_config(tmp, model, f"127.0.0.1:{relay}", zport, "udp")
     else:
         radio, base, drone = start_radio_serial(tmp, radio_spec)
@@ -200,21 +186,9 @@ def run_mavlink(tmp: Path, scenario: str, spec: str, seconds: float) -> dict[str
     sink = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sink.bind(("127.0.0.1", 0))
     relay = free_port("udp")
-    radio = Proc(
-        "mavradio",
-        [
-            *RADIO,
-            "--udp",
-            f"127.0.0.1:{relay}",
-            "--to",
-            f"127.0.0.1:{sink.getsockname()[1]}",
-            "--radio",
-            spec or "seed=1",
-            "--report",
-            "1",
-        ],
-        tmp / "mavradio.log",
-    )
+    radio = start_radio_udp(tmp, sink.getsockname()[1], spec or "seed=1", "mavradio", relay=relay)[
+        0
+    ]
     # the drone sends to the relay's far side: here the "base" sends, the "drone" receives,
     # so the relay's base->drone direction carries the stream
     out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -297,21 +271,7 @@ def run_zenoh(tmp: Path, number: int, spec: str, seconds: float) -> dict[str, An
         ],
         tmp / "zenoh-drone.log",
     )
-    radio = Proc(
-        "zradio",
-        [
-            *RADIO,
-            "--udp",
-            f"127.0.0.1:{relay}",
-            "--to",
-            f"127.0.0.1:{port}",
-            "--radio",
-            spec or "seed=1",
-            "--report",
-            "1",
-        ],
-        tmp / "zradio.log",
-    )
+    radio = start_radio_udp(tmp, port, spec or "seed=1", "zradio", relay=relay)[0]
     received = [0]
     session = None
     try:

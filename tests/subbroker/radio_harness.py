@@ -90,24 +90,14 @@ status_period_s = 0.5
     return path
 
 
-def start_radio_udp(tmp: Path, target: int, spec: str, tag: str = "radio") -> tuple[Proc, int]:
-    """modd-radio as a UDP relay to 127.0.0.1:target; (process, its port)."""
-    port = free_port("udp")
-    proc = Proc(
-        tag,
-        [
-            *RADIO,
-            "--udp",
-            f"127.0.0.1:{port}",
-            "--to",
-            f"127.0.0.1:{target}",
-            "--radio",
-            spec,
-            "--report",
-            "1",
-        ],
-        tmp / f"{tag}.log",
-    )
+def start_radio_udp(
+    tmp: Path, target: int, spec: str, tag: str = "radio", relay: int | None = None
+) -> tuple[Proc, int]:
+    """modd-radio as a UDP relay to 127.0.0.1:target, on 127.0.0.1:``relay``
+    (a new port when None), counting once a second; (process, its port)."""
+    port = relay if relay is not None else free_port("udp")
+    args = ["--udp", f"127.0.0.1:{port}", "--to", f"127.0.0.1:{target}", "--radio", spec]
+    proc = Proc(tag, [*RADIO, *args, "--report", "1"], tmp / f"{tag}.log")
     time.sleep(0.3)
     return proc, port
 

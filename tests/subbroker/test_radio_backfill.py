@@ -13,7 +13,12 @@ from typing import Any
 
 import pytest
 from modd.zenoh_session import wait_connected
-from radio_harness import RADIO, radio_counts, start_pubbroker_dgram, subbroker_dgram_config
+from radio_harness import (
+    radio_counts,
+    start_pubbroker_dgram,
+    start_radio_udp,
+    subbroker_dgram_config,
+)
 from subbroker_harness import (
     Proc,
     check_against_archive,
@@ -58,21 +63,7 @@ def test_backfill_over_udp_fills_what_the_ring_lost(tmp_path: Path, zenoh_client
         assert wait_connected(session, 5)
         got = Collector()
         session.declare_subscriber("modd/usv/**", got.on_sample)  # values and status
-        radio = Proc(
-            "radio",
-            [
-                *RADIO,
-                "--udp",
-                f"127.0.0.1:{relay}",
-                "--to",
-                f"127.0.0.1:{port}",
-                "--radio",
-                "latency_ms=20,outage=5+6,seed=3",
-                "--report",
-                "1",
-            ],
-            tmp_path / "radio.log",
-        )
+        radio = start_radio_udp(tmp_path, port, "latency_ms=20,outage=5+6,seed=3", relay=relay)[0]
         assert sb.wait_log("running", 30), sb.log()[-3000:]
         load = start_load(tmp_path, model, ingress, 40.0)
         time.sleep(max(0.0, radio.started + 11.0 - time.monotonic()))  # the outage's end

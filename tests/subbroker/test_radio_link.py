@@ -18,7 +18,6 @@ import pytest
 from modd.zenoh_session import wait_connected
 from modd_contracts.schema import validate
 from radio_harness import (
-    RADIO,
     Injector,
     radio_counts,
     start_pubbroker_dgram,
@@ -263,21 +262,9 @@ def _outage_and_reboots(tmp: Path, transport: str, zenoh_client: Any) -> None:
             # the emulator starts once the SubBroker is up, so that its outage falls
             # while the load runs; the handshake waits for it
             outage_at = 4.0
-            radio = Proc(
-                "radio",
-                [
-                    *RADIO,
-                    "--udp",
-                    f"127.0.0.1:{relay}",
-                    "--to",
-                    f"127.0.0.1:{port}",
-                    "--radio",
-                    f"latency_ms=30,outage={outage_at}+{OUTAGE_S},seed=2",
-                    "--report",
-                    "1",
-                ],
-                tmp / "radio.log",
-            )
+            radio = start_radio_udp(
+                tmp, port, f"latency_ms=30,outage={outage_at}+{OUTAGE_S},seed=2", relay=relay
+            )[0]
         else:
             # the emulator makes the pseudo-terminals: it comes first, its outage later
             outage_at = 14.0

@@ -29,7 +29,7 @@ from typing import Any
 from modd.ports import free_port
 from modd.subbroker.payload import DeliveredValue
 from modd.zenoh_session import client_settings, open_session, wait_connected
-from radio_harness import RADIO, start_pubbroker_dgram, subbroker_dgram_config
+from radio_harness import start_pubbroker_dgram, start_radio_udp, subbroker_dgram_config
 from subbroker_harness import (
     Proc,
     model_copy,
@@ -149,21 +149,9 @@ def run(
     zport, ingress, port, relay = free_port(), free_port(), free_port("udp"), free_port("udp")
     settle = 12.0  # handshake, CONFIG, first live values before the radio goes dark
     pb = start_pubbroker_dgram(tmp, model_path, {"transport": "udp", "port": port}, ingress)
-    radio = Proc(
-        "radio",
-        [
-            *RADIO,
-            "--udp",
-            f"127.0.0.1:{relay}",
-            "--to",
-            f"127.0.0.1:{port}",
-            "--radio",
-            f"rate={rate},outage={settle}+{outage_s},seed=1",
-            "--report",
-            "1",
-        ],
-        tmp / "radio.log",
-    )
+    radio = start_radio_udp(
+        tmp, port, f"rate={rate},outage={settle}+{outage_s},seed=1", relay=relay
+    )[0]
     sb = start_subbroker(
         tmp, subbroker_dgram_config(tmp, model_path, f"127.0.0.1:{relay}", zport, "udp")
     )

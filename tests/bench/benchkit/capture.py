@@ -94,10 +94,9 @@ class Capture:
         return read_pcap(self.pcap, self.port, self.seconds)
 
 
-def read_pcap(pcap: Path, server_port: int, seconds: float) -> Wire:
-    """Per direction, the packets from the first one up to (not including) the last one over
-    the time between them: a periodic flow's exact rate, whatever the capture's edges cut.
-    ``seconds`` (the capture's duration) is kept for a direction with fewer than 2 packets."""
+def tcp_packets(pcap: Path) -> list[tuple[float, int, int, int]]:
+    """Every TCP packet of a capture (tshark): (time since the first, source
+    port, IP length, TCP payload length)."""
     out = subprocess.run(
         [
             "tshark",
@@ -118,10 +117,19 @@ def read_pcap(pcap: Path, server_port: int, seconds: float) -> Wire:
         capture_output=True,
         text=True,
     ).stdout
+    return [
+        (float(t), int(src), int(iplen), int(tcplen))
+        for t, src, iplen, tcplen in (line.split("\t") for line in out.splitlines())
+    ]
+
+
+def read_pcap(pcap: Path, server_port: int, seconds: float) -> Wire:
+    """Per direction, the packets from the first one up to (not including) the last one over
+    the time between them: a periodic flow's exact rate, whatever the capture's edges cut.
+    ``seconds`` (the capture's duration) is kept for a direction with fewer than 2 packets."""
     pkts: dict[bool, list[tuple[float, int, int]]] = {True: [], False: []}
-    for line in out.splitlines():
-        t, src, iplen, tcplen = line.split("\t")
-        pkts[int(src) == server_port].append((float(t), int(iplen), int(tcplen)))
+    for t, src, iplen, tcplen in tcp_packets(pcap):
+        pkts[src == server_port].append((t, iplen, tcplen))
     dirs, spans = [], []
     for down in (True, False):
         ps = pkts[down]

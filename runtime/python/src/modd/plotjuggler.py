@@ -24,7 +24,6 @@ import argparse
 import json
 import logging
 import math
-import os
 import signal
 import socket
 import sys
@@ -35,7 +34,7 @@ from modd_contracts import keys
 from modd_contracts.delivered import load_delivered
 from modd_contracts.types_gen import DeliveredValue
 
-from .zenoh_session import DEFAULT_ENDPOINT, client_settings, open_session
+from .zenoh_session import add_viewer_args, client_settings, open_session
 
 log = logging.getLogger("modd.plotjuggler")
 #: PlotJuggler's default UDP server port.
@@ -128,17 +127,7 @@ def main(argv: list[str] | None = None) -> int:
         help=f"PlotJuggler's UDP server (default {DEFAULT_UDP})",
     )
     p.add_argument("--drone", default="*", help="drone name (default: every drone)")
-    p.add_argument(
-        "--modd-connect",
-        default=os.environ.get("MODD_ZENOH_CONNECT", DEFAULT_ENDPOINT),
-        metavar="ENDPOINT",
-        help="the SubBroker's zenoh endpoint",
-    )
-    p.add_argument(
-        "--credentials",
-        metavar="FILE",
-        help="a viewer's .cred file (default $MODD_ZENOH_CREDENTIALS; docs/security.md)",
-    )
+    add_viewer_args(p)
     a = p.parse_args(argv)
     try:
         target = parse_udp(a.udp)

@@ -13,6 +13,7 @@ as raw zenoh settings (``extra``).
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import socket
@@ -128,6 +129,24 @@ def _str_list(value: Any, where: str) -> list[str]:
     if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
         raise ValueError(f"{where}: expected a list of endpoints such as {DEFAULT_ENDPOINT!r}")
     return list(value)
+
+
+def add_viewer_args(p: argparse.ArgumentParser) -> None:
+    """The options of a viewer of the SubBroker's zenoh (``modd-ros2``,
+    ``modd-plotjuggler``): ``--modd-connect`` and ``--credentials``, as
+    :func:`client_settings` takes them."""
+    p.add_argument(
+        "--modd-connect",
+        default=os.environ.get("MODD_ZENOH_CONNECT", DEFAULT_ENDPOINT),
+        metavar="ENDPOINT",
+        help="the SubBroker's zenoh endpoint",
+    )
+    p.add_argument(
+        "--credentials",
+        metavar="FILE",
+        help="a viewer's .cred file for the SubBroker's zenoh (default "
+        "$MODD_ZENOH_CREDENTIALS; docs/security.md)",
+    )
 
 
 def client_settings(

@@ -17,23 +17,12 @@ import signal
 import sys
 import threading
 
-from ..zenoh_session import DEFAULT_ENDPOINT, ZenohSettings, client_settings, open_session
+from ..zenoh_session import ZenohSettings, add_viewer_args, client_settings, open_session
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="modd-ros2", description=__doc__.splitlines()[0])
-    p.add_argument(
-        "--modd-connect",
-        default=os.environ.get("MODD_ZENOH_CONNECT", DEFAULT_ENDPOINT),
-        metavar="ENDPOINT",
-        help="the SubBroker's zenoh endpoint",
-    )
-    p.add_argument(
-        "--credentials",
-        metavar="FILE",
-        help="a viewer's .cred file for the SubBroker's zenoh (default "
-        "$MODD_ZENOH_CREDENTIALS; docs/security.md)",
-    )
+    add_viewer_args(p)
     p.add_argument(
         "--ros-connect",
         metavar="ENDPOINT",
