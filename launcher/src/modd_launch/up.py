@@ -58,7 +58,7 @@ from typing import Any
 
 from modd import uplink
 from modd.ports import free_port
-from modd.supervise import watch
+from modd.supervise import tied_to_parent, watch
 from modd.zenoh_auth import CredentialStore, private_dir
 from modd.zenoh_session import DEFAULT_ENDPOINT
 
@@ -97,7 +97,12 @@ class Process:
         self.log.parent.mkdir(parents=True, exist_ok=True)
         with self.log.open("ab") as out:
             self.popen = subprocess.Popen(
-                self.argv, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True
+                self.argv,
+                stdout=out,
+                stderr=subprocess.STDOUT,
+                env=env,
+                start_new_session=True,  # Ctrl-C in a terminal reaches modd up alone
+                preexec_fn=tied_to_parent(),  # and a killed modd up takes them all with it
             )
 
     def stop(self) -> int | None:

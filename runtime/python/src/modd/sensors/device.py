@@ -1,6 +1,8 @@
 """A sensor's serial device: opened by path at each attempt (so a
 ``/dev/serial/by-id/...`` link that udev points at a renumbered adapter is
 followed), closed on any error, reopened every ``RETRY_S`` until it is back.
+A device another process holds (pyserial's exclusive lock) is told apart from an
+absent one: :class:`DeviceBusy` names the holder when ``/proc`` shows it.
 
 Example::
 
@@ -9,6 +11,7 @@ Example::
 
 from __future__ import annotations
 
+import errno
 import os
 import select
 
@@ -22,8 +25,37 @@ PARITY = {"none": serial.PARITY_NONE, "even": serial.PARITY_EVEN, "odd": serial.
 Errors = (serial.SerialException, OSError, ValueError)
 
 
+PROC_SCAN_LIMIT = 4096  # processes looked at to name a holder: bounded on a busy machine
+
+
+class DeviceBusy(Exception):
+    """The device is there but locked by another process (``str()`` says which, if known)."""
+
+
+def holder_of(path: str, proc: str = "/proc", limit: int = PROC_SCAN_LIMIT) -> str:
+    """``pid N (name)`` of another process that has ``path`` open, or "" when none can be
+    seen (another user's process, no ``/proc``)."""
+    target = os.path.realpath(path)
+    try:
+        pids = [d for d in os.listdir(proc) if d.isdigit()][:limit]
+    except OSError:
+        return ""
+    for pid in pids:
+        if int(pid) == os.getpid():
+            continue
+        try:
+            fds = os.listdir(f"{proc}/{pid}/fd")
+            if any(os.readlink(f"{proc}/{pid}/fd/{fd}") == target for fd in fds):
+                with open(f"{proc}/{pid}/comm") as comm:
+                    return f"pid {pid} ({comm.read().strip()})"
+        except OSError:
+            continue  # gone, or not ours to look at
+    return ""
+
+
 def open_port(device: Device, timeout: float = READ_TIMEOUT_S) -> serial.Serial | None:
-    """The open port, or None when the device is not there (or not a serial port)."""
+    """The open port, or None when the device is not there (or not a serial port);
+    raises :class:`DeviceBusy` when another process holds it."""
     try:
         return serial.Serial(
             device.path,
@@ -34,6 +66,11 @@ def open_port(device: Device, timeout: float = READ_TIMEOUT_S) -> serial.Serial 
             write_timeout=1.0,
             exclusive=True,
         )
+    except serial.SerialException as exc:
+        if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN):  # flock: another process holds it
+            holder = holder_of(device.path)
+            raise DeviceBusy(f"held by {holder}" if holder else "held by another process") from exc
+        return None
     except Errors:
         return None
 

@@ -30,6 +30,7 @@ class Health:
     silent: bool = False
     last_value_ns: int = 0  # receive time of the last value (0: none yet)
     last_bad: str = ""  # why the last bad line was refused
+    busy: str = ""  # another process holds the device ("held by pid N (name)"); not on the wire
 
     def bad(self, why: str) -> None:
         self.lines_bad += 1
@@ -61,7 +62,15 @@ class Health:
 
 def status_line(name: str, h: Health, now_ns: int) -> str:
     age = f"{(now_ns - h.last_value_ns) / 1e9:.1f} s ago" if h.last_value_ns else "none yet"
-    state = "silent" if h.silent else "open" if h.connected else "closed"
+    state = (
+        f"busy ({h.busy})"
+        if h.busy
+        else "silent"
+        if h.silent
+        else "open"
+        if h.connected
+        else "closed"
+    )
     last = f" (last bad: {h.last_bad})" if h.lines_bad else ""
     extra = "".join(
         f", {k} {v}"

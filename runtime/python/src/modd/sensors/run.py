@@ -24,13 +24,14 @@ from modd.link.frames import SensorHealth
 
 from . import modbus
 from .decode import Block, LineDecoder, Sample, block_samples, blocks
-from .device import RETRY_S, Errors, open_port, read_some
+from .device import RETRY_S, DeviceBusy, Errors, open_port, read_some
 from .health import Health, status_line
 from .plan import SensorPlan
 
 MODBUS_TIMEOUT_S = 0.5
 HEALTH_PERIOD_S = 1.0  # how often the PubBroker hears of the sensors' health
 SILENT_PERIODS, SILENT_MIN_S = 3, 2.0
+STOP_BUDGET_S = 1.0  # SIGTERM to exit, whatever the PubBroker's state (systemd waits longer)
 
 
 class Sink(Protocol):
@@ -76,7 +77,13 @@ class SensorThread:
     def _run(self) -> None:
         waiting = False  # said once per absence, not every RETRY_S
         while not self._stop.is_set():
-            port = open_port(self.plan.device)
+            try:
+                port = open_port(self.plan.device)
+            except DeviceBusy as exc:
+                self._busy(str(exc))
+                self._stop.wait(RETRY_S)
+                continue
+            self.health.busy = ""
             if port is None:
                 if not waiting:
                     self.log(
@@ -102,6 +109,13 @@ class SensorThread:
             finally:
                 self.health.connected = False
                 port.close()
+
+    def _busy(self, why: str) -> None:
+        """Another process holds the device: said once per holder, and in the health
+        (busy, not silent: the instrument may be fine)."""
+        if self.health.busy != why:
+            self.log(f"{self.plan.name}: {self.plan.device.path} is busy, {why}; retrying")
+        self.health.busy = why
 
     def _read(self, port: serial.Serial) -> None:
         decoder = LineDecoder(self.plan, self.health)
@@ -154,7 +168,7 @@ class SensorThread:
         h = self.health
         since = h.last_value_ns or self.started_ns
         limit = max(SILENT_MIN_S, SILENT_PERIODS * self.plan.poll_s) * 1e9
-        if not h.silent and now_ns - since > limit:
+        if not h.silent and not h.busy and now_ns - since > limit:
             h.silent = True
             h.silences += 1
             self.log(f"{self.plan.name}: silent for {(now_ns - since) / 1e9:.1f} s")
@@ -217,12 +231,25 @@ class Runner:
                     for s in self.sensors:
                         self.log(status_line(s.plan.name, s.health, now))
         finally:
-            for s in self.sensors:
-                s.thread.join(2.0)
-            self.send_health()  # the last counts, before the publishers close
-            for sink in self.sinks.values():
-                sink.flush(2.0)
-                sink.close()
-            self.write_status()
-            for s in self.sensors:
-                self.log(status_line(s.plan.name, s.health, time.time_ns()))
+            self._stop_within(STOP_BUDGET_S)
+
+    def _stop_within(self, budget_s: float) -> None:
+        """Joins the readers and flushes the publishers within one budget for all of
+        them: with the PubBroker gone, a flush per publisher would otherwise wait its
+        own timeout, one after the other (20 s for ten publishers); what is left
+        unsent then is what the PubBroker could not take anyway."""
+        deadline = time.monotonic() + budget_s
+
+        def left() -> float:
+            return max(0.0, deadline - time.monotonic())
+
+        for s in self.sensors:
+            s.thread.join(left())
+        self.send_health()  # the last counts, before the publishers close
+        for sink in self.sinks.values():
+            sink.flush(left())
+        for sink in self.sinks.values():
+            sink.close(left())
+        self.write_status()
+        for s in self.sensors:
+            self.log(status_line(s.plan.name, s.health, time.time_ns()))
