@@ -9,12 +9,14 @@ BUILD_TYPE ?= RelWithDebInfo
 setup:
 	@scripts/setup.sh
 
-# C++ runtime: binaries land in build/bin/.
+# C++ runtime: binaries land in build/bin/. Only what runs (the PubBroker): the
+# unit tests are built by `make test` (runtime/cpp/scripts/test.sh), so a first
+# `make run` does not wait for them.
 build: setup
 	@if [ -f runtime/cpp/CMakeLists.txt ]; then \
 	  cmake -S runtime/cpp -B build/cpp -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) \
 	        -DMODD_BIN_DIR=$(ROOT)/build/bin >/dev/null && \
-	  cmake --build build/cpp ; \
+	  cmake --build build/cpp --target modd-pubbroker ; \
 	fi
 
 run: build
