@@ -8,6 +8,9 @@ import { emptyModel } from "../core/templates";
 import { PROJECT_TEMPLATES } from "./projectTemplates";
 import { useServices } from "./services";
 
+/** How often an empty project list asks again (the demo project arrives after the login line). */
+export const EMPTY_POLL_MS = 2000;
+
 export function ProjectsPage({ onOpen, user, onLogout, onUsers }: { onOpen: (p: Project) => void; user: string; onLogout: () => void; onUsers?: () => void }) {
   const { api } = useServices();
   const [projects, setProjects] = useState<Project[] | null>(null);
@@ -18,9 +21,24 @@ export function ProjectsPage({ onOpen, user, onLogout, onUsers }: { onOpen: (p: 
   const [importNote, setImportNote] = useState<string | null>(null);
   const [importErrors, setImportErrors] = useState<Diagnostic[]>([]);
 
+  // The list follows projects that arrive after the page opened (`make run` loads the
+  // demo a few seconds after its login line): polled while it is empty, and again
+  // whenever the page comes back into view.
   useEffect(() => {
-    api.listProjects().then(setProjects, (e: Error) => setError(e.message));
+    let live = true;
+    const load = () => api.listProjects().then((ps) => { if (live) { setProjects(ps); setError(null); } }, (e: Error) => { if (live) setError(e.message); });
+    void load();
+    const onVisible = () => { if (document.visibilityState === "visible") void load(); };
+    document.addEventListener("visibilitychange", onVisible);
+    window.addEventListener("focus", onVisible);
+    return () => { live = false; document.removeEventListener("visibilitychange", onVisible); window.removeEventListener("focus", onVisible); };
   }, [api]);
+  const empty = projects !== null && projects.length === 0;
+  useEffect(() => {
+    if (!empty) return;
+    const timer = window.setInterval(() => { api.listProjects().then(setProjects, () => {}); }, EMPTY_POLL_MS);
+    return () => window.clearInterval(timer);
+  }, [api, empty]);
 
   const create = async (e: React.FormEvent) => {
     e.preventDefault();
