@@ -255,7 +255,13 @@ def run(args: argparse.Namespace) -> int:
         args.credentials_dir = Path(args.credentials or workdir / "credentials").absolute()
         store = CredentialStore(args.credentials_dir)
         if args.part != "drone":
-            store.ensure()
+            for name in store.ensure().remade:
+                print(
+                    f"modd up: {store.dir / name} was missing and was made anew with a new "
+                    "secret: copies of it handed out before no longer work",
+                    file=sys.stderr,
+                    flush=True,
+                )
     except ValueError as exc:
         print(f"modd up: {exc}", file=sys.stderr)
         return 1

@@ -127,10 +127,15 @@ class CredentialStore:
 
     def __init__(self, directory: str | Path) -> None:
         self.dir = Path(directory)
+        self.remade: list[str] = []  # files made anew after a first start (see ensure)
 
     def ensure(self) -> CredentialStore:
-        """Make the directory and every missing file (first start); idempotent."""
+        """Make the directory and every missing file (first start); idempotent.
+        A file missing after the first start (deleted by hand) is made anew with a
+        new secret, named in ``remade`` and logged as a warning: copies of it that
+        were handed out no longer work, and whoever holds one must be told."""
         private_dir(self.dir)
+        first = not self.dictionary.exists()
         made = []
         for ident in IDENTITIES:
             cred = self.dir / f"{ident}.cred"
@@ -142,8 +147,16 @@ class CredentialStore:
             _write_private(key, (secrets.token_hex(32) + "\n").encode())
             made.append(key.name)
         self._write_dictionary()
-        if made:
+        if made and first:
             log.info("zenoh credentials made in %s: %s", self.dir, ", ".join(made))
+        elif made:
+            self.remade = made
+            log.warning(
+                "zenoh credentials missing from %s were made anew with new secrets: %s; "
+                "copies handed out before no longer work",
+                self.dir,
+                ", ".join(made),
+            )
         return self
 
     def _write_dictionary(self) -> None:
