@@ -5,6 +5,16 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# What a first run needs from the network, said when a step that downloads fails
+# (an offline machine otherwise sees only a resolver error from uv or npm).
+offline_hint() {
+  echo "setup: $1 failed. The first \`make run\` or \`make test\` on a machine downloads" >&2
+  echo "setup: what it needs: Debian packages (apt), Python packages (PyPI, through uv) and" >&2
+  echo "setup: npm packages; later runs need no network. Check that this machine reaches them" >&2
+  echo "setup: (a proxy: set http_proxy/https_proxy), then run the command again." >&2
+  exit 1
+}
+
 APT_PACKAGES=(cmake ninja-build g++ make libgtest-dev libssl-dev libzstd-dev liblz4-dev
               nlohmann-json3-dev clang clang-format libclang-rt-14-dev tshark chromium postgresql mosquitto
               faketime)  # faketime: the PubBroker's clock-step test (tests/runtime/test_pubbroker_clock_step.py)
@@ -17,15 +27,16 @@ if [ ${#missing[@]} -gt 0 ]; then
   echo "setup: installing Debian packages: ${missing[*]}"
   SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
   export DEBIAN_FRONTEND=noninteractive
-  $SUDO apt-get update -qq
+  $SUDO apt-get update -qq || offline_hint "apt-get update"
   # tshark asks whether non-root users may capture; the default (no) is what we want.
   echo "wireshark-common wireshark-common/install-setuid boolean false" | $SUDO debconf-set-selections
-  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null ||
+    offline_hint "installing Debian packages (${missing[*]})"
 fi
 
 if ! command -v uv >/dev/null 2>&1; then
   echo "setup: installing uv from PyPI"
-  python3 -m pip install --quiet --disable-pip-version-check uv
+  python3 -m pip install --quiet --disable-pip-version-check uv || offline_hint "installing uv from PyPI"
 fi
 
 # --compile-bytecode: the dependencies' bytecode written once here, as pip
@@ -33,7 +44,7 @@ fi
 # set, Python never writes it: the backend's imports then cost 3.5 s of CPU
 # per start instead of 1.3-2 s, `modd plan` 0.6 s instead of 0.15-0.23 s).
 # uv sync skips what is compiled already.
-uv sync --quiet --all-packages --compile-bytecode
+uv sync --quiet --all-packages --compile-bytecode || offline_hint "uv sync (Python packages)"
 # the same for the workspace's own sources (editable: not in site-packages);
 # compileall skips the files whose bytecode is current
 .venv/bin/python -m compileall -q -j 0 metamodel/src runtime/python/src backend/src \
@@ -42,6 +53,6 @@ uv sync --quiet --all-packages --compile-bytecode
 if [ -f frontend/package.json ]; then
   if [ ! -d frontend/node_modules ] || [ frontend/package-lock.json -nt frontend/node_modules/.package-lock.json ]; then
     echo "setup: installing npm packages"
-    (cd frontend && npm ci --no-audit --no-fund --loglevel=error)
+    (cd frontend && npm ci --no-audit --no-fund --loglevel=error) || offline_hint "npm ci (frontend packages)"
   fi
 fi
