@@ -38,6 +38,8 @@ run tests/bench/bench_pubbroker.py --seconds "${PUBBROKER_SECONDS:-10}" --ingest
 run tests/bench/bench_planner.py --quick
 run tests/bench/bench_plan_cpu.py
 run tests/bench/bench_backend_plan.py --runs 30
+printf '\n===== %s\n\n' "frontend/tests/bench/live-plan-latency.mjs --edits 20"
+(cd frontend && node tests/bench/live-plan-latency.mjs --edits 20)  # the live plan in the browser
 run tests/bench/bench_subbroker.py --seconds "${SUBBROKER_SECONDS:-10}" --profile
 run tests/bench/bench_fleet.py --drones "${FLEET_DRONES:-20}" --seconds "${FLEET_SECONDS:-60}"
 run tests/bench/bench_health_ws.py --ops 20000

@@ -66,6 +66,7 @@ export function Workbench({ project, user, onLogout, onProjects, route }: Props)
   const firstView = route?.view && views.includes(route.view) ? route.view : views[0] ?? "operator";
   const store: EditorStore = useMemo(() => {
     const s = createEditorStore(emptyModel(), firstView);
+    s.patch({ userRoles: user.roles as Role[] });
     if (route?.panel) s.patch({ panel: route.panel });
     return s;
   }, [project.id]); // eslint-disable-line react-hooks/exhaustive-deps

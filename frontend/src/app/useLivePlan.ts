@@ -19,7 +19,14 @@ export function nextPlanState(prev: PlanState, result: PlanResult): PlanState {
   return { busy: false, result, error: null, lastValid: result.plan, previous: prev.lastValid ?? null, calibrate: prev.calibrate };
 }
 
-export function useLivePlan(delayMs = 400): void {
+/**
+ * Edits closer together than this are planned once. Planning takes 5–10 ms on the
+ * backend (docs/benchmarks.md): the wait is what the user sees, so it is short;
+ * a request still running when the next edit comes is aborted.
+ */
+export const LIVE_PLAN_DEBOUNCE_MS = 120;
+
+export function useLivePlan(delayMs = LIVE_PLAN_DEBOUNCE_MS): void {
   const { api } = useServices();
   const store = useEditorStore();
   const model = useModel();

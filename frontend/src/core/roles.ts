@@ -107,3 +107,43 @@ export function deniedParts(role: Role, before: object, after: object): string[]
   }
   return denied.sort();
 }
+
+/** The parts an edit changes that none of `roles` may change: what a user holding all of
+ * them may not do, whichever view they are in (a whole model pasted or dropped). */
+export function deniedPartsFor(roles: readonly Role[], before: object, after: object): string[] {
+  if (roles.length === 0) return deniedParts("operator", before, after);
+  const each = roles.map((r) => new Set(deniedParts(r, before, after)));
+  return [...each[0]].filter((part) => each.every((d) => d.has(part))).sort();
+}
+
+const PART_WORDS: Readonly<Record<string, string>> = {
+  "/drone": "the drone", "/drone/sensors": "the sensors", "/pubBroker": "the PubBroker",
+  "/subBroker": "the SubBroker", "/link": "the link", "/publishers": "the publishers",
+  "/subscribers": "the subscriptions", "/layout": "the layout",
+};
+
+/** A model part in the model's words ("/subscribers" → "the subscriptions"). */
+export function partWords(part: string): string {
+  return PART_WORDS[part] ?? `the ${part.replace(/^\//, "")}`;
+}
+
+/** The role that owns a part ("designer" when the schema says nothing). */
+export function partOwner(part: string): Role {
+  const owner = part in PART_OWNERS ? PART_OWNERS[part] : "designer";
+  return owner ?? "designer";
+}
+
+/**
+ * Why a whole model from text or a file is refused, and what to do: the parts in the
+ * model's words, who owns them, and the two ways out.
+ *
+ * @example refusalOfParts(["/subscribers"], ["integrator"])
+ *   // "This model changes the subscriptions, which your roles (integrator) may not change. ..."
+ */
+export function refusalOfParts(parts: readonly string[], roles: readonly Role[]): string {
+  const words = parts.map(partWords);
+  const owners = [...new Set(parts.map(partOwner))].sort();
+  const list = words.length > 1 ? `${words.slice(0, -1).join(", ")} and ${words[words.length - 1]}` : words[0];
+  return `This model changes ${list}, which your roles (${roles.join(", ") || "none"}) may not change. `
+    + `Ask a user with the ${owners.join(" or ")} role (or an admin) to apply it, or import it as a new project from the Projects page.`;
+}

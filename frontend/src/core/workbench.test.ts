@@ -87,15 +87,44 @@ describe("replaceModel", () => {
     const bad = scenario1();
     bad.publishers[0].periodS = "0.1";
     const s2 = reduce(s1, { type: "replaceModel", model: bad });
-    expect(s2.notice).toBe("the scientist view cannot change /publishers");
+    expect(s2.notice).toBe("the scientist view cannot change the publishers");
     expect(currentModel(s2)).toBe(currentModel(s1));
+  });
+});
+
+describe("replaceModel with the user's roles (a whole model pasted or dropped)", () => {
+  const whole = () => {
+    const m = scenario1();
+    m.drone.sensors[0].name = "imu";
+    m.publishers[0].topics = m.publishers[0].topics.map((t) => t.replace("accelerometer", "imu"));
+    m.subscribers.forEach((x) => { x.topic = x.topic.replace("accelerometer", "imu"); });
+    return m;
+  };
+
+  it("is applied for an admin in any view, and for a user who holds every owner role", () => {
+    for (const view of ["designer", "integrator", "scientist", "operator"] as const) {
+      const s = reduce(initialState(scenario1(), view), { type: "replaceModel", model: whole(), roles: ["admin"] });
+      expect(s.notice).toBeNull();
+      expect(currentModel(s).drone.sensors[0].name).toBe("imu");
+    }
+    const s = reduce(initialState(scenario1(), "scientist"), { type: "replaceModel", model: whole(), roles: ["designer", "integrator", "scientist"] });
+    expect(currentModel(s).drone.sensors[0].name).toBe("imu");
+  });
+
+  it("is refused for a scientist with the parts in words, their owners and the ways out", () => {
+    const s0 = initialState(scenario1(), "scientist");
+    const s = reduce(s0, { type: "replaceModel", model: whole(), roles: ["scientist"] });
+    expect(currentModel(s)).toBe(currentModel(s0));
+    expect(s.notice).toBe("This model changes the sensors and the publishers, which your roles (scientist) may not change. "
+      + "Ask a user with the designer or integrator role (or an admin) to apply it, or import it as a new project from the Projects page.");
+    expect(s.notice).not.toMatch(/\/drone|\/publishers/);
   });
 });
 
 describe("the save rule applied at edit time", () => {
   it("refuses an integrator rename that would rewrite others' references", () => {
     const s = reduce(initialState(scenario1(), "integrator"), { type: "setField", id: "sensor:accelerometer", path: ["name"], value: "imu" });
-    expect(s.notice).toBe("this edit changes /publishers, /subscribers, which the integrator view may not change");
+    expect(s.notice).toBe("this edit changes the publishers, the subscriptions, which the integrator view may not change");
     expect(currentModel(s).drone.sensors[0].name).toBe("accelerometer");
   });
 

@@ -16,7 +16,7 @@ import {
 } from "./ops";
 import { copyElements, isEmptyFragment, pasteFragment, type Fragment } from "./clipboard";
 import { parseId, type ElementKind } from "./ids";
-import { canEdit, deniedParts, editsAnything, type Role } from "./roles";
+import { canEdit, deniedParts, deniedPartsFor, editsAnything, partWords, refusalOfParts, type Role } from "./roles";
 
 export interface WorkbenchState {
   history: History<ModdModel>;
@@ -30,7 +30,11 @@ export interface WorkbenchState {
 export type Action =
   | { type: "load"; model: ModdModel }
   /** Replace the whole model (text applied to the diagram): one undo step, only parts the role owns may change. */
-  | { type: "replaceModel"; model: ModdModel }
+  /** Something the user must read about their last action (a dropped file not applied). */
+  | { type: "notify"; notice: string }
+  /** A whole model (text applied, a file dropped). With `roles` (the user's), it is checked
+   * against what the user may change, not only the view: an admin applies anything. */
+  | { type: "replaceModel"; model: ModdModel; roles?: readonly Role[] }
   | { type: "setRole"; role: Role }
   | { type: "select"; ids: string[] }
   | { type: "addSensor"; pos?: Position }
@@ -124,8 +128,13 @@ function edit(s: WorkbenchState, a: Action): WorkbenchState {
       return commit(s, model, { select, coalesce: `field:${newId}:${a.path.join(".")}` });
     }
     case "replaceModel": {
+      if (a.roles) {
+        const denied = deniedPartsFor(a.roles, m, a.model);
+        if (denied.length) return refuse(s, refusalOfParts(denied, a.roles));
+        return commit(s, a.model, { select: [] });
+      }
       const denied = deniedParts(s.role, m, a.model);
-      if (denied.length) return refuse(s, `the ${s.role} view cannot change ${denied.join(", ")}`);
+      if (denied.length) return refuse(s, `the ${s.role} view cannot change ${denied.map(partWords).join(", ")}`);
       return commit(s, a.model, { select: [] });
     }
     case "move":
@@ -156,6 +165,7 @@ export function reduce(s: WorkbenchState, a: Action): WorkbenchState {
     case "redo": return readOnlyView(s) ? refuse(s, denied(s.role, "the model (no redo)")) : { ...s, history: redo(s.history), notice: null };
     case "copy": return readOnlyView(s) ? s : { ...s, clipboard: copyElements(currentModel(s), a.ids) };
     case "dismissNotice": return { ...s, notice: null };
+    case "notify": return { ...s, notice: a.notice };
     default:
       try {
         const next = edit(s, a);
@@ -163,9 +173,10 @@ export function reduce(s: WorkbenchState, a: Action): WorkbenchState {
         // another role owns (e.g. a sensor rename reaching subscriptions) is refused here.
         const before = currentModel(s);
         const after = currentModel(next);
-        if (a.type !== "move" && after !== before) {
+        const checked = a.type === "replaceModel" && a.roles !== undefined; // against the user's roles
+        if (a.type !== "move" && !checked && after !== before) {
           const denied = deniedParts(s.role, before, after);
-          if (denied.length) return refuse(s, `this edit changes ${denied.join(", ")}, which the ${s.role} view may not change`);
+          if (denied.length) return refuse(s, `this edit changes ${denied.map(partWords).join(", ")}, which the ${s.role} view may not change`);
         }
         return next;
       } catch (e) {

@@ -1,7 +1,10 @@
 /**
  * The diagram: xyflow canvas over the model. Positions move locally while
  * dragging and are written to the model's layout on drop (one undo step);
- * connections and selection go through the store; deletion and clipboard go
+ * connections and selection go through the store (an edge is picked by a
+ * click, or by Tab then Enter: the link opens its radio settings in the
+ * inspector, a publisher → topic or topic → subscriber edge can be deleted);
+ * deletion and clipboard go
  * through the keyboard shortcuts (xyflow's own delete key is off, so the
  * model decides what can be removed).
  */
@@ -19,6 +22,7 @@ import { canConnect } from "../core/ops";
 import { canEditEdge } from "../core/roles";
 import { FAR_ZOOM, FIT, farLabelPx } from "./fit";
 import { useRevealNew } from "./useRevealNew";
+import { useModelDrop } from "./useModelDrop";
 
 const MINIMAP_COLORS: Record<string, string> = {
   drone: "#0f766e", sensor: "#7c3aed", topic: "#2563eb", publisher: "#b45309", subscriber: "#be185d",
@@ -32,6 +36,7 @@ export function Canvas() {
   const derived = useFlowElements();
   const [nodes, setNodes] = useState<ElementNode[]>(derived.nodes);
   useKeyboardShortcuts();
+  const drop = useModelDrop(); // a whole model file dropped on the diagram
   const box = useRef<HTMLDivElement>(null);
   useRevealNew(box);
   // Below FAR_ZOOM: names only, at a legible size (fit.ts); the zoom in steps of 0.02 (rounded down), not each frame.
@@ -50,13 +55,31 @@ export function Canvas() {
     setNodes((ns) => applyNodeChanges(changes.filter((c) => c.type !== "remove"), ns));
   }, []);
 
+  // Edges are picked here, not by xyflow's own edge selection (which would need a second
+  // copy of the selection kept in step with the store's): a click, or Enter/Space on a
+  // focused edge, selects it in the store, and the edges' `selected` is derived from there.
+  const pickEdge = useCallback((edge: Edge | undefined) => {
+    if (edge && (edge.data as { pickable?: boolean } | undefined)?.pickable) store.dispatch({ type: "select", ids: [edge.id] });
+  }, [store]);
+  const onEdgeClick = useCallback((_e: React.MouseEvent, edge: Edge) => pickEdge(edge), [pickEdge]);
+  const onKeyDown = useCallback((e: React.KeyboardEvent) => {
+    if (e.key !== "Enter" && e.key !== " ") return;
+    const id = (e.target as Element).closest?.(".react-flow__edge")?.getAttribute("data-id");
+    if (!id) return;
+    e.preventDefault();
+    pickEdge(derived.edges.find((x) => x.id === id));
+  }, [derived.edges, pickEdge]);
+
   const onNodeDragStop = useCallback((_e: unknown, _n: ElementNode, dragged: ElementNode[]) => {
     store.dispatch({ type: "move", positions: Object.fromEntries(dragged.map((n) => [n.id, n.position])) });
   }, [store]);
 
+  // Nodes are selected by xyflow (click, box, modifier keys); an edge only by pickEdge
+  // below, one at a time. A node picked drops the edge; with no node the picked edge stays.
   const onSelectionChange = useCallback(({ nodes: ns, edges: es }: OnSelectionChangeParams) => {
-    store.dispatch({ type: "select", ids: [...ns.map((n) => n.id), ...es.map((e) => e.id)] });
+    store.dispatch({ type: "select", ids: ns.length ? ns.map((n) => n.id) : es.map((e) => e.id) });
   }, [store]);
+  const onPaneClick = useCallback(() => store.dispatch({ type: "select", ids: [] }), [store]);
 
   const onConnect = useCallback((c: Connection) => {
     if (c.source && c.target) store.dispatch({ type: "connect", source: c.source, target: c.target });
@@ -69,15 +92,17 @@ export function Canvas() {
   }, [model, role]);
 
   return (
-    <div className={`canvas${far ? " canvas-far" : ""}`} aria-label="Model diagram" ref={box}
+    <div className={`canvas${far ? " canvas-far" : ""}`} aria-label="Model diagram" ref={box} onDragOver={drop.onDragOver} onDrop={drop.onDrop} onKeyDown={onKeyDown}
       style={far ? ({ "--far-label-px": `${farLabelPx(zoom)}px` } as React.CSSProperties) : undefined}>
       <ReactFlow<ElementNode>
         nodes={nodes}
         edges={derived.edges}
+        onEdgeClick={onEdgeClick}
         nodeTypes={nodeTypes}
         onNodesChange={onNodesChange}
         onNodeDragStop={onNodeDragStop}
         onSelectionChange={onSelectionChange}
+        onPaneClick={onPaneClick}
         onConnect={onConnect}
         isValidConnection={isValidConnection}
         deleteKeyCode={null}

@@ -30,6 +30,8 @@ export interface EditorState {
   remoteSave: { revision: number; author: string; message: string } | null;
   /** Unsaved edits found in this browser at start and put back (when they were kept). */
   draftRestored: string | null;
+  /** The signed-in user's roles (the view is one of them; a whole model is checked against all). */
+  userRoles: Role[];
 }
 
 export interface MergeState {
@@ -78,6 +80,7 @@ export function createEditorStore(model: ModdModel, role: Role): EditorStore {
     conflict: null,
     remoteSave: null,
     draftRestored: null,
+    userRoles: [role],
   };
   const listeners = new Set<() => void>();
   const emit = () => listeners.forEach((l) => l());

@@ -24,6 +24,10 @@ export function useDiagnostics() {
   return useMemo(() => [...local, ...fresh.map((d) => ({ ...d, source: "backend" }))], [local, fresh]);
 }
 
+/** Whether the view can pick an edge of `kind`: the link (its settings, read-only or not), or an edge its role owns. */
+const pickable = (kind: string, role: Parameters<typeof canEditEdge>[0]): boolean =>
+  kind === "link" || ((kind === "publishes" || kind === "subscribes") && canEditEdge(role, kind));
+
 export function useFlowElements(): { nodes: ElementNode[]; edges: Edge[] } {
   const model = useModel();
   const role = useRole();
@@ -46,14 +50,17 @@ export function useFlowElements(): { nodes: ElementNode[]; edges: Edge[] } {
       id: e.id,
       source: e.source,
       target: e.target,
-      className: `edge-${e.kind}`,
       selected: selected.has(e.id),
-      selectable: e.kind === "link" || canEditEdge(role, e.kind),
+      // Picked by the canvas's own click and key handlers (editor/Canvas.tsx), never by
+      // xyflow's edge selection; still focusable, so Tab reaches them.
+      selectable: false,
+      focusable: pickable(e.kind, role),
       deletable: false,
       animated: e.kind === "link",
       label: e.kind === "link" ? "link" : undefined,
       markerEnd: e.kind === "publishes" || e.kind === "subscribes" ? { type: MarkerType.ArrowClosed } : undefined,
-      data: { kind: e.kind },
+      className: `edge-${e.kind}${pickable(e.kind, role) ? " pickable" : ""}`,
+      data: { kind: e.kind, pickable: pickable(e.kind, role) },
     }));
     return { nodes, edges };
   }, [graph, markers, selection, role]);

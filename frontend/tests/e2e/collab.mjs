@@ -184,6 +184,37 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await expectText(page.locator(".topbar .revision"), /^r6(?!.*unsaved)/);
     }],
 
+    ["collab: a whole model pasted in the Text panel — applied for the admin in the scientist view, refused in words for a scientist", async () => {
+      const panel = (p, name) => p.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
+      // The saved model with its sensor renamed: a change to the sensors, the publishers and the subscriptions.
+      const saved = (await api("GET", `/api/projects/${pid}/model`)).model;
+      const whole = JSON.stringify(saved, null, 2).replaceAll("accelerometer", "imu");
+      const paste = async (p) => {
+        await panel(p, "Text");
+        await p.getByRole("button", { name: "Apply text to diagram" }).waitFor();
+        await p.waitForTimeout(400);
+        await p.locator(".cm-content").click();
+        await p.keyboard.press("Control+a");
+        await p.keyboard.insertText(whole);
+        await p.getByRole("button", { name: "Apply text to diagram" }).click();
+      };
+      await page.getByRole("tab", { name: "Scientist", exact: true }).click();
+      await paste(page);
+      await expectText(page.locator(".text-toolbar [role=status]"), /^Applied to the diagram\./);
+      await node(page, "sensor:imu").waitFor();
+      await page.locator(".react-flow__pane").click({ position: { x: 8, y: 8 } });
+      await page.keyboard.press("Control+z"); // one undo step takes the whole model back
+      await node(page, "sensor:accelerometer").waitFor();
+      await other.goto(`${baseUrl}/projects/${pid}/scientist/text`);
+      await paste(other);
+      const status = other.locator(".text-toolbar [role=status]");
+      await expectText(status, /This model changes the sensors and the publishers, which your roles \(scientist\) may not change\./);
+      await expectText(status, /Ask a user with the designer or integrator role \(or an admin\).*import it as a new project/);
+      if (/\/drone|\/publishers/.test((await status.textContent()) ?? "")) throw new Error("the refusal names JSON pointers");
+      await node(other, "sensor:accelerometer").waitFor();
+      await shot(other, "text-refused");
+    }],
+
     ["collab: inspector — applies as you type, and the first click after a rename (accepted or refused) is kept", async () => {
       await page.getByRole("tab", { name: "Scientist", exact: true }).click();
       await select(page, "sub:sub_4");

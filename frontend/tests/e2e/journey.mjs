@@ -238,6 +238,35 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       await expectCount(page.locator(".react-flow__node.react-flow__node-subscriber"), 7);
     }],
 
+    ["designer: the link and a publisher's edge selected on the diagram; the radio set by form, the plan's air time follows", async () => {
+      await view("System designer");
+      await clickPane();
+      // The mouse on the link edge (a straight line: clicked at its middle, where a person would).
+      const box = await page.locator(".react-flow__edge.edge-link path.react-flow__edge-interaction").boundingBox();
+      if (!box) throw new Error("the link edge is not on screen");
+      await page.mouse.click(box.x + box.width / 2, box.y + box.height / 2);
+      await expectVisible(inspector.getByRole("heading", { name: /^Link/ }));
+      await setSelect("radio.kind", "sik");
+      await panel("Plan");
+      await waitUntil(async () => /sik/i.test((await page.getByTestId("radio-kind").textContent().catch(() => "")) ?? ""), 10000, async () => "no SiK radio in the plan");
+      const seconds = async () => Number(/([\d.]+) s/.exec((await page.getByTestId("air-time").textContent()) ?? "")?.[1]);
+      const fast = await seconds();
+      await setText("radio.airRateBps", "16000"); // a quarter of the SiK default: four times the air time
+      await waitUntil(async () => (await seconds()) > fast * 3, 10000, async () => `air time ${await seconds()} s after a 4x slower radio (was ${fast} s)`);
+      await shot("designer-link");
+      // The keyboard on a publisher → topic edge: Tab reaches it, Enter selects it.
+      await page.locator(".react-flow__edge.edge-publishes").first().focus();
+      await page.keyboard.press("Enter");
+      await expectVisible(inspector.getByRole("heading", { name: "Publisher → topic" }));
+      await expectVisible(inspector.getByRole("button", { name: "Delete this edge" }));
+      // Both radio edits undone: the model is scenario 1 again for the steps after this one.
+      await clickPane();
+      await page.keyboard.press("Control+z");
+      await page.keyboard.press("Control+z");
+      await expectCount(page.getByTestId("radio-kind"), 0);
+      await view("Scientist"); // where the steps after this one start
+    }],
+
     ["save", async () => {
       await page.getByRole("button", { name: "Save", exact: true }).click();
       await expectText(page.locator(".topbar .revision"), /^r2$/);
@@ -259,7 +288,7 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
       await page.keyboard.press("Control+End");
       await page.keyboard.type(" oops {");
       await page.getByRole("button", { name: "Apply text to diagram" }).click();
-      await expectText(page.locator(".text-toolbar [role=status]"), /error\(s\): not applied\. \d+:\d+/);
+      await expectText(page.locator(".text-toolbar [role=status]"), /^Not applied: \d+ errors?, marked in the text \(line \d+:\d+/);
       await expectVisible(page.locator(".cm-lintRange-error, .cm-lint-marker-error").first());
       await shot("text-error");
       await page.getByRole("button", { name: "Reload saved text" }).click();

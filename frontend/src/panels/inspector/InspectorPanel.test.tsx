@@ -85,4 +85,30 @@ describe("InspectorPanel", () => {
     expect(screen.getByText(/1 problem/)).toBeTruthy();
     expect(screen.getByRole("button", { name: "sub:sub_8" })).toBeTruthy();
   });
+  it("shows a publisher → topic edge in the model's words and deletes it for its owner", () => {
+    const store = mount("designer", ["publishes:pub:pub_1->topic:accelerometer.accel_x"]);
+    expect(screen.getByRole("heading", { name: "Publisher → topic" })).toBeTruthy();
+    expect(screen.getByRole("button", { name: "usv.accelerometer.accel_x" })).toBeTruthy();
+    fireEvent.click(screen.getByRole("button", { name: "Delete this edge" }));
+    const pub = currentModel(store.getState().wb).publishers.find((p) => p.name === "pub_1");
+    expect(pub?.topics).not.toContain("usv.accelerometer.accel_x");
+  });
+
+  it("keeps a topic → subscriber edge read-only for a role that does not own subscribers", () => {
+    mount("designer", ["subscribes:topic:accelerometer.accel_x->sub:sub_1"]);
+    expect(screen.getByText(/subscribes to/)).toBeTruthy();
+    expect(screen.queryByRole("button", { name: "Delete this edge" })).toBeNull();
+    expect(screen.getByRole("note").textContent).toMatch(/Read-only in the designer view/);
+  });
+
+  it("opens the link's radio settings as a form for the designer", () => {
+    const store = mount("designer", ["link"]);
+    expect(screen.getByRole("heading", { name: /^Link/ })).toBeTruthy();
+    const fields = [...document.querySelectorAll("[data-field]")].map((e) => e.getAttribute("data-field"));
+    expect(fields.some((f) => f?.startsWith("radio"))).toBe(true);
+    expect(fields).toContain("transport");
+    const transport = screen.getByLabelText(/^transport/) as HTMLSelectElement;
+    fireEvent.change(transport, { target: { value: "udp" } });
+    expect(currentModel(store.getState().wb).link?.transport).toBe("udp");
+  });
 });

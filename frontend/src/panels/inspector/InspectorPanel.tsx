@@ -13,8 +13,9 @@ import { placeDiagnostics } from "../../core/diagnostics";
 import { canEdit } from "../../core/roles";
 import { useEditorStore, useModel, useRole, useSelection } from "../../editor/useEditor";
 import { useDiagnostics } from "../../editor/useFlowElements";
-import { removeSelection } from "../../editor/selectionActions";
+import { edgeEnds, removeSelection } from "../../editor/selectionActions";
 import { KIND_LABEL } from "../../editor/nodes/ElementNode";
+import { EdgeInspector } from "./EdgeInspector";
 import { FieldInput } from "./FieldInput";
 
 export default function InspectorPanel() {
@@ -30,6 +31,16 @@ export default function InspectorPanel() {
   const slot = useRef({ id: "", n: 0 });
 
   const nodeIds = selection.filter((id) => parseId(id));
+  const edgeIds = selection.filter((id) => edgeEnds(id));
+  if (nodeIds.length === 0 && edgeIds.length === 1) return <EdgeInspector id={edgeIds[0]} />;
+  if (nodeIds.length === 0 && edgeIds.length > 1) {
+    return (
+      <section className="inspector" aria-label="Inspector">
+        <h2>{edgeIds.length} edges selected</h2>
+        <button onClick={() => removeSelection(store)}>Delete selection</button>
+      </section>
+    );
+  }
   if (nodeIds.length === 0) {
     const problems = placed.filter((d) => d.severity === "error");
     return (

@@ -4,9 +4,13 @@
  *   the diagram has unsaved edits, the edited model itself (print), so the text
  *   follows the diagram as you draw — until you edit the text yourself: your
  *   text is then never overwritten until you apply it or reload;
- * - text → diagram: "Apply" parses the text with the backend (validate), shows
- *   syntax and validation errors as markers at line:col, and on success
- *   replaces the model (one undo step, the diagram layout kept).
+ * - text → diagram: "Apply" parses the text with the backend (validate): a
+ *   whole `.modd`, JSON or original `.collector` model pasted or dropped in is
+ *   read as what it is. Text with an error is never applied: each error is a
+ *   marker at its line:col, and the status only counts them. Valid text
+ *   replaces the model (one undo step, the diagram layout kept) when the
+ *   user's roles may change every part it changes (an admin: all), else it is
+ *   refused with the parts in the model's words and the ways out.
  */
 import { useCallback, useEffect, useRef, useState } from "react";
 import { EditorView, basicSetup } from "codemirror";
@@ -25,6 +29,18 @@ function toCm(text: string, diags: Diagnostic[]): CmDiagnostic[] {
     const { from, to } = rangeOf(text, d);
     return { from, to, severity: d.severity === "error" ? "error" : "warning", message: d.message };
   });
+}
+
+/** A JSON model starts with "{"; anything else is read as .modd (the original .collector too). */
+export function textFormat(text: string): "json" | "modd" {
+  return text.trimStart().startsWith("{") ? "json" : "modd";
+}
+
+/** The status of text not applied: how many errors and where (each is a marker in the text). */
+export function notAppliedWords(errors: readonly Diagnostic[]): string {
+  if (errors.length === 0) return "Not applied: the text does not describe a model.";
+  const where = errors.slice(0, 5).map((d) => (d.line ? `line ${d.line}:${d.col ?? 1}` : (d.pointer ?? "?"))).join(", ");
+  return `Not applied: ${errors.length} error${errors.length > 1 ? "s" : ""}, marked in the text (${where}${errors.length > 5 ? ", …" : ""}).`;
 }
 
 export default function TextPanel() {
@@ -112,19 +128,25 @@ export default function TextPanel() {
     const text = v.state.doc.toString();
     setStatus({ kind: "info", text: "Checking…" });
     try {
-      const r = await api.validate({ text, format: "modd" });
+      const r = await api.validate({ text, format: textFormat(text) });
       v.dispatch(setDiagnostics(v.state, toCm(text, r.diagnostics)));
       const errors = r.diagnostics.filter((d) => d.severity === "error");
-      if (!r.model) {
-        setStatus({ kind: "error", text: `${errors.length} error(s): not applied. ${errors.map((d) => `${d.line ?? "?"}:${d.col ?? "?"} ${d.message}`).join("; ")}` });
+      if (!r.model || errors.length) {
+        setStatus({ kind: "error", text: notAppliedWords(errors) });
         return;
       }
-      const layout = currentModel(store.getState().wb).layout;
-      store.dispatch({ type: "replaceModel", model: { ...r.model, layout: r.model.layout ?? layout } });
-      applied.current = currentModel(store.getState().wb);
+      const before = currentModel(store.getState().wb);
+      store.dispatch({ type: "replaceModel", model: { ...r.model, layout: r.model.layout ?? before.layout }, roles: store.getState().userRoles });
+      const after = currentModel(store.getState().wb);
+      if (after === before) {
+        // Said once, here beside the text (not also in the diagram's notice).
+        setStatus({ kind: "error", text: store.getState().wb.notice ?? "Not applied." });
+        store.dispatch({ type: "dismissNotice" });
+        return;
+      }
+      applied.current = after;
       markEdited(false);
-      const notice = store.getState().wb.notice;
-      setStatus(notice ? { kind: "error", text: notice } : { kind: errors.length ? "error" : "ok", text: errors.length ? `Applied with ${errors.length} error(s).` : "Applied to the diagram." });
+      setStatus({ kind: "ok", text: "Applied to the diagram." });
     } catch (e) {
       const body = (e as { body?: { diagnostics?: Diagnostic[] } }).body;
       if (body?.diagnostics) v.dispatch(setDiagnostics(v.state, toCm(text, body.diagnostics)));
