@@ -10,7 +10,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from modd_gen import generate
+from modd_gen import generate, py_client
 from modd_gen.targets.cpp_driver import client_sources
 from modd_gen.targets.subscribers import delivered_value_header, subscriber_client_sources
 from modd_model import load_model
@@ -39,7 +39,8 @@ def _models(scenarios_dir: Path) -> dict[str, Path]:
 @pytest.mark.parametrize("name", ["scenario1", "scenario2", "extended"])
 def test_output_matches_golden(scenarios_dir: Path, name: str) -> None:
     artifacts = generate(load_model(_models(scenarios_dir)[name]))
-    produced = {a.path: a.content for a in artifacts if not a.path.endswith(CARRIED)}
+    carried = CARRIED + tuple(f"python/{name}" for name in py_client.ORIGINALS)
+    produced = {a.path: a.content for a in artifacts if not a.path.endswith(carried)}
     root = GOLDEN / name
     if os.environ.get("MODD_UPDATE_GOLDEN"):
         shutil.rmtree(root, ignore_errors=True)
@@ -81,6 +82,13 @@ def test_carried_client_is_the_runtime_client(scenarios_dir: Path) -> None:
         == delivered_value_header()
         == (repo / "runtime/cpp/include/modd/client/delivered_value.gen.hpp").read_text("utf-8")
     )
+
+
+def test_carried_python_client_is_the_runtime_client(scenarios_dir: Path) -> None:
+    repo = Path(__file__).resolve().parents[2]
+    artifacts = {a.path: a.content for a in generate(load_model(scenarios_dir / "scenario1.modd"))}
+    for name, original in py_client.ORIGINALS.items():
+        assert artifacts[f"scientist/python/{name}"] == (repo / original).read_text("utf-8"), name
 
 
 def test_roles_partition_the_output(scenarios_dir: Path) -> None:

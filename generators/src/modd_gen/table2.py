@@ -23,7 +23,13 @@ from .generate import generate
 REPO = Path(__file__).resolve().parents[3]
 SCENARIOS = REPO / "metamodel" / "examples" / "scenarios"
 OUTPUT = REPO / "docs" / "generated-code.md"
-CARRIED = ("/modd/src/", "/modd/include/", "/ros2/modd_msgs/")
+CARRIED = (
+    "/modd/src/",
+    "/modd/include/",
+    "/ros2/modd_msgs/",
+    "/python/modd/",
+    "/python/modd_contracts/",
+)
 
 
 def code_lines(text: str) -> int:

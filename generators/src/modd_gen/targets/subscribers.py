@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from .. import py_client
 from ..artifact import Artifact, Ownership
 from ..context import Context
 from ..cpp_client import client, read
@@ -65,6 +66,10 @@ def artifacts(ctx: Context) -> list[Artifact]:
         if "endpoint" in sub:
             out += _cpp(ctx, sub)
     if ctx.model["subscribers"]:
+        out += [  # the client the stubs import, so that they run without the MoDD runtime
+            Artifact(f"scientist/python/{name}", py_client.read(name), "scientist")
+            for name in py_client.ORIGINALS
+        ]
         out.append(
             Artifact(
                 "scientist/README.md",

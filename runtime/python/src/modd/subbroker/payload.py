@@ -23,7 +23,7 @@ import json
 import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 from modd_contracts.types_gen import (
     DELIVERED_VALUE_REQUIRED,
@@ -31,7 +31,9 @@ from modd_contracts.types_gen import (
     DeliveredValueFields,
 )
 from modd_contracts.types_gen import DeliveredValue as DeliveredValueDoc
-from modd_plan.windows import Value
+
+if TYPE_CHECKING:  # a type only: the subscriber client carries this module without the planner
+    from modd_plan.windows import Value
 
 #: Version of the payload (the contract's ``x-version``); a reader rejects a higher one.
 PAYLOAD_VERSION = DELIVERED_VALUE_VERSION

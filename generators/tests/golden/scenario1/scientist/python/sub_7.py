@@ -4,8 +4,10 @@
 
 Prints each value as the base-station SubBroker delivers it on zenoh, or, with
 --dataframe SECONDS, collects the values of that many seconds into a pandas
-DataFrame and writes it as CSV. Needs the MoDD Python runtime (``import modd``)
-and a SubBroker reachable through zenoh (default tcp/127.0.0.1:7447;
+DataFrame and writes it as CSV. Needs Python 3.11 or later with eclipse-zenoh
+(pandas for --dataframe): the MoDD client it imports is carried beside it
+(the modd and modd_contracts folders); and a SubBroker
+reachable through zenoh (default tcp/127.0.0.1:7447;
 --connect or MODD_ZENOH_CONNECT to change it), which lets in only known users:
 give a viewer's credentials file at run time
 (--credentials FILE or MODD_ZENOH_CREDENTIALS; `make run` keeps it in
@@ -18,7 +20,10 @@ import argparse
 import os
 import sys
 
-import modd
+# The MoDD client carried beside this file (modd/, modd_contracts/): no install of the runtime.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+import modd  # noqa: E402
 
 DRONE = 'usv'
 SUBSCRIBER = 'sub_7'
