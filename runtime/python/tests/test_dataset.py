@@ -168,6 +168,15 @@ def test_positions_are_the_track_interpolated(archive: Path, tmp_path: Path) -> 
     assert ctd["lat"][~inside].isna().all() and (~inside).sum() == 10  # the last second
 
 
+def nc_series(ds: Any, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """A variable's samples in a MoDD NetCDF read with xarray (CF decoding): its
+    observations are the rows where it is not the fill value. (times in ns, values)"""
+    values = ds[name].values[0]
+    keep = ~np.isnan(values)
+    times = ds["time"].values[0].astype("datetime64[ns]").astype(np.int64)
+    return times[keep], values[keep]
+
+
 def test_netcdf_is_cf_and_holds_the_values(archive: Path, tmp_path: Path) -> None:
     import xarray as xr
 
@@ -176,15 +185,18 @@ def test_netcdf_is_cf_and_holds_the_values(archive: Path, tmp_path: Path) -> Non
     truth = official(archive)
     with xr.open_dataset(out) as ds:
         assert ds.attrs["featureType"] == "trajectory"
-        assert ds.attrs["Conventions"] == "CF-1.11, ACDD-1.3"
+        assert ds.attrs["Conventions"] == "CF-1.11, ACDD-1.3, IOOS-1.2"
+        assert ds["time"].dims == ds["ctd_temp"].dims == ("trajectory", "obs")
+        assert ds.sizes["obs"] == sum(len(v) for v in truth.values())
         temp = ds["ctd_temp"]
         assert temp.attrs["units"] == "degC"
         assert temp.attrs["standard_name"] == "sea_water_temperature"
+        assert temp.attrs["instrument"] == "instrument_ctd"
+        times, values = nc_series(ds, "ctd_temp")
         want = np.array([v for _, v in truth["boat.ctd.temp"]], dtype=np.float32)
-        assert np.array_equal(temp.values, want)
-        assert ds["ctd_count"].values.tolist() == [v for _, v in truth["boat.ctd.count"]]
-        assert ds["ctd_wet"].values.tolist() == [int(v) for _, v in truth["boat.ctd.wet"]]
-        times = ds["time_ctd_temp"].values.astype("int64")
+        assert np.array_equal(values, want)
+        assert nc_series(ds, "ctd_count")[1].tolist() == [v for _, v in truth["boat.ctd.count"]]
+        assert nc_series(ds, "ctd_wet")[1].tolist() == [int(v) for _, v in truth["boat.ctd.wet"]]
         assert np.abs(times - [t for t, _ in truth["boat.ctd.temp"]]).max() < 1000  # < 1 µs
 
 

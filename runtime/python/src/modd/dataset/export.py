@@ -157,13 +157,13 @@ def _check_batch(
         if plan.source == "received":
             strangers.add(b.topic)  # the subscribers chosen are known: say which were not
             s.notes.append(
-                f"{path}: subscriber {b.topic} left out (not chosen, or not in the "
+                f"{path.name}: subscriber {b.topic} left out (not chosen, or not in the "
                 "model: a dynamic subscription or another model revision)"
             )
         elif not b.topic.startswith(plan.drone + "."):
             strangers.add(b.topic)
             s.notes.append(
-                f"{path}: topic {b.topic} is not in the model (an archive of "
+                f"{path.name}: topic {b.topic} is not in the model (an archive of "
                 "another model or revision?): left out"
             )
         return None
@@ -264,7 +264,7 @@ def export(
             batcher.add(var, b)
         if state.cut_at is not None:
             summary.notes.append(
-                f"{path}: not closed (cut or still being written): exported up "
+                f"{path.name}: not closed (cut or still being written): exported up "
                 f"to offset {state.cut_at} of {size} bytes; "
                 "`modd archive recover` closes it"
             )

@@ -12,12 +12,14 @@ from __future__ import annotations
 import hashlib
 import json
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from modd_model.position import PlatformPosition, platform_position
 from modd_model.query import DEFAULT_VALUE_TYPE
 from modd_model.units import convertible, udunits
+
+from .metadata import Metadata
 
 
 class PlanError(ValueError):
@@ -38,6 +40,7 @@ class Variable:
     valid_max: float | None
     temperature: bool = False  # a temperature on a scale (CF units_metadata)
     cell_methods: str | None = None  # a received window's aggregation (CF §7.3)
+    sensor: str | None = None  # the model's sensor (the NetCDF instrument)
 
 
 @dataclass(frozen=True)
@@ -52,6 +55,10 @@ class ExportPlan:
     #: "archive": the samples archived on board; "received": the windows the
     #: subscribers received (the base-station record, received.py).
     source: str = "archive"
+    #: The model's sensors by name: their description (the NetCDF instruments).
+    sensors: dict[str, str] = field(default_factory=dict)
+    #: The scientist's discovery metadata (metadata.py); none declared when empty.
+    metadata: Metadata = field(default_factory=Metadata)
 
 
 def _safe(text: str) -> str:
@@ -76,6 +83,7 @@ def _variable(drone: str, sensor: dict[str, Any], var: dict[str, Any]) -> Variab
         valid_min=var.get("validMin"),
         valid_max=var.get("validMax"),
         temperature=convertible(var["unit"], "K"),
+        sensor=sensor["name"],
     )
 
 
@@ -112,4 +120,8 @@ def plan_export(
         model_revision(model),
         start_ns,
         end_ns,
+        sensors={
+            s["name"]: s.get("description") or s.get("kind") or s["name"]
+            for s in model["drone"]["sensors"]
+        },
     )
