@@ -365,3 +365,103 @@ def test_time_and_period_arguments() -> None:
         parse_time("yesterday")
     with pytest.raises(Exception, match="period"):
         parse_period("0")
+
+
+# -- every format x every option ------------------------------------------------
+
+FORMATS = ("netcdf", "parquet", "csv", "geojson", "gpx")
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+@pytest.mark.parametrize("period", [None, 0.05, 1.0, 2.5, 3600.0, 86_400.0])
+def test_every_format_with_every_period_gives_a_valid_file(
+    archive: Path, tmp_path: Path, fmt: str, period: float | None, dataset_valid: Any
+) -> None:
+    out = tmp_path / f"d.{fmt}"
+    summary = make_dataset([archive], _model(), fmt, out, resample_s=period)
+    rows = dataset_valid(fmt, out)
+    truth = official(archive)
+    times = {t for samples in truth.values() for t, _ in samples}
+    if fmt in ("geojson", "gpx"):  # one point per period whose centre has a position
+        # an hour's centre is far outside the 20 s track: no point, and the notes say so
+        assert rows >= 1 if (period or 1) < 20 else rows == 0
+        assert rows > 0 or any("have no position and were left out" in n for n in summary.notes)
+    elif period is None:
+        assert rows == summary.samples == sum(len(v) for v in truth.values())
+    else:  # one row per period with a sample
+        step = int(round(period * S))
+        assert rows == len({t // step for t in times})
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+@pytest.mark.parametrize("fixes", [0, 1, 2])
+def test_an_export_of_few_positions_is_a_valid_file(
+    tmp_path: Path, fmt: str, fixes: int, dataset_valid: Any
+) -> None:
+    msgs = [m for m in mission(3) if not m[0].startswith("boat.gps")]
+    msgs += [("boat.gps.lat", T0 + i * S, lat_at(i)) for i in range(fixes)]
+    msgs += [("boat.gps.lon", T0 + i * S, lon_at(i)) for i in range(fixes)]
+    path = tmp_path / "few.mcap"
+    write_archive(path, msgs)
+    out = tmp_path / f"few.{fmt}"
+    make_dataset([path], _model(), fmt, out)
+    rows = dataset_valid(fmt, out)
+    if fmt in ("geojson", "gpx"):  # 1 s points: one at each fix (the fix's period centre
+        assert rows <= fixes  # is inside the track only between two fixes)
+
+
+def test_metadata_reaches_every_format(archive: Path, tmp_path: Path) -> None:
+    import xarray as xr
+    from modd.dataset.metadata import parse_metadata
+
+    meta = parse_metadata(
+        {
+            "creator_name": "Ana Example",
+            "license": "CC-BY-4.0",
+            "naming_authority": "org.example.marine",
+            "platform": {"name": "Test boat", "id": "boat01", "vocabulary": "https://x.org/p"},
+            "instruments": {"ctd": {"make": "Sea-Bird", "model": "SBE 37", "serial_number": 7}},
+        },
+        "dataset.yaml",
+    )
+    nc, pa_out = tmp_path / "m.nc", tmp_path / "m.parquet"
+    summary = make_dataset([archive], _model(), "netcdf", nc, metadata=meta)
+    make_dataset([archive], _model(), "parquet", pa_out, metadata=meta)
+    with xr.open_dataset(nc) as ds:
+        assert ds.attrs["creator_name"] == "Ana Example"
+        assert ds.attrs["naming_authority"] == "org.example.marine"
+        assert ds["trajectory"].values[0] == b"boat01"
+        assert ds["instrument_ctd"].attrs["make_model"] == "Sea-Bird SBE 37"
+        assert ds["instrument_ctd"].attrs["serial_number"] == "7"
+        assert ds["platform"].attrs["platform_vocabulary"] == "https://x.org/p"
+    assert any("ask for creator_email" in n and "dataset.yaml" in n for n in summary.notes)
+    modd = json.loads(pq.read_schema(pa_out).metadata[b"modd"])
+    assert modd["metadata"]["license"] == "CC-BY-4.0"
+    assert modd["topics"]["boat.ctd.temp"]["standard_name"] == "sea_water_temperature"
+
+
+@pytest.mark.parametrize(
+    ("doc", "error"),
+    [
+        ({"creator": "x"}, "unknown key 'creator'"),
+        ({"naming_authority": "modd"}, "not a reversed DNS name"),
+        ({"platform": {"colour": "red"}}, "platform: unknown key 'colour'"),
+        ({"instruments": {"ctd": {"make": {"a": 1}}}}, "instruments.ctd.make: a text"),
+        (["a"], "a mapping"),
+    ],
+)
+def test_bad_metadata_is_a_located_error(doc: Any, error: str) -> None:
+    from modd.dataset.metadata import MetadataError, parse_metadata
+
+    with pytest.raises(MetadataError, match=error) as info:
+        parse_metadata(doc, "dataset.yaml")
+    assert str(info.value).startswith("dataset.yaml")
+
+
+def test_notes_name_files_not_server_paths(archive: Path, tmp_path: Path) -> None:
+    data = archive.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) // 2])
+    summary = make_dataset([cut], _model(), "csv", tmp_path / "c.csv")
+    assert summary.notes and not any(str(tmp_path) in n for n in summary.notes)
+    assert any(n.startswith("cut.mcap: not closed") for n in summary.notes)

@@ -271,3 +271,21 @@ def test_a_record_being_written_exports_up_to_its_last_chunk(tmp_path: Path) -> 
         rec.close()
     assert 1500 < summary.samples < 2000, summary.samples
     assert any("not closed" in n for n in summary.notes)
+
+
+@pytest.mark.parametrize("fmt", ["netcdf", "parquet", "csv", "geojson", "gpx"])
+@pytest.mark.parametrize("period", [None, 0.25, 1.0, 7.0, 86_400.0])
+def test_received_in_every_format_and_period(
+    record: Path, tmp_path: Path, fmt: str, period: float | None, dataset_valid: Any
+) -> None:
+    out = tmp_path / f"r.{fmt}"
+    summary = make_dataset([record], _model(), fmt, out, received=True, resample_s=period)
+    rows = dataset_valid(fmt, out)
+    want = _independent(record)
+    if fmt in ("geojson", "gpx"):
+        assert rows > 0 or (period or 1) > 20
+    elif period is None:
+        assert rows == summary.samples == sum(len(w) for w in want.values())
+    else:
+        step = int(round(period * S))
+        assert rows == len({t // step for w in want.values() for t, _ in w})
