@@ -77,8 +77,11 @@ def _data(value: Any) -> bytes:
     return b'{"value":' + text.encode() + b"}"
 
 
-def write_archive(path: Path, messages: Messages, chunk_size: int = 4096) -> None:
-    """An archive by the official writer, channels as the contract says."""
+def write_archive(
+    path: Path, messages: Messages, chunk_size: int = 4096, skew: dict[str, int] | None = None
+) -> None:
+    """An archive by the official writer, channels as the contract says; a
+    topic's publish time is its log time plus its ``skew`` (ns)."""
     channels = {
         c["type"]: c for c in json.loads((VECTORS / "archive_record.json").read_text())["channels"]
     }
@@ -93,7 +96,8 @@ def write_archive(path: Path, messages: Messages, chunk_size: int = 4096) -> Non
                     c["schema_name"], c["schema_encoding"], c["schema_data"].encode()
                 )
                 ids[topic] = w.register_channel(topic, c["message_encoding"], sid, c["metadata"])
-            w.add_message(ids[topic], log_time=t, data=_data(value), publish_time=t)
+            pub = t + (skew or {}).get(topic, 0)
+            w.add_message(ids[topic], log_time=t, data=_data(value), publish_time=pub)
         w.finish()  # type: ignore[no-untyped-call]
 
 
@@ -465,3 +469,77 @@ def test_notes_name_files_not_server_paths(archive: Path, tmp_path: Path) -> Non
     summary = make_dataset([cut], _model(), "csv", tmp_path / "c.csv")
     assert summary.notes and not any(str(tmp_path) in n for n in summary.notes)
     assert any(n.startswith("cut.mcap: not closed") for n in summary.notes)
+
+
+# -- both clocks ------------------------------------------------------------------
+
+#: The GNSS's own clock, 395 million seconds ahead of the companion computer's.
+SKEW = 395_000_000 * S
+
+
+def _two_clock_model() -> dict[str, Any]:
+    text = MODEL.replace(
+        "Sensor gps measures {",
+        'Sensor gps kind nmea on "/dev/ttyACM0" { clock = instrument; } measures {',
+    )
+    for v, f in (("lat(degree_north, float64)", "GGA.lat"), ("lon(degree_east, float64)", "GGA.lon")):
+        text = text.replace(f"{v};", f"{v} from sentence {f};")
+    text = text.replace('alt("m");', 'alt("m") from sentence GGA.altitude;')
+    result = load_text(text, "boat.modd")
+    assert result.ok and result.model is not None, [str(d) for d in result.diagnostics]
+    return result.model
+
+
+@pytest.mark.parametrize("fmt", ["netcdf", "parquet", "csv"])
+@pytest.mark.parametrize("clock", ["receive", "instrument"])
+def test_both_clocks_are_written_and_either_is_the_axis(
+    tmp_path: Path, fmt: str, clock: str
+) -> None:
+    path = tmp_path / "two.mcap"
+    gps = {t: SKEW for t in ("boat.gps.lat", "boat.gps.lon", "boat.gps.alt")}
+    write_archive(path, mission(5), skew=gps)
+    out = tmp_path / f"two.{fmt}"
+    make_dataset([path], _two_clock_model(), fmt, out, clock=clock)
+    other = "receive_time" if clock == "instrument" else "instrument_time"
+    truth: dict[str, list[tuple[int, int]]] = {}
+    with path.open("rb") as f:  # the oracle: both times as the official reader reads them
+        for _s, ch, m in make_reader(f).iter_messages(log_time_order=False):
+            truth.setdefault(ch.topic, []).append((m.log_time, m.publish_time))
+    for topic in ("boat.gps.lat", "boat.ctd.temp"):
+        instrument = topic.startswith("boat.gps")
+        log, pub = (np.array(x, dtype=np.int64) for x in zip(*truth[topic], strict=True))
+        axis = pub if clock == "instrument" and instrument else log
+        second = log if clock == "instrument" else (pub if instrument else None)
+        got_axis, got_other = _times_of(fmt, out, topic, other)
+        assert np.abs(got_axis - axis).max() < 1000, (topic, "axis")
+        if second is None:
+            assert np.isnan(got_other).all(), topic
+        else:
+            assert np.abs(got_other - second).max() < 1000, (topic, other)
+
+
+def _times_of(fmt: str, out: Path, topic: str, other: str) -> tuple[np.ndarray, np.ndarray]:
+    """(axis, other clock) of a topic's samples, in ns (float; NaN for none)."""
+    if fmt == "netcdf":
+        import netCDF4
+
+        with netCDF4.Dataset(out) as ds:
+            name = topic.split(".", 1)[1].replace(".", "_")
+            rows = ~np.ma.getmaskarray(ds[name][0, :])
+            axis = ds["time"][0, :][rows].astype(np.float64) * 1e9
+            return axis, np.ma.filled(ds[other][0, :][rows], np.nan) * 1e9
+    table = pq.read_table(out) if fmt == "parquet" else pcsv.read_csv(out)
+    frame = table.to_pandas()
+    rows = frame[frame["topic"] == topic]
+    axis = rows["time"].astype("int64").to_numpy(dtype=np.float64)
+    second = rows[other]
+    if second.isna().all():
+        return axis, np.full(len(rows), np.nan)
+    return axis, second.astype("int64").to_numpy(dtype=np.float64)
+
+
+def test_instrument_axis_without_an_instrument_clock_is_refused(
+    archive: Path, tmp_path: Path
+) -> None:
+    with pytest.raises(DatasetError, match="no sensor of the chosen topics declares clock"):
+        make_dataset([archive], _model(), "csv", tmp_path / "x.csv", clock="instrument")

@@ -88,6 +88,7 @@ def make_dataset(
     options: Options | None = None,
     received: bool = False,
     metadata: Metadata | None = None,
+    clock: str = "receive",
 ) -> Summary:
     """Writes the dataset to ``out``; raises DatasetError. With ``received``,
     ``paths`` are base-station records and the dataset holds the windows the
@@ -103,6 +104,12 @@ def make_dataset(
         )
         if metadata is not None:
             plan = replace(plan, metadata=metadata)
+        plan = replace(plan, clock=clock)
+        if clock == "instrument" and not plan.two_clocks:
+            raise PlanError(
+                "--time instrument: no sensor of the chosen topics declares "
+                "clock = instrument (the archive has their receive time only)"
+            )
         if fmt in ("geojson", "gpx") and plan.position is None:
             raise PlanError(
                 f"a {fmt} track needs the platform's position, and the model "

@@ -2,7 +2,7 @@
 
     modd dataset ARCHIVE_DIR_OR_FILES... --model MODEL --format netcdf|parquet|csv|geojson|gpx
                  -o OUT [--from T0 --to T1] [--topics T ...] [--resample PERIOD] [--received]
-                 [--metadata FILE]
+                 [--metadata FILE] [--time receive|instrument]
 
 With --received the files are base-station records (the SubBroker's
 ``record/<drone>/*.mcap``) and the dataset holds the windows the subscribers
@@ -66,6 +66,14 @@ def register(sub: Any) -> None:
         "--received",
         action="store_true",
         help="the files are base-station records: export the windows the subscribers received",
+    )
+    p.add_argument(
+        "--time",
+        dest="clock",
+        choices=("receive", "instrument"),
+        default="receive",
+        help="the time axis: the PubBroker's receive time (default), or the instrument's "
+        "time for sensors declaring clock = instrument; the other clock is written beside it",
     )
     p.add_argument(
         "--metadata",
@@ -139,6 +147,7 @@ def run(args: argparse.Namespace) -> int:
             progress=progress,
             received=args.received,
             metadata=metadata,
+            clock=args.clock,
         )
     except DatasetError as exc:
         print(f"modd dataset: {exc}", file=sys.stderr)

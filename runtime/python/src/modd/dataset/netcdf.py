@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .export import Summary
+from .export import NAT, Summary
 from .plan import ExportPlan, Variable
 from .position import Track
 from .record import dtype_of
@@ -158,6 +158,34 @@ def create(path: Path, plan: ExportPlan, variables: list[Variable]) -> Any:
     return ds
 
 
+def _second_time(ds: Any, plan: ExportPlan) -> None:
+    """The clock not on the axis (an auxiliary variable: CF allows one time axis)."""
+    v = ds.createVariable(
+        plan.other_clock, "f8", DIMS, fill_value=np.nan, chunksizes=(1, CHUNK), zlib=True
+    )
+    v.set_var_chunk_cache(size=CACHE_BYTES)
+    what = (
+        "the PubBroker's receive time of the sample"
+        if plan.clock == "instrument"
+        else "the instrument's time of the sample (sensors declaring clock = instrument)"
+    )
+    v.setncatts(
+        {
+            "units": TIME_UNITS,
+            "calendar": "standard",
+            "long_name": what,
+            "units_metadata": "leap_seconds: none",
+            "coverage_content_type": "auxiliaryInformation",
+        }
+    )
+    ds["time"].long_name = (
+        "time of the sample: the instrument's where its sensor declares clock = instrument, "
+        "else the PubBroker's receive time"
+        if plan.clock == "instrument"
+        else "time of the sample: the PubBroker's receive time"
+    )
+
+
 class NetcdfSink:
     """The samples, one observation each (rows appended as the archive is read)."""
 
@@ -165,9 +193,13 @@ class NetcdfSink:
         self.path = path
         self.ds: Any = None
         self.rows = 0
+        self.plan_other = ""
 
     def open(self, plan: ExportPlan, track: Track | None) -> None:
         self.ds = create(self.path, plan, list(plan.variables.values()))
+        self.plan_other = plan.other_clock
+        if plan.two_clocks:
+            _second_time(self.ds, plan)
 
     def write(
         self,
@@ -177,9 +209,12 @@ class NetcdfSink:
         lat: np.ndarray,
         lon: np.ndarray,
         alt: np.ndarray,
+        other: np.ndarray | None = None,
     ) -> None:
         sl = slice(self.rows, self.rows + len(time_ns))
         self.ds["time"][0, sl] = time_ns / 1e9
+        if other is not None:
+            self.ds[self.plan_other][0, sl] = np.where(other == NAT, np.nan, other / 1e9)
         self.ds["lat"][0, sl] = lat
         self.ds["lon"][0, sl] = lon
         self.ds["alt"][0, sl] = alt

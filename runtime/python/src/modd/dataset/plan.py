@@ -41,6 +41,9 @@ class Variable:
     temperature: bool = False  # a temperature on a scale (CF units_metadata)
     cell_methods: str | None = None  # a received window's aggregation (CF §7.3)
     sensor: str | None = None  # the model's sensor (the NetCDF instrument)
+    #: The sensor declares ``clock = instrument``: the archive's publish time is the
+    #: instrument's (the log time stays the PubBroker's receive time).
+    instrument_clock: bool = False
 
 
 @dataclass(frozen=True)
@@ -59,6 +62,19 @@ class ExportPlan:
     sensors: dict[str, str] = field(default_factory=dict)
     #: The scientist's discovery metadata (metadata.py); none declared when empty.
     metadata: Metadata = field(default_factory=Metadata)
+    #: The primary time axis: "receive" (the PubBroker's receive time, every topic) or
+    #: "instrument" (the instrument's time for the topics of sensors declaring it).
+    clock: str = "receive"
+
+    @property
+    def two_clocks(self) -> bool:
+        """A topic of the export declares the instrument's clock: both times are written."""
+        return any(v.instrument_clock for v in self.variables.values())
+
+    @property
+    def other_clock(self) -> str:
+        """The name of the second time (column, variable): the clock not on the axis."""
+        return "receive_time" if self.clock == "instrument" else "instrument_time"
 
 
 def _safe(text: str) -> str:
@@ -84,6 +100,7 @@ def _variable(drone: str, sensor: dict[str, Any], var: dict[str, Any]) -> Variab
         valid_max=var.get("validMax"),
         temperature=convertible(var["unit"], "K"),
         sensor=sensor["name"],
+        instrument_clock=sensor.get("clock") == "instrument",
     )
 
 

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .export import Summary
+from .export import NAT, Summary
 from .plan import ExportPlan, Variable
 from .position import Track
 from .resample import WideTable
@@ -27,11 +27,17 @@ from .tablemeta import iso_times, schema_metadata, wkb_points, with_field_metada
 ROWS_PER_GROUP = 1 << 20
 
 
-def _long_schema(fmt: str) -> Any:
+def _time_type(fmt: str) -> Any:
+    import pyarrow as pa
+
+    return pa.timestamp("ns", tz="UTC") if fmt == "parquet" else pa.string()
+
+
+def _long_schema(fmt: str, other: str | None = None) -> Any:
     import pyarrow as pa
 
     fields = [
-        ("time", pa.timestamp("ns", tz="UTC") if fmt == "parquet" else pa.string()),
+        ("time", _time_type(fmt)),
         ("topic", pa.dictionary(pa.int32(), pa.string())),
         ("value", pa.float64()),
         ("unit", pa.dictionary(pa.int32(), pa.string())),
@@ -39,9 +45,21 @@ def _long_schema(fmt: str) -> Any:
         ("lon", pa.float64()),
         ("alt", pa.float64()),
     ]
+    if other is not None:  # the second clock (docs/user-guide/datasets.md, "Both clocks")
+        fields.append((other, _time_type(fmt)))
     if fmt == "parquet":
         fields.append(("geometry", pa.binary()))
     return pa.schema(fields)
+
+
+def _times(time_ns: np.ndarray, csv: bool) -> Any:
+    """A time column: ISO 8601 text for CSV, UTC ns for Parquet; NAT is null."""
+    import pyarrow as pa
+
+    missing = time_ns == NAT
+    if csv:
+        return pa.array(iso_times(time_ns), mask=missing if missing.any() else None)
+    return pa.array(time_ns, pa.timestamp("ns", tz="UTC"), mask=missing if missing.any() else None)
 
 
 class TableSink:
@@ -58,7 +76,7 @@ class TableSink:
         import pyarrow.csv as pcsv
         import pyarrow.parquet as pq
 
-        self.schema = _long_schema(self.fmt)
+        self.schema = _long_schema(self.fmt, plan.other_clock if plan.two_clocks else None)
         if self.fmt == "parquet":
             self.schema = self.schema.with_metadata(schema_metadata(plan, long_form=True))
             self.writer = pq.ParquetWriter(self.path, self.schema, compression="zstd")
@@ -73,6 +91,7 @@ class TableSink:
         lat: np.ndarray,
         lon: np.ndarray,
         alt: np.ndarray,
+        other: np.ndarray | None = None,
     ) -> None:
         import pyarrow as pa
 
@@ -81,7 +100,7 @@ class TableSink:
         unit = pa.DictionaryArray.from_arrays(np.zeros(n, np.int32), pa.array([var.unit]))
         csv = self.fmt == "csv"
         columns = [
-            pa.array(iso_times(time_ns)) if csv else pa.array(time_ns, pa.timestamp("ns", tz="UTC")),
+            _times(time_ns, csv),
             topic,
             pa.array(value.astype(np.float64), from_pandas=csv),
             unit,
@@ -89,6 +108,8 @@ class TableSink:
             pa.array(lon, from_pandas=csv),
             pa.array(alt, from_pandas=csv),
         ]
+        if other is not None:
+            columns.append(_times(other, csv))
         if not csv:
             columns.append(wkb_points(lon, lat))
         self.parts.append(pa.record_batch(columns, schema=self.schema))
@@ -121,9 +142,7 @@ def write_wide(path: Path, fmt: str, plan: ExportPlan, table: WideTable) -> None
 
     csv = fmt == "csv"
     cols: dict[str, Any] = {
-        "time": pa.array(iso_times(table.time_ns))
-        if csv
-        else pa.array(table.time_ns, pa.timestamp("ns", tz="UTC")),
+        "time": _times(table.time_ns, csv),
         "lat": pa.array(table.lat, from_pandas=csv),
         "lon": pa.array(table.lon, from_pandas=csv),
         "alt": pa.array(table.alt, from_pandas=csv),
