@@ -157,7 +157,9 @@ def _assert_compliant(failed: dict[str, list[tuple[str, Any]]], unnamed: set[str
     assert failed["cf:1.11"] == []
     # ACDD rates standard_name "highly recommended": the CF table has none for a
     # platform's linear acceleration, so the demo's three accelerometer axes go without.
-    missing = {re.sub(r'.*variable "(\w+)".*', r"\1", name): msgs for name, msgs in failed["acdd:1.3"]}
+    missing = {
+        re.sub(r'.*variable "(\w+)".*', r"\1", name): msgs for name, msgs in failed["acdd:1.3"]
+    }
     assert set(missing) <= unnamed and all(m == ["standard_name"] for m in missing.values())
     # IOOS: the NDBC/GTS ingest check always fails, by design, to list the variables that
     # qualify (compliance-checker issue 759); nothing else may.

@@ -448,7 +448,7 @@ def test_metadata_reaches_every_format(archive: Path, tmp_path: Path) -> None:
     ("doc", "error"),
     [
         ({"creator": "x"}, "unknown key 'creator'"),
-        ({"naming_authority": "modd"}, "not a reversed DNS name"),
+        ({"naming_authority": "modd"}, "not reversed DNS"),
         ({"platform": {"colour": "red"}}, "platform: unknown key 'colour'"),
         ({"instruments": {"ctd": {"make": {"a": 1}}}}, "instruments.ctd.make: a text"),
         (["a"], "a mapping"),
@@ -482,7 +482,10 @@ def _two_clock_model() -> dict[str, Any]:
         "Sensor gps measures {",
         'Sensor gps kind nmea on "/dev/ttyACM0" { clock = instrument; } measures {',
     )
-    for v, f in (("lat(degree_north, float64)", "GGA.lat"), ("lon(degree_east, float64)", "GGA.lon")):
+    for v, f in (
+        ("lat(degree_north, float64)", "GGA.lat"),
+        ("lon(degree_east, float64)", "GGA.lon"),
+    ):
         text = text.replace(f"{v};", f"{v} from sentence {f};")
     text = text.replace('alt("m");', 'alt("m") from sentence GGA.altitude;')
     result = load_text(text, "boat.modd")

@@ -226,8 +226,8 @@ class _Batcher:
             self.emit(var, parts[0])
             return
         time_ns = np.concatenate([p.time_ns for p in parts])
-        pubs = [p.publish_ns for p in parts]
-        pub = None if any(p is None for p in pubs) else np.concatenate(pubs)  # type: ignore[arg-type]
+        pubs = [p.publish_ns for p in parts if p.publish_ns is not None]
+        pub = np.concatenate(pubs) if len(pubs) == len(parts) else None
         value = np.concatenate([p.value for p in parts])
         self.emit(var, Batch(topic, parts[0].value_type, time_ns, value, pub))
 

@@ -13,10 +13,10 @@ names).
 >>> m = parse_metadata({"creator_name": "Ana", "keywords": ["ocean", "ctd"]}, "m.yaml")
 >>> m.attributes["keywords"]
 'ocean, ctd'
->>> parse_metadata({"naming_authority": "modd"}, "m.yaml")
+>>> parse_metadata({"naming_authority": "modd"}, "m")
 Traceback (most recent call last):
 ...
-modd.dataset.metadata.MetadataError: m.yaml: naming_authority 'modd' is not a reversed DNS name (org.example.data)
+modd.dataset.metadata.MetadataError: m: naming_authority 'modd' is not reversed DNS (org.example)
 """
 
 from __future__ import annotations
@@ -138,7 +138,7 @@ def parse_metadata(doc: Any, source: str) -> Metadata:
     authority = attrs.get("naming_authority")
     if authority is not None and not _DNS.match(authority):
         raise MetadataError(
-            f"{source}: naming_authority {authority!r} is not a reversed DNS name (org.example.data)"
+            f"{source}: naming_authority {authority!r} is not reversed DNS (org.example)"
         )
     platform = _table(doc.get("platform") or {}, PLATFORM_KEYS, f"{source}: platform")
     sensors = doc.get("instruments") or {}

@@ -28,10 +28,10 @@ from typing import Any
 import numpy as np
 
 from .export import NAT, Summary
+from .ncmeta import coverage, global_attributes, instrument_variables, platform_variable
 from .plan import ExportPlan, Variable
 from .position import Track
 from .record import dtype_of
-from .ncmeta import coverage, global_attributes, instrument_variables, platform_variable
 from .resample import WideTable
 
 _INT_FILL = {np.dtype(np.int64): np.int64(-(2**63)), np.dtype(np.int8): np.int8(-127)}
@@ -127,8 +127,6 @@ def _data_var(ds: Any, var: Variable, instruments: dict[str, str]) -> None:
     if var.valid_max is not None:
         attrs["valid_max"] = np.array(var.valid_max, dtype=dtype)
     v.setncatts(attrs)
-
-
 
 
 def _trajectory(ds: Any, plan: ExportPlan) -> None:

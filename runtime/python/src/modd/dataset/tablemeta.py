@@ -63,7 +63,11 @@ def _geo(bbox: list[float] | None = None) -> dict[str, Any]:
     column: dict[str, Any] = {"encoding": "WKB", "geometry_types": ["Point"]}
     if bbox is not None:
         column["bbox"] = bbox
-    return {"version": GEOPARQUET_VERSION, "primary_column": "geometry", "columns": {"geometry": column}}
+    return {
+        "version": GEOPARQUET_VERSION,
+        "primary_column": "geometry",
+        "columns": {"geometry": column},
+    }
 
 
 def schema_metadata(

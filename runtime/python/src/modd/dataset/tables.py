@@ -22,7 +22,7 @@ from .export import NAT, Summary
 from .plan import ExportPlan, Variable
 from .position import Track
 from .resample import WideTable
-from .tablemeta import iso_times, schema_metadata, wkb_points, with_field_metadata
+from .tablemeta import iso_times, schema_metadata, with_field_metadata, wkb_points
 
 ROWS_PER_GROUP = 1 << 20
 
