@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
+import pyarrow.csv as pcsv
 import pyarrow.parquet as pq
 import pytest
 from mcap.reader import make_reader
@@ -219,7 +219,8 @@ def test_resampled_netcdf_passes_the_checkers(
         path = tmp_path / f"r.{fmt}"
         done = _modd_dataset(archive, model, fmt, path, "--resample", "2")
         assert done.returncode == 0, done.stderr
-        tables[fmt] = pq.read_table(path).to_pandas() if fmt == "parquet" else pd.read_csv(path)
+        table = pq.read_table(path) if fmt == "parquet" else pcsv.read_csv(path)
+        tables[fmt] = table.to_pandas()
     import xarray as xr
 
     with xr.open_dataset(out) as ds:
@@ -264,7 +265,7 @@ def test_the_received_windows_are_the_records(
                 truth.setdefault(ch.topic.rsplit("/", 1)[1], []).append((d["end_ns"], v))
     assert len(truth) == 14 and all(len(v) >= 2 for v in truth.values())
     table = pq.read_table(received["parquet"]).to_pandas()
-    csv = pd.read_csv(received["csv"])
+    csv = pcsv.read_csv(received["csv"]).to_pandas()
     with xr.open_dataset(received["netcdf"]) as ds:
         for name, windows in truth.items():
             rows = table[table["topic"] == name]
@@ -282,13 +283,13 @@ def test_the_received_windows_are_the_records(
 def _nc_values(ds: Any, name: str) -> np.ndarray:
     """A variable's values in a MoDD NetCDF (xarray, CF decoding): the rows where it
     is not the fill value (a row is one sample of one variable)."""
-    values: np.ndarray = ds[name].values[0]
-    return values[~np.isnan(values)]
+    values = np.asarray(ds[name].values[0])
+    return np.asarray(values[~np.isnan(values)])
 
 
 def _nc_times(ds: Any, name: str) -> np.ndarray:
-    times: np.ndarray = ds["time"].values[0].astype("datetime64[ns]").astype("int64")
-    return times[~np.isnan(ds[name].values[0])]
+    times = np.asarray(ds["time"].values[0]).astype("datetime64[ns]").astype("int64")
+    return np.asarray(times[~np.isnan(ds[name].values[0])])
 
 
 def test_every_value_is_the_archives(
@@ -298,7 +299,7 @@ def test_every_value_is_the_archives(
 
     truth = _official(mission[0])
     table = pq.read_table(exports["parquet"]).to_pandas()
-    csv = pd.read_csv(exports["csv"])
+    csv = pcsv.read_csv(exports["csv"]).to_pandas()
     assert len(table) == len(csv) == sum(len(v) for v in truth.values())
     with xr.open_dataset(exports["netcdf"]) as ds:  # CF decoding: times become datetimes
         for topic, samples in truth.items():

@@ -49,7 +49,7 @@ def _parquet(path: Path) -> int:
     placed = np.isfinite(lon)
     assert len(points) == placed.sum()
     assert np.allclose(shapely.get_x(points), lon[placed])
-    return table.num_rows
+    return int(table.num_rows)
 
 
 def _csv(path: Path) -> int:

@@ -27,50 +27,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-#: The global attributes a metadata file may give (ACDD 1.3 and IOOS 1.2 names).
-GLOBAL_KEYS = (
-    "title",
-    "summary",
-    "keywords",
-    "keywords_vocabulary",
-    "id",
-    "naming_authority",
-    "institution",
-    "license",
-    "project",
-    "program",
-    "acknowledgement",
-    "references",
-    "comment",
-    "infoUrl",
-    "creator_name",
-    "creator_email",
-    "creator_url",
-    "creator_type",
-    "creator_institution",
-    "creator_country",
-    "creator_sector",
-    "publisher_name",
-    "publisher_email",
-    "publisher_url",
-    "publisher_type",
-    "publisher_institution",
-    "publisher_country",
-    "contributor_name",
-    "contributor_role",
-    "contributor_email",
-    "contributor_url",
-    "contributor_role_vocabulary",
-    "platform_vocabulary",
-    "platform_id",
-    "platform_name",
-    "instrument_vocabulary",
-    "sea_name",
-)
-#: The platform variable's attributes (IOOS 1.2: ``platform`` names it).
-PLATFORM_KEYS = ("name", "id", "type", "ioos_code", "wmo_code", "vocabulary", "comment")
-#: An instrument's attributes (per sensor of the model).
-INSTRUMENT_KEYS = ("make", "model", "serial_number", "vocabulary", "comment", "calibration_date")
 #: Asked for by ACDD 1.3 / IOOS 1.2 and not known to MoDD: named in the notes when absent.
 ASKED = (
     "creator_name",
@@ -91,6 +47,33 @@ ASKED = (
     "contributor_name",
     "contributor_role",
 )
+#: The global attributes a metadata file may give (ACDD 1.3 and IOOS 1.2 names).
+GLOBAL_KEYS = (
+    "title",
+    "summary",
+    "keywords",
+    "keywords_vocabulary",
+    "id",
+    "project",
+    "program",
+    "acknowledgement",
+    "references",
+    "comment",
+    "creator_type",
+    "publisher_type",
+    "contributor_email",
+    "contributor_url",
+    "contributor_role_vocabulary",
+    "platform_vocabulary",
+    "platform_id",
+    "platform_name",
+    "instrument_vocabulary",
+    "sea_name",
+) + ASKED
+#: The platform variable's attributes (IOOS 1.2: ``platform`` names it).
+PLATFORM_KEYS = ("name", "id", "type", "ioos_code", "wmo_code", "vocabulary", "comment")
+#: An instrument's attributes (per sensor of the model).
+INSTRUMENT_KEYS = ("make", "model", "serial_number", "vocabulary", "comment", "calibration_date")
 _DNS = re.compile(r"^[a-z0-9-]+(\.[a-z0-9-]+)+$", re.IGNORECASE)
 
 
