@@ -55,7 +55,13 @@ def mission(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, float
     tmp = tmp_path_factory.mktemp("mission")
     model = tmp / "demo.modd"
     text = (ROOT / "metamodel" / "examples" / "demo.modd").read_text()
-    model.write_text(text.replace('"127.0.0.1":7171', f'"127.0.0.1":{free_port()}'))
+    text = text.replace('"127.0.0.1":7171', f'"127.0.0.1":{free_port()}')
+    # the GNSS stamps its samples with its own clock (its ZDA/RMC time): both clocks
+    text = text.replace(
+        '"/dev/ttyACM0" { baud = 9600; }', '"/dev/ttyACM0" { baud = 9600; clock = instrument; }'
+    )
+    assert "clock = instrument" in text
+    model.write_text(text)
     run = tmp / "run"
     up = subprocess.Popen(
         [
@@ -343,5 +349,25 @@ def test_tracks_open_as_geojson_and_gpx(exports: dict[str, Path]) -> None:
     assert temp is not None and temp.get("unit") == "degC"
     assert (
         exports["csv"].read_text().splitlines()[0]
-        == '"time","topic","value","unit","lat","lon","alt"'
+        == '"time","topic","value","unit","lat","lon","alt","instrument_time"'
     )
+
+
+def test_the_instruments_clock_is_kept_beside_the_receive_time(
+    mission: tuple[Path, Path, float], exports: dict[str, Path]
+) -> None:
+    """The GNSS declares clock = instrument: its samples carry the time the reader
+    took from its ZDA/RMC sentences (the archive's publish time, read here by the
+    official reader), the other topics none."""
+    truth: dict[str, list[int]] = {}
+    for path in sorted(mission[0].glob("*.mcap")):
+        with path.open("rb") as f:
+            for _s, ch, m in make_reader(f).iter_messages(log_time_order=False):
+                truth.setdefault(ch.topic, []).append(m.publish_time)
+    table = pq.read_table(exports["parquet"]).to_pandas()
+    for topic in truth:
+        rows = table[table["topic"] == topic]["instrument_time"]
+        if topic.startswith("usv.gnss."):
+            assert rows.astype("int64").tolist() == truth[topic], topic
+        else:
+            assert rows.isna().all(), topic

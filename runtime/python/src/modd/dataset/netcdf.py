@@ -170,6 +170,7 @@ def _second_time(ds: Any, plan: ExportPlan) -> None:
     v.setncatts(
         {
             "units": TIME_UNITS,
+            "standard_name": "time",
             "calendar": "standard",
             "long_name": what,
             "units_metadata": "leap_seconds: none",
