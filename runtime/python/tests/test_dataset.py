@@ -546,3 +546,26 @@ def test_instrument_axis_without_an_instrument_clock_is_refused(
 ) -> None:
     with pytest.raises(DatasetError, match="no sensor of the chosen topics declares clock"):
         make_dataset([archive], _model(), "csv", tmp_path / "x.csv", clock="instrument")
+
+
+def test_the_projects_dataset_yaml_beside_the_model_is_read(
+    archive: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import argparse
+
+    import netCDF4
+    from modd.dataset.cli import register
+
+    (tmp_path / "boat.modd").write_text(MODEL)
+    (tmp_path / "dataset.yaml").write_text("creator_name: Ana Example\nlicense: CC-BY-4.0\n")
+    parser = argparse.ArgumentParser()
+    register(parser.add_subparsers())
+    out = tmp_path / "p.nc"
+    argv = ["dataset", str(archive), "--model", str(tmp_path / "boat.modd")]
+    args = parser.parse_args([*argv, "--format", "netcdf", "-o", str(out)])
+    assert args.func(args) == 0
+    with netCDF4.Dataset(out) as ds:
+        assert ds.creator_name == "Ana Example" and ds.license == "CC-BY-4.0"
+    (tmp_path / "dataset.yaml").write_text("license: [CC-BY-4.0, {a: 1}]\n")
+    assert args.func(args) == 1
+    assert "dataset.yaml: license: a text or a list of texts" in capsys.readouterr().err

@@ -103,13 +103,16 @@ def _text(value: Any, where: str) -> str:
     raise MetadataError(f"{where}: a text or a list of texts, not {type(value).__name__}")
 
 
-def _table(doc: Any, keys: tuple[str, ...], where: str) -> dict[str, str]:
+def _table(doc: Any, keys: tuple[str, ...], source: str, path: str = "") -> dict[str, str]:
+    """The texts of a mapping; errors say ``SOURCE: PATH: ...`` (``PATH.KEY`` for a value)."""
+    where = f"{source}: {path}" if path else source
     if not isinstance(doc, dict):
         raise MetadataError(f"{where}: a mapping of {', '.join(keys)}")
     unknown = sorted(str(k) for k in doc if k not in keys)
     if unknown:
         raise MetadataError(f"{where}: unknown key {unknown[0]!r}; one of {', '.join(keys)}")
-    return {k: _text(v, f"{where}.{k}") for k, v in doc.items() if v is not None}
+    dot = f"{path}." if path else ""
+    return {k: _text(v, f"{source}: {dot}{k}") for k, v in doc.items() if v is not None}
 
 
 def parse_metadata(doc: Any, source: str) -> Metadata:
@@ -123,12 +126,12 @@ def parse_metadata(doc: Any, source: str) -> Metadata:
         raise MetadataError(
             f"{source}: naming_authority {authority!r} is not reversed DNS (org.example)"
         )
-    platform = _table(doc.get("platform") or {}, PLATFORM_KEYS, f"{source}: platform")
+    platform = _table(doc.get("platform") or {}, PLATFORM_KEYS, source, "platform")
     sensors = doc.get("instruments") or {}
     if not isinstance(sensors, dict):
         raise MetadataError(f"{source}: instruments: a mapping of sensor names to instruments")
     instruments = {
-        str(name): _table(inst, INSTRUMENT_KEYS, f"{source}: instruments.{name}")
+        str(name): _table(inst, INSTRUMENT_KEYS, source, f"instruments.{name}")
         for name, inst in sensors.items()
     }
     return Metadata(attrs, platform, instruments, Path(source).name)

@@ -3,7 +3,7 @@
 revision, the dataset metadata; ``geo``: GeoParquet 1.1), the positions as
 WKB points, and ISO 8601 times for CSV.
 
->>> iso_times(np.array([1_790_000_000_000_000_001]))[0]
+>>> str(iso_times(np.array([1_790_000_000_000_000_001]))[0])
 '2026-09-21T14:13:20.000000001Z'
 >>> bytes(wkb_points(np.array([-3.0]), np.array([47.0]))[0].as_py()).hex()[:10]
 '0101000000'
