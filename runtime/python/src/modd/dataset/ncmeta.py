@@ -73,7 +73,8 @@ def global_attributes(plan: ExportPlan) -> dict[str, Any]:
         "ncei_template_version": NCEI_TEMPLATE,
         **_what(plan),
         "keywords": ", ".join(["drone", "trajectory", "in situ", *names]),
-        "platform": "platform",
+        # ACDD/IOOS: the platform's type from platform_vocabulary (one word), else the drone
+        "platform": "_".join((plan.metadata.platform.get("type") or plan.drone).split()),
         "platform_name": plan.metadata.platform.get("name") or plan.description,
         "history": f"{now} modd dataset (MoDD {modd_version()})",
         "date_created": now,
