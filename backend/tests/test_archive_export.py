@@ -5,6 +5,7 @@ keeps answering."""
 
 from __future__ import annotations
 
+import datetime as dt
 import io
 from collections.abc import Iterator
 from pathlib import Path
@@ -59,7 +60,11 @@ def test_export_parquet_is_every_sample(
     r = c.post(URL, json={"model": _model(), "format": "parquet"}, headers=h)
     assert r.status_code == 200, r.text
     assert r.headers["content-type"] == "application/vnd.apache.parquet"
-    assert 'filename="usv-dataset.parquet"' in r.headers["content-disposition"]
+    span = "-".join(
+        dt.datetime.fromtimestamp(t // 10**9, dt.UTC).strftime("%Y%m%dT%H%M%SZ")
+        for t in (T0, T0 + 499 * STEP)
+    )
+    assert f'filename="usv-dataset-{span}.parquet"' in r.headers["content-disposition"]
     assert "no position" in r.headers["x-modd-notes"]
     (tmp_path / "d.parquet").write_bytes(r.content)
     table = pq.read_table(tmp_path / "d.parquet").to_pandas()
@@ -84,8 +89,28 @@ def test_export_netcdf_of_a_range(client: tuple[TestClient, Headers, Path], tmp_
     assert r.status_code == 200, r.text
     (tmp_path / "d.nc").write_bytes(r.content)
     with xr.open_dataset(tmp_path / "d.nc") as ds:
-        assert ds["accelerometer_accel_z"].values.tolist() == [-float(i) for i in range(100, 200)]
+        assert ds["accelerometer_accel_z"].values[0].tolist() == [
+            -float(i) for i in range(100, 200)
+        ]
         assert "accelerometer_accel_x" not in ds
+
+
+def test_export_carries_the_dataset_metadata(
+    client: tuple[TestClient, Headers, Path], tmp_path: Path
+) -> None:
+    import xarray as xr
+
+    c, h, _ = client
+    meta = {"creator_name": "Ana Example", "platform": {"id": "usv01"}}
+    body = {"model": _model(), "format": "netcdf", "metadata": meta}
+    r = c.post(URL, json=body, headers=h)
+    assert r.status_code == 200, r.text
+    (tmp_path / "m.nc").write_bytes(r.content)
+    with xr.open_dataset(tmp_path / "m.nc") as ds:
+        assert ds.attrs["creator_name"] == "Ana Example"
+        assert ds["trajectory"].values[0] == b"usv01"
+    bad = c.post(URL, json=body | {"metadata": {"naming_authority": "modd"}}, headers=h)
+    assert bad.status_code == 422 and "not reversed DNS" in bad.text, bad.text
 
 
 def test_bad_requests_get_a_clear_4xx(
@@ -163,7 +188,7 @@ def test_export_the_windows_the_subscribers_received(tmp_path: Path) -> None:
         body = {"model": result.model, "format": "parquet", "source": "received"}
         r = c.post(URL, json=body, headers=h)
         assert r.status_code == 200, r.text
-        assert 'filename="usv-received.parquet"' in r.headers["content-disposition"]
+        assert 'filename="usv-received-2' in r.headers["content-disposition"]
         assert "1 empty windows" in r.headers["x-modd-notes"]
         none = c.post(URL, json=body | {"source": "archive"}, headers=h)
         assert none.status_code == 404

@@ -100,11 +100,19 @@ def dataset_file(
     resample_s: float | None,
     max_samples: int,
     received: bool = False,
-) -> list[str]:
+    metadata: dict[str, Any] | None = None,
+) -> tuple[list[str], int | None, int | None]:
     """``modd dataset`` (``--received`` with ``received``) into ``out`` (in a
-    worker); its notes. Raises DatasetError."""
-    from modd.dataset.build import make_dataset
+    worker), with the dataset ``metadata`` (the object of a ``dataset.yaml``);
+    its notes and the time span written (ns). Raises DatasetError."""
+    from modd.dataset.build import DatasetError, make_dataset
     from modd.dataset.export import Options
+    from modd.dataset.metadata import MetadataError, parse_metadata
+
+    try:
+        meta = parse_metadata(metadata, "metadata") if metadata is not None else None
+    except MetadataError as exc:
+        raise DatasetError(str(exc)) from None
 
     summary = make_dataset(
         paths,
@@ -117,5 +125,6 @@ def dataset_file(
         resample_s=resample_s,
         options=Options(max_samples=max_samples),
         received=received,
+        metadata=meta,
     )
-    return summary.notes
+    return summary.notes, summary.start_ns, summary.end_ns

@@ -77,8 +77,11 @@ def _data(value: Any) -> bytes:
     return b'{"value":' + text.encode() + b"}"
 
 
-def write_archive(path: Path, messages: Messages, chunk_size: int = 4096) -> None:
-    """An archive by the official writer, channels as the contract says."""
+def write_archive(
+    path: Path, messages: Messages, chunk_size: int = 4096, skew: dict[str, int] | None = None
+) -> None:
+    """An archive by the official writer, channels as the contract says; a
+    topic's publish time is its log time plus its ``skew`` (ns)."""
     channels = {
         c["type"]: c for c in json.loads((VECTORS / "archive_record.json").read_text())["channels"]
     }
@@ -93,7 +96,8 @@ def write_archive(path: Path, messages: Messages, chunk_size: int = 4096) -> Non
                     c["schema_name"], c["schema_encoding"], c["schema_data"].encode()
                 )
                 ids[topic] = w.register_channel(topic, c["message_encoding"], sid, c["metadata"])
-            w.add_message(ids[topic], log_time=t, data=_data(value), publish_time=t)
+            pub = t + (skew or {}).get(topic, 0)
+            w.add_message(ids[topic], log_time=t, data=_data(value), publish_time=pub)
         w.finish()  # type: ignore[no-untyped-call]
 
 
@@ -168,6 +172,15 @@ def test_positions_are_the_track_interpolated(archive: Path, tmp_path: Path) -> 
     assert ctd["lat"][~inside].isna().all() and (~inside).sum() == 10  # the last second
 
 
+def nc_series(ds: Any, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """A variable's samples in a MoDD NetCDF read with xarray (CF decoding): its
+    observations are the rows where it is not the fill value. (times in ns, values)"""
+    values = ds[name].values[0]
+    keep = ~np.isnan(values)
+    times = ds["time"].values[0].astype("datetime64[ns]").astype(np.int64)
+    return times[keep], values[keep]
+
+
 def test_netcdf_is_cf_and_holds_the_values(archive: Path, tmp_path: Path) -> None:
     import xarray as xr
 
@@ -176,15 +189,18 @@ def test_netcdf_is_cf_and_holds_the_values(archive: Path, tmp_path: Path) -> Non
     truth = official(archive)
     with xr.open_dataset(out) as ds:
         assert ds.attrs["featureType"] == "trajectory"
-        assert ds.attrs["Conventions"] == "CF-1.11, ACDD-1.3"
+        assert ds.attrs["Conventions"] == "CF-1.11, ACDD-1.3, IOOS-1.2"
+        assert ds["time"].dims == ds["ctd_temp"].dims == ("trajectory", "obs")
+        assert ds.sizes["obs"] == sum(len(v) for v in truth.values())
         temp = ds["ctd_temp"]
         assert temp.attrs["units"] == "degC"
         assert temp.attrs["standard_name"] == "sea_water_temperature"
+        assert temp.attrs["instrument"] == "instrument_ctd"
+        times, values = nc_series(ds, "ctd_temp")
         want = np.array([v for _, v in truth["boat.ctd.temp"]], dtype=np.float32)
-        assert np.array_equal(temp.values, want)
-        assert ds["ctd_count"].values.tolist() == [v for _, v in truth["boat.ctd.count"]]
-        assert ds["ctd_wet"].values.tolist() == [int(v) for _, v in truth["boat.ctd.wet"]]
-        times = ds["time_ctd_temp"].values.astype("int64")
+        assert np.array_equal(values, want)
+        assert nc_series(ds, "ctd_count")[1].tolist() == [v for _, v in truth["boat.ctd.count"]]
+        assert nc_series(ds, "ctd_wet")[1].tolist() == [int(v) for _, v in truth["boat.ctd.wet"]]
         assert np.abs(times - [t for t, _ in truth["boat.ctd.temp"]]).max() < 1000  # < 1 µs
 
 
@@ -353,3 +369,203 @@ def test_time_and_period_arguments() -> None:
         parse_time("yesterday")
     with pytest.raises(Exception, match="period"):
         parse_period("0")
+
+
+# -- every format x every option ------------------------------------------------
+
+FORMATS = ("netcdf", "parquet", "csv", "geojson", "gpx")
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+@pytest.mark.parametrize("period", [None, 0.05, 1.0, 2.5, 3600.0, 86_400.0])
+def test_every_format_with_every_period_gives_a_valid_file(
+    archive: Path, tmp_path: Path, fmt: str, period: float | None, dataset_valid: Any
+) -> None:
+    out = tmp_path / f"d.{fmt}"
+    summary = make_dataset([archive], _model(), fmt, out, resample_s=period)
+    rows = dataset_valid(fmt, out)
+    truth = official(archive)
+    times = {t for samples in truth.values() for t, _ in samples}
+    if fmt in ("geojson", "gpx"):  # one point per period whose centre has a position
+        # an hour's centre is far outside the 20 s track: no point, and the notes say so
+        assert rows >= 1 if (period or 1) < 20 else rows == 0
+        assert rows > 0 or any("have no position and were left out" in n for n in summary.notes)
+    elif period is None:
+        assert rows == summary.samples == sum(len(v) for v in truth.values())
+    else:  # one row per period with a sample
+        step = int(round(period * S))
+        assert rows == len({t // step for t in times})
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+@pytest.mark.parametrize("fixes", [0, 1, 2])
+def test_an_export_of_few_positions_is_a_valid_file(
+    tmp_path: Path, fmt: str, fixes: int, dataset_valid: Any
+) -> None:
+    msgs = [m for m in mission(3) if not m[0].startswith("boat.gps")]
+    msgs += [("boat.gps.lat", T0 + i * S, lat_at(i)) for i in range(fixes)]
+    msgs += [("boat.gps.lon", T0 + i * S, lon_at(i)) for i in range(fixes)]
+    path = tmp_path / "few.mcap"
+    write_archive(path, msgs)
+    out = tmp_path / f"few.{fmt}"
+    make_dataset([path], _model(), fmt, out)
+    rows = dataset_valid(fmt, out)
+    if fmt in ("geojson", "gpx"):  # 1 s points: one at each fix (the fix's period centre
+        assert rows <= fixes  # is inside the track only between two fixes)
+
+
+def test_metadata_reaches_every_format(archive: Path, tmp_path: Path) -> None:
+    import xarray as xr
+    from modd.dataset.metadata import parse_metadata
+
+    meta = parse_metadata(
+        {
+            "creator_name": "Ana Example",
+            "license": "CC-BY-4.0",
+            "naming_authority": "org.example.marine",
+            "platform": {"name": "Test boat", "id": "boat01", "vocabulary": "https://x.org/p"},
+            "instruments": {"ctd": {"make": "Sea-Bird", "model": "SBE 37", "serial_number": 7}},
+        },
+        "dataset.yaml",
+    )
+    nc, pa_out = tmp_path / "m.nc", tmp_path / "m.parquet"
+    summary = make_dataset([archive], _model(), "netcdf", nc, metadata=meta)
+    make_dataset([archive], _model(), "parquet", pa_out, metadata=meta)
+    with xr.open_dataset(nc) as ds:
+        assert ds.attrs["creator_name"] == "Ana Example"
+        assert ds.attrs["naming_authority"] == "org.example.marine"
+        assert ds["trajectory"].values[0] == b"boat01"
+        assert ds["instrument_ctd"].attrs["make_model"] == "Sea-Bird SBE 37"
+        assert ds["instrument_ctd"].attrs["serial_number"] == "7"
+        assert ds["platform"].attrs["platform_vocabulary"] == "https://x.org/p"
+    assert any("ask for creator_email" in n and "dataset.yaml" in n for n in summary.notes)
+    modd = json.loads(pq.read_schema(pa_out).metadata[b"modd"])
+    assert modd["metadata"]["license"] == "CC-BY-4.0"
+    assert modd["topics"]["boat.ctd.temp"]["standard_name"] == "sea_water_temperature"
+
+
+@pytest.mark.parametrize(
+    ("doc", "error"),
+    [
+        ({"creator": "x"}, "unknown key 'creator'"),
+        ({"naming_authority": "modd"}, "not reversed DNS"),
+        ({"platform": {"colour": "red"}}, "platform: unknown key 'colour'"),
+        ({"instruments": {"ctd": {"make": {"a": 1}}}}, "instruments.ctd.make: a text"),
+        (["a"], "a mapping"),
+    ],
+)
+def test_bad_metadata_is_a_located_error(doc: Any, error: str) -> None:
+    from modd.dataset.metadata import MetadataError, parse_metadata
+
+    with pytest.raises(MetadataError, match=error) as info:
+        parse_metadata(doc, "dataset.yaml")
+    assert str(info.value).startswith("dataset.yaml")
+
+
+def test_notes_name_files_not_server_paths(archive: Path, tmp_path: Path) -> None:
+    data = archive.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) // 2])
+    summary = make_dataset([cut], _model(), "csv", tmp_path / "c.csv")
+    assert summary.notes and not any(str(tmp_path) in n for n in summary.notes)
+    assert any(n.startswith("cut.mcap: not closed") for n in summary.notes)
+
+
+# -- both clocks ------------------------------------------------------------------
+
+#: The GNSS's own clock, 395 million seconds ahead of the companion computer's.
+SKEW = 395_000_000 * S
+
+
+def _two_clock_model() -> dict[str, Any]:
+    text = MODEL.replace(
+        "Sensor gps measures {",
+        'Sensor gps kind nmea on "/dev/ttyACM0" { clock = instrument; } measures {',
+    )
+    for v, f in (
+        ("lat(degree_north, float64)", "GGA.lat"),
+        ("lon(degree_east, float64)", "GGA.lon"),
+    ):
+        text = text.replace(f"{v};", f"{v} from sentence {f};")
+    text = text.replace('alt("m");', 'alt("m") from sentence GGA.altitude;')
+    result = load_text(text, "boat.modd")
+    assert result.ok and result.model is not None, [str(d) for d in result.diagnostics]
+    return result.model
+
+
+@pytest.mark.parametrize("fmt", ["netcdf", "parquet", "csv"])
+@pytest.mark.parametrize("clock", ["receive", "instrument"])
+def test_both_clocks_are_written_and_either_is_the_axis(
+    tmp_path: Path, fmt: str, clock: str
+) -> None:
+    path = tmp_path / "two.mcap"
+    gps = {t: SKEW for t in ("boat.gps.lat", "boat.gps.lon", "boat.gps.alt")}
+    write_archive(path, mission(5), skew=gps)
+    out = tmp_path / f"two.{fmt}"
+    make_dataset([path], _two_clock_model(), fmt, out, clock=clock)
+    other = "receive_time" if clock == "instrument" else "instrument_time"
+    truth: dict[str, list[tuple[int, int]]] = {}
+    with path.open("rb") as f:  # the oracle: both times as the official reader reads them
+        for _s, ch, m in make_reader(f).iter_messages(log_time_order=False):
+            truth.setdefault(ch.topic, []).append((m.log_time, m.publish_time))
+    for topic in ("boat.gps.lat", "boat.ctd.temp"):
+        instrument = topic.startswith("boat.gps")
+        log, pub = (np.array(x, dtype=np.int64) for x in zip(*truth[topic], strict=True))
+        axis = pub if clock == "instrument" and instrument else log
+        second = log if clock == "instrument" else (pub if instrument else None)
+        got_axis, got_other = _times_of(fmt, out, topic, other)
+        assert np.abs(got_axis - axis).max() < 1000, (topic, "axis")
+        if second is None:
+            assert np.isnan(got_other).all(), topic
+        else:
+            assert np.abs(got_other - second).max() < 1000, (topic, other)
+
+
+def _times_of(fmt: str, out: Path, topic: str, other: str) -> tuple[np.ndarray, np.ndarray]:
+    """(axis, other clock) of a topic's samples, in ns (float; NaN for none)."""
+    if fmt == "netcdf":
+        import netCDF4
+
+        with netCDF4.Dataset(out) as ds:
+            name = topic.split(".", 1)[1].replace(".", "_")
+            rows = ~np.ma.getmaskarray(ds[name][0, :])
+            axis = ds["time"][0, :][rows].astype(np.float64) * 1e9
+            return axis, np.ma.filled(ds[other][0, :][rows], np.nan) * 1e9
+    table = pq.read_table(out) if fmt == "parquet" else pcsv.read_csv(out)
+    frame = table.to_pandas()
+    rows = frame[frame["topic"] == topic]
+    axis = rows["time"].astype("int64").to_numpy(dtype=np.float64)
+    second = rows[other]
+    if second.isna().all():
+        return axis, np.full(len(rows), np.nan)
+    return axis, second.astype("int64").to_numpy(dtype=np.float64)
+
+
+def test_instrument_axis_without_an_instrument_clock_is_refused(
+    archive: Path, tmp_path: Path
+) -> None:
+    with pytest.raises(DatasetError, match="no sensor of the chosen topics declares clock"):
+        make_dataset([archive], _model(), "csv", tmp_path / "x.csv", clock="instrument")
+
+
+def test_the_projects_dataset_yaml_beside_the_model_is_read(
+    archive: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import argparse
+
+    import netCDF4
+    from modd.dataset.cli import register
+
+    (tmp_path / "boat.modd").write_text(MODEL)
+    (tmp_path / "dataset.yaml").write_text("creator_name: Ana Example\nlicense: CC-BY-4.0\n")
+    parser = argparse.ArgumentParser()
+    register(parser.add_subparsers())
+    out = tmp_path / "p.nc"
+    argv = ["dataset", str(archive), "--model", str(tmp_path / "boat.modd")]
+    args = parser.parse_args([*argv, "--format", "netcdf", "-o", str(out)])
+    assert args.func(args) == 0
+    with netCDF4.Dataset(out) as ds:
+        assert ds.creator_name == "Ana Example" and ds.license == "CC-BY-4.0"
+    (tmp_path / "dataset.yaml").write_text("license: [CC-BY-4.0, {a: 1}]\n")
+    assert args.func(args) == 1
+    assert "dataset.yaml: license: a text or a list of texts" in capsys.readouterr().err

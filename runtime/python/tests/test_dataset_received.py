@@ -185,6 +185,13 @@ def test_tables_hold_every_received_window(record: Path, tmp_path: Path, fmt: st
             assert la is None or np.isnan(la)  # outside the received track: no position
 
 
+def nc_series(ds: Any, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """A subscriber's windows with a value, read with xarray: (times in ns, values)."""
+    values = ds[name].values[0]
+    keep = ~np.isnan(values)
+    return ds["time"].values[0].astype("datetime64[ns]").astype(np.int64)[keep], values[keep]
+
+
 def test_netcdf_holds_every_received_window_with_its_cell_method(
     record: Path, tmp_path: Path
 ) -> None:
@@ -196,19 +203,19 @@ def test_netcdf_holds_every_received_window_with_its_cell_method(
     with xr.open_dataset(out) as ds:
         assert "windows received" in ds.attrs["title"]
         assert ds.attrs["source"] == "MoDD base-station record (MCAP)"
+        empty = 0
         for name, rows in want.items():
-            times = ds[f"time_{name}"].values.astype("datetime64[ns]").astype(np.int64)
-            got = list(zip(times.tolist(), ds[name].values.astype(float).tolist(), strict=True))
+            # the windows with a value; an empty one is a row of fill values
+            got = list(zip(*(a.tolist() for a in nc_series(ds, name)), strict=True))
+            full = [(t, v) for t, v in rows if not np.isnan(v)]
+            empty += len(rows) - len(full)
             # NetCDF times are float64 seconds: equal to the microsecond
-            assert len(got) == len(rows), name
-            for (t1, v1), (t2, v2) in zip(sorted(got), sorted(rows), strict=True):
-                assert abs(t1 - t2) < 1000 and (v1 == v2 or (np.isnan(v1) and np.isnan(v2))), (
-                    name,
-                    t1,
-                    t2,
-                    v1,
-                    v2,
-                )
+            assert len(got) == len(full), name
+            for (t1, v1), (t2, v2) in zip(sorted(got), sorted(full), strict=True):
+                assert abs(t1 - t2) < 1000 and v1 == v2, (name, t1, t2, v1, v2)
+        values = np.stack([ds[name].values[0] for name in want])
+        assert int(np.isnan(values).all(axis=0).sum()) == empty
+        assert ds.sizes["obs"] == sum(len(rows) for rows in want.values())
         assert ds["temp_avg"].attrs["cell_methods"] == "time: mean (interval: 1 s)"
         assert ds["temp_min"].attrs["cell_methods"] == "time: minimum (interval: 0.5 s)"
         assert ds["temp_all"].attrs["cell_methods"] == "time: point"
@@ -264,3 +271,21 @@ def test_a_record_being_written_exports_up_to_its_last_chunk(tmp_path: Path) -> 
         rec.close()
     assert 1500 < summary.samples < 2000, summary.samples
     assert any("not closed" in n for n in summary.notes)
+
+
+@pytest.mark.parametrize("fmt", ["netcdf", "parquet", "csv", "geojson", "gpx"])
+@pytest.mark.parametrize("period", [None, 0.25, 1.0, 7.0, 86_400.0])
+def test_received_in_every_format_and_period(
+    record: Path, tmp_path: Path, fmt: str, period: float | None, dataset_valid: Any
+) -> None:
+    out = tmp_path / f"r.{fmt}"
+    summary = make_dataset([record], _model(), fmt, out, received=True, resample_s=period)
+    rows = dataset_valid(fmt, out)
+    want = _independent(record)
+    if fmt in ("geojson", "gpx"):
+        assert rows > 0 or (period or 1) > 20
+    elif period is None:
+        assert rows == summary.samples == sum(len(w) for w in want.values())
+    else:
+        step = int(round(period * S))
+        assert rows == len({t // step for w in want.values() for t, _ in w})

@@ -4,6 +4,7 @@ user may read; paths are confined to ``<archive_dir>/<drone>/``."""
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 import os
 import tempfile
@@ -162,6 +163,25 @@ class ExportIn(BaseModel):
     )
     resample_s: float | None = Field(default=None, gt=0, le=86_400)
     source: Literal["archive", "received"] = "archive"
+    #: The dataset's metadata (ACDD/IOOS attribute names, ``platform``,
+    #: ``instruments``: what a project's dataset.yaml holds; docs/user-guide/datasets.md).
+    metadata: dict[str, Any] | None = None
+
+
+def _compact(ns: int) -> str:
+    return dt.datetime.fromtimestamp(ns // 1_000_000_000, dt.UTC).strftime("%Y%m%dT%H%M%SZ")
+
+
+def export_name(drone: str, received: bool, first_ns: int | None, last_ns: int | None) -> str:
+    """A download's name: the drone, what it holds and the time span written.
+
+    >>> export_name("usv", False, 1_790_000_000 * 10**9, 1_790_003_600 * 10**9)
+    'usv-dataset-20260921T141320Z-20260921T151320Z'
+    """
+    base = f"{drone}-{'received' if received else 'dataset'}"
+    if first_ns is None or last_ns is None:
+        return base
+    return f"{base}-{_compact(first_ns)}-{_compact(last_ns)}"
 
 
 EXPORT_TYPES = {
@@ -211,7 +231,7 @@ async def export_dataset(
     os.close(fd)
     out = FsPath(tmp)
     try:
-        notes = await in_worker(
+        notes, first_ns, last_ns = await in_worker(
             dataset_file,
             paths,
             body.model,
@@ -223,6 +243,7 @@ async def export_dataset(
             body.resample_s,
             archive_work.MAX_EXPORT_SAMPLES,
             received,
+            body.metadata,
         )
     except DatasetError as exc:
         out.unlink(missing_ok=True)
@@ -230,7 +251,9 @@ async def export_dataset(
         raise HTTPException(
             413 if "more than" in text and "samples" in text else 422, text
         ) from None
-    name = f"{drone}-{'received' if received else 'dataset'}{suffix}"
+    name = export_name(drone, received, first_ns, last_ns) + suffix
+    hidden = "<records>" if received else "<archives>"
+    notes = [n.replace(str(root), hidden) for n in notes]
     headers = {"X-Modd-Notes": json.dumps(notes[:20], ensure_ascii=True)}
     return FileResponse(
         out,

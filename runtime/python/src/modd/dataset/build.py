@@ -9,6 +9,7 @@ when it is complete (a failed export leaves nothing behind). Used by
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -16,6 +17,7 @@ from typing import Any
 from . import netcdf, tables, tracks
 from .export import Options, Sink, Summary, export, find_files, print_progress
 from .mcapread import ArchiveError, read_file
+from .metadata import Metadata
 from .plan import ExportPlan, PlanError, plan_export
 from .received import plan_received, read_record
 from .resample import Resampler, WideTable
@@ -29,6 +31,28 @@ SUFFIXES = {
     "geojson": ".geojson",
     "gpx": ".gpx",
 }
+
+
+def metadata_notes(plan: ExportPlan) -> list[str]:
+    """What a data centre will ask for that the dataset metadata does not say."""
+    unnamed = [v.topic for v in plan.variables.values() if not v.standard_name]
+    out = (
+        [
+            f"no CF standard name for {', '.join(unnamed)} (ACDD asks for one; "
+            "declare standardName in the model where the CF table has a name for it)"
+        ]
+        if unnamed
+        else []
+    )
+    missing = plan.metadata.missing()
+    if not missing:
+        return out
+    where = plan.metadata.source or "no dataset metadata (--metadata FILE, or dataset.yaml"
+    where += "" if plan.metadata.source else " beside the model)"
+    return out + [
+        f"{where}: ACDD 1.3 / IOOS 1.2 ask for {', '.join(missing)}; "
+        "left out (docs/user-guide/datasets.md, Metadata)"
+    ]
 
 
 class DatasetError(Exception):
@@ -63,6 +87,8 @@ def make_dataset(
     progress: bool = False,
     options: Options | None = None,
     received: bool = False,
+    metadata: Metadata | None = None,
+    clock: str = "receive",
 ) -> Summary:
     """Writes the dataset to ``out``; raises DatasetError. With ``received``,
     ``paths`` are base-station records and the dataset holds the windows the
@@ -76,6 +102,14 @@ def make_dataset(
             if received
             else plan_export(model, topics, start_ns, end_ns)
         )
+        if metadata is not None:
+            plan = replace(plan, metadata=metadata)
+        plan = replace(plan, clock=clock)
+        if clock == "instrument" and not plan.two_clocks:
+            raise PlanError(
+                "--time instrument: no sensor of the chosen topics declares "
+                "clock = instrument (the archive has their receive time only)"
+            )
         if fmt in ("geojson", "gpx") and plan.position is None:
             raise PlanError(
                 f"a {fmt} track needs the platform's position, and the model "
@@ -96,6 +130,8 @@ def make_dataset(
                 "; a record being written is read up to its last complete chunk" if received else ""
             )
             raise PlanError(f"nothing to export: no {what} in the range{hint}")
+        if fmt == "netcdf":
+            summary.notes += metadata_notes(plan)
         os.replace(tmp, out)
         return summary
     except (PlanError, ArchiveError) as exc:

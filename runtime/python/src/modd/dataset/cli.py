@@ -2,10 +2,16 @@
 
     modd dataset ARCHIVE_DIR_OR_FILES... --model MODEL --format netcdf|parquet|csv|geojson|gpx
                  -o OUT [--from T0 --to T1] [--topics T ...] [--resample PERIOD] [--received]
+                 [--metadata FILE] [--time receive|instrument]
 
 With --received the files are base-station records (the SubBroker's
 ``record/<drone>/*.mcap``) and the dataset holds the windows the subscribers
 received; --topics then names subscribers or their topics.
+
+--metadata FILE (YAML or JSON, ACDD/IOOS attribute names: creator_name,
+publisher_url, license, platform, instruments...) describes the dataset for a
+data centre; without it, ``dataset.yaml`` or ``dataset.json`` beside the model
+is read when there is one (docs/user-guide/datasets.md, "Metadata").
 
 Times are ISO 8601 (``2026-11-27T10:00:00Z``; UTC when no offset is given) or
 seconds since the Unix epoch; PERIOD is seconds (``0.5``, ``10s``). Exit 0
@@ -62,6 +68,21 @@ def register(sub: Any) -> None:
         help="the files are base-station records: export the windows the subscribers received",
     )
     p.add_argument(
+        "--time",
+        dest="clock",
+        choices=("receive", "instrument"),
+        default="receive",
+        help="the time axis: the PubBroker's receive time (default), or the instrument's "
+        "time for sensors declaring clock = instrument; the other clock is written beside it",
+    )
+    p.add_argument(
+        "--metadata",
+        type=Path,
+        metavar="FILE",
+        help="the dataset's metadata (YAML or JSON: creator, publisher, license...; "
+        "default: dataset.yaml or dataset.json beside the model)",
+    )
+    p.add_argument(
         "--progress",
         action=argparse.BooleanOptionalAction,
         default=None,
@@ -101,9 +122,16 @@ def run(args: argparse.Namespace) -> int:
     from modd_model.io import load_or_report
 
     from .build import DatasetError, make_dataset
+    from .metadata import MetadataError, load_metadata, project_metadata
 
     model = load_or_report(args.model, quiet_warnings=True)
     if model is None:
+        return 1
+    meta_path = args.metadata or project_metadata(args.model)
+    try:
+        metadata = load_metadata(meta_path) if meta_path is not None else None
+    except MetadataError as exc:
+        print(f"modd dataset: {exc}", file=sys.stderr)
         return 1
     progress = sys.stderr.isatty() if args.progress is None else args.progress
     try:
@@ -118,6 +146,8 @@ def run(args: argparse.Namespace) -> int:
             resample_s=args.resample,
             progress=progress,
             received=args.received,
+            metadata=metadata,
+            clock=args.clock,
         )
     except DatasetError as exc:
         print(f"modd dataset: {exc}", file=sys.stderr)

@@ -65,9 +65,14 @@ class Sink(Protocol):
         lat: np.ndarray,
         lon: np.ndarray,
         alt: np.ndarray,
+        other: np.ndarray | None = None,
     ) -> None: ...
 
     def close(self, plan: ExportPlan, summary: Summary) -> None: ...
+
+
+#: No time (numpy's NaT as int64 ns).
+NAT = np.iinfo(np.int64).min
 
 
 class TooMany(PlanError):
@@ -89,13 +94,26 @@ def find_files(paths: list[Path]) -> list[Path]:
     return out
 
 
+def clocked(plan: ExportPlan, var: Variable | None, b: Batch) -> Batch:
+    """The batch on the plan's time axis; ``publish_ns`` then holds the other
+    clock (the instrument's, NaN-free only for topics that declare it)."""
+    if b.publish_ns is None or not plan.two_clocks:
+        return b
+    if plan.clock == "instrument" and var is not None and var.instrument_clock:
+        return Batch(b.topic, b.value_type, b.publish_ns, b.value, b.time_ns)
+    return b
+
+
 def _in_range(plan: ExportPlan, b: Batch) -> Batch:
     keep = np.ones(len(b.time_ns), dtype=bool)
     if plan.start_ns is not None:
         keep &= b.time_ns >= plan.start_ns
     if plan.end_ns is not None:
         keep &= b.time_ns < plan.end_ns
-    return b if keep.all() else Batch(b.topic, b.value_type, b.time_ns[keep], b.value[keep])
+    if keep.all():
+        return b
+    pub = b.publish_ns[keep] if b.publish_ns is not None else None
+    return Batch(b.topic, b.value_type, b.time_ns[keep], b.value[keep], pub)
 
 
 def read_track(
@@ -113,7 +131,8 @@ def read_track(
         r: ([], []) for r in roles.values()
     }
     for path in files:
-        for b in reader(path, None, None, set(roles)):
+        for raw in reader(path, None, None, set(roles)):
+            b = clocked(plan, plan.variables.get(raw.topic), raw)
             if b.topic in roles:
                 ts, vs = parts[roles[b.topic]]
                 ts.append(b.time_ns)
@@ -157,13 +176,13 @@ def _check_batch(
         if plan.source == "received":
             strangers.add(b.topic)  # the subscribers chosen are known: say which were not
             s.notes.append(
-                f"{path}: subscriber {b.topic} left out (not chosen, or not in the "
+                f"{path.name}: subscriber {b.topic} left out (not chosen, or not in the "
                 "model: a dynamic subscription or another model revision)"
             )
         elif not b.topic.startswith(plan.drone + "."):
             strangers.add(b.topic)
             s.notes.append(
-                f"{path}: topic {b.topic} is not in the model (an archive of "
+                f"{path.name}: topic {b.topic} is not in the model (an archive of "
                 "another model or revision?): left out"
             )
         return None
@@ -207,10 +226,10 @@ class _Batcher:
             self.emit(var, parts[0])
             return
         time_ns = np.concatenate([p.time_ns for p in parts])
-        self.emit(
-            var,
-            Batch(topic, parts[0].value_type, time_ns, np.concatenate([p.value for p in parts])),
-        )
+        pubs = [p.publish_ns for p in parts if p.publish_ns is not None]
+        pub = np.concatenate(pubs) if len(pubs) == len(parts) else None
+        value = np.concatenate([p.value for p in parts])
+        self.emit(var, Batch(topic, parts[0].value_type, time_ns, value, pub))
 
     def close(self) -> None:
         for topic in list(self.parts):
@@ -239,7 +258,7 @@ def export(
     def emit(var: Variable, b: Batch) -> None:
         nan = np.full(len(b.time_ns), np.nan)
         lat, lon, alt = track.at(b.time_ns) if track else (nan, nan, nan)
-        sink.write(var, b.time_ns, b.value, lat, lon, alt)
+        sink.write(var, b.time_ns, b.value, lat, lon, alt, other_clock(plan, var, b))
         _account(summary, var, b, lat, lon, alt)
 
     batcher, seen = _Batcher(emit), 0
@@ -249,7 +268,7 @@ def export(
         tick = (lambda done, p=path, n=size: progress(p.name, done, n)) if progress else None
         for raw in reader(path, state, tick, None):
             var = _check_batch(plan, raw, path, summary, strangers)
-            b = _in_range(plan, raw) if var is not None else raw
+            b = _in_range(plan, clocked(plan, var, raw)) if var is not None else raw
             if var is None or len(b.time_ns) == 0:
                 continue
             seen += len(b.time_ns)
@@ -264,7 +283,7 @@ def export(
             batcher.add(var, b)
         if state.cut_at is not None:
             summary.notes.append(
-                f"{path}: not closed (cut or still being written): exported up "
+                f"{path.name}: not closed (cut or still being written): exported up "
                 f"to offset {state.cut_at} of {size} bytes; "
                 "`modd archive recover` closes it"
             )
@@ -272,6 +291,17 @@ def export(
     _final_notes(plan, summary, nonfinite, track)
     sink.close(plan, summary)
     return summary
+
+
+def other_clock(plan: ExportPlan, var: Variable, b: Batch) -> np.ndarray | None:
+    """The second time of each sample (int64 ns; NAT, numpy's NaT, where there is
+    none): the instrument's beside the receive axis (topics declaring it only),
+    the receive time beside the instrument axis; None with one clock in the export."""
+    if not plan.two_clocks:
+        return None
+    if b.publish_ns is None or (plan.clock == "receive" and not var.instrument_clock):
+        return np.full(len(b.time_ns), NAT, dtype=np.int64)
+    return b.publish_ns
 
 
 def _final_notes(

@@ -42,7 +42,7 @@ OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK, OP_DATA_END =
     0x0F,
 )
 _REC = struct.Struct("<BQ")
-_MSG = struct.Struct("<HIQ")  # channel id, sequence, log time (publish time follows)
+_MSG = struct.Struct("<HIQQ")  # channel id, sequence, log time, publish time
 _MSG_HEAD = 2 + 4 + 8 + 8
 #: No record of a MoDD archive is near this; a longer length is a corrupt file.
 MAX_RECORD = 1 << 31
@@ -64,6 +64,9 @@ class Batch:
     value_type: str
     time_ns: np.ndarray  # int64, ns since the Unix epoch (the MCAP log time)
     value: np.ndarray  # record.dtype_of(value_type)
+    #: int64, the MCAP publish time: the publisher's stamp (the instrument's clock for
+    #: a sensor declaring ``clock = instrument``); None where the reader has none.
+    publish_ns: np.ndarray | None = None
 
 
 @dataclass
@@ -133,7 +136,7 @@ def _chunk(state: FileState, buf: bytes, offset: int) -> bytes:
     return data
 
 
-Pending = dict[int, tuple[list[int], list[bytes]]]
+Pending = dict[int, tuple[list[int], list[int], list[bytes]]]
 #: A chunk of the PubBroker's is messages only, each ``{"value":TEXT}``: one regular
 #: expression pass (in C) finds every value text; the records' offsets follow from the
 #: texts' lengths, and the headers are gathered from those offsets by NumPy. Used only
@@ -144,8 +147,8 @@ _HEAD = np.dtype([("len", "<u8"), ("ch", "<u2"), ("seq", "<u4"), ("log", "<u8"),
 _HEAD_AT = np.arange(1, 1 + _HEAD.itemsize)
 
 
-def _fast(buf: bytes) -> dict[int, tuple[np.ndarray, np.ndarray]] | None:
-    """(log times, value texts) per channel of a messages-only chunk, or None."""
+def _fast(buf: bytes) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] | None:
+    """(log times, publish times, value texts) per channel of a messages-only chunk, or None."""
     text = np.array(_TEXT.findall(buf), dtype=bytes)
     if len(text) == 0:
         return None
@@ -160,11 +163,11 @@ def _fast(buf: bytes) -> dict[int, tuple[np.ndarray, np.ndarray]] | None:
     head = raw[starts[:, None] + _HEAD_AT].copy().view(_HEAD).ravel()
     if not np.array_equal(head["len"], sizes - 9):
         return None
-    channels, times = head["ch"], head["log"].astype(np.int64)
+    channels, times, pubs = head["ch"], head["log"].astype(np.int64), head["pub"].astype(np.int64)
     out = {}
     for cid in np.unique(channels).tolist():
         mask = channels == cid
-        out[cid] = (times[mask], text[mask])
+        out[cid] = (times[mask], pubs[mask], text[mask])
     return out
 
 
@@ -180,9 +183,10 @@ def _records(state: FileState, buf: bytes, base: int, pending: Pending) -> None:
         if body + length > end:
             raise ArchiveError(state.path, base + at, "record runs past its chunk")
         if op == OP_MESSAGE:
-            cid, _seq, t = _MSG.unpack_from(buf, body)
-            times, datas = pending.setdefault(cid, ([], []))
+            cid, _seq, t, pub = _MSG.unpack_from(buf, body)
+            times, pubs, datas = pending.setdefault(cid, ([], [], []))
             times.append(t)
+            pubs.append(pub)
             datas.append(buf[body + _MSG_HEAD : body + length])
         elif op == OP_SCHEMA:
             _schema(state, buf[body : body + length])
@@ -193,11 +197,11 @@ def _records(state: FileState, buf: bytes, base: int, pending: Pending) -> None:
 
 def _batches(
     state: FileState,
-    pending: Pending | dict[int, tuple[np.ndarray, np.ndarray]],
+    pending: Pending | dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]],
     offset: int,
     only: set[str] | None,
 ) -> Iterator[Batch]:
-    for cid, (times, datas) in pending.items():
+    for cid, (times, pubs, datas) in pending.items():
         topic, vtype = state.topics.get(cid, (None, None))
         if topic is None:
             raise ArchiveError(state.path, offset, f"message on unknown channel {cid}")
@@ -210,7 +214,8 @@ def _batches(
                 values = decode_values(vtype, datas)
         except RecordError as exc:
             raise ArchiveError(state.path, offset, f"topic {topic}: {exc}") from None
-        yield Batch(topic, vtype, np.asarray(times, dtype=np.int64), values)
+        as_ns = np.asarray(times, dtype=np.int64)
+        yield Batch(topic, vtype, as_ns, values, np.asarray(pubs, dtype=np.int64))
 
 
 def _read_record(f: BinaryIO, state: FileState, offset: int) -> tuple[int, bytes] | None:

@@ -1,26 +1,34 @@
-"""NetCDF-4: CF-1.11 ``featureType = "trajectory"`` with ACDD-1.3 global attributes.
+"""NetCDF-4: a CF-1.11 discrete sampling geometry, ``featureType =
+"trajectory"``, with ACDD-1.3 and IOOS-1.2 metadata.
 
-Layout (docs/user-guide/datasets.md, "NetCDF layout"): every topic keeps its
-own samples at its own times, so each has its own observation dimension
-``obs_<name>`` with its own coordinates ``time_<name>``, ``lat_<name>``,
-``lon_<name>``, ``alt_<name>`` (the platform position interpolated to those
-times); the data variable ``<name>`` names them in ``coordinates``. Nothing is
-resampled: variables at 25 Hz and 0.5 Hz sit side by side, each a CF
-single-trajectory ``data(o)`` (CF §9, H.4.1) of the one trajectory named by the
-scalar ``trajectory`` (``cf_role = "trajectory_id"``). With ``--resample`` the
-wide table has one ``obs`` dimension and plain ``time lat lon alt``.
+Layout (docs/user-guide/datasets.md, "NetCDF layout"): the incomplete
+multidimensional representation of CF §9.3.2 (H.4.2) with one trajectory:
+dimensions ``trajectory`` (1) and ``obs`` (unlimited); ``trajectory(trajectory,
+name_strlen)`` carries ``cf_role = "trajectory_id"``; ``time``, ``lat``,
+``lon``, ``alt`` and every data variable are ``(trajectory, obs)``. Each
+observation is one sample of one topic: its own variable holds the value,
+the others the fill value. Nothing is resampled (25 Hz and 0.5 Hz topics sit
+side by side, at their own times) and the file is written as the archive is
+read (rows in blocks of one topic, time-ordered within a topic), so memory
+stays bounded; an unwritten block of a variable is not stored (HDF5 leaves
+its chunks unallocated). With ``--resample`` the rows are the periods and
+every variable has a value in most of them. ``platform`` and one
+``instrument_<sensor>`` variable per sensor describe where the data come from
+(IOOS 1.2); a data variable names them in ``platform`` and ``instrument``. An
+ancillary variable (a quality flag) is one more ``(trajectory, obs)`` variable
+written beside its data variable (``_data_var`` and ``NetcdfSink.write``).
 """
 
 from __future__ import annotations
 
-import datetime as dt
-from importlib import metadata
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .export import Summary
+from .export import NAT, Summary
+from .ncmeta import coverage, global_attributes, instrument_variables, platform_variable
 from .plan import ExportPlan, Variable
 from .position import Track
 from .record import dtype_of
@@ -44,20 +52,10 @@ _VERTICAL = {
 }
 
 
-def modd_version() -> str:
-    try:
-        return metadata.version("modd-runtime")
-    except metadata.PackageNotFoundError:  # pragma: no cover - a checkout without install
-        return "unknown"
+DIMS = ("trajectory", "obs")
 
 
-def _iso(ns: int | None) -> str:
-    if ns is None:
-        return ""
-    return dt.datetime.fromtimestamp(ns / 1e9, dt.UTC).isoformat().replace("+00:00", "Z")
-
-
-def _coord(ds: Any, name: str, dim: str, kind: str) -> None:
+def _coord(ds: Any, name: str, kind: str) -> None:
     attrs = {
         # Unix time counts no leap seconds
         "time": {
@@ -88,27 +86,30 @@ def _coord(ds: Any, name: str, dim: str, kind: str) -> None:
             "long_name": "platform altitude, interpolated to the sample's time",
         },
     }[kind]
-    fill = None if kind == "time" else np.nan
+    fill = None if kind == "time" else np.nan  # every observation has its time
     v = ds.createVariable(
-        name, "f8", (dim,), fill_value=fill, chunksizes=(CHUNK,), zlib=True, complevel=1
+        name, "f8", DIMS, fill_value=fill, chunksizes=(1, CHUNK), zlib=True, complevel=1
     )
     v.set_var_chunk_cache(size=CACHE_BYTES)
     v.setncatts(attrs | {"coverage_content_type": "coordinate"})
 
 
-def _data_var(ds: Any, var: Variable, name: str, dim: str, coords: str) -> None:
+def _data_var(ds: Any, var: Variable, instruments: dict[str, str]) -> None:
     dtype = np.dtype(dtype_of(var.value_type))
-    fill = np.float32(np.nan) if dtype.kind == "f" else _INT_FILL[dtype]
+    fill = dtype.type(np.nan) if dtype.kind == "f" else _INT_FILL[dtype]
     v = ds.createVariable(
-        name, dtype, (dim,), fill_value=fill, chunksizes=(CHUNK,), zlib=True, complevel=1
+        var.name, dtype, DIMS, fill_value=fill, chunksizes=(1, CHUNK), zlib=True, complevel=1
     )
     v.set_var_chunk_cache(size=CACHE_BYTES)
     attrs: dict[str, Any] = {
         "long_name": var.long_name,
-        "coordinates": coords,
+        "coordinates": "time lat lon alt",
         "modd_topic": var.topic,
         "coverage_content_type": "physicalMeasurement",
+        "platform": "platform",
     }
+    if var.sensor in instruments:
+        attrs["instrument"] = instruments[var.sensor]
     if var.standard_name in _VERTICAL:
         attrs["positive"] = _VERTICAL[var.standard_name]
     if var.temperature:
@@ -128,106 +129,76 @@ def _data_var(ds: Any, var: Variable, name: str, dim: str, coords: str) -> None:
     v.setncatts(attrs)
 
 
-def _what(plan: ExportPlan) -> dict[str, str]:
-    """The attributes that say what the dataset holds: samples or received windows."""
-    if plan.source == "received":
-        return {
-            "title": f"{plan.description}: windows received from drone {plan.drone}",
-            "summary": (
-                f"Every window the MoDD subscribers of drone {plan.drone} received (the "
-                "base-station record, live and backfilled), at the window's end, with the "
-                "platform position interpolated from the received position windows."
-            ),
-            "source": "MoDD base-station record (MCAP)",
-            "processing_level": "aggregated on board per subscription (cell_methods); "
-            "position interpolated",
-        }
-    return {
-        "title": f"{plan.description}: samples of drone {plan.drone}",
-        "summary": (
-            f"Every sample archived on board drone {plan.drone} by the MoDD PubBroker, "
-            "at its own time, with the platform position linearly interpolated to it."
-        ),
-        "source": "MoDD on-board archive (MCAP)",
-        "processing_level": "raw samples; position interpolated",
-    }
-
-
-def _globals(plan: ExportPlan) -> dict[str, Any]:
-    now = dt.datetime.now(dt.UTC).replace(microsecond=0).isoformat().replace("+00:00", "Z")
-    return {
-        "Conventions": "CF-1.11, ACDD-1.3",
-        "featureType": "trajectory",
-        "cdm_data_type": "Trajectory",
-        **_what(plan),
-        "keywords": "drone, trajectory, in situ, "
-        + ", ".join(sorted({v.standard_name for v in plan.variables.values() if v.standard_name})),
-        "platform": plan.drone,
-        "history": f"{now} modd dataset (MoDD {modd_version()})",
-        "date_created": now,
-        "product_version": modd_version(),
-        "modd_version": modd_version(),
-        "modd_model_revision": plan.model_revision,
-        "id": f"{plan.drone}-{plan.model_revision}",
-        "naming_authority": "modd",
-        "comment": "Positions are linear interpolations between the platform's fixes; a sample "
-        "in a gap longer than the model's maxGap has none (fill value).",
-        "standard_name_vocabulary": "CF Standard Name Table v93",
-    }
-
-
-def _coverage(ds: Any, s: Summary) -> None:
-    if s.start_ns is not None and s.end_ns is not None:
-        ds.time_coverage_start, ds.time_coverage_end = _iso(s.start_ns), _iso(s.end_ns)
-        ds.time_coverage_duration = f"PT{(s.end_ns - s.start_ns) / 1e9:.3f}S"
-    for key, rng, units in (
-        ("lat", s.lat_range, "degree_north"),
-        ("lon", s.lon_range, "degree_east"),
-    ):
-        if rng is not None:
-            setattr(ds, f"geospatial_{key}_min", rng[0])
-            setattr(ds, f"geospatial_{key}_max", rng[1])
-            setattr(ds, f"geospatial_{key}_units", units)
-    if s.lat_range is not None and s.lon_range is not None:
-        (la0, la1), (lo0, lo1) = s.lat_range, s.lon_range
-        ds.geospatial_bounds = (
-            f"POLYGON (({la0} {lo0}, {la1} {lo0}, {la1} {lo1}, {la0} {lo1}, {la0} {lo0}))"
-        )
-        ds.geospatial_bounds_crs = "EPSG:4326"
-    if s.alt_range is not None:
-        ds.geospatial_vertical_min, ds.geospatial_vertical_max = s.alt_range
-        ds.geospatial_vertical_units, ds.geospatial_vertical_positive = "m", "up"
-
-
 def _trajectory(ds: Any, plan: ExportPlan) -> None:
-    t = ds.createVariable("trajectory", str, ())
+    name = plan.metadata.platform.get("id") or f"{plan.drone}-{plan.model_revision}"
+    ds.createDimension("trajectory", 1)
+    ds.createDimension("name_strlen", len(name.encode()))
+    t = ds.createVariable("trajectory", "S1", ("trajectory", "name_strlen"))
     t.cf_role = "trajectory_id"
     t.long_name = "mission of the drone"
-    t[...] = np.array(f"{plan.drone}-{plan.model_revision}", dtype=object)
+    t[0, :] = np.frombuffer(name.encode(), dtype="S1")
+
+
+def create(path: Path, plan: ExportPlan, variables: list[Variable]) -> Any:
+    """The file with its dimensions and variables, no observation yet."""
+    import netCDF4
+
+    ds = netCDF4.Dataset(path, "w", format="NETCDF4")
+    ds.setncatts(global_attributes(plan))
+    _trajectory(ds, plan)
+    ds.createDimension("obs", None)
+    for kind in ("time", "lat", "lon", "alt"):
+        _coord(ds, kind, kind)
+    instruments = instrument_variables(ds, plan)
+    platform_variable(ds, plan)
+    for var in variables:
+        _data_var(ds, var, instruments)
+    return ds
+
+
+def _second_time(ds: Any, plan: ExportPlan) -> None:
+    """The clock not on the axis (an auxiliary variable: CF allows one time axis)."""
+    v = ds.createVariable(
+        plan.other_clock, "f8", DIMS, fill_value=np.nan, chunksizes=(1, CHUNK), zlib=True
+    )
+    v.set_var_chunk_cache(size=CACHE_BYTES)
+    what = (
+        "the PubBroker's receive time of the sample"
+        if plan.clock == "instrument"
+        else "the instrument's time of the sample (sensors declaring clock = instrument)"
+    )
+    v.setncatts(
+        {
+            "units": TIME_UNITS,
+            "standard_name": "time",
+            "calendar": "standard",
+            "long_name": what,
+            "units_metadata": "leap_seconds: none",
+            "coverage_content_type": "auxiliaryInformation",
+        }
+    )
+    ds["time"].long_name = (
+        "time of the sample: the instrument's where its sensor declares clock = instrument, "
+        "else the PubBroker's receive time"
+        if plan.clock == "instrument"
+        else "time of the sample: the PubBroker's receive time"
+    )
 
 
 class NetcdfSink:
-    """The long form: one observation dimension per topic."""
+    """The samples, one observation each (rows appended as the archive is read)."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
         self.ds: Any = None
-        self.filled: dict[str, int] = {}
+        self.rows = 0
+        self.plan_other = ""
 
     def open(self, plan: ExportPlan, track: Track | None) -> None:
-        import netCDF4
-
-        self.ds = netCDF4.Dataset(self.path, "w", format="NETCDF4")
-        self.ds.setncatts(_globals(plan))
-        _trajectory(self.ds, plan)
-        for var in plan.variables.values():
-            dim = f"obs_{var.name}"
-            self.ds.createDimension(dim, None)
-            names = [f"{k}_{var.name}" for k in ("time", "lat", "lon", "alt")]
-            for kind, name in zip(("time", "lat", "lon", "alt"), names, strict=True):
-                _coord(self.ds, name, dim, kind)
-            _data_var(self.ds, var, var.name, dim, " ".join(names))
-            self.filled[var.name] = 0
+        self.ds = create(self.path, plan, list(plan.variables.values()))
+        self.plan_other = plan.other_clock
+        if plan.two_clocks:
+            _second_time(self.ds, plan)
 
     def write(
         self,
@@ -237,47 +208,38 @@ class NetcdfSink:
         lat: np.ndarray,
         lon: np.ndarray,
         alt: np.ndarray,
+        other: np.ndarray | None = None,
     ) -> None:
-        at, n = self.filled[var.name], len(time_ns)
-        sl = slice(at, at + n)
-        self.ds[f"time_{var.name}"][sl] = time_ns / 1e9
-        self.ds[f"lat_{var.name}"][sl] = lat
-        self.ds[f"lon_{var.name}"][sl] = lon
-        self.ds[f"alt_{var.name}"][sl] = alt
-        self.ds[var.name][sl] = value
-        self.filled[var.name] = at + n
+        sl = slice(self.rows, self.rows + len(time_ns))
+        self.ds["time"][0, sl] = time_ns / 1e9
+        if other is not None:
+            self.ds[self.plan_other][0, sl] = np.where(other == NAT, np.nan, other / 1e9)
+        self.ds["lat"][0, sl] = lat
+        self.ds["lon"][0, sl] = lon
+        self.ds["alt"][0, sl] = alt
+        self.ds[var.name][0, sl] = value
+        self.rows = sl.stop
 
     def close(self, plan: ExportPlan, summary: Summary) -> None:
-        _coverage(self.ds, summary)
+        coverage(self.ds, summary, plan)
         self.ds.close()
 
 
 def write_wide(path: Path, plan: ExportPlan, table: WideTable, summary: Summary) -> None:
-    """The resampled form: one ``obs`` dimension, ``time lat lon alt`` shared."""
-    import netCDF4
-
-    with netCDF4.Dataset(path, "w", format="NETCDF4") as ds:
-        ds.setncatts(_globals(plan))
+    """The resampled form: one row per period, every topic's mean on it."""
+    means = [replace(v, value_type="float64") for v in plan.variables.values()]
+    ds = create(path, plan, means)
+    try:
         ds.processing_level = f"resampled: mean over {table.period_s:g} s periods"
-        _trajectory(ds, plan)
-        ds.createDimension("obs", len(table.time_ns))
-        for kind in ("time", "lat", "lon", "alt"):
-            _coord(ds, kind, "obs", kind)
-        ds["time"][:] = table.time_ns / 1e9
-        ds["lat"][:], ds["lon"][:], ds["alt"][:] = table.lat, table.lon, table.alt
-        for var in plan.variables.values():
-            mean = Variable(
-                var.topic,
-                var.name,
-                var.unit,
-                "float64",
-                var.standard_name,
-                var.long_name,
-                var.valid_min,
-                var.valid_max,
-                var.temperature,
-            )
-            _data_var(ds, mean, var.name, "obs", "time lat lon alt")
+        n = len(table.time_ns)
+        if n:
+            ds["time"][0, :n] = table.time_ns / 1e9
+            ds["lat"][0, :n], ds["lon"][0, :n] = table.lat, table.lon
+            ds["alt"][0, :n] = table.alt
+        for var in means:
             ds[var.name].cell_methods = f"time: mean (interval: {table.period_s:g} s)"
-            ds[var.name][:] = table.columns[var.topic]
-        _coverage(ds, summary)
+            if n:
+                ds[var.name][0, :n] = table.columns[var.topic]
+        coverage(ds, summary, plan, table.period_s)
+    finally:
+        ds.close()

@@ -12,12 +12,14 @@ from __future__ import annotations
 import hashlib
 import json
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from modd_model.position import PlatformPosition, platform_position
 from modd_model.query import DEFAULT_VALUE_TYPE
 from modd_model.units import convertible, udunits
+
+from .metadata import Metadata
 
 
 class PlanError(ValueError):
@@ -38,6 +40,10 @@ class Variable:
     valid_max: float | None
     temperature: bool = False  # a temperature on a scale (CF units_metadata)
     cell_methods: str | None = None  # a received window's aggregation (CF §7.3)
+    sensor: str | None = None  # the model's sensor (the NetCDF instrument)
+    #: The sensor declares ``clock = instrument``: the archive's publish time is the
+    #: instrument's (the log time stays the PubBroker's receive time).
+    instrument_clock: bool = False
 
 
 @dataclass(frozen=True)
@@ -52,6 +58,23 @@ class ExportPlan:
     #: "archive": the samples archived on board; "received": the windows the
     #: subscribers received (the base-station record, received.py).
     source: str = "archive"
+    #: The model's sensors by name: their description (the NetCDF instruments).
+    sensors: dict[str, str] = field(default_factory=dict)
+    #: The scientist's discovery metadata (metadata.py); none declared when empty.
+    metadata: Metadata = field(default_factory=Metadata)
+    #: The primary time axis: "receive" (the PubBroker's receive time, every topic) or
+    #: "instrument" (the instrument's time for the topics of sensors declaring it).
+    clock: str = "receive"
+
+    @property
+    def two_clocks(self) -> bool:
+        """A topic of the export declares the instrument's clock: both times are written."""
+        return any(v.instrument_clock for v in self.variables.values())
+
+    @property
+    def other_clock(self) -> str:
+        """The name of the second time (column, variable): the clock not on the axis."""
+        return "receive_time" if self.clock == "instrument" else "instrument_time"
 
 
 def _safe(text: str) -> str:
@@ -76,6 +99,8 @@ def _variable(drone: str, sensor: dict[str, Any], var: dict[str, Any]) -> Variab
         valid_min=var.get("validMin"),
         valid_max=var.get("validMax"),
         temperature=convertible(var["unit"], "K"),
+        sensor=sensor["name"],
+        instrument_clock=sensor.get("clock") == "instrument",
     )
 
 
@@ -112,4 +137,8 @@ def plan_export(
         model_revision(model),
         start_ns,
         end_ns,
+        sensors={
+            s["name"]: s.get("description") or s.get("kind") or s["name"]
+            for s in model["drone"]["sensors"]
+        },
     )

@@ -96,6 +96,7 @@ def _subscriber_variable(sub: dict[str, Any], topic: Variable | None) -> Variabl
         value_type="float64",
         long_name=f"{what} (subscriber {name})",
         cell_methods=cell_methods(aggregation, period),
+        instrument_clock=False,  # a window's time is its end on the base station's axis
     )
 
 

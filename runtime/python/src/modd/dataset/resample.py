@@ -70,8 +70,9 @@ class Resampler:
         lat: np.ndarray,
         lon: np.ndarray,
         alt: np.ndarray,
+        other: np.ndarray | None = None,
     ) -> None:
-        self.add(var.topic, time_ns, value)
+        self.add(var.topic, time_ns, value)  # a period has the axis's time only
 
     def table(self) -> WideTable:
         keys = np.array(sorted({k for acc in self.sums.values() for k in acc}), dtype=np.int64)

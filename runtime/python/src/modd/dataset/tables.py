@@ -3,6 +3,12 @@
 (one row per period, one column per topic, named ``<sensor>_<variable>``).
 Written through Arrow in row groups of about a million rows, so memory stays
 bounded; times are UTC timestamps in nanoseconds.
+
+Parquet also carries what the data mean (tablemeta.py): each topic's unit,
+standard and long name in the schema's ``modd`` metadata (and the wide
+form's fields), the model's revision, and a GeoParquet 1.1 ``geometry``
+column (WKB points, longitude and latitude). CSV writes a missing value as
+an empty cell and times as ISO 8601 (``2026-11-27T10:00:00.000000000Z``).
 """
 
 from __future__ import annotations
@@ -12,28 +18,48 @@ from typing import Any
 
 import numpy as np
 
-from .export import Summary
+from .export import NAT, Summary
 from .plan import ExportPlan, Variable
 from .position import Track
 from .resample import WideTable
+from .tablemeta import iso_times, schema_metadata, with_field_metadata, wkb_points
 
 ROWS_PER_GROUP = 1 << 20
 
 
-def _long_schema() -> Any:
+def _time_type(fmt: str) -> Any:
     import pyarrow as pa
 
-    return pa.schema(
-        [
-            ("time", pa.timestamp("ns", tz="UTC")),
-            ("topic", pa.dictionary(pa.int32(), pa.string())),
-            ("value", pa.float64()),
-            ("unit", pa.dictionary(pa.int32(), pa.string())),
-            ("lat", pa.float64()),
-            ("lon", pa.float64()),
-            ("alt", pa.float64()),
-        ]
-    )
+    return pa.timestamp("ns", tz="UTC") if fmt == "parquet" else pa.string()
+
+
+def _long_schema(fmt: str, other: str | None = None) -> Any:
+    import pyarrow as pa
+
+    fields = [
+        ("time", _time_type(fmt)),
+        ("topic", pa.dictionary(pa.int32(), pa.string())),
+        ("value", pa.float64()),
+        ("unit", pa.dictionary(pa.int32(), pa.string())),
+        ("lat", pa.float64()),
+        ("lon", pa.float64()),
+        ("alt", pa.float64()),
+    ]
+    if other is not None:  # the second clock (docs/user-guide/datasets.md, "Both clocks")
+        fields.append((other, _time_type(fmt)))
+    if fmt == "parquet":
+        fields.append(("geometry", pa.binary()))
+    return pa.schema(fields)
+
+
+def _times(time_ns: np.ndarray, csv: bool) -> Any:
+    """A time column: ISO 8601 text for CSV, UTC ns for Parquet; NAT is null."""
+    import pyarrow as pa
+
+    missing = time_ns == NAT
+    if csv:
+        return pa.array(iso_times(time_ns), mask=missing if missing.any() else None)
+    return pa.array(time_ns, pa.timestamp("ns", tz="UTC"), mask=missing if missing.any() else None)
 
 
 class TableSink:
@@ -42,6 +68,7 @@ class TableSink:
     def __init__(self, path: Path, fmt: str) -> None:
         self.path, self.fmt = path, fmt
         self.writer: Any = None
+        self.schema: Any = None
         self.parts: list[Any] = []
         self.rows = 0
 
@@ -49,11 +76,12 @@ class TableSink:
         import pyarrow.csv as pcsv
         import pyarrow.parquet as pq
 
-        schema = _long_schema()
+        self.schema = _long_schema(self.fmt, plan.other_clock if plan.two_clocks else None)
         if self.fmt == "parquet":
-            self.writer = pq.ParquetWriter(self.path, schema, compression="zstd")
+            self.schema = self.schema.with_metadata(schema_metadata(plan, long_form=True))
+            self.writer = pq.ParquetWriter(self.path, self.schema, compression="zstd")
         else:
-            self.writer = pcsv.CSVWriter(self.path, schema)
+            self.writer = pcsv.CSVWriter(self.path, self.schema)
 
     def write(
         self,
@@ -63,26 +91,28 @@ class TableSink:
         lat: np.ndarray,
         lon: np.ndarray,
         alt: np.ndarray,
+        other: np.ndarray | None = None,
     ) -> None:
         import pyarrow as pa
 
         n = len(time_ns)
         topic = pa.DictionaryArray.from_arrays(np.zeros(n, np.int32), pa.array([var.topic]))
         unit = pa.DictionaryArray.from_arrays(np.zeros(n, np.int32), pa.array([var.unit]))
-        self.parts.append(
-            pa.record_batch(
-                [
-                    pa.array(time_ns, pa.timestamp("ns", tz="UTC")),
-                    topic,
-                    pa.array(value.astype(np.float64)),
-                    unit,
-                    pa.array(lat),
-                    pa.array(lon),
-                    pa.array(alt),
-                ],
-                schema=_long_schema(),
-            )
-        )
+        csv = self.fmt == "csv"
+        columns = [
+            _times(time_ns, csv),
+            topic,
+            pa.array(value.astype(np.float64), from_pandas=csv),
+            unit,
+            pa.array(lat, from_pandas=csv),
+            pa.array(lon, from_pandas=csv),
+            pa.array(alt, from_pandas=csv),
+        ]
+        if other is not None:
+            columns.append(_times(other, csv))
+        if not csv:
+            columns.append(wkb_points(lon, lat))
+        self.parts.append(pa.record_batch(columns, schema=self.schema))
         self.rows += n
         if self.rows >= ROWS_PER_GROUP:
             self._flush()
@@ -104,24 +134,28 @@ class TableSink:
 
 
 def write_wide(path: Path, fmt: str, plan: ExportPlan, table: WideTable) -> None:
-    """The wide form: ``time, lat, lon, alt`` then one column per topic."""
+    """The wide form: ``time, lat, lon, alt`` then one column per topic
+    (Parquet: then ``geometry``)."""
     import pyarrow as pa
     import pyarrow.csv as pcsv
     import pyarrow.parquet as pq
 
+    csv = fmt == "csv"
     cols: dict[str, Any] = {
-        "time": pa.array(table.time_ns, pa.timestamp("ns", tz="UTC")),
-        "lat": table.lat,
-        "lon": table.lon,
-        "alt": table.alt,
+        "time": _times(table.time_ns, csv),
+        "lat": pa.array(table.lat, from_pandas=csv),
+        "lon": pa.array(table.lon, from_pandas=csv),
+        "alt": pa.array(table.alt, from_pandas=csv),
     }
     for var in plan.variables.values():
-        cols[var.name] = table.columns[var.topic]
+        cols[var.name] = pa.array(table.columns[var.topic], pa.float64(), from_pandas=csv)
+    if csv:
+        pcsv.write_csv(pa.table(cols), path)
+        return
+    cols["geometry"] = wkb_points(table.lon, table.lat)
     arrow = pa.table(cols)
-    meta = {f"unit:{v.name}": v.unit for v in plan.variables.values()}
-    meta["resample_period_s"] = f"{table.period_s:g}"
-    arrow = arrow.replace_schema_metadata(meta)
-    if fmt == "parquet":
-        pq.write_table(arrow, path, compression="zstd")
-    else:
-        pcsv.write_csv(arrow, path)
+    meta = schema_metadata(plan, long_form=False, period_s=table.period_s)
+    arrow = pa.Table.from_arrays(
+        arrow.columns, schema=with_field_metadata(arrow.schema, plan).with_metadata(meta)
+    )
+    pq.write_table(arrow, path, compression="zstd")

@@ -1,9 +1,11 @@
-"""The track as GeoJSON (a FeatureCollection: the LineString of the track,
-then one Point per period carrying the chosen measurements as properties)
-and GPX 1.1 (one track segment; measurements in each point's
-``<extensions>``, in a ``modd`` namespace). Both are written from the wide
-form (one point per resampling period, 1 s unless ``--resample`` says), one
-point at a time; points without a position are left out (and counted).
+"""The track as GeoJSON (a FeatureCollection: the track, then one Point per
+period carrying the chosen measurements as properties) and GPX 1.1 (one
+track segment; measurements in each point's ``<extensions>``, in the MoDD
+namespace ``GPX_NS``, each with its ``unit``). Both are written from the
+wide form (one point per resampling period, 1 s unless ``--resample`` says),
+one point at a time; points without a position are left out (and counted).
+The track is a LineString from two points on, a Point with one (RFC 7946: a
+LineString has two positions or more), and absent with none.
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ from .export import Summary
 from .plan import ExportPlan
 from .resample import WideTable
 
-GPX_NS = "https://modd.example/gpx/1"
+#: The namespace of MoDD's GPX extensions (docs/user-guide/datasets.md, "GPX").
+GPX_NS = "https://modd.dev/schema/gpx/1"
 
 
 def _iso(ns: int) -> str:
@@ -47,22 +50,23 @@ def write_geojson(path: Path, plan: ExportPlan, table: WideTable, summary: Summa
         units = {v.name: v.unit for v in plan.variables.values()}
         f.write('{"type":"FeatureCollection","features":[')
         line = [[round(float(table.lon[i]), 8), round(float(table.lat[i]), 8)] for i in rows]
-        f.write(
-            json.dumps(
-                {
-                    "type": "Feature",
-                    "geometry": {"type": "LineString", "coordinates": line},
-                    "properties": {"drone": plan.drone, "units": units, "period_s": table.period_s},
-                }
+        sep = ""
+        if line:
+            geometry = (
+                {"type": "LineString", "coordinates": line}
+                if len(line) > 1
+                else {"type": "Point", "coordinates": line[0]}
             )
-        )
+            props = {"drone": plan.drone, "units": units, "period_s": table.period_s}
+            f.write(json.dumps({"type": "Feature", "geometry": geometry, "properties": props}))
+            sep = ",\n"
         for i in rows:
             coords = [float(table.lon[i]), float(table.lat[i])]
             if math.isfinite(table.alt[i]):
                 coords.append(float(table.alt[i]))
             props = {"time": _iso(int(table.time_ns[i])), **_props(plan, table, i)}
             f.write(
-                ",\n"
+                sep
                 + json.dumps(
                     {
                         "type": "Feature",
@@ -76,6 +80,7 @@ def write_geojson(path: Path, plan: ExportPlan, table: WideTable, summary: Summa
 
 def write_gpx(path: Path, plan: ExportPlan, table: WideTable, summary: Summary) -> None:
     rows = _positioned(table)
+    units = {v.name: escape(v.unit, {'"': "&quot;"}) for v in plan.variables.values()}
     _note_unplaced(table, rows, summary)
     with path.open("w", encoding="utf-8") as f:
         f.write(
@@ -91,7 +96,7 @@ def write_gpx(path: Path, plan: ExportPlan, table: WideTable, summary: Summary) 
             f.write(f"<time>{_iso(int(table.time_ns[i]))}</time><extensions>")
             for name, v in _props(plan, table, i).items():
                 if v is not None:
-                    f.write(f"<modd:{name}>{v!r}</modd:{name}>")
+                    f.write(f'<modd:{name} unit="{units[name]}">{v!r}</modd:{name}>')
             f.write("</extensions></trkpt>\n")
         f.write("</trkseg></trk>\n</gpx>\n")
 
