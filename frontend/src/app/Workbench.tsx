@@ -3,7 +3,7 @@
  * dock of panels. Loads the project's head revision, keeps the live plan
  * running.
  */
-import { useEffect, useMemo, useState } from "react";
+import { useEffect, useMemo, useRef, useState } from "react";
 import type { Api } from "../api/client";
 import type { ModelVersion } from "../api/types";
 import { ReactFlowProvider } from "@xyflow/react";
@@ -71,6 +71,8 @@ export function Workbench({ project, user, onLogout, onProjects, route }: Props)
     return s;
   }, [project.id]); // eslint-disable-line react-hooks/exhaustive-deps
   const [state, setState] = useState<"loading" | "ready" | string>("loading");
+  // Decided once, when the project opens (no view asked in the address, the user an admin).
+  const allRolesWhenEmpty = useRef(!route?.view && views.includes("admin"));
 
   useEffect(() => {
     let live = true;
@@ -78,6 +80,8 @@ export function Workbench({ project, user, onLogout, onProjects, route }: Props)
       async (v) => {
         if (!live) return;
         loadRevision(store, { id: project.id, name: project.name }, v.revision, v.model);
+        // An admin starting a model from nothing builds every part of it: the All roles view.
+        if (allRolesWhenEmpty.current && v.model.drone.sensors.length === 0) store.dispatch({ type: "setRole", role: "admin" });
         await restoreDraft(api, store, user.username, v).catch(() => undefined);
         if (live) setState("ready");
       },

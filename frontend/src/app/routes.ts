@@ -19,7 +19,7 @@ const PANEL_IDS: readonly PanelId[] = ["plan", "text", "deploy", "monitor", "sce
 export function parseRoute(path: string): Route {
   const m = /^\/projects\/(\d{1,9})(?:\/([a-z]+))?(?:\/([a-z0-9]+))?\/?$/.exec(path);
   if (!m) return { project: null, view: null, panel: null };
-  const view = (VIEW_ROLES as readonly string[]).includes(m[2] ?? "") ? (m[2] as ViewRole) : null;
+  const view = ([...VIEW_ROLES, "admin"] as readonly string[]).includes(m[2] ?? "") ? (m[2] as ViewRole) : null;
   const panel = (PANEL_IDS as readonly string[]).includes(m[3] ?? "") ? (m[3] as PanelId) : null;
   return { project: Number(m[1]), view, panel };
 }

@@ -37,7 +37,7 @@ describe("role permissions", () => {
   });
 
   it("lists views for a user's roles", () => {
-    expect(viewsFor(["admin"])).toEqual(["designer", "integrator", "scientist", "operator"]);
+    expect(viewsFor(["admin"])).toEqual(["designer", "integrator", "scientist", "operator", "admin"]); // All roles last
     expect(viewsFor(["scientist", "operator"])).toEqual(["scientist", "operator"]);
   });
 });

@@ -18,7 +18,8 @@ import { MODEL_PART_OWNERS } from "./contracts.gen";
 export type Role = "designer" | "integrator" | "scientist" | "operator" | "admin";
 /** The four views of the workbench, one per working role. */
 export const VIEW_ROLES = ["designer", "integrator", "scientist", "operator"] as const;
-export type ViewRole = (typeof VIEW_ROLES)[number];
+/** A view: one role's, or "admin" (titled "All roles"): everything, for an admin building a model alone. */
+export type ViewRole = (typeof VIEW_ROLES)[number] | "admin";
 
 const EDITS: Record<Role, readonly ElementKind[]> = {
   designer: ["drone", "pubBroker", "subBroker", "link", "publisher"],
@@ -56,9 +57,9 @@ export function canDeploy(role: Role): boolean {
   return role === "operator" || role === "admin";
 }
 
-/** The views a user with these roles may open (admin opens all). */
+/** The views a user with these roles may open (admin opens all, and "All roles" last). */
 export function viewsFor(roles: readonly Role[]): ViewRole[] {
-  if (roles.includes("admin")) return [...VIEW_ROLES];
+  if (roles.includes("admin")) return [...VIEW_ROLES, "admin"];
   return VIEW_ROLES.filter((r) => roles.includes(r));
 }
 
@@ -68,6 +69,7 @@ export const VIEW_TITLES: Record<ViewRole, string> = {
   integrator: "Sensor integrator",
   scientist: "Scientist",
   operator: "Operator",
+  admin: "All roles",
 };
 
 /**

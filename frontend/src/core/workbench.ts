@@ -47,6 +47,8 @@ export type Action =
   | { type: "setField"; id: string; path: string[]; value: unknown }
   | { type: "move"; positions: Record<string, Position> }
   | { type: "copy"; ids: string[] }
+  /** Copy and paste in one step, leaving the clipboard as it is (a subscription asked twice). */
+  | { type: "duplicate"; ids: string[] }
   | { type: "paste" }
   | { type: "undo" }
   | { type: "redo" }
@@ -140,9 +142,10 @@ function edit(s: WorkbenchState, a: Action): WorkbenchState {
     case "move":
       // Anyone may arrange the diagram: the layout is presentation, not model.
       return commit(s, moveNodes(m, a.positions));
+    case "duplicate":
     case "paste": {
-      if (!s.clipboard || isEmptyFragment(s.clipboard)) return s;
-      const c = s.clipboard;
+      const c = a.type === "paste" ? s.clipboard : copyElements(m, a.ids);
+      if (!c || isEmptyFragment(c)) return s;
       if (c.sensors.length && !allowed(s, "sensor")) return refuse(s, denied(s.role, "sensors"));
       if (c.publishers.length && !allowed(s, "publisher")) return refuse(s, denied(s.role, "publishers"));
       if (c.subscribers.length && !allowed(s, "subscriber")) return refuse(s, denied(s.role, "subscribers"));

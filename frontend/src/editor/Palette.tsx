@@ -59,6 +59,7 @@ export function Palette() {
         <button aria-label="Redo" title={edits ? "Redo (Ctrl+Shift+Z)" : offTitle} disabled={!edits || !canRedo(history)} onClick={() => store.dispatch({ type: "redo" })}>↷ Redo</button>
         <button aria-label="Copy" title={edits ? "Copy (Ctrl+C)" : offTitle} disabled={!edits || !selection.length} onClick={() => store.dispatch({ type: "copy", ids: selection })}>Copy</button>
         <button aria-label="Paste" title={edits ? "Paste (Ctrl+V)" : offTitle} disabled={!edits || !hasClipboard} onClick={() => store.dispatch({ type: "paste" })}>Paste</button>
+        <button aria-label="Duplicate" title={edits ? "Duplicate the selection (Ctrl+D)" : offTitle} disabled={!edits || !selection.length} onClick={() => store.dispatch({ type: "duplicate", ids: selection })}>Duplicate</button>
         <button aria-label="Delete" title={edits ? "Delete (Del)" : offTitle} disabled={!edits || !removable} onClick={() => removeSelection(store)}>Delete</button>
       </div>
       <h2>View</h2>

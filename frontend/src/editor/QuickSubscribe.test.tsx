@@ -55,4 +55,29 @@ describe("QuickSubscribe", () => {
     expect(screen.getByRole("alert").textContent).toBe("Not a period: fast");
     expect((screen.getByRole("button", { name: /Subscribe/ }) as HTMLButtonElement).disabled).toBe(true);
   });
+  it("lists every aggregation and toggles one with a plain click, no modifier key", () => {
+    mount();
+    const select = screen.getByLabelText("Aggregation") as HTMLSelectElement;
+    expect(select.size).toBe(select.options.length); // none hidden below the fold
+    expect([...select.options].map((o) => o.value)).toEqual(expect.arrayContaining(["LAST", "FIRST", "ALL"]));
+    const option = (v: string) => [...select.options].find((o) => o.value === v)!;
+    fireEvent.mouseDown(option("MAX"));
+    expect([...select.selectedOptions].map((o) => o.value).sort()).toEqual(["AVERAGE", "MAX"]);
+    fireEvent.mouseDown(option("AVERAGE"));
+    expect([...select.selectedOptions].map((o) => o.value)).toEqual(["MAX"]);
+    fireEvent.mouseDown(option("MAX")); // the last one stays
+    expect([...select.selectedOptions].map((o) => o.value)).toEqual(["MAX"]);
+  });
+
+  it("leaves the last subscription made selected, so that Duplicate makes it twice", () => {
+    const store = mount();
+    const before = currentModel(store.getState().wb).subscribers.length;
+    act(() => { fireEvent.click(screen.getByRole("button", { name: "Subscribe" })); });
+    const made = currentModel(store.getState().wb).subscribers.slice(before);
+    expect(store.getState().wb.selection).toEqual([`sub:${made[made.length - 1].name}`]);
+    act(() => { store.dispatch({ type: "duplicate", ids: store.getState().wb.selection }); });
+    const after = currentModel(store.getState().wb).subscribers.slice(before);
+    expect(after).toHaveLength(2);
+    expect(after.map((x) => `${x.topic} ${x.periodS} ${x.aggregation}`)).toEqual([1, 2].map(() => "usv.accelerometer.accel_x 1.0 AVERAGE"));
+  });
 });

@@ -1,8 +1,9 @@
 /**
  * The scientist's shortcut: topics, periods and aggregations, then Subscribe —
  * a subscriber connected to its topic for every topic × period × aggregation
- * chosen (Ctrl/Shift-click picks several topics or aggregations; periods are
- * written "2.0, 0.25"). The topics are grouped under their sensor's name, each
+ * chosen (a plain click adds a topic or an aggregation to the choice or takes it
+ * out, every aggregation listed; periods are written "2.0, 0.25"). After a submit
+ * the last subscription made is selected: Duplicate (Ctrl+D) makes it twice. The topics are grouped under their sensor's name, each
  * by its variable and unit so that the narrow palette cuts no name (the full
  * name is the tooltip); what will be made is spelled out in full under the form.
  */
@@ -17,6 +18,21 @@ import { parsePeriods, subscriptionGrid } from "../core/subscriptionGrid";
 import { useEditorStore, useModel } from "./useEditor";
 
 const selected = (e: React.ChangeEvent<HTMLSelectElement>) => [...e.target.selectedOptions].map((o) => o.value);
+
+/**
+ * A plain click on an option adds it to the choice or takes it out (no Ctrl or Shift:
+ * a choice of several is the usual case here), keeping at least one.
+ */
+function toggleOnClick<T extends string>(chosen: readonly T[], set: (v: T[]) => void) {
+  return (e: React.MouseEvent<HTMLSelectElement>) => {
+    const option = e.target as HTMLElement;
+    if (option.tagName !== "OPTION" || e.ctrlKey || e.metaKey || e.shiftKey) return;
+    e.preventDefault();
+    const value = (option as HTMLOptionElement).value as T;
+    const next = chosen.includes(value) ? chosen.filter((x) => x !== value) : [...chosen, value];
+    if (next.length) set(next);
+  };
+}
 
 export function QuickSubscribe() {
   const store = useEditorStore();
@@ -42,7 +58,7 @@ export function QuickSubscribe() {
     >
       <label>Topic
         <select multiple size={Math.min(6, topics.length + model.drone.sensors.length) || 1} value={chosen}
-          title={chosen.join(", ")} onChange={(e) => setTopics(selected(e))} disabled={!topics.length}>
+          title={chosen.join(", ")} onChange={(e) => setTopics(selected(e))} onMouseDown={toggleOnClick(chosen, setTopics)} disabled={!topics.length}>
           {model.drone.sensors.map((sensor) => (
             <optgroup key={sensor.name} label={sensor.name} title={sensor.description || undefined}>
               {topics.filter((t) => t.sensor === sensor).map((t) => (
@@ -58,7 +74,8 @@ export function QuickSubscribe() {
       </label>
       {bad.length > 0 && <span className="error" role="alert">Not a period: {bad.join(", ")}</span>}
       <label>Aggregation
-        <select multiple size={3} value={aggregations} onChange={(e) => setAggregations(selected(e) as Aggregation[])}>
+        <select multiple size={AggregationValues.length} value={aggregations} onChange={(e) => setAggregations(selected(e) as Aggregation[])}
+          onMouseDown={toggleOnClick(aggregations, setAggregations)} title="Every aggregation is listed; a click adds one or takes it out">
           {AggregationValues.map((a) => <option key={a}>{a}</option>)}
         </select>
       </label>

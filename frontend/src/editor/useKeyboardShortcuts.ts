@@ -1,7 +1,7 @@
 /**
  * Keyboard shortcuts of the diagram: Ctrl/⌘+Z undo, Ctrl/⌘+Shift+Z or
  * Ctrl/⌘+Y redo, Delete/Backspace remove the selection, Ctrl/⌘+C copy,
- * Ctrl/⌘+V paste. Ignored while typing in a field or the text editor.
+ * Ctrl/⌘+V paste, Ctrl/⌘+D duplicate. Ignored while typing in a field or the text editor.
  */
 import { useEffect } from "react";
 import { useEditorStore } from "./useEditor";
@@ -25,6 +25,7 @@ export function useKeyboardShortcuts(): void {
       else if (mod && ((key === "z" && e.shiftKey) || key === "y")) store.dispatch({ type: "redo" });
       else if (mod && key === "c") store.dispatch({ type: "copy", ids: selection });
       else if (mod && key === "v") store.dispatch({ type: "paste" });
+      else if (mod && key === "d" && selection.length) store.dispatch({ type: "duplicate", ids: selection });
       else if ((e.key === "Delete" || e.key === "Backspace") && selection.length) removeSelection(store);
       else return;
       e.preventDefault();
