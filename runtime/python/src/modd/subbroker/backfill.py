@@ -120,12 +120,20 @@ class BackfillManager:
             self._ensure_thread()
         self.save()
 
-    def on_windows(self, running: Running, windows: Sequence[Window]) -> None:
-        """Live windows that arrived (link thread)."""
+    def on_windows(
+        self,
+        running: Running,
+        windows: Sequence[Window],
+        derived: Sequence[tuple[StreamKey, int, int]] = (),
+    ) -> None:
+        """Live windows that arrived, and the derived windows they completed
+        (stream, start, end) that the fan-out delivered (link thread)."""
         sent = running.fanout.sent
         with self._lock:
             for w in windows:
                 self.record.add_received(sent[w.stream], w.start_ns, w.end_ns)
+            for stream, start, end in derived:
+                self.record.add_derived(stream, start, end)
             if not self._dirty:  # the clock thread saves it within SAVE_S
                 self._dirty = True
                 self._wake.notify_all()

@@ -21,6 +21,7 @@ from modd_model.diagnostics import Diagnostic, ModelError
 from modd_model.query import topics
 from modd_model.signing import NonceGuard, signature
 from modd_plan import Plan
+from modd_plan.streams import StreamKey
 
 from modd.link.frames import AuthOk, Config, ConfigAck, ErrorCode, Status
 from modd.link.receiver import Window
@@ -303,10 +304,11 @@ class SubBroker:
         running = self._by_id.get(windows[0].config_id)
         if running is None or running.slots is None:
             return
-        self.backfill.on_windows(running, windows)
+        derived: list[tuple[StreamKey, int, int]] = []
         self.delivered += running.slots.deliver(
-            windows, self._sinks(), self.backfill.filled_already
+            windows, self._sinks(), self.backfill.filled_already, derived.append
         )
+        self.backfill.on_windows(running, windows, derived)
 
     def _link_up(self) -> None:
         """After a reconnection: the running backfill resumes, and the subscriptions whose

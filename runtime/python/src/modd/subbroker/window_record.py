@@ -84,6 +84,9 @@ class WindowRecord:
     def __init__(self) -> None:
         self.epochs: list[Epoch] = []
         self.received: dict[StreamKey, Intervals] = {}
+        # derived windows delivered live, per derived stream: a derived window counts
+        # when the fan-out delivered it, not when its source interval arrived
+        self.derived: dict[StreamKey, Intervals] = {}
         self.filled: dict[tuple[str, StreamKey], Intervals] = {}
 
     def begin(self, epoch: Epoch) -> None:
@@ -96,6 +99,9 @@ class WindowRecord:
     def add_received(self, source: StreamKey, start: int, end: int) -> None:
         self.received.setdefault(source, Intervals()).add(start, end)
 
+    def add_derived(self, stream: StreamKey, start: int, end: int) -> None:
+        self.derived.setdefault(stream, Intervals()).add(start, end)
+
     def add_filled(self, subscriber: str, stream: StreamKey, start: int, end: int) -> None:
         self.filled.setdefault((subscriber, stream), Intervals()).add(start, end)
 
@@ -107,7 +113,7 @@ class WindowRecord:
     def delivered(
         self, subscriber: str, stream: StreamKey, source: StreamKey, start: int, end: int
     ) -> bool:
-        live = self.received.get(source)
+        live = self.received.get(source) if stream == source else self.derived.get(stream)
         if live is not None and live.covers(start, end):
             return True
         filled = self.filled.get((subscriber, stream))
@@ -189,6 +195,7 @@ class WindowRecord:
                 for e in self.epochs
             ],
             "received": {k.key: iv.spans for k, iv in self.received.items()},
+            "derived": {k.key: iv.spans for k, iv in self.derived.items()},
             "filled": [[s, k.key, iv.spans] for (s, k), iv in self.filled.items()],
         }
 
@@ -206,6 +213,15 @@ class WindowRecord:
             rec.received[StreamKey.parse(k)] = Intervals(_spans(spans))
         for s, k, spans in doc["filled"]:
             rec.filled[(str(s), StreamKey.parse(k))] = Intervals(_spans(spans))
+        if "derived" in doc:
+            for k, spans in doc["derived"].items():
+                rec.derived[StreamKey.parse(k)] = Intervals(_spans(spans))
+        else:  # a record of an earlier version counted a derived window by its source
+            for e in rec.epochs:
+                for d in e.due:
+                    for a, b in rec.received.get(d.source, Intervals()).spans:
+                        if d.stream != d.source:
+                            rec.add_derived(d.stream, a, b)
         return rec
 
 
