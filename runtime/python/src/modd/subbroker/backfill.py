@@ -97,8 +97,13 @@ class BackfillManager:
             return WindowRecord()
         try:
             return WindowRecord.from_json(doc)
-        except (KeyError, TypeError, ValueError) as exc:
-            log.error("window record in the state directory unreadable (%s): starting afresh", exc)
+        except (ValueError, ArithmeticError) as exc:
+            if self._state is not None:
+                self._state.set_aside(
+                    "windows.json",
+                    f"not a window record: {exc}; the gaps of earlier configs are forgotten "
+                    "(the running config's are recorded afresh)",
+                )
             return WindowRecord()
 
     def save(self) -> None:

@@ -236,7 +236,8 @@ class SubBroker:
             return self._prepare(running.model, ok.config_id, running.meta)
         try:
             return self._prepare(self._model, ok.config_id, self._meta)
-        except ValueError as exc:
+        except (ValueError, KeyError, TypeError, AttributeError, ArithmeticError) as exc:
+            # a kept model that cannot be planned (a damaged deployed.json) never stops the run
             if self._meta.source != "kept":
                 raise
             log.error(

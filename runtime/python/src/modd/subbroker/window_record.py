@@ -201,32 +201,17 @@ class WindowRecord:
 
     @classmethod
     def from_json(cls, doc: Any) -> WindowRecord:
-        """The record kept; raises ValueError (or KeyError, TypeError) if it is not one."""
-        rec = cls()
-        for e in doc["epochs"]:
-            due = [
-                Due(str(s), StreamKey.parse(k), StreamKey.parse(src), str(u), str(t))
-                for s, k, src, u, t in e["due"]
-            ]
-            rec.begin(Epoch(str(e["mission"]), int(e["config_id"]), int(e["epoch_ns"]), due))
-        for k, spans in doc["received"].items():
-            rec.received[StreamKey.parse(k)] = Intervals(_spans(spans))
-        for s, k, spans in doc["filled"]:
-            rec.filled[(str(s), StreamKey.parse(k))] = Intervals(_spans(spans))
-        if "derived" in doc:
-            for k, spans in doc["derived"].items():
-                rec.derived[StreamKey.parse(k)] = Intervals(_spans(spans))
-        else:  # a record of an earlier version counted a derived window by its source
-            for e in rec.epochs:
-                for d in e.due:
-                    for a, b in rec.received.get(d.source, Intervals()).spans:
-                        if d.stream != d.source:
-                            rec.add_derived(d.stream, a, b)
-        return rec
+        """The record kept (:func:`.record_file.read_record`, bounded); raises
+        ValueError naming the first field that is not one."""
+        from .record_file import read_record
 
+        return read_record(doc)
 
-def _spans(raw: Any) -> list[tuple[int, int]]:
-    spans = [(int(a), int(b)) for a, b in raw]
-    if any(b < a for a, b in spans) or spans != sorted(spans):
-        raise ValueError("intervals out of order")
-    return spans
+    def derived_from_sources(self) -> None:
+        """Count each derived window delivered where its source interval arrived (how
+        a record of an earlier version counted them)."""
+        for e in self.epochs:
+            for d in e.due:
+                if d.stream != d.source:
+                    for a, b in self.received.get(d.source, Intervals()).spans:
+                        self.add_derived(d.stream, a, b)
