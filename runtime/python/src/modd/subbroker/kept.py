@@ -29,7 +29,7 @@ Source = Literal["configured", "deploy", "kept"]
 #: Largest state file read, by name ("*": the others); a larger one is set aside.
 #: The window record is bounded when written (record_file: epochs, intervals),
 #: a kept deployment by the deploy request's bound.
-MAX_STATE_BYTES = {"windows.json": 16 * 1024 * 1024, "*": MAX_DEPLOY_BYTES + 64 * 1024}
+MAX_STATE_BYTES = {"windows.json": 8 * 1024 * 1024, "*": MAX_DEPLOY_BYTES + 64 * 1024}
 
 
 @dataclass(frozen=True)

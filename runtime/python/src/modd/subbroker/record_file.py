@@ -15,20 +15,16 @@ ValueError: /received: an object expected, not a list
 from __future__ import annotations
 
 import itertools
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from modd_contracts.aggregations_gen import AGGREGATIONS
 from modd_plan.streams import StreamKey
 
 from .fanout import period_us
-
-if TYPE_CHECKING:
-    from .window_record import WindowRecord
+from .window_record import MAX_EPOCHS, MAX_SPANS, Due, Epoch, Intervals, WindowRecord
 
 #: Streams due in one epoch (subscribers × streams) taken from a kept record.
 MAX_DUE = 20_000
-#: Merged intervals per stream kept (the newest): a few per outage.
-MAX_SPANS = 4096
 _NS_MAX = 1 << 63
 _PERIOD_MAX_US = 86_400 * 1_000_000  # a window of at most a day
 _AGGREGATIONS = {a.name for a in AGGREGATIONS}
@@ -90,8 +86,6 @@ def _spans(v: Any, at: str) -> list[tuple[int, int]]:
 
 def read_record(doc: Any) -> WindowRecord:
     """The record kept in ``doc`` (parsed JSON); ValueError naming the first bad field."""
-    from .window_record import MAX_EPOCHS, Due, Epoch, Intervals, WindowRecord
-
     top = _obj(doc, "")
     rec = WindowRecord()
     epochs = _list(top.get("epochs"), "/epochs")

@@ -31,6 +31,8 @@ from .fanout import period_us
 
 #: Epochs kept (the oldest are forgotten past this: a mission of many redeploys).
 MAX_EPOCHS = 256
+#: Merged intervals kept per stream (the newest): a few per outage.
+MAX_SPANS = 1024
 
 
 class Intervals:
@@ -194,9 +196,10 @@ class WindowRecord:
                 }
                 for e in self.epochs
             ],
-            "received": {k.key: iv.spans for k, iv in self.received.items()},
-            "derived": {k.key: iv.spans for k, iv in self.derived.items()},
-            "filled": [[s, k.key, iv.spans] for (s, k), iv in self.filled.items()],
+            # the newest MAX_SPANS intervals a stream: what the reader takes (record_file)
+            "received": {k.key: iv.spans[-MAX_SPANS:] for k, iv in self.received.items()},
+            "derived": {k.key: iv.spans[-MAX_SPANS:] for k, iv in self.derived.items()},
+            "filled": [[s, k.key, iv.spans[-MAX_SPANS:]] for (s, k), iv in self.filled.items()],
         }
 
     @classmethod
