@@ -529,6 +529,12 @@ class SubBroker:
             "last_data_ns": stats.last_data_ns,
             "last_error": stats.last_error,
             "delivered": self.delivered,
+            # state files that could not be used and were renamed aside (docs/subbroker.md)
+            **(
+                {"state_files_set_aside": list(self._state.set_aside_files)}
+                if self._state.set_aside_files
+                else {}
+            ),
             "predicted_link_bytes_per_s": predicted,
             "routes": running.fanout.routes() if running else {},
             "dynamic": self.dynamic.names(),

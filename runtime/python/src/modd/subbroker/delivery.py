@@ -336,8 +336,13 @@ class SlotDelivery:
         by_id = {w.stream: window_of(w.value, *kinds[w.stream]) for w in windows}
         now = time.time_ns()
         payloads, prefixes, sent = self._payloads, self._prefixes, self._sent
+        # an empty slot (a datagram link carries it; tcp does not send it) completes
+        # derived windows but delivers no sent stream's window
+        empty = all(v is None for v in by_id.values())
         count = 0
         for out in self.fanout.on_slot(slot, date_us, by_id):
+            if empty and out.stream in sent:
+                continue
             payload, period = payloads.get(out.stream) or self._payload(out.stream)
             value, samples = split_window(out.stream.aggregation, out.value)
             end_ns = epoch + out.end_us * 1000  # a derived window's end, not the slot's
