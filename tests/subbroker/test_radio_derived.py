@@ -1,8 +1,9 @@
 """Every window every subscriber is owed, derived ones included, over a lossy radio
-(udp and serial through modd-radio at 10 % loss each way) and across an ingest stall
-of at least 1 s: delivered live or by `modd backfill --gaps`, each once, each equal to
-the aggregate recomputed from the on-board archive (the official `mcap` reader: the
-oracle); `--gaps` asked again over the same span then finds nothing.
+(udp and serial through modd-radio at 10 % loss each way, and a 3 s outage that a
+256-byte resend ring cannot repair) and across an ingest stall of at least 1 s:
+delivered live or by `modd backfill --gaps`, each once, each equal to the aggregate
+recomputed from the on-board archive (the official `mcap` reader: the oracle);
+`--from/--to` over the same span then finds nothing to fill.
 
 The fault this guards (issue 38): scenario 1's 2 s AVERAGE subscriptions (sub_1,
 sub_2) are derived at the base station from the 0.25 s streams; a source window
@@ -52,6 +53,7 @@ pytestmark = [pytest.mark.e2e, pytest.mark.usefixtures("needs_pubbroker")]
 SUBS = {f"sub_{i}": (2_000_000_000 if i in (1, 2) else 250_000_000) for i in range(1, 8)}
 LOAD_S = 10.0  # before and after the stall
 STALL_S = 1.0
+OUTAGE_AT_S, OUTAGE_S = 15.0, 3.0  # from the radio's start: in the first load (or later)
 
 
 def backfill_all(zport: int, sb: Proc, *span: str) -> dict[str, dict[str, Any]]:
@@ -100,15 +102,18 @@ def check_every_window(
 
 
 def start_link(tmp: Path, model: Path, transport: str, zport: int, ingress: int) -> list[Any]:
-    spec = "loss=0.1,latency_ms=30,jitter_ms=10,seed=4"
+    """The PubBroker (a resend ring of 256 B: what the outage loses stays lost live),
+    the radio (10 % loss, an outage of OUTAGE_S at OUTAGE_AT_S), the SubBroker."""
+    spec = f"loss=0.1,latency_ms=30,jitter_ms=10,outage={OUTAGE_AT_S}+{OUTAGE_S},seed=4"
     if transport == "udp":
         port = free_port("udp")
-        pb = start_pubbroker_dgram(tmp, model, {"transport": "udp", "port": port}, ingress)
+        link = {"transport": "udp", "port": port, "ring_bytes": 256}
+        pb = start_pubbroker_dgram(tmp, model, link, ingress)
         radio, relay = start_radio_udp(tmp, port, spec)
         cfg = subbroker_dgram_config(tmp, model, f"127.0.0.1:{relay}", zport, "udp")
     else:
         radio, base, drone = start_radio_serial(tmp, spec)
-        link = {"transport": "serial", "device": drone, "port": 1}
+        link = {"transport": "serial", "device": drone, "port": 1, "ring_bytes": 256}
         pb = start_pubbroker_dgram(tmp, model, link, ingress)
         cfg = subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport, "serial", device=base)
     return [radio, pb, start_subbroker(tmp, cfg)]
@@ -128,6 +133,7 @@ def test_every_window_is_delivered_or_backfilled_over_a_lossy_radio(
         got = Collector()
         session.declare_subscriber("modd/usv/sub/*", got.on_sample)
         assert sb.wait_log("running", 40), sb.log()[-2000:]
+        outage_seen = time.monotonic() - radio.started < OUTAGE_AT_S - 2  # running before it
         with processes(start_load(tmp_path, model, ingress, LOAD_S, tag="load1", seed=1)):
             time.sleep(LOAD_S + 0.3)
         time.sleep(STALL_S)  # the ingest stall: no sample at all (load1 has ended)
@@ -150,6 +156,8 @@ def test_every_window_is_delivered_or_backfilled_over_a_lossy_radio(
         assert check_against_archive({sub: mine}, archive) == len(mine)
         check_every_window(sub, mine, period, until_ns, archive, derived=period > 10**9)
     derived_backfilled = sum(v.backfilled for s in ("sub_1", "sub_2") for v in values[s])
+    if outage_seen:  # the outage's derived windows: gaps that only the backfill filled
+        assert derived_backfilled > 0, first
     empty = sum(v.value is None and not v.backfilled for s in ("sub_1", "sub_2") for v in values[s])
     print(  # the figures docs/reliability.md quotes
         f"{transport}: backfilled {sum(f['windows'] for f in first.values())} windows "

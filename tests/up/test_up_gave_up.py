@@ -5,11 +5,17 @@ document of the contract (status.schema.json), link `stopped`."""
 from __future__ import annotations
 
 import json
+import threading
+import time
 from pathlib import Path
 
+import pytest
+from modd.ports import free_port
 from modd.supervise import watch
+from modd.zenoh_auth import CredentialStore
+from modd.zenoh_session import client_settings, open_session
 from modd_contracts.schema import validate
-from modd_launch.announce import stopped_status
+from modd_launch.announce import announce_stop, settings_for, stopped_status
 
 
 def test_giving_up_says_which_process_and_why_in_a_status_of_the_contract() -> None:
@@ -48,3 +54,33 @@ def test_giving_up_says_which_process_and_why_in_a_status_of_the_contract() -> N
     doc = stopped_status("usv", info)
     assert validate("status", json.loads(json.dumps(doc))) == []
     assert doc["link"] == "stopped" and doc["supervisor"] == info
+
+
+@pytest.mark.e2e
+def test_a_viewer_gets_the_stopped_status_where_the_subbroker_was(tmp_path: Path) -> None:
+    """The SubBroker is gone; `modd up` opens a router on its endpoint with its
+    credentials and puts the stopped status: a viewer (its own credentials) gets it."""
+    store = CredentialStore(tmp_path)
+    store.ensure()
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    info = {
+        "state": "GAVE_UP",
+        "process": "pubbroker",
+        "exit_code": 1,
+        "reason": "r",
+        "log": "/tmp/pb.log",
+        "at_ns": 1,
+    }
+    args = (settings_for([endpoint], []), store, "usv", info, 3.0)
+    told = threading.Thread(target=announce_stop, args=args)
+    told.start()
+    time.sleep(0.5)
+    got: list[dict[str, object]] = []
+    viewer = open_session(client_settings(endpoint, store.cred_file("viewer")))
+    viewer.declare_subscriber(
+        "modd/usv/status", lambda s: got.append(json.loads(s.payload.to_bytes()))
+    )
+    told.join()
+    viewer.close()  # type: ignore[no-untyped-call]
+    assert got and got[-1]["supervisor"] == info and got[-1]["link"] == "stopped"
+    assert validate("status", got[-1]) == []

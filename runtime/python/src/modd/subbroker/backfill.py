@@ -32,6 +32,7 @@ from modd.link.receiver import Window
 
 from .backfill_queue import BackfillQueue, Filled, Job, Run, Timing
 from .payload import DeliveredValue
+from .record_file import read_record
 from .window_record import Due, Epoch, WindowRecord
 
 if TYPE_CHECKING:
@@ -96,7 +97,7 @@ class BackfillManager:
         if doc is None:
             return WindowRecord()
         try:
-            return WindowRecord.from_json(doc)
+            return read_record(doc)
         except (ValueError, ArithmeticError) as exc:
             if self._state is not None:
                 self._state.set_aside(

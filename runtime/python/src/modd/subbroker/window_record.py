@@ -180,7 +180,7 @@ class WindowRecord:
                 start = None
         return runs
 
-    # -- kept in the state directory ----------------------------------------------------
+    # -- kept in the state directory (read back by record_file.read_record) -----------
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -201,14 +201,6 @@ class WindowRecord:
             "derived": {k.key: iv.spans[-MAX_SPANS:] for k, iv in self.derived.items()},
             "filled": [[s, k.key, iv.spans[-MAX_SPANS:]] for (s, k), iv in self.filled.items()],
         }
-
-    @classmethod
-    def from_json(cls, doc: Any) -> WindowRecord:
-        """The record kept (:func:`.record_file.read_record`, bounded); raises
-        ValueError naming the first field that is not one."""
-        from .record_file import read_record
-
-        return read_record(doc)
 
     def derived_from_sources(self) -> None:
         """Count each derived window delivered where its source interval arrived (how
