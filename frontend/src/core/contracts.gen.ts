@@ -110,7 +110,7 @@ export interface SubBrokerStatus {
   radio?: RadioStatus | null;
   /** The plug-and-play instruments' health (modd-sensors, docs/sensors.md "Health") from the PubBroker's last STATUS, by sensor name; absent when no instrument reports. Carried as docs/protocol.md, STATUS, "Instruments' health". */
   sensors?: Record<string, SensorHealth>;
-  /** Put by `modd up` when it gave up the run (docs/reliability.md, "Supervision"): the SubBroker is stopped with the rest, so this last status (link `stopped`) says which process ended the run and why; absent otherwise. */
+  /** Put by `modd up` when it gave up the run (docs/reliability.md, "Base station, store and tools"): the SubBroker is stopped with the rest, so this last status (link `stopped`) says which process ended the run and why; absent otherwise. */
   supervisor?: unknown;
 }
 

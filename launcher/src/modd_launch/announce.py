@@ -1,5 +1,5 @@
 """What ``modd up`` says on the zenoh status key when it gives up a run
-(docs/reliability.md, "Supervision"): the SubBroker that published the status is
+(docs/reliability.md, "Base station, store and tools"): the SubBroker that published the status is
 stopped with the rest, so ``modd up`` opens a session where the SubBroker's was
 (the same endpoints, the SubBroker's credentials) and puts, for a few seconds
 so that reconnecting clients (the workbench) get it, a status whose
