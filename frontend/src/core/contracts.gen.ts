@@ -70,6 +70,8 @@ export interface SubBrokerStatus {
   last_error: string | null;
   /** Values delivered since start. */
   delivered: number;
+  /** State files the SubBroker could not use and renamed aside at start (docs/subbroker.md, "State files never stop the SubBroker"); absent when none. */
+  state_files_set_aside?: unknown[];
   /** The planner's prediction for the running plan (modd_plan.linkcost), or null. */
   predicted_link_bytes_per_s: PredictedLink | null;
   /** Subscriber names per routed stream key. */
@@ -108,6 +110,8 @@ export interface SubBrokerStatus {
   radio?: RadioStatus | null;
   /** The plug-and-play instruments' health (modd-sensors, docs/sensors.md "Health") from the PubBroker's last STATUS, by sensor name; absent when no instrument reports. Carried as docs/protocol.md, STATUS, "Instruments' health". */
   sensors?: Record<string, SensorHealth>;
+  /** Put by `modd up` when it gave up the run (docs/reliability.md, "Base station, store and tools"): the SubBroker is stopped with the rest, so this last status (link `stopped`) says which process ended the run and why; absent otherwise. */
+  supervisor?: unknown;
 }
 
 /** A datagram link's figures (modd.subbroker.dglink.DatagramLinkClient.radio_status): the wire bytes/s per direction over the last 10 s, the share of slots lost or repaired, the datagrams refused, and the PubBroker's own counters from its last STATUS. */

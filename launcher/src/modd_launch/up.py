@@ -316,15 +316,26 @@ def run(args: argparse.Namespace) -> int:
     if args.part != "drone":
         print(viewer_hint(args, store), flush=True)
     code = 1
+    gave_up: list[dict[str, Any]] = []
     try:
         code = watch(
             stack.processes,
             env,
             lambda: stopping,
             say=lambda line: print(line, file=sys.stderr, flush=True),
+            gave_up=gave_up.append,
         )
     finally:
         stack.stop()
+    if gave_up and args.part != "drone":  # the workbench is told why the run stopped
+        from .announce import announce_stop, settings_for
+
+        announce_stop(
+            settings_for(args.zenoh_listen or [], args.zenoh_connect or []),
+            store,
+            local["drone"]["name"],
+            gave_up[0],
+        )
     return code
 
 

@@ -53,6 +53,7 @@ class SubBrokerStatus(TypedDict):
     last_data_ns: int | None
     last_error: str | None
     delivered: int
+    state_files_set_aside: NotRequired[list[Any]]
     predicted_link_bytes_per_s: PredictedLink | None
     routes: dict[str, list[str]]
     dynamic: list[str]
@@ -72,6 +73,7 @@ class SubBrokerStatus(TypedDict):
     link_budget: NotRequired[dict[str, Any] | None]
     radio: NotRequired[RadioStatus | None]
     sensors: NotRequired[dict[str, SensorHealth]]
+    supervisor: NotRequired[Any]
 
 
 class RadioStatus(TypedDict):

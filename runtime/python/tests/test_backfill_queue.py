@@ -275,6 +275,20 @@ def test_silence_after_the_ack_asks_again_from_the_resume_point() -> None:
     assert [r.resume for _, r in b.pb.requests] == [0, 8]
 
 
+@pytest.mark.parametrize("rate", [0, 5000])
+def test_an_end_whose_data_was_lost_is_asked_again_after_the_grace(rate: int) -> None:
+    """A datagram link lost the run's only DATA frame but not its PROGRESS and END
+    (DONE at a resume point short of the run): asked again once the grace is over, well
+    before the stall; at the PubBroker's own pace (rate 0) too, where the stall was
+    1,000 s (a job left RUNNING for ever, found over udp at 10 % loss)."""
+    b = Bench(FakePubBroker(rate_bps=5000, drop=lambda k, n: (k, n) == ("data", 0)))
+    job = b.submit("sub_1", runs_of("sub_1", 1, 5), rate)
+    secs = b.run_until(lambda: job.status != "RUNNING", 60)
+    assert job.status == "DONE" and b.got == expected("sub_1", 1, 5) and b.twice == 0
+    assert secs < Timing().resume_grace_s + 0.5, secs
+    assert Timing().stall(0) == Timing().stall_s
+
+
 def test_cancel_and_a_refusal_move_the_queue_on() -> None:
     b = Bench(FakePubBroker(rate_bps=50))
     first = b.submit("sub_1", runs_of("sub_1", 1, 400), 50)

@@ -82,3 +82,33 @@ def _delivery(plan: Any, config: Any, info: dict[str, tuple[str, str]]) -> SlotD
         for sub in ps.subscribers:
             fan.route(ps.stream, ps.sources, sub)
     return SlotDelivery(fan, config.config_id, EPOCH, info)
+
+
+def test_empty_slots_complete_derived_windows_and_deliver_no_sent_window() -> None:
+    """An ingest stall over a datagram link: every slot of the first 2 s arrives empty.
+    The 2 s derived windows (sub_1, sub_2) are delivered (null, count 0) and told to the
+    window record; the 0.25 s subscribers of the sent streams get nothing for them."""
+    model = load_model(S1)
+    plan = plan_for(model, None)
+    config = config_for(plan, 1)
+    info = {t.name: (t.unit, t.type) for t in topics(model).values()}
+    fan = FanOut([s.stream for s in plan.sent_streams])
+    for ps in plan.streams:
+        for sub in ps.subscribers:
+            fan.route(ps.stream, ps.sources, sub)
+    delivery = SlotDelivery(fan, config.config_id, EPOCH, info)
+    rec, derived = Recorder(), list[tuple[StreamKey, int, int]]()
+    periods = [s.period_us for s in config.streams]
+    walk = SlotIterator(periods)
+    for _ in range(8):  # the slots of the first 2 s
+        slot = next(walk)
+        end = EPOCH + slot.offset_us * 1000
+        empty = [
+            Window(config.config_id, slot.index, sid, end - periods[sid] * 1000, end, Value())
+            for sid in slot.streams
+        ]
+        delivery.deliver(empty, [rec], None, derived.append)
+    assert sorted(rec.got) == ["sub_1", "sub_2"]
+    assert sorted((s.key, a, b) for s, a, b in derived) == [
+        (f"usv.accelerometer.accel_{xy}/AVERAGE/2.0", EPOCH, EPOCH + 2 * 10**9) for xy in "xy"
+    ]

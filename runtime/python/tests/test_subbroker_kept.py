@@ -49,7 +49,9 @@ def test_an_older_file_a_torn_one_and_no_directory(
     (tmp_path / "deployed.json").write_text('{"model": {"na')
     with caplog.at_level(logging.ERROR, logger="modd.subbroker"):
         assert state.load_deployment() is None
-    assert "unreadable" in caplog.text and "deployed.json" in caplog.text
+    assert "cannot be used" in caplog.text and "deployed.json" in caplog.text
+    assert not (tmp_path / "deployed.json").exists()  # set aside, kept for a look
+    assert len(list(tmp_path.glob("deployed.json.bad-*"))) == 1
     nowhere = StateDir(None)
     nowhere.save_deployment(MODEL, Deployment.configured())
     assert nowhere.load_deployment() is None and nowhere.load_dynamic() == []

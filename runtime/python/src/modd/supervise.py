@@ -19,7 +19,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 
 @dataclass(frozen=True)
@@ -107,10 +107,12 @@ def watch(
     say: Callable[[str], None] = print,
     clock: Callable[[], float] = time.monotonic,
     sleep: Callable[[float], None] = time.sleep,
+    gave_up: Callable[[dict[str, Any]], None] | None = None,
 ) -> int:
     """Restarts each child that dies (when it is restartable) until ``stopping()``
-    (0) or until one dies more often than ``policy`` allows (1). The caller
-    stops them all after it returns."""
+    (0) or until one dies more often than ``policy`` allows (1): then ``gave_up``
+    is told which process, its exit code, why and its log (what ``modd up`` puts
+    on the zenoh status). The caller stops them all after it returns."""
     restarts = Restarts(policy)
     started = {c.name: clock() for c in children}
     due: dict[str, float] = {}
@@ -138,6 +140,17 @@ def watch(
                     else (f"{policy.max_restarts} restarts within {policy.window_s:.0f} s")
                 )
                 say(f"modd up: {c.name} exited ({code}); see {c.log}; stopping the run: {why}")
+                if gave_up is not None:
+                    gave_up(
+                        {
+                            "state": "GAVE_UP",
+                            "process": c.name,
+                            "exit_code": code,
+                            "reason": f"{c.name} exited ({code}); stopping the run: {why}",
+                            "log": str(c.log),
+                            "at_ns": time.time_ns(),
+                        }
+                    )
                 return 1
             due[c.name] = at
             say(

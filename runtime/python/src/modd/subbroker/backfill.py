@@ -32,6 +32,7 @@ from modd.link.receiver import Window
 
 from .backfill_queue import BackfillQueue, Filled, Job, Run, Timing
 from .payload import DeliveredValue
+from .record_file import read_record
 from .window_record import Due, Epoch, WindowRecord
 
 if TYPE_CHECKING:
@@ -96,9 +97,14 @@ class BackfillManager:
         if doc is None:
             return WindowRecord()
         try:
-            return WindowRecord.from_json(doc)
-        except (KeyError, TypeError, ValueError) as exc:
-            log.error("window record in the state directory unreadable (%s): starting afresh", exc)
+            return read_record(doc)
+        except (ValueError, ArithmeticError) as exc:
+            if self._state is not None:
+                self._state.set_aside(
+                    "windows.json",
+                    f"not a window record: {exc}; the gaps of earlier configs are forgotten "
+                    "(the running config's are recorded afresh)",
+                )
             return WindowRecord()
 
     def save(self) -> None:
@@ -120,12 +126,20 @@ class BackfillManager:
             self._ensure_thread()
         self.save()
 
-    def on_windows(self, running: Running, windows: Sequence[Window]) -> None:
-        """Live windows that arrived (link thread)."""
+    def on_windows(
+        self,
+        running: Running,
+        windows: Sequence[Window],
+        derived: Sequence[tuple[StreamKey, int, int]] = (),
+    ) -> None:
+        """Live windows that arrived, and the derived windows they completed
+        (stream, start, end) that the fan-out delivered (link thread)."""
         sent = running.fanout.sent
         with self._lock:
             for w in windows:
                 self.record.add_received(sent[w.stream], w.start_ns, w.end_ns)
+            for stream, start, end in derived:
+                self.record.add_derived(stream, start, end)
             if not self._dirty:  # the clock thread saves it within SAVE_S
                 self._dirty = True
                 self._wake.notify_all()

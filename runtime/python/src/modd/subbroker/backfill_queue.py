@@ -47,7 +47,11 @@ class Timing:
     largest_frame_b: int = 250  # slow paces wait for four such frames before a resume
 
     def stall(self, rate_bps: int) -> float:
-        return max(self.stall_s, 4 * self.largest_frame_b / max(rate_bps, 1))
+        """0: paced by the PubBroker (its own budget, not a slow one): ``stall_s``
+        (was 4 frames at 1 B/s: a job whose last frames were lost waited 1,000 s)."""
+        if rate_bps <= 0:
+            return self.stall_s
+        return max(self.stall_s, 4 * self.largest_frame_b / rate_bps)
 
 
 @dataclass
@@ -388,6 +392,9 @@ class BackfillQueue:
             and f.sent_at is not None
             and now - f.sent_at < self.timing.resume_grace_s
         ):
+            # looked at again once the grace is over, should nothing more come (an END
+            # whose DATA was lost on a datagram link left the job silent until the stall)
+            f.retry_at = f.sent_at + self.timing.resume_grace_s
             return []
         f.acked, f.sent_at = False, None
         return self._again(f, now, f"windows from {f.next} lost")

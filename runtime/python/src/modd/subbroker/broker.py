@@ -21,6 +21,7 @@ from modd_model.diagnostics import Diagnostic, ModelError
 from modd_model.query import topics
 from modd_model.signing import NonceGuard, signature
 from modd_plan import Plan
+from modd_plan.streams import StreamKey
 
 from modd.link.frames import AuthOk, Config, ConfigAck, ErrorCode, Status
 from modd.link.receiver import Window
@@ -235,7 +236,8 @@ class SubBroker:
             return self._prepare(running.model, ok.config_id, running.meta)
         try:
             return self._prepare(self._model, ok.config_id, self._meta)
-        except ValueError as exc:
+        except (ValueError, KeyError, TypeError, AttributeError, ArithmeticError) as exc:
+            # a kept model that cannot be planned (a damaged deployed.json) never stops the run
             if self._meta.source != "kept":
                 raise
             log.error(
@@ -303,10 +305,11 @@ class SubBroker:
         running = self._by_id.get(windows[0].config_id)
         if running is None or running.slots is None:
             return
-        self.backfill.on_windows(running, windows)
+        derived: list[tuple[StreamKey, int, int]] = []
         self.delivered += running.slots.deliver(
-            windows, self._sinks(), self.backfill.filled_already
+            windows, self._sinks(), self.backfill.filled_already, derived.append
         )
+        self.backfill.on_windows(running, windows, derived)
 
     def _link_up(self) -> None:
         """After a reconnection: the running backfill resumes, and the subscriptions whose
@@ -526,6 +529,12 @@ class SubBroker:
             "last_data_ns": stats.last_data_ns,
             "last_error": stats.last_error,
             "delivered": self.delivered,
+            # state files that could not be used and were renamed aside (docs/subbroker.md)
+            **(
+                {"state_files_set_aside": list(self._state.set_aside_files)}
+                if self._state.set_aside_files
+                else {}
+            ),
             "predicted_link_bytes_per_s": predicted,
             "routes": running.fanout.routes() if running else {},
             "dynamic": self.dynamic.names(),

@@ -299,6 +299,7 @@ class SlotDelivery:
         self._epoch_ns = epoch_ns
         self._topic_info = topic_info
         self._kinds = [(s.aggregation, topic_info[s.topic][1]) for s in fanout.sent]
+        self._sent = frozenset(fanout.sent)
         self._payloads: dict[StreamKey, tuple[StreamPayload, int]] = {}
         self._prefixes: dict[str, bytes] = {}
 
@@ -321,23 +322,33 @@ class SlotDelivery:
         windows: Sequence[Window],
         sinks: Sequence[Sink],
         filled: Filled | None = None,
+        derived: Callable[[tuple[StreamKey, int, int]], None] | None = None,
     ) -> int:
         """Deliver what the slot of ``windows`` completes; the number of values
         (one per subscriber and window, whatever the number of sinks). A window
         ``filled`` says a backfill delivered already (a NACK's resend that comes
-        after the backfill it raced) is not delivered twice."""
+        after the backfill it raced) is not delivered twice. ``derived`` is told
+        each derived window delivered (stream, start, end: the window record's)."""
         first = windows[0]
         slot, end_ns, epoch = first.slot, first.end_ns, self._epoch_ns
         date_us = (end_ns - epoch) // 1000
         kinds = self._kinds
         by_id = {w.stream: window_of(w.value, *kinds[w.stream]) for w in windows}
         now = time.time_ns()
-        payloads, prefixes = self._payloads, self._prefixes
+        payloads, prefixes, sent = self._payloads, self._prefixes, self._sent
+        # an empty slot (a datagram link carries it; tcp does not send it) completes
+        # derived windows but delivers no sent stream's window
+        empty = all(v is None for v in by_id.values())
         count = 0
         for out in self.fanout.on_slot(slot, date_us, by_id):
+            if empty and out.stream in sent:
+                continue
             payload, period = payloads.get(out.stream) or self._payload(out.stream)
             value, samples = split_window(out.stream.aggregation, out.value)
-            start_ns = epoch + (date_us - period) * 1000
+            end_ns = epoch + out.end_us * 1000  # a derived window's end, not the slot's
+            start_ns = end_ns - period * 1000
+            if derived is not None and out.stream not in sent:
+                derived((out.stream, start_ns, end_ns))
             tail = payload.tail(slot, start_ns, end_ns, value, samples, now)
             for sub in out.subscribers:
                 if filled is not None and filled(sub, out.stream, start_ns, end_ns):

@@ -247,16 +247,16 @@ class Runs:
 
 
 def _windows(run: _Run, slots: list[tuple[int, list[Value]]]) -> list[list[Window]]:
-    """The windows of each slot that has a value (an empty slot, which tcp
-    does not send, delivers nothing)."""
+    """The windows of each slot, an empty one (every stream absent: no sample, an
+    ingest stall) included: it arrived, so its windows are not gaps and the derived
+    windows it is part of complete; the delivery gives a sent stream's subscribers
+    nothing for it (as over tcp, which does not send it; docs/subbroker.md)."""
     it = SlotIterator([s.period_us for s in run.config.streams])
     it.skip_to(slots[0][0])
     out: list[list[Window]] = []
     for index, values in slots:
         it.skip_to(index)
         slot = next(it)
-        if not any(v.present for v in values):
-            continue
         end = run.epoch_ns + slot.offset_us * 1000
         out.append(
             [

@@ -1,13 +1,14 @@
 """Fan-out: from the windows of the sent streams in one DATA slot to the
 windows of every stream a subscriber listens to, derived streams included.
 
-The SubBroker keeps, per sent stream, the last windows it received (as many
-as the largest derivation factor that uses it). A derived stream of period
-``k·P`` is due at every date that is a multiple of ``k·P``; its value is
+A derived stream of period ``k·P`` has, for each of its windows, the value
 :func:`modd_plan.derive.derive_value` over the ``k`` source windows that tile
-it. A derived window whose source windows did not all arrive (the link was
-down for part of it, or the subscription began inside it) is *not* delivered:
-a MIN over half a window would be a wrong MIN.
+it, put together by window index (:mod:`.derivation`): it is delivered when
+its last source window arrives, whatever the order they arrive in. A derived
+window whose source windows do not all arrive (the link was down for part of
+it and the NACKs gave up, or the subscription began inside it) is *not*
+delivered live: a MIN over half a window would be a wrong MIN; it is a gap for
+backfill.
 
 >>> from modd_plan.streams import StreamKey
 >>> from fractions import Fraction
@@ -20,9 +21,7 @@ a MIN over half a window would be a wrong MIN.
 
 from __future__ import annotations
 
-import itertools
 import threading
-from collections import deque
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -30,6 +29,8 @@ from typing import Any
 from modd_model.numbers import MICROS_PER_SECOND
 from modd_plan.derive import derive_value
 from modd_plan.streams import Source, StreamKey
+
+from .derivation import Assembly
 
 
 def period_us(stream: StreamKey) -> int:
@@ -59,16 +60,18 @@ class Output:
 class _Route:
     sources: tuple[Source, ...]  # () when the stream is sent itself
     subscribers: list[str]
+    assembly: Assembly | None = None  # the derived windows being put together
 
 
 @dataclass(frozen=True)
-class _Due:
-    """A route as :meth:`FanOut.on_slot` walks it: everything it needs resolved
-    once, when the routes change, not at every slot."""
+class _Derived:
+    """A derived route as :meth:`FanOut.on_slot` walks it, resolved once per
+    change of the routes (:meth:`FanOut._rebuild`), not at every slot."""
 
     stream: StreamKey
-    sid: int  # the sent stream's id; -1 when derived
-    sources: tuple[tuple[int, int, str], ...]  # (stream id, factor, aggregation)
+    period: int  # µs
+    aggregations: tuple[str, ...]  # of the sources, in the derivation's order
+    assembly: Assembly
     subscribers: tuple[str, ...]
 
 
@@ -77,17 +80,18 @@ class FanOut:
 
     ``sent`` lists the sent streams in stream-id order. Thread-safe: the link
     thread calls :meth:`on_slot` while zenoh threads add and remove routes.
-    The routes are grouped by period once per change (:meth:`_rebuild`), so a
-    slot costs one modulo per distinct routed period plus the streams due.
+    A derived window is put together by window index (:mod:`.derivation`), so
+    a source window that arrives late (a NACK's resend) still completes it,
+    once. The routes are indexed by sent stream once per change
+    (:meth:`_rebuild`), so a slot costs a look-up per window it carries.
     """
 
     def __init__(self, sent: Sequence[StreamKey]) -> None:
         self._ids = {s: i for i, s in enumerate(sent)}
         self._periods = [period_us(s) for s in sent]
-        self._history: list[deque[tuple[int, Any]]] = [deque() for _ in sent]
-        self._keep = [0] * len(sent)
         self._routes: dict[StreamKey, _Route] = {}
-        self._by_period: list[tuple[int, list[_Due]]] = []
+        self._direct: dict[int, list[tuple[StreamKey, tuple[str, ...]]]] = {}
+        self._derived: dict[int, list[_Derived]] = {}
         self._lock = threading.Lock()
 
     @property
@@ -103,12 +107,19 @@ class FanOut:
         for src in srcs or (Source(stream, 1),):
             if src.stream not in self._ids:
                 raise ValueError(f"{src.stream.key} is not sent in the running plan")
-        period_us(stream)  # a period the wire cannot express fails here, not per slot
+        period = period_us(stream)  # a period the wire cannot express fails here, not per slot
         with self._lock:
-            route = self._routes.setdefault(stream, _Route(srcs, []))
+            route = self._routes.get(stream)
+            if route is None:
+                assembly = None
+                if srcs:
+                    assembly = Assembly(
+                        tuple((self._ids[s.stream], s.factor) for s in srcs), period
+                    )
+                route = self._routes[stream] = _Route(srcs, [], assembly)
             if subscriber not in route.subscribers:
                 route.subscribers.append(subscriber)
-            self._retain()
+            self._rebuild()
 
     def unroute(self, subscriber: str) -> bool:
         """Stop delivering anything to ``subscriber``; False if it had nothing."""
@@ -120,7 +131,7 @@ class FanOut:
                     found = True
                 if not route.subscribers:
                     del self._routes[stream]
-            self._retain()
+            self._rebuild()
         return found
 
     def routes(self) -> dict[str, tuple[str, ...]]:
@@ -128,81 +139,48 @@ class FanOut:
         with self._lock:
             return {s.key: tuple(r.subscribers) for s, r in self._routes.items()}
 
-    def _retain(self) -> None:
-        keep = [0] * len(self._periods)
-        for route in self._routes.values():
-            for src in route.sources:
-                sid = self._ids[src.stream]
-                keep[sid] = max(keep[sid], src.factor)
-        self._keep = keep
-        for sid, hist in enumerate(self._history):
-            while len(hist) > keep[sid]:
-                hist.popleft()
-        self._rebuild()
+    def pending(self) -> int:
+        """Partial derived windows held (bounded: :data:`.derivation.MAX_PENDING` a route)."""
+        with self._lock:
+            return sum(r.assembly.pending for r in self._routes.values() if r.assembly)
 
     def _rebuild(self) -> None:
-        """Group the routes by period (in route order within a period)."""
-        groups: dict[int, list[_Due]] = {}
+        """Index the routes by the sent stream they take windows from (in route order)."""
+        direct: dict[int, list[tuple[StreamKey, tuple[str, ...]]]] = {}
+        derived: dict[int, list[_Derived]] = {}
         for stream, route in self._routes.items():
-            due = _Due(
+            subs = tuple(route.subscribers)
+            if route.assembly is None:
+                direct.setdefault(self._ids[stream], []).append((stream, subs))
+                continue
+            d = _Derived(
                 stream,
-                -1 if route.sources else self._ids[stream],
-                tuple((self._ids[s.stream], s.factor, s.stream.aggregation) for s in route.sources),
-                tuple(route.subscribers),
+                period_us(stream),
+                tuple(s.stream.aggregation for s in route.sources),
+                route.assembly,
+                subs,
             )
-            groups.setdefault(period_us(stream), []).append(due)
-        self._by_period = list(groups.items())
+            for sid, _ in route.assembly.sources:
+                derived.setdefault(sid, []).append(d)
+        self._direct, self._derived = direct, derived
 
     def on_slot(self, slot: int, date_us: int, windows: Mapping[int, Any]) -> list[Output]:
         """Take the windows of one DATA slot (stream id -> window, for the
-        streams due at ``date_us``) and return the windows due for delivery."""
+        streams due at ``date_us``, in any order of slots: a late slot is
+        welcome) and return the windows this completes for delivery."""
         with self._lock:
-            keep, history, periods = self._keep, self._history, self._periods
-            for sid, window in windows.items():
-                if keep[sid]:
-                    hist = history[sid]
-                    hist.append((date_us // periods[sid], window))
-                    if len(hist) > keep[sid]:
-                        hist.popleft()
             out: list[Output] = []
-            for period, dues in self._by_period:
-                if date_us % period:
+            for sid, window in windows.items():
+                for stream, subs in self._direct.get(sid, ()):
+                    out.append(Output(stream, slot, date_us, window, subs))
+                derived = self._derived.get(sid)
+                if not derived:
                     continue
-                for due in dues:
-                    if due.sid >= 0:
-                        value = windows.get(due.sid, _INCOMPLETE)
-                    else:
-                        value = self._derive(due, date_us)
-                    if value is not _INCOMPLETE:
-                        out.append(Output(due.stream, slot, date_us, value, due.subscribers))
+                index = date_us // self._periods[sid]
+                for d in derived:
+                    for j, parts in d.assembly.add(sid, index, window):
+                        value = derive_value(
+                            d.stream.aggregation, list(zip(d.aggregations, parts, strict=True))
+                        )
+                        out.append(Output(d.stream, slot, j * d.period, value, d.subscribers))
             return out
-
-    def _derive(self, due: _Due, date_us: int) -> Any:
-        parts: list[tuple[str, list[Any]]] = []
-        for sid, factor, aggregation in due.sources:
-            windows = self._tail(sid, factor, date_us // self._periods[sid])
-            if windows is None:
-                return _INCOMPLETE
-            parts.append((aggregation, windows))
-        return derive_value(due.stream.aggregation, parts)
-
-    def _tail(self, sid: int, factor: int, last: int) -> list[Any] | None:
-        """The windows ``last - factor + 1 .. last`` of a sent stream, or None
-        when one is missing. The history is kept in slot order, so they are
-        its last ``factor`` entries when those are numbered right."""
-        hist = self._history[sid]
-        if len(hist) < factor:
-            return None
-        tail = list(itertools.islice(hist, len(hist) - factor, None))
-        if (
-            tail[0][0] == last - factor + 1
-            and tail[-1][0] == last
-            and all(b[0] - a[0] == 1 for a, b in itertools.pairwise(tail))
-        ):
-            return [w for _, w in tail]
-        wanted = range(last - factor + 1, last + 1)  # out of order (never seen): look up
-        have = {i: w for i, w in hist if i in wanted}
-        return [have[i] for i in wanted] if len(have) == factor else None
-
-
-_INCOMPLETE = object()

@@ -18,10 +18,18 @@ from pathlib import Path
 from typing import Any, Literal
 
 from modd_model.io import write_atomic
+from modd_model.jsondepth import MAX_DEPTH, loads_bounded
+
+from .request import MAX_DEPLOY_BYTES
 
 log = logging.getLogger("modd.subbroker")
 
 Source = Literal["configured", "deploy", "kept"]
+
+#: Largest state file read, by name ("*": the others); a larger one is set aside.
+#: The window record is bounded when written (record_file: epochs, intervals),
+#: a kept deployment by the deploy request's bound.
+MAX_STATE_BYTES = {"windows.json": 8 * 1024 * 1024, "*": MAX_DEPLOY_BYTES + 64 * 1024}
 
 
 @dataclass(frozen=True)
@@ -88,6 +96,7 @@ class StateDir:
 
     def __init__(self, path: Path | None) -> None:
         self.path = path
+        self.set_aside_files: list[dict[str, str]] = []  # for the status (bounded: 3 files)
 
     def _file(self, name: str) -> Path | None:
         return self.path / name if self.path is not None else None
@@ -100,14 +109,54 @@ class StateDir:
         write_atomic(f, json.dumps(doc))
 
     def _read(self, name: str) -> Any:
+        """The parsed file, or None when absent, unreadable or not JSON within the
+        bounds (then set aside, :meth:`set_aside`): bounded time and memory."""
         f = self._file(name)
-        if f is None or not f.exists():
+        if f is None:
             return None
+        limit = MAX_STATE_BYTES.get(name, MAX_STATE_BYTES["*"])
         try:
-            return json.loads(f.read_text())
-        except (OSError, ValueError) as exc:
+            with f.open("rb") as fh:
+                raw = fh.read(limit + 1)
+        except FileNotFoundError:
+            return None
+        except OSError as exc:
             log.error("state file %s unreadable (%s): ignored", f, exc)
             return None
+        try:
+            if len(raw) > limit:
+                raise ValueError(f"larger than {limit} bytes")
+            return loads_bounded(raw, MAX_DEPTH)
+        except (ValueError, RecursionError) as exc:
+            self.set_aside(name, f"not JSON within the bounds: {exc}")
+            return None
+
+    def set_aside(self, name: str, reason: str) -> Path | None:
+        """Rename a state file that cannot be used to ``<name>.bad-<UTC time>`` (kept for
+        a look, never read again) and say so: the run goes on without it."""
+        f = self._file(name)
+        if f is None:
+            return None
+        stamp = time.strftime("%Y%m%dT%H%M%SZ", time.gmtime())
+        aside = f.with_name(f"{name}.bad-{stamp}")
+        n = 1
+        while aside.exists():
+            aside, n = f.with_name(f"{name}.bad-{stamp}-{n}"), n + 1
+        try:
+            f.rename(aside)
+        except OSError as exc:
+            log.error("state file %s cannot be used (%s) nor set aside (%s)", f, reason, exc)
+            self.set_aside_files.append({"file": str(f), "reason": reason[:300]})
+            return None
+        log.error(
+            "state file %s cannot be used (%s): set aside as %s; the SubBroker goes on without it",
+            f,
+            reason,
+            aside.name,
+        )
+        self.set_aside_files.append({"file": str(f), "aside": str(aside), "reason": reason[:300]})
+        del self.set_aside_files[:-8]
+        return aside
 
     # -- the kept deployment ---------------------------------------------------
 
@@ -118,7 +167,10 @@ class StateDir:
         """The kept model and its metadata (source ``kept``), or None. A file of
         an older version (the bare model) is read as a deploy of no revision."""
         doc = self._read("deployed.json")
+        if doc is None:
+            return None
         if not isinstance(doc, dict):
+            self.set_aside("deployed.json", "not a kept deployment (a JSON object expected)")
             return None
         if isinstance(doc.get("model"), dict):
             model: dict[str, Any] = doc["model"]
@@ -152,6 +204,8 @@ class StateDir:
         doc = self._read("dynamic.json")
         subs = doc.get("subscriptions") if isinstance(doc, dict) else None
         if not isinstance(subs, list):
+            if doc is not None:
+                self.set_aside("dynamic.json", 'not {"subscriptions": [...]}')
             return []
         return [
             s

@@ -31,6 +31,8 @@ from .fanout import period_us
 
 #: Epochs kept (the oldest are forgotten past this: a mission of many redeploys).
 MAX_EPOCHS = 256
+#: Merged intervals kept per stream (the newest): a few per outage.
+MAX_SPANS = 1024
 
 
 class Intervals:
@@ -84,6 +86,9 @@ class WindowRecord:
     def __init__(self) -> None:
         self.epochs: list[Epoch] = []
         self.received: dict[StreamKey, Intervals] = {}
+        # derived windows delivered live, per derived stream: a derived window counts
+        # when the fan-out delivered it, not when its source interval arrived
+        self.derived: dict[StreamKey, Intervals] = {}
         self.filled: dict[tuple[str, StreamKey], Intervals] = {}
 
     def begin(self, epoch: Epoch) -> None:
@@ -96,6 +101,9 @@ class WindowRecord:
     def add_received(self, source: StreamKey, start: int, end: int) -> None:
         self.received.setdefault(source, Intervals()).add(start, end)
 
+    def add_derived(self, stream: StreamKey, start: int, end: int) -> None:
+        self.derived.setdefault(stream, Intervals()).add(start, end)
+
     def add_filled(self, subscriber: str, stream: StreamKey, start: int, end: int) -> None:
         self.filled.setdefault((subscriber, stream), Intervals()).add(start, end)
 
@@ -107,7 +115,7 @@ class WindowRecord:
     def delivered(
         self, subscriber: str, stream: StreamKey, source: StreamKey, start: int, end: int
     ) -> bool:
-        live = self.received.get(source)
+        live = self.received.get(source) if stream == source else self.derived.get(stream)
         if live is not None and live.covers(start, end):
             return True
         filled = self.filled.get((subscriber, stream))
@@ -172,7 +180,7 @@ class WindowRecord:
                 start = None
         return runs
 
-    # -- kept in the state directory ----------------------------------------------------
+    # -- kept in the state directory (read back by record_file.read_record) -----------
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -188,29 +196,17 @@ class WindowRecord:
                 }
                 for e in self.epochs
             ],
-            "received": {k.key: iv.spans for k, iv in self.received.items()},
-            "filled": [[s, k.key, iv.spans] for (s, k), iv in self.filled.items()],
+            # the newest MAX_SPANS intervals a stream: what the reader takes (record_file)
+            "received": {k.key: iv.spans[-MAX_SPANS:] for k, iv in self.received.items()},
+            "derived": {k.key: iv.spans[-MAX_SPANS:] for k, iv in self.derived.items()},
+            "filled": [[s, k.key, iv.spans[-MAX_SPANS:]] for (s, k), iv in self.filled.items()],
         }
 
-    @classmethod
-    def from_json(cls, doc: Any) -> WindowRecord:
-        """The record kept; raises ValueError (or KeyError, TypeError) if it is not one."""
-        rec = cls()
-        for e in doc["epochs"]:
-            due = [
-                Due(str(s), StreamKey.parse(k), StreamKey.parse(src), str(u), str(t))
-                for s, k, src, u, t in e["due"]
-            ]
-            rec.begin(Epoch(str(e["mission"]), int(e["config_id"]), int(e["epoch_ns"]), due))
-        for k, spans in doc["received"].items():
-            rec.received[StreamKey.parse(k)] = Intervals(_spans(spans))
-        for s, k, spans in doc["filled"]:
-            rec.filled[(str(s), StreamKey.parse(k))] = Intervals(_spans(spans))
-        return rec
-
-
-def _spans(raw: Any) -> list[tuple[int, int]]:
-    spans = [(int(a), int(b)) for a, b in raw]
-    if any(b < a for a, b in spans) or spans != sorted(spans):
-        raise ValueError("intervals out of order")
-    return spans
+    def derived_from_sources(self) -> None:
+        """Count each derived window delivered where its source interval arrived (how
+        a record of an earlier version counted them)."""
+        for e in self.epochs:
+            for d in e.due:
+                if d.stream != d.source:
+                    for a, b in self.received.get(d.source, Intervals()).spans:
+                        self.add_derived(d.stream, a, b)
