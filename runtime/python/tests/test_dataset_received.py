@@ -264,3 +264,12 @@ def test_a_record_being_written_exports_up_to_its_last_chunk(tmp_path: Path) -> 
         rec.close()
     assert 1500 < summary.samples < 2000, summary.samples
     assert any("not closed" in n for n in summary.notes)
+
+
+def test_the_exact_statistics_have_their_cf_cell_methods() -> None:
+    """CF Appendix E's method names (median, standard_deviation, range)."""
+    from modd.dataset.received import cell_methods
+
+    assert cell_methods("MEDIAN", "1.0") == "time: median (interval: 1 s)"
+    assert cell_methods("STDDEV", "0.5") == "time: standard_deviation (interval: 0.5 s)"
+    assert cell_methods("RANGE", "0.25") == "time: range (interval: 0.25 s)"
