@@ -8,6 +8,7 @@ from __future__ import annotations
 import ipaddress
 import re
 from collections.abc import Callable, Iterator
+from fractions import Fraction
 from functools import cache, lru_cache
 from typing import TYPE_CHECKING, Any
 
@@ -320,12 +321,12 @@ def subscription_periods(doc: dict[str, Any]) -> Iterator[Diagnostic]:
 def window_samples_bounded(doc: dict[str, Any]) -> Iterator[Diagnostic]:
     """A MEDIAN or ALL window holds every sample of its period on board: at most
     MAX_LIST, from the topic's publication period (its fastest publisher)."""
-    fastest: dict[str, Any] = {}
+    fastest: dict[str, Fraction] = {}
     for pub in doc["publishers"]:
+        period = to_fraction(pub["periodS"])
         for t in pub["topics"]:
-            pm = to_fraction(pub["periodS"])
-            if pm > 0 and (t not in fastest or pm < fastest[t]):
-                fastest[t] = pm
+            if period > 0 and (t not in fastest or period < fastest[t]):
+                fastest[t] = period
     for i, sub in enumerate(doc["subscribers"]):
         pm = fastest.get(sub["topic"])
         if sub["aggregation"] not in _KEEPS_SAMPLES or pm is None:
