@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -43,7 +44,7 @@ SUBS = [
     ("med_y", Y, "1.0", "MEDIAN"),  # derived from all_y's ALL stream
     ("sd_y", Y, "0.5", "STDDEV"),  # derived from it too
 ]
-NUMPY = {"MEDIAN": np.median, "STDDEV": np.std, "RANGE": np.ptp}
+NUMPY: dict[str, Callable[[Any], Any]] = {"MEDIAN": np.median, "STDDEV": np.std, "RANGE": np.ptp}
 
 
 def _model(tmp_path: Path) -> Path:
