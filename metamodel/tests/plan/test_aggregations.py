@@ -95,3 +95,14 @@ def test_bool_topics_refuse_the_new_statistics(make_model: Any) -> None:
     for a in NEW:
         model = make_model([("b", "bool")], [("p", "0.1", ["b"])], [("s", "b", "1.0", a)])
         assert any(d.pointer == "/subscribers/0/aggregation" for d in validate(model)), a
+
+
+def test_the_bound_error_is_located_in_the_modd_text() -> None:
+    from modd_model import load_text
+
+    scenario = Path(__file__).resolve().parents[2] / "examples" / "scenarios" / "scenario1.modd"
+    text = scenario.read_text(encoding="utf-8").replace("2.0, AVERAGE);", "3000.0, MEDIAN);", 1)
+    (error,) = [e for e in load_text(text, "m.modd").errors if "keeps at most" in str(e)]
+    assert str(error).startswith(
+        "m.modd:19:69: error: a MEDIAN window of 3000.0 s holds up to 75000"
+    )
