@@ -52,7 +52,7 @@ def test_invalid_revision_and_unknown_target(
 ) -> None:
     pid = _project(client, admin, scenario1)
     model = client.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
-    model["subscribers"][0]["aggregation"] = "MEDIAN"
+    model["subscribers"][0]["aggregation"] = "MODE"
     client.put(
         f"/api/projects/{pid}/model", headers=admin, json={"base_revision": 1, "model": model}
     )

@@ -93,7 +93,7 @@ def test_invalid_model_is_saved_with_pointed_diagnostics(
 ) -> None:
     pid = _create(client, admin, scenario1)
     model = client.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
-    model["subscribers"][1]["aggregation"] = "MEDIAN"
+    model["subscribers"][1]["aggregation"] = "MODE"
     r = client.put(
         f"/api/projects/{pid}/model",
         headers=admin,

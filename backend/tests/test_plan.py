@@ -46,7 +46,7 @@ def test_bad_model_gives_diagnostics_not_a_plan(
     client: TestClient, admin: Headers, scenario1: str
 ) -> None:
     body = client.post(
-        "/api/plan", headers=admin, json={"text": scenario1.replace("2.0, AVERAGE", "2.0, MEDIAN")}
+        "/api/plan", headers=admin, json={"text": scenario1.replace("2.0, AVERAGE", "2.0, MODE")}
     ).json()
     assert body["ok"] is False and body["plan"] is None
     assert body["diagnostics"][0]["pointer"] == "/subscribers/0/aggregation"

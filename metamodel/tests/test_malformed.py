@@ -77,7 +77,7 @@ CASES = [
         5,
     ),
     ("unknown-type", "flag(NONE, bool)", "flag(NONE, boolean)", "unknown value type", 6),
-    ("unknown-aggregation", "0.25, MIN", "0.25, MEDIAN", "unknown aggregation 'MEDIAN'", 17),
+    ("unknown-aggregation", "0.25, MIN", "0.25, MODE", "unknown aggregation 'MODE'", 17),
     (
         "unknown-topic-sub",
         '"usv.imu.ay", 0.25',
@@ -257,12 +257,12 @@ def test_syntax_error_shows_line_and_caret() -> None:
 
 def test_all_errors_reported_at_once() -> None:
     text = (
-        BASE.replace("0.25, MIN", "0.25, MEDIAN")
+        BASE.replace("0.25, MIN", "0.25, MODE")
         .replace('"usv.imu.ax", 2.0', '"usv.imu.zz", 2.0')
         .replace("ay(METER_PER_SECOND_SQUARED)", "ay(WOMBAT)")
     )
     messages = [d.message for d in load_text(text, "m.modd").errors]
-    assert any("MEDIAN" in m for m in messages)
+    assert any("MODE" in m for m in messages)
     assert any("usv.imu.zz" in m for m in messages)
     assert any("WOMBAT" in m for m in messages)
 

@@ -24,6 +24,8 @@ from modd_contracts import link_wire_gen, wiregen
 from modd_model.schema import definition
 
 REPO = Path(__file__).resolve().parents[2]
+#: The fake aggregation's wire code: the next one.
+FAKE_CODE = len(definition("Aggregation")["enum"])
 
 #: What the child Python checks with the copy's generated modules.
 CHILD = r"""
@@ -35,7 +37,7 @@ from modd_contracts import link_wire_gen
 from modd_contracts.aggregations_gen import Aggregation
 from modd_model import load_text
 
-assert Aggregation.FAKE == 8
+assert Aggregation.FAKE == @CODE@
 assert link_wire_gen.MsgType.FAKE_FRAME == 0x7E and link_wire_gen.MAX_FAKE == 42
 # a counter appended to STATUS is named by the SubBroker's decoder
 assert frames.STATUS_FIELDS[-1] == "fake_counter", frames.STATUS_FIELDS
@@ -59,8 +61,8 @@ print("ok")
 CPP = """
 #include "modd/link/aggregation_table.gen.hpp"
 #include "modd/link/wire.gen.hpp"
-static_assert(static_cast<int>(modd::link::Aggregation::Fake) == 8);
-static_assert(modd::link::table::kAggregationCount == 9);
+static_assert(static_cast<int>(modd::link::Aggregation::Fake) == @CODE@);
+static_assert(modd::link::table::kAggregationCount == @CODE@ + 1);
 static_assert(static_cast<int>(modd::link::MsgType::FakeFrame) == 0x7E);
 static_assert(modd::link::kMaxFake == 42);
 static_assert(modd::link::kStatusFieldCount == 31);
@@ -83,7 +85,7 @@ def _fake_tree(root: Path) -> Path:
     agg = schema["$defs"]["Aggregation"]
     agg["enum"].append("FAKE")
     agg["x-table"].append(
-        {**agg["x-table"][0], "name": "FAKE", "code": 8, "derivableFrom": ["FAKE"]}
+        {**agg["x-table"][0], "name": "FAKE", "code": FAKE_CODE, "derivableFrom": ["FAKE"]}
     )
     (root / "metamodel" / "modd.schema.json").write_text(json.dumps(schema), encoding="utf-8")
     wire_file = src / "modd_contracts" / "wire.json"
@@ -112,7 +114,7 @@ def test_a_fake_value_reaches_both_codecs_and_validation(tmp_path: Path) -> None
     path = os.pathsep.join([str(src), str(REPO / "runtime" / "python" / "src")])
     model = REPO / "metamodel" / "tests" / "data" / "scenario1_datacollector.modd"
     run = subprocess.run(
-        [sys.executable, "-c", CHILD, str(model)],
+        [sys.executable, "-c", CHILD.replace("@CODE@", str(FAKE_CODE)), str(model)],
         cwd=tmp_path,
         env={**os.environ, "PYTHONPATH": path},
         capture_output=True,
@@ -123,7 +125,7 @@ def test_a_fake_value_reaches_both_codecs_and_validation(tmp_path: Path) -> None
     # setup.sh installs the C++ toolchain (make check and make test need it)
     compiler = shutil.which("g++") or shutil.which("clang++")
     assert compiler is not None, "no C++ compiler: run scripts/setup.sh"
-    (tmp_path / "fake.cpp").write_text(CPP, encoding="utf-8")
+    (tmp_path / "fake.cpp").write_text(CPP.replace("@CODE@", str(FAKE_CODE)), encoding="utf-8")
     include = tmp_path / "runtime" / "cpp" / "include"
     cc = subprocess.run(
         [compiler, "-std=c++20", "-fsyntax-only", f"-I{include}", str(tmp_path / "fake.cpp")],

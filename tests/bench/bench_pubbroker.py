@@ -144,18 +144,15 @@ def wire_figures(wire: Wire) -> dict[str, Any]:
     }
 
 
-def scenario(tmp: Path, n: int, seconds: float, status_period_s: int) -> dict[str, Any]:
-    from modd_model import load_model
-    from modd_plan import make_plan
-
-    plan = make_plan(load_model(SCENARIOS / f"scenario{n}.modd")).to_json()
-    config = scenario_config(n, status_period_s=status_period_s)
+def start_steady(
+    tmp: Path, config: Any, seconds: float, status_period_s: int
+) -> tuple[PubBroker, BaseStation, threading.Event, threading.Thread]:
+    """The PubBroker with ``config`` from the Python base station, the 25 Hz load on every
+    topic for ``seconds`` + 6 s (stopped by the event), after 2 s of warm-up."""
     names = [t.name for t in config.topics]
     b = PubBroker(
         tmp, [(t, "float32") for t in names], status_period_s=status_period_s, log_period_s=0
     ).start()
-    assert b.proc is not None
-    pid = b.proc.pid
     base = BaseStation(b.link_port)
     base.configure(config)
     base.start()
@@ -167,6 +164,18 @@ def scenario(tmp: Path, n: int, seconds: float, status_period_s: int) -> dict[st
     )
     loader.start()
     time.sleep(2.0)  # steady state
+    return b, base, stop, loader
+
+
+def scenario(tmp: Path, n: int, seconds: float, status_period_s: int) -> dict[str, Any]:
+    from modd_model import load_model
+    from modd_plan import make_plan
+
+    plan = make_plan(load_model(SCENARIOS / f"scenario{n}.modd")).to_json()
+    config = scenario_config(n, status_period_s=status_period_s)
+    b, base, stop, loader = start_steady(tmp, config, seconds, status_period_s)
+    assert b.proc is not None
+    pid = b.proc.pid
     result: dict[str, Any] = {
         "scenario": n,
         "seconds": seconds,

@@ -172,8 +172,8 @@ def invalid() -> list[dict[str, str]]:
         },
         {
             "name": "request_bad_aggregation",
-            "hex": fr("50 01 0161 00 09 01 0000000000000000 01 00 00"),
-            "why": "aggregation 9",
+            "hex": fr("50 01 0161 00 7f 01 0000000000000000 01 00 00"),
+            "why": "aggregation 127",
         },
         {
             "name": "request_zero_period",

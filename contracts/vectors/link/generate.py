@@ -222,6 +222,27 @@ def main() -> None:
         ),
     )
     simple(
+        "config_statistics",
+        "the exact window statistics: f32 MEDIAN and STDDEV, int MEDIAN and RANGE",
+        Config(
+            201,
+            0,
+            (
+                TopicSpec("d.s.turbidity", ValueType.FLOAT32, 1, 0),
+                TopicSpec("d.s.count", ValueType.INT, 1000, 10000),
+            ),
+            tuple(
+                StreamSpec(t, a, p)
+                for t, a, p in [
+                    (0, Aggregation.MEDIAN, 1_000_000),
+                    (0, Aggregation.STDDEV, 1_000_000),
+                    (1, Aggregation.MEDIAN, 2_000_000),
+                    (1, Aggregation.RANGE, 2_000_000),
+                ]
+            ),
+        ),
+    )
+    simple(
         "config_ack",
         "CONFIG 1 accepted, takes effect at the epoch",
         ConfigAck(1, 0, 1_763_700_000_250_000_000),
@@ -364,6 +385,25 @@ def main() -> None:
         mixed,
     )
 
+    data(
+        "data_statistics",
+        "4 streams: f32 MEDIAN 20.5, f32 STDDEV 0.25, int MEDIAN 2.5 (a float64: the mean"
+        " of the two middle samples), int RANGE 19",
+        Data(
+            False,
+            0,
+            0,
+            7,
+            [Value(True, 20.5), Value(True, 0.25), Value(True, 2.5), Value(True, 0, 19)],
+        ),
+        [
+            (ValueType.FLOAT32, Aggregation.MEDIAN),
+            (ValueType.FLOAT32, Aggregation.STDDEV),
+            (ValueType.INT, Aggregation.MEDIAN),
+            (ValueType.INT, Aggregation.RANGE),
+        ],
+    )
+
     handshake = {
         "name": "handshake",
         "meaning": "HMAC-SHA256 proofs for key 'modd-test-key'",
@@ -410,7 +450,7 @@ def main() -> None:
             "stream names topic 5 of 1",
         ),
         ("config_bad_buffer", fr("07 01 00 01 0161 00 00 00 00"), "buffer size 0"),
-        ("config_bad_aggregation", fr("07 01 00 01 0161 00 01 00 01 00 09 01"), "aggregation 9"),
+        ("config_bad_aggregation", fr("07 01 00 01 0161 00 01 00 01 00 7f 01"), "aggregation 127"),
         ("config_zero_period", fr("07 01 00 01 0161 00 01 00 01 00 00 00"), "stream period 0"),
         ("trailing_byte", fr("08 01 00 0000000000000000 ff"), "CONFIG_ACK with a trailing byte"),
         (

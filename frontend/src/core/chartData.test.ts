@@ -21,6 +21,8 @@ describe("chart data", () => {
   it("labels units", () => {
     expect(unitLabel("METER_PER_SECOND_SQUARED")).toBe("m/s²");
     expect(unitLabel("DEGREE_CELSIUS", "COUNT")).toBe("samples");
+    // the exact window statistics are in the topic's unit (a deviation, a range, a median)
+    for (const a of ["MEDIAN", "STDDEV", "RANGE"]) expect(unitLabel("DEGREE_CELSIUS", a)).toBe("°C");
     expect(axisLabel(["m/s²", "m/s²", "°C"])).toBe("m/s² · °C");
   });
 });

@@ -487,6 +487,9 @@ export const AGGREGATION_TABLE = [
   { name: "ALL", code: 5, numericOnly: false },
   { name: "COUNT", code: 6, numericOnly: false },
   { name: "SUM", code: 7, numericOnly: true },
+  { name: "MEDIAN", code: 8, numericOnly: true },
+  { name: "STDDEV", code: 9, numericOnly: true },
+  { name: "RANGE", code: 10, numericOnly: true },
 ] as const;
 
 /** Each aggregation's name, for code that compares or builds one. */
@@ -499,6 +502,9 @@ export const AGGREGATION = {
   ALL: "ALL",
   COUNT: "COUNT",
   SUM: "SUM",
+  MEDIAN: "MEDIAN",
+  STDDEV: "STDDEV",
+  RANGE: "RANGE",
 } as const;
 
 /** The role owning each model part (modd.schema.json x-owner; null: any editor). */

@@ -61,8 +61,8 @@ export type ValueType = "float32" | "float64" | "int" | "bool";
 export const ValueTypeValues = ["float32", "float64", "int", "bool"] as const;
 
 /** How the samples of one period are reduced to what the subscriber receives. ALL sends every raw sample of the period. */
-export type Aggregation = "MIN" | "MAX" | "AVERAGE" | "FIRST" | "LAST" | "ALL" | "COUNT" | "SUM";
-export const AggregationValues = ["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM"] as const;
+export type Aggregation = "MIN" | "MAX" | "AVERAGE" | "FIRST" | "LAST" | "ALL" | "COUNT" | "SUM" | "MEDIAN" | "STDDEV" | "RANGE";
+export const AggregationValues = ["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM", "MEDIAN", "STDDEV", "RANGE"] as const;
 
 /** The platform (surface, aerial or underwater drone) and the sensors it carries. */
 export interface Drone {

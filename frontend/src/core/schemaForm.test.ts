@@ -48,7 +48,7 @@ describe("forms from the schema", () => {
     expect(checkField(field("subscriber", "name"), "9x")).toMatch(/letter/);
     expect(checkField(field("pubBroker", "endpoint.port"), 70000)).toMatch(/at most/);
     expect(checkField(field("pubBroker", "endpoint.port"), 1.5)).toMatch(/whole/);
-    expect(checkField(field("subscriber", "aggregation"), "MEDIAN")).toMatch(/one of/);
+    expect(checkField(field("subscriber", "aggregation"), "MODE")).toMatch(/one of/);
     expect(checkField(field("publisher", "topics"), [])).toMatch(/no topic/);
     expect(checkField(field("subscriber", "endpoint.host"), undefined)).toBeNull();
   });

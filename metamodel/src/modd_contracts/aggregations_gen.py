@@ -23,6 +23,9 @@ LAST: Final = "LAST"
 ALL: Final = "ALL"
 COUNT: Final = "COUNT"
 SUM: Final = "SUM"
+MEDIAN: Final = "MEDIAN"
+STDDEV: Final = "STDDEV"
+RANGE: Final = "RANGE"
 
 
 class Aggregation(IntEnum):
@@ -37,6 +40,9 @@ class Aggregation(IntEnum):
     ALL = 5
     COUNT = 6
     SUM = 7
+    MEDIAN = 8
+    STDDEV = 9
+    RANGE = 10
 
 
 @dataclass(frozen=True)
@@ -47,6 +53,7 @@ class AggregationSpec:
     code: int
     numeric_only: bool
     wire_count: bool
+    keeps_samples: bool
     result: dict[str, str]
     derivable_from: tuple[str, ...]
     derivable_from_pair: tuple[str, str] | None
@@ -58,6 +65,7 @@ AGGREGATIONS: tuple[AggregationSpec, ...] = (
         code=0,
         numeric_only=False,
         wire_count=False,
+        keeps_samples=False,
         result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'bool'},
         derivable_from=('MIN', 'ALL'),
         derivable_from_pair=None,
@@ -67,6 +75,7 @@ AGGREGATIONS: tuple[AggregationSpec, ...] = (
         code=1,
         numeric_only=False,
         wire_count=False,
+        keeps_samples=False,
         result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'bool'},
         derivable_from=('MAX', 'ALL'),
         derivable_from_pair=None,
@@ -76,6 +85,7 @@ AGGREGATIONS: tuple[AggregationSpec, ...] = (
         code=2,
         numeric_only=True,
         wire_count=True,
+        keeps_samples=False,
         result={'float32': 'float32', 'float64': 'float64', 'int': 'float64', 'bool': 'float32'},
         derivable_from=('AVERAGE', 'ALL'),
         derivable_from_pair=('SUM', 'COUNT'),
@@ -85,6 +95,7 @@ AGGREGATIONS: tuple[AggregationSpec, ...] = (
         code=3,
         numeric_only=False,
         wire_count=False,
+        keeps_samples=False,
         result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'bool'},
         derivable_from=('FIRST', 'ALL'),
         derivable_from_pair=None,
@@ -94,6 +105,7 @@ AGGREGATIONS: tuple[AggregationSpec, ...] = (
         code=4,
         numeric_only=False,
         wire_count=False,
+        keeps_samples=False,
         result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'bool'},
         derivable_from=('LAST', 'ALL'),
         derivable_from_pair=None,
@@ -103,6 +115,7 @@ AGGREGATIONS: tuple[AggregationSpec, ...] = (
         code=5,
         numeric_only=False,
         wire_count=False,
+        keeps_samples=True,
         result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'bool'},
         derivable_from=('ALL',),
         derivable_from_pair=None,
@@ -112,6 +125,7 @@ AGGREGATIONS: tuple[AggregationSpec, ...] = (
         code=6,
         numeric_only=False,
         wire_count=False,
+        keeps_samples=False,
         result={'float32': 'int', 'float64': 'int', 'int': 'int', 'bool': 'int'},
         derivable_from=('COUNT', 'AVERAGE', 'ALL'),
         derivable_from_pair=None,
@@ -121,8 +135,39 @@ AGGREGATIONS: tuple[AggregationSpec, ...] = (
         code=7,
         numeric_only=True,
         wire_count=False,
+        keeps_samples=False,
         result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'int'},
         derivable_from=('SUM', 'ALL'),
+        derivable_from_pair=None,
+    ),
+    AggregationSpec(
+        name='MEDIAN',
+        code=8,
+        numeric_only=True,
+        wire_count=False,
+        keeps_samples=True,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'float64', 'bool': 'float32'},
+        derivable_from=('ALL',),
+        derivable_from_pair=None,
+    ),
+    AggregationSpec(
+        name='STDDEV',
+        code=9,
+        numeric_only=True,
+        wire_count=False,
+        keeps_samples=False,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'float64', 'bool': 'float32'},
+        derivable_from=('ALL',),
+        derivable_from_pair=None,
+    ),
+    AggregationSpec(
+        name='RANGE',
+        code=10,
+        numeric_only=True,
+        wire_count=False,
+        keeps_samples=False,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'int'},
+        derivable_from=('ALL',),
         derivable_from_pair=None,
     ),
 )

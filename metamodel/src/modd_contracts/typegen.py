@@ -308,6 +308,7 @@ def generate_agg_py() -> str:
         "    code: int",
         "    numeric_only: bool",
         "    wire_count: bool",
+        "    keeps_samples: bool",
         "    result: dict[str, str]",
         "    derivable_from: tuple[str, ...]",
         "    derivable_from_pair: tuple[str, str] | None",
@@ -323,6 +324,7 @@ def generate_agg_py() -> str:
             f"        code={r['code']},",
             f"        numeric_only={r['numericOnly']},",
             f"        wire_count={r['wireCount']},",
+            f"        keeps_samples={r.get('keepsSamples', False)},",
             f"        result={r['result']!r},",
             f"        derivable_from={tuple(r['derivableFrom'])!r},",
             f"        derivable_from_pair={tuple(pair) if pair else None!r},",
@@ -367,6 +369,7 @@ def generate_agg_cpp() -> str:
         "  uint8_t code;",
         "  bool numeric_only;",
         "  bool wire_count;",
+        "  bool keeps_samples;  // holds every sample of the window (at most kMaxList)",
         "  // Wire value type per topic type, indexed by ValueType",
         "  // (float32, float64, int, bool): 0 float32, 1 float64, 2 int, 3 bool.",
         "  uint8_t result[4];",
@@ -378,7 +381,8 @@ def generate_agg_cpp() -> str:
         res = ", ".join(str(types.index(r["result"][t])) for t in types)
         out.append(
             f'    {{"{r["name"]}", {r["code"]}, {str(r["numericOnly"]).lower()}, '
-            f"{str(r['wireCount']).lower()}, {{{res}}}}},"
+            f"{str(r['wireCount']).lower()}, {str(r.get('keepsSamples', False)).lower()}, "
+            f"{{{res}}}}},"
         )
     out += [
         "};",

@@ -14,7 +14,7 @@ Text = str
 Path = str
 KnownUnit = Literal["METER", "METER_PER_SECOND", "METER_PER_SECOND_SQUARED", "DEGREE_CELSIUS", "RADIAN", "RADIAN_PER_SECOND", "BAR", "LITER", "GRAM", "NONE"]
 ValueType = Literal["float32", "float64", "int", "bool"]
-Aggregation = Literal["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM"]
+Aggregation = Literal["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM", "MEDIAN", "STDDEV", "RANGE"]
 Unit = KnownUnit | str
 
 

@@ -8,11 +8,12 @@ from __future__ import annotations
 import ipaddress
 import re
 from collections.abc import Callable, Iterator
+from fractions import Fraction
 from functools import cache, lru_cache
 from typing import TYPE_CHECKING, Any
 
 from modd_contracts.aggregations_gen import AGGREGATIONS
-from modd_contracts.link_wire_gen import MAX_PERIOD_US
+from modd_contracts.link_wire_gen import MAX_LIST, MAX_PERIOD_US
 
 from .bounds import size_errors
 from .diagnostics import Diagnostic, pointer_join
@@ -34,6 +35,9 @@ CHECKS: list[Check] = [*SCIENCE_CHECKS, *RESOLUTION_CHECKS]
 # Aggregations that make no sense on booleans (their mean or sum is not a bool):
 # the aggregation table's numericOnly.
 _NUMERIC_ONLY = {a.name for a in AGGREGATIONS if a.numeric_only}
+# Aggregations whose window's samples the PubBroker holds (ALL, MEDIAN): at most
+# the link's list bound a window (docs/protocol.md, "Aggregation semantics").
+_KEEPS_SAMPLES = {a.name for a in AGGREGATIONS if a.keeps_samples}
 
 
 def check(fn: Check) -> Check:
@@ -309,6 +313,31 @@ def subscription_periods(doc: dict[str, Any]) -> Iterator[Diagnostic]:
             yield Diagnostic(
                 f"subscription period {sub['periodS']} s is shorter than the "
                 f"publication period {float(pm):g} s of {sub['topic']!r}",
+                f"/subscribers/{i}/periodS",
+            )
+
+
+@check
+def window_samples_bounded(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    """A MEDIAN or ALL window holds every sample of its period on board: at most
+    MAX_LIST, from the topic's publication period (its fastest publisher)."""
+    fastest: dict[str, Fraction] = {}
+    for pub in doc["publishers"]:
+        period = to_fraction(pub["periodS"])
+        for t in pub["topics"]:
+            if period > 0 and (t not in fastest or period < fastest[t]):
+                fastest[t] = period
+    for i, sub in enumerate(doc["subscribers"]):
+        pm = fastest.get(sub["topic"])
+        if sub["aggregation"] not in _KEEPS_SAMPLES or pm is None:
+            continue
+        samples = -(-to_fraction(sub["periodS"]) // pm)  # ceil: a window's most
+        if samples > MAX_LIST:
+            yield Diagnostic(
+                f"a {sub['aggregation']} window of {sub['periodS']} s holds up to {samples} "
+                f"samples of {sub['topic']!r} (published every {float(pm):g} s); the "
+                f"PubBroker keeps at most {MAX_LIST} a window: choose a period of at most "
+                f"{float(pm * MAX_LIST):g} s",
                 f"/subscribers/{i}/periodS",
             )
 

@@ -12,7 +12,13 @@ SUM          the sum of the samples (``0`` for an empty window)
 COUNT        the number of samples (``int``)
 AVERAGE      ``(mean, count)``, or ``None`` when ``count == 0``
 ALL          the list of raw samples, in publication order
+MEDIAN       numpy.median of the samples (float), or ``None``
+STDDEV       the population standard deviation (numpy.std, ddof=0), or ``None``
+RANGE        MAX - MIN, or ``None``
 ===========  ==================================================
+
+MEDIAN, STDDEV and RANGE are exact over their window and cannot be merged
+(the aggregation table derives them from ALL only).
 
 A stream of period ``k·P`` is derived from ``k`` consecutive windows of a sent
 stream of period ``P``. Every window starts at the configuration epoch, so the
@@ -29,6 +35,7 @@ stream of period ``P``. Every window starts at the configuration epoch, so the
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -139,17 +146,43 @@ def aggregate(aggregation: str, samples: Sequence[Sample]) -> Window:
         return sum(samples, 0)
     if aggregation == agg.AVERAGE:
         return (sum(samples, 0) / len(samples), len(samples)) if samples else None
-    if not samples:
-        return None
-    if aggregation == agg.MIN:
-        return min(samples)
-    if aggregation == agg.MAX:
-        return max(samples)
-    if aggregation == agg.FIRST:
-        return samples[0]
-    if aggregation == agg.LAST:
-        return samples[-1]
-    raise ValueError(f"unknown aggregation {aggregation!r}")
+    whole = _WHOLE.get(aggregation)
+    if whole is None:
+        raise ValueError(f"unknown aggregation {aggregation!r}")
+    return whole(samples) if samples else None
+
+
+def median(samples: Sequence[Sample]) -> float:
+    """numpy.median: the middle sample, or the mean of the two middle ones.
+
+    >>> median([3, 1, 2]), median([4.0, 1.0, 2.0, 3.0])
+    (2.0, 2.5)
+    """
+    s = sorted(samples)
+    mid = len(s) // 2
+    return float(s[mid]) if len(s) % 2 else (float(s[mid - 1]) + float(s[mid])) / 2
+
+
+def stddev(samples: Sequence[Sample]) -> float:
+    """The population standard deviation (numpy.std with ddof=0), two passes.
+
+    >>> stddev([2, 4, 4, 4, 5, 5, 7, 9])
+    2.0
+    """
+    mean = math.fsum(float(x) for x in samples) / len(samples)
+    return math.sqrt(math.fsum((float(x) - mean) ** 2 for x in samples) / len(samples))
+
+
+#: The aggregations computed from a non-empty window's samples as a whole.
+_WHOLE: dict[str, Callable[[Sequence[Sample]], Window]] = {
+    agg.MIN: min,
+    agg.MAX: max,
+    agg.FIRST: lambda s: s[0],
+    agg.LAST: lambda s: s[-1],
+    agg.MEDIAN: median,
+    agg.STDDEV: stddev,
+    agg.RANGE: lambda s: max(s) - min(s),
+}
 
 
 def _convert(target: str, source: str, window: Window) -> Window:
@@ -172,6 +205,10 @@ def derive_value(target: str, sources: Sequence[tuple[str, Sequence[Window]]]) -
     """
     if len(sources) == 1:
         source, windows = sources[0]
+        if target not in MERGES:  # exact over the whole window: from ALL only
+            if source != agg.ALL:
+                raise ValueError(f"{target} cannot be derived from {source}")
+            return aggregate(target, merge_all(windows))
         return merge(target, [_convert(target, source, w) for w in windows])
     if len(sources) == 2 and PAIR_SOURCE_RULES.get(target) == (sources[0][0], sources[1][0]):
         total = merge_sum(sources[0][1])

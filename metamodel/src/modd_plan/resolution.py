@@ -3,8 +3,10 @@ resolution"): the finest of what the subscriptions it serves need, directly or
 through the streams derived from it; None (unquantised) as soon as one of them
 needs full precision. A subscription needs its own ``resolution``, else its
 variable's. A SUM source of k windows is sent k times finer, so that the sum of
-k errors of half a step stays within half of the subscriber's step (the other
-derivations, MIN, MAX, an AVERAGE of AVERAGEs, keep the error of their sources).
+k errors of half a step stays within half of the subscriber's step; a RANGE
+derived from ALL asks it twice finer (a difference of two samples). The other
+derivations (MIN, MAX, an AVERAGE of AVERAGEs, a MEDIAN or STDDEV of ALL's
+samples) keep the error of their sources.
 """
 
 from __future__ import annotations
@@ -61,6 +63,8 @@ def stream_resolutions(
             if into is None:
                 continue
             divide = src.factor if src.stream.aggregation == agg.SUM else 1
+            if s.stream.aggregation == agg.RANGE:  # a difference of two quantised samples
+                divide *= 2
             into += [
                 None if need.get(n) is None else need[n] / divide  # type: ignore[operator]
                 for n in s.subscribers

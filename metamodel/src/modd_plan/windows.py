@@ -31,7 +31,7 @@ class LinkValue(Protocol):
 def window_of(value: LinkValue, aggregation: str, value_type: str) -> Any:
     """A decoded DATA value as a window in the form of :mod:`modd_plan.derive`
     (``None`` when marked absent)."""
-    floats = value_type in ("float32", "float64")
+    result = agg.BY_NAME[aggregation].result[value_type]  # the value's wire type
     if not value.present:
         return None
     if aggregation == agg.AVERAGE:
@@ -40,11 +40,9 @@ def window_of(value: LinkValue, aggregation: str, value_type: str) -> Any:
         return value.count
     if aggregation == agg.ALL:
         return [bool(x) for x in value.samples] if value_type == "bool" else list(value.samples)
-    if aggregation == agg.SUM:
-        return value.number if floats else value.integer
-    if floats:
+    if result in ("float32", "float64"):
         return value.number
-    return bool(value.integer) if value_type == "bool" else value.integer
+    return bool(value.integer) if result == "bool" else value.integer
 
 
 def split_window(aggregation: str, window: Any) -> tuple[Value, int | None]:

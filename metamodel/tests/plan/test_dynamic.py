@@ -45,7 +45,7 @@ def test_refuses_what_cannot_be_computed(plan: Plan) -> None:
 
 def test_refuses_bad_requests(plan: Plan) -> None:
     assert "no topic" in _reason(check_dynamic(plan, "d.x.y", "1", "MIN"))
-    assert "unknown aggregation" in _reason(check_dynamic(plan, X, "1", "MEDIAN"))
+    assert "unknown aggregation" in _reason(check_dynamic(plan, X, "1", "MODE"))
     assert "not a positive decimal" in _reason(check_dynamic(plan, X, "-1", "MIN"))
     assert "not a positive decimal" in _reason(check_dynamic(plan, X, "0", "MIN"))
 

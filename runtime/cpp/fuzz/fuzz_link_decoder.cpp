@@ -1,12 +1,16 @@
 // libFuzzer target: the link decoder as the PubBroker runs it (a LinkSession
 // fed arbitrary bytes, before and after authentication) and the DATA decoder
 // with a fixed set of value kinds, and again with declared resolutions (quantised
-// values must read back within half a step). Must never crash, leak or hit UB.
+// values must read back within half a step), and the exact statistics' accumulators
+// (MEDIAN, STDDEV, RANGE) over the bytes as samples. Must never crash, leak or hit UB.
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
+#include "modd/broker/accumulator.hpp"
 #include "modd/broker/link_session.hpp"
 #include "modd/link/auth.hpp"
 #include "modd/link/codec.hpp"
@@ -32,7 +36,9 @@ void check_quantised(const RawFrame& f) {
       value_kind(ValueType::Float32, Aggregation::Average, 0.01),
       value_kind(ValueType::Float64, Aggregation::All, 0.5),
       value_kind(ValueType::Float32, Aggregation::Max, 1e-9),
-      value_kind(ValueType::Int, Aggregation::Sum, 0.1)};
+      value_kind(ValueType::Int, Aggregation::Sum, 0.1),
+      value_kind(ValueType::Float32, Aggregation::Stddev, 0.01),
+      value_kind(ValueType::Int, Aggregation::Median, 0.5)};
   Data d;
   try {
     d = decode_data(f, kinds);
@@ -48,6 +54,30 @@ void check_quantised(const RawFrame& f) {
     for (size_t j = 0; j < d.values[i].numbers.size(); ++j)
       if (!close(back.values[i].numbers[j], d.values[i].numbers[j], r)) std::abort();
   }
+}
+// The bytes as float64 samples of one window: MEDIAN lies within [min, max] and
+// STDDEV within [0, max - min]; the int RANGE equals max - min.
+void check_statistics(std::span<const uint8_t> in) {
+  broker::Accumulator med(ValueType::Float64, Aggregation::Median);
+  broker::Accumulator sd(ValueType::Float64, Aggregation::Stddev);
+  broker::Accumulator range(ValueType::Int, Aggregation::Range);
+  double lo = INFINITY, hi = -INFINITY;
+  for (size_t at = 0; at + 8 <= in.size(); at += 8) {
+    double x;
+    std::memcpy(&x, in.data() + at, 8);
+    if (!std::isfinite(x) || std::fabs(x) > 1e150) continue;  // no overflow of the squares
+    med.add(x, 0);
+    sd.add(x, 0);
+    range.add(0, static_cast<int64_t>(std::fmod(x, 1e9)));  // in range: no UB
+    lo = std::min(lo, x);
+    hi = std::max(hi, x);
+  }
+  link::Value m = med.take(), s = sd.take(), r = range.take();
+  if (m.present != s.present || m.present != r.present) std::abort();
+  if (!m.present) return;
+  if (m.number < lo || m.number > hi) std::abort();
+  if (!(s.number >= 0) || s.number > (hi - lo) + 1e-9 * std::max(-lo, hi)) std::abort();
+  if (r.integer < 0) std::abort();
 }
 }  // namespace
 
@@ -65,7 +95,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             value_kind(ValueType::Int, Aggregation::All),
             value_kind(ValueType::Bool, Aggregation::Min),
             value_kind(ValueType::Float64, Aggregation::Count),
-            value_kind(ValueType::Int, Aggregation::Sum)};
+            value_kind(ValueType::Int, Aggregation::Sum),
+            value_kind(ValueType::Float64, Aggregation::Median),
+            value_kind(ValueType::Float32, Aggregation::Stddev),
+            value_kind(ValueType::Int, Aggregation::Range)};
         (void)decode_data(*f, kinds);
       } else {
         Message m = decode(*f);
@@ -79,6 +112,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       }
     }
   } catch (const Error&) {}
+  check_statistics(in);
   // 2. A session: the handshake done with the right key, then the fuzz bytes.
   Hooks h;
   const std::string key = "fuzz";

@@ -1,5 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
 #include "modd/broker/accumulator.hpp"
 
 using namespace modd::broker;
@@ -42,4 +47,48 @@ TEST(Accumulator, IntAggregatesAndReset) {
   Accumulator avg(ValueType::Bool, Aggregation::Average);
   for (int b : {1, 0, 1, 1}) avg.add(0, b);
   EXPECT_DOUBLE_EQ(avg.take().number, 0.75);
+}
+
+// MEDIAN, STDDEV and RANGE equal numpy's over each window of the contract's
+// vectors (contracts/vectors/aggregations.json, computed by numpy).
+TEST(Accumulator, ExactStatisticsMatchNumpy) {
+  std::ifstream f(std::string(MODD_CONTRACTS_DIR) + "/vectors/aggregations.json");
+  ASSERT_TRUE(f.good());
+  auto doc = nlohmann::json::parse(f);
+  ASSERT_GE(doc["vectors"].size(), 5u);
+  for (const auto& c : doc["vectors"]) {
+    bool is_int = c["type"] == "int";
+    ValueType type = is_int ? ValueType::Int
+                            : (c["type"] == "float32" ? ValueType::Float32 : ValueType::Float64);
+    auto run = [&](Aggregation a) {
+      Accumulator acc(type, a);
+      for (int round = 0; round < 2; ++round) {  // the second window starts clean
+        for (const auto& x : c["samples"])
+          acc.add(is_int ? 0.0 : x.get<double>(), is_int ? x.get<int64_t>() : 0);
+        auto v = acc.take();
+        EXPECT_TRUE(v.present);
+        if (round == 1) return v;
+      }
+      return modd::link::Value{};
+    };
+    std::string name = c["name"];
+    EXPECT_DOUBLE_EQ(run(Aggregation::Median).number, c["MEDIAN"].get<double>()) << name;
+    double sd = c["STDDEV"].get<double>();
+    EXPECT_NEAR(run(Aggregation::Stddev).number, sd, 1e-9 * sd + 1e-12) << name;
+    if (is_int)
+      EXPECT_EQ(run(Aggregation::Range).integer, c["RANGE"].get<int64_t>()) << name;
+    else
+      EXPECT_DOUBLE_EQ(run(Aggregation::Range).number, c["RANGE"].get<double>()) << name;
+  }
+}
+
+TEST(Accumulator, StatisticsOfAnEmptyWindowAreAbsentAndMedianIsBounded) {
+  for (auto a : {Aggregation::Median, Aggregation::Stddev, Aggregation::Range})
+    EXPECT_FALSE(Accumulator(ValueType::Float64, a).take().present);
+  Accumulator med(ValueType::Float64, Aggregation::Median);
+  // beyond kMaxAll samples the median is over the window's first kMaxAll
+  for (size_t i = 0; i < Accumulator::kMaxAll; ++i) med.add(1.0, 0);
+  for (int i = 0; i < 1000; ++i) med.add(1e9, 0);
+  auto v = med.take();
+  EXPECT_EQ(v.number, 1.0);
 }

@@ -289,3 +289,12 @@ def test_received_in_every_format_and_period(
     else:
         step = int(round(period * S))
         assert rows == len({t // step for w in want.values() for t, _ in w})
+
+
+def test_the_exact_statistics_have_their_cf_cell_methods() -> None:
+    """CF Appendix E's method names (median, standard_deviation, range)."""
+    from modd.dataset.received import cell_methods
+
+    assert cell_methods("MEDIAN", "1.0") == "time: median (interval: 1 s)"
+    assert cell_methods("STDDEV", "0.5") == "time: standard_deviation (interval: 0.5 s)"
+    assert cell_methods("RANGE", "0.25") == "time: range (interval: 0.25 s)"

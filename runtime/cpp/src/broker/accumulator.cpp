@@ -1,6 +1,7 @@
 #include "modd/broker/accumulator.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace modd::broker {
 
@@ -40,6 +41,9 @@ void Accumulator::add(double number, int64_t integer) {
         isum_ += integer;  // wraps like int64 (documented)
       break;
     case Aggregation::Count: break;
+    case Aggregation::Median:
+    case Aggregation::Stddev:
+    case Aggregation::Range: add_statistic(number, integer, first); break;
     case Aggregation::All:
       if (is_float()) {
         if (all_.numbers.size() < kMaxAll) all_.numbers.push_back(number);
@@ -72,6 +76,15 @@ link::Value Accumulator::take() {
         v.integer = isum_;
         break;
       case Aggregation::Count: v.count = n_; break;
+      case Aggregation::Range:
+        if (is_float())
+          v.number = d_ - dlo_;
+        else
+          v.integer = static_cast<int64_t>(static_cast<uint64_t>(i_) -
+                                           static_cast<uint64_t>(ilo_));  // wraps like SUM
+        break;
+      case Aggregation::Median:
+      case Aggregation::Stddev: v.number = take_statistic(); break;
       case Aggregation::All:
         v = std::move(all_);
         v.present = true;
@@ -82,8 +95,50 @@ link::Value Accumulator::take() {
   n_ = 0;
   d_ = dsum_ = 0;
   i_ = isum_ = 0;
+  mean_ = m2_ = shift_ = dlo_ = 0;
+  ilo_ = 0;
+  samples_.clear();
   all_ = link::Value{};
   return v;
+}
+
+void Accumulator::add_statistic(double number, int64_t integer, bool first) {
+  double x = is_float() ? number : static_cast<double>(integer);
+  switch (agg_) {
+    case Aggregation::Median:
+      if (samples_.size() < kMaxAll) samples_.push_back(x);
+      break;
+    case Aggregation::Stddev: {  // Welford on x - (the first sample): stable in one pass,
+      if (first) shift_ = x;     // and precise far from zero (a pressure near 101325 Pa)
+      x -= shift_;
+      double delta = x - mean_;
+      mean_ += delta / static_cast<double>(n_);
+      m2_ += delta * (x - mean_);
+      break;
+    }
+    default:  // Range
+      if (is_float()) {
+        d_ = first ? number : std::max(d_, number);
+        dlo_ = first ? number : std::min(dlo_, number);
+      } else {
+        i_ = first ? integer : std::max(i_, integer);
+        ilo_ = first ? integer : std::min(ilo_, integer);
+      }
+  }
+}
+
+// numpy.median (the mean of the two middle samples of an even count) and
+// numpy.std (ddof=0) of the window.
+double Accumulator::take_statistic() {
+  if (agg_ == Aggregation::Stddev) return std::sqrt(m2_ / static_cast<double>(n_));
+  size_t mid = samples_.size() / 2;
+  std::nth_element(samples_.begin(), samples_.begin() + static_cast<std::ptrdiff_t>(mid),
+                   samples_.end());
+  double upper = samples_[mid];
+  if (samples_.size() % 2) return upper;
+  double lower =
+      *std::max_element(samples_.begin(), samples_.begin() + static_cast<std::ptrdiff_t>(mid));
+  return (lower + upper) / 2;
 }
 
 }  // namespace modd::broker

@@ -1,9 +1,12 @@
 // A running aggregate for one scheduled stream, updated on ingest and taken
 // (value + reset) when the stream's window closes. An empty window gives an
-// absent value.
+// absent value. MEDIAN keeps the window's samples (at most kMaxAll, as ALL:
+// validation refuses a subscription whose window may hold more); STDDEV is
+// Welford's running population deviation (of the samples less the first); RANGE keeps the extremes.
 #pragma once
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 #include "modd/link/messages.hpp"
 
@@ -31,7 +34,13 @@ class Accumulator {
   uint64_t n_ = 0;
   double d_ = 0, dsum_ = 0;
   int64_t i_ = 0, isum_ = 0;
+  double mean_ = 0, m2_ = 0, shift_ = 0;  // STDDEV (Welford, shifted)
+  double dlo_ = 0;                        // RANGE of float topics: d_ is the largest
+  int64_t ilo_ = 0;                       // RANGE of int topics: i_ is the largest
+  std::vector<double> samples_;           // MEDIAN
   link::Value all_;
+  void add_statistic(double x, int64_t integer, bool first);
+  double take_statistic();
 };
 
 }  // namespace modd::broker

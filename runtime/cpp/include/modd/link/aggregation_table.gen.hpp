@@ -16,6 +16,9 @@ enum class Aggregation : uint8_t {
   All = 5,
   Count = 6,
   Sum = 7,
+  Median = 8,
+  Stddev = 9,
+  Range = 10,
 };
 
 }  // namespace modd::link
@@ -27,22 +30,26 @@ struct AggregationRow {
   uint8_t code;
   bool numeric_only;
   bool wire_count;
+  bool keeps_samples;  // holds every sample of the window (at most kMaxList)
   // Wire value type per topic type, indexed by ValueType
   // (float32, float64, int, bool): 0 float32, 1 float64, 2 int, 3 bool.
   uint8_t result[4];
 };
 
 inline constexpr AggregationRow kAggregations[] = {
-    {"MIN", 0, false, false, {0, 1, 2, 3}},
-    {"MAX", 1, false, false, {0, 1, 2, 3}},
-    {"AVERAGE", 2, true, true, {0, 1, 1, 0}},
-    {"FIRST", 3, false, false, {0, 1, 2, 3}},
-    {"LAST", 4, false, false, {0, 1, 2, 3}},
-    {"ALL", 5, false, false, {0, 1, 2, 3}},
-    {"COUNT", 6, false, false, {2, 2, 2, 2}},
-    {"SUM", 7, true, false, {0, 1, 2, 2}},
+    {"MIN", 0, false, false, false, {0, 1, 2, 3}},
+    {"MAX", 1, false, false, false, {0, 1, 2, 3}},
+    {"AVERAGE", 2, true, true, false, {0, 1, 1, 0}},
+    {"FIRST", 3, false, false, false, {0, 1, 2, 3}},
+    {"LAST", 4, false, false, false, {0, 1, 2, 3}},
+    {"ALL", 5, false, false, true, {0, 1, 2, 3}},
+    {"COUNT", 6, false, false, false, {2, 2, 2, 2}},
+    {"SUM", 7, true, false, false, {0, 1, 2, 2}},
+    {"MEDIAN", 8, true, false, true, {0, 1, 1, 0}},
+    {"STDDEV", 9, true, false, false, {0, 1, 1, 0}},
+    {"RANGE", 10, true, false, false, {0, 1, 2, 2}},
 };
-inline constexpr int kAggregationCount = 8;
+inline constexpr int kAggregationCount = 11;
 
 // Value types in the order of result[]: Float32, Float64, Int, Bool.
 

@@ -42,6 +42,9 @@ _METHODS = {
     agg.MAX: "maximum",
     agg.LAST: "point",
     agg.ALL: "point",
+    agg.MEDIAN: "median",
+    agg.STDDEV: "standard_deviation",
+    agg.RANGE: "range",
 }
 
 

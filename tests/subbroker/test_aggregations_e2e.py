@@ -1,0 +1,114 @@
+"""MEDIAN, STDDEV and RANGE end to end on loopback, real processes (the C++
+PubBroker, the publisher load, the SubBroker CLI, a zenoh client here): every
+delivered window equals numpy's over the archive's samples of that window,
+read with the official ``mcap`` reader. One MEDIAN is sent as such, another
+is derived at the SubBroker from an ALL stream (the planner drops it), so both
+the PubBroker's accumulator and the SubBroker's derivation are checked."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from modd_plan.plan import make_plan
+from subbroker_harness import (
+    f32,
+    free_port,
+    model_copy,
+    processes,
+    read_archive,
+    start_load,
+    start_pubbroker,
+    start_subbroker,
+    subbroker_config,
+    wait_port,
+)
+
+from conftest import Collector
+
+pytestmark = [pytest.mark.usefixtures("needs_pubbroker"), pytest.mark.e2e]
+
+RUN_S = 8.0
+X, Y, Z = (f"usv.accelerometer.accel_{a}" for a in "xyz")
+#: (name, topic, period, aggregation): scenario 1's subscriptions replaced
+SUBS = [
+    ("med_x", X, "1.0", "MEDIAN"),
+    ("sd_x", X, "0.5", "STDDEV"),
+    ("range_z", Z, "0.25", "RANGE"),
+    ("all_y", Y, "0.25", "ALL"),
+    ("med_y", Y, "1.0", "MEDIAN"),  # derived from all_y's ALL stream
+    ("sd_y", Y, "0.5", "STDDEV"),  # derived from it too
+]
+NUMPY: dict[str, Callable[[Any], Any]] = {"MEDIAN": np.median, "STDDEV": np.std, "RANGE": np.ptp}
+
+
+def _model(tmp_path: Path) -> Path:
+    path = model_copy(tmp_path, "scenario1.modd")
+    model = json.loads(path.read_text())
+    model["subscribers"] = [
+        {"name": n, "topic": t, "periodS": p, "aggregation": a} for n, t, p, a in SUBS
+    ]
+    path.write_text(json.dumps(model))
+    plan = make_plan(model)
+    sent = {(s.stream.topic, s.stream.aggregation) for s in plan.sent_streams}
+    assert (X, "MEDIAN") in sent and (Y, "MEDIAN") not in sent, sent  # the premise
+    return path
+
+
+#: computed at the SubBroker from ALL's samples, in double (not sent as a float32)
+DERIVED = {"med_y", "sd_y"}
+
+
+def _check(name: str, aggregation: str, vals: list[Any], samples: list[tuple[int, Any]]) -> int:
+    """numpy's value of every window: as the float32 the PubBroker sends, or in
+    double when the SubBroker derived it (STDDEV: within float rounding)."""
+    checked = 0
+    for v in vals:
+        window = np.array([x for t, x in samples if v.start_ns <= t < v.end_ns], np.float64)
+        if window.size == 0:
+            assert v.value is None, (name, v)
+            continue
+        want = float(NUMPY[aggregation](window))
+        if name not in DERIVED:
+            want = f32(want)  # float32 topics: a float32 value on the link
+        tol = (
+            (2e-7 if name not in DERIVED else 1e-12) * abs(want) if aggregation == "STDDEV" else 0.0
+        )
+        assert abs(v.value - want) <= tol, (name, v, want, window.size)
+        checked += 1
+    return checked
+
+
+def test_median_stddev_range_equal_numpy_over_the_archive(
+    tmp_path: Path, zenoh_client: Any
+) -> None:
+    model = _model(tmp_path)
+    link, ingress, zport = free_port(), free_port(), free_port()
+    pb = start_pubbroker(tmp_path, model, link, ingress)
+    sb = start_subbroker(tmp_path, subbroker_config(tmp_path, model, link, zport))
+    load = None
+    try:
+        wait_port(zport)
+        session = zenoh_client(zport)
+        got = Collector()
+        session.declare_subscriber("modd/usv/**", got.on_sample)
+        assert sb.wait_log("running", 10), sb.log()
+        load = start_load(tmp_path, model, ingress, RUN_S, signal="uniform")
+        load.p.wait(RUN_S + 15)
+        time.sleep(1.5)
+    finally:
+        with processes(pb, sb, *([load] if load else [])):
+            pass
+    values = got.snapshot()
+    archive = read_archive(tmp_path / "archive", model)
+    assert set(values) == {n for n, *_ in SUBS}
+    checked = {n: _check(n, a, values[n], archive[t]) for n, t, _, a in SUBS if a != "ALL"}
+    minimum = {"1.0": RUN_S - 3, "0.5": 2 * RUN_S - 4, "0.25": 4 * RUN_S - 6}
+    for n, _, p, a in SUBS:
+        if a != "ALL":
+            assert checked[n] >= minimum[p], (n, checked[n])
