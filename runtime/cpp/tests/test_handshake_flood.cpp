@@ -432,3 +432,61 @@ TEST(KeyedHello, KeyedChallengesHaveABudgetOfTheirOwn) {
     d.hear(hs(Hello{kVersion, keyed(6)}), source_of(i), t);
   EXPECT_LE(d.challenges().size(), 8u + 8 + 1);
 }
+
+namespace {
+Nonce keyed_at(uint32_t stamp, uint8_t b) {  // the SubBroker's form: its clock, then random
+  std::array<uint8_t, 8> r{static_cast<uint8_t>(stamp >> 24),
+                           static_cast<uint8_t>(stamp >> 16),
+                           static_cast<uint8_t>(stamp >> 8),
+                           static_cast<uint8_t>(stamp),
+                           b,
+                           b,
+                           b,
+                           b};
+  return keyed_nonce(psk(), r);
+}
+}  // namespace
+
+TEST(KeyedHello, RecordedAttemptsPlayedAgainNeitherEvictNorStarveTheNewest) {
+  // 40 keyed HELLOs recorded from the base station's earlier attempts (during an outage:
+  // none opened a session), played again 2,000 a second from 250 sources: the newest
+  // attempt is kept and answered within its retry.
+  Drone d;
+  const std::vector<uint8_t> base{127, 0, 0, 1, 0x1f, 0x90};
+  const uint32_t now_s = 1'800'000'000;
+  std::vector<Nonce> recorded;
+  for (uint32_t i = 0; i < 40; ++i) recorded.push_back(keyed_at(now_s - 400 + 10 * i, 1));
+  int64_t t = 0;
+  auto replay = [&](double seconds) {
+    for (int i = 0; i < static_cast<int>(2000 * seconds); ++i, t += kMs / 2)
+      d.hear(hs(Hello{kVersion, recorded[i % recorded.size()]}), source_of(i), t);
+  };
+  replay(2);
+  Nonce fresh = keyed_at(now_s, 9);
+  std::vector<Nonce> got;
+  for (int retry = 0; retry < 3 && got.empty(); ++retry) {  // the SubBroker's 1 s retries
+    size_t mark = d.air.sent.size();
+    d.hear(hs(Hello{kVersion, fresh}), base, t);
+    got = d.challenges(mark);
+    replay(1);
+  }
+  ASSERT_EQ(got.size(), 1u);
+  replay(0.3);
+  d.hear(hs(Auth{client_proof(psk(), fresh, got[0])}), base, t);
+  EXPECT_TRUE(d.link.ready());
+  EXPECT_GT(d.link.handshake_counters().stale_keyed, 1000u);  // the replays, once it was heard
+}
+
+TEST(KeyedHello, AClockSetBackGoesTheKeylessWay) {
+  Drone d;
+  const std::vector<uint8_t> base{127, 0, 0, 1, 0x1f, 0x90};
+  d.hear(hs(Hello{kVersion, keyed_at(2'000'000'000, 1)}), base, 0);
+  size_t mark = d.air.sent.size();
+  Nonce back = keyed_at(1'000'000'000, 2);  // a clock set back: answered all the same
+  d.hear(hs(Hello{kVersion, back}), base, kMs);
+  auto c = d.challenges(mark);
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(d.link.handshake_counters().stale_keyed, 1u);
+  d.hear(hs(Auth{client_proof(psk(), back, c[0])}), base, 2 * kMs);
+  EXPECT_TRUE(d.link.ready());
+}

@@ -453,7 +453,7 @@ int64_t DatagramLink::next_due_ns() const {
 }
 
 std::string DatagramLink::summary() const {
-  char buf[600];
+  char buf[800];
   std::snprintf(
       buf, sizeof buf,
       "datagrams_in=%llu datagrams_out=%llu bytes_out=%llu forged=%llu replayed=%llu "
@@ -461,7 +461,7 @@ std::string DatagramLink::summary() const {
       "nacks=%llu resent=%llu too_old=%llu handshakes=%llu timeouts=%llu fragments=%llu "
       "dropped=%llu "
       "foreign=%llu resend_paced=%llu challenges=%llu hellos_unanswered=%llu "
-      "keyed_hellos=%llu",
+      "keyed_hellos=%llu stale_keyed=%llu",
       static_cast<unsigned long long>(c_.datagrams_in),
       static_cast<unsigned long long>(c_.datagrams_out),
       static_cast<unsigned long long>(c_.bytes_out), static_cast<unsigned long long>(c_.forged),
@@ -473,7 +473,8 @@ std::string DatagramLink::summary() const {
       static_cast<unsigned long long>(c_.resend_paced),
       static_cast<unsigned long long>(challenges_.counters().challenges),
       static_cast<unsigned long long>(challenges_.counters().unanswered),
-      static_cast<unsigned long long>(challenges_.counters().keyed));
+      static_cast<unsigned long long>(challenges_.counters().keyed),
+      static_cast<unsigned long long>(challenges_.counters().stale_keyed));
   return buf;
 }
 

@@ -57,14 +57,43 @@ std::optional<Nonce> Challenges::on_hello(const Nonce& hello, std::span<const ui
   }
   if (!is_keyed_nonce(key_, hello)) return on_keyless_hello(hello, source, now);
   // The base station's (or a copy of one it sent, which opens nothing: see on_auth).
+  if (stale(hello)) {
+    ++c_.stale_keyed;  // an older attempt's HELLO played again, or a clock set back
+    return on_keyless_hello(hello, source, now);
+  }
   ++c_.keyed;
-  remember(keyed_, hello, now, lim_.max_keyed);
+  remember_keyed(hello, now);
   if (!keyed_budget_.take(now)) {
     ++c_.unanswered;
     return std::nullopt;
   }
   ++c_.challenges;
   return cookie(hello, source, bucket(now));
+}
+
+namespace {
+// The base station's clock (seconds) when it made a keyed nonce: its first 4 bytes.
+int64_t stamp_of(const Nonce& n) {
+  return (int64_t{n[0]} << 24) | (int64_t{n[1]} << 16) | (int64_t{n[2]} << 8) | int64_t{n[3]};
+}
+}  // namespace
+
+bool Challenges::stale(const Nonce& hello) const {
+  int64_t newest = 0;
+  for (const Entry& e : keyed_) newest = std::max(newest, stamp_of(e.nonce));
+  return stamp_of(hello) + lim_.keyed_slack_s < newest;
+}
+
+void Challenges::remember_keyed(const Nonce& n, int64_t now) {
+  auto it =
+      std::find_if(keyed_.begin(), keyed_.end(), [&](const Entry& e) { return e.nonce == n; });
+  if (it != keyed_.end()) keyed_.erase(it);  // heard again: kept from now
+  keyed_.push_back({n, now});
+  if (keyed_.size() <= lim_.max_keyed) return;
+  // full: the oldest attempt goes (the base station's newest is never the one replaced)
+  keyed_.erase(std::min_element(keyed_.begin(), keyed_.end(), [](const Entry& a, const Entry& b) {
+    return stamp_of(a.nonce) < stamp_of(b.nonce);
+  }));
 }
 
 bool Challenges::source_allows(std::span<const uint8_t> source, int64_t now) {

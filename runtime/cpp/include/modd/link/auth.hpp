@@ -17,9 +17,10 @@ Mac client_proof(std::span<const uint8_t> key, const Nonce& client, const Nonce&
 Mac server_proof(std::span<const uint8_t> key, const Nonce& client, const Nonce& server);
 bool macs_equal(const Mac& a, const Mac& b);  // constant time
 
-// A keyed HELLO nonce (docs/protocol.md, "Keyed HELLO"): 8 random bytes, then
-// HMAC(key, "MODDHL" || those 8 bytes)[0:8]. The HELLO's layout is unchanged; the PubBroker
-// tells the base station's HELLO from a keyless stranger's by it (is_keyed_nonce).
+// A keyed HELLO nonce (docs/protocol.md, "Keyed HELLO"): 8 bytes (the SubBroker's: its clock
+// in seconds, big-endian u32, then 4 random bytes), then HMAC(key, "MODDHL" || those 8)[0:8]. The
+// HELLO's layout is unchanged; the PubBroker tells the base station's HELLO from a keyless
+// stranger's by it (is_keyed_nonce).
 Nonce keyed_nonce(std::span<const uint8_t> key, std::span<const uint8_t, 8> random);
 bool is_keyed_nonce(std::span<const uint8_t> key, const Nonce& n);  // constant time
 

@@ -40,6 +40,10 @@ struct ChallengeLimits {
   // keyed HELLOs: only the key's holder makes them (a copy of one is refused once it opened
   // a session), so neither their budget nor their memory is a stranger's to spend
   size_t max_keyed = 16;  // keyed HELLO nonces kept, each for two time buckets
+  // A keyed nonce starts with the base station's clock in seconds: one more than this older
+  // than the newest kept is an earlier attempt played again (or a clock set back), and goes
+  // the keyless way; when the memory is full, the oldest by that clock is replaced.
+  int64_t keyed_slack_s = 2;
   double keyed_per_s = 8, keyed_burst = 8;
   size_t max_used = 4096;  // HELLO nonces that opened a session, refused from then on
 };
@@ -47,6 +51,7 @@ struct ChallengeLimits {
 struct ChallengeCounters {
   uint64_t hellos = 0, challenges = 0, unanswered = 0;  // unanswered: over a rate limit
   uint64_t keyed = 0;                                   // HELLOs with a keyed nonce
+  uint64_t stale_keyed = 0;  // ... older than the newest kept (gone the keyless way)
   uint64_t auth_ok = 0, auth_failed = 0, auth_limited = 0, replayed = 0;
 };
 
@@ -77,6 +82,8 @@ class Challenges {
   uint64_t bucket(int64_t now) const { return static_cast<uint64_t>(now / lim_.lifetime_ns); }
   static void remember(std::deque<Entry>& q, const Nonce& n, int64_t now, size_t max);
   void expire(int64_t now);
+  bool stale(const Nonce& hello) const;
+  void remember_keyed(const Nonce& n, int64_t now);
   std::optional<Nonce> on_keyless_hello(const Nonce& hello, std::span<const uint8_t> source,
                                         int64_t now);
   bool source_allows(std::span<const uint8_t> source, int64_t now);

@@ -15,6 +15,8 @@ import hashlib
 import hmac
 import os
 import socket
+import struct
+import time
 
 from modd_contracts.link_wire_gen import MIN_KEY_BYTES as MIN_KEY_BYTES  # as the PubBroker's
 
@@ -54,9 +56,13 @@ def client_proof(key: bytes, client_nonce: bytes, server_nonce: bytes) -> bytes:
 
 def keyed_nonce(key: bytes, random: bytes | None = None) -> bytes:
     """A HELLO nonce the PubBroker knows for the key holder's (docs/protocol.md, "Keyed
-    HELLO"): 8 random bytes, then HMAC(key, "MODDHL" || those 8 bytes)[0:8]. The HELLO keeps
-    its layout; a keyless flood can then neither spend its CHALLENGE budget nor evict it."""
-    head = os.urandom(_KEYED_HALF) if random is None else random
+    HELLO"): 8 bytes, then HMAC(key, "MODDHL" || those 8 bytes)[0:8]. The 8 bytes are
+    ``random`` when given, else this clock in seconds (big-endian u32: the PubBroker prefers
+    the newest attempt) and 4 random bytes. The HELLO keeps its layout; a keyless flood can
+    then neither spend its CHALLENGE budget nor evict it."""
+    head = random
+    if head is None:
+        head = struct.pack(">I", int(time.time()) & 0xFFFFFFFF) + os.urandom(4)
     if len(head) != _KEYED_HALF:
         raise ValueError(f"a keyed nonce starts with {_KEYED_HALF} random bytes, not {len(head)}")
     return head + hmac.new(key, HELLO_LABEL + head, hashlib.sha256).digest()[:_KEYED_HALF]
