@@ -7,11 +7,13 @@ from __future__ import annotations
 
 import json
 import random
+import re
 import select
 import socket
 import sys
 import threading
 import time
+from datetime import datetime
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +30,8 @@ from subbroker_harness import (
 )
 
 RADIO = [str(Path(sys.executable)), "-m", "modd.radio.cli"]
+RADIO_300MS = "rate=3600,packet=252,latency_ms=300,seed=5"  # a SiK-like radio, 300 ms each way
+AUTHENTICATED = "authenticated over"
 
 
 def start_pubbroker_dgram(
@@ -212,3 +216,26 @@ def through_profile(
         stopping.set()
         thread.join(10)
     return out[0]
+
+
+def _stamp(line: str) -> datetime:
+    return datetime.strptime(line[:23], "%Y-%m-%d %H:%M:%S,%f")
+
+
+def time_to_authenticate(tmp: Path, cfg: Path, tag: str) -> float:
+    """Seconds from the SubBroker's first log line (its link starts) to its link's
+    authentication, by the SubBroker's own log stamps (its interpreter's start-up, slow on
+    a loaded machine, left out)."""
+    sb = start_subbroker(tmp, cfg, tag=tag)
+    try:
+        assert sb.wait_log(AUTHENTICATED, 60), sb.log()[-3000:]
+        lines = sb.log().splitlines()
+        done = next(ln for ln in lines if AUTHENTICATED in ln)
+        return (_stamp(done) - _stamp(lines[0])).total_seconds()
+    finally:
+        sb.stop()
+
+
+def pb_counter(pb: Proc, name: str) -> int:
+    found = re.findall(rf"\b{name}=(\d+)", pb.log())
+    return int(found[-1]) if found else 0

@@ -14,11 +14,9 @@ from __future__ import annotations
 
 import contextlib
 import os
-import re
 import socket
 import threading
 import time
-from datetime import datetime
 from pathlib import Path
 
 import pytest
@@ -36,13 +34,17 @@ from modd.link.datagram import (
 from modd.link.frames import VERSION, Auth, AuthOk, Challenge, Hello, Ping
 from modd.link.serialframe import encode_frame
 from modd.ports import free_port
-from radio_harness import start_pubbroker_dgram, start_radio_serial, subbroker_dgram_config
-from subbroker_harness import KEY, Proc, model_copy, processes, start_load, start_subbroker
+from radio_harness import (
+    RADIO_300MS,
+    pb_counter,
+    start_pubbroker_dgram,
+    start_radio_serial,
+    subbroker_dgram_config,
+    time_to_authenticate,
+)
+from subbroker_harness import KEY, model_copy, processes, start_load, start_subbroker
 
 pytestmark = pytest.mark.usefixtures("needs_pubbroker")
-
-RADIO_300MS = "rate=3600,packet=252,latency_ms=300,seed=5"
-AUTHENTICATED = "authenticated over"
 
 
 class HelloFlood:
@@ -70,29 +72,6 @@ class HelloFlood:
         os.close(self.fd)
 
 
-def _stamp(line: str) -> datetime:
-    return datetime.strptime(line[:23], "%Y-%m-%d %H:%M:%S,%f")
-
-
-def _time_to_authenticate(tmp: Path, cfg: Path, tag: str) -> float:
-    """Seconds from the SubBroker's first log line (its link starts) to its link's
-    authentication, by the SubBroker's own log stamps (its interpreter's start-up, slow on
-    a loaded machine, left out)."""
-    sb = start_subbroker(tmp, cfg, tag=tag)
-    try:
-        assert sb.wait_log(AUTHENTICATED, 60), sb.log()[-3000:]
-        lines = sb.log().splitlines()
-        done = next(ln for ln in lines if AUTHENTICATED in ln)
-        return (_stamp(done) - _stamp(lines[0])).total_seconds()
-    finally:
-        sb.stop()
-
-
-def _pb_counter(pb: Proc, name: str) -> int:
-    found = re.findall(rf"\b{name}=(\d+)", pb.log())
-    return int(found[-1]) if found else 0
-
-
 def test_a_stranger_flooding_hellos_on_the_radio_cannot_keep_the_base_station_out(
     tmp_path: Path,
 ) -> None:
@@ -106,11 +85,11 @@ def test_a_stranger_flooding_hellos_on_the_radio_cannot_keep_the_base_station_ou
             cfg = subbroker_dgram_config(
                 tmp_path, model, "127.0.0.1:1", free_port(), "serial", device=base
             )
-            quiet = _time_to_authenticate(tmp_path, cfg, "sb-quiet")
+            quiet = time_to_authenticate(tmp_path, cfg, "sb-quiet")
             flood = HelloFlood(base, 50)
             try:
                 time.sleep(2)  # the flood is on before the SubBroker comes back
-                times = [_time_to_authenticate(tmp_path, cfg, f"sb-flood{i}") for i in range(3)]
+                times = [time_to_authenticate(tmp_path, cfg, f"sb-flood{i}") for i in range(3)]
             finally:
                 flood.close()
             time.sleep(1.5)  # a log line with the PubBroker's counters
@@ -118,10 +97,10 @@ def test_a_stranger_flooding_hellos_on_the_radio_cannot_keep_the_base_station_ou
         f"authenticated {quiet:.2f} s after the link started without the stranger, "
         f"{', '.join(f'{t:.2f}' for t in times)} s with 50 HELLO/s ({flood.sent} HELLOs)"
     )
-    challenges = _pb_counter(pb, "challenges")
+    challenges = pb_counter(pb, "challenges")
     print(
-        f"PubBroker: {challenges} CHALLENGEs, {_pb_counter(pb, 'hellos_unanswered')} HELLOs "
-        f"unanswered, {_pb_counter(pb, 'handshakes')} sessions"
+        f"PubBroker: {challenges} CHALLENGEs, {pb_counter(pb, 'hellos_unanswered')} HELLOs "
+        f"unanswered, {pb_counter(pb, 'handshakes')} sessions"
     )
     # within 2 s (the issue's bound: four 300 ms crossings and a CHALLENGE heard), or 1 s
     # more than without the stranger when the machine is that slow
@@ -130,7 +109,7 @@ def test_a_stranger_flooding_hellos_on_the_radio_cannot_keep_the_base_station_ou
     # burst of 4), not HELLO for HELLO
     seconds = flood.sent / 50
     assert challenges <= 4 + 2 * (seconds + 8) + 12, (challenges, flood.sent, pb.log()[-2000:])
-    assert _pb_counter(pb, "hellos_unanswered") >= flood.sent // 2
+    assert pb_counter(pb, "hellos_unanswered") >= flood.sent // 2
 
 
 class StormClient:
@@ -214,8 +193,8 @@ def test_a_nack_storm_is_resent_within_the_link_budget(tmp_path: Path) -> None:
         elapsed = time.monotonic() - began
         time.sleep(1.2)  # a log line with the PubBroker's counters
     print(
-        f"PubBroker: resent={_pb_counter(pb, 'resent')} resend_paced="
-        f"{_pb_counter(pb, 'resend_paced')} nacks={_pb_counter(pb, 'nacks')}"
+        f"PubBroker: resent={pb_counter(pb, 'resent')} resend_paced="
+        f"{pb_counter(pb, 'resend_paced')} nacks={pb_counter(pb, 'nacks')}"
     )
     nack_bytes = sum(len(n) for n in storm)
     resent = during - live
@@ -287,5 +266,5 @@ def test_over_udp_a_flooding_address_gets_its_own_rate_and_the_session_its_addre
     assert challenges <= 4 + 2 * 4, challenges
     assert took < 2.0
     assert not [d for d in from_elsewhere if d[:1] == bytes([DGRAM_CONTROL])]  # no PONG
-    assert _pb_counter(pb, "foreign") == 1, pb.log()[-1500:]
+    assert pb_counter(pb, "foreign") == 1, pb.log()[-1500:]
     assert len(from_peer) >= 1  # the PONG, to the session's address

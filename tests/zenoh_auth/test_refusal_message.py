@@ -7,14 +7,19 @@ through the CLI (`modd backfill`) as a user runs it."""
 
 from __future__ import annotations
 
+import socket
 import subprocess
 import sys
+import threading
+import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import pytest
+from modd.ports import free_port
 from modd.zenoh_auth import Credentials, CredentialStore
-from modd.zenoh_session import client_settings, open_session
+from modd.zenoh_session import ZenohSettings, client_settings, open_session, secured
 
 
 def _refused(endpoint: str, who: Credentials | None) -> str:
@@ -72,3 +77,45 @@ def test_modd_backfill_without_credentials(router: tuple[str, CredentialStore, A
     assert res.returncode == 2
     assert "needs credentials" in res.stderr and "viewer.cred" in res.stderr, res.stderr
     assert "Traceback" not in res.stderr and ".rs:" not in res.stderr
+
+
+def test_a_router_closing_every_new_connection_is_not_blamed_on_credentials(
+    tmp_path: Path,
+) -> None:
+    """A router whose `accept_pending` is reached (connections that never authenticate)
+    closes every new connection at once, real clients too: the viewer is told so, not that
+    its credentials were refused, keeps trying meanwhile and opens once there is room."""
+    store = CredentialStore(tmp_path / "credentials")
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    settings = secured(ZenohSettings(mode="router", listen=(endpoint,)), store, "subbroker", "usv")
+    limits = {"transport/unicast/accept_pending": "8", "transport/unicast/accept_timeout": "60000"}
+    router = open_session(replace(settings, extra={**settings.extra, **limits}))
+    idle: list[socket.socket] = []
+    try:
+        idle = [socket.create_connection(("127.0.0.1", port)) for _ in range(12)]
+        time.sleep(0.3)
+        viewer = client_settings(endpoint, store.cred_file("viewer"))
+        with pytest.raises(ValueError) as info:
+            open_session(viewer, busy_wait_s=1.0)
+        said = str(info.value)
+        assert "closes every new connection at once" in said, said
+        assert "accept_pending" in said and "credentials were not checked" in said
+        assert "refused the credentials" not in said
+
+        # room again (the flood ends) while the viewer is trying: it opens
+        def room() -> None:
+            for s in idle:
+                s.close()
+
+        threading.Timer(1.5, room).start()
+        began = time.monotonic()
+        session = open_session(viewer, busy_wait_s=10.0)
+        took = time.monotonic() - began
+        session.close()  # type: ignore[no-untyped-call]
+        print(f"opened {took:.2f} s after the first try, 1.5 s after which there was room")
+        assert took < 6.0
+    finally:
+        for s in idle:
+            s.close()
+        router.close()  # type: ignore[no-untyped-call]

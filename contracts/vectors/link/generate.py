@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from modd.link import codec
-from modd.link.auth import client_proof, server_proof
+from modd.link.auth import client_proof, keyed_nonce, server_proof
 from modd.link.frames import (
     Aggregation,
     Auth,
@@ -412,6 +412,8 @@ def main() -> None:
         "server_nonce": SN.hex(),
         "client_proof": client_proof(KEY, CN, SN).hex(),
         "server_proof": server_proof(KEY, CN, SN).hex(),
+        "keyed_random": CN[:8].hex(),
+        "keyed_nonce": keyed_nonce(KEY, CN[:8]).hex(),
     }
     (HERE / "handshake.json").write_text(json.dumps(handshake, indent=1) + "\n")
 

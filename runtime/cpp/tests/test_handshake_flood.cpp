@@ -289,3 +289,204 @@ TEST(HandshakeFlood, ClientProofsUnderOneKeyAreTheHmacOfTheProtocol) {
     }
   }
 }
+
+// Keyed HELLOs (docs/protocol.md, "Keyed HELLO"): the base station's nonce is tagged under
+// the link key, so that a keyless flood from any number of sources can neither spend its
+// CHALLENGE budget nor evict its handshake.
+namespace {
+
+Nonce keyed(uint8_t b) {
+  std::array<uint8_t, 8> r{};
+  r.fill(b);
+  return keyed_nonce(psk(), r);
+}
+
+std::vector<uint8_t> source_of(int i) {  // 127.0.0.x:port, as many as asked
+  return {127,
+          0,
+          0,
+          static_cast<uint8_t>(2 + i % 250),
+          static_cast<uint8_t>(i >> 8),
+          static_cast<uint8_t>(i)};
+}
+
+// `rate` keyless HELLOs a second from `sources` addresses for `seconds`, from `t` on; the
+// time after it.
+int64_t flood(Drone& d, int rate, int sources, double seconds, int64_t t) {
+  const int64_t step = 1'000'000'000 / rate;
+  const int n = static_cast<int>(rate * seconds);
+  for (int i = 0; i < n; ++i, t += step) {
+    Nonce h = random_nonce();
+    d.hear(hs(Hello{kVersion, h}), source_of(i % sources), t);
+  }
+  return t;
+}
+
+}  // namespace
+
+TEST(KeyedHello, TheTagIsTheKeysAndAStrangersNonceIsNotKeyed) {
+  Nonce k = keyed(7);
+  EXPECT_TRUE(is_keyed_nonce(psk(), k));
+  const std::string other = "another-key-of-32-bytes-for-test";
+  EXPECT_FALSE(is_keyed_nonce({reinterpret_cast<const uint8_t*>(other.data()), other.size()}, k));
+  k[12] ^= 1;
+  EXPECT_FALSE(is_keyed_nonce(psk(), k));
+  int keyed_by_chance = 0;
+  for (int i = 0; i < 10'000; ++i) keyed_by_chance += is_keyed_nonce(psk(), random_nonce());
+  EXPECT_EQ(keyed_by_chance, 0);
+}
+
+TEST(KeyedHello, AFloodFromManySourcesCannotSpendTheBaseStationsBudget) {
+  // 2,000 HELLO/s from 250 sources for 5 s: each source under its own limit, the keyless
+  // budget spent; the base station's keyed HELLO is answered at once and its AUTH opens.
+  Drone d;
+  const std::vector<uint8_t> base{127, 0, 0, 1, 0x1f, 0x90};
+  int64_t t = flood(d, 2000, 250, 5, 0);
+  EXPECT_LE(d.challenges().size(), 8u + 8 * 5 + 1);  // the keyless budget, whatever the sources
+  Nonce h = keyed(7);
+  size_t mark = d.air.sent.size();
+  d.hear(hs(Hello{kVersion, h}), base, t);
+  auto c = d.challenges(mark);
+  ASSERT_EQ(c.size(), 1u);
+  t = flood(d, 2000, 250, 0.6, t + kMs);  // the flood goes on while the CHALLENGE crosses
+  d.hear(hs(Auth{client_proof(psk(), h, c[0])}), base, t);
+  EXPECT_TRUE(d.link.ready());
+  EXPECT_EQ(d.hooks.auths, 1);
+  EXPECT_EQ(d.link.handshake_counters().keyed, 1u);
+}
+
+TEST(KeyedHello, AFloodCannotEvictTheBaseStationsHandshakeNorAnAuthFloodDelayIt) {
+  Drone d;
+  const std::vector<uint8_t> base{127, 0, 0, 1, 0x1f, 0x90};
+  auto [h, c] = d.hello(base, 0);  // nonce(7) is keyless: the keyed one below
+  Nonce k = keyed(8);
+  size_t mark = d.air.sent.size();
+  d.hear(hs(Hello{kVersion, k}), base, kMs);
+  Nonce ck = d.challenges(mark).at(0);
+  int64_t t = flood(d, 2000, 250, 4, 2 * kMs);  // 8,000 HELLOs: the keyless memory is gone
+  for (int i = 0; i < 500; ++i, t += kMs / 2)   // and 2,000 AUTH/s from strangers
+    d.hear(hs(Auth{Mac{}}), source_of(i), t);
+  EXPECT_GE(d.link.handshake_counters().auth_limited, 400u);
+  d.hear(hs(Auth{client_proof(psk(), h, c)}), base, t);  // the keyless handshake: evicted
+  EXPECT_FALSE(d.link.ready());
+  d.hear(hs(Auth{client_proof(psk(), k, ck)}), base, t + kMs);  // the keyed one holds
+  EXPECT_TRUE(d.link.ready());
+}
+
+TEST(KeyedHello, TheCookieIsBoundToTheSourceAndToTwoTimeBuckets) {
+  const std::vector<uint8_t> base{127, 0, 0, 1, 0x1f, 0x90}, other{127, 0, 0, 9, 0, 1};
+  {
+    Drone d;  // the base station's AUTH, copied and sent from elsewhere first
+    Nonce k = keyed(1);
+    d.hear(hs(Hello{kVersion, k}), base, 0);
+    Mac proof = client_proof(psk(), k, d.challenges().at(0));
+    d.hear(hs(Auth{proof}), other, kMs);
+    EXPECT_FALSE(d.link.ready());
+    d.hear(hs(Auth{proof}), base, 2 * kMs);
+    EXPECT_TRUE(d.link.ready());
+  }
+  {
+    Drone d;  // answered in the next time bucket: still good; two buckets on: stale
+    const int64_t life = ChallengeLimits{}.lifetime_ns;
+    Nonce k = keyed(2), late = keyed(3);
+    d.hear(hs(Hello{kVersion, k}), base, life - kMs);
+    d.hear(hs(Hello{kVersion, late}), base, life - kMs);
+    auto c = d.challenges();
+    ASSERT_EQ(c.size(), 2u);
+    d.hear(hs(Auth{client_proof(psk(), late, c[1])}), base, 2 * life + kMs);
+    EXPECT_FALSE(d.link.ready());
+    d.hear(hs(Auth{client_proof(psk(), k, c[0])}), base, life + kMs);
+    EXPECT_TRUE(d.link.ready());
+  }
+}
+
+TEST(KeyedHello, ASniffedExchangePlayedAgainOpensNothing) {
+  Drone d;
+  const std::vector<uint8_t> base{127, 0, 0, 1, 0x1f, 0x90};
+  Nonce k = keyed(4);
+  d.hear(hs(Hello{kVersion, k}), base, 0);
+  Nonce c = d.challenges().at(0);
+  Mac proof = client_proof(psk(), k, c);
+  d.hear(hs(Auth{proof}), base, kMs);
+  ASSERT_EQ(d.hooks.auths, 1);
+  // a new session (the base station restarted) moves the key on
+  Nonce k2 = keyed(5);
+  size_t mark = d.air.sent.size();
+  d.hear(hs(Hello{kVersion, k2}), base, 2 * kMs);
+  d.hear(hs(Auth{client_proof(psk(), k2, d.challenges(mark).at(0))}), base, 3 * kMs);
+  ASSERT_EQ(d.hooks.auths, 2);
+  // the first exchange, played again from the base station's address: no CHALLENGE, no session
+  mark = d.air.sent.size();
+  d.hear(hs(Hello{kVersion, k}), base, 4 * kMs);
+  d.hear(hs(Auth{proof}), base, 5 * kMs);
+  EXPECT_TRUE(d.challenges(mark).empty());
+  EXPECT_EQ(d.hooks.auths, 2);
+  EXPECT_GE(d.link.handshake_counters().replayed, 1u);
+}
+
+TEST(KeyedHello, KeyedChallengesHaveABudgetOfTheirOwn) {
+  Drone d;
+  const std::vector<uint8_t> base{127, 0, 0, 1, 0x1f, 0x90};
+  int64_t t = 0;
+  for (int i = 0; i < 100; ++i, t += 10 * kMs)  // one keyed HELLO replayed 100 times in 1 s
+    d.hear(hs(Hello{kVersion, keyed(6)}), source_of(i), t);
+  EXPECT_LE(d.challenges().size(), 8u + 8 + 1);
+}
+
+namespace {
+Nonce keyed_at(uint32_t stamp, uint8_t b) {  // the SubBroker's form: its clock, then random
+  std::array<uint8_t, 8> r{static_cast<uint8_t>(stamp >> 24),
+                           static_cast<uint8_t>(stamp >> 16),
+                           static_cast<uint8_t>(stamp >> 8),
+                           static_cast<uint8_t>(stamp),
+                           b,
+                           b,
+                           b,
+                           b};
+  return keyed_nonce(psk(), r);
+}
+}  // namespace
+
+TEST(KeyedHello, RecordedAttemptsPlayedAgainNeitherEvictNorStarveTheNewest) {
+  // 40 keyed HELLOs recorded from the base station's earlier attempts (during an outage:
+  // none opened a session), played again 2,000 a second from 250 sources: the newest
+  // attempt is kept and answered within its retry.
+  Drone d;
+  const std::vector<uint8_t> base{127, 0, 0, 1, 0x1f, 0x90};
+  const uint32_t now_s = 1'800'000'000;
+  std::vector<Nonce> recorded;
+  for (uint32_t i = 0; i < 40; ++i) recorded.push_back(keyed_at(now_s - 400 + 10 * i, 1));
+  int64_t t = 0;
+  auto replay = [&](double seconds) {
+    for (int i = 0; i < static_cast<int>(2000 * seconds); ++i, t += kMs / 2)
+      d.hear(hs(Hello{kVersion, recorded[i % recorded.size()]}), source_of(i), t);
+  };
+  replay(2);
+  Nonce fresh = keyed_at(now_s, 9);
+  std::vector<Nonce> got;
+  for (int retry = 0; retry < 3 && got.empty(); ++retry) {  // the SubBroker's 1 s retries
+    size_t mark = d.air.sent.size();
+    d.hear(hs(Hello{kVersion, fresh}), base, t);
+    got = d.challenges(mark);
+    replay(1);
+  }
+  ASSERT_EQ(got.size(), 1u);
+  replay(0.3);
+  d.hear(hs(Auth{client_proof(psk(), fresh, got[0])}), base, t);
+  EXPECT_TRUE(d.link.ready());
+  EXPECT_GT(d.link.handshake_counters().stale_keyed, 1000u);  // the replays, once it was heard
+}
+
+TEST(KeyedHello, AClockSetBackGoesTheKeylessWay) {
+  Drone d;
+  const std::vector<uint8_t> base{127, 0, 0, 1, 0x1f, 0x90};
+  d.hear(hs(Hello{kVersion, keyed_at(2'000'000'000, 1)}), base, 0);
+  size_t mark = d.air.sent.size();
+  Nonce back = keyed_at(1'000'000'000, 2);  // a clock set back: answered all the same
+  d.hear(hs(Hello{kVersion, back}), base, kMs);
+  auto c = d.challenges(mark);
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(d.link.handshake_counters().stale_keyed, 1u);
+  d.hear(hs(Auth{client_proof(psk(), back, c[0])}), base, 2 * kMs);
+  EXPECT_TRUE(d.link.ready());
+}

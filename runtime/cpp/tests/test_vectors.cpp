@@ -201,6 +201,12 @@ TEST(Vectors, HandshakeProofs) {
   auto sn = arr<16>(v["server_nonce"]);
   EXPECT_EQ(to_hex(client_proof(key, cn, sn)), v["client_proof"].get<std::string>());
   EXPECT_EQ(to_hex(server_proof(key, cn, sn)), v["server_proof"].get<std::string>());
+  // the keyed HELLO nonce the SubBroker makes (docs/protocol.md, "Keyed HELLO")
+  auto random = arr<8>(v["keyed_random"]);
+  Nonce keyed = keyed_nonce(key, random);
+  EXPECT_EQ(to_hex(keyed), v["keyed_nonce"].get<std::string>());
+  EXPECT_TRUE(is_keyed_nonce(key, keyed));
+  EXPECT_FALSE(is_keyed_nonce(key, cn));
 }
 
 TEST(Vectors, SlotTable) {

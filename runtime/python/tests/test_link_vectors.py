@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
+import time
 from pathlib import Path
 from typing import Any
 
 import pytest
 from modd.link import codec
-from modd.link.auth import client_proof, resolve_key, server_proof
+from modd.link.auth import client_proof, is_keyed_nonce, keyed_nonce, resolve_key, server_proof
 from modd.link.frames import (
     Aggregation,
     Auth,
@@ -130,6 +133,30 @@ def test_handshake_proofs() -> None:
     key, cn, sn = (bytes.fromhex(v[k]) for k in ("key", "client_nonce", "server_nonce"))
     assert client_proof(key, cn, sn).hex() == v["client_proof"]
     assert server_proof(key, cn, sn).hex() == v["server_proof"]
+
+
+def _rfc2104(key: bytes, msg: bytes) -> bytes:
+    """HMAC-SHA256 written out from RFC 2104 (an oracle apart from :mod:`hmac`)."""
+    k = key.ljust(64, b"\0")
+    inner = hashlib.sha256(bytes(b ^ 0x36 for b in k) + msg).digest()
+    return hashlib.sha256(bytes(b ^ 0x5C for b in k) + inner).digest()
+
+
+def test_keyed_hello_nonce() -> None:
+    """The keyed HELLO nonce (docs/protocol.md, "Keyed HELLO"): the vector (which the C++
+    side checks too) and the tag by RFC 2104; a random nonce or another key is not keyed."""
+    v = json.loads((VECTORS / "handshake.json").read_text())
+    key, head = bytes.fromhex(v["key"]), bytes.fromhex(v["keyed_random"])
+    assert v["keyed_nonce"] == (head + _rfc2104(key, b"MODDHL" + head)[:8]).hex()
+    assert keyed_nonce(key, head).hex() == v["keyed_nonce"]
+    assert is_keyed_nonce(key, bytes.fromhex(v["keyed_nonce"]))
+    assert not is_keyed_nonce(b"another-key", bytes.fromhex(v["keyed_nonce"]))
+    assert not any(is_keyed_nonce(key, os.urandom(16)) for _ in range(1000))
+    made = keyed_nonce(key)  # the SubBroker's: its clock in seconds first
+    assert is_keyed_nonce(key, made)
+    assert abs(int.from_bytes(made[:4], "big") - int(time.time())) <= 2
+    with pytest.raises(ValueError, match="8 random bytes"):
+        keyed_nonce(key, b"short")
 
 
 def test_slot_table() -> None:

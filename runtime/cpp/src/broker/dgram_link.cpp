@@ -51,7 +51,8 @@ DatagramLink::DatagramLink(std::string psk, LinkHooks& hooks, DatagramOut& out, 
       out_(out),
       opt_(opt),
       delay_ns_(opt.delay_ns),
-      challenges_(opt.challenges, cookie_secret),
+      challenges_(std::span(reinterpret_cast<const uint8_t*>(psk_.data()), psk_.size()),
+                  opt.challenges, cookie_secret),
       resend_budget_(
           0, static_cast<double>(opt.resend_burst_bytes ? opt.resend_burst_bytes : opt.ring_bytes),
           0),
@@ -119,7 +120,7 @@ void DatagramLink::on_handshake(std::span<const uint8_t> frame, int64_t now) {
     send_handshake(ok, false);
     return;
   }
-  auto got = challenges_.on_auth(a->mac, key, now);
+  auto got = challenges_.on_auth(a->mac, out_.source(), now);
   if (got.status == Challenges::AuthResult::Limited) return;  // an AUTH flood: no air time
   if (got.status == Challenges::AuthResult::Failed) {
     hooks_.on_rejected("datagram AUTH does not verify (wrong key, or a stale challenge)");
@@ -452,14 +453,15 @@ int64_t DatagramLink::next_due_ns() const {
 }
 
 std::string DatagramLink::summary() const {
-  char buf[600];
+  char buf[800];
   std::snprintf(
       buf, sizeof buf,
       "datagrams_in=%llu datagrams_out=%llu bytes_out=%llu forged=%llu replayed=%llu "
       "malformed=%llu "
       "nacks=%llu resent=%llu too_old=%llu handshakes=%llu timeouts=%llu fragments=%llu "
       "dropped=%llu "
-      "foreign=%llu resend_paced=%llu challenges=%llu hellos_unanswered=%llu",
+      "foreign=%llu resend_paced=%llu challenges=%llu hellos_unanswered=%llu "
+      "keyed_hellos=%llu stale_keyed=%llu",
       static_cast<unsigned long long>(c_.datagrams_in),
       static_cast<unsigned long long>(c_.datagrams_out),
       static_cast<unsigned long long>(c_.bytes_out), static_cast<unsigned long long>(c_.forged),
@@ -470,7 +472,9 @@ std::string DatagramLink::summary() const {
       static_cast<unsigned long long>(c_.dropped), static_cast<unsigned long long>(c_.foreign),
       static_cast<unsigned long long>(c_.resend_paced),
       static_cast<unsigned long long>(challenges_.counters().challenges),
-      static_cast<unsigned long long>(challenges_.counters().unanswered));
+      static_cast<unsigned long long>(challenges_.counters().unanswered),
+      static_cast<unsigned long long>(challenges_.counters().keyed),
+      static_cast<unsigned long long>(challenges_.counters().stale_keyed));
   return buf;
 }
 

@@ -47,6 +47,27 @@ bool macs_equal(const Mac& a, const Mac& b) {
   return CRYPTO_memcmp(a.data(), b.data(), a.size()) == 0;
 }
 
+static constexpr size_t kKeyedHalf = 8;
+
+static Mac hello_tag(std::span<const uint8_t> key, const uint8_t* random) {
+  std::vector<uint8_t> msg{'M', 'O', 'D', 'D', 'H', 'L'};
+  msg.insert(msg.end(), random, random + kKeyedHalf);
+  return hmac_sha256(key, msg);
+}
+
+Nonce keyed_nonce(std::span<const uint8_t> key, std::span<const uint8_t, 8> random) {
+  Nonce n{};
+  std::copy(random.begin(), random.end(), n.begin());
+  Mac tag = hello_tag(key, n.data());
+  std::copy_n(tag.begin(), n.size() - kKeyedHalf, n.begin() + kKeyedHalf);
+  return n;
+}
+
+bool is_keyed_nonce(std::span<const uint8_t> key, const Nonce& n) {
+  Mac tag = hello_tag(key, n.data());
+  return CRYPTO_memcmp(tag.data(), n.data() + kKeyedHalf, n.size() - kKeyedHalf) == 0;
+}
+
 ClientProofs::ClientProofs(std::span<const uint8_t> key)
     : inner_(EVP_MD_CTX_new()), outer_(EVP_MD_CTX_new()), work_(EVP_MD_CTX_new()) {
   std::array<uint8_t, 64> k{}, ipad{}, opad{};

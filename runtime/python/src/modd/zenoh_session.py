@@ -32,6 +32,9 @@ if TYPE_CHECKING:
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 MODES = ("peer", "client", "router")
 RECONNECT = "{period_init_ms: 100, period_max_ms: 1000, period_increase_factor: 2}"
+#: How long a client keeps trying a router that closes every new connection at once (its
+#: ``accept_pending`` reached: a flood of connections that never authenticate).
+BUSY_WAIT_S = 10.0
 #: A listening session's bounds against connections that open and never authenticate
 #: (docs/security.md, "Idle connections"): zenoh's defaults (10 s to authenticate, 100 at
 #: once) let 100 idle sockets lock every new session out for 10 s. Each is overridable in
@@ -207,22 +210,30 @@ def zenoh_config(settings: ZenohSettings) -> zenoh.Config:
     return config
 
 
-def open_session(settings: ZenohSettings) -> zenoh.Session:
+def open_session(settings: ZenohSettings, busy_wait_s: float = BUSY_WAIT_S) -> zenoh.Session:
     """Open a session; raises ValueError naming the endpoints if it cannot,
-    and, for a client the router turned away, the credentials it needs."""
+    and, for a client the router turned away, why: the credentials it needs, or a
+    router closing every new connection (it has as many in their handshake as it takes,
+    ``accept_pending``), which is tried again for up to ``busy_wait_s``."""
     import zenoh
 
     if settings.listen:
         _room_for_pending()
-    try:
-        return zenoh.open(zenoh_config(settings))
-    except zenoh.ZError as exc:
-        where = ", ".join(settings.listen + settings.connect) or "no endpoint"
-        head = f"cannot open a zenoh session ({settings.mode}, {where})"
-        if settings.mode != "client" or not settings.connect:
-            raise ValueError(f"{head}: {exc}") from exc
-        answers = tcp_answers(settings.connect[0])
-        raise ValueError(f"{head}: {refusal(settings, answers)}") from exc
+    deadline = time.monotonic() + busy_wait_s
+    pause = 0.1
+    while True:
+        try:
+            return zenoh.open(zenoh_config(settings))
+        except zenoh.ZError as exc:
+            where = ", ".join(settings.listen + settings.connect) or "no endpoint"
+            head = f"cannot open a zenoh session ({settings.mode}, {where})"
+            if settings.mode != "client" or not settings.connect:
+                raise ValueError(f"{head}: {exc}") from exc
+            probe = tcp_probe(settings.connect[0])
+            if probe != "closed" or time.monotonic() + pause > deadline:
+                raise ValueError(f"{head}: {refusal(settings, probe, busy_wait_s)}") from exc
+        time.sleep(pause)  # the router sheds connections that never authenticate
+        pause = min(1.0, 2 * pause)
 
 
 #: Where `make run` and `modd up` keep a viewer's credentials (docs/security.md).
@@ -232,43 +243,59 @@ CREDENTIALS_HINT = (
 )
 
 
-def refusal(settings: ZenohSettings, answers: bool | None) -> str:
-    """Why a client could not connect, in the user's words: ``answers`` says
-    whether something accepts TCP connections at the endpoint (None: unknown).
+def refusal(settings: ZenohSettings, probe: str | None, waited_s: float = 0.0) -> str:
+    """Why a client could not connect, in the user's words: ``probe`` is what the
+    endpoint did with a new TCP connection (:func:`tcp_probe`; None: unknown).
     zenoh itself only says "Unable to connect" in every case.
 
-    >>> refusal(ZenohSettings(mode="client", connect=("tcp/127.0.0.1:7447",)), True)[:49]
+    >>> refusal(ZenohSettings(mode="client", connect=("tcp/127.0.0.1:7447",)), "held")[:50]
     'the router at tcp/127.0.0.1:7447 needs credentials'
     """
     endpoint = settings.connect[0]
-    if answers is False:
+    if probe == "none":
         return (
             f"nothing answers at {endpoint}: is the SubBroker running (`make run` or "
             "`modd up`), and is this its zenoh endpoint (--connect or $MODD_ZENOH_CONNECT)?"
+        )
+    if probe == "closed":
+        return (
+            f"the router at {endpoint} closes every new connection at once (for {waited_s:g} s "
+            "of tries): it holds as many connections in their handshake as it takes "
+            "(transport/unicast/accept_pending), so something is opening connections without "
+            "authenticating; your credentials were not checked. Try again later, or ask the "
+            'base station\'s operator (docs/security.md, "Idle connections")'
         )
     if settings.credentials is None:
         said = "needs credentials and none were given"
     else:
         said = f"refused the credentials of user {settings.credentials.user!r}"
-    maybe = "" if answers else " (or nothing answers there)"
+    maybe = "" if probe == "held" else " (or nothing answers there)"
     return (
         f"the router at {endpoint} {said}{maybe}: give a credentials file with "
         f"--credentials FILE or $MODD_ZENOH_CREDENTIALS; {CREDENTIALS_HINT}"
     )
 
 
-def tcp_answers(endpoint: str, timeout_s: float = 1.0) -> bool | None:
-    """Whether a TCP connection to a ``tcp/host:port`` endpoint is accepted
-    (None for another kind of endpoint)."""
+def tcp_probe(endpoint: str, timeout_s: float = 1.0, hold_s: float = 0.3) -> str | None:
+    """What a ``tcp/host:port`` endpoint does with a new connection that says nothing:
+    "none" (refused or unreachable), "closed" (accepted, then closed within ``hold_s``: a
+    zenoh listener with as many connections in their handshake as it takes), "held"
+    (kept open: a listener awaiting the handshake); None for another kind of endpoint."""
     kind, _, address = endpoint.partition("/")
     host, _, port = address.rpartition(":")
     if kind != "tcp" or not port.isdigit():
         return None
     try:
-        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
-            return True
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s) as s:
+            s.settimeout(hold_s)
+            try:
+                return "closed" if not s.recv(1) else "held"
+            except TimeoutError:
+                return "held"
+            except OSError:  # reset
+                return "closed"
     except OSError:
-        return False
+        return "none"
 
 
 def _room_for_pending() -> None:

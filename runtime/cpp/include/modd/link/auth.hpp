@@ -17,6 +17,13 @@ Mac client_proof(std::span<const uint8_t> key, const Nonce& client, const Nonce&
 Mac server_proof(std::span<const uint8_t> key, const Nonce& client, const Nonce& server);
 bool macs_equal(const Mac& a, const Mac& b);  // constant time
 
+// A keyed HELLO nonce (docs/protocol.md, "Keyed HELLO"): 8 bytes (the SubBroker's: its clock
+// in seconds, big-endian u32, then 4 random bytes), then HMAC(key, "MODDHL" || those 8)[0:8]. The
+// HELLO's layout is unchanged; the PubBroker tells the base station's HELLO from a keyless
+// stranger's by it (is_keyed_nonce).
+Nonce keyed_nonce(std::span<const uint8_t> key, std::span<const uint8_t, 8> random);
+bool is_keyed_nonce(std::span<const uint8_t> key, const Nonce& n);  // constant time
+
 // client_proof under one key for many nonce pairs (RFC 2104 with the key's pads hashed
 // once): an AUTH checked against many outstanding handshakes costs two SHA-256 blocks a
 // pair instead of a whole HMAC set-up.

@@ -15,6 +15,8 @@ import hashlib
 import hmac
 import os
 import socket
+import struct
+import time
 
 from modd_contracts.link_wire_gen import MIN_KEY_BYTES as MIN_KEY_BYTES  # as the PubBroker's
 
@@ -33,6 +35,8 @@ from modd.zenoh_auth import read_secret
 
 CLIENT_LABEL = b"MODD1C"
 SERVER_LABEL = b"MODD1S"
+HELLO_LABEL = b"MODDHL"
+_KEYED_HALF = 8
 
 
 def check_key_length(key: bytes, reference: str) -> bytes:
@@ -48,6 +52,27 @@ def check_key_length(key: bytes, reference: str) -> bytes:
 
 def client_proof(key: bytes, client_nonce: bytes, server_nonce: bytes) -> bytes:
     return hmac.new(key, CLIENT_LABEL + server_nonce + client_nonce, hashlib.sha256).digest()
+
+
+def keyed_nonce(key: bytes, random: bytes | None = None) -> bytes:
+    """A HELLO nonce the PubBroker knows for the key holder's (docs/protocol.md, "Keyed
+    HELLO"): 8 bytes, then HMAC(key, "MODDHL" || those 8 bytes)[0:8]. The 8 bytes are
+    ``random`` when given, else this clock in seconds (big-endian u32: the PubBroker prefers
+    the newest attempt) and 4 random bytes. The HELLO keeps its layout; a keyless flood can
+    then neither spend its CHALLENGE budget nor evict it."""
+    head = random
+    if head is None:
+        head = struct.pack(">I", int(time.time()) & 0xFFFFFFFF) + os.urandom(4)
+    if len(head) != _KEYED_HALF:
+        raise ValueError(f"a keyed nonce starts with {_KEYED_HALF} random bytes, not {len(head)}")
+    return head + hmac.new(key, HELLO_LABEL + head, hashlib.sha256).digest()[:_KEYED_HALF]
+
+
+def is_keyed_nonce(key: bytes, nonce: bytes) -> bool:
+    """Whether ``nonce`` is :func:`keyed_nonce`'s under ``key`` (constant time)."""
+    if len(nonce) != 2 * _KEYED_HALF:
+        return False
+    return hmac.compare_digest(keyed_nonce(key, nonce[:_KEYED_HALF]), nonce)
 
 
 def server_proof(key: bytes, client_nonce: bytes, server_nonce: bytes) -> bytes:
@@ -85,7 +110,7 @@ def client_handshake(
     """Runs the handshake on a connected socket. Returns AUTH_OK and the splitter holding any
     bytes received after it. Raises ProtocolError if the broker refuses or cannot prove the key."""
     splitter = codec.FrameSplitter()
-    client_nonce = nonce if nonce is not None else os.urandom(16)
+    client_nonce = nonce if nonce is not None else keyed_nonce(key)
     sock.sendall(codec.encode(Hello(VERSION, client_nonce)))
     msg = codec.decode(read_frame(sock, splitter))
     if isinstance(msg, ErrorMsg):

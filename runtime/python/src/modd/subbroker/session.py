@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 from modd.link import backfill as bf
 from modd.link import codec
-from modd.link.auth import client_proof, server_proof
+from modd.link.auth import client_proof, keyed_nonce, server_proof
 from modd.link.frames import (
     VERSION,
     Auth,
@@ -170,7 +170,7 @@ class LinkSession(ABC):
     def begin(self) -> None:
         """A new connection: the handshake starts (HELLO)."""
         self.stats.state = "handshake"
-        nonce = os.urandom(16)
+        nonce = keyed_nonce(self._psk)  # the PubBroker tells it from a stranger's
         self._hs = _Handshake("HELLO", codec.encode(Hello(VERSION, nonce)), nonce)
         self._last_in = self.clock.monotonic()
         self._send_step(self._last_in)
