@@ -55,7 +55,7 @@ from .scene import SceneServer, SceneService
 from .settings import Settings
 from .socketcaps import SocketCaps
 from .spa import mount_frontend
-from .throttle import Throttle
+from .throttle import KnownPairs, Throttle
 from .versions import get_version, model_of
 from .zenoh_session import ZenohSession
 
@@ -184,6 +184,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
             archive_pool=ArchivePool(archive_work.ARCHIVE_WORKERS),
             login_accounts=Throttle(settings.login_limit_account, settings.login_window_s),
             login_addresses=Throttle(settings.login_limit_address, settings.login_window_s),
+            login_known=KnownPairs(settings.login_known_s),
             socket_caps=SocketCaps(settings.ws_sockets_per_user, settings.ws_sockets_per_address),
         )
         app.state.modd = state

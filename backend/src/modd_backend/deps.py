@@ -30,7 +30,7 @@ from .sessionwatches import SessionWatches
 from .settings import Settings
 from .socketcaps import SocketCaps
 from .tables import User
-from .throttle import Throttle
+from .throttle import KnownPairs, Throttle
 from .tickets import ViewerTickets
 from .zenoh_session import ZenohSession
 
@@ -66,6 +66,8 @@ class AppState:
     archive_pool: ArchivePool | None = None
     login_accounts: Throttle = field(default_factory=lambda: Throttle(10, 300))
     login_addresses: Throttle = field(default_factory=lambda: Throttle(50, 300))
+    #: Accounts that logged in from an address: past that address's lock (throttle.py).
+    login_known: KnownPairs = field(default_factory=lambda: KnownPairs(30 * 86_400))
     #: Live WebSocket subscriptions per user id (event loop only).
     ws_counts: Counter[int] = field(default_factory=Counter)
     #: Single-use tickets standing for a session in a viewer's URL (Foxglove).
