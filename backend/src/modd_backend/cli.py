@@ -207,18 +207,27 @@ def _is_loopback(host: str) -> bool:
 
 
 class RedactQuery(logging.Filter):
-    """Cuts the query string from every logged request path (access and
-    WebSocket lines), so no secret sent in a URL ends up in a log."""
+    """Cuts the query string from every logged request target (access and
+    WebSocket lines; a path, or an absolute-form target ``ws://host/p?q``),
+    so no secret sent in a URL ends up in a log.
+
+    >>> r = logging.LogRecord("a", 20, "", 0, "%s %s", ("ws://h/foxglove/live?ticket=T", 1), None)
+    >>> RedactQuery().filter(r), r.args
+    (True, ('ws://h/foxglove/live?…', 1))
+    """
 
     def filter(self, record: logging.LogRecord) -> bool:
         if isinstance(record.args, tuple):
             record.args = tuple(
-                a.split("?", 1)[0] + "?…"
-                if isinstance(a, str) and "?" in a and a.startswith("/")
-                else a
+                a.split("?", 1)[0] + "?…" if isinstance(a, str) and _target(a) else a
                 for a in record.args
             )
         return True
+
+
+def _target(arg: str) -> bool:
+    """A request target with a query: a path, or a URL (absolute form)."""
+    return "?" in arg and (arg.startswith("/") or "://" in arg.split("?", 1)[0])
 
 
 def log_config() -> dict[str, Any]:
