@@ -237,6 +237,8 @@ def log_config() -> dict[str, Any]:
     cfg["filters"] = {"redact": {"()": RedactQuery}}
     for handler in cfg["handlers"].values():
         handler["filters"] = ["redact"]
+        # written by a thread of their own, off the event loop (logqueue.py)
+        handler["class"] = "modd_backend.logqueue.QueuedStreamHandler"
     return cfg
 
 
@@ -273,6 +275,9 @@ def server_options(settings: Settings) -> dict[str, Any]:
     return {
         "log_config": log_config(),
         "ws_max_size": 1024 * 1024,
+        # live values are small JSON: compressing them cost the event loop more
+        # than it saved on loopback and LAN links (issue 41)
+        "ws_per_message_deflate": False,
         "ws": PacedWebSocketProtocol,
         "proxy_headers": bool(proxies),
         "forwarded_allow_ips": proxies or None,
