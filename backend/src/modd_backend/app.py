@@ -16,7 +16,7 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from typing import Any, TextIO
 
-from anyio import CapacityLimiter, to_thread
+from anyio import CapacityLimiter
 from fastapi import APIRouter, FastAPI
 from sqlalchemy import text
 from starlette.concurrency import run_in_threadpool
@@ -190,7 +190,6 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         app.state.modd = state
         state.database = "ok"  # just opened and migrated
         state.login_threads = CapacityLimiter(settings.login_threads)
-        to_thread.current_default_thread_limiter().total_tokens = settings.worker_threads
         if settings.foxglove_port or settings.foxglove_replay_port:
             state.loopback_tls = LoopbackTls.generate()
         if zenoh_session is not None:

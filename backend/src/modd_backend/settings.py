@@ -99,9 +99,6 @@ class Settings:
     #: Threads of their own for login: never queued behind the worker threads
     #: that run the other sync routes (saves, reads).
     login_threads: int = 2
-    #: Worker threads of the sync routes (saves, reads; anyio's default is 40):
-    #: more of them only contend for the interpreter lock with the event loop.
-    worker_threads: int = 10
     #: Heavy routes (CSV export, series, deploy): at once per user and in all.
     heavy_per_user: int = 2
     heavy_total: int = 8
