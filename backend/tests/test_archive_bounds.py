@@ -15,11 +15,11 @@ from typing import Any
 import httpx2 as httpx
 import pytest
 from fastapi.testclient import TestClient
-from modd_backend import Settings, archive_work
+from modd_backend import archive_work
 
 from .conftest import ADMIN_PASSWORD, Headers
 from .served import serve
-from .test_archive_export import URL, _model, client  # noqa: F401  (the fixture)
+from .test_archive_export import URL, _model, archive_settings, client  # noqa: F401  (the fixture)
 from .test_archives import write_archive
 
 Client = tuple[TestClient, Headers, Path]
@@ -135,17 +135,9 @@ def _post_and_leave(base: str, token: str, body: dict[str, Any], hold_s: float) 
 
 @pytest.mark.slow
 def test_an_abandoned_export_stops_its_worker_within_2_s(tmp_path: Path) -> None:
-    root = tmp_path / "archives"
-    (root / "usv").mkdir(parents=True)
-    write_archive(root / "usv" / "big.mcap", 100_000)
+    settings, root = archive_settings(tmp_path, 100_000, "big.mcap")
     for i in range(6):  # six names of one large file: about 10 s of export
         os.link(root / "usv" / "big.mcap", root / "usv" / f"copy-{i}.mcap")
-    settings = Settings(
-        data_dir=tmp_path / "data",
-        zenoh_enabled=False,
-        initial_admin_password=ADMIN_PASSWORD,
-        archive_dir=root,
-    )
     with serve(settings) as base:
         token = httpx.post(
             f"{base}/api/auth/login", json={"username": "admin", "password": ADMIN_PASSWORD}
@@ -174,15 +166,7 @@ def _login(base: str, name: str, password: str) -> dict[str, str]:
 def test_one_users_100_requests_do_not_delay_anothers_series_past_30_s(tmp_path: Path) -> None:
     from concurrent.futures import ThreadPoolExecutor
 
-    root = tmp_path / "archives"
-    (root / "usv").mkdir(parents=True)
-    write_archive(root / "usv" / "big.mcap", 100_000)
-    settings = Settings(
-        data_dir=tmp_path / "data",
-        zenoh_enabled=False,
-        initial_admin_password=ADMIN_PASSWORD,
-        archive_dir=root,
-    )
+    settings, root = archive_settings(tmp_path, 100_000, "big.mcap")
     csv = "/api/drones/usv/archives/big.mcap/csv"
     series = "/api/drones/usv/archives/big.mcap/series"
     params = {"topic": "usv.accelerometer.accel_x"}
