@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import os
 import time
+from pathlib import Path
 
 import pytest
 from modd_backend.archive_pool import ArchivePool
@@ -15,11 +16,12 @@ from modd_backend.errors import ApiError
 
 
 def _alive(pid: int) -> bool:
+    """The process runs (a killed one not yet reaped does not)."""
     try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
         return False
-    return True
+    return stat.rsplit(")", 1)[1].split()[0] != "Z"
 
 
 async def _dead_within(pid: int, seconds: float) -> float:

@@ -281,6 +281,8 @@ class ArchivePool:
             self._idle.append(worker)
         elif worker is not None:
             self.killed += 0 if reusable else 1
+            if worker.process.is_alive():
+                worker.process.kill()  # at once; reaped in a thread
             asyncio.get_running_loop().run_in_executor(None, worker.kill)
         self._dispatch()
 
