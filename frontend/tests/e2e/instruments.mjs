@@ -153,13 +153,14 @@ export function instruments({ page, ports, drone, liveValues }) {
     ["instruments: a health field of 2^63 leaves the Monitor working", async () => {
       if (!drone || !liveValues) throw new Error("needs the simulated drone (modd up --simulate)");
       const hostile = { state: 1, lines_ok: 2 ** 63, lines_bad: -4, reconnects: "x", values: 1, last_value_ms: 2 ** 63 };
-      await page.routeWebSocket(/\/stream$/, (ws) => {
+      let inject = true;
+      await page.routeWebSocket(/\/stream(\?|$)/, (ws) => {
         const server = ws.connectToServer();
         ws.onMessage((m) => server.send(m));
         server.onMessage((m) => {
           try {
             const doc = JSON.parse(String(m));
-            if (doc.type === "status" && doc.data && doc.data.sensors) {
+            if (inject && doc.type === "status" && doc.data && doc.data.sensors) {
               doc.data.sensors.zz_hostile = hostile;
               ws.send(JSON.stringify(doc));
               return;
@@ -179,7 +180,7 @@ export function instruments({ page, ports, drone, liveValues }) {
       if (cells[2] !== "none yet" || cells[4] !== "0") throw new Error(`the hostile row reads ${JSON.stringify(cells)}`);
       if (await page.getByText(/panel failed/).count()) throw new Error("a panel failed on the hostile health");
       await expectText(page.getByRole("status", { name: "Link status" }), /link up/, 30000);  // live still shown
-      await page.unrouteAll({ behavior: "ignoreErrors" });
+      inject = false;  // good data again: the hostile row leaves with it
       await page.reload();
       await panel("Monitor");
       await expectText(summary, /Instruments: 4 \(4 open\)$/, 30000);
