@@ -48,6 +48,8 @@ CROSS_PROCESS = (
     "backend/tests/test_app.py",
     "backend/tests/test_archives.py",
     "backend/tests/test_archive_export.py",
+    "backend/tests/test_archive_bounds.py",  # the archive worker processes
+    "backend/tests/test_archive_pool.py",
     "backend/tests/test_frontend.py",
     "backend/tests/test_hardening.py",
     "backend/tests/test_live.py",

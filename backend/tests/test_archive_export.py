@@ -35,17 +35,23 @@ def _model() -> dict[str, Any]:
     return result.model
 
 
-@pytest.fixture
-def client(tmp_path: Path) -> Iterator[tuple[TestClient, Headers, Path]]:
+def archive_settings(tmp_path: Path, samples: int, name: str) -> tuple[Settings, Path]:
+    """A backend's settings with one archive of drone usv, ``samples`` long; its archive dir."""
     root = tmp_path / "archives"
     (root / "usv").mkdir(parents=True)
-    write_archive(root / "usv" / "run-0000.mcap", 500)
+    write_archive(root / "usv" / name, samples)
     settings = Settings(
         data_dir=tmp_path / "data",
         zenoh_enabled=False,
         initial_admin_password=ADMIN_PASSWORD,
         archive_dir=root,
     )
+    return settings, root
+
+
+@pytest.fixture
+def client(tmp_path: Path) -> Iterator[tuple[TestClient, Headers, Path]]:
+    settings, root = archive_settings(tmp_path, 500, "run-0000.mcap")
     with TestClient(create_app(settings, out=io.StringIO())) as c:
         yield c, login(c, "admin", ADMIN_PASSWORD), root
 

@@ -141,12 +141,12 @@ def test_ticket_store_forgets_and_expires(tmp_path: Path) -> None:
     from modd_backend.tickets import ViewerTickets
 
     t = ViewerTickets(ttl_s=10, max_tickets=2)
-    first = t.issue("a", now=0)
-    second, third = t.issue("b", now=0), t.issue("c", now=0)
-    assert t.redeem(first, now=1) is None  # forgotten: the oldest past max_tickets
-    assert t.redeem(second, now=11) is None  # late
-    assert t.redeem(third, now=9) == "c" and t.redeem(third, now=9) is None
-    assert t.redeem("x" * 500) is None
+    first = t.issue("a", "live", 1, now=0)
+    second, third = t.issue("b", "live", 2, now=0), t.issue("c", "live", 3, now=0)
+    assert t.redeem(first, "live", now=1) is None  # forgotten: the oldest past max_tickets
+    assert t.redeem(second, "live", now=11) is None  # late
+    assert t.redeem(third, "live", now=9) == "c" and t.redeem(third, "live", now=9) is None
+    assert t.redeem("x" * 500, "live") is None
 
 
 def test_sockets_per_user_are_capped(tmp_path: Path) -> None:

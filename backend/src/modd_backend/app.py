@@ -24,6 +24,7 @@ from starlette.concurrency import run_in_threadpool
 from . import archive_work, errors, planning
 from .accounts import ensure_first_admin
 from .apidocs import install_docs
+from .archive_pool import ArchivePool
 from .bodies import install_schemas
 from .db import Store
 from .deployments import last_acked
@@ -54,7 +55,7 @@ from .scene import SceneServer, SceneService
 from .settings import Settings
 from .socketcaps import SocketCaps
 from .spa import mount_frontend
-from .throttle import Throttle
+from .throttle import KnownPairs, Throttle
 from .versions import get_version, model_of
 from .zenoh_session import ZenohSession
 
@@ -180,8 +181,10 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
             store,
             zenoh_session,
             heavy=HeavyLimiter(settings.heavy_per_user, settings.heavy_total),
+            archive_pool=ArchivePool(archive_work.ARCHIVE_WORKERS),
             login_accounts=Throttle(settings.login_limit_account, settings.login_window_s),
             login_addresses=Throttle(settings.login_limit_address, settings.login_window_s),
+            login_known=KnownPairs(settings.login_known_s),
             socket_caps=SocketCaps(settings.ws_sockets_per_user, settings.ws_sockets_per_address),
         )
         app.state.modd = state
@@ -237,7 +240,8 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
                 state.replay.stop()
             if zenoh_session is not None:
                 zenoh_session.close()
-            await run_in_threadpool(archive_work.shutdown_pool)
+            if state.archive_pool is not None:
+                await state.archive_pool.close()
             await run_in_threadpool(planning.shutdown_pool)
             store.close()
 

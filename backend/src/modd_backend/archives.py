@@ -14,6 +14,7 @@ import re
 import struct
 from collections.abc import Iterator
 from dataclasses import dataclass
+from itertools import islice
 from pathlib import Path
 from typing import Any
 
@@ -142,27 +143,30 @@ def file_info(path: Path) -> FileInfo:
     return FileInfo(path.name, path.stat().st_size, False, first, last, topics)
 
 
-def read_topic(path: Path, topic: str, start_ns: int | None, end_ns: int | None) -> list[Sample]:
-    """(log time ns, value) of ``topic`` in [start, end), in time order."""
+def read_topic(
+    path: Path, topic: str, start_ns: int | None, end_ns: int | None, limit: int | None = None
+) -> list[Sample]:
+    """(log time ns, value) of ``topic`` in [start, end), in time order;
+    reading stops after ``limit + 1`` samples (the caller refuses the range)."""
+    stop = None if limit is None else limit + 1
     try:
         with path.open("rb") as f:
             reader = make_reader(f)
             if reader.get_summary() is not None:
-                return [
-                    (m.log_time, _value(m.data))
-                    for _s, _c, m in reader.iter_messages(
-                        topics=[topic], starting_at=start_ns, ending_before=end_ns
-                    )
-                ]
+                messages = reader.iter_messages(
+                    topics=[topic], starting_at=start_ns, ending_before=end_ns
+                )
+                return [(m.log_time, _value(m.data)) for _s, _c, m in islice(messages, stop)]
     except _BROKEN:
         pass
-    out = [
-        (m.log_time, _value(m.data))
+    wanted = (
+        m
         for t, m in _stream(path)
         if t == topic
         and (start_ns is None or m.log_time >= start_ns)
         and (end_ns is None or m.log_time < end_ns)
-    ]
+    )
+    out = [(m.log_time, _value(m.data)) for m in islice(wanted, stop)]
     out.sort(key=lambda s: s[0])
     return out
 

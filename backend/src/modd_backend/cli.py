@@ -207,18 +207,27 @@ def _is_loopback(host: str) -> bool:
 
 
 class RedactQuery(logging.Filter):
-    """Cuts the query string from every logged request path (access and
-    WebSocket lines), so no secret sent in a URL ends up in a log."""
+    """Cuts the query string from every logged request target (access and
+    WebSocket lines; a path, or an absolute-form target ``ws://host/p?q``),
+    so no secret sent in a URL ends up in a log.
+
+    >>> r = logging.LogRecord("a", 20, "", 0, "%s %s", ("ws://h/foxglove/live?ticket=T", 1), None)
+    >>> RedactQuery().filter(r), r.args
+    (True, ('ws://h/foxglove/live?…', 1))
+    """
 
     def filter(self, record: logging.LogRecord) -> bool:
         if isinstance(record.args, tuple):
             record.args = tuple(
-                a.split("?", 1)[0] + "?…"
-                if isinstance(a, str) and "?" in a and a.startswith("/")
-                else a
+                a.split("?", 1)[0] + "?…" if isinstance(a, str) and _target(a) else a
                 for a in record.args
             )
         return True
+
+
+def _target(arg: str) -> bool:
+    """A request target with a query: a path, or a URL (absolute form)."""
+    return "?" in arg and (arg.startswith("/") or "://" in arg.split("?", 1)[0])
 
 
 def log_config() -> dict[str, Any]:
@@ -228,6 +237,8 @@ def log_config() -> dict[str, Any]:
     cfg["filters"] = {"redact": {"()": RedactQuery}}
     for handler in cfg["handlers"].values():
         handler["filters"] = ["redact"]
+        # written by a thread of their own, off the event loop (logqueue.py)
+        handler["class"] = "modd_backend.logqueue.QueuedStreamHandler"
     return cfg
 
 
@@ -264,6 +275,9 @@ def server_options(settings: Settings) -> dict[str, Any]:
     return {
         "log_config": log_config(),
         "ws_max_size": 1024 * 1024,
+        # live values are small JSON: compressing them cost the event loop more
+        # than it saved on loopback and LAN links (issue 41)
+        "ws_per_message_deflate": False,
         "ws": PacedWebSocketProtocol,
         "proxy_headers": bool(proxies),
         "forwarded_allow_ips": proxies or None,

@@ -7,6 +7,7 @@ authenticated user and role checks.
 from __future__ import annotations
 
 import hmac
+import time
 from collections import Counter
 from collections.abc import AsyncIterator, Callable, Iterator
 from dataclasses import dataclass, field
@@ -29,11 +30,12 @@ from .sessionwatches import SessionWatches
 from .settings import Settings
 from .socketcaps import SocketCaps
 from .tables import User
-from .throttle import Throttle
+from .throttle import KnownPairs, Throttle
 from .tickets import ViewerTickets
 from .zenoh_session import ZenohSession
 
 if TYPE_CHECKING:
+    from .archive_pool import ArchivePool
     from .guards import HeavyLimiter
     from .hub import SubscriptionHub
     from .reconcile import DroneStatuses
@@ -60,8 +62,12 @@ class AppState:
     #: Saves announced to the stream WebSockets watching a project.
     project_events: ProjectEvents = field(default_factory=ProjectEvents)
     heavy: HeavyLimiter | None = None
+    #: The archive worker processes behind their per-user fair queue.
+    archive_pool: ArchivePool | None = None
     login_accounts: Throttle = field(default_factory=lambda: Throttle(10, 300))
     login_addresses: Throttle = field(default_factory=lambda: Throttle(50, 300))
+    #: Accounts that logged in from an address: past that address's lock (throttle.py).
+    login_known: KnownPairs = field(default_factory=lambda: KnownPairs(30 * 86_400))
     #: Live WebSocket subscriptions per user id (event loop only).
     ws_counts: Counter[int] = field(default_factory=Counter)
     #: Single-use tickets standing for a session in a viewer's URL (Foxglove).
@@ -174,7 +180,9 @@ def require(*roles: Role) -> Callable[[User], User]:
     return check
 
 
-async def _heavy(state: StateDep, user: UserDep) -> AsyncIterator[None]:
+async def _heavy(request: Request, state: StateDep, user: UserDep) -> AsyncIterator[None]:
+    # the archive workers' start bound (30 s) counts from here (archive_pool.py)
+    request.state.heavy_since = time.monotonic()
     if state.heavy is None:
         yield
         return

@@ -63,15 +63,18 @@ def load_recording(
     partial: bool = False,
     start_ns: int | None = None,
     end_ns: int | None = None,
+    time_s: float | None = None,
 ) -> tuple[dict[str, RecordedChannel], list[Recorded]]:
     """Channels and messages (sorted by log time) of MCAP files, those whose
     log time is in [start_ns, end_ns). A file without a summary (still being
     written, or cut by a crash) is refused unless ``partial``: then its
-    complete records are played, up to the cut."""
+    complete records are played, up to the cut. Reading longer than
+    ``time_s`` is refused (ValueError), as is more than ``max_messages``."""
     from mcap.reader import make_reader
 
     channels: dict[str, RecordedChannel] = {}
     messages: list[Recorded] = []
+    deadline = None if time_s is None else time.monotonic() + time_s
 
     def keep(topic: str, schema: Any, encoding: str, log_time: int, data: bytes) -> None:
         if (start_ns is not None and log_time < start_ns) or (
@@ -87,6 +90,10 @@ def load_recording(
                 schema.data if schema else b"",
             )
         messages.append(Recorded(log_time, topic, data))
+        if deadline is not None and not len(messages) % 4096 and time.monotonic() > deadline:
+            raise ValueError(
+                f"more than {time_s:g} s of reading messages to play: choose a shorter time range"
+            )
         if len(messages) > max_messages:
             raise ValueError(
                 f"more than {max_messages} messages to play: choose a shorter time range"

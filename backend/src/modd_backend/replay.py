@@ -18,6 +18,8 @@ from .loopback_tls import LoopbackTls
 
 #: Messages one replay holds in memory at most (≈ 200 B each).
 MAX_REPLAY_MESSAGES = 1_000_000
+#: Seconds a replay may spend reading its range before it is refused.
+REPLAY_LOAD_S = 60.0
 
 
 @dataclass(frozen=True)
@@ -63,7 +65,12 @@ class ReplaySlot:
         """Loads the range (ValueError: nothing in it, or too much), then
         swaps the server; the old one stops first so the port is free."""
         recording = load_recording(
-            [path], self.max_messages, partial=True, start_ns=start_ns, end_ns=end_ns
+            [path],
+            self.max_messages,
+            partial=True,
+            start_ns=start_ns,
+            end_ns=end_ns,
+            time_s=REPLAY_LOAD_S,
         )
         with self._lock:
             self._stop_locked()

@@ -90,6 +90,9 @@ class Settings:
     login_limit_account: int = 10
     login_limit_address: int = 50
     login_window_s: float = 300.0
+    #: An account that logged in from an address within this time (in this
+    #: process) is past that address's lock; 0: never (the address lock is for all).
+    login_known_s: float = 30 * 86_400.0
     #: Largest request body any route accepts (413 beyond), and JSON nesting depth (422).
     max_body_bytes: int = 4 * 1024 * 1024
     max_json_depth: int = 64

@@ -8,6 +8,11 @@ guesses cannot all pass the check while the first ones are still being
 hashed. Every loopback address is one client (:func:`address_key`): a local
 process rotating through 127.0.0.0/8 is still one address.
 
+An account that logged in from an address (:class:`KnownPairs`) is past that
+address's lock there: 50 wrong logins under random names from one local
+process lock that address for new names, never the users who log in from it;
+their own accounts' limit still holds.
+
 >>> t = Throttle(limit=2, window_s=60)
 >>> t.fail("ann", now=0); t.fail("ann", now=1); t.retry_after("ann", now=2)
 58.0
@@ -113,3 +118,35 @@ class Throttle:
     def clear(self, key: str) -> None:
         with self._lock:
             self._fails.pop(key, None)
+
+
+class KnownPairs:
+    """(account, address key) pairs that logged in successfully within
+    ``keep_s``; at most ``max_pairs`` kept (the oldest forgotten first).
+
+    >>> k = KnownPairs(keep_s=10)
+    >>> k.add("ann", "loopback", now=0); k.has("ann", "loopback", now=5), k.has("ann", "x", now=5)
+    (True, False)
+    >>> k.has("ann", "loopback", now=11)
+    False
+    """
+
+    def __init__(self, keep_s: float, max_pairs: int = 100_000) -> None:
+        self.keep_s = keep_s
+        self.max_pairs = max_pairs
+        self._seen: OrderedDict[tuple[str, str], float] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def add(self, account: str, address: str, now: float | None = None) -> None:
+        now = time.monotonic() if now is None else now
+        with self._lock:
+            self._seen[(account, address)] = now
+            self._seen.move_to_end((account, address))
+            while len(self._seen) > self.max_pairs:
+                self._seen.popitem(last=False)
+
+    def has(self, account: str, address: str, now: float | None = None) -> bool:
+        now = time.monotonic() if now is None else now
+        with self._lock:
+            seen = self._seen.get((account, address))
+            return seen is not None and now - seen <= self.keep_s

@@ -53,18 +53,23 @@ def _session(state: AppState, token: str) -> Seen | None:
 
 
 async def admit(
-    websocket: WebSocket, state: AppState, what: str, *, tickets: bool = False
+    websocket: WebSocket, state: AppState, what: str, *, ticket_kind: str | None = None
 ) -> tuple[str, Seen] | None:
     """The session and roles of an upgrade, or None once it is refused
-    (closed with 4403 for an Origin or a missing role, 4401 without a session)."""
+    (closed with 4403 for an Origin or a missing role, 4401 without a session).
+    ``ticket_kind``: the route takes viewer tickets of that kind (tickets.py)."""
     from .routers.live import origin_allowed
 
-    ticket = websocket.query_params.get("ticket") if tickets else None
+    ticket = websocket.query_params.get("ticket") if ticket_kind is not None else None
     opaque = ticket is not None and websocket.headers.get("origin") in OPAQUE_ORIGINS
     if not (opaque or origin_allowed(websocket, state.settings)):
         await websocket.close(code=4403, reason="Origin not allowed")
         return None
-    token = state.tickets.redeem(ticket) if ticket is not None else socket_token(websocket)
+    token = (
+        state.tickets.redeem(ticket, ticket_kind or "")
+        if ticket is not None
+        else socket_token(websocket)
+    )
     seen = None if token is None else await run_in_threadpool(_session, state, token)
     if token is None or seen is None:
         await websocket.close(code=4401, reason=f"{what} needs a session or a fresh ticket")

@@ -12,6 +12,7 @@
  *   // [{ name: "ctd", state: "open", linesOk: 9, linesBad: 0, lastValueMs: 1999000, ... }]
  */
 import type { SensorHealth } from "./contracts.gen";
+import { clockUtc } from "./numberFormat";
 
 export type InstrumentState = "closed" | "open" | "silent" | "unknown";
 const STATES: InstrumentState[] = ["closed", "open", "silent"];  // the protocol's codes
@@ -33,19 +34,25 @@ export interface InstrumentHealth {
   alert: string | null;
 }
 
-const count = (x: unknown): number => (typeof x === "number" && Number.isFinite(x) ? x : 0);
+/** A counter as the drone sent it: a whole number ≥ 0, else 0 (a string, NaN, -3, 2^63 beyond 2^53). */
+const count = (x: unknown): number =>
+  typeof x === "number" && Number.isFinite(x) && x >= 0 ? Math.min(Math.trunc(x), Number.MAX_SAFE_INTEGER) : 0;
+/** The largest ms since the epoch a Date holds. */
+const MAX_DATE_MS = 8.64e15;
 
-/** Rows sorted by sensor name. */
+/** Rows sorted by sensor name; any status a drone sends gives rows (a field
+ * it cannot be is shown as none). */
 export function instrumentsHealth(sensors: Record<string, SensorHealth> | null | undefined): InstrumentHealth[] {
-  if (!sensors) return [];
+  if (!sensors || typeof sensors !== "object" || Array.isArray(sensors)) return [];
   return Object.keys(sensors).sort().map((name) => {
-    const h = sensors[name];
-    const state = STATES[count(h.state)] ?? "unknown";
+    const raw: unknown = sensors[name];
+    const h = (raw && typeof raw === "object" ? raw : {}) as Partial<SensorHealth>;
+    const state = (Number.isInteger(h.state) ? STATES[h.state as number] : undefined) ?? "unknown";
     const last = count(h.last_value_ms);
     const row = {
       name, state,
       linesOk: count(h.lines_ok), linesBad: count(h.lines_bad), reconnects: count(h.reconnects),
-      lastValueMs: last > 0 ? last : null,
+      lastValueMs: last > 0 && last <= MAX_DATE_MS ? last : null,
       values: count(h.values), timeouts: count(h.timeouts), exceptions: count(h.exceptions),
       silences: count(h.silences),
     };
@@ -60,7 +67,7 @@ function alertOf(h: Omit<InstrumentHealth, "alert">): string | null {
   return null;
 }
 
-/** A time of day in UTC, to the second: "10:15:02 UTC". */
+/** A time of day in UTC, to the second: "10:15:02 UTC" ("—" for no valid time). */
 export function formatClock(ms: number): string {
-  return `${new Date(ms).toISOString().slice(11, 19)} UTC`;
+  return clockUtc(ms);
 }

@@ -59,6 +59,7 @@ export function linkStateWords(state: LinkStatus["state"] | null | undefined): s
 
 /** "12 s", "3 min 4 s", "2 h 5 min". */
 export function formatAge(s: number): string {
+  if (typeof s !== "number" || !Number.isFinite(s)) return "—";
   const t = Math.max(0, Math.round(s));
   if (t < 60) return `${t} s`;
   if (t < 3600) return `${Math.floor(t / 60)} min ${t % 60} s`;

@@ -97,6 +97,7 @@ export function infeasibleElements(model: ModdModel, plan: PlanJson): Map<string
 
 /** Bytes per second in a human unit. */
 export function formatRate(bytesPerS: number): string {
+  if (typeof bytesPerS !== "number" || !Number.isFinite(bytesPerS)) return "—";
   if (bytesPerS >= 1e6) return `${(bytesPerS / 1e6).toFixed(2)} MB/s`;
   if (bytesPerS >= 1e3) return `${(bytesPerS / 1e3).toFixed(2)} kB/s`;
   return `${bytesPerS.toFixed(0)} B/s`;

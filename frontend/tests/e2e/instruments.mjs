@@ -147,5 +147,43 @@ export function instruments({ page, ports, drone, liveValues }) {
       }
       for (const [i] of topics.entries()) await expectText(page.getByTestId(`last-sub_${i + 1}`), /last -?\d/, 30000);
     }],
+
+    // Issue 41: a drone's health field out of any range (2^63 ms, a negative count, a string)
+    // leaves the Monitor working: the status the page receives is altered on its way in.
+    ["instruments: a health field of 2^63 leaves the Monitor working", async () => {
+      if (!drone || !liveValues) throw new Error("needs the simulated drone (modd up --simulate)");
+      const hostile = { state: 1, lines_ok: 2 ** 63, lines_bad: -4, reconnects: "x", values: 1, last_value_ms: 2 ** 63 };
+      let inject = true;
+      await page.routeWebSocket(/\/stream(\?|$)/, (ws) => {
+        const server = ws.connectToServer();
+        ws.onMessage((m) => server.send(m));
+        server.onMessage((m) => {
+          try {
+            const doc = JSON.parse(String(m));
+            if (inject && doc.type === "status" && doc.data && doc.data.sensors) {
+              doc.data.sensors.zz_hostile = hostile;
+              ws.send(JSON.stringify(doc));
+              return;
+            }
+          } catch { /* not JSON: passed on as it came */ }
+          ws.send(m);
+        });
+      });
+      await page.reload();
+      await panel("Monitor");
+      const summary = page.getByRole("status", { name: "Link status" }).locator("details.instruments-health summary");
+      await expectText(summary, /Instruments: 5 /, 30000);
+      await summary.click();
+      const row = page.locator('tr[data-sensor="zz_hostile"]');
+      await expectVisible(row);
+      const cells = await row.locator("td").allTextContents();
+      if (cells[2] !== "none yet" || cells[4] !== "0") throw new Error(`the hostile row reads ${JSON.stringify(cells)}`);
+      if (await page.getByText(/panel failed/).count()) throw new Error("a panel failed on the hostile health");
+      await expectText(page.getByRole("status", { name: "Link status" }), /link up/, 30000);  // live still shown
+      inject = false;  // good data again: the hostile row leaves with it
+      await page.reload();
+      await panel("Monitor");
+      await expectText(summary, /Instruments: 4 \(4 open\)$/, 30000);
+    }],
   ];
 }

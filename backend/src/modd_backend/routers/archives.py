@@ -8,20 +8,31 @@ import datetime as dt
 import json
 import os
 import tempfile
+from collections import Counter
 from collections.abc import Callable
 from pathlib import Path as FsPath
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, TypeVar
 
-from fastapi import APIRouter, Depends, HTTPException, Path, Query
+from fastapi import APIRouter, Depends, HTTPException, Path, Query, Request
 from fastapi.responses import FileResponse, Response
 from pydantic import BaseModel, Field
 from starlette.background import BackgroundTask
 
 from .. import archive_work
-from ..archive_work import MAX_EXPORT_SAMPLES, csv_text, dataset_file, in_worker, series
+from ..archive_work import (
+    EXPORT_TIME_S,
+    MAX_EXPORT_SAMPLES,
+    TOPIC_TIME_S,
+    Refused,
+    check_bytes,
+    csv_text,
+    dataset_file,
+    series,
+)
 from ..archives import archive_path, file_info, list_files
 from ..deps import AppState, Heavy, StateDep, UserDep, require
 from ..downloads import content_disposition
+from ..errors import ApiError
 from ..filesnapshot import file_snapshot
 from ..roles import Role
 from ..schemas import Responses
@@ -35,9 +46,36 @@ Topic = Annotated[str, Query(max_length=200)]
 Nanos = Annotated[int | None, Query(ge=0, le=2**63 - 1)]
 NOT_FOUND: Responses = {404: {"description": "no such archive file"}}
 BUSY: Responses = {
+    413: {"description": "more bytes or samples than one request reads"},
     429: {"description": "this user's heavy requests are running; Retry-After"},
-    503: {"description": "all heavy slots are taken; Retry-After"},
+    503: {
+        "description": "all heavy slots are taken, or no archive worker within 30 s "
+        "(Retry-After); or the work ran over its time"
+    },
 }
+T = TypeVar("T")
+
+
+async def in_worker(
+    request: Request, state: AppState, user: User, fn: Callable[..., T], *args: Any, time_s: float
+) -> T:
+    """``fn(*args)`` in an archive worker, in this user's fair turn
+    (archive_pool.py), given up when the client goes away; a bound refused
+    there (archive_work.Refused, MemoryError) is its 413 or 422."""
+    pool = state.archive_pool
+    if pool is None:
+        raise HTTPException(503, "the archive workers are not running")
+    since = getattr(request.state, "heavy_since", None)
+    try:
+        return await pool.run(
+            user.id, fn, *args, time_s=time_s, since=since, gone=request.is_disconnected
+        )
+    except Refused as exc:
+        if exc.extra:  # the model's diagnostics, as the route always gave them
+            raise HTTPException(exc.status, {"message": str(exc), **exc.extra}) from None
+        raise ApiError(exc.status, str(exc)) from None
+    except MemoryError as exc:
+        raise ApiError(413, f"{exc}: choose a shorter range, fewer topics or files") from None
 
 
 class TopicCount(BaseModel):
@@ -109,13 +147,25 @@ async def read_series(
     name: Name,
     topic: Topic,
     state: StateDep,
-    _user: UserDep,
+    user: UserDep,
+    request: Request,
     start_ns: Nanos = None,
     end_ns: Nanos = None,
     max_points: Annotated[int, Query(ge=2, le=100_000)] = 2000,
 ) -> SeriesOut:
-    path = archive_path(state.settings.effective_archive_dir, drone, name)
-    total, points = await in_worker(series, path, topic, start_ns, end_ns, max_points)
+    (path,) = _bounded([archive_path(state.settings.effective_archive_dir, drone, name)])
+    total, points = await in_worker(
+        request,
+        state,
+        user,
+        series,
+        path,
+        topic,
+        start_ns,
+        end_ns,
+        max_points,
+        time_s=TOPIC_TIME_S,
+    )
     return SeriesOut(topic=topic, total=total, reduced=len(points) < total, points=points)
 
 
@@ -129,14 +179,17 @@ async def export_csv(
     name: Name,
     topic: Topic,
     state: StateDep,
-    _user: UserDep,
+    user: UserDep,
+    request: Request,
     start_ns: Nanos = None,
     end_ns: Nanos = None,
 ) -> Response:
     """Every sample of the range, unreduced: ``log_time_ns,topic,value``
     (read in a worker process: archive_work.py)."""
-    path = archive_path(state.settings.effective_archive_dir, drone, name)
-    text = await in_worker(csv_text, path, topic, start_ns, end_ns)
+    (path,) = _bounded([archive_path(state.settings.effective_archive_dir, drone, name)])
+    text = await in_worker(
+        request, state, user, csv_text, path, topic, start_ns, end_ns, time_s=TOPIC_TIME_S
+    )
     stem = f"{name.removesuffix('.mcap')}-{topic}.csv"
     return Response(
         text,
@@ -161,7 +214,7 @@ class ExportIn(BaseModel):
     topics: list[Annotated[str, Field(max_length=200)]] | None = Field(
         default=None, max_length=1000
     )
-    resample_s: float | None = Field(default=None, gt=0, le=86_400)
+    resample_s: float | None = Field(default=None, ge=archive_work.MIN_RESAMPLE_S, le=86_400)
     source: Literal["archive", "received"] = "archive"
     #: The dataset's metadata (ACDD/IOOS attribute names, ``platform``,
     #: ``instruments``: what a project's dataset.yaml holds; docs/user-guide/datasets.md).
@@ -206,32 +259,26 @@ EXPORT_TYPES = {
     },
 )
 async def export_dataset(
-    drone: Drone, body: ExportIn, state: StateDep, _user: UserDep
+    drone: Drone, body: ExportIn, state: StateDep, user: UserDep, request: Request
 ) -> FileResponse:
     """The archive (or the windows the subscribers received) as a dataset file,
-    streamed as a download (made in a worker process, bounded to
-    MAX_EXPORT_SAMPLES samples; notes in ``X-Modd-Notes``)."""
+    streamed as a download (made in a worker process in this user's fair turn,
+    bounded in bytes, samples and time: docs/backend.md; notes in ``X-Modd-Notes``)."""
     from modd.dataset.build import DatasetError
-    from modd_model import validate
 
-    errors = [str(d) for d in validate(body.model) if d.severity == "error"]
-    if errors:
-        raise HTTPException(422, {"message": "the model is not valid", "errors": errors[:20]})
     received = body.source == "received"
     root = state.settings.effective_record_dir if received else state.settings.effective_archive_dir
-    paths = (
-        [archive_path(root, drone, n) for n in body.files]
-        if body.files
-        else list_files(root, drone)
-    )
-    if not paths:
-        raise HTTPException(404, f"no {'records' if received else 'archives'} for drone {drone!r}")
+    paths = _export_paths(root, drone, body.files, received)
     media, suffix = EXPORT_TYPES[body.format]
     fd, tmp = tempfile.mkstemp(prefix="modd-export-", suffix=suffix)
     os.close(fd)
     out = FsPath(tmp)
+    hide = _hider(root, "<records>" if received else "<archives>")
     try:
         notes, first_ns, last_ns = await in_worker(
+            request,
+            state,
+            user,
             dataset_file,
             paths,
             body.model,
@@ -244,17 +291,19 @@ async def export_dataset(
             archive_work.MAX_EXPORT_SAMPLES,
             received,
             body.metadata,
+            time_s=EXPORT_TIME_S,
         )
     except DatasetError as exc:
-        out.unlink(missing_ok=True)
-        text = str(exc).replace(str(root), "<records>" if received else "<archives>")
+        out.unlink(missing_ok=True)  # the next clause does not see what this one raises
+        text = hide(str(exc))
         raise HTTPException(
             413 if "more than" in text and "samples" in text else 422, text
         ) from None
+    except BaseException:
+        out.unlink(missing_ok=True)
+        raise
     name = export_name(drone, received, first_ns, last_ns) + suffix
-    hidden = "<records>" if received else "<archives>"
-    notes = [n.replace(str(root), hidden) for n in notes]
-    headers = {"X-Modd-Notes": json.dumps(notes[:20], ensure_ascii=True)}
+    headers = {"X-Modd-Notes": json.dumps([hide(n) for n in notes[:20]], ensure_ascii=True)}
     return FileResponse(
         out,
         media_type=media,
@@ -262,6 +311,39 @@ async def export_dataset(
         headers=headers,
         background=BackgroundTask(out.unlink, missing_ok=True),
     )
+
+
+def _export_paths(root: FsPath, drone: str, files: list[str], received: bool) -> list[FsPath]:
+    """The files an export reads: each named once (422 for a repeat, also
+    through a link), within MAX_ARCHIVE_BYTES (413); all of them when none is named."""
+    repeated = sorted(n for n, k in Counter(files).items() if k > 1)
+    if repeated:
+        raise HTTPException(422, f"files name {repeated[0]!r} more than once: name each file once")
+    paths = [archive_path(root, drone, n) for n in files] if files else list_files(root, drone)
+    if len(set(paths)) != len(paths):
+        raise HTTPException(422, "two of the files named are the same file: name each once")
+    if not paths:
+        raise HTTPException(404, f"no {'records' if received else 'archives'} for drone {drone!r}")
+    return _bounded(paths)
+
+
+def _bounded(paths: list[FsPath]) -> list[FsPath]:
+    """``paths``, refused with 413 beyond MAX_ARCHIVE_BYTES in all."""
+    try:
+        check_bytes(paths)
+    except Refused as exc:
+        raise ApiError(exc.status, str(exc)) from None
+    return paths
+
+
+def _hider(root: FsPath, label: str) -> Callable[[str], str]:
+    """A text with the server's own paths replaced (notes and errors say no server path)."""
+    real = str(root.resolve())
+
+    def hide(text: str) -> str:
+        return text.replace(real, label).replace(str(root), label)
+
+    return hide
 
 
 @router.post(
@@ -300,7 +382,7 @@ def serve_replay(
     """The replay of ``<root>/<drone>/<name>`` (an archive or a base-station record)."""
     if state.replay is None:
         raise HTTPException(409, "replay is off on this backend (--foxglove-replay-port 0)")
-    path = archive_path(root, drone, name)
+    (path,) = _bounded([archive_path(root, drone, name)])
     try:
         info = state.replay.start(
             drone, path, body.start_ns, body.end_ns, user.username, autoplay=body.autoplay

@@ -3,8 +3,9 @@ for the workbench), log out, who am I, change my password.
 
 Login attempts are throttled per account and per client address (429 with
 ``Retry-After``), counted before the password check so that concurrent guesses
-cannot outrun the count (throttle.py); an unknown user name costs the same
-time as a wrong password."""
+cannot outrun the count (throttle.py); an account that logged in from an
+address before is past that address's lock (its own limit still holds); an
+unknown user name costs the same time as a wrong password."""
 
 from __future__ import annotations
 
@@ -85,11 +86,13 @@ async def login(body: LoginIn, state: StateDep, request: Request, response: Resp
     own threads (``Settings.login_threads``), never queued behind saves."""
     account = body.username.lower()
     address = address_key(client_address(request))
+    # an account that logged in from here before is past this address's lock
+    known = state.login_known.has(account, address)
     # counted before the password check, atomically (throttle.py)
-    wait = state.login_addresses.take(address)
+    wait = 0.0 if known else state.login_addresses.take(address)
     if wait == 0:
         wait = state.login_accounts.take(account)
-        if wait > 0:
+        if wait > 0 and not known:
             state.login_addresses.give_back(address)
     if wait > 0:
         raise retry_later(429, "too many failed logins; try again later", wait)
@@ -97,7 +100,9 @@ async def login(body: LoginIn, state: StateDep, request: Request, response: Resp
     if found is None:
         raise ApiError(401, "wrong user name or password")
     state.login_accounts.clear(account)
-    state.login_addresses.give_back(address)
+    if not known:
+        state.login_addresses.give_back(address)
+    state.login_known.add(account, address)
     token, user = found
     if body.session == "cookie":
         response.set_cookie(

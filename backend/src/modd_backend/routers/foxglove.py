@@ -29,17 +29,20 @@ router = APIRouter(tags=["foxglove"])
 SUBPROTOCOLS = ("foxglove.sdk.v1", "foxglove.websocket.v1")
 
 
-def viewer_link(request: Request, state: AppState, token: str, kind: str) -> str:
+def viewer_link(request: Request, state: AppState, token: str, kind: str, user: int) -> str:
     """``ws(s)://HOST/foxglove/<kind>?ticket=T`` for the session ``token``
-    (HOST as the request named it: allow-listed by the Guard)."""
+    (HOST as the request named it: allow-listed by the Guard); the ticket
+    opens only ``kind`` and counts among ``user``'s (tickets.py)."""
     scheme = "wss" if request.url.scheme == "https" else "ws"
     host = request.headers.get("host", "127.0.0.1")
-    return f"{scheme}://{host}/foxglove/{kind}?ticket={state.tickets.issue(token)}"
+    return f"{scheme}://{host}/foxglove/{kind}?ticket={state.tickets.issue(token, kind, user)}"
 
 
-def viewer_links(request: Request, state: StateDep, creds: CredsDep) -> Callable[[str], str]:
+def viewer_links(
+    request: Request, state: StateDep, creds: CredsDep, user: UserDep
+) -> Callable[[str], str]:
     """A dependency: makes the links of the requesting session."""
-    return lambda kind: viewer_link(request, state, creds.token, kind)
+    return lambda kind: viewer_link(request, state, creds.token, kind, user.id)
 
 
 ViewerLinks = Annotated[Callable[[str], str], Depends(viewer_links)]
@@ -67,8 +70,10 @@ def links(state: StateDep, user: UserDep, link: ViewerLinks) -> LinksOut:
     )
 
 
-async def _relay(websocket: WebSocket, state: AppState, port: int | None, what: str) -> None:
-    admitted = await admit(websocket, state, what, tickets=True)
+async def _relay(
+    websocket: WebSocket, state: AppState, port: int | None, what: str, kind: str
+) -> None:
+    admitted = await admit(websocket, state, what, ticket_kind=kind)
     if admitted is None:
         return
     if port is None or state.loopback_tls is None:
@@ -94,11 +99,11 @@ async def _relay(websocket: WebSocket, state: AppState, port: int | None, what: 
 async def live_socket(websocket: WebSocket) -> None:
     state = ws_state(websocket)
     port = state.foxglove.port if state.foxglove is not None else None
-    await _relay(websocket, state, port, "the Foxglove live server")
+    await _relay(websocket, state, port, "the Foxglove live server", "live")
 
 
 @router.websocket("/foxglove/replay")
 async def replay_socket(websocket: WebSocket) -> None:
     state = ws_state(websocket)
     port = state.replay.serving_port() if state.replay is not None else None
-    await _relay(websocket, state, port, "the Foxglove replay")
+    await _relay(websocket, state, port, "the Foxglove replay", "replay")

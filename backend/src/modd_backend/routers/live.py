@@ -107,15 +107,18 @@ def _session(state: AppState, token: str) -> tuple[User, str] | None:
 
 def origin_allowed(websocket: WebSocket, settings: Settings) -> bool:
     """A browser's WebSocket names its page's origin: it must be this
-    service's own (or a configured CORS origin). Clients without an Origin
-    (API clients, not browsers) pass; they cannot use the cookie (below)."""
+    service's own, scheme included (``http://HOST`` for ``ws://``,
+    ``https://HOST`` for ``wss://``), or a configured CORS origin. Clients
+    without an Origin (API clients, not browsers) pass; they cannot use the
+    cookie (below)."""
     origin = websocket.headers.get("origin")
     if origin is None:
         return True
     if origin in settings.cors_origins:
         return True
     host = websocket.headers.get("host", "")
-    return origin.split("://", 1)[-1].rstrip("/").lower() == host.lower()
+    scheme = "https" if websocket.url.scheme in ("wss", "https") else "http"
+    return origin.rstrip("/").lower() == f"{scheme}://{host}".lower()
 
 
 def _parse(text: str) -> Any:

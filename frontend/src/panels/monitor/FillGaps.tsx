@@ -16,6 +16,7 @@
  * running backfill every POLL_MS.
  */
 import { useEffect, useRef, useState } from "react";
+import { fixed } from "../../core/numberFormat";
 import { useServices } from "../../app/services";
 import type { BackfillProgress } from "../../api/types";
 import type { DataSource } from "../../dataSources/types";
@@ -122,8 +123,8 @@ export function FillGaps({ drone, source, subscribers, scope, compact = false }:
         <div role="status" aria-label="Backfill progress" data-testid="backfill-progress">
           <progress max={Math.max(total, 1)} value={total ? progress.windows_done : 1} />
           <span> {progress.windows_done}/{total} windows</span>
-          <span className="muted"> · {progress.bytes_per_s.toFixed(0)} of {progress.rate_bps || "—"} B/s</span>
-          {progress.seconds_left != null && running && <span className="muted"> · {progress.seconds_left.toFixed(0)} s left</span>}
+          <span className="muted"> · {fixed(progress.bytes_per_s, 0)} of {progress.rate_bps || "—"} B/s</span>
+          {progress.seconds_left != null && running && <span className="muted"> · {fixed(progress.seconds_left, 0)} s left</span>}
           {running && progress.reason && <span className="muted" data-testid="backfill-reason"> · {progress.reason}</span>}
           <strong> · {progress.status === "DONE" ? `done: ${progress.windows} filled, ${progress.duplicates} duplicates` : progress.status.toLowerCase()}</strong>
           {marked > 0 && <span className="backfilled"> · {marked} backfilled values received</span>}

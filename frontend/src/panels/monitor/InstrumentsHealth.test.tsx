@@ -56,3 +56,17 @@ describe("InstrumentsHealth", () => {
     expect(show({})).toBeNull();
   });
 });
+
+describe("InstrumentsHealth with what a drone could send", () => {
+  it("shows 2^53, 2^63, negative, NaN-escaped and string fields without throwing", () => {
+    const table = show({
+      a: { state: 1, lines_ok: 2 ** 63, lines_bad: -4, reconnects: 0, last_value_ms: 2 ** 53 },
+      b: { state: 1, lines_ok: 1, lines_bad: 0, reconnects: 0, last_value_ms: 2 ** 63 },
+      c: { state: 9, lines_ok: 1, lines_bad: 0, reconnects: 0, last_value_ms: -1 },
+      d: { state: "1", lines_ok: "NaN", lines_bad: "x", reconnects: null, last_value_ms: "1e400" },
+    } as never)!;
+    expect(cells(table).map((r) => r[2])).toEqual(["none yet", "none yet", "none yet", "none yet"]);
+    expect(cells(table)[0][4]).toBe("0");  // a negative counter is no count
+    expect(cells(table)[3][1]).toBe("unknown");
+  });
+});

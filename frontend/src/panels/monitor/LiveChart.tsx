@@ -5,6 +5,7 @@
  * opens the chart's values as a table (ValuesTable).
  */
 import { useEffect, useState, type ReactNode } from "react";
+import { fixed, precise, whole } from "../../core/numberFormat";
 import type { DataSource, Sample } from "../../dataSources/types";
 import type { ViewWindow } from "../../core/chartData";
 import { TimeChart, type ChartSeries } from "./TimeChart";
@@ -50,9 +51,9 @@ function LastValue({ source, s, now }: { source: DataSource; s: ChartSeries; now
     <span className="chart-last-line">
       <strong>{s.title ?? s.channel}</strong> <span className="muted">{s.label}</span>
       <span className="chart-last" data-testid={`last-${s.channel}`}>
-        {last ? <>last {last.value.toPrecision(5)}{s.unit ? ` ${s.unit}` : ""}{last.windowS ? ` over ${last.windowS.toFixed(2)} s` : ""}{last.count !== undefined ? ` (${last.count} samples)` : ""}</> : "waiting for values…"}
+        {last ? <>last {precise(last.value, 5)}{s.unit ? ` ${s.unit}` : ""}{last.windowS ? ` over ${fixed(last.windowS, 2)} s` : ""}{last.count !== undefined ? ` (${whole(last.count)} samples)` : ""}</> : "waiting for values…"}
       </span>
-      {age !== null && <span className={age > 5 ? "stale" : "fresh"}> · {age < 1 ? "fresh" : `${age.toFixed(0)} s old`}</span>}
+      {age !== null && <span className={age > 5 ? "stale" : "fresh"}> · {age < 1 ? "fresh" : `${fixed(age, 0)} s old`}</span>}
       <span className="muted"> · {count} kept</span>
     </span>
   );

@@ -13,6 +13,7 @@
  * drone's archive, and the backfilled values appear in place, marked.
  */
 import { useEffect, useState } from "react";
+import { fixed, localTime } from "../../core/numberFormat";
 import { AggregationValues } from "../../core/model.gen";
 import { AGGREGATION } from "../../core/contracts.gen";
 import { findTopicByName, listTopics } from "../../core/query";
@@ -91,14 +92,14 @@ export default function MonitorPanel() {
         {health.down && <strong className="error"> · link lost: {health.reason}</strong>}
         {link && <>
           · link <strong>{link.state ?? (link.connected ? "up" : "down")}</strong>
-          · RTT {link.rttMs === null ? "—" : `${link.rttMs.toFixed(1)} ms`}
+          · RTT {fixed(link.rttMs, 1, " ms")}
           · measured {link.measuredBytesPerS === null ? "—" : formatRate(link.measuredBytesPerS)}
           {" "}vs planned {link.plannedBytesPerS === null ? "—" : formatRate(link.plannedBytesPerS)}
           {link.radio && <RadioLine radio={link.radio} />}
           {health.sinceLastFrameS !== null && <> · last frame {formatAge(health.sinceLastFrameS)} ago</>}
           {link.archive && <ArchiveSpaceNote space={link.archive} />}
           {link.behind && <strong className="behind" role="alert">
-            {" "}· base station behind the link{link.lagS != null && ` by ${link.lagS.toFixed(1)} s`}
+            {" "}· base station behind the link{link.lagS != null && ` by ${fixed(link.lagS, 1, " s")}`}
           </strong>}
         </>}
         {!link && state === "open" && " · waiting for the drone's status…"}
@@ -147,7 +148,7 @@ export default function MonitorPanel() {
             <button onClick={() => setWin(panRange(range, 0.5))}>Later →</button>
             <button aria-pressed={win.follow} onClick={() => setWin(DEFAULT_WINDOW)}>Follow live</button>
             <span className="muted" data-testid="time-window">
-              {win.follow ? `following, last ${win.spanS.toFixed(0)} s` : `${new Date(range[0] * 1000).toLocaleTimeString()} – ${new Date(range[1] * 1000).toLocaleTimeString()} (${(range[1] - range[0]).toFixed(1)} s)`}
+              {win.follow ? `following, last ${fixed(win.spanS, 0)} s` : `${localTime(range[0])} – ${localTime(range[1])} (${fixed(range[1] - range[0], 1)} s)`}
               {" "}· drag across a chart to zoom
             </span>
           </div>
