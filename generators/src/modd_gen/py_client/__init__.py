@@ -18,19 +18,25 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
+_RT, _MM = "runtime/python/src", "metamodel/src"
+_CLIENT = "modd"  # the package name (a path, not a zenoh key)
+
 #: path beside the stubs (also the file in this package, in a wheel) -> its original.
 ORIGINALS = {
-    "modd/__init__.py": "runtime/python/src/modd/__init__.py",
-    "modd/subscriber.py": "runtime/python/src/modd/subscriber.py",
-    "modd/zenoh_session.py": "runtime/python/src/modd/zenoh_session.py",
-    "modd/zenoh_auth.py": "runtime/python/src/modd/zenoh_auth.py",
-    "modd/subbroker/__init__.py": "runtime/python/src/modd/subbroker/__init__.py",
-    "modd/subbroker/client.py": "runtime/python/src/modd/subbroker/client.py",
-    "modd/subbroker/keys.py": "runtime/python/src/modd/subbroker/keys.py",
-    "modd/subbroker/payload.py": "runtime/python/src/modd/subbroker/payload.py",
-    "modd_contracts/__init__.py": "metamodel/src/modd_contracts/__init__.py",
-    "modd_contracts/keys.py": "metamodel/src/modd_contracts/keys.py",
-    "modd_contracts/types_gen.py": "metamodel/src/modd_contracts/types_gen.py",
+    f"{_CLIENT}/{name}": f"{_RT}/{_CLIENT}/{name}"
+    for name in (
+        "__init__.py",
+        "subscriber.py",
+        "zenoh_session.py",
+        "zenoh_auth.py",
+        "subbroker/__init__.py",
+        "subbroker/client.py",
+        "subbroker/keys.py",
+        "subbroker/payload.py",
+    )
+} | {
+    f"modd_contracts/{name}": f"{_MM}/modd_contracts/{name}"
+    for name in ("__init__.py", "keys.py", "types_gen.py")
 }
 
 #: The checkout this package sits in (src/modd_gen/py_client -> the repository).
