@@ -116,17 +116,19 @@ def model_text(devices: dict[str, Path], port: int = 7171) -> str:
         + f" measures {{ {vars_} }}"
         for name, path in devices.items()
     )
-    topics = ", ".join(
-        f'"c.{name}.{s.lower()}_{c}"'
+    publishers = " ".join(
+        f"Publisher p_{name}(0.1, "
+        + ", ".join(
+            f'"c.{name}.{s.lower()}_{c}"' for s in POSITION_SENTENCES for c in ("lat", "lon")
+        )
+        + ");"
         for name in devices
-        for s in POSITION_SENTENCES
-        for c in ("lat", "lon")
     )
     return (
         f"Drone c {{ Sensors {{ {sensors} }} }}\n"
         f'PubBroker("127.0.0.1":{port}, "/tmp/unused"); '
         f'SubBroker("127.0.0.1":{port + 1}, "/tmp/unused");\n'
-        f"Publishers {{ Publisher p(0.1, {topics}); }}\n"
+        f"Publishers {{ {publishers} }}\n"
     )
 
 
