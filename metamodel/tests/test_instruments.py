@@ -187,7 +187,8 @@ def test_mistakes_are_located(sensor: str, pointer: str, words: str) -> None:
 def test_an_unknown_fix_class_is_located() -> None:
     doc, smap, diagnostics = parse_lenient(
         _model(
-            'Sensor g kind nmea on "/d" {\n fix = survey; } measures { x(NONE) from sentence GGA.lat; }'
+            'Sensor g kind nmea on "/d" {\n fix = survey; } measures { '
+            "x(NONE) from sentence GGA.lat; }"
         )
     )
     assert doc is not None and diagnostics == []
