@@ -92,6 +92,8 @@ class LineDecoder:
             except nmea.NoValue as exc:
                 self.health.no_value(1, str(exc))
         if stamp is not None:
+            if self.clock is not None:
+                self.health.clock_offset_ms = (stamp - now_ns) // 1_000_000
             return released + [(m, stamp, v) for m, v in values]
         assert self.clock is not None
         self._hold(self.clock.pending_tod(s), values)

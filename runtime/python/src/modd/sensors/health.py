@@ -33,6 +33,7 @@ class Health:
     last_value_ns: int = 0  # receive time of the last value (0: none yet)
     last_bad: str = ""  # why the last bad line was refused
     last_missing: str = ""  # why the last missing value had none
+    clock_offset_ms: int | None = None  # clock = instrument: last stamp minus its receive time
 
     def no_value(self, n: int, why: str, no_fix: bool = False) -> None:
         """``n`` mapped fields gave no value, for this reason."""
