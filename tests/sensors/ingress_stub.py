@@ -57,6 +57,7 @@ class RecordingIngress:
 
     def _serve(self, conn: socket.socket) -> None:
         splitter, received = FrameSplitter(), 0
+        # frames are read whole: a frame the stub cannot read is a test failure
         names: dict[int, str] = {}
         types: dict[int, ValueType] = {}
         conn.sendall(encode_catalogue(Catalogue(self.drone, accept_unknown=True)))
@@ -71,15 +72,19 @@ class RecordingIngress:
                     got = []
                     for _ in range(n):
                         lid = r.varint()
-                        stamp = r.fixed("<q")
-                        got.append((names[lid], int(stamp), float(r.fixed(_FORMAT[types[lid]]))))
-                    with self.lock:
-                        for topic, stamp, value in got:
-                            self.samples.setdefault(topic, []).append((stamp, value))
+                        stamp = int(r.fixed("<q"))
+                        got.append((names[lid], stamp, float(r.fixed(_FORMAT[types[lid]]))))
+                    self.received(got)
                     received += n
                     conn.sendall(encode_ack(Ack(received, received, received)))
                 elif f.type not in (HELLO, HEALTH):
                     raise RuntimeError(f"unexpected ingress frame {f.type}")
+
+    def received(self, samples: list[tuple[str, int, float]]) -> None:
+        """Called with each SAMPLES frame's (topic, timestamp_ns, value): kept by topic."""
+        with self.lock:
+            for topic, stamp, value in samples:
+                self.samples.setdefault(topic, []).append((stamp, value))
 
     def topic(self, name: str) -> list[tuple[int, float]]:
         with self.lock:

@@ -61,34 +61,29 @@ def _at(s: Sentence, i: int) -> str | None:
     return s.fields[i] if i < len(s.fields) else None
 
 
+def _judge(what: str, value: str, says_no_fix: bool, accepted: bool) -> str | None:
+    if says_no_fix:
+        return f"{what} {value or 'empty'} (no fix)"
+    return None if accepted else f"{what} {value} (not accepted by the sensor's fix)"
+
+
 def _mode(kind: str, mode: str | None, cls: FixClass) -> str | None:
-    if mode is None or mode == "":
+    if not mode:
         return (
             f"{kind} states no mode (the sensor accepts only some fixes)" if cls.narrowed else None
         )
-    if mode == "N":
-        return f"{kind} mode N (no fix)"
-    if mode not in cls.modes:
-        return f"{kind} mode {mode} (not accepted by the sensor's fix)"
-    return None
+    return _judge(f"{kind} mode", mode, mode == "N", mode in cls.modes)
 
 
 def _gga(s: Sentence, cls: FixClass) -> str | None:
     q = _at(s, 5) or ""
-    if q in ("", "0"):
-        return f"GGA fix quality {q or 'empty'} (no fix)"
-    if q not in cls.qualities:
-        return f"GGA fix quality {q} (not accepted by the sensor's fix)"
-    return None
+    return _judge("GGA fix quality", q, q in ("", "0"), q in cls.qualities)
 
 
 def _gns(s: Sentence, cls: FixClass) -> str | None:
     letters = _at(s, 5) or ""
-    if not letters or set(letters) == {"N"}:
-        return f"GNS mode {letters or 'empty'} (no fix)"
-    if not set(letters) & cls.modes:
-        return f"GNS mode {letters} (not accepted by the sensor's fix)"
-    return None
+    no = not letters or set(letters) == {"N"}
+    return _judge("GNS mode", letters, no, bool(set(letters) & cls.modes))
 
 
 def no_fix(s: Sentence, fix: str = DEFAULT_FIX) -> str | None:
