@@ -7,6 +7,9 @@ checksum, framing or form (lines the model maps nothing of are ``ignored``)."""
 
 from __future__ import annotations
 
+import contextlib
+import dataclasses
+import datetime
 import json
 import signal
 import subprocess
@@ -15,11 +18,13 @@ import time
 from pathlib import Path
 from typing import Any
 
+import pynmea2  # type: ignore[import-untyped]
 import pytest
 from corpus import (
     BARE,
     POSITION_SENTENCES,
     captures,
+    lines,
     model_text,
     reference,
     replay_bytes,
@@ -27,6 +32,10 @@ from corpus import (
 )
 from devices import PtyDevice, wait_until
 from ingress_stub import RecordingIngress
+from modd.sensors.decode import LineDecoder
+from modd.sensors.health import Health
+from modd.sensors.plan import plan_sensors
+from modd_model import parse_text
 
 MODD_SENSORS = Path(sys.executable).parent / "modd-sensors"
 
@@ -127,3 +136,53 @@ def _compare(
     assert not bad_mismatch, bad_mismatch
     assert sum(h["noFix"] for h in health.values()) >= no_fix  # lat and lon of each
     assert sum(h["ignored"] for h in health.values()) > 0
+
+
+def _days(data: bytes) -> set[int]:
+    """The dates (days since 1970) the capture's RMC and ZDA sentences state, per pynmea2."""
+    out = set()
+    for line in lines(data):
+        with contextlib.suppress(Exception):
+            msg = pynmea2.parse(line.decode("ascii"), check=True)
+            day = msg.datestamp if type(msg).__name__ == "RMC" else msg.datetime.date()
+            if type(msg).__name__ in ("RMC", "ZDA") and day.year < 2090:
+                out.add(day.toordinal() - datetime.date(1970, 1, 1).toordinal())
+    return out
+
+
+def test_real_receivers_on_their_own_clock() -> None:
+    """``clock = instrument`` on every capture that states a date, the computer's clock
+    set to the capture's day: each position's stamp is its sentence's own UTC time of
+    day (pynmea2's), within a day of its date; nothing carries the computer's clock."""
+    files = [p for p in captures() if _days(replay_bytes(p))]
+    assert len(files) >= 50
+    devs = {sensor_name(p): Path("/dev/null") for p in files}
+    doc, _ = parse_text(model_text(devs))
+    plans = {p.name: dataclasses.replace(p, instrument_clock=True) for p in plan_sensors(doc)}
+    stamped = 0
+    day_ns = 86_400 * 10**9
+    for p in files:
+        data = replay_bytes(p)
+        days = _days(data)
+        computer = max(days) * day_ns + day_ns // 2  # noon of the capture's last day
+        out = LineDecoder(plans[sensor_name(p)], Health()).feed(data, computer)
+        own = _times_of_day(data)
+        for m, stamp, _ in out:
+            kind = m.topic.rsplit(".", 1)[1][:3].upper()
+            assert stamp != computer, p.name
+            assert {stamp // day_ns + k for k in (-1, 0, 1)} & days, (p.name, stamp)
+            assert stamp % day_ns in own[kind], (p.name, kind, stamp)
+            stamped += 1
+    assert stamped > 5000
+
+
+def _times_of_day(data: bytes) -> dict[str, set[int]]:
+    """Per sentence type, the times of day (ns) its sentences state, read by pynmea2."""
+    out: dict[str, set[int]] = {k: set() for k in POSITION_SENTENCES}
+    for line in lines(data):
+        with contextlib.suppress(Exception):
+            msg = pynmea2.parse(line.decode("ascii"), check=False)
+            t = msg.timestamp
+            ns = ((t.hour * 60 + t.minute) * 60 + t.second) * 10**9 + t.microsecond * 1000
+            out[type(msg).__name__].add(ns)
+    return out

@@ -88,7 +88,7 @@ export interface Sensor {
   device?: SerialDevice;
   /** For an ascii sensor: how its lines are written. */
   line?: AsciiLine;
-  /** For an nmea sensor: which clock stamps its samples: receive (the reader's clock when the line arrives) or instrument (the sentence's own UTC time of day on the date of the last RMC or ZDA, across midnight; a sentence without a time takes its fix epoch's; samples held until the instrument states a date; two-digit years and GPS week rollovers resolved against the computer's clock: docs/sensors.md, "Instrument clock"). receive when absent. */
+  /** For an nmea sensor: which clock stamps its samples: receive (the reader's clock when the line arrives) or instrument (the sentence's own UTC time of day on the date of the last valid RMC or ZDA, across midnight; a sentence without a time takes its fix epoch's; samples held until the instrument states a date; two-digit years and GPS week rollovers resolved against the computer's clock: docs/sensors.md, "Instrument clock"). receive when absent. */
   clock?: "receive" | "instrument";
   /** For an nmea sensor: required (a line without *hh is refused) or optional (for an instrument that sends none: a line without one is read when each field has its sentence's shape; a line with one is still checked). required when absent. */
   checksum?: "required" | "optional";

@@ -1,7 +1,9 @@
 """The instrument's clock (``clock = instrument``): a sentence that states its
 UTC time of day (GGA, GNS, RMC, GLL, ZDA, GST …) is stamped with that time, on
-the date of the last RMC or ZDA; a sentence without one (VTG, GSA, HDT …) takes
-the time of its fix epoch (the last time stated). The date follows the times
+the date of the last valid RMC (status A) or ZDA (a void RMC's date may be the
+receiver's default, 1980-01-05, before it has one); a sentence without one
+(VTG, GSA, HDT …) takes the time of its fix epoch (the last time stated). The
+date follows the times
 across midnight (23:59:59 then 00:00:00 is the next day) until the next RMC/ZDA
 says it.
 
@@ -63,7 +65,7 @@ class InstrumentClock:
     def observe(self, s: Sentence, now_ns: int) -> int | None:
         """Takes the sentence's date and time; its stamp (None: no date known yet)."""
         tod = time_of_day(s)
-        date = stated_date(s)
+        date = stated_date(s) if s.type == "ZDA" or s.fields[1:2] == ("A",) else None
         if date is not None and tod is not None:
             try:
                 self.midnight_ns = resolve_date(*date, now_ns)
