@@ -18,7 +18,7 @@ from modd_model.vocabulary import NMEA_SENTENCES
 BROKERS = 'PubBroker("127.0.0.1":1, "/l"); SubBroker("127.0.0.1":2, "/c");'
 SENSORS = r"""
 Sensor gnss "u-blox" kind nmea on "/dev/serial/by-id/usb-u-blox" {
-    baud = 9600; clock = instrument;
+    baud = 9600; clock = instrument; checksum = optional; fix = rtk;
 } measures {
     lat("deg", float64) from sentence GGA.lat;
     sats(NONE, int) from sentence GGA.satellites;
@@ -45,7 +45,7 @@ def test_instrument_sensors_round_trip() -> None:
     doc, _ = parse_text(_model(SENSORS))
     gnss, ctd, sonde = doc["drone"]["sensors"]
     assert gnss["device"] == {"path": "/dev/serial/by-id/usb-u-blox", "baud": 9600}
-    assert gnss["clock"] == "instrument"
+    assert (gnss["clock"], gnss["checksum"], gnss["fix"]) == ("instrument", "optional", "rtk")
     assert gnss["variables"][2]["nmea"] == {
         "sentence": "DBT",
         "field": "f3",
@@ -131,6 +131,12 @@ def _errors(sensors: str) -> dict[str, tuple[str, int]]:
             "clock is only for a sensor of kind nmea",
         ),
         (
+            'Sensor g kind modbus on "/d" { fix = rtk; checksum = optional; } '
+            "measures { x(NONE) from register 1 int16; }",
+            "/drone/sensors/0/fix",
+            "fix is only for a sensor of kind nmea",
+        ),
+        (
             'Sensor g kind ascii on "/d" measures { x(NONE) from register 1 int16; }',
             "/drone/sensors/0/variables/0/modbus",
             "is read as modbus but sensor 'g' is of kind ascii",
@@ -176,6 +182,20 @@ def test_mistakes_are_located(sensor: str, pointer: str, words: str) -> None:
     message, line = errors[pointer]
     assert words in message
     assert line == 1
+
+
+def test_an_unknown_fix_class_is_located() -> None:
+    doc, smap, diagnostics = parse_lenient(
+        _model(
+            'Sensor g kind nmea on "/d" {\n fix = survey; } measures { '
+            "x(NONE) from sentence GGA.lat; }"
+        )
+    )
+    assert doc is not None and diagnostics == []
+    (err,) = [d for d in validate(doc) if d.pointer == "/drone/sensors/0/fix"]
+    assert "rtkFixed" in err.message or "survey" in err.message
+    loc = smap["/drone/sensors/0/fix"]
+    assert loc.line == 2
 
 
 def test_same_register_read_alike_is_fine() -> None:
@@ -279,6 +299,8 @@ _sensors = st.fixed_dictionaries(
             },
         ),
         "clock": st.sampled_from(["receive", "instrument"]),
+        "checksum": st.sampled_from(["required", "optional"]),
+        "fix": st.sampled_from(["gnss", "any", "differential", "rtk", "rtkFixed"]),
     },
 )
 

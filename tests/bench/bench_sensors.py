@@ -25,7 +25,6 @@ import argparse
 import contextlib
 import json
 import os
-import socket
 import statistics
 import subprocess
 import sys
@@ -37,34 +36,17 @@ from pathlib import Path
 from typing import Any
 
 HERE = Path(__file__).resolve().parent
-sys.path[:0] = [str(HERE)]
+sys.path[:0] = [str(HERE), str(HERE.parent / "sensors")]
 
 from benchkit.footprint import Sampler  # noqa: E402
 from benchkit.report import table  # noqa: E402
-from modd.ingress import (  # noqa: E402
-    HEALTH,
-    HELLO,
-    REGISTER,
-    SAMPLES,
-    Ack,
-    Catalogue,
-    encode_ack,
-    encode_catalogue,  # noqa: E402
-)
-from modd.link.codec import FrameSplitter, Reader  # noqa: E402
-from modd.link.frames import ValueType  # noqa: E402
+from ingress_stub import RecordingIngress  # noqa: E402
 from modd.sensors.nmea import sentence  # noqa: E402
 from modd.sensors.plan import plan_sensors  # noqa: E402
 from modd.sim.instruments import open_device  # noqa: E402
 from modd.sim.wire import modbus_reply, registers  # noqa: E402
 
 NMEA_DEVICES, MODBUS_DEVICES, NMEA_HZ = 20, 4, 10
-_FORMAT = {
-    ValueType.FLOAT32: "<f",
-    ValueType.FLOAT64: "<d",
-    ValueType.INT: "<q",
-    ValueType.BOOL: "<B",
-}
 
 
 def model_text(devices: Path) -> str:
@@ -86,65 +68,19 @@ def model_text(devices: Path) -> str:
         Publishers {{ Publisher nav(0.1, {fast}); Publisher water(1.0, {slow}); }}""")
 
 
-def _recv(conn: socket.socket) -> bytes:
-    """What a reader sent; nothing once it went away (terminated with bytes unread)."""
-    try:
-        return conn.recv(65536)
-    except OSError:
-        return b""
-
-
-class Ingress:
+class Ingress(RecordingIngress):
     """The PubBroker's ingress as far as a publisher sees it; notes each sample's arrival."""
 
     def __init__(self, path: Path) -> None:
-        self.path = path
-        self.server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        self.server.bind(str(path))
-        self.server.listen(16)
         self.arrivals: list[tuple[float, int]] = []  # (arrival monotonic_ns, seq)
-        self.samples = 0
-        self.lock = threading.Lock()
-        threading.Thread(target=self._accept, daemon=True).start()
+        self.count = 0
+        super().__init__(path, "b")
 
-    def _accept(self) -> None:
-        while True:
-            try:
-                conn, _ = self.server.accept()
-            except OSError:
-                return
-            threading.Thread(target=self._serve, args=(conn,), daemon=True).start()
-
-    def _serve(self, conn: socket.socket) -> None:
-        splitter, received = FrameSplitter(), 0
-        names: dict[int, str] = {}
-        types: dict[int, ValueType] = {}
-        conn.sendall(encode_catalogue(Catalogue("b", accept_unknown=True)))
-        while data := _recv(conn):
-            now = time.monotonic_ns()
-            for f in splitter.feed(data):
-                r = Reader(f.body)
-                if f.type == REGISTER:
-                    lid, vtype = r.varint(), ValueType(r.u8())
-                    names[lid], types[lid] = r.string(255), vtype
-                elif f.type == SAMPLES:
-                    n = r.varint()
-                    for _ in range(n):
-                        lid = r.varint()
-                        r.fixed("<q")
-                        value = r.fixed(_FORMAT[types[lid]])
-                        if names[lid].endswith(".seq"):
-                            with self.lock:
-                                self.arrivals.append((now, int(value)))
-                    received += n
-                    with self.lock:
-                        self.samples += n
-                    conn.sendall(encode_ack(Ack(received, received, received)))
-                elif f.type not in (HELLO, HEALTH):  # HEALTH: modd-sensors' instruments
-                    raise RuntimeError(f"unexpected ingress frame {f.type}")
-
-    def close(self) -> None:
-        self.server.close()
+    def received(self, samples: list[tuple[str, int, float]]) -> None:
+        now = time.monotonic_ns()
+        with self.lock:
+            self.arrivals += [(now, int(v)) for t, _, v in samples if t.endswith(".seq")]
+            self.count += len(samples)
 
 
 class Devices:
@@ -267,12 +203,12 @@ def measure(
         time.sleep(3.0)  # devices opened, publishers connected
         with ingress.lock:
             ingress.arrivals.clear()
-            before = ingress.samples
+            before = ingress.count
         sampler = Sampler(proc.pid).start()
         time.sleep(seconds)
         fp = sampler.stop()
         with ingress.lock:
-            arrivals, samples = list(ingress.arrivals), ingress.samples - before
+            arrivals, samples = list(ingress.arrivals), ingress.count - before
     finally:
         proc.terminate()
         proc.wait(10)

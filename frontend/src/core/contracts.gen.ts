@@ -207,6 +207,10 @@ export interface SensorHealth {
   exceptions?: number;
   /** Times the instrument fell silent. */
   silences?: number;
+  /** Good lines the model maps nothing of (other sentences, vendors' own lines). */
+  ignored?: number;
+  /** Of missing: mapped fields of sentences that say they have no fix (docs/sensors.md, "Validity"). */
+  no_fix?: number;
 }
 
 /** The plan as one JSON object (docs/planning.md, "Plan JSON"). Producer: metamodel/src/modd_plan/planjson.py (`modd plan --json`, the backend's live plan). Consumers: the backend, the workbench's plan panel (frontend/src/core/plan.ts), the SubBroker's CONFIG builder. Periods and delays are exact decimal strings, wire periods integer microseconds. */

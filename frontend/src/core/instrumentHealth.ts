@@ -4,7 +4,8 @@
  * "Health"), one row per sensor for the operator.
  *
  * A sensor is flagged when its device is closed (unplugged, renumbered), it
- * fell silent, or it gave only bad lines. The last value's time is the
+ * fell silent, it gave only bad lines, or only sentences saying they have no
+ * fix (a GNSS receiver without satellites: docs/sensors.md "Validity"). The last value's time is the
  * drone's clock, as the instrument's values are stamped.
  *
  * @example
@@ -30,6 +31,10 @@ export interface InstrumentHealth {
   timeouts: number;
   exceptions: number;
   silences: number;
+  /** Mapped fields of sentences that said they had no fix (none taken). */
+  noFix: number;
+  /** Good lines the model maps nothing of. */
+  ignored: number;
   /** Why the operator should look, in words (null: nothing to say). */
   alert: string | null;
 }
@@ -54,7 +59,7 @@ export function instrumentsHealth(sensors: Record<string, SensorHealth> | null |
       linesOk: count(h.lines_ok), linesBad: count(h.lines_bad), reconnects: count(h.reconnects),
       lastValueMs: last > 0 && last <= MAX_DATE_MS ? last : null,
       values: count(h.values), timeouts: count(h.timeouts), exceptions: count(h.exceptions),
-      silences: count(h.silences),
+      silences: count(h.silences), noFix: count(h.no_fix), ignored: count(h.ignored),
     };
     return { ...row, alert: alertOf(row) };
   });
@@ -62,8 +67,10 @@ export function instrumentsHealth(sensors: Record<string, SensorHealth> | null |
 
 function alertOf(h: Omit<InstrumentHealth, "alert">): string | null {
   if (h.state === "closed") return "device closed (unplugged or lost)";
-  if (h.state === "silent") return "silent: no value for 3 periods";
+  const noFix = h.noFix > 0 ? ` (${h.noFix} fields refused: the receiver said it had no fix)` : "";
+  if (h.state === "silent") return `silent: no value for 3 periods${noFix}`;
   if (h.values === 0 && h.linesBad > 0) return "only bad lines (wrong baud rate or format?)";
+  if (h.values === 0 && h.noFix > 0) return `no fix yet${noFix}`;
   return null;
 }
 

@@ -88,8 +88,12 @@ export interface Sensor {
   device?: SerialDevice;
   /** For an ascii sensor: how its lines are written. */
   line?: AsciiLine;
-  /** For an nmea sensor: which clock stamps its samples: receive (the reader's clock when the line arrives) or instrument (the UTC time of the instrument's last ZDA or RMC sentence, advanced by the receive time since). receive when absent. */
+  /** For an nmea sensor: which clock stamps its samples: receive (the reader's clock when the line arrives) or instrument (the sentence's own UTC time of day on the date of the last valid RMC or ZDA, across midnight; a sentence without a time takes its fix epoch's; samples held until the instrument states a date; two-digit years and GPS week rollovers resolved against the computer's clock: docs/sensors.md, "Instrument clock"). receive when absent. */
   clock?: "receive" | "instrument";
+  /** For an nmea sensor: required (a line without *hh is refused) or optional (for an instrument that sends none: a line without one is read when each field has its sentence's shape; a line with one is still checked). required when absent. */
+  checksum?: "required" | "optional";
+  /** For an nmea sensor: which fixes give values, by GGA's fix quality and the mode of RMC, GLL, VTG and GNS: gnss (measured: autonomous, differential, precise, RTK), any (also dead reckoning), differential (DGPS, SBAS, precise, RTK), rtk (RTK fixed or float: quality 4 or 5, mode R or F) or rtkFixed (quality 4, mode R). Sentences that say no fix never give values (docs/sensors.md, "Validity"). gnss when absent. */
+  fix?: "gnss" | "any" | "differential" | "rtk" | "rtkFixed";
   /** What the sensor measures (1 to 256 variables). */
   variables: MeasuredVariable[];
 }
@@ -175,7 +179,7 @@ export interface AsciiLine {
 /** A field of an NMEA 0183 sentence, talker-agnostic (GPGGA, GNGGA and GLGGA are all GGA), converted as value = raw * scale + offset. Latitude and longitude fields are signed decimal degrees (their N/S/E/W field applied). */
 export interface NmeaField {
   /** Sentence type without the talker, e.g. GGA. */
-  sentence: "GGA" | "GLL" | "RMC" | "VTG" | "GSA" | "ZDA" | "DBT" | "DPT" | "MTW" | "MWV" | "HDG" | "HDT" | "MDA" | "XDR";
+  sentence: "GGA" | "GNS" | "GLL" | "RMC" | "VTG" | "GSA" | "GST" | "ZDA" | "DBT" | "DPT" | "MTW" | "MWV" | "HDG" | "HDT" | "MDA" | "XDR";
   /** A field name of the sentence (x-sentences), or fN for its N-th field (1-based). */
   field: Name;
   /** Factor applied to the field. */

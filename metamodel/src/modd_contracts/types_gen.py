@@ -142,6 +142,8 @@ class SensorHealth(TypedDict):
     timeouts: NotRequired[int]
     exceptions: NotRequired[int]
     silences: NotRequired[int]
+    ignored: NotRequired[int]
+    no_fix: NotRequired[int]
 
 
 class PlanDocument(TypedDict):

@@ -25,7 +25,13 @@ from .diagnostics import Diagnostic
 from .vocabulary import NMEA_SENTENCES
 
 INSTRUMENT_KINDS = ("nmea", "ascii", "modbus")
-_SENSOR_ONLY = {"device": INSTRUMENT_KINDS, "line": ("ascii",), "clock": ("nmea",)}
+_SENSOR_ONLY = {
+    "device": INSTRUMENT_KINDS,
+    "line": ("ascii",),
+    "clock": ("nmea",),
+    "checksum": ("nmea",),
+    "fix": ("nmea",),
+}
 _VARIABLE_MAPPING = ("source", "nmea", "ascii", "modbus")
 _NUMERIC = ("number", "latitude", "longitude")
 _WORDS = {"int16": 1, "uint16": 1, "int32": 2, "uint32": 2, "float32": 2}

@@ -89,6 +89,8 @@ SENSOR_SETTINGS = {
     "start": ("line/startCommand", "string"),
     "pattern": ("line/pattern", "string"),
     "clock": ("clock", "word"),
+    "checksum": ("checksum", "word"),
+    "fix": ("fix", "word"),
 }
 POSITION_SETTINGS = {
     "latitude": ("latitude", "string"),

@@ -115,8 +115,7 @@ def _device(s: dict[str, Any]) -> str:
         for k, v in s.get(part, {}).items()
         if (part, k) != ("device", "path")
     }
-    if "clock" in s:
-        flat["clock"] = s["clock"]
+    flat.update({k: s[k] for k in ("clock", "checksum", "fix") if k in s})
     settings = " ".join(line.strip() for line in _settings(flat, SENSOR_SETTINGS, 0))
     path = s.get("device", {}).get("path")
     head = f" on {quote(path)}" if path is not None else " with" if settings else ""

@@ -56,6 +56,8 @@ class Sensor(TypedDict):
     device: NotRequired[SerialDevice]
     line: NotRequired[AsciiLine]
     clock: NotRequired[Literal["receive", "instrument"]]
+    checksum: NotRequired[Literal["required", "optional"]]
+    fix: NotRequired[Literal["gnss", "any", "differential", "rtk", "rtkFixed"]]
     variables: list[MeasuredVariable]
 
 
@@ -116,7 +118,7 @@ class AsciiLine(TypedDict):
 class NmeaField(TypedDict):
     """A field of an NMEA 0183 sentence, talker-agnostic (GPGGA, GNGGA and GLGGA are all GGA), converted as value = raw * scale + offset. Latitude and longitude fields are signed decimal degrees (their N/S/E/W field applied)."""
 
-    sentence: Literal["GGA", "GLL", "RMC", "VTG", "GSA", "ZDA", "DBT", "DPT", "MTW", "MWV", "HDG", "HDT", "MDA", "XDR"]
+    sentence: Literal["GGA", "GNS", "GLL", "RMC", "VTG", "GSA", "GST", "ZDA", "DBT", "DPT", "MTW", "MWV", "HDG", "HDT", "MDA", "XDR"]
     field: Name
     scale: NotRequired[float]
     offset: NotRequired[float]

@@ -298,7 +298,7 @@ def test_data_frames_become_windows_and_backfill_goes_to_the_sink() -> None:
     assert handler.statuses == [Status((11, 22, 33))]
     assert list(s.stats.pubbroker.values()) == [11, 22, 33]
     assert s.stats.sensors == {}
-    gnss = SensorHealth("gnss", (1, 40, 2, 1, 1700, 80, 0, 0, 0, 0, 3, 9))
+    gnss = SensorHealth("gnss", (1, 40, 2, 1, 1700, 80, 0, 0, 0, 0, 3, 9, 4, 7))
     s.feed(codec.encode(Status((11,), (gnss,))))
     assert s.stats.sensors == {
         "gnss": {
@@ -313,7 +313,9 @@ def test_data_frames_become_windows_and_backfill_goes_to_the_sink() -> None:
             "timeouts": 0,
             "exceptions": 0,
             "silences": 3,
-            "field_11": 9,
+            "ignored": 9,
+            "no_fix": 4,
+            "field_13": 7,  # a field a newer modd-sensors appends: kept by position
         }
     }
 

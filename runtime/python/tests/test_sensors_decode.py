@@ -4,6 +4,7 @@ giving no value; Modbus frames and register words against pymodbus."""
 
 from __future__ import annotations
 
+import dataclasses
 import struct
 from typing import Any
 
@@ -21,7 +22,7 @@ from pymodbus.framer import FramerRTU
 
 MODEL = r"""
 Drone usv { Sensors {
-    Sensor gnss kind nmea on "/dev/gnss" { clock = instrument; } measures {
+    Sensor gnss kind nmea on "/dev/gnss" measures {
         lat("deg", float64) from sentence GGA.lat; lon("deg", float64) from sentence GGA.lon;
         depth(METER) from sentence DBT.depth_meters;
         heading("deg") from sentence HDT.heading scale 1 offset 0.5;
@@ -56,7 +57,7 @@ def _topics(samples: list[Any]) -> dict[str, float]:
 def test_plan_of_the_model() -> None:
     plans = _plans()
     gnss, ctd, sonde = plans["gnss"], plans["ctd"], plans["sonde"]
-    assert gnss.instrument_clock and gnss.poll_s == pytest.approx(0.1)
+    assert not gnss.instrument_clock and gnss.poll_s == pytest.approx(0.1)
     assert {m.publisher for m in gnss.mappings} == {"nav"}
     assert ctd.terminator == b"\n" and ctd.kind == "ascii"
     assert (sonde.device.baud, sonde.device.parity, sonde.poll_s) == (19200, "even", 1.0)
@@ -96,14 +97,17 @@ def test_nmea_bytes_cut_anywhere(cuts: list[int]) -> None:
 
 
 def test_instrument_clock_from_zda() -> None:
-    plan = _plans()["gnss"]
+    plan = dataclasses.replace(_plans()["gnss"], instrument_clock=True)
     dec = LineDecoder(plan, Health())
-    now = 1_700_000_000_000_000_000
-    assert dec.feed(GGA.encode(), now)[0][1] == now  # no instrument time yet: receive time
-    dec.feed(ZDA.encode(), now)
     zda = int(pynmea2.parse(ZDA.strip()).datetime.timestamp() * 1e9)
-    stamp = dec.feed(GGA.encode(), now + 500_000_000)[0][1]
-    assert stamp == zda + 500_000_000
+    now = zda + 10**9  # the computer's clock, near the instrument's (no rollover)
+    assert dec.feed(GGA.encode(), now) == []  # no instrument date yet: held
+    gga = pynmea2.parse(GGA.strip()).timestamp
+    released = dec.feed(ZDA.encode(), now)
+    day = zda - zda % 86_400_000_000_000
+    own = day + (gga.hour * 3600 + gga.minute * 60 + gga.second) * 10**9
+    assert [s[1] for s in released] == [own, own]  # lat and lon, at GGA's own time
+    assert [s[1] for s in dec.feed(GGA.encode(), now + 500_000_000)] == [own, own]
 
 
 def test_heading_scale_offset_and_empty_fields() -> None:

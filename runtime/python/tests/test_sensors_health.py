@@ -33,6 +33,8 @@ def test_every_counter_travels_under_its_protocol_name() -> None:
     h = Health(connected=True, lines_ok=7, values=12, missing=1, refused=2, reconnects=3)
     h.bad("checksum")
     h.timeouts, h.exceptions, h.silences = 4, 5, 6
+    h.ignored = 8
+    h.no_value(2, "GGA fix quality 0 (no fix)", no_fix=True)
     h.last_value_ns = 1_700_000_000_123_456_789
     # through the link's codec, as the SubBroker reads it
     frame = codec.split_frame(codec.encode(Status((1,), (h.report("ctd"),))))
@@ -48,11 +50,13 @@ def test_every_counter_travels_under_its_protocol_name() -> None:
         "reconnects": 3,
         "last_value_ms": 1_700_000_000_123,
         "values": 12,
-        "missing": 1,
+        "missing": 3,
         "refused": 2,
         "timeouts": 4,
         "exceptions": 5,
         "silences": 6,
+        "ignored": 8,
+        "no_fix": 2,
     }
     assert len(got.fields) == len(HEALTH_FIELDS)
 

@@ -61,7 +61,8 @@ def test_instrument_time_from_the_simulated_zda() -> None:
     plan = _plan("gnss")
     dec = LineDecoder(plan, Health())
     lines = nmea_lines(plan, {"d.gnss.depth": 3.0}, 1_790_000_000.25)
-    got = dec.feed("".join(x + "\r\n" for x in lines).encode(), 0)
+    computer = 1_790_000_001 * 10**9  # dates are resolved against the computer's clock
+    got = dec.feed("".join(x + "\r\n" for x in lines).encode(), computer)
     assert got[0][1] == 1_790_000_000_250_000_000
 
 

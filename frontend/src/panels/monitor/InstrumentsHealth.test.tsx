@@ -51,6 +51,18 @@ describe("InstrumentsHealth", () => {
       + "wind: only bad lines (wrong baud rate or format?)");
   });
 
+  it("says why a GNSS receiver gives nothing: it says it has no fix", () => {
+    const table = show({
+      gnss: { state: 1, lines_ok: 120, lines_bad: 0, reconnects: 0, last_value_ms: 0, values: 0, no_fix: 80, ignored: 40 },
+      rtk: { state: 2, lines_ok: 50, lines_bad: 0, reconnects: 0, last_value_ms: 0, values: 10, no_fix: 6 },
+    })!;
+    expect(within(table).getAllByRole("columnheader").map((h) => h.textContent).at(-1)).toBe("No fix");
+    expect(cells(table).map((r) => r.at(-1))).toEqual(["80", "6"]);
+    expect(screen.getByRole("alert").textContent).toBe(
+      " · gnss: no fix yet (80 fields refused: the receiver said it had no fix); "
+      + "rtk: silent: no value for 3 periods (6 fields refused: the receiver said it had no fix)");
+  });
+
   it("shows nothing when no instrument reports", () => {
     expect(show(undefined)).toBeNull();
     expect(show({})).toBeNull();

@@ -4,11 +4,12 @@ import { formatClock, type InstrumentHealth } from "../../core/instrumentHealth"
  * of the link status line — how many, in which state, and any flagged one
  * (closed, silent, garbage only) as an alert — that opens on a table, one row
  * per instrument: state, last value time, lines ok and bad, reconnects; Modbus
- * timeouts and exceptions when any. Closed by default, so the charts keep
+ * timeouts and exceptions, and fields of no-fix NMEA sentences, when any. Closed by default, so the charts keep
  * their place. */
 export function InstrumentsHealth({ sensors }: { sensors: InstrumentHealth[] }) {
   if (sensors.length === 0) return null;
   const modbus = sensors.some((s) => s.timeouts || s.exceptions);
+  const noFix = sensors.some((s) => s.noFix);
   const states = ["open", "silent", "closed", "unknown"]
     .map((st) => [st, sensors.filter((s) => s.state === st).length] as const)
     .filter(([, n]) => n > 0).map(([st, n]) => `${n} ${st}`).join(", ");
@@ -25,6 +26,7 @@ export function InstrumentsHealth({ sensors }: { sensors: InstrumentHealth[] }) 
         <thead><tr>
           <th>Instrument</th><th>State</th><th>Last value</th><th>Lines ok</th><th>Lines bad</th><th>Reconnects</th>
           {modbus && <><th>Timeouts</th><th>Exceptions</th></>}
+          {noFix && <th>No fix</th>}
         </tr></thead>
         <tbody>
           {sensors.map((s) => (
@@ -34,6 +36,7 @@ export function InstrumentsHealth({ sensors }: { sensors: InstrumentHealth[] }) 
               <td>{s.lastValueMs === null ? "none yet" : formatClock(s.lastValueMs)}</td>
               <td>{s.linesOk}</td><td>{s.linesBad}</td><td>{s.reconnects}</td>
               {modbus && <><td>{s.timeouts}</td><td>{s.exceptions}</td></>}
+              {noFix && <td>{s.noFix}</td>}
             </tr>
           ))}
         </tbody>

@@ -157,6 +157,8 @@ HEALTH_FIELDS: tuple[str, ...] = (
     "timeouts",
     "exceptions",
     "silences",
+    "ignored",
+    "no_fix",
 )
 HEALTH_STATES = ("closed", "open", "silent")  # `state`'s codes
 

@@ -12,21 +12,24 @@ Example::
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass
 
 from . import modbus, nmea
 from .ascii import BadLine, values
+from .clock import HOLD_MAX, InstrumentClock
 from .health import Health
 from .lines import LineSplitter
 from .plan import Mapping, Register, SensorPlan
+from .validity import no_fix
 
 Sample = tuple[Mapping, int, float]
 
 
 class LineDecoder:
     """An ``nmea`` or ``ascii`` sensor's bytes → samples, stamped on receive (or,
-    for an ``nmea`` sensor with ``clock = instrument``, with the instrument's
-    clock: the last ZDA/RMC time plus the receive time elapsed since it)."""
+    for an ``nmea`` sensor with ``clock = instrument``, with the sentence's own
+    UTC time: ``clock.InstrumentClock``, samples held until its date is known)."""
 
     def __init__(self, plan: SensorPlan, health: Health, max_line: int | None = None) -> None:
         self.plan = plan
@@ -34,7 +37,10 @@ class LineDecoder:
         limit = max_line or (nmea.MAX_LINE if plan.kind == "nmea" else 4096)
         self.splitter = LineSplitter(plan.terminator, limit)
         self._dropped = 0  # overlong or undecodable lines already counted
-        self.offset_ns: int | None = None  # instrument clock - receive clock
+        self.clock = InstrumentClock() if plan.instrument_clock else None
+        self.held: deque[tuple[Mapping, int | None, float]] = (
+            deque()
+        )  # (mapping, time of day, value)
         self.by_sentence: dict[str, list[Mapping]] = {}
         for m in plan.mappings:
             if isinstance(m.where, tuple):
@@ -60,26 +66,54 @@ class LineDecoder:
 
     def _nmea(self, line: str, now_ns: int) -> list[Sample]:
         try:
-            s = nmea.parse_sentence(line)
+            s = nmea.parse_sentence(line, self.plan.checksum_required)
         except nmea.BadSentence as exc:
             self.health.bad(str(exc))
             return []
         self.health.lines_ok += 1
-        if self.plan.instrument_clock and (t := nmea.instrument_time_ns(s)) is not None:
-            self.offset_ns = t - now_ns
+        stamp: int | None = now_ns
+        released: list[Sample] = []
+        if self.clock is not None:
+            known = self.clock.midnight_ns is not None
+            stamp = self.clock.observe(s, now_ns)
+            if not known and self.clock.midnight_ns is not None:
+                released = self._release()
         mapped = self.by_sentence.get(s.type)
         if not mapped:
-            return []
-        if nmea.void(s):
-            self.health.missing += len(mapped)
-            return []
-        stamp = now_ns + (self.offset_ns or 0)
-        out: list[Sample] = []
+            self.health.ignored += 1
+            return released
+        if (why := no_fix(s, self.plan.fix)) is not None:
+            self.health.no_value(len(mapped), why, no_fix=True)
+            return released
+        values: list[tuple[Mapping, float]] = []
         for m in mapped:
             try:
-                out.append((m, stamp, m.value(nmea.field_value(s, m.where[1]))))  # type: ignore[index]
-            except nmea.NoValue:
-                self.health.missing += 1
+                values.append((m, m.value(nmea.field_value(s, m.where[1]))))  # type: ignore[index]
+            except nmea.NoValue as exc:
+                self.health.no_value(1, str(exc))
+        if stamp is not None:
+            if self.clock is not None:
+                self.health.clock_offset_ms = (stamp - now_ns) // 1_000_000
+            return released + [(m, stamp, v) for m, v in values]
+        assert self.clock is not None
+        self._hold(self.clock.pending_tod(s), values)
+        return released
+
+    def _hold(self, tod_ns: int | None, values: list[tuple[Mapping, float]]) -> None:
+        """Keeps samples until the instrument states its date (at most HOLD_MAX)."""
+        if tod_ns is None:
+            self.health.no_value(len(values), "before the instrument's first time of day")
+            return
+        for m, v in values:
+            if len(self.held) >= HOLD_MAX:
+                self.held.popleft()
+                self.health.no_value(1, "held too long: the instrument states no date (RMC/ZDA)")
+            self.held.append((m, tod_ns, v))
+
+    def _release(self) -> list[Sample]:
+        assert self.clock is not None
+        out = [(m, self.clock.on_date(tod), v) for m, tod, v in self.held if tod is not None]
+        self.held.clear()
         return out
 
     def _ascii(self, line: str, now_ns: int) -> list[Sample]:

@@ -21,16 +21,26 @@ class Health:
     lines_ok: int = 0  # sentences, lines or Modbus replies that passed every check
     lines_bad: int = 0  # refused: checksum, form, CRC, truncated, garbage
     values: int = 0  # samples handed to the publishers
-    missing: int = 0  # mapped fields with no value in a good line (empty, void fix)
+    missing: int = 0  # mapped fields with no value in a good line (empty, no fix, no date yet)
     refused: int = 0  # samples a publisher refused (type, range, queue full)
     reconnects: int = 0  # the device was reopened after a loss
     timeouts: int = 0  # Modbus requests with no complete reply in time
     exceptions: int = 0  # Modbus exception replies
     silences: int = 0  # times the instrument fell silent (no value for 3 periods, >= 2 s)
+    ignored: int = 0  # good lines the model maps nothing of (other sentences, vendors' own)
+    no_fix: int = 0  # of missing: fields of sentences that say no fix (validity.py)
     silent: bool = False
     last_value_ns: int = 0  # receive time of the last value (0: none yet)
     last_bad: str = ""  # why the last bad line was refused
+    last_missing: str = ""  # why the last missing value had none
+    clock_offset_ms: int | None = None  # clock = instrument: last stamp minus its receive time
     busy: str = ""  # another process holds the device ("held by pid N (name)"); not on the wire
+
+    def no_value(self, n: int, why: str, no_fix: bool = False) -> None:
+        """``n`` mapped fields gave no value, for this reason."""
+        self.missing += n
+        self.no_fix += n if no_fix else 0
+        self.last_missing = why[:120]
 
     def bad(self, why: str) -> None:
         self.lines_bad += 1
@@ -72,10 +82,13 @@ def status_line(name: str, h: Health, now_ns: int) -> str:
         else "closed"
     )
     last = f" (last bad: {h.last_bad})" if h.lines_bad else ""
+    last += f" (last missing: {h.last_missing})" if h.missing else ""
     extra = "".join(
         f", {k} {v}"
         for k, v in (
             ("missing", h.missing),
+            ("no fix", h.no_fix),
+            ("ignored", h.ignored),
             ("refused", h.refused),
             ("timeouts", h.timeouts),
             ("exceptions", h.exceptions),

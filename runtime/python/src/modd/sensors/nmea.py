@@ -1,10 +1,13 @@
 """NMEA 0183 sentences → field values, talker-agnostic (``$GPGGA`` and
 ``$GNGGA`` are both ``GGA``), with the checks a reader needs before it trusts
-a line: the ``$``/``!`` start, the ``*hh`` checksum (required: a line without
-one is refused, which is how a truncated line shows), printable ASCII only,
-at most 82 characters as the standard says (a little slack for receivers that
-exceed it), and no more fields than the sentence has (a merged line fails
-the checksum or this). The field tables are the metamodel's
+a line: the ``$``/``!`` start, printable ASCII only, the ``*hh`` checksum
+(required unless the sensor says ``checksum = optional``: then a line without
+one must have the exact shape of its sentence, field by field), and a bounded
+length. A sentence may carry more fields than the table (NMEA 4.x system ids,
+vendor variants, a trailing empty field): its checksum vouches for them and
+the extra fields are kept, unread. An address that is not talker + type
+(``$PUBX``, ``$LOG…``) is a well-formed line the model cannot map (counted
+ignored by the decoder, not bad). The field tables are the metamodel's
 (``modd_model.vocabulary.NMEA_SENTENCES``), read from the schema.
 
 Example::
@@ -17,11 +20,25 @@ Example::
 from __future__ import annotations
 
 import calendar
+import re
 from dataclasses import dataclass
 
 from modd_model.vocabulary import NMEA_SENTENCES
 
-MAX_LINE = 120  # the standard's 82, with slack for receivers that exceed it
+MAX_LINE = 512  # the standard's 82; vendors' long proprietary lines still pass, memory bounded
+MAX_BARE = 120  # a line without a checksum: the standard's 82, with slack
+_ADDRESS = re.compile(r"[A-Z0-9]{2,16}")
+_HEX = frozenset("0123456789ABCDEFabcdef")
+# What a field of each kind may hold in a line without a checksum (empty: no value).
+_SHAPES = {
+    "number": re.compile(r"[-+]?[0-9]*\.?[0-9]*"),
+    "latitude": re.compile(r"(?:[0-9]{4}(?:\.[0-9]*)?)?"),
+    "longitude": re.compile(r"(?:[0-9]{5}(?:\.[0-9]*)?)?"),
+    "time": re.compile(r"(?:[0-9]{6}(?:\.[0-9]*)?)?"),
+    "date": re.compile(r"(?:[0-9]{6})?"),
+    "status": re.compile(r"[AV]?"),
+    "text": re.compile(r"[^,*$!]*"),
+}
 
 
 class BadSentence(ValueError):
@@ -53,8 +70,10 @@ def sentence(talker: str, kind: str, fields: list[str]) -> str:
     return f"${body}*{checksum(body):02X}"
 
 
-def parse_sentence(line: str) -> Sentence:
-    """One line (terminator stripped) → its sentence; BadSentence says why not."""
+def parse_sentence(line: str, checksum_required: bool = True) -> Sentence:
+    """One line (terminator stripped) → its sentence; BadSentence says why not.
+    With ``checksum_required=False`` a line without ``*hh`` is read when its
+    shape is exactly its sentence's (a line with one is still checked)."""
     if len(line) > MAX_LINE:
         raise BadSentence(f"line of {len(line)} characters (at most {MAX_LINE})")
     if not line or line[0] not in "$!":
@@ -62,27 +81,53 @@ def parse_sentence(line: str) -> Sentence:
     if not line.isascii() or not line.isprintable():
         raise BadSentence("non-printable or non-ASCII characters")
     body, star, given = line[1:].rpartition("*")
-    if not star:
+    if star:
+        if len(given) != 2 or not set(given) <= _HEX:
+            raise BadSentence(f"checksum {given!r} is not two hex digits")
+        if int(given, 16) != checksum(body):
+            raise BadSentence(f"bad checksum {given.upper()} (computed {checksum(body):02X})")
+    elif checksum_required:
         raise BadSentence("no *hh checksum (truncated?)")
-    if len(given) != 2 or not all(c in "0123456789ABCDEFabcdef" for c in given):
-        raise BadSentence(f"checksum {given!r} is not two hex digits")
-    if int(given, 16) != checksum(body):
-        raise BadSentence(f"bad checksum {given.upper()} (computed {checksum(body):02X})")
-    if "$" in body or "*" in body:
-        raise BadSentence("two sentences run together")
-    address, *fields = body.split(",")
-    if address.startswith("P"):
-        talker, kind = "P", address[1:]
-    elif len(address) == 5 and address.isalnum():
-        talker, kind = address[:2], address[2:]
     else:
+        body = line[1:]
+    if "$" in body or "!" in body[1:] or "*" in body:
+        raise BadSentence("two sentences run together")
+    s = _address(body.split(","))
+    if s.type == "XDR" and len(s.fields) % 4:
+        raise BadSentence(f"XDR with {len(s.fields)} fields (groups of 4)")
+    if not star:
+        _bare_shape(s, len(line))
+    return s
+
+
+def _address(parts: list[str]) -> Sentence:
+    address, *fields = parts
+    if address.startswith("P"):  # proprietary: the vendor's own address (may hold spaces)
+        return Sentence("P", address[1:], tuple(fields))
+    if len(address) == 5 and _ADDRESS.fullmatch(address):
+        return Sentence(address[:2], address[2:], tuple(fields))
+    if not _ADDRESS.fullmatch(address):
         raise BadSentence(f"address {address!r} is not talker + sentence type")
-    known = NMEA_SENTENCES.get(kind)
-    if known is not None and kind != "XDR" and len(fields) > len(known):
-        raise BadSentence(f"{kind} with {len(fields)} fields (at most {len(known)})")
-    if kind == "XDR" and len(fields) % 4:
-        raise BadSentence(f"XDR with {len(fields)} fields (groups of 4)")
-    return Sentence(talker, kind, tuple(fields))
+    return Sentence("", address, tuple(fields))  # $LOG..., vendors' own: never mapped
+
+
+def _bare_shape(s: Sentence, length: int) -> None:
+    """The stricter checks of a line without a checksum: a known sentence, at most
+    its fields, each of its kind's shape (so a cut or merged line is refused)."""
+    if length > MAX_BARE:
+        raise BadSentence(f"line of {length} characters without checksum (at most {MAX_BARE})")
+    table = NMEA_SENTENCES.get(s.type)
+    if table is None or s.talker in ("", "P"):
+        return  # unmapped anyway: read as well-formed, counted ignored
+    kinds = list(table.values())
+    if s.type != "XDR" and len(s.fields) > len(kinds):
+        raise BadSentence(
+            f"{s.type} with {len(s.fields)} fields and no checksum (at most {len(kinds)})"
+        )
+    for i, text in enumerate(s.fields):
+        kind = kinds[i % len(kinds)]
+        if not _SHAPES[kind].fullmatch(text):
+            raise BadSentence(f"{s.type} field {i + 1} {text!r} is not a {kind} (no checksum)")
 
 
 class NoValue(ValueError):
@@ -131,22 +176,44 @@ def field_value(s: Sentence, field: str) -> float:
     return value
 
 
-def void(s: Sentence) -> bool:
-    """True when the sentence says its data is not valid (RMC/GLL status V, MWV V)."""
-    table = NMEA_SENTENCES.get(s.type, {})
-    for i, kind in enumerate(table.values()):
-        if kind == "status" and i < len(s.fields):
-            return s.fields[i] != "A"
-    return False
-
-
 def _hms(text: str) -> float:
+    """hhmmss[.ss] → seconds of the day; NoValue when it is not a time."""
     if len(text) < 6 or not text[:6].isdigit():
         raise NoValue(f"time {text!r}")
     h, m, sec = int(text[:2]), int(text[2:4]), float(text[4:])
     if h > 23 or m > 59 or sec >= 61:
         raise NoValue(f"time {text!r}")
     return h * 3600 + m * 60 + sec
+
+
+def time_of_day(s: Sentence) -> float | None:
+    """The UTC time of day (seconds) the sentence states in its time field, None
+    when it has none (a sentence type without one, or an empty or bad field)."""
+    table = NMEA_SENTENCES.get(s.type)
+    if table is None or "time" not in table:
+        return None
+    i = list(table).index("time")
+    try:
+        return _hms(s.fields[i]) if i < len(s.fields) else None
+    except (NoValue, ValueError):
+        return None
+
+
+def stated_date(s: Sentence) -> tuple[int, int, int, bool] | None:
+    """(year, month, day, two_digit_year) of an RMC's or ZDA's date; None without one."""
+    f = s.fields
+    try:
+        if s.type == "ZDA" and len(f) >= 4 and all(f[1:4]):
+            day, month, year, short = int(f[1]), int(f[2]), int(f[3]), False
+        elif s.type == "RMC" and len(f) >= 9 and len(f[8]) == 6 and f[8].isdigit():
+            day, month, year, short = int(f[8][:2]), int(f[8][2:4]), int(f[8][4:]), True
+        else:
+            return None
+    except ValueError:
+        return None
+    if not (1 <= month <= 12 and 1 <= day <= 31 and 0 <= year <= 9999):
+        return None
+    return year, month, day, short
 
 
 def instrument_time_ns(s: Sentence) -> int | None:

@@ -62,7 +62,9 @@ class SensorPlan:
     kind: str  # nmea | ascii | modbus
     device: Device
     mappings: tuple[Mapping, ...]
-    instrument_clock: bool = False  # nmea: stamp with the ZDA/RMC time
+    instrument_clock: bool = False  # nmea: stamp with the sentence's own UTC (clock.py)
+    checksum_required: bool = True  # nmea: false with `checksum = optional`
+    fix: str = "gnss"  # nmea: the fixes accepted (validity.FIX_CLASSES)
     line: LineFormat = field(default_factory=LineFormat)
     terminator: bytes = b"\n"
     start_command: str | None = None
@@ -126,6 +128,8 @@ def _sensor_plan(
         ),
         mappings=tuple(mappings),
         instrument_clock=sensor.get("clock") == "instrument",
+        checksum_required=sensor.get("checksum", "required") == "required",
+        fix=sensor.get("fix", "gnss"),
         line=_line_format(sensor),
         terminator=TERMINATORS[terminator],
         start_command=line.get("startCommand"),

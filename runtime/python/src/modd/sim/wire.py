@@ -25,6 +25,15 @@ from ..sensors.plan import Mapping as TopicMapping
 from ..sensors.plan import Register, SensorPlan
 
 TALKER = "GP"
+# A simulated receiver has a fix: the validity fields say so (modd.sensors.validity).
+VALID_FIX = {
+    "GGA": {5: "1"},
+    "GNS": {5: "AA"},
+    "GSA": {0: "A", 1: "3"},
+    "RMC": {11: "A"},
+    "GLL": {6: "A"},
+    "VTG": {8: "A"},
+}
 
 
 def _raw(m: TopicMapping, value: float) -> float:
@@ -47,6 +56,8 @@ def _stamp(kind: str, now: float) -> str:
 def _fields(kind: str, mapped: list[tuple[TopicMapping, float]], now: float) -> list[str]:
     table = list(NMEA_SENTENCES[kind].items())
     fields = [_stamp(k, now) for _, k in table]
+    for i, text in VALID_FIX.get(kind, {}).items():
+        fields[i] = text
     for m, value in mapped:
         field = m.where[1]  # type: ignore[index]
         i = (
