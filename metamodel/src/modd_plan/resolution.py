@@ -4,7 +4,8 @@ through the streams derived from it; None (unquantised) as soon as one of them
 needs full precision. A subscription needs its own ``resolution``, else its
 variable's. A SUM source of k windows is sent k times finer, so that the sum of
 k errors of half a step stays within half of the subscriber's step (the other
-derivations, MIN, MAX, an AVERAGE of AVERAGEs, keep the error of their sources).
+derivations, MIN, MAX, an AVERAGE of AVERAGEs or of ALL samples, keep the error of
+their sources); an ALL stream a SUM is derived from is sent exact (no resolution).
 """
 
 from __future__ import annotations
@@ -61,8 +62,11 @@ def stream_resolutions(
             if into is None:
                 continue
             divide = src.factor if src.stream.aggregation == agg.SUM else 1
+            # A SUM of an ALL stream adds as many errors as there are samples, a count no
+            # CONFIG bounds: its samples go exact (an AVERAGE of them keeps half a step).
+            exact = s.stream.aggregation == agg.SUM and src.stream.aggregation == agg.ALL
             into += [
-                None if need.get(n) is None else need[n] / divide  # type: ignore[operator]
+                None if exact or need.get(n) is None else need[n] / divide  # type: ignore[operator]
                 for n in s.subscribers
             ]
     return [
