@@ -66,20 +66,22 @@ constexpr uint64_t k2p53 = uint64_t{1} << 53, k2p63 = uint64_t{1} << 63;
 }  // namespace
 
 TEST(Health, NamesAreMadePrintable) {
-  EXPECT_EQ(printable_name("gnss-1 µ°C"), "gnss-1 µ°C");  // UTF-8 kept
+  EXPECT_EQ(printable_name("gnss-1 µ°C"), "gnss-1 µ°C");            // UTF-8 kept
   EXPECT_EQ(printable_name("\x1b[31mred\x1b[0m"), "?[31mred?[0m");  // no ANSI escape
-  EXPECT_EQ(printable_name("a\xff\xfe" "b"), "a??b");                // not UTF-8
-  EXPECT_EQ(printable_name("\xc0\xaf"), "??");                       // overlong '/'
-  EXPECT_EQ(printable_name("\xed\xa0\x80"), "???");                  // a surrogate
-  EXPECT_EQ(printable_name("x\xc2\x85y\r\n\x7f"), "x?y???");         // C1 NEL, CR LF, DEL
-  EXPECT_EQ(printable_name("\xe2\x80\xaegps"), "?gps");              // a bidi override
-  EXPECT_EQ(printable_name("\xe2\x82"), "??");                       // a cut sequence
+  EXPECT_EQ(printable_name("a\xff\xfe"
+                           "b"),
+            "a??b");                                          // not UTF-8
+  EXPECT_EQ(printable_name("\xc0\xaf"), "??");                // overlong '/'
+  EXPECT_EQ(printable_name("\xed\xa0\x80"), "???");           // a surrogate
+  EXPECT_EQ(printable_name("x\xc2\x85y\r\n\x7f"), "x?y???");  // C1 NEL, CR LF, DEL
+  EXPECT_EQ(printable_name("\xe2\x80\xaegps"), "?gps");       // a bidi override
+  EXPECT_EQ(printable_name("\xe2\x82"), "??");                // a cut sequence
 }
 
 TEST(Health, NumbersAreBroughtIntoRange) {
   SensorHealth h{"ctd", {7, k2p63, 3, k2p53, k2p53, 5, UINT64_MAX}};
   EXPECT_EQ(sanitise_health(h), 5u);
-  std::vector<uint64_t> want = {kStateSilent, kMaxHealthCount, 3, kMaxHealthCount, 0, 5,
+  std::vector<uint64_t> want = {kStateSilent,   kMaxHealthCount, 3, kMaxHealthCount, 0, 5,
                                 kMaxHealthCount};
   EXPECT_EQ(h.fields, want);
   SensorHealth fine{"gnss", {1, 10, 0, 0, 1'764'892'800'000, 9}};

@@ -14,7 +14,11 @@ namespace {
 size_t utf8_sequence(std::string_view s, size_t i, uint32_t& cp) {
   auto b = [&](size_t k) { return static_cast<uint8_t>(s[i + k]); };
   uint8_t c = b(0);
-  size_t n = c < 0x80 ? 1 : (c & 0xE0) == 0xC0 ? 2 : (c & 0xF0) == 0xE0 ? 3 : (c & 0xF8) == 0xF0 ? 4 : 0;
+  size_t n = c < 0x80             ? 1
+             : (c & 0xE0) == 0xC0 ? 2
+             : (c & 0xF0) == 0xE0 ? 3
+             : (c & 0xF8) == 0xF0 ? 4
+                                  : 0;
   if (n == 0 || i + n > s.size()) return 0;
   cp = n == 1 ? c : c & (0x7F >> n);
   for (size_t k = 1; k < n; ++k) {
@@ -120,8 +124,7 @@ link::Status fit_status(std::vector<uint64_t> counters, std::vector<link::Sensor
     used += health_entry_size(all[take++]);
   all.resize(take);
   std::ranges::sort(all, {}, &link::SensorHealth::name);
-  counters[at(StatusField::InstrumentsUnlisted)] =
-      counters[at(StatusField::Instruments)] - take;
+  counters[at(StatusField::InstrumentsUnlisted)] = counters[at(StatusField::Instruments)] - take;
   link::Status st{std::move(counters), std::move(all)};
   while (!st.sensors.empty() && frame_size(st) > room) {  // the frame's length varint grew
     st.sensors.pop_back();
