@@ -169,3 +169,23 @@ TEST(Health, AClosedConnectionsHealthLeavesStatusWithinAPeriod) {
   EXPECT_TRUE(link.status(1).sensors.empty());
   EXPECT_EQ(link.status(1).counters[at(StatusField::Instruments)], 0u);
 }
+
+TEST(Health, AChangeIsToldWithinTenSecondsHoweverLongThePeriod) {
+  FakeClock clock;
+  FakeLink link;
+  BrokerConfig cfg = health_config("gap");
+  cfg.status_period_s = 60;
+  Broker b(cfg, "key", clock, link);
+  IngressSession s(b);
+  ASSERT_TRUE(s.on_bytes(health_bytes({{"ctd", {1, 5}}})));
+  ASSERT_EQ(link.writes.size(), 1u);  // new: at once
+  ASSERT_TRUE(s.on_bytes(health_bytes({{"ctd", {0, 5}}})));
+  EXPECT_EQ(b.status_wake_ns(), b.now() + int64_t{kMaxChangeGapS} * 1'000'000'000);
+  clock.advance(9'000 * kMs);
+  b.send_overdue_status(b.now());
+  EXPECT_EQ(link.writes.size(), 1u);  // held: within the gap
+  clock.advance(1'000 * kMs);
+  b.send_overdue_status(b.now());
+  ASSERT_EQ(link.writes.size(), 2u);  // 10 s after the first, not 60
+  EXPECT_EQ(link.status(1).sensors.at(0).fields[0], kStateClosed);
+}

@@ -454,15 +454,19 @@ void Broker::instruments_changed() {
 }
 
 void Broker::want_change_status() {
-  // A change: one STATUS of its own at most every status period (the change budget,
+  // A change: one STATUS of its own at most every change gap (the change budget,
   // docs/protocol.md "STATUS"); changes in between are coalesced into the next one.
   if (change_wanted_) ++counters_.status_coalesced;
   change_wanted_ = true;
 }
 
+int64_t Broker::change_gap_ns() const {
+  return int64_t{std::min(status_period_s_, kMaxChangeGapS)} * 1'000'000'000;
+}
+
 int64_t Broker::status_wake_ns() const {
   if (!change_wanted_ || status_period_s_ == 0) return Executor::kNever;
-  return last_change_status_ns_ + int64_t{status_period_s_} * 1'000'000'000;
+  return last_change_status_ns_ + change_gap_ns();
 }
 
 void Broker::shutdown() {
@@ -602,7 +606,7 @@ void Broker::status_due(int64_t now) {
 
 void Broker::send_overdue_status(int64_t now) {
   int64_t period = int64_t{status_period_s_} * 1'000'000'000;
-  if (change_wanted_ && (period == 0 || now - last_change_status_ns_ >= period)) {
+  if (change_wanted_ && (period == 0 || now - last_change_status_ns_ >= change_gap_ns())) {
     change_wanted_ = false;  // no STATUS at all when the period is 0
     if (period) {
       last_change_status_ns_ = now;

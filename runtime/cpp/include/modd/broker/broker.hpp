@@ -47,6 +47,9 @@ class Broker;
 
 // Most bytes of a STATUS frame over tcp: one segment with a DATA frame beside it.
 inline constexpr size_t kStatusRoomTcp = 1400;
+// A change (an instrument, the archive's state) is told within this many seconds at most,
+// however long the status period (docs/protocol.md, "Instruments' health").
+inline constexpr uint32_t kMaxChangeGapS = 10;
 
 // One publisher connection's registrations, the decoder's handler, and (ingress version 2)
 // what the broker tells the publisher: the topic catalogue, acknowledgements per archive
@@ -154,10 +157,12 @@ class Broker final : public LinkHooks, public FrameSink {
   // Instruments appeared, left or one changed state: a STATUS within the change budget.
   void instruments_changed();
   // A change the operator should hear of (instruments, archive state): one STATUS of its own
-  // at most every status period (send_overdue_status sends it), changes between coalesced.
+  // at most every change gap (send_overdue_status sends it), changes between coalesced.
   void want_change_status();
   // When a coalesced change's STATUS falls due (Executor::kNever: none waits).
   int64_t status_wake_ns() const;
+  // Least time between two change STATUS: the status period, at most kMaxChangeGapS.
+  int64_t change_gap_ns() const;
   // Most bytes a STATUS frame takes (a datagram link: what one CONTROL datagram carries).
   void set_status_room(size_t bytes) { status_room_ = bytes; }
   std::string log_summary();
