@@ -112,7 +112,8 @@ def test_flapping_instruments_cost_a_bounded_share_of_the_radio(
         f"(extra {flooded - live:.1f}, budget {BUDGET:.1f})"
     )
     assert flips >= 150, flips  # about 20 a second for 10 s
-    assert flooded - live <= BUDGET, (live, flooded)
+    # the budget, and one STATUS more at the edges of the measured window (statuses every 0.5 s)
+    assert flooded - live <= BUDGET + (ROOM + 14) / (d[0] - c[0]), (live, flooded)
     share, missing = _delivered_share(values, archive)
     assert share == 1.0, sorted(missing)
     pubbroker = last["pubbroker"]
