@@ -2,10 +2,11 @@
 docs/protocol.md, "Instruments' health"): 64 instruments flipping state 20 times
 a second through one ingress client, beside scenario 1's publishers, over udp
 through the radio emulator at 3,600 B/s. STATUS changes are coalesced to one a
-period (a 2 s period: its change gap is the period too): the link's extra bytes stay
-within the documented budget 2 × (room + h) / status_period_s, every live window of sub_5 is delivered
-(the on-board archive as the oracle), and the operator's status shows the
-instruments' state (summarised: every instrument counted, listed or not)."""
+period (a 2 s period: its change gap is the period too): the link's extra bytes
+stay within the documented budget 2 × (room + h) / status_period_s, every live
+window of sub_5 is delivered (the on-board archive as the oracle), and the
+operator's status shows the instruments' state (summarised: every instrument
+counted, listed or not)."""
 
 from __future__ import annotations
 
