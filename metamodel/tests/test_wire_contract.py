@@ -65,8 +65,8 @@ static_assert(static_cast<int>(modd::link::Aggregation::Fake) == @CODE@);
 static_assert(modd::link::table::kAggregationCount == @CODE@ + 1);
 static_assert(static_cast<int>(modd::link::MsgType::FakeFrame) == 0x7E);
 static_assert(modd::link::kMaxFake == 42);
-static_assert(modd::link::kStatusFieldCount == 31);
-static_assert(static_cast<int>(modd::link::StatusField::FakeCounter) == 30);
+static_assert(modd::link::kStatusFieldCount == 38);
+static_assert(static_cast<int>(modd::link::StatusField::FakeCounter) == 37);
 int main() { return 0; }
 """
 

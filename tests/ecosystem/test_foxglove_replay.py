@@ -10,7 +10,7 @@ import json
 import signal
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import httpx2 as httpx
 import pytest
@@ -162,7 +162,18 @@ def test_a_base_station_record_replays_valid_against_its_schemas(tmp_path: Path)
             rec.put(
                 name,
                 DeliveredValue(
-                    name, f"usv.a.{name}", agg, "0.1", "1", 1, k, start, end, value, count, end + 1
+                    name,
+                    f"usv.a.{name}",
+                    agg,
+                    "0.1",
+                    "1",
+                    1,
+                    k,
+                    start,
+                    end,
+                    cast(Any, value),
+                    count,
+                    end + 1,
                 ).to_json(),
             )
     rec.close()

@@ -26,8 +26,8 @@ export interface DeliveredValue {
   start_ns: number;
   /** End of the window (exclusive), ns since the Unix epoch on the drone's clock. */
   end_ns: number;
-  /** The window's value: a number or boolean, the list of raw samples for ALL, or null when the window had no sample. */
-  value: number | boolean | (number | boolean)[] | null;
+  /** The window's value: a number or boolean, the list of raw samples for ALL, or null when the window had no sample. A number JSON cannot hold (a sum beyond the double range) is the string "Infinity", "-Infinity" or "NaN" (docs/protocol.md, "Values JSON cannot hold"). */
+  value: number | boolean | "Infinity" | "-Infinity" | "NaN" | (number | boolean | "Infinity" | "-Infinity" | "NaN")[] | null;
   /** Samples behind the value when the aggregation carries it (AVERAGE, COUNT, ALL), else null. */
   count: number | null;
   /** When the SubBroker delivered it, ns since the Unix epoch on the base station's clock. */

@@ -23,6 +23,12 @@ MAX_HEALTH_SENSORS: Final = 64
 MAX_HEALTH_FIELDS: Final = 32
 #: Longest instrument name in a health report, in bytes.
 MAX_HEALTH_NAME: Final = 64
+#: Largest health field or STATUS counter forwarded: 2^53 - 1, exact in a double (a larger one
+#: is clamped by the PubBroker, left out by the SubBroker).
+MAX_HEALTH_COUNT: Final = 9007199254740991
+#: Latest last_value_ms of an instrument's health: 2100-01-01T00:00Z in Unix ms (a later one
+#: reads as 0, none).
+MAX_LAST_VALUE_MS: Final = 4102444800000
 #: Longest STATUS period a CONFIG may ask for, in seconds: one day (0: no STATUS).
 MAX_STATUS_PERIOD_S: Final = 86400
 #: Most topics, or streams, of one CONFIG.
@@ -73,6 +79,13 @@ class StatusField(IntEnum):
     LINK_SLOTS_DROPPED = 27
     LINK_FORGED = 28
     LINK_REPLAYED = 29
+    INSTRUMENTS = 30
+    INSTRUMENTS_OPEN = 31
+    INSTRUMENTS_SILENT = 32
+    INSTRUMENTS_CLOSED = 33
+    INSTRUMENTS_UNLISTED = 34
+    HEALTH_CORRECTED = 35
+    STATUS_COALESCED = 36
 
     @property
     def label(self) -> str:
@@ -216,6 +229,8 @@ __all__ = [
     "MAX_HEALTH_SENSORS",
     "MAX_HEALTH_FIELDS",
     "MAX_HEALTH_NAME",
+    "MAX_HEALTH_COUNT",
+    "MAX_LAST_VALUE_MS",
     "MAX_STATUS_PERIOD_S",
     "MAX_LIST",
     "MAX_NAME",

@@ -28,7 +28,7 @@ class DeliveredValue(TypedDict):
     slot: int
     start_ns: int
     end_ns: int
-    value: float | bool | list[float | bool] | None
+    value: float | bool | Literal["Infinity", "-Infinity", "NaN"] | list[float | bool | Literal["Infinity", "-Infinity", "NaN"]] | None
     count: int | None
     delivered_ns: int
     v: int
@@ -409,7 +409,7 @@ class DeliveredValueFields:
     slot: int
     start_ns: int
     end_ns: int
-    value: float | bool | list[float | bool] | None
+    value: float | bool | Literal["Infinity", "-Infinity", "NaN"] | list[float | bool | Literal["Infinity", "-Infinity", "NaN"]] | None
     count: int | None
     delivered_ns: int
     backfilled: bool = False

@@ -36,7 +36,8 @@ stream of period ``P``. Every window starts at the configuration epoch, so the
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
+from fractions import Fraction
 from typing import Any
 
 from modd_contracts import aggregations_gen as agg
@@ -85,9 +86,36 @@ def merge_last(windows: Sequence[Sample | None]) -> Sample | None:
     return present[-1] if present else None
 
 
+def exact_sum(values: Iterable[Sample]) -> Sample:
+    """The sum with no precision lost: ints (and bools) exactly, floats correctly
+    rounded once (``math.fsum``, then exact fractions when an intermediate sum
+    overflows); a sum beyond the double range is ``±inf``, ``inf − inf`` is ``nan``.
+
+    >>> exact_sum([3.4e38, -9.0e13, -3.4e38]), sum([3.4e38, -9.0e13, -3.4e38])
+    (-90000000000000.0, 0.0)
+    >>> exact_sum([1e308, 1e308, -1e308]), exact_sum([1e308, 1e308]), exact_sum([2, True])
+    (1e+308, inf, 3)
+    """
+    xs = list(values)
+    if not any(isinstance(x, float) for x in xs):
+        return sum(xs, 0)
+    try:
+        return math.fsum(xs)
+    except ValueError:  # inf and -inf among the values
+        return math.nan
+    except OverflowError:
+        if not all(math.isfinite(x) for x in xs):
+            return math.fsum(x for x in xs if not math.isfinite(x))
+        total = sum((Fraction(x) for x in xs), Fraction(0))
+        try:
+            return float(total)
+        except OverflowError:
+            return math.inf if total > 0 else -math.inf
+
+
 def merge_sum(windows: Sequence[Sample | None]) -> Sample:
     """Sum of the window sums (absent windows count as 0)."""
-    return sum((w for w in windows if w is not None), 0)
+    return exact_sum(w for w in windows if w is not None)
 
 
 def merge_count(windows: Sequence[int | None]) -> int:
@@ -102,7 +130,7 @@ def merge_average(windows: Sequence[tuple[float, int] | None]) -> tuple[float, i
     count = sum(c for _, c in present)
     if count == 0:
         return None
-    return (sum(m * c for m, c in present) / count, count)
+    return (exact_sum(m * c for m, c in present) / count, count)
 
 
 def merge_all(windows: Sequence[Sequence[Sample] | None]) -> list[Sample]:
@@ -143,9 +171,9 @@ def aggregate(aggregation: str, samples: Sequence[Sample]) -> Window:
     if aggregation == agg.COUNT:
         return len(samples)
     if aggregation == agg.SUM:
-        return sum(samples, 0)
+        return exact_sum(samples)
     if aggregation == agg.AVERAGE:
-        return (sum(samples, 0) / len(samples), len(samples)) if samples else None
+        return (exact_sum(samples) / len(samples), len(samples)) if samples else None
     whole = _WHOLE.get(aggregation)
     if whole is None:
         raise ValueError(f"unknown aggregation {aggregation!r}")
@@ -205,9 +233,9 @@ def derive_value(target: str, sources: Sequence[tuple[str, Sequence[Window]]]) -
     """
     if len(sources) == 1:
         source, windows = sources[0]
-        if target not in MERGES:  # exact over the whole window: from ALL only
-            if source != agg.ALL:
-                raise ValueError(f"{target} cannot be derived from {source}")
+        if target not in MERGES and source != agg.ALL:  # exact over the whole window: from ALL only
+            raise ValueError(f"{target} cannot be derived from {source}")
+        if source == agg.ALL:  # every sample at once: one rounding, not one per window
             return aggregate(target, merge_all(windows))
         return merge(target, [_convert(target, source, w) for w in windows])
     if len(sources) == 2 and PAIR_SOURCE_RULES.get(target) == (sources[0][0], sources[1][0]):

@@ -5,8 +5,9 @@ needs full precision. A subscription needs its own ``resolution``, else its
 variable's. A SUM source of k windows is sent k times finer, so that the sum of
 k errors of half a step stays within half of the subscriber's step; a RANGE
 derived from ALL asks it twice finer (a difference of two samples). The other
-derivations (MIN, MAX, an AVERAGE of AVERAGEs, a MEDIAN or STDDEV of ALL's
-samples) keep the error of their sources.
+derivations (MIN, MAX, an AVERAGE of AVERAGEs or of ALL samples, a MEDIAN or
+STDDEV of ALL's samples) keep the error of their sources; an ALL stream a SUM is
+derived from is sent exact (no resolution).
 """
 
 from __future__ import annotations
@@ -65,8 +66,11 @@ def stream_resolutions(
             divide = src.factor if src.stream.aggregation == agg.SUM else 1
             if s.stream.aggregation == agg.RANGE:  # a difference of two quantised samples
                 divide *= 2
+            # A SUM of an ALL stream adds as many errors as there are samples, a count no
+            # CONFIG bounds: its samples go exact (an AVERAGE of them keeps half a step).
+            exact = s.stream.aggregation == agg.SUM and src.stream.aggregation == agg.ALL
             into += [
-                None if need.get(n) is None else need[n] / divide  # type: ignore[operator]
+                None if exact or need.get(n) is None else need[n] / divide  # type: ignore[operator]
                 for n in s.subscribers
             ]
     return [

@@ -692,3 +692,19 @@ def test_the_backlog_of_the_transport_counts_in_the_backpressure() -> None:
     s.feed(codec.encode(ConfigAck(3, 0, 0)) + _data(0, 1.0))
     bp = s.stats.backpressure.as_dict()
     assert bp["recv_backlog_bytes"] == 300_000 and bp["behind"] is True
+
+
+def test_a_malformed_status_is_read_as_far_as_it_goes_and_keeps_the_link() -> None:
+    handler = Handler()
+    s, clock = _session(handler)
+    _authenticate(s, clock, PeerHandshake())
+    # a name that is not UTF-8, a counter of 2^63 and a cut list: logged, left out
+    body = codec.varint(2) + codec.varint(5) + codec.varint(1 << 63)
+    body += codec.varint(2) + codec.varint(3) + b"\xff\xfe\xfd" + codec.varint(1) + codec.varint(1)
+    body += codec.varint(4) + b"gnss" + codec.varint(5)  # cut here
+    s.feed(codec.varint(len(body) + 1) + bytes([0x20]) + body)
+    assert s.stats.pubbroker == {"uptime_s": 5}
+    assert s.stats.sensors == {}
+    s.feed(codec.encode(Status((6,), (SensorHealth("gnss", (1, 2)),))))  # the link goes on
+    assert s.stats.pubbroker == {"uptime_s": 6}
+    assert s.stats.sensors == {"gnss": {"state": 1, "lines_ok": 2}}

@@ -11,6 +11,7 @@ import json
 import math
 import random
 import struct
+from fractions import Fraction
 from pathlib import Path
 
 import pytest
@@ -23,6 +24,7 @@ from modd.link.dgreceiver import DatagramReceiver, DatagramSender
 from modd.link.frames import Aggregation, ProtocolError, Value, ValueType, value_kind
 from modd.link.quantise import MAX_STEPS, steps
 from modd.radio.channel import Channel, RadioSpec
+from modd_plan.derive import derive_value
 
 VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors" / "link"
 STEP = 0.01
@@ -211,3 +213,71 @@ def test_a_refused_config_with_resolutions_says_an_older_pubbroker_may_be_why() 
     assert _older_peer(Config(1, 0, topics, streams)) == ""
     hint = _older_peer(Config(1, 0, topics, streams, 1000, (0.01,)))
     assert "declares resolutions" in hint and "update the PubBroker" in hint
+
+
+# -- derivations from ALL (docs/protocol.md, "Quantised values") --------------------------
+f32_samples = st.floats(width=32, allow_nan=False, allow_infinity=False)
+FLT_MAX = 3.4028234663852886e38
+
+
+def _through_the_link(windows: list[list[float]], r: float) -> list[list[float]]:
+    """Each window's ALL elements written and read by the codec at resolution r."""
+    out = []
+    for w in windows:
+        b, chain = bytearray(), dict[int, int]()
+        for x in w:
+            put_number(b, chain, 0, x, r)
+        rd, back = codec.Reader(bytes(b)), dict[int, int]()
+        out.append([get_number(rd, back, 0, r) for _ in w])
+    return out
+
+
+def _within_half_a_step(got: float, exact_sum: Fraction, n: int, r: float) -> bool:
+    """|got − exact_sum / n| ≤ r/2, up to the two roundings of a double mean (the sum's,
+    shared by n, and the division's): they matter only where r is below a double's ulp."""
+    slack = Fraction(math.ulp(float(exact_sum))) / n + Fraction(math.ulp(got))
+    return abs(Fraction(got) - exact_sum / n) <= Fraction(r) / 2 + slack
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.lists(f32_samples, max_size=12), min_size=1, max_size=8), resolutions)
+def test_sum_and_average_derived_from_all_stay_within_half_a_step(
+    windows: list[list[float]], r: float
+) -> None:
+    exact = sum((Fraction(x) for w in windows for x in w), Fraction(0))
+    n = sum(len(w) for w in windows)
+    # the SUM's ALL source goes exact (modd_plan.resolution): the sum is rounded once
+    assert derive_value("SUM", [("ALL", windows)]) == float(exact)
+    # the AVERAGE's ALL source goes quantised: a mean of values each within half a step
+    got = derive_value("AVERAGE", [("ALL", _through_the_link(windows, r))])
+    if n == 0:
+        assert got is None
+    else:
+        assert got[1] == n and _within_half_a_step(got[0], exact, n, r)
+
+
+def test_a_window_with_plus_and_minus_flt_max_keeps_its_small_sum() -> None:
+    windows = [[FLT_MAX, -4.5e13], [-4.5e13, -FLT_MAX]]
+    assert sum(x for w in windows for x in w) == 0.0  # the naive sum
+    assert derive_value("SUM", [("ALL", windows)]) == -9.0e13
+    assert derive_value("AVERAGE", [("ALL", windows)]) == (-2.25e13, 4)
+
+
+def test_a_sum_of_all_samples_is_sent_exact_while_an_average_keeps_its_steps() -> None:
+    from modd_plan.resolution import stream_resolutions  # noqa: PLC0415
+    from modd_plan.streams import PlannedStream, Source, StreamKey  # noqa: PLC0415
+
+    topic = "usv.ctd.t"
+    src = StreamKey(topic, "ALL", Fraction(1, 4))
+    sent = [PlannedStream(src, 0, (), ("s_all",))]
+    model = {
+        "drone": {
+            "name": "usv",
+            "sensors": [{"name": "ctd", "variables": [{"name": "t", "resolution": 0.01}]}],
+        },
+        "subscribers": [{"name": n, "topic": topic} for n in ("s_all", "s_sum", "s_ave")],
+    }
+    for agg, want in (("SUM", None), ("AVERAGE", 0.01)):
+        key = StreamKey(topic, agg, Fraction(2))
+        derived = PlannedStream(key, None, (Source(src, 8),), (f"s_{agg.lower()[:3]}",))
+        assert stream_resolutions(model, sent, [*sent, derived]) == [want]

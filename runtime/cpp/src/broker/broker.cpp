@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "modd/broker/health.hpp"
 #include "modd/link/auth.hpp"
 #include "modd/link/codec.hpp"
 #include "modd/util/bytes.hpp"
@@ -16,7 +17,11 @@ namespace modd::broker {
 // ---- ingress ---------------------------------------------------------------
 
 IngressSession::IngressSession(Broker& b) : broker_(b) { broker_.attach(this); }
-IngressSession::~IngressSession() { broker_.detach(this); }
+IngressSession::~IngressSession() {
+  broker_.detach(this);
+  // Its instruments leave STATUS now (within the change budget), not at the next period.
+  if (!health_.empty()) broker_.want_change_status();  // sent by the server's next tick
+}
 
 void IngressSession::on_hello(const ingress::Hello& h) {
   publisher_ = h.publisher;
@@ -42,8 +47,10 @@ void IngressSession::on_register(const ingress::Register& r) {
 }
 
 void IngressSession::on_health(std::vector<link::SensorHealth>&& sensors) {
-  // New instruments, or a change of one's state (field 0: closed, open, silent), are sent at
-  // once, as a change of archive state is: the operator hears of an unplugged device now.
+  // New instruments, or a change of one's state (field 0: closed, open, silent), ask for a
+  // STATUS now, within the change budget (Broker::instruments_changed): the operator hears of
+  // an unplugged device at once, and a flapping one costs at most one STATUS a period.
+  for (auto& h : sensors) broker_.counters().health_corrected += sanitise_health(h);
   auto states = [](const std::vector<link::SensorHealth>& v) {
     std::vector<std::pair<std::string, uint64_t>> out;
     for (const auto& h : v) out.emplace_back(h.name, h.fields.empty() ? 0 : h.fields[0]);
@@ -438,13 +445,28 @@ void Broker::check_archive(int64_t now) {
     archive_state_ = state;
     changed = true;
   }
-  if (changed) send_status_now();  // the operator hears of it now, not at the next period
+  if (changed) want_change_status();  // the operator hears of it now, not at the next period
 }
 
-void Broker::send_status_now() {
-  status_pending_ = true;
-  status_due_since_ = INT64_MIN / 2;  // overdue: sent on its own at once if the link is up
+void Broker::instruments_changed() {
+  want_change_status();
   send_overdue_status(now());
+}
+
+void Broker::want_change_status() {
+  // A change: one STATUS of its own at most every change gap (the change budget,
+  // docs/protocol.md "STATUS"); changes in between are coalesced into the next one.
+  if (change_wanted_) ++counters_.status_coalesced;
+  change_wanted_ = true;
+}
+
+int64_t Broker::change_gap_ns() const {
+  return int64_t{std::min(status_period_s_, kMaxChangeGapS)} * 1'000'000'000;
+}
+
+int64_t Broker::status_wake_ns() const {
+  if (!change_wanted_ || status_period_s_ == 0) return Executor::kNever;
+  return last_change_status_ns_ + change_gap_ns();
 }
 
 void Broker::shutdown() {
@@ -584,6 +606,14 @@ void Broker::status_due(int64_t now) {
 
 void Broker::send_overdue_status(int64_t now) {
   int64_t period = int64_t{status_period_s_} * 1'000'000'000;
+  if (change_wanted_ && (period == 0 || now - last_change_status_ns_ >= change_gap_ns())) {
+    change_wanted_ = false;  // no STATUS at all when the period is 0
+    if (period) {
+      last_change_status_ns_ = now;
+      status_pending_ = true;
+      status_due_since_ = INT64_MIN / 2;  // overdue: sent on its own at once if the link is up
+    }
+  }
   if (!status_pending_ || period == 0 || now - status_due_since_ < period || !out_.link_ready())
     return;
   std::vector<uint8_t> frame;
@@ -595,13 +625,15 @@ void Broker::send_overdue_status(int64_t now) {
   }
 }
 
-link::Status Broker::status_message() {
-  link::Status st{status_counters()};
+std::vector<link::SensorHealth> Broker::instruments() const {
+  std::vector<link::SensorHealth> all;
   for (const IngressSession* s : sessions_)
-    for (const auto& h : s->health())
-      if (st.sensors.size() < link::kMaxHealthSensors) st.sensors.push_back(h);
-  std::ranges::sort(st.sensors, {}, &link::SensorHealth::name);
-  return st;
+    all.insert(all.end(), s->health().begin(), s->health().end());
+  return all;
+}
+
+link::Status Broker::status_message() {
+  return fit_status(status_counters(), instruments(), status_room_);
 }
 
 std::vector<uint64_t> Broker::status_counters() {
@@ -649,6 +681,9 @@ std::vector<uint64_t> Broker::status_counters() {
   v[at(StatusField::LinkSlotsDropped)] = d.dropped;
   v[at(StatusField::LinkForged)] = d.forged;
   v[at(StatusField::LinkReplayed)] = d.replayed;
+  count_instruments(v, instruments());
+  v[at(StatusField::HealthCorrected)] = counters_.health_corrected;
+  v[at(StatusField::StatusCoalesced)] = counters_.status_coalesced;
   return v;
 }
 

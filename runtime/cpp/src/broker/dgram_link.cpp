@@ -44,6 +44,11 @@ size_t control_frame_overhead(bool serial) {
   return kDatagram + (serial ? serial_frame_bytes(0) : kUdpIp);
 }
 
+size_t control_frame_room(size_t max_datagram) {
+  constexpr size_t kHeader = 1 + 5 + dg::kControlTag;
+  return max_datagram > kHeader ? max_datagram - kHeader : 0;
+}
+
 DatagramLink::DatagramLink(std::string psk, LinkHooks& hooks, DatagramOut& out, DgramOptions opt,
                            std::optional<Mac> cookie_secret)
     : psk_(std::move(psk)),

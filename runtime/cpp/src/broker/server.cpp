@@ -93,6 +93,7 @@ Server::Server(const BrokerConfig& cfg, std::string key, Clock& clock)
     dlink_ = std::make_unique<DatagramLink>(key_, *broker_, *this, o);
     broker_->set_backfill_link(o.max_datagram,
                                control_frame_overhead(cfg_.link_transport == "serial"));
+    broker_->set_status_room(control_frame_room(o.max_datagram));
     open_dgram_port();
     if (!port_) throw Error(ErrorCode::Io, "cannot open the link device " + cfg_.link_device);
   }
@@ -342,7 +343,7 @@ void Server::timers(int64_t now) {
 
 int Server::timeout_ms(int64_t now) const {
   int64_t next = std::min({broker_->next_due_ns(), next_flush_, next_log_, next_status_,
-                           broker_->backfill_wake_ns(now)});
+                           broker_->backfill_wake_ns(now), broker_->status_wake_ns()});
   if (dlink_) next = std::min(next, dlink_->next_due_ns());
   for (const auto& [fd, c] : conns_)
     if (c.kind == Kind::Link && !c.link->ready()) next = std::min(next, c.deadline_ns);

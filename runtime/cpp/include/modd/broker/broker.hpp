@@ -45,6 +45,12 @@ class LinkOutput {
 
 class Broker;
 
+// Most bytes of a STATUS frame over tcp: one segment with a DATA frame beside it.
+inline constexpr size_t kStatusRoomTcp = 1400;
+// A change (an instrument, the archive's state) is told within this many seconds at most,
+// however long the status period (docs/protocol.md, "Instruments' health").
+inline constexpr uint32_t kMaxChangeGapS = 10;
+
 // One publisher connection's registrations, the decoder's handler, and (ingress version 2)
 // what the broker tells the publisher: the topic catalogue, acknowledgements per archive
 // flush and rejections (docs/ingress.md).
@@ -144,10 +150,21 @@ class Broker final : public LinkHooks, public FrameSink {
   // status period after it fell due (idle publishers), it is sent on its own.
   void send_overdue_status(int64_t now);
   std::vector<uint64_t> status_counters();
-  // The counters and the connected publishers' instruments' health (sorted by name).
+  // The counters and the connected publishers' instruments' health (sorted by name), as
+  // many as fit the STATUS room, the others counted (health.hpp, fit_status).
   link::Status status_message();
-  // Instruments appeared or one changed state: STATUS goes out now, whatever the period.
-  void instruments_changed() { send_status_now(); }
+  std::vector<link::SensorHealth> instruments() const;
+  // Instruments appeared, left or one changed state: a STATUS within the change budget.
+  void instruments_changed();
+  // A change the operator should hear of (instruments, archive state): one STATUS of its own
+  // at most every change gap (send_overdue_status sends it), changes between coalesced.
+  void want_change_status();
+  // When a coalesced change's STATUS falls due (Executor::kNever: none waits).
+  int64_t status_wake_ns() const;
+  // Least time between two change STATUS: the status period, at most kMaxChangeGapS.
+  int64_t change_gap_ns() const;
+  // Most bytes a STATUS frame takes (a datagram link: what one CONTROL datagram carries).
+  void set_status_room(size_t bytes) { status_room_ = bytes; }
   std::string log_summary();
 
   // LinkHooks
@@ -190,7 +207,6 @@ class Broker final : public LinkHooks, public FrameSink {
   };
   uint32_t add_topic(const std::string& name, link::ValueType type, uint32_t capacity, bool known);
   void swap_out(Topic& t);
-  void send_status_now();
   void write_run_record(int64_t now, bool final);
 
   BrokerConfig cfg_;
@@ -209,6 +225,9 @@ class Broker final : public LinkHooks, public FrameSink {
   uint64_t front_samples_ = 0;
   uint64_t generation_ = 1;
   bool status_pending_ = false;
+  bool change_wanted_ = false;  // a change asked for a STATUS of its own (want_change_status)
+  int64_t last_change_status_ns_ = INT64_MIN / 2;
+  size_t status_room_ = kStatusRoomTcp;
   int64_t status_due_since_ = 0;
   uint32_t status_period_s_ = 0;
   std::vector<IngressSession*> sessions_;

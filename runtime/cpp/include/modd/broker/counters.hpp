@@ -30,6 +30,8 @@ struct Counters {
   uint64_t link_bytes_sent = 0;
   uint64_t auth_failures = 0;
   uint64_t link_sessions = 0;
+  uint64_t health_corrected = 0;  // HEALTH names and fields made safe at the ingress
+  uint64_t status_coalesced = 0;  // changes that shared a STATUS with an earlier one
   uint64_t& rej(Reject r) { return rejected[static_cast<int>(r)]; }
   uint64_t rejected_total() const {
     uint64_t n = 0;

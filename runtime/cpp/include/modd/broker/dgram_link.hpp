@@ -154,5 +154,8 @@ size_t serial_capacity(size_t packet);
 // then IPv4 + UDP headers, or the serial framing (CRC-16, COBS code byte, delimiter).
 // The backfill pace counts them (tcp: BackfillSender::kSegmentOverhead).
 size_t control_frame_overhead(bool serial);
+// Bytes of link frames one CONTROL datagram of `max_datagram` bytes carries whole (type,
+// counter up to 2^35, tag): a STATUS that fits is never cut into control fragments.
+size_t control_frame_room(size_t max_datagram);
 
 }  // namespace modd::broker

@@ -22,6 +22,12 @@ inline constexpr size_t kMaxHealthSensors = 64;
 inline constexpr size_t kMaxHealthFields = 32;
 // Longest instrument name in a health report, in bytes.
 inline constexpr size_t kMaxHealthName = 64;
+// Largest health field or STATUS counter forwarded: 2^53 - 1, exact in a double (a larger one
+// is clamped by the PubBroker, left out by the SubBroker).
+inline constexpr uint64_t kMaxHealthCount = 9007199254740991;
+// Latest last_value_ms of an instrument's health: 2100-01-01T00:00Z in Unix ms (a later one
+// reads as 0, none).
+inline constexpr uint64_t kMaxLastValueMs = 4102444800000;
 // Longest STATUS period a CONFIG may ask for, in seconds: one day (0: no STATUS).
 inline constexpr uint64_t kMaxStatusPeriodS = 86400;
 // Most topics, or streams, of one CONFIG.
@@ -70,11 +76,18 @@ enum class StatusField : uint8_t {
   LinkSlotsDropped = 27,
   LinkForged = 28,
   LinkReplayed = 29,
+  Instruments = 30,
+  InstrumentsOpen = 31,
+  InstrumentsSilent = 32,
+  InstrumentsClosed = 33,
+  InstrumentsUnlisted = 34,
+  HealthCorrected = 35,
+  StatusCoalesced = 36,
 };
 // The number of StatusField values.
-inline constexpr size_t kStatusFieldCount = 30;
+inline constexpr size_t kStatusFieldCount = 37;
 // Each StatusField's name in logs and status documents, by code.
-inline constexpr const char* kStatusFieldLabels[] = {"uptime_s", "samples_in", "samples_archived", "rejected_unknown_topic", "rejected_wrong_type", "rejected_not_finite", "rejected_timestamp", "rejected_overflow", "rejected_malformed", "archive_failed", "ingress_malformed_frames", "publishers_connected", "frames_sent", "frames_dropped", "link_bytes_sent", "disk_free_mb", "buffer_fill_pct", "archive_files", "auth_failures", "config_id", "rejected_quota", "archive_state", "archive_rate_bps", "samples_pending", "link_datagrams_sent", "link_datagrams_resent", "link_nacks", "link_slots_dropped", "link_forged", "link_replayed"};
+inline constexpr const char* kStatusFieldLabels[] = {"uptime_s", "samples_in", "samples_archived", "rejected_unknown_topic", "rejected_wrong_type", "rejected_not_finite", "rejected_timestamp", "rejected_overflow", "rejected_malformed", "archive_failed", "ingress_malformed_frames", "publishers_connected", "frames_sent", "frames_dropped", "link_bytes_sent", "disk_free_mb", "buffer_fill_pct", "archive_files", "auth_failures", "config_id", "rejected_quota", "archive_state", "archive_rate_bps", "samples_pending", "link_datagrams_sent", "link_datagrams_resent", "link_nacks", "link_slots_dropped", "link_forged", "link_replayed", "instruments", "instruments_open", "instruments_silent", "instruments_closed", "instruments_unlisted", "health_corrected", "status_coalesced"};
 
 // The type byte of a frame.
 enum class MsgType : uint8_t {

@@ -20,7 +20,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from modd_plan.streams import StreamKey
 from modd_plan.windows import split_window, window_of
@@ -299,7 +299,7 @@ class BackfillManager:
                 (start + q) // q,
                 start,
                 start + q,
-                val,
+                cast(Any, val),  # a list of the window's samples: list[float | bool] here
                 count,
                 now,
                 True,

@@ -53,6 +53,33 @@ _K1, _K2, _K3, _K4, _K5 = _KEYS[1:]
 _END = "".join(f',"{k}":{PAYLOAD_VERSION}' for k in _VERSION) + "}"
 
 
+#: Numbers JSON cannot hold travel as these strings (docs/protocol.md, "Values JSON
+#: cannot hold"): a float sum beyond the double range, ``inf − inf``.
+NON_FINITE: dict[str, float] = {"Infinity": math.inf, "-Infinity": -math.inf, "NaN": math.nan}
+
+
+def json_safe(value: Any) -> Any:
+    """``value`` with every non-finite float as its escape string (lists element-wise).
+
+    >>> json_safe([1.0, float("inf"), -float("inf"), float("nan"), True])
+    [1.0, 'Infinity', '-Infinity', 'NaN', True]
+    """
+    if type(value) is float and not math.isfinite(value):
+        return "NaN" if value != value else "Infinity" if value > 0 else "-Infinity"
+    if isinstance(value, list):
+        return [json_safe(x) for x in value]
+    return value
+
+
+def from_json_safe(value: Any) -> Any:
+    """The inverse of :func:`json_safe`: escape strings back to floats."""
+    if isinstance(value, str) and value in NON_FINITE:
+        return NON_FINITE[value]
+    if isinstance(value, list):
+        return [from_json_safe(x) for x in value]
+    return value
+
+
 def _is_int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
@@ -108,6 +135,7 @@ class DeliveredValue(DeliveredValueFields):
 
     def to_dict(self) -> DeliveredValueDoc:
         out = cast(DeliveredValueDoc, asdict(self))
+        out["value"] = json_safe(self.value)
         if not self.backfilled:
             del out["backfilled"]
         out["v"] = PAYLOAD_VERSION
@@ -115,7 +143,7 @@ class DeliveredValue(DeliveredValueFields):
 
     def to_json(self) -> bytes:
         """Compact UTF-8 JSON (no spaces), without a trailing newline."""
-        return json.dumps(self.to_dict(), separators=(",", ":")).encode()
+        return json.dumps(self.to_dict(), separators=(",", ":"), allow_nan=False).encode()
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> DeliveredValue:
@@ -132,7 +160,7 @@ class DeliveredValue(DeliveredValueFields):
         for name in _INTS:
             if not _is_int(data[name]):
                 raise ValueError(f"delivered value: {name} is {data[name]!r}, not an integer")
-        value, count = doc["value"], doc["count"]
+        value, count = from_json_safe(doc["value"]), doc["count"]
         if not (
             value is None
             or _is_scalar(value)
@@ -144,7 +172,8 @@ class DeliveredValue(DeliveredValueFields):
             )
         if count is not None and not _is_int(count):
             raise ValueError(f"delivered value: count is {count!r}, not an integer or null")
-        out = cls(**{f.name: data[f.name] for f in fields(cls) if f.name in data})
+        got = {f.name: data[f.name] for f in fields(cls) if f.name in data}
+        out = cls(**{**got, "value": value})
         if not isinstance(out.backfilled, bool):
             raise ValueError("delivered value: backfilled must be true or false")
         return out
@@ -174,7 +203,7 @@ def _json_scalar(value: Value) -> str:
         return int.__repr__(value)
     if value is None:
         return "null"
-    return json.dumps(value, separators=(",", ":"))
+    return json.dumps(json_safe(value), separators=(",", ":"), allow_nan=False)
 
 
 class StreamPayload:

@@ -30,7 +30,7 @@ from concurrent.futures import Future
 from dataclasses import dataclass, field
 
 from modd.link import backfill as bf
-from modd.link import codec
+from modd.link import codec, status_read
 from modd.link.auth import client_proof, keyed_nonce, server_proof
 from modd.link.frames import (
     VERSION,
@@ -42,6 +42,7 @@ from modd.link.frames import (
     ErrorCode,
     ErrorMsg,
     Hello,
+    MsgType,
     Ping,
     Pong,
     ProtocolError,
@@ -343,6 +344,10 @@ class LinkSession(ABC):
             if sink is not None:
                 sink(frame)
             return
+        if frame.type == MsgType.STATUS:  # never a reason to drop the link: read what reads
+            status, problems = status_read.read_status(frame.body)
+            self._on_status(status, problems)
+            return
         msg = codec.decode(frame)
         hs = self._hs
         if (
@@ -357,13 +362,22 @@ class LinkSession(ABC):
         else:
             self._handle(msg, strict)
 
+    def _on_status(self, msg: Status, problems: list[str]) -> None:
+        """The PubBroker's counters and instruments, every field range-checked: a bad one
+        is logged and left out (modd.link.status_read)."""
+        counters, bad_counters = status_read.checked_counters(msg)
+        sensors, bad_sensors = status_read.checked_sensors(msg.sensors)
+        for p in problems + bad_counters + bad_sensors:
+            log.warning("%s", p)
+        self.stats.pubbroker = counters
+        self.stats.sensors = sensors
+        self.handler.on_status(msg)
+
     def _handle(self, msg: object, strict: bool) -> None:
         if isinstance(msg, ConfigAck):
             self._on_ack(msg)
         elif isinstance(msg, Status):
-            self.stats.pubbroker = msg.as_dict()
-            self.stats.sensors = {h.name: h.as_dict() for h in msg.sensors}
-            self.handler.on_status(msg)
+            self._on_status(msg, [])
         elif isinstance(msg, Ping):
             self.send(codec.encode(Pong(msg.payload)))
         elif isinstance(msg, ErrorMsg):
