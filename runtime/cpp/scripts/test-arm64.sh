@@ -14,6 +14,9 @@ ROOT=$PWD
 JOBS=${JOBS:-1}
 BUILD=build/cpp-arm64
 scripts/setup.sh arm64
+mkdir -p $BUILD
+exec 9>$BUILD.lock
+flock 9  # one build of $BUILD at a time (make test and make package may overlap)
 command -v ccache >/dev/null && export CMAKE_CXX_COMPILER_LAUNCHER=${CMAKE_CXX_COMPILER_LAUNCHER:-ccache}
 
 # pkg-config (FindOpenSSL asks it first) must see the arm64 libraries, not the host's
