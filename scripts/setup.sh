@@ -31,7 +31,7 @@ if [ "${1:-}" = arm64 ]; then
     $SUDO dpkg --add-architecture arm64
   fi
   apt_install g++-aarch64-linux-gnu libssl-dev:arm64 libzstd-dev:arm64 liblz4-dev:arm64 \
-              libgtest-dev:arm64 nlohmann-json3-dev qemu-user-static
+              libgtest-dev:arm64 libstdc++6:arm64 nlohmann-json3-dev qemu-user-static
   exit 0
 fi
 

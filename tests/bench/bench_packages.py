@@ -10,7 +10,7 @@
    translation cache included): an upper bound of the board's figure. Time and CPU
    under emulation mean nothing and are not reported.
 
-    make package && .venv/bin/python tests/bench/bench_packages.py [--seconds 30]
+    make package && .venv/bin/python tests/bench/bench_packages.py [--seconds 30] [--memory-only]
 """
 
 from __future__ import annotations
@@ -130,11 +130,13 @@ def pubbroker_rss(command: list[str], seconds: float) -> tuple[int, int]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seconds", type=float, default=20.0)
+    ap.add_argument("--memory-only", action="store_true", help="only the RSS part")
     a = ap.parse_args()
-    if not list(PACKAGES.glob("*.deb")):
-        sys.exit(f"no package in {PACKAGES}: run make package first")
-    print("## Packages (sizes in MiB; parts: the biggest in the tree)\n")
-    print(table(["package", "arch", "installed", ".deb", "holds (MiB)"], package_rows()))
+    if not a.memory_only:
+        if not list(PACKAGES.glob("*.deb")):
+            sys.exit(f"no package in {PACKAGES}: run make package first")
+        print("## Packages (sizes in MiB; parts: the biggest in the tree)\n")
+        print(table(["package", "arch", "installed", ".deb", "holds (MiB)"], package_rows()))
     rows: list[list[object]] = []
     runs = [("amd64 (native)", [str(REPO / "build" / "bin" / "modd-pubbroker")])]
     if ARM64_PUBBROKER.exists():
