@@ -4,7 +4,7 @@ SHELL := /bin/bash
 ROOT := $(CURDIR)
 BUILD_TYPE ?= RelWithDebInfo
 
-.PHONY: run test setup build check test-python test-cpp test-frontend bench screenshots clean
+.PHONY: run test setup build package check test-python test-cpp test-frontend bench screenshots clean
 
 setup:
 	@scripts/setup.sh
@@ -20,6 +20,13 @@ build: setup
 	fi
 
 run: build
+
+# Debian packages of the drone and the base station, amd64 and arm64, in build/package/
+# (packaging/README.md); checked with lintian and systemd-analyze verify.
+package: build
+	@scripts/setup.sh arm64
+	@packaging/build.sh
+
 	@scripts/run.sh
 
 test: build

@@ -16,17 +16,27 @@ scripts/check-fast.sh
 cpp_rc=0
 cpp_log=$(mktemp)
 trap 'rm -f "$cpp_log"' EXIT
+# Then the arm64 lane (runtime/cpp/scripts/test-arm64.sh): the PubBroker and the units
+# cross-built for aarch64 (build/cpp-arm64 kept: only what changed is rebuilt), the
+# units run under qemu-user.
+ARM64_LINK=tests/subbroker/test_arm64_link.py
 if [ -x runtime/cpp/scripts/test.sh ]; then
-  (JOBS=1 nice -n 10 runtime/cpp/scripts/test.sh) >"$cpp_log" 2>&1 &
+  (JOBS=1 nice -n 10 runtime/cpp/scripts/test.sh &&
+   JOBS=1 nice -n 10 runtime/cpp/scripts/test-arm64.sh) >"$cpp_log" 2>&1 &
   cpp_pid=$!
 fi
 step "pytest (cross-process and slow: what make check left out; the C++ suites beside it)"
 py_rc=0
-pytest -q -m "e2e or slow" || py_rc=$?
+# the arm64 link test waits for the arm64 build: it runs after the C++ lane
+pytest -q -m "e2e or slow" --ignore="$ARM64_LINK" || py_rc=$?
 if [ -n "${cpp_pid:-}" ]; then
   wait "$cpp_pid" || cpp_rc=$?
-  step "C++ runtime (ran beside the cross-process tier)"
+  step "C++ runtime and its arm64 build (ran beside the cross-process tier)"
   cat "$cpp_log"
+  if [ "$cpp_rc" -eq 0 ]; then
+    step "the aarch64 PubBroker under qemu against the amd64 SubBroker"
+    pytest -q "$ARM64_LINK" || py_rc=$?
+  fi
 fi
 if [ "$py_rc" -ne 0 ] || [ "$cpp_rc" -ne 0 ]; then
   [ "$py_rc" -eq 0 ] || echo "make test: FAILED in: pytest (cross-process and slow)" >&2

@@ -2,6 +2,9 @@
 # Installs everything the project needs on a fresh Debian machine, idempotently:
 # Debian packages (apt-get), uv (from PyPI), the Python workspace (.venv), npm packages.
 # Each step is skipped when what it installs is already there.
+#   scripts/setup.sh arm64    only the aarch64 cross toolchain, the arm64 libraries
+#                             (Debian multiarch) and qemu-user: make test's arm64 lane
+#                             (runtime/cpp/scripts/test-arm64.sh) and make package.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -15,15 +18,13 @@ offline_hint() {
   exit 1
 }
 
-APT_PACKAGES=(cmake ninja-build g++ make libgtest-dev libssl-dev libzstd-dev liblz4-dev
-              nlohmann-json3-dev clang clang-format libclang-rt-14-dev tshark chromium postgresql mosquitto
-              faketime)  # faketime: the PubBroker's clock-step test (tests/runtime/test_pubbroker_clock_step.py)
-
-missing=()
-for p in "${APT_PACKAGES[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
+# apt_install PKG...: installs those not installed yet (one apt-get run, quiet).
+apt_install() {
+  local missing=() p
+  for p in "$@"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  [ ${#missing[@]} -gt 0 ] || return 0
   echo "setup: installing Debian packages: ${missing[*]}"
   SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
   export DEBIAN_FRONTEND=noninteractive
@@ -32,7 +33,24 @@ if [ ${#missing[@]} -gt 0 ]; then
   echo "wireshark-common wireshark-common/install-setuid boolean false" | $SUDO debconf-set-selections
   $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null ||
     offline_hint "installing Debian packages (${missing[*]})"
+}
+
+if [ "${1:-}" = arm64 ]; then
+  if ! dpkg --print-foreign-architectures | grep -qx arm64; then
+    echo "setup: adding the arm64 architecture (Debian multiarch)"
+    SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+    $SUDO dpkg --add-architecture arm64
+  fi
+  apt_install g++-aarch64-linux-gnu libssl-dev:arm64 libzstd-dev:arm64 liblz4-dev:arm64 \
+              libgtest-dev:arm64 libstdc++6:arm64 nlohmann-json3-dev qemu-user-static
+  exit 0
 fi
+
+APT_PACKAGES=(cmake ninja-build g++ make libgtest-dev libssl-dev libzstd-dev liblz4-dev
+              nlohmann-json3-dev clang clang-format libclang-rt-14-dev tshark chromium postgresql mosquitto
+              faketime)  # faketime: the PubBroker's clock-step test (tests/runtime/test_pubbroker_clock_step.py)
+
+apt_install "${APT_PACKAGES[@]}"
 
 if ! command -v uv >/dev/null 2>&1; then
   echo "setup: installing uv from PyPI"

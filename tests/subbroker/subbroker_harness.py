@@ -141,7 +141,13 @@ def model_copy(tmp: Path, scenario: str, tcp_ports: dict[str, int] | None = None
 
 
 def start_pubbroker(
-    tmp: Path, model_path: Path, link_port: int, ingress_port: int, tag: str = "pb", **extra: Any
+    tmp: Path,
+    model_path: Path,
+    link_port: int,
+    ingress_port: int,
+    tag: str = "pb",
+    command: list[str] | None = None,
+    **extra: Any,
 ) -> Proc:
     model = load_model(model_path)
     cfg = {
@@ -155,8 +161,9 @@ def start_pubbroker(
     cfg.update(extra)
     path = tmp / f"{tag}.json"
     path.write_text(json.dumps(cfg))
-    proc = Proc(tag, [str(PUBBROKER), "--config", str(path)], tmp / f"{tag}.log")
-    wait_port(link_port)
+    # command: another build, e.g. the arm64 one under qemu (test_arm64_link.py)
+    proc = Proc(tag, [*(command or [str(PUBBROKER)]), "--config", str(path)], tmp / f"{tag}.log")
+    wait_port(link_port, 30.0 if command else 10.0)
     return proc
 
 

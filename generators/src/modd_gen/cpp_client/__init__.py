@@ -29,6 +29,8 @@ ORIGINALS = {
     "wire.hpp": "runtime/cpp/include/modd/ingress/wire.hpp",  # the publisher's, shared
     # its codes and limits, generated from modd_contracts/wire.json
     "wire.gen.hpp": "runtime/cpp/include/modd/ingress/wire.gen.hpp",
+    # the aarch64 cross toolchain, which also cross-builds the runtime itself (make test)
+    "aarch64-linux-gnu.cmake": "runtime/cpp/cmake/aarch64-linux-gnu.cmake",
 }
 
 #: The checkout this package sits in (src/modd_gen/cpp_client -> the repository).

@@ -20,7 +20,7 @@ from __future__ import annotations
 from ..artifact import Artifact, Ownership
 from ..context import Context, PublisherView
 from ..cpp_client import client, read
-from ..render import render
+from ..render import BANNER, render
 
 
 def client_sources() -> tuple[str, str]:
@@ -41,9 +41,11 @@ def _project(ctx: Context, pub: PublisherView) -> list[Artifact]:
         ("CMakeLists.txt", "cpp_driver/CMakeLists.txt.j2"),
         ("README.md", "cpp_driver/README.md.j2"),
         (f"generated/{pub.name}_topics.hpp", "cpp_driver/topics.hpp.j2"),
-        ("cmake/aarch64-linux-gnu.cmake", "cpp_driver/aarch64-linux-gnu.cmake.j2"),
     ]
     out = [Artifact(f"{root}/{path}", render(tpl, **args), "integrator") for path, tpl in gen]
+    # the cross toolchain the runtime itself is built with (runtime/cpp/cmake), carried
+    toolchain = f"# {BANNER}\n" + read("aarch64-linux-gnu.cmake")
+    out.append(Artifact(f"{root}/cmake/aarch64-linux-gnu.cmake", toolchain, "integrator"))
     out += [
         Artifact(f"{root}/modd/include/modd/client/publisher.hpp", header, "integrator"),
         Artifact(f"{root}/modd/src/publisher.cpp", source, "integrator"),

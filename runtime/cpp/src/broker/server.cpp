@@ -68,7 +68,7 @@ int unix_listen(const std::string& path) {
 }  // namespace
 
 Server::Server(const BrokerConfig& cfg, std::string key, Clock& clock)
-    : cfg_(cfg), key_(std::move(key)), clock_(clock) {
+    : cfg_(cfg), key_(std::move(key)), clock_(clock), systemd_(SdNotifier::from_env(clock)) {
   broker_ = std::make_unique<Broker>(cfg_, key_, clock_, *this);
   epfd_ = epoll_create1(EPOLL_CLOEXEC);
   if (epfd_ < 0) sys_fail("epoll_create1");
@@ -358,9 +358,14 @@ void Server::run() {
            cfg_.ingress_unix.c_str(), cfg_.ingress_port ? " tcp:" : "",
            cfg_.ingress_port ? std::to_string(ingress_port_).c_str() : "",
            cfg_.archive_dir.c_str());
+  // The archive is open and every listener bound (the constructor): ready for systemd.
+  systemd_.ready("archiving to " + cfg_.archive_dir);
   epoll_event events[64];
   while (!stop_) {
-    int n = epoll_wait(epfd_, events, 64, timeout_ms(broker_->now()));
+    int wait_ms = timeout_ms(broker_->now());
+    int dog_ms = systemd_.ms_until_due();
+    if (dog_ms >= 0 && dog_ms < wait_ms) wait_ms = dog_ms;
+    int n = epoll_wait(epfd_, events, 64, wait_ms);
     if (n < 0 && errno != EINTR) sys_fail("epoll_wait");
     for (int i = 0; i < n; ++i) {
       auto it = conns_.find(events[i].data.fd);
@@ -384,7 +389,9 @@ void Server::run() {
     timers(broker_->now());
     for (int fd : to_close_) close_conn(fd);
     to_close_.clear();
+    systemd_.tick();  // from the loop itself: a loop that hangs stops feeding the watchdog
   }
+  systemd_.stopping();
   log_line("stopping: flushing buffers and closing the archive");
   broker_->shutdown();
   log_line("stopped: %s", broker_->log_summary().c_str());

@@ -12,6 +12,7 @@
 #include "modd/broker/broker.hpp"
 #include "modd/broker/dgram_link.hpp"
 #include "modd/broker/dgram_port.hpp"
+#include "modd/util/sd_notify.hpp"
 
 namespace modd::broker {
 
@@ -19,7 +20,8 @@ class Server final : public LinkOutput, public DatagramOut {
  public:
   Server(const BrokerConfig& cfg, std::string key, Clock& clock);
   ~Server() override;
-  // Runs until SIGTERM/SIGINT, then flushes and closes the archive.
+  // Runs until SIGTERM/SIGINT, then flushes and closes the archive. Under systemd
+  // (Type=notify) it reports READY=1 on entry and feeds the watchdog from the loop.
   void run();
   uint16_t link_port() const { return link_port_; }
   uint16_t ingress_port() const { return ingress_port_; }
@@ -61,6 +63,7 @@ class Server final : public LinkOutput, public DatagramOut {
   BrokerConfig cfg_;
   std::string key_;
   Clock& clock_;
+  SdNotifier systemd_;  // READY=1 once listening, WATCHDOG=1 from the loop (docs/operations.md)
   std::unique_ptr<Broker> broker_;
   int epfd_ = -1;
   int sigfd_ = -1;

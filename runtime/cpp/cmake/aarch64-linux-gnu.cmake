@@ -1,4 +1,3 @@
-# {{ banner }}
 # Cross-compilation for a 64-bit ARM on-board computer (Raspberry Pi 4/5,
 # Jetson, ...), with Debian's crossbuild-essential-arm64:
 #   cmake -S . -B build-arm64 -DCMAKE_TOOLCHAIN_FILE=cmake/aarch64-linux-gnu.cmake

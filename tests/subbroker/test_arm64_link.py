@@ -1,0 +1,85 @@
+"""The aarch64 PubBroker (build/cpp-arm64, runtime/cpp/scripts/test-arm64.sh) run under
+qemu-user against the amd64 SubBroker over TCP, as a companion computer and its base
+station would: a publisher load at scenario 1's rate, every delivered window recomputed
+from the archive the arm64 broker wrote (read back here, on amd64, with the official
+`mcap` reader), then a deploy of scenario 2 acknowledged by the arm64 broker. A byte
+order, alignment or size assumption in the link codec or the archive shows here."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+from modd.subbroker.client import request
+from modd.zenoh_session import wait_connected
+from subbroker_harness import (
+    REPO,
+    check_against_archive,
+    free_port,
+    model_copy,
+    processes,
+    read_archive,
+    signed,
+    start_load,
+    start_pubbroker,
+    start_subbroker,
+    subbroker_config,
+    wait_port,
+)
+
+from conftest import Collector
+
+ARM64_PUBBROKER = REPO / "build" / "cpp-arm64" / "bin" / "modd-pubbroker"
+QEMU = shutil.which("qemu-aarch64-static") or shutil.which("qemu-aarch64")
+RUN_S = 6.0
+
+
+@pytest.fixture
+def arm64_pubbroker() -> list[str]:
+    if not ARM64_PUBBROKER.exists():
+        pytest.skip(
+            f"{ARM64_PUBBROKER} is not built: runtime/cpp/scripts/test-arm64.sh builds it "
+            "(make test runs it)"
+        )
+    if QEMU is None:
+        pytest.skip("qemu-user is not installed: scripts/setup.sh arm64 installs it")
+    return [QEMU, str(ARM64_PUBBROKER)]
+
+
+def test_arm64_pubbroker_with_the_amd64_subbroker(
+    tmp_path: Path, zenoh_client: Any, arm64_pubbroker: list[str]
+) -> None:
+    link, ingress, zport = free_port(), free_port(), free_port()
+    model = model_copy(tmp_path, "scenario1.modd")
+    s2 = model_copy(tmp_path, "scenario2.modd")
+    pb = start_pubbroker(tmp_path, model, link, ingress, command=arm64_pubbroker)
+    sb = start_subbroker(tmp_path, subbroker_config(tmp_path, model, link, zport))
+    load = None
+    try:
+        wait_port(zport)
+        session = zenoh_client(zport)
+        assert wait_connected(session)
+        got = Collector()
+        session.declare_subscriber("modd/usv/**", got.on_sample)
+        assert sb.wait_log("config 1 running", 30), sb.log() + pb.log()
+        load = start_load(tmp_path, model, ingress, RUN_S)
+        load.p.wait(RUN_S + 20)
+        time.sleep(1.5)  # the last windows close and travel
+        values = got.snapshot()
+        reply = request(
+            session, "modd/usv/deploy", signed({"text": s2.read_text(), "format": "json"})
+        )
+    finally:
+        with processes(pb, sb, *([load] if load else [])):
+            pass
+    assert reply["status"] == "ACKED" and reply["config_id"] == 2, reply
+    assert "config 2 accepted" in pb.log()
+    archive = read_archive(tmp_path / "archive", model)
+    sent = json.loads(load.log().strip().splitlines()[-1])["sent"]
+    assert {t: len(s) for t, s in archive.items()} == sent  # lossless archive, read on amd64
+    n = check_against_archive(values, archive)
+    assert n >= 40, (n, {k: len(v) for k, v in values.items()})
