@@ -20,14 +20,13 @@ build: setup
 	fi
 
 run: build
+	@scripts/run.sh
 
 # Debian packages of the drone and the base station, amd64 and arm64, in build/package/
 # (packaging/README.md); checked with lintian and systemd-analyze verify.
 package: build
 	@scripts/setup.sh arm64
 	@packaging/build.sh
-
-	@scripts/run.sh
 
 test: build
 	@scripts/check.sh
