@@ -16,8 +16,7 @@ True
 
 from __future__ import annotations
 
-from importlib import resources
-from pathlib import Path
+from ..carried import read_carried
 
 #: file in this package (in a wheel) -> its original, relative to the repository.
 ORIGINALS = {
@@ -33,25 +32,10 @@ ORIGINALS = {
     "aarch64-linux-gnu.cmake": "runtime/cpp/cmake/aarch64-linux-gnu.cmake",
 }
 
-#: The checkout this package sits in (src/modd_gen/cpp_client -> the repository).
-CHECKOUT = Path(__file__).resolve().parents[4]
-
 
 def read(name: str) -> str:
-    """One carried file (a key of :data:`ORIGINALS`): the wheel's copy, else
-    the checkout's original."""
-    if name not in ORIGINALS:
-        raise ValueError(f"no carried C++ file {name!r}")
-    packaged = resources.files(__package__).joinpath(name)
-    if packaged.is_file():
-        return packaged.read_text(encoding="utf-8")
-    original = CHECKOUT / ORIGINALS[name]
-    if not original.is_file():
-        raise FileNotFoundError(
-            f"C++ client source {name!r} is neither in the package "
-            f"nor at {original} (build the wheel from a checkout)"
-        )
-    return original.read_text(encoding="utf-8")
+    """One carried file (a key of :data:`ORIGINALS`): the wheel's copy, else the checkout's."""
+    return read_carried(__package__, ORIGINALS, name, "C++ client")
 
 
 def client(kind: str) -> tuple[str, str]:

@@ -15,8 +15,7 @@ True
 
 from __future__ import annotations
 
-from importlib import resources
-from pathlib import Path
+from ..carried import read_carried
 
 _RT, _MM = "runtime/python/src", "metamodel/src"
 _CLIENT = "modd"  # the package name (a path, not a zenoh key)
@@ -39,21 +38,7 @@ ORIGINALS = {
     for name in ("__init__.py", "keys.py", "types_gen.py")
 }
 
-#: The checkout this package sits in (src/modd_gen/py_client -> the repository).
-CHECKOUT = Path(__file__).resolve().parents[4]
-
 
 def read(name: str) -> str:
     """One carried file (a key of :data:`ORIGINALS`): the wheel's copy, else the checkout's."""
-    if name not in ORIGINALS:
-        raise ValueError(f"no carried Python client file {name!r}")
-    packaged = resources.files(__package__).joinpath(name)
-    if packaged.is_file():
-        return packaged.read_text(encoding="utf-8")
-    original = CHECKOUT / ORIGINALS[name]
-    if not original.is_file():
-        raise FileNotFoundError(
-            f"Python client source {name!r} is neither in the package "
-            f"nor at {original} (build the wheel from a checkout)"
-        )
-    return original.read_text(encoding="utf-8")
+    return read_carried(__package__, ORIGINALS, name, "Python client")
