@@ -40,7 +40,7 @@ Subscriptions { }
 Messages = list[tuple[str, int, float]]
 
 
-def write_archive(path: Path, messages: Messages) -> None:
+def write_archive(path: Path, messages: Messages) -> Path:
     """An archive by the official writer, float64 channels as the contract says."""
     doc = json.loads((VECTORS / "archive_record.json").read_text())
     c = next(c for c in doc["channels"] if c["type"] == "float64")
@@ -55,15 +55,7 @@ def write_archive(path: Path, messages: Messages) -> None:
             data = b'{"value":' + repr(value).encode() + b"}"
             w.add_message(ids[topic], log_time=t, data=data, publish_time=t)
         w.finish()  # type: ignore[no-untyped-call]
-
-
-def official(path: Path) -> dict[str, list[tuple[int, float]]]:
-    """The oracle: every sample as the official mcap reader and json read it."""
-    out: dict[str, list[tuple[int, float]]] = {}
-    with path.open("rb") as f:
-        for _s, ch, m in make_reader(f).iter_messages(log_time_order=False):
-            out.setdefault(ch.topic, []).append((m.log_time, json.loads(m.data)["value"]))
-    return out
+    return path
 
 
 TEMP = "boat.ctd.temp"
@@ -106,16 +98,16 @@ def _mission(seconds: int = 250, hz: int = 1) -> Messages:
 
 @pytest.fixture
 def archive(tmp_path: Path) -> Path:
-    path = tmp_path / "boat-0.mcap"
-    write_archive(path, _mission())
-    return path
+    return write_archive(tmp_path / "boat-0.mcap", _mission())
 
 
 def _expected(path: Path) -> np.ndarray:
     """The oracle: ioos_qc on the official reader's samples, the same tests."""
-    samples = sorted(official(path)[TEMP])
-    t = np.array([s[0] for s in samples], dtype="datetime64[ns]")
-    v = np.ma.masked_invalid(np.array([s[1] for s in samples], dtype=np.float64))
+    with path.open("rb") as f:
+        messages = make_reader(f).iter_messages(topics=[TEMP], log_time_order=True)
+        pairs = [(m.log_time, json.loads(m.data)["value"]) for _s, _c, m in messages]
+    t = np.array([p[0] for p in pairs], dtype="datetime64[ns]")
+    v = np.ma.masked_invalid(np.array([p[1] for p in pairs], dtype=np.float64))
     p = QC[TEMP]
     flags = [
         qartod.gross_range_test(inp=v, fail_span=[0.0, 30.0]),
@@ -212,8 +204,7 @@ def test_a_qc_topic_not_in_the_model_is_refused(archive: Path, tmp_path: Path) -
 
 
 def test_faster_than_1_hz_the_timed_tests_are_said_not_evaluated(tmp_path: Path) -> None:
-    path = tmp_path / "fast.mcap"
-    write_archive(path, _mission(seconds=25, hz=10))
+    path = write_archive(tmp_path / "fast.mcap", _mission(seconds=25, hz=10))
     out = tmp_path / "f.parquet"
     summary = make_dataset([path], _model(), "parquet", out, metadata=_meta())
     note = f"topic {TEMP}: rate_of_change_test and flat_line_test not evaluated"
