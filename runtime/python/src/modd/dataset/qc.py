@@ -110,6 +110,8 @@ def qc_config(plan: ExportPlan) -> QcConfig:
         source = plan.metadata.source or "dataset metadata"
         raise PlanError(f"{source}: qc.{unknown[0]}: not a topic of the model ({', '.join(known)})")
     out: QcConfig = {}
+    if plan.source == "received":  # a window's aggregate (a count, a spread) is no sample
+        return out
     for topic, var in plan.variables.items():
         if var.value_type == "bool":
             continue
