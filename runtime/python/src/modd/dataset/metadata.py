@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .qcconfig import QcConfigError, parse_qc
+
 #: Asked for by ACDD 1.3 / IOOS 1.2 and not known to MoDD: named in the notes when absent.
 ASKED = (
     "creator_name",
@@ -136,9 +138,10 @@ def parse_metadata(doc: Any, source: str) -> Metadata:
         str(name): _table(inst, INSTRUMENT_KEYS, source, f"instruments.{name}")
         for name, inst in sensors.items()
     }
-    from .qc import parse_qc  # qc.py reads plans, which hold metadata
-
-    qc = parse_qc(doc["qc"], source) if doc.get("qc") is not None else {}
+    try:
+        qc = parse_qc(doc["qc"], source) if doc.get("qc") is not None else {}
+    except QcConfigError as exc:
+        raise MetadataError(str(exc)) from None
     return Metadata(attrs, platform, instruments, Path(source).name, qc)
 
 
