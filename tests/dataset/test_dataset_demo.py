@@ -320,6 +320,35 @@ def test_every_value_is_the_archives(
             assert np.abs(times - [t for t, _ in samples]).max() < 1000, topic
 
 
+def test_quality_flags_are_ioos_qcs_on_the_archive(
+    mission: tuple[Path, Path, float], exports: dict[str, Path]
+) -> None:
+    """dataset.yaml's qc section, run here by ioos_qc on the official reader's samples
+    (the CTD samples at 2 Hz: the timed tests are left out, as the export's notes say)."""
+    import xarray as xr
+    import yaml
+    from ioos_qc import qartod
+
+    config = yaml.safe_load(METADATA.read_text())["qc"]
+    truth = _official(mission[0])
+    table = pq.read_table(exports["parquet"]).to_pandas()
+    with xr.open_dataset(exports["netcdf"], mask_and_scale=False) as ds:
+        for topic in ("usv.ctd.water_temperature", "usv.sounder.depth"):
+            v = np.ma.masked_invalid(np.array([v for _, v in truth[topic]], np.float64))
+            tests = {
+                k: p
+                for k, p in config[topic].items()
+                if not k.endswith(("change_test", "line_test"))
+            }
+            want = qartod.qartod_compare([getattr(qartod, k)(inp=v, **p) for k, p in tests.items()])
+            name = topic.split(".", 1)[1].replace(".", "_")
+            assert ds[name].attrs["ancillary_variables"] == f"{name}_qc_agg"
+            flags = ds[f"{name}_qc_agg"].values[0]
+            assert np.array_equal(flags[flags != -127], want), topic
+            assert table[table["topic"] == topic]["qc_agg"].tolist() == list(want), topic
+        assert "autopilot_roll_qc_agg" not in ds
+
+
 def test_every_position_is_the_simulators(
     mission: tuple[Path, Path, float], exports: dict[str, Path]
 ) -> None:
@@ -349,7 +378,7 @@ def test_tracks_open_as_geojson_and_gpx(exports: dict[str, Path]) -> None:
     assert temp is not None and temp.get("unit") == "degC"
     assert (
         exports["csv"].read_text().splitlines()[0]
-        == '"time","topic","value","unit","lat","lon","alt","instrument_time"'
+        == '"time","topic","value","unit","lat","lon","alt","instrument_time","qc_agg"'
     )
 
 

@@ -20,6 +20,7 @@ import numpy as np
 from .mcapread import Batch, FileState, read_file
 from .plan import ExportPlan, PlanError, Variable
 from .position import Track, build_track
+from .qc import QcRunner
 
 #: Reads one file as batches: (path, state, progress, only topics).
 Reader = Callable[
@@ -66,6 +67,7 @@ class Sink(Protocol):
         lon: np.ndarray,
         alt: np.ndarray,
         other: np.ndarray | None = None,
+        qc: np.ndarray | None = None,
     ) -> None: ...
 
     def close(self, plan: ExportPlan, summary: Summary) -> None: ...
@@ -251,6 +253,7 @@ def export(
     track = read_track(files, plan, options, reader)
     if track is not None:
         summary.notes += track.notes
+    runner = QcRunner(plan) if getattr(sink, "takes_qc", True) else None
     sink.open(plan, track)
     strangers: set[str] = set()
     nonfinite: dict[str, int] = {}
@@ -258,7 +261,8 @@ def export(
     def emit(var: Variable, b: Batch) -> None:
         nan = np.full(len(b.time_ns), np.nan)
         lat, lon, alt = track.at(b.time_ns) if track else (nan, nan, nan)
-        sink.write(var, b.time_ns, b.value, lat, lon, alt, other_clock(plan, var, b))
+        flags = runner.flags(var, b.time_ns, b.value) if runner else None
+        sink.write(var, b.time_ns, b.value, lat, lon, alt, other_clock(plan, var, b), flags)
         _account(summary, var, b, lat, lon, alt)
 
     batcher, seen = _Batcher(emit), 0
@@ -288,6 +292,7 @@ def export(
                 "`modd archive recover` closes it"
             )
     batcher.close()
+    summary.notes += runner.notes.values() if runner else []
     _final_notes(plan, summary, nonfinite, track)
     sink.close(plan, summary)
     return summary

@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .qcconfig import QcConfigError, parse_qc
+
 #: Asked for by ACDD 1.3 / IOOS 1.2 and not known to MoDD: named in the notes when absent.
 ASKED = (
     "creator_name",
@@ -89,6 +91,8 @@ class Metadata:
     platform: dict[str, str] = field(default_factory=dict)
     instruments: dict[str, dict[str, str]] = field(default_factory=dict)
     source: str | None = None  # the file it came from (its name only)
+    #: QARTOD tests by topic (qc.py): ``{topic: {ioos_qc test: {parameter: value}}}``.
+    qc: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
 
     def missing(self) -> list[str]:
         """The ACDD/IOOS attributes asked for that the file did not give."""
@@ -119,7 +123,7 @@ def parse_metadata(doc: Any, source: str) -> Metadata:
     """The metadata of a parsed file; raises MetadataError naming ``source`` and the key."""
     if not isinstance(doc, dict):
         raise MetadataError(f"{source}: a mapping of attribute names to values")
-    rest = {k: v for k, v in doc.items() if k not in ("platform", "instruments")}
+    rest = {k: v for k, v in doc.items() if k not in ("platform", "instruments", "qc")}
     attrs = _table(rest, GLOBAL_KEYS, source)
     authority = attrs.get("naming_authority")
     if authority is not None and not _DNS.match(authority):
@@ -134,7 +138,11 @@ def parse_metadata(doc: Any, source: str) -> Metadata:
         str(name): _table(inst, INSTRUMENT_KEYS, source, f"instruments.{name}")
         for name, inst in sensors.items()
     }
-    return Metadata(attrs, platform, instruments, Path(source).name)
+    try:
+        qc = parse_qc(doc["qc"], source) if doc.get("qc") is not None else {}
+    except QcConfigError as exc:
+        raise MetadataError(str(exc)) from None
+    return Metadata(attrs, platform, instruments, Path(source).name, qc)
 
 
 def load_metadata(path: Path) -> Metadata:

@@ -31,6 +31,7 @@ from .export import NAT, Summary
 from .ncmeta import coverage, global_attributes, instrument_variables, platform_variable
 from .plan import ExportPlan, Variable
 from .position import Track
+from .qc import FLAG_ATTRS, qc_config
 from .record import dtype_of
 from .resample import WideTable
 
@@ -139,7 +140,20 @@ def _trajectory(ds: Any, plan: ExportPlan) -> None:
     t[0, :] = np.frombuffer(name.encode(), dtype="S1")
 
 
-def create(path: Path, plan: ExportPlan, variables: list[Variable]) -> Any:
+def _flag_var(ds: Any, var: Variable) -> None:
+    """The aggregate QARTOD flag of ``var`` (its ancillary variable)."""
+    name = f"{var.name}_qc_agg"
+    v = ds.createVariable(
+        name, "i1", DIMS, fill_value=np.int8(-127), chunksizes=(1, CHUNK), zlib=True, complevel=1
+    )
+    v.set_var_chunk_cache(size=CACHE_BYTES)
+    v.setncatts(FLAG_ATTRS | {"long_name": f"{var.long_name}: aggregate QARTOD quality flag"})
+    ds[var.name].ancillary_variables = name
+
+
+def create(
+    path: Path, plan: ExportPlan, variables: list[Variable], flagged: set[str] | None = None
+) -> Any:
     """The file with its dimensions and variables, no observation yet."""
     import netCDF4
 
@@ -153,6 +167,8 @@ def create(path: Path, plan: ExportPlan, variables: list[Variable]) -> Any:
     platform_variable(ds, plan)
     for var in variables:
         _data_var(ds, var, instruments)
+        if flagged and var.topic in flagged:
+            _flag_var(ds, var)
     return ds
 
 
@@ -195,7 +211,7 @@ class NetcdfSink:
         self.plan_other = ""
 
     def open(self, plan: ExportPlan, track: Track | None) -> None:
-        self.ds = create(self.path, plan, list(plan.variables.values()))
+        self.ds = create(self.path, plan, list(plan.variables.values()), set(qc_config(plan)))
         self.plan_other = plan.other_clock
         if plan.two_clocks:
             _second_time(self.ds, plan)
@@ -209,6 +225,7 @@ class NetcdfSink:
         lon: np.ndarray,
         alt: np.ndarray,
         other: np.ndarray | None = None,
+        qc: np.ndarray | None = None,
     ) -> None:
         sl = slice(self.rows, self.rows + len(time_ns))
         self.ds["time"][0, sl] = time_ns / 1e9
@@ -218,6 +235,8 @@ class NetcdfSink:
         self.ds["lon"][0, sl] = lon
         self.ds["alt"][0, sl] = alt
         self.ds[var.name][0, sl] = value
+        if qc is not None:
+            self.ds[f"{var.name}_qc_agg"][0, sl] = qc
         self.rows = sl.stop
 
     def close(self, plan: ExportPlan, summary: Summary) -> None:

@@ -65,6 +65,8 @@ class ExportPlan:
     #: The primary time axis: "receive" (the PubBroker's receive time, every topic) or
     #: "instrument" (the instrument's time for the topics of sensors declaring it).
     clock: str = "receive"
+    #: Every topic of the model (the export may hold fewer): a QC section may name any.
+    model_topics: tuple[str, ...] = ()
 
     @property
     def two_clocks(self) -> bool:
@@ -141,4 +143,5 @@ def plan_export(
             s["name"]: s.get("description") or s.get("kind") or s["name"]
             for s in model["drone"]["sensors"]
         },
+        model_topics=tuple(every),
     )

@@ -38,6 +38,8 @@ WideWriter = Callable[[ExportPlan, WideTable, Summary], None]
 class Resampler:
     """A sink that bins samples per period, then hands the table to a writer."""
 
+    takes_qc = False  # a period's mean has no QARTOD flag (docs: "Quality flags")
+
     def __init__(self, period_s: float, writer: WideWriter) -> None:
         if not period_s > 0:
             raise ValueError("the resampling period must be greater than zero")
@@ -71,6 +73,7 @@ class Resampler:
         lon: np.ndarray,
         alt: np.ndarray,
         other: np.ndarray | None = None,
+        qc: np.ndarray | None = None,
     ) -> None:
         self.add(var.topic, time_ns, value)  # a period has the axis's time only
 

@@ -21,6 +21,7 @@ import numpy as np
 from .export import NAT, Summary
 from .plan import ExportPlan, Variable
 from .position import Track
+from .qc import qc_config
 from .resample import WideTable
 from .tablemeta import iso_times, schema_metadata, with_field_metadata, wkb_points
 
@@ -33,7 +34,7 @@ def _time_type(fmt: str) -> Any:
     return pa.timestamp("ns", tz="UTC") if fmt == "parquet" else pa.string()
 
 
-def _long_schema(fmt: str, other: str | None = None) -> Any:
+def _long_schema(fmt: str, other: str | None = None, qc: bool = False) -> Any:
     import pyarrow as pa
 
     fields = [
@@ -47,6 +48,8 @@ def _long_schema(fmt: str, other: str | None = None) -> Any:
     ]
     if other is not None:  # the second clock (docs/user-guide/datasets.md, "Both clocks")
         fields.append((other, _time_type(fmt)))
+    if qc:  # the aggregate QARTOD flag (qc.py); empty for a topic without tests
+        fields.append(("qc_agg", pa.uint8()))
     if fmt == "parquet":
         fields.append(("geometry", pa.binary()))
     return pa.schema(fields)
@@ -71,12 +74,15 @@ class TableSink:
         self.schema: Any = None
         self.parts: list[Any] = []
         self.rows = 0
+        self.qc = False
 
     def open(self, plan: ExportPlan, track: Track | None) -> None:
         import pyarrow.csv as pcsv
         import pyarrow.parquet as pq
 
-        self.schema = _long_schema(self.fmt, plan.other_clock if plan.two_clocks else None)
+        self.qc = bool(qc_config(plan))
+        other = plan.other_clock if plan.two_clocks else None
+        self.schema = _long_schema(self.fmt, other, self.qc)
         if self.fmt == "parquet":
             self.schema = self.schema.with_metadata(schema_metadata(plan, long_form=True))
             self.writer = pq.ParquetWriter(self.path, self.schema, compression="zstd")
@@ -92,6 +98,7 @@ class TableSink:
         lon: np.ndarray,
         alt: np.ndarray,
         other: np.ndarray | None = None,
+        qc: np.ndarray | None = None,
     ) -> None:
         import pyarrow as pa
 
@@ -110,6 +117,8 @@ class TableSink:
         ]
         if other is not None:
             columns.append(_times(other, csv))
+        if self.qc:
+            columns.append(pa.array(qc) if qc is not None else pa.nulls(n, pa.uint8()))
         if not csv:
             columns.append(wkb_points(lon, lat))
         self.parts.append(pa.record_batch(columns, schema=self.schema))
