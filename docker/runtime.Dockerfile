@@ -54,6 +54,7 @@ COPY runtime/cpp/include/modd/client runtime/cpp/include/modd/client
 COPY runtime/cpp/src/client runtime/cpp/src/client
 COPY runtime/cpp/include/modd/ingress/wire.hpp runtime/cpp/include/modd/ingress/wire.hpp
 COPY runtime/cpp/include/modd/ingress/wire.gen.hpp runtime/cpp/include/modd/ingress/wire.gen.hpp
+COPY runtime/cpp/cmake/aarch64-linux-gnu.cmake runtime/cpp/cmake/aarch64-linux-gnu.cmake
 COPY runtime/python runtime/python
 # `modd up` is the launcher's (it depends on the runtime and the generators).
 COPY launcher launcher

@@ -78,7 +78,8 @@ def test_integrator_download_from_installed_wheels(
     assert ("generators", "generators") in pairs and ("metamodel", "metamodel") in pairs
     reproduce(pairs, image)
     # Of runtime/cpp, only the client sources the wheel carries (their one home).
-    assert sorted(p.name for p in (image / "runtime" / "cpp").rglob("*.?pp")) == sorted(ORIGINALS)
+    carried = [p.name for p in (image / "runtime" / "cpp").rglob("*") if p.is_file()]
+    assert sorted(carried) == sorted(ORIGINALS)
     dist, site = tmp_path / "dist", tmp_path / "site"
     for member in ("metamodel", "generators"):
         subprocess.run(

@@ -36,6 +36,8 @@ def for_viewers(schema: dict[str, Any], root: dict[str, Any] | None = None) -> d
     kind = node.get("type")
     if kind is None and isinstance(node.get("enum"), list) and node["enum"]:
         kind = _JSON_TYPES.get(type(node["enum"][0]))
+    if kind is None and "const" in node:  # a one-value field (e.g. a status's "GAVE_UP")
+        kind = _JSON_TYPES.get(type(node["const"]))
     if kind is not None:
         out["type"] = kind
     if kind == "object":
