@@ -86,6 +86,9 @@ class Process:
     log: Path
     popen: subprocess.Popen[bytes] | None = None
     restartable: bool = True  # the serial radio is not: its pseudo-terminals would change
+    # sent by the kernel when modd up dies: SIGTERM lets the brokers close their files;
+    # the simulator and the bridge hold nothing to save and go at once
+    death_signal: int = signal.SIGTERM
 
     def exit_code(self) -> int | None:
         return self.popen.poll() if self.popen is not None else None
@@ -102,7 +105,7 @@ class Process:
                 stderr=subprocess.STDOUT,
                 env=env,
                 start_new_session=True,  # Ctrl-C in a terminal reaches modd up alone
-                preexec_fn=tied_to_parent(),  # and a killed modd up takes them all with it
+                preexec_fn=tied_to_parent(self.death_signal),  # a killed modd up takes them along
             )
 
     def stop(self) -> int | None:
@@ -182,10 +185,11 @@ def simulation(model: dict[str, Any], model_json: Path, bin_dir: Path, logs: Pat
                 "bridge",
                 [str(bridge), "--model", str(model_json), "--connect", f"udpin:127.0.0.1:{port}"],
                 logs / "bridge.log",
+                death_signal=signal.SIGKILL,
             )
         )
         sim_argv += ["--mavlink", f"udpout:127.0.0.1:{port}"]
-    out.append(Process("simulator", sim_argv, logs / "simulator.log"))
+    out.append(Process("simulator", sim_argv, logs / "simulator.log", death_signal=signal.SIGKILL))
     return out
 
 
