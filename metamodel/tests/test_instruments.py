@@ -23,12 +23,16 @@ Sensor gnss "u-blox" kind nmea on "/dev/serial/by-id/usb-u-blox" {
     lat("deg", float64) from sentence GGA.lat;
     sats(NONE, int) from sentence GGA.satellites;
     depth(METER) from sentence DBT.f3 scale 1.0 offset -0.5;
+    wind_true("deg") from sentence MWV.angle where reference = T;
+    air(DEGREE_CELSIUS) from sentence XDR.value where id != "AIR TEMP";
+    rtk_lat("deg", float64) from sentence GGA.lat where quality >= 4;
 }
 Sensor ctd kind ascii on "/dev/ttyUSB1" {
     separator = " "; terminator = lf; start = "START"; pattern = "T=(?P<T>\\S+) C=(\\S+)";
 } measures {
     t(DEGREE_CELSIUS) from key T;
     c("mS/cm") from column 2 scale 0.1;
+    s(NONE) from column 2 where column 1 = "S";
 }
 Sensor sonde kind modbus on "/dev/ttyUSB2" { baud = 19200; parity = even; stop = 2; } measures {
     ph(NONE) from register 100 float32 unit 2 table input order little;
@@ -58,7 +62,11 @@ def test_instrument_sensors_round_trip() -> None:
         "startCommand": "START",
         "pattern": r"T=(?P<T>\S+) C=(\S+)",
     }
+    assert gnss["variables"][3]["nmea"]["where"] == {"field": "reference", "op": "=", "value": "T"}
+    assert gnss["variables"][4]["nmea"]["where"] == {"field": "id", "op": "!=", "value": "AIR TEMP"}
+    assert gnss["variables"][5]["nmea"]["where"] == {"field": "quality", "op": ">=", "value": "4"}
     assert ctd["variables"][0]["ascii"] == {"key": "T"}
+    assert ctd["variables"][2]["ascii"]["where"] == {"column": 1, "op": "=", "value": "S"}
     assert sonde["device"]["parity"] == "even" and sonde["device"]["stopBits"] == 2
     assert sonde["variables"][0]["modbus"] == {
         "unit": 2,
@@ -174,6 +182,51 @@ def _errors(sensors: str) -> dict[str, tuple[str, int]]:
             "/drone/sensors/0/variables/0/modbus/scale",
             "scale must be a finite number",
         ),
+        (
+            'Sensor g kind nmea on "/d" measures { x(NONE) from sentence MWV.angle '
+            "where refrence = T; }",
+            "/drone/sensors/0/variables/0/nmea/where/field",
+            "where: MWV has no field 'refrence'",
+        ),
+        (
+            'Sensor g kind nmea on "/d" measures { x(NONE) from sentence MWV.angle '
+            "where reference < T; }",
+            "/drone/sensors/0/variables/0/nmea/where/op",
+            "MWV.reference holds text: compare it with = or !=, not <",
+        ),
+        (
+            'Sensor g kind nmea on "/d" measures { x(NONE) from sentence GGA.lat '
+            "where quality >= T; }",
+            "/drone/sensors/0/variables/0/nmea/where/value",
+            "GGA.quality holds a number: compare it with a number, not 'T'",
+        ),
+        (
+            'Sensor g kind nmea on "/d" measures { x(NONE) from sentence GGA.lat where time = 3; }',
+            "/drone/sensors/0/variables/0/nmea/where/field",
+            "GGA.time holds a time; a condition compares text or numbers",
+        ),
+        (
+            'Sensor g kind nmea on "/d" measures { x(NONE) from sentence XDR.f2 where id = A; }',
+            "/drone/sensors/0/variables/0/nmea/field",
+            "id picks an XDR quadruplet: read the quadruplet's field",
+        ),
+        (
+            'Sensor g kind ascii on "/d" measures { x(NONE) from column 2 where column 1 > S; }',
+            "/drone/sensors/0/variables/0/ascii/where/value",
+            "> compares numbers: 'S' is not a number",
+        ),
+        (
+            'Sensor g kind ascii on "/d" { pattern = "(?P<a>.*)"; } '
+            "measures { x(NONE) from key a where key b = S; }",
+            "/drone/sensors/0/variables/0/ascii/where/key",
+            "no group named 'b'",
+        ),
+        (
+            'Sensor g kind nmea on "/d" measures { x(NONE) from sentence MWV.angle '
+            'where reference = "a,b"; }',
+            "/drone/sensors/0/variables/0/nmea/where/value",
+            "'a,b' is not well-formed",
+        ),
     ],
 )
 def test_mistakes_are_located(sensor: str, pointer: str, words: str) -> None:
@@ -237,20 +290,29 @@ _factors = {"scale": _finite, "offset": _finite}
 _text = st.text(
     alphabet=string.printable.replace("\x0b", "").replace("\x0c", ""), min_size=1, max_size=12
 )
+_ops = st.sampled_from(["=", "!=", "<", "<=", ">", ">="])
+_values = st.one_of(_text, st.from_regex(r"[+-]?[0-9]{1,4}(\.[0-9]{0,3})?", fullmatch=True))
+_nmea_where = st.fixed_dictionaries({"field": _names, "op": _ops, "value": _values})
+_ascii_where = st.one_of(
+    st.fixed_dictionaries({"column": st.integers(1, 256), "op": _ops, "value": _values}),
+    st.fixed_dictionaries({"key": _text, "op": _ops, "value": _values}),
+)
 _sources: st.SearchStrategy[dict[str, Any]] = st.one_of(
     st.fixed_dictionaries(
         {
             "nmea": st.fixed_dictionaries(
                 {"sentence": st.sampled_from(list(NMEA_SENTENCES)), "field": _names},
-                optional=_factors,
+                optional={**_factors, "where": _nmea_where},
             )
         }
     ),
     st.fixed_dictionaries(
         {
             "ascii": st.one_of(
-                st.fixed_dictionaries({"column": st.integers(1, 256)}, optional=_factors),
-                st.fixed_dictionaries({"key": _text}, optional=_factors),
+                st.fixed_dictionaries(
+                    {"column": st.integers(1, 256)}, optional={**_factors, "where": _ascii_where}
+                ),
+                st.fixed_dictionaries({"key": _text}, optional={**_factors, "where": _ascii_where}),
             )
         }
     ),

@@ -186,6 +186,8 @@ export interface NmeaField {
   scale?: number;
   /** Added after scaling. */
   offset?: number;
+  /** Read the field only from sentences where another of their fields compares so, e.g. MWV's reference is T (true wind) or R (relative), XDR's transducer id is AIRTEMP. For XDR, a condition on the quadruplet's type, value, unit or id picks the first quadruplet that meets it, and the field is read from that quadruplet. A sentence that does not meet it gives this variable nothing (counted ignored when it gives no variable anything). */
+  where?: NmeaCondition;
 }
 
 /** Where a value is in an ascii instrument's line (exactly one of column and key), converted as value = raw * scale + offset. */
@@ -198,7 +200,38 @@ export interface AsciiField {
   scale?: number;
   /** Added after scaling. */
   offset?: number;
+  /** Read the value only from lines where another column or key compares so, e.g. a CTD's record type in column 1 is S. A line that does not meet it gives this variable nothing (counted ignored when it gives no variable anything). */
+  where?: AsciiCondition;
 }
+
+/** A condition on another field of the same NMEA sentence: field op value. */
+export interface NmeaCondition {
+  /** The field compared: a field name of the sentence (x-sentences) or fN for its N-th; not a time or a date. */
+  field: Name;
+  /** The comparison: = and != compare text exactly (a number field: as numbers); <, <=, >, >= compare numbers and need a number field. An empty field meets no condition. */
+  op?: Comparison;
+  /** What the field is compared with, as written: T, AIRTEMP, or a number for a number field. */
+  value: ConditionValue;
+}
+
+/** A condition on another column or key of the same ascii line (exactly one of column and key): column op value. */
+export interface AsciiCondition {
+  /** Column number compared, 1 for the first (or group number, with a pattern). */
+  column?: number;
+  /** Key of the key=value pair compared (or group name, with a pattern). */
+  key?: string;
+  /** The comparison: = and != compare text exactly (blanks around it trimmed); <, <=, >, >= compare numbers (a line whose column is not a number does not meet it). A missing column or key meets no condition. */
+  op?: Comparison;
+  /** What the column is compared with, as written: S, or a number for <, <=, >, >=. */
+  value: ConditionValue;
+}
+
+/** How a condition compares a field with its value. */
+export type Comparison = "=" | "!=" | "<" | "<=" | ">" | ">=";
+export const ComparisonValues = ["=", "!=", "<", "<=", ">", ">="] as const;
+
+/** The text a condition compares a field with (printable, no comma, asterisk or line end: NMEA and CSV fields cannot hold them). */
+export type ConditionValue = string;
 
 /** A Modbus RTU register (or pair) read at the sensor's publisher period, converted as value = raw * scale + offset. */
 export interface ModbusRegister {

@@ -17,6 +17,7 @@ Example::
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Iterator
 from typing import Any
@@ -34,27 +35,90 @@ _SENSOR_ONLY = {
 }
 _VARIABLE_MAPPING = ("source", "nmea", "ascii", "modbus")
 _NUMERIC = ("number", "latitude", "longitude")
+_TEXT = ("text", "status")
 _WORDS = {"int16": 1, "uint16": 1, "int32": 2, "uint32": 2, "float32": 2}
+
+
+def nmea_field_kind(sentence: str, field: str) -> tuple[str | None, str | None]:
+    """(what ``field`` of ``sentence`` holds, None) or (None, why there is no such field)."""
+    table = NMEA_SENTENCES.get(sentence)
+    if table is None:
+        return None, f"unknown NMEA sentence {sentence!r}; known: {', '.join(NMEA_SENTENCES)}"
+    kinds = list(table.values())
+    if field in table:
+        return table[field], None
+    if re.fullmatch(r"f[1-9][0-9]?", field):
+        n = int(field[1:])
+        if sentence != "XDR" and n > len(kinds):
+            return None, f"{sentence} has {len(kinds)} fields: {field} is out of range"
+        return kinds[(n - 1) % len(kinds)], None
+    fields = ", ".join(table)
+    return None, f"{sentence} has no field {field!r} (fields: {fields}; or fN for the N-th)"
 
 
 def nmea_field_problem(sentence: str, field: str) -> str | None:
     """Why ``field`` of ``sentence`` cannot be read as a number (None: it can)."""
-    table = NMEA_SENTENCES.get(sentence)
-    if table is None:
-        return f"unknown NMEA sentence {sentence!r}; known: {', '.join(NMEA_SENTENCES)}"
-    kinds = list(table.values())
-    if field in table:
-        kind = table[field]
-    elif re.fullmatch(r"f[1-9][0-9]?", field):
-        n = int(field[1:])
-        if sentence != "XDR" and n > len(kinds):
-            return f"{sentence} has {len(kinds)} fields: {field} is out of range"
-        kind = kinds[(n - 1) % len(kinds)]
-    else:
-        return f"{sentence} has no field {field!r} (fields: {', '.join(table)}; or fN for the N-th)"
+    kind, problem = nmea_field_kind(sentence, field)
+    if kind is None:
+        return problem
     if kind not in _NUMERIC:
         return f"{sentence}.{field} holds {kind}, not a number"
     return None
+
+
+def _is_number(text: str) -> bool:
+    try:
+        return math.isfinite(float(text))
+    except ValueError:
+        return False
+
+
+def _nmea_condition(src: dict[str, Any], ptr: str) -> Iterator[Diagnostic]:
+    """A ``where`` on an NMEA source: a field of the sentence holding text or a
+    number, compared as it can be; XDR's quadruplet picked by a named field."""
+    cond, sentence = src["where"], src["sentence"]
+    field, op, value = cond["field"], cond.get("op", "="), cond["value"]
+    kind, problem = nmea_field_kind(sentence, field)
+    if kind is None:
+        yield Diagnostic(f"where: {problem}", f"{ptr}/where/field")
+        return
+    name = f"{sentence}.{field}"
+    if kind not in _NUMERIC + _TEXT:
+        yield Diagnostic(
+            f"where: {name} holds a {kind}; a condition compares text or numbers",
+            f"{ptr}/where/field",
+        )
+    elif kind in _TEXT and op not in ("=", "!="):
+        yield Diagnostic(
+            f"where: {name} holds text: compare it with = or !=, not {op}", f"{ptr}/where/op"
+        )
+    elif kind in _NUMERIC and not _is_number(value):
+        yield Diagnostic(
+            f"where: {name} holds a number: compare it with a number, not {value!r}",
+            f"{ptr}/where/value",
+        )
+    if (
+        sentence == "XDR"
+        and field in NMEA_SENTENCES["XDR"]
+        and src["field"] not in NMEA_SENTENCES["XDR"]
+    ):
+        yield Diagnostic(
+            f"where: {field} picks an XDR quadruplet: read the quadruplet's field "
+            f"(type, value, unit or id), not {src['field']}",
+            f"{ptr}/field",
+        )
+
+
+def _ascii_condition(cond: dict[str, Any], ptr: str) -> Iterator[Diagnostic]:
+    if ("column" in cond) == ("key" in cond):
+        yield Diagnostic(
+            "where: a condition compares exactly one of column and key", ptr + "/where"
+        )
+    op = cond.get("op", "=")
+    if op not in ("=", "!=") and not _is_number(cond["value"]):
+        yield Diagnostic(
+            f"where: {op} compares numbers: {cond['value']!r} is not a number", ptr + "/where/value"
+        )
 
 
 def _sensor_parts(s: dict[str, Any], ptr: str) -> Iterator[Diagnostic]:
@@ -100,8 +164,12 @@ def _variable_mapping(s: dict[str, Any], v: dict[str, Any], ptr: str) -> Iterato
         yield Diagnostic("scale must be a finite number other than zero", f"{ptr}/{kind}/scale")
     if kind == "nmea" and (problem := nmea_field_problem(src["sentence"], src["field"])):
         yield Diagnostic(problem, f"{ptr}/nmea/field")
+    if kind == "nmea" and "where" in src:
+        yield from _nmea_condition(src, f"{ptr}/nmea")
     if kind == "ascii" and ("column" in src) == ("key" in src):
         yield Diagnostic("an ascii variable reads exactly one of column and key", f"{ptr}/ascii")
+    if kind == "ascii" and "where" in src:
+        yield from _ascii_condition(src["where"], f"{ptr}/ascii")
 
 
 def _ascii_pattern(s: dict[str, Any], ptr: str) -> Iterator[Diagnostic]:
@@ -115,15 +183,15 @@ def _ascii_pattern(s: dict[str, Any], ptr: str) -> Iterator[Diagnostic]:
         return
     for j, v in enumerate(s["variables"]):
         src = v.get("ascii", {})
-        if "key" in src and src["key"] not in pattern.groupindex:
-            yield Diagnostic(
-                f"the pattern has no group named {src['key']!r}", f"{ptr}/variables/{j}/ascii/key"
-            )
-        if "column" in src and src["column"] > pattern.groups:
-            yield Diagnostic(
-                f"the pattern has {pattern.groups} groups: no group {src['column']}",
-                f"{ptr}/variables/{j}/ascii/column",
-            )
+        for where, place in ((src, ""), (src.get("where", {}), "/where")):
+            at = f"{ptr}/variables/{j}/ascii{place}"
+            if "key" in where and where["key"] not in pattern.groupindex:
+                yield Diagnostic(f"the pattern has no group named {where['key']!r}", f"{at}/key")
+            if "column" in where and where["column"] > pattern.groups:
+                yield Diagnostic(
+                    f"the pattern has {pattern.groups} groups: no group {where['column']}",
+                    f"{at}/column",
+                )
 
 
 def _modbus_registers(s: dict[str, Any], ptr: str) -> Iterator[Diagnostic]:

@@ -527,21 +527,55 @@ class _Builder:
         return out
 
     def _nmea_source(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
-        sentence, field, *factors = node.children
+        sentence, field, *rest = node.children
         self._mark(ptr, node)
         self._mark(ptr + "/sentence", sentence)
         self._mark(ptr + "/field", field)
-        return self._factors(factors, {"sentence": str(sentence), "field": str(field)}, ptr)
+        factors, condition = _split_condition(rest)
+        src = self._factors(factors, {"sentence": str(sentence), "field": str(field)}, ptr)
+        if condition is not None:
+            place, comparison, value = condition.children
+            assert isinstance(place, Token)
+            self._mark(ptr + "/where/field", place)
+            src["where"] = {"field": str(place), **self._comparison(comparison, value, ptr)}
+            self._mark(ptr + "/where", condition)
+        return src
 
     def _ascii_source(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
-        where, *factors = node.children
+        where, *rest = node.children
         assert isinstance(where, Token)
         self._mark(ptr, node)
+        factors, condition = _split_condition(rest)
         if node.data == "column_source":
             self._mark(ptr + "/column", where)
-            return self._factors(factors, {"column": self._int(where, ptr + "/column")}, ptr)
-        self._mark(ptr + "/key", where)
-        return self._factors(factors, {"key": _word(where)}, ptr)
+            src = self._factors(factors, {"column": self._int(where, ptr + "/column")}, ptr)
+        else:
+            self._mark(ptr + "/key", where)
+            src = self._factors(factors, {"key": _word(where)}, ptr)
+        if condition is not None:
+            place, comparison, value = condition.children
+            assert isinstance(place, Tree) and isinstance(place.children[0], Token)
+            tok = place.children[0]
+            self._mark(ptr + "/where", condition)
+            if place.data == "where_column":
+                self._mark(ptr + "/where/column", tok)
+                cond: dict[str, Any] = {"column": self._int(tok, ptr + "/where/column")}
+            else:
+                self._mark(ptr + "/where/key", tok)
+                cond = {"key": _word(tok)}
+            src["where"] = {**cond, **self._comparison(comparison, value, ptr)}
+        return src
+
+    def _comparison(
+        self, comparison: Tree[Token] | Token, value: Tree[Token] | Token, ptr: str
+    ) -> dict[str, str]:
+        """``op value`` of a source's ``where`` (the value as written; a string unquoted)."""
+        assert isinstance(comparison, Tree) and isinstance(value, Tree)
+        op, tok = comparison.children[0], value.children[0]
+        assert isinstance(op, Token) and isinstance(tok, Token)
+        self._mark(ptr + "/where/op", op)
+        self._mark(ptr + "/where/value", tok)
+        return {"op": str(op), "value": _word(tok)}
 
     def _register_source(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
         register, rtype, *rest = node.children
@@ -712,6 +746,15 @@ class _Builder:
                     )
                 sub["aggregation"] = str(child)
         return sub
+
+
+def _split_condition(
+    nodes: list[Tree[Token] | Token],
+) -> tuple[list[Tree[Token] | Token], Tree[Token] | None]:
+    """A source's ``scale``/``offset`` apart from its ``where`` (last, when given)."""
+    if nodes and isinstance(nodes[-1], Tree) and "condition" in str(nodes[-1].data):
+        return nodes[:-1], nodes[-1]
+    return nodes, None
 
 
 def _qualify_topics(doc: dict[str, Any]) -> None:

@@ -8,6 +8,7 @@ not part of the text (it stays in the JSON form)."""
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from .parser import (
@@ -50,6 +51,7 @@ KEYWORDS = frozenset(
         "unit",
         "table",
         "order",
+        "where",
     }
 )
 
@@ -89,14 +91,34 @@ def _factors(src: dict[str, Any]) -> str:
     return "".join(f" {key} {float(src[key])!r}" for key in ("scale", "offset") if key in src)
 
 
+_BARE_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_BARE_NUMBER = re.compile(r"[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?")
+
+
+def _condition(cond: dict[str, Any] | None) -> str:
+    """`` where PLACE OP VALUE`` of a source ("" without one); a value that is a plain
+    word (not a keyword) or a number is written bare, anything else quoted."""
+    if cond is None:
+        return ""
+    if "field" in cond:
+        place = cond["field"]
+    else:
+        place = f"column {cond['column']}" if "column" in cond else f"key {quote(cond['key'])}"
+    value = cond["value"]
+    bare = (_BARE_WORD.fullmatch(value) and value not in KEYWORDS) or _BARE_NUMBER.fullmatch(value)
+    return f" where {place} {cond.get('op', '=')} {value if bare else quote(value)}"
+
+
 def _instrument_source(v: dict[str, Any]) -> str:
     """The ``from`` of an nmea, ascii or modbus variable ("" when it has none)."""
     if "nmea" in v:
-        return f" from sentence {v['nmea']['sentence']}.{v['nmea']['field']}{_factors(v['nmea'])}"
+        n = v["nmea"]
+        where = _condition(n.get("where"))
+        return f" from sentence {n['sentence']}.{n['field']}{_factors(n)}{where}"
     if "ascii" in v:
         a = v["ascii"]
         where = f"column {a['column']}" if "column" in a else f"key {quote(a['key'])}"
-        return f" from {where}{_factors(a)}"
+        return f" from {where}{_factors(a)}{_condition(a.get('where'))}"
     if "modbus" in v:
         m = v["modbus"]
         text = f" from register {m['register']} {m.get('type', 'uint16')}"

@@ -15,6 +15,8 @@ Path = str
 KnownUnit = Literal["METER", "METER_PER_SECOND", "METER_PER_SECOND_SQUARED", "DEGREE_CELSIUS", "RADIAN", "RADIAN_PER_SECOND", "BAR", "LITER", "GRAM", "NONE"]
 ValueType = Literal["float32", "float64", "int", "bool"]
 Aggregation = Literal["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM", "MEDIAN", "STDDEV", "RANGE"]
+Comparison = Literal["=", "!=", "<", "<=", ">", ">="]
+ConditionValue = str
 Unit = KnownUnit | str
 
 
@@ -122,6 +124,7 @@ class NmeaField(TypedDict):
     field: Name
     scale: NotRequired[float]
     offset: NotRequired[float]
+    where: NotRequired[NmeaCondition]
 
 
 class AsciiField(TypedDict):
@@ -131,6 +134,24 @@ class AsciiField(TypedDict):
     key: NotRequired[str]
     scale: NotRequired[float]
     offset: NotRequired[float]
+    where: NotRequired[AsciiCondition]
+
+
+class NmeaCondition(TypedDict):
+    """A condition on another field of the same NMEA sentence: field op value."""
+
+    field: Name
+    op: NotRequired[Comparison]
+    value: ConditionValue
+
+
+class AsciiCondition(TypedDict):
+    """A condition on another column or key of the same ascii line (exactly one of column and key): column op value."""
+
+    column: NotRequired[int]
+    key: NotRequired[str]
+    op: NotRequired[Comparison]
+    value: ConditionValue
 
 
 class ModbusRegister(TypedDict):
@@ -243,4 +264,4 @@ class Position(TypedDict):
     y: float
 
 
-__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "PlatformPosition", "MavlinkField", "SerialDevice", "AsciiLine", "NmeaField", "AsciiField", "ModbusRegister", "PubBroker", "Ingress", "SubBroker", "Link", "Radio", "Publisher", "Subscriber", "Layout", "Position"]
+__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "PlatformPosition", "MavlinkField", "SerialDevice", "AsciiLine", "NmeaField", "AsciiField", "NmeaCondition", "AsciiCondition", "Comparison", "ConditionValue", "ModbusRegister", "PubBroker", "Ingress", "SubBroker", "Link", "Radio", "Publisher", "Subscriber", "Layout", "Position"]

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 MAX_LINE = 4096
 
@@ -57,10 +57,28 @@ def _split(fmt: LineFormat, line: str) -> list[str]:
     return line.split() if fmt.separator == " " else line.split(fmt.separator)
 
 
-def values(fmt: LineFormat, line: str, wanted: dict[str, Where]) -> dict[str, float]:
-    """Every wanted value of one line (terminator stripped), by variable name.
-    BadLine when the line is not printable, does not match, or lacks a value:
-    a line is taken whole or not at all, so a truncated one archives nothing."""
+@dataclass(frozen=True)
+class Cells:
+    """A line taken apart: its columns and ``key=value`` pairs, or its pattern's groups."""
+
+    parts: tuple[str, ...] = ()
+    pairs: dict[str, str] = field(default_factory=dict)
+    match: re.Match[str] | None = None
+
+    def text(self, where: Where) -> str | None:
+        """The text at ``where`` (None: the line has no such column, key or group)."""
+        if self.match is not None:
+            if isinstance(where, Key):
+                return self.match.groupdict().get(where.name)
+            return self.match.group(where.number) if where.number <= self.match.re.groups else None
+        if isinstance(where, Key):
+            return self.pairs.get(where.name)
+        return self.parts[where.number - 1] if where.number <= len(self.parts) else None
+
+
+def cells(fmt: LineFormat, line: str) -> Cells:
+    """One line (terminator stripped) taken apart; BadLine when it is too long, not
+    printable or does not match the pattern."""
     if len(line) > MAX_LINE:
         raise BadLine(f"line of {len(line)} characters (at most {MAX_LINE})")
     if not line.isprintable():
@@ -69,28 +87,34 @@ def values(fmt: LineFormat, line: str, wanted: dict[str, Where]) -> dict[str, fl
         m = fmt.pattern.fullmatch(line.strip())
         if m is None:
             raise BadLine("does not match the pattern")
-        groups = m.groupdict()
-        out = {}
-        for name, where in wanted.items():
-            text = (
-                groups.get(where.name)
-                if isinstance(where, Key)
-                else (m.group(where.number) if where.number <= (m.re.groups or 0) else None)
-            )
+        return Cells(match=m)
+    parts = _split(fmt, line.strip())
+    pairs = {k.strip(): v for k, sep, v in (p.partition("=") for p in parts) if sep}
+    return Cells(tuple(parts), pairs)
+
+
+def read(c: Cells, wanted: dict[str, Where]) -> dict[str, float]:
+    """Every wanted value of a line taken apart, by variable name; BadLine when one lacks."""
+    out = {}
+    for name, where in wanted.items():
+        text = c.text(where)
+        if c.match is not None:
             if text is None:
                 raise BadLine(f"no group {where} in the match")
             out[name] = _number(text, f"group {where}")
-        return out
-    parts = _split(fmt, line.strip())
-    pairs = {k.strip(): v for k, sep, v in (p.partition("=") for p in parts) if sep}
-    out = {}
-    for name, where in wanted.items():
-        if isinstance(where, Column):
-            if where.number > len(parts):
-                raise BadLine(f"column {where.number} missing ({len(parts)} columns)")
-            out[name] = _number(parts[where.number - 1], f"column {where.number}")
+        elif isinstance(where, Column):
+            if text is None:
+                raise BadLine(f"column {where.number} missing ({len(c.parts)} columns)")
+            out[name] = _number(text, f"column {where.number}")
         else:
-            if where.name not in pairs:
+            if text is None:
                 raise BadLine(f"key {where.name!r} missing")
-            out[name] = _number(pairs[where.name], f"key {where.name!r}")
+            out[name] = _number(text, f"key {where.name!r}")
     return out
+
+
+def values(fmt: LineFormat, line: str, wanted: dict[str, Where]) -> dict[str, float]:
+    """Every wanted value of one line (terminator stripped), by variable name.
+    BadLine when the line is not printable, does not match, or lacks a value:
+    a line is taken whole or not at all, so a truncated one archives nothing."""
+    return read(cells(fmt, line), wanted)

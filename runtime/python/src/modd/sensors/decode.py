@@ -16,8 +16,9 @@ from collections import deque
 from dataclasses import dataclass
 
 from . import modbus, nmea
-from .ascii import BadLine, values
+from .ascii import BadLine, cells, read
 from .clock import HOLD_MAX, InstrumentClock
+from .condition import ascii_holds, nmea_field
 from .health import Health
 from .lines import LineSplitter
 from .plan import Mapping, Register, SensorPlan
@@ -78,17 +79,21 @@ class LineDecoder:
             stamp = self.clock.observe(s, now_ns)
             if not known and self.clock.midnight_ns is not None:
                 released = self._release()
-        mapped = self.by_sentence.get(s.type)
-        if not mapped:
+        mapped = [
+            (m, f)
+            for m in self.by_sentence.get(s.type, ())
+            if (f := nmea_field(s, m.where[1], m.condition)) is not None  # type: ignore[index]
+        ]
+        if not mapped:  # no mapping, or none whose condition the sentence meets
             self.health.ignored += 1
             return released
         if (why := no_fix(s, self.plan.fix)) is not None:
             self.health.no_value(len(mapped), why, no_fix=True)
             return released
         values: list[tuple[Mapping, float]] = []
-        for m in mapped:
+        for m, field in mapped:
             try:
-                values.append((m, m.value(nmea.field_value(s, m.where[1]))))  # type: ignore[index]
+                values.append((m, m.value(nmea.field_value(s, field))))
             except nmea.NoValue as exc:
                 self.health.no_value(1, str(exc))
         if stamp is not None:
@@ -118,11 +123,17 @@ class LineDecoder:
 
     def _ascii(self, line: str, now_ns: int) -> list[Sample]:
         try:
-            got = values(self.plan.line, line, self.wanted)  # type: ignore[arg-type]
+            c = cells(self.plan.line, line)
+            wanted = {
+                t: w for t, w in self.wanted.items() if ascii_holds(c, self.by_topic[t].condition)
+            }
+            got = read(c, wanted)  # type: ignore[arg-type]
         except BadLine as exc:
             self.health.bad(str(exc))
             return []
         self.health.lines_ok += 1
+        if not wanted:  # a record of a type no variable reads
+            self.health.ignored += 1
         return [(self.by_topic[t], now_ns, self.by_topic[t].value(v)) for t, v in got.items()]
 
 

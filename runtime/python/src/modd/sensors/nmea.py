@@ -134,7 +134,7 @@ class NoValue(ValueError):
     """A field that carries no value in this sentence (empty, absent, or not a number)."""
 
 
-def _position(kind: str, field: str) -> tuple[int, str]:
+def position(kind: str, field: str) -> tuple[int, str]:
     """(0-based index, field kind) of a field named in the table or written ``fN``."""
     table = NMEA_SENTENCES[kind]
     names = list(table)
@@ -159,7 +159,7 @@ def _coordinate(text: str, hemisphere: str, degree_digits: int) -> float:
 def field_value(s: Sentence, field: str) -> float:
     """The number a mapped field carries (latitude/longitude in signed decimal
     degrees); NoValue when the field is empty, absent or not a number."""
-    i, kind = _position(s.type, field)
+    i, kind = position(s.type, field)
     if i >= len(s.fields) or not s.fields[i]:
         raise NoValue(f"{s.type} field {i + 1} is empty")
     text = s.fields[i]

@@ -21,6 +21,7 @@ from modd_model.numbers import to_fraction
 from modd_model.query import DEFAULT_VALUE_TYPE, topic_name
 
 from .ascii import Column, Key, LineFormat, Where
+from .condition import Condition
 from .lines import LINE_ENDS, TERMINATORS
 
 
@@ -51,6 +52,7 @@ class Mapping:
     where: tuple[str, str] | Where | Register  # nmea: (sentence, field)
     scale: float = 1.0
     offset: float = 0.0
+    condition: Condition | None = None  # read only where another field compares so (where)
 
     def value(self, raw: float) -> float:
         return raw * self.scale + self.offset
@@ -87,6 +89,16 @@ def _where(kind: str, var: dict[str, Any]) -> tuple[str, str] | Where | Register
     )
 
 
+def _condition(kind: str, src: dict[str, Any]) -> Condition | None:
+    cond = src.get("where")
+    if cond is None:
+        return None
+    place: str | Where = cond.get("field", "")
+    if kind == "ascii":
+        place = Column(cond["column"]) if "column" in cond else Key(cond["key"])
+    return Condition(place, cond.get("op", "="), cond["value"])
+
+
 def _line_format(sensor: dict[str, Any]) -> LineFormat:
     line = sensor.get("line", {})
     pattern = line.get("pattern")
@@ -113,6 +125,7 @@ def _sensor_plan(
                 _where(kind, var),
                 float(src.get("scale", 1)),
                 float(src.get("offset", 0)),
+                _condition(kind, src),
             )
         )
     if not mappings:
