@@ -370,15 +370,19 @@ export function setField(model: ModdModel, id: string, path: string[], value: un
   if (id === LINK_ID && !m.link) m.link = {};
   const target = elementValue(m, id) as Record<string, unknown> | undefined;
   if (!target) throw new EditError(`unknown element "${id}"`);
-  let obj: Record<string, unknown> = target;
+  const chain: Record<string, unknown>[] = [target];
   for (const seg of path.slice(0, -1)) {
+    const obj = chain[chain.length - 1];
     if (typeof obj[seg] !== "object" || obj[seg] === null) obj[seg] = {};
-    obj = obj[seg] as Record<string, unknown>;
+    chain.push(obj[seg] as Record<string, unknown>);
   }
   const last = path[path.length - 1];
-  // undefined removes an optional field (the inspector sends it for an emptied optional input).
-  if (value === undefined) delete obj[last];
-  else obj[last] = value;
+  // undefined removes an optional field (the inspector sends it for an emptied optional input),
+  // and the nested objects it leaves empty (a source's condition whose parts are all cleared).
+  if (value === undefined) {
+    delete chain[chain.length - 1][last];
+    for (let i = chain.length - 1; i > 0 && Object.keys(chain[i]).length === 0; i--) delete chain[i - 1][path[i - 1]];
+  } else chain[chain.length - 1][last] = value;
   if (id === LINK_ID && m.link && Object.keys(m.link).length === 0) delete m.link;
   return m;
 }

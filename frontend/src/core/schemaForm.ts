@@ -142,7 +142,7 @@ export function formFor(root: JsonSchema, kind: ElementKind): FieldSpec[] {
 const SOURCE_OF_KIND: Record<string, string> = { mavlink: "source", nmea: "nmea", ascii: "ascii", modbus: "modbus" };
 /** A sensor's properties that belong to some kinds only. */
 const SENSOR_PART_KINDS: Record<string, readonly string[]> = {
-  device: ["nmea", "ascii", "modbus"], line: ["ascii"], clock: ["nmea"],
+  device: ["nmea", "ascii", "modbus"], line: ["ascii"], clock: ["nmea"], checksum: ["nmea"], fix: ["nmea"],
 };
 
 /**

@@ -11,7 +11,7 @@ from modd.sensors import modbus
 from modd.sensors.decode import LineDecoder, block_samples, blocks
 from modd.sensors.health import Health
 from modd.sensors.plan import SensorPlan, plan_sensors
-from modd.sim.wire import ascii_line, modbus_reply, nmea_lines, registers
+from modd.sim.wire import ascii_line, ascii_lines, modbus_reply, nmea_lines, registers
 from modd_model import parse_text
 
 MODEL = """
@@ -89,3 +89,33 @@ def test_modbus_replies_read_back() -> None:
     with pytest.raises(modbus.ExceptionReply):
         modbus.parse_reply(unknown, 1, modbus.HOLDING, 1)
     assert modbus_reply(b"\x01\x03\x00\x00\x00\x01\x00\x00", regs) is None  # bad CRC
+
+
+CONDITIONS = """
+Drone d { Sensors {
+    Sensor wx kind nmea on "/w" measures {
+        t(NONE) from sentence MWV.angle where reference = T;
+        r(NONE) from sentence MWV.angle where reference = R;
+        air(NONE) from sentence XDR.value where id = AIRTEMP;
+        baro(NONE) from sentence XDR.value where id = BARO;
+    }
+    Sensor ctd kind ascii on "/c" measures {
+        s(NONE) from column 2 where column 1 = S; b(NONE) from column 2 where column 1 = B;
+    }
+} }
+PubBroker("127.0.0.1":1, "/l"); SubBroker("127.0.0.1":2, "/c");
+Publishers { Publisher p(1, "d.wx.t", "d.wx.r", "d.wx.air", "d.wx.baro", "d.ctd.s", "d.ctd.b"); }
+"""
+
+
+def test_the_simulator_meets_the_models_conditions() -> None:
+    doc, _ = parse_text(CONDITIONS)
+    wx, ctd = plan_sensors(doc)
+    values = {"d.wx.t": 101.5, "d.wx.r": 42.25, "d.wx.air": 12.5, "d.wx.baro": 1.013}
+    lines = nmea_lines(wx, values, 1_790_000_000.25)
+    assert [pynmea2.parse(x, check=True).sentence_type for x in lines] == ["MWV", "MWV", "XDR"]
+    got = LineDecoder(wx, Health()).feed("".join(x + "\r\n" for x in lines).encode(), 0)
+    assert {m.topic: v for m, _, v in got} == pytest.approx(values)
+    text = "".join(x + "\r\n" for x in ascii_lines(ctd, {"d.ctd.s": 9.5, "d.ctd.b": 12.25}))
+    got = LineDecoder(ctd, Health()).feed(text.encode(), 0)
+    assert {m.topic: v for m, _, v in got} == {"d.ctd.s": 9.5, "d.ctd.b": 12.25}

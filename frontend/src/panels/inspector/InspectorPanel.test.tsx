@@ -54,6 +54,39 @@ describe("InspectorPanel", () => {
     expect(sensor.variables[0].nmea).toEqual({ sentence: "DPT", field: "depth" });
   });
 
+  it("edits a source's condition (where) as a form: MWV true wind only", () => {
+    const store = mount("integrator", ["sensor:accelerometer"]);
+    const nmeaOnly = () => ["checksum", "fix"].map((f) => document.querySelector(`[data-field="${f}"]`) !== null);
+    expect(nmeaOnly()).toEqual([false, false]);
+    act(() => store.dispatch({ type: "setField", id: "sensor:accelerometer", path: ["kind"], value: "nmea" }));
+    expect(nmeaOnly()).toEqual([true, true]);
+    act(() => store.dispatch({ type: "select", ids: ["topic:accelerometer.accel_x"] }));
+    expect(document.querySelector('[data-field="nmea.where.field"]')).not.toBeNull();
+    const op = screen.getByLabelText(/^nmea where op/) as HTMLSelectElement;
+    expect([...op.options].map((o) => o.value)).toEqual(["", "=", "!=", "<", "<=", ">", ">="]);
+    expect(op.value).toBe("=");
+    const id = "topic:accelerometer.accel_x";
+    act(() => store.dispatch({ type: "setField", id, path: ["nmea", "sentence"], value: "MWV" }));
+    act(() => store.dispatch({ type: "setField", id, path: ["nmea", "field"], value: "angle" }));
+    act(() => store.dispatch({ type: "setField", id, path: ["nmea", "where", "field"], value: "reference" }));
+    act(() => store.dispatch({ type: "setField", id, path: ["nmea", "where", "value"], value: "T" }));
+    fireEvent.change(screen.getByLabelText(/^nmea where op/), { target: { value: "!=" } });
+    const variable = () => currentModel(store.getState().wb).drone.sensors[0].variables[0];
+    expect(variable().nmea).toEqual({ sentence: "MWV", field: "angle", where: { field: "reference", value: "T", op: "!=" } });
+    for (const part of ["field", "value", "op"]) {
+      act(() => store.dispatch({ type: "setField", id, path: ["nmea", "where", part], value: undefined }));
+    }
+    expect(variable().nmea).toEqual({ sentence: "MWV", field: "angle" }); // no empty condition left
+  });
+
+  it("shows an ascii variable's condition on a column or a key", () => {
+    const store = mount("integrator", ["sensor:accelerometer"]);
+    act(() => store.dispatch({ type: "setField", id: "sensor:accelerometer", path: ["kind"], value: "ascii" }));
+    act(() => store.dispatch({ type: "select", ids: ["topic:accelerometer.accel_x"] }));
+    const fields = [...document.querySelectorAll("[data-field^='ascii.where']")].map((e) => e.getAttribute("data-field"));
+    expect(fields).toEqual(["ascii.where.column", "ascii.where.key", "ascii.where.op", "ascii.where.value"]);
+  });
+
   it("commits text fields on Enter, as one undoable edit", () => {
     const store = mount("scientist", ["sub:sub_1"]);
     const period = screen.getByLabelText(/^period/) as HTMLInputElement;

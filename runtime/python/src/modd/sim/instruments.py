@@ -31,7 +31,7 @@ from modd_model.query import topics
 from ..sensors.plan import SensorPlan, plan_sensors
 from .sensors import topic_signal
 from .track import survey_pose
-from .wire import ascii_line, modbus_reply, nmea_lines, registers
+from .wire import ascii_lines, modbus_reply, nmea_lines, registers
 
 
 def open_device(path: Path) -> int:
@@ -90,7 +90,9 @@ class Instrument:
                     line + "\r\n" for line in nmea_lines(self.plan, self.values(now), now)
                 )
             else:
-                text = ascii_line(self.plan, self.values(now)) + end.decode()
+                text = "".join(
+                    line + end.decode() for line in ascii_lines(self.plan, self.values(now))
+                )
             _send(self.master, text.encode())
             tick += 1
 

@@ -53,41 +53,71 @@ def _stamp(kind: str, now: float) -> str:
     return time.strftime("%d%m%y", t) if kind == "date" else "A" if kind == "status" else ""
 
 
+def _index(kind: str, field: str) -> int:
+    names = list(NMEA_SENTENCES[kind])
+    return names.index(field) if field in names else int(field[1:]) - 1
+
+
+def _put(fields: list[str], kind: str, i: int, m: TopicMapping, value: float) -> None:
+    table = list(NMEA_SENTENCES[kind].values())
+    fields += [""] * (i + 2 - len(fields))
+    what = table[i % len(table)]
+    if what in ("latitude", "longitude"):
+        fields[i], fields[i + 1] = _coordinate(_raw(m, value), 2 if what == "latitude" else 3)
+    else:
+        fields[i] = f"{_raw(m, value):.4f}"
+
+
+def _quadruplet(m: TopicMapping) -> bool:
+    """An XDR variable whose condition picks its quadruplet (``where id = NAME``)."""
+    quad = list(NMEA_SENTENCES["XDR"])
+    c = m.condition
+    return m.where[0] == "XDR" and c is not None and c.place in quad and m.where[1] in quad  # type: ignore[index]
+
+
 def _fields(kind: str, mapped: list[tuple[TopicMapping, float]], now: float) -> list[str]:
     table = list(NMEA_SENTENCES[kind].items())
     fields = [_stamp(k, now) for _, k in table]
     for i, text in VALID_FIX.get(kind, {}).items():
         fields[i] = text
     for m, value in mapped:
-        field = m.where[1]  # type: ignore[index]
-        i = (
-            [n for n, _ in table].index(field)
-            if field in NMEA_SENTENCES[kind]
-            else int(field[1:]) - 1
-        )
-        fields += [""] * (i + 2 - len(fields))
-        what = table[i % len(table)][1]
-        if what in ("latitude", "longitude"):
-            fields[i], fields[i + 1] = _coordinate(_raw(m, value), 2 if what == "latitude" else 3)
-        else:
-            fields[i] = f"{_raw(m, value):.4f}"
-    if kind == "XDR":  # groups of four
-        return fields + [""] * (-len(fields) % 4)
-    return fields[: len(table)]
+        if not _quadruplet(m):
+            _put(fields, kind, _index(kind, m.where[1]), m, value)  # type: ignore[index]
+        if m.condition is not None and m.condition.op == "=" and not _quadruplet(m):
+            fields[_index(kind, str(m.condition.place))] = m.condition.value
+    if kind != "XDR":
+        return fields[: len(table)]
+    fields += [""] * (-len(fields) % 4)  # groups of four; a named transducer in its own
+    for m, value in mapped:
+        if _quadruplet(m) and m.condition is not None:
+            group = [""] * 4
+            group[_index("XDR", str(m.condition.place))] = m.condition.value
+            _put(group, "XDR", _index("XDR", m.where[1]), m, value)  # type: ignore[index]
+            fields += group[:4]
+    return fields
+
+
+def _sentence_key(m: TopicMapping) -> tuple[str, str]:
+    """Variables written in one sentence: by type, and by the condition they need met
+    (MWV with reference T and with R are two sentences; XDR quadruplets share one)."""
+    c = m.condition
+    if c is None or c.op != "=" or _quadruplet(m):
+        return m.where[0], ""  # type: ignore[index]
+    return m.where[0], f"{c.place}={c.value}"  # type: ignore[index]
 
 
 def nmea_lines(plan: SensorPlan, values: Mapping[str, float], now: float) -> list[str]:
     """One sentence per sentence type the sensor's variables read (and a ZDA when
     the model stamps with the instrument's clock)."""
     # the time first, as receivers start an epoch with it
-    by_kind: dict[str, list[tuple[TopicMapping, float]]] = (
-        {"ZDA": []} if plan.instrument_clock else {}
+    by_kind: dict[tuple[str, str], list[tuple[TopicMapping, float]]] = (
+        {("ZDA", ""): []} if plan.instrument_clock else {}
     )
     for m in plan.mappings:
         if m.topic in values:
-            by_kind.setdefault(m.where[0], []).append((m, values[m.topic]))  # type: ignore[index]
+            by_kind.setdefault(_sentence_key(m), []).append((m, values[m.topic]))
     out = []
-    for kind, mapped in by_kind.items():
+    for (kind, _), mapped in by_kind.items():
         fields = _fields(kind, mapped, now)
         if kind == "ZDA":
             t = time.gmtime(now)
@@ -96,14 +126,23 @@ def nmea_lines(plan: SensorPlan, values: Mapping[str, float], now: float) -> lis
     return out
 
 
-def ascii_line(plan: SensorPlan, values: Mapping[str, float]) -> str:
+def ascii_line(
+    plan: SensorPlan, values: Mapping[str, float], mappings: list[TopicMapping] | None = None
+) -> str:
     """One line with the sensor's columns and key=value pairs (a pattern is not inverted:
-    write the model's separator-and-key form)."""
+    write the model's separator-and-key form), with the ``=`` conditions of ``mappings``
+    (all the sensor's by default) met."""
     columns: dict[int, str] = {}
     pairs: list[str] = []
-    for m in plan.mappings:
+    for m in plan.mappings if mappings is None else mappings:
         if m.topic not in values:
             continue
+        c = m.condition
+        if c is not None and c.op == "=":
+            if isinstance(c.place, Column):
+                columns[c.place.number] = c.value
+            else:
+                pairs.append(f"{c.place.name}={c.value}")  # type: ignore[union-attr]
         text = f"{_raw(m, values[m.topic]):.4f}"
         if isinstance(m.where, Column):
             columns[m.where.number] = text
@@ -111,6 +150,18 @@ def ascii_line(plan: SensorPlan, values: Mapping[str, float]) -> str:
             pairs.append(f"{m.where.name}={text}")  # type: ignore[union-attr]
     cells = [columns.get(i, "0") for i in range(1, max(columns, default=0) + 1)] + pairs
     return (" " if plan.line.separator == " " else plan.line.separator).join(cells)
+
+
+def ascii_lines(plan: SensorPlan, values: Mapping[str, float]) -> list[str]:
+    """One line per record type the variables' conditions name (a CTD's S and B
+    lines), the unconditioned variables in each."""
+    kinds: dict[str, list[TopicMapping]] = {}
+    plain = [m for m in plan.mappings if m.condition is None or m.condition.op != "="]
+    for m in plan.mappings:
+        if m not in plain and m.condition is not None:
+            kinds.setdefault(f"{m.condition.place}={m.condition.value}", []).append(m)
+    groups = [plain + ms for ms in kinds.values()] or [plain]
+    return [ascii_line(plan, values, g) for g in groups]
 
 
 def _words(r: Register, raw: float) -> list[int]:
