@@ -13,7 +13,7 @@ DOC = Path(__file__).resolve().parents[3] / "docs" / "sensors.md"
 
 def test_cookbook_excerpts_validate() -> None:
     blocks = re.findall(r"```\n(Sensor .*?)```", DOC.read_text(), re.S)
-    assert len(blocks) == 6
+    assert len(blocks) == 8
     for block in blocks:
         name = block.split()[1]
         variables = re.findall(r"^\s+(\w+)\(", block, re.M)

@@ -87,6 +87,8 @@ def _fields(kind: str, mapped: list[tuple[TopicMapping, float]], now: float) -> 
             fields[_index(kind, str(m.condition.place))] = m.condition.value
     if kind != "XDR":
         return fields[: len(table)]
+    if all(_quadruplet(m) for m, _ in mapped):
+        fields = []  # only named transducers: no empty first quadruplet
     fields += [""] * (-len(fields) % 4)  # groups of four; a named transducer in its own
     for m, value in mapped:
         if _quadruplet(m) and m.condition is not None:
