@@ -10,18 +10,17 @@ the other's."""
 
 from __future__ import annotations
 
-import json
 import random
 import sys
 import time
 from collections import defaultdict
 from pathlib import Path
-from typing import Any
 
 import pynmea2  # type: ignore[import-untyped]
 from devices import PtyDevice, wait_until
 from mavlink_harness import Proc, load_model, read_archive, start_pubbroker
 from modd.ports import free_port
+from test_sensors_corpus import _health
 
 MODEL = """
 Drone usv { Sensors {
@@ -66,8 +65,8 @@ def _sentences(rng: random.Random) -> list[str]:
         angle = rng.uniform(100, 200) if ref == "T" else rng.uniform(0, 100)
         speed = rng.uniform(20, 30) if ref == "T" else rng.uniform(0, 10)
         status = "V" if i == 17 else "A"
-        fields = (f"{angle:.1f}", ref, f"{speed:.1f}", "N", status)
-        out.append(str(pynmea2.MWV("WI", "MWV", fields)))
+        wind = (f"{angle:.1f}", ref, f"{speed:.1f}", "N", status)
+        out.append(str(pynmea2.MWV("WI", "MWV", wind)))
         if i % 2:
             quads = rng.sample(TRANSDUCERS, rng.randint(1, 4))
             values = [f"{rng.uniform(-5, 35):.2f}" for _ in quads]
@@ -93,14 +92,6 @@ def _expected(lines: list[str]) -> dict[str, list[float]]:
                 if t.id in XDR_NAMES:
                     want[f"usv.wx.{XDR_NAMES[t.id]}"].append(float(t.value))
     return want
-
-
-def _health(path: Path) -> dict[str, Any]:
-    try:
-        sensors: dict[str, Any] = json.loads(path.read_text())["sensors"]
-        return sensors
-    except (FileNotFoundError, ValueError, KeyError):
-        return {}
 
 
 def test_conditions_split_multiplexed_instruments_into_topics(tmp_path: Path) -> None:

@@ -27,9 +27,7 @@ class Health:
     timeouts: int = 0  # Modbus requests with no complete reply in time
     exceptions: int = 0  # Modbus exception replies
     silences: int = 0  # times the instrument fell silent (no value for 3 periods, >= 2 s)
-    ignored: int = (
-        0  # good lines the model maps nothing of (other sentences, vendors' own, no condition met)
-    )
+    ignored: int = 0  # good lines mapping nothing: other sentences, vendors', no condition met
     no_fix: int = 0  # of missing: fields of sentences that say no fix (validity.py)
     silent: bool = False
     last_value_ns: int = 0  # receive time of the last value (0: none yet)
