@@ -315,3 +315,23 @@ def test_the_instruments_clock_is_kept_beside_the_receive_time(
             assert rows.astype("int64").tolist() == truth[topic], topic
         else:
             assert rows.isna().all(), topic
+
+
+def test_the_erddap_excerpts_serve_every_variable(exports: dict[str, Path]) -> None:
+    """The datasets.xml excerpts of the scientist's guide and docs/ecosystem.md are
+    for this export: one dataVariable per variable on the observation axis (and the
+    trajectory id), in the file's order, as ERDDAP's EDDTableFromNcCFFiles reads it."""
+    import xml.etree.ElementTree as ET
+
+    import netCDF4
+
+    with netCDF4.Dataset(exports["netcdf"]) as ds:
+        want = [n for n, v in ds.variables.items() if "obs" in v.dimensions or n == "trajectory"]
+    for doc in ("docs/user-guide/datasets.md", "docs/ecosystem.md"):
+        text = (ROOT / doc).read_text()
+        blocks = re.findall(r"```xml\n(<dataset .*?</dataset>)\n```", text, re.S)
+        assert len(blocks) == 1, doc
+        root = ET.fromstring(blocks[0])
+        assert root.get("type") == "EDDTableFromNcCFFiles", doc
+        names = [d.findtext("sourceName") for d in root.findall("dataVariable")]
+        assert names == want, doc

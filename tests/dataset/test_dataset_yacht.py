@@ -224,6 +224,9 @@ def _samples_agree(ds: Any, paths: dict[str, Path], folder: Path, clock: str) ->
         stored = np.array(want, ds[name].encoding["dtype"]).astype(np.float64)
         assert np.array_equal(nc_values(ds, name), stored), topic
         assert np.abs(nc_times(ds, name) - [t for t, _ in samples]).max() < 1000, topic
+    times = [t for samples in truth.values() for t, _ in samples]  # ACDD's coverage
+    assert abs(pd.Timestamp(ds.attrs["time_coverage_start"]).value - min(times)) < 1000
+    assert abs(pd.Timestamp(ds.attrs["time_coverage_end"]).value - max(times)) < 1000
 
 
 def _clocked(folder: Path, clock: str) -> dict[str, list[tuple[int, Any]]]:
@@ -289,3 +292,65 @@ def test_each_option_passes_the_checkers_and_formats_agree(
         else:
             clock = "instrument" if option == "instrument" else "receive"
             _samples_agree(ds, paths, run / "archive", clock)
+
+
+def test_quality_flags_are_ioos_qcs_on_the_instruments_clock(
+    voyage: tuple[Path, Path], tmp_path: Path
+) -> None:
+    """yacht.yaml's four QARTOD tests per topic, run here by ``ioos_qc`` itself on the
+    official reader's samples at the instrument's times (1 Hz: the timed tests run),
+    give the export's flags (the export runs two of them vectorised: qcfast.py)."""
+    import xarray as xr
+    import yaml
+    from ioos_qc import qartod
+
+    paths = _export(voyage, "instrument", tmp_path)
+    config = yaml.safe_load(METADATA.read_text())["qc"]
+    truth = _clocked(voyage[0] / "archive", "instrument")
+    table = pq.read_table(paths["parquet"]).to_pandas()
+    seen: set[int] = set()
+    with xr.open_dataset(paths["netcdf"], mask_and_scale=False) as ds:
+        for topic, tests in config.items():
+            times = np.array([t for t, _ in truth[topic]]).astype("datetime64[ns]")
+            v = np.ma.masked_invalid(np.array([v for _, v in truth[topic]], np.float64))
+            flags = [
+                getattr(qartod, k)(inp=v, tinp=times, **p)
+                if k in ("rate_of_change_test", "flat_line_test")
+                else getattr(qartod, k)(inp=v, **p)
+                for k, p in tests.items()
+            ]
+            want = qartod.qartod_compare(flags).tolist()
+            name = _name(topic)
+            got = ds[f"{name}_qc_agg"].values[0]
+            assert got[got != -127].tolist() == want, topic
+            assert table[table["topic"] == topic]["qc_agg"].tolist() == want, topic
+            seen |= set(want)
+    assert seen > {1}, seen  # the real track is not all PASS
+
+
+@pytest.mark.parametrize("option", list(OPTIONS))
+def test_each_option_gives_the_same_track_in_geojson_and_gpx(
+    voyage: tuple[Path, Path], option: str, tmp_path: Path
+) -> None:
+    """The track formats take every option too: valid GeoJSON (lon, lat) and GPX,
+    the same points in both, all within the capture's own fixes (pynmea2)."""
+    import xml.etree.ElementTree as ET
+
+    run, model = voyage
+    source = run / "records" / "yacht" if option == "received" else run / "archive"
+    out = {}
+    for fmt in ("geojson", "gpx"):
+        out[fmt] = tmp_path / f"yacht.{fmt}"
+        done = modd_dataset(source, model, fmt, out[fmt], METADATA, *OPTIONS[option])
+        assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+    features = json.loads(out["geojson"].read_text())["features"]
+    assert features[0]["geometry"]["type"] == "LineString"
+    line = features[0]["geometry"]["coordinates"]
+    gpx = "{http://www.topografix.com/GPX/1/1}"
+    points = ET.parse(out["gpx"]).getroot().findall(f".//{gpx}trkpt")
+    assert len(points) == len(features) - 1 == len(line) >= 2
+    assert [[float(p.get("lon", "")), float(p.get("lat", ""))] for p in points] == line
+    fixes = [pynmea2.parse(ln.decode().strip()) for ln in _lines() if ln.startswith(b"$GPGGA")]
+    lats, lons = [f.latitude for f in fixes], [f.longitude for f in fixes]
+    for lon, lat in line:
+        assert min(lats) <= lat <= max(lats) and min(lons) <= lon <= max(lons), (lat, lon)
