@@ -128,6 +128,9 @@ def exports(
         done = _modd_dataset(archive, model, fmt, paths[fmt])
         assert done.returncode == 0, done.stderr
         assert "Traceback" not in done.stderr
+        if fmt == "netcdf":  # the only variables without a CF standard name, said
+            unnamed = ", ".join(f"usv.accelerometer.accel_{a}" for a in "xyz")
+            assert f"note: no CF standard name for {unnamed} (" in done.stderr, done.stderr
     return paths
 
 

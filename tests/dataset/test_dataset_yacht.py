@@ -46,7 +46,7 @@ BIN = Path(sys.executable).parent
 CAPTURE = ROOT / "tests" / "sensors" / "captures" / "bundg_zeus_9.log"
 METADATA = Path(__file__).with_name("yacht.yaml")
 PACE = 10.0  # times faster than the chartplotter sent it (~146 s of sailing)
-PERIOD_S = 10
+PERIOD_S = 2
 MODEL = """
 Drone yacht "Sailing yacht, B&G chartplotter" {{
     Sensors {{
@@ -198,6 +198,7 @@ def _export(voyage: tuple[Path, Path], option: str, out: Path) -> dict[str, Path
         paths[fmt] = out / f"yacht-{option}.{suffix}"
         done = modd_dataset(source, model, fmt, paths[fmt], METADATA, *OPTIONS[option])
         assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+        assert "no CF standard name" not in done.stderr, done.stderr
     return paths
 
 
