@@ -26,7 +26,7 @@ static_checks() {
   # (each tree's conftest.py puts its folder on sys.path): the same folders are
   # mypy's bases here. The conftest.py files share one module name, so one run each.
   local tests_path=tests/subbroker:tests/runtime:tests/mavlink:tests/ecosystem:tests/bench:tests/sensors
-  tests_path+=:tests/deploy:tests/twodrones:tests:backend/tests
+  tests_path+=:tests/deploy:tests/twodrones:tests/dataset:tests:backend/tests
   MYPYPATH=$tests_path mypy --no-error-summary --explicit-package-bases \
     --exclude '/conftest\.py$' tests
   for c in tests/*/conftest.py; do

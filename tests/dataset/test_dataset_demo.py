@@ -2,8 +2,8 @@
 --simulate` writes an archive; `modd dataset` exports it in the five formats,
 plain, resampled and received, with a data manager's metadata (dataset.yaml
 here). Checked against tools we did not write: the IOOS compliance checker
-(CF-1.11, ACDD-1.3, IOOS-1.2, and the NCEI trajectory template through
-cc-plugin-ncei), pocean-core's DSG readers, xarray's and cf_xarray's CF
+(CF-1.11 and CF-1.6, ACDD-1.3, IOOS-1.2, and the NCEI trajectory template
+through cc-plugin-ncei), pocean-core's DSG readers, xarray's and cf_xarray's CF
 decoding, the official `mcap` reader (every value), and the simulator's own
 track (every position)."""
 
@@ -17,14 +17,21 @@ import signal
 import subprocess
 import sys
 import time
-import warnings
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pyarrow.csv as pcsv
 import pyarrow.parquet as pq
 import pytest
+from checkers import (
+    assert_compliant,
+    dsg_readers,
+    modd_dataset,
+    nc_times,
+    nc_values,
+    official,
+    official_windows,
+)
 from mcap.reader import make_reader
 from modd.ports import free_port
 from modd.sim.track import survey_pose
@@ -103,23 +110,10 @@ def _archived_fixes(folder: Path) -> int:
     return n
 
 
-def _official(folder: Path) -> dict[str, list[tuple[int, Any]]]:
-    out: dict[str, list[tuple[int, Any]]] = {}
-    for path in sorted(folder.glob("*.mcap")):
-        with path.open("rb") as f:
-            for _s, ch, m in make_reader(f).iter_messages(log_time_order=False):
-                out.setdefault(ch.topic, []).append((m.log_time, json.loads(m.data)["value"]))
-    return out
-
-
 def _modd_dataset(
     files: Path, model: Path, fmt: str, out: Path, *more: str
 ) -> subprocess.CompletedProcess[str]:
-    command = [str(BIN / "modd"), "dataset", str(files), *more, "--model", str(model)]
-    command += ["--metadata", str(METADATA)]
-    return subprocess.run(
-        [*command, "--format", fmt, "-o", str(out)], capture_output=True, text=True, timeout=120
-    )
+    return modd_dataset(files, model, fmt, out, METADATA, *more)
 
 
 @pytest.fixture(scope="module")
@@ -134,71 +128,13 @@ def exports(
         done = _modd_dataset(archive, model, fmt, paths[fmt])
         assert done.returncode == 0, done.stderr
         assert "Traceback" not in done.stderr
+        if fmt == "netcdf":  # the only variables without a CF standard name, said
+            unnamed = ", ".join(f"usv.accelerometer.accel_{a}" for a in "xyz")
+            assert f"note: no CF standard name for {unnamed} (" in done.stderr, done.stderr
     return paths
 
 
-SUITES = ("cf:1.11", "acdd:1.3", "ioos:1.2", "ncei-trajectory:2.0")
-
-
-def _cc_failures(path: Path, out: Path) -> dict[str, list[tuple[str, Any]]]:
-    """The IOOS compliance checker's failed high-priority checks, per suite."""
-    tests = [a for suite in SUITES for a in ("--test", suite)]
-    subprocess.run(
-        [str(BIN / "compliance-checker"), *tests, "-f", "json", "-o", str(out), str(path)],
-        capture_output=True,
-        timeout=300,
-    )
-    results = json.loads(out.read_text())
-    return {
-        suite: [
-            (r["name"], r["msgs"]) for r in res["high_priorities"] if r["value"][0] != r["value"][1]
-        ]
-        for suite, res in results.items()
-    }
-
-
-def _assert_compliant(failed: dict[str, list[tuple[str, Any]]], unnamed: set[str]) -> None:
-    """0 high-priority failures, but for what the checkers cannot pass:"""
-    assert set(failed) == set(SUITES)
-    assert failed["cf:1.11"] == []
-    # ACDD rates standard_name "highly recommended": the CF table has none for a
-    # platform's linear acceleration, so the demo's three accelerometer axes go without.
-    missing = {
-        re.sub(r'.*variable "(\w+)".*', r"\1", name): msgs for name, msgs in failed["acdd:1.3"]
-    }
-    assert set(missing) <= unnamed and all(m == ["standard_name"] for m in missing.values())
-    # IOOS: the NDBC/GTS ingest check always fails, by design, to list the variables that
-    # qualify (compliance-checker issue 759); nothing else may.
-    assert [name for name, _ in failed["ioos:1.2"]] == ["NDBC/GTS Ingest Requirements"]
-    # NCEI 2.0 wants the literal "CF-1.6" in Conventions; the file says CF-1.11.
-    assert failed["ncei-trajectory:2.0"] == [
-        (
-            "Required global attributes",
-            [
-                'Conventions attribute is missing or is not equal to "CF-1.6, ACDD-1.3": '
-                "CF-1.11, ACDD-1.3, IOOS-1.2"
-            ],
-        )
-    ]
-
-
-def _dsg_readers(path: Path) -> None:
-    """pocean-core recognises the trajectory; cf_xarray finds its axes and its id."""
-    import cf_xarray  # noqa: F401  (registers the .cf accessor)
-    import xarray as xr
-    from pocean.cf import CFDataset
-    from pocean.dsg import IncompleteMultidimensionalTrajectory as IMT
-
-    with CFDataset.load(str(path)) as nc:
-        assert isinstance(nc, IMT)
-        with warnings.catch_warnings():  # pocean casts numpy's masked fill to datetime
-            warnings.simplefilter("ignore", RuntimeWarning)
-            frame = nc.to_dataframe()
-        # pocean keeps the rows of variables with a standard name (not the accelerometer's)
-        assert 0 < len(frame) <= nc.dimensions["obs"].size
-    with xr.open_dataset(path) as ds:
-        assert ds.cf.cf_roles == {"trajectory_id": ["trajectory"]}
-        assert ds.cf.axes == {"X": ["lon"], "Y": ["lat"], "Z": ["alt"], "T": ["time"]}
+AXES = {"X": ["lon"], "Y": ["lat"], "Z": ["alt"], "T": ["time"]}
 
 
 ACCEL = {f"accelerometer_accel_{a}" for a in "xyz"}
@@ -207,8 +143,8 @@ ACCEL = {f"accelerometer_accel_{a}" for a in "xyz"}
 def test_netcdf_passes_the_ioos_compliance_checker(
     exports: dict[str, Path], tmp_path: Path
 ) -> None:
-    _assert_compliant(_cc_failures(exports["netcdf"], tmp_path / "cc.json"), ACCEL)
-    _dsg_readers(exports["netcdf"])
+    assert_compliant(exports["netcdf"], tmp_path / "cc.json", ACCEL)
+    dsg_readers(exports["netcdf"], AXES)
 
 
 def test_resampled_netcdf_passes_the_checkers(
@@ -218,8 +154,8 @@ def test_resampled_netcdf_passes_the_checkers(
     out = tmp_path / "r.nc"
     done = _modd_dataset(archive, model, "netcdf", out, "--resample", "2")
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
-    _assert_compliant(_cc_failures(out, tmp_path / "cc.json"), ACCEL)
-    _dsg_readers(out)
+    assert_compliant(out, tmp_path / "cc.json", ACCEL)
+    dsg_readers(out, AXES)
     tables = {}
     for fmt in ("parquet", "csv"):
         path = tmp_path / f"r.{fmt}"
@@ -262,13 +198,7 @@ def test_the_received_windows_are_the_records(
     reader), is in the export at its end; its NetCDF passes the IOOS checker."""
     import xarray as xr
 
-    truth: dict[str, list[tuple[int, float]]] = {}
-    for path in sorted((mission[0].parent / "records").rglob("*.mcap")):
-        with path.open("rb") as f:
-            for _s, ch, m in make_reader(f).iter_messages(log_time_order=False):
-                d = json.loads(m.data)
-                v = float("nan") if d["value"] is None else float(d["value"])
-                truth.setdefault(ch.topic.rsplit("/", 1)[1], []).append((d["end_ns"], v))
+    truth = official_windows(mission[0].parent / "records")
     assert len(truth) == 14 and all(len(v) >= 2 for v in truth.values())
     table = pq.read_table(received["parquet"]).to_pandas()
     csv = pcsv.read_csv(received["csv"]).to_pandas()
@@ -279,23 +209,11 @@ def test_the_received_windows_are_the_records(
             assert np.allclose(rows["value"], [v for _, v in windows], equal_nan=True), name
             values = csv[csv["topic"] == name]["value"].to_numpy(dtype=float)
             assert np.allclose(values, [v for _, v in windows], equal_nan=True), name
-            got = _nc_values(ds, name)
+            got = nc_values(ds, name)
             assert np.array_equal(got, [v for _, v in windows if not math.isnan(v)]), name
     accel = {f"sub_{i}" for i in range(1, 8)}
-    _assert_compliant(_cc_failures(received["netcdf"], tmp_path / "cc.json"), accel)
-    _dsg_readers(received["netcdf"])
-
-
-def _nc_values(ds: Any, name: str) -> np.ndarray:
-    """A variable's values in a MoDD NetCDF (xarray, CF decoding): the rows where it
-    is not the fill value (a row is one sample of one variable)."""
-    values = np.asarray(ds[name].values[0])
-    return np.asarray(values[~np.isnan(values)])
-
-
-def _nc_times(ds: Any, name: str) -> np.ndarray:
-    times = np.asarray(ds["time"].values[0]).astype("datetime64[ns]").astype("int64")
-    return np.asarray(times[~np.isnan(ds[name].values[0])])
+    assert_compliant(received["netcdf"], tmp_path / "cc.json", accel)
+    dsg_readers(received["netcdf"], AXES)
 
 
 def test_every_value_is_the_archives(
@@ -303,7 +221,7 @@ def test_every_value_is_the_archives(
 ) -> None:
     import xarray as xr
 
-    truth = _official(mission[0])
+    truth = official(mission[0])
     table = pq.read_table(exports["parquet"]).to_pandas()
     csv = pcsv.read_csv(exports["csv"]).to_pandas()
     assert len(table) == len(csv) == sum(len(v) for v in truth.values())
@@ -315,8 +233,8 @@ def test_every_value_is_the_archives(
             name = topic.split(".", 1)[1].replace(".", "_")
             stored = np.float64 if isinstance(samples[0][1], int) else ds[name].encoding["dtype"]
             want = np.array([v for _, v in samples], stored).astype(np.float64)
-            assert np.array_equal(_nc_values(ds, name), want), topic
-            times = _nc_times(ds, name)
+            assert np.array_equal(nc_values(ds, name), want), topic
+            times = nc_times(ds, name)
             assert np.abs(times - [t for t, _ in samples]).max() < 1000, topic
 
 
@@ -330,7 +248,7 @@ def test_quality_flags_are_ioos_qcs_on_the_archive(
     from ioos_qc import qartod
 
     config = yaml.safe_load(METADATA.read_text())["qc"]
-    truth = _official(mission[0])
+    truth = official(mission[0])
     table = pq.read_table(exports["parquet"]).to_pandas()
     with xr.open_dataset(exports["netcdf"], mask_and_scale=False) as ds:
         for topic in ("usv.ctd.water_temperature", "usv.sounder.depth"):
@@ -400,3 +318,23 @@ def test_the_instruments_clock_is_kept_beside_the_receive_time(
             assert rows.astype("int64").tolist() == truth[topic], topic
         else:
             assert rows.isna().all(), topic
+
+
+def test_the_erddap_excerpts_serve_every_variable(exports: dict[str, Path]) -> None:
+    """The datasets.xml excerpts of the scientist's guide and docs/ecosystem.md are
+    for this export: one dataVariable per variable on the observation axis (and the
+    trajectory id), in the file's order, as ERDDAP's EDDTableFromNcCFFiles reads it."""
+    import xml.etree.ElementTree as ET
+
+    import netCDF4
+
+    with netCDF4.Dataset(exports["netcdf"]) as ds:
+        want = [n for n, v in ds.variables.items() if "obs" in v.dimensions or n == "trajectory"]
+    for doc in ("docs/user-guide/datasets.md", "docs/ecosystem.md"):
+        text = (ROOT / doc).read_text()
+        blocks = re.findall(r"```xml\n(<dataset .*?</dataset>)\n```", text, re.S)
+        assert len(blocks) == 1, doc
+        root = ET.fromstring(blocks[0])
+        assert root.get("type") == "EDDTableFromNcCFFiles", doc
+        names = [d.findtext("sourceName") for d in root.findall("dataVariable")]
+        assert names == want, doc

@@ -189,7 +189,7 @@ def test_netcdf_is_cf_and_holds_the_values(archive: Path, tmp_path: Path) -> Non
     truth = official(archive)
     with xr.open_dataset(out) as ds:
         assert ds.attrs["featureType"] == "trajectory"
-        assert ds.attrs["Conventions"] == "CF-1.11, ACDD-1.3, IOOS-1.2"
+        assert ds.attrs["Conventions"] == "CF-1.11, CF-1.6, ACDD-1.3, IOOS-1.2"
         assert ds["time"].dims == ds["ctd_temp"].dims == ("trajectory", "obs")
         assert ds.sizes["obs"] == sum(len(v) for v in truth.values())
         temp = ds["ctd_temp"]

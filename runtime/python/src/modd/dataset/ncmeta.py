@@ -18,7 +18,14 @@ import numpy as np
 from .export import Summary
 from .plan import ExportPlan
 
-CONVENTIONS = "CF-1.11, ACDD-1.3, IOOS-1.2"
+#: CF-1.11 first (the version the file is written to: readers that parse the attribute
+#: take the first CF entry), then CF-1.6: the file is also a CF-1.6 trajectory (every
+#: feature it uses is in CF-1.6 but ``units_metadata``, an attribute CF-1.6 ignores; the
+#: tests run compliance-checker ``cf:1.6`` on it), and the NCEI trajectory template 2.0,
+#: whose checker (cc-plugin-ncei 2.0.4, ``ncei_base.py`` line 1104,
+#: ``accepted_conventions = ["CF-1.6", "ACDD-1.3"]``) fails a file, high priority,
+#: without the literal "CF-1.6" in the list.
+CONVENTIONS = "CF-1.11, CF-1.6, ACDD-1.3, IOOS-1.2"
 NCEI_TEMPLATE = "NCEI_NetCDF_Trajectory_Template_v2.0"
 STANDARD_NAMES = "CF Standard Name Table v93"
 

@@ -19,6 +19,7 @@ import numpy as np
 
 from .plan import ExportPlan, PlanError, Variable
 from .qcconfig import QcConfig
+from .qcfast import fast_test
 
 #: Samples of a topic's previous batch kept as context for the next (spike, rate of
 #: change and flat line look back; a flat line longer than this is cut at a batch's start).
@@ -77,12 +78,14 @@ def run_tests(
     """The aggregate flag (uint8) of ``tests`` on one series, as ``ioos_qc`` computes it."""
     from ioos_qc import qartod
 
-    inp = np.ma.masked_invalid(value.astype(np.float64))
+    plain = value.astype(np.float64)
+    inp = np.ma.masked_invalid(plain)
     tinp = time_ns.astype("datetime64[ns]")
     flags = []
     for name, params in tests.items():
-        fn = getattr(qartod, name)
-        args = {"inp": inp, "tinp": tinp} if name in TIMED else {"inp": inp}
+        fast = fast_test(name, params)  # the same flags, vectorised (qcfast.py)
+        fn = fast or getattr(qartod, name)
+        args = {"inp": plain if fast else inp} | ({"tinp": tinp} if name in TIMED else {})
         flags.append(np.asarray(fn(**args, **params)))
     return np.asarray(qartod.qartod_compare(flags), dtype=np.uint8)
 

@@ -1,0 +1,62 @@
+"""The vectorised QARTOD tests (modd.dataset.qcfast) give ``ioos_qc`` 3.0's flags,
+flag for flag: random series with missing values, infinities, spikes and flat
+stretches, at every length from 0 to a few hundred, every threshold shape."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from ioos_qc import qartod
+from modd.dataset import qcfast
+
+
+def _series(rng: np.random.Generator, n: int) -> np.ndarray:
+    v = np.cumsum(rng.normal(0, 0.3, n))
+    if n:
+        spikes = rng.random(n) < 0.05
+        v[spikes] += rng.normal(0, 20, int(spikes.sum()))
+        v[rng.random(n) < 0.1] = np.nan
+        v[rng.random(n) < 0.01] = np.inf
+        start = int(rng.integers(0, n))
+        v[start : start + int(rng.integers(0, 40))] = v[start]  # a stuck sensor
+    return v
+
+
+def _library(fn: str, *args: object, **kwargs: object) -> np.ndarray:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return np.asarray(getattr(qartod, fn)(*args, **kwargs), dtype=np.uint8)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_spike_test_is_ioos_qcs(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for n in (1, 2, 3, 4, 7, 50, int(rng.integers(100, 400))):
+        v = _series(rng, n)
+        for s, f in ((1.0, 3.0), (0.5, None), (None, 2.0), (0, 0), (2.0, 1.0)):
+            want = _library("spike_test", inp=v, suspect_threshold=s, fail_threshold=f)
+            got = qcfast.spike_test(v, s, f)
+            assert got.tolist() == want.tolist(), (n, s, f, v)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_flat_line_test_is_ioos_qcs(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for n in (0, 1, 2, 3, 4, 5, 9, 10, 11, 60, int(rng.integers(100, 400))):
+        v = _series(rng, n)
+        step = int(rng.choice([1, 2, 3, 5]))
+        t = (np.arange(n) * step * 10**9 + int(rng.integers(0, 10**9))).astype("datetime64[ns]")
+        cases = ((3, 6, 0.01), (10, 20, 0.5), (0, 5, 0.1), (5.7, 9.9, 1e-9), (1, 2, 0), (8, 3, 0.5))
+        for s, f, tol in cases:
+            want = _library(
+                "flat_line_test",
+                inp=v,
+                tinp=t,
+                suspect_threshold=s,
+                fail_threshold=f,
+                tolerance=tol,
+            )
+            got = qcfast.flat_line_test(v, t, s, f, tol)
+            assert got.tolist() == want.tolist(), (n, step, s, f, tol, v)
