@@ -10,10 +10,10 @@
  * drone's archive (`modd up --simulate`).
  */
 import { execFileSync } from "node:child_process";
-import { mkdirSync } from "node:fs";
+import { mkdirSync, writeFileSync } from "node:fs";
 import { dirname, join, resolve } from "node:path";
 import { fileURLToPath } from "node:url";
-import { expectText, expectVisible } from "./journey.mjs";
+import { expectText, expectVisible, waitUntil } from "./journey.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const python = resolve(here, "../../../.venv/bin/python");
@@ -41,7 +41,29 @@ const FILLED = {
   "Instrument accelerometer serial number": "4711",
 };
 
-export function metadataJourney({ page, imagesDir, model, liveValues }) {
+//: QARTOD tests of the accelerometer's x axis: on its 2 s AVERAGE windows live (sub_1), on its samples in the file.
+const QC = {
+  "usv.accelerometer.accel_x": {
+    spike_test: { suspect_threshold: 2, fail_threshold: 5 },
+    flat_line_test: { suspect_threshold: 6, fail_threshold: 12, tolerance: 0.001 },
+  },
+};
+
+/** The backend's API as the admin (a Bearer token), for what the journey sets up off-screen. */
+async function adminApi(baseUrl, password) {
+  const r = await fetch(`${baseUrl}/api/auth/login`, { method: "POST", headers: { "content-type": "application/json" },
+    body: JSON.stringify({ username: "admin", password }) });
+  const { token } = await r.json();
+  return async (method, path, body) => {
+    const res = await fetch(`${baseUrl}${path}`, { method, headers: { "content-type": "application/json", authorization: `Bearer ${token}` },
+      body: body === undefined ? undefined : JSON.stringify(body), signal: AbortSignal.timeout(60000) });
+    const text = await res.text();
+    if (!res.ok) throw new Error(`${method} ${path}: HTTP ${res.status} ${text.slice(0, 300)}`);
+    return res.headers.get("content-type")?.includes("json") ? JSON.parse(text) : text;
+  };
+}
+
+export function metadataJourney({ page, imagesDir, model, liveValues, baseUrl, password, faultsFile }) {
   mkdirSync(imagesDir, { recursive: true });
   const panel = (name) => page.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
   const form = page.getByRole("form", { name: "Dataset metadata" });
@@ -96,6 +118,49 @@ export function metadataJourney({ page, imagesDir, model, liveValues }) {
       await expectVisible(notes);
       await expectText(notes, /ask for [^;]*publisher_email/);
       await page.screenshot({ path: join(imagesDir, "export-notes.png") });
+    }],
+
+    ["quality flags: a spike and a stuck value injected into the simulated accelerometer, marked in the Monitor and flagged in the file", async () => {
+      const api = await adminApi(baseUrl, password);
+      const project = (await api("GET", "/api/projects")).find((p) => p.name === "bay-survey");
+      if (!project) throw new Error("no project bay-survey");
+      // The QARTOD tests (the form keeps a saved qc section), then the project deployed: the backend
+      // flags the live windows of what runs on the drone with its project's tests.
+      const meta = await api("GET", `/api/projects/${project.id}/dataset-metadata`);
+      await api("PUT", `/api/projects/${project.id}/dataset-metadata`, { base_revision: meta.revision, metadata: { ...meta.metadata, qc: QC } });
+      const deployed = await api("POST", `/api/projects/${project.id}/deployments`, { revision: null });
+      if (deployed.status !== "acked") throw new Error(`deploy: ${JSON.stringify(deployed).slice(0, 300)}`);
+      await panel("Monitor");
+      const box = page.getByRole("checkbox", { name: /sub_1 / });
+      if (!(await box.isChecked())) await box.check();
+      await expectText(page.getByTestId("last-sub_1"), /last -?\d/, 60000);
+      const chart = page.locator("figure.live-chart", { has: page.getByTestId("last-sub_1") });
+      const caption = chart.getByTestId("chart-gaps");
+      const bad = async () => Number(/(\d+) bad\)/.exec((await caption.textContent()) ?? "")?.[1] ?? 0);
+      const before = await bad();
+      const now = Date.now() / 1000;
+      const inject = (fault) => writeFileSync(faultsFile, JSON.stringify({ faults: [{ topic: "usv.accelerometer.accel_x", ...fault }] }));
+      // A spike: one sample +500 m/s² (its 2 s window's mean +10), in 3 s.
+      inject({ kind: "spike", at: now + 3, offset: 500 });
+      await waitUntil(async () => (await bad()) > before, 30000, async () => `after the spike, the caption says "${await caption.textContent()}"`);
+      await page.waitForTimeout(8000); // the windows around it flagged for good (a flag revises the window before only)
+      const spiked = await bad();
+      await page.screenshot({ path: join(imagesDir, "monitor-qc-spike.png") });
+      // Then the axis stuck for 20 s: FAIL once 12 s of its windows are flat (flat_line_test, above).
+      const flatFrom = Date.now() / 1000 + 1;
+      inject({ kind: "flat", from: flatFrom, to: flatFrom + 20 });
+      await waitUntil(async () => (await bad()) > spiked, 60000, async () => `after the flat line, the caption says "${await caption.textContent()}"`);
+      if (Date.now() / 1000 - flatFrom < 10) throw new Error(`flagged ${(Date.now() / 1000 - flatFrom).toFixed(1)} s into the flat line: not by the flat line test`);
+      await page.screenshot({ path: join(imagesDir, "monitor-qc.png") });
+      // The file: the spike's sample flagged FAIL (4) in the CSV's qc_agg column (the export's ioos_qc run).
+      const csv = await api("POST", "/api/drones/usv/archives/export", { model, format: "csv", topics: ["usv.accelerometer.accel_x"],
+        project: project.id, start_ns: Math.round((now - 5) * 1e9) });
+      const rows = csv.trim().split("\n");
+      const head = rows[0].split(",").map((h) => h.replace(/"/g, ""));
+      const [value, qc] = [head.indexOf("value"), head.indexOf("qc_agg")];
+      if (qc < 0) throw new Error(`no qc_agg column: ${rows[0]}`);
+      const flagged = rows.slice(1).map((r) => r.split(",")).filter((c) => Number(c[value]) > 100);
+      if (flagged.length !== 1 || flagged[0][qc] !== "4") throw new Error(`the spike in the file: ${JSON.stringify(flagged)}`);
     }],
   ];
 }
