@@ -67,6 +67,16 @@ export function metadataJourney({ page, imagesDir, model, liveValues, baseUrl, p
   mkdirSync(imagesDir, { recursive: true });
   const panel = (name) => page.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
   const form = page.getByRole("form", { name: "Dataset metadata" });
+  // The panel over the whole window, for its photographs.
+  const expand = async (on) => {
+    const b = page.locator(".dock-toggle");
+    if ((await b.getAttribute("aria-pressed")) !== String(on)) await b.click();
+  };
+  const photo = async (locator, name) => {
+    await locator.scrollIntoViewIfNeeded();
+    await page.waitForTimeout(300);
+    await page.screenshot({ path: join(imagesDir, `${name}.png`) });
+  };
   return [
     ["dataset metadata: filled, a located fault, saved with the project", async () => {
       if (!liveValues) throw new Error("no simulated drone: no archive to export");
@@ -75,6 +85,7 @@ export function metadataJourney({ page, imagesDir, model, liveValues, baseUrl, p
       await page.locator('input[type="file"]').setInputFiles({ name: "bay-survey.json", mimeType: "application/json", buffer: Buffer.from(JSON.stringify(model)) });
       await page.locator('.react-flow__node[data-id="drone"]').waitFor({ state: "visible", timeout: 20000 });
       await panel("Archives");
+      await expand(true);
       const files = page.getByRole("table", { name: "Archive files" });
       await expectText(files, /\.mcap/, 20000);
       await files.locator("button.link").first().click();
@@ -84,11 +95,11 @@ export function metadataJourney({ page, imagesDir, model, liveValues, baseUrl, p
       await form.getByLabel("Naming authority", { exact: true }).fill("modd");
       await form.getByRole("button", { name: "Save metadata" }).click();
       await expectText(form.locator("#dm-naming_authority-error"), /not reversed DNS/);
-      await page.screenshot({ path: join(imagesDir, "dataset-metadata-error.png") });
+      await photo(form.getByLabel("Naming authority", { exact: true }), "dataset-metadata-error");
       await form.getByLabel("Naming authority", { exact: true }).fill("org.example.marine");
       await form.getByRole("button", { name: "Save metadata" }).click();
       await expectText(form.getByRole("status"), /Saved revision 1/);
-      await page.screenshot({ path: join(imagesDir, "dataset-metadata.png") });
+      await photo(form.getByLabel("Title", { exact: true }), "dataset-metadata");
     }],
 
     ["dataset metadata: the NetCDF export carries it (read with netCDF4), named by the backend, notes shown", async () => {
@@ -117,7 +128,7 @@ export function metadataJourney({ page, imagesDir, model, liveValues, baseUrl, p
       const notes = exportForm.getByRole("list", { name: "Export notes" });
       await expectVisible(notes);
       await expectText(notes, /ask for [^;]*publisher_email/);
-      await page.screenshot({ path: join(imagesDir, "export-notes.png") });
+      await photo(notes, "export-notes");
     }],
 
     ["quality flags: a spike and a stuck value injected into the simulated accelerometer, marked in the Monitor and flagged in the file", async () => {
@@ -131,6 +142,7 @@ export function metadataJourney({ page, imagesDir, model, liveValues, baseUrl, p
       const deployed = await api("POST", `/api/projects/${project.id}/deployments`, { revision: null });
       if (deployed.status !== "acked") throw new Error(`deploy: ${JSON.stringify(deployed).slice(0, 300)}`);
       await panel("Monitor");
+      await expand(true);
       const box = page.getByRole("checkbox", { name: /sub_1 / });
       if (!(await box.isChecked())) await box.check();
       await expectText(page.getByTestId("last-sub_1"), /last -?\d/, 60000);
@@ -145,13 +157,14 @@ export function metadataJourney({ page, imagesDir, model, liveValues, baseUrl, p
       await waitUntil(async () => (await bad()) > before, 30000, async () => `after the spike, the caption says "${await caption.textContent()}"`);
       await page.waitForTimeout(8000); // the windows around it flagged for good (a flag revises the window before only)
       const spiked = await bad();
-      await page.screenshot({ path: join(imagesDir, "monitor-qc-spike.png") });
+      await photo(chart, "monitor-qc-spike");
       // Then the axis stuck for 20 s: FAIL once 12 s of its windows are flat (flat_line_test, above).
       const flatFrom = Date.now() / 1000 + 1;
       inject({ kind: "flat", from: flatFrom, to: flatFrom + 20 });
       await waitUntil(async () => (await bad()) > spiked, 60000, async () => `after the flat line, the caption says "${await caption.textContent()}"`);
       if (Date.now() / 1000 - flatFrom < 10) throw new Error(`flagged ${(Date.now() / 1000 - flatFrom).toFixed(1)} s into the flat line: not by the flat line test`);
-      await page.screenshot({ path: join(imagesDir, "monitor-qc.png") });
+      await photo(chart, "monitor-qc");
+      await expand(false);
       // The file: the spike's sample flagged FAIL (4) in the CSV's qc_agg column (the export's ioos_qc run).
       const csv = await api("POST", "/api/drones/usv/archives/export", { model, format: "csv", topics: ["usv.accelerometer.accel_x"],
         project: project.id, start_ns: Math.round((now - 5) * 1e9) });

@@ -21,13 +21,14 @@ from ..errors import ApiError
 from ..roles import EDITORS
 from ..schemas import Id, Responses
 from ..tables import DatasetMetadataVersion
-from ..versions import get_project, head_version, model_of
+from ..versions import get_project, head_version, model_of, stale
 
 router = APIRouter(prefix="/api/projects", tags=["dataset metadata"])
 NOT_FOUND: Responses = {404: {"description": "no such project or revision"}}
 Revision = Annotated[int | None, Query(ge=1, le=2**31 - 1)]
 #: What a metadata document may hold, in bytes of its JSON (a dataset.yaml is a few kB).
 MAX_METADATA_BYTES = 256_000
+WHAT = "the dataset metadata"
 
 
 class MetadataIn(BaseModel):
@@ -119,7 +120,7 @@ def save_metadata(project_id: Id, body: MetadataIn, db: DbDep, user: UserDep) ->
     head = head_metadata(db, project_id)
     current = head.revision if head is not None else 0
     if body.base_revision != current:
-        raise _stale(body.base_revision, current)
+        raise stale(body.base_revision, current, WHAT)
     row = DatasetMetadataVersion(
         project_id=project_id,
         revision=current + 1,
@@ -131,7 +132,7 @@ def save_metadata(project_id: Id, body: MetadataIn, db: DbDep, user: UserDep) ->
         db.commit()
     except IntegrityError:
         db.rollback()
-        raise _stale(body.base_revision, _head_number(db, project_id)) from None
+        raise stale(body.base_revision, _head_number(db, project_id), WHAT) from None
     return metadata_out(project_id, row, db)
 
 
@@ -154,12 +155,3 @@ def _head_number(db: Db, project_id: int) -> int:
         )
     )
     return int(rev or 0)
-
-
-def _stale(base: int, current: int) -> ApiError:
-    return ApiError(
-        409,
-        f"the dataset metadata was saved meanwhile: you edited revision {base}, the current "
-        f"one is {current}; reload and merge",
-        current_revision=current,
-    )
