@@ -85,3 +85,15 @@ def test_the_file_is_read_again_and_a_bad_one_injects_nothing(
     assert faults.apply(TOPIC, 2.0, 2.0) == 2.0
     assert "faults[0]: kind 'wobble': spike or flat; no fault injected" in capsys.readouterr().err
     assert faults.apply(TOPIC, 3.0, True) is True  # a bool is never offset
+
+
+def test_a_simulated_instrument_carries_the_faults_too(tmp_path: Path) -> None:
+    from modd.sim.instruments import Instrument
+
+    path = tmp_path / "faults.json"
+    spike = {"topic": "usv.sounder.depth", "kind": "spike", "at": 10.0, "offset": 100}
+    path.write_text(json.dumps({"faults": [spike]}))
+    inst = object.__new__(Instrument)  # its values only: no device opened
+    inst.start, inst.faults = 0.0, FaultFile(str(path))
+    inst.signals = {"usv.sounder.depth": lambda t, p: 3.0}
+    assert [inst.values(t)["usv.sounder.depth"] for t in (9.0, 10.0, 11.0)] == [3.0, 103.0, 3.0]

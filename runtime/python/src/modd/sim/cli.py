@@ -156,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
         from .instruments import start_instruments
 
         try:
-            threads += start_instruments(model, start, stop, log)
+            threads += start_instruments(model, start, stop, log, faults)
         except OSError as exc:
             print(f"modd-sim: cannot simulate the instruments: {exc}", file=sys.stderr)
             stop.set()
