@@ -17,6 +17,7 @@ from typing import Any
 from modd_contracts.keys import check_name, sub_key, subscribe_key
 
 from .hub import SubscriptionHub
+from .liveqc import LiveQc
 from .relay import DropOldestQueue
 from .zenoh_session import ZenohSession
 
@@ -58,9 +59,17 @@ class LiveRelay:
         self.counts: Counter[int] = per_user_counts if per_user_counts is not None else Counter()
         self._subs: set[str] = set()
         self._started = False
+        #: QARTOD flags per subscriber with tests configured (liveqc.py)
+        self._qc: dict[str, LiveQc] = {}
 
     def _on_value(self, name: str, payload: bytes) -> None:
-        self.queue.put({"type": "value", "subscriber": name, "data": _decode(payload)})
+        data = _decode(payload)
+        message: dict[str, Any] = {"type": "value", "subscriber": name, "data": data}
+        qc = self._qc.get(name)
+        flags = qc.flags(data) if qc is not None else None
+        if flags is not None:
+            message["qc"] = flags
+        self.queue.put(message)
 
     def _on_status(self, payload: bytes) -> None:
         self.queue.put({"type": "status", "data": _decode(payload)})
@@ -69,9 +78,16 @@ class LiveRelay:
         self.hub.add_status(self.drone, self._on_status)
         self._started = True
 
-    def subscribe(self, subscriber: object) -> dict[str, Any]:
+    def subscribe(
+        self, subscriber: object, qc_tests: dict[str, Any] | None = None
+    ) -> dict[str, Any]:
+        """Relay the subscriber's values (flagged by ``qc_tests[subscriber]``'s QARTOD
+        tests when it has some: liveqc.py)."""
         name = check_name("subscriber", subscriber)
         key = sub_key(self.drone, name)
+        tests = (qc_tests or {}).get(name)
+        if tests and name not in self._qc:
+            self._qc[name] = LiveQc(tests)
         if name not in self._subs:
             if len(self._subs) >= self.per_socket:
                 raise CapReached(f"at most {self.per_socket} subscriptions per connection")
@@ -84,6 +100,7 @@ class LiveRelay:
 
     def unsubscribe(self, subscriber: object) -> dict[str, Any]:
         name = check_name("subscriber", subscriber)
+        self._qc.pop(name, None)
         if name in self._subs:
             self._subs.discard(name)
             self._release(1)

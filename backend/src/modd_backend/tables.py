@@ -65,6 +65,22 @@ class ModelVersion(Base):
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
 
 
+class DatasetMetadataVersion(Base):
+    """One save of a project's dataset metadata (ACDD/IOOS attributes, platform,
+    instruments, QARTOD tests: what ``dataset.yaml`` holds): revision 1, 2, ...
+    per project, beside the model's revisions."""
+
+    __tablename__ = "dataset_metadata_versions"
+    __table_args__ = (UniqueConstraint("project_id", "revision"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    project_id: Mapped[int] = mapped_column(ForeignKey("projects.id", ondelete="CASCADE"))
+    revision: Mapped[int]
+    metadata_json: Mapped[str] = mapped_column(Text)
+    author: Mapped[str] = mapped_column(String(64))
+    created_at: Mapped[datetime] = mapped_column(default=utcnow)
+
+
 class Deployment(Base):
     """One deploy of a model version to a drone, and how it ended."""
 

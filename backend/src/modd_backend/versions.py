@@ -88,7 +88,7 @@ def save_version(
     current = head.revision if head is not None else 0
     if base_revision != current:
         db.rollback()
-        raise _stale(base_revision, current)
+        raise stale(base_revision, current)
     if check is not None:
         model = check(model_of(head), model)
     version = ModelVersion(
@@ -104,14 +104,15 @@ def save_version(
         db.commit()
     except IntegrityError:
         db.rollback()
-        raise _stale(base_revision, head_revision(db, project_id)) from None
+        raise stale(base_revision, head_revision(db, project_id)) from None
     return version
 
 
-def _stale(base: int, current: int) -> ApiError:
+def stale(base: int, current: int, what: str = "the model") -> ApiError:
+    """409: ``what`` was saved on top of ``base`` meanwhile (the head is ``current``)."""
     return ApiError(
         409,
-        f"the model was saved meanwhile: you edited revision {base}, the current one is "
+        f"{what} was saved meanwhile: you edited revision {base}, the current one is "
         f"{current}; reload and merge",
         current_revision=current,
     )

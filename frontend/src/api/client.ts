@@ -8,9 +8,10 @@
  */
 import type { ModdModel } from "../core/model.gen";
 import type { Role } from "../core/roles";
-import { Http, type HttpOptions } from "./http";
+import { Http, type FileAnswer, type HttpOptions } from "./http";
+import { datasetFile } from "./download";
 import type {
-  ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress, DatasetRequest,
+  ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress, DatasetFile, DatasetMetadata, DatasetMetadataDoc, DatasetRequest,
   DeployedDiff, Deployment, DynamicReply, DynamicRequest, FoxgloveLinks,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, RunningDrone, User, ValidateResult, Version,
 } from "./types";
@@ -130,8 +131,16 @@ export function createApi(opts: HttpOptions) {
     downloadRecord: (drone: string, file: string) =>
       http.request<Blob>(`/api/drones/${drone}/records/${encodeURIComponent(file)}`, { as: "blob" }),
     /** The archive as a dataset file (`modd dataset`: NetCDF, Parquet, CSV, GeoJSON, GPX), made by the backend. */
-    exportDataset: (drone: string, request: DatasetRequest) =>
-      http.request<Blob>(`/api/drones/${drone}/archives/export`, { method: "POST", json: request, as: "blob" }),
+    exportDataset: async (drone: string, request: DatasetRequest): Promise<DatasetFile> => {
+      const answer = await http.request<FileAnswer>(`/api/drones/${drone}/archives/export`, { method: "POST", json: request, as: "file" });
+      return datasetFile(answer.blob, answer.headers, `${drone}-dataset`);
+    },
+    readDatasetMetadata: (projectId: number) =>
+      http.request<DatasetMetadata>(`/api/projects/${projectId}/dataset-metadata`),
+    saveDatasetMetadata: (projectId: number, metadata: DatasetMetadataDoc, baseRevision: number) =>
+      http.request<DatasetMetadata>(`/api/projects/${projectId}/dataset-metadata`, {
+        method: "PUT", json: { base_revision: baseRevision, metadata },
+      }),
     archiveCsv: (drone: string, file: string, topic: string, startNs?: number, endNs?: number) =>
       http.request<Blob>(`/api/drones/${drone}/archives/${encodeURIComponent(file)}/csv`, { query: { topic, start_ns: startNs, end_ns: endNs }, as: "blob" }),
 

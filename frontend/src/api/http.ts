@@ -17,6 +17,12 @@ export interface ErrorBody {
   [key: string]: unknown;
 }
 
+/** A download with its headers (`as: "file"`): the backend names it (Content-Disposition). */
+export interface FileAnswer {
+  blob: Blob;
+  headers: Headers;
+}
+
 export class ApiError extends Error {
   constructor(
     readonly status: number,
@@ -76,7 +82,7 @@ export interface RequestOptions {
   query?: Record<string, string | number | undefined>;
   signal?: AbortSignal;
   /** How to read a successful body. */
-  as?: "json" | "text" | "blob" | "none";
+  as?: "json" | "text" | "blob" | "file" | "none";
   /** Wait for a turn when the backend says it is busy (default true; a login does not). */
   waitTurn?: boolean;
 }
@@ -137,6 +143,7 @@ export class Http {
       case "none": return undefined as T;
       case "text": return (await res.text()) as T;
       case "blob": return (await res.blob()) as T;
+      case "file": return { blob: await res.blob(), headers: res.headers } as T;
       default: return (res.status === 204 ? undefined : await res.json()) as T;
     }
   }

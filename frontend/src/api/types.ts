@@ -175,6 +175,28 @@ export interface DatasetRequest {
   end_ns?: number | null;
   topics?: string[] | null;
   resample_s?: number | null;
+  /** The project whose saved dataset metadata the file carries. */
+  project?: number | null;
+}
+
+/** A project's dataset metadata (ACDD/IOOS attribute names, `platform`, `instruments`, `qc`: a dataset.yaml). */
+export type DatasetMetadataDoc = Record<string, unknown>;
+
+export interface DatasetMetadata {
+  project_id: number;
+  revision: number; // 0: none saved yet
+  metadata: DatasetMetadataDoc;
+  author: string | null;
+  created_at: string | null;
+  /** What ACDD 1.3 / IOOS 1.2 ask for that it does not give. */
+  missing: string[];
+}
+
+/** An exported dataset: the file, the name the backend gave it and its notes. */
+export interface DatasetFile {
+  blob: Blob;
+  name: string;
+  notes: string[];
 }
 
 export interface ArchiveSeries {

@@ -125,3 +125,27 @@ export function unitLabel(unit: string | undefined, aggregation?: string): strin
 export function axisLabel(units: readonly string[]): string {
   return [...new Set(units.filter(Boolean))].join(" · ");
 }
+
+/** QARTOD's flags a chart marks: SUSPECT (3) and FAIL (4). */
+export const FLAGGED = new Set([3, 4]);
+
+/**
+ * Per channel, the values of its windows the backend flagged suspect or bad
+ * (QARTOD 3 or 4) at the times `xs` (alignWithGaps's), undefined elsewhere:
+ * a series the chart draws as marks.
+ */
+export function flaggedSeries(channels: readonly ChannelData[], xs: readonly number[]): Array<Array<number | undefined>> {
+  const index = new Map(xs.map((t, i) => [t, i]));
+  return channels.map((c) => {
+    const y = new Array<number | undefined>(xs.length).fill(undefined);
+    for (const p of c.samples) if (p.qc !== undefined && FLAGGED.has(p.qc)) y[index.get(p.t)!] = p.value;
+    return y;
+  });
+}
+
+/** In words, for the caption: "2 flagged (QARTOD: 1 suspect, 1 bad)", or "" when none is. */
+export function qcSummary(channels: readonly ChannelData[]): string {
+  const all = channels.flatMap((c) => c.samples);
+  const suspect = all.filter((s) => s.qc === 3).length, bad = all.filter((s) => s.qc === 4).length;
+  return suspect + bad === 0 ? "" : `${suspect + bad} flagged (QARTOD: ${suspect} suspect, ${bad} bad)`;
+}

@@ -73,6 +73,16 @@ export class RingBuffer<T> {
     return [...this.items.slice(this.start), ...this.items.slice(0, this.start)];
   }
 
+  /** The newest item among the last `depth` that `pred` accepts (no copy of the buffer). */
+  findLast(pred: (x: T) => boolean, depth = this.items.length): T | undefined {
+    const n = this.items.length;
+    for (let i = 1; i <= Math.min(depth, n); i++) {
+      const x = this.items[(this.start + n - i) % n];
+      if (pred(x)) return x;
+    }
+    return undefined;
+  }
+
   last(): T | undefined {
     if (this.items.length === 0) return undefined;
     return this.items[(this.start + this.items.length - 1) % this.items.length];

@@ -78,6 +78,19 @@ export function withBatch(url: string): string {
 }
 
 /** Two samples of the same window (same time and window length): a backfill repeating a live value. */
+/** A window's QARTOD flag, as the backend sends it beside a value (`qc: [[end_ns, flag], ...]`). */
+interface QcFlag { channel: string; t: number; qc: number }
+
+/** The flags of a value message (none when absent or malformed). */
+export function qcFlags(channel: string, raw: unknown): QcFlag[] {
+  if (!Array.isArray(raw)) return [];
+  return raw.slice(0, 4).flatMap((p): QcFlag[] => {
+    if (!Array.isArray(p) || p.length !== 2) return [];
+    const [endNs, qc] = p.map(Number);
+    return Number.isFinite(endNs) && Number.isInteger(qc) ? [{ channel, t: endNs / 1e9, qc }] : [];
+  });
+}
+
 function sameWindow(a: Sample, b: Sample): boolean {
   return a.t === b.t && a.windowS === b.windowS;
 }
@@ -169,27 +182,36 @@ export class WebSocketSource implements DataSource {
       return;
     }
     const samples = new Map<string, Sample[]>(); // per channel, in arrival order
+    const flags: QcFlag[] = [];
     if (msg.type === "batch" && Array.isArray(msg.messages)) {
       for (const m of msg.messages) {
-        if (m && typeof m === "object") this.handle(m as Raw, samples);
+        if (m && typeof m === "object") this.handle(m as Raw, samples, flags);
       }
     } else {
-      this.handle(msg, samples);
+      this.handle(msg, samples, flags);
     }
     samples.forEach((batch, channel) => {
       const b = this.buffer(channel);
       // Live values come in time order; a backfilled one goes in place among them (a
       // window already held, live or backfilled before, is replaced, never doubled).
       batch.forEach((s) => b.insertOrdered(s, (x) => x.t, sameWindow));
-      this.listeners.get(channel)?.forEach((l) => l(batch));
     });
+    for (const f of flags) this.flag(f);
+    samples.forEach((batch, channel) => this.listeners.get(channel)?.forEach((l) => l(batch)));
   }
 
-  private handle(msg: Raw, samples: Map<string, Sample[]>): void {
+  /** Sets a window's QARTOD flag (the newest windows: a flag revises this one or the one before). */
+  private flag({ channel, t, qc }: QcFlag): void {
+    const s = this.buffers.get(channel)?.findLast((x) => x.t === t && !x.backfilled, 8);
+    if (s) s.qc = qc;
+  }
+
+  private handle(msg: Raw, samples: Map<string, Sample[]>, flags: QcFlag[]): void {
     if (msg.type === "value") {
       const channel = String(msg.subscriber ?? "");
       const batch = toSamples((msg.data ?? {}) as Partial<DeliveredValue>);
       if (!channel || batch.length === 0) return;
+      flags.push(...qcFlags(channel, msg.qc));
       const list = samples.get(channel);
       if (list) list.push(...batch);
       else samples.set(channel, batch);

@@ -25,6 +25,8 @@ export interface Sample {
   count?: number;
   /** Recomputed from the drone's archive after the link missed it (backfill). */
   backfilled?: boolean;
+  /** The window's QARTOD aggregate flag from the backend (1 pass, 2 not evaluated, 3 suspect, 4 fail). */
+  qc?: number;
 }
 
 /** Link status of a drone: measured against planned. */

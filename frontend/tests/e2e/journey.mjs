@@ -413,7 +413,8 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
           page.waitForEvent("download", { timeout: 60000 }),
           exportForm.getByRole("button", { name: "Export", exact: true }).click(),
         ]);
-        if (!/-received\.csv$/.test(received.suggestedFilename())) throw new Error(`received: ${received.suggestedFilename()}`);
+        // Named by the backend: the drone, what it holds and the time span.
+        if (!/^usv-received-\d{8}T\d{6}Z-\d{8}T\d{6}Z\.csv$/.test(received.suggestedFilename())) throw new Error(`received: ${received.suggestedFilename()}`);
         const windows = readFileSync(await received.path(), "utf8").trim().split("\n");
         const bySubscriber = windows.filter((r) => /^[^,]+,"[A-Za-z_]\w*",(-?[0-9.e+-]+)?,"m s-2"/.test(r));
         if (bySubscriber.length < 3) throw new Error(`received CSV: ${bySubscriber.length} windows of accelerometer subscribers (${windows.length} rows; ${windows[1]})`);

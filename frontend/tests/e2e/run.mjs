@@ -19,6 +19,7 @@ import { views } from "./views.mjs";
 import { radio } from "./radio.mjs";
 import { instrumentParts, instruments } from "./instruments.mjs";
 import { startTileServer } from "./tiles.mjs";
+import { metadataJourney } from "./metadata.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
@@ -82,7 +83,7 @@ try {
       + "CredentialStore(sys.argv[1]).ensure()", creds], { cwd: repo, stdio: "inherit" });
     const up = start("modd up", [join(bin, "modd"), "up", join(tmp, "scenario1.json"), "--workdir", join(tmp, "drone"),
       "--credentials", creds, "--zenoh-listen", zenoh, ...(liveValues ? ["--simulate"] : [])], { cwd: repo, logFile: join(tmp, "drone.log"),
-      env: { MODD_PUBBROKER: pubbrokerBin } });
+      env: { MODD_PUBBROKER: pubbrokerBin, MODD_SIM_FAULTS: join(tmp, "sim-faults.json") } });
     procs.push(up);
     // `modd up` writes the PubBroker's archive to <workdir>/archive: the backend reads it as a
     // one-drone archive directory (a drone folder symlinked out of the archive directory is refused).
@@ -118,7 +119,10 @@ try {
   // MODD_E2E_ONLY=radio: log in, then only the radio budget steps (radio.mjs).
   // The radio steps put a test flight's archive where the backend reads archives (--archives).
   const radioSteps = () => radio({ page, baseUrl, password: PASSWORD, archiveDir: drone ? join(tmp, "drone", "archive") : join(tmp, "archives") });
-  const steps = only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
+  // MODD_E2E_ONLY=metadata: log in, then only the dataset metadata steps (metadata.mjs).
+  const metadataSteps = () => metadataJourney({ page, imagesDir, model: scenario1(pubPort, subPort), liveValues, baseUrl, password: PASSWORD,
+    faultsFile: join(tmp, "sim-faults.json") });
+  const steps = only === "metadata" ? [loginStep(page, baseUrl), ...metadataSteps()] : only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
     ...(only === "collab" || only === "instruments" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
     ...(only === "collab" || only === "instruments" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
@@ -126,6 +130,7 @@ try {
       survey: surveyModel(pubPort, subPort), tiles })),
     ...(only === "views" || only === "instruments" ? [] : collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) })),
     ...(only === "views" || only === "collab" || only === "instruments" ? [] : radioSteps()),
+    ...(only === "views" || only === "collab" || only === "instruments" ? [] : metadataSteps()),
     // Issue 32: the four plug-and-play instruments declared, deployed and watched (last: it deploys its own model).
     ...(only === "instruments" ? [loginStep(page, baseUrl)] : []),
     ...(only === "views" || only === "collab" ? [] : instruments({ page, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),

@@ -14,6 +14,7 @@ from pathlib import Path as FsPath
 from typing import Annotated, Any, Literal, TypeVar
 
 from fastapi import APIRouter, Depends, HTTPException, Path, Query, Request
+from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse, Response
 from pydantic import BaseModel, Field
 from starlette.background import BackgroundTask
@@ -37,6 +38,7 @@ from ..filesnapshot import file_snapshot
 from ..roles import Role
 from ..schemas import Responses
 from ..tables import User
+from .datasetmeta import head_metadata
 from .foxglove import ViewerLinks
 
 router = APIRouter(prefix="/api/drones/{drone}/archives", tags=["archives"])
@@ -219,6 +221,19 @@ class ExportIn(BaseModel):
     #: The dataset's metadata (ACDD/IOOS attribute names, ``platform``,
     #: ``instruments``: what a project's dataset.yaml holds; docs/user-guide/datasets.md).
     metadata: dict[str, Any] | None = None
+    #: The project whose saved dataset metadata (its head revision) the file
+    #: carries when ``metadata`` is not given (Archives → Dataset metadata).
+    project: int | None = Field(default=None, ge=1, le=2**31 - 1)
+
+
+def _metadata(body: ExportIn, state: AppState) -> dict[str, Any] | None:
+    """The body's metadata, else the named project's saved one (None: neither)."""
+    if body.metadata is not None or body.project is None:
+        return body.metadata
+    with state.store.session() as db:  # read and closed before the long export
+        row = head_metadata(db, body.project)
+        doc: dict[str, Any] | None = json.loads(row.metadata_json) if row is not None else None
+    return doc
 
 
 def _compact(ns: int) -> str:
@@ -266,6 +281,7 @@ async def export_dataset(
     bounded in bytes, samples and time: docs/backend.md; notes in ``X-Modd-Notes``)."""
     from modd.dataset.build import DatasetError
 
+    metadata = await run_in_threadpool(_metadata, body, state)
     received = body.source == "received"
     root = state.settings.effective_record_dir if received else state.settings.effective_archive_dir
     paths = _export_paths(root, drone, body.files, received)
@@ -290,7 +306,7 @@ async def export_dataset(
             body.resample_s,
             archive_work.MAX_EXPORT_SAMPLES,
             received,
-            body.metadata,
+            metadata,
             time_s=EXPORT_TIME_S,
         )
     except DatasetError as exc:

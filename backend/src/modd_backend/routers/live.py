@@ -39,6 +39,7 @@ from ..deps import (
     zenoh_session_of,
 )
 from ..live import CapReached, LiveRelay, dynamic_request
+from ..liveqc import live_tests
 from ..project_events import ProjectWatches
 from ..roles import Role
 from ..sessionwatch import watch_session
@@ -307,7 +308,8 @@ async def _handle(
         if not roles_of(user) and op != "ping":
             out = {"type": "error", "message": "live values need a role"}
         elif op == "subscribe":
-            out = relay.subscribe(message.get("subscriber"))
+            tests = await run_in_threadpool(_live_tests, state, relay.drone)
+            out = relay.subscribe(message.get("subscriber"), tests)
         elif op == "unsubscribe":
             out = relay.unsubscribe(message.get("subscriber"))
         elif op == "ping":
@@ -327,6 +329,12 @@ async def _handle(
     if ident is not None:
         out["id"] = ident
     return out
+
+
+def _live_tests(state: AppState, drone: str) -> dict[str, Any]:
+    """The QARTOD tests of each subscriber of what runs on ``drone`` (liveqc.py)."""
+    with state.store.session() as db:
+        return live_tests(db, drone)
 
 
 async def _dynamic(

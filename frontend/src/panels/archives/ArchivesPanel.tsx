@@ -8,7 +8,7 @@
 import { useEffect, useRef, useState } from "react";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
-import { useModel } from "../../editor/useEditor";
+import { useEditor, useModel } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
 import { usePanelData, LoadState } from "../usePanelData";
 import { BaseRecords } from "./BaseRecords";
@@ -16,6 +16,7 @@ import { saveBlob } from "../saveBlob";
 import type { ArchiveFile, ArchiveReplay, ArchiveSeries } from "../../api/types";
 import { Playback } from "./Playback";
 import { ExportDataset } from "./ExportDataset";
+import { DatasetMetadataForm } from "./DatasetMetadataForm";
 import { topicLabel } from "../../core/topicLabel";
 
 function SeriesChart({ series, name }: { series: ArchiveSeries; name: string }) {
@@ -44,6 +45,7 @@ export default function ArchivesPanel() {
   const { api } = useServices();
   const model = useModel();
   const drone = model.drone.name;
+  const project = useEditor((s) => s.project?.id ?? null);
   const [files, reload] = usePanelData(() => api.listArchives(drone), [drone]);
   const [file, setFile] = useState<ArchiveFile | null>(null);
   const [topic, setTopic] = useState("");
@@ -119,7 +121,8 @@ export default function ArchivesPanel() {
               {series.busy && <span role="status">Reading…</span>}
               {series.error && <span className="error" role="alert">{series.error}</span>}
             </form>
-            <ExportDataset model={model} file={file} />
+            {project !== null && <DatasetMetadataForm model={model} project={project} />}
+            <ExportDataset model={model} file={file} project={project} />
             {replay && (
               <p role="status" aria-label="Foxglove replay">
                 Replay of {replay.file} ({replay.messages} messages, {replay.topics.length} topics): in Foxglove or Lichtblick,

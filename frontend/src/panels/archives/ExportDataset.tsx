@@ -2,7 +2,10 @@
  * Archives → Export dataset: the picked file (or every file) as a dataset
  * scientists open in their tools (`modd dataset` run by the backend): CF
  * NetCDF, Parquet, CSV, GeoJSON or GPX; a time range, topics, and an optional
- * resampling period. The file arrives as a download.
+ * resampling period. The file arrives as a download named by the backend
+ * (drone and time span), with the project's saved dataset metadata; the
+ * export's notes (dropped glitches, gaps, fills, what a data centre asks for)
+ * are shown under the form.
  */
 import { useState } from "react";
 import { useServices } from "../../app/services";
@@ -10,29 +13,29 @@ import { saveBlob } from "../saveBlob";
 import { DATASET_FORMATS, type ArchiveFile, type DatasetFormat, type DatasetSource } from "../../api/types";
 import type { ModdModel } from "../../core/model.gen";
 import { topicLabel } from "../../core/topicLabel";
-import { datasetFileName, datasetRequest, exportables, type ExportChoice } from "./exportForm";
+import { datasetRequest, exportables, type ExportChoice } from "./exportForm";
 
 const FORMAT_WORDS: Record<DatasetFormat, string> = {
   netcdf: "NetCDF (CF trajectory)", parquet: "Parquet", csv: "CSV", geojson: "GeoJSON track", gpx: "GPX track",
 };
 
-export function ExportDataset({ model, file }: { model: ModdModel; file: ArchiveFile | null }) {
+export function ExportDataset({ model, file, project }: { model: ModdModel; file: ArchiveFile | null; project: number | null }) {
   const { api } = useServices();
   const drone = model.drone.name;
   const [choice, setChoice] = useState<ExportChoice>({ format: "netcdf", from: "", to: "", topics: [], resample: "" });
-  const [state, setState] = useState<{ busy?: boolean; error?: string; done?: string }>({});
+  const [state, setState] = useState<{ busy?: boolean; error?: string; done?: string; notes?: string[] }>({});
   const topics = exportables(model, file, choice.source);
   const received = choice.source === "received";
 
   const run = async (e: React.FormEvent) => {
     e.preventDefault();
-    const request = datasetRequest(model, choice, file);
+    const request = datasetRequest(model, choice, file, project);
     if (typeof request === "string") { setState({ error: request }); return; }
     setState({ busy: true });
     try {
-      const name = datasetFileName(drone, file, choice.format, choice.source);
-      saveBlob(await api.exportDataset(drone, request), name);
-      setState({ done: name });
+      const got = await api.exportDataset(drone, request);
+      saveBlob(got.blob, got.name);
+      setState({ done: got.name, notes: got.notes });
     } catch (err) {
       setState({ error: (err as Error).message });
     }
@@ -67,6 +70,11 @@ export function ExportDataset({ model, file }: { model: ModdModel; file: Archive
       {state.busy && <span role="status">Exporting…</span>}
       {state.done && <span role="status">Saved {state.done}</span>}
       {state.error && <span className="error" role="alert">{state.error}</span>}
+      {state.notes && state.notes.length > 0 && (
+        <ul className="export-notes" aria-label="Export notes">
+          {state.notes.map((n, i) => <li key={i}>{n}</li>)}
+        </ul>
+      )}
     </form>
   );
 }

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { datasetFileName, datasetRequest, exportables, type ExportChoice } from "./exportForm";
+import { datasetRequest, exportables, type ExportChoice } from "./exportForm";
 import type { ArchiveFile } from "../../api/types";
 import type { ModdModel } from "../../core/model.gen";
 
@@ -31,12 +31,10 @@ describe("the Export dataset form", () => {
     });
     expect(exportables(withSubs, file, "received")).toEqual(["sub_1", "track_lat"]);
     expect(exportables(withSubs, { ...file, topics: [{ topic: "usv.a.x", messages: 3 }] }, "archive")).toEqual(["usv.a.x"]);
-    expect(datasetFileName("usv", file, "csv", "received")).toBe("usv-0000-received.csv");
-    expect(datasetFileName("usv", null, "parquet", "received")).toBe("usv-received.parquet");
   });
 
-  it("names the download after the file and the format", () => {
-    expect(datasetFileName("usv", file, "gpx")).toBe("usv-0000.gpx");
-    expect(datasetFileName("usv", null, "netcdf")).toBe("usv-dataset.nc");
+  it("names the project whose saved metadata the file carries", () => {
+    expect(datasetRequest(model, choice, file, 7)).toMatchObject({ project: 7 });
+    expect(datasetRequest(model, choice, file)).not.toHaveProperty("project");
   });
 });

@@ -1,6 +1,6 @@
 /**
  * The Export dataset form's rules, apart from the component: what request a
- * filled form makes, and the name the download gets.
+ * filled form makes (the backend names the download: drone and time span).
  *
  *   datasetRequest(model, { format: "netcdf", from: "10", to: "", topics: [], resample: "" }, file)
  *   // { model, format: "netcdf", files: [file.name], start_ns: file.start_ns + 10e9, ... }
@@ -18,12 +18,10 @@ export interface ExportChoice {
   resample: string; // seconds; "" = every raw sample at its own time
 }
 
-export const DATASET_SUFFIX: Record<DatasetFormat, string> = {
-  netcdf: "nc", parquet: "parquet", csv: "csv", geojson: "geojson", gpx: "gpx",
-};
-
-/** What a form asks for; an error text instead when a field cannot be read. */
-export function datasetRequest(model: ModdModel, c: ExportChoice, file: ArchiveFile | null): DatasetRequest | string {
+/** What a form asks for (with the project whose saved dataset metadata the file carries);
+ *  an error text instead when a field cannot be read. */
+export function datasetRequest(model: ModdModel, c: ExportChoice, file: ArchiveFile | null,
+  project: number | null = null): DatasetRequest | string {
   const seconds = (text: string, what: string): number | null | string => {
     if (text.trim() === "") return null;
     const n = Number(text);
@@ -41,6 +39,7 @@ export function datasetRequest(model: ModdModel, c: ExportChoice, file: ArchiveF
     files: file && !received ? [file.name] : [],
     start_ns: at(from as number | null), end_ns: at(to as number | null),
     topics: c.topics.length ? c.topics : null, resample_s: resample as number | null,
+    ...(project !== null ? { project } : {}),
   };
 }
 
@@ -48,12 +47,4 @@ export function datasetRequest(model: ModdModel, c: ExportChoice, file: ArchiveF
 export function exportables(model: ModdModel, file: ArchiveFile | null, source: DatasetSource | undefined): string[] {
   if (source === "received") return (model.subscribers ?? []).map((s) => s.name);
   return file?.topics.map((t) => t.topic) ?? [];
-}
-
-/** `usv-run-0000.nc`, or `usv-dataset.nc` for every file, `usv-run-0000-received.nc` for the windows received. */
-export function datasetFileName(drone: string, file: ArchiveFile | null, format: DatasetFormat,
-  source?: DatasetSource): string {
-  const base = file ? file.name.replace(/\.mcap$/, "") : `${drone}-dataset`;
-  const stem = source === "received" ? `${file ? base : drone}-received` : base;
-  return `${stem}.${DATASET_SUFFIX[format]}`;
 }

@@ -13,12 +13,16 @@
  * channel draws them as large hollow amber points, legend "backfilled". The
  * caption says it in words (missing windows, backfilled values), since the
  * canvas holds no text.
+ *
+ * Quality flags: a window the backend flagged suspect or bad (QARTOD, by the
+ * deployed project's tests: docs/user-guide/datasets.md, "Quality flags") is
+ * marked by a red ring, legend "QC suspect/bad", counted in the caption.
  */
 import { useEffect, useRef } from "react";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import type { DataSource } from "../../dataSources/types";
-import { alignWithGaps, axisLabel, gapSummary, visibleRange, type ViewWindow } from "../../core/chartData";
+import { alignWithGaps, axisLabel, flaggedSeries, gapSummary, qcSummary, visibleRange, type ViewWindow } from "../../core/chartData";
 
 export interface ChartSeries {
   channel: string;
@@ -31,6 +35,7 @@ export interface ChartSeries {
 }
 
 const BACKFILLED = "#d97706";
+const FLAGGED_RING = "#b91c1c";
 
 const COLOURS = ["#2563eb", "#dc2626", "#15803d", "#9333ea", "#0891b2", "#4d7c0f"];
 
@@ -63,8 +68,10 @@ export function TimeChart({ source, series, window: view, onZoom, syncKey, heigh
     if (!el) return;
     const data = (): uPlot.AlignedData => {
       const channels = series.map((s) => ({ samples: source.history(s.channel), periodS: s.periodS }));
-      if (gaps.current) gaps.current.textContent = gapSummary(channels);
-      return alignWithGaps(channels) as uPlot.AlignedData;
+      const qc = qcSummary(channels);
+      if (gaps.current) gaps.current.textContent = gapSummary(channels) + (qc ? ` · ${qc}` : "");
+      const aligned = alignWithGaps(channels);
+      return [...aligned, ...flaggedSeries(channels, aligned[0])] as uPlot.AlignedData;
     };
     const lastT = () => Math.max(...series.map((s) => source.history(s.channel).at(-1)?.t ?? -Infinity));
     const range = (): [number, number] => {
@@ -88,6 +95,11 @@ export function TimeChart({ source, series, window: view, onZoom, syncKey, heigh
             paths: () => null, points: { show: true, size: 9, width: 2, stroke: BACKFILLED, fill: "#fff7ed" },
           },
         ]),
+        // After every channel's pair (alignWithGaps), one series per channel: its flagged windows.
+        ...series.map((s): uPlot.Series => ({
+          label: series.length > 1 ? `QC suspect/bad (${s.channel})` : "QC suspect/bad", stroke: FLAGGED_RING, width: 0,
+          paths: () => null, points: { show: true, size: 12, width: 2, stroke: FLAGGED_RING, fill: "transparent" },
+        })),
       ],
       axes: [
         { stroke: "#475569", label: "local time", labelSize: 16 },

@@ -77,10 +77,17 @@ PLATFORM_KEYS = ("name", "id", "type", "ioos_code", "wmo_code", "vocabulary", "c
 #: An instrument's attributes (per sensor of the model).
 INSTRUMENT_KEYS = ("make", "model", "serial_number", "vocabulary", "comment", "calibration_date")
 _DNS = re.compile(r"^[a-z0-9-]+(\.[a-z0-9-]+)+$", re.IGNORECASE)
+_EMAIL = re.compile(r"^[^@\s,]+@[^@\s,]+\.[^@\s,.]+$")
+_URL = re.compile(r"^https?://[^\s/]+\.[^\s]*$|^https?://[^\s/]+$", re.IGNORECASE)
 
 
 class MetadataError(ValueError):
-    """A metadata file that cannot be used, located (file, key)."""
+    """A metadata file that cannot be used, located (file, key): ``key`` is the
+    dotted key at fault (``creator_email``, ``platform.id``), None for the whole file."""
+
+    def __init__(self, message: str, key: str | None = None) -> None:
+        super().__init__(message)
+        self.key = key
 
 
 @dataclass
@@ -99,24 +106,50 @@ class Metadata:
         return [k for k in ASKED if k not in self.attributes]
 
 
-def _text(value: Any, where: str) -> str:
+def _text(value: Any, where: str, key: str | None = None) -> str:
     if isinstance(value, list) and all(isinstance(v, str | int | float) for v in value):
         return ", ".join(str(v) for v in value)
     if isinstance(value, str | int | float) and not isinstance(value, bool):
         return str(value)
-    raise MetadataError(f"{where}: a text or a list of texts, not {type(value).__name__}")
+    raise MetadataError(f"{where}: a text or a list of texts, not {type(value).__name__}", key)
+
+
+def _check_forms(attrs: dict[str, str], source: str) -> None:
+    """Reversed DNS, e-mail addresses and URLs in their form (the first fault, located).
+
+    >>> _check_forms({"creator_email": "ana at example.org"}, "m")
+    Traceback (most recent call last):
+    ...
+    modd.dataset.metadata.MetadataError: m: creator_email 'ana at example.org' is not an \
+e-mail address (name@example.org)
+    """
+    for key, value in attrs.items():
+        if key == "naming_authority" and not _DNS.match(value):
+            raise MetadataError(
+                f"{source}: naming_authority {value!r} is not reversed DNS (org.example)", key
+            )
+        if key.endswith("_email") and not all(_EMAIL.match(v.strip()) for v in value.split(",")):
+            raise MetadataError(
+                f"{source}: {key} {value!r} is not an e-mail address (name@example.org)", key
+            )
+        if (key.endswith("_url") or key == "infoUrl") and not _URL.match(value):
+            raise MetadataError(f"{source}: {key} {value!r} is not an http(s) URL", key)
 
 
 def _table(doc: Any, keys: tuple[str, ...], source: str, path: str = "") -> dict[str, str]:
     """The texts of a mapping; errors say ``SOURCE: PATH: ...`` (``PATH.KEY`` for a value)."""
     where = f"{source}: {path}" if path else source
     if not isinstance(doc, dict):
-        raise MetadataError(f"{where}: a mapping of {', '.join(keys)}")
+        raise MetadataError(f"{where}: a mapping of {', '.join(keys)}", path or None)
+    dot = f"{path}." if path else ""
     unknown = sorted(str(k) for k in doc if k not in keys)
     if unknown:
-        raise MetadataError(f"{where}: unknown key {unknown[0]!r}; one of {', '.join(keys)}")
-    dot = f"{path}." if path else ""
-    return {k: _text(v, f"{source}: {dot}{k}") for k, v in doc.items() if v is not None}
+        raise MetadataError(
+            f"{where}: unknown key {unknown[0]!r}; one of {', '.join(keys)}", f"{dot}{unknown[0]}"
+        )
+    return {
+        k: _text(v, f"{source}: {dot}{k}", f"{dot}{k}") for k, v in doc.items() if v is not None
+    }
 
 
 def parse_metadata(doc: Any, source: str) -> Metadata:
@@ -125,15 +158,13 @@ def parse_metadata(doc: Any, source: str) -> Metadata:
         raise MetadataError(f"{source}: a mapping of attribute names to values")
     rest = {k: v for k, v in doc.items() if k not in ("platform", "instruments", "qc")}
     attrs = _table(rest, GLOBAL_KEYS, source)
-    authority = attrs.get("naming_authority")
-    if authority is not None and not _DNS.match(authority):
-        raise MetadataError(
-            f"{source}: naming_authority {authority!r} is not reversed DNS (org.example)"
-        )
+    _check_forms(attrs, source)
     platform = _table(doc.get("platform") or {}, PLATFORM_KEYS, source, "platform")
     sensors = doc.get("instruments") or {}
     if not isinstance(sensors, dict):
-        raise MetadataError(f"{source}: instruments: a mapping of sensor names to instruments")
+        raise MetadataError(
+            f"{source}: instruments: a mapping of sensor names to instruments", "instruments"
+        )
     instruments = {
         str(name): _table(inst, INSTRUMENT_KEYS, source, f"instruments.{name}")
         for name, inst in sensors.items()
@@ -141,7 +172,7 @@ def parse_metadata(doc: Any, source: str) -> Metadata:
     try:
         qc = parse_qc(doc["qc"], source) if doc.get("qc") is not None else {}
     except QcConfigError as exc:
-        raise MetadataError(str(exc)) from None
+        raise MetadataError(str(exc), "qc") from None
     return Metadata(attrs, platform, instruments, Path(source).name, qc)
 
 

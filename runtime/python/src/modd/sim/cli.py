@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 import threading
@@ -13,6 +14,7 @@ from modd_model import load_or_report
 from modd_model.numbers import to_fraction
 from modd_model.query import topics
 
+from .faults import FaultFile
 from .sensors import run_publisher
 
 DEFAULT_MAVLINK = "udpout:127.0.0.1:14550"
@@ -87,6 +89,13 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         help="when the survey track starts (default: now)",
     )
     p.add_argument("--duration", type=float, help="stop after this many seconds")
+    p.add_argument(
+        "--faults",
+        default=os.environ.get("MODD_SIM_FAULTS"),
+        metavar="FILE",
+        help="a JSON file of spikes and flat lines to inject into the simulated sensors, "
+        "read again when it changes (default $MODD_SIM_FAULTS; sim/faults.py)",
+    )
     return p.parse_args(argv)
 
 
@@ -105,6 +114,7 @@ def main(argv: list[str] | None = None) -> int:
     wired = set() if args.no_instruments else instrument_topics(model)
     tops = topics(model)
     stop = threading.Event()
+    faults = FaultFile(args.faults)
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     threads = []
@@ -124,6 +134,7 @@ def main(argv: list[str] | None = None) -> int:
                         stop,
                         i,
                         start,
+                        faults,
                     ),
                 )
             )
@@ -145,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
         from .instruments import start_instruments
 
         try:
-            threads += start_instruments(model, start, stop, log)
+            threads += start_instruments(model, start, stop, log, faults)
         except OSError as exc:
             print(f"modd-sim: cannot simulate the instruments: {exc}", file=sys.stderr)
             stop.set()

@@ -29,6 +29,7 @@ from typing import Any
 from modd_model.query import topics
 
 from ..sensors.plan import SensorPlan, plan_sensors
+from .faults import FaultFile
 from .sensors import topic_signal
 from .track import survey_pose
 from .wire import ascii_lines, modbus_reply, nmea_lines, registers
@@ -56,8 +57,16 @@ def _send(master: int, data: bytes) -> None:
 
 
 class Instrument:
-    def __init__(self, plan: SensorPlan, model: dict[str, Any], start: float, seed: int) -> None:
+    def __init__(
+        self,
+        plan: SensorPlan,
+        model: dict[str, Any],
+        start: float,
+        seed: int,
+        faults: FaultFile | None = None,
+    ) -> None:
         rng = random.Random(seed)
+        self.faults = faults or FaultFile(None)
         tops = topics(model)
         self.plan = plan
         self.start = start
@@ -67,7 +76,10 @@ class Instrument:
     def values(self, now: float) -> dict[str, float]:
         t = now - self.start
         pose = survey_pose(t)
-        return {name: float(sig(t, pose)) for name, sig in self.signals.items()}
+        return {
+            name: float(self.faults.apply(name, now, sig(t, pose)))
+            for name, sig in self.signals.items()
+        }
 
     def run(self, stop: threading.Event) -> None:
         try:
@@ -113,15 +125,19 @@ class Instrument:
 
 
 def start_instruments(
-    model: dict[str, Any], start: float, stop: threading.Event, log: Callable[[str], None]
+    model: dict[str, Any],
+    start: float,
+    stop: threading.Event,
+    log: Callable[[str], None],
+    faults: FaultFile | None = None,
 ) -> list[threading.Thread]:
-    """A thread per instrument sensor of ``model``, started."""
+    """A thread per instrument sensor of ``model``, started (``faults`` injected: faults.py)."""
     threads = []
     for i, plan in enumerate(plan_sensors(model)):
         if plan.kind == "ascii" and plan.line.pattern is not None:
             log(f"{plan.name}: a pattern is not simulated (write its lines to {plan.device.path})")
             continue
-        inst = Instrument(plan, model, start, 1000 + i)
+        inst = Instrument(plan, model, start, 1000 + i, faults)
         th = threading.Thread(
             target=inst.run, args=(stop,), name=f"instrument-{plan.name}", daemon=True
         )

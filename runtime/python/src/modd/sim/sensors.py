@@ -23,6 +23,7 @@ from collections.abc import Callable
 from modd_model.query import Topic
 
 from ..publisher import Publisher
+from .faults import FaultFile
 from .track import LEG_M, Pose, altitude, plume, survey_pose, waves
 
 Signal = Callable[[float, Pose], float | int | bool]
@@ -70,9 +71,12 @@ def run_publisher(
     stop: threading.Event,
     seed: int,
     start: float,
+    faults: FaultFile | None = None,
 ) -> None:
     """Publishes every topic of ``tops`` each ``period_s`` until ``stop`` is set;
-    ``start`` is the track's start (Unix seconds)."""
+    ``start`` is the track's start (Unix seconds); ``faults``: spikes and flat
+    lines injected (faults.py)."""
+    faults = faults or FaultFile(None)
     rng = random.Random(seed)
     signals = {t.name: topic_signal(t, rng) for t in tops}
     with Publisher(name, ingress) as pub:
@@ -85,6 +89,7 @@ def run_publisher(
             elapsed = now / 1e9 - start
             pose = survey_pose(elapsed)
             for t in tops:
-                pub.publish(t.name, now, signals[t.name](elapsed, pose))
+                value = faults.apply(t.name, now / 1e9, signals[t.name](elapsed, pose))
+                pub.publish(t.name, now, value)
             tick += 1
             stop.wait(max(0.0, first + tick * period_s - time.monotonic()))
