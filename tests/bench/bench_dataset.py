@@ -8,9 +8,8 @@ nothing. The issue's targets: >= 1 M samples/s for netcdf and parquet, peak RSS 
                                                   [--rate 1000]
 
 ``--qc`` exports with QARTOD flags on every topic but the position (a metadata file's
-``qc`` section: gross range, spike, rate of change and flat line; ioos_qc counts time in
-whole seconds, so above 1 Hz it cannot run the two timed tests, which are then left out
-and said in the notes: ``--rate 1`` runs all four).
+``qc`` section: gross range, spike, rate of change and flat line; above 1 Hz the two
+timed tests run in scaled time, docs/user-guide/datasets.md "Quality flags").
 
 The archive: ``--topics`` float32 topics at one rate (``--rate``, per topic, default
 1000 Hz), two of them the platform's latitude

@@ -165,6 +165,7 @@ export function metadataJourney({ page, imagesDir, model, liveValues, baseUrl, p
       if (Date.now() / 1000 - flatFrom < 10) throw new Error(`flagged ${(Date.now() / 1000 - flatFrom).toFixed(1)} s into the flat line: not by the flat line test`);
       await photo(chart, "monitor-qc");
       await expand(false);
+      await page.waitForTimeout(Math.max(0, (flatFrom + 21 - Date.now() / 1000) * 1000)); // the flat line over
       // The file: the spike's sample flagged FAIL (4) in the CSV's qc_agg column (the export's ioos_qc run).
       const csv = await api("POST", "/api/drones/usv/archives/export", { model, format: "csv", topics: ["usv.accelerometer.accel_x"],
         project: project.id, start_ns: Math.round((now - 5) * 1e9) });
@@ -174,6 +175,13 @@ export function metadataJourney({ page, imagesDir, model, liveValues, baseUrl, p
       if (qc < 0) throw new Error(`no qc_agg column: ${rows[0]}`);
       const flagged = rows.slice(1).map((r) => r.split(",")).filter((c) => Number(c[value]) > 100);
       if (flagged.length !== 1 || flagged[0][qc] !== "4") throw new Error(`the spike in the file: ${JSON.stringify(flagged)}`);
+      // And the stuck value: its 25 Hz samples flagged FAIL once 12 s flat (the timed tests run in scaled time).
+      const at = head.indexOf("time");
+      const stuck = rows.slice(1).map((r) => r.split(",")).filter((c) => {
+        const t = Date.parse(c[at].replace(/"/g, "")) / 1000;
+        return t > flatFrom + 13 && t < flatFrom + 19;
+      });
+      if (stuck.length < 50 || stuck.some((c) => c[qc] !== "4")) throw new Error(`the stuck value in the file: ${stuck.length} samples, flags ${[...new Set(stuck.map((c) => c[qc]))]}`);
     }],
   ];
 }

@@ -203,12 +203,37 @@ def test_a_qc_topic_not_in_the_model_is_refused(archive: Path, tmp_path: Path) -
     )
 
 
-def test_faster_than_1_hz_the_timed_tests_are_said_not_evaluated(tmp_path: Path) -> None:
+def test_faster_than_1_hz_the_timed_tests_run_in_scaled_time(tmp_path: Path) -> None:
+    """At 10 Hz the timed tests run as ``ioos_qc`` would on the same samples a second
+    apart with their parameters in that unit (a rate per second / 10, windows x 10):
+    both tests are the same under a change of time unit."""
     path = write_archive(tmp_path / "fast.mcap", _mission(seconds=25, hz=10))
+    tests = {
+        "spike_test": QC[TEMP]["spike_test"],
+        "rate_of_change_test": {"threshold": 5},
+        "flat_line_test": {"suspect_threshold": 2, "fail_threshold": 4, "tolerance": 0.0001},
+    }
     out = tmp_path / "f.parquet"
-    summary = make_dataset([path], _model(), "parquet", out, metadata=_meta())
-    note = f"topic {TEMP}: rate_of_change_test and flat_line_test not evaluated"
-    assert any(n.startswith(note) for n in summary.notes), summary.notes
+    summary = make_dataset(
+        [path], _model(), "parquet", out, metadata=parse_metadata({"qc": {TEMP: tests}}, "d.yaml")
+    )
+    assert not any("not evaluated" in n for n in summary.notes), summary.notes
     rows = [r for r in pq.read_table(out).to_pylist() if r["topic"] == TEMP]
     got = np.array([r["qc_agg"] for r in sorted(rows, key=lambda r: r["time"])])
-    assert got[SPIKE] == 4 and got[-1] == 4  # spike and gross range still run
+    with path.open("rb") as f:
+        messages = make_reader(f).iter_messages(topics=[TEMP], log_time_order=True)
+        v = np.ma.masked_invalid([json.loads(m.data)["value"] for _s, _c, m in messages])
+    t = (T0 + np.arange(len(v)) * S).astype("datetime64[ns]")  # a second apart
+    expected = qartod.qartod_compare(
+        [
+            qartod.gross_range_test(inp=v, fail_span=[0.0, 30.0]),
+            qartod.spike_test(inp=v, **tests["spike_test"]),
+            qartod.rate_of_change_test(inp=v, tinp=t, threshold=0.5),
+            qartod.flat_line_test(
+                inp=v, tinp=t, suspect_threshold=20, fail_threshold=40, tolerance=0.0001
+            ),
+        ]
+    )
+    assert np.array_equal(got, np.asarray(expected)), np.nonzero(got != expected)
+    assert got[SPIKE] == 4 and got[-1] == 4
+    assert got[STUCK[0] + 41 : STUCK[1]].min() == 4  # stuck 6 s, FAIL after 4 s

@@ -63,30 +63,70 @@ def qc_config(plan: ExportPlan) -> QcConfig:
 #: The tests that read the time: ``ioos_qc`` 3.0 counts it in whole seconds (``astype
 #: ("timedelta64[s]")``), so a topic sampled faster than 1 Hz would divide by zero.
 TIMED = ("rate_of_change_test", "flat_line_test")
+#: Per-second parameters of the timed tests: a rate per second (divided by the time
+#: scale) and windows in seconds (multiplied by it).
+PER_SECOND = {"rate_of_change_test": ("threshold",)}
+IN_SECONDS = {"flat_line_test": ("suspect_threshold", "fail_threshold")}
+#: The largest span (ns) a scaled series may take: datetime64[ns] is an int64.
+MAX_SCALED_SPAN = 2**62
+
+
+def time_scale(time_ns: np.ndarray) -> int | None:
+    """The power of ten by which the timed tests see a sub-second series' time: both
+    tests are the same under a change of time unit when their parameters follow it (a
+    rate per second divided, windows in seconds multiplied), and at 1,000 s or more a
+    median interval loses under 0.1 % to the whole seconds ``ioos_qc`` counts. 1 at
+    1 Hz or slower (as ``ioos_qc`` itself); None when no scale brings the interval to a
+    second within ``datetime64[ns]`` (repeated times, or a span too long)."""
+    if len(time_ns) < 2:
+        return 1
+    median = float(np.median(np.diff(time_ns)))
+    if median >= 1e9:
+        return 1
+    span = max(int(time_ns[-1]) - int(time_ns[0]), 1)
+    scale = 1
+    while median * scale < 1e12 and span * scale * 10 < MAX_SCALED_SPAN:
+        scale *= 10
+    return scale if median * scale >= 1e9 else None
 
 
 def evaluable(tests: dict[str, dict[str, Any]], time_ns: np.ndarray) -> dict[str, dict[str, Any]]:
-    """``tests`` less the timed ones when the median interval is under a second."""
-    if len(time_ns) < 2 or float(np.median(np.diff(time_ns))) >= 1e9:
+    """``tests`` less the timed ones when the series' time cannot be scaled."""
+    if time_scale(time_ns) is not None:
         return tests
     return {k: v for k, v in tests.items() if k not in TIMED}
+
+
+def _scaled(name: str, params: dict[str, Any], scale: int) -> dict[str, Any]:
+    out = dict(params)
+    for key in PER_SECOND.get(name, ()):
+        if key in out:
+            out[key] = out[key] / scale
+    for key in IN_SECONDS.get(name, ()):
+        if key in out:
+            out[key] = out[key] * scale
+    return out
 
 
 def run_tests(
     tests: dict[str, dict[str, Any]], time_ns: np.ndarray, value: np.ndarray
 ) -> np.ndarray:
-    """The aggregate flag (uint8) of ``tests`` on one series, as ``ioos_qc`` computes it."""
+    """The aggregate flag (uint8) of ``tests`` on one series, as ``ioos_qc`` computes it
+    (the timed tests on a sub-second series in scaled time, ``time_scale``)."""
     from ioos_qc import qartod
 
     plain = value.astype(np.float64)
     inp = np.ma.masked_invalid(plain)
-    tinp = time_ns.astype("datetime64[ns]")
+    scale = time_scale(time_ns) or 1
+    base = int(time_ns[0]) if len(time_ns) else 0
+    tinp = (base + (time_ns.astype(np.int64) - base) * scale).astype("datetime64[ns]")
     flags = []
     for name, params in tests.items():
         fast = fast_test(name, params)  # the same flags, vectorised (qcfast.py)
         fn = fast or getattr(qartod, name)
-        args = {"inp": plain if fast else inp} | ({"tinp": tinp} if name in TIMED else {})
-        flags.append(np.asarray(fn(**args, **params)))
+        timed = name in TIMED
+        args = {"inp": plain if fast else inp} | ({"tinp": tinp} if timed else {})
+        flags.append(np.asarray(fn(**args, **(_scaled(name, params, scale) if timed else params))))
     return np.asarray(qartod.qartod_compare(flags), dtype=np.uint8)
 
 
@@ -109,7 +149,8 @@ class QcRunner:
         if len(run) < len(tests):
             self.notes[var.topic] = (
                 f"topic {var.topic}: {' and '.join(k for k in tests if k not in run)} not "
-                "evaluated: sampled faster than 1 Hz, and ioos_qc counts time in whole seconds"
+                "evaluated: its times repeat or span too long to be scaled to the whole seconds "
+                "ioos_qc counts"
             )
         if not run:
             return np.full(len(time_ns), 2, dtype=np.uint8)  # NOT_EVALUATED
