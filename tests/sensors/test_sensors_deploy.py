@@ -113,7 +113,7 @@ def _deploy(endpoint: str, creds: Path, text: str, revision: int) -> tuple[dict[
         reply: dict[str, Any] = request(session, "modd/usv/deploy", signed, timeout_s=20)
         return reply, time.monotonic() - start
     finally:
-        session.close()
+        session.close()  # type: ignore[no-untyped-call]
 
 
 def _health(run: Path) -> dict[str, Any]:
@@ -130,7 +130,8 @@ def _by_sensor(reply: dict[str, Any]) -> dict[str, dict[str, Any]]:
 
 def _applied_within(reply: dict[str, Any], sent_ns: int) -> float:
     """Seconds from the deploy request to the last on-board process's answer."""
-    return max(r["at_ns"] for r in reply["onboard"].values()) / 1e9 - sent_ns / 1e9
+    last = max(int(r["at_ns"]) for r in reply["onboard"].values())
+    return (last - sent_ns) / 1e9
 
 
 def test_a_deploy_reaches_modd_sensors_and_modd_mavlink(tmp_path: Path) -> None:

@@ -104,6 +104,11 @@ export default function MonitorPanel() {
         </>}
         {!link && state === "open" && " · waiting for the drone's status…"}
         {link?.sensors && <InstrumentsHealth sensors={link.sensors} />}
+        {link?.onboard?.filter((l) => !l.ok).map((l) => (
+          <strong key={l.process} className="behind" role="alert" data-testid="onboard-problem">
+            {" "}· last deploy, {l.process}: {l.text}
+          </strong>
+        ))}
       </div>
       <div className="monitor-grid">
         <aside className="watch-list" aria-label="Subscriptions to watch">
