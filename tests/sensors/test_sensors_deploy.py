@@ -9,7 +9,6 @@ test wrote (decoded by pynmea2) and every ATTITUDE it sent."""
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 import socket
@@ -22,9 +21,12 @@ from typing import Any
 
 import pynmea2  # type: ignore[import-untyped]
 import pytest
-from devices import PtyDevice, nmea, wait_until
+from devices import PtyDevice, nmea, run_health, wait_until
 from mavlink_harness import Autopilot, f32, read_archive
 from modd.ports import free_port
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from support.processes import pid_alive  # noqa: E402
 
 pytestmark = pytest.mark.e2e
 
@@ -116,14 +118,6 @@ def _deploy(endpoint: str, creds: Path, text: str, revision: int) -> tuple[dict[
         session.close()  # type: ignore[no-untyped-call]
 
 
-def _health(run: Path) -> dict[str, Any]:
-    try:
-        sensors: dict[str, Any] = json.loads((run / "sensors.json").read_text())["sensors"]
-        return sensors
-    except (FileNotFoundError, ValueError, KeyError):
-        return {}
-
-
 def _by_sensor(reply: dict[str, Any]) -> dict[str, dict[str, Any]]:
     return {s["sensor"]: s for s in reply["onboard"]["sensors"]["sensors"]}
 
@@ -175,7 +169,7 @@ def test_a_deploy_reaches_modd_sensors_and_modd_mavlink(tmp_path: Path) -> None:
         pid = _pid(up.pid)
         feeder.thread.start()
         ctd.write(b"12.5\r\n")
-        wait_until(lambda: _health(run).get("gnss", {}).get("values", 0) >= 3, 10, "GNSS values")
+        wait_until(lambda: run_health(run).get("gnss", {}).get("values", 0) >= 3, 10, "GNSS values")
 
         # add: a sounder, an unplugged echo sounder, the CTD's conductivity, the pitch
         v2 = text(
@@ -202,7 +196,7 @@ def test_a_deploy_reaches_modd_sensors_and_modd_mavlink(tmp_path: Path) -> None:
         print(f"deploy round trip {took:.3f} s, applied {_applied_within(reply, sent):.3f} s")
         sounder.write(nmea("SDDBT,11.48,f,3.50,M,1.91,F"))
         ctd.write(b"12.6,C=45100\r\n")
-        wait_until(lambda: _health(run).get("sounder", {}).get("values", 0) == 1, 3, "sounder")
+        wait_until(lambda: run_health(run).get("sounder", {}).get("values", 0) == 1, 3, "sounder")
 
         # remove the sounder and the pitch
         v3 = text(
@@ -218,9 +212,9 @@ def test_a_deploy_reaches_modd_sensors_and_modd_mavlink(tmp_path: Path) -> None:
         assert sensors["ctd"]["action"] == "unchanged" and reply["onboard"]["sensors"]["ok"]
         assert reply["onboard"]["mavlink"]["removed"] == ["usv.autopilot.pitch"]
         sounder.write(nmea("SDDBT,13.12,f,4.00,M,2.19,F"))  # nobody reads it now
-        wait_until(lambda: "sounder" not in _health(run), 1, "the sounder's health gone")
+        wait_until(lambda: "sounder" not in run_health(run), 1, "the sounder's health gone")
         time.sleep(0.5)
-        assert _pid(up.pid) == pid and _alive(pid), "the PubBroker was restarted"
+        assert _pid(up.pid) == pid and pid_alive(pid), "the PubBroker was restarted"
         feeder.stop.set()
         feeder.thread.join()
         time.sleep(0.5)  # the last samples reach the archive before the stop
@@ -254,11 +248,3 @@ def _pid(up: int) -> int:
         if b"modd-pubbroker" in Path(f"/proc/{child}/cmdline").read_bytes():
             return int(child)
     raise AssertionError("modd up runs no PubBroker")
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    return True

@@ -17,6 +17,14 @@ describe("onboardLines", () => {
     ]);
   });
 
+  it("leaves out, when asked, the instruments a deploy did not touch", () => {
+    const onboard = { sensors: { ok: true, sensors: [
+      { sensor: "gnss", action: "unchanged", ok: true, state: "open" },
+      { sensor: "gps2", action: "started", ok: true, state: "open" },
+    ] } };
+    expect(onboardLines(onboard, true)[0].text).toBe("gps2 started (open)");
+  });
+
   it("reads an invalid model's refusal and hostile shapes without failing", () => {
     expect(onboardLines({ sensors: { ok: false, problem: "invalid model: x" } })[0].text).toBe("invalid model: x");
     expect(onboardLines(null)).toEqual([]);

@@ -30,20 +30,24 @@ function topicWords(r: Record<string, unknown>): string[] {
   });
 }
 
-function processWords(r: Record<string, unknown>): string {
+function processWords(r: Record<string, unknown>, changedOnly: boolean): string {
   const items = Array.isArray(r.sensors)
-    ? (r.sensors as unknown[]).filter((s): s is Record<string, unknown> => !!s && typeof s === "object").slice(0, MAX_ITEMS).map(sensorWords)
+    ? (r.sensors as unknown[])
+      .filter((s): s is Record<string, unknown> => !!s && typeof s === "object")
+      .filter((s) => !changedOnly || s.action !== "unchanged" || s.ok !== true)
+      .slice(0, MAX_ITEMS).map(sensorWords)
     : topicWords(r);
   const problem = str(r.problem);
   return [problem, ...items].filter(Boolean).join("; ") || (r.ok === true ? "applied" : "not applied");
 }
 
-/** The `onboard` object as lines, processes in name order; [] when absent or not an object. */
-export function onboardLines(onboard: unknown): OnboardLine[] {
+/** The `onboard` object as lines, processes in name order; [] when absent or not an object.
+ * `changedOnly`: leave out the instruments a deploy left as they were and that read. */
+export function onboardLines(onboard: unknown, changedOnly = false): OnboardLine[] {
   if (!onboard || typeof onboard !== "object" || Array.isArray(onboard)) return [];
   return Object.entries(onboard as Record<string, unknown>)
     .filter((e): e is [string, Record<string, unknown>] => !!e[1] && typeof e[1] === "object")
     .sort(([a], [b]) => a.localeCompare(b))
     .slice(0, 8)
-    .map(([process, r]) => ({ process, ok: r.ok === true, text: processWords(r) }));
+    .map(([process, r]) => ({ process, ok: r.ok === true, text: processWords(r, changedOnly) }));
 }

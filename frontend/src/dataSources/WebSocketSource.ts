@@ -106,7 +106,7 @@ export function toLinkStatus(d: Partial<SubBrokerStatus>): LinkStatus {
     ...(typeof d.behind === "boolean" ? { behind: d.behind, lagS: num(d.lag_s) } : {}),
     ...(archive ? { archive } : {}),
     ...(d.sensors ? { sensors: instrumentsHealth(d.sensors) } : {}),
-    ...(d.onboard ? { onboard: onboardLines(d.onboard) } : {}),
+    ...(d.onboard ? { onboard: onboardLines(d.onboard, true) } : {}),
     ...(radio ? {
       radio: {
         transport: String(radio.transport ?? ""),

@@ -79,7 +79,7 @@ def apply_plans(
     for s in gone:
         s.stop()
     for s in gone:
-        s.thread.join(JOIN_S)  # its device closed before a new reader opens it
+        s.join(JOIN_S)  # its device closed before a new reader opens it
     for name in old.keys() - actions.keys():
         actions[name] = "stopped"
     new = [s for s in readers if actions[s.plan.name] != "unchanged"]

@@ -56,13 +56,22 @@ class SensorThread:
         self.health = Health()
         self.thread = threading.Thread(target=self._run, name=f"sensor-{plan.name}", daemon=True)
         self._stop = threading.Event()
+        self._starting = threading.Lock()
         self._opened = False
         self.absent = False  # the device path is not there (waiting for it)
         self.started_ns = 0  # when reading began: silence is counted from there
 
     def start(self) -> None:
-        self.started_ns = time.time_ns()
-        self.thread.start()
+        """Starts reading, once (a deploy and the runner's start may both ask), never after stop."""
+        with self._starting:
+            if self.thread.ident is not None or self._stop.is_set():
+                return
+            self.started_ns = time.time_ns()
+            self.thread.start()
+
+    def join(self, timeout: float) -> None:
+        if self.thread.ident is not None:
+            self.thread.join(timeout)
 
     def stop(self) -> None:
         """Asks the reader to end (it closes its device within its read timeout)."""
@@ -251,7 +260,7 @@ class Runner:
         for s in self.sensors:
             s.stop()
         for s in self.sensors:
-            s.thread.join(left())
+            s.join(left())
         self.send_health()  # the last counts, before the publishers close
         for sink in self.sinks.values():
             sink.flush(left())
