@@ -254,11 +254,22 @@ export function instruments({ page, ports, drone, liveValues, feedInstruments })
 
     ["instruments: removing one stops its reader", async () => {
       if (!dir) throw new Error("needs the instruments added above");
+      // each view removes what it owns: the scientist the subscription, the designer the
+      // publisher's topic, then the integrator the sensor
+      const remove = async (id) => {
+        await select(id);
+        const button = page.getByRole("button", { name: "Delete", exact: true });
+        if (await button.isDisabled()) throw new Error(`Delete is disabled: ${await button.getAttribute("title")}`);
+        await button.click();
+        await expectCount(node(id), 0);
+      };
+      await view("Scientist");
+      await remove("sub:sub_8");
+      await view("System designer");
+      await select("pub:pub_2");
+      await inspector.getByRole("checkbox", { name: /^usv\.ctd2\.temperature / }).uncheck();
       await view("Sensor integrator");
-      await select("sensor:ctd2");
-      const remove = page.getByRole("button", { name: "Delete", exact: true });
-      if (await remove.isDisabled()) throw new Error(`Delete is disabled: ${await remove.getAttribute("title")}`);
-      await remove.click();
+      await remove("sensor:ctd2");
       await expectCount(node("sensor:ctd2"), 0);
       await page.getByRole("button", { name: "Save", exact: true }).click();
       await expectText(page.locator(".topbar .revision"), /^r4$/);
