@@ -72,6 +72,15 @@ def test_the_hand_over_is_seen_once_and_answered_by_digest(tmp_path: Path) -> No
     assert got["sensors"]["ok"] is True and got["sensors"]["digest"] == second
 
 
+def test_a_handed_over_model_is_taken_as_validated_until_edited(tmp_path: Path) -> None:
+    path = tmp_path / "model.json"
+    applied = onboard.hand_over(path, {"drone": {"name": "a"}})
+    assert onboard.validated(path, applied) == {"drone": {"name": "a"}}
+    path.write_text('{"drone": {"name": "edited by hand"}}')
+    edited = onboard.digest(path.read_bytes())
+    assert onboard.validated(path, edited) is None and onboard.validated(path, applied) is None
+
+
 def test_an_oversized_or_damaged_answer_file_is_left_out(tmp_path: Path) -> None:
     path = tmp_path / "model.json"
     onboard.results_dir(path).mkdir()

@@ -45,11 +45,36 @@ def _replace(path: Path, data: bytes) -> None:
     os.replace(tmp, path)
 
 
+def _valid_file(model_path: Path) -> Path:
+    return model_path.with_name(model_path.name + ".valid")
+
+
 def hand_over(model_path: Path, model: dict[str, Any]) -> str:
-    """Writes ``model`` (the deployed JSON document) to the on-board model file; its digest."""
+    """Writes ``model`` (the deployed JSON document, validated by the caller) to the
+    on-board model file; its digest. The digest goes first to ``<file>.valid``: a
+    process finding it there need not check the model again (:func:`validated`)."""
     data = (json.dumps(model, indent=1, sort_keys=True) + "\n").encode()
+    _replace(_valid_file(model_path), (digest(data) + "\n").encode())
     _replace(model_path, data)
     return digest(data)
+
+
+def validated(model_path: Path, applied: str) -> dict[str, Any] | None:
+    """The model file's document when it is the one of digest ``applied`` and the
+    hand-over said it valid; None otherwise (a file edited by hand: check it)."""
+    try:
+        if _valid_file(model_path).read_text().strip() != applied:
+            return None
+        data = model_path.read_bytes()
+    except OSError:
+        return None
+    if digest(data) != applied:
+        return None
+    try:
+        doc = json.loads(data)
+    except ValueError:
+        return None
+    return doc if isinstance(doc, dict) else None
 
 
 def write_result(model_path: Path, process: str, applied: str, result: dict[str, Any]) -> None:

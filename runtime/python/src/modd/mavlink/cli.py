@@ -23,7 +23,7 @@ from typing import Any
 
 from modd_model import load_or_report
 
-from ..onboard import ModelWatch, follow, write_result
+from ..onboard import ModelWatch, follow, validated, write_result
 from ..publisher import Publisher
 from .bridge import Bridge, BridgeSettings
 from .guard import signing_key
@@ -166,9 +166,9 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def _replanned(path: Path, bridge: Bridge, ingress: str) -> dict[str, Any]:
+def _replanned(path: Path, applied: str, bridge: Bridge, ingress: str) -> dict[str, Any]:
     """The deployed model applied by the bridge's own thread; what it did."""
-    model = load_or_report(str(path))
+    model = validated(path, applied) or load_or_report(str(path))
     if model is None:
         return {"ok": False, "problem": f"invalid model (see {path}'s diagnostics in the log)"}
     try:
@@ -189,7 +189,7 @@ def _follow(path: Path, bridge: Bridge, ingress: str, stop: threading.Event) -> 
     write_result(path, "mavlink", watch.digest, {"ok": True, "started": True})
 
     def apply(applied: str) -> None:
-        write_result(path, "mavlink", applied, _replanned(path, bridge, ingress))
+        write_result(path, "mavlink", applied, _replanned(path, applied, bridge, ingress))
 
     threading.Thread(target=follow, args=(watch, apply, stop), name="watch", daemon=True).start()
 

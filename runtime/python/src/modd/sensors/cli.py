@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..onboard import ModelWatch, follow, write_result
+from ..onboard import ModelWatch, follow, validated, write_result
 from ..publisher import Publisher
 from .check import checked_model, model_or_why
 from .plan import plan_sensors
@@ -105,6 +105,16 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
+def _applied(
+    model: dict[str, Any], runner: Runner, ingress: str, devices: Path | None
+) -> dict[str, Any]:
+    try:
+        plans = [linked_device(p, devices) for p in plan_sensors(model)]
+    except (KeyError, TypeError, ValueError) as exc:  # a model file no validator read
+        return {"ok": False, "problem": f"cannot read the model's instruments: {exc!r}"}
+    return apply_plans(runner, plans, lambda n: Publisher(n, ingress))
+
+
 def _follow(
     path: Path, runner: Runner, ingress: str, stop: threading.Event, devices: Path | None
 ) -> None:
@@ -113,13 +123,16 @@ def _follow(
     write_result(path, "sensors", watch.digest, {"ok": True, "started": True})
 
     def apply(applied: str) -> None:
-        model, why = model_or_why(str(path))
+        # a deploy's hand-over was validated by the SubBroker; a file edited by hand is checked
+        model = validated(path, applied)
+        why = ""
+        if model is None:
+            model, why = model_or_why(str(path))
         if model is None:
             log(f"deploy: {path} refused, the readers go on: {why}")
             result: dict[str, Any] = {"ok": False, "problem": f"invalid model: {why}"}
         else:
-            plans = [linked_device(p, devices) for p in plan_sensors(model)]
-            result = apply_plans(runner, plans, lambda n: Publisher(n, ingress))
+            result = _applied(model, runner, ingress, devices)
         write_result(path, "sensors", applied, result)
 
     threading.Thread(target=follow, args=(watch, apply, stop), name="watch", daemon=True).start()
