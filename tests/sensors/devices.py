@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import os
 import select
 import threading
@@ -145,6 +146,15 @@ class ModbusDevice:
             with contextlib.suppress(OSError):
                 os.close(fd)
         self.reader_side.close()
+
+
+def run_health(run: Path) -> dict[str, Any]:
+    """Each sensor's health in ``modd up``'s ``<run>/sensors.json`` ({} before it is written)."""
+    try:
+        sensors: dict[str, Any] = json.loads((run / "sensors.json").read_text())["sensors"]
+        return sensors
+    except (FileNotFoundError, ValueError, KeyError):
+        return {}
 
 
 def wait_until(cond: Callable[[], bool], timeout: float, what: str) -> float:

@@ -8,18 +8,16 @@ health, and an unplugged GNSS resumes within 2 s of being plugged back in."""
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import Any
 
 import pynmea2  # type: ignore[import-untyped]
 import pytest
-from devices import ModbusDevice, PtyDevice, nmea, wait_until
+from devices import ModbusDevice, PtyDevice, nmea, run_health, wait_until
 from mavlink_harness import f32, read_archive
 from modd.ports import free_port
 
@@ -48,14 +46,6 @@ Publishers {{
                     "usv.sonde.oxygen");
 }}
 """
-
-
-def _health(run: Path) -> dict[str, Any]:
-    try:
-        sensors: dict[str, Any] = json.loads((run / "sensors.json").read_text())["sensors"]
-        return sensors
-    except (FileNotFoundError, ValueError, KeyError):
-        return {}
 
 
 def _gga(lat: float) -> bytes:
@@ -95,7 +85,8 @@ def test_four_instruments_archived_with_no_driver_code(tmp_path: Path) -> None:
     try:
         wait_until(
             lambda: (
-                all(h.get("connected") for h in _health(run).values()) and len(_health(run)) == 4
+                len(run_health(run)) == 4
+                and all(h.get("connected") for h in run_health(run).values())
             ),
             30,
             "modd-sensors opened the four devices",
@@ -120,19 +111,19 @@ def test_four_instruments_archived_with_no_driver_code(tmp_path: Path) -> None:
             sounder.write(nmea(f"SDDBT,{d * 3.28084:.2f},f,{d:.2f},M,{d * 0.5468:.2f},F"))
         sounder.write(b"\x80\xfe\x13garbage at 9600 read as 4800\r\n")
         ctd.write(b"12.5,C=45100\r\n12.6;C=45200\r\nS>\r\n12.7,C=\r\n12.8,C=45300\r\n")
-        wait_until(lambda: _health(run)["sonde"]["values"] >= 4, 15, "two polls of the sonde")
-        wait_until(lambda: _health(run)["gnss"]["values"] == 2 * 10 + 1, 10, "GNSS values")
+        wait_until(lambda: run_health(run)["sonde"]["values"] >= 4, 15, "two polls of the sonde")
+        wait_until(lambda: run_health(run)["gnss"]["values"] == 2 * 10 + 1, 10, "GNSS values")
 
         gnss.unplug()
-        wait_until(lambda: not _health(run)["gnss"]["connected"], 5, "the GNSS loss seen")
+        wait_until(lambda: not run_health(run)["gnss"]["connected"], 5, "the GNSS loss seen")
         gnss.plug()
         start = time.monotonic()
-        while _health(run)["gnss"]["values"] < 2 * 10 + 3:
-            assert time.monotonic() - start < 2.0, _health(run)["gnss"]
+        while run_health(run)["gnss"]["values"] < 2 * 10 + 3:
+            assert time.monotonic() - start < 2.0, run_health(run)["gnss"]
             gnss.write(_gga(47.71))
             time.sleep(0.1)
-        n_replug = (_health(run)["gnss"]["values"] - 2 * 10 - 1) // 2
-        health = _health(run)
+        n_replug = (run_health(run)["gnss"]["values"] - 2 * 10 - 1) // 2
+        health = run_health(run)
     finally:
         up.send_signal(signal.SIGTERM)
         out, _ = up.communicate(timeout=60)

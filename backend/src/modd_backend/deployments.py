@@ -29,8 +29,10 @@ from sqlalchemy.orm import Session as Db
 from .tables import Deployment, ModelVersion, utcnow
 from .zenoh_session import ZenohSession, read_secret
 
-#: Extra seconds the backend waits beyond the SubBroker's own deploy timeout.
-QUERY_MARGIN_S = 2.0
+#: Extra seconds the backend waits beyond the SubBroker's own deploy timeout: 2 s, and
+#: the 2 s the SubBroker may wait after the ack for the on-board processes' answers
+#: (modd.onboard.RESULT_WAIT_S).
+QUERY_MARGIN_S = 4.0
 
 #: Deployment ids whose query this process is waiting for (reconcile skips them).
 _in_flight: set[int] = set()

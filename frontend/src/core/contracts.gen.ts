@@ -112,6 +112,8 @@ export interface SubBrokerStatus {
   sensors?: Record<string, SensorHealth>;
   /** Put by `modd up` when it gave up the run (docs/reliability.md, "Base station, store and tools"): the SubBroker is stopped with the rest, so this last status (link `stopped`) says which process ended the run and why; absent otherwise. */
   supervisor?: unknown;
+  /** What the drone's on-board processes did with the last deploy, when they run on the SubBroker's machine (modd-subbroker --onboard-model; docs/sensors.md, "Deploying to a running drone"): process name (sensors, mavlink) → its result (ok, problem, and for sensors each instrument's action, state and problem). Absent until a deploy was handed over. */
+  onboard?: Record<string, object>;
 }
 
 /** A datagram link's figures (modd.subbroker.dglink.DatagramLinkClient.radio_status): the wire bytes/s per direction over the last 10 s, the share of slots lost or repaired, the datagrams refused, and the PubBroker's own counters from its last STATUS. */

@@ -22,6 +22,7 @@ import type { DeliveredValue, SubBrokerStatus } from "../core/contracts.gen";
 import { RingBuffer } from "./RingBuffer";
 import { archiveSpace } from "../core/archiveSpace";
 import { instrumentsHealth } from "../core/instrumentHealth";
+import { onboardLines } from "../core/onboard";
 import type { ChannelListener, ConnectionState, DataSource, LinkStatus, Sample, SavedEvent } from "./types";
 
 export interface SocketLike {
@@ -118,6 +119,7 @@ export function toLinkStatus(d: Partial<SubBrokerStatus>): LinkStatus {
     ...(typeof d.behind === "boolean" ? { behind: d.behind, lagS: num(d.lag_s) } : {}),
     ...(archive ? { archive } : {}),
     ...(d.sensors ? { sensors: instrumentsHealth(d.sensors) } : {}),
+    ...(d.onboard ? { onboard: onboardLines(d.onboard, true) } : {}),
     ...(radio ? {
       radio: {
         transport: String(radio.transport ?? ""),

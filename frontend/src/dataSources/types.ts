@@ -1,5 +1,6 @@
 import type { ArchiveSpace } from "../core/archiveSpace";
 import type { InstrumentHealth } from "../core/instrumentHealth";
+import type { OnboardLine } from "../core/onboard";
 /**
  * Live data behind one interface. Panels never open sockets: they get a
  * `DataSource` from the services context and subscribe to channels.
@@ -49,6 +50,8 @@ export interface LinkStatus {
   radio?: RadioFigures;
   /** The plug-and-play instruments' health (status' `sensors`), when the drone reports it. */
   sensors?: InstrumentHealth[];
+  /** what the on-board processes did with the last deploy (core/onboard.ts) */
+  onboard?: OnboardLine[];
 }
 
 /** A datagram link's figures (docs/subbroker.md, "Status": `radio`). */

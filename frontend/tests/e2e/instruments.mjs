@@ -48,7 +48,18 @@ export function instrumentParts() {
   return { sensors, publisher: { name: "pub_instruments", periodS: PERIOD_S, topics } };
 }
 
-export function instruments({ page, ports, drone, liveValues }) {
+/** Added to the running drone (issue 39): on pseudo-terminals the journey makes (pty_instruments.py),
+ * and one whose device is not there. */
+const ADDED = (dir) => [
+  { name: "gps2", kind: "nmea", path: `${dir}/gps2`, variables: [
+    { name: "lat", unit: "deg", source: { "nmea.sentence": "GGA", "nmea.field": "lat" } }] },
+  { name: "ctd2", kind: "ascii", path: `${dir}/ctd2`, variables: [
+    { name: "temperature", unit: "DEGREE_CELSIUS", source: { "ascii.column": "1" } }] },
+  { name: "echo2", kind: "nmea", path: `${dir}/not-plugged`, variables: [
+    { name: "depth", unit: "METER", source: { "nmea.sentence": "DBT", "nmea.field": "depth_meters" } }] },
+];
+
+export function instruments({ page, ports, drone, liveValues, feedInstruments }) {
   const node = (id) => page.locator(`.react-flow__node[data-id="${id}"]`);
   const inspector = page.getByRole("region", { name: "Inspector" });
   const view = (name) => page.getByRole("tab", { name, exact: true }).click();
@@ -67,6 +78,33 @@ export function instruments({ page, ports, drone, liveValues }) {
     await expectVisible(inspector.locator("h2").first());
   };
   const topics = SENSORS.flatMap((s) => s.variables.map((v) => `usv.${s.name}.${v.name}`));
+  const declare = async (sensors) => {
+    await view("Sensor integrator");
+    for (const s of sensors) {
+      await page.getByRole("button", { name: "+ Sensor" }).click();
+      await set("name", s.name);
+      await set("kind", s.kind);
+      await set("device.path", s.path);
+      for (const [i, v] of s.variables.entries()) {
+        if (i === 0) await select(`topic:${s.name}.var_1`);
+        else await page.getByRole("button", { name: "+ Variable" }).click();
+        await set("name", v.name);
+        await set("unit", v.unit);
+        for (const [path, value] of Object.entries(v.source)) await set(path, value);
+      }
+    }
+  };
+  const deployHead = async (revision) => {
+    await view("Operator");
+    await panel("Deploy");
+    await page.getByRole("button", { name: `Deploy revision ${revision}` }).click();
+    const result = page.getByTestId("deploy-result");
+    await expectText(result, /Acked|failed/, 30000);
+    if (!/Acked/.test((await result.textContent()) ?? "")) throw new Error(`deploy not acked: ${await result.textContent()}`);
+    return Date.now();
+  };
+  const onboard = page.getByTestId("deploy-onboard");
+  let dir = null;
 
   return [
     ["instruments: the integrator declares an NMEA GNSS, an NMEA sounder, an ASCII CTD and a Modbus sonde in the form", async () => {
@@ -77,20 +115,7 @@ export function instruments({ page, ports, drone, liveValues }) {
       await page.getByLabel("Drone name").fill("usv");
       await page.getByRole("button", { name: "Create" }).click();
       await expectVisible(node("drone"));
-      await view("Sensor integrator");
-      for (const s of SENSORS) {
-        await page.getByRole("button", { name: "+ Sensor" }).click();
-        await set("name", s.name);
-        await set("kind", s.kind);
-        await set("device.path", s.path);
-        for (const [i, v] of s.variables.entries()) {
-          if (i === 0) await select(`topic:${s.name}.var_1`);
-          else await page.getByRole("button", { name: "+ Variable" }).click();
-          await set("name", v.name);
-          await set("unit", v.unit);
-          for (const [path, value] of Object.entries(v.source)) await set(path, value);
-        }
-      }
+      await declare(SENSORS);
       await expectCount(page.locator(".react-flow__node.react-flow__node-topic"), topics.length);
     }],
 
@@ -184,6 +209,76 @@ export function instruments({ page, ports, drone, liveValues }) {
       await page.reload();
       await panel("Monitor");
       await expectText(summary, /Instruments: 4 \(4 open\)$/, 30000);
+    }],
+
+    // Issue 39: a deploy reaches modd-sensors on the running drone (no restart): two instruments
+    // added in the form read at once, a missing device said in the deploy result, a removed one stops.
+    ["instruments: added on the running drone, read within 3 s of the deploy, no restart", async () => {
+      if (!drone || !liveValues || !feedInstruments) throw new Error("needs the simulated drone (modd up --simulate)");
+      dir = await feedInstruments();
+      const added = ADDED(dir);
+      await declare(added);
+      await view("System designer");
+      await page.getByRole("button", { name: "+ Publisher" }).click();
+      await set("periodS", "0.2");
+      for (const s of added) await inspector.getByRole("checkbox", { name: new RegExp(`^usv\\.${s.name}\\.${s.variables[0].name} `) }).check();
+      await view("Scientist");
+      const quick = page.getByRole("form", { name: "Quick subscription" });
+      for (const t of ["usv.gps2.lat", "usv.ctd2.temperature"]) {
+        await quick.getByLabel("Topic").selectOption(t);
+        await quick.getByLabel("Every (s)").fill("0.5");
+        await quick.getByLabel("Aggregation").selectOption("LAST");
+        await quick.getByRole("button", { name: "Subscribe" }).click();
+      }
+      await expectCount(page.locator(".react-flow__node .marker-error"), 0);
+      await page.getByRole("button", { name: "Save", exact: true }).click();
+      await expectText(page.locator(".topbar .revision"), /^r3$/);
+      const acked = await deployHead(3);
+      // what each on-board process did: both new readers open, the missing device said
+      await expectText(onboard, /gps2 started \(open\)/, 3000);
+      await expectText(onboard, /ctd2 started \(open\)/, 100);
+      await expectText(onboard.getByRole("alert"), new RegExp(`echo2 started — device ${dir}/not-plugged missing`), 100);
+      await panel("Monitor");
+      const line = page.getByTestId("onboard-sensors");
+      await expectText(line, /gps2 started \(open\)/, Math.max(100, 3000 - (Date.now() - acked)));
+      await expectText(line, /ctd2 started \(open\)/, 100);
+      await expectText(line, /echo2 started — device .* missing/, 100);
+      for (const sub of ["sub_7", "sub_8"]) await page.getByRole("checkbox", { name: new RegExp(`^${sub} `) }).check();
+      for (const sub of ["sub_7", "sub_8"]) await expectText(page.getByTestId(`last-${sub}`), /last -?\d/, Math.max(100, 3000 - (Date.now() - acked)));
+      const took = Date.now() - acked;
+      console.log(`    new instruments' values in the Monitor ${took} ms after the ack`);
+      // the instruments' health table follows the PubBroker's STATUS (at most one change STATUS per 10 s)
+      const summary = page.getByRole("status", { name: "Link status" }).locator("details.instruments-health summary");
+      await expectText(summary, /Instruments: 7 \(6 open, 1 closed\)/, 15000);
+    }],
+
+    ["instruments: removing one stops its reader", async () => {
+      if (!dir) throw new Error("needs the instruments added above");
+      // each view removes what it owns: the scientist the subscription, the designer the
+      // publisher's topic, then the integrator the sensor
+      const remove = async (id) => {
+        await select(id);
+        const button = page.getByRole("button", { name: "Delete", exact: true });
+        if (await button.isDisabled()) throw new Error(`Delete is disabled: ${await button.getAttribute("title")}`);
+        await button.click();
+        await expectCount(node(id), 0);
+      };
+      await view("Scientist");
+      await remove("sub:sub_8");
+      await view("System designer");
+      await select("pub:pub_2");
+      await inspector.getByRole("checkbox", { name: /^usv\.ctd2\.temperature / }).uncheck();
+      await view("Sensor integrator");
+      await remove("sensor:ctd2");
+      await expectCount(node("sensor:ctd2"), 0);
+      await page.getByRole("button", { name: "Save", exact: true }).click();
+      await expectText(page.locator(".topbar .revision"), /^r4$/);
+      await deployHead(4);
+      await expectText(onboard, /ctd2 stopped/, 3000);
+      await expectText(onboard, /gps2 unchanged \(open\)/, 100);
+      await panel("Monitor");
+      const summary = page.getByRole("status", { name: "Link status" }).locator("details.instruments-health summary");
+      await expectText(summary, /Instruments: 6 \(5 open, 1 closed\)/, 15000);
     }],
   ];
 }

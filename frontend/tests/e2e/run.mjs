@@ -6,13 +6,13 @@
  * Chromium at 1280×800; stops what it started, by PID; prints one line
  * "N passed, N failed" and exits non-zero on any failure.
  */
-import { existsSync, mkdtempSync, rmSync, readFileSync, writeFileSync } from "node:fs";
+import { existsSync, mkdirSync, mkdtempSync, rmSync, readFileSync, writeFileSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { dirname, join, resolve } from "node:path";
 import { fileURLToPath } from "node:url";
 import { execFileSync } from "node:child_process";
 import { launch } from "./browser.mjs";
-import { freePort, start, stop, waitForHttp } from "./processes.mjs";
+import { freePort, sleep, start, stop, waitForHttp } from "./processes.mjs";
 import { journey } from "./journey.mjs";
 import { collaboration } from "./collab.mjs";
 import { views } from "./views.mjs";
@@ -49,6 +49,20 @@ const procs = [];
 let passed = 0, failed = 0;
 let browser = null;
 const cleanups = []; // extra browsers the steps open
+
+/** Instruments on pseudo-terminals of this run (pty_instruments.py, stopped with the others); their folder. */
+async function feedInstruments() {
+  const dir = join(tmp, "instruments");
+  mkdirSync(dir, { recursive: true });
+  const feeder = start("instruments", [join(bin, "python"), join(here, "pty_instruments.py"), dir],
+    { cwd: repo, logFile: join(tmp, "instruments.log") });
+  procs.push(feeder);
+  for (let i = 0; i < 100 && !(existsSync(join(dir, "gps2")) && existsSync(join(dir, "ctd2"))); i += 1) {
+    if (feeder.exited) throw new Error(`the instruments' feeder exited: ${readFileSync(join(tmp, "instruments.log"), "utf8")}`);
+    await sleep(100);
+  }
+  return dir;
+}
 
 async function cleanup() {
   for (const c of cleanups) await c();
@@ -133,7 +147,7 @@ try {
     ...(only === "views" || only === "collab" || only === "instruments" ? [] : metadataSteps()),
     // Issue 32: the four plug-and-play instruments declared, deployed and watched (last: it deploys its own model).
     ...(only === "instruments" ? [loginStep(page, baseUrl)] : []),
-    ...(only === "views" || only === "collab" ? [] : instruments({ page, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
+    ...(only === "views" || only === "collab" ? [] : instruments({ page, ports: { pub: pubPort, sub: subPort }, drone, liveValues, feedInstruments })),
   ];
   let broken = null;
   // MODD_E2E_KEEP_GOING=1: the later steps still run after a failure (to see them locally; they

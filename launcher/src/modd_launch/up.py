@@ -167,7 +167,9 @@ def has_mavlink_sensors(model: dict[str, Any]) -> bool:
     return any(s.get("kind") == "mavlink" for s in model["drone"]["sensors"])
 
 
-def simulation(model: dict[str, Any], model_json: Path, bin_dir: Path, logs: Path) -> list[Process]:
+def simulation(
+    model: dict[str, Any], model_json: Path, bin_dir: Path, logs: Path, onboard: Path
+) -> list[Process]:
     """The simulator and, when the model has mavlink sensors, the MAVLink bridge reading
     the simulator's autopilot on a loopback UDP port of this run (bridge first: it listens)."""
     sim = bin_dir / "modd-sim"
@@ -183,7 +185,14 @@ def simulation(model: dict[str, Any], model_json: Path, bin_dir: Path, logs: Pat
         out.append(
             Process(
                 "bridge",
-                [str(bridge), "--model", str(model_json), "--connect", f"udpin:127.0.0.1:{port}"],
+                [
+                    str(bridge),
+                    "--model",
+                    str(onboard),
+                    "--connect",
+                    f"udpin:127.0.0.1:{port}",
+                    *following(model),
+                ],
                 logs / "bridge.log",
                 death_signal=signal.SIGKILL,
             )
@@ -229,23 +238,39 @@ def build_stack(
         stack.processes.append(Process("subbroker", sub, logs / "subbroker.log"))
     from modd.sensors.plan import has_instrument_sensors
 
+    onboard = onboard_model(configs, workdir) if drone else None
+    if onboard is not None and station:  # an acked deploy reaches the on-board processes
+        sub_process = next(p for p in stack.processes if p.name == "subbroker")
+        sub_process.argv += ["--onboard-model", str(onboard)]
     if drone and has_instrument_sensors(model):  # nmea, ascii, modbus: read by modd-sensors
-        stack.processes.append(
-            Process(
-                "sensors",
-                [
-                    str(bin_dir / "modd-sensors"),
-                    "--model",
-                    str(configs / "model.json"),
-                    "--status-file",
-                    str(workdir / "sensors.json"),
-                ],
-                logs / "sensors.log",
-            )
-        )
+        assert onboard is not None
+        sensors = [str(bin_dir / "modd-sensors"), "--model", str(onboard)]
+        sensors += ["--status-file", str(workdir / "sensors.json"), *following(model)]
+        if args.simulate:
+            sensors += ["--device-dir", str(workdir / "devices")]
+        stack.processes.append(Process("sensors", sensors, logs / "sensors.log"))
     if args.simulate and drone:
-        stack.processes += simulation(model, configs / "model.json", bin_dir, logs)
+        assert onboard is not None
+        stack.processes += simulation(model, configs / "model.json", bin_dir, logs, onboard)
     return stack
+
+
+def onboard_model(configs: Path, workdir: Path) -> Path:
+    """The on-board processes' model file (modd.onboard), the generated model at start;
+    a deploy the PubBroker acks replaces it, and modd-sensors and modd-mavlink follow."""
+    folder = workdir / "onboard"
+    folder.mkdir(mode=0o700, exist_ok=True)
+    shutil.rmtree(folder / "applied", ignore_errors=True)  # an earlier run's answers
+    path = folder / "model.json"
+    shutil.copyfile(configs / "model.json", path)
+    return path
+
+
+def following(model: dict[str, Any]) -> list[str]:
+    """--watch and the run's ingress (a deployed model names the drone's own, not the run's)."""
+    from modd_model.ingress import ingress_of
+
+    return ["--watch", "--ingress", ingress_of(model).address]
 
 
 def run(args: argparse.Namespace) -> int:

@@ -74,6 +74,7 @@ class SubBrokerStatus(TypedDict):
     radio: NotRequired[RadioStatus | None]
     sensors: NotRequired[dict[str, SensorHealth]]
     supervisor: NotRequired[Any]
+    onboard: NotRequired[dict[str, dict[str, Any]]]
 
 
 class RadioStatus(TypedDict):

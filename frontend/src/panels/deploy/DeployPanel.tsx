@@ -3,7 +3,8 @@
  * words, with the plan's consequences (bytes/s, delays, hyperperiod before →
  * after); the deploy button (disabled, with the reason, for an invalid
  * revision); a warning when the drone runs another project; the drone's ack
- * or the error; and the history, whose rows can be reviewed and redeployed
+ * or the error, and what each on-board process did with it (an instrument
+ * whose device is missing said there); and the history, whose rows can be reviewed and redeployed
  * (a rollback is a redeploy of an older revision).
  */
 import { useState } from "react";
@@ -14,6 +15,22 @@ import { useServices } from "../../app/services";
 import { usePanelData, LoadState } from "../usePanelData";
 import type { Deployment } from "../../api/types";
 import { loadDeployReview, type DeployReview } from "./useDeployReview";
+import { onboardLines } from "../../core/onboard";
+
+/** What each on-board process did with the deploy (modd-sensors, modd-mavlink), when they said. */
+function OnboardResult({ reply }: { reply: Deployment["reply"] }) {
+  const lines = onboardLines(reply?.onboard);
+  if (lines.length === 0) return null;
+  return (
+    <ul className="onboard-result" aria-label="On-board processes" data-testid="deploy-onboard">
+      {lines.map((l) => (
+        <li key={l.process} className={l.ok ? "status-ok" : "error"} role={l.ok ? undefined : "alert"}>
+          <strong>{l.process}</strong>: {l.text}
+        </li>
+      ))}
+    </ul>
+  );
+}
 
 function Review({ review }: { review: DeployReview }) {
   const { diff, candidate, changes, consequences, otherProject } = review;
@@ -91,6 +108,7 @@ export default function DeployPanel() {
         {progress.result?.status === "acked" && <span className="status-ok" role="status" data-testid="deploy-result">Acked by the drone ({progress.result.drone}, revision {progress.result.revision}).</span>}
         {progress.error && <span className="error" role="alert" data-testid="deploy-result">Deploy failed: {progress.error}</span>}
       </div>
+      {progress.result?.status === "acked" && <OnboardResult reply={progress.result.reply} />}
       {blockers.length > 0 && (
         <ul className="problem-list" aria-label="Why deploy is disabled">
           {blockers.slice(0, 12).map((b, i) => <li key={i}><strong>{b.element}</strong>: {b.text}</li>)}

@@ -104,6 +104,11 @@ export default function MonitorPanel() {
         </>}
         {!link && state === "open" && " · waiting for the drone's status…"}
         {link?.sensors && <InstrumentsHealth sensors={link.sensors} />}
+        {link?.onboard?.map((l) => l.ok
+          ? <span key={l.process} data-testid={`onboard-${l.process}`}> · last deploy, {l.process}: {l.text}</span>
+          : <strong key={l.process} className="behind" role="alert" data-testid={`onboard-${l.process}`}>
+            {" "}· last deploy, {l.process}: {l.text}
+          </strong>)}
       </div>
       <div className="monitor-grid">
         <aside className="watch-list" aria-label="Subscriptions to watch">

@@ -99,7 +99,7 @@ class Autopilot:
                     f"{self._boot_ms / 1000:.1f} s to {boot_ms / 1000:.1f} s): "
                     "asking for the message rates again"
                 )
-                self._ask_all()
+                self.ask_all()
             self._boot_ms = boot_ms
 
     def _on_heartbeat(self, msg: Any, now: float) -> None:
@@ -125,13 +125,13 @@ class Autopilot:
             )
             self.system, self.component = src, comp
             self._boot_ms = None
-            self._ask_all()
+            self.ask_all()
         elif self.lost:
             self.log(
                 f"autopilot {src} back after {now - (self.last_heartbeat or now):.1f} s "
                 "of silence: asking for the message rates again"
             )
-            self._ask_all()
+            self.ask_all()
         self.lost = False
         self.last_heartbeat = now
 
@@ -153,7 +153,7 @@ class Autopilot:
                 f"{result_name(msg.result)}"
             )
 
-    def _ask_all(self) -> None:
+    def ask_all(self) -> None:
         self._queue = deque(Request(m, i) for m, i in sorted(self.intervals_us.items()))
         self._in_flight = None
 

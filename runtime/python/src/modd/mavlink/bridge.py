@@ -23,6 +23,7 @@ Example::
 
 from __future__ import annotations
 
+import queue
 import threading
 import time
 from collections.abc import Callable, Mapping
@@ -93,6 +94,8 @@ class Bridge:
         self._next_heartbeat = 0.0
         self._next_status: float | None = None
         self._bad_logged = 0  # bad frames logged since the last status line
+        #: work for the bridge's own thread (a deployed model's replan), run between reads
+        self.pending: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()
         for pub in plan.publishers:
             for m in pub.mappings:
                 self.sinks[pub.name].declare(m.topic, m.type)
@@ -189,6 +192,8 @@ class Bridge:
         try:
             next_tick = 0.0
             while not stop.is_set():
+                while not self.pending.empty():
+                    self.pending.get()()
                 now = time.monotonic()
                 if now >= next_tick:
                     self.tick(now)

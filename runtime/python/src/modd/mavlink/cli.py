@@ -13,20 +13,26 @@ Example::
 from __future__ import annotations
 
 import argparse
+import queue
 import signal
 import sys
 import threading
 import time
+from pathlib import Path
+from typing import Any
 
 from modd_model import load_or_report
 
+from ..onboard import ModelWatch, follow, validated, write_result
 from ..publisher import Publisher
 from .bridge import Bridge, BridgeSettings
 from .guard import signing_key
 from .mapping import MappingError, plan_bridge
+from .reload import replan
 from .transport import open_transport
 
 DEFAULT_CONNECT = "udpin:127.0.0.1:14550"
+APPLY_TIMEOUT_S = 1.0
 
 
 def log(line: str) -> None:
@@ -83,6 +89,12 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         default=3.0,
         metavar="S",
         help="report the autopilot lost after this long without HEARTBEAT (3)",
+    )
+    p.add_argument(
+        "--watch",
+        action="store_true",
+        help="follow the model file: apply a deployed model's mavlink variables as it "
+        "changes, each result in <model dir>/applied/mavlink.json (docs/mavlink.md)",
     )
     p.add_argument(
         "--status-period",
@@ -147,9 +159,39 @@ def main(argv: list[str] | None = None) -> int:
         f"drone {model['drone']['name']}: {topics} topics from {args.connect} -> {ingress}, "
         "waiting for the autopilot's HEARTBEAT"
     )
+    if args.watch:
+        _follow(Path(args.model), bridge, ingress, stop)
     bridge.run(stop)
     log("stopped")
     return 0
+
+
+def _replanned(path: Path, applied: str, bridge: Bridge, ingress: str) -> dict[str, Any]:
+    """The deployed model applied by the bridge's own thread; what it did."""
+    model = validated(path, applied) or load_or_report(str(path))
+    if model is None:
+        return {"ok": False, "problem": f"invalid model (see {path}'s diagnostics in the log)"}
+    try:
+        plan = plan_bridge(model)
+    except MappingError as exc:
+        return {"ok": False, "problem": "; ".join(exc.problems)[:500]}
+    done: queue.SimpleQueue[dict[str, Any]] = queue.SimpleQueue()
+    bridge.pending.put(lambda: done.put(replan(bridge, plan, lambda n: Publisher(n, ingress))))
+    try:
+        return done.get(timeout=APPLY_TIMEOUT_S)
+    except queue.Empty:
+        return {"ok": False, "problem": f"the bridge did not apply it in {APPLY_TIMEOUT_S} s"}
+
+
+def _follow(path: Path, bridge: Bridge, ingress: str, stop: threading.Event) -> None:
+    """Applies the model file each time it changes (a deploy), in a thread of its own."""
+    watch = ModelWatch(path)
+    write_result(path, "mavlink", watch.digest, {"ok": True, "started": True})
+
+    def apply(applied: str) -> None:
+        write_result(path, "mavlink", applied, _replanned(path, applied, bridge, ingress))
+
+    threading.Thread(target=follow, args=(watch, apply, stop), name="watch", daemon=True).start()
 
 
 if __name__ == "__main__":

@@ -32,6 +32,20 @@ def checked_model(path: str) -> dict[str, Any] | None:
     return model
 
 
+def model_or_why(path: str) -> tuple[dict[str, Any] | None, str]:
+    """The valid model, or None and its diagnostics (for a deploy's answer)."""
+    child = subprocess.run(
+        [sys.executable, "-m", "modd.sensors.check", path],
+        capture_output=True,
+        timeout=CHECK_TIMEOUT_S,
+        check=False,
+    )
+    if child.returncode != 0:
+        return None, child.stderr.decode(errors="replace").strip()[:500]
+    model: dict[str, Any] = json.loads(child.stdout)
+    return model, ""
+
+
 def main(argv: list[str] | None = None) -> int:
     from modd_model import load_or_report
 

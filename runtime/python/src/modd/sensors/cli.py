@@ -16,10 +16,13 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
+from ..onboard import ModelWatch, follow, validated, write_result
 from ..publisher import Publisher
-from .check import checked_model
+from .check import checked_model, model_or_why
 from .plan import plan_sensors
+from .reload import apply_plans, linked_device
 from .run import Runner
 
 
@@ -43,6 +46,19 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         help="keep each sensor's health in this JSON file (rewritten every 0.25 s)",
     )
     p.add_argument(
+        "--watch",
+        action="store_true",
+        help="follow the model file: apply a deployed model's instruments as it changes, "
+        "each result in <model dir>/applied/sensors.json (docs/sensors.md)",
+    )
+    p.add_argument(
+        "--device-dir",
+        type=Path,
+        metavar="DIR",
+        help="with --watch: a deployed sensor that has a link DIR/<name> reads it, not the "
+        "model's device (modd up --simulate: the simulator's pseudo-terminals)",
+    )
+    p.add_argument(
         "--status-period",
         type=float,
         default=10.0,
@@ -57,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
     model = checked_model(args.model)
     if model is None:
         return 1
-    plans = plan_sensors(model)
+    plans = [linked_device(p, args.device_dir) for p in plan_sensors(model)]
     if not plans:
         print(
             f"modd-sensors: {args.model}: no published topic of an nmea, ascii or modbus sensor",
@@ -82,9 +98,44 @@ def main(argv: list[str] | None = None) -> int:
             f"{p.device.baud} baud"
         )
     log(f"drone {model['drone']['name']}: {len(plans)} sensors -> {ingress}")
+    if args.watch:
+        _follow(Path(args.model), runner, ingress, stop, args.device_dir)
     runner.run(stop)
     log("stopped")
     return 0
+
+
+def _applied(
+    model: dict[str, Any], runner: Runner, ingress: str, devices: Path | None
+) -> dict[str, Any]:
+    try:
+        plans = [linked_device(p, devices) for p in plan_sensors(model)]
+    except (KeyError, TypeError, ValueError) as exc:  # a model file no validator read
+        return {"ok": False, "problem": f"cannot read the model's instruments: {exc!r}"}
+    return apply_plans(runner, plans, lambda n: Publisher(n, ingress))
+
+
+def _follow(
+    path: Path, runner: Runner, ingress: str, stop: threading.Event, devices: Path | None
+) -> None:
+    """Applies the model file each time it changes (a deploy), in a thread of its own."""
+    watch = ModelWatch(path)
+    write_result(path, "sensors", watch.digest, {"ok": True, "started": True})
+
+    def apply(applied: str) -> None:
+        # a deploy's hand-over was validated by the SubBroker; a file edited by hand is checked
+        model = validated(path, applied)
+        why = ""
+        if model is None:
+            model, why = model_or_why(str(path))
+        if model is None:
+            log(f"deploy: {path} refused, the readers go on: {why}")
+            result: dict[str, Any] = {"ok": False, "problem": f"invalid model: {why}"}
+        else:
+            result = _applied(model, runner, ingress, devices)
+        write_result(path, "sensors", applied, result)
+
+    threading.Thread(target=follow, args=(watch, apply, stop), name="watch", daemon=True).start()
 
 
 if __name__ == "__main__":

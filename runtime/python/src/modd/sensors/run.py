@@ -56,13 +56,26 @@ class SensorThread:
         self.health = Health()
         self.thread = threading.Thread(target=self._run, name=f"sensor-{plan.name}", daemon=True)
         self._stop = threading.Event()
+        self._starting = threading.Lock()
         self._opened = False
+        self.absent = False  # the device path is not there (waiting for it)
         self.started_ns = 0  # when reading began: silence is counted from there
 
-    def start(self, stop: threading.Event) -> None:
-        self._stop = stop
-        self.started_ns = time.time_ns()
-        self.thread.start()
+    def start(self) -> None:
+        """Starts reading, once (a deploy and the runner's start may both ask), never after stop."""
+        with self._starting:
+            if self.thread.ident is not None or self._stop.is_set():
+                return
+            self.started_ns = time.time_ns()
+            self.thread.start()
+
+    def join(self, timeout: float) -> None:
+        if self.thread.ident is not None:
+            self.thread.join(timeout)
+
+    def stop(self) -> None:
+        """Asks the reader to end (it closes its device within its read timeout)."""
+        self._stop.set()
 
     def publish(self, samples: list[Sample]) -> None:
         h = self.health
@@ -84,6 +97,7 @@ class SensorThread:
                 self._stop.wait(RETRY_S)
                 continue
             self.health.busy = ""
+            self.absent = port is None
             if port is None:
                 if not waiting:
                     self.log(
@@ -185,11 +199,11 @@ class Runner:
         report_health: Callable[[list[SensorHealth]], None] | None = None,
         health_period_s: float = HEALTH_PERIOD_S,
     ) -> None:
-        self.sinks = sinks
+        self.sinks = dict(sinks)
         self.report_health = report_health
         self.health_period_s = health_period_s
         self.log = log
-        self.sensors = [SensorThread(p, sinks, log) for p in plans]
+        self.sensors = [SensorThread(p, self.sinks, log) for p in plans]
         self.status_file = status_file
         self.status_period_s = status_period_s
         for p in plans:
@@ -198,12 +212,12 @@ class Runner:
 
     def health(self) -> dict[str, dict[str, object]]:
         now = time.time_ns()
-        return {s.plan.name: s.health.as_dict(now) for s in self.sensors}
+        return {s.plan.name: s.health.as_dict(now) for s in list(self.sensors)}
 
     def send_health(self) -> None:
         """Every sensor's health to the PubBroker (HEALTH), which forwards it in STATUS."""
         if self.report_health is not None:
-            self.report_health([s.health.report(s.plan.name) for s in self.sensors])
+            self.report_health([s.health.report(s.plan.name) for s in list(self.sensors)])
 
     def write_status(self) -> None:
         if self.status_file is None:
@@ -214,13 +228,13 @@ class Runner:
 
     def run(self, stop: threading.Event, tick_s: float = 0.25) -> None:
         for s in self.sensors:
-            s.start(stop)
+            s.start()
         next_status = time.monotonic() + self.status_period_s
         next_health = time.monotonic()
         try:
             while not stop.wait(tick_s):
                 now = time.time_ns()
-                for s in self.sensors:
+                for s in list(self.sensors):
                     s.watch(now)
                 self.write_status()
                 if time.monotonic() >= next_health:
@@ -228,7 +242,7 @@ class Runner:
                     self.send_health()
                 if time.monotonic() >= next_status:
                     next_status += self.status_period_s
-                    for s in self.sensors:
+                    for s in list(self.sensors):
                         self.log(status_line(s.plan.name, s.health, now))
         finally:
             self._stop_within(STOP_BUDGET_S)
@@ -244,7 +258,9 @@ class Runner:
             return max(0.0, deadline - time.monotonic())
 
         for s in self.sensors:
-            s.thread.join(left())
+            s.stop()
+        for s in self.sensors:
+            s.join(left())
         self.send_health()  # the last counts, before the publishers close
         for sink in self.sinks.values():
             sink.flush(left())

@@ -26,6 +26,7 @@ from modd_plan.streams import StreamKey
 from modd.link.frames import AuthOk, Config, ConfigAck, ErrorCode, Status
 from modd.link.receiver import Window
 
+from .. import onboard
 from ..zenoh_auth import CredentialStore
 from ..zenoh_session import open_session, secured
 from . import backfill_query, delivery_auth
@@ -86,6 +87,7 @@ class SubBroker:
         self._queryables: list[Any] = []
         self._workers = ThreadPoolExecutor(max_workers=4, thread_name_prefix="modd-query")
         self.delivered = 0
+        self._onboard: dict[str, Any] = {}  # what the on-board processes did with the last deploy
         # Backfill (docs/subbroker.md, "Backfill") and the base-station record of every delivery.
         records = config.record_dir or (config.state_dir / "records" if config.state_dir else None)
         self.record = BaseRecord(records, self.drone) if records is not None else None
@@ -476,7 +478,25 @@ class SubBroker:
                 delay = min(delay * 2, 1.0)
         running = self._running
         assert running is not None
-        return {**self._acked_reply(running, config, request.warnings), "busy_retries": busy}
+        reply = {**self._acked_reply(running, config, request.warnings), "busy_retries": busy}
+        if self.config.onboard_model is not None:
+            reply["onboard"] = self._hand_over(self.config.onboard_model, request.model)
+        return reply
+
+    def _hand_over(self, path: Path, model: dict[str, Any]) -> dict[str, Any]:
+        """The acked model to the on-board processes on this machine (modd.onboard);
+        what each did, also kept for the status (the Monitor shows a problem)."""
+        try:
+            applied = onboard.hand_over(path, model)
+        except OSError as exc:
+            results = {"handover": {"ok": False, "problem": f"cannot write {path}: {exc}"}}
+        else:
+            results = onboard.wait_results(path, applied)
+        for name, r in results.items():
+            if not r.get("ok", False):
+                log.warning("deploy: on-board %s did not apply it all: %s", name, _problems(r))
+        self._onboard = results
+        return results
 
     def _acked_reply(
         self, running: Running, config: Config, warnings: list[dict[str, Any]]
@@ -548,7 +568,15 @@ class SubBroker:
                 else None
             ),
             "radio": self.link.radio_status(),
+            **({"onboard": self._onboard} if self._onboard else {}),
         }
+
+
+def _problems(result: dict[str, Any]) -> str:
+    """A process's result's problems, in one line."""
+    found = [str(result["problem"])] if result.get("problem") else []
+    found += [f"{s['sensor']}: {s['problem']}" for s in result.get("sensors", ()) if "problem" in s]
+    return "; ".join(found) or "not ok"
 
 
 def _located(exc: ValueError, model: dict[str, Any]) -> list[dict[str, object]]:

@@ -82,6 +82,14 @@ def _parser() -> argparse.ArgumentParser:
         help="run the configured model, not the deployment (and dynamic "
         "subscriptions) kept in the state directory",
     )
+    p.add_argument(
+        "--onboard-model",
+        metavar="PATH",
+        default=None,
+        help="when the drone's processes run on this machine (modd up --part all): write "
+        "each acked deploy's model there for modd-sensors and modd-mavlink --watch, and "
+        "put what they did in the deploy's reply (docs/sensors.md)",
+    )
     p.add_argument("--log-level", default="INFO")
     return p
 
@@ -118,6 +126,8 @@ def build_config(args: argparse.Namespace) -> SubBrokerConfig:
         delivery = replace(delivery, status_period_s=args.status_period)
     if args.record_dir:
         cfg = replace(cfg, record_dir=Path(args.record_dir))
+    if args.onboard_model:
+        cfg = replace(cfg, onboard_model=Path(args.onboard_model))
     return replace(
         cfg, link=link, zenoh=z, delivery=delivery, resume=cfg.resume and not args.no_resume
     )

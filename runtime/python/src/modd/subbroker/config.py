@@ -83,6 +83,9 @@ class SubBrokerConfig:
     #: Resume the deployment and dynamic subscriptions kept in state_dir (else
     #: run the configured model; ``modd-subbroker --no-resume``).
     resume: bool = True
+    #: The on-board model file an acked deploy is handed to (modd.onboard), when the
+    #: drone's processes run on this machine; None: the deploy ends at the PubBroker.
+    onboard_model: Path | None = None
 
     @property
     def endpoint(self) -> tuple[str, int]:
