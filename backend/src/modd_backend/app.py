@@ -70,6 +70,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     plan.router,
     deploy.router,
     downloads.router,
+    downloads.credentials_router,
     live.router,
     archives.router,
     archives.replay_router,

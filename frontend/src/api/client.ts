@@ -11,7 +11,8 @@ import type { Role } from "../core/roles";
 import { Http, type HttpOptions } from "./http";
 import type {
   ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress, DatasetRequest,
-  DeployedDiff, Deployment, DynamicReply, DynamicRequest, FoxgloveLinks,
+  DeployedDiff, Deployment, DynamicReply, DynamicRequest, CredentialsRemade,
+  FoxgloveLinks,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, RunningDrone, User, ValidateResult, Version,
 } from "./types";
 
@@ -93,6 +94,8 @@ export function createApi(opts: HttpOptions) {
       http.request<Blob>(`/api/projects/${projectId}/foxglove-layout`, { as: "blob" }),
     /** URLs to open in Foxglove/Lichtblick, each with a ticket good for one connection. */
     foxgloveLinks: () => http.request<FoxgloveLinks>("/api/foxglove/links", { method: "POST" }),
+    /** Credential files of the base station made anew after its first start (copies handed out no longer work). */
+    credentialsRemade: () => http.request<CredentialsRemade>("/api/credentials/remade"),
 
     // --- live (scientist): dynamic subscriptions; values come over the stream WebSocket
     addDynamic: (drone: string, body: DynamicRequest) =>

@@ -137,6 +137,9 @@ export interface ArchiveFile {
 }
 
 /** Viewer URLs with single-use tickets (backend routers/foxglove.py); null: not served. */
+/** GET /api/credentials/remade: credential files made anew, with when (UTC ISO 8601). */
+export interface CredentialsRemade { remade: Array<{ file: string; at: string }> }
+
 export interface FoxgloveLinks {
   live: string | null;
   replay: string | null;

@@ -7,8 +7,9 @@
  * do not exist there). Pictures go to `imagesDir` like the journey's.
  */
 import { execFileSync } from "node:child_process";
+import { readFileSync } from "node:fs";
 import { join } from "node:path";
-import { waitUntil } from "./journey.mjs";
+import { expectCount, waitUntil } from "./journey.mjs";
 import { TILE_FILL, tileOf } from "./tiles.mjs";
 import { checkRows, readTopic } from "./archiveOracle.mjs";
 
@@ -321,6 +322,36 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await page.reload();
       await view("Scientist");
       await panel("Monitor");
+      await stacked();
+      // Named layouts like Foxglove's: this one saved under a name, exported as a file,
+      // deleted and the dock reset; a broken file is refused with its field and nothing
+      // changes; the exported file imported brings the three stacked panels back.
+      await layoutMenu();
+      const named = page.getByRole("group", { name: "Named layouts" });
+      await named.getByLabel("Layout name").fill("Three stacked");
+      await named.getByRole("button", { name: "Save as", exact: true }).click();
+      const message = page.getByTestId("layout-message");
+      await expectText(message, /Saved “Three stacked”/);
+      const [file] = await Promise.all([page.waitForEvent("download", { timeout: 15000 }),
+        named.getByRole("button", { name: "Export…", exact: true }).click()]);
+      const exported = JSON.parse(readFileSync(await file.path(), "utf8"));
+      if (exported.format !== "modd-dock-layout" || exported.name !== "Three stacked" || exported.panel !== "monitor"
+        || exported.layout.beside.join() !== "map,plan" || exported.layout.stacked !== true) throw new Error(`exported layout: ${JSON.stringify(exported)}`);
+      if (file.suggestedFilename() !== "Three_stacked.modd-layout.json") throw new Error(`exported as ${file.suggestedFilename()}`);
+      await shot("layouts-named");
+      await named.getByRole("button", { name: "Delete", exact: true }).click();
+      await page.getByRole("button", { name: "Reset to default", exact: true }).click();
+      await expectCount(page.getByRole("region", { name: "Map", exact: true }), 0);
+      const importFile = named.getByLabel("Import layout file");
+      const broken = { ...exported, layout: { ...exported.layout, beside: ["map", "radar"] } };
+      await importFile.setInputFiles({ name: "broken.json", mimeType: "application/json", buffer: Buffer.from(JSON.stringify(broken)) });
+      await expectText(message, /^broken\.json not imported: `layout\.beside\[1\]` is "radar", not a panel/);
+      await shot("layouts-import-refused");
+      if (await map.count()) throw new Error("a refused layout file was applied");
+      await importFile.setInputFiles({ name: "Three_stacked.modd-layout.json", mimeType: "application/json", buffer: readFileSync(await file.path()) });
+      await expectText(message, /Imported “Three stacked” and switched to it/);
+      if ((await named.getByLabel("Named layout", { exact: true }).inputValue()) !== "Three stacked") throw new Error("the imported layout is not listed by its name");
+      await page.locator(".dock-layout > summary").click(); // the menu closed again
       await stacked();
       // another role keeps its own (one panel), and one click resets this one
       await view("Operator");
