@@ -49,6 +49,7 @@ from .routers import (
     projects,
     records,
     scene,
+    tiles,
     users,
 )
 from .scene import SceneServer, SceneService
@@ -79,6 +80,8 @@ ROUTERS: tuple[APIRouter, ...] = (
     foxglove.router,
     backfill.router,
     records.router,
+    records.track_router,
+    tiles.router,
 )
 
 

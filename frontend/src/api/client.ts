@@ -11,7 +11,7 @@ import type { Role } from "../core/roles";
 import { Http, type HttpOptions } from "./http";
 import type {
   ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress, DatasetRequest,
-  DeployedDiff, Deployment, DynamicReply, DynamicRequest, CredentialsRemade,
+  DeployedDiff, Deployment, DynamicReply, DynamicRequest, CredentialsRemade, RecordTrack, TilesInfo,
   FoxgloveLinks,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, RunningDrone, User, ValidateResult, Version,
 } from "./types";
@@ -94,6 +94,11 @@ export function createApi(opts: HttpOptions) {
       http.request<Blob>(`/api/projects/${projectId}/foxglove-layout`, { as: "blob" }),
     /** URLs to open in Foxglove/Lichtblick, each with a ticket good for one connection. */
     foxgloveLinks: () => http.request<FoxgloveLinks>("/api/foxglove/links", { method: "POST" }),
+    /** The drone's track since its mission began, from the base-station record (thinned to `points`). */
+    track: (drone: string, lat: string, lon: string, points = 2000) =>
+      http.request<RecordTrack>(`/api/drones/${encodeURIComponent(drone)}/track?lat=${encodeURIComponent(lat)}&lon=${encodeURIComponent(lon)}&points=${points}`),
+    /** Whether the workbench serves a tile folder (modd-backend --tiles) and its tile URL. */
+    tilesInfo: () => http.request<TilesInfo>("/api/tiles"),
     /** Credential files of the base station made anew after its first start (copies handed out no longer work). */
     credentialsRemade: () => http.request<CredentialsRemade>("/api/credentials/remade"),
 

@@ -137,6 +137,12 @@ export interface ArchiveFile {
 }
 
 /** Viewer URLs with single-use tickets (backend routers/foxglove.py); null: not served. */
+/** GET /api/drones/{drone}/track: fixes [t (s since the epoch), lat, lon] of the newest base-station record, thinned; `total` before thinning. */
+export interface RecordTrack { file: string | null; total: number; points: Array<[number, number, number]> }
+
+/** GET /api/tiles: the workbench's tile folder, when it serves one. */
+export interface TilesInfo { available: boolean; url: string | null }
+
 /** GET /api/credentials/remade: credential files made anew, with when (UTC ISO 8601). */
 export interface CredentialsRemade { remade: Array<{ file: string; at: string }> }
 

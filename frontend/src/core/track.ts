@@ -23,6 +23,14 @@ export function positionSubscribers(model: ModdModel): { lat: string | null; lon
   return { lat: find(ROLE_NAMES.lat), lon: find(ROLE_NAMES.lon) };
 }
 
+/** Topic names (their last part) that are the vehicle's heading or course over ground, in degrees from north. */
+const HEADING_NAMES = ["heading", "true_heading", "hdg", "course", "course_true", "cog"];
+
+/** The first subscription (not a COUNT) whose topic is a heading or course: the map's vehicle points along it. */
+export function headingSubscriber(model: ModdModel): string | null {
+  return model.subscribers.find((s) => s.aggregation !== "COUNT" && HEADING_NAMES.includes((s.topic.split(".").pop() ?? "").toLowerCase()))?.name ?? null;
+}
+
 /** The first topics (full names, e.g. of an archive file) that are a latitude and a longitude. */
 export function positionTopics(topics: readonly string[]): { lat: string | null; lon: string | null } {
   const find = (names: readonly string[]) => topics.find((t) => names.includes((t.split(".").pop() ?? "").toLowerCase())) ?? null;
@@ -88,4 +96,16 @@ export function gridStep(span: number, lines = 6): number {
 /** "40 m", "1.2 km". */
 export function formatDistance(m: number): string {
   return m >= 1000 ? `${Number((m / 1000).toFixed(2))} km` : `${Number(m.toFixed(1))} m`;
+}
+
+/**
+ * The recorded fixes (the base station's record since the mission began: [t, lat, lon])
+ * before a live series: the record's samples older than the live series' first, then the
+ * live ones. `column` 1 takes the latitudes, 2 the longitudes.
+ */
+export function withRecord(record: ReadonlyArray<readonly [number, number, number]>, column: 1 | 2, live: readonly Sample[]): Sample[] {
+  const first = live.length ? live[0].t : Infinity;
+  const before: Sample[] = [];
+  for (const r of record) if (r[0] < first - 1e-6) before.push({ t: r[0], value: r[column] });
+  return before.length ? before.concat(live) : [...live];
 }

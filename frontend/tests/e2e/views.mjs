@@ -7,16 +7,16 @@
  * do not exist there). Pictures go to `imagesDir` like the journey's.
  */
 import { execFileSync } from "node:child_process";
-import { readFileSync } from "node:fs";
+import { mkdirSync, readFileSync, writeFileSync } from "node:fs";
 import { join } from "node:path";
 import { expectCount, waitUntil } from "./journey.mjs";
-import { TILE_FILL, tileOf } from "./tiles.mjs";
+import { TILE_FILL, tileOf, tilePng } from "./tiles.mjs";
 import { checkRows, readTopic } from "./archiveOracle.mjs";
 
 /** How long the gap step stops the drone's PubBroker (ms). */
 const OUTAGE_MS = 8000;
 
-export function views({ page, imagesDir, drone, liveValues, dronePid, survey, ports, tiles, archiveDir }) {
+export function views({ page, imagesDir, drone, liveValues, dronePid, survey, ports, tiles, archiveDir, tileDir }) {
   const shot = async (name) => {
     await page.waitForTimeout(200);
     await page.screenshot({ path: join(imagesDir, `${name}.png`) });
@@ -259,6 +259,23 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await expectText(status, /[1-9]\d* did not load: is http:\/\/localhost:\d+ reachable, and allowed/, 20000);
       if (tiles.requests.slice(n).some((r) => r.host.startsWith("localhost"))) throw new Error("a tile from an origin the service does not allow was fetched");
       await page.getByLabel("Tile URL").fill("");
+      // Offline: the backend's own tile folder (--tiles), written here around the track's first fix
+      // at every zoom the map may use; nothing is fetched from the loopback server meanwhile.
+      for (let z = 10; z <= 19; z += 1) {
+        const [cx, cy] = tileOf(lat, lon, z);
+        for (let x = cx - 4; x <= cx + 4; x += 1) {
+          mkdirSync(join(tileDir, String(z), String(x)), { recursive: true });
+          for (let y = cy - 4; y <= cy + 4; y += 1) writeFileSync(join(tileDir, String(z), String(x), `${y}.png`), tilePng);
+        }
+      }
+      const served = tiles.requests.length;
+      await page.getByRole("button", { name: "Use the workbench's tile folder (offline)" }).click();
+      if ((await page.getByLabel("Tile URL").inputValue()) !== "/api/tiles/{z}/{x}/{y}.png") throw new Error("the tile folder's URL is not the map's");
+      await expectText(status, /Tiles: [1-9]\d* of [1-9]\d* drawn from the workbench's tile folder/, 20000);
+      await waitUntil(async () => (await tilePixels()).share > 0.3, 10000, async () => `folder tiles cover ${(await tilePixels()).share} of the map`);
+      if (tiles.requests.length !== served) throw new Error("a tile was fetched from the tile server while the map used the folder");
+      await shot("map-local-tiles");
+      await page.getByLabel("Tile URL").fill("");
       await expand(false);
     }],
 
@@ -359,6 +376,35 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await view("Scientist");
       await page.getByRole("button", { name: "Reset layout" }).click();
       if (await map.count()) throw new Error("the map is still beside the Monitor after Reset layout");
+    }],
+
+    ["map after a reload: the whole track since the mission began, from the base station's record (read with @mcap/core as the oracle)", async () => {
+      if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
+      const records = join(archiveDir, "..", "records");
+      // The oracle: the first fix of the mission (a latitude window with a longitude within 0.5 s) in the record.
+      const firstFix = () => {
+        const lat = readTopic(records, "modd/usv/sub/sub_lat").filter((x) => Number.isFinite(x.value));
+        const lon = readTopic(records, "modd/usv/sub/sub_lon").filter((x) => Number.isFinite(x.value));
+        const a = lat.find((x) => lon.some((y) => Math.abs(Number(y.ns - x.ns)) <= 5e8));
+        return a ? Number(a.ns) / 1e9 : null;
+      };
+      const start = firstFix();
+      if (start === null) throw new Error(`no fix in the base-station record under ${records}`);
+      const reloadedAt = Date.now() / 1000;
+      await page.reload();
+      await view("Scientist");
+      await panel("Map");
+      const canvas = page.getByTestId("map-canvas");
+      await waitUntil(async () => Math.abs(Number(await canvas.getAttribute("data-first-t")) - start) < 1e-3, 15000,
+        async () => `the map's first fix at ${await canvas.getAttribute("data-first-t")}, the mission's at ${start}`);
+      if (!(reloadedAt - start > 10)) throw new Error(`the mission began only ${reloadedAt - start} s before the reload: nothing to tell apart`);
+      const points = Number(await canvas.getAttribute("data-points"));
+      if (!(points >= 8)) throw new Error(`${points} fixes on the map after the reload`);
+      await expectText(page.getByTestId("map-fixes"), /the mission's from its start in the base station's record \(\d+ recorded/);
+      await expectText(page.getByTestId("map-fixes"), /The vehicle heads \d+° \(its course over the last fixes: no heading or course topic is subscribed\)/);
+      await expand(true);
+      await shot("map-after-reload");
+      await expand(false);
     }],
 
     ["archives: a time range played back through the charts (seek, play, pause)", async () => {
