@@ -74,8 +74,10 @@ def test_the_track_since_the_mission_began_thinned_and_paired(tmp_path: Path) ->
         rec.put("sub_lat", _fix("sub_lat", "usv.gps.latitude", i, 44.6 + i * 1e-5, t0))
         if i != 7:  # a longitude missing: that latitude is no fix
             rec.put("sub_lon", _fix("sub_lon", "usv.gps.longitude", i, -63.5 - i * 1e-5, t0))
+        if i % 2 == 0:  # the colour subscriber every other window
+            rec.put("sub_temp", _fix("sub_temp", "usv.ctd.water_temperature", i, 10 + i / 10, t0))
     rec.close()
-    oracle: dict[str, dict[int, float]] = {"sub_lat": {}, "sub_lon": {}}
+    oracle: dict[str, dict[int, float]] = {"sub_lat": {}, "sub_lon": {}, "sub_temp": {}}
     with open(rec.path, "rb") as f:
         for _, ch, msg in make_reader(f).iter_messages():
             oracle[ch.topic.rsplit("/", 1)[1]][msg.log_time] = json.loads(msg.data)["value"]
@@ -98,6 +100,11 @@ def test_the_track_since_the_mission_began_thinned_and_paired(tmp_path: Path) ->
             assert lat == oracle["sub_lat"][ns] and lon == oracle["sub_lon"][ns]
         assert all(a[0] < b[0] for a, b in zip(pts, pts[1:], strict=False))
         assert len(c.get(url, headers=h).json()["points"]) == 299
+        coloured = c.get(f"{url}&points=50&colour=sub_temp", headers=h).json()["points"]
+        assert [p[:3] for p in coloured] == pts
+        for t, _, _, v in coloured:
+            ns = round(t * 1e9 / 1e6) * 1_000_000
+            assert v == oracle["sub_temp"].get(ns)  # None where it had no window then
         assert c.get(f"{url}&points=100000", headers=h).status_code == 422
         assert c.get("/api/drones/usv/track?lat=a.b&lon=x", headers=h).status_code == 422
         none = c.get("/api/drones/other/track?lat=sub_lat&lon=sub_lon", headers=h).json()

@@ -48,6 +48,7 @@ from .routers import (
     plan,
     projects,
     records,
+    rehearsal,
     scene,
     tiles,
     users,
@@ -82,6 +83,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     records.router,
     records.track_router,
     tiles.router,
+    rehearsal.router,
 )
 
 

@@ -36,9 +36,9 @@ def newest_record(root: Path, drone: str) -> Path | None:
     return max(files, key=lambda p: (p.stat().st_mtime_ns, p.name)) if files else None
 
 
-def _series(path: Path, name: str, other: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    parts: dict[str, tuple[list[np.ndarray], list[np.ndarray]]] = {name: ([], []), other: ([], [])}
-    for batch in read_record(path, only={name, other}):
+def _series(path: Path, names: set[str]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    parts: dict[str, tuple[list[np.ndarray], list[np.ndarray]]] = {n: ([], []) for n in names}
+    for batch in read_record(path, only=names):
         ts, vs = parts[batch.topic]
         ts.append(batch.time_ns)
         vs.append(batch.value.astype(np.float64))
@@ -64,17 +64,32 @@ def pair(lat: tuple[np.ndarray, np.ndarray], lon: tuple[np.ndarray, np.ndarray])
     return np.column_stack([ta[near].astype(np.float64), va[near], vb[j][near]])
 
 
-def mission_track(root: Path, drone: str, lat: str, lon: str, points: int) -> dict[str, Any]:
+def value_near(series: tuple[np.ndarray, np.ndarray], t_ns: np.ndarray) -> list[float | None]:
+    """The value of ``series`` nearest each time, within PAIR_S (None: none that near)."""
+    ts, vs = series
+    if not len(ts):
+        return [None] * len(t_ns)
+    j = np.clip(np.searchsorted(ts, t_ns), 0, len(ts) - 1)
+    k = np.clip(j - 1, 0, len(ts) - 1)
+    j = np.where(np.abs(ts[k] - t_ns) <= np.abs(ts[j] - t_ns), k, j)
+    near = np.abs(ts[j] - t_ns) <= PAIR_S * 1e9
+    return [float(v) if ok else None for v, ok in zip(vs[j].tolist(), near.tolist(), strict=True)]
+
+
+def mission_track(
+    root: Path, drone: str, lat: str, lon: str, points: int, colour: str | None = None
+) -> dict[str, Any]:
     """``{"file", "total", "points": [[t_s, lat, lon], ...]}`` of the newest record
-    (``file`` None and no points when the drone has none yet)."""
+    (``file`` None and no points when the drone has none yet); with ``colour`` a
+    fourth column, that subscriber's value at the fix (None when it had none)."""
     path = newest_record(root, drone)
     if path is None:
         return {"file": None, "total": 0, "points": []}
-    series = _series(path, lat, lon)
+    series = _series(path, {lat, lon} | ({colour} if colour else set()))
     rows = pair(series[lat], series[lon])
     kept = rows[thin(len(rows), points)]
-    return {
-        "file": path.name,
-        "total": len(rows),
-        "points": [[t / 1e9, a, b] for t, a, b in kept.tolist()],
-    }
+    out: list[list[float | None]] = [[t / 1e9, a, b] for t, a, b in kept.tolist()]
+    if colour:
+        for row, v in zip(out, value_near(series[colour], kept[:, 0].astype(np.int64)), strict=True):
+            row.append(v)
+    return {"file": path.name, "total": len(rows), "points": out}

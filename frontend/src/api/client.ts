@@ -95,8 +95,9 @@ export function createApi(opts: HttpOptions) {
     /** URLs to open in Foxglove/Lichtblick, each with a ticket good for one connection. */
     foxgloveLinks: () => http.request<FoxgloveLinks>("/api/foxglove/links", { method: "POST" }),
     /** The drone's track since its mission began, from the base-station record (thinned to `points`). */
-    track: (drone: string, lat: string, lon: string, points = 2000) =>
-      http.request<RecordTrack>(`/api/drones/${encodeURIComponent(drone)}/track?lat=${encodeURIComponent(lat)}&lon=${encodeURIComponent(lon)}&points=${points}`),
+    track: (drone: string, lat: string, lon: string, points = 2000, colour?: string) =>
+      http.request<RecordTrack>(`/api/drones/${encodeURIComponent(drone)}/track?${new URLSearchParams({
+        lat, lon, points: String(points), ...(colour ? { colour } : {}) }).toString()}`),
     /** Whether the workbench serves a tile folder (modd-backend --tiles) and its tile URL. */
     tilesInfo: () => http.request<TilesInfo>("/api/tiles"),
     /** Credential files of the base station made anew after its first start (copies handed out no longer work). */

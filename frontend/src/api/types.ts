@@ -137,8 +137,8 @@ export interface ArchiveFile {
 }
 
 /** Viewer URLs with single-use tickets (backend routers/foxglove.py); null: not served. */
-/** GET /api/drones/{drone}/track: fixes [t (s since the epoch), lat, lon] of the newest base-station record, thinned; `total` before thinning. */
-export interface RecordTrack { file: string | null; total: number; points: Array<[number, number, number]> }
+/** GET /api/drones/{drone}/track: fixes [t (s since the epoch), lat, lon, colour value?] of the newest base-station record, thinned; `total` before thinning. */
+export interface RecordTrack { file: string | null; total: number; points: Array<[number, number, number] | [number, number, number, number | null]> }
 
 /** GET /api/tiles: the workbench's tile folder, when it serves one. */
 export interface TilesInfo { available: boolean; url: string | null }

@@ -44,6 +44,7 @@ describe("the track since the mission began", () => {
     expect(withRecord(record, 1, live).map((s) => [s.t, s.value])).toEqual([[1, 44.1], [2, 44.2], [3, 44.3], [4, 44.4]]);
     expect(withRecord(record, 2, []).map((s) => s.value)).toEqual([-63.1, -63.2, -63.3]); // a reload: the record alone
     expect(withRecord([], 1, live)).toEqual(live);
+    expect(withRecord([[1, 0, 0, 12.5], [2, 0, 0, null], [3, 0, 0]], 3, []).map((s) => [s.t, s.value])).toEqual([[1, 12.5]]);
   });
 
   it("points the vehicle along a heading or course topic when a subscription has one", () => {

@@ -101,11 +101,14 @@ export function formatDistance(m: number): string {
 /**
  * The recorded fixes (the base station's record since the mission began: [t, lat, lon])
  * before a live series: the record's samples older than the live series' first, then the
- * live ones. `column` 1 takes the latitudes, 2 the longitudes.
+ * live ones. `column` 1 takes the latitudes, 2 the longitudes, 3 the colour values (those the record has).
  */
-export function withRecord(record: ReadonlyArray<readonly [number, number, number]>, column: 1 | 2, live: readonly Sample[]): Sample[] {
+export function withRecord(record: ReadonlyArray<readonly [number, number, number, (number | null)?]>, column: 1 | 2 | 3, live: readonly Sample[]): Sample[] {
   const first = live.length ? live[0].t : Infinity;
   const before: Sample[] = [];
-  for (const r of record) if (r[0] < first - 1e-6) before.push({ t: r[0], value: r[column] });
+  for (const r of record) {
+    const v = r[column];
+    if (r[0] < first - 1e-6 && typeof v === "number") before.push({ t: r[0], value: v });
+  }
   return before.length ? before.concat(live) : [...live];
 }

@@ -41,12 +41,17 @@ def track(
     state: StateDep,
     _user: UserDep,
     points: Annotated[int, Query(ge=2, le=MAX_POINTS)] = 2000,
+    colour: Annotated[
+        str | None, Query(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64)
+    ] = None,
 ) -> dict[str, object]:
     """The drone's track since its mission began (the Map after a reload): the
     windows of the subscribers ``lat`` and ``lon`` in the newest base-station
     record, paired by time and thinned evenly to at most ``points`` fixes
-    (``total``: how many there were); times in seconds since the Unix epoch."""
-    return mission_track(state.settings.effective_record_dir, drone, lat, lon, points)
+    (``total``: how many there were); times in seconds since the Unix epoch.
+    With ``colour``, each fix carries that subscriber's value then (the Map's colour-by)."""
+    root = state.settings.effective_record_dir
+    return mission_track(root, drone, lat, lon, points, colour)
 
 
 @router.get("")

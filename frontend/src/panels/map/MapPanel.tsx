@@ -16,7 +16,7 @@
  * backend's 3D scene, when it runs one.
  */
 import { subscriptionLabel } from "../../core/topicLabel";
-import { useEffect, useRef, useState } from "react";
+import { useCallback, useEffect, useRef, useState } from "react";
 import { headingSubscriber, positionSubscribers, trackPoints, valueRange, withRecord, type TrackPoint } from "../../core/track";
 import { unitLabel } from "../../core/chartData";
 import { findTopicByName } from "../../core/query";
@@ -24,6 +24,7 @@ import { useModel } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
 import { useDroneStream } from "../../app/useDroneStream";
 import type { DataSource } from "../../dataSources/types";
+import type { RecordTrack } from "../../api/types";
 import { drawMap, isLocalTiles, tileOrigin, tileUrlProblem, type TileCount } from "./drawMap";
 import { defaultColour } from "./marker";
 
@@ -31,7 +32,7 @@ const TILE_KEY = "modd.map.tileUrl";
 /** Fixes of the record asked for at most (the backend thins the mission's evenly). */
 const RECORD_POINTS = 2000;
 
-type RecordFixes = ReadonlyArray<readonly [number, number, number]>;
+type RecordFixes = RecordTrack["points"];
 
 /** A channel of the source the track can be coloured by. */
 export interface ColourChoice { channel: string; label: string; detail: string; unit: string }
@@ -42,7 +43,7 @@ function useTrack(source: DataSource, lat: string | null, lon: string | null, co
     if (!lat || !lon) { setPoints([]); return; }
     let frame = 0;
     const build = () => setPoints(trackPoints(withRecord(record, 1, source.history(lat)), withRecord(record, 2, source.history(lon)),
-      colour ? source.history(colour) : []));
+      colour ? withRecord(record, 3, source.history(colour)) : []));
     const later = () => { if (!frame) frame = requestAnimationFrame(() => { frame = 0; build(); }); };
     build();
     const offs = [lat, lon, colour].filter(Boolean).map((c) => source.subscribe(c, later));
@@ -75,20 +76,23 @@ function useLatest(source: DataSource, channel: string | null): number | null {
   return v;
 }
 
+interface RecordTrackOf { fixes: RecordFixes; total: number }
+/** Asks the backend for the record's fixes, each with the colour channel's value then. */
+type RecordSource = (colour: string) => Promise<RecordTrack>;
+
 /** The fixes the base station recorded since the mission began (none until they come, or when it cannot say). */
-function useRecordTrack(drone: string, lat: string | null, lon: string | null): { fixes: RecordFixes; total: number } {
-  const { api } = useServices();
-  const [got, setGot] = useState<{ fixes: RecordFixes; total: number }>({ fixes: [], total: 0 });
+function useRecordTrack(recordOf: RecordSource | undefined, colour: string): RecordTrackOf {
+  const [got, setGot] = useState<RecordTrackOf>(NO_RECORD);
   useEffect(() => {
-    if (!lat || !lon) return;
+    if (!recordOf) return;
     let live = true;
-    api.track(drone, lat, lon, RECORD_POINTS).then((r) => { if (live) setGot({ fixes: r.points, total: r.total }); }, () => undefined);
+    recordOf(colour).then((r) => { if (live) setGot({ fixes: r.points, total: r.total }); }, () => undefined);
     return () => { live = false; };
-  }, [api, drone, lat, lon]);
+  }, [recordOf, colour]);
   return got;
 }
 
-const NO_RECORD: RecordFixes = [];
+const NO_RECORD: RecordTrackOf = { fixes: [], total: 0 };
 
 function TileStatus({ url, count }: { url: string; count: TileCount }) {
   const problem = tileUrlProblem(url);
@@ -121,18 +125,19 @@ interface TrackMapProps {
   /** Prefix of the test ids (map, playback-map). */
   id?: string;
   missing: string;
-  /** Fixes recorded before the source's first (the mission's start, after a reload), and how many the record holds. */
-  record?: { fixes: RecordFixes; total: number };
+  /** The fixes recorded since the mission began (drawn before the source's first: the whole track after a reload). */
+  recordOf?: RecordSource;
   /** A subscription of the vehicle's heading or course (degrees from north): the vehicle points along it. */
   headingChannel?: string | null;
 }
 
-export function TrackMap({ source, lat, lon, choices, onColour, id = "map", missing, record, headingChannel = null }: TrackMapProps) {
+export function TrackMap({ source, lat, lon, choices, onColour, id = "map", missing, recordOf, headingChannel = null }: TrackMapProps) {
   const drone = useModel().drone.name;
   const [colour, setColour] = useState(() => defaultColour(choices));
   const [tileUrl, setTileUrl] = useState(() => window.localStorage.getItem(TILE_KEY) ?? "");
   const [tiles, setTiles] = useState<TileCount>({ asked: 0, drawn: 0, failed: 0 });
-  const points = useTrack(source, lat, lon, colour, record?.fixes ?? NO_RECORD);
+  const record = useRecordTrack(recordOf, colour);
+  const points = useTrack(source, lat, lon, colour, record.fixes);
   const canvas = useRef<HTMLCanvasElement>(null);
   const range = valueRange(points);
   const chosen = choices.find((c) => c.channel === colour);
@@ -177,7 +182,7 @@ export function TrackMap({ source, lat, lon, choices, onColour, id = "map", miss
         </label>
         {!lat || !lon ? <p className="muted" role="status">{missing}</p>
           : <p className="muted" role="status" data-testid={`${id}-fixes`}>{points.length} fixes from {lat} and {lon}
-            {record && record.total > 0 && <>, the mission&apos;s from its start in the base station&apos;s record ({record.total} recorded{record.total > record.fixes.length ? `, ${record.fixes.length} drawn` : ""})</>}.
+            {record.total > 0 && <>, the mission&apos;s from its start in the base station&apos;s record ({record.total} recorded{record.total > record.fixes.length ? `, ${record.fixes.length} drawn` : ""})</>}.
             {heading !== null && <> The vehicle heads {heading.toFixed(0)}°{headingChannel && headingValue !== null ? <> (from {headingChannel}, a heading topic)</>
               : <> (its course over the last fixes{headingChannel ? <>: no value from {headingChannel} yet</> : <>: no heading or course topic is subscribed</>})</>}.</>}</p>}
         {chosen && (
@@ -208,7 +213,9 @@ export default function MapPanel() {
   const { api } = useServices();
   const { source } = useDroneStream(model.drone.name);
   const { lat, lon } = positionSubscribers(model);
-  const record = useRecordTrack(model.drone.name, lat, lon);
+  const drone = model.drone.name;
+  const recordOf = useCallback<RecordSource>((colour) => (lat && lon ? api.track(drone, lat, lon, RECORD_POINTS, colour || undefined)
+    : Promise.resolve({ file: null, total: 0, points: [] })), [api, drone, lat, lon]);
   const heading = headingSubscriber(model);
   const choices = model.subscribers.filter((s) => s.topic && s.name !== lat && s.name !== lon && s.name !== heading).map((s) => ({
     channel: s.name, label: s.name, detail: subscriptionLabel(model, s),
@@ -218,7 +225,7 @@ export default function MapPanel() {
   const onColour = (name: string) => { api.setSceneColour(model.drone.name, name || null).catch(() => undefined); };
   return (
     <div className="panel-body">
-      <TrackMap source={source} lat={lat} lon={lon} choices={choices} onColour={onColour} record={record} headingChannel={heading}
+      <TrackMap source={source} lat={lat} lon={lon} choices={choices} onColour={onColour} recordOf={recordOf} headingChannel={heading}
         missing="No subscription delivers a latitude and a longitude: subscribe to them to draw the track." />
     </div>
   );

@@ -27,6 +27,8 @@ from modd.link.frames import AuthOk, Config, ConfigAck, ErrorCode, Status
 from modd.link.receiver import Window
 
 from ..zenoh_auth import CredentialStore
+from .pump import Pump
+from .rehearsal import CutSwitch
 from ..zenoh_session import open_session, secured
 from . import backfill_query, delivery_auth
 from .backfill import BackfillManager
@@ -80,6 +82,8 @@ class SubBroker:
             self.dynamic.restore(self._state.load_dynamic())
         self.dynamic.persist = self._state.save_dynamic
         self.link = link_client(config, self._key, self, self._liveness)
+        if config.rehearsal_dir is not None and isinstance(self.link, Pump):
+            self.link.cut = CutSwitch(config.rehearsal_dir)
         self._zenoh: ZenohDelivery | None = None
         self._tcp: TcpDelivery | None = None
         self._status: StatusPublisher | None = None
