@@ -11,7 +11,7 @@ import type { Role } from "../core/roles";
 import { Http, type HttpOptions } from "./http";
 import type {
   ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress, DatasetRequest,
-  DeployedDiff, Deployment, DynamicReply, DynamicRequest, CredentialsRemade, RecordTrack, TilesInfo,
+  DeployedDiff, Deployment, DynamicReply, DynamicRequest, CredentialsRemade, RecordTrack, Rehearsal, TilesInfo,
   FoxgloveLinks,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, RunningDrone, User, ValidateResult, Version,
 } from "./types";
@@ -98,6 +98,11 @@ export function createApi(opts: HttpOptions) {
     track: (drone: string, lat: string, lon: string, points = 2000, colour?: string) =>
       http.request<RecordTrack>(`/api/drones/${encodeURIComponent(drone)}/track?${new URLSearchParams({
         lat, lon, points: String(points), ...(colour ? { colour } : {}) }).toString()}`),
+    /** Whether the drone's link is a simulated one that can be cut for a rehearsal, and whether it is cut. */
+    rehearsal: (drone: string) => http.request<Rehearsal>(`/api/drones/${encodeURIComponent(drone)}/rehearsal`),
+    /** Cuts (true) or restores (false) the simulated link (operator). */
+    setRehearsal: (drone: string, cut: boolean) =>
+      http.request<Rehearsal>(`/api/drones/${encodeURIComponent(drone)}/rehearsal`, { method: "POST", json: { cut } }),
     /** Whether the workbench serves a tile folder (modd-backend --tiles) and its tile URL. */
     tilesInfo: () => http.request<TilesInfo>("/api/tiles"),
     /** Credential files of the base station made anew after its first start (copies handed out no longer work). */
