@@ -12,7 +12,7 @@ from pathlib import Path
 from fastapi.testclient import TestClient
 from modd_backend import Settings, create_app
 
-from .conftest import ADMIN_PASSWORD, Headers, login
+from .conftest import ADMIN_PASSWORD, Headers, app_client, login
 
 
 def _project(client: TestClient, admin: Headers, text: str) -> int:
@@ -94,13 +94,7 @@ def test_a_remade_credential_is_announced_to_the_downloads_panel(tmp_path: Path)
 
     creds = tmp_path / "credentials"
     CredentialStore(creds).ensure()
-    settings = Settings(
-        data_dir=tmp_path / "data",
-        zenoh_enabled=False,
-        initial_admin_password=ADMIN_PASSWORD,
-        zenoh_credentials=creds / "backend.cred",
-    )
-    with TestClient(create_app(settings, out=io.StringIO())) as c:
+    with app_client(tmp_path, zenoh_credentials=creds / "backend.cred") as c:
         assert c.get("/api/credentials/remade").status_code == 401
         admin = login(c, "admin", ADMIN_PASSWORD)
         assert c.get("/api/credentials/remade", headers=admin).json() == {"remade": []}

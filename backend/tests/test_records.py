@@ -11,7 +11,7 @@ from modd.subbroker.payload import DeliveredValue
 from modd.subbroker.record import BaseRecord
 from modd_backend import Settings, create_app
 
-from .conftest import ADMIN_PASSWORD, login
+from .conftest import ADMIN_PASSWORD, app_client, login
 
 
 def test_records_listed_and_downloaded(tmp_path: Path) -> None:
@@ -81,13 +81,7 @@ def test_the_track_since_the_mission_began_thinned_and_paired(tmp_path: Path) ->
     with open(rec.path, "rb") as f:
         for _, ch, msg in make_reader(f).iter_messages():
             oracle[ch.topic.rsplit("/", 1)[1]][msg.log_time] = json.loads(msg.data)["value"]
-    settings = Settings(
-        data_dir=tmp_path / "data",
-        zenoh_enabled=False,
-        initial_admin_password=ADMIN_PASSWORD,
-        record_dir=tmp_path / "records",
-    )
-    with TestClient(create_app(settings, out=io.StringIO())) as c:
+    with app_client(tmp_path, record_dir=tmp_path / "records") as c:
         h = login(c, "admin", ADMIN_PASSWORD)
         url = "/api/drones/usv/track?lat=sub_lat&lon=sub_lon"
         got = c.get(f"{url}&points=50", headers=h).json()

@@ -4,30 +4,24 @@ link-cut file; operators and admins only; none without such a run."""
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 from fastapi.testclient import TestClient
 from modd.subbroker.rehearsal import is_cut
-from modd_backend import Settings, create_app
 from modd_launch.up import rehearsal_dir
 
-from .conftest import ADMIN_PASSWORD, Headers, login
+from .conftest import ADMIN_PASSWORD, Headers, app_client, login
 
 
 def _app(tmp_path: Path) -> TestClient:
-    settings = Settings(
-        data_dir=tmp_path / "data",
-        zenoh_enabled=False,
-        initial_admin_password=ADMIN_PASSWORD,
-        archive_dir=tmp_path / "run" / "archive",
-    )
-    return TestClient(create_app(settings, out=io.StringIO()))
+    return app_client(tmp_path, archive_dir=tmp_path / "run" / "archive")
 
 
 def _user(c: TestClient, admin: Headers, name: str, role: str) -> Headers:
     pw = f"pw-{name}-123456"
-    r = c.post("/api/users", headers=admin, json={"username": name, "password": pw, "roles": [role]})
+    r = c.post(
+        "/api/users", headers=admin, json={"username": name, "password": pw, "roles": [role]}
+    )
     assert r.status_code in (200, 201), r.text
     return login(c, name, pw)
 
@@ -45,11 +39,12 @@ def test_the_operator_cuts_and_restores_the_simulated_link(tmp_path: Path) -> No
         assert c.get(url, headers=sci).json() == {"available": True, "cut": False}
         assert c.post(url, headers=sci, json={"cut": True}).status_code == 403
         assert not is_cut(folder)
-        assert c.post(url, headers=op, json={"cut": True}).json() == {"available": True, "cut": True}
+        assert c.post(url, headers=op, json={"cut": True}).json() == {
+            "available": True,
+            "cut": True,
+        }
         assert is_cut(folder) and c.get(url, headers=sci).json()["cut"] is True
         assert c.post(url, headers=admin, json={"cut": False}).json()["cut"] is False
         assert not is_cut(folder)
         assert c.post(url, headers=op, json={"cut": "yes"}).status_code == 422
         assert c.get(url).status_code == 401
-
-

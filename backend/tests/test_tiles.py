@@ -4,26 +4,18 @@ without the option."""
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 from fastapi.testclient import TestClient
-from modd_backend import Settings, create_app
 from modd_backend.cli import parse_args
 
-from .conftest import ADMIN_PASSWORD, login
+from .conftest import ADMIN_PASSWORD, app_client, login
 
 PNG = b"\x89PNG\r\n\x1a\n" + b"tile-bytes"
 
 
 def _client(tmp_path: Path, tile_dir: Path | None) -> TestClient:
-    settings = Settings(
-        data_dir=tmp_path / "data",
-        zenoh_enabled=False,
-        initial_admin_password=ADMIN_PASSWORD,
-        tile_dir=tile_dir,
-    )
-    return TestClient(create_app(settings, out=io.StringIO()))
+    return app_client(tmp_path, tile_dir=tile_dir)
 
 
 def test_a_tile_of_the_folder_is_served_and_nothing_else(tmp_path: Path) -> None:

@@ -11,8 +11,12 @@ from pathlib import Path
 from modd_launch.up import rehearsal_dir
 
 
-def _modd(modd_cmd: str, *args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([modd_cmd, "link", *args], capture_output=True, text=True, timeout=60, env=env)
+def _modd(
+    modd_cmd: str, *args: str, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [modd_cmd, "link", *args], capture_output=True, text=True, timeout=60, env=env
+    )
 
 
 def test_cut_restore_status(tmp_path: Path, modd_cmd: str) -> None:

@@ -57,7 +57,11 @@ def pair(lat: tuple[np.ndarray, np.ndarray], lon: tuple[np.ndarray, np.ndarray])
     (ta, va), (tb, vb) = lat, lon
     if not len(ta) or not len(tb):
         return np.zeros((0, 3))
-    j = np.clip(np.searchsorted(tb, ta), 1, len(tb) - 1) if len(tb) > 1 else np.zeros(len(ta), np.int64)
+    j = (
+        np.clip(np.searchsorted(tb, ta), 1, len(tb) - 1)
+        if len(tb) > 1
+        else np.zeros(len(ta), np.int64)
+    )
     if len(tb) > 1:
         j = np.where(np.abs(tb[j - 1] - ta) <= np.abs(tb[j] - ta), j - 1, j)
     near = np.abs(tb[j] - ta) <= PAIR_S * 1e9
@@ -90,6 +94,8 @@ def mission_track(
     kept = rows[thin(len(rows), points)]
     out: list[list[float | None]] = [[t / 1e9, a, b] for t, a, b in kept.tolist()]
     if colour:
-        for row, v in zip(out, value_near(series[colour], kept[:, 0].astype(np.int64)), strict=True):
+        for row, v in zip(
+            out, value_near(series[colour], kept[:, 0].astype(np.int64)), strict=True
+        ):
             row.append(v)
     return {"file": path.name, "total": len(rows), "points": out}

@@ -21,10 +21,10 @@ def _folder(args: argparse.Namespace) -> Path:
     from modd.subbroker.rehearsal import FOLDER
 
     if args.workdir:
-        return Path(args.workdir) / FOLDER
+        return Path(str(args.workdir)) / FOLDER
     runtime = os.environ.get("XDG_RUNTIME_DIR")
     base = Path(runtime) / "modd-up" if runtime else Path(f"/tmp/modd-up-{os.getuid()}")
-    return base / args.drone / FOLDER
+    return base / str(args.drone) / FOLDER
 
 
 def run(args: argparse.Namespace) -> int:
@@ -57,6 +57,9 @@ def register(sub: Any) -> None:
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workdir", metavar="DIR", help="the run directory (make run: data/run)")
     where.add_argument(
-        "--drone", metavar="NAME", default="usv", help="the drone of modd up's default run directory"
+        "--drone",
+        metavar="NAME",
+        default="usv",
+        help="the drone of modd up's default run directory",
     )
     p.set_defaults(func=run)

@@ -226,7 +226,9 @@ def build_stack(
             sub.append("--no-resume")  # what runs is MODEL, not an earlier run's deployment
         if getattr(args, "relay", None):
             sub += ["--link", "{}:{}".format(*args.relay)]
-        if getattr(args, "simulate", False):  # a simulated drone: its link can be cut for a rehearsal
+        if getattr(
+            args, "simulate", False
+        ):  # a simulated drone: its link can be cut for a rehearsal
             sub += ["--rehearsal-dir", str(rehearsal_dir(workdir))]
         stack.processes.append(Process("subbroker", sub, logs / "subbroker.log"))
     from modd.sensors.plan import has_instrument_sensors

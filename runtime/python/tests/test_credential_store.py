@@ -50,5 +50,7 @@ def test_a_remade_file_is_noted_with_its_time_for_the_downloads_panel(tmp_path: 
 def test_an_unreadable_note_reads_as_none(tmp_path: Path) -> None:
     (tmp_path / "remade.json").write_text("{not json")
     assert remade_notes(tmp_path) == {}
-    (tmp_path / "remade.json").write_text('{"../etc/passwd": "x", "viewer.cred": 5, "backend.cred": "t"}')
+    (tmp_path / "remade.json").write_text(
+        '{"../etc/passwd": "x", "viewer.cred": 5, "backend.cred": "t"}'
+    )
     assert remade_notes(tmp_path) == {"backend.cred": "t"}

@@ -13,8 +13,8 @@ from fastapi.responses import FileResponse, Response
 from ..archives import archive_path, file_info, list_files
 from ..deps import Heavy, StateDep, UserDep
 from ..filesnapshot import file_snapshot
-from ..track import MAX_POINTS, mission_track
 from ..tables import User
+from ..track import MAX_POINTS, mission_track
 from .archives import (
     BUSY,
     NOT_FOUND,
@@ -41,9 +41,7 @@ def track(
     state: StateDep,
     _user: UserDep,
     points: Annotated[int, Query(ge=2, le=MAX_POINTS)] = 2000,
-    colour: Annotated[
-        str | None, Query(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64)
-    ] = None,
+    colour: Annotated[str | None, Query(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64)] = None,
 ) -> dict[str, object]:
     """The drone's track since its mission began (the Map after a reload): the
     windows of the subscribers ``lat`` and ``lon`` in the newest base-station

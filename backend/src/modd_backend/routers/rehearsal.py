@@ -58,5 +58,10 @@ def set_rehearsal(drone: Drone, body: RehearsalIn, state: StateDep, user: UserDe
             "(make run); a real drone's link is not cut from here",
         )
     set_cut(folder, body.cut)
-    log.warning("rehearsal: %s %s the simulated link of %s", user.username, "cut" if body.cut else "restored", drone)
+    log.warning(
+        "rehearsal: %s %s the simulated link of %s",
+        user.username,
+        "cut" if body.cut else "restored",
+        drone,
+    )
     return RehearsalOut(available=True, cut=is_cut(folder))

@@ -45,7 +45,12 @@ def tile_path(root: FsPath, z: int, x: int, y: int, ext: str) -> FsPath:
     responses={200: {"content": {t: {} for t in sorted(set(TYPES.values()))}}, 404: {}},
 )
 def tile(
-    z: Coord, x: Coord, y: Coord, ext: Literal["png", "jpg", "jpeg", "webp"], state: StateDep, _user: UserDep
+    z: Coord,
+    x: Coord,
+    y: Coord,
+    ext: Literal["png", "jpg", "jpeg", "webp"],
+    state: StateDep,
+    _user: UserDep,
 ) -> FileResponse:
     root = state.settings.tile_dir
     if root is None:

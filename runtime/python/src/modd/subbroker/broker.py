@@ -27,8 +27,6 @@ from modd.link.frames import AuthOk, Config, ConfigAck, ErrorCode, Status
 from modd.link.receiver import Window
 
 from ..zenoh_auth import CredentialStore
-from .pump import Pump
-from .rehearsal import CutSwitch
 from ..zenoh_session import open_session, secured
 from . import backfill_query, delivery_auth
 from .backfill import BackfillManager
@@ -41,7 +39,9 @@ from .kept import Deployment, StateDir, same_model
 from .keys import backfill_key, deploy_key, subscribe_key
 from .linkhooks import ConfigRejected, LinkDown
 from .planning import config_for, plan_within, trailing_fields
+from .pump import Pump
 from .record import BaseRecord
+from .rehearsal import CutSwitch
 from .request import MAX_DEPLOY_BYTES, MAX_SMALL_BYTES, read_request
 from .running import Running
 from .status import StatusPublisher
