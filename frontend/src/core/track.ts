@@ -10,6 +10,7 @@
  *   positionSubscribers(model)          // { lat: "sub_lat", lon: "sub_lon" }
  *   trackPoints(lat, lon, temperature)  // [{ t, east: 0, north: 0, value: 12.1 }, ...]
  */
+import { AGGREGATION } from "./contracts.gen";
 import type { ModdModel } from "./model.gen";
 import type { Sample } from "../dataSources/types";
 
@@ -28,7 +29,7 @@ const HEADING_NAMES = ["heading", "true_heading", "hdg", "course", "course_true"
 
 /** The first subscription (not a COUNT) whose topic is a heading or course: the map's vehicle points along it. */
 export function headingSubscriber(model: ModdModel): string | null {
-  return model.subscribers.find((s) => s.aggregation !== "COUNT" && HEADING_NAMES.includes((s.topic.split(".").pop() ?? "").toLowerCase()))?.name ?? null;
+  return model.subscribers.find((s) => s.aggregation !== AGGREGATION.COUNT && HEADING_NAMES.includes((s.topic.split(".").pop() ?? "").toLowerCase()))?.name ?? null;
 }
 
 /** The first topics (full names, e.g. of an archive file) that are a latitude and a longitude. */
