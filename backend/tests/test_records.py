@@ -77,6 +77,7 @@ def test_the_track_since_the_mission_began_thinned_and_paired(tmp_path: Path) ->
         if i % 2 == 0:  # the colour subscriber every other window
             rec.put("sub_temp", _fix("sub_temp", "usv.ctd.water_temperature", i, 10 + i / 10, t0))
     rec.close()
+    assert rec.path is not None
     oracle: dict[str, dict[int, float]] = {"sub_lat": {}, "sub_lon": {}, "sub_temp": {}}
     with open(rec.path, "rb") as f:
         for _, ch, msg in make_reader(f).iter_messages():

@@ -7,6 +7,7 @@ from __future__ import annotations
 import socket
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -57,7 +58,7 @@ class _Handler:
     def on_status(self, status: Any) -> None: ...
 
 
-def _wait(cond: Any, timeout_s: float) -> bool:
+def _wait(cond: Callable[[], bool], timeout_s: float) -> bool:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if cond():
@@ -70,7 +71,7 @@ def test_a_cut_link_stays_down_until_restored(tmp_path: Path) -> None:
     server = _Listener()
     set_cut(tmp_path, True)
     options = LinkOptions(connect_timeout_s=0.5, backoff_initial_s=0.05, backoff_max_s=5.0)
-    client = LinkClient(("127.0.0.1", server.port), b"k", options, _Handler())  # type: ignore[arg-type]
+    client = LinkClient(("127.0.0.1", server.port), b"k", options, _Handler())
     client.cut = CutSwitch(tmp_path, check_s=0.05)
     client.start()
     try:
