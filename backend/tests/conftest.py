@@ -6,6 +6,7 @@ from __future__ import annotations
 import io
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 from fastapi.testclient import TestClient
@@ -42,6 +43,17 @@ def settings(tmp_path: Path) -> Settings:
         zenoh_enabled=False,
         initial_admin_password=ADMIN_PASSWORD,
     )
+
+
+def app_client(tmp_path: Path, **extra: Any) -> TestClient:
+    """A workbench over ``tmp_path`` with these further settings (a ``with`` starts it)."""
+    settings = Settings(
+        data_dir=tmp_path / "data",
+        zenoh_enabled=False,
+        initial_admin_password=ADMIN_PASSWORD,
+        **extra,
+    )
+    return TestClient(create_app(settings, out=io.StringIO()))
 
 
 @pytest.fixture

@@ -12,7 +12,7 @@ from pathlib import Path
 from fastapi.testclient import TestClient
 from modd_backend import Settings, create_app
 
-from .conftest import ADMIN_PASSWORD, Headers, login
+from .conftest import ADMIN_PASSWORD, Headers, app_client, login
 
 
 def _project(client: TestClient, admin: Headers, text: str) -> int:
@@ -85,3 +85,22 @@ def test_driver_readme_names_the_run_s_ingress_and_archive(tmp_path: Path, scena
         assert f"unix:{run / 'ingress.sock'}" in readme
         assert str(run / "archive") in readme
         assert "/tmp/modd/logs" not in readme
+
+
+def test_a_remade_credential_is_announced_to_the_downloads_panel(tmp_path: Path) -> None:
+    """A viewer.cred deleted by hand and made anew at the next start: the route the
+    Downloads panel reads names it with when; before that, and with no station, nothing."""
+    from modd.zenoh_auth import CredentialStore
+
+    creds = tmp_path / "credentials"
+    CredentialStore(creds).ensure()
+    with app_client(tmp_path, zenoh_credentials=creds / "backend.cred") as c:
+        assert c.get("/api/credentials/remade").status_code == 401
+        admin = login(c, "admin", ADMIN_PASSWORD)
+        assert c.get("/api/credentials/remade", headers=admin).json() == {"remade": []}
+        (creds / "viewer.cred").unlink()
+        CredentialStore(creds).ensure()
+        notes = c.get("/api/credentials/remade", headers=admin).json()["remade"]
+        assert [n["file"] for n in notes] == ["viewer.cred"]
+        assert notes[0]["at"].endswith("Z")
+        assert "viewer:" not in json.dumps(notes)  # no secret

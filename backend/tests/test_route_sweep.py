@@ -77,6 +77,10 @@ def _operations(spec: dict[str, Any], pid: int, uid: int) -> list[tuple[str, str
         "target": "cpp-driver",
         "job_id": "1",
         "revision": "1",
+        "z": "1",
+        "x": "0",
+        "y": "0",
+        "ext": "png",
     }
     out = []
     for path, ops in spec["paths"].items():

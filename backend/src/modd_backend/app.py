@@ -49,7 +49,9 @@ from .routers import (
     plan,
     projects,
     records,
+    rehearsal,
     scene,
+    tiles,
     users,
 )
 from .scene import SceneServer, SceneService
@@ -72,6 +74,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     plan.router,
     deploy.router,
     downloads.router,
+    downloads.credentials_router,
     live.router,
     archives.router,
     archives.replay_router,
@@ -80,6 +83,9 @@ ROUTERS: tuple[APIRouter, ...] = (
     foxglove.router,
     backfill.router,
     records.router,
+    records.track_router,
+    tiles.router,
+    rehearsal.router,
 )
 
 

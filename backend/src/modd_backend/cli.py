@@ -130,6 +130,14 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         "default $MODD_TILE_ORIGINS, space-separated; none: no foreign images)",
     )
     p.add_argument(
+        "--tiles",
+        type=Path,
+        metavar="DIR",
+        default=os.environ.get("MODD_TILES") or None,
+        help="a folder of map tiles laid out <z>/<x>/<y>.png, served to the Map at "
+        "/api/tiles (a basemap offline; default $MODD_TILES; none: no tiles served)",
+    )
+    p.add_argument(
         "--viewer-origin",
         action="append",
         metavar="ORIGIN",
@@ -187,6 +195,7 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         allowed_hosts=tuple(a.allowed_host),
         trusted_proxies=tuple(a.trusted_proxy),
         tile_origins=tuple(a.tile_origin),
+        tile_dir=Path(a.tiles).absolute() if a.tiles else None,
         cors_origins=tuple(a.viewer_origin),
         preload_milp=True,
         scene_port=None if a.scene_port < 0 else a.scene_port,

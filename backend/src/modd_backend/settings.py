@@ -75,6 +75,9 @@ class Settings:
     #: Origins (scheme://host[:port]) the map may load tiles from; none by default,
     #: so the workbench loads no image from elsewhere (docs/security.md).
     tile_origins: tuple[str, ...] = field(default_factory=tuple)
+    #: A folder of map tiles (``<z>/<x>/<y>.png``) served at ``/api/tiles``: a basemap
+    #: offline, from the workbench's own origin; None: no tiles served.
+    tile_dir: Path | None = None
     #: The ``backend`` identity's zenoh user:password file (docs/security.md).
     zenoh_credentials: Path | None = None
     #: The key that signs deploys, shared with the SubBroker (its deploy.key).

@@ -12,7 +12,8 @@ import { Http, type FileAnswer, type HttpOptions } from "./http";
 import { datasetFile } from "./download";
 import type {
   ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress, DatasetFile, DatasetMetadata, DatasetMetadataDoc, DatasetRequest,
-  DeployedDiff, Deployment, DynamicReply, DynamicRequest, FoxgloveLinks,
+  DeployedDiff, Deployment, DynamicReply, DynamicRequest, CredentialsRemade, RecordTrack, Rehearsal, TilesInfo,
+  FoxgloveLinks,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, RunningDrone, User, ValidateResult, Version,
 } from "./types";
 
@@ -94,6 +95,19 @@ export function createApi(opts: HttpOptions) {
       http.request<Blob>(`/api/projects/${projectId}/foxglove-layout`, { as: "blob" }),
     /** URLs to open in Foxglove/Lichtblick, each with a ticket good for one connection. */
     foxgloveLinks: () => http.request<FoxgloveLinks>("/api/foxglove/links", { method: "POST" }),
+    /** The drone's track since its mission began, from the base-station record (thinned to `points`). */
+    track: (drone: string, lat: string, lon: string, points = 2000, colour?: string) =>
+      http.request<RecordTrack>(`/api/drones/${encodeURIComponent(drone)}/track?${new URLSearchParams({
+        lat, lon, points: String(points), ...(colour ? { colour } : {}) }).toString()}`),
+    /** Whether the drone's link is a simulated one that can be cut for a rehearsal, and whether it is cut. */
+    rehearsal: (drone: string) => http.request<Rehearsal>(`/api/drones/${encodeURIComponent(drone)}/rehearsal`),
+    /** Cuts (true) or restores (false) the simulated link (operator). */
+    setRehearsal: (drone: string, cut: boolean) =>
+      http.request<Rehearsal>(`/api/drones/${encodeURIComponent(drone)}/rehearsal`, { method: "POST", json: { cut } }),
+    /** Whether the workbench serves a tile folder (modd-backend --tiles) and its tile URL. */
+    tilesInfo: () => http.request<TilesInfo>("/api/tiles"),
+    /** Credential files of the base station made anew after its first start (copies handed out no longer work). */
+    credentialsRemade: () => http.request<CredentialsRemade>("/api/credentials/remade"),
 
     // --- live (scientist): dynamic subscriptions; values come over the stream WebSocket
     addDynamic: (drone: string, body: DynamicRequest) =>

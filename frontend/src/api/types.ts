@@ -137,6 +137,18 @@ export interface ArchiveFile {
 }
 
 /** Viewer URLs with single-use tickets (backend routers/foxglove.py); null: not served. */
+/** GET /api/drones/{drone}/track: fixes [t (s since the epoch), lat, lon, colour value?] of the newest base-station record, thinned; `total` before thinning. */
+export interface RecordTrack { file: string | null; total: number; points: Array<[number, number, number] | [number, number, number, number | null]> }
+
+/** GET/POST /api/drones/{drone}/rehearsal: a simulated link (modd up --simulate) that can be cut, and whether it is. */
+export interface Rehearsal { available: boolean; cut: boolean }
+
+/** GET /api/tiles: the workbench's tile folder, when it serves one. */
+export interface TilesInfo { available: boolean; url: string | null }
+
+/** GET /api/credentials/remade: credential files made anew, with when (UTC ISO 8601). */
+export interface CredentialsRemade { remade: Array<{ file: string; at: string }> }
+
 export interface FoxgloveLinks {
   live: string | null;
   replay: string | null;

@@ -11,6 +11,7 @@ import { PanelBoundary } from "../panels/PanelBoundary";
 import { useEditor, useEditorStore } from "../editor/useEditor";
 import { isDefault, loadLayout, moveDivider, resetLayout, saveLayout, setBeside, type DockLayout } from "../core/dockLayout";
 import type { PanelId } from "../editor/store";
+import { NamedLayouts } from "./NamedLayouts";
 
 const IDS = PANELS.map((p) => p.id);
 
@@ -119,6 +120,9 @@ export function Dock({ user = "" }: { user?: string }) {
                 <label><input type="checkbox" checked={layout.stacked} onChange={(e) => change({ stacked: e.target.checked })} /> Stacked</label>
               </>
             )}
+            <NamedLayouts user={user} role={role} panels={IDS} current={{ panel: panel.id, layout }}
+              onApply={(named) => { store.patch({ panel: named.panel }); change(named.layout); }} />
+            <button type="button" onClick={() => setLayout(resetLayout(window.localStorage, user, role))}>Reset to default</button>
           </div>
         </details>
         {!isDefault(layout) && (

@@ -78,9 +78,20 @@ export function alignWithGaps(channels: readonly ChannelData[]): [number[], ...A
   return [xs, ...ys];
 }
 
+/**
+ * The gaps of what this page saw live: from a channel's first live (not backfilled)
+ * value on. A fill brings windows from before the page opened too (the mission's
+ * older gaps); the stretch between those and the first live value was delivered
+ * before the page opened, not missed, and is no gap to count.
+ */
+export function liveGaps(c: ChannelData): Array<[number, number, number]> {
+  const first = c.samples.findIndex((s) => !s.backfilled);
+  return findGaps(first > 0 ? c.samples.slice(first) : c.samples, c.periodS);
+}
+
 /** In words, for a chart's caption: "2 windows missing in 1 gap · 5 backfilled". */
 export function gapSummary(channels: readonly ChannelData[]): string {
-  const gaps = channels.flatMap((c) => findGaps(c.samples, c.periodS));
+  const gaps = channels.flatMap(liveGaps);
   const missing = gaps.reduce((n, g) => n + g[2], 0);
   const filled = channels.reduce((n, c) => n + c.samples.filter((s) => s.backfilled).length, 0);
   const words = gaps.length === 0 ? "no gap" : `${missing} window${missing === 1 ? "" : "s"} missing in ${gaps.length} gap${gaps.length === 1 ? "" : "s"}`;

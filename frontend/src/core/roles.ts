@@ -53,6 +53,11 @@ export function canFillGaps(role: Role): boolean {
   return role === "scientist" || role === "operator" || role === "admin";
 }
 
+/** Whether `role` may cut and restore a simulated link (a rehearsed outage). */
+export function canRehearse(role: Role): boolean {
+  return role === "operator" || role === "admin";
+}
+
 export function canDeploy(role: Role): boolean {
   return role === "operator" || role === "admin";
 }

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { colourOf, gridStep, positionSubscribers, positionTopics, trackPoints, valueAt, valueRange } from "./track";
+import { colourOf, gridStep, headingSubscriber, positionSubscribers, positionTopics, trackPoints, valueAt, valueRange, withRecord } from "./track";
 import { scenario1 } from "./testing/scenario1";
 
 const s = (t: number, value: number) => ({ t, value });
@@ -34,5 +34,23 @@ describe("track", () => {
     expect(colourOf(0)).toEqual([0, 0, 255]);
     expect(colourOf(1)).toEqual([255, 0, 0]);
     expect(gridStep(400)).toBe(100);
+  });
+});
+
+describe("the track since the mission began", () => {
+  it("puts the record's fixes older than the live series' first before it", () => {
+    const record: Array<[number, number, number]> = [[1, 44.1, -63.1], [2, 44.2, -63.2], [3, 44.3, -63.3]];
+    const live = [{ t: 3, value: 44.3 }, { t: 4, value: 44.4 }];
+    expect(withRecord(record, 1, live).map((s) => [s.t, s.value])).toEqual([[1, 44.1], [2, 44.2], [3, 44.3], [4, 44.4]]);
+    expect(withRecord(record, 2, []).map((s) => s.value)).toEqual([-63.1, -63.2, -63.3]); // a reload: the record alone
+    expect(withRecord([], 1, live)).toEqual(live);
+    expect(withRecord([[1, 0, 0, 12.5], [2, 0, 0, null], [3, 0, 0]], 3, []).map((s) => [s.t, s.value])).toEqual([[1, 12.5]]);
+  });
+
+  it("points the vehicle along a heading or course topic when a subscription has one", () => {
+    const m = scenario1();
+    expect(headingSubscriber(m)).toBeNull();
+    m.subscribers.push({ ...m.subscribers[0], name: "sub_hdg", topic: "usv.gps.course_true" });
+    expect(headingSubscriber(m)).toBe("sub_hdg");
   });
 });

@@ -10,6 +10,7 @@
  *   positionSubscribers(model)          // { lat: "sub_lat", lon: "sub_lon" }
  *   trackPoints(lat, lon, temperature)  // [{ t, east: 0, north: 0, value: 12.1 }, ...]
  */
+import { AGGREGATION } from "./contracts.gen";
 import type { ModdModel } from "./model.gen";
 import type { Sample } from "../dataSources/types";
 
@@ -21,6 +22,14 @@ export function positionSubscribers(model: ModdModel): { lat: string | null; lon
   const find = (names: readonly string[]) =>
     model.subscribers.find((s) => names.includes((s.topic.split(".").pop() ?? "").toLowerCase()))?.name ?? null;
   return { lat: find(ROLE_NAMES.lat), lon: find(ROLE_NAMES.lon) };
+}
+
+/** Topic names (their last part) that are the vehicle's heading or course over ground, in degrees from north. */
+const HEADING_NAMES = ["heading", "true_heading", "hdg", "course", "course_true", "cog"];
+
+/** The first subscription (not a COUNT) whose topic is a heading or course: the map's vehicle points along it. */
+export function headingSubscriber(model: ModdModel): string | null {
+  return model.subscribers.find((s) => s.aggregation !== AGGREGATION.COUNT && HEADING_NAMES.includes((s.topic.split(".").pop() ?? "").toLowerCase()))?.name ?? null;
 }
 
 /** The first topics (full names, e.g. of an archive file) that are a latitude and a longitude. */
@@ -88,4 +97,19 @@ export function gridStep(span: number, lines = 6): number {
 /** "40 m", "1.2 km". */
 export function formatDistance(m: number): string {
   return m >= 1000 ? `${Number((m / 1000).toFixed(2))} km` : `${Number(m.toFixed(1))} m`;
+}
+
+/**
+ * The recorded fixes (the base station's record since the mission began: [t, lat, lon])
+ * before a live series: the record's samples older than the live series' first, then the
+ * live ones. `column` 1 takes the latitudes, 2 the longitudes, 3 the colour values (those the record has).
+ */
+export function withRecord(record: ReadonlyArray<readonly [number, number, number, (number | null)?]>, column: 1 | 2 | 3, live: readonly Sample[]): Sample[] {
+  const first = live.length ? live[0].t : Infinity;
+  const before: Sample[] = [];
+  for (const r of record) {
+    const v = r[column];
+    if (r[0] < first - 1e-6 && typeof v === "number") before.push({ t: r[0], value: v });
+  }
+  return before.length ? before.concat(live) : [...live];
 }

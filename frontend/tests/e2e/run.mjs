@@ -104,12 +104,15 @@ try {
   }
   // A map tile server on loopback; the backend allows its origin for images (--tile-origin).
   const tiles = await startTileServer();
+  mkdirSync(join(tmp, "tiles"));
   cleanups.push(tiles.close);
   const backend = start("backend", [
     backendBin, "--host", "127.0.0.1", "--port", String(port), "--data", join(tmp, "data"),
     "--frontend", join(frontend, "dist"),
     "--foxglove-port", String(foxglovePort), "--foxglove-replay-port", String(replayPort),
     "--tile-origin", tiles.origin,
+    // a tile folder the backend serves (offline basemap); views.mjs writes its tiles where the track is
+    "--tiles", join(tmp, "tiles"),
     "--archives", drone ? join(tmp, "drone", "archive") : join(tmp, "archives"),
     "--records", drone ? join(tmp, "drone", "records") : join(tmp, "records"),
     ...(drone ? ["--zenoh-connect", zenoh, "--zenoh-credentials", join(creds, "backend.cred"),
@@ -141,7 +144,7 @@ try {
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
     ...(only === "collab" || only === "instruments" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
       archiveDir: join(tmp, "drone", "archive"),
-      survey: surveyModel(pubPort, subPort), tiles })),
+      survey: surveyModel(pubPort, subPort), tiles, tileDir: join(tmp, "tiles") })),
     ...(only === "views" || only === "instruments" ? [] : collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) })),
     ...(only === "views" || only === "collab" || only === "instruments" ? [] : radioSteps()),
     ...(only === "views" || only === "collab" || only === "instruments" ? [] : metadataSteps()),

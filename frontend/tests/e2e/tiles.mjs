@@ -48,6 +48,8 @@ export function png(w, h, rgb) {
 }
 
 const TILE = png(256, 256, (x, y) => (x < 2 || y < 2 ? TILE_BORDER : TILE_FILL));
+/** The PNG of every tile (a tile folder's files too). */
+export const tilePng = TILE;
 
 /** Starts the server on 127.0.0.1 (a free port); `requests` lists the tiles asked for ({ z, x, y, host }). */
 export async function startTileServer() {

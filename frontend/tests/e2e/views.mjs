@@ -7,15 +7,16 @@
  * do not exist there). Pictures go to `imagesDir` like the journey's.
  */
 import { execFileSync } from "node:child_process";
+import { mkdirSync, readFileSync, writeFileSync } from "node:fs";
 import { join } from "node:path";
-import { waitUntil } from "./journey.mjs";
-import { TILE_FILL, tileOf } from "./tiles.mjs";
+import { expectCount, waitUntil } from "./journey.mjs";
+import { TILE_FILL, tileOf, tilePng } from "./tiles.mjs";
 import { checkRows, readTopic } from "./archiveOracle.mjs";
 
 /** How long the gap step stops the drone's PubBroker (ms). */
 const OUTAGE_MS = 8000;
 
-export function views({ page, imagesDir, drone, liveValues, dronePid, survey, ports, tiles, archiveDir }) {
+export function views({ page, imagesDir, drone, liveValues, dronePid, survey, ports, tiles, archiveDir, tileDir }) {
   const shot = async (name) => {
     await page.waitForTimeout(200);
     await page.screenshot({ path: join(imagesDir, `${name}.png`) });
@@ -258,6 +259,23 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await expectText(status, /[1-9]\d* did not load: is http:\/\/localhost:\d+ reachable, and allowed/, 20000);
       if (tiles.requests.slice(n).some((r) => r.host.startsWith("localhost"))) throw new Error("a tile from an origin the service does not allow was fetched");
       await page.getByLabel("Tile URL").fill("");
+      // Offline: the backend's own tile folder (--tiles), written here around the track's first fix
+      // at every zoom the map may use; nothing is fetched from the loopback server meanwhile.
+      for (let z = 10; z <= 19; z += 1) {
+        const [cx, cy] = tileOf(lat, lon, z);
+        for (let x = cx - 4; x <= cx + 4; x += 1) {
+          mkdirSync(join(tileDir, String(z), String(x)), { recursive: true });
+          for (let y = cy - 4; y <= cy + 4; y += 1) writeFileSync(join(tileDir, String(z), String(x), `${y}.png`), tilePng);
+        }
+      }
+      const served = tiles.requests.length;
+      await page.getByRole("button", { name: "Use the workbench's tile folder (offline)" }).click();
+      if ((await page.getByLabel("Tile URL").inputValue()) !== "/api/tiles/{z}/{x}/{y}.png") throw new Error("the tile folder's URL is not the map's");
+      await expectText(status, /Tiles: [1-9]\d* of [1-9]\d* drawn from the workbench's tile folder/, 20000);
+      await waitUntil(async () => (await tilePixels()).share > 0.3, 10000, async () => `folder tiles cover ${(await tilePixels()).share} of the map`);
+      if (tiles.requests.length !== served) throw new Error("a tile was fetched from the tile server while the map used the folder");
+      await shot("map-local-tiles");
+      await page.getByLabel("Tile URL").fill("");
       await expand(false);
     }],
 
@@ -322,12 +340,71 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await view("Scientist");
       await panel("Monitor");
       await stacked();
+      // Named layouts like Foxglove's: this one saved under a name, exported as a file,
+      // deleted and the dock reset; a broken file is refused with its field and nothing
+      // changes; the exported file imported brings the three stacked panels back.
+      await layoutMenu();
+      const named = page.getByRole("group", { name: "Named layouts" });
+      await named.getByLabel("Layout name").fill("Three stacked");
+      await named.getByRole("button", { name: "Save as", exact: true }).click();
+      const message = page.getByTestId("layout-message");
+      await expectText(message, /Saved “Three stacked”/);
+      const [file] = await Promise.all([page.waitForEvent("download", { timeout: 15000 }),
+        named.getByRole("button", { name: "Export…", exact: true }).click()]);
+      const exported = JSON.parse(readFileSync(await file.path(), "utf8"));
+      if (exported.format !== "modd-dock-layout" || exported.name !== "Three stacked" || exported.panel !== "monitor"
+        || exported.layout.beside.join() !== "map,plan" || exported.layout.stacked !== true) throw new Error(`exported layout: ${JSON.stringify(exported)}`);
+      if (file.suggestedFilename() !== "Three_stacked.modd-layout.json") throw new Error(`exported as ${file.suggestedFilename()}`);
+      await shot("layouts-named");
+      await named.getByRole("button", { name: "Delete", exact: true }).click();
+      await page.getByRole("button", { name: "Reset to default", exact: true }).click();
+      await expectCount(page.getByRole("region", { name: "Map", exact: true }), 0);
+      const importFile = named.getByLabel("Import layout file");
+      const broken = { ...exported, layout: { ...exported.layout, beside: ["map", "radar"] } };
+      await importFile.setInputFiles({ name: "broken.json", mimeType: "application/json", buffer: Buffer.from(JSON.stringify(broken)) });
+      await expectText(message, /^broken\.json not imported: `layout\.beside\[1\]` is "radar", not a panel/);
+      await shot("layouts-import-refused");
+      if (await map.count()) throw new Error("a refused layout file was applied");
+      await importFile.setInputFiles({ name: "Three_stacked.modd-layout.json", mimeType: "application/json", buffer: readFileSync(await file.path()) });
+      await expectText(message, /Imported “Three stacked” and switched to it/);
+      if ((await named.getByLabel("Named layout", { exact: true }).inputValue()) !== "Three stacked") throw new Error("the imported layout is not listed by its name");
+      await page.locator(".dock-layout > summary").click(); // the menu closed again
+      await stacked();
       // another role keeps its own (one panel), and one click resets this one
       await view("Operator");
       if (await page.getByRole("region", { name: "Map", exact: true }).count()) throw new Error("the scientist's layout leaked into the operator view");
       await view("Scientist");
       await page.getByRole("button", { name: "Reset layout" }).click();
       if (await map.count()) throw new Error("the map is still beside the Monitor after Reset layout");
+    }],
+
+    ["map after a reload: the whole track since the mission began, from the base station's record (read with @mcap/core as the oracle)", async () => {
+      if (!liveValues) throw new Error("needs the simulated drone and sensors (make build, modd-sim)");
+      const records = join(archiveDir, "..", "records");
+      // The oracle: the first fix of the mission (a latitude window with a longitude within 0.5 s) in the record.
+      const firstFix = () => {
+        const lat = readTopic(records, "modd/usv/sub/sub_lat").filter((x) => Number.isFinite(x.value));
+        const lon = readTopic(records, "modd/usv/sub/sub_lon").filter((x) => Number.isFinite(x.value));
+        const a = lat.find((x) => lon.some((y) => Math.abs(Number(y.ns - x.ns)) <= 5e8));
+        return a ? Number(a.ns) / 1e9 : null;
+      };
+      const start = firstFix();
+      if (start === null) throw new Error(`no fix in the base-station record under ${records}`);
+      const reloadedAt = Date.now() / 1000;
+      await page.reload();
+      await view("Scientist");
+      await panel("Map");
+      const canvas = page.getByTestId("map-canvas");
+      await waitUntil(async () => Math.abs(Number(await canvas.getAttribute("data-first-t")) - start) < 1e-3, 15000,
+        async () => `the map's first fix at ${await canvas.getAttribute("data-first-t")}, the mission's at ${start}`);
+      if (!(reloadedAt - start > 10)) throw new Error(`the mission began only ${reloadedAt - start} s before the reload: nothing to tell apart`);
+      const points = Number(await canvas.getAttribute("data-points"));
+      if (!(points >= 8)) throw new Error(`${points} fixes on the map after the reload`);
+      await expectText(page.getByTestId("map-fixes"), /the mission's from its start in the base station's record \(\d+ recorded/);
+      await expectText(page.getByTestId("map-fixes"), /The vehicle heads \d+° \(its course over the last fixes: no heading or course topic is subscribed\)/);
+      await expand(true);
+      await shot("map-after-reload");
+      await expand(false);
     }],
 
     ["archives: a time range played back through the charts (seek, play, pause)", async () => {
@@ -580,6 +657,62 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
         return /done: [1-9]\d* filled, 0 duplicates/.test((await progress.textContent()) ?? "");
       }, 180000, async () => `the operator's Fill gaps: "${await progress.textContent()}"`);
       console.log(`    operator: ${await progress.textContent()}${reason ? ` (seen while running:${reason})` : ""}`);
+      await view("Scientist");
+    }],
+
+    ["operator rehearsal: the link cut and restored from the Monitor, then Fill gaps: the missing count back to 0, the time left true", async () => {
+      if (!drone || !liveValues) throw new Error("needs the simulated drone (make build)");
+      // A fresh page: its charts count what it saw live from now on.
+      await page.reload();
+      await view("Operator");
+      await panel("Monitor");
+      const link = page.getByRole("status", { name: "Link status" });
+      await expectText(link, /link up/, 60000);
+      const box = page.getByRole("checkbox", { name: /sub_5 / });
+      if (!(await box.isChecked())) await box.check();
+      const chart = page.locator("figure.live-chart", { has: page.getByTestId("last-sub_5") });
+      const caption = chart.getByTestId("chart-gaps");
+      const missing = async () => {
+        const t = (await caption.textContent()) ?? "";
+        return /no gap/.test(t) ? 0 : Number(/(\d+) windows? missing/.exec(t)?.[1] ?? NaN);
+      };
+      await expectText(page.getByTestId("last-sub_5"), /last -?\d/, 60000);
+      await page.waitForTimeout(3000);
+      const rehearse = page.getByRole("region", { name: "Rehearse an outage" });
+      await rehearse.getByRole("button", { name: "Cut the link", exact: true }).click();
+      await expectText(page.getByTestId("rehearsal-state"), /is cut/);
+      await expectText(link, /link (cut|down|connecting)|link lost/, 20000);
+      await page.waitForTimeout(6000); // the outage: the drone archives on
+      await expandShot("monitor-rehearsal-cut");
+      await rehearse.getByRole("button", { name: "Restore the link", exact: true }).click();
+      await expectText(link, /link up/, 60000);
+      await waitUntil(async () => (await missing()) > 0, 60000, async () => `no gap after the rehearsed outage: "${await caption.textContent()}"`);
+      const gap = await missing();
+      // Fill gaps for the whole drone; the time left it says is noted as it runs, against when it ends.
+      const fill = page.getByRole("region", { name: /^Fill gaps: drone / });
+      const progress = fill.getByTestId("backfill-progress");
+      const said = [];
+      for (let attempt = 1; ; attempt += 1) {
+        await fill.getByRole("button", { name: "Fill gaps" }).click();
+        await expectVisible(progress, 30000);
+        await waitUntil(async () => {
+          const text = (await progress.textContent()) ?? "";
+          const left = /· (\d+) s left/.exec(text);
+          if (left) said.push([Date.now() / 1000, Number(left[1])]);
+          return /done: \d+ filled, 0 duplicates/.test(text);
+        }, 180000, async () => `the operator's Fill gaps: "${await progress.textContent()}"`);
+        const ended = Date.now() / 1000;
+        for (const [at, left] of said) {
+          if (left > 3 * (ended - at) + 10) throw new Error(`"${left} s left" said ${(ended - at).toFixed(1)} s before the end`);
+        }
+        // the chart's missing count back to 0 once the backfilled windows are in (a window a loaded
+        // machine stalled after the fill is a new gap: one more Fill gaps takes it)
+        const zero = await waitUntil(async () => (await missing()) === 0, 30000, async () => "").then(() => true, () => false);
+        if (zero) break;
+        if (attempt === 2) throw new Error(`after Fill gaps twice: "${await caption.textContent()}" (${gap} were missing)`);
+      }
+      console.log(`    rehearsal: ${gap} windows of sub_5 missing after the cut, 0 after Fill gaps; time left said ${said.length} times, within 3× (+10 s) of the end`);
+      await expandShot("monitor-rehearsal-filled");
       await view("Scientist");
     }],
 

@@ -235,6 +235,10 @@ def build_stack(
             sub.append("--no-resume")  # what runs is MODEL, not an earlier run's deployment
         if getattr(args, "relay", None):
             sub += ["--link", "{}:{}".format(*args.relay)]
+        if getattr(
+            args, "simulate", False
+        ):  # a simulated drone: its link can be cut for a rehearsal
+            sub += ["--rehearsal-dir", str(rehearsal_dir(workdir))]
         stack.processes.append(Process("subbroker", sub, logs / "subbroker.log"))
     from modd.sensors.plan import has_instrument_sensors
 
@@ -422,6 +426,16 @@ def start_radio(
     except uplink.LinkSetupError:
         radio.stop()
         raise
+
+
+def rehearsal_dir(workdir: Path) -> Path:
+    """``<workdir>/rehearsal``, made private and with the link restored (an earlier run's cut
+    is not carried over): where ``modd link cut`` and the workbench cut the simulated link."""
+    from modd.subbroker.rehearsal import FOLDER, set_cut
+
+    folder = private_dir(workdir / FOLDER)
+    set_cut(folder, False)
+    return folder
 
 
 def run_dir(workdir: str | None, drone: str) -> Path:

@@ -27,6 +27,7 @@ COMMAND_HELP = {
     "convert": "convert a model between .modd, JSON and the original tool's .collector",
     "fmt": "rewrite models in canonical form",
     "generate": "generate configs, driver projects and stubs",
+    "link": "cut or restore the simulated link of a modd up --simulate run (rehearsal)",
     "plan": "schedule, buffer sizes, delays and link cost of a model",
     "push": "put a model into a running workbench (and deploy it)",
     "up": "run a model locally: PubBroker, SubBroker, simulated sensors",

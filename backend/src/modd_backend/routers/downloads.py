@@ -9,6 +9,7 @@ from typing import Annotated, Literal
 
 from fastapi import APIRouter, Query
 from fastapi.responses import Response
+from modd.zenoh_auth import remade_notes
 from modd_model import validate
 
 from ..deps import DbDep, StateDep, UserDep, has_role
@@ -21,6 +22,7 @@ from ..schemas import Id, Responses
 from ..versions import get_project, get_version, model_of
 
 router = APIRouter(prefix="/api/projects", tags=["downloads"])
+credentials_router = APIRouter(prefix="/api/credentials", tags=["downloads"])
 Target = Literal["integrator", "operator", "scientist"]
 RESPONSES: Responses = {
     200: {"content": {"application/zip": {}}},
@@ -114,3 +116,15 @@ def foxglove_layout_download(
         media_type="application/json",
         headers={"Content-Disposition": f'attachment; filename="{name}.json"'},
     )
+
+
+@credentials_router.get("/remade")
+def credentials_remade(user: UserDep, state: StateDep) -> dict[str, list[dict[str, str]]]:
+    """The credential files of the base station this backend connects to
+    (beside its own, ``make run``'s ``data/credentials``) that were made anew
+    with a new secret after the first start (deleted by hand), with when (UTC):
+    copies handed out before, in downloads among them, no longer work. Names
+    and times only; no secret is read."""
+    creds = state.settings.zenoh_credentials
+    notes = remade_notes(creds.parent) if creds is not None else {}
+    return {"remade": [{"file": f, "at": at} for f, at in sorted(notes.items())]}

@@ -7,13 +7,14 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends
+from fastapi import APIRouter, Depends, Query
 from fastapi.responses import FileResponse, Response
 
 from ..archives import archive_path, file_info, list_files
 from ..deps import Heavy, StateDep, UserDep
 from ..filesnapshot import file_snapshot
 from ..tables import User
+from ..track import MAX_POINTS, mission_track
 from .archives import (
     BUSY,
     NOT_FOUND,
@@ -28,6 +29,27 @@ from .archives import (
 from .foxglove import ViewerLinks
 
 router = APIRouter(prefix="/api/drones/{drone}/records", tags=["archives"])
+track_router = APIRouter(prefix="/api/drones/{drone}", tags=["archives"])
+Subscriber = Annotated[str, Query(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64)]
+
+
+@track_router.get("/track", dependencies=[Heavy])
+def track(
+    drone: Drone,
+    lat: Subscriber,
+    lon: Subscriber,
+    state: StateDep,
+    _user: UserDep,
+    points: Annotated[int, Query(ge=2, le=MAX_POINTS)] = 2000,
+    colour: Annotated[str | None, Query(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64)] = None,
+) -> dict[str, object]:
+    """The drone's track since its mission began (the Map after a reload): the
+    windows of the subscribers ``lat`` and ``lon`` in the newest base-station
+    record, paired by time and thinned evenly to at most ``points`` fixes
+    (``total``: how many there were); times in seconds since the Unix epoch.
+    With ``colour``, each fix carries that subscriber's value then (the Map's colour-by)."""
+    root = state.settings.effective_record_dir
+    return mission_track(root, drone, lat, lon, points, colour)
 
 
 @router.get("")

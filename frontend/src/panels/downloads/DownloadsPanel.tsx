@@ -9,6 +9,7 @@ import { useServices } from "../../app/services";
 import { saveBlob } from "../saveBlob";
 
 import { TARGETS } from "./targets";
+import { RemadeCredentials } from "./RemadeCredentials";
 
 
 export default function DownloadsPanel() {
@@ -32,6 +33,7 @@ export default function DownloadsPanel() {
 
   return (
     <div className="panel-body downloads-panel">
+      <RemadeCredentials />
       <p className="muted">Generated from the saved revision {revision}; save first to include unsaved edits.</p>
       <ul className="download-list">
         {TARGETS.map((t) => (

@@ -1,6 +1,6 @@
 // @vitest-environment jsdom
 import { describe, expect, it } from "vitest";
-import { drawMap, fitScale, tileOrigin, tileUrlProblem } from "./drawMap";
+import { drawMap, fitScale, isLocalTiles, tileOrigin, tileUrlProblem } from "./drawMap";
 import type { TrackPoint } from "../../core/track";
 
 describe("tile URL", () => {
@@ -41,5 +41,24 @@ describe("map in a narrow panel", () => {
     for (const [w, h] of [[20, 300], [56, 300], [400, 30], [1, 1], [400, 300]]) {
       expect(() => drawMap(canvasOf(w, h), track, null, { tileUrl: "", onTile: () => undefined })).not.toThrow();
     }
+  });
+});
+
+describe("the vehicle's heading", () => {
+  const east: TrackPoint[] = [0, 1, 2].map((i) => ({ t: i, east: 10 * i, north: 0, lat: 0, lon: 0, value: null }));
+  it("is the heading topic's value when there is one, else the course over the last fixes", () => {
+    expect(drawMap(canvasOf(400, 300), east, null, { tileUrl: "", onTile: () => undefined }).heading).toBeCloseTo(90);
+    expect(drawMap(canvasOf(400, 300), east, null, { tileUrl: "", onTile: () => undefined, heading: 370 }).heading).toBeCloseTo(10);
+    expect(drawMap(canvasOf(400, 300), east, null, { tileUrl: "", onTile: () => undefined, heading: null }).heading).toBeCloseTo(90);
+    expect(drawMap(canvasOf(400, 300), east, null, { tileUrl: "", onTile: () => undefined, heading: Number.NaN }).heading).toBeCloseTo(90);
+  });
+});
+
+describe("the workbench's tile folder", () => {
+  it("is a tile URL of the page's own origin", () => {
+    expect(isLocalTiles("/api/tiles/{z}/{x}/{y}.png")).toBe(true);
+    expect(tileUrlProblem("/api/tiles/{z}/{x}/{y}.png")).toBeNull();
+    expect(tileUrlProblem("/elsewhere/{z}/{x}/{y}.png")).toMatch(/api\/tiles/);
+    expect(tileOrigin("/api/tiles/{z}/{x}/{y}.png")).toBe(window.location.origin);
   });
 });

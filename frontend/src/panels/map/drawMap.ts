@@ -7,7 +7,12 @@
 import { colourOf, EARTH_RADIUS_M, formatDistance, gridStep, type TrackPoint } from "../../core/track";
 import { courseDeg } from "./marker";
 
-interface Options { tileUrl: string; onTile: () => void }
+interface Options {
+  tileUrl: string;
+  onTile: () => void;
+  /** The vehicle's heading from a heading/course topic, degrees from north; without it, its course over the last fixes. */
+  heading?: number | null;
+}
 
 /** The tiles a drawing asked for: drawn, failed (unreachable, refused by the page's policy, not an image), waiting. */
 export interface TileCount { asked: number; drawn: number; failed: number }
@@ -34,19 +39,24 @@ function tile(url: string, onChange: () => void): HTMLImageElement | "failed" | 
   return img.complete && img.naturalWidth > 0 ? img : null;
 }
 
-/** A tile URL template the map can use: http(s), with {z}, {x} and {y}; else why not. */
+/** A tile URL template the map can use: http(s), or a path of the workbench's own (its tile folder, /api/tiles/…), with {z}, {x} and {y}; else why not. */
 export function tileUrlProblem(url: string): string | null {
   if (!url) return null;
-  if (!/^https?:\/\/[^/]+\//.test(url)) return "a tile URL starts with http:// or https:// and a host";
+  if (!/^https?:\/\/[^/]+\//.test(url) && !isLocalTiles(url)) return "a tile URL starts with http:// or https:// and a host, or is the workbench's /api/tiles/…";
   const missing = ["{z}", "{x}", "{y}"].filter((p) => !url.includes(p));
   if (missing.length) return `a tile URL needs ${missing.join(", ")}`;
   try { new URL(tileOrigin(url)); } catch { return "not a URL"; }
   return null;
 }
 
-/** The origin (scheme://host:port) a tile URL template loads from. */
+/** A path of the workbench's own tile folder (modd-backend --tiles). */
+export function isLocalTiles(url: string): boolean {
+  return url.startsWith("/api/tiles/");
+}
+
+/** The origin (scheme://host:port) a tile URL template loads from (the page's own for the workbench's tile folder). */
 export function tileOrigin(url: string): string {
-  return new URL(url.replace(/\{[xyz]\}/g, "0")).origin;
+  return new URL(url.replace(/\{[xyz]\}/g, "0"), window.location.origin).origin;
 }
 
 /** The track's margin on every side, in CSS pixels. */
@@ -125,7 +135,7 @@ export function drawMap(el: HTMLCanvasElement, points: readonly TrackPoint[], ra
     ctx.fill();
   }
   const last = points[points.length - 1];
-  const heading = courseDeg(points);
+  const heading = opts.heading != null && Number.isFinite(opts.heading) ? ((opts.heading % 360) + 360) % 360 : courseDeg(points);
   drawVehicle(ctx, X(last.east), Y(last.north), heading);
 
   // Scale bar (one grid step) and north arrow.

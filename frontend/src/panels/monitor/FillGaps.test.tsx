@@ -1,7 +1,7 @@
 // @vitest-environment jsdom
 import { afterEach, describe, expect, it, vi } from "vitest";
 import { act, cleanup, fireEvent, render, screen } from "@testing-library/react";
-import { FillGaps } from "./FillGaps";
+import { FillGaps, sumProgress } from "./FillGaps";
 import { ServicesContext, type Services } from "../../app/services";
 import type { BackfillProgress } from "../../api/types";
 import type { ChannelListener, DataSource } from "../../dataSources/types";
@@ -18,7 +18,7 @@ describe("FillGaps", () => {
     vi.useFakeTimers();
     const listeners: ChannelListener[] = [];
     const source = { subscribe: (_c: string, l: ChannelListener) => { listeners.push(l); return () => {}; } } as unknown as DataSource;
-    const startBackfill = vi.fn(async () => progress({ windows_done: 10, bytes_per_s: 420, seconds_left: 3 }));
+    const startBackfill = vi.fn(async () => progress({ windows_done: 10, bytes_per_s: 420, seconds: 1, seconds_left: 3 }));
     const backfillProgress = vi.fn(async () => progress({ status: "DONE", windows: 40, windows_done: 40 }));
     const services = { api: { startBackfill, backfillProgress }, openStream: () => source } as unknown as Services;
     render(<ServicesContext.Provider value={services}><FillGaps drone="usv" source={source} subscribers={["sub_5"]} scope="sub_5" /></ServicesContext.Provider>);
@@ -48,5 +48,19 @@ describe("FillGaps", () => {
     await act(async () => { await vi.advanceTimersByTimeAsync(600); });
     expect(screen.getByTestId("backfill-reason").textContent).toBe(" · waiting for the link");
     vi.useRealTimers();
+  });
+});
+
+describe("the time left of many backfills", () => {
+  it("is the windows left at the pace of all of them, not the most queued job's own guess", () => {
+    // 10 jobs started together, served in turn: after 20 s, 9 are done (40 windows each) and
+    // the last has done 4 of 40; its own estimate counts its 20 s queued as its pace (180 s left).
+    const done = Array.from({ length: 9 }, () => progress({ status: "DONE", windows: 40, windows_done: 40, seconds: 18 }));
+    const last = progress({ windows_done: 4, seconds: 20, seconds_left: 180 });
+    const p = sumProgress([...done, last])!;
+    expect(p.windows_done).toBe(364);
+    expect(p.seconds_left).toBeCloseTo((20 / 364) * 36, 5); // ≈ 2 s: 36 windows at 18 windows/s
+    expect(sumProgress([progress({ status: "DONE", windows_done: 40, seconds: 3 })])!.seconds_left).toBeNull();
+    expect(sumProgress([progress({ seconds: 2 })])!.seconds_left).toBeNull(); // nothing done yet: no guess
   });
 });

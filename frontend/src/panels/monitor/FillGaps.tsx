@@ -44,7 +44,12 @@ export function runningReason(all: readonly BackfillProgress[]): string | null {
   return [active, queued ? `${queued} queued` : null].filter(Boolean).join(", ");
 }
 
-/** The progress of several backfills as one: windows and bytes/s summed, the longest time left. */
+/**
+ * The progress of several backfills as one: windows and bytes/s summed; the time left from
+ * the windows left at the pace of all of them so far (every job started with the fill: a
+ * job's own estimate counts its time queued behind the others as its pace, ten times too
+ * long for the last of many).
+ */
 export function sumProgress(all: readonly BackfillProgress[]): BackfillProgress | null {
   if (all.length === 0) return null;
   const sum = (f: (p: BackfillProgress) => number) => all.reduce((n, p) => n + f(p), 0);
@@ -52,14 +57,16 @@ export function sumProgress(all: readonly BackfillProgress[]): BackfillProgress 
   const done = all.some((p) => p.status === "DONE");
   // A failure decides only when nothing ran to the end (each failure is said beside the bar).
   const failed = done ? undefined : all.find((p) => p.status !== "RUNNING" && p.status !== "DONE");
-  const left = all.map((p) => p.seconds_left).filter((s): s is number => s != null);
+  const doneWindows = sum((p) => p.windows_done), totalWindows = sum((p) => p.windows_total);
+  const elapsed = Math.max(...all.map((p) => p.seconds));
+  const left = running && doneWindows > 0 ? (elapsed / doneWindows) * Math.max(0, totalWindows - doneWindows) : null;
   return {
     status: running ? "RUNNING" : failed ? failed.status : "DONE",
     reason: running ? runningReason(all) : failed?.reason ?? null,
-    windows: sum((p) => p.windows), windows_done: sum((p) => p.windows_done), windows_total: sum((p) => p.windows_total),
+    windows: sum((p) => p.windows), windows_done: doneWindows, windows_total: totalWindows,
     duplicates: sum((p) => p.duplicates), bytes: sum((p) => p.bytes), seconds: Math.max(...all.map((p) => p.seconds)),
     bytes_per_s: sum((p) => p.bytes_per_s), rate_bps: Math.max(...all.map((p) => p.rate_bps)),
-    seconds_left: left.length ? Math.max(...left) : null,
+    seconds_left: left,
   };
 }
 

@@ -19,7 +19,7 @@ import { AGGREGATION } from "../../core/contracts.gen";
 import { findTopicByName, listTopics } from "../../core/query";
 import { subscriptionLabel, topicLabel } from "../../core/topicLabel";
 import { formatRate } from "../../core/plan";
-import { canEdit, canFillGaps } from "../../core/roles";
+import { canEdit, canFillGaps, canRehearse } from "../../core/roles";
 import { formatAge } from "../../core/linkHealth";
 import { DEFAULT_WINDOW, panRange, unitLabel, visibleRange, zoomRange, type ViewWindow } from "../../core/chartData";
 import { useEditor, useModel } from "../../editor/useEditor";
@@ -30,6 +30,7 @@ import { LiveChart } from "./LiveChart";
 import { keepSubscribed, useChartLayout } from "./useChartLayout";
 import { ArchiveSpaceNote } from "./ArchiveSpaceNote";
 import { FillGaps } from "./FillGaps";
+import { Rehearsal } from "./Rehearsal";
 import { RadioLine } from "./RadioLine";
 import { InstrumentsHealth } from "./InstrumentsHealth";
 
@@ -122,6 +123,7 @@ export default function MonitorPanel() {
             <label key={name}><input type="checkbox" checked={watched.includes(name)} onChange={() => layout.toggle(name)} />
               {name} <span className="muted">{subscriptionLabel(model, { ...d, periodS: d.period_s })} (dynamic)</span></label>
           ))}
+          {canRehearse(role) && <Rehearsal drone={drone} />}
           {canFillGaps(role) && <FillGaps drone={drone} source={source} scope={`drone ${drone}`}
             subscribers={subscribers.map((s) => s.name)} />}
           {canEdit(role, "subscriber") && (

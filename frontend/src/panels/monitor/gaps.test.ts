@@ -8,7 +8,7 @@ import { describe, expect, it } from "vitest";
 import { RingBuffer } from "../../dataSources/RingBuffer";
 import { WebSocketSource, type SocketLike } from "../../dataSources/WebSocketSource";
 import type { Sample } from "../../dataSources/types";
-import { alignWithGaps, findGaps, gapSummary } from "../../core/chartData";
+import { alignWithGaps, findGaps, gapSummary, liveGaps } from "../../core/chartData";
 import { sumProgress } from "./FillGaps";
 
 class FakeSocket implements SocketLike {
@@ -107,12 +107,26 @@ describe("Fill gaps of several subscriptions", () => {
     const p = (status: string, done: number, total: number, left: number | null) => ({
       status, windows: done, windows_done: done, windows_total: total, duplicates: 0, bytes: 10, rate_bps: 600, seconds: 1, bytes_per_s: 100, seconds_left: left,
     });
-    expect(sumProgress([p("DONE", 4, 4, null), p("RUNNING", 1, 6, 3)])).toMatchObject({ status: "RUNNING", windows_done: 5, windows_total: 10, bytes_per_s: 200, seconds_left: 3 });
+    expect(sumProgress([p("DONE", 4, 4, null), p("RUNNING", 1, 6, 3)])).toMatchObject({ status: "RUNNING", windows_done: 5, windows_total: 10, bytes_per_s: 200, seconds_left: 1 }); // 5 windows left at 5 a second
     expect(sumProgress([p("DONE", 4, 4, null), p("DONE", 6, 6, null)])).toMatchObject({ status: "DONE", windows: 10 });
     expect(sumProgress([p("ERROR", 0, 0, null), { ...p("ERROR", 0, 0, null), reason: "no link" }])).toMatchObject({ status: "ERROR" });
     expect(sumProgress([{ ...p("ERROR", 0, 0, null), reason: "no link" }])).toMatchObject({ status: "ERROR", reason: "no link" });
     // one refused, the others done: done (the refusal is said beside the bar)
     expect(sumProgress([p("DONE", 4, 4, null), { ...p("ERROR", 0, 0, null), reason: "no link" }])).toMatchObject({ status: "DONE", windows: 4 });
     expect(sumProgress([])).toBeNull();
+  });
+});
+
+describe("gaps counted after a fill", () => {
+  it("counts what the page missed live, not the stretch before it opened that a fill reaches back across", () => {
+    // A fill brought windows 1–3 of the mission (before the page opened at 100); the page then
+    // saw 100..110 every 2 s with 104 and 106 missing, then filled.
+    const old = [1, 3, 5].map((t) => ({ t, value: 0, backfilled: true }));
+    const live = [100, 102, 108, 110].map((t) => ({ t, value: 1 }));
+    expect(gapSummary([{ samples: [...old, ...live], periodS: 2 }])).toBe("2 windows missing in 1 gap · 3 backfilled");
+    const filled = [104, 106].map((t) => ({ t, value: 1, backfilled: true }));
+    const all = [...old, ...live.slice(0, 2), ...filled, ...live.slice(2)];
+    expect(gapSummary([{ samples: all, periodS: 2 }])).toBe("no gap · 5 backfilled");
+    expect(liveGaps({ samples: old, periodS: 2 })).toEqual([]); // nothing live: its own gaps
   });
 });

@@ -20,6 +20,7 @@ nothing here prints a password.
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import secrets
@@ -35,6 +36,10 @@ log = logging.getLogger("modd.zenoh")
 IDENTITIES = ("subbroker", "backend", "viewer")
 DICTIONARY = "users"
 DEPLOY_KEY = "deploy.key"
+#: When each credential file was last made anew after the first start (file name -> UTC ISO
+#: time): what the backend's Downloads panel announces (``remade_notes``).
+REMADE = "remade.json"
+_MAX_REMADE_BYTES = 16 * 1024
 #: Key and credentials files are small; anything bigger is a mistake or an attack.
 MAX_SECRET_BYTES = 64 * 1024
 
@@ -151,6 +156,7 @@ class CredentialStore:
             log.info("zenoh credentials made in %s: %s", self.dir, ", ".join(made))
         elif made:
             self.remade = made
+            self._note_remade(made)
             log.warning(
                 "zenoh credentials missing from %s were made anew with new secrets: %s; "
                 "copies handed out before no longer work",
@@ -158,6 +164,15 @@ class CredentialStore:
                 ", ".join(made),
             )
         return self
+
+    def _note_remade(self, made: list[str]) -> None:
+        from datetime import UTC, datetime
+
+        now = datetime.now(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
+        notes = {**remade_notes(self.dir), **dict.fromkeys(made, now)}
+        tmp = self.dir / f".{REMADE}.{secrets.token_hex(4)}"
+        _write_private(tmp, (json.dumps(notes, sort_keys=True) + "\n").encode())
+        tmp.replace(self.dir / REMADE)
 
     def _write_dictionary(self) -> None:
         lines = [f"{c.user}:{c.password}\n" for c in map(self.credentials, IDENTITIES)]
@@ -246,3 +261,23 @@ def acl(drone: str | None = None) -> dict[str, Any]:
         "subjects": subjects,
         "policies": policies,
     }
+
+
+def remade_notes(directory: str | Path) -> dict[str, str]:
+    """The credential files of ``directory`` made anew after its first start,
+    with when (UTC, ISO 8601): ``{}`` when none was, or the note is unreadable.
+
+    >>> remade_notes("/nonexistent")
+    {}
+    """
+    path = Path(directory) / REMADE
+    known = {f"{i}.cred" for i in IDENTITIES} | {DEPLOY_KEY}
+    try:
+        if path.stat().st_size > _MAX_REMADE_BYTES:
+            return {}
+        raw = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    if not isinstance(raw, dict):
+        return {}
+    return {k: v for k, v in raw.items() if k in known and isinstance(v, str) and len(v) <= 40}

@@ -40,7 +40,9 @@ from .kept import Deployment, StateDir, same_model
 from .keys import backfill_key, deploy_key, subscribe_key
 from .linkhooks import ConfigRejected, LinkDown
 from .planning import config_for, plan_within, trailing_fields
+from .pump import Pump
 from .record import BaseRecord
+from .rehearsal import CutSwitch
 from .request import MAX_DEPLOY_BYTES, MAX_SMALL_BYTES, read_request
 from .running import Running
 from .status import StatusPublisher
@@ -81,6 +83,8 @@ class SubBroker:
             self.dynamic.restore(self._state.load_dynamic())
         self.dynamic.persist = self._state.save_dynamic
         self.link = link_client(config, self._key, self, self._liveness)
+        if config.rehearsal_dir is not None and isinstance(self.link, Pump):
+            self.link.cut = CutSwitch(config.rehearsal_dir)
         self._zenoh: ZenohDelivery | None = None
         self._tcp: TcpDelivery | None = None
         self._status: StatusPublisher | None = None

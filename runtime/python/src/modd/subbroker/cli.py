@@ -65,6 +65,13 @@ def _parser() -> argparse.ArgumentParser:
         "(default: <state_dir>/records; none without a state_dir)",
     )
     p.add_argument(
+        "--rehearsal-dir",
+        metavar="DIR",
+        default=None,
+        help="a folder whose file link-cut, while there, cuts the link to the PubBroker "
+        "for a rehearsed outage (modd up --simulate gives <workdir>/rehearsal; modd link cut)",
+    )
+    p.add_argument(
         "--no-tcp-delivery",
         action="store_true",
         help="do not deliver to the subscribers' TCP endpoints",
@@ -128,6 +135,8 @@ def build_config(args: argparse.Namespace) -> SubBrokerConfig:
         cfg = replace(cfg, record_dir=Path(args.record_dir))
     if args.onboard_model:
         cfg = replace(cfg, onboard_model=Path(args.onboard_model))
+    if args.rehearsal_dir:
+        cfg = replace(cfg, rehearsal_dir=Path(args.rehearsal_dir))
     return replace(
         cfg, link=link, zenoh=z, delivery=delivery, resume=cfg.resume and not args.no_resume
     )

@@ -79,6 +79,8 @@ class SubBrokerConfig:
     delivery: DeliveryOptions = field(default_factory=DeliveryOptions)
     state_dir: Path | None = None  # where a deployed model is kept across restarts
     record_dir: Path | None = None  # base-station record (default <state_dir>/records)
+    #: ``modd up --simulate``'s rehearsal folder: its ``link-cut`` cuts the link (rehearsal.py).
+    rehearsal_dir: Path | None = None
     source: str = "<defaults>"
     #: Resume the deployment and dynamic subscriptions kept in state_dir (else
     #: run the configured model; ``modd-subbroker --no-resume``).

@@ -26,6 +26,7 @@ from modd.link.frames import Config, ConfigAck, ProtocolError
 
 from .config import LinkOptions
 from .linkhooks import LinkDown, LinkStats
+from .rehearsal import CutSwitch
 from .session import LinkSession
 
 log = logging.getLogger("modd.subbroker.link")
@@ -79,6 +80,8 @@ class Pump(ABC):
         self._send_lock = threading.Lock()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=thread_name, daemon=True)
+        #: A rehearsal's switch (modd up --simulate): while it says cut, no link (rehearsal.py).
+        self.cut: CutSwitch | None = None
 
     # -- what a transport provides --------------------------------------------------
 
@@ -160,9 +163,17 @@ class Pump(ABC):
             for data in self.session.take():
                 self._write(data)
 
+    def _is_cut(self) -> bool:
+        return self.cut is not None and self.cut.cut
+
     def _run(self) -> None:
         backoff = self._opt.backoff_initial_s
         while not self._stop.is_set():
+            if self._is_cut():  # a rehearsed outage: no connect until it is restored, then at once
+                self.stats.state = "cut"
+                backoff = 0.0
+                self._stop.wait(0.1)
+                continue
             connects, began = self.stats.connects, time.monotonic()
             try:
                 self._session()
@@ -193,6 +204,8 @@ class Pump(ABC):
         self.session.begin()
         self._flush()
         while not self._stop.is_set():
+            if self._is_cut():
+                raise LinkDown("the link was cut for a rehearsal")
             self._read()
             self._flush()
             self.session.tick()
