@@ -315,6 +315,8 @@ export interface PlanLinkBudget {
   delays_s: Record<string, number>;
   over_budget: string[];
   error: string | null;
+  /** The link's own control traffic, drone to base (metamodel/src/modd_plan/control.py): STATUS every status_period_s and a PONG per keepalive PING; bytes_per_s and packets_per_s are estimates, already in drone_to_base and packets_per_s; bound_bytes_per_s is at most (a STATUS of the whole STATUS room each period) while the instruments' states hold. */
+  control?: unknown;
 }
 
 /** The declared radio's figures per hour of the plan (metamodel/src/modd_plan/radio.py). */
@@ -327,9 +329,9 @@ export interface PlanRadio {
   duty_cycle: number | null;
   /** Air time (the bound's, when there is one) over the limit's (above 1: refused), else null. */
   duty_share: number | null;
-  /** What the air-time and energy figures are: exact (nothing quantised), upper_bound (every quantised value sized at its declared range) or estimate (quantised deltas assumed small; docs/planning.md, "Bounds and estimates"). */
+  /** What the air-time and energy figures are: exact (nothing quantised), upper_bound (every quantised value sized at its declared range) or estimate (quantised deltas assumed small, or the link's control traffic counted: its STATUS sizes vary; docs/planning.md, "Bounds and estimates"). */
   figures?: "exact" | "upper_bound" | "estimate";
-  /** With estimated figures: the air time of the bound the duty-cycle check uses (duty_share is its share), else null. */
+  /** With estimated figures: the air time of the bound the duty-cycle check uses (duty_share is its share): the DATA's bound with the control traffic's (the link budget's control.bound_bytes_per_s), else null. */
   air_time_bound_s_per_hour?: number | null;
   /** Only in a plan calibrated by an archive (modd plan --calibrate): its name; the quantised values were sized from its samples (figures: estimate). */
   calibrated_from?: string;
@@ -369,9 +371,9 @@ export interface PlanProposal {
   duty_share: number;
   energy_j_per_hour: number;
   change: string;
-  /** What the air-time and energy figures are: exact (nothing quantised), upper_bound (every quantised value sized at its declared range) or estimate (quantised deltas assumed small; docs/planning.md, "Bounds and estimates"). */
+  /** What the air-time and energy figures are: exact (nothing quantised), upper_bound (every quantised value sized at its declared range) or estimate (quantised deltas assumed small, or the link's control traffic counted: its STATUS sizes vary; docs/planning.md, "Bounds and estimates"). */
   figures?: "exact" | "upper_bound" | "estimate";
-  /** With estimated figures: the air time of the bound the duty-cycle check uses (duty_share is its share), else null. */
+  /** With estimated figures: the air time of the bound the duty-cycle check uses (duty_share is its share): the DATA's bound with the control traffic's (the link budget's control.bound_bytes_per_s), else null. */
   air_time_bound_s_per_hour?: number | null;
   /** Only when the plan is calibrated: the archive the proposal's figures were sized from. */
   calibrated_from?: string;

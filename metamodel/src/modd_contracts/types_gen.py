@@ -241,6 +241,7 @@ class PlanLinkBudget(TypedDict):
     delays_s: dict[str, float]
     over_budget: list[str]
     error: str | None
+    control: NotRequired[Any]
 
 
 class PlanRadio(TypedDict):
