@@ -9,6 +9,7 @@ profile's air time. The planner's "about" must be within 5 % of it and its
 
 from __future__ import annotations
 
+import collections
 import json
 from pathlib import Path
 from typing import Any
@@ -103,7 +104,7 @@ def _measure(
     """The model over serial through its ``link.radio`` profile, a STATUS
     every :data:`STATUS_S`: as :func:`measure_air`."""
     sizes, air, energy, by_kind = measure_serial(tmp, model, load_s, signal)
-    print(f"measured air s/h by kind: {by_kind}")
+    print(f"measured air s/h by kind: {by_kind}; DATA sizes {sorted(collections.Counter(sizes).items())}")
     return sizes, air, energy
 
 

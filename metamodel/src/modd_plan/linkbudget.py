@@ -516,6 +516,13 @@ def budget_lines(budget: LinkBudget) -> list[str]:
         f"{budget.base_to_drone:.1f} B/s base->drone ({headers} included), "
         f"{budget.packets_per_s:.3f} packets/s",
     ]
+    c = budget.control
+    if c is not None:
+        status = f"STATUS every {c.status_period_s} s" if c.status_period_s else "no STATUS"
+        lines.append(
+            f"  of which control {budget.control_bytes_per_s:.1f} B/s ({status}, a PONG every "
+            f"{KEEPALIVE_S} s; at most {budget.control_bound_bytes_per_s:.1f} B/s)"
+        )
     share = budget.share
     if share is not None:
         lines.append(f"  {100 * share:.1f} % of the radio's {s.rate_bps} B/s")
