@@ -45,6 +45,7 @@ PROFILES: dict[str, dict[str, Any]] = {
 
 
 def _model(tmp: Path, radio: dict[str, Any], long: bool, resolution: bool) -> dict[str, Any]:
+    model: dict[str, Any]
     if resolution:
         model = _at_resolution(tmp, 10, "0.2", radio)
     else:
@@ -79,7 +80,7 @@ def main() -> int:
     ap.add_argument("--seconds", type=float, default=60.0, help="load per row")
     ap.add_argument("--json", type=Path, help="write the rows here too")
     args = ap.parse_args()
-    relay.AirtimeChannel = _Recording  # type: ignore[misc]  # every packet recorded
+    setattr(relay, "AirtimeChannel", _Recording)  # noqa: B010  # every packet recorded
     rows = []
     with TemporaryDirectory(prefix="modd-bench-airtime-") as d:
         for name in PROFILES:
@@ -90,7 +91,9 @@ def main() -> int:
                     rows.append(row(tmp, name, long, resolution, args.seconds))
                     print(json.dumps(rows[-1]), flush=True)
     print(f"\nserial, STATUS every {STATUS_S} s, {args.seconds:g} s of load a row; air s/h")
-    head = "| radio | set | resolution | about | at most | measured | measured/about | bound holds |"
+    head = (
+        "| radio | set | resolution | about | at most | measured | measured/about | bound holds |"
+    )
     print(head)
     print("|" + " --- |" * 8)
     for x in rows:

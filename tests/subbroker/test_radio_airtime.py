@@ -104,7 +104,8 @@ def _measure(
     """The model over serial through its ``link.radio`` profile, a STATUS
     every :data:`STATUS_S`: as :func:`measure_air`."""
     sizes, air, energy, by_kind = measure_serial(tmp, model, load_s, signal)
-    print(f"measured air s/h by kind: {by_kind}; DATA sizes {sorted(collections.Counter(sizes).items())}")
+    counts = sorted(collections.Counter(sizes).items())
+    print(f"measured air s/h by kind: {by_kind}; DATA sizes {counts}")
     return sizes, air, energy
 
 

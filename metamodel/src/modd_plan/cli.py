@@ -249,7 +249,9 @@ def _radio_lines(report: RadioReport, proposals: Sequence[Proposal]) -> list[str
     ]
     if report.ceiling:
         c = report.ceiling
-        why = "every delta at its variable's declared range, " if report.upper_bound is False else ""
+        why = (
+            "every delta at its variable's declared range, " if report.upper_bound is False else ""
+        )
         lines.append(
             f"  at most {c.air_s_per_hour:.1f} s/h and {c.energy_j_per_hour:.1f} J/h "
             f"({why}a STATUS of the whole STATUS room: the duty-cycle check's)"

@@ -127,7 +127,9 @@ def status_frame_about(
     body += sum(varint_bytes(int(value.get(f, 0))) for f in StatusField)
     if n:
         entry = varint_bytes(len(HEALTH_FIELD_BYTES)) + sum(HEALTH_FIELD_BYTES)
-        body += varint_bytes(n) + sum(varint_bytes(len(s)) + len(s) + entry for s in inputs.instruments)
+        body += varint_bytes(n) + sum(
+            varint_bytes(len(s)) + len(s) + entry for s in inputs.instruments
+        )
     return varint_bytes(body + 1) + 1 + body
 
 

@@ -43,11 +43,11 @@ from .control import (
     CONTROL_HEADER_ABOUT,
     CONTROL_HEADER_MAX,
     KEEPALIVE_PAYLOAD,
-    KEEPALIVE_S,
     ControlInputs,
     ControlTraffic,
     control_traffic,
 )
+from .control import KEEPALIVE_S as KEEPALIVE_S
 from .linkcost import (
     TCP_IP_HEADER_BYTES,
     UDP_IP_HEADER_BYTES,
@@ -188,7 +188,7 @@ class LinkBudget:
     def to_json(self) -> PlanLinkBudget:
         s = self.settings
         share = self.share
-        return {
+        out: PlanLinkBudget = {
             "transport": s.transport,  # type: ignore[typeddict-item]  # a word the settings checked
             "rate_bps": s.rate_bps,
             "max_packet": s.max_packet,
@@ -200,22 +200,16 @@ class LinkBudget:
             "delays_s": {k: round(v, 6) for k, v in self.delays_s.items()},
             "over_budget": list(self.over_budget),
             "error": self.error,
-            **self._control_json(),
         }
-
-    def _control_json(self) -> dict[str, Any]:
-        """The control traffic's figures (absent without any)."""
         c = self.control
-        if c is None:
-            return {}
-        return {
-            "control": {
+        if c is not None:  # the control traffic's figures (absent without any)
+            out["control"] = {
                 "status_period_s": c.status_period_s,
                 "bytes_per_s": round(self.control_bytes_per_s, 3),
                 "packets_per_s": round(sum(n for _, n in self.control_about) / 3600, 6),
                 "bound_bytes_per_s": round(self.control_bound_bytes_per_s, 3),
             }
-        }
+        return out
 
 
 #: One walked slot: (date µs, value bytes, stream count, distinct periods due).

@@ -35,11 +35,11 @@ from .buffers import (
     solve_exact,
 )
 from .calibration import Calibration
+from .control import ControlInputs
 from .linkbudget import LinkBudget, LinkSettings, link_budget
 from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
 from .planjson import plan_to_json
 from .proposals import Proposal, propose
-from .control import ControlInputs
 from .radio import RadioProfile, RadioReport, radio_report
 from .resolution import calibration_use, quantised_window_bytes
 from .schedule import Schedule, ScheduleTooLarge

@@ -7,7 +7,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-
 from modd_model import load_text
 from modd_plan.linkbudget import datagram_capacity, serial_frame_bytes, wire_bytes
 from modd_plan.plan import make_plan

@@ -161,8 +161,12 @@ def test_the_radio_figures_say_whether_they_bound_the_link() -> None:
     assert bounded.at_most == "about " and bounded.ceiling.at_most == "at most "
     assert bounded.to_json()["figures"] == "estimate"
     data = bounded.air_s_per_hour - bounded.control_s_per_hour
-    assert bounded.ceiling.air_s_per_hour - bounded.ceiling.control_s_per_hour == pytest.approx(data)
-    assert bounded.to_json()["air_time_bound_s_per_hour"] == round(bounded.ceiling.air_s_per_hour, 3)
+    assert bounded.ceiling.air_s_per_hour - bounded.ceiling.control_s_per_hour == pytest.approx(
+        data
+    )
+    assert bounded.to_json()["air_time_bound_s_per_hour"] == round(
+        bounded.ceiling.air_s_per_hour, 3
+    )
 
 
 def test_a_plan_is_refused_on_its_bound() -> None:
