@@ -315,8 +315,7 @@ export interface PlanLinkBudget {
   delays_s: Record<string, number>;
   over_budget: string[];
   error: string | null;
-  /** The link's own control traffic, drone to base (metamodel/src/modd_plan/control.py): STATUS every status_period_s and a PONG per keepalive PING; bytes_per_s and packets_per_s are estimates, already in drone_to_base and packets_per_s; bound_bytes_per_s is at most (a STATUS of the whole STATUS room each period) while the instruments' states hold. */
-  control?: unknown;
+  control?: PlanLinkControl;
 }
 
 /** The declared radio's figures per hour of the plan (metamodel/src/modd_plan/radio.py). */
@@ -377,6 +376,14 @@ export interface PlanProposal {
   air_time_bound_s_per_hour?: number | null;
   /** Only when the plan is calibrated: the archive the proposal's figures were sized from. */
   calibrated_from?: string;
+}
+
+/** The link's own control traffic, drone to base (metamodel/src/modd_plan/control.py): STATUS every status_period_s and a PONG per keepalive PING; bytes_per_s and packets_per_s are estimates, already in drone_to_base and packets_per_s; bound_bytes_per_s is at most (a STATUS of the whole STATUS room each period) while the instruments' states hold. */
+export interface PlanLinkControl {
+  status_period_s: number;
+  bytes_per_s: number;
+  packets_per_s: number;
+  bound_bytes_per_s: number;
 }
 
 /** What an archive gave a calibrated plan (metamodel/src/modd_plan/calibration.py): the mean bytes of each quantised stream's values measured on its first windows, and the quantised streams it has no sample of (sized as without a calibration). */
