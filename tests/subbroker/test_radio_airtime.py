@@ -139,26 +139,6 @@ def plan_of(model: dict[str, Any], **kwargs: Any) -> Any:
 PROFILES = {"sik": {"kind": "sik"}, "lora": {"kind": "lora", "dutyCycle": "0.2"}}
 
 
-@pytest.mark.parametrize("name", sorted(PROFILES))
-def test_planned_air_time_is_what_the_emulator_measures(
-    name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.setattr(relay, "AirtimeChannel", _Recording)
-    model = json.loads(model_copy(tmp_path, "scenario1.modd").read_text())
-    model["link"] = {"transport": "serial", "device": "", "radio": PROFILES[name]}
-    predicted = plan_of(model).radio
-    assert predicted is not None and predicted.fits and predicted.ceiling is not None
-    _, air, energy = _measure(tmp_path, model, LOAD_S)
-    print(
-        f"{name}: air {air:.3f} s/h measured, about {predicted.air_s_per_hour:.3f}, "
-        f"at most {predicted.ceiling.air_s_per_hour:.3f} planned"
-    )
-    assert air == pytest.approx(predicted.air_s_per_hour, rel=0.05)
-    assert air <= predicted.ceiling.air_s_per_hour
-    print(f"{name}: energy {energy:.3f} J/h measured, {predicted.energy_j_per_hour:.3f} planned")
-    assert energy == pytest.approx(predicted.energy_j_per_hour, rel=0.05)
-
-
 # Long windows (issue 39): every subscription of scenario 1 at 2 s, one slot a
 # datagram, one datagram every 2 s: the control traffic is a larger share (it
 # made the measured air time exceed the plan's bound when left out).
@@ -171,22 +151,26 @@ def long_windows(model: dict[str, Any]) -> dict[str, Any]:
     return model
 
 
+@pytest.mark.parametrize("long", [False, True], ids=["scenario1", "long_windows"])
 @pytest.mark.parametrize("name", sorted(PROFILES))
-def test_long_windows_air_time_is_estimated_and_bounded(
-    name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+def test_planned_air_time_is_what_the_emulator_measures(
+    name: str, long: bool, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(relay, "AirtimeChannel", _Recording)
-    model = long_windows(json.loads(model_copy(tmp_path, "scenario1.modd").read_text()))
+    model = json.loads(model_copy(tmp_path, "scenario1.modd").read_text())
+    model = long_windows(model) if long else model
     model["link"] = {"transport": "serial", "device": "", "radio": PROFILES[name]}
     predicted = plan_of(model).radio
     assert predicted is not None and predicted.fits and predicted.ceiling is not None
-    _, air, _ = _measure(tmp_path, model, LONG_LOAD_S)
+    _, air, energy = _measure(tmp_path, model, LONG_LOAD_S if long else LOAD_S)
     print(
-        f"{name} long windows: air {air:.3f} s/h measured, about "
+        f"{name}{' long windows' if long else ''}: air {air:.3f} s/h measured, about "
         f"{predicted.air_s_per_hour:.3f}, at most {predicted.ceiling.air_s_per_hour:.3f} planned"
     )
     assert air == pytest.approx(predicted.air_s_per_hour, rel=0.05)
     assert air <= predicted.ceiling.air_s_per_hour
+    print(f"{name}: energy {energy:.3f} J/h measured, {predicted.energy_j_per_hour:.3f} planned")
+    assert energy == pytest.approx(predicted.energy_j_per_hour, rel=0.05)
 
 
 def _at_resolution(tmp: Path, bound: float, delay: str, radio: dict[str, Any]) -> dict[str, Any]:
