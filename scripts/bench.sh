@@ -2,7 +2,7 @@
 # Every benchmark of tests/bench, one after the other, each printing its tables
 # (`make bench`, after `make build`, which runs scripts/setup.sh). Asserts no time.
 # Figures go in docs/benchmarks.md with the command that printed them.
-# Takes about 17 minutes on a 2-core machine. LINK_SECONDS etc. shorten it.
+# Takes about 27 minutes on a 2-core machine. LINK_SECONDS etc. shorten it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=.venv/bin/python
@@ -31,6 +31,7 @@ echo "bench: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2
 run tests/bench/bench_link.py --seconds "${LINK_SECONDS:-60}"
 run tests/bench/bench_radio.py --seconds "${RADIO_SECONDS:-30}"
 run tests/bench/bench_resolution.py --seconds "${RADIO_SECONDS:-30}"
+run tests/bench/bench_airtime.py --seconds "${AIRTIME_SECONDS:-60}"  # planned about / at most vs measured
 run tests/bench/bench_ingest.py
 run tests/bench/bench_latency.py --seconds "${LATENCY_SECONDS:-20}"
 run tests/bench/bench_footprint.py --seconds "${FOOTPRINT_SECONDS:-30}"

@@ -178,8 +178,10 @@ def through_profile(
     profile: Any,
     load_s: float,
     signal: str = "uniform",
+    status_s: int = 60,
 ) -> tuple[Any, Any]:
-    """The model's processes over serial through a radio profile: the relay in
+    """The model's processes over serial through a radio profile (the
+    PubBroker's STATUS every ``status_s``): the relay in
     this process (``modd.radio.relay``, whose AirtimeChannel the caller may have
     replaced to record) between the pseudo-terminals ``ptys`` (base fd, path,
     drone fd, path), the PubBroker, the SubBroker and ``load_s`` of load; the
@@ -203,7 +205,9 @@ def through_profile(
     )
     sb = start_subbroker(
         tmp,
-        subbroker_dgram_config(tmp, model_path, "127.0.0.1:1", zport, "serial", device=base_path),
+        subbroker_dgram_config(
+            tmp, model_path, "127.0.0.1:1", zport, "serial", device=base_path, pb_status_s=status_s
+        ),
     )
     try:
         with processes(pb, sb):

@@ -317,6 +317,7 @@ export interface PlanLinkBudget {
   delays_s: Record<string, number>;
   over_budget: string[];
   error: string | null;
+  control?: PlanLinkControl;
 }
 
 /** The declared radio's figures per hour of the plan (metamodel/src/modd_plan/radio.py). */
@@ -329,9 +330,9 @@ export interface PlanRadio {
   duty_cycle: number | null;
   /** Air time (the bound's, when there is one) over the limit's (above 1: refused), else null. */
   duty_share: number | null;
-  /** What the air-time and energy figures are: exact (nothing quantised), upper_bound (every quantised value sized at its declared range) or estimate (quantised deltas assumed small; docs/planning.md, "Bounds and estimates"). */
+  /** What the air-time and energy figures are: exact (nothing quantised), upper_bound (every quantised value sized at its declared range) or estimate (quantised deltas assumed small, or the link's control traffic counted: its STATUS sizes vary; docs/planning.md, "Bounds and estimates"). */
   figures?: "exact" | "upper_bound" | "estimate";
-  /** With estimated figures: the air time of the bound the duty-cycle check uses (duty_share is its share), else null. */
+  /** With estimated figures: the air time of the bound the duty-cycle check uses (duty_share is its share): the DATA's bound with the control traffic's (the link budget's control.bound_bytes_per_s), else null. */
   air_time_bound_s_per_hour?: number | null;
   /** Only in a plan calibrated by an archive (modd plan --calibrate): its name; the quantised values were sized from its samples (figures: estimate). */
   calibrated_from?: string;
@@ -371,12 +372,20 @@ export interface PlanProposal {
   duty_share: number;
   energy_j_per_hour: number;
   change: string;
-  /** What the air-time and energy figures are: exact (nothing quantised), upper_bound (every quantised value sized at its declared range) or estimate (quantised deltas assumed small; docs/planning.md, "Bounds and estimates"). */
+  /** What the air-time and energy figures are: exact (nothing quantised), upper_bound (every quantised value sized at its declared range) or estimate (quantised deltas assumed small, or the link's control traffic counted: its STATUS sizes vary; docs/planning.md, "Bounds and estimates"). */
   figures?: "exact" | "upper_bound" | "estimate";
-  /** With estimated figures: the air time of the bound the duty-cycle check uses (duty_share is its share), else null. */
+  /** With estimated figures: the air time of the bound the duty-cycle check uses (duty_share is its share): the DATA's bound with the control traffic's (the link budget's control.bound_bytes_per_s), else null. */
   air_time_bound_s_per_hour?: number | null;
   /** Only when the plan is calibrated: the archive the proposal's figures were sized from. */
   calibrated_from?: string;
+}
+
+/** The link's own control traffic, drone to base (metamodel/src/modd_plan/control.py): STATUS every status_period_s and a PONG per keepalive PING; bytes_per_s and packets_per_s are estimates, already in drone_to_base and packets_per_s; bound_bytes_per_s is at most (a STATUS of the whole STATUS room each period) while the instruments' states hold. */
+export interface PlanLinkControl {
+  status_period_s: number;
+  bytes_per_s: number;
+  packets_per_s: number;
+  bound_bytes_per_s: number;
 }
 
 /** What an archive gave a calibrated plan (metamodel/src/modd_plan/calibration.py): the mean bytes of each quantised stream's values measured on its first windows, and the quantised streams it has no sample of (sized as without a calibration). */

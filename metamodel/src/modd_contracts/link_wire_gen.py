@@ -31,6 +31,9 @@ MAX_HEALTH_COUNT: Final = 9007199254740991
 MAX_LAST_VALUE_MS: Final = 4102444800000
 #: Longest STATUS period a CONFIG may ask for, in seconds: one day (0: no STATUS).
 MAX_STATUS_PERIOD_S: Final = 86400
+#: The STATUS period the SubBroker asks for in CONFIG unless configured
+#: (link.pubbroker_status_period_s), and the planner counts.
+DEFAULT_STATUS_PERIOD_S: Final = 60
 #: Most topics, or streams, of one CONFIG.
 MAX_LIST: Final = 65535
 #: Longest topic name, in bytes.
@@ -232,6 +235,7 @@ __all__ = [
     "MAX_HEALTH_COUNT",
     "MAX_LAST_VALUE_MS",
     "MAX_STATUS_PERIOD_S",
+    "DEFAULT_STATUS_PERIOD_S",
     "MAX_LIST",
     "MAX_NAME",
     "MAX_BUFFER_SIZE",

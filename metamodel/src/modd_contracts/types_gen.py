@@ -242,6 +242,7 @@ class PlanLinkBudget(TypedDict):
     delays_s: dict[str, float]
     over_budget: list[str]
     error: str | None
+    control: NotRequired[PlanLinkControl]
 
 
 class PlanRadio(TypedDict):
@@ -295,6 +296,15 @@ class PlanProposal(TypedDict):
     figures: NotRequired[Literal["exact", "upper_bound", "estimate"]]
     air_time_bound_s_per_hour: NotRequired[float | None]
     calibrated_from: NotRequired[str]
+
+
+class PlanLinkControl(TypedDict):
+    """The link's own control traffic, drone to base (metamodel/src/modd_plan/control.py): STATUS every status_period_s and a PONG per keepalive PING; bytes_per_s and packets_per_s are estimates, already in drone_to_base and packets_per_s; bound_bytes_per_s is at most (a STATUS of the whole STATUS room each period) while the instruments' states hold."""
+
+    status_period_s: int
+    bytes_per_s: float
+    packets_per_s: float
+    bound_bytes_per_s: float
 
 
 class PlanCalibration(TypedDict):
@@ -420,4 +430,4 @@ class DeliveredValueFields:
 DELIVERED_VALUE_REQUIRED: tuple[str, ...] = ("subscriber", "topic", "aggregation", "period_s", "unit", "config_id", "slot", "start_ns", "end_ns", "value", "count", "delivered_ns", "v",)
 
 
-__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "ARCHIVE_RECORD_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "SensorHealth", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanRadio", "PlanRadioCost", "PlanRadioDiagnostic", "PlanProposal", "PlanCalibration", "PlanCalibratedStream", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "ArchiveRecord", "DeliveredValueFields", "DELIVERED_VALUE_REQUIRED"]
+__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "ARCHIVE_RECORD_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "SensorHealth", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanRadio", "PlanRadioCost", "PlanRadioDiagnostic", "PlanProposal", "PlanLinkControl", "PlanCalibration", "PlanCalibratedStream", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "ArchiveRecord", "DeliveredValueFields", "DELIVERED_VALUE_REQUIRED"]

@@ -38,6 +38,19 @@ def _decimal(text: str) -> Fraction:
         raise argparse.ArgumentTypeError(str(exc)) from exc
 
 
+def _status_period(text: str) -> int:
+    """A STATUS period in whole seconds, 0 (none) to a day."""
+    from modd_contracts.link_wire_gen import MAX_STATUS_PERIOD_S
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number of seconds: {text!r}") from None
+    if not 0 <= value <= MAX_STATUS_PERIOD_S:
+        raise argparse.ArgumentTypeError(f"{value} s: from 0 (no STATUS) to {MAX_STATUS_PERIOD_S}")
+    return value
+
+
 def _positive_int(text: str) -> int:
     if not text.isdigit() or int(text) < 1:
         raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
@@ -56,6 +69,13 @@ def register(subparsers: Any) -> None:
     p.add_argument("--beta", type=_decimal, help="weight of the largest deviation")
     p.add_argument("--max-buffer", type=_positive_int, metavar="N", help="MAX_BUFFER")
     p.add_argument("--method", choices=METHODS, default="exact", help="buffer-size solver")
+    p.add_argument(
+        "--status-period",
+        type=_status_period,
+        metavar="S",
+        help="the PubBroker's STATUS period the SubBroker asks for "
+        "(its pubbroker_status_period_s; default 60, 0: none), in the control traffic",
+    )
     p.add_argument(
         "--calibrate",
         metavar="ARCHIVE",
@@ -138,6 +158,7 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
             max_buffer=args.max_buffer,
             method=args.method,
             calibration=calibration,
+            status_period_s=getattr(args, "status_period", None),
         )
     except PlanningError as exc:
         for d in locate(exc.diagnostics, result, args.file):
@@ -228,10 +249,15 @@ def _radio_lines(report: RadioReport, proposals: Sequence[Proposal]) -> list[str
     ]
     if report.ceiling:
         c = report.ceiling
+        why = (
+            "every delta at its variable's declared range, " if report.upper_bound is False else ""
+        )
         lines.append(
             f"  at most {c.air_s_per_hour:.1f} s/h and {c.energy_j_per_hour:.1f} J/h "
-            "(every delta at its variable's declared range: the duty-cycle check's)"
+            f"({why}a STATUS of the whole STATUS room: the duty-cycle check's)"
         )
+    if report.control_s_per_hour:
+        lines.append(f"  of which the link's control traffic {report.control_s_per_hour:.1f} s/h")
     lines += _calibration_lines(report)
     share = report.duty_share
     if share is not None:

@@ -19,6 +19,9 @@ codec in ``runtime/python/src/modd/link/datagram.py``:
 * base to drone: nothing while nothing is lost on udp/serial but a keepalive
   PING every :data:`KEEPALIVE_S` seconds (the PubBroker's proof that the base
   station still listens).
+* the link's own control traffic, drone to base (:mod:`.control`): STATUS
+  every status period and a PONG per keepalive, in ``drone_to_base`` and
+  ``packets_per_s`` (estimated; :attr:`LinkBudget.control` has the bound).
 
 Every stream is assumed present in every window, as in ``linkcost``.
 """
@@ -36,6 +39,15 @@ from modd_contracts.link_wire_gen import DEFAULT_SERIAL_PACKET, DEFAULT_UDP_PACK
 from modd_contracts.link_wire_gen import TAG_BYTES as TAG_BYTES  # the datagrams' HMAC tags
 from modd_contracts.types_gen import PlanLinkBudget
 
+from .control import (
+    CONTROL_HEADER_ABOUT,
+    CONTROL_HEADER_MAX,
+    KEEPALIVE_PAYLOAD,
+    ControlInputs,
+    ControlTraffic,
+    control_traffic,
+)
+from .control import KEEPALIVE_S as KEEPALIVE_S
 from .linkcost import (
     TCP_IP_HEADER_BYTES,
     UDP_IP_HEADER_BYTES,
@@ -50,12 +62,13 @@ DGRAM_HEADER_BYTES = 4  # type, config id, slot u16le
 FRAGMENT_BYTE = 1  # fragment index (high nibble) and count - 1 (low nibble)
 SERIAL_CRC_BYTES = 2
 DEFAULT_PACKET = {"tcp": TCP_MSS, "udp": DEFAULT_UDP_PACKET, "serial": DEFAULT_SERIAL_PACKET}
-KEEPALIVE_S = 30
 #: slots walked at most to predict packing and delays (bounded work per plan)
 WALK_LIMIT = 400
 #: a keepalive: control datagram type + counter (varint, ~2 B) + PING frame
-#: (length, type, 2 B payload) + tag
-KEEPALIVE_BYTES = 1 + 2 + 4 + CONTROL_TAG_BYTES
+#: (length, type, the SubBroker's 5 B payload) + tag
+KEEPALIVE_BYTES = CONTROL_HEADER_ABOUT + 2 + KEEPALIVE_PAYLOAD
+#: the STATUS room over tcp (docs/protocol.md, STATUS), frame bytes
+TCP_STATUS_ROOM = 1400
 
 
 def serial_frame_bytes(payload: int) -> int:
@@ -128,6 +141,32 @@ class LinkBudget:
     span_s: float = 0.0
     packet_sizes: tuple[int, ...] = field(default=())
     streams: tuple[tuple[float, tuple[str, ...]], ...] = field(default=())
+    #: the control traffic (control.py) as (wire bytes, packets per hour),
+    #: estimated and bound, drone to base; its estimate is in drone_to_base
+    #: and packets_per_s
+    control: ControlTraffic | None = None
+    control_about: tuple[tuple[int, float], ...] = field(default=())
+    control_at_most: tuple[tuple[int, float], ...] = field(default=())
+
+    @property
+    def control_bytes_per_s(self) -> float:
+        """Control traffic's estimated bytes/s on the wire, drone to base."""
+        return sum(size * n for size, n in self.control_about) / 3600
+
+    @property
+    def control_bound_bytes_per_s(self) -> float:
+        """Control traffic's bytes/s at most (while the instruments' states hold)."""
+        return sum(size * n for size, n in self.control_at_most) / 3600
+
+    @property
+    def data_packets_per_s(self) -> float:
+        """DATA packets per second (without the control traffic's)."""
+        return self.packets_per_s - sum(n for _, n in self.control_about) / 3600
+
+    @property
+    def data_to_base(self) -> float:
+        """DATA bytes/s on the wire, drone to base (the streams' share)."""
+        return self.drone_to_base - self.control_bytes_per_s
 
     @property
     def share(self) -> float | None:
@@ -149,7 +188,7 @@ class LinkBudget:
     def to_json(self) -> PlanLinkBudget:
         s = self.settings
         share = self.share
-        return {
+        out: PlanLinkBudget = {
             "transport": s.transport,  # type: ignore[typeddict-item]  # a word the settings checked
             "rate_bps": s.rate_bps,
             "max_packet": s.max_packet,
@@ -162,6 +201,15 @@ class LinkBudget:
             "over_budget": list(self.over_budget),
             "error": self.error,
         }
+        c = self.control
+        if c is not None:  # the control traffic's figures (absent without any)
+            out["control"] = {
+                "status_period_s": c.status_period_s,
+                "bytes_per_s": round(self.control_bytes_per_s, 3),
+                "packets_per_s": round(sum(n for _, n in self.control_about) / 3600, 6),
+                "bound_bytes_per_s": round(self.control_bound_bytes_per_s, 3),
+            }
+        return out
 
 
 #: One walked slot: (date µs, value bytes, stream count, distinct periods due).
@@ -341,12 +389,14 @@ def link_budget(
     subscribers_of: Sequence[Sequence[str]],
     subscriptions: Sequence[str],
     carry: bool = False,
+    control: ControlInputs | None = None,
 ) -> LinkBudget:
     """The budget of ``settings``'s transport for a schedule whose sent
     stream ``i`` carries ``window_bytes[i]`` per window and serves the
     subscribers ``subscribers_of[i]`` (directly or through a derived stream).
     ``subscriptions`` lists every subscriber, each of which gets a delay.
-    ``carry``: the window bytes are means, slots rounded as :func:`_slot_walk`."""
+    ``carry``: the window bytes are means, slots rounded as :func:`_slot_walk`.
+    ``control``: the control traffic's inputs (None: none counted)."""
     slots = _slot_walk(schedule, window_bytes, settings.accepted_delay, carry)
     if not slots:
         return LinkBudget(settings, 0.0, 0.0, 0.0, dict.fromkeys(subscriptions, 0.0))
@@ -368,6 +418,10 @@ def link_budget(
         (float(b) / (p / 1e6), tuple(subs))
         for b, p, subs in zip(window_bytes, schedule.periods_us, subscribers_of, strict=True)
     )
+    ctl = _control(settings, schedule, control, down, packets)
+    if ctl is not None:
+        down += sum(size * n for size, n in ctl[1]) / 3600
+        packets += sum(n for _, n in ctl[1]) / 3600
     return LinkBudget(
         settings,
         down,
@@ -378,7 +432,37 @@ def link_budget(
         span_s,
         tuple(sizes),
         streams,
+        *(ctl if ctl is not None else (None, (), ())),
     )
+
+
+ControlWire = tuple[ControlTraffic, tuple[tuple[int, float], ...], tuple[tuple[int, float], ...]]
+
+
+def _control(
+    settings: LinkSettings,
+    schedule: Schedule,
+    inputs: ControlInputs | None,
+    down: float,
+    packets_per_s: float,
+) -> ControlWire | None:
+    """The control traffic and its (wire bytes, packets per hour), estimated
+    and bound: over udp/serial each frame in a CONTROL datagram of its own,
+    over tcp in a segment of its own (a STATUS mostly rides in a DATA one)."""
+    if inputs is None:
+        return None
+    t = settings.transport
+    h = schedule.hyperperiod
+    slots_per_s = float(schedule.messages_per_hyperperiod / h) if h else 0.0
+    if t == "tcp":
+        ctl = control_traffic(inputs, TCP_STATUS_ROOM, slots_per_s, down, packets_per_s)
+        about = tuple((TCP_IP_HEADER_BYTES + f, n) for f, n in ctl.about)
+        return ctl, about, tuple((TCP_IP_HEADER_BYTES + f, n) for f, n in ctl.at_most)
+    room = datagram_capacity(t, settings.max_packet) - CONTROL_HEADER_MAX
+    ctl = control_traffic(inputs, room, slots_per_s, down, packets_per_s)
+    about = tuple((wire_bytes(t, CONTROL_HEADER_ABOUT + f), n) for f, n in ctl.about)
+    at_most = tuple((wire_bytes(t, CONTROL_HEADER_MAX + f), n) for f, n in ctl.at_most)
+    return ctl, about, at_most
 
 
 def _over_budget(
@@ -426,6 +510,13 @@ def budget_lines(budget: LinkBudget) -> list[str]:
         f"{budget.base_to_drone:.1f} B/s base->drone ({headers} included), "
         f"{budget.packets_per_s:.3f} packets/s",
     ]
+    c = budget.control
+    if c is not None:
+        status = f"STATUS every {c.status_period_s} s" if c.status_period_s else "no STATUS"
+        lines.append(
+            f"  of which control {budget.control_bytes_per_s:.1f} B/s ({status}, a PONG every "
+            f"{KEEPALIVE_S} s; at most {budget.control_bound_bytes_per_s:.1f} B/s)"
+        )
     share = budget.share
     if share is not None:
         lines.append(f"  {100 * share:.1f} % of the radio's {s.rate_bps} B/s")

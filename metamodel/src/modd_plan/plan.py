@@ -35,6 +35,7 @@ from .buffers import (
     solve_exact,
 )
 from .calibration import Calibration
+from .control import ControlInputs
 from .linkbudget import LinkBudget, LinkSettings, link_budget
 from .linkcost import LinkCost, plain_message_bytes, predict, window_value_bytes
 from .planjson import plan_to_json
@@ -263,6 +264,7 @@ def _budget(
     streams: Sequence[PlannedStream],
     window_bytes: list[Fraction],
     carry: bool = False,
+    status_period_s: int | None = None,
 ) -> LinkBudget:
     # by identity: plan_streams gives each stream one key object, which its
     # derived streams' sources hold (no StreamKey hashed or compared)
@@ -281,6 +283,7 @@ def _budget(
         [served[id(s.stream)] for s in sent],
         [sub["name"] for sub in model.get("subscribers", [])],
         carry,
+        ControlInputs.of(model, status_period_s),
     )
 
 
@@ -302,6 +305,7 @@ def make_plan(
     method: str = "exact",
     proposals: bool = True,
     calibration: Calibration | None = None,
+    status_period_s: int | None = None,
 ) -> Plan:
     """Plan a validated model. ``method`` picks the buffer-size solver:
     ``"exact"`` (fast, default) or ``"cvxpy"`` (the MILP with HiGHS); both
@@ -309,10 +313,11 @@ def make_plan(
     A plan over its radio's duty-cycle limit carries the nearest plans that
     fit (``proposals=False``: not searched). ``calibration``: quantised
     values sized from an archive's samples (calibration.py), the proposals'
-    too."""
+    too. ``status_period_s``: the STATUS period the SubBroker asks for
+    (None: its default), in the control traffic (control.py)."""
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
-    options = _Options(ping_s, alpha, beta, max_buffer, method, calibration)
+    options = _Options(ping_s, alpha, beta, max_buffer, method, calibration, status_period_s)
     with gc_paused():
         plan = _make_plan(model, options)
         if not proposals or plan.radio is None or plan.radio.fits:
@@ -364,6 +369,7 @@ class _Options:
     max_buffer: int | None
     method: str
     calibration: Calibration | None
+    status_period_s: int | None = None
 
 
 def _make_plan(model: Mapping[str, Any], options: _Options) -> Plan:
@@ -436,7 +442,8 @@ def _make_plan(model: Mapping[str, Any], options: _Options) -> Plan:
     if use is not None and not (use.sizes or use.missing):
         use = None  # nothing quantised: nothing to calibrate
     calibrated = use is not None and bool(use.sizes)
-    budget = _budget(model, sched, sent, streams, window_bytes, calibrated)
+    period = o.status_period_s
+    budget = _budget(model, sched, sent, streams, window_bytes, calibrated, period)
     radio = model.get("link", {}).get("radio")
     ceiling = None
     if radio and bound is False:  # an estimate: the duty-cycle limit is checked on a bound
@@ -444,7 +451,7 @@ def _make_plan(model: Mapping[str, Any], options: _Options) -> Plan:
             model, sent, streams, exact, tops, link.transport, link.accepted_delay, True
         )
         if bounded:
-            ceiling = _budget(model, sched, sent, streams, ceiling_bytes)
+            ceiling = _budget(model, sched, sent, streams, ceiling_bytes, False, period)
     report = radio_report(RadioProfile.of(radio), budget, bound, ceiling, use) if radio else None
     return Plan(
         topics=tuple(tops.values()),

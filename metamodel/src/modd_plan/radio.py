@@ -26,7 +26,7 @@ Default powers, from the datasheets (check your module's; override them):
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from math import ceil
 from typing import Any, Literal
 
@@ -161,11 +161,20 @@ class RadioReport:
     #: the archive the quantised values were sized from (calibration.py):
     #: its per-stream mean sizes, and the streams it had no sample of
     calibration: CalibrationUse | None = None
+    #: of air_s_per_hour, the link's control traffic's (control.py): an
+    #: estimate (its STATUS sizes vary), so the figures are one
+    control_s_per_hour: float = 0.0
+    with_control: bool = False
+
+    @property
+    def hedge(self) -> bool | None:
+        """True: the figures bound the radio's; False: an estimate; None: exact."""
+        return False if self.with_control else self.upper_bound
 
     @property
     def at_most(self) -> str:
         """What the figures are, before them: "at most ", "about " or ""."""
-        return {True: "at most ", False: "about ", None: ""}[self.upper_bound]
+        return {True: "at most ", False: "about ", None: ""}[self.hedge]
 
     @property
     def duty_share(self) -> float | None:
@@ -213,7 +222,7 @@ class RadioReport:
             False: "estimate",
             None: "exact",
         }
-        return kinds[self.upper_bound]
+        return kinds[self.hedge]
 
     @property
     def air_bound_s_per_hour(self) -> float | None:
@@ -263,40 +272,84 @@ def radio_report(
     calibration: CalibrationUse | None = None,
 ) -> RadioReport:
     """The radio's figures for a plan's link budget (its walked packets
-    scaled to an hour); ``upper_bound`` as :attr:`RadioReport.upper_bound`;
-    ``ceiling``, the budget of the bound when ``budget`` is an estimate;
-    ``calibration``, what the sizes were measured on."""
-    span = budget.span_s
-    air, packets = 0.0, 0
-    for size in budget.packet_sizes:
-        a, n = profile.packet_s(size)
-        air += a
-        packets += n
-    scale = HOUR_S / span if span > 0 else 0.0
-    air_h, packets_h = air * scale, packets * scale
+    scaled to an hour, and its control traffic's); ``upper_bound`` as
+    :attr:`RadioReport.upper_bound`; ``ceiling``, the budget of the bound
+    when ``budget`` is an estimate; ``calibration``, what the sizes were
+    measured on. With control traffic (an estimate: its counters vary) the
+    figures are an estimate and the report carries its bound: the DATA's
+    bound (``ceiling``, else the DATA figures) with the control's bound."""
+    data_h, packets_h = _data_air(profile, budget)
+    control_h, control_packets_h = _control_air(profile, budget.control_about)
+    air_h = data_h + control_h
     transport = budget.settings.transport
     if transport == "tcp":  # one pure ACK back per segment
-        rx_h = profile.packet_s(TCP_IP_HEADER_BYTES)[0] * len(budget.packet_sizes) * scale
+        acks = len(budget.packet_sizes) * _scale(budget) + control_packets_h
+        rx_h = profile.packet_s(TCP_IP_HEADER_BYTES)[0] * acks
     else:
         rx_h = profile.packet_s(wire_bytes(transport, KEEPALIVE_BYTES))[0] * HOUR_S / KEEPALIVE_S
     rx_h = min(rx_h, HOUR_S - min(air_h, HOUR_S))
     idle_h = max(HOUR_S - air_h - rx_h, 0.0)
     energy = profile.tx_w * air_h + profile.rx_w * rx_h + profile.idle_w * idle_h
+    data_bounded = ceiling is not None or upper_bound is not False
+    if budget.control is not None and data_bounded:  # DATA's bound with the control's
+        ceiling = _with_control_bound(ceiling or budget)
     return RadioReport(
         profile,
         budget.drone_to_base,
-        packets_h,
+        packets_h + control_packets_h,
         air_h,
         rx_h,
         energy,
-        _costs(budget, air_h),
+        _costs(budget, data_h),
         upper_bound,
         radio_report(profile, ceiling, True) if ceiling else None,
         calibration,
+        control_h,
+        budget.control is not None,
     )
 
 
+def _with_control_bound(budget: LinkBudget) -> LinkBudget:
+    """``budget`` with its control traffic's bound in place of its estimate."""
+    return replace(
+        budget,
+        drone_to_base=budget.data_to_base + budget.control_bound_bytes_per_s,
+        control=None,
+        control_about=budget.control_at_most,
+        control_at_most=(),
+    )
+
+
+def _scale(budget: LinkBudget) -> float:
+    """Walked packets to an hour."""
+    return HOUR_S / budget.span_s if budget.span_s > 0 else 0.0
+
+
+def _data_air(profile: RadioProfile, budget: LinkBudget) -> tuple[float, float]:
+    """The DATA packets' air time and radio packets per hour."""
+    air, packets = 0.0, 0
+    for size in budget.packet_sizes:
+        a, n = profile.packet_s(size)
+        air += a
+        packets += n
+    scale = _scale(budget)
+    return air * scale, packets * scale
+
+
+def _control_air(
+    profile: RadioProfile, control: tuple[tuple[int, float], ...]
+) -> tuple[float, float]:
+    """Control packets' (wire bytes, per hour) air time and radio packets per hour."""
+    air, packets = 0.0, 0.0
+    for size, per_hour in control:
+        a, n = profile.packet_s(size)
+        air += a * per_hour
+        packets += n * per_hour
+    return air, packets
+
+
 def _costs(budget: LinkBudget, air_h: float) -> tuple[SubscriptionCost, ...]:
+    """Each subscription's share of the DATA's bytes/s and air time."""
     total = sum(rate for rate, _ in budget.streams)
     if total <= 0:
         return ()
@@ -307,7 +360,7 @@ def _costs(budget: LinkBudget, air_h: float) -> tuple[SubscriptionCost, ...]:
         share = rate / total / len(subs)
         for s in subs:
             entry = by_name.setdefault(s, [0.0, 0.0])
-            entry[0] += share * budget.drone_to_base
+            entry[0] += share * budget.data_to_base
             entry[1] += share * air_h
     costs = [SubscriptionCost(n, b, a) for n, (b, a) in by_name.items()]
     return tuple(sorted(costs, key=lambda c: (-c.air_s_per_hour, c.name)))

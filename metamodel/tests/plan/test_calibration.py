@@ -138,7 +138,7 @@ def test_a_signal_near_zero_costs_less_than_one_filling_the_range() -> None:
     full = Calibration("full.mcap", {t: _series(_high, 120, i) for i, t in enumerate(TOPICS)})
     a, b = make_plan(model, calibration=calm), make_plan(model, calibration=full)
     assert bound.radio and a.radio and b.radio and a.budget and b.budget
-    assert bound.radio.figures == "upper_bound"
+    assert bound.radio.upper_bound is True  # the DATA's (with control: "estimate")
     assert a.radio.figures == b.radio.figures == "estimate"
     # the 8 s AVERAGEs of an 8 s wave are ~0 (1 B), its MIN/MAX ~+-1 (2 B):
     # 4 values, each with the count of an AVERAGE: 22 B a datagram on the
@@ -174,6 +174,7 @@ def test_a_topic_without_samples_keeps_the_bound_and_is_named() -> None:
 
 def test_an_archive_without_the_models_topics_changes_nothing_but_says_so() -> None:
     model = _lora_model(-20, 20)
+    model["link"]["radio"]["dutyCycle"] = "0.02"  # fits: no proposals
     none = make_plan(model, calibration=Calibration("empty.mcap", {})).to_json()
     plain = make_plan(model).to_json()
     radio = none.pop("radio")
@@ -215,5 +216,6 @@ def test_calibrated_rates_are_over_whole_datagrams() -> None:
     cal = Calibration("calm.mcap", {t: _series(_wave, 60, i) for i, t in enumerate(TOPICS)})
     calibrated, plain = make_plan(model, calibration=cal).radio, make_plan(model).radio
     assert calibrated is not None and plain is not None
-    assert calibrated.packets_per_hour == pytest.approx(3600 / 0.75)
-    assert plain.packets_per_hour == pytest.approx(3600 / 0.75)
+    # and 120 PONGs and 60 STATUS an hour (control.py)
+    assert calibrated.packets_per_hour == pytest.approx(3600 / 0.75 + 180)
+    assert plain.packets_per_hour == pytest.approx(3600 / 0.75 + 180)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from modd_model import load_text
 from modd_plan.linkbudget import datagram_capacity, serial_frame_bytes, wire_bytes
 from modd_plan.plan import make_plan
@@ -31,7 +32,8 @@ def test_serial_framing_by_hand() -> None:
 def test_tcp_budget_is_todays_link_cost(scenarios_dir: Path) -> None:
     plan = _plan_with(scenarios_dir, "scenario1.modd", "transport = tcp;")
     assert plan.budget is not None
-    assert plan.budget.drone_to_base == plan.link.drone_to_base == 292.0
+    assert plan.budget.data_to_base == pytest.approx(plan.link.drone_to_base)
+    assert plan.link.drone_to_base == 292.0
     assert plan.budget.base_to_drone == 208.0
 
 
@@ -41,15 +43,15 @@ def test_scenario1_udp_and_serial_by_hand(scenarios_dir: Path) -> None:
     # dates t .. t + 1 s: 4 B header + 90 B values + 4 B tag = 98 B, 0.8/s.
     udp = _plan_with(scenarios_dir, "scenario1.modd", "transport = udp; rate = 3600;").budget
     assert udp is not None
-    assert abs(udp.packets_per_s - 0.8) < 1e-9
-    assert abs(udp.drone_to_base - 0.8 * (98 + 28)) < 1e-9
+    assert abs(udp.data_packets_per_s - 0.8) < 1e-9
+    assert abs(udp.data_to_base - 0.8 * (98 + 28)) < 1e-9
     assert udp.base_to_drone < 5
     assert udp.error is None and abs(udp.share - udp.drone_to_base / 3600) < 1e-12
     serial = _plan_with(
         scenarios_dir, "scenario1.modd", 'transport = serial; device = "/dev/ttyUSB0";'
     ).budget
     assert serial is not None
-    assert abs(serial.drone_to_base - 0.8 * (98 + 2 + 1 + 1)) < 1e-9
+    assert abs(serial.data_to_base - 0.8 * (98 + 2 + 1 + 1)) < 1e-9
     assert serial.settings.max_packet == 252
     # the first slot of a datagram waits the whole accepted delay
     assert 1.0 <= max(serial.delays_s.values()) < 1.1
@@ -59,7 +61,7 @@ def test_accepted_delay_bounds_packing(scenarios_dir: Path) -> None:
     budget = _plan_with(scenarios_dir, "scenario1.modd", "transport = udp; delay = 0.25;").budget
     assert budget is not None
     # 2 slots per datagram: 4 + 36 + 4 = 44 B, 2 datagrams/s
-    assert abs(budget.drone_to_base - 2 * (44 + 28)) < 1e-9
+    assert abs(budget.data_to_base - 2 * (44 + 28)) < 1e-9
     assert max(budget.delays_s.values()) < 0.3
 
 
@@ -70,13 +72,13 @@ def test_small_packet_splits_datagrams(scenarios_dir: Path) -> None:
         scenarios_dir, "scenario2.modd", 'transport = serial; device = "/dev/x"; packet = 100;'
     ).budget
     assert budget is not None
-    assert abs(budget.packets_per_s - 1) < 1e-9
-    assert abs(budget.drone_to_base - serial_frame_bytes(4 + 76 + 4)) < 1e-9
+    assert abs(budget.data_packets_per_s - 1) < 1e-9
+    assert abs(budget.data_to_base - serial_frame_bytes(4 + 76 + 4)) < 1e-9
     # 64 B packet: the slot goes as two fragments with their own header and tag
     frag = _plan_with(scenarios_dir, "scenario2.modd", "transport = udp; packet = 64;").budget
     assert frag is not None
-    assert abs(frag.packets_per_s - 2) < 1e-9
-    assert abs(frag.drone_to_base - (2 * (4 + 1 + 4 + 28) + 76)) < 1e-9
+    assert abs(frag.data_packets_per_s - 2) < 1e-9
+    assert abs(frag.data_to_base - (2 * (4 + 1 + 4 + 28) + 76)) < 1e-9
 
 
 def test_over_budget_names_the_subscriptions(scenarios_dir: Path) -> None:
@@ -85,7 +87,8 @@ def test_over_budget_names_the_subscriptions(scenarios_dir: Path) -> None:
     )
     budget = plan.budget
     assert budget is not None and budget.error is not None
-    assert "81.6 B/s" in budget.error and "60 B/s" in budget.error
+    # 81.6 B/s of DATA and 1.85 B/s of STATUS and PONG (test_control.py)
+    assert "83.4 B/s" in budget.error and "60 B/s" in budget.error
     assert budget.over_budget and all(n in budget.error for n in budget.over_budget)
     j = plan.to_json()["link_budget"]
     assert j["error"] == budget.error and j["over_budget"] == list(budget.over_budget)

@@ -68,28 +68,46 @@ def test_lora_time_on_air_against_the_lr1110_formulation(sf: int, bw: int) -> No
                 assert got == pytest.approx(want, rel=1e-12), (pl, sf, bw, cr, header, crc)
 
 
+# The link's control traffic on scenario 1 over serial (test_control.py): a PONG
+# of 22 B (at most 25 B) every 30 s, a STATUS of about 67 B (at most the
+# 252-B packet) every 60 s: 120 + 60 packets an hour.
+PONG, STATUS, PONG_MAX, STATUS_MAX = 22, 67, 25, 252
+
+
 def test_scenario1_air_time_and_energy_by_hand(scenarios_dir: Path) -> None:
     plan = _plan(scenarios_dir, "scenario1.modd", LORA_SF7)
     r = plan.radio
     assert r is not None
+
+    def toa(n: int) -> float:
+        return lora_time_on_air(n, 7, 125_000)
+
     # 0.8 datagrams/s of 98 B (test_linkbudget) framed to 102 B: one LoRa packet each
-    assert r.packets_per_hour == pytest.approx(0.8 * 3600)
-    air = 0.8 * 3600 * lora_time_on_air(102, 7, 125_000)
+    assert r.packets_per_hour == pytest.approx(0.8 * 3600 + 120 + 60)
+    data = 0.8 * 3600 * toa(102)
+    air = data + 120 * toa(PONG) + 60 * toa(STATUS)
     assert r.air_s_per_hour == pytest.approx(air)
-    rx = lora_time_on_air(wire_bytes("serial", KEEPALIVE_BYTES), 7, 125_000) * 3600 / KEEPALIVE_S
+    assert r.control_s_per_hour == pytest.approx(air - data)
+    rx = toa(wire_bytes("serial", KEEPALIVE_BYTES)) * 3600 / KEEPALIVE_S
     energy = 0.287 * air + 0.0356 * rx + 0.00528 * (3600 - air - rx)
     assert r.energy_j_per_hour == pytest.approx(energy)
     assert r.battery_share == pytest.approx(energy / (50 * 3600))
-    assert r.duty_share == pytest.approx(air / 36)
+    # the duty-cycle check on the bound: a STATUS of 252 B goes as 250 B + 2 B
+    bound = data + 120 * toa(PONG_MAX) + 60 * (toa(250) + toa(2))
+    assert r.figures == "estimate" and r.ceiling is not None
+    assert r.ceiling.air_s_per_hour == pytest.approx(bound)
+    assert r.duty_share == pytest.approx(bound / 36)
 
 
 def test_packets_above_the_payload_limit_are_split(scenarios_dir: Path) -> None:
     # SF10's 59 B limit: a 102 B frame goes as 59 B + 43 B
     r = _plan(scenarios_dir, "scenario1.modd", LORA_SF7.replace("sf = 7", "sf = 10")).radio
     assert r is not None and r.profile.max_payload == 59
-    assert r.packets_per_hour == pytest.approx(2 * 0.8 * 3600)
+    assert r.packets_per_hour == pytest.approx(2 * 0.8 * 3600 + 120 + 2 * 60)
     one = lora_time_on_air(59, 10, 125_000) + lora_time_on_air(43, 10, 125_000)
-    assert r.air_s_per_hour == pytest.approx(0.8 * 3600 * one)
+    pong = lora_time_on_air(PONG, 10, 125_000)
+    status = lora_time_on_air(59, 10, 125_000) + lora_time_on_air(STATUS - 59, 10, 125_000)
+    assert r.air_s_per_hour == pytest.approx(0.8 * 3600 * one + 120 * pong + 60 * status)
 
 
 def test_sik_profile_fits_and_overrides(scenarios_dir: Path) -> None:
@@ -97,7 +115,8 @@ def test_sik_profile_fits_and_overrides(scenarios_dir: Path) -> None:
     r = _plan(scenarios_dir, "scenario1.modd", link).radio
     assert r is not None and r.fits and r.duty_share is None and r.error is None
     assert r.profile.tx_w == 1.0 and r.profile.ecc
-    assert r.air_s_per_hour == pytest.approx(0.8 * 3600 * (102 + 13) * 16 / 64_000)
+    packets = 0.8 * 3600 * (102 + 13) + 120 * (PONG + 13) + 60 * (STATUS + 13)
+    assert r.air_s_per_hour == pytest.approx(packets * 16 / 64_000)
     assert sik_time_on_air(102, 64_000, True) == 2 * sik_time_on_air(102, 64_000)
 
 
@@ -107,7 +126,8 @@ def test_over_the_duty_cycle_is_refused_with_the_costs_located(scenarios_dir: Pa
     assert r is not None and not r.fits and r.error is not None
     # sub_5 alone is served by its own 0.25 s MIN stream: the costliest
     assert r.costs[0].name == "sub_5" and "sub_5" in r.error
-    assert sum(c.air_s_per_hour for c in r.costs) == pytest.approx(r.air_s_per_hour)
+    data = r.air_s_per_hour - r.control_s_per_hour  # the subscriptions share the DATA's
+    assert sum(c.air_s_per_hour for c in r.costs) == pytest.approx(data)
     doc = plan.to_json()["radio"]
     pointers = [d["pointer"] for d in doc["diagnostics"]]
     assert pointers[:2] == ["/link/radio", "/subscribers/4"]
@@ -117,8 +137,13 @@ def test_over_the_duty_cycle_is_refused_with_the_costs_located(scenarios_dir: Pa
         assert d["message"].startswith(model["subscribers"][index]["name"] + " ")
 
 
+# At 1 % (36 s/h) the control traffic's bound takes 31 s/h (test above): no
+# plan of scenario 1 fits; at 2 % the proposals coarsen the periods.
+LORA_SF7_2PC = LORA_SF7 + " dutyCycle = 0.02;"
+
+
 def test_proposals_fit_when_planned_again(scenarios_dir: Path) -> None:
-    model = _model(scenarios_dir, "scenario1.modd", LORA_SF7)
+    model = _model(scenarios_dir, "scenario1.modd", LORA_SF7_2PC)
     plan = make_plan(model)
     assert plan.proposals
     keys = [
@@ -162,7 +187,7 @@ def test_profile_defaults_per_spreading_factor() -> None:
 
 def test_modd_plan_refuses_with_exit_5(scenarios_dir: Path, tmp_path: Path) -> None:
     path = tmp_path / "lora.modd"
-    path.write_text((scenarios_dir / "scenario1.modd").read_text() + f"Link {{ {LORA_SF7} }}\n")
+    path.write_text((scenarios_dir / "scenario1.modd").read_text() + f"Link {{ {LORA_SF7_2PC} }}\n")
     parser = argparse.ArgumentParser(prog="modd")
     register(parser.add_subparsers(dest="command", required=True))
     out = io.StringIO()

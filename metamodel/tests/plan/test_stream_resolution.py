@@ -85,8 +85,8 @@ def test_the_planner_counts_quantised_bytes() -> None:
     # (2 AVERAGE + count, MIN, MAX): 4 x (2 + 4 x 1) + 10 counts = 34 B, the key
     # spread over the windows (1.2 B a value) and each slot rounded up to whole bytes
     # (7 B): 35 B, + 8 header and tag + 4 serial framing, 0.8 datagrams a second
-    assert exact.drone_to_base == 81.6
-    assert quantised.drone_to_base == pytest.approx(0.8 * 47)
+    assert exact.data_to_base == 81.6
+    assert quantised.data_to_base == pytest.approx(0.8 * 47)
 
 
 def test_a_refused_radio_plan_may_be_proposed_coarser_resolutions() -> None:
@@ -102,8 +102,10 @@ def test_a_refused_radio_plan_may_be_proposed_coarser_resolutions() -> None:
     assert plan.radio is not None and not plan.radio.fits
     coarser = [p for p in plan.proposals if p.coarser is not None]
     assert coarser and all(p.report.fits for p in plan.proposals)
-    assert "resolution 4 x coarser" in coarser[0].describe()
-    assert coarser[0].model["drone"]["sensors"][0]["variables"][0]["resolution"] == 0.004
+    # (4 x coarser before the link's control traffic was counted: its bound
+    # takes 31 of the 36 s an hour)
+    assert "resolution 16 x coarser" in coarser[0].describe()
+    assert coarser[0].model["drone"]["sensors"][0]["variables"][0]["resolution"] == 0.016
     figures = [(p.accepted_delay_s, p.min_period_s, p.report.bytes_per_s) for p in plan.proposals]
     assert len(set(figures)) == len(figures)  # no coarser twin of the same plan
 
@@ -139,7 +141,10 @@ def test_the_radio_figures_say_whether_they_bound_the_link() -> None:
     # -20 then a delta to +20, 2 B each: 4 values x 5 slots x 2 B + 10 counts,
     # + 8 header and tag + 4 serial framing, 0.8 datagrams a second
     assert _codec_bytes(-20.0) == 2 and _codec_bytes(-20.0, 20.0) == 4
-    assert estimate.ceiling.bytes_per_s == pytest.approx(0.8 * (4 * 5 * 2 + 10 + 12))
+    # with the control traffic's bound: a PONG of at most 25 B every 30 s, a
+    # STATUS of at most the 252-B packet every 60 s (control.py)
+    control = (25 * 120 + 252 * 60) / 3600
+    assert estimate.ceiling.bytes_per_s == pytest.approx(0.8 * (4 * 5 * 2 + 10 + 12) + control)
     assert estimate.ceiling.air_s_per_hour > estimate.air_s_per_hour
     assert estimate.duty_share is None  # sik: no limit
     # the plan JSON says so, for the Plan panel (the contract: plan.schema.json)
@@ -147,13 +152,21 @@ def test_the_radio_figures_say_whether_they_bound_the_link() -> None:
     assert doc["figures"] == "estimate"
     assert doc["air_time_bound_s_per_hour"] == round(estimate.ceiling.air_s_per_hour, 3)
     # under the windows' period, every datagram holds one window: every value
-    # absolute, sized at the range, the figures themselves are the bound
+    # absolute, sized at the range: the DATA's figures are their bound; with
+    # the control traffic (an estimate) the figures are "about", their bound
+    # the DATA's with the control's
     model["link"]["acceptedDelayS"] = "0.2"
     bounded = make_plan(model).radio
-    assert bounded is not None and bounded.upper_bound is True and bounded.ceiling is None
-    assert bounded.at_most == "at most "
-    assert bounded.to_json()["figures"] == "upper_bound"
-    assert bounded.to_json()["air_time_bound_s_per_hour"] is None
+    assert bounded is not None and bounded.upper_bound is True and bounded.ceiling
+    assert bounded.at_most == "about " and bounded.ceiling.at_most == "at most "
+    assert bounded.to_json()["figures"] == "estimate"
+    data = bounded.air_s_per_hour - bounded.control_s_per_hour
+    assert bounded.ceiling.air_s_per_hour - bounded.ceiling.control_s_per_hour == pytest.approx(
+        data
+    )
+    assert bounded.to_json()["air_time_bound_s_per_hour"] == round(
+        bounded.ceiling.air_s_per_hour, 3
+    )
 
 
 def test_a_plan_is_refused_on_its_bound() -> None:

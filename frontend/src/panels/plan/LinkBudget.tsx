@@ -22,6 +22,12 @@ export function LinkBudgetView({ budget, onSelect }: { budget: LinkBudget; onSel
             <strong data-testid="budget-share">{(budget.share * 100).toFixed(1)} %</strong></div>
         )}
         <div className="figure muted"><span>Packets / s</span><strong>{budget.packets_per_s.toFixed(2)}</strong></div>
+        {budget.control && (
+          <div className="figure muted" data-testid="control-rate"
+            title={`STATUS every ${budget.control.status_period_s} s and a PONG per keepalive, included above; at most ${budget.control.bound_bytes_per_s.toFixed(1)} B/s`}>
+            <span>of which control</span><strong>about {budget.control.bytes_per_s.toFixed(1)} B/s</strong>
+          </div>
+        )}
       </div>
       {budget.error && (
         <div className="infeasible" role="alert" data-testid="budget-error">

@@ -49,13 +49,18 @@ describe("PlanPanel", () => {
   it("shows the link budget and the over-budget error naming the subscriptions", () => {
     const budget = {
       transport: "serial" as const, rate_bps: 60, max_packet: 252, accepted_delay_s: 1,
-      drone_to_base: 81.6, base_to_drone: 0.6, packets_per_s: 0.8, share: 1.36,
+      drone_to_base: 83.45, base_to_drone: 0.733, packets_per_s: 0.85, share: 1.390833,
       delays_s: { sub_1: 2.7, sub_2: 2.7 }, over_budget: ["sub_4", "sub_2"],
-      error: "the plan needs 81.6 B/s on the serial link, more than its 60 B/s; the subscriptions that exceed the budget: sub_4, sub_2",
+      error: "the plan needs 83.4 B/s on the serial link, more than its 60 B/s; the subscriptions that exceed the budget: sub_4, sub_2",
+      control: { status_period_s: 60, bytes_per_s: 1.85, packets_per_s: 0.05, bound_bytes_per_s: 5.033 },
     };
     const store = mount({ ...(planJson as unknown as PlanJson), link_budget: budget });
     expect(screen.getByTestId("transport").textContent).toBe("serial");
-    expect(screen.getByTestId("budget-share").textContent).toBe("136.0 %");
+    expect(screen.getByTestId("budget-share").textContent).toBe("139.1 %");
+    // the link's own STATUS and PONG, included in the figure on the wire
+    const control = screen.getByTestId("control-rate");
+    expect(control.textContent).toMatch(/of which control\s*about 1\.\d+ B\/s/);
+    expect(control.title).toMatch(/STATUS every 60 s.*at most 5\.\d+ B\/s/);
     expect(screen.getByTestId("budget-error").textContent).toMatch(/more than its 60 B\/s.*sub_4, sub_2/);
     act(() => { fireEvent.click(screen.getByRole("button", { name: "sub_4" })); });
     expect(store.getState().wb.selection).toEqual(["sub:sub_4"]);

@@ -30,6 +30,9 @@ inline constexpr uint64_t kMaxHealthCount = 9007199254740991;
 inline constexpr uint64_t kMaxLastValueMs = 4102444800000;
 // Longest STATUS period a CONFIG may ask for, in seconds: one day (0: no STATUS).
 inline constexpr uint64_t kMaxStatusPeriodS = 86400;
+// The STATUS period the SubBroker asks for in CONFIG unless configured
+// (link.pubbroker_status_period_s), and the planner counts.
+inline constexpr uint64_t kDefaultStatusPeriodS = 60;
 // Most topics, or streams, of one CONFIG.
 inline constexpr size_t kMaxList = 65535;
 // Longest topic name, in bytes.

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from modd_contracts.link_wire_gen import DEFAULT_STATUS_PERIOD_S
 from modd_model import ModelError, load_model
 
 from ..link.auth import check_key_length
@@ -43,7 +44,8 @@ class LinkOptions:
     liveness_timeout_s: float = 0.0  # 0: 2 x the longest slot gap + 1 s
     ping_count: int = 3
     ping_period_s: float = 0.0  # 0: PING only on connect (keeps the link quiet)
-    pubbroker_status_period_s: int = 60  # STATUS rate asked in CONFIG (0: none)
+    # STATUS rate asked in CONFIG (0: none); the planner counts the default's
+    pubbroker_status_period_s: int = DEFAULT_STATUS_PERIOD_S
     ack_timeout_s: float = 5.0
     plan_budget_s: float = 5.0  # a deploy not planned within it is refused (REJECTED)
     # transport (docs/subbroker.md): "" is the model's (tcp, udp or serial); for serial the
