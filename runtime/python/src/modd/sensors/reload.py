@@ -86,8 +86,8 @@ def apply_plans(
     for s in new:
         s.start()
     runner.sensors = readers
-    deadline = time.monotonic() + OPEN_WAIT_S
-    while not all(_settled(s) for s in new) and time.monotonic() < deadline:
+    deadline = time.monotonic() + OPEN_WAIT_S  # a kept reader may still be opening too
+    while not all(_settled(s) for s in readers) and time.monotonic() < deadline:
         time.sleep(0.02)
     by_name = {s.plan.name: s for s in readers}
     out = [{"sensor": n, **_outcome(a, by_name.get(n))} for n, a in sorted(actions.items())]
