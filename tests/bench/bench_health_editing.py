@@ -188,11 +188,14 @@ def run(a: argparse.Namespace, tmp: Path) -> None:
         stop_backend(proc)
 
 
-def start(tmp: Path, port: int, database_url: str | None) -> Any:
+def start(tmp: Path, port: int, database_url: str | None, cores: str | None = None) -> Any:
+    """The backend, pinned to ``cores`` (a taskset list) when given."""
     exe = Path(sys.executable).with_name("modd-backend")
     extra = ["--database-url", database_url] if database_url else []
+    pin = ["taskset", "-c", cores] if cores else []
     return subprocess.Popen(
         [
+            *pin,
             str(exe),
             "--port",
             str(port),

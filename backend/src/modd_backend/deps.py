@@ -9,7 +9,7 @@ from __future__ import annotations
 import hmac
 import time
 from collections import Counter
-from collections.abc import AsyncIterator, Callable, Iterator
+from collections.abc import AsyncIterator, Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Annotated, Literal
 
@@ -17,6 +17,7 @@ from anyio import CapacityLimiter
 from fastapi import Depends, HTTPException, Request, WebSocket
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from sqlalchemy.orm import Session as Db
+from starlette.concurrency import run_in_threadpool
 
 from .accounts import user_for_token
 from .db import Store
@@ -98,9 +99,20 @@ def ws_state(websocket: WebSocket) -> AppState:
 StateDep = Annotated[AppState, Depends(get_state)]
 
 
-def get_db(state: StateDep) -> Iterator[Db]:
-    with state.store.session() as db:
+async def get_db(state: StateDep) -> AsyncIterator[Db]:
+    """A store session for the request. Opened on the event loop (no I/O until
+    its first query, made in the route's thread) and closed there when it
+    never began a transaction; otherwise closed in a worker thread. Each
+    worker-thread hop costs the event loop as much as a short request (issue
+    41's profile), so the route's dependencies take as few as they can."""
+    db = state.store.factory()
+    try:
         yield db
+    finally:
+        if db.in_transaction():
+            await run_in_threadpool(db.close)
+        else:
+            db.close()
 
 
 DbDep = Annotated[Db, Depends(get_db)]
@@ -115,7 +127,7 @@ class Credentials:
     via_cookie: bool
 
 
-def credentials(
+async def credentials(
     request: Request,
     creds: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
 ) -> Credentials:
@@ -142,7 +154,7 @@ def credentials(
 CredsDep = Annotated[Credentials, Depends(credentials)]
 
 
-def bearer_token(creds: CredsDep) -> str:
+async def bearer_token(creds: CredsDep) -> str:
     return creds.token
 
 
@@ -168,11 +180,11 @@ def has_role(user: User, *roles: Role) -> bool:
     return Role.admin in held or any(r in held for r in roles)
 
 
-def require(*roles: Role) -> Callable[[User], User]:
+def require(*roles: Role) -> Callable[[User], Awaitable[User]]:
     """A dependency letting through users holding any of ``roles`` (or admin)."""
     names = ", ".join(r.value for r in roles) or "admin"
 
-    def check(user: UserDep) -> User:
+    async def check(user: UserDep) -> User:  # (async: no worker thread for a set test)
         if not has_role(user, *roles):
             raise HTTPException(403, f"this needs the role {names}")
         return user

@@ -38,6 +38,12 @@ class QueuedStreamHandler(QueueHandler):
             self._stopped = True
             self.listener.stop()
 
+    def prepare(self, record: logging.LogRecord) -> logging.LogRecord:
+        """The record as it is: the writer thread formats it (QueueHandler's
+        own prepare formats on the caller's thread, the event loop). The
+        service's log arguments are strings and numbers, read once."""
+        return record
+
     def enqueue(self, record: logging.LogRecord) -> None:
         if self.dropped and self.queue.qsize() < MAX_QUEUED // 2:  # type: ignore[attr-defined]
             record.msg = f"{record.msg} ({self.dropped} log lines dropped before this one)"
