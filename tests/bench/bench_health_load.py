@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx2 as httpx
-from bench_health_csv import PASSWORD, login, stop_backend, write_archive
+from bench_health_csv import stop_backend, write_archive
 from bench_health_editing import DEMO, Load, pct, start, wait_login
 from benchkit.postgres import local_postgres
 from modd.ports import free_port

@@ -13,11 +13,10 @@ from collections.abc import AsyncIterator, Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Annotated, Literal
 
-from anyio import CapacityLimiter
+from anyio import CapacityLimiter, to_thread
 from fastapi import Depends, HTTPException, Request, WebSocket
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from sqlalchemy.orm import Session as Db
-from starlette.concurrency import run_in_threadpool
 
 from .accounts import user_for_token
 from .db import Store
@@ -77,6 +76,8 @@ class AppState:
     loopback_tls: LoopbackTls | None = None
     #: The login's own threads (routers/auth.py), set at start-up.
     login_threads: CapacityLimiter | None = None
+    #: Threads closing store sessions (get_db), apart from the routes' pool.
+    closing_threads: CapacityLimiter | None = None
     #: Open WebSockets per user and per client address (socketcaps.py).
     socket_caps: SocketCaps = field(default_factory=lambda: SocketCaps(64, 512))
     #: One shared session re-check per session of open sockets (sessionwatch.py).
@@ -110,7 +111,10 @@ async def get_db(state: StateDep) -> AsyncIterator[Db]:
         yield db
     finally:
         if db.in_transaction():
-            await run_in_threadpool(db.close)
+            # threads of its own (as FastAPI's exits of sync dependencies): a
+            # close waiting behind routes that wait for its connection would
+            # hold them all until the pool's timeout
+            await to_thread.run_sync(db.close, limiter=state.closing_threads)
         else:
             db.close()
 
@@ -162,7 +166,12 @@ TokenDep = Annotated[str, Depends(bearer_token)]
 
 
 def current_user(db: DbDep, token: TokenDep) -> User:
+    """The session's user. Its read ends here (the user's fields stay
+    loaded): the connection goes back to the pool while the route waits for
+    its worker thread, so requests waiting for threads never hold every
+    connection that the running ones wait for."""
     user = user_for_token(db, token)
+    db.commit()
     if user is None:
         raise HTTPException(401, "invalid or expired token", headers={"WWW-Authenticate": "Bearer"})
     return user
