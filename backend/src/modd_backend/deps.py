@@ -70,6 +70,8 @@ class AppState:
     login_known: KnownPairs = field(default_factory=lambda: KnownPairs(30 * 86_400))
     #: Live WebSocket subscriptions per user id (event loop only).
     ws_counts: Counter[int] = field(default_factory=Counter)
+    #: Stream sockets waiting for their first-message auth, per client address.
+    ws_unauthenticated: Counter[str] = field(default_factory=Counter)
     #: Single-use tickets standing for a session in a viewer's URL (Foxglove).
     tickets: ViewerTickets = field(default_factory=ViewerTickets)
     #: The certificate the loopback Foxglove servers present (only the proxy trusts it).
