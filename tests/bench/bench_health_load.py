@@ -150,7 +150,7 @@ def one_run(a: argparse.Namespace, tmp: Path, database_url: str | None) -> dict[
                 f"{base}/api/projects",
                 headers=admin,
                 timeout=60,
-                json={"name": f"p{i}", "model": {"text": text}},
+                json={"name": f"p{i}-{port}", "model": {"text": text}},  # runs share PostgreSQL
             ).json()["id"]
             for i in range(a.editors)
         ]
