@@ -29,7 +29,6 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -156,17 +155,7 @@ def one_run(a: argparse.Namespace, tmp: Path, database_url: str | None) -> dict[
         ]
         load = Saving(base, admin, a.think)
         token = admin["Authorization"][7:]
-        threads = [threading.Thread(target=load.editor, args=(p,)) for p in pids]
-        threads += [
-            threading.Thread(target=load.viewer, args=(port, token, pids[i % len(pids)]))
-            for i in range(a.viewers)
-        ]
-        threads += [
-            threading.Thread(target=load.exporter, args=(admin,)) for _ in range(a.exporters)
-        ]
-        for t in threads:
-            t.start()
-        time.sleep(2.0)  # every client is at work
+        threads = load.start(port, token, pids, a.viewers, a.exporters)
         outs = [tmp / "health.json", tmp / "bare.json"]
         probes = [
             probe(f"{base}/api/health", a.seconds, outs[0]),
