@@ -2,7 +2,7 @@
 # Every benchmark of tests/bench, one after the other, each printing its tables
 # (`make bench`, after `make build`, which runs scripts/setup.sh). Asserts no time.
 # Figures go in docs/benchmarks.md with the command that printed them.
-# Takes about 27 minutes on a 2-core machine. LINK_SECONDS etc. shorten it.
+# Takes about 35 minutes on a 2-core machine. LINK_SECONDS etc. shorten it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=.venv/bin/python
@@ -48,6 +48,8 @@ run tests/bench/bench_sensors.py --seconds "${SENSORS_SECONDS:-20}"
 run tests/bench/bench_health_csv.py --clients 70 --seconds "${HEALTH_CSV_SECONDS:-20}"
 run tests/bench/bench_health_editing.py --seconds "${HEALTH_EDITING_SECONDS:-20}"
 run tests/bench/bench_health_editing.py --seconds "${HEALTH_EDITING_SECONDS:-20}" --sockets 1000
+# issue 41's load, SQLite and PostgreSQL, beside a bare app on the same cores
+run tests/bench/bench_health_load.py --seconds "${HEALTH_LOAD_SECONDS:-180}"
 run tests/bench/bench_backfill.py --minutes "${BACKFILL_MINUTES:-10}" --rate 3600
 run tests/bench/bench_dataset.py --samples "${DATASET_SAMPLES:-10000000}" --json build/bench/dataset.json
 run tests/bench/flap_windows.py "${FLAP_SECONDS:-60}" 2

@@ -5,12 +5,21 @@ no server path; an export whose client went away stops its worker within 2 s."""
 
 from __future__ import annotations
 
+import json
+import os
+import socket
+import subprocess
+import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import httpx2 as httpx
 import pytest
 from fastapi.testclient import TestClient
+from modd.ports import free_port
 from modd_backend import archive_work
 
 from .conftest import ADMIN_PASSWORD, Headers
@@ -141,3 +150,115 @@ def test_one_users_100_requests_do_not_delay_anothers_series_past_30_s(tmp_path:
     assert mine.json()["total"] == 100_000
     assert waited < 30, waited
     assert set(statuses) <= {200, 429, 503} and 200 in statuses
+
+
+def _workers(pid: int) -> set[int]:
+    """The running archive worker processes of process ``pid`` (multiprocessing's
+    spawned children; its resource tracker is not one)."""
+    out = set()
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+            argv = (stat.parent / "cmdline").read_bytes()
+        except OSError:
+            continue
+        if fields[1] == str(pid) and fields[0] != "Z" and b"multiprocessing.spawn" in argv:
+            out.add(int(stat.parent.name))
+    return out
+
+
+@contextmanager
+def _backend(tmp: Path, archives: Path) -> Iterator[tuple[subprocess.Popen[bytes], str, str]]:
+    """A real ``modd-backend`` process (uvicorn, as deployed) on loopback: the
+    process, its base URL and the admin's token."""
+    port = free_port()
+    exe = Path(sys.executable).with_name("modd-backend")
+    argv = [str(exe), "--port", str(port), "--data", str(tmp / "data"), "--no-zenoh"]
+    argv += ["--scene-port", "-1", "--foxglove-port", "0", "--foxglove-replay-port", "0"]
+    argv += ["--archives", str(archives), "--frontend", str(tmp / "none")]
+    with (tmp / "backend.log").open("wb") as log:
+        env = {**os.environ, "MODD_ADMIN_PASSWORD": ADMIN_PASSWORD}
+        proc = subprocess.Popen(argv, env=env, stdout=log, stderr=subprocess.STDOUT)
+    base = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + 120
+        while True:
+            try:
+                token = _login(base, "admin", ADMIN_PASSWORD)["Authorization"][7:]
+                break
+            except httpx.TransportError:
+                assert proc.poll() is None and time.monotonic() < deadline, "no backend"
+                time.sleep(0.2)
+        yield proc, base, token
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(10)
+
+
+def _post(base: str, token: str, body: dict[str, Any]) -> socket.socket:
+    """The export POSTed whole on a raw socket, its answer never read."""
+    data = json.dumps(body).encode()
+    host, port = base.removeprefix("http://").split(":")
+    sock = socket.create_connection((host, int(port)))
+    sock.sendall(
+        f"POST {URL} HTTP/1.1\r\nHost: {host}:{port}\r\nAuthorization: Bearer {token}\r\n"
+        f"Content-Type: application/json\r\nContent-Length: {len(data)}\r\n\r\n".encode()
+        + data
+    )
+    return sock
+
+
+def _running(pid: int, within_s: float) -> set[int]:
+    deadline = time.monotonic() + within_s
+    while not (found := _workers(pid)) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return found
+
+
+@pytest.mark.slow
+def test_an_abandoned_export_stops_its_worker_within_2_s(tmp_path: Path) -> None:
+    """Over real HTTP (the ``modd-backend`` process): while the client holds
+    its socket the export's worker reads on (the control: seconds of work);
+    once it closes the socket, having sent the whole body and read nothing,
+    the worker is gone within 2 s and the service answers."""
+    _settings, root = archive_settings(tmp_path, 100_000, "big.mcap")
+    for i in range(6):  # six more names of one large file: about 10 s of export
+        os.link(root / "usv" / "big.mcap", root / "usv" / f"copy-{i}.mcap")
+    files = ["big.mcap", *(f"copy-{i}.mcap" for i in range(6))]
+    body = {"model": _model(), "format": "netcdf", "files": files}
+    with _backend(tmp_path, root) as (proc, base, token):
+        sock = _post(base, token, body)
+        workers = _running(proc.pid, within_s=30)
+        assert workers, "no archive worker started"
+        time.sleep(2.0)
+        assert _workers(proc.pid) & workers, "the export ended before the client left"
+        sock.close()
+        left_at = time.monotonic()
+        while _workers(proc.pid) & workers:
+            assert time.monotonic() - left_at < 2.0, "the abandoned export's worker still runs"
+            time.sleep(0.05)
+        assert httpx.get(f"{base}/api/health", timeout=10).status_code == 200
+        time.sleep(1.0)  # the pool restarts no abandoned job: no worker reads again
+        assert not _workers(proc.pid) - workers or _idle(_workers(proc.pid) - workers)
+
+
+def _idle(pids: set[int]) -> bool:
+    """The processes used (almost) no CPU over 0.5 s: a fresh, waiting worker."""
+
+    def ticks() -> int:
+        total = 0
+        for pid in pids:
+            try:
+                f = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            total += int(f[11]) + int(f[12])  # utime + stime
+        return total
+
+    before = ticks()
+    time.sleep(0.5)
+    return ticks() - before <= 5  # clock ticks (1/100 s)

@@ -85,6 +85,24 @@ class Load:
                 i += 1
                 self.stop.wait(self.think_s)
 
+    def start(
+        self, port: int, token: str, pids: list[int], viewers: int, exporters: int
+    ) -> list[threading.Thread]:
+        """One editor per project, ``viewers`` and ``exporters`` (as the
+        admin), started; returns once every client is at work."""
+        threads = [threading.Thread(target=self.editor, args=(p,)) for p in pids]
+        threads += [
+            threading.Thread(target=self.viewer, args=(port, token, pids[i % len(pids)]))
+            for i in range(viewers)
+        ]
+        threads += [
+            threading.Thread(target=self.exporter, args=(self.admin,)) for _ in range(exporters)
+        ]
+        for t in threads:
+            t.start()
+        time.sleep(2.0)
+        return threads
+
     def viewer(self, port: int, token: str, pid: int) -> None:
         try:
             ws = connect(f"ws://127.0.0.1:{port}/api/drones/usv/stream", open_timeout=30)
@@ -156,17 +174,7 @@ def run(a: argparse.Namespace, tmp: Path) -> None:
         )
         crowd = login(base, "crowd", PASSWORD)["Authorization"][7:]
         held = hold_sockets(port, crowd, a.sockets, load)
-        threads = [threading.Thread(target=load.editor, args=(p,)) for p in pids]
-        threads += [
-            threading.Thread(target=load.viewer, args=(port, token, pids[i % len(pids)]))
-            for i in range(a.viewers)
-        ]
-        threads += [
-            threading.Thread(target=load.exporter, args=(admin,)) for _ in range(a.exporters)
-        ]
-        for t in threads:
-            t.start()
-        time.sleep(2.0)  # every client is at work
+        threads = load.start(port, token, pids, a.viewers, a.exporters)
         with httpx.Client(timeout=60) as c:
             lat = _poll(c, base, lambda: False, seconds=a.seconds)
         load.stop.set()
@@ -188,11 +196,14 @@ def run(a: argparse.Namespace, tmp: Path) -> None:
         stop_backend(proc)
 
 
-def start(tmp: Path, port: int, database_url: str | None) -> Any:
+def start(tmp: Path, port: int, database_url: str | None, cores: str | None = None) -> Any:
+    """The backend, pinned to ``cores`` (a taskset list) when given."""
     exe = Path(sys.executable).with_name("modd-backend")
     extra = ["--database-url", database_url] if database_url else []
+    pin = ["taskset", "-c", cores] if cores else []
     return subprocess.Popen(
         [
+            *pin,
             str(exe),
             "--port",
             str(port),

@@ -198,6 +198,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         app.state.modd = state
         state.database = "ok"  # just opened and migrated
         state.login_threads = CapacityLimiter(settings.login_threads)
+        state.closing_threads = CapacityLimiter(4)
         if settings.foxglove_port or settings.foxglove_replay_port:
             state.loopback_tls = LoopbackTls.generate()
         if zenoh_session is not None:

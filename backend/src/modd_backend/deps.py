@@ -9,11 +9,11 @@ from __future__ import annotations
 import hmac
 import time
 from collections import Counter
-from collections.abc import AsyncIterator, Callable, Iterator
+from collections.abc import AsyncIterator, Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Annotated, Literal
 
-from anyio import CapacityLimiter
+from anyio import CapacityLimiter, to_thread
 from fastapi import Depends, HTTPException, Request, WebSocket
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from sqlalchemy.orm import Session as Db
@@ -70,12 +70,16 @@ class AppState:
     login_known: KnownPairs = field(default_factory=lambda: KnownPairs(30 * 86_400))
     #: Live WebSocket subscriptions per user id (event loop only).
     ws_counts: Counter[int] = field(default_factory=Counter)
+    #: Stream sockets waiting for their first-message auth, per client address.
+    ws_unauthenticated: Counter[str] = field(default_factory=Counter)
     #: Single-use tickets standing for a session in a viewer's URL (Foxglove).
     tickets: ViewerTickets = field(default_factory=ViewerTickets)
     #: The certificate the loopback Foxglove servers present (only the proxy trusts it).
     loopback_tls: LoopbackTls | None = None
     #: The login's own threads (routers/auth.py), set at start-up.
     login_threads: CapacityLimiter | None = None
+    #: Threads closing store sessions (get_db), apart from the routes' pool.
+    closing_threads: CapacityLimiter | None = None
     #: Open WebSockets per user and per client address (socketcaps.py).
     socket_caps: SocketCaps = field(default_factory=lambda: SocketCaps(64, 512))
     #: One shared session re-check per session of open sockets (sessionwatch.py).
@@ -98,9 +102,23 @@ def ws_state(websocket: WebSocket) -> AppState:
 StateDep = Annotated[AppState, Depends(get_state)]
 
 
-def get_db(state: StateDep) -> Iterator[Db]:
-    with state.store.session() as db:
+async def get_db(state: StateDep) -> AsyncIterator[Db]:
+    """A store session for the request. Opened on the event loop (no I/O until
+    its first query, made in the route's thread) and closed there when it
+    never began a transaction; otherwise closed in a worker thread. Each
+    worker-thread hop costs the event loop as much as a short request (issue
+    41's profile), so the route's dependencies take as few as they can."""
+    db = state.store.factory()
+    try:
         yield db
+    finally:
+        if db.in_transaction():
+            # threads of its own (as FastAPI's exits of sync dependencies): a
+            # close waiting behind routes that wait for its connection would
+            # hold them all until the pool's timeout
+            await to_thread.run_sync(db.close, limiter=state.closing_threads)
+        else:
+            db.close()
 
 
 DbDep = Annotated[Db, Depends(get_db)]
@@ -115,7 +133,7 @@ class Credentials:
     via_cookie: bool
 
 
-def credentials(
+async def credentials(
     request: Request,
     creds: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
 ) -> Credentials:
@@ -142,7 +160,7 @@ def credentials(
 CredsDep = Annotated[Credentials, Depends(credentials)]
 
 
-def bearer_token(creds: CredsDep) -> str:
+async def bearer_token(creds: CredsDep) -> str:
     return creds.token
 
 
@@ -150,7 +168,12 @@ TokenDep = Annotated[str, Depends(bearer_token)]
 
 
 def current_user(db: DbDep, token: TokenDep) -> User:
+    """The session's user. Its read ends here (the user's fields stay
+    loaded): the connection goes back to the pool while the route waits for
+    its worker thread, so requests waiting for threads never hold every
+    connection that the running ones wait for."""
     user = user_for_token(db, token)
+    db.commit()
     if user is None:
         raise HTTPException(401, "invalid or expired token", headers={"WWW-Authenticate": "Bearer"})
     return user
@@ -168,11 +191,11 @@ def has_role(user: User, *roles: Role) -> bool:
     return Role.admin in held or any(r in held for r in roles)
 
 
-def require(*roles: Role) -> Callable[[User], User]:
+def require(*roles: Role) -> Callable[[User], Awaitable[User]]:
     """A dependency letting through users holding any of ``roles`` (or admin)."""
     names = ", ".join(r.value for r in roles) or "admin"
 
-    def check(user: UserDep) -> User:
+    async def check(user: UserDep) -> User:  # (async: no worker thread for a set test)
         if not has_role(user, *roles):
             raise HTTPException(403, f"this needs the role {names}")
         return user

@@ -112,6 +112,12 @@ class Settings:
     #: address (all loopback addresses are one); beyond: closed with 4429.
     ws_sockets_per_user: int = 64
     ws_sockets_per_address: int = 512
+    #: Stream sockets accepted but not yet authenticated (waiting for their
+    #: first message) per client address, and how long one may wait; beyond
+    #: the cap a socket is refused before it is accepted (HTTP 403), past the
+    #: wait closed with 4401. A cookie session is checked before the accept.
+    ws_unauthenticated_per_address: int = 32
+    ws_auth_timeout_s: float = 5.0
     #: How often an open WebSocket re-checks its session and roles (seconds).
     ws_recheck_s: float = 0.4
 

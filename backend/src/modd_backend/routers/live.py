@@ -97,7 +97,6 @@ def cancel_dynamic(drone: Drone, subscriber: Name, state: StateDep, user: UserDe
 #: Largest WebSocket message a client may send (a subscribe op is ~60 bytes).
 MAX_MESSAGE = 64 * 1024
 #: Seconds a client without the session cookie has to send ``{"op": "auth"}``.
-AUTH_TIMEOUT_S = 5.0
 
 
 def _session(state: AppState, token: str) -> tuple[User, str] | None:
@@ -161,16 +160,16 @@ async def stream(websocket: WebSocket, drone: str) -> None:
         if session is None:
             await websocket.close(code=4401, reason="missing or invalid token")
             return
-    await websocket.accept()
+    address = websocket.client.host if websocket.client is not None else "unknown"
     token = cookie
     if session is None:
-        token, session = await _first_message_auth(websocket, state)
+        token, session = await _unauthenticated(websocket, state, address)
         if session is None or token is None:
-            await websocket.close(code=4401, reason="missing or invalid token")
             return
+    else:
+        await websocket.accept()
     user, roles = session
     assert token is not None
-    address = websocket.client.host if websocket.client is not None else "unknown"
     try:
         with state.socket_caps.slot(user.id, address):
             await _serve_stream(websocket, state, drone, token, user, roles)
@@ -219,11 +218,37 @@ async def _serve_stream(
         relay.close()
 
 
+async def _unauthenticated(
+    websocket: WebSocket, state: AppState, address: str
+) -> tuple[str | None, tuple[User, str] | None]:
+    """A socket without a cookie session: refused before the accept (a 403,
+    no task, no timer) when its address already has
+    ``ws_unauthenticated_per_address`` waiting; else accepted and given
+    ``ws_auth_timeout_s`` for its auth message, closed with 4401 without one."""
+    waiting = state.ws_unauthenticated
+    if waiting[address] >= state.settings.ws_unauthenticated_per_address:
+        await websocket.close(code=CAP_CLOSE, reason="too many sockets waiting to authenticate")
+        return None, None
+    waiting[address] += 1
+    try:
+        await websocket.accept()
+        token, session = await _first_message_auth(websocket, state)
+    finally:
+        waiting[address] -= 1
+        if waiting[address] <= 0:
+            del waiting[address]
+    if session is None or token is None:
+        await websocket.close(code=4401, reason="missing or invalid token")
+        return None, None
+    return token, session
+
+
 async def _first_message_auth(
     websocket: WebSocket, state: AppState
 ) -> tuple[str | None, tuple[User, str] | None]:
     try:
-        text = await asyncio.wait_for(websocket.receive_text(), AUTH_TIMEOUT_S)
+        timeout = state.settings.ws_auth_timeout_s
+        text = await asyncio.wait_for(websocket.receive_text(), timeout)
         message = _parse(text)
     except (TimeoutError, ValueError, KeyError, WebSocketDisconnect, RuntimeError):
         return None, None
