@@ -47,6 +47,17 @@ export interface LinkStatus {
   radio?: RadioFigures;
   /** The plug-and-play instruments' health (status' `sensors`), when the drone reports it. */
   sensors?: InstrumentHealth[];
+  /** The supervisor (`modd up`) gave up the run (status' `supervisor`): which process, why. */
+  gaveUp?: SupervisorStop;
+}
+
+/** Why `modd up` stopped the run (docs/reliability.md, "Base station, store and tools"). */
+export interface SupervisorStop {
+  process: string;
+  exitCode: number | null;
+  reason: string;
+  /** The process's log file, on the base station. */
+  log: string;
 }
 
 /** A datagram link's figures (docs/subbroker.md, "Status": `radio`). */

@@ -32,6 +32,7 @@ import { ArchiveSpaceNote } from "./ArchiveSpaceNote";
 import { FillGaps } from "./FillGaps";
 import { RadioLine } from "./RadioLine";
 import { InstrumentsHealth } from "./InstrumentsHealth";
+import { SupervisorNote } from "./SupervisorNote";
 
 export default function MonitorPanel() {
   const model = useModel();
@@ -102,6 +103,7 @@ export default function MonitorPanel() {
             {" "}· base station behind the link{link.lagS != null && ` by ${fixed(link.lagS, 1, " s")}`}
           </strong>}
         </>}
+        {link?.gaveUp && <SupervisorNote stop={link.gaveUp} />}
         {!link && state === "open" && " · waiting for the drone's status…"}
         {link?.sensors && <InstrumentsHealth sensors={link.sensors} />}
       </div>
