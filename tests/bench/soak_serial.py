@@ -196,13 +196,12 @@ def check_samples(sent: dict[str, int], archive: Any) -> tuple[int, int, list[st
     return sum(sent.values()), sum(have.values()), failed
 
 
-def run(tmp: Path, seconds: float, every: float, log: Any) -> dict[str, Any]:
+def run(tmp: Path, seconds: float, every: float, log: Any, rotate_s: int) -> dict[str, Any]:
     model = model_copy(tmp, "scenario1.modd")
     zport, ingress = free_port(), free_port()
     radio, base, drone = start_radio_serial(tmp, RADIO_SPEC)
-    pb = start_pubbroker_dgram(
-        tmp, model, {"transport": "serial", "device": drone, "port": 1}, ingress
-    )
+    link = {"transport": "serial", "device": drone, "port": 1}
+    pb = start_pubbroker_dgram(tmp, model, link, ingress, archive_opts={"rotate_s": rotate_s})
     sb = start_subbroker(
         tmp, subbroker_dgram_config(tmp, model, "127.0.0.1:1", zport, "serial", device=base)
     )
@@ -280,17 +279,25 @@ def main() -> int:
     p.add_argument("--seconds", type=float, default=3600.0)
     p.add_argument("--every", type=float, default=5.0, help="RSS sampling period (s)")
     p.add_argument("--keep", type=Path, help="keep the run's files (logs, archive) here")
+    p.add_argument(
+        "--rotate-s",
+        type=int,
+        default=3600,
+        help="the PubBroker's archive.rotate_s (default 3600, its own): the open file's "
+        "summary (an MCAP chunk index per chunk) is held in memory until the file rotates",
+    )
     args = p.parse_args()
     print(
         f"soak_serial: {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
-        f"{time.strftime('%Y-%m-%dT%H:%MZ', time.gmtime())}, {args.seconds:g} s",
+        f"{time.strftime('%Y-%m-%dT%H:%MZ', time.gmtime())}, {args.seconds:g} s, "
+        f"PubBroker archive.rotate_s {args.rotate_s}",
         flush=True,
     )
     with tempfile.TemporaryDirectory(prefix="modd-soak-serial-") as d:
         tmp = args.keep or Path(d)
         tmp.mkdir(parents=True, exist_ok=True)
         started = time.monotonic()
-        out = run(tmp, args.seconds, args.every, sys.stdout)
+        out = run(tmp, args.seconds, args.every, sys.stdout, args.rotate_s)
         failed = report(out, args.seconds)
         print(f"done in {time.monotonic() - started:.0f} s, load {os.getloadavg()[0]:.1f}")
     for f in failed:

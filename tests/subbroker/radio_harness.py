@@ -41,14 +41,16 @@ def start_pubbroker_dgram(
     ingress_port: int,
     tag: str = "pb",
     archive: str = "archive",
+    archive_opts: dict[str, Any] | None = None,
 ) -> Proc:
-    """A PubBroker whose link is ``link`` (transport, port or device, ...)."""
+    """A PubBroker whose link is ``link`` (transport, port or device, ...);
+    ``archive_opts``: more of its archive's settings (rotate_s, ...)."""
     model = load_model(model_path)
     cfg = {
         "name": model["drone"]["name"],
         "link": {"host": "127.0.0.1", "key": "env:MODD_LINK_KEY", **link},
         "ingress": {"host": "127.0.0.1", "port": ingress_port},
-        "archive": {"dir": str(tmp / archive), "flush_interval_ms": 200},
+        "archive": {"dir": str(tmp / archive), "flush_interval_ms": 200, **(archive_opts or {})},
         "topics": [{"name": t.name, "type": t.type} for t in topics(model).values()],
         "status_period_s": 60,
         "log_period_s": 1,
