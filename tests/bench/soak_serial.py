@@ -23,7 +23,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -38,12 +37,13 @@ from modd.subbroker.payload import DeliveredValue  # noqa: E402
 from modd.zenoh_session import client_settings, open_session, wait_connected  # noqa: E402
 from radio_harness import (  # noqa: E402
     radio_counts,
+    start_backfills,
     start_pubbroker_dgram,
     start_radio_serial,
     subbroker_dgram_config,
 )
+from soak import rss_kib  # noqa: E402
 from subbroker_harness import (  # noqa: E402
-    PYTHON,
     Proc,
     check_against_archive,
     load_counts,
@@ -74,32 +74,10 @@ class Collector:
         self.values.setdefault(v.subscriber, []).append(v)
 
 
-def rss_kib(pid: int) -> int | None:
-    try:
-        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1])
-    except OSError:
-        return None
-    return None
-
-
 def backfill_all(zport: int, *span: str) -> dict[str, dict[str, Any]]:
     """`modd backfill` for every subscriber (one CLI each, at once): its --json figures."""
-    env = {**os.environ, "MODD_ZENOH_CREDENTIALS": str(shared_credentials().cred_file("backend"))}
-    base = [str(PYTHON), "-m", "modd_model.cli", "backfill", "--drone", "usv"]
-    procs = {
-        sub: subprocess.Popen(
-            [*base, "--connect", f"tcp/127.0.0.1:{zport}", "--subscriber", sub, *span, "--json"],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            env=env,
-        )
-        for sub in SUBS
-    }
     out: dict[str, dict[str, Any]] = {}
-    for sub, p in procs.items():
+    for sub, p in start_backfills(zport, SUBS, *span).items():
         stdout, stderr = p.communicate(timeout=300)
         if p.returncode != 0:
             raise RuntimeError(f"backfill {sub} {span}: {stderr[-2000:]}")
