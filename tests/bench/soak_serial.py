@@ -238,7 +238,7 @@ def report(out: dict[str, Any], seconds: float) -> list[str]:
         f"--from/--to again: {sum(r['windows'] for r in out['span_again'].values())}"
     )
     print(
-        f"RSS MiB (every {len(out['rss']['subbroker'])} samples; flat: line over the last half "
+        f"RSS MiB ({len(out['rss']['subbroker'])} samples of each; flat: line over the last half "
         f"rises <= {FLAT_MIB:g} MiB + {FLAT_FRACTION:.0%})"
     )
     print("process      first  half  last   max   last-half rise")
