@@ -55,6 +55,8 @@ run tests/bench/bench_dataset.py --samples "${DATASET_SAMPLES:-10000000}" --json
 run tests/bench/flap_windows.py "${FLAP_SECONDS:-60}" 2
 if [ -n "${SOAK:-}" ]; then  # make bench SOAK=1: the 30-minute soak with faults (docs/reliability.md)
   run tests/bench/soak.py --seconds "${SOAK_SECONDS:-1800}"
+  # and the one-hour serial soak at 10 % loss: windows, archive, flat memory (issue 38)
+  run tests/bench/soak_serial.py --seconds "${SOAK_SERIAL_SECONDS:-3600}"
 fi
 echo
 echo "bench: all done in $(( $(date +%s) - start )) s"

@@ -6,10 +6,12 @@ that forges and replays datagrams. Every process is stopped by its PID."""
 from __future__ import annotations
 
 import json
+import os
 import random
 import re
 import select
 import socket
+import subprocess
 import sys
 import threading
 import time
@@ -22,6 +24,7 @@ from modd_model import load_model
 from modd_model.query import topics
 from subbroker_harness import (
     PUBBROKER,
+    PYTHON,
     Proc,
     processes,
     shared_credentials,
@@ -41,14 +44,16 @@ def start_pubbroker_dgram(
     ingress_port: int,
     tag: str = "pb",
     archive: str = "archive",
+    archive_opts: dict[str, Any] | None = None,
 ) -> Proc:
-    """A PubBroker whose link is ``link`` (transport, port or device, ...)."""
+    """A PubBroker whose link is ``link`` (transport, port or device, ...);
+    ``archive_opts``: more of its archive's settings (rotate_s, ...)."""
     model = load_model(model_path)
     cfg = {
         "name": model["drone"]["name"],
         "link": {"host": "127.0.0.1", "key": "env:MODD_LINK_KEY", **link},
         "ingress": {"host": "127.0.0.1", "port": ingress_port},
-        "archive": {"dir": str(tmp / archive), "flush_interval_ms": 200},
+        "archive": {"dir": str(tmp / archive), "flush_interval_ms": 200, **(archive_opts or {})},
         "topics": [{"name": t.name, "type": t.type} for t in topics(model).values()],
         "status_period_s": 60,
         "log_period_s": 1,
@@ -113,6 +118,23 @@ def start_radio_serial(tmp: Path, spec: str, tag: str = "radio") -> tuple[Proc, 
     line = next(ln for ln in proc.log().splitlines() if ln.startswith("base="))
     base, drone = (part.partition("=")[2] for part in line.split())
     return proc, base, drone
+
+
+def start_backfills(zport: int, subs: Any, *span: str) -> dict[str, subprocess.Popen[str]]:
+    """`modd backfill --json` for each subscriber of ``subs`` at once (one CLI each, the
+    backend's credentials), over ``span`` (``--gaps``, ``--from F --to T``)."""
+    env = {**os.environ, "MODD_ZENOH_CREDENTIALS": str(shared_credentials().cred_file("backend"))}
+    base = [str(PYTHON), "-m", "modd_model.cli", "backfill", "--drone", "usv"]
+    return {
+        sub: subprocess.Popen(
+            [*base, "--connect", f"tcp/127.0.0.1:{zport}", "--subscriber", sub, *span, "--json"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        for sub in subs
+    }
 
 
 def radio_counts(proc: Proc) -> str:

@@ -26,20 +26,19 @@ import pytest
 from modd.zenoh_session import wait_connected
 from radio_harness import (
     radio_counts,
+    start_backfills,
     start_pubbroker_dgram,
     start_radio_serial,
     start_radio_udp,
     subbroker_dgram_config,
 )
 from subbroker_harness import (
-    PYTHON,
     Proc,
     check_against_archive,
     free_port,
     model_copy,
     processes,
     read_archive,
-    shared_credentials,
     start_load,
     start_subbroker,
     wait_port,
@@ -58,18 +57,7 @@ OUTAGE_AT_S, OUTAGE_S = 15.0, 3.0  # from the radio's start: in the first load (
 
 def backfill_all(zport: int, sb: Proc, *span: str) -> dict[str, dict[str, Any]]:
     """`modd backfill` for every subscriber at once (one CLI each): figures per subscriber."""
-    env = {**os.environ, "MODD_ZENOH_CREDENTIALS": str(shared_credentials().cred_file("backend"))}
-    base = [str(PYTHON), "-m", "modd_model.cli", "backfill", "--drone", "usv"]
-    procs = {
-        sub: subprocess.Popen(
-            [*base, "--connect", f"tcp/127.0.0.1:{zport}", "--subscriber", sub, *span, "--json"],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            env=env,
-        )
-        for sub in SUBS
-    }
+    procs = start_backfills(zport, SUBS, *span)
     out = {}
     for sub, p in procs.items():
         try:

@@ -13,7 +13,7 @@
  *   linkHealth({ stream: "open", status, statusAt: 100, now: 112 })
  *   // { down: true, reason: "no status from the base station for 12 s", lastFrameAt: 95 }
  */
-import type { ConnectionState, LinkStatus } from "../dataSources/types";
+import type { ConnectionState, LinkStatus, SupervisorStop } from "../dataSources/types";
 
 export interface LinkHealthInput {
   stream: ConnectionState;
@@ -40,6 +40,8 @@ export function linkHealth({ stream, status, statusAt, now, staleS = 5, statusTi
   // Before any status (no drone, or a backend without zenoh) nothing is known: no alarm.
   if (!status || statusAt === null) return { down: false, reason: null, lastFrameAt: null };
   if (stream === "closed" || stream === "error") return down("the workbench's stream is closed");
+  // `modd up` gave up the run: its last status says why, and no status follows it.
+  if (status.gaveUp) return down(gaveUpWords(status.gaveUp));
   if (now - statusAt > statusTimeoutS) return down(`no status from the base station for ${Math.round(now - statusAt)} s`);
   // A deploy reconfigures the link for a moment: not a loss.
   if (!status.connected && status.state !== "configuring") return down(linkStateWords(status.state));
@@ -55,6 +57,12 @@ export function linkStateWords(state: LinkStatus["state"] | null | undefined): s
     case "stopped": return "the base station stopped the link";
     default: return "the drone's link is down";
   }
+}
+
+/** "modd up gave up the run: subbroker exited (1); stopping the run: 5 restarts within 60 s". */
+export function gaveUpWords(stop: SupervisorStop): string {
+  const code = stop.exitCode === null ? "" : ` (${stop.exitCode})`;
+  return `modd up gave up the run: ${stop.reason || `${stop.process} exited${code}`}`;
 }
 
 /** "12 s", "3 min 4 s", "2 h 5 min". */

@@ -23,7 +23,7 @@ import { RingBuffer } from "./RingBuffer";
 import { archiveSpace } from "../core/archiveSpace";
 import { instrumentsHealth } from "../core/instrumentHealth";
 import { onboardLines } from "../core/onboard";
-import type { ChannelListener, ConnectionState, DataSource, LinkStatus, Sample, SavedEvent } from "./types";
+import type { ChannelListener, ConnectionState, DataSource, LinkStatus, Sample, SavedEvent, SupervisorStop } from "./types";
 
 export interface SocketLike {
   readyState: number;
@@ -100,6 +100,22 @@ function num(x: unknown): number | null {
   return x === null || x === undefined || !Number.isFinite(Number(x)) ? null : Number(x);
 }
 
+/** Printable, bounded text from a status field (a process's reason may quote its log). */
+function text(x: unknown, max = 300): string {
+  // eslint-disable-next-line no-control-regex
+  const s = String(x ?? "").replace(/[\u0000-\u001f\u007f-\u009f]+/g, " ").trim();
+  return s.length > max ? `${s.slice(0, max - 1)}…` : s;
+}
+
+/** The `supervisor` field `modd up` puts when it gave up the run, as `{ gaveUp }`; null otherwise. */
+export function supervisorStop(x: unknown): { gaveUp: SupervisorStop } | null {
+  if (!x || typeof x !== "object") return null;
+  const s = x as Record<string, unknown>;
+  if (s.state !== "GAVE_UP") return null;
+  const code = num(s.exit_code);
+  return { gaveUp: { process: text(s.process, 80) || "a process", exitCode: code, reason: text(s.reason), log: text(s.log) } };
+}
+
 /** LinkStatus from the SubBroker's status document; the link is connected when its state is "up". */
 export function toLinkStatus(d: Partial<SubBrokerStatus>): LinkStatus {
   // over udp/serial the plan of the declared transport, else the TCP prediction
@@ -120,6 +136,7 @@ export function toLinkStatus(d: Partial<SubBrokerStatus>): LinkStatus {
     ...(archive ? { archive } : {}),
     ...(d.sensors ? { sensors: instrumentsHealth(d.sensors) } : {}),
     ...(d.onboard ? { onboard: onboardLines(d.onboard, true) } : {}),
+    ...(supervisorStop(d.supervisor) ?? {}),
     ...(radio ? {
       radio: {
         transport: String(radio.transport ?? ""),

@@ -52,6 +52,17 @@ export interface LinkStatus {
   sensors?: InstrumentHealth[];
   /** what the on-board processes did with the last deploy (core/onboard.ts) */
   onboard?: OnboardLine[];
+  /** The supervisor (`modd up`) gave up the run (status' `supervisor`): which process, why. */
+  gaveUp?: SupervisorStop;
+}
+
+/** Why `modd up` stopped the run (docs/reliability.md, "Base station, store and tools"). */
+export interface SupervisorStop {
+  process: string;
+  exitCode: number | null;
+  reason: string;
+  /** The process's log file, on the base station. */
+  log: string;
 }
 
 /** A datagram link's figures (docs/subbroker.md, "Status": `radio`). */

@@ -226,6 +226,23 @@ TEST(Archiver, RotatesByTime) {
   EXPECT_EQ(a.counters().files.load(), 2u);
 }
 
+TEST(Archiver, RotatesByChunkCountSoTheOpenSummaryIsBounded) {
+  std::string dir = tmpdir("rotate-chunks");
+  ArchiverOptions o;
+  o.dir = dir;
+  o.rotate_chunks = 2;  // the open file's chunk indexes: at most 2 held in memory
+  auto topic = std::make_shared<TopicInfo>(TopicInfo{"usv.t", modd::link::ValueType::Int});
+  Archiver a(o);
+  for (int64_t i = 0; i < 6; ++i) {
+    a.submit(topic, std::vector<Sample>{{i, i, 0, i}});
+    a.flush();  // one chunk per sample
+  }
+  a.submit(topic, std::vector<Sample>{{7, 7, 0, 7}});
+  a.stop();
+  EXPECT_EQ(a.counters().archived.load(), 7u);
+  EXPECT_GE(a.counters().files.load(), 3u);  // was 1: every chunk index held until the close
+}
+
 TEST(McapRecover, AFileCutByACrashKeepsItsCompleteChunksAndGetsASummary) {
   std::string dir = tmpdir("recover");
   std::string path = dir + "/usv-crash.mcap";

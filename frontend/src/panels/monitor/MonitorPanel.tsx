@@ -33,6 +33,7 @@ import { FillGaps } from "./FillGaps";
 import { Rehearsal } from "./Rehearsal";
 import { RadioLine } from "./RadioLine";
 import { InstrumentsHealth } from "./InstrumentsHealth";
+import { SupervisorNote } from "./SupervisorNote";
 
 export default function MonitorPanel() {
   const model = useModel();
@@ -103,6 +104,7 @@ export default function MonitorPanel() {
             {" "}· base station behind the link{link.lagS != null && ` by ${fixed(link.lagS, 1, " s")}`}
           </strong>}
         </>}
+        {link?.gaveUp && <SupervisorNote stop={link.gaveUp} />}
         {!link && state === "open" && " · waiting for the drone's status…"}
         {link?.sensors && <InstrumentsHealth sensors={link.sensors} />}
         {link?.onboard?.map((l) => l.ok

@@ -338,6 +338,7 @@ bool Archiver::write_item(Item& item) {
     // Age on the monotonic clock: a wall-clock step neither rotates nor holds the file.
     int64_t age = steady_s() - file_opened_s_;
     if (writer_->file_bytes() >= opt_.rotate_bytes ||
+        writer_->chunk_count() >= opt_.rotate_chunks ||
         (opt_.rotate_s > 0 && age >= static_cast<int64_t>(opt_.rotate_s)))
       close_file();
     return true;

@@ -39,6 +39,10 @@ struct ArchiverOptions {
   std::string prefix = "modd";
   uint64_t rotate_bytes = 256ull << 20;
   uint64_t rotate_s = 3600;
+  // A file is also closed when it holds this many chunks: the open file's summary (one
+  // chunk index per chunk, ~350 B each, written at close as MCAP asks) is held in memory
+  // until then; this bounds it whatever the flush interval, rotate_s and rotate_bytes.
+  uint64_t rotate_chunks = 4096;
   WriterOptions writer;
   uint32_t retry_first_ms = 250;  // after a write error: retry after this, doubling,
   uint32_t retry_max_ms = 2000;   // up to this

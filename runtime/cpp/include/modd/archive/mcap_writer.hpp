@@ -83,6 +83,8 @@ class McapWriter {
   void close();    // flush, summary, footer, magic; idempotent; resumable after a write error
   void abandon();  // closes the descriptor as the file is (left for recovery at next start)
   uint64_t file_bytes() const { return offset_ + pending_.size(); }
+  // Chunks written to this file (their indexes are held for the summary).
+  size_t chunk_count() const { return chunk_indexes_.size(); }
   uint64_t message_count() const { return message_count_; }
   uint64_t flushed_messages() const { return flushed_messages_; }  // in chunks written to the file
   uint64_t pending_bytes() const { return pending_.size(); }
