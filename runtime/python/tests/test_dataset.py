@@ -256,6 +256,14 @@ def test_glitch_and_disorder_are_cleaned_and_said(tmp_path: Path) -> None:
     table = pcsv.read_csv(out).to_pandas()
     lat = table[table["topic"] == "boat.ctd.temp"]["lat"]
     assert lat.max() < 47.01  # the glitch never reaches a sample
+    # and in the NetCDF file's history (CF's audit trail), read by another reader
+    import xarray as xr
+
+    nc = tmp_path / "g.nc"
+    nc_notes = make_dataset([path], _model(), "netcdf", nc).notes
+    with xr.open_dataset(nc) as ds:
+        history = ds.attrs["history"]
+    assert all(f"note: {n}" in history for n in nc_notes) and "1 fixes jump faster" in history
 
 
 def test_nan_samples_and_empty_topics_are_kept_and_said(tmp_path: Path) -> None:

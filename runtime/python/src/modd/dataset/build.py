@@ -33,6 +33,18 @@ SUFFIXES = {
 }
 
 
+def _notes_in_history(path: Path, notes: list[str]) -> None:
+    """The export's notes (dropped glitches, sorted fixes, gaps, unnamed quantities) in
+    the file too, after its ``history`` line: CF's audit trail of what was done to the
+    data, which ERDDAP and the IOOS tools show."""
+    if not notes:
+        return
+    import netCDF4
+
+    with netCDF4.Dataset(path, "a") as ds:
+        ds.setncattr("history", ds.getncattr("history") + "".join(f"\n  note: {n}" for n in notes))
+
+
 def metadata_notes(plan: ExportPlan) -> list[str]:
     """What a data centre will ask for that the dataset metadata does not say."""
     unnamed = [v.topic for v in plan.variables.values() if not v.standard_name]
@@ -132,6 +144,7 @@ def make_dataset(
             raise PlanError(f"nothing to export: no {what} in the range{hint}")
         if fmt == "netcdf":
             summary.notes += metadata_notes(plan)
+            _notes_in_history(tmp, summary.notes)
         os.replace(tmp, out)
         return summary
     except (PlanError, ArchiveError) as exc:
