@@ -1,7 +1,9 @@
 """The aggregation vectors (``aggregations.json``): windows of samples and what
 each exact statistic of the window is, computed by numpy (the oracle, not the
 project's code): MEDIAN is ``numpy.median``, STDDEV ``numpy.std`` (ddof=0,
-the population standard deviation), RANGE ``numpy.ptp``. The C++ accumulator
+the population standard deviation), RANGE ``numpy.ptp``, PERCENTILE(p)
+``numpy.percentile(x, p)`` (its default ``method="linear"``) for each p of
+``PERCENTILES``. The C++ accumulator
 (runtime/cpp/tests/test_accumulator.cpp) and the planner's ``aggregate``
 (metamodel/tests/plan/test_aggregations.py) are checked against them; a test
 checks that this script reproduces the committed file.
@@ -19,6 +21,8 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "aggregations.json"
+#: The p of the PERCENTILE vectors: in (0, 100], the tails and fractions included.
+PERCENTILES = (0.1, 5, 25, 33.3, 50, 90, 95, 99, 99.9, 100)
 
 
 def _windows() -> list[tuple[str, str, list[float] | list[int]]]:
@@ -55,12 +59,14 @@ def vectors() -> dict[str, Any]:
                 "MEDIAN": float(np.median(x)),
                 "STDDEV": float(np.std(x, ddof=0)),
                 "RANGE": int(np.ptp(np.asarray(samples))) if vtype == "int" else float(np.ptp(x)),
+                "PERCENTILE": {f"{p:g}": float(np.percentile(x, p)) for p in PERCENTILES},
             }
         )
     return {
         "doc": "Windows of samples and their exact MEDIAN (numpy.median), STDDEV "
-        "(numpy.std, ddof=0) and RANGE (numpy.ptp), in double precision over the "
-        "samples as float64; written by gen_aggregations.py.",
+        "(numpy.std, ddof=0), RANGE (numpy.ptp) and PERCENTILE(p) (numpy.percentile, "
+        "method='linear', keyed by p), in double precision over the samples as "
+        "float64; written by gen_aggregations.py.",
         "vectors": cases,
     }
 

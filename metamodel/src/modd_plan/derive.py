@@ -201,6 +201,26 @@ def stddev(samples: Sequence[Sample]) -> float:
     return math.sqrt(math.fsum((float(x) - mean) ** 2 for x in samples) / len(samples))
 
 
+def percentile(samples: Sequence[Sample], p: float) -> float:
+    """numpy.percentile(samples, p) with its default ``method="linear"``: the
+    sorted samples' value at the virtual index ``(n - 1) * p / 100``, between
+    its two neighbours as numpy interpolates them (from the upper one when the
+    fraction is at least a half), so that the result is numpy's to the bit.
+
+    >>> percentile([1, 2, 3, 4], 50), percentile([10.0, 0.0, 5.0], 95), percentile([7], 0.1)
+    (2.5, 9.5, 7.0)
+    """
+    if not 0 < p <= 100:
+        raise ValueError(f"percentile {p!r} is not in (0, 100]")
+    s = sorted(float(x) for x in samples)
+    index = (len(s) - 1) * (p / 100)
+    lower = math.floor(index)
+    if lower >= len(s) - 1:
+        return s[-1]
+    a, b, t = s[lower], s[lower + 1], index - lower
+    return b - (b - a) * (1 - t) if t >= 0.5 else a + (b - a) * t
+
+
 #: The aggregations computed from a non-empty window's samples as a whole.
 _WHOLE: dict[str, Callable[[Sequence[Sample]], Window]] = {
     agg.MIN: min,

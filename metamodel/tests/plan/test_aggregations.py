@@ -14,7 +14,7 @@ import pytest
 from modd_contracts import aggregations_gen as agg
 from modd_contracts.link_wire_gen import MAX_LIST
 from modd_model.validate import validate
-from modd_plan.derive import aggregate, derive_value
+from modd_plan.derive import aggregate, derive_value, percentile
 from modd_plan.plan import make_plan
 
 VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors"
@@ -45,6 +45,34 @@ def test_aggregate_equals_numpy_over_the_window(case: dict[str, Any]) -> None:
     assert aggregate(agg.RANGE, samples) == case["RANGE"]
     # and numpy itself, at the same call, agrees (the vectors are not stale)
     assert case["MEDIAN"] == float(np.median(np.asarray(samples, np.float64)))
+
+
+@pytest.mark.parametrize("case", _cases(), ids=lambda c: c["name"])
+def test_percentile_equals_numpy_over_the_window(case: dict[str, Any]) -> None:
+    samples = case["samples"]
+    x = np.asarray(samples, np.float64)
+    assert len(case["PERCENTILE"]) >= 8
+    for key, want in case["PERCENTILE"].items():
+        p = float(key)
+        assert percentile(samples, p) == want, (key, case["name"])  # to the bit
+        assert want == float(np.percentile(x, p, method="linear"))  # not stale
+    assert percentile(samples, 50) == pytest.approx(case["MEDIAN"], rel=1e-15, abs=1e-300)
+
+
+def test_percentile_equals_numpy_over_random_windows() -> None:
+    rng = np.random.default_rng(95)
+    for _ in range(300):
+        n = int(rng.integers(1, 200))
+        x = rng.normal(rng.uniform(-1e6, 1e6), rng.uniform(1e-3, 1e3), n)
+        x[rng.random(n) < 0.1] = 0.0  # ties
+        p = float(rng.choice([rng.uniform(1e-9, 100), 95.0, 100.0, 0.5]))
+        assert percentile(list(x), p) == float(np.percentile(x, p)), (n, p)
+
+
+@pytest.mark.parametrize("p", [0, -5, 100.5, float("nan"), float("inf")])
+def test_a_percentile_outside_0_100_is_refused(p: float) -> None:
+    with pytest.raises(ValueError, match=r"not in \(0, 100\]"):
+        percentile([1.0, 2.0], p)
 
 
 def test_an_empty_window_is_absent() -> None:

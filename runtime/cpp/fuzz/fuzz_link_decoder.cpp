@@ -55,13 +55,15 @@ void check_quantised(const RawFrame& f) {
       if (!close(back.values[i].numbers[j], d.values[i].numbers[j], r)) std::abort();
   }
 }
-// The bytes as float64 samples of one window: MEDIAN lies within [min, max] and
-// STDDEV within [0, max - min]; the int RANGE equals max - min.
+// The bytes as float64 samples of one window: MEDIAN and PERCENTILE(p) (p from the
+// first byte, in (0, 100]) lie within [min, max], PERCENTILE(100) is max, STDDEV lies
+// within [0, max - min]; the int RANGE equals max - min.
 void check_statistics(std::span<const uint8_t> in) {
   broker::Accumulator med(ValueType::Float64, Aggregation::Median);
   broker::Accumulator sd(ValueType::Float64, Aggregation::Stddev);
   broker::Accumulator range(ValueType::Int, Aggregation::Range);
   double lo = INFINITY, hi = -INFINITY;
+  std::vector<double> kept;
   for (size_t at = 0; at + 8 <= in.size(); at += 8) {
     double x;
     std::memcpy(&x, in.data() + at, 8);
@@ -71,6 +73,7 @@ void check_statistics(std::span<const uint8_t> in) {
     range.add(0, static_cast<int64_t>(std::fmod(x, 1e9)));  // in range: no UB
     lo = std::min(lo, x);
     hi = std::max(hi, x);
+    kept.push_back(x);
   }
   link::Value m = med.take(), s = sd.take(), r = range.take();
   if (m.present != s.present || m.present != r.present) std::abort();
@@ -78,6 +81,8 @@ void check_statistics(std::span<const uint8_t> in) {
   if (m.number < lo || m.number > hi) std::abort();
   if (!(s.number >= 0) || s.number > (hi - lo) + 1e-9 * std::max(-lo, hi)) std::abort();
   if (r.integer < 0) std::abort();
+  double p = 100.0 * (in[0] + 1) / 256.0, q = broker::percentile(kept, p);
+  if (q < lo || q > hi || broker::percentile(kept, 100) != hi) std::abort();
 }
 }  // namespace
 

@@ -1,9 +1,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "modd/broker/accumulator.hpp"
 
@@ -80,6 +83,38 @@ TEST(Accumulator, ExactStatisticsMatchNumpy) {
     else
       EXPECT_DOUBLE_EQ(run(Aggregation::Range).number, c["RANGE"].get<double>()) << name;
   }
+}
+
+// PERCENTILE(p) equals numpy.percentile (method "linear") to the bit over each window
+// of the contract's vectors, for each p they carry; the samples' order does not matter.
+TEST(Accumulator, PercentileMatchesNumpy) {
+  std::ifstream f(std::string(MODD_CONTRACTS_DIR) + "/vectors/aggregations.json");
+  ASSERT_TRUE(f.good());
+  auto doc = nlohmann::json::parse(f);
+  size_t checked = 0;
+  for (const auto& c : doc["vectors"]) {
+    std::vector<double> window;
+    for (const auto& x : c["samples"])
+      window.push_back(c["type"] == "int" ? static_cast<double>(x.get<int64_t>())
+                                          : x.get<double>());
+    ASSERT_GE(c["PERCENTILE"].size(), 8u) << c["name"];
+    for (const auto& [key, want] : c["PERCENTILE"].items()) {
+      std::vector<double> samples = window;
+      std::reverse(samples.begin(), samples.end());
+      EXPECT_EQ(modd::broker::percentile(samples, std::stod(key)), want.get<double>())
+          << c["name"] << " p=" << key;
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 80u);
+}
+
+TEST(Accumulator, PercentileRefusesNoSampleAndPOutside0To100) {
+  std::vector<double> none, two{1.0, 2.0};
+  EXPECT_THROW(modd::broker::percentile(none, 50), std::invalid_argument);
+  for (double p : {0.0, -1.0, 100.5, std::nan("")})
+    EXPECT_THROW(modd::broker::percentile(two, p), std::invalid_argument) << p;
+  EXPECT_EQ(modd::broker::percentile(two, 100), 2.0);
 }
 
 TEST(Accumulator, StatisticsOfAnEmptyWindowAreAbsentAndMedianIsBounded) {

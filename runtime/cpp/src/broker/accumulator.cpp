@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace modd::broker {
 
@@ -139,6 +140,20 @@ double Accumulator::take_statistic() {
   double lower =
       *std::max_element(samples_.begin(), samples_.begin() + static_cast<std::ptrdiff_t>(mid));
   return (lower + upper) / 2;
+}
+
+double percentile(std::vector<double>& samples, double p) {
+  if (samples.empty()) throw std::invalid_argument("percentile of no sample");
+  if (!(p > 0 && p <= 100)) throw std::invalid_argument("percentile p is not in (0, 100]");
+  double index = static_cast<double>(samples.size() - 1) * (p / 100);
+  auto lower = static_cast<size_t>(std::floor(index));
+  auto at = samples.begin() + static_cast<std::ptrdiff_t>(lower);
+  std::nth_element(samples.begin(), at, samples.end());
+  double a = *at;
+  if (lower + 1 >= samples.size()) return a;
+  double b = *std::min_element(at + 1, samples.end());
+  double t = index - static_cast<double>(lower);
+  return t >= 0.5 ? b - (b - a) * (1 - t) : a + (b - a) * t;
 }
 
 }  // namespace modd::broker

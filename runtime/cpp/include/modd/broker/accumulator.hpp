@@ -43,4 +43,11 @@ class Accumulator {
   double take_statistic();
 };
 
+// numpy.percentile(samples, p) with its default method "linear", to the bit: the
+// sorted samples' value at the virtual index (n - 1) * p / 100, between its two
+// neighbours as numpy interpolates them (from the upper one when the fraction is at
+// least a half). O(n): reorders `samples` (nth_element). Throws std::invalid_argument
+// for no sample or p outside (0, 100].
+double percentile(std::vector<double>& samples, double p);
+
 }  // namespace modd::broker
