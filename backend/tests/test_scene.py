@@ -60,6 +60,18 @@ def test_points_in_local_metres_and_colours() -> None:
     assert not t.ingest("la", _v(None)) and not t.ingest("unknown", _v(1.0))
 
 
+def test_a_backfilled_value_never_moves_the_live_pose_nor_the_track() -> None:
+    t = Track({"la": "lat", "lo": "lon", "y": "yaw"}, colour_by="la")
+    t.ingest("y", _v(1.0))
+    t.ingest("la", _v(43.0))
+    t.ingest("lo", _v(5.0))
+    old = _v(0.0)
+    old["backfilled"] = True  # an older window, delivered late
+    assert not t.ingest("y", old)
+    assert not t.ingest("la", old) and not t.ingest("lo", old)
+    assert t.attitude == {"yaw": 1.0} and t.points == [(0.0, 0.0, 0.0)]
+
+
 def test_attitude_quaternion() -> None:
     t = Track({"r": "roll", "y": "yaw"})
     assert t.quaternion() == (1.0, 0.0, 0.0, 0.0)

@@ -159,6 +159,23 @@ def test_outage_filled_once_with_the_archive_values(tmp_path: Path, zenoh_client
     assert sum(1 for r in recorded if r.get("backfilled")) == sum(
         f["windows"] for f in figures.values()
     )
+    check_marks_against_window_record(values, tmp_path / "state")
+
+
+def check_marks_against_window_record(values: dict[str, list[DeliveredValue]], state: Path) -> None:
+    """Every window delivered by backfill carries the historical mark, and no live one
+    does: a window is marked exactly when the SubBroker's window record (windows.json,
+    written on its stop) lists it among the subscriber's filled intervals."""
+    (path,) = state.rglob("windows.json")
+    filled: dict[str, list[tuple[int, int]]] = {}
+    for subscriber, _stream, spans in json.loads(path.read_text())["filled"]:
+        filled.setdefault(subscriber, []).extend((a, b) for a, b in spans)
+    for name, got in values.items():
+        spans = filled.get(name, [])
+        for v in got:
+            inside = any(a <= v.start_ns and v.end_ns <= b for a, b in spans)
+            assert v.backfilled == inside, (name, v.start_ns, v.end_ns, v.backfilled, spans[:4])
+        assert any(v.backfilled for v in got), name
 
 
 def test_backfill_survives_a_cut_and_a_pubbroker_restart(tmp_path: Path, zenoh_client: Any) -> None:

@@ -71,7 +71,11 @@ class Track:
     _last_value: float | None = None
 
     def ingest(self, subscriber: str, delivered: DeliveredValue) -> bool:
-        """Take one delivered value; True when the drawing changed."""
+        """Take one delivered value; True when the drawing changed. A backfilled one
+        (historical: an older window delivered late) is left out: the scene shows the
+        drone as it is now, and its track's head and pose are the newest live values."""
+        if delivered.get("backfilled") is True:
+            return False
         value = delivered.get("value")
         if isinstance(value, list | tuple):  # AVERAGE travels as (mean, count) elsewhere
             value = value[0] if value else None

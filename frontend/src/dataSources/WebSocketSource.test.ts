@@ -105,6 +105,30 @@ describe("WebSocketSource", () => {
     expect(a).toHaveBeenCalledTimes(2);
   });
 
+  it("never lets an older backfilled window replace the latest live value", () => {
+    const { sock, src } = setup(20);
+    const lasts: number[] = [];
+    src.subscribe("sub_5", () => lasts.push(src.history("sub_5").at(-1)!.value));
+    sock.open();
+    const win = (k: number, value: number, backfilled?: boolean) =>
+      ({ type: "value", subscriber: "sub_5", data: { value, start_ns: (k - 1) * 1e9, end_ns: k * 1e9, ...(backfilled ? { backfilled } : {}) } });
+    sock.deliver(win(1, 1));
+    sock.deliver(win(10, 10)); // the live LAST, after a gap 2..9
+    sock.deliver({ type: "batch", messages: [win(2, 2, true), win(3, 3, true)] });
+    sock.deliver(win(9, 9, true));
+    sock.deliver(win(10, -10, true)); // a backfilled copy of the live window: the live one stays
+    expect(lasts).toEqual([1, 10, 10, 10, 10]);
+    const h = src.history("sub_5");
+    expect(h.map((s) => [s.t, s.value, s.backfilled === true])).toEqual([
+      [1, 1, false], [2, 2, true], [3, 3, true], [9, 9, true], [10, 10, false],
+    ]);
+    // a backfilled window newer than every live one is the newest (marked, for the view to say so)
+    sock.deliver(win(11, 11, true));
+    expect(src.history("sub_5").at(-1)).toMatchObject({ t: 11, backfilled: true });
+    sock.deliver(win(11, 12)); // its live copy, late: replaces it
+    expect(src.history("sub_5").at(-1)).toEqual({ t: 11, value: 12, windowS: 1 });
+  });
+
   it("spreads ALL windows over the window and counts backend drops", () => {
     expect(toSamples({ value: [1, 2, 3, 4], start_ns: 0, end_ns: 4e9 }).map((s) => s.t)).toEqual([1, 2, 3, 4]);
     expect(toSamples({ value: true, end_ns: 1e9 })[0].value).toBe(1);

@@ -211,9 +211,14 @@ export class WebSocketSource implements DataSource {
     }
     samples.forEach((batch, channel) => {
       const b = this.buffer(channel);
-      // Live values come in time order; a backfilled one goes in place among them (a
-      // window already held, live or backfilled before, is replaced, never doubled).
-      batch.forEach((s) => b.insertOrdered(s, (x) => x.t, sameWindow));
+      // Live values come in time order; a backfilled one goes in place among them, so
+      // the newest (the "last" a view shows) stays the newest whatever arrives late. A
+      // window already held is replaced, never doubled, except a live one by its
+      // backfilled copy: the live value stays (a historical one never hides it).
+      batch.forEach((s) => {
+        if (s.backfilled && b.findLast((x) => !x.backfilled && sameWindow(x, s))) return;
+        b.insertOrdered(s, (x) => x.t, sameWindow);
+      });
     });
     for (const f of flags) this.flag(f);
     samples.forEach((batch, channel) => this.listeners.get(channel)?.forEach((l) => l(batch)));

@@ -28,9 +28,11 @@ BATCH = 4
 class Sink:
     def __init__(self) -> None:
         self.values: list[DeliveredValue] = []
+        self.payloads: list[bytes] = []
 
     def put(self, subscriber: str, payload: bytes) -> None:
         self.values.append(DeliveredValue.from_json(payload))
+        self.payloads.append(payload)
 
 
 class LossyPubBroker:
@@ -107,7 +109,9 @@ def check_once_each(sink: Sink, windows: int) -> None:
     q = 250_000_000
     got = sorted((v.start_ns, v.value) for v in sink.values)
     assert got == [(FROM_NS + k * q, float(k)) for k in range(windows)]
+    # every window the backfill delivers carries the historical mark, in its bytes
     assert all(v.backfilled for v in sink.values)
+    assert all(b'"backfilled":true' in p for p in sink.payloads)
 
 
 def test_nothing_lost_one_request() -> None:

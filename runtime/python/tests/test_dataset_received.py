@@ -137,6 +137,28 @@ def _independent(folder: Path) -> dict[str, list[tuple[int, float]]]:
     return out
 
 
+def _marks(folder: Path) -> dict[str, list[tuple[int, int]]]:
+    """(time, 1 if backfilled else 0) per subscriber and point, from the record read
+    by the official reader: every point of a window carries the window's mark."""
+    out: dict[str, list[tuple[int, int]]] = {}
+    for path in sorted(folder.glob("*.mcap")):
+        with path.open("rb") as f:
+            for _s, ch, m in make_reader(f).iter_messages(log_time_order=False):
+                d = json.loads(m.data)
+                mark = 1 if d.get("backfilled") is True else 0
+                n = len(d["value"]) if isinstance(d["value"], list) and d["value"] else 1
+                times = (
+                    [d["end_ns"]]
+                    if n == 1 and not isinstance(d["value"], list)
+                    else [
+                        d["start_ns"] + (i + 1) * (d["end_ns"] - d["start_ns"]) // n
+                        for i in range(n)
+                    ]
+                )
+                out.setdefault(ch.topic.rsplit("/", 1)[1], []).extend((t, mark) for t in times)
+    return out
+
+
 def _same(got: list[tuple[int, float]], want: list[tuple[int, float]]) -> bool:
     return len(got) == len(want) and all(
         t1 == t2 and (v1 == v2 or (np.isnan(v1) and np.isnan(v2)))
@@ -174,6 +196,13 @@ def test_tables_hold_every_received_window(record: Path, tmp_path: Path, fmt: st
         got.setdefault(topic, []).append((ns, float("nan") if v is None else v))
     for name, rows in want.items():
         assert _same(got[name], rows), name
+    # every backfilled window is marked historical, the live ones not (the record's mark)
+    marks: dict[str, list[tuple[int, int]]] = {}
+    for ns, topic, b in zip(table["time"], table["topic"], table["backfilled"], strict=True):
+        marks.setdefault(topic, []).append((ns, b))
+    want_marks = _marks(record)
+    assert {n: sorted(m) for n, m in marks.items()} == {n: sorted(m) for n, m in want_marks.items()}
+    assert 0 < sum(b for m in marks.values() for _t, b in m) < sum(map(len, marks.values()))
     units = dict(zip(table["topic"], table["unit"], strict=True))
     assert units["temp_avg"] == "degC" and units["temp_n"] == "1"
     # the position: the received fixes, interpolated to each window's time
@@ -221,6 +250,26 @@ def test_netcdf_holds_every_received_window_with_its_cell_method(
         assert ds["temp_all"].attrs["cell_methods"] == "time: point"
         assert ds["temp_avg"].attrs["standard_name"] == "sea_water_temperature"
         assert "cell_methods" not in ds["temp_n"].attrs and ds["temp_n"].attrs["units"] == "1"
+        # the historical mark: a CF flag variable, ancillary to every subscriber's
+        flag = ds["backfilled"]
+        assert list(flag.attrs["flag_values"]) == [0, 1]
+        assert flag.attrs["flag_meanings"] == "live backfilled"
+        assert "backfilled" in ds["temp_avg"].attrs["ancillary_variables"].split()
+        times = ds["time"].values[0].astype("datetime64[ns]").astype(np.int64)
+        got_marks = {}
+        for name in want:
+            has = ~np.isnan(ds[name].values[0])
+            got_marks[name] = sorted(
+                zip(times[has].tolist(), flag.values[0][has].astype(int).tolist(), strict=True)
+            )
+        for name, mark_rows in _marks(record).items():
+            marked = sorted(
+                (t, b)
+                for (t, b), (_t, v) in zip(sorted(mark_rows), sorted(want[name]), strict=True)
+                if not np.isnan(v)
+            )
+            assert [b for _t, b in got_marks[name]] == [b for _t, b in marked], name
+            assert any(b for _t, b in marked), name
 
 
 def test_subscribers_chosen_and_a_cut_record(record: Path, tmp_path: Path) -> None:

@@ -134,6 +134,8 @@ def test_the_subbroker_configures_runs_and_delivers_each_slot(broker: SubBroker)
         d for _, d in sink.got if f"{d['topic']}/{d['aggregation']}/{d['period_s']}" in direct
     ]
     assert len(delivered) == 40 * subscribers > 0  # every slot, to each subscriber
+    # live windows carry no historical mark (the payload's optional ``backfilled``)
+    assert not [d for _, d in sink.got if "backfilled" in d]
     for got in delivered:
         stream_id = direct[f"{got['topic']}/{got['aggregation']}/{got['period_s']}"]
         slot_index = got["slot"]

@@ -53,6 +53,7 @@ function LastValue({ source, s, now }: { source: DataSource; s: ChartSeries; now
       <span className="chart-last" data-testid={`last-${s.channel}`}>
         {last ? <>last {precise(last.value, 5)}{s.unit ? ` ${s.unit}` : ""}{last.windowS ? ` over ${fixed(last.windowS, 2)} s` : ""}{last.count !== undefined ? ` (${whole(last.count)} samples)` : ""}</> : "waiting for values…"}
       </span>
+      {last?.backfilled && <span className="backfilled" title="filled from the drone's archive after the link missed it; no live value is newer"> · backfilled</span>}
       {age !== null && <span className={age > 5 ? "stale" : "fresh"}> · {age < 1 ? "fresh" : `${fixed(age, 0)} s old`}</span>}
       <span className="muted"> · {count} kept</span>
     </span>

@@ -54,17 +54,17 @@ describe("RingBuffer.insertOrdered", () => {
 });
 
 describe("backfilled values in the source", () => {
-  it("go in place among the live ones, keep their mark, and replace a window already held", () => {
+  it("go in place among the live ones, keep their mark, and never double nor replace a live window", () => {
     const sock = new FakeSocket();
     const src = new WebSocketSource({ url: "ws://127.0.0.1/x", connect: () => sock, capacity: 100 });
     const got: Sample[][] = [];
     src.subscribe("sub_5", (b) => got.push([...b]));
     for (const t of [1, 2, 3, 7, 8]) sock.deliver(win(t, t * 10));
     for (const t of [4, 5, 6]) sock.deliver(win(t, t * 10 + 1, true));
-    sock.deliver(win(3, 30, true)); // a window the link did deliver: not twice
+    sock.deliver(win(3, 30, true)); // a window the link did deliver: not twice, the live one kept
     const h = src.history("sub_5");
     expect(h.map((s) => s.t)).toEqual([1, 2, 3, 4, 5, 6, 7, 8]);
-    expect(h.filter((s) => s.backfilled).map((s) => s.t)).toEqual([3, 4, 5, 6]);
+    expect(h.filter((s) => s.backfilled).map((s) => s.t)).toEqual([4, 5, 6]);
     expect(h.find((s) => s.t === 5)?.value).toBe(51);
     expect(got.at(-1)?.[0].backfilled).toBe(true);
   });

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Protocol
 
@@ -54,7 +54,8 @@ class Summary:
 
 class Sink(Protocol):
     """A format writer. ``open`` before any sample; ``write`` per batch (one
-    topic, time order within a topic); ``close`` last, with the summary."""
+    topic, time order within a topic; ``historical`` marks a received window
+    delivered by backfill); ``close`` last, with the summary."""
 
     def open(self, plan: ExportPlan, track: Track | None) -> None: ...
 
@@ -68,6 +69,7 @@ class Sink(Protocol):
         alt: np.ndarray,
         other: np.ndarray | None = None,
         qc: np.ndarray | None = None,
+        historical: np.ndarray | None = None,
     ) -> None: ...
 
     def close(self, plan: ExportPlan, summary: Summary) -> None: ...
@@ -102,7 +104,7 @@ def clocked(plan: ExportPlan, var: Variable | None, b: Batch) -> Batch:
     if b.publish_ns is None or not plan.two_clocks:
         return b
     if plan.clock == "instrument" and var is not None and var.instrument_clock:
-        return Batch(b.topic, b.value_type, b.publish_ns, b.value, b.time_ns)
+        return replace(b, time_ns=b.publish_ns, publish_ns=b.time_ns)
     return b
 
 
@@ -115,7 +117,8 @@ def _in_range(plan: ExportPlan, b: Batch) -> Batch:
     if keep.all():
         return b
     pub = b.publish_ns[keep] if b.publish_ns is not None else None
-    return Batch(b.topic, b.value_type, b.time_ns[keep], b.value[keep], pub)
+    hist = b.historical[keep] if b.historical is not None else None
+    return Batch(b.topic, b.value_type, b.time_ns[keep], b.value[keep], pub, hist)
 
 
 def read_track(
@@ -231,7 +234,9 @@ class _Batcher:
         pubs = [p.publish_ns for p in parts if p.publish_ns is not None]
         pub = np.concatenate(pubs) if len(pubs) == len(parts) else None
         value = np.concatenate([p.value for p in parts])
-        self.emit(var, Batch(topic, parts[0].value_type, time_ns, value, pub))
+        hists = [p.historical for p in parts if p.historical is not None]
+        hist = np.concatenate(hists) if len(hists) == len(parts) else None
+        self.emit(var, Batch(topic, parts[0].value_type, time_ns, value, pub, hist))
 
     def close(self) -> None:
         for topic in list(self.parts):
@@ -262,7 +267,8 @@ def export(
         nan = np.full(len(b.time_ns), np.nan)
         lat, lon, alt = track.at(b.time_ns) if track else (nan, nan, nan)
         flags = runner.flags(var, b.time_ns, b.value) if runner else None
-        sink.write(var, b.time_ns, b.value, lat, lon, alt, other_clock(plan, var, b), flags)
+        other = other_clock(plan, var, b)
+        sink.write(var, b.time_ns, b.value, lat, lon, alt, other, flags, b.historical)
         _account(summary, var, b, lat, lon, alt)
 
     batcher, seen = _Batcher(emit), 0

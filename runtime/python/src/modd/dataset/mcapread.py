@@ -67,6 +67,9 @@ class Batch:
     #: int64, the MCAP publish time: the publisher's stamp (the instrument's clock for
     #: a sensor declaring ``clock = instrument``); None where the reader has none.
     publish_ns: np.ndarray | None = None
+    #: bool, per sample: a base-station record's window delivered by backfill (the
+    #: delivered value's ``backfilled``), not live; None for the archive's samples.
+    historical: np.ndarray | None = None
 
 
 @dataclass

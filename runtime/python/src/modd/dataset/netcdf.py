@@ -151,6 +151,30 @@ def _flag_var(ds: Any, var: Variable) -> None:
     ds[var.name].ancillary_variables = name
 
 
+#: The historical mark of a received window (``--received``): 0 live, 1 backfilled.
+HISTORICAL = "backfilled"
+HISTORICAL_ATTRS: dict[str, Any] = {
+    "long_name": "how the base station received the window: live, or backfilled (historical: "
+    "recomputed from the drone's archive after the link missed it, delivered late)",
+    "flag_values": np.array([0, 1], dtype=np.int8),
+    "flag_meanings": "live backfilled",
+    "coverage_content_type": "auxiliaryInformation",
+    "coordinates": "time lat lon alt",
+}
+
+
+def _historical_var(ds: Any, plan: ExportPlan) -> None:
+    """The ``backfilled`` flag of every received window (an ancillary variable of each)."""
+    v = ds.createVariable(
+        HISTORICAL, "i1", DIMS, fill_value=np.int8(-127), chunksizes=(1, CHUNK), zlib=True
+    )
+    v.set_var_chunk_cache(size=CACHE_BYTES)
+    v.setncatts(HISTORICAL_ATTRS)
+    for var in plan.variables.values():
+        old = getattr(ds[var.name], "ancillary_variables", "")
+        ds[var.name].ancillary_variables = f"{old} {HISTORICAL}".strip()
+
+
 def create(
     path: Path, plan: ExportPlan, variables: list[Variable], flagged: set[str] | None = None
 ) -> Any:
@@ -215,6 +239,8 @@ class NetcdfSink:
         self.plan_other = plan.other_clock
         if plan.two_clocks:
             _second_time(self.ds, plan)
+        if plan.source == "received":
+            _historical_var(self.ds, plan)
 
     def write(
         self,
@@ -226,8 +252,11 @@ class NetcdfSink:
         alt: np.ndarray,
         other: np.ndarray | None = None,
         qc: np.ndarray | None = None,
+        historical: np.ndarray | None = None,
     ) -> None:
         sl = slice(self.rows, self.rows + len(time_ns))
+        if historical is not None:
+            self.ds[HISTORICAL][0, sl] = historical.astype(np.int8)
         self.ds["time"][0, sl] = time_ns / 1e9
         if other is not None:
             self.ds[self.plan_other][0, sl] = np.where(other == NAT, np.nan, other / 1e9)

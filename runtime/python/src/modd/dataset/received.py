@@ -163,7 +163,7 @@ def read_record(
     st = state if state is not None else FileState(path)
     st.size = path.stat().st_size
     names: dict[int, str] = {}
-    parts: dict[str, tuple[list[np.ndarray], list[np.ndarray]]] = {}
+    parts: _Parts = {}
     held = 0
     with open(path, "rb") as f:
         try:
@@ -177,10 +177,12 @@ def read_record(
                     name = names[rec.channel_id]
                     if only is not None and name not in only:
                         continue
-                    times, values = _window(path, f.tell(), rec.data)
-                    ts, vs = parts.setdefault(name, ([], []))
-                    ts.append(times)
-                    vs.append(values)
+                    for part, got in zip(
+                        parts.setdefault(name, ([], [], [])),
+                        _window(path, f.tell(), rec.data),
+                        strict=True,
+                    ):
+                        part.append(got)
                     held += 1
                     if held >= FLUSH:
                         yield from _flush(parts)
@@ -197,16 +199,23 @@ def read_record(
         progress(st.size)
 
 
-def _window(path: Path, offset: int, data: bytes) -> tuple[np.ndarray, np.ndarray]:
+def _window(path: Path, offset: int, data: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A window's points, each marked historical when it was delivered by backfill."""
     try:
         doc = json.loads(data)
-        return window_points(int(doc["start_ns"]), int(doc["end_ns"]), doc.get("value"))
-    except (ValueError, KeyError, TypeError) as exc:
+        times, values = window_points(int(doc["start_ns"]), int(doc["end_ns"]), doc.get("value"))
+    except (ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ArchiveError(path, offset, f"not a delivered value ({exc})") from None
+    return times, values, np.full(len(times), doc.get("backfilled") is True)
 
 
-def _flush(parts: dict[str, tuple[list[np.ndarray], list[np.ndarray]]]) -> Iterator[Batch]:
-    for name, (ts, vs) in parts.items():
+#: Per subscriber, the windows' times, values and historical marks not yet handed on.
+_Parts = dict[str, tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]]
+
+
+def _flush(parts: _Parts) -> Iterator[Batch]:
+    for name, (ts, vs, hs) in parts.items():
         if ts:
-            yield Batch(name, "float64", np.concatenate(ts), np.concatenate(vs))
+            t, v, h = np.concatenate(ts), np.concatenate(vs), np.concatenate(hs)
+            yield Batch(name, "float64", t, v, None, h)
     parts.clear()

@@ -74,6 +74,7 @@ class Resampler:
         alt: np.ndarray,
         other: np.ndarray | None = None,
         qc: np.ndarray | None = None,
+        historical: np.ndarray | None = None,
     ) -> None:
         self.add(var.topic, time_ns, value)  # a period has the axis's time only
 

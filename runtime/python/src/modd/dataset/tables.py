@@ -34,7 +34,9 @@ def _time_type(fmt: str) -> Any:
     return pa.timestamp("ns", tz="UTC") if fmt == "parquet" else pa.string()
 
 
-def _long_schema(fmt: str, other: str | None = None, qc: bool = False) -> Any:
+def _long_schema(
+    fmt: str, other: str | None = None, qc: bool = False, historical: bool = False
+) -> Any:
     import pyarrow as pa
 
     fields = [
@@ -50,6 +52,8 @@ def _long_schema(fmt: str, other: str | None = None, qc: bool = False) -> Any:
         fields.append((other, _time_type(fmt)))
     if qc:  # the aggregate QARTOD flag (qc.py); empty for a topic without tests
         fields.append(("qc_agg", pa.uint8()))
+    if historical:  # a received window: 1 backfilled (delivered late), 0 live
+        fields.append(("backfilled", pa.uint8()))
     if fmt == "parquet":
         fields.append(("geometry", pa.binary()))
     return pa.schema(fields)
@@ -75,6 +79,7 @@ class TableSink:
         self.parts: list[Any] = []
         self.rows = 0
         self.qc = False
+        self.historical = False
 
     def open(self, plan: ExportPlan, track: Track | None) -> None:
         import pyarrow.csv as pcsv
@@ -82,7 +87,8 @@ class TableSink:
 
         self.qc = bool(qc_config(plan))
         other = plan.other_clock if plan.two_clocks else None
-        self.schema = _long_schema(self.fmt, other, self.qc)
+        self.historical = plan.source == "received"
+        self.schema = _long_schema(self.fmt, other, self.qc, self.historical)
         if self.fmt == "parquet":
             self.schema = self.schema.with_metadata(schema_metadata(plan, long_form=True))
             self.writer = pq.ParquetWriter(self.path, self.schema, compression="zstd")
@@ -99,6 +105,7 @@ class TableSink:
         alt: np.ndarray,
         other: np.ndarray | None = None,
         qc: np.ndarray | None = None,
+        historical: np.ndarray | None = None,
     ) -> None:
         import pyarrow as pa
 
@@ -119,6 +126,9 @@ class TableSink:
             columns.append(_times(other, csv))
         if self.qc:
             columns.append(pa.array(qc) if qc is not None else pa.nulls(n, pa.uint8()))
+        if self.historical:
+            marks = historical if historical is not None else np.zeros(n, bool)
+            columns.append(pa.array(marks.astype(np.uint8)))
         if not csv:
             columns.append(wkb_points(lon, lat))
         self.parts.append(pa.record_batch(columns, schema=self.schema))
