@@ -45,6 +45,7 @@ pytestmark = [pytest.mark.e2e, pytest.mark.slow]
 PACKAGES = REPO / "build" / "package"
 RUN_S = 8.0
 SUBBROKER_TOML = "/etc/modd/subbroker.toml"
+PUBBROKER_JSON = "/etc/modd/pubbroker.json"
 CLEAN_ENV = ["/usr/bin/env", "-i", "PATH=/usr/sbin:/usr/bin:/sbin:/bin", "LANG=C.UTF-8"]
 
 
@@ -75,39 +76,46 @@ def ok(r: subprocess.CompletedProcess[str]) -> str:
 
 def as_modd(root: Path, tmp: Path, tag: str, *cmd: str) -> Proc:
     """An installed command run from the root as the service user (the units' User=)."""
-    shell = f'mount -t proc proc "{root}/proc" && exec chroot "{root}" "$@"'
+    # /proc and a /dev/shm of 1777 as a booted machine has them (zenoh's shared memory)
+    shell = (
+        f'mount -t proc proc "{root}/proc" && mkdir -p "{root}/dev/shm" && '
+        f'mount -t tmpfs -o mode=1777 shm "{root}/dev/shm" && exec chroot "{root}" "$@"'
+    )
     setpriv = ["/usr/bin/setpriv", "--reuid=modd", "--regid=modd", "--init-groups", "--"]
     argv = ["unshare", "-m", "--propagation", "private", "sh", "-c", shell, "sh"]
     return Proc(tag, [*argv, *CLEAN_ENV, "HOME=/var/lib/modd", *setpriv, *cmd], tmp / f"{tag}.log")
 
 
-def stage(root: Path) -> list[str]:
-    """The .debs copied into the root's /tmp; their paths there."""
-    out = []
-    for name in ("modd-drone", "modd-base"):
-        deb = built(name)
-        shutil.copy(deb, root / "tmp" / deb.name)
-        out.append(f"/tmp/{deb.name}")
-    return out
+def fresh_root(tmp: Path, name: str, package: str) -> Path:
+    """A clean root from the cached bookworm tarball, the package's .deb in its /tmp."""
+    tar = subprocess.run(
+        [str(REPO / "packaging" / "test-root.sh")], capture_output=True, text=True, check=True
+    ).stdout.strip()
+    root = tmp / name
+    root.mkdir()
+    subprocess.run(["tar", "-xf", tar, "-C", str(root)], check=True)
+    shutil.copy(built(package), root / "tmp")
+    return root
 
 
-def install_offline(root: Path, debs: list[str]) -> str:
+def install_offline(root: Path, package: str) -> str:
     probe = "import socket; socket.create_connection(('deb.debian.org', 80), 3)"
     offline = in_root(root, "/usr/bin/python3", "-c", probe, net=False)
     assert offline.returncode != 0, "the registry is reachable from the install namespace"
-    return ok(in_root(root, "/usr/bin/dpkg", "-i", *debs, net=False))
+    return ok(in_root(root, "/usr/bin/dpkg", "-i", f"/tmp/{built(package).name}", net=False))
 
 
-def configure(root: Path, tmp: Path, link: int, ingress: int, zport: int) -> Path:
-    """The operator's files in /etc/modd (before the install: postinst makes the key
-    0600 modd) and the zenoh credentials the test's subscriber shares."""
+def configure(drone: Path, base: Path, tmp: Path, link: int, ingress: int, zport: int) -> Path:
+    """The operator's files in each root's /etc/modd (before the install: postinst makes
+    the key 0600 modd) and the zenoh credentials the test's subscriber shares."""
     model = model_copy(tmp, "scenario1.modd")
-    etc = root / "etc" / "modd"
-    etc.mkdir(parents=True)
-    (etc / "model.json").write_text(model.read_text())
-    (etc / "link.key").write_text(KEY + "\n")
-    os.chmod(etc / "link.key", 0o644)  # a careless copy: postinst closes it
     m = load_model(model)
+    for root in (drone, base):
+        etc = root / "etc" / "modd"
+        etc.mkdir(parents=True)
+        (etc / "model.json").write_text(model.read_text())
+        (etc / "link.key").write_text(KEY + "\n")
+        os.chmod(etc / "link.key", 0o644)  # a careless copy: postinst closes it
     pb = {
         "name": m["drone"]["name"],
         "link": {"host": "127.0.0.1", "port": link, "key": "file:/etc/modd/link.key"},
@@ -116,8 +124,8 @@ def configure(root: Path, tmp: Path, link: int, ingress: int, zport: int) -> Pat
         "topics": [{"name": t.name, "type": t.type} for t in topics(m).values()],
         "status_period_s": 60,
     }
-    (etc / "pubbroker.json").write_text(json.dumps(pb))
-    (etc / "subbroker.toml").write_text(f"""
+    (drone / "etc/modd/pubbroker.json").write_text(json.dumps(pb))
+    (base / "etc/modd/subbroker.toml").write_text(f"""
 model = "/etc/modd/model.json"
 state_dir = "/var/lib/modd/state"
 [link]
@@ -130,8 +138,21 @@ credentials_dir = "/var/lib/modd/credentials"
 tcp = false
 status_period_s = 0.5
 """)
-    shutil.copytree(shared_credentials().dir, root / "var/lib/modd/credentials")
+    shutil.copytree(shared_credentials().dir, base / "var/lib/modd/credentials")
     return model
+
+
+def installed(root: Path, package: str) -> int:
+    """Offline install; what postinst made checked; the modd uid."""
+    print(install_offline(root, package))
+    uid, gid = modd_ids(root)
+    assert uid != 0 and gid != 0
+    key = (root / "etc/modd/link.key").stat()
+    assert (key.st_mode & 0o777, key.st_uid) == (0o600, uid)
+    state = (root / "var/lib/modd").stat()
+    assert (state.st_mode & 0o777, state.st_uid) == (0o750, uid)
+    ok(in_root(root, "/bin/chown", "-R", "modd:modd", "/var/lib/modd"))
+    return uid
 
 
 def modd_ids(root: Path) -> tuple[int, int]:
@@ -163,62 +184,53 @@ def archive_bytes(root: Path) -> int:
 
 
 def test_installed_offline_then_scenario_1_as_modd_then_upgrade_and_purge(tmp_path: Path) -> None:
-    built("modd-drone")
-    built("modd-base")
-    tar = subprocess.run(
-        [str(REPO / "packaging" / "test-root.sh")], capture_output=True, text=True, check=True
-    ).stdout.strip()
-    root = tmp_path / "root"
-    root.mkdir()
-    subprocess.run(["tar", "-xf", tar, "-C", str(root)], check=True)
+    """The drone and the base station are two machines: two roots (their private
+    Python trees share /usr/lib/modd/python, so one machine holds one of them)."""
+    drone = fresh_root(tmp_path, "drone", "modd-drone")
+    base = fresh_root(tmp_path, "base", "modd-base")
     link, ingress, zport = free_port(), free_port(), free_port()
-    model = configure(root, tmp_path, link, ingress, zport)
-    print(install_offline(root, stage(root)))
-    uid, gid = modd_ids(root)
-    assert uid != 0 and gid != 0
-    key = (root / "etc/modd/link.key").stat()
-    assert (key.st_mode & 0o777, key.st_uid) == (0o600, uid)
-    state = (root / "var/lib/modd").stat()
-    assert (state.st_mode & 0o777, state.st_uid) == (0o750, uid)
-    ok(in_root(root, "/bin/chown", "-R", "modd:modd", "/var/lib/modd"))
-    run_scenario_1(root, tmp_path, model, link, ingress, zport, uid)
-    upgrade_keeps_archive(root)
-    out = ok(in_root(root, "/usr/bin/dpkg", "--purge", "modd-drone", "modd-base", net=False))
-    assert "Left in place" in out and "/var/lib/modd" in out, out
-    assert not (root / "usr/bin/modd-pubbroker").exists()
-    assert list((root / "var/lib/modd/archive").glob("*.mcap"))  # the data stays
-    assert (root / "etc/modd/pubbroker.json").exists()
+    model = configure(drone, base, tmp_path, link, ingress, zport)
+    uids = {drone: installed(drone, "modd-drone"), base: installed(base, "modd-base")}
+    run_scenario_1(drone, base, tmp_path, model, (link, ingress, zport), uids)
+    upgrade_keeps_archive(drone, "modd-drone")
+    upgrade_keeps_archive(base, "modd-base")
+    for root, package in ((drone, "modd-drone"), (base, "modd-base")):
+        out = ok(in_root(root, "/usr/bin/dpkg", "--purge", package, net=False))
+        assert "Left in place" in out and "/var/lib/modd" in out, out
+        assert not (root / "usr/lib/modd/python").exists()
+        assert (root / "etc/modd/model.json").exists()
+    assert list((drone / "var/lib/modd/archive").glob("*.mcap"))  # the data stays
 
 
 def run_scenario_1(
-    root: Path, tmp: Path, model: Path, link: int, ingress: int, zport: int, uid: int
+    drone: Path, base: Path, tmp: Path, model: Path, ports: tuple[int, int, int], uids: Any
 ) -> None:
-    pb = as_modd(root, tmp, "pb", "/usr/bin/modd-pubbroker", "--config", "/etc/modd/pubbroker.json")
+    link, ingress, zport = ports
+    pb = as_modd(drone, tmp, "pb", "/usr/bin/modd-pubbroker", "--config", PUBBROKER_JSON)
     with processes(pb):
         wait_port(link, 20)
-        sb = as_modd(
-            root, tmp, "sb", "/usr/bin/modd-subbroker", "--config", "/etc/modd/subbroker.toml"
-        )
+        sb = as_modd(base, tmp, "sb", "/usr/bin/modd-subbroker", "--config", SUBBROKER_TOML)
         with processes(sb):
             wait_port(zport, 60)
             session = zenoh_client_of(zport)
             got = Collector()
             session.declare_subscriber("modd/usv/**", got.on_sample)
             assert sb.wait_log("config 1 running", 60), sb.log() + pb.log()
-            before = archive_bytes(root)
+            before = archive_bytes(drone)
             load = start_load(tmp, model, ingress, RUN_S)
             with processes(load):
                 time.sleep(RUN_S / 2)
-                running = root_processes(root)
-                assert pb.pid in running and sb.pid in running, running
-                assert set(running.values()) == {uid}, running  # nothing as root
+                for root, proc in ((drone, pb), (base, sb)):
+                    running = root_processes(root)
+                    assert proc.pid in running, running
+                    assert set(running.values()) == {uids[root]}, running  # nothing as root
                 load.p.wait(RUN_S + 20)
             time.sleep(1.5)
             values = got.snapshot()
             session.close()
-    assert archive_bytes(root) > before, pb.log()
+    assert archive_bytes(drone) > before, pb.log()
     assert len(values) == 7, (sorted(values), sb.log())
-    checked = check_against_archive(values, read_archive(root / "var/lib/modd/archive", model))
+    checked = check_against_archive(values, read_archive(drone / "var/lib/modd/archive", model))
     assert checked >= 7
 
 
@@ -249,27 +261,16 @@ def newer(root: Path, name: str) -> str:
     return f"/tmp/{out.name}"
 
 
-def upgrade_keeps_archive(root: Path) -> None:
-    archive = {f.name: f.stat().st_size for f in (root / "var/lib/modd/archive").glob("*.mcap")}
-    assert archive
-    env = root / "etc/modd/drone.env"
-    env.write_text(env.read_text() + "MODD_SENSORS_ARGS=--edited-by-operator\n")
+def upgrade_keeps_archive(root: Path, package: str) -> None:
+    state = {str(f): f.stat().st_size for f in (root / "var/lib/modd").rglob("*") if f.is_file()}
+    conffile = next((root / "etc/modd").glob("*.env"))
+    conffile.write_text(conffile.read_text() + "# edited by the operator\n")
     etc = {f.name: f.read_bytes() for f in (root / "etc/modd").iterdir()}
-    out = ok(
-        in_root(
-            root,
-            "/usr/bin/dpkg",
-            "-i",
-            newer(root, "modd-drone"),
-            newer(root, "modd-base"),
-            net=False,
-        )
-    )
+    out = ok(in_root(root, "/usr/bin/dpkg", "-i", newer(root, package), net=False))
     assert "Preparing to unpack" in out, out
-    status = ok(in_root(root, "/usr/bin/dpkg-query", "-W", "-f", "${Version}\\n", "modd-drone"))
+    status = ok(in_root(root, "/usr/bin/dpkg-query", "-W", "-f", "${Version}\\n", package))
     assert status.strip().endswith(".1"), status
-    after = {f.name: f.stat().st_size for f in (root / "var/lib/modd/archive").glob("*.mcap")}
-    assert after == archive
+    after = {str(f): f.stat().st_size for f in (root / "var/lib/modd").rglob("*") if f.is_file()}
+    assert after == state
     assert {f.name: f.read_bytes() for f in (root / "etc/modd").iterdir()} == etc
-    key = (root / "etc/modd/link.key").stat()
-    assert key.st_mode & 0o777 == 0o600
+    assert (root / "etc/modd/link.key").stat().st_mode & 0o777 == 0o600
