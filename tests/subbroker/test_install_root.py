@@ -1,5 +1,6 @@
-"""The install test (issue 43): the amd64 packages of `make package` installed into a
-clean Debian root (bookworm minbase, packaging/test-root.sh) with the network cut
+"""The install test (issue 43): the amd64 packages of `make package` installed into
+clean Debian roots, a drone's and a base station's (bookworm minbase,
+packaging/test-root.sh), with the network cut
 (`unshare -n`: no registry reachable), so that the maintainer scripts really run; then
 scenario 1 from the installed files as the service user (chroot + setpriv to `modd`):
 the installed PubBroker and SubBroker on loopback with a configuration of the test's,
