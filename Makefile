@@ -4,7 +4,7 @@ SHELL := /bin/bash
 ROOT := $(CURDIR)
 BUILD_TYPE ?= RelWithDebInfo
 
-.PHONY: run test setup build package check test-python test-cpp test-frontend bench screenshots clean
+.PHONY: run test setup build package package-test check test-python test-cpp test-frontend bench screenshots clean
 
 setup:
 	@scripts/setup.sh
@@ -27,6 +27,14 @@ run: build
 package: build
 	@scripts/setup.sh arm64
 	@packaging/build.sh
+
+# The install test (tests/subbroker/test_install_root.py): the amd64 packages (built
+# here if missing) installed offline into a clean Debian root (packaging/test-root.sh,
+# cached in build/installroot/), scenario 1 run from it as the modd user, upgrade, purge.
+package-test: setup
+	@ls build/package/modd-drone_*_amd64.deb build/package/modd-base_*_amd64.deb >/dev/null 2>&1 \
+	  || ARCHS=amd64 packaging/build.sh
+	@.venv/bin/pytest -q -m "e2e or slow" tests/subbroker/test_install_root.py
 
 test: build
 	@scripts/check.sh
