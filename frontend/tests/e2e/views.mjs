@@ -152,6 +152,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await page.getByRole("button", { name: "← Earlier" }).click();
       await expectText(page.getByTestId("time-window"), /\(30\.0 s\)/);
       // The cursor follows the mouse on every chart.
+      await both.locator(".u-over").scrollIntoViewIfNeeded(); // the link line may wrap (the last deploy's on-board answers)
       const over = await both.locator(".u-over").boundingBox();
       await page.mouse.move(over.x + over.width / 2, over.y + over.height / 2);
       const cursors = page.locator(".live-chart .u-cursor-x");
