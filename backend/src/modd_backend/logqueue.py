@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import atexit
 import logging
+import sys
 import threading
 from collections import deque
 from typing import IO
@@ -31,6 +32,17 @@ MAX_QUEUED = 10_000
 FLUSH_S = 0.05
 
 
+class _CurrentStderr:
+    """``sys.stderr`` as it is at each write: the writer thread outlives whoever
+    replaced it meanwhile (a test's captured stream, closed after the test)."""
+
+    def write(self, text: str) -> int:
+        return sys.stderr.write(text)
+
+    def flush(self) -> None:
+        sys.stderr.flush()
+
+
 class QueuedStreamHandler(logging.Handler):
     """A StreamHandler on ``stream`` behind a bounded deque and a writer thread."""
 
@@ -38,7 +50,7 @@ class QueuedStreamHandler(logging.Handler):
         super().__init__()
         self.dropped = 0
         self.waiting: deque[logging.LogRecord] = deque()
-        self.target = logging.StreamHandler(stream)
+        self.target = logging.StreamHandler(stream or _CurrentStderr())
         self.target.setFormatter(logging.Formatter("%(message)s"))
         self._stop = threading.Event()
         self._writer = threading.Thread(target=self._run, name="modd-log-writer", daemon=True)
