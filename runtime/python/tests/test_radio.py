@@ -10,6 +10,7 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 import pytest
 from modd.ports import free_port
@@ -176,6 +177,22 @@ def test_serial_relay_between_pseudo_terminals() -> None:
     assert down.passed == 10 and down.passed_bytes == len(frames)  # one packet per frame
 
 
+def _wait_udp_bound(port: int, timeout: float) -> None:
+    """Until some socket of this host is bound to UDP ``port`` (read from
+    /proc/net/udp: probing with a bind of our own could take the port first)."""
+    want = f":{port:04X}"
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if any(line.split()[1].endswith(want) for line in _udp_table()):
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"nothing bound UDP port {port} within {timeout} s")
+
+
+def _udp_table() -> list[str]:
+    return Path("/proc/net/udp").read_text().splitlines()[1:]
+
+
 def test_cli_prints_passed_and_dropped() -> None:
     target = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     target.bind(("127.0.0.1", 0))
@@ -193,13 +210,13 @@ def test_cli_prints_passed_and_dropped() -> None:
             "--radio",
             "loss=0.5,seed=2",
             "--duration",
-            "1.5",
+            "3",
         ],
         stdout=subprocess.PIPE,
         text=True,
     )
     try:
-        time.sleep(0.5)
+        _wait_udp_bound(port, 10.0)  # a fixed sleep lost the datagrams on a loaded machine
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
             for _ in range(40):
                 s.sendto(b"x", ("127.0.0.1", port))
