@@ -148,15 +148,18 @@ class WindowRecord:
             lo, hi = max(from_ns, e.epoch_ns), min(to_ns, end)
             if hi <= lo:
                 continue
+            running = i + 1 == len(self.epochs)  # its windows go on past to_ns
             for d in e.due:
                 if d.subscriber == subscriber:
-                    runs += self._gaps_of(e, d, lo, hi)
+                    runs += self._gaps_of(e, d, lo, hi, running)
         return runs
 
-    def _gaps_of(self, e: Epoch, d: Due, lo: int, hi: int) -> list[Run]:
+    def _gaps_of(self, e: Epoch, d: Due, lo: int, hi: int, running: bool = False) -> list[Run]:
         q = period_us(d.stream) * 1000
         first = max(0, -(-(lo - e.epoch_ns) // q))
         last = (hi - e.epoch_ns) // q  # windows [epoch + j q, epoch + (j+1) q) for j < last
+        if running and self._cut_short(d, e.epoch_ns + last * q, hi):
+            last += 1  # the derived window under way at hi: the live path never completes it
         runs: list[Run] = []
         start: int | None = None
         for j in range(first, last + 1):
@@ -179,6 +182,20 @@ class WindowRecord:
                 )
                 start = None
         return runs
+
+    def _cut_short(self, d: Due, start: int, hi: int) -> bool:
+        """Whether the derived window of ``d`` that began at ``start`` and is under way
+        at ``hi`` already missed a source window (an outage that ended inside it): the
+        fan-out delivers a derived window only whole, so it never comes live and is a
+        gap now, though it ends after ``hi`` (a fill asked just after the link came back).
+        A direct window under way is the live path's."""
+        if d.stream == d.source or start >= hi:
+            return False
+        live = self.received.get(d.source)
+        if live is None or not live.spans:
+            return False
+        seen = min(hi, live.spans[-1][1])
+        return seen > start and not live.covers(start, seen)
 
     # -- kept in the state directory (read back by record_file.read_record) -----------
 
