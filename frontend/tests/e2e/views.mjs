@@ -459,6 +459,12 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
         found = /usv\.gps\.latitude/.test((await form.textContent().catch(() => "")) ?? "");
       }
       if (!found) throw new Error("no archive file holds usv.gps.latitude");
+      // several position sources: the one with the most fixes is the first choice
+      const trackFrom = form.getByLabel("Track from");
+      if (await trackFrom.count()) {
+        const n = (await trackFrom.locator("option").allTextContents()).map((o) => Number(/\((\d+) fixes\)/.exec(o)?.[1]));
+        if (n.some((x) => !(x <= n[0]))) throw new Error(`"Track from" offers ${n.join(", ")} fixes, the first not the most`);
+      }
       await form.getByRole("button", { name: "Load for playback" }).click();
       const controls = page.getByRole("group", { name: "Playback controls" });
       await expectVisible(controls, 20000);
@@ -771,6 +777,7 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
       await panel("Plan");
       await waitUntil(async () => (await page.getByTestId("buffer-size").allTextContents()).join(",") === "28,28,6", 20000,
         async () => `buffer sizes ${(await page.getByTestId("buffer-size").allTextContents()).join(",")}`);
+      await expandShot("scenario1-counted");
     }],
   ];
 
