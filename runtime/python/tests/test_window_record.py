@@ -214,7 +214,11 @@ def test_the_derived_window_the_link_came_back_in_is_a_gap_at_once() -> None:
     rec.add_received(FAST, T0 + 8 * S + S // 2, T0 + 9 * S + S // 4)
     until = T0 + 9 * S + S // 4
     runs = rec.gaps("sub", T0, until)
-    assert [(r.from_ns, r.windows) for r in runs] == [(T0 + 2 * S, 4)]  # 2..10 s, 8..10 under way
+    # 2..8 s, then 8..10 s (under way) as a run of its own, last: the drone sends it once its
+    # archive holds its end, and it must hold up no other run meanwhile
+    assert [(r.from_ns, r.windows) for r in runs] == [(T0 + 2 * S, 3), (T0 + 8 * S, 1)]
+    rec.add_filled("sub", SLOW, T0 + 8 * S, T0 + 10 * S)  # filled: not asked again
+    assert [(r.from_ns, r.windows) for r in rec.gaps("sub", T0, until)] == [(T0 + 2 * S, 3)]
     # the fast stream's windows: the outage's alone (from 8.5 s, live)
     (fast,) = rec.gaps("fast", T0, until)
     assert (fast.from_ns, fast.windows) == (T0 + 3 * S, 22)

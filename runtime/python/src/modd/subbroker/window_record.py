@@ -158,8 +158,6 @@ class WindowRecord:
         q = period_us(d.stream) * 1000
         first = max(0, -(-(lo - e.epoch_ns) // q))
         last = (hi - e.epoch_ns) // q  # windows [epoch + j q, epoch + (j+1) q) for j < last
-        if running and self._cut_short(d, e.epoch_ns + last * q, hi):
-            last += 1  # the derived window under way at hi: the live path never completes it
         runs: list[Run] = []
         start: int | None = None
         for j in range(first, last + 1):
@@ -181,6 +179,23 @@ class WindowRecord:
                     )
                 )
                 start = None
+        under_way = e.epoch_ns + last * q
+        if running and under_way >= lo and self._cut_short(d, under_way, hi):
+            # the derived window under way at hi, which the live path never completes: a run
+            # of its own, last, so that the drone, which sends it once its archive holds its
+            # end, holds up no other run (the queue serves one run per turn)
+            runs.append(
+                Run(
+                    d.subscriber,
+                    d.stream,
+                    d.source,
+                    d.value_type,
+                    d.unit,
+                    e.config_id,
+                    under_way,
+                    1,
+                )
+            )
         return runs
 
     def _cut_short(self, d: Due, start: int, hi: int) -> bool:
@@ -189,7 +204,13 @@ class WindowRecord:
         fan-out delivers a derived window only whole, so it never comes live and is a
         gap now, though it ends after ``hi`` (a fill asked just after the link came back).
         A direct window under way is the live path's."""
-        if d.stream == d.source or start >= hi:
+        if (
+            d.stream == d.source
+            or start >= hi
+            or self.delivered(
+                d.subscriber, d.stream, d.source, start, start + period_us(d.stream) * 1000
+            )
+        ):
             return False
         live = self.received.get(d.source)
         if live is None or not live.spans:
