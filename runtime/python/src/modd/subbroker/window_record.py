@@ -156,6 +156,12 @@ class WindowRecord:
 
     def _gaps_of(self, e: Epoch, d: Due, lo: int, hi: int, running: bool = False) -> list[Run]:
         q = period_us(d.stream) * 1000
+
+        def run(start: int, windows: int) -> Run:
+            return Run(
+                d.subscriber, d.stream, d.source, d.value_type, d.unit, e.config_id, start, windows
+            )
+
         first = max(0, -(-(lo - e.epoch_ns) // q))
         last = (hi - e.epoch_ns) // q  # windows [epoch + j q, epoch + (j+1) q) for j < last
         runs: list[Run] = []
@@ -166,36 +172,14 @@ class WindowRecord:
                 if start is None:
                     start = s
             elif start is not None:
-                runs.append(
-                    Run(
-                        d.subscriber,
-                        d.stream,
-                        d.source,
-                        d.value_type,
-                        d.unit,
-                        e.config_id,
-                        start,
-                        (s - start) // q,
-                    )
-                )
+                runs.append(run(start, (s - start) // q))
                 start = None
         under_way = e.epoch_ns + last * q
         if running and under_way >= lo and self._cut_short(d, under_way, hi):
             # the derived window under way at hi, which the live path never completes: a run
             # of its own, last, so that the drone, which sends it once its archive holds its
             # end, holds up no other run (the queue serves one run per turn)
-            runs.append(
-                Run(
-                    d.subscriber,
-                    d.stream,
-                    d.source,
-                    d.value_type,
-                    d.unit,
-                    e.config_id,
-                    under_way,
-                    1,
-                )
-            )
+            runs.append(run(under_way, 1))
         return runs
 
     def _cut_short(self, d: Due, start: int, hi: int) -> bool:
