@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { colourOf, gridStep, headingSubscriber, positionSubscribers, positionTopics, trackPoints, valueAt, valueRange, withRecord } from "./track";
+import { colourOf, gridStep, headingSubscriber, positionPairs, positionSubscribers, positionTopics, trackPoints, valueAt, valueRange, withRecord } from "./track";
 import { scenario1 } from "./testing/scenario1";
 
 const s = (t: number, value: number) => ({ t, value });
@@ -17,6 +17,18 @@ describe("track", () => {
     expect(positionTopics(["usv.ctd.water_temperature", "usv.gps.longitude", "usv.gps.latitude"]))
       .toEqual({ lat: "usv.gps.latitude", lon: "usv.gps.longitude" });
     expect(positionTopics(["usv.gps.platitude"])).toEqual({ lat: null, lon: null });
+  });
+
+  it("pairs an archive's position topics by sensor, the one with the most fixes first", () => {
+    const t = (topic: string, messages: number) => ({ topic, messages });
+    expect(positionPairs([t("usv.gps.latitude", 9), t("usv.ctd.water_temperature", 50), t("usv.gps.longitude", 8),
+      t("usv.gnss.lat", 40), t("usv.gnss.lon", 41)])).toEqual([
+      { lat: "usv.gnss.lat", lon: "usv.gnss.lon", fixes: 40 },
+      { lat: "usv.gps.latitude", lon: "usv.gps.longitude", fixes: 8 },
+    ]);
+    // no sensor with both: every latitude with every longitude
+    expect(positionPairs([t("usv.a.lat", 3), t("usv.b.lon", 5)])).toEqual([{ lat: "usv.a.lat", lon: "usv.b.lon", fixes: 3 }]);
+    expect(positionPairs([t("usv.a.lat", 3)])).toEqual([]);
   });
 
   it("pairs fixes and puts them in metres from the first (an independent figure: 1e-3° of latitude ≈ 111.2 m)", () => {

@@ -38,6 +38,30 @@ export function positionTopics(topics: readonly string[]): { lat: string | null;
   return { lat: find(ROLE_NAMES.lat), lon: find(ROLE_NAMES.lon) };
 }
 
+/** A latitude and a longitude topic that make a track, and how many fixes it has (the fewer of their message counts). */
+export interface PositionPair { lat: string; lon: string; fixes: number }
+
+/**
+ * Every latitude/longitude pair of an archive file's topics (each latitude with the
+ * longitude of the same sensor, else with every longitude when no sensor has both),
+ * the pair with the most fixes first: the track a map draws unless the user picks another.
+ *
+ * @example
+ *   positionPairs([{ topic: "usv.gps.latitude", messages: 9 }, { topic: "usv.gps.longitude", messages: 9 },
+ *     { topic: "usv.gnss.lat", messages: 40 }, { topic: "usv.gnss.lon", messages: 41 }])
+ *   // [{ lat: "usv.gnss.lat", lon: "usv.gnss.lon", fixes: 40 }, { lat: "usv.gps.latitude", lon: "usv.gps.longitude", fixes: 9 }]
+ */
+export function positionPairs(topics: ReadonlyArray<{ topic: string; messages: number }>): PositionPair[] {
+  const role = (names: readonly string[]) => topics.filter((t) => names.includes((t.topic.split(".").pop() ?? "").toLowerCase()));
+  const lats = role(ROLE_NAMES.lat), lons = role(ROLE_NAMES.lon);
+  const sensor = (t: string) => t.slice(0, t.lastIndexOf("."));
+  const pair = (a: { topic: string; messages: number }, b: { topic: string; messages: number }) =>
+    ({ lat: a.topic, lon: b.topic, fixes: Math.min(a.messages, b.messages) });
+  const same = lats.flatMap((a) => lons.filter((b) => sensor(b.topic) === sensor(a.topic)).map((b) => pair(a, b)));
+  const pairs = same.length ? same : lats.flatMap((a) => lons.map((b) => pair(a, b)));
+  return pairs.sort((x, y) => y.fixes - x.fixes);
+}
+
 export interface TrackPoint { t: number; east: number; north: number; lat: number; lon: number; value: number | null }
 
 /** The sample of a sorted series at or before `t` (binary search), or null. */

@@ -202,6 +202,7 @@ export function collaboration({ page, baseUrl, password, imagesDir, ports, drone
       await paste(page);
       await expectText(page.locator(".text-toolbar [role=status]"), /^Applied to the diagram\./);
       await node(page, "sensor:imu").waitFor();
+      await shot(page, "text-pasted");
       await page.locator(".react-flow__pane").click({ position: { x: 8, y: 8 } });
       await page.keyboard.press("Control+z"); // one undo step takes the whole model back
       await node(page, "sensor:accelerometer").waitFor();

@@ -20,6 +20,7 @@ import { radio } from "./radio.mjs";
 import { instrumentParts, instruments } from "./instruments.mjs";
 import { startTileServer } from "./tiles.mjs";
 import { metadataJourney } from "./metadata.mjs";
+import { credentialsJourney } from "./credentials.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
@@ -139,7 +140,10 @@ try {
   // MODD_E2E_ONLY=metadata: log in, then only the dataset metadata steps (metadata.mjs).
   const metadataSteps = () => metadataJourney({ page, imagesDir, model: scenario1(pubPort, subPort), liveValues, baseUrl, password: PASSWORD,
     faultsFile: join(tmp, "sim-faults.json") });
-  const steps = only === "metadata" ? [loginStep(page, baseUrl), ...metadataSteps()] : only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
+  // MODD_E2E_ONLY=credentials: log in, then only the re-created credential file's step (credentials.mjs).
+  const credentialsSteps = () => credentialsJourney({ page, imagesDir, model: scenario1(pubPort, subPort), credsDir: creds,
+    droneDir: join(tmp, "drone"), dronePid: drone ? procs[0].pid : null });
+  const steps = only === "credentials" ? [loginStep(page, baseUrl), ...credentialsSteps()] : only === "metadata" ? [loginStep(page, baseUrl), ...metadataSteps()] : only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
     ...(only === "collab" || only === "instruments" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
     ...(only === "collab" || only === "instruments" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
@@ -151,6 +155,8 @@ try {
     // Issue 32: the four plug-and-play instruments declared, deployed and watched (last: it deploys its own model).
     ...(only === "instruments" ? [loginStep(page, baseUrl)] : []),
     ...(only === "views" || only === "collab" ? [] : instruments({ page, ports: { pub: pubPort, sub: subPort }, drone, liveValues, feedInstruments })),
+    // Issue 42: a deleted credential file announced (last: it restarts the SubBroker).
+    ...(only ? [] : credentialsSteps()),
   ];
   let broken = null;
   // MODD_E2E_KEEP_GOING=1: the later steps still run after a failure (to see them locally; they

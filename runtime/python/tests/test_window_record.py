@@ -192,3 +192,37 @@ def test_a_record_of_an_earlier_version_counts_derived_windows_by_their_source()
     del doc["derived"]
     back = read_record(doc)
     assert back.gaps("sub", T0, T0 + 10 * S) == []
+
+
+def test_the_derived_window_the_link_came_back_in_is_a_gap_at_once() -> None:
+    """Fill gaps asked just after the link came back (issue 42's rehearsal): the 2 s
+    window under way then lost its first source windows in the outage, so the fan-out
+    never delivers it; it is asked for with the outage's windows (was: left out, as
+    ending after the last live window, and missing on the chart after the fill). A
+    direct window under way, or a derived one whose sources all came, is not."""
+    rec = WindowRecord()
+    rec.begin(
+        Epoch(
+            "m",
+            1,
+            T0,
+            [Due("sub", SLOW, FAST, "m", "float32"), Due("fast", FAST, FAST, "m", "float32")],
+        )
+    )
+    rec.add_received(FAST, T0, T0 + 3 * S)  # the outage: 3 s .. 8.5 s
+    rec.add_derived(SLOW, T0, T0 + 2 * S)
+    rec.add_received(FAST, T0 + 8 * S + S // 2, T0 + 9 * S + S // 4)
+    until = T0 + 9 * S + S // 4
+    runs = rec.gaps("sub", T0, until)
+    # 2..8 s, then 8..10 s (under way) as a run of its own, last: the drone sends it once its
+    # archive holds its end, and it must hold up no other run meanwhile
+    assert [(r.from_ns, r.windows) for r in runs] == [(T0 + 2 * S, 3), (T0 + 8 * S, 1)]
+    rec.add_filled("sub", SLOW, T0 + 8 * S, T0 + 10 * S)  # filled: not asked again
+    assert [(r.from_ns, r.windows) for r in rec.gaps("sub", T0, until)] == [(T0 + 2 * S, 3)]
+    # the fast stream's windows: the outage's alone (from 8.5 s, live)
+    (fast,) = rec.gaps("fast", T0, until)
+    assert (fast.from_ns, fast.windows) == (T0 + 3 * S, 22)
+    # no outage inside the window under way: the live path completes it
+    rec.add_received(FAST, T0 + 3 * S, T0 + 8 * S + S // 2)
+    rec.add_derived(SLOW, T0 + 2 * S, T0 + 8 * S)
+    assert rec.gaps("sub", T0, until) == []

@@ -6,7 +6,9 @@
  * When the file holds a latitude and a longitude, they are read too and the
  * map beside the charts (above them in a narrow panel) shows the track up to
  * the cursor, coloured by a picked topic; it stays in view while the charts
- * scroll. Loading brings the playback into view.
+ * scroll. A file with several position sources (a GPS and an NMEA GNSS, say)
+ * lets the user pick which track to draw, the one with the most fixes first.
+ * Loading brings the playback into view.
  */
 import { useEffect, useMemo, useRef, useState } from "react";
 import { PlaybackSource, archiveSamples } from "../../dataSources/PlaybackSource";
@@ -17,7 +19,7 @@ import { useModel } from "../../editor/useEditor";
 import { useServices } from "../../app/services";
 import type { ArchiveFile } from "../../api/types";
 import { LiveChart } from "../monitor/LiveChart";
-import { positionTopics } from "../../core/track";
+import { positionPairs, type PositionPair } from "../../core/track";
 import { TrackMap } from "../map/MapPanel";
 
 const MAX_POINTS = 5000;
@@ -46,8 +48,11 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
   const [rate, setRate] = useState(10);
   const [charts, setCharts] = useState<string[][]>([]);
   const [win, setWin] = useState<ViewWindow>(DEFAULT_WINDOW);
-  const position = positionTopics(file.topics.map((tp) => tp.topic));
-  const track = position.lat && position.lon ? { lat: position.lat, lon: position.lon } : null;
+  const pairs = useMemo(() => positionPairs(file.topics), [file.topics]);
+  const [chosen, setChosen] = useState(0);
+  const position: PositionPair | null = pairs[chosen] ?? pairs[0] ?? null;
+  // the track of the last load (another choice is read at the next load)
+  const [track, setTrack] = useState<PositionPair | null>(null);
   const controls = useRef<HTMLDivElement>(null);
   // Loaded: the controls, the map and the first charts come into view together.
   useEffect(() => { if (source) controls.current?.scrollIntoView({ block: "start" }); }, [source]);
@@ -57,7 +62,7 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
     e.preventDefault();
     setLoaded({ busy: true });
     try {
-      const wanted = [...new Set([...picked, ...[position.lat, position.lon].filter((x): x is string => !!x)])];
+      const wanted = [...new Set([...picked, ...(position ? [position.lat, position.lon] : [])])];
       // Two reads at a time: series reads are heavy routes, limited per user (backend settings: heavy_per_user).
       const all: Awaited<ReturnType<typeof api.readArchive>>[] = [];
       for (let i = 0; i < wanted.length; i += 2) {
@@ -66,6 +71,7 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
       }
       const src = new PlaybackSource(Object.fromEntries(all.map((s) => [s.topic, archiveSamples(s.points)])));
       setCharts(picked.map((p) => [p]));
+      setTrack(position);
       setWin({ follow: false, from: src.start, to: Math.max(src.end, src.start + 1) });
       setLoaded({ source: src });
     } catch (err) {
@@ -82,6 +88,13 @@ export function Playback({ file, bound }: { file: ArchiveFile; bound: (s: string
         {file.topics.map((tp) => (
           <label key={tp.topic}><input type="checkbox" checked={picked.includes(tp.topic)} onChange={() => toggle(tp.topic)} />{topicLabel(model, tp.topic)}</label>
         ))}
+        {pairs.length > 1 && (
+          <label>Track from{" "}
+            <select aria-label="Track from" value={chosen} onChange={(e) => setChosen(Number(e.target.value))}>
+              {pairs.map((p, i) => <option key={`${p.lat}+${p.lon}`} value={i}>{p.lat} + {p.lon.split(".").pop()} ({p.fixes} fixes)</option>)}
+            </select>
+          </label>
+        )}
         <input aria-label="Playback from (s after the start)" placeholder="from s" value={range.from} onChange={(e) => setRange({ ...range, from: e.target.value })} size={6} />
         <input aria-label="Playback to (s after the start)" placeholder="to s" value={range.to} onChange={(e) => setRange({ ...range, to: e.target.value })} size={6} />
         <button type="submit" disabled={picked.length === 0 || loaded.busy}>Load for playback</button>

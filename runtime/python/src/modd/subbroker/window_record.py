@@ -148,13 +148,20 @@ class WindowRecord:
             lo, hi = max(from_ns, e.epoch_ns), min(to_ns, end)
             if hi <= lo:
                 continue
+            running = i + 1 == len(self.epochs)  # its windows go on past to_ns
             for d in e.due:
                 if d.subscriber == subscriber:
-                    runs += self._gaps_of(e, d, lo, hi)
+                    runs += self._gaps_of(e, d, lo, hi, running)
         return runs
 
-    def _gaps_of(self, e: Epoch, d: Due, lo: int, hi: int) -> list[Run]:
+    def _gaps_of(self, e: Epoch, d: Due, lo: int, hi: int, running: bool = False) -> list[Run]:
         q = period_us(d.stream) * 1000
+
+        def run(start: int, windows: int) -> Run:
+            return Run(
+                d.subscriber, d.stream, d.source, d.value_type, d.unit, e.config_id, start, windows
+            )
+
         first = max(0, -(-(lo - e.epoch_ns) // q))
         last = (hi - e.epoch_ns) // q  # windows [epoch + j q, epoch + (j+1) q) for j < last
         runs: list[Run] = []
@@ -165,20 +172,35 @@ class WindowRecord:
                 if start is None:
                     start = s
             elif start is not None:
-                runs.append(
-                    Run(
-                        d.subscriber,
-                        d.stream,
-                        d.source,
-                        d.value_type,
-                        d.unit,
-                        e.config_id,
-                        start,
-                        (s - start) // q,
-                    )
-                )
+                runs.append(run(start, (s - start) // q))
                 start = None
+        under_way = e.epoch_ns + last * q
+        if running and under_way >= lo and self._cut_short(d, under_way, hi):
+            # the derived window under way at hi, which the live path never completes: a run
+            # of its own, last, so that the drone, which sends it once its archive holds its
+            # end, holds up no other run (the queue serves one run per turn)
+            runs.append(run(under_way, 1))
         return runs
+
+    def _cut_short(self, d: Due, start: int, hi: int) -> bool:
+        """Whether the derived window of ``d`` that began at ``start`` and is under way
+        at ``hi`` already missed a source window (an outage that ended inside it): the
+        fan-out delivers a derived window only whole, so it never comes live and is a
+        gap now, though it ends after ``hi`` (a fill asked just after the link came back).
+        A direct window under way is the live path's."""
+        if (
+            d.stream == d.source
+            or start >= hi
+            or self.delivered(
+                d.subscriber, d.stream, d.source, start, start + period_us(d.stream) * 1000
+            )
+        ):
+            return False
+        live = self.received.get(d.source)
+        if live is None or not live.spans:
+            return False
+        seen = min(hi, live.spans[-1][1])
+        return seen > start and not live.covers(start, seen)
 
     # -- kept in the state directory (read back by record_file.read_record) -----------
 
