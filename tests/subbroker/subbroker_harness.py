@@ -7,6 +7,7 @@ Every process is stopped by its PID (SIGTERM, then SIGKILL after a bound).
 
 from __future__ import annotations
 
+import bisect
 import contextlib
 import functools
 import json
@@ -286,8 +287,16 @@ def read_archive(
 
 
 def window_samples(samples: list[tuple[int, Any]], start_ns: int, end_ns: int) -> list[Any]:
-    """Samples stamped in [start, end): the PubBroker's window rule."""
-    return [v for t, v in samples if start_ns <= t < end_ns]
+    """Samples stamped in [start, end): the PubBroker's window rule. ``samples``
+    sorted by time, as read_archive gives them: a bisection, not a scan (an
+    hour's soak checks 75,000 windows against 270,000 samples)."""
+    lo = bisect.bisect_left(samples, start_ns, key=_stamp)
+    hi = bisect.bisect_left(samples, end_ns, lo, key=_stamp)
+    return [v for _, v in samples[lo:hi]]
+
+
+def _stamp(sample: tuple[int, Any]) -> int:
+    return sample[0]
 
 
 def oracle_value(aggregation: str, samples: list[Any]) -> tuple[Any, int | None]:
