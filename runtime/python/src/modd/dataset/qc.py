@@ -19,7 +19,7 @@ import numpy as np
 
 from .plan import ExportPlan, PlanError, Variable
 from .qcconfig import QcConfig
-from .qcfast import fast_test
+from .qcfast import fast_test, qartod_compare
 
 #: Samples of a topic's previous batch kept as context for the next (spike, rate of
 #: change and flat line look back; a flat line longer than this is cut at a batch's start).
@@ -90,9 +90,12 @@ def time_scale(time_ns: np.ndarray) -> int | None:
     return scale if median * scale >= 1e9 else None
 
 
-def evaluable(tests: dict[str, dict[str, Any]], time_ns: np.ndarray) -> dict[str, dict[str, Any]]:
-    """``tests`` less the timed ones when the series' time cannot be scaled."""
-    if time_scale(time_ns) is not None:
+def evaluable(
+    tests: dict[str, dict[str, Any]], time_ns: np.ndarray, scale: int | None = 0
+) -> dict[str, dict[str, Any]]:
+    """``tests`` less the timed ones when the series' time cannot be scaled (``scale``:
+    its ``time_scale`` when known, 0 to compute it)."""
+    if (time_scale(time_ns) if scale == 0 else scale) is not None:
         return tests
     return {k: v for k, v in tests.items() if k not in TIMED}
 
@@ -109,25 +112,38 @@ def _scaled(name: str, params: dict[str, Any], scale: int) -> dict[str, Any]:
 
 
 def run_tests(
-    tests: dict[str, dict[str, Any]], time_ns: np.ndarray, value: np.ndarray
+    tests: dict[str, dict[str, Any]],
+    time_ns: np.ndarray,
+    value: np.ndarray,
+    scale_known: int | None = 0,
 ) -> np.ndarray:
     """The aggregate flag (uint8) of ``tests`` on one series, as ``ioos_qc`` computes it
-    (the timed tests on a sub-second series in scaled time, ``time_scale``)."""
-    from ioos_qc import qartod
-
+    (the timed tests on a sub-second series in scaled time, ``time_scale``; ``scale_known``:
+    that scale when known, 0 to compute it)."""
     plain = value.astype(np.float64)
-    inp = np.ma.masked_invalid(plain)
-    scale = time_scale(time_ns) or 1
-    base = int(time_ns[0]) if len(time_ns) else 0
-    tinp = (base + (time_ns.astype(np.int64) - base) * scale).astype("datetime64[ns]")
+    slow = any(fast_test(k, p) is None for k, p in tests.items())
+    inp = np.ma.masked_invalid(plain) if slow else plain  # the library's tests take it masked
+    tinp, scale = None, 1
+    if any(k in TIMED for k in tests):
+        scale = (time_scale(time_ns) if scale_known == 0 else scale_known) or 1
+        base = int(time_ns[0]) if len(time_ns) else 0
+        tinp = (base + (time_ns.astype(np.int64) - base) * scale).astype("datetime64[ns]")
     flags = []
     for name, params in tests.items():
         fast = fast_test(name, params)  # the same flags, vectorised (qcfast.py)
-        fn = fast or getattr(qartod, name)
+        fn = fast or _library(name)
         timed = name in TIMED
         args = {"inp": plain if fast else inp} | ({"tinp": tinp} if timed else {})
         flags.append(np.asarray(fn(**args, **(_scaled(name, params, scale) if timed else params))))
-    return np.asarray(qartod.qartod_compare(flags), dtype=np.uint8)
+    return np.asarray(qartod_compare(flags), dtype=np.uint8)
+
+
+def _library(name: str) -> Any:
+    """``ioos_qc``'s test ``name`` (imported only when a test has no vectorised twin:
+    the import costs pandas')."""
+    from ioos_qc import qartod
+
+    return getattr(qartod, name)
 
 
 class QcRunner:
@@ -145,7 +161,8 @@ class QcRunner:
         t0, v0 = self.tails.get(var.topic, (time_ns[:0], value[:0]))
         t, v = np.concatenate([t0, time_ns]), np.concatenate([v0, value])
         self.tails[var.topic] = (t[-TAIL:], v[-TAIL:])
-        run = evaluable(tests, t)
+        scale = time_scale(t) if any(k in TIMED for k in tests) else 1
+        run = evaluable(tests, t, scale)
         if len(run) < len(tests):
             self.notes[var.topic] = (
                 f"topic {var.topic}: {' and '.join(k for k in tests if k not in run)} not "
@@ -154,4 +171,4 @@ class QcRunner:
             )
         if not run:
             return np.full(len(time_ns), 2, dtype=np.uint8)  # NOT_EVALUATED
-        return run_tests(run, t, v)[len(t0) :]
+        return run_tests(run, t, v, scale)[len(t0) :]
