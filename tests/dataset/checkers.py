@@ -128,3 +128,20 @@ def nc_values(ds: Any, name: str) -> np.ndarray:
 def nc_times(ds: Any, name: str) -> np.ndarray:
     times = np.asarray(ds["time"].values[0]).astype("datetime64[ns]").astype("int64")
     return np.asarray(times[~np.isnan(ds[name].values[0])])
+
+
+def assert_location_flags(ds: Any, table: Any) -> None:
+    """The location test's flags of every sample's position, NetCDF (``ds``, read with
+    ``mask_and_scale=False``) and Parquet (``table``, pandas), are ``ioos_qc``'s
+    ``location_test`` run here on the positions the files carry."""
+    from ioos_qc import qartod
+
+    assert ds["lat"].attrs["ancillary_variables"] == "location_qc_agg"
+    lat, lon = ds["lat"].values[0], ds["lon"].values[0]
+    rows = ds["location_qc_agg"].values[0] != -127
+    want = np.asarray(qartod.location_test(lon=lon[rows], lat=lat[rows]), dtype=np.uint8)
+    assert ds["location_qc_agg"].values[0][rows].tolist() == want.tolist()
+    lat, lon = table["lat"].to_numpy(np.float64), table["lon"].to_numpy(np.float64)
+    want = np.asarray(qartod.location_test(lon=lon, lat=lat), dtype=np.uint8)
+    assert table["location_qc_agg"].tolist() == want.tolist()
+    assert 1 in want

@@ -25,6 +25,7 @@ import pyarrow.parquet as pq
 import pytest
 from checkers import (
     assert_compliant,
+    assert_location_flags,
     dsg_readers,
     modd_dataset,
     nc_times,
@@ -265,6 +266,7 @@ def test_quality_flags_are_ioos_qcs_on_the_archive(
             assert np.array_equal(flags[flags != -127], want), topic
             assert table[table["topic"] == topic]["qc_agg"].tolist() == list(want), topic
         assert "autopilot_roll_qc_agg" not in ds
+        assert_location_flags(ds, table)
 
 
 def test_every_position_is_the_simulators(
@@ -296,7 +298,8 @@ def test_tracks_open_as_geojson_and_gpx(exports: dict[str, Path]) -> None:
     assert temp is not None and temp.get("unit") == "degC"
     assert (
         exports["csv"].read_text().splitlines()[0]
-        == '"time","topic","value","unit","lat","lon","alt","instrument_time","qc_agg"'
+        == '"time","topic","value","unit","lat","lon","alt","instrument_time","qc_agg",'
+        '"location_qc_agg"'
     )
 
 

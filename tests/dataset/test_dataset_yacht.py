@@ -30,6 +30,7 @@ import pynmea2  # type: ignore[import-untyped]
 import pytest
 from checkers import (
     assert_compliant,
+    assert_location_flags,
     dsg_readers,
     modd_dataset,
     nc_times,
@@ -326,6 +327,7 @@ def test_quality_flags_are_ioos_qcs_on_the_instruments_clock(
             assert got[got != -127].tolist() == want, topic
             assert table[table["topic"] == topic]["qc_agg"].tolist() == want, topic
             seen |= set(want)
+        assert_location_flags(ds, table)
     assert seen > {1}, seen  # the real track is not all PASS
 
 

@@ -115,3 +115,26 @@ def test_qartod_compare_is_ioos_qcs(seed: int) -> None:
             flags = [rng.choice([0, 1, 2, 3, 4, 9], n).astype(np.uint8) for _ in range(k)]
             want = _library("qartod_compare", flags)
             assert qcfast.qartod_compare(flags).tolist() == want.tolist(), flags
+
+
+def _positions(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
+    lon = rng.uniform(-200, 200, n)
+    lat = rng.uniform(-100, 100, n)
+    for a in (lon, lat):
+        a[rng.random(n) < 0.1] = np.nan
+        a[rng.random(n) < 0.03] = rng.choice([np.inf, -np.inf])
+    lon[rng.random(n) < 0.02] = 10.0  # on the box's border
+    return lon, lat
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_location_tests_are_ioos_qcs(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for n in (0, 1, 2, 50, int(rng.integers(100, 400))):
+        lon, lat = _positions(rng, n)
+        want = _library("location_test", lon=lon, lat=lat)
+        assert qcfast.location_test(lon, lat).tolist() == want.tolist(), (lon, lat)
+        for bbox in ([-20.0, -30.0, 10.0, 40.0], [-180.0, -90.0, 180.0, 90.0]):
+            want = _library("location_bounds_test", lon=lon, lat=lat, shape=list(bbox))
+            got = qcfast.location_bounds_test(lon, lat, bbox)
+            assert got.tolist() == want.tolist(), (bbox, lon, lat)

@@ -31,7 +31,7 @@ from .export import NAT, Summary
 from .ncmeta import coverage, global_attributes, instrument_variables, platform_variable
 from .plan import ExportPlan, Variable
 from .position import Track
-from .qc import FLAG_ATTRS, qc_config
+from .qc import FLAG_ATTRS, location_config, qc_config
 from .record import dtype_of
 from .resample import WideTable
 
@@ -151,6 +151,32 @@ def _flag_var(ds: Any, var: Variable) -> None:
     ds[var.name].ancillary_variables = name
 
 
+#: The location test's flag of each sample's position (lat, lon), their ancillary variable.
+LOCATION = "location_qc_agg"
+
+
+def _location_var(ds: Any) -> None:
+    v = ds.createVariable(
+        LOCATION,
+        "i1",
+        DIMS,
+        fill_value=np.int8(-127),
+        chunksizes=(1, CHUNK),
+        zlib=True,
+        complevel=1,
+    )
+    v.set_var_chunk_cache(size=CACHE_BYTES)
+    v.setncatts(
+        FLAG_ATTRS
+        | {
+            "long_name": "platform position (lat, lon): aggregate QARTOD location test flag",
+            "coordinates": "time lat lon alt",
+        }
+    )
+    ds["lat"].ancillary_variables = LOCATION
+    ds["lon"].ancillary_variables = LOCATION
+
+
 #: The historical mark of a received window (``--received``): 0 live, 1 backfilled.
 HISTORICAL = "backfilled"
 HISTORICAL_ATTRS: dict[str, Any] = {
@@ -241,6 +267,8 @@ class NetcdfSink:
             _second_time(self.ds, plan)
         if plan.source == "received":
             _historical_var(self.ds, plan)
+        if location_config(plan) is not None:
+            _location_var(self.ds)
 
     def write(
         self,
@@ -253,6 +281,7 @@ class NetcdfSink:
         other: np.ndarray | None = None,
         qc: np.ndarray | None = None,
         historical: np.ndarray | None = None,
+        location: np.ndarray | None = None,
     ) -> None:
         sl = slice(self.rows, self.rows + len(time_ns))
         if historical is not None:
@@ -266,6 +295,8 @@ class NetcdfSink:
         self.ds[var.name][0, sl] = value
         if qc is not None:
             self.ds[f"{var.name}_qc_agg"][0, sl] = qc
+        if location is not None:
+            self.ds[LOCATION][0, sl] = location
         self.rows = sl.stop
 
     def close(self, plan: ExportPlan, summary: Summary) -> None:

@@ -9,6 +9,8 @@ export reads it (one batch: at most ``export.BATCH`` samples) with the last
 ``TAIL`` samples of the topic's previous batch before it as context, so
 memory stays bounded; the aggregate flag is ``ioos_qc.qartod.qartod_compare``
 of the tests' flags (1 PASS, 2 NOT_EVALUATED, 3 SUSPECT, 4 FAIL, 9 MISSING).
+Every sample's position (the track interpolated to its time) gets the location
+test's flag when the model declares a position (``location_flags``).
 """
 
 from __future__ import annotations
@@ -18,8 +20,8 @@ from typing import Any
 import numpy as np
 
 from .plan import ExportPlan, PlanError, Variable
-from .qcconfig import QcConfig
-from .qcfast import fast_test, qartod_compare
+from .qcconfig import POSITION, QcConfig
+from .qcfast import fast_test, location_bounds_test, location_test, qartod_compare
 
 #: Samples of a topic's previous batch kept as context for the next (spike, rate of
 #: change and flat line look back; a flat line longer than this is cut at a batch's start).
@@ -44,10 +46,13 @@ def qc_config(plan: ExportPlan) -> QcConfig:
     a topic of the file that the model does not have is a PlanError."""
     given = plan.metadata.qc
     known = plan.model_topics or tuple(plan.variables)
-    unknown = [t for t in given if t not in known]  # one left out by --topics is no error
+    unknown = [t for t in given if t not in known and t != POSITION]  # --topics: no error
     if unknown:
         source = plan.metadata.source or "dataset metadata"
         raise PlanError(f"{source}: qc.{unknown[0]}: not a topic of the model ({', '.join(known)})")
+    if POSITION in given and plan.position is None:
+        source = plan.metadata.source or "dataset metadata"
+        raise PlanError(f"{source}: qc.{POSITION}: the model declares no position")
     out: QcConfig = {}
     if plan.source == "received":  # a window's aggregate (a count, a spread) is no sample
         return out
@@ -58,6 +63,25 @@ def qc_config(plan: ExportPlan) -> QcConfig:
         if tests:
             out[topic] = tests
     return out
+
+
+def location_config(plan: ExportPlan) -> dict[str, Any] | None:
+    """The location test's parameters (``qc.position.location_test``): it runs whenever
+    the model declares a position (an impossible position needs no configuration), on
+    every sample's position; None without a position, or for received windows."""
+    if plan.position is None or plan.source == "received":
+        return None
+    params: dict[str, Any] = plan.metadata.qc.get(POSITION, {}).get("location_test", {})
+    return params
+
+
+def location_flags(params: dict[str, Any], lat: np.ndarray, lon: np.ndarray) -> np.ndarray:
+    """The aggregate of ``ioos_qc``'s ``location_test`` (impossible positions) and, with
+    a ``bbox``, its ``location_bounds_test`` (outside the box FAIL) on these positions."""
+    flags = [location_test(lon, lat)]
+    if "bbox" in params:
+        flags.append(location_bounds_test(lon, lat, params["bbox"]))
+    return np.asarray(qartod_compare(flags), dtype=np.uint8)
 
 
 #: The tests that read the time: ``ioos_qc`` 3.0 counts it in whole seconds (``astype
@@ -151,8 +175,13 @@ class QcRunner:
 
     def __init__(self, plan: ExportPlan) -> None:
         self.config = qc_config(plan)
+        self.location = location_config(plan)
         self.tails: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.notes: dict[str, str] = {}  # by topic: tests not evaluated, and why
+
+    def location_flags(self, lat: np.ndarray, lon: np.ndarray) -> np.ndarray | None:
+        """The location test's flags of these positions; None when it does not run."""
+        return None if self.location is None else location_flags(self.location, lat, lon)
 
     def flags(self, var: Variable, time_ns: np.ndarray, value: np.ndarray) -> np.ndarray | None:
         tests = self.config.get(var.topic)

@@ -178,6 +178,37 @@ def rate_of_change_test(
     return flags
 
 
+def location_test(lon: np.ndarray, lat: np.ndarray) -> np.ndarray:
+    """``ioos_qc.qartod.location_test(lon, lat)`` (no ``range_max``): MISSING where the
+    position is missing (NaN or infinite), FAIL where only one coordinate is, or where
+    ``|lat| > 90`` or ``|lon| > 180`` (an infinity compared, as the library does)."""
+    x, y = np.asarray(lon, dtype=np.float64), np.asarray(lat, dtype=np.float64)
+    if x.shape != y.shape:
+        raise ValueError(f"Longitude ({x.shape}) and latitude ({y.shape}) are different sizes.")
+    no_x, no_y = ~np.isfinite(x), ~np.isfinite(y)
+    flags = np.ones(len(x), dtype=np.uint8)
+    flags[no_x | no_y] = MISSING
+    flags[no_x != no_y] = FAIL
+    with np.errstate(invalid="ignore"):
+        flags[(np.abs(y) > 90) | (np.abs(x) > 180)] = FAIL
+    return flags
+
+
+def location_bounds_test(lon: np.ndarray, lat: np.ndarray, bbox: list[float]) -> np.ndarray:
+    """``ioos_qc.qartod.location_bounds_test(lon, lat, shape=bbox)`` with the legacy
+    ``bbox`` ``[lon_min, lat_min, lon_max, lat_max]``: FAIL outside the box (its border
+    is outside, as for shapely), MISSING where a coordinate is NaN."""
+    x, y = np.asarray(lon, dtype=np.float64), np.asarray(lat, dtype=np.float64)
+    x0, y0, x1, y1 = bbox
+    nan = np.isnan(x) | np.isnan(y)
+    flags = np.ones(len(x), dtype=np.uint8)
+    flags[nan] = MISSING
+    with np.errstate(invalid="ignore"):
+        inside = (x > x0) & (x < x1) & (y > y0) & (y < y1)
+    flags[~inside & ~nan] = FAIL
+    return flags
+
+
 #: ``qartod_compare``'s precedence, lowest first: a later flag in any test wins.
 _PRECEDENCE = (MISSING, UNKNOWN, GOOD, SUSPECT, FAIL)
 _RANK = np.zeros(256, dtype=np.uint8)
