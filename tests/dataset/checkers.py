@@ -20,9 +20,11 @@ BIN = Path(sys.executable).parent
 SUITES = ("cf:1.11", "cf:1.6", "acdd:1.3", "ioos:1.2", "ncei-trajectory:2.0")
 #: compliance-checker 6.1.0, ``ioos.py`` line 1483, ``check_gts_ingest_requirements``:
 #: ``Result(BaseCheck.HIGH, False,  # always fail, "NDBC/GTS Ingest Requirements", ...)``.
-#: It fails on every file by design, to list the variables that qualify for NDBC's
-#: ingest to the GTS (compliance-checker issue 759, PR 811); a file passes when no
-#: variable is listed as not qualifying (its second message).
+#: Its value is the constant ``False`` whatever the file holds: it fails on every file
+#: by design, to list the variables that qualify for NDBC's ingest to the GTS
+#: (compliance-checker issue 759, PR 811). A file does what it asks when every variable
+#: marked ``gts_ingest = "true"`` is listed as qualifying and none as not (its second
+#: message).
 GTS = "NDBC/GTS Ingest Requirements"
 
 
@@ -70,7 +72,19 @@ def assert_compliant(path: Path, out: Path, unnamed: set[str]) -> None:
     assert [name for name, _ in failed["ioos:1.2"]] == [GTS], failed["ioos:1.2"]
     (msgs,) = [m for name, m in failed["ioos:1.2"]]
     assert len(msgs) == 1 and "did not qualify" not in msgs[0], msgs
+    listed = {n.strip() for n in msgs[0].split(":", 1)[1].split(",") if n.strip()}
+    assert listed == gts_marked(path), (msgs, gts_marked(path))
     assert failed["ncei-trajectory:2.0"] == [], failed["ncei-trajectory:2.0"]
+
+
+def gts_marked(path: Path) -> set[str]:
+    """The variables marked for NDBC/GTS ingest (``gts_ingest = "true"``)."""
+    import netCDF4
+
+    with netCDF4.Dataset(path) as ds:
+        names = {v.name for v in ds.get_variables_by_attributes(gts_ingest="true")}
+        assert (getattr(ds, "gts_ingest", None) == "true") == bool(names)
+    return names
 
 
 def dsg_readers(path: Path, axes: dict[str, list[str]]) -> None:

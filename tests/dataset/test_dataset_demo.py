@@ -27,6 +27,7 @@ from checkers import (
     assert_compliant,
     assert_location_flags,
     dsg_readers,
+    gts_marked,
     modd_dataset,
     nc_times,
     nc_values,
@@ -145,6 +146,8 @@ def test_netcdf_passes_the_ioos_compliance_checker(
     exports: dict[str, Path], tmp_path: Path
 ) -> None:
     assert_compliant(exports["netcdf"], tmp_path / "cc.json", ACCEL)
+    # dataset.yaml's gts_ingest: both qualify (QARTOD flag, CF standard name, units)
+    assert gts_marked(exports["netcdf"]) == {"ctd_water_temperature", "sounder_depth"}
     dsg_readers(exports["netcdf"], AXES)
 
 

@@ -343,3 +343,23 @@ def test_a_location_test_without_a_position_is_refused(archive: Path, tmp_path: 
     meta = parse_metadata({"qc": {"position": {"location_test": {}}}}, "dataset.yaml")
     with pytest.raises(DatasetError, match="qc.position: the model declares no position"):
         make_dataset([archive], model, "csv", tmp_path / "x.csv", metadata=meta)
+
+
+def test_gts_ingest_marks_the_file_and_its_variables(archive: Path, tmp_path: Path) -> None:
+    import netCDF4
+
+    meta = parse_metadata({"qc": QC, "gts_ingest": [TEMP]}, "dataset.yaml")
+    out = tmp_path / "g.nc"
+    make_dataset([archive], _model(), "netcdf", out, metadata=meta)
+    with netCDF4.Dataset(out) as ds:
+        assert ds.gts_ingest == "true"
+        assert [v.name for v in ds.get_variables_by_attributes(gts_ingest="true")] == ["ctd_temp"]
+    plain = tmp_path / "p.nc"
+    make_dataset([archive], _model(), "netcdf", plain, metadata=_meta())
+    with netCDF4.Dataset(plain) as ds:
+        assert "gts_ingest" not in ds.ncattrs()
+    bad = parse_metadata({"gts_ingest": ["boat.ctd.tmp"]}, "dataset.yaml")
+    with pytest.raises(DatasetError, match="dataset.yaml: gts_ingest: boat.ctd.tmp is not a topic"):
+        make_dataset([archive], _model(), "netcdf", tmp_path / "b.nc", metadata=bad)
+    with pytest.raises(MetadataError, match="dataset.yaml: gts_ingest: a list of topics"):
+        parse_metadata({"gts_ingest": "yes"}, "dataset.yaml")

@@ -29,7 +29,7 @@ import numpy as np
 
 from .export import NAT, Summary
 from .ncmeta import coverage, global_attributes, instrument_variables, platform_variable
-from .plan import ExportPlan, Variable
+from .plan import ExportPlan, PlanError, Variable
 from .position import Track
 from .qc import FLAG_ATTRS, location_config, qc_config
 from .record import dtype_of
@@ -177,6 +177,25 @@ def _location_var(ds: Any) -> None:
     ds["lon"].ancillary_variables = LOCATION
 
 
+def _gts_ingest(ds: Any, plan: ExportPlan) -> None:
+    """IOOS 1.2's ``gts_ingest = "true"`` on the file and on the variables of the
+    metadata's ``gts_ingest`` topics (for NDBC's ingest to the GTS); a topic the model
+    does not have is a PlanError, one left out by ``--topics`` is skipped. Received
+    windows (no QARTOD flags: not real-time samples) are never marked."""
+    topics = plan.metadata.gts_ingest if plan.source != "received" else ()
+    known = plan.model_topics or tuple(plan.variables)
+    unknown = [t for t in topics if t not in known]
+    if unknown:
+        source = plan.metadata.source or "dataset metadata"
+        raise PlanError(f"{source}: gts_ingest: {unknown[0]} is not a topic of the model")
+    chosen = [plan.variables[t] for t in topics if t in plan.variables]
+    if not chosen:
+        return
+    ds.gts_ingest = "true"
+    for var in chosen:
+        ds[var.name].gts_ingest = "true"
+
+
 #: The historical mark of a received window (``--received``): 0 live, 1 backfilled.
 HISTORICAL = "backfilled"
 HISTORICAL_ATTRS: dict[str, Any] = {
@@ -269,6 +288,7 @@ class NetcdfSink:
             _historical_var(self.ds, plan)
         if location_config(plan) is not None:
             _location_var(self.ds)
+        _gts_ingest(self.ds, plan)
 
     def write(
         self,
