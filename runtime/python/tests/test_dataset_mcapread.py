@@ -52,20 +52,21 @@ def _messages(rng: np.random.Generator, n: int) -> list[tuple[str, int, int, byt
 
 
 def _write(path: Path, messages: list[tuple[str, int, int, bytes]], chunk_size: int) -> None:
-    channels = {
-        c["type"]: c for c in json.loads((VECTORS / "archive_record.json").read_text())["channels"]
-    }
+    """The messages by the official writer; every channel registered first, as the
+    contract's vectors give them (the first chunk: channels, then messages)."""
+    vectors = json.loads((VECTORS / "archive_record.json").read_text())["channels"]
+    by_type = {c["type"]: c for c in vectors}
     with path.open("wb") as f:
         w = Writer(f, chunk_size=chunk_size, compression=CompressionType.ZSTD)
         w.start(profile="", library="test")
-        ids: dict[str, int] = {}
+        ids = {}
+        for topic, kind in TYPES.items():
+            c = by_type[kind]
+            schema = (c["schema_name"], c["schema_encoding"], c["schema_data"].encode())
+            ids[topic] = w.register_channel(
+                topic, c["message_encoding"], w.register_schema(*schema), c["metadata"]
+            )
         for topic, t, pub, data in messages:
-            if topic not in ids:
-                c = channels[TYPES[topic]]
-                sid = w.register_schema(
-                    c["schema_name"], c["schema_encoding"], c["schema_data"].encode()
-                )
-                ids[topic] = w.register_channel(topic, c["message_encoding"], sid, c["metadata"])
             w.add_message(ids[topic], log_time=t, data=data, publish_time=pub)
         w.finish()  # type: ignore[no-untyped-call]
 

@@ -212,17 +212,28 @@ def _located_batches(
     sorted_ch = loc.channels[order]
     cuts = np.flatnonzero(np.diff(sorted_ch)) + 1
     for rows in np.split(order, cuts):
-        cid = int(loc.channels[rows[0]])
-        topic, vtype = state.topics.get(cid, (None, None))
-        if topic is None:
-            raise ArchiveError(state.path, offset, f"message on unknown channel {cid}")
-        if vtype is None or (only is not None and topic not in only):
-            continue  # not a MoDD topic (another tool's channel), or not asked for
+        wanted = _wanted(state, int(loc.channels[rows[0]]), offset, only)
+        if wanted is None:
+            continue
+        topic, vtype = wanted
         try:
             values = decode_texts(vtype, loc.texts(rows))
         except RecordError as exc:
             raise ArchiveError(state.path, offset, f"topic {topic}: {exc}") from None
         yield Batch(topic, vtype, loc.times[rows], values, loc.pubs[rows])
+
+
+def _wanted(
+    state: FileState, cid: int, offset: int, only: set[str] | None
+) -> tuple[str, str] | None:
+    """(topic, value type) of channel ``cid`` when its messages are to be decoded: None
+    for another tool's channel or a topic not asked for; ArchiveError for an unknown id."""
+    topic, vtype = state.topics.get(cid, (None, None))
+    if topic is None:
+        raise ArchiveError(state.path, offset, f"message on unknown channel {cid}")
+    if vtype is None or (only is not None and topic not in only):
+        return None
+    return topic, vtype
 
 
 def _records(state: FileState, buf: bytes, base: int, pending: Pending) -> None:
@@ -256,11 +267,10 @@ def _batches(
     only: set[str] | None,
 ) -> Iterator[Batch]:
     for cid, (times, pubs, datas) in pending.items():
-        topic, vtype = state.topics.get(cid, (None, None))
-        if topic is None:
-            raise ArchiveError(state.path, offset, f"message on unknown channel {cid}")
-        if vtype is None or (only is not None and topic not in only):
-            continue  # not a MoDD topic (another tool's channel), or not asked for
+        wanted = _wanted(state, cid, offset, only)
+        if wanted is None:
+            continue
+        topic, vtype = wanted
         try:
             values = decode_values(vtype, datas)
         except RecordError as exc:
