@@ -20,9 +20,11 @@ BIN = Path(sys.executable).parent
 SUITES = ("cf:1.11", "cf:1.6", "acdd:1.3", "ioos:1.2", "ncei-trajectory:2.0")
 #: compliance-checker 6.1.0, ``ioos.py`` line 1483, ``check_gts_ingest_requirements``:
 #: ``Result(BaseCheck.HIGH, False,  # always fail, "NDBC/GTS Ingest Requirements", ...)``.
-#: It fails on every file by design, to list the variables that qualify for NDBC's
-#: ingest to the GTS (compliance-checker issue 759, PR 811); a file passes when no
-#: variable is listed as not qualifying (its second message).
+#: Its value is the constant ``False`` whatever the file holds: it fails on every file
+#: by design, to list the variables that qualify for NDBC's ingest to the GTS
+#: (compliance-checker issue 759, PR 811). A file does what it asks when every variable
+#: marked ``gts_ingest = "true"`` is listed as qualifying and none as not (its second
+#: message).
 GTS = "NDBC/GTS Ingest Requirements"
 
 
@@ -70,7 +72,19 @@ def assert_compliant(path: Path, out: Path, unnamed: set[str]) -> None:
     assert [name for name, _ in failed["ioos:1.2"]] == [GTS], failed["ioos:1.2"]
     (msgs,) = [m for name, m in failed["ioos:1.2"]]
     assert len(msgs) == 1 and "did not qualify" not in msgs[0], msgs
+    listed = {n.strip() for n in msgs[0].split(":", 1)[1].split(",") if n.strip()}
+    assert listed == gts_marked(path), (msgs, gts_marked(path))
     assert failed["ncei-trajectory:2.0"] == [], failed["ncei-trajectory:2.0"]
+
+
+def gts_marked(path: Path) -> set[str]:
+    """The variables marked for NDBC/GTS ingest (``gts_ingest = "true"``)."""
+    import netCDF4
+
+    with netCDF4.Dataset(path) as ds:
+        names = {v.name for v in ds.get_variables_by_attributes(gts_ingest="true")}
+        assert (getattr(ds, "gts_ingest", None) == "true") == bool(names)
+    return names
 
 
 def dsg_readers(path: Path, axes: dict[str, list[str]]) -> None:
@@ -128,3 +142,20 @@ def nc_values(ds: Any, name: str) -> np.ndarray:
 def nc_times(ds: Any, name: str) -> np.ndarray:
     times = np.asarray(ds["time"].values[0]).astype("datetime64[ns]").astype("int64")
     return np.asarray(times[~np.isnan(ds[name].values[0])])
+
+
+def assert_location_flags(ds: Any, table: Any) -> None:
+    """The location test's flags of every sample's position, NetCDF (``ds``, read with
+    ``mask_and_scale=False``) and Parquet (``table``, pandas), are ``ioos_qc``'s
+    ``location_test`` run here on the positions the files carry."""
+    from ioos_qc import qartod
+
+    assert ds["lat"].attrs["ancillary_variables"] == "location_qc_agg"
+    lat, lon = ds["lat"].values[0], ds["lon"].values[0]
+    rows = ds["location_qc_agg"].values[0] != -127
+    want = np.asarray(qartod.location_test(lon=lon[rows], lat=lat[rows]), dtype=np.uint8)
+    assert ds["location_qc_agg"].values[0][rows].tolist() == want.tolist()
+    lat, lon = table["lat"].to_numpy(np.float64), table["lon"].to_numpy(np.float64)
+    want = np.asarray(qartod.location_test(lon=lon, lat=lat), dtype=np.uint8)
+    assert table["location_qc_agg"].tolist() == want.tolist()
+    assert 1 in want

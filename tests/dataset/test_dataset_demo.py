@@ -25,7 +25,9 @@ import pyarrow.parquet as pq
 import pytest
 from checkers import (
     assert_compliant,
+    assert_location_flags,
     dsg_readers,
+    gts_marked,
     modd_dataset,
     nc_times,
     nc_values,
@@ -144,6 +146,8 @@ def test_netcdf_passes_the_ioos_compliance_checker(
     exports: dict[str, Path], tmp_path: Path
 ) -> None:
     assert_compliant(exports["netcdf"], tmp_path / "cc.json", ACCEL)
+    # dataset.yaml's gts_ingest: both qualify (QARTOD flag, CF standard name, units)
+    assert gts_marked(exports["netcdf"]) == {"ctd_water_temperature", "sounder_depth"}
     dsg_readers(exports["netcdf"], AXES)
 
 
@@ -265,6 +269,7 @@ def test_quality_flags_are_ioos_qcs_on_the_archive(
             assert np.array_equal(flags[flags != -127], want), topic
             assert table[table["topic"] == topic]["qc_agg"].tolist() == list(want), topic
         assert "autopilot_roll_qc_agg" not in ds
+        assert_location_flags(ds, table)
 
 
 def test_every_position_is_the_simulators(
@@ -296,7 +301,8 @@ def test_tracks_open_as_geojson_and_gpx(exports: dict[str, Path]) -> None:
     assert temp is not None and temp.get("unit") == "degC"
     assert (
         exports["csv"].read_text().splitlines()[0]
-        == '"time","topic","value","unit","lat","lon","alt","instrument_time","qc_agg"'
+        == '"time","topic","value","unit","lat","lon","alt","instrument_time","qc_agg",'
+        '"location_qc_agg"'
     )
 
 

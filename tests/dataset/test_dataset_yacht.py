@@ -30,7 +30,9 @@ import pynmea2  # type: ignore[import-untyped]
 import pytest
 from checkers import (
     assert_compliant,
+    assert_location_flags,
     dsg_readers,
+    gts_marked,
     modd_dataset,
     nc_times,
     nc_values,
@@ -283,6 +285,8 @@ def test_each_option_passes_the_checkers_and_formats_agree(
 
     paths = _export(voyage, option, tmp_path)
     assert_compliant(paths["netcdf"], tmp_path / "cc.json", set())
+    samples = option not in ("resample", "received")  # flagged samples: marked for the GTS
+    assert gts_marked(paths["netcdf"]) == ({"bus_depth"} if samples else set())
     dsg_readers(paths["netcdf"], AXES)
     run = voyage[0]
     with xr.open_dataset(paths["netcdf"]) as ds:
@@ -326,6 +330,7 @@ def test_quality_flags_are_ioos_qcs_on_the_instruments_clock(
             assert got[got != -127].tolist() == want, topic
             assert table[table["topic"] == topic]["qc_agg"].tolist() == want, topic
             seen |= set(want)
+        assert_location_flags(ds, table)
     assert seen > {1}, seen  # the real track is not all PASS
 
 

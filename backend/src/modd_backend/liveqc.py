@@ -2,11 +2,11 @@
 "Quality flags", "Live"): each value a subscriber delivers is flagged with the
 tests the deployed project configures for its topic (the dataset metadata's
 ``qc`` section, and a gross range test from the model's ``validMin`` /
-``validMax``), run by ``ioos_qc`` (modd.dataset.qc.run_tests, the export's own
-call) on the subscriber's last ``KEEP`` window values. The browser gets the
-aggregate flags beside the value: ``{"type": "value", ..., "qc": [[end_ns, flag],
-...]}`` for this window and the one before it (a spike is known one window
-late: the test needs the neighbour after it).
+``validMax``), run as the export runs them (modd.dataset.qc.run_tests: ``ioos_qc``'s
+tests, vectorised, equal flag for flag) on the subscriber's last ``KEEP`` window
+values. The browser gets the aggregate flags beside the value: ``{"type":
+"value", ..., "qc": [[end_ns, flag], ...]}`` for this window and the one before it
+(a spike is known one window late: the test needs the neighbour after it).
 
 A live window is an aggregate (a mean, a minimum...) of the samples it covers:
 its flag says that the window's value is suspect or bad by the topic's tests,

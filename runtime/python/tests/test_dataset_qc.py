@@ -237,3 +237,129 @@ def test_faster_than_1_hz_the_timed_tests_run_in_scaled_time(tmp_path: Path) -> 
     assert np.array_equal(got, np.asarray(expected)), np.nonzero(got != expected)
     assert got[SPIKE] == 4 and got[-1] == 4
     assert got[STUCK[0] + 41 : STUCK[1]].min() == 4  # stuck 6 s, FAIL after 4 s
+
+
+#: A box the track leaves (north) after its 200th fix: lat 47.0 + 1e-4 i.
+BBOX = [-3.5, 46.5, -2.5, 47.01995]
+
+
+def _positions(path: Path, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The oracle's position at ``times``: the fixes the official reader returns,
+    interpolated by NumPy (NaN outside them)."""
+    fixes: dict[str, list[tuple[int, float]]] = {"boat.gps.lat": [], "boat.gps.lon": []}
+    with path.open("rb") as f:
+        for _s, c, m in make_reader(f).iter_messages(topics=list(fixes), log_time_order=True):
+            fixes[c.topic].append((m.log_time, json.loads(m.data)["value"]))
+    out = []
+    for topic in fixes:
+        t, v = np.array(fixes[topic], dtype=np.float64).T
+        out.append(np.interp(times.astype(np.float64), t, v, left=np.nan, right=np.nan))
+    return out[0], out[1]
+
+
+def _location_expected(lat: np.ndarray, lon: np.ndarray) -> np.ndarray:
+    return np.asarray(
+        qartod.qartod_compare(
+            [
+                qartod.location_test(lon=lon, lat=lat),
+                qartod.location_bounds_test(lon=lon, lat=lat, shape=list(BBOX)),
+            ]
+        ),
+        dtype=np.uint8,
+    )
+
+
+@pytest.mark.parametrize("fmt", ["netcdf", "parquet", "csv"])
+def test_positions_get_the_location_test_of_ioos_qc(
+    archive: Path, tmp_path: Path, fmt: str
+) -> None:
+    meta = parse_metadata({"qc": {"position": {"location_test": {"bbox": BBOX}}}}, "d.yaml")
+    out = tmp_path / f"loc.{fmt}"
+    make_dataset([archive], _model(), fmt, out, metadata=meta)
+    if fmt == "netcdf":
+        import xarray as xr
+
+        with xr.open_dataset(out, mask_and_scale=False) as ds:
+            assert ds["lat"].attrs["ancillary_variables"] == "location_qc_agg"
+            assert ds["lon"].attrs["ancillary_variables"] == "location_qc_agg"
+            assert ds["location_qc_agg"].attrs["flag_meanings"].startswith("PASS NOT_EVAL")
+            time_ns = ds["time"].values[0].astype("datetime64[ns]").astype(np.int64)
+            lat, lon = ds["lat"].values[0], ds["lon"].values[0]
+            got = ds["location_qc_agg"].values[0].astype(np.uint8)
+    else:
+        table = pq.read_table(out) if fmt == "parquet" else pcsv.read_csv(out)
+        import pyarrow as pa
+
+        stamps = table["time"].cast(pa.timestamp("ns", tz="UTC"))
+        time_ns = stamps.cast(pa.int64()).to_numpy()
+        lat = table["lat"].to_numpy(zero_copy_only=False)
+        lon = table["lon"].to_numpy(zero_copy_only=False)
+        got = table["location_qc_agg"].to_numpy(zero_copy_only=False).astype(np.uint8)
+    want_lat, want_lon = _positions(archive, time_ns)
+    both = np.isfinite(lat) & np.isfinite(want_lat)
+    np.testing.assert_allclose(lat[both], want_lat[both], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(lon[both], want_lon[both], rtol=0, atol=1e-9)
+    # NetCDF keeps times as float seconds (~0.2 us): only at the track's ends may they differ
+    ends = np.array([T0, T0 + 249 * S])
+    odd = time_ns[np.isnan(lat) != np.isnan(want_lat)]
+    assert (np.abs(odd[:, None] - ends).min(axis=1, initial=0) < 1000).all(), odd
+    np.testing.assert_array_equal(got, _location_expected(lat, lon))
+    assert sorted(set(got.tolist())) == [1, 4, 9]  # inside; north of the box; no position
+    assert (got[lat > BBOX[3]] == 4).all() and (got[np.isnan(lat)] == 9).all()
+
+
+def test_every_position_gets_the_location_test_by_default(archive: Path, tmp_path: Path) -> None:
+    out = tmp_path / "d.parquet"
+    make_dataset([archive], _model(ranged=False), "parquet", out)
+    table = pq.read_table(out)
+    got = table["location_qc_agg"].to_numpy().astype(np.uint8)
+    lat, lon = table["lat"].to_numpy(), table["lon"].to_numpy()
+    expected = np.asarray(qartod.location_test(lon=lon, lat=lat), dtype=np.uint8)
+    np.testing.assert_array_equal(got, expected)
+    assert sorted(set(got.tolist())) == [1, 9]
+
+
+@pytest.mark.parametrize(
+    ("qc", "error"),
+    [
+        ({"position": {"location_test": {"bbox": [1, 2, 3]}}}, "bbox: four numbers"),
+        ({"position": {"location_test": {"bbox": [3, 0, 1, 2]}}}, "min < max"),
+        ({"position": {"spike_test": {}}}, "qc.position: unknown test 'spike_test'"),
+        ({TEMP: {"location_test": {}}}, "qc.boat.ctd.temp: unknown test 'location_test'"),
+    ],
+)
+def test_bad_location_config_is_a_located_error(qc: Any, error: str) -> None:
+    with pytest.raises(MetadataError, match=error):
+        parse_metadata({"qc": qc}, "dataset.yaml")
+
+
+def test_a_location_test_without_a_position_is_refused(archive: Path, tmp_path: Path) -> None:
+    text = MODEL.replace("RANGE", "").replace(
+        'Position { latitude = "boat.gps.lat"; longitude = "boat.gps.lon"; maxGap = 3; }', ""
+    )
+    result = load_text(text, "boat.modd")
+    assert result.ok and result.model is not None
+    model = result.model
+    meta = parse_metadata({"qc": {"position": {"location_test": {}}}}, "dataset.yaml")
+    with pytest.raises(DatasetError, match="qc.position: the model declares no position"):
+        make_dataset([archive], model, "csv", tmp_path / "x.csv", metadata=meta)
+
+
+def test_gts_ingest_marks_the_file_and_its_variables(archive: Path, tmp_path: Path) -> None:
+    import netCDF4
+
+    meta = parse_metadata({"qc": QC, "gts_ingest": [TEMP]}, "dataset.yaml")
+    out = tmp_path / "g.nc"
+    make_dataset([archive], _model(), "netcdf", out, metadata=meta)
+    with netCDF4.Dataset(out) as ds:
+        assert ds.gts_ingest == "true"
+        assert [v.name for v in ds.get_variables_by_attributes(gts_ingest="true")] == ["ctd_temp"]
+    plain = tmp_path / "p.nc"
+    make_dataset([archive], _model(), "netcdf", plain, metadata=_meta())
+    with netCDF4.Dataset(plain) as ds:
+        assert "gts_ingest" not in ds.ncattrs()
+    bad = parse_metadata({"gts_ingest": ["boat.ctd.tmp"]}, "dataset.yaml")
+    with pytest.raises(DatasetError, match="dataset.yaml: gts_ingest: boat.ctd.tmp is not a topic"):
+        make_dataset([archive], _model(), "netcdf", tmp_path / "b.nc", metadata=bad)
+    with pytest.raises(MetadataError, match="dataset.yaml: gts_ingest: a list of topics"):
+        parse_metadata({"gts_ingest": "yes"}, "dataset.yaml")

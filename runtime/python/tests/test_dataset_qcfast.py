@@ -60,3 +60,81 @@ def test_flat_line_test_is_ioos_qcs(seed: int) -> None:
             )
             got = qcfast.flat_line_test(v, t, s, f, tol)
             assert got.tolist() == want.tolist(), (n, step, s, f, tol, v)
+
+
+def _times(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Increasing times, some repeated, some within the same whole second."""
+    steps = rng.choice([0, 10**8, 6 * 10**8, 10**9, 3 * 10**9], n)
+    return (np.cumsum(steps) + int(rng.integers(0, 10**9))).astype("datetime64[ns]")
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_gross_range_test_is_ioos_qcs(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for n in (0, 1, 2, 5, int(rng.integers(50, 400))):
+        v = _series(rng, n) * 3
+        v[rng.random(n) < 0.05] = -np.inf
+        for fail, suspect in (
+            ([-5, 5], [-2, 2]),
+            ([5, -5], None),
+            ([-1, 3], [0, 3]),
+            ([0, 0], None),
+        ):
+            want = _library("gross_range_test", inp=v, fail_span=fail, suspect_span=suspect)
+            got = qcfast.gross_range_test(v, fail, suspect)
+            assert got.tolist() == want.tolist(), (n, fail, suspect, v)
+
+
+def test_gross_range_test_refuses_a_suspect_span_outside_the_fail_span() -> None:
+    with pytest.raises(ValueError, match="must fall within"):
+        _library("gross_range_test", inp=[1.0], fail_span=[0, 1], suspect_span=[-1, 1])
+    with pytest.raises(ValueError, match="must fall within"):
+        qcfast.gross_range_test(np.array([1.0]), [0, 1], [-1, 1])
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_rate_of_change_test_is_ioos_qcs(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for n in (0, 1, 2, 3, 10, int(rng.integers(50, 400))):
+        v = _series(rng, n)
+        v[rng.random(n) < 0.03] = -np.inf
+        t = _times(rng, n)
+        for threshold, fail in ((0.5, None), (1.0, 4.0), (0.0, 0.0), (3.0, 1.0)):
+            want = _library(
+                "rate_of_change_test", inp=v, tinp=t, threshold=threshold, fail_threshold=fail
+            )
+            got = qcfast.rate_of_change_test(v, t, threshold, fail)
+            assert got.tolist() == want.tolist(), (n, threshold, fail, v, t)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_qartod_compare_is_ioos_qcs(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for k in (1, 2, 4):
+        for n in (0, 1, 7, 300):
+            flags = [rng.choice([0, 1, 2, 3, 4, 9], n).astype(np.uint8) for _ in range(k)]
+            want = _library("qartod_compare", flags)
+            assert qcfast.qartod_compare(flags).tolist() == want.tolist(), flags
+
+
+def _positions(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
+    lon = rng.uniform(-200, 200, n)
+    lat = rng.uniform(-100, 100, n)
+    for a in (lon, lat):
+        a[rng.random(n) < 0.1] = np.nan
+        a[rng.random(n) < 0.03] = rng.choice([np.inf, -np.inf])
+    lon[rng.random(n) < 0.02] = 10.0  # on the box's border
+    return lon, lat
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_location_tests_are_ioos_qcs(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for n in (0, 1, 2, 50, int(rng.integers(100, 400))):
+        lon, lat = _positions(rng, n)
+        want = _library("location_test", lon=lon, lat=lat)
+        assert qcfast.location_test(lon, lat).tolist() == want.tolist(), (lon, lat)
+        for bbox in ([-20.0, -30.0, 10.0, 40.0], [-180.0, -90.0, 180.0, 90.0]):
+            want = _library("location_bounds_test", lon=lon, lat=lat, shape=list(bbox))
+            got = qcfast.location_bounds_test(lon, lat, bbox)
+            assert got.tolist() == want.tolist(), (bbox, lon, lat)

@@ -16,16 +16,18 @@ describe("the Dataset metadata form", () => {
     expect(metadataErrors({ creator_email: "  " })).toEqual({}); // empty: left out, not wrong
   });
 
-  it("makes a document of the filled fields only, keeping the QC tests the form does not show", () => {
+  it("makes a document of the filled fields only, keeping the QC tests and GTS marks the form does not show", () => {
     const qc = { "usv.ctd.t": { spike_test: { suspect_threshold: 1 } } };
+    const gts = ["usv.ctd.t"];
     const doc = documentOf({
       title: " Bay survey ", creator_name: "", keywords: "ocean, ctd,", "platform.id": "usv01",
       "instruments.ctd.make": "Sea-Bird", "instruments.ctd.serial_number": "12", "instruments.gnss.model": "",
-    }, { qc, creator_name: "old" });
+    }, { qc, gts_ingest: gts, creator_name: "old" });
     expect(doc).toEqual({
       title: "Bay survey", keywords: ["ocean", "ctd"], platform: { id: "usv01" },
-      instruments: { ctd: { make: "Sea-Bird", serial_number: "12" } }, qc,
+      instruments: { ctd: { make: "Sea-Bird", serial_number: "12" } }, qc, gts_ingest: gts,
     });
+    expect(valuesOf({ title: "T", gts_ingest: gts, qc })).toEqual({ title: "T" });
     expect(documentOf({}, {})).toEqual({}); // nothing invented
   });
 

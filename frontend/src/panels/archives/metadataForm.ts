@@ -71,7 +71,7 @@ function text(v: unknown): string {
 export function valuesOf(doc: DatasetMetadataDoc): MetadataValues {
   const out: MetadataValues = {};
   for (const [k, v] of Object.entries(doc)) {
-    if (k === "platform" || k === "instruments" || k === "qc") continue;
+    if (k === "platform" || k === "instruments" || KEPT.includes(k)) continue;
     out[k] = text(v);
   }
   const platform = (doc.platform ?? {}) as Record<string, unknown>;
@@ -83,10 +83,14 @@ export function valuesOf(doc: DatasetMetadataDoc): MetadataValues {
   return out;
 }
 
-/** The document of the filled form: empty fields left out, what the form does not show (`qc`) kept. */
+/** The document's sections the form does not show, kept as saved: the QARTOD tests and
+ * the variables sent to NDBC/GTS (docs/user-guide/datasets.md). */
+const KEPT = ["qc", "gts_ingest"];
+
+/** The document of the filled form: empty fields left out, what the form does not show (`KEPT`) kept. */
 export function documentOf(values: MetadataValues, saved: DatasetMetadataDoc): DatasetMetadataDoc {
   const doc: DatasetMetadataDoc = {};
-  if (saved.qc !== undefined) doc.qc = saved.qc;
+  for (const k of KEPT) if (saved[k] !== undefined) doc[k] = saved[k];
   const platform: Record<string, string> = {};
   const instruments: Record<string, Record<string, string>> = {};
   for (const [key, raw] of Object.entries(values)) {

@@ -55,7 +55,8 @@ class Summary:
 class Sink(Protocol):
     """A format writer. ``open`` before any sample; ``write`` per batch (one
     topic, time order within a topic; ``historical`` marks a received window
-    delivered by backfill); ``close`` last, with the summary."""
+    delivered by backfill; ``qc`` the samples' aggregate QARTOD flags, ``location``
+    their positions' location test flags); ``close`` last, with the summary."""
 
     def open(self, plan: ExportPlan, track: Track | None) -> None: ...
 
@@ -70,6 +71,7 @@ class Sink(Protocol):
         other: np.ndarray | None = None,
         qc: np.ndarray | None = None,
         historical: np.ndarray | None = None,
+        location: np.ndarray | None = None,
     ) -> None: ...
 
     def close(self, plan: ExportPlan, summary: Summary) -> None: ...
@@ -267,8 +269,9 @@ def export(
         nan = np.full(len(b.time_ns), np.nan)
         lat, lon, alt = track.at(b.time_ns) if track else (nan, nan, nan)
         flags = runner.flags(var, b.time_ns, b.value) if runner else None
+        where = runner.location_flags(lat, lon) if runner else None
         other = other_clock(plan, var, b)
-        sink.write(var, b.time_ns, b.value, lat, lon, alt, other, flags, b.historical)
+        sink.write(var, b.time_ns, b.value, lat, lon, alt, other, flags, b.historical, where)
         _account(summary, var, b, lat, lon, alt)
 
     batcher, seen = _Batcher(emit), 0

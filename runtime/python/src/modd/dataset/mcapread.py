@@ -18,7 +18,6 @@ an :class:`ArchiveError`.
 
 from __future__ import annotations
 
-import re
 import struct
 import zlib
 from collections.abc import Callable, Iterator
@@ -28,6 +27,7 @@ from typing import BinaryIO
 
 import numpy as np
 from modd_contracts.archive_record import PREFIX, channel_type
+from numpy.lib.stride_tricks import sliding_window_view
 
 from .record import RecordError, decode_texts, decode_values
 
@@ -140,38 +140,100 @@ def _chunk(state: FileState, buf: bytes, offset: int) -> bytes:
 
 
 Pending = dict[int, tuple[list[int], list[int], list[bytes]]]
-#: A chunk of the PubBroker's is messages only, each ``{"value":TEXT}``: one regular
-#: expression pass (in C) finds every value text; the records' offsets follow from the
-#: texts' lengths, and the headers are gathered from those offsets by NumPy. Used only
-#: when the records so found tile the chunk exactly, with the opcodes and lengths they
-#: declare; else the record loop reads the chunk.
-_TEXT = re.compile(rb"\x05.{30}" + re.escape(PREFIX) + rb"([^}]*)\}", re.DOTALL)
+#: A chunk of the PubBroker's is messages only, each ``{"value":TEXT}``: NumPy finds
+#: every value's prefix in one pass over the bytes, each record's header sits just before
+#: its prefix, and the value texts are cut out as rows of one byte array. Used only when
+#: the records so found tile the chunk exactly, with the opcodes, lengths and closing
+#: braces they declare (a prefix's bytes met by chance elsewhere breaks the tiling); else
+#: the record loop reads the chunk.
+_PREFIX = np.frombuffer(PREFIX, dtype=np.uint8)
 _HEAD = np.dtype([("len", "<u8"), ("ch", "<u2"), ("seq", "<u4"), ("log", "<u8"), ("pub", "<u8")])
-_HEAD_AT = np.arange(1, 1 + _HEAD.itemsize)
+_BEFORE = 9 + _MSG_HEAD  # bytes of a message record before its data
 
 
-def _fast(buf: bytes) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] | None:
-    """(log times, publish times, value texts) per channel of a messages-only chunk, or None."""
-    text = np.array(_TEXT.findall(buf), dtype=bytes)
-    if len(text) == 0:
-        return None
-    sizes = 9 + _MSG_HEAD + len(PREFIX) + 1 + np.char.str_len(text).astype(np.int64)
-    ends = np.cumsum(sizes)
-    if int(ends[-1]) != len(buf):
-        return None  # other records too (schemas, channels): the record loop reads it
-    starts = ends - sizes
+@dataclass
+class Located:
+    """A messages-only chunk's records: channel, times, and where each value text lies."""
+
+    channels: np.ndarray  # uint16 channel id per message
+    times: np.ndarray  # int64 log times
+    pubs: np.ndarray  # int64 publish times
+    text_at: np.ndarray  # offset of each value text in ``raw``
+    text_len: np.ndarray  # its length
+    raw: np.ndarray  # the chunk's bytes (uint8), zero-padded past the end
+
+    def texts(self, rows: np.ndarray) -> np.ndarray:
+        """The value texts of messages ``rows`` (a bytes array, NUL-padded)."""
+        at, lens = self.text_at[rows], self.text_len[rows]
+        width = max(int(lens.max()), 1) if len(rows) else 1
+        grid = sliding_window_view(self.raw, width)[at]
+        grid *= np.arange(width) < lens[:, None]
+        out: np.ndarray = grid.view(f"S{width}").ravel()
+        return out
+
+
+def _prefixes(raw: np.ndarray) -> np.ndarray:
+    """Offsets in ``raw`` where the archive record's prefix stands after a header."""
+    n = len(raw) - len(_PREFIX)
+    at = np.flatnonzero(raw[_BEFORE:n] == _PREFIX[0]) + _BEFORE
+    ok = np.ones(len(at), dtype=bool)
+    for i in range(1, len(_PREFIX)):
+        ok &= raw[at + i] == _PREFIX[i]
+    return at[ok]
+
+
+def _fast(buf: bytes) -> Located | None:
+    """The messages of a messages-only chunk of archive records, or None."""
     raw = np.frombuffer(buf, dtype=np.uint8)
-    if not (raw[starts] == OP_MESSAGE).all():
+    at = _prefixes(raw) if len(raw) > _BEFORE + len(_PREFIX) else raw[:0].astype(np.int64)
+    if len(at) == 0:
         return None
-    head = raw[starts[:, None] + _HEAD_AT].copy().view(_HEAD).ravel()
-    if not np.array_equal(head["len"], sizes - 9):
+    starts = at - _BEFORE
+    if starts[0] != 0:
         return None
-    channels, times, pubs = head["ch"], head["log"].astype(np.int64), head["pub"].astype(np.int64)
-    out = {}
-    for cid in np.unique(channels).tolist():
-        mask = channels == cid
-        out[cid] = (times[mask], pubs[mask], text[mask])
-    return out
+    head = sliding_window_view(raw, _HEAD.itemsize)[starts + 1].view(_HEAD).ravel()
+    ends = starts + 9 + head["len"].astype(np.int64)
+    if ends[-1] != len(raw) or not np.array_equal(ends[:-1], starts[1:]):
+        return None  # other records too (schemas, channels): the record loop reads it
+    if not ((raw[starts] == OP_MESSAGE).all() and (raw[ends - 1] == ord("}")).all()):
+        return None
+    text_at = at + len(_PREFIX)
+    text_len = ends - 1 - text_at
+    pad = np.zeros(len(raw) + int(text_len.max()) + 1, dtype=np.uint8)
+    pad[: len(raw)] = raw
+    times, pubs = head["log"].astype(np.int64), head["pub"].astype(np.int64)
+    return Located(head["ch"], times, pubs, text_at, text_len, pad)
+
+
+def _located_batches(
+    state: FileState, loc: Located, offset: int, only: set[str] | None
+) -> Iterator[Batch]:
+    order = np.argsort(loc.channels, kind="stable")
+    sorted_ch = loc.channels[order]
+    cuts = np.flatnonzero(np.diff(sorted_ch)) + 1
+    for rows in np.split(order, cuts):
+        wanted = _wanted(state, int(loc.channels[rows[0]]), offset, only)
+        if wanted is None:
+            continue
+        topic, vtype = wanted
+        try:
+            values = decode_texts(vtype, loc.texts(rows))
+        except RecordError as exc:
+            raise ArchiveError(state.path, offset, f"topic {topic}: {exc}") from None
+        yield Batch(topic, vtype, loc.times[rows], values, loc.pubs[rows])
+
+
+def _wanted(
+    state: FileState, cid: int, offset: int, only: set[str] | None
+) -> tuple[str, str] | None:
+    """(topic, value type) of channel ``cid`` when its messages are to be decoded: None
+    for another tool's channel or a topic not asked for; ArchiveError for an unknown id."""
+    topic, vtype = state.topics.get(cid, (None, None))
+    if topic is None:
+        raise ArchiveError(state.path, offset, f"message on unknown channel {cid}")
+    if vtype is None or (only is not None and topic not in only):
+        return None
+    return topic, vtype
 
 
 def _records(state: FileState, buf: bytes, base: int, pending: Pending) -> None:
@@ -200,21 +262,17 @@ def _records(state: FileState, buf: bytes, base: int, pending: Pending) -> None:
 
 def _batches(
     state: FileState,
-    pending: Pending | dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]],
+    pending: Pending,
     offset: int,
     only: set[str] | None,
 ) -> Iterator[Batch]:
     for cid, (times, pubs, datas) in pending.items():
-        topic, vtype = state.topics.get(cid, (None, None))
-        if topic is None:
-            raise ArchiveError(state.path, offset, f"message on unknown channel {cid}")
-        if vtype is None or (only is not None and topic not in only):
-            continue  # not a MoDD topic (another tool's channel), or not asked for
+        wanted = _wanted(state, cid, offset, only)
+        if wanted is None:
+            continue
+        topic, vtype = wanted
         try:
-            if isinstance(datas, np.ndarray):
-                values = decode_texts(vtype, datas)
-            else:
-                values = decode_values(vtype, datas)
+            values = decode_values(vtype, datas)
         except RecordError as exc:
             raise ArchiveError(state.path, offset, f"topic {topic}: {exc}") from None
         as_ns = np.asarray(times, dtype=np.int64)
@@ -271,7 +329,10 @@ def read_file(
             elif op == OP_FOOTER:
                 st.closed = True
                 return
-            yield from _batches(st, fast if fast is not None else slow, offset, only)
+            if fast is not None:
+                yield from _located_batches(st, fast, offset, only)
+            else:
+                yield from _batches(st, slow, offset, only)
             offset += 9 + len(body)
             if progress is not None:
                 progress(offset)

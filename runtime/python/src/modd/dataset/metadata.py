@@ -100,6 +100,9 @@ class Metadata:
     source: str | None = None  # the file it came from (its name only)
     #: QARTOD tests by topic (qc.py): ``{topic: {ioos_qc test: {parameter: value}}}``.
     qc: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
+    #: Topics whose variables are marked for NDBC's ingest to the GTS (IOOS 1.2
+    #: ``gts_ingest = "true"`` on them and on the file).
+    gts_ingest: tuple[str, ...] = ()
 
     def missing(self) -> list[str]:
         """The ACDD/IOOS attributes asked for that the file did not give."""
@@ -156,7 +159,9 @@ def parse_metadata(doc: Any, source: str) -> Metadata:
     """The metadata of a parsed file; raises MetadataError naming ``source`` and the key."""
     if not isinstance(doc, dict):
         raise MetadataError(f"{source}: a mapping of attribute names to values")
-    rest = {k: v for k, v in doc.items() if k not in ("platform", "instruments", "qc")}
+    rest = {
+        k: v for k, v in doc.items() if k not in ("platform", "instruments", "qc", "gts_ingest")
+    }
     attrs = _table(rest, GLOBAL_KEYS, source)
     _check_forms(attrs, source)
     platform = _table(doc.get("platform") or {}, PLATFORM_KEYS, source, "platform")
@@ -173,7 +178,10 @@ def parse_metadata(doc: Any, source: str) -> Metadata:
         qc = parse_qc(doc["qc"], source) if doc.get("qc") is not None else {}
     except QcConfigError as exc:
         raise MetadataError(str(exc), "qc") from None
-    return Metadata(attrs, platform, instruments, Path(source).name, qc)
+    gts = doc.get("gts_ingest") or []
+    if not isinstance(gts, list) or not all(isinstance(t, str) and t for t in gts):
+        raise MetadataError(f"{source}: gts_ingest: a list of topics", "gts_ingest")
+    return Metadata(attrs, platform, instruments, Path(source).name, qc, tuple(gts))
 
 
 def load_metadata(path: Path) -> Metadata:

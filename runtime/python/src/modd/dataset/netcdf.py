@@ -29,9 +29,9 @@ import numpy as np
 
 from .export import NAT, Summary
 from .ncmeta import coverage, global_attributes, instrument_variables, platform_variable
-from .plan import ExportPlan, Variable
+from .plan import ExportPlan, PlanError, Variable
 from .position import Track
-from .qc import FLAG_ATTRS, qc_config
+from .qc import FLAG_ATTRS, location_config, qc_config
 from .record import dtype_of
 from .resample import WideTable
 
@@ -151,6 +151,51 @@ def _flag_var(ds: Any, var: Variable) -> None:
     ds[var.name].ancillary_variables = name
 
 
+#: The location test's flag of each sample's position (lat, lon), their ancillary variable.
+LOCATION = "location_qc_agg"
+
+
+def _location_var(ds: Any) -> None:
+    v = ds.createVariable(
+        LOCATION,
+        "i1",
+        DIMS,
+        fill_value=np.int8(-127),
+        chunksizes=(1, CHUNK),
+        zlib=True,
+        complevel=1,
+    )
+    v.set_var_chunk_cache(size=CACHE_BYTES)
+    v.setncatts(
+        FLAG_ATTRS
+        | {
+            "long_name": "platform position (lat, lon): aggregate QARTOD location test flag",
+            "coordinates": "time lat lon alt",
+        }
+    )
+    ds["lat"].ancillary_variables = LOCATION
+    ds["lon"].ancillary_variables = LOCATION
+
+
+def _gts_ingest(ds: Any, plan: ExportPlan) -> None:
+    """IOOS 1.2's ``gts_ingest = "true"`` on the file and on the variables of the
+    metadata's ``gts_ingest`` topics (for NDBC's ingest to the GTS); a topic the model
+    does not have is a PlanError, one left out by ``--topics`` is skipped. Received
+    windows (no QARTOD flags: not real-time samples) are never marked."""
+    topics = plan.metadata.gts_ingest if plan.source != "received" else ()
+    known = plan.model_topics or tuple(plan.variables)
+    unknown = [t for t in topics if t not in known]
+    if unknown:
+        source = plan.metadata.source or "dataset metadata"
+        raise PlanError(f"{source}: gts_ingest: {unknown[0]} is not a topic of the model")
+    chosen = [plan.variables[t] for t in topics if t in plan.variables]
+    if not chosen:
+        return
+    ds.gts_ingest = "true"
+    for var in chosen:
+        ds[var.name].gts_ingest = "true"
+
+
 #: The historical mark of a received window (``--received``): 0 live, 1 backfilled.
 HISTORICAL = "backfilled"
 HISTORICAL_ATTRS: dict[str, Any] = {
@@ -241,6 +286,9 @@ class NetcdfSink:
             _second_time(self.ds, plan)
         if plan.source == "received":
             _historical_var(self.ds, plan)
+        if location_config(plan) is not None:
+            _location_var(self.ds)
+        _gts_ingest(self.ds, plan)
 
     def write(
         self,
@@ -253,6 +301,7 @@ class NetcdfSink:
         other: np.ndarray | None = None,
         qc: np.ndarray | None = None,
         historical: np.ndarray | None = None,
+        location: np.ndarray | None = None,
     ) -> None:
         sl = slice(self.rows, self.rows + len(time_ns))
         if historical is not None:
@@ -266,6 +315,8 @@ class NetcdfSink:
         self.ds[var.name][0, sl] = value
         if qc is not None:
             self.ds[f"{var.name}_qc_agg"][0, sl] = qc
+        if location is not None:
+            self.ds[LOCATION][0, sl] = location
         self.rows = sl.stop
 
     def close(self, plan: ExportPlan, summary: Summary) -> None:

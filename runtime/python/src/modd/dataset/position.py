@@ -114,13 +114,17 @@ class Track:
     longitude: Coordinate
     altitude: Coordinate | None
     max_gap_ns: int
+    #: The longitude's fixes unwrapped across the antimeridian (computed once).
+    unwrapped_lon: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self.unwrapped_lon = np.unwrap(self.longitude.v, period=360.0)
 
     def at(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(lat, lon, alt) at ``times`` (ns); NaN where unknown."""
         lat = coordinate_at(times, self.latitude.t, self.latitude.v, self.max_gap_ns)
         # across the antimeridian: interpolate the unwrapped longitude, then wrap
-        unwrapped = np.unwrap(self.longitude.v, period=360.0)
-        lon = coordinate_at(times, self.longitude.t, unwrapped, self.max_gap_ns)
+        lon = coordinate_at(times, self.longitude.t, self.unwrapped_lon, self.max_gap_ns)
         lon = (lon + 180.0) % 360.0 - 180.0
         alt = (
             coordinate_at(times, self.altitude.t, self.altitude.v, self.max_gap_ns)

@@ -9,6 +9,8 @@ export reads it (one batch: at most ``export.BATCH`` samples) with the last
 ``TAIL`` samples of the topic's previous batch before it as context, so
 memory stays bounded; the aggregate flag is ``ioos_qc.qartod.qartod_compare``
 of the tests' flags (1 PASS, 2 NOT_EVALUATED, 3 SUSPECT, 4 FAIL, 9 MISSING).
+Every sample's position (the track interpolated to its time) gets the location
+test's flag when the model declares a position (``location_flags``).
 """
 
 from __future__ import annotations
@@ -18,8 +20,8 @@ from typing import Any
 import numpy as np
 
 from .plan import ExportPlan, PlanError, Variable
-from .qcconfig import QcConfig
-from .qcfast import fast_test
+from .qcconfig import POSITION, QcConfig
+from .qcfast import fast_test, location_bounds_test, location_test, qartod_compare
 
 #: Samples of a topic's previous batch kept as context for the next (spike, rate of
 #: change and flat line look back; a flat line longer than this is cut at a batch's start).
@@ -44,10 +46,13 @@ def qc_config(plan: ExportPlan) -> QcConfig:
     a topic of the file that the model does not have is a PlanError."""
     given = plan.metadata.qc
     known = plan.model_topics or tuple(plan.variables)
-    unknown = [t for t in given if t not in known]  # one left out by --topics is no error
+    unknown = [t for t in given if t not in known and t != POSITION]  # --topics: no error
     if unknown:
         source = plan.metadata.source or "dataset metadata"
         raise PlanError(f"{source}: qc.{unknown[0]}: not a topic of the model ({', '.join(known)})")
+    if POSITION in given and plan.position is None:
+        source = plan.metadata.source or "dataset metadata"
+        raise PlanError(f"{source}: qc.{POSITION}: the model declares no position")
     out: QcConfig = {}
     if plan.source == "received":  # a window's aggregate (a count, a spread) is no sample
         return out
@@ -58,6 +63,25 @@ def qc_config(plan: ExportPlan) -> QcConfig:
         if tests:
             out[topic] = tests
     return out
+
+
+def location_config(plan: ExportPlan) -> dict[str, Any] | None:
+    """The location test's parameters (``qc.position.location_test``): it runs whenever
+    the model declares a position (an impossible position needs no configuration), on
+    every sample's position; None without a position, or for received windows."""
+    if plan.position is None or plan.source == "received":
+        return None
+    params: dict[str, Any] = plan.metadata.qc.get(POSITION, {}).get("location_test", {})
+    return params
+
+
+def location_flags(params: dict[str, Any], lat: np.ndarray, lon: np.ndarray) -> np.ndarray:
+    """The aggregate of ``ioos_qc``'s ``location_test`` (impossible positions) and, with
+    a ``bbox``, its ``location_bounds_test`` (outside the box FAIL) on these positions."""
+    flags = [location_test(lon, lat)]
+    if "bbox" in params:
+        flags.append(location_bounds_test(lon, lat, params["bbox"]))
+    return np.asarray(qartod_compare(flags), dtype=np.uint8)
 
 
 #: The tests that read the time: ``ioos_qc`` 3.0 counts it in whole seconds (``astype
@@ -90,9 +114,12 @@ def time_scale(time_ns: np.ndarray) -> int | None:
     return scale if median * scale >= 1e9 else None
 
 
-def evaluable(tests: dict[str, dict[str, Any]], time_ns: np.ndarray) -> dict[str, dict[str, Any]]:
-    """``tests`` less the timed ones when the series' time cannot be scaled."""
-    if time_scale(time_ns) is not None:
+def evaluable(
+    tests: dict[str, dict[str, Any]], time_ns: np.ndarray, scale: int | None = 0
+) -> dict[str, dict[str, Any]]:
+    """``tests`` less the timed ones when the series' time cannot be scaled (``scale``:
+    its ``time_scale`` when known, 0 to compute it)."""
+    if (time_scale(time_ns) if scale == 0 else scale) is not None:
         return tests
     return {k: v for k, v in tests.items() if k not in TIMED}
 
@@ -109,25 +136,38 @@ def _scaled(name: str, params: dict[str, Any], scale: int) -> dict[str, Any]:
 
 
 def run_tests(
-    tests: dict[str, dict[str, Any]], time_ns: np.ndarray, value: np.ndarray
+    tests: dict[str, dict[str, Any]],
+    time_ns: np.ndarray,
+    value: np.ndarray,
+    scale_known: int | None = 0,
 ) -> np.ndarray:
     """The aggregate flag (uint8) of ``tests`` on one series, as ``ioos_qc`` computes it
-    (the timed tests on a sub-second series in scaled time, ``time_scale``)."""
-    from ioos_qc import qartod
-
+    (the timed tests on a sub-second series in scaled time, ``time_scale``; ``scale_known``:
+    that scale when known, 0 to compute it)."""
     plain = value.astype(np.float64)
-    inp = np.ma.masked_invalid(plain)
-    scale = time_scale(time_ns) or 1
-    base = int(time_ns[0]) if len(time_ns) else 0
-    tinp = (base + (time_ns.astype(np.int64) - base) * scale).astype("datetime64[ns]")
+    slow = any(fast_test(k, p) is None for k, p in tests.items())
+    inp = np.ma.masked_invalid(plain) if slow else plain  # the library's tests take it masked
+    tinp, scale = None, 1
+    if any(k in TIMED for k in tests):
+        scale = (time_scale(time_ns) if scale_known == 0 else scale_known) or 1
+        base = int(time_ns[0]) if len(time_ns) else 0
+        tinp = (base + (time_ns.astype(np.int64) - base) * scale).astype("datetime64[ns]")
     flags = []
     for name, params in tests.items():
         fast = fast_test(name, params)  # the same flags, vectorised (qcfast.py)
-        fn = fast or getattr(qartod, name)
+        fn = fast or _library(name)
         timed = name in TIMED
         args = {"inp": plain if fast else inp} | ({"tinp": tinp} if timed else {})
         flags.append(np.asarray(fn(**args, **(_scaled(name, params, scale) if timed else params))))
-    return np.asarray(qartod.qartod_compare(flags), dtype=np.uint8)
+    return np.asarray(qartod_compare(flags), dtype=np.uint8)
+
+
+def _library(name: str) -> Any:
+    """``ioos_qc``'s test ``name`` (imported only when a test has no vectorised twin:
+    the import costs pandas')."""
+    from ioos_qc import qartod
+
+    return getattr(qartod, name)
 
 
 class QcRunner:
@@ -135,8 +175,13 @@ class QcRunner:
 
     def __init__(self, plan: ExportPlan) -> None:
         self.config = qc_config(plan)
+        self.location = location_config(plan)
         self.tails: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.notes: dict[str, str] = {}  # by topic: tests not evaluated, and why
+
+    def location_flags(self, lat: np.ndarray, lon: np.ndarray) -> np.ndarray | None:
+        """The location test's flags of these positions; None when it does not run."""
+        return None if self.location is None else location_flags(self.location, lat, lon)
 
     def flags(self, var: Variable, time_ns: np.ndarray, value: np.ndarray) -> np.ndarray | None:
         tests = self.config.get(var.topic)
@@ -145,7 +190,8 @@ class QcRunner:
         t0, v0 = self.tails.get(var.topic, (time_ns[:0], value[:0]))
         t, v = np.concatenate([t0, time_ns]), np.concatenate([v0, value])
         self.tails[var.topic] = (t[-TAIL:], v[-TAIL:])
-        run = evaluable(tests, t)
+        scale = time_scale(t) if any(k in TIMED for k in tests) else 1
+        run = evaluable(tests, t, scale)
         if len(run) < len(tests):
             self.notes[var.topic] = (
                 f"topic {var.topic}: {' and '.join(k for k in tests if k not in run)} not "
@@ -154,4 +200,4 @@ class QcRunner:
             )
         if not run:
             return np.full(len(time_ns), 2, dtype=np.uint8)  # NOT_EVALUATED
-        return run_tests(run, t, v)[len(t0) :]
+        return run_tests(run, t, v, scale)[len(t0) :]

@@ -1,5 +1,6 @@
 """The ``qc`` section of a dataset metadata file (qc.py runs the tests):
-``{topic: {ioos_qc test: {parameter: value}}}``, checked with located errors.
+``{topic: {ioos_qc test: {parameter: value}}}``, checked with located errors;
+the key ``position`` holds the platform position's ``location_test``.
 
 >>> parse_qc({"usv.ctd.t": {"spike_test": {"suspect_threshold": 1}}}, "m.yaml")
 {'usv.ctd.t': {'spike_test': {'suspect_threshold': 1.0}}}
@@ -20,6 +21,12 @@ class QcConfigError(ValueError):
     """A ``qc`` section that cannot be used, located (file, key)."""
 
 
+#: The key of the platform's position in the ``qc`` section (not a topic: the position is
+#: two topics, latitude and longitude), and its one test.
+POSITION = "position"
+LOCATION_TESTS: dict[str, dict[str, tuple[str, bool]]] = {
+    "location_test": {"bbox": ("bbox", False)},
+}
 #: Each test's parameters: a number, or a pair of numbers (a span), and which are required.
 TESTS: dict[str, dict[str, tuple[str, bool]]] = {
     "gross_range_test": {"fail_span": ("span", True), "suspect_span": ("span", False)},
@@ -40,18 +47,30 @@ def _param(value: Any, kind: str, where: str) -> Any:
 
     if kind == "number" and number(value):
         return float(value)
+    if kind == "bbox" and isinstance(value, list) and len(value) == 4 and all(map(number, value)):
+        if value[0] >= value[2] or value[1] >= value[3]:
+            raise QcConfigError(
+                f"{where}: [lon_min, lat_min, lon_max, lat_max], min < max, not {value}"
+            )
+        return [float(v) for v in value]
     if kind == "span" and isinstance(value, list) and len(value) == 2 and all(map(number, value)):
         if value[0] > value[1]:
             raise QcConfigError(f"{where}: [low, high] with low <= high, not {value}")
         return [float(value[0]), float(value[1])]
-    want = "a number" if kind == "number" else "a pair of numbers [low, high]"
+    want = {
+        "number": "a number",
+        "span": "a pair of numbers [low, high]",
+        "bbox": "four numbers [lon_min, lat_min, lon_max, lat_max]",
+    }[kind]
     raise QcConfigError(f"{where}: {want}, not {value!r}")
 
 
-def _test(name: str, params: Any, where: str) -> dict[str, Any]:
-    if name not in TESTS:
-        raise QcConfigError(f"{where}: unknown test {name!r}; one of {', '.join(TESTS)}")
-    spec, here = TESTS[name], f"{where}.{name}"
+def _test(
+    name: str, params: Any, where: str, tests: dict[str, dict[str, tuple[str, bool]]] = TESTS
+) -> dict[str, Any]:
+    if name not in tests:
+        raise QcConfigError(f"{where}: unknown test {name!r}; one of {', '.join(tests)}")
+    spec, here = tests[name], f"{where}.{name}"
     if not isinstance(params, dict):
         raise QcConfigError(f"{here}: a mapping of parameters ({', '.join(spec)})")
     unknown = sorted(str(k) for k in params if k not in spec)
@@ -72,5 +91,6 @@ def parse_qc(doc: Any, source: str) -> QcConfig:
         where = f"{source}: qc.{topic}"
         if not isinstance(tests, dict):
             raise QcConfigError(f"{where}: a mapping of tests ({', '.join(TESTS)})")
-        out[str(topic)] = {str(n): _test(str(n), p, where) for n, p in tests.items()}
+        known = LOCATION_TESTS if topic == POSITION else TESTS
+        out[str(topic)] = {str(n): _test(str(n), p, where, known) for n, p in tests.items()}
     return out

@@ -1,13 +1,17 @@
-"""Two QARTOD tests of ``ioos_qc`` 3.0 written again, vectorised, for speed:
-``spike_test`` (its default method, ``average``) and ``flat_line_test``. The
-library's own loop over every sample in Python (spike: the missing-value flags)
-and its masked window of ``count`` samples per sample (flat line) cost more than
-the rest of an export (docs/benchmarks.md, "With quality flags"). Each function
-gives the flags ``ioos_qc.qartod``'s function of the same name gives, flag for
-flag, on any series (NaN and infinities as missing): runtime/python/tests/
-test_dataset_qcfast.py checks them against the library on random series with
-gaps, spikes and flat stretches, and the export's tests against ioos_qc run on
-the archive. Anything else (another spike method) goes to the library.
+"""The QARTOD tests of ``ioos_qc`` 3.0 an export runs, written again, vectorised,
+for speed: ``spike_test`` (its default method, ``average``), ``flat_line_test``,
+``gross_range_test``, ``rate_of_change_test``, ``location_test`` (without its
+``range_max``) and the aggregate, ``qartod_compare``. The library's own loop over
+every sample in Python (spike: the missing-value flags), its masked window of
+``count`` samples per sample (flat line), its masked arrays (the others) and the
+import of pandas it brings cost more than the rest of an export
+(docs/benchmarks.md, "With quality flags"). Each function gives the flags
+``ioos_qc.qartod``'s function of the same name gives, flag for flag, on any
+series (NaN and infinities as missing, the masked arrays' data where the library
+reads them): runtime/python/tests/test_dataset_qcfast.py checks them against the
+library on random series with gaps, infinities, repeated times, spikes and flat
+stretches, and the export's tests against ioos_qc run on the archive. Anything
+else (another spike method) goes to the library.
 
 >>> spike_test(np.array([1.0, 1.0, 9.0, 1.0, np.nan]), 1, 3).tolist()
 [2, 3, 4, 2, 9]
@@ -120,10 +124,121 @@ def flat_line_test(
     return flags
 
 
+def _span(pair: Any) -> tuple[float, float]:
+    low, high = sorted(pair)
+    return float(low), float(high)
+
+
+def gross_range_test(
+    inp: np.ndarray, fail_span: Any, suspect_span: Any | None = None
+) -> np.ndarray:
+    """``ioos_qc.qartod.gross_range_test``: outside ``suspect_span`` SUSPECT, outside
+    ``fail_span`` FAIL; NaN MISSING (an infinity is compared, as the library does)."""
+    v = np.asarray(inp, dtype=np.float64)
+    fail = _span(fail_span)
+    flags = np.ones(len(v), dtype=np.uint8)
+    flags[~np.isfinite(v)] = MISSING
+    with np.errstate(invalid="ignore"):
+        if suspect_span is not None:
+            user = _span(suspect_span)
+            if user[0] < fail[0] or user[1] > fail[1]:
+                raise ValueError(
+                    f"Suspect span(minv={user[0]}, maxv={user[1]}) must fall within the "
+                    f"Fail span(minv={fail[0]}, maxv={fail[1]})"
+                )
+            flags[(v < user[0]) | (v > user[1])] = SUSPECT
+        flags[(v < fail[0]) | (v > fail[1])] = FAIL
+    return flags
+
+
+def rate_of_change_test(
+    inp: np.ndarray, tinp: np.ndarray, threshold: float, fail_threshold: float | None = None
+) -> np.ndarray:
+    """``ioos_qc.qartod.rate_of_change_test``: the change from the previous sample per
+    second (whole seconds) above ``threshold`` SUSPECT, above ``fail_threshold`` FAIL.
+    Where the library's masked division is masked (no time between the two, or a
+    missing value) it compares the masked data, the difference itself; so do we."""
+    v = np.asarray(inp, dtype=np.float64)
+    flags = np.ones(len(v), dtype=np.uint8)
+    missing = ~np.isfinite(v)
+    if len(v):
+        seconds = np.diff(np.asarray(tinp).astype("datetime64[ns]"))
+        dt = seconds.astype("timedelta64[s]").astype(float)
+        roc = np.zeros(len(v))
+        with np.errstate(all="ignore"):
+            diff = v[1:] - v[:-1]
+            masked = (
+                missing[1:] | missing[:-1] | (np.abs(diff) * np.finfo(float).tiny >= np.abs(dt))
+            )
+            roc[1:] = np.abs(np.where(masked, diff, diff / dt))
+            flags[roc > threshold] = SUSPECT
+            if fail_threshold is not None:
+                flags[roc > fail_threshold] = FAIL
+    flags[missing] = MISSING
+    return flags
+
+
+def location_test(lon: np.ndarray, lat: np.ndarray) -> np.ndarray:
+    """``ioos_qc.qartod.location_test(lon, lat)`` (no ``range_max``): MISSING where the
+    position is missing (NaN or infinite), FAIL where only one coordinate is, or where
+    ``|lat| > 90`` or ``|lon| > 180`` (an infinity compared, as the library does)."""
+    x, y = np.asarray(lon, dtype=np.float64), np.asarray(lat, dtype=np.float64)
+    if x.shape != y.shape:
+        raise ValueError(f"Longitude ({x.shape}) and latitude ({y.shape}) are different sizes.")
+    no_x, no_y = ~np.isfinite(x), ~np.isfinite(y)
+    flags = np.ones(len(x), dtype=np.uint8)
+    flags[no_x | no_y] = MISSING
+    flags[no_x != no_y] = FAIL
+    with np.errstate(invalid="ignore"):
+        flags[(np.abs(y) > 90) | (np.abs(x) > 180)] = FAIL
+    return flags
+
+
+def location_bounds_test(lon: np.ndarray, lat: np.ndarray, bbox: list[float]) -> np.ndarray:
+    """``ioos_qc.qartod.location_bounds_test(lon, lat, shape=bbox)`` with the legacy
+    ``bbox`` ``[lon_min, lat_min, lon_max, lat_max]``: FAIL outside the box (its border
+    is outside, as for shapely), MISSING where a coordinate is NaN."""
+    x, y = np.asarray(lon, dtype=np.float64), np.asarray(lat, dtype=np.float64)
+    x0, y0, x1, y1 = bbox
+    nan = np.isnan(x) | np.isnan(y)
+    flags = np.ones(len(x), dtype=np.uint8)
+    flags[nan] = MISSING
+    with np.errstate(invalid="ignore"):
+        inside = (x > x0) & (x < x1) & (y > y0) & (y < y1)
+    flags[~inside & ~nan] = FAIL
+    return flags
+
+
+#: ``qartod_compare``'s precedence, lowest first: a later flag in any test wins.
+_PRECEDENCE = (MISSING, UNKNOWN, GOOD, SUSPECT, FAIL)
+_RANK = np.zeros(256, dtype=np.uint8)
+_RANK[list(_PRECEDENCE)] = np.arange(1, len(_PRECEDENCE) + 1)
+_OF_RANK = np.array((MISSING, *_PRECEDENCE), dtype=np.uint8)
+
+
+def qartod_compare(vectors: list[np.ndarray]) -> np.ndarray:
+    """``ioos_qc.qartod.qartod_compare``: per sample the flag of highest precedence
+    among the tests' (FAIL over SUSPECT over PASS over NOT_EVALUATED over MISSING;
+    MISSING where no test gave one of them)."""
+    if not vectors or any(len(v) != len(vectors[0]) for v in vectors):
+        raise ValueError("Vectors are not the same size.")
+    rank = _RANK[np.asarray(vectors[0], dtype=np.uint8)]
+    for v in vectors[1:]:
+        np.maximum(rank, _RANK[np.asarray(v, dtype=np.uint8)], out=rank)
+    out: np.ndarray = _OF_RANK[rank]
+    return out
+
+
+FAST: dict[str, Any] = {
+    "spike_test": spike_test,
+    "flat_line_test": flat_line_test,
+    "gross_range_test": gross_range_test,
+    "rate_of_change_test": rate_of_change_test,
+}
+
+
 def fast_test(name: str, params: dict[str, Any]) -> Any | None:
     """The vectorised test standing for ``ioos_qc``'s ``name`` with ``params``, if any."""
-    if name == "spike_test" and params.get("method", "average") == "average":
-        return spike_test
-    if name == "flat_line_test":
-        return flat_line_test
-    return None
+    if name == "spike_test" and params.get("method", "average") != "average":
+        return None
+    return FAST.get(name)

@@ -75,6 +75,7 @@ class Resampler:
         other: np.ndarray | None = None,
         qc: np.ndarray | None = None,
         historical: np.ndarray | None = None,
+        location: np.ndarray | None = None,
     ) -> None:
         self.add(var.topic, time_ns, value)  # a period has the axis's time only
 

@@ -21,7 +21,7 @@ import numpy as np
 from .export import NAT, Summary
 from .plan import ExportPlan, Variable
 from .position import Track
-from .qc import qc_config
+from .qc import location_config, qc_config
 from .resample import WideTable
 from .tablemeta import iso_times, schema_metadata, with_field_metadata, wkb_points
 
@@ -35,7 +35,11 @@ def _time_type(fmt: str) -> Any:
 
 
 def _long_schema(
-    fmt: str, other: str | None = None, qc: bool = False, historical: bool = False
+    fmt: str,
+    other: str | None = None,
+    qc: bool = False,
+    historical: bool = False,
+    location: bool = False,
 ) -> Any:
     import pyarrow as pa
 
@@ -54,6 +58,8 @@ def _long_schema(
         fields.append(("qc_agg", pa.uint8()))
     if historical:  # a received window: 1 backfilled (delivered late), 0 live
         fields.append(("backfilled", pa.uint8()))
+    if location:  # the location test's flag of the row's position (qc.py)
+        fields.append(("location_qc_agg", pa.uint8()))
     if fmt == "parquet":
         fields.append(("geometry", pa.binary()))
     return pa.schema(fields)
@@ -80,6 +86,7 @@ class TableSink:
         self.rows = 0
         self.qc = False
         self.historical = False
+        self.location = False
 
     def open(self, plan: ExportPlan, track: Track | None) -> None:
         import pyarrow.csv as pcsv
@@ -88,7 +95,8 @@ class TableSink:
         self.qc = bool(qc_config(plan))
         other = plan.other_clock if plan.two_clocks else None
         self.historical = plan.source == "received"
-        self.schema = _long_schema(self.fmt, other, self.qc, self.historical)
+        self.location = location_config(plan) is not None
+        self.schema = _long_schema(self.fmt, other, self.qc, self.historical, self.location)
         if self.fmt == "parquet":
             self.schema = self.schema.with_metadata(schema_metadata(plan, long_form=True))
             self.writer = pq.ParquetWriter(self.path, self.schema, compression="zstd")
@@ -106,6 +114,7 @@ class TableSink:
         other: np.ndarray | None = None,
         qc: np.ndarray | None = None,
         historical: np.ndarray | None = None,
+        location: np.ndarray | None = None,
     ) -> None:
         import pyarrow as pa
 
@@ -129,6 +138,8 @@ class TableSink:
         if self.historical:
             marks = historical if historical is not None else np.zeros(n, bool)
             columns.append(pa.array(marks.astype(np.uint8)))
+        if self.location:
+            columns.append(pa.array(location) if location is not None else pa.nulls(n, pa.uint8()))
         if not csv:
             columns.append(wkb_points(lon, lat))
         self.parts.append(pa.record_batch(columns, schema=self.schema))
