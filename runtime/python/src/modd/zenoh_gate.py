@@ -99,6 +99,8 @@ class AcceptGate:
                 await self._refuse(writer, source, why)
                 return
             await self._relay(reader, writer, _Conn(source))
+        except Exception as exc:  # one connection's fault never stops the gate
+            log.warning("zenoh gate at %s:%d: a connection failed: %r", *self.address, exc)
         finally:
             self._tasks.discard(task)
             writer.close()
