@@ -36,6 +36,9 @@ RECONNECT = "{period_init_ms: 100, period_max_ms: 1000, period_increase_factor: 
 #: How long a client keeps trying a router that closes every new connection at once (its
 #: ``accept_pending`` reached: a flood of connections that never authenticate).
 BUSY_WAIT_S = 10.0
+#: Tries whose probe found the router waiting for a handshake before a failure is put
+#: down to the credentials (a router shedding a flood has room again now and then).
+HELD_TRIES = 3
 #: A listening session's bounds against connections that open and never authenticate
 #: (docs/security.md, "Idle connections"): zenoh's defaults (10 s to authenticate, 100 at
 #: once) let 100 idle sockets lock every new session out for 10 s. Each is overridable in
@@ -238,9 +241,10 @@ def open_session(settings: ZenohSettings, busy_wait_s: float = BUSY_WAIT_S) -> z
             if settings.mode != "client" or not settings.connect:
                 raise ValueError(f"{head}: {exc}") from exc
             probe = tcp_probe(settings.connect[0])
-            # "held" once may be a router that shed this try and has room again: one more
+            # "held" may be a router that shed this try (full) and has room again: a refusal
+            # of the credentials is "held" every time, so it is said after HELD_TRIES
             held += probe == "held"
-            busy = probe == "closed" or is_gated(probe) or held == 1
+            busy = probe == "closed" or is_gated(probe) or 0 < held < HELD_TRIES
             if not busy or time.monotonic() + pause > deadline:
                 raise ValueError(f"{head}: {refusal(settings, probe, busy_wait_s)}") from exc
         time.sleep(pause)  # the router sheds connections that never authenticate
