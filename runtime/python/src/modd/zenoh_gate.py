@@ -10,6 +10,7 @@ logged at most once every :data:`LOG_EVERY_S`.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import re
 import socket
@@ -65,6 +66,7 @@ class AcceptGate:
         )
         self._server: asyncio.Server | None = None
         self._tasks: set[asyncio.Task[None]] = set()
+        self._full_logged = float("-inf")
 
     def start(self) -> AcceptGate:
         self._thread.start()
@@ -86,6 +88,7 @@ class AcceptGate:
         for task in list(self._tasks):
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
+        await asyncio.sleep(0.05)  # the transports' last callbacks: their sockets closed
 
     async def _serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         task = asyncio.current_task()
@@ -99,14 +102,19 @@ class AcceptGate:
                 await self._refuse(writer, source, why)
                 return
             await self._relay(reader, writer, _Conn(source))
+        except asyncio.CancelledError:
+            pass  # the gate stops: end quietly (asyncio logs a cancelled connection task)
         except Exception as exc:  # one connection's fault never stops the gate
             log.warning("zenoh gate at %s:%d: a connection failed: %r", *self.address, exc)
         finally:
             self._tasks.discard(task)
-            writer.close()
+            await _close(writer)
 
     async def _refuse(self, writer: asyncio.StreamWriter, source: str, why: str) -> None:
         n = self.table.due_report(source, LOG_EVERY_S)
+        now = self._loop.time()
+        if not n and why.startswith("max_sources") and now - self._full_logged >= LOG_EVERY_S:
+            n, self._full_logged = 1, now  # the address is not in the table: one line per period
         if n:
             log.warning(
                 "zenoh gate at %s:%d: refusing connections from %s (%s); %d refused since "
@@ -141,7 +149,7 @@ class AcceptGate:
             settle.cancel()
             self.table.closed(conn.source, conn.pending)
             if up_writer is not None:
-                up_writer.close()
+                await _close(up_writer)
 
     def _settle(self, conn: _Conn) -> None:
         conn.pending = False
@@ -171,6 +179,12 @@ async def _pump(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> N
             await writer.drain()
     except OSError:
         pass
+
+
+async def _close(writer: asyncio.StreamWriter) -> None:
+    writer.close()
+    with contextlib.suppress(Exception, asyncio.CancelledError):
+        await asyncio.wait_for(writer.wait_closed(), 1.0)
 
 
 def _nodelay(writer: asyncio.StreamWriter) -> None:
