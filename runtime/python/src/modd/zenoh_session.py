@@ -39,6 +39,9 @@ BUSY_WAIT_S = 10.0
 #: Tries whose probe found the router waiting for a handshake before a failure is put
 #: down to the credentials (a router shedding a flood has room again now and then).
 HELD_TRIES = 3
+#: Seconds a failed open takes past which it was no refusal (a router refuses credentials
+#: within a round trip) but a router too busy to finish the handshake.
+SLOW_OPEN_S = 1.0
 #: A listening session's bounds against connections that open and never authenticate
 #: (docs/security.md, "Idle connections"): zenoh's defaults (10 s to authenticate, 100 at
 #: once) let 100 idle sockets lock every new session out for 10 s. Each is overridable in
@@ -233,6 +236,7 @@ def open_session(settings: ZenohSettings, busy_wait_s: float = BUSY_WAIT_S) -> z
     deadline = time.monotonic() + busy_wait_s
     pause, held = 0.1, 0
     while True:
+        began = time.monotonic()
         try:
             return zenoh.open(zenoh_config(settings))
         except zenoh.ZError as exc:
@@ -241,10 +245,12 @@ def open_session(settings: ZenohSettings, busy_wait_s: float = BUSY_WAIT_S) -> z
             if settings.mode != "client" or not settings.connect:
                 raise ValueError(f"{head}: {exc}") from exc
             probe = tcp_probe(settings.connect[0])
+            if probe == "held" and time.monotonic() - began >= SLOW_OPEN_S:
+                probe = "slow"  # accepted, but no answer in time: not a refusal
             # "held" may be a router that shed this try (full) and has room again: a refusal
             # of the credentials is "held" every time, so it is said after HELD_TRIES
             held += probe == "held"
-            busy = probe == "closed" or is_gated(probe) or 0 < held < HELD_TRIES
+            busy = probe in ("closed", "slow") or is_gated(probe) or 0 < held < HELD_TRIES
             if not busy or time.monotonic() + pause > deadline:
                 raise ValueError(f"{head}: {refusal(settings, probe, busy_wait_s)}") from exc
         time.sleep(pause)  # the router sheds connections that never authenticate
@@ -273,6 +279,14 @@ def refusal(settings: ZenohSettings, probe: str | None, waited_s: float = 0.0) -
             f"(for {waited_s:g} s of tries): {probe}; your credentials were not checked. "
             "Something on this address opens connections without authenticating; try again "
             "later, or ask the base station's operator"
+        )
+    if probe == "slow":
+        return (
+            f"the router at {endpoint} takes connections but did not finish the handshake in "
+            f"time (for {waited_s:g} s of tries): it is busy, likely with connections that "
+            "never authenticate (transport/unicast/accept_pending); your credentials were "
+            "not checked. Try again later, or ask the base station's operator (docs/security.md, "
+            '"Connections per source")'
         )
     if probe == "none":
         return (
