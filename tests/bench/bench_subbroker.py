@@ -211,7 +211,7 @@ def _no_link() -> Any:
     return LinkOptions(endpoint=("127.0.0.1", free_port()), backoff_initial_s=60.0)
 
 
-def end_to_end(m: dict[str, Any], seconds: float) -> None:
+def end_to_end(m: dict[str, Any], seconds: float, gate: bool = True) -> None:
     import json
     import tempfile
     import threading
@@ -224,6 +224,7 @@ def end_to_end(m: dict[str, Any], seconds: float) -> None:
     from benchkit.footprint import Sampler
     from modd.zenoh_session import client_settings
     from subbroker_harness import (
+        shared_credentials,
         start_load,
         start_pubbroker,
         start_subbroker,
@@ -238,11 +239,15 @@ def end_to_end(m: dict[str, Any], seconds: float) -> None:
         model_path.write_text(json.dumps(m))
         link, ingress, zport = free_port(), free_port(), free_port()
         pb = start_pubbroker(tmp, model_path, link, ingress)
-        sb = start_subbroker(tmp, subbroker_config(tmp, model_path, link, zport))
+        config = subbroker_config(tmp, model_path, link, zport)
+        if not gate:  # zenoh on the endpoint itself (docs/security.md, "Connections per source")
+            config.write_text(config.read_text() + "[zenoh.gate]\nenabled = false\n")
+        sb = start_subbroker(tmp, config)
         procs = [pb, sb]
         try:
             wait_port(zport, 120)
-            session = open_session(client_settings(f"tcp/127.0.0.1:{zport}"))
+            viewer = shared_credentials().cred_file("viewer")
+            session = open_session(client_settings(f"tcp/127.0.0.1:{zport}", viewer))
             received = [0]
             status: list[dict[str, Any]] = []
             lock = threading.Lock()
@@ -317,10 +322,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--flat-slots", type=int, default=64, help="flat-out phase: slots")
     ap.add_argument("--profile", action="store_true", help="print the top of cProfile")
     ap.add_argument("--e2e", action="store_true", help="through the real processes")
+    ap.add_argument("--no-gate", action="store_true", help="--e2e without the zenoh accept gate")
     args = ap.parse_args(argv)
     m = model(args.topics, args.subs)
     if args.e2e:
-        end_to_end(m, args.seconds)
+        end_to_end(m, args.seconds, gate=not args.no_gate)
         return 0
     bench = Bench(m)
     try:

@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 from modd.ports import free_port
 from modd.zenoh_auth import CredentialStore, acl
+from modd.zenoh_gate import AcceptGate, start_gates
 from modd.zenoh_session import ZenohSettings, client_settings, open_session, wait_connected
 
 pytestmark = pytest.mark.skipif(shutil.which("openssl") is None, reason="needs openssl")
@@ -87,7 +88,9 @@ def tls(d: Path, ca: str, role: str, cert: str | None) -> dict[str, str]:
     return out
 
 
-def test_mutual_tls_with_credentials(tmp_path: Path) -> None:
+@pytest.mark.parametrize("gated", [False, True], ids=["bare", "behind-the-gate"])
+def test_mutual_tls_with_credentials(tmp_path: Path, gated: bool) -> None:
+    """Also behind the SubBroker's accept gate (modd.zenoh_gate), which relays TLS as is."""
     for ca in ("ca", "other_ca"):
         make_ca(tmp_path, ca)
     make_cert(tmp_path, "ca", "router")
@@ -95,15 +98,18 @@ def test_mutual_tls_with_credentials(tmp_path: Path) -> None:
     make_cert(tmp_path, "other_ca", "stranger")
     store = CredentialStore(tmp_path / "credentials").ensure()
     endpoint = f"tls/127.0.0.1:{free_port()}"
-    router = open_session(
-        ZenohSettings(
-            mode="router",
-            listen=(endpoint,),
-            dictionary_file=str(store.dictionary),
-            access_control=acl("usv"),
-            extra=tls(tmp_path, "ca", "listen", "router"),
-        )
+    settings = ZenohSettings(
+        mode="router",
+        listen=(endpoint,),
+        dictionary_file=str(store.dictionary),
+        access_control=acl("usv"),
+        extra=tls(tmp_path, "ca", "listen", "router"),
     )
+    gates: list[AcceptGate] = []
+    if gated:
+        settings, gates = start_gates(settings)
+        assert settings.listen != (endpoint,) and len(gates) == 1
+    router = open_session(settings)
     sessions = [router]
     try:
 
@@ -138,3 +144,5 @@ def test_mutual_tls_with_credentials(tmp_path: Path) -> None:
     finally:
         for s in reversed(sessions):
             s.close()  # type: ignore[no-untyped-call]
+        for gate in gates:
+            gate.stop()

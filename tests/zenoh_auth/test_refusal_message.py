@@ -19,6 +19,8 @@ from typing import Any
 import pytest
 from modd.ports import free_port
 from modd.zenoh_auth import Credentials, CredentialStore
+from modd.zenoh_gate import start_gates
+from modd.zenoh_gate_policy import GateLimits
 from modd.zenoh_session import ZenohSettings, client_settings, open_session, secured
 
 
@@ -119,3 +121,42 @@ def test_a_router_closing_every_new_connection_is_not_blamed_on_credentials(
         for s in idle:
             s.close()
         router.close()  # type: ignore[no-untyped-call]
+
+
+def test_a_viewer_whose_address_the_gate_throttles_is_told_so(tmp_path: Path) -> None:
+    """Behind the SubBroker's accept gate (modd.zenoh_gate), a viewer on an address that
+    already has ``per_source_pending`` connections being set up is told that the gate
+    refuses new connections from its address, and the bound's name, not that its
+    credentials were refused; once those connections are over it opens."""
+    store = CredentialStore(tmp_path / "credentials")
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    settings = secured(ZenohSettings(mode="router", listen=(endpoint,)), store, "subbroker", "usv")
+    settings = replace(settings, gate=GateLimits(per_source_pending=4))
+    inner, gates = start_gates(settings)
+    router = open_session(inner)
+    idle: list[socket.socket] = []
+    try:
+        idle = [socket.create_connection(("127.0.0.1", port)) for _ in range(4)]
+        time.sleep(0.3)
+        viewer = client_settings(endpoint, store.cred_file("viewer"))
+        with pytest.raises(ValueError) as info:
+            open_session(viewer, busy_wait_s=0.5)
+        said = str(info.value)
+        assert "refuses new connections from this address" in said, said
+        assert "per_source_pending: 4 connections of 127.0.0.1 being set up" in said
+        assert "credentials were not checked" in said and "refused the credentials" not in said
+
+        def room() -> None:
+            for s in idle:
+                s.close()
+
+        threading.Timer(0.5, room).start()
+        session = open_session(viewer, busy_wait_s=10.0)
+        session.close()  # type: ignore[no-untyped-call]
+    finally:
+        for s in idle:
+            s.close()
+        router.close()  # type: ignore[no-untyped-call]
+        for gate in gates:
+            gate.stop()

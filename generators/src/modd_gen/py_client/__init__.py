@@ -28,6 +28,7 @@ ORIGINALS = {
         "subscriber.py",
         "zenoh_session.py",
         "zenoh_auth.py",
+        "zenoh_gate_policy.py",
         "subbroker/__init__.py",
         "subbroker/client.py",
         "subbroker/keys.py",

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .zenoh_auth import Credentials, CredentialStore, acl, read_credentials
+from .zenoh_gate_policy import REFUSAL_MARK, GateLimits
 
 if TYPE_CHECKING:
     import zenoh
@@ -35,6 +36,12 @@ RECONNECT = "{period_init_ms: 100, period_max_ms: 1000, period_increase_factor: 
 #: How long a client keeps trying a router that closes every new connection at once (its
 #: ``accept_pending`` reached: a flood of connections that never authenticate).
 BUSY_WAIT_S = 10.0
+#: Tries whose probe found the router waiting for a handshake before a failure is put
+#: down to the credentials (a router shedding a flood has room again now and then).
+HELD_TRIES = 3
+#: Seconds a failed open takes past which it was no refusal (a router refuses credentials
+#: within a round trip) but a router too busy to finish the handshake.
+SLOW_OPEN_S = 1.0
 #: A listening session's bounds against connections that open and never authenticate
 #: (docs/security.md, "Idle connections"): zenoh's defaults (10 s to authenticate, 100 at
 #: once) let 100 idle sockets lock every new session out for 10 s. Each is overridable in
@@ -73,6 +80,9 @@ class ZenohSettings:
     dictionary_file: str | None = None
     access_control: Mapping[str, Any] | None = None
     credentials_dir: str | None = None
+    #: The per-source bounds of the accept gate in front of a SubBroker's listener
+    #: (``[zenoh.gate]``; :mod:`modd.zenoh_gate`).
+    gate: GateLimits = field(default_factory=GateLimits)
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
@@ -110,7 +120,7 @@ class ZenohSettings:
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any], where: str = "zenoh") -> ZenohSettings:
         """From a config-file table (docs/subbroker.md, ``[zenoh]``)."""
-        known = {"mode", "listen", "connect", "config_file", "settings", "credentials_dir"}
+        known = {"mode", "listen", "connect", "config_file", "settings", "credentials_dir", "gate"}
         unknown = sorted(set(data) - known)
         if unknown:
             listing = ", ".join(sorted(known))
@@ -118,6 +128,9 @@ class ZenohSettings:
         extra = data.get("settings", {})
         if not isinstance(extra, Mapping):
             raise ValueError(f"{where}.settings: expected a table of path = value")
+        gate = data.get("gate", {})
+        if not isinstance(gate, Mapping):
+            raise ValueError(f"{where}.gate: expected a table (docs/subbroker.md)")
         return cls(
             mode=str(data.get("mode", "router")),
             listen=tuple(_str_list(data.get("listen", [DEFAULT_ENDPOINT]), f"{where}.listen")),
@@ -125,6 +138,7 @@ class ZenohSettings:
             config_file=data.get("config_file"),
             extra={k: json.dumps(v) for k, v in extra.items()},  # TOML values -> JSON
             credentials_dir=str(data["credentials_dir"]) if "credentials_dir" in data else None,
+            gate=GateLimits.from_mapping(gate, f"{where}.gate"),
         )
 
 
@@ -220,8 +234,9 @@ def open_session(settings: ZenohSettings, busy_wait_s: float = BUSY_WAIT_S) -> z
     if settings.listen:
         _room_for_pending()
     deadline = time.monotonic() + busy_wait_s
-    pause = 0.1
+    pause, held = 0.1, 0
     while True:
+        began = time.monotonic()
         try:
             return zenoh.open(zenoh_config(settings))
         except zenoh.ZError as exc:
@@ -230,7 +245,13 @@ def open_session(settings: ZenohSettings, busy_wait_s: float = BUSY_WAIT_S) -> z
             if settings.mode != "client" or not settings.connect:
                 raise ValueError(f"{head}: {exc}") from exc
             probe = tcp_probe(settings.connect[0])
-            if probe != "closed" or time.monotonic() + pause > deadline:
+            if probe == "held" and time.monotonic() - began >= SLOW_OPEN_S:
+                probe = "slow"  # accepted, but no answer in time: not a refusal
+            # "held" may be a router that shed this try (full) and has room again: a refusal
+            # of the credentials is "held" every time, so it is said after HELD_TRIES
+            held += probe == "held"
+            busy = probe in ("closed", "slow") or is_gated(probe) or 0 < held < HELD_TRIES
+            if not busy or time.monotonic() + pause > deadline:
                 raise ValueError(f"{head}: {refusal(settings, probe, busy_wait_s)}") from exc
         time.sleep(pause)  # the router sheds connections that never authenticate
         pause = min(1.0, 2 * pause)
@@ -252,6 +273,21 @@ def refusal(settings: ZenohSettings, probe: str | None, waited_s: float = 0.0) -
     'the router at tcp/127.0.0.1:7447 needs credentials'
     """
     endpoint = settings.connect[0]
+    if is_gated(probe):
+        return (
+            f"the SubBroker at {endpoint} refuses new connections from this address for now "
+            f"(for {waited_s:g} s of tries): {probe}; your credentials were not checked. "
+            "Something on this address opens connections without authenticating; try again "
+            "later, or ask the base station's operator"
+        )
+    if probe == "slow":
+        return (
+            f"the router at {endpoint} takes connections but did not finish the handshake in "
+            f"time (for {waited_s:g} s of tries): it is busy, likely with connections that "
+            "never authenticate (transport/unicast/accept_pending); your credentials were "
+            "not checked. Try again later, or ask the base station's operator (docs/security.md, "
+            '"Connections per source")'
+        )
     if probe == "none":
         return (
             f"nothing answers at {endpoint}: is the SubBroker running (`make run` or "
@@ -280,7 +316,8 @@ def tcp_probe(endpoint: str, timeout_s: float = 1.0, hold_s: float = 0.3) -> str
     """What a ``tcp/host:port`` endpoint does with a new connection that says nothing:
     "none" (refused or unreachable), "closed" (accepted, then closed within ``hold_s``: a
     zenoh listener with as many connections in their handshake as it takes), "held"
-    (kept open: a listener awaiting the handshake); None for another kind of endpoint."""
+    (kept open: a listener awaiting the handshake), the SubBroker's gate's reason when it
+    turns this address away (:func:`is_gated`); None for another kind of endpoint."""
     kind, _, address = endpoint.partition("/")
     host, _, port = address.rpartition(":")
     if kind != "tcp" or not port.isdigit():
@@ -289,13 +326,30 @@ def tcp_probe(endpoint: str, timeout_s: float = 1.0, hold_s: float = 0.3) -> str
         with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s) as s:
             s.settimeout(hold_s)
             try:
-                return "closed" if not s.recv(1) else "held"
+                said = s.recv(512)
             except TimeoutError:
                 return "held"
             except OSError:  # reset
                 return "closed"
+            if said.startswith(REFUSAL_MARK):
+                return _gate_reason(said)
+            return "closed" if not said else "held"
     except OSError:
         return "none"
+
+
+#: How :func:`tcp_probe` starts the reason the SubBroker's gate gave.
+GATED = "the gate says: "
+
+
+def is_gated(probe: str | None) -> bool:
+    return probe is not None and probe.startswith(GATED)
+
+
+def _gate_reason(said: bytes) -> str:
+    """The gate's one line, printable characters only (it comes from the network)."""
+    text = said[len(REFUSAL_MARK) :].split(b"\n", 1)[0].decode("utf-8", "replace")
+    return GATED + "".join(c if c.isprintable() else "?" for c in text)[:300]
 
 
 def _room_for_pending() -> None:
@@ -303,7 +357,8 @@ def _room_for_pending() -> None:
     (a service's soft limit is often 1024), within the hard limit."""
     import resource
 
-    want = int(LISTENER_LIMITS["transport/unicast/accept_pending"]) + 1024
+    # each pending connection: zenoh's socket, and the gate's two (modd.zenoh_gate)
+    want = 3 * int(LISTENER_LIMITS["transport/unicast/accept_pending"]) + 1024
     soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
     if soft != resource.RLIM_INFINITY and soft < want:
         new = want if hard == resource.RLIM_INFINITY else min(want, hard)

@@ -28,6 +28,7 @@ from modd.link.receiver import Window
 
 from .. import onboard
 from ..zenoh_auth import CredentialStore
+from ..zenoh_gate import AcceptGate, start_gates
 from ..zenoh_session import open_session, secured
 from . import backfill_query, delivery_auth
 from .backfill import BackfillManager
@@ -144,7 +145,12 @@ class SubBroker:
         self._nonces = NonceGuard(path=nonces)
         if self._session is None:
             settings = secured(self.config.zenoh, self._store, "subbroker", self.drone)
-            self._session = open_session(settings)
+            settings, self._gates = start_gates(settings)
+            try:
+                self._session = open_session(settings)
+            except BaseException:
+                self._stop_gates()
+                raise
         session = self._session
         if self.config.delivery.zenoh:
             self._zenoh = ZenohDelivery(session, self.drone)
@@ -193,6 +199,14 @@ class SubBroker:
         self.backfill.close()
         if self._own_session and self._session is not None:
             self._session.close()  # type: ignore[no-untyped-call]
+        self._stop_gates()
+
+    _gates: list[AcceptGate] = []  # noqa: RUF012 - replaced per instance in start()
+
+    def _stop_gates(self) -> None:
+        for gate in self._gates:
+            gate.stop()
+        self._gates = []
 
     # -- planning ----------------------------------------------------------------
 
