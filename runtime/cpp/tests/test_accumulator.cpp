@@ -112,9 +112,37 @@ TEST(Accumulator, PercentileMatchesNumpy) {
 TEST(Accumulator, PercentileRefusesNoSampleAndPOutside0To100) {
   std::vector<double> none, two{1.0, 2.0};
   EXPECT_THROW(modd::broker::percentile(none, 50), std::invalid_argument);
-  for (double p : {0.0, -1.0, 100.5, std::nan("")})
+  for (double p : {-1.0, 100.5, std::nan("")})
     EXPECT_THROW(modd::broker::percentile(two, p), std::invalid_argument) << p;
   EXPECT_EQ(modd::broker::percentile(two, 100), 2.0);
+  EXPECT_EQ(modd::broker::percentile(two, 0), 1.0);  // numpy's: the minimum
+}
+
+// The PERCENTILE(p) accumulator (the PubBroker's, p from CONFIG) equals numpy's over
+// each window of the contract's vectors, for each p they carry, two windows in a row.
+TEST(Accumulator, PercentileAccumulatorMatchesNumpy) {
+  std::ifstream f(std::string(MODD_CONTRACTS_DIR) + "/vectors/aggregations.json");
+  ASSERT_TRUE(f.good());
+  auto doc = nlohmann::json::parse(f);
+  size_t checked = 0;
+  for (const auto& c : doc["vectors"]) {
+    bool is_int = c["type"] == "int";
+    ValueType type = is_int ? ValueType::Int
+                            : (c["type"] == "float32" ? ValueType::Float32 : ValueType::Float64);
+    for (const auto& [key, want] : c["PERCENTILE"].items()) {
+      Accumulator acc(type, Aggregation::Percentile, std::stod(key));
+      for (int round = 0; round < 2; ++round) {
+        for (const auto& x : c["samples"])
+          acc.add(is_int ? 0.0 : x.get<double>(), is_int ? x.get<int64_t>() : 0);
+        auto v = acc.take();
+        ASSERT_TRUE(v.present);
+        EXPECT_EQ(v.number, want.get<double>()) << c["name"] << " p=" << key;
+      }
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 80u);
+  EXPECT_FALSE(Accumulator(ValueType::Float64, Aggregation::Percentile, 95).take().present);
 }
 
 TEST(Accumulator, StatisticsOfAnEmptyWindowAreAbsentAndMedianIsBounded) {
