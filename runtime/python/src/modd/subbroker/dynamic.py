@@ -25,7 +25,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from modd_contracts import labels
 from modd_plan import Accepted, Plan, check_dynamic
 from modd_plan.streams import Source, StreamKey
 
@@ -157,10 +156,6 @@ class DynamicSubscriptions:
                 "status": "ERROR",
                 "reason": f"topic, period_s and aggregation: at most {MAX_FIELD} characters",
             }
-        try:
-            labels.parse(agg)  # PERCENTILE with its p: PERCENTILE(95)
-        except ValueError as exc:
-            return {"status": "ERROR", "reason": str(exc)[:MAX_FIELD]}
         owner = _owner(request) or ""
         if running is None:
             return {"status": "NOT_AVAILABLE", "reason": "no plan is running on the link yet"}
