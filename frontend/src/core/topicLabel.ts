@@ -47,7 +47,13 @@ export function topicLabel(model: ModdModel | ReadonlyArray<ModdModel | undefine
 /** A subscription as every panel tells it: its topic (as topicLabel), aggregation and period. */
 export function subscriptionLabel(
   model: ModdModel | ReadonlyArray<ModdModel | undefined> | undefined,
-  s: { topic: string; aggregation: string; periodS: string | number },
+  s: { topic: string; aggregation: string; periodS: string | number; percentile?: number },
 ): string {
-  return `${s.topic ? topicLabel(model, s.topic) : "(no topic)"} ${s.aggregation} every ${String(s.periodS)} s`;
+  return `${s.topic ? topicLabel(model, s.topic) : "(no topic)"} ${aggregationLabel(s)} every ${String(s.periodS)} s`;
+}
+
+/** A subscription's aggregation as the plan and the delivered values name it:
+ * PERCENTILE with its p, `PERCENTILE(95)` (modd_contracts/labels.py). */
+export function aggregationLabel(s: { aggregation: string; percentile?: number }): string {
+  return s.aggregation === "PERCENTILE" && s.percentile !== undefined ? `PERCENTILE(${String(s.percentile)})` : s.aggregation;
 }

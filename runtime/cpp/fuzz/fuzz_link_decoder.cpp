@@ -121,7 +121,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
           auto g = split_frame(out);
           if (!g || !(std::get<Config>(decode(*g)) == *c)) std::abort();
           for (const auto& s : c->streams)  // PERCENTILE's p read back within 0..100
-            if (s.aggregation == Aggregation::Percentile && !(s.percentile >= 0 && s.percentile <= 100))
+            if (s.aggregation == Aggregation::Percentile &&
+                !(s.percentile >= 0 && s.percentile <= 100))
               std::abort();
         }
       }
