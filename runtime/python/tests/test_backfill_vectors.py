@@ -30,6 +30,7 @@ def _from_json(m: dict[str, Any]) -> bf.BackfillMessage:
             m["windows"],
             m["resume"],
             m["rate_bps"],
+            m.get("percentile"),
         )
     if t == "BACKFILL_PROGRESS":
         return bf.BackfillProgress(
