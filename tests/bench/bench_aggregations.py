@@ -1,5 +1,5 @@
-"""Scenario 1 with MEDIAN, STDDEV or PERCENTILE(95) instead of AVERAGE (issue 45): link bytes/s on the
-wire (tshark on lo, IP and TCP headers included) and the PubBroker's CPU per ingested
+"""Scenario 1 with MEDIAN, STDDEV or PERCENTILE(95) instead of AVERAGE (issue 45): link
+bytes/s on the wire (tshark on lo, IP and TCP headers included) and the PubBroker's CPU per ingested
 sample, each aggregation in turn at the same 25 Hz load. Asserts nothing; prints the
 figures beside the planner's prediction.
 

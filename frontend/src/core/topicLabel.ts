@@ -11,6 +11,7 @@
  *   topicLabel(model, "usv.gone.x")                     // "usv.gone.x" (not in the model: the name alone)
  *   subscriptionLabel(model, sub)                       // "usv.accelerometer.accel_x (m/s²) AVERAGE every 2.0 s"
  */
+import { AGGREGATION } from "./contracts.gen";
 import type { ModdModel } from "./model.gen";
 import { unitLabel } from "./chartData";
 import { findTopicByName, type TopicRef } from "./query";
@@ -55,5 +56,5 @@ export function subscriptionLabel(
 /** A subscription's aggregation as the plan and the delivered values name it:
  * PERCENTILE with its p, `PERCENTILE(95)` (modd_contracts/labels.py). */
 export function aggregationLabel(s: { aggregation: string; percentile?: number }): string {
-  return s.aggregation === "PERCENTILE" && s.percentile !== undefined ? `PERCENTILE(${String(s.percentile)})` : s.aggregation;
+  return s.aggregation === AGGREGATION.PERCENTILE && s.percentile !== undefined ? `${s.aggregation}(${String(s.percentile)})` : s.aggregation;
 }
