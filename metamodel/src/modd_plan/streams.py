@@ -238,11 +238,11 @@ def _pair_sources(target: StreamKey, candidates: Sequence[StreamKey]) -> tuple[S
 
 def stream_order(
     topic_index: Mapping[str, int],
-) -> Callable[[StreamKey], tuple[int, int, tuple[float, Fraction]]]:
+) -> Callable[[StreamKey], tuple[int, float, tuple[float, Fraction]]]:
     """Sort key of the contract: topic declaration order, aggregation enum
     order, period ascending."""
 
-    def order(s: StreamKey) -> tuple[int, int, tuple[float, Fraction]]:
+    def order(s: StreamKey) -> tuple[int, float, tuple[float, Fraction]]:
         return (topic_index[s.topic], _AGG_INDEX[s.aggregation], s._sort_period)  # type: ignore[attr-defined]
 
     return order
