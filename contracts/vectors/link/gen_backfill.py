@@ -28,7 +28,7 @@ def _message(m: bf.BackfillMessage) -> dict[str, Any]:
             "windows": m.windows,
             "resume": m.resume,
             "rate_bps": m.rate_bps,
-        }
+        } | ({} if m.percentile is None else {"percentile": m.percentile})
     if isinstance(m, bf.BackfillProgress):
         return {
             "type": "BACKFILL_PROGRESS",
@@ -115,6 +115,23 @@ def vectors() -> list[dict[str, Any]]:
             600,
             137,
             3600,
+        ),
+    )
+    msg(
+        "request_percentile",
+        "request 7: PERCENTILE(95) of a float32 topic, 1 s windows, 60 windows; "
+        "p (f64le) follows the period",
+        bf.BackfillRequest(
+            7,
+            "usv.accelerometer.accel_x",
+            ValueType.FLOAT32,
+            Aggregation.PERCENTILE,
+            1_000_000,
+            EPOCH,
+            60,
+            0,
+            0,
+            95.0,
         ),
     )
     msg(

@@ -89,6 +89,7 @@ def msg_json(m: Message) -> dict[str, Any]:
             ],
             "streams": [
                 {"topic": s.topic, "aggregation": s.aggregation.name, "period_us": s.period_us}
+                | ({} if s.percentile is None else {"percentile": s.percentile})
                 for s in m.streams
             ],
             **({} if m.accepted_delay_ms is None else {"accepted_delay_ms": m.accepted_delay_ms}),
@@ -239,6 +240,23 @@ def main() -> None:
                     (1, Aggregation.MEDIAN, 2_000_000),
                     (1, Aggregation.RANGE, 2_000_000),
                 ]
+            ),
+        ),
+    )
+    simple(
+        "config_percentile",
+        "PERCENTILE(p): p (f64le) after the stream's period, f32 PERCENTILE(95), int PERCENTILE(2.5)",
+        Config(
+            202,
+            0,
+            (
+                TopicSpec("d.s.turbidity", ValueType.FLOAT32, 1, 0),
+                TopicSpec("d.s.count", ValueType.INT, 1000, 10000),
+            ),
+            (
+                StreamSpec(0, Aggregation.MEDIAN, 1_000_000),
+                StreamSpec(0, Aggregation.PERCENTILE, 1_000_000, 95.0),
+                StreamSpec(1, Aggregation.PERCENTILE, 2_000_000, 2.5),
             ),
         ),
     )
@@ -454,6 +472,21 @@ def main() -> None:
         ("config_bad_buffer", fr("07 01 00 01 0161 00 00 00 00"), "buffer size 0"),
         ("config_bad_aggregation", fr("07 01 00 01 0161 00 01 00 01 00 7f 01"), "aggregation 127"),
         ("config_zero_period", fr("07 01 00 01 0161 00 01 00 01 00 00 00"), "stream period 0"),
+        (
+            "config_percentile_above_100",
+            fr("07 01 00 01 0161 00 01 00 01 00 0b 01 0000000000205940"),
+            "PERCENTILE(100.5)",
+        ),
+        (
+            "config_percentile_nan",
+            fr("07 01 00 01 0161 00 01 00 01 00 0b 01 000000000000f87f"),
+            "PERCENTILE(NaN)",
+        ),
+        (
+            "config_percentile_truncated",
+            fr("07 01 00 01 0161 00 01 00 01 00 0b 01 00000000"),
+            "PERCENTILE's p cut short",
+        ),
         ("trailing_byte", fr("08 01 00 0000000000000000 ff"), "CONFIG_ACK with a trailing byte"),
         (
             "config_delay_above_one_hour",

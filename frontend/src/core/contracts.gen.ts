@@ -505,6 +505,7 @@ export const AGGREGATION_TABLE = [
   { name: "MEDIAN", code: 8, numericOnly: true },
   { name: "STDDEV", code: 9, numericOnly: true },
   { name: "RANGE", code: 10, numericOnly: true },
+  { name: "PERCENTILE", code: 11, numericOnly: true },
 ] as const;
 
 /** Each aggregation's name, for code that compares or builds one. */
@@ -520,6 +521,7 @@ export const AGGREGATION = {
   MEDIAN: "MEDIAN",
   STDDEV: "STDDEV",
   RANGE: "RANGE",
+  PERCENTILE: "PERCENTILE",
 } as const;
 
 /** The role owning each model part (modd.schema.json x-owner; null: any editor). */

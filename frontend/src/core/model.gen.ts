@@ -61,8 +61,8 @@ export type ValueType = "float32" | "float64" | "int" | "bool";
 export const ValueTypeValues = ["float32", "float64", "int", "bool"] as const;
 
 /** How the samples of one period are reduced to what the subscriber receives. ALL sends every raw sample of the period. */
-export type Aggregation = "MIN" | "MAX" | "AVERAGE" | "FIRST" | "LAST" | "ALL" | "COUNT" | "SUM" | "MEDIAN" | "STDDEV" | "RANGE";
-export const AggregationValues = ["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM", "MEDIAN", "STDDEV", "RANGE"] as const;
+export type Aggregation = "MIN" | "MAX" | "AVERAGE" | "FIRST" | "LAST" | "ALL" | "COUNT" | "SUM" | "MEDIAN" | "STDDEV" | "RANGE" | "PERCENTILE";
+export const AggregationValues = ["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM", "MEDIAN", "STDDEV", "RANGE", "PERCENTILE"] as const;
 
 /** The platform (surface, aerial or underwater drone) and the sensors it carries. */
 export interface Drone {
@@ -373,6 +373,8 @@ export interface Subscriber {
   periodS: Period;
   /** How the samples of each period are reduced. */
   aggregation: Aggregation;
+  /** The p of a PERCENTILE subscription (numpy.percentile, linear), 0 to 100; required with PERCENTILE and only with it. */
+  percentile?: number;
   /** The precision this subscription needs live, in the topic's unit: at least the variable's resolution (coarser still); the stream is sent at the finest resolution of the subscriptions it serves, unquantised if one of them declares none. */
   resolution?: number;
   /** What the SubBroker fills by itself from the drone's archive after a link outage: off (nothing; a backfill can still be asked for), gaps (the windows missed since the last connection) or mission (every window missed since the running config began). */

@@ -29,6 +29,9 @@ describe("topicLabel", () => {
     expect(subscriptionLabel(model, { topic: "usv.accelerometer.accel_x", aggregation: "MIN", periodS: "0.25" }))
       .toBe("usv.accelerometer.accel_x (m/s²) MIN every 0.25 s");
     expect(subscriptionLabel(model, { topic: "", aggregation: "MIN", periodS: "1" })).toBe("(no topic) MIN every 1 s");
+    // a percentile by its label, as the plan and the delivered values name it
+    expect(subscriptionLabel(model, { topic: "usv.accelerometer.accel_x", aggregation: "PERCENTILE", percentile: 99.5, periodS: "2.0" }))
+      .toBe("usv.accelerometer.accel_x (m/s²) PERCENTILE(99.5) every 2.0 s");
   });
 });
 

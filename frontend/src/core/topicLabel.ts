@@ -11,6 +11,7 @@
  *   topicLabel(model, "usv.gone.x")                     // "usv.gone.x" (not in the model: the name alone)
  *   subscriptionLabel(model, sub)                       // "usv.accelerometer.accel_x (m/s²) AVERAGE every 2.0 s"
  */
+import { AGGREGATION } from "./contracts.gen";
 import type { ModdModel } from "./model.gen";
 import { unitLabel } from "./chartData";
 import { findTopicByName, type TopicRef } from "./query";
@@ -47,7 +48,13 @@ export function topicLabel(model: ModdModel | ReadonlyArray<ModdModel | undefine
 /** A subscription as every panel tells it: its topic (as topicLabel), aggregation and period. */
 export function subscriptionLabel(
   model: ModdModel | ReadonlyArray<ModdModel | undefined> | undefined,
-  s: { topic: string; aggregation: string; periodS: string | number },
+  s: { topic: string; aggregation: string; periodS: string | number; percentile?: number },
 ): string {
-  return `${s.topic ? topicLabel(model, s.topic) : "(no topic)"} ${s.aggregation} every ${String(s.periodS)} s`;
+  return `${s.topic ? topicLabel(model, s.topic) : "(no topic)"} ${aggregationLabel(s)} every ${String(s.periodS)} s`;
+}
+
+/** A subscription's aggregation as the plan and the delivered values name it:
+ * PERCENTILE with its p, `PERCENTILE(95)` (modd_contracts/labels.py). */
+export function aggregationLabel(s: { aggregation: string; percentile?: number }): string {
+  return s.aggregation === AGGREGATION.PERCENTILE && s.percentile !== undefined ? `${s.aggregation}(${String(s.percentile)})` : s.aggregation;
 }

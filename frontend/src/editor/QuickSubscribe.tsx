@@ -17,6 +17,10 @@ import { topicLabel, topicRefLabel, variableLabel } from "../core/topicLabel";
 import { parsePeriods, subscriptionGrid } from "../core/subscriptionGrid";
 import { useEditorStore, useModel } from "./useEditor";
 
+/** PERCENTILE needs its p: it is written PERCENTILE(95) in the text view, or given
+ * its percentile in the inspector, not chosen here. */
+const QUICK_AGGREGATIONS = AggregationValues.filter((a) => a !== AGGREGATION.PERCENTILE);
+
 const selected = (e: React.ChangeEvent<HTMLSelectElement>) => [...e.target.selectedOptions].map((o) => o.value);
 
 /**
@@ -74,9 +78,9 @@ export function QuickSubscribe() {
       </label>
       {bad.length > 0 && <span className="error" role="alert">Not a period: {bad.join(", ")}</span>}
       <label>Aggregation
-        <select multiple size={AggregationValues.length} value={aggregations} onChange={(e) => setAggregations(selected(e) as Aggregation[])}
+        <select multiple size={QUICK_AGGREGATIONS.length} value={aggregations} onChange={(e) => setAggregations(selected(e) as Aggregation[])}
           onMouseDown={toggleOnClick(aggregations, setAggregations)} title="Every aggregation is listed; a click adds one or takes it out">
-          {AggregationValues.map((a) => <option key={a}>{a}</option>)}
+          {QUICK_AGGREGATIONS.map((a) => <option key={a}>{a}</option>)}
         </select>
       </label>
       <output className="quick-subscribe-summary" aria-label="Subscriptions to make">

@@ -26,6 +26,7 @@ SUM: Final = "SUM"
 MEDIAN: Final = "MEDIAN"
 STDDEV: Final = "STDDEV"
 RANGE: Final = "RANGE"
+PERCENTILE: Final = "PERCENTILE"
 
 
 class Aggregation(IntEnum):
@@ -43,6 +44,7 @@ class Aggregation(IntEnum):
     MEDIAN = 8
     STDDEV = 9
     RANGE = 10
+    PERCENTILE = 11
 
 
 @dataclass(frozen=True)
@@ -167,6 +169,16 @@ AGGREGATIONS: tuple[AggregationSpec, ...] = (
         wire_count=False,
         keeps_samples=False,
         result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'int'},
+        derivable_from=('ALL',),
+        derivable_from_pair=None,
+    ),
+    AggregationSpec(
+        name='PERCENTILE',
+        code=11,
+        numeric_only=True,
+        wire_count=False,
+        keeps_samples=True,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'float64', 'bool': 'float32'},
         derivable_from=('ALL',),
         derivable_from_pair=None,
     ),

@@ -307,6 +307,14 @@ class _Builder:
             self._error(token, str(exc), pointer)
             return "0.0"
 
+    def _percentile(self, node: Tree[Token], pointer: str) -> float:
+        """PERCENTILE(p)'s p as written; its range (0 to 100) and its
+        aggregation are the schema's and the validator's to check, located."""
+        token = node.children[0]
+        assert isinstance(token, Token)
+        self._mark(pointer, token)
+        return float(token)
+
     def _int(self, token: Token, pointer: str) -> int:
         text = str(token)
         if not text.isdigit():
@@ -724,6 +732,8 @@ class _Builder:
                         ptr + "/backfill",
                     )
                 sub["backfill"] = str(word)
+            elif isinstance(child, Tree) and child.data == "percentile":
+                sub["percentile"] = self._percentile(child, ptr + "/percentile")
             elif isinstance(child, Tree) and child.data == "resolution":
                 number = child.children[0]
                 assert isinstance(number, Token)

@@ -229,7 +229,7 @@ def print_model(doc: dict[str, Any]) -> str:
     out.append("Subscriptions {")
     for s in doc["subscribers"]:
         args = [endpoint(s["endpoint"])] if "endpoint" in s else []
-        args += [quote(s["topic"]), s["periodS"], s["aggregation"]]
+        args += [quote(s["topic"]), s["periodS"], s["aggregation"] + _percentile(s)]
         if "backfill" in s:  # "off" too when set: the text keeps what the model says
             args.append(f"backfill = {s['backfill']}")
         if "resolution" in s:
@@ -237,3 +237,11 @@ def print_model(doc: dict[str, Any]) -> str:
         out.append(f"{INDENT}Subscriber {name(s['name'])}({', '.join(args)});")
     out.append("}")
     return "\n".join(out) + "\n"
+
+
+def _percentile(sub: dict[str, Any]) -> str:
+    """``(95)`` after PERCENTILE (the shortest text of the number that reads back)."""
+    if "percentile" not in sub:
+        return ""
+    p = repr(float(sub["percentile"]))
+    return f"({p.removesuffix('.0')})"

@@ -14,7 +14,7 @@ Text = str
 Path = str
 KnownUnit = Literal["METER", "METER_PER_SECOND", "METER_PER_SECOND_SQUARED", "DEGREE_CELSIUS", "RADIAN", "RADIAN_PER_SECOND", "BAR", "LITER", "GRAM", "NONE"]
 ValueType = Literal["float32", "float64", "int", "bool"]
-Aggregation = Literal["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM", "MEDIAN", "STDDEV", "RANGE"]
+Aggregation = Literal["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM", "MEDIAN", "STDDEV", "RANGE", "PERCENTILE"]
 Comparison = Literal["=", "!=", "<", "<=", ">", ">="]
 ConditionValue = str
 Unit = KnownUnit | str
@@ -247,6 +247,7 @@ class Subscriber(TypedDict):
     topic: TopicName
     periodS: Period
     aggregation: Aggregation
+    percentile: NotRequired[float]
     resolution: NotRequired[float]
     backfill: NotRequired[Literal["off", "gaps", "mission"]]
 

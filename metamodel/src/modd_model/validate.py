@@ -12,6 +12,7 @@ from fractions import Fraction
 from functools import cache, lru_cache
 from typing import TYPE_CHECKING, Any
 
+from modd_contracts import aggregations_gen as agg
 from modd_contracts.aggregations_gen import AGGREGATIONS
 from modd_contracts.link_wire_gen import MAX_LIST, MAX_PERIOD_US
 
@@ -35,7 +36,8 @@ CHECKS: list[Check] = [*SCIENCE_CHECKS, *RESOLUTION_CHECKS]
 # Aggregations that make no sense on booleans (their mean or sum is not a bool):
 # the aggregation table's numericOnly.
 _NUMERIC_ONLY = {a.name for a in AGGREGATIONS if a.numeric_only}
-# Aggregations whose window's samples the PubBroker holds (ALL, MEDIAN): at most
+# Aggregations whose window's samples the PubBroker holds (ALL, MEDIAN,
+# PERCENTILE): at most
 # the link's list bound a window (docs/protocol.md, "Aggregation semantics").
 _KEEPS_SAMPLES = {a.name for a in AGGREGATIONS if a.keeps_samples}
 
@@ -319,7 +321,7 @@ def subscription_periods(doc: dict[str, Any]) -> Iterator[Diagnostic]:
 
 @check
 def window_samples_bounded(doc: dict[str, Any]) -> Iterator[Diagnostic]:
-    """A MEDIAN or ALL window holds every sample of its period on board: at most
+    """A MEDIAN, PERCENTILE or ALL window holds every sample of its period on board: at most
     MAX_LIST, from the topic's publication period (its fastest publisher)."""
     fastest: dict[str, Fraction] = {}
     for pub in doc["publishers"]:
@@ -351,6 +353,25 @@ def aggregation_fits_type(doc: dict[str, Any]) -> Iterator[Diagnostic]:
             yield Diagnostic(
                 f"{sub['aggregation']} is not defined for the bool topic {sub['topic']!r}",
                 f"/subscribers/{i}/aggregation",
+            )
+
+
+@check
+def percentile_has_its_p(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    """PERCENTILE names its p (``PERCENTILE(95)``, ``"percentile": 95``); no
+    other aggregation takes one. Its range, 0 to 100, is the schema's."""
+    for i, sub in enumerate(doc["subscribers"]):
+        is_percentile = sub["aggregation"] == agg.PERCENTILE
+        if is_percentile and "percentile" not in sub:
+            yield Diagnostic(
+                "PERCENTILE needs its p, 0 to 100: PERCENTILE(95) in .modd, "
+                '"percentile": 95 in JSON',
+                f"/subscribers/{i}/aggregation",
+            )
+        elif not is_percentile and "percentile" in sub:
+            yield Diagnostic(
+                f"{sub['aggregation']} takes no percentile (only PERCENTILE(p) does)",
+                f"/subscribers/{i}/percentile",
             )
 
 

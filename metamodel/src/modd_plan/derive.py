@@ -15,9 +15,11 @@ ALL          the list of raw samples, in publication order
 MEDIAN       numpy.median of the samples (float), or ``None``
 STDDEV       the population standard deviation (numpy.std, ddof=0), or ``None``
 RANGE        MAX - MIN, or ``None``
+PERCENTILE   numpy.percentile(samples, p) (linear), or ``None``; the
+             aggregation is named by its label, ``PERCENTILE(95)``
 ===========  ==================================================
 
-MEDIAN, STDDEV and RANGE are exact over their window and cannot be merged
+MEDIAN, STDDEV, RANGE and PERCENTILE(p) are exact over their window and cannot be merged
 (the aggregation table derives them from ALL only).
 
 A stream of period ``k·P`` is derived from ``k`` consecutive windows of a sent
@@ -42,6 +44,7 @@ from typing import Any
 
 from modd_contracts import aggregations_gen as agg
 from modd_contracts.aggregations_gen import AGGREGATIONS
+from modd_contracts.labels import ByLabel, parse
 
 Sample = float | int | bool
 Window = Any
@@ -49,13 +52,15 @@ Window = Any
 #: For each aggregation, the aggregations of ONE sent stream it can be derived
 #: from, most preferred first (same aggregation, then cheaper, ALL last): the
 #: aggregation table's ``derivableFrom`` (metamodel/modd.schema.json).
-SINGLE_SOURCE_RULES: dict[str, tuple[str, ...]] = {a.name: a.derivable_from for a in AGGREGATIONS}
+SINGLE_SOURCE_RULES: dict[str, tuple[str, ...]] = ByLabel(
+    {a.name: a.derivable_from for a in AGGREGATIONS}
+)
 
 #: Aggregations derivable from TWO sent streams together (AVERAGE = SUM / COUNT):
 #: the table's ``derivableFromPair``.
-PAIR_SOURCE_RULES: dict[str, tuple[str, str]] = {
-    a.name: a.derivable_from_pair for a in AGGREGATIONS if a.derivable_from_pair
-}
+PAIR_SOURCE_RULES: dict[str, tuple[str, str]] = ByLabel(
+    {a.name: a.derivable_from_pair for a in AGGREGATIONS if a.derivable_from_pair}
+)
 
 
 def _present(windows: Sequence[Window]) -> list[Window]:
@@ -175,6 +180,10 @@ def aggregate(aggregation: str, samples: Sequence[Sample]) -> Window:
     if aggregation == agg.AVERAGE:
         return (exact_sum(samples) / len(samples), len(samples)) if samples else None
     whole = _WHOLE.get(aggregation)
+    if whole is None and aggregation.startswith(agg.PERCENTILE):
+        p = parse(aggregation)[1]
+        assert p is not None
+        return percentile(samples, p) if samples else None
     if whole is None:
         raise ValueError(f"unknown aggregation {aggregation!r}")
     return whole(samples) if samples else None
@@ -210,8 +219,8 @@ def percentile(samples: Sequence[Sample], p: float) -> float:
     >>> percentile([1, 2, 3, 4], 50), percentile([10.0, 0.0, 5.0], 95), percentile([7], 0.1)
     (2.5, 9.5, 7.0)
     """
-    if not 0 < p <= 100:
-        raise ValueError(f"percentile {p!r} is not in (0, 100]")
+    if not 0 <= p <= 100:
+        raise ValueError(f"percentile {p!r} is not in [0, 100]")
     s = sorted(float(x) for x in samples)
     index = (len(s) - 1) * (p / 100)
     lower = math.floor(index)

@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
+from modd_contracts import aggregations_gen as agg
+from modd_contracts import labels
 from modd_model.numbers import fraction_to_decimal, to_fraction
 
 from .derive import PAIR_SOURCE_RULES, SINGLE_SOURCE_RULES
@@ -60,8 +62,10 @@ def check_dynamic(
 ) -> Accepted | NotAvailable:
     """Accept (topic, period, aggregation) if it is sent or derivable from
     what is sent; otherwise say why not, in the scientist's terms."""
-    if aggregation not in AGGREGATIONS:
-        known = ", ".join(AGGREGATIONS)
+    try:
+        labels.parse(aggregation)  # PERCENTILE with its p: PERCENTILE(95)
+    except ValueError:
+        known = ", ".join(a if a != agg.PERCENTILE else "PERCENTILE(p)" for a in AGGREGATIONS)
         return NotAvailable(f"unknown aggregation {aggregation!r}; use one of {known}")
     if all(t.name != topic for t in plan.topics):
         return NotAvailable(f"the model has no topic named {topic!r}")

@@ -34,7 +34,7 @@ from functools import lru_cache
 from math import ceil, lcm
 
 from modd_contracts import aggregations_gen as agg
-from modd_contracts.aggregations_gen import BY_NAME
+from modd_contracts import labels
 from modd_contracts.types_gen import PredictedLink
 
 from .schedule import Schedule
@@ -66,7 +66,7 @@ def varint_size(n: int) -> int:
 def aggregate_value_type(aggregation: str, topic_type: str) -> str:
     """Wire type of one aggregated value of a topic of ``topic_type``: the
     aggregation table's ``result``."""
-    return BY_NAME[aggregation].result[topic_type]
+    return labels.spec(aggregation).result[topic_type]
 
 
 @lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models

@@ -27,14 +27,17 @@ from functools import cached_property, lru_cache
 from typing import Any
 
 from modd_contracts import aggregations_gen as agg
+from modd_contracts import labels
 from modd_contracts.aggregations_gen import NAMES
+from modd_contracts.labels import ByLabel, RankByLabel
 from modd_model.numbers import fraction_to_decimal, to_fraction
 
 from .derive import PAIR_SOURCE_RULES, SINGLE_SOURCE_RULES
 
 #: The aggregation table's names in wire-code order (the tie-break of stream ids).
 AGGREGATIONS: tuple[str, ...] = NAMES
-_AGG_INDEX = {a: i for i, a in enumerate(AGGREGATIONS)}
+#: A label's place in it: PERCENTILE(p) after PERCENTILE's code, by p.
+_AGG_INDEX = RankByLabel({a: float(agg.BY_NAME[a].code * 1000) for a in AGGREGATIONS})
 
 
 @dataclass(frozen=True, init=False)
@@ -143,7 +146,7 @@ def asked_streams(
     by_stream: dict[tuple[str, str, int, int], tuple[StreamKey, list[str]]] = {}
     subscriptions: dict[str, StreamKey] = {}
     for sub in model.get("subscribers", []):
-        text = (sub["topic"], sub["aggregation"], sub["periodS"])
+        text = (sub["topic"], labels.of_subscriber(sub), sub["periodS"])
         entry = by_text.get(text)
         if entry is None:
             period, nd = _period_parts(text[2])
@@ -235,11 +238,11 @@ def _pair_sources(target: StreamKey, candidates: Sequence[StreamKey]) -> tuple[S
 
 def stream_order(
     topic_index: Mapping[str, int],
-) -> Callable[[StreamKey], tuple[int, int, tuple[float, Fraction]]]:
+) -> Callable[[StreamKey], tuple[int, float, tuple[float, Fraction]]]:
     """Sort key of the contract: topic declaration order, aggregation enum
     order, period ascending."""
 
-    def order(s: StreamKey) -> tuple[int, int, tuple[float, Fraction]]:
+    def order(s: StreamKey) -> tuple[int, float, tuple[float, Fraction]]:
         return (topic_index[s.topic], _AGG_INDEX[s.aggregation], s._sort_period)  # type: ignore[attr-defined]
 
     return order
@@ -248,8 +251,10 @@ def stream_order(
 #: Per aggregation: whether an ALL stream serves it alone, its single-source
 #: rules' rank (find_sources' first preference), and which of its pair
 #: groups an ALL stream joins.
-_ALL_SERVES = {a: agg.ALL in rules for a, rules in SINGLE_SOURCE_RULES.items()}
-_RULE_RANK = {a: {x: k for k, x in enumerate(rules)} for a, rules in SINGLE_SOURCE_RULES.items()}
+_ALL_SERVES = ByLabel({a: agg.ALL in rules for a, rules in SINGLE_SOURCE_RULES.items()})
+_RULE_RANK = ByLabel(
+    {a: {x: k for k, x in enumerate(rules)} for a, rules in SINGLE_SOURCE_RULES.items()}
+)
 _ALL_PAIR = {
     a: [g for g, x in enumerate(pair) if x == agg.ALL] for a, pair in PAIR_SOURCE_RULES.items()
 }

@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Any, Protocol
 
 from modd_contracts import aggregations_gen as agg
+from modd_contracts import labels
 
 Scalar = float | int | bool
 Value = Scalar | list[Scalar] | None
@@ -31,7 +32,7 @@ class LinkValue(Protocol):
 def window_of(value: LinkValue, aggregation: str, value_type: str) -> Any:
     """A decoded DATA value as a window in the form of :mod:`modd_plan.derive`
     (``None`` when marked absent)."""
-    result = agg.BY_NAME[aggregation].result[value_type]  # the value's wire type
+    result = labels.spec(aggregation).result[value_type]  # the value's wire type
     if not value.present:
         return None
     if aggregation == agg.AVERAGE:

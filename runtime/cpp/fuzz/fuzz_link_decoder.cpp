@@ -2,7 +2,8 @@
 // fed arbitrary bytes, before and after authentication) and the DATA decoder
 // with a fixed set of value kinds, and again with declared resolutions (quantised
 // values must read back within half a step), and the exact statistics' accumulators
-// (MEDIAN, STDDEV, RANGE) over the bytes as samples. Must never crash, leak or hit UB.
+// (MEDIAN, STDDEV, RANGE, PERCENTILE(p)) over the bytes as samples; a CONFIG's
+// PERCENTILE p reads back the same, within 0..100. Must never crash, leak or hit UB.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -83,6 +84,11 @@ void check_statistics(std::span<const uint8_t> in) {
   if (r.integer < 0) std::abort();
   double p = 100.0 * (in[0] + 1) / 256.0, q = broker::percentile(kept, p);
   if (q < lo || q > hi || broker::percentile(kept, 100) != hi) std::abort();
+  if (broker::percentile(kept, 0) != lo) std::abort();
+  // the PERCENTILE(p) accumulator gives the statistic of the window's samples
+  broker::Accumulator pct(ValueType::Float64, Aggregation::Percentile, p);
+  for (double x : kept) pct.add(x, 0);
+  if (pct.take().number != broker::percentile(kept, p)) std::abort();
 }
 }  // namespace
 
@@ -103,7 +109,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             value_kind(ValueType::Int, Aggregation::Sum),
             value_kind(ValueType::Float64, Aggregation::Median),
             value_kind(ValueType::Float32, Aggregation::Stddev),
-            value_kind(ValueType::Int, Aggregation::Range)};
+            value_kind(ValueType::Int, Aggregation::Range),
+            value_kind(ValueType::Float32, Aggregation::Percentile)};
         (void)decode_data(*f, kinds);
       } else {
         Message m = decode(*f);
@@ -113,6 +120,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
           // and a CONFIG (its optional accepted delay included) must read back the same
           auto g = split_frame(out);
           if (!g || !(std::get<Config>(decode(*g)) == *c)) std::abort();
+          for (const auto& s : c->streams)  // PERCENTILE's p read back within 0..100
+            if (s.aggregation == Aggregation::Percentile &&
+                !(s.percentile >= 0 && s.percentile <= 100))
+              std::abort();
         }
       }
     }

@@ -14,6 +14,18 @@ using namespace modd::broker;
 using modd::link::Aggregation;
 using modd::link::ValueType;
 
+namespace {
+// contracts/vectors/aggregations.json (numpy's values); null when it is missing.
+nlohmann::json aggregation_vectors() {
+  std::ifstream f(std::string(MODD_CONTRACTS_DIR) + "/vectors/aggregations.json");
+  return f.good() ? nlohmann::json::parse(f) : nlohmann::json();
+}
+ValueType vector_type(const nlohmann::json& c) {
+  if (c["type"] == "int") return ValueType::Int;
+  return c["type"] == "float32" ? ValueType::Float32 : ValueType::Float64;
+}
+}  // namespace
+
 TEST(Accumulator, FloatAggregates) {
   double xs[] = {3.0, -1.5, 7.25, 0.5};
   auto run = [&](Aggregation a) {
@@ -55,14 +67,12 @@ TEST(Accumulator, IntAggregatesAndReset) {
 // MEDIAN, STDDEV and RANGE equal numpy's over each window of the contract's
 // vectors (contracts/vectors/aggregations.json, computed by numpy).
 TEST(Accumulator, ExactStatisticsMatchNumpy) {
-  std::ifstream f(std::string(MODD_CONTRACTS_DIR) + "/vectors/aggregations.json");
-  ASSERT_TRUE(f.good());
-  auto doc = nlohmann::json::parse(f);
+  auto doc = aggregation_vectors();
+  ASSERT_FALSE(doc.is_null());
   ASSERT_GE(doc["vectors"].size(), 5u);
   for (const auto& c : doc["vectors"]) {
     bool is_int = c["type"] == "int";
-    ValueType type = is_int ? ValueType::Int
-                            : (c["type"] == "float32" ? ValueType::Float32 : ValueType::Float64);
+    ValueType type = vector_type(c);
     auto run = [&](Aggregation a) {
       Accumulator acc(type, a);
       for (int round = 0; round < 2; ++round) {  // the second window starts clean
@@ -88,9 +98,8 @@ TEST(Accumulator, ExactStatisticsMatchNumpy) {
 // PERCENTILE(p) equals numpy.percentile (method "linear") to the bit over each window
 // of the contract's vectors, for each p they carry; the samples' order does not matter.
 TEST(Accumulator, PercentileMatchesNumpy) {
-  std::ifstream f(std::string(MODD_CONTRACTS_DIR) + "/vectors/aggregations.json");
-  ASSERT_TRUE(f.good());
-  auto doc = nlohmann::json::parse(f);
+  auto doc = aggregation_vectors();
+  ASSERT_FALSE(doc.is_null());
   size_t checked = 0;
   for (const auto& c : doc["vectors"]) {
     std::vector<double> window;
@@ -112,9 +121,35 @@ TEST(Accumulator, PercentileMatchesNumpy) {
 TEST(Accumulator, PercentileRefusesNoSampleAndPOutside0To100) {
   std::vector<double> none, two{1.0, 2.0};
   EXPECT_THROW(modd::broker::percentile(none, 50), std::invalid_argument);
-  for (double p : {0.0, -1.0, 100.5, std::nan("")})
+  for (double p : {-1.0, 100.5, std::nan("")})
     EXPECT_THROW(modd::broker::percentile(two, p), std::invalid_argument) << p;
   EXPECT_EQ(modd::broker::percentile(two, 100), 2.0);
+  EXPECT_EQ(modd::broker::percentile(two, 0), 1.0);  // numpy's: the minimum
+}
+
+// The PERCENTILE(p) accumulator (the PubBroker's, p from CONFIG) equals numpy's over
+// each window of the contract's vectors, for each p they carry, two windows in a row.
+TEST(Accumulator, PercentileAccumulatorMatchesNumpy) {
+  auto doc = aggregation_vectors();
+  ASSERT_FALSE(doc.is_null());
+  size_t checked = 0;
+  for (const auto& c : doc["vectors"]) {
+    bool is_int = c["type"] == "int";
+    ValueType type = vector_type(c);
+    for (const auto& [key, want] : c["PERCENTILE"].items()) {
+      Accumulator acc(type, Aggregation::Percentile, std::stod(key));
+      for (int round = 0; round < 2; ++round) {
+        for (const auto& x : c["samples"])
+          acc.add(is_int ? 0.0 : x.get<double>(), is_int ? x.get<int64_t>() : 0);
+        auto v = acc.take();
+        ASSERT_TRUE(v.present);
+        EXPECT_EQ(v.number, want.get<double>()) << c["name"] << " p=" << key;
+      }
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 80u);
+  EXPECT_FALSE(Accumulator(ValueType::Float64, Aggregation::Percentile, 95).take().present);
 }
 
 TEST(Accumulator, StatisticsOfAnEmptyWindowAreAbsentAndMedianIsBounded) {

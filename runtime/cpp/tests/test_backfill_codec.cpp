@@ -50,6 +50,7 @@ bf::Message from_json(const json& m) {
     q.windows = m["windows"];
     q.resume = m["resume"];
     q.rate_bps = m["rate_bps"];
+    q.percentile = m.value("percentile", 0.0);
     return q;
   }
   if (t == "BACKFILL_PROGRESS")

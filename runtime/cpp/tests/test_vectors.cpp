@@ -67,6 +67,7 @@ Message from_json(const json& m) {
       s.topic = sj["topic"];
       EXPECT_TRUE(parse_aggregation(sj["aggregation"], s.aggregation));
       s.period_us = sj["period_us"];
+      s.percentile = sj.value("percentile", 0.0);
       c.streams.push_back(s);
     }
     if (m.contains("accepted_delay_ms"))

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import struct
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +30,7 @@ def _from_json(m: dict[str, Any]) -> bf.BackfillMessage:
             m["windows"],
             m["resume"],
             m["rate_bps"],
+            m.get("percentile"),
         )
     if t == "BACKFILL_PROGRESS":
         return bf.BackfillProgress(
@@ -87,3 +90,20 @@ def test_encode_refuses_empty_and_oversized_batches() -> None:
         bf.encode_data(bf.BackfillData(1, 0, []), kind)
     with pytest.raises(ValueError):
         bf.encode_data(bf.BackfillData(1, 0, [Value()] * (bf.MAX_BATCH + 1)), kind)
+
+
+def test_a_percentile_request_carries_its_p() -> None:
+    """PERCENTILE's p (f64le) follows the period, read back; out of 0..100 refused;
+    a C++ PubBroker reads the same bytes (runtime/cpp/src/link/backfill.cpp)."""
+    req = bf.BackfillRequest(
+        3, "t", ValueType.FLOAT32, Aggregation.PERCENTILE, 250_000, 10**18, 8, 0, 0, 99.5
+    )
+    raw = bf.encode(req)
+    assert struct.pack("<d", 99.5) in raw
+    (frame,) = FrameSplitter().feed(raw)
+    assert bf.decode(frame) == req
+    (bad,) = FrameSplitter().feed(raw.replace(struct.pack("<d", 99.5), struct.pack("<d", 100.5)))
+    with pytest.raises(ProtocolError, match="percentile"):
+        bf.decode(bad)
+    with pytest.raises(ValueError):
+        bf.encode(dataclasses.replace(req, percentile=None))

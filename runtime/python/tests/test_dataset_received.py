@@ -347,3 +347,19 @@ def test_the_exact_statistics_have_their_cf_cell_methods() -> None:
     assert cell_methods("MEDIAN", "1.0") == "time: median (interval: 1 s)"
     assert cell_methods("STDDEV", "0.5") == "time: standard_deviation (interval: 0.5 s)"
     assert cell_methods("RANGE", "0.25") == "time: range (interval: 0.25 s)"
+    # CF has no percentile method (Appendix E): none, the long_name says which
+    assert cell_methods("PERCENTILE(95)", "1.0") is None
+
+
+def test_a_percentile_subscriber_is_named_by_its_label() -> None:
+    from modd.dataset.plan import Variable
+    from modd.dataset.received import _subscriber_variable
+
+    topic = Variable("usv.ctd.turb", "turb", "1", "float32", None, "turbidity", None, None)
+    sub = {"name": "p95", "topic": "usv.ctd.turb", "periodS": "10.0", "aggregation": "PERCENTILE"}
+    var = _subscriber_variable({**sub, "percentile": 95.0}, topic)
+    assert var.cell_methods is None
+    assert var.long_name == (
+        "PERCENTILE(95) of usv.ctd.turb over 10 s windows (numpy.percentile, linear) "
+        "(subscriber p95)"
+    )

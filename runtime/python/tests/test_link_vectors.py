@@ -73,7 +73,9 @@ def from_json(m: dict[str, Any]) -> Message:
                 for x in m["topics"]
             ),
             tuple(
-                StreamSpec(x["topic"], Aggregation[x["aggregation"]], x["period_us"])
+                StreamSpec(
+                    x["topic"], Aggregation[x["aggregation"]], x["period_us"], x.get("percentile")
+                )
                 for x in m["streams"]
             ),
             m.get("accepted_delay_ms"),

@@ -202,6 +202,12 @@ def test_dynamic_registry() -> None:
     assert no["status"] == "NOT_AVAILABLE" and "AVERAGE every 0.25 s" in no["reason"]
     no = reg.handle({**ask, "period_s": "0.3"}, run)
     assert no["status"] == "NOT_AVAILABLE" and "multiple" in no["reason"]
+    pct = reg.handle({**ask, "aggregation": "PERCENTILE(95)"}, run)  # needs ALL: not sent
+    assert (
+        pct["status"] == "NOT_AVAILABLE" and "PERCENTILE(95) every 4.0 s needs ALL" in pct["reason"]
+    )
+    bare = reg.handle({**ask, "aggregation": "PERCENTILE"}, run)
+    assert bare["status"] == "NOT_AVAILABLE" and "PERCENTILE(p)" in bare["reason"], bare
     assert reg.handle({"topic": "x"}, run)["status"] == "ERROR"
     assert reg.handle({"action": "dance"}, run)["status"] == "ERROR"
     assert len(reg.handle({"action": "list"}, run)["subscriptions"]) == 2

@@ -43,6 +43,7 @@ void Accumulator::add(double number, int64_t integer) {
       break;
     case Aggregation::Count: break;
     case Aggregation::Median:
+    case Aggregation::Percentile:
     case Aggregation::Stddev:
     case Aggregation::Range: add_statistic(number, integer, first); break;
     case Aggregation::All:
@@ -85,6 +86,7 @@ link::Value Accumulator::take() {
                                            static_cast<uint64_t>(ilo_));  // wraps like SUM
         break;
       case Aggregation::Median:
+      case Aggregation::Percentile:
       case Aggregation::Stddev: v.number = take_statistic(); break;
       case Aggregation::All:
         v = std::move(all_);
@@ -107,6 +109,7 @@ void Accumulator::add_statistic(double number, int64_t integer, bool first) {
   double x = is_float() ? number : static_cast<double>(integer);
   switch (agg_) {
     case Aggregation::Median:
+    case Aggregation::Percentile:
       if (samples_.size() < kMaxAll) samples_.push_back(x);
       break;
     case Aggregation::Stddev: {  // Welford on x - (the first sample): stable in one pass,
@@ -128,10 +131,11 @@ void Accumulator::add_statistic(double number, int64_t integer, bool first) {
   }
 }
 
-// numpy.median (the mean of the two middle samples of an even count) and
-// numpy.std (ddof=0) of the window.
+// numpy.median (the mean of the two middle samples of an even count),
+// numpy.percentile (linear) and numpy.std (ddof=0) of the window.
 double Accumulator::take_statistic() {
   if (agg_ == Aggregation::Stddev) return std::sqrt(m2_ / static_cast<double>(n_));
+  if (agg_ == Aggregation::Percentile) return percentile(samples_, p_);
   size_t mid = samples_.size() / 2;
   std::nth_element(samples_.begin(), samples_.begin() + static_cast<std::ptrdiff_t>(mid),
                    samples_.end());
@@ -144,7 +148,7 @@ double Accumulator::take_statistic() {
 
 double percentile(std::vector<double>& samples, double p) {
   if (samples.empty()) throw std::invalid_argument("percentile of no sample");
-  if (!(p > 0 && p <= 100)) throw std::invalid_argument("percentile p is not in (0, 100]");
+  if (!(p >= 0 && p <= 100)) throw std::invalid_argument("percentile p is not in [0, 100]");
   double index = static_cast<double>(samples.size() - 1) * (p / 100);
   auto lower = static_cast<size_t>(std::floor(index));
   auto at = samples.begin() + static_cast<std::ptrdiff_t>(lower);

@@ -19,7 +19,7 @@ constexpr int64_t kGuardNs = 100'000'000;
 BackfillSender::Job::Job(const bf::Request& r, const std::string& dir, const std::string& prefix)
     : req(r),
       kind(link::value_kind(r.type, r.aggregation)),
-      acc(r.type, r.aggregation),
+      acc(r.type, r.aggregation, r.percentile),
       reader(dir, prefix, r.topic, r.type),
       next(r.resume),
       progress_next(r.resume) {}

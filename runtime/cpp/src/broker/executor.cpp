@@ -17,7 +17,7 @@ std::unique_ptr<Executor::Active> Executor::build(const link::Config& cfg,
     if (s.topic >= cfg.topics.size() || s.topic >= globals.size())
       throw Error(ErrorCode::BadConfig, "stream " + std::to_string(id) + " names a missing topic");
     link::ValueType type = cfg.topics[s.topic].type;
-    a->acc.emplace_back(type, s.aggregation);
+    a->acc.emplace_back(type, s.aggregation, s.percentile);
     a->kinds.push_back(
         link::value_kind(type, s.aggregation, cfg.resolutions.empty() ? 0 : cfg.resolutions[id]));
     uint32_t g = globals[s.topic];

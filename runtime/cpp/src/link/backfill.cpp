@@ -39,6 +39,7 @@ void encode(std::vector<uint8_t>& out, const Message& m) {
           w.u8(static_cast<uint8_t>(msg.type));
           w.u8(static_cast<uint8_t>(msg.aggregation));
           w.varint(msg.period_us);
+          if (msg.aggregation == Aggregation::Percentile) w.fixed<double>(msg.percentile);
           w.fixed<uint64_t>(msg.from_ns);
           w.varint(msg.windows);
           w.varint(msg.resume);
@@ -99,6 +100,10 @@ Message decode(const RawFrame& f) {
       q.aggregation = static_cast<Aggregation>(a);
       q.period_us = r.varint();
       if (q.period_us < 1 || q.period_us > kMaxPeriodUs) r.fail("window period out of range");
+      if (q.aggregation == Aggregation::Percentile) {
+        q.percentile = r.fixed<double>();
+        if (!(q.percentile >= 0 && q.percentile <= 100)) r.fail("percentile out of 0..100");
+      }
       q.from_ns = r.fixed<uint64_t>();
       q.windows = r.varint();
       q.resume = r.varint();

@@ -228,6 +228,7 @@ void encode(std::vector<uint8_t>& out, const Message& m) {
             w.varint(s.topic);
             w.u8(static_cast<uint8_t>(s.aggregation));
             w.varint(s.period_us);
+            if (s.aggregation == Aggregation::Percentile) w.fixed<double>(s.percentile);
           }
           if (msg.accepted_delay_ms) w.varint(*msg.accepted_delay_ms);
           put_resolutions(w, msg);
@@ -381,6 +382,11 @@ Message decode(const RawFrame& f) {
         s.aggregation = static_cast<Aggregation>(a);
         s.period_us = r.varint();
         if (s.period_us == 0 || s.period_us > kMaxPeriodUs) r.fail("stream period out of range");
+        if (s.aggregation == Aggregation::Percentile) {
+          s.percentile = r.fixed<double>();
+          if (!(s.percentile >= 0 && s.percentile <= 100))  // NaN too
+            r.fail("stream " + std::to_string(i) + ": percentile out of 0..100");
+        }
         c.streams.push_back(s);
       }
       if (r.remaining() > 0) {

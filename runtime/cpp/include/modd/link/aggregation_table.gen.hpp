@@ -19,6 +19,7 @@ enum class Aggregation : uint8_t {
   Median = 8,
   Stddev = 9,
   Range = 10,
+  Percentile = 11,
 };
 
 }  // namespace modd::link
@@ -48,8 +49,9 @@ inline constexpr AggregationRow kAggregations[] = {
     {"MEDIAN", 8, true, false, true, {0, 1, 1, 0}},
     {"STDDEV", 9, true, false, false, {0, 1, 1, 0}},
     {"RANGE", 10, true, false, false, {0, 1, 2, 2}},
+    {"PERCENTILE", 11, true, false, true, {0, 1, 1, 0}},
 };
-inline constexpr int kAggregationCount = 11;
+inline constexpr int kAggregationCount = 12;
 
 // Value types in the order of result[]: Float32, Float64, Int, Bool.
 

@@ -23,6 +23,7 @@ struct Request {
   ValueType type = ValueType::Float32;
   Aggregation aggregation = Aggregation::Min;
   uint64_t period_us = 0;
+  double percentile = 0;  // PERCENTILE's p (f64le after the period); else unused
   uint64_t from_ns = 0;
   uint64_t windows = 0;
   uint64_t resume = 0;

@@ -53,6 +53,7 @@ struct StreamSpec {
   uint32_t topic = 0;  // index into Config::topics
   Aggregation aggregation = Aggregation::Min;
   uint64_t period_us = 0;  // window period, > 0
+  double percentile = 0;   // PERCENTILE's p (0..100), f64le after the period; else unused
 };
 struct Config {
   uint8_t config_id = 1;
@@ -72,7 +73,8 @@ inline bool operator==(const TopicSpec& a, const TopicSpec& b) {
          a.period_us == b.period_us;
 }
 inline bool operator==(const StreamSpec& a, const StreamSpec& b) {
-  return a.topic == b.topic && a.aggregation == b.aggregation && a.period_us == b.period_us;
+  return a.topic == b.topic && a.aggregation == b.aggregation && a.period_us == b.period_us &&
+         a.percentile == b.percentile;
 }
 
 struct ConfigAck {

@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 from modd_contracts import aggregations_gen as agg
+from modd_contracts import labels
 from modd_contracts.keys import match_sub_key
 from modd_model.position import PlatformPosition
 
@@ -50,7 +51,9 @@ _METHODS = {
 
 def cell_methods(aggregation: str, period_s: str) -> str | None:
     """CF ``cell_methods`` of a window (CF §7.3); None for COUNT (not a statistic
-    of the variable: its own variable, unit ``1``)."""
+    of the variable: its own variable, unit ``1``) and for PERCENTILE(p): CF's
+    methods (Appendix E) have no percentile and ``point`` would claim an
+    instantaneous value, so its ``long_name`` says which percentile it is."""
     method = _METHODS.get(aggregation)
     if method is None:
         return None
@@ -79,8 +82,10 @@ def _number(v: Any) -> float:
 
 
 def _subscriber_variable(sub: dict[str, Any], topic: Variable | None) -> Variable:
-    name, aggregation, period = sub["name"], sub["aggregation"], str(sub["periodS"])
+    name, aggregation, period = sub["name"], labels.of_subscriber(sub), str(sub["periodS"])
     what = f"{aggregation} of {sub['topic']} over {float(period):g} s windows"
+    if "percentile" in sub:
+        what += " (numpy.percentile, linear)"
     if aggregation == agg.COUNT or topic is None:
         return Variable(
             sub["name"],

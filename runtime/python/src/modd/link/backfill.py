@@ -31,7 +31,17 @@ from modd_contracts.link_wire_gen import MAX_WINDOWS as MAX_WINDOWS
 from modd_contracts.link_wire_gen import BackfillType as BackfillType
 from modd_contracts.link_wire_gen import EndStatus as EndStatus
 
-from modd.link.codec import RawFrame, Reader, _frame, _get_value, _put_value, string, varint
+from modd.link.codec import (
+    RawFrame,
+    Reader,
+    _frame,
+    _get_value,
+    _put_value,
+    percentile_field,
+    read_percentile,
+    string,
+    varint,
+)
 from modd.link.frames import (
     Aggregation,
     ErrorCode,
@@ -56,6 +66,8 @@ class BackfillRequest:
     windows: int
     resume: int = 0
     rate_bps: int = 0  # 0: the PubBroker's default pace
+    #: PERCENTILE's p (0..100), f64le after the period; None for the others.
+    percentile: float | None = None
 
     def window_start_ns(self, k: int) -> int:
         return self.from_ns + k * self.period_us * 1000
@@ -106,7 +118,8 @@ def encode(m: BackfillMessage) -> bytes:
     """One whole frame (length prefix included) of any backfill message but DATA."""
     if isinstance(m, BackfillRequest):
         b = varint(m.request_id) + string(m.topic) + bytes([m.type, m.aggregation])
-        b += varint(m.period_us) + struct.pack("<Q", m.from_ns)
+        b += varint(m.period_us) + percentile_field(m.aggregation, m.percentile)
+        b += struct.pack("<Q", m.from_ns)
         b += varint(m.windows) + varint(m.resume) + varint(m.rate_bps)
         return _frame(BackfillType.REQUEST, b)
     if isinstance(m, BackfillProgress):
@@ -159,6 +172,7 @@ def decode(f: RawFrame) -> BackfillMessage:
         period = r.varint()
         if not 1 <= period <= MAX_PERIOD_US:
             raise r.fail("window period out of range")
+        pct = read_percentile(r, "request") if agg == Aggregation.PERCENTILE else None
         from_ns = int(r.fixed("<Q"))
         windows = r.varint()
         resume = r.varint()
@@ -173,6 +187,7 @@ def decode(f: RawFrame) -> BackfillMessage:
             windows,
             resume,
             r.varint(),
+            pct,
         )
     elif f.type == BackfillType.PROGRESS:
         rid, nxt, windows = r.varint(), r.varint(), r.varint()

@@ -170,6 +170,7 @@ def encode(m: Message) -> bytes:
         b += varint(len(m.streams))
         for s in m.streams:
             b += varint(s.topic) + bytes([s.aggregation]) + varint(s.period_us)
+            b += percentile_field(s.aggregation, s.percentile)
         if m.accepted_delay_ms is not None:
             if not 0 <= m.accepted_delay_ms <= MAX_ACCEPTED_DELAY_MS:
                 raise ValueError(
@@ -452,7 +453,8 @@ def _decode_config(r: Reader) -> Config:
         p = r.varint()
         if p == 0 or p > MAX_PERIOD_US:
             raise r.fail("stream period out of range")
-        streams.append(StreamSpec(topic, Aggregation(a), p))
+        pct = read_percentile(r, f"stream {i}") if a == Aggregation.PERCENTILE else None
+        streams.append(StreamSpec(topic, Aggregation(a), p, pct))
     delay = None
     if r.remaining():
         delay = r.varint()
@@ -460,6 +462,25 @@ def _decode_config(r: Reader) -> Config:
             raise r.fail("accepted delay above one hour")
     resolutions = _read_resolutions(r, ns) if r.remaining() else None
     return Config(config_id, sp, tuple(topics), tuple(streams), delay, resolutions)
+
+
+def percentile_field(aggregation: Aggregation, p: float | None) -> bytes:
+    """PERCENTILE's p after its period (f64le, 0..100), in CONFIG and
+    BACKFILL_REQUEST; nothing for the other aggregations."""
+    if (aggregation == Aggregation.PERCENTILE) != (p is not None):
+        raise ValueError(f"{aggregation.name}: a percentile goes with PERCENTILE, and only with it")
+    if p is None:
+        return b""
+    if not 0 <= p <= 100:
+        raise ValueError(f"percentile {p!r} out of 0..100")
+    return struct.pack("<d", p)
+
+
+def read_percentile(r: Reader, what: str) -> float:
+    p = float(r.fixed("<d"))
+    if not 0 <= p <= 100:  # NaN too
+        raise r.fail(f"{what}: percentile {p!r} out of 0..100")
+    return p
 
 
 def _resolutions(m: Config) -> bytes:

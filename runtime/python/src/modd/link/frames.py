@@ -109,6 +109,8 @@ class StreamSpec:
     topic: int
     aggregation: Aggregation
     period_us: int
+    #: PERCENTILE's p (0..100), written after the period; None for the others.
+    percentile: float | None = None
 
 
 @dataclass(frozen=True)

@@ -25,6 +25,7 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
+from modd_contracts import labels
 from modd_plan.streams import StreamKey
 
 from modd.link import backfill as bf
@@ -324,16 +325,18 @@ class BackfillQueue:
             if job is None:
                 return []
             run = job.runs[0]
+            name, p = labels.parse(run.stream.aggregation)
             req = bf.BackfillRequest(
                 self.next_request_id,
                 run.stream.topic,
                 ValueType.parse(run.value_type),
-                Aggregation[run.stream.aggregation],
+                Aggregation[name],
                 period_us(run.stream),
                 run.from_ns,
                 run.windows,
                 0,
                 job.rate_bps,
+                p,
             )
             self.next_request_id += 1
             self.flight = InFlight(job, req)
@@ -372,6 +375,7 @@ class BackfillQueue:
             q.windows,
             f.next,
             f.job.rate_bps,
+            q.percentile,
         )
         f.sends += 1
         f.sent_at = f.heard = f.last_sent = now

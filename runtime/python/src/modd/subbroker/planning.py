@@ -13,11 +13,13 @@ from concurrent.futures import Future
 from fractions import Fraction
 from typing import Any
 
+from modd_contracts import labels
 from modd_model.numbers import MICROS_PER_SECOND
 from modd_model.query import link_settings
 from modd_plan import Plan, make_plan
 from modd_plan.linkbudget import LinkSettings
 from modd_plan.resolution import stream_resolutions
+from modd_plan.streams import StreamKey
 
 from modd.link.frames import (
     MAX_ACCEPTED_DELAY_MS,
@@ -131,11 +133,14 @@ def config_for(
         )
         for t in plan.topics
     )
-    streams = tuple(
-        StreamSpec(index[s.stream.topic], Aggregation[s.stream.aggregation], period_us(s.stream))
-        for s in plan.sent_streams
-    )
+    streams = tuple(_stream_spec(index[s.stream.topic], s.stream) for s in plan.sent_streams)
     return Config(config_id, status_period_s, topics, streams, accepted_delay_ms, resolutions)
+
+
+def _stream_spec(topic: int, stream: StreamKey) -> StreamSpec:
+    """A sent stream as CONFIG names it: PERCENTILE(p)'s label is its code and p."""
+    name, p = labels.parse(stream.aggregation)
+    return StreamSpec(topic, Aggregation[name], period_us(stream), p)
 
 
 def resolutions_of(model: dict[str, Any], plan: Plan) -> tuple[float | None, ...] | None:

@@ -17,7 +17,8 @@ from __future__ import annotations
 import itertools
 from typing import Any
 
-from modd_contracts.aggregations_gen import AGGREGATIONS
+from modd_contracts import labels
+from modd_contracts.aggregations_gen import NAMES
 from modd_plan.streams import StreamKey
 
 from .fanout import period_us
@@ -27,7 +28,7 @@ from .window_record import MAX_EPOCHS, MAX_SPANS, Due, Epoch, Intervals, WindowR
 MAX_DUE = 20_000
 _NS_MAX = 1 << 63
 _PERIOD_MAX_US = 86_400 * 1_000_000  # a window of at most a day
-_AGGREGATIONS = {a.name for a in AGGREGATIONS}
+_NAMES = frozenset(NAMES)  # the labels without a parameter: most streams
 
 
 _KINDS: dict[type, str] = {dict: "an object", list: "a list", str: "a string"}
@@ -66,8 +67,10 @@ def _stream(v: Any, at: str) -> StreamKey:
     text = _str(v, at)
     try:
         key = StreamKey.parse(text)
-        if key.aggregation not in _AGGREGATIONS or not 0 < period_us(key) <= _PERIOD_MAX_US:
-            raise ValueError("unknown aggregation or period out of range")
+        if key.aggregation not in _NAMES:
+            labels.parse(key.aggregation)  # ValueError: not an aggregation's label
+        if not 0 < period_us(key) <= _PERIOD_MAX_US:
+            raise ValueError("period out of range")
     except (ValueError, ArithmeticError) as exc:
         raise ValueError(f"{at}: not a stream key ({text!r:.60}: {exc})") from None
     return key
