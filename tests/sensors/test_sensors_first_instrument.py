@@ -12,7 +12,6 @@ import os
 import re
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -21,19 +20,11 @@ import pytest
 from devices import PtyDevice, nmea, run_health, wait_until
 from mavlink_harness import read_archive
 from modd.ports import free_port
-from test_sensors_deploy import _by_sensor, _deploy, _pid
+from test_sensors_deploy import BIN, GNSS, HEAD, _by_sensor, _deploy
 
 pytestmark = pytest.mark.e2e
 
-BIN = Path(sys.executable).parent
-
-HEAD = """
-PubBroker onboard("127.0.0.1":{port}, "/tmp/unused");
-SubBroker base("127.0.0.1":{port2}, "/tmp/unused");
-"""
-GNSS = """Sensor gnss kind nmea on "{dev}/gnss" { baud = 9600; } measures {
-        lat("deg", float64) from sentence GGA.lat; }"""
-PLAIN = 'Sensor hull measures { temperature(DEGREE_CELSIUS, float32); }'
+PLAIN = "Sensor hull measures { temperature(DEGREE_CELSIUS, float32); }"
 
 
 def _model(sensors: list[str], topics: list[str]) -> str:
@@ -67,7 +58,9 @@ def test_a_deploy_adds_the_first_instrument_without_a_restart(tmp_path: Path) ->
     env = dict(os.environ, MODD_LINK_KEY="first-instrument-test-key")
     argv = [str(BIN / "modd"), "up", str(model), "--workdir", str(run), "--credentials"]
     argv += [str(creds), "--zenoh-listen", zenoh]
-    up = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+    up = subprocess.Popen(
+        argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env
+    )
     written: list[bytes] = []
     try:
         wait_until(lambda: (run / "onboard" / "applied" / "sensors.json").exists(), 30, "sensors")
@@ -75,11 +68,9 @@ def test_a_deploy_adds_the_first_instrument_without_a_restart(tmp_path: Path) ->
         wait_until(
             lambda: "config 1 running" in (run / "logs" / "subbroker.log").read_text(), 30, "config"
         )
-        pid = _pid(up.pid)
+        pid = _child(up.pid, b"modd-pubbroker")
         sensors_pid = _child(up.pid, b"modd-sensors")
-        reply, _ = _deploy(
-            zenoh, creds, text([PLAIN, GNSS], ["hull.temperature", "gnss.lat"]), 2
-        )
+        reply, _ = _deploy(zenoh, creds, text([PLAIN, GNSS], ["hull.temperature", "gnss.lat"]), 2)
         assert reply["status"] == "ACKED", reply
         assert _by_sensor(reply)["gnss"] == {
             "sensor": "gnss",
@@ -92,7 +83,7 @@ def test_a_deploy_adds_the_first_instrument_without_a_restart(tmp_path: Path) ->
             gnss.write(written[-1])
             time.sleep(0.1)
         wait_until(lambda: run_health(run).get("gnss", {}).get("values", 0) == 5, 5, "values")
-        assert _pid(up.pid) == pid, "the PubBroker was restarted"
+        assert _child(up.pid, b"modd-pubbroker") == pid, "the PubBroker was restarted"
         assert _child(up.pid, b"modd-sensors") == sensors_pid, "modd-sensors was restarted"
         time.sleep(0.5)  # the last samples reach the archive before the stop
     finally:
