@@ -230,9 +230,14 @@ def build_stack(
             sub += ["--rehearsal-dir", str(rehearsal_dir(workdir))]
         stack.processes.append(Process("subbroker", sub, logs / "subbroker.log"))
     onboard = onboard_model(configs, workdir) if drone else None
-    if onboard is not None and station:  # an acked deploy reaches the on-board processes
+    # an acked deploy reaches the on-board processes over the link (ONBOARD): the
+    # PubBroker writes it to the on-board model file, modd-sensors and modd-mavlink follow
+    if onboard is not None:
+        pub_process = next(p for p in stack.processes if p.name == "pubbroker")
+        pub_process.argv += ["--onboard-model", str(onboard)]
+    if station:
         sub_process = next(p for p in stack.processes if p.name == "subbroker")
-        sub_process.argv += ["--onboard-model", str(onboard)]
+        sub_process.argv.append("--onboard-over-link")
     if onboard is not None:  # nmea, ascii, modbus: read by modd-sensors, idle while the
         # model has none (a deploy that adds the first needs no restart)
         sensors = [str(bin_dir / "modd-sensors"), "--model", str(onboard)]
