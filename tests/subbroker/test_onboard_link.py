@@ -13,6 +13,7 @@ on-board part does not fit ONBOARD is refused before its CONFIG, located."""
 from __future__ import annotations
 
 import json
+import secrets
 import sys
 import time
 from pathlib import Path
@@ -20,9 +21,11 @@ from typing import Any
 
 import pynmea2  # type: ignore[import-untyped]
 import pytest
+from modd.onboard import pack
 from modd.ports import free_port
 from modd.subbroker.client import request
 from modd.zenoh_session import wait_connected
+from modd_contracts.link_wire_gen import MAX_ONBOARD_WIRE
 from modd_model import load_text
 from radio_harness import start_pubbroker_dgram, start_radio_serial
 from subbroker_harness import (
@@ -180,6 +183,19 @@ def test_a_deploy_reaches_modd_sensors_over_the_link_alone(
         reply = _deploy(session, v3, 3)
         assert reply["status"] == "ACKED" and reply["onboard"]["sensors"]["ok"], reply
         assert _actions(reply) == {"gnss": "unchanged", "sounder": "stopped"}, reply
+        # an on-board model beyond what ONBOARD carries: refused before its CONFIG, located
+        crowd = [GNSS2] + [
+            f's{i:03d}{secrets.token_hex(6)} kind nmea on "/dev/x{secrets.token_hex(8)}" '
+            "{ baud = 4800; } measures { depth(METER) from sentence DBT.depth_meters; }"
+            for i in range(200)
+        ]
+        big = _model(
+            dev, ["Sensor " + c if i else c for i, c in enumerate(crowd)], ["gnss.lat"], link
+        )
+        assert len(pack(big)) > MAX_ONBOARD_WIRE
+        refused = _deploy(session, big, 4)
+        assert refused["status"] == "REJECTED" and "ONBOARD" in refused["reason"], refused
+        assert refused["diagnostics"][0]["pointer"] == "/drone/sensors"
         assert pb.pid == pid and pb.alive(), "the PubBroker was restarted"
         time.sleep(0.6)  # the last samples reach the archive before the stop
     archive = read_archive(drone / "archive")
@@ -189,5 +205,6 @@ def test_a_deploy_reaches_modd_sensors_over_the_link_alone(
     assert got["usv.gnss.lat"][-3:] == [pytest.approx(x, abs=1e-12) for x in lats]
     # nothing shared: the station's directory holds no on-board model file
     assert not list((tmp_path / "station").rglob("model.json"))
+    assert "config 3 accepted" in pb.log() and "config 4" not in pb.log()
     gnss.close()
     sounder.close()

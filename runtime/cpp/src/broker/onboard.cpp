@@ -48,8 +48,8 @@ std::string decompress(std::span<const uint8_t> model) {
   if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN)
     throw Error(ErrorCode::BadConfig, "on-board model: not a zstd frame with its size");
   if (size > kMaxOnboardBytes)
-    throw Error(ErrorCode::BadConfig, "on-board model: " + std::to_string(size) +
-                                          " B, above " + std::to_string(kMaxOnboardBytes));
+    throw Error(ErrorCode::BadConfig, "on-board model: " + std::to_string(size) + " B, above " +
+                                          std::to_string(kMaxOnboardBytes));
   std::string out(static_cast<size_t>(size), '\0');
   size_t n = ZSTD_decompress(out.data(), out.size(), model.data(), model.size());
   if (ZSTD_isError(n) || n != out.size())
@@ -93,10 +93,10 @@ std::optional<std::string> onboard_answers(const std::string& path, const std::s
       continue;
     }
     all = false;
-    out[name] = {{"process", name},
-                 {"ok", false},
-                 {"problem", "no answer within " + std::to_string(link::kOnboardWaitMs / 1000) +
-                                 " s"}};
+    out[name] = {
+        {"process", name},
+        {"ok", false},
+        {"problem", "no answer within " + std::to_string(link::kOnboardWaitMs / 1000) + " s"}};
   }
   if (!all && !final) return std::nullopt;
   return out.dump();
@@ -111,7 +111,8 @@ link::OnboardAck onboard_ack(uint8_t config_id, uint8_t status, const std::strin
   };
   link::OnboardAck ack{config_id, status, pack(answers_json)};
   if (ack.answers.empty() || ack.answers.size() > kMaxOnboardWire)
-    ack.answers = pack(R"({"pubbroker":{"ok":false,"problem":"the answers do not fit ONBOARD_ACK"}})");
+    ack.answers =
+        pack(R"({"pubbroker":{"ok":false,"problem":"the answers do not fit ONBOARD_ACK"}})");
   return ack;
 }
 
