@@ -69,6 +69,9 @@ def unpack_answers(data: bytes, limit: int) -> dict[str, Any]:
     import zstandard
 
     try:
+        size = zstandard.get_frame_parameters(data).content_size
+        if size > limit:  # declared above the bound, or not declared (2^64 - 1): refused
+            raise ValueError(f"{size} B once decompressed, above {limit} B")
         raw = zstandard.ZstdDecompressor().decompress(data, max_output_size=limit)
         doc = json.loads(raw)
     except (zstandard.ZstdError, ValueError) as exc:
