@@ -9,6 +9,13 @@ counts every packet it sent (DATA, STATUS, PONG), each kind at its own rate. Per
 the planner's "about" and "at most", the measured, measured / about, and whether the
 bound held. Asserts nothing.
 
+The "about" is planned for the run's length (``status_horizon_s``: the STATUS
+frames such a run sends, whose counters are younger than an hour's) and, with a
+declared resolution, calibrated by the archive of ANOTHER run of the same load
+(the other radio's row of the same set: ``modd plan --calibrate``, issue 34), as an
+operator plans from an earlier flight: a value sized at its declared range is a
+bound, not an estimate. The uncalibrated figure is printed beside it.
+
     .venv/bin/python tests/bench/bench_airtime.py [--seconds 60] [--json F]
 """
 
@@ -29,6 +36,7 @@ from modd.radio import relay  # noqa: E402
 from subbroker_harness import model_copy  # noqa: E402
 from test_radio_airtime import (  # noqa: E402
     STATUS_S,
+    _archive_samples,
     _at_resolution,
     _Recording,
     long_windows,
@@ -56,7 +64,7 @@ def _model(tmp: Path, radio: dict[str, Any], long: bool, resolution: bool) -> di
 
 def row(tmp: Path, name: str, long: bool, resolution: bool, seconds: float) -> dict[str, Any]:
     model = _model(tmp, PROFILES[name], long, resolution)
-    plan = plan_of(model)
+    plan = plan_of(model, status_horizon_s=round(seconds))
     r = plan.radio
     assert r is not None and r.ceiling is not None and plan.budget is not None
     _, air, _, by_kind = measure_serial(tmp, model, seconds)
@@ -72,7 +80,31 @@ def row(tmp: Path, name: str, long: bool, resolution: bool, seconds: float) -> d
         "planned_control_s_h": round(r.control_s_per_hour, 2),
         "measured_by_kind_s_h": {k: round(v, 2) for k, v in sorted(by_kind.items())},
         "planned_packets_h": round(r.packets_per_hour, 1),
+        "_model": model,
+        "_archive": tmp / "archive",
     }
+
+
+def calibrate(rows: list[dict[str, Any]], seconds: float) -> None:
+    """Each row with a resolution planned again, calibrated by the archive of the
+    other radio's row of the same set (another run of the same load)."""
+    from modd_plan.calibration import Calibration
+
+    for x in rows:
+        if x["resolution"] == "-":
+            continue
+        other = next(
+            y
+            for y in rows
+            if y["radio"] != x["radio"] and y["set"] == x["set"] and y["resolution"] != "-"
+        )
+        cal = Calibration(f"{other['radio']}.mcap", _archive_samples(other["_archive"]))
+        r = plan_of(x["_model"], calibration=cal, status_horizon_s=round(seconds)).radio
+        assert r is not None and r.calibration is not None and not r.calibration.missing
+        x["uncalibrated_about_s_h"] = x["about_s_h"]
+        x["about_s_h"] = round(r.air_s_per_hour, 2)
+        x["calibrated_by"] = other["radio"]
+        x["measured_over_about"] = round(x["measured_s_h"] / r.air_s_per_hour, 3)
 
 
 def main() -> int:
@@ -89,17 +121,20 @@ def main() -> int:
                     tmp = Path(d) / f"{name}-{int(long)}-{int(resolution)}"
                     tmp.mkdir()
                     rows.append(row(tmp, name, long, resolution, args.seconds))
-                    print(json.dumps(rows[-1]), flush=True)
+        calibrate(rows, args.seconds)
+    for x in rows:
+        x.pop("_model")
+        x.pop("_archive")
+        print(json.dumps(x), flush=True)
     print(f"\nserial, STATUS every {STATUS_S} s, {args.seconds:g} s of load a row; air s/h")
-    head = (
-        "| radio | set | resolution | about | at most | measured | measured/about | bound holds |"
-    )
-    print(head)
-    print("|" + " --- |" * 8)
+    head = "| radio | set | resolution | about | (uncalibrated) | at most | measured |"
+    print(head + " measured/about | bound holds |")
+    print("|" + " --- |" * 9)
     for x in rows:
         print(
             f"| {x['radio']} | {x['set']} | {x['resolution']} | {x['about_s_h']} | "
-            f"{x['at_most_s_h']} | {x['measured_s_h']} | {x['measured_over_about']} | "
+            f"{x.get('uncalibrated_about_s_h', '-')} | {x['at_most_s_h']} | "
+            f"{x['measured_s_h']} | {x['measured_over_about']} | "
             f"{'yes' if x['bound_holds'] else 'NO'} |"
         )
     if args.json:

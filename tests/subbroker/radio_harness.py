@@ -45,9 +45,11 @@ def start_pubbroker_dgram(
     tag: str = "pb",
     archive: str = "archive",
     archive_opts: dict[str, Any] | None = None,
+    args: tuple[str, ...] = (),
 ) -> Proc:
     """A PubBroker whose link is ``link`` (transport, port or device, ...);
-    ``archive_opts``: more of its archive's settings (rotate_s, ...)."""
+    ``archive_opts``: more of its archive's settings (rotate_s, ...); ``args``: more
+    of its command line (--onboard-model PATH)."""
     model = load_model(model_path)
     cfg = {
         "name": model["drone"]["name"],
@@ -60,7 +62,7 @@ def start_pubbroker_dgram(
     }
     path = tmp / f"{tag}.json"
     path.write_text(json.dumps(cfg))
-    proc = Proc(tag, [str(PUBBROKER), "--config", str(path)], tmp / f"{tag}.log")
+    proc = Proc(tag, [str(PUBBROKER), "--config", str(path), *args], tmp / f"{tag}.log")
     assert proc.wait_log("started:", 10), proc.log()
     return proc
 

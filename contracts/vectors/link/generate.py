@@ -13,6 +13,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+import zstandard
 from modd.link import codec
 from modd.link.auth import client_proof, keyed_nonce, server_proof
 from modd.link.frames import (
@@ -26,6 +27,8 @@ from modd.link.frames import (
     ErrorMsg,
     Hello,
     Message,
+    Onboard,
+    OnboardAck,
     Ping,
     Pong,
     SensorHealth,
@@ -35,6 +38,7 @@ from modd.link.frames import (
     Value,
     ValueType,
 )
+from modd_contracts.link_wire_gen import MAX_ONBOARD_WIRE
 
 HERE = Path(__file__).parent
 KEY = b"modd-test-key"
@@ -102,6 +106,15 @@ def msg_json(m: Message) -> dict[str, Any]:
             "status": m.status,
             "epoch_ns": m.epoch_ns,
         }
+    if isinstance(m, Onboard):
+        return {"type": "ONBOARD", "config_id": m.config_id, "model": m.model.hex()}
+    if isinstance(m, OnboardAck):
+        return {
+            "type": "ONBOARD_ACK",
+            "config_id": m.config_id,
+            "status": m.status,
+            "answers": m.answers.hex(),
+        }
     if isinstance(m, Status):
         return {
             "type": "STATUS",
@@ -154,6 +167,20 @@ def write(
             for k in kinds
         ]
     (HERE / f"{name}.json").write_text(json.dumps(doc, indent=1) + "\n")
+
+
+#: zstd (level 19, content size written) of ``{"drone": {"name": "usv", "sensors": []}}``
+#: and of ``{"sensors": {"ok": true}}``, as modd.onboard.pack and the PubBroker write them
+ONBOARD_MODEL = (
+    zstandard.ZstdCompressor(level=19, write_content_size=True)
+    .compress(b'{"drone": {"name": "usv", "sensors": []}}\n')
+    .hex()
+)
+ONBOARD_ANSWERS = (
+    zstandard.ZstdCompressor(level=19, write_content_size=True)
+    .compress(b'{"sensors": {"ok": true}}')
+    .hex()
+)
 
 
 def simple(name: str, meaning: str, m: Message) -> None:
@@ -264,6 +291,18 @@ def main() -> None:
         "config_ack",
         "CONFIG 1 accepted, takes effect at the epoch",
         ConfigAck(1, 0, 1_763_700_000_250_000_000),
+    )
+    # the zstd frames as written (content size in the header), kept as bytes: the
+    # codecs carry them as they are; onboard.pack / onboard_ack make and read them
+    simple(
+        "onboard",
+        "ONBOARD for config 2: a zstd frame of the on-board model file's bytes",
+        Onboard(2, bytes.fromhex(ONBOARD_MODEL)),
+    )
+    simple(
+        "onboard_ack",
+        "ONBOARD_ACK for config 2: written; a zstd frame of each process's answer",
+        OnboardAck(2, 0, bytes.fromhex(ONBOARD_ANSWERS)),
     )
     simple(
         "config_ack_busy",
@@ -523,6 +562,12 @@ def main() -> None:
             fr("07 01 00 01 0161 00 01 00 01 00 00 01 01 01 00 0000000000000000"),
             "resolution 0",
         ),
+        (
+            "onboard_above_limit",
+            fr("0b 02" + "00" * (MAX_ONBOARD_WIRE + 1)),
+            f"ONBOARD payload of {MAX_ONBOARD_WIRE + 1} bytes (above {MAX_ONBOARD_WIRE})",
+        ),
+        ("onboard_ack_truncated", fr("0c 02"), "ONBOARD_ACK without its status"),
         (
             "status_overlong_varint",
             fr("20 01 ffffffffffffffffffff7f"),

@@ -11,10 +11,12 @@ Options:
 - Sensors of ``kind nmea``, ``ascii`` or ``modbus`` are read by ``modd-sensors``
   from their devices (with ``--simulate``: from the simulator's pseudo-terminals,
   linked under ``<workdir>/devices``); each sensor's health is kept in
-  ``<workdir>/sensors.json`` (docs/sensors.md).
+  ``<workdir>/sensors.json`` (docs/sensors.md). It runs even when the model has
+  none (idle, it follows the on-board model file: a deploy that adds the first
+  instrument needs no restart).
 - ``--simulate``: also run ``modd-sim`` (the simulated drone) against the
-  PubBroker's ingress and, when the model has ``kind mavlink`` sensors, the
-  MAVLink bridge ``modd-mavlink`` reading the simulator's autopilot over UDP
+  PubBroker's ingress and the MAVLink bridge ``modd-mavlink`` (idle while the
+  model has no ``kind mavlink`` sensor) reading the simulator's autopilot over UDP
   on a loopback port picked free for this run, so that two runs at once do
   not collide (docs/mavlink.md).
 - ``--part drone|station|all`` (default ``all``): which side of the link runs
@@ -163,43 +165,30 @@ def prepare(
     return local, workdir / "generated" / "operator"
 
 
-def has_mavlink_sensors(model: dict[str, Any]) -> bool:
-    return any(s.get("kind") == "mavlink" for s in model["drone"]["sensors"])
-
-
 def simulation(
     model: dict[str, Any], model_json: Path, bin_dir: Path, logs: Path, onboard: Path
 ) -> list[Process]:
-    """The simulator and, when the model has mavlink sensors, the MAVLink bridge reading
-    the simulator's autopilot on a loopback UDP port of this run (bridge first: it listens)."""
+    """The MAVLink bridge, then the simulator, whose autopilot (when the model has
+    mavlink sensors) the bridge reads on a loopback UDP port of this run (bridge first:
+    it listens). The bridge runs even when the model has no mavlink sensor: idle, it
+    applies a deploy that adds the first without a restart."""
     sim = bin_dir / "modd-sim"
-    if not sim.exists():
-        raise FileNotFoundError(f"{sim} not found: the drone simulator is not installed")
-    sim_argv = [str(sim), "--model", str(model_json)]
-    out = []
-    if has_mavlink_sensors(model):
-        bridge = bin_dir / "modd-mavlink"
-        if not bridge.exists():
-            raise FileNotFoundError(f"{bridge} not found: the MAVLink bridge is not installed")
-        port = free_port("udp")
-        out.append(
-            Process(
-                "bridge",
-                [
-                    str(bridge),
-                    "--model",
-                    str(onboard),
-                    "--connect",
-                    f"udpin:127.0.0.1:{port}",
-                    *following(model),
-                ],
-                logs / "bridge.log",
-                death_signal=signal.SIGKILL,
-            )
-        )
-        sim_argv += ["--mavlink", f"udpout:127.0.0.1:{port}"]
-    out.append(Process("simulator", sim_argv, logs / "simulator.log", death_signal=signal.SIGKILL))
-    return out
+    bridge = bin_dir / "modd-mavlink"
+    for binary, what in ((sim, "the drone simulator"), (bridge, "the MAVLink bridge")):
+        if not binary.exists():
+            raise FileNotFoundError(f"{binary} not found: {what} is not installed")
+    port = free_port("udp")
+    bridge_argv = [str(bridge), "--model", str(onboard), "--connect", f"udpin:127.0.0.1:{port}"]
+    sim_argv = [str(sim), "--model", str(model_json), "--mavlink", f"udpout:127.0.0.1:{port}"]
+    return [
+        Process(
+            "bridge",
+            [*bridge_argv, *following(model)],
+            logs / "bridge.log",
+            death_signal=signal.SIGKILL,
+        ),
+        Process("simulator", sim_argv, logs / "simulator.log", death_signal=signal.SIGKILL),
+    ]
 
 
 def build_stack(
@@ -240,14 +229,17 @@ def build_stack(
         ):  # a simulated drone: its link can be cut for a rehearsal
             sub += ["--rehearsal-dir", str(rehearsal_dir(workdir))]
         stack.processes.append(Process("subbroker", sub, logs / "subbroker.log"))
-    from modd.sensors.plan import has_instrument_sensors
-
     onboard = onboard_model(configs, workdir) if drone else None
-    if onboard is not None and station:  # an acked deploy reaches the on-board processes
+    # an acked deploy reaches the on-board processes over the link (ONBOARD): the
+    # PubBroker writes it to the on-board model file, modd-sensors and modd-mavlink follow
+    if onboard is not None:
+        pub_process = next(p for p in stack.processes if p.name == "pubbroker")
+        pub_process.argv += ["--onboard-model", str(onboard)]
+    if station:
         sub_process = next(p for p in stack.processes if p.name == "subbroker")
-        sub_process.argv += ["--onboard-model", str(onboard)]
-    if drone and has_instrument_sensors(model):  # nmea, ascii, modbus: read by modd-sensors
-        assert onboard is not None
+        sub_process.argv.append("--onboard-over-link")
+    if onboard is not None:  # nmea, ascii, modbus: read by modd-sensors, idle while the
+        # model has none (a deploy that adds the first needs no restart)
         sensors = [str(bin_dir / "modd-sensors"), "--model", str(onboard)]
         sensors += ["--status-file", str(workdir / "sensors.json"), *following(model)]
         if args.simulate:

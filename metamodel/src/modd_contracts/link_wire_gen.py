@@ -43,6 +43,13 @@ MAX_BUFFER_SIZE: Final = 1000000
 #: Longest stream period of a CONFIG or a backfill request, in microseconds: 366 days (the
 #: smallest is 1).
 MAX_PERIOD_US: Final = 31622400000000
+#: Largest on-board model (ONBOARD) or answer (ONBOARD_ACK), in bytes once decompressed.
+MAX_ONBOARD_BYTES: Final = 262144
+#: Largest compressed on-board model an ONBOARD frame carries: 16 control fragments of a 240-B
+#: packet.
+MAX_ONBOARD_WIRE: Final = 3584
+#: How long the PubBroker waits for the on-board processes' answers before ONBOARD_ACK.
+ONBOARD_WAIT_MS: Final = 2000
 #: Shortest pre-shared key, in bytes: shorter keys are refused.
 MIN_KEY_BYTES: Final = 16
 
@@ -107,6 +114,8 @@ class MsgType(IntEnum):
     PONG = 0x06
     CONFIG = 0x07
     CONFIG_ACK = 0x08
+    ONBOARD = 0x0B  # config id, the on-board model (zstd): for modd-sensors and modd-mavlink
+    ONBOARD_ACK = 0x0C  # config id, status, what each on-board process did (zstd JSON)
     DATA = 0x10  # seq8, values (all streams present)
     DATA_BITMAP = 0x11  # seq8, presence bitmap, values
     DATA_SYNC = 0x12  # config id, full slot number, values
@@ -240,6 +249,9 @@ __all__ = [
     "MAX_NAME",
     "MAX_BUFFER_SIZE",
     "MAX_PERIOD_US",
+    "MAX_ONBOARD_BYTES",
+    "MAX_ONBOARD_WIRE",
+    "ONBOARD_WAIT_MS",
     "MIN_KEY_BYTES",
     "StatusField",
     "MsgType",

@@ -8,7 +8,9 @@ the DATA of the plan's streams (docs/planning.md, "Control traffic").
   Its frame: the :class:`StatusField` counters as varints, then each
   instrument's health (``modd-sensors``' instruments, the model's sensors
   with a ``kind``). The **estimate** sizes each counter at its value after
-  :data:`HORIZON_S` of the plan (ingest, DATA frames, link bytes);
+  :data:`HORIZON_S` of the plan (ingest, DATA frames, link bytes) or, planned
+  for a run of ``horizon_s``, is that run's STATUS frames, each counter at its
+  value when its frame is sent, each size at its share of the frames;
   the **bound** is the link's *STATUS room* (``max_datagram - 14`` over
   udp/serial, 1,400 B over tcp: the PubBroker never sends a larger one).
 * **PONG** for the SubBroker's keepalive PING every :data:`KEEPALIVE_S`
@@ -74,10 +76,14 @@ class ControlInputs:
     status_period_s: int = DEFAULT_STATUS_PERIOD_S
     instruments: tuple[str, ...] = ()
     samples_per_s: float = 0.0
+    horizon_s: int | None = None
 
     @staticmethod
-    def of(model: Mapping[str, Any], status_period_s: int | None = None) -> ControlInputs:
-        """From a validated model (``status_period_s`` None: the default)."""
+    def of(
+        model: Mapping[str, Any], status_period_s: int | None = None, horizon_s: int | None = None
+    ) -> ControlInputs:
+        """From a validated model (``status_period_s`` None: the default;
+        ``horizon_s`` None: the frame after :data:`HORIZON_S`)."""
         sensors = model.get("drone", {}).get("sensors", [])
         rate = 0.0
         for pub in model.get("publishers", []):
@@ -88,6 +94,7 @@ class ControlInputs:
             DEFAULT_STATUS_PERIOD_S if status_period_s is None else status_period_s,
             tuple(s["name"] for s in sensors if s.get("kind")),
             rate,
+            None if horizon_s is None else max(1, horizon_s),
         )
 
 
@@ -103,11 +110,15 @@ class ControlTraffic:
 
 
 def status_frame_about(
-    inputs: ControlInputs, frames_per_s: float, bytes_per_s: float, datagrams_per_s: float
+    inputs: ControlInputs,
+    frames_per_s: float,
+    bytes_per_s: float,
+    datagrams_per_s: float,
+    at_s: float = HORIZON_S,
 ) -> int:
-    """The estimated STATUS frame (length, type, counters, health), after
-    :data:`HORIZON_S` of a run at the given rates."""
-    h = HORIZON_S
+    """The estimated STATUS frame (length, type, counters, health) sent ``at_s``
+    into a run at the given rates."""
+    h = at_s
     n = len(inputs.instruments)
     value = {
         StatusField.UPTIME_S: h,
@@ -133,6 +144,25 @@ def status_frame_about(
     return varint_bytes(body + 1) + 1 + body
 
 
+def status_frames_about(
+    inputs: ControlInputs, frames_per_s: float, bytes_per_s: float, datagrams_per_s: float
+) -> tuple[tuple[int, float], ...]:
+    """The STATUS frames of a run of ``inputs.horizon_s`` (one every period, the
+    first one period in), as (frame bytes, frames per hour): each size at its
+    share of the frames (counters grow: a short run's frames are smaller);
+    without a horizon, the frame after :data:`HORIZON_S`."""
+    period = inputs.status_period_s
+    if inputs.horizon_s is None:
+        frame = status_frame_about(inputs, frames_per_s, bytes_per_s, datagrams_per_s)
+        return ((frame, 3600 / period),)
+    count = max(1, int(inputs.horizon_s // period))
+    sizes: dict[int, int] = {}
+    for k in range(1, count + 1):
+        size = status_frame_about(inputs, frames_per_s, bytes_per_s, datagrams_per_s, k * period)
+        sizes[size] = sizes.get(size, 0) + 1
+    return tuple((size, 3600 / period * c / count) for size, c in sorted(sizes.items()))
+
+
 def control_traffic(
     inputs: ControlInputs,
     room: int,
@@ -148,7 +178,7 @@ def control_traffic(
     at_most: list[tuple[int, float]] = [(pong, pongs)]
     period = inputs.status_period_s
     if period > 0:
-        frame = status_frame_about(inputs, frames_per_s, bytes_per_s, datagrams_per_s)
-        about.append((min(frame, room), 3600 / period))
-        at_most.append((max(room, frame), 3600 / period))
+        frames = status_frames_about(inputs, frames_per_s, bytes_per_s, datagrams_per_s)
+        about += [(min(frame, room), n) for frame, n in frames]
+        at_most.append((max(room, frames[-1][0]), 3600 / period))
     return ControlTraffic(period, tuple(about), tuple(at_most))

@@ -265,6 +265,7 @@ def _budget(
     window_bytes: list[Fraction],
     carry: bool = False,
     status_period_s: int | None = None,
+    status_horizon_s: int | None = None,
 ) -> LinkBudget:
     # by identity: plan_streams gives each stream one key object, which its
     # derived streams' sources hold (no StreamKey hashed or compared)
@@ -283,7 +284,7 @@ def _budget(
         [served[id(s.stream)] for s in sent],
         [sub["name"] for sub in model.get("subscribers", [])],
         carry,
-        ControlInputs.of(model, status_period_s),
+        ControlInputs.of(model, status_period_s, status_horizon_s),
     )
 
 
@@ -306,6 +307,7 @@ def make_plan(
     proposals: bool = True,
     calibration: Calibration | None = None,
     status_period_s: int | None = None,
+    status_horizon_s: int | None = None,
 ) -> Plan:
     """Plan a validated model. ``method`` picks the buffer-size solver:
     ``"exact"`` (fast, default) or ``"cvxpy"`` (the MILP with HiGHS); both
@@ -314,10 +316,13 @@ def make_plan(
     fit (``proposals=False``: not searched). ``calibration``: quantised
     values sized from an archive's samples (calibration.py), the proposals'
     too. ``status_period_s``: the STATUS period the SubBroker asks for
-    (None: its default), in the control traffic (control.py)."""
+    (None: its default), in the control traffic (control.py); ``status_horizon_s``:
+    the length of run whose STATUS frames are estimated (None: the first hour)."""
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
-    options = _Options(ping_s, alpha, beta, max_buffer, method, calibration, status_period_s)
+    options = _Options(
+        ping_s, alpha, beta, max_buffer, method, calibration, status_period_s, status_horizon_s
+    )
     with gc_paused():
         plan = _make_plan(model, options)
         if not proposals or plan.radio is None or plan.radio.fits:
@@ -370,6 +375,7 @@ class _Options:
     method: str
     calibration: Calibration | None
     status_period_s: int | None = None
+    status_horizon_s: int | None = None
 
 
 def _make_plan(model: Mapping[str, Any], options: _Options) -> Plan:
@@ -442,8 +448,8 @@ def _make_plan(model: Mapping[str, Any], options: _Options) -> Plan:
     if use is not None and not (use.sizes or use.missing):
         use = None  # nothing quantised: nothing to calibrate
     calibrated = use is not None and bool(use.sizes)
-    period = o.status_period_s
-    budget = _budget(model, sched, sent, streams, window_bytes, calibrated, period)
+    period, horizon = o.status_period_s, o.status_horizon_s
+    budget = _budget(model, sched, sent, streams, window_bytes, calibrated, period, horizon)
     radio = model.get("link", {}).get("radio")
     ceiling = None
     if radio and bound is False:  # an estimate: the duty-cycle limit is checked on a bound
@@ -451,7 +457,7 @@ def _make_plan(model: Mapping[str, Any], options: _Options) -> Plan:
             model, sent, streams, exact, tops, link.transport, link.accepted_delay, True
         )
         if bounded:
-            ceiling = _budget(model, sched, sent, streams, ceiling_bytes, False, period)
+            ceiling = _budget(model, sched, sent, streams, ceiling_bytes, False, period, horizon)
     report = radio_report(RadioProfile.of(radio), budget, bound, ceiling, use) if radio else None
     return Plan(
         topics=tuple(tops.values()),

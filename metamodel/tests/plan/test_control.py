@@ -58,6 +58,32 @@ def test_scenario1_over_serial_by_hand(scenarios_dir: Path) -> None:
     }
 
 
+def _by_hand(t: int) -> int:
+    """Scenario 1's STATUS frame ``t`` s into a run over serial, by hand: uptime
+    t; 75 samples/s in and archived; 4 DATA frames/s; 81.6 link B/s; 0.8
+    datagrams/s (varints); 100,000 MB free (3 B); 10,000 archive B/s (2 B); 75
+    pending (1 B); one publisher (1 B); the 27 others 0 (1 B each); the count 37
+    (1 B); + length and type."""
+    grow = (t, 75 * t, 75 * t, 4 * t, int(81.6 * t), int(0.8 * t))
+    return 1 + 1 + 1 + sum(varint_bytes(v) for v in grow) + 3 + 2 + 1 + 1 + 27
+
+
+def test_a_run_of_a_given_length_has_its_own_status_frames(scenarios_dir: Path) -> None:
+    """``status_horizon_s``: the STATUS frames of a 45-s run (4 at 10 s, younger
+    counters than an hour's), each size at its share; the bound is unchanged."""
+    model = _model(scenarios_dir, SERIAL)
+    assert _by_hand(3600) == 52  # the hour's frame (the test above)
+    short = make_plan(model, status_period_s=10, status_horizon_s=45).budget
+    hour = make_plan(model, status_period_s=10).budget
+    assert short is not None and short.control is not None and hour is not None
+    sizes: dict[int, float] = {}
+    for k in range(1, 5):
+        sizes[_by_hand(10 * k)] = sizes.get(_by_hand(10 * k), 0) + 360 / 4
+    assert dict(short.control.about[1:]) == pytest.approx(sizes)
+    assert max(sizes) < 52 and short.control_at_most == hour.control_at_most
+    assert short.control_bytes_per_s < hour.control_bytes_per_s
+
+
 def test_instruments_add_their_health(scenarios_dir: Path) -> None:
     inputs = ControlInputs.of(_model(scenarios_dir, SERIAL))
     assert inputs.instruments == () and inputs.samples_per_s == pytest.approx(75)

@@ -43,6 +43,11 @@ Message from_json(const json& m) {
   if (t == "PING") return Ping{from_hex(m["payload"].get<std::string>())};
   if (t == "PONG") return Pong{from_hex(m["payload"].get<std::string>())};
   if (t == "CONFIG_ACK") return ConfigAck{m["config_id"], m["status"], m["epoch_ns"]};
+  if (t == "ONBOARD")
+    return Onboard{m["config_id"].get<uint8_t>(), from_hex(m["model"].get<std::string>())};
+  if (t == "ONBOARD_ACK")
+    return OnboardAck{m["config_id"].get<uint8_t>(), m["status"].get<uint8_t>(),
+                      from_hex(m["answers"].get<std::string>())};
   if (t == "STATUS") {
     Status s{m["counters"].get<std::vector<uint64_t>>()};
     for (const auto& h : m.value("sensors", json::array()))

@@ -23,6 +23,8 @@ from modd.link.frames import (
     ErrorMsg,
     Hello,
     Message,
+    Onboard,
+    OnboardAck,
     Ping,
     Pong,
     ProtocolError,
@@ -57,6 +59,10 @@ def from_json(m: dict[str, Any]) -> Message:
         return Pong(bytes.fromhex(m["payload"]))
     if t == "CONFIG_ACK":
         return ConfigAck(m["config_id"], m["status"], m["epoch_ns"])
+    if t == "ONBOARD":
+        return Onboard(m["config_id"], bytes.fromhex(m["model"]))
+    if t == "ONBOARD_ACK":
+        return OnboardAck(m["config_id"], m["status"], bytes.fromhex(m["answers"]))
     if t == "STATUS":
         return Status(
             tuple(m["counters"]),

@@ -204,3 +204,28 @@ def test_a_damaged_model_file_is_refused_by_the_sensors_check(tmp_path: Path, te
     path.write_text(text)
     model, why = model_or_why(str(path))
     assert model is None and why
+
+
+def test_onboards_payload_is_the_hand_overs_bytes_and_its_answers_are_bounded(
+    tmp_path: Path,
+) -> None:
+    """ONBOARD carries the bytes hand_over writes (one zstd frame, its size in the
+    header, read back with zstandard as the oracle); ONBOARD_ACK's answers are read
+    within a bound and must be a JSON object."""
+    import zstandard
+
+    model = {"drone": {"name": "usv", "sensors": []}, "subscribers": []}
+    path = tmp_path / "model.json"
+    onboard.hand_over(path, model)
+    packed = onboard.pack(model)
+    assert zstandard.ZstdDecompressor().decompress(packed) == path.read_bytes()
+    assert zstandard.get_frame_parameters(packed).content_size == len(path.read_bytes())
+    answers = zstandard.ZstdCompressor(write_content_size=True).compress(
+        b'{"sensors": {"ok": true}}'
+    )
+    assert onboard.unpack_answers(answers, 1024) == {"sensors": {"ok": True}}
+    bomb = zstandard.ZstdCompressor().compress(b'{"x": "' + b"a" * 100_000 + b'"}')
+    with pytest.raises(ValueError, match="unreadable"):
+        onboard.unpack_answers(bomb, 1024)  # above the bound: refused, not decompressed
+    with pytest.raises(ValueError, match="not a JSON object"):
+        onboard.unpack_answers(zstandard.ZstdCompressor().compress(b"[1]"), 1024)

@@ -6,7 +6,10 @@
 #include <cmath>
 #include <cstdio>
 
+#include <nlohmann/json.hpp>
+
 #include "modd/broker/health.hpp"
+#include "modd/broker/onboard.hpp"
 #include "modd/link/auth.hpp"
 #include "modd/link/codec.hpp"
 #include "modd/util/bytes.hpp"
@@ -367,6 +370,44 @@ void Broker::tick(int64_t now) {
   if (now < last_stamp_) now = last_stamp_;
   last_stamp_ = now;
   executor_.advance(now, *this);
+  if (onboard_wait_ && now >= onboard_wait_->next_ns) answer_onboard(now);
+}
+
+std::optional<link::OnboardAck> Broker::on_onboard(const link::Onboard& o) {
+  auto refuse = [&](const std::string& why) {
+    log_line("link: on-board model of config %u refused: %s", o.config_id, why.c_str());
+    nlohmann::json doc = {{"pubbroker", {{"ok", false}, {"problem", why}}}};
+    return onboard_ack(o.config_id, static_cast<uint8_t>(ErrorCode::BadConfig), doc.dump());
+  };
+  if (cfg_.onboard_model.empty())
+    return refuse("this PubBroker keeps no on-board model file (--onboard-model)");
+  try {
+    std::string digest = write_onboard(cfg_.onboard_model, o.model);
+    log_line("link: on-board model %s written to %s", digest.c_str(), cfg_.onboard_model.c_str());
+    int64_t t = now();
+    onboard_wait_ = OnboardWait{o.config_id, digest, t + int64_t{link::kOnboardWaitMs} * 1'000'000,
+                                t + 50'000'000};
+  } catch (const Error& e) { return refuse(e.what()); }
+  return std::nullopt;
+}
+
+int64_t Broker::onboard_wake_ns() const {
+  return onboard_wait_ ? onboard_wait_->next_ns : Executor::kNever;
+}
+
+void Broker::answer_onboard(int64_t now) {
+  OnboardWait& w = *onboard_wait_;
+  bool final = now >= w.deadline_ns;
+  auto answers = onboard_answers(cfg_.onboard_model, w.digest, final);
+  if (!answers) {
+    w.next_ns = now + 50'000'000;  // looked at every 50 ms
+    return;
+  }
+  std::vector<uint8_t> frame;
+  link::encode(frame, onboard_ack(w.config_id, 0, *answers));
+  size_t n = frame.size();
+  if (out_.link_write(std::move(frame))) counters_.link_bytes_sent += n;
+  onboard_wait_.reset();
 }
 
 void Broker::flush_buffers() {

@@ -225,6 +225,12 @@ void DatagramLink::on_control_frame(const std::vector<uint8_t>& frame) {
           cfg->accepted_delay_ms ? int64_t{*cfg->accepted_delay_ms} * 1'000'000 : opt_.delay_ns;
     }
     send_control(out);
+  } else if (auto* o = std::get_if<Onboard>(&m)) {
+    if (auto ack = hooks_.on_onboard(*o)) {
+      std::vector<uint8_t> out;
+      encode(out, *ack);
+      send_control(out);
+    }
   } else if (auto* e = std::get_if<ErrorMsg>(&m)) {
     hooks_.on_rejected("peer sent ERROR " + std::to_string(e->code) + ": " + e->message);
     ready_ = false;

@@ -98,6 +98,10 @@ bool LinkSession::handle(uint8_t type, std::span<const uint8_t> body, std::vecto
         encode(out, hooks_.on_config(*c));
         return true;
       }
+      if (auto* o = std::get_if<Onboard>(&m)) {
+        if (auto ack = hooks_.on_onboard(*o)) encode(out, *ack);
+        return true;
+      }
       if (auto* e = std::get_if<ErrorMsg>(&m)) {
         hooks_.on_rejected("peer sent ERROR " + std::to_string(e->code) + ": " + e->message);
         state_ = State::Closed;

@@ -343,7 +343,8 @@ void Server::timers(int64_t now) {
 
 int Server::timeout_ms(int64_t now) const {
   int64_t next = std::min({broker_->next_due_ns(), next_flush_, next_log_, next_status_,
-                           broker_->backfill_wake_ns(now), broker_->status_wake_ns()});
+                           broker_->backfill_wake_ns(now), broker_->status_wake_ns(),
+                           broker_->onboard_wake_ns()});
   if (dlink_) next = std::min(next, dlink_->next_due_ns());
   for (const auto& [fd, c] : conns_)
     if (c.kind == Kind::Link && !c.link->ready()) next = std::min(next, c.deadline_ns);

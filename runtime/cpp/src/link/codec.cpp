@@ -237,6 +237,19 @@ void encode(std::vector<uint8_t>& out, const Message& m) {
           w.u8(msg.config_id);
           w.u8(msg.status);
           w.fixed<uint64_t>(msg.epoch_ns);
+        } else if constexpr (std::is_same_v<T, Onboard>) {
+          type = MsgType::Onboard;
+          if (msg.model.size() > kMaxOnboardWire)
+            throw Error(ErrorCode::Internal, "ONBOARD above its wire limit");
+          w.u8(msg.config_id);
+          w.bytes(msg.model);
+        } else if constexpr (std::is_same_v<T, OnboardAck>) {
+          type = MsgType::OnboardAck;
+          if (msg.answers.size() > kMaxOnboardWire)
+            throw Error(ErrorCode::Internal, "ONBOARD_ACK above its wire limit");
+          w.u8(msg.config_id);
+          w.u8(msg.status);
+          w.bytes(msg.answers);
         } else if constexpr (std::is_same_v<T, Status>) {
           type = MsgType::Status;
           w.varint(msg.counters.size());
@@ -309,6 +322,14 @@ std::optional<RawFrame> split_frame(std::span<const uint8_t> buf, size_t max_fra
 }
 
 bool is_data_type(uint8_t type) { return type >= 0x10 && type <= 0x13; }
+
+// ONBOARD's and ONBOARD_ACK's payload: the rest of the frame, bounded.
+static std::vector<uint8_t> onboard_payload(ByteReader& r) {
+  if (r.remaining() > kMaxOnboardWire)
+    r.fail("on-board payload above " + std::to_string(kMaxOnboardWire) + " bytes");
+  auto b = r.bytes(r.remaining());
+  return {b.begin(), b.end()};
+}
 
 Message decode(const RawFrame& f) {
   ByteReader r(f.body, 0);
@@ -402,6 +423,19 @@ Message decode(const RawFrame& f) {
       a.config_id = r.u8();
       a.status = r.u8();
       a.epoch_ns = r.fixed<uint64_t>();
+      return done(a);
+    }
+    case MsgType::Onboard: {
+      Onboard o;
+      o.config_id = r.u8();
+      o.model = onboard_payload(r);
+      return done(o);
+    }
+    case MsgType::OnboardAck: {
+      OnboardAck a;
+      a.config_id = r.u8();
+      a.status = r.u8();
+      a.answers = onboard_payload(r);
       return done(a);
     }
     case MsgType::Status: {

@@ -16,7 +16,7 @@
 namespace {
 
 const char* kUsage =
-    "usage: modd-pubbroker --config FILE\n"
+    "usage: modd-pubbroker --config FILE [--onboard-model PATH]\n"
     "\n"
     "The MoDD on-board broker: archives every published sample to MCAP files,\n"
     "computes the scheduled aggregates and sends them to the base station over\n"
@@ -24,6 +24,9 @@ const char* kUsage =
     "\n"
     "options:\n"
     "  --config FILE   the broker's JSON configuration (required)\n"
+    "  --onboard-model PATH  write a deployed model received over the link (ONBOARD)\n"
+    "                  there, for modd-sensors and modd-mavlink --watch, and send\n"
+    "                  their answers back (docs/sensors.md); without it ONBOARD is refused\n"
     "  --help          this text\n"
     "\n"
     "SIGTERM or SIGINT: flush the buffers, close the archive, exit 0.\n";
@@ -31,7 +34,7 @@ const char* kUsage =
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string config_path;
+  std::string config_path, onboard_model;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
       std::fputs(kUsage, stdout);
@@ -39,6 +42,10 @@ int main(int argc, char** argv) {
     }
     if (!std::strcmp(argv[i], "--config") && i + 1 < argc) {
       config_path = argv[++i];
+      continue;
+    }
+    if (!std::strcmp(argv[i], "--onboard-model") && i + 1 < argc) {
+      onboard_model = argv[++i];
       continue;
     }
     std::fprintf(stderr, "modd-pubbroker: unknown argument '%s'\n%s", argv[i], kUsage);
@@ -57,6 +64,7 @@ int main(int argc, char** argv) {
   pthread_sigmask(SIG_BLOCK, &mask, nullptr);
   try {
     modd::broker::BrokerConfig cfg = modd::broker::load_config(config_path);
+    cfg.onboard_model = onboard_model;
     if (!cfg.log_file.empty()) modd::log_to_file(cfg.log_file, cfg.log_max_bytes, cfg.log_keep);
     std::string key = modd::link::resolve_key(cfg.key_ref);
     modd::SystemClock clock;

@@ -49,11 +49,43 @@ def _valid_file(model_path: Path) -> Path:
     return model_path.with_name(model_path.name + ".valid")
 
 
+def model_bytes(model: dict[str, Any]) -> bytes:
+    """The on-board model file's bytes for ``model`` (what :func:`hand_over` writes,
+    and what ONBOARD carries compressed: the PubBroker writes them as they are)."""
+    return (json.dumps(model, indent=1, sort_keys=True) + "\n").encode()
+
+
+def pack(model: dict[str, Any]) -> bytes:
+    """ONBOARD's payload: :func:`model_bytes` as one zstd frame (its size in the header,
+    so that the PubBroker bounds it before decompressing)."""
+    import zstandard
+
+    return zstandard.ZstdCompressor(level=19, write_content_size=True).compress(model_bytes(model))
+
+
+def unpack_answers(data: bytes, limit: int) -> dict[str, Any]:
+    """ONBOARD_ACK's answers (a zstd frame of a JSON object, at most ``limit`` bytes
+    once decompressed); ValueError naming what is wrong."""
+    import zstandard
+
+    try:
+        size = zstandard.get_frame_parameters(data).content_size
+        if size > limit:  # declared above the bound, or not declared (2^64 - 1): refused
+            raise ValueError(f"{size} B once decompressed, above {limit} B")
+        raw = zstandard.ZstdDecompressor().decompress(data, max_output_size=limit)
+        doc = json.loads(raw)
+    except (zstandard.ZstdError, ValueError) as exc:
+        raise ValueError(f"unreadable on-board answers: {exc}") from exc
+    if not isinstance(doc, dict):
+        raise ValueError("on-board answers are not a JSON object")
+    return doc
+
+
 def hand_over(model_path: Path, model: dict[str, Any]) -> str:
     """Writes ``model`` (the deployed JSON document, validated by the caller) to the
     on-board model file; its digest. The digest goes first to ``<file>.valid``: a
     process finding it there need not check the model again (:func:`validated`)."""
-    data = (json.dumps(model, indent=1, sort_keys=True) + "\n").encode()
+    data = model_bytes(model)
     _replace(_valid_file(model_path), (digest(data) + "\n").encode())
     _replace(model_path, data)
     return digest(data)

@@ -173,6 +173,9 @@ class Broker final : public LinkHooks, public FrameSink {
   void on_authenticated() override;
   void on_rejected(const std::string& why) override;
   void on_backfill(const link::RawFrame& f, std::vector<uint8_t>& out) override;
+  std::optional<link::OnboardAck> on_onboard(const link::Onboard& o) override;
+  // When the on-board processes' answers are looked at next (Executor::kNever: none awaited).
+  int64_t onboard_wake_ns() const;
   // Backfill frames the pace allows now, between live slots (docs/protocol.md, "Backfill").
   void pump_backfill(int64_t now);
   int64_t backfill_wake_ns(int64_t now) const { return backfill_.next_wake_ns(now); }
@@ -208,6 +211,13 @@ class Broker final : public LinkHooks, public FrameSink {
   uint32_t add_topic(const std::string& name, link::ValueType type, uint32_t capacity, bool known);
   void swap_out(Topic& t);
   void write_run_record(int64_t now, bool final);
+  void answer_onboard(int64_t now);
+  struct OnboardWait {
+    uint8_t config_id = 0;
+    std::string digest;
+    int64_t deadline_ns = 0, next_ns = 0;
+  };
+  std::optional<OnboardWait> onboard_wait_;
 
   BrokerConfig cfg_;
   std::string key_;

@@ -18,6 +18,9 @@ struct TopicDefault {
 
 struct BrokerConfig {
   std::string name = "drone";
+  // --onboard-model PATH (not in the config file): where an ONBOARD's model is written for
+  // modd-sensors and modd-mavlink --watch; empty: ONBOARD refused (docs/protocol.md)
+  std::string onboard_model;
   // link: where the SubBroker connects
   std::string link_host = "127.0.0.1";
   uint16_t link_port = 7171;

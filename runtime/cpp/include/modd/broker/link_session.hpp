@@ -5,6 +5,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -28,6 +29,11 @@ class LinkHooks {
   virtual void on_backfill(const link::RawFrame& f, std::vector<uint8_t>& out) {
     (void)f;
     (void)out;
+  }
+  // The on-board model (ONBOARD): written for the on-board processes; an answer to
+  // send at once (a refusal), or none (their answers follow as ONBOARD_ACK).
+  virtual std::optional<link::OnboardAck> on_onboard(const link::Onboard& o) {
+    return link::OnboardAck{o.config_id, static_cast<uint8_t>(ErrorCode::BadConfig), {}};
   }
 };
 

@@ -82,6 +82,20 @@ struct ConfigAck {
   uint8_t status = 0;
   uint64_t epoch_ns = 0;
 };
+// The on-board part of a deployed model (docs/protocol.md, "ONBOARD"): `model` is one
+// zstd frame of the model file's bytes (at most kMaxOnboardWire, kMaxOnboardBytes once
+// decompressed), for modd-sensors and modd-mavlink --watch.
+struct Onboard {
+  uint8_t config_id = 0;
+  std::vector<uint8_t> model;
+};
+// What each on-board process did with it: `answers` is one zstd frame of a JSON object
+// by process name; status 0 when the model file was written.
+struct OnboardAck {
+  uint8_t config_id = 0;
+  uint8_t status = 0;
+  std::vector<uint8_t> answers;
+};
 // One plug-and-play instrument's health (docs/protocol.md, "STATUS"; fields in the order
 // of the table there), as modd-sensors reports it through the ingress (HEALTH) and the
 // PubBroker forwards it in STATUS.
@@ -120,8 +134,8 @@ struct Data {
   std::vector<Value> values;  // one per stream due in the slot, stream-id order
 };
 
-using Message =
-    std::variant<Hello, Challenge, Auth, AuthOk, Ping, Pong, Config, ConfigAck, Status, ErrorMsg>;
+using Message = std::variant<Hello, Challenge, Auth, AuthOk, Ping, Pong, Config, ConfigAck, Onboard,
+                             OnboardAck, Status, ErrorMsg>;
 
 // How a (topic type, aggregation) pair is written in DATA.
 enum class ScalarKind : uint8_t { F32, F64, ZigZag, Bool, UVarint };

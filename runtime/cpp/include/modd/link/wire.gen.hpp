@@ -42,6 +42,13 @@ inline constexpr uint64_t kMaxBufferSize = 1000000;
 // Longest stream period of a CONFIG or a backfill request, in microseconds: 366 days (the
 // smallest is 1).
 inline constexpr uint64_t kMaxPeriodUs = 31622400000000;
+// Largest on-board model (ONBOARD) or answer (ONBOARD_ACK), in bytes once decompressed.
+inline constexpr size_t kMaxOnboardBytes = 262144;
+// Largest compressed on-board model an ONBOARD frame carries: 16 control fragments of a 240-B
+// packet.
+inline constexpr size_t kMaxOnboardWire = 3584;
+// How long the PubBroker waits for the on-board processes' answers before ONBOARD_ACK.
+inline constexpr uint32_t kOnboardWaitMs = 2000;
 // Shortest pre-shared key, in bytes: shorter keys are refused.
 inline constexpr size_t kMinKeyBytes = 16;
 
@@ -102,6 +109,8 @@ enum class MsgType : uint8_t {
   Pong = 0x06,
   Config = 0x07,
   ConfigAck = 0x08,
+  Onboard = 0x0B,  // config id, the on-board model (zstd): for modd-sensors and modd-mavlink
+  OnboardAck = 0x0C,  // config id, status, what each on-board process did (zstd JSON)
   Data = 0x10,  // seq8, values (all streams present)
   DataBitmap = 0x11,  // seq8, presence bitmap, values
   DataSync = 0x12,  // config id, full slot number, values
@@ -110,7 +119,7 @@ enum class MsgType : uint8_t {
   Error = 0x7F,
 };
 // The number of MsgType values.
-inline constexpr size_t kMsgTypeCount = 14;
+inline constexpr size_t kMsgTypeCount = 16;
 
 // A topic's value type: the metamodel's ValueType enum, coded in its order.
 enum class ValueType : uint8_t {

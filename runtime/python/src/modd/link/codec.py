@@ -16,6 +16,7 @@ from modd_contracts.link_wire_gen import (
     MAX_BUFFER_SIZE,
     MAX_LIST,
     MAX_NAME,
+    MAX_ONBOARD_WIRE,
     MAX_PERIOD_US,
     MAX_PING,
     MAX_STATUS_PERIOD_S,
@@ -40,6 +41,8 @@ from modd.link.frames import (
     Hello,
     Message,
     MsgType,
+    Onboard,
+    OnboardAck,
     Ping,
     Pong,
     ProtocolError,
@@ -182,6 +185,12 @@ def encode(m: Message) -> bytes:
     if isinstance(m, ConfigAck):
         body = bytes([m.config_id, m.status]) + struct.pack("<Q", m.epoch_ns)
         return _frame(MsgType.CONFIG_ACK, body)
+    if isinstance(m, Onboard):
+        _check_onboard(len(m.model))
+        return _frame(MsgType.ONBOARD, bytes([m.config_id]) + m.model)
+    if isinstance(m, OnboardAck):
+        _check_onboard(len(m.answers))
+        return _frame(MsgType.ONBOARD_ACK, bytes([m.config_id, m.status]) + m.answers)
     if isinstance(m, Status):
         body = varint(len(m.counters)) + b"".join(varint(c) for c in m.counters)
         if m.sensors:
@@ -190,6 +199,17 @@ def encode(m: Message) -> bytes:
     if isinstance(m, ErrorMsg):
         return _frame(MsgType.ERROR, bytes([m.code]) + string(m.message))
     raise TypeError(f"not a link message: {m!r}")
+
+
+def _check_onboard(n: int) -> None:
+    if n > MAX_ONBOARD_WIRE:
+        raise ValueError(f"on-board payload of {n} B above the frame's {MAX_ONBOARD_WIRE} B")
+
+
+def _rest_onboard(r: Reader) -> bytes:
+    if r.remaining() > MAX_ONBOARD_WIRE:
+        raise r.fail(f"on-board payload above {MAX_ONBOARD_WIRE} bytes")
+    return r.take(r.remaining())
 
 
 def _put_scalar(b: bytearray, k: Scalar, number: float, integer: int, count: int) -> None:
@@ -383,6 +403,12 @@ def decode(f: RawFrame) -> Message:
         m = _decode_config(r)
     elif t == MsgType.CONFIG_ACK:
         m = ConfigAck(r.u8(), r.u8(), int(r.fixed("<Q")))
+    elif t == MsgType.ONBOARD:
+        cid = r.u8()
+        m = Onboard(cid, _rest_onboard(r))
+    elif t == MsgType.ONBOARD_ACK:
+        cid, status = r.u8(), r.u8()
+        m = OnboardAck(cid, status, _rest_onboard(r))
     elif t == MsgType.STATUS:
         n = r.varint()
         if n > r.remaining():

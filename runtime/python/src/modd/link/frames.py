@@ -141,6 +141,25 @@ class ConfigAck:
     epoch_ns: int
 
 
+@dataclass(frozen=True)
+class Onboard:
+    """The on-board part of a deployed model, for modd-sensors and modd-mavlink
+    (docs/protocol.md, "ONBOARD"): ``model`` is a zstd frame of its JSON document."""
+
+    config_id: int
+    model: bytes
+
+
+@dataclass(frozen=True)
+class OnboardAck:
+    """What each on-board process did with an ONBOARD: ``answers`` is a zstd frame of
+    a JSON object by process name; ``status`` 0 when the model file was written."""
+
+    config_id: int
+    status: int
+    answers: bytes
+
+
 # The PubBroker's counters in STATUS order (generated from wire.json, as the C++ side).
 STATUS_FIELDS: tuple[str, ...] = tuple(f.label for f in StatusField)
 
@@ -217,4 +236,17 @@ class Data:
     values: list[Value]
 
 
-Message = Hello | Challenge | Auth | AuthOk | Ping | Pong | Config | ConfigAck | Status | ErrorMsg
+Message = (
+    Hello
+    | Challenge
+    | Auth
+    | AuthOk
+    | Ping
+    | Pong
+    | Config
+    | ConfigAck
+    | Onboard
+    | OnboardAck
+    | Status
+    | ErrorMsg
+)

@@ -119,7 +119,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     for warning in plan.warnings:
         log(warning)
-    if not plan.publishers:
+    if not plan.publishers and not args.watch:  # under --watch a deploy may add the first
         print(
             f"modd-mavlink: {args.model}: no published topic of a kind mavlink sensor",
             file=sys.stderr,

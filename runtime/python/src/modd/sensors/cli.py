@@ -74,7 +74,7 @@ def main(argv: list[str] | None = None) -> int:
     if model is None:
         return 1
     plans = [linked_device(p, args.device_dir) for p in plan_sensors(model)]
-    if not plans:
+    if not plans and not args.watch:
         print(
             f"modd-sensors: {args.model}: no published topic of an nmea, ascii or modbus sensor",
             file=sys.stderr,
@@ -85,10 +85,8 @@ def main(argv: list[str] | None = None) -> int:
     ingress = args.ingress or ingress_of(model).address
     names = sorted({m.publisher for p in plans for m in p.mappings})
     sinks = {n: Publisher(n, ingress) for n in names}
-    # the health rides on one publisher's connection (the broker forwards it in STATUS)
-    runner = Runner(
-        plans, sinks, log, args.status_file, args.status_period, sinks[names[0]].report_health
-    )
+    runner = Runner(plans, sinks, log, args.status_file, args.status_period)
+    runner.report_health = lambda health: _report_health(runner, health)
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     signal.signal(signal.SIGINT, lambda *_: stop.set())
@@ -103,6 +101,15 @@ def main(argv: list[str] | None = None) -> int:
     runner.run(stop)
     log("stopped")
     return 0
+
+
+def _report_health(runner: Runner, health: list[Any]) -> None:
+    """The health rides on one publisher's connection (the broker forwards it in
+    STATUS): the first one the readers have now (none while idle, under --watch with
+    no instrument yet: a deploy may add the first)."""
+    sinks = [s for _, s in sorted(runner.sinks.items())]
+    if sinks and isinstance(sinks[0], Publisher):
+        sinks[0].report_health(health)
 
 
 def _applied(

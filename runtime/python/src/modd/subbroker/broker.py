@@ -17,13 +17,14 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from modd_contracts.link_wire_gen import MAX_ONBOARD_BYTES, MAX_ONBOARD_WIRE, ONBOARD_WAIT_MS
 from modd_model.diagnostics import Diagnostic, ModelError
 from modd_model.query import topics
 from modd_model.signing import NonceGuard, signature
 from modd_plan import Plan
 from modd_plan.streams import StreamKey
 
-from modd.link.frames import AuthOk, Config, ConfigAck, ErrorCode, Status
+from modd.link.frames import AuthOk, Config, ConfigAck, ErrorCode, Onboard, Status
 from modd.link.receiver import Window
 
 from .. import onboard
@@ -468,6 +469,11 @@ class SubBroker:
                 "reason": str(exc),
                 "diagnostics": _located(exc, request.model),
             }
+        packed = b""
+        if self.config.onboard_over_link:
+            packed = onboard.pack(request.model)
+            if len(packed) > MAX_ONBOARD_WIRE:
+                return _onboard_too_large(len(packed), request.model)
         deadline = time.monotonic() + request.timeout_s
         delay, busy = 0.05, 0
         while True:
@@ -497,9 +503,32 @@ class SubBroker:
         running = self._running
         assert running is not None
         reply = {**self._acked_reply(running, config, request.warnings), "busy_retries": busy}
-        if self.config.onboard_model is not None:
+        if packed:
+            reply["onboard"] = self._send_onboard(config.config_id, packed)
+        elif self.config.onboard_model is not None:
             reply["onboard"] = self._hand_over(self.config.onboard_model, request.model)
         return reply
+
+    def _send_onboard(self, config_id: int, packed: bytes) -> dict[str, Any]:
+        """The acked model to the on-board processes over the link (ONBOARD); what
+        each did, from the ONBOARD_ACK, also kept for the status."""
+        wait_s = ONBOARD_WAIT_MS / 1000 + 3.0  # their answers, and the link's round trip
+        try:
+            ack = self.link.send_onboard(Onboard(config_id, packed), wait_s)
+            results = onboard.unpack_answers(ack.answers, MAX_ONBOARD_BYTES)
+        except (LinkDown, TimeoutError, ValueError) as exc:
+            results = {"link": {"ok": False, "problem": f"on-board model not handed over: {exc}"}}
+        else:
+            if ack.status != 0 and not results:
+                results = {"pubbroker": {"ok": False, "problem": f"status {ack.status}"}}
+        return self._answers(results)
+
+    def _answers(self, results: dict[str, Any]) -> dict[str, Any]:
+        for name, r in results.items():
+            if not isinstance(r, dict) or not r.get("ok", False):
+                log.warning("deploy: on-board %s did not apply it all: %s", name, _problems(r))
+        self._onboard = results
+        return results
 
     def _hand_over(self, path: Path, model: dict[str, Any]) -> dict[str, Any]:
         """The acked model to the on-board processes on this machine (modd.onboard);
@@ -510,11 +539,7 @@ class SubBroker:
             results = {"handover": {"ok": False, "problem": f"cannot write {path}: {exc}"}}
         else:
             results = onboard.wait_results(path, applied)
-        for name, r in results.items():
-            if not r.get("ok", False):
-                log.warning("deploy: on-board %s did not apply it all: %s", name, _problems(r))
-        self._onboard = results
-        return results
+        return self._answers(results)
 
     def _acked_reply(
         self, running: Running, config: Config, warnings: list[dict[str, Any]]
@@ -590,8 +615,20 @@ class SubBroker:
         }
 
 
-def _problems(result: dict[str, Any]) -> str:
+def _onboard_too_large(size: int, model: dict[str, Any]) -> dict[str, Any]:
+    """The deploy refused before its CONFIG: the on-board model does not fit ONBOARD."""
+    why = (
+        f"the on-board model is {size} B compressed, more than the {MAX_ONBOARD_WIRE} B "
+        "an ONBOARD frame carries: declare fewer instruments or mappings"
+    )
+    where = "/drone/sensors" if model.get("drone", {}).get("sensors") else ""
+    return {"status": "REJECTED", "reason": why, "diagnostics": [Diagnostic(why, where).to_json()]}
+
+
+def _problems(result: Any) -> str:
     """A process's result's problems, in one line."""
+    if not isinstance(result, dict):
+        return "unreadable answer"
     found = [str(result["problem"])] if result.get("problem") else []
     found += [f"{s['sensor']}: {s['problem']}" for s in result.get("sensors", ()) if "problem" in s]
     return "; ".join(found) or "not ok"

@@ -97,6 +97,14 @@ def _parser() -> argparse.ArgumentParser:
         "each acked deploy's model there for modd-sensors and modd-mavlink --watch, and "
         "put what they did in the deploy's reply (docs/sensors.md)",
     )
+    p.add_argument(
+        "--onboard-over-link",
+        action="store_true",
+        help="send each acked deploy's model to the PubBroker over the link (ONBOARD, "
+        "docs/protocol.md; a PubBroker started with --onboard-model writes it for "
+        "modd-sensors and modd-mavlink --watch) and put their answers in the reply; "
+        "an older PubBroker refuses the frame",
+    )
     p.add_argument("--log-level", default="INFO")
     return p
 
@@ -135,6 +143,8 @@ def build_config(args: argparse.Namespace) -> SubBrokerConfig:
         cfg = replace(cfg, record_dir=Path(args.record_dir))
     if args.onboard_model:
         cfg = replace(cfg, onboard_model=Path(args.onboard_model))
+    if args.onboard_over_link:
+        cfg = replace(cfg, onboard_over_link=True)
     if args.rehearsal_dir:
         cfg = replace(cfg, rehearsal_dir=Path(args.rehearsal_dir))
     return replace(

@@ -90,6 +90,8 @@ class SubBrokerConfig:
     #: The on-board model file an acked deploy is handed to (modd.onboard), when the
     #: drone's processes run on this machine; None: the deploy ends at the PubBroker.
     onboard_model: Path | None = None
+    #: an acked deploy's model goes to the PubBroker over the link (ONBOARD)
+    onboard_over_link: bool = False
 
     @property
     def endpoint(self) -> tuple[str, int]:

@@ -22,7 +22,7 @@ from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any, Protocol
 
 from modd.link import codec
-from modd.link.frames import Config, ConfigAck, ProtocolError
+from modd.link.frames import Config, ConfigAck, Onboard, OnboardAck, ProtocolError
 
 from .config import LinkOptions
 from .linkhooks import LinkDown, LinkStats
@@ -57,6 +57,11 @@ class Link(Protocol):
     def send_config(self, config: Config, timeout_s: float) -> ConfigAck:
         """Send CONFIG and wait for its CONFIG_ACK (any thread). Raises LinkDown,
         ConfigRejected or TimeoutError."""
+        ...
+
+    def send_onboard(self, msg: Onboard, timeout_s: float) -> OnboardAck:
+        """Send ONBOARD and wait for its ONBOARD_ACK (any thread). Raises LinkDown,
+        ValueError (too large for the link) or TimeoutError."""
         ...
 
     def radio_status(self) -> dict[str, Any] | None:
@@ -152,6 +157,16 @@ class Pump(ABC):
             return future.result(timeout=max(0.0, deadline - time.monotonic()))
         except FutureTimeout as exc:
             raise TimeoutError(f"no CONFIG_ACK for config {config.config_id}") from exc
+
+    def send_onboard(self, msg: Onboard, timeout_s: float) -> OnboardAck:
+        if not self.session.up:
+            raise LinkDown(f"the link to {self._where} is down")
+        future = self.session.submit_onboard(msg)
+        self._flush()
+        try:
+            return future.result(timeout=timeout_s)
+        except FutureTimeout as exc:
+            raise TimeoutError(f"no ONBOARD_ACK for config {msg.config_id}") from exc
 
     def radio_status(self) -> dict[str, Any] | None:
         return None

@@ -43,6 +43,8 @@ from modd.link.frames import (
     ErrorMsg,
     Hello,
     MsgType,
+    Onboard,
+    OnboardAck,
     Ping,
     Pong,
     ProtocolError,
@@ -114,6 +116,7 @@ class LinkSession(ABC):
         self._lock = threading.Lock()
         self._out: list[bytes] = []
         self._pending: dict[int, Pending] = {}
+        self._onboard: dict[int, Future[OnboardAck]] = {}  # ONBOARDs awaiting their ack
         self._round_trips = RoundTrips(options.ping_period_s)
         self._up = threading.Event()
         self._hs: _Handshake | None = None
@@ -227,6 +230,29 @@ class LinkSession(ABC):
             self._pending[config.config_id] = pending
         self.send(codec.encode(config))
         return future
+
+    def submit_onboard(self, msg: Onboard) -> Future[OnboardAck]:
+        """Send ONBOARD; the future is its ONBOARD_ACK (the caller waits with a
+        timeout; ValueError when it cannot travel over this link)."""
+        future: Future[OnboardAck] = Future()
+        frame = codec.encode(msg)
+        with self._lock:
+            self._onboard[msg.config_id] = future
+        try:
+            self.send(frame)
+        except ValueError as exc:  # more control fragments than a message may have
+            with self._lock:
+                self._onboard.pop(msg.config_id, None)
+            future.set_exception(exc)
+        return future
+
+    def _on_onboard_ack(self, ack: OnboardAck) -> None:
+        with self._lock:
+            future = self._onboard.pop(ack.config_id, None)
+        if future is None:
+            log.debug("ONBOARD_ACK for config %d that is not awaited", ack.config_id)
+        elif not future.done():
+            future.set_result(ack)
 
     def _refuse(self, config: Config) -> str:
         """Why ``config`` cannot be sent over this transport, or ""."""
@@ -376,6 +402,8 @@ class LinkSession(ABC):
     def _handle(self, msg: object, strict: bool) -> None:
         if isinstance(msg, ConfigAck):
             self._on_ack(msg)
+        elif isinstance(msg, OnboardAck):
+            self._on_onboard_ack(msg)
         elif isinstance(msg, Status):
             self._on_status(msg, [])
         elif isinstance(msg, Ping):
