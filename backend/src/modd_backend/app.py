@@ -28,7 +28,7 @@ from .archive_pool import ArchivePool
 from .bodies import install_schemas
 from .db import Store
 from .deployments import last_acked
-from .deps import AppState
+from .deps import STORE_THREADS, AppState
 from .foxglove import FoxgloveLive
 from .guards import Guard, HeavyLimiter
 from .hub import SubscriptionHub
@@ -199,6 +199,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         state.database = "ok"  # just opened and migrated
         state.login_threads = CapacityLimiter(settings.login_threads)
         state.closing_threads = CapacityLimiter(4)
+        state.store_threads = CapacityLimiter(STORE_THREADS)
         if settings.foxglove_port or settings.foxglove_replay_port:
             state.loopback_tls = LoopbackTls.generate()
         if zenoh_session is not None:
