@@ -97,7 +97,11 @@ async def save_model(project_id: Id, raw: BodyDep, creds: CredsDep, state: State
 
 def _save(db: Db, user: User, state: AppState, project_id: int, raw: Body) -> ModelOut:
     body = parse_as(raw, SaveIn)
-    model = require_document(read_input(body, f"project-{project_id}.{body.format}"))
+    # a JSON model is stored as it is (its diagnostics come with the saved
+    # revision, versions.diagnostics_of); text is read into one first
+    model = body.model
+    if model is None:
+        model = require_document(read_input(body, f"project-{project_id}.{body.format}"))
     get_project(db, project_id)
     from_text = body.text is not None
 
