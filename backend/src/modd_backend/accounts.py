@@ -68,10 +68,12 @@ def login(db: Db, username: str, password: str, ttl_s: int) -> tuple[str, User] 
 
 
 def user_for_token(db: Db, token: str) -> User | None:
-    row = db.get(Session, token_hash(token))
-    if row is None or row.expires_at < utcnow():
-        return None
-    return db.get(User, row.user_id)
+    """The user of a live session (one query: every request asks)."""
+    return db.scalar(
+        select(User)
+        .join(Session, Session.user_id == User.id)
+        .where(Session.token_hash == token_hash(token), Session.expires_at >= utcnow())
+    )
 
 
 def logout(db: Db, token: str) -> None:

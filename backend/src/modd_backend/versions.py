@@ -34,16 +34,19 @@ def head_revision(db: Db, project_id: int) -> int:
 
 
 def get_version(db: Db, project_id: int, revision: int | None = None) -> ModelVersion:
-    """The given revision, or the head; 404 when there is none."""
-    get_project(db, project_id)
-    rev = head_revision(db, project_id) if revision is None else revision
-    version = db.scalar(
-        select(ModelVersion).where(
-            ModelVersion.project_id == project_id, ModelVersion.revision == rev
+    """The given revision, or the head; 404 when there is none. One query
+    when found (every editor reads its head all the time, issue 41)."""
+    if revision is None:
+        version = head_version(db, project_id)
+    else:
+        version = db.scalar(
+            select(ModelVersion).where(
+                ModelVersion.project_id == project_id, ModelVersion.revision == revision
+            )
         )
-    )
     if version is None:
-        what = f"revision {rev}" if revision is not None else "model yet"
+        get_project(db, project_id)  # 404 for the project first
+        what = f"revision {revision}" if revision is not None else "model yet"
         raise ApiError(404, f"project {project_id} has no {what}")
     return version
 
