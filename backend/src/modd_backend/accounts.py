@@ -68,12 +68,10 @@ def login(db: Db, username: str, password: str, ttl_s: int) -> tuple[str, User] 
 
 
 def user_for_token(db: Db, token: str) -> User | None:
-    """The user of a live session (one query: every request asks)."""
-    return db.scalar(
-        select(User)
-        .join(Session, Session.user_id == User.id)
-        .where(Session.token_hash == token_hash(token), Session.expires_at >= utcnow())
-    )
+    row = db.get(Session, token_hash(token))
+    if row is None or row.expires_at < utcnow():
+        return None
+    return db.get(User, row.user_id)
 
 
 def logout(db: Db, token: str) -> None:
