@@ -13,6 +13,7 @@ import logging
 import os
 import sys
 from collections.abc import AsyncIterator
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import asynccontextmanager
 from typing import Any, TextIO
 
@@ -28,7 +29,7 @@ from .archive_pool import ArchivePool
 from .bodies import install_schemas
 from .db import Store
 from .deployments import last_acked
-from .deps import AppState
+from .deps import STORE_THREADS, AppState
 from .foxglove import FoxgloveLive
 from .guards import Guard, HeavyLimiter
 from .hub import SubscriptionHub
@@ -199,6 +200,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         state.database = "ok"  # just opened and migrated
         state.login_threads = CapacityLimiter(settings.login_threads)
         state.closing_threads = CapacityLimiter(4)
+        state.store_threads = ThreadPoolExecutor(STORE_THREADS, thread_name_prefix="modd-store")
         if settings.foxglove_port or settings.foxglove_replay_port:
             state.loopback_tls = LoopbackTls.generate()
         if zenoh_session is not None:
@@ -252,6 +254,7 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
             if state.archive_pool is not None:
                 await state.archive_pool.close()
             await run_in_threadpool(planning.shutdown_pool)
+            state.store_threads.shutdown(wait=False, cancel_futures=True)
             store.close()
 
     app = FastAPI(

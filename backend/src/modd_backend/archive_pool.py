@@ -41,13 +41,20 @@ T = TypeVar("T")
 #: an export holds (samples, the platform track, the writer's buffers) ends there
 #: with a MemoryError, answered 413, instead of growing until the machine swaps.
 WORKER_MEMORY_BYTES = 6 * 1024**3
+#: How much nicer than the service a worker process runs (os.nice): archive
+#: work is batch work; the CPU it shares with the event loop goes to the loop
+#: first (issue 41: four CSV exports kept both cores busy at the service's own
+#: priority, and the loop's answers waited for the scheduler).
+WORKER_NICE = 10
 
 
 def _worker_main(conn: Connection, memory_bytes: int) -> None:
     """A worker: run ``fn(*args)`` for each job received; answer
     ``("ok", result)`` or ``("err", exception)``."""
+    import os
     import resource
 
+    os.nice(WORKER_NICE)
     if memory_bytes > 0:
         resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
     while True:

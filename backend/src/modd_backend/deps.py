@@ -6,12 +6,15 @@ authenticated user and role checks.
 
 from __future__ import annotations
 
+import asyncio
+import functools
 import hmac
 import time
 from collections import Counter
 from collections.abc import AsyncIterator, Awaitable, Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Annotated, Literal
+from typing import TYPE_CHECKING, Annotated, Literal, TypeVar
 
 from anyio import CapacityLimiter, to_thread
 from fastapi import Depends, HTTPException, Request, WebSocket
@@ -46,6 +49,11 @@ if TYPE_CHECKING:
 SESSION_COOKIE = "modd_session"
 CSRF_HEADER = "X-CSRF-Token"
 SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
+#: Threads running the hot routes' whole store work (:func:`in_store`): fewer
+#: than the store's connection pool (5 + 10 overflow), so none waits for a
+#: connection, and few enough that the event loop seldom waits for the GIL.
+STORE_THREADS = 6
+T = TypeVar("T")
 
 
 @dataclass
@@ -80,6 +88,8 @@ class AppState:
     login_threads: CapacityLimiter | None = None
     #: Threads closing store sessions (get_db), apart from the routes' pool.
     closing_threads: CapacityLimiter | None = None
+    #: The hot routes' threads (in_store), apart from the routes' pool.
+    store_threads: ThreadPoolExecutor | None = None
     #: Open WebSockets per user and per client address (socketcaps.py).
     socket_caps: SocketCaps = field(default_factory=lambda: SocketCaps(64, 512))
     #: One shared session re-check per session of open sockets (sessionwatch.py).
@@ -174,6 +184,10 @@ def current_user(db: DbDep, token: TokenDep) -> User:
     connection that the running ones wait for."""
     user = user_for_token(db, token)
     db.commit()
+    return _known(user)
+
+
+def _known(user: User | None) -> User:
     if user is None:
         raise HTTPException(401, "invalid or expired token", headers={"WWW-Authenticate": "Bearer"})
     return user
@@ -193,14 +207,47 @@ def has_role(user: User, *roles: Role) -> bool:
 
 def require(*roles: Role) -> Callable[[User], Awaitable[User]]:
     """A dependency letting through users holding any of ``roles`` (or admin)."""
-    names = ", ".join(r.value for r in roles) or "admin"
 
     async def check(user: UserDep) -> User:  # (async: no worker thread for a set test)
-        if not has_role(user, *roles):
-            raise HTTPException(403, f"this needs the role {names}")
-        return user
+        return _holding(user, roles)
 
     return check
+
+
+def _holding(user: User, roles: tuple[Role, ...]) -> User:
+    if not has_role(user, *roles):
+        names = ", ".join(r.value for r in roles) or "admin"
+        raise HTTPException(403, f"this needs the role {names}")
+    return user
+
+
+async def in_store(
+    state: AppState, creds: Credentials, work: Callable[[Db, User], T], *roles: Role
+) -> T:
+    """``work(db, user)`` for the request's user, in ONE worker-thread hop
+    (issue 41: each hop costs the event loop as much as a short request):
+    a store session is opened, the session token read (401) and ``roles``
+    checked (403, none: any user), ``work`` run and committed, and the
+    session closed, all in a thread of ``state.store_threads``. ``work``
+    should also build its answer there (e.g. the JSON bytes of a
+    :class:`fastapi.Response`), so the event loop only sends it. (An
+    executor's hop costs the loop about half of anyio's, which adds a
+    ``queue.Queue`` and a cancel scope; a request given up while its work
+    runs lets it finish, as anyio's did, and one not begun is never run.)"""
+    call = functools.partial(_store_work, state, creds.token, roles, work)
+    return await asyncio.get_running_loop().run_in_executor(state.store_threads, call)
+
+
+def _store_work(
+    state: AppState, token: str, roles: tuple[Role, ...], work: Callable[[Db, User], T]
+) -> T:
+    with state.store.session() as db:
+        user = _known(user_for_token(db, token))
+        if roles:
+            _holding(user, roles)
+        out = work(db, user)
+        db.commit()
+        return out
 
 
 async def _heavy(request: Request, state: StateDep, user: UserDep) -> AsyncIterator[None]:

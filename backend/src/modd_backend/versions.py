@@ -4,6 +4,8 @@ only on top of the current one (optimistic concurrency)."""
 from __future__ import annotations
 
 import json
+import threading
+from collections import OrderedDict
 from collections.abc import Callable
 from typing import Any
 
@@ -32,16 +34,19 @@ def head_revision(db: Db, project_id: int) -> int:
 
 
 def get_version(db: Db, project_id: int, revision: int | None = None) -> ModelVersion:
-    """The given revision, or the head; 404 when there is none."""
-    get_project(db, project_id)
-    rev = head_revision(db, project_id) if revision is None else revision
-    version = db.scalar(
-        select(ModelVersion).where(
-            ModelVersion.project_id == project_id, ModelVersion.revision == rev
+    """The given revision, or the head; 404 when there is none. One query
+    when found (every editor reads its head all the time, issue 41)."""
+    if revision is None:
+        version = head_version(db, project_id)
+    else:
+        version = db.scalar(
+            select(ModelVersion).where(
+                ModelVersion.project_id == project_id, ModelVersion.revision == revision
+            )
         )
-    )
     if version is None:
-        what = f"revision {rev}" if revision is not None else "model yet"
+        get_project(db, project_id)  # 404 for the project first
+        what = f"revision {revision}" if revision is not None else "model yet"
         raise ApiError(404, f"project {project_id} has no {what}")
     return version
 
@@ -94,8 +99,8 @@ def save_version(
     version = ModelVersion(
         project_id=project_id,
         revision=current + 1,
-        model_json=canonical_json(model),
-        valid=not any(d.severity == "error" for d in validate(model)),
+        model_json=(stored := canonical_json(model)),
+        valid=not any(d["severity"] == "error" for d in diagnostics_of(stored)),
         author=author,
         message=message,
     )
@@ -128,7 +133,31 @@ def version_json(version: ModelVersion, with_model: bool = True) -> dict[str, An
         "created_at": version.created_at,
     }
     if with_model:
-        model = model_of(version)
-        out["model"] = model
-        out["diagnostics"] = diagnostics_json(validate(model))
+        out["model"] = model_of(version)
+        out["diagnostics"] = diagnostics_of(version.model_json)
     return out
+
+
+#: Diagnostics of the models last saved or read, by their stored JSON: a
+#: revision never changes, and every editor reads the head it just saved
+#: (issue 41: validation was a third of a save's thread time, twice per save
+#: and once per read). Models up to ``_CACHED_CHARS`` long, ``_CACHED`` of them.
+_CACHED, _CACHED_CHARS = 128, 1 << 18
+_diagnostics: OrderedDict[str, list[dict[str, object]]] = OrderedDict()
+_diagnostics_lock = threading.Lock()
+
+
+def diagnostics_of(model_json: str) -> list[dict[str, object]]:
+    """The diagnostics (JSON) of a stored model (its ``model_json``)."""
+    with _diagnostics_lock:
+        found = _diagnostics.get(model_json)
+        if found is not None:
+            _diagnostics.move_to_end(model_json)
+            return list(found)
+    diags = diagnostics_json(validate(json.loads(model_json)))
+    if len(model_json) <= _CACHED_CHARS:
+        with _diagnostics_lock:
+            _diagnostics[model_json] = diags
+            while len(_diagnostics) > _CACHED:
+                _diagnostics.popitem(last=False)
+    return list(diags)

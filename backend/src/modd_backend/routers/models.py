@@ -6,15 +6,16 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, Depends, Query
+from fastapi import APIRouter, Query
 from fastapi.responses import Response
 from modd_model import dumps
 from modd_model.collector import print_collector
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, TypeAdapter
 from sqlalchemy import select
+from sqlalchemy.orm import Session as Db
 
-from ..bodies import BodyDep, documented, parse_as
-from ..deps import AppState, DbDep, StateDep, UserDep, require
+from ..bodies import Body, BodyDep, documented, parse_as
+from ..deps import AppState, CredsDep, DbDep, StateDep, UserDep, in_store
 from ..errors import ApiError
 from ..modelio import diagnostics_json, read_input, require_document
 from ..roles import EDITORS
@@ -29,7 +30,7 @@ from ..schemas import (
     Responses,
     VersionOut,
 )
-from ..tables import ModelVersion
+from ..tables import ModelVersion, User
 from ..versions import get_project, get_version, model_of, save_version, version_json
 from .projects import DENIED, check_edit
 
@@ -51,25 +52,56 @@ class ValidateOut(BaseModel):
     diagnostics: list[DiagnosticOut]
 
 
-@router.get("/projects/{project_id}/model", responses=NOT_FOUND)
-def read_model(project_id: Id, db: DbDep, _user: UserDep, revision: Revision = None) -> ModelOut:
-    return ModelOut.model_validate(version_json(get_version(db, project_id, revision)))
+def json_answer(out: BaseModel | list[VersionOut]) -> Response:
+    """The JSON answer FastAPI would give for ``out`` (its response model),
+    built in the route's thread: the event loop only sends the bytes."""
+    data = _VERSIONS.dump_json(out) if isinstance(out, list) else out.model_dump_json().encode()
+    return Response(data, media_type="application/json")
+
+
+_VERSIONS = TypeAdapter(list[VersionOut])
+
+
+@router.get("/projects/{project_id}/model", response_model=ModelOut, responses=NOT_FOUND)
+async def read_model(
+    project_id: Id, state: StateDep, creds: CredsDep, revision: Revision = None
+) -> Response:
+    """(async: the whole request is one hop to a store thread, deps.in_store)"""
+
+    def work(db: Db, _user: User) -> Response:
+        return json_answer(
+            ModelOut.model_validate(version_json(get_version(db, project_id, revision)))
+        )
+
+    return await in_store(state, creds, work)
 
 
 @router.put(
     "/projects/{project_id}/model",
-    dependencies=[Depends(require(*EDITORS))],
+    response_model=ModelOut,
     responses={**NOT_FOUND, **DENIED, 409: {"model": ConflictOut}, 422: {"model": InvalidModelOut}},
     openapi_extra=documented(SaveIn),
 )
-def save_model(project_id: Id, raw: BodyDep, db: DbDep, user: UserDep, state: StateDep) -> ModelOut:
+async def save_model(project_id: Id, raw: BodyDep, creds: CredsDep, state: StateDep) -> Response:
     """Save a new revision (the body is a :class:`SaveIn`, read and
-    validated in the thread pool, not on the event loop: modd_backend.bodies).
-    Text input keeps the current diagram layout (the .modd text has none).
-    Everyone watching the project over a stream WebSocket hears of it
-    (``{"type": "saved", ...}``)."""
+    validated in the route's store thread, not on the event loop:
+    modd_backend.bodies, deps.in_store). Text input keeps the current diagram
+    layout (the .modd text has none). Everyone watching the project over a
+    stream WebSocket hears of it (``{"type": "saved", ...}``)."""
+
+    def work(db: Db, user: User) -> Response:
+        return json_answer(_save(db, user, state, project_id, raw))
+
+    return await in_store(state, creds, work, *EDITORS)
+
+
+def _save(db: Db, user: User, state: AppState, project_id: int, raw: Body) -> ModelOut:
     body = parse_as(raw, SaveIn)
-    model = require_document(read_input(body, f"project-{project_id}.{body.format}"))
+    # a JSON model is stored as it is (its diagnostics come with the saved
+    # revision, versions.diagnostics_of); text is read into one first
+    model = body.model
+    if model is None:
+        model = require_document(read_input(body, f"project-{project_id}.{body.format}"))
     get_project(db, project_id)
     from_text = body.text is not None
 
@@ -100,15 +132,18 @@ def announce_save(state: AppState, version: ModelVersion) -> None:
     )
 
 
-@router.get("/projects/{project_id}/versions", responses=NOT_FOUND)
-def list_versions(project_id: Id, db: DbDep, _user: UserDep) -> list[VersionOut]:
-    get_project(db, project_id)
-    rows = db.scalars(
-        select(ModelVersion)
-        .where(ModelVersion.project_id == project_id)
-        .order_by(ModelVersion.revision.desc())
-    )
-    return [VersionOut.model_validate(version_json(v, False)) for v in rows]
+@router.get("/projects/{project_id}/versions", response_model=list[VersionOut], responses=NOT_FOUND)
+async def list_versions(project_id: Id, state: StateDep, creds: CredsDep) -> Response:
+    def work(db: Db, _user: User) -> Response:
+        get_project(db, project_id)
+        rows = db.scalars(
+            select(ModelVersion)
+            .where(ModelVersion.project_id == project_id)
+            .order_by(ModelVersion.revision.desc())
+        )
+        return json_answer([VersionOut.model_validate(version_json(v, False)) for v in rows])
+
+    return await in_store(state, creds, work)
 
 
 @router.get(
