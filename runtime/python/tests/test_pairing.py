@@ -70,7 +70,8 @@ def test_every_flipped_byte_is_refused(sealed: tuple[bytes, str]) -> None:
             bad[i] ^= flip
             with pytest.raises(pb.BundleError) as err:
                 pb.open_bundle(bytes(bad), code, NOW)
-            assert "altered" in str(err.value) or "not a pairing bundle" in str(err.value), (i, flip)
+            why = str(err.value)
+            assert any(w in why for w in ("altered", "not a pairing bundle", "version")), (i, why)
 
 
 def test_each_field_changed_and_re_serialised_fails_the_signature(sealed: tuple[bytes, str]) -> None:
