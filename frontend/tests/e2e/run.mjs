@@ -20,6 +20,7 @@ import { radio } from "./radio.mjs";
 import { instrumentParts, instruments } from "./instruments.mjs";
 import { startTileServer } from "./tiles.mjs";
 import { metadataJourney } from "./metadata.mjs";
+import { pairing } from "./pairing.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
@@ -84,7 +85,15 @@ try {
   // as the journey builds it, on free loopback ports. Needs the C++ build.
   const drone = existsSync(pubbrokerBin);
   const liveValues = drone && existsSync(simulatorBin);
-  if (drone) {
+  // MODD_E2E_ONLY=pairing: no `modd up`; the pairing steps run the paired drone (pairing.mjs).
+  const pairingOnly = process.env.MODD_E2E_ONLY === "pairing";
+  const pairedModel = { ...scenario1(pubPort, subPort) };
+  pairedModel.pubBroker = { ...pairedModel.pubBroker, logPath: join(tmp, "paired-archive"), ingress: { unixSocket: join(tmp, "paired-ingress.sock") } };
+  if (drone && pairingOnly) {
+    execFileSync(join(bin, "python"), ["-c", "import sys; from modd.zenoh_auth import CredentialStore; "
+      + "CredentialStore(sys.argv[1]).ensure()", creds], { cwd: repo, stdio: "inherit" });
+  }
+  if (drone && !pairingOnly) {
     const model = scenario1(pubPort, subPort);
     // The plug-and-play instruments (instruments.mjs): simulated on pseudo-terminals, read by modd-sensors.
     const instr = instrumentParts();
@@ -139,7 +148,9 @@ try {
   // MODD_E2E_ONLY=metadata: log in, then only the dataset metadata steps (metadata.mjs).
   const metadataSteps = () => metadataJourney({ page, imagesDir, model: scenario1(pubPort, subPort), liveValues, baseUrl, password: PASSWORD,
     faultsFile: join(tmp, "sim-faults.json") });
-  const steps = only === "metadata" ? [loginStep(page, baseUrl), ...metadataSteps()] : only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
+  // MODD_E2E_ONLY=pairing: log in, then the pairing steps (pairing.mjs).
+  const pairingSteps = () => pairing({ page, imagesDir, bin, tmp, model: pairedModel, pubbrokerBin, zenoh, creds, dataDir: join(tmp, "data"), procs });
+  const steps = only === "pairing" ? [loginStep(page, baseUrl), ...pairingSteps()] : only === "metadata" ? [loginStep(page, baseUrl), ...metadataSteps()] : only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
     ...(only === "collab" || only === "instruments" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
     ...(only === "collab" || only === "instruments" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
