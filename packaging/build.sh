@@ -115,6 +115,7 @@ drone() {
     "$OUT"/wheels/modd_runtime-*.whl "$OUT"/wheels/modd_metamodel-*.whl
   wrapper "$root" modd-sensors modd.sensors:main
   wrapper "$root" modd-mavlink modd.mavlink.cli:main
+  wrapper "$root" modd-pair modd.pairing.cli:main
   install -D -m 0644 packaging/drone/drone.env "$root/etc/modd/drone.env"
   units_of drone "$root"
   [ "$arch" != amd64 ] || smoke_drone "$root"

@@ -58,7 +58,9 @@ def test_bundle_carries_the_drone_s_files_and_its_link_key(
     assert key_file.stat().st_mode & 0o777 == 0o600
     station = tmp_path / "data" / "pairing" / "station.key"
     assert station.stat().st_mode & 0o777 == 0o600
-    opened = open_bundle(first["bundle"].encode(), first["code"], verify(first["bundle"].encode()).issued_ns)
+    opened = open_bundle(
+        first["bundle"].encode(), first["code"], verify(first["bundle"].encode()).issued_ns
+    )
     assert opened.files["link.key"] == key_file.read_text().strip()
     assert opened.files["pubbroker.json"]["name"] == "usv"
     assert opened.files["model.json"]["drone"]["name"] == "usv"
@@ -77,6 +79,8 @@ def test_invalid_revision_is_refused(client: TestClient, admin: Headers, scenari
     pid = _project(client, admin, scenario1)
     model = client.get(f"/api/projects/{pid}/model", headers=admin).json()["model"]
     model["subscribers"][0]["aggregation"] = "MODE"
-    client.put(f"/api/projects/{pid}/model", headers=admin, json={"base_revision": 1, "model": model})
+    client.put(
+        f"/api/projects/{pid}/model", headers=admin, json={"base_revision": 1, "model": model}
+    )
     bad = client.post(f"/api/projects/{pid}/pairing", headers=admin, json={})
     assert bad.status_code == 422 and "fix them before pairing" in bad.json()["detail"]

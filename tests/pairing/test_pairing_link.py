@@ -22,6 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from support.loopback import (  # noqa: E402
     PUBBROKER,
     REPO,
+    SUBBROKER_CLIENT_TOML,
     VENV_BIN,
     Backend,
     Proc,
@@ -34,19 +35,6 @@ from support.loopback import (  # noqa: E402
 
 DEMO = REPO / "metamodel" / "examples" / "demo.modd"
 ADMIN_PASSWORD = "pairing-admin-password"
-SUBBROKER_TOML = """model = "{model}"
-[link]
-endpoint = "127.0.0.1:{link}"
-key = "file:{key}"
-[zenoh]
-mode = "client"
-listen = []
-connect = ["{router}"]
-credentials_dir = "{credentials}"
-[delivery]
-tcp = false
-status_period_s = 0.5
-"""
 
 
 @pytest.fixture
@@ -69,7 +57,14 @@ def mission(tmp: Path, link: int) -> dict[str, Any]:
 
 def modd_pair(bundle: Path, config_dir: Path, code: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [str(VENV_BIN / "modd-pair"), str(bundle), "--config-dir", str(config_dir), "--code-file", "-"],
+        [
+            str(VENV_BIN / "modd-pair"),
+            str(bundle),
+            "--config-dir",
+            str(config_dir),
+            "--code-file",
+            "-",
+        ],
         input=code + "\n",
         capture_output=True,
         text=True,
@@ -104,7 +99,9 @@ def test_a_paired_drone_acknowledges_the_workbench_s_deploy(
             started.append(backend.proc)
             backend.sign_in(ADMIN_PASSWORD)
             model = mission(tmp_path, link)
-            r = backend.request("POST", "/projects", json={"name": "paired", "model": {"model": model}})
+            r = backend.request(
+                "POST", "/projects", json={"name": "paired", "model": {"model": model}}
+            )
             assert r.status_code == 201, r.text
             project = r.json()["id"]
             made = backend.request("POST", f"/projects/{project}/pairing", json={})
@@ -122,15 +119,19 @@ def test_a_paired_drone_acknowledges_the_workbench_s_deploy(
             assert (etc / "link.key").stat().st_mode & 0o777 == 0o600
             # the drone runs from what the bundle wrote, and nothing else
             started.append(
-                Proc("pubbroker", [str(PUBBROKER), "--config", str(etc / "pubbroker.json")],
-                     tmp_path / "pubbroker.log", env={"MODD_LINK_KEY": "not-the-paired-key"})
+                Proc(
+                    "pubbroker",
+                    [str(PUBBROKER), "--config", str(etc / "pubbroker.json")],
+                    tmp_path / "pubbroker.log",
+                    env={"MODD_LINK_KEY": "not-the-paired-key"},
+                )
             )
             wait_port(link, 10.0)
             station_model = tmp_path / "station-model.json"
             station_model.write_text(json.dumps(model))
             config = tmp_path / "subbroker.toml"
             config.write_text(
-                SUBBROKER_TOML.format(
+                SUBBROKER_CLIENT_TOML.format(
                     model=station_model,
                     link=link,
                     key=pairing["link_key_file"],
@@ -139,8 +140,12 @@ def test_a_paired_drone_acknowledges_the_workbench_s_deploy(
                 )
             )
             started.append(
-                Proc("subbroker", [str(VENV_BIN / "modd-subbroker"), "--config", str(config)],
-                     tmp_path / "subbroker.log", env={"MODD_LINK_KEY": "not-the-paired-key"})
+                Proc(
+                    "subbroker",
+                    [str(VENV_BIN / "modd-subbroker"), "--config", str(config)],
+                    tmp_path / "subbroker.log",
+                    env={"MODD_LINK_KEY": "not-the-paired-key"},
+                )
             )
             watch.wait("usv", lambda s: s["link"] == "up" and s["config_id"], 30)
             r = backend.request("POST", f"/projects/{project}/deployments", json={})

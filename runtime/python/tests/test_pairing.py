@@ -58,7 +58,10 @@ def test_round_trip_writes_the_files(
     assert json.loads((etc / "model.json").read_text()) == FILES["model.json"]
     assert [p.name for p in etc.iterdir() if p.name.startswith(".")] == []  # no temporary left
     out = capsys.readouterr()
-    assert "paired with base station SHA256:" in out.out and "systemctl restart modd-pubbroker" in out.out
+    assert (
+        "paired with base station SHA256:" in out.out
+        and "systemctl restart modd-pubbroker" in out.out
+    )
     assert KEY not in out.out + out.err and code not in out.out + out.err
 
 
@@ -74,7 +77,9 @@ def test_every_flipped_byte_is_refused(sealed: tuple[bytes, str]) -> None:
             assert any(w in why for w in ("altered", "not a pairing bundle", "version")), (i, why)
 
 
-def test_each_field_changed_and_re_serialised_fails_the_signature(sealed: tuple[bytes, str]) -> None:
+def test_each_field_changed_and_re_serialised_fails_the_signature(
+    sealed: tuple[bytes, str],
+) -> None:
     """A tamperer who writes a canonical file still meets the signature, field by field."""
     doc = json.loads(sealed[0])
     changes = {

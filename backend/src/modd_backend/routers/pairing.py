@@ -9,12 +9,11 @@ from datetime import UTC, datetime
 
 from fastapi import APIRouter, Depends
 from fastapi.responses import JSONResponse
-from modd_model import validate
 from pydantic import BaseModel, Field
 
 from ..deps import DbDep, StateDep, UserDep, require
 from ..errors import ApiError
-from ..modelio import diagnostics_json
+from ..modelio import require_valid
 from ..pairing import make_bundle
 from ..roles import Role
 from ..schemas import Id
@@ -25,7 +24,9 @@ NO_STORE = {"Cache-Control": "no-store", "Pragma": "no-cache"}
 
 
 class PairingIn(BaseModel):
-    revision: int | None = Field(default=None, ge=1, le=2**31 - 1, description="the head when absent")
+    revision: int | None = Field(
+        default=None, ge=1, le=2**31 - 1, description="the head when absent"
+    )
 
 
 class PairingOut(BaseModel):
@@ -59,13 +60,7 @@ def make_pairing(
     """A pairing bundle for the drone of the project's revision (the head when absent)."""
     version = get_version(db, project_id, body.revision)
     model = model_of(version)
-    errors = [d for d in validate(model) if d.severity == "error"]
-    if errors:
-        raise ApiError(
-            422,
-            f"revision {version.revision} has errors: fix them before pairing",
-            diagnostics=diagnostics_json(errors),
-        )
+    require_valid(model, version.revision, "before pairing")
     settings = state.settings
     try:
         made = make_bundle(model, settings.effective_pairing_key, settings.effective_link_keys)

@@ -84,7 +84,9 @@ class Verified:
 
 
 def canonical(doc: dict[str, Any]) -> bytes:
-    return (json.dumps(doc, sort_keys=True, separators=(",", ":"), ensure_ascii=True) + "\n").encode()
+    return (
+        json.dumps(doc, sort_keys=True, separators=(",", ":"), ensure_ascii=True) + "\n"
+    ).encode()
 
 
 def _b64(data: bytes) -> str:
@@ -252,7 +254,9 @@ def decrypt(bundle: Verified, code: str) -> Opened:
     payload = json.loads(plain)
     if payload.get("drone") != bundle.drone or not isinstance(payload.get("files"), dict):
         raise BundleError("the bundle's sealed part is not for the drone its label names")
-    return Opened(bundle.drone, bundle.issued_ns, bundle.fingerprint, bundle.public_key, payload["files"])
+    return Opened(
+        bundle.drone, bundle.issued_ns, bundle.fingerprint, bundle.public_key, payload["files"]
+    )
 
 
 def open_bundle(data: bytes, code: str, now_ns: int) -> Opened:
@@ -265,17 +269,17 @@ def open_bundle(data: bytes, code: str, now_ns: int) -> Opened:
 def check_time(bundle: Verified, now_ns: int) -> None:
     if now_ns > bundle.expires_ns:
         raise BundleError(
-            f"the bundle expired {_when(bundle.expires_ns)} (bundles are valid "
+            f"the bundle expired {utc_text(bundle.expires_ns)} (bundles are valid "
             f"{LIFETIME_S // 86_400} days); make a new one on the workbench"
         )
     if bundle.issued_ns > now_ns + 300 * 1_000_000_000:
         raise BundleError(
-            f"the bundle was made {_when(bundle.issued_ns)}, in this drone's future: "
+            f"the bundle was made {utc_text(bundle.issued_ns)}, in this drone's future: "
             "set the drone's clock (timedatectl) and try again"
         )
 
 
-def _when(ns: int) -> str:
+def utc_text(ns: int) -> str:
     from datetime import UTC, datetime
 
     return datetime.fromtimestamp(ns / 1e9, UTC).strftime("%Y-%m-%d %H:%M UTC")

@@ -38,8 +38,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     where = p.add_mutually_exclusive_group()
     where.add_argument("--config-dir", type=Path, help=f"where to write (default {DEFAULT_DIR})")
-    where.add_argument("--root", type=Path, help="write into ROOT/etc/modd (an image being prepared)")
-    p.add_argument("--drone", help="this drone's name (default: the name in pubbroker.json, if any)")
+    where.add_argument(
+        "--root", type=Path, help="write into ROOT/etc/modd (an image being prepared)"
+    )
+    p.add_argument(
+        "--drone", help="this drone's name (default: the name in pubbroker.json, if any)"
+    )
     p.add_argument(
         "--owner",
         help=f"owner of the secrets (default: {SERVICE_USER} when run as root, else yourself)",
@@ -47,7 +51,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--new-station",
         action="store_true",
-        help="accept a bundle signed by another base station than the one this drone is paired with",
+        help="accept a bundle signed by another base station than this drone's",
     )
 
 

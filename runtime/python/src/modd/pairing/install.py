@@ -3,10 +3,11 @@
 renamed), secrets 0600 and owned by the service user, the station's key
 pinned so that a bundle from another base station or an older one is refused.
 
->>> check_drone("usv", "asv", "/etc/modd/pubbroker.json")
-Traceback (most recent call last):
-...
-modd.pairing.bundle.BundleError: this bundle is for drone 'usv', but this drone is 'asv' (/etc/modd/pubbroker.json): make the bundle for 'asv' on the workbench
+>>> try:
+...     check_drone("usv", "asv", "/etc/modd/pubbroker.json")
+... except BundleError as exc:
+...     print(str(exc)[:62])
+this bundle is for drone 'usv', but this drone is 'asv' (/etc/
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .bundle import BundleError, Opened, Verified, _when, fingerprint
+from .bundle import BundleError, Opened, Verified, fingerprint, utc_text
 
 #: What a bundle may carry and the mode each is written with (0600: a secret).
 FILES = {"pubbroker.json": 0o644, "model.json": 0o644, "link.key": 0o600}
@@ -51,7 +52,7 @@ def paired_record(config_dir: Path) -> dict[str, Any] | None:
 
 
 def current_drone(config_dir: Path) -> tuple[str, str] | None:
-    """The drone this machine is configured as (its pubbroker.json's name) and where that is said."""
+    """The drone this machine is configured as (its pubbroker.json's name), and where."""
     path = config_dir / "pubbroker.json"
     try:
         name = json.loads(path.read_text()).get("name")
@@ -84,8 +85,8 @@ def check_pairing(bundle: Verified, config_dir: Path, new_station: bool) -> None
     last = int(record.get("issued_ns", 0))
     if pinned == bundle.fingerprint and bundle.issued_ns <= last:
         raise BundleError(
-            f"this bundle (made {_when(bundle.issued_ns)}) is not newer than the one imported "
-            f"last (made {_when(last)}): an old copy? make a new one on the workbench"
+            f"this bundle (made {utc_text(bundle.issued_ns)}) is not newer than the one imported "
+            f"last (made {utc_text(last)}): an old copy? make a new one on the workbench"
         )
 
 
