@@ -113,9 +113,10 @@ def test_a_paired_drone_acknowledges_the_workbench_s_deploy(
             refusals(tmp_path, bundle, pairing["code"])
 
             etc = tmp_path / "fresh-etc"
-            r = modd_pair(tmp_path / "usv.modd-pair", etc, pairing["code"])
-            assert r.returncode == 0, r.stderr
-            assert pairing["fingerprint"] in r.stdout and "systemctl restart" in r.stdout
+            imported = modd_pair(tmp_path / "usv.modd-pair", etc, pairing["code"])
+            assert imported.returncode == 0, imported.stderr
+            assert pairing["fingerprint"] in imported.stdout
+            assert "systemctl restart" in imported.stdout
             assert (etc / "link.key").stat().st_mode & 0o777 == 0o600
             # the drone runs from what the bundle wrote, and nothing else
             started.append(
