@@ -45,9 +45,11 @@ def start_pubbroker_dgram(
     tag: str = "pb",
     archive: str = "archive",
     archive_opts: dict[str, Any] | None = None,
+    command: list[str] | None = None,
 ) -> Proc:
     """A PubBroker whose link is ``link`` (transport, port or device, ...);
-    ``archive_opts``: more of its archive's settings (rotate_s, ...)."""
+    ``archive_opts``: more of its archive's settings (rotate_s, ...); ``command``:
+    another build, e.g. the arm64 one under qemu (test_arm64_link.py)."""
     model = load_model(model_path)
     cfg = {
         "name": model["drone"]["name"],
@@ -60,8 +62,8 @@ def start_pubbroker_dgram(
     }
     path = tmp / f"{tag}.json"
     path.write_text(json.dumps(cfg))
-    proc = Proc(tag, [str(PUBBROKER), "--config", str(path)], tmp / f"{tag}.log")
-    assert proc.wait_log("started:", 10), proc.log()
+    proc = Proc(tag, [*(command or [str(PUBBROKER)]), "--config", str(path)], tmp / f"{tag}.log")
+    assert proc.wait_log("started:", 30 if command else 10), proc.log()
     return proc
 
 
