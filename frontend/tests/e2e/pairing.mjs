@@ -7,8 +7,10 @@
  * operator's deploy is acknowledged by that drone. A copy with one byte flipped and
  * the right code is refused, and writes nothing.
  *
- * Runs with MODD_E2E_ONLY=pairing (run.mjs starts no `modd up` then: this drone is
- * the only one behind the backend's zenoh endpoint).
+ * The base station is a second one (run.mjs's pairingStation: its own backend, zenoh
+ * endpoint and credentials; this SubBroker serves that endpoint), so that these steps
+ * run in the full `npm run test:e2e` beside `modd up`'s drone usv, and alone with
+ * MODD_E2E_ONLY=pairing.
  */
 import { execFileSync } from "node:child_process";
 import { existsSync, mkdirSync, readFileSync, statSync, writeFileSync } from "node:fs";
@@ -27,7 +29,7 @@ function moddPair(bin, file, dir, code) {
   }
 }
 
-export function pairing({ page, imagesDir, bin, tmp, model, pubbrokerBin, zenoh, creds, dataDir, procs }) {
+export function pairing({ page, imagesDir, bin, tmp, model, pubbrokerBin, station, procs }) {
   const view = (name) => page.getByRole("tab", { name, exact: true }).click();
   const made = page.getByTestId("pairing-made");
   const paired = { code: "", file: "" };
@@ -52,7 +54,7 @@ export function pairing({ page, imagesDir, bin, tmp, model, pubbrokerBin, zenoh,
       if (!/^[0-9A-Z]{5}(-[0-9A-Z]{5}){3}$/.test(paired.code)) throw new Error(`pairing code shown: "${paired.code}"`);
       const bundle = readFileSync(paired.file, "utf8");
       if (bundle.includes(paired.code) || bundle.includes(paired.code.replaceAll("-", ""))) throw new Error("the code is inside the bundle");
-      await expectText(made, new RegExp(join(dataDir, "pairing", "link-keys", "usv.key").replaceAll(".", "\\.")));
+      await expectText(made, new RegExp(join(station.dataDir, "pairing", "link-keys", "usv.key").replaceAll(".", "\\.")));
       await made.scrollIntoViewIfNeeded();
       await page.waitForTimeout(200);
       await page.screenshot({ path: join(imagesDir, "pairing.png") });
@@ -82,9 +84,9 @@ export function pairing({ page, imagesDir, bin, tmp, model, pubbrokerBin, zenoh,
         { logFile: join(tmp, "paired-pubbroker.log"), env: wrongKey }));
       const stationModel = join(tmp, "station-usv.json");
       writeFileSync(stationModel, JSON.stringify(model));
-      const keyFile = join(dataDir, "pairing", "link-keys", "usv.key");
+      const keyFile = join(station.dataDir, "pairing", "link-keys", "usv.key");
       procs.push(start("paired subbroker", [join(bin, "modd-subbroker"), "--model", stationModel, "--key", `file:${keyFile}`,
-        "--zenoh-listen", zenoh, "--credentials", creds, "--no-tcp-delivery"],
+        "--zenoh-listen", station.zenoh, "--credentials", station.creds, "--no-tcp-delivery"],
       { logFile: join(tmp, "paired-subbroker.log"), env: wrongKey }));
       const sbLog = () => (existsSync(join(tmp, "paired-subbroker.log")) ? readFileSync(join(tmp, "paired-subbroker.log"), "utf8") : "");
       // linked: the SubBroker authenticated with the paired PubBroker and its config runs
