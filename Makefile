@@ -30,11 +30,12 @@ package: build
 
 # The install test (tests/subbroker/test_install_root.py): the amd64 packages (built
 # here if missing) installed offline into a clean Debian root (packaging/test-root.sh,
-# cached in build/installroot/), scenario 1 run from it as the modd user, upgrade, purge.
+# cached in build/installroot/), scenario 1 run from it as the modd user, upgrade, purge;
+# and a fresh drone paired with modd-pair (tests/subbroker/test_install_pair.py).
 package-test: setup
 	@ls build/package/modd-drone_*_amd64.deb build/package/modd-base_*_amd64.deb >/dev/null 2>&1 \
 	  || ARCHS=amd64 packaging/build.sh
-	@.venv/bin/pytest -q -m "e2e or slow" tests/subbroker/test_install_root.py
+	@.venv/bin/pytest -q -m "e2e or slow" tests/subbroker/test_install_root.py tests/subbroker/test_install_pair.py
 
 test: build
 	@scripts/check.sh

@@ -115,6 +115,7 @@ drone() {
     "$OUT"/wheels/modd_runtime-*.whl "$OUT"/wheels/modd_metamodel-*.whl
   wrapper "$root" modd-sensors modd.sensors:main
   wrapper "$root" modd-mavlink modd.mavlink.cli:main
+  wrapper "$root" modd-pair modd.pairing.cli:main
   install -D -m 0644 packaging/drone/drone.env "$root/etc/modd/drone.env"
   units_of drone "$root"
   [ "$arch" != amd64 ] || smoke_drone "$root"
@@ -126,7 +127,12 @@ base() {
   local arch=$1 root=$OUT/root/modd-base-$1
   step "modd-base ($arch)"
   rm -rf "$root" && mkdir -p "$root"
-  python_tree "$root" "$arch" "$OUT/base-requirements.txt" "$OUT"/wheels/*.whl
+  local extra=()
+  if [ "$arch" = arm64 ]; then  # packaging/README.md: PyPI has no Linux aarch64 wheel of cf-units
+    packaging/cf-units-arm64.sh "$(pins cf-units | cut -d= -f3)" "$(pins numpy | cut -d= -f3)" "$ROOT/build/cross-wheels"
+    extra=(--find-links "$ROOT/build/cross-wheels" --platform linux_aarch64)
+  fi
+  python_tree "$root" "$arch" "$OUT/base-requirements.txt" "$OUT"/wheels/*.whl "${extra[@]}"
   wrapper "$root" modd-subbroker modd.subbroker.cli:main
   wrapper "$root" modd-radio modd.radio.cli:main
   wrapper "$root" modd-backend modd_backend.cli:main
@@ -134,15 +140,11 @@ base() {
   install -d "$root/usr/share/modd" && cp -r frontend/dist "$root/usr/share/modd/frontend"
   install -D -m 0644 packaging/base/base.env "$root/etc/modd/base.env"
   units_of base "$root"
-  deb modd-base "$arch" "$root" base "libc6, libstdc++6, python3 (>= 3.11), python3 (<< 3.12), adduser"
+  deb modd-base "$arch" "$root" base "libc6, libstdc++6, libexpat1, python3 (>= 3.11), python3 (<< 3.12), adduser"
 }
 
 for kind in $KINDS; do
   for arch in $ARCHS; do
-    if [ "$kind-$arch" = base-arm64 ]; then  # packaging/README.md: cf-units has no aarch64 wheel
-      step "modd-base (arm64): not built: cf-units has no Linux aarch64 wheel on PyPI (packaging/README.md)"
-      continue
-    fi
     "$kind" "$arch"
   done
 done

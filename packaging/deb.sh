@@ -74,7 +74,7 @@ verify_units() {  # systemd-analyze verify: the package's tree over this system'
 # else (python -I: no site-packages, no user paths): proves the drone tree is complete.
 smoke_drone() {
   local lib=$1/usr/lib/modd/python c
-  for c in "modd.sensors" "modd.mavlink.cli"; do
+  for c in "modd.sensors" "modd.mavlink.cli" "modd.pairing.cli"; do
     env -i PATH=/usr/bin:/bin PYTHONDONTWRITEBYTECODE=1 PYTHONPATH="$lib" /usr/bin/python3 -c \
       "import sys; from ${c} import main; sys.argv=['x','--help']; main()" >/dev/null \
       || { echo "drone tree: $c does not start" >&2; return 1; }
@@ -82,5 +82,5 @@ smoke_drone() {
   env -i PATH=/usr/bin:/bin PYTHONDONTWRITEBYTECODE=1 PYTHONPATH="$lib" /usr/bin/python3 -c \
     "from modd_model import load_or_report; from modd_model.ingress import ingress_of; import pymavlink.mavutil, serial" \
     || { echo "drone tree: the model loader or pymavlink is missing" >&2; return 1; }
-  echo "  drone tree: modd-sensors, modd-mavlink start from the package's files alone"
+  echo "  drone tree: modd-sensors, modd-mavlink, modd-pair start from the package's files alone"
 }

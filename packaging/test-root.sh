@@ -11,7 +11,7 @@ TAR=build/installroot/bookworm-minbase.tar
 if [ ! -s "$TAR" ]; then
   command -v mmdebstrap >/dev/null || apt-get install -y -qq --no-install-recommends mmdebstrap >/dev/null
   mkdir -p build/installroot
-  mmdebstrap --quiet --variant=minbase --include=python3,adduser,libssl3,libzstd1,liblz4-1,libstdc++6 \
+  mmdebstrap --quiet --format=tar --variant=minbase --include=python3,adduser,libssl3,libzstd1,liblz4-1,libstdc++6 \
     bookworm "$TAR.part" http://deb.debian.org/debian >&2
   mv "$TAR.part" "$TAR"
 fi

@@ -46,10 +46,12 @@ def start_pubbroker_dgram(
     archive: str = "archive",
     archive_opts: dict[str, Any] | None = None,
     args: tuple[str, ...] = (),
+    command: list[str] | None = None,
 ) -> Proc:
     """A PubBroker whose link is ``link`` (transport, port or device, ...);
     ``archive_opts``: more of its archive's settings (rotate_s, ...); ``args``: more
-    of its command line (--onboard-model PATH)."""
+    of its command line (--onboard-model PATH); ``command``: another build, e.g. the
+    arm64 one under qemu (test_arm64_link.py)."""
     model = load_model(model_path)
     cfg = {
         "name": model["drone"]["name"],
@@ -62,8 +64,9 @@ def start_pubbroker_dgram(
     }
     path = tmp / f"{tag}.json"
     path.write_text(json.dumps(cfg))
-    proc = Proc(tag, [str(PUBBROKER), "--config", str(path), *args], tmp / f"{tag}.log")
-    assert proc.wait_log("started:", 10), proc.log()
+    argv = [*(command or [str(PUBBROKER)]), "--config", str(path), *args]
+    proc = Proc(tag, argv, tmp / f"{tag}.log")
+    assert proc.wait_log("started:", 30 if command else 10), proc.log()
     return proc
 
 

@@ -36,6 +36,7 @@ from subbroker_harness import (  # noqa: E402
 )
 
 __all__ = [
+    "SUBBROKER_CLIENT_TOML",
     "PUBBROKER",
     "REPO",
     "VENV_BIN",
@@ -52,6 +53,20 @@ __all__ = [
 
 REPO = Path(__file__).resolve().parents[2]
 VENV_BIN = Path(sys.executable).parent
+#: A SubBroker that joins a router as a client and listens nowhere (docs/subbroker.md).
+SUBBROKER_CLIENT_TOML = """model = "{model}"
+[link]
+endpoint = "127.0.0.1:{link}"
+key = "file:{key}"
+[zenoh]
+mode = "client"
+listen = []
+connect = ["{router}"]
+credentials_dir = "{credentials}"
+[delivery]
+tcp = false
+status_period_s = 0.5
+"""
 
 
 @contextlib.contextmanager

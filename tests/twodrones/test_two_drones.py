@@ -23,6 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from support.loopback import (  # noqa: E402
     PUBBROKER,
     REPO,
+    SUBBROKER_CLIENT_TOML,
     VENV_BIN,
     Backend,
     Proc,
@@ -36,20 +37,6 @@ from support.loopback import (  # noqa: E402
 
 DEMO = REPO / "metamodel" / "examples" / "demo.modd"
 ADMIN_PASSWORD = "two-drones-admin-password"
-# A client of the router that listens nowhere (docs/subbroker.md).
-SUBBROKER_TOML = """model = "{model}"
-[link]
-endpoint = "127.0.0.1:{link}"
-key = "file:{key}"
-[zenoh]
-mode = "client"
-listen = []
-connect = ["{router}"]
-credentials_dir = "{credentials}"
-[delivery]
-tcp = false
-status_period_s = 0.5
-"""
 
 
 @dataclass
@@ -122,7 +109,7 @@ def start_drone(tmp: Path, name: str, router: str, extra_subscriber: str | None 
     )
     config = d / f"{name}-subbroker.toml"
     config.write_text(
-        SUBBROKER_TOML.format(
+        SUBBROKER_CLIENT_TOML.format(
             model=path, link=link, key=key_file, router=router, credentials=shared_credentials().dir
         )
     )

@@ -62,6 +62,19 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         metavar="FILE",
         help="key file that signs deploys, the SubBroker's deploy.key (default $MODD_DEPLOY_KEY)",
     )
+    p.add_argument(
+        "--link-keys",
+        type=Path,
+        metavar="DIR",
+        help="the drones' link keys, <drone>.key, made at pairing (default DATA/pairing/link-keys)",
+    )
+    p.add_argument(
+        "--pairing-key",
+        type=Path,
+        metavar="FILE",
+        help="Ed25519 key signing pairing bundles, made at first use "
+        "(default DATA/pairing/station.key)",
+    )
     p.add_argument("--no-zenoh", action="store_true", help="no zenoh session (no deploy/streams)")
     p.add_argument(
         "--frontend",
@@ -203,6 +216,8 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         foxglove_replay_port=a.foxglove_replay_port,
         zenoh_credentials=Path(a.zenoh_credentials) if a.zenoh_credentials else None,
         deploy_key_file=Path(a.deploy_key) if a.deploy_key else None,
+        link_keys_dir=a.link_keys.absolute() if a.link_keys else None,
+        pairing_key_file=a.pairing_key.absolute() if a.pairing_key else None,
     )
 
 

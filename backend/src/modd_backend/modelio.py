@@ -18,6 +18,17 @@ def diagnostics_json(diags: list[Diagnostic]) -> list[dict[str, object]]:
     return [d.to_json() for d in diags]
 
 
+def require_valid(model: dict[str, Any], revision: int, then: str = "first") -> None:
+    """ApiError 422 with the diagnostics when the revision's model has errors."""
+    errors = [d for d in validate(model) if d.severity == "error"]
+    if errors:
+        raise ApiError(
+            422,
+            f"revision {revision} has errors: fix them {then}",
+            diagnostics=diagnostics_json(errors),
+        )
+
+
 def read_input(body: ModelInput, filename: str = "<editor>") -> LoadResult:
     if body.model is not None:
         return LoadResult(body.model, validate(body.model), {})

@@ -82,6 +82,12 @@ class Settings:
     zenoh_credentials: Path | None = None
     #: The key that signs deploys, shared with the SubBroker (its deploy.key).
     deploy_key_file: Path | None = None
+    #: The base station's Ed25519 key that signs pairing bundles (made at first use);
+    #: None: ``<data_dir>/pairing/station.key`` (modd_backend/pairing.py).
+    pairing_key_file: Path | None = None
+    #: The drones' link keys, ``<drone>.key`` (made when a drone is first paired; each
+    #: SubBroker reads its own); None: ``<data_dir>/pairing/link-keys``.
+    link_keys_dir: Path | None = None
     #: Host names (or host:port) requests may name besides the loopback names
     #: (localhost, 127.0.0.1, ::1) and ``host``; "*" allows any (not advised).
     allowed_hosts: tuple[str, ...] = field(default_factory=tuple)
@@ -147,6 +153,14 @@ class Settings:
     @property
     def effective_record_dir(self) -> Path:
         return self.record_dir if self.record_dir is not None else self.data_dir / "records"
+
+    @property
+    def effective_pairing_key(self) -> Path:
+        return self.pairing_key_file or self.data_dir / "pairing" / "station.key"
+
+    @property
+    def effective_link_keys(self) -> Path:
+        return self.link_keys_dir or self.data_dir / "pairing" / "link-keys"
 
     @property
     def effective_archive_dir(self) -> Path:

@@ -12,7 +12,7 @@ import { Http, type FileAnswer, type HttpOptions } from "./http";
 import { datasetFile } from "./download";
 import type {
   ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress, DatasetFile, DatasetMetadata, DatasetMetadataDoc, DatasetRequest,
-  DeployedDiff, Deployment, DynamicReply, DynamicRequest, CredentialsRemade, RecordTrack, Rehearsal, TilesInfo,
+  DeployedDiff, Deployment, Pairing, DynamicReply, DynamicRequest, CredentialsRemade, RecordTrack, Rehearsal, TilesInfo,
   FoxgloveLinks,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, RunningDrone, User, ValidateResult, Version,
 } from "./types";
@@ -84,6 +84,9 @@ export function createApi(opts: HttpOptions) {
     deploy: (projectId: number, revision?: number) =>
       http.request<Deployment>(`/api/projects/${projectId}/deployments`, { method: "POST", json: { revision: revision ?? null } }),
     listDeployments: (projectId: number) => http.request<Deployment[]>(`/api/projects/${projectId}/deployments`),
+    /** A pairing bundle for the project's drone and its one-time code (in the body, never a URL). */
+    makePairing: (projectId: number, revision?: number) =>
+      http.request<Pairing>(`/api/projects/${projectId}/pairing`, { method: "POST", json: { revision: revision ?? null } }),
     deployedDiff: (projectId: number) => http.request<DeployedDiff>(`/api/projects/${projectId}/deployed-diff`),
 
     // --- downloads: generated artefacts per role, as a zip

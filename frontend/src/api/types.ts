@@ -59,6 +59,22 @@ export interface PlanResult {
 
 export type ModelInput = { model: ModdModel } | { text: string; format?: "modd" | "json" };
 
+/**
+ * A pairing bundle just made (POST /api/projects/{id}/pairing, operator): the file's
+ * text (saved as `filename`), its one-time code (shown once, never stored), the base
+ * station's key fingerprint the drone pins, and where the station keeps the link key.
+ */
+export interface Pairing {
+  drone: string;
+  revision: number;
+  filename: string;
+  bundle: string;
+  code: string;
+  fingerprint: string;
+  expires_at: string;
+  link_key_file: string;
+}
+
 export interface Deployment {
   id: number;
   project_id: number;

@@ -21,6 +21,7 @@ import { instrumentParts, instruments } from "./instruments.mjs";
 import { startTileServer } from "./tiles.mjs";
 import { metadataJourney } from "./metadata.mjs";
 import { credentialsJourney } from "./credentials.mjs";
+import { pairing } from "./pairing.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
@@ -85,7 +86,12 @@ try {
   // as the journey builds it, on free loopback ports. Needs the C++ build.
   const drone = existsSync(pubbrokerBin);
   const liveValues = drone && existsSync(simulatorBin);
-  if (drone) {
+  // MODD_E2E_ONLY=pairing: no `modd up`; the pairing steps start their own base station
+  // (a second backend and, once paired, a SubBroker) and the paired drone (pairing.mjs).
+  const pairingOnly = process.env.MODD_E2E_ONLY === "pairing";
+  const pairedModel = { ...scenario1(await freePort(), await freePort()) };
+  pairedModel.pubBroker = { ...pairedModel.pubBroker, logPath: join(tmp, "paired-archive"), ingress: { unixSocket: join(tmp, "paired-ingress.sock") } };
+  if (drone && !pairingOnly) {
     const model = scenario1(pubPort, subPort);
     // The plug-and-play instruments (instruments.mjs): simulated on pseudo-terminals, read by modd-sensors.
     const instr = instrumentParts();
@@ -143,7 +149,18 @@ try {
   // MODD_E2E_ONLY=credentials: log in, then only the re-created credential file's step (credentials.mjs).
   const credentialsSteps = () => credentialsJourney({ page, imagesDir, model: scenario1(pubPort, subPort), credsDir: creds,
     droneDir: join(tmp, "drone"), dronePid: drone ? procs[0].pid : null });
-  const steps = only === "credentials" ? [loginStep(page, baseUrl), ...credentialsSteps()] : only === "metadata" ? [loginStep(page, baseUrl), ...metadataSteps()] : only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
+  // MODD_E2E_ONLY=pairing: log in, then the pairing steps (pairing.mjs).
+  // The station is started by the pairing's first step: a base station of its own (its backend,
+  // zenoh endpoint and credentials), not the one `modd up` serves drone usv on.
+  const station = {};
+  const pairingSteps = () => [
+    ["pairing: a second base station (backend, zenoh endpoint, credentials) for a fresh drone", async () => {
+      Object.assign(station, await pairingStation());
+      await loginStep(page, station.baseUrl)[1]();
+    }],
+    ...pairing({ page, imagesDir, bin, tmp, model: pairedModel, pubbrokerBin, station, procs }),
+  ];
+  const steps = only === "credentials" ? [loginStep(page, baseUrl), ...credentialsSteps()] : only === "pairing" ? pairingSteps() : only === "metadata" ? [loginStep(page, baseUrl), ...metadataSteps()] : only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
     ...(only === "collab" || only === "instruments" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
     ...(only === "collab" || only === "instruments" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
@@ -155,6 +172,8 @@ try {
     // Issue 32: the four plug-and-play instruments declared, deployed and watched (last: it deploys its own model).
     ...(only === "instruments" ? [loginStep(page, baseUrl)] : []),
     ...(only === "views" || only === "collab" ? [] : instruments({ page, ports: { pub: pubPort, sub: subPort }, drone, liveValues, feedInstruments })),
+    // Issue 43: pairing a freshly installed drone with a base station of its own (pairing.mjs).
+    ...(only === "views" || only === "collab" || only === "instruments" || !drone ? [] : pairingSteps()),
     // Issue 42: a deleted credential file announced (last: it restarts the SubBroker).
     ...(only ? [] : credentialsSteps()),
   ];
@@ -195,6 +214,30 @@ try {
 }
 console.log(`${passed} passed, ${failed} failed`);
 process.exit(failed ? 1 : 0);
+
+/**
+ * A second base station for the pairing steps: a backend with its own data folder, a
+ * free port, and the zenoh endpoint and credentials the paired drone's SubBroker will
+ * serve (pairing.mjs starts that SubBroker once the drone is paired).
+ */
+async function pairingStation() {
+  const [port, zport, fox, replay] = [await freePort(), await freePort(), await freePort(), await freePort()];
+  const station = { baseUrl: `http://127.0.0.1:${port}`, zenoh: `tcp/127.0.0.1:${zport}`,
+    creds: join(tmp, "station2", "credentials"), dataDir: join(tmp, "station2", "data") };
+  for (const d of ["archives", "records"]) mkdirSync(join(tmp, "station2", d), { recursive: true });
+  execFileSync(join(bin, "python"), ["-c", "import sys; from modd.zenoh_auth import CredentialStore; "
+    + "CredentialStore(sys.argv[1]).ensure()", station.creds], { cwd: repo, stdio: "inherit" });
+  const backend = start("backend (pairing station)", [
+    backendBin, "--host", "127.0.0.1", "--port", String(port), "--data", station.dataDir,
+    "--frontend", join(frontend, "dist"), "--foxglove-port", String(fox), "--foxglove-replay-port", String(replay),
+    "--archives", join(tmp, "station2", "archives"), "--records", join(tmp, "station2", "records"),
+    "--zenoh-connect", station.zenoh, "--zenoh-credentials", join(station.creds, "backend.cred"),
+    "--deploy-key", join(station.creds, "deploy.key"),
+  ], { cwd: repo, logFile: join(tmp, "station2-backend.log"), env: { MODD_ADMIN_PASSWORD: PASSWORD } });
+  procs.push(backend);
+  await waitForHttp(`${station.baseUrl}/openapi.json`, backend);
+  return station;
+}
 
 /** Logs in as the admin (the journey's first step does it otherwise). */
 function loginStep(page, baseUrl) {

@@ -10,13 +10,12 @@ from typing import Annotated, Literal
 from fastapi import APIRouter, Query
 from fastapi.responses import Response
 from modd.zenoh_auth import remade_notes
-from modd_model import validate
 
 from ..deps import DbDep, StateDep, UserDep, has_role
 from ..downloads import as_run, role_zip, station_of
 from ..errors import ApiError
 from ..layouts import foxglove_layout
-from ..modelio import diagnostics_json
+from ..modelio import require_valid
 from ..roles import Role
 from ..schemas import Id, Responses
 from ..versions import get_project, get_version, model_of
@@ -51,13 +50,7 @@ def download(
     project = get_project(db, project_id)
     version = get_version(db, project_id, revision)
     model = model_of(version)
-    errors = [d for d in validate(model) if d.severity == "error"]
-    if errors:
-        raise ApiError(
-            422,
-            f"revision {version.revision} has errors: fix them first",
-            diagnostics=diagnostics_json(errors),
-        )
+    require_valid(model, version.revision)
     folder = f"{project.name}-r{version.revision}-{target}".replace(" ", "_")
     try:
         if target == "integrator":
@@ -101,13 +94,7 @@ def foxglove_layout_download(
     project = get_project(db, project_id)
     version = get_version(db, project_id, revision)
     model = model_of(version)
-    errors = [d for d in validate(model) if d.severity == "error"]
-    if errors:  # an invalid revision may lack any part the layout reads
-        raise ApiError(
-            422,
-            f"revision {version.revision} has errors: fix them first",
-            diagnostics=diagnostics_json(errors),
-        )
+    require_valid(model, version.revision)  # an invalid one may lack any part the layout reads
     safe = re.sub(r"[^A-Za-z0-9_.-]", "_", project.name)
     name = f"{safe}-r{version.revision}-foxglove-layout"
     body = json.dumps(foxglove_layout(model), indent=1).encode()

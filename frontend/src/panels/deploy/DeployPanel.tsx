@@ -16,6 +16,7 @@ import { usePanelData, LoadState } from "../usePanelData";
 import type { Deployment } from "../../api/types";
 import { loadDeployReview, type DeployReview } from "./useDeployReview";
 import { onboardLines } from "../../core/onboard";
+import { PairDrone } from "./PairDrone";
 
 /** What each on-board process did with the deploy (modd-sensors, modd-mavlink), when they said. */
 function OnboardResult({ reply }: { reply: Deployment["reply"] }) {
@@ -143,6 +144,7 @@ export default function DeployPanel() {
           ))}
         </section>
       </div>
+      <PairDrone projectId={pid} revision={revision} allowed={canDeploy(role)} />
     </div>
   );
 }
