@@ -1,7 +1,7 @@
 // @vitest-environment jsdom
 import { afterEach, describe, expect, it, vi } from "vitest";
 import { act, cleanup, fireEvent, render, screen } from "@testing-library/react";
-import { FillGaps, sumProgress } from "./FillGaps";
+import { FillGaps, recentPace, sumProgress } from "./FillGaps";
 import { ServicesContext, type Services } from "../../app/services";
 import type { BackfillProgress } from "../../api/types";
 import type { ChannelListener, DataSource } from "../../dataSources/types";
@@ -62,5 +62,23 @@ describe("the time left of many backfills", () => {
     expect(p.seconds_left).toBeCloseTo((20 / 364) * 36, 5); // ≈ 2 s: 36 windows at 18 windows/s
     expect(sumProgress([progress({ status: "DONE", windows_done: 40, seconds: 3 })])!.seconds_left).toBeNull();
     expect(sumProgress([progress({ seconds: 2 })])!.seconds_left).toBeNull(); // nothing done yet: no guess
+  });
+});
+
+describe("the time left during a burst", () => {
+  it("follows the recent pace: a burst after a long wait ends in seconds, not at the average pace", () => {
+    // 20 s waiting for the drone, then 200 windows in 2 s: 200 of 400 done.
+    const seen: [number, number][] = [[0.5, 0], [10, 0], [20, 0], [21, 100], [22, 200]];
+    const pace = recentPace(seen)!;
+    expect(pace).toBeCloseTo(100, 5); // the last 3 s: 200 windows in 2 s
+    const p = sumProgress([progress({ windows_done: 200, windows_total: 400, seconds: 22 })], pace)!;
+    expect(p.seconds_left).toBeCloseTo(2, 5); // the average pace (200 in 22 s) would say 22 s
+    expect(sumProgress([progress({ windows_done: 200, windows_total: 400, seconds: 22 })])!.seconds_left).toBeCloseTo(22, 5);
+  });
+  it("makes no guess while nothing moves, nor before a second of samples", () => {
+    expect(recentPace([[5, 10], [6, 10], [8, 10]])).toBe(0);
+    expect(sumProgress([progress({ windows_done: 10, windows_total: 40, seconds: 8 })], 0)!.seconds_left).toBeNull();
+    expect(recentPace([[5, 10], [5.4, 12]])).toBeNull();
+    expect(recentPace([[5, 10]])).toBeNull();
   });
 });

@@ -44,13 +44,31 @@ export function runningReason(all: readonly BackfillProgress[]): string | null {
   return [active, queued ? `${queued} queued` : null].filter(Boolean).join(", ");
 }
 
+/** How far back the time left looks for its pace (seconds of the fill's own clock). */
+export const PACE_SPAN_S = 3;
+
+/**
+ * Windows per second over the last PACE_SPAN_S of ``seen`` ([elapsed s, windows done], in
+ * order, the newest last): a fill goes by bursts (the drone answers a request once its
+ * archive holds it), so the pace since the start says a burst's last seconds are far longer
+ * than they are. null until the samples span a second; 0 while nothing moves.
+ */
+export function recentPace(seen: readonly (readonly [number, number])[]): number | null {
+  if (seen.length < 2) return null;
+  const [t1, d1] = seen[seen.length - 1];
+  const from = seen.find(([t]) => t >= t1 - PACE_SPAN_S) ?? seen[0];
+  const span = t1 - from[0];
+  return span >= 1 ? Math.max(0, d1 - from[1]) / span : null;
+}
+
 /**
  * The progress of several backfills as one: windows and bytes/s summed; the time left from
- * the windows left at the pace of all of them so far (every job started with the fill: a
- * job's own estimate counts its time queued behind the others as its pace, ten times too
- * long for the last of many).
+ * the windows left at the pace of all of them (every job started with the fill: a job's own
+ * estimate counts its time queued behind the others as its pace, ten times too long for the
+ * last of many) — the recent pace when ``pace`` is given (recentPace), no guess while
+ * nothing moves.
  */
-export function sumProgress(all: readonly BackfillProgress[]): BackfillProgress | null {
+export function sumProgress(all: readonly BackfillProgress[], pace: number | null = null): BackfillProgress | null {
   if (all.length === 0) return null;
   const sum = (f: (p: BackfillProgress) => number) => all.reduce((n, p) => n + f(p), 0);
   const running = all.some((p) => p.status === "RUNNING");
@@ -59,7 +77,8 @@ export function sumProgress(all: readonly BackfillProgress[]): BackfillProgress 
   const failed = done ? undefined : all.find((p) => p.status !== "RUNNING" && p.status !== "DONE");
   const doneWindows = sum((p) => p.windows_done), totalWindows = sum((p) => p.windows_total);
   const elapsed = Math.max(...all.map((p) => p.seconds));
-  const left = running && doneWindows > 0 ? (elapsed / doneWindows) * Math.max(0, totalWindows - doneWindows) : null;
+  const rate = pace ?? (doneWindows > 0 ? doneWindows / elapsed : 0);
+  const left = running && doneWindows > 0 && rate > 0 ? Math.max(0, totalWindows - doneWindows) / rate : null;
   return {
     status: running ? "RUNNING" : failed ? failed.status : "DONE",
     reason: running ? runningReason(all) : failed?.reason ?? null,
@@ -76,6 +95,8 @@ export function FillGaps({ drone, source, subscribers, scope, compact = false }:
   const [error, setError] = useState<string | null>(null);
   const [marked, setMarked] = useState(0);
   const timers = useRef(new Set<number>());
+  /** [elapsed s, windows done] of the fill as polled (recentPace). */
+  const seen = useRef<[number, number][]>([]);
   const key = subscribers.join(",");
 
   useEffect(() => () => { timers.current.forEach((t) => window.clearTimeout(t)); }, []);
@@ -92,7 +113,14 @@ export function FillGaps({ drone, source, subscribers, scope, compact = false }:
       timers.current.delete(t);
       try {
         const p = await api.backfillProgress(drone, id);
-        setJobs((j) => ({ ...j, [sub]: p }));
+        setJobs((j) => {
+          const next = { ...j, [sub]: p };
+          const all = Object.values(next);
+          const at = Math.max(...all.map((q) => q.seconds));
+          const last = seen.current[seen.current.length - 1];
+          if (!last || at > last[0]) seen.current = [...seen.current.slice(-64), [at, all.reduce((n, q) => n + q.windows_done, 0)]];
+          return next;
+        });
         if (p.status === "RUNNING") poll(sub, id);
       } catch (err) {
         setError((err as Error).message);
@@ -105,6 +133,7 @@ export function FillGaps({ drone, source, subscribers, scope, compact = false }:
     setError(null);
     setMarked(0);
     setJobs({});
+    seen.current = [];
     await Promise.all(subscribers.map(async (sub) => {
       try {
         const p = await api.startBackfill(drone, { subscriber: sub, gaps: true });
@@ -117,7 +146,7 @@ export function FillGaps({ drone, source, subscribers, scope, compact = false }:
     }));
   };
 
-  const progress = sumProgress(Object.values(jobs));
+  const progress = sumProgress(Object.values(jobs), recentPace(seen.current));
   const running = progress?.status === "RUNNING";
   const total = progress?.windows_total ?? 0;
   return (
