@@ -14,6 +14,7 @@ import secrets
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 import tomllib
 from collections.abc import Iterator
@@ -299,12 +300,16 @@ class Run:
 
 
 @pytest.fixture
-def run(compose: dict[str, Any], tmp_path: Path) -> Iterator[Run]:
-    r = Run(compose, tmp_path)
-    try:
-        yield r
-    finally:
-        r.stop()
+def run(compose: dict[str, Any]) -> Iterator[Run]:
+    # a short folder of its own, not tmp_path: the services' paths sit under it
+    # (.../root/var/lib/modd/drone/ingress.sock), and a unix socket's path has at
+    # most 107 bytes (pytest-xdist's tmp_path adds a worker folder)
+    with tempfile.TemporaryDirectory(prefix="modd-compose-") as d:
+        r = Run(compose, Path(d))
+        try:
+            yield r
+        finally:
+            r.stop()
 
 
 def archive_grows(directory: Path, timeout_s: float) -> None:
