@@ -172,10 +172,11 @@ try {
     // Issue 32: the four plug-and-play instruments declared, deployed and watched (last: it deploys its own model).
     ...(only === "instruments" ? [loginStep(page, baseUrl)] : []),
     ...(only === "views" || only === "collab" ? [] : instruments({ page, ports: { pub: pubPort, sub: subPort }, drone, liveValues, feedInstruments })),
-    // Issue 43: pairing a freshly installed drone with a base station of its own (pairing.mjs).
-    ...(only === "views" || only === "collab" || only === "instruments" || !drone ? [] : pairingSteps()),
-    // Issue 42: a deleted credential file announced (last: it restarts the SubBroker).
+    // Issue 42: a deleted credential file announced (it restarts the SubBroker: after the others on it).
     ...(only ? [] : credentialsSteps()),
+    // Issue 43: pairing a freshly installed drone with a base station of its own (pairing.mjs;
+    // last: the page then works on that station).
+    ...(only === "views" || only === "collab" || only === "instruments" || !drone ? [] : pairingSteps()),
   ];
   let broken = null;
   // MODD_E2E_KEEP_GOING=1: the later steps still run after a failure (to see them locally; they
