@@ -65,7 +65,7 @@ def test_the_source_table_is_bounded() -> None:
 
 def test_sources_and_limits() -> None:
     assert source_of("127.0.0.2") == "127.0.0.2"
-    assert source_of("::ffff:10.1.2.3") == "10.1.2.3"
+    assert source_of("::ffff:127.1.2.3") == "127.1.2.3"
     assert source_of("2001:db8:1:2:aa::1") == source_of("2001:db8:1:2:bb::9") == "2001:db8:1:2::/64"
     got = ZenohSettings.from_mapping({"gate": {"per_source_pending": 8, "enabled": False}})
     assert got.gate == GateLimits(enabled=False, per_source_pending=8)

@@ -7,8 +7,8 @@ their handshake (``per_source_pending``) and the rate it may open new ones
 (``per_source_rate``, a token bucket), in a table of at most ``max_sources`` entries.
 
 >>> t = SourceTable(GateLimits(per_source_pending=1, per_source_rate=10), clock=lambda: 0.0)
->>> t.admit("10.0.0.9") is None, t.admit("10.0.0.9")
-(True, 'per_source_pending: 1 connection of 10.0.0.9 being set up')
+>>> t.admit("127.0.0.9") is None, t.admit("127.0.0.9")
+(True, 'per_source_pending: 1 connection of 127.0.0.9 being set up')
 """
 
 from __future__ import annotations
