@@ -36,6 +36,12 @@ export interface DeliveredValue {
   v: number;
   /** Present and true when the window was recomputed from the drone's archive after the link missed it (backfill); absent on live values. */
   backfilled?: boolean;
+  /** The window's identity, first part: the drone whose window it is. The identity (drone, subscriber, epoch_ns, window) names the window wherever it was heard (any base station, live or backfilled), so a subscriber joined to several stations keeps one of each (docs/fleet.md). Written by every SubBroker since the fleet; absent from older payloads. */
+  drone?: string;
+  /** The window's identity: the epoch of the configuration it belongs to (the PubBroker's CONFIG_ACK), ns since the Unix epoch on the drone's clock. */
+  epoch_ns?: number;
+  /** The window's identity: its index k on the configuration's grid, the window being [epoch_ns + k period, epoch_ns + (k + 1) period). */
+  window?: number;
 }
 
 /** The SubBroker's status document, put on modd/<drone>/status every status_period_s. Producer: runtime/python/src/modd/subbroker/broker.py (status), status.py (rates), backpressure.py. Consumers: the backend (stream relay, health, Foxglove), `modd up`, the browser's WebSocketSource. docs/subbroker.md, "Status". A new field is added here first. */

@@ -138,7 +138,7 @@ def _snake(name: str) -> str:
 
 def _py_record(name: str, record: str, omit: tuple[str, ...], s: dict[str, Any]) -> list[str]:
     """A frozen dataclass of ``s``'s properties in their order; an optional
-    boolean defaults to False (and must come last), other optionals are refused."""
+    boolean defaults to False, another optional to None (optionals come last)."""
     required = set(s.get("required", []))
     out = [
         "@dataclass(frozen=True)",
@@ -154,7 +154,7 @@ def _py_record(name: str, record: str, omit: tuple[str, ...], s: dict[str, Any])
         elif ps.get("type") == "boolean":
             out.append(f"    {prop}: bool = False")
         else:
-            raise ValueError(f"{name}.{prop}: a record's optional field must be a boolean")
+            out.append(f"    {prop}: {_py_type(ps)} | None = None")
     return [*out, "", ""]
 
 

@@ -33,6 +33,9 @@ class DeliveredValue(TypedDict):
     delivered_ns: int
     v: int
     backfilled: NotRequired[bool]
+    drone: NotRequired[str]
+    epoch_ns: NotRequired[int]
+    window: NotRequired[int]
 
 
 class SubBrokerStatus(TypedDict):
@@ -424,6 +427,9 @@ class DeliveredValueFields:
     count: int | None
     delivered_ns: int
     backfilled: bool = False
+    drone: str | None = None
+    epoch_ns: int | None = None
+    window: int | None = None
 
 
 #: The fields every :class:`DeliveredValue` carries, in the contract's order.

@@ -40,5 +40,11 @@ inline constexpr std::string_view kDeliveredNs = "delivered_ns";
 inline constexpr std::string_view kV = "v";
 // Present and true when the window was recomputed from the drone's archive after the link missed it (backfill); absent on live values.
 inline constexpr std::string_view kBackfilled = "backfilled";
+// The window's identity, first part: the drone whose window it is.
+inline constexpr std::string_view kDrone = "drone";
+// The window's identity: the epoch of the configuration it belongs to (the PubBroker's CONFIG_ACK), ns since the Unix epoch on the drone's clock.
+inline constexpr std::string_view kEpochNs = "epoch_ns";
+// The window's identity: its index k on the configuration's grid, the window being [epoch_ns + k period, epoch_ns + (k + 1) period).
+inline constexpr std::string_view kWindow = "window";
 
 }  // namespace modd::delivered_value

@@ -31,7 +31,7 @@ from modd.link.frames import ProtocolError
 from modd.link.receiver import Window
 
 from .backfill_queue import BackfillQueue, Filled, Job, Run, Timing
-from .payload import DeliveredValue
+from .payload import DeliveredValue, window_index
 from .record_file import read_record
 from .window_record import Due, Epoch, WindowRecord
 
@@ -73,7 +73,9 @@ class BackfillManager:
         sinks: Callable[[], Sequence[Sink]],
         state: StateDir | None = None,
         timing: Timing | None = None,
+        drone: str | None = None,
     ) -> None:
+        self.drone = drone  # the windows carry their identity (docs/fleet.md) when set
         self._send = send
         self._sinks = sinks
         self._state = state
@@ -303,6 +305,7 @@ class BackfillManager:
                 count,
                 now,
                 True,
+                *self._identity(run, start, q),
             )
             payload = out.to_json()
             for sink in sinks:
@@ -310,6 +313,12 @@ class BackfillManager:
             self.record.add_filled(run.subscriber, run.stream, start, start + q)
             job.delivered += 1
         self._dirty = True
+
+    def _identity(self, run: Run, start_ns: int, period_ns: int) -> tuple[Any, ...]:
+        """(drone, epoch_ns, window) of a backfilled window, () when not known."""
+        if self.drone is None or run.epoch_ns is None:
+            return ()
+        return (self.drone, run.epoch_ns, window_index(start_ns, run.epoch_ns, period_ns))
 
     def _ended(self, job: Job) -> None:
         log.info(

@@ -97,7 +97,9 @@ class SubBroker:
         # Backfill (docs/subbroker.md, "Backfill") and the base-station record of every delivery.
         records = config.record_dir or (config.state_dir / "records" if config.state_dir else None)
         self.record = BaseRecord(records, self.drone) if records is not None else None
-        self.backfill = BackfillManager(self.link.send_frame, self._sinks, self._state)
+        self.backfill = BackfillManager(
+            self.link.send_frame, self._sinks, self._state, drone=self.drone
+        )
         self.link.backfill_sink = self.backfill.on_frame
         self.link.on_up = self._link_up
 
@@ -285,7 +287,7 @@ class SubBroker:
         running = Running(model, plan, config, ack.epoch_ns, FanOut(sent), meta)
         running.topic_info = {t.name: (t.unit, t.type) for t in topics(model).values()}
         running.slots = SlotDelivery(
-            running.fanout, config.config_id, ack.epoch_ns, running.topic_info
+            running.fanout, config.config_id, ack.epoch_ns, running.topic_info, self.drone
         )
         for ps in plan.streams:
             for sub in ps.subscribers:
