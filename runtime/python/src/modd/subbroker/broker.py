@@ -47,6 +47,7 @@ from .record import BaseRecord
 from .rehearsal import CutSwitch
 from .request import MAX_DEPLOY_BYTES, MAX_SMALL_BYTES, read_request
 from .running import Running
+from .serving import ServingSwitch
 from .status import StatusPublisher
 from .transport import link_client
 
@@ -155,6 +156,11 @@ class SubBroker:
                 self._stop_gates()
                 raise
         session = self._session
+        if self.config.station and isinstance(self.link, Pump):
+            self.serving = ServingSwitch(
+                session, self.drone, self.config.station, lambda: self.link.up
+            )
+            self.link.cut = self.serving
         if self.config.delivery.zenoh:
             self._zenoh = ZenohDelivery(session, self.drone)
         if self.config.delivery.tcp:
@@ -186,8 +192,12 @@ class SubBroker:
             *self.config.endpoint,
         )
 
+    serving: ServingSwitch | None = None
+
     def stop(self) -> None:
         self.link.stop()
+        if self.serving is not None:
+            self.serving.close()
         if self._status is not None:
             self._status.stop()
         for q in self._queryables:
