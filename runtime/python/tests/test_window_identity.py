@@ -38,7 +38,8 @@ def test_a_payload_without_identity_reads_and_writes_as_before() -> None:
 
 def test_a_mistyped_identity_is_refused_with_its_field() -> None:
     line = json.loads(
-        subscriber_prefix("s") + StreamPayload("u.a.z", "MIN", "1", "M", 1).tail(1, 0, 1, 1, None, 0)
+        subscriber_prefix("s")
+        + StreamPayload("u.a.z", "MIN", "1", "M", 1).tail(1, 0, 1, 1, None, 0)
     )
     with pytest.raises(ValueError, match="window is '3', not an integer"):
         DeliveredValue.from_dict({**line, "window": "3"})

@@ -183,6 +183,8 @@ class SubBroker:
             self.status,
             lambda: self.link.stats,
         )
+        if self.serving is not None:
+            self._status.quiet = self.serving.another_serves
         self._status.start()
         self.link.start()
         log.info(

@@ -139,6 +139,11 @@ class ServingSwitch:
                 self._serving_token.undeclare()
                 self._serving_token = None
 
+    def another_serves(self) -> bool:
+        """Whether another station holds the drone's link now."""
+        with self._lock:
+            return bool(self.election.serving - {self.election.station})
+
     def describe(self) -> dict[str, Any]:
         with self._lock:
             e = self.election
