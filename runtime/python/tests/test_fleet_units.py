@@ -5,10 +5,13 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any, cast
 
 import pytest
 from modd.subbroker.config import ConfigError, load_config
+from modd.subbroker.payload import StreamPayload, subscriber_prefix
 from modd.subbroker.serving import Election
+from modd.subscriber import Subscription
 from modd.zenoh_auth import CredentialStore, acl
 from modd.zenoh_mesh import STATION, Mesh, station_acl
 from modd.zenoh_session import ZenohSettings, secured
@@ -93,3 +96,43 @@ def test_a_station_name_must_be_an_identifier(tmp_path: Path) -> None:
         load_config(cfg)
     cfg.write_text(f'model = "{MODEL / "scenario1.modd"}"\nstation = "shore"\n')
     assert load_config(cfg).station == "shore"
+
+
+class _Payload:
+    def __init__(self, data: bytes) -> None:
+        self.data = data
+
+    def to_bytes(self) -> bytes:
+        return self.data
+
+
+class _Sample:
+    def __init__(self, data: bytes) -> None:
+        self.payload = _Payload(data)
+
+
+class _Session:
+    """What a Subscription asks of a zenoh session: one subscriber, its callback kept."""
+
+    def declare_subscriber(self, key: str, callback: Any) -> Any:
+        self.callback = callback
+        return self
+
+    def undeclare(self) -> None:
+        pass
+
+
+def test_a_subscriber_gets_a_window_once_whichever_station_sent_it() -> None:
+    head = StreamPayload("usv.a.z", "MIN", "1", "M", 1, ("usv", 10**18, 10**9))
+    line = subscriber_prefix("s") + head.tail(1, 10**18 + 10**9, 10**18 + 2 * 10**9, 1.5, None, 7)
+    again = line.replace(b'"delivered_ns":7', b'"delivered_ns":9')  # another station's send
+    old = subscriber_prefix("s") + StreamPayload("usv.a.z", "MIN", "1", "M", 1).tail(
+        1, 0, 10**9, 2.5, None, 7
+    )
+    session = _Session()
+    sub = Subscription(cast(Any, session), "modd/usv/sub/s")
+    for data in (line, again, old, old):
+        session.callback(_Sample(data))
+    got = [sub.get(0.1), sub.get(0.1), sub.get(0.1), sub.get(0.1)]
+    assert [v.value if v else None for v in got] == [1.5, 2.5, 2.5, None]
+    assert sub.duplicates == 1  # a payload without identity (an older SubBroker) is kept
