@@ -28,6 +28,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
 
+from modd.subbroker.client import request as client_request  # noqa: E402
 from modd.subbroker.payload import DeliveredValue  # noqa: E402
 from modd.zenoh_auth import CredentialStore  # noqa: E402
 from modd.zenoh_session import ZenohSettings, open_session, wait_connected  # noqa: E402
@@ -240,8 +241,11 @@ def test_a_drone_heard_by_two_stations_is_served_once_and_taken_over(
     assert back is not None and back <= TAKEOVER_S, (back, sb_b.log())
     procs.append(a.start("-again"))
     procs.append(sb_a2 := start_subbroker(tmp_path, sb["a"], "sb-a-again"))
-    time.sleep(5)
+    time.sleep(4)
     assert sb_a2.log().count("serves usv") == 0, "a back stands by: b serves"
+    # the handover's gap: b fills what no station holds (it heard a's windows delivered)
+    job = backfill(b, {"op": "start", "subscriber": "sub_5", "gaps": True})
+    assert sb_b.wait_log(f"backfill {job['id']} for sub_5: DONE", 30), sb_b.log()
     load.p.wait(60)
     time.sleep(1.5)
     archive = read_archive(tmp_path / "archive", model)
@@ -252,4 +256,33 @@ def test_a_drone_heard_by_two_stations_is_served_once_and_taken_over(
         dup = len(ids) - len(set(ids))
         assert dup == 0, f"{dup} windows twice at station {name}"
         assert check_against_archive({name: values}, archive) > 50
-    print(f"takeover: first value at b {back:.2f} s after station a was killed")
+    sub5 = [v for v in at["b"].values() if v.subscriber == "sub_5"]
+    filled = sum(v.backfilled for v in sub5)
+    assert filled > 0, "the handover's gap was filled"
+    assert_every_window(sub5, epochs=2)
+    print(f"takeover: first value at b {back:.2f} s after station a was killed; {filled} filled")
+
+
+def backfill(station: Station, request: dict[str, Any]) -> dict[str, Any]:
+    creds = CredentialStore(station.cred).credentials("backend")
+    settings = ZenohSettings(mode="client", connect=(station.endpoint,), credentials=creds)
+    session = open_session(settings)
+    try:
+        assert wait_connected(session, 5)
+        reply = client_request(session, "modd/usv/backfill", request)
+    finally:
+        session.close()  # type: ignore[no-untyped-call]
+    assert reply.get("status") == "RUNNING", reply
+    return reply
+
+
+def assert_every_window(values: list[DeliveredValue], epochs: int) -> None:
+    """Per epoch, every window from the first received to the epoch's last, once."""
+    by_epoch: dict[int, list[int]] = {}
+    for v in values:
+        assert v.epoch_ns is not None and v.window is not None
+        by_epoch.setdefault(v.epoch_ns, []).append(v.window)
+    assert len(by_epoch) == epochs, sorted(by_epoch)
+    for epoch, windows in by_epoch.items():
+        missing = sorted(set(range(min(windows), max(windows) + 1)) - set(windows))
+        assert not missing, f"epoch {epoch}: windows {missing[:10]} missing"

@@ -105,6 +105,16 @@ def serving_key(drone: str, station: str | None) -> str:
     return f"{drone_prefix(drone)}/fleet/serving/{who}"
 
 
+def held_key(drone: str, station: str | None) -> str:
+    """The queryable of a station's window record for ``drone`` (``None``: every station's).
+
+    >>> held_key("usv", None)
+    'modd/usv/fleet/held/*'
+    """
+    who = "*" if station is None else check_name("station", station)
+    return f"{drone_prefix(drone)}/fleet/held/{who}"
+
+
 #: Everything under the MoDD root, for ACL rules.
 EVERYTHING = f"{ROOT}/**"
 #: Every drone's values and every drone's status: what readers subscribe to.

@@ -258,9 +258,23 @@ def acl(drone: str | None = None) -> dict[str, Any]:
         # the SubBroker: the liveliness tokens electing the station serving its drone
         _rule(
             "subbroker_fleet",
-            ["liveliness_token", "declare_liveliness_subscriber", "liveliness_query"],
+            [
+                "liveliness_token",
+                "declare_liveliness_subscriber",
+                "liveliness_query",
+                "declare_queryable",
+                "query",
+                "reply",
+            ],
             ["ingress", "egress"],
             [keys.fleet_tree(drone or None)],
+        ),
+        # the SubBroker of a station in a mesh hears its drone's values another serves
+        _rule(
+            "subbroker_hear",
+            ["declare_subscriber", "put"],
+            ["ingress", "egress"],
+            [keys.values_tree(drone or None)],
         ),
         # readers (backend and viewers): subscribe to values and status; a
         # subscription may be as wide as modd/**, only these keys' puts reach it
@@ -274,7 +288,7 @@ def acl(drone: str | None = None) -> dict[str, Any]:
     policies = [
         {
             "id": "subbroker",
-            "rules": ["subbroker_out", "subbroker_in", "subbroker_fleet"],
+            "rules": ["subbroker_out", "subbroker_in", "subbroker_fleet", "subbroker_hear"],
             "subjects": ["subbroker"],
         },
         {

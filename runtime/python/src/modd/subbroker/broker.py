@@ -38,6 +38,7 @@ from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoi
 from .deploy import DeployRequest, parse_request
 from .dynamic import DynamicSubscriptions
 from .fanout import FanOut
+from .fleet_record import FleetRecord
 from .kept import Deployment, StateDir, same_model
 from .keys import backfill_key, deploy_key, subscribe_key
 from .linkhooks import ConfigRejected, LinkDown
@@ -157,8 +158,12 @@ class SubBroker:
                 raise
         session = self._session
         if self.config.station and isinstance(self.link, Pump):
+            self.fleet = FleetRecord(
+                session, self.drone, self.config.station, self.backfill.record_json
+            )
+            self.backfill.fleet = self.fleet.others
             self.serving = ServingSwitch(
-                session, self.drone, self.config.station, lambda: self.link.up
+                session, self.drone, self.config.station, lambda: self.link.up, self._serves
             )
             self.link.cut = self.serving
         if self.config.delivery.zenoh:
@@ -171,11 +176,8 @@ class SubBroker:
                 except delivery_auth.DeliveryKeyError as exc:
                     raise ConfigError(str(exc)) from exc
             self._tcp = TcpDelivery({}, self.config.delivery.tcp_queue, key)
-        self._queryables = [
-            session.declare_queryable(subscribe_key(self.drone), self._on_query(self._subscribe)),
-            session.declare_queryable(deploy_key(self.drone), self._on_query(self._deploy)),
-            session.declare_queryable(backfill_key(self.drone), self._on_query(self._backfill)),
-        ]
+        if self.serving is None:  # a station answers while it serves (_serves)
+            self._declare_queryables(session)
         self._status = StatusPublisher(
             session,
             self.drone,
@@ -195,15 +197,33 @@ class SubBroker:
         )
 
     serving: ServingSwitch | None = None
+    fleet: FleetRecord | None = None
+
+    def _declare_queryables(self, session: zenoh.Session) -> None:
+        self._queryables = [
+            session.declare_queryable(subscribe_key(self.drone), self._on_query(self._subscribe)),
+            session.declare_queryable(deploy_key(self.drone), self._on_query(self._deploy)),
+            session.declare_queryable(backfill_key(self.drone), self._on_query(self._backfill)),
+        ]
+
+    def _serves(self, serving: bool) -> None:
+        """This station took the drone's link (its queryables answer) or left it."""
+        if serving and not self._queryables and self._session is not None:
+            self._declare_queryables(self._session)
+        elif not serving:
+            for q in self._queryables:
+                q.undeclare()
+            self._queryables = []
 
     def stop(self) -> None:
         self.link.stop()
         if self.serving is not None:
             self.serving.close()
+        if self.fleet is not None:
+            self.fleet.close()
         if self._status is not None:
             self._status.stop()
-        for q in self._queryables:
-            q.undeclare()
+        self._serves(False)
         self._workers.shutdown(wait=True, cancel_futures=True)
         if self._tcp is not None:
             self._tcp.close()

@@ -83,10 +83,16 @@ class ServingSwitch:
     why = "another base station serves the drone"
 
     def __init__(
-        self, session: zenoh.Session, drone: str, station: str, is_up: Callable[[], bool]
+        self,
+        session: zenoh.Session,
+        drone: str,
+        station: str,
+        is_up: Callable[[], bool],
+        on_change: Callable[[bool], None] = lambda serving: None,
     ) -> None:
         self.drone = drone
         self._is_up = is_up
+        self._on_change = on_change
         self.election = Election(station)
         self._session = session
         self._lock = threading.Lock()
@@ -128,9 +134,11 @@ class ServingSwitch:
         return not allowed
 
     def _sync(self, up: bool) -> None:
-        """The link is up (this station serves: its token) or down (its token gone)."""
+        """The link is up (this station serves: its token) or down (its token gone);
+        ``on_change`` is told when that changes."""
         with self._lock:
             self.election.up = up
+            changed = up != (self._serving_token is not None)
             if up and self._serving_token is None:
                 key = serving_key(self.drone, self.election.station)
                 self._serving_token = self._session.liveliness().declare_token(key)
@@ -138,6 +146,8 @@ class ServingSwitch:
             elif not up and self._serving_token is not None:
                 self._serving_token.undeclare()
                 self._serving_token = None
+        if changed:
+            self._on_change(up)
 
     def another_serves(self) -> bool:
         """Whether another station holds the drone's link now."""
