@@ -79,6 +79,10 @@ class FakePubBroker:
                 bf.encode(bf.BackfillProgress(m.request_id, m.resume, m.windows, 0, m.rate_bps))
             )
 
+    def held(self, req: bf.BackfillRequest) -> int:
+        """Windows of ``req`` the archive holds (all of them here)."""
+        return req.windows
+
     def forget(self) -> None:  # a new link session
         self.jobs.clear()
         self.out.clear()
@@ -90,7 +94,9 @@ class FakePubBroker:
             assert isinstance(req, bf.BackfillRequest) and isinstance(first, int)
             if self.credit <= 0:
                 return
-            last = min(first + BATCH, req.windows)
+            last = min(first + BATCH, req.windows, max(first, self.held(req)))
+            if last == first:
+                continue  # waiting for the archive (ArchivePubBroker)
             vals = [Value(True, req.window_start_ns(k) / 1e9) for k in range(first, last)]
             frame = bf.encode_data(bf.BackfillData(rid, first, vals), req.kind())
             self.credit -= len(frame)
@@ -359,26 +365,8 @@ class ArchivePubBroker(FakePubBroker):
         super().__init__(rate_bps)
         self.archived = archived
 
-    def pump(self) -> None:
-        self.credit = min(self.credit + self.rate * DT, self.rate * DT * 4)
-        for rid, job in list(self.jobs.items()):
-            req, first = job
-            assert isinstance(req, bf.BackfillRequest) and isinstance(first, int)
-            if self.credit <= 0:
-                return
-            held = (self.archived() - req.from_ns) // (req.period_us * 1000)
-            last = min(first + BATCH, req.windows, max(first, held))
-            if last == first and last < req.windows:
-                continue  # waiting for the archive
-            vals = [Value(True, req.window_start_ns(k) / 1e9) for k in range(first, last)]
-            frame = bf.encode_data(bf.BackfillData(rid, first, vals), req.kind())
-            self.credit -= len(frame)
-            self.data_bytes += len(frame)
-            job[1] = last
-            self.out.append(frame)
-            if last >= req.windows:
-                del self.jobs[rid]
-                self.out.append(bf.encode(bf.BackfillEnd(rid, bf.EndStatus.DONE, last)))
+    def held(self, req: bf.BackfillRequest) -> int:
+        return int((self.archived() - req.from_ns) // (req.period_us * 1000))
 
 
 def _recent(subscriber: str, end_ns: int, windows: int) -> list[Run]:
