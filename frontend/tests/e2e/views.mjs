@@ -730,7 +730,8 @@ export function views({ page, imagesDir, drone, liveValues, dronePid, survey, po
         const off = errors.filter(([left, truth]) => left > 3 * truth + 10 || truth > 3 * left + 10);
         const worst = errors.reduce((w, e) => (Math.abs(e[0] - e[1]) > Math.abs(w[0] - w[1]) ? e : w), [0, 0]);
         console.log(`    rehearsal: time left said ${said.length} times, worst "${worst[0]} s left" ${worst[1].toFixed(1)} s before the end`
-          + `${waits.size ? `; no number while ${[...waits].join(", ")}` : ""}`);
+          + `${waits.size ? `; no number while ${[...waits].join(", ")}` : ""}`
+          + ` (said/true s: ${errors.map(([l, t]) => `${l}/${t.toFixed(1)}`).join(" ")})`);
         if (off.length) throw new Error(`time left untrue ${off.length} of ${said.length} times, e.g. "${off[0][0]} s left" said ${off[0][1].toFixed(1)} s before the end`);
         // EVERY chart's missing count back to 0 once the backfilled windows are in, the 2 s
         // ones derived at the base station included (a window a loaded machine stalled after
