@@ -389,8 +389,13 @@ def test_time_left_after_a_drone_wide_fill_is_true_or_not_said() -> None:
     journey asks 3x + 10 s), said most of the time; where it cannot be said the state says
     why. The pace of the last 3 s (what the workbench said before) is off by more."""
     flush = int(5e9)
-    drone = lambda: T0 + 600 * 10**9 + int(b.now * 1e9)  # noqa: E731 - the drone's clock
-    b = Bench(ArchivePubBroker(100, lambda: (drone() - 2 * 10**9) // flush * flush))
+    pb = ArchivePubBroker(100, lambda: 0)
+    b = Bench(pb)
+
+    def drone() -> int:  # the drone's clock
+        return T0 + 600 * 10**9 + int(b.now * 1e9)
+
+    pb.archived = lambda: (drone() - 2 * 10**9) // flush * flush
     b.track_reasons = False
     wide = [b.submit(f"sub_{i}", runs_of(f"sub_{i}", 2, 12, 5 * i), 600, "op") for i in range(6)]
     b.run_until(lambda: all(j.status == "DONE" for j in wide), 600)
@@ -432,7 +437,7 @@ def test_the_view_is_bounded_and_says_each_jobs_state() -> None:
     assert doc["pace_bps"] is None  # nothing measured: no number
     assert time_left(ahead, {jobs[1].job_id}) == (None, "measuring the pace")
     assert time_left(ahead, {jobs[-1].job_id})[1] == "not in the queue"  # past MAX_VIEW
-    b.run_until(lambda: jobs[0].runs and b.q.meter.pace_bps() is not None, 60)
+    b.run_until(lambda: bool(jobs[0].runs) and b.q.meter.pace_bps() is not None, 60)
     doc, ahead = b.q.view(b.now + 1)
     assert doc["jobs"][0]["state"] == "sending" and doc["jobs"][0]["send_s"] > 0
     on = b.q.flight.job if b.q.flight else jobs[0]
