@@ -15,6 +15,7 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 from modd_backend import Settings, create_app
+from modd_contracts.schema import validate
 from modd_model import load_model
 from starlette.testclient import WebSocketTestSession
 
@@ -304,6 +305,9 @@ def test_backfill_routes_and_roles(live: TestClient, people: dict[str, Headers])
     job = started["id"]
     p = live.get(f"/api/drones/usv/backfill/{job}", headers=sci).json()
     assert p["id"] == job and p["windows_total"] >= p["windows_done"] >= 0
+    assert validate("backfill", p) == [], p  # relayed as the contract says
+    if p["status"] == "RUNNING":  # the SubBroker's view of its queue, this job in it
+        assert job in [j["id"] for j in p["queue"]["jobs"]], p
     assert (
         live.post(
             f"/api/drones/usv/backfill/{job}/cap", headers=sci, json={"rate_bps": 100}

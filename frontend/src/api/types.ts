@@ -7,6 +7,7 @@ import type { ModdModel } from "../core/model.gen";
 import type { Diagnostic } from "../core/diagnostics";
 import type { PlanJson } from "../core/plan";
 import type { Role } from "../core/roles";
+import type { BackfillQueue } from "../core/contracts.gen";
 
 export interface User {
   id: number;
@@ -139,6 +140,8 @@ export interface BackfillProgress {
   seconds: number;
   bytes_per_s: number;
   seconds_left?: number | null;
+  /** The SubBroker's view of its backfill queue (a running job's answer only). */
+  queue?: BackfillQueue | null;
 }
 
 /** An MCAP archive of a drone (backend routers/archives.py). */

@@ -5,6 +5,7 @@ export const STATUS_VERSION = 1;
 export const PLAN_VERSION = 1;
 export const PUBBROKER_VERSION = 1;
 export const ARCHIVE_RECORD_VERSION = 1;
+export const BACKFILL_VERSION = 1;
 
 /** One window of one subscription, as the SubBroker puts it on modd/<drone>/sub/<subscriber> and writes it on a TCP delivery connection (one compact JSON object a line). Producer: runtime/python/src/modd/subbroker/payload.py. Consumers: the backend (stream relay, 3D scene, Foxglove), the generated C++ and Python subscriber clients, the browser's WebSocketSource. docs/subbroker.md, "Delivered values". */
 export interface DeliveredValue {
@@ -497,6 +498,77 @@ export interface ArchiveRecord {
   /** The sample: a number for float32, float64 and int topics (an integer for int), a boolean for bool topics. */
   value: number | boolean;
 }
+
+/** A backfill job's progress document, the answer of the SubBroker's modd/<drone>/backfill queryable to start, progress, cap and cancel (or an error with its reason). Producer: runtime/python/src/modd/subbroker/backfill_queue.py (progress), backfill_query.py. Consumers: the backend (routers/backfill.py, relayed as is), `modd backfill`, the workbench's Fill gaps. docs/subbroker.md, "Backfill". A new field is added here first. */
+export interface BackfillProgress {
+  /** RUNNING, DONE, CANCELLED, FAILED; or UNKNOWN, ERROR, UNAUTHORISED (the queryable), NO_REPLY (the backend). */
+  status: string;
+  /** What a running job waits for, in words ("queued behind 3 jobs", "paced at 600 B/s"), or why it ended or was refused. */
+  reason?: string | null;
+  /** The job's id. */
+  id?: number | null;
+  /** The subscription filled. */
+  subscriber?: string | null;
+  /** Windows delivered to the subscriber. */
+  windows?: number;
+  /** Windows received from the drone (delivered or already there). */
+  windows_done?: number;
+  /** Windows the job asks for. */
+  windows_total?: number;
+  /** Windows received that had been delivered already (not delivered again). */
+  duplicates?: number;
+  /** Link bytes of the job's BACKFILL_DATA frames. */
+  bytes?: number;
+  /** The job's pace in bytes/s (0: the PubBroker's own). */
+  rate_bps?: number;
+  /** Seconds since the job started (until it ended). */
+  seconds?: number;
+  /** The job's bytes over its seconds. */
+  bytes_per_s?: number;
+  /** Seconds until the job is done, from the queue's view (the job and a fair share of the others at the measured pace); null where that cannot be computed (the queue's states say why). */
+  seconds_left?: number | null;
+  /** Link requests sent for the job. */
+  requests?: number;
+  /** Requests sent again after a loss, a silence or a BUSY. */
+  resumes?: number;
+  /** Start of the range filled (answer to start). */
+  from_ns?: number;
+  /** End of the range filled (answer to start). */
+  to_ns?: number;
+  /** The SubBroker's backfill queue as it stands (a running job only; null or absent otherwise). */
+  queue?: BackfillQueue | null;
+}
+
+/** The jobs that have not ended, in the order the queue serves them (the one on the link first), at most 32; the link's measured backfill pace. */
+export interface BackfillQueue {
+  /** The jobs, the one on the link first. */
+  jobs: BackfillQueueJob[];
+  /** Jobs past the ones listed. */
+  more: number;
+  /** Bytes/s between the backfill frames of the last seconds, the drone's pauses for its archive left out; null until measured. */
+  pace_bps: number | null;
+  /** Mean seconds from a run's request to its first frame (the last 16 runs); null until measured. */
+  trip_s: number | null;
+}
+
+/** One job of the queue. */
+export interface BackfillQueueJob {
+  /** The job's id. */
+  id: number;
+  state: BackfillJobState;
+  /** Windows received. */
+  windows_done: number;
+  /** Windows asked. */
+  windows_total: number;
+  /** Link requests left (the one on the link included). */
+  runs_left: number;
+  /** Seconds the job's rest takes on the link alone at the measured pace; null until the pace and the bytes of its windows are measured. */
+  send_s: number | null;
+}
+
+/** What a job waits for: sending (its frames come), asking (its request is on the way), unanswered (asked again, no answer yet), waiting_archive (acknowledged, silent: the drone waits for its archive to hold the windows), waiting_link, busy (the PubBroker said BUSY), queued (behind the job on the link). */
+export type BackfillJobState = "sending" | "asking" | "unanswered" | "waiting_archive" | "waiting_link" | "busy" | "queued";
+export const BackfillJobStateValues = ["sending", "asking", "unanswered", "waiting_archive", "waiting_link", "busy", "queued"] as const;
 
 /** The aggregation table (modd.schema.json Aggregation x-table). */
 export const AGGREGATION_TABLE = [

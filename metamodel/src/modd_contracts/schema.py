@@ -15,7 +15,7 @@ from importlib import resources
 from typing import Any
 
 #: The contracts with a schema, by file stem.
-NAMES = ("delivered_value", "status", "plan", "pubbroker", "archive_record")
+NAMES = ("delivered_value", "status", "plan", "pubbroker", "archive_record", "backfill")
 
 
 @cache

@@ -10,10 +10,12 @@ STATUS_VERSION = 1
 PLAN_VERSION = 1
 PUBBROKER_VERSION = 1
 ARCHIVE_RECORD_VERSION = 1
+BACKFILL_VERSION = 1
 
 
 LinkState = Literal["connecting", "handshake", "configuring", "up", "down", "stopped"]
 DecimalString = str
+BackfillJobState = Literal["sending", "asking", "unanswered", "waiting_archive", "waiting_link", "busy", "queued"]
 
 
 class DeliveredValue(TypedDict):
@@ -410,6 +412,49 @@ class ArchiveRecord(TypedDict):
     value: float | bool
 
 
+class BackfillProgress(TypedDict):
+    """A backfill job's progress document, the answer of the SubBroker's modd/<drone>/backfill queryable to start, progress, cap and cancel (or an error with its reason)."""
+
+    status: str
+    reason: NotRequired[str | None]
+    id: NotRequired[int | None]
+    subscriber: NotRequired[str | None]
+    windows: NotRequired[int]
+    windows_done: NotRequired[int]
+    windows_total: NotRequired[int]
+    duplicates: NotRequired[int]
+    bytes: NotRequired[int]
+    rate_bps: NotRequired[int]
+    seconds: NotRequired[float]
+    bytes_per_s: NotRequired[float]
+    seconds_left: NotRequired[float | None]
+    requests: NotRequired[int]
+    resumes: NotRequired[int]
+    from_ns: NotRequired[int]
+    to_ns: NotRequired[int]
+    queue: NotRequired[BackfillQueue | None]
+
+
+class BackfillQueue(TypedDict):
+    """The jobs that have not ended, in the order the queue serves them (the one on the link first), at most 32; the link's measured backfill pace."""
+
+    jobs: list[BackfillQueueJob]
+    more: int
+    pace_bps: float | None
+    trip_s: float | None
+
+
+class BackfillQueueJob(TypedDict):
+    """One job of the queue."""
+
+    id: int
+    state: BackfillJobState
+    windows_done: int
+    windows_total: int
+    runs_left: int
+    send_s: float | None
+
+
 @dataclass(frozen=True)
 class DeliveredValueFields:
     """The fields of :class:`DeliveredValue` but v, as a record."""
@@ -436,4 +481,4 @@ class DeliveredValueFields:
 DELIVERED_VALUE_REQUIRED: tuple[str, ...] = ("subscriber", "topic", "aggregation", "period_s", "unit", "config_id", "slot", "start_ns", "end_ns", "value", "count", "delivered_ns", "v",)
 
 
-__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "ARCHIVE_RECORD_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "SensorHealth", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanRadio", "PlanRadioCost", "PlanRadioDiagnostic", "PlanProposal", "PlanLinkControl", "PlanCalibration", "PlanCalibratedStream", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "ArchiveRecord", "DeliveredValueFields", "DELIVERED_VALUE_REQUIRED"]
+__all__ = ["DELIVERED_VALUE_VERSION", "STATUS_VERSION", "PLAN_VERSION", "PUBBROKER_VERSION", "ARCHIVE_RECORD_VERSION", "BACKFILL_VERSION", "DeliveredValue", "SubBrokerStatus", "RadioStatus", "PubBrokerDatagrams", "LinkState", "PredictedLink", "TcpSender", "SensorHealth", "PlanDocument", "DecimalString", "PlanTopic", "PlanSource", "PlanStream", "PlanSlot", "PlanSentStream", "PlanSchedule", "PlanLinkBudget", "PlanRadio", "PlanRadioCost", "PlanRadioDiagnostic", "PlanProposal", "PlanLinkControl", "PlanCalibration", "PlanCalibratedStream", "PlanInfeasible", "PubBrokerConfig", "PubBrokerLink", "PubBrokerIngress", "PubBrokerArchive", "PubBrokerTopic", "PubBrokerLog", "ArchiveRecord", "BackfillProgress", "BackfillQueue", "BackfillQueueJob", "BackfillJobState", "DeliveredValueFields", "DELIVERED_VALUE_REQUIRED"]

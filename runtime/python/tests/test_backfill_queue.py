@@ -20,6 +20,8 @@ from modd.link import backfill as bf
 from modd.link.codec import split_frame
 from modd.link.frames import Value
 from modd.subbroker.backfill_queue import BackfillQueue, Job, Run, Timing
+from modd.subbroker.backfill_view import MAX_VIEW, time_left
+from modd_contracts.schema import validate
 from modd_plan.streams import StreamKey
 
 T0 = 1_700_000_000_000_000_000
@@ -77,6 +79,10 @@ class FakePubBroker:
                 bf.encode(bf.BackfillProgress(m.request_id, m.resume, m.windows, 0, m.rate_bps))
             )
 
+    def held(self, req: bf.BackfillRequest) -> int:
+        """Windows of ``req`` the archive holds (all of them here)."""
+        return req.windows
+
     def forget(self) -> None:  # a new link session
         self.jobs.clear()
         self.out.clear()
@@ -88,7 +94,9 @@ class FakePubBroker:
             assert isinstance(req, bf.BackfillRequest) and isinstance(first, int)
             if self.credit <= 0:
                 return
-            last = min(first + BATCH, req.windows)
+            last = min(first + BATCH, req.windows, max(first, self.held(req)))
+            if last == first:
+                continue  # waiting for the archive (ArchivePubBroker)
             vals = [Value(True, req.window_start_ns(k) / 1e9) for k in range(first, last)]
             frame = bf.encode_data(bf.BackfillData(rid, first, vals), req.kind())
             self.credit -= len(frame)
@@ -344,3 +352,99 @@ def test_many_owners_loss_flaps_and_busy_every_window_once(seed: int) -> None:
     assert [j.status for j in jobs] == ["DONE"] * 12, [b.q.progress(j, b.now) for j in jobs]
     assert b.got == want and b.twice == 0
     assert pb.most_at_once == 1
+
+
+# -- the queue's view and its time left (backfill_view.py) -------------------------------
+
+
+class ArchivePubBroker(FakePubBroker):
+    """The fake PubBroker whose archive holds windows only up to ``archived(now)`` (ns):
+    a window past it is sent once a flush brings it in, so a fill goes by bursts."""
+
+    def __init__(self, rate_bps: int, archived: Callable[[], int]) -> None:
+        super().__init__(rate_bps)
+        self.archived = archived
+
+    def held(self, req: bf.BackfillRequest) -> int:
+        return int((self.archived() - req.from_ns) // (req.period_us * 1000))
+
+
+def _recent(subscriber: str, end_ns: int, windows: int) -> list[Run]:
+    """One run of ``windows`` windows ending at ``end_ns`` (a gap the link just had)."""
+    s = StreamKey("usv.a.x", "MIN", Fraction(1, 4))
+    return [Run(subscriber, s, s, "float64", "m", 1, end_ns - windows * Q, windows)]
+
+
+def _naive(seen: list[tuple[float, int]], left: int) -> float | None:
+    """The time left the workbench said before: windows left at the last 3 s's pace."""
+    t1, d1 = seen[-1]
+    t0, d0 = next((t, d) for t, d in seen if t >= t1 - 3)
+    return left / ((d1 - d0) / (t1 - t0)) if t1 - t0 >= 1 and d1 > d0 else None
+
+
+def test_time_left_after_a_drone_wide_fill_is_true_or_not_said() -> None:
+    """A drone-wide fill, then a rehearsal's fill of 10 jobs whose last windows wait for
+    the drone's archive (flushed every 5 s, durable 2 s later) while another owner's
+    job shares the link: every time left said is within 1.5x + 3 s of the truth (the
+    journey asks 3x + 10 s), said most of the time; where it cannot be said the state says
+    why. The pace of the last 3 s (what the workbench said before) is off by more."""
+    flush = int(5e9)
+    pb = ArchivePubBroker(100, lambda: 0)
+    b = Bench(pb)
+
+    def drone() -> int:  # the drone's clock
+        return T0 + 600 * 10**9 + int(b.now * 1e9)
+
+    pb.archived = lambda: (drone() - 2 * 10**9) // flush * flush
+    b.track_reasons = False
+    wide = [b.submit(f"sub_{i}", runs_of(f"sub_{i}", 2, 12, 5 * i), 600, "op") for i in range(6)]
+    b.run_until(lambda: all(j.status == "DONE" for j in wide), 600)
+    now = drone()
+    ours = [
+        b.submit(f"sub_{i}", _recent(f"sub_{i}", now, 24 + 8 * i), 100, "op") for i in range(10)
+    ]
+    states: set[str] = set()
+    samples: list[tuple[float, float | None, float | None]] = []
+    seen: list[tuple[float, int]] = []
+    while any(j.status == "RUNNING" for j in ours):
+        if not samples or b.now - samples[-1][0] >= 0.5:  # the workbench polls every 0.5 s
+            ahead = b.q.view(b.now)[1]
+            states |= {a.state for a in ahead}
+            done = sum(j.done_windows for j in ours)
+            seen.append((b.now, done))
+            left = time_left(ahead, {j.job_id for j in ours})[0]
+            samples.append((b.now, left, _naive(seen, sum(j.total for j in ours) - done)))
+        b.step()
+        if len(samples) == 3 and b.ids == 16:  # another owner's job shares the link from then
+            b.submit("sub_x", runs_of("sub_x", 3, 40, 1000), 100, "scientist")
+        assert b.now < 2000
+    end = b.now
+    said = [(end - at, left) for at, left, _ in samples if left is not None]
+    assert len(said) >= len(samples) * 2 // 3, samples  # a number most of the time
+    for truth, left in said:
+        assert left <= 1.5 * truth + 3 and truth <= 1.5 * left + 3, (truth, left)
+    naive = [(end - at, n) for at, _, n in samples if n is not None]
+    assert any(n > 1.5 * t + 3 or t > 1.5 * n + 3 for t, n in naive), naive
+    assert {"waiting_archive", "queued", "sending", "asking"} <= states
+
+
+def test_the_view_is_bounded_and_says_each_jobs_state() -> None:
+    b = Bench(FakePubBroker(rate_bps=600))
+    jobs = [b.submit(f"sub_{i}", runs_of(f"sub_{i}", 2, 8, i), 600) for i in range(MAX_VIEW + 8)]
+    doc, ahead = b.q.view(b.now)
+    assert len(doc["jobs"]) == MAX_VIEW and doc["more"] == 8
+    assert [a["state"] for a in doc["jobs"]][:2] == ["asking", "queued"]
+    assert doc["pace_bps"] is None  # nothing measured: no number
+    assert time_left(ahead, {jobs[1].job_id}) == (None, "measuring the pace")
+    assert time_left(ahead, {jobs[-1].job_id})[1] == "not in the queue"  # past MAX_VIEW
+    b.run_until(lambda: bool(jobs[0].runs) and b.q.meter.pace_bps() is not None, 60)
+    doc, ahead = b.q.view(b.now + 1)
+    assert doc["jobs"][0]["state"] == "sending" and doc["jobs"][0]["send_s"] > 0
+    on = b.q.flight.job if b.q.flight else jobs[0]
+    b.up = False
+    b.q.link_down()
+    assert b.q.view(b.now + 2)[0]["jobs"][0]["state"] == "waiting_link"
+    assert time_left(b.q.view(b.now + 2)[1], {on.job_id}) == (None, "waiting for the link")
+    progress = b.q.progress(on, b.now + 2)
+    assert progress["seconds_left"] is None and len(progress["queue"]["jobs"]) == MAX_VIEW
+    assert validate("backfill", progress) == []  # the contract (backfill.schema.json)

@@ -6,7 +6,8 @@
   scientist may only lower the pace, and a dynamic subscription is backfilled
   for its owner only (the SubBroker checks ``owner``).
 - ``GET .../backfill/{id}``: the job's progress (windows done / total,
-  bytes/s against the pace, seconds left).
+  bytes/s against the pace, seconds left) and the SubBroker's view of its queue
+  (each job's state, windows and seconds at the measured pace).
 - ``POST .../backfill/{id}/cap`` (operator): set the pace of a running job.
 - ``DELETE .../backfill/{id}`` (operator, or the scientist who started it): cancel.
 """
@@ -51,7 +52,9 @@ class CapIn(BaseModel):
 
 
 class Progress(BaseModel):
-    """The SubBroker's progress document (docs/subbroker.md, "Backfill")."""
+    """The SubBroker's progress document (docs/subbroker.md, "Backfill"; its contract:
+    modd_contracts/schemas/backfill.schema.json, ``BackfillProgress``); ``queue`` (the
+    SubBroker's view of its backfill queue, ``BackfillQueue``) is relayed as it is."""
 
     status: str
     reason: str | None = None
@@ -66,6 +69,9 @@ class Progress(BaseModel):
     seconds: float = 0.0
     bytes_per_s: float = 0.0
     seconds_left: float | None = None
+    requests: int = 0
+    resumes: int = 0
+    queue: dict[str, Any] | None = None
 
 
 def _ask(zenoh_session: ZenohSession, drone: str, request: dict[str, Any]) -> Progress:

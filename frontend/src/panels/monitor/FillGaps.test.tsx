@@ -1,9 +1,11 @@
 // @vitest-environment jsdom
 import { afterEach, describe, expect, it, vi } from "vitest";
 import { act, cleanup, fireEvent, render, screen } from "@testing-library/react";
-import { FillGaps, recentPace, sumProgress } from "./FillGaps";
+import { FillGaps, sumProgress } from "./FillGaps";
+import { queueTimeLeft } from "./backfillQueue";
 import { ServicesContext, type Services } from "../../app/services";
 import type { BackfillProgress } from "../../api/types";
+import type { BackfillQueue, BackfillQueueJob } from "../../core/contracts.gen";
 import type { ChannelListener, DataSource } from "../../dataSources/types";
 
 afterEach(cleanup);
@@ -51,34 +53,32 @@ describe("FillGaps", () => {
   });
 });
 
-describe("the time left of many backfills", () => {
-  it("is the windows left at the pace of all of them, not the most queued job's own guess", () => {
-    // 10 jobs started together, served in turn: after 20 s, 9 are done (40 windows each) and
-    // the last has done 4 of 40; its own estimate counts its 20 s queued as its pace (180 s left).
-    const done = Array.from({ length: 9 }, () => progress({ status: "DONE", windows: 40, windows_done: 40, seconds: 18 }));
-    const last = progress({ windows_done: 4, seconds: 20, seconds_left: 180 });
-    const p = sumProgress([...done, last])!;
-    expect(p.windows_done).toBe(364);
-    expect(p.seconds_left).toBeCloseTo((20 / 364) * 36, 5); // ≈ 2 s: 36 windows at 18 windows/s
-    expect(sumProgress([progress({ status: "DONE", windows_done: 40, seconds: 3 })])!.seconds_left).toBeNull();
-    expect(sumProgress([progress({ seconds: 2 })])!.seconds_left).toBeNull(); // nothing done yet: no guess
-  });
+const job = (id: number, state: BackfillQueueJob["state"], send_s: number | null): BackfillQueueJob => ({
+  id, state, windows_done: 0, windows_total: 40, runs_left: 1, send_s,
 });
+const view = (...jobs: BackfillQueueJob[]): BackfillQueue => ({ jobs, more: 0, pace_bps: 120, trip_s: 0.2 });
 
-describe("the time left during a burst", () => {
-  it("follows the recent pace: a burst after a long wait ends in seconds, not at the average pace", () => {
-    // 20 s waiting for the drone, then 200 windows in 2 s: 200 of 400 done.
-    const seen: [number, number][] = [[0.5, 0], [10, 0], [20, 0], [21, 100], [22, 200]];
-    const pace = recentPace(seen)!;
-    expect(pace).toBeCloseTo(100, 5); // the last 3 s: 200 windows in 2 s
-    const p = sumProgress([progress({ windows_done: 200, windows_total: 400, seconds: 22 })], pace)!;
-    expect(p.seconds_left).toBeCloseTo(2, 5); // the average pace (200 in 22 s) would say 22 s
-    expect(sumProgress([progress({ windows_done: 200, windows_total: 400, seconds: 22 })])!.seconds_left).toBeCloseTo(22, 5);
+describe("the time left of a fill, from the SubBroker's view of its queue", () => {
+  it("sums our jobs and, of the others, as much as ours, at the measured pace", () => {
+    // ours: 1 on the link (4 s left alone) and 2 queued (3 s, 5 s); another owner's: 30 s and 1 s
+    const q = view(job(1, "sending", 4), job(7, "queued", 30), job(2, "queued", 3), job(8, "queued", 1), job(3, "queued", 5));
+    expect(queueTimeLeft(q, new Set([1, 2, 3]))).toEqual({ seconds: 4 + 3 + 5 + 12 + 1, waiting: null });
+    const ours = [1, 2, 3].map((id) => progress({ id, windows_done: 10, seconds: 9, seconds_left: 99 }));
+    const done = progress({ id: 4, status: "DONE", windows: 40, windows_done: 40, seconds: 3 });
+    expect(sumProgress([...ours, done], q)).toMatchObject({ status: "RUNNING", windows_done: 70, seconds_left: 25, waiting: null });
   });
-  it("makes no guess while nothing moves, nor before a second of samples", () => {
-    expect(recentPace([[5, 10], [6, 10], [8, 10]])).toBe(0);
-    expect(sumProgress([progress({ windows_done: 10, windows_total: 40, seconds: 8 })], 0)!.seconds_left).toBeNull();
-    expect(recentPace([[5, 10], [5.4, 12]])).toBeNull();
-    expect(recentPace([[5, 10]])).toBeNull();
+  it("gives no number while the drone's archive, the link or the pace is awaited, and says so", () => {
+    expect(queueTimeLeft(view(job(1, "waiting_archive", 4), job(2, "queued", 3)), new Set([2]))).toEqual({ seconds: null, waiting: "waiting for the drone's archive" });
+    expect(queueTimeLeft(view(job(1, "waiting_link", 4)), new Set([1])).waiting).toBe("waiting for the link");
+    expect(queueTimeLeft(view(job(1, "asking", 4), job(2, "queued", null)), new Set([1])).waiting).toBe("measuring the pace");
+    expect(queueTimeLeft({ ...view(), more: 40 }, new Set([1])).waiting).toBe("queued behind 0+ jobs");
+    expect(queueTimeLeft(null, new Set([1]))).toEqual({ seconds: null, waiting: null });
+    const p = sumProgress([progress({ id: 1, seconds_left: 3 })], view(job(1, "waiting_archive", 4)))!;
+    expect([p.seconds_left, p.waiting]).toEqual([null, "waiting for the drone's archive"]);
+  });
+  it("without a view: a lone job's own time left, none for many, none once done", () => {
+    expect(sumProgress([progress({ seconds_left: 3 })])!.seconds_left).toBe(3);
+    expect(sumProgress([progress({ id: 1, seconds_left: 3 }), progress({ id: 2, seconds_left: 5 })])!.seconds_left).toBeNull();
+    expect(sumProgress([progress({ status: "DONE", windows_done: 40, seconds: 3, seconds_left: 3 })])!.seconds_left).toBeNull();
   });
 });

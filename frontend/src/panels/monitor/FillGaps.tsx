@@ -1,7 +1,9 @@
 /**
  * "Fill gaps": asks the drone for what the link missed of some subscriptions
  * (backfill from its archive, paced within the link's spare budget) and shows
- * the progress: windows done / total, bytes/s used against the pace, time left.
+ * the progress: windows done / total, bytes/s used against the pace, time left (from
+ * the SubBroker's view of its queue at the link's measured pace, or what it waits for
+ * instead of a number: "waiting for the drone's archive").
  * The Monitor puts one on each chart (the chart's subscriptions) and one for
  * the drone (every subscription of the model and the dynamic ones).
  * One backfill per subscription, started together; the bar sums them (a
@@ -19,9 +21,16 @@ import { useEffect, useRef, useState } from "react";
 import { fixed } from "../../core/numberFormat";
 import { useServices } from "../../app/services";
 import type { BackfillProgress } from "../../api/types";
+import type { BackfillQueue } from "../../core/contracts.gen";
+import { queueTimeLeft } from "./backfillQueue";
 import type { DataSource } from "../../dataSources/types";
 
 const POLL_MS = 500;
+
+/** The fill's progress: the jobs' summed, and what it waits for when no time left is said. */
+export interface FillProgress extends BackfillProgress {
+  waiting: string | null;
+}
 
 interface Props {
   drone: string;
@@ -44,48 +53,29 @@ export function runningReason(all: readonly BackfillProgress[]): string | null {
   return [active, queued ? `${queued} queued` : null].filter(Boolean).join(", ");
 }
 
-/** How far back the time left looks for its pace (seconds of the fill's own clock). */
-export const PACE_SPAN_S = 3;
-
-/**
- * Windows per second over the last PACE_SPAN_S of ``seen`` ([elapsed s, windows done], in
- * order, the newest last): a fill goes by bursts (the drone answers a request once its
- * archive holds it), so the pace since the start says a burst's last seconds are far longer
- * than they are. null until the samples span a second; 0 while nothing moves.
- */
-export function recentPace(seen: readonly (readonly [number, number])[]): number | null {
-  if (seen.length < 2) return null;
-  const [t1, d1] = seen[seen.length - 1];
-  const from = seen.find(([t]) => t >= t1 - PACE_SPAN_S) ?? seen[0];
-  const span = t1 - from[0];
-  return span >= 1 ? Math.max(0, d1 - from[1]) / span : null;
-}
-
 /**
  * The progress of several backfills as one: windows and bytes/s summed; the time left from
- * the windows left at the pace of all of them (every job started with the fill: a job's own
- * estimate counts its time queued behind the others as its pace, ten times too long for the
- * last of many) — the recent pace when ``pace`` is given (recentPace), no guess while
- * nothing moves.
+ * the SubBroker's view of its queue (``queue``, the newest polled: queueTimeLeft), with what
+ * the fill waits for where it gives no number. Without a view, a lone job's own time left.
  */
-export function sumProgress(all: readonly BackfillProgress[], pace: number | null = null): BackfillProgress | null {
+export function sumProgress(all: readonly BackfillProgress[], queue: BackfillQueue | null = null): FillProgress | null {
   if (all.length === 0) return null;
   const sum = (f: (p: BackfillProgress) => number) => all.reduce((n, p) => n + f(p), 0);
-  const running = all.some((p) => p.status === "RUNNING");
+  const running = all.filter((p) => p.status === "RUNNING");
   const done = all.some((p) => p.status === "DONE");
   // A failure decides only when nothing ran to the end (each failure is said beside the bar).
   const failed = done ? undefined : all.find((p) => p.status !== "RUNNING" && p.status !== "DONE");
-  const doneWindows = sum((p) => p.windows_done), totalWindows = sum((p) => p.windows_total);
-  const elapsed = Math.max(...all.map((p) => p.seconds));
-  const rate = pace ?? (doneWindows > 0 ? doneWindows / elapsed : 0);
-  const left = running && doneWindows > 0 && rate > 0 ? Math.max(0, totalWindows - doneWindows) / rate : null;
+  const left = queue
+    ? queueTimeLeft(queue, new Set(running.map((p) => p.id ?? -1)))
+    : { seconds: running.length === 1 ? running[0].seconds_left ?? null : null, waiting: null };
   return {
-    status: running ? "RUNNING" : failed ? failed.status : "DONE",
-    reason: running ? runningReason(all) : failed?.reason ?? null,
-    windows: sum((p) => p.windows), windows_done: doneWindows, windows_total: totalWindows,
+    status: running.length ? "RUNNING" : failed ? failed.status : "DONE",
+    reason: running.length ? runningReason(all) : failed?.reason ?? null,
+    windows: sum((p) => p.windows), windows_done: sum((p) => p.windows_done), windows_total: sum((p) => p.windows_total),
     duplicates: sum((p) => p.duplicates), bytes: sum((p) => p.bytes), seconds: Math.max(...all.map((p) => p.seconds)),
     bytes_per_s: sum((p) => p.bytes_per_s), rate_bps: Math.max(...all.map((p) => p.rate_bps)),
-    seconds_left: left,
+    seconds_left: running.length ? left.seconds : null,
+    waiting: running.length && left.seconds == null ? left.waiting : null,
   };
 }
 
@@ -95,8 +85,8 @@ export function FillGaps({ drone, source, subscribers, scope, compact = false }:
   const [error, setError] = useState<string | null>(null);
   const [marked, setMarked] = useState(0);
   const timers = useRef(new Set<number>());
-  /** [elapsed s, windows done] of the fill as polled (recentPace). */
-  const seen = useRef<[number, number][]>([]);
+  /** The SubBroker's view of its queue, from the newest answer (sumProgress). */
+  const [queue, setQueue] = useState<BackfillQueue | null>(null);
   const key = subscribers.join(",");
 
   useEffect(() => () => { timers.current.forEach((t) => window.clearTimeout(t)); }, []);
@@ -113,14 +103,8 @@ export function FillGaps({ drone, source, subscribers, scope, compact = false }:
       timers.current.delete(t);
       try {
         const p = await api.backfillProgress(drone, id);
-        setJobs((j) => {
-          const next = { ...j, [sub]: p };
-          const all = Object.values(next);
-          const at = Math.max(...all.map((q) => q.seconds));
-          const last = seen.current[seen.current.length - 1];
-          if (!last || at > last[0]) seen.current = [...seen.current.slice(-64), [at, all.reduce((n, q) => n + q.windows_done, 0)]];
-          return next;
-        });
+        setJobs((j) => ({ ...j, [sub]: p }));
+        if (p.queue) setQueue(p.queue);
         if (p.status === "RUNNING") poll(sub, id);
       } catch (err) {
         setError((err as Error).message);
@@ -133,11 +117,12 @@ export function FillGaps({ drone, source, subscribers, scope, compact = false }:
     setError(null);
     setMarked(0);
     setJobs({});
-    seen.current = [];
+    setQueue(null);
     await Promise.all(subscribers.map(async (sub) => {
       try {
         const p = await api.startBackfill(drone, { subscriber: sub, gaps: true });
         setJobs((j) => ({ ...j, [sub]: p }));
+        if (p.queue) setQueue(p.queue);
         if (p.status === "RUNNING" && p.id) poll(sub, p.id);
         else if (p.status !== "DONE") setError(`${sub}: ${p.status}${p.reason ? `: ${p.reason}` : ""}`);
       } catch (err) {
@@ -146,7 +131,7 @@ export function FillGaps({ drone, source, subscribers, scope, compact = false }:
     }));
   };
 
-  const progress = sumProgress(Object.values(jobs), recentPace(seen.current));
+  const progress = sumProgress(Object.values(jobs), queue);
   const running = progress?.status === "RUNNING";
   const total = progress?.windows_total ?? 0;
   return (
@@ -160,7 +145,8 @@ export function FillGaps({ drone, source, subscribers, scope, compact = false }:
           <progress max={Math.max(total, 1)} value={total ? progress.windows_done : 1} />
           <span> {progress.windows_done}/{total} windows</span>
           <span className="muted"> · {fixed(progress.bytes_per_s, 0)} of {progress.rate_bps || "—"} B/s</span>
-          {progress.seconds_left != null && running && <span className="muted"> · {fixed(progress.seconds_left, 0)} s left</span>}
+          {running && progress.seconds_left != null && <span className="muted" data-testid="backfill-left"> · {fixed(progress.seconds_left, 0)} s left</span>}
+          {running && progress.waiting && <span className="muted" data-testid="backfill-left"> · time left: {progress.waiting}</span>}
           {running && progress.reason && <span className="muted" data-testid="backfill-reason"> · {progress.reason}</span>}
           <strong> · {progress.status === "DONE" ? `done: ${progress.windows} filled, ${progress.duplicates} duplicates` : progress.status.toLowerCase()}</strong>
           {marked > 0 && <span className="backfilled"> · {marked} backfilled values received</span>}

@@ -107,7 +107,7 @@ describe("Fill gaps of several subscriptions", () => {
     const p = (status: string, done: number, total: number, left: number | null) => ({
       status, windows: done, windows_done: done, windows_total: total, duplicates: 0, bytes: 10, rate_bps: 600, seconds: 1, bytes_per_s: 100, seconds_left: left,
     });
-    expect(sumProgress([p("DONE", 4, 4, null), p("RUNNING", 1, 6, 3)])).toMatchObject({ status: "RUNNING", windows_done: 5, windows_total: 10, bytes_per_s: 200, seconds_left: 1 }); // 5 windows left at 5 a second
+    expect(sumProgress([p("DONE", 4, 4, null), p("RUNNING", 1, 6, 3)])).toMatchObject({ status: "RUNNING", windows_done: 5, windows_total: 10, bytes_per_s: 200, seconds_left: 3 }); // the one running job's own time left (no view of the queue)
     expect(sumProgress([p("DONE", 4, 4, null), p("DONE", 6, 6, null)])).toMatchObject({ status: "DONE", windows: 10 });
     expect(sumProgress([p("ERROR", 0, 0, null), { ...p("ERROR", 0, 0, null), reason: "no link" }])).toMatchObject({ status: "ERROR" });
     expect(sumProgress([{ ...p("ERROR", 0, 0, null), reason: "no link" }])).toMatchObject({ status: "ERROR", reason: "no link" });

@@ -31,6 +31,7 @@ from modd_plan.streams import StreamKey
 from modd.link import backfill as bf
 from modd.link.frames import Aggregation, ValueType
 
+from .backfill_view import MAX_VIEW, Ahead, PaceMeter, Size, send_s, time_left
 from .fanout import period_us
 
 
@@ -108,6 +109,7 @@ class InFlight:
     retry_at: float | None = None
     busy: int = 0  # BUSY answers in a row
     why: str = ""  # why it is asked again (said once it is sent)
+    got_data: bool = False  # a DATA frame of this run arrived (its round trip is measured)
 
 
 @dataclass
@@ -130,6 +132,8 @@ class BackfillQueue:
     _turn: int = 0  # counts the runs put in flight
     _served: dict[str, int] = field(default_factory=dict)  # owner / job id -> its last turn
     notes: list[str] = field(default_factory=list)  # what to log (the manager drains it)
+    meter: PaceMeter = field(default_factory=PaceMeter)  # the pace the view's time left uses
+    _view: tuple[float, dict[str, Any], list[Ahead]] | None = None  # (when, json, jobs)
 
     # -- jobs -------------------------------------------------------------------------
 
@@ -203,6 +207,9 @@ class BackfillQueue:
         if d.first != f.next:  # in flight before a resume: asked for again
             return None, []
         job, run = f.job, f.job.runs[0]
+        asked = None if f.got_data else f.last_sent
+        self.meter.data(d.request_id, _size(run), now, size, len(d.values), asked)
+        f.got_data = True
         job.bytes += size
         f.next += len(d.values)
         job.done_windows += len(d.values)
@@ -280,11 +287,14 @@ class BackfillQueue:
         )
 
     def progress(self, job: Job, now: float) -> dict[str, Any]:
+        """The job's progress document; a running job's carries the queue's view
+        (``queue``) and its time left from it (None where it cannot be computed)."""
         secs = (job.ended if job.ended is not None else now) - job.started
-        left = None
-        if job.done_windows and job.status == "RUNNING":
-            left = secs / job.done_windows * (job.total - job.done_windows)
-        return {
+        left, view = None, None
+        if job.status == "RUNNING":
+            view, ahead = self.view(now)
+            left = time_left(ahead, {job.job_id})[0]
+        out: dict[str, Any] = {
             "status": job.status,
             "id": job.job_id,
             "subscriber": job.subscriber,
@@ -301,6 +311,62 @@ class BackfillQueue:
             "resumes": job.resumes,
             "reason": self.reason(job, now),
         }
+        if view is not None:
+            out["queue"] = view
+        return out
+
+    # -- the queue's view -------------------------------------------------------------
+
+    def view(self, now: float) -> tuple[dict[str, Any], list[Ahead]]:
+        """The jobs that have not ended in the order they are served (the one on the link
+        first; at most MAX_VIEW), each with its state and the seconds its rest takes at
+        the measured pace; computed at most every 0.25 s (every job's poll asks for it)."""
+        if self._view is not None and 0 <= now - self._view[0] < 0.25:
+            return self._view[1], self._view[2]
+        busy = [self.flight.job] if self.flight is not None else []
+        order = busy + self.order()
+        ahead = [self._ahead(j, now) for j in order[:MAX_VIEW]]
+        pace, trip = self.meter.pace_bps(), self.meter.trip_s()
+        doc = {
+            "jobs": [a.to_json() for a in ahead],
+            "more": max(0, len(order) - MAX_VIEW),
+            "pace_bps": None if pace is None else round(pace, 1),
+            "trip_s": None if trip is None else round(trip, 2),
+        }
+        self._view = (now, doc, ahead)
+        return doc, ahead
+
+    def state(self, job: Job, now: float) -> str:
+        """What ``job`` waits for, in one word (backfill_view.STATES)."""
+        f = self.flight
+        if f is None or f.job is not job:
+            return "queued"
+        if not self.up:
+            return "waiting_link"
+        if f.busy and f.retry_at is not None:
+            return "busy"
+        if not f.acked:
+            return "asking" if f.sends <= 1 else "unanswered"
+        quiet = max(self.meter.pause_s, 128 / job.rate_bps if job.rate_bps else 0.0)
+        return "waiting_archive" if now - f.heard > quiet else "sending"
+
+    def _ahead(self, job: Job, now: float) -> Ahead:
+        f = self.flight
+        on = f is not None and f.job is job
+        sizes: dict[Size, int] = {}
+        for i, run in enumerate(job.runs):
+            left = run.windows - (f.next if on and i == 0 and f is not None else 0)
+            sizes[_size(run)] = sizes.get(_size(run), 0) + left
+        asked = 1 if on and f is not None and f.got_data else 0
+        seconds = send_s(self.meter, list(sizes.items()), len(job.runs) - asked)
+        return Ahead(
+            job.job_id,
+            self.state(job, now),
+            job.done_windows,
+            job.total,
+            len(job.runs),
+            seconds,
+        )
 
     def order(self, until: Job | None = None) -> list[Job]:
         """The waiting jobs in the order the queue serves their next runs (up to ``until``)."""
@@ -424,6 +490,10 @@ class BackfillQueue:
         self._served.pop(_j(job), None)
         if all(j.owner != job.owner for j in self.jobs.values()):
             self._served.pop(_o(job), None)
+
+
+def _size(run: Run) -> Size:
+    return (run.stream.aggregation, run.value_type)
 
 
 def _least_served(jobs: list[Job], served: dict[str, int]) -> Job:
