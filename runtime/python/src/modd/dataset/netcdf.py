@@ -306,7 +306,8 @@ class NetcdfSink:
             self.ds[self.plan_other][0, sl] = np.where(other == NAT, np.nan, other / 1e9)
         self.ds["lat"][0, sl] = lat
         self.ds["lon"][0, sl] = lon
-        self.ds["alt"][0, sl] = alt
+        if not np.isnan(alt).all():  # no altitude: its chunks stay unwritten, the fill value
+            self.ds["alt"][0, sl] = alt
         self.ds[var.name][0, sl] = value
         if qc is not None:
             self.ds[f"{var.name}_qc_agg"][0, sl] = qc
