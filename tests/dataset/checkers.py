@@ -22,9 +22,11 @@ SUITES = ("cf:1.11", "cf:1.6", "acdd:1.3", "ioos:1.2", "ncei-trajectory:2.0")
 #: ``Result(BaseCheck.HIGH, False,  # always fail, "NDBC/GTS Ingest Requirements", ...)``.
 #: Its value is the constant ``False`` whatever the file holds: it fails on every file
 #: by design, to list the variables that qualify for NDBC's ingest to the GTS
-#: (compliance-checker issue 759, PR 811). A file does what it asks when every variable
-#: marked ``gts_ingest = "true"`` is listed as qualifying and none as not (its second
-#: message).
+#: (https://github.com/ioos/compliance-checker/pull/811 for issue 759; unchanged on the
+#: project's main branch as of d4610de, 2026-08-17; its own unit test asserts the
+#: failure for a file with no ``gts_ingest`` at all; test_checker_gts.py shows it on an
+#: empty file). A file does what it asks when every variable marked
+#: ``gts_ingest = "true"`` is listed as qualifying and none as not (its second message).
 GTS = "NDBC/GTS Ingest Requirements"
 
 
@@ -36,9 +38,9 @@ def modd_dataset(
     return subprocess.run(command, capture_output=True, text=True, timeout=120)
 
 
-def cc_results(path: Path, out: Path) -> dict[str, Any]:
+def cc_results(path: Path, out: Path, suites: tuple[str, ...] = SUITES) -> dict[str, Any]:
     """The IOOS compliance checker's JSON report, per suite."""
-    tests = [a for suite in SUITES for a in ("--test", suite)]
+    tests = [a for suite in suites for a in ("--test", suite)]
     subprocess.run(
         [str(BIN / "compliance-checker"), *tests, "-f", "json", "-o", str(out), str(path)],
         capture_output=True,

@@ -29,20 +29,34 @@ METERS_PER_DEG = 111_320.0
 SLACK_M = 5.0
 
 
-def coordinate_at(
-    times: np.ndarray, fix_t: np.ndarray, fix_v: np.ndarray, max_gap_ns: int
-) -> np.ndarray:
-    """``fix_v`` interpolated linearly to ``times`` (NaN outside the fixes or in a long gap)."""
-    out = np.full(times.shape, np.nan)
+def covered(times: np.ndarray, fix_t: np.ndarray, max_gap_ns: int) -> np.ndarray:
+    """Which ``times`` the fixes cover: at a fix, or between two no more than
+    ``max_gap_ns`` apart."""
     if len(fix_t) == 0:
-        return out
+        return np.zeros(times.shape, dtype=bool)
     nxt = np.searchsorted(fix_t, times, side="right")
     prev = nxt - 1
     exact = (prev >= 0) & (fix_t[np.clip(prev, 0, None)] == times)
     inside = (prev >= 0) & (nxt < len(fix_t))
     p, n = np.clip(prev, 0, len(fix_t) - 1), np.clip(nxt, 0, len(fix_t) - 1)
     short = inside & (fix_t[n] - fix_t[p] <= max_gap_ns)
-    ok = exact | short
+    ok: np.ndarray = exact | short
+    return ok
+
+
+def coordinate_at(
+    times: np.ndarray,
+    fix_t: np.ndarray,
+    fix_v: np.ndarray,
+    max_gap_ns: int,
+    ok: np.ndarray | None = None,
+) -> np.ndarray:
+    """``fix_v`` interpolated linearly to ``times`` (NaN outside the fixes or in a long
+    gap); ``ok``: ``covered(times, fix_t, max_gap_ns)`` when known."""
+    out = np.full(times.shape, np.nan)
+    if len(fix_t) == 0:
+        return out
+    ok = covered(times, fix_t, max_gap_ns) if ok is None else ok
     out[ok] = np.interp(times[ok], fix_t, fix_v)
     return out
 
@@ -117,14 +131,21 @@ class Track:
     #: The longitude's fixes unwrapped across the antimeridian (computed once).
     unwrapped_lon: np.ndarray = field(init=False, repr=False)
 
+    #: Latitude and longitude have the same fix times (one receiver's sentences): the
+    #: samples they cover are found once.
+    paired: bool = field(init=False, repr=False)
+
     def __post_init__(self) -> None:
         self.unwrapped_lon = np.unwrap(self.longitude.v, period=360.0)
+        self.paired = np.array_equal(self.latitude.t, self.longitude.t)
 
     def at(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(lat, lon, alt) at ``times`` (ns); NaN where unknown."""
-        lat = coordinate_at(times, self.latitude.t, self.latitude.v, self.max_gap_ns)
+        gap = self.max_gap_ns
+        ok = covered(times, self.latitude.t, gap) if self.paired else None
+        lat = coordinate_at(times, self.latitude.t, self.latitude.v, gap, ok)
         # across the antimeridian: interpolate the unwrapped longitude, then wrap
-        lon = coordinate_at(times, self.longitude.t, self.unwrapped_lon, self.max_gap_ns)
+        lon = coordinate_at(times, self.longitude.t, self.unwrapped_lon, gap, ok)
         lon = (lon + 180.0) % 360.0 - 180.0
         alt = (
             coordinate_at(times, self.altitude.t, self.altitude.v, self.max_gap_ns)

@@ -21,7 +21,13 @@ import numpy as np
 
 from .plan import ExportPlan, PlanError, Variable
 from .qcconfig import POSITION, QcConfig
-from .qcfast import fast_test, location_bounds_test, location_test, qartod_compare
+from .qcfast import (
+    fast_test,
+    location_bounds_test,
+    location_test,
+    median_step,
+    qartod_compare,
+)
 
 #: Samples of a topic's previous batch kept as context for the next (spike, rate of
 #: change and flat line look back; a flat line longer than this is cut at a batch's start).
@@ -104,7 +110,7 @@ def time_scale(time_ns: np.ndarray) -> int | None:
     second within ``datetime64[ns]`` (repeated times, or a span too long)."""
     if len(time_ns) < 2:
         return 1
-    median = float(np.median(np.diff(time_ns)))
+    median = float(median_step(np.diff(time_ns)))
     if median >= 1e9:
         return 1
     span = max(int(time_ns[-1]) - int(time_ns[0]), 1)
