@@ -172,13 +172,15 @@ def start_pubbroker(
 def subbroker_config(
     tmp: Path,
     model_path: Path,
-    link_port: int,
+    link_port: int | str,
     zenoh_port: int,
     tcp: bool = False,
     tag: str = "sb",
     state_dir: Path | None = None,
     **link: Any,
 ) -> Path:
+    # link_port: the PubBroker's port on 127.0.0.1, or the whole endpoint (host:port)
+    endpoint = link_port if isinstance(link_port, str) else f"127.0.0.1:{link_port}"
     link_lines = "\n".join(f"{k} = {json.dumps(v)}" for k, v in link.items())
     state = f"state_dir = {json.dumps(str(state_dir))}" if state_dir else ""
     path = tmp / f"{tag}.toml"
@@ -186,7 +188,7 @@ def subbroker_config(
 model = {json.dumps(str(model_path))}
 {state}
 [link]
-endpoint = "127.0.0.1:{link_port}"
+endpoint = "{endpoint}"
 key = "env:MODD_LINK_KEY"
 {link_lines}
 [zenoh]
