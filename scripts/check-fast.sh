@@ -2,9 +2,11 @@
 # The fast tier (`make check`, under 2 minutes): formatters, linters, types
 # (tests included) and the unit tests of every component. `make test`
 # (scripts/check.sh) runs this first, then the cross-process suites.
-# Two lanes run side by side, one per core: the static checks (formatters,
-# linters, types) and the unit tests. Each lane stops at its first failing
-# step; the script prints both lanes' output, then says which step failed.
+# Two lanes run side by side, one per core, of about the same CPU time: the
+# static checks (formatters, linters, types), then the frontend's and the C++
+# unit tests; and the Python unit tests (the longest step, alone in its lane).
+# Each lane stops at its first failing step; the script prints both lanes'
+# output, then says which step failed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$PWD/.venv/bin:$PATH"
@@ -39,10 +41,8 @@ static_checks() {
   fi
 }
 
-unit_tests() {
-  step "unit tests (pytest -m 'not e2e and not slow')"
-  pytest -q -m "not e2e and not slow" metamodel/tests generators/tests runtime/python/tests \
-    backend/tests
+# C++ and frontend unit tests: after the static checks, in their lane.
+component_tests() {
   if [ -f build/cpp/build.ninja ]; then
     step "C++ unit tests (build/cpp, after make build)"
     cmake --build build/cpp --target modd_unit_tests >/dev/null
@@ -54,11 +54,18 @@ unit_tests() {
   fi
 }
 
+# The Python unit tests of every component (~1,600; the longest step).
+unit_tests() {
+  step "unit tests (pytest -m 'not e2e and not slow')"
+  pytest -q -m "not e2e and not slow" metamodel/tests generators/tests runtime/python/tests \
+    backend/tests
+}
+
 logs=$(mktemp -d)
 trap 'rm -rf "$logs"' EXIT
 echo "make check: static checks and unit tests side by side (output when both end)"
 # Background jobs, not the left side of ||: there errexit would be ignored in them.
-(set -e; static_checks) >"$logs/static" 2>&1 &
+(set -e; static_checks; component_tests) >"$logs/static" 2>&1 &
 static_pid=$!
 (set -e; unit_tests) >"$logs/unit" 2>&1 &
 unit_pid=$!

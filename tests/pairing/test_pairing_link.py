@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -20,29 +19,19 @@ from modd_model import load_model
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from support.loopback import (  # noqa: E402
+    DEMO,
     PUBBROKER,
-    REPO,
-    SUBBROKER_CLIENT_TOML,
     VENV_BIN,
-    Backend,
     Proc,
-    StatusWatch,
     free_port,
-    shared_credentials,
+    router_and_watch,
+    start_client_subbroker,
+    start_signed_in_backend,
+    started,  # noqa: F401  (the fixture)
     wait_port,
-    zenoh_router,
 )
 
-DEMO = REPO / "metamodel" / "examples" / "demo.modd"
 ADMIN_PASSWORD = "pairing-admin-password"
-
-
-@pytest.fixture
-def started() -> Iterator[list[Proc]]:
-    procs: list[Proc] = []
-    yield procs
-    for p in reversed(procs):
-        p.stop()
 
 
 def mission(tmp: Path, link: int) -> dict[str, Any]:
@@ -87,79 +76,57 @@ def refusals(tmp: Path, bundle: bytes, code: str) -> None:
 
 @pytest.mark.timeout(120)
 def test_a_paired_drone_acknowledges_the_workbench_s_deploy(
-    tmp_path: Path, started: list[Proc]
+    tmp_path: Path,
+    started: list[Proc],  # noqa: F811
 ) -> None:
-    assert PUBBROKER.exists(), f"{PUBBROKER} is not built: run make build (make test does)"
-    router_port, link = free_port(), free_port()
-    router = f"tcp/127.0.0.1:{router_port}"
-    with zenoh_router(router_port) as session:
-        watch = StatusWatch(session)
-        try:
-            backend = Backend.start(tmp_path, router, ADMIN_PASSWORD, ["--deploy-timeout", "8"])
-            started.append(backend.proc)
-            backend.sign_in(ADMIN_PASSWORD)
-            model = mission(tmp_path, link)
-            r = backend.request(
-                "POST", "/projects", json={"name": "paired", "model": {"model": model}}
-            )
-            assert r.status_code == 201, r.text
-            project = r.json()["id"]
-            made = backend.request("POST", f"/projects/{project}/pairing", json={})
-            assert made.status_code == 200, made.text
-            assert made.headers["cache-control"] == "no-store"
-            pairing = made.json()
-            bundle = pairing["bundle"].encode()
-            (tmp_path / "usv.modd-pair").write_bytes(bundle)
-            refusals(tmp_path, bundle, pairing["code"])
+    link = free_port()
+    with router_and_watch() as (router, watch):
+        backend = start_signed_in_backend(tmp_path, router, ADMIN_PASSWORD, started)
+        model = mission(tmp_path, link)
+        r = backend.request("POST", "/projects", json={"name": "paired", "model": {"model": model}})
+        assert r.status_code == 201, r.text
+        project = r.json()["id"]
+        made = backend.request("POST", f"/projects/{project}/pairing", json={})
+        assert made.status_code == 200, made.text
+        assert made.headers["cache-control"] == "no-store"
+        pairing = made.json()
+        bundle = pairing["bundle"].encode()
+        (tmp_path / "usv.modd-pair").write_bytes(bundle)
+        refusals(tmp_path, bundle, pairing["code"])
 
-            etc = tmp_path / "fresh-etc"
-            imported = modd_pair(tmp_path / "usv.modd-pair", etc, pairing["code"])
-            assert imported.returncode == 0, imported.stderr
-            assert pairing["fingerprint"] in imported.stdout
-            assert "systemctl restart" in imported.stdout
-            assert (etc / "link.key").stat().st_mode & 0o777 == 0o600
-            # the drone runs from what the bundle wrote, and nothing else
-            started.append(
-                Proc(
-                    "pubbroker",
-                    [str(PUBBROKER), "--config", str(etc / "pubbroker.json")],
-                    tmp_path / "pubbroker.log",
-                    env={"MODD_LINK_KEY": "not-the-paired-key"},
-                )
+        etc = tmp_path / "fresh-etc"
+        imported = modd_pair(tmp_path / "usv.modd-pair", etc, pairing["code"])
+        assert imported.returncode == 0, imported.stderr
+        assert pairing["fingerprint"] in imported.stdout
+        assert "systemctl restart" in imported.stdout
+        assert (etc / "link.key").stat().st_mode & 0o777 == 0o600
+        # the drone runs from what the bundle wrote, and nothing else
+        started.append(
+            Proc(
+                "pubbroker",
+                [str(PUBBROKER), "--config", str(etc / "pubbroker.json")],
+                tmp_path / "pubbroker.log",
+                env={"MODD_LINK_KEY": "not-the-paired-key"},
             )
-            wait_port(link, 10.0)
-            station_model = tmp_path / "station-model.json"
-            station_model.write_text(json.dumps(model))
-            config = tmp_path / "subbroker.toml"
-            config.write_text(
-                SUBBROKER_CLIENT_TOML.format(
-                    model=station_model,
-                    link=link,
-                    key=pairing["link_key_file"],
-                    router=router,
-                    credentials=shared_credentials().dir,
-                )
+        )
+        wait_port(link, 10.0)
+        station_model = tmp_path / "station-model.json"
+        station_model.write_text(json.dumps(model))
+        started.append(
+            start_client_subbroker(
+                tmp_path, "subbroker", station_model, link, pairing["link_key_file"], router
             )
-            started.append(
-                Proc(
-                    "subbroker",
-                    [str(VENV_BIN / "modd-subbroker"), "--config", str(config)],
-                    tmp_path / "subbroker.log",
-                    env={"MODD_LINK_KEY": "not-the-paired-key"},
-                )
-            )
-            watch.wait("usv", lambda s: s["link"] == "up" and s["config_id"], 30)
-            r = backend.request("POST", f"/projects/{project}/deployments", json={})
-            assert r.status_code == 201, r.text
-            record = r.json()
-            assert record["status"] == "acked", record
-            config_id = record["reply"]["config_id"]
-            watch.wait("usv", lambda s: s["config_id"] == config_id, 10)
-            for p in started:
-                assert p.alive(), f"{p.name} died:\n{p.log()}"
-            logs = "".join(p.log() for p in started)
-            key = (etc / "link.key").read_text().strip()
-            for secret in (pairing["code"], key):
-                assert secret not in logs
-        finally:
-            watch.close()
+        )
+        watch.wait("usv", lambda s: s["link"] == "up" and s["config_id"], 30)
+        r = backend.request("POST", f"/projects/{project}/deployments", json={})
+        assert r.status_code == 201, r.text
+        record = r.json()
+        assert record["status"] == "acked", record
+        config_id = record["reply"]["config_id"]
+        watch.wait("usv", lambda s: s["config_id"] == config_id, 10)
+        for p in started:
+            assert p.alive(), f"{p.name} died:\n{p.log()}"
+        logs = "".join(p.log() for p in started)
+        key = (etc / "link.key").read_text().strip()
+        for secret in (pairing["code"], key):
+            assert secret not in logs

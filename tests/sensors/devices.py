@@ -81,6 +81,12 @@ def nmea(body: str) -> bytes:
     return f"${body}*{pynmea2.NMEASentence.checksum(body):02X}\r\n".encode()
 
 
+def gga(lat: float) -> bytes:
+    """A GNSS fix (GNGGA) at latitude ``lat`` degrees north, 3°21' W."""
+    minutes = (lat - int(lat)) * 60
+    return nmea(f"GNGGA,101500.00,{int(lat):02d}{minutes:07.4f},N,00321.0000,W,1,09,0.9,4.2,M,,M,,")
+
+
 class ModbusDevice:
     """pymodbus's RTU server (unit 1, holding registers from address 0 = ``registers``)
     on one pty pair, relayed to the pty pair the reader opens at ``path``.

@@ -21,7 +21,7 @@ from typing import Any
 
 import pynmea2  # type: ignore[import-untyped]
 import pytest
-from devices import PtyDevice, nmea, run_health, wait_until
+from devices import PtyDevice, gga, nmea, run_health, wait_until
 from mavlink_harness import Autopilot, f32, read_archive
 from modd.ports import free_port
 
@@ -54,20 +54,20 @@ def _autopilot(pitch: bool) -> str:
     return f"Sensor autopilot kind mavlink measures {{ yaw(RADIAN) from ATTITUDE.yaw; {more} }}"
 
 
-def model_text(sensors: list[str], nav: list[str], water: list[str]) -> str:
+def model_text(
+    sensors: list[str], nav: list[str], water: list[str], subscribed: str = "ctd.temperature"
+) -> str:
+    """The drone with ``sensors``; publishers nav (10 Hz) and, if ``water``, water
+    (2 Hz); one subscriber averaging ``subscribed`` each second."""
     quoted = ", ".join(f'"usv.{t}"' for t in nav)
     wq = ", ".join(f'"usv.{t}"' for t in water)
+    publishers = f"    Publisher nav(0.1, {quoted});\n"
+    publishers += f"    Publisher water(0.5, {wq});\n" if water else ""
     return (
         "Drone usv { Sensors { " + "\n".join(sensors) + " } }" + HEAD + "Publishers {\n"
-        f"    Publisher nav(0.1, {quoted});\n    Publisher water(0.5, {wq});\n}}\n"
-        'Subscriptions { Subscriber t("usv.ctd.temperature", 1.0, AVERAGE); }\n'
+        f"{publishers}}}\n"
+        f'Subscriptions {{ Subscriber t("usv.{subscribed}", 1.0, AVERAGE); }}\n'
     )
-
-
-def _gga(i: int) -> bytes:
-    lat = 47.70 + i * 0.0001
-    minutes = (lat - int(lat)) * 60
-    return nmea(f"GNGGA,101500.00,{int(lat):02d}{minutes:07.4f},N,00321.0000,W,1,09,0.9,4.2,M,,M,,")
 
 
 class Feeder:
@@ -87,7 +87,7 @@ class Feeder:
 
         i = 0
         while not self.stop.wait(0.1):
-            line = _gga(i)
+            line = gga(47.70 + i * 0.0001)
             self.gnss.write(line)
             self.gga.append(line)
             yaw = 0.001 * i

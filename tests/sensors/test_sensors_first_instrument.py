@@ -17,27 +17,14 @@ from pathlib import Path
 
 import pynmea2  # type: ignore[import-untyped]
 import pytest
-from devices import PtyDevice, nmea, run_health, wait_until
+from devices import PtyDevice, gga, run_health, wait_until
 from mavlink_harness import read_archive
 from modd.ports import free_port
-from test_sensors_deploy import BIN, GNSS, HEAD, _by_sensor, _deploy
+from test_sensors_deploy import BIN, GNSS, _by_sensor, _deploy, model_text
 
 pytestmark = pytest.mark.e2e
 
 PLAIN = "Sensor hull measures { temperature(DEGREE_CELSIUS, float32); }"
-
-
-def _model(sensors: list[str], topics: list[str]) -> str:
-    quoted = ", ".join(f'"usv.{t}"' for t in topics)
-    return (
-        "Drone usv { Sensors { " + "\n".join(sensors) + " } }" + HEAD + "Publishers {\n"
-        f"    Publisher nav(0.1, {quoted});\n}}\n"
-        'Subscriptions { Subscriber t("usv.hull.temperature", 1.0, AVERAGE); }\n'
-    )
-
-
-def _gga(i: int) -> bytes:
-    return nmea(f"GNGGA,101500.00,47{42 + i * 0.001:07.4f},N,00321.0000,W,1,09,0.9,4.2,M,,M,,")
 
 
 def test_a_deploy_adds_the_first_instrument_without_a_restart(tmp_path: Path) -> None:
@@ -48,7 +35,7 @@ def test_a_deploy_adds_the_first_instrument_without_a_restart(tmp_path: Path) ->
     zenoh = f"tcp/127.0.0.1:{free_port()}"
 
     def text(sensors: list[str], topics: list[str]) -> str:
-        body = _model(sensors, topics)
+        body = model_text(sensors, topics, [], subscribed="hull.temperature")
         for k, v in ports.items():
             body = body.replace(k, v)
         return body
@@ -79,7 +66,7 @@ def test_a_deploy_adds_the_first_instrument_without_a_restart(tmp_path: Path) ->
             "state": "open",
         }, reply
         for i in range(5):
-            written.append(_gga(i))
+            written.append(gga(47.70 + i * 0.0001))
             gnss.write(written[-1])
             time.sleep(0.1)
         wait_until(lambda: run_health(run).get("gnss", {}).get("values", 0) == 5, 5, "values")

@@ -30,6 +30,7 @@ from subbroker_harness import (
     shared_credentials,
     start_load,
     start_subbroker,
+    subbroker_config,
 )
 
 RADIO = [str(Path(sys.executable)), "-m", "modd.radio.cli"]
@@ -83,25 +84,18 @@ def subbroker_dgram_config(
 ) -> Path:
     """``pb_status_s``: the PubBroker's STATUS period asked in CONFIG;
     ``ping_period_s``: the SubBroker's periodic PINGs (0: none)."""
-    dev = f"device = {json.dumps(device)}" if device else ""
-    path = tmp / f"{tag}.toml"
-    path.write_text(f"""
-model = {json.dumps(str(model_path))}
-[link]
-endpoint = "{endpoint}"
-key = "env:MODD_LINK_KEY"
-transport = "{transport}"
-pubbroker_status_period_s = {pb_status_s}
-ping_period_s = {ping_period_s}
-{dev}
-[zenoh]
-listen = ["tcp/127.0.0.1:{zenoh_port}"]
-credentials_dir = {json.dumps(str(shared_credentials().dir))}
-[delivery]
-tcp = false
-status_period_s = 0.5
-""")
-    return path
+    more: dict[str, Any] = {"device": device} if device else {}
+    return subbroker_config(
+        tmp,
+        model_path,
+        endpoint,
+        zenoh_port,
+        tag=tag,
+        transport=transport,
+        pubbroker_status_period_s=pb_status_s,
+        ping_period_s=ping_period_s,
+        **more,
+    )
 
 
 def start_radio_udp(

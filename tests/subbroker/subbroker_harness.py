@@ -22,6 +22,7 @@ import tempfile
 import threading
 import time
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -171,13 +172,15 @@ def start_pubbroker(
 def subbroker_config(
     tmp: Path,
     model_path: Path,
-    link_port: int,
+    link_port: int | str,
     zenoh_port: int,
     tcp: bool = False,
     tag: str = "sb",
     state_dir: Path | None = None,
     **link: Any,
 ) -> Path:
+    # link_port: the PubBroker's port on 127.0.0.1, or the whole endpoint (host:port)
+    endpoint = link_port if isinstance(link_port, str) else f"127.0.0.1:{link_port}"
     link_lines = "\n".join(f"{k} = {json.dumps(v)}" for k, v in link.items())
     state = f"state_dir = {json.dumps(str(state_dir))}" if state_dir else ""
     path = tmp / f"{tag}.toml"
@@ -185,7 +188,7 @@ def subbroker_config(
 model = {json.dumps(str(model_path))}
 {state}
 [link]
-endpoint = "127.0.0.1:{link_port}"
+endpoint = "{endpoint}"
 key = "env:MODD_LINK_KEY"
 {link_lines}
 [zenoh]
@@ -441,3 +444,37 @@ def processes(*procs: Proc | None) -> Iterator[None]:
         for p in reversed(procs):
             if p is not None:
                 p.stop()
+
+
+@dataclass
+class Scenario1:
+    """Scenario 1 on loopback: the PubBroker, the SubBroker (``sb`` may be replaced by
+    a restarted one: the one there at the end is stopped) and the load generator."""
+
+    model: Path
+    config: Path
+    port: int  # the SubBroker's zenoh port
+    pb: Proc
+    sb: Proc
+    load: Proc | None = None
+
+
+@contextlib.contextmanager
+def scenario1_running(tmp: Path, load_s: float, config_extra: str = "") -> Iterator[Scenario1]:
+    """Scenario 1's processes on free ports under ``tmp``, once the SubBroker runs
+    its first config; ``config_extra`` is appended to its config (TOML tables).
+    All stopped on exit, last first."""
+    link, ingress, zport = free_port(), free_port(), free_port()
+    model = model_copy(tmp, "scenario1.modd")
+    config = subbroker_config(tmp, model, link, zport)
+    config.write_text(config.read_text() + config_extra)
+    pb = start_pubbroker(tmp, model, link, ingress)
+    s = Scenario1(model, config, zport, pb, start_subbroker(tmp, config))
+    try:
+        s.load = start_load(tmp, model, ingress, load_s)
+        wait_port(zport)
+        assert s.sb.wait_log("config 1 running", 15), s.sb.log()
+        yield s
+    finally:
+        with processes(s.pb, s.sb, s.load):
+            pass

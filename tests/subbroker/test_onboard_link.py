@@ -34,9 +34,9 @@ from subbroker_harness import (
     SUBBROKER,
     Proc,
     processes,
-    shared_credentials,
     signed,
     start_pubbroker,
+    subbroker_config,
     wait_port,
 )
 
@@ -84,25 +84,12 @@ def _actions(reply: dict[str, Any]) -> dict[str, str]:
     return {s["sensor"]: s["action"] for s in reply["onboard"]["sensors"]["sensors"]}
 
 
-def _subbroker(tmp: Path, model: Path, endpoint: str, zport: int, link: str) -> Proc:
+def _subbroker(tmp: Path, model: Path, endpoint: str, zport: int, link: dict[str, Any]) -> Proc:
     """The station: its own directory, state and record; ONBOARD over the link."""
     station = tmp / "station"
     station.mkdir()
-    path = station / "sb.toml"
-    path.write_text(f"""
-model = {json.dumps(str(model))}
-state_dir = {json.dumps(str(station / "state"))}
-[link]
-endpoint = "{endpoint}"
-key = "env:MODD_LINK_KEY"
-{link}
-[zenoh]
-listen = ["tcp/127.0.0.1:{zport}"]
-credentials_dir = {json.dumps(str(shared_credentials().dir))}
-[delivery]
-tcp = false
-status_period_s = 0.5
-""")
+    state = station / "state"
+    path = subbroker_config(station, model, endpoint, zport, state_dir=state, **link)
     cmd = [*SUBBROKER, "--config", str(path), "--onboard-over-link"]
     return Proc("sb", cmd, station / "sb.log", dumps_stacks=True)
 
@@ -130,7 +117,7 @@ def test_a_deploy_reaches_modd_sensors_over_the_link_alone(
         port = free_port()
         cmd = [str(PUBBROKER), "--onboard-model", str(onboard)]
         pb = start_pubbroker(drone, model_path, port, ingress, command=cmd)
-        sb = _subbroker(tmp_path, model_path, f"127.0.0.1:{port}", zport, "")
+        sb = _subbroker(tmp_path, model_path, f"127.0.0.1:{port}", zport, {})
     else:
         radio, base, tty = start_radio_serial(tmp_path, "packet=252,latency_ms=20,seed=5")
         procs.append(radio)
@@ -143,7 +130,7 @@ def test_a_deploy_reaches_modd_sensors_over_the_link_alone(
             model_path,
             "127.0.0.1:1",
             zport,
-            f'transport = "serial"\ndevice = {json.dumps(base)}',
+            {"transport": "serial", "device": base},
         )
     sensors = Proc(
         "sensors",

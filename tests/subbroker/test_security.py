@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -24,15 +25,11 @@ from modd.zenoh_auth import Credentials
 from modd.zenoh_session import client_settings, open_session, wait_connected
 from modd_model.signing import sign_request
 from subbroker_harness import (
-    free_port,
-    model_copy,
-    processes,
+    Scenario1,
+    scenario1_running,
     shared_credentials,
     signed,
-    start_load,
-    start_pubbroker,
     start_subbroker,
-    subbroker_config,
     wait_port,
 )
 
@@ -42,30 +39,18 @@ DYN = {"topic": "usv.accelerometer.accel_x", "period_s": "4.0", "aggregation": "
 
 
 @pytest.fixture(scope="module")
-def station(tmp_path_factory: pytest.TempPathFactory) -> Any:
+def station(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Scenario1]:
     tmp = tmp_path_factory.mktemp("security")
-    link, ingress, zport = free_port(), free_port(), free_port()
-    model = model_copy(tmp, "scenario1.modd")
-    pb = start_pubbroker(tmp, model, link, ingress)
-    config = subbroker_config(tmp, model, link, zport)
-    sb = start_subbroker(tmp, config)
-    load = start_load(tmp, model, ingress, 60)
-    info: dict[str, Any] = {"port": zport, "model": model, "sb": sb, "config": config}
-    try:
-        wait_port(zport)
-        assert sb.wait_log("config 1 running", 15), sb.log()
-        yield info
-    finally:
-        with processes(pb, info["sb"], load):
-            pass
+    with scenario1_running(tmp, 60) as running:
+        yield running
 
 
 def _anonymous(port: int, who: Credentials | None) -> None:
     open_session(client_settings(f"tcp/127.0.0.1:{port}", who))
 
 
-def test_anonymous_and_wrong_password_refused(station: dict[str, Any]) -> None:
-    port = station["port"]
+def test_anonymous_and_wrong_password_refused(station: Scenario1) -> None:
+    port = station.port
     with pytest.raises(ValueError, match="cannot open"):
         _anonymous(port, None)
     for who in (
@@ -78,9 +63,9 @@ def test_anonymous_and_wrong_password_refused(station: dict[str, Any]) -> None:
 
 
 def test_viewer_reads_but_cannot_deploy_subscribe_or_forge(
-    station: dict[str, Any], zenoh_client: Any
+    station: Scenario1, zenoh_client: Any
 ) -> None:
-    port = station["port"]
+    port = station.port
     reader = zenoh_client(port, "backend")
     viewer = zenoh_client(port, "viewer")
     assert wait_connected(reader) and wait_connected(viewer)
@@ -99,20 +84,18 @@ def test_viewer_reads_but_cannot_deploy_subscribe_or_forge(
     assert any("/sub/" in k for k, _ in seen) and any(k.endswith("/status") for k, _ in seen)
     assert not [p for _, p in seen if b"999999" in p or b"forged" in p]
     assert any("/sub/" in k for k in mine), "the viewer reads values"
-    s1 = Path(station["model"]).read_text()
+    s1 = station.model.read_text()
     with pytest.raises(NoReply):
         request(viewer, "modd/usv/deploy", signed({"text": s1, "format": "json"}), timeout_s=1)
     with pytest.raises(NoReply):
         request(viewer, "modd/usv/subscribe", DYN, timeout_s=1)
-    assert "deploy" not in station["sb"].log().split("config 1 running", 1)[1]
+    assert "deploy" not in station.sb.log().split("config 1 running", 1)[1]
 
 
-def test_unsigned_forged_or_replayed_deploy_refused(
-    station: dict[str, Any], zenoh_client: Any
-) -> None:
-    backend = zenoh_client(station["port"], "backend")
+def test_unsigned_forged_or_replayed_deploy_refused(station: Scenario1, zenoh_client: Any) -> None:
+    backend = zenoh_client(station.port, "backend")
     assert wait_connected(backend)
-    body = {"text": Path(station["model"]).read_text(), "format": "json", "timeout_s": 5}
+    body = {"text": station.model.read_text(), "format": "json", "timeout_s": 5}
     unsigned = request(backend, "modd/usv/deploy", body)
     assert unsigned["status"] == "UNAUTHORISED", unsigned
     forged = sign_request(b"a key the attacker made up", body)
@@ -126,8 +109,8 @@ def test_unsigned_forged_or_replayed_deploy_refused(
     assert replay["status"] == "UNAUTHORISED" and "replayed" in replay["reason"]
 
 
-def test_dynamic_quota_owner_scope_and_names(station: dict[str, Any], zenoh_client: Any) -> None:
-    backend = zenoh_client(station["port"], "backend")
+def test_dynamic_quota_owner_scope_and_names(station: Scenario1, zenoh_client: Any) -> None:
+    backend = zenoh_client(station.port, "backend")
     assert wait_connected(backend)
 
     def ask(**more: Any) -> dict[str, Any]:
@@ -165,18 +148,18 @@ def test_dynamic_quota_owner_scope_and_names(station: dict[str, Any], zenoh_clie
 
 
 def test_replayed_deploy_refused_after_a_subbroker_restart(
-    station: dict[str, Any], zenoh_client: Any, tmp_path: Path
+    station: Scenario1, zenoh_client: Any, tmp_path: Path
 ) -> None:
-    backend = zenoh_client(station["port"], "backend")
+    backend = zenoh_client(station.port, "backend")
     assert wait_connected(backend)
-    body = {"text": Path(station["model"]).read_text(), "format": "json", "timeout_s": 5}
+    body = {"text": station.model.read_text(), "format": "json", "timeout_s": 5}
     good = signed(body)
     applied = request(backend, "modd/usv/deploy", good)  # the signature and nonce passed
     assert applied["status"] != "UNAUTHORISED", applied
-    old = station["sb"]
+    old = station.sb
     old.stop()
-    station["sb"] = sb = start_subbroker(tmp_path, station["config"], "sb-restarted")
-    wait_port(station["port"])
+    station.sb = sb = start_subbroker(tmp_path, station.config, "sb-restarted")
+    wait_port(station.port)
     assert sb.wait_log("running", 30), sb.log()
     deadline = time.monotonic() + 10
     while True:  # the client reconnects to the restarted router by itself
@@ -201,12 +184,12 @@ def _replies(session: Any, key: str, body: dict[str, Any]) -> list[dict[str, Any
 
 
 def test_no_identity_but_the_subbroker_answers_or_forges(
-    station: dict[str, Any], zenoh_client: Any
+    station: Scenario1, zenoh_client: Any
 ) -> None:
     """Held-out: a viewer, or a stolen backend credential, declares queryables
     on the control keys to answer in the SubBroker's place, and the backend
     puts forged values and status: none of it reaches anyone."""
-    port = station["port"]
+    port = station.port
     backend = zenoh_client(port, "backend")
     viewer = zenoh_client(port, "viewer")
     other = zenoh_client(port, "backend")
@@ -241,14 +224,14 @@ def test_no_identity_but_the_subbroker_answers_or_forges(
 
 
 def test_oversized_or_deep_queries_are_refused_before_parsing(
-    station: dict[str, Any], zenoh_client: Any
+    station: Scenario1, zenoh_client: Any
 ) -> None:
     """Held-out: a stolen ``backend`` credential sends 30,000-deep and
     oversized documents to every queryable. Before, the parser's recursion
     answered "internal error" (a traceback logged per query) and a 20 MB
     query was parsed whole; now each is an ERROR naming the bound, and the
     SubBroker keeps answering."""
-    backend = zenoh_client(station["port"], "backend")
+    backend = zenoh_client(station.port, "backend")
     assert wait_connected(backend)
     deep = b"[" * 30_000 + b"]" * 30_000  # within the size bound, far past the recursion limit
     big = json.dumps({"action": "list", "owner": "x" * 70_000}).encode()
@@ -266,4 +249,4 @@ def test_oversized_or_deep_queries_are_refused_before_parsing(
             assert replies[0]["status"] == "ERROR" and words in replies[0]["reason"], replies
     listed = request(backend, "modd/usv/subscribe", {"action": "list", "owner": "x"})
     assert listed["status"] == "OK"
-    assert "RecursionError" not in station["sb"].log()
+    assert "RecursionError" not in station.sb.log()

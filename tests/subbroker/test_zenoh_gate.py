@@ -16,17 +16,7 @@ from pathlib import Path
 import pytest
 from churn import Churner
 from modd.zenoh_session import client_settings, open_session
-from subbroker_harness import (
-    free_port,
-    model_copy,
-    processes,
-    shared_credentials,
-    start_load,
-    start_pubbroker,
-    start_subbroker,
-    subbroker_config,
-    wait_port,
-)
+from subbroker_harness import scenario1_running, shared_credentials
 
 pytestmark = pytest.mark.usefixtures("needs_pubbroker")
 
@@ -66,19 +56,9 @@ def fds(pid: int) -> int:
 def run(tmp_path: Path, gate: bool, hold: int) -> tuple[list[float], Churner, int, str]:
     """Viewer open times under churn, the churner, fds after minus before, the log."""
     REFUSALS.clear()
-    link, ingress, zport = free_port(), free_port(), free_port()
-    model = model_copy(tmp_path, "scenario1.modd")
-    config = subbroker_config(tmp_path, model, link, zport)
-    if not gate:
-        config.write_text(
-            config.read_text().replace("[delivery]", "[zenoh.gate]\nenabled = false\n[delivery]")
-        )
-    pb = start_pubbroker(tmp_path, model, link, ingress)
-    sb = start_subbroker(tmp_path, config)
-    load = start_load(tmp_path, model, ingress, 120)
-    with processes(pb, sb, load):
-        wait_port(zport)
-        assert sb.wait_log("config 1 running", 15), sb.log()
+    off = "" if gate else "[zenoh.gate]\nenabled = false\n"
+    with scenario1_running(tmp_path, 120, config_extra=off) as station:
+        sb, pb, zport = station.sb, station.pb, station.port
         assert viewer_value_in(zport) < 2.0, "no live value before the churn"
         time.sleep(0.5)
         before = fds(sb.pid)

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx2 as httpx
+import pytest
 from modd.zenoh_auth import acl
 from modd.zenoh_session import ZenohSettings, open_session
 from websockets.sync.client import ClientConnection, connect
@@ -36,6 +37,7 @@ from subbroker_harness import (  # noqa: E402
 )
 
 __all__ = [
+    "DEMO",
     "SUBBROKER_CLIENT_TOML",
     "PUBBROKER",
     "REPO",
@@ -45,8 +47,12 @@ __all__ = [
     "StatusWatch",
     "free_port",
     "receive_until",
+    "router_and_watch",
+    "start_signed_in_backend",
     "start_pubbroker",
     "shared_credentials",
+    "start_client_subbroker",
+    "started",
     "wait_port",
     "zenoh_router",
 ]
@@ -67,6 +73,38 @@ credentials_dir = "{credentials}"
 tcp = false
 status_period_s = 0.5
 """
+#: The demo mission (one drone, ``usv``) the workbench tests fly.
+DEMO = REPO / "metamodel" / "examples" / "demo.modd"
+
+
+@pytest.fixture
+def started() -> Iterator[list[Proc]]:
+    """The processes a test starts (append them), stopped last first when it ends.
+    A fixture: import it into the test module."""
+    procs: list[Proc] = []
+    yield procs
+    for p in reversed(procs):
+        p.stop()
+
+
+def start_client_subbroker(
+    tmp: Path, name: str, model: Path, link: int, key_file: Path | str, router: str
+) -> Proc:
+    """A SubBroker joined to ``router`` as a client (SUBBROKER_CLIENT_TOML), linked to
+    127.0.0.1:``link`` with the key in ``key_file``; ``tmp/NAME.toml``, ``tmp/NAME.log``.
+    MODD_LINK_KEY is set to a wrong key: the SubBroker must read its own file."""
+    config = tmp / f"{name}.toml"
+    config.write_text(
+        SUBBROKER_CLIENT_TOML.format(
+            model=model,
+            link=link,
+            key=key_file,
+            router=router,
+            credentials=shared_credentials().dir,
+        )
+    )
+    cmd = [str(VENV_BIN / "modd-subbroker"), "--config", str(config)]
+    return Proc(name, cmd, tmp / f"{name}.log", env={"MODD_LINK_KEY": "not-the-link-key"})
 
 
 @contextlib.contextmanager
@@ -211,3 +249,26 @@ def receive_until(
         if pred(msg):
             return got
     raise AssertionError(f"the expected message never came within {timeout_s} s; got {got[-5:]}")
+
+
+@contextlib.contextmanager
+def router_and_watch() -> Iterator[tuple[str, StatusWatch]]:
+    """A zenoh router on a free loopback port (its endpoint) and a watch on the
+    SubBrokers' status keys through it; for tests that also run the PubBroker."""
+    assert PUBBROKER.exists(), f"{PUBBROKER} is not built: run make build (make test does)"
+    port = free_port()
+    with zenoh_router(port) as session:
+        watch = StatusWatch(session)
+        try:
+            yield f"tcp/127.0.0.1:{port}", watch
+        finally:
+            watch.close()
+
+
+def start_signed_in_backend(tmp: Path, router: str, password: str, started: list[Proc]) -> Backend:
+    """The workbench joined to ``router`` (deploys time out after 8 s), in ``started``,
+    signed in as its admin."""
+    backend = Backend.start(tmp, router, password, ["--deploy-timeout", "8"])
+    started.append(backend.proc)
+    backend.sign_in(password)
+    return backend

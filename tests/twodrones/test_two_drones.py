@@ -10,7 +10,6 @@ import re
 import secrets
 import sys
 import time
-from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -21,21 +20,20 @@ from modd_model import load_model
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from support.loopback import (  # noqa: E402
-    PUBBROKER,
-    REPO,
-    SUBBROKER_CLIENT_TOML,
+    DEMO,
     VENV_BIN,
     Backend,
     Proc,
     StatusWatch,
     free_port,
     receive_until,
-    shared_credentials,
+    router_and_watch,
+    start_client_subbroker,
     start_pubbroker,
-    zenoh_router,
+    start_signed_in_backend,
+    started,  # noqa: F401  (the fixture)
 )
 
-DEMO = REPO / "metamodel" / "examples" / "demo.modd"
 ADMIN_PASSWORD = "two-drones-admin-password"
 
 
@@ -107,29 +105,8 @@ def start_drone(tmp: Path, name: str, router: str, extra_subscriber: str | None 
             env=env,
         )
     )
-    config = d / f"{name}-subbroker.toml"
-    config.write_text(
-        SUBBROKER_CLIENT_TOML.format(
-            model=path, link=link, key=key_file, router=router, credentials=shared_credentials().dir
-        )
-    )
-    drone.procs.append(
-        Proc(
-            f"{name}-subbroker",
-            [str(VENV_BIN / "modd-subbroker"), "--config", str(config)],
-            d / f"{name}-subbroker.log",
-            env=env,
-        )
-    )
+    drone.procs.append(start_client_subbroker(d, f"{name}-subbroker", path, link, key_file, router))
     return drone
-
-
-@pytest.fixture
-def started() -> Iterator[list[Proc]]:
-    procs: list[Proc] = []
-    yield procs
-    for p in reversed(procs):
-        p.stop()
 
 
 def deploy(backend: Backend, project: int) -> dict[str, Any]:
@@ -145,28 +122,22 @@ def values(messages: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 @pytest.mark.timeout(90)
-def test_two_drones_have_their_own_deploys_and_streams(tmp_path: Path, started: list[Proc]) -> None:
-    assert PUBBROKER.exists(), f"{PUBBROKER} is not built: run make build (make test does)"
-    router_port = free_port()
-    router = f"tcp/127.0.0.1:{router_port}"
-    with zenoh_router(router_port) as session:
-        watch = StatusWatch(session)
-        try:
-            usv = start_drone(tmp_path, "usv", router)
-            started.extend(usv.procs)
-            asv = start_drone(tmp_path, "asv", router, extra_subscriber="only_asv")
-            started.extend(asv.procs)
-            backend = Backend.start(tmp_path, router, ADMIN_PASSWORD, ["--deploy-timeout", "8"])
-            started.append(backend.proc)
-            backend.sign_in(ADMIN_PASSWORD)
-            for d in (usv, asv):
-                watch.wait(d.name, lambda s: s["link"] == "up" and s["config_id"], 30)
-            check_deploys(backend, watch, usv, asv)
-            check_streams(backend, usv, asv)
-            for p in started:
-                assert p.alive(), f"{p.name} died:\n{p.log()}"
-        finally:
-            watch.close()
+def test_two_drones_have_their_own_deploys_and_streams(
+    tmp_path: Path,
+    started: list[Proc],  # noqa: F811
+) -> None:
+    with router_and_watch() as (router, watch):
+        usv = start_drone(tmp_path, "usv", router)
+        started.extend(usv.procs)
+        asv = start_drone(tmp_path, "asv", router, extra_subscriber="only_asv")
+        started.extend(asv.procs)
+        backend = start_signed_in_backend(tmp_path, router, ADMIN_PASSWORD, started)
+        for d in (usv, asv):
+            watch.wait(d.name, lambda s: s["link"] == "up" and s["config_id"], 30)
+        check_deploys(backend, watch, usv, asv)
+        check_streams(backend, usv, asv)
+        for p in started:
+            assert p.alive(), f"{p.name} died:\n{p.log()}"
 
 
 def check_deploys(backend: Backend, watch: StatusWatch, usv: Drone, asv: Drone) -> None:
