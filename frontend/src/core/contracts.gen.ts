@@ -34,6 +34,10 @@ export interface DeliveredValue {
   delivered_ns: number;
   /** Payload version; a reader rejects a higher one. */
   v: number;
+  /** An event subscription's window (ON_CHANGE, THRESHOLD: value is the list of its events' values): each event's sample time, ns since the Unix epoch on the drone's clock (the PubBroker's stamp of the sample, to the microsecond), in value's order; absent for the other aggregations. */
+  event_ns?: number[];
+  /** An event window: how many events beyond the subscription's worst case (at most N a window) were coalesced into its last event (value's last item is the window's newest event); count is then the window's events, len(value) + coalesced. Absent for the other aggregations. */
+  coalesced?: number;
   /** Present and true when the window was recomputed from the drone's archive after the link missed it (backfill); absent on live values. */
   backfilled?: boolean;
 }
@@ -506,6 +510,8 @@ export const AGGREGATION_TABLE = [
   { name: "STDDEV", code: 9, numericOnly: true },
   { name: "RANGE", code: 10, numericOnly: true },
   { name: "PERCENTILE", code: 11, numericOnly: true },
+  { name: "ON_CHANGE", code: 12, numericOnly: false },
+  { name: "THRESHOLD", code: 13, numericOnly: true },
 ] as const;
 
 /** Each aggregation's name, for code that compares or builds one. */
@@ -522,6 +528,8 @@ export const AGGREGATION = {
   STDDEV: "STDDEV",
   RANGE: "RANGE",
   PERCENTILE: "PERCENTILE",
+  ON_CHANGE: "ON_CHANGE",
+  THRESHOLD: "THRESHOLD",
 } as const;
 
 /** The role owning each model part (modd.schema.json x-owner; null: any editor). */

@@ -40,8 +40,10 @@ samples, so none reaches a detector.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 from .link_wire_gen import MAX_EVENTS, Crossing, DeadbandMode, EventKind
 
@@ -153,3 +155,94 @@ def implied(spec: EventSpec, samples: Sequence[tuple[int, float]]) -> list[tuple
     delivery test: a window's events are these, coalesced beyond N)."""
     detector = Detector(spec)
     return [(t, float(x)) for t, x in samples if detector.feed(x) is not None]
+
+
+# -- Labels: an event stream's name in the plan, CONFIG's reader and delivered
+# values (modd_contracts.labels), ``ON_CHANGE(0.5)``, ``ON_CHANGE(5%, 4)``,
+# ``THRESHOLD(DOWN 5, 0.2, 2)``: the definition's parameters, then N when declared.
+
+ON_CHANGE, THRESHOLD = "ON_CHANGE", "THRESHOLD"
+#: The aggregation table's event subscriptions.
+EVENT_AGGREGATIONS = frozenset({ON_CHANGE, THRESHOLD})
+_CROSSINGS = {"up": Crossing.UP, "down": Crossing.DOWN, "both": Crossing.BOTH}
+
+
+def _num(x: float) -> str:
+    return repr(float(x)).removesuffix(".0")
+
+
+@dataclass(frozen=True)
+class EventLabel:
+    """An event stream's parameters; ``max_events`` None when derived."""
+
+    spec: EventSpec
+    declared: bool
+    percent: float | None = field(default=None, compare=False)  # relative, as written
+
+    @property
+    def max_events(self) -> int | None:
+        return self.spec.max_events if self.declared else None
+
+    def text(self) -> str:
+        s = self.spec
+        n = f", {s.max_events}" if self.declared else ""
+        if s.kind == EventKind.ON_CHANGE:
+            d = _num(self.percent) + "%" if self.percent is not None else _num(s.deadband)
+            return f"{ON_CHANGE}({d}{n})"
+        h = f", {_num(s.hysteresis)}" if n or s.hysteresis else ""
+        return f"{THRESHOLD}({s.crossing.name} {_num(s.level)}{h}{n})"
+
+
+def of_subscriber(sub: Any) -> EventLabel:
+    """The parameters of a model's ON_CHANGE or THRESHOLD subscriber (the
+    validator has checked them)."""
+    n = sub.get("maxEvents")
+    bound = int(n) if n is not None else MAX_EVENTS
+    if sub["aggregation"] == ON_CHANGE:
+        relative = "deadbandPercent" in sub
+        d = float(sub["deadbandPercent"]) / 100 if relative else float(sub.get("deadband", 0.0))
+        mode = DeadbandMode.RELATIVE if relative else DeadbandMode.ABSOLUTE
+        spec = EventSpec(EventKind.ON_CHANGE, bound, deadband=d, mode=mode)
+        return EventLabel(spec, n is not None, float(sub["deadbandPercent"]) if relative else None)
+    spec = EventSpec(
+        EventKind.THRESHOLD,
+        bound,
+        level=float(sub["level"]),
+        hysteresis=float(sub.get("hysteresis", 0.0)),
+        crossing=_CROSSINGS[sub.get("crossing", "both")],
+    )
+    return EventLabel(spec, n is not None)
+
+
+def parse_label(text: str) -> EventLabel:
+    """An event label's parameters; ValueError naming the text when it is none.
+
+    >>> parse_label("THRESHOLD(DOWN 5, 0.2, 2)").text(), parse_label("ON_CHANGE(5%)").spec.deadband
+    ('THRESHOLD(DOWN 5, 0.2, 2)', 0.05)
+    """
+    name, _, rest = text.partition("(")
+    parts = [p.strip() for p in rest.removesuffix(")").split(",")] if rest.endswith(")") else []
+    try:
+        sub: dict[str, Any] = {"aggregation": name}
+        if name == ON_CHANGE and 1 <= len(parts) <= 2:
+            key = "deadbandPercent" if parts[0].endswith("%") else "deadband"
+            sub[key] = float(parts[0].removesuffix("%"))
+        elif name == THRESHOLD and 1 <= len(parts) <= 3:
+            crossing, _, level = parts[0].partition(" ")
+            sub |= {"crossing": crossing.lower(), "level": float(level)}
+            sub["hysteresis"] = float(parts[1]) if len(parts) > 1 else 0.0
+            if crossing != crossing.upper() or sub["crossing"] not in _CROSSINGS:
+                raise ValueError(crossing)
+        else:
+            raise ValueError(text)
+        limit = 2 if name == ON_CHANGE else 3
+        if len(parts) == limit:
+            if not parts[-1].isdigit():
+                raise ValueError(parts[-1])
+            sub["maxEvents"] = int(parts[-1])
+        out = of_subscriber(sub)
+    except (ValueError, KeyError) as exc:
+        raise ValueError(f"unknown aggregation {text!r} ({exc})") from None
+    if not all(map(math.isfinite, (out.spec.deadband, out.spec.level, out.spec.hysteresis))):
+        raise ValueError(f"unknown aggregation {text!r} (not a finite number)")
+    return out

@@ -32,6 +32,8 @@ class DeliveredValue(TypedDict):
     count: int | None
     delivered_ns: int
     v: int
+    event_ns: NotRequired[list[int]]
+    coalesced: NotRequired[int]
     backfilled: NotRequired[bool]
 
 
@@ -423,6 +425,8 @@ class DeliveredValueFields:
     value: float | bool | Literal["Infinity", "-Infinity", "NaN"] | list[float | bool | Literal["Infinity", "-Infinity", "NaN"]] | None
     count: int | None
     delivered_ns: int
+    event_ns: list[int] | None = None
+    coalesced: int | None = None
     backfilled: bool = False
 
 

@@ -229,19 +229,34 @@ def print_model(doc: dict[str, Any]) -> str:
     out.append("Subscriptions {")
     for s in doc["subscribers"]:
         args = [endpoint(s["endpoint"])] if "endpoint" in s else []
-        args += [quote(s["topic"]), s["periodS"], s["aggregation"] + _percentile(s)]
+        args += [quote(s["topic"]), s["periodS"], s["aggregation"] + _agg_args(s)]
         if "backfill" in s:  # "off" too when set: the text keeps what the model says
             args.append(f"backfill = {s['backfill']}")
         if "resolution" in s:
             args.append(f"resolution = {float(s['resolution'])!r}")
+        if "maxEvents" in s:
+            args.append(f"maxEvents = {s['maxEvents']}")
         out.append(f"{INDENT}Subscriber {name(s['name'])}({', '.join(args)});")
     out.append("}")
     return "\n".join(out) + "\n"
 
 
-def _percentile(sub: dict[str, Any]) -> str:
-    """``(95)`` after PERCENTILE (the shortest text of the number that reads back)."""
-    if "percentile" not in sub:
+def _number(x: Any) -> str:
+    """The shortest text of a number that reads back."""
+    return repr(float(x)).removesuffix(".0")
+
+
+def _agg_args(sub: dict[str, Any]) -> str:
+    """``(95)`` after PERCENTILE, ``(0.5)`` or ``(5%)`` after ON_CHANGE,
+    ``(DOWN 5, 0.2)`` after THRESHOLD: what the model has, nothing more."""
+    if "percentile" in sub:
+        return f"({_number(sub['percentile'])})"
+    if "deadband" in sub:
+        return f"({_number(sub['deadband'])})"
+    if "deadbandPercent" in sub:
+        return f"({_number(sub['deadbandPercent'])}%)"
+    if "level" not in sub:
         return ""
-    p = repr(float(sub["percentile"]))
-    return f"({p.removesuffix('.0')})"
+    crossing = f"{sub['crossing'].upper()} " if "crossing" in sub else ""
+    h = f", {_number(sub['hysteresis'])}" if "hysteresis" in sub else ""
+    return f"({crossing}{_number(sub['level'])}{h})"

@@ -138,6 +138,9 @@ class DeliveredValue(DeliveredValueFields):
         out["value"] = json_safe(self.value)
         if not self.backfilled:
             del out["backfilled"]
+        for optional in ("event_ns", "coalesced"):  # an event window's only
+            if out.get(optional) is None:
+                del out[optional]  # type: ignore[misc]
         out["v"] = PAYLOAD_VERSION
         return out
 
@@ -176,6 +179,12 @@ class DeliveredValue(DeliveredValueFields):
         out = cls(**{**got, "value": value})
         if not isinstance(out.backfilled, bool):
             raise ValueError("delivered value: backfilled must be true or false")
+        if out.event_ns is not None and not (
+            isinstance(out.event_ns, list) and all(_is_int(t) for t in out.event_ns)
+        ):
+            raise ValueError("delivered value: event_ns must be a list of integers")
+        if out.coalesced is not None and not (_is_int(out.coalesced) and out.coalesced >= 0):
+            raise ValueError("delivered value: coalesced must be an integer >= 0")
         return out
 
     @classmethod
@@ -233,8 +242,19 @@ class StreamPayload:
         value: Value,
         count: int | None,
         delivered_ns: int,
+        events: str = "",
     ) -> bytes:
+        """``events``: an event window's fields, :func:`event_fields`."""
         return (
             f"{self._head}{slot}{_K1}{start_ns}{_K2}{end_ns}{_K3}{_json_scalar(value)}"
-            f"{_K4}{_json_scalar(count)}{_K5}{delivered_ns}{_END}"
+            f"{_K4}{_json_scalar(count)}{_K5}{delivered_ns}{events}{_END}"
         ).encode()
+
+
+def event_fields(event_ns: list[int], coalesced: int) -> str:
+    """An event window's fields as :meth:`DeliveredValue.to_json` writes them.
+
+    >>> event_fields([5, 7], 0)
+    ',"event_ns":[5,7],"coalesced":0'
+    """
+    return f',"event_ns":[{",".join(map(str, event_ns))}],"coalesced":{coalesced}'
