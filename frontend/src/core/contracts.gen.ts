@@ -285,6 +285,10 @@ export interface PlanStream {
   factor: number;
   sources: PlanSource[];
   subscribers: string[];
+  /** An event stream's (ON_CHANGE, THRESHOLD) worst case: events a window at most, its declared maxEvents or every sample of the window; absent for the others. */
+  events_at_most?: number;
+  /** An event stream's value bytes a second at most, every window at its worst case (the plan's link figures count it so); absent for the others. */
+  bytes_per_s_at_most?: number;
 }
 
 export interface PlanSlot {

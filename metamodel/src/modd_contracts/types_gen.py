@@ -202,6 +202,8 @@ class PlanStream(TypedDict):
     factor: int
     sources: list[PlanSource]
     subscribers: list[str]
+    events_at_most: NotRequired[int]
+    bytes_per_s_at_most: NotRequired[float]
 
 
 class PlanSlot(TypedDict):

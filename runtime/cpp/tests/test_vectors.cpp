@@ -193,8 +193,9 @@ TEST(Vectors, DataVectors) {
       EXPECT_EQ(back.values[i].integer, d.values[i].integer) << i;
       EXPECT_EQ(back.values[i].count, d.values[i].count) << i;
       EXPECT_EQ(back.values[i].integers, d.values[i].integers) << i;
-      if (is_event(kinds[i].aggregation))
+      if (is_event(kinds[i].aggregation)) {
         EXPECT_EQ(back.values[i].numbers, d.values[i].numbers) << i;
+      }
       EXPECT_EQ(back.values[i].times_us, d.values[i].times_us) << i;
       EXPECT_EQ(back.values[i].coalesced, d.values[i].coalesced) << i;
     }
