@@ -75,7 +75,7 @@ TEST(EventDetector, FlappingKeepsTheBoundAndCountsTheRest) {
   ASSERT_EQ(w.events.size(), 2u);
   EXPECT_EQ(w.events[0], (Event{1, 4.0}));
   EXPECT_EQ(w.events[1], (Event{1000, 6.0}));  // the newest
-  EXPECT_EQ(w.coalesced, 1000u - 2u);           // 1000 crossings in all
+  EXPECT_EQ(w.coalesced, 1000u - 2u);          // 1000 crossings in all
   EXPECT_EQ(det.coalesced_total(), 998u);
   EXPECT_TRUE(det.take().events.empty());
 }

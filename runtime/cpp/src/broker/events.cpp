@@ -10,8 +10,7 @@ namespace ev = link::events;
 
 EventDetector::EventDetector(const EventSpec& spec) : spec_(spec) {
   if (spec.max_events < 1 || spec.max_events > ev::kMaxEvents)
-    throw std::invalid_argument("at most N events: N out of 1.." +
-                                std::to_string(ev::kMaxEvents));
+    throw std::invalid_argument("at most N events: N out of 1.." + std::to_string(ev::kMaxEvents));
   if (!(spec.deadband >= 0) || !(spec.hysteresis >= 0))  // NaN too
     throw std::invalid_argument("a deadband or hysteresis is a number >= 0");
   window_.events.reserve(spec.max_events < 64 ? spec.max_events : 64);

@@ -85,8 +85,8 @@ link::Value Executor::take_events(Active& a, uint32_t id, int64_t date) {
   link::Value v;
   v.present = !w.events.empty();
   int64_t start = date - static_cast<int64_t>(a.periods_us[id]) * 1000;
-  bool is_float = a.kinds[id].scalar == link::ScalarKind::F32 ||
-                  a.kinds[id].scalar == link::ScalarKind::F64;
+  bool is_float =
+      a.kinds[id].scalar == link::ScalarKind::F32 || a.kinds[id].scalar == link::ScalarKind::F64;
   for (const Event& e : w.events) {
     v.times_us.push_back(e.t_ns > start ? static_cast<uint64_t>(e.t_ns - start) / 1000 : 0);
     if (is_float)

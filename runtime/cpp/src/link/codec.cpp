@@ -54,8 +54,8 @@ Value get_events(ByteReader& r, const ValueKind& k) {
   v.present = true;
   uint64_t n = r.varint();
   if (n < 1 || n > events::kMaxEvents || n > r.remaining())
-    r.fail("event count " + std::to_string(n) + " out of 1.." +
-           std::to_string(events::kMaxEvents) + " or beyond the frame");
+    r.fail("event count " + std::to_string(n) + " out of 1.." + std::to_string(events::kMaxEvents) +
+           " or beyond the frame");
   bool is_float = k.scalar == ScalarKind::F32 || k.scalar == ScalarKind::F64;
   for (uint64_t i = 0; i < n; ++i) {
     v.times_us.push_back(r.varint());
