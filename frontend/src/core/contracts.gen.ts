@@ -34,12 +34,12 @@ export interface DeliveredValue {
   delivered_ns: number;
   /** Payload version; a reader rejects a higher one. */
   v: number;
+  /** Present and true when the window was recomputed from the drone's archive after the link missed it (backfill); absent on live values. */
+  backfilled?: boolean;
   /** An event subscription's window (ON_CHANGE, THRESHOLD: value is the list of its events' values): each event's sample time, ns since the Unix epoch on the drone's clock (the PubBroker's stamp of the sample, to the microsecond), in value's order; absent for the other aggregations. */
   event_ns?: number[];
   /** An event window: how many events beyond the subscription's worst case (at most N a window) were coalesced into its last event (value's last item is the window's newest event); count is then the window's events, len(value) + coalesced. Absent for the other aggregations. */
   coalesced?: number;
-  /** Present and true when the window was recomputed from the drone's archive after the link missed it (backfill); absent on live values. */
-  backfilled?: boolean;
 }
 
 /** The SubBroker's status document, put on modd/<drone>/status every status_period_s. Producer: runtime/python/src/modd/subbroker/broker.py (status), status.py (rates), backpressure.py. Consumers: the backend (stream relay, health, Foxglove), `modd up`, the browser's WebSocketSource. docs/subbroker.md, "Status". A new field is added here first. */

@@ -32,9 +32,9 @@ class DeliveredValue(TypedDict):
     count: int | None
     delivered_ns: int
     v: int
+    backfilled: NotRequired[bool]
     event_ns: NotRequired[list[int]]
     coalesced: NotRequired[int]
-    backfilled: NotRequired[bool]
 
 
 class SubBrokerStatus(TypedDict):
@@ -427,9 +427,9 @@ class DeliveredValueFields:
     value: float | bool | Literal["Infinity", "-Infinity", "NaN"] | list[float | bool | Literal["Infinity", "-Infinity", "NaN"]] | None
     count: int | None
     delivered_ns: int
+    backfilled: bool = False
     event_ns: list[int] | None = None
     coalesced: int | None = None
-    backfilled: bool = False
 
 
 #: The fields every :class:`DeliveredValue` carries, in the contract's order.

@@ -38,11 +38,11 @@ inline constexpr std::string_view kCount = "count";
 inline constexpr std::string_view kDeliveredNs = "delivered_ns";
 // Payload version; a reader rejects a higher one.
 inline constexpr std::string_view kV = "v";
+// Present and true when the window was recomputed from the drone's archive after the link missed it (backfill); absent on live values.
+inline constexpr std::string_view kBackfilled = "backfilled";
 // An event subscription's window (ON_CHANGE, THRESHOLD: value is the list of its events' values): each event's sample time, ns since the Unix epoch on the drone's clock (the PubBroker's stamp of the sample, to the microsecond), in value's order; absent for the other aggregations.
 inline constexpr std::string_view kEventNs = "event_ns";
 // An event window: how many events beyond the subscription's worst case (at most N a window) were coalesced into its last event (value's last item is the window's newest event); count is then the window's events, len(value) + coalesced.
 inline constexpr std::string_view kCoalesced = "coalesced";
-// Present and true when the window was recomputed from the drone's archive after the link missed it (backfill); absent on live values.
-inline constexpr std::string_view kBackfilled = "backfilled";
 
 }  // namespace modd::delivered_value
