@@ -172,8 +172,10 @@ def test_on_change_and_threshold_deliver_every_implied_event_within_the_plan(
         bound = event_window_bytes(of_subscriber(sub), "float32", Fraction(samples), period_us)
         measured = _window_bytes(values[sub["name"]])
         assert max(measured) <= bound, (sub["name"], max(measured), bound)
+        print(f"events: {sub['name']} window value at most {max(measured)} B, plan {bound} B")
     # the plan sizes the link for every window at its worst: the link bytes the
     # SubBroker read (every frame, handshake and STATUS included) stay under the
     # plan's drone-to-base bytes a second over the load's run
     read = max(status["bytes_in"] for status in got.status)
+    print(f"events: link {read / RUN_S:.1f} B/s read, plan at most {plan.link.drone_to_base} B/s")
     assert 0 < read / RUN_S <= plan.link.drone_to_base, (read, plan.link)
