@@ -167,7 +167,6 @@ def test_on_change_and_threshold_deliver_every_implied_event_within_the_plan(
     for sub in SUBS:
         period_us = int(float(sub["periodS"]) * 1_000_000)
         samples = 25 * float(sub["periodS"])  # 25 Hz
-        from fractions import Fraction
 
         bound = event_window_bytes(of_subscriber(sub), "float32", Fraction(samples), period_us)
         measured = _window_bytes(values[sub["name"]])
