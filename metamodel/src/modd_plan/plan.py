@@ -222,11 +222,6 @@ def _window_bytes(stream: StreamKey, tops: Mapping[str, Topic]) -> Fraction:
     )
 
 
-def _us_of(p_num: int, p_den: int) -> int:
-    """A period's whole microseconds (an event stream's times are sized by it)."""
-    return -(-p_num * 1_000_000 // p_den)
-
-
 @lru_cache(maxsize=65_536)  # keyed by integers: Fraction hashing is slow
 def _bytes(
     aggregation: str, topic_type: str, samples_num: int, samples_den: int, period_us: int = 0
