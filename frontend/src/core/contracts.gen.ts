@@ -36,6 +36,12 @@ export interface DeliveredValue {
   v: number;
   /** Present and true when the window was recomputed from the drone's archive after the link missed it (backfill); absent on live values. */
   backfilled?: boolean;
+  /** The window's identity, first part: the drone whose window it is. The identity (drone, subscriber, epoch_ns, window) names the window wherever it was heard (any base station, live or backfilled), so a subscriber joined to several stations keeps one of each (docs/fleet.md). Written by every SubBroker since the fleet; absent from older payloads. */
+  drone?: string;
+  /** The window's identity: the epoch of the configuration it belongs to (the PubBroker's CONFIG_ACK), ns since the Unix epoch on the drone's clock. */
+  epoch_ns?: number;
+  /** The window's identity: its index k on the configuration's grid, the window being [epoch_ns + k period, epoch_ns + (k + 1) period). */
+  window?: number;
   /** An event subscription's window (ON_CHANGE, THRESHOLD: value is the list of its events' values): each event's sample time, ns since the Unix epoch on the drone's clock (the PubBroker's stamp of the sample, to the microsecond), in value's order; absent for the other aggregations. */
   event_ns?: number[];
   /** An event window: how many events beyond the subscription's worst case (at most N a window) were coalesced into its last event (value's last item is the window's newest event); count is then the window's events, len(value) + coalesced. Absent for the other aggregations. */

@@ -84,6 +84,37 @@ def values_tree(drone: str | None) -> str:
     return f"{drone_prefix(drone)}/sub/**"
 
 
+def fleet_tree(drone: str | None) -> str:
+    """A drone's fleet keys (``modd/<drone>/fleet/**``): the liveliness tokens that elect
+    the station serving it (docs/fleet.md), for ACL rules."""
+    return f"{drone_prefix(drone)}/fleet/**"
+
+
+def candidate_key(drone: str, station: str) -> str:
+    """The liveliness token of a station that can serve ``drone``.
+
+    >>> candidate_key("usv", "shore")
+    'modd/usv/fleet/candidate/shore'
+    """
+    return f"{drone_prefix(drone)}/fleet/candidate/{check_name('station', station)}"
+
+
+def serving_key(drone: str, station: str | None) -> str:
+    """The liveliness token of the station holding ``drone``'s link (``None``: any)."""
+    who = "*" if station is None else check_name("station", station)
+    return f"{drone_prefix(drone)}/fleet/serving/{who}"
+
+
+def held_key(drone: str, station: str | None) -> str:
+    """The queryable of a station's window record for ``drone`` (``None``: every station's).
+
+    >>> held_key("usv", None)
+    'modd/usv/fleet/held/*'
+    """
+    who = "*" if station is None else check_name("station", station)
+    return f"{drone_prefix(drone)}/fleet/held/{who}"
+
+
 #: Everything under the MoDD root, for ACL rules.
 EVERYTHING = f"{ROOT}/**"
 #: Every drone's values and every drone's status: what readers subscribe to.

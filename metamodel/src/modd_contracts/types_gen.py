@@ -33,6 +33,9 @@ class DeliveredValue(TypedDict):
     delivered_ns: int
     v: int
     backfilled: NotRequired[bool]
+    drone: NotRequired[str]
+    epoch_ns: NotRequired[int]
+    window: NotRequired[int]
     event_ns: NotRequired[list[int]]
     coalesced: NotRequired[int]
 
@@ -428,6 +431,9 @@ class DeliveredValueFields:
     count: int | None
     delivered_ns: int
     backfilled: bool = False
+    drone: str | None = None
+    epoch_ns: int | None = None
+    window: int | None = None
     event_ns: list[int] | None = None
     coalesced: int | None = None
 

@@ -29,10 +29,12 @@ ORIGINALS = {
         "zenoh_session.py",
         "zenoh_auth.py",
         "zenoh_gate_policy.py",
+        "zenoh_mesh.py",
         "subbroker/__init__.py",
         "subbroker/client.py",
         "subbroker/keys.py",
         "subbroker/payload.py",
+        "subbroker/seen.py",
     )
 } | {
     f"modd_contracts/{name}": f"{_MM}/modd_contracts/{name}"

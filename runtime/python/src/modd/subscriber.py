@@ -33,6 +33,7 @@ from modd_contracts.types_gen import DeliveredValueFields
 
 from .subbroker.keys import sub_key, subscribe_key
 from .subbroker.payload import DeliveredValue
+from .subbroker.seen import Seen, identity
 
 if TYPE_CHECKING:
     import pandas  # type: ignore[import-untyped]
@@ -62,6 +63,9 @@ class Subscription:
         self.accepted: dict[str, Any] | None = None
         self.dropped = 0
         self.malformed = 0
+        #: Windows received again (same identity, another station: docs/fleet.md), not given.
+        self.duplicates = 0
+        self._seen = Seen()
         self._session = session
         self._own_session = own_session
         self._callback = callback
@@ -81,6 +85,10 @@ class Subscription:
                 log.warning(
                     "%s: malformed value dropped (%d so far): %s", self.key, self.malformed, exc
                 )
+            return
+        ident = identity(value)
+        if ident is not None and not self._seen.first(ident):
+            self.duplicates += 1
             return
         if self._callback is not None:
             try:

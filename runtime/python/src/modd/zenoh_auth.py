@@ -34,6 +34,9 @@ from modd_contracts import keys
 log = logging.getLogger("modd.zenoh")
 
 IDENTITIES = ("subbroker", "backend", "viewer")
+#: The identity base stations give each other in a router mesh (docs/fleet.md), made
+#: only for a station that meshes (``CredentialStore.ensure_station``).
+STATION_IDENTITY = "station"
 DICTIONARY = "users"
 DEPLOY_KEY = "deploy.key"
 #: When each credential file was last made anew after the first start (file name -> UTC ISO
@@ -174,8 +177,24 @@ class CredentialStore:
         _write_private(tmp, (json.dumps(notes, sort_keys=True) + "\n").encode())
         tmp.replace(self.dir / REMADE)
 
+    def ensure_station(self) -> CredentialStore:
+        """The ``station`` identity of a station in a router mesh (docs/fleet.md): made
+        when missing (the first station), else the copy the campaign handed over; it
+        joins the dictionary, so the other stations' routers are let in."""
+        self.ensure()
+        cred = self.cred_file(STATION_IDENTITY)
+        if not cred.exists():
+            _write_private(cred, f"{STATION_IDENTITY}:{secrets.token_urlsafe(24)}\n".encode())
+            log.info("zenoh station credentials made: %s (copy it to every station)", cred)
+        self._write_dictionary()
+        return self
+
+    def _identities(self) -> tuple[str, ...]:
+        extra = (STATION_IDENTITY,) if self.cred_file(STATION_IDENTITY).exists() else ()
+        return IDENTITIES + extra
+
     def _write_dictionary(self) -> None:
-        lines = [f"{c.user}:{c.password}\n" for c in map(self.credentials, IDENTITIES)]
+        lines = [f"{c.user}:{c.password}\n" for c in map(self.credentials, self._identities())]
         data = "".join(lines).encode()
         path = self.dictionary
         if path.exists() and read_secret(path, "zenoh dictionary") + b"\n" == data:
@@ -236,6 +255,27 @@ def acl(drone: str | None = None) -> dict[str, Any]:
             ["egress"],
             [*read, *queries],
         ),
+        # the SubBroker: the liveliness tokens electing the station serving its drone
+        _rule(
+            "subbroker_fleet",
+            [
+                "liveliness_token",
+                "declare_liveliness_subscriber",
+                "liveliness_query",
+                "declare_queryable",
+                "query",
+                "reply",
+            ],
+            ["ingress", "egress"],
+            [keys.fleet_tree(drone or None)],
+        ),
+        # the SubBroker of a station in a mesh hears its drone's values another serves
+        _rule(
+            "subbroker_hear",
+            ["declare_subscriber", "put"],
+            ["ingress", "egress"],
+            [keys.values_tree(drone or None)],
+        ),
         # readers (backend and viewers): subscribe to values and status; a
         # subscription may be as wide as modd/**, only these keys' puts reach it
         _rule("read_in", ["declare_subscriber"], ["ingress", "egress"], [keys.EVERYTHING]),
@@ -246,7 +286,11 @@ def acl(drone: str | None = None) -> dict[str, Any]:
     ]
     subjects = [{"id": ident, "usernames": [ident]} for ident in IDENTITIES]
     policies = [
-        {"id": "subbroker", "rules": ["subbroker_out", "subbroker_in"], "subjects": ["subbroker"]},
+        {
+            "id": "subbroker",
+            "rules": ["subbroker_out", "subbroker_in", "subbroker_fleet", "subbroker_hear"],
+            "subjects": ["subbroker"],
+        },
         {
             "id": "backend",
             "rules": ["read_in", "read_out", "ask", "answer"],

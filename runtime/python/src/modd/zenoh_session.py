@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 from .zenoh_auth import Credentials, CredentialStore, acl, read_credentials
 from .zenoh_gate_policy import REFUSAL_MARK, GateLimits
+from .zenoh_mesh import STATION, Mesh, station_acl
 
 if TYPE_CHECKING:
     import zenoh
@@ -83,6 +84,8 @@ class ZenohSettings:
     #: The per-source bounds of the accept gate in front of a SubBroker's listener
     #: (``[zenoh.gate]``; :mod:`modd.zenoh_gate`).
     gate: GateLimits = field(default_factory=GateLimits)
+    #: The other base stations' routers this one joins (``[zenoh.mesh]``; docs/fleet.md).
+    mesh: Mesh | None = None
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
@@ -99,8 +102,11 @@ class ZenohSettings:
             out["listen/endpoints"] = json.dumps(list(self.listen))
         if self.listen:
             out.update(LISTENER_LIMITS)
-        if self.connect:
-            out["connect/endpoints"] = json.dumps(list(self.connect))
+        connect = self.connect + (self.mesh.endpoints() if self.mesh else ())
+        if self.mesh is not None:
+            out.update(self.mesh.inserts())
+        if connect:
+            out["connect/endpoints"] = json.dumps(list(connect))
             # come back within a second when the other side restarts
             out["connect/retry"] = RECONNECT
             if self.mode == "client":
@@ -120,7 +126,16 @@ class ZenohSettings:
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any], where: str = "zenoh") -> ZenohSettings:
         """From a config-file table (docs/subbroker.md, ``[zenoh]``)."""
-        known = {"mode", "listen", "connect", "config_file", "settings", "credentials_dir", "gate"}
+        known = {
+            "mode",
+            "listen",
+            "connect",
+            "config_file",
+            "settings",
+            "credentials_dir",
+            "gate",
+            "mesh",
+        }
         unknown = sorted(set(data) - known)
         if unknown:
             listing = ", ".join(sorted(known))
@@ -131,6 +146,9 @@ class ZenohSettings:
         gate = data.get("gate", {})
         if not isinstance(gate, Mapping):
             raise ValueError(f"{where}.gate: expected a table (docs/subbroker.md)")
+        mesh = data.get("mesh")
+        if mesh is not None and not isinstance(mesh, Mapping):
+            raise ValueError(f"{where}.mesh: expected a table (docs/fleet.md)")
         return cls(
             mode=str(data.get("mode", "router")),
             listen=tuple(_str_list(data.get("listen", [DEFAULT_ENDPOINT]), f"{where}.listen")),
@@ -139,6 +157,7 @@ class ZenohSettings:
             extra={k: json.dumps(v) for k, v in extra.items()},  # TOML values -> JSON
             credentials_dir=str(data["credentials_dir"]) if "credentials_dir" in data else None,
             gate=GateLimits.from_mapping(gate, f"{where}.gate"),
+            mesh=Mesh.from_mapping(mesh, f"{where}.mesh") if mesh is not None else None,
         )
 
 
@@ -200,6 +219,11 @@ def secured(
         extra.setdefault("scouting/gossip/enabled", "false")
     if settings.connect:
         changes["credentials"] = store.credentials(identity)
+    if settings.mesh is not None:  # a station's router: the others know it as `station`
+        store.ensure_station()
+        changes["dictionary_file"] = str(store.dictionary)
+        changes["access_control"] = station_acl(acl(drone), settings.mesh.peer_ids())
+        changes["credentials"] = store.credentials(STATION)
     return replace(settings, extra=extra, **changes)
 
 

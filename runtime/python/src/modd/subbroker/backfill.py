@@ -31,7 +31,8 @@ from modd.link.frames import ProtocolError
 from modd.link.receiver import Window
 
 from .backfill_queue import BackfillQueue, Filled, Job, Run, Timing
-from .payload import DeliveredValue
+from .fleet_record import merge
+from .payload import DeliveredValue, window_index
 from .record_file import read_record
 from .window_record import Due, Epoch, WindowRecord
 
@@ -73,7 +74,9 @@ class BackfillManager:
         sinks: Callable[[], Sequence[Sink]],
         state: StateDir | None = None,
         timing: Timing | None = None,
+        drone: str | None = None,
     ) -> None:
+        self.drone = drone  # the windows carry their identity (docs/fleet.md) when set
         self._send = send
         self._sinks = sinks
         self._state = state
@@ -155,22 +158,34 @@ class BackfillManager:
         with self._lock:
             return self.record.received_until()
 
+    #: The other stations' records (fleet_record.py): a window one holds is no gap.
+    fleet: Callable[[], list[WindowRecord]] | None = None
+
+    def _view(self) -> WindowRecord:
+        """This station's record, merged with the fleet's when there is one."""
+        return self.record if self.fleet is None else merge([self.record, *self.fleet()])
+
     def mission_start(self, running: Running) -> int:
         with self._lock:
-            start = self.record.mission_start(mission_of(running))
+            start = self._view().mission_start(mission_of(running))
         return running.epoch_ns if start is None else min(start, running.epoch_ns)
 
     def knows(self, running: Running, subscriber: str) -> bool:
         with self._lock:
             self.record.begin(epoch_of(running))
-            return subscriber in self.record.subscribers(self.mission_start(running))
+            return subscriber in self._view().subscribers(self.mission_start(running))
+
+    def record_json(self) -> dict[str, Any]:
+        """The window record as kept in the state directory (what the fleet is told)."""
+        with self._lock:
+            return self.record.to_json()
 
     def gaps(self, running: Running, subscriber: str, from_ns: int, to_ns: int) -> list[Run]:
         """The runs of ``subscriber``'s windows in ``[from_ns, to_ns)`` not delivered,
         in every config that ran then (each on its own window grid)."""
         with self._lock:
             self.record.begin(epoch_of(running))  # dynamic subscriptions added since
-            return self.record.gaps(subscriber, from_ns, to_ns)
+            return self._view().gaps(subscriber, from_ns, to_ns)
 
     # -- jobs -------------------------------------------------------------------------
 
@@ -282,9 +297,10 @@ class BackfillManager:
         run, job, now = f.run, f.job, time.time_ns()
         q = f.request.period_us * 1000
         sinks = self._sinks()
+        view = self._view()  # a window another station delivered since is not sent twice
         for i, value in enumerate(f.data.values):
             start = f.request.window_start_ns(f.data.first + i)
-            if self.record.delivered(run.subscriber, run.stream, run.source, start, start + q):
+            if view.delivered(run.subscriber, run.stream, run.source, start, start + q):
                 job.duplicates += 1
                 continue
             window = window_of(value, run.stream.aggregation, run.value_type)
@@ -303,6 +319,7 @@ class BackfillManager:
                 count,
                 now,
                 True,
+                *self._identity(run, start, q),
             )
             payload = out.to_json()
             for sink in sinks:
@@ -310,6 +327,12 @@ class BackfillManager:
             self.record.add_filled(run.subscriber, run.stream, start, start + q)
             job.delivered += 1
         self._dirty = True
+
+    def _identity(self, run: Run, start_ns: int, period_ns: int) -> tuple[Any, ...]:
+        """(drone, epoch_ns, window) of a backfilled window, () when not known."""
+        if self.drone is None or run.epoch_ns is None:
+            return ()
+        return (self.drone, run.epoch_ns, window_index(start_ns, run.epoch_ns, period_ns))
 
     def _ended(self, job: Job) -> None:
         log.info(

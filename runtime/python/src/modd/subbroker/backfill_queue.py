@@ -67,6 +67,7 @@ class Run:
     config_id: int  # the config that was running when these windows were due
     from_ns: int
     windows: int
+    epoch_ns: int | None = None  # the config's epoch (the windows' grid); None: unknown
 
 
 @dataclass

@@ -38,6 +38,7 @@ from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoi
 from .deploy import DeployRequest, parse_request
 from .dynamic import DynamicSubscriptions
 from .fanout import FanOut
+from .fleet_record import FleetRecord
 from .kept import Deployment, StateDir, same_model
 from .keys import backfill_key, deploy_key, subscribe_key
 from .linkhooks import ConfigRejected, LinkDown
@@ -47,6 +48,7 @@ from .record import BaseRecord
 from .rehearsal import CutSwitch
 from .request import MAX_DEPLOY_BYTES, MAX_SMALL_BYTES, read_request
 from .running import Running
+from .serving import ServingSwitch
 from .status import StatusPublisher
 from .transport import link_client
 
@@ -97,7 +99,9 @@ class SubBroker:
         # Backfill (docs/subbroker.md, "Backfill") and the base-station record of every delivery.
         records = config.record_dir or (config.state_dir / "records" if config.state_dir else None)
         self.record = BaseRecord(records, self.drone) if records is not None else None
-        self.backfill = BackfillManager(self.link.send_frame, self._sinks, self._state)
+        self.backfill = BackfillManager(
+            self.link.send_frame, self._sinks, self._state, drone=self.drone
+        )
         self.link.backfill_sink = self.backfill.on_frame
         self.link.on_up = self._link_up
 
@@ -153,6 +157,15 @@ class SubBroker:
                 self._stop_gates()
                 raise
         session = self._session
+        if self.config.station and isinstance(self.link, Pump):
+            self.fleet = FleetRecord(
+                session, self.drone, self.config.station, self.backfill.record_json
+            )
+            self.backfill.fleet = self.fleet.others
+            self.serving = ServingSwitch(
+                session, self.drone, self.config.station, lambda: self.link.up, self._serves
+            )
+            self.link.cut = self.serving
         if self.config.delivery.zenoh:
             self._zenoh = ZenohDelivery(session, self.drone)
         if self.config.delivery.tcp:
@@ -163,11 +176,8 @@ class SubBroker:
                 except delivery_auth.DeliveryKeyError as exc:
                     raise ConfigError(str(exc)) from exc
             self._tcp = TcpDelivery({}, self.config.delivery.tcp_queue, key)
-        self._queryables = [
-            session.declare_queryable(subscribe_key(self.drone), self._on_query(self._subscribe)),
-            session.declare_queryable(deploy_key(self.drone), self._on_query(self._deploy)),
-            session.declare_queryable(backfill_key(self.drone), self._on_query(self._backfill)),
-        ]
+        if self.serving is None:  # a station answers while it serves (_serves)
+            self._declare_queryables(session)
         self._status = StatusPublisher(
             session,
             self.drone,
@@ -175,6 +185,8 @@ class SubBroker:
             self.status,
             lambda: self.link.stats,
         )
+        if self.serving is not None:
+            self._status.quiet = self.serving.another_serves
         self._status.start()
         self.link.start()
         log.info(
@@ -184,12 +196,34 @@ class SubBroker:
             *self.config.endpoint,
         )
 
+    serving: ServingSwitch | None = None
+    fleet: FleetRecord | None = None
+
+    def _declare_queryables(self, session: zenoh.Session) -> None:
+        self._queryables = [
+            session.declare_queryable(subscribe_key(self.drone), self._on_query(self._subscribe)),
+            session.declare_queryable(deploy_key(self.drone), self._on_query(self._deploy)),
+            session.declare_queryable(backfill_key(self.drone), self._on_query(self._backfill)),
+        ]
+
+    def _serves(self, serving: bool) -> None:
+        """This station took the drone's link (its queryables answer) or left it."""
+        if serving and not self._queryables and self._session is not None:
+            self._declare_queryables(self._session)
+        elif not serving:
+            for q in self._queryables:
+                q.undeclare()
+            self._queryables = []
+
     def stop(self) -> None:
         self.link.stop()
+        if self.serving is not None:
+            self.serving.close()
+        if self.fleet is not None:
+            self.fleet.close()
         if self._status is not None:
             self._status.stop()
-        for q in self._queryables:
-            q.undeclare()
+        self._serves(False)
         self._workers.shutdown(wait=True, cancel_futures=True)
         if self._tcp is not None:
             self._tcp.close()
@@ -285,7 +319,7 @@ class SubBroker:
         running = Running(model, plan, config, ack.epoch_ns, FanOut(sent), meta)
         running.topic_info = {t.name: (t.unit, t.type) for t in topics(model).values()}
         running.slots = SlotDelivery(
-            running.fanout, config.config_id, ack.epoch_ns, running.topic_info
+            running.fanout, config.config_id, ack.epoch_ns, running.topic_info, self.drone
         )
         for ps in plan.streams:
             for sub in ps.subscribers:

@@ -21,7 +21,14 @@ from pathlib import Path
 from types import FrameType
 
 from ..zenoh_session import ZenohSettings
-from .config import ConfigError, SubBrokerConfig, config_from_model, load_config, parse_endpoint
+from .config import (
+    ConfigError,
+    SubBrokerConfig,
+    config_from_model,
+    load_config,
+    parse_endpoint,
+    station_name,
+)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -105,6 +112,13 @@ def _parser() -> argparse.ArgumentParser:
         "modd-sensors and modd-mavlink --watch) and put their answers in the reply; "
         "an older PubBroker refuses the frame",
     )
+    p.add_argument(
+        "--station",
+        metavar="NAME",
+        default=None,
+        help="this base station's name when several stations may serve the drone: they "
+        "elect the one that holds the link (docs/fleet.md)",
+    )
     p.add_argument("--log-level", default="INFO")
     return p
 
@@ -147,6 +161,8 @@ def build_config(args: argparse.Namespace) -> SubBrokerConfig:
         cfg = replace(cfg, onboard_over_link=True)
     if args.rehearsal_dir:
         cfg = replace(cfg, rehearsal_dir=Path(args.rehearsal_dir))
+    if args.station:
+        cfg = replace(cfg, station=station_name(args.station, "--station"))
     return replace(
         cfg, link=link, zenoh=z, delivery=delivery, resume=cfg.resume and not args.no_resume
     )

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from modd_contracts.keys import check_name
 from modd_contracts.link_wire_gen import DEFAULT_STATUS_PERIOD_S
 from modd_model import ModelError, load_model
 
@@ -92,6 +93,9 @@ class SubBrokerConfig:
     onboard_model: Path | None = None
     #: an acked deploy's model goes to the PubBroker over the link (ONBOARD)
     onboard_over_link: bool = False
+    #: This base station's name when several may serve the drone (docs/fleet.md): the
+    #: stations elect the one that holds the link; "" connects as before.
+    station: str = ""
 
     @property
     def endpoint(self) -> tuple[str, int]:
@@ -234,7 +238,7 @@ def load_config(path: str | Path) -> SubBrokerConfig:
         raise ConfigError(f"{path}: {exc.strerror}") from exc
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: {exc}") from exc
-    known = {"model", "drone", "state_dir", "record_dir", "link", "zenoh", "delivery"}
+    known = {"model", "drone", "state_dir", "record_dir", "link", "zenoh", "delivery", "station"}
     for key in data:
         if key not in known:
             raise ConfigError(f"{path}: unknown key {key!r}; known: {', '.join(sorted(known))}")
@@ -269,4 +273,15 @@ def load_config(path: str | Path) -> SubBrokerConfig:
         state_dir=path.parent / str(state) if state else None,
         record_dir=path.parent / str(data["record_dir"]) if data.get("record_dir") else None,
         source=str(path),
+        station=station_name(data.get("station", ""), f"{path}: station"),
     )
+
+
+def station_name(value: object, where: str) -> str:
+    """A station's name: an identifier (it is a chunk of a zenoh key), or "" for none."""
+    if value == "":
+        return ""
+    try:
+        return check_name("station", value)
+    except ValueError as exc:
+        raise ConfigError(f"{where}: {exc}") from exc

@@ -294,7 +294,10 @@ class SlotDelivery:
         config_id: int,
         epoch_ns: int,
         topic_info: Mapping[str, tuple[str, str]],
+        drone: str | None = None,
     ) -> None:
+        """``drone``: the windows carry their identity (docs/fleet.md); None: they do not."""
+        self.drone = drone
         self.fanout = fanout
         self._config_id = config_id
         self._epoch_ns = epoch_ns
@@ -309,10 +312,12 @@ class SlotDelivery:
     def _payload(self, stream: StreamKey) -> tuple[StreamPayload, int]:
         unit = self._topic_info[stream.topic][0]
         period_text = stream.key.rsplit("/", 1)[1]
-        entry = (
-            StreamPayload(stream.topic, stream.aggregation, period_text, unit, self._config_id),
-            period_us(stream),
+        period = period_us(stream)
+        ident = None if self.drone is None else (self.drone, self._epoch_ns, period * 1000)
+        payload = StreamPayload(
+            stream.topic, stream.aggregation, period_text, unit, self._config_id, ident
         )
+        entry = (payload, period)
         self._payloads[stream] = entry
         return entry
 

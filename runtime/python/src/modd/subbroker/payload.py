@@ -51,6 +51,9 @@ _FIRST, _CONSTANT, _WINDOW, _VERSION = _ORDER[0], _ORDER[1:6], _ORDER[6:12], _OR
 _KEYS = tuple(f',"{k}":' for k in _WINDOW)
 _K1, _K2, _K3, _K4, _K5 = _KEYS[1:]
 _END = "".join(f',"{k}":{PAYLOAD_VERSION}' for k in _VERSION) + "}"
+#: The window's identity (docs/fleet.md): optional in the contract (older payloads lack
+#: it), written by every SubBroker after the windows' own fields, before the version.
+IDENTITY = ("drone", "epoch_ns", "window")
 
 
 #: Numbers JSON cannot hold travel as these strings (docs/protocol.md, "Values JSON
@@ -138,6 +141,9 @@ class DeliveredValue(DeliveredValueFields):
         out["value"] = json_safe(self.value)
         if not self.backfilled:
             del out["backfilled"]
+        for name in IDENTITY:
+            if out.get(name) is None:
+                out.pop(name, None)  # type: ignore[misc]
         for optional in ("event_ns", "coalesced"):  # an event window's only
             if out.get(optional) is None:
                 del out[optional]  # type: ignore[misc]
@@ -175,6 +181,7 @@ class DeliveredValue(DeliveredValueFields):
             )
         if count is not None and not _is_int(count):
             raise ValueError(f"delivered value: count is {count!r}, not an integer or null")
+        _check_identity(data)
         got = {f.name: data[f.name] for f in fields(cls) if f.name in data}
         out = cls(**{**got, "value": value})
         if not isinstance(out.backfilled, bool):
@@ -197,6 +204,26 @@ class DeliveredValue(DeliveredValueFields):
         if not isinstance(data, dict):
             raise ValueError("a delivered value is a JSON object")
         return cls.from_dict(data)
+
+
+def _check_identity(data: Mapping[str, Any]) -> None:
+    """The identity's fields, when present, are a name and two integers."""
+    drone = data.get("drone")
+    if drone is not None and not isinstance(drone, str):
+        raise ValueError(f"delivered value: drone is {drone!r}, not a string")
+    for name in IDENTITY[1:]:
+        if data.get(name) is not None and not _is_int(data[name]):
+            raise ValueError(f"delivered value: {name} is {data[name]!r}, not an integer")
+
+
+def window_index(start_ns: int, epoch_ns: int, period_ns: int) -> int:
+    """The index of the window starting at ``start_ns`` on the grid of a configuration
+    whose epoch is ``epoch_ns``: windows are [epoch + k period, epoch + (k + 1) period).
+
+    >>> window_index(1_500, 1_000, 250), window_index(1_000, 1_000, 250)
+    (2, 0)
+    """
+    return (start_ns - epoch_ns) // period_ns
 
 
 def subscriber_prefix(subscriber: str) -> bytes:
@@ -223,16 +250,28 @@ class StreamPayload:
     byte :meth:`DeliveredValue.to_json` (field order and separators included).
     """
 
-    __slots__ = ("_head",)
+    __slots__ = ("_epoch", "_head", "_id", "_period")
 
     def __init__(
-        self, topic: str, aggregation: str, period_s: str, unit: str, config_id: int
+        self,
+        topic: str,
+        aggregation: str,
+        period_s: str,
+        unit: str,
+        config_id: int,
+        identity: tuple[str, int, int] | None = None,
     ) -> None:
+        """``identity``: (drone, epoch_ns, period_ns) of the windows, which then carry
+        their identity (drone, subscriber, epoch_ns, window); None: they do not."""
         fixed = json.dumps(
             dict(zip(_CONSTANT, (topic, aggregation, period_s, unit, config_id), strict=True)),
             separators=(",", ":"),
         )
         self._head = fixed[1:-1] + _KEYS[0]
+        self._id, self._epoch, self._period = "", 0, 1
+        if identity is not None:
+            drone, self._epoch, self._period = identity
+            self._id = f',"drone":{json.dumps(drone)},"epoch_ns":{self._epoch},"window":'
 
     def tail(
         self,
@@ -245,9 +284,10 @@ class StreamPayload:
         events: str = "",
     ) -> bytes:
         """``events``: an event window's fields, :func:`event_fields`."""
+        ident = f"{self._id}{(start_ns - self._epoch) // self._period}" if self._id else ""
         return (
             f"{self._head}{slot}{_K1}{start_ns}{_K2}{end_ns}{_K3}{_json_scalar(value)}"
-            f"{_K4}{_json_scalar(count)}{_K5}{delivered_ns}{events}{_END}"
+            f"{_K4}{_json_scalar(count)}{_K5}{delivered_ns}{ident}{events}{_END}"
         ).encode()
 
 

@@ -26,10 +26,18 @@ from modd.link.frames import Config, ConfigAck, Onboard, OnboardAck, ProtocolErr
 
 from .config import LinkOptions
 from .linkhooks import LinkDown, LinkStats
-from .rehearsal import CutSwitch
 from .session import LinkSession
 
 log = logging.getLogger("modd.subbroker.link")
+
+
+class Switch(Protocol):
+    """What keeps the link from connecting while it says so: a rehearsal's cut
+    (:class:`~.rehearsal.CutSwitch`), another station serving the drone
+    (:class:`~.serving.ServingSwitch`)."""
+
+    @property
+    def cut(self) -> bool: ...
 
 
 class Link(Protocol):
@@ -85,8 +93,9 @@ class Pump(ABC):
         self._send_lock = threading.Lock()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=thread_name, daemon=True)
-        #: A rehearsal's switch (modd up --simulate): while it says cut, no link (rehearsal.py).
-        self.cut: CutSwitch | None = None
+        #: While it says cut, no link: a rehearsal's switch (modd up --simulate, rehearsal.py),
+        #: or the election of the station serving the drone (serving.py).
+        self.cut: Switch | None = None
 
     # -- what a transport provides --------------------------------------------------
 
@@ -185,7 +194,7 @@ class Pump(ABC):
         backoff = self._opt.backoff_initial_s
         while not self._stop.is_set():
             if self._is_cut():  # a rehearsed outage: no connect until it is restored, then at once
-                self.stats.state = "cut"
+                self.stats.state = getattr(self.cut, "state", "cut")
                 backoff = 0.0
                 self._stop.wait(0.1)
                 continue
@@ -220,7 +229,7 @@ class Pump(ABC):
         self._flush()
         while not self._stop.is_set():
             if self._is_cut():
-                raise LinkDown("the link was cut for a rehearsal")
+                raise LinkDown(getattr(self.cut, "why", "the link was cut for a rehearsal"))
             self._read()
             self._flush()
             self.session.tick()

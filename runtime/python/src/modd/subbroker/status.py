@@ -74,6 +74,9 @@ class StatusPublisher:
         self._publishing = threading.Lock()  # the period's thread and an event's (a deploy)
         self._thread = threading.Thread(target=self._run, name="modd-status", daemon=True)
         self.last: dict[str, Any] = {}
+        #: True while another base station serves the drone (serving.py): its status is
+        #: the drone's, this station's would say "down" in between (docs/fleet.md).
+        self.quiet: Callable[[], bool] = lambda: False
 
     def start(self) -> None:
         self._thread.start()
@@ -90,7 +93,8 @@ class StatusPublisher:
             status.update(self._rates.update(stats))
             status.update(stats.backpressure.as_dict())
             self.last = status
-            self._pub.put(json.dumps(status, separators=(",", ":")))
+            if not self.quiet():
+                self._pub.put(json.dumps(status, separators=(",", ":")))
             return status
 
     def _run(self) -> None:

@@ -159,7 +159,15 @@ class WindowRecord:
 
         def run(start: int, windows: int) -> Run:
             return Run(
-                d.subscriber, d.stream, d.source, d.value_type, d.unit, e.config_id, start, windows
+                d.subscriber,
+                d.stream,
+                d.source,
+                d.value_type,
+                d.unit,
+                e.config_id,
+                start,
+                windows,
+                e.epoch_ns,
             )
 
         first = max(0, -(-(lo - e.epoch_ns) // q))
