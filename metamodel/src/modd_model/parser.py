@@ -776,6 +776,11 @@ class _Builder:
                 sub["backfill"] = str(word)
             elif isinstance(child, Tree) and child.data == "agg_args":
                 sub.update(self._agg_args(child, sub.get("aggregation", ""), ptr))
+            elif isinstance(child, Tree) and child.data == "agg_param":
+                key, value = child.children
+                assert isinstance(key, Token) and isinstance(value, Token)
+                self._mark(f"{ptr}/{key}", value)
+                sub[str(key)] = str(value) if value.type == "NAME" else float(value)
             elif isinstance(child, Tree) and child.data == "max_events":
                 number = child.children[0]
                 assert isinstance(number, Token)
