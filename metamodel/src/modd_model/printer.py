@@ -11,6 +11,8 @@ from __future__ import annotations
 import re
 from typing import Any
 
+from modd_contracts import aggregations_gen as agg
+
 from .parser import (
     INGRESS_SETTINGS,
     LINK_SETTINGS,
@@ -259,11 +261,11 @@ def _agg_args(sub: dict[str, Any]) -> tuple[str, list[str]]:
     text keeps what the model says."""
     keys = [k for k in ("percentile", *_EVENT_KEYS) if k in sub]
     aggregation = sub["aggregation"]
-    if aggregation == "ON_CHANGE" and keys in (["deadband"], ["deadbandPercent"]):
+    if aggregation == agg.ON_CHANGE and keys in (["deadband"], ["deadbandPercent"]):
         x = sub[keys[0]]
         return f"({_number(x)}{'%' if keys[0] == 'deadbandPercent' else ''})", []
     if (
-        aggregation == "THRESHOLD"
+        aggregation == agg.THRESHOLD
         and "level" in keys
         and set(keys) <= {"level", "hysteresis", "crossing"}
     ):
@@ -271,7 +273,7 @@ def _agg_args(sub: dict[str, Any]) -> tuple[str, list[str]]:
         h = f", {_number(sub['hysteresis'])}" if "hysteresis" in sub else ""
         return f"({crossing}{_number(sub['level'])}{h})", []
     positional = ""
-    if "percentile" in keys and aggregation not in ("ON_CHANGE", "THRESHOLD"):
+    if "percentile" in keys and aggregation not in (agg.ON_CHANGE, agg.THRESHOLD):
         positional, keys = f"({_number(sub['percentile'])})", keys[1:]
     named = [f"{k} = {sub[k] if k == 'crossing' else _number(sub[k])}" for k in keys]
     return positional, named
