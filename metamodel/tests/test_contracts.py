@@ -14,6 +14,7 @@ import pytest
 from jsonschema import Draft202012Validator
 from modd_contracts import keys
 from modd_contracts.aggregations_gen import AGGREGATIONS, BY_NAME
+from modd_contracts.events import EVENT_AGGREGATIONS
 from modd_contracts.owners_gen import MODEL_PART_OWNERS
 from modd_contracts.schema import NAMES, load, validate
 from modd_contracts.typegen import part_owners, stale_outputs
@@ -112,8 +113,11 @@ def test_aggregation_table_is_the_metamodels_enum() -> None:
     assert [a.code for a in AGGREGATIONS] == list(range(len(AGGREGATIONS)))
     for a in AGGREGATIONS:
         assert set(a.result) == {"float32", "float64", "int", "bool"}
-        # a window that cannot be merged (MEDIAN, STDDEV, RANGE) comes from ALL only
-        assert a.name in a.derivable_from or a.derivable_from == ("ALL",)
+        # a window that cannot be merged (MEDIAN, STDDEV, RANGE) comes from ALL only;
+        # an event subscription (its state spans windows) from nothing
+        assert a.name in a.derivable_from or a.derivable_from == (
+            () if a.name in EVENT_AGGREGATIONS else ("ALL",)
+        )
         assert set(a.derivable_from) <= set(BY_NAME)
 
 
@@ -122,6 +126,9 @@ def test_derivability_rules_hold_on_samples() -> None:
     samples computes (the independent oracle: :func:`aggregate` on the whole)."""
     halves = ([1.0, 4.0, -2.0], [3.5, 0.5])
     for name, sources in SINGLE_SOURCE_RULES.items():
+        if name in EVENT_AGGREGATIONS:
+            assert not sources  # derived from nothing
+            continue
         target = "PERCENTILE(95)" if name == "PERCENTILE" else name  # a stream's label
         whole = aggregate(target, [*halves[0], *halves[1]])
         for source in sources:
@@ -144,7 +151,8 @@ def test_cpp_enum_follows_the_table() -> None:
     text = (REPO / "runtime/cpp/include/modd/link/aggregation_table.gen.hpp").read_text()
     enum = re.search(r"enum class Aggregation : uint8_t \{([^}]*)\}", text)
     assert enum is not None
-    names = [n.split("=")[0].strip().upper() for n in enum.group(1).split(",") if n.strip()]
+    names = [n.split("=")[0].strip() for n in enum.group(1).split(",") if n.strip()]
+    names = [re.sub(r"(?<=[a-z])(?=[A-Z])", "_", n).upper() for n in names]  # OnChange
     assert names == [a.name for a in AGGREGATIONS]
 
 

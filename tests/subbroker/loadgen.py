@@ -63,6 +63,32 @@ def wave(rng: random.Random, topic: int, t: float) -> float:
     return math.sin(2 * math.pi * t / 8.0 + topic) + rng.gauss(0.0, 0.01)
 
 
+def _value(
+    signal_: str, rng: random.Random, topic: int, vtype: str, start: float, k: int
+) -> float | int:
+    if signal_ == "wave" and vtype.startswith("float"):
+        return wave(rng, topic, time.monotonic() - start)
+    if signal_ == "scripted" and vtype.startswith("float"):
+        return scripted(rng, topic, k)
+    return value_for(rng, vtype)
+
+
+def scripted(rng: random.Random, topic: int, k: int) -> float:
+    """The event subscriptions' script (tests/subbroker/test_events_e2e.py), 10 s
+    at 25 Hz repeated, a phase of 2 s per topic: steps (4, then 6), a ramp down
+    from 6 to 3, noise around 5 (sigma 0.3), a signal flapping between 4 and 6."""
+    part, i = divmod((k + 50 * topic) % 250, 50)
+    if part == 0:
+        return 4.0
+    if part == 1:
+        return 6.0
+    if part == 2:
+        return 6.0 - 3.0 * i / 49
+    if part == 3:
+        return 5.0 + rng.gauss(0.0, 0.3)
+    return 4.0 if i % 2 else 6.0
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser()
     p.add_argument("--model", required=True)
@@ -72,10 +98,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--record", help="append every sample sent to this file (JSON lines)")
     p.add_argument(
         "--signal",
-        choices=("uniform", "wave"),
+        choices=("uniform", "wave", "scripted"),
         default="uniform",
-        help="float values: uniform in [-10, 10] (default), or a sea wave "
-        "(1 m/s2, 8 s period, a phase per topic) plus 0.01 of noise",
+        help="float values: uniform in [-10, 10] (default), a sea wave "
+        "(1 m/s2, 8 s period, a phase per topic) plus 0.01 of noise, or the event "
+        "tests' script (steps, a ramp, noise around 5, flapping)",
     )
     args = p.parse_args(argv)
     model = load_model(args.model)
@@ -119,9 +146,7 @@ def main(argv: list[str] | None = None) -> int:
         now = time.time_ns()
         records = b""
         values = [
-            wave(rng, ids[topic], time.monotonic() - start)
-            if args.signal == "wave" and types[topic].startswith("float")
-            else value_for(rng, types[topic])
+            _value(args.signal, rng, ids[topic], types[topic], start, sent[topic])
             for topic in pubs[i][1]
         ]
         for topic, value in zip(pubs[i][1], values, strict=True):

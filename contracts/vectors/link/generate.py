@@ -94,6 +94,7 @@ def msg_json(m: Message) -> dict[str, Any]:
             "streams": [
                 {"topic": s.topic, "aggregation": s.aggregation.name, "period_us": s.period_us}
                 | ({} if s.percentile is None else {"percentile": s.percentile})
+                | ({} if s.event is None else {"event": event_json(s.event)})
                 for s in m.streams
             ],
             **({} if m.accepted_delay_ms is None else {"accepted_delay_ms": m.accepted_delay_ms}),
@@ -130,6 +131,19 @@ def msg_json(m: Message) -> dict[str, Any]:
     raise TypeError(m)
 
 
+def event_json(e: EventLabel) -> dict[str, Any]:
+    """An event stream's CONFIG parameters (code: the mode or the crossing)."""
+    s = e.spec
+    code = s.mode if s.kind == EventKind.ON_CHANGE else s.crossing
+    return {
+        "code": int(code),
+        "deadband": s.deadband,
+        "level": s.level,
+        "hysteresis": s.hysteresis,
+        "max_events": e.max_events or 0,
+    }
+
+
 def data_json(d: Data) -> dict[str, Any]:
     return {
         "type": "DATA",
@@ -145,6 +159,7 @@ def data_json(d: Data) -> dict[str, Any]:
                 "count": v.count,
                 "samples": v.samples,
             }
+            | ({"times_us": v.times_us, "coalesced": v.coalesced} if v.times_us else {})
             for v in d.values
         ],
     }
@@ -181,6 +196,10 @@ ONBOARD_ANSWERS = (
     .compress(b'{"sensors": {"ok": true}}')
     .hex()
 )
+
+
+from modd_contracts.events import EventLabel, parse_label  # noqa: E402
+from modd_contracts.link_wire_gen import EventKind  # noqa: E402
 
 
 def simple(name: str, meaning: str, m: Message) -> None:
@@ -461,6 +480,58 @@ def main() -> None:
         ],
     )
 
+    simple(
+        "config_events",
+        "ON_CHANGE and THRESHOLD: after the period, ON_CHANGE's mode (u8) and deadband "
+        "(f64le), THRESHOLD's crossing (u8), level and hysteresis (f64le), then N (varint, "
+        "0: derived); f32 ON_CHANGE(0.5, 4), f32 ON_CHANGE(10%), int THRESHOLD(DOWN 5, 0.2, 2)",
+        Config(
+            203,
+            0,
+            (
+                TopicSpec("d.s.temperature", ValueType.FLOAT32, 1, 0),
+                TopicSpec("d.s.count", ValueType.INT, 1000, 10000),
+            ),
+            (
+                StreamSpec(0, Aggregation.LAST, 1_000_000),
+                StreamSpec(
+                    0, Aggregation.ON_CHANGE, 1_000_000, None, parse_label("ON_CHANGE(0.5, 4)")
+                ),
+                StreamSpec(
+                    0, Aggregation.ON_CHANGE, 2_000_000, None, parse_label("ON_CHANGE(10%)")
+                ),
+                StreamSpec(
+                    1,
+                    Aggregation.THRESHOLD,
+                    1_000_000,
+                    None,
+                    parse_label("THRESHOLD(DOWN 5, 0.2, 2)"),
+                ),
+            ),
+        ),
+    )
+    data(
+        "data_events",
+        "3 event streams: f32 THRESHOLD, 2 events (at 10 us and 0.9 s after the window's "
+        "start) and 3 coalesced; int ON_CHANGE absent; bool ON_CHANGE, 1 event",
+        Data(
+            False,
+            0,
+            0,
+            9,
+            [
+                Value(True, count=5, samples=[4.5, 5.5], times_us=[10, 900_000], coalesced=3),
+                Value(),
+                Value(True, count=1, samples=[1], times_us=[250_000], coalesced=0),
+            ],
+        ),
+        [
+            (ValueType.FLOAT32, Aggregation.THRESHOLD),
+            (ValueType.INT, Aggregation.ON_CHANGE),
+            (ValueType.BOOL, Aggregation.ON_CHANGE),
+        ],
+    )
+
     handshake = {
         "name": "handshake",
         "meaning": "HMAC-SHA256 proofs for key 'modd-test-key'",
@@ -525,6 +596,26 @@ def main() -> None:
             "config_percentile_truncated",
             fr("07 01 00 01 0161 00 01 00 01 00 0b 01 00000000"),
             "PERCENTILE's p cut short",
+        ),
+        (
+            "config_event_bad_crossing",
+            fr("07 01 00 01 0161 00 01 00 01 00 0d 01 04 0000000000001440 0000000000000000 00"),
+            "THRESHOLD crossing 4",
+        ),
+        (
+            "config_event_nan_deadband",
+            fr("07 01 00 01 0161 00 01 00 01 00 0c 01 00 000000000000f87f 00"),
+            "ON_CHANGE(NaN)",
+        ),
+        (
+            "config_event_bound_above_max",
+            fr("07 01 00 01 0161 00 01 00 01 00 0c 01 00 0000000000000000 808004"),
+            "ON_CHANGE with N = 65536",
+        ),
+        (
+            "config_event_truncated",
+            fr("07 01 00 01 0161 00 01 00 01 00 0d 01 02 00000000"),
+            "THRESHOLD's level cut short",
         ),
         ("trailing_byte", fr("08 01 00 0000000000000000 ff"), "CONFIG_ACK with a trailing byte"),
         (

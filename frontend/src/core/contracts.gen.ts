@@ -43,6 +43,10 @@ export interface DeliveredValue {
   epoch_ns?: number;
   /** The window's identity: its index k on the configuration's grid, the window being [epoch_ns + k period, epoch_ns + (k + 1) period). */
   window?: number;
+  /** An event subscription's window (ON_CHANGE, THRESHOLD: value is the list of its events' values): each event's sample time, ns since the Unix epoch on the drone's clock (the PubBroker's stamp of the sample, to the microsecond), in value's order; absent for the other aggregations. */
+  event_ns?: number[];
+  /** An event window: how many events beyond the subscription's worst case (at most N a window) were coalesced into its last event (value's last item is the window's newest event); count is then the window's events, len(value) + coalesced. Absent for the other aggregations. */
+  coalesced?: number;
 }
 
 /** The SubBroker's status document, put on modd/<drone>/status every status_period_s. Producer: runtime/python/src/modd/subbroker/broker.py (status), status.py (rates), backpressure.py. Consumers: the backend (stream relay, health, Foxglove), `modd up`, the browser's WebSocketSource. docs/subbroker.md, "Status". A new field is added here first. */
@@ -288,6 +292,10 @@ export interface PlanStream {
   factor: number;
   sources: PlanSource[];
   subscribers: string[];
+  /** An event stream's (ON_CHANGE, THRESHOLD) worst case: events a window at most, its declared maxEvents or every sample of the window; absent for the others. */
+  events_at_most?: number;
+  /** An event stream's value bytes a second at most, every window at its worst case (the plan's link figures count it so); absent for the others. */
+  bytes_per_s_at_most?: number;
 }
 
 export interface PlanSlot {
@@ -584,6 +592,8 @@ export const AGGREGATION_TABLE = [
   { name: "STDDEV", code: 9, numericOnly: true },
   { name: "RANGE", code: 10, numericOnly: true },
   { name: "PERCENTILE", code: 11, numericOnly: true },
+  { name: "ON_CHANGE", code: 12, numericOnly: false },
+  { name: "THRESHOLD", code: 13, numericOnly: true },
 ] as const;
 
 /** Each aggregation's name, for code that compares or builds one. */
@@ -600,6 +610,8 @@ export const AGGREGATION = {
   STDDEV: "STDDEV",
   RANGE: "RANGE",
   PERCENTILE: "PERCENTILE",
+  ON_CHANGE: "ON_CHANGE",
+  THRESHOLD: "THRESHOLD",
 } as const;
 
 /** The role owning each model part (modd.schema.json x-owner; null: any editor). */

@@ -61,8 +61,8 @@ export type ValueType = "float32" | "float64" | "int" | "bool";
 export const ValueTypeValues = ["float32", "float64", "int", "bool"] as const;
 
 /** How the samples of one period are reduced to what the subscriber receives. ALL sends every raw sample of the period. */
-export type Aggregation = "MIN" | "MAX" | "AVERAGE" | "FIRST" | "LAST" | "ALL" | "COUNT" | "SUM" | "MEDIAN" | "STDDEV" | "RANGE" | "PERCENTILE";
-export const AggregationValues = ["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM", "MEDIAN", "STDDEV", "RANGE", "PERCENTILE"] as const;
+export type Aggregation = "MIN" | "MAX" | "AVERAGE" | "FIRST" | "LAST" | "ALL" | "COUNT" | "SUM" | "MEDIAN" | "STDDEV" | "RANGE" | "PERCENTILE" | "ON_CHANGE" | "THRESHOLD";
+export const AggregationValues = ["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM", "MEDIAN", "STDDEV", "RANGE", "PERCENTILE", "ON_CHANGE", "THRESHOLD"] as const;
 
 /** The platform (surface, aerial or underwater drone) and the sensors it carries. */
 export interface Drone {
@@ -375,6 +375,18 @@ export interface Subscriber {
   aggregation: Aggregation;
   /** The p of a PERCENTILE subscription (numpy.percentile, linear), 0 to 100; required with PERCENTILE and only with it. */
   percentile?: number;
+  /** ON_CHANGE: a sample is an event when it differs from the last event's value by more than this, in the topic's unit (absolute deadband); >= 0. ON_CHANGE takes deadband or deadbandPercent, and only it. */
+  deadband?: number;
+  /** ON_CHANGE: the deadband as a percentage of the last event's value (relative deadband), |x - last| > deadbandPercent / 100 * |last|; >= 0. */
+  deadbandPercent?: number;
+  /** THRESHOLD: the level whose crossings are events; required with THRESHOLD and only with it. */
+  level?: number;
+  /** THRESHOLD: the signal must pass the level by more than this to cross it (a crossing UP needs x > level + hysteresis, DOWN x < level - hysteresis); >= 0, default 0. */
+  hysteresis?: number;
+  /** THRESHOLD: which crossings are events: up, down or both (default both). */
+  crossing?: "up" | "down" | "both";
+  /** ON_CHANGE or THRESHOLD: the declared worst case, at most this many events a period (window); beyond it the newest event replaces the window's last one and is counted as coalesced. Without it the worst case is every sample of the window (from the topic's publication period). */
+  maxEvents?: number;
   /** The precision this subscription needs live, in the topic's unit: at least the variable's resolution (coarser still); the stream is sent at the finest resolution of the subscriptions it serves, unquantised if one of them declares none. */
   resolution?: number;
   /** What the SubBroker fills by itself from the drone's archive after a link outage: off (nothing; a backfill can still be asked for), gaps (the windows missed since the last connection) or mission (every window missed since the running config began). */

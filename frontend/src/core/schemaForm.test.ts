@@ -9,7 +9,8 @@ const field = (kind: Parameters<typeof formFor>[1], path: string): FieldSpec =>
 
 describe("forms from the schema", () => {
   it("lists each kind's fields in schema order, objects flattened, arrays of objects left out", () => {
-    expect(paths("subscriber")).toEqual(["name", "endpoint.host", "endpoint.port", "topic", "periodS", "aggregation", "percentile", "resolution", "backfill"]);
+    expect(paths("subscriber")).toEqual(["name", "endpoint.host", "endpoint.port", "topic", "periodS", "aggregation", "percentile", "deadband", "deadbandPercent",
+      "level", "hysteresis", "crossing", "maxEvents", "resolution", "backfill"]);
     expect(paths("publisher")).toEqual(["name", "endpoint.host", "endpoint.port", "periodS", "topics"]);
     expect(paths("drone")).toEqual(["name", "description", "position.latitude", "position.longitude",
       "position.altitude", "position.maxGapS"]);

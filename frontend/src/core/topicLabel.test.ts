@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { subscriptionLabel, topicLabel } from "./topicLabel";
+import { aggregationLabel, subscriptionLabel, topicLabel } from "./topicLabel";
 import { planFigures } from "./planDiff";
 import type { PlanJson } from "./plan";
 import type { ModdModel } from "./model.gen";
@@ -32,6 +32,11 @@ describe("topicLabel", () => {
     // a percentile by its label, as the plan and the delivered values name it
     expect(subscriptionLabel(model, { topic: "usv.accelerometer.accel_x", aggregation: "PERCENTILE", percentile: 99.5, periodS: "2.0" }))
       .toBe("usv.accelerometer.accel_x (m/s²) PERCENTILE(99.5) every 2.0 s");
+    // event subscriptions by their label: parameters, then N when declared
+    expect(aggregationLabel({ aggregation: "ON_CHANGE", deadband: 0.5, maxEvents: 4 })).toBe("ON_CHANGE(0.5, 4)");
+    expect(aggregationLabel({ aggregation: "ON_CHANGE", deadbandPercent: 5 })).toBe("ON_CHANGE(5%)");
+    expect(aggregationLabel({ aggregation: "THRESHOLD", level: 5, hysteresis: 0.2, crossing: "down" })).toBe("THRESHOLD(DOWN 5, 0.2)");
+    expect(aggregationLabel({ aggregation: "THRESHOLD", level: -2 })).toBe("THRESHOLD(BOTH -2)");
   });
 });
 

@@ -48,13 +48,35 @@ export function topicLabel(model: ModdModel | ReadonlyArray<ModdModel | undefine
 /** A subscription as every panel tells it: its topic (as topicLabel), aggregation and period. */
 export function subscriptionLabel(
   model: ModdModel | ReadonlyArray<ModdModel | undefined> | undefined,
-  s: { topic: string; aggregation: string; periodS: string | number; percentile?: number },
+  s: { topic: string; aggregation: string; periodS: string | number; percentile?: number } & EventParameters,
 ): string {
   return `${s.topic ? topicLabel(model, s.topic) : "(no topic)"} ${aggregationLabel(s)} every ${String(s.periodS)} s`;
 }
 
+/** The parameters of an event subscription (ON_CHANGE, THRESHOLD) a label spells. */
+export interface EventParameters {
+  deadband?: number;
+  deadbandPercent?: number;
+  level?: number;
+  hysteresis?: number;
+  crossing?: string;
+  maxEvents?: number;
+}
+
 /** A subscription's aggregation as the plan and the delivered values name it:
- * PERCENTILE with its p, `PERCENTILE(95)` (modd_contracts/labels.py). */
-export function aggregationLabel(s: { aggregation: string; percentile?: number }): string {
-  return s.aggregation === AGGREGATION.PERCENTILE && s.percentile !== undefined ? `${s.aggregation}(${String(s.percentile)})` : s.aggregation;
+ * PERCENTILE with its p, `PERCENTILE(95)`; an event subscription with its
+ * parameters then N, `ON_CHANGE(0.5, 4)`, `THRESHOLD(DOWN 5, 0.2)`
+ * (modd_contracts/labels.py and events.py). */
+export function aggregationLabel(s: { aggregation: string; percentile?: number } & EventParameters): string {
+  if (s.aggregation === AGGREGATION.PERCENTILE && s.percentile !== undefined) return `${s.aggregation}(${String(s.percentile)})`;
+  const n = s.maxEvents !== undefined ? `, ${String(s.maxEvents)}` : "";
+  if (s.aggregation === AGGREGATION.ON_CHANGE) {
+    const d = s.deadbandPercent !== undefined ? `${String(s.deadbandPercent)}%` : String(s.deadband ?? 0);
+    return `${s.aggregation}(${d}${n})`;
+  }
+  if (s.aggregation === AGGREGATION.THRESHOLD && s.level !== undefined) {
+    const h = n || s.hysteresis ? `, ${String(s.hysteresis ?? 0)}` : "";
+    return `${s.aggregation}(${(s.crossing ?? "both").toUpperCase()} ${String(s.level)}${h}${n})`;
+  }
+  return s.aggregation;
 }

@@ -19,7 +19,7 @@ import { useEditorStore, useModel } from "./useEditor";
 
 /** PERCENTILE needs its p: it is written PERCENTILE(95) in the text view, or given
  * its percentile in the inspector, not chosen here. */
-const QUICK_AGGREGATIONS = AggregationValues.filter((a) => a !== AGGREGATION.PERCENTILE);
+const QUICK_AGGREGATIONS = AggregationValues.filter((a) => a !== AGGREGATION.PERCENTILE && a !== AGGREGATION.ON_CHANGE && a !== AGGREGATION.THRESHOLD);
 
 const selected = (e: React.ChangeEvent<HTMLSelectElement>) => [...e.target.selectedOptions].map((o) => o.value);
 

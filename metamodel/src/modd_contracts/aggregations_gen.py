@@ -27,6 +27,8 @@ MEDIAN: Final = "MEDIAN"
 STDDEV: Final = "STDDEV"
 RANGE: Final = "RANGE"
 PERCENTILE: Final = "PERCENTILE"
+ON_CHANGE: Final = "ON_CHANGE"
+THRESHOLD: Final = "THRESHOLD"
 
 
 class Aggregation(IntEnum):
@@ -45,6 +47,8 @@ class Aggregation(IntEnum):
     STDDEV = 9
     RANGE = 10
     PERCENTILE = 11
+    ON_CHANGE = 12
+    THRESHOLD = 13
 
 
 @dataclass(frozen=True)
@@ -180,6 +184,26 @@ AGGREGATIONS: tuple[AggregationSpec, ...] = (
         keeps_samples=True,
         result={'float32': 'float32', 'float64': 'float64', 'int': 'float64', 'bool': 'float32'},
         derivable_from=('ALL',),
+        derivable_from_pair=None,
+    ),
+    AggregationSpec(
+        name='ON_CHANGE',
+        code=12,
+        numeric_only=False,
+        wire_count=False,
+        keeps_samples=False,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'bool'},
+        derivable_from=(),
+        derivable_from_pair=None,
+    ),
+    AggregationSpec(
+        name='THRESHOLD',
+        code=13,
+        numeric_only=True,
+        wire_count=False,
+        keeps_samples=False,
+        result={'float32': 'float32', 'float64': 'float64', 'int': 'int', 'bool': 'bool'},
+        derivable_from=(),
         derivable_from_pair=None,
     ),
 )

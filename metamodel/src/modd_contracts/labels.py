@@ -18,6 +18,7 @@ import math
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
+from . import events
 from .aggregations_gen import BY_NAME, PERCENTILE, AggregationSpec
 
 _V = TypeVar("_V")
@@ -26,6 +27,11 @@ _V = TypeVar("_V")
 def p_text(p: float) -> str:
     """``95.0`` -> ``"95"``, ``99.5`` -> ``"99.5"``."""
     return repr(float(p)).removesuffix(".0")
+
+
+def is_event(text: str) -> bool:
+    """Whether a label names an event subscription (ON_CHANGE, THRESHOLD)."""
+    return base(text) in events.EVENT_AGGREGATIONS
 
 
 def label(aggregation: str, p: float | None = None) -> str:
@@ -38,13 +44,19 @@ def label(aggregation: str, p: float | None = None) -> str:
 
 
 def of_subscriber(sub: Mapping[str, Any]) -> str:
-    """The label of a model's subscriber (its aggregation and percentile)."""
+    """The label of a model's subscriber (its aggregation and percentile, or an
+    event subscription's parameters, modd_contracts.events)."""
+    if sub["aggregation"] in events.EVENT_AGGREGATIONS:
+        return events.of_subscriber(sub).text()
     return label(sub["aggregation"], sub.get("percentile"))
 
 
 def parse(text: str) -> tuple[str, float | None]:
     """A label's (aggregation, p); ValueError naming the text when it is none."""
     name, paren, rest = text.partition("(")
+    if name in events.EVENT_AGGREGATIONS:
+        events.parse_label(text)  # ValueError naming the text
+        return name, None
     if name not in BY_NAME or (paren and name != PERCENTILE) or (name == PERCENTILE) != bool(paren):
         raise ValueError(f"unknown aggregation {text!r}")
     if not paren:
@@ -71,6 +83,8 @@ def spec(text: str) -> AggregationSpec:
 def rank(text: str) -> float:
     """The stream-id order of a label: the wire code, then p."""
     name, p = parse(text) if "(" in text else (text, None)
+    if name in events.EVENT_AGGREGATIONS:
+        p = None  # event streams of one topic and period: in the model's order
     return BY_NAME[name].code * 1000 + (p or 0.0)
 
 

@@ -193,6 +193,36 @@ class EndStatus(IntEnum):
     IO = 5  # the archive could not be read
 
 
+# -- events: Event subscriptions, ON_CHANGE and THRESHOLD (docs/planning.md, "Event
+# -- subscriptions"): their codes and bounds; the definition is modd_contracts.events, its
+# -- vectors contracts/vectors/events.json.
+#: Most events one window of an event subscription carries (its declared or derived 'at most
+#: N'): the link's list bound.
+MAX_EVENTS: Final = 65535
+
+
+class EventKind(IntEnum):
+    """What makes an event."""
+
+    ON_CHANGE = 0  # the sample differs from the last reported one by more than the deadband
+    THRESHOLD = 1  # the sample crosses the level by more than the hysteresis
+
+
+class DeadbandMode(IntEnum):
+    """How an ON_CHANGE deadband is read."""
+
+    ABSOLUTE = 0  # in the topic's unit: |x - last| > deadband
+    RELATIVE = 1  # a fraction of the last reported value: |x - last| > deadband * |last|
+
+
+class Crossing(IntEnum):
+    """Which crossings of a THRESHOLD are events (a bit set)."""
+
+    UP = 1  # below to above: x > level + hysteresis
+    DOWN = 2  # above to below: x < level - hysteresis
+    BOTH = 3  # either
+
+
 # -- datagrams: Datagram form of the link (docs/protocol.md, "Datagram transports").
 #: DATA datagram of consecutive slots.
 DGRAM_DATA: Final = 0x30
@@ -262,6 +292,10 @@ __all__ = [
     "MAX_BATCH",
     "BackfillType",
     "EndStatus",
+    "MAX_EVENTS",
+    "EventKind",
+    "DeadbandMode",
+    "Crossing",
     "DGRAM_DATA",
     "DGRAM_DATA_BITMAP",
     "DGRAM_FRAGMENT",

@@ -153,7 +153,7 @@ def _py_record(name: str, record: str, omit: tuple[str, ...], s: dict[str, Any])
             out.append(f"    {prop}: {_py_type(ps)}")
         elif ps.get("type") == "boolean":
             out.append(f"    {prop}: bool = False")
-        else:
+        else:  # absent: None
             out.append(f"    {prop}: {_py_type(ps)} | None = None")
     return [*out, "", ""]
 
@@ -356,7 +356,10 @@ def generate_agg_cpp() -> str:
         "// The wire code of each aggregation (docs/protocol.md).",
         "enum class Aggregation : uint8_t {",
     ]
-    out += [f"  {r['name'].capitalize()} = {r['code']}," for r in _table()]
+    out += [
+        f"  {''.join(p.capitalize() for p in r['name'].split('_'))} = {r['code']},"
+        for r in _table()
+    ]
     out += [
         "};",
         "",

@@ -38,6 +38,8 @@ class DeliveredValue(TypedDict):
     drone: NotRequired[str]
     epoch_ns: NotRequired[int]
     window: NotRequired[int]
+    event_ns: NotRequired[list[int]]
+    coalesced: NotRequired[int]
 
 
 class SubBrokerStatus(TypedDict):
@@ -205,6 +207,8 @@ class PlanStream(TypedDict):
     factor: int
     sources: list[PlanSource]
     subscribers: list[str]
+    events_at_most: NotRequired[int]
+    bytes_per_s_at_most: NotRequired[float]
 
 
 class PlanSlot(TypedDict):
@@ -475,6 +479,8 @@ class DeliveredValueFields:
     drone: str | None = None
     epoch_ns: int | None = None
     window: int | None = None
+    event_ns: list[int] | None = None
+    coalesced: int | None = None
 
 
 #: The fields every :class:`DeliveredValue` carries, in the contract's order.

@@ -30,6 +30,8 @@ else:  # the standalone parser generated from modd.lark: lark is not imported at
         UnexpectedToken,
     )
 
+from modd_contracts import aggregations_gen as agg
+
 from .diagnostics import Diagnostic, Location, ModelError, pointer_join
 from .numbers import canonical_decimal
 from .vocabulary import (
@@ -271,6 +273,15 @@ def _topic(node: Token | Tree[Token]) -> str:
     return ".".join(_word(t) for t in node.children if isinstance(t, Token))
 
 
+#: The parameters each aggregation takes in parentheses, in order (docs/dsl.md).
+_AGG_FIELDS: dict[str, tuple[str, ...]] = {
+    agg.PERCENTILE: ("percentile",),
+    agg.ON_CHANGE: ("deadband",),
+    agg.THRESHOLD: ("crossing", "level", "hysteresis"),
+}
+_AGG_SYNTAX = "PERCENTILE(95), ON_CHANGE(0.5), ON_CHANGE(5%), THRESHOLD(DOWN 5.0, 0.2)"
+
+
 class _Builder:
     """Walks the parse tree and assembles the model document, recording where
     each JSON pointer came from."""
@@ -307,13 +318,44 @@ class _Builder:
             self._error(token, str(exc), pointer)
             return "0.0"
 
-    def _percentile(self, node: Tree[Token], pointer: str) -> float:
-        """PERCENTILE(p)'s p as written; its range (0 to 100) and its
-        aggregation are the schema's and the validator's to check, located."""
-        token = node.children[0]
-        assert isinstance(token, Token)
-        self._mark(pointer, token)
-        return float(token)
+    def _agg_args(self, node: Tree[Token], aggregation: str, ptr: str) -> dict[str, Any]:
+        """An aggregation's parameters as written, by its aggregation: PERCENTILE(p),
+        ON_CHANGE(d) or ON_CHANGE(p%), THRESHOLD([UP|DOWN|BOTH] level[, hysteresis]);
+        their ranges are the schema's and the validator's to check, located."""
+        tokens = [t for t in node.children if isinstance(t, Token)]
+        word = [t for t in tokens if t.type == "NAME"]
+        numbers = [t for t in tokens if t.type == "SCALAR"]
+        percent = any(t.type == "PERCENT" for t in tokens)
+        fields = _AGG_FIELDS.get(aggregation)
+        if fields is None and not word and not percent and len(numbers) == 1:
+            fields = _AGG_FIELDS[agg.PERCENTILE]  # MEDIAN(5): the validator says it takes no p
+        numeric = [f for f in fields or () if f != "crossing"]
+        shape_ok = fields is not None and len(numbers) <= len(numeric)
+        if aggregation != agg.THRESHOLD and word or percent and aggregation != agg.ON_CHANGE:
+            shape_ok = False
+        if not shape_ok or fields is None:
+            self._error(
+                tokens[0],
+                f"{aggregation} takes no such parameters ({_AGG_SYNTAX})",
+                ptr + "/aggregation",
+            )
+            return {}
+        out: dict[str, Any] = {}
+        if word:
+            crossing = str(word[0])
+            self._mark(ptr + "/crossing", word[0])
+            if crossing not in ("UP", "DOWN", "BOTH"):
+                self._error(
+                    word[0],
+                    f"unknown crossing {crossing!r}; expected UP, DOWN or BOTH",
+                    ptr + "/crossing",
+                )
+            out["crossing"] = crossing.lower()
+        names = ["deadbandPercent"] if percent else numeric
+        for key, token in zip(names, numbers, strict=False):
+            self._mark(f"{ptr}/{key}", token)
+            out[key] = float(token)
+        return out
 
     def _int(self, token: Token, pointer: str) -> int:
         text = str(token)
@@ -732,8 +774,18 @@ class _Builder:
                         ptr + "/backfill",
                     )
                 sub["backfill"] = str(word)
-            elif isinstance(child, Tree) and child.data == "percentile":
-                sub["percentile"] = self._percentile(child, ptr + "/percentile")
+            elif isinstance(child, Tree) and child.data == "agg_args":
+                sub.update(self._agg_args(child, sub.get("aggregation", ""), ptr))
+            elif isinstance(child, Tree) and child.data == "agg_param":
+                key, value = child.children
+                assert isinstance(key, Token) and isinstance(value, Token)
+                self._mark(f"{ptr}/{key}", value)
+                sub[str(key)] = str(value) if value.type == "NAME" else float(value)
+            elif isinstance(child, Tree) and child.data == "max_events":
+                number = child.children[0]
+                assert isinstance(number, Token)
+                sub["maxEvents"] = self._int(number, ptr + "/maxEvents")
+                self._mark(ptr + "/maxEvents", number)
             elif isinstance(child, Tree) and child.data == "resolution":
                 number = child.children[0]
                 assert isinstance(number, Token)

@@ -11,6 +11,8 @@ from __future__ import annotations
 import re
 from typing import Any
 
+from modd_contracts import aggregations_gen as agg
+
 from .parser import (
     INGRESS_SETTINGS,
     LINK_SETTINGS,
@@ -229,19 +231,49 @@ def print_model(doc: dict[str, Any]) -> str:
     out.append("Subscriptions {")
     for s in doc["subscribers"]:
         args = [endpoint(s["endpoint"])] if "endpoint" in s else []
-        args += [quote(s["topic"]), s["periodS"], s["aggregation"] + _percentile(s)]
+        positional, named = _agg_args(s)
+        args += [quote(s["topic"]), s["periodS"], s["aggregation"] + positional]
         if "backfill" in s:  # "off" too when set: the text keeps what the model says
             args.append(f"backfill = {s['backfill']}")
         if "resolution" in s:
             args.append(f"resolution = {float(s['resolution'])!r}")
+        args += named
+        if "maxEvents" in s:
+            args.append(f"maxEvents = {s['maxEvents']}")
         out.append(f"{INDENT}Subscriber {name(s['name'])}({', '.join(args)});")
     out.append("}")
     return "\n".join(out) + "\n"
 
 
-def _percentile(sub: dict[str, Any]) -> str:
-    """``(95)`` after PERCENTILE (the shortest text of the number that reads back)."""
-    if "percentile" not in sub:
-        return ""
-    p = repr(float(sub["percentile"]))
-    return f"({p.removesuffix('.0')})"
+def _number(x: Any) -> str:
+    """The shortest text of a number that reads back."""
+    return repr(float(x)).removesuffix(".0")
+
+
+_EVENT_KEYS = ("deadband", "deadbandPercent", "level", "hysteresis", "crossing")
+
+
+def _agg_args(sub: dict[str, Any]) -> tuple[str, list[str]]:
+    """The aggregation's parameters in parentheses where their places say them,
+    ``(95)`` after PERCENTILE, ``(0.5)`` or ``(5%)`` after ON_CHANGE,
+    ``(DOWN 5, 0.2)`` after THRESHOLD; any other (a field the aggregation does
+    not take, which the validator reports) by name, ``level = 5``, so that the
+    text keeps what the model says."""
+    keys = [k for k in ("percentile", *_EVENT_KEYS) if k in sub]
+    aggregation = sub["aggregation"]
+    if aggregation == agg.ON_CHANGE and keys in (["deadband"], ["deadbandPercent"]):
+        x = sub[keys[0]]
+        return f"({_number(x)}{'%' if keys[0] == 'deadbandPercent' else ''})", []
+    if (
+        aggregation == agg.THRESHOLD
+        and "level" in keys
+        and set(keys) <= {"level", "hysteresis", "crossing"}
+    ):
+        crossing = f"{sub['crossing'].upper()} " if "crossing" in sub else ""
+        h = f", {_number(sub['hysteresis'])}" if "hysteresis" in sub else ""
+        return f"({crossing}{_number(sub['level'])}{h})", []
+    positional = ""
+    if "percentile" in keys and aggregation not in (agg.ON_CHANGE, agg.THRESHOLD):
+        positional, keys = f"({_number(sub['percentile'])})", keys[1:]
+    named = [f"{k} = {sub[k] if k == 'crossing' else _number(sub[k])}" for k in keys]
+    return positional, named

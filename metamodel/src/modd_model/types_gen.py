@@ -14,7 +14,7 @@ Text = str
 Path = str
 KnownUnit = Literal["METER", "METER_PER_SECOND", "METER_PER_SECOND_SQUARED", "DEGREE_CELSIUS", "RADIAN", "RADIAN_PER_SECOND", "BAR", "LITER", "GRAM", "NONE"]
 ValueType = Literal["float32", "float64", "int", "bool"]
-Aggregation = Literal["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM", "MEDIAN", "STDDEV", "RANGE", "PERCENTILE"]
+Aggregation = Literal["MIN", "MAX", "AVERAGE", "FIRST", "LAST", "ALL", "COUNT", "SUM", "MEDIAN", "STDDEV", "RANGE", "PERCENTILE", "ON_CHANGE", "THRESHOLD"]
 Comparison = Literal["=", "!=", "<", "<=", ">", ">="]
 ConditionValue = str
 Unit = KnownUnit | str
@@ -248,6 +248,12 @@ class Subscriber(TypedDict):
     periodS: Period
     aggregation: Aggregation
     percentile: NotRequired[float]
+    deadband: NotRequired[float]
+    deadbandPercent: NotRequired[float]
+    level: NotRequired[float]
+    hysteresis: NotRequired[float]
+    crossing: NotRequired[Literal["up", "down", "both"]]
+    maxEvents: NotRequired[int]
     resolution: NotRequired[float]
     backfill: NotRequired[Literal["off", "gaps", "mission"]]
 

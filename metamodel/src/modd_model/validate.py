@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from modd_contracts import aggregations_gen as agg
 from modd_contracts.aggregations_gen import AGGREGATIONS
+from modd_contracts.events import EVENT_AGGREGATIONS
 from modd_contracts.link_wire_gen import MAX_LIST, MAX_PERIOD_US
 
 from .bounds import size_errors
@@ -322,7 +323,8 @@ def subscription_periods(doc: dict[str, Any]) -> Iterator[Diagnostic]:
 @check
 def window_samples_bounded(doc: dict[str, Any]) -> Iterator[Diagnostic]:
     """A MEDIAN, PERCENTILE or ALL window holds every sample of its period on board: at most
-    MAX_LIST, from the topic's publication period (its fastest publisher)."""
+    MAX_LIST, from the topic's publication period (its fastest publisher); so may an
+    ON_CHANGE or THRESHOLD window's events without maxEvents (its worst case)."""
     fastest: dict[str, Fraction] = {}
     for pub in doc["publishers"]:
         period = to_fraction(pub["periodS"])
@@ -331,7 +333,8 @@ def window_samples_bounded(doc: dict[str, Any]) -> Iterator[Diagnostic]:
                 fastest[t] = period
     for i, sub in enumerate(doc["subscribers"]):
         pm = fastest.get(sub["topic"])
-        if sub["aggregation"] not in _KEEPS_SAMPLES or pm is None:
+        derived = sub["aggregation"] in EVENT_AGGREGATIONS and "maxEvents" not in sub
+        if sub["aggregation"] not in _KEEPS_SAMPLES and not derived or pm is None:
             continue
         samples = -(-to_fraction(sub["periodS"]) // pm)  # ceil: a window's most
         if samples > MAX_LIST:
@@ -339,7 +342,7 @@ def window_samples_bounded(doc: dict[str, Any]) -> Iterator[Diagnostic]:
                 f"a {sub['aggregation']} window of {sub['periodS']} s holds up to {samples} "
                 f"samples of {sub['topic']!r} (published every {float(pm):g} s); the "
                 f"PubBroker keeps at most {MAX_LIST} a window: choose a period of at most "
-                f"{float(pm * MAX_LIST):g} s",
+                f"{float(pm * MAX_LIST):g} s" + (" (or declare maxEvents)" if derived else ""),
                 f"/subscribers/{i}/periodS",
             )
 
@@ -372,6 +375,51 @@ def percentile_has_its_p(doc: dict[str, Any]) -> Iterator[Diagnostic]:
             yield Diagnostic(
                 f"{sub['aggregation']} takes no percentile (only PERCENTILE(p) does)",
                 f"/subscribers/{i}/percentile",
+            )
+
+
+#: Each event subscription's own fields (modd_contracts.events); maxEvents is both's.
+_EVENT_FIELDS = {
+    agg.ON_CHANGE: ("deadband", "deadbandPercent", "maxEvents"),
+    agg.THRESHOLD: ("level", "hysteresis", "crossing", "maxEvents"),
+}
+
+
+@check
+def event_parameters(doc: dict[str, Any]) -> Iterator[Diagnostic]:
+    """ON_CHANGE takes a deadband (absolute, or deadbandPercent), THRESHOLD its
+    level (and hysteresis, crossing); both an optional maxEvents; no other
+    aggregation takes any of them. Their ranges are the schema's."""
+    every = {f for fields in _EVENT_FIELDS.values() for f in fields}
+    for i, sub in enumerate(doc["subscribers"]):
+        mine = _EVENT_FIELDS.get(sub["aggregation"], ())
+        for f in sorted(every.intersection(sub).difference(mine)):
+            yield Diagnostic(
+                f"{sub['aggregation']} takes no {f} (ON_CHANGE takes deadband or "
+                "deadbandPercent, THRESHOLD level, hysteresis and crossing; both maxEvents)",
+                f"/subscribers/{i}/{f}",
+            )
+        if sub["aggregation"] == agg.ON_CHANGE and {"deadband", "deadbandPercent"} <= sub.keys():
+            yield Diagnostic(
+                "ON_CHANGE takes one deadband: deadband (absolute) or deadbandPercent (relative)",
+                f"/subscribers/{i}/deadbandPercent",
+            )
+        if sub["aggregation"] in _EVENT_FIELDS and sub.get("backfill", "off") != "off":
+            yield Diagnostic(
+                f"{sub['aggregation']} is not backfilled (its events are live only): "
+                "backfill = off",
+                f"/subscribers/{i}/backfill",
+            )
+        if sub["aggregation"] in _EVENT_FIELDS and "resolution" in sub:
+            yield Diagnostic(
+                f"{sub['aggregation']} sends each event's sample exact: it takes no resolution",
+                f"/subscribers/{i}/resolution",
+            )
+        if sub["aggregation"] == agg.THRESHOLD and "level" not in sub:
+            yield Diagnostic(
+                "THRESHOLD needs its level: THRESHOLD(DOWN 5.0, 0.2) in .modd, "
+                '"level": 5.0 in JSON',
+                f"/subscribers/{i}/aggregation",
             )
 
 

@@ -34,7 +34,8 @@ from functools import lru_cache
 from math import ceil, lcm
 
 from modd_contracts import aggregations_gen as agg
-from modd_contracts import labels
+from modd_contracts import events, labels
+from modd_contracts.link_wire_gen import MAX_PERIOD_US
 from modd_contracts.types_gen import PredictedLink
 
 from .schedule import Schedule
@@ -69,10 +70,37 @@ def aggregate_value_type(aggregation: str, topic_type: str) -> str:
     return labels.spec(aggregation).result[topic_type]
 
 
+#: An event's value at most (an int topic's zigzag varint of 64 bits).
+EVENT_VALUE_BYTES: dict[str, int] = {"float32": 4, "float64": 8, "int": 10, "bool": 1}
+
+
+def events_at_most(aggregation: str, samples: Fraction) -> int:
+    """An event stream's worst case, events a window: its declared N, else
+    every sample of the window (at most the window's samples either way)."""
+    n = events.parse_label(aggregation).max_events
+    most = ceil(samples)
+    return most if n is None else min(n, most)
+
+
+def event_window_bytes(aggregation: str, topic_type: str, samples: Fraction, period_us: int) -> int:
+    """Bytes of an event window at most (docs/protocol.md, "Event values"):
+    the event count, each event's time (µs after the window's start) and
+    value, and the coalesced count."""
+    n = events_at_most(aggregation, samples)
+    time_bytes = varint_size(max(period_us - 1, 0) if period_us else MAX_PERIOD_US)
+    coalesced = varint_size(max(ceil(samples) - n, 0))
+    return varint_size(n) + n * (time_bytes + EVENT_VALUE_BYTES[topic_type]) + coalesced
+
+
 @lru_cache(maxsize=65_536)  # bounded: a long-running backend plans many models
-def window_value_bytes(aggregation: str, topic_type: str, samples: Fraction) -> Fraction:
+def window_value_bytes(
+    aggregation: str, topic_type: str, samples: Fraction, period_us: int = 0
+) -> Fraction:
     """Expected bytes of one window's value when ``samples`` samples (on
-    average) fall in a window."""
+    average) fall in a window; an event stream's at most (``period_us``, its
+    window, sizes its events' times)."""
+    if labels.is_event(aggregation):
+        return Fraction(event_window_bytes(aggregation, topic_type, samples, period_us))
     count_bytes = varint_size(ceil(samples))
     if aggregation == agg.COUNT:
         return Fraction(count_bytes)

@@ -213,15 +213,22 @@ def buffer_problem(
 
 def _window_bytes(stream: StreamKey, tops: Mapping[str, Topic]) -> Fraction:
     topic = tops.get(stream.topic)
+    (pn, pd) = stream._nd  # type: ignore[attr-defined]
     if topic is None or topic.period is None:
-        return window_value_bytes(stream.aggregation, "float32", Fraction(0))
-    (pn, pd), pm = stream._nd, topic.period  # type: ignore[attr-defined]
-    return _bytes(stream.aggregation, topic.type, pn * pm.denominator, pd * pm.numerator)
+        return window_value_bytes(stream.aggregation, "float32", Fraction(0), _us_of(pn, pd))
+    pm = topic.period
+    return _bytes(
+        stream.aggregation, topic.type, pn * pm.denominator, pd * pm.numerator, _us_of(pn, pd)
+    )
 
 
 @lru_cache(maxsize=65_536)  # keyed by integers: Fraction hashing is slow
-def _bytes(aggregation: str, topic_type: str, samples_num: int, samples_den: int) -> Fraction:
-    return window_value_bytes(aggregation, topic_type, Fraction(samples_num, samples_den))
+def _bytes(
+    aggregation: str, topic_type: str, samples_num: int, samples_den: int, period_us: int = 0
+) -> Fraction:
+    return window_value_bytes(
+        aggregation, topic_type, Fraction(samples_num, samples_den), period_us
+    )
 
 
 @lru_cache(maxsize=65_536)  # keyed by integers: a plan repeats few (period, topic) kinds
@@ -229,7 +236,7 @@ def _cost(
     aggregation: str, topic_type: str, p_num: int, p_den: int, pm_num: int, pm_den: int
 ) -> float:
     """Value bytes per second of a stream of period p on a topic of period pm."""
-    window = _bytes(aggregation, topic_type, p_num * pm_den, p_den * pm_num)
+    window = _bytes(aggregation, topic_type, p_num * pm_den, p_den * pm_num, _us_of(p_num, p_den))
     return float(window / Fraction(p_num, p_den))
 
 
@@ -437,7 +444,7 @@ def _make_plan(model: Mapping[str, Any], options: _Options) -> Plan:
         if topic is None:
             return _window_bytes(stream, tops)
         pn, pd = stream._nd  # type: ignore[attr-defined]
-        return _bytes(stream.aggregation, topic[0], pn * topic[2], pd * topic[1])
+        return _bytes(stream.aggregation, topic[0], pn * topic[2], pd * topic[1], _us_of(pn, pd))
 
     exact = [window(s.stream) for s in sent]
     link = LinkSettings.of(model)

@@ -14,6 +14,7 @@ from functools import lru_cache
 from operator import itemgetter
 from typing import Any, Protocol
 
+from modd_contracts import labels
 from modd_contracts.types_gen import (
     PlanDocument,
     PlanRadio,
@@ -27,7 +28,7 @@ from modd_model.query import Topic
 
 from .buffers import BufferSolution, Infeasibility
 from .linkbudget import LinkBudget
-from .linkcost import LinkCost
+from .linkcost import LinkCost, event_window_bytes, events_at_most
 from .proposals import Proposal
 from .radio import RadioReport
 from .schedule import Schedule, Slot
@@ -161,10 +162,25 @@ def _schedule_json(plan: PlanView, streams: list[PlanSentStream]) -> PlanSchedul
     }
 
 
+def _event_bounds(plan: PlanView, streams: list[PlanStream]) -> None:
+    """An event stream's worst case (docs/planning.md, "Event subscriptions"): its
+    events a window and its value bytes a second, at most (the plan counts it so)."""
+    periods = {t.name: (t.type, t.period) for t in plan.topics if t.period is not None}
+    for s in streams:
+        if not labels.is_event(s["aggregation"]) or not s["sent"]:
+            continue
+        vtype, pm = periods.get(s["topic"], ("float32", None))
+        samples = Fraction(s["period_us"], MICROS_PER_SECOND) / pm if pm else Fraction(0)
+        window = event_window_bytes(s["aggregation"], vtype, samples, s["period_us"])
+        s["events_at_most"] = events_at_most(s["aggregation"], samples)
+        s["bytes_per_s_at_most"] = round(window * MICROS_PER_SECOND / s["period_us"], 3)
+
+
 def plan_to_json(plan: PlanView) -> PlanDocument:
     """Every field of the shared contract (docs/planning.md, "Plan JSON")."""
     sizes = plan.buffer_sizes
     streams, sent = _streams_json(plan.streams)
+    _event_bounds(plan, streams)
     doc: PlanDocument = {
         "hyperperiod_s": _dec(plan.schedule.hyperperiod),
         "messages_per_hyperperiod": plan.schedule.messages_per_hyperperiod,

@@ -10,7 +10,7 @@ forms both follow.
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from typing import Any, NamedTuple, Protocol
 
 from modd_contracts import aggregations_gen as agg
 from modd_contracts import labels
@@ -27,14 +27,32 @@ class LinkValue(Protocol):
     integer: int
     count: int
     samples: Any
+    times_us: Any
+    coalesced: int
+
+
+class EventsWindow(NamedTuple):
+    """An event stream's window (ON_CHANGE, THRESHOLD): its events' values and
+    times (µs after the window's start) and the events coalesced beyond N."""
+
+    values: list[Scalar]
+    times_us: list[int]
+    coalesced: int
+
+    def event_ns(self, start_ns: int) -> list[int]:
+        """Each event's time, ns since the Unix epoch on the drone's clock."""
+        return [start_ns + t * 1000 for t in self.times_us]
 
 
 def window_of(value: LinkValue, aggregation: str, value_type: str) -> Any:
     """A decoded DATA value as a window in the form of :mod:`modd_plan.derive`
-    (``None`` when marked absent)."""
+    (``None`` when marked absent); an event stream's is an :class:`EventsWindow`."""
     result = labels.spec(aggregation).result[value_type]  # the value's wire type
     if not value.present:
         return None
+    if labels.is_event(aggregation):
+        values = [bool(x) for x in value.samples] if value_type == "bool" else list(value.samples)
+        return EventsWindow(values, list(value.times_us), value.coalesced)
     if aggregation == agg.AVERAGE:
         return (value.number, value.count) if value.count else None
     if aggregation == agg.COUNT:
@@ -57,4 +75,6 @@ def split_window(aggregation: str, window: Any) -> tuple[Value, int | None]:
     if aggregation == agg.ALL:
         samples = list(window or [])
         return samples, len(samples)
+    if isinstance(window, EventsWindow):
+        return list(window.values), len(window.values) + window.coalesced
     return window, None

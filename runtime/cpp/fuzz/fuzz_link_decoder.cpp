@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "modd/broker/accumulator.hpp"
+#include "modd/broker/events.hpp"
 #include "modd/broker/link_session.hpp"
 #include "modd/link/auth.hpp"
 #include "modd/link/codec.hpp"
@@ -90,6 +91,27 @@ void check_statistics(std::span<const uint8_t> in) {
   for (double x : kept) pct.add(x, 0);
   if (pct.take().number != broker::percentile(kept, p)) std::abort();
 }
+// A THRESHOLD (flapping input) keeps at most N events a window and counts the rest:
+// every crossing is kept or coalesced, none lost.
+void check_events(std::span<const uint8_t> in) {
+  if (in.empty()) return;
+  broker::EventSpec spec;
+  spec.kind = events::EventKind::Threshold;
+  spec.max_events = in[0] % 8 + 1;
+  spec.hysteresis = (in[0] >> 3) / 4.0;
+  broker::EventDetector det(spec);
+  uint64_t crossings = 0, kept = 0, coalesced = 0;
+  for (size_t at = 1; at < in.size(); ++at) {
+    crossings += det.add(static_cast<int64_t>(at), static_cast<int8_t>(in[at]) / 16.0) ? 1 : 0;
+    if (at % 32 == 0 || at + 1 == in.size()) {
+      broker::EventWindow w = det.take();
+      if (w.events.size() > spec.max_events) std::abort();
+      kept += w.events.size();
+      coalesced += w.coalesced;
+    }
+  }
+  if (kept + coalesced != crossings) std::abort();
+}
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -110,7 +132,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             value_kind(ValueType::Float64, Aggregation::Median),
             value_kind(ValueType::Float32, Aggregation::Stddev),
             value_kind(ValueType::Int, Aggregation::Range),
-            value_kind(ValueType::Float32, Aggregation::Percentile)};
+            value_kind(ValueType::Float32, Aggregation::Percentile),
+            value_kind(ValueType::Float32, Aggregation::Threshold),
+            value_kind(ValueType::Int, Aggregation::OnChange)};
         (void)decode_data(*f, kinds);
       } else {
         Message m = decode(*f);
@@ -124,11 +148,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             if (s.aggregation == Aggregation::Percentile &&
                 !(s.percentile >= 0 && s.percentile <= 100))
               std::abort();
+          for (const auto& s : c->streams)  // event parameters read back in range
+            if (is_event(s.aggregation) &&
+                (s.event.max_events > events::kMaxEvents || !(s.event.deadband >= 0) ||
+                 !(s.event.hysteresis >= 0) || !std::isfinite(s.event.level)))
+              std::abort();
         }
       }
     }
   } catch (const Error&) {}
   check_statistics(in);
+  check_events(in);
   // 2. A session: the handshake done with the right key, then the fuzz bytes.
   Hooks h;
   const std::string key = "fuzz";

@@ -138,3 +138,41 @@ TEST(Executor, NewConfigSwitchesAtTheNextSlotWithoutLosingSamples) {
   EXPECT_EQ(nw.slot, 0u);
   EXPECT_EQ(nw.values[0].count, 2u);  // exactly the samples after the switch
 }
+
+TEST(Executor, EventStreamsSendEachEventWithItsTimeInTheWindow) {
+  FakeClock clock;
+  int64_t E = clock.now_ns();
+  Executor ex;
+  CaptureSink sink;
+  Config c;
+  c.config_id = 3;
+  c.topics.push_back({"x", ValueType::Float32, 28, 40000});
+  c.topics.push_back({"n", ValueType::Int, 28, 40000});
+  StreamSpec threshold{0, Aggregation::Threshold, 250000};
+  threshold.event = {static_cast<uint8_t>(events::Crossing::Both), 0, 5.0, 0.5, 2};
+  StreamSpec change{1, Aggregation::OnChange, 250000};
+  change.event = {static_cast<uint8_t>(events::DeadbandMode::Absolute), 1.0, 0, 0, 0};
+  c.streams = {threshold, change};
+  ASSERT_EQ(ex.apply(c, {0, 1}, E), E);
+  // x: below, then UP at 10 ms, DOWN at 20 ms, UP at 30 ms: N = 2 keeps the first and
+  // the newest; n: 7 (an event), 7, 9 (an event: more than 1 away)
+  double xs[] = {4.0, 6.0, 4.0, 6.0};
+  for (int k = 0; k < 4; ++k) ex.on_sample(0, xs[k], 0, E + k * 10 * kMs + 1234);
+  ex.on_sample(1, 0, 7, E + 5 * kMs);
+  ex.on_sample(1, 0, 7, E + 6 * kMs);
+  ex.on_sample(1, 0, 9, E + 7 * kMs);
+  ex.advance(E + 250 * kMs, sink);
+  ASSERT_EQ(sink.frames.size(), 1u);
+  Data d = decode_data(*split_frame(sink.frames[0]), kinds(c, {0, 1}));
+  EXPECT_EQ(d.values[0].numbers, (std::vector<double>{6.0, 6.0}));
+  EXPECT_EQ(d.values[0].times_us, (std::vector<uint64_t>{10001, 30001}));  // µs, floored
+  EXPECT_EQ(d.values[0].coalesced, 1u);
+  EXPECT_EQ(d.values[1].integers, (std::vector<int64_t>{7, 9}));
+  EXPECT_EQ(d.values[1].times_us, (std::vector<uint64_t>{5000, 7000}));
+  EXPECT_EQ(ex.counters().events_coalesced, 1u);
+  // the state carries over: x stays above (no event), n stays within 1 of 9: absent
+  ex.on_sample(0, 5.2, 0, E + 300 * kMs);
+  ex.on_sample(1, 0, 10, E + 310 * kMs);
+  ex.advance(E + 500 * kMs, sink);
+  EXPECT_EQ(sink.frames.size(), 1u);  // nothing to send
+}

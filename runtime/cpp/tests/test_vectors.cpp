@@ -73,6 +73,14 @@ Message from_json(const json& m) {
       EXPECT_TRUE(parse_aggregation(sj["aggregation"], s.aggregation));
       s.period_us = sj["period_us"];
       s.percentile = sj.value("percentile", 0.0);
+      if (sj.contains("event")) {
+        const json& e = sj["event"];
+        s.event.code = e["code"];
+        s.event.deadband = e["deadband"];
+        s.event.level = e["level"];
+        s.event.hysteresis = e["hysteresis"];
+        s.event.max_events = e["max_events"];
+      }
       c.streams.push_back(s);
     }
     if (m.contains("accepted_delay_ms"))
@@ -150,11 +158,17 @@ TEST(Vectors, DataVectors) {
       x.number = vj["number"];
       x.integer = vj["integer"];
       x.count = vj["count"];
+      bool int_kind = kinds[d.values.size()].scalar == ScalarKind::ZigZag ||
+                      kinds[d.values.size()].scalar == ScalarKind::Bool;
       for (const auto& s : vj["samples"]) {
-        if (s.is_number_integer())
+        if (s.is_number_integer() && (int_kind || !is_event(kinds[d.values.size()].aggregation)))
           x.integers.push_back(s.get<int64_t>());
         else
           x.numbers.push_back(s.get<double>());
+      }
+      if (vj.contains("times_us")) {
+        x.times_us = vj["times_us"].get<std::vector<uint64_t>>();
+        x.coalesced = vj["coalesced"];
       }
       d.values.push_back(x);
     }
@@ -179,6 +193,11 @@ TEST(Vectors, DataVectors) {
       EXPECT_EQ(back.values[i].integer, d.values[i].integer) << i;
       EXPECT_EQ(back.values[i].count, d.values[i].count) << i;
       EXPECT_EQ(back.values[i].integers, d.values[i].integers) << i;
+      if (is_event(kinds[i].aggregation)) {
+        EXPECT_EQ(back.values[i].numbers, d.values[i].numbers) << i;
+      }
+      EXPECT_EQ(back.values[i].times_us, d.values[i].times_us) << i;
+      EXPECT_EQ(back.values[i].coalesced, d.values[i].coalesced) << i;
     }
     ++n;
   }

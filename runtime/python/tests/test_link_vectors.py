@@ -37,6 +37,8 @@ from modd.link.frames import (
     value_kind,
 )
 from modd.link.schedule import SlotIterator
+from modd_contracts.events import EventLabel, EventSpec
+from modd_contracts.link_wire_gen import MAX_EVENTS, Crossing, DeadbandMode, EventKind
 
 VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors" / "link"
 ALL = sorted(p for p in VECTORS.glob("*.json"))
@@ -80,7 +82,11 @@ def from_json(m: dict[str, Any]) -> Message:
             ),
             tuple(
                 StreamSpec(
-                    x["topic"], Aggregation[x["aggregation"]], x["period_us"], x.get("percentile")
+                    x["topic"],
+                    Aggregation[x["aggregation"]],
+                    x["period_us"],
+                    x.get("percentile"),
+                    _event(Aggregation[x["aggregation"]], x["event"]) if "event" in x else None,
                 )
                 for x in m["streams"]
             ),
@@ -88,6 +94,24 @@ def from_json(m: dict[str, Any]) -> Message:
             tuple(m["resolutions"]) if "resolutions" in m else None,
         )
     raise AssertionError(t)
+
+
+def _event(aggregation: Aggregation, e: dict[str, Any]) -> EventLabel:
+    """A vector's event parameters, as the reference definition holds them."""
+    n = e["max_events"] or MAX_EVENTS
+    if aggregation == Aggregation.ON_CHANGE:
+        spec = EventSpec(
+            EventKind.ON_CHANGE, n, deadband=e["deadband"], mode=DeadbandMode(e["code"])
+        )
+    else:
+        spec = EventSpec(
+            EventKind.THRESHOLD,
+            n,
+            level=e["level"],
+            hysteresis=e["hysteresis"],
+            crossing=Crossing(e["code"]),
+        )
+    return EventLabel(spec, e["max_events"] > 0)
 
 
 def test_vectors_exist() -> None:
@@ -110,7 +134,15 @@ def test_vector_byte_for_byte(path: Path) -> None:
         for k in v["kinds"]
     ]
     values = [
-        Value(x["present"], x["number"], x["integer"], x["count"], x["samples"])
+        Value(
+            x["present"],
+            x["number"],
+            x["integer"],
+            x["count"],
+            x["samples"],
+            x.get("times_us", []),
+            x.get("coalesced", 0),
+        )
         for x in m["values"]
     ]
     data = Data(m["sync"], m["config_id"], m["slot"], m["seq8"], values)
@@ -124,6 +156,7 @@ def test_vector_byte_for_byte(path: Path) -> None:
         if want.present:
             assert (got.number, got.integer, got.count) == (want.number, want.integer, want.count)
             assert got.samples == want.samples
+            assert (got.times_us, got.coalesced) == (want.times_us, want.coalesced)
 
 
 def test_invalid_frames_rejected() -> None:

@@ -136,7 +136,7 @@ export default function MonitorPanel() {
               </select>
               <input aria-label="Period (s)" value={dyn.period_s} onChange={(e) => setDyn({ ...dyn, period_s: e.target.value })} size={5} />
               <select aria-label="Aggregation" value={dyn.aggregation} onChange={(e) => setDyn({ ...dyn, aggregation: e.target.value })}>
-                {AggregationValues.map((a) => (a === AGGREGATION.PERCENTILE ? `${a}(95)` : a)).map((a) => <option key={a}>{a}</option>)}
+                {AggregationValues.filter((a) => a !== AGGREGATION.ON_CHANGE && a !== AGGREGATION.THRESHOLD).map((a) => (a === AGGREGATION.PERCENTILE ? `${a}(95)` : a)).map((a) => <option key={a}>{a}</option>)}
               </select>
               <button type="submit">Ask the drone</button>
               <ul className="dynamic-replies">

@@ -46,6 +46,8 @@ void Accumulator::add(double number, int64_t integer) {
     case Aggregation::Percentile:
     case Aggregation::Stddev:
     case Aggregation::Range: add_statistic(number, integer, first); break;
+    case Aggregation::OnChange:
+    case Aggregation::Threshold: break;  // an EventDetector's (broker/events.hpp)
     case Aggregation::All:
       if (is_float()) {
         if (all_.numbers.size() < kMaxAll) all_.numbers.push_back(number);
@@ -88,6 +90,8 @@ link::Value Accumulator::take() {
       case Aggregation::Median:
       case Aggregation::Percentile:
       case Aggregation::Stddev: v.number = take_statistic(); break;
+      case Aggregation::OnChange:
+      case Aggregation::Threshold: v.present = false; break;
       case Aggregation::All:
         v = std::move(all_);
         v.present = true;

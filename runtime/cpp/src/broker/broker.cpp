@@ -291,7 +291,7 @@ Reject Broker::ingest(int64_t global, Reject why, link::ValueType declared, int6
   }
   ++counters_.accepted;
   ++t.accepted;
-  executor_.on_sample(static_cast<uint32_t>(global), r.number, r.integer);
+  executor_.on_sample(static_cast<uint32_t>(global), r.number, r.integer, stamp);
   if (t.front.capacity() == 0) {
     t.front = archiver_->take_spare();
     t.front.reserve(t.capacity);

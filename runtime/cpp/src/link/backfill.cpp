@@ -98,6 +98,8 @@ Message decode(const RawFrame& f) {
       uint8_t a = r.u8();
       if (a >= table::kAggregationCount) r.fail("unknown aggregation " + std::to_string(a));
       q.aggregation = static_cast<Aggregation>(a);
+      if (is_event(q.aggregation))
+        r.fail("event subscriptions (ON_CHANGE, THRESHOLD) are not backfilled");
       q.period_us = r.varint();
       if (q.period_us < 1 || q.period_us > kMaxPeriodUs) r.fail("window period out of range");
       if (q.aggregation == Aggregation::Percentile) {

@@ -32,9 +32,51 @@ void put_scalar(ByteWriter& w, ScalarKind k, double number, int64_t integer, uin
   }
 }
 
+// An event window (docs/protocol.md, "Event values"): count, each event's time (µs after
+// the window's start) and value, the coalesced count.
+void put_events(ByteWriter& w, const ValueKind& k, const Value& v) {
+  bool is_float = k.scalar == ScalarKind::F32 || k.scalar == ScalarKind::F64;
+  size_t n = v.times_us.size();
+  if ((is_float ? v.numbers.size() : v.integers.size()) != n)
+    throw Error(ErrorCode::Internal, "event values and times differ in number");
+  w.varint(n);
+  for (size_t i = 0; i < n; ++i) {
+    w.varint(v.times_us[i]);
+    put_scalar(w, k.scalar, is_float ? v.numbers[i] : 0, is_float ? 0 : v.integers[i], 0);
+  }
+  w.varint(v.coalesced);
+}
+
+void get_scalar(ByteReader& r, ScalarKind k, double& number, int64_t& integer, uint64_t& count);
+
+Value get_events(ByteReader& r, const ValueKind& k) {
+  Value v;
+  v.present = true;
+  uint64_t n = r.varint();
+  if (n < 1 || n > events::kMaxEvents || n > r.remaining())
+    r.fail("event count " + std::to_string(n) + " out of 1.." + std::to_string(events::kMaxEvents) +
+           " or beyond the frame");
+  bool is_float = k.scalar == ScalarKind::F32 || k.scalar == ScalarKind::F64;
+  for (uint64_t i = 0; i < n; ++i) {
+    v.times_us.push_back(r.varint());
+    double d = 0;
+    int64_t x = 0;
+    uint64_t c = 0;
+    get_scalar(r, k.scalar, d, x, c);
+    if (is_float)
+      v.numbers.push_back(d);
+    else
+      v.integers.push_back(x);
+  }
+  v.coalesced = r.varint();
+  v.count = n + v.coalesced;
+  return v;
+}
+
 // chain: the unit's last steps by stream, for a kind with a declared resolution.
 void put_value(ByteWriter& w, const ValueKind& k, const Value& v, Chain& chain, uint32_t stream) {
   bool quantised = k.resolution > 0;
+  if (is_event(k.aggregation)) return put_events(w, k, v);
   if (k.aggregation == Aggregation::All) {
     bool is_float = k.scalar == ScalarKind::F32 || k.scalar == ScalarKind::F64;
     size_t n = is_float ? v.numbers.size() : v.integers.size();
@@ -70,6 +112,7 @@ void get_scalar(ByteReader& r, ScalarKind k, double& number, int64_t& integer, u
 }
 
 Value get_value(ByteReader& r, const ValueKind& k, Chain& chain, uint32_t stream) {
+  if (is_event(k.aggregation)) return get_events(r, k);
   Value v;
   v.present = true;
   bool quantised = k.resolution > 0;
@@ -99,6 +142,38 @@ Value get_value(ByteReader& r, const ValueKind& k, Chain& chain, uint32_t stream
     get_scalar(r, k.scalar, v.number, v.integer, v.count);
   if (k.aggregation == Aggregation::Average) v.count = r.varint();
   return v;
+}
+
+// ON_CHANGE: mode u8, deadband f64le; THRESHOLD: crossing u8, level and hysteresis f64le;
+// then N (varint, 0: derived).
+void put_event_params(ByteWriter& w, const StreamSpec& s) {
+  w.u8(s.event.code);
+  if (s.aggregation == Aggregation::OnChange) {
+    w.fixed<double>(s.event.deadband);
+  } else {
+    w.fixed<double>(s.event.level);
+    w.fixed<double>(s.event.hysteresis);
+  }
+  w.varint(s.event.max_events);
+}
+
+void get_event_params(ByteReader& r, StreamSpec& s, size_t i) {
+  EventParams& e = s.event;
+  e.code = r.u8();
+  bool on_change = s.aggregation == Aggregation::OnChange;
+  if (on_change) {
+    e.deadband = r.fixed<double>();
+  } else {
+    e.level = r.fixed<double>();
+    e.hysteresis = r.fixed<double>();
+  }
+  uint64_t n = r.varint();
+  bool code_ok = on_change ? e.code < events::kDeadbandModeCount : e.code >= 1 && e.code <= 3;
+  bool numbers_ok = std::isfinite(e.deadband) && e.deadband >= 0 && std::isfinite(e.level) &&
+                    std::isfinite(e.hysteresis) && e.hysteresis >= 0;
+  if (!code_ok || !numbers_ok || n > events::kMaxEvents)
+    r.fail("stream " + std::to_string(i) + ": event parameters out of range");
+  e.max_events = static_cast<uint32_t>(n);
 }
 
 // The optional resolution field: count, then per declared stream its index gap and f64le step.
@@ -229,6 +304,7 @@ void encode(std::vector<uint8_t>& out, const Message& m) {
             w.u8(static_cast<uint8_t>(s.aggregation));
             w.varint(s.period_us);
             if (s.aggregation == Aggregation::Percentile) w.fixed<double>(s.percentile);
+            if (is_event(s.aggregation)) put_event_params(w, s);
           }
           if (msg.accepted_delay_ms) w.varint(*msg.accepted_delay_ms);
           put_resolutions(w, msg);
@@ -408,6 +484,7 @@ Message decode(const RawFrame& f) {
           if (!(s.percentile >= 0 && s.percentile <= 100))  // NaN too
             r.fail("stream " + std::to_string(i) + ": percentile out of 0..100");
         }
+        if (is_event(s.aggregation)) get_event_params(r, s, i);
         c.streams.push_back(s);
       }
       if (r.remaining() > 0) {

@@ -44,7 +44,7 @@ ValueKind value_kind(ValueType type, Aggregation a, double resolution) {
                      ? kScalar[static_cast<int>(type) & 3]
                      : kScalar[table::kAggregations[i].result[static_cast<int>(type) & 3]];
   bool is_float = k == ScalarKind::F32 || k == ScalarKind::F64;
-  return {a, k, is_float ? resolution : 0};
+  return {a, k, is_float && !is_event(a) ? resolution : 0};  // events go exact
 }
 
 }  // namespace modd::link

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "modd/broker/accumulator.hpp"
+#include "modd/broker/events.hpp"
 #include "modd/link/messages.hpp"
 #include "modd/link/quantise.hpp"
 #include "modd/link/schedule.hpp"
@@ -45,6 +46,7 @@ struct ExecutorCounters {
   uint64_t slots_empty = 0;  // every stream absent: nothing sent
   uint64_t frames_sent = 0;
   uint64_t frames_dropped = 0;
+  uint64_t events_coalesced = 0;  // events beyond their window's N, counted in its last one
 };
 
 class Executor {
@@ -57,7 +59,8 @@ class Executor {
   std::optional<int64_t> apply(const link::Config& cfg, const std::vector<uint32_t>& topic_globals,
                                int64_t now);
   void advance(int64_t t, FrameSink& sink);
-  void on_sample(uint32_t global_topic, double number, int64_t integer);
+  // t_ns: the sample's stamp (an event's time; windows hold the samples stamped inside them).
+  void on_sample(uint32_t global_topic, double number, int64_t integer, int64_t t_ns = 0);
   int64_t next_due_ns() const;
   uint8_t config_id() const { return active_ ? active_->config_id : 0; }
   int64_t epoch_ns() const { return active_ ? active_->epoch : 0; }
@@ -70,6 +73,8 @@ class Executor {
     uint8_t config_id = 0;
     int64_t epoch = 0;
     std::vector<Accumulator> acc;
+    std::vector<std::unique_ptr<EventDetector>> events;  // ON_CHANGE, THRESHOLD streams
+    std::vector<uint64_t> periods_us;
     std::vector<link::ValueKind> kinds;
     std::vector<std::vector<uint32_t>> by_topic;  // global topic -> stream ids
     std::unique_ptr<link::SlotIterator> slots;
@@ -78,6 +83,7 @@ class Executor {
   std::unique_ptr<Active> build(const link::Config& cfg, const std::vector<uint32_t>& topic_globals,
                                 int64_t epoch);
   void fire(FrameSink& sink);
+  link::Value take_events(Active& a, uint32_t id, int64_t date);
   void fire_slot(FrameSink& sink, const link::Data& d, const std::vector<link::ValueKind>& kinds,
                  const std::vector<uint32_t>& streams, int64_t date);
 

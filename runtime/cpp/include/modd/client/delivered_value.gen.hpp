@@ -46,5 +46,9 @@ inline constexpr std::string_view kDrone = "drone";
 inline constexpr std::string_view kEpochNs = "epoch_ns";
 // The window's identity: its index k on the configuration's grid, the window being [epoch_ns + k period, epoch_ns + (k + 1) period).
 inline constexpr std::string_view kWindow = "window";
+// An event subscription's window (ON_CHANGE, THRESHOLD: value is the list of its events' values): each event's sample time, ns since the Unix epoch on the drone's clock (the PubBroker's stamp of the sample, to the microsecond), in value's order; absent for the other aggregations.
+inline constexpr std::string_view kEventNs = "event_ns";
+// An event window: how many events beyond the subscription's worst case (at most N a window) were coalesced into its last event (value's last item is the window's newest event); count is then the window's events, len(value) + coalesced.
+inline constexpr std::string_view kCoalesced = "coalesced";
 
 }  // namespace modd::delivered_value

@@ -20,6 +20,8 @@ enum class Aggregation : uint8_t {
   Stddev = 9,
   Range = 10,
   Percentile = 11,
+  OnChange = 12,
+  Threshold = 13,
 };
 
 }  // namespace modd::link
@@ -50,8 +52,10 @@ inline constexpr AggregationRow kAggregations[] = {
     {"STDDEV", 9, true, false, false, {0, 1, 1, 0}},
     {"RANGE", 10, true, false, false, {0, 1, 2, 2}},
     {"PERCENTILE", 11, true, false, true, {0, 1, 1, 0}},
+    {"ON_CHANGE", 12, false, false, false, {0, 1, 2, 3}},
+    {"THRESHOLD", 13, true, false, false, {0, 1, 2, 3}},
 };
-inline constexpr int kAggregationCount = 12;
+inline constexpr int kAggregationCount = 14;
 
 // Value types in the order of result[]: Float32, Float64, Int, Bool.
 

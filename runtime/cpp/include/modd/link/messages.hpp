@@ -49,11 +49,25 @@ struct TopicSpec {
   uint32_t buffer_size = 1;
   uint64_t period_us = 0;  // publication period, informative (0 = unknown)
 };
+// ON_CHANGE's and THRESHOLD's parameters, after the stream's period in CONFIG
+// (docs/protocol.md, "CONFIG"; their meaning: broker/events.hpp).
+struct EventParams {
+  uint8_t code = 0;         // ON_CHANGE: events::DeadbandMode; THRESHOLD: events::Crossing
+  double deadband = 0;      // ON_CHANGE (a fraction of the last event's value when relative)
+  double level = 0;         // THRESHOLD
+  double hysteresis = 0;    // THRESHOLD
+  uint32_t max_events = 0;  // N, the declared worst case; 0: derived (every sample)
+  bool operator==(const EventParams&) const = default;
+};
+inline bool is_event(Aggregation a) {
+  return a == Aggregation::OnChange || a == Aggregation::Threshold;
+}
 struct StreamSpec {
   uint32_t topic = 0;  // index into Config::topics
   Aggregation aggregation = Aggregation::Min;
   uint64_t period_us = 0;  // window period, > 0
   double percentile = 0;   // PERCENTILE's p (0..100), f64le after the period; else unused
+  EventParams event;       // ON_CHANGE, THRESHOLD; else unused
 };
 struct Config {
   uint8_t config_id = 1;
@@ -74,7 +88,7 @@ inline bool operator==(const TopicSpec& a, const TopicSpec& b) {
 }
 inline bool operator==(const StreamSpec& a, const StreamSpec& b) {
   return a.topic == b.topic && a.aggregation == b.aggregation && a.period_us == b.period_us &&
-         a.percentile == b.percentile;
+         a.percentile == b.percentile && a.event == b.event;
 }
 
 struct ConfigAck {
@@ -124,6 +138,10 @@ struct Value {
   uint64_t count = 0;             // AVERAGE sample count, COUNT
   std::vector<double> numbers;    // ALL of float topics
   std::vector<int64_t> integers;  // ALL of int/bool topics
+  // An event window (ON_CHANGE, THRESHOLD): each event's value in numbers or integers, its
+  // time in µs after the window's start, and the events coalesced beyond N.
+  std::vector<uint64_t> times_us;
+  uint64_t coalesced = 0;
 };
 
 struct Data {

@@ -168,6 +168,42 @@ inline constexpr size_t kEndStatusCount = 6;
 
 }  // namespace modd::link::backfill
 
+// Event subscriptions, ON_CHANGE and THRESHOLD (docs/planning.md, "Event subscriptions"): their
+// codes and bounds; the definition is modd_contracts.events, its vectors
+// contracts/vectors/events.json.
+namespace modd::link::events {
+
+// Most events one window of an event subscription carries (its declared or derived 'at most
+// N'): the link's list bound.
+inline constexpr uint32_t kMaxEvents = 65535;
+
+// What makes an event.
+enum class EventKind : uint8_t {
+  OnChange = 0,  // the sample differs from the last reported one by more than the deadband
+  Threshold = 1,  // the sample crosses the level by more than the hysteresis
+};
+// The number of EventKind values.
+inline constexpr size_t kEventKindCount = 2;
+
+// How an ON_CHANGE deadband is read.
+enum class DeadbandMode : uint8_t {
+  Absolute = 0,  // in the topic's unit: |x - last| > deadband
+  Relative = 1,  // a fraction of the last reported value: |x - last| > deadband * |last|
+};
+// The number of DeadbandMode values.
+inline constexpr size_t kDeadbandModeCount = 2;
+
+// Which crossings of a THRESHOLD are events (a bit set).
+enum class Crossing : uint8_t {
+  Up = 1,  // below to above: x > level + hysteresis
+  Down = 2,  // above to below: x < level - hysteresis
+  Both = 3,  // either
+};
+// The number of Crossing values.
+inline constexpr size_t kCrossingCount = 3;
+
+}  // namespace modd::link::events
+
 // Datagram form of the link (docs/protocol.md, "Datagram transports").
 namespace modd::link::dgram {
 

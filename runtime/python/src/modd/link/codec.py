@@ -12,8 +12,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from modd_contracts.aggregations_gen import AGGREGATIONS
+from modd_contracts.events import EVENT_AGGREGATIONS, EventLabel, EventSpec
 from modd_contracts.link_wire_gen import (
     MAX_BUFFER_SIZE,
+    MAX_EVENTS,
     MAX_LIST,
     MAX_NAME,
     MAX_ONBOARD_WIRE,
@@ -21,6 +23,9 @@ from modd_contracts.link_wire_gen import (
     MAX_PING,
     MAX_STATUS_PERIOD_S,
     MAX_VARINT_BYTES,
+    Crossing,
+    DeadbandMode,
+    EventKind,
 )
 
 from modd.link.frames import (
@@ -174,6 +179,7 @@ def encode(m: Message) -> bytes:
         for s in m.streams:
             b += varint(s.topic) + bytes([s.aggregation]) + varint(s.period_us)
             b += percentile_field(s.aggregation, s.percentile)
+            b += event_field(s.aggregation, s.event)
         if m.accepted_delay_ms is not None:
             if not 0 <= m.accepted_delay_ms <= MAX_ACCEPTED_DELAY_MS:
                 raise ValueError(
@@ -266,6 +272,9 @@ def _put_value(
 ) -> None:
     """``chain``: the unit's last step counts by stream (declared resolution)."""
     links = {} if chain is None else chain
+    if k.aggregation.name in EVENT_AGGREGATIONS:
+        _put_events(b, k, v)
+        return
     if k.aggregation == Aggregation.ALL:
         b += varint(len(v.samples))
         for s in v.samples:
@@ -480,7 +489,8 @@ def _decode_config(r: Reader) -> Config:
         if p == 0 or p > MAX_PERIOD_US:
             raise r.fail("stream period out of range")
         pct = read_percentile(r, f"stream {i}") if a == Aggregation.PERCENTILE else None
-        streams.append(StreamSpec(topic, Aggregation(a), p, pct))
+        ev = read_event(r, Aggregation(a), f"stream {i}")
+        streams.append(StreamSpec(topic, Aggregation(a), p, pct, ev))
     delay = None
     if r.remaining():
         delay = r.varint()
@@ -500,6 +510,74 @@ def percentile_field(aggregation: Aggregation, p: float | None) -> bytes:
     if not 0 <= p <= 100:
         raise ValueError(f"percentile {p!r} out of 0..100")
     return struct.pack("<d", p)
+
+
+def event_field(aggregation: Aggregation, event: EventLabel | None) -> bytes:
+    """ON_CHANGE's (mode u8, deadband f64le) or THRESHOLD's (crossing u8, level
+    and hysteresis f64le) parameters and N (varint, 0: derived) after the period,
+    in CONFIG; nothing for the other aggregations."""
+    if (aggregation.name in EVENT_AGGREGATIONS) != (event is not None):
+        raise ValueError(f"{aggregation.name}: event parameters go with ON_CHANGE or THRESHOLD")
+    if event is None:
+        return b""
+    s, n = event.spec, varint(event.max_events or 0)
+    if aggregation == Aggregation.ON_CHANGE:
+        return bytes([s.mode]) + struct.pack("<d", s.deadband) + n
+    return bytes([s.crossing]) + struct.pack("<dd", s.level, s.hysteresis) + n
+
+
+def read_event(r: Reader, aggregation: Aggregation, what: str) -> EventLabel | None:
+    """The event parameters :func:`event_field` writes, checked (located)."""
+    if aggregation.name not in EVENT_AGGREGATIONS:
+        return None
+    code = r.u8()
+    numbers = [
+        float(r.fixed("<d")) for _ in range(1 if aggregation == Aggregation.ON_CHANGE else 2)
+    ]
+    n = r.varint()
+    if not all(math.isfinite(x) for x in numbers) or n > MAX_EVENTS:
+        raise r.fail(f"{what}: event parameters out of range")
+    try:
+        if aggregation == Aggregation.ON_CHANGE:
+            spec = EventSpec(
+                EventKind.ON_CHANGE, n or MAX_EVENTS, deadband=numbers[0], mode=DeadbandMode(code)
+            )
+        else:
+            level, h = numbers
+            spec = EventSpec(
+                EventKind.THRESHOLD,
+                n or MAX_EVENTS,
+                level=level,
+                hysteresis=h,
+                crossing=Crossing(code),
+            )
+    except ValueError as exc:
+        raise r.fail(f"{what}: {exc}") from None
+    return EventLabel(spec, n > 0)
+
+
+def _put_events(b: bytearray, k: ValueKind, v: Value) -> None:
+    """An event window: count, each event's time (µs after the window's start)
+    and value, the coalesced count (docs/protocol.md, "Event values")."""
+    if len(v.times_us) != len(v.samples):
+        raise ValueError(f"{len(v.samples)} events with {len(v.times_us)} times")
+    b += varint(len(v.samples))
+    for t, x in zip(v.times_us, v.samples, strict=True):
+        b += varint(t)
+        _put_scalar(b, k.scalar, float(x), int(x), 0)
+    b += varint(v.coalesced)
+
+
+def _get_events(r: Reader, k: ValueKind, v: Value) -> Value:
+    n = r.varint()
+    if not 1 <= n <= min(MAX_EVENTS, r.remaining()):
+        raise r.fail(f"event count {n} out of 1..{MAX_EVENTS} or beyond the frame")
+    for _ in range(n):
+        v.times_us.append(r.varint())
+        v.samples.append(_get_scalar(r, k.scalar))
+    v.coalesced = r.varint()
+    v.count = n + v.coalesced
+    return v
 
 
 def read_percentile(r: Reader, what: str) -> float:
@@ -588,6 +666,8 @@ def _get_value(r: Reader, k: ValueKind, chain: dict[int, int] | None = None, key
     is_float = k.scalar in (Scalar.F32, Scalar.F64)
     links = {} if chain is None else chain
     res = k.resolution
+    if k.aggregation.name in EVENT_AGGREGATIONS:
+        return _get_events(r, k, v)
     if k.aggregation == Aggregation.ALL:
         n = r.varint()
         if n > r.remaining():

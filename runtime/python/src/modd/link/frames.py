@@ -7,6 +7,7 @@ from enum import IntEnum
 
 from modd_contracts.aggregations_gen import AGGREGATIONS
 from modd_contracts.aggregations_gen import Aggregation as Aggregation  # the wire codes, generated
+from modd_contracts.events import EVENT_AGGREGATIONS, EventLabel
 
 # The wire's codes and limits, generated from modd_contracts/wire.json.
 from modd_contracts.link_wire_gen import MAX_ACCEPTED_DELAY_MS as MAX_ACCEPTED_DELAY_MS
@@ -46,6 +47,8 @@ def value_kind(vtype: ValueType, agg: Aggregation, resolution: float | None = No
     if agg == Aggregation.COUNT:
         return ValueKind(agg, Scalar.UVARINT)
     scalar = _SCALAR[AGGREGATIONS[agg].result[vtype.label]]
+    if agg.name in EVENT_AGGREGATIONS:  # events go exact (no declared resolution)
+        return ValueKind(agg, scalar)
     return ValueKind(agg, scalar, resolution if scalar in (Scalar.F32, Scalar.F64) else None)
 
 
@@ -111,6 +114,9 @@ class StreamSpec:
     period_us: int
     #: PERCENTILE's p (0..100), written after the period; None for the others.
     percentile: float | None = None
+    #: ON_CHANGE's or THRESHOLD's parameters and declared N, written after the
+    #: period (docs/protocol.md, "CONFIG"); None for the others.
+    event: EventLabel | None = None
 
 
 @dataclass(frozen=True)
@@ -225,6 +231,10 @@ class Value:
     integer: int = 0
     count: int = 0
     samples: list[float | int] = field(default_factory=list)
+    #: An event window's (ON_CHANGE, THRESHOLD): each event's time, µs after the
+    #: window's start (its value in ``samples``), and the events coalesced beyond N.
+    times_us: list[int] = field(default_factory=list)
+    coalesced: int = 0
 
 
 @dataclass

@@ -22,15 +22,16 @@ from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Protocol
 
+from modd_contracts import labels
 from modd_plan.streams import StreamKey
-from modd_plan.windows import split_window, window_of
+from modd_plan.windows import EventsWindow, split_window, window_of
 
 from modd.link.receiver import Window
 
 from . import delivery_auth
 from .fanout import FanOut, period_us
 from .keys import sub_key
-from .payload import DeliveredValue, StreamPayload, subscriber_prefix
+from .payload import DeliveredValue, StreamPayload, event_fields, subscriber_prefix
 
 if TYPE_CHECKING:
     import zenoh
@@ -303,6 +304,8 @@ class SlotDelivery:
         self._topic_info = topic_info
         self._kinds = [(s.aggregation, topic_info[s.topic][1]) for s in fanout.sent]
         self._sent = frozenset(fanout.sent)
+        #: event streams: a window without an event is not delivered
+        self._events = frozenset(s for s in fanout.sent if labels.is_event(s.aggregation))
         self._payloads: dict[StreamKey, tuple[StreamPayload, int]] = {}
         self._prefixes: dict[str, bytes] = {}
 
@@ -341,12 +344,13 @@ class SlotDelivery:
         by_id = {w.stream: window_of(w.value, *kinds[w.stream]) for w in windows}
         now = time.time_ns()
         payloads, prefixes, sent = self._payloads, self._prefixes, self._sent
+        events_ = self._events
         # an empty slot (a datagram link carries it; tcp does not send it) completes
         # derived windows but delivers no sent stream's window
         empty = all(v is None for v in by_id.values())
         count = 0
         for out in self.fanout.on_slot(slot, date_us, by_id):
-            if empty and out.stream in sent:
+            if empty and out.stream in sent or out.value is None and out.stream in events_:
                 continue
             payload, period = payloads.get(out.stream) or self._payload(out.stream)
             value, samples = split_window(out.stream.aggregation, out.value)
@@ -354,7 +358,10 @@ class SlotDelivery:
             start_ns = end_ns - period * 1000
             if derived is not None and out.stream not in sent:
                 derived((out.stream, start_ns, end_ns))
-            tail = payload.tail(slot, start_ns, end_ns, value, samples, now)
+            events = ""
+            if isinstance(out.value, EventsWindow):
+                events = event_fields(out.value.event_ns(start_ns), out.value.coalesced)
+            tail = payload.tail(slot, start_ns, end_ns, value, samples, now, events)
             for sub in out.subscribers:
                 if filled is not None and filled(sub, out.stream, start_ns, end_ns):
                     continue

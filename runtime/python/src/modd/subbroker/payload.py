@@ -144,6 +144,9 @@ class DeliveredValue(DeliveredValueFields):
         for name in IDENTITY:
             if out.get(name) is None:
                 out.pop(name, None)  # type: ignore[misc]
+        for optional in ("event_ns", "coalesced"):  # an event window's only
+            if out.get(optional) is None:
+                del out[optional]  # type: ignore[misc]
         out["v"] = PAYLOAD_VERSION
         return out
 
@@ -183,6 +186,12 @@ class DeliveredValue(DeliveredValueFields):
         out = cls(**{**got, "value": value})
         if not isinstance(out.backfilled, bool):
             raise ValueError("delivered value: backfilled must be true or false")
+        if out.event_ns is not None and not (
+            isinstance(out.event_ns, list) and all(_is_int(t) for t in out.event_ns)
+        ):
+            raise ValueError("delivered value: event_ns must be a list of integers")
+        if out.coalesced is not None and not (_is_int(out.coalesced) and out.coalesced >= 0):
+            raise ValueError("delivered value: coalesced must be an integer >= 0")
         return out
 
     @classmethod
@@ -272,9 +281,20 @@ class StreamPayload:
         value: Value,
         count: int | None,
         delivered_ns: int,
+        events: str = "",
     ) -> bytes:
+        """``events``: an event window's fields, :func:`event_fields`."""
         ident = f"{self._id}{(start_ns - self._epoch) // self._period}" if self._id else ""
         return (
             f"{self._head}{slot}{_K1}{start_ns}{_K2}{end_ns}{_K3}{_json_scalar(value)}"
-            f"{_K4}{_json_scalar(count)}{_K5}{delivered_ns}{ident}{_END}"
+            f"{_K4}{_json_scalar(count)}{_K5}{delivered_ns}{ident}{events}{_END}"
         ).encode()
+
+
+def event_fields(event_ns: list[int], coalesced: int) -> str:
+    """An event window's fields as :meth:`DeliveredValue.to_json` writes them.
+
+    >>> event_fields([5, 7], 0)
+    ',"event_ns":[5,7],"coalesced":0'
+    """
+    return f',"event_ns":[{",".join(map(str, event_ns))}],"coalesced":{coalesced}'

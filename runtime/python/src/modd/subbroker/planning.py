@@ -13,7 +13,7 @@ from concurrent.futures import Future
 from fractions import Fraction
 from typing import Any
 
-from modd_contracts import labels
+from modd_contracts import events, labels
 from modd_model.numbers import MICROS_PER_SECOND
 from modd_model.query import link_settings
 from modd_plan import Plan, make_plan
@@ -138,9 +138,11 @@ def config_for(
 
 
 def _stream_spec(topic: int, stream: StreamKey) -> StreamSpec:
-    """A sent stream as CONFIG names it: PERCENTILE(p)'s label is its code and p."""
+    """A sent stream as CONFIG names it: PERCENTILE(p)'s label is its code and p,
+    an event stream's its code, parameters and N."""
     name, p = labels.parse(stream.aggregation)
-    return StreamSpec(topic, Aggregation[name], period_us(stream), p)
+    event = events.parse_label(stream.aggregation) if labels.is_event(stream.aggregation) else None
+    return StreamSpec(topic, Aggregation[name], period_us(stream), p, event)
 
 
 def resolutions_of(model: dict[str, Any], plan: Plan) -> tuple[float | None, ...] | None:
