@@ -116,6 +116,7 @@ drone() {
   wrapper "$root" modd-sensors modd.sensors:main
   wrapper "$root" modd-mavlink modd.mavlink.cli:main
   wrapper "$root" modd-pair modd.pairing.cli:main
+  install -D -m 0755 packaging/drone/lib/onboard-init "$root/usr/lib/modd/onboard-init"
   install -D -m 0644 packaging/drone/drone.env "$root/etc/modd/drone.env"
   units_of drone "$root"
   [ "$arch" != amd64 ] || smoke_drone "$root"
@@ -143,8 +144,9 @@ base() {
   deb modd-base "$arch" "$root" base "libc6, libstdc++6, libexpat1, python3 (>= 3.11), python3 (<< 3.12), adduser"
 }
 
-for kind in $KINDS; do
-  for arch in $ARCHS; do
+# architecture by architecture: the amd64 packages (all the install tests need) first
+for arch in $ARCHS; do
+  for kind in $KINDS; do
     "$kind" "$arch"
   done
 done

@@ -59,6 +59,8 @@ verify_units() {  # systemd-analyze verify: the package's tree over this system'
   vroot=$(mktemp -d)
   mkdir -p "$vroot/usr" "$vroot/lib/systemd"
   cp -a "$1/usr/bin" "$vroot/usr/" && cp -a "$1/lib/systemd/system" "$vroot/lib/systemd/"
+  # the units' ExecStartPre helpers (not the Python tree: verify looks at the commands only)
+  find "$1/usr/lib/modd" -maxdepth 1 -type f -exec install -D -t "$vroot/usr/lib/modd" {} +
   cp -an /lib/systemd/system/. "$vroot/lib/systemd/system/"  # the targets they order against
   for u in "$1"/lib/systemd/system/*.service; do
     out=$(SYSTEMD_LOG_LEVEL=warning systemd-analyze verify --root="$vroot" \
