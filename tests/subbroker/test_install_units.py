@@ -28,6 +28,7 @@ import pytest
 from modd.subbroker.client import request
 from modd.zenoh_session import wait_connected
 from modd_model import load_text
+from modd_model.ingress import ingress_of
 from subbroker_harness import (
     KEY,
     Proc,
@@ -55,9 +56,9 @@ SOUNDER = """Sensor sounder kind nmea on "{dev}/sounder" { baud = 4800; } measur
         depth(METER) from sentence DBT.depth_meters; }"""
 
 
-def boat(sensors: list[str], topics: list[str], link: int, ingress: int) -> dict[str, Any]:
-    """The drone's model: its archive in /var/lib/modd, its ingress the TCP port of the
-    pubbroker.json the test writes (modd-sensors takes the model's)."""
+def boat(sensors: list[str], topics: list[str], link: int) -> dict[str, Any]:
+    """The drone's model: its archive in /var/lib/modd, its ingress the generated default
+    (a unix socket in /tmp, which the drone's units share: JoinsNamespaceOf=)."""
     quoted = ", ".join(f'"usv.{t}"' for t in topics)
     text = (
         "Drone usv { Sensors { " + "\n".join(sensors).replace("{dev}", DEV) + " } }\n"
@@ -68,9 +69,7 @@ def boat(sensors: list[str], topics: list[str], link: int, ingress: int) -> dict
     )
     result = load_text(text, "boat.modd")
     assert result.ok and result.model is not None, [str(d) for d in result.diagnostics]
-    model = result.model
-    model["pubBroker"]["ingress"] = {"tcpPort": ingress}
-    return model
+    return result.model
 
 
 def configure(drone: Path, base: Path, model: dict[str, Any], ports: dict[str, int]) -> None:
@@ -84,7 +83,7 @@ def configure(drone: Path, base: Path, model: dict[str, Any], ports: dict[str, i
     pb = {
         "name": "usv",
         "link": {"host": "127.0.0.1", "port": ports["link"], "key": "file:/etc/modd/link.key"},
-        "ingress": {"host": "127.0.0.1", "port": ports["ingress"]},
+        "ingress": {"unix_path": ingress_of(model).unix_socket},  # as modd generate writes
         "archive": {"dir": "/var/lib/modd/archive", "flush_interval_ms": 200},
         "topics": topics,
         "status_period_s": 60,
@@ -185,8 +184,8 @@ def test_the_units_own_command_lines_follow_a_deploy_without_a_restart(
 ) -> None:
     drone = fresh_root(tmp_path, "drone", "modd-drone")
     base = fresh_root(tmp_path, "base", "modd-base")
-    ports = {k: free_port() for k in ("link", "ingress", "zenoh", "mavlink")}
-    v1 = boat([GNSS], ["gnss.lat"], ports["link"], ports["ingress"])
+    ports = {k: free_port() for k in ("link", "zenoh", "mavlink")}
+    v1 = boat([GNSS], ["gnss.lat"], ports["link"])
     configure(drone, base, v1, ports)
     print(install_offline(drone, "modd-drone"))
     print(install_offline(base, "modd-base"))
@@ -230,7 +229,7 @@ DEPTHS = [3.5, 4.5, 5.5]
 
 def run_deploys(session: Any, procs: Any, sounder: PtyDevice, ports: dict[str, int]) -> None:
     pb, sensors, _mavlink, sb = procs
-    v2 = boat([GNSS, SOUNDER], ["gnss.lat", "sounder.depth"], ports["link"], ports["ingress"])
+    v2 = boat([GNSS, SOUNDER], ["gnss.lat", "sounder.depth"], ports["link"])
     reply = deploy(session, v2, 2)
     assert reply["status"] == "ACKED", (reply, sb.log(), pb.log())
     onboard = reply["onboard"]
@@ -252,7 +251,7 @@ def run_deploys(session: Any, procs: Any, sounder: PtyDevice, ports: dict[str, i
         "the sounder's values read",
     )
     time.sleep(0.6)  # published, archived (flush_interval_ms 200)
-    v3 = boat([GNSS], ["gnss.lat"], ports["link"], ports["ingress"])
+    v3 = boat([GNSS], ["gnss.lat"], ports["link"])
     reply = deploy(session, v3, 3)
     assert reply["status"] == "ACKED" and reply["onboard"]["sensors"]["ok"], reply
     actions = {s["sensor"]: s["action"] for s in reply["onboard"]["sensors"]["sensors"]}
