@@ -111,7 +111,11 @@ def arm64_python() -> Path:
 
 
 def arm64_tree(package: str) -> Path:
-    """The private Python tree of the arm64 PACKAGE's .deb, unpacked once per build."""
+    """The private Python tree of the arm64 PACKAGE: the tree `make package` packed
+    (build/package/root), else its .deb's, unpacked once per build."""
+    built = PACKAGES / "root" / f"{package}-arm64" / "usr/lib/modd/python"
+    if (built / "modd").is_dir():
+        return built
     deb = sorted(PACKAGES.glob(f"{package}_*_arm64.deb"))[-1]
     dest = REPO / "build" / "arm64-python" / deb.stem
     if not (dest / "usr/lib/modd/python").is_dir():
@@ -248,7 +252,7 @@ def wait_values(status: Path, timeout_s: float, proc: object) -> None:
 def memory_rows(seconds: float) -> list[list[object]]:
     rows: list[list[object]] = []
     archs = ["amd64"]
-    if ARM64_PUBBROKER.exists() and list(PACKAGES.glob("modd-*_arm64.deb")):
+    if ARM64_PUBBROKER.exists() and list(PACKAGES.glob("*arm64*")):
         archs.append("arm64")
     else:
         print(f"\n(no {ARM64_PUBBROKER} or arm64 package: run make package)")

@@ -204,6 +204,7 @@ def test_the_units_own_command_lines_follow_a_deploy_without_a_restart(
         mavlink = start_unit(drone, tmp_path, "modd-mavlink")
         sb = start_unit(base, tmp_path, "modd-subbroker")
         with processes(sensors, mavlink, sb):
+            wait_port(ports["zenoh"], 120)  # the installed SubBroker's first start
             session = zenoh_client(ports["zenoh"])
             assert wait_connected(session)
             assert sb.wait_log("config 1 running", 90), sb.log() + pb.log()
