@@ -126,16 +126,19 @@ def arm64_tree(package: str) -> Path:
 def python_command(arch: str, package: str, module: str) -> list[str]:
     """MODULE's main() as the package runs it: amd64 from this checkout's environment
     (the same code), arm64 from the arm64 package's tree under qemu-user (-I: nothing
-    of this machine's Python on its path)."""
+    of this machine's Python on its path; its children, e.g. modd-sensors' model check,
+    run through a wrapper that starts qemu again: no binfmt_misc here)."""
     if arch == "amd64":
         return [sys.executable, "-m", module]
     sysroot, tree = arm64_python(), arm64_tree(package)
-    code = f"import sys; sys.path.insert(0, {str(tree)!r}); from {module} import main; "
-    code += "sys.exit(main())"
-    return ["qemu-aarch64-static", "-L", str(sysroot), f"{sysroot}/usr/bin/python3.11", "-I"] + [
-        "-c",
-        code,
-    ]
+    qemu = ["qemu-aarch64-static", "-L", str(sysroot), f"{sysroot}/usr/bin/python3.11"]
+    wrapper = sysroot.parent / "python3.11-qemu"
+    wrapper.write_text("#!/bin/sh\nexec " + " ".join(qemu) + ' "$@"\n')
+    wrapper.chmod(0o755)
+    code = f"import os, sys; sys.executable = {str(wrapper)!r}; "
+    code += f"os.environ['PYTHONPATH'] = {str(tree)!r}; sys.path.insert(0, {str(tree)!r}); "
+    code += f"from {module} import main; sys.exit(main())"
+    return [*qemu, "-I", "-c", code]
 
 
 def pubbroker_command(arch: str) -> list[str]:
