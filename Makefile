@@ -31,11 +31,14 @@ package: build
 # The install test (tests/subbroker/test_install_root.py): the amd64 packages (built
 # here if missing) installed offline into a clean Debian root (packaging/test-root.sh,
 # cached in build/installroot/), scenario 1 run from it as the modd user, upgrade, purge;
-# and a fresh drone paired with modd-pair (tests/subbroker/test_install_pair.py).
+# a fresh drone paired with modd-pair (tests/subbroker/test_install_pair.py); and the
+# units' own command lines (ExecStart) run as the modd user, following deploys that add
+# and remove an instrument (tests/subbroker/test_install_units.py).
 package-test: setup
 	@ls build/package/modd-drone_*_amd64.deb build/package/modd-base_*_amd64.deb >/dev/null 2>&1 \
 	  || ARCHS=amd64 packaging/build.sh
-	@.venv/bin/pytest -q -m "e2e or slow" tests/subbroker/test_install_root.py tests/subbroker/test_install_pair.py
+	@.venv/bin/pytest -q -m "e2e or slow" tests/subbroker/test_install_root.py tests/subbroker/test_install_pair.py \
+	  tests/subbroker/test_install_units.py
 
 test: build
 	@scripts/check.sh

@@ -58,6 +58,16 @@ if [ ! -f frontend/dist/index.html ] || [ -n "$(find frontend/src -newer fronten
   (cd frontend && npm run --silent build >/dev/null)
 fi
 
+# cross_wheels ARCH: sets extra (pip's arguments) to the wheels built here for ARCH.
+# packaging/README.md: PyPI has no Linux aarch64 wheel of cf-units (drone and base need it)
+cross_wheels() {
+  extra=()
+  if [ "$1" = arm64 ]; then
+    packaging/cf-units-arm64.sh "$(pins cf-units | cut -d= -f3)" "$(pins numpy | cut -d= -f3)" "$ROOT/build/cross-wheels"
+    extra=(--find-links "$ROOT/build/cross-wheels" --platform linux_aarch64)
+  fi
+}
+
 platform() { [ "$1" = arm64 ] && echo manylinux2014_aarch64 || echo manylinux2014_x86_64; }
 
 # python_tree ROOT ARCH REQS: the wheels for ARCH installed into ROOT/usr/lib/modd/python
@@ -111,27 +121,25 @@ drone() {
   rm -rf "$root" && mkdir -p "$root"
   install -D -m 0755 "$bin" "$root/usr/bin/modd-pubbroker"
   strip_for "$arch" "$root/usr/bin/modd-pubbroker"
+  local extra=(); cross_wheels "$arch"
   python_tree "$root" "$arch" "$OUT/drone-requirements.txt" \
-    "$OUT"/wheels/modd_runtime-*.whl "$OUT"/wheels/modd_metamodel-*.whl
+    "$OUT"/wheels/modd_runtime-*.whl "$OUT"/wheels/modd_metamodel-*.whl "${extra[@]}"
   wrapper "$root" modd-sensors modd.sensors:main
   wrapper "$root" modd-mavlink modd.mavlink.cli:main
   wrapper "$root" modd-pair modd.pairing.cli:main
+  install -D -m 0755 packaging/drone/lib/onboard-init "$root/usr/lib/modd/onboard-init"
   install -D -m 0644 packaging/drone/drone.env "$root/etc/modd/drone.env"
   units_of drone "$root"
   [ "$arch" != amd64 ] || smoke_drone "$root"
   deb modd-drone "$arch" "$root" drone \
-    "libc6, libstdc++6, libssl3, libzstd1, liblz4-1, python3 (>= 3.11), python3 (<< 3.12), adduser"
+    "libc6, libstdc++6, libssl3, libzstd1, liblz4-1, libexpat1, python3 (>= 3.11), python3 (<< 3.12), adduser"
 }
 
 base() {
   local arch=$1 root=$OUT/root/modd-base-$1
   step "modd-base ($arch)"
   rm -rf "$root" && mkdir -p "$root"
-  local extra=()
-  if [ "$arch" = arm64 ]; then  # packaging/README.md: PyPI has no Linux aarch64 wheel of cf-units
-    packaging/cf-units-arm64.sh "$(pins cf-units | cut -d= -f3)" "$(pins numpy | cut -d= -f3)" "$ROOT/build/cross-wheels"
-    extra=(--find-links "$ROOT/build/cross-wheels" --platform linux_aarch64)
-  fi
+  local extra=(); cross_wheels "$arch"
   python_tree "$root" "$arch" "$OUT/base-requirements.txt" "$OUT"/wheels/*.whl "${extra[@]}"
   wrapper "$root" modd-subbroker modd.subbroker.cli:main
   wrapper "$root" modd-radio modd.radio.cli:main
@@ -143,8 +151,9 @@ base() {
   deb modd-base "$arch" "$root" base "libc6, libstdc++6, libexpat1, python3 (>= 3.11), python3 (<< 3.12), adduser"
 }
 
-for kind in $KINDS; do
-  for arch in $ARCHS; do
+# architecture by architecture: the amd64 packages (all the install tests need) first
+for arch in $ARCHS; do
+  for kind in $KINDS; do
     "$kind" "$arch"
   done
 done

@@ -59,6 +59,8 @@ verify_units() {  # systemd-analyze verify: the package's tree over this system'
   vroot=$(mktemp -d)
   mkdir -p "$vroot/usr" "$vroot/lib/systemd"
   cp -a "$1/usr/bin" "$vroot/usr/" && cp -a "$1/lib/systemd/system" "$vroot/lib/systemd/"
+  # the units' ExecStartPre helpers (not the Python tree: verify looks at the commands only)
+  find "$1/usr/lib/modd" -maxdepth 1 -type f -exec install -D -t "$vroot/usr/lib/modd" {} +
   cp -an /lib/systemd/system/. "$vroot/lib/systemd/system/"  # the targets they order against
   for u in "$1"/lib/systemd/system/*.service; do
     out=$(SYSTEMD_LOG_LEVEL=warning systemd-analyze verify --root="$vroot" \
@@ -82,5 +84,9 @@ smoke_drone() {
   env -i PATH=/usr/bin:/bin PYTHONDONTWRITEBYTECODE=1 PYTHONPATH="$lib" /usr/bin/python3 -c \
     "from modd_model import load_or_report; from modd_model.ingress import ingress_of; import pymavlink.mavutil, serial" \
     || { echo "drone tree: the model loader or pymavlink is missing" >&2; return 1; }
+  # a unit beyond the paper's: the model check loads UDUNITS-2 (cf-units), as modd-sensors does
+  env -i PATH=/usr/bin:/bin PYTHONDONTWRITEBYTECODE=1 PYTHONPATH="$lib" /usr/bin/python3 -c \
+    "from modd_model.units import unit_problem; assert unit_problem('deg') is None and unit_problem('furlong/fortnight') is None and unit_problem('nonsense')" \
+    || { echo "drone tree: the model's unit check (cf-units) does not run" >&2; return 1; }
   echo "  drone tree: modd-sensors, modd-mavlink, modd-pair start from the package's files alone"
 }

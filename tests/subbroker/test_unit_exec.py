@@ -1,0 +1,81 @@
+"""The packaged units' command lines as systemd expands them (unit_exec.py), read from
+packaging/*/units with the packages' own environment files: the drone's on-board
+processes follow a deploy (the PubBroker writes the on-board model file, modd-sensors
+and modd-mavlink watch it) and the base station's SubBroker sends it over the link
+(issue 39, item 5). Fast: no package built. The installed units are run in
+test_install_units.py (`make package-test`)."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+from subbroker_harness import REPO
+from unit_exec import UnitError, command, read_unit
+
+PACKAGING = REPO / "packaging"
+ONBOARD = "/var/lib/modd/onboard/model.json"
+
+
+@pytest.fixture
+def root(tmp_path: Path) -> Path:
+    """A tree laid out as the two packages install it (units and conffiles)."""
+    units = tmp_path / "lib/systemd/system"
+    units.mkdir(parents=True)
+    for f in PACKAGING.glob("*/units/*.service"):
+        shutil.copy(f, units)
+    (tmp_path / "etc/modd").mkdir(parents=True)
+    for kind, env in (("drone", "drone.env"), ("base", "base.env")):
+        shutil.copy(PACKAGING / kind / env, tmp_path / "etc/modd")
+    return tmp_path
+
+
+def test_the_drone_units_follow_the_on_board_model_file(root: Path) -> None:
+    pb = read_unit(root, "modd-pubbroker.service")
+    assert pb.exec_start == [
+        "/usr/bin/modd-pubbroker",
+        "--config",
+        "/etc/modd/pubbroker.json",
+        "--onboard-model",
+        ONBOARD,
+    ]
+    for name in ("modd-pubbroker", "modd-sensors", "modd-mavlink"):
+        unit = read_unit(root, f"{name}.service")
+        assert unit.exec_start_pre == [["/usr/lib/modd/onboard-init"]], name
+        assert unit.one("User") == "modd" and "/var/lib/modd" in unit.one("ReadWritePaths")
+    sensors = read_unit(root, "modd-sensors.service").exec_start
+    assert sensors[:4] == ["/usr/bin/modd-sensors", "--model", ONBOARD, "--watch"]
+    assert sensors[-2:] == ["--status-file", "/run/modd/sensors.json"]  # empty ARGS: no word
+    mavlink = read_unit(root, "modd-mavlink.service").exec_start
+    assert mavlink == ["/usr/bin/modd-mavlink", "--model", ONBOARD, "--watch"] + [
+        "--connect",
+        "/dev/ttyAMA0,921600",
+    ]
+
+
+def test_the_subbroker_unit_sends_the_on_board_model_over_the_link(root: Path) -> None:
+    sb = read_unit(root, "modd-subbroker.service")
+    assert "--onboard-over-link" in sb.exec_start
+    (root / "etc/modd/base.env").write_text('MODD_SUBBROKER_ARGS="--record-dir /var/lib/modd/r"\n')
+    sb = read_unit(root, "modd-subbroker.service")
+    assert sb.exec_start[-2:] == ["--record-dir", "/var/lib/modd/r"]  # $VAR: split in words
+
+
+def test_expansion_follows_systemd_and_refuses_what_it_does_not_read() -> None:
+    env = {"A": "one two", "B": ""}
+    assert command("/x ${A} $A $B %t/%n %%", env, "u.service", "here") == [
+        "/x",
+        "one two",
+        "one",
+        "two",
+        "/run/u.service",
+        "%",
+    ]
+    for line, what in (
+        ("/x %h", "specifier %h"),
+        ("-/x", "prefix"),
+        ("/x a$A", "inside a word"),
+    ):
+        with pytest.raises(UnitError, match=what):
+            command(line, env, "u.service", "here")
