@@ -1,20 +1,24 @@
 """A campaign in network namespaces (issue 44, docs/fleet.md): three stations (a, b, c)
-and three drones, each in its own namespace made by this test, joined by veth links
-(tests/support/netns.py). The addresses (10.44.<link>.1/.2, one /30 per link) exist
-only inside those namespaces, which the test deletes; nothing is added to the host's.
+and six drones, each in its own namespace made by this test, joined by veth links
+(tests/support/netns.py). The addresses (10.44.<link>.1/.2, one /30 per link) and the
+fixed ports inside a drone's namespace (7000 link, 7001 ingress) exist only inside those
+namespaces, which the test deletes; nothing is added to the host's own namespace.
 
 Stations a, b, c: a router each (``python -m modd.station``, full mesh over the links
 a–b, b–c, a–c) and the SubBrokers of the drones it hears (clients of its router, with
-``station`` set). Drones: the C++ PubBroker fed by the load generator; usv1 is linked to
-a and b, usv2 to b, usv3 to c. Viewers at a and at c (in their stations' namespaces).
+``station`` set). Drones: the C++ PubBroker fed by the load generator, linked to the
+stations of ``HEARD_BY`` (usv1 to a and b, usv6 to b and c, the others to one). Viewers
+at a and at c, in their stations' namespaces (tests/fleet/ns_listener.py).
 
 The scenario: usv1 starts heard by a only; it moves to b (its link to a cut, to b
-opened); station b (router and SubBrokers) is killed with -9 and restarted; the a–b link
-is cut and healed. Then each drone's serving station fills its gaps (``modd backfill
---gaps``). At each viewer, every window of every drone came exactly once (by identity:
-drone, subscriber, epoch, window), equals the aggregate recomputed from that drone's
-archive with the official ``mcap`` reader, and every epoch's windows are there from its
-first to its last.
+opened); station b (router and SubBrokers) is killed with -9 and restarted (c takes
+usv6 over, usv2 waits for b); the a–b link is cut and healed. Then each drone's serving
+station fills its gaps (``modd backfill --gaps``). At each viewer, through the subscriber
+API, every window of every drone came exactly once (by identity: drone, subscriber,
+epoch, window), equals the aggregate recomputed from that drone's archive with the
+official ``mcap`` reader, and every epoch's windows are there from its first to its
+last. On the wire, a window comes twice only if b delivered it in the last ``SAVE_S``
+before its kill (docs/fleet.md, "What remains").
 """
 
 from __future__ import annotations
@@ -49,11 +53,11 @@ from test_fleet import campaign_credentials  # noqa: E402
 
 from tests.support.netns import Fabric, needs_netns  # noqa: E402
 
-pytestmark = [needs_netns, pytest.mark.e2e]
+pytestmark = needs_netns  # e2e: every test under tests/ (conftest.py CROSS_PROCESS)
 
 STATIONS = "abc"
 #: drone -> the stations whose namespaces it is linked to
-HEARD_BY = {"usv1": "ab", "usv2": "b", "usv3": "c"}
+HEARD_BY = {"usv1": "ab", "usv2": "b", "usv3": "c", "usv4": "a", "usv5": "c", "usv6": "bc"}
 LOAD_S = 75
 LOADGEN = Path(__file__).resolve().parents[1] / "subbroker" / "loadgen.py"
 
@@ -213,7 +217,7 @@ def serving_now(c: Campaign, drone: str) -> str:
 
 
 @pytest.mark.timeout(240)
-def test_three_stations_three_drones_move_kill_partition_each_window_once(
+def test_three_stations_six_drones_move_kill_partition_each_window_once(
     campaign: Campaign,
 ) -> None:
     c = campaign
@@ -227,14 +231,15 @@ def test_three_stations_three_drones_move_kill_partition_each_window_once(
     for drone, heard in HEARD_BY.items():
         for s in heard:
             c.start_subbroker(s, drone)
-    wait_serving(c, "a", "usv1")
-    wait_serving(c, "b", "usv2")
-    wait_serving(c, "c", "usv3")
+    for drone, heard in HEARD_BY.items():
+        wait_serving(c, heard[0], drone)
     time.sleep(6)
     # usv1 moves from a to b
+    moved = time.monotonic()
     c.fabric.set_link("usv1", "a", up=False)
     c.fabric.set_link("usv1", "b", up=True)
     wait_serving(c, "b", "usv1", 30)
+    print(f"usv1 moved: station b serves it {time.monotonic() - moved:.1f} s later")
     time.sleep(4)
     # station b dies (router and SubBrokers) and comes back
     for key in [k for k in c.sb if k[0] == "b"]:
