@@ -36,19 +36,10 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import subbroker_harness as h  # noqa: E402
 from modd.subbroker.backfill import SAVE_S  # noqa: E402
 from modd.subbroker.payload import DeliveredValue  # noqa: E402
 from modd_model.query import topics  # noqa: E402
-from subbroker_harness import (  # noqa: E402
-    PUBBROKER,
-    PYTHON,
-    SUBBROKER,
-    Proc,
-    check_against_archive,
-    free_port,
-    model_copy,
-    read_archive,
-)
 from test_fleet import campaign_credentials  # noqa: E402
 
 from tests.support.netns import Fabric, needs_netns  # noqa: E402
@@ -67,9 +58,9 @@ class Campaign:
 
     def __init__(self, tmp: Path, fabric: Fabric) -> None:
         self.tmp, self.fabric = tmp, fabric
-        self.procs: list[Proc] = []
+        self.procs: list[h.Proc] = []
         self.creds = campaign_credentials(tmp, STATIONS)
-        self.port = {s: free_port() for s in STATIONS}
+        self.port = {s: h.free_port() for s in STATIONS}
         self.addr: dict[tuple[str, str], str] = {}  # (whose, seen from) -> address
         for i, s in enumerate(STATIONS):
             for o in STATIONS[i + 1 :]:
@@ -78,21 +69,21 @@ class Campaign:
             for s in heard:
                 self._link(drone, s)
         self.models: dict[str, Path] = {}
-        self.sb: dict[tuple[str, str], Proc] = {}
-        self.routers: dict[str, Proc] = {}
+        self.sb: dict[tuple[str, str], h.Proc] = {}
+        self.routers: dict[str, h.Proc] = {}
 
     def _link(self, x: str, y: str) -> None:
         ax, ay = self.fabric.link(x, y)
         self.addr[(x, y)], self.addr[(y, x)] = ax, ay
 
-    def run(self, name: str, where: str, cmd: list[str]) -> Proc:
-        proc = Proc(name, [*self.fabric.prefix(where), *cmd], self.tmp / f"{name}.log")
+    def run(self, name: str, where: str, cmd: list[str]) -> h.Proc:
+        proc = h.Proc(name, [*self.fabric.prefix(where), *cmd], self.tmp / f"{name}.log")
         self.procs.append(proc)
         return proc
 
     def start_router(self, s: str, tag: str = "") -> None:
         zid = {n: f"{i + 1:x}{i + 1:x}" for i, n in enumerate(STATIONS)}
-        cmd = [str(PYTHON), "-m", "modd.station", "--listen", f"tcp/0.0.0.0:{self.port[s]}"]
+        cmd = [str(h.PYTHON), "-m", "modd.station", "--listen", f"tcp/0.0.0.0:{self.port[s]}"]
         cmd += ["--credentials", str(self.creds[s]), "--id", zid[s]]
         for o in STATIONS:
             if o != s:
@@ -105,7 +96,7 @@ class Campaign:
         archive) and its load (ingress 127.0.0.1:7001, in the same namespace)."""
         home = self.tmp / drone
         home.mkdir()
-        model = model_copy(home, "scenario1.modd")
+        model = h.model_copy(home, "scenario1.modd")
         doc = json.loads(model.read_text().replace('"usv.', f'"{drone}.'))  # topics
         doc["drone"]["name"] = drone
         model.write_text(json.dumps(doc))
@@ -119,13 +110,13 @@ class Campaign:
             "status_period_s": 60,
         }
         (home / "pb.json").write_text(json.dumps(cfg))
-        self.run(f"pb-{drone}", drone, [str(PUBBROKER), "--config", str(home / "pb.json")])
+        self.run(f"pb-{drone}", drone, [str(h.PUBBROKER), "--config", str(home / "pb.json")])
         self.fabric.wait_port(drone, "127.0.0.1", 7000)
-        load = [str(PYTHON), str(LOADGEN), "--model", str(model), "--ingress", "127.0.0.1:7001"]
+        load = [str(h.PYTHON), str(LOADGEN), "--model", str(model), "--ingress", "127.0.0.1:7001"]
         load += ["--seconds", str(LOAD_S), "--seed", str(seed), "--signal", "uniform"]
         self.run(f"load-{drone}", drone, load)
 
-    def start_subbroker(self, s: str, drone: str, tag: str = "") -> Proc:
+    def start_subbroker(self, s: str, drone: str, tag: str = "") -> h.Proc:
         path = self.tmp / f"sb-{s}-{drone}.toml"
         path.write_text(f"""model = "{self.models[drone]}"
 station = "{s}"
@@ -142,21 +133,21 @@ credentials_dir = "{self.creds[s]}"
 tcp = false
 status_period_s = 0.5
 """)
-        proc = self.run(f"sb-{s}-{drone}{tag}", s, [*SUBBROKER, "--config", str(path)])
+        proc = self.run(f"sb-{s}-{drone}{tag}", s, [*h.SUBBROKER, "--config", str(path)])
         proc.dumps_stacks = True
         self.sb[(s, drone)] = proc
         return proc
 
     def start_viewer(self, s: str) -> Path:
         out = self.tmp / f"viewer-{s}.hex"
-        cmd = [str(PYTHON), str(Path(__file__).with_name("ns_listener.py"))]
+        cmd = [str(h.PYTHON), str(Path(__file__).with_name("ns_listener.py"))]
         cmd += ["--connect", f"tcp/127.0.0.1:{self.port[s]}", "--credentials", str(self.creds[s])]
         cmd += ["--out", str(out)]
         assert self.run(f"viewer-{s}", s, cmd).wait_log("listening", 20)
         return out
 
     def backfill(self, s: str, drone: str, subscriber: str) -> dict[str, Any]:
-        cmd = [*self.fabric.prefix(s), str(Path(PYTHON).with_name("modd")), "backfill"]
+        cmd = [*self.fabric.prefix(s), str(Path(h.PYTHON).with_name("modd")), "backfill"]
         cmd += ["--drone", drone, "--subscriber", subscriber, "--gaps", "--json"]
         cmd += ["--connect", f"tcp/127.0.0.1:{self.port[s]}", "--timeout", "60"]
         cmd += ["--credentials", str(self.creds[s] / "backend.cred")]
@@ -221,7 +212,7 @@ def test_three_stations_six_drones_move_kill_partition_each_window_once(
     campaign: Campaign,
 ) -> None:
     c = campaign
-    assert PUBBROKER.exists(), f"{PUBBROKER} is not built: run make build"
+    assert h.PUBBROKER.exists(), f"{h.PUBBROKER} is not built: run make build"
     c.fabric.set_link("usv1", "b", up=False)  # usv1 starts in a's range only
     for s in STATIONS:
         c.start_router(s)
@@ -283,7 +274,7 @@ def check_viewers(c: Campaign, viewers: dict[str, Path], killed_ns: int) -> None
     equal to its archive's aggregate, none missing. On the wire (raw samples): a window
     comes twice only when b was killed (-9) within ``SAVE_S`` of delivering it, before
     its window record was written (docs/fleet.md, "What remains")."""
-    archives = {d: read_archive(c.tmp / d / "archive", c.models[d]) for d in HEARD_BY}
+    archives = {d: h.read_archive(c.tmp / d / "archive", c.models[d]) for d in HEARD_BY}
     for s, path in viewers.items():
         given, raw = read_api(path), read_viewer(path)
         for drone in HEARD_BY:
@@ -291,7 +282,7 @@ def check_viewers(c: Campaign, viewers: dict[str, Path], killed_ns: int) -> None
             ids = [identity(v) for v in mine]
             dup = len(ids) - len(set(ids))
             assert dup == 0, f"{dup} windows of {drone} twice at the viewer at {s}"
-            assert check_against_archive({f"{s}/{drone}": mine}, archives[drone]) > 50
+            assert h.check_against_archive({f"{s}/{drone}": mine}, archives[drone]) > 50
             assert_complete(mine, f"{s}/{drone}")
         assert {identity(v) for v in raw} == {identity(v) for v in given}
         first: dict[tuple[Any, ...], int] = {}
