@@ -34,15 +34,14 @@ from typing import Any
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import subbroker_harness as h  # noqa: E402
+from fleet.test_fleet import campaign_credentials  # noqa: E402
 from modd.subbroker.backfill import SAVE_S  # noqa: E402
 from modd.subbroker.payload import DeliveredValue  # noqa: E402
 from modd_model.query import topics  # noqa: E402
-from test_fleet import campaign_credentials  # noqa: E402
-
-from tests.support.netns import Fabric, needs_netns  # noqa: E402
+from support.netns import Fabric, needs_netns  # noqa: E402
 
 pytestmark = needs_netns  # e2e: every test under tests/ (conftest.py CROSS_PROCESS)
 
