@@ -56,7 +56,10 @@ def test_a_crashed_file_with_25_flipped_bytes_keeps_every_chunk_whose_data_check
     (b.archive_dir / "usv-flipall.mcap").write_bytes(all_flips)
     want["usv-flipall.mcap"] = oracle.count_valid(all_flips, layout)
     want[crashed.name] = everything
-    assert sum(1 for n in want.values() if n < everything) >= 15  # most flips hit a chunk
+    # the test's power: most flips cost a chunk (the rest land in message indexes; how
+    # many depends on how the load's timing cut the file: 14 to 19 seen)
+    damaged_files = sum(1 for n in want.values() if n < everything)
+    assert damaged_files >= 12
 
     b2 = broker_factory(archive={"dir": str(b.archive_dir), "chunk_bytes": 2048})
     assert b2.stop() == 0
@@ -65,4 +68,4 @@ def test_a_crashed_file_with_25_flipped_bytes_keeps_every_chunk_whose_data_check
     got = {name: official_count(b.archive_dir / name) for name in want}
     assert got == want
     assert not list(b.archive_dir.glob("*.recovering"))
-    assert log.count("skipped ") >= 15  # each skipped region logged with its offset
+    assert log.count("skipped ") >= damaged_files  # each skipped region logged with its offset
