@@ -21,11 +21,11 @@ MODEL = Path(__file__).resolve().parents[3] / "metamodel" / "examples" / "scenar
 
 def test_a_mesh_table_gives_the_id_and_connects_to_every_peer() -> None:
     z = ZenohSettings.from_mapping(
-        {"mode": "router", "mesh": {"id": "a1", "peers": {"b2": "tcp/10.0.0.2:7447"}}}
+        {"mode": "router", "mesh": {"id": "a1", "peers": {"b2": "tcp/127.0.0.2:7447"}}}
     )
     inserts = z.inserts()
     assert json.loads(inserts["id"]) == "a1"
-    assert json.loads(inserts["connect/endpoints"]) == ["tcp/10.0.0.2:7447"]
+    assert json.loads(inserts["connect/endpoints"]) == ["tcp/127.0.0.2:7447"]
 
 
 @pytest.mark.parametrize(

@@ -4,7 +4,7 @@ the access control of a SubBroker's router for every drone (docs/security.md) an
 with ``--id`` and ``--peer``, joins the other stations' routers in one mesh.
 
     python -m modd.station --listen tcp/0.0.0.0:7447 --credentials DIR \\
-        --id a1 --peer b2=tcp/10.0.0.2:7447 --peer c3=tcp/10.0.0.3:7447
+        --id a1 --peer b2=tcp/station-b.example:7447 --peer c3=tcp/station-c.example:7447
 
 SIGTERM or SIGINT stops it. Exit codes: 0 stopped, 2 bad usage or configuration.
 """
@@ -42,7 +42,7 @@ def settings_of(args: argparse.Namespace) -> ZenohSettings:
     if args.id or args.peer:
         peers = dict(p.split("=", 1) for p in args.peer if "=" in p)
         if len(peers) != len(args.peer):
-            raise ValueError("--peer: expected ID=ENDPOINT, e.g. b2=tcp/10.0.0.2:7447")
+            raise ValueError("--peer: expected ID=ENDPOINT, e.g. b2=tcp/station-b.example:7447")
         mesh = Mesh.from_mapping({"id": args.id, "peers": peers}, "--id/--peer")
     listen = tuple(args.listen or [DEFAULT_ENDPOINT])
     return ZenohSettings(mode="router", listen=listen, mesh=mesh)

@@ -11,9 +11,9 @@ connected knows the other by its zenoh id, the endpoint it chose to dial. The
 ``station`` policy lets stations exchange everything under ``modd/**`` (values,
 status, queryables, liveliness), nothing else.
 
->>> m = Mesh.from_mapping({"id": "a1", "peers": {"b2": "tcp/10.0.0.2:7447"}})
+>>> m = Mesh.from_mapping({"id": "a1", "peers": {"b2": "tcp/127.0.0.2:7447"}})
 >>> m.endpoints(), m.peer_ids()
-(('tcp/10.0.0.2:7447',), ('b2',))
+(('tcp/127.0.0.2:7447',), ('b2',))
 >>> Mesh.from_mapping({"id": "x"})
 Traceback (most recent call last):
 ValueError: zenoh.mesh.id: 'x' is not a zenoh id (1 to 32 hex digits, not all zero)
