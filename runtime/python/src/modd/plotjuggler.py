@@ -24,7 +24,6 @@ import argparse
 import json
 import logging
 import math
-import signal
 import socket
 import sys
 import threading
@@ -34,6 +33,7 @@ from modd_contracts import keys
 from modd_contracts.delivered import load_delivered
 from modd_contracts.types_gen import DeliveredValue
 
+from .shutdown import stop_on_signals
 from .zenoh_session import add_viewer_args, client_settings, open_session
 
 log = logging.getLogger("modd.plotjuggler")
@@ -143,7 +143,7 @@ def main(argv: list[str] | None = None) -> int:
         flush=True,
     )
     stop = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    stop_on_signals(stop)
     try:
         stop.wait()
     except KeyboardInterrupt:

@@ -13,11 +13,10 @@ from __future__ import annotations
 
 import argparse
 import logging
-import signal
 import sys
 import threading
-from types import FrameType
 
+from .shutdown import stop_on_signals
 from .zenoh_auth import CredentialStore
 from .zenoh_gate import start_gates
 from .zenoh_mesh import Mesh
@@ -59,12 +58,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"modd.station: {exc}", file=sys.stderr)
         return 2
     done = threading.Event()
-
-    def on_signal(signum: int, frame: FrameType | None) -> None:
-        done.set()
-
-    signal.signal(signal.SIGTERM, on_signal)
-    signal.signal(signal.SIGINT, on_signal)
+    stop_on_signals(done)
     logging.getLogger("modd.station").info("station router up: %s", ", ".join(settings.listen))
     done.wait()
     session.close()  # type: ignore[no-untyped-call]

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import queue
-import signal
 import sys
 import threading
 import time
@@ -25,6 +24,7 @@ from modd_model import load_or_report
 
 from ..onboard import ModelWatch, follow, validated, write_result
 from ..publisher import Publisher
+from ..shutdown import stop_on_signals
 from .bridge import Bridge, BridgeSettings
 from .guard import signing_key
 from .mapping import MappingError, plan_bridge
@@ -152,8 +152,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     bridge = Bridge(plan, transport, sinks, settings, log)
     stop = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    stop_on_signals(stop)
     topics = sum(len(p.mappings) for p in plan.publishers)
     log(
         f"drone {model['drone']['name']}: {topics} topics from {args.connect} -> {ingress}, "

@@ -13,10 +13,10 @@ from __future__ import annotations
 import argparse
 import logging
 import os
-import signal
 import sys
 import threading
 
+from ..shutdown import stop_on_signals
 from ..zenoh_session import ZenohSettings, add_viewer_args, client_settings, open_session
 
 
@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
         flush=True,
     )
     stop = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    stop_on_signals(stop)
     try:
         stop.wait()
     except KeyboardInterrupt:

@@ -11,7 +11,6 @@ Example::
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
 import threading
 import time
@@ -20,6 +19,7 @@ from typing import Any
 
 from ..onboard import ModelWatch, follow, validated, write_result
 from ..publisher import Publisher
+from ..shutdown import stop_on_signals
 from .check import checked_model, model_or_why
 from .plan import plan_sensors
 from .reload import apply_plans, linked_device
@@ -88,8 +88,7 @@ def main(argv: list[str] | None = None) -> int:
     runner = Runner(plans, sinks, log, args.status_file, args.status_period)
     runner.report_health = lambda health: _report_health(runner, health)
     stop = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    stop_on_signals(stop)
     for p in plans:
         log(
             f"{p.name} ({p.kind}): {len(p.mappings)} topics from {p.device.path} at "

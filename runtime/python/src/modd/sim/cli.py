@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import signal
 import sys
 import threading
 import time
@@ -14,6 +13,7 @@ from modd_model import load_or_report
 from modd_model.numbers import to_fraction
 from modd_model.query import topics
 
+from ..shutdown import stop_on_signals
 from .faults import FaultFile
 from .sensors import run_publisher
 
@@ -115,8 +115,7 @@ def main(argv: list[str] | None = None) -> int:
     tops = topics(model)
     stop = threading.Event()
     faults = FaultFile(args.faults)
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    stop_on_signals(stop)
     threads = []
     for i, p in enumerate(model["publishers"]):
         mine = [tops[t] for t in p["topics"] if t not in autopilot_topics | wired]

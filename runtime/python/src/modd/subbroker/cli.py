@@ -18,8 +18,8 @@ import sys
 import threading
 from dataclasses import replace
 from pathlib import Path
-from types import FrameType
 
+from ..shutdown import stop_on_signals
 from ..zenoh_session import ZenohSettings
 from .config import (
     ConfigError,
@@ -186,12 +186,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"modd-subbroker: {exc}", file=sys.stderr)
         return 2
     done = threading.Event()
-
-    def on_signal(signum: int, frame: FrameType | None) -> None:
-        done.set()
-
-    signal.signal(signal.SIGTERM, on_signal)
-    signal.signal(signal.SIGINT, on_signal)
+    stop_on_signals(done)
     done.wait()
     logging.getLogger("modd.subbroker").info("stopping")
     broker.stop()
