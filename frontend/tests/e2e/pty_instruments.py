@@ -11,7 +11,6 @@ import fcntl
 import os
 import signal
 import sys
-import threading
 import time
 import tty
 from pathlib import Path
@@ -45,11 +44,12 @@ def write(fd: int, data: bytes) -> None:
 def main() -> int:
     folder = Path(sys.argv[1])
     gps, ctd = device(folder / "gps2"), device(folder / "ctd2")
-    stop = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    stopping: list[int] = []  # a plain flag: a lock in a signal handler can deadlock
+    signal.signal(signal.SIGTERM, lambda signum, _: stopping.append(signum))
     print("ready", flush=True)
     i = 0
-    while not stop.wait(0.2):
+    while not stopping:
+        time.sleep(0.2)
         write(gps, gga(i))
         if i % 5 == 0:
             write(ctd, f"{12.0 + (i % 50) * 0.01:.2f},C={45000 + i % 100}\r\n".encode())
