@@ -3,7 +3,12 @@ republished as ROS 2 messages on the ROS zenoh network, as ``rmw_zenoh``
 publishers of one node (default ``modd_bridge``):
 
 - ``/<drone>/<subscriber>``: ``modd_msgs/msg/Window``;
-- ``/<drone>/<subscriber>/value``: ``std_msgs/msg/Float64``.
+- ``/<drone>/<subscriber>/value``: ``std_msgs/msg/Float64``, live values only.
+
+A backfilled window (filled from the drone's archive after an outage) is
+published on the Window topic with ``backfilled`` true, at its own
+``window_end``; never on ``/value``, whose Float64 has no time: a viewer
+there would take an old value for the current one.
 
 Publishers (and their liveliness tokens, which make them visible to
 ``ros2 topic list``) are declared on a subscriber's first value, so deploys
@@ -130,15 +135,18 @@ class Ros2Bridge:
                 delivered.get("value"),
                 delivered.get("count"),
                 str(delivered.get("aggregation", "")),
+                delivered.get("backfilled") is True,
             )
         except (KeyError, TypeError, ValueError) as exc:
             log.warning("%s: value skipped (%s)", base, exc)
             return
         self._publisher(base, WINDOW.name, WINDOW_HASH).publish(window)
+        self.published += 1
+        if delivered.get("backfilled") is True:
+            return  # historical: a Float64 has no time, so a viewer would take it for the latest
         self._publisher(f"{base}/value", FLOAT64.name, FLOAT64_HASH).publish(
             float64_cdr(delivered.get("value"))
         )
-        self.published += 1
 
     def topics(self) -> dict[str, RosPublisher]:
         with self._lock:

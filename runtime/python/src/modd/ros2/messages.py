@@ -1,7 +1,7 @@
 """The ROS 2 messages of MoDD's values and their CDR (via ``rosbags``):
 
 - ``modd_msgs/msg/Window``: one window of a subscription (start, end, value,
-  sample count, aggregation); its ``.msg`` and ``package.xml`` are generated
+  sample count, aggregation, the historical mark ``backfilled``); its ``.msg`` and ``package.xml`` are generated
   for the integrator (``modd generate --target ros2``, docs/ecosystem.md);
 - ``std_msgs/msg/Float64``: the plain value.
 
@@ -39,6 +39,7 @@ WINDOW = MessageType(
         Field("aggregation", "string"),
         Field("has_count", "bool"),
         Field("samples", "float64[]"),
+        Field("backfilled", "bool"),
     ),
 )
 #: The .msg text of modd_msgs/msg/Window (one source, in the contracts).
@@ -77,9 +78,15 @@ def as_float(value: Any) -> float:
 
 
 def window_cdr(
-    start_ns: int, end_ns: int, value: Any, count: int | None, aggregation: str
+    start_ns: int,
+    end_ns: int,
+    value: Any,
+    count: int | None,
+    aggregation: str,
+    backfilled: bool = False,
 ) -> bytes:
-    """CDR (little endian, with its 4-byte encapsulation header)."""
+    """CDR (little endian, with its 4-byte encapsulation header); ``backfilled``
+    marks a window filled from the drone's archive (historical)."""
     import numpy as np
 
     store = typestore()
@@ -99,6 +106,7 @@ def window_cdr(
         aggregation=aggregation,
         has_count=n is not None,
         samples=np.asarray(samples, dtype=np.float64),
+        backfilled=backfilled,
     )
     return bytes(store.serialize_cdr(msg, WINDOW.name))
 
