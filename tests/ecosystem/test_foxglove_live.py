@@ -308,9 +308,19 @@ def test_a_backfilled_window_is_marked_and_never_a_position() -> None:
     try:
 
         def put(name: str, topic: str, end_s: int, value: float, backfilled: bool) -> None:
-            v = {"value": value, "count": None, "aggregation": "LAST", "topic": topic,
-                 "start_ns": (end_s - 1) * 10**9, "end_ns": end_s * 10**9, "delivered_ns": 1}
-            live.on_value(f"modd/usv/sub/{name}", json.dumps(v | ({"backfilled": True} if backfilled else {})).encode())
+            v = {
+                "value": value,
+                "count": None,
+                "aggregation": "LAST",
+                "topic": topic,
+                "start_ns": (end_s - 1) * 10**9,
+                "end_ns": end_s * 10**9,
+                "delivered_ns": 1,
+            }
+            live.on_value(
+                f"modd/usv/sub/{name}",
+                json.dumps(v | ({"backfilled": True} if backfilled else {})).encode(),
+            )
 
         put("track_lat", "usv.gps.latitude", 10, 43.0, False)
         put("track_lon", "usv.gps.longitude", 10, 5.0, False)
@@ -320,7 +330,15 @@ def test_a_backfilled_window_is_marked_and_never_a_position() -> None:
         put("track_lon", "usv.gps.longitude", 11, 5.5, False)
     finally:
         live.stop()
-    fixes = [(m["latitude"], m["longitude"], t) for topic, m, t in logged if topic == "/usv/position"]
+    fixes = [
+        (m["latitude"], m["longitude"], t) for topic, m, t in logged if topic == "/usv/position"
+    ]
     assert fixes == [(43.0, 5.0, 10 * 10**9), (43.5, 5.5, 11 * 10**9)]
-    windows = [(m["backfilled"], m["value"], t) for topic, m, t in logged if topic == "/usv/track_lat"]
-    assert windows == [(False, 43.0, 10 * 10**9), (True, 42.0, 4 * 10**9), (False, 43.5, 11 * 10**9)]
+    windows = [
+        (m["backfilled"], m["value"], t) for topic, m, t in logged if topic == "/usv/track_lat"
+    ]
+    assert windows == [
+        (False, 43.0, 10 * 10**9),
+        (True, 42.0, 4 * 10**9),
+        (False, 43.5, 11 * 10**9),
+    ]

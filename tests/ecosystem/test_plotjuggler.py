@@ -121,11 +121,19 @@ def test_datagrams_from_delivered_values() -> None:
     ]
     assert series[3:5] == [
         {"/timestamp": 0.5, "/usv/all_1/value": 1.0},
-        {"/timestamp": 1.0, "/usv/all_1/value": 2.0, "/usv/all_1/count": 2, "/usv/all_1/backfilled": 0},
+        {
+            "/timestamp": 1.0,
+            "/usv/all_1/value": 2.0,
+            "/usv/all_1/count": 2,
+            "/usv/all_1/backfilled": 0,
+        },
     ]
     # the historical window is marked and stamped with its own window's end (placed in time)
     assert series[5] == {
-        "/timestamp": 0.5, "/usv/sub_3/value": -7.5, "/usv/sub_3/count": 4, "/usv/sub_3/backfilled": 1
+        "/timestamp": 0.5,
+        "/usv/sub_3/value": -7.5,
+        "/usv/sub_3/count": 4,
+        "/usv/sub_3/backfilled": 1,
     }
 
 

@@ -1,9 +1,10 @@
 """The ROS 2 messages of MoDD's values and their CDR (via ``rosbags``):
 
 - ``modd_msgs/msg/Window``: one window of a subscription (start, end, value,
-  sample count, aggregation, the historical mark ``backfilled``); its ``.msg`` and ``package.xml`` are generated
-  for the integrator (``modd generate --target ros2``, docs/ecosystem.md);
-- ``std_msgs/msg/Float64``: the plain value.
+  sample count, aggregation, the historical mark ``backfilled``); its
+  ``.msg`` and ``package.xml`` are generated for the integrator (``modd
+  generate --target ros2``, docs/ecosystem.md);
+- ``std_msgs/msg/Float64``: the plain value, of live windows only.
 
 An empty window (no sample) has ``value`` NaN and ``count`` 0. An ``ALL``
 window has ``value`` NaN, its samples in ``samples`` and ``count`` their
