@@ -88,8 +88,7 @@ def decode_window(cdr: bytes) -> dict[str, Any]:
     (n,) = struct.unpack_from("<I", body, at)
     at = (at + 4 + 7) // 8 * 8 if n else at + 4  # float64 items, 8-aligned
     samples = list(struct.unpack_from(f"<{n}d", body, at))
-    backfilled = body[at + 8 * n]
-    assert len(body) == at + 8 * n + 1, "nothing after the historical mark"
+    assert len(body) == at + 8 * n, "nothing after the samples"
     return {
         "start_ns": s0 * 10**9 + n0,
         "end_ns": s1 * 10**9 + n1,
@@ -98,7 +97,6 @@ def decode_window(cdr: bytes) -> dict[str, Any]:
         "aggregation": text[:-1].decode(),
         "has_count": has_count,
         "samples": samples,
-        "backfilled": backfilled,
     }
 
 
@@ -229,7 +227,7 @@ def test_bridge_publishes_as_rmw_zenoh(
     float_key = f"0/usv/sub_3/value/std_msgs::msg::dds_::Float64_/{PUBLISHED_FLOAT64}"
     assert set(got) >= {window_key, float_key}
     windows = [decode_window(p) for p, _ in got[window_key]]
-    assert windows[:5] == [
+    assert windows == [
         {
             "start_ns": v.start_ns,
             "end_ns": v.end_ns,
@@ -238,16 +236,24 @@ def test_bridge_publishes_as_rmw_zenoh(
             "aggregation": "AVERAGE",
             "has_count": 1,
             "samples": [],
-            "backfilled": 0,
         }
         for v in values[:5]
     ]
-    assert len(windows) == 6 and windows[5]["backfilled"] == 1
-    assert windows[5]["backfilled"] == 1 and windows[5]["end_ns"] == late.end_ns
-    assert windows[5]["value"] == -7.5
+    # the historical window: on its own topic, never on the live ones (whose last it would be)
+    back_key = f"0/usv/sub_3/backfilled/modd_msgs::msg::dds_::Window_/{WINDOW_HASH}"
+    assert [decode_window(p) for p, _ in got[back_key]] == [
+        {
+            "start_ns": late.start_ns,
+            "end_ns": late.end_ns,
+            "value": -7.5,
+            "count": 6,
+            "aggregation": "AVERAGE",
+            "has_count": 1,
+            "samples": [],
+        }
+    ]
     floats = [struct.unpack("<d", p[4:])[0] for p, _ in got[float_key]]
     assert [p[:4] for p, _ in got[float_key]] == [b"\x00\x01\x00\x00"] * 5
-    # the historical copy is not on /value: a Float64 has no time, it would read as the latest
     assert floats == [v.value for v in values[:5]]
     empty = decode_window(got[f"0/usv/sub_5/modd_msgs::msg::dds_::Window_/{WINDOW_HASH}"][0][0])
     assert math.isnan(empty["value"]) and (empty["count"], empty["has_count"]) == (0, 1)
@@ -265,7 +271,7 @@ def test_bridge_publishes_as_rmw_zenoh(
         for _, a in got[window_key]
     ]
     assert all(len(a) == 33 for _, a in got[window_key])
-    assert [a[0] for a in atts] == [1, 2, 3, 4, 5, 6]
+    assert [a[0] for a in atts] == [1, 2, 3, 4, 5]
     assert all(abs(a[1] - time.time_ns()) < 60 * 10**9 for a in atts)
     gids = {a[2] for a in atts}
     assert len(gids) == 1 and len(next(iter(gids))) == 16
@@ -291,5 +297,7 @@ def test_bridge_publishes_as_rmw_zenoh(
     assert w[10:13] == ["modd_msgs::msg::dds_::Window_", WINDOW_HASH, "::,:,:,:,,"]
     f = pubs["%usv%sub_3%value"]
     assert f[10:12] == ["std_msgs::msg::dds_::Float64_", PUBLISHED_FLOAT64]
+    # the historical topic is a Window publisher of its own (ros2 topic list shows it)
+    assert pubs["%usv%sub_3%backfilled"][10:12] == ["modd_msgs::msg::dds_::Window_", WINDOW_HASH]
     assert rmw.gid("/".join(w)) in gids  # the GID is the publisher's own
     assert len({p[4] for p in pubs.values()}) == len(pubs)  # one entity id each

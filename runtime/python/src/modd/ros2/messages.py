@@ -1,10 +1,9 @@
 """The ROS 2 messages of MoDD's values and their CDR (via ``rosbags``):
 
 - ``modd_msgs/msg/Window``: one window of a subscription (start, end, value,
-  sample count, aggregation, the historical mark ``backfilled``); its
-  ``.msg`` and ``package.xml`` are generated for the integrator (``modd
-  generate --target ros2``, docs/ecosystem.md);
-- ``std_msgs/msg/Float64``: the plain value, of live windows only.
+  sample count, aggregation); its ``.msg`` and ``package.xml`` are generated
+  for the integrator (``modd generate --target ros2``, docs/ecosystem.md);
+- ``std_msgs/msg/Float64``: the plain value.
 
 An empty window (no sample) has ``value`` NaN and ``count`` 0. An ``ALL``
 window has ``value`` NaN, its samples in ``samples`` and ``count`` their
@@ -40,7 +39,6 @@ WINDOW = MessageType(
         Field("aggregation", "string"),
         Field("has_count", "bool"),
         Field("samples", "float64[]"),
-        Field("backfilled", "bool"),
     ),
 )
 #: The .msg text of modd_msgs/msg/Window (one source, in the contracts).
@@ -79,15 +77,9 @@ def as_float(value: Any) -> float:
 
 
 def window_cdr(
-    start_ns: int,
-    end_ns: int,
-    value: Any,
-    count: int | None,
-    aggregation: str,
-    backfilled: bool = False,
+    start_ns: int, end_ns: int, value: Any, count: int | None, aggregation: str
 ) -> bytes:
-    """CDR (little endian, with its 4-byte encapsulation header); ``backfilled``
-    marks a window filled from the drone's archive (historical)."""
+    """CDR (little endian, with its 4-byte encapsulation header)."""
     import numpy as np
 
     store = typestore()
@@ -107,7 +99,6 @@ def window_cdr(
         aggregation=aggregation,
         has_count=n is not None,
         samples=np.asarray(samples, dtype=np.float64),
-        backfilled=backfilled,
     )
     return bytes(store.serialize_cdr(msg, WINDOW.name))
 
