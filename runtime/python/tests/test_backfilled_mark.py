@@ -27,3 +27,41 @@ def test_backfilled_must_be_a_bool() -> None:
     raw: dict[str, object] = {**good, "backfilled": "yes"}
     with pytest.raises(ValueError, match="backfilled"):
         DeliveredValue.from_dict(raw)
+
+
+class _Payload:
+    def __init__(self, data: bytes) -> None:
+        self.data = data
+
+    def to_bytes(self) -> bytes:
+        return self.data
+
+
+class _Sample:
+    def __init__(self, value: DeliveredValue) -> None:
+        self.payload = _Payload(value.to_json())
+
+
+class _Session:
+    def declare_subscriber(self, key: str, handler: object) -> object:
+        return self
+
+
+def test_latest_is_the_newest_live_value_whatever_comes_late() -> None:
+    """``Subscription.latest``: a backfilled window, older or newer, never becomes it;
+    a live one newer than it does (each window once: the identity differs)."""
+    from modd.subscriber import Subscription
+
+    def win(k: int, value: float, backfilled: bool = False) -> DeliveredValue:
+        return DeliveredValue(
+            "s", "t", "LAST", "1", "M", 1, k, (k - 1) * 10**9, k * 10**9, value, None, 1,
+            backfilled, "usv", 5, k + (1000 if backfilled else 0),
+        )  # fmt: skip
+
+    lasts: list[float | None] = []
+    sub = Subscription(_Session(), "modd/usv/sub/s", lambda v: None)  # type: ignore[arg-type]
+    assert sub.latest is None
+    for v in (win(1, 1.0), win(9, 9.0), win(3, -3.0, True), win(12, -12.0, True), win(10, 10.0)):
+        sub._receive(_Sample(v))  # type: ignore[arg-type]
+        lasts.append(None if sub.latest is None else sub.latest.value)
+    assert lasts == [1.0, 9.0, 9.0, 9.0, 10.0]
