@@ -62,9 +62,10 @@ def main() -> int:
     try:
         for n, sample in enumerate(sub, start=1):
             shown = "no sample in window" if sample.value is None else sample.value
-            # a window filled from the drone's archive after an outage is historical, not the latest
+            # a window filled from the drone's archive after an outage: historical, not the latest
             mark = " (backfilled)" if sample.backfilled else ""
-            print(f"{sample.end_ns} {sample.topic} {sample.aggregation} = {shown}{mark}", flush=True)
+            line = f"{sample.end_ns} {sample.topic} {sample.aggregation} = {shown}{mark}"
+            print(line, flush=True)
             if args.count is not None and n >= args.count:
                 break
     finally:
