@@ -285,3 +285,60 @@ def test_an_all_subscriber_changes_its_channel_schema() -> None:
         assert live.topics() == ["/usv/s"]
     finally:
         live.stop()
+
+
+def test_a_backfilled_window_is_marked_and_never_a_position() -> None:
+    """A backfilled (historical) window goes out on its subscriber's channel
+    with ``backfilled`` true, logged at its own window's end (a plot places it
+    in time); it never makes a ``/position`` fix (a LocationFix cannot say it is
+    old, and an old latitude would pair with a live longitude)."""
+    from modd_backend.foxglove import FoxgloveLive
+
+    live = FoxgloveLive("127.0.0.1", free_port())
+    logged: list[tuple[str, dict[str, Any], int | None]] = []
+
+    class Spy:
+        def __init__(self, topic: str) -> None:
+            self.topic = topic
+
+        def log(self, msg: dict[str, Any], log_time: int | None = None) -> None:
+            logged.append((self.topic, msg, log_time))
+
+    live._channel = lambda topic, schema, title: Spy(topic)  # type: ignore[method-assign]
+    try:
+
+        def put(name: str, topic: str, end_s: int, value: float, backfilled: bool) -> None:
+            v = {
+                "value": value,
+                "count": None,
+                "aggregation": "LAST",
+                "topic": topic,
+                "start_ns": (end_s - 1) * 10**9,
+                "end_ns": end_s * 10**9,
+                "delivered_ns": 1,
+            }
+            live.on_value(
+                f"modd/usv/sub/{name}",
+                json.dumps(v | ({"backfilled": True} if backfilled else {})).encode(),
+            )
+
+        put("track_lat", "usv.gps.latitude", 10, 43.0, False)
+        put("track_lon", "usv.gps.longitude", 10, 5.0, False)
+        put("track_lat", "usv.gps.latitude", 4, 42.0, True)  # an old window, filled late
+        put("track_lon", "usv.gps.longitude", 4, 4.0, True)
+        put("track_lat", "usv.gps.latitude", 11, 43.5, False)
+        put("track_lon", "usv.gps.longitude", 11, 5.5, False)
+    finally:
+        live.stop()
+    fixes = [
+        (m["latitude"], m["longitude"], t) for topic, m, t in logged if topic == "/usv/position"
+    ]
+    assert fixes == [(43.0, 5.0, 10 * 10**9), (43.5, 5.5, 11 * 10**9)]
+    windows = [
+        (m["backfilled"], m["value"], t) for topic, m, t in logged if topic == "/usv/track_lat"
+    ]
+    assert windows == [
+        (False, 43.0, 10 * 10**9),
+        (True, 42.0, 4 * 10**9),
+        (False, 43.5, 11 * 10**9),
+    ]

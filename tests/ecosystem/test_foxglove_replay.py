@@ -174,6 +174,7 @@ def test_a_base_station_record_replays_valid_against_its_schemas(tmp_path: Path)
                     cast(Any, value),
                     count,
                     end + 1,
+                    backfilled=name == "avg" and k in (3, 4),  # filled after an outage
                 ).to_json(),
             )
     rec.close()
@@ -190,10 +191,15 @@ def test_a_base_station_record_replays_valid_against_its_schemas(tmp_path: Path)
         assert not refusals(schemas[topic]), topic
         for m in msgs:
             assert violations(schemas[topic], m["msg"]) == [], (topic, m["msg"])
+        # every window carries its historical mark (a live one false, which the record leaves out)
         want = [
             {k: (int(v) if isinstance(v, bool) else v) for k, v in d.items() if v is not None}
+            | {"backfilled": d.get("backfilled") is True}
             for d in recorded[topic]
         ]
+        assert [m["msg"]["backfilled"] for m in msgs] == [
+            topic.endswith("/avg") and k in (3, 4) for k in range(10)
+        ], topic
         # JSON numbers are doubles in the client: ns times agree to the microsecond
         assert [
             {k: pytest.approx(v, abs=1000) if k.endswith("_ns") else v for k, v in m["msg"].items()}

@@ -10,6 +10,7 @@ import socket
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, cast
 
@@ -98,9 +99,11 @@ def test_datagrams_from_delivered_values() -> None:
                 "all_1", "usv.a.z", "ALL", "1", "M", 1, 0, 0, 1_000_000_000, [1.0, 2.0], 2, 0
             )
         )
+        # a backfilled (historical) window, older than the live ones, arriving last
+        values.append(replace(values[0], value=-7.5, backfilled=True))
         for v in values:
             station.put(f"modd/usv/sub/{v.subscriber}", v.to_json())
-        got = [json.loads(udp.recv(65536)) for _ in range(5)]
+        got = [json.loads(udp.recv(65536)) for _ in range(6)]
         udp.settimeout(0.5)
         with pytest.raises(TimeoutError):
             udp.recv(65536)
@@ -112,14 +115,26 @@ def test_datagrams_from_delivered_values() -> None:
         router.__exit__(None, None, None)
         udp.close()
     series = [flatten(g) for g in got]
+    live = {"/usv/sub_3/count": 4, "/usv/sub_3/backfilled": 0}
     assert series[:3] == [
-        {"/timestamp": (k + 1) * 0.25, "/usv/sub_3/value": 0.5 * k, "/usv/sub_3/count": 4}
-        for k in range(1, 4)
+        {"/timestamp": (k + 1) * 0.25, "/usv/sub_3/value": 0.5 * k, **live} for k in range(1, 4)
     ]
-    assert series[3:] == [
+    assert series[3:5] == [
         {"/timestamp": 0.5, "/usv/all_1/value": 1.0},
-        {"/timestamp": 1.0, "/usv/all_1/value": 2.0, "/usv/all_1/count": 2},
+        {
+            "/timestamp": 1.0,
+            "/usv/all_1/value": 2.0,
+            "/usv/all_1/count": 2,
+            "/usv/all_1/backfilled": 0,
+        },
     ]
+    # the historical window is marked and stamped with its own window's end (placed in time)
+    assert series[5] == {
+        "/timestamp": 0.5,
+        "/usv/sub_3/value": -7.5,
+        "/usv/sub_3/count": 4,
+        "/usv/sub_3/backfilled": 1,
+    }
 
 
 def plotted(lines: list[bytes]) -> dict[str, list[tuple[float, object]]]:
@@ -145,6 +160,9 @@ def test_every_contract_vector_plots_as_its_samples() -> None:
         assert len(values) == len(vector["samples"]), vector["name"]
         for (t, v), (want_t, want_v) in zip(values, vector["samples"], strict=True):
             assert t == pytest.approx(want_t) and v == want_v, vector["name"]
+        # the historical mark rides with the window's last sample: 1 backfilled, 0 live
+        mark = series.pop(f"/usv/{doc['subscriber']}/backfilled", [])
+        assert [m for _, m in mark] == ([1 if doc.get("backfilled") else 0] if values else [])
         assert set(series) <= {f"/usv/{doc['subscriber']}/count"}, vector["name"]
 
 
@@ -161,6 +179,8 @@ def test_bad_values_and_options() -> None:
     assert len(many) == 20_000 and all(len(d) < 100 for d in many)
     backfilled = partial({"end_ns": 10**9, "value": 1, "backfilled": True})
     assert json.loads(datagrams("usv", "s", backfilled)[0])["usv"]["s"]["backfilled"] == 1
+    live = partial({"end_ns": 10**9, "value": 1})
+    assert json.loads(datagrams("usv", "s", live)[0])["usv"]["s"]["backfilled"] == 0
     assert parse_udp("127.0.0.1:9870") == ("127.0.0.1", 9870)
     assert parse_udp("[::1]:9870") == ("::1", 9870)
     for bad in ("9870", "host:", "host:0", "host:x"):

@@ -18,6 +18,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from dataclasses import replace
 from typing import Any
 
 import pytest
@@ -199,11 +200,13 @@ def test_bridge_publishes_as_rmw_zenoh(
                 0,
             ),
         ]
-        for v in values:
+        # a backfilled (historical) copy of an older window, after the live ones
+        late = replace(values[1], value=-7.5, backfilled=True)
+        for v in [*values, late]:
             modd.put(f"modd/usv/sub/{v.subscriber}", v.to_json())
             time.sleep(0.02)
         deadline = time.monotonic() + 10
-        while time.monotonic() < deadline and sum(len(v) for v in got.values()) < 16:
+        while time.monotonic() < deadline and sum(len(v) for v in got.values()) < 17:
             time.sleep(0.05)
         # liveliness tokens are also answered to a query (late joiners: ros2 topic list)
         queried = [
@@ -235,6 +238,19 @@ def test_bridge_publishes_as_rmw_zenoh(
             "samples": [],
         }
         for v in values[:5]
+    ]
+    # the historical window: on its own topic, never on the live ones (whose last it would be)
+    back_key = f"0/usv/sub_3/backfilled/modd_msgs::msg::dds_::Window_/{WINDOW_HASH}"
+    assert [decode_window(p) for p, _ in got[back_key]] == [
+        {
+            "start_ns": late.start_ns,
+            "end_ns": late.end_ns,
+            "value": -7.5,
+            "count": 6,
+            "aggregation": "AVERAGE",
+            "has_count": 1,
+            "samples": [],
+        }
     ]
     floats = [struct.unpack("<d", p[4:])[0] for p, _ in got[float_key]]
     assert [p[:4] for p, _ in got[float_key]] == [b"\x00\x01\x00\x00"] * 5
@@ -281,5 +297,7 @@ def test_bridge_publishes_as_rmw_zenoh(
     assert w[10:13] == ["modd_msgs::msg::dds_::Window_", WINDOW_HASH, "::,:,:,:,,"]
     f = pubs["%usv%sub_3%value"]
     assert f[10:12] == ["std_msgs::msg::dds_::Float64_", PUBLISHED_FLOAT64]
+    # the historical topic is a Window publisher of its own (ros2 topic list shows it)
+    assert pubs["%usv%sub_3%backfilled"][10:12] == ["modd_msgs::msg::dds_::Window_", WINDOW_HASH]
     assert rmw.gid("/".join(w)) in gids  # the GID is the publisher's own
     assert len({p[4] for p in pubs.values()}) == len(pubs)  # one entity id each

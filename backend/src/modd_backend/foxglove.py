@@ -6,7 +6,9 @@ Channels: ``/<drone>/<subscriber>`` (one per subscriber, JSON, schema
 :data:`WINDOW_SCHEMA`: value, window start/end, sample count, aggregation,
 backfilled mark), ``/<drone>/link`` (the SubBroker's status: link state,
 RTT, byte rates) and ``/<drone>/position`` (a ``foxglove.LocationFix`` for
-the Map panel, from the latitude/longitude subscriptions). A channel is
+the Map panel, from the latitude/longitude subscriptions' live windows). A
+backfilled window is logged at its window's end with ``backfilled`` true, so a
+plot places it in time and a viewer can tell it from a live value. A channel is
 advertised on the first value of its subscriber, so deploys and dynamic
 subscriptions appear by themselves, and is withdrawn when the drone's status
 no longer routes that subscriber (a new deploy, a cancelled dynamic
@@ -252,7 +254,12 @@ class FoxgloveLive:
         self, drone: str, subscriber: str, delivered: DeliveredValue, end_ns: int
     ) -> None:
         """``/<drone>/position`` (LocationFix) from the subscriptions whose
-        topic is a latitude, longitude or altitude (the 3D scene's rule)."""
+        topic is a latitude, longitude or altitude (the 3D scene's rule). A
+        backfilled (historical) window is left out: a LocationFix has no field
+        to mark it, the Map panel would take it for where the drone is now, and
+        it would pair an old latitude with a live longitude."""
+        if delivered.get("backfilled") is True:
+            return
         role = position_roles(
             {"subscribers": [{"name": subscriber, "topic": delivered.get("topic", "")}]}
         ).get(subscriber)

@@ -143,8 +143,9 @@ def _delivered_for_viewers(
 ) -> tuple[dict[str, RecordedChannel], list[Recorded]]:
     """A base-station record's windows as the live server sends them: every
     message valid against its channel's schema (the delivered-value contract
-    with one type per field; a null left out, a boolean as 1/0). The record
-    itself keeps the delivered bytes."""
+    with one type per field; a null left out, a boolean as 1/0), each with its
+    historical mark ``backfilled`` (false for a live one, which the record
+    leaves out). The record itself keeps the delivered bytes."""
     record = {t for t, c in channels.items() if c.schema_name == DELIVERED}
     if not record:
         return channels, messages
@@ -162,6 +163,7 @@ def _delivered_for_viewers(
             continue
         aggregation.setdefault(m.topic, str(doc.get("aggregation", "")))
         doc["value"] = as_numbers(doc.get("value"))
+        doc["backfilled"] = doc.get("backfilled") is True  # live ones marked too: a plottable 0/1
         out.append(Recorded(m.log_time, m.topic, json.dumps(without_nulls(doc)).encode()))
     for topic in record:
         schema = json.dumps(delivered_schema(aggregation.get(topic, ""))).encode()

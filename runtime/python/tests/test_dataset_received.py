@@ -363,3 +363,33 @@ def test_a_percentile_subscriber_is_named_by_its_label() -> None:
         "PERCENTILE(95) of usv.ctd.turb over 10 s windows (numpy.percentile, linear) "
         "(subscriber p95)"
     )
+
+
+@pytest.mark.parametrize("fmt", ["parquet", "csv", "netcdf"])
+@pytest.mark.parametrize("period", [1.0, 7.0])
+def test_a_resampled_period_says_whether_a_backfilled_window_is_in_it(
+    record: Path, tmp_path: Path, fmt: str, period: float
+) -> None:
+    """``--received --resample``: each period's ``backfilled`` is 1 exactly when a
+    window the record marks backfilled went into its mean (the record read by the
+    official reader), so a historical value is never taken for a live one."""
+    out = tmp_path / f"r.{fmt}"
+    make_dataset([record], _model(), fmt, out, received=True, resample_s=period)
+    step = int(round(period * S))
+    marks = [(t // step, b) for m in _marks(record).values() for t, b in m]
+    want = {k: int(any(b for kk, b in marks if kk == k)) for k, _ in marks}
+    if fmt == "netcdf":
+        import xarray as xr
+
+        with xr.open_dataset(out) as ds:
+            times = ds["time"].values[0].astype("datetime64[ns]").astype(np.int64)
+            flags = ds["backfilled"].values[0].astype(int).tolist()
+            assert "went into the period's mean" in ds["backfilled"].attrs["long_name"]
+            assert "backfilled" in ds["temp_avg"].attrs["ancillary_variables"].split()
+    else:
+        arrow = pq.read_table(out) if fmt == "parquet" else pcsv.read_csv(out)
+        times = arrow["time"].cast(pa.timestamp("ns", tz="UTC")).cast(pa.int64()).to_numpy()
+        flags = arrow["backfilled"].to_pylist()
+    got = {int(t) // step: int(f) for t, f in zip(times.tolist(), flags, strict=True)}
+    assert got == want
+    assert 0 < sum(got.values()) < len(got)

@@ -9,7 +9,7 @@ from typing import Any, cast
 
 import pytest
 from modd.subbroker.config import ConfigError, load_config
-from modd.subbroker.payload import StreamPayload, subscriber_prefix
+from modd.subbroker.payload import DeliveredValue, StreamPayload, subscriber_prefix
 from modd.subbroker.serving import Election
 from modd.subscriber import Subscription
 from modd.zenoh_auth import CredentialStore, acl
@@ -136,3 +136,23 @@ def test_a_subscriber_gets_a_window_once_whichever_station_sent_it() -> None:
     got = [sub.get(0.1), sub.get(0.1), sub.get(0.1), sub.get(0.1)]
     assert [v.value if v else None for v in got] == [1.5, 2.5, 2.5, None]
     assert sub.duplicates == 1  # a payload without identity (an older SubBroker) is kept
+
+
+def test_latest_is_the_newest_live_value_whatever_comes_late() -> None:
+    """``Subscription.latest``: a backfilled window, older or newer, never becomes it;
+    a live one newer than it does (each window once: the identity differs)."""
+
+    def win(k: int, value: float, backfilled: bool = False) -> DeliveredValue:
+        return DeliveredValue(
+            "s", "t", "LAST", "1", "M", 1, k, (k - 1) * 10**9, k * 10**9, value, None, 1,
+            backfilled, "usv", 5, k + (1000 if backfilled else 0),
+        )  # fmt: skip
+
+    lasts: list[float | None] = []
+    session = _Session()
+    sub = Subscription(cast(Any, session), "modd/usv/sub/s", lambda v: None)
+    assert sub.latest is None
+    for v in (win(1, 1.0), win(9, 9.0), win(3, -3.0, True), win(12, -12.0, True), win(10, 10.0)):
+        session.callback(_Sample(v.to_json()))
+        lasts.append(None if sub.latest is None else sub.latest.value)
+    assert lasts == [1.0, 9.0, 9.0, 9.0, 10.0]

@@ -7,7 +7,11 @@ Each datagram is a JSON object PlotJuggler flattens into series
 with the window's end in seconds (tick "use field as timestamp if
 available" with field ``timestamp`` in PlotJuggler):
 
-    {"timestamp": 1795000000.25, "usv": {"sub_3": {"value": -0.0966, "count": 6}}}
+    {"timestamp": 1795000000.25, "usv": {"sub_3": {"value": -0.0966, "count": 6, "backfilled": 0}}}
+
+``backfilled`` is the historical mark of every window: 1 for a window filled
+from the drone's archive after an outage (it arrives late and PlotJuggler
+places it at its own timestamp, among the live points), 0 for a live one.
 
 Empty windows (no sample) send no value. An ``ALL`` window sends one datagram
 per sample, each at its own time (the delivered-value contract spreads the
@@ -47,7 +51,7 @@ def datagrams(drone: str, subscriber: str, delivered: DeliveredValue) -> list[by
     """The datagrams of one delivered value (none when it has nothing to plot).
 
     >>> datagrams("usv", "sub_3", {"end_ns": 2_500_000_000, "value": 1.5, "count": 6})
-    [b'{"timestamp":2.5,"usv":{"sub_3":{"value":1.5,"count":6}}}']
+    [b'{"timestamp":2.5,"usv":{"sub_3":{"value":1.5,"count":6,"backfilled":0}}}']
     >>> [d[:16] for d in datagrams("usv", "a", {"start_ns": 0, "end_ns": 10**9,
     ...                                          "value": [1.0, 2.0], "count": 2})]
     [b'{"timestamp":0.5', b'{"timestamp":1.0']
@@ -72,8 +76,7 @@ def datagrams(drone: str, subscriber: str, delivered: DeliveredValue) -> list[by
         if i == len(points) - 1:
             if isinstance(delivered.get("count"), int):
                 fields["count"] = delivered["count"]
-            if delivered.get("backfilled"):
-                fields["backfilled"] = 1
+            fields["backfilled"] = 1 if delivered.get("backfilled") is True else 0
         doc = {"timestamp": t, drone: {subscriber: fields}}
         data = json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()
         if len(data) <= MAX_DATAGRAM:

@@ -8,6 +8,7 @@ Iterate, give a callback, or collect into a pandas DataFrame::
 
     sub = modd.subscribe("usv", "sub_5", callback=print)       # zenoh's thread calls print
     df = modd.subscribe("usv", "sub_3").dataframe(duration_s=10)
+    sub.latest            # the newest live value: a backfilled one never replaces it
 
     # a dynamic subscription (cancelled when closed)
     with modd.subscribe_dynamic("usv", "usv.accelerometer.accel_x", "4.0", "AVERAGE") as sub:
@@ -65,6 +66,9 @@ class Subscription:
         self.malformed = 0
         #: Windows received again (same identity, another station: docs/fleet.md), not given.
         self.duplicates = 0
+        #: The newest live value (by window end), None before the first: a backfilled
+        #: window (historical, ``backfilled`` True) never becomes it, however late it comes.
+        self.latest: DeliveredValue | None = None
         self._seen = Seen()
         self._session = session
         self._own_session = own_session
@@ -90,6 +94,8 @@ class Subscription:
         if ident is not None and not self._seen.first(ident):
             self.duplicates += 1
             return
+        if not value.backfilled and (self.latest is None or value.end_ns > self.latest.end_ns):
+            self.latest = value
         if self._callback is not None:
             try:
                 self._callback(value)

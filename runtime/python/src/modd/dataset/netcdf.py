@@ -209,6 +209,13 @@ HISTORICAL_ATTRS: dict[str, Any] = {
 }
 
 
+#: The mark of a resampled period of received windows.
+WIDE_HISTORICAL = (
+    "whether a backfilled window (historical: recomputed from the drone's archive after the "
+    "link missed it, delivered late) went into the period's mean: 1 yes, 0 live windows only"
+)
+
+
 def _historical_var(ds: Any, plan: ExportPlan) -> None:
     """The ``backfilled`` flag of every received window (an ancillary variable of each)."""
     v = _obs_var(ds, HISTORICAL, "i1", np.int8(-127))
@@ -335,6 +342,11 @@ def write_wide(path: Path, plan: ExportPlan, table: WideTable, summary: Summary)
             ds[var.name].cell_methods = f"time: mean (interval: {table.period_s:g} s)"
             if n:
                 ds[var.name][0, :n] = table.columns[var.topic]
+        if table.historical is not None:
+            _historical_var(ds, plan)
+            ds[HISTORICAL].long_name = WIDE_HISTORICAL
+            if n:
+                ds[HISTORICAL][0, :n] = table.historical.astype(np.int8)
         coverage(ds, summary, plan, table.period_s)
     finally:
         ds.close()

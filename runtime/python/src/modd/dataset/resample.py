@@ -30,6 +30,9 @@ class WideTable:
     lat: np.ndarray
     lon: np.ndarray
     alt: np.ndarray
+    #: Received windows (``--received``) only: 1 where a backfilled (historical) window
+    #: went into the period's mean, else 0; None for the archive's samples.
+    historical: np.ndarray | None = None
 
 
 WideWriter = Callable[[ExportPlan, WideTable, Summary], None]
@@ -48,10 +51,13 @@ class Resampler:
         self.writer = writer
         self.sums: dict[str, dict[int, tuple[float, int]]] = {}
         self.track: Track | None = None
+        #: The periods holding a backfilled window; None unless the windows are received ones.
+        self.marked: set[int] | None = None
 
     def open(self, plan: ExportPlan, track: Track | None) -> None:
         self.track = track
         self.sums = {t: {} for t in plan.variables}
+        self.marked = set() if plan.source == "received" else None
 
     def add(self, topic: str, time_ns: np.ndarray, value: np.ndarray) -> None:
         bins = time_ns // self.period_ns
@@ -78,6 +84,8 @@ class Resampler:
         location: np.ndarray | None = None,
     ) -> None:
         self.add(var.topic, time_ns, value)  # a period has the axis's time only
+        if self.marked is not None and historical is not None:
+            self.marked.update((time_ns[historical.astype(bool)] // self.period_ns).tolist())
 
     def table(self) -> WideTable:
         keys = np.array(sorted({k for acc in self.sums.values() for k in acc}), dtype=np.int64)
@@ -93,7 +101,10 @@ class Resampler:
             lat, lon, alt = self.track.at(centre)
         else:
             lat = lon = alt = np.full(len(keys), np.nan)
-        return WideTable(self.period_s, centre, columns, lat, lon, alt)
+        marks = None
+        if self.marked is not None:
+            marks = np.isin(keys, np.fromiter(self.marked, np.int64)).astype(np.uint8)
+        return WideTable(self.period_s, centre, columns, lat, lon, alt, marks)
 
     def close(self, plan: ExportPlan, summary: Summary) -> None:
         self.writer(plan, self.table(), summary)

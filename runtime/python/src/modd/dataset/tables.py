@@ -164,8 +164,8 @@ class TableSink:
 
 
 def write_wide(path: Path, fmt: str, plan: ExportPlan, table: WideTable) -> None:
-    """The wide form: ``time, lat, lon, alt`` then one column per topic
-    (Parquet: then ``geometry``)."""
+    """The wide form: ``time, lat, lon, alt`` then one column per topic, then
+    (received windows) ``backfilled`` (Parquet: then ``geometry``)."""
     import pyarrow as pa
     import pyarrow.csv as pcsv
     import pyarrow.parquet as pq
@@ -179,6 +179,8 @@ def write_wide(path: Path, fmt: str, plan: ExportPlan, table: WideTable) -> None
     }
     for var in plan.variables.values():
         cols[var.name] = pa.array(table.columns[var.topic], pa.float64(), from_pandas=csv)
+    if table.historical is not None:  # received: 1 where a backfilled window is in the mean
+        cols["backfilled"] = pa.array(table.historical, pa.uint8())
     if csv:
         pcsv.write_csv(pa.table(cols), path)
         return

@@ -3,7 +3,16 @@ republished as ROS 2 messages on the ROS zenoh network, as ``rmw_zenoh``
 publishers of one node (default ``modd_bridge``):
 
 - ``/<drone>/<subscriber>``: ``modd_msgs/msg/Window``;
-- ``/<drone>/<subscriber>/value``: ``std_msgs/msg/Float64``.
+- ``/<drone>/<subscriber>/value``: ``std_msgs/msg/Float64``;
+- ``/<drone>/<subscriber>/backfilled``: ``modd_msgs/msg/Window``, the
+  historical windows.
+
+The first two carry live windows only. A backfilled window (filled from the
+drone's archive after an outage, delivered late) goes to ``.../backfilled``
+alone: the historical mark is the topic, since the Window message has no
+field for it (a new field would change its type hash and cut every deployed
+``modd_msgs`` off the bridge) and a Float64 has no time at all, so on the
+live topics a viewer would take an old value for the current one.
 
 Publishers (and their liveliness tokens, which make them visible to
 ``ros2 topic list``) are declared on a subscriber's first value, so deploys
@@ -32,6 +41,8 @@ if TYPE_CHECKING:
     import zenoh
 
 log = logging.getLogger("modd.ros2")
+#: The topic under ``/<drone>/<subscriber>`` of the backfilled (historical) windows.
+BACKFILLED = "backfilled"
 
 
 @dataclass
@@ -134,11 +145,14 @@ class Ros2Bridge:
         except (KeyError, TypeError, ValueError) as exc:
             log.warning("%s: value skipped (%s)", base, exc)
             return
+        self.published += 1
+        if delivered.get("backfilled") is True:  # historical: on its own topic only
+            self._publisher(f"{base}/{BACKFILLED}", WINDOW.name, WINDOW_HASH).publish(window)
+            return
         self._publisher(base, WINDOW.name, WINDOW_HASH).publish(window)
         self._publisher(f"{base}/value", FLOAT64.name, FLOAT64_HASH).publish(
             float64_cdr(delivered.get("value"))
         )
-        self.published += 1
 
     def topics(self) -> dict[str, RosPublisher]:
         with self._lock:

@@ -62,7 +62,10 @@ def main() -> int:
     try:
         for n, sample in enumerate(sub, start=1):
             shown = "no sample in window" if sample.value is None else sample.value
-            print(f"{sample.end_ns} {sample.topic} {sample.aggregation} = {shown}", flush=True)
+            # a window filled from the drone's archive after an outage: historical, not the latest
+            mark = " (backfilled)" if sample.backfilled else ""
+            line = f"{sample.end_ns} {sample.topic} {sample.aggregation} = {shown}{mark}"
+            print(line, flush=True)
             if args.count is not None and n >= args.count:
                 break
     finally:

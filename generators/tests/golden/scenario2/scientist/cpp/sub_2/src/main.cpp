@@ -16,13 +16,16 @@ namespace {
 modd::Subscriber* running = nullptr;
 
 void on_value(const modd::Delivered& d) {
+  // A window filled from the drone's archive after an outage is historical, not the latest.
+  const char* mark = d.backfilled ? " (backfilled)" : "";
   if (!d.present) {
-    std::printf("%lld %s: no sample in the window\n", static_cast<long long>(d.end_ns), d.topic.c_str());
+    std::printf("%lld %s: no sample in the window%s\n", static_cast<long long>(d.end_ns), d.topic.c_str(), mark);
   } else if (!d.values.empty()) {
-    std::printf("%lld %s: %zu samples\n", static_cast<long long>(d.end_ns), d.topic.c_str(), d.values.size());
+    std::printf("%lld %s: %zu samples%s\n", static_cast<long long>(d.end_ns), d.topic.c_str(), d.values.size(),
+                mark);
   } else {
-    std::printf("%lld %s %s = %.9g\n", static_cast<long long>(d.end_ns), d.topic.c_str(),
-                d.aggregation.c_str(), d.value);
+    std::printf("%lld %s %s = %.9g%s\n", static_cast<long long>(d.end_ns), d.topic.c_str(),
+                d.aggregation.c_str(), d.value, mark);
   }
   std::fflush(stdout);
 }
