@@ -624,5 +624,6 @@ export const MODEL_PART_OWNERS: Readonly<Record<string, "designer" | "integrator
   "/link": "designer",
   "/publishers": "designer",
   "/subscribers": "scientist",
+  "/campaign": "designer",
   "/layout": null,
 };
