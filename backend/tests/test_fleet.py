@@ -80,3 +80,8 @@ def test_refusals(client: TestClient, admin: Headers, user_factory: Callable[...
     )
     assert bad.status_code == 422
     assert client.get("/api/projects/999/drones", headers=admin).status_code == 404
+    for path, who in (("deployments", operator), ("subscriptions", scientist)):
+        none = client.post(
+            f"/api/projects/{pid}/fleet/{path}", headers=who, json={**body, "drones": []}
+        )
+        assert none.status_code == 422, none.text  # an empty list is no fleet ("all" is no list)

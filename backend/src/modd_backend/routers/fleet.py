@@ -63,7 +63,10 @@ class FleetDeployIn(BaseModel):
         default=None, ge=1, le=2**31 - 1, description="the head when absent"
     )
     drones: list[Name] | None = Field(
-        default=None, max_length=100, description="every drone of the project when absent"
+        default=None,
+        min_length=1,
+        max_length=100,
+        description="every drone of the project when absent",
     )
 
 
@@ -77,7 +80,7 @@ class FleetSubscribeIn(BaseModel):
     period_s: str = Field(pattern=r"^[0-9]+(\.[0-9]+)?$", max_length=32)
     aggregation: str = Field(max_length=16)
     subscriber: Name | None = None
-    drones: list[Name] | None = Field(default=None, max_length=100)
+    drones: list[Name] | None = Field(default=None, min_length=1, max_length=100)
 
 
 class FleetSubscriptionOut(DynamicOut):
@@ -92,14 +95,20 @@ def _description(model: dict[str, Any], name: str) -> str | None:
     return (model.get("drone") or {}).get("description") if not vehicles(model) else None
 
 
-@router.get("/{project_id}/drones", responses={404: {"description": "no project or no model"}})
+@router.get(
+    "/{project_id}/drones",
+    responses={
+        404: {"description": "no project or no model"},
+        422: {"description": "the model is too broken to list its drones"},
+    },
+)
 def list_drones(project_id: Id, db: DbDep, _user: UserDep, state: StateDep) -> FleetOut:
     """The project's drones as its head model expands them (a campaign's
     vehicles, or its one drone), with their last deployment and status."""
     model = model_of(get_version(db, project_id))
     channel_of = {v: c for c, members in channel_members(model).items() for v in members}
     out: list[DroneOut] = []
-    for name, doc in expand(model).items():
+    for name, doc in _drones(model).items():
         last = db.scalar(
             select(Deployment)
             .where(Deployment.project_id == project_id, Deployment.drone == name)
@@ -125,8 +134,25 @@ def list_drones(project_id: Id, db: DbDep, _user: UserDep, state: StateDep) -> F
     )
 
 
+#: What every drone's model needs before it is listed or deployed.
+PARTS = ("drone", "pubBroker", "subBroker")
+
+
+def _drones(model: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """The model's drones; 422 when it is too broken to say (a revision with errors)."""
+    try:
+        drones = expand(model)
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise ApiError(
+            422, f"the model cannot be read as drones ({exc!r}): fix its errors"
+        ) from exc
+    if not all(isinstance(d.get(p), dict) for d in drones.values() for p in PARTS):
+        raise ApiError(422, "the model has no PubBroker or SubBroker: fix its errors")
+    return drones
+
+
 def _chosen(model: dict[str, Any], asked: list[str] | None) -> dict[str, dict[str, Any]]:
-    drones = expand(model)
+    drones = _drones(model)
     if asked is None:
         return drones
     unknown = [d for d in asked if d not in drones]
@@ -177,7 +203,10 @@ def deploy_fleet(
 @router.post(
     "/{project_id}/fleet/subscriptions",
     dependencies=[Depends(require(Role.scientist))],
-    responses={404: {"description": "no project, no model or no such drone"}},
+    responses={
+        404: {"description": "no project, no model or no such drone"},
+        422: {"description": "the model is too broken to list its drones"},
+    },
 )
 def subscribe_fleet(
     project_id: Id, body: FleetSubscribeIn, db: DbDep, user: UserDep, state: StateDep

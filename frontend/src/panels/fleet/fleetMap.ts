@@ -51,13 +51,17 @@ export function drawFleet(canvas: HTMLCanvasElement, fixes: readonly Fix[], link
   ctx.setTransform(ratio, 0, 0, ratio, 0, 0);
   ctx.clearRect(0, 0, width, height);
   ctx.font = "12px sans-serif";
+  const labels = new Map<string, number>(); // drones within a few pixels: their labels stacked
   for (const p of placed) {
+    const spot = `${Math.round(p.x / 8)},${Math.round(p.y / 8)}`;
+    const below = labels.get(spot) ?? 0;
+    labels.set(spot, below + 1);
     ctx.fillStyle = linkColour(links[p.name] ?? null);
     ctx.beginPath();
     ctx.arc(p.x, p.y, 6, 0, 2 * Math.PI);
     ctx.fill();
     ctx.fillStyle = "#222";
-    ctx.fillText(p.name, p.x + 9, p.y + 4);
+    ctx.fillText(p.name, p.x + 9, p.y + 4 + 14 * below);
   }
   return placed;
 }
