@@ -85,3 +85,16 @@ def test_refusals(client: TestClient, admin: Headers, user_factory: Callable[...
             f"/api/projects/{pid}/fleet/{path}", headers=who, json={**body, "drones": []}
         )
         assert none.status_code == 422, none.text  # an empty list is no fleet ("all" is no list)
+
+
+def test_the_live_plan_says_a_shared_channel_is_over_its_rate(
+    client: TestClient, admin: Headers
+) -> None:
+    text = (EXAMPLES / "campaign.modd").read_text()
+    fits = client.post("/api/plan", headers=admin, json={"text": text}).json()
+    assert fits["ok"] and not any(d["pointer"].startswith("/campaign") for d in fits["diagnostics"])
+    over = text.replace("rate = 200000;", "rate = 10;")
+    plan = client.post("/api/plan", headers=admin, json={"text": over}).json()
+    (d,) = [d for d in plan["diagnostics"] if d["pointer"] == "/campaign/channels/0"]
+    assert "over its rate of 10 B/s" in d["message"] and "usv1, usv2" in d["message"]
+    assert d["severity"] == "warning"  # pinned on the channel, as a radio's refusal is

@@ -19,7 +19,7 @@ from modd_model import load_text, validate
 from modd_model.campaign import drone_names, expand
 from modd_model.printer import print_model
 from modd_plan import make_plan
-from modd_plan.campaign import link_bytes_per_s, plan_campaign
+from modd_plan.campaign import channel_diagnostics, link_bytes_per_s, plan_campaign
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 MISSION = """\
@@ -238,3 +238,11 @@ def test_cli_plans_every_drone_and_refuses_an_overloaded_channel(tmp_path: Path)
     assert run.returncode == 6, run.stderr
     assert re.findall(r"== drone (\w+)", run.stdout) == ["a", "b"]
     assert "over its rate of 10 B/s" in run.stdout
+
+
+def test_an_overloaded_channel_is_a_diagnostic_at_the_channel() -> None:
+    """What the workbench's live plan pins on the model (backend planning.live_plan)."""
+    assert channel_diagnostics(_model(_campaign())) == []
+    assert channel_diagnostics(_model(MISSION)) == []
+    (d,) = channel_diagnostics(_model(_campaign(10)))
+    assert d.pointer == "/campaign/channels/0" and "over its rate of 10 B/s" in d.message

@@ -16,6 +16,7 @@ from fractions import Fraction
 from typing import Any
 
 from modd_model.campaign import channel_members, expand
+from modd_model.diagnostics import Diagnostic, pointer_join
 
 from .plan import Plan, make_plan
 
@@ -116,3 +117,16 @@ def plan_campaign(model: Mapping[str, Any], **options: Any) -> CampaignPlan:
             )
         )
     return CampaignPlan(plans, tuple(loads))
+
+
+def channel_diagnostics(model: Mapping[str, Any], **options: Any) -> list[Diagnostic]:
+    """Each shared channel that cannot carry its vehicles together, located at the
+    channel (``/campaign/channels/i``); none for a model without a campaign."""
+    if not isinstance(model.get("campaign"), dict):
+        return []
+    names = [str(c["name"]) for c in model["campaign"].get("channels", [])]
+    out = []
+    for load in plan_campaign(model, **options).channels:
+        where = pointer_join("campaign", "channels", names.index(load.name))
+        out += [Diagnostic(error, where) for error in load.errors]
+    return out
