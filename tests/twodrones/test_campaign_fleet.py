@@ -12,6 +12,7 @@ on that drone's stream)."""
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -93,6 +94,14 @@ def _fleet_deploy(backend: Backend, pid: int, **body: Any) -> list[dict[str, Any
     return out
 
 
+def runs_config(config: int) -> Callable[[dict[str, Any]], bool]:
+    return lambda s: bool(s["config_id"] == config)
+
+
+def runs_revision(revision: int) -> Callable[[dict[str, Any]], bool]:
+    return lambda s: bool((s.get("deployment") or {}).get("revision") == revision)
+
+
 def check_deploy_and_rollback(
     backend: Backend, watch: StatusWatch, pid: int, drones: list[Drone]
 ) -> None:
@@ -101,20 +110,21 @@ def check_deploy_and_rollback(
     for r in records:
         assert r["status"] == "acked", r
         assert r["reply"]["status"] == "ACKED"
-        config = r["reply"]["config_id"]
-        status = watch.wait(r["drone"], lambda s, c=config: s["config_id"] == c, 10)
+        status = watch.wait(r["drone"], runs_config(int(r["reply"]["config_id"])), 10)
         assert status["deployment"]["revision"] == 1, status
         assert status["deployment"]["project_id"] == pid, status
     # revision 2 everywhere, then usv2 alone back to revision 1
     model = backend.request("GET", f"/projects/{pid}/model").json()["model"]
     model["subscribers"][0]["periodS"] = "4"
-    r = backend.request("PUT", f"/projects/{pid}/model", json={"base_revision": 1, "model": model})
-    assert r.status_code in (200, 201), r.text
+    saved = backend.request(
+        "PUT", f"/projects/{pid}/model", json={"base_revision": 1, "model": model}
+    )
+    assert saved.status_code in (200, 201), saved.text
     assert all(x["status"] == "acked" for x in _fleet_deploy(backend, pid))
     (back,) = _fleet_deploy(backend, pid, revision=1, drones=["usv2"])
     assert (back["drone"], back["revision"], back["status"]) == ("usv2", 1, "acked"), back
     for name, revision in (("usv1", 2), ("usv2", 1), ("usv3", 2)):
-        status = watch.wait(name, lambda s, v=revision: s["deployment"]["revision"] == v, 10)
+        status = watch.wait(name, runs_revision(revision), 10)
         assert status["deployment"]["project_id"] == pid
     listed = backend.request("GET", f"/projects/{pid}/deployments").json()
     assert sorted(x["drone"] for x in listed) == sorted([*NAMES, *NAMES, "usv2"])

@@ -154,50 +154,48 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
     if "campaign" in result.model:
         return _run_campaign(args, result.model, calibration, out)
     try:
-        plan = make_plan(
-            result.model,
-            ping_s=args.ping,
-            alpha=args.alpha,
-            beta=args.beta,
-            max_buffer=args.max_buffer,
-            method=args.method,
-            calibration=calibration,
-            status_period_s=getattr(args, "status_period", None),
-        )
+        plan = make_plan(result.model, **_options(args, calibration))
     except PlanningError as exc:
         for d in locate(exc.diagnostics, result, args.file):
             print(d, file=sys.stderr)
         return 1
     if args.json:
-        json.dump(plan.to_json(), out, indent=2)
-        out.write("\n")
+        _dump(plan.to_json(), out)
     else:
         out.write(render_text(plan))
     return _exit_code(plan)
 
 
+def _options(args: argparse.Namespace, calibration: Calibration | None) -> dict[str, Any]:
+    """make_plan's options from the command line."""
+    return {
+        "ping_s": args.ping,
+        "alpha": args.alpha,
+        "beta": args.beta,
+        "max_buffer": args.max_buffer,
+        "method": args.method,
+        "calibration": calibration,
+        "status_period_s": getattr(args, "status_period", None),
+    }
+
+
+def _dump(doc: Any, out: TextIO) -> None:
+    json.dump(doc, out, indent=2)
+    out.write("\n")
+
+
 def _run_campaign(
-    args: argparse.Namespace, model: dict[str, Any], calibration: Any, out: TextIO
+    args: argparse.Namespace, model: dict[str, Any], calibration: Calibration | None, out: TextIO
 ) -> int:
     """A campaign: one plan per drone, then each shared channel's load."""
     try:
-        result = plan_campaign(
-            model,
-            ping_s=args.ping,
-            alpha=args.alpha,
-            beta=args.beta,
-            max_buffer=args.max_buffer,
-            method=args.method,
-            calibration=calibration,
-            status_period_s=getattr(args, "status_period", None),
-        )
+        result = plan_campaign(model, **_options(args, calibration))
     except PlanningError as exc:
         for d in exc.diagnostics:
             print(d, file=sys.stderr)
         return 1
     if args.json:
-        json.dump(result.to_json(), out, indent=2)
-        out.write("\n")
+        _dump(result.to_json(), out)
     else:
         for name, plan in result.plans.items():
             out.write(f"== drone {name}\n{render_text(plan)}")
