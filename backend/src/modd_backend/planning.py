@@ -25,7 +25,7 @@ import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Literal, TypeVar
 
 from fastapi import HTTPException
@@ -35,6 +35,7 @@ from modd_model.diagnostics import Diagnostic, ModelError
 from modd_model.query import topics
 from modd_plan import make_plan
 from modd_plan.calibration import CalibrationError
+from modd_plan.campaign import channel_diagnostics
 from modd_plan.cli import load_calibration
 
 from .modelio import diagnostics_json, read_text
@@ -73,6 +74,12 @@ def live_plan(
             if calibrate is not None:
                 calibration = load_calibration(calibrate, list(topics(result.model)))
             plan = make_plan(result.model, method=method, calibration=calibration).to_json()
+            # a campaign's shared channels, summed over its vehicles' own plans: pinned
+            # as the radio's refusal is (a warning; `modd plan` exits 6)
+            diags += [
+                replace(d, severity="warning")
+                for d in channel_diagnostics(result.model, method=method, calibration=calibration)
+            ]
             # a refusal by the radio, pinned in the editor (the plan is still shown)
             diags += [
                 Diagnostic(d["message"], d["pointer"], "warning")

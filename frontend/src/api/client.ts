@@ -12,7 +12,7 @@ import { Http, type FileAnswer, type HttpOptions } from "./http";
 import { datasetFile } from "./download";
 import type {
   ArchiveFile, ArchiveReplay, ArchiveSeries, BackfillProgress, DatasetFile, DatasetMetadata, DatasetMetadataDoc, DatasetRequest,
-  DeployedDiff, Deployment, Pairing, DynamicReply, DynamicRequest, CredentialsRemade, RecordTrack, Rehearsal, TilesInfo,
+  DeployedDiff, Deployment, Fleet, FleetSubscribeRequest, FleetSubscription, Pairing, DynamicReply, DynamicRequest, CredentialsRemade, RecordTrack, Rehearsal, TilesInfo,
   FoxgloveLinks,
   LoginResult, ModelInput, ModelVersion, PlanResult, Project, RunningDrone, User, ValidateResult, Version,
 } from "./types";
@@ -88,6 +88,16 @@ export function createApi(opts: HttpOptions) {
     makePairing: (projectId: number, revision?: number) =>
       http.request<Pairing>(`/api/projects/${projectId}/pairing`, { method: "POST", json: { revision: revision ?? null } }),
     deployedDiff: (projectId: number) => http.request<DeployedDiff>(`/api/projects/${projectId}/deployed-diff`),
+
+    // --- fleet: a project's drones (a campaign's vehicles), deployed and subscribed at once
+    fleet: (projectId: number) => http.request<Fleet>(`/api/projects/${projectId}/drones`),
+    /** Deploys to the drones given (all when absent), each its own model; one record per drone. A rollback: an older revision, one drone. */
+    deployFleet: (projectId: number, drones?: string[], revision?: number) =>
+      http.request<Deployment[]>(`/api/projects/${projectId}/fleet/deployments`, {
+        method: "POST", json: { revision: revision ?? null, drones: drones ?? null },
+      }),
+    subscribeFleet: (projectId: number, request: FleetSubscribeRequest) =>
+      http.request<FleetSubscription[]>(`/api/projects/${projectId}/fleet/subscriptions`, { method: "POST", json: request }),
 
     // --- downloads: generated artefacts per role, as a zip
     downloadUrl: (projectId: number, target: string) => http.url(`/api/projects/${projectId}/downloads/${target}`),

@@ -90,6 +90,38 @@ export interface Deployment {
   error: string | null;
 }
 
+/** One drone of a project (backend routers/fleet.py): a campaign's vehicle, or the project's one drone. */
+export interface FleetDrone {
+  name: string;
+  description: string | null;
+  channel: string | null;
+  pub_broker: { endpoint: { host: string; port: number } };
+  sub_broker: { endpoint: { host: string; port: number } };
+  /** This project's last deployment to it. */
+  deployment: Deployment | null;
+  /** Its last status document when it reported lately (link, station, last_data_ns, sensors, ...), else null. */
+  status: Record<string, unknown> | null;
+}
+
+/** A project's drones, and its shared radio channels' members. */
+export interface Fleet {
+  campaign: string | null;
+  drones: FleetDrone[];
+  channels: Record<string, string[]>;
+}
+
+/** A subscription to `sensor.variable` of every drone (or the listed ones), in one step. */
+export interface FleetSubscribeRequest {
+  variable: string;
+  period_s: string;
+  aggregation: string;
+  subscriber?: string;
+  drones?: string[];
+}
+
+/** One drone's answer to a fleet subscription. */
+export interface FleetSubscription extends DynamicReply { drone: string; topic: string }
+
 /** A drone reporting its status now, with the link ends of the model last deployed to it. */
 export interface RunningDrone {
   drone: string;

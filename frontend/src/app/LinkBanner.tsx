@@ -3,12 +3,12 @@
  * is down, with why and the time since the last frame. While it shows, the
  * diagram draws the link edge broken (app/views.css: `.workbench:has(.link-banner)`).
  */
+import { useDroneName } from "./fleetFocus";
 import { formatAge } from "../core/linkHealth";
-import { useModel } from "../editor/useEditor";
 import { useLinkHealth } from "./useLinkHealth";
 
 export function LinkBanner() {
-  const drone = useModel().drone.name;
+  const drone = useDroneName();
   const link = useLinkHealth();
   if (!link.down) return null;
   return (

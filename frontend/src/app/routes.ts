@@ -14,7 +14,7 @@ export interface Route {
   panel: PanelId | null;
 }
 
-const PANEL_IDS: readonly PanelId[] = ["plan", "text", "deploy", "monitor", "scene3d", "archives", "downloads", "history"];
+const PANEL_IDS: readonly PanelId[] = ["plan", "text", "deploy", "monitor", "fleet", "scene3d", "archives", "downloads", "history"];
 
 export function parseRoute(path: string): Route {
   const m = /^\/projects\/(\d{1,9})(?:\/([a-z]+))?(?:\/([a-z0-9]+))?\/?$/.exec(path);

@@ -2,9 +2,10 @@
  * The drone's link health (core/linkHealth), re-judged every second on the
  * browser's clock, with the seconds since its last frame.
  */
+import { useDroneName } from "./fleetFocus";
 import { useEffect, useState } from "react";
 import { linkHealth, type LinkHealth } from "../core/linkHealth";
-import { useEditor, useModel } from "../editor/useEditor";
+import { useEditor } from "../editor/useEditor";
 import { useDroneStream, type DroneStream } from "./useDroneStream";
 
 export interface LiveLink extends LinkHealth {
@@ -14,7 +15,7 @@ export interface LiveLink extends LinkHealth {
 }
 
 export function useLinkHealth(): LiveLink {
-  const drone = useModel().drone.name;
+  const drone = useDroneName();
   const stream = useDroneStream(drone);
   // A plan with long gaps between messages is not a loss: wait two hyperperiods (at least 5 s).
   const hyper = Number(useEditor((s) => s.plan.lastValid?.hyperperiod_s ?? 0)) || 0;

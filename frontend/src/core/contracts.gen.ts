@@ -113,6 +113,8 @@ export interface SubBrokerStatus {
   behind_episodes?: number;
   /** What runs (docs/subbroker.md, "Status"): source (configured, deploy or kept), project_id, revision, nonce, deployed_by, deployed_at_ns, resumed_at_ns, running, differs_from_configured. */
   deployment?: unknown;
+  /** The base station whose SubBroker sent this status, when several may serve the drone (its configured station, docs/fleet.md): the serving station, since a standby keeps its status to itself. Absent without a station. */
+  station?: string;
   /** The link's transport this SubBroker was started with ("": the model's; tcp, udp or serial). */
   transport?: string;
   /** Over udp and serial: the planner's figures for the declared transport (modd_plan.linkbudget: drone_to_base, base_to_drone, share, delays_s, ...), else null. */
@@ -624,5 +626,6 @@ export const MODEL_PART_OWNERS: Readonly<Record<string, "designer" | "integrator
   "/link": "designer",
   "/publishers": "designer",
   "/subscribers": "scientist",
+  "/campaign": "designer",
   "/layout": null,
 };

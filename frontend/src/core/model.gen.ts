@@ -16,6 +16,8 @@ export interface ModdModel {
   publishers: Publisher[];
   /** Base-station consumers, each asking for one topic every period, aggregated (at most 50,000). */
   subscribers: Subscriber[];
+  /** A campaign: this model is the mission model of several vehicles, each its own drone (identity, keys, link and configuration) made from it with its own settings (modd_model.campaign expands it to one model per vehicle). Absent: the model is one drone, as before. */
+  campaign?: Campaign;
   /** Diagram layout of the workbench (not part of the .modd text). */
   layout?: Layout;
 }
@@ -391,6 +393,62 @@ export interface Subscriber {
   resolution?: number;
   /** What the SubBroker fills by itself from the drone's archive after a link outage: off (nothing; a backfill can still be asked for), gaps (the windows missed since the last connection) or mission (every window missed since the running config began). */
   backfill?: "off" | "gaps" | "mission";
+}
+
+/** Several vehicles flying one mission model. Each vehicle is a drone named after it: its topics are the mission's with the vehicle's name in place of the mission drone's; its sensors' devices, its link and its brokers' endpoints are the mission's unless the vehicle says otherwise. Vehicles on one radio channel share its rate and duty cycle: the planner checks their sum. */
+export interface Campaign {
+  /** Name of the campaign. */
+  name: Name;
+  /** Free text shown in the workbench. */
+  description?: Text;
+  /** Radio channels shared by several vehicles (at most 100). */
+  channels?: Channel[];
+  /** The vehicles, each one drone of the campaign (1 to 100). */
+  vehicles: Vehicle[];
+}
+
+/** A radio channel several vehicles transmit on: their links share its rate and its duty cycle. */
+export interface Channel {
+  /** Name of the channel, referred to by its vehicles. */
+  name: Name;
+  /** Usable bytes per second of the channel, shared by every vehicle on it: the sum of their links' planned bytes per second, both ways, must fit. */
+  rateBps?: number;
+  /** Largest share of each hour the channel may carry transmissions, all its vehicles' air time together (0.01: EU868's 1 % sub-band). */
+  dutyCycle?: Decimal;
+}
+
+/** One vehicle of a campaign: a drone made from the mission model with these settings. */
+export interface Vehicle {
+  /** Name of the vehicle's drone: the first part of its topics and zenoh keys. */
+  name: Name;
+  /** Free text shown in the workbench. */
+  description?: Text;
+  /** The shared radio channel the vehicle transmits on (one of the campaign's channels). */
+  channel?: Name;
+  /** The vehicle's PubBroker endpoint, and archive directory (the mission's when absent). */
+  pubBroker?: VehicleBroker;
+  /** The vehicle's SubBroker endpoint, and configuration directory (the mission's when absent). */
+  subBroker?: VehicleBroker;
+  /** The vehicle's device paths, per sensor of the mission model (at most 1,000). */
+  devices?: DeviceOverride[];
+  /** Link settings of this vehicle over the mission's: each setting given replaces the mission's (the radio's one by one). */
+  link?: Link;
+}
+
+/** A vehicle's broker: its endpoint, and its directory when not the mission's. */
+export interface VehicleBroker {
+  /** Endpoint of the broker. */
+  endpoint: Endpoint;
+  /** The PubBroker's archive directory or the SubBroker's configuration directory. */
+  path?: Path;
+}
+
+/** The device a sensor of the mission model reads on this vehicle. */
+export interface DeviceOverride {
+  /** Name of the sensor in the mission model (one with a device). */
+  sensor: Name;
+  /** The vehicle's device, e.g. /dev/ttyUSB3. */
+  path: Path;
 }
 
 /** Diagram layout, kept apart from the semantic model: node positions by node id. */

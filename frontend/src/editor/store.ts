@@ -13,7 +13,7 @@ import type { PlanResult } from "../api/types";
 import type { Side } from "../core/merge";
 import type { PlanJson } from "../core/plan";
 
-export type PanelId = "plan" | "text" | "deploy" | "monitor" | "map" | "scene3d" | "archives" | "downloads" | "history";
+export type PanelId = "plan" | "text" | "deploy" | "monitor" | "map" | "fleet" | "scene3d" | "archives" | "downloads" | "history";
 
 export interface EditorState {
   wb: WorkbenchState;

@@ -18,6 +18,7 @@ export const PANELS: PanelInfo[] = [
   { id: "deploy", title: "Deploy", component: lazy(() => import("./deploy/DeployPanel")) },
   { id: "monitor", title: "Monitor", component: lazy(() => import("./monitor/MonitorPanel")) },
   { id: "map", title: "Map", component: lazy(() => import("./map/MapPanel")) },
+  { id: "fleet", title: "Fleet", component: lazy(() => import("./fleet/FleetPanel")) },
   { id: "scene3d", title: "3D", component: lazy(() => import("./scene3d/ScenePanel")) },
   { id: "archives", title: "Archives", component: lazy(() => import("./archives/ArchivesPanel")) },
   { id: "history", title: "History", component: lazy(() => import("./history/HistoryPanel")) },

@@ -22,6 +22,7 @@ import { startTileServer } from "./tiles.mjs";
 import { metadataJourney } from "./metadata.mjs";
 import { credentialsJourney } from "./credentials.mjs";
 import { pairing } from "./pairing.mjs";
+import { fleetJourney, startFleet } from "./fleet.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
@@ -70,7 +71,7 @@ async function cleanup() {
   for (const c of cleanups) await c();
   if (browser) await browser.close();
   // `modd up` stops its own children (their own sessions) on SIGTERM, within 10 s.
-  for (const p of procs.reverse()) await stop(p, p.name === "modd up" ? 15000 : 8000);
+  for (const p of procs.reverse()) await stop(p, p.name.startsWith("modd up") ? 15000 : 8000);
   rmSync(tmp, { recursive: true, force: true });
 }
 for (const sig of ["SIGINT", "SIGTERM"]) process.on(sig, () => { void cleanup().then(() => process.exit(130)); });
@@ -89,9 +90,17 @@ try {
   // MODD_E2E_ONLY=pairing: no `modd up`; the pairing steps start their own base station
   // (a second backend and, once paired, a SubBroker) and the paired drone (pairing.mjs).
   const pairingOnly = process.env.MODD_E2E_ONLY === "pairing";
+  // MODD_E2E_ONLY=fleet: no `modd up` of scenario 1; three simulated drones of a campaign
+  // (fleet.mjs), each its own `modd up` and zenoh endpoint, the backend joined to the three.
+  const fleetOnly = process.env.MODD_E2E_ONLY === "fleet";
+  let fleet = null;
   const pairedModel = { ...scenario1(await freePort(), await freePort()) };
   pairedModel.pubBroker = { ...pairedModel.pubBroker, logPath: join(tmp, "paired-archive"), ingress: { unixSocket: join(tmp, "paired-ingress.sock") } };
-  if (drone && !pairingOnly) {
+  if (drone && fleetOnly) {
+    execFileSync(join(bin, "python"), ["-c", "import sys; from modd.zenoh_auth import CredentialStore; "
+      + "CredentialStore(sys.argv[1]).ensure()", creds], { cwd: repo, stdio: "inherit" });
+    fleet = await startFleet({ repo, bin, tmp, creds, pubbrokerBin, procs });
+  } else if (drone && !pairingOnly) {
     const model = scenario1(pubPort, subPort);
     // The plug-and-play instruments (instruments.mjs): simulated on pseudo-terminals, read by modd-sensors.
     const instr = instrumentParts();
@@ -122,7 +131,9 @@ try {
     "--tiles", join(tmp, "tiles"),
     "--archives", drone ? join(tmp, "drone", "archive") : join(tmp, "archives"),
     "--records", drone ? join(tmp, "drone", "records") : join(tmp, "records"),
-    ...(drone ? ["--zenoh-connect", zenoh, "--zenoh-credentials", join(creds, "backend.cred"),
+    // a peer (it listens too) joins every drone's router; a client would join one of them
+    ...(fleet ? [...fleet.endpoints.flatMap((e) => ["--zenoh-connect", e]), "--zenoh-listen", `tcp/127.0.0.1:${await freePort()}`] : []),
+    ...(drone ? [...(fleet ? [] : ["--zenoh-connect", zenoh]), "--zenoh-credentials", join(creds, "backend.cred"),
       "--deploy-key", join(creds, "deploy.key")] : ["--no-zenoh"]),
   ], { cwd: repo, logFile: join(tmp, "backend.log"), env: { MODD_ADMIN_PASSWORD: PASSWORD } });
   procs.push(backend);
@@ -160,7 +171,7 @@ try {
     }],
     ...pairing({ page, imagesDir, bin, tmp, model: pairedModel, pubbrokerBin, station, procs }),
   ];
-  const steps = only === "credentials" ? [loginStep(page, baseUrl), ...credentialsSteps()] : only === "pairing" ? pairingSteps() : only === "metadata" ? [loginStep(page, baseUrl), ...metadataSteps()] : only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
+  const steps = only === "fleet" ? [loginStep(page, baseUrl), ...(fleet ? fleetJourney({ page, imagesDir, fleet }) : [])] : only === "credentials" ? [loginStep(page, baseUrl), ...credentialsSteps()] : only === "pairing" ? pairingSteps() : only === "metadata" ? [loginStep(page, baseUrl), ...metadataSteps()] : only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
     ...(only === "collab" || only === "instruments" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
     ...(only === "collab" || only === "instruments" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },

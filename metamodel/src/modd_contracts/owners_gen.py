@@ -15,5 +15,6 @@ MODEL_PART_OWNERS: dict[str, str | None] = {
     "/link": "designer",
     "/publishers": "designer",
     "/subscribers": "scientist",
+    "/campaign": "designer",
     "/layout": None,
 }

@@ -76,6 +76,7 @@ class SubBrokerStatus(TypedDict):
     behind_since_ns: NotRequired[int | None]
     behind_episodes: NotRequired[int]
     deployment: NotRequired[Any]
+    station: NotRequired[str]
     transport: NotRequired[str]
     link_budget: NotRequired[dict[str, Any] | None]
     radio: NotRequired[RadioStatus | None]

@@ -94,6 +94,7 @@ SENSOR_SETTINGS = {
     "checksum": ("checksum", "word"),
     "fix": ("fix", "word"),
 }
+CHANNEL_SETTINGS = {"rate": ("rateBps", "int"), "dutyCycle": ("dutyCycle", "decimal")}
 POSITION_SETTINGS = {
     "latitude": ("latitude", "string"),
     "longitude": ("longitude", "string"),
@@ -373,7 +374,7 @@ class _Builder:
         for block in tree.children:
             assert isinstance(block, Tree)
             kind = str(block.data)
-            if kind in ("drone", "pubbroker", "subbroker", "link"):
+            if kind in ("drone", "pubbroker", "subbroker", "link", "campaign"):
                 if kind in seen:
                     first = self._loc(seen[kind])
                     self._error(
@@ -393,6 +394,8 @@ class _Builder:
                     self._settings(block.children[0], "/link", LINK_SETTINGS | RADIO_SETTINGS)
                 )
                 self._mark("/link", block)
+            elif kind == "campaign":
+                doc["campaign"] = self._campaign(block)
             elif kind == "publishers":
                 self._mark("/publishers", block)
                 for p in block.children:
@@ -653,6 +656,80 @@ class _Builder:
         order = ("unit", "register", "table", "type", "wordOrder")
         return self._factors(factors, {k: src[k] for k in order if k in src}, ptr)
 
+    # -- a campaign (modd_model.campaign) -------------------------------------
+    def _campaign(self, node: Tree[Token]) -> dict[str, Any]:
+        name, rest = node.children[0], node.children[1:]
+        assert isinstance(name, Token)
+        self._mark("/campaign", node)
+        self._mark("/campaign/name", name)
+        out: dict[str, Any] = {"name": _word(name)}
+        channels: list[dict[str, Any]] = []
+        found: list[dict[str, Any]] = []
+        for child in rest:
+            assert isinstance(child, Tree)
+            if child.data == "description":
+                out["description"] = _unquote(child.children[0])  # type: ignore[arg-type]
+            elif child.data == "channel":
+                ptr = f"/campaign/channels/{len(channels)}"
+                channels.append(self._channel(child, ptr))
+            else:
+                found.append(self._vehicle(child, f"/campaign/vehicles/{len(found)}"))
+        if channels:
+            out["channels"] = channels
+        out["vehicles"] = found
+        return out
+
+    def _channel(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
+        name, settings = node.children
+        assert isinstance(name, Token)
+        self._mark(ptr, node)
+        self._mark(ptr + "/name", name)
+        return {"name": _word(name), **self._settings(settings, ptr, CHANNEL_SETTINGS)}
+
+    def _vehicle(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
+        name, rest = node.children[0], node.children[1:]
+        assert isinstance(name, Token)
+        self._mark(ptr, node)
+        self._mark(ptr + "/name", name)
+        out: dict[str, Any] = {"name": _word(name)}
+        devices: list[dict[str, Any]] = []
+        for child in rest:
+            assert isinstance(child, Tree)
+            part = str(child.data)
+            if part == "description":
+                out["description"] = _unquote(child.children[0])  # type: ignore[arg-type]
+            elif part == "vehicle_channel":
+                self._mark(ptr + "/channel", child)
+                out["channel"] = str(child.children[0])
+            elif part == "vehicle_device":
+                sensor, path = child.children
+                at = f"{ptr}/devices/{len(devices)}"
+                self._mark(at, child)
+                self._mark(at + "/sensor", sensor)
+                devices.append({"sensor": str(sensor), "path": _word(path.children[0])})  # type: ignore[union-attr, arg-type]
+            elif part == "link":
+                self._mark(ptr + "/link", child)
+                known = LINK_SETTINGS | RADIO_SETTINGS
+                out["link"] = _nest(self._settings(child.children[0], ptr + "/link", known))
+            else:
+                key = "pubBroker" if part == "vehicle_pub" else "subBroker"
+                out[key] = self._vehicle_broker(child, f"{ptr}/{key}")
+        if devices:
+            out["devices"] = devices
+        order = ["name", "description", "channel", "pubBroker", "subBroker", "devices", "link"]
+        return {k: out[k] for k in order if k in out}
+
+    def _vehicle_broker(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
+        self._mark(ptr, node)
+        endpoint = node.children[0]
+        assert isinstance(endpoint, Tree)
+        out: dict[str, Any] = {"endpoint": self._endpoint(endpoint, ptr + "/endpoint")}
+        if len(node.children) > 1:
+            path = node.children[1]
+            assert isinstance(path, Tree)
+            out["path"] = _word(path.children[0])  # type: ignore[arg-type]
+        return out
+
     def _endpoint(self, node: Tree[Token], ptr: str) -> dict[str, Any]:
         host, port = node.children
         assert isinstance(host, Token) and isinstance(port, Token)
@@ -845,7 +922,13 @@ def _qualify_topics(doc: dict[str, Any]) -> None:
             sub["topic"] = full(sub["topic"])
 
 
-_BLOCK_WORD = {"drone": "Drone", "pubbroker": "PubBroker", "subbroker": "SubBroker", "link": "Link"}
+_BLOCK_WORD = {
+    "drone": "Drone",
+    "pubbroker": "PubBroker",
+    "subbroker": "SubBroker",
+    "link": "Link",
+    "campaign": "Campaign",
+}
 _TOP_ORDER = [
     "schemaVersion",
     "drone",
@@ -854,6 +937,7 @@ _TOP_ORDER = [
     "link",
     "publishers",
     "subscribers",
+    "campaign",
     "layout",
 ]
 

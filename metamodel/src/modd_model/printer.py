@@ -14,6 +14,7 @@ from typing import Any
 from modd_contracts import aggregations_gen as agg
 
 from .parser import (
+    CHANNEL_SETTINGS,
     INGRESS_SETTINGS,
     LINK_SETTINGS,
     POSITION_SETTINGS,
@@ -218,9 +219,7 @@ def print_model(doc: dict[str, Any]) -> str:
     out += _broker("PubBroker", doc["pubBroker"], "logPath")
     out += _broker("SubBroker", doc["subBroker"], "configPath")
     if "link" in doc:
-        link = dict(doc["link"])  # the radio profile is written flat (parser.RADIO_SETTINGS)
-        link.update({f"radio/{k}": v for k, v in link.pop("radio", {}).items()})
-        out += ["Link {", *_settings(link, LINK_SETTINGS | RADIO_SETTINGS, 0), "}"]
+        out += ["Link {", *_link_settings(doc["link"], 0), "}"]
     out.append("Publishers {")
     for p in doc["publishers"]:
         args = [endpoint(p["endpoint"])] if "endpoint" in p else []
@@ -242,7 +241,37 @@ def print_model(doc: dict[str, Any]) -> str:
             args.append(f"maxEvents = {s['maxEvents']}")
         out.append(f"{INDENT}Subscriber {name(s['name'])}({', '.join(args)});")
     out.append("}")
+    if "campaign" in doc:
+        out += _campaign(doc["campaign"])
     return "\n".join(out) + "\n"
+
+
+def _link_settings(link: dict[str, Any], depth: int) -> list[str]:
+    flat = dict(link)  # the radio profile is written flat (parser.RADIO_SETTINGS)
+    flat.update({f"radio/{k}": v for k, v in flat.pop("radio", {}).items()})
+    return _settings(flat, LINK_SETTINGS | RADIO_SETTINGS, depth)
+
+
+def _campaign(campaign: dict[str, Any]) -> list[str]:
+    out = [f"Campaign {name(campaign['name'])}{_description(campaign)} {{"]
+    for c in campaign.get("channels", []):
+        out += [f"{INDENT}Channel {name(c['name'])} {{", *_settings(c, CHANNEL_SETTINGS, 1)]
+        out.append(f"{INDENT}}}")
+    for v in campaign["vehicles"]:
+        out.append(f"{INDENT}Vehicle {name(v['name'])}{_description(v)} {{")
+        inner = INDENT * 2
+        if "channel" in v:
+            out.append(f"{inner}channel = {name(v['channel'])};")
+        for part, word in (("pubBroker", "PubBroker"), ("subBroker", "SubBroker")):
+            if part in v:
+                path = f", {quote(v[part]['path'])}" if "path" in v[part] else ""
+                out.append(f"{inner}{word}({endpoint(v[part]['endpoint'])}{path});")
+        for d in v.get("devices", []):
+            out.append(f"{inner}device {name(d['sensor'])} = {quote(d['path'])};")
+        if "link" in v:
+            out += [f"{inner}Link {{", *_link_settings(v["link"], 2), f"{inner}}}"]
+        out.append(f"{INDENT}}}")
+    return [*out, "}"]
 
 
 def _number(x: Any) -> str:

@@ -30,6 +30,7 @@ class ModdModel(TypedDict):
     link: NotRequired[Link]
     publishers: list[Publisher]
     subscribers: list[Subscriber]
+    campaign: NotRequired[Campaign]
     layout: NotRequired[Layout]
 
 
@@ -258,6 +259,49 @@ class Subscriber(TypedDict):
     backfill: NotRequired[Literal["off", "gaps", "mission"]]
 
 
+class Campaign(TypedDict):
+    """Several vehicles flying one mission model. Each vehicle is a drone named after it: its topics are the mission's with the vehicle's name in place of the mission drone's; its sensors' devices, its link and its brokers' endpoints are the mission's unless the vehicle says otherwise. Vehicles on one radio channel share its rate and duty cycle: the planner checks their sum."""
+
+    name: Name
+    description: NotRequired[Text]
+    channels: NotRequired[list[Channel]]
+    vehicles: list[Vehicle]
+
+
+class Channel(TypedDict):
+    """A radio channel several vehicles transmit on: their links share its rate and its duty cycle."""
+
+    name: Name
+    rateBps: NotRequired[int]
+    dutyCycle: NotRequired[Decimal]
+
+
+class Vehicle(TypedDict):
+    """One vehicle of a campaign: a drone made from the mission model with these settings."""
+
+    name: Name
+    description: NotRequired[Text]
+    channel: NotRequired[Name]
+    pubBroker: NotRequired[VehicleBroker]
+    subBroker: NotRequired[VehicleBroker]
+    devices: NotRequired[list[DeviceOverride]]
+    link: NotRequired[Link]
+
+
+class VehicleBroker(TypedDict):
+    """A vehicle's broker: its endpoint, and its directory when not the mission's."""
+
+    endpoint: Endpoint
+    path: NotRequired[Path]
+
+
+class DeviceOverride(TypedDict):
+    """The device a sensor of the mission model reads on this vehicle."""
+
+    sensor: Name
+    path: Path
+
+
 class Layout(TypedDict):
     """Diagram layout, kept apart from the semantic model: node positions by node id."""
 
@@ -271,4 +315,4 @@ class Position(TypedDict):
     y: float
 
 
-__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "PlatformPosition", "MavlinkField", "SerialDevice", "AsciiLine", "NmeaField", "AsciiField", "NmeaCondition", "AsciiCondition", "Comparison", "ConditionValue", "ModbusRegister", "PubBroker", "Ingress", "SubBroker", "Link", "Radio", "Publisher", "Subscriber", "Layout", "Position"]
+__all__ = ["ModdModel", "Name", "TopicName", "Decimal", "Period", "Endpoint", "Host", "Text", "Path", "Unit", "KnownUnit", "ValueType", "Aggregation", "Drone", "Sensor", "MeasuredVariable", "PlatformPosition", "MavlinkField", "SerialDevice", "AsciiLine", "NmeaField", "AsciiField", "NmeaCondition", "AsciiCondition", "Comparison", "ConditionValue", "ModbusRegister", "PubBroker", "Ingress", "SubBroker", "Link", "Radio", "Publisher", "Subscriber", "Campaign", "Channel", "Vehicle", "VehicleBroker", "DeviceOverride", "Layout", "Position"]

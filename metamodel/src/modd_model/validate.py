@@ -18,6 +18,7 @@ from modd_contracts.events import EVENT_AGGREGATIONS
 from modd_contracts.link_wire_gen import MAX_LIST, MAX_PERIOD_US
 
 from .bounds import size_errors
+from .campaign import campaign_checks, vehicle_diagnostics
 from .diagnostics import Diagnostic, pointer_join
 from .instruments import instrument_sensors
 from .numbers import to_fraction, to_micros
@@ -32,7 +33,7 @@ if TYPE_CHECKING:  # jsonschema is imported on first validation (it is slow to i
 
 Check = Callable[[dict[str, Any]], Iterator[Diagnostic]]
 #: Units, standard names, valid ranges and the platform position (science.py) first.
-CHECKS: list[Check] = [*SCIENCE_CHECKS, *RESOLUTION_CHECKS]
+CHECKS: list[Check] = [*SCIENCE_CHECKS, *RESOLUTION_CHECKS, campaign_checks]
 
 # Aggregations that make no sense on booleans (their mean or sum is not a bool):
 # the aggregation table's numericOnly.
@@ -69,6 +70,8 @@ def validate(doc: Any) -> list[Diagnostic]:
         except (KeyError, TypeError, ValueError, AttributeError, IndexError):
             if not out:
                 raise  # on a schema-valid document a failing check is a bug
+    if "campaign" in doc and not any(d.severity == "error" for d in out):
+        out.extend(vehicle_diagnostics(doc, out, validate))  # each vehicle's own model
     return out
 
 

@@ -22,6 +22,7 @@ from modd_model.numbers import fraction_to_decimal, to_fraction
 from modd_model.query import topics
 
 from .calibration import Calibration, CalibrationError, Series
+from .campaign import plan_campaign
 from .linkbudget import budget_lines
 from .plan import METHODS, Plan, PlanningError, make_plan
 from .proposals import Proposal
@@ -134,7 +135,8 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Load, plan, print. Exit 0 when feasible, 1 on a bad model or archive, 3 when the
     plan violates the 3 x PING cap, 4 when it exceeds the link's byte budget,
     5 when its radio refuses it (over the duty-cycle limit; the plan and the
-    nearest plans that fit are still printed)."""
+    nearest plans that fit are still printed), 6 when a campaign's shared
+    channel cannot carry its vehicles together."""
     out = out or sys.stdout
     result = load_file(args.file)
     if not result.ok or result.model is None:
@@ -149,26 +151,65 @@ def run_plan(args: argparse.Namespace, out: TextIO | None = None) -> int:
         except CalibrationError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 1
+    if "campaign" in result.model:
+        return _run_campaign(args, result.model, calibration, out)
     try:
-        plan = make_plan(
-            result.model,
-            ping_s=args.ping,
-            alpha=args.alpha,
-            beta=args.beta,
-            max_buffer=args.max_buffer,
-            method=args.method,
-            calibration=calibration,
-            status_period_s=getattr(args, "status_period", None),
-        )
+        plan = make_plan(result.model, **_options(args, calibration))
     except PlanningError as exc:
         for d in locate(exc.diagnostics, result, args.file):
             print(d, file=sys.stderr)
         return 1
     if args.json:
-        json.dump(plan.to_json(), out, indent=2)
-        out.write("\n")
+        _dump(plan.to_json(), out)
     else:
         out.write(render_text(plan))
+    return _exit_code(plan)
+
+
+def _options(args: argparse.Namespace, calibration: Calibration | None) -> dict[str, Any]:
+    """make_plan's options from the command line."""
+    return {
+        "ping_s": args.ping,
+        "alpha": args.alpha,
+        "beta": args.beta,
+        "max_buffer": args.max_buffer,
+        "method": args.method,
+        "calibration": calibration,
+        "status_period_s": getattr(args, "status_period", None),
+    }
+
+
+def _dump(doc: Any, out: TextIO) -> None:
+    json.dump(doc, out, indent=2)
+    out.write("\n")
+
+
+def _run_campaign(
+    args: argparse.Namespace, model: dict[str, Any], calibration: Calibration | None, out: TextIO
+) -> int:
+    """A campaign: one plan per drone, then each shared channel's load."""
+    try:
+        result = plan_campaign(model, **_options(args, calibration))
+    except PlanningError as exc:
+        for d in exc.diagnostics:
+            print(d, file=sys.stderr)
+        return 1
+    if args.json:
+        _dump(result.to_json(), out)
+    else:
+        for name, plan in result.plans.items():
+            out.write(f"== drone {name}\n{render_text(plan)}")
+        for load in result.channels:
+            rate = f" of {load.rate_bps} B/s" if load.rate_bps is not None else ""
+            out.write(f"== channel {load.name} ({', '.join(load.vehicles)}): ")
+            out.write(f"{load.bytes_per_s:.1f} B/s{rate}\n")
+            for error in load.errors:
+                out.write(f"error: {error}\n")
+    worst = max((_exit_code(p) for p in result.plans.values()), default=0)
+    return worst or (0 if result.fits else 6)
+
+
+def _exit_code(plan: Plan) -> int:
     if plan.buffers.infeasible:
         return 3
     if plan.budget is not None and plan.budget.error:

@@ -8,6 +8,7 @@ status document against its contract (schemas/status.schema.json)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from collections.abc import Iterator
@@ -208,3 +209,19 @@ def test_the_published_status_holds_the_links_counters(broker: SubBroker) -> Non
     assert published == json.loads(json.dumps(status))
     assert validate("status", published) == []
     assert published["bytes_in_per_s"] is not None and published["behind"] is False
+
+
+def test_the_status_names_its_station_when_it_has_one(tmp_path: Path, broker: SubBroker) -> None:
+    """The fleet view's serving station (docs/fleet.md): the status of a SubBroker
+    started with a station names it, in the contract; one without says nothing."""
+    assert "station" not in broker.status()
+    config = dataclasses.replace(broker.config, station="shore", state_dir=tmp_path / "shore")
+    stationed = SubBroker(config)
+    try:
+        status = json.loads(json.dumps(stationed.status()))
+        assert status["station"] == "shore"
+        assert validate("status", status) == []
+        assert validate("status", {**status, "station": 7}) != []
+    finally:
+        if stationed.record is not None:
+            stationed.record.close()

@@ -8,17 +8,19 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Query
 from modd_model import validate
+from modd_model.campaign import drone_names, expand, vehicles
 from pydantic import BaseModel, Field
 from sqlalchemy import select
+from sqlalchemy.orm import Session as Db
 
 from ..deployments import deploy, last_acked, record_json, signing_key
-from ..deps import DbDep, Heavy, StateDep, UserDep, require, zenoh_session_of
+from ..deps import AppState, DbDep, Heavy, StateDep, UserDep, require, zenoh_session_of
 from ..errors import ApiError
 from ..modeldiff import diff
 from ..modelio import diagnostics_json
 from ..roles import Role
 from ..schemas import Id, InvalidModelOut
-from ..tables import Deployment
+from ..tables import Deployment, ModelVersion
 from ..versions import get_project, get_version, model_of
 
 router = APIRouter(prefix="/api", tags=["deploy"])
@@ -67,6 +69,7 @@ class DeployedDiffOut(BaseModel):
     dependencies=[Depends(require(Role.operator)), Heavy],
     responses={
         404: {"description": "no such project or revision"},
+        409: {"description": "a campaign: POST .../fleet/deployments deploys to its drones"},
         422: {"model": InvalidModelOut, "description": "the version is not valid"},
     },
 )
@@ -76,25 +79,42 @@ def deploy_version(
     """Deploy and wait for the drone's answer (up to the deploy timeout); the
     record is created either way and says acked or failed."""
     version = get_version(db, project_id, body.revision)
+    model = model_of(version)
+    if vehicles(model):
+        drones = drone_names(model)
+        raise ApiError(
+            409,
+            f"revision {version.revision} is a campaign of {len(drones)} drones "
+            f"({', '.join(drones)}): deploy it with POST "
+            f"/api/projects/{project_id}/fleet/deployments",
+        )
     if not version.valid:
-        diags = diagnostics_json(validate(model_of(version)))
+        diags = diagnostics_json(validate(model))
         raise ApiError(
             422,
             f"revision {version.revision} has errors: fix them before deploying",
             diagnostics=diags,
         )
+    record = deploy_model(state, db, version, model, user.username)
+    return DeploymentOut.model_validate(record_json(record))
+
+
+def deploy_model(
+    state: AppState, db: Db, version: ModelVersion, model: dict[str, Any], username: str
+) -> Deployment:
+    """Deploy ``model`` (one drone's) as ``version``, signed, and wait for its ack."""
     record = deploy(
         db,
         zenoh_session_of(state),
         version,
-        model_of(version),
-        user.username,
+        model,
+        username,
         state.settings.deploy_timeout_s,
         signing_key(state.settings.deploy_key_file),
     )
     if record.status == "acked" and state.scene is not None:
         state.scene.forget(record.drone)  # the 3D scene re-reads the drone's model
-    return DeploymentOut.model_validate(record_json(record))
+    return record
 
 
 @router.get("/projects/{project_id}/deployments", responses={404: {"description": "no project"}})
@@ -121,8 +141,9 @@ def deployed_diff(
     acked deployment when it does not report) to this project's head;
     everything is an addition when nothing known is deployed."""
     head = get_version(db, project_id)
-    edited = model_of(head)
-    name = drone or str((edited.get("drone") or {}).get("name", ""))
+    drones = expand(model_of(head))  # a campaign's drones; a one-drone model itself
+    name = drone or next(iter(drones))
+    edited = drones.get(name, model_of(head))
     reports = state.statuses.deployment(name) if state.statuses and name else None
     running: Deployment | None = None
     if reports is not None:

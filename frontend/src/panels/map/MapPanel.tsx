@@ -15,6 +15,7 @@
  * the track up to the playback cursor. The colour choice also colours the
  * backend's 3D scene, when it runs one.
  */
+import { useDroneName } from "../../app/fleetFocus";
 import { subscriptionLabel } from "../../core/topicLabel";
 import { useCallback, useEffect, useRef, useState } from "react";
 import { headingSubscriber, positionSubscribers, trackPoints, valueRange, withRecord, type TrackPoint } from "../../core/track";
@@ -132,7 +133,7 @@ interface TrackMapProps {
 }
 
 export function TrackMap({ source, lat, lon, choices, onColour, id = "map", missing, recordOf, headingChannel = null }: TrackMapProps) {
-  const drone = useModel().drone.name;
+  const drone = useDroneName();
   const [colour, setColour] = useState(() => defaultColour(choices));
   const [tileUrl, setTileUrl] = useState(() => window.localStorage.getItem(TILE_KEY) ?? "");
   const [tiles, setTiles] = useState<TileCount>({ asked: 0, drawn: 0, failed: 0 });
@@ -211,9 +212,9 @@ export function TrackMap({ source, lat, lon, choices, onColour, id = "map", miss
 export default function MapPanel() {
   const model = useModel();
   const { api } = useServices();
-  const { source } = useDroneStream(model.drone.name);
+  const drone = useDroneName();
+  const { source } = useDroneStream(drone);
   const { lat, lon } = positionSubscribers(model);
-  const drone = model.drone.name;
   const recordOf = useCallback<RecordSource>((colour) => (lat && lon ? api.track(drone, lat, lon, RECORD_POINTS, colour || undefined)
     : Promise.resolve({ file: null, total: 0, points: [] })), [api, drone, lat, lon]);
   const heading = headingSubscriber(model);
@@ -222,7 +223,7 @@ export default function MapPanel() {
     unit: unitLabel(findTopicByName(model, s.topic)?.variable.unit, s.aggregation),
   }));
   // The 3D scene is shared: it follows the choice when the backend runs one (404 otherwise).
-  const onColour = (name: string) => { api.setSceneColour(model.drone.name, name || null).catch(() => undefined); };
+  const onColour = (name: string) => { api.setSceneColour(drone, name || null).catch(() => undefined); };
   return (
     <div className="panel-body">
       <TrackMap source={source} lat={lat} lon={lon} choices={choices} onColour={onColour} recordOf={recordOf} headingChannel={heading}

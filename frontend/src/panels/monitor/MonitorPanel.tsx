@@ -12,6 +12,7 @@
  * subscriptions) or for the drone (all of them) backfills them from the
  * drone's archive, and the backfilled values appear in place, marked.
  */
+import { useDroneName } from "../../app/fleetFocus";
 import { useEffect, useState } from "react";
 import { fixed, localTime } from "../../core/numberFormat";
 import { AggregationValues } from "../../core/model.gen";
@@ -39,7 +40,7 @@ export default function MonitorPanel() {
   const model = useModel();
   const role = useEditor((s) => s.wb.role);
   const { api } = useServices();
-  const drone = model.drone.name;
+  const drone = useDroneName();
   const health = useLinkHealth();
   const { source, state, link } = health.stream;
   const subscribers = model.subscribers.filter((s) => s.topic);

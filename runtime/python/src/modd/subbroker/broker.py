@@ -639,6 +639,7 @@ class SubBroker:
             "pubbroker": dict(stats.pubbroker),
             **({"sensors": dict(stats.sensors)} if stats.sensors else {}),
             "transport": self.config.transport,
+            **({"station": self.config.station} if self.config.station else {}),
             "link_budget": (
                 running.plan.budget.to_json()
                 if running is not None and running.plan.budget is not None
