@@ -53,4 +53,7 @@ if [ -f frontend/package.json ]; then
   # typecheck and the unit tests ran in the fast tier; the browser journeys are left
   step "frontend: browser journeys"
   (cd frontend && npm run --silent test:e2e)
+  # the campaign's journey needs a backend joined to three drones from its start
+  step "frontend: the campaign's browser journey (three simulated drones)"
+  (cd frontend && MODD_E2E_ONLY=fleet npm run --silent test:e2e)
 fi
