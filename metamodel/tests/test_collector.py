@@ -15,6 +15,7 @@ from hypothesis import given, settings
 from modd_model import load_model, load_text
 from modd_model.collector import ORIGINAL_AGGREGATIONS, print_collector
 from modd_model.io import load_file
+from modd_model.units import PAPER_UNITS
 from modd_model.vocabulary import KNOWN_UNITS
 
 # The random documents of the print/parse property tests, shared.
@@ -235,6 +236,14 @@ def test_demo_export_says_what_it_leaves_out() -> None:
     assert all(d.severity == "warning" and "left out" in d.message for d in omitted)
 
 
+def _paper_name(unit: str) -> str:
+    """The paper's keyword for a unit: itself, the keyword whose UDUNITS spelling it is
+    (``m`` is METER), else NONE."""
+    if unit in KNOWN_UNITS:
+        return unit
+    return {text: k for k, text in PAPER_UNITS.items()}.get(unit, "NONE")
+
+
 def _expressible(doc: dict[str, Any]) -> dict[str, Any]:
     """What the original form keeps of ``doc``."""
     out: dict[str, Any] = {"schemaVersion": doc["schemaVersion"]}
@@ -244,8 +253,7 @@ def _expressible(doc: dict[str, Any]) -> dict[str, Any]:
             {
                 "name": s["name"],
                 "variables": [
-                    {"name": v["name"], "unit": v["unit"] if v["unit"] in KNOWN_UNITS else "NONE"}
-                    for v in s["variables"]
+                    {"name": v["name"], "unit": _paper_name(v["unit"])} for v in s["variables"]
                 ],
             }
             for s in doc["drone"]["sensors"]
