@@ -25,19 +25,9 @@ from typing import Any
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from radio_harness import RADIO, radio_counts, start_pubbroker_dgram  # noqa: E402
-from subbroker_harness import (  # noqa: E402
-    PUBBROKER,
-    Proc,
-    check_against_archive,
-    free_port,
-    model_copy,
-    read_archive,
-    start_load,
-)
-from test_fleet import (  # noqa: E402
+from fleet.test_fleet import (  # noqa: E402
     TAKEOVER_S,
     Listener,
     Station,
@@ -48,6 +38,16 @@ from test_fleet import (  # noqa: E402
     mesh,
     procs,  # noqa: F401  (the fixture)
     start_subbroker,
+)
+from radio_harness import RADIO, radio_counts, start_pubbroker_dgram  # noqa: E402
+from subbroker_harness import (  # noqa: E402
+    PUBBROKER,
+    Proc,
+    check_against_archive,
+    free_port,
+    model_copy,
+    read_archive,
+    start_load,
 )
 
 LOSS = "loss=0.2,seed=44"

@@ -20,18 +20,9 @@ from typing import Any
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from subbroker_harness import (  # noqa: E402
-    PUBBROKER,
-    check_against_archive,
-    free_port,
-    model_copy,
-    read_archive,
-    start_load,
-    start_pubbroker,
-)
-from test_fleet import (  # noqa: E402
+from fleet.test_fleet import (  # noqa: E402
     Listener,
     assert_every_window,
     backfill,
@@ -40,6 +31,15 @@ from test_fleet import (  # noqa: E402
     procs,  # noqa: F401  (the fixture)
     start_subbroker,
     subbroker_toml,
+)
+from subbroker_harness import (  # noqa: E402
+    PUBBROKER,
+    check_against_archive,
+    free_port,
+    model_copy,
+    read_archive,
+    start_load,
+    start_pubbroker,
 )
 
 KILLS = 3
