@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-import subprocess
 import sys
 import time
 from collections import defaultdict
@@ -40,137 +39,49 @@ for p in (HERE, HERE.parent / "subbroker", HERE.parent):
 
 import subbroker_harness as h  # noqa: E402
 from benchkit.footprint import Footprint, Sampler  # noqa: E402
-from fleet.test_fleet import campaign_credentials  # noqa: E402
-from modd_model.query import topics  # noqa: E402
+from fleet.test_fleet_netns import STATIONS, Campaign  # noqa: E402
 from support.netns import Fabric, netns_works  # noqa: E402
 
-STATIONS = "abc"
 MOVER = "h00"
-PORT = 7447  # each router's, inside its own namespace
-LOADGEN = HERE.parent / "subbroker" / "loadgen.py"
 FLEET_PROCS = HERE / "benchkit" / "fleet_procs.py"
 VIEWER = HERE / "benchkit" / "fleet_viewer.py"
 SUBSCRIBERS = [f"sub_{i}" for i in range(1, 8)]
 
 
-class Bench:
-    """The namespaces and processes; stopped by :meth:`stop`."""
+class Bench(Campaign):
+    """The campaign test's namespaces and processes (tests/fleet/test_fleet_netns.py), with
+    the mover in a namespace of its own, a viewer's namespace linked to a, and the other
+    drones in their stations' namespaces."""
 
-    def __init__(self, tmp: Path, drones: int) -> None:
-        self.tmp, self.fabric = tmp, Fabric()
-        self.procs: list[h.Proc] = []
-        self.creds = campaign_credentials(tmp, STATIONS)
-        self.addr: dict[tuple[str, str], str] = {}
-        for i, s in enumerate(STATIONS):
-            for o in STATIONS[i + 1 :]:
-                self._link(s, o)
-        for x, y in ((MOVER, "a"), (MOVER, "b"), ("v", "a")):
-            self._link(x, y)
+    def __init__(self, tmp: Path, drones: int, load_s: float) -> None:
+        super().__init__(tmp, Fabric(), {MOVER: "ab"}, load_s)
+        self._link("v", "a")
         self.home = {f"d{i:02d}": STATIONS[(i - 1) % 3] for i in range(1, drones)}
-        self.sb: dict[tuple[str, str], h.Proc] = {}
-        self.routers: dict[str, h.Proc] = {}
-
-    def _link(self, x: str, y: str) -> None:
-        ax, ay = self.fabric.link(x, y)
-        self.addr[(x, y)], self.addr[(y, x)] = ax, ay
-
-    def run(self, name: str, where: str, cmd: list[str]) -> h.Proc:
-        proc = h.Proc(name, [*self.fabric.prefix(where), *cmd], self.tmp / f"{name}.log")
-        self.procs.append(proc)
-        return proc
-
-    def start_routers(self) -> None:
-        zid = {n: f"{i + 1:x}{i + 1:x}" for i, n in enumerate(STATIONS)}
-        for s in STATIONS:
-            cmd = [str(h.PYTHON), "-m", "modd.station", "--listen", f"tcp/0.0.0.0:{PORT}"]
-            cmd += ["--credentials", str(self.creds[s]), "--id", zid[s]]
-            for o in STATIONS:
-                if o != s:
-                    cmd += ["--peer", f"{zid[o]}=tcp/{self.addr[(o, s)]}:{PORT}"]
-            self.routers[s] = self.run(f"router-{s}", s, cmd)
-        for s in STATIONS:
-            self.fabric.wait_port(s, "127.0.0.1", PORT, 60)
-
-    def model(self, drone: str) -> Path:
-        home = self.tmp / drone
-        home.mkdir(exist_ok=True)
-        model: Path = h.model_copy(home, "scenario1.modd")
-        doc = json.loads(model.read_text().replace('"usv.', f'"{drone}.'))
-        doc["drone"]["name"] = drone
-        model.write_text(json.dumps(doc))
-        return model
-
-    def start_pubbroker(self, drone: str, where: str, host: str, link: int, ingress: int) -> None:
-        home = self.tmp / drone
-        doc = json.loads((home / "scenario1.json").read_text())
-        cfg = {
-            "name": drone,
-            "link": {"host": host, "port": link, "key": "env:MODD_LINK_KEY"},
-            "ingress": {"host": "127.0.0.1", "port": ingress},
-            "archive": {"dir": str(home / "archive"), "flush_interval_ms": 200},
-            "topics": [{"name": t.name, "type": t.type} for t in topics(doc).values()],
-            "status_period_s": 60,
-        }
-        (home / "pb.json").write_text(json.dumps(cfg))
-        self.run(f"pb-{drone}", where, [str(h.PUBBROKER), "--config", str(home / "pb.json")])
-
-    def start_subbroker(self, s: str, drone: str, endpoint: str) -> h.Proc:
-        path = self.tmp / f"sb-{s}-{drone}.toml"
-        path.write_text(f"""model = "{self.tmp / drone / "scenario1.json"}"
-station = "{s}"
-state_dir = "{self.tmp / f"state-{s}-{drone}"}"
-[link]
-endpoint = "{endpoint}"
-key = "env:MODD_LINK_KEY"
-[zenoh]
-mode = "client"
-listen = []
-connect = ["tcp/127.0.0.1:{PORT}"]
-credentials_dir = "{self.creds[s]}"
-[delivery]
-tcp = false
-status_period_s = 1.0
-""")
-        proc = self.run(f"sb-{s}-{drone}", s, [*h.SUBBROKER, "--config", str(path)])
-        self.sb[(s, drone)] = proc
-        return proc
 
     def stop(self) -> None:
-        for p in self.procs:
-            if p.alive():
-                p.p.terminate()
-        for p in reversed(self.procs):
-            p.stop()
+        super().stop()
         self.fabric.close()
 
 
-def start_drones(b: Bench, load_s: float) -> None:
-    """Every drone's PubBroker and load, then its SubBroker(s)."""
+def start_drones(b: Bench) -> None:
+    """Every drone's PubBroker and load, then its serving SubBroker."""
     targets: dict[str, list[list[Any]]] = defaultdict(list)
     for n, (drone, s) in enumerate(b.home.items()):
-        link, ingress = 7100 + 2 * n, 7101 + 2 * n
-        b.model(drone)
-        b.start_pubbroker(drone, s, "127.0.0.1", link, ingress)
-        targets[s].append([drone, ingress, str(b.tmp / drone / "scenario1.json")])
-    model = b.model(MOVER)
-    b.start_pubbroker(MOVER, MOVER, "0.0.0.0", 7000, 7001)
-    for n, s in enumerate(b.home.values()):
-        b.fabric.wait_port(s, "127.0.0.1", 7101 + 2 * n, 60)
-    b.fabric.wait_port(MOVER, "127.0.0.1", 7001, 60)
+        b.start_drone(drone, 0, where=s, ports=(7100 + 2 * n, 7101 + 2 * n))
+        targets[s].append([drone, 7101 + 2 * n, str(b.models[drone])])
+    b.start_drone(MOVER, 1)
     for s, t in targets.items():
         cmd = [str(h.PYTHON), str(FLEET_PROCS), "load", "--targets", json.dumps(t)]
-        b.run(f"load-{s}", s, [*cmd, "--seconds", str(load_s)])
-    load = [str(h.PYTHON), str(LOADGEN), "--model", str(model), "--ingress", "127.0.0.1:7001"]
-    b.run(f"load-{MOVER}", MOVER, [*load, "--seconds", str(load_s), "--signal", "uniform"])
+        b.run(f"load-{s}", s, [*cmd, "--seconds", str(b.load_s)])
     for n, (drone, s) in enumerate(b.home.items()):
-        b.start_subbroker(s, drone, f"127.0.0.1:{7100 + 2 * n}")
-    b.start_subbroker("a", MOVER, f"{b.addr[(MOVER, 'a')]}:7000")
+        b.start_subbroker(s, drone, endpoint=f"127.0.0.1:{7100 + 2 * n}")
+    b.start_subbroker("a", MOVER)
 
 
 def start_standby(b: Bench) -> None:
     """b's SubBroker of the mover, once a serves it (started with the others, on a loaded
     machine b could come up first and serve: no hand-back then)."""
-    b.start_subbroker("b", MOVER, f"{b.addr[(MOVER, 'b')]}:7000")
+    b.start_subbroker("b", MOVER)
 
 
 def wait_all_serving(b: Bench, timeout_s: float) -> float:
@@ -202,15 +113,6 @@ def measure(b: Bench, seconds: float) -> dict[str, list[tuple[str, Footprint]]]:
     return {s: [(kind, sm.stop()) for kind, sm in lst] for s, lst in samplers.items()}
 
 
-def backfill(b: Bench, s: str, drone: str, sub: str) -> None:
-    cmd = [*b.fabric.prefix(s), str(Path(h.PYTHON).with_name("modd")), "backfill"]
-    cmd += ["--drone", drone, "--subscriber", sub, "--gaps", "--json"]
-    cmd += ["--connect", f"tcp/127.0.0.1:{PORT}", "--timeout", "60"]
-    cmd += ["--credentials", str(b.creds[s] / "backend.cred")]
-    done = subprocess.run(cmd, capture_output=True, timeout=90, text=True)
-    assert done.returncode == 0, (done.stdout[-2000:], done.stderr[-2000:])
-
-
 def handover(b: Bench) -> dict[str, float]:
     """Kill a's SubBroker of the mover; b serves it, then fills the gap."""
     killed = time.time_ns()
@@ -219,7 +121,7 @@ def handover(b: Bench) -> dict[str, float]:
     served_s = (time.time_ns() - killed) / 1e9
     time.sleep(3)
     for sub in SUBSCRIBERS:
-        backfill(b, "b", MOVER, sub)
+        b.backfill("b", MOVER, sub)
     return {"killed_ns": killed, "served_s": served_s}
 
 
@@ -285,14 +187,16 @@ def main() -> int:
     import tempfile
 
     with tempfile.TemporaryDirectory(prefix="modd-fleet-stations-") as tmp:
-        b = Bench(Path(tmp), args.drones)
+        b = Bench(Path(tmp), args.drones, load_s=args.seconds + 150)
         try:
-            b.start_routers()
+            for s in STATIONS:
+                b.start_router(s)
             viewer_out = Path(tmp) / "viewer.jsonl"
-            cmd = [str(h.PYTHON), str(VIEWER), "--connect", f"tcp/{b.addr[('a', 'v')]}:{PORT}"]
+            where = f"tcp/{b.addr[('a', 'v')]}:{b.port['a']}"
+            cmd = [str(h.PYTHON), str(VIEWER), "--connect", where]
             cmd += ["--credentials", str(b.creds["a"]), "--out", str(viewer_out)]
             assert b.run("viewer", "v", cmd).wait_log("listening", 60)
-            start_drones(b, load_s=args.seconds + 150)
+            start_drones(b)
             started_s = wait_all_serving(b, 300)
             start_standby(b)
             time.sleep(10)  # settled

@@ -30,7 +30,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from fleet.test_fleet import (  # noqa: E402
     TAKEOVER_S,
     Listener,
-    Station,
     assert_every_window,
     backfill,
     first_after,
@@ -38,6 +37,7 @@ from fleet.test_fleet import (  # noqa: E402
     mesh,
     procs,  # noqa: F401  (the fixture)
     start_subbroker,
+    subbroker_toml,
 )
 from radio_harness import RADIO, radio_counts, start_pubbroker_dgram  # noqa: E402
 from subbroker_harness import (  # noqa: E402
@@ -53,28 +53,6 @@ from subbroker_harness import (  # noqa: E402
 LOSS = "loss=0.2,seed=44"
 LOAD_S = 50
 SUBSCRIBERS = ("sub_3", "sub_4", "sub_5", "sub_6", "sub_7")  # scenario 1's 0.25-s ones
-
-
-def subbroker_udp_toml(tmp: Path, model: Path, modem: int, station: Station) -> Path:
-    """Station ``station``'s SubBroker: its link to its modem on the shared channel."""
-    path = tmp / f"sb-{station.name}.toml"
-    path.write_text(f"""model = "{model}"
-station = "{station.name}"
-state_dir = "{tmp / f"state-{station.name}"}"
-[link]
-transport = "udp"
-endpoint = "127.0.0.1:{modem}"
-key = "env:MODD_LINK_KEY"
-[zenoh]
-mode = "client"
-listen = []
-connect = ["{station.endpoint}"]
-credentials_dir = "{station.cred}"
-[delivery]
-tcp = false
-status_period_s = 0.5
-""")
-    return path
 
 
 def start_shared_radio(tmp: Path, target: int, modems: list[int]) -> Proc:
@@ -103,7 +81,10 @@ def test_two_stations_on_one_radio_channel_each_window_once_union_coverage(
     procs.append(radio := start_shared_radio(tmp_path, link, list(modems.values())))
     at = {s.name: Listener(s, "modd/usv/sub/*") for s in (a, b)}
     procs.extend(at.values())
-    sb = {s.name: subbroker_udp_toml(tmp_path, model, modems[s.name], s) for s in (a, b)}
+    sb = {
+        s.name: subbroker_toml(tmp_path, model, modems[s.name], s, "udp", str(tmp_path / s.name))
+        for s in (a, b)
+    }
     procs.append(sb_a := start_subbroker(tmp_path, sb["a"], "sb-a"))
     assert sb_a.wait_log("station a serves usv", 30), sb_a.log()
     procs.append(sb_b := start_subbroker(tmp_path, sb["b"], "sb-b"))

@@ -60,9 +60,7 @@ def test_a_station_killed_while_delivering_sends_no_window_twice(
     procs.append(start_pubbroker(tmp_path, model, link, ingress))
     viewer = Listener(a, "modd/usv/sub/*")
     procs.append(viewer)
-    config = subbroker_toml(tmp_path, model, link, a)
-    state = f'state_dir = "{tmp_path / "st"}"\n[link]'
-    config.write_text(config.read_text().replace("[link]", state))
+    config = subbroker_toml(tmp_path, model, link, a, state=str(tmp_path / "st"))
     procs.append(sb := start_subbroker(tmp_path, config, "sb-0"))
     assert sb.wait_log("station a serves usv", 20), sb.log()
     procs.append(load := start_load(tmp_path, model, ingress, LOAD_S))

@@ -75,7 +75,7 @@ def _relay_address(base: socket.socket, port: int, drone: socket.socket) -> tupl
             continue
         if data == b"probe":
             _drain(drone, 0.1)
-            return addr
+            return (str(addr[0]), int(addr[1]))
     raise AssertionError("no datagram through the relay")
 
 

@@ -130,6 +130,19 @@ def test_the_mission_starts_at_its_first_epoch_and_names_its_subscribers() -> No
     assert rec.mission_start("m") is None and rec.mission_start("m2") == T0 + 300 * S
 
 
+def fast_running() -> SimpleNamespace:
+    """What the manager reads of a running config: sub due FAST from T0 (config 1)."""
+    ps = SimpleNamespace(stream=FAST, sources=(), subscribers=["sub"])
+    return SimpleNamespace(
+        plan=SimpleNamespace(streams=[ps]),
+        model={"name": "m"},
+        topic_info={FAST.topic: ("m", "float32")},
+        config=SimpleNamespace(config_id=1),
+        epoch_ns=T0,
+        fanout=SimpleNamespace(sent=[FAST]),
+    )
+
+
 def test_the_manager_keeps_the_record_without_a_clean_stop(tmp_path: Path) -> None:
     """Written within SAVE_S of a live window (a kill -9 loses at most that), read back by
     the next SubBroker: the earlier epoch's gaps are still known."""
@@ -138,15 +151,7 @@ def test_the_manager_keeps_the_record_without_a_clean_stop(tmp_path: Path) -> No
     from modd.subbroker.backfill import SAVE_S, BackfillManager
     from modd.subbroker.kept import StateDir
 
-    ps = SimpleNamespace(stream=FAST, sources=(), subscribers=["sub"])
-    running = SimpleNamespace(
-        plan=SimpleNamespace(streams=[ps]),
-        model={"name": "m"},
-        topic_info={FAST.topic: ("m", "float32")},
-        config=SimpleNamespace(config_id=1),
-        epoch_ns=T0,
-        fanout=SimpleNamespace(sent=[FAST]),
-    )
+    running = fast_running()
     m = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
     m.on_config(running)  # type: ignore[arg-type]
     q = S // 4
@@ -238,22 +243,15 @@ def test_windows_delivered_just_before_a_kill_are_kept_by_the_journal(tmp_path: 
     from modd.subbroker.backfill import BackfillManager
     from modd.subbroker.kept import StateDir
 
-    ps = SimpleNamespace(stream=FAST, sources=(), subscribers=["sub"])
-    running = SimpleNamespace(
-        plan=SimpleNamespace(streams=[ps]),
-        model={"name": "m"},
-        topic_info={FAST.topic: ("m", "float32")},
-        config=SimpleNamespace(config_id=1),
-        epoch_ns=T0,
-        fanout=SimpleNamespace(sent=[FAST]),
-    )
+    running = fast_running()
     q = S // 4
 
     def live(ks: range) -> list[Window]:
         return [Window(1, k, 0, T0 + k * q, T0 + (k + 1) * q, Value(True, 1.0)) for k in ks]
 
     m = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
-    m.on_config(running)  # type: ignore[arg-type]  (saves the record: the epoch)
+    m.on_config(running)  # type: ignore[arg-type]
+    # on_config saved the record: the epoch only
     m.journal_live(running, live(range(0, 10)))  # type: ignore[arg-type]
     m.journal_live(running, live(range(20, 30)))  # type: ignore[arg-type]
     assert m._journal is not None
