@@ -268,3 +268,18 @@ def test_windows_delivered_just_before_a_kill_are_kept_by_the_journal(tmp_path: 
     assert [(r.from_ns, r.windows) for r in third.record.gaps("sub", T0, T0 + 30 * q)] == gaps
     for mgr in (m, again, third):
         mgr.close()
+
+
+def test_a_journal_that_cannot_be_opened_is_said_and_the_run_goes_on(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    from modd.subbroker.backfill import BackfillManager
+    from modd.subbroker.kept import StateDir
+
+    blocked = tmp_path / "state"
+    blocked.mkdir()
+    (blocked / "windows.journal").mkdir()  # not a file: it cannot be opened for appending
+    m = BackfillManager(lambda _f: None, lambda: [], StateDir(blocked))
+    assert m._journal is None
+    assert "cannot keep the window journal" in caplog.text
+    m.close()

@@ -87,8 +87,7 @@ class BackfillManager:
         # requests at each authentication, so a restarted SubBroker's ids meet no old one
         self._queue = BackfillQueue(timing or Timing())
         self.record = self._load()
-        path = state.journal_path() if state is not None else None
-        self._journal = WindowJournal(path) if path is not None else None
+        self._journal = self._open_journal()
         self._dirty = False
         self._saved_at = 0.0
         self._jobs: dict[int, Job] = {}
@@ -105,6 +104,16 @@ class BackfillManager:
         if path is not None and (lines := replay(path, record)):
             log.info("window journal: %d deliveries since the record was saved", lines)
         return record
+
+    def _open_journal(self) -> WindowJournal | None:
+        path = self._state.journal_path() if self._state is not None else None
+        if path is None:
+            return None
+        try:
+            return WindowJournal(path)
+        except OSError as exc:  # as a record that cannot be written: said, and the run goes on
+            log.error("cannot keep the window journal %s: %s", path, exc)
+            return None
 
     def _read_record(self) -> WindowRecord:
         doc = self._state.load_windows() if self._state is not None else None

@@ -93,6 +93,9 @@ def replay(path: Path, record: WindowRecord) -> int:
                 raw = fh.read(MAX_JOURNAL_BYTES)
         except FileNotFoundError:
             continue
+        except OSError as exc:  # unreadable: the record alone, as before the journal
+            log.error("window journal %s unreadable (%s): ignored", f, exc)
+            continue
         for n, line in enumerate(raw.splitlines(), 1):
             try:
                 for entry in _list(json.loads(line), f"{f.name}:{n}"):
