@@ -44,6 +44,8 @@ printf '\n===== %s\n\n' "frontend/tests/bench/live-plan-latency.mjs --edits 20"
 (cd frontend && node tests/bench/live-plan-latency.mjs --edits 20)  # the live plan in the browser
 run tests/bench/bench_subbroker.py --seconds "${SUBBROKER_SECONDS:-10}" --profile
 run tests/bench/bench_fleet.py --drones "${FLEET_DRONES:-20}" --seconds "${FLEET_SECONDS:-60}"
+# issue 44: 50 drones across 3 stations in network namespaces (root), a handover
+run tests/bench/bench_fleet_stations.py --drones "${STATIONS_DRONES:-50}" --seconds "${STATIONS_SECONDS:-60}"
 run tests/bench/bench_health_ws.py --ops 20000
 run tests/bench/bench_sensors.py --seconds "${SENSORS_SECONDS:-20}"
 run tests/bench/bench_health_csv.py --clients 70 --seconds "${HEALTH_CSV_SECONDS:-20}"

@@ -51,3 +51,35 @@ def test_toml_writer_round_trips_hostile_strings() -> None:
         "zenoh": {"mode": "peer", "weird key\n": "v", "sub": {"k": "\u2028"}},
     }
     assert tomllib.loads(dumps(doc)) == doc
+
+
+def test_campaign_station_configs_load_as_one_mesh(scenarios_dir: Path, tmp_path: Path) -> None:
+    """``--station``: one SubBroker configuration per station, read by the SubBroker's own
+    loader: each names its station, is a router, and dials every other station that has
+    an endpoint; the one behind a cellular link is dialled by none (docs/operations.md)."""
+    from modd_gen.context import build_context
+    from modd_gen.targets.stations import artifacts, parse_station
+
+    model = load_model(scenarios_dir / "scenario1.modd")
+    given = ["shore=tcp/192.0.2.1:7447", "boat", "cliff=tcp/cliff.example:7448"]
+    stations = [parse_station(t) for t in given]
+    write_artifacts(
+        tmp_path, [*generate(model, "operator"), *artifacts(build_context(model), stations)]
+    )
+    cfgs = {
+        s.name: load_config(tmp_path / "operator" / "stations" / s.name / "subbroker.toml")
+        for s in stations
+    }
+    zid = {s.name: s.zid for s in stations}
+    assert len(set(zid.values())) == 3
+    for name, cfg in cfgs.items():
+        assert cfg.station == name and cfg.model == model and cfg.zenoh.mode == "router"
+        mesh = cfg.zenoh.mesh
+        assert mesh is not None and mesh.station == zid[name]
+        want = {
+            zid[o]: e
+            for o, e in (("shore", "tcp/192.0.2.1:7447"), ("cliff", "tcp/cliff.example:7448"))
+            if o != name
+        }
+        assert dict(mesh.peers) == want, name
+    assert cfgs["cliff"].zenoh.listen == ("tcp/0.0.0.0:7448",)

@@ -171,11 +171,18 @@ def test_three_stations_one_mesh_each_value_once(
         pub.close()  # type: ignore[no-untyped-call]
 
 
-def subbroker_toml(tmp: Path, model: Path, link: int, station: Station) -> Path:
+def subbroker_toml(
+    tmp: Path, model: Path, link: int, station: Station, transport: str = "tcp", state: str = ""
+) -> Path:
+    """Station ``station``'s SubBroker of the drone whose link is 127.0.0.1:``link``
+    (``state``: its state directory, none when "")."""
     path = tmp / f"sb-{station.name}.toml"
+    state_dir = f'state_dir = "{state}"' if state else ""
     path.write_text(f"""model = "{model}"
 station = "{station.name}"
+{state_dir}
 [link]
+transport = "{transport}"
 endpoint = "127.0.0.1:{link}"
 key = "env:MODD_LINK_KEY"
 [zenoh]

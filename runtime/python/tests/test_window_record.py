@@ -130,6 +130,19 @@ def test_the_mission_starts_at_its_first_epoch_and_names_its_subscribers() -> No
     assert rec.mission_start("m") is None and rec.mission_start("m2") == T0 + 300 * S
 
 
+def fast_running() -> SimpleNamespace:
+    """What the manager reads of a running config: sub due FAST from T0 (config 1)."""
+    ps = SimpleNamespace(stream=FAST, sources=(), subscribers=["sub"])
+    return SimpleNamespace(
+        plan=SimpleNamespace(streams=[ps]),
+        model={"name": "m"},
+        topic_info={FAST.topic: ("m", "float32")},
+        config=SimpleNamespace(config_id=1),
+        epoch_ns=T0,
+        fanout=SimpleNamespace(sent=[FAST]),
+    )
+
+
 def test_the_manager_keeps_the_record_without_a_clean_stop(tmp_path: Path) -> None:
     """Written within SAVE_S of a live window (a kill -9 loses at most that), read back by
     the next SubBroker: the earlier epoch's gaps are still known."""
@@ -138,15 +151,7 @@ def test_the_manager_keeps_the_record_without_a_clean_stop(tmp_path: Path) -> No
     from modd.subbroker.backfill import SAVE_S, BackfillManager
     from modd.subbroker.kept import StateDir
 
-    ps = SimpleNamespace(stream=FAST, sources=(), subscribers=["sub"])
-    running = SimpleNamespace(
-        plan=SimpleNamespace(streams=[ps]),
-        model={"name": "m"},
-        topic_info={FAST.topic: ("m", "float32")},
-        config=SimpleNamespace(config_id=1),
-        epoch_ns=T0,
-        fanout=SimpleNamespace(sent=[FAST]),
-    )
+    running = fast_running()
     m = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
     m.on_config(running)  # type: ignore[arg-type]
     q = S // 4
@@ -226,3 +231,55 @@ def test_the_derived_window_the_link_came_back_in_is_a_gap_at_once() -> None:
     rec.add_received(FAST, T0 + 3 * S, T0 + 8 * S + S // 2)
     rec.add_derived(SLOW, T0 + 2 * S, T0 + 8 * S)
     assert rec.gaps("sub", T0, until) == []
+
+
+def test_windows_delivered_just_before_a_kill_are_kept_by_the_journal(tmp_path: Path) -> None:
+    """Issue 44's wire duplicates: windows delivered (live and backfilled) after the
+    record's last save, then a kill -9 (no close, no save): the next SubBroker knows
+    them from the journal, so none is a gap (none backfilled twice). A line cut by the
+    kill is skipped; a save sets the journal aside and removes it once written."""
+    from modd.link.frames import Value
+    from modd.link.receiver import Window
+    from modd.subbroker.backfill import BackfillManager
+    from modd.subbroker.kept import StateDir
+
+    running = fast_running()
+    q = S // 4
+
+    def live(ks: range) -> list[Window]:
+        return [Window(1, k, 0, T0 + k * q, T0 + (k + 1) * q, Value(True, 1.0)) for k in ks]
+
+    m = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
+    m.on_config(running)  # type: ignore[arg-type]
+    # on_config saved the record: the epoch only
+    m.journal_live(running, live(range(0, 10)))  # type: ignore[arg-type]
+    m.journal_live(running, live(range(20, 30)))  # type: ignore[arg-type]
+    assert m._journal is not None
+    m._journal.append([["f", "sub", FAST.key, T0 + 10 * q, T0 + 12 * q]])
+    with open(tmp_path / "windows.journal", "ab") as f:
+        f.write(b'[["r","usv.a.x/MIN/0.25",')  # the kill cut this line
+    again = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
+    gaps = [(r.from_ns, r.windows) for r in again.record.gaps("sub", T0, T0 + 30 * q)]
+    assert gaps == [(T0 + 12 * q, 8)], gaps
+    again._dirty = True
+    again.save()  # the record now holds the journal: set aside, then removed
+    assert not (tmp_path / "windows.journal.old").exists()
+    third = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
+    assert [(r.from_ns, r.windows) for r in third.record.gaps("sub", T0, T0 + 30 * q)] == gaps
+    for mgr in (m, again, third):
+        mgr.close()
+
+
+def test_a_journal_that_cannot_be_opened_is_said_and_the_run_goes_on(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    from modd.subbroker.backfill import BackfillManager
+    from modd.subbroker.kept import StateDir
+
+    blocked = tmp_path / "state"
+    blocked.mkdir()
+    (blocked / "windows.journal").mkdir()  # not a file: it cannot be opened for appending
+    m = BackfillManager(lambda _f: None, lambda: [], StateDir(blocked))
+    assert m._journal is None
+    assert "cannot keep the window journal" in caplog.text
+    m.close()

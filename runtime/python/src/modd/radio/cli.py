@@ -2,6 +2,9 @@
 
 UDP: ``modd-radio --udp 127.0.0.1:7181 --to 127.0.0.1:7171 --radio "rate=3600,loss=0.05"``
 (the SubBroker sends to 7181 instead of the PubBroker's 7171).
+A shared channel (several stations hearing one drone: docs/fleet.md): ``--udp`` once
+per station, ``modd-radio --udp 127.0.0.1:7181 --udp 127.0.0.1:7182 --to 127.0.0.1:7171``;
+the drone's datagrams reach every station, each losing its own share.
 Serial: ``modd-radio --serial --radio "rate=3600,packet=252"`` creates two
 pseudo-terminals, prints their paths (``base=/dev/pts/N drone=/dev/pts/M``) and
 relays between them. Prints what it passed and dropped every ``--report`` seconds
@@ -20,6 +23,7 @@ from modd_plan.radio import RadioProfile
 
 from .channel import Channel, RadioSpec
 from .relay import open_pty_pair, run_serial, run_udp
+from .shared import Modem, run_shared_udp, summary
 
 
 def _hostport(text: str) -> tuple[str, int]:
@@ -64,6 +68,10 @@ def _print(up: Channel, down: Channel) -> None:
     print(f"radio: base->drone {up.summary()}; drone->base {down.summary()}", flush=True)
 
 
+def _print_shared(stations: list[Modem]) -> None:
+    print(f"radio: {summary(stations)}", flush=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(
         prog="modd-radio", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -72,8 +80,10 @@ def main(argv: list[str] | None = None) -> int:
     mode.add_argument(
         "--udp",
         type=_hostport,
+        action="append",
         metavar="HOST:PORT",
-        help="listen here for the base station's datagrams",
+        help="listen here for the base station's datagrams (once per station: a shared "
+        "channel that every station hears)",
     )
     mode.add_argument(
         "--serial", action="store_true", help="relay between two new pseudo-terminals"
@@ -102,11 +112,16 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     if args.udp and not args.to:
         p.error("--udp needs --to HOST:PORT (the PubBroker's endpoint)")
-    if args.udp and _same_endpoint(args.udp, args.to):
-        p.error(
-            f"--to {args.to[0]}:{args.to[1]} is where the radio listens (--udp): it would "
-            "relay every datagram to itself; give the PubBroker's endpoint"
-        )
+    for listen in args.udp or ():
+        if _same_endpoint(listen, args.to):
+            p.error(
+                f"--to {args.to[0]}:{args.to[1]} is where the radio listens (--udp): it would "
+                "relay every datagram to itself; give the PubBroker's endpoint"
+            )
+    if args.udp and len(set(args.udp)) < len(args.udp):
+        p.error("--udp: each station needs its own HOST:PORT (one given twice)")
+    if args.udp and len(args.udp) > 1 and args.profile is not None:
+        p.error("--profile emulates one station's radio: give one --udp with it")
     if args.report <= 0 or (args.duration is not None and args.duration <= 0):
         p.error("--report and --duration take seconds > 0")
     stopping: list[bool] = []
@@ -117,9 +132,13 @@ def main(argv: list[str] | None = None) -> int:
     def stop() -> bool:
         return bool(stopping) or (end is not None and time.monotonic() >= end)
 
+    if args.udp and len(args.udp) > 1:
+        stations = run_shared_udp(args.radio, args.udp, args.to, stop, _print_shared, args.report)
+        _print_shared(stations)
+        return 0
     if args.udp:
         up, down = run_udp(
-            args.radio, args.udp, args.to, stop, _print, args.report, profile=args.profile
+            args.radio, args.udp[0], args.to, stop, _print, args.report, profile=args.profile
         )
     else:
         base, base_path = open_pty_pair()

@@ -34,6 +34,7 @@ from .backfill_queue import BackfillQueue, Filled, Job, Run, Timing
 from .fleet_record import merge
 from .payload import DeliveredValue, window_index
 from .record_file import read_record
+from .window_journal import WindowJournal, replay
 from .window_record import Due, Epoch, WindowRecord
 
 if TYPE_CHECKING:
@@ -86,6 +87,7 @@ class BackfillManager:
         # requests at each authentication, so a restarted SubBroker's ids meet no old one
         self._queue = BackfillQueue(timing or Timing())
         self.record = self._load()
+        self._journal = self._open_journal()
         self._dirty = False
         self._saved_at = 0.0
         self._jobs: dict[int, Job] = {}
@@ -96,6 +98,24 @@ class BackfillManager:
     # -- the record -----------------------------------------------------------------
 
     def _load(self) -> WindowRecord:
+        """The record kept, with the windows journalled since it was written."""
+        record = self._read_record()
+        path = self._state.journal_path() if self._state is not None else None
+        if path is not None and (lines := replay(path, record)):
+            log.info("window journal: %d deliveries since the record was saved", lines)
+        return record
+
+    def _open_journal(self) -> WindowJournal | None:
+        path = self._state.journal_path() if self._state is not None else None
+        if path is None:
+            return None
+        try:
+            return WindowJournal(path)
+        except OSError as exc:  # as a record that cannot be written: said, and the run goes on
+            log.error("cannot keep the window journal %s: %s", path, exc)
+            return None
+
+    def _read_record(self) -> WindowRecord:
         doc = self._state.load_windows() if self._state is not None else None
         if doc is None:
             return WindowRecord()
@@ -116,10 +136,21 @@ class BackfillManager:
             if self._state is None or not self._dirty:
                 return
             doc, self._dirty, self._saved_at = self.record.to_json(), False, time.monotonic()
+            journal = self._journal
+            try:
+                if journal is not None:
+                    journal.rotate()  # what follows the snapshot goes to a new journal
+            except OSError as exc:
+                log.error("cannot set the window journal aside: %s", exc)
+                journal = None
         try:
             self._state.save_windows(doc)
         except OSError as exc:
             log.error("cannot keep the window record: %s", exc)
+            self._dirty = True  # the journal set aside is kept until it is
+            return
+        if journal is not None:
+            journal.saved()
 
     def on_config(self, running: Running) -> None:
         """A config runs (acknowledged): its windows are due from its epoch."""
@@ -128,6 +159,17 @@ class BackfillManager:
             self._dirty = True
             self._ensure_thread()
         self.save()
+
+    def journal_live(self, running: Running, windows: Sequence[Window]) -> None:
+        """Live windows about to be delivered: written down first (window_journal.py)."""
+        if self._journal is not None:
+            sent = running.fanout.sent
+            self._journal.append([["r", sent[w.stream].key, w.start_ns, w.end_ns] for w in windows])
+
+    def journal_derived(self, stream: StreamKey, start: int, end: int) -> None:
+        """A derived window about to be delivered."""
+        if self._journal is not None:
+            self._journal.append([["d", stream.key, start, end]])
 
     def on_windows(
         self,
@@ -247,6 +289,8 @@ class BackfillManager:
             self._closed = True
             self._wake.notify_all()
         self.save()
+        if self._journal is not None:
+            self._journal.close()
 
     # -- frames to and from the PubBroker ----------------------------------------------
 
@@ -322,6 +366,8 @@ class BackfillManager:
                 *self._identity(run, start, q),
             )
             payload = out.to_json()
+            if self._journal is not None:  # written down before it is put
+                self._journal.append([["f", run.subscriber, run.stream.key, start, start + q]])
             for sink in sinks:
                 sink.put(run.subscriber, payload)
             self.record.add_filled(run.subscriber, run.stream, start, start + q)

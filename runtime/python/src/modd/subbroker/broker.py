@@ -361,8 +361,14 @@ class SubBroker:
         if running is None or running.slots is None:
             return
         derived: list[tuple[StreamKey, int, int]] = []
+
+        def on_derived(d: tuple[StreamKey, int, int]) -> None:
+            self.backfill.journal_derived(*d)  # before it is put
+            derived.append(d)
+
+        self.backfill.journal_live(running, windows)  # written down before they are put
         self.delivered += running.slots.deliver(
-            windows, self._sinks(), self.backfill.filled_already, derived.append
+            windows, self._sinks(), self.backfill.filled_already, on_derived
         )
         self.backfill.on_windows(running, windows, derived)
 

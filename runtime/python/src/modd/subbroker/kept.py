@@ -222,5 +222,10 @@ class StateDir:
     def save_windows(self, doc: dict[str, Any]) -> None:
         self._write("windows.json", doc)
 
+    def journal_path(self) -> Path | None:
+        """Where the windows delivered since the record was saved are written
+        (window_journal.py); None without a state directory."""
+        return self._file("windows.journal")
+
     def load_windows(self) -> Any:
         return self._read("windows.json")

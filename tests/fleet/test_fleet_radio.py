@@ -1,0 +1,129 @@
+"""Two stations hearing one drone over one radio channel (issue 44, docs/fleet.md,
+"Several stations on one radio channel"), real processes on loopback: the C++
+PubBroker on a udp link behind ``modd-radio`` in its shared-channel mode (one modem
+per station, 20 % of the datagrams lost at each, drawn apart in both directions),
+two station routers in a mesh, a SubBroker per station on the same drone (``station``
+set: one serves, the other stands by), a viewer at each station.
+
+Station a serves; it is killed with -9 (SubBroker and router) and b takes the drone
+over through its own modem; a comes back and stands by; b fills the gaps
+(``backfill --gaps``) of every subscriber. At each viewer, on the raw zenoh samples:
+every window once (by identity), equal to the aggregate recomputed from the drone's
+archive with the official ``mcap`` reader, every window of every epoch of the 0.25-s
+subscriptions there from its first to its last; and **union coverage**: no window
+either station delivered (live, or heard by the other through the mesh) was
+backfilled, i.e. what came back with ``backfilled`` set is disjoint from what came live.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from fleet.test_fleet import (  # noqa: E402
+    TAKEOVER_S,
+    Listener,
+    assert_every_window,
+    backfill,
+    first_after,
+    identities,
+    mesh,
+    procs,  # noqa: F401  (the fixture)
+    start_subbroker,
+    subbroker_toml,
+)
+from radio_harness import RADIO, radio_counts, start_pubbroker_dgram  # noqa: E402
+from subbroker_harness import (  # noqa: E402
+    PUBBROKER,
+    Proc,
+    check_against_archive,
+    free_port,
+    model_copy,
+    read_archive,
+    start_load,
+)
+
+LOSS = "loss=0.2,seed=44"
+LOAD_S = 50
+SUBSCRIBERS = ("sub_3", "sub_4", "sub_5", "sub_6", "sub_7")  # scenario 1's 0.25-s ones
+
+
+def start_shared_radio(tmp: Path, target: int, modems: list[int]) -> Proc:
+    listens = [a for m in modems for a in ("--udp", f"127.0.0.1:{m}")]
+    cmd = [*RADIO, *listens, "--to", f"127.0.0.1:{target}", "--radio", LOSS, "--report", "1"]
+    proc = Proc("radio", cmd, tmp / "radio.log")
+    time.sleep(0.3)
+    return proc
+
+
+@pytest.mark.timeout(240)
+def test_two_stations_on_one_radio_channel_each_window_once_union_coverage(
+    tmp_path: Path,
+    procs: list[Any],  # noqa: F811
+) -> None:
+    assert PUBBROKER.exists(), f"{PUBBROKER} is not built: run make build"
+    stations = mesh(tmp_path, "ab")
+    for s in stations.values():
+        procs.append(s.start())
+    a, b = stations["a"], stations["b"]
+    link, ingress = free_port("udp"), free_port()
+    model = model_copy(tmp_path, "scenario1.modd")
+    udp = {"transport": "udp", "port": link}
+    procs.append(start_pubbroker_dgram(tmp_path, model, udp, ingress))
+    modems = {"a": free_port("udp"), "b": free_port("udp")}
+    procs.append(radio := start_shared_radio(tmp_path, link, list(modems.values())))
+    at = {s.name: Listener(s, "modd/usv/sub/*") for s in (a, b)}
+    procs.extend(at.values())
+    sb = {
+        s.name: subbroker_toml(tmp_path, model, modems[s.name], s, "udp", str(tmp_path / s.name))
+        for s in (a, b)
+    }
+    procs.append(sb_a := start_subbroker(tmp_path, sb["a"], "sb-a"))
+    assert sb_a.wait_log("station a serves usv", 30), sb_a.log()
+    procs.append(sb_b := start_subbroker(tmp_path, sb["b"], "sb-b"))
+    procs.append(load := start_load(tmp_path, model, ingress, LOAD_S))
+    time.sleep(15)  # b stands by while a serves over the lossy channel
+    assert "serves usv" not in sb_b.log(), sb_b.log()
+    assert len(at["b"].values()) > 20, "a's values reach the viewer at b through the mesh"
+    sb_a.kill9()
+    assert a.proc is not None
+    a.proc.kill9()
+    killed_ns = time.time_ns()
+    assert sb_b.wait_log("station b serves usv", TAKEOVER_S + 10), sb_b.log()
+    back = first_after(at["b"], killed_ns, TAKEOVER_S + 10)
+    assert back is not None, sb_b.log()
+    procs.append(a.start("-again"))
+    procs.append(sb_a2 := start_subbroker(tmp_path, sb["a"], "sb-a-again"))
+    load.p.wait(LOAD_S + 60)
+    time.sleep(3)
+    assert sb_a2.log().count("serves usv") == 0, "a back stands by: b serves"
+    for sub in SUBSCRIBERS:
+        job = backfill(b, {"op": "start", "subscriber": sub, "gaps": True})
+        assert sb_b.wait_log(f"backfill {job['id']} for {sub}: DONE", 60), sb_b.log()[-3000:]
+    time.sleep(2)
+    check(tmp_path, model, at)
+    print(f"takeover over the radio: first value at b {back:.2f} s after a was killed")
+    print(radio_counts(radio))
+
+
+def check(tmp: Path, model: Path, at: dict[str, Listener]) -> None:
+    archive = read_archive(tmp / "archive", model)
+    for name, listener in at.items():
+        values = listener.values()
+        ids = identities(values)
+        dup = len(ids) - len(set(ids))
+        assert dup == 0, f"{dup} windows twice at station {name}'s viewer (raw samples)"
+        assert check_against_archive({name: values}, archive) > 100
+        live = {i for v, i in zip(values, ids, strict=True) if not v.backfilled}
+        filled = {i for v, i in zip(values, ids, strict=True) if v.backfilled}
+        assert not live & filled, f"{len(live & filled)} windows delivered live were backfilled"
+        for sub in SUBSCRIBERS:
+            assert_every_window([v for v in values if v.subscriber == sub], epochs=2)
+        print(f"viewer at {name}: {len(ids)} windows, {len(filled)} backfilled, none twice")
