@@ -43,7 +43,9 @@ CASES: list[tuple[str, dict[str, Any], str]] = [
 
 def slow(_topic: int, k: int) -> float:
     """15 °C, ±0.4 °C over a 5-minute period, ±2 mK of noise: k-th sample at 25 Hz."""
-    return f32(15 + 0.4 * math.sin(2 * math.pi * k / (25 * 300)) + 0.002 * math.sin(0.37 * k))
+    return float(
+        f32(15 + 0.4 * math.sin(2 * math.pi * k / (25 * 300)) + 0.002 * math.sin(0.37 * k))
+    )
 
 
 def flapping(_topic: int, k: int) -> float:

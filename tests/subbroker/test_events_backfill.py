@@ -10,7 +10,6 @@ backfilled windows are marked so."""
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 from typing import Any
@@ -19,7 +18,6 @@ import pytest
 from subbroker_harness import (
     Blackhole,
     free_port,
-    model_copy,
     processes,
     read_archive,
     start_load,
@@ -30,16 +28,9 @@ from subbroker_harness import (
 )
 from test_backfill import CUT_S, ask, listen, wait_live
 from test_events_e2e import SUBS, check_event_windows
+from test_events_e2e import _model as events_model
 
 pytestmark = [pytest.mark.usefixtures("needs_pubbroker"), pytest.mark.e2e]
-
-
-def _model(tmp_path: Path) -> Path:
-    path = model_copy(tmp_path, "scenario1.modd")
-    model = json.loads(path.read_text())
-    model["subscribers"] = SUBS
-    path.write_text(json.dumps(model))
-    return path
 
 
 def _backfill(session: Any, name: str, timeout_s: float = 60) -> dict[str, Any]:
@@ -53,7 +44,7 @@ def _backfill(session: Any, name: str, timeout_s: float = 60) -> dict[str, Any]:
 
 
 def test_a_cut_links_events_are_backfilled_exactly_once(tmp_path: Path, zenoh_client: Any) -> None:
-    model = _model(tmp_path)
+    model = events_model(tmp_path)
     link, ingress, zport = free_port(), free_port(), free_port()
     pb = start_pubbroker(tmp_path, model, link, ingress)
     proxy = Blackhole(link)

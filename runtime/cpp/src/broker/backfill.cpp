@@ -17,6 +17,10 @@ constexpr int64_t kGuardNs = 100'000'000;
 bool is_float(const link::ValueKind& k) {
   return k.scalar == link::ScalarKind::F32 || k.scalar == link::ScalarKind::F64;
 }
+// One archived sample into an event stream's detector (an int topic's as a double).
+void feed(EventDetector& d, const link::ValueKind& k, const archive::ArchivedSample& s) {
+  d.add(s.stamp_ns, is_float(k) ? s.number : static_cast<double>(s.integer));
+}
 }  // namespace
 
 BackfillSender::Job::Job(const bf::Request& r, const std::string& dir, const std::string& prefix)
@@ -113,8 +117,7 @@ bool BackfillSender::replay(Job& j, const Env& env) {
       j.events->take();
       return true;
     }
-    j.events->add(smp->stamp_ns,
-                  is_float(j.kind) ? smp->number : static_cast<double>(smp->integer));
+    feed(*j.events, j.kind, *smp);
     j.replayed_to = smp->stamp_ns;
     j.reader.pop();
   }
@@ -126,8 +129,7 @@ link::Value BackfillSender::take_window(Job& j, int64_t s, int64_t e) {
     auto smp = j.reader.peek(s);
     if (!smp || smp->stamp_ns >= e) break;
     if (j.events)
-      j.events->add(smp->stamp_ns,
-                    is_float(j.kind) ? smp->number : static_cast<double>(smp->integer));
+      feed(*j.events, j.kind, *smp);
     else
       j.acc.add(smp->number, smp->integer);
     j.reader.pop();
