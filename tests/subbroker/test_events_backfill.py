@@ -3,13 +3,16 @@ loopback: the scripted signal (steps, a ramp, noise around the threshold, flappi
 through the C++ PubBroker, the link cut in a proxy for CUT_S seconds, then `backfill
 gaps` for every event subscriber. The PubBroker re-derives the lost windows' events from
 its archive, its detector's state rebuilt from the config's epoch (docs/protocol.md,
-"Backfill of events"). The oracle is the reference definition (modd_contracts.events)
+"Backfill of events"); one subscription (BY_POLICY) has `backfill = gaps` in the
+model and is filled by the SubBroker by itself. The oracle is the reference definition (modd_contracts.events)
 over the archive read with the official ``mcap`` reader: every event it implies is
 delivered exactly once, live or backfilled, in its window (coalesced beyond N), and the
 backfilled windows are marked so."""
 
 from __future__ import annotations
 
+import json
+import re
 import time
 from pathlib import Path
 from typing import Any
@@ -43,8 +46,17 @@ def _backfill(session: Any, name: str, timeout_s: float = 60) -> dict[str, Any]:
     return p
 
 
+#: filled by the SubBroker by itself (its model's policy); the others are asked for
+BY_POLICY = "thd_z"
+
+
 def test_a_cut_links_events_are_backfilled_exactly_once(tmp_path: Path, zenoh_client: Any) -> None:
     model = events_model(tmp_path)
+    doc = json.loads(model.read_text())
+    for sub in doc["subscribers"]:
+        if sub["name"] == BY_POLICY:
+            sub["backfill"] = "gaps"
+    model.write_text(json.dumps(doc))
     link, ingress, zport = free_port(), free_port(), free_port()
     pb = start_pubbroker(tmp_path, model, link, ingress)
     proxy = Blackhole(link)
@@ -66,7 +78,12 @@ def test_a_cut_links_events_are_backfilled_exactly_once(tmp_path: Path, zenoh_cl
         wait_live(got, "on_x", time.time_ns())
         time.sleep(1.5)  # windows ending before the request are the backfill's
         for sub in SUBS:
-            jobs[sub["name"]] = _backfill(session, sub["name"])
+            if sub["name"] != BY_POLICY:
+                jobs[sub["name"]] = _backfill(session, sub["name"])
+        assert sb.wait_log(f"for {BY_POLICY}: DONE", 30), sb.log()[-3000:]
+        found = re.search(rf"backfill (\d+) for {BY_POLICY}: DONE", sb.log())
+        assert found, sb.log()[-3000:]
+        jobs[BY_POLICY] = ask(session, {"op": "progress", "id": int(found.group(1))})
         time.sleep(1.5)
     finally:
         with processes(*(x for x in (pb, sb, load) if x is not None)):
