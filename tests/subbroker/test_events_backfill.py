@@ -4,10 +4,10 @@ through the C++ PubBroker, the link cut in a proxy for CUT_S seconds, then `back
 gaps` for every event subscriber. The PubBroker re-derives the lost windows' events from
 its archive, its detector's state rebuilt from the config's epoch (docs/protocol.md,
 "Backfill of events"); one subscription (BY_POLICY) has `backfill = gaps` in the
-model and is filled by the SubBroker by itself. The oracle is the reference definition (modd_contracts.events)
-over the archive read with the official ``mcap`` reader: every event it implies is
-delivered exactly once, live or backfilled, in its window (coalesced beyond N), and the
-backfilled windows are marked so."""
+model and is filled by the SubBroker by itself. The oracle is the reference definition
+(modd_contracts.events) over the archive read with the official ``mcap`` reader: every
+event it implies is delivered exactly once, live or backfilled, in its window (coalesced
+beyond N), and the backfilled windows are marked so."""
 
 from __future__ import annotations
 
