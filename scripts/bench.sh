@@ -37,6 +37,7 @@ run tests/bench/bench_latency.py --seconds "${LATENCY_SECONDS:-20}"
 run tests/bench/bench_footprint.py --seconds "${FOOTPRINT_SECONDS:-30}"
 run tests/bench/bench_pubbroker.py --seconds "${PUBBROKER_SECONDS:-10}" --ingest-samples 10000000
 run tests/bench/bench_aggregations.py --seconds "${AGGREGATIONS_SECONDS:-20}"  # MEDIAN, STDDEV, PERCENTILE(95) vs AVERAGE
+run tests/bench/bench_events.py --seconds "${EVENTS_SECONDS:-30}"  # ON_CHANGE vs LAST, flapping worst case
 run tests/bench/bench_planner.py --quick
 run tests/bench/bench_plan_cpu.py
 run tests/bench/bench_backend_plan.py --runs 30

@@ -145,10 +145,11 @@ def wire_figures(wire: Wire) -> dict[str, Any]:
 
 
 def start_steady(
-    tmp: Path, config: Any, seconds: float, status_period_s: int
+    tmp: Path, config: Any, seconds: float, status_period_s: int, value: Any = None
 ) -> tuple[PubBroker, BaseStation, threading.Event, threading.Thread]:
     """The PubBroker with ``config`` from the Python base station, the 25 Hz load on every
-    topic for ``seconds`` + 6 s (stopped by the event), after 2 s of warm-up."""
+    topic for ``seconds`` + 6 s (stopped by the event), after 2 s of warm-up; ``value(i, k)``:
+    topic i's k-th sample (the harness's varied signal when None)."""
     names = [t.name for t in config.topics]
     b = PubBroker(
         tmp, [(t, "float32") for t in names], status_period_s=status_period_s, log_period_s=0
@@ -160,7 +161,7 @@ def start_steady(
     loader = threading.Thread(
         target=run_load,
         args=(f"unix:{b.unix_path}", names, 25.0, seconds + 6.0),
-        kwargs={"stop": stop},
+        kwargs={"stop": stop} | ({"value": value} if value is not None else {}),
     )
     loader.start()
     time.sleep(2.0)  # steady state

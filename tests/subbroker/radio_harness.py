@@ -31,6 +31,7 @@ from subbroker_harness import (
     start_load,
     start_subbroker,
     subbroker_config,
+    wait_port,
 )
 
 RADIO = [str(Path(sys.executable)), "-m", "modd.radio.cli"]
@@ -200,13 +201,15 @@ def through_profile(
     load_s: float,
     signal: str = "uniform",
     status_s: int = 60,
+    on_zenoh: Any = None,
 ) -> tuple[Any, Any]:
     """The model's processes over serial through a radio profile (the
     PubBroker's STATUS every ``status_s``): the relay in
     this process (``modd.radio.relay``, whose AirtimeChannel the caller may have
     replaced to record) between the pseudo-terminals ``ptys`` (base fd, path,
     drone fd, path), the PubBroker, the SubBroker and ``load_s`` of load; the
-    relay's (up, down) channels once everything has stopped."""
+    relay's (up, down) channels once everything has stopped. ``on_zenoh(port)``, when
+    given, is called with the SubBroker's zenoh port once it listens."""
     from modd.radio import relay
     from modd.radio.channel import RadioSpec
 
@@ -232,6 +235,9 @@ def through_profile(
     )
     try:
         with processes(pb, sb):
+            if on_zenoh is not None:
+                wait_port(zport, 40)
+                on_zenoh(zport)
             assert sb.wait_log("running", 60), sb.log()[-3000:]
             load = start_load(tmp, model_path, ingress, load_s, signal=signal)
             load.p.wait(load_s + 30)

@@ -90,7 +90,9 @@ def _spec(sub: dict[str, Any]) -> EventSpec:
     return parse_label(of_subscriber(sub)).spec
 
 
-def _check_windows(sub: dict[str, Any], values: list[Any], samples: list[tuple[int, Any]]) -> int:
+def check_event_windows(
+    sub: dict[str, Any], values: list[Any], samples: list[tuple[int, Any]]
+) -> int:
     """Every delivered window holds what the definition implies in it (bounded
     by N, coalesced beyond), and every implied event is in a delivered window."""
     spec = _spec(sub)
@@ -159,7 +161,7 @@ def test_on_change_and_threshold_deliver_every_implied_event_within_the_plan(
     archive = read_archive(tmp_path / "archive", model)
     assert set(values) == {s["name"] for s in SUBS}, (set(values), sb.log()[-2000:])
     for sub in SUBS:
-        seen = _check_windows(sub, values[sub["name"]], archive[sub["topic"]])
+        seen = check_event_windows(sub, values[sub["name"]], archive[sub["topic"]])
         assert seen >= 5, (sub["name"], seen)
         if sub["aggregation"] == "THRESHOLD":
             _check_hysteresis(sub, values[sub["name"]])

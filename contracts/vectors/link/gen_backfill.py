@@ -8,27 +8,37 @@ import json
 from pathlib import Path
 from typing import Any
 
+from generate import event_json
 from modd.link import backfill as bf
 from modd.link import codec
 from modd.link.frames import Aggregation, Value, ValueType
+from modd_contracts.events import parse_label
 
 EPOCH = 1_763_700_000_000_000_000
 
 
 def _message(m: bf.BackfillMessage) -> dict[str, Any]:
     if isinstance(m, bf.BackfillRequest):
-        return {
-            "type": "BACKFILL_REQUEST",
-            "request_id": m.request_id,
-            "topic": m.topic,
-            "value_type": m.type.label,
-            "aggregation": m.aggregation.name,
-            "period_us": m.period_us,
-            "from_ns": m.from_ns,
-            "windows": m.windows,
-            "resume": m.resume,
-            "rate_bps": m.rate_bps,
-        } | ({} if m.percentile is None else {"percentile": m.percentile})
+        return (
+            {
+                "type": "BACKFILL_REQUEST",
+                "request_id": m.request_id,
+                "topic": m.topic,
+                "value_type": m.type.label,
+                "aggregation": m.aggregation.name,
+                "period_us": m.period_us,
+                "from_ns": m.from_ns,
+                "windows": m.windows,
+                "resume": m.resume,
+                "rate_bps": m.rate_bps,
+            }
+            | ({} if m.percentile is None else {"percentile": m.percentile})
+            | (
+                {}
+                if m.event is None
+                else {"event": event_json(m.event), "state_from_ns": m.state_from_ns}
+            )
+        )
     if isinstance(m, bf.BackfillProgress):
         return {
             "type": "BACKFILL_PROGRESS",
@@ -135,6 +145,43 @@ def vectors() -> list[dict[str, Any]]:
         ),
     )
     msg(
+        "request_on_change",
+        "request 8: ON_CHANGE(0.5, 4) of a float32 topic, 1 s windows, 30 windows from "
+        "10 s after the config's epoch, resuming at 3: the event parameters as CONFIG "
+        "writes them, then state_from_ns (u64le, the epoch) follow the period",
+        bf.BackfillRequest(
+            8,
+            "usv.accelerometer.accel_x",
+            ValueType.FLOAT32,
+            Aggregation.ON_CHANGE,
+            1_000_000,
+            EPOCH + 10_000_000_000,
+            30,
+            3,
+            0,
+            event=parse_label("ON_CHANGE(0.5, 4)"),
+            state_from_ns=EPOCH,
+        ),
+    )
+    msg(
+        "request_threshold",
+        "request 9: THRESHOLD(DOWN 5, 0.5) (N derived: 0) of an int topic, 0.5 s windows, "
+        "from the epoch itself, at 600 B/s",
+        bf.BackfillRequest(
+            9,
+            "d.s.i",
+            ValueType.INT,
+            Aggregation.THRESHOLD,
+            500_000,
+            EPOCH,
+            120,
+            0,
+            600,
+            event=parse_label("THRESHOLD(DOWN 5, 0.5)"),
+            state_from_ns=EPOCH,
+        ),
+    )
+    msg(
         "progress",
         "request 300: windows up to 199 sent of 600, 4711 bytes, pacing at 3000 B/s",
         bf.BackfillProgress(300, 200, 600, 4711, 3000),
@@ -196,6 +243,22 @@ def invalid() -> list[dict[str, str]]:
             "name": "request_zero_period",
             "hex": fr("50 01 0161 00 00 00 0000000000000000 01 00 00"),
             "why": "period 0",
+        },
+        {
+            "name": "request_state_after_first",
+            "hex": fr(
+                "50 01 0161 00 0c 01 00 0000000000000000 00 0100000000000000 "
+                "0000000000000000 01 00 00"
+            ),
+            "why": "an ON_CHANGE request whose state starts after its first window",
+        },
+        {
+            "name": "request_event_bad_crossing",
+            "hex": fr(
+                "50 01 0161 00 0d 01 07 0000000000000000 0000000000000000 00 "
+                "0000000000000000 0000000000000000 01 00 00"
+            ),
+            "why": "THRESHOLD crossing 7",
         },
         {"name": "end_bad_status", "hex": fr("53 01 09 00 00"), "why": "end status 9"},
         {"name": "cancel_trailing", "hex": fr("54 01 00"), "why": "trailing byte"},

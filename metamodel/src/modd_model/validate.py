@@ -407,12 +407,6 @@ def event_parameters(doc: dict[str, Any]) -> Iterator[Diagnostic]:
                 "ON_CHANGE takes one deadband: deadband (absolute) or deadbandPercent (relative)",
                 f"/subscribers/{i}/deadbandPercent",
             )
-        if sub["aggregation"] in _EVENT_FIELDS and sub.get("backfill", "off") != "off":
-            yield Diagnostic(
-                f"{sub['aggregation']} is not backfilled (its events are live only): "
-                "backfill = off",
-                f"/subscribers/{i}/backfill",
-            )
         if sub["aggregation"] in _EVENT_FIELDS and "resolution" in sub:
             yield Diagnostic(
                 f"{sub['aggregation']} sends each event's sample exact: it takes no resolution",

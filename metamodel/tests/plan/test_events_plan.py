@@ -63,7 +63,6 @@ def test_the_language_reads_and_prints_events() -> None:
         ("ON_CHANGE(-1)", "less than the minimum of 0", "deadband"),
         ("MIN, maxEvents = 3", "MIN takes no maxEvents", "maxEvents"),
         ("ON_CHANGE(1), maxEvents = 0", "less than the minimum of 1", "maxEvents"),
-        ("ON_CHANGE(1), backfill = gaps", "is not backfilled", "backfill"),
         ("ON_CHANGE(1), resolution = 0.1", "takes no resolution", "resolution"),
     ],
 )
@@ -75,6 +74,13 @@ def test_a_bad_event_subscription_is_a_located_error(
     assert len(errors) == 1, load_text(text, "m.modd").errors
     assert f"/subscribers/0/{pointer}" in str(errors[0])
     assert str(errors[0]).startswith("m.modd:")  # located in the text
+
+
+@pytest.mark.parametrize("policy", ["gaps", "mission"])
+def test_an_event_subscription_is_backfilled_like_a_window(policy: str) -> None:
+    text = _text(f'Subscriber a("{X}", 1.0, THRESHOLD(UP 5, 0.2), backfill = {policy});')
+    loaded = load_text(text, "m.modd")
+    assert not loaded.errors, loaded.errors
 
 
 def test_a_derived_worst_case_is_bounded_like_a_median() -> None:

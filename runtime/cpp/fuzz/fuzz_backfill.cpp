@@ -13,9 +13,10 @@ using namespace modd::link;
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;
-  // First byte picks the value kind of BACKFILL_DATA; the rest is a frame stream.
-  ValueKind kind =
-      value_kind(static_cast<ValueType>(data[0] & 3), static_cast<Aggregation>((data[0] >> 2) & 7));
+  // First byte picks the value kind of BACKFILL_DATA (any aggregation, events included);
+  // the rest is a frame stream.
+  ValueKind kind = value_kind(static_cast<ValueType>(data[0] & 3),
+                              static_cast<Aggregation>((data[0] >> 2) % table::kAggregationCount));
   std::span<const uint8_t> in(data + 1, size - 1);
   size_t at = 0;
   try {

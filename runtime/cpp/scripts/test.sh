@@ -42,6 +42,14 @@ for t in "${TARGETS[@]}"; do
         "$v" > "$corpus/$(basename "$v" .json)"
     done
   fi
+  if [ "$t" = backfill ]; then
+    # Seed with the backfill vectors, each behind a kind byte: float32 MIN, ON_CHANGE, THRESHOLD.
+    python3 -c 'import json,sys; d=json.load(open(sys.argv[1]))
+for v in d["vectors"] + d["invalid"]:
+    n, w = v["name"], bytes.fromhex(v["hex"])
+    for k in (0x00, 0x30, 0x34): open(f"{sys.argv[2]}/{n}-{k:02x}", "wb").write(bytes([k]) + w)' \
+      contracts/vectors/link/backfill.json "$corpus"
+  fi
   if [ "$t" = chunk_scan ] && [ -x .venv/bin/python ]; then
     # Seed with small crashed files (the recovery tests' independent writer).
     .venv/bin/python -c 'import sys; sys.path.insert(0, "tests"); from support.mcap_oracle import crashed_mcap

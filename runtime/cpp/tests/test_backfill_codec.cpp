@@ -51,6 +51,15 @@ bf::Message from_json(const json& m) {
     q.resume = m["resume"];
     q.rate_bps = m["rate_bps"];
     q.percentile = m.value("percentile", 0.0);
+    if (m.contains("event")) {
+      const json& e = m["event"];
+      q.event.code = e["code"];
+      q.event.deadband = e["deadband"];
+      q.event.level = e["level"];
+      q.event.hysteresis = e["hysteresis"];
+      q.event.max_events = e["max_events"];
+      q.state_from_ns = m["state_from_ns"];
+    }
     return q;
   }
   if (t == "BACKFILL_PROGRESS")

@@ -10,6 +10,7 @@ window it claims to be.
 
 from __future__ import annotations
 
+import dataclasses
 import random
 from collections import deque
 from collections.abc import Callable
@@ -21,6 +22,7 @@ from modd.link.codec import split_frame
 from modd.link.frames import Value
 from modd.subbroker.backfill_queue import BackfillQueue, Job, Run, Timing
 from modd.subbroker.backfill_view import MAX_VIEW, time_left
+from modd_contracts.events import parse_label
 from modd_contracts.schema import validate
 from modd_plan.streams import StreamKey
 
@@ -448,3 +450,29 @@ def test_the_view_is_bounded_and_says_each_jobs_state() -> None:
     progress = b.q.progress(on, b.now + 2)
     assert progress["seconds_left"] is None and len(progress["queue"]["jobs"]) == MAX_VIEW
     assert validate("backfill", progress) == []  # the contract (backfill.schema.json)
+
+
+def test_an_event_runs_request_carries_its_definition_and_its_configs_epoch() -> None:
+    """ON_CHANGE and THRESHOLD runs: the request names the label's parameters and the
+    epoch the PubBroker replays its archive from; asked again (the link back, a resume
+    point further on), it keeps both."""
+    q = BackfillQueue(Timing())
+    epoch = T0 - 40 * Q
+    for label in ("ON_CHANGE(0.5, 4)", "THRESHOLD(DOWN 5, 0.2)"):
+        s = StreamKey("usv.a.x", label, Fraction(1, 4))
+        run = Run("sub_1", s, s, "float32", "m", 1, T0, 16, epoch)
+        job = Job(len(q.jobs) + 1, "sub_1", "", deque([run]), 16, 600)
+        _, frames = q.submit(job, 0.0)
+        raw = split_frame(frames[0])
+        assert raw is not None
+        req = bf.decode(raw)
+        assert isinstance(req, bf.BackfillRequest)
+        assert req.event == parse_label(label) and req.state_from_ns == epoch
+        assert (req.from_ns, req.windows, req.resume) == (T0, 16, 0)
+        assert q.flight is not None
+        q.flight.next = 5
+        q.link_down()
+        again = split_frame(q.link_up(10.0)[0])
+        assert again is not None
+        assert bf.decode(again) == dataclasses.replace(req, resume=5)
+        q.cancel(job, 10.0)

@@ -12,6 +12,8 @@ import pytest
 from modd.link import backfill as bf
 from modd.link.codec import FrameSplitter
 from modd.link.frames import Aggregation, ProtocolError, Value, ValueType, value_kind
+from modd_contracts.events import Crossing, DeadbandMode, EventKind, EventLabel, EventSpec
+from modd_contracts.link_wire_gen import MAX_EVENTS
 
 LINK_VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors" / "link"
 DOC = json.loads((LINK_VECTORS / "backfill.json").read_text())
@@ -31,6 +33,8 @@ def _from_json(m: dict[str, Any]) -> bf.BackfillMessage:
             m["resume"],
             m["rate_bps"],
             m.get("percentile"),
+            _event(m["aggregation"], m.get("event")),
+            m.get("state_from_ns"),
         )
     if t == "BACKFILL_PROGRESS":
         return bf.BackfillProgress(
@@ -40,6 +44,26 @@ def _from_json(m: dict[str, Any]) -> bf.BackfillMessage:
         return bf.BackfillEnd(m["request_id"], bf.EndStatus[m["status"]], m["next"], m["message"])
     assert t == "BACKFILL_CANCEL"
     return bf.BackfillCancel(m["request_id"])
+
+
+def _event(aggregation: str, e: dict[str, Any] | None) -> EventLabel | None:
+    """An event request's parameters as the vector spells them (code: mode or crossing)."""
+    if e is None:
+        return None
+    n = e["max_events"] or MAX_EVENTS
+    if aggregation == "ON_CHANGE":
+        spec = EventSpec(
+            EventKind.ON_CHANGE, n, deadband=e["deadband"], mode=DeadbandMode(e["code"])
+        )
+    else:
+        spec = EventSpec(
+            EventKind.THRESHOLD,
+            n,
+            level=e["level"],
+            hysteresis=e["hysteresis"],
+            crossing=Crossing(e["code"]),
+        )
+    return EventLabel(spec, e["max_events"] > 0)
 
 
 @pytest.mark.parametrize("v", DOC["vectors"], ids=lambda v: v["name"])

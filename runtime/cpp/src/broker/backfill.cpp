@@ -14,12 +14,23 @@ namespace {
 constexpr int64_t kPollNs = 20'000'000;  // archive not complete yet, live guard: look again
 constexpr int64_t kProgressNs = 1'000'000'000;
 constexpr int64_t kGuardNs = 100'000'000;
+bool is_float(const link::ValueKind& k) {
+  return k.scalar == link::ScalarKind::F32 || k.scalar == link::ScalarKind::F64;
+}
+// One archived sample into an event stream's detector (an int topic's as a double).
+void feed(EventDetector& d, const link::ValueKind& k, const archive::ArchivedSample& s) {
+  d.add(s.stamp_ns, is_float(k) ? s.number : static_cast<double>(s.integer));
+}
 }  // namespace
 
 BackfillSender::Job::Job(const bf::Request& r, const std::string& dir, const std::string& prefix)
     : req(r),
       kind(link::value_kind(r.type, r.aggregation)),
       acc(r.type, r.aggregation, r.percentile),
+      events(link::is_event(r.aggregation)
+                 ? std::make_unique<EventDetector>(event_spec(r.aggregation, r.event))
+                 : nullptr),
+      replayed_to(static_cast<int64_t>(r.state_from_ns)),
       reader(dir, prefix, r.topic, r.type),
       next(r.resume),
       progress_next(r.resume) {}
@@ -93,9 +104,48 @@ void BackfillSender::on_cancel(uint64_t id, std::vector<uint8_t>& out) {
   bf::encode(out, bf::End{id, bf::EndStatus::Cancelled, next, "cancelled by the base station"});
 }
 
+// The detector's state at the first window to send: the archive's samples from the
+// request's state_from_ns on, fed in (their events discarded), kReplayStep at a time.
+bool BackfillSender::replay(Job& j, const Env& env) {
+  int64_t until = j.req.window_start_ns(j.next + j.batch.size());
+  if (!j.events || j.replayed_to >= until) return true;
+  if (until > env.archived_until) return false;
+  for (size_t n = 0; n < replay_step_; ++n) {
+    auto smp = j.reader.peek(j.replayed_to);
+    if (!smp || smp->stamp_ns >= until) {
+      j.replayed_to = until;
+      j.events->take();
+      return true;
+    }
+    feed(*j.events, j.kind, *smp);
+    j.replayed_to = smp->stamp_ns;
+    j.reader.pop();
+  }
+  return false;
+}
+
+link::Value BackfillSender::take_window(Job& j, int64_t s, int64_t e) {
+  for (;;) {
+    auto smp = j.reader.peek(s);
+    if (!smp || smp->stamp_ns >= e) break;
+    if (j.events)
+      feed(*j.events, j.kind, *smp);
+    else
+      j.acc.add(smp->number, smp->integer);
+    j.reader.pop();
+  }
+  if (!j.events) return j.acc.take();
+  j.replayed_to = e;
+  return event_value(j.events->take(), s, is_float(j.kind));
+}
+
 void BackfillSender::fill(Job& j, const Env& env) {
   size_t budget = frame_budget();
   j.waiting = false;
+  if (!replay(j, env)) {
+    j.waiting = true;  // more to replay (next pump) or not archived yet
+    return;
+  }
   std::vector<uint8_t> tmp;
   while (j.batch_bytes < budget && j.batch.size() < bf::kMaxBatch) {
     uint64_t k = j.next + j.batch.size();
@@ -106,13 +156,7 @@ void BackfillSender::fill(Job& j, const Env& env) {
       j.waiting = true;  // samples of this window may still be on their way to the archive
       break;
     }
-    for (;;) {
-      auto smp = j.reader.peek(s);
-      if (!smp || smp->stamp_ns >= e) break;
-      j.acc.add(smp->number, smp->integer);
-      j.reader.pop();
-    }
-    link::Value v = j.acc.take();
+    link::Value v = take_window(j, s, e);
     tmp.clear();
     if (v.present) link::encode_value(tmp, j.kind, v);
     j.batch_bytes += tmp.size() + (j.batch.size() % 8 == 0 ? 1 : 0);

@@ -61,4 +61,33 @@ EventWindow EventDetector::take() {
   return out;
 }
 
+EventSpec event_spec(link::Aggregation a, const link::EventParams& p) {
+  EventSpec spec;
+  bool on_change = a == link::Aggregation::OnChange;
+  spec.kind = on_change ? ev::EventKind::OnChange : ev::EventKind::Threshold;
+  spec.max_events = p.max_events ? p.max_events : ev::kMaxEvents;
+  spec.deadband = p.deadband;
+  spec.level = p.level;
+  spec.hysteresis = p.hysteresis;
+  if (on_change)
+    spec.mode = static_cast<ev::DeadbandMode>(p.code);
+  else
+    spec.crossing = static_cast<ev::Crossing>(p.code);
+  return spec;
+}
+
+link::Value event_value(const EventWindow& w, int64_t start_ns, bool is_float) {
+  link::Value v;
+  v.present = !w.events.empty();
+  for (const Event& e : w.events) {
+    v.times_us.push_back(e.t_ns > start_ns ? static_cast<uint64_t>(e.t_ns - start_ns) / 1000 : 0);
+    if (is_float)
+      v.numbers.push_back(e.value);
+    else
+      v.integers.push_back(static_cast<int64_t>(e.value));
+  }
+  v.coalesced = w.coalesced;
+  return v;
+}
+
 }  // namespace modd::broker

@@ -5,24 +5,6 @@
 
 namespace modd::broker {
 
-namespace {
-std::unique_ptr<EventDetector> make_detector(const link::StreamSpec& s) {
-  namespace ev = link::events;
-  EventSpec spec;
-  bool on_change = s.aggregation == link::Aggregation::OnChange;
-  spec.kind = on_change ? ev::EventKind::OnChange : ev::EventKind::Threshold;
-  spec.max_events = s.event.max_events ? s.event.max_events : ev::kMaxEvents;
-  spec.deadband = s.event.deadband;
-  spec.level = s.event.level;
-  spec.hysteresis = s.event.hysteresis;
-  if (on_change)
-    spec.mode = static_cast<ev::DeadbandMode>(s.event.code);
-  else
-    spec.crossing = static_cast<ev::Crossing>(s.event.code);
-  return std::make_unique<EventDetector>(spec);
-}
-}  // namespace
-
 std::unique_ptr<Executor::Active> Executor::build(const link::Config& cfg,
                                                   const std::vector<uint32_t>& globals,
                                                   int64_t epoch) {
@@ -36,7 +18,9 @@ std::unique_ptr<Executor::Active> Executor::build(const link::Config& cfg,
       throw Error(ErrorCode::BadConfig, "stream " + std::to_string(id) + " names a missing topic");
     link::ValueType type = cfg.topics[s.topic].type;
     a->acc.emplace_back(type, s.aggregation, s.percentile);
-    a->events.push_back(link::is_event(s.aggregation) ? make_detector(s) : nullptr);
+    a->events.push_back(link::is_event(s.aggregation)
+                            ? std::make_unique<EventDetector>(event_spec(s.aggregation, s.event))
+                            : nullptr);
     a->periods_us.push_back(s.period_us);
     a->kinds.push_back(
         link::value_kind(type, s.aggregation, cfg.resolutions.empty() ? 0 : cfg.resolutions[id]));
@@ -82,19 +66,10 @@ void Executor::on_sample(uint32_t g, double number, int64_t integer, int64_t t_n
 // An event stream's window [date - P, date): its events, times after the window's start.
 link::Value Executor::take_events(Active& a, uint32_t id, int64_t date) {
   EventWindow w = a.events[id]->take();
-  link::Value v;
-  v.present = !w.events.empty();
   int64_t start = date - static_cast<int64_t>(a.periods_us[id]) * 1000;
   bool is_float =
       a.kinds[id].scalar == link::ScalarKind::F32 || a.kinds[id].scalar == link::ScalarKind::F64;
-  for (const Event& e : w.events) {
-    v.times_us.push_back(e.t_ns > start ? static_cast<uint64_t>(e.t_ns - start) / 1000 : 0);
-    if (is_float)
-      v.numbers.push_back(e.value);
-    else
-      v.integers.push_back(static_cast<int64_t>(e.value));
-  }
-  v.coalesced = w.coalesced;
+  link::Value v = event_value(w, start, is_float);
   counters_.events_coalesced += w.coalesced;
   return v;
 }

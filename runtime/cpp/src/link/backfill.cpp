@@ -40,6 +40,10 @@ void encode(std::vector<uint8_t>& out, const Message& m) {
           w.u8(static_cast<uint8_t>(msg.aggregation));
           w.varint(msg.period_us);
           if (msg.aggregation == Aggregation::Percentile) w.fixed<double>(msg.percentile);
+          if (is_event(msg.aggregation)) {
+            put_event_params(w, msg.aggregation, msg.event);
+            w.fixed<uint64_t>(msg.state_from_ns);
+          }
           w.fixed<uint64_t>(msg.from_ns);
           w.varint(msg.windows);
           w.varint(msg.resume);
@@ -98,15 +102,19 @@ Message decode(const RawFrame& f) {
       uint8_t a = r.u8();
       if (a >= table::kAggregationCount) r.fail("unknown aggregation " + std::to_string(a));
       q.aggregation = static_cast<Aggregation>(a);
-      if (is_event(q.aggregation))
-        r.fail("event subscriptions (ON_CHANGE, THRESHOLD) are not backfilled");
       q.period_us = r.varint();
       if (q.period_us < 1 || q.period_us > kMaxPeriodUs) r.fail("window period out of range");
       if (q.aggregation == Aggregation::Percentile) {
         q.percentile = r.fixed<double>();
         if (!(q.percentile >= 0 && q.percentile <= 100)) r.fail("percentile out of 0..100");
       }
+      if (is_event(q.aggregation)) {
+        q.event = get_event_params(r, q.aggregation, "request");
+        q.state_from_ns = r.fixed<uint64_t>();
+      }
       q.from_ns = r.fixed<uint64_t>();
+      if (is_event(q.aggregation) && q.state_from_ns > q.from_ns)
+        r.fail("the events' state starts after the first window");
       q.windows = r.varint();
       q.resume = r.varint();
       check_windows(r, q.windows, q.resume);

@@ -144,38 +144,6 @@ Value get_value(ByteReader& r, const ValueKind& k, Chain& chain, uint32_t stream
   return v;
 }
 
-// ON_CHANGE: mode u8, deadband f64le; THRESHOLD: crossing u8, level and hysteresis f64le;
-// then N (varint, 0: derived).
-void put_event_params(ByteWriter& w, const StreamSpec& s) {
-  w.u8(s.event.code);
-  if (s.aggregation == Aggregation::OnChange) {
-    w.fixed<double>(s.event.deadband);
-  } else {
-    w.fixed<double>(s.event.level);
-    w.fixed<double>(s.event.hysteresis);
-  }
-  w.varint(s.event.max_events);
-}
-
-void get_event_params(ByteReader& r, StreamSpec& s, size_t i) {
-  EventParams& e = s.event;
-  e.code = r.u8();
-  bool on_change = s.aggregation == Aggregation::OnChange;
-  if (on_change) {
-    e.deadband = r.fixed<double>();
-  } else {
-    e.level = r.fixed<double>();
-    e.hysteresis = r.fixed<double>();
-  }
-  uint64_t n = r.varint();
-  bool code_ok = on_change ? e.code < events::kDeadbandModeCount : e.code >= 1 && e.code <= 3;
-  bool numbers_ok = std::isfinite(e.deadband) && e.deadband >= 0 && std::isfinite(e.level) &&
-                    std::isfinite(e.hysteresis) && e.hysteresis >= 0;
-  if (!code_ok || !numbers_ok || n > events::kMaxEvents)
-    r.fail("stream " + std::to_string(i) + ": event parameters out of range");
-  e.max_events = static_cast<uint32_t>(n);
-}
-
 // The optional resolution field: count, then per declared stream its index gap and f64le step.
 void put_resolutions(ByteWriter& w, const Config& c) {
   if (c.resolutions.empty()) return;
@@ -217,6 +185,39 @@ void get_resolutions(ByteReader& r, Config& c) {
 }
 
 }  // namespace
+
+// ON_CHANGE: mode u8, deadband f64le; THRESHOLD: crossing u8, level and hysteresis f64le;
+// then N (varint, 0: derived).
+void put_event_params(ByteWriter& w, Aggregation a, const EventParams& e) {
+  w.u8(e.code);
+  if (a == Aggregation::OnChange) {
+    w.fixed<double>(e.deadband);
+  } else {
+    w.fixed<double>(e.level);
+    w.fixed<double>(e.hysteresis);
+  }
+  w.varint(e.max_events);
+}
+
+EventParams get_event_params(ByteReader& r, Aggregation a, const std::string& what) {
+  EventParams e;
+  e.code = r.u8();
+  bool on_change = a == Aggregation::OnChange;
+  if (on_change) {
+    e.deadband = r.fixed<double>();
+  } else {
+    e.level = r.fixed<double>();
+    e.hysteresis = r.fixed<double>();
+  }
+  uint64_t n = r.varint();
+  bool code_ok = on_change ? e.code < events::kDeadbandModeCount : e.code >= 1 && e.code <= 3;
+  bool numbers_ok = std::isfinite(e.deadband) && e.deadband >= 0 && std::isfinite(e.level) &&
+                    std::isfinite(e.hysteresis) && e.hysteresis >= 0;
+  if (!code_ok || !numbers_ok || n > events::kMaxEvents)
+    r.fail(what + ": event parameters out of range");
+  e.max_events = static_cast<uint32_t>(n);
+  return e;
+}
 
 void encode_value(std::vector<uint8_t>& out, const ValueKind& k, const Value& v) {
   ByteWriter w(out);
@@ -304,7 +305,7 @@ void encode(std::vector<uint8_t>& out, const Message& m) {
             w.u8(static_cast<uint8_t>(s.aggregation));
             w.varint(s.period_us);
             if (s.aggregation == Aggregation::Percentile) w.fixed<double>(s.percentile);
-            if (is_event(s.aggregation)) put_event_params(w, s);
+            if (is_event(s.aggregation)) put_event_params(w, s.aggregation, s.event);
           }
           if (msg.accepted_delay_ms) w.varint(*msg.accepted_delay_ms);
           put_resolutions(w, msg);
@@ -484,7 +485,8 @@ Message decode(const RawFrame& f) {
           if (!(s.percentile >= 0 && s.percentile <= 100))  // NaN too
             r.fail("stream " + std::to_string(i) + ": percentile out of 0..100");
         }
-        if (is_event(s.aggregation)) get_event_params(r, s, i);
+        if (is_event(s.aggregation))
+          s.event = get_event_params(r, s.aggregation, "stream " + std::to_string(i));
         c.streams.push_back(s);
       }
       if (r.remaining() > 0) {

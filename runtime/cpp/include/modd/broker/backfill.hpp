@@ -5,6 +5,10 @@
 // time, the archive horizon and when the next live slot is due, and sends what
 // pump() returns. Memory is bounded: at most kMaxJobs requests, each holding
 // one decompressed chunk, one open window and one frame's worth of windows.
+// An event stream's request (ON_CHANGE, THRESHOLD) holds one detector: its state
+// at the first window asked is rebuilt by replaying the archive from the
+// request's state_from_ns (the config's epoch), at most kReplayStep samples
+// per pump() (set_replay_step), so a long replay never holds up the live slots.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -14,6 +18,7 @@
 
 #include "modd/archive/reader.hpp"
 #include "modd/broker/accumulator.hpp"
+#include "modd/broker/events.hpp"
 #include "modd/link/backfill.hpp"
 
 namespace modd::broker {
@@ -21,6 +26,9 @@ namespace modd::broker {
 class BackfillSender {
  public:
   static constexpr size_t kMaxJobs = 8;
+  // Archive samples an event request replays per pump() (a few ms of work).
+  static constexpr size_t kReplayStep = 16384;
+  void set_replay_step(size_t n) { replay_step_ = n ? n : 1; }  // tests: a replay in steps
   // Bytes a TCP segment adds on the wire (IPv4 + TCP with timestamps): what the pace
   // counts per frame unless the link says otherwise (set_frame_overhead).
   static constexpr size_t kSegmentOverhead = 52;
@@ -63,6 +71,8 @@ class BackfillSender {
     link::backfill::Request req;
     link::ValueKind kind;
     Accumulator acc;
+    std::unique_ptr<EventDetector> events;  // ON_CHANGE, THRESHOLD
+    int64_t replayed_to = 0;                // the detector's state holds the samples before
     archive::TopicReader reader;
     uint64_t next = 0;  // first window not sent
     std::vector<link::Value> batch;
@@ -76,6 +86,8 @@ class BackfillSender {
   uint64_t rate() const;
   size_t frame_budget() const;  // the pace's, capped by window_bytes_cap()
   void fill(Job& j, const Env& env);
+  bool replay(Job& j, const Env& env);  // false: the detector is not at window `next` yet
+  link::Value take_window(Job& j, int64_t start, int64_t end);
   void end(Job& j, link::backfill::EndStatus st, const std::string& why,
            std::vector<std::vector<uint8_t>>& frames);
 
@@ -88,6 +100,7 @@ class BackfillSender {
   uint64_t bytes_sent_ = 0;
   size_t max_datagram_ = 0;
   size_t frame_overhead_ = kSegmentOverhead;
+  size_t replay_step_ = kReplayStep;
 };
 
 }  // namespace modd::broker

@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include "modd/link/messages.hpp"
 #include "modd/link/wire.gen.hpp"
 
 namespace modd::broker {
@@ -53,5 +54,12 @@ class EventDetector {
   EventWindow window_;
   uint64_t coalesced_total_ = 0;
 };
+
+// The detector's definition of an event stream as CONFIG or BACKFILL_REQUEST carries it
+// (N = 0, derived: kMaxEvents).
+EventSpec event_spec(link::Aggregation a, const link::EventParams& p);
+// A window [start_ns, start_ns + P)'s events as the link carries them: each time in µs
+// after the window's start, the values as doubles (float topics) or integers.
+link::Value event_value(const EventWindow& w, int64_t start_ns, bool is_float);
 
 }  // namespace modd::broker

@@ -24,6 +24,12 @@ struct Request {
   Aggregation aggregation = Aggregation::Min;
   uint64_t period_us = 0;
   double percentile = 0;  // PERCENTILE's p (f64le after the period); else unused
+  // ON_CHANGE, THRESHOLD: the parameters (as CONFIG writes them) and the date the
+  // detector's state starts from (the config's epoch, u64le), after the period; the
+  // PubBroker replays the archive from there to the first window asked (docs/protocol.md,
+  // "Backfill of events"). Else unused.
+  EventParams event;
+  uint64_t state_from_ns = 0;
   uint64_t from_ns = 0;
   uint64_t windows = 0;
   uint64_t resume = 0;

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "modd/link/messages.hpp"
@@ -54,6 +55,12 @@ void encode_slot_values(std::vector<uint8_t>& out, std::span<const Value> values
                         std::span<const ValueKind> kinds, std::span<const uint32_t> streams,
                         Chain& chain);
 Value decode_slot_value(ByteReader& r, const ValueKind& k, Chain& chain, uint32_t stream);
+
+// An event stream's parameters after its period (CONFIG, BACKFILL_REQUEST): ON_CHANGE's
+// mode u8 and deadband f64le, THRESHOLD's crossing u8, level and hysteresis f64le, then N
+// (varint, 0: derived). The decoder checks them; `what` locates its error.
+void put_event_params(ByteWriter& w, Aggregation a, const EventParams& e);
+EventParams get_event_params(ByteReader& r, Aggregation a, const std::string& what);
 
 // Instruments' health as STATUS and the ingress's HEALTH carry it: `count:varint` then
 // `count` x { `name:string` `n:varint` `n` x `field:varint` } (bounds: kMaxHealth*).

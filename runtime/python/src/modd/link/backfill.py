@@ -23,6 +23,7 @@ import struct
 from dataclasses import dataclass, field
 
 from modd_contracts.aggregations_gen import AGGREGATIONS
+from modd_contracts.events import EventLabel
 
 # The backfill frames' codes and limits, generated from modd_contracts/wire.json.
 from modd_contracts.link_wire_gen import MAX_BATCH as MAX_BATCH
@@ -37,7 +38,9 @@ from modd.link.codec import (
     _frame,
     _get_value,
     _put_value,
+    event_field,
     percentile_field,
+    read_event,
     read_percentile,
     string,
     varint,
@@ -68,6 +71,12 @@ class BackfillRequest:
     rate_bps: int = 0  # 0: the PubBroker's default pace
     #: PERCENTILE's p (0..100), f64le after the period; None for the others.
     percentile: float | None = None
+    #: ON_CHANGE's and THRESHOLD's parameters (as CONFIG writes them) after the period,
+    #: then ``state_from_ns`` (u64le): the date the detector's state starts from, the
+    #: config's epoch; the PubBroker replays its archive from there to the first window
+    #: asked (docs/protocol.md, "Backfill of events"). None for the others.
+    event: EventLabel | None = None
+    state_from_ns: int | None = None
 
     def window_start_ns(self, k: int) -> int:
         return self.from_ns + k * self.period_us * 1000
@@ -119,6 +128,7 @@ def encode(m: BackfillMessage) -> bytes:
     if isinstance(m, BackfillRequest):
         b = varint(m.request_id) + string(m.topic) + bytes([m.type, m.aggregation])
         b += varint(m.period_us) + percentile_field(m.aggregation, m.percentile)
+        b += _state_field(m)
         b += struct.pack("<Q", m.from_ns)
         b += varint(m.windows) + varint(m.resume) + varint(m.rate_bps)
         return _frame(BackfillType.REQUEST, b)
@@ -149,6 +159,14 @@ def encode_data(d: BackfillData, kind: ValueKind) -> bytes:
     return _frame(BackfillType.DATA, bytes(b))
 
 
+def _state_field(m: BackfillRequest) -> bytes:
+    """An event request's parameters and the start of its detector's state."""
+    b = event_field(m.aggregation, m.event)
+    if (m.event is None) != (m.state_from_ns is None):
+        raise ValueError("an event request has its parameters and state_from_ns, no other one")
+    return b if m.state_from_ns is None else b + struct.pack("<Q", m.state_from_ns)
+
+
 def _check_windows(r: Reader, windows: int, resume: int) -> None:
     if not 1 <= windows <= MAX_WINDOWS:
         raise r.fail(f"window count {windows} out of 1..{MAX_WINDOWS}")
@@ -173,7 +191,11 @@ def decode(f: RawFrame) -> BackfillMessage:
         if not 1 <= period <= MAX_PERIOD_US:
             raise r.fail("window period out of range")
         pct = read_percentile(r, "request") if agg == Aggregation.PERCENTILE else None
+        event = read_event(r, Aggregation(agg), "request")
+        state_from = int(r.fixed("<Q")) if event is not None else None
         from_ns = int(r.fixed("<Q"))
+        if state_from is not None and state_from > from_ns:
+            raise r.fail("the events' state starts after the first window")
         windows = r.varint()
         resume = r.varint()
         _check_windows(r, windows, resume)
@@ -188,6 +210,8 @@ def decode(f: RawFrame) -> BackfillMessage:
             resume,
             r.varint(),
             pct,
+            event,
+            state_from,
         )
     elif f.type == BackfillType.PROGRESS:
         rid, nxt, windows = r.varint(), r.varint(), r.varint()

@@ -22,8 +22,9 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, cast
 
+from modd_contracts.labels import is_event
 from modd_plan.streams import StreamKey
-from modd_plan.windows import split_window, window_of
+from modd_plan.windows import EventsWindow, split_window, window_of
 
 from modd.link import backfill as bf
 from modd.link.codec import RawFrame
@@ -348,7 +349,11 @@ class BackfillManager:
                 job.duplicates += 1
                 continue
             window = window_of(value, run.stream.aggregation, run.value_type)
+            self.record.add_filled(run.subscriber, run.stream, start, start + q)
+            if window is None and is_event(run.stream.aggregation):
+                continue  # no event in the window: nothing to deliver (as live)
             val, count = split_window(run.stream.aggregation, window)
+            ev = window if isinstance(window, EventsWindow) else None
             out = DeliveredValue(
                 run.subscriber,
                 run.stream.topic,
@@ -364,20 +369,23 @@ class BackfillManager:
                 now,
                 True,
                 *self._identity(run, start, q),
+                None if ev is None else ev.event_ns(start),
+                None if ev is None else ev.coalesced,
             )
             payload = out.to_json()
             if self._journal is not None:  # written down before it is put
                 self._journal.append([["f", run.subscriber, run.stream.key, start, start + q]])
             for sink in sinks:
                 sink.put(run.subscriber, payload)
-            self.record.add_filled(run.subscriber, run.stream, start, start + q)
             job.delivered += 1
         self._dirty = True
 
-    def _identity(self, run: Run, start_ns: int, period_ns: int) -> tuple[Any, ...]:
-        """(drone, epoch_ns, window) of a backfilled window, () when not known."""
+    def _identity(
+        self, run: Run, start_ns: int, period_ns: int
+    ) -> tuple[str | None, int | None, int | None]:
+        """(drone, epoch_ns, window) of a backfilled window, Nones when not known."""
         if self.drone is None or run.epoch_ns is None:
-            return ()
+            return (None, None, None)
         return (self.drone, run.epoch_ns, window_index(start_ns, run.epoch_ns, period_ns))
 
     def _ended(self, job: Job) -> None:

@@ -21,8 +21,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from modd_contracts import labels
-
 from .backfill import BackfillManager, Job
 from .request import MAX_SMALL_BYTES, read_request
 
@@ -102,12 +100,6 @@ def _start(
         return {
             "status": "ERROR",
             "reason": f"no subscriber {subscriber!r} in the plans of this mission",
-        }
-    stream = running.plan.subscriptions.get(subscriber)
-    if stream is not None and labels.is_event(stream.aggregation):
-        return {
-            "status": "ERROR",
-            "reason": f"{stream.aggregation} is live only: event subscriptions are not backfilled",
         }
     until = covered_until(running)
     began = manager.mission_start(running)

@@ -21,11 +21,13 @@ for ("queued behind 3 jobs", "waiting for the link", "paced at 600 B/s").
 
 from __future__ import annotations
 
+import dataclasses
 from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
 from modd_contracts import labels
+from modd_contracts.events import parse_label
 from modd_plan.streams import StreamKey
 
 from modd.link import backfill as bf
@@ -391,20 +393,7 @@ class BackfillQueue:
             job = self._pick()
             if job is None:
                 return []
-            run = job.runs[0]
-            name, p = labels.parse(run.stream.aggregation)
-            req = bf.BackfillRequest(
-                self.next_request_id,
-                run.stream.topic,
-                ValueType.parse(run.value_type),
-                Aggregation[name],
-                period_us(run.stream),
-                run.from_ns,
-                run.windows,
-                0,
-                job.rate_bps,
-                p,
-            )
+            req = _request(self.next_request_id, job.runs[0], job.rate_bps)
             self.next_request_id += 1
             self.flight = InFlight(job, req)
         if self.flight.sent_at is None and self.flight.retry_at is None:
@@ -431,19 +420,7 @@ class BackfillQueue:
                 f"of {f.request.windows}"
             )
             f.why = ""
-        q = f.request
-        f.request = bf.BackfillRequest(
-            q.request_id,
-            q.topic,
-            q.type,
-            q.aggregation,
-            q.period_us,
-            q.from_ns,
-            q.windows,
-            f.next,
-            f.job.rate_bps,
-            q.percentile,
-        )
+        f.request = dataclasses.replace(f.request, resume=f.next, rate_bps=f.job.rate_bps)
         f.sends += 1
         f.sent_at = f.heard = f.last_sent = now
         f.asked_next = f.next
@@ -490,6 +467,31 @@ class BackfillQueue:
         self._served.pop(_j(job), None)
         if all(j.owner != job.owner for j in self.jobs.values()):
             self._served.pop(_o(job), None)
+
+
+def _request(request_id: int, run: Run, rate_bps: int) -> bf.BackfillRequest:
+    """The link request of a run, from its first window. An event stream's carries its
+    parameters and its config's epoch, where the PubBroker's detector state starts."""
+    name, p = labels.parse(run.stream.aggregation)
+    event, state_from = None, None
+    if labels.is_event(run.stream.aggregation):
+        if run.epoch_ns is None:
+            raise ValueError(f"{run.stream.aggregation}: its config's epoch is not known")
+        event, state_from = parse_label(run.stream.aggregation), run.epoch_ns
+    return bf.BackfillRequest(
+        request_id,
+        run.stream.topic,
+        ValueType.parse(run.value_type),
+        Aggregation[name],
+        period_us(run.stream),
+        run.from_ns,
+        run.windows,
+        0,
+        rate_bps,
+        p,
+        event,
+        state_from,
+    )
 
 
 def _size(run: Run) -> Size:
