@@ -4,7 +4,7 @@ import { toSamples } from "../dataSources/WebSocketSource";
 import {
   MAX_ALERTS, acknowledge, activeAlerts, alertRules, alertTimes, applyEvents, bannerAlert, clearAlert, type Alert, type AlertRule,
 } from "./alerts";
-import type { Model } from "./model.gen";
+import type { ModdModel as Model } from "./model.gen";
 
 const rule = (crossing: AlertRule["crossing"], roles = ["scientist", "operator"]): AlertRule =>
   ({ subscriber: "hi", topic: "usv.accelerometer.accel_x", level: 0.5, hysteresis: 0.1, crossing, roles });

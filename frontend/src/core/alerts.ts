@@ -24,7 +24,7 @@
  *   bannerAlert(alerts, rules, "scientist") // the new alert, if rules[0] names the scientist
  */
 import type { Sample } from "../dataSources/types";
-import type { Model } from "./model.gen";
+import type { ModdModel as Model } from "./model.gen";
 import type { ViewRole } from "./roles";
 
 export type Direction = "up" | "down";
