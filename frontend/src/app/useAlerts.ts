@@ -11,9 +11,10 @@
  */
 import { useEffect, useMemo, useSyncExternalStore } from "react";
 import {
-  acknowledge as ack, alertRules, applyEvents, clearAlert, type Alert, type AlertRule,
+  acknowledge as ack, acknowledgeAll as ackAll, alertRules, applyEvents, clearAlert, type Alert, type AlertRule,
 } from "../core/alerts";
 import type { DataSource } from "../dataSources/types";
+import type { ViewRole } from "../core/roles";
 import { useModel } from "../editor/useEditor";
 import { useDroneStream } from "./useDroneStream";
 
@@ -51,6 +52,8 @@ export interface Alerts {
   alerts: readonly Alert[];
   rules: AlertRule[];
   acknowledge(id: string): void;
+  /** Acknowledges every alert a view's banner holds. */
+  acknowledgeAll(view: ViewRole): void;
   clear(id: string): void;
   /** Called for each alert raised from now on. */
   onRaised(f: (a: Alert) => void): () => void;
@@ -66,6 +69,7 @@ export function useAlerts(): Alerts {
   return {
     alerts, rules,
     acknowledge: (id) => store.set(ack(store.alerts, id)),
+    acknowledgeAll: (view) => store.set(ackAll(store.alerts, rules, view)),
     clear: (id) => store.set(clearAlert(store.alerts, id)),
     onRaised: (f) => { store.onRaised.add(f); return () => { store.onRaised.delete(f); }; },
   };

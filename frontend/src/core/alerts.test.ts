@@ -2,7 +2,7 @@ import { describe, expect, it } from "vitest";
 import type { Sample } from "../dataSources/types";
 import { toSamples } from "../dataSources/WebSocketSource";
 import {
-  MAX_ALERTS, acknowledge, activeAlerts, alertRules, alertTimes, applyEvents, bannerAlert, clearAlert, type Alert, type AlertRule,
+  MAX_ALERTS, acknowledge, acknowledgeAll, activeAlerts, alertRules, alertTimes, applyEvents, bannerAlert, clearAlert, type Alert, type AlertRule,
 } from "./alerts";
 import type { ModdModel as Model } from "./model.gen";
 
@@ -82,10 +82,20 @@ describe("alerts", () => {
     alerts = acknowledge(alerts, "hi@5");
     expect(bannerAlert(alerts, rules, "scientist")).toBeNull();
     expect(activeAlerts(alerts, rules, "operator")).toHaveLength(1);
-    alerts = clearAlert(alerts, "hi@5");
+    alerts = applyEvents(alerts, rules[0], [{ t: 6, value: 0.3, event: true }, { t: 7, value: 0.8, event: true }], 0);
+    expect(alerts.map((a) => [a.id, a.active, a.cleared])).toEqual([["hi@5", false, "signal"], ["hi@7", true, undefined]]);
+    // back to normal but not yet seen: still in the banner until acknowledged
+    alerts = applyEvents(alerts, rules[0], [{ t: 8, value: 0.3, event: true }], 0);
+    expect(bannerAlert(alerts, rules, "scientist")?.id).toBe("hi@7");
     expect(activeAlerts(alerts, rules, "operator")).toEqual([]);
-    expect(alerts[0].cleared).toBe("user");
-    expect(alertTimes(alerts, "hi")).toEqual([5]);
+    alerts = acknowledgeAll(alerts, rules, "scientist");
+    expect(bannerAlert(alerts, rules, "scientist")).toBeNull();
+    alerts = applyEvents(alerts, rules[0], [{ t: 9, value: 0.7, event: true }], 0);
+    alerts = clearAlert(alerts, "hi@9");
+    expect(activeAlerts(alerts, rules, "operator")).toEqual([]);
+    expect(alerts.at(-1)?.cleared).toBe("user");
+    expect(bannerAlert(alerts, rules, "scientist")).toBeNull();
+    expect(alertTimes(alerts, "hi")).toEqual([5, 7, 9]);
   });
 
   it("keeps at most MAX_ALERTS, the oldest inactive first", () => {

@@ -13,8 +13,10 @@
  * - A crossing the other way clears the subscription's active alerts ("signal
  *   back"): the hysteresis holds, since the drone only reports it past the band.
  *   With BOTH that crossing raises its own alert as it clears the previous one.
- * - A user may acknowledge an alert (it stays active and listed, its banner and
- *   sound stop) or clear it (no longer active). Both are this browser's.
+ * - The banner shows a view's alerts until acknowledged, those the signal has
+ *   already cleared too ("back to normal", as alarm systems do: a short crossing
+ *   is not missed). Acknowledged, an alert stays active and listed; a user may
+ *   also clear it (no longer active). Both are this browser's.
  *
  * Memory is bounded: at most MAX_ALERTS are kept, the oldest inactive first.
  *
@@ -120,10 +122,21 @@ export function activeAlerts(alerts: readonly Alert[], rules: readonly AlertRule
   return alerts.filter((a) => a.active && shown.has(a.subscriber)).sort((a, b) => b.t - a.t);
 }
 
-/** The alert a view's banner shows: its newest active one not yet acknowledged, if any. */
-export function bannerAlert(alerts: readonly Alert[], rules: readonly AlertRule[], view: ViewRole): Alert | null {
+/** What a view's banner holds: its alerts not yet acknowledged (active, or back to normal unseen), newest first. */
+export function unacknowledged(alerts: readonly Alert[], rules: readonly AlertRule[], view: ViewRole): Alert[] {
   const mine = new Set(rules.filter((r) => shownTo(r, view)).map((r) => r.subscriber));
-  return alerts.filter((a) => a.active && !a.acknowledged && mine.has(a.subscriber)).sort((a, b) => b.t - a.t)[0] ?? null;
+  return alerts.filter((a) => !a.acknowledged && a.cleared !== "user" && mine.has(a.subscriber)).sort((a, b) => b.t - a.t);
+}
+
+/** The alert a view's banner shows: its newest unacknowledged one, if any. */
+export function bannerAlert(alerts: readonly Alert[], rules: readonly AlertRule[], view: ViewRole): Alert | null {
+  return unacknowledged(alerts, rules, view)[0] ?? null;
+}
+
+/** Acknowledges every alert a view's banner holds. */
+export function acknowledgeAll(alerts: readonly Alert[], rules: readonly AlertRule[], view: ViewRole): Alert[] {
+  const ids = new Set(unacknowledged(alerts, rules, view).map((a) => a.id));
+  return alerts.map((a) => (ids.has(a.id) ? { ...a, acknowledged: true } : a));
 }
 
 /** Event times of a subscriber's alerts (the chart's marks), seconds. */
