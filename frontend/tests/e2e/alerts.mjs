@@ -10,7 +10,7 @@
  *
  * MODD_E2E_ONLY=alerts runs these steps alone (after logging in).
  */
-import { expectText, expectVisible, waitUntil } from "./journey.mjs";
+import { expectText, expectVisible, importProject, waitUntil } from "./journey.mjs";
 
 const LEVEL = 0.5;
 const HYSTERESIS = 0.1;
@@ -23,10 +23,7 @@ export function alertsJourney({ page, model, liveValues }) {
   return [
     ["alerts: the scientist adds a threshold alert in the text view (inspector shows its roles)", async () => {
       if (!liveValues) throw new Error("no simulated drone: no signal to cross a level");
-      await page.getByRole("button", { name: "MoDD", exact: true }).click().catch(() => undefined);
-      await page.getByRole("heading", { name: "MoDD projects" }).waitFor({ state: "visible", timeout: 10000 });
-      await page.locator('input[type="file"]').setInputFiles({ name: "deck-alert.json", mimeType: "application/json", buffer: Buffer.from(JSON.stringify(model)) });
-      await page.locator('.react-flow__node[data-id="drone"]').waitFor({ state: "visible", timeout: 20000 });
+      await importProject(page, "deck-alert.json", model);
       await view("Scientist");
       await panel("Text");
       await expectText(page.locator(".cm-content"), /Subscriber sub_7/);

@@ -764,8 +764,7 @@ class _Builder:
                 what = "twice" if str(word) in roles else "unknown"
                 self._error(
                     word,
-                    f"alert: role {str(word)!r} {what}; expected some of "
-                    f"{' + '.join(ALERT_ROLES)}",
+                    f"alert: role {str(word)!r} {what}; expected some of {' + '.join(ALERT_ROLES)}",
                     f"{ptr}/{k}",
                 )
             roles.append(str(word))

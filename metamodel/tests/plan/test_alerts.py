@@ -25,7 +25,9 @@ def test_an_alert_reads_prints_back_and_streams_both_crossings() -> None:
     assert hi["alert"] == ["scientist", "operator"] and hi["crossing"] == "up"
     assert "alert" not in plain
     assert load_text(print_model(loaded.model), "again.modd").model == loaded.model
-    streams = {s.stream.aggregation: list(s.subscribers) for s in make_plan(loaded.model).sent_streams}
+    streams = {
+        s.stream.aggregation: list(s.subscribers) for s in make_plan(loaded.model).sent_streams
+    }
     assert streams == {"THRESHOLD(BOTH 0.5, 0.1)": ["hi"], "THRESHOLD(UP 0.5, 0.1)": ["plain"]}
 
 
