@@ -27,6 +27,7 @@
  */
 import type { Sample } from "../dataSources/types";
 import type { ModdModel as Model } from "./model.gen";
+import { AGGREGATION } from "./contracts.gen";
 import type { ViewRole } from "./roles";
 
 export type Direction = "up" | "down";
@@ -64,7 +65,7 @@ export const MAX_ALERTS = 200;
 
 /** The model's alert subscriptions (THRESHOLD with `alert`). */
 export function alertRules(model: Model): AlertRule[] {
-  return model.subscribers.flatMap((s) => s.aggregation === "THRESHOLD" && s.alert?.length && s.level !== undefined && s.topic
+  return model.subscribers.flatMap((s) => s.aggregation === AGGREGATION.THRESHOLD && s.alert?.length && s.level !== undefined && s.topic
     ? [{ subscriber: s.name, topic: s.topic, level: s.level, hysteresis: s.hysteresis ?? 0, crossing: s.crossing ?? "both", roles: s.alert }]
     : []);
 }

@@ -10,13 +10,14 @@
  *
  * MODD_E2E_ONLY=alerts runs these steps alone (after logging in).
  */
+import { join } from "node:path";
 import { expectText, expectVisible, importProject, waitUntil } from "./journey.mjs";
 
 const LEVEL = 0.5;
 const HYSTERESIS = 0.1;
 const ALERT_LINE = `    Subscriber high_x("usv.accelerometer.accel_x", 0.5, THRESHOLD(UP ${LEVEL}, ${HYSTERESIS}), alert = scientist + operator);\n`;
 
-export function alertsJourney({ page, model, liveValues }) {
+export function alertsJourney({ page, model, liveValues, imagesDir }) {
   const view = (name) => page.getByRole("tab", { name, exact: true }).click();
   const panel = (name) => page.getByRole("tablist").last().getByRole("tab", { name, exact: true }).click();
   const banner = page.getByTestId("alert-banner");
@@ -69,6 +70,7 @@ export function alertsJourney({ page, model, liveValues }) {
       if ((await banner.getAttribute("role")) !== "alert") throw new Error("the banner is not role=alert");
       await expectText(banner, /high_x: usv\.accelerometer\.accel_x above 0\.5/);
       if (await page.getByLabel("Alert sound").first().isChecked()) throw new Error("the alert sound is on by default");
+      await page.screenshot({ path: join(imagesDir, "alert-banner.png") });
       // A few alerts (acknowledged one by one, so each next crossing shows anew).
       for (let i = 0; i < 3; i += 1) {
         await waitUntil(async () => (await page.evaluate(() => window.__alertsSeen.length)) > i, 15000, async () => "no new alert banner");
@@ -101,6 +103,7 @@ export function alertsJourney({ page, model, liveValues }) {
       const item = list.getByTestId("active-alert-high_x");
       await expectVisible(item, 15000);
       await expectText(item, /accel_x above 0\.5 \(0\.\d+ at /);
+      await page.screenshot({ path: join(imagesDir, "monitor-active-alerts.png") });
       const value = Number((await item.textContent()).match(/\((-?[\d.]+) at /)[1]);
       if (!(value > LEVEL + HYSTERESIS)) throw new Error(`the alert's sample ${value} is not above level + hysteresis`);
       // The signal swings back below 0.4 within a period (3.3 s): the alert is no longer active.

@@ -162,7 +162,7 @@ try {
     ...pairing({ page, imagesDir, bin, tmp, model: pairedModel, pubbrokerBin, station, procs }),
   ];
   // MODD_E2E_ONLY=alerts: log in, then only the alert steps (alerts.mjs, issue 45).
-  const alertSteps = () => alertsJourney({ page, model: scenario1(pubPort, subPort), liveValues });
+  const alertSteps = () => alertsJourney({ page, model: scenario1(pubPort, subPort), liveValues, imagesDir });
   const steps = only === "alerts" ? [loginStep(page, baseUrl), ...alertSteps()] : only === "credentials" ? [loginStep(page, baseUrl), ...credentialsSteps()] : only === "pairing" ? pairingSteps() : only === "metadata" ? [loginStep(page, baseUrl), ...metadataSteps()] : only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
     ...(only === "collab" || only === "instruments" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
