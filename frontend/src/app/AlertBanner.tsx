@@ -7,16 +7,14 @@
  * while it is on.
  */
 import { useEffect, useState } from "react";
+import { localTimeMs } from "../core/numberFormat";
 import { describeAlert, shownTo, unacknowledged } from "../core/alerts";
 import { useEditor } from "../editor/useEditor";
 import { beep, soundOn, useAlerts, useWatchAlerts } from "./useAlerts";
 import { SoundToggle } from "./SoundToggle";
 
 /** Clock time to the millisecond: an alert's time says when the sample crossed. */
-export const alertTime = (t: number) => {
-  const d = new Date(t * 1000);
-  return `${d.toLocaleTimeString()}.${String(d.getMilliseconds()).padStart(3, "0")}`;
-};
+export const alertTime = (t: number) => localTimeMs(t);
 
 export function AlertBanner() {
   const role = useEditor((s) => s.wb.role);

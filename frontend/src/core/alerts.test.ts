@@ -2,9 +2,10 @@ import { describe, expect, it } from "vitest";
 import type { Sample } from "../dataSources/types";
 import { toSamples } from "../dataSources/WebSocketSource";
 import {
-  MAX_ALERTS, acknowledge, acknowledgeAll, activeAlerts, alertRules, alertTimes, applyEvents, bannerAlert, clearAlert, type Alert, type AlertRule,
+  MAX_ALERTS, acknowledge, acknowledgeAll, activeAlerts, alertRules, alertTimes, applyEvents, bannerAlert, clearAlert, describeAlert, type Alert, type AlertRule,
 } from "./alerts";
 import type { ModdModel as Model } from "./model.gen";
+import { localTimeMs } from "./numberFormat";
 
 const rule = (crossing: AlertRule["crossing"], roles = ["scientist", "operator"]): AlertRule =>
   ({ subscriber: "hi", topic: "usv.accelerometer.accel_x", level: 0.5, hysteresis: 0.1, crossing, roles });
@@ -104,6 +105,12 @@ describe("alerts", () => {
     expect(alerts).toHaveLength(MAX_ALERTS);
     expect(alerts.filter((a) => a.active)).toHaveLength(1);
     expect(alerts.at(-1)?.t).toBe(events.filter((e) => e.dir === "up").at(-1)?.t);
+  });
+
+  it("says an alert in words, its value to 4 digits", () => {
+    const [a] = applyEvents([], rule("up"), [{ t: 5, value: 0.6797314882, event: true }], 0);
+    expect(describeAlert(a, rule("up"), () => "T")).toBe("hi: usv.accelerometer.accel_x above 0.5 (0.6797 at T)");
+    expect(localTimeMs(new Date(2026, 11, 5, 14, 5, 9, 250).getTime() / 1000)).toBe("14:05:09.250");
   });
 
   it("reads the alert subscriptions of a model", () => {

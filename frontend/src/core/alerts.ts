@@ -28,6 +28,7 @@
 import type { Sample } from "../dataSources/types";
 import type { ModdModel as Model } from "./model.gen";
 import { AGGREGATION } from "./contracts.gen";
+import { precise } from "./numberFormat";
 import type { ViewRole } from "./roles";
 
 export type Direction = "up" | "down";
@@ -145,8 +146,8 @@ export function alertTimes(alerts: readonly Alert[], subscriber: string): number
   return alerts.filter((a) => a.subscriber === subscriber).map((a) => a.t);
 }
 
-/** The alert in words: "high_x: accel_x above 0.5 (0.63 at 12:00:01.250)". */
+/** The alert in words: "high_x: usv.accelerometer.accel_x above 0.5 (0.6342 at 12:00:01.250)". */
 export function describeAlert(a: Alert, rule: AlertRule | undefined, time: (t: number) => string): string {
   const where = rule ? `${rule.topic} ${a.direction === "up" ? "above" : "below"} ${rule.level}` : a.direction;
-  return `${a.subscriber}: ${where} (${a.value} at ${time(a.t)})`;
+  return `${a.subscriber}: ${where} (${precise(a.value, 4)} at ${time(a.t)})`;
 }
