@@ -5,7 +5,7 @@ here). The oracle is the reference definition (modd_contracts.events) run over
 the archive's samples, read with the official ``mcap`` reader: every event it
 implies is delivered in its window (the first N - 1, then the newest, the
 rest counted as coalesced), none other; THRESHOLD's events alternate and leave
-the hysteresis band; each window's value, as the link codec writes it, is
+the hysteresis band; an alert's stream carries both crossings (its way back); each window's value, as the link codec writes it, is
 within the plan's worst case, and so are the link's bytes a second."""
 
 from __future__ import annotations
@@ -74,6 +74,16 @@ SUBS: list[dict[str, Any]] = [
         "level": 5.0,
         "hysteresis": 0.5,
         "crossing": "down",
+    },
+    {  # an alert (issue 45, item 3): its stream reports both crossings, so its way back is seen
+        "name": "alert_z",
+        "topic": Z,
+        "periodS": "0.5",
+        "aggregation": "THRESHOLD",
+        "level": 5.0,
+        "hysteresis": 0.5,
+        "crossing": "down",
+        "alert": ["scientist", "operator"],
     },
 ]
 
@@ -164,6 +174,15 @@ def test_on_change_and_threshold_deliver_every_implied_event_within_the_plan(
         if sub["aggregation"] == "THRESHOLD":
             _check_hysteresis(sub, values[sub["name"]])
     assert any(v.coalesced for v in values["th_x"])  # the flapping part went beyond N = 3
+    # the alert's windows hold both crossings, alternating (the DOWN ones are thd_z's)
+    downs = [x for v in values["thd_z"] for x in v.value]
+    alert = [x for v in sorted(values["alert_z"], key=lambda v: v.start_ns) for x in v.value]
+    alert_downs = [x for x in alert if x < 5.0]
+    n = min(len(downs), len(alert_downs))
+    assert n >= 5 and alert_downs[:n] == downs[:n], (alert_downs, downs)
+    assert any(x > 5.5 for x in alert) and all(
+        (a > 5.0) != (b > 5.0) for a, b in zip(alert, alert[1:], strict=False)
+    ), alert
     for sub in SUBS:
         period_us = int(float(sub["periodS"]) * 1_000_000)
         samples = 25 * float(sub["periodS"])  # 25 Hz
