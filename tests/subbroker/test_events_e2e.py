@@ -5,8 +5,9 @@ here). The oracle is the reference definition (modd_contracts.events) run over
 the archive's samples, read with the official ``mcap`` reader: every event it
 implies is delivered in its window (the first N - 1, then the newest, the
 rest counted as coalesced), none other; THRESHOLD's events alternate and leave
-the hysteresis band; an alert's stream carries both crossings (its way back); each window's value, as the link codec writes it, is
-within the plan's worst case, and so are the link's bytes a second."""
+the hysteresis band; an alert's stream carries both crossings (its way back);
+each window's value, as the link codec writes it, is within the plan's worst
+case, and so are the link's bytes a second."""
 
 from __future__ import annotations
 
