@@ -131,6 +131,15 @@ def _check_hysteresis(sub: dict[str, Any], values: list[Any]) -> None:
         assert all(a != b for a, b in zip(sides, sides[1:], strict=False)), sub["name"]
 
 
+def _event_values(values: list[Any]) -> list[float]:
+    """The events of a subscription's windows, in time order."""
+    out: list[float] = []
+    for v in sorted(values, key=lambda v: v.start_ns):
+        assert isinstance(v.value, list), v
+        out += [float(x) for x in v.value]
+    return out
+
+
 def _window_bytes(values: list[Any]) -> list[int]:
     """Each window's value as the link codec writes it (float32 topics)."""
     kind = value_kind(ValueType.FLOAT32, Aggregation.ON_CHANGE)
@@ -176,8 +185,8 @@ def test_on_change_and_threshold_deliver_every_implied_event_within_the_plan(
             _check_hysteresis(sub, values[sub["name"]])
     assert any(v.coalesced for v in values["th_x"])  # the flapping part went beyond N = 3
     # the alert's windows hold both crossings, alternating (the DOWN ones are thd_z's)
-    downs = [x for v in values["thd_z"] for x in v.value]
-    alert = [x for v in sorted(values["alert_z"], key=lambda v: v.start_ns) for x in v.value]
+    downs = _event_values(values["thd_z"])
+    alert = _event_values(values["alert_z"])
     alert_downs = [x for x in alert if x < 5.0]
     n = min(len(downs), len(alert_downs))
     assert n >= 5 and alert_downs[:n] == downs[:n], (alert_downs, downs)
