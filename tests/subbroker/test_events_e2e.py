@@ -5,8 +5,9 @@ here). The oracle is the reference definition (modd_contracts.events) run over
 the archive's samples, read with the official ``mcap`` reader: every event it
 implies is delivered in its window (the first N - 1, then the newest, the
 rest counted as coalesced), none other; THRESHOLD's events alternate and leave
-the hysteresis band; each window's value, as the link codec writes it, is
-within the plan's worst case, and so are the link's bytes a second."""
+the hysteresis band; an alert's stream carries both crossings (its way back);
+each window's value, as the link codec writes it, is within the plan's worst
+case, and so are the link's bytes a second."""
 
 from __future__ import annotations
 
@@ -75,6 +76,16 @@ SUBS: list[dict[str, Any]] = [
         "hysteresis": 0.5,
         "crossing": "down",
     },
+    {  # an alert (issue 45, item 3): its stream reports both crossings, so its way back is seen
+        "name": "alert_z",
+        "topic": Z,
+        "periodS": "0.5",
+        "aggregation": "THRESHOLD",
+        "level": 5.0,
+        "hysteresis": 0.5,
+        "crossing": "down",
+        "alert": ["scientist", "operator"],
+    },
 ]
 
 
@@ -122,6 +133,15 @@ def _check_hysteresis(sub: dict[str, Any], values: list[Any]) -> None:
         assert all(a != b for a, b in zip(sides, sides[1:], strict=False)), sub["name"]
 
 
+def _event_values(values: list[Any]) -> list[float]:
+    """The events of a subscription's windows, in time order."""
+    out: list[float] = []
+    for v in sorted(values, key=lambda v: v.start_ns):
+        assert isinstance(v.value, list), v
+        out += [float(x) for x in v.value]
+    return out
+
+
 def _window_bytes(values: list[Any]) -> list[int]:
     """Each window's value as the link codec writes it (float32 topics)."""
     kind = value_kind(ValueType.FLOAT32, Aggregation.ON_CHANGE)
@@ -166,6 +186,15 @@ def test_on_change_and_threshold_deliver_every_implied_event_within_the_plan(
         if sub["aggregation"] == "THRESHOLD":
             _check_hysteresis(sub, values[sub["name"]])
     assert any(v.coalesced for v in values["th_x"])  # the flapping part went beyond N = 3
+    # the alert's windows hold both crossings, alternating (the DOWN ones are thd_z's)
+    downs = _event_values(values["thd_z"])
+    alert = _event_values(values["alert_z"])
+    alert_downs = [x for x in alert if x < 5.0]
+    n = min(len(downs), len(alert_downs))
+    assert n >= 5 and alert_downs[:n] == downs[:n], (alert_downs, downs)
+    assert any(x > 5.5 for x in alert) and all(
+        (a > 5.0) != (b > 5.0) for a, b in zip(alert, alert[1:], strict=False)
+    ), alert
     for sub in SUBS:
         period_us = int(float(sub["periodS"]) * 1_000_000)
         samples = 25 * float(sub["periodS"])  # 25 Hz

@@ -32,6 +32,7 @@ import { goTo, type Route } from "./routes";
 import { sameValue } from "../core/merge";
 import { push } from "../core/history";
 import { LinkBanner } from "./LinkBanner";
+import { AlertBanner } from "./AlertBanner";
 
 function LivePlan() {
   useLivePlan();
@@ -111,6 +112,7 @@ export function Workbench({ project, user, onLogout, onProjects, route }: Props)
           <RemoteSaveNotice />
           <DraftNotice />
           <LinkBanner />
+          <AlertBanner />
           <FirstStep />
           <RunningDroneHint />
           <div className="main">

@@ -389,6 +389,8 @@ export interface Subscriber {
   crossing?: "up" | "down" | "both";
   /** ON_CHANGE or THRESHOLD: the declared worst case, at most this many events a period (window); beyond it the newest event replaces the window's last one and is counted as coalesced. Without it the worst case is every sample of the window (from the topic's publication period). */
   maxEvents?: number;
+  /** THRESHOLD only: the subscription is an alert, shown at once in the workbench (a banner with an optional sound, a mark on its chart) to these roles' views, and listed in the operator's Monitor while active. Active: from a crossing of the subscription's direction (UP: above level + hysteresis; DOWN: below level - hysteresis; BOTH: either) until the signal crosses back past the level by more than the hysteresis, or a user clears it (docs/user-guide/operator.md, "Alerts"). The drone reports an alert's crossings both ways (its stream is THRESHOLD(BOTH ...)) so that the way back is seen. */
+  alert?: ("designer" | "integrator" | "scientist" | "operator")[];
   /** The precision this subscription needs live, in the topic's unit: at least the variable's resolution (coarser still); the stream is sent at the finest resolution of the subscriptions it serves, unquantised if one of them declares none. */
   resolution?: number;
   /** What the SubBroker fills by itself from the drone's archive after a link outage: off (nothing; a backfill can still be asked for), gaps (the windows missed since the last connection) or mission (every window missed since the running config began). */

@@ -55,3 +55,12 @@ export function localTime(seconds: unknown): string {
   const d = s === null ? null : dateOf(s * 1000);
   return d === null ? DASH : d.toLocaleTimeString();
 }
+
+/** The local time of day of ``seconds`` to the millisecond, 24-hour: "14:05:09.250"; DASH for no valid time. */
+export function localTimeMs(seconds: unknown): string {
+  const s = finite(seconds);
+  const d = s === null ? null : dateOf(s * 1000);
+  if (d === null) return DASH;
+  const two = (n: number) => String(n).padStart(2, "0");
+  return `${two(d.getHours())}:${two(d.getMinutes())}:${two(d.getSeconds())}.${String(d.getMilliseconds()).padStart(3, "0")}`;
+}

@@ -10,7 +10,7 @@ const field = (kind: Parameters<typeof formFor>[1], path: string): FieldSpec =>
 describe("forms from the schema", () => {
   it("lists each kind's fields in schema order, objects flattened, arrays of objects left out", () => {
     expect(paths("subscriber")).toEqual(["name", "endpoint.host", "endpoint.port", "topic", "periodS", "aggregation", "percentile", "deadband", "deadbandPercent",
-      "level", "hysteresis", "crossing", "maxEvents", "resolution", "backfill"]);
+      "level", "hysteresis", "crossing", "maxEvents", "alert", "resolution", "backfill"]);
     expect(paths("publisher")).toEqual(["name", "endpoint.host", "endpoint.port", "periodS", "topics"]);
     expect(paths("drone")).toEqual(["name", "description", "position.latitude", "position.longitude",
       "position.altitude", "position.maxGapS"]);
@@ -31,6 +31,9 @@ describe("forms from the schema", () => {
     expect(unit.options).toEqual(expect.arrayContaining(["m s-2", "degC", "degree_north", "m/s²"]));
     expect(unit.options?.filter((o) => (KnownUnitValues as readonly string[]).includes(o))).toEqual([]);
     expect(field("subscriber", "topic").input).toBe("topic");
+    expect(field("subscriber", "alert")).toMatchObject({ input: "choices", options: ["designer", "integrator", "scientist", "operator"] });
+    expect(checkField(field("subscriber", "alert"), ["scientist", "operator"])).toBeNull();
+    expect(checkField(field("subscriber", "alert"), ["pilot"])).toMatch(/some of designer/);
     expect(field("publisher", "topics")).toMatchObject({ input: "topics", minItems: 1 });
     expect(field("subscriber", "periodS").input).toBe("decimal");
     expect(field("pubBroker", "endpoint.port")).toMatchObject({ input: "integer", minimum: 1, maximum: 65535, required: true });

@@ -37,7 +37,9 @@ export interface JsonSchema {
 }
 
 export type InputKind =
-  | "text" | "name" | "integer" | "number" | "decimal" | "enum" | "enumOrText" | "topic" | "topics";
+  | "text" | "name" | "integer" | "number" | "decimal" | "enum" | "enumOrText" | "topic" | "topics"
+  /** Some of a closed list (an array of an enum: a subscriber's alert roles), as checkboxes. */
+  | "choices";
 
 export interface FieldSpec {
   path: string[];
@@ -96,6 +98,7 @@ function inputOf(root: JsonSchema, prop: JsonSchema, refs: string[], s: JsonSche
   if (s.type === "array") {
     const items = s.items ? resolve(root, s.items) : null;
     if (items?.refs.includes("TopicName")) return { input: "topics", minItems: s.minItems };
+    if (items?.schema.enum) return { input: "choices", options: items.schema.enum, minItems: s.minItems };
     return null;
   }
   if (s.anyOf) {
@@ -201,6 +204,9 @@ export function checkField(spec: FieldSpec, value: unknown): string | null {
     if (spec.minimum !== undefined && value < spec.minimum) return `at least ${spec.minimum}`;
     if (spec.maximum !== undefined && value > spec.maximum) return `at most ${spec.maximum}`;
     return null;
+  }
+  if (spec.input === "choices" && (!Array.isArray(value) || value.some((v) => !spec.options?.includes(String(v))))) {
+    return `some of ${spec.options?.join(", ")}`;
   }
   if (spec.input === "enum" && !spec.options?.includes(String(value))) {
     return `one of ${spec.options?.join(", ")}`;

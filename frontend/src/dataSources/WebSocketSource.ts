@@ -63,6 +63,16 @@ export function toSamples(d: Partial<DeliveredValue>): Sample[] {
     if (d.backfilled === true) s.backfilled = true;
     return s;
   };
+  if (Array.isArray(d.value) && Array.isArray(d.event_ns) && d.event_ns.length === d.value.length) {
+    // An event window: each event at its own sample time (docs/subbroker.md, "Delivered values").
+    const delivered = num(d.delivered_ns);
+    const times = d.event_ns;
+    return d.value.map((v, i) => {
+      const s = one(v, Number(times[i]) / 1e9);
+      if (s) { s.event = true; if (delivered !== null) s.deliveredNs = delivered; }
+      return s;
+    }).filter((s): s is Sample => s !== null && Number.isFinite(s.t));
+  }
   if (Array.isArray(d.value)) {
     const n = d.value.length;
     const w = windowS ?? 0;

@@ -26,6 +26,10 @@ export interface Sample {
   count?: number;
   /** Recomputed from the drone's archive after the link missed it (backfill). */
   backfilled?: boolean;
+  /** An event of an ON_CHANGE or THRESHOLD window: `t` is its sample time (the value's `event_ns`). */
+  event?: boolean;
+  /** When the SubBroker delivered the window (its `delivered_ns`), ns since the epoch; for events. */
+  deliveredNs?: number;
   /** The window's QARTOD aggregate flag from the backend (1 pass, 2 not evaluated, 3 suspect, 4 fail). */
   qc?: number;
 }

@@ -427,6 +427,14 @@ export function journey({ page, baseUrl, password, imagesDir, ports, drone, live
   ];
 }
 
+/** From any page of the workbench: back to the projects, a model imported as a new project, its diagram open. */
+export async function importProject(page, fileName, model) {
+  await page.getByRole("button", { name: "MoDD", exact: true }).click().catch(() => undefined);
+  await page.getByRole("heading", { name: "MoDD projects" }).waitFor({ state: "visible", timeout: 10000 });
+  await page.locator('input[type="file"]').setInputFiles({ name: fileName, mimeType: "application/json", buffer: Buffer.from(JSON.stringify(model)) });
+  await page.locator('.react-flow__node[data-id="drone"]').waitFor({ state: "visible", timeout: 20000 });
+}
+
 export async function waitUntil(check, timeoutMs, describe) {
   const t0 = Date.now();
   while (Date.now() - t0 < timeoutMs) {

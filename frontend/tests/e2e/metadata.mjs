@@ -13,7 +13,7 @@ import { execFileSync } from "node:child_process";
 import { mkdirSync, writeFileSync } from "node:fs";
 import { dirname, join, resolve } from "node:path";
 import { fileURLToPath } from "node:url";
-import { expectText, expectVisible, waitUntil } from "./journey.mjs";
+import { expectText, expectVisible, importProject, waitUntil } from "./journey.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const python = resolve(here, "../../../.venv/bin/python");
@@ -80,10 +80,7 @@ export function metadataJourney({ page, imagesDir, model, liveValues, baseUrl, p
   return [
     ["dataset metadata: filled, a located fault, saved with the project", async () => {
       if (!liveValues) throw new Error("no simulated drone: no archive to export");
-      await page.getByRole("button", { name: "MoDD", exact: true }).click().catch(() => undefined);
-      await page.getByRole("heading", { name: "MoDD projects" }).waitFor({ state: "visible", timeout: 10000 });
-      await page.locator('input[type="file"]').setInputFiles({ name: "bay-survey.json", mimeType: "application/json", buffer: Buffer.from(JSON.stringify(model)) });
-      await page.locator('.react-flow__node[data-id="drone"]').waitFor({ state: "visible", timeout: 20000 });
+      await importProject(page, "bay-survey.json", model);
       await panel("Archives");
       await expand(true);
       const files = page.getByRole("table", { name: "Archive files" });

@@ -23,6 +23,7 @@ import { metadataJourney } from "./metadata.mjs";
 import { credentialsJourney } from "./credentials.mjs";
 import { pairing } from "./pairing.mjs";
 import { fleetJourney, startFleet } from "./fleet.mjs";
+import { alertsJourney } from "./alerts.mjs";
 
 const here = dirname(fileURLToPath(import.meta.url));
 const frontend = resolve(here, "../..");
@@ -171,7 +172,9 @@ try {
     }],
     ...pairing({ page, imagesDir, bin, tmp, model: pairedModel, pubbrokerBin, station, procs }),
   ];
-  const steps = only === "fleet" ? [loginStep(page, baseUrl), ...(fleet ? fleetJourney({ page, imagesDir, fleet }) : [])] : only === "credentials" ? [loginStep(page, baseUrl), ...credentialsSteps()] : only === "pairing" ? pairingSteps() : only === "metadata" ? [loginStep(page, baseUrl), ...metadataSteps()] : only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
+  // MODD_E2E_ONLY=alerts: log in, then only the alert steps (alerts.mjs, issue 45).
+  const alertSteps = () => alertsJourney({ page, model: scenario1(pubPort, subPort), liveValues, imagesDir });
+  const steps = only === "fleet" ? [loginStep(page, baseUrl), ...(fleet ? fleetJourney({ page, imagesDir, fleet }) : [])] : only === "alerts" ? [loginStep(page, baseUrl), ...alertSteps()] : only === "credentials" ? [loginStep(page, baseUrl), ...credentialsSteps()] : only === "pairing" ? pairingSteps() : only === "metadata" ? [loginStep(page, baseUrl), ...metadataSteps()] : only === "radio" ? [journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })[0], ...radioSteps()] : [
     ...(only === "collab" || only === "instruments" ? [] : journey({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, liveValues })),
     // Issue 20's "seeing what changed" and "plots and the map" (views.mjs), on the journey's project.
     ...(only === "collab" || only === "instruments" ? [] : views({ page, baseUrl, imagesDir, drone, liveValues, dronePid: drone ? procs[0].pid : null, ports: { pub: pubPort, sub: subPort },
@@ -180,6 +183,7 @@ try {
     ...(only === "views" || only === "instruments" ? [] : collaboration({ page, baseUrl, password: PASSWORD, imagesDir, ports: { pub: pubPort, sub: subPort }, drone, onCleanup: (fn) => cleanups.push(fn) })),
     ...(only === "views" || only === "collab" || only === "instruments" ? [] : radioSteps()),
     ...(only === "views" || only === "collab" || only === "instruments" ? [] : metadataSteps()),
+    ...(only === "views" || only === "collab" || only === "instruments" ? [] : alertSteps()),
     // Issue 32: the four plug-and-play instruments declared, deployed and watched (last: it deploys its own model).
     ...(only === "instruments" ? [loginStep(page, baseUrl)] : []),
     ...(only === "views" || only === "collab" ? [] : instruments({ page, ports: { pub: pubPort, sub: subPort }, drone, liveValues, feedInstruments })),

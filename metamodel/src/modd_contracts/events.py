@@ -209,7 +209,9 @@ def of_subscriber(sub: Any) -> EventLabel:
         bound,
         level=float(sub["level"]),
         hysteresis=float(sub.get("hysteresis", 0.0)),
-        crossing=_CROSSINGS[sub.get("crossing", "both")],
+        # An alert's stream reports both crossings: the way back clears it (the
+        # model's crossing names the alert's direction; docs/dsl.md, "Alerts").
+        crossing=Crossing.BOTH if sub.get("alert") else _CROSSINGS[sub.get("crossing", "both")],
     )
     return EventLabel(spec, n is not None)
 

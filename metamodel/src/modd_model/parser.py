@@ -36,6 +36,7 @@ from .diagnostics import Diagnostic, Location, ModelError, pointer_join
 from .numbers import canonical_decimal
 from .vocabulary import (
     AGGREGATIONS,
+    ALERT_ROLES,
     BACKFILL_POLICIES,
     SCHEMA_VERSION,
     SENSOR_KINDS,
@@ -829,6 +830,24 @@ class _Builder:
         pub["topics"] = topics
         return pub
 
+    def _alert(self, node: Tree[Token], ptr: str) -> list[str]:
+        """``alert = scientist + operator``: the roles whose views show the alert
+        (each once; an unknown role is an error at its word)."""
+        roles: list[str] = []
+        for k, word in enumerate(node.children):
+            assert isinstance(word, Token)
+            self._mark(f"{ptr}/{k}", word)
+            if str(word) not in ALERT_ROLES or str(word) in roles:
+                what = "twice" if str(word) in roles else "unknown"
+                self._error(
+                    word,
+                    f"alert: role {str(word)!r} {what}; expected some of {' + '.join(ALERT_ROLES)}",
+                    f"{ptr}/{k}",
+                )
+            roles.append(str(word))
+        self._mark(ptr, node)
+        return roles
+
     def _subscriber(self, node: Tree[Token], index: int) -> dict[str, Any]:
         ptr = f"/subscribers/{index}"
         name = node.children[0]
@@ -863,6 +882,8 @@ class _Builder:
                 assert isinstance(number, Token)
                 sub["maxEvents"] = self._int(number, ptr + "/maxEvents")
                 self._mark(ptr + "/maxEvents", number)
+            elif isinstance(child, Tree) and child.data == "alert":
+                sub["alert"] = self._alert(child, ptr + "/alert")
             elif isinstance(child, Tree) and child.data == "resolution":
                 number = child.children[0]
                 assert isinstance(number, Token)

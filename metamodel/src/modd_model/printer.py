@@ -239,6 +239,8 @@ def print_model(doc: dict[str, Any]) -> str:
         args += named
         if "maxEvents" in s:
             args.append(f"maxEvents = {s['maxEvents']}")
+        if s.get("alert"):
+            args.append("alert = " + " + ".join(s["alert"]))
         out.append(f"{INDENT}Subscriber {name(s['name'])}({', '.join(args)});")
     out.append("}")
     if "campaign" in doc:

@@ -255,6 +255,7 @@ class Subscriber(TypedDict):
     hysteresis: NotRequired[float]
     crossing: NotRequired[Literal["up", "down", "both"]]
     maxEvents: NotRequired[int]
+    alert: NotRequired[list[Literal["designer", "integrator", "scientist", "operator"]]]
     resolution: NotRequired[float]
     backfill: NotRequired[Literal["off", "gaps", "mission"]]
 

@@ -412,6 +412,12 @@ def event_parameters(doc: dict[str, Any]) -> Iterator[Diagnostic]:
                 f"{sub['aggregation']} sends each event's sample exact: it takes no resolution",
                 f"/subscribers/{i}/resolution",
             )
+        if "alert" in sub and sub["aggregation"] != agg.THRESHOLD:
+            yield Diagnostic(
+                f"only a THRESHOLD subscription can be an alert ({sub['aggregation']} "
+                "has no crossing to raise it): THRESHOLD(UP 0.5, 0.1), alert = scientist",
+                f"/subscribers/{i}/alert",
+            )
         if sub["aggregation"] == agg.THRESHOLD and "level" not in sub:
             yield Diagnostic(
                 "THRESHOLD needs its level: THRESHOLD(DOWN 5.0, 0.2) in .modd, "

@@ -14,3 +14,7 @@ BACKFILL_POLICIES: tuple[str, ...] = tuple(
 )
 #: NMEA 0183 sentence type -> {field name: what it holds}, fields in order (field 1 first).
 NMEA_SENTENCES: dict[str, dict[str, str]] = definition("NmeaField")["x-sentences"]
+#: The roles whose views may show an alert (a THRESHOLD subscriber's ``alert``).
+ALERT_ROLES: tuple[str, ...] = tuple(
+    definition("Subscriber")["properties"]["alert"]["items"]["enum"]
+)

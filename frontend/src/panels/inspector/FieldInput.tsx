@@ -114,6 +114,22 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
       );
       break;
     }
+    case "choices": {
+      // Some of a closed list; none chosen removes the field (an alert with no role is no alert).
+      const chosen = Array.isArray(value) ? (value as string[]) : [];
+      const pick = (o: string, on: boolean) => {
+        const next = spec.options?.filter((x) => (x === o ? on : chosen.includes(x))) ?? [];
+        onCommit(next.length ? next : undefined);
+      };
+      control = (
+        <fieldset id={id} className="topic-checks" aria-describedby={describedBy} aria-label={spec.label} aria-invalid={invalid} disabled={readOnly}>
+          {spec.options?.map((o) => (
+            <label key={o}><input type="checkbox" checked={chosen.includes(o)} onChange={(e) => pick(o, e.target.checked)} /> {o}</label>
+          ))}
+        </fieldset>
+      );
+      break;
+    }
     default:
       control = (
         <>

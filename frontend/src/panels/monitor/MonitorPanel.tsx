@@ -35,6 +35,9 @@ import { Rehearsal } from "./Rehearsal";
 import { RadioLine } from "./RadioLine";
 import { InstrumentsHealth } from "./InstrumentsHealth";
 import { SupervisorNote } from "./SupervisorNote";
+import { ActiveAlerts } from "./ActiveAlerts";
+import { useAlerts } from "../../app/useAlerts";
+import { alertTimes } from "../../core/alerts";
 
 export default function MonitorPanel() {
   const model = useModel();
@@ -53,6 +56,7 @@ export default function MonitorPanel() {
   const watchedKey = watched.join(",");
   useEffect(() => { keepSubscribed(source, watchedKey ? watchedKey.split(",") : []); }, [source, watchedKey]);
 
+  const { alerts } = useAlerts();
   const describe = (name: string) => {
     const s = model.subscribers.find((x) => x.name === name);
     const d = dynamic[name];
@@ -61,7 +65,8 @@ export default function MonitorPanel() {
     const unit = unitLabel(findTopicByName(model, topic)?.variable.unit, aggregation);
     const label = s ? subscriptionLabel(model, s) : d ? `${subscriptionLabel(model, { ...d, periodS: d.period_s })} (dynamic)` : "(not in the model)";
     const period = Number(s ? s.periodS : d ? d.period_s : NaN);
-    return { channel: name, label, unit, ...(Number.isFinite(period) && period > 0 ? { periodS: period } : {}) };
+    const marks = alertTimes(alerts, name);
+    return { channel: name, label, unit, ...(Number.isFinite(period) && period > 0 ? { periodS: period } : {}), ...(marks.length ? { alerts: marks } : {}) };
   };
 
   const addDynamic = async (e: React.FormEvent) => {
@@ -114,6 +119,7 @@ export default function MonitorPanel() {
             {" "}· last deploy, {l.process}: {l.text}
           </strong>)}
       </div>
+      <ActiveAlerts role={role} />
       <div className="monitor-grid">
         <aside className="watch-list" aria-label="Subscriptions to watch">
           <h3>Watch</h3>

@@ -22,6 +22,7 @@ import { useEffect, useRef } from "react";
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import type { DataSource } from "../../dataSources/types";
+import { alertTime } from "../../app/AlertBanner";
 import { alignWithGaps, axisLabel, flaggedSeries, gapSummary, qcSummary, visibleRange, type ViewWindow } from "../../core/chartData";
 
 export interface ChartSeries {
@@ -32,10 +33,13 @@ export interface ChartSeries {
   unit: string;
   /** Seconds between windows (the subscription's period): where values are missing, the line breaks. */
   periodS?: number;
+  /** Its alerts' times (core/alerts: the crossing samples' times), drawn as marks. */
+  alerts?: number[];
 }
 
 const BACKFILLED = "#d97706";
 const FLAGGED_RING = "#b91c1c";
+const ALERT = "#b45309";
 
 const COLOURS = ["#2563eb", "#dc2626", "#15803d", "#9333ea", "#0891b2", "#4d7c0f"];
 
@@ -62,6 +66,10 @@ export function TimeChart({ source, series, window: view, onZoom, syncKey, heigh
   const zoomRef = useRef(onZoom);
   zoomRef.current = onZoom;
   const key = series.map((s) => `${s.channel}|${s.title ?? ""}|${s.label}|${s.unit}|${s.periodS ?? ""}`).join(";");
+  const marks = series.flatMap((s) => s.alerts ?? []);
+  const marksRef = useRef(marks);
+  marksRef.current = marks;
+  const marksKey = marks.join(",");
 
   useEffect(() => {
     const el = host.current;
@@ -121,7 +129,7 @@ export function TimeChart({ source, series, window: view, onZoom, syncKey, heigh
           u.setSelect({ left: 0, top: 0, width: 0, height: 0 }, false);
           zoomRef.current(from, to);
         }],
-        draw: [(u) => {
+        draw: [(u) => drawAlertMarks(u, marksRef.current), (u) => {
           const m = markerRef.current;
           if (m === null) return;
           const x = u.valToPos(m, "x", true);
@@ -153,7 +161,7 @@ export function TimeChart({ source, series, window: view, onZoom, syncKey, heigh
   useEffect(() => {
     const plot = plotRef.current;
     if (plot) plot.setData(plot.data);
-  }, [view, marker]);
+  }, [view, marker, marksKey]);
 
   const units = axisLabel(series.map((s) => s.unit));
   return (
@@ -162,7 +170,32 @@ export function TimeChart({ source, series, window: view, onZoom, syncKey, heigh
       <div className="chart-axes muted" data-testid="chart-axes">
         <span ref={info} /> · values{units ? ` in ${units}` : " (no unit)"}
         {" · "}<span ref={gaps} data-testid="chart-gaps" />
+        {marks.length > 0 && <span data-testid="chart-alerts"> · {marks.length} alert{marks.length > 1 ? "s" : ""} marked, last at {alertTime(Math.max(...marks))}</span>}
       </div>
     </>
   );
+}
+
+/** An alert's mark: a dashed amber line at the crossing sample's time, a triangle on top. */
+function drawAlertMarks(u: uPlot, times: readonly number[]): void {
+  const ctx = u.ctx;
+  ctx.save();
+  ctx.strokeStyle = ALERT;
+  ctx.fillStyle = ALERT;
+  ctx.lineWidth = 2;
+  ctx.setLineDash([4, 4]);
+  for (const t of times) {
+    const x = u.valToPos(t, "x", true);
+    if (x < u.bbox.left || x > u.bbox.left + u.bbox.width) continue;
+    ctx.beginPath();
+    ctx.moveTo(x, u.bbox.top);
+    ctx.lineTo(x, u.bbox.top + u.bbox.height);
+    ctx.stroke();
+    ctx.beginPath();
+    ctx.moveTo(x - 5, u.bbox.top);
+    ctx.lineTo(x + 5, u.bbox.top);
+    ctx.lineTo(x, u.bbox.top + 8);
+    ctx.fill();
+  }
+  ctx.restore();
 }

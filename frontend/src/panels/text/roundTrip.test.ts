@@ -56,6 +56,7 @@ function typed(spec: FieldSpec, current: unknown, topics: string[]): string[] | 
     case "enumOrText": return ["METER", "mS/cm"];
     case "topic": return topics.filter((t) => t !== current).slice(0, 1);
     case "topics": return [];
+    case "choices": return [(spec.options ?? []).slice(-2)];
   }
 }
 
@@ -74,7 +75,7 @@ describe("inspector edits round-trip through the text view", () => {
           // a field of an absent optional object (an endpoint's port without its host) is not an edit on its own
           if (spec.path.length > 1 && getPath(value, spec.path.slice(0, -1)) === undefined) continue;
           for (const text of typed(spec, current, listTopics(base).map((t) => t.name))) {
-            const stored = spec.input === "enum" || spec.input === "topic" ? text : parseField(spec, String(text));
+            const stored = spec.input === "enum" || spec.input === "topic" || spec.input === "choices" ? text : parseField(spec, String(text));
             const s = reduce(initialState(base, role), { type: "setField", id: node.id, path: spec.path, value: stored });
             if (s.notice || currentModel(s) === base) continue; // refused (e.g. a rename reaching another role's part)
             edits.push({ role, what: `${node.id} ${spec.path.join(".")} = ${JSON.stringify(text)}`, model: currentModel(s) });
