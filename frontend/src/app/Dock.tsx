@@ -6,7 +6,8 @@
  * (core/dockLayout.ts) and reset in one click.
  */
 import { Fragment, useEffect, useRef, useState, type PointerEvent as ReactPointerEvent } from "react";
-import { PANELS, type PanelInfo } from "../panels/registry";
+import { PANELS, panelTabs, type PanelInfo } from "../panels/registry";
+import { currentModel } from "../core/workbench";
 import { PanelBoundary } from "../panels/PanelBoundary";
 import { useEditor, useEditorStore } from "../editor/useEditor";
 import { isDefault, loadLayout, moveDivider, resetLayout, saveLayout, setBeside, type DockLayout } from "../core/dockLayout";
@@ -79,6 +80,7 @@ export function Dock({ user = "" }: { user?: string }) {
   const store = useEditorStore();
   const active = useEditor((s) => s.panel);
   const role = useEditor((s) => s.wb.role);
+  const campaign = useEditor((s) => currentModel(s.wb).campaign !== undefined);
   const panel = PANELS.find((p) => p.id === active) ?? PANELS[0];
   const [expanded, setExpanded] = useState(false);
   const [layout, setLayout] = useState<DockLayout>(() => loadLayout(window.localStorage, user, role, IDS));
@@ -105,7 +107,7 @@ export function Dock({ user = "" }: { user?: string }) {
         }} />
       <div className="dock-tabs">
         <div role="tablist" className="dock-tablist">
-          {PANELS.map((p) => (
+          {panelTabs(campaign, panel.id).map((p) => (
             <button key={p.id} role="tab" aria-selected={p.id === panel.id} className={p.id === panel.id ? "active" : ""}
               onClick={() => store.patch({ panel: p.id })}>{p.title}</button>
           ))}

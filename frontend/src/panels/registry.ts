@@ -24,4 +24,12 @@ export const PANELS: PanelInfo[] = [
   { id: "history", title: "History", component: lazy(() => import("./history/HistoryPanel")) },
 ];
 
+/**
+ * The dock's tabs: the Fleet panel only for a campaign (several drones), or when it is
+ * the panel shown; a one-drone project's Map and Monitor already say all it would.
+ */
+export function panelTabs(campaign: boolean, active: PanelId): PanelInfo[] {
+  return PANELS.filter((p) => p.id !== "fleet" || campaign || active === "fleet");
+}
+
 export const InspectorPanel = lazy(() => import("./inspector/InspectorPanel"));
