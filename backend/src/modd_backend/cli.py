@@ -109,6 +109,14 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         "workbench (viewers connect through /foxglove/replay); 0: none",
     )
     p.add_argument(
+        "--store-processes",
+        type=int,
+        default=int(os.environ.get("MODD_STORE_PROCESSES", "2")),
+        metavar="N",
+        help="processes running the model reads and saves, apart from the event loop "
+        "($MODD_STORE_PROCESSES, default 2); 0: threads of the service's process",
+    )
+    p.add_argument(
         "--admin-password-file",
         type=Path,
         metavar="FILE",
@@ -211,6 +219,7 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         tile_dir=Path(a.tiles).absolute() if a.tiles else None,
         cors_origins=tuple(a.viewer_origin),
         preload_milp=True,
+        store_processes=a.store_processes,
         scene_port=None if a.scene_port < 0 else a.scene_port,
         foxglove_port=a.foxglove_port,
         foxglove_replay_port=a.foxglove_replay_port,

@@ -1,0 +1,143 @@
+"""The hot routes' store work in store processes (storeproc.py, issue 41):
+the same answers as in the service's own threads (every status, the saved
+event), none of it in the service's threads, and a killed store process
+answered 503 with Retry-After and replaced."""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+from collections.abc import Iterator
+from datetime import timedelta
+from pathlib import Path
+from typing import Any
+
+import pytest
+from fastapi.testclient import TestClient
+from modd_backend import storeproc
+from modd_backend.errors import ApiError
+from modd_backend.tables import Session, utcnow
+from sqlalchemy import update
+
+from .conftest import ADMIN_PASSWORD, Headers, app_client, login
+
+
+def _journey(client: TestClient, text: str) -> list[tuple[int, Any]]:
+    """Every answer of the hot routes' statuses, the saved events included."""
+    admin = login(client, "admin", ADMIN_PASSWORD)
+    state = client.app.state.modd  # type: ignore[attr-defined]
+    client.post(
+        "/api/users",
+        headers=admin,
+        json={"username": "op", "password": "pw-op-123456", "roles": ["operator"]},
+    )
+    operator = login(client, "op", "pw-op-123456")
+    pid = client.post("/api/projects", headers=admin, json={"name": "p", "model": {"text": text}})
+    pid = pid.json()["id"]
+    heard: list[dict[str, Any]] = []
+    state.project_events.add(pid, heard.append)
+    url = f"/api/projects/{pid}/model"
+    head = client.get(url, headers=admin).json()
+    broken = {**head["model"], "link": {**(head["model"].get("link") or {}), "maxBuffer": -5}}
+    calls = [
+        ("get", url, admin, None),
+        ("put", url, admin, {"model": broken, "base_revision": 1, "message": "m"}),
+        ("put", url, admin, {"model": broken, "base_revision": 1}),  # 409: stale
+        ("put", url, admin, {"model": broken}),  # 422: no base revision
+        ("put", url, operator, {"model": broken, "base_revision": 2}),  # 403
+        ("get", url + "?revision=1", admin, None),
+        ("get", url + "?revision=99", admin, None),  # 404
+        ("get", f"/api/projects/{pid + 99}/model", admin, None),  # 404
+        ("get", f"/api/projects/{pid}/versions", admin, None),
+        ("get", url, {"Authorization": "Bearer nope"}, None),  # 401
+    ]
+    answers: list[tuple[int, Any]] = []
+    for method, path, who, body in calls:
+        r = client.request(method, path, headers=who, json=body)
+        answers.append((r.status_code, r.json()))
+    with state.store.session() as db:
+        db.execute(update(Session).values(expires_at=utcnow() - timedelta(seconds=1)))
+        db.commit()
+    answers.append((client.get(url, headers=admin).status_code, None))  # 401: expired
+    return [*answers, (0, heard)]
+
+
+def _without_times(answers: list[tuple[int, Any]]) -> list[tuple[int, Any]]:
+    def strip(v: Any) -> Any:
+        if isinstance(v, dict):
+            return {k: strip(x) for k, x in v.items() if k not in ("created_at", "saved_at")}
+        if isinstance(v, list):
+            return [strip(x) for x in v]
+        return v
+
+    return [(s, strip(a)) for s, a in answers]
+
+
+@pytest.fixture(scope="module")
+def procs_client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
+    with app_client(tmp_path_factory.mktemp("procs"), store_processes=2) as c:
+        yield c
+
+
+def test_store_processes_answer_as_the_threads_do(
+    procs_client: TestClient, tmp_path: Path, scenario1: str
+) -> None:
+    state = procs_client.app.state.modd  # type: ignore[attr-defined]
+    assert state.store_procs is not None and state.store_procs.processes == 2
+    in_procs = _journey(procs_client, scenario1)
+    with app_client(tmp_path) as threads_client:
+        assert threads_client.app.state.modd.store_procs is None  # type: ignore[attr-defined]
+        in_threads = _journey(threads_client, scenario1)
+    assert [s for s, _ in in_procs] == [200, 200, 409, 422, 403, 200, 404, 404, 200, 401, 401, 0]
+    assert _without_times(in_procs) == _without_times(in_threads)
+    heard = in_procs[-1][1]
+    assert heard == [
+        {"type": "saved", "project": heard[0]["project"], "revision": 2}
+        | {"author": "admin", "message": "m"}
+    ]
+    # none of it ran in the service's own store threads
+    assert not state.store_threads._threads
+
+
+def test_a_killed_store_process_is_503_then_replaced(
+    procs_client: TestClient, scenario1: str
+) -> None:
+    admin = login(procs_client, "admin", ADMIN_PASSWORD)
+    pid = procs_client.post(
+        "/api/projects", headers=admin, json={"name": "k", "model": {"text": scenario1}}
+    ).json()["id"]
+    url = f"/api/projects/{pid}/model"
+    assert procs_client.get(url, headers=admin).status_code == 200
+    pool = procs_client.app.state.modd.store_procs._pool  # type: ignore[attr-defined]
+    for child in list(pool._processes.values()):
+        os.kill(child.pid, signal.SIGKILL)
+    deadline = time.monotonic() + 30
+    statuses = []
+    while time.monotonic() < deadline:
+        r = procs_client.get(url, headers=admin)
+        statuses.append(r.status_code)
+        if r.status_code == 200:
+            break
+        assert r.status_code == 503 and r.headers["retry-after"] == "1", r.text
+        assert "store process stopped" in r.json()["detail"]
+    assert statuses[-1] == 200 and 503 in statuses, statuses
+    assert procs_client.app.state.modd.store_procs._pool is not pool  # type: ignore[attr-defined]
+
+
+def test_store_processes_need_a_shared_store() -> None:
+    assert storeproc.usable("sqlite:////tmp/x.sqlite3", 2)
+    assert storeproc.usable("postgresql://u@h/db", 1)
+    assert not storeproc.usable("sqlite:///:memory:", 2)
+    assert not storeproc.usable("sqlite:////tmp/x.sqlite3", 0)
+    with pytest.raises(ValueError, match="store_processes must be 0..16"):
+        storeproc.StoreProcesses("sqlite:////tmp/x.sqlite3", 17)
+
+
+def test_api_errors_cross_processes_whole() -> None:
+    import pickle
+
+    exc = ApiError(409, "stale", headers={"Retry-After": "1"}, current=3)
+    back = pickle.loads(pickle.dumps(exc))
+    assert (back.status, back.body, back.headers) == (409, exc.body, exc.headers)
+    assert back.body == {"detail": "stale", "current": 3}
