@@ -20,7 +20,7 @@ from modd_backend.errors import ApiError
 from modd_backend.tables import Session, utcnow
 from sqlalchemy import update
 
-from .conftest import ADMIN_PASSWORD, Headers, app_client, login
+from .conftest import ADMIN_PASSWORD, app_client, login
 
 
 def _journey(client: TestClient, text: str) -> list[tuple[int, Any]]:
@@ -141,3 +141,23 @@ def test_api_errors_cross_processes_whole() -> None:
     back = pickle.loads(pickle.dumps(exc))
     assert (back.status, back.body, back.headers) == (409, exc.body, exc.headers)
     assert back.body == {"detail": "stale", "current": 3}
+
+
+def test_the_cli_runs_2_store_processes_and_refuses_a_bad_count(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from modd_backend.cli import parse_args
+
+    monkeypatch.delenv("MODD_STORE_PROCESSES", raising=False)
+    assert parse_args([]).store_processes == 2
+    assert parse_args(["--store-processes", "0"]).store_processes == 0
+    monkeypatch.setenv("MODD_STORE_PROCESSES", "5")
+    assert parse_args([]).store_processes == 5
+    for bad in (["--store-processes", "17"], ["--store-processes", "two"]):
+        with pytest.raises(SystemExit):
+            parse_args(bad)
+        assert "is not a count 0..16" in capsys.readouterr().err
+    monkeypatch.setenv("MODD_STORE_PROCESSES", "-1")
+    with pytest.raises(SystemExit):
+        parse_args([])
+    assert "'-1' is not a count 0..16" in capsys.readouterr().err

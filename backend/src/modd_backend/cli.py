@@ -19,6 +19,7 @@ from sqlalchemy.engine import make_url
 from sqlalchemy.exc import ArgumentError
 
 from .settings import DEFAULT_ZENOH_CONNECT, Settings, check_origin
+from .storeproc import MAX_STORE_PROCESSES
 from .zenoh_session import read_secret
 
 
@@ -110,8 +111,8 @@ def parse_args(argv: list[str] | None = None) -> Settings:
     )
     p.add_argument(
         "--store-processes",
-        type=int,
-        default=int(os.environ.get("MODD_STORE_PROCESSES", "2")),
+        type=_store_processes,
+        default=os.environ.get("MODD_STORE_PROCESSES", "2"),
         metavar="N",
         help="processes running the model reads and saves, apart from the event loop "
         "($MODD_STORE_PROCESSES, default 2); 0: threads of the service's process",
@@ -228,6 +229,17 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         link_keys_dir=a.link_keys.absolute() if a.link_keys else None,
         pairing_key_file=a.pairing_key.absolute() if a.pairing_key else None,
     )
+
+
+def _store_processes(text: str) -> int:
+    """0..16 (argparse reports anything else, $MODD_STORE_PROCESSES included)."""
+    try:
+        n = int(text)
+    except ValueError:
+        n = -1
+    if not 0 <= n <= MAX_STORE_PROCESSES:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a count 0..{MAX_STORE_PROCESSES}")
+    return n
 
 
 def _is_loopback(host: str) -> bool:
