@@ -314,10 +314,13 @@ def server_options(settings: Settings) -> dict[str, Any]:
     """uvicorn's options for this service. X-Forwarded-* headers are read only
     from ``trusted_proxies`` (uvicorn believes them from 127.0.0.1 by default,
     so any local process could pose as any client address)."""
+    from .coalesce import CoalescingHttpToolsProtocol
     from .wspacing import PacedWebSocketProtocol
 
     proxies = list(settings.trusted_proxies)
     return {
+        # an answer's headers and body in one send (coalesce.py, issue 41)
+        "http": CoalescingHttpToolsProtocol,
         "log_config": log_config(),
         "ws_max_size": 1024 * 1024,
         # live values are small JSON: compressing them cost the event loop more
