@@ -161,3 +161,64 @@ def test_the_cli_runs_2_store_processes_and_refuses_a_bad_count(
     with pytest.raises(SystemExit):
         parse_args([])
     assert "'-1' is not a count 0..16" in capsys.readouterr().err
+
+
+def _store_children(pid: int) -> set[int]:
+    out = set()
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            name, rest = stat.read_text().split("(", 1)[1].rsplit(")", 1)
+        except (OSError, IndexError):
+            continue
+        if name == "modd-store" and rest.split()[1] == str(pid) and rest.split()[0] != "Z":
+            out.add(int(stat.parent.name))
+    return out
+
+
+def _alive(pids: set[int]) -> set[int]:
+    out = set()
+    for p in pids:
+        try:
+            if Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z":
+                out.add(p)
+        except OSError:
+            continue
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="Linux /proc")
+def test_the_cli_starts_2_named_store_processes_that_end_when_it_is_killed(
+    tmp_path: Path,
+) -> None:
+    """``modd-backend`` (as deployed): 2 children named ``modd-store`` once
+    it answers; SIGKILLed, with no chance to stop them, they end within 5 s."""
+    import subprocess
+    import sys
+
+    from modd.ports import free_port
+
+    port = free_port()
+    exe = Path(sys.executable).with_name("modd-backend")
+    argv = [str(exe), "--port", str(port), "--data", str(tmp_path / "data"), "--no-zenoh"]
+    argv += ["--scene-port", "-1", "--foxglove-port", "0", "--foxglove-replay-port", "0"]
+    env = {**os.environ, "MODD_ADMIN_PASSWORD": ADMIN_PASSWORD}
+    env.pop("MODD_STORE_PROCESSES", None)
+    with (tmp_path / "backend.log").open("wb") as log:
+        proc = subprocess.Popen(argv, env=env, stdout=log, stderr=subprocess.STDOUT)
+    try:
+        deadline = time.monotonic() + 120
+        while len(children := _store_children(proc.pid)) < 2:
+            assert proc.poll() is None and time.monotonic() < deadline, "no store processes"
+            time.sleep(0.2)
+        assert len(children) == 2, children
+        proc.kill()
+        proc.wait(10)
+        deadline = time.monotonic() + 5
+        while _alive(children):
+            assert time.monotonic() < deadline, f"store processes outlived the service: {children}"
+            time.sleep(0.1)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(10)

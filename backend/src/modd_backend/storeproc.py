@@ -48,13 +48,20 @@ def usable(url: str, processes: int) -> bool:
     return processes > 0 and (not url.startswith("sqlite:") or sqlite_path(url) is not None)
 
 
+#: A store process's name (``ps -o comm``, /proc/PID/stat), apart from the
+#: archive workers, which are also spawned children of the service.
+PROCESS_NAME = b"modd-store"
+
+
 def _die_with_parent() -> None:
-    """Linux: SIGTERM when the service's process ends (however it ends)."""
+    """Linux: SIGTERM when the service's process ends (however it ends), and
+    the name :data:`PROCESS_NAME`."""
     try:
         import ctypes
 
         libc = ctypes.CDLL(None, use_errno=True)
         libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+        libc.prctl(15, PROCESS_NAME)  # PR_SET_NAME
     except (OSError, AttributeError):  # another system: the pool's shutdown ends them
         pass
 
