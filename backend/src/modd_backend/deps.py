@@ -26,12 +26,15 @@ from .db import Store
 from .foxglove import FoxgloveLive
 from .loopback_tls import LoopbackTls
 from .project_events import ProjectEvents
-from .roles import Role, parse_roles
+from .roles import Role
 from .scene import SceneService
 from .security import csrf_for
 from .sessionwatches import SessionWatches
 from .settings import Settings
 from .socketcaps import SocketCaps
+from .storework import has_role as has_role  # re-exported: the routes import it from here
+from .storework import holding, known, store_work
+from .storework import roles_of as roles_of
 from .tables import User
 from .throttle import KnownPairs, Throttle
 from .tickets import ViewerTickets
@@ -187,41 +190,19 @@ def current_user(db: DbDep, token: TokenDep) -> User:
     connection that the running ones wait for."""
     user = user_for_token(db, token)
     db.commit()
-    return _known(user)
-
-
-def _known(user: User | None) -> User:
-    if user is None:
-        raise HTTPException(401, "invalid or expired token", headers={"WWW-Authenticate": "Bearer"})
-    return user
+    return known(user)
 
 
 UserDep = Annotated[User, Depends(current_user)]
-
-
-def roles_of(user: User) -> set[str]:
-    return parse_roles(user.roles)
-
-
-def has_role(user: User, *roles: Role) -> bool:
-    held = roles_of(user)
-    return Role.admin in held or any(r in held for r in roles)
 
 
 def require(*roles: Role) -> Callable[[User], Awaitable[User]]:
     """A dependency letting through users holding any of ``roles`` (or admin)."""
 
     async def check(user: UserDep) -> User:  # (async: no worker thread for a set test)
-        return _holding(user, roles)
+        return holding(user, roles)
 
     return check
-
-
-def _holding(user: User, roles: tuple[Role, ...]) -> User:
-    if not has_role(user, *roles):
-        names = ", ".join(r.value for r in roles) or "admin"
-        raise HTTPException(403, f"this needs the role {names}")
-    return user
 
 
 async def in_store(
@@ -249,23 +230,6 @@ async def in_store(
         return await state.store_procs.run(creds.token, roles, work, args)
     call = functools.partial(store_work, state.store, creds.token, roles, work, args)
     return await asyncio.get_running_loop().run_in_executor(state.store_threads, call)
-
-
-def store_work(
-    store: Store,
-    token: str,
-    roles: tuple[Role, ...],
-    work: Callable[..., T],
-    args: tuple[Any, ...],
-) -> T:
-    """One session: the token's user (401), ``roles`` (403), ``work``, commit."""
-    with store.session() as db:
-        user = _known(user_for_token(db, token))
-        if roles:
-            _holding(user, roles)
-        out = work(db, user, *args)
-        db.commit()
-        return out
 
 
 async def _heavy(request: Request, state: StateDep, user: UserDep) -> AsyncIterator[None]:

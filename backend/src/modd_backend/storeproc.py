@@ -35,6 +35,7 @@ from typing import Any, TypeVar
 
 from .db import Store, sqlite_path
 from .errors import retry_later
+from .storework import store_work
 
 T = TypeVar("T")
 #: At most this many store processes (``Settings.store_processes``).
@@ -78,8 +79,6 @@ def _ready() -> bool:
 
 
 def _run(token: str, roles: tuple[Any, ...], fn: Callable[..., T], args: tuple[Any, ...]) -> T:
-    from .deps import store_work
-
     assert _store is not None, "a store process opens its store when it starts"
     return store_work(_store, token, roles, fn, args)
 
