@@ -222,3 +222,16 @@ def test_the_cli_starts_2_named_store_processes_that_end_when_it_is_killed(
         if proc.poll() is None:
             proc.kill()
             proc.wait(10)
+
+
+def test_a_service_closed_while_its_store_processes_start_leaves_none(tmp_path: Path) -> None:
+    """Closed at once (the processes still importing): none is left behind,
+    none waits on a queue lock (the exit of the test process would hang)."""
+    with app_client(tmp_path, store_processes=2) as c:
+        pool = c.app.state.modd.store_procs._pool  # type: ignore[attr-defined]
+        pids = {p.pid for p in pool._processes.values()}
+    assert len(pids) == 2
+    deadline = time.monotonic() + 10
+    while _alive(pids):
+        assert time.monotonic() < deadline, f"store processes left: {_alive(pids)}"
+        time.sleep(0.1)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import asyncio
 import multiprocessing
+import os
 import signal
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
@@ -54,9 +55,10 @@ def usable(url: str, processes: int) -> bool:
 PROCESS_NAME = b"modd-store"
 
 
-def _die_with_parent() -> None:
+def _die_with_parent(parent: int) -> None:
     """Linux: SIGTERM when the service's process ends (however it ends), and
-    the name :data:`PROCESS_NAME`."""
+    the name :data:`PROCESS_NAME`. A service gone before this (it ended
+    while the process was starting) ends the process at once."""
     try:
         import ctypes
 
@@ -65,12 +67,14 @@ def _die_with_parent() -> None:
         libc.prctl(15, PROCESS_NAME)  # PR_SET_NAME
     except (OSError, AttributeError):  # another system: the pool's shutdown ends them
         pass
+    if os.getppid() != parent:
+        os._exit(0)
 
 
-def _start(url: str) -> None:
+def _start(url: str, parent: int) -> None:
     """A store process's start: connect (no migration: the service did it)."""
     global _store
-    _die_with_parent()
+    _die_with_parent(parent)
     _store = Store.open(url, migrate_first=False)
 
 
@@ -99,7 +103,7 @@ class StoreProcesses:
             self.processes,
             mp_context=multiprocessing.get_context("spawn"),
             initializer=_start,
-            initargs=(self.url,),
+            initargs=(self.url, os.getpid()),
         )
         for _ in range(self.processes):  # start them now, not on the first requests
             pool.submit(_ready)
@@ -122,4 +126,13 @@ class StoreProcesses:
             raise retry_later(503, detail, 1) from None
 
     def close(self) -> None:
-        self._pool.shutdown(wait=False, cancel_futures=True)
+        """Stop the store processes (at the service's end: uvicorn has waited
+        for its requests). Terminated, not only told to stop: one ended while
+        it read its queue (killed, or its starting thread gone) leaves the
+        queue's lock taken and the others waiting for it, and the service's
+        exit waiting for them."""
+        pool = self._pool
+        processes = list((getattr(pool, "_processes", None) or {}).values())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for process in processes:
+            process.terminate()
