@@ -53,7 +53,7 @@ run tests/bench/bench_health_csv.py --clients 70 --seconds "${HEALTH_CSV_SECONDS
 run tests/bench/bench_health_editing.py --seconds "${HEALTH_EDITING_SECONDS:-20}"
 run tests/bench/bench_health_editing.py --seconds "${HEALTH_EDITING_SECONDS:-20}" --sockets 1000
 # issue 41's load, SQLite and PostgreSQL, beside a bare app on the same cores
-run tests/bench/bench_health_load.py --seconds "${HEALTH_LOAD_SECONDS:-180}"
+run tests/bench/bench_health_load.py --seconds "${HEALTH_LOAD_SECONDS:-180}" --runs "${HEALTH_LOAD_RUNS:-3}"
 run tests/bench/bench_backfill.py --minutes "${BACKFILL_MINUTES:-10}" --rate 3600
 run tests/bench/bench_dataset.py --samples "${DATASET_SAMPLES:-10000000}" --json build/bench/dataset.json
 run tests/bench/flap_windows.py "${FLAP_SECONDS:-60}" 2

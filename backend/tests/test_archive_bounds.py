@@ -154,15 +154,18 @@ def test_one_users_100_requests_do_not_delay_anothers_series_past_30_s(tmp_path:
 
 def _workers(pid: int) -> set[int]:
     """The running archive worker processes of process ``pid`` (multiprocessing's
-    spawned children; its resource tracker is not one)."""
+    spawned children; its resource tracker is not one, nor are its store
+    processes, named ``modd-store``)."""
     out = set()
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
+            name, rest = stat.read_text().split("(", 1)[1].rsplit(")", 1)
+            fields = rest.split()
             argv = (stat.parent / "cmdline").read_bytes()
         except OSError:
             continue
-        if fields[1] == str(pid) and fields[0] != "Z" and b"multiprocessing.spawn" in argv:
+        spawned = b"multiprocessing.spawn" in argv and name != "modd-store"
+        if fields[1] == str(pid) and fields[0] != "Z" and spawned:
             out.add(int(stat.parent.name))
     return out
 
@@ -176,6 +179,8 @@ def _backend(tmp: Path, archives: Path) -> Iterator[tuple[subprocess.Popen[bytes
     argv = [str(exe), "--port", str(port), "--data", str(tmp / "data"), "--no-zenoh"]
     argv += ["--scene-port", "-1", "--foxglove-port", "0", "--foxglove-replay-port", "0"]
     argv += ["--archives", str(archives), "--frontend", str(tmp / "none")]
+    # no store processes: spawned children too, unnamed until their start-up ends
+    argv += ["--store-processes", "0"]
     with (tmp / "backend.log").open("wb") as log:
         env = {**os.environ, "MODD_ADMIN_PASSWORD": ADMIN_PASSWORD}
         proc = subprocess.Popen(argv, env=env, stdout=log, stderr=subprocess.STDOUT)

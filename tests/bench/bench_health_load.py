@@ -15,7 +15,10 @@ final model that is not the last acknowledged save). Several ``--runs`` give
 the median of each figure. Asserts nothing.
 
     .venv/bin/python tests/bench/bench_health_load.py [--seconds 180] [--runs 1]
-        [--database sqlite|postgres|both] [--cores 0-1]
+        [--database sqlite|postgres|both] [--cores 0-1] [--store-processes N]
+
+``--store-processes`` is the backend's (``$MODD_STORE_PROCESSES``; its
+default 2; 0: the store work in the backend's own threads, as before).
 
 Target (issue 41): health p99 <= 50 ms on SQLite and PostgreSQL, 0 lost saves.
 """
@@ -181,6 +184,14 @@ def one_run(a: argparse.Namespace, tmp: Path, database_url: str | None) -> dict[
         stop_backend(bare)
 
 
+def ratio(health: dict[str, float], bare: dict[str, float]) -> str:
+    """The backend's p50/p99 over the bare app's: the load's cost beyond the machine's."""
+    return (
+        f"  backend / bare app: p50 {health['p50'] / bare['p50']:.1f}x, "
+        f"p99 {health['p99'] / bare['p99']:.1f}x"
+    )
+
+
 def row(name: str, f: dict[str, float]) -> str:
     return (
         f"  {name:<8} {f['n']:>6.0f} probes  p50 {f['p50']:6.1f}  p95 {f['p95']:6.1f}  "
@@ -202,6 +213,7 @@ def measure(a: argparse.Namespace, db: str, url: str | None) -> None:
         print(f"{db} run {i + 1}/{a.runs} (load average {load_avg:.1f} at its start):")
         print(row("backend", r["health"]))
         print(row("bare app", r["bare"]))
+        print(ratio(r["health"], r["bare"]))
         print(
             f"  saves {r['saves']} acknowledged (p99 {r['save_p99']:.0f} ms), "
             f"{r['lost']} lost; answers {r['answers']}",
@@ -211,6 +223,7 @@ def measure(a: argparse.Namespace, db: str, url: str | None) -> None:
         print(f"{db}, median of {a.runs} runs:")
         print(row("backend", median_of(runs, "health")))
         print(row("bare app", median_of(runs, "bare")))
+        print(ratio(median_of(runs, "health"), median_of(runs, "bare")))
         print(f"  lost saves in all runs: {sum(r['lost'] for r in runs)}", flush=True)
 
 
@@ -225,11 +238,17 @@ def main() -> int:
     ap.add_argument("--runs", type=int, default=1)
     ap.add_argument("--database", choices=("sqlite", "postgres", "both"), default="both")
     ap.add_argument("--cores", help="taskset list for the backend and the bare app (all)")
+    ap.add_argument(
+        "--store-processes", type=int, help="the backend's store processes (its default: 2)"
+    )
     a = ap.parse_args()
+    if a.store_processes is not None:
+        os.environ["MODD_STORE_PROCESSES"] = str(a.store_processes)
     print(
         f"{a.editors} editors (a save every {a.think:g} s + its answer), {a.viewers} viewers, "
         f"{a.exporters} CSV exporters, {a.seconds:g} s; {os.cpu_count()} cores, "
-        f"backend and bare app on cores {a.cores or 'all'}"
+        f"backend and bare app on cores {a.cores or 'all'}, "
+        f"store processes {os.environ.get('MODD_STORE_PROCESSES', '2 (default)')}"
     )
     if a.database in ("sqlite", "both"):
         measure(a, "SQLite", None)

@@ -22,7 +22,7 @@ from fastapi import APIRouter, FastAPI
 from sqlalchemy import text
 from starlette.concurrency import run_in_threadpool
 
-from . import archive_work, errors, planning
+from . import archive_work, errors, planning, storeproc
 from .accounts import ensure_first_admin
 from .apidocs import install_docs
 from .archive_pool import ArchivePool
@@ -205,6 +205,9 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
         state.login_threads = CapacityLimiter(settings.login_threads)
         state.closing_threads = CapacityLimiter(4)
         state.store_threads = ThreadPoolExecutor(STORE_THREADS, thread_name_prefix="modd-store")
+        url = settings.effective_database_url
+        if storeproc.usable(url, settings.store_processes):
+            state.store_procs = storeproc.StoreProcesses(url, settings.store_processes)
         if settings.foxglove_port or settings.foxglove_replay_port:
             state.loopback_tls = LoopbackTls.generate()
         if zenoh_session is not None:
@@ -259,6 +262,8 @@ def create_app(settings: Settings, *, out: TextIO = sys.stdout) -> FastAPI:
                 await state.archive_pool.close()
             await run_in_threadpool(planning.shutdown_pool)
             state.store_threads.shutdown(wait=False, cancel_futures=True)
+            if state.store_procs is not None:
+                state.store_procs.close()
             store.close()
 
     app = FastAPI(

@@ -19,6 +19,7 @@ from sqlalchemy.engine import make_url
 from sqlalchemy.exc import ArgumentError
 
 from .settings import DEFAULT_ZENOH_CONNECT, Settings, check_origin
+from .storeproc import MAX_STORE_PROCESSES
 from .zenoh_session import read_secret
 
 
@@ -107,6 +108,14 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         default=8865,
         help="loopback port of the Foxglove replay of an archive chosen in the "
         "workbench (viewers connect through /foxglove/replay); 0: none",
+    )
+    p.add_argument(
+        "--store-processes",
+        type=_store_processes,
+        default=os.environ.get("MODD_STORE_PROCESSES", "2"),
+        metavar="N",
+        help="processes running the model reads and saves, apart from the event loop "
+        "($MODD_STORE_PROCESSES, default 2); 0: threads of the service's process",
     )
     p.add_argument(
         "--admin-password-file",
@@ -211,6 +220,7 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         tile_dir=Path(a.tiles).absolute() if a.tiles else None,
         cors_origins=tuple(a.viewer_origin),
         preload_milp=True,
+        store_processes=a.store_processes,
         scene_port=None if a.scene_port < 0 else a.scene_port,
         foxglove_port=a.foxglove_port,
         foxglove_replay_port=a.foxglove_replay_port,
@@ -219,6 +229,17 @@ def parse_args(argv: list[str] | None = None) -> Settings:
         link_keys_dir=a.link_keys.absolute() if a.link_keys else None,
         pairing_key_file=a.pairing_key.absolute() if a.pairing_key else None,
     )
+
+
+def _store_processes(text: str) -> int:
+    """0..16 (argparse reports anything else, $MODD_STORE_PROCESSES included)."""
+    try:
+        n = int(text)
+    except ValueError:
+        n = -1
+    if not 0 <= n <= MAX_STORE_PROCESSES:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a count 0..{MAX_STORE_PROCESSES}")
+    return n
 
 
 def _is_loopback(host: str) -> bool:
@@ -293,10 +314,13 @@ def server_options(settings: Settings) -> dict[str, Any]:
     """uvicorn's options for this service. X-Forwarded-* headers are read only
     from ``trusted_proxies`` (uvicorn believes them from 127.0.0.1 by default,
     so any local process could pose as any client address)."""
+    from .coalesce import CoalescingHttpToolsProtocol
     from .wspacing import PacedWebSocketProtocol
 
     proxies = list(settings.trusted_proxies)
     return {
+        # an answer's headers and body in one send (coalesce.py, issue 41)
+        "http": CoalescingHttpToolsProtocol,
         "log_config": log_config(),
         "ws_max_size": 1024 * 1024,
         # live values are small JSON: compressing them cost the event loop more

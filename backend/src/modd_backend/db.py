@@ -86,10 +86,13 @@ class Store:
     factory: sessionmaker[Session]
 
     @classmethod
-    def open(cls, url: str, init: Callable[[Store], None] | None = None) -> Store:
+    def open(
+        cls, url: str, init: Callable[[Store], None] | None = None, *, migrate_first: bool = True
+    ) -> Store:
         """Connect and migrate, then run ``init`` (first-start work such as the
         first admin), both under the start-up lock; a SQLite file's folder is
-        created."""
+        created. ``migrate_first=False``: connect only (a store process of a
+        service that migrated, storeproc.py)."""
         path = sqlite_path(url)
         if url.startswith("sqlite:"):
             if path is not None:
@@ -99,6 +102,8 @@ class Store:
         else:
             engine = create_engine(url, pool_pre_ping=True)
         store = cls(engine, sessionmaker(engine, expire_on_commit=False))
+        if not migrate_first:
+            return store
         with startup_lock(engine, url):
             migrate(engine)
             if init is not None:

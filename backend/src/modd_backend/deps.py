@@ -14,7 +14,7 @@ from collections import Counter
 from collections.abc import AsyncIterator, Awaitable, Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Annotated, Literal, TypeVar
+from typing import TYPE_CHECKING, Annotated, Any, Literal, TypeVar
 
 from anyio import CapacityLimiter, to_thread
 from fastapi import Depends, HTTPException, Request, WebSocket
@@ -26,12 +26,15 @@ from .db import Store
 from .foxglove import FoxgloveLive
 from .loopback_tls import LoopbackTls
 from .project_events import ProjectEvents
-from .roles import Role, parse_roles
+from .roles import Role
 from .scene import SceneService
 from .security import csrf_for
 from .sessionwatches import SessionWatches
 from .settings import Settings
 from .socketcaps import SocketCaps
+from .storework import has_role as has_role  # re-exported: the routes import it from here
+from .storework import holding, known, store_work
+from .storework import roles_of as roles_of
 from .tables import User
 from .throttle import KnownPairs, Throttle
 from .tickets import ViewerTickets
@@ -43,6 +46,7 @@ if TYPE_CHECKING:
     from .hub import SubscriptionHub
     from .reconcile import DroneStatuses
     from .replay import ReplaySlot
+    from .storeproc import StoreProcesses
 
 #: The workbench's session cookie (HttpOnly, SameSite=Strict) and the header
 #: a cookie session must add to every unsafe request (CSRF).
@@ -90,6 +94,8 @@ class AppState:
     closing_threads: CapacityLimiter | None = None
     #: The hot routes' threads (in_store), apart from the routes' pool.
     store_threads: ThreadPoolExecutor | None = None
+    #: The hot routes' store processes (storeproc.py); None: store_threads.
+    store_procs: StoreProcesses | None = None
     #: Open WebSockets per user and per client address (socketcaps.py).
     socket_caps: SocketCaps = field(default_factory=lambda: SocketCaps(64, 512))
     #: One shared session re-check per session of open sockets (sessionwatch.py).
@@ -184,70 +190,46 @@ def current_user(db: DbDep, token: TokenDep) -> User:
     connection that the running ones wait for."""
     user = user_for_token(db, token)
     db.commit()
-    return _known(user)
-
-
-def _known(user: User | None) -> User:
-    if user is None:
-        raise HTTPException(401, "invalid or expired token", headers={"WWW-Authenticate": "Bearer"})
-    return user
+    return known(user)
 
 
 UserDep = Annotated[User, Depends(current_user)]
-
-
-def roles_of(user: User) -> set[str]:
-    return parse_roles(user.roles)
-
-
-def has_role(user: User, *roles: Role) -> bool:
-    held = roles_of(user)
-    return Role.admin in held or any(r in held for r in roles)
 
 
 def require(*roles: Role) -> Callable[[User], Awaitable[User]]:
     """A dependency letting through users holding any of ``roles`` (or admin)."""
 
     async def check(user: UserDep) -> User:  # (async: no worker thread for a set test)
-        return _holding(user, roles)
+        return holding(user, roles)
 
     return check
 
 
-def _holding(user: User, roles: tuple[Role, ...]) -> User:
-    if not has_role(user, *roles):
-        names = ", ".join(r.value for r in roles) or "admin"
-        raise HTTPException(403, f"this needs the role {names}")
-    return user
-
-
 async def in_store(
-    state: AppState, creds: Credentials, work: Callable[[Db, User], T], *roles: Role
+    state: AppState,
+    creds: Credentials,
+    roles: tuple[Role, ...],
+    work: Callable[..., T],
+    *args: Any,
 ) -> T:
-    """``work(db, user)`` for the request's user, in ONE worker-thread hop
-    (issue 41: each hop costs the event loop as much as a short request):
-    a store session is opened, the session token read (401) and ``roles``
-    checked (403, none: any user), ``work`` run and committed, and the
-    session closed, all in a thread of ``state.store_threads``. ``work``
-    should also build its answer there (e.g. the JSON bytes of a
-    :class:`fastapi.Response`), so the event loop only sends it. (An
-    executor's hop costs the loop about half of anyio's, which adds a
-    ``queue.Queue`` and a cancel scope; a request given up while its work
-    runs lets it finish, as anyio's did, and one not begun is never run.)"""
-    call = functools.partial(_store_work, state, creds.token, roles, work)
+    """``work(db, user, *args)`` for the request's user, in ONE hop (issue
+    41: each hop costs the event loop as much as a short request): a store
+    session is opened, the session token read (401) and ``roles`` checked
+    (403; none: any user), ``work`` run and committed, and the session
+    closed (:func:`store_work`). ``work`` also builds its answer there (e.g.
+    the JSON bytes), so the event loop only sends it.
+
+    The hop goes to a store process (storeproc.py, ``Settings.store_processes``):
+    the work's Python then never holds this process's interpreter lock away
+    from the event loop. ``work`` must be a module-level function and its
+    arguments and result picklable. With no store processes it goes to
+    ``state.store_threads`` (an executor's hop costs the loop about half of
+    anyio's). Either way a request given up while its work runs lets it
+    finish, and one not begun is never run."""
+    if state.store_procs is not None:
+        return await state.store_procs.run(creds.token, roles, work, args)
+    call = functools.partial(store_work, state.store, creds.token, roles, work, args)
     return await asyncio.get_running_loop().run_in_executor(state.store_threads, call)
-
-
-def _store_work(
-    state: AppState, token: str, roles: tuple[Role, ...], work: Callable[[Db, User], T]
-) -> T:
-    with state.store.session() as db:
-        user = _known(user_for_token(db, token))
-        if roles:
-            _holding(user, roles)
-        out = work(db, user)
-        db.commit()
-        return out
 
 
 async def _heavy(request: Request, state: StateDep, user: UserDep) -> AsyncIterator[None]:

@@ -27,6 +27,16 @@ class ApiError(Exception):
         self.body = {"detail": detail, **extra}
         self.headers = headers
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickled whole (it crosses from a store or archive worker process)."""
+        return (_api_error, (self.status, self.body, self.headers))
+
+
+def _api_error(status: int, body: dict[str, Any], headers: dict[str, str] | None) -> ApiError:
+    exc = ApiError(status, str(body.get("detail", "")), headers=headers)
+    exc.body = body
+    return exc
+
 
 async def _handle(_request: Request, exc: Exception) -> JSONResponse:
     assert isinstance(exc, ApiError)

@@ -108,6 +108,10 @@ class Settings:
     #: Threads of their own for login: never queued behind the worker threads
     #: that run the other sync routes (saves, reads).
     login_threads: int = 2
+    #: Processes running the hot routes' store work (a model's read and save,
+    #: its versions: storeproc.py), so its Python never holds the event loop's
+    #: interpreter lock; 0: threads of this process. 2 in the CLI.
+    store_processes: int = 0
     #: Heavy routes (CSV export, series, deploy): at once per user and in all.
     heavy_per_user: int = 2
     heavy_total: int = 8

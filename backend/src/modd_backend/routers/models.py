@@ -37,6 +37,7 @@ from .projects import DENIED, check_edit
 router = APIRouter(prefix="/api", tags=["models"])
 NOT_FOUND: Responses = {404: {"description": "no such project or revision"}}
 Revision = Annotated[int | None, Query(ge=1, le=2**31 - 1)]
+EDITING = tuple(sorted(EDITORS))
 
 
 class SaveIn(ModelInput):
@@ -52,10 +53,13 @@ class ValidateOut(BaseModel):
     diagnostics: list[DiagnosticOut]
 
 
-def json_answer(out: BaseModel | list[VersionOut]) -> Response:
-    """The JSON answer FastAPI would give for ``out`` (its response model),
-    built in the route's thread: the event loop only sends the bytes."""
-    data = _VERSIONS.dump_json(out) if isinstance(out, list) else out.model_dump_json().encode()
+def answer_bytes(out: BaseModel | list[VersionOut]) -> bytes:
+    """The JSON FastAPI would answer for ``out`` (its response model), built
+    in the store's hop: the event loop only sends the bytes."""
+    return _VERSIONS.dump_json(out) if isinstance(out, list) else out.model_dump_json().encode()
+
+
+def json_bytes(data: bytes) -> Response:
     return Response(data, media_type="application/json")
 
 
@@ -66,14 +70,13 @@ _VERSIONS = TypeAdapter(list[VersionOut])
 async def read_model(
     project_id: Id, state: StateDep, creds: CredsDep, revision: Revision = None
 ) -> Response:
-    """(async: the whole request is one hop to a store thread, deps.in_store)"""
+    """(async: the whole request is one hop to the store, deps.in_store)"""
+    return json_bytes(await in_store(state, creds, (), _read, project_id, revision))
 
-    def work(db: Db, _user: User) -> Response:
-        return json_answer(
-            ModelOut.model_validate(version_json(get_version(db, project_id, revision)))
-        )
 
-    return await in_store(state, creds, work)
+def _read(db: Db, _user: User, project_id: int, revision: int | None) -> bytes:
+    version = get_version(db, project_id, revision)
+    return answer_bytes(ModelOut.model_validate(version_json(version)))
 
 
 @router.put(
@@ -84,18 +87,17 @@ async def read_model(
 )
 async def save_model(project_id: Id, raw: BodyDep, creds: CredsDep, state: StateDep) -> Response:
     """Save a new revision (the body is a :class:`SaveIn`, read and
-    validated in the route's store thread, not on the event loop:
+    validated in the store's hop, not on the event loop:
     modd_backend.bodies, deps.in_store). Text input keeps the current diagram
     layout (the .modd text has none). Everyone watching the project over a
     stream WebSocket hears of it (``{"type": "saved", ...}``)."""
-
-    def work(db: Db, user: User) -> Response:
-        return json_answer(_save(db, user, state, project_id, raw))
-
-    return await in_store(state, creds, work, *EDITORS)
+    data, event = await in_store(state, creds, EDITING, _save, project_id, raw)
+    state.project_events.publish(project_id, event)
+    return json_bytes(data)
 
 
-def _save(db: Db, user: User, state: AppState, project_id: int, raw: Body) -> ModelOut:
+def _save(db: Db, user: User, project_id: int, raw: Body) -> tuple[bytes, dict[str, Any]]:
+    """The saved revision's answer and the event its watchers hear."""
     body = parse_as(raw, SaveIn)
     # a JSON model is stored as it is (its diagnostics come with the saved
     # revision, versions.diagnostics_of); text is read into one first
@@ -114,36 +116,38 @@ def _save(db: Db, user: User, state: AppState, project_id: int, raw: Body) -> Mo
     version = save_version(
         db, project_id, body.base_revision, model, user.username, body.message, check
     )
-    announce_save(state, version)
-    return ModelOut.model_validate(version_json(version))
+    return answer_bytes(ModelOut.model_validate(version_json(version))), saved_event(version)
+
+
+def saved_event(version: ModelVersion) -> dict[str, Any]:
+    """What a project's watchers hear of a saved revision."""
+    return {
+        "type": "saved",
+        "project": version.project_id,
+        "revision": version.revision,
+        "author": version.author,
+        "message": version.message[:200],
+    }
 
 
 def announce_save(state: AppState, version: ModelVersion) -> None:
     """Tell the project's watchers that a revision was saved."""
-    state.project_events.publish(
-        version.project_id,
-        {
-            "type": "saved",
-            "project": version.project_id,
-            "revision": version.revision,
-            "author": version.author,
-            "message": version.message[:200],
-        },
-    )
+    state.project_events.publish(version.project_id, saved_event(version))
 
 
 @router.get("/projects/{project_id}/versions", response_model=list[VersionOut], responses=NOT_FOUND)
 async def list_versions(project_id: Id, state: StateDep, creds: CredsDep) -> Response:
-    def work(db: Db, _user: User) -> Response:
-        get_project(db, project_id)
-        rows = db.scalars(
-            select(ModelVersion)
-            .where(ModelVersion.project_id == project_id)
-            .order_by(ModelVersion.revision.desc())
-        )
-        return json_answer([VersionOut.model_validate(version_json(v, False)) for v in rows])
+    return json_bytes(await in_store(state, creds, (), _versions, project_id))
 
-    return await in_store(state, creds, work)
+
+def _versions(db: Db, _user: User, project_id: int) -> bytes:
+    get_project(db, project_id)
+    rows = db.scalars(
+        select(ModelVersion)
+        .where(ModelVersion.project_id == project_id)
+        .order_by(ModelVersion.revision.desc())
+    )
+    return answer_bytes([VersionOut.model_validate(version_json(v, False)) for v in rows])
 
 
 @router.get(
