@@ -83,6 +83,7 @@ class BackfillManager:
         self._sinks = sinks
         self._state = state
         self._lock = threading.RLock()
+        self._saving = threading.Lock()  # taken before _lock, never under it
         self._wake = threading.Condition(self._lock)
         # request ids from 1 (one byte in every BACKFILL_DATA): the PubBroker forgets its
         # requests at each authentication, so a restarted SubBroker's ids meet no old one
@@ -132,7 +133,13 @@ class BackfillManager:
             return WindowRecord()
 
     def save(self) -> None:
-        """Write the record to the state directory (if any) when it changed."""
+        """Write the record to the state directory (if any) when it changed. On return
+        the record as it was at the call is on disk, also when the clock thread's save
+        took it: a save under way is waited for (one writer at a time)."""
+        with self._saving:
+            self._save()
+
+    def _save(self) -> None:
         with self._lock:
             if self._state is None or not self._dirty:
                 return
@@ -148,7 +155,8 @@ class BackfillManager:
             self._state.save_windows(doc)
         except OSError as exc:
             log.error("cannot keep the window record: %s", exc)
-            self._dirty = True  # the journal set aside is kept until it is
+            with self._lock:
+                self._dirty = True  # the journal set aside is kept until it is
             return
         if journal is not None:
             journal.saved()
