@@ -11,7 +11,7 @@
  */
 import { useEffect, useMemo, useSyncExternalStore } from "react";
 import {
-  acknowledge as ack, acknowledgeAll as ackAll, alertRules, applyEvents, clearAlert, type Alert, type AlertRule,
+  acknowledge as ack, acknowledgeAll as ackAll, alertRules, applyEvents, clearAlert, type Alert, type AlertRule, type Newest,
 } from "../core/alerts";
 import type { DataSource } from "../dataSources/types";
 import type { ViewRole } from "../core/roles";
@@ -20,6 +20,8 @@ import { useDroneStream } from "./useDroneStream";
 
 class AlertStore {
   alerts: Alert[] = [];
+  /** Each subscriber's newest crossing: a backfilled older one is history, not the state. */
+  private newest: Newest = new Map();
   private listeners = new Set<() => void>();
   /** Raised alerts (for the sound), newest last. */
   onRaised = new Set<(a: Alert) => void>();
@@ -36,8 +38,8 @@ class AlertStore {
 
   /** Feeds a rule's channel into the store; returns the unsubscribe. */
   watch(source: DataSource, rule: AlertRule): () => void {
-    this.set(applyEvents(this.alerts, rule, source.history(rule.subscriber), Date.now()));
-    return source.subscribe(rule.subscriber, (batch) => this.set(applyEvents(this.alerts, rule, batch, Date.now())));
+    this.set(applyEvents(this.alerts, rule, source.history(rule.subscriber), Date.now(), this.newest));
+    return source.subscribe(rule.subscriber, (batch) => this.set(applyEvents(this.alerts, rule, batch, Date.now(), this.newest)));
   }
 }
 

@@ -2,7 +2,7 @@ import { describe, expect, it } from "vitest";
 import type { Sample } from "../dataSources/types";
 import { toSamples } from "../dataSources/WebSocketSource";
 import {
-  MAX_ALERTS, acknowledge, acknowledgeAll, activeAlerts, alertRules, alertTimes, applyEvents, bannerAlert, clearAlert, describeAlert, type Alert, type AlertRule,
+  MAX_ALERTS, acknowledge, acknowledgeAll, activeAlerts, alertRules, alertTimes, applyEvents, bannerAlert, clearAlert, describeAlert, type Alert, type AlertRule, type Newest,
 } from "./alerts";
 import type { ModdModel as Model } from "./model.gen";
 import { localTimeMs } from "./numberFormat";
@@ -65,6 +65,25 @@ describe("alerts", () => {
     expect(alerts).toHaveLength(1);
     expect(alerts[0]).toMatchObject({ t: 1000.2, receivedMs: 1_060_000, deliveredNs: 1_000_900_000_000, active: true });
     expect(applyEvents([], rule("up"), [{ t: 1, value: 0.9 }], 0)).toEqual([]); // not an event: a plain value
+  });
+
+  it("an outage's crossings backfilled after newer live ones are raised as history, not as the state", () => {
+    const newest: Newest = new Map();
+    const up = rule("up");
+    // live: up at 10 (raised), then the link is lost; after it, live down at 16 clears it
+    let alerts = applyEvents([], up, [{ t: 10, value: 0.7, event: true }], 10_100, newest);
+    alerts = applyEvents(alerts, up, [{ t: 16, value: 0.3, event: true }], 16_100, newest);
+    expect(alerts.filter((a) => a.active)).toHaveLength(0);
+    // backfilled: the outage's down at 12 and up at 14 (older than the live down at 16)
+    alerts = applyEvents(alerts, up, [{ t: 12, value: 0.3, event: true }, { t: 14, value: 0.8, event: true }], 20_000, newest);
+    const late = alerts.find((a) => a.t === 14);
+    expect(late).toMatchObject({ active: false, cleared: "signal", acknowledged: false, receivedMs: 20_000 });
+    expect(activeAlerts(alerts, [up], "operator")).toEqual([]);
+    expect(bannerAlert(alerts, [up], "scientist")?.t).toBe(14); // seen in the banner, back to normal
+    // and a late down never clears a newer live alert
+    alerts = applyEvents(alerts, up, [{ t: 30, value: 0.9, event: true }], 30_100, newest);
+    alerts = applyEvents(alerts, up, [{ t: 25, value: 0.2, event: true }], 31_000, newest);
+    expect(activeAlerts(alerts, [up], "operator").map((a) => a.t)).toEqual([30]);
   });
 
   it("shows the banner to the roles that asked; the operator's list holds every active alert", () => {

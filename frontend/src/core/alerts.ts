@@ -85,20 +85,33 @@ function raises(rule: AlertRule, d: Direction): boolean {
   return rule.crossing === "both" || rule.crossing === d;
 }
 
-/** The alerts after a batch of a rule's delivered samples (events only; in time order). */
-export function applyEvents(alerts: readonly Alert[], rule: AlertRule, batch: readonly Sample[], receivedMs: number): Alert[] {
+/** The newest crossing seen per subscriber (kept by the caller across batches). */
+export type Newest = Map<string, { t: number; direction: Direction }>;
+
+/**
+ * The alerts after a batch of a rule's delivered samples (events only; in time order).
+ * An event older than the newest crossing already seen (a window backfilled after the
+ * link came back) is history: it is raised with its true time, for the banner, but
+ * as already back to normal, and it clears nothing newer.
+ */
+export function applyEvents(alerts: readonly Alert[], rule: AlertRule, batch: readonly Sample[], receivedMs: number,
+  newest: Newest = new Map()): Alert[] {
   let out = [...alerts];
   const events = batch.filter((s) => s.event).sort((a, b) => a.t - b.t);
   for (const e of events) {
     const d = directionOf(rule, e.value);
     const id = `${rule.subscriber}@${e.t}`;
     if (out.some((a) => a.id === id)) continue;
+    const last = newest.get(rule.subscriber);
+    const late = last !== undefined && last.t > e.t;
+    if (!late) newest.set(rule.subscriber, { t: e.t, direction: d });
     // The way back clears what the other direction raised (with BOTH as well).
     out = out.map((a) => a.subscriber === rule.subscriber && a.active && a.direction !== d && a.t <= e.t
       ? { ...a, active: false, cleared: "signal" } : a);
-    if (!raises(rule, d) || out.some((a) => a.subscriber === rule.subscriber && a.active && a.direction === d)) continue;
+    if (!raises(rule, d) || (!late && out.some((a) => a.subscriber === rule.subscriber && a.active && a.direction === d))) continue;
     out.push({ id, subscriber: rule.subscriber, direction: d, value: e.value, t: e.t, receivedMs,
-      ...(e.deliveredNs !== undefined ? { deliveredNs: e.deliveredNs } : {}), acknowledged: false, active: true });
+      ...(e.deliveredNs !== undefined ? { deliveredNs: e.deliveredNs } : {}), acknowledged: false,
+      ...(late ? { active: false, cleared: "signal" as const } : { active: true }) });
   }
   return bounded(out);
 }
