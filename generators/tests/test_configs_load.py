@@ -61,7 +61,7 @@ def test_campaign_station_configs_load_as_one_mesh(scenarios_dir: Path, tmp_path
     from modd_gen.targets.stations import artifacts, parse_station
 
     model = load_model(scenarios_dir / "scenario1.modd")
-    given = ["shore=tcp/192.0.2.1:7447", "boat", "cliff=tcp/cliff.example:7448"]
+    given = ["shore=tcp/shore.example:7447", "boat", "cliff=tcp/cliff.example:7448"]
     stations = [parse_station(t) for t in given]
     write_artifacts(
         tmp_path, [*generate(model, "operator"), *artifacts(build_context(model), stations)]
@@ -78,7 +78,7 @@ def test_campaign_station_configs_load_as_one_mesh(scenarios_dir: Path, tmp_path
         assert mesh is not None and mesh.station == zid[name]
         want = {
             zid[o]: e
-            for o, e in (("shore", "tcp/192.0.2.1:7447"), ("cliff", "tcp/cliff.example:7448"))
+            for o, e in (("shore", "tcp/shore.example:7447"), ("cliff", "tcp/cliff.example:7448"))
             if o != name
         }
         assert dict(mesh.peers) == want, name

@@ -1,18 +1,18 @@
 """A campaign's base stations (docs/fleet.md, docs/operations.md "Two stations"):
-``modd generate FILE --out DIR --station shore=tcp/10.0.0.1:7447 --station boat``
+``modd generate FILE --out DIR --station shore=tcp/shore.example:7447 --station boat``
 writes one SubBroker configuration per station, ``operator/stations/<name>/subbroker.toml``:
 the drone's (subbroker_config.py) with ``station`` set, its zenoh in router mode (the
 SubBroker is the station's router) and ``[zenoh.mesh]``: this station's zenoh id and
 the other stations' endpoints. A station given without an endpoint (behind a cellular
 link or NAT: nothing can connect to it) dials the others and is listed by none.
 
->>> s = parse_station("shore=tcp/10.0.0.1:7447"); (s.name, s.endpoint, s.listen)
-('shore', 'tcp/10.0.0.1:7447', 'tcp/0.0.0.0:7447')
+>>> s = parse_station("shore=tcp/shore.example:7447"); (s.name, s.endpoint, s.listen)
+('shore', 'tcp/shore.example:7447', 'tcp/0.0.0.0:7447')
 >>> parse_station("boat").endpoint is None
 True
->>> parse_station("shore=10.0.0.1")  # doctest: +ELLIPSIS
+>>> parse_station("shore=shore.example")  # doctest: +ELLIPSIS
 Traceback (most recent call last):
-ValueError: --station shore=10.0.0.1: expected NAME=PROTOCOL/HOST:PORT (tcp/10.0.0.1:7447), ...
+ValueError: --station shore=shore.example: expected NAME=PROTOCOL/HOST:PORT ...
 """
 
 from __future__ import annotations
@@ -63,7 +63,7 @@ def parse_station(text: str) -> CampaignStation:
     m = _ENDPOINT.fullmatch(endpoint)
     if m is None or not 0 < int(m.group(3)) < 65536:
         raise ValueError(
-            f"--station {text}: expected NAME=PROTOCOL/HOST:PORT (tcp/10.0.0.1:7447), or NAME "
+            f"--station {text}: expected NAME=PROTOCOL/HOST:PORT (tcp/shore.example:7447), or NAME "
             "alone for a station nothing can connect to (cellular)"
         )
     return CampaignStation(name, endpoint)
