@@ -9,6 +9,7 @@ import { formFor, checkField, getPath, type JsonSchema } from "./schemaForm";
 import { elementValue } from "./ops";
 import { modelToGraph } from "./graph";
 import { parseId } from "./ids";
+import { campaignDiagnostics } from "./campaignForm";
 
 export type Severity = "error" | "warning" | "info";
 
@@ -73,6 +74,7 @@ export function localDiagnostics(model: ModdModel, schema: JsonSchema): Diagnost
       }
     }
   }
+  out.push(...campaignDiagnostics(model, schema));
   const published = new Set(model.publishers.flatMap((p) => p.topics));
   model.subscribers.forEach((s, i) => {
     if (s.topic && !published.has(s.topic)) {

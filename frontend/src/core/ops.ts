@@ -370,6 +370,18 @@ export function setField(model: ModdModel, id: string, path: string[], value: un
   if (id === LINK_ID && !m.link) m.link = {};
   const target = elementValue(m, id) as Record<string, unknown> | undefined;
   if (!target) throw new EditError(`unknown element "${id}"`);
+  setIn(target, path, value);
+  if (id === LINK_ID && m.link && Object.keys(m.link).length === 0) delete m.link;
+  return m;
+}
+
+/**
+ * Sets `value` at `path` inside `target` (changed in place), making the nested
+ * objects on the way; `undefined` removes the field and the nested objects it
+ * leaves empty (a source's condition whose parts are all cleared). Array
+ * items are addressed by their index ("0").
+ */
+export function setIn(target: Record<string, unknown>, path: readonly string[], value: unknown): void {
   const chain: Record<string, unknown>[] = [target];
   for (const seg of path.slice(0, -1)) {
     const obj = chain[chain.length - 1];
@@ -377,14 +389,10 @@ export function setField(model: ModdModel, id: string, path: string[], value: un
     chain.push(obj[seg] as Record<string, unknown>);
   }
   const last = path[path.length - 1];
-  // undefined removes an optional field (the inspector sends it for an emptied optional input),
-  // and the nested objects it leaves empty (a source's condition whose parts are all cleared).
   if (value === undefined) {
     delete chain[chain.length - 1][last];
     for (let i = chain.length - 1; i > 0 && Object.keys(chain[i]).length === 0; i--) delete chain[i - 1][path[i - 1]];
   } else chain[chain.length - 1][last] = value;
-  if (id === LINK_ID && m.link && Object.keys(m.link).length === 0) delete m.link;
-  return m;
 }
 
 /** Saves node positions into the layout. */

@@ -34,6 +34,11 @@ export function canEdit(role: Role, kind: ElementKind): boolean {
   return EDITS[role].includes(kind);
 }
 
+/** Whether `role` may edit the campaign (its vehicles and channels): the part's owner, the system designer. */
+export function canEditCampaign(role: Role): boolean {
+  return role === "admin" || PART_OWNERS["/campaign"] === role;
+}
+
 /** Whether `role` may edit anything in the model (the operator may not). */
 export function editsAnything(role: Role): boolean {
   return EDITS[role].length > 0;

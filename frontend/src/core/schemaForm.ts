@@ -55,6 +55,8 @@ export interface FieldSpec {
   maxLength?: number;
   minItems?: number;
   default?: unknown;
+  /** What an optional choice's empty option says ("(default: tcp)" when not given). */
+  emptyLabel?: string;
 }
 
 /** The $defs entry that describes each element kind. */
@@ -136,8 +138,13 @@ function fieldsOf(root: JsonSchema, obj: JsonSchema, prefix: string[], parentReq
 
 /** The form fields of an element kind, in schema order. */
 export function formFor(root: JsonSchema, kind: ElementKind): FieldSpec[] {
-  const def = root.$defs?.[DEF_OF_KIND[kind]];
-  if (!def) throw new Error(`schema: no $defs/${DEF_OF_KIND[kind]}`);
+  return formForDef(root, DEF_OF_KIND[kind]);
+}
+
+/** The form fields of a $defs entry (one that is no diagram element: a campaign's vehicle), in schema order. */
+export function formForDef(root: JsonSchema, defName: string): FieldSpec[] {
+  const def = root.$defs?.[defName];
+  if (!def) throw new Error(`schema: no $defs/${defName}`);
   return fieldsOf(root, def, [], true);
 }
 

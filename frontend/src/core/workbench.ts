@@ -14,9 +14,10 @@ import {
   EditError, addPublisher, addSensor, addSubscriber, addVariable, connect, disconnect,
   moveNodes, removeElements, renamedId, setField,
 } from "./ops";
+import { applyCampaignEdit, campaignEditKey, type CampaignEdit } from "./campaign";
 import { copyElements, isEmptyFragment, pasteFragment, type Fragment } from "./clipboard";
 import { parseId, type ElementKind } from "./ids";
-import { canEdit, deniedParts, deniedPartsFor, editsAnything, partWords, refusalOfParts, type Role } from "./roles";
+import { canEdit, canEditCampaign, deniedParts, deniedPartsFor, editsAnything, partWords, refusalOfParts, type Role } from "./roles";
 
 export interface WorkbenchState {
   history: History<ModdModel>;
@@ -45,6 +46,8 @@ export type Action =
   | { type: "connect"; source: string; target: string }
   | { type: "disconnect"; source: string; target: string }
   | { type: "setField"; id: string; path: string[]; value: unknown }
+  /** An edit of the campaign (core/campaign.ts): the Inspector's campaign form. */
+  | { type: "editCampaign"; edit: CampaignEdit }
   | { type: "move"; positions: Record<string, Position> }
   | { type: "copy"; ids: string[] }
   /** Copy and paste in one step, leaving the clipboard as it is (a subscription asked twice). */
@@ -128,6 +131,10 @@ function edit(s: WorkbenchState, a: Action): WorkbenchState {
       const newId = renamed ? renamedId(a.id, a.value as string) : a.id;
       const select = s.selection.map((x) => (x === a.id ? newId : x));
       return commit(s, model, { select, coalesce: `field:${newId}:${a.path.join(".")}` });
+    }
+    case "editCampaign": {
+      if (!canEditCampaign(s.role)) return refuse(s, denied(s.role, "the campaign"));
+      return commit(s, applyCampaignEdit(m, a.edit), { coalesce: campaignEditKey(a.edit) });
     }
     case "replaceModel": {
       if (a.roles) {

@@ -83,7 +83,7 @@ export function FieldInput({ spec, value, topics, readOnly, errors, onCommit }: 
       control = (
         <select id={id} value={toText(value ?? spec.default)} disabled={readOnly} aria-invalid={invalid} aria-describedby={describedBy}
           onChange={(e) => onCommit(e.target.value === "" ? undefined : e.target.value)}>
-          {!spec.required && <option value="">(default{spec.default !== undefined ? `: ${String(spec.default)}` : ""})</option>}
+          {!spec.required && <option value="">{spec.emptyLabel ?? `(default${spec.default !== undefined ? `: ${String(spec.default)}` : ""})`}</option>}
           {spec.options?.map((o) => <option key={o}>{o}</option>)}
         </select>
       );

@@ -17,6 +17,7 @@ import { edgeEnds, removeSelection } from "../../editor/selectionActions";
 import { KIND_LABEL } from "../../editor/nodes/ElementNode";
 import { EdgeInspector } from "./EdgeInspector";
 import { FieldInput } from "./FieldInput";
+import { CampaignForm } from "./CampaignForm";
 
 export default function InspectorPanel() {
   const store = useEditorStore();
@@ -57,6 +58,7 @@ export default function InspectorPanel() {
             </ul>
           </>
         )}
+        <CampaignForm />
       </section>
     );
   }
@@ -97,6 +99,7 @@ export default function InspectorPanel() {
             onCommit={(v) => store.dispatch({ type: "setField", id, path: spec.path, value: v })} />
         ))}
       </form>
+      {kind === "drone" && <CampaignForm />}
     </section>
   );
 }
