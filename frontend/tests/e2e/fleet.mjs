@@ -3,7 +3,9 @@
  * made from one mission model, each a real simulated drone (`modd up
  * --simulate`: PubBroker, SubBroker, simulator) on free loopback ports, its
  * SubBroker's zenoh router on a port of its own, the backend joined to the
- * three. In the browser: the campaign's .modd file imported as one project,
+ * three. In the browser: the mission's .modd file (one drone) imported as one
+ * project, made the campaign of the three with the Inspector's campaign form
+ * (as the drones' own models were made from the campaign's text) and saved;
  * the Fleet panel shows the three drones on one map with their link, a
  * deploy to the three at once is acked by each, and one subscription to the
  * water temperature of every drone is accepted by each SubBroker in one step.
@@ -16,9 +18,8 @@ import { expectText, expectVisible, waitUntil } from "./journey.mjs";
 
 export const FLEET = ["usv1", "usv2", "usv3"];
 
-/** The mission (scenario 1's accelerometer plus the survey's GPS and CTD, as run.mjs's surveyParts) and a Campaign of three vehicles, as .modd text. */
-function campaignText(ports) {
-  const vehicles = FLEET.map((n, i) => `    Vehicle ${n} "${n} boat" { channel = lake; PubBroker("127.0.0.1":${ports[i].pub}); SubBroker("127.0.0.1":${ports[i].sub}); }`);
+/** The mission (scenario 1's accelerometer plus the survey's GPS and CTD, as run.mjs's surveyParts), one drone, as .modd text. */
+function missionText(ports) {
   return [
     'Drone usv "Survey boat" {',
     "    Sensors {",
@@ -39,6 +40,15 @@ function campaignText(ports) {
     '    Subscriber sub_lon("usv.gps.longitude", 1.0, LAST);',
     '    Subscriber sub_temp("usv.ctd.water_temperature", 1.0, AVERAGE);',
     "}",
+    "",
+  ].join("\n");
+}
+
+/** The mission and a Campaign of three vehicles, as .modd text (the drones' models are expanded from it). */
+function campaignText(ports) {
+  const vehicles = FLEET.map((n, i) => `    Vehicle ${n} "${n} boat" { channel = lake; PubBroker("127.0.0.1":${ports[i].pub}); SubBroker("127.0.0.1":${ports[i].sub}); }`);
+  return [
+    missionText(ports).trimEnd(),
     'Campaign lake "Three boats on one lake" {',
     "    Channel lake { rate = 100000; }",
     ...vehicles,
@@ -72,7 +82,38 @@ export async function startFleet({ repo, bin, tmp, creds, pubbrokerBin, procs })
       "--credentials", creds, "--zenoh-listen", zenoh, "--simulate"],
     { cwd: repo, logFile: join(dir, `${name}.log`), env: { MODD_PUBBROKER: pubbrokerBin } }));
   });
-  return { text, endpoints };
+  return { text, mission: missionText(ports), ports, endpoints };
+}
+
+/**
+ * The campaign of the text (campaignText) made by a person in the Inspector's campaign form of
+ * the one-drone mission: two vehicles and a third, named after the fleet, each on channel lake,
+ * the second and third on their own brokers (the first keeps the mission's, which are its own).
+ */
+async function makeCampaign(page, ports, imagesDir) {
+  const form = page.getByRole("region", { name: "Inspector" }).getByRole("region", { name: "Campaign" });
+  const commit = async (input, text) => { await input.fill(text); await input.press("Enter"); };
+  await form.getByRole("button", { name: "Make it a campaign" }).click();
+  await form.getByRole("button", { name: "Add vehicle" }).click();
+  await commit(form.locator('form > .field[data-field="name"] input'), "lake");
+  await commit(form.locator('form > .field[data-field="description"] input'), "Three boats on one lake");
+  await form.getByRole("button", { name: "Add channel" }).click();
+  await commit(form.getByRole("group", { name: "Channel ch_1" }).getByLabel(/^rate bps/), "100000");
+  await commit(form.getByRole("group", { name: "Channel ch_1" }).getByLabel(/^name/), "lake");
+  for (const [i, name] of FLEET.entries()) {
+    let vehicle = form.getByRole("group", { name: `Vehicle usv_${i + 1}` });
+    await commit(vehicle.getByLabel(/^name/), name);
+    vehicle = form.getByRole("group", { name: `Vehicle ${name}` });
+    await commit(vehicle.getByLabel(/^description/), `${name} boat`);
+    await vehicle.getByLabel(/^channel/).selectOption("lake");
+    if (i === 0) continue;
+    await commit(vehicle.getByLabel(/^pub broker endpoint port/), String(ports[i].pub));
+    await vehicle.getByText("SubBroker: the mission's").click();
+    await commit(vehicle.getByLabel(/^sub broker endpoint host/), "127.0.0.1");
+    await commit(vehicle.getByLabel(/^sub broker endpoint port/), String(ports[i].sub));
+  }
+  await expectText(form.getByRole("group", { name: "Channel lake" }), /Vehicles on it: usv1, usv2, usv3/, 5000);
+  await page.screenshot({ path: join(imagesDir, "fleet-campaign-form.png") });
 }
 
 export function fleetJourney({ page, imagesDir, fleet }) {
@@ -80,9 +121,13 @@ export function fleetJourney({ page, imagesDir, fleet }) {
   const view = (name) => page.getByRole("tab", { name, exact: true }).click();
   const row = (n) => page.getByTestId(`fleet-row-${n}`);
   return [
-    ["fleet: a campaign of three drones imported from one mission model, each with its link up", async () => {
-      await page.locator('input[type="file"]').setInputFiles({ name: "lake.modd", mimeType: "text/plain", buffer: Buffer.from(fleet.text) });
+    ["fleet: a campaign of three drones made from one mission model with the Inspector's campaign form, saved, each with its link up", async () => {
+      await page.locator('input[type="file"]').setInputFiles({ name: "lake.modd", mimeType: "text/plain", buffer: Buffer.from(fleet.mission) });
       await page.locator('.react-flow__node[data-id="drone"]').waitFor({ state: "visible", timeout: 20000 });
+      await view("System designer");
+      await makeCampaign(page, fleet.ports, imagesDir);
+      await page.getByRole("button", { name: "Save", exact: true }).click();
+      await expectText(page.locator(".topbar .revision"), /^r2$/, 20000);
       await panel("Fleet");
       await expectText(page.locator(".fleet-panel"), /Campaign lake: 3 drones; channel lake: usv1, usv2, usv3/, 20000);
       for (const n of FLEET) await expectText(row(n).getByTestId("fleet-link"), /^up$/, 90000);
@@ -90,9 +135,9 @@ export function fleetJourney({ page, imagesDir, fleet }) {
     ["fleet: deployed to the three at once, each acked by its own drone", async () => {
       await view("Operator");
       await panel("Fleet");
-      await page.getByRole("button", { name: "Deploy revision 1 to 3 drones" }).click();
-      for (const n of FLEET) await expectText(page.getByTestId(`fleet-ack-${n}`), new RegExp(`^${n}: revision 1 acked$`), 60000);
-      for (const n of FLEET) await expectText(row(n).getByTestId("fleet-deployed"), /^r1 acked$/, 10000);
+      await page.getByRole("button", { name: "Deploy revision 2 to 3 drones" }).click();
+      for (const n of FLEET) await expectText(page.getByTestId(`fleet-ack-${n}`), new RegExp(`^${n}: revision 2 acked$`), 60000);
+      for (const n of FLEET) await expectText(row(n).getByTestId("fleet-deployed"), /^r2 acked$/, 10000);
     }],
     ["fleet: every drone on one map, at its last fix", async () => {
       const canvas = page.getByTestId("fleet-canvas");
