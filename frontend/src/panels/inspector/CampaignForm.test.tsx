@@ -20,6 +20,7 @@ import { planKey } from "../../core/planKey";
 import type { ModdModel } from "../../core/model.gen";
 import type { Diagnostic } from "../../core/diagnostics";
 import type { Role } from "../../core/roles";
+import { sameMeaning } from "../../core/canonical";
 
 const repo = resolve(__dirname, "../../../..");
 const python = resolve(repo, ".venv/bin/python");
@@ -36,6 +37,15 @@ for m in json.load(sys.stdin):
     out.append([{"severity": d.severity, "message": d.message, "pointer": d.pointer} for d in found])
 print(json.dumps(out))`;
   return JSON.parse(execFileSync(python, ["-c", script], { cwd: repo, input: JSON.stringify(models) }).toString()) as Diagnostic[][];
+}
+
+/** Each model printed as .modd text and parsed back by modd_model (what the Text panel shows and applies). */
+function viaText(models: ModdModel[]): unknown[] {
+  const script = `
+import json, sys
+from modd_model import dumps, load_text
+print(json.dumps([load_text(dumps(m, "modd"), "m.modd").model for m in json.load(sys.stdin)]))`;
+  return JSON.parse(execFileSync(python, ["-c", script], { cwd: repo, input: JSON.stringify(models) }).toString()) as unknown[];
 }
 
 const errorsOf = (diags: Diagnostic[]) => diags.filter((d) => d.severity === "error");
@@ -125,6 +135,8 @@ describe("CampaignForm", () => {
     ]);
     expect(model(store).campaign?.channels).toBeUndefined();
     expect(validated(steps).map(errorsOf)).toEqual([[], [], [], []]);
+    // and each is written in the Text panel's .modd and read back unchanged
+    viaText(steps).forEach((back, i) => expect(sameMeaning(back, { ...steps[i], layout: undefined })).toBe(true));
     click("Back to one drone");
     expect(model(store).campaign).toBeUndefined();
     act(() => store.dispatch({ type: "undo" })); // the model's own undo: the campaign is back
