@@ -24,6 +24,8 @@ import { sameMeaning } from "../../core/canonical";
 
 const repo = resolve(__dirname, "../../../..");
 const python = resolve(repo, ".venv/bin/python");
+/** Time for a test that runs the project's Python (a loaded machine; as roundTrip.test.ts). */
+const PYTHON_MS = 60_000;
 
 /** modd_model's validation of each model, and (with `plan`) the live plan's channel check, as the backend runs them. */
 function validated(models: ModdModel[], plan = false): Diagnostic[][] {
@@ -141,7 +143,7 @@ describe("CampaignForm", () => {
     expect(model(store).campaign).toBeUndefined();
     act(() => store.dispatch({ type: "undo" })); // the model's own undo: the campaign is back
     expect(model(store).campaign?.vehicles.map((v) => v.name)).toEqual(["north", "usv_3"]);
-  });
+  }, PYTHON_MS);
 
   it("shows the validator's and the live plan's located errors at the field they name", () => {
     const store = mount("designer", withDevice());
@@ -169,7 +171,7 @@ describe("CampaignForm", () => {
     const shared = part("Vehicle usv_2").getByText(/one PubBroker endpoint 127\.0\.0\.1:7171/);
     expect(shared.closest("details")?.querySelector("summary")?.textContent).toBe("PubBroker"); // at the vehicle's PubBroker
     expect(within(field("Vehicle usv_1", /^name/)).queryByRole("alert")).toBeNull();
-  });
+  }, PYTHON_MS);
 
   it("shows hostile strings as text, and is read-only outside the designer's view", () => {
     const m = scenario1();
