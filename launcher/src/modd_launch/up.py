@@ -32,6 +32,10 @@ Options:
   prints which file a viewer connects with, never a password
   (docs/security.md).
 
+- ``--vehicle NAME`` (repeatable): of a model with a ``Campaign``, run these
+  vehicles only (default: every one). A campaign runs as one supervised run
+  (:mod:`modd_launch.campaign_up`, docs/operations.md "A campaign").
+
 Link endpoints are always the model's. With ``--part all`` and no key in the
 environment, a random link key is made for the run; with ``--part drone`` or
 ``station`` both sides must share the key the model's ``keyRef`` names (by
@@ -54,6 +58,7 @@ import shutil
 import signal
 import subprocess
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -91,6 +96,8 @@ class Process:
     # sent by the kernel when modd up dies: SIGTERM lets the brokers close their files;
     # the simulator and the bridge hold nothing to save and go at once
     death_signal: int = signal.SIGTERM
+    # added to the run's environment: a campaign vehicle's own link key
+    env: dict[str, str] = field(default_factory=dict)
 
     def exit_code(self) -> int | None:
         return self.popen.poll() if self.popen is not None else None
@@ -105,7 +112,7 @@ class Process:
                 self.argv,
                 stdout=out,
                 stderr=subprocess.STDOUT,
-                env=env,
+                env={**env, **self.env},
                 start_new_session=True,  # Ctrl-C in a terminal reaches modd up alone
                 preexec_fn=tied_to_parent(self.death_signal),  # a killed modd up takes them along
             )
@@ -269,61 +276,125 @@ def following(model: dict[str, Any]) -> list[str]:
     return ["--watch", "--ingress", ingress_of(model).address]
 
 
+class UpError(Exception):
+    """Why ``modd up`` cannot start, said as it is (``modd up: <message>``)."""
+
+
 def run(args: argparse.Namespace) -> int:
     from modd_model import load_or_report
+    from modd_model.campaign import vehicles
 
     model = load_or_report(args.model)
     if model is None:
         return 1
+    if vehicles(model):
+        from .campaign_up import run_campaign
+
+        return run_campaign(args, model)
+    if args.vehicle and set(args.vehicle) != {model["drone"]["name"]}:
+        print(
+            f"modd up: {args.model} has no Campaign: --vehicle names a campaign's vehicles",
+            file=sys.stderr,
+        )
+        return 1
     try:
         workdir = run_dir(args.workdir, model["drone"]["name"])
-        args.credentials_dir = Path(args.credentials or workdir / "credentials").absolute()
-        store = CredentialStore(args.credentials_dir)
-        if args.part != "drone":
-            for name in store.ensure().remade:
-                print(
-                    f"modd up: {store.dir / name} was missing and was made anew with a new "
-                    "secret: copies of it handed out before no longer work",
-                    file=sys.stderr,
-                    flush=True,
-                )
-    except ValueError as exc:
+        store = credentials(args, workdir / "credentials")
+        local, stack, env = ready(args, model, workdir)
+    except (ValueError, UpError) as exc:
         print(f"modd up: {exc}", file=sys.stderr)
         return 1
+
+    def running() -> None:
+        station = args.part == "station"
+        where = f"logs in {workdir}" if station else f"archive in {workdir / 'archive'}"
+        drone = local["drone"]["name"]
+        print(f"modd up: drone {drone} ({args.part}) running; {where}; Ctrl-C to stop", flush=True)
+        if args.part != "drone":
+            print(viewer_hint(args, store), flush=True)
+
+    code, gave_up = supervised(stack, env, running)
+    if gave_up and args.part != "drone":  # the workbench is told why the run stopped
+        from .announce import announce_stop, settings_for
+
+        announce_stop(
+            settings_for(args.zenoh_listen or [], args.zenoh_connect or []),
+            store,
+            local["drone"]["name"],
+            gave_up[0],
+        )
+    return code
+
+
+def credentials(args: argparse.Namespace, default: Path) -> CredentialStore:
+    """The SubBrokers' credentials (``--credentials``, else ``default``), made at first start
+    (ValueError for a directory that cannot be used); sets ``args.credentials_dir``."""
+    args.credentials_dir = Path(args.credentials or default).absolute()
+    store = CredentialStore(args.credentials_dir)
+    if args.part != "drone":
+        for name in store.ensure().remade:
+            print(
+                f"modd up: {store.dir / name} was missing and was made anew with a new "
+                "secret: copies of it handed out before no longer work",
+                file=sys.stderr,
+                flush=True,
+            )
+    return store
+
+
+def ready(
+    args: argparse.Namespace, model: dict[str, Any], workdir: Path
+) -> tuple[dict[str, Any], Stack, dict[str, str]]:
+    """One drone's run, ready to start: the model as run, its processes (the radio
+    emulator, already started when the run needs one, first) and what the run adds to
+    the environment (a link key made for it). UpError when it cannot run; nothing of
+    it is left running then."""
     try:
         radio, devices = start_radio(args, model, workdir)
     except (uplink.LinkSetupError, FileNotFoundError) as exc:
-        print(f"modd up: {exc}", file=sys.stderr)
-        return 1
-    if args.simulate:  # simulated instruments on pseudo-terminals of this run, never real ones
-        from modd.sim.instruments import simulated_devices
-
-        model = simulated_devices(model, workdir / "devices")
-    local, configs = prepare(model, workdir, args.transport, devices)
-    if args.part != "drone":
-        print(kept_note(workdir / "state", args.resume), end="", flush=True)
-    env = dict(os.environ)
-    key_ref = local.get("link", {}).get("keyRef") or "env:MODD_LINK_KEY"
-    kind, _, name = key_ref.partition(":")
-    if kind == "env" and not env.get(name):
-        if args.part != "all":
-            # the other part runs elsewhere: a key made up here could never match its key
-            print(
-                f"modd up: --part {args.part} needs the link key in ${name} (the model's "
-                f"keyRef {key_ref}), the same on the drone and the station",
-                file=sys.stderr,
-            )
-            return 1
-        env[name] = secrets.token_hex(16)  # a key for this local run only
+        raise UpError(str(exc)) from exc
     try:
+        if args.simulate:  # simulated instruments on pseudo-terminals of this run, never real ones
+            from modd.sim.instruments import simulated_devices
+
+            model = simulated_devices(model, workdir / "devices")
+        local, configs = prepare(model, workdir, args.transport, devices)
+        if args.part != "drone":
+            print(kept_note(workdir / "state", args.resume), end="", flush=True)
+        key = link_key(args, local)
         stack = build_stack(args, local, workdir, configs)
-    except FileNotFoundError as exc:
-        print(f"modd up: {exc}", file=sys.stderr)
+    except (UpError, FileNotFoundError) as exc:
         if radio is not None:
             radio.stop()
-        return 1
+        raise UpError(str(exc)) from exc
     if radio is not None:
         stack.processes.insert(0, radio)  # stopped last
+    return local, stack, key
+
+
+def link_key(args: argparse.Namespace, local: dict[str, Any]) -> dict[str, str]:
+    """The environment variable of the link key the run makes (``--part all`` and none in
+    the environment: a random key for this run only), or nothing; UpError when a part
+    run here alone has none (the other part runs elsewhere: a key made up here could
+    never match its key)."""
+    key_ref = local.get("link", {}).get("keyRef") or "env:MODD_LINK_KEY"
+    kind, _, name = key_ref.partition(":")
+    if kind != "env" or os.environ.get(name):
+        return {}
+    if args.part != "all":
+        raise UpError(
+            f"--part {args.part} needs the link key in ${name} (the model's "
+            f"keyRef {key_ref}), the same on the drone and the station"
+        )
+    return {name: secrets.token_hex(16)}
+
+
+def supervised(
+    stack: Stack, key: dict[str, str], running: Callable[[], None]
+) -> tuple[int, list[dict[str, Any]]]:
+    """Start the stack, say it runs (``running``), restart what dies (modd.supervise)
+    until Ctrl-C or SIGTERM, then stop it all: the exit code and, when the run gave
+    up, which process and why."""
     stopping = False
 
     def on_signal(_sig: int, _frame: object) -> None:
@@ -332,14 +403,9 @@ def run(args: argparse.Namespace) -> int:
 
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
+    env = {**os.environ, **key}
     stack.start(env)
-    where = f"archive in {workdir / 'archive'}" if args.part != "station" else f"logs in {workdir}"
-    print(
-        f"modd up: drone {local['drone']['name']} ({args.part}) running; {where}; Ctrl-C to stop",
-        flush=True,
-    )
-    if args.part != "drone":
-        print(viewer_hint(args, store), flush=True)
+    running()
     code = 1
     gave_up: list[dict[str, Any]] = []
     try:
@@ -352,16 +418,7 @@ def run(args: argparse.Namespace) -> int:
         )
     finally:
         stack.stop()
-    if gave_up and args.part != "drone":  # the workbench is told why the run stopped
-        from .announce import announce_stop, settings_for
-
-        announce_stop(
-            settings_for(args.zenoh_listen or [], args.zenoh_connect or []),
-            store,
-            local["drone"]["name"],
-            gave_up[0],
-        )
-    return code
+    return code, gave_up
 
 
 def kept_note(state: Path, resume: bool) -> str:
@@ -512,5 +569,12 @@ def register(sub: Any) -> None:
         default=None,
         help="an emulated radio in the path (udp or serial), e.g. "
         '"rate=3600,loss=0.05,latency_ms=80" (modd-radio --help)',
+    )
+    p.add_argument(
+        "--vehicle",
+        action="append",
+        default=None,
+        metavar="NAME",
+        help="a campaign: run this vehicle (repeatable; default every vehicle)",
     )
     p.set_defaults(func=run)
