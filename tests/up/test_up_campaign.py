@@ -20,6 +20,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from modd.subbroker.payload import DeliveredValue  # noqa: E402
 from subbroker_harness import check_against_archive, read_archive  # noqa: E402
 from support.processes import pid_alive  # noqa: E402
 
@@ -43,10 +44,11 @@ def campaign_model(scenarios_dir: Path, tmp: Path, free_port: Callable[[], int])
     return model
 
 
-def raw_values(endpoint: str, viewer: Path, until: Callable[[dict[str, list]], bool]) -> dict:
+def raw_values(
+    endpoint: str, viewer: Path, until: Callable[[dict[str, list[DeliveredValue]]], bool]
+) -> dict[str, list[DeliveredValue]]:
     """Every delivered value put on `modd/*/sub/*` at the router, by key, until ``until``
     holds (40 s at most)."""
-    from modd.subbroker.payload import DeliveredValue
     from modd.zenoh_session import client_settings, open_session
 
     got: dict[str, list[DeliveredValue]] = {}

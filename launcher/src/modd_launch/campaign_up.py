@@ -37,7 +37,7 @@ from typing import Any
 from modd.zenoh_auth import CredentialStore, private_dir
 from modd.zenoh_session import DEFAULT_ENDPOINT
 
-from .up import Process, Stack, UpError, credentials, ready, run_dir, supervised, viewer_hint
+from .drone import Process, Stack, UpError, credentials, ready, run_dir, supervised, viewer_hint
 
 #: How long the station router may take to listen before the up fails.
 ROUTER_WAIT_S = 20.0
