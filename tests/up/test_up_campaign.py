@@ -3,8 +3,9 @@ brought up in one command with --simulate. Each drone's values arrive on its own
 zenoh key (`modd/<drone>/sub/*`, read raw at the campaign's one router), each equal
 to the aggregate recomputed from that drone's archive with the official `mcap`
 reader; a process of one vehicle that stops is restarted while the others run;
-SIGTERM stops every process (checked by PID). A vehicle that cannot start fails
-the up before anything runs, and no process is left."""
+SIGTERM stops every process (checked by PID). A vehicle whose process keeps dying
+stops the whole campaign, named; one that cannot start fails the up before anything
+runs; no process is left either way."""
 
 from __future__ import annotations
 
@@ -157,3 +158,42 @@ def test_a_vehicle_that_cannot_start_fails_the_up_and_leaves_nothing(
     assert res.returncode == 1
     assert "--vehicle usv9: the campaign has no such vehicle (usv1, usv2, usv3)" in res.stderr
     assert "started" not in res.stdout  # nothing started
+
+
+def test_a_vehicle_that_keeps_dying_stops_the_whole_campaign_named(
+    scenarios_dir: Path,
+    tmp_path: Path,
+    modd_cmd: str,
+    free_port: Callable[[], int],
+) -> None:
+    """usv2's PubBroker exits at once every time (a wrapper fails for usv2 alone): it is
+    restarted per the policy while usv1 and usv3 run, then the run gives up, naming usv2,
+    and every process of every vehicle is stopped (exit 1)."""
+    from modd_launch.drone import pubbroker_binary
+
+    wrapper = tmp_path / "pubbroker"
+    wrapper.write_text(
+        '#!/bin/sh\ncase "$*" in */usv2/*) echo "usv2 fails" >&2; exit 3;; esac\n'
+        f'exec {pubbroker_binary()} "$@"\n'
+    )
+    wrapper.chmod(0o755)
+    model = campaign_model(scenarios_dir, tmp_path, free_port)
+    argv = [modd_cmd, "up", str(model), "--workdir", str(tmp_path / "run")]
+    res = subprocess.run(
+        [*argv, "--zenoh-listen", f"tcp/127.0.0.1:{free_port()}"],
+        env={**os.environ, "MODD_PUBBROKER": str(wrapper)},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    out = res.stdout + res.stderr
+    assert res.returncode == 1, out
+    assert "restarted usv2/pubbroker (pid" in out and "restart 5 of at most 5" in out, out
+    assert "usv2/pubbroker exited (3)" in out and "stopping the run" in out, out
+    assert "modd up: vehicle usv2 failed; every drone of campaign lake was stopped" in out
+    assert "restarted usv1/" not in out and "restarted usv3/" not in out, out
+    pids = [int(p) for p in re.findall(r"\(pid (\d+)\)", out)]
+    assert len(pids) == 1 + 3 * len(VEHICLES) + 5, out  # router, 3 a vehicle, 5 restarts
+    assert not [p for p in pids if pid_alive(p)], out
+    for v in ("usv1", "usv3"):
+        assert f"stopped {v}/pubbroker (exit 0)" in out, out
