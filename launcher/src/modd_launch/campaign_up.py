@@ -144,17 +144,17 @@ def run_campaign(args: argparse.Namespace, model: dict[str, Any]) -> int:
             vehicles.append(vehicle(args, name, drone, top, connect))
             processes += vehicles[-1].processes
     except (ValueError, UpError) as exc:
-        Stack(processes).stop()  # what was started already (the router, radios)
+        Stack([p for p in processes if p.popen is not None]).stop()  # the router, radios
         print(f"modd up: {exc}", file=sys.stderr)
         return 1
 
     def running() -> None:
         for v in vehicles:
             print(status_line(v, args.part), flush=True)
-        where = ", ".join(listen or connect)
+        where = f"; zenoh {', '.join(listen or connect)}" if listen or connect else ""
         print(
             f"modd up: campaign {campaign}: {len(vehicles)} drones running "
-            f"({', '.join(v.name for v in vehicles)}); zenoh {where}; Ctrl-C to stop",
+            f"({', '.join(v.name for v in vehicles)}){where}; Ctrl-C to stop",
             flush=True,
         )
         if args.part != "drone":
