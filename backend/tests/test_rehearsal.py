@@ -8,7 +8,7 @@ from pathlib import Path
 
 from fastapi.testclient import TestClient
 from modd.subbroker.rehearsal import is_cut
-from modd_launch.up import rehearsal_dir
+from modd_launch.drone import rehearsal_dir
 
 from .conftest import ADMIN_PASSWORD, Headers, app_client, login
 

@@ -74,7 +74,7 @@ def load_model(path: Path, link_port: int) -> dict[str, Any]:
 def start_pubbroker(model: dict[str, Any], workdir: Path) -> tuple[Proc, dict[str, Any], Path]:
     """The real PubBroker from the operator configs generated for ``model`` (archive and
     ingress socket under workdir); returns it, the local model and the model.json path."""
-    from modd_launch.up import prepare
+    from modd_launch.drone import prepare
 
     if not PUBBROKER.is_file():
         pytest.fail(f"{PUBBROKER} is missing: run `make build`")

@@ -8,7 +8,7 @@ import os
 import subprocess
 from pathlib import Path
 
-from modd_launch.up import rehearsal_dir
+from modd_launch.drone import rehearsal_dir
 
 
 def _modd(

@@ -9,7 +9,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from modd_launch.up import run_dir
+from modd_launch.drone import run_dir
 
 DEMO = Path(__file__).resolve().parents[2] / "metamodel" / "examples" / "demo.modd"
 

@@ -1,16 +1,15 @@
 /**
  * Issue 44's fleet journey (MODD_E2E_ONLY=fleet): a campaign of three drones
- * made from one mission model, each a real simulated drone (`modd up
- * --simulate`: PubBroker, SubBroker, simulator) on free loopback ports, its
- * SubBroker's zenoh router on a port of its own, the backend joined to the
- * three. In the browser: the mission's .modd file (one drone) imported as one
- * project, made the campaign of the three with the Inspector's campaign form
- * (as the drones' own models were made from the campaign's text) and saved;
+ * made from one mission model, each a real simulated drone (PubBroker,
+ * SubBroker, simulator) on free loopback ports, the three brought up by one
+ * `modd up --simulate` of the campaign, their SubBrokers joined to its one
+ * station router, which the backend joins. In the browser: the mission's .modd
+ * file (one drone) imported as one project, made the campaign of the three with
+ * the Inspector's campaign form (as the campaign's text for `modd up` was) and saved;
  * the Fleet panel shows the three drones on one map with their link, a
  * deploy to the three at once is acked by each, and one subscription to the
  * water temperature of every drone is accepted by each SubBroker in one step.
  */
-import { execFileSync } from "node:child_process";
 import { mkdirSync, writeFileSync } from "node:fs";
 import { join } from "node:path";
 import { freePort, start } from "./processes.mjs";
@@ -58,31 +57,24 @@ function campaignText(ports) {
 }
 
 /**
- * Starts the three drones (each `modd up --simulate` of its vehicle's model, expanded from the
- * campaign by modd_model.campaign) and returns the campaign's text and the zenoh endpoints the
- * backend connects to. `procs` gets each process (stopped by PID with the others).
+ * Starts the three drones in one command: `modd up lake.modd --simulate` brings up every
+ * vehicle of the campaign (each its PubBroker, simulator and SubBroker) and one station router
+ * their SubBrokers join; returns the campaign's text and the zenoh endpoint the backend
+ * connects to. `procs` gets the `modd up` process (stopped by PID with the others: it stops
+ * every process of the campaign).
  */
 export async function startFleet({ repo, bin, tmp, creds, pubbrokerBin, procs }) {
   const ports = [];
-  for (const _ of FLEET) ports.push({ pub: await freePort(), sub: await freePort(), zenoh: await freePort() });
+  for (const _ of FLEET) ports.push({ pub: await freePort(), sub: await freePort() });
   const text = campaignText(ports);
   const dir = join(tmp, "fleet");
   mkdirSync(dir, { recursive: true });
   writeFileSync(join(dir, "lake.modd"), text);
-  execFileSync(join(bin, "python"), ["-c", [
-    "import json, sys", "from modd_model import load_model", "from modd_model.campaign import expand",
-    "for name, model in expand(load_model(sys.argv[1])).items():",
-    "    open(f'{sys.argv[2]}/{name}.json', 'w').write(json.dumps(model))",
-  ].join("\n"), join(dir, "lake.modd"), dir], { cwd: repo, stdio: "inherit" });
-  const endpoints = [];
-  FLEET.forEach((name, i) => {
-    const zenoh = `tcp/127.0.0.1:${ports[i].zenoh}`;
-    endpoints.push(zenoh);
-    procs.push(start(`modd up ${name}`, [join(bin, "modd"), "up", join(dir, `${name}.json`), "--workdir", join(dir, name),
-      "--credentials", creds, "--zenoh-listen", zenoh, "--simulate"],
-    { cwd: repo, logFile: join(dir, `${name}.log`), env: { MODD_PUBBROKER: pubbrokerBin } }));
-  });
-  return { text, mission: missionText(ports), ports, endpoints };
+  const zenoh = `tcp/127.0.0.1:${await freePort()}`;
+  procs.push(start("modd up lake", [join(bin, "modd"), "up", join(dir, "lake.modd"), "--workdir", join(dir, "run"),
+    "--credentials", creds, "--zenoh-listen", zenoh, "--simulate"],
+  { cwd: repo, logFile: join(dir, "up.log"), env: { MODD_PUBBROKER: pubbrokerBin } }));
+  return { text, mission: missionText(ports), ports, endpoints: [zenoh] };
 }
 
 /**

@@ -92,7 +92,7 @@ try {
   // (a second backend and, once paired, a SubBroker) and the paired drone (pairing.mjs).
   const pairingOnly = process.env.MODD_E2E_ONLY === "pairing";
   // MODD_E2E_ONLY=fleet: no `modd up` of scenario 1; three simulated drones of a campaign
-  // (fleet.mjs), each its own `modd up` and zenoh endpoint, the backend joined to the three.
+  // (fleet.mjs), brought up by one `modd up` of the campaign, the backend joined to its router.
   const fleetOnly = process.env.MODD_E2E_ONLY === "fleet";
   let fleet = null;
   const pairedModel = { ...scenario1(await freePort(), await freePort()) };
@@ -132,7 +132,7 @@ try {
     "--tiles", join(tmp, "tiles"),
     "--archives", drone ? join(tmp, "drone", "archive") : join(tmp, "archives"),
     "--records", drone ? join(tmp, "drone", "records") : join(tmp, "records"),
-    // a peer (it listens too) joins every drone's router; a client would join one of them
+    // a peer (it listens too) joins the fleet's router(s)
     ...(fleet ? [...fleet.endpoints.flatMap((e) => ["--zenoh-connect", e]), "--zenoh-listen", `tcp/127.0.0.1:${await freePort()}`] : []),
     ...(drone ? [...(fleet ? [] : ["--zenoh-connect", zenoh]), "--zenoh-credentials", join(creds, "backend.cred"),
       "--deploy-key", join(creds, "deploy.key")] : ["--no-zenoh"]),

@@ -86,7 +86,7 @@ def tied_to_parent(sig: int = signal.SIGTERM) -> Callable[[], None] | None:
 
 
 class Child(Protocol):
-    """A process of the run (``modd_launch.up.Process``)."""
+    """A process of the run (``modd_launch.drone.Process``)."""
 
     name: str
     log: Path
