@@ -153,7 +153,8 @@ TEST(SubscriberRepeats, IdentityFieldsAreCheckedAndOptional) {
       R"("config_id":1,"slot":7,"start_ns":0,"end_ns":1,"value":1,"count":null,"delivered_ns":1)";
   modd::Delivered d;
   std::string err;
-  ASSERT_TRUE(modd::parse_delivered(base + R"(,"drone":"usv","epoch_ns":null,"window":3})", d, &err));
+  ASSERT_TRUE(
+      modd::parse_delivered(base + R"(,"drone":"usv","epoch_ns":null,"window":3})", d, &err));
   EXPECT_FALSE(d.has_identity);  // one of the three missing: no identity, passed on
   EXPECT_FALSE(modd::parse_delivered(base + R"(,"window":"3"})", d, &err));
   EXPECT_NE(err.find("window"), std::string::npos);
@@ -168,13 +169,13 @@ TEST(SubscriberRepeats, IdentityFieldsAreCheckedAndOptional) {
 TEST(SubscriberRepeats, SeenWindowsIsBoundedAndMergesRuns) {
   modd::SeenWindows seen(3, 2);
   for (int64_t k = 0; k < 10; k += 2) EXPECT_TRUE(seen.first("usv", "s", 1, k));  // five runs
-  EXPECT_TRUE(seen.first("usv", "s", 1, 0));    // the oldest runs were forgotten
-  EXPECT_FALSE(seen.first("usv", "s", 1, 8));   // the newest kept
-  EXPECT_TRUE(seen.first("usv", "s", 1, 7));    // joins 8's run
+  EXPECT_TRUE(seen.first("usv", "s", 1, 0));   // the oldest runs were forgotten
+  EXPECT_FALSE(seen.first("usv", "s", 1, 8));  // the newest kept
+  EXPECT_TRUE(seen.first("usv", "s", 1, 7));   // joins 8's run
   EXPECT_FALSE(seen.first("usv", "s", 1, 7));
-  EXPECT_TRUE(seen.first("usv", "s", 2, 8));    // another epoch
-  EXPECT_TRUE(seen.first("usv", "t", 1, 8));    // another subscriber
-  EXPECT_TRUE(seen.first("usv", "u", 1, 8));    // a third pair: s, the least recent, forgotten
+  EXPECT_TRUE(seen.first("usv", "s", 2, 8));  // another epoch
+  EXPECT_TRUE(seen.first("usv", "t", 1, 8));  // another subscriber
+  EXPECT_TRUE(seen.first("usv", "u", 1, 8));  // a third pair: s, the least recent, forgotten
   EXPECT_FALSE(seen.first("usv", "t", 1, 8));
   EXPECT_TRUE(seen.first("usv", "s", 1, 8));
   EXPECT_TRUE(seen.first("usv", "s", 1, INT64_MAX));

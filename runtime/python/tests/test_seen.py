@@ -1,7 +1,8 @@
-"""Each window once, by its identity (docs/fleet.md): the Python subscriber API
-keeps the contracts' repeats (contracts/vectors/delivered_value.json, "repeats",
-which the C++ subscriber client and the backend read too), and the memory of
-windows had agrees with a plain set while it stays bounded."""
+"""Each window once, by its identity (docs/fleet.md): the contracts' repeats
+(contracts/vectors/delivered_value.json, "repeats", which the Python subscriber
+API (test_fleet_units.py), the C++ subscriber client and the backend keep) are
+what a SubBroker writes, and the memory of windows had agrees with a plain set
+while it stays bounded."""
 
 from __future__ import annotations
 
@@ -10,11 +11,10 @@ import random
 import threading
 from itertools import pairwise
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 from modd.subbroker.payload import DeliveredValue
 from modd.subbroker.seen import Runs, Seen, identity, identity_of
-from modd.subscriber import Subscription
 from modd_contracts.schema import validate
 
 VECTORS = Path(__file__).resolve().parents[3] / "contracts" / "vectors" / "delivered_value.json"
@@ -25,24 +25,6 @@ def _repeats() -> list[dict[str, Any]]:
     return cases
 
 
-class _Sample:
-    def __init__(self, data: bytes) -> None:
-        self.payload = self
-        self.data = data
-
-    def to_bytes(self) -> bytes:
-        return self.data
-
-
-class _Session:
-    def declare_subscriber(self, key: str, callback: Any) -> Any:
-        self.callback = callback
-        return self
-
-    def undeclare(self) -> None:
-        pass
-
-
 def test_the_repeats_are_payloads_a_subbroker_writes() -> None:
     for case in _repeats():
         line = case["line"].encode()
@@ -50,18 +32,6 @@ def test_the_repeats_are_payloads_a_subbroker_writes() -> None:
         value = DeliveredValue.from_json(line)
         assert value.to_json() == line, case["name"]
         assert identity_of(json.loads(line)) == identity(value), case["name"]
-
-
-def test_the_subscriber_api_passes_each_window_once() -> None:
-    session = _Session()
-    got: list[bytes] = []
-    sub = Subscription(
-        cast(Any, session), "modd/*/sub/*", callback=lambda v: got.append(v.to_json())
-    )
-    for case in _repeats():
-        session.callback(_Sample(case["line"].encode()))
-    assert got == [c["line"].encode() for c in _repeats() if c["first"]]
-    assert sub.duplicates == sum(not c["first"] for c in _repeats())
 
 
 def test_runs_agree_with_a_set() -> None:
