@@ -7,8 +7,8 @@ neither the number of sockets nor of subscriptions costs OS threads (the
 two wildcard subscribers are declared once, at start-up).
 
 It is also where the backend keeps each window once (docs/fleet.md, "Exactly once
-at the subscriber"): a value whose identity (drone, subscriber, epoch_ns, window)
-it has had, sent again by another station, reaches no callback (the WebSockets,
+at the subscriber"): a value whose identity (drone, subscriber, epoch_ns, window,
+with its period) it has had, sent again by another station, reaches no callback (the WebSockets,
 the 3D scene, the Foxglove server); a value without one passes as before.
 
 >>> hub = SubscriptionHub()
@@ -132,7 +132,8 @@ def first_window(seen: Seen, payload: bytes) -> bool:
     """False when ``payload`` is a window ``seen`` has had (it is remembered
     otherwise); a payload without an identity, or not JSON, is always first.
 
-    >>> seen, line = Seen(), b'{"drone":"usv","subscriber":"s","epoch_ns":1,"window":0}'
+    >>> seen = Seen()
+    >>> line = b'{"drone":"usv","subscriber":"s","period_s":"1","epoch_ns":1,"window":0}'
     >>> first_window(seen, line), first_window(seen, line), first_window(seen, b"{")
     (True, False, True)
     """

@@ -128,10 +128,10 @@ TEST(SubscriberRepeats, TwoStationsGiveEachWindowOnce) {
   ASSERT_EQ(values.size(), first + without_identity + 1);
   EXPECT_EQ(stats.duplicates, (lines.size() - first) + (lines.size() - without_identity));
   EXPECT_EQ(stats.received, values.size());
-  std::vector<std::tuple<std::string, std::string, int64_t, int64_t>> ids;
+  std::vector<std::tuple<std::string, std::string, std::string, int64_t, int64_t>> ids;
   for (const auto& d : values) {
     if (!d.has_identity) continue;
-    auto id = std::make_tuple(d.drone, d.subscriber, d.epoch_ns, d.window);
+    auto id = std::make_tuple(d.drone, d.subscriber, d.period_s, d.epoch_ns, d.window);
     EXPECT_EQ(std::count(ids.begin(), ids.end(), id), 0) << d.subscriber << " " << d.window;
     ids.push_back(id);
   }
@@ -168,20 +168,21 @@ TEST(SubscriberRepeats, IdentityFieldsAreCheckedAndOptional) {
 
 TEST(SubscriberRepeats, SeenWindowsIsBoundedAndMergesRuns) {
   modd::SeenWindows seen(3, 2);
-  for (int64_t k = 0; k < 10; k += 2) EXPECT_TRUE(seen.first("usv", "s", 1, k));  // five runs
-  EXPECT_TRUE(seen.first("usv", "s", 1, 0));   // the oldest runs were forgotten
-  EXPECT_FALSE(seen.first("usv", "s", 1, 8));  // the newest kept
-  EXPECT_TRUE(seen.first("usv", "s", 1, 7));   // joins 8's run
-  EXPECT_FALSE(seen.first("usv", "s", 1, 7));
-  EXPECT_TRUE(seen.first("usv", "s", 2, 8));  // another epoch
-  EXPECT_TRUE(seen.first("usv", "t", 1, 8));  // another subscriber
-  EXPECT_TRUE(seen.first("usv", "u", 1, 8));  // a third pair: s, the least recent, forgotten
-  EXPECT_FALSE(seen.first("usv", "t", 1, 8));
-  EXPECT_TRUE(seen.first("usv", "s", 1, 8));
-  EXPECT_TRUE(seen.first("usv", "s", 1, INT64_MAX));
-  EXPECT_TRUE(seen.first("usv", "s", 1, INT64_MAX - 1));  // merges without overflow
-  EXPECT_FALSE(seen.first("usv", "s", 1, INT64_MAX));
-  EXPECT_TRUE(seen.first("usv", "s", 1, INT64_MIN));
-  EXPECT_TRUE(seen.first("usv", "s", 1, INT64_MIN + 1));
-  EXPECT_FALSE(seen.first("usv", "s", 1, INT64_MIN));
+  for (int64_t k = 0; k < 10; k += 2) EXPECT_TRUE(seen.first("usv", "s", "1", 1, k));  // five runs
+  EXPECT_TRUE(seen.first("usv", "s", "1", 1, 0));   // the oldest runs were forgotten
+  EXPECT_FALSE(seen.first("usv", "s", "1", 1, 8));  // the newest kept
+  EXPECT_TRUE(seen.first("usv", "s", "1", 1, 7));   // joins 8's run
+  EXPECT_FALSE(seen.first("usv", "s", "1", 1, 7));
+  EXPECT_TRUE(seen.first("usv", "s", "1", 2, 8));    // another epoch
+  EXPECT_TRUE(seen.first("usv", "s", "0.5", 1, 8));  // another period: another grid
+  EXPECT_TRUE(seen.first("usv", "t", "1", 1, 8));    // another subscriber
+  EXPECT_TRUE(seen.first("usv", "u", "1", 1, 8));    // a third key: s, the least recent, forgotten
+  EXPECT_FALSE(seen.first("usv", "t", "1", 1, 8));
+  EXPECT_TRUE(seen.first("usv", "s", "1", 1, 8));
+  EXPECT_TRUE(seen.first("usv", "s", "1", 1, INT64_MAX));
+  EXPECT_TRUE(seen.first("usv", "s", "1", 1, INT64_MAX - 1));  // merges without overflow
+  EXPECT_FALSE(seen.first("usv", "s", "1", 1, INT64_MAX));
+  EXPECT_TRUE(seen.first("usv", "s", "1", 1, INT64_MIN));
+  EXPECT_TRUE(seen.first("usv", "s", "1", 1, INT64_MIN + 1));
+  EXPECT_FALSE(seen.first("usv", "s", "1", 1, INT64_MIN));
 }

@@ -62,9 +62,9 @@ def test_memory_is_bounded_oldest_out_first() -> None:
     assert runs.first(1, 0)  # forgotten: it passes again
     seen = Seen(runs=2, keys=2)
     for name in ("a", "b", "c"):
-        assert seen.first(("usv", name, 1, 0))
-    assert not seen.first(("usv", "c", 1, 0)) and not seen.first(("usv", "b", 1, 0))
-    assert seen.first(("usv", "a", 1, 0))  # the least recently heard key went first
+        assert seen.first(("usv", name, "1", 1, 0))
+    assert not seen.first(("usv", "c", "1", 1, 0)) and not seen.first(("usv", "b", "1", 1, 0))
+    assert seen.first(("usv", "a", "1", 1, 0))  # the least recently heard key went first
 
 
 def test_threads_get_each_window_once() -> None:
@@ -72,7 +72,7 @@ def test_threads_get_each_window_once() -> None:
     lock = threading.Lock()
 
     def feed(order: list[int]) -> None:
-        mine = [k for k in order if seen.first(("usv", "s", 1, k))]
+        mine = [k for k in order if seen.first(("usv", "s", "1", 1, k))]
         with lock:
             firsts.extend(mine)
 

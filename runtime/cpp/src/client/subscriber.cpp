@@ -464,13 +464,13 @@ SeenWindows::SeenWindows(size_t max_runs, size_t max_keys)
     : max_runs_(std::max<size_t>(max_runs, 1)), max_keys_(std::max<size_t>(max_keys, 1)) {}
 
 bool SeenWindows::first(const Delivered& d) {
-  return !d.has_identity || first(d.drone, d.subscriber, d.epoch_ns, d.window);
+  return !d.has_identity || first(d.drone, d.subscriber, d.period_s, d.epoch_ns, d.window);
 }
 
-SeenWindows::Runs& SeenWindows::runs_of(const std::string& drone, const std::string& subscriber) {
-  auto [at, added] = keys_.try_emplace({drone, subscriber});
+SeenWindows::Runs& SeenWindows::runs_of(Key key) {
+  auto [at, added] = keys_.try_emplace(std::move(key));
   at->second.used = ++tick_;
-  if (added && keys_.size() > max_keys_) {  // forget the least recently heard pair
+  if (added && keys_.size() > max_keys_) {  // forget the least recently heard key
     auto oldest = std::min_element(keys_.begin(), keys_.end(), [](const auto& a, const auto& b) {
       return a.second.used < b.second.used;
     });
@@ -479,9 +479,9 @@ SeenWindows::Runs& SeenWindows::runs_of(const std::string& drone, const std::str
   return at->second;
 }
 
-bool SeenWindows::first(const std::string& drone, const std::string& subscriber, int64_t epoch_ns,
-                        int64_t window) {
-  auto& last = runs_of(drone, subscriber).last;
+bool SeenWindows::first(const std::string& drone, const std::string& subscriber,
+                        const std::string& period_s, int64_t epoch_ns, int64_t window) {
+  auto& last = runs_of({drone, subscriber, period_s}).last;
   auto after = last.upper_bound({epoch_ns, window});  // the first run starting past it
   int64_t lo = window, hi = window;
   if (after != last.begin()) {

@@ -22,8 +22,8 @@
 // never holds back the SubBroker's values.
 //
 // Each window reaches the callback once (docs/fleet.md, "A window's identity"):
-// a value whose identity (drone, subscriber, epoch_ns, window) came before, from
-// this SubBroker or another station's, is dropped and counted
+// a value whose identity (drone, subscriber, epoch_ns, window, with its period)
+// came before, from this SubBroker or another station's, is dropped and counted
 // (Stats::duplicates); a value without an identity (an older SubBroker) passes.
 #pragma once
 #include <array>
@@ -70,11 +70,13 @@ bool parse_delivered(std::string_view line, Delivered& out, std::string* error =
 std::string load_delivery_key();
 
 // The windows a subscriber has had, by identity: runs of consecutive window
-// indices per (drone, subscriber) and epoch (live windows come in order, so an
-// hour of them is one run). Bounded: at most max_runs runs per (drone,
-// subscriber), the oldest (lowest epoch, then window) forgotten first, and at
-// most max_keys pairs, the least recently heard forgotten first; a forgotten
-// window passes again. One thread at a time (the Subscriber's).
+// indices per (drone, subscriber, period) and epoch (live windows come in order,
+// so an hour of them is one run). The period is compared too: a subscription
+// made again under its name with another period numbers its windows on another
+// grid. Bounded: at most max_runs runs per key, the oldest (lowest epoch, then
+// window) forgotten first, and at most max_keys keys, the least recently heard
+// forgotten first; a forgotten window passes again. One thread at a time (the
+// Subscriber's).
 //
 //   modd::SeenWindows seen;
 //   seen.first(d);  // true: d is new (now remembered), or has no identity
@@ -83,17 +85,18 @@ class SeenWindows {
   static constexpr size_t kMaxRuns = 1024, kMaxKeys = 1024;
   explicit SeenWindows(size_t max_runs = kMaxRuns, size_t max_keys = kMaxKeys);
   bool first(const Delivered& d);
-  bool first(const std::string& drone, const std::string& subscriber, int64_t epoch_ns,
-             int64_t window);
+  bool first(const std::string& drone, const std::string& subscriber, const std::string& period_s,
+             int64_t epoch_ns, int64_t window);
 
  private:
   struct Runs {
     std::map<std::pair<int64_t, int64_t>, int64_t> last;  // (epoch, first window) -> last window
     uint64_t used = 0;
   };
-  Runs& runs_of(const std::string& drone, const std::string& subscriber);
+  using Key = std::array<std::string, 3>;  // drone, subscriber, period_s
+  Runs& runs_of(Key key);
 
-  std::map<std::pair<std::string, std::string>, Runs> keys_;
+  std::map<Key, Runs> keys_;
   size_t max_runs_, max_keys_;
   uint64_t tick_ = 0;
 };

@@ -3,18 +3,26 @@ identity"): the point where a window two stations sent (two serving for a moment
 after a partition heals, a backfill racing the live value) is kept once. Used by
 the Python subscriber API and the backend (every value it relays or keeps).
 
-Windows are remembered as runs of consecutive indices per (drone, subscriber) and
-epoch, not one entry each: live windows come in order, so an hour of a 4 Hz
-subscription is one run, and memory stays flat over a mission. Bounded: at most
-:data:`MAX_RUNS` runs per (drone, subscriber), the oldest (lowest epoch, then
-lowest window) out first, and at most :data:`MAX_KEYS` (drone, subscriber) pairs,
-the least recently heard out first. A window forgotten that way passes again.
+Windows are remembered as runs of consecutive indices per (drone, subscriber,
+period) and epoch, not one entry each: live windows come in order, so an hour of a
+4 Hz subscription is one run, and memory stays flat over a mission. Bounded: at most
+:data:`MAX_RUNS` runs per key, the oldest (lowest epoch, then lowest window) out
+first, and at most :data:`MAX_KEYS` keys, the least recently heard out first. A
+window forgotten that way passes again.
+
+The period is part of what is compared: a window's identity names it on its
+configuration's grid, and a dynamic subscription cancelled and made again under the
+same name with another period, in the same configuration, numbers its windows on
+another grid (its window 3 is not the first one's). A genuine repeat is the same
+payload, period included, so comparing it drops none.
 
 >>> seen = Seen()
->>> [seen.first(("usv", "s", 1, k)) for k in (0, 1, 0, 3, 2, 3)]
+>>> [seen.first(("usv", "s", "0.25", 1, k)) for k in (0, 1, 0, 3, 2, 3)]
 [True, True, False, True, True, False]
->>> seen.first(("usv", "s", 2, 0)), seen.first(("usv", "t", 1, 0))  # another epoch, subscriber
+>>> seen.first(("usv", "s", "0.25", 2, 0)), seen.first(("usv", "t", "0.25", 1, 0))
 (True, True)
+>>> seen.first(("usv", "s", "1", 1, 3))  # the name made again with another period
+True
 """
 
 from __future__ import annotations
@@ -27,17 +35,17 @@ from typing import Any
 
 from .payload import DeliveredValue
 
-#: Runs of windows remembered per (drone, subscriber): one per gap left unfilled.
+#: Runs of windows remembered per (drone, subscriber, period): one per gap left unfilled.
 MAX_RUNS = 1024
-#: (drone, subscriber) pairs remembered: the least recently heard go first.
+#: (drone, subscriber, period) keys remembered: the least recently heard go first.
 MAX_KEYS = 1024
-#: A window's identity: (drone, subscriber, epoch_ns, window).
-Identity = tuple[str, str, int, int]
+#: A window's identity with its period: (drone, subscriber, period_s, epoch_ns, window).
+Identity = tuple[str, str, str, int, int]
 _AFTER = float("inf")  # sorts after any run starting at the same (epoch, window)
 
 
 class Runs:
-    """The windows of one (drone, subscriber): sorted, merged runs
+    """The windows of one (drone, subscriber, period): sorted, merged runs
     ``(epoch, first, end)`` (``end`` exclusive), at most ``limit``.
 
     >>> r = Runs(); [r.first(5, k) for k in (0, 2, 1, 1)], r.runs
@@ -68,50 +76,52 @@ class Runs:
 
 
 class Seen:
-    """The windows had so far, per (drone, subscriber); safe from several threads
-    (zenoh calls back from its own)."""
+    """The windows had so far, per (drone, subscriber, period); safe from several
+    threads (zenoh calls back from its own)."""
 
     def __init__(self, runs: int = MAX_RUNS, keys: int = MAX_KEYS) -> None:
         self.runs, self.keys = runs, keys
-        self._by_key: OrderedDict[tuple[str, str], Runs] = OrderedDict()
+        self._by_key: OrderedDict[tuple[str, str, str], Runs] = OrderedDict()
         self._lock = threading.Lock()
 
     def first(self, identity: Identity) -> bool:
         """True the first time ``identity`` comes (it is remembered), else False."""
-        drone, subscriber, epoch, window = identity
+        drone, subscriber, period, epoch, window = identity
+        k = (drone, subscriber, period)
         with self._lock:
-            runs = self._by_key.get((drone, subscriber))
+            runs = self._by_key.get(k)
             if runs is None:
-                runs = self._by_key[(drone, subscriber)] = Runs(self.runs)
+                runs = self._by_key[k] = Runs(self.runs)
                 if len(self._by_key) > self.keys:
                     self._by_key.popitem(last=False)
             else:
-                self._by_key.move_to_end((drone, subscriber))
+                self._by_key.move_to_end(k)
             return runs.first(epoch, window)
 
 
 def identity(value: DeliveredValue) -> Identity | None:
-    """(drone, subscriber, epoch_ns, window), or None for a payload without it."""
+    """(drone, subscriber, period_s, epoch_ns, window), or None for a payload without it."""
     if value.drone is None or value.epoch_ns is None or value.window is None:
         return None
-    return (value.drone, value.subscriber, value.epoch_ns, value.window)
+    return (value.drone, value.subscriber, value.period_s, value.epoch_ns, value.window)
 
 
 def identity_of(doc: Mapping[str, Any]) -> Identity | None:
     """The identity of a parsed payload (a JSON object), or None when it has none
     or a malformed one: such a payload is passed on as it is, never dropped.
 
-    >>> identity_of({"drone": "usv", "subscriber": "s", "epoch_ns": 7, "window": 2})
-    ('usv', 's', 7, 2)
+    >>> doc = {"drone": "usv", "subscriber": "s", "period_s": "1", "epoch_ns": 7, "window": 2}
+    >>> identity_of(doc)
+    ('usv', 's', '1', 7, 2)
     >>> identity_of({"subscriber": "s", "topic": "usv.a.x"}) is None
     True
     """
-    drone, subscriber = doc.get("drone"), doc.get("subscriber")
+    drone, subscriber, period = doc.get("drone"), doc.get("subscriber"), doc.get("period_s")
     epoch, window = doc.get("epoch_ns"), doc.get("window")
-    if not (isinstance(drone, str) and isinstance(subscriber, str)):
+    if not (isinstance(drone, str) and isinstance(subscriber, str) and isinstance(period, str)):
         return None
     if not (isinstance(epoch, int) and isinstance(window, int)):
         return None
     if isinstance(epoch, bool) or isinstance(window, bool):
         return None
-    return (drone, subscriber, epoch, window)
+    return (drone, subscriber, period, epoch, window)
