@@ -4,7 +4,8 @@ anyone was printed as real). The subscriber serves several connections at
 once, drops one that does not prove the delivery key in time, and refuses a
 connection whose first line is not that proof. The SubBroker's side is its
 real TCP delivery (modd.subbroker.delivery), the proof checked against
-Python's hmac."""
+Python's hmac. Two SubBrokers (two stations) delivering the same windows: each
+is printed once (docs/fleet.md)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ import socket
 import subprocess
 import threading
 import time
+from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -22,7 +24,7 @@ import pytest
 from modd.ports import free_port
 from modd.subbroker import delivery_auth
 from modd.subbroker.delivery import TcpDelivery
-from modd.subbroker.payload import DeliveredValue
+from modd.subbroker.payload import DeliveredValue, StreamPayload, subscriber_prefix
 from modd_gen import generate, write_artifacts
 from modd_model import load_model
 
@@ -209,3 +211,39 @@ def test_out_of_range_integers_are_malformed_not_undefined(subscriber: tuple[int
         )
         out.wait("6000000006 usv.accelerometer.accel_z MIN = 2", 5)
     assert not any(line.startswith("-9223372036854775808") for line in out.lines)
+
+
+EPOCH, OTHER_EPOCH, Q = 1_700_000_000_000_000_000, 1_700_000_060_000_000_000, 250_000_000
+
+
+def _window(k: int, epoch: int = EPOCH, identity: bool = True) -> tuple[bytes, int]:
+    """Window ``k`` of sub_5 as the SubBroker's fast path writes it, and its end."""
+    head = StreamPayload(
+        "usv.accelerometer.accel_z", "MIN", "0.25", "METER_PER_SECOND_SQUARED", 1,
+        ("usv", epoch, Q) if identity else None,
+    )  # fmt: skip
+    start = epoch + k * Q
+    line = head.tail(abs(k), start, start + Q, 0.5, None, start + Q)  # slot: the index
+    return subscriber_prefix("sub_5") + line, start + Q
+
+
+def test_two_stations_windows_are_printed_once(subscriber: tuple[int, Output]) -> None:
+    """Both stations deliver windows 0-2, window 0 of another epoch and a value
+    without identity (an older SubBroker), then a window of their own: the windows
+    are printed once, the value without identity twice (both stations were heard)."""
+    port, out = subscriber
+    windows = [_window(k) for k in range(3)] + [_window(0, OTHER_EPOCH)]
+    old = _window(-4000, identity=False)
+    stations = [TcpDelivery({"sub_5": ("127.0.0.1", port)}, queue_size=100) for _ in range(2)]
+    marks = [_window(10), _window(11)]
+    try:
+        for tcp, mark in zip(stations, marks, strict=True):
+            for line, _ in [*windows, old, mark]:
+                tcp.put("sub_5", line)
+        for _, end in marks:  # each station's last: its other lines came before
+            out.wait(f"{end} usv.accelerometer.accel_z MIN", 10)
+    finally:
+        for tcp in stations:
+            tcp.close()
+    printed = Counter(line.split()[0] for line in out.lines if " MIN = " in line)
+    assert printed == Counter({str(end): 1 for _, end in windows + marks} | {str(old[1]): 2})

@@ -6,6 +6,11 @@ declared on zenoh, no thread is started and the event loop never waits, so
 neither the number of sockets nor of subscriptions costs OS threads (the
 two wildcard subscribers are declared once, at start-up).
 
+It is also where the backend keeps each window once (docs/fleet.md, "Exactly once
+at the subscriber"): a value whose identity (drone, subscriber, epoch_ns, window,
+with its period) it has had, sent again by another station, reaches no callback (the WebSockets,
+the 3D scene, the Foxglove server); a value without one passes as before.
+
 >>> hub = SubscriptionHub()
 >>> got = []
 >>> hub.add("usv", "sub_1", lambda name, p: got.append((name, p)))
@@ -16,9 +21,11 @@ two wildcard subscribers are declared once, at start-up).
 
 from __future__ import annotations
 
+import json
 import threading
 from collections.abc import Callable
 
+from modd.subbroker.seen import Seen, identity_of
 from modd_contracts import keys
 
 from .zenoh_session import Undeclarable, ZenohSession
@@ -41,6 +48,9 @@ class SubscriptionHub:
         self._every_value: list[Callable[[str, bytes], None]] = []
         self._every_status: list[Callable[[str, bytes], None]] = []
         self._declared: list[Undeclarable] = []
+        self._seen = Seen()
+        #: Values dropped as windows already had (another station's copy).
+        self.duplicates = 0
 
     def start(self, zenoh_session: ZenohSession) -> None:
         """Declare the two wildcard subscribers (blocking; call at start-up)."""
@@ -63,6 +73,10 @@ class SubscriptionHub:
         self._every_status.append(callback)
 
     def on_value(self, key: str, payload: bytes) -> None:
+        if not first_window(self._seen, payload):
+            with self._lock:
+                self.duplicates += 1
+            return
         found = keys.match_sub_key(key)
         for cb in self._every_value:
             cb(key, payload)
@@ -112,3 +126,22 @@ class SubscriptionHub:
     def keys(self) -> int:
         with self._lock:
             return len(self._values)
+
+
+def first_window(seen: Seen, payload: bytes) -> bool:
+    """False when ``payload`` is a window ``seen`` has had (it is remembered
+    otherwise); a payload without an identity, or not JSON, is always first.
+
+    >>> seen = Seen()
+    >>> line = b'{"drone":"usv","subscriber":"s","period_s":"1","epoch_ns":1,"window":0}'
+    >>> first_window(seen, line), first_window(seen, line), first_window(seen, b"{")
+    (True, False, True)
+    """
+    if b'"window"' not in payload:  # older payloads: no parse
+        return True
+    try:
+        doc = json.loads(payload)
+    except (ValueError, UnicodeDecodeError, RecursionError):
+        return True
+    ident = identity_of(doc) if isinstance(doc, dict) else None
+    return ident is None or seen.first(ident)

@@ -62,6 +62,28 @@ TEST(Contracts, SubscriberParsesEveryDeliveredValue) {
   }
 }
 
+// The repeats (delivered_value.json, "repeats"): a window whose identity came
+// before is dropped, as the Python subscriber API and the backend drop it.
+TEST(Contracts, SubscriberKeepsEachWindowOnce) {
+  json v = vectors("delivered_value");
+  ASSERT_FALSE(v["repeats"]["sequence"].empty());
+  modd::SeenWindows seen;
+  for (const auto& c : v["repeats"]["sequence"]) {
+    std::string line = c["line"].get<std::string>();
+    json doc = json::parse(line);
+    modd::Delivered d;
+    std::string error;
+    ASSERT_TRUE(modd::parse_delivered(line, d, &error)) << c["name"] << ": " << error;
+    EXPECT_EQ(d.has_identity, doc.contains("window")) << c["name"];
+    if (d.has_identity) {
+      EXPECT_EQ(d.drone, doc["drone"].get<std::string>());
+      EXPECT_EQ(d.epoch_ns, doc["epoch_ns"].get<int64_t>());
+      EXPECT_EQ(d.window, doc["window"].get<int64_t>());
+    }
+    EXPECT_EQ(seen.first(d), c["first"].get<bool>()) << c["name"];
+  }
+}
+
 TEST(Contracts, AggregationNamesAreTheTables) {
   for (int i = 0; i < modd::link::table::kAggregationCount; ++i) {
     const auto& row = modd::link::table::kAggregations[i];

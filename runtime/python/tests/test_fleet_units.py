@@ -138,6 +138,24 @@ def test_a_subscriber_gets_a_window_once_whichever_station_sent_it() -> None:
     assert sub.duplicates == 1  # a payload without identity (an older SubBroker) is kept
 
 
+def _repeats() -> list[dict[str, Any]]:
+    vectors = MODEL.parents[2] / "contracts" / "vectors" / "delivered_value.json"
+    cases: list[dict[str, Any]] = json.loads(vectors.read_text())["repeats"]["sequence"]
+    return cases
+
+
+def test_the_subscriber_api_passes_each_window_once() -> None:
+    session = _Session()
+    got: list[bytes] = []
+    sub = Subscription(
+        cast(Any, session), "modd/*/sub/*", callback=lambda v: got.append(v.to_json())
+    )
+    for case in _repeats():
+        session.callback(_Sample(case["line"].encode()))
+    assert got == [c["line"].encode() for c in _repeats() if c["first"]]
+    assert sub.duplicates == sum(not c["first"] for c in _repeats())
+
+
 def test_latest_is_the_newest_live_value_whatever_comes_late() -> None:
     """``Subscription.latest``: a backfilled window, older or newer, never becomes it;
     a live one newer than it does (each window once: the identity differs)."""

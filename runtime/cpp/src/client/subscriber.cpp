@@ -15,8 +15,10 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <iterator>
 #include <stdexcept>
 
 namespace modd {
@@ -393,7 +395,7 @@ bool parse_delivered(std::string_view line, Delivered& out, std::string* error) 
     return false;
   }
   out = Delivered{};
-  int seen = 0;
+  int seen = 0, identity = 0;
   auto bad = [&](const std::string& key) {
     if (error) *error = "bad \"" + key + "\"";
     return false;
@@ -434,6 +436,16 @@ bool parse_delivered(std::string_view line, Delivered& out, std::string* error) 
     } else if (key == f::kBackfilled) {
       if (v.kind != Json::Bool) return bad(key);
       out.backfilled = v.boolean;
+    } else if (key == f::kDrone) {
+      if (v.kind == Json::Null) continue;
+      if (v.kind != Json::String) return bad(key);
+      out.drone = v.text;
+      identity |= 1;
+    } else if (key == f::kEpochNs || key == f::kWindow) {
+      if (v.kind == Json::Null) continue;
+      if (!integer(v, n)) return bad(key);
+      (key == f::kEpochNs ? out.epoch_ns : out.window) = n;
+      identity |= key == f::kEpochNs ? 2 : 4;
     } else if (key == f::kV) {
       if (!integer(v, n) || n > f::kVersion) {
         return bad(std::string(f::kV) + " (unsupported payload version)");
@@ -444,6 +456,51 @@ bool parse_delivered(std::string_view line, Delivered& out, std::string* error) 
     if (error) *error = "not a delivered value (no topic)";
     return false;
   }
+  out.has_identity = identity == 7;
+  return true;
+}
+
+SeenWindows::SeenWindows(size_t max_runs, size_t max_keys)
+    : max_runs_(std::max<size_t>(max_runs, 1)), max_keys_(std::max<size_t>(max_keys, 1)) {}
+
+bool SeenWindows::first(const Delivered& d) {
+  return !d.has_identity || first(d.drone, d.subscriber, d.period_s, d.epoch_ns, d.window);
+}
+
+SeenWindows::Runs& SeenWindows::runs_of(Key key) {
+  auto [at, added] = keys_.try_emplace(std::move(key));
+  at->second.used = ++tick_;
+  if (added && keys_.size() > max_keys_) {  // forget the least recently heard key
+    auto oldest = std::min_element(keys_.begin(), keys_.end(), [](const auto& a, const auto& b) {
+      return a.second.used < b.second.used;
+    });
+    keys_.erase(oldest);
+  }
+  return at->second;
+}
+
+bool SeenWindows::first(const std::string& drone, const std::string& subscriber,
+                        const std::string& period_s, int64_t epoch_ns, int64_t window) {
+  auto& last = runs_of({drone, subscriber, period_s}).last;
+  auto after = last.upper_bound({epoch_ns, window});  // the first run starting past it
+  int64_t lo = window, hi = window;
+  if (after != last.begin()) {
+    auto before = std::prev(after);
+    if (before->first.first == epoch_ns) {
+      if (window <= before->second) return false;  // inside a run: had
+      if (before->second == window - 1) {          // window > before's last: no overflow
+        lo = before->first.second;
+        last.erase(before);
+      }
+    }
+  }
+  if (after != last.end() && after->first.first == epoch_ns && window < INT64_MAX &&
+      after->first.second == window + 1) {
+    hi = after->second;
+    last.erase(after);
+  }
+  last.emplace(std::make_pair(epoch_ns, lo), hi);
+  if (last.size() > max_runs_) last.erase(last.begin());  // the oldest run
   return true;
 }
 
@@ -496,7 +553,8 @@ void Subscriber::start() {
 }
 
 Subscriber::Stats Subscriber::stats() const noexcept {
-  return Stats{received_.load(), malformed_.load(), connections_.load(), refused_.load()};
+  return Stats{received_.load(), malformed_.load(), connections_.load(), refused_.load(),
+               duplicates_.load()};
 }
 
 struct Subscriber::Connection {
@@ -560,11 +618,13 @@ bool Subscriber::handle_line(Connection& c, std::string_view line) {
   }
   if (line.empty()) return true;
   Delivered d;
-  if (parse_delivered(line, d)) {
+  if (!parse_delivered(line, d)) {
+    ++malformed_;
+  } else if (!options_.keep_repeats && !seen_.first(d)) {
+    ++duplicates_;  // another station's copy of a window already passed on
+  } else {
     ++received_;
     callback_(d);
-  } else {
-    ++malformed_;
   }
   return true;
 }

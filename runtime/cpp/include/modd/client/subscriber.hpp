@@ -20,11 +20,17 @@
 // at once (poll); one that does not prove itself within the handshake timeout,
 // or stays idle past the idle timeout, is dropped, so an idle or hostile socket
 // never holds back the SubBroker's values.
+//
+// Each window reaches the callback once (docs/fleet.md, "A window's identity"):
+// a value whose identity (drone, subscriber, epoch_ns, window, with its period)
+// came before, from this SubBroker or another station's, is dropped and counted
+// (Stats::duplicates); a value without an identity (an older SubBroker) passes.
 #pragma once
 #include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -44,6 +50,12 @@ struct Delivered {
   std::vector<double> values;  // ALL: every raw sample of the window
   int64_t count = -1;          // samples behind the value, when known; else -1
   bool backfilled = false;     // recomputed from the drone's archive after the link missed it
+  // The window's identity with `subscriber` (docs/fleet.md); has_identity false
+  // when the payload lacks one of the three (an older SubBroker).
+  bool has_identity = false;
+  std::string drone;
+  int64_t epoch_ns = 0;  // the epoch of the configuration the window belongs to
+  int64_t window = 0;    // its index on that configuration's grid
 };
 
 // Parses one delivered line. On malformed input returns false and says why.
@@ -56,6 +68,38 @@ bool parse_delivered(std::string_view line, Delivered& out, std::string* error =
 // absent. A key file must be a regular file of at most 4 KiB. Throws
 // std::runtime_error naming the reference.
 std::string load_delivery_key();
+
+// The windows a subscriber has had, by identity: runs of consecutive window
+// indices per (drone, subscriber, period) and epoch (live windows come in order,
+// so an hour of them is one run). The period is compared too: a subscription
+// made again under its name with another period numbers its windows on another
+// grid. Bounded: at most max_runs runs per key, the oldest (lowest epoch, then
+// window) forgotten first, and at most max_keys keys, the least recently heard
+// forgotten first; a forgotten window passes again. One thread at a time (the
+// Subscriber's).
+//
+//   modd::SeenWindows seen;
+//   seen.first(d);  // true: d is new (now remembered), or has no identity
+class SeenWindows {
+ public:
+  static constexpr size_t kMaxRuns = 1024, kMaxKeys = 1024;
+  explicit SeenWindows(size_t max_runs = kMaxRuns, size_t max_keys = kMaxKeys);
+  bool first(const Delivered& d);
+  bool first(const std::string& drone, const std::string& subscriber, const std::string& period_s,
+             int64_t epoch_ns, int64_t window);
+
+ private:
+  struct Runs {
+    std::map<std::pair<int64_t, int64_t>, int64_t> last;  // (epoch, first window) -> last window
+    uint64_t used = 0;
+  };
+  using Key = std::array<std::string, 3>;  // drone, subscriber, period_s
+  Runs& runs_of(Key key);
+
+  std::map<Key, Runs> keys_;
+  size_t max_runs_, max_keys_;
+  uint64_t tick_ = 0;
+};
 
 using Digest = std::array<uint8_t, 32>;
 Digest sha256(std::string_view data);
@@ -71,13 +115,15 @@ class Subscriber {
     uint64_t received = 0;   // values passed to the callback
     uint64_t malformed = 0;  // lines that did not parse (skipped)
     uint64_t connections = 0;
-    uint64_t refused = 0;  // connections dropped: no or wrong proof, idle, over the limit
+    uint64_t refused = 0;     // connections dropped: no or wrong proof, idle, over the limit
+    uint64_t duplicates = 0;  // windows had before (SeenWindows), not passed to the callback
   };
   struct Options {
     std::string key;                  // the delivery key; empty: load_delivery_key()
     int handshake_timeout_ms = 5000;  // to prove itself, from accept
     int idle_timeout_ms = 300000;     // without a byte, once proven
     size_t max_connections = 8;       // at once; past it the oldest unproven one is dropped
+    bool keep_repeats = false;        // true: every value to the callback, repeats included
   };
 
   // Listens on host:port, the subscriber's endpoint in the model (port 0: any).
@@ -106,7 +152,8 @@ class Subscriber {
   int wake_[2] = {-1, -1};
   uint16_t port_ = 0;
   std::atomic<bool> stopping_{false};
-  std::atomic<uint64_t> received_{0}, malformed_{0}, connections_{0}, refused_{0};
+  SeenWindows seen_;  // run()'s thread only
+  std::atomic<uint64_t> received_{0}, malformed_{0}, connections_{0}, refused_{0}, duplicates_{0};
   std::thread thread_;
 };
 
