@@ -27,7 +27,7 @@ import json
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -99,12 +99,18 @@ class Campaign:
         self.fabric.wait_port(s, "127.0.0.1", self.port[s])
 
     def start_drone(
-        self, drone: str, seed: int, where: str = "", ports: tuple[int, int] = (7000, 7001)
+        self,
+        drone: str,
+        seed: int,
+        where: str = "",
+        ports: tuple[int, int] = (7000, 7001),
+        transport: str = "tcp",
     ) -> None:
         """The drone's PubBroker (link on 0.0.0.0:7000 in its namespace, its own
         archive) and its load (ingress 127.0.0.1:7001, in the same namespace); with
         ``where``, in that (station's) namespace instead, on 127.0.0.1:``ports``, without
-        a load (the caller feeds it)."""
+        a load (the caller feeds it); ``transport``: its link's (udp: on 127.0.0.1, behind
+        the radio the caller starts in its namespace)."""
         home = self.tmp / drone
         home.mkdir()
         model: Path = h.model_copy(home, "scenario1.modd")
@@ -112,10 +118,11 @@ class Campaign:
         doc["drone"]["name"] = drone
         model.write_text(json.dumps(doc))
         self.models[drone] = model
-        host = "127.0.0.1" if where else "0.0.0.0"
+        host = "127.0.0.1" if where or transport != "tcp" else "0.0.0.0"
+        link = {"transport": transport, "host": host, "port": ports[0], "key": "env:MODD_LINK_KEY"}
         cfg = {
             "name": drone,
-            "link": {"host": host, "port": ports[0], "key": "env:MODD_LINK_KEY"},
+            "link": link,
             "ingress": {"host": "127.0.0.1", "port": ports[1]},
             "archive": {"dir": str(home / "archive"), "flush_interval_ms": 200},
             "topics": [{"name": t.name, "type": t.type} for t in topics(doc).values()],
@@ -131,7 +138,9 @@ class Campaign:
         load += ["--seconds", str(self.load_s), "--seed", str(seed), "--signal", "uniform"]
         self.run(f"load-{drone}", drone, load)
 
-    def start_subbroker(self, s: str, drone: str, tag: str = "", endpoint: str = "") -> h.Proc:
+    def start_subbroker(
+        self, s: str, drone: str, tag: str = "", endpoint: str = "", transport: str = "tcp"
+    ) -> h.Proc:
         """Station ``s``'s SubBroker of ``drone`` (its PubBroker at ``endpoint``, by default
         the drone's namespace's address seen from ``s``, port 7000)."""
         path = self.tmp / f"sb-{s}-{drone}.toml"
@@ -139,6 +148,7 @@ class Campaign:
 station = "{s}"
 state_dir = "{self.tmp / f"state-{s}-{drone}"}"
 [link]
+transport = "{transport}"
 endpoint = "{endpoint or f"{self.addr[(drone, s)]}:7000"}"
 key = "env:MODD_LINK_KEY"
 [zenoh]
@@ -214,13 +224,18 @@ def wait_serving(c: Campaign, s: str, drone: str, timeout_s: float = 25.0) -> No
 
 
 def serving_now(c: Campaign, drone: str) -> str:
-    """The station whose SubBroker of ``drone`` last said it serves (its log)."""
-    last, who = -1, ""
+    """The station whose SubBroker of ``drone`` serves it now, by its log: the latest
+    "station s serves" line with no link warning after it (log lines start with their
+    time, so two stations' logs compare)."""
+    best, who = "", ""
     for (s, d), sb in c.sb.items():
-        if d == drone and sb.alive():
-            at = sb.log().rfind(f"station {s} serves {drone}")
-            if at > last and "stands by" not in sb.log()[at:]:
-                last, who = at, s
+        if d != drone or not sb.alive():
+            continue
+        lines = sb.log().splitlines()
+        served = [ln[:23] for ln in lines if f"station {s} serves {drone}" in ln]
+        lost = [ln[:23] for ln in lines if "WARNING modd.subbroker.link: link to" in ln]
+        if served and (not lost or served[-1] > lost[-1]) and served[-1] > best:
+            best, who = served[-1], s
     return who
 
 
@@ -276,9 +291,9 @@ def test_three_stations_six_drones_move_kill_partition_each_window_once(
     check_viewers(c, viewers, killed_ns)
 
 
-def fill_gaps(c: Campaign) -> None:
+def fill_gaps(c: Campaign, drones: Iterable[str] = HEARD_BY) -> None:
     """Each drone's serving station fills every subscriber's gaps."""
-    for drone in HEARD_BY:
+    for drone in drones:
         s = serving_now(c, drone)
         assert s, f"no station serves {drone}"
         subs = {v.subscriber for v in read_api(c.tmp / "viewer-c.hex") if v.drone == drone}
@@ -286,14 +301,16 @@ def fill_gaps(c: Campaign) -> None:
             c.backfill(s, drone, sub)
 
 
-def check_viewers(c: Campaign, viewers: dict[str, Path], killed_ns: int) -> None:
+def check_viewers(
+    c: Campaign, viewers: dict[str, Path], killed_ns: int, drones: Iterable[str] = HEARD_BY
+) -> None:
     """At each viewer, through the subscriber API: every window of every drone once,
     equal to its archive's aggregate, none missing; on the wire (raw samples) none twice
     either, b's kill -9 included (its window journal: docs/fleet.md, "Exactly once")."""
-    archives = {d: h.read_archive(c.tmp / d / "archive", c.models[d]) for d in HEARD_BY}
+    archives = {d: h.read_archive(c.tmp / d / "archive", c.models[d]) for d in drones}
     for s, path in viewers.items():
         given, raw = read_api(path), read_viewer(path)
-        for drone in HEARD_BY:
+        for drone in drones:
             mine = [v for v in given if v.drone == drone]
             ids = [identity(v) for v in mine]
             dup = len(ids) - len(set(ids))

@@ -13,10 +13,16 @@ archive with the official ``mcap`` reader, every window of every epoch of the 0.
 subscriptions there from its first to its last; and **union coverage**: no window
 either station delivered (live, or heard by the other through the mesh) was
 backfilled, i.e. what came back with ``backfilled`` set is disjoint from what came live.
+
+Diversity reception: station a's modem hears nothing of the drone for 15 s (its
+receiver blocked; the drone still hears a), b's hears every datagram; b stands by and
+forwards what its modem hears, so a keeps the drone and every window comes live: none
+is left for a backfill.
 """
 
 from __future__ import annotations
 
+import json
 import sys
 import time
 from pathlib import Path
@@ -55,9 +61,13 @@ LOAD_S = 50
 SUBSCRIBERS = ("sub_3", "sub_4", "sub_5", "sub_6", "sub_7")  # scenario 1's 0.25-s ones
 
 
-def start_shared_radio(tmp: Path, target: int, modems: list[int]) -> Proc:
+def start_shared_radio(
+    tmp: Path, target: int, modems: list[int], radios: tuple[str, ...] = (LOSS,)
+) -> Proc:
+    """The shared channel: ``radios`` once for every modem, or one per modem."""
     listens = [a for m in modems for a in ("--udp", f"127.0.0.1:{m}")]
-    cmd = [*RADIO, *listens, "--to", f"127.0.0.1:{target}", "--radio", LOSS, "--report", "1"]
+    settings = [a for r in radios for a in ("--radio", r)]
+    cmd = [*RADIO, *listens, "--to", f"127.0.0.1:{target}", *settings, "--report", "1"]
     proc = Proc("radio", cmd, tmp / "radio.log")
     time.sleep(0.3)
     return proc
@@ -127,3 +137,63 @@ def check(tmp: Path, model: Path, at: dict[str, Listener]) -> None:
         for sub in SUBSCRIBERS:
             assert_every_window([v for v in values if v.subscriber == sub], epochs=2)
         print(f"viewer at {name}: {len(ids)} windows, {len(filled)} backfilled, none twice")
+
+
+@pytest.mark.timeout(200)
+def test_a_window_the_standby_stations_modem_got_is_delivered_live(
+    tmp_path: Path,
+    procs: list[Any],  # noqa: F811
+) -> None:
+    """Union coverage by diversity reception: a's modem loses 20 % and then hears
+    nothing of the drone for 15 s (the drone still hears a), b's loses nothing. b never
+    serves; a delivers every window live from what the two modems heard (b's forwarded
+    through the mesh), each once,
+    equal to the archive; a backfill of the gaps finds none. Without the forwarding,
+    a's link goes silent in the outage and b takes the drone over: a handover, its gap
+    backfilled."""
+    assert PUBBROKER.exists(), f"{PUBBROKER} is not built: run make build"
+    stations = mesh(tmp_path, "ab")
+    for s in stations.values():
+        procs.append(s.start())
+    a, b = stations["a"], stations["b"]
+    link, ingress = free_port("udp"), free_port()
+    model = model_copy(tmp_path, "scenario1.modd")
+    udp = {"transport": "udp", "port": link}
+    procs.append(start_pubbroker_dgram(tmp_path, model, udp, ingress))
+    modems = {"a": free_port("udp"), "b": free_port("udp")}
+    radios = ("loss=0.2,seed=45,deaf=18+15", "loss=0")
+    procs.append(radio := start_shared_radio(tmp_path, link, list(modems.values()), radios))
+    at = {s.name: Listener(s, "modd/usv/sub/*") for s in (a, b)}
+    procs.extend(at.values())
+    procs.append(status := Listener(a, "modd/usv/status"))
+    sb = {
+        s.name: subbroker_toml(tmp_path, model, modems[s.name], s, "udp", str(tmp_path / s.name))
+        for s in (a, b)
+    }
+    procs.append(sb_a := start_subbroker(tmp_path, sb["a"], "sb-a"))
+    assert sb_a.wait_log("station a serves usv", 30), sb_a.log()
+    procs.append(sb_b := start_subbroker(tmp_path, sb["b"], "sb-b"))
+    procs.append(load := start_load(tmp_path, model, ingress, 40))
+    load.p.wait(100)
+    time.sleep(3)
+    assert "serves usv" not in sb_b.log(), "a kept the drone: b never served"
+    for sub in SUBSCRIBERS:  # no gap: nothing to ask the drone for
+        job = backfill(a, {"op": "start", "subscriber": sub, "gaps": True}, expect="DONE")
+        assert job["windows"] == 0, job
+    archive = read_archive(tmp_path / "archive", model)
+    for name, listener in at.items():
+        values = listener.values()
+        ids = identities(values)
+        assert len(ids) == len(set(ids)), f"a window twice at station {name}'s viewer"
+        assert check_against_archive({name: values}, archive) > 100
+        filled = [v for v in values if v.backfilled]
+        assert not filled, f"{len(filled)} windows backfilled that station b's modem got"
+        for sub in SUBSCRIBERS:
+            assert_every_window([v for v in values if v.subscriber == sub], epochs=1)
+    radio_of_a = [json.loads(r).get("radio") or {} for r in status.raw]
+    used = max(r.get("heard_elsewhere_used", 0) for r in radio_of_a)
+    # a datagram carries up to the accepted delay (1 s) of slots: 15 s, 15 datagrams at least
+    assert used >= 15, f"the outage's datagrams came from b's modem ({used})"
+    replayed = max(r.get("replayed", 0) for r in radio_of_a)
+    assert replayed == 0, f"{replayed} copies (both modems heard them) counted as replays"
+    print(f"station a took {used} datagrams from b's modem; {radio_counts(radio)}")

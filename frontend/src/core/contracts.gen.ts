@@ -157,6 +157,10 @@ export interface RadioStatus {
   malformed: number;
   unknown_config: number;
   handshakes: number;
+  /** Datagrams of the drone that other stations' modems heard and forwarded through the mesh (docs/fleet.md, "Diversity reception"); absent without a mesh. */
+  heard_elsewhere?: number;
+  /** Of those, the ones that brought what this station's own modem had missed (the others were heard here too). */
+  heard_elsewhere_used?: number;
   /** The PubBroker's datagram counters from its last STATUS (docs/protocol.md, STATUS fields 24..29); null before its first STATUS. */
   pubbroker: PubBrokerDatagrams | null;
 }

@@ -115,6 +115,17 @@ def held_key(drone: str, station: str | None) -> str:
     return f"{drone_prefix(drone)}/fleet/held/{who}"
 
 
+def heard_key(drone: str, station: str | None) -> str:
+    """Where a standby station puts the drone's datagrams its modem heard, for the
+    serving station (docs/fleet.md, "Diversity reception"; ``None``: every station's).
+
+    >>> heard_key("usv", "boat")
+    'modd/usv/fleet/heard/boat'
+    """
+    who = "*" if station is None else check_name("station", station)
+    return f"{drone_prefix(drone)}/fleet/heard/{who}"
+
+
 #: Everything under the MoDD root, for ACL rules.
 EVERYTHING = f"{ROOT}/**"
 #: Every drone's values and every drone's status: what readers subscribe to.

@@ -104,6 +104,8 @@ class RadioStatus(TypedDict):
     malformed: int
     unknown_config: int
     handshakes: int
+    heard_elsewhere: NotRequired[int]
+    heard_elsewhere_used: NotRequired[int]
     pubbroker: PubBrokerDatagrams | None
 
 

@@ -159,6 +159,36 @@ TEST(DgramLink, PacksSlotsUpToTheDelayAndResendsOnNack) {
   EXPECT_EQ(s.link.counters().resent, 1u);
 }
 
+TEST(DgramLink, ANackOfAConfigThatReusesAnIdIsNotAnsweredWithTheOlderConfigsSlots) {
+  // Config 1 ran (another station's), then config 2, then a restarted SubBroker's
+  // config 1 again, its slots from 0: a NACK names slots alone, so slot 1 of the new
+  // config 1 must come back as the new one's, never as the older config 1's slot 1.
+  Session s;
+  s.handshake(1, 0);
+  const int64_t q = 250'000'000, ms = 1'000'000;
+  auto run = [&](uint8_t id, uint8_t value, int64_t from) {  // within the keepalive (5 s)
+    for (uint64_t k = 0; k < 4; ++k)
+      s.link.add_slot(id, k, from + static_cast<int64_t>(k + 1) * q, {value, value}, {true});
+    s.link.tick(from + 1400 * ms);  // the group of 4 slots waited its accepted delay
+    return s.out.sent.back();
+  };
+  run(1, 10, 0);
+  run(2, 20, 1500 * ms);
+  auto renewed = run(1, 30, 3000 * ms);
+  auto v = dg::verify_data(renewed, s.key, dg::kDroneToBase, 0);
+  ASSERT_EQ(v.config_id, 1);
+  size_t before = s.out.sent.size();
+  s.link.on_datagram(s.control(nack(1, 1)), 4500 * ms);
+  // config 2's datagram covers slot 1 too (the base station drops it: another config)
+  std::vector<std::vector<uint8_t>> config1;
+  for (size_t i = before; i < s.out.sent.size(); ++i) {
+    auto r = dg::verify_data(s.out.sent[i], s.key, dg::kDroneToBase, 0);
+    if (r.config_id == 1) config1.push_back(r.values);
+  }
+  ASSERT_EQ(config1.size(), 1u) << "the older config 1's datagram answered the NACK too";
+  EXPECT_EQ(config1[0], v.values);
+}
+
 TEST(DgramLink, AConfigChangesTheAcceptedDelayAndAnOldOneRestoresIt) {
   Session s;
   s.handshake(1, 0);

@@ -57,6 +57,21 @@ def test_channel_rate_loss_outage_are_seeded() -> None:
     assert q.dropped["queue"] == 2
 
 
+def test_a_deaf_outage_silences_the_drone_to_station_direction_alone() -> None:
+    """``deaf=5+2``: the station's modem hears nothing of the drone for 2 s, while
+    the drone still hears the station (the relays' drone -> station channel is the
+    one built with ``hearing``)."""
+    spec = RadioSpec.parse("deaf=5+2,seed=3")
+    assert spec.deaf == ((5.0, 2.0),) and spec.outages == ()
+    talking, hearing = Channel(spec, 1), Channel(spec, 2).hearing()
+    times = [i * 0.1 for i in range(100)]
+    assert all(talking.offer(b"x", t) is not None for t in times)
+    assert sum(hearing.offer(b"x", t) is None for t in times) == 20
+    assert hearing.dropped["outage"] == 20
+    with pytest.raises(ValueError, match="deaf"):
+        RadioSpec.parse("deaf=5")
+
+
 def test_forged_copies_pass_the_framing_and_fail_the_tag() -> None:
     """An attacker's forgery over serial has a good CRC (the deframer passes it),
     so it is the datagram's tag that refuses it; handshakes are not forged."""

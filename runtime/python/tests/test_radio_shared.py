@@ -34,7 +34,7 @@ def test_two_stations_each_hear_the_drone_with_their_own_loss() -> None:
     out: list[list[Modem]] = []
     listens = [("127.0.0.1", p) for p in ports]
     t = threading.Thread(
-        target=lambda: out.append(run_shared_udp(spec, listens, drone.getsockname(), stop.is_set))
+        target=lambda: out.append(run_shared_udp([spec], listens, drone.getsockname(), stop.is_set))
     )
     t.start()
     bases = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in ports]
@@ -88,3 +88,49 @@ def test_cli_refuses_one_station_twice() -> None:
         timeout=30,
     )
     assert p.returncode == 2 and "given twice" in p.stderr, p.stderr
+
+
+def test_an_empty_datagram_teaches_the_modem_and_is_not_sent_on_the_air() -> None:
+    """A standby station's empty datagram: its modem delivers the drone's datagrams to
+    it from then on, and the drone receives nothing (a radio sends no empty packet).
+    Each station has its own settings: a close by (no loss), b behind a headland."""
+    drone = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    drone.bind(("127.0.0.1", 0))
+    ports = [free_port("udp"), free_port("udp")]
+    stop = threading.Event()
+    specs = [RadioSpec(), RadioSpec(outages=((0.0, 600.0),))]
+    listens = [("127.0.0.1", p) for p in ports]
+    out: list[list[Modem]] = []
+    t = threading.Thread(
+        target=lambda: out.append(run_shared_udp(specs, listens, drone.getsockname(), stop.is_set))
+    )
+    t.start()
+    bases = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in ports]
+    try:
+        time.sleep(0.05)
+        for base, port in zip(bases, ports, strict=True):
+            base.sendto(b"", ("127.0.0.1", port))
+        assert _drain(drone) == [], "an empty datagram went on the air"
+        bases[0].sendto(b"probe", ("127.0.0.1", ports[0]))
+        drone.settimeout(1.0)
+        data, peer = drone.recvfrom(100)
+        assert data == b"probe"
+        for i in range(50):
+            drone.sendto(bytes([i]), peer)
+        heard = [_drain(b) for b in bases]
+    finally:
+        stop.set()
+        t.join(5)
+        for s in (*bases, drone):
+            s.close()
+    assert [len(h) for h in heard] == [50, 0]
+    assert out[0][1].down.dropped["outage"] == 50
+
+
+def test_cli_takes_one_radio_setting_per_station_or_one_for_all() -> None:
+    args = ["--udp", "127.0.0.1:1", "--udp", "127.0.0.1:2", "--to", "127.0.0.1:3"]
+    run = [sys.executable, "-m", "modd.radio.cli", *args]
+    three = [*run, "--radio", "loss=0.1", "--radio", "loss=0.2", "--radio", "loss=0.3"]
+    bad = subprocess.run(three, capture_output=True, text=True, timeout=30)
+    assert bad.returncode == 2
+    assert "--radio given 3 times: give it once, or once per --udp (2 here)" in bad.stderr

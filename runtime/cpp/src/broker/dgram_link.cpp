@@ -338,12 +338,27 @@ void DatagramLink::retag(Sent& s) {  // tagged again under the current session's
 }
 
 void DatagramLink::keep(Sent&& s) {
+  // A config id names one config at a time, and a NACK names slots alone: a new config
+  // that reuses an id (another SubBroker's, one restarted: its ids start again) starts
+  // its slots again, and the older config's datagrams under that id must not answer its
+  // NACKs (the base station would decode them as the new config's slots).
+  int64_t& last = kept_first_[s.d.config_id];
+  if (static_cast<int64_t>(s.first) <= last) forget_config(s.d.config_id);
+  last = static_cast<int64_t>(s.first);
   ring_bytes_ += s.bytes();
   ring_.push_back(std::move(s));
   while (!ring_.empty() && (ring_.size() > opt_.ring_datagrams || ring_bytes_ > opt_.ring_bytes)) {
     ring_bytes_ -= ring_.front().bytes();
     ring_.pop_front();
   }
+}
+
+void DatagramLink::forget_config(uint8_t config_id) {
+  std::erase_if(ring_, [&](const Sent& e) {
+    if (e.d.config_id != config_id) return false;
+    ring_bytes_ -= e.bytes();
+    return true;
+  });
 }
 
 void DatagramLink::send_fragments(uint8_t config_id, uint64_t slot, const SlotEntry& e) {

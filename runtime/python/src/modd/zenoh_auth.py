@@ -255,10 +255,13 @@ def acl(drone: str | None = None) -> dict[str, Any]:
             ["egress"],
             [*read, *queries],
         ),
-        # the SubBroker: the liveliness tokens electing the station serving its drone
+        # the SubBroker: the liveliness tokens electing the station serving its drone,
+        # the window records, and the datagrams a standby station's modem heard
         _rule(
             "subbroker_fleet",
             [
+                "put",
+                "declare_subscriber",
                 "liveliness_token",
                 "declare_liveliness_subscriber",
                 "liveliness_query",

@@ -10,6 +10,7 @@
 // delay. What leaves goes to a DatagramOut: `reply` datagrams to the sender
 // of the datagram being handled, the others to the authenticated peer.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -142,6 +143,14 @@ class DatagramLink {
   // resend ring
   std::deque<Sent> ring_;
   size_t ring_bytes_ = 0;
+  // The first slot last kept per config id: a smaller one is a new config under that id.
+  std::array<int64_t, 256> kept_first_ = filled(-1);
+  static std::array<int64_t, 256> filled(int64_t v) {
+    std::array<int64_t, 256> a;
+    a.fill(v);
+    return a;
+  }
+  void forget_config(uint8_t config_id);
   TokenBucket resend_budget_;
   size_t per_nack_;
 };

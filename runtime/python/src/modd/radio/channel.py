@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import random
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 # The largest UDP payload (IPv4, the link contract's): a larger ``packet`` means nothing.
 from modd_contracts.link_wire_gen import MAX_PACKET as MAX_PACKET
@@ -34,6 +34,9 @@ class RadioSpec:
     latency_ms: float = 0.0
     jitter_ms: float = 0.0  # uniform in [-jitter, +jitter], never before the send
     outages: tuple[tuple[float, float], ...] = ()  # (start s, duration s) from the start
+    # Outages of the drone -> station direction only (the drone still hears the station:
+    # a station whose receiver is blocked or swamped, its transmitter not)
+    deaf: tuple[tuple[float, float], ...] = ()
     queue_s: float = 2.0  # a packet that would wait longer than this to be sent is dropped
     seed: int = 0
     duplicate: float = 0.0  # probability that a packet that passed arrives twice
@@ -64,7 +67,7 @@ class RadioSpec:
             raise bad("queue_s", self.queue_s, f"seconds in (0, {MAX_QUEUE_S:.0f}]")
         if self.seed < 0:
             raise bad("seed", self.seed, "a whole number >= 0")
-        for start, length in self.outages:
+        for start, length in self.outages + self.deaf:
             if not (math.isfinite(start) and start >= 0 and math.isfinite(length) and length > 0):
                 raise bad(
                     "outage", f"{start}+{length}", "start+duration in s, start >= 0, duration > 0"
@@ -73,20 +76,22 @@ class RadioSpec:
     @staticmethod
     def parse(text: str) -> RadioSpec:
         """``rate=3600,packet=252,loss=0.05,latency_ms=80,jitter_ms=20,outage=10+30,seed=7``
+        (``deaf=10+30``: an outage of the drone -> station direction alone)
         (``duplicate=0.01``: a share of the packets arrives twice; ``forge=0.1``,
         ``replay=0.1``: an attacker forges or replays a share of them)
         (``outage`` may repeat: start+duration in seconds). Raises ValueError naming
         the bad item."""
         values: dict[str, float] = {}
         outages: list[tuple[float, float]] = []
+        deaf: list[tuple[float, float]] = []
         for item in filter(None, (p.strip() for p in text.split(","))):
             key, sep, raw = item.partition("=")
             if not sep:
                 raise ValueError(f"radio setting {item!r}: expected name=value")
             try:
-                if key == "outage":
+                if key in ("outage", "deaf"):
                     start, _, length = raw.partition("+")
-                    outages.append((float(start), float(length)))
+                    (outages if key == "outage" else deaf).append((float(start), float(length)))
                     continue
                 value = float(raw)
             except ValueError:
@@ -105,7 +110,7 @@ class RadioSpec:
             ):
                 raise ValueError(
                     f"unknown radio setting {key!r}; expected rate, packet, loss, "
-                    "latency_ms, jitter_ms, outage, queue_s, seed, duplicate, "
+                    "latency_ms, jitter_ms, outage, deaf, queue_s, seed, duplicate, "
                     "forge or replay"
                 )
             if key in values:
@@ -122,6 +127,7 @@ class RadioSpec:
             latency_ms=values.get("latency_ms", 0.0),
             jitter_ms=values.get("jitter_ms", 0.0),
             outages=tuple(outages),
+            deaf=tuple(deaf),
             queue_s=values.get("queue_s", 2.0),
             seed=int(values.get("seed", 0)),
             duplicate=values.get("duplicate", 0.0),
@@ -149,6 +155,12 @@ class Channel:
 
     def __post_init__(self) -> None:
         self._rng = random.Random(self.seed)
+
+    def hearing(self) -> Channel:
+        """This channel as the drone -> station direction: its ``deaf`` outages too."""
+        if self.spec.deaf:
+            self.spec = replace(self.spec, outages=self.spec.outages + self.spec.deaf, deaf=())
+        return self
 
     def in_outage(self, now: float) -> bool:
         t = now - self.start

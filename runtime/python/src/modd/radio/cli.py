@@ -4,7 +4,8 @@ UDP: ``modd-radio --udp 127.0.0.1:7181 --to 127.0.0.1:7171 --radio "rate=3600,lo
 (the SubBroker sends to 7181 instead of the PubBroker's 7171).
 A shared channel (several stations hearing one drone: docs/fleet.md): ``--udp`` once
 per station, ``modd-radio --udp 127.0.0.1:7181 --udp 127.0.0.1:7182 --to 127.0.0.1:7171``;
-the drone's datagrams reach every station, each losing its own share.
+the drone's datagrams reach every station, each losing its own share; ``--radio``
+once for all the stations' channels, or once per ``--udp`` in its order.
 Serial: ``modd-radio --serial --radio "rate=3600,packet=252"`` creates two
 pseudo-terminals, prints their paths (``base=/dev/pts/N drone=/dev/pts/M``) and
 relays between them. Prints what it passed and dropped every ``--report`` seconds
@@ -97,9 +98,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument(
         "--radio",
         type=_spec,
-        default=RadioSpec(),
+        action="append",
         metavar="SPEC",
-        help='e.g. "rate=3600,packet=252,loss=0.05,latency_ms=80,jitter_ms=20,outage=10+30,seed=7"',
+        help='e.g. "rate=3600,packet=252,loss=0.05,latency_ms=80,jitter_ms=20,outage=10+30,seed=7"'
+        " (a shared channel: once for every station, or once per --udp, in its order)",
     )
     p.add_argument(
         "--profile",
@@ -122,6 +124,12 @@ def main(argv: list[str] | None = None) -> int:
         p.error("--udp: each station needs its own HOST:PORT (one given twice)")
     if args.udp and len(args.udp) > 1 and args.profile is not None:
         p.error("--profile emulates one station's radio: give one --udp with it")
+    radios: list[RadioSpec] = args.radio or [RadioSpec()]
+    if len(radios) > 1 and len(radios) != len(args.udp or ()):
+        p.error(
+            f"--radio given {len(radios)} times: give it once, or once per --udp "
+            f"({len(args.udp or ())} here)"
+        )
     if args.report <= 0 or (args.duration is not None and args.duration <= 0):
         p.error("--report and --duration take seconds > 0")
     stopping: list[bool] = []
@@ -133,19 +141,19 @@ def main(argv: list[str] | None = None) -> int:
         return bool(stopping) or (end is not None and time.monotonic() >= end)
 
     if args.udp and len(args.udp) > 1:
-        stations = run_shared_udp(args.radio, args.udp, args.to, stop, _print_shared, args.report)
+        stations = run_shared_udp(radios, args.udp, args.to, stop, _print_shared, args.report)
         _print_shared(stations)
         return 0
     if args.udp:
         up, down = run_udp(
-            args.radio, args.udp[0], args.to, stop, _print, args.report, profile=args.profile
+            radios[0], args.udp[0], args.to, stop, _print, args.report, profile=args.profile
         )
     else:
         base, base_path = open_pty_pair()
         drone, drone_path = open_pty_pair()
         print(f"base={base_path} drone={drone_path}", flush=True)
         up, down = run_serial(
-            args.radio, base, drone, stop, _print, args.report, profile=args.profile
+            radios[0], base, drone, stop, _print, args.report, profile=args.profile
         )
     _print(up, down)
     return 0

@@ -49,9 +49,11 @@ def channels(
     if profile is not None:
         return (
             AirtimeChannel(spec, spec.seed * 2 + 1, start, profile=profile),
-            AirtimeChannel(spec, spec.seed * 2 + 2, start, profile=profile),
+            AirtimeChannel(spec, spec.seed * 2 + 2, start, profile=profile).hearing(),
         )
-    return Channel(spec, spec.seed * 2 + 1, start), Channel(spec, spec.seed * 2 + 2, start)
+    return Channel(spec, spec.seed * 2 + 1, start), Channel(
+        spec, spec.seed * 2 + 2, start
+    ).hearing()
 
 
 def run_udp(
@@ -87,6 +89,8 @@ def run_udp(
                 if key.data == "front":
                     data, addr = front.recvfrom(MAX_DATAGRAM)
                     peer[:] = [addr]
+                    if not data:  # the station says where it is: nothing on the air
+                        continue
                     at = up.offer(data, now)
                     if at is not None:
                         _deliver(pending, up, at, back.send, data, serial=False)

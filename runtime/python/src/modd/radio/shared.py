@@ -7,10 +7,15 @@ sees one peer (the relay's socket: the radio it is wired to), as a PubBroker on 
 serial modem does.
 
 A station's modem is the UDP port it sends to (``listen``); the relay delivers the
-drone's datagrams to the address that last sent from it (its SubBroker), so a
-station that has never transmitted (a standby one: the election keeps it silent)
-is delivered nothing until it does: it would drop them unverified anyway (it holds
-no session key: docs/fleet.md).
+drone's datagrams to the address that last sent to it (its SubBroker), as a UDP
+bridge of a serial modem learns its client. A standby station (the election keeps it
+silent on the air) sends an **empty** datagram now and then: the modem learns where it
+is and transmits nothing (a radio sends no empty packet), and the station hears the
+drone, to forward what it hears to the serving one (docs/fleet.md, "Diversity
+reception").
+
+Each station's channel may be set apart (``specs``: one per station, or one for all):
+one station behind a headland (an outage), one close by (no loss).
 """
 
 from __future__ import annotations
@@ -40,19 +45,29 @@ class Modem:
     peer: list[tuple[str, int]] = field(default_factory=list)
 
 
-def modems(spec: RadioSpec, listens: Sequence[tuple[str, int]], start: float) -> list[Modem]:
-    """One bound modem per station, its channels seeded apart."""
+def modems(
+    specs: Sequence[RadioSpec], listens: Sequence[tuple[str, int]], start: float
+) -> list[Modem]:
+    """One bound modem per station, its channels seeded apart; ``specs``: one per
+    station, or one for all."""
+    if len(specs) not in (1, len(listens)):
+        raise ValueError(
+            f"{len(specs)} radio settings for {len(listens)} stations: give one, or one each"
+        )
     out = []
     for i, addr in enumerate(listens):
+        spec = specs[i] if len(specs) > 1 else specs[0]
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         sock.bind(addr)
         seed = spec.seed * 2 + i * SEED_STRIDE
-        out.append(Modem(sock, Channel(spec, seed + 1, start), Channel(spec, seed + 2, start)))
+        out.append(
+            Modem(sock, Channel(spec, seed + 1, start), Channel(spec, seed + 2, start).hearing())
+        )
     return out
 
 
 def run_shared_udp(
-    spec: RadioSpec,
+    specs: Sequence[RadioSpec],
     listens: Sequence[tuple[str, int]],
     target: tuple[str, int],
     stop: Callable[[], bool],
@@ -63,7 +78,7 @@ def run_shared_udp(
     ``target`` until ``stop()``: the drone's datagrams to every station (each
     station's loss drawn on its own), each station's to the drone."""
     start = time.monotonic()
-    stations = modems(spec, listens, start)
+    stations = modems(specs, listens, start)
     back = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     back.bind((listens[0][0], 0))
     back.connect(target)
@@ -98,6 +113,8 @@ def _on_ready(
         except OSError:  # an ICMP error for a station's SubBroker that went away
             return
         modem.peer[:] = [addr]
+        if not data:  # the station says where it is: nothing goes on the air
+            return
         at = modem.up.offer(data, now)
         if at is not None:
             _deliver(pending, modem.up, at, back.send, data, serial=False)

@@ -36,6 +36,8 @@ from .backfill import BackfillManager
 from .config import ConfigError, SubBrokerConfig, resolve_key
 from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoints
 from .deploy import DeployRequest, parse_request
+from .dglink import DatagramLinkClient
+from .diversity import Diversity
 from .dynamic import DynamicSubscriptions
 from .fanout import FanOut
 from .fleet_record import FleetRecord
@@ -166,6 +168,8 @@ class SubBroker:
                 session, self.drone, self.config.station, lambda: self.link.up, self._serves
             )
             self.link.cut = self.serving
+            if isinstance(self.link, DatagramLinkClient):
+                self.diversity = Diversity(session, self.drone, self.config.station, self.link)
         if self.config.delivery.zenoh:
             self._zenoh = ZenohDelivery(session, self.drone)
         if self.config.delivery.tcp:
@@ -198,6 +202,7 @@ class SubBroker:
 
     serving: ServingSwitch | None = None
     fleet: FleetRecord | None = None
+    diversity: Diversity | None = None
 
     def _declare_queryables(self, session: zenoh.Session) -> None:
         self._queryables = [
@@ -219,6 +224,8 @@ class SubBroker:
         self.link.stop()
         if self.serving is not None:
             self.serving.close()
+        if self.diversity is not None:
+            self.diversity.close()
         if self.fleet is not None:
             self.fleet.close()
         if self._status is not None:

@@ -53,6 +53,11 @@ class DatagramPort(Protocol):
 
     def send(self, datagram: bytes) -> None: ...
 
+    def announce(self) -> None:
+        """Tell the radio where this station is without transmitting (a standby
+        station that listens: docs/fleet.md, "Diversity reception")."""
+        ...
+
     def recv(self, timeout_s: float) -> list[tuple[bytes, Hashable | None]]:
         """The datagrams that came within ``timeout_s``, each with its source."""
         ...
@@ -82,6 +87,12 @@ class UdpPort:
         with contextlib.suppress(OSError):  # nobody there (yet): lost, as on a radio
             self.sock.sendto(datagram, self._peer)
             self.wire_out += len(datagram) + UDP_IP_HEADER_BYTES
+
+    def announce(self) -> None:
+        """An empty datagram: a UDP bridge of a modem learns its client from it, and a
+        radio has nothing to send (modd-radio does the same)."""
+        with contextlib.suppress(OSError):
+            self.sock.sendto(b"", self._peer)
 
     def recv(self, timeout_s: float) -> list[tuple[bytes, Hashable | None]]:
         out: list[tuple[bytes, Hashable | None]] = []
@@ -137,6 +148,9 @@ class SerialPort:
                 continue
             self.wire_out += n
             view = view[n:]
+
+    def announce(self) -> None:
+        pass  # a modem on a serial line gives what it hears to the line: nothing to say
 
     def recv(self, timeout_s: float) -> list[tuple[bytes, Hashable | None]]:
         ready, _, _ = select.select([self.fd], [], [], timeout_s)

@@ -47,6 +47,8 @@ class RadioCounters:
     nacks: int = 0
     handshakes: int = 0
     foreign: int = 0  # from an address the session is not bound to (logged, not in the status)
+    heard_elsewhere: int = 0  # forwarded by other stations (docs/fleet.md, "Diversity reception")
+    heard_elsewhere_used: int = 0  # ... that brought what this station's modem missed
     _rates: deque[tuple[float, int, int]] = field(default_factory=deque)
 
 
@@ -243,6 +245,14 @@ class Runs:
             "malformed": r.malformed + corrupt,
             "unknown_config": r.unknown_config,
             "handshakes": r.handshakes,
+            **(
+                {
+                    "heard_elsewhere": r.heard_elsewhere,
+                    "heard_elsewhere_used": r.heard_elsewhere_used,
+                }
+                if r.heard_elsewhere
+                else {}
+            ),
         }
 
 

@@ -9,6 +9,11 @@ CONTROL datagrams (CONFIG resent every second until its ack). DATA datagrams
 are verified before anything is decoded (:mod:`.dgruns`), gaps are NACKed,
 and nothing else flows back but a PING every keepalive period.
 
+Datagrams another station's modem heard (docs/fleet.md, "Diversity reception") come
+through :meth:`DatagramSession.relayed`: from no address of this link, they are taken
+on their tag alone; a copy this station had already (its own modem heard it too) is
+dropped as a copy, not counted as a replay.
+
 Silence (no datagram for the liveness time) gets a PING; three times that
 ends the session, and the next handshake resumes the running config when the
 PubBroker still runs it, so that the slots lost during an outage are still
@@ -18,6 +23,7 @@ asked for (the PubBroker tags its ring again under the new session's key).
 from __future__ import annotations
 
 import logging
+from collections import deque
 from collections.abc import Callable, Hashable
 from typing import Any, TypeVar
 
@@ -58,6 +64,7 @@ RETRY_S = 1.0  # handshake and CONFIG resent this often ...
 RETRIES = 10  # ... at most this many times
 KEEPALIVE_S = 30.0
 FOREIGN_LOG_EVERY = 1000  # a datagram from another address is logged once per this many
+FORWARDED_KEPT = 256  # datagrams other stations forwarded, kept to tell a copy from a replay
 
 
 class DatagramSession(LinkSession):
@@ -101,6 +108,10 @@ class DatagramSession(LinkSession):
         self._pieces = ControlPieces()
         self._pinged = 0.0
         self._last_sent = 0.0
+        self._own_in = 0.0  # when this station's own modem last gave a verified datagram
+        #: the last datagrams other stations forwarded: the same one from this station's
+        #: own modem afterwards is a copy, not a replay
+        self._forwarded: deque[bytes] = deque(maxlen=FORWARDED_KEPT)
 
     @property
     def delay_s(self) -> float:
@@ -118,6 +129,7 @@ class DatagramSession(LinkSession):
         self._bound = None
         self._pinged = 0.0
         super().begin()
+        self._own_in = self._last_in
 
     def _wrap_handshake(self, frame: bytes) -> list[bytes]:
         return [encode_handshake(frame)]
@@ -196,12 +208,21 @@ class DatagramSession(LinkSession):
         return min(self.delay_s, max(0.3, 2 * rtt + 0.15))
 
     def _check_silence(self, now: float) -> None:
+        """Silence ends the session; so does a drone that no longer answers this station
+        while its datagrams come only through other stations' modems (this station's
+        transmissions no longer reach it: another station should serve)."""
         silence = max(self.liveness_s(), 2 * self.delay_s + 1.0)
         silent = now - self._last_in
         if silent > 3 * silence:
             raise LinkDown(f"nothing from the PubBroker for {silent:.1f} s")
+        unanswered = now - max(self._own_in, self.answered_at)
+        if unanswered > 3 * silence:
+            raise LinkDown(
+                f"the PubBroker has not answered this station for {unanswered:.1f} s (its "
+                "datagrams come only through other stations' modems)"
+            )
         if (
-            silent > silence and now - self._pinged > silence
+            unanswered > silence and now - self._pinged > silence
         ) or now - self._last_sent > KEEPALIVE_S:
             self.send(codec.encode(Ping(b"alive")))
             self._pinged = now
@@ -226,8 +247,29 @@ class DatagramSession(LinkSession):
                 )
             return False
         self._source = source
+        replayed = self.radio.replayed
         ok = self._on_datagram(raw)
         if ok:
+            self.heard()
+            self._own_in = self._last_in
+        elif self.radio.replayed > replayed and raw in self._forwarded:
+            self.radio.replayed = replayed  # another station forwarded it first
+        return ok
+
+    def relayed(self, raw: bytes) -> bool:
+        """A datagram another station's modem heard: True when it verified under this
+        session's key and brought something new. A handshake datagram is not taken (each
+        station answers its own), nor anything before this session has its key."""
+        if not self._key or not raw or raw[0] == DGRAM_HANDSHAKE:
+            return False
+        self.radio.heard_elsewhere += 1
+        self.stats.bytes_in += len(raw)
+        replayed = self.radio.replayed
+        ok = self._on_datagram(raw)
+        self.radio.replayed = replayed  # a copy of what this modem heard is no replay
+        if ok:
+            self.radio.heard_elsewhere_used += 1
+            self._forwarded.append(raw)
             self.heard()
         return ok
 

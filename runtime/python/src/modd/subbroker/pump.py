@@ -196,7 +196,7 @@ class Pump(ABC):
             if self._is_cut():  # a rehearsed outage: no connect until it is restored, then at once
                 self.stats.state = getattr(self.cut, "state", "cut")
                 backoff = 0.0
-                self._stop.wait(0.1)
+                self._while_cut()
                 continue
             connects, began = self.stats.connects, time.monotonic()
             try:
@@ -234,6 +234,11 @@ class Pump(ABC):
             self._flush()
             self.session.tick()
             self._flush()
+
+    def _while_cut(self) -> None:
+        """What the thread does while the link is cut, a turn at a time (a datagram
+        link's standby station listens: dglink.py)."""
+        self._stop.wait(0.1)
 
     def _drop(self, reason: str) -> None:
         self.session.close(reason)

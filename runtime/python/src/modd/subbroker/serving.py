@@ -81,6 +81,8 @@ class ServingSwitch:
     #: what the status says of the link while another station serves (the schema's LinkState)
     state = "down"
     why = "another base station serves the drone"
+    #: a datagram link listens while cut (dglink.py): the serving station uses what it hears
+    overhears = True
 
     def __init__(
         self,

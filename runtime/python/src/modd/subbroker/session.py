@@ -121,6 +121,7 @@ class LinkSession(ABC):
         self._up = threading.Event()
         self._hs: _Handshake | None = None
         self._last_in = 0.0  # when the PubBroker was last heard
+        self.answered_at = 0.0  # when it last answered a PING of this session (a PONG)
         #: Backfill frames from the PubBroker go here (link thread); ``on_up`` runs after each
         #: (re)connection, so that running backfills are asked for again with their resume point.
         self.backfill_sink: Callable[[codec.RawFrame], None] | None = None
@@ -414,6 +415,7 @@ class LinkSession(ABC):
             for cid in list(self._pending):
                 self._fail(cid, ConfigRejected(msg.code, msg.message))
         elif isinstance(msg, Pong):
+            self.answered_at = self.clock.monotonic()
             rtt = self._round_trips.on_pong(msg.payload, self.clock.monotonic())
             if rtt is not None:
                 self.stats.rtt_s = rtt
