@@ -61,7 +61,7 @@ class _Handler:
 
 def _session() -> tuple[DatagramSession, _Handler]:
     handler = _Handler()
-    s = DatagramSession("udp", b"psk", LinkOptions(), handler)  # type: ignore[arg-type]
+    s = DatagramSession("udp", b"psk", LinkOptions(), handler)
     s._key = KEY  # an authenticated session (the handshake is not under test here)
     s.runs.accept(CONFIG, ConfigAck(1, 0, 10**18), KEY)
     return s, handler
@@ -121,7 +121,7 @@ def test_a_forged_forwarded_datagram_is_refused_and_counted() -> None:
 
 def test_nothing_is_taken_before_the_session_has_its_key_nor_a_handshake() -> None:
     handler = _Handler()
-    s = DatagramSession("udp", b"psk", LinkOptions(), handler)  # type: ignore[arg-type]
+    s = DatagramSession("udp", b"psk", LinkOptions(), handler)
     assert not s.relayed(_datagram(1))
     s2, h2 = _session()
     assert not s2.relayed(bytes([DGRAM_HANDSHAKE, 1, 2, 3]))
@@ -154,7 +154,7 @@ def _timed_session() -> tuple[DatagramSession, _Clock]:
         LinkOptions(),
         _Handler(),
         liveness_s=lambda: 3.0,
-        clock=clock,  # type: ignore[arg-type]
+        clock=clock,
     )
     s._key = KEY
     s.runs.accept(CONFIG, ConfigAck(1, 0, 10**18), KEY)
