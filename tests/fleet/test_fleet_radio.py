@@ -73,31 +73,50 @@ def start_shared_radio(
     return proc
 
 
+class SharedChannel:
+    """Two stations a and b in a mesh, the C++ PubBroker on udp behind the shared
+    channel (``radios``: once for both modems, or one each), a viewer at each station and
+    each station's SubBroker configuration (``sb``), not started."""
+
+    def __init__(self, tmp: Path, started: list[Any], radios: tuple[str, ...]) -> None:
+        assert PUBBROKER.exists(), f"{PUBBROKER} is not built: run make build"
+        self.tmp, self.started = tmp, started
+        self.stations = mesh(tmp, "ab")
+        for s in self.stations.values():
+            started.append(s.start())
+        link, self.ingress = free_port("udp"), free_port()
+        self.model = model_copy(tmp, "scenario1.modd")
+        udp = {"transport": "udp", "port": link}
+        started.append(start_pubbroker_dgram(tmp, self.model, udp, self.ingress))
+        modems = {"a": free_port("udp"), "b": free_port("udp")}
+        self.radio = start_shared_radio(tmp, link, list(modems.values()), radios)
+        started.append(self.radio)
+        self.viewers = {s: Listener(st, "modd/usv/sub/*") for s, st in self.stations.items()}
+        started.extend(self.viewers.values())
+        self.sb = {
+            s: subbroker_toml(tmp, self.model, modems[s], st, "udp", str(tmp / s))
+            for s, st in self.stations.items()
+        }
+
+    def start_subbrokers(self) -> tuple[Proc, Proc]:
+        """a's SubBroker, serving, then b's (it stands by)."""
+        sb_a = start_subbroker(self.tmp, self.sb["a"], "sb-a")
+        self.started.append(sb_a)
+        assert sb_a.wait_log("station a serves usv", 30), sb_a.log()
+        sb_b = start_subbroker(self.tmp, self.sb["b"], "sb-b")
+        self.started.append(sb_b)
+        return sb_a, sb_b
+
+
 @pytest.mark.timeout(240)
 def test_two_stations_on_one_radio_channel_each_window_once_union_coverage(
     tmp_path: Path,
     procs: list[Any],  # noqa: F811
 ) -> None:
-    assert PUBBROKER.exists(), f"{PUBBROKER} is not built: run make build"
-    stations = mesh(tmp_path, "ab")
-    for s in stations.values():
-        procs.append(s.start())
-    a, b = stations["a"], stations["b"]
-    link, ingress = free_port("udp"), free_port()
-    model = model_copy(tmp_path, "scenario1.modd")
-    udp = {"transport": "udp", "port": link}
-    procs.append(start_pubbroker_dgram(tmp_path, model, udp, ingress))
-    modems = {"a": free_port("udp"), "b": free_port("udp")}
-    procs.append(radio := start_shared_radio(tmp_path, link, list(modems.values())))
-    at = {s.name: Listener(s, "modd/usv/sub/*") for s in (a, b)}
-    procs.extend(at.values())
-    sb = {
-        s.name: subbroker_toml(tmp_path, model, modems[s.name], s, "udp", str(tmp_path / s.name))
-        for s in (a, b)
-    }
-    procs.append(sb_a := start_subbroker(tmp_path, sb["a"], "sb-a"))
-    assert sb_a.wait_log("station a serves usv", 30), sb_a.log()
-    procs.append(sb_b := start_subbroker(tmp_path, sb["b"], "sb-b"))
+    ch = SharedChannel(tmp_path, procs, (LOSS,))
+    a, b, at, sb = ch.stations["a"], ch.stations["b"], ch.viewers, ch.sb
+    sb_a, sb_b = ch.start_subbrokers()
+    model, ingress, radio = ch.model, ch.ingress, ch.radio
     procs.append(load := start_load(tmp_path, model, ingress, LOAD_S))
     time.sleep(15)  # b stands by while a serves over the lossy channel
     assert "serves usv" not in sb_b.log(), sb_b.log()
@@ -151,28 +170,11 @@ def test_a_window_the_standby_stations_modem_got_is_delivered_live(
     equal to the archive; a backfill of the gaps finds none. Without the forwarding,
     a's link goes silent in the outage and b takes the drone over: a handover, its gap
     backfilled."""
-    assert PUBBROKER.exists(), f"{PUBBROKER} is not built: run make build"
-    stations = mesh(tmp_path, "ab")
-    for s in stations.values():
-        procs.append(s.start())
-    a, b = stations["a"], stations["b"]
-    link, ingress = free_port("udp"), free_port()
-    model = model_copy(tmp_path, "scenario1.modd")
-    udp = {"transport": "udp", "port": link}
-    procs.append(start_pubbroker_dgram(tmp_path, model, udp, ingress))
-    modems = {"a": free_port("udp"), "b": free_port("udp")}
-    radios = ("loss=0.2,seed=45,deaf=18+15", "loss=0")
-    procs.append(radio := start_shared_radio(tmp_path, link, list(modems.values()), radios))
-    at = {s.name: Listener(s, "modd/usv/sub/*") for s in (a, b)}
-    procs.extend(at.values())
+    ch = SharedChannel(tmp_path, procs, ("loss=0.2,seed=45,deaf=18+15", "loss=0"))
+    a, at = ch.stations["a"], ch.viewers
     procs.append(status := Listener(a, "modd/usv/status"))
-    sb = {
-        s.name: subbroker_toml(tmp_path, model, modems[s.name], s, "udp", str(tmp_path / s.name))
-        for s in (a, b)
-    }
-    procs.append(sb_a := start_subbroker(tmp_path, sb["a"], "sb-a"))
-    assert sb_a.wait_log("station a serves usv", 30), sb_a.log()
-    procs.append(sb_b := start_subbroker(tmp_path, sb["b"], "sb-b"))
+    sb_a, sb_b = ch.start_subbrokers()
+    model, ingress, radio = ch.model, ch.ingress, ch.radio
     procs.append(load := start_load(tmp_path, model, ingress, 40))
     load.p.wait(100)
     time.sleep(3)
