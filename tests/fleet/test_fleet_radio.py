@@ -166,10 +166,9 @@ def test_a_window_the_standby_stations_modem_got_is_delivered_live(
     """Union coverage by diversity reception: a's modem loses 20 % and then hears
     nothing of the drone for 15 s (the drone still hears a), b's loses nothing. b never
     serves; a delivers every window live from what the two modems heard (b's forwarded
-    through the mesh), each once,
-    equal to the archive; a backfill of the gaps finds none. Without the forwarding,
-    a's link goes silent in the outage and b takes the drone over: a handover, its gap
-    backfilled."""
+    through the mesh), each once, equal to the archive; a backfill of the gaps finds
+    none. Without the forwarding, a's link goes silent in the outage and b takes the
+    drone over: a handover, its gap backfilled."""
     ch = SharedChannel(tmp_path, procs, ("loss=0.2,seed=45,deaf=18+15", "loss=0"))
     a, at = ch.stations["a"], ch.viewers
     procs.append(status := Listener(a, "modd/usv/status"))
