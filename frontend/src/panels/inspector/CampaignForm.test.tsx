@@ -106,7 +106,7 @@ describe("CampaignForm", () => {
     fireEvent.change(part("Vehicle north").getByLabelText(/^channel/), { target: { value: "lake" } });
     fireEvent.change(part("Vehicle usv_2").getByLabelText(/^channel/), { target: { value: "lake" } });
     steps.push(model(store));
-    type(part("Vehicle usv_3").getByLabelText(/^sub broker endpoint host/), "10.0.0.9");
+    type(part("Vehicle usv_3").getByLabelText(/^sub broker endpoint host/), "boat.example");
     type(part("Vehicle usv_3").getByLabelText(/^sub broker endpoint port/), "7300");
     type(part("Vehicle usv_3").getByLabelText(/^device of gps/), "/dev/ttyUSB3");
     fireEvent.change(part("Vehicle usv_3").getByLabelText(/^link transport/), { target: { value: "udp" } });
@@ -120,7 +120,7 @@ describe("CampaignForm", () => {
         { name: "usv_2", channel: "lake", pubBroker: { endpoint: { host: "127.0.0.1", port: 7172 } } },
         {
           name: "usv_3", description: "East boat", pubBroker: { endpoint: { host: "127.0.0.1", port: 7173 } },
-          subBroker: { endpoint: { host: "10.0.0.9", port: 7300 } }, devices: [{ sensor: "gps", path: "/dev/ttyUSB3" }],
+          subBroker: { endpoint: { host: "boat.example", port: 7300 } }, devices: [{ sensor: "gps", path: "/dev/ttyUSB3" }],
           link: { transport: "udp" },
         },
       ],
@@ -133,7 +133,7 @@ describe("CampaignForm", () => {
     expect(model(store).campaign?.vehicles).toEqual([
       { name: "north" },
       { name: "usv_3", description: "East boat", pubBroker: { endpoint: { host: "127.0.0.1", port: 7173 } },
-        subBroker: { endpoint: { host: "10.0.0.9", port: 7300 } }, link: { transport: "udp" } },
+        subBroker: { endpoint: { host: "boat.example", port: 7300 } }, link: { transport: "udp" } },
     ]);
     expect(model(store).campaign?.channels).toBeUndefined();
     expect(validated(steps).map(errorsOf)).toEqual([[], [], [], []]);
