@@ -50,7 +50,7 @@ def main() -> None:
     done = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: done.set())
     done.wait()
-    sub.undeclare()
+    sub.undeclare()  # type: ignore[no-untyped-call]
     subscription.close()
     session.close()  # type: ignore[no-untyped-call]
     out.close()
