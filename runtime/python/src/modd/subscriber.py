@@ -35,7 +35,6 @@ from modd_contracts.types_gen import DeliveredValueFields
 from .subbroker.keys import sub_key, subscribe_key
 from .subbroker.payload import DeliveredValue
 from .subbroker.seen import Seen, identity
-from .zenoh_recovery import values_subscriber
 
 if TYPE_CHECKING:
     import pandas  # type: ignore[import-untyped]
@@ -77,8 +76,7 @@ class Subscription:
         self._queue: queue.Queue[DeliveredValue | None] = queue.Queue(QUEUE_LIMIT)
         self._on_close = on_close
         self._closed = False
-        # what a break in the mesh kept from it, it asks the publishers for (fleet.md)
-        self._sub = values_subscriber(session, key, self._receive)
+        self._sub = session.declare_subscriber(key, self._receive)
 
     def _receive(self, sample: zenoh.Sample) -> None:
         """One payload: a malformed one is dropped alone and counted
@@ -157,7 +155,7 @@ class Subscription:
         if self._closed:
             return
         self._closed = True
-        self._sub.undeclare()
+        self._sub.undeclare()  # type: ignore[no-untyped-call]
         if self._on_close is not None:
             self._on_close()
         self._queue.put(None)

@@ -103,8 +103,7 @@ def station_acl(base: Mapping[str, Any], peer_ids: tuple[str, ...]) -> dict[str,
             "messages": STATION_MESSAGES,
             "flows": ["ingress", "egress"],
             "permission": "allow",
-            # zenoh's recovery keys are verbatim (@adv): no ** matches them
-            "key_exprs": [keys.EVERYTHING, keys.recovery_tree(None)],
+            "key_exprs": [keys.EVERYTHING],
         }
     )
     subjects = [{"id": "station_user", "usernames": [STATION]}]

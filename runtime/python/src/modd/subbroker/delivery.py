@@ -20,7 +20,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from modd_contracts import labels
 from modd_plan.streams import StreamKey
@@ -50,23 +50,20 @@ class ZenohDelivery:
     def __init__(self, session: zenoh.Session, drone: str) -> None:
         self._session = session
         self._drone = drone
-        self._publishers: dict[str, Any] = {}
+        self._publishers: dict[str, zenoh.Publisher] = {}
         self._lock = threading.Lock()
         self.delivered = 0
 
-    def _publisher(self, subscriber: str) -> Any:
+    def _publisher(self, subscriber: str) -> zenoh.Publisher:
         import zenoh
-
-        from ..zenoh_recovery import values_publisher
 
         with self._lock:
             pub = self._publishers.get(subscriber)
             if pub is None:
-                pub = values_publisher(  # numbered and cached: readers recover (fleet.md)
-                    self._session,
+                pub = self._session.declare_publisher(
                     sub_key(self._drone, subscriber),
-                    zenoh.Encoding.APPLICATION_JSON,
-                    zenoh.CongestionControl.DROP,
+                    encoding=zenoh.Encoding.APPLICATION_JSON,
+                    congestion_control=zenoh.CongestionControl.DROP,
                 )
                 self._publishers[subscriber] = pub
             return pub
@@ -87,7 +84,7 @@ class ZenohDelivery:
         with self._lock:
             pub = self._publishers.pop(subscriber, None)
         if pub is not None:
-            pub.undeclare()
+            pub.undeclare()  # type: ignore[no-untyped-call]
 
     def close(self) -> None:
         for name in list(self._publishers):
