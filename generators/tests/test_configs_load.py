@@ -11,6 +11,8 @@ from modd.subbroker.config import load_config
 from modd_gen import generate, write_artifacts
 from modd_model import load_model
 
+EXAMPLES = Path(__file__).resolve().parents[2] / "metamodel" / "examples"
+
 
 def test_generated_subbroker_config_loads(scenarios_dir: Path, tmp_path: Path) -> None:
     model = load_model(scenarios_dir / "scenario1.modd")
@@ -57,15 +59,12 @@ def test_campaign_station_configs_load_as_one_mesh(scenarios_dir: Path, tmp_path
     """``--station``: one SubBroker configuration per station, read by the SubBroker's own
     loader: each names its station, is a router, and dials every other station that has
     an endpoint; the one behind a cellular link is dialled by none (docs/operations.md)."""
-    from modd_gen.context import build_context
     from modd_gen.targets.stations import artifacts, parse_station
 
     model = load_model(scenarios_dir / "scenario1.modd")
     given = ["shore=tcp/shore.example:7447", "boat", "cliff=tcp/cliff.example:7448"]
     stations = [parse_station(t) for t in given]
-    write_artifacts(
-        tmp_path, [*generate(model, "operator"), *artifacts(build_context(model), stations)]
-    )
+    write_artifacts(tmp_path, [*generate(model, "operator"), *artifacts(model, stations)])
     cfgs = {
         s.name: load_config(tmp_path / "operator" / "stations" / s.name / "subbroker.toml")
         for s in stations
@@ -83,3 +82,40 @@ def test_campaign_station_configs_load_as_one_mesh(scenarios_dir: Path, tmp_path
         }
         assert dict(mesh.peers) == want, name
     assert cfgs["cliff"].zenoh.listen == ("tcp/0.0.0.0:7448",)
+
+
+def test_campaign_stations_get_a_router_and_a_subbroker_per_vehicle(tmp_path: Path) -> None:
+    """A model with a campaign: per station, the router's ``station.toml`` (read by
+    ``modd.station``'s loader: the mesh as for one drone) and each vehicle's SubBroker
+    (read by its loader: a client of that router, the vehicle's own model, drone name,
+    state, link and key); the vehicles' models beside them. (Run as they are:
+    tests/fleet/test_fleet_generated.py.)"""
+    from modd.station import read_config
+    from modd_gen.targets.stations import artifacts, parse_station
+    from modd_model.campaign import expand
+
+    model = load_model(EXAMPLES / "campaign.modd")
+    stations = [parse_station(t) for t in ("shore=tcp/shore.example:7447", "boat")]
+    names = [p.path for p in artifacts(model, stations)]
+    assert len(names) == len(set(names))
+    write_artifacts(tmp_path, [*generate(model, "operator"), *artifacts(model, stations)])
+    fleet = expand(model)
+    top = tmp_path / "operator" / "stations"
+    zid = {s.name: s.zid for s in stations}
+    for s in stations:
+        router = read_config(top / s.name / "station.toml")
+        assert router.mesh is not None and router.mesh.station == zid[s.name]
+        others = {"shore": {}, "boat": {zid["shore"]: "tcp/shore.example:7447"}}
+        assert dict(router.mesh.peers) == others[s.name]
+        assert router.listen == ("tcp/0.0.0.0:7447",)
+        assert not (top / s.name / "subbroker.toml").exists()
+        keys = set()
+        for v, vm in fleet.items():
+            cfg = load_config(top / s.name / v / "subbroker.toml")
+            assert cfg.drone == v and cfg.station == s.name and cfg.model == vm
+            assert cfg.zenoh.mode == "client" and cfg.zenoh.connect == ("tcp/127.0.0.1:7447",)
+            ep = vm["pubBroker"]["endpoint"]
+            assert cfg.endpoint == (ep["host"], ep["port"])
+            assert cfg.state_dir == Path(vm["subBroker"]["configPath"])
+            keys.add(cfg.key_ref)
+        assert keys == {f"env:MODD_LINK_KEY_{v.upper()}" for v in fleet}

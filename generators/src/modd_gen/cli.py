@@ -11,7 +11,6 @@ from typing import Any
 from modd_model import load_or_report
 
 from .artifact import write_artifacts
-from .context import build_context
 from .generate import ROLES, generate
 from .targets.stations import artifacts as station_artifacts
 from .targets.stations import check_campaign, parse_station
@@ -33,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     made = generate(model, args.role)
     if stations and args.role in (None, "operator"):
-        made += station_artifacts(build_context(model), stations)
+        made += station_artifacts(model, stations)
     written = write_artifacts(out, made)
     index = [
         {

@@ -6,6 +6,14 @@ SubBroker is the station's router) and ``[zenoh.mesh]``: this station's zenoh id
 the other stations' endpoints. A station given without an endpoint (behind a cellular
 link or NAT: nothing can connect to it) dials the others and is listed by none.
 
+A model with a ``Campaign`` (several vehicles: modd_model.campaign) gets, per station,
+the station's router (``operator/stations/<name>/station.toml``, for ``python -m
+modd.station --config``: ``[zenoh]`` listen and mesh, as above) and one SubBroker per
+vehicle, a client of that router (``operator/stations/<name>/<vehicle>/subbroker.toml``,
+as ``modd up`` runs a campaign), each vehicle's model beside them
+(``operator/vehicles/<vehicle>/model.json``). Every station gets every vehicle: any may
+hear any drone, and one that never hears a vehicle stands by for it.
+
 >>> s = parse_station("shore=tcp/shore.example:7447"); (s.name, s.endpoint, s.listen)
 ('shore', 'tcp/shore.example:7447', 'tcp/0.0.0.0:7447')
 >>> parse_station("boat").endpoint is None
@@ -18,12 +26,15 @@ ValueError: --station shore=shore.example: expected NAME=PROTOCOL/HOST:PORT ...
 from __future__ import annotations
 
 import hashlib
+import json
 import re
 from dataclasses import dataclass
 from typing import Any
 
+from modd_model.campaign import expand, vehicles
+
 from ..artifact import Artifact
-from ..context import Context
+from ..context import DEFAULT_KEY_REF, Context, build_context
 from ..tomlwriter import dumps
 from . import subbroker_config
 
@@ -89,20 +100,94 @@ def config(ctx: Context, me: CampaignStation, stations: list[CampaignStation]) -
     return doc
 
 
-def artifacts(ctx: Context, stations: list[CampaignStation]) -> list[Artifact]:
+def artifacts(model: dict[str, Any], stations: list[CampaignStation]) -> list[Artifact]:
+    """The stations' files: for the drone of ``model``, or for each of its campaign's
+    vehicles when it has one."""
     check_campaign(stations)
+    if vehicles(model):
+        return campaign_artifacts(model, stations)
+    ctx = build_context(model)
     out = []
     for me in stations:
-        how = (
-            f"reached by the others at {me.endpoint}"
-            if me.endpoint
-            else "behind a cellular link or NAT: it dials the others, none dials it"
-        )
-        head = (
-            f"# Station {me.name} of the campaign ({', '.join(s.name for s in stations)}): "
-            f"{how}.\n# Copy the first station's credentials directory to every station "
-            "(docs/fleet.md, 'One mesh of stations').\n"
-        )
-        text = head + dumps(config(ctx, me, stations))
+        text = _head(me, stations) + dumps(config(ctx, me, stations))
         out.append(Artifact(f"operator/stations/{me.name}/subbroker.toml", text, "operator"))
+    return out
+
+
+def _head(me: CampaignStation, stations: list[CampaignStation]) -> str:
+    how = (
+        f"reached by the others at {me.endpoint}"
+        if me.endpoint
+        else "behind a cellular link or NAT: it dials the others, none dials it"
+    )
+    return (
+        f"# Station {me.name} of the campaign ({', '.join(s.name for s in stations)}): "
+        f"{how}.\n# Copy the first station's credentials directory to every station "
+        "(docs/fleet.md, 'One mesh of stations').\n"
+    )
+
+
+def local_endpoint(listen: str) -> str:
+    """Where a process on the station's own machine reaches its router.
+
+    >>> local_endpoint("tcp/0.0.0.0:7447")
+    'tcp/127.0.0.1:7447'
+    """
+    proto, _, rest = listen.partition("/")
+    return f"{proto}/127.0.0.1:{rest.rsplit(':', 1)[1]}"
+
+
+def router_config(me: CampaignStation, stations: list[CampaignStation]) -> dict[str, Any]:
+    """A campaign station's router (``python -m modd.station --config``)."""
+    peers = {s.zid: s.endpoint for s in stations if s is not me and s.endpoint is not None}
+    return {"zenoh": {"listen": [me.listen], "mesh": {"id": me.zid, "peers": peers}}}
+
+
+def vehicle_config(ctx: Context, vehicle: str, me: CampaignStation) -> dict[str, Any]:
+    """One vehicle's SubBroker at station ``me``: a client of the station's router."""
+    doc = subbroker_config.config(ctx)
+    doc["model"] = f"../../../vehicles/{vehicle}/model.json"
+    doc["station"] = me.name
+    doc["zenoh"] = {"mode": "client", "listen": [], "connect": [local_endpoint(me.listen)]}
+    if ctx.key_ref == DEFAULT_KEY_REF:  # one station, several drones: a key each
+        doc["link"]["key"] = vehicle_key_ref(vehicle)
+    return doc
+
+
+def vehicle_key_ref(vehicle: str) -> str:
+    """Where a vehicle's SubBroker reads its link key when its model names none.
+
+    >>> vehicle_key_ref("usv1")
+    'env:MODD_LINK_KEY_USV1'
+    """
+    return f"{DEFAULT_KEY_REF}_{vehicle.upper()}"
+
+
+def campaign_artifacts(model: dict[str, Any], stations: list[CampaignStation]) -> list[Artifact]:
+    fleet = expand(model)
+    out = [
+        Artifact(
+            f"operator/vehicles/{name}/model.json",
+            json.dumps(vm, indent=2, ensure_ascii=False) + "\n",
+            "operator",
+        )
+        for name, vm in fleet.items()
+    ]
+    contexts = {name: build_context(vm) for name, vm in fleet.items()}
+    for me in stations:
+        where = f"operator/stations/{me.name}"
+        start = (
+            "# Start: python -m modd.station --config station.toml --credentials DIR, then\n"
+            "# each vehicle's modd-subbroker --config <vehicle>/subbroker.toml --credentials "
+            "DIR\n# (the same DIR: the station's one credentials directory).\n"
+        )
+        text = _head(me, stations) + start + dumps(router_config(me, stations))
+        out.append(Artifact(f"{where}/station.toml", text, "operator"))
+        for name, ctx in contexts.items():
+            head = (
+                f"# Vehicle {name} at station {me.name}: a client of the station's router "
+                f"({local_endpoint(me.listen)}); its link key as [link] key says.\n"
+            )
+            text = head + dumps(vehicle_config(ctx, name, me))
+            out.append(Artifact(f"{where}/{name}/subbroker.toml", text, "operator"))
     return out

@@ -5,6 +5,12 @@ with ``--id`` and ``--peer``, joins the other stations' routers in one mesh.
 
     python -m modd.station --listen tcp/0.0.0.0:7447 --credentials DIR \\
         --id a1 --peer b2=tcp/station-b.example:7447 --peer c3=tcp/station-c.example:7447
+    python -m modd.station --config station.toml --credentials DIR
+
+``--config``: a TOML file whose ``[zenoh]`` table is a SubBroker's (``listen``,
+``[zenoh.mesh]`` ``id`` and ``peers``, ``settings``, ``gate``: docs/subbroker.md), as
+``modd generate --station`` writes it for a campaign; ``--listen``, ``--id`` and
+``--peer`` given as well replace what it says.
 
 SIGTERM or SIGINT stops it. Exit codes: 0 stopped, 2 bad usage or configuration.
 """
@@ -15,6 +21,9 @@ import argparse
 import logging
 import sys
 import threading
+import tomllib
+from dataclasses import replace
+from pathlib import Path
 
 from .shutdown import stop_on_signals
 from .zenoh_auth import CredentialStore
@@ -25,6 +34,7 @@ from .zenoh_session import DEFAULT_ENDPOINT, ZenohSettings, open_session, secure
 
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="modd.station", description=__doc__.splitlines()[0])
+    p.add_argument("--config", metavar="FILE", help="a station.toml ([zenoh], its mesh)")
     p.add_argument("--listen", action="append", metavar="ENDPOINT", help="repeatable")
     p.add_argument("--credentials", required=True, metavar="DIR", help="credentials directory")
     p.add_argument("--id", metavar="HEX", help="this station's zenoh id (the mesh)")
@@ -36,15 +46,38 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def settings_of(args: argparse.Namespace) -> ZenohSettings:
-    """The router's settings (ValueError for a bad --id or --peer)."""
-    mesh = None
+    """The router's settings (ValueError, located, for a bad file, --id or --peer)."""
+    base = ZenohSettings(mode="router", listen=(DEFAULT_ENDPOINT,))
+    if args.config:
+        base = replace(read_config(Path(args.config)), mode="router")
+    mesh = base.mesh
     if args.id or args.peer:
         peers = dict(p.split("=", 1) for p in args.peer if "=" in p)
         if len(peers) != len(args.peer):
             raise ValueError("--peer: expected ID=ENDPOINT, e.g. b2=tcp/station-b.example:7447")
         mesh = Mesh.from_mapping({"id": args.id, "peers": peers}, "--id/--peer")
-    listen = tuple(args.listen or [DEFAULT_ENDPOINT])
-    return ZenohSettings(mode="router", listen=listen, mesh=mesh)
+    listen = tuple(args.listen) if args.listen else base.listen
+    return replace(base, listen=listen, mesh=mesh)
+
+
+def read_config(path: Path) -> ZenohSettings:
+    """A station.toml's ``[zenoh]`` (its only table)."""
+    try:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path}: cannot read: {exc}") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: {exc}") from exc
+    unknown = sorted(set(doc) - {"zenoh"})
+    if unknown:
+        raise ValueError(f"{path}: unknown table {unknown[0]!r}; known: zenoh")
+    table = doc.get("zenoh", {})
+    if not isinstance(table, dict):
+        raise ValueError(f"{path}: zenoh: expected a table")
+    mode = table.get("mode", "router")
+    if mode != "router":
+        raise ValueError(f"{path}: zenoh.mode: a station is a router, not {mode!r}")
+    return ZenohSettings.from_mapping(table, f"{path}: zenoh")
 
 
 def main(argv: list[str] | None = None) -> int:
