@@ -319,9 +319,23 @@ def check_viewers(
             assert_complete(mine, f"{s}/{drone}")
         assert {identity(v) for v in raw} == {identity(v) for v in given}
         twice = len(raw) - len({identity(v) for v in raw})
-        assert twice == 0, f"{twice} windows twice on the wire at {s} (b killed at {killed_ns})"
+        assert twice == 0, (
+            f"{twice} windows twice on the wire at {s} (b killed at {killed_ns}): "
+            f"{repeated(raw)[:12]}"
+        )
         filled = sum(v.backfilled for v in given)
         print(f"viewer at {s}: {len(given)} windows ({filled} filled), none twice on the wire")
+
+
+def repeated(raw: list[DeliveredValue]) -> list[tuple[Any, ...]]:
+    """The windows that came more than once, with their places in the stream (to tell
+    a station's second put from a late copy)."""
+    at: dict[tuple[Any, ...], list[int]] = {}
+    for i, v in enumerate(raw):
+        at.setdefault(identity(v), []).append(i)
+    return [
+        (*k, [(i, raw[i].backfilled) for i in v], len(raw)) for k, v in at.items() if len(v) > 1
+    ]
 
 
 def identity(v: DeliveredValue) -> tuple[Any, ...]:

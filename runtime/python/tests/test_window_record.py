@@ -270,6 +270,30 @@ def test_windows_delivered_just_before_a_kill_are_kept_by_the_journal(tmp_path: 
         mgr.close()
 
 
+def test_a_save_between_the_journal_and_the_put_keeps_the_window(tmp_path: Path) -> None:
+    """The clock thread's save may come between a window's journal line and its put
+    (then a kill -9, before the next save): the record it writes holds the window, or
+    the journal it keeps does. (Seen in the namespace radio test: a window delivered
+    live was in neither, and the restarted station backfilled it.)"""
+    from modd.link.frames import Value
+    from modd.link.receiver import Window
+    from modd.subbroker.backfill import BackfillManager
+    from modd.subbroker.kept import StateDir
+
+    running = fast_running()
+    q = S // 4
+    live = [Window(1, k, 0, T0 + k * q, T0 + (k + 1) * q, Value(True, 1.0)) for k in range(8)]
+    m = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))
+    m.on_config(running)  # type: ignore[arg-type]
+    m.on_windows(running, live[:4])  # type: ignore[arg-type]
+    m.journal_live(running, live[4:])  # type: ignore[arg-type]  # their put is under way
+    m.save()  # the clock thread's save
+    again = BackfillManager(lambda _f: None, lambda: [], StateDir(tmp_path))  # after kill -9
+    assert again.record.gaps("sub", T0, T0 + 8 * q) == []
+    for mgr in (m, again):
+        mgr.close()
+
+
 def test_a_journal_that_cannot_be_opened_is_said_and_the_run_goes_on(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:

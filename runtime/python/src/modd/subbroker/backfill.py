@@ -170,15 +170,30 @@ class BackfillManager:
         self.save()
 
     def journal_live(self, running: Running, windows: Sequence[Window]) -> None:
-        """Live windows about to be delivered: written down first (window_journal.py)."""
-        if self._journal is not None:
-            sent = running.fanout.sent
-            self._journal.append([["r", sent[w.stream].key, w.start_ns, w.end_ns] for w in windows])
+        """Live windows about to be delivered: written down first (window_journal.py)
+        and held in the record at once, both under the lock a save takes its snapshot
+        and sets the journal aside under. So a line the save sets aside is in the
+        snapshot it writes, and one it does not is in the next journal. (Added to the
+        record only after the put, a window journalled just before a save was in neither
+        the record written nor the journal kept: a kill -9 within the next second then
+        lost it, and a restarted station backfilled a window it had delivered.)"""
+        sent = running.fanout.sent
+        with self._lock:
+            if self._journal is not None:
+                self._journal.append(
+                    [["r", sent[w.stream].key, w.start_ns, w.end_ns] for w in windows]
+                )
+            for w in windows:
+                self.record.add_received(sent[w.stream], w.start_ns, w.end_ns)
+            self._changed()
 
     def journal_derived(self, stream: StreamKey, start: int, end: int) -> None:
-        """A derived window about to be delivered."""
-        if self._journal is not None:
-            self._journal.append([["d", stream.key, start, end]])
+        """A derived window about to be delivered (as :meth:`journal_live`)."""
+        with self._lock:
+            if self._journal is not None:
+                self._journal.append([["d", stream.key, start, end]])
+            self.record.add_derived(stream, start, end)
+            self._changed()
 
     def on_windows(
         self,
@@ -186,17 +201,18 @@ class BackfillManager:
         windows: Sequence[Window],
         derived: Sequence[tuple[StreamKey, int, int]] = (),
     ) -> None:
-        """Live windows that arrived, and the derived windows they completed
-        (stream, start, end) that the fan-out delivered (link thread)."""
-        sent = running.fanout.sent
-        with self._lock:
-            for w in windows:
-                self.record.add_received(sent[w.stream], w.start_ns, w.end_ns)
-            for stream, start, end in derived:
-                self.record.add_derived(stream, start, end)
-            if not self._dirty:  # the clock thread saves it within SAVE_S
-                self._dirty = True
-                self._wake.notify_all()
+        """Live windows, and the derived windows they completed (stream, start, end),
+        written down and held at once (what the broker does a step at a time, before
+        each put)."""
+        self.journal_live(running, windows)
+        for d in derived:
+            self.journal_derived(*d)
+
+    def _changed(self) -> None:
+        """The record changed (under the lock): the clock thread saves it within SAVE_S."""
+        if not self._dirty:
+            self._dirty = True
+            self._wake.notify_all()
 
     def filled_already(self, subscriber: str, stream: StreamKey, start: int, end: int) -> bool:
         """Did a backfill deliver this window already? (A NACK's resend may arrive

@@ -22,7 +22,6 @@ from modd_model.diagnostics import Diagnostic, ModelError
 from modd_model.query import topics
 from modd_model.signing import NonceGuard, signature
 from modd_plan import Plan
-from modd_plan.streams import StreamKey
 
 from modd.link.frames import AuthOk, Config, ConfigAck, ErrorCode, Onboard, Status
 from modd.link.receiver import Window
@@ -367,17 +366,14 @@ class SubBroker:
         running = self._by_id.get(windows[0].config_id)
         if running is None or running.slots is None:
             return
-        derived: list[tuple[StreamKey, int, int]] = []
-
-        def on_derived(d: tuple[StreamKey, int, int]) -> None:
-            self.backfill.journal_derived(*d)  # before it is put
-            derived.append(d)
-
-        self.backfill.journal_live(running, windows)  # written down before they are put
+        # each window held (journal and record) before it is put (backfill.journal_live)
+        self.backfill.journal_live(running, windows)
         self.delivered += running.slots.deliver(
-            windows, self._sinks(), self.backfill.filled_already, on_derived
+            windows,
+            self._sinks(),
+            self.backfill.filled_already,
+            lambda d: self.backfill.journal_derived(*d),
         )
-        self.backfill.on_windows(running, windows, derived)
 
     def _link_up(self) -> None:
         """After a reconnection: the running backfill resumes, and the subscriptions whose
