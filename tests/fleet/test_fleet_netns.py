@@ -198,6 +198,21 @@ def read_viewer(path: Path) -> list[DeliveredValue]:
     return [DeliveredValue.from_json(r) for r in raw if r.startswith(b"{")]
 
 
+def settled(path: Path, quiet_s: float = 1.5, limit_s: float = 30.0) -> None:
+    """Wait until a viewer's two files have not grown for ``quiet_s``: a drone's last
+    windows may still come, and the wire's file and the API's, read a moment apart,
+    would then differ by them."""
+    files = [path, Path(f"{path}.api")]
+    sizes, since, end = None, time.monotonic(), time.monotonic() + limit_s
+    while time.monotonic() < end:
+        now = [f.stat().st_size if f.exists() else -1 for f in files]
+        if now != sizes:
+            sizes, since = now, time.monotonic()
+        elif time.monotonic() - since >= quiet_s:
+            return
+        time.sleep(0.25)
+
+
 def read_api(path: Path) -> list[DeliveredValue]:
     """What the subscriber API gave the same viewer."""
     api = Path(f"{path}.api")
@@ -309,6 +324,7 @@ def check_viewers(
     either, b's kill -9 included (its window journal: docs/fleet.md, "Exactly once")."""
     archives = {d: h.read_archive(c.tmp / d / "archive", c.models[d]) for d in drones}
     for s, path in viewers.items():
+        settled(path)
         given, raw = read_api(path), read_viewer(path)
         for drone in drones:
             mine = [v for v in given if v.drone == drone]

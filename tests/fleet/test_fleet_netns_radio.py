@@ -72,11 +72,12 @@ def run(c: Campaign) -> None:
     radio = [*RADIO, *modems, "--to", "127.0.0.1:7000", "--radio", "loss=0.2,seed=44"]
     c.run("radio-usv1", "usv1", [*radio, "--report", "5"])
     c.start_drone("usv2", seed=2)
-    for s in "ab":
+    c.start_subbroker("c", "usv2")
+    for s in "ab":  # a first: started together, either may win the drone (both hear it)
         endpoint = f"{c.addr[('usv1', s)]}:{MODEM[s]}"
         c.start_subbroker(s, "usv1", endpoint=endpoint, transport="udp")
-    c.start_subbroker("c", "usv2")
-    wait_serving(c, "a", "usv1")
+        if s == "a":
+            wait_serving(c, "a", "usv1")
     wait_serving(c, "c", "usv2")
     time.sleep(8)  # a serves, b forwards what its modem hears
     moved = time.monotonic()
