@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import io
 import json
-import time
+import threading
 from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
@@ -20,6 +20,7 @@ import zenoh
 from fastapi.testclient import TestClient
 from modd.ports import free_port
 from modd.subbroker.payload import StreamPayload, subscriber_prefix
+from modd.zenoh_recovery import values_publisher
 from modd_backend import Settings, create_app, hub
 from modd_backend.hub import SubscriptionHub
 from starlette.testclient import WebSocketTestSession
@@ -27,6 +28,7 @@ from starlette.testclient import WebSocketTestSession
 from .conftest import ADMIN_PASSWORD, login
 
 VECTORS = Path(__file__).resolve().parents[2] / "contracts" / "vectors" / "delivered_value.json"
+JSON = zenoh.Encoding.APPLICATION_JSON
 EPOCH, OTHER_EPOCH, Q = 1_700_000_000_000_000_000, 1_700_000_060_000_000_000, 250_000_000
 
 
@@ -90,14 +92,41 @@ def _line(window: int, epoch: int = EPOCH, identity: bool = True, value: float =
     return subscriber_prefix("sub_1") + head.tail(window, start, start + Q, value, None, start + Q)
 
 
+#: Values of the probes each station puts until the hub hears both (not counted).
+PROBES = {-1.0, -2.0}
+
+
+def _until_both_heard(ws: WebSocketTestSession, a: Any, b: Any) -> None:
+    """Each station puts a probe (a payload without identity: always relayed) until
+    the browser got one of each, so no counted put precedes the hub's subscriber
+    reaching the router (slower on a loaded machine than any fixed wait)."""
+    stop = threading.Event()
+
+    def probe() -> None:
+        while not stop.is_set():
+            a.put(_line(0, identity=False, value=-1.0))
+            b.put(_line(0, identity=False, value=-2.0))
+            stop.wait(0.1)
+
+    thread = threading.Thread(target=probe, daemon=True)
+    thread.start()
+    try:
+        _values_until(ws, set(PROBES))
+    finally:
+        stop.set()
+        thread.join()
+
+
 def _values_until(ws: WebSocketTestSession, ends: set[float]) -> list[dict[str, Any]]:
-    """The values relayed until each value of ``ends`` came (each station's last put)."""
+    """The values relayed until each value of ``ends`` came (each station's last put),
+    probes left out."""
     got: list[dict[str, Any]] = []
     while ends:
         msg = ws.receive_json()
         if msg["type"] == "value":
-            got.append(msg["data"])
             ends.discard(msg["data"]["value"])
+            if msg["data"]["value"] not in PROBES:
+                got.append(msg["data"])
     return got
 
 
@@ -110,7 +139,10 @@ def _relayed(router: str, tmp_path: Path) -> list[dict[str, Any]]:
         zenoh_connect=(router,),
         initial_admin_password=ADMIN_PASSWORD,
     )
-    a, b = _client(router), _client(router)
+    key = "modd/usv/sub/sub_1"
+    sa, sb = _client(router), _client(router)
+    # each station's values through the SubBroker's own (advanced) publisher
+    a, b = (values_publisher(s, key, JSON, zenoh.CongestionControl.BLOCK) for s in (sa, sb))
     try:
         with TestClient(create_app(settings, out=io.StringIO())) as client:
             token = login(client, "admin", ADMIN_PASSWORD)["Authorization"].split()[1]
@@ -119,19 +151,20 @@ def _relayed(router: str, tmp_path: Path) -> list[dict[str, Any]]:
                 assert ws.receive_json()["type"] == "authenticated"
                 ws.send_json({"op": "subscribe", "subscriber": "sub_1"})
                 assert ws.receive_json()["type"] == "subscribed"
-                time.sleep(1.0)  # the hub's subscriber declared at the router
-                key = "modd/usv/sub/sub_1"
+                _until_both_heard(ws, a, b)
                 for station in (a, b):
                     for k in range(3):
-                        station.put(key, _line(k))
-                    station.put(key, _line(0, identity=False, value=7.0))
-                a.put(key, _line(0, epoch=OTHER_EPOCH, value=2.5))
-                a.put(key, _line(10, value=100.0))
-                b.put(key, _line(11, value=111.0))
+                        station.put(_line(k))
+                    station.put(_line(0, identity=False, value=7.0))
+                a.put(_line(0, epoch=OTHER_EPOCH, value=2.5))
+                a.put(_line(10, value=100.0))
+                b.put(_line(11, value=111.0))
                 return _values_until(ws, {100.0, 111.0})
     finally:
-        a.close()  # type: ignore[no-untyped-call]
-        b.close()  # type: ignore[no-untyped-call]
+        for pub in (a, b):
+            pub.undeclare()
+        sa.close()  # type: ignore[no-untyped-call]
+        sb.close()  # type: ignore[no-untyped-call]
 
 
 def _windows(values: list[dict[str, Any]]) -> Counter[tuple[int | None, int | None]]:

@@ -1,6 +1,8 @@
 """A viewer at one station, run inside its namespace, until SIGTERM: every zenoh sample
-under KEY, one hex line each in OUT, and what the subscriber API (``modd.subscriber``,
-which keeps each window once by its identity) gives, one JSON line each in OUT.api."""
+under KEY (through zenoh's recovery, as the subscriber API: what a break in the mesh
+kept from it is asked for again), one hex line each in OUT, and what the subscriber
+API (``modd.subscriber``, which keeps each window once by its identity) gives, one
+JSON line each in OUT.api."""
 
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ from typing import Any
 from modd.subbroker.payload import DeliveredValue
 from modd.subscriber import Subscription
 from modd.zenoh_auth import CredentialStore
+from modd.zenoh_recovery import values_subscriber
 from modd.zenoh_session import ZenohSettings, open_session, wait_connected
 
 
@@ -41,7 +44,7 @@ def main() -> None:
             api.write(value.to_json().decode() + "\n")
             api.flush()
 
-    sub = session.declare_subscriber(args.key, on)
+    sub = values_subscriber(session, args.key, on)  # as the subscriber API: it recovers
     subscription = Subscription(session, args.key, given)
     print("listening", flush=True)
     done = threading.Event()

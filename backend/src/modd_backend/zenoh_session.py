@@ -27,6 +27,8 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import zenoh
+from modd.zenoh_recovery import values_subscriber
+from modd_contracts import keys
 
 
 class Undeclarable(Protocol):
@@ -165,7 +167,7 @@ class ZenohSession:
             self._session = session
             pending = list(self._pending)
         for p in pending:
-            p.real = session.declare_subscriber(p.key, p.on_sample)
+            p.real = _declare(session, p.key, p.on_sample)
         log.info("zenoh session open (%s)", self._where)
         return True
 
@@ -208,7 +210,7 @@ class ZenohSession:
                 pending = _Pending(self, key, on_sample)
                 self._pending.add(pending)
                 return pending
-        sub: Undeclarable = session.declare_subscriber(key, on_sample)
+        sub: Undeclarable = _declare(session, key, on_sample)
         return sub
 
     def close(self) -> None:
@@ -217,3 +219,11 @@ class ZenohSession:
             self._opener.join(timeout=5)
         if self._session is not None:
             self._session.close()  # type: ignore[no-untyped-call]
+
+
+def _declare(session: zenoh.Session, key: str, on_sample: Callable[[zenoh.Sample], None]) -> Any:
+    """Delivered values through zenoh's recovery (a value a break in the mesh kept from
+    the backend is asked for again: docs/fleet.md); anything else as a plain subscriber."""
+    if key == keys.ALL_VALUES:
+        return values_subscriber(session, key, on_sample)
+    return session.declare_subscriber(key, on_sample)

@@ -84,6 +84,17 @@ def values_tree(drone: str | None) -> str:
     return f"{drone_prefix(drone)}/sub/**"
 
 
+def recovery_tree(drone: str | None) -> str:
+    """The keys of zenoh's recovery of delivered values (``zenoh.ext`` advanced publishers
+    and subscribers: ``modd/<drone>/sub/<subscriber>/@adv/...``), for ACL rules: ``@adv``
+    is a verbatim chunk that no ``**`` matches.
+
+    >>> recovery_tree(None)
+    'modd/*/sub/*/@adv/**'
+    """
+    return f"{drone_prefix(drone)}/sub/*/@adv/**"
+
+
 def fleet_tree(drone: str | None) -> str:
     """A drone's fleet keys (``modd/<drone>/fleet/**``): the liveliness tokens that elect
     the station serving it (docs/fleet.md), for ACL rules."""

@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 from typing import Any, cast
 
+import modd.subscriber
 import pytest
 from modd.subbroker.config import ConfigError, load_config
 from modd.subbroker.payload import DeliveredValue, StreamPayload, subscriber_prefix
@@ -109,6 +110,15 @@ class _Payload:
 class _Sample:
     def __init__(self, data: bytes) -> None:
         self.payload = _Payload(data)
+
+
+@pytest.fixture(autouse=True)
+def _plain_subscriber(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The fake session below stands for zenoh's: the Subscription declares a plain
+    subscriber on it (zenoh's advanced one takes a real session only)."""
+    monkeypatch.setattr(
+        modd.subscriber, "values_subscriber", lambda s, key, cb: s.declare_subscriber(key, cb)
+    )
 
 
 class _Session:

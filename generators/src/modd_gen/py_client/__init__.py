@@ -30,6 +30,7 @@ ORIGINALS = {
         "zenoh_auth.py",
         "zenoh_gate_policy.py",
         "zenoh_mesh.py",
+        "zenoh_recovery.py",
         "subbroker/__init__.py",
         "subbroker/client.py",
         "subbroker/keys.py",

@@ -35,6 +35,7 @@ from modd_contracts.types_gen import DeliveredValueFields
 from .subbroker.keys import sub_key, subscribe_key
 from .subbroker.payload import DeliveredValue
 from .subbroker.seen import Seen, identity
+from .zenoh_recovery import values_subscriber
 
 if TYPE_CHECKING:
     import pandas  # type: ignore[import-untyped]
@@ -76,7 +77,8 @@ class Subscription:
         self._queue: queue.Queue[DeliveredValue | None] = queue.Queue(QUEUE_LIMIT)
         self._on_close = on_close
         self._closed = False
-        self._sub = session.declare_subscriber(key, self._receive)
+        # what a break in the mesh kept from it, it asks the publishers for (fleet.md)
+        self._sub = values_subscriber(session, key, self._receive)
 
     def _receive(self, sample: zenoh.Sample) -> None:
         """One payload: a malformed one is dropped alone and counted
@@ -155,7 +157,7 @@ class Subscription:
         if self._closed:
             return
         self._closed = True
-        self._sub.undeclare()  # type: ignore[no-untyped-call]
+        self._sub.undeclare()
         if self._on_close is not None:
             self._on_close()
         self._queue.put(None)

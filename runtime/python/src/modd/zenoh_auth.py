@@ -279,6 +279,45 @@ def acl(drone: str | None = None) -> dict[str, Any]:
             ["ingress", "egress"],
             [keys.values_tree(drone or None)],
         ),
+        # zenoh's recovery of delivered values (modd.zenoh_recovery): the SubBroker's
+        # advanced publishers (numbers, cache, heartbeats) ...
+        _rule(
+            "adv_publish",
+            [
+                "put",
+                "declare_subscriber",
+                "declare_queryable",
+                "query",
+                "reply",
+                "liveliness_token",
+                "declare_liveliness_subscriber",
+                "liveliness_query",
+            ],
+            ["ingress", "egress"],
+            [keys.recovery_tree(drone or None)],
+        ),
+        # ... and the readers' advanced subscribers, which ask a publisher's cache and
+        # hear its heartbeats; no reader answers for a publisher (no queryable, no reply)
+        _rule(
+            "adv_read",
+            [
+                "put",
+                "declare_subscriber",
+                "query",
+                "liveliness_token",
+                "declare_liveliness_subscriber",
+                "liveliness_query",
+            ],
+            ["ingress", "egress"],
+            [keys.recovery_tree(None)],
+        ),
+        # a cache's answers carry the values' own keys
+        _rule(
+            "adv_answered",
+            ["reply"],
+            ["egress"],
+            [keys.recovery_tree(None), keys.values_tree(None)],
+        ),
         # readers (backend and viewers): subscribe to values and status; a
         # subscription may be as wide as modd/**, only these keys' puts reach it
         _rule("read_in", ["declare_subscriber"], ["ingress", "egress"], [keys.EVERYTHING]),
@@ -291,15 +330,25 @@ def acl(drone: str | None = None) -> dict[str, Any]:
     policies = [
         {
             "id": "subbroker",
-            "rules": ["subbroker_out", "subbroker_in", "subbroker_fleet", "subbroker_hear"],
+            "rules": [
+                "subbroker_out",
+                "subbroker_in",
+                "subbroker_fleet",
+                "subbroker_hear",
+                "adv_publish",
+            ],
             "subjects": ["subbroker"],
         },
         {
             "id": "backend",
-            "rules": ["read_in", "read_out", "ask", "answer"],
+            "rules": ["read_in", "read_out", "ask", "answer", "adv_read", "adv_answered"],
             "subjects": ["backend"],
         },
-        {"id": "viewer", "rules": ["read_in", "read_out"], "subjects": ["viewer"]},
+        {
+            "id": "viewer",
+            "rules": ["read_in", "read_out", "adv_read", "adv_answered"],
+            "subjects": ["viewer"],
+        },
     ]
     return {
         "enabled": True,

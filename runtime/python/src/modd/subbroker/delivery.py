@@ -20,7 +20,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from modd_contracts import labels
 from modd_plan.streams import StreamKey
@@ -50,20 +50,23 @@ class ZenohDelivery:
     def __init__(self, session: zenoh.Session, drone: str) -> None:
         self._session = session
         self._drone = drone
-        self._publishers: dict[str, zenoh.Publisher] = {}
+        self._publishers: dict[str, Any] = {}
         self._lock = threading.Lock()
         self.delivered = 0
 
-    def _publisher(self, subscriber: str) -> zenoh.Publisher:
+    def _publisher(self, subscriber: str) -> Any:
         import zenoh
+
+        from ..zenoh_recovery import values_publisher
 
         with self._lock:
             pub = self._publishers.get(subscriber)
             if pub is None:
-                pub = self._session.declare_publisher(
+                pub = values_publisher(  # numbered and cached: readers recover (fleet.md)
+                    self._session,
                     sub_key(self._drone, subscriber),
-                    encoding=zenoh.Encoding.APPLICATION_JSON,
-                    congestion_control=zenoh.CongestionControl.DROP,
+                    zenoh.Encoding.APPLICATION_JSON,
+                    zenoh.CongestionControl.DROP,
                 )
                 self._publishers[subscriber] = pub
             return pub
@@ -84,7 +87,7 @@ class ZenohDelivery:
         with self._lock:
             pub = self._publishers.pop(subscriber, None)
         if pub is not None:
-            pub.undeclare()  # type: ignore[no-untyped-call]
+            pub.undeclare()
 
     def close(self) -> None:
         for name in list(self._publishers):
