@@ -10,6 +10,12 @@ order per publisher, and nothing is sent twice to a reader that had it.
 The keys of this machinery are under ``<key>/@adv/...``, a verbatim chunk no ``**``
 matches: the access control names them (:func:`modd.zenoh_auth.acl`, rule ``adv_*``).
 
+A sample without a number (a plain publisher's, an older SubBroker's) passes an
+advanced subscriber only if its timestamp is later than the last one it passed from
+the same clock; a router stamps its clients' puts, so two plain publishers through one
+router can lose a sample to reordering (docs/fleet.md, "A partition"). Every value a
+SubBroker of this version puts is numbered.
+
 >>> CACHE_SAMPLES >= 600 * 4
 True
 """
