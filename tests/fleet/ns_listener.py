@@ -50,7 +50,7 @@ def main() -> None:
     done = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: done.set())
     done.wait()
-    sub.undeclare()  # type: ignore[no-untyped-call]
+    sub.undeclare()
     subscription.close()
     session.close()  # type: ignore[no-untyped-call]
     out.close()
