@@ -3,7 +3,7 @@
 # arm64, built on this amd64 machine (packaging/README.md):
 #   build/package/modd-drone_<version>_<arch>.deb   modd-pubbroker, modd-sensors,
 #       modd-mavlink and their Python runtime (wheels for <arch>, vendored)
-#   build/package/modd-base_<version>_<arch>.deb    modd-subbroker, modd-radio,
+#   build/package/modd-base_<version>_<arch>.deb    modd-subbroker, modd-station, modd-radio,
 #       modd-backend and the built workbench, with their Python runtime
 # Nothing is fetched at install time. Checks every package with lintian and every
 # unit with systemd-analyze verify; fails on an error.
@@ -142,6 +142,7 @@ base() {
   local extra=(); cross_wheels "$arch"
   python_tree "$root" "$arch" "$OUT/base-requirements.txt" "$OUT"/wheels/*.whl "${extra[@]}"
   wrapper "$root" modd-subbroker modd.subbroker.cli:main
+  wrapper "$root" modd-station modd.station:main
   wrapper "$root" modd-radio modd.radio.cli:main
   wrapper "$root" modd-backend modd_backend.cli:main
   wrapper "$root" modd modd_model.cli:main

@@ -87,8 +87,8 @@ def test_campaign_station_configs_load_as_one_mesh(scenarios_dir: Path, tmp_path
 def test_campaign_stations_get_a_router_and_a_subbroker_per_vehicle(tmp_path: Path) -> None:
     """A model with a campaign: per station, the router's ``station.toml`` (read by
     ``modd.station``'s loader: the mesh as for one drone) and each vehicle's SubBroker
-    (read by its loader: a client of that router, the vehicle's own model, drone name,
-    state, link and key); the vehicles' models beside them. (Run as they are:
+    (read by its loader: a client of that router, the vehicle's own model beside it,
+    drone name, state, link and key), laid out as the station's /etc/modd. (Run as they are:
     tests/fleet/test_fleet_generated.py.)"""
     from modd.station import read_config
     from modd_gen.targets.stations import artifacts, parse_station
@@ -111,7 +111,7 @@ def test_campaign_stations_get_a_router_and_a_subbroker_per_vehicle(tmp_path: Pa
         assert not (top / s.name / "subbroker.toml").exists()
         keys = set()
         for v, vm in fleet.items():
-            cfg = load_config(top / s.name / v / "subbroker.toml")
+            cfg = load_config(top / s.name / "vehicles" / v / "subbroker.toml")
             assert cfg.drone == v and cfg.station == s.name and cfg.model == vm
             assert cfg.zenoh.mode == "client" and cfg.zenoh.connect == ("tcp/127.0.0.1:7447",)
             ep = vm["pubBroker"]["endpoint"]

@@ -1,8 +1,8 @@
 """A campaign's stations as ``modd generate --station`` writes them (docs/operations.md,
 "Two base stations"), run as they are: scenario 1 made a campaign of two vehicles,
 generated for stations a and b (loopback endpoints); each station's router started
-from its ``station.toml`` (``python -m modd.station --config``), each vehicle's
-SubBroker from ``<station>/<vehicle>/subbroker.toml`` with the station's credentials
+from its ``station.toml`` (``modd-station --config``), each vehicle's
+SubBroker from ``<station>/vehicles/<vehicle>/subbroker.toml`` with the station's credentials
 directory, each vehicle's C++ PubBroker fed by the load generator. Station a serves
 both drones; a viewer at station b gets each drone's windows through the mesh, once
 each, equal to the aggregate recomputed from that drone's archive."""
@@ -73,7 +73,8 @@ def test_generated_campaign_stations_run_as_one_mesh(tmp_path: Path) -> None:
     procs: list[h.Proc | Listener] = []
     try:
         for s, st in stations.items():
-            cmd = [str(h.PYTHON), "-m", "modd.station", "--config", str(top / s / "station.toml")]
+            station = str(Path(h.PYTHON).with_name("modd-station"))
+            cmd = [station, "--config", str(top / s / "station.toml")]
             # the file listens on 0.0.0.0 (a station's machine); a test stays on loopback
             cmd += ["--listen", st.endpoint, "--credentials", str(st.cred)]
             procs.append(h.Proc(f"router-{s}", cmd, tmp_path / f"router-{s}.log"))
@@ -84,13 +85,13 @@ def test_generated_campaign_stations_run_as_one_mesh(tmp_path: Path) -> None:
         for i, v in enumerate(VEHICLES):
             home = tmp_path / v
             home.mkdir(exist_ok=True)
-            vm = out / "operator" / "vehicles" / v / "model.json"
+            vm = model_of(out, v)
             procs.append(h.start_pubbroker(home, vm, links[v], ingress := h.free_port()))
             loads.append(h.start_load(home, vm, ingress, 25, seed=i + 1))
             procs.append(loads[-1])
         for s in "ab":  # a first: it serves both; b stands by
             for v in VEHICLES:
-                cfg = top / s / v / "subbroker.toml"
+                cfg = top / s / "vehicles" / v / "subbroker.toml"
                 doc = tomllib.loads(cfg.read_text())
                 assert doc["station"] == s and doc["zenoh"]["mode"] == "client", doc
                 # the state directory is the model's (one per vehicle); one per station here
@@ -124,4 +125,4 @@ def test_generated_campaign_stations_run_as_one_mesh(tmp_path: Path) -> None:
 
 
 def model_of(out: Path, vehicle: str) -> Path:
-    return out / "operator" / "vehicles" / vehicle / "model.json"
+    return out / "operator" / "stations" / "a" / "vehicles" / vehicle / "model.json"

@@ -7,12 +7,11 @@ the other stations' endpoints. A station given without an endpoint (behind a cel
 link or NAT: nothing can connect to it) dials the others and is listed by none.
 
 A model with a ``Campaign`` (several vehicles: modd_model.campaign) gets, per station,
-the station's router (``operator/stations/<name>/station.toml``, for ``python -m
-modd.station --config``: ``[zenoh]`` listen and mesh, as above) and one SubBroker per
-vehicle, a client of that router (``operator/stations/<name>/<vehicle>/subbroker.toml``,
-as ``modd up`` runs a campaign), each vehicle's model beside them
-(``operator/vehicles/<vehicle>/model.json``). Every station gets every vehicle: any may
-hear any drone, and one that never hears a vehicle stands by for it.
+a folder to copy to that station: the router's ``station.toml`` (for ``modd-station
+--config``: ``[zenoh]`` listen and mesh, as above) and, per vehicle,
+``vehicles/<vehicle>/subbroker.toml`` (a client of that router, as ``modd up`` runs a
+campaign) with the vehicle's ``model.json`` beside it. Every station gets every
+vehicle: any may hear any drone, and one that never hears a vehicle stands by for it.
 
 >>> s = parse_station("shore=tcp/shore.example:7447"); (s.name, s.endpoint, s.listen)
 ('shore', 'tcp/shore.example:7447', 'tcp/0.0.0.0:7447')
@@ -146,7 +145,7 @@ def router_config(me: CampaignStation, stations: list[CampaignStation]) -> dict[
 def vehicle_config(ctx: Context, vehicle: str, me: CampaignStation) -> dict[str, Any]:
     """One vehicle's SubBroker at station ``me``: a client of the station's router."""
     doc = subbroker_config.config(ctx)
-    doc["model"] = f"../../../vehicles/{vehicle}/model.json"
+    doc["model"] = "model.json"  # beside it
     doc["station"] = me.name
     doc["zenoh"] = {"mode": "client", "listen": [], "connect": [local_endpoint(me.listen)]}
     if ctx.key_ref == DEFAULT_KEY_REF:  # one station, several drones: a key each
@@ -165,29 +164,23 @@ def vehicle_key_ref(vehicle: str) -> str:
 
 def campaign_artifacts(model: dict[str, Any], stations: list[CampaignStation]) -> list[Artifact]:
     fleet = expand(model)
-    out = [
-        Artifact(
-            f"operator/vehicles/{name}/model.json",
-            json.dumps(vm, indent=2, ensure_ascii=False) + "\n",
-            "operator",
-        )
-        for name, vm in fleet.items()
-    ]
-    contexts = {name: build_context(vm) for name, vm in fleet.items()}
+    out = []
     for me in stations:
         where = f"operator/stations/{me.name}"
         start = (
-            "# Start: python -m modd.station --config station.toml --credentials DIR, then\n"
-            "# each vehicle's modd-subbroker --config <vehicle>/subbroker.toml --credentials "
-            "DIR\n# (the same DIR: the station's one credentials directory).\n"
+            "# Copy this folder to the station. Start: modd-station --config station.toml\n"
+            "# --credentials DIR, then each vehicle's modd-subbroker --config\n"
+            "# vehicles/<vehicle>/subbroker.toml --credentials DIR (one DIR for all).\n"
         )
         text = _head(me, stations) + start + dumps(router_config(me, stations))
         out.append(Artifact(f"{where}/station.toml", text, "operator"))
-        for name, ctx in contexts.items():
+        for name, vm in fleet.items():
             head = (
                 f"# Vehicle {name} at station {me.name}: a client of the station's router "
                 f"({local_endpoint(me.listen)}); its link key as [link] key says.\n"
             )
-            text = head + dumps(vehicle_config(ctx, name, me))
-            out.append(Artifact(f"{where}/{name}/subbroker.toml", text, "operator"))
+            text = head + dumps(vehicle_config(build_context(vm), name, me))
+            out.append(Artifact(f"{where}/vehicles/{name}/subbroker.toml", text, "operator"))
+            body = json.dumps(vm, indent=2, ensure_ascii=False) + "\n"
+            out.append(Artifact(f"{where}/vehicles/{name}/model.json", body, "operator"))
     return out
