@@ -32,6 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "subbroker"))
 from modd.subbroker.client import request as client_request  # noqa: E402
 from modd.subbroker.payload import DeliveredValue  # noqa: E402
 from modd.zenoh_auth import CredentialStore  # noqa: E402
+from modd.zenoh_recovery import values_subscriber  # noqa: E402
 from modd.zenoh_session import ZenohSettings, open_session, wait_connected  # noqa: E402
 from subbroker_harness import (  # noqa: E402
     PUBBROKER,
@@ -103,7 +104,9 @@ class Listener:
         assert wait_connected(self.session, 5)
         self.raw: list[bytes] = []
         self._lock = threading.Lock()
-        self._sub = self.session.declare_subscriber(key, self._on)
+        # as the subscriber API: what a break kept from it (its station's router down)
+        # is asked for again (modd.zenoh_recovery)
+        self._sub = values_subscriber(self.session, key, self._on)
 
     def _on(self, sample: Any) -> None:
         with self._lock:

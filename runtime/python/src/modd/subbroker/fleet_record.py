@@ -94,7 +94,9 @@ class FleetRecord:
 
     def _answer(self, query: zenoh.Query) -> None:
         try:
-            query.reply(query.key_expr, json.dumps(self._own(), separators=(",", ":")))
+            # on this station's own key (the query's is the wildcard): its answer is named
+            own = held_key(self.drone, self.station)
+            query.reply(own, json.dumps(self._own(), separators=(",", ":")))
         finally:
             query.drop()  # type: ignore[no-untyped-call]
 
