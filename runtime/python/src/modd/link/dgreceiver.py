@@ -126,6 +126,13 @@ class DatagramReceiver:
         self.stats = LinkStats()
         self.reassembly = Reassembly()
         self.counter = 0
+        #: The slot expected before the first datagram: 0 for a config that starts now,
+        #: another station's last for a config joined while it runs (slot numbers
+        #: travel as their low 16 bits: extend16 reads them near this one).
+        self.expected = 0
+
+    def _expected_slot(self) -> int:
+        return self.gaps.next if self.gaps.next >= 0 else self.expected
 
     def on_datagram(self, raw: bytes, now: float) -> list[tuple[int, list[Value]]]:
         """The slots of a datagram that verifies and is new, decoded; [] otherwise
@@ -135,7 +142,7 @@ class DatagramReceiver:
         try:
             if raw[:1] == bytes([DGRAM_FRAGMENT]):
                 return self._on_fragment(raw, now)
-            v = verify_data(raw, self.key, DRONE_TO_BASE, max(self.gaps.next, 0))
+            v = verify_data(raw, self.key, DRONE_TO_BASE, self._expected_slot())
         except Forged:
             self.stats.forged += 1
             return []
@@ -147,7 +154,7 @@ class DatagramReceiver:
     def _on_fragment(self, raw: bytes, now: float) -> list[tuple[int, list[Value]]]:
         """A fragment: verified, kept until its slot is whole; a piece of a slot
         already delivered is a replay. Raises Forged, ProtocolError."""
-        f = verify_fragment(raw, self.key, DRONE_TO_BASE, max(self.gaps.next, 0))
+        f = verify_fragment(raw, self.key, DRONE_TO_BASE, self._expected_slot())
         if f.config_id != self.config_id or self.replay.seen_or_old(f.slot):
             self.stats.replayed += 1
             return []

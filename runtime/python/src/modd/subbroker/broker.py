@@ -23,6 +23,7 @@ from modd_model.query import topics
 from modd_model.signing import NonceGuard, signature
 from modd_plan import Plan
 
+from modd.link import codec
 from modd.link.frames import AuthOk, Config, ConfigAck, ErrorCode, Onboard, Status
 from modd.link.receiver import Window
 
@@ -40,9 +41,10 @@ from .diversity import Diversity
 from .dynamic import DynamicSubscriptions
 from .fanout import FanOut
 from .fleet_record import FleetRecord
+from .handover import RunningConfig, model_digest
 from .kept import Deployment, StateDir, same_model
 from .keys import backfill_key, deploy_key, subscribe_key
-from .linkhooks import ConfigRejected, LinkDown
+from .linkhooks import Adopted, ConfigRejected, LinkDown
 from .planning import config_for, plan_within, trailing_fields
 from .pump import Pump
 from .record import BaseRecord
@@ -79,7 +81,8 @@ class SubBroker:
         self._model, self._meta = self._initial_model()
         self._running: Running | None = None
         self._by_id: dict[int, Running] = {}
-        self._planned: dict[int, tuple[dict[str, Any], Plan, Deployment]] = {}
+        # model, plan, deployment, and the round trip the plan was made for
+        self._planned: dict[int, tuple[dict[str, Any], Plan, Deployment, float | None]] = {}
         self._last_id = 0
         self._lock = threading.RLock()
         self._deploy_lock = threading.Lock()
@@ -159,9 +162,7 @@ class SubBroker:
                 raise
         session = self._session
         if self.config.station and isinstance(self.link, Pump):
-            self.fleet = FleetRecord(
-                session, self.drone, self.config.station, self.backfill.record_json
-            )
+            self.fleet = FleetRecord(session, self.drone, self.config.station, self._told)
             self.backfill.fleet = self.fleet.others
             self.serving = ServingSwitch(
                 session, self.drone, self.config.station, lambda: self.link.up, self._serves
@@ -265,34 +266,116 @@ class SubBroker:
         shortest = min(s.period_us for s in running.config.streams) / 1e6
         return max(3.0, 2 * shortest + 1.0)
 
+    def _told(self) -> dict[str, Any]:
+        """The fleet's answer: the window record and, while this station serves, what
+        its PubBroker runs."""
+        doc = self.backfill.record_json()
+        running = self.running_config() if self.link.up else None
+        if running is not None:
+            doc["running"] = running
+        return doc
+
     def _prepare(self, model: dict[str, Any], avoid: int, meta: Deployment) -> Config:
-        plan = plan_within(model, self.link.stats.rtt_s, self.config.link.plan_budget_s)
+        rtt = self.link.stats.rtt_s
+        plan = plan_within(model, rtt, self.config.link.plan_budget_s)
         if not plan.sent_streams:
             raise ValueError("the plan sends nothing over the link (no published subscription)")
-        delay_ms, resolutions = trailing_fields(
-            model, self.config.model, self.config.transport, plan
-        )
         with self._lock:
             cid = self._last_id % 255 + 1
             if cid == avoid:
                 cid = cid % 255 + 1
-            self._last_id = cid
-            # kept until acked: an ack that comes after the deploy timed out
-            # still means the PubBroker runs it, so the SubBroker follows
-            self._planned[cid] = (model, plan, meta)
-            for stale in list(self._planned)[:-8]:
-                del self._planned[stale]
+            self._plan_kept(cid, model, plan, meta, rtt)
+        return self._config_of(model, plan, cid)
+
+    def _plan_kept(
+        self, cid: int, model: dict[str, Any], plan: Plan, meta: Deployment, rtt: float | None
+    ) -> None:
+        """(Under the lock.) Kept until acked: an ack that comes after the deploy timed
+        out still means the PubBroker runs it, so the SubBroker follows."""
+        self._last_id = cid
+        self._planned[cid] = (model, plan, meta, rtt)
+        for stale in list(self._planned)[:-8]:
+            del self._planned[stale]
+
+    def _config_of(self, model: dict[str, Any], plan: Plan, cid: int) -> Config:
+        delay_ms, resolutions = trailing_fields(
+            model, self.config.model, self.config.transport, plan
+        )
         return config_for(
             plan, cid, self.config.link.pubbroker_status_period_s, delay_ms, resolutions
         )
 
+    def _adopt(self, ok: AuthOk) -> Adopted | None:
+        """The config another station had the PubBroker run, when it still runs it and
+        this station's model planned for that station's round trip gives the very same
+        CONFIG (handover.py); None otherwise (a new CONFIG is sent)."""
+        if self.fleet is None or ok.config_id == 0:
+            return None
+        running = self._running
+        model, meta = (running.model, running.meta) if running else (self._model, self._meta)
+        for station, told in self.fleet.running():
+            if (told.config_id, told.epoch_ns) != (ok.config_id, ok.epoch_ns):
+                continue
+            if told.model != model_digest(model):
+                log.info(
+                    "config %d of station %s was planned from another model: a new config",
+                    told.config_id,
+                    station,
+                )
+                return None
+            try:
+                plan = plan_within(model, told.rtt_s, self.config.link.plan_budget_s)
+                config = self._config_of(model, plan, told.config_id)
+            except (ValueError, KeyError, TypeError, ArithmeticError) as exc:
+                log.info(
+                    "config %d of station %s cannot be planned here: %s",
+                    told.config_id,
+                    station,
+                    exc,
+                )
+                return None
+            if codec.encode(config) != told.config:
+                log.info(
+                    "config %d of station %s differs from this station's plan: a new config",
+                    told.config_id,
+                    station,
+                )
+                return None
+            with self._lock:
+                self._plan_kept(told.config_id, model, plan, meta, told.rtt_s)
+            log.info(
+                "adopting config %d of station %s (epoch %d ns): the PubBroker runs it",
+                told.config_id,
+                station,
+                told.epoch_ns,
+            )
+            return Adopted(config, ConfigAck(told.config_id, 0, told.epoch_ns), told.slot)
+        return None
+
+    def running_config(self) -> dict[str, Any] | None:
+        """What the PubBroker runs, as the fleet is told it (handover.py)."""
+        running = self._running
+        if running is None:
+            return None
+        return RunningConfig(
+            running.config.config_id,
+            running.epoch_ns,
+            codec.encode(running.config),
+            running.rtt_s,
+            model_digest(running.model),
+            running.last_slot,
+        ).to_json()
+
     # -- LinkHandler -------------------------------------------------------------
 
-    def on_connect(self, ok: AuthOk, rtt_s: float | None) -> Config | None:
+    def on_connect(self, ok: AuthOk, rtt_s: float | None) -> Config | Adopted | None:
         running = self._running
         if running and ok.config_id == running.config.config_id and ok.epoch_ns == running.epoch_ns:
             log.info("resuming config %d", ok.config_id)
             return None
+        adopted = self._adopt(ok)
+        if adopted is not None:
+            return adopted
         if running:
             return self._prepare(running.model, ok.config_id, running.meta)
         try:
@@ -312,7 +395,7 @@ class SubBroker:
 
     def on_config_acked(self, config: Config, ack: ConfigAck) -> None:
         with self._lock:
-            model, plan, meta = self._planned.pop(config.config_id)
+            model, plan, meta, rtt = self._planned.pop(config.config_id)
         if meta.source == "deploy" and meta.deployed_at_ns is None:
             # acked, even after its deploy timed out: this is what the drone runs now
             meta = meta.acked()
@@ -322,7 +405,7 @@ class SubBroker:
             except OSError as exc:
                 log.error("cannot keep the deployment in the state directory: %s", exc)
         sent = [s.stream for s in plan.sent_streams]
-        running = Running(model, plan, config, ack.epoch_ns, FanOut(sent), meta)
+        running = Running(model, plan, config, ack.epoch_ns, FanOut(sent), meta, rtt_s=rtt)
         running.topic_info = {t.name: (t.unit, t.type) for t in topics(model).values()}
         running.slots = SlotDelivery(
             running.fanout, config.config_id, ack.epoch_ns, running.topic_info, self.drone
@@ -366,6 +449,7 @@ class SubBroker:
         running = self._by_id.get(windows[0].config_id)
         if running is None or running.slots is None:
             return
+        running.last_slot = max(running.last_slot, windows[-1].slot)
         # each window held (journal and record) before it is put (backfill.journal_live)
         self.backfill.journal_live(running, windows)
         self.delivered += running.slots.deliver(

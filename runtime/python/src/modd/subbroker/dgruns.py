@@ -137,6 +137,14 @@ class Runs:
         )
         self.by_id = runs
 
+    def joined_at(self, config_id: int, slot: int) -> None:
+        """A config joined while it runs (adopted from another station: handover.py):
+        its slot numbers, 16 bits on the air, are read near ``slot`` (that station's
+        last), not near 0."""
+        run = self.by_id.get(config_id)
+        if run is not None:
+            run.receiver.expected = slot
+
     def on_datagram(self, raw: bytes) -> list[list[Window]] | None:
         """The windows of each slot a DATA datagram holds, or None when it is refused
         (counted: unknown config, forged, replayed, malformed)."""

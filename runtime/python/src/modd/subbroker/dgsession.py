@@ -171,6 +171,9 @@ class DatagramSession(LinkSession):
     def _accept_config(self, config: Config, ack: ConfigAck) -> None:
         self.runs.accept(config, ack, self._key)
 
+    def _joined_at(self, config_id: int, slot: int) -> None:
+        self.runs.joined_at(config_id, slot)
+
     def _refuse(self, config: Config) -> str:
         """Why ``config`` cannot travel in the control fragments of this radio
         (at most 16 packets), or ""."""

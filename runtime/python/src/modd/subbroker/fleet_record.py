@@ -1,5 +1,6 @@
 """The fleet-wide record of which windows some station holds (docs/fleet.md): each
-station answers its window record on ``modd/<drone>/fleet/held/<station>``; each
+station answers its window record on ``modd/<drone>/fleet/held/<station>`` (and,
+under ``running``, the config its PubBroker runs: handover.py); each
 station asks the others every few seconds and keeps their last answers (a station
 that died is remembered as it last answered), so a backfill asks only for windows no
 station holds, and a station that takes a drone over knows the configs the previous
@@ -29,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 from modd_contracts.keys import held_key, values_of
 from modd_plan.streams import StreamKey
 
+from .handover import RunningConfig
 from .payload import DeliveredValue
 from .record_file import read_record
 from .window_record import Intervals, WindowRecord
@@ -80,6 +82,7 @@ class FleetRecord:
         self._own = own
         self._lock = threading.Lock()
         self._others: dict[str, WindowRecord] = {}
+        self._running: dict[str, RunningConfig] = {}  # what each said its PubBroker runs
         self._stop = threading.Event()
         # what this station hears the serving one deliver (docs/fleet.md): exact where a
         # polled record is seconds old, and what a dead station delivered last
@@ -91,7 +94,9 @@ class FleetRecord:
 
     def _answer(self, query: zenoh.Query) -> None:
         try:
-            query.reply(query.key_expr, json.dumps(self._own(), separators=(",", ":")))
+            # on this station's own key (the query's is the wildcard): its answer is named
+            own = held_key(self.drone, self.station)
+            query.reply(own, json.dumps(self._own(), separators=(",", ":")))
         finally:
             query.drop()  # type: ignore[no-untyped-call]
 
@@ -109,6 +114,11 @@ class FleetRecord:
         with self._lock:
             return [*self._others.values(), self._heard]
 
+    def running(self) -> list[tuple[str, RunningConfig]]:
+        """What the other stations last said their PubBroker runs (a dead one's too)."""
+        with self._lock:
+            return list(self._running.items())
+
     def ask(self, timeout_s: float = 1.0) -> None:
         """Ask every other station for its record now; keep the answers."""
         for reply in self._session.get(held_key(self.drone, None), timeout=timeout_s):
@@ -119,11 +129,18 @@ class FleetRecord:
             if station == self.station or len(data) > MAX_ANSWER_BYTES:
                 continue
             try:
-                record = read_record(json.loads(data))
+                doc = json.loads(data)
+                told = doc.pop("running", None) if isinstance(doc, dict) else None
+                record = read_record(doc)
+                running = None if told is None else RunningConfig.from_json(told)
             except (ValueError, RecursionError) as exc:
                 log.warning("the record of station %s is refused: %s", station[:64], exc)
                 continue
             with self._lock:
+                if running is not None and (
+                    station in self._running or len(self._running) < MAX_STATIONS
+                ):
+                    self._running[station] = running
                 # merged into what it said before: a station restarted without its state
                 # directory forgets windows it delivered, the fleet does not
                 if station in self._others:

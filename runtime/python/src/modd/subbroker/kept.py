@@ -82,13 +82,13 @@ class Deployment:
         return f"{rev}{project}, deployed{when}{by}"
 
 
-def _content(model: dict[str, Any]) -> str:
+def model_content(model: dict[str, Any]) -> str:
     """A model's content for comparison: canonical JSON without the layout."""
     return json.dumps({k: v for k, v in model.items() if k != "layout"}, sort_keys=True)
 
 
 def same_model(a: dict[str, Any], b: dict[str, Any]) -> bool:
-    return _content(a) == _content(b)
+    return model_content(a) == model_content(b)
 
 
 class StateDir:

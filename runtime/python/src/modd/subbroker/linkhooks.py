@@ -29,11 +29,22 @@ class ConfigRejected(RuntimeError):
         self.status = status
 
 
+@dataclass(frozen=True)
+class Adopted:
+    """The config the PubBroker runs, taken as acknowledged without sending it (another
+    station sent it: handover.py)."""
+
+    config: Config
+    ack: ConfigAck
+    slot: int = 0  # the last slot that station had: where the slot numbers are read
+
+
 class LinkHandler(Protocol):
     """What the SubBroker does with link events (called on the link thread)."""
 
-    def on_connect(self, ok: AuthOk, rtt_s: float | None) -> Config | None:
-        """The CONFIG to send now, or None to resume the one ``ok`` reports."""
+    def on_connect(self, ok: AuthOk, rtt_s: float | None) -> Config | Adopted | None:
+        """The CONFIG to send now, the running one adopted, or None to resume the one
+        ``ok`` reports (this SubBroker's own)."""
         ...
 
     def on_config_acked(self, config: Config, ack: ConfigAck) -> None: ...

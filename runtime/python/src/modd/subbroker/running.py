@@ -30,6 +30,8 @@ class Running:
     meta: Deployment = field(default_factory=Deployment.configured)
     topic_info: dict[str, tuple[str, str]] = field(default_factory=dict)  # unit, type
     slots: SlotDelivery | None = None
+    rtt_s: float | None = None  # the round trip its plan was made for (handover.py)
+    last_slot: int = 0  # the latest slot whose windows came (handover.py)
 
     def route(self, stream: StreamKey, sources: tuple[Source, ...], subscriber: str) -> None:
         self.fanout.route(stream, sources, subscriber)

@@ -52,7 +52,7 @@ from modd.link.frames import (
 )
 
 from .config import LinkOptions
-from .linkhooks import Clock, ConfigRejected, LinkDown, LinkHandler, LinkStats, SystemClock
+from .linkhooks import Adopted, Clock, ConfigRejected, LinkDown, LinkHandler, LinkStats, SystemClock
 from .roundtrips import RoundTrips
 
 log = logging.getLogger("modd.subbroker.link")
@@ -151,6 +151,10 @@ class LinkSession(ABC):
     @abstractmethod
     def _accept_config(self, config: Config, ack: ConfigAck) -> None:
         """A CONFIG the PubBroker acked: its DATA is decoded from now on."""
+
+    def _joined_at(self, config_id: int, slot: int) -> None:  # noqa: B027
+        """A config adopted while it runs, its last slot at the station that sent it
+        (datagrams read slot numbers near it; a byte stream resynchronises on its own)."""
 
     @abstractmethod
     def _check_silence(self, now: float) -> None:
@@ -346,7 +350,12 @@ class LinkSession(ABC):
     def _connected(self, ok: AuthOk) -> None:
         self.stats.state = "configuring"
         config = self.handler.on_connect(ok, self.stats.rtt_s)
-        if config is not None:
+        if isinstance(config, Adopted):  # another station's, running: nothing to send
+            self._accept_config(config.config, config.ack)
+            self._joined_at(config.ack.config_id, config.slot)
+            self.handler.on_config_acked(config.config, config.ack)
+            self.stats.state = "up"
+        elif config is not None:
             self.submit(config, connecting=True)
         else:
             self.stats.state = "up"
