@@ -49,6 +49,8 @@ describe("Calibration (the Plan panel's archive picker)", () => {
     const picker = await screen.findByRole("combobox", { name: "Calibrate by archive" });
     expect(asked).toEqual([undefined]);
     expect(screen.queryByTestId("calibrated-from")).toBeNull();
+    // the archives are listed asynchronously: a choice before its option exists is no choice
+    await waitFor(() => expect(Array.from(picker.querySelectorAll("option"), (o) => o.value)).toContain("usv/run-0001.mcap"));
     act(() => { fireEvent.change(picker, { target: { value: "usv/run-0001.mcap" } }); });
     expect(store.getState().plan.calibrate).toBe("usv/run-0001.mcap");
     await waitFor(() => expect(asked).toEqual([undefined, "usv/run-0001.mcap"]));
