@@ -62,6 +62,31 @@ def test_the_subbroker_unit_sends_the_on_board_model_over_the_link(root: Path) -
     assert sb.exec_start[-2:] == ["--record-dir", "/var/lib/modd/r"]  # $VAR: split in words
 
 
+def test_the_station_unit_runs_the_router_of_the_generated_station_toml(root: Path) -> None:
+    """A campaign station (docs/operations.md): the router from /etc/modd/station.toml,
+    which `modd generate --station` writes, with the station's credentials; it reads
+    that file with its own loader (the command's options are modd-station's)."""
+    from modd.station import _parser
+
+    unit = read_unit(root, "modd-station.service")
+    assert unit.exec_start == [
+        "/usr/bin/modd-station",
+        "--config",
+        "/etc/modd/station.toml",
+        "--credentials",
+        "/var/lib/modd/credentials",
+    ]
+    text = (root / "lib/systemd/system/modd-station.service").read_text()
+    assert unit.one("User") == "modd" and "ConditionPathExists=/etc/modd/station.toml" in text
+    args = _parser().parse_args(unit.exec_start[1:])
+    assert (args.config, args.credentials) == (
+        "/etc/modd/station.toml",
+        "/var/lib/modd/credentials",
+    )
+    (root / "etc/modd/base.env").write_text('MODD_STATION_ARGS="--log-level DEBUG"\n')
+    assert read_unit(root, "modd-station.service").exec_start[-2:] == ["--log-level", "DEBUG"]
+
+
 def test_expansion_follows_systemd_and_refuses_what_it_does_not_read() -> None:
     env = {"A": "one two", "B": ""}
     assert command("/x ${A} $A $B %t/%n %%", env, "u.service", "here") == [
