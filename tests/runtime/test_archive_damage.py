@@ -1,7 +1,7 @@
 """Start-up recovery of crashed archive files with damaged bytes (issue 28, docs/pubbroker.md):
 a real PubBroker is killed (kill -9), single-byte flips are made at 25 offsets of its file (each
 flip in a copy of its own, and all 25 in one more), and the broker restarted on that directory
-recovers every copy. Oracle: tests/support/mcap_oracle.py, chunk by chunk over the chunk
+recovers every copy, and one more whose flip its decoder reads past. Oracle: tests/support/mcap_oracle.py, chunk by chunk over the chunk
 boundaries of the undamaged file, against the official `mcap` reader on the recovered files."""
 
 from __future__ import annotations
@@ -53,6 +53,13 @@ def test_a_crashed_file_with_25_flipped_bytes_keeps_every_chunk_whose_data_check
         name = f"usv-flip{i:02d}.mcap"
         (b.archive_dir / name).write_bytes(damaged)
         want[name] = oracle.count_valid(damaged, layout)
+    # a flip the broker's libzstd reads past and python-zstandard's refuses: the chunk is
+    # kept, written anew, or the official reader below throws on the whole file
+    past = oracle.read_past_flip(data, layout)
+    assert past is not None
+    (b.archive_dir / "usv-readpast.mcap").write_bytes(oracle.flipped(data, *past))
+    want["usv-readpast.mcap"] = oracle.count_valid(oracle.flipped(data, *past), layout)
+    assert want["usv-readpast.mcap"] == everything
     (b.archive_dir / "usv-flipall.mcap").write_bytes(all_flips)
     want["usv-flipall.mcap"] = oracle.count_valid(all_flips, layout)
     want[crashed.name] = everything
@@ -69,3 +76,4 @@ def test_a_crashed_file_with_25_flipped_bytes_keeps_every_chunk_whose_data_check
     assert got == want
     assert not list(b.archive_dir.glob("*.recovering"))
     assert log.count("skipped ") >= damaged_files  # each skipped region logged with its offset
+    assert "1 chunks written anew from their data" in log

@@ -242,6 +242,57 @@ TEST(McapRecoverDamage, All25FlipsInOneFileKeepEveryChunkWhoseDataChecks) {
   EXPECT_EQ(read_back(slurp(fx.dir + "/usv-crashed.mcap")), want);
 }
 
+// A flip the decoder reads past: the chunk's data still checks (this libzstd ignores, for
+// one, the reserved bits of a block's Symbol_Compression_Modes, which zstd 1.5.7 refuses; the
+// Python `mcap` reader then throws on the whole file). The chunk is kept and written anew from
+// its data: every chunk of the recovered file is what the writer's zstd level 1 makes of it.
+TEST(McapRecoverDamage, AFlipTheDecoderReadsPastIsWrittenAnewFromTheChunksData) {
+  Fixture fx("read-past");
+  std::vector<Record> chunks;
+  for (const Record& r : fx.layout)
+    if (r.op == 0x06) chunks.push_back(r);
+  const Record& c = chunks[10];
+  const auto want = chunk_messages(fx.clean, c.at, c.size);
+  ASSERT_TRUE(want.has_value());
+  std::optional<std::pair<size_t, uint8_t>> flip;
+  for (size_t at = c.at + 9 + 44; at < c.at + c.size && !flip; ++at)
+    for (int bit = 0; bit < 8 && !flip; ++bit) {
+      Bytes d = fx.clean;
+      d[at] ^= static_cast<uint8_t>(1u << bit);
+      if (chunk_messages(d, c.at, c.size) == want) flip = {at, static_cast<uint8_t>(1u << bit)};
+    }
+  ASSERT_TRUE(flip.has_value()) << "no flip this libzstd reads past in the chunk";
+  Bytes d = fx.clean;
+  d[flip->first] ^= flip->second;
+  const uint64_t all = oracle_count(fx.clean, fx.layout);
+  ASSERT_EQ(oracle_count(d, fx.layout), all);
+
+  Recovered r = recover_one(fx.dir, d);
+  EXPECT_EQ(r.messages, all);
+  EXPECT_EQ(r.skipped.size(), 1u);  // the torn tail, nothing else
+  EXPECT_EQ(r.rewritten_chunks, 1u);
+  EXPECT_TRUE(r.rewritten);  // not finished in place: that would keep the flip
+  Bytes out = slurp(fx.dir + "/usv-crashed.mcap");
+  EXPECT_EQ(read_back(out), all);
+  size_t checked = 0;
+  for (const Record& rec : records(out)) {
+    if (rec.op != 0x06) continue;
+    uint64_t usize = rd<uint64_t>(out, rec.at + 9 + 16);
+    uint64_t clen = rd<uint64_t>(out, rec.at + 9 + 36);
+    Bytes plain(usize), again(ZSTD_compressBound(usize));
+    ASSERT_EQ(ZSTD_decompress(plain.data(), usize, &out[rec.at + 9 + 44], clen), usize);
+    again.resize(ZSTD_compress(again.data(), again.size(), plain.data(), usize, 1));
+    EXPECT_TRUE(Bytes(out.begin() + rec.at + 9 + 44, out.begin() + rec.at + 9 + 44 + clen) == again)
+        << "chunk at " << rec.at;
+    ++checked;
+  }
+  EXPECT_EQ(checked, chunks.size());
+
+  Recovered clean = recover_one(fx.dir, fx.clean);  // the writer's own chunks stay as they are
+  EXPECT_EQ(clean.rewritten_chunks, 0u);
+  EXPECT_FALSE(clean.rewritten);
+}
+
 TEST(McapRecoverDamage, WithoutRoomForTheCopyTheOriginalStaysAsItIs) {
   Fixture fx("no-copy");
   Bytes d = fx.clean;

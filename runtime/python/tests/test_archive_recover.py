@@ -83,6 +83,24 @@ def test_each_of_25_single_byte_flips_keeps_every_chunk_whose_data_checks(
             assert r.skipped and r.skipped[0].offset <= at, (at, r.skipped)
 
 
+def test_a_flip_the_pubbrokers_decoder_reads_past_keeps_its_chunk(
+    crashed: tuple[bytes, list[oracle.Record]], tmp_path: Path
+) -> None:
+    """python-zstandard refuses the flip; the chunk's data is still whole (the
+    system's libzstd reads past it and the CRC checks), as the PubBroker keeps
+    it. The output is written anew, so the official reader reads it."""
+    data, layout = crashed
+    flip = oracle.read_past_flip(data, layout)
+    assert flip is not None
+    damaged = oracle.flipped(data, *flip)
+    assert oracle.count_valid(damaged, layout) == 3000
+    src = tmp_path / "read-past.mcap"
+    src.write_bytes(damaged)
+    r = recover(src)
+    assert r.messages == 3000
+    assert official_count(r.output) == 3000
+
+
 def test_all_25_flips_in_one_file(
     crashed: tuple[bytes, list[oracle.Record]], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -227,6 +227,17 @@ std::optional<ScannedChunk> read_chunk(std::span<const uint8_t> f, size_t at, Fi
   return out;
 }
 
+// Whether `data`, which decompressed to `plain`, is what the writer makes of `plain`. A chunk
+// that checks can still hold a flip its decoder ignored; readers with a stricter decoder would
+// refuse it, and the file with it. One level-1 compression per kept chunk, at recovery only.
+bool as_written(const std::string& compression, std::span<const uint8_t> data,
+                const std::vector<uint8_t>& plain) {
+  Compression c{};
+  if (!parse_compression(compression.empty() ? "none" : compression, c)) return false;
+  std::vector<uint8_t> again = compress_chunk(c, plain);
+  return std::equal(again.begin(), again.end(), data.begin(), data.end());
+}
+
 // Whether a Schema or Channel record at `at` parses exactly and is followed by the end of
 // the file or a record that can follow it (a resync must not trust a lookalike in noise).
 bool definition_at(std::span<const uint8_t> f, size_t at, FileScan& s, bool add) {
@@ -324,11 +335,12 @@ struct Walk {
       return n;
     }();
     pos = end + idx.length;
-    if (prefix_open) {
+    if (prefix_open && !c.reencode) {
       s.clean_end = c.index_intact ? pos : end;
       ++s.clean_chunks;
       prefix_open = c.index_intact;
-    } else {
+    } else {  // a chunk to write anew cannot stay in place either
+      prefix_open = false;
       s.in_place = false;
     }
     s.chunks.push_back(std::move(c));
@@ -353,9 +365,13 @@ void Walk::run() {
     }
     const size_t next = at + 9 + len;
     if (op == kChunk) {
-      if (auto c = check_chunk(f, at, s, plain))
+      if (auto c = check_chunk(f, at, s, plain)) {
+        const ChunkIndex& ci = c->ci;
+        c->reencode = !as_written(
+            ci.compression,
+            f.subspan(ci.offset + ci.length - ci.compressed_size, ci.compressed_size), plain);
         chunk(std::move(*c));
-      else
+      } else
         skip_from(at, "a chunk whose data does not check (CRC, size or records)");
     } else if (op == kSchema || op == kChannel) {
       bool known = op == kSchema ? s.schemas.count(rd<uint16_t>(&f[at + 9]))

@@ -61,32 +61,6 @@ const char* compression_name(Compression c) {
   return c == Compression::Zstd ? "zstd" : c == Compression::Lz4 ? "lz4" : "";
 }
 
-std::vector<uint8_t> compress(Compression c, const std::vector<uint8_t>& in) {
-  std::vector<uint8_t> out;
-  if (c == Compression::Zstd) {
-    // One context per thread, reused: a fresh one per chunk costs its allocation and setup.
-    thread_local std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> cctx{ZSTD_createCCtx(),
-                                                                         ZSTD_freeCCtx};
-    if (!cctx) throw Error(ErrorCode::Internal, "zstd: cannot create a compression context");
-    out.resize(ZSTD_compressBound(in.size()));
-    size_t n = ZSTD_compressCCtx(cctx.get(), out.data(), out.size(), in.data(), in.size(), 1);
-    if (ZSTD_isError(n))
-      throw Error(ErrorCode::Internal, std::string("zstd: ") + ZSTD_getErrorName(n));
-    out.resize(n);
-  } else if (c == Compression::Lz4) {
-    LZ4F_preferences_t prefs{};
-    prefs.frameInfo.contentSize = in.size();
-    out.resize(LZ4F_compressFrameBound(in.size(), &prefs));
-    size_t n = LZ4F_compressFrame(out.data(), out.size(), in.data(), in.size(), &prefs);
-    if (LZ4F_isError(n))
-      throw Error(ErrorCode::Internal, std::string("lz4: ") + LZ4F_getErrorName(n));
-    out.resize(n);
-  } else {
-    out = in;
-  }
-  return out;
-}
-
 }  // namespace
 
 bool parse_compression(const std::string& s, Compression& out) {
@@ -111,6 +85,32 @@ bool parse_fsync(const std::string& s, FsyncPolicy& out) {
   else
     return false;
   return true;
+}
+
+std::vector<uint8_t> compress_chunk(Compression c, const std::vector<uint8_t>& in) {
+  std::vector<uint8_t> out;
+  if (c == Compression::Zstd) {
+    // One context per thread, reused: a fresh one per chunk costs its allocation and setup.
+    thread_local std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> cctx{ZSTD_createCCtx(),
+                                                                         ZSTD_freeCCtx};
+    if (!cctx) throw Error(ErrorCode::Internal, "zstd: cannot create a compression context");
+    out.resize(ZSTD_compressBound(in.size()));
+    size_t n = ZSTD_compressCCtx(cctx.get(), out.data(), out.size(), in.data(), in.size(), 1);
+    if (ZSTD_isError(n))
+      throw Error(ErrorCode::Internal, std::string("zstd: ") + ZSTD_getErrorName(n));
+    out.resize(n);
+  } else if (c == Compression::Lz4) {
+    LZ4F_preferences_t prefs{};
+    prefs.frameInfo.contentSize = in.size();
+    out.resize(LZ4F_compressFrameBound(in.size(), &prefs));
+    size_t n = LZ4F_compressFrame(out.data(), out.size(), in.data(), in.size(), &prefs);
+    if (LZ4F_isError(n))
+      throw Error(ErrorCode::Internal, std::string("lz4: ") + LZ4F_getErrorName(n));
+    out.resize(n);
+  } else {
+    out = in;
+  }
+  return out;
 }
 
 McapWriter::McapWriter(const std::string& path, WriterOptions options)
@@ -282,7 +282,7 @@ void McapWriter::flush_chunk() {
     write_out();
     return;
   }
-  auto compressed = compress(opt_.compression, chunk_);
+  auto compressed = compress_chunk(opt_.compression, chunk_);
   Rec c(kChunk);
   c.put<uint64_t>(chunk_start_);
   c.put<uint64_t>(chunk_end_);

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -46,21 +47,49 @@ struct Mapped {
   std::span<const uint8_t> all() const { return {p, n}; }
 };
 
-// Hands the scan's schemas, channels and chunks to a writer that finishes a file; a chunk's
-// indexes are taken to start right after it at `index_start[i]`.
-void adopt(McapWriter& w, const FileScan& s, const std::vector<uint64_t>& chunk_at) {
+// Hands the scan's schemas, channels and chunks to a writer that finishes a file; `placed[i]`
+// is chunk i as the finished file holds it (offset, length, compressed size), its indexes
+// right after it.
+void adopt(McapWriter& w, const FileScan& s, const std::vector<ChunkIndex>& placed) {
   for (const auto& [id, sc] : s.schemas) w.adopt_schema(id, sc.name, sc.encoding, sc.data);
   for (const auto& [id, ch] : s.channels)
     w.adopt_channel(id, ch.schema, ch.topic, ch.encoding, ch.meta);
-  for (size_t i = 0; i < chunk_at.size(); ++i) {
+  for (size_t i = 0; i < placed.size(); ++i) {
     const ScannedChunk& c = s.chunks[i];
-    ChunkIndex ci = c.ci;
-    ci.offset = chunk_at[i];
+    ChunkIndex ci = placed[i];
     ci.index_offsets.clear();
-    for (const auto& [ch, off] : c.index_at) ci.index_offsets[ch] = chunk_at[i] + ci.length + off;
+    for (const auto& [ch, off] : c.index_at) ci.index_offsets[ch] = ci.offset + ci.length + off;
     ci.index_length = c.index.size();
     w.adopt_chunk(ci, c.counts);
   }
+}
+
+// The Chunk record of `c` written anew from its data: its times, size, CRC and compression as
+// they were, its records compressed as the writer compresses them; `ci` gets the new sizes.
+std::vector<uint8_t> chunk_anew(std::span<const uint8_t> file, const ScannedChunk& c,
+                                ChunkIndex& ci) {
+  const uint64_t fields = 8 + 8 + 8 + 4 + 4 + c.ci.compression.size();  // up to compressed size
+  std::vector<uint8_t> plain;
+  Compression comp{};
+  if (!decompress_chunk(
+          c.ci.compression,
+          file.subspan(c.ci.offset + c.ci.length - c.ci.compressed_size, c.ci.compressed_size),
+          c.ci.uncompressed_size, plain) ||
+      !parse_compression(c.ci.compression.empty() ? "none" : c.ci.compression, comp))
+    throw Error(ErrorCode::Internal, "a kept chunk no longer decompresses");
+  std::vector<uint8_t> data = compress_chunk(comp, plain);
+  const uint64_t csize = data.size();
+  const uint64_t body = fields + 8 + csize;
+  auto head = file.subspan(c.ci.offset + 9, fields);
+  std::vector<uint8_t> rec(9 + body);
+  rec[0] = file[c.ci.offset];
+  std::memcpy(&rec[1], &body, 8);
+  std::memcpy(&rec[9], head.data(), fields);
+  std::memcpy(&rec[9 + fields], &csize, 8);
+  if (csize) std::memcpy(&rec[9 + fields + 8], data.data(), csize);
+  ci.length = rec.size();
+  ci.compressed_size = csize;
+  return rec;
 }
 
 // Appends bytes to a descriptor, keeping the data-section CRC; throws Error(Io).
@@ -113,20 +142,21 @@ void finish_in_place(const std::string& path, const FileScan& s, std::span<const
     if (err) throw Error(ErrorCode::Io, "cannot seek " + path + ": " + std::strerror(err));
   }
   McapWriter w(path, options, McapWriter::Resume{s.clean_end + tail.size(), crc});
-  std::vector<uint64_t> at;
-  for (size_t i = 0; i < s.clean_chunks; ++i) at.push_back(s.chunks[i].ci.offset);
-  adopt(w, s, at);
+  std::vector<ChunkIndex> placed;
+  for (size_t i = 0; i < s.clean_chunks; ++i) placed.push_back(s.chunks[i].ci);
+  adopt(w, s, placed);
   w.close();
 }
 
 // Writes the trusted records beside the original (`.recovering`): magic, header, schemas,
-// channels, then each kept chunk as it was with its Message Index records, then the summary.
+// channels, then each kept chunk with its Message Index records (as it was, or written anew
+// from its data when its bytes were not the writer's), then the summary.
 void write_copy(const std::string& tmp, const FileScan& s, std::span<const uint8_t> file,
                 const WriterOptions& options) {
   int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw Error(ErrorCode::Io, "cannot create " + tmp + ": " + std::strerror(errno));
   Out out{fd, tmp};
-  std::vector<uint64_t> at;
+  std::vector<ChunkIndex> placed;
   try {
     out.put(kMagic);
     if (s.header.length) {
@@ -140,9 +170,14 @@ void write_copy(const std::string& tmp, const FileScan& s, std::span<const uint8
     for (const auto& [id, ch] : s.channels)
       if (ch.at.length) out.put(file.subspan(ch.at.offset, ch.at.length));
     for (const ScannedChunk& c : s.chunks) {
-      at.push_back(out.at);
-      out.put(file.subspan(c.ci.offset, c.ci.length));
+      ChunkIndex ci = c.ci;
+      ci.offset = out.at;
+      if (c.reencode)
+        out.put(chunk_anew(file, c, ci));
+      else
+        out.put(file.subspan(c.ci.offset, c.ci.length));
       out.put(c.index);
+      placed.push_back(std::move(ci));
     }
   } catch (...) {
     ::close(fd);
@@ -152,7 +187,7 @@ void write_copy(const std::string& tmp, const FileScan& s, std::span<const uint8
   WriterOptions o = options;
   o.fsync = FsyncPolicy::Close;
   McapWriter w(tmp, o, McapWriter::Resume{out.at, out.crc});
-  adopt(w, s, at);
+  adopt(w, s, placed);
   w.close();
 }
 
@@ -160,8 +195,10 @@ void write_copy(const std::string& tmp, const FileScan& s, std::span<const uint8
 void verify_copy(const std::string& tmp, const FileScan& s, bool message_index) {
   Mapped m(tmp);
   FileScan v = scan_mcap(m.all(), message_index);
+  bool as_written = std::none_of(v.chunks.begin(), v.chunks.end(),
+                                 [](const ScannedChunk& c) { return c.reencode; });
   if (!v.magic || !v.skipped.empty() || !v.data_end || v.chunks.size() != s.chunks.size() ||
-      v.messages != s.messages || !mcap_complete(tmp))
+      v.messages != s.messages || !as_written || !mcap_complete(tmp))
     throw Error(ErrorCode::Internal, "the recovered copy " + tmp + " does not read back whole");
 }
 
@@ -193,6 +230,8 @@ Recovered recover_mcap(const std::string& path, const WriterOptions& options) {
   res.skipped = s.skipped;
   res.messages = s.messages;
   res.chunks = s.chunks.size();
+  res.rewritten_chunks = static_cast<uint64_t>(std::count_if(
+      s.chunks.begin(), s.chunks.end(), [](const ScannedChunk& c) { return c.reencode; }));
   if (!s.magic && s.chunks.empty() && s.channels.empty()) {
     res.foreign = true;  // not an MCAP file: left as it is
     return res;
@@ -240,6 +279,11 @@ void log_recovered(const std::string& name, const Recovered& r, const char* when
       name.c_str(), when,
       r.rewritten ? " (written beside it, read back, then renamed over it)" : "", u(r.messages),
       u(r.chunks), u(r.dropped_bytes), r.skipped.size());
+  if (r.rewritten_chunks)
+    log_line(
+        "archive:   %llu chunks written anew from their data (their bytes were not the "
+        "writer's: a damaged byte their decoder read past, or another writer)",
+        u(r.rewritten_chunks));
   for (size_t i = 0; i < r.skipped.size() && i < 20; ++i)
     log_line("archive:   skipped %llu bytes at offset %llu: %s", u(r.skipped[i].length),
              u(r.skipped[i].offset), r.skipped[i].why.c_str());

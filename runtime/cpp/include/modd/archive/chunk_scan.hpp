@@ -2,7 +2,8 @@
 // damaged regions skipped (not a stop at the first one). A chunk is trusted when its header
 // agrees with its record length, its data decompresses to the declared size (bounded) and its
 // records match their CRC; past a damaged region the scan resyncs on the next record that
-// checks whole (a chunk, or a schema or channel that parses exactly). Used by recovery
+// checks whole (a chunk, or a schema or channel that parses exactly). A trusted chunk whose
+// bytes are not the writer's for its data is marked to be written anew. Used by recovery
 // (recover.hpp), which keeps what it trusts and reports what it skipped.
 #pragma once
 #include <cstdint>
@@ -28,6 +29,10 @@ struct ScannedChunk {
   std::vector<uint8_t> index;             // Message Index records to write after it
   std::map<uint16_t, uint64_t> index_at;  // channel -> offset of its record inside `index`
   bool index_intact = false;              // the file holds exactly `index` right after the chunk
+  // Its data checks but its bytes are not what the writer makes of that data: a flip that a
+  // lenient decoder reads past (libzstd 1.5.4 ignores reserved bits that 1.5.7 refuses), or
+  // another writer's stream. Written anew from its data, so that every reader reads it.
+  bool reencode = false;
 };
 
 struct Skipped {

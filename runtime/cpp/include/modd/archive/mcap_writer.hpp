@@ -19,6 +19,9 @@ enum class FsyncPolicy { Never, Chunk, Close };
 
 bool parse_compression(const std::string& s, Compression& out);
 bool parse_fsync(const std::string& s, FsyncPolicy& out);
+// A chunk's records compressed as the writer compresses them (zstd level 1, an LZ4 frame with
+// its content size, or as they are). Throws Error(Internal) if the codec fails.
+std::vector<uint8_t> compress_chunk(Compression c, const std::vector<uint8_t>& in);
 
 struct WriterOptions {
   Compression compression = Compression::Zstd;

@@ -20,10 +20,11 @@ namespace modd::archive {
 
 struct Recovered {
   std::string path;
-  uint64_t messages = 0;         // kept
-  uint64_t chunks = 0;           // kept
-  uint64_t dropped_bytes = 0;    // damaged regions and torn tail
-  std::vector<Skipped> skipped;  // the damaged regions (offset, length, why), in file order
+  uint64_t messages = 0;          // kept
+  uint64_t chunks = 0;            // kept
+  uint64_t rewritten_chunks = 0;  // kept, written anew from their data (ScannedChunk::reencode)
+  uint64_t dropped_bytes = 0;     // damaged regions and torn tail
+  std::vector<Skipped> skipped;   // the damaged regions (offset, length, why), in file order
   bool rewritten = false;  // written beside and renamed over (a trusted record lay past damage)
   bool removed = false;    // empty file (nothing but a partial magic/header): removed
   bool foreign = false;    // no magic and no record found: left as it is

@@ -11,6 +11,9 @@ True
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
+import functools
 import io
 import struct
 import zlib
@@ -104,6 +107,33 @@ def chunk_header_fits(buf: bytes | memoryview, at: int) -> bool:
     return u64(buf, at + 9 + 16) <= MAX_CHUNK_BYTES and clen == length - 40 - name
 
 
+@functools.cache
+def _libzstd() -> ctypes.CDLL | None:
+    name = ctypes.util.find_library("zstd")  # libzstd1: required on Debian (dpkg uses it)
+    if name is None:
+        return None
+    lib = ctypes.CDLL(name)
+    lib.ZSTD_decompress.restype = ctypes.c_size_t
+    size_t, buf = ctypes.c_size_t, ctypes.c_char_p
+    lib.ZSTD_decompress.argtypes = [buf, size_t, buf, size_t]
+    lib.ZSTD_isError.restype = ctypes.c_uint
+    lib.ZSTD_isError.argtypes = [ctypes.c_size_t]
+    return lib
+
+
+def system_zstd(data: bytes, size: int) -> bytes | None:
+    """``data`` decompressed by the system's libzstd into at most ``size``
+    bytes, or None. Decoders differ in what they read past: python-zstandard's
+    libzstd (1.5.7) refuses reserved bits that 1.5.4, the PubBroker's, ignores,
+    so a chunk the PubBroker keeps (its CRC checks) is not dropped here."""
+    lib = _libzstd()
+    if lib is None:
+        return None
+    out = ctypes.create_string_buffer(max(size, 1))
+    n = lib.ZSTD_decompress(out, size, data, len(data))
+    return None if lib.ZSTD_isError(n) else out.raw[:n]
+
+
 def decompress(compression: str, data: bytes, size: int) -> bytes:
     """``data`` decompressed to exactly ``size`` bytes; raises :class:`Damaged`
     otherwise. Never produces more than ``size + 1`` bytes."""
@@ -115,8 +145,14 @@ def decompress(compression: str, data: bytes, size: int) -> bytes:
         declared = zstandard.frame_content_size(data)  # -1: not in the frame's header
         if declared not in (-1, size):
             raise Damaged(f"the zstd frame holds {declared} bytes, the chunk declares {size}")
-        with zstandard.ZstdDecompressor().stream_reader(io.BytesIO(data)) as r:
-            out = r.read(size + 1)
+        try:
+            with zstandard.ZstdDecompressor().stream_reader(io.BytesIO(data)) as r:
+                out = r.read(size + 1)
+        except zstandard.ZstdError:
+            read_past = system_zstd(data, size)
+            if read_past is None:
+                raise
+            out = read_past
     elif compression == "lz4":
         if size > len(data) * 256 + 64:  # LZ4's ratio is below 255:1: nothing allocated
             raise Damaged(f"{len(data)} lz4 bytes cannot hold {size}")
