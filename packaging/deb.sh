@@ -7,7 +7,10 @@ units_of() {
   install -m 0644 packaging/$1/units/*.service "$2/lib/systemd/system/"
 }
 
-unit_names() { (cd "$1/lib/systemd/system" && ls -- *.service | xargs); }
+# the package's units; templates (name@.service: one instance each, enabled by the
+# operator) are not enabled or restarted by name: their running instances are
+unit_names() { (cd "$1/lib/systemd/system" && ls -- *.service | grep -v '@\.service$' | xargs); }
+instance_patterns() { (cd "$1/lib/systemd/system" && ls -- *@.service 2>/dev/null | sed 's/@\.service$/@*.service/' | xargs); }
 
 strip_for() {  # strip_for ARCH FILE: debug symbols out (lintian: unstripped-binary-or-object)
   if [ "$1" = arm64 ]; then aarch64-linux-gnu-strip --strip-unneeded "$2"; else strip --strip-unneeded "$2"; fi
@@ -27,12 +30,14 @@ doc_files() {
 
 # deb PACKAGE ARCH ROOT KIND DEPENDS: control files, build, lintian, systemd-analyze
 deb() {
-  local pkg=$1 arch=$2 root=$3 kind=$4 depends=$5 units
+  local pkg=$1 arch=$2 root=$3 kind=$4 depends=$5 units instances
   units=$(unit_names "$root")
+  instances=$(instance_patterns "$root")
   doc_files "$pkg" "$root" "$kind"
   install -d "$root/DEBIAN"
   for s in postinst prerm postrm; do
-    sed -e "s/@PACKAGE@/$pkg/g" -e "s/@UNITS@/$units/g" packaging/common/$s > "$root/DEBIAN/$s"
+    sed -e "s/@PACKAGE@/$pkg/g" -e "s/@UNITS@/$units/g" -e "s/@INSTANCES@/$instances/g" \
+      packaging/common/$s > "$root/DEBIAN/$s"
     chmod 0755 "$root/DEBIAN/$s"
   done
   (cd "$root" && find etc -type f | sed 's|^|/|' | sort) > "$root/DEBIAN/conffiles"
@@ -68,7 +73,7 @@ verify_units() {  # systemd-analyze verify: the package's tree over this system'
     [ -z "$out" ] || { printf '  systemd-analyze: %s\n' "$out"; rc=1; }
   done
   rm -rf "$vroot"
-  [ $rc -eq 0 ] && echo "  systemd-analyze verify: $(unit_names "$1"): clean"
+  [ $rc -eq 0 ] && echo "  systemd-analyze verify: $(cd "$1/lib/systemd/system" && ls -- *.service | xargs): clean"
   return $rc
 }
 

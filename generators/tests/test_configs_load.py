@@ -119,3 +119,22 @@ def test_campaign_stations_get_a_router_and_a_subbroker_per_vehicle(tmp_path: Pa
             assert cfg.state_dir == Path(vm["subBroker"]["configPath"])
             keys.add(cfg.key_ref)
         assert keys == {f"env:MODD_LINK_KEY_{v.upper()}" for v in fleet}
+
+
+def test_vehicles_on_the_missions_subbroker_path_get_a_state_folder_each(tmp_path: Path) -> None:
+    """Vehicles that give no SubBroker path of their own share the mission's; at one
+    station their SubBrokers would share one window record. Each gets a folder named
+    after it; a vehicle with its own path keeps it."""
+    from modd_gen.targets.stations import artifacts, parse_station
+
+    model = load_model(EXAMPLES / "campaign.modd")
+    for v in model["campaign"]["vehicles"][:2]:
+        del v["subBroker"]["path"]
+    stations = [parse_station(t) for t in ("shore=tcp/shore.example:7447", "boat")]
+    write_artifacts(tmp_path, artifacts(model, stations))
+    top = tmp_path / "operator" / "stations" / "shore" / "vehicles"
+    got = {v: load_config(top / v / "subbroker.toml").state_dir for v in ("usv1", "usv2", "usv3")}
+    mission = Path(model["subBroker"]["configPath"])
+    assert got["usv1"] == mission / "usv1" and got["usv2"] == mission / "usv2"
+    third = model["campaign"]["vehicles"][2]["subBroker"]["path"]
+    assert got["usv3"] == Path(third)

@@ -87,6 +87,48 @@ def test_the_station_unit_runs_the_router_of_the_generated_station_toml(root: Pa
     assert read_unit(root, "modd-station.service").exec_start[-2:] == ["--log-level", "DEBUG"]
 
 
+def test_a_vehicles_subbroker_unit_runs_the_generated_vehicle_folder(
+    root: Path, tmp_path: Path
+) -> None:
+    """A campaign station's vehicles (docs/operations.md): `modd generate --station`'s
+    folder for the station copied to /etc/modd; modd-subbroker@<vehicle> runs that
+    vehicle's subbroker.toml with the station's credentials, and the file loads with the
+    SubBroker's own loader from there (its model beside it, its key from link.env)."""
+    from modd.subbroker.cli import _parser
+    from modd.subbroker.config import load_config
+    from modd_gen import write_artifacts
+    from modd_gen.targets.stations import artifacts, parse_station
+    from modd_model import load_model
+    from modd_model.campaign import drone_names
+
+    model = load_model(REPO / "metamodel" / "examples" / "campaign.modd")
+    stations = [parse_station(t) for t in ("shore=tcp/shore.example:7447", "boat")]
+    write_artifacts(tmp_path / "gen", artifacts(model, stations))
+    made = tmp_path / "gen" / "operator" / "stations" / "boat"
+    shutil.copytree(made, root / "etc/modd", dirs_exist_ok=True)
+    vehicles = drone_names(model)
+    assert len(vehicles) == 3
+    for v in vehicles:
+        unit = read_unit(root, f"modd-subbroker@{v}.service")
+        config = f"/etc/modd/vehicles/{v}/subbroker.toml"
+        assert unit.exec_start == [
+            "/usr/bin/modd-subbroker",
+            "--config",
+            config,
+            "--credentials",
+            "/var/lib/modd/credentials",
+            "--onboard-over-link",
+        ]
+        args = _parser().parse_args(unit.exec_start[1:])
+        assert args.config == config and args.onboard_over_link
+        cfg = load_config(root / config.lstrip("/"))
+        assert cfg.drone == v and cfg.station == "boat" and cfg.zenoh.mode == "client"
+        assert cfg.key_ref == f"env:MODD_LINK_KEY_{v.upper()}"
+    text = (root / "lib/systemd/system/modd-subbroker@.service").read_text()
+    assert "ConditionPathExists=/etc/modd/vehicles/%i/subbroker.toml" in text
+    assert "EnvironmentFile=-/etc/modd/link.env" in text
+
+
 def test_expansion_follows_systemd_and_refuses_what_it_does_not_read() -> None:
     env = {"A": "one two", "B": ""}
     assert command("/x ${A} $A $B %t/%n %%", env, "u.service", "here") == [

@@ -7,7 +7,8 @@ systemd.unit(5), "Specifiers"):
 
 - ``${NAME}``: the value as it is, inside its word;
 - ``$NAME`` as a whole word: the value split at whitespace into words (none if empty);
-- ``%%``, ``%t`` (/run), ``%S`` (/var/lib), ``%n`` (the unit's name).
+- ``%%``, ``%t`` (/run), ``%S`` (/var/lib), ``%n`` (the unit's name), ``%i`` (the
+  instance of a template unit: ``name@usv1.service`` is read from ``name@.service``).
 
 Anything else (another specifier, a prefix such as ``+`` or ``!``, a line continued
 with a backslash) is refused with the unit's name and line, rather than guessed.
@@ -89,6 +90,8 @@ def specifiers(word: str, unit: str, where: str) -> str:
         c = m.group(1)
         if c == "n":
             return unit
+        if c == "i" and "@" in unit:
+            return unit.partition("@")[2].rpartition(".")[0]
         if c not in SPECIFIERS:
             raise UnitError(f"{where}: specifier %{c} is not expanded here")
         return SPECIFIERS[c]
@@ -115,7 +118,8 @@ def command(line: str, env: dict[str, str], unit: str, where: str) -> list[str]:
 
 def read_unit(root: Path, name: str) -> Unit:
     """The installed unit ``name`` of the root, its commands expanded."""
-    path = root / UNIT_DIR / name
+    prefix, at, rest = name.partition("@")
+    path = root / UNIT_DIR / (f"{prefix}@{rest[rest.rfind('.') :]}" if at else name)
     service = sections(path.read_text(), str(path)).get("Service", {})
     unit = Unit(name, service)
     for value in service.get("EnvironmentFile", []):

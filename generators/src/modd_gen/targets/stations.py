@@ -27,7 +27,9 @@ from __future__ import annotations
 import hashlib
 import json
 import re
+from collections import Counter
 from dataclasses import dataclass
+from pathlib import PurePosixPath
 from typing import Any
 
 from modd_model.campaign import expand, vehicles
@@ -142,9 +144,16 @@ def router_config(me: CampaignStation, stations: list[CampaignStation]) -> dict[
     return {"zenoh": {"listen": [me.listen], "mesh": {"id": me.zid, "peers": peers}}}
 
 
-def vehicle_config(ctx: Context, vehicle: str, me: CampaignStation) -> dict[str, Any]:
-    """One vehicle's SubBroker at station ``me``: a client of the station's router."""
+def vehicle_config(
+    ctx: Context, vehicle: str, me: CampaignStation, shared_state: bool = False
+) -> dict[str, Any]:
+    """One vehicle's SubBroker at station ``me``: a client of the station's router.
+    ``shared_state``: other vehicles have the same SubBroker path (the mission's, not
+    one of their own); its state then goes in a folder named after the vehicle, as two
+    SubBrokers on one window record would each take the other's windows as theirs."""
     doc = subbroker_config.config(ctx)
+    if shared_state:
+        doc["state_dir"] = str(PurePosixPath(doc["state_dir"]) / vehicle)
     doc["model"] = "model.json"  # beside it
     doc["station"] = me.name
     doc["zenoh"] = {"mode": "client", "listen": [], "connect": [local_endpoint(me.listen)]}
@@ -164,6 +173,7 @@ def vehicle_key_ref(vehicle: str) -> str:
 
 def campaign_artifacts(model: dict[str, Any], stations: list[CampaignStation]) -> list[Artifact]:
     fleet = expand(model)
+    paths = Counter(str(vm["subBroker"]["configPath"]) for vm in fleet.values())
     out = []
     for me in stations:
         where = f"operator/stations/{me.name}"
@@ -179,7 +189,8 @@ def campaign_artifacts(model: dict[str, Any], stations: list[CampaignStation]) -
                 f"# Vehicle {name} at station {me.name}: a client of the station's router "
                 f"({local_endpoint(me.listen)}); its link key as [link] key says.\n"
             )
-            text = head + dumps(vehicle_config(build_context(vm), name, me))
+            shared = paths[str(vm["subBroker"]["configPath"])] > 1
+            text = head + dumps(vehicle_config(build_context(vm), name, me, shared))
             out.append(Artifact(f"{where}/vehicles/{name}/subbroker.toml", text, "operator"))
             body = json.dumps(vm, indent=2, ensure_ascii=False) + "\n"
             out.append(Artifact(f"{where}/vehicles/{name}/model.json", body, "operator"))
