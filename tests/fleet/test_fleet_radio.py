@@ -12,7 +12,9 @@ every window once (by identity), equal to the aggregate recomputed from the dron
 archive with the official ``mcap`` reader, every window of every epoch of the 0.25-s
 subscriptions there from its first to its last; and **union coverage**: no window
 either station delivered (live, or heard by the other through the mesh) was
-backfilled, i.e. what came back with ``backfilled`` set is disjoint from what came live.
+backfilled, i.e. what came back with ``backfilled`` set is disjoint from what came live;
+and what b's modem heard while no station served (a dead, b not yet up) is delivered at
+the takeover, read under a's session, not backfilled.
 
 Diversity reception: station a's modem hears nothing of the drone for 15 s (its
 receiver blocked; the drone still hears a), b's hears every datagram; b stands by and
@@ -23,6 +25,7 @@ is left for a backfill.
 from __future__ import annotations
 
 import json
+import re
 import sys
 import time
 from pathlib import Path
@@ -127,6 +130,9 @@ def test_two_stations_on_one_radio_channel_each_window_once_union_coverage(
     killed_ns = time.time_ns()
     assert sb_b.wait_log("station b serves usv", TAKEOVER_S + 10), sb_b.log()
     assert "adopting config" in sb_b.log(), "b takes the config the PubBroker runs"
+    # what b's modem heard while no station served, read under a's session: delivered
+    took = re.search(r"took over with (\d+) datagrams .* (\d+) values delivered", sb_b.log())
+    assert took is not None and int(took.group(2)) > 0, sb_b.log()
     back = first_after(at["b"], killed_ns, TAKEOVER_S + 10)
     assert back is not None, sb_b.log()
     procs.append(a.start("-again"))
@@ -140,6 +146,7 @@ def test_two_stations_on_one_radio_channel_each_window_once_union_coverage(
     time.sleep(2)
     check(tmp_path, model, at)
     print(f"takeover over the radio: first value at b {back:.2f} s after a was killed")
+    print(f"b delivered {took.group(2)} values from {took.group(1)} datagrams its modem heard")
     print(radio_counts(radio))
 
 

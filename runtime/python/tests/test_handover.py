@@ -143,3 +143,103 @@ def test_a_joined_datagram_run_reads_slot_numbers_near_the_last_one() -> None:
         assert (got is not None) == decoded
         if got:
             assert got[0][0].slot == 70_003
+
+
+class _Heard:
+    """Diversity's side at takeover: what this station's modem heard."""
+
+    def __init__(self, datagrams: list[bytes]) -> None:
+        self.datagrams = datagrams
+
+    def take_heard(self) -> list[bytes]:
+        out, self.datagrams = self.datagrams, []
+        return out
+
+
+class _FleetHeard(_Fleet):
+    def __init__(self, told: list[tuple[str, RunningConfig]], until: int, held: Any) -> None:
+        super().__init__(told)
+        self.until, self.held = until, held
+
+    def heard_until(self) -> int:
+        return self.until
+
+    def others(self) -> list[Any]:
+        return [self.held]
+
+
+class _Sink:
+    def __init__(self) -> None:
+        self.values: list[Any] = []
+
+    def put(self, subscriber: str, payload: bytes) -> None:
+        from modd.subbroker.payload import DeliveredValue
+
+        self.values.append(DeliveredValue.from_json(payload))
+
+
+def test_the_next_station_delivers_what_its_modem_heard_under_the_dead_stations_session(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Station a served over udp and died; b's modem heard slots 100..119 (forwarded to
+    no one). b adopts a's config and reads them under a's session (its nonces, told by
+    the fleet, and the drone's link key): the slots after the last window b heard a
+    deliver (104), that verify (112 is forged) and that no station holds (sub_3's
+    window of slot 110 is in a's record) are delivered at once and recorded as received."""
+    from modd.link.datagram import DRONE_TO_BASE, DataDatagram, encode_data, session_key
+    from modd.link.frames import Data, Value
+    from modd.subbroker.window_record import WindowRecord
+
+    monkeypatch.setenv("MODD_TEST_HANDOVER_KEY", KEY)
+    udp = LinkOptions(key="env:MODD_TEST_HANDOVER_KEY", transport="udp")
+    brokers = [
+        SubBroker(
+            dataclasses.replace(config_from_model(S1, link=udp, state_dir=tmp_path / s), station=s)
+        )
+        for s in "ab"
+    ]
+    a, b = brokers
+    try:
+        nonces = (bytes(range(16)), bytes(range(16, 32)))
+        a.link.dgram.nonces = nonces  # type: ignore[attr-defined]
+        config, told = _serving(a)
+        assert [bytes.fromhex(n) for n in told["session"]] == list(nonces)
+        key_a = session_key(KEY.encode(), *nonces)
+        kinds = config.kinds()
+
+        def datagram(slot: int, key: bytes = key_a) -> bytes:
+            values = [Value(True, float(slot + i)) for i in range(len(kinds))]
+            body = codec.encode_data(Data(False, 0, 0, 0, values), kinds)[3:]
+            return encode_data(DataDatagram(config.config_id, slot, [body]), key, DRONE_TO_BASE)
+
+        period = 250_000_000
+        end = {s: EPOCH + (s + 1) * period for s in range(100, 120)}
+        heard = [datagram(s, bytes(32) if s == 112 else key_a) for s in range(100, 120)]
+        held = WindowRecord()
+        s3 = next(p.stream for p in a._running.plan.streams if "sub_3" in p.subscribers)  # type: ignore[union-attr]
+        held.add_filled("sub_3", s3, end[110] - period, end[110])
+        running = RunningConfig.from_json({**told, "slot": 100})
+        b.fleet = _FleetHeard([("a", running)], end[104], held)  # type: ignore[assignment]
+        b.diversity = _Heard(heard)  # type: ignore[assignment]
+        b.link.stats.rtt_s = 0.08
+        sink = _Sink()
+        b._sinks = lambda: [sink]  # type: ignore[method-assign]
+        got = b.on_connect(AuthOk(b"", config.config_id, EPOCH), 0.08)
+        assert isinstance(got, Adopted), got
+        b.on_config_acked(got.config, got.ack)
+
+        ends = {v.end_ns for v in sink.values}
+        assert ends, "nothing delivered from what b's modem heard"
+        assert min(ends) == end[105] and max(ends) == end[119]
+        assert end[112] not in ends  # forged
+        at110 = {v.subscriber for v in sink.values if v.end_ns == end[110]}
+        at111 = {v.subscriber for v in sink.values if v.end_ns == end[111]}
+        assert "sub_3" in at111 and at110 == at111 - {"sub_3"}
+        assert all(not v.backfilled for v in sink.values)
+        assert b.backfill.record.received[s3].covers(end[105] - period, end[111])
+        assert not b.backfill.record.received[s3].covers(end[104] - period, end[104])
+        assert b.diversity.take_heard() == []  # type: ignore[union-attr]
+    finally:
+        for x in brokers:
+            if x.record is not None:
+                x.record.close()

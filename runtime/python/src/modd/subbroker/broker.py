@@ -22,6 +22,7 @@ from modd_model.diagnostics import Diagnostic, ModelError
 from modd_model.query import topics
 from modd_model.signing import NonceGuard, signature
 from modd_plan import Plan
+from modd_plan.streams import StreamKey
 
 from modd.link import codec
 from modd.link.frames import AuthOk, Config, ConfigAck, ErrorCode, Onboard, Status
@@ -34,13 +35,13 @@ from ..zenoh_session import open_session, secured
 from . import backfill_query, delivery_auth
 from .backfill import BackfillManager
 from .config import ConfigError, SubBrokerConfig, resolve_key
-from .delivery import Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoints
+from .delivery import Filled, Sink, SlotDelivery, TcpDelivery, ZenohDelivery, tcp_endpoints
 from .deploy import DeployRequest, parse_request
 from .dglink import DatagramLinkClient
 from .diversity import Diversity
 from .dynamic import DynamicSubscriptions
 from .fanout import FanOut
-from .fleet_record import FleetRecord
+from .fleet_record import FleetRecord, merge
 from .handover import RunningConfig, model_digest
 from .kept import Deployment, StateDir, same_model
 from .keys import backfill_key, deploy_key, subscribe_key
@@ -349,6 +350,7 @@ class SubBroker:
                 station,
                 told.epoch_ns,
             )
+            self._adopted = (station, told)
             return Adopted(config, ConfigAck(told.config_id, 0, told.epoch_ns), told.slot)
         return None
 
@@ -357,6 +359,7 @@ class SubBroker:
         running = self._running
         if running is None:
             return None
+        session = self.link.dgram.nonces if isinstance(self.link, DatagramLinkClient) else None
         return RunningConfig(
             running.config.config_id,
             running.epoch_ns,
@@ -364,11 +367,51 @@ class SubBroker:
             running.rtt_s,
             model_digest(running.model),
             running.last_slot,
+            session,
         ).to_json()
+
+    #: the station and running config adopted by the last on_connect (handover.py)
+    _adopted: tuple[str, RunningConfig] | None = None
+
+    def _deliver_heard(self, running: Running, station: str, told: RunningConfig) -> None:
+        """After a takeover: the windows this station's modem heard while the previous
+        station served and after the last one heard delivered, read under that station's
+        session (diversity.py), delivered now when no station holds them rather than
+        backfilled later (docs/fleet.md, "Diversity reception")."""
+        if self.diversity is None or self.fleet is None or told.session is None:
+            return
+        assert isinstance(self.link, DatagramLinkClient)
+        heard = self.diversity.take_heard()
+        if not heard:
+            return
+        slots = self.link.dgram.read_heard(
+            running.config, told.epoch_ns, told.slot, told.session, heard
+        )
+        after = self.fleet.heard_until()
+        view = merge(self.fleet.others())
+
+        def held(sub: str, stream: StreamKey, start: int, end: int) -> bool:
+            return view.holds(sub, stream, start, end) or self.backfill.filled_already(
+                sub, stream, start, end
+            )
+
+        new = [w for w in slots if after is None or w[0].end_ns > after]
+        values = sum(self._deliver(running, w, held) for w in new)
+        log.info(
+            "took over with %d datagrams this station's modem heard: %d slots read under "
+            "station %s's session, %d after the last window heard delivered, %d values "
+            "delivered (the rest held by some station)",
+            len(heard),
+            len(slots),
+            station,
+            len(new),
+            values,
+        )
 
     # -- LinkHandler -------------------------------------------------------------
 
     def on_connect(self, ok: AuthOk, rtt_s: float | None) -> Config | Adopted | None:
+        self._adopted = None  # set again by _adopt when this connection adopts
         running = self._running
         if running and ok.config_id == running.config.config_id and ok.epoch_ns == running.epoch_ns:
             log.info("resuming config %d", ok.config_id)
@@ -439,6 +482,12 @@ class SubBroker:
             len(config.streams),
             meta.describe() if meta.source != "configured" else "the configured model",
         )
+        adopted, self._adopted = self._adopted, None
+        if adopted is not None and adopted[1].config_id == config.config_id:
+            try:
+                self._deliver_heard(running, *adopted)
+            except Exception:  # what the modem heard is a bonus: the gaps are backfilled
+                log.exception("the datagrams heard before the takeover could not be read")
         if self._status is not None:  # what runs is known at once, not a period later
             try:
                 self._status.publish_now()
@@ -447,17 +496,21 @@ class SubBroker:
 
     def on_windows(self, windows: list[Window]) -> None:
         running = self._by_id.get(windows[0].config_id)
-        if running is None or running.slots is None:
-            return
+        if running is not None:
+            self._deliver(running, windows, self.backfill.filled_already)
+
+    def _deliver(self, running: Running, windows: list[Window], filled: Filled) -> int:
+        """One slot's windows: held (journal and record: backfill.journal_live), then put
+        to each subscriber whose window ``filled`` does not say is delivered already."""
+        if running.slots is None:
+            return 0
         running.last_slot = max(running.last_slot, windows[-1].slot)
-        # each window held (journal and record) before it is put (backfill.journal_live)
         self.backfill.journal_live(running, windows)
-        self.delivered += running.slots.deliver(
-            windows,
-            self._sinks(),
-            self.backfill.filled_already,
-            lambda d: self.backfill.journal_derived(*d),
+        n = running.slots.deliver(
+            windows, self._sinks(), filled, lambda d: self.backfill.journal_derived(*d)
         )
+        self.delivered += n
+        return n
 
     def _link_up(self) -> None:
         """After a reconnection: the running backfill resumes, and the subscriptions whose

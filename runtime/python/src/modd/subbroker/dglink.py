@@ -54,6 +54,9 @@ class DatagramLinkClient(Pump):
         super().__init__(session, options, session.where, "modd-dglink")
         #: While another station serves: what this station's modem hears goes here.
         self.overhear: Callable[[bytes], None] | None = None
+        #: given the drone's datagrams this session could not read before it was up (a
+        #: takeover's handshake: under the previous station's key; diversity.py)
+        self.keep_unread: Callable[[bytes], None] | None = None
         self._relayed: deque[bytes] = deque(maxlen=RELAY_QUEUE)
         self._relay_lock = threading.Lock()
         self._announced = float("-inf")
@@ -78,7 +81,10 @@ class DatagramLinkClient(Pump):
         if self.dgram.up:  # once the CONFIG is out: the rates are the running link's
             self.dgram.sample_wire(port.wire_in, port.wire_out)
         for raw, source in port.recv(0.05):
-            self.dgram.datagram(raw, source)
+            taken = self.dgram.datagram(raw, source)
+            keep = self.keep_unread
+            if not taken and keep is not None and not self.dgram.up and source == port.peer:
+                keep(raw)  # DATA under the previous station's session, before this one is up
         with self._relay_lock:
             relayed, self._relayed = list(self._relayed), deque(maxlen=RELAY_QUEUE)
         for raw in relayed:

@@ -51,6 +51,7 @@ from modd.link.datagram import (
     verify_control_fragment,
 )
 from modd.link.frames import Config, ConfigAck, Ping, ProtocolError
+from modd.link.receiver import Window
 
 from .config import LinkOptions
 from .dgruns import PUBBROKER_COUNTS, RadioCounters, Runs, control_frames
@@ -112,6 +113,8 @@ class DatagramSession(LinkSession):
         #: the last datagrams other stations forwarded: the same one from this station's
         #: own modem afterwards is a copy, not a replay
         self._forwarded: deque[bytes] = deque(maxlen=FORWARDED_KEPT)
+        #: the handshake nonces of the running session (the fleet is told them: handover.py)
+        self.nonces: tuple[bytes, bytes] | None = None
 
     @property
     def delay_s(self) -> float:
@@ -162,6 +165,7 @@ class DatagramSession(LinkSession):
 
     def _authenticated(self, nonce: bytes, server_nonce: bytes) -> None:
         self.runs.old_key, self._key = self._key, session_key(self._psk, nonce, server_nonce)
+        self.nonces = (nonce, server_nonce)
         self._window = ReplayWindow(64)
         self._pieces = ControlPieces()
         self.runs.rekey(self._key)
@@ -193,6 +197,31 @@ class DatagramSession(LinkSession):
             log.error("%s: %s", self.where, why)
             return why
         return ""
+
+    def read_heard(
+        self,
+        config: Config,
+        epoch_ns: int,
+        slot: int,
+        nonces: tuple[bytes, bytes],
+        datagrams: list[bytes],
+    ) -> list[list[Window]]:
+        """The windows, slot by slot, of DATA datagrams this station's modem heard while
+        another station served (diversity.py), read under that station's session key
+        (its ``nonces`` and the drone's link key), or under this session's own when they
+        came before its config was taken, on ``config``'s grid near ``slot``. A
+        decoder of its own: the session's gaps and NACKs are not touched. What does not
+        verify (another session's, forged) is left out."""
+        runs = Runs(self.delay_s, RadioCounters(), self.clock)
+        ack = ConfigAck(config.config_id, 0, epoch_ns)
+        runs.accept(config, ack, session_key(self._psk, *nonces))
+        runs.old_key = self._key  # and this session's, before its config was taken
+        runs.joined_at(config.config_id, slot)
+        out: list[list[Window]] = []
+        for raw in datagrams:
+            if len(raw) > 1 and raw[0] in (DGRAM_DATA, DGRAM_DATA_BITMAP, DGRAM_FRAGMENT):
+                out += runs.on_datagram(raw) or []
+        return out
 
     # -- timers -------------------------------------------------------------------
 

@@ -114,6 +114,12 @@ class FleetRecord:
         with self._lock:
             return [*self._others.values(), self._heard]
 
+    def heard_until(self) -> int | None:
+        """The end of the latest window this station heard another deliver (ns)."""
+        with self._lock:
+            ends = [iv.spans[-1][1] for iv in self._heard.filled.values() if iv.spans]
+        return max(ends, default=None)
+
     def running(self) -> list[tuple[str, RunningConfig]]:
         """What the other stations last said their PubBroker runs (a dead one's too)."""
         with self._lock:

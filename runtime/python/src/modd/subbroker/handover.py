@@ -8,7 +8,13 @@ windows keep their epoch and grid, nothing new crosses the radio, and the handov
 gap is a gap of that one epoch. Anything else (another model, another plan) sends a
 new CONFIG, as before.
 
->>> r = RunningConfig(3, 10**18, b"\\x01\\x02", 0.25, "ab" * 32, 70000)
+Over a datagram link the answer also carries the nonces of that station's session (they
+cross the air in the handshake, in the clear: the session key needs the drone's link key
+as well). What the next station's modem heard while no station served is under that key;
+it reads it at takeover and delivers what no station holds (docs/fleet.md, "Diversity
+reception").
+
+>>> r = RunningConfig(3, 10**18, b"\\x01\\x02", 0.25, "ab" * 32, 70000, (b"n" * 16, b"s" * 16))
 >>> RunningConfig.from_json(r.to_json()) == r
 True
 >>> RunningConfig.from_json({"config_id": 300})
@@ -27,6 +33,8 @@ from .kept import model_content
 
 #: A CONFIG larger than this is not told (the link's own bound is far below).
 MAX_CONFIG_BYTES = 64 * 1024
+#: A handshake nonce longer than this is refused (the link's are 16 bytes).
+MAX_NONCE_BYTES = 64
 
 
 @dataclass(frozen=True)
@@ -39,9 +47,11 @@ class RunningConfig:
     rtt_s: float | None  # the round trip the plan was made for
     model: str  # model_digest of the model it was planned from
     slot: int = 0  # the latest slot that station had (slot numbers travel as 16 bits)
+    #: its datagram session's handshake nonces (client's, server's); None over tcp
+    session: tuple[bytes, bytes] | None = None
 
     def to_json(self) -> dict[str, Any]:
-        return {
+        doc: dict[str, Any] = {
             "config_id": self.config_id,
             "epoch_ns": self.epoch_ns,
             "config": self.config.hex(),
@@ -49,6 +59,9 @@ class RunningConfig:
             "model": self.model,
             "slot": self.slot,
         }
+        if self.session is not None:
+            doc["session"] = [n.hex() for n in self.session]
+        return doc
 
     @classmethod
     def from_json(cls, doc: Any) -> RunningConfig:
@@ -81,7 +94,20 @@ class RunningConfig:
         slot = doc.get("slot", 0)
         if not isinstance(slot, int) or isinstance(slot, bool) or not 0 <= slot < 2**40:
             raise ValueError("running config: slot must be a slot number")
-        return cls(cid, epoch, config, None if rtt is None else float(rtt), model, slot)
+        session = doc.get("session")
+        if session is not None:
+            if (
+                not isinstance(session, list)
+                or len(session) != 2
+                or not all(isinstance(n, str) and len(n) <= 2 * MAX_NONCE_BYTES for n in session)
+            ):
+                raise ValueError("running config: session must be two hex nonces")
+            try:
+                session = (bytes.fromhex(session[0]), bytes.fromhex(session[1]))
+            except ValueError as exc:
+                raise ValueError("running config: session is not hex") from exc
+        rtt_s = None if rtt is None else float(rtt)
+        return cls(cid, epoch, config, rtt_s, model, slot, session)
 
 
 def model_digest(model: dict[str, Any]) -> str:

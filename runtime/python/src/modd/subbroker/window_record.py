@@ -104,6 +104,18 @@ class WindowRecord:
     def add_derived(self, stream: StreamKey, start: int, end: int) -> None:
         self.derived.setdefault(stream, Intervals()).add(start, end)
 
+    def holds(self, subscriber: str, stream: StreamKey, start: int, end: int) -> bool:
+        """Whether ``subscriber``'s window of ``stream`` is held here: received, derived,
+        or filled for it."""
+        for spans in (
+            self.received.get(stream),
+            self.derived.get(stream),
+            self.filled.get((subscriber, stream)),
+        ):
+            if spans is not None and spans.covers(start, end):
+                return True
+        return False
+
     def add_filled(self, subscriber: str, stream: StreamKey, start: int, end: int) -> None:
         self.filled.setdefault((subscriber, stream), Intervals()).add(start, end)
 
