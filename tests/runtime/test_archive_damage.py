@@ -1,8 +1,9 @@
 """Start-up recovery of crashed archive files with damaged bytes (issue 28, docs/pubbroker.md):
 a real PubBroker is killed (kill -9), single-byte flips are made at 25 offsets of its file (each
-flip in a copy of its own, and all 25 in one more), and the broker restarted on that directory
-recovers every copy, and one more whose flip its decoder reads past. Oracle: tests/support/mcap_oracle.py, chunk by chunk over the chunk
-boundaries of the undamaged file, against the official `mcap` reader on the recovered files."""
+flip in a copy of its own, and all 25 in one more, and one flip its decoder reads past in one
+more), and the broker restarted on that directory recovers every copy. Oracle:
+tests/support/mcap_oracle.py, chunk by chunk over the chunk boundaries of the undamaged file,
+against the official `mcap` reader on the recovered files."""
 
 from __future__ import annotations
 

@@ -191,7 +191,7 @@ def read_past_flip(data: bytes, layout: list[Record], chunks: int = 8) -> tuple[
     """A single-bit flip in the zstd data of one of the first ``chunks`` chunks
     that python-zstandard refuses while the system's libzstd reads past it to
     the chunk's own data (a reserved bit, say); None if there is none."""
-    for op, at, size in [r for r in layout if r[0] == CHUNK][:chunks]:
+    for _op, at, size in [r for r in layout if r[0] == CHUNK][:chunks]:
         (name_len,) = struct.unpack_from("<I", data, at + 9 + 28)
         (usize,) = struct.unpack_from("<Q", data, at + 9 + 16)
         start = at + 49 + name_len
