@@ -190,3 +190,75 @@ def test_a_station_the_drone_no_longer_answers_gives_the_link_up() -> None:
             s.relayed(_datagram(k))
             s.tick()
     assert clock.t - 1000.0 <= 3 * 3.0 + 1.0
+
+
+class _ZenohStub:
+    """What Diversity declares on its session (nothing crosses a network here)."""
+
+    class _Entity:
+        def put(self, raw: bytes) -> None: ...
+
+        def undeclare(self) -> None: ...
+
+    def declare_publisher(self, key: str) -> Any:
+        return self._Entity()
+
+    def declare_subscriber(self, key: str, callback: Any) -> Any:
+        return self._Entity()
+
+
+class _Port:
+    """A datagram port whose next read gives ``queued`` (the drone is ``peer``)."""
+
+    peer = ("127.0.0.1", 7171)
+
+    def __init__(self) -> None:
+        self.queued: list[tuple[bytes, Any]] = []
+        self.wire_in = self.wire_out = 0
+
+    def recv(self, timeout_s: float) -> list[tuple[bytes, Any]]:
+        out, self.queued = self.queued, []
+        return out
+
+
+def _station() -> tuple[Any, Any, _Port]:
+    from modd.subbroker.dglink import DatagramLinkClient
+    from modd.subbroker.diversity import Diversity
+
+    session = DatagramSession("udp", b"psk", LinkOptions(), _Handler(), peer=_Port.peer)
+    port = _Port()
+    link = DatagramLinkClient(lambda: port, session, LinkOptions())  # type: ignore[arg-type,return-value]
+    link._port = port  # type: ignore[assignment]
+    diversity = Diversity(_ZenohStub(), "usv", "b", link)  # type: ignore[arg-type]
+    return link, diversity, port
+
+
+def test_what_a_station_heard_is_kept_for_a_takeover_within_its_bound() -> None:
+    """Kept: what the modem heard standing by (DATA only), what the session could not read
+    before it was up (a takeover's handshake), what another station forwarded meanwhile;
+    at most HEARD_KEPT datagrams, the newest; read once."""
+    from modd.subbroker import diversity as div
+
+    link, diversity, port = _station()
+    diversity.forward(_datagram(1))
+    diversity.forward(encode_control(1, codec.encode(Pong(b"x")), KEY, DRONE_TO_BASE))  # control
+    port.queued = [(_datagram(2), _Port.peer), (_datagram(3), ("127.0.0.9", 1))]  # a stranger
+    link._read()  # the session is not up: it cannot read them
+    sample = type("S", (), {"key_expr": "modd/usv/fleet/heard/c"})()
+    sample.payload = type("P", (), {"to_bytes": lambda self: _datagram(4)})()
+    diversity._on_heard(sample)
+    assert diversity.take_heard() == [_datagram(1), _datagram(2), _datagram(4)]
+    assert diversity.take_heard() == []
+    for k in range(div.HEARD_KEPT + 10):
+        diversity.forward(_datagram(k))
+    kept = diversity.take_heard()
+    assert len(kept) == div.HEARD_KEPT and kept[-1] == _datagram(div.HEARD_KEPT + 9)
+    assert kept[0] == _datagram(10)
+
+
+def test_a_session_that_is_up_keeps_nothing() -> None:
+    link, diversity, port = _station()
+    link.dgram._up.set()
+    port.queued = [(_datagram(2), _Port.peer)]
+    link._read()
+    assert diversity.take_heard() == []
